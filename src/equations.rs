@@ -1,0 +1,387 @@
+//! Pointwise physics: the coupled rod-tendon equations (eq. 13 as corrected in ERRATA.md
+//! and docs/model.md), the tendon point wrenches, and the internal force and moment.
+//!
+//! Everything that depends on the state (R, v, u) is generic over the scalar so the
+//! collocation Jacobian can be taken exactly by forward-mode automatic differentiation;
+//! everything that depends only on s (stiffness, reference strains, routings, external
+//! loads) is evaluated once in f64 as a [`Site`].
+#![allow(non_snake_case)]
+
+use crate::error::Result;
+use crate::robot::Robot;
+use crate::rod::{SectionPoint, StrainPoint};
+use crate::routing::RoutingPoint;
+use crate::so3::hat;
+use crate::{Error, Real};
+use nalgebra::{Matrix3, Matrix6, Vector3, Vector6};
+
+/// Below this |p_i'| (body frame, dimensionless) a tendon's path has no usable tangent.
+const MIN_TENDON_SPEED: f64 = 1e-9;
+
+/// Lifts an f64 vector into the scalar type `T`.
+pub fn lift<T: Real>(v: &Vector3<f64>) -> Vector3<T> {
+    v.map(|x| T::from_f64(x).unwrap_or_else(T::zero))
+}
+
+/// Lifts an f64 matrix into the scalar type `T`.
+pub fn lift_m<T: Real>(m: &Matrix3<f64>) -> Matrix3<T> {
+    m.map(|x| T::from_f64(x).unwrap_or_else(T::zero))
+}
+
+/// The state-independent data at one arc length.
+#[derive(Clone, Copy, Debug)]
+pub struct Site {
+    /// Arc length (m).
+    pub s: f64,
+    /// Stiffness and its derivative.
+    pub section: SectionPoint,
+    /// Reference strains and their derivatives.
+    pub reference: StrainPoint,
+    /// f_e: external distributed force (N/m), world frame, times the load factor.
+    pub f_e: Vector3<f64>,
+    /// l_e: external distributed moment (N m/m), world frame, times the load factor.
+    pub l_e: Vector3<f64>,
+}
+
+/// Which tendons take part in a sum.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Which {
+    /// Tendons that reach the end `e` of the current segment (termination >= e).
+    ActiveTo(f64),
+    /// Tendons that end exactly at s (termination == s).
+    EndingAt(f64),
+    /// Tendons that continue past s (termination > s).
+    Past(f64),
+}
+
+/// The robot's equations at a load factor: all tensions and external loads are multiplied
+/// by `load_factor` (1 is the robot as given; smaller values are used by load continuation).
+#[derive(Clone, Copy, Debug)]
+pub struct Model<'a> {
+    /// The robot (validated).
+    pub robot: &'a Robot,
+    /// Multiplier on tensions and external loads, in [0, 1].
+    pub load_factor: f64,
+}
+
+impl<'a> Model<'a> {
+    /// The model of a validated robot at full load.
+    pub fn new(robot: &'a Robot) -> Self {
+        Model {
+            robot,
+            load_factor: 1.0,
+        }
+    }
+
+    /// State-independent data at arc length s.
+    pub fn site(&self, s: f64) -> Site {
+        let loads = &self.robot.loads;
+        Site {
+            s,
+            section: self.robot.rod.section_at(s),
+            reference: self.robot.rod.reference_at(s),
+            f_e: loads.distributed_force.at(s) * self.load_factor,
+            l_e: loads.distributed_moment.at(s) * self.load_factor,
+        }
+    }
+
+    /// (tension tau_i in N, routing point) for the selected tendons at s.
+    pub fn tendons(&self, s: f64, which: Which) -> impl Iterator<Item = (usize, f64, RoutingPoint)> + '_ {
+        let l = self.robot.length();
+        self.robot.tendons.iter().enumerate().filter_map(move |(i, t)| {
+            let end = t.end(l);
+            let take = match which {
+                Which::ActiveTo(e) => end >= e,
+                Which::EndingAt(x) => end == x,
+                Which::Past(x) => end > x,
+            };
+            (take && t.tension > 0.0).then(|| (i, t.tension * self.load_factor, t.routing.at(s, l)))
+        })
+    }
+
+    /// Eq. 13 (corrected): the strain rates (v', u') at a site for the state (R, v, u),
+    /// with the tendons that reach `segment_end` loading the backbone.
+    ///
+    /// # Errors
+    /// [`Error::SingularRouting`] where a tendon's path tangent vanishes,
+    /// [`Error::Breakdown`] where the 6x6 system is singular.
+    pub fn strain_rates<T: Real>(
+        &self,
+        site: &Site,
+        segment_end: f64,
+        R: &Matrix3<T>,
+        v: &Vector3<T>,
+        u: &Vector3<T>,
+    ) -> Result<(Vector3<T>, Vector3<T>)> {
+        let kse = lift::<T>(&site.section.section.kse);
+        let kbt = lift::<T>(&site.section.section.kbt);
+        let D = Matrix3::from_diagonal(&kse);
+        let C = Matrix3::from_diagonal(&kbt);
+        let D_s = Matrix3::from_diagonal(&lift::<T>(&site.section.kse_s));
+        let C_s = Matrix3::from_diagonal(&lift::<T>(&site.section.kbt_s));
+        let v_star = lift::<T>(&site.reference.v_star);
+        let u_star = lift::<T>(&site.reference.u_star);
+        let dv = v - v_star;
+        let du = u - u_star;
+        let u_hat = hat(u);
+        let Rt = R.transpose();
+
+        let mut A = Matrix3::<T>::zeros();
+        let mut B = Matrix3::<T>::zeros();
+        let mut G = Matrix3::<T>::zeros();
+        let mut H = Matrix3::<T>::zeros();
+        let mut a = Vector3::<T>::zeros();
+        let mut b = Vector3::<T>::zeros();
+        for (i, tension, rp) in self.tendons(site.s, Which::ActiveTo(segment_end)) {
+            let r = lift::<T>(&rp.r);
+            let r_s = lift::<T>(&rp.r_s);
+            let r_ss = lift::<T>(&rp.r_ss);
+            let pb_s = u.cross(&r) + r_s + v; // p_i^b'
+            let speed = pb_s.norm();
+            if speed < T::from_f64(MIN_TENDON_SPEED).unwrap_or_else(T::zero) {
+                return Err(Error::SingularRouting {
+                    tendon: i,
+                    s: site.s,
+                    speed: to_f64(speed),
+                });
+            }
+            let ph = hat(&pb_s);
+            let tau = T::from_f64(tension).unwrap_or_else(T::zero);
+            let A_i = ph * ph * (-tau / (speed * speed * speed));
+            let r_hat = hat(&r);
+            let B_i = r_hat * A_i;
+            let a_i = A_i * (u_hat * pb_s + u_hat * r_s + r_ss);
+            A += A_i;
+            B += B_i;
+            G -= A_i * r_hat;
+            H -= B_i * r_hat;
+            b += r.cross(&a_i);
+            a += a_i;
+        }
+
+        let rhs_v = D * lift::<T>(&site.reference.v_star_s) - (u_hat * D + D_s) * dv - Rt * lift::<T>(&site.f_e) - a;
+        let rhs_u = C * lift::<T>(&site.reference.u_star_s)
+            - (u_hat * C + C_s) * du
+            - hat(v) * D * dv
+            - Rt * lift::<T>(&site.l_e)
+            - b;
+        let mut M = Matrix6::<T>::zeros();
+        M.fixed_view_mut::<3, 3>(0, 0).copy_from(&(D + A));
+        M.fixed_view_mut::<3, 3>(0, 3).copy_from(&G);
+        M.fixed_view_mut::<3, 3>(3, 0).copy_from(&B);
+        M.fixed_view_mut::<3, 3>(3, 3).copy_from(&(C + H));
+        let mut rhs = Vector6::<T>::zeros();
+        rhs.fixed_rows_mut::<3>(0).copy_from(&rhs_v);
+        rhs.fixed_rows_mut::<3>(3).copy_from(&rhs_u);
+        // M is symmetric positive definite (B = G^T, H symmetric, A_i PSD): Cholesky first;
+        // LU only if rounding made the factorization fail.
+        let x = match M.cholesky() {
+            Some(ch) => ch.solve(&rhs),
+            None => M.lu().solve(&rhs).ok_or_else(|| Error::Breakdown {
+                s: site.s,
+                what: "the 6x6 matrix [D + A, G; B, C + H] of eq. 13 is singular".into(),
+            })?,
+        };
+        Ok((x.fixed_rows::<3>(0).into(), x.fixed_rows::<3>(3).into()))
+    }
+
+    /// The sum over the selected tendons of their internal tension tau_i t_i (world frame,
+    /// N) and its moment about the centreline (R r_i) x tau_i t_i (N m), where
+    /// t_i = p_i' / |p_i'| is the unit tangent of the tendon's path (eq. 9) for the state
+    /// (R, v, u).
+    ///
+    /// The point load of tendon i on the backbone where its path ends or bends is
+    /// tau_i (t_i(s+) - t_i(s-)) (ERRATA.md), so jump and tip conditions are differences
+    /// of these sums.
+    pub fn tendon_pull<T: Real>(
+        &self,
+        s: f64,
+        which: Which,
+        R: &Matrix3<T>,
+        v: &Vector3<T>,
+        u: &Vector3<T>,
+    ) -> Result<(Vector3<T>, Vector3<T>)> {
+        let mut force = Vector3::<T>::zeros();
+        let mut moment = Vector3::<T>::zeros();
+        for (i, tension, rp) in self.tendons(s, which) {
+            let r = lift::<T>(&rp.r);
+            let pb_s = u.cross(&r) + lift::<T>(&rp.r_s) + v;
+            let speed = pb_s.norm();
+            if speed < T::from_f64(MIN_TENDON_SPEED).unwrap_or_else(T::zero) {
+                return Err(Error::SingularRouting {
+                    tendon: i,
+                    s,
+                    speed: to_f64(speed),
+                });
+            }
+            let f_b = pb_s * (T::from_f64(tension).unwrap_or_else(T::zero) / speed);
+            force += R * f_b;
+            moment += R * r.cross(&f_b);
+        }
+        Ok((force, moment))
+    }
+
+    /// Internal force n = R D (v - v*) (N) and moment m = R C (u - u*) (N m), world frame (eq. 3).
+    pub fn internal_wrench<T: Real>(
+        &self,
+        site: &Site,
+        R: &Matrix3<T>,
+        v: &Vector3<T>,
+        u: &Vector3<T>,
+    ) -> (Vector3<T>, Vector3<T>) {
+        let nb = (v - lift::<T>(&site.reference.v_star)).component_mul(&lift(&site.section.section.kse));
+        let mb = (u - lift::<T>(&site.reference.u_star)).component_mul(&lift(&site.section.section.kbt));
+        (R * nb, R * mb)
+    }
+
+    /// Body-frame strains (v, u) that carry the body-frame internal wrench (n_b, m_b): the
+    /// inverse of [`Model::internal_wrench`].
+    pub fn strains_for_wrench<T: Real>(
+        &self,
+        site: &Site,
+        n_b: &Vector3<T>,
+        m_b: &Vector3<T>,
+    ) -> (Vector3<T>, Vector3<T>) {
+        let v = lift::<T>(&site.reference.v_star) + n_b.component_div(&lift(&site.section.section.kse));
+        let u = lift::<T>(&site.reference.u_star) + m_b.component_div(&lift(&site.section.section.kbt));
+        (v, u)
+    }
+}
+
+/// The real part of a scalar (its value for f64, the value without derivatives for duals).
+pub fn to_f64<T: Real>(x: T) -> f64 {
+    // `to_subset` keeps only the real part for the dual types of num-dual.
+    x.to_subset().unwrap_or(f64::NAN)
+}
+
+/// One side of a point-load condition: the site and the state (R, v, u) there.
+pub type Side<'s, T> = (&'s Site, &'s Matrix3<T>, &'s Vector3<T>, &'s Vector3<T>);
+
+impl Model<'_> {
+    /// Sum of the external point force and moment (world frame, N and N m) applied exactly
+    /// at s, including the tip wrench when s is the tip. Scaled by the load factor.
+    pub fn point_wrench(&self, s: f64) -> (Vector3<f64>, Vector3<f64>) {
+        let loads = &self.robot.loads;
+        let (mut f, mut l) = if s == self.robot.length() {
+            (loads.tip_force, loads.tip_moment)
+        } else {
+            (Vector3::zeros(), Vector3::zeros())
+        };
+        for p in loads.point.iter().filter(|p| p.s == s) {
+            f += p.force;
+            l += p.moment;
+        }
+        (f * self.load_factor, l * self.load_factor)
+    }
+
+    /// Imbalance of the point-load condition at s (jump conditions and tip boundary
+    /// condition, ERRATA.md):
+    ///
+    /// n(s-) = n(s+) + F_ext + sum_i tau_i (t_i(s+) - t_i(s-)),
+    /// m(s-) = m(s+) + L_ext + sum_i (R r_i) x tau_i (t_i(s+) - t_i(s-)),
+    ///
+    /// with t_i(s+) = 0 for a tendon that ends at s, n(s+) = m(s+) = 0 at the tip
+    /// (`right = None`), and the bend term of continuing tendons only when
+    /// `robot.corner_forces`. Returned in strain units in the left body frame:
+    /// (D^-1 R^T dn, C^-1 R^T dm), zero when balanced.
+    ///
+    /// # Errors
+    /// [`Error::SingularRouting`] where a tendon has no tangent.
+    pub fn wrench_balance<T: Real>(
+        &self,
+        s: f64,
+        left: Side<T>,
+        right: Option<Side<T>>,
+    ) -> Result<(Vector3<T>, Vector3<T>)> {
+        let (site_a, Ra, va, ua) = left;
+        let (mut dn, mut dm) = self.internal_wrench(site_a, Ra, va, ua);
+        let (f_ext, l_ext) = self.point_wrench(s);
+        dn -= lift::<T>(&f_ext);
+        dm -= lift::<T>(&l_ext);
+        let (fe, me) = self.tendon_pull(s, Which::EndingAt(s), Ra, va, ua)?;
+        dn += fe;
+        dm += me;
+        if let Some((site_b, Rb, vb, ub)) = right {
+            let (nb, mb) = self.internal_wrench(site_b, Rb, vb, ub);
+            dn -= nb;
+            dm -= mb;
+            if self.robot.corner_forces {
+                let (fa, ma) = self.tendon_pull(s, Which::Past(s), Ra, va, ua)?;
+                let (fb, mb) = self.tendon_pull(s, Which::Past(s), Rb, vb, ub)?;
+                dn += fa - fb;
+                dm += ma - mb;
+            }
+        }
+        let Rt = Ra.transpose();
+        Ok((
+            (Rt * dn).component_div(&lift(&site_a.section.section.kse)),
+            (Rt * dm).component_div(&lift(&site_a.section.section.kbt)),
+        ))
+    }
+
+    /// The base wrench (n(0), m(0), world frame) that balances every load on the unloaded
+    /// (reference) shape: the rigid-equilibrium estimate used as an initial guess.
+    /// `shape` gives (s, p, R) of the reference shape at increasing s from 0 to L.
+    pub fn rigid_base_wrench(&self, shape: &[(f64, Vector3<f64>, Matrix3<f64>)]) -> (Vector3<f64>, Vector3<f64>) {
+        let robot = self.robot;
+        let p0 = shape[0].1;
+        let mut n = Vector3::zeros();
+        let mut m = Vector3::zeros();
+        // External distributed loads by the trapezoid rule (an estimate only).
+        for w in shape.windows(2) {
+            let (s0, pa, _) = w[0];
+            let (s1, pb, _) = w[1];
+            let h = s1 - s0;
+            for (s, p) in [(s0, pa), (s1, pb)] {
+                let site = self.site(s);
+                n += site.f_e * (h / 2.0);
+                m += ((p - p0).cross(&site.f_e) + site.l_e) * (h / 2.0);
+            }
+        }
+        let at = |s: f64| {
+            shape
+                .iter()
+                .min_by(|a, b| (a.0 - s).abs().total_cmp(&(b.0 - s).abs()))
+                .map_or((p0, robot.base_rotation), |x| (x.1, x.2))
+        };
+        let mut add_point = |s: f64, f: Vector3<f64>, l: Vector3<f64>| {
+            let (p, _) = at(s);
+            n += f;
+            m += l + (p - p0).cross(&f);
+        };
+        let (ft, lt) = self.point_wrench(robot.length());
+        add_point(robot.length(), ft, lt);
+        for p in &robot.loads.point {
+            if p.s < robot.length() {
+                add_point(p.s, p.force * self.load_factor, p.moment * self.load_factor);
+            }
+        }
+        // The tendons pull the backbone back along their path at the base.
+        let site0 = self.site(0.0);
+        let (R0, v0, u0) = (shape[0].2, site0.reference.v_star, site0.reference.u_star);
+        if let Ok((f, l)) = self.tendon_pull(0.0, Which::ActiveTo(0.0), &R0, &v0, &u0) {
+            n -= f;
+            m -= l;
+        }
+        (n, m)
+    }
+
+    /// The unloaded shape (s, p, R) at `count + 1` evenly spaced arc lengths, integrated
+    /// from the base with the reference strains (midpoint rule on the Lie group).
+    pub fn reference_shape(&self, count: usize) -> Vec<(f64, Vector3<f64>, Matrix3<f64>)> {
+        let robot = self.robot;
+        let h = robot.length() / count as f64;
+        let mut p = robot.base_position;
+        let mut R = robot.base_rotation;
+        let mut out = vec![(0.0, p, R)];
+        for k in 0..count {
+            let s = (k as f64 + 0.5) * h;
+            let rf = robot.rod.reference_at(s);
+            let half = crate::so3::exp(&(rf.u_star * (h / 2.0)));
+            p += R * half * rf.v_star * h;
+            R *= crate::so3::exp(&(rf.u_star * h));
+            out.push(((k + 1) as f64 * h, p, R));
+        }
+        out
+    }
+}

@@ -1,0 +1,34 @@
+//! # tdcr: statics of tendon-driven continuum robots
+//!
+//! The coupled Cosserat-rod / Cosserat-string model of Rucker & Webster ("Mechanics of
+//! Continuum Robots with External Loading and General Tendon Routing"), with the
+//! corrections of docs/model.md, solved either by sparse collocation (the main solver) or
+//! by shooting (an independent cross-check).
+#![warn(missing_docs)]
+
+pub mod cases;
+pub mod equations;
+pub mod error;
+pub mod loads;
+pub mod report;
+pub mod robot;
+pub mod rod;
+pub mod routing;
+pub mod shooting;
+pub mod so3;
+pub mod solution;
+pub mod tendon;
+
+pub use error::{Error, Result};
+pub use loads::{Field, Loads, PointLoad};
+pub use report::{Method, SolveReport, Termination};
+pub use robot::Robot;
+pub use rod::{Rod, Section};
+pub use routing::{Routing, RoutingPoint};
+pub use solution::{Node, Solution, State};
+pub use tendon::Tendon;
+
+/// The scalar types the model equations accept: f64, and num-dual's dual numbers for exact
+/// derivatives.
+pub trait Real: nalgebra::RealField + Copy {}
+impl<T: nalgebra::RealField + Copy> Real for T {}

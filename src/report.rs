@@ -1,0 +1,158 @@
+//! What a solve did: termination reason, iterations, residual history, counts and timings.
+
+use std::fmt;
+use std::time::Duration;
+
+/// Which solver produced a solution.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Method {
+    /// Sparse collocation with Newton (the main solver).
+    Collocation,
+    /// Shooting from the base with an adaptive Runge-Kutta integrator (cross-check).
+    Shooting,
+}
+
+impl fmt::Display for Method {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            Method::Collocation => "collocation",
+            Method::Shooting => "shooting",
+        })
+    }
+}
+
+/// Why a Newton iteration stopped.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Termination {
+    /// Scaled residual and step are below their tolerances.
+    Converged,
+    /// The iteration limit was reached first.
+    MaxIterations,
+    /// The line search could not decrease the merit function.
+    LineSearchFailed,
+    /// The linear solve hit a zero pivot or produced a non-finite step.
+    SingularJacobian,
+    /// The residual became non-finite (the model broke down at a visited state).
+    NonFinite,
+}
+
+impl fmt::Display for Termination {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            Termination::Converged => "converged: the scaled residual and the Newton step are below tolerance",
+            Termination::MaxIterations => "stopped at the iteration limit before the residual reached tolerance",
+            Termination::LineSearchFailed => "the line search found no step that reduces the residual",
+            Termination::SingularJacobian => "the Newton matrix is singular: zero pivot or non-finite step",
+            Termination::NonFinite => "the residual became non-finite at a state the iteration visited",
+        })
+    }
+}
+
+/// One Newton iteration.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Iteration {
+    /// Scaled residual max-norm before the step.
+    pub residual: f64,
+    /// Scaled max-norm of the full Newton step.
+    pub step: f64,
+    /// Line-search fraction of the step taken, in (0, 1].
+    pub damping: f64,
+}
+
+/// Evaluation counts.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Evaluations {
+    /// Residual evaluations (collocation) or tip-residual integrations (shooting).
+    pub residual: usize,
+    /// Jacobian evaluations.
+    pub jacobian: usize,
+    /// Evaluations of eq. 13.
+    pub equations: usize,
+}
+
+/// Wall-clock time split by stage.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Timings {
+    /// Residual and Jacobian assembly.
+    pub assembly: Duration,
+    /// Numeric (and, on a new mesh, symbolic) factorization.
+    pub factorization: Duration,
+    /// Triangular solves.
+    pub solve: Duration,
+    /// Whole call.
+    pub total: Duration,
+}
+
+/// What a solve did. Filled by both solvers.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SolveReport {
+    /// Which solver.
+    pub method: Method,
+    /// Why it stopped (of the last Newton run).
+    pub termination: Termination,
+    /// Newton iterations, summed over load steps and meshes.
+    pub iterations: usize,
+    /// Load-continuation steps taken (1 for a direct solve).
+    pub load_steps: usize,
+    /// Meshes solved on (1 without refinement).
+    pub meshes: usize,
+    /// Per-iteration record of the last Newton run.
+    pub history: Vec<Iteration>,
+    /// Final scaled residual max-norm.
+    pub residual: f64,
+    /// Evaluation counts.
+    pub evaluations: Evaluations,
+    /// Timings.
+    pub timings: Timings,
+    /// Unknowns of the final system.
+    pub unknowns: usize,
+    /// Non-zeros of the final Jacobian.
+    pub nonzeros: usize,
+    /// Mesh intervals (collocation) or accepted integration steps (shooting).
+    pub intervals: usize,
+    /// Estimated tip-position discretization error (m), when the solver estimated it.
+    pub tip_error_estimate: Option<f64>,
+}
+
+impl SolveReport {
+    /// An empty report for `method`.
+    pub fn new(method: Method) -> Self {
+        SolveReport {
+            method,
+            termination: Termination::MaxIterations,
+            iterations: 0,
+            load_steps: 0,
+            meshes: 0,
+            history: Vec::new(),
+            residual: f64::NAN,
+            evaluations: Evaluations::default(),
+            timings: Timings::default(),
+            unknowns: 0,
+            nonzeros: 0,
+            intervals: 0,
+            tip_error_estimate: None,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_termination_has_its_own_sentence() {
+        let all = [
+            Termination::Converged,
+            Termination::MaxIterations,
+            Termination::LineSearchFailed,
+            Termination::SingularJacobian,
+            Termination::NonFinite,
+        ];
+        let texts: Vec<String> = all.iter().map(|t| t.to_string()).collect();
+        for (i, t) in texts.iter().enumerate() {
+            assert!(t.len() > 20 && !t.contains('\n'));
+            assert!(texts.iter().skip(i + 1).all(|o| o != t));
+        }
+        assert!(texts[3].contains("singular"));
+    }
+}

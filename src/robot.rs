@@ -1,0 +1,244 @@
+//! The whole robot: backbone, tendons, loads and base pose, validated once.
+
+use crate::error::{Result, invalid};
+use crate::loads::Loads;
+use crate::rod::Rod;
+use crate::tendon::Tendon;
+use crate::{Error, so3};
+use nalgebra::{Matrix3, Vector3};
+
+/// A tendon-driven continuum robot: plain data in SI units. Call [`Robot::validate`] (the
+/// solvers do) before use.
+#[derive(Clone, Debug)]
+pub struct Robot {
+    /// The elastic backbone.
+    pub rod: Rod,
+    /// The tendons.
+    pub tendons: Vec<Tendon>,
+    /// External loads (world frame).
+    pub loads: Loads,
+    /// Base position p(0) (m), world frame.
+    pub base_position: Vector3<f64>,
+    /// Base orientation R(0), body to world.
+    pub base_rotation: Matrix3<f64>,
+    /// Include the point forces of tendons that bend at an interior termination of another
+    /// tendon (ERRATA.md addendum). `true` is the physically consistent model; `false`
+    /// reproduces the paper's jump conditions for comparison.
+    pub corner_forces: bool,
+}
+
+/// Samples per unit turn used to look for a vanishing tendon tangent in validation.
+const ROUTING_SAMPLES: usize = 256;
+
+impl Robot {
+    /// A robot with the base at the origin, body z along world z, no tendons, no loads.
+    pub fn new(rod: Rod) -> Self {
+        Robot {
+            rod,
+            tendons: Vec::new(),
+            loads: Loads::none(),
+            base_position: Vector3::zeros(),
+            base_rotation: Matrix3::identity(),
+            corner_forces: true,
+        }
+    }
+
+    /// The same robot with one more tendon.
+    pub fn with_tendon(mut self, tendon: Tendon) -> Self {
+        self.tendons.push(tendon);
+        self
+    }
+
+    /// The same robot with these loads.
+    pub fn with_loads(mut self, loads: Loads) -> Self {
+        self.loads = loads;
+        self
+    }
+
+    /// The same robot with base pose (p0 in m, R0 body to world).
+    pub fn with_base(mut self, position: Vector3<f64>, rotation: Matrix3<f64>) -> Self {
+        self.base_position = position;
+        self.base_rotation = rotation;
+        self
+    }
+
+    /// Rod length L (m).
+    pub fn length(&self) -> f64 {
+        self.rod.length
+    }
+
+    /// Interior arc lengths in (0, L) where the solution may jump (tendon terminations and
+    /// point loads), sorted and without repeats.
+    pub fn breakpoints(&self) -> Vec<f64> {
+        let l = self.length();
+        let mut b: Vec<f64> = self
+            .tendons
+            .iter()
+            .map(|t| t.end(l))
+            .chain(self.loads.point.iter().map(|p| p.s))
+            .filter(|&s| s < l)
+            .collect();
+        b.sort_by(f64::total_cmp);
+        b.dedup();
+        b
+    }
+
+    /// Characteristic bending stiffness E I (N m^2) at the base, used for scaling.
+    pub fn bending_stiffness(&self) -> f64 {
+        let k = self.rod.section_at(0.0).section.kbt;
+        k[0].max(k[1])
+    }
+
+    /// Checks every field; returns the first problem with the path of the offending field.
+    ///
+    /// # Errors
+    /// [`Error::InvalidInput`] for non-finite or out-of-range values, [`Error::SingularRouting`]
+    /// for a tendon whose path tangent vanishes in the unloaded shape.
+    pub fn validate(&self) -> Result<()> {
+        let l = self.rod.length;
+        if !(l.is_finite() && l > 0.0) {
+            return Err(invalid(
+                "rod.length",
+                format!("is {l}"),
+                "give a positive, finite length in m",
+            ));
+        }
+        let samples: Vec<f64> = (0..=32).map(|k| l * k as f64 / 32.0).collect();
+        for &s in &samples {
+            let sp = self.rod.section_at(s);
+            for (name, v) in [
+                ("kse (GA, GA, EA)", sp.section.kse),
+                ("kbt (EIxx, EIyy, GJ)", sp.section.kbt),
+            ] {
+                if v.iter().any(|x| !(x.is_finite() && *x > 0.0)) {
+                    return Err(invalid(
+                        "rod.stiffness",
+                        format!("{name} is ({}, {}, {}) at s = {s} m", v[0], v[1], v[2]),
+                        "every stiffness must be positive and finite: check radius and moduli",
+                    ));
+                }
+            }
+            if !(sp.kse_s.iter().chain(sp.kbt_s.iter()).all(|x| x.is_finite())) {
+                return Err(invalid(
+                    "rod.stiffness",
+                    format!("derivative is not finite at s = {s} m"),
+                    "fix the stiffness function",
+                ));
+            }
+            let r = self.rod.reference_at(s);
+            let all = [r.v_star, r.u_star, r.v_star_s, r.u_star_s];
+            if all.iter().any(|v| v.iter().any(|x| !x.is_finite())) {
+                return Err(invalid(
+                    "rod.reference",
+                    format!("is not finite at s = {s} m"),
+                    "fix v*, u* or their derivatives",
+                ));
+            }
+            if r.v_star[2] <= 0.0 {
+                return Err(invalid(
+                    "rod.reference.v_star",
+                    format!("has z = {} <= 0 at s = {s} m", r.v_star[2]),
+                    "the reference axial strain v*_z must be positive (1 for an unstretched rod)",
+                ));
+            }
+        }
+        check_vec("base_position", &self.base_position)?;
+        let r0 = &self.base_rotation;
+        if r0.iter().any(|x| !x.is_finite()) || so3::orthonormality_error(r0) > 1e-6 {
+            return Err(invalid(
+                "base_rotation",
+                format!(
+                    "is not a rotation (|R^T R - I|, |det R - 1| = {:.2e})",
+                    so3::orthonormality_error(r0)
+                ),
+                "give an orthonormal matrix with determinant +1 (rows are the body axes' world components transposed)",
+            ));
+        }
+        self.validate_loads()?;
+        for (i, t) in self.tendons.iter().enumerate() {
+            self.validate_tendon(i, t)?;
+        }
+        Ok(())
+    }
+
+    fn validate_loads(&self) -> Result<()> {
+        let l = self.rod.length;
+        check_vec("loads.tip_force", &self.loads.tip_force)?;
+        check_vec("loads.tip_moment", &self.loads.tip_moment)?;
+        for k in 0..=32 {
+            let s = l * k as f64 / 32.0;
+            check_vec("loads.distributed_force", &self.loads.distributed_force.at(s))?;
+            check_vec("loads.distributed_moment", &self.loads.distributed_moment.at(s))?;
+        }
+        for (i, p) in self.loads.point.iter().enumerate() {
+            if !(p.s.is_finite() && p.s > 0.0 && p.s <= l) {
+                return Err(invalid(
+                    format!("loads.point[{i}].s"),
+                    format!("is {} m, outside (0, {l}]", p.s),
+                    "place point loads on the rod, after the base",
+                ));
+            }
+            check_vec(&format!("loads.point[{i}].force"), &p.force)?;
+            check_vec(&format!("loads.point[{i}].moment"), &p.moment)?;
+        }
+        Ok(())
+    }
+
+    fn validate_tendon(&self, i: usize, t: &Tendon) -> Result<()> {
+        let l = self.rod.length;
+        if !(t.tension.is_finite() && t.tension >= 0.0) {
+            return Err(invalid(
+                format!("tendons[{i}].tension"),
+                format!("is {} N", t.tension),
+                "a string can only pull: give a finite tension >= 0",
+            ));
+        }
+        let end = t.end(l);
+        if !(end.is_finite() && end > 0.0 && end <= l) {
+            return Err(invalid(
+                format!("tendons[{i}].termination"),
+                format!("is s = {end} m, outside (0, {l}]"),
+                "set the termination to at most the rod length and above 0",
+            ));
+        }
+        // Look for a vanishing path tangent in the unloaded shape: |u* x r + r' + v*|.
+        let n = ROUTING_SAMPLES * 4;
+        for k in 0..=n {
+            let s = end * k as f64 / n as f64;
+            let rp = t.routing.at(s, l);
+            if [rp.r, rp.r_s, rp.r_ss].iter().any(|v| v.iter().any(|x| !x.is_finite())) {
+                return Err(invalid(
+                    format!("tendons[{i}].routing"),
+                    format!("is not finite at s = {s} m"),
+                    "fix the routing function",
+                ));
+            }
+            if rp.r[2] != 0.0 || rp.r_s[2] != 0.0 || rp.r_ss[2] != 0.0 {
+                return Err(invalid(
+                    format!("tendons[{i}].routing"),
+                    format!("has a z component at s = {s} m"),
+                    "r(s) lies in the cross-section: z must be 0",
+                ));
+            }
+            let rf = self.rod.reference_at(s);
+            let speed = (rf.u_star.cross(&rp.r) + rp.r_s + rf.v_star).norm();
+            // 1e-3: below this the tendon force per length exceeds a thousand times tau * curvature
+            if speed < 1e-3 {
+                return Err(Error::SingularRouting { tendon: i, s, speed });
+            }
+        }
+        Ok(())
+    }
+}
+
+fn check_vec(field: &str, v: &Vector3<f64>) -> Result<()> {
+    if v.iter().all(|x| x.is_finite()) {
+        Ok(())
+    } else {
+        Err(invalid(
+            field,
+            format!("is ({}, {}, {})", v[0], v[1], v[2]),
+            "every component must be a finite number",
+        ))
+    }
+}

@@ -1,0 +1,183 @@
+//! The elastic backbone: length, cross-section stiffness and reference (stress-free) strains.
+
+use nalgebra::Vector3;
+use std::f64::consts::PI;
+use std::fmt;
+use std::sync::Arc;
+
+/// Stiffness of one cross-section: `kse` = diag(GA, GA, EA) (N), the paper's D, and
+/// `kbt` = diag(E Ixx, E Iyy, G J) (N m^2), the paper's C with torsion G J (ERRATA.md).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Section {
+    /// Shear and extension stiffness (GA, GA, EA), body frame, N.
+    pub kse: Vector3<f64>,
+    /// Bending and torsion stiffness (E Ixx, E Iyy, G J), body frame, N m^2.
+    pub kbt: Vector3<f64>,
+}
+
+/// Shear modulus from Young's modulus and Poisson's ratio, G = E / (2 (1 + nu)) (Pa).
+pub fn shear_modulus(youngs_modulus: f64, poisson_ratio: f64) -> f64 {
+    youngs_modulus / (2.0 * (1.0 + poisson_ratio))
+}
+
+impl Section {
+    /// A solid circular section of `radius` (m), Young's modulus `e` and shear modulus `g` (Pa).
+    pub fn solid_circle(radius: f64, e: f64, g: f64) -> Self {
+        Self::tube(radius, 0.0, e, g)
+    }
+
+    /// A circular tube with `outer` and `inner` radii (m), moduli `e`, `g` (Pa).
+    pub fn tube(outer: f64, inner: f64, e: f64, g: f64) -> Self {
+        let area = PI * (outer.powi(2) - inner.powi(2));
+        let i = PI / 4.0 * (outer.powi(4) - inner.powi(4));
+        Self::explicit(e * area, g * area, e * i, e * i, g * 2.0 * i)
+    }
+
+    /// Explicit stiffnesses: EA and GA (N), E Ixx, E Iyy and G J (N m^2).
+    pub fn explicit(ea: f64, ga: f64, eixx: f64, eiyy: f64, gj: f64) -> Self {
+        Section {
+            kse: Vector3::new(ga, ga, ea),
+            kbt: Vector3::new(eixx, eiyy, gj),
+        }
+    }
+}
+
+/// Section stiffness and its arc-length derivative at one s (eq. 4 needs D', C').
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SectionPoint {
+    /// Stiffness at s.
+    pub section: Section,
+    /// d kse / ds (N/m).
+    pub kse_s: Vector3<f64>,
+    /// d kbt / ds (N m).
+    pub kbt_s: Vector3<f64>,
+}
+
+/// Reference strains and their derivatives at one s.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct StrainPoint {
+    /// v*(s), body frame, dimensionless.
+    pub v_star: Vector3<f64>,
+    /// u*(s), body frame, rad/m.
+    pub u_star: Vector3<f64>,
+    /// dv*/ds (1/m).
+    pub v_star_s: Vector3<f64>,
+    /// du*/ds (rad/m^2).
+    pub u_star_s: Vector3<f64>,
+}
+
+/// How the stiffness varies along the backbone.
+#[derive(Clone)]
+pub enum Stiffness {
+    /// The same section everywhere.
+    Uniform(Section),
+    /// A section (with exact derivative) given as a function of s (m).
+    Varying(Arc<dyn Fn(f64) -> SectionPoint + Send + Sync>),
+}
+
+/// The stress-free shape of the backbone, as strains.
+#[derive(Clone)]
+pub enum ReferenceStrains {
+    /// Straight and unstretched: v* = (0, 0, 1), u* = 0.
+    Straight,
+    /// Constant strains (constant precurvature u*, body frame, rad/m).
+    Constant {
+        /// v*, dimensionless.
+        v_star: Vector3<f64>,
+        /// u*, rad/m.
+        u_star: Vector3<f64>,
+    },
+    /// Strains with exact derivatives as a function of s (m).
+    Varying(Arc<dyn Fn(f64) -> StrainPoint + Send + Sync>),
+}
+
+/// The elastic backbone.
+#[derive(Clone, Debug)]
+pub struct Rod {
+    /// Backbone length L (m).
+    pub length: f64,
+    /// Cross-section stiffness along s.
+    pub stiffness: Stiffness,
+    /// Reference strains v*(s), u*(s).
+    pub reference: ReferenceStrains,
+}
+
+impl Rod {
+    /// A straight rod of uniform section.
+    pub fn new(length: f64, section: Section) -> Self {
+        Rod {
+            length,
+            stiffness: Stiffness::Uniform(section),
+            reference: ReferenceStrains::Straight,
+        }
+    }
+
+    /// A straight solid circular rod of `radius` (m), Young's modulus `e` (Pa) and Poisson's
+    /// ratio `nu`, torsion G J with G = E / (2 (1 + nu)).
+    pub fn solid_circle(length: f64, radius: f64, e: f64, nu: f64) -> Self {
+        Self::new(length, Section::solid_circle(radius, e, shear_modulus(e, nu)))
+    }
+
+    /// The same rod with a constant precurvature `u_star` (body frame, rad/m).
+    pub fn with_precurvature(mut self, u_star: Vector3<f64>) -> Self {
+        self.reference = ReferenceStrains::Constant {
+            v_star: Vector3::z(),
+            u_star,
+        };
+        self
+    }
+
+    /// Section stiffness and its derivative at s.
+    pub fn section_at(&self, s: f64) -> SectionPoint {
+        match &self.stiffness {
+            Stiffness::Uniform(section) => SectionPoint {
+                section: *section,
+                kse_s: Vector3::zeros(),
+                kbt_s: Vector3::zeros(),
+            },
+            Stiffness::Varying(f) => f(s),
+        }
+    }
+
+    /// Reference strains and their derivatives at s.
+    pub fn reference_at(&self, s: f64) -> StrainPoint {
+        match &self.reference {
+            ReferenceStrains::Straight => StrainPoint {
+                v_star: Vector3::z(),
+                u_star: Vector3::zeros(),
+                v_star_s: Vector3::zeros(),
+                u_star_s: Vector3::zeros(),
+            },
+            ReferenceStrains::Constant { v_star, u_star } => StrainPoint {
+                v_star: *v_star,
+                u_star: *u_star,
+                v_star_s: Vector3::zeros(),
+                u_star_s: Vector3::zeros(),
+            },
+            ReferenceStrains::Varying(f) => f(s),
+        }
+    }
+}
+
+impl fmt::Debug for Stiffness {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Stiffness::Uniform(s) => f.debug_tuple("Uniform").field(s).finish(),
+            Stiffness::Varying(_) => f.write_str("Varying(<fn>)"),
+        }
+    }
+}
+
+impl fmt::Debug for ReferenceStrains {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            ReferenceStrains::Straight => f.write_str("Straight"),
+            ReferenceStrains::Constant { v_star, u_star } => f
+                .debug_struct("Constant")
+                .field("v_star", v_star)
+                .field("u_star", u_star)
+                .finish(),
+            ReferenceStrains::Varying(_) => f.write_str("Varying(<fn>)"),
+        }
+    }
+}

@@ -1,0 +1,426 @@
+//! The shooting solver, kept as an independent cross-check of collocation.
+//!
+//! Unknowns: the base strains (v(0), u(0)), 6 numbers. Each trial integrates eq. 13 from the
+//! base with the Dormand-Prince 5(4) embedded Runge-Kutta pair, stepping the rotation on
+//! SO(3) by Runge-Kutta-Munthe-Kaas (each step works in the local coordinates
+//! R = R_n exp(theta), theta' = J_r(theta)^-1 u, so R stays orthonormal). At every interior
+//! breakpoint the right-hand strains are found from the jump conditions by a small Newton
+//! solve; the 6 tip conditions are the residual of an outer damped Newton iteration whose
+//! Jacobian is taken by central differences.
+#![allow(non_snake_case)]
+
+use crate::equations::{Model, Site};
+use crate::error::Result;
+use crate::report::{Iteration, Method, SolveReport, Termination};
+use crate::solution::Solution;
+use crate::{Error, Robot, so3};
+use nalgebra::{Matrix3, SMatrix, SVector, Vector3};
+use num_dual::DualSVec64;
+use std::time::Instant;
+
+/// Shooting options.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Options {
+    /// Relative and absolute local error tolerance of the integrator on the scaled state
+    /// (p / L, theta, v, u L). Default 1e-10; down to 1e-12 is supported.
+    pub integration_tolerance: f64,
+    /// Newton stops when the scaled tip residual is below this. Default 1e-9 (dimensionless).
+    pub tolerance: f64,
+    /// Newton iteration limit. Default 50.
+    pub max_iterations: usize,
+}
+
+impl Default for Options {
+    fn default() -> Self {
+        Options {
+            integration_tolerance: 1e-10,
+            tolerance: 1e-9,
+            max_iterations: 50,
+        }
+    }
+}
+
+/// A point of the integrated trajectory: (s, p, R, v, u).
+type Point = (f64, Vector3<f64>, Matrix3<f64>, Vector3<f64>, Vector3<f64>);
+
+/// Local-coordinate state (p, theta, v, u) of one integration step.
+type Local = SVector<f64, 12>;
+
+/// Solves `robot` by shooting.
+///
+/// # Errors
+/// Invalid input, a model breakdown, or [`Error::NotConverged`] with the report.
+pub fn solve(robot: &Robot, options: &Options) -> Result<Solution> {
+    robot.validate()?;
+    let start = Instant::now();
+    let model = Model::new(robot);
+    let length = robot.length();
+    let mut report = SolveReport::new(Method::Shooting);
+    report.meshes = 1;
+    report.load_steps = 1;
+    report.unknowns = 6;
+
+    // Initial guess: strains carrying the rigid-equilibrium base wrench.
+    let site0 = model.site(0.0);
+    let (n0, m0) = model.rigid_base_wrench(&model.reference_shape(64));
+    let R0t = robot.base_rotation.transpose();
+    let (v0, u0) = model.strains_for_wrench(&site0, &(R0t * n0), &(R0t * m0));
+    let scale = Scale { length };
+    let mut x = scale.to_unknowns(&v0, &u0);
+
+    let mut trajectory = Vec::new();
+    let mut res = shoot(&model, &scale, &x, options, &mut trajectory, &mut report)?;
+    let mut norm = res.amax();
+    report.termination = Termination::MaxIterations;
+    for _ in 0..options.max_iterations {
+        if norm < options.tolerance {
+            report.termination = Termination::Converged;
+            break;
+        }
+        report.iterations += 1;
+        let J = jacobian(&model, &scale, &x, options, &mut report)?;
+        let Some(step) = J.lu().solve(&(-res)) else {
+            report.termination = Termination::SingularJacobian;
+            break;
+        };
+        if !step.iter().all(|v| v.is_finite()) {
+            report.termination = Termination::SingularJacobian;
+            break;
+        }
+        // Backtracking: halve until the residual decreases (Armijo-free: the cross-check
+        // only needs robustness, not efficiency).
+        let mut damping = 1.0;
+        let mut accepted = false;
+        while damping > 1e-4 {
+            let trial = x + step * damping;
+            let mut traj = Vec::new();
+            if let Ok(r) = shoot(&model, &scale, &trial, options, &mut traj, &mut report)
+                && r.amax().is_finite()
+                && r.amax() < norm
+            {
+                report.history.push(Iteration {
+                    residual: norm,
+                    step: step.amax(),
+                    damping,
+                });
+                x = trial;
+                res = r;
+                norm = r.amax();
+                trajectory = traj;
+                accepted = true;
+                break;
+            }
+            damping *= 0.5;
+        }
+        if !accepted {
+            report.termination = Termination::LineSearchFailed;
+            break;
+        }
+    }
+    if norm < options.tolerance {
+        report.termination = Termination::Converged;
+    }
+    report.residual = norm;
+    report.intervals = trajectory.len().saturating_sub(1);
+    report.timings.total = start.elapsed();
+    if report.termination != Termination::Converged {
+        return Err(Error::NotConverged {
+            method: "shooting",
+            report: Box::new(report),
+            worst_s: length,
+            hint: "shooting is a cross-check; use collocation (with load continuation) for hard cases".into(),
+        });
+    }
+    let ends = segment_ends(&model, &trajectory);
+    Solution::from_states(&model, &trajectory, &ends, report)
+}
+
+/// The end of the segment each trajectory point belongs to (a breakpoint appears twice:
+/// left limit, then right limit).
+fn segment_ends(model: &Model, traj: &[Point]) -> Vec<f64> {
+    let length = model.robot.length();
+    let breaks = model.robot.breakpoints();
+    let mut out = Vec::with_capacity(traj.len());
+    for (k, pt) in traj.iter().enumerate() {
+        let is_right_limit = k > 0 && traj[k - 1].0 == pt.0;
+        let end = breaks
+            .iter()
+            .copied()
+            .find(|&b| if is_right_limit { b > pt.0 } else { b >= pt.0 })
+            .unwrap_or(length);
+        out.push(end);
+    }
+    out
+}
+
+/// Scaling of the unknowns: (v, u L).
+struct Scale {
+    length: f64,
+}
+
+impl Scale {
+    fn to_unknowns(&self, v: &Vector3<f64>, u: &Vector3<f64>) -> SVector<f64, 6> {
+        SVector::<f64, 6>::from_iterator(v.iter().copied().chain(u.iter().map(|x| x * self.length)))
+    }
+    fn from_unknowns(&self, x: &SVector<f64, 6>) -> (Vector3<f64>, Vector3<f64>) {
+        (x.fixed_rows::<3>(0).into(), x.fixed_rows::<3>(3) / self.length)
+    }
+}
+
+fn jacobian(
+    model: &Model,
+    scale: &Scale,
+    x: &SVector<f64, 6>,
+    options: &Options,
+    report: &mut SolveReport,
+) -> Result<SMatrix<f64, 6, 6>> {
+    report.evaluations.jacobian += 1;
+    // Central differences; 1e-6 balances truncation (h^2) and integration noise (tol / h).
+    let h = 1e-6;
+    let mut J = SMatrix::<f64, 6, 6>::zeros();
+    let mut scratch = Vec::new();
+    for j in 0..6 {
+        let mut xp = *x;
+        let mut xm = *x;
+        xp[j] += h;
+        xm[j] -= h;
+        let rp = shoot(model, scale, &xp, options, &mut scratch, report)?;
+        let rm = shoot(model, scale, &xm, options, &mut scratch, report)?;
+        J.set_column(j, &((rp - rm) / (2.0 * h)));
+    }
+    Ok(J)
+}
+
+/// Integrates from the base with base strains `x` (scaled) and returns the scaled tip
+/// residual; `traj` receives every accepted step.
+fn shoot(
+    model: &Model,
+    scale: &Scale,
+    x: &SVector<f64, 6>,
+    options: &Options,
+    traj: &mut Vec<Point>,
+    report: &mut SolveReport,
+) -> Result<SVector<f64, 6>> {
+    report.evaluations.residual += 1;
+    traj.clear();
+    let robot = model.robot;
+    let length = robot.length();
+    let (v, u) = scale.from_unknowns(x);
+    let mut state: Point = (0.0, robot.base_position, robot.base_rotation, v, u);
+    traj.push(state);
+    let mut seg_start = 0.0;
+    let breaks = robot.breakpoints();
+    for seg_end in breaks.iter().copied().chain(std::iter::once(length)) {
+        state = integrate(
+            model,
+            seg_start,
+            seg_end,
+            state,
+            options.integration_tolerance,
+            traj,
+            report,
+        )?;
+        if seg_end < length {
+            let (v_b, u_b) = jump(model, seg_end, &state)?;
+            state = (seg_end, state.1, state.2, v_b, u_b);
+            traj.push(state);
+        }
+        seg_start = seg_end;
+    }
+    let site = model.site(length);
+    let (s, _, R, v, u) = state;
+    let (f, m) = model.wrench_balance(s, (&site, &R, &v, &u), None)?;
+    Ok(SVector::<f64, 6>::from_iterator(
+        f.iter().copied().chain(m.iter().map(|x| x * length)),
+    ))
+}
+
+/// Right-limit strains at breakpoint s from the jump conditions (Newton on 6 unknowns with
+/// an exact dual-number Jacobian; p and R are continuous).
+fn jump(model: &Model, s: f64, left: &Point) -> Result<(Vector3<f64>, Vector3<f64>)> {
+    type D6 = DualSVec64<6>;
+    let site = model.site(s);
+    let (_, _, R, va, ua) = *left;
+    let (mut v, mut u) = (va, ua);
+    let lift3 = |x: &Vector3<f64>| x.map(D6::from);
+    let (Rd, vad, uad) = (R.map(D6::from), lift3(&va), lift3(&ua));
+    for _ in 0..30 {
+        let mut vd = lift3(&v);
+        let mut ud = lift3(&u);
+        for i in 0..3 {
+            vd[i] = D6::from(v[i]).derivative(i);
+            ud[i] = D6::from(u[i]).derivative(i + 3);
+        }
+        let (fr, mr) = model.wrench_balance(s, (&site, &Rd, &vad, &uad), Some((&site, &Rd, &vd, &ud)))?;
+        let r = SVector::<f64, 6>::from_iterator(fr.iter().chain(mr.iter()).map(|d| d.re));
+        let mut J = SMatrix::<f64, 6, 6>::zeros();
+        for (row, d) in fr.iter().chain(mr.iter()).enumerate() {
+            if let Some(eps) = d.eps.0.as_ref() {
+                J.set_row(row, &eps.transpose());
+            }
+        }
+        let step = J.lu().solve(&(-r)).ok_or_else(|| Error::Breakdown {
+            s,
+            what: "the jump conditions are singular".into(),
+        })?;
+        v += step.fixed_rows::<3>(0);
+        u += step.fixed_rows::<3>(3);
+        // 1e-15 relative to the strains: converged to rounding
+        if step.amax() <= 1e-15 * (1.0 + v.amax() + u.amax()) {
+            break;
+        }
+    }
+    Ok((v, u))
+}
+
+/// Scaled local state: p / L, theta, v, u L.
+fn scaled(y: &Local, length: f64) -> Local {
+    let mut z = *y;
+    for i in 0..3 {
+        z[i] /= length;
+        z[9 + i] *= length;
+    }
+    z
+}
+
+/// d/ds of the local state (p, theta, v, u) of a step that started at rotation `R_n`.
+fn local_rhs(model: &Model, site: &Site, seg_end: f64, R_n: &Matrix3<f64>, y: &Local) -> Result<Local> {
+    let theta: Vector3<f64> = y.fixed_rows::<3>(3).into();
+    let v: Vector3<f64> = y.fixed_rows::<3>(6).into();
+    let u: Vector3<f64> = y.fixed_rows::<3>(9).into();
+    let R = R_n * so3::exp(&theta);
+    let (v_s, u_s) = model.strain_rates(site, seg_end, &R, &v, &u)?;
+    let mut d = Local::zeros();
+    d.fixed_rows_mut::<3>(0).copy_from(&(R * v));
+    d.fixed_rows_mut::<3>(3)
+        .copy_from(&(so3::right_jacobian_inv(&theta) * u));
+    d.fixed_rows_mut::<3>(6).copy_from(&v_s);
+    d.fixed_rows_mut::<3>(9).copy_from(&u_s);
+    Ok(d)
+}
+
+// Dormand-Prince 5(4) tableau (Dormand & Prince 1980; Hairer, Norsett & Wanner, table II.5.2).
+const C: [f64; 7] = [0.0, 1.0 / 5.0, 3.0 / 10.0, 4.0 / 5.0, 8.0 / 9.0, 1.0, 1.0];
+const A: [[f64; 6]; 7] = [
+    [0.0; 6],
+    [1.0 / 5.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+    [3.0 / 40.0, 9.0 / 40.0, 0.0, 0.0, 0.0, 0.0],
+    [44.0 / 45.0, -56.0 / 15.0, 32.0 / 9.0, 0.0, 0.0, 0.0],
+    [
+        19372.0 / 6561.0,
+        -25360.0 / 2187.0,
+        64448.0 / 6561.0,
+        -212.0 / 729.0,
+        0.0,
+        0.0,
+    ],
+    [
+        9017.0 / 3168.0,
+        -355.0 / 33.0,
+        46732.0 / 5247.0,
+        49.0 / 176.0,
+        -5103.0 / 18656.0,
+        0.0,
+    ],
+    [
+        35.0 / 384.0,
+        0.0,
+        500.0 / 1113.0,
+        125.0 / 192.0,
+        -2187.0 / 6784.0,
+        11.0 / 84.0,
+    ],
+];
+/// 5th-order weights (the last row of A).
+const B5: [f64; 7] = [
+    35.0 / 384.0,
+    0.0,
+    500.0 / 1113.0,
+    125.0 / 192.0,
+    -2187.0 / 6784.0,
+    11.0 / 84.0,
+    0.0,
+];
+/// 4th-order embedded weights.
+const B4: [f64; 7] = [
+    5179.0 / 57600.0,
+    0.0,
+    7571.0 / 16695.0,
+    393.0 / 640.0,
+    -92097.0 / 339200.0,
+    187.0 / 2100.0,
+    1.0 / 40.0,
+];
+
+/// Integrates one segment [s0, s1] with adaptive steps, pushing every accepted step.
+fn integrate(
+    model: &Model,
+    s0: f64,
+    s1: f64,
+    start: Point,
+    tol: f64,
+    traj: &mut Vec<Point>,
+    report: &mut SolveReport,
+) -> Result<Point> {
+    let length = model.robot.length();
+    let (_, mut p, mut R, mut v, mut u) = start;
+    let mut s = s0;
+    // First step: a few percent of the segment; the controller adapts it at once.
+    let mut h = (s1 - s0) * 0.02;
+    let mut steps = 0usize;
+    while s < s1 {
+        steps += 1;
+        // 1e6 steps means the tolerance cannot be met: report instead of looping
+        if steps > 1_000_000 || !h.is_finite() {
+            return Err(Error::Breakdown {
+                s,
+                what: "the integrator's step size collapsed".into(),
+            });
+        }
+        let last = s + h >= s1 - 1e-14 * length;
+        if last {
+            h = s1 - s;
+        }
+        let mut y0 = Local::zeros();
+        y0.fixed_rows_mut::<3>(0).copy_from(&p);
+        y0.fixed_rows_mut::<3>(6).copy_from(&v);
+        y0.fixed_rows_mut::<3>(9).copy_from(&u);
+        let mut k = [Local::zeros(); 7];
+        for i in 0..7 {
+            let mut yi = y0;
+            for (j, kj) in k.iter().enumerate().take(i) {
+                yi += kj * (h * A[i][j]);
+            }
+            let site = model.site(s + C[i] * h);
+            k[i] = local_rhs(model, &site, s1, &R, &yi)?;
+            report.evaluations.equations += 1;
+        }
+        let mut y5 = y0;
+        let mut y4 = y0;
+        for i in 0..7 {
+            y5 += k[i] * (h * B5[i]);
+            y4 += k[i] * (h * B4[i]);
+        }
+        let (z0, z5, z4) = (scaled(&y0, length), scaled(&y5, length), scaled(&y4, length));
+        let mut err: f64 = 0.0;
+        for i in 0..12 {
+            let sc = tol * (1.0 + z0[i].abs().max(z5[i].abs()));
+            err = err.max(((z5[i] - z4[i]) / sc).abs());
+        }
+        if !err.is_finite() {
+            h *= 0.25;
+            continue;
+        }
+        if err <= 1.0 {
+            s = if last { s1 } else { s + h };
+            p = y5.fixed_rows::<3>(0).into();
+            R *= so3::exp(&y5.fixed_rows::<3>(3).into());
+            v = y5.fixed_rows::<3>(6).into();
+            u = y5.fixed_rows::<3>(9).into();
+            traj.push((s, p, R, v, u));
+        }
+        // Standard controller: safety 0.9, exponent 1/5, growth limited to [0.2, 5].
+        h *= (0.9 * err.powf(-0.2)).clamp(0.2, 5.0);
+    }
+    Ok((s, p, R, v, u))
+}

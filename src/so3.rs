@@ -1,0 +1,176 @@
+//! Rotation-group helpers: hat/vee, the exponential and logarithm maps and the right
+//! Jacobian of SO(3), generic over the scalar so that forward-mode automatic
+//! differentiation (num-dual) flows through them.
+//!
+//! Every function is smooth at the identity: near theta = 0 the trigonometric ratios are
+//! evaluated from their Taylor series in theta^2, so dual numbers get exact derivatives
+//! there too (sqrt(theta^2) would have an infinite derivative at 0).
+
+use crate::Real;
+use nalgebra::{Matrix3, Vector3};
+
+/// Below this theta^2 the series are used; their first omitted term is then below 1e-24.
+const SERIES_THETA_SQ: f64 = 1e-6;
+
+/// The hat map: `hat(a) * b == a x b`.
+pub fn hat<T: Real>(a: &Vector3<T>) -> Matrix3<T> {
+    let z = T::zero();
+    Matrix3::new(z, -a[2], a[1], a[2], z, -a[0], -a[1], a[0], z)
+}
+
+/// The vee map, inverse of [`hat`] on skew-symmetric matrices (reads the skew part).
+pub fn vee<T: Real>(m: &Matrix3<T>) -> Vector3<T> {
+    let half = T::from_f64(0.5).unwrap_or_else(T::one);
+    Vector3::new(
+        (m[(2, 1)] - m[(1, 2)]) * half,
+        (m[(0, 2)] - m[(2, 0)]) * half,
+        (m[(1, 0)] - m[(0, 1)]) * half,
+    )
+}
+
+fn c<T: Real>(x: f64) -> T {
+    T::from_f64(x).unwrap_or_else(T::zero)
+}
+
+/// (sin t / t, (1 - cos t) / t^2, t^2) for the rotation vector `theta`, t = |theta|.
+fn ratios<T: Real>(theta: &Vector3<T>) -> (T, T, T) {
+    let t2 = theta.norm_squared();
+    if t2 < c(SERIES_THETA_SQ) {
+        let a = T::one() - t2 / c(6.0) + t2 * t2 / c(120.0) - t2 * t2 * t2 / c(5040.0);
+        let b = c::<T>(0.5) - t2 / c(24.0) + t2 * t2 / c(720.0) - t2 * t2 * t2 / c(40320.0);
+        (a, b, t2)
+    } else {
+        let t = t2.sqrt();
+        (t.sin() / t, (T::one() - t.cos()) / t2, t2)
+    }
+}
+
+/// The exponential map: the rotation by angle |theta| about theta / |theta| (Rodrigues).
+pub fn exp<T: Real>(theta: &Vector3<T>) -> Matrix3<T> {
+    let (a, b, _) = ratios(theta);
+    let k = hat(theta);
+    Matrix3::identity() + k * a + k * k * b
+}
+
+/// The right Jacobian J_r(theta): d/ds exp(theta(s)) = exp(theta) hat(J_r(theta) theta').
+pub fn right_jacobian<T: Real>(theta: &Vector3<T>) -> Matrix3<T> {
+    let t2 = theta.norm_squared();
+    let k = hat(theta);
+    // (1 - cos t) / t^2 and (t - sin t) / t^3
+    let (b, d) = if t2 < c(SERIES_THETA_SQ) {
+        (
+            c::<T>(0.5) - t2 / c(24.0) + t2 * t2 / c(720.0),
+            c::<T>(1.0 / 6.0) - t2 / c(120.0) + t2 * t2 / c(5040.0),
+        )
+    } else {
+        let t = t2.sqrt();
+        ((T::one() - t.cos()) / t2, (t - t.sin()) / (t2 * t))
+    };
+    Matrix3::identity() - k * b + k * k * d
+}
+
+/// The inverse of the right Jacobian: theta' = J_r(theta)^-1 u when R = R0 exp(theta),
+/// R' = R hat(u). Valid for |theta| < 2 pi.
+pub fn right_jacobian_inv<T: Real>(theta: &Vector3<T>) -> Matrix3<T> {
+    let t2 = theta.norm_squared();
+    let k = hat(theta);
+    // 1/t^2 - (1 + cos t) / (2 t sin t) = 1/12 + t^2/720 + t^4/30240 + ...
+    let e = if t2 < c(SERIES_THETA_SQ) {
+        c::<T>(1.0 / 12.0) + t2 / c(720.0) + t2 * t2 / c(30240.0)
+    } else {
+        let t = t2.sqrt();
+        T::one() / t2 - (T::one() + t.cos()) / (c::<T>(2.0) * t * t.sin())
+    };
+    Matrix3::identity() + k * c::<T>(0.5) + k * k * e
+}
+
+/// The logarithm map: the rotation vector theta with exp(theta) = q, |theta| <= pi.
+///
+/// `q` must be a rotation matrix. Smooth at the identity (series in sin^2) and
+/// well-conditioned up to, but not at, |theta| = pi, where the axis is read from the
+/// symmetric part.
+pub fn log<T: Real>(q: &Matrix3<T>) -> Vector3<T> {
+    let w = vee(q); // sin(t) * axis
+    let cos = (q.trace() - T::one()) * c(0.5);
+    let s2 = w.norm_squared();
+    if cos > c(0.0) && s2 < c(SERIES_THETA_SQ) {
+        // asin(x)/x = 1 + x^2/6 + 3x^4/40 + 5x^6/112 with x^2 = sin^2 t
+        let f = T::one() + s2 / c(6.0) + s2 * s2 * c(3.0 / 40.0) + s2 * s2 * s2 * c(5.0 / 112.0);
+        return w * f;
+    }
+    if cos > c(-0.9) {
+        let sin = s2.sqrt();
+        return w * (sin.atan2(cos) / sin);
+    }
+    // Near pi: (q + q^T)/2 - cos I = (1 - cos) a a^T; take the largest column.
+    let sym: Matrix3<T> = (q + q.transpose()) * c::<T>(0.5) - Matrix3::<T>::identity() * cos;
+    let mut k = 0;
+    for i in 1..3 {
+        if sym[(i, i)] > sym[(k, k)] {
+            k = i;
+        }
+    }
+    let col: Vector3<T> = sym.column(k).into();
+    let mut axis = col / col.norm();
+    if axis.dot(&w) < c(0.0) {
+        axis = -axis;
+    }
+    let angle = s2.sqrt().atan2(cos);
+    axis * angle
+}
+
+/// Largest deviation of `r^T r` from the identity and of det(r) from 1: 0 for a rotation.
+pub fn orthonormality_error(r: &Matrix3<f64>) -> f64 {
+    let e = (r.transpose() * r - Matrix3::identity()).abs().max();
+    e.max((r.determinant() - 1.0).abs())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use approx::assert_relative_eq;
+
+    fn num_jr(theta: &Vector3<f64>, u: &Vector3<f64>) -> Vector3<f64> {
+        // exp(theta)^T d/de exp(theta + e J^-1 u) at e = 0 should be hat(u).
+        let h = 1e-6;
+        let dir = right_jacobian_inv(theta) * u;
+        let d = (exp(&(theta + dir * h)) - exp(&(theta - dir * h))) / (2.0 * h);
+        vee(&(exp(theta).transpose() * d))
+    }
+
+    #[test]
+    fn exp_log_round_trip_across_angles() {
+        // Angles from 0 through the series switch and up to just below pi.
+        for &t in &[0.0, 1e-9, 1e-4, 1e-3, 0.5, 2.0, 3.0, 3.1, 3.14159] {
+            let theta = Vector3::new(0.3, -0.5, 0.8).normalize() * t;
+            let r = exp(&theta);
+            assert!(orthonormality_error(&r) < 1e-15, "t = {t}");
+            // 1e-12: log near pi loses digits as 1/sin(t)
+            assert_relative_eq!(log(&r), theta, epsilon = 1e-12);
+        }
+    }
+
+    #[test]
+    fn right_jacobian_inverse_is_inverse_and_matches_exp() {
+        for &t in &[0.0, 1e-5, 0.7, 2.5] {
+            let theta = Vector3::new(-0.2, 0.9, 0.4).normalize() * t;
+            let p = right_jacobian(&theta) * right_jacobian_inv(&theta);
+            assert_relative_eq!(p, Matrix3::identity(), epsilon = 1e-14);
+            let u = Vector3::new(0.3, -1.0, 2.0);
+            // 1e-8: central difference with step 1e-6
+            assert_relative_eq!(num_jr(&theta, &u), u, epsilon = 1e-8);
+        }
+    }
+
+    #[test]
+    fn dual_derivatives_are_finite_at_identity() {
+        use num_dual::Dual64;
+        let theta = Vector3::new(Dual64::from(0.0).derivative(), 0.0.into(), 0.0.into());
+        let r = exp(&theta);
+        // d exp / d theta_x at 0 is hat(e_x)
+        assert_eq!(r[(2, 1)].eps, 1.0);
+        let l = log(&r);
+        assert_eq!(l[0].eps, 1.0);
+        assert!(l[1].eps == 0.0 && l[2].eps == 0.0);
+    }
+}

@@ -1,0 +1,173 @@
+//! The solved shape, shared by all solvers: nodes along the backbone, tendon paths, the tip
+//! pose, and evaluation at any arc length with the cubic Hermite interpolant (the natural
+//! interpolant of the Hermite-Simpson scheme; 4th-order accurate between nodes).
+#![allow(non_snake_case)]
+
+use crate::equations::Model;
+use crate::report::SolveReport;
+use crate::so3;
+use nalgebra::{Matrix3, Vector3};
+
+/// The state at one node. Where the solution jumps (a tendon termination or point load) two
+/// nodes share the same s: the first is the left limit, the second the right limit.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Node {
+    /// Arc length (m).
+    pub s: f64,
+    /// Centreline position (m), world frame.
+    pub p: Vector3<f64>,
+    /// Orientation, body to world.
+    pub R: Matrix3<f64>,
+    /// Shear/extension strain, body frame (p' = R v).
+    pub v: Vector3<f64>,
+    /// Curvature/twist, body frame (R' = R hat(u)), rad/m.
+    pub u: Vector3<f64>,
+    /// dv/ds (1/m).
+    pub v_s: Vector3<f64>,
+    /// du/ds (rad/m^2).
+    pub u_s: Vector3<f64>,
+    /// Internal force (N), world frame.
+    pub n: Vector3<f64>,
+    /// Internal moment (N m), world frame.
+    pub m: Vector3<f64>,
+}
+
+/// The state at an arbitrary arc length.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct State {
+    /// Arc length (m).
+    pub s: f64,
+    /// Position (m), world frame.
+    pub p: Vector3<f64>,
+    /// Orientation, body to world (orthonormal to rounding).
+    pub R: Matrix3<f64>,
+    /// Shear/extension strain, body frame.
+    pub v: Vector3<f64>,
+    /// Curvature/twist, body frame (rad/m).
+    pub u: Vector3<f64>,
+}
+
+/// A solved robot shape.
+#[derive(Clone, Debug)]
+pub struct Solution {
+    /// Nodes in increasing s, from 0 to L.
+    pub nodes: Vec<Node>,
+    /// For each tendon, its path p_i(s) = p + R r_i (m, world) at the nodes up to its
+    /// termination.
+    pub tendon_paths: Vec<Vec<Vector3<f64>>>,
+    /// How the solve went.
+    pub report: SolveReport,
+}
+
+impl Solution {
+    /// Builds a solution from node states (s, p, R, v, u): fills v', u', n, m and the
+    /// tendon paths from the model. `segment_ends[k]` is the end of the segment node k
+    /// belongs to (which tendons load it).
+    pub(crate) fn from_states(
+        model: &Model,
+        states: &[(f64, Vector3<f64>, Matrix3<f64>, Vector3<f64>, Vector3<f64>)],
+        segment_ends: &[f64],
+        report: SolveReport,
+    ) -> crate::Result<Self> {
+        let robot = model.robot;
+        let length = robot.length();
+        let mut nodes = Vec::with_capacity(states.len());
+        for (k, &(s, p, R, v, u)) in states.iter().enumerate() {
+            let site = model.site(s);
+            let (v_s, u_s) = model.strain_rates(&site, segment_ends[k], &R, &v, &u)?;
+            let (n, m) = model.internal_wrench(&site, &R, &v, &u);
+            nodes.push(Node {
+                s,
+                p,
+                R,
+                v,
+                u,
+                v_s,
+                u_s,
+                n,
+                m,
+            });
+        }
+        let tendon_paths = robot
+            .tendons
+            .iter()
+            .map(|t| {
+                let end = t.end(length);
+                let mut last_s = f64::NEG_INFINITY;
+                nodes
+                    .iter()
+                    .filter(|nd| nd.s <= end && std::mem::replace(&mut last_s, nd.s) < nd.s)
+                    .map(|nd| nd.p + nd.R * t.routing.at(nd.s, length).r)
+                    .collect()
+            })
+            .collect();
+        Ok(Solution {
+            nodes,
+            tendon_paths,
+            report,
+        })
+    }
+
+    /// Backbone length (m).
+    pub fn length(&self) -> f64 {
+        self.nodes.last().map_or(0.0, |n| n.s)
+    }
+
+    /// The tip node.
+    pub fn tip(&self) -> &Node {
+        &self.nodes[self.nodes.len() - 1]
+    }
+
+    /// The base node.
+    pub fn base(&self) -> &Node {
+        &self.nodes[0]
+    }
+
+    /// Tip position (m), world frame.
+    pub fn tip_position(&self) -> Vector3<f64> {
+        self.tip().p
+    }
+
+    /// The state at arc length `s` (clamped to [0, L]), from the cubic Hermite interpolant
+    /// in the local coordinates of the interval (R = R_k exp(theta(s))), so R stays a rotation.
+    /// At a jump the right limit is returned.
+    pub fn at(&self, s: f64) -> State {
+        let s = s.clamp(0.0, self.length());
+        // last interval of positive length starting at or before s
+        let mut k = 0;
+        for i in 0..self.nodes.len() - 1 {
+            if self.nodes[i + 1].s > self.nodes[i].s && self.nodes[i].s <= s {
+                k = i;
+            }
+        }
+        let (a, b) = (&self.nodes[k], &self.nodes[k + 1]);
+        let h = b.s - a.s;
+        let t = (s - a.s) / h;
+        let (h00, h10, h01, h11) = (
+            2.0 * t * t * t - 3.0 * t * t + 1.0,
+            t * t * t - 2.0 * t * t + t,
+            -2.0 * t * t * t + 3.0 * t * t,
+            t * t * t - t * t,
+        );
+        let herm = |y0: Vector3<f64>, d0: Vector3<f64>, y1: Vector3<f64>, d1: Vector3<f64>| {
+            y0 * h00 + d0 * (h10 * h) + y1 * h01 + d1 * (h11 * h)
+        };
+        let theta1 = so3::log(&(a.R.transpose() * b.R));
+        let theta = herm(Vector3::zeros(), a.u, theta1, so3::right_jacobian_inv(&theta1) * b.u);
+        State {
+            s,
+            p: herm(a.p, a.R * a.v, b.p, b.R * b.v),
+            R: a.R * so3::exp(&theta),
+            v: herm(a.v, a.v_s, b.v, b.v_s),
+            u: herm(a.u, a.u_s, b.u, b.u_s),
+        }
+    }
+
+    /// Largest deviation from orthonormality over all node rotations (0 for exact rotations).
+    pub fn max_orthonormality_error(&self) -> f64 {
+        self.nodes
+            .iter()
+            .map(|n| so3::orthonormality_error(&n.R))
+            .fold(0.0, f64::max)
+    }
+}

@@ -1,0 +1,37 @@
+//! A tendon: its routing, tension and where it ends.
+
+use crate::routing::Routing;
+
+/// One tendon, modelled as a frictionless Cosserat string (section 3 of the paper).
+#[derive(Clone, Debug)]
+pub struct Tendon {
+    /// Path in the cross-section along s.
+    pub routing: Routing,
+    /// Tension tau_i (N), >= 0, constant along the tendon (frictionless).
+    pub tension: f64,
+    /// Arc length l_i where it is attached to the backbone (m), in (0, L]; `None` means
+    /// the tip.
+    pub termination: Option<f64>,
+}
+
+impl Tendon {
+    /// A tendon along `routing` at `tension` (N), ending at the tip.
+    pub fn new(routing: Routing, tension: f64) -> Self {
+        Tendon {
+            routing,
+            tension,
+            termination: None,
+        }
+    }
+
+    /// The same tendon ending at arc length `s` (m).
+    pub fn ending_at(mut self, s: f64) -> Self {
+        self.termination = Some(s);
+        self
+    }
+
+    /// Termination arc length on a rod of `length` L (m).
+    pub fn end(&self, length: f64) -> f64 {
+        self.termination.unwrap_or(length)
+    }
+}
