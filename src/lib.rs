@@ -7,9 +7,13 @@
 #![warn(missing_docs)]
 
 pub mod cases;
+pub mod collocation;
 pub mod equations;
+pub mod equilibrium;
 pub mod error;
+pub mod guess;
 pub mod loads;
+pub mod mesh;
 pub mod report;
 pub mod robot;
 pub mod rod;

@@ -11,8 +11,10 @@
 
 use crate::equations::{Model, Site};
 use crate::error::Result;
+use crate::guess;
+use crate::mesh::Mesh;
 use crate::report::{Iteration, Method, SolveReport, Termination};
-use crate::solution::Solution;
+use crate::solution::{Solution, State};
 use crate::{Error, Robot, so3};
 use nalgebra::{Matrix3, SMatrix, SVector, Vector3};
 use num_dual::DualSVec64;
@@ -40,8 +42,8 @@ impl Default for Options {
     }
 }
 
-/// A point of the integrated trajectory: (s, p, R, v, u).
-type Point = (f64, Vector3<f64>, Matrix3<f64>, Vector3<f64>, Vector3<f64>);
+/// A point of the integrated trajectory.
+type Point = State;
 
 /// Local-coordinate state (p, theta, v, u) of one integration step.
 type Local = SVector<f64, 12>;
@@ -60,13 +62,10 @@ pub fn solve(robot: &Robot, options: &Options) -> Result<Solution> {
     report.load_steps = 1;
     report.unknowns = 6;
 
-    // Initial guess: strains carrying the rigid-equilibrium base wrench.
-    let site0 = model.site(0.0);
-    let (n0, m0) = model.rigid_base_wrench(&model.reference_shape(64));
-    let R0t = robot.base_rotation.transpose();
-    let (v0, u0) = model.strains_for_wrench(&site0, &(R0t * n0), &(R0t * m0));
+    // Initial guess: base strains of the rigid-equilibrium estimate.
+    let base = guess::rigid_estimate(&model, &Mesh::uniform(robot, 64)?.nodes)[0];
     let scale = Scale { length };
-    let mut x = scale.to_unknowns(&v0, &u0);
+    let mut x = scale.to_unknowns(&base.v, &base.u);
 
     let mut trajectory = Vec::new();
     let mut res = shoot(&model, &scale, &x, options, &mut trajectory, &mut report)?;
@@ -142,11 +141,11 @@ fn segment_ends(model: &Model, traj: &[Point]) -> Vec<f64> {
     let breaks = model.robot.breakpoints();
     let mut out = Vec::with_capacity(traj.len());
     for (k, pt) in traj.iter().enumerate() {
-        let is_right_limit = k > 0 && traj[k - 1].0 == pt.0;
+        let is_right_limit = k > 0 && traj[k - 1].s == pt.s;
         let end = breaks
             .iter()
             .copied()
-            .find(|&b| if is_right_limit { b > pt.0 } else { b >= pt.0 })
+            .find(|&b| if is_right_limit { b > pt.s } else { b >= pt.s })
             .unwrap_or(length);
         out.push(end);
     }
@@ -206,7 +205,13 @@ fn shoot(
     let robot = model.robot;
     let length = robot.length();
     let (v, u) = scale.from_unknowns(x);
-    let mut state: Point = (0.0, robot.base_position, robot.base_rotation, v, u);
+    let mut state = State {
+        s: 0.0,
+        p: robot.base_position,
+        R: robot.base_rotation,
+        v,
+        u,
+    };
     traj.push(state);
     let mut seg_start = 0.0;
     let breaks = robot.breakpoints();
@@ -222,13 +227,18 @@ fn shoot(
         )?;
         if seg_end < length {
             let (v_b, u_b) = jump(model, seg_end, &state)?;
-            state = (seg_end, state.1, state.2, v_b, u_b);
+            state = State {
+                s: seg_end,
+                v: v_b,
+                u: u_b,
+                ..state
+            };
             traj.push(state);
         }
         seg_start = seg_end;
     }
     let site = model.site(length);
-    let (s, _, R, v, u) = state;
+    let State { s, R, v, u, .. } = state;
     let (f, m) = model.wrench_balance(s, (&site, &R, &v, &u), None)?;
     Ok(SVector::<f64, 6>::from_iterator(
         f.iter().copied().chain(m.iter().map(|x| x * length)),
@@ -240,7 +250,7 @@ fn shoot(
 fn jump(model: &Model, s: f64, left: &Point) -> Result<(Vector3<f64>, Vector3<f64>)> {
     type D6 = DualSVec64<6>;
     let site = model.site(s);
-    let (_, _, R, va, ua) = *left;
+    let State { R, v: va, u: ua, .. } = *left;
     let (mut v, mut u) = (va, ua);
     let lift3 = |x: &Vector3<f64>| x.map(D6::from);
     let (Rd, vad, uad) = (R.map(D6::from), lift3(&va), lift3(&ua));
@@ -363,7 +373,13 @@ fn integrate(
     report: &mut SolveReport,
 ) -> Result<Point> {
     let length = model.robot.length();
-    let (_, mut p, mut R, mut v, mut u) = start;
+    let State {
+        mut p,
+        mut R,
+        mut v,
+        mut u,
+        ..
+    } = start;
     let mut s = s0;
     // First step: a few percent of the segment; the controller adapts it at once.
     let mut h = (s1 - s0) * 0.02;
@@ -417,10 +433,10 @@ fn integrate(
             R *= so3::exp(&y5.fixed_rows::<3>(3).into());
             v = y5.fixed_rows::<3>(6).into();
             u = y5.fixed_rows::<3>(9).into();
-            traj.push((s, p, R, v, u));
+            traj.push(State { s, p, R, v, u });
         }
         // Standard controller: safety 0.9, exponent 1/5, growth limited to [0.2, 5].
         h *= (0.9 * err.powf(-0.2)).clamp(0.2, 5.0);
     }
-    Ok((s, p, R, v, u))
+    Ok(State { s, p, R, v, u })
 }

@@ -65,14 +65,14 @@ impl Solution {
     /// belongs to (which tendons load it).
     pub(crate) fn from_states(
         model: &Model,
-        states: &[(f64, Vector3<f64>, Matrix3<f64>, Vector3<f64>, Vector3<f64>)],
+        states: &[State],
         segment_ends: &[f64],
         report: SolveReport,
     ) -> crate::Result<Self> {
         let robot = model.robot;
         let length = robot.length();
         let mut nodes = Vec::with_capacity(states.len());
-        for (k, &(s, p, R, v, u)) in states.iter().enumerate() {
+        for (k, &State { s, p, R, v, u }) in states.iter().enumerate() {
             let site = model.site(s);
             let (v_s, u_s) = model.strain_rates(&site, segment_ends[k], &R, &v, &u)?;
             let (n, m) = model.internal_wrench(&site, &R, &v, &u);
@@ -132,14 +132,20 @@ impl Solution {
     /// in the local coordinates of the interval (R = R_k exp(theta(s))), so R stays a rotation.
     /// At a jump the right limit is returned.
     pub fn at(&self, s: f64) -> State {
+        self.at_limit(s, false)
+    }
+
+    /// As [`Solution::at`], choosing the left limit at a jump when `left` is set.
+    pub fn at_limit(&self, s: f64, left: bool) -> State {
         let s = s.clamp(0.0, self.length());
-        // last interval of positive length starting at or before s
-        let mut k = 0;
-        for i in 0..self.nodes.len() - 1 {
-            if self.nodes[i + 1].s > self.nodes[i].s && self.nodes[i].s <= s {
-                k = i;
-            }
-        }
+        let inside = |i: usize| {
+            let (a, b) = (self.nodes[i].s, self.nodes[i + 1].s);
+            b > a && if left { a < s && s <= b } else { a <= s && s < b }
+        };
+        let last = self.nodes.len() - 2;
+        let k = (0..=last)
+            .find(|&i| inside(i))
+            .unwrap_or(if left || s > 0.0 { last } else { 0 });
         let (a, b) = (&self.nodes[k], &self.nodes[k + 1]);
         let h = b.s - a.s;
         let t = (s - a.s) / h;

@@ -4,21 +4,28 @@ fn main() {
         ("S", tdcr::cases::case_s(), tdcr::cases::TIP_S),
         ("H", tdcr::cases::case_h(), tdcr::cases::TIP_H),
     ] {
-        let t = std::time::Instant::now();
-        match tdcr::shooting::solve(&robot, &Default::default()) {
-            Ok(sol) => {
-                let p = sol.tip_position();
-                println!(
-                    "{name}: tip {:?} err {:.3e} iters {} time {:?} n0 {:?} u0 {:?}",
-                    p.as_slice(),
-                    (p - nalgebra::Vector3::from(tip)).norm(),
-                    sol.report.iterations,
-                    t.elapsed(),
-                    (sol.base().R.transpose() * sol.base().n).as_slice(),
-                    sol.base().u.as_slice()
-                );
+        for n in [4, 8, 16, 32, 64, 128] {
+            let t = std::time::Instant::now();
+            let o = tdcr::collocation::Options {
+                intervals: n,
+                ..Default::default()
+            };
+            match tdcr::collocation::solve(&robot, &o) {
+                Ok(sol) => {
+                    let p = sol.tip_position();
+                    println!(
+                        "{name} {n}: err {:.3e} iters {} steps {} time {:?} res {:.1e} orth {:.1e} {:?}",
+                        (p - nalgebra::Vector3::from(tip)).norm(),
+                        sol.report.iterations,
+                        sol.report.load_steps,
+                        t.elapsed(),
+                        sol.report.residual,
+                        sol.max_orthonormality_error(),
+                        sol.report.history.iter().map(|h| h.damping).collect::<Vec<_>>()
+                    );
+                }
+                Err(e) => println!("{name}: {e}"),
             }
-            Err(e) => println!("{name}: {e}"),
         }
     }
 }

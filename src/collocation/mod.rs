@@ -1,0 +1,310 @@
+//! The collocation solver: the whole robot as one sparse Newton system solved with faer.
+//!
+//! Stages, in the order data flows:
+//! 1. [`Mesh`]: nodes on [0, L] with two nodes at every breakpoint.
+//! 2. [`system`]: residual rows (base, Hermite-Simpson intervals in Lie-group local
+//!    coordinates, jump conditions, tip) and their exact Jacobian by forward-mode AD.
+//! 3. [`newton`]: damped Newton with the symbolic LU computed once per mesh.
+//! 4. Robustness: rigid-equilibrium initial guess or a warm start, and automatic load
+//!    continuation when a direct solve fails.
+//! 5. Error control: optional adaptive refinement until the tip moves less than a
+//!    tolerance, guided by per-interval defect estimates ([`interval_errors`]).
+//!
+//! docs/numerics.md documents the scheme (order 4), the scaling and the stopping tests.
+
+pub mod newton;
+pub mod residual;
+pub mod system;
+
+use crate::equations::Model;
+use crate::error::{Result, invalid};
+use crate::guess::rigid_estimate;
+use crate::mesh::Mesh;
+use crate::report::{Method, SolveReport, Termination};
+use crate::solution::{Solution, State};
+use crate::{Error, Robot};
+use newton::{Settings, Workspace};
+use std::time::Instant;
+use system::System;
+
+/// Collocation options. `Options { intervals: 64, ..Default::default() }`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Options {
+    /// Mesh intervals (spread over the segments between breakpoints). Without `tolerance`
+    /// the mesh is fixed; with it, this is the starting mesh. Default 32.
+    pub intervals: usize,
+    /// Explicit mesh points (m); when given they replace `intervals` (breakpoints, 0 and L
+    /// are added). Default `None`.
+    pub mesh: Option<Vec<f64>>,
+    /// Tip position tolerance (m) for adaptive refinement; `None` solves on the given mesh
+    /// only. Default `None`.
+    pub tolerance: Option<f64>,
+    /// Cap on intervals during refinement. Default 8192.
+    pub max_intervals: usize,
+    /// Newton stops when the scaled residual max-norm is at or below this (dimensionless).
+    /// Default 1e-11 (a few hundred times rounding of O(1) scaled quantities).
+    pub residual_tolerance: f64,
+    /// Newton iterations per solve (per load step with continuation). Default 30.
+    pub max_iterations: usize,
+    /// Use load continuation when the direct solve fails. Default true.
+    pub continuation: bool,
+}
+
+impl Default for Options {
+    fn default() -> Self {
+        Options {
+            intervals: 32,
+            mesh: None,
+            tolerance: None,
+            max_intervals: 8192,
+            residual_tolerance: 1e-11,
+            max_iterations: 30,
+            continuation: true,
+        }
+    }
+}
+
+/// Solves `robot` by collocation from the rigid-equilibrium initial guess.
+///
+/// # Errors
+/// Invalid input, [`Error::NotConverged`] (with the report and where the residual is
+/// largest), [`Error::NodeCap`] when refinement cannot meet the tolerance.
+///
+/// # Examples
+/// ```
+/// let robot = tdcr::cases::case_s();
+/// let solution = tdcr::collocation::solve(&robot, &Default::default()).unwrap();
+/// let tip = solution.tip_position();
+/// assert!((tip.x - 0.151823122).abs() < 1e-6);
+/// ```
+pub fn solve(robot: &Robot, options: &Options) -> Result<Solution> {
+    solve_impl(robot, options, None)
+}
+
+/// Solves `robot` starting from a previous solution (of this or a nearby robot), which is
+/// interpolated onto the new mesh if the meshes differ.
+///
+/// # Errors
+/// As [`solve`].
+pub fn solve_from(robot: &Robot, options: &Options, guess: &Solution) -> Result<Solution> {
+    solve_impl(robot, options, Some(guess))
+}
+
+fn initial_mesh(robot: &Robot, options: &Options) -> Result<Mesh> {
+    match &options.mesh {
+        Some(points) => Mesh::from_points(robot, points),
+        None => Mesh::uniform(robot, options.intervals),
+    }
+}
+
+/// Node states of `guess` on `mesh` (left limits for the left node of a jump).
+fn interpolate(guess: &Solution, mesh: &Mesh) -> Vec<State> {
+    let same = guess.nodes.len() == mesh.nodes.len() && guess.nodes.iter().zip(&mesh.nodes).all(|(a, b)| a.s == b.s);
+    if same {
+        return guess
+            .nodes
+            .iter()
+            .map(|n| State {
+                s: n.s,
+                p: n.p,
+                R: n.R,
+                v: n.v,
+                u: n.u,
+            })
+            .collect();
+    }
+    (0..mesh.nodes.len())
+        .map(|k| {
+            let s = mesh.nodes[k].s;
+            let left = k + 1 < mesh.nodes.len() && mesh.is_jump(k);
+            State {
+                s,
+                ..guess.at_limit(s, left)
+            }
+        })
+        .collect()
+}
+
+fn solve_impl(robot: &Robot, options: &Options, warm: Option<&Solution>) -> Result<Solution> {
+    robot.validate()?;
+    if !(options.residual_tolerance > 0.0) || options.max_iterations == 0 {
+        return Err(invalid(
+            "options",
+            "needs residual_tolerance > 0 and max_iterations >= 1",
+            "use Options::default() and change single fields",
+        ));
+    }
+    if let Some(tol) = options.tolerance
+        && !(tol.is_finite() && tol > 0.0)
+    {
+        return Err(invalid(
+            "options.tolerance",
+            format!("is {tol} m"),
+            "give a positive tip tolerance in m",
+        ));
+    }
+    let start = Instant::now();
+    let model = Model::new(robot);
+    let mut report = SolveReport::new(Method::Collocation);
+    let mesh = initial_mesh(robot, options)?;
+    let x0 = match warm {
+        Some(g) => interpolate(g, &mesh),
+        None => rigid_estimate(&model, &mesh.nodes),
+    };
+    let (mut mesh, mut x) = (mesh.clone(), solve_on_mesh(&model, mesh, x0, options, &mut report)?);
+    if let Some(tol) = options.tolerance {
+        loop {
+            let sys = System::new(model, mesh.clone());
+            let errors = interval_errors(&sys, &x)?;
+            let worst = errors.iter().copied().fold(0.0, f64::max);
+            // Split every interval within three orders of magnitude of the worst one: the
+            // rest cannot matter at the next level.
+            let split: Vec<bool> = errors.iter().map(|&e| e > 1e-3 * worst).collect();
+            let all = (0..mesh.nodes.len() - 1).all(|k| mesh.is_jump(k) || split[k]);
+            let fine = mesh.bisected(&split);
+            if fine.intervals() > options.max_intervals {
+                return Err(Error::NodeCap {
+                    cap: options.max_intervals,
+                    estimate: report.tip_error_estimate.unwrap_or(f64::NAN),
+                    tolerance: tol,
+                });
+            }
+            let guess = Solution::from_states(&model, &x, &segment_ends(&mesh), report.clone())?;
+            let xf = solve_on_mesh(&model, fine.clone(), interpolate(&guess, &fine), options, &mut report)?;
+            let change = (xf[xf.len() - 1].p - x[x.len() - 1].p).norm();
+            // Order 4: halving every interval cuts the error 16-fold, so the finer error is
+            // about change / 15; with partial splitting use the change itself (conservative).
+            let estimate = if all { change / 15.0 } else { change };
+            report.tip_error_estimate = Some(estimate);
+            mesh = fine;
+            x = xf;
+            if estimate <= tol {
+                break;
+            }
+        }
+    }
+    report.intervals = mesh.intervals();
+    report.unknowns = mesh.nodes.len() * system::NODE;
+    report.nonzeros = system::pattern(&mesh).len();
+    report.timings.total = start.elapsed();
+    Solution::from_states(&model, &x, &segment_ends(&mesh), report)
+}
+
+fn segment_ends(mesh: &Mesh) -> Vec<f64> {
+    mesh.nodes.iter().map(|n| n.segment_end).collect()
+}
+
+/// Newton on one mesh; on failure, load continuation from the unloaded shape.
+fn solve_on_mesh(
+    model: &Model,
+    mesh: Mesh,
+    x0: Vec<State>,
+    options: &Options,
+    report: &mut SolveReport,
+) -> Result<Vec<State>> {
+    report.meshes += 1;
+    let settings = Settings {
+        tolerance: options.residual_tolerance,
+        max_iterations: options.max_iterations,
+    };
+    let mut system = System::new(*model, mesh);
+    let mut ws = Workspace::new(&system)?;
+    report.unknowns = system.unknowns();
+    report.nonzeros = ws.nonzeros();
+    report.intervals = system.mesh.intervals();
+    let mut x = x0;
+    report.load_steps += 1;
+    let (termination, worst) = newton::run(&system, &mut ws, &mut x, &settings, report);
+    report.termination = termination;
+    if termination == Termination::Converged {
+        return Ok(x);
+    }
+    if !options.continuation {
+        return Err(not_converged(
+            &system,
+            report,
+            worst,
+            "enable load continuation, refine the mesh, or warm-start from a nearby solution",
+        ));
+    }
+    // Load continuation: from the unloaded shape (exact at load factor 0), raise the load
+    // factor, warm-starting each step from the last; halve the step on failure, grow it
+    // after a success.
+    let (mut lambda, mut dl): (f64, f64) = (0.0, 0.25);
+    system.set_load_factor(0.0);
+    let mut x = rigid_estimate(&system.model, &system.mesh.nodes);
+    let (t0, _) = newton::run(&system, &mut ws, &mut x, &settings, report);
+    if t0 != Termination::Converged {
+        report.termination = t0;
+        return Err(not_converged(
+            &system,
+            report,
+            worst,
+            "even the unloaded rod did not converge: check the mesh and routings",
+        ));
+    }
+    while lambda < 1.0 {
+        let target = (lambda + dl).min(1.0);
+        system.set_load_factor(target);
+        let mut trial = x.clone();
+        report.load_steps += 1;
+        let (t, w) = newton::run(&system, &mut ws, &mut trial, &settings, report);
+        report.termination = t;
+        if t == Termination::Converged {
+            lambda = target;
+            x = trial;
+            dl *= 1.5;
+        } else {
+            dl *= 0.5;
+            // 1e-4 of the full load: the problem is not continuous in the load, or it has no
+            // solution nearby (buckling, a tendon losing its tangent).
+            if dl < 1e-4 {
+                return Err(not_converged(
+                    &system,
+                    report,
+                    w,
+                    &format!(
+                        "load continuation stalled at {:.1} % of the load; refine the mesh or check for buckling",
+                        lambda * 100.0
+                    ),
+                ));
+            }
+        }
+    }
+    Ok(x)
+}
+
+fn not_converged(system: &System, report: &SolveReport, worst_row: usize, hint: &str) -> Error {
+    Error::NotConverged {
+        method: "collocation",
+        report: Box::new(report.clone()),
+        worst_s: system.row_position(worst_row),
+        hint: hint.into(),
+    }
+}
+
+/// Estimated discretization error of each link (0 for jumps): the interval length times the
+/// largest scaled defect of the cubic interpolant at s_k + h/4 and s_k + 3h/4 (the defect
+/// vanishes at the collocation points 0, 1/2, 1), in the dimensionless units of the residual.
+///
+/// # Errors
+/// A model breakdown at the solution (cannot happen for a converged one).
+pub fn interval_errors(system: &System, x: &[State]) -> Result<Vec<f64>> {
+    let model = &system.model;
+    (0..x.len() - 1)
+        .map(|k| {
+            let Some(sites) = system.interval_sites(k) else {
+                return Ok(0.0);
+            };
+            let h = sites.end.s - sites.start.s;
+            let seg = system.mesh.nodes[k].segment_end;
+            let mut worst: f64 = 0.0;
+            for t in [0.25, 0.75] {
+                let site = model.site(sites.start.s + t * h);
+                let d = residual::defect(model, sites, &site, seg, &x[k], &x[k + 1], t)?;
+                worst = worst.max(d.amax());
+            }
+            Ok(worst * h / model.robot.length())
+        })
+        .collect()
+}

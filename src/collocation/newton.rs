@@ -1,0 +1,240 @@
+//! Damped Newton on the collocation system with faer's sparse LU.
+//!
+//! The sparsity pattern, the map from assembly order to storage, the symbolic LU (COLAMD
+//! ordering, elimination tree) and every buffer are built once per mesh in [`Workspace`];
+//! each iteration refills the matrix values, refactors numerically and solves without
+//! allocating. faer reports only structurally singular matrices, so every step is checked
+//! for finiteness (a numerically zero pivot shows up as inf/NaN) and the factorization is
+//! run under `catch_unwind` in case a faer version panics on a zero pivot: either way the
+//! result is a [`Termination::SingularJacobian`], never a panic.
+
+use super::system::{System, pattern};
+use crate::error::{Result, invalid};
+use crate::report::{Iteration, SolveReport, Termination};
+use crate::solution::State;
+use faer::col::ColMut;
+use faer::dyn_stack::{MemBuffer, MemStack};
+use faer::sparse::linalg::SupernodalThreshold;
+use faer::sparse::linalg::lu::{LuSymbolicParams, NumericLu, SymbolicLu, factorize_symbolic_lu};
+use faer::sparse::{SparseColMat, Triplet};
+use faer::{Conj, Par};
+use std::panic::{AssertUnwindSafe, catch_unwind};
+use std::time::Instant;
+
+/// Armijo sufficient-decrease constant (Dennis & Schnabel's customary 1e-4).
+const ARMIJO: f64 = 1e-4;
+/// Smallest line-search fraction before giving up (2^-20: 20 halvings).
+const MIN_DAMPING: f64 = 1.0 / 1_048_576.0;
+
+/// Newton settings.
+#[derive(Clone, Copy, Debug)]
+pub struct Settings {
+    /// Stop when the scaled residual max-norm is at or below this.
+    pub tolerance: f64,
+    /// Iteration limit.
+    pub max_iterations: usize,
+}
+
+/// Everything Newton needs for one mesh, built once and reused across iterations, load
+/// steps and solves on the same mesh.
+pub struct Workspace {
+    matrix: SparseColMat<usize, f64>,
+    slots: Vec<usize>,
+    values: Vec<f64>,
+    symbolic: SymbolicLu<usize>,
+    numeric: NumericLu<usize, f64>,
+    mem: MemBuffer,
+    residual: Vec<f64>,
+    trial_residual: Vec<f64>,
+    step: Vec<f64>,
+    trial: Vec<State>,
+}
+
+impl Workspace {
+    /// Builds the pattern and the symbolic LU for `system`'s mesh.
+    ///
+    /// # Errors
+    /// [`crate::Error::InvalidInput`] if faer rejects the pattern (cannot happen for a valid mesh).
+    pub fn new(system: &System) -> Result<Self> {
+        let n = system.unknowns();
+        let pat = pattern(&system.mesh);
+        // Unit values so the pattern is fully stored (zeros are kept, but be explicit).
+        let triplets: Vec<Triplet<usize, usize, f64>> = pat.iter().map(|&(r, c)| Triplet::new(r, c, 1.0)).collect();
+        let matrix = SparseColMat::<usize, f64>::try_new_from_triplets(n, n, &triplets).map_err(|e| {
+            invalid(
+                "mesh",
+                format!("gives an invalid sparsity pattern ({e:?})"),
+                "report this as a bug",
+            )
+        })?;
+        let (cp, ri) = (matrix.symbolic().col_ptr(), matrix.symbolic().row_idx());
+        let slots = pat
+            .iter()
+            .map(|&(r, c)| cp[c] + ri[cp[c]..cp[c + 1]].binary_search(&r).unwrap_or(0))
+            .collect();
+        // Simplicial LU: no allocation per refactorization (the supernodal path allocates per call).
+        let params = LuSymbolicParams {
+            supernodal_flop_ratio_threshold: SupernodalThreshold::FORCE_SIMPLICIAL,
+            ..Default::default()
+        };
+        let symbolic = factorize_symbolic_lu(matrix.symbolic(), params)
+            .map_err(|e| invalid("mesh", format!("symbolic LU failed ({e:?})"), "report this as a bug"))?;
+        let req = symbolic
+            .factorize_numeric_lu_scratch::<f64>(Par::Seq, Default::default())
+            .or(symbolic.solve_in_place_scratch::<f64>(1, Par::Seq));
+        Ok(Workspace {
+            matrix,
+            slots,
+            values: vec![0.0; pat.len()],
+            symbolic,
+            numeric: NumericLu::new(),
+            mem: MemBuffer::new(req),
+            residual: vec![0.0; n],
+            trial_residual: vec![0.0; n],
+            step: vec![0.0; n],
+            trial: Vec::with_capacity(system.mesh.nodes.len()),
+        })
+    }
+
+    /// Non-zeros stored in the Jacobian.
+    pub fn nonzeros(&self) -> usize {
+        self.values.len()
+    }
+
+    /// Factorizes the current matrix and solves J step = -residual in place.
+    /// Returns false for a zero pivot or a non-finite step.
+    fn solve(&mut self, report: &mut SolveReport) -> bool {
+        for (slot, v) in self.slots.iter().zip(&self.values) {
+            self.matrix.val_mut()[*slot] = *v;
+        }
+        let Workspace {
+            matrix,
+            symbolic,
+            numeric,
+            mem,
+            step,
+            residual,
+            ..
+        } = self;
+        let outcome = catch_unwind(AssertUnwindSafe(|| {
+            let t = Instant::now();
+            let lu = symbolic
+                .factorize_numeric_lu(
+                    numeric,
+                    matrix.as_ref(),
+                    Par::Seq,
+                    MemStack::new(mem),
+                    Default::default(),
+                )
+                .ok()?;
+            let factor_time = t.elapsed();
+            let t = Instant::now();
+            for (i, r) in residual.iter().enumerate() {
+                step[i] = -r;
+            }
+            lu.solve_in_place_with_conj(
+                Conj::No,
+                ColMut::from_slice_mut(step).as_mat_mut(),
+                Par::Seq,
+                MemStack::new(mem),
+            );
+            Some((factor_time, t.elapsed()))
+        }));
+        match outcome {
+            Ok(Some((factor_time, solve_time))) => {
+                report.timings.factorization += factor_time;
+                report.timings.solve += solve_time;
+                step.iter().all(|x| x.is_finite())
+            }
+            _ => false,
+        }
+    }
+}
+
+fn max_norm(v: &[f64]) -> f64 {
+    v.iter()
+        .fold(0.0, |m, x| if x.is_nan() { f64::NAN } else { m.max(x.abs()) })
+}
+
+fn merit(v: &[f64]) -> f64 {
+    0.5 * v.iter().map(|x| x * x).sum::<f64>()
+}
+
+/// Runs damped Newton from `x` (updated in place). Returns the termination reason and the
+/// row of the largest final residual.
+pub fn run(
+    system: &System,
+    ws: &mut Workspace,
+    x: &mut Vec<State>,
+    settings: &Settings,
+    report: &mut SolveReport,
+) -> (Termination, usize) {
+    report.history.clear();
+    let t = Instant::now();
+    let first = system.residual(x, &mut ws.residual);
+    report.timings.assembly += t.elapsed();
+    report.evaluations.residual += 1;
+    if first.is_err() || !ws.residual.iter().all(|r| r.is_finite()) {
+        return (Termination::NonFinite, worst_row(&ws.residual));
+    }
+    for _ in 0..settings.max_iterations {
+        let norm = max_norm(&ws.residual);
+        if norm <= settings.tolerance {
+            report.residual = norm;
+            return (Termination::Converged, worst_row(&ws.residual));
+        }
+        report.iterations += 1;
+        let t = Instant::now();
+        let ok = system.jacobian(x, &mut ws.residual, &mut ws.values).is_ok();
+        report.timings.assembly += t.elapsed();
+        report.evaluations.jacobian += 1;
+        report.evaluations.equations += 3 * system.mesh.intervals();
+        if !ok || !ws.values.iter().all(|v| v.is_finite()) {
+            return (Termination::NonFinite, worst_row(&ws.residual));
+        }
+        if !ws.solve(report) {
+            return (Termination::SingularJacobian, worst_row(&ws.residual));
+        }
+        let step_norm = ws.step.iter().fold(0.0f64, |m, s| m.max(s.abs()));
+        let phi = merit(&ws.residual);
+        let mut alpha = 1.0;
+        loop {
+            system.retract(x, &ws.step, alpha, &mut ws.trial);
+            let t = Instant::now();
+            let ok = system.residual(&ws.trial, &mut ws.trial_residual).is_ok();
+            report.timings.assembly += t.elapsed();
+            report.evaluations.residual += 1;
+            let phi_trial = merit(&ws.trial_residual);
+            // Armijo on 0.5|F|^2, whose slope along the Newton step is -|F|^2 = -2 phi.
+            if ok && phi_trial.is_finite() && phi_trial <= (1.0 - 2.0 * ARMIJO * alpha) * phi {
+                break;
+            }
+            alpha *= 0.5;
+            if alpha < MIN_DAMPING {
+                report.residual = norm;
+                return (Termination::LineSearchFailed, worst_row(&ws.residual));
+            }
+        }
+        report.history.push(Iteration {
+            residual: norm,
+            step: step_norm,
+            damping: alpha,
+        });
+        std::mem::swap(x, &mut ws.trial);
+        std::mem::swap(&mut ws.residual, &mut ws.trial_residual);
+    }
+    let norm = max_norm(&ws.residual);
+    report.residual = norm;
+    if norm <= settings.tolerance {
+        (Termination::Converged, worst_row(&ws.residual))
+    } else {
+        (Termination::MaxIterations, worst_row(&ws.residual))
+    }
+}
+
+fn worst_row(r: &[f64]) -> usize {
+    r.iter()
+        .enumerate()
+        .max_by(|a, b| a.1.abs().partial_cmp(&b.1.abs()).unwrap_or(std::cmp::Ordering::Greater))
+        .map_or(0, |(i, _)| i)
+}

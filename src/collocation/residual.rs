@@ -1,0 +1,190 @@
+//! The residual blocks of the collocation system, generic over the scalar so that one code
+//! path gives both the residual (f64) and its exact Jacobian (num-dual forward mode).
+//!
+//! Unknowns: at every node a scaled perturbation d = (dp / L, dtheta, dv, du L) of the
+//! current state, applied as p + L dp, R exp(dtheta), v + dv, u + du / L (rotations are
+//! updated on SO(3), so every R stays orthonormal). Residual rows are scaled the same way:
+//! positions by 1/L, curvatures by L, wrenches in strain units (D^-1 n, C^-1 m L), so all
+//! are dimensionless and O(1) for O(1) errors.
+//!
+//! Interval rows: the Hermite-Simpson (3-stage Lobatto IIIA, order 4) collocation of the
+//! ODE written in the interval's local coordinates y = (p, theta, v, u) with
+//! R(s) = R_k exp(theta(s)), theta' = J_r(theta)^-1 u, theta(s_k) = 0 and
+//! theta(s_k+1) = log(R_k^T R_k+1) (a Runge-Kutta-Munthe-Kaas collocation):
+//!
+//! ```text
+//! y_m = (y_0 + y_1) / 2 + h/8 (F_0 - F_1),    F = (R v, J_r^-1 u, v', u')  (eq. 13)
+//! 0   = y_1 - y_0 - h/6 (F_0 + 4 F(y_m) + F_1)
+//! ```
+#![allow(non_snake_case)]
+
+use crate::equations::{Model, Site, lift, lift_m};
+use crate::error::Result;
+use crate::solution::State;
+use crate::{Real, so3};
+use nalgebra::{Matrix3, SVector, Vector3};
+
+/// Scaled perturbation of one node's unknowns.
+pub type Delta<T> = SVector<T, 12>;
+/// Residual of one link (interval or jump).
+pub type Block<T> = SVector<T, 12>;
+
+/// A node's state with the perturbation applied, in scalar type T.
+struct Perturbed<T: Real> {
+    p: Vector3<T>,
+    R: Matrix3<T>,
+    v: Vector3<T>,
+    u: Vector3<T>,
+}
+
+fn perturb<T: Real>(x: &State, d: &Delta<T>, length: f64) -> Perturbed<T> {
+    let l = T::from_f64(length).unwrap_or_else(T::one);
+    let part = |i: usize| -> Vector3<T> { d.fixed_rows::<3>(i).into() };
+    Perturbed {
+        p: lift::<T>(&x.p) + part(0) * l,
+        R: lift_m::<T>(&x.R) * so3::exp(&part(3)),
+        v: lift::<T>(&x.v) + part(6),
+        u: lift::<T>(&x.u) + part(9) / l,
+    }
+}
+
+/// Scales a local-coordinate vector (p, theta, v, u) to residual units.
+fn scale_rows<T: Real>(mut y: Block<T>, length: f64) -> Block<T> {
+    let l = T::from_f64(length).unwrap_or_else(T::one);
+    for i in 0..3 {
+        y[i] /= l;
+        y[9 + i] *= l;
+    }
+    y
+}
+
+fn stack<T: Real>(a: &Vector3<T>, b: &Vector3<T>, c: &Vector3<T>, d: &Vector3<T>) -> Block<T> {
+    Block::from_iterator(a.iter().chain(b.iter()).chain(c.iter()).chain(d.iter()).copied())
+}
+
+/// Base rows: p(0) = p0, R(0) = R0 (6 rows).
+pub fn base<T: Real>(model: &Model, x: &State, d: &Delta<T>) -> SVector<T, 6> {
+    let robot = model.robot;
+    let n = perturb(x, d, robot.length());
+    let l = T::from_f64(robot.length()).unwrap_or_else(T::one);
+    let dp = (n.p - lift::<T>(&robot.base_position)) / l;
+    let dr = so3::log(&(lift_m::<T>(&robot.base_rotation).transpose() * n.R));
+    SVector::<T, 6>::from_iterator(dp.iter().chain(dr.iter()).copied())
+}
+
+/// Tip rows: the free-end wrench balance n(L) = F_tip + sum F_i, m(L) = L_tip + sum L_i (6 rows).
+pub fn tip<T: Real>(model: &Model, site: &Site, x: &State, d: &Delta<T>) -> Result<SVector<T, 6>> {
+    let length = model.robot.length();
+    let n = perturb(x, d, length);
+    let (f, m) = model.wrench_balance(site.s, (site, &n.R, &n.v, &n.u), None)?;
+    let l = T::from_f64(length).unwrap_or_else(T::one);
+    Ok(SVector::<T, 6>::from_iterator(
+        f.iter().copied().chain(m.iter().map(|&x| x * l)),
+    ))
+}
+
+/// Jump rows at a breakpoint: p and R continuous, the point-load wrench balance (12 rows).
+pub fn jump<T: Real>(
+    model: &Model,
+    site: &Site,
+    a: &State,
+    b: &State,
+    da: &Delta<T>,
+    db: &Delta<T>,
+) -> Result<Block<T>> {
+    let length = model.robot.length();
+    let (na, nb) = (perturb(a, da, length), perturb(b, db, length));
+    let l = T::from_f64(length).unwrap_or_else(T::one);
+    let dp = (nb.p - na.p) / l;
+    let dr = so3::log(&(na.R.transpose() * nb.R));
+    let (f, m) = model.wrench_balance(site.s, (site, &na.R, &na.v, &na.u), Some((site, &nb.R, &nb.v, &nb.u)))?;
+    Ok(stack(&dp, &dr, &f, &(m * l)))
+}
+
+/// The right-hand side F(s, y) in the local coordinates of an interval starting at `Rk`.
+fn rhs<T: Real>(model: &Model, site: &Site, segment_end: f64, Rk: &Matrix3<T>, y: &Block<T>) -> Result<Block<T>> {
+    let theta: Vector3<T> = y.fixed_rows::<3>(3).into();
+    let v: Vector3<T> = y.fixed_rows::<3>(6).into();
+    let u: Vector3<T> = y.fixed_rows::<3>(9).into();
+    let R = Rk * so3::exp(&theta);
+    let (v_s, u_s) = model.strain_rates(site, segment_end, &R, &v, &u)?;
+    Ok(stack(&(R * v), &(so3::right_jacobian_inv(&theta) * u), &v_s, &u_s))
+}
+
+/// The sites an interval needs: at its start, midpoint and end.
+#[derive(Clone, Copy, Debug)]
+pub struct IntervalSites {
+    /// Site at s_k.
+    pub start: Site,
+    /// Site at the midpoint.
+    pub mid: Site,
+    /// Site at s_k+1.
+    pub end: Site,
+}
+
+/// Interval rows: Hermite-Simpson collocation in local coordinates (12 rows).
+pub fn interval<T: Real>(
+    model: &Model,
+    sites: &IntervalSites,
+    segment_end: f64,
+    a: &State,
+    b: &State,
+    da: &Delta<T>,
+    db: &Delta<T>,
+) -> Result<Block<T>> {
+    let length = model.robot.length();
+    let (na, nb) = (perturb(a, da, length), perturb(b, db, length));
+    let h = T::from_f64(sites.end.s - sites.start.s).unwrap_or_else(T::zero);
+    let zero = Vector3::<T>::zeros();
+    let theta1 = so3::log(&(na.R.transpose() * nb.R));
+    let y0 = stack(&na.p, &zero, &na.v, &na.u);
+    let y1 = stack(&nb.p, &theta1, &nb.v, &nb.u);
+    let f0 = rhs(model, &sites.start, segment_end, &na.R, &y0)?;
+    let f1 = rhs(model, &sites.end, segment_end, &na.R, &y1)?;
+    let half = T::from_f64(0.5).unwrap_or_else(T::one);
+    let eighth = T::from_f64(0.125).unwrap_or_else(T::one);
+    let ym = (y0 + y1) * half + (f0 - f1) * (h * eighth);
+    let fm = rhs(model, &sites.mid, segment_end, &na.R, &ym)?;
+    let sixth = T::from_f64(1.0 / 6.0).unwrap_or_else(T::one);
+    let four = T::from_f64(4.0).unwrap_or_else(T::one);
+    Ok(scale_rows(y1 - y0 - (f0 + fm * four + f1) * (h * sixth), length))
+}
+
+/// The defect y'(s) - F(s, y(s)) of the interval's cubic Hermite interpolant at fraction
+/// `t` of the interval, scaled like the residual (f64 only; used for error estimates).
+pub fn defect(
+    model: &Model,
+    sites: &IntervalSites,
+    site: &Site,
+    segment_end: f64,
+    a: &State,
+    b: &State,
+    t: f64,
+) -> Result<Block<f64>> {
+    let h = sites.end.s - sites.start.s;
+    let zero = Vector3::zeros();
+    let theta1 = so3::log(&(a.R.transpose() * b.R));
+    let y0 = stack(&a.p, &zero, &a.v, &a.u);
+    let y1 = stack(&b.p, &theta1, &b.v, &b.u);
+    let f0 = rhs(model, &sites.start, segment_end, &a.R, &y0)?;
+    let f1 = rhs(model, &sites.end, segment_end, &a.R, &y1)?;
+    // Cubic Hermite basis and its derivative at t.
+    let (h00, h10, h01, h11) = (
+        2.0 * t.powi(3) - 3.0 * t * t + 1.0,
+        t.powi(3) - 2.0 * t * t + t,
+        -2.0 * t.powi(3) + 3.0 * t * t,
+        t.powi(3) - t * t,
+    );
+    let (d00, d10, d01, d11) = (
+        6.0 * t * t - 6.0 * t,
+        3.0 * t * t - 4.0 * t + 1.0,
+        -6.0 * t * t + 6.0 * t,
+        3.0 * t * t - 2.0 * t,
+    );
+    let y = y0 * h00 + f0 * (h10 * h) + y1 * h01 + f1 * (h11 * h);
+    let dy = (y0 * d00 + y1 * d01) / h + f0 * d10 + f1 * d11;
+    Ok(scale_rows(
+        dy - rhs(model, site, segment_end, &a.R, &y)?,
+        model.robot.length(),
+    ))
+}

@@ -1,0 +1,140 @@
+//! Collocation meshes: nodes on [0, L] with a node on each side of every breakpoint
+//! (tendon termination or interior point load), joined there by the jump conditions.
+
+use crate::error::{Result, invalid};
+use crate::robot::Robot;
+
+/// A mesh node: where it is and which segment (stretch between breakpoints) it belongs to.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MeshNode {
+    /// Arc length (m).
+    pub s: f64,
+    /// End of the node's segment (m): tendons ending at or after it load the segment.
+    pub segment_end: f64,
+}
+
+/// Nodes in increasing s. Two consecutive nodes with the same s are the left and right
+/// limits at a breakpoint; every other pair of neighbours bounds an interval.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Mesh {
+    /// The nodes, from s = 0 to s = L.
+    pub nodes: Vec<MeshNode>,
+}
+
+impl Mesh {
+    /// About `intervals` intervals of equal length, distributed over the segments between
+    /// breakpoints in proportion to their length (at least one per segment).
+    ///
+    /// # Errors
+    /// [`crate::Error::InvalidInput`] when `intervals` is 0.
+    pub fn uniform(robot: &Robot, intervals: usize) -> Result<Self> {
+        if intervals == 0 {
+            return Err(invalid(
+                "options.intervals",
+                "is 0",
+                "use at least 1 interval (16 or more for accuracy)",
+            ));
+        }
+        let length = robot.length();
+        let mut points = Vec::new();
+        let mut start = 0.0;
+        for end in robot.breakpoints().into_iter().chain(std::iter::once(length)) {
+            let count = ((intervals as f64) * (end - start) / length).round().max(1.0) as usize;
+            points.extend((0..count).map(|k| start + (end - start) * k as f64 / count as f64));
+            start = end;
+        }
+        points.push(length);
+        Self::from_points(robot, &points)
+    }
+
+    /// A mesh through the given arc lengths (m), plus 0, L and every breakpoint.
+    ///
+    /// # Errors
+    /// [`crate::Error::InvalidInput`] for a point outside [0, L] or not finite.
+    pub fn from_points(robot: &Robot, points: &[f64]) -> Result<Self> {
+        let length = robot.length();
+        if let Some((i, &s)) = points
+            .iter()
+            .enumerate()
+            .find(|(_, s)| !(s.is_finite() && (0.0..=length).contains(*s)))
+        {
+            return Err(invalid(
+                format!("mesh[{i}]"),
+                format!("is {s} m, outside [0, {length}]"),
+                "give mesh points on the rod",
+            ));
+        }
+        let breaks = robot.breakpoints();
+        let mut s: Vec<f64> = points
+            .iter()
+            .copied()
+            .chain([0.0, length])
+            .chain(breaks.iter().copied())
+            .collect();
+        s.sort_by(f64::total_cmp);
+        s.dedup();
+        let mut nodes = Vec::with_capacity(s.len() + breaks.len());
+        let mut seg = 0;
+        for &x in &s {
+            let end = breaks.get(seg).copied().unwrap_or(length);
+            nodes.push(MeshNode { s: x, segment_end: end });
+            if x == end && seg < breaks.len() {
+                seg += 1;
+                nodes.push(MeshNode {
+                    s: x,
+                    segment_end: breaks.get(seg).copied().unwrap_or(length),
+                });
+            }
+        }
+        Ok(Mesh { nodes })
+    }
+
+    /// Number of intervals (neighbour pairs of positive length).
+    pub fn intervals(&self) -> usize {
+        self.nodes.windows(2).filter(|w| w[1].s > w[0].s).count()
+    }
+
+    /// Whether link k (between nodes k and k + 1) is a jump (zero length).
+    pub fn is_jump(&self, k: usize) -> bool {
+        self.nodes[k + 1].s == self.nodes[k].s
+    }
+
+    /// The same mesh with link k bisected wherever `split[k]` is set (jumps are never split).
+    pub fn bisected(&self, split: &[bool]) -> Self {
+        let mut nodes = Vec::with_capacity(self.nodes.len() * 2);
+        for (k, node) in self.nodes.iter().enumerate() {
+            nodes.push(*node);
+            if k + 1 < self.nodes.len() && split[k] && !self.is_jump(k) {
+                let s = 0.5 * (node.s + self.nodes[k + 1].s);
+                nodes.push(MeshNode {
+                    s,
+                    segment_end: node.segment_end,
+                });
+            }
+        }
+        Mesh { nodes }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::{Rod, Routing, Tendon};
+
+    #[test]
+    fn breakpoints_get_two_nodes_and_segments() {
+        let robot = Robot::new(Rod::solid_circle(1.0, 0.001, 1e9, 0.3))
+            .with_tendon(Tendon::new(Routing::straight(0.01, 0.0), 1.0).ending_at(0.5))
+            .with_tendon(Tendon::new(Routing::straight(-0.01, 0.0), 1.0));
+        let mesh = Mesh::uniform(&robot, 4).unwrap();
+        let s: Vec<f64> = mesh.nodes.iter().map(|n| n.s).collect();
+        assert_eq!(s, vec![0.0, 0.25, 0.5, 0.5, 0.75, 1.0]);
+        let ends: Vec<f64> = mesh.nodes.iter().map(|n| n.segment_end).collect();
+        assert_eq!(ends, vec![0.5, 0.5, 0.5, 1.0, 1.0, 1.0]);
+        assert_eq!(mesh.intervals(), 4);
+        assert!(mesh.is_jump(2) && !mesh.is_jump(1));
+        let fine = mesh.bisected(&[true; 5]);
+        assert_eq!(fine.intervals(), 8);
+        assert_eq!(fine.nodes.len(), 10);
+    }
+}

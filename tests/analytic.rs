@@ -1,0 +1,443 @@
+//! Physics against closed-form answers: constant-curvature arcs (pure moment, one straight
+//! tendon), linear beam theory, the large-deflection elastica, symmetry, global equilibrium
+//! and the reference tips of the prototype. Every solver of `common::solve_all` must pass.
+
+mod common;
+
+use common::solve_all;
+use nalgebra::{Matrix3, Vector3};
+use std::f64::consts::{FRAC_PI_2, PI};
+use tdcr::{Field, Loads, PointLoad, Robot, Rod, Routing, Section, Solution, Tendon, cases, equilibrium};
+
+/// Relative global-equilibrium error every solution must meet: shooting at integration
+/// tolerance 1e-12 balances to about 1e-11 (see `equilibrium` docs for the scales).
+const BALANCE: f64 = 1e-9;
+
+fn assert_balanced(robot: &Robot, name: &str, solution: &Solution) -> f64 {
+    let e = equilibrium::imbalance(robot, solution);
+    assert!(e.max() < BALANCE, "{name}: global equilibrium violated: {e:?}");
+    e.max()
+}
+
+/// Relative difference |a - b| / |b| of two vectors.
+fn rel(a: &Vector3<f64>, b: &Vector3<f64>) -> f64 {
+    (a - b).norm() / b.norm()
+}
+
+/// A cantilever of length `length` with the given section, base at the origin along world z.
+fn cantilever(length: f64, section: Section) -> Robot {
+    Robot::new(Rod::new(length, section))
+}
+
+/// Point on a circular arc of curvature `kappa` about body y, starting at the origin along
+/// z, at arc length `s`, in a rod whose axial stretch is `stretch` (p' = stretch R e_z).
+fn arc_about_y(kappa: f64, s: f64, stretch: f64) -> Vector3<f64> {
+    let t = kappa * s;
+    Vector3::new(1.0 - t.cos(), 0.0, t.sin()) * (stretch / kappa)
+}
+
+#[test]
+fn pure_tip_moment_bends_a_circular_arc() {
+    let length = 0.3;
+    // Different bending stiffnesses about x and y so each axis is checked separately.
+    let (eixx, eiyy) = (0.02, 0.05);
+    let section = Section::explicit(1e5, 4e4, eixx, eiyy, 0.03);
+    // kappa L = 2 rad about body y, 1.2 rad about body x.
+    for (moment, kappa, expected) in [
+        (
+            Vector3::new(0.0, 2.0 * eiyy / length, 0.0),
+            2.0 / length,
+            arc_about_y(2.0 / length, length, 1.0),
+        ),
+        (Vector3::new(1.2 * eixx / length, 0.0, 0.0), 1.2 / length, {
+            // About body x: R = Rx(kappa s), p' = (0, -sin, cos).
+            let a = arc_about_y(1.2 / length, length, 1.0);
+            Vector3::new(0.0, -a[0], a[2])
+        }),
+    ] {
+        let robot = cantilever(length, section).with_loads(Loads::none().with_tip_moment(moment));
+        for (name, solution) in solve_all(&robot) {
+            let tip = solution.tip_position();
+            // 1e-9: integration tolerance 1e-12 on a smooth arc; the arc itself is exact
+            // (n = 0 everywhere, so v = v* and u = M / EI)
+            assert!(rel(&tip, &expected) < 1e-9, "{name}: tip {tip:?} vs {expected:?}");
+            for node in &solution.nodes {
+                let u_expected = moment.component_div(&Vector3::new(eixx, eiyy, 1.0));
+                // 1e-9 relative to kappa: as above
+                assert!((node.u - u_expected).norm() < 1e-9 * kappa, "{name}: u {:?}", node.u);
+                // 1e-12: n(L) = 0 to the Newton residual, and n' = 0
+                assert!((node.v - Vector3::z()).norm() < 1e-12, "{name}: v {:?}", node.v);
+            }
+            assert_balanced(&robot, name, &solution);
+        }
+    }
+}
+
+#[test]
+fn one_straight_tendon_bends_a_compressed_circular_arc() {
+    let (length, radius, e, nu) = (0.2, 5e-4, 200e9, 0.3);
+    let rod = Rod::solid_circle(length, radius, e, nu);
+    let section = rod.section_at(0.0).section;
+    let (ea, ei) = (section.kse[2], section.kbt[1]);
+    let (offset, tension) = (0.005, 20.0);
+    let robot = Robot::new(rod).with_tendon(Tendon::new(Routing::straight(offset, 0.0), tension));
+    // Exact solution: backbone plus tendon carry no net force or moment at any cut, so the
+    // backbone holds n_b = (0, 0, -tau), m_b = (0, tau r, 0): v_z = 1 - tau/EA,
+    // u_y = tau r / EI, and p is an arc of radius v_z / u_y.
+    let v_z = 1.0 - tension / ea;
+    let kappa = tension * offset / ei;
+    let expected = arc_about_y(kappa, length, v_z);
+    for (name, solution) in solve_all(&robot) {
+        let tip = solution.tip_position();
+        // 1e-9: integration tolerance 1e-12; the arc is exact
+        assert!(rel(&tip, &expected) < 1e-9, "{name}: tip {tip:?} vs {expected:?}");
+        for node in &solution.nodes {
+            // 1e-13: compression tau/EA = 1.3e-4 resolved to the Newton residual and rounding
+            assert!(
+                (node.v - Vector3::new(0.0, 0.0, v_z)).norm() < 1e-13,
+                "{name}: v {:?}",
+                node.v
+            );
+            // 1e-9 relative: as the tip
+            assert!(
+                (node.u - Vector3::new(0.0, kappa, 0.0)).norm() < 1e-9 * kappa,
+                "{name}: u {:?}",
+                node.u
+            );
+            let n_b = node.R.transpose() * node.n;
+            // 1e-9 relative to tau: n = EA (v - v*) amplifies v's rounding by EA
+            assert!(
+                (n_b + Vector3::z() * tension).norm() < 1e-9 * tension,
+                "{name}: n_b {n_b:?}"
+            );
+        }
+        assert_balanced(&robot, name, &solution);
+    }
+}
+
+/// A realistic thin rod for the small-deflection tests: shear stiffness finite, so the
+/// Timoshenko term is part of the linear answer.
+fn steel_rod(length: f64) -> (Rod, f64, f64) {
+    let rod = Rod::solid_circle(length, 4e-4, 210e9, 0.3);
+    let section = rod.section_at(0.0).section;
+    let (ga, ei) = (section.kse[0], section.kbt[0]);
+    (rod, ga, ei)
+}
+
+#[test]
+fn small_tip_force_matches_linear_beam_theory() {
+    let length = 0.25;
+    let (rod, ga, ei) = steel_rod(length);
+    // Load parameter F L^2 / EI = 1e-3: the elastica's relative correction to the linear
+    // deflection is -(4/35) (F L^2/EI)^2 = -1.1e-7 (perturbation series).
+    let load = 1e-3;
+    let force = load * ei / (length * length);
+    let robot = Robot::new(rod).with_loads(Loads::none().with_tip_force(Vector3::new(0.0, force, 0.0)));
+    // Euler-Bernoulli plus Timoshenko shear: n_b = (0, F, 0) so v_y = F / GA.
+    let expected = force * length.powi(3) / (3.0 * ei) + force * length / ga;
+    for (name, solution) in solve_all(&robot) {
+        let tip = solution.tip_position();
+        // 3e-7: the nonlinear correction 1.1e-7 above, plus solver error far below it
+        assert!(
+            (tip[1] / expected - 1.0).abs() < 3e-7,
+            "{name}: {} vs {expected}",
+            tip[1]
+        );
+        // 1e-15 L: nothing pushes out of the yz plane
+        assert!(tip[0].abs() < 1e-15 * length, "{name}: {tip:?}");
+        assert_balanced(&robot, name, &solution);
+    }
+}
+
+#[test]
+fn small_uniform_load_matches_linear_beam_theory() {
+    let length = 0.25;
+    let (rod, ga, ei) = steel_rod(length);
+    // Load parameter w L^3 / EI = 1e-3: the relative nonlinear correction is -(w L^3/EI)^2 / 80
+    // = -1.25e-8 (perturbation series).
+    let load = 1e-3;
+    let w = load * ei / length.powi(3);
+    let robot = Robot::new(rod).with_loads(Loads::self_weight(w, Vector3::x()));
+    let expected = w * length.powi(4) / (8.0 * ei) + w * length * length / (2.0 * ga);
+    for (name, solution) in solve_all(&robot) {
+        let tip = solution.tip_position();
+        // 5e-8: the nonlinear correction 1.25e-8 above, plus solver error below it
+        assert!(
+            (tip[0] / expected - 1.0).abs() < 5e-8,
+            "{name}: {} vs {expected}",
+            tip[0]
+        );
+        assert_balanced(&robot, name, &solution);
+    }
+}
+
+/// Carlson's symmetric elliptic integral R_F(x, y, z) by duplication (Carlson 1995, DLMF
+/// 19.36.1); stops when the relative spread is below 1e-4, where the 5th-order series
+/// leaves an error of order 1e-24.
+fn carlson_rf(mut x: f64, mut y: f64, mut z: f64) -> f64 {
+    loop {
+        let mu = (x + y + z) / 3.0;
+        let (dx, dy, dz) = (1.0 - x / mu, 1.0 - y / mu, 1.0 - z / mu);
+        if dx.abs().max(dy.abs()).max(dz.abs()) < 1e-4 {
+            let e2 = dx * dy - dz * dz;
+            let e3 = dx * dy * dz;
+            return (1.0 - e2 / 10.0 + e3 / 14.0 + e2 * e2 / 24.0 - 3.0 * e2 * e3 / 44.0) / mu.sqrt();
+        }
+        let lambda = (x * y).sqrt() + (y * z).sqrt() + (z * x).sqrt();
+        x = (x + lambda) / 4.0;
+        y = (y + lambda) / 4.0;
+        z = (z + lambda) / 4.0;
+    }
+}
+
+/// Carlson's R_D(x, y, z) = R_J(x, y, z, z) by duplication (Carlson 1995; the series as in
+/// Numerical Recipes' `rd`), same stopping rule as [`carlson_rf`].
+fn carlson_rd(mut x: f64, mut y: f64, mut z: f64) -> f64 {
+    let (mut sum, mut fac) = (0.0, 1.0);
+    loop {
+        let mu = (x + y + 3.0 * z) / 5.0;
+        let (dx, dy, dz) = ((mu - x) / mu, (mu - y) / mu, (mu - z) / mu);
+        if dx.abs().max(dy.abs()).max(dz.abs()) < 1e-4 {
+            let (ea, eb) = (dx * dy, dz * dz);
+            let (ec, ed) = (ea - eb, ea - 6.0 * eb);
+            let ee = ed + ec + ec;
+            let (c1, c2, c3, c4) = (3.0 / 14.0, 1.0 / 6.0, 9.0 / 22.0, 3.0 / 26.0);
+            let (c5, c6) = (0.25 * c1, 1.5 * c4);
+            let series = 1.0 + ed * (-c1 + c5 * ed - c6 * dz * ee) + dz * (c2 * ee + dz * (-c3 * ec + dz * c4 * ea));
+            return 3.0 * sum + fac * series / (mu * mu.sqrt());
+        }
+        let lambda = (x * y).sqrt() + (y * z).sqrt() + (z * x).sqrt();
+        sum += fac / (z.sqrt() * (z + lambda));
+        fac *= 0.25;
+        x = (x + lambda) / 4.0;
+        y = (y + lambda) / 4.0;
+        z = (z + lambda) / 4.0;
+    }
+}
+
+/// Incomplete elliptic integral of the first kind F(phi, k) (modulus k).
+fn elliptic_f(phi: f64, k: f64) -> f64 {
+    let (s, c) = phi.sin_cos();
+    s * carlson_rf(c * c, 1.0 - k * k * s * s, 1.0)
+}
+
+/// Incomplete elliptic integral of the second kind E(phi, k) (modulus k).
+fn elliptic_e(phi: f64, k: f64) -> f64 {
+    let (s, c) = phi.sin_cos();
+    let d = 1.0 - k * k * s * s;
+    s * carlson_rf(c * c, d, 1.0) - k * k * s.powi(3) / 3.0 * carlson_rd(c * c, d, 1.0)
+}
+
+#[test]
+fn elliptic_integrals_match_agm_and_tabulated_values() {
+    // Complete K(k) = pi / (2 AGM(1, sqrt(1 - k^2))), independent of Carlson's forms.
+    for k in [0.1, 1.0 / 2f64.sqrt(), 0.9, 0.999] {
+        let (mut a, mut b) = (1.0, (1.0 - k * k).sqrt());
+        for _ in 0..30 {
+            (a, b) = ((a + b) / 2.0, (a * b).sqrt());
+        }
+        // 1e-14: both are converged to rounding
+        assert!(
+            (elliptic_f(FRAC_PI_2, k) / (PI / (2.0 * a)) - 1.0).abs() < 1e-14,
+            "K({k})"
+        );
+    }
+    // E(1/sqrt 2) = 1.3506438810476755 (Abramowitz & Stegun 17.3, table 17.1 at m = 1/2).
+    // 1e-15: rounding
+    assert!((elliptic_e(FRAC_PI_2, 1.0 / 2f64.sqrt()) - 1.350_643_881_047_675_5).abs() < 1e-15);
+    // E(phi, 0) = phi, F(phi, 1) = atanh(sin phi).
+    assert!((elliptic_e(0.7, 0.0) - 0.7).abs() < 1e-15);
+    assert!((elliptic_f(0.7, 1.0) - 0.7f64.sin().atanh()).abs() < 1e-14);
+}
+
+/// Tip of the inextensible, unshearable elastica: a cantilever of unit length clamped along
+/// z, dead tip load perpendicular to it along x with load parameter `lambda` = P L^2 / EI.
+/// Returns (x, z) / L.
+///
+/// EI theta'' = -P cos(theta) with theta(0) = 0, theta'(L) = 0. Substituting
+/// 1 + sin(theta) = 2 k^2 sin^2(phi) gives ds = dphi / (sqrt(P/EI) sqrt(1 - k^2 sin^2 phi))
+/// with phi from phi1 = asin(1 / (k sqrt 2)) at the base to pi/2 at the tip, so
+/// sqrt(lambda) = K(k) - F(phi1, k) fixes k; then sin(theta) ds integrates to
+/// x sqrt(lambda) = (K - F(phi1)) - 2 (E - E(phi1)) and cos(theta) ds to
+/// z = sqrt(2 sin(theta_L) / lambda) with sin(theta_L) = 2 k^2 - 1.
+fn elastica_tip(lambda: f64) -> (f64, f64) {
+    let phi1 = |k: f64| (1.0 / (k * 2f64.sqrt())).asin();
+    let length_of = |k: f64| elliptic_f(FRAC_PI_2, k) - elliptic_f(phi1(k), k);
+    // Bisection on k in (1/sqrt 2, 1): the length grows monotonically with k.
+    let (mut lo, mut hi) = (1.0 / 2f64.sqrt(), 1.0 - 1e-15);
+    while hi - lo > 1e-16 {
+        let mid = 0.5 * (lo + hi);
+        if mid <= lo || mid >= hi {
+            break;
+        }
+        if length_of(mid) > lambda.sqrt() {
+            hi = mid
+        } else {
+            lo = mid
+        }
+    }
+    let k = 0.5 * (lo + hi);
+    let x = (length_of(k) - 2.0 * (elliptic_e(FRAC_PI_2, k) - elliptic_e(phi1(k), k))) / lambda.sqrt();
+    let z = (2.0 * (2.0 * k * k - 1.0) / lambda).sqrt();
+    (x, z)
+}
+
+#[test]
+fn elastica_reference_is_right() {
+    // Bisshopp & Drucker (1945), P L^2/EI = 1: x/L = 0.30172, z/L = 0.94357; and 30-digit
+    // mpmath values of the same formulas for 1 and 10.
+    for (lambda, x, z) in [
+        (1.0, 0.301_720_773_799_813_5, 0.943_566_763_716_623_1),
+        (10.0, 0.810_609_024_880_296_5, 0.445_004_402_246_248_7),
+    ] {
+        let (xc, zc) = elastica_tip(lambda);
+        // 1e-13: bisection to rounding; k near 1/sqrt 2 costs a few digits in z
+        assert!((xc - x).abs() < 1e-13 && (zc - z).abs() < 1e-13, "{lambda}: {xc} {zc}");
+    }
+}
+
+#[test]
+fn large_deflection_cantilever_matches_elastica() {
+    let (length, ei) = (0.5, 2.0);
+    // EA = GA = 1e8 EI/L^2 makes axial and shear strain at most P/EA = 1e-7 at lambda = 10,
+    // so extension and shear move the tip by less than 1e-7 L.
+    let stiff = 1e8 * ei / (length * length);
+    let robot0 = cantilever(length, Section::explicit(stiff, stiff, ei, ei, 0.75 * ei));
+    for lambda in [1.0, 2.0, 5.0, 10.0] {
+        let force = lambda * ei / (length * length);
+        let robot = robot0
+            .clone()
+            .with_loads(Loads::none().with_tip_force(Vector3::new(force, 0.0, 0.0)));
+        let (x, z) = elastica_tip(lambda);
+        for (name, solution) in solve_all(&robot) {
+            let tip = solution.tip_position();
+            let err_x = (tip[0] / (x * length) - 1.0).abs();
+            let err_z = ((length - tip[2]) / (length * (1.0 - z)) - 1.0).abs();
+            eprintln!("elastica lambda {lambda}: {name} relative error x {err_x:.2e}, L - z {err_z:.2e}");
+            // 1e-6: extension/shear effects are below 1e-7 L (see above), integration error
+            // below 1e-10 L
+            assert!(err_x < 1e-6 && err_z < 1e-6, "{name}: {tip:?} vs ({x}, {z}) L");
+            // 1e-15 L: the load is in the xz plane
+            assert!(tip[1].abs() < 1e-15 * length, "{name}: {tip:?}");
+            assert_balanced(&robot, name, &solution);
+        }
+    }
+}
+
+#[test]
+fn opposite_equal_tendons_keep_the_rod_straight() {
+    let (length, offset, tension) = (0.2, 0.005, 10.0);
+    let rod = Rod::solid_circle(length, 5e-4, 200e9, 0.3);
+    let ea = rod.section_at(0.0).section.kse[2];
+    let robot = Robot::new(rod)
+        .with_tendon(Tendon::new(Routing::straight(offset, 0.0), tension))
+        .with_tendon(Tendon::new(Routing::straight(-offset, 0.0), tension));
+    for (name, solution) in solve_all(&robot) {
+        let tip = solution.tip_position();
+        // 1e-15 L: the tendon moments cancel exactly; only rounding can bend the rod
+        assert!(
+            tip[0].abs() < 1e-15 * length && tip[1].abs() < 1e-15 * length,
+            "{name}: {tip:?}"
+        );
+        // 1e-14: rounding of 1 - 2 tau / EA integrated along the rod
+        assert!(
+            (tip[2] / (length * (1.0 - 2.0 * tension / ea)) - 1.0).abs() < 1e-14,
+            "{name}: {tip:?}"
+        );
+        assert_balanced(&robot, name, &solution);
+    }
+}
+
+#[test]
+fn rotating_the_routing_rotates_the_shape() {
+    let (length, offset) = (0.2, 0.005);
+    let rod = Rod::solid_circle(length, 5e-4, 200e9, 0.3);
+    let quarter = Matrix3::new(0.0, -1.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0); // 90 deg about z
+    let tip_force = Vector3::new(0.05, -0.02, 0.03);
+    let build = |turn: &Matrix3<f64>, phase: f64| {
+        let straight = turn * Vector3::new(0.6 * offset, 0.2 * offset, 0.0);
+        Robot::new(rod.clone())
+            .with_tendon(Tendon::new(Routing::helical(offset, 1.0, 0.3 + phase), 4.0))
+            .with_tendon(Tendon::new(Routing::straight(straight[0], straight[1]), 2.0))
+            .with_loads(Loads::none().with_tip_force(turn * tip_force))
+    };
+    let robot = build(&Matrix3::identity(), 0.0);
+    let turned = build(&quarter, FRAC_PI_2);
+    for ((name, a), (_, b)) in solve_all(&robot).into_iter().zip(solve_all(&turned)) {
+        let (pa, pb) = (a.tip_position(), b.tip_position());
+        // 1e-10 L: the two solves take different integration steps, each accurate to ~1e-11 L
+        assert!(
+            (quarter * pa - pb).norm() < 1e-10 * length,
+            "{name}: {pa:?} turned vs {pb:?}"
+        );
+        assert!(
+            pa.xy().norm() > 0.1 * length,
+            "{name}: the test should bend the rod: {pa:?}"
+        );
+        assert_balanced(&robot, name, &a);
+        assert_balanced(&turned, name, &b);
+    }
+}
+
+#[test]
+fn prototype_reference_tips() {
+    for (label, robot, tip) in [
+        ("S", cases::case_s(), cases::TIP_S),
+        ("H", cases::case_h(), cases::TIP_H),
+    ] {
+        for (name, solution) in solve_all(&robot) {
+            let err = (solution.tip_position() - Vector3::from(tip)).norm();
+            // 1e-9 m: the references are good to about 2e-10 m (ERRATA.md)
+            assert!(err < 1e-9, "{name} case {label}: tip error {err:.3e} m");
+        }
+    }
+}
+
+#[test]
+fn table2_experiments_are_in_global_equilibrium() {
+    let mut worst: f64 = 0.0;
+    for experiment in cases::table2() {
+        let robot = experiment.robot();
+        for (name, solution) in solve_all(&robot) {
+            let e = assert_balanced(&robot, &format!("{name} {}", experiment.label()), &solution);
+            worst = worst.max(e);
+        }
+    }
+    eprintln!("table 2: worst relative imbalance {worst:.2e}");
+}
+
+#[test]
+fn varying_loads_and_interior_terminations_balance() {
+    // Exercises every term of the balance: varying f_e, l_e, a point load, and a tendon
+    // ending mid-way so that the helical tendon has a corner there (ERRATA.md addendum).
+    let length = 0.25;
+    let (rod, _, _) = steel_rod(length);
+    let mut loads = Loads::none()
+        .with_tip_force(Vector3::new(0.0, 0.01, -0.02))
+        .with_tip_moment(Vector3::new(0.0, 0.0, 1e-3));
+    loads.distributed_force = Field::Varying(std::sync::Arc::new(move |s: f64| {
+        Vector3::new(0.2 * (1.0 - s / length), 0.0, -0.1) * (s / length + 0.5)
+    }));
+    loads.distributed_moment = Field::Constant(Vector3::new(0.0, 0.002, 0.001));
+    loads.point.push(PointLoad {
+        s: 0.3 * length,
+        force: Vector3::new(-0.05, 0.02, 0.0),
+        moment: Vector3::new(0.0, 0.0, 2e-3),
+    });
+    let mut robot = Robot::new(rod)
+        .with_tendon(Tendon::new(Routing::helical(0.006, -0.5, 1.0), 1.5))
+        .with_tendon(Tendon::new(Routing::straight(0.0, -0.006), 2.0).ending_at(0.6 * length))
+        .with_loads(loads);
+    for (name, solution) in solve_all(&robot) {
+        assert_balanced(&robot, name, &solution);
+    }
+    // The paper's jump conditions (no corner forces) are out of balance: the check sees it.
+    robot.corner_forces = false;
+    for (name, solution) in solve_all(&robot) {
+        let e = equilibrium::imbalance(&robot, &solution);
+        eprintln!("{name} without corner forces: imbalance {e:?}");
+        // 1e-7: the omitted corner force is about 1e-5 of the loads (ERRATA.md), 100 times
+        // the solvers' error
+        assert!(e.max() > 1e-7, "{name}: {e:?}");
+    }
+}

@@ -1,0 +1,32 @@
+//! Shared by the integration tests: run every solver on a robot.
+//!
+//! To test a new solver everywhere, add it to [`try_solve_all`]; tests loop over what it
+//! returns and never depend on how many solvers there are.
+#![allow(dead_code)] // each test crate uses a different subset
+
+use tdcr::shooting::{self, Options};
+use tdcr::{Result, Robot, Solution};
+
+/// Every solver's result on `robot`, labelled by solver name, at tight tolerances.
+pub fn try_solve_all(robot: &Robot) -> Vec<(&'static str, Result<Solution>)> {
+    vec![(
+        "shooting",
+        // 1e-12: the tightest integration tolerance shooting supports
+        shooting::solve(
+            robot,
+            &Options {
+                integration_tolerance: 1e-12,
+                ..Default::default()
+            },
+        ),
+    )]
+}
+
+/// Every solver's solution of `robot`; panics with the solver's name and error if one
+/// fails.
+pub fn solve_all(robot: &Robot) -> Vec<(&'static str, Solution)> {
+    try_solve_all(robot)
+        .into_iter()
+        .map(|(name, result)| (name, result.unwrap_or_else(|e| panic!("{name}: {e}"))))
+        .collect()
+}
