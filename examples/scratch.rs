@@ -1,17 +1,22 @@
+use tdcr::*;
 fn main() {
-    let robot = tdcr::cases::case_s();
-    for n in [32, 64] {
-        let o = tdcr::collocation::Options {
+    let robot = cases::case_h();
+    for n in [32, 128, 512] {
+        let o = collocation::Options {
             intervals: n,
-            continuation: false,
             ..Default::default()
         };
-        match tdcr::collocation::solve(&robot, &o) {
-            Ok(sol) => println!("{:?}", sol.report.history),
-            Err(tdcr::Error::NotConverged { report, worst_s, .. }) => {
-                println!("{} {worst_s} {:#?}", report.termination, report.history)
-            }
-            Err(e) => println!("{e}"),
-        }
+        let sol = collocation::solve(&robot, &o).unwrap();
+        let r = &sol.report;
+        println!(
+            "{n}: iters {} total {:?} assembly {:?} factor {:?} solve {:?} res evals {} jac {}",
+            r.iterations,
+            r.timings.total,
+            r.timings.assembly,
+            r.timings.factorization,
+            r.timings.solve,
+            r.evaluations.residual,
+            r.evaluations.jacobian
+        );
     }
 }

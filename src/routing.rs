@@ -113,6 +113,7 @@ impl fmt::Debug for Routing {
 mod tests {
     use super::*;
     use approx::assert_relative_eq;
+    use num_dual::DualNum;
 
     #[test]
     fn helix_derivatives_match_dual_version() {

@@ -161,7 +161,7 @@ impl Scale {
     fn to_unknowns(&self, v: &Vector3<f64>, u: &Vector3<f64>) -> SVector<f64, 6> {
         SVector::<f64, 6>::from_iterator(v.iter().copied().chain(u.iter().map(|x| x * self.length)))
     }
-    fn from_unknowns(&self, x: &SVector<f64, 6>) -> (Vector3<f64>, Vector3<f64>) {
+    fn strains(&self, x: &SVector<f64, 6>) -> (Vector3<f64>, Vector3<f64>) {
         (x.fixed_rows::<3>(0).into(), x.fixed_rows::<3>(3) / self.length)
     }
 }
@@ -204,7 +204,7 @@ fn shoot(
     traj.clear();
     let robot = model.robot;
     let length = robot.length();
-    let (v, u) = scale.from_unknowns(x);
+    let (v, u) = scale.strains(x);
     let mut state = State {
         s: 0.0,
         p: robot.base_position,

@@ -14,8 +14,12 @@ use tdcr::{Field, Loads, PointLoad, Robot, Rod, Routing, Section, Solution, Tend
 const BALANCE: f64 = 1e-9;
 
 fn assert_balanced(robot: &Robot, name: &str, solution: &Solution) -> f64 {
+    assert_balanced_within(robot, name, solution, BALANCE)
+}
+
+fn assert_balanced_within(robot: &Robot, name: &str, solution: &Solution, tolerance: f64) -> f64 {
     let e = equilibrium::imbalance(robot, solution);
-    assert!(e.max() < BALANCE, "{name}: global equilibrium violated: {e:?}");
+    assert!(e.max() < tolerance, "{name}: global equilibrium violated: {e:?}");
     e.max()
 }
 
@@ -58,6 +62,7 @@ fn pure_tip_moment_bends_a_circular_arc() {
         let robot = cantilever(length, section).with_loads(Loads::none().with_tip_moment(moment));
         for (name, solution) in solve_all(&robot) {
             let tip = solution.tip_position();
+            eprintln!("pure moment: {name} tip relative error {:.2e}", rel(&tip, &expected));
             // 1e-9: integration tolerance 1e-12 on a smooth arc; the arc itself is exact
             // (n = 0 everywhere, so v = v* and u = M / EI)
             assert!(rel(&tip, &expected) < 1e-9, "{name}: tip {tip:?} vs {expected:?}");
@@ -89,6 +94,7 @@ fn one_straight_tendon_bends_a_compressed_circular_arc() {
     let expected = arc_about_y(kappa, length, v_z);
     for (name, solution) in solve_all(&robot) {
         let tip = solution.tip_position();
+        eprintln!("one tendon: {name} tip relative error {:.2e}", rel(&tip, &expected));
         // 1e-9: integration tolerance 1e-12; the arc is exact
         assert!(rel(&tip, &expected) < 1e-9, "{name}: tip {tip:?} vs {expected:?}");
         for node in &solution.nodes {
@@ -299,9 +305,14 @@ fn elastica_reference_is_right() {
 #[test]
 fn large_deflection_cantilever_matches_elastica() {
     let (length, ei) = (0.5, 2.0);
-    // EA = GA = 1e8 EI/L^2 makes axial and shear strain at most P/EA = 1e-7 at lambda = 10,
-    // so extension and shear move the tip by less than 1e-7 L.
-    let stiff = 1e8 * ei / (length * length);
+    // With EA = GA = K the body-frame strain v - v* = n_b / K is the world force rotated
+    // into the body, so the moment arm term (p' x n)_y = P cos(theta) is exactly that of the
+    // inextensible rod: theta(s) is the inextensible elastica, and p gains exactly
+    // int R n_b / K ds = P L / K along the load. Only that shift separates the two answers.
+    // K = 1e5 EI/L^2 keeps the shift visible (1e-4 L at lambda = 10) and the rod
+    // stiff; shooting's finite-difference Jacobian (a fixed step 1e-6 on v, i.e. 1e-6 K of
+    // force) fails for K >= 1e7 EI/L^2.
+    let stiff = 1e5 * ei / (length * length);
     let robot0 = cantilever(length, Section::explicit(stiff, stiff, ei, ei, 0.75 * ei));
     for lambda in [1.0, 2.0, 5.0, 10.0] {
         let force = lambda * ei / (length * length);
@@ -309,14 +320,16 @@ fn large_deflection_cantilever_matches_elastica() {
             .clone()
             .with_loads(Loads::none().with_tip_force(Vector3::new(force, 0.0, 0.0)));
         let (x, z) = elastica_tip(lambda);
+        let x = x * length + force * length / stiff;
+        let z = z * length;
         for (name, solution) in solve_all(&robot) {
             let tip = solution.tip_position();
-            let err_x = (tip[0] / (x * length) - 1.0).abs();
-            let err_z = ((length - tip[2]) / (length * (1.0 - z)) - 1.0).abs();
+            let err_x = (tip[0] / x - 1.0).abs();
+            let err_z = ((length - tip[2]) / (length - z) - 1.0).abs();
             eprintln!("elastica lambda {lambda}: {name} relative error x {err_x:.2e}, L - z {err_z:.2e}");
-            // 1e-6: extension/shear effects are below 1e-7 L (see above), integration error
-            // below 1e-10 L
-            assert!(err_x < 1e-6 && err_z < 1e-6, "{name}: {tip:?} vs ({x}, {z}) L");
+            // 1e-7: the shift above is exact, so only solver error remains (shooting: below
+            // 5e-11); 10 times tighter than the 1e-6 an inextensible comparison would allow
+            assert!(err_x < 1e-7 && err_z < 1e-7, "{name}: {tip:?} vs ({x}, {z})");
             // 1e-15 L: the load is in the xz plane
             assert!(tip[1].abs() < 1e-15 * length, "{name}: {tip:?}");
             assert_balanced(&robot, name, &solution);
@@ -365,6 +378,10 @@ fn rotating_the_routing_rotates_the_shape() {
     let turned = build(&quarter, FRAC_PI_2);
     for ((name, a), (_, b)) in solve_all(&robot).into_iter().zip(solve_all(&turned)) {
         let (pa, pb) = (a.tip_position(), b.tip_position());
+        eprintln!(
+            "rotated routing: {name} tip difference {:.2e} L",
+            (quarter * pa - pb).norm() / length
+        );
         // 1e-10 L: the two solves take different integration steps, each accurate to ~1e-11 L
         assert!(
             (quarter * pa - pb).norm() < 1e-10 * length,
@@ -395,12 +412,25 @@ fn prototype_reference_tips() {
 
 #[test]
 fn table2_experiments_are_in_global_equilibrium() {
+    let ea = cases::prototype().rod.section_at(0.0).section.kse[2];
     let mut worst: f64 = 0.0;
     for experiment in cases::table2() {
         let robot = experiment.robot();
+        // The characteristic force of `equilibrium::imbalance` for this experiment.
+        let force_scale = experiment
+            .tension
+            .max(experiment.tip_load)
+            .max(cases::WEIGHT_PER_LENGTH * cases::LENGTH);
+        // Rounding floor: n = EA (v - v*) with v_z ~ 1 stored in f64 resolves force only to
+        // eps EA = 2.3e-11 N, and integrating v over ~100 steps accumulates ~10 such
+        // roundings; 30 eps EA is 2e-8 of the self weight alone (the no-tension case,
+        // measured 1.3e-9 .. 1.9e-9) and below 1e-9 of every tensioned case.
+        let tolerance = BALANCE.max(30.0 * f64::EPSILON * ea / force_scale);
         for (name, solution) in solve_all(&robot) {
-            let e = assert_balanced(&robot, &format!("{name} {}", experiment.label()), &solution);
+            let label = format!("{name} {}", experiment.label());
+            let e = assert_balanced_within(&robot, &label, &solution, tolerance);
             worst = worst.max(e);
+            eprintln!("{label}: relative imbalance {e:.2e}");
         }
     }
     eprintln!("table 2: worst relative imbalance {worst:.2e}");
@@ -436,8 +466,8 @@ fn varying_loads_and_interior_terminations_balance() {
     for (name, solution) in solve_all(&robot) {
         let e = equilibrium::imbalance(&robot, &solution);
         eprintln!("{name} without corner forces: imbalance {e:?}");
-        // 1e-7: the omitted corner force is about 1e-5 of the loads (ERRATA.md), 100 times
-        // the solvers' error
+        // 1e-7: the omitted corner force is a first-order error (measured 2e-3 here; about
+        // 1e-5 on the ERRATA.md example), far above the solvers' 1e-10
         assert!(e.max() > 1e-7, "{name}: {e:?}");
     }
 }

@@ -127,7 +127,7 @@ fn interpolate(guess: &Solution, mesh: &Mesh) -> Vec<State> {
 
 fn solve_impl(robot: &Robot, options: &Options, warm: Option<&Solution>) -> Result<Solution> {
     robot.validate()?;
-    if !(options.residual_tolerance > 0.0) || options.max_iterations == 0 {
+    if options.residual_tolerance.is_nan() || options.residual_tolerance <= 0.0 || options.max_iterations == 0 {
         return Err(invalid(
             "options",
             "needs residual_tolerance > 0 and max_iterations >= 1",

@@ -18,7 +18,9 @@
 //! The base rows depend only on p and R of node 0, the tip rows on R, v, u of node N; each
 //! link block is a dense 12 x 24. The pattern is built once per mesh; each Newton
 //! iteration refills the values in the same order. The Jacobian is exact: the same generic
-//! residual code is run on num-dual dual numbers seeded with the node unknowns.
+//! residual code is run on num-dual dual numbers seeded with the node unknowns (one
+//! direction per pass for the 12 x 24 link blocks, which measured twice as fast as one
+//! pass with 24-wide dual vectors).
 
 use super::residual::{self, Delta, IntervalSites};
 use crate::equations::{Model, Site};
@@ -27,12 +29,11 @@ use crate::mesh::Mesh;
 use crate::so3;
 use crate::solution::State;
 use nalgebra::{SVector, Vector3};
-use num_dual::DualSVec64;
+use num_dual::{Dual64, DualSVec64};
 
 /// Unknowns per node.
 pub const NODE: usize = 12;
 
-type D24 = DualSVec64<24>;
 type D12 = DualSVec64<12>;
 
 /// The collocation system on one mesh at one load factor.
@@ -167,16 +168,31 @@ impl<'a> System<'a> {
             values[at..at + 6].copy_from_slice(&eps.as_slice()[..6]);
             at += 6;
         }
-        let da = Delta::<D24>::from_fn(|i, _| D24::from(0.0).derivative(i));
-        let db = Delta::<D24>::from_fn(|i, _| D24::from(0.0).derivative(NODE + i));
         let links = x.len() - 1;
+        let width = 2 * NODE;
         for k in 0..links {
-            let r = self.link(k, x, &da, &db)?;
-            for (i, d) in r.iter().enumerate() {
-                out[6 + k * NODE + i] = d.re;
-                values[at..at + 2 * NODE].copy_from_slice(derivative(&d.eps.0).as_slice());
-                at += 2 * NODE;
+            for j in 0..width {
+                let da = Delta::<Dual64>::from_fn(|i, _| {
+                    if i == j {
+                        Dual64::from(0.0).derivative()
+                    } else {
+                        Dual64::from(0.0)
+                    }
+                });
+                let db = Delta::<Dual64>::from_fn(|i, _| {
+                    if i + NODE == j {
+                        Dual64::from(0.0).derivative()
+                    } else {
+                        Dual64::from(0.0)
+                    }
+                });
+                let r = self.link(k, x, &da, &db)?;
+                for (i, d) in r.iter().enumerate() {
+                    out[6 + k * NODE + i] = d.re;
+                    values[at + i * width + j] = d.eps;
+                }
             }
+            at += NODE * width;
         }
         let tip = residual::tip(&self.model, &self.node_sites[links], &x[links], &seed12())?;
         for (r, d) in tip.iter().enumerate() {

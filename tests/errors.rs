@@ -1,0 +1,193 @@
+//! Bad input is rejected before any iteration, by every solver, with the right
+//! `tdcr::Error` variant and a message that names the field, the value and the fix.
+
+mod common;
+
+use common::try_solve_all;
+use nalgebra::{Matrix3, Vector3};
+use tdcr::{Error, Loads, Robot, Rod, Routing, Tendon};
+
+const LENGTH: f64 = 0.2;
+const RADIUS: f64 = 5e-4;
+const MODULUS: f64 = 200e9;
+const POISSON: f64 = 0.3;
+const OFFSET: f64 = 0.005;
+
+/// A valid robot: two straight tendons under tension.
+fn good() -> Robot {
+    Robot::new(Rod::solid_circle(LENGTH, RADIUS, MODULUS, POISSON))
+        .with_tendon(Tendon::new(Routing::straight(OFFSET, 0.0), 1.0))
+        .with_tendon(Tendon::new(Routing::straight(0.0, OFFSET), 2.0))
+}
+
+/// Asserts that validation and every solver return `Error::InvalidInput` for `field`,
+/// with every fragment in the message.
+fn assert_invalid(robot: &Robot, field: &str, fragments: &[&str]) {
+    let mut results = vec![("validate", robot.validate().map(|_| ()))];
+    results.extend(try_solve_all(robot).into_iter().map(|(name, r)| (name, r.map(|_| ()))));
+    for (name, result) in results {
+        match result {
+            Err(e @ Error::InvalidInput { .. }) => {
+                let Error::InvalidInput { field: got, .. } = &e else {
+                    unreachable!()
+                };
+                assert_eq!(got, field, "{name}: {e}");
+                let message = e.to_string();
+                assert!(message.contains(&format!("`{field}`")), "{name}: {message}");
+                for fragment in fragments {
+                    assert!(message.contains(fragment), "{name}: no `{fragment}` in: {message}");
+                }
+            }
+            other => panic!("{name}: expected InvalidInput for {field}, got {other:?}"),
+        }
+    }
+}
+
+#[test]
+fn a_good_robot_is_accepted() {
+    assert!(good().validate().is_ok());
+    for (name, result) in try_solve_all(&good()) {
+        assert!(result.is_ok(), "{name}: {result:?}");
+    }
+}
+
+#[test]
+fn bad_length_is_rejected() {
+    for length in [f64::NAN, 0.0, -0.1, f64::INFINITY] {
+        let mut robot = good();
+        robot.rod = Rod::solid_circle(length, RADIUS, MODULUS, POISSON);
+        assert_invalid(
+            &robot,
+            "rod.length",
+            &[&format!("is {length}"), "positive, finite length"],
+        );
+    }
+}
+
+#[test]
+fn zero_radius_or_bad_modulus_is_rejected_as_bad_stiffness() {
+    for (radius, modulus) in [(0.0, MODULUS), (RADIUS, 0.0), (RADIUS, -MODULUS), (RADIUS, f64::NAN)] {
+        let mut robot = good();
+        robot.rod = Rod::solid_circle(LENGTH, radius, modulus, POISSON);
+        assert_invalid(
+            &robot,
+            "rod.stiffness",
+            &["kse (GA, GA, EA)", "check radius and moduli"],
+        );
+    }
+    // Poisson's ratio -1 makes G = E / (2 (1 + nu)) infinite.
+    let mut robot = good();
+    robot.rod = Rod::solid_circle(LENGTH, RADIUS, MODULUS, -1.0);
+    assert_invalid(&robot, "rod.stiffness", &["inf", "positive and finite"]);
+}
+
+#[test]
+fn bad_tension_is_rejected() {
+    for tension in [f64::NAN, -1.0, f64::INFINITY] {
+        let mut robot = good();
+        robot.tendons[1].tension = tension;
+        assert_invalid(
+            &robot,
+            "tendons[1].tension",
+            &[&format!("is {tension} N"), "can only pull"],
+        );
+    }
+}
+
+#[test]
+fn non_finite_loads_are_rejected() {
+    let robot = good().with_loads(Loads::none().with_tip_force(Vector3::new(0.0, f64::NAN, 0.0)));
+    assert_invalid(&robot, "loads.tip_force", &["(0, NaN, 0)", "finite number"]);
+    let robot = good().with_loads(Loads::none().with_tip_moment(Vector3::new(f64::INFINITY, 0.0, 0.0)));
+    assert_invalid(&robot, "loads.tip_moment", &["(inf, 0, 0)", "finite number"]);
+    let robot = good().with_loads(Loads::self_weight(f64::NAN, -Vector3::z()));
+    assert_invalid(&robot, "loads.distributed_force", &["NaN", "finite number"]);
+}
+
+#[test]
+fn point_load_off_the_rod_is_rejected() {
+    for s in [0.0, -0.01, 1.5 * LENGTH, f64::NAN] {
+        let mut robot = good();
+        robot.loads.point.push(tdcr::PointLoad {
+            s,
+            force: Vector3::x(),
+            moment: Vector3::zeros(),
+        });
+        assert_invalid(&robot, "loads.point[0].s", &["outside (0, 0.2]"]);
+    }
+}
+
+#[test]
+fn bad_base_pose_is_rejected() {
+    let mut nan = Matrix3::identity();
+    nan[(1, 2)] = f64::NAN;
+    let stretched = Matrix3::identity() * 1.01;
+    let sheared = Matrix3::new(1.0, 0.1, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0);
+    let reflection = Matrix3::from_diagonal(&Vector3::new(1.0, 1.0, -1.0));
+    for rotation in [nan, stretched, sheared, reflection] {
+        let robot = good().with_base(Vector3::zeros(), rotation);
+        assert_invalid(
+            &robot,
+            "base_rotation",
+            &["is not a rotation", "orthonormal matrix with determinant +1"],
+        );
+    }
+    let robot = good().with_base(Vector3::new(0.0, f64::NAN, 0.0), Matrix3::identity());
+    assert_invalid(&robot, "base_position", &["finite number"]);
+}
+
+#[test]
+fn termination_outside_the_rod_is_rejected() {
+    for end in [0.0, -0.05, LENGTH * 1.001, f64::NAN, f64::INFINITY] {
+        let mut robot = good();
+        robot.tendons[1] = robot.tendons[1].clone().ending_at(end);
+        assert_invalid(
+            &robot,
+            "tendons[1].termination",
+            &[&format!("is s = {end} m, outside (0, 0.2]"), "at most the rod length"],
+        );
+    }
+}
+
+#[test]
+fn routing_with_vanishing_tangent_is_rejected() {
+    // A straight tendon at (x, 0) on a rod precurved by u* = (0, 1/x, 0): in the unloaded
+    // shape its path tangent u* x r + r' + v* = (0, 0, -1) + (0, 0, 1) vanishes everywhere.
+    let rod =
+        Rod::solid_circle(LENGTH, RADIUS, MODULUS, POISSON).with_precurvature(Vector3::new(0.0, 1.0 / OFFSET, 0.0));
+    let robot = Robot::new(rod)
+        .with_tendon(Tendon::new(Routing::straight(0.0, OFFSET), 1.0))
+        .with_tendon(Tendon::new(Routing::straight(OFFSET, 0.0), 1.0));
+    let mut results = vec![("validate", robot.validate().map(|_| ()))];
+    results.extend(try_solve_all(&robot).into_iter().map(|(name, r)| (name, r.map(|_| ()))));
+    for (name, result) in results {
+        match result {
+            Err(e @ Error::SingularRouting { tendon: 1, .. }) => {
+                let message = e.to_string();
+                assert!(
+                    message.contains("tendon 1 has a vanishing path tangent"),
+                    "{name}: {message}"
+                );
+                assert!(message.contains("cancel the axial strain"), "{name}: {message}");
+            }
+            other => panic!("{name}: expected SingularRouting for tendon 1, got {other:?}"),
+        }
+    }
+}
+
+#[test]
+fn routing_leaving_the_cross_section_or_not_finite_is_rejected() {
+    let mut robot = good();
+    robot.tendons[0].routing = Routing::custom(|_, _| tdcr::RoutingPoint {
+        r: Vector3::new(OFFSET, 0.0, 1e-3),
+        r_s: Vector3::zeros(),
+        r_ss: Vector3::zeros(),
+    });
+    assert_invalid(&robot, "tendons[0].routing", &["has a z component", "z must be 0"]);
+    robot.tendons[0].routing = Routing::helical(f64::NAN, 1.0, 0.0);
+    assert_invalid(
+        &robot,
+        "tendons[0].routing",
+        &["is not finite", "fix the routing function"],
+    );
+}
