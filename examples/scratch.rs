@@ -1,22 +1,24 @@
 use tdcr::*;
 fn main() {
-    let robot = cases::case_h();
-    for n in [32, 128, 512] {
-        let o = collocation::Options {
-            intervals: n,
-            ..Default::default()
-        };
-        let sol = collocation::solve(&robot, &o).unwrap();
-        let r = &sol.report;
-        println!(
-            "{n}: iters {} total {:?} assembly {:?} factor {:?} solve {:?} res evals {} jac {}",
-            r.iterations,
-            r.timings.total,
-            r.timings.assembly,
-            r.timings.factorization,
-            r.timings.solve,
-            r.evaluations.residual,
-            r.evaluations.jacobian
-        );
+    let mut bend = cases::prototype();
+    bend.tendons[0].tension = 20.0;
+    for (name, robot) in [("S", cases::case_s()), ("H", cases::case_h()), ("bend", bend)] {
+        for n in [16, 32, 64, 128, 256] {
+            let o = collocation::Options {
+                intervals: n,
+                ..Default::default()
+            };
+            let sol = collocation::solve(&robot, &o).unwrap();
+            println!("{name} {n}: {:?}", equilibrium::imbalance(&robot, &sol));
+        }
+        let sol = shooting::solve(
+            &robot,
+            &shooting::Options {
+                integration_tolerance: 1e-12,
+                ..Default::default()
+            },
+        )
+        .unwrap();
+        println!("{name} shooting: {:?}", equilibrium::imbalance(&robot, &sol));
     }
 }

@@ -54,13 +54,16 @@ pub enum Which {
     Past(f64),
 }
 
-/// The robot's equations at a load factor: all tensions and external loads are multiplied
-/// by `load_factor` (1 is the robot as given; smaller values are used by load continuation).
+/// The robot's equations with its tensions multiplied by `tension_factor` and its external
+/// loads by `load_factor` (1 and 1 is the robot as given; smaller values are used by load
+/// continuation).
 #[derive(Clone, Copy, Debug)]
 pub struct Model<'a> {
     /// The robot (validated).
     pub robot: &'a Robot,
-    /// Multiplier on tensions and external loads, in [0, 1].
+    /// Multiplier on all tendon tensions, in [0, 1].
+    pub tension_factor: f64,
+    /// Multiplier on all external loads (distributed, point and tip), in [0, 1].
     pub load_factor: f64,
 }
 
@@ -69,6 +72,7 @@ impl<'a> Model<'a> {
     pub fn new(robot: &'a Robot) -> Self {
         Model {
             robot,
+            tension_factor: 1.0,
             load_factor: 1.0,
         }
     }
@@ -95,7 +99,7 @@ impl<'a> Model<'a> {
                 Which::EndingAt(x) => end == x,
                 Which::Past(x) => end > x,
             };
-            (take && t.tension > 0.0).then(|| (i, t.tension * self.load_factor, t.routing.at(s, l)))
+            (take && t.tension > 0.0).then(|| (i, t.tension * self.tension_factor, t.routing.at(s, l)))
         })
     }
 

@@ -227,51 +227,100 @@ fn solve_on_mesh(
             "enable load continuation, refine the mesh, or warm-start from a nearby solution",
         ));
     }
-    // Load continuation: from the unloaded shape (exact at load factor 0), raise the load
-    // factor, warm-starting each step from the last; halve the step on failure, grow it
-    // after a success.
-    let (mut lambda, mut dl): (f64, f64) = (0.0, 0.25);
-    system.set_load_factor(0.0);
-    let mut x = rigid_estimate(&system.model, &system.mesh.nodes);
-    let (t0, _) = newton::run(&system, &mut ws, &mut x, &settings, report);
-    if t0 != Termination::Converged {
-        report.termination = t0;
-        return Err(not_converged(
-            &system,
-            report,
-            worst,
-            "even the unloaded rod did not converge: check the mesh and routings",
-        ));
-    }
-    while lambda < 1.0 {
-        let target = (lambda + dl).min(1.0);
-        system.set_load_factor(target);
-        let mut trial = x.clone();
-        report.load_steps += 1;
-        let (t, w) = newton::run(&system, &mut ws, &mut trial, &settings, report);
-        report.termination = t;
-        if t == Termination::Converged {
-            lambda = target;
-            x = trial;
-            dl *= 1.5;
+    continuation(&mut system, &mut ws, &settings, report)
+        .map_err(|(hint, row)| not_converged(&system, report, row, &hint))
+}
+
+/// What load continuation ramps.
+#[derive(Clone, Copy, PartialEq)]
+enum Ramp {
+    /// External loads, with the tendons at full tension.
+    Loads,
+    /// Tensions and external loads together.
+    All,
+}
+
+/// Load continuation on `system` (whose direct solve failed). First, when the robot has
+/// both tendons and external loads, the tensions stay and the external loads are ramped:
+/// the tendon-only shape is the one the rigid estimate gets (nearly) right. Failing that,
+/// everything is ramped from the unloaded shape. Each step warm-starts from the last; the
+/// step halves on failure and grows by half after a success. Returns the states, or a hint
+/// and the worst residual row.
+fn continuation(
+    system: &mut System,
+    ws: &mut Workspace,
+    settings: &Settings,
+    report: &mut SolveReport,
+) -> std::result::Result<Vec<State>, (String, usize)> {
+    let robot = system.model.robot;
+    let loaded = system.model.point_wrench(robot.length()) != Default::default()
+        || !robot.loads.point.is_empty()
+        || system.mesh.nodes.iter().any(|n| {
+            let site = system.model.site(n.s);
+            site.f_e != nalgebra::Vector3::zeros() || site.l_e != nalgebra::Vector3::zeros()
+        });
+    let pulled = robot.tendons.iter().any(|t| t.tension > 0.0);
+    let ramps: &[Ramp] = if loaded && pulled {
+        &[Ramp::Loads, Ramp::All]
+    } else {
+        &[Ramp::All]
+    };
+    let factors = |ramp: Ramp, lambda: f64| {
+        if ramp == Ramp::Loads {
+            (1.0, lambda)
         } else {
-            dl *= 0.5;
-            // 1e-4 of the full load: the problem is not continuous in the load, or it has no
-            // solution nearby (buckling, a tendon losing its tangent).
-            if dl < 1e-4 {
-                return Err(not_converged(
-                    &system,
-                    report,
-                    w,
-                    &format!(
-                        "load continuation stalled at {:.1} % of the load; refine the mesh or check for buckling",
-                        lambda * 100.0
-                    ),
-                ));
+            (lambda, lambda)
+        }
+    };
+    let mut failure = (String::new(), 0);
+    for &ramp in ramps {
+        let (t, l) = factors(ramp, 0.0);
+        system.set_factors(t, l);
+        let mut x = rigid_estimate(&system.model, &system.mesh.nodes);
+        report.load_steps += 1;
+        let (start, row) = newton::run(system, ws, &mut x, settings, report);
+        if start != Termination::Converged {
+            report.termination = start;
+            failure = (
+                "the starting problem of load continuation did not converge: refine the mesh".into(),
+                row,
+            );
+            continue;
+        }
+        let (mut lambda, mut dl): (f64, f64) = (0.0, 0.25);
+        while lambda < 1.0 {
+            let target = (lambda + dl).min(1.0);
+            let (t, l) = factors(ramp, target);
+            system.set_factors(t, l);
+            let mut trial = x.clone();
+            report.load_steps += 1;
+            let (term, row) = newton::run(system, ws, &mut trial, settings, report);
+            report.termination = term;
+            if term == Termination::Converged {
+                lambda = target;
+                x = trial;
+                dl *= 1.5;
+            } else {
+                dl *= 0.5;
+                // 1e-4 of the full load: the solution is not continuous in the load, or
+                // there is none nearby (buckling, a tendon losing its tangent).
+                if dl < 1e-4 {
+                    failure = (
+                        format!(
+                            "load continuation stalled at {:.1} % of the load; refine the mesh or check for buckling",
+                            lambda * 100.0
+                        ),
+                        row,
+                    );
+                    break;
+                }
             }
         }
+        if lambda >= 1.0 {
+            return Ok(x);
+        }
     }
-    Ok(x)
+    Err(failure)
 }
 
 fn not_converged(system: &System, report: &SolveReport, worst_row: usize, hint: &str) -> Error {

@@ -83,12 +83,14 @@ impl<'a> System<'a> {
             interval_sites: Vec::new(),
             node_sites: Vec::new(),
         };
-        sys.set_load_factor(model.load_factor);
+        sys.set_factors(model.tension_factor, model.load_factor);
         sys
     }
 
-    /// Changes the load factor (recomputes the sites, whose external loads it scales).
-    pub fn set_load_factor(&mut self, load_factor: f64) {
+    /// Changes the tension and external-load factors of the model (recomputes the sites,
+    /// whose external loads the latter scales).
+    pub fn set_factors(&mut self, tension_factor: f64, load_factor: f64) {
+        self.model.tension_factor = tension_factor;
         self.model.load_factor = load_factor;
         let model = self.model;
         self.node_sites = self.mesh.nodes.iter().map(|n| model.site(n.s)).collect();
