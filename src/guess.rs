@@ -37,36 +37,94 @@ fn integrate_poses(
     out
 }
 
-/// Most shape sweeps of the rigid-equilibrium estimate.
-const MAX_SWEEPS: usize = 8;
+/// Where Newton starts when no previous solution is given.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum InitialGuess {
+    /// The rigid-equilibrium estimate ([`rigid_estimate`]): exact for tendon-only loading,
+    /// linear beam theory for small loads.
+    #[default]
+    RigidEquilibrium,
+    /// The unloaded (reference) shape with reference strains, as most shooting codes start.
+    Unloaded,
+}
+
+/// The initial state at every mesh node.
+pub fn initial(model: &Model, nodes: &[MeshNode], kind: InitialGuess) -> Vec<State> {
+    match kind {
+        InitialGuess::RigidEquilibrium => rigid_estimate(model, nodes),
+        InitialGuess::Unloaded => {
+            let strains = reference_strains(model, nodes);
+            integrate_poses(model, nodes, &strains)
+                .into_iter()
+                .zip(nodes.iter().zip(strains))
+                .map(|((p, R), (node, (v, u)))| State { s: node.s, p, R, v, u })
+                .collect()
+        }
+    }
+}
+
+fn reference_strains(model: &Model, nodes: &[MeshNode]) -> Vec<(Vector3<f64>, Vector3<f64>)> {
+    nodes
+        .iter()
+        .map(|n| {
+            let r = model.robot.rod.reference_at(n.s);
+            (r.v_star, r.u_star)
+        })
+        .collect()
+}
+
+/// Most shape sweeps of the rigid-equilibrium estimate (each costs one pass over the mesh).
+const MAX_SWEEPS: usize = 40;
+/// Weight of the first sweep's step in the relaxed update (Aitken adapts it afterwards).
+const RELAXATION: f64 = 0.5;
 
 /// The rigid-equilibrium estimate of the state at every mesh node, refined by re-summing
 /// the loads on the shape it predicts (moment arms and body frames from the previous sweep)
 /// until the curvature stops changing, or grows (then the previous sweep is kept).
 pub fn rigid_estimate(model: &Model, nodes: &[MeshNode]) -> Vec<State> {
     let length = model.robot.length();
-    let mut strains: Vec<_> = nodes
-        .iter()
-        .map(|n| {
-            let r = model.robot.rod.reference_at(n.s);
-            (r.v_star, r.u_star)
-        })
-        .collect();
+    let mut strains = reference_strains(model, nodes);
     let mut shape = integrate_poses(model, nodes, &strains);
     let mut last_change = f64::INFINITY;
+    let mut relaxation = RELAXATION;
+    let mut last_step: Option<Vec<f64>> = None;
     for _ in 0..MAX_SWEEPS {
         let next = sweep(model, nodes, &shape, &strains);
-        let change = next
+        // The fixed-point step, flattened (v then u L per node, so all are comparable).
+        let step: Vec<f64> = next
             .iter()
             .zip(&strains)
-            .map(|(a, b)| (a.1 - b.1).amax() * length)
-            .fold(0.0, f64::max);
+            .flat_map(|(a, b)| {
+                let (dv, du) = (a.0 - b.0, (a.1 - b.1) * length);
+                [dv[0], dv[1], dv[2], du[0], du[1], du[2]]
+            })
+            .collect();
+        let change = step.iter().fold(0.0f64, |m, x| m.max(x.abs()));
         if !(change < last_change || last_change.is_infinite()) || !change.is_finite() {
             break;
         }
-        strains = next;
+        // Aitken's dynamic relaxation (Irons & Tuck): the plain fixed point can cycle when
+        // a load's moment arm swings with the shape it bends (a tendon and a tip load
+        // pulling the same way); the factor adapts to the observed contraction.
+        if let Some(prev) = &last_step {
+            let (mut num, mut den) = (0.0, 0.0);
+            for (a, b) in prev.iter().zip(&step) {
+                num += a * (b - a);
+                den += (b - a) * (b - a);
+            }
+            if den > 0.0 {
+                relaxation = (-relaxation * num / den).clamp(0.1, 1.0);
+            }
+        }
+        for (k, s) in strains.iter_mut().enumerate() {
+            for i in 0..3 {
+                s.0[i] += relaxation * step[6 * k + i];
+                s.1[i] += relaxation * step[6 * k + 3 + i] / length;
+            }
+        }
         shape = integrate_poses(model, nodes, &strains);
         last_change = change;
+        last_step = Some(step);
         // 1e-6 of a radian over the rod: far below what Newton needs from a guess
         if change < 1e-6 {
             break;

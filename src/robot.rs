@@ -2,7 +2,7 @@
 
 use crate::error::{Result, invalid};
 use crate::loads::Loads;
-use crate::rod::Rod;
+use crate::rod::{Geometry, Rod};
 use crate::tendon::Tendon;
 use crate::{Error, so3};
 use nalgebra::{Matrix3, Vector3};
@@ -102,6 +102,9 @@ impl Robot {
                 format!("is {l}"),
                 "give a positive, finite length in m",
             ));
+        }
+        if let Some(g) = &self.rod.geometry {
+            validate_geometry(g)?;
         }
         let samples: Vec<f64> = (0..=32).map(|k| l * k as f64 / 32.0).collect();
         for &s in &samples {
@@ -229,6 +232,38 @@ impl Robot {
         }
         Ok(())
     }
+}
+
+fn validate_geometry(g: &Geometry) -> Result<()> {
+    let positive = |field: &str, x: f64, unit: &str| {
+        if x.is_finite() && x > 0.0 {
+            Ok(())
+        } else {
+            Err(invalid(
+                field,
+                format!("is {x} {unit}"),
+                format!("give a positive, finite value in {unit}"),
+            ))
+        }
+    };
+    positive("rod.outer_radius", g.outer_radius, "m")?;
+    positive("rod.youngs_modulus", g.youngs_modulus, "Pa")?;
+    if !(g.inner_radius.is_finite() && g.inner_radius >= 0.0 && g.inner_radius < g.outer_radius) {
+        return Err(invalid(
+            "rod.inner_radius",
+            format!("is {} m with outer radius {} m", g.inner_radius, g.outer_radius),
+            "the inner radius must be >= 0 and below the outer radius",
+        ));
+    }
+    let nu = g.poisson_ratio;
+    if !(nu.is_finite() && nu > -1.0 && nu <= 0.5) {
+        return Err(invalid(
+            "rod.poisson_ratio",
+            format!("is {nu}"),
+            "Poisson's ratio must lie in (-1, 0.5]",
+        ));
+    }
+    Ok(())
 }
 
 fn check_vec(field: &str, v: &Vector3<f64>) -> Result<()> {

@@ -91,6 +91,20 @@ pub enum ReferenceStrains {
     Varying(Arc<dyn Fn(f64) -> StrainPoint + Send + Sync>),
 }
 
+/// The geometry and material a circular rod was built from, kept so that validation can
+/// name the input that is wrong (a negative radius would otherwise square away unnoticed).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Geometry {
+    /// Outer radius (m).
+    pub outer_radius: f64,
+    /// Inner radius (m), 0 for a solid rod.
+    pub inner_radius: f64,
+    /// Young's modulus E (Pa).
+    pub youngs_modulus: f64,
+    /// Poisson's ratio nu, in (-1, 0.5].
+    pub poisson_ratio: f64,
+}
+
 /// The elastic backbone.
 #[derive(Clone, Debug)]
 pub struct Rod {
@@ -100,6 +114,8 @@ pub struct Rod {
     pub stiffness: Stiffness,
     /// Reference strains v*(s), u*(s).
     pub reference: ReferenceStrains,
+    /// Geometry and material of a circular rod, when it was built from them.
+    pub geometry: Option<Geometry>,
 }
 
 impl Rod {
@@ -109,13 +125,27 @@ impl Rod {
             length,
             stiffness: Stiffness::Uniform(section),
             reference: ReferenceStrains::Straight,
+            geometry: None,
         }
     }
 
     /// A straight solid circular rod of `radius` (m), Young's modulus `e` (Pa) and Poisson's
     /// ratio `nu`, torsion G J with G = E / (2 (1 + nu)).
     pub fn solid_circle(length: f64, radius: f64, e: f64, nu: f64) -> Self {
-        Self::new(length, Section::solid_circle(radius, e, shear_modulus(e, nu)))
+        Self::tube(length, radius, 0.0, e, nu)
+    }
+
+    /// A straight circular tube with `outer` and `inner` radii (m), Young's modulus `e` (Pa)
+    /// and Poisson's ratio `nu`.
+    pub fn tube(length: f64, outer: f64, inner: f64, e: f64, nu: f64) -> Self {
+        let mut rod = Self::new(length, Section::tube(outer, inner, e, shear_modulus(e, nu)));
+        rod.geometry = Some(Geometry {
+            outer_radius: outer,
+            inner_radius: inner,
+            youngs_modulus: e,
+            poisson_ratio: nu,
+        });
+        rod
     }
 
     /// The same rod with a constant precurvature `u_star` (body frame, rad/m).

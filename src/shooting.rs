@@ -10,8 +10,8 @@
 #![allow(non_snake_case)]
 
 use crate::equations::{Model, Site};
-use crate::error::Result;
-use crate::guess;
+use crate::error::{Result, invalid};
+use crate::guess::{self, InitialGuess};
 use crate::mesh::Mesh;
 use crate::report::{Iteration, Method, SolveReport, Termination};
 use crate::solution::{Solution, State};
@@ -30,6 +30,8 @@ pub struct Options {
     pub tolerance: f64,
     /// Newton iteration limit. Default 50.
     pub max_iterations: usize,
+    /// Where Newton starts. Default: the rigid-equilibrium estimate.
+    pub initial_guess: InitialGuess,
 }
 
 impl Default for Options {
@@ -38,7 +40,40 @@ impl Default for Options {
             integration_tolerance: 1e-10,
             tolerance: 1e-9,
             max_iterations: 50,
+            initial_guess: InitialGuess::RigidEquilibrium,
         }
+    }
+}
+
+impl Options {
+    /// Checks the options.
+    ///
+    /// # Errors
+    /// [`Error::InvalidInput`] naming the field.
+    pub fn validate(&self) -> Result<()> {
+        // 1e-14: below this the local error test is pure rounding and steps collapse
+        if !(self.integration_tolerance.is_finite() && (1e-14..=1e-2).contains(&self.integration_tolerance)) {
+            return Err(invalid(
+                "shooting.integration_tolerance",
+                format!("is {}", self.integration_tolerance),
+                "use a value in [1e-14, 1e-2] (1e-10 by default)",
+            ));
+        }
+        if !(self.tolerance.is_finite() && self.tolerance > 0.0) {
+            return Err(invalid(
+                "shooting.tolerance",
+                format!("is {}", self.tolerance),
+                "use a positive value (1e-9 by default)",
+            ));
+        }
+        if self.max_iterations == 0 {
+            return Err(invalid(
+                "shooting.max_iterations",
+                "is 0",
+                "allow at least one Newton iteration",
+            ));
+        }
+        Ok(())
     }
 }
 
@@ -54,6 +89,7 @@ type Local = SVector<f64, 12>;
 /// Invalid input, a model breakdown, or [`Error::NotConverged`] with the report.
 pub fn solve(robot: &Robot, options: &Options) -> Result<Solution> {
     robot.validate()?;
+    options.validate()?;
     let start = Instant::now();
     let model = Model::new(robot);
     let length = robot.length();
@@ -63,8 +99,8 @@ pub fn solve(robot: &Robot, options: &Options) -> Result<Solution> {
     report.unknowns = 6;
 
     // Initial guess: base strains of the rigid-equilibrium estimate.
-    let base = guess::rigid_estimate(&model, &Mesh::uniform(robot, 64)?.nodes)[0];
-    let scale = Scale { length };
+    let base = guess::initial(&model, &Mesh::uniform(robot, 64)?.nodes, options.initial_guess)[0];
+    let scale = Scale::new(&model);
     let mut x = scale.to_unknowns(&base.v, &base.u);
 
     let mut trajectory = Vec::new();
@@ -77,7 +113,12 @@ pub fn solve(robot: &Robot, options: &Options) -> Result<Solution> {
             break;
         }
         report.iterations += 1;
-        let J = jacobian(&model, &scale, &x, options, &mut report)?;
+        // A breakdown while differencing (a trial state where a tendon loses its tangent,
+        // say) ends the iteration: the state is unphysical, not the input.
+        let Ok(J) = jacobian(&model, &scale, &x, options, &mut report) else {
+            report.termination = Termination::NonFinite;
+            break;
+        };
         let Some(step) = J.lu().solve(&(-res)) else {
             report.termination = Termination::SingularJacobian;
             break;
@@ -95,7 +136,7 @@ pub fn solve(robot: &Robot, options: &Options) -> Result<Solution> {
             let mut traj = Vec::new();
             if let Ok(r) = shoot(&model, &scale, &trial, options, &mut traj, &mut report)
                 && r.amax().is_finite()
-                && r.amax() < norm
+                && (r.amax() < norm || r.amax() <= options.tolerance)
             {
                 report.history.push(Iteration {
                     residual: norm,
@@ -118,6 +159,25 @@ pub fn solve(robot: &Robot, options: &Options) -> Result<Solution> {
     }
     if norm < options.tolerance {
         report.termination = Termination::Converged;
+        // One more full Newton step, kept only if it lowers the residual: at quadratic
+        // convergence it takes the residual from the tolerance down to the noise floor.
+        let J = jacobian(&model, &scale, &x, options, &mut report)?;
+        if let Some(step) = J.lu().solve(&(-res)) {
+            let trial = x + step;
+            let mut traj = Vec::new();
+            if let Ok(r) = shoot(&model, &scale, &trial, options, &mut traj, &mut report)
+                && r.amax() < norm
+            {
+                report.iterations += 1;
+                report.history.push(Iteration {
+                    residual: norm,
+                    step: step.amax(),
+                    damping: 1.0,
+                });
+                norm = r.amax();
+                trajectory = traj;
+            }
+        }
     }
     report.residual = norm;
     report.intervals = trajectory.len().saturating_sub(1);
@@ -152,12 +212,21 @@ fn segment_ends(model: &Model, traj: &[Point]) -> Vec<f64> {
     out
 }
 
-/// Scaling of the unknowns: (v, u L).
+/// The unknowns: the base strains (v, u L). Central differences in these units with step
+/// 1e-6 keep the Jacobian well above the integration noise for the strains of ordinary
+/// rods; for rods extremely stiff in shear and extension (EA L^2 / EI above about 1e6)
+/// the v columns become noise-limited, one reason shooting is only a cross-check.
 struct Scale {
+    /// L (m).
     length: f64,
 }
 
 impl Scale {
+    fn new(model: &Model) -> Self {
+        Scale {
+            length: model.robot.length(),
+        }
+    }
     fn to_unknowns(&self, v: &Vector3<f64>, u: &Vector3<f64>) -> SVector<f64, 6> {
         SVector::<f64, 6>::from_iterator(v.iter().copied().chain(u.iter().map(|x| x * self.length)))
     }

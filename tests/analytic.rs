@@ -23,6 +23,14 @@ fn assert_balanced_within(robot: &Robot, name: &str, solution: &Solution, tolera
     e.max()
 }
 
+/// Rounding floor of the relative force balance for loads of size `force` (N): the
+/// internal force is D (v - v*) with v_z ~ 1 in f64, so it is resolved only to eps times the
+/// largest of EA, GA, and integrating v over ~100 steps accumulates ~10 such roundings
+/// (hence 30 eps); relative to `force` that is the floor below.
+fn rounding_floor(robot: &Robot, force: f64) -> f64 {
+    30.0 * f64::EPSILON * robot.rod.section_at(0.0).section.kse.max() / force
+}
+
 /// Relative difference |a - b| / |b| of two vectors.
 fn rel(a: &Vector3<f64>, b: &Vector3<f64>) -> f64 {
     (a - b).norm() / b.norm()
@@ -151,7 +159,8 @@ fn small_tip_force_matches_linear_beam_theory() {
         );
         // 1e-15 L: nothing pushes out of the yz plane
         assert!(tip[0].abs() < 1e-15 * length, "{name}: {tip:?}");
-        assert_balanced(&robot, name, &solution);
+        // The load is tiny (6.7e-5 N), so the force balance meets its rounding floor first.
+        assert_balanced_within(&robot, name, &solution, BALANCE.max(rounding_floor(&robot, force)));
     }
 }
 
@@ -173,7 +182,8 @@ fn small_uniform_load_matches_linear_beam_theory() {
             "{name}: {} vs {expected}",
             tip[0]
         );
-        assert_balanced(&robot, name, &solution);
+        // The load is tiny (w L = 6.7e-5 N), so the force balance meets its rounding floor.
+        assert_balanced_within(&robot, name, &solution, BALANCE.max(rounding_floor(&robot, w * length)));
     }
 }
 
@@ -412,7 +422,6 @@ fn prototype_reference_tips() {
 
 #[test]
 fn table2_experiments_are_in_global_equilibrium() {
-    let ea = cases::prototype().rod.section_at(0.0).section.kse[2];
     let mut worst: f64 = 0.0;
     for experiment in cases::table2() {
         let robot = experiment.robot();
@@ -425,7 +434,7 @@ fn table2_experiments_are_in_global_equilibrium() {
         // eps EA = 2.3e-11 N, and integrating v over ~100 steps accumulates ~10 such
         // roundings; 30 eps EA is 2e-8 of the self weight alone (the no-tension case,
         // measured 1.3e-9 .. 1.9e-9) and below 1e-9 of every tensioned case.
-        let tolerance = BALANCE.max(30.0 * f64::EPSILON * ea / force_scale);
+        let tolerance = BALANCE.max(rounding_floor(&robot, force_scale));
         for (name, solution) in solve_all(&robot) {
             let label = format!("{name} {}", experiment.label());
             let e = assert_balanced_within(&robot, &label, &solution, tolerance);

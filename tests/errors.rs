@@ -65,20 +65,36 @@ fn bad_length_is_rejected() {
 }
 
 #[test]
-fn zero_radius_or_bad_modulus_is_rejected_as_bad_stiffness() {
-    for (radius, modulus) in [(0.0, MODULUS), (RADIUS, 0.0), (RADIUS, -MODULUS), (RADIUS, f64::NAN)] {
+fn bad_radius_modulus_or_poisson_ratio_is_rejected_by_name() {
+    for radius in [0.0, -RADIUS, f64::NAN] {
         let mut robot = good();
-        robot.rod = Rod::solid_circle(LENGTH, radius, modulus, POISSON);
-        assert_invalid(
-            &robot,
-            "rod.stiffness",
-            &["kse (GA, GA, EA)", "check radius and moduli"],
-        );
+        robot.rod = Rod::solid_circle(LENGTH, radius, MODULUS, POISSON);
+        assert_invalid(&robot, "rod.outer_radius", &["positive, finite value in m"]);
     }
-    // Poisson's ratio -1 makes G = E / (2 (1 + nu)) infinite.
+    for modulus in [0.0, -MODULUS, f64::NAN] {
+        let mut robot = good();
+        robot.rod = Rod::solid_circle(LENGTH, RADIUS, modulus, POISSON);
+        assert_invalid(&robot, "rod.youngs_modulus", &["positive, finite value in Pa"]);
+    }
+    for nu in [-1.0, 0.6, f64::NAN] {
+        let mut robot = good();
+        robot.rod = Rod::solid_circle(LENGTH, RADIUS, MODULUS, nu);
+        assert_invalid(&robot, "rod.poisson_ratio", &["(-1, 0.5]"]);
+    }
     let mut robot = good();
-    robot.rod = Rod::solid_circle(LENGTH, RADIUS, MODULUS, -1.0);
-    assert_invalid(&robot, "rod.stiffness", &["inf", "positive and finite"]);
+    robot.rod = Rod::tube(LENGTH, RADIUS, RADIUS, MODULUS, POISSON);
+    assert_invalid(&robot, "rod.inner_radius", &["below the outer radius"]);
+}
+
+#[test]
+fn zero_explicit_stiffness_is_rejected() {
+    let mut robot = good();
+    robot.rod = Rod::new(LENGTH, tdcr::Section::explicit(1e4, 1e4, 0.0, 1e-3, 1e-3));
+    assert_invalid(
+        &robot,
+        "rod.stiffness",
+        &["kbt (EIxx, EIyy, GJ)", "positive and finite"],
+    );
 }
 
 #[test]

@@ -18,7 +18,7 @@ pub mod system;
 
 use crate::equations::Model;
 use crate::error::{Result, invalid};
-use crate::guess::rigid_estimate;
+use crate::guess::{self, InitialGuess, rigid_estimate};
 use crate::mesh::Mesh;
 use crate::report::{Method, SolveReport, Termination};
 use crate::solution::{Solution, State};
@@ -48,6 +48,8 @@ pub struct Options {
     pub max_iterations: usize,
     /// Use load continuation when the direct solve fails. Default true.
     pub continuation: bool,
+    /// Where Newton starts without a warm start. Default: the rigid-equilibrium estimate.
+    pub initial_guess: InitialGuess,
 }
 
 impl Default for Options {
@@ -60,6 +62,7 @@ impl Default for Options {
             residual_tolerance: 1e-11,
             max_iterations: 30,
             continuation: true,
+            initial_guess: InitialGuess::RigidEquilibrium,
         }
     }
 }
@@ -149,7 +152,7 @@ fn solve_impl(robot: &Robot, options: &Options, warm: Option<&Solution>) -> Resu
     let mesh = initial_mesh(robot, options)?;
     let x0 = match warm {
         Some(g) => interpolate(g, &mesh),
-        None => rigid_estimate(&model, &mesh.nodes),
+        None => guess::initial(&model, &mesh.nodes, options.initial_guess),
     };
     let (mut mesh, mut x) = (mesh.clone(), solve_on_mesh(&model, mesh, x0, options, &mut report)?);
     if let Some(tol) = options.tolerance {

@@ -177,9 +177,11 @@ pub fn run(
     if first.is_err() || !ws.residual.iter().all(|r| r.is_finite()) {
         return (Termination::NonFinite, worst_row(&ws.residual));
     }
-    for _ in 0..settings.max_iterations {
+    for iteration in 0..settings.max_iterations {
         let norm = max_norm(&ws.residual);
-        if norm <= settings.tolerance {
+        // At least one step: a guess (the rigid estimate of a lightly loaded rod, say) can
+        // meet an absolute tolerance without being the discrete solution.
+        if norm <= settings.tolerance && iteration > 0 {
             report.residual = norm;
             return (Termination::Converged, worst_row(&ws.residual));
         }
@@ -205,8 +207,10 @@ pub fn run(
             report.timings.assembly += t.elapsed();
             report.evaluations.residual += 1;
             let phi_trial = merit(&ws.trial_residual);
-            // Armijo on 0.5|F|^2, whose slope along the Newton step is -|F|^2 = -2 phi.
-            if ok && phi_trial.is_finite() && phi_trial <= (1.0 - 2.0 * ARMIJO * alpha) * phi {
+            // Armijo on 0.5|F|^2, whose slope along the Newton step is -|F|^2 = -2 phi; a
+            // trial already within tolerance is accepted (at rounding level phi cannot fall).
+            let done = max_norm(&ws.trial_residual) <= settings.tolerance;
+            if ok && phi_trial.is_finite() && (done || phi_trial <= (1.0 - 2.0 * ARMIJO * alpha) * phi) {
                 break;
             }
             alpha *= 0.5;
