@@ -170,6 +170,8 @@ pub fn run(
     report: &mut SolveReport,
 ) -> (Termination, usize) {
     report.history.clear();
+    // Reserved up front so that recording iterations never allocates inside the loop.
+    report.history.reserve(settings.max_iterations);
     let t = Instant::now();
     let first = system.residual(x, &mut ws.residual);
     report.timings.assembly += t.elapsed();
