@@ -1,1 +1,67 @@
-fn main() {}
+//! Solve-time benchmarks: `cargo bench --bench solve`.
+//!
+//! - `prototype_s`: the prototype with tendon 1 at 2.94 N plus self weight; collocation at
+//!   16..128 intervals from a cold start and warm-started from the solution at 0.99x the
+//!   tension; shooting at integration tolerances giving comparable tip accuracy.
+//! - `newton_iteration`: one full Newton iteration (Jacobian, factorization, solve, line
+//!   search) on case H from 64 to 8192 intervals: the cost must grow linearly.
+
+use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
+use std::hint::black_box;
+use tdcr::collocation::newton::{self, Settings, Workspace};
+use tdcr::collocation::system::System;
+use tdcr::equations::Model;
+use tdcr::guess::rigid_estimate;
+use tdcr::mesh::Mesh;
+use tdcr::report::{Method, SolveReport};
+use tdcr::{cases, collocation, shooting};
+
+fn prototype_s(c: &mut Criterion) {
+    let robot = cases::case_s();
+    let mut previous = robot.clone();
+    previous.tendons[0].tension *= 0.99;
+    let mut group = c.benchmark_group("prototype_s");
+    for intervals in [16, 32, 64, 128] {
+        let options = collocation::Options { intervals, ..Default::default() };
+        group.bench_with_input(BenchmarkId::new("collocation_cold", intervals), &options, |b, o| {
+            b.iter(|| black_box(collocation::solve(&robot, o).unwrap()))
+        });
+        let guess = collocation::solve(&previous, &options).unwrap();
+        group.bench_with_input(BenchmarkId::new("collocation_warm", intervals), &options, |b, o| {
+            b.iter(|| black_box(collocation::solve_from(&robot, o, &guess).unwrap()))
+        });
+    }
+    for tolerance in [1e-6, 1e-8, 1e-10] {
+        let options = shooting::Options { integration_tolerance: tolerance, ..Default::default() };
+        group.bench_with_input(BenchmarkId::new("shooting", tolerance), &options, |b, o| {
+            b.iter(|| black_box(shooting::solve(&robot, o).unwrap()))
+        });
+    }
+    group.finish();
+}
+
+fn newton_iteration(c: &mut Criterion) {
+    let robot = cases::case_h();
+    let model = Model::new(&robot);
+    let mut group = c.benchmark_group("newton_iteration");
+    group.sample_size(10);
+    for intervals in [64, 256, 1024, 4096, 8192] {
+        let system = System::new(model, Mesh::uniform(&robot, intervals).unwrap());
+        let mut ws = Workspace::new(&system).unwrap();
+        let start = rigid_estimate(&model, &system.mesh.nodes);
+        // Tolerance 0 and one iteration: exactly one Newton step per call.
+        let settings = Settings { tolerance: 0.0, max_iterations: 1 };
+        let mut report = SolveReport::new(Method::Collocation);
+        let mut x = start.clone();
+        group.bench_function(BenchmarkId::from_parameter(intervals), |b| {
+            b.iter(|| {
+                x.clone_from(&start);
+                black_box(newton::run(&system, &mut ws, &mut x, &settings, &mut report))
+            })
+        });
+    }
+    group.finish();
+}
+
+criterion_group!(benches, prototype_s, newton_iteration);
+criterion_main!(benches);

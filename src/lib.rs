@@ -36,3 +36,8 @@ pub use tendon::Tendon;
 /// derivatives.
 pub trait Real: nalgebra::RealField + Copy {}
 impl<T: nalgebra::RealField + Copy> Real for T {}
+
+/// The README's example is compiled and run as a doctest.
+#[doc = include_str!("../README.md")]
+#[cfg(doctest)]
+pub struct ReadmeDoctests;
