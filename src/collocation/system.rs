@@ -173,25 +173,38 @@ impl<'a> System<'a> {
         let links = x.len() - 1;
         let width = 2 * NODE;
         for k in 0..links {
-            for j in 0..width {
-                let da = Delta::<Dual64>::from_fn(|i, _| {
-                    if i == j {
-                        Dual64::from(0.0).derivative()
-                    } else {
-                        Dual64::from(0.0)
+            let rows = 6 + k * NODE..6 + (k + 1) * NODE;
+            if let Some(sites) = &self.interval_sites[k] {
+                let (r, block) =
+                    residual::interval_jacobian(&self.model, sites, self.mesh.nodes[k].segment_end, &x[k], &x[k + 1])?;
+                out[rows].copy_from_slice(r.as_slice());
+                for i in 0..NODE {
+                    for j in 0..width {
+                        values[at + i * width + j] = block[(i, j)];
                     }
-                });
-                let db = Delta::<Dual64>::from_fn(|i, _| {
-                    if i + NODE == j {
-                        Dual64::from(0.0).derivative()
-                    } else {
-                        Dual64::from(0.0)
+                }
+            } else {
+                // Jumps: one dual pass per unknown (they are few).
+                for j in 0..width {
+                    let da = Delta::<Dual64>::from_fn(|i, _| {
+                        if i == j {
+                            Dual64::from(0.0).derivative()
+                        } else {
+                            Dual64::from(0.0)
+                        }
+                    });
+                    let db = Delta::<Dual64>::from_fn(|i, _| {
+                        if i + NODE == j {
+                            Dual64::from(0.0).derivative()
+                        } else {
+                            Dual64::from(0.0)
+                        }
+                    });
+                    let r = self.link(k, x, &da, &db)?;
+                    for (i, d) in r.iter().enumerate() {
+                        out[6 + k * NODE + i] = d.re;
+                        values[at + i * width + j] = d.eps;
                     }
-                });
-                let r = self.link(k, x, &da, &db)?;
-                for (i, d) in r.iter().enumerate() {
-                    out[6 + k * NODE + i] = d.re;
-                    values[at + i * width + j] = d.eps;
                 }
             }
             at += NODE * width;
