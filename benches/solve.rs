@@ -8,7 +8,7 @@
 
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
 use std::hint::black_box;
-use tdcr::collocation::newton::{self, Settings, Workspace};
+use tdcr::collocation::newton::{self, LinearSolver, Settings, Workspace};
 use tdcr::collocation::system::System;
 use tdcr::equations::Model;
 use tdcr::guess::rigid_estimate;
@@ -22,7 +22,10 @@ fn prototype_s(c: &mut Criterion) {
     previous.tendons[0].tension *= 0.99;
     let mut group = c.benchmark_group("prototype_s");
     for intervals in [16, 32, 64, 128] {
-        let options = collocation::Options { intervals, ..Default::default() };
+        let options = collocation::Options {
+            intervals,
+            ..Default::default()
+        };
         group.bench_with_input(BenchmarkId::new("collocation_cold", intervals), &options, |b, o| {
             b.iter(|| black_box(collocation::solve(&robot, o).unwrap()))
         });
@@ -32,7 +35,10 @@ fn prototype_s(c: &mut Criterion) {
         });
     }
     for tolerance in [1e-6, 1e-8, 1e-10] {
-        let options = shooting::Options { integration_tolerance: tolerance, ..Default::default() };
+        let options = shooting::Options {
+            integration_tolerance: tolerance,
+            ..Default::default()
+        };
         group.bench_with_input(BenchmarkId::new("shooting", tolerance), &options, |b, o| {
             b.iter(|| black_box(shooting::solve(&robot, o).unwrap()))
         });
@@ -47,10 +53,13 @@ fn newton_iteration(c: &mut Criterion) {
     group.sample_size(10);
     for intervals in [64, 256, 1024, 4096, 8192] {
         let system = System::new(model, Mesh::uniform(&robot, intervals).unwrap());
-        let mut ws = Workspace::new(&system).unwrap();
+        let mut ws = Workspace::new(&system, LinearSolver::Auto).unwrap();
         let start = rigid_estimate(&model, &system.mesh.nodes);
         // Tolerance 0 and one iteration: exactly one Newton step per call.
-        let settings = Settings { tolerance: 0.0, max_iterations: 1 };
+        let settings = Settings {
+            tolerance: 0.0,
+            max_iterations: 1,
+        };
         let mut report = SolveReport::new(Method::Collocation);
         let mut x = start.clone();
         group.bench_function(BenchmarkId::from_parameter(intervals), |b| {

@@ -75,9 +75,9 @@ pub struct Evaluations {
 pub struct Timings {
     /// Residual and Jacobian assembly.
     pub assembly: Duration,
-    /// Numeric (and, on a new mesh, symbolic) factorization.
+    /// Numeric factorization (sparse LU) or forward elimination (block elimination).
     pub factorization: Duration,
-    /// Triangular solves.
+    /// Triangular solves (sparse LU) or back substitution (block elimination).
     pub solve: Duration,
     /// Whole call.
     pub total: Duration,

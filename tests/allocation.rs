@@ -4,7 +4,7 @@
 use std::alloc::{GlobalAlloc, Layout, System as Heap};
 use std::cell::Cell;
 use std::sync::atomic::{AtomicUsize, Ordering};
-use tdcr::collocation::newton::{self, Settings, Workspace};
+use tdcr::collocation::newton::{self, LinearSolver, Settings, Workspace};
 use tdcr::collocation::system::System;
 use tdcr::equations::Model;
 use tdcr::guess::rigid_estimate;
@@ -48,11 +48,16 @@ fn newton_loop_does_not_allocate_after_setup() {
     COUNTING.with(|c| c.set(false));
     drop(boxed);
     assert_eq!(ALLOCATIONS.swap(0, Ordering::Relaxed), 1);
+    for solver in [LinearSolver::Auto, LinearSolver::SparseLu] {
+        newton_solve_does_not_allocate(solver);
+    }
+}
 
+fn newton_solve_does_not_allocate(solver: LinearSolver) {
     for robot in [tdcr::cases::case_s(), tdcr::cases::case_h()] {
         let model = Model::new(&robot);
         let system = System::new(model, Mesh::uniform(&robot, 64).unwrap());
-        let mut ws = Workspace::new(&system).unwrap();
+        let mut ws = Workspace::new(&system, solver).unwrap();
         let settings = Settings {
             tolerance: 1e-11,
             max_iterations: 30,

@@ -12,6 +12,7 @@
 //!
 //! docs/numerics.md documents the scheme (order 4), the scaling and the stopping tests.
 
+pub mod blocks;
 pub mod newton;
 pub mod residual;
 pub mod system;
@@ -23,6 +24,7 @@ use crate::mesh::Mesh;
 use crate::report::{Method, SolveReport, Termination};
 use crate::solution::{Solution, State};
 use crate::{Error, Robot};
+pub use newton::LinearSolver;
 use newton::{Settings, Workspace};
 use std::time::Instant;
 use system::System;
@@ -50,6 +52,8 @@ pub struct Options {
     pub continuation: bool,
     /// Where Newton starts without a warm start. Default: the rigid-equilibrium estimate.
     pub initial_guess: InitialGuess,
+    /// The linear solver for Newton steps. Default: automatic (the structured elimination).
+    pub linear_solver: LinearSolver,
 }
 
 impl Default for Options {
@@ -63,6 +67,7 @@ impl Default for Options {
             max_iterations: 30,
             continuation: true,
             initial_guess: InitialGuess::RigidEquilibrium,
+            linear_solver: LinearSolver::Auto,
         }
     }
 }
@@ -211,7 +216,7 @@ fn solve_on_mesh(
         max_iterations: options.max_iterations,
     };
     let mut system = System::new(*model, mesh);
-    let mut ws = Workspace::new(&system)?;
+    let mut ws = Workspace::new(&system, options.linear_solver)?;
     report.unknowns = system.unknowns();
     report.nonzeros = ws.nonzeros();
     report.intervals = system.mesh.intervals();

@@ -8,6 +8,7 @@
 //! run under `catch_unwind` in case a faer version panics on a zero pivot: either way the
 //! result is a [`Termination::SingularJacobian`], never a panic.
 
+use super::blocks::BlockElimination;
 use super::system::{System, pattern};
 use crate::error::{Result, invalid};
 use crate::report::{Iteration, SolveReport, Termination};
@@ -19,7 +20,7 @@ use faer::sparse::linalg::lu::{LuSymbolicParams, NumericLu, SymbolicLu, factoriz
 use faer::sparse::{SparseColMat, Triplet};
 use faer::{Conj, Par};
 use std::panic::{AssertUnwindSafe, catch_unwind};
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
 /// Armijo sufficient-decrease constant (Dennis & Schnabel's customary 1e-4).
 const ARMIJO: f64 = 1e-4;
@@ -38,27 +39,44 @@ pub struct Settings {
 /// Everything Newton needs for one mesh, built once and reused across iterations, load
 /// steps and solves on the same mesh.
 pub struct Workspace {
-    matrix: SparseColMat<usize, f64>,
-    slots: Vec<usize>,
+    linear: Linear,
     values: Vec<f64>,
-    symbolic: SymbolicLu<usize>,
-    numeric: NumericLu<usize, f64>,
-    mem: MemBuffer,
     residual: Vec<f64>,
     trial_residual: Vec<f64>,
+    rhs: Vec<f64>,
     step: Vec<f64>,
     trial: Vec<State>,
 }
 
-impl Workspace {
-    /// Builds the pattern and the symbolic LU for `system`'s mesh.
-    ///
-    /// # Errors
-    /// [`crate::Error::InvalidInput`] if faer rejects the pattern (cannot happen for a valid mesh).
-    pub fn new(system: &System) -> Result<Self> {
+/// The linear solver behind Newton's steps.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum LinearSolver {
+    /// The structured almost-block-diagonal elimination ([`super::blocks`]): the collocation
+    /// Jacobian always has that structure, so this is the automatic choice.
+    #[default]
+    Auto,
+    /// faer's general sparse LU (COLAMD ordering, simplicial), the reference path.
+    SparseLu,
+}
+
+enum Linear {
+    Sparse(SparseLu),
+    Blocks(BlockElimination),
+}
+
+/// faer's sparse LU with the pattern, value slots and symbolic factorization of one mesh.
+struct SparseLu {
+    matrix: SparseColMat<usize, f64>,
+    slots: Vec<usize>,
+    symbolic: SymbolicLu<usize>,
+    numeric: NumericLu<usize, f64>,
+    mem: MemBuffer,
+}
+
+impl SparseLu {
+    fn new(system: &System) -> Result<Self> {
         let n = system.unknowns();
         let pat = pattern(&system.mesh);
-        // Unit values so the pattern is fully stored (zeros are kept, but be explicit).
         let triplets: Vec<Triplet<usize, usize, f64>> = pat.iter().map(|&(r, c)| Triplet::new(r, c, 1.0)).collect();
         let matrix = SparseColMat::<usize, f64>::try_new_from_triplets(n, n, &triplets).map_err(|e| {
             invalid(
@@ -82,41 +100,29 @@ impl Workspace {
         let req = symbolic
             .factorize_numeric_lu_scratch::<f64>(Par::Seq, Default::default())
             .or(symbolic.solve_in_place_scratch::<f64>(1, Par::Seq));
-        Ok(Workspace {
+        Ok(SparseLu {
             matrix,
             slots,
-            values: vec![0.0; pat.len()],
             symbolic,
             numeric: NumericLu::new(),
             mem: MemBuffer::new(req),
-            residual: vec![0.0; n],
-            trial_residual: vec![0.0; n],
-            step: vec![0.0; n],
-            trial: Vec::with_capacity(system.mesh.nodes.len()),
         })
     }
 
-    /// Non-zeros stored in the Jacobian.
-    pub fn nonzeros(&self) -> usize {
-        self.values.len()
-    }
-
-    /// Factorizes the current matrix and solves J step = -residual in place.
-    /// Returns false for a zero pivot or a non-finite step.
-    fn solve(&mut self, report: &mut SolveReport) -> bool {
-        for (slot, v) in self.slots.iter().zip(&self.values) {
+    /// Refills the values, factorizes and solves in place; None on a zero pivot (or a panic
+    /// inside faer), else the factorization and solve times.
+    fn solve(&mut self, values: &[f64], x: &mut [f64]) -> Option<(Duration, Duration)> {
+        for (slot, v) in self.slots.iter().zip(values) {
             self.matrix.val_mut()[*slot] = *v;
         }
-        let Workspace {
+        let SparseLu {
             matrix,
             symbolic,
             numeric,
             mem,
-            step,
-            residual,
             ..
         } = self;
-        let outcome = catch_unwind(AssertUnwindSafe(|| {
+        catch_unwind(AssertUnwindSafe(|| {
             let t = Instant::now();
             let lu = symbolic
                 .factorize_numeric_lu(
@@ -129,25 +135,78 @@ impl Workspace {
                 .ok()?;
             let factor_time = t.elapsed();
             let t = Instant::now();
-            for (i, r) in residual.iter().enumerate() {
-                step[i] = -r;
-            }
             lu.solve_in_place_with_conj(
                 Conj::No,
-                ColMut::from_slice_mut(step).as_mat_mut(),
+                ColMut::from_slice_mut(x).as_mat_mut(),
                 Par::Seq,
                 MemStack::new(mem),
             );
             Some((factor_time, t.elapsed()))
-        }));
-        match outcome {
-            Ok(Some((factor_time, solve_time))) => {
-                report.timings.factorization += factor_time;
-                report.timings.solve += solve_time;
-                step.iter().all(|x| x.is_finite())
-            }
-            _ => false,
+        }))
+        .ok()
+        .flatten()
+    }
+}
+
+impl Workspace {
+    /// Builds the buffers and, for the sparse path, the pattern and symbolic LU of
+    /// `system`'s mesh.
+    ///
+    /// # Errors
+    /// [`crate::Error::InvalidInput`] if faer rejects the pattern (cannot happen for a valid mesh).
+    pub fn new(system: &System, solver: LinearSolver) -> Result<Self> {
+        let n = system.unknowns();
+        let linear = match solver {
+            LinearSolver::Auto => Linear::Blocks(BlockElimination::new(system.mesh.nodes.len())),
+            LinearSolver::SparseLu => Linear::Sparse(SparseLu::new(system)?),
+        };
+        Ok(Workspace {
+            linear,
+            values: vec![0.0; pattern(&system.mesh).len()],
+            residual: vec![0.0; n],
+            trial_residual: vec![0.0; n],
+            rhs: vec![0.0; n],
+            step: vec![0.0; n],
+            trial: Vec::with_capacity(system.mesh.nodes.len()),
+        })
+    }
+
+    /// Non-zeros stored in the Jacobian.
+    pub fn nonzeros(&self) -> usize {
+        self.values.len()
+    }
+
+    /// Factorizes the current matrix and solves J step = -residual.
+    /// Returns false for a zero pivot or a non-finite step.
+    fn solve(&mut self, report: &mut SolveReport) -> bool {
+        for (r, f) in self.rhs.iter_mut().zip(&self.residual) {
+            *r = -f;
         }
+        let times = match &mut self.linear {
+            Linear::Sparse(lu) => {
+                self.step.copy_from_slice(&self.rhs);
+                lu.solve(&self.values, &mut self.step)
+            }
+            Linear::Blocks(blocks) => blocks.solve(&self.values, &self.rhs, &mut self.step),
+        };
+        let Some((factor_time, solve_time)) = times else {
+            return false;
+        };
+        report.timings.factorization += factor_time;
+        report.timings.solve += solve_time;
+        self.step.iter().all(|x| x.is_finite())
+    }
+
+    /// Solves J x = rhs for Jacobian `values` in [`pattern`] order with this workspace's
+    /// linear solver: the hook tests use to cross-check the solvers and to force a singular
+    /// matrix. None for a zero pivot or a non-finite result.
+    pub fn solve_linear(&mut self, values: &[f64], rhs: &[f64]) -> Option<&[f64]> {
+        self.values.copy_from_slice(values);
+        for (r, f) in self.residual.iter_mut().zip(rhs) {
+            *r = -f;
+        }
+        let mut report = SolveReport::new(crate::report::Method::Collocation);
+        self.solve(&mut report).then_some(&self.step[..])
     }
 }
 
