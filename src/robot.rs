@@ -27,8 +27,9 @@ pub struct Robot {
     pub corner_forces: bool,
 }
 
-/// Samples per unit turn used to look for a vanishing tendon tangent in validation.
-const ROUTING_SAMPLES: usize = 256;
+/// Samples along each tendon used to look for a vanishing path tangent in validation (a
+/// heuristic screen: the solvers still check every point they evaluate).
+const ROUTING_SAMPLES: usize = 128;
 
 impl Robot {
     /// A robot with the base at the origin, body z along world z, no tendons, no loads.
@@ -205,7 +206,7 @@ impl Robot {
             ));
         }
         // Look for a vanishing path tangent in the unloaded shape: |u* x r + r' + v*|.
-        let n = ROUTING_SAMPLES * 4;
+        let n = ROUTING_SAMPLES;
         for k in 0..=n {
             let s = end * k as f64 / n as f64;
             let rp = t.routing.at(s, l);

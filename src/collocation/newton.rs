@@ -60,7 +60,7 @@ pub enum LinearSolver {
 }
 
 enum Linear {
-    Sparse(SparseLu),
+    Sparse(Box<SparseLu>),
     Blocks(BlockElimination),
 }
 
@@ -158,7 +158,7 @@ impl Workspace {
         let n = system.unknowns();
         let linear = match solver {
             LinearSolver::Auto => Linear::Blocks(BlockElimination::new(system.mesh.nodes.len())),
-            LinearSolver::SparseLu => Linear::Sparse(SparseLu::new(system)?),
+            LinearSolver::SparseLu => Linear::Sparse(Box::new(SparseLu::new(system)?)),
         };
         Ok(Workspace {
             linear,
