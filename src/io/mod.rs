@@ -1,0 +1,72 @@
+//! Files in and out of the `tdcr` command: the TOML robot file (docs/robot-file.md), read
+//! with every problem reported by file, line, field and rule, and the JSON and CSV result
+//! files (docs/cli.md).
+//!
+//! ```
+//! let file = tdcr::io::parse(&tdcr::io::example(), "example.toml").unwrap();
+//! let solution = tdcr::collocation::solve(&file.robot, &file.solver.collocation).unwrap();
+//! let json = tdcr::io::output::json(&file.robot, &solution, None);
+//! assert!(json.contains("\"converged\": true"));
+//! ```
+
+mod example;
+pub mod locate;
+pub mod output;
+mod robot_file;
+
+pub use example::example;
+pub use robot_file::{RobotFile, SolverSettings, parse};
+
+use std::fmt;
+
+/// One problem in a robot file: where it is, which field, and the rule it breaks.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Problem {
+    /// Line and column (from 1) when the problem has a place in the file.
+    pub position: Option<locate::Position>,
+    /// Field path in the file, e.g. `tendon[2].end` (array elements numbered from 1, as
+    /// on the command line); empty for problems of the whole file.
+    pub field: String,
+    /// What is wrong, with the value, and the rule.
+    pub message: String,
+}
+
+/// Everything wrong with one robot file, in file order.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FileError {
+    /// The file's name as given (`<stdin>` for standard input).
+    pub file: String,
+    /// The problems, at least one.
+    pub problems: Vec<Problem>,
+}
+
+impl fmt::Display for Problem {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        if let Some(p) = self.position {
+            write!(f, "{}:{}: ", p.line, p.column)?;
+        }
+        if !self.field.is_empty() {
+            write!(f, "`{}` ", self.field)?;
+        }
+        f.write_str(&self.message)
+    }
+}
+
+impl fmt::Display for FileError {
+    /// One line per problem: `FILE:LINE:COLUMN: `FIELD` MESSAGE`.
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        for (i, p) in self.problems.iter().enumerate() {
+            if i > 0 {
+                f.write_str("\n")?;
+            }
+            if p.position.is_some() {
+                write!(f, "{}:{p}", self.file)?;
+            } else {
+                write!(f, "{}: {p}", self.file)?;
+            }
+        }
+        Ok(())
+    }
+}
+
+impl std::error::Error for FileError {}

@@ -1,0 +1,267 @@
+//! Result files: the solved shape sampled along the backbone, as JSON or CSV (docs/cli.md
+//! lists every field and unit). SI units throughout.
+#![allow(non_snake_case)]
+
+use crate::equations::Model;
+use crate::{Robot, Solution};
+use nalgebra::{Matrix3, Vector3};
+use std::fmt::Write;
+
+/// The state at one output arc length.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Sample {
+    /// Arc length (m).
+    pub s: f64,
+    /// Centreline position (m), world frame.
+    pub p: Vector3<f64>,
+    /// Orientation, body to world.
+    pub R: Matrix3<f64>,
+    /// Internal force (N), world frame.
+    pub n: Vector3<f64>,
+    /// Internal moment (N m), world frame.
+    pub m: Vector3<f64>,
+}
+
+/// The solution at the output arc lengths: its own nodes when `count` is `None` (both
+/// limits where the solution jumps), otherwise `count` (>= 2; fewer are raised to 2) evenly
+/// spaced arc lengths from 0 to L, interpolated with the solution's Hermite interpolant
+/// ([`Solution::at`]) and n, m from the constitutive law (eq. 3) at the interpolated strains.
+pub fn samples(robot: &Robot, solution: &Solution, count: Option<usize>) -> Vec<Sample> {
+    let Some(count) = count else {
+        return solution
+            .nodes
+            .iter()
+            .map(|n| Sample {
+                s: n.s,
+                p: n.p,
+                R: n.R,
+                n: n.n,
+                m: n.m,
+            })
+            .collect();
+    };
+    let model = Model::new(robot);
+    let count = count.max(2);
+    let length = solution.length();
+    (0..count)
+        .map(|k| {
+            let s = length * k as f64 / (count - 1) as f64;
+            let state = solution.at(s);
+            let (n, m) = model.internal_wrench(&model.site(s), &state.R, &state.v, &state.u);
+            Sample {
+                s,
+                p: state.p,
+                R: state.R,
+                n,
+                m,
+            }
+        })
+        .collect()
+}
+
+/// Bending angle (rad): the angle between the base tangent R(0) e3 and the tip tangent
+/// R(L) e3, in [0, pi].
+pub fn bending_angle(solution: &Solution) -> f64 {
+    let a = solution.base().R.column(2).into_owned();
+    let b = solution.tip().R.column(2).into_owned();
+    a.cross(&b).norm().atan2(a.dot(&b))
+}
+
+fn rows(R: &Matrix3<f64>) -> [[f64; 3]; 3] {
+    [0, 1, 2].map(|i| [R[(i, 0)], R[(i, 1)], R[(i, 2)]])
+}
+
+/// A JSON value with its keys in the order written (serde_json's own map sorts them).
+enum Json {
+    Bool(bool),
+    Integer(usize),
+    Number(f64),
+    Text(String),
+    Array(Vec<Json>),
+    Object(Vec<(&'static str, Json)>),
+}
+
+impl Json {
+    fn vector(v: &Vector3<f64>) -> Json {
+        Json::Array(v.iter().map(|&x| Json::Number(x)).collect())
+    }
+
+    fn matrix(R: &Matrix3<f64>) -> Json {
+        Json::Array(
+            rows(R)
+                .iter()
+                .map(|r| Json::Array(r.iter().map(|&x| Json::Number(x)).collect()))
+                .collect(),
+        )
+    }
+
+    fn optional(x: Option<f64>) -> Json {
+        // NaN is written as null.
+        Json::Number(x.unwrap_or(f64::NAN))
+    }
+
+    fn is_scalar(&self) -> bool {
+        !matches!(self, Json::Array(_) | Json::Object(_))
+    }
+
+    /// Scalars, vectors and 3-row matrices: written on one line.
+    fn is_small(&self) -> bool {
+        match self {
+            Json::Array(items) => {
+                items.iter().all(Json::is_scalar)
+                    || items.len() <= 3
+                        && items
+                            .iter()
+                            .all(|i| matches!(i, Json::Array(r) if r.iter().all(Json::is_scalar)))
+            }
+            Json::Object(_) => false,
+            _ => true,
+        }
+    }
+
+    /// Objects inside arrays whose values are all small go on one line (one sample per
+    /// line); everything else is indented.
+    fn write(&self, out: &mut String, indent: usize, in_array: bool) {
+        let pad = |n: usize| " ".repeat(n);
+        match self {
+            // serde_json formats numbers (shortest round-trip form; NaN, inf as null) and
+            // escapes strings; neither can fail.
+            Json::Bool(b) => out.push_str(if *b { "true" } else { "false" }),
+            Json::Integer(i) => out.push_str(&i.to_string()),
+            Json::Number(x) => out.push_str(&serde_json::to_string(x).unwrap_or_else(|_| "null".into())),
+            Json::Text(t) => out.push_str(&serde_json::to_string(t).unwrap_or_else(|_| "\"\"".into())),
+            Json::Array(items) if items.is_empty() => out.push_str("[]"),
+            Json::Array(items) if self.is_small() => {
+                out.push('[');
+                for (k, item) in items.iter().enumerate() {
+                    if k > 0 {
+                        out.push_str(", ");
+                    }
+                    item.write(out, indent, true);
+                }
+                out.push(']');
+            }
+            Json::Array(items) => {
+                out.push_str("[\n");
+                for (k, item) in items.iter().enumerate() {
+                    out.push_str(&pad(indent + 2));
+                    item.write(out, indent + 2, true);
+                    out.push_str(if k + 1 < items.len() { ",\n" } else { "\n" });
+                }
+                out.push_str(&pad(indent));
+                out.push(']');
+            }
+            Json::Object(fields) if in_array && fields.iter().all(|(_, v)| v.is_small()) => {
+                out.push('{');
+                for (k, (key, value)) in fields.iter().enumerate() {
+                    if k > 0 {
+                        out.push_str(", ");
+                    }
+                    let _ = write!(out, "\"{key}\": ");
+                    value.write(out, indent, true);
+                }
+                out.push('}');
+            }
+            Json::Object(fields) => {
+                out.push_str("{\n");
+                for (k, (key, value)) in fields.iter().enumerate() {
+                    let _ = write!(out, "{}\"{key}\": ", pad(indent + 2));
+                    value.write(out, indent + 2, false);
+                    out.push_str(if k + 1 < fields.len() { ",\n" } else { "\n" });
+                }
+                out.push_str(&pad(indent));
+                out.push('}');
+            }
+        }
+    }
+}
+
+/// The solution as JSON (every field and unit in docs/cli.md): the solve report, the tip
+/// pose and wrench, the samples of [`samples`] for `count`, and each tendon's tension, end
+/// and path. Vectors are `[x, y, z]`, matrices lists of rows; one sample per line.
+pub fn json(robot: &Robot, solution: &Solution, count: Option<usize>) -> String {
+    let report = &solution.report;
+    let tip = solution.tip();
+    let samples = samples(robot, solution, count)
+        .iter()
+        .map(|x| {
+            Json::Object(vec![
+                ("s", Json::Number(x.s)),
+                ("p", Json::vector(&x.p)),
+                ("R", Json::matrix(&x.R)),
+                ("n", Json::vector(&x.n)),
+                ("m", Json::vector(&x.m)),
+            ])
+        })
+        .collect();
+    let tendons = robot
+        .tendons
+        .iter()
+        .zip(&solution.tendon_paths)
+        .map(|(t, path)| {
+            Json::Object(vec![
+                ("tension", Json::Number(t.tension)),
+                ("end", Json::Number(t.end(robot.length()))),
+                ("path", Json::Array(path.iter().map(Json::vector).collect())),
+            ])
+        })
+        .collect();
+    let out = Json::Object(vec![
+        (
+            "converged",
+            Json::Bool(report.termination == crate::Termination::Converged),
+        ),
+        ("method", Json::Text(report.method.to_string())),
+        ("termination", Json::Text(report.termination.to_string())),
+        ("iterations", Json::Integer(report.iterations)),
+        ("load_steps", Json::Integer(report.load_steps)),
+        ("residual", Json::Number(report.residual)),
+        ("intervals", Json::Integer(report.intervals)),
+        ("tip_error_estimate", Json::optional(report.tip_error_estimate)),
+        ("solve_time", Json::Number(report.timings.total.as_secs_f64())),
+        ("bending_angle_deg", Json::Number(bending_angle(solution).to_degrees())),
+        (
+            "tip",
+            Json::Object(vec![
+                ("position", Json::vector(&tip.p)),
+                ("rotation", Json::matrix(&tip.R)),
+                ("force", Json::vector(&tip.n)),
+                ("moment", Json::vector(&tip.m)),
+            ]),
+        ),
+        ("samples", Json::Array(samples)),
+        ("tendons", Json::Array(tendons)),
+    ]);
+    let mut text = String::new();
+    out.write(&mut text, 0, false);
+    text.push('\n');
+    text
+}
+
+/// The CSV header: arc length, position, internal force and moment, and R row-major.
+pub const CSV_HEADER: &str = "s,px,py,pz,nx,ny,nz,mx,my,mz,R11,R12,R13,R21,R22,R23,R31,R32,R33";
+
+/// The samples as CSV: [`CSV_HEADER`], then one row per sample (SI units, full precision).
+pub fn csv(samples: &[Sample]) -> String {
+    let mut out = String::from(CSV_HEADER);
+    out.push('\n');
+    for x in samples {
+        let mut values = vec![x.s];
+        values.extend(x.p.iter().chain(x.n.iter()).chain(x.m.iter()));
+        values.extend(rows(&x.R).iter().flatten());
+        let line: Vec<String> = values.iter().map(|&v| number(v)).collect();
+        let _ = writeln!(out, "{}", line.join(","));
+    }
+    out
+}
+
+/// A number for CSV: the shortest text that reads back to the same f64, in exponent form
+/// when it is very small or very large (`1.0844e-28` rather than 28 zeros).
+pub fn number(x: f64) -> String {
+    let magnitude = x.abs();
+    if x != 0.0 && x.is_finite() && !(1e-4..1e15).contains(&magnitude) {
+        format!("{x:e}")
+    } else {
+        x.to_string()
+    }
+}

@@ -1,0 +1,472 @@
+//! The `tdcr` command, run as a built binary: the main job, round trips through robot files,
+//! JSON and CSV output, and one test per class of bad input with its exit code and message.
+
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output, Stdio};
+
+const TDCR: &str = env!("CARGO_BIN_EXE_tdcr");
+
+/// A fresh scratch folder for one test.
+fn scratch(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("tdcr-cli-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+/// Runs `tdcr args` in `dir`, feeding `stdin` if given.
+fn run(dir: &Path, args: &[&str], stdin: Option<&str>) -> Output {
+    let mut child = Command::new(TDCR)
+        .args(args)
+        .current_dir(dir)
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut input = child.stdin.take().unwrap();
+    if let Some(text) = stdin {
+        input.write_all(text.as_bytes()).unwrap();
+    }
+    drop(input);
+    let out = child.wait_with_output().unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        !stderr.contains("panicked") && !stderr.contains("RUST_BACKTRACE"),
+        "{stderr}"
+    );
+    out
+}
+
+fn stdout(out: &Output) -> String {
+    String::from_utf8_lossy(&out.stdout).into_owned()
+}
+
+fn stderr(out: &Output) -> String {
+    String::from_utf8_lossy(&out.stderr).into_owned()
+}
+
+fn example() -> String {
+    let out = run(&std::env::temp_dir(), &["example"], None);
+    assert_eq!(out.status.code(), Some(0));
+    stdout(&out)
+}
+
+/// The example with one line replaced (the line must exist).
+fn edited(from: &str, to: &str) -> String {
+    let text = example();
+    assert!(text.contains(from), "{from}");
+    text.replacen(from, to, 1)
+}
+
+fn tip_of(json: &serde_json::Value) -> [f64; 3] {
+    let p = &json["tip"]["position"];
+    [0, 1, 2].map(|k| p[k].as_f64().unwrap())
+}
+
+#[test]
+fn main_job_prints_all_table2_rows_and_draws_them() {
+    let dir = scratch("main");
+    let out = run(&dir, &[], None);
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    let text = stdout(&out);
+    let rows: Vec<usize> = text
+        .lines()
+        .filter(|l| !l.contains(" of "))
+        .filter_map(|l| l.split_whitespace().next()?.parse().ok())
+        .collect();
+    assert_eq!(rows, (1..=32).collect::<Vec<_>>(), "{text}");
+    assert!(text.contains("32 of 32 solved"), "{text}");
+    assert!(text.contains("T5 4.91 N + 0.196 N tip"));
+    let svg = std::fs::read_to_string(dir.join("out/table2.svg")).unwrap();
+    assert!(svg.starts_with("<svg") && svg.trim_end().ends_with("</svg>"));
+    assert!(svg.contains("perspective") && svg.contains("side view (XZ)"));
+    let csv = std::fs::read_to_string(dir.join("out/table2.csv")).unwrap();
+    assert_eq!(csv.lines().count(), 33);
+}
+
+#[test]
+fn example_round_trips_through_standard_input() {
+    let dir = scratch("roundtrip");
+    let out = run(&dir, &["solve", "-", "--format", "json"], Some(&example()));
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    let json: serde_json::Value = serde_json::from_str(&stdout(&out)).unwrap();
+    // The example is case S with the library's default options, and JSON numbers read back
+    // exactly; the stiffness may differ in the last bit (the compiler folds powi for the
+    // constants of `cases`), which moves the tip by ~1e-17 m: 1e-12 m is rounding.
+    let expected = tdcr::collocation::solve(&tdcr::cases::case_s(), &Default::default())
+        .unwrap()
+        .tip_position();
+    let tip = tip_of(&json);
+    for k in 0..3 {
+        assert!((tip[k] - expected[k]).abs() < 1e-12, "{tip:?} vs {expected}");
+    }
+    assert_eq!(json["converged"], true);
+    assert_eq!(json["method"], "collocation");
+    assert_eq!(json["intervals"], 32);
+    assert_eq!(json["tendons"].as_array().unwrap().len(), 5);
+    assert_eq!(json["tendons"][0]["tension"], 2.94);
+    let samples = json["samples"].as_array().unwrap();
+    assert_eq!(samples[0]["s"], 0.0);
+    assert_eq!(samples[0]["R"].as_array().unwrap().len(), 3);
+}
+
+#[test]
+fn json_tip_equals_the_library_for_overrides_and_samples() {
+    let dir = scratch("json");
+    std::fs::write(dir.join("robot.toml"), example()).unwrap();
+    let args = [
+        "solve",
+        "robot.toml",
+        "--tension",
+        "1=0",
+        "--tension",
+        "5=4.91",
+        "--tip-force",
+        "0,0,-0.196",
+        "--nodes",
+        "48",
+        "--samples",
+        "5",
+        "--format",
+        "json",
+    ];
+    let out = run(&dir, &args, None);
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    let json: serde_json::Value = serde_json::from_str(&stdout(&out)).unwrap();
+    let options = tdcr::collocation::Options {
+        intervals: 48,
+        ..Default::default()
+    };
+    let expected = tdcr::collocation::solve(&tdcr::cases::case_h(), &options)
+        .unwrap()
+        .tip_position();
+    let tip = tip_of(&json);
+    for k in 0..3 {
+        // Same robot (case H) and options; 1e-12 m as in the round-trip test.
+        assert!((tip[k] - expected[k]).abs() < 1e-12, "{tip:?} vs {expected}");
+    }
+    let samples = json["samples"].as_array().unwrap();
+    assert_eq!(samples.len(), 5);
+    assert_eq!(samples[2]["s"], 0.121);
+    // The last sample is the tip itself.
+    assert_eq!(samples[4]["p"], json["tip"]["position"]);
+}
+
+#[test]
+fn csv_has_a_header_and_one_row_per_sample() {
+    let dir = scratch("csv");
+    std::fs::write(dir.join("robot.toml"), example()).unwrap();
+    let out = run(
+        &dir,
+        &[
+            "solve",
+            "robot.toml",
+            "--samples",
+            "7",
+            "--format",
+            "csv",
+            "--out",
+            "shape.csv",
+        ],
+        None,
+    );
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    let csv = std::fs::read_to_string(dir.join("shape.csv")).unwrap();
+    let lines: Vec<&str> = csv.lines().collect();
+    assert_eq!(lines[0], tdcr::io::output::CSV_HEADER);
+    assert_eq!(lines.len(), 8);
+    assert!(lines.iter().all(|l| l.split(',').count() == 19));
+}
+
+#[test]
+fn table_output_and_plot() {
+    let dir = scratch("table");
+    std::fs::write(dir.join("robot.toml"), example()).unwrap();
+    let out = run(
+        &dir,
+        &["solve", "robot.toml", "--tol", "1e-8", "-v", "--plot", "shape.svg"],
+        None,
+    );
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    let text = stdout(&out);
+    assert!(
+        text.contains("tip position (mm):") && text.contains("adaptive mesh"),
+        "{text}"
+    );
+    assert!(stderr(&out).contains("iter   residual"), "{}", stderr(&out));
+    assert!(
+        std::fs::read_to_string(dir.join("shape.svg"))
+            .unwrap()
+            .contains("<polyline")
+    );
+}
+
+#[test]
+fn shooting_agrees_with_collocation_through_the_command() {
+    let dir = scratch("shooting");
+    let json = |method: &str| {
+        let out = run(
+            &dir,
+            &["solve", "-", "--format", "json", "--method", method],
+            Some(&example()),
+        );
+        assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+        tip_of(&serde_json::from_str(&stdout(&out)).unwrap())
+    };
+    let (a, b) = (json("collocation"), json("shooting"));
+    for k in 0..3 {
+        // 1e-6 m: the 32-interval mesh's discretization error on case S is below 1e-7 m.
+        assert!((a[k] - b[k]).abs() < 1e-6, "{a:?} vs {b:?}");
+    }
+}
+
+#[test]
+fn sweep_writes_csv_rows_and_a_trajectory_plot() {
+    let dir = scratch("sweep");
+    std::fs::write(dir.join("robot.toml"), example()).unwrap();
+    let out = run(
+        &dir,
+        &[
+            "sweep",
+            "robot.toml",
+            "--tension",
+            "1=0:3:7",
+            "--tension",
+            "2=0.5",
+            "--plot",
+            "tip.svg",
+        ],
+        None,
+    );
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    let csv = stdout(&out);
+    let lines: Vec<&str> = csv.lines().collect();
+    assert!(lines[0].starts_with("step,tension_1,tension_2"));
+    assert_eq!(lines.len(), 8);
+    assert!(lines[7].starts_with("7,3,0.5,"), "{}", lines[7]);
+    // Pulling tendon 1 harder bends the tip down: z decreases along the sweep.
+    let z: Vec<f64> = lines[1..]
+        .iter()
+        .map(|l| l.split(',').nth(8).unwrap().parse().unwrap())
+        .collect();
+    assert!(z.windows(2).all(|w| w[1] < w[0]), "{z:?}");
+    assert!(
+        std::fs::read_to_string(dir.join("tip.svg"))
+            .unwrap()
+            .contains("tip trajectory")
+    );
+}
+
+#[test]
+fn check_accepts_the_example() {
+    let dir = scratch("check-ok");
+    let out = run(&dir, &["check", "-"], Some(&example()));
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    assert!(stdout(&out).contains("OK"));
+}
+
+/// Runs `check` and `solve` on a robot file text; both must exit 2 and name `fragments`.
+fn rejected(name: &str, text: &str, fragments: &[&str]) {
+    let dir = scratch(name);
+    std::fs::write(dir.join("robot.toml"), text).unwrap();
+    for command in ["check", "solve"] {
+        let out = run(&dir, &[command, "robot.toml"], None);
+        let message = stderr(&out);
+        assert_eq!(out.status.code(), Some(2), "{command} {name}: {message}");
+        for f in fragments {
+            assert!(message.contains(f), "{command} {name}: `{f}` not in {message}");
+        }
+    }
+}
+
+#[test]
+fn missing_field_is_named_with_its_table_line() {
+    rejected(
+        "missing",
+        &edited("length = 0.242", "# no length"),
+        &["robot.toml:5:1:", "`rod.length` is required but missing in [rod]"],
+    );
+}
+
+#[test]
+fn unknown_key_names_the_key_and_its_table() {
+    rejected(
+        "unknown",
+        &edited("tension = 2.94", "tension = 2.94\ncolour = \"red\""),
+        &["unknown field `colour`", "[[tendon]] #1", ":36:1:"],
+    );
+    rejected(
+        "unknown-table",
+        &format!("{}\n[motor]\nspeed = 1\n", example()),
+        &["unknown key `motor` at the top level"],
+    );
+}
+
+#[test]
+fn wrong_type_names_field_and_line() {
+    rejected(
+        "type",
+        &edited("length = 0.242", "length = \"long\""),
+        &["robot.toml:6:10:", "`rod.length`", "expected a number"],
+    );
+}
+
+#[test]
+fn nan_and_infinity_are_rejected() {
+    rejected(
+        "nan",
+        &edited("youngs_modulus = 210e9", "youngs_modulus = nan"),
+        &[
+            ":9:1:",
+            "`rod.youngs_modulus` is nan Pa, but every number must be finite",
+        ],
+    );
+    rejected(
+        "inf",
+        &edited("tip_force = [0.0, 0.0, 0.0]", "tip_force = [0.0, inf, 0.0]"),
+        &["`loads.tip_force` has y = inf N"],
+    );
+}
+
+#[test]
+fn negative_and_out_of_range_values_are_rejected() {
+    rejected(
+        "negative",
+        &edited("tension = 2.94", "tension = -1.0"),
+        &[":35:1:", "`tendon[1].tension` is -1 N", "must be >= 0"],
+    );
+    rejected(
+        "radius",
+        &edited("outer_radius = 0.0004", "outer_radius = -0.0004"),
+        &["`rod.outer_radius` is -0.0004 m, but must be positive"],
+    );
+    rejected(
+        "poisson",
+        &edited("poisson_ratio = 0.3125", "poisson_ratio = 0.7"),
+        &["`rod.poisson_ratio` is 0.7, but must lie in (-1, 0.5]"],
+    );
+    rejected(
+        "tube",
+        &edited("# inner_radius = 0.0", "inner_radius = 0.0005"),
+        &["`rod.inner_radius` is 0.0005 m, but must be below the outer radius"],
+    );
+}
+
+#[test]
+fn tendon_ending_past_the_tip_is_rejected() {
+    rejected(
+        "past-tip",
+        &edited("# end = 0.242", "end = 0.3"),
+        &[":36:1:", "`tendon[1].end` is 0.3 m, past the tip at 0.242 m"],
+    );
+}
+
+#[test]
+fn bad_rotation_and_routing_kind_are_rejected() {
+    rejected(
+        "rotation",
+        &edited("[-1.0, 0.0, 0.0]]", "[-1.0, 0.0, 0.5]]"),
+        &["`base.rotation` is not a rotation"],
+    );
+    rejected(
+        "kind",
+        &edited("kind = \"helical\"", "kind = \"spiral\""),
+        &[
+            "unknown variant `spiral`, expected `straight` or `helical`",
+            "[[tendon]] #5",
+        ],
+    );
+}
+
+#[test]
+fn every_problem_of_a_file_is_listed() {
+    let text = edited("tension = 2.94", "tension = -1.0")
+        .replacen("length = 0.242", "length = -0.242", 1)
+        .replacen("poisson_ratio = 0.3125", "poisson_ratio = 2.0", 1);
+    rejected(
+        "many",
+        &text,
+        &[
+            "`rod.length` is -0.242 m",
+            "`rod.poisson_ratio` is 2",
+            "`tendon[1].tension` is -1 N",
+        ],
+    );
+}
+
+#[test]
+fn empty_unreadable_and_non_toml_files_are_rejected() {
+    rejected("empty", "", &["robot.toml: is empty"]);
+    rejected(
+        "not-toml",
+        "this is not a robot\n",
+        &["robot.toml:1:", "is not valid TOML"],
+    );
+    let dir = scratch("unreadable");
+    let out = run(&dir, &["solve", "no-such-robot.toml"], None);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(
+        stderr(&out).contains("cannot read robot file no-such-robot.toml"),
+        "{}",
+        stderr(&out)
+    );
+}
+
+#[test]
+fn bad_options_exit_2() {
+    let dir = scratch("options");
+    std::fs::write(dir.join("robot.toml"), example()).unwrap();
+    for (args, fragment) in [
+        (
+            &["solve", "robot.toml", "--tension", "9=1"][..],
+            "the robot has 5 tendon(s)",
+        ),
+        (
+            &["solve", "robot.toml", "--tension", "1=-2"][..],
+            "a tendon can only pull",
+        ),
+        (
+            &["solve", "robot.toml", "--tip-force", "1,2"][..],
+            "three comma-separated numbers",
+        ),
+        (&["solve", "robot.toml", "--tol", "nan"][..], "not finite"),
+        (&["solve", "robot.toml", "--nodes", "0"][..], ">= 1"),
+        (
+            &["sweep", "robot.toml", "--tension", "1=0:1:3", "--tension", "2=0:1:4"][..],
+            "the same COUNT",
+        ),
+        (&["solve", "robot.toml", "--frobnicate"][..], "unexpected argument"),
+    ] {
+        let out = run(&dir, args, None);
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {}", stderr(&out));
+        assert!(stderr(&out).contains(fragment), "{args:?}: {}", stderr(&out));
+    }
+}
+
+#[test]
+fn forced_non_convergence_exits_3_with_diagnostics() {
+    // One Newton iteration and no load continuation cannot reach the residual tolerance of
+    // 1e-11 under a 20 N pull and a 0.5 N tip load.
+    let text = edited("# max_iterations = 30", "max_iterations = 1").replacen(
+        "# continuation = true",
+        "continuation = false",
+        1,
+    );
+    let dir = scratch("no-convergence");
+    std::fs::write(dir.join("robot.toml"), text).unwrap();
+    let out = run(
+        &dir,
+        &["solve", "robot.toml", "--tension", "1=20", "--tip-force", "0,0,-0.5"],
+        None,
+    );
+    assert_eq!(out.status.code(), Some(3), "{}", stderr(&out));
+    let message = stderr(&out);
+    assert!(
+        message.contains("did not converge") && message.contains("iteration limit"),
+        "{message}"
+    );
+    assert!(message.contains("iter   residual"), "{message}");
+    assert!(stdout(&out).is_empty());
+}
