@@ -24,7 +24,7 @@ pub const TENDON_OFFSET: f64 = 0.008;
 pub const TIP_LOADS: [f64; 2] = [0.098, 0.196];
 
 /// The prototype's base rotation: body z along world +x, body x along world -z
-/// (rows [[0,0,1],[0,1,0],[-1,0,0]]).
+/// (rows `[[0,0,1],[0,1,0],[-1,0,0]]`).
 pub fn prototype_base_rotation() -> Matrix3<f64> {
     Matrix3::new(0.0, 0.0, 1.0, 0.0, 1.0, 0.0, -1.0, 0.0, 0.0)
 }

@@ -159,7 +159,7 @@ fn solve_impl(robot: &Robot, options: &Options, warm: Option<&Solution>) -> Resu
         Some(g) => interpolate(g, &mesh),
         None => guess::initial(&model, &mesh.nodes, options.initial_guess),
     };
-    let (mut mesh, mut x) = (mesh.clone(), solve_on_mesh(&model, mesh, x0, options, &mut report)?);
+    let (mut mesh, mut x) = (mesh.clone(), solve_on_mesh(&model, mesh, x0, options, &mut report).map_err(|e| timed(e, start))?);
     if let Some(tol) = options.tolerance {
         loop {
             let sys = System::new(model, mesh.clone());
@@ -178,7 +178,8 @@ fn solve_impl(robot: &Robot, options: &Options, warm: Option<&Solution>) -> Resu
                 });
             }
             let guess = Solution::from_states(&model, &x, &segment_ends(&mesh), report.clone())?;
-            let xf = solve_on_mesh(&model, fine.clone(), interpolate(&guess, &fine), options, &mut report)?;
+            let xf = solve_on_mesh(&model, fine.clone(), interpolate(&guess, &fine), options, &mut report)
+                .map_err(|e| timed(e, start))?;
             let change = (xf[xf.len() - 1].p - x[x.len() - 1].p).norm();
             // Order 4: halving every interval cuts the error 16-fold, so the finer error is
             // about change / 15; with partial splitting use the change itself (conservative).
@@ -329,6 +330,14 @@ fn continuation(
         }
     }
     Err(failure)
+}
+
+/// Stamps the total time on the report a non-convergence error carries.
+fn timed(mut error: Error, start: Instant) -> Error {
+    if let Error::NotConverged { report, .. } = &mut error {
+        report.timings.total = start.elapsed();
+    }
+    error
 }
 
 fn not_converged(system: &System, report: &SolveReport, worst_row: usize, hint: &str) -> Error {
