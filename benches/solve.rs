@@ -5,6 +5,8 @@
 //!   tension; shooting at integration tolerances giving comparable tip accuracy.
 //! - `newton_iteration`: one full Newton iteration (Jacobian, factorization, solve, line
 //!   search) on case H from 64 to 8192 intervals: the cost must grow linearly.
+//! - `tendon_count`: a solve with 1..32 tendons.
+//! - `batch`: 1000 independent solves over all cores with `collocation::solve_batch`.
 
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
 use std::hint::black_box;
@@ -72,5 +74,58 @@ fn newton_iteration(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, prototype_s, newton_iteration);
+/// Cost against the number of tendons: 1..32 straight tendons evenly spaced around the
+/// prototype's backbone at 8 mm, each at 2.94 N / count, with self weight.
+fn tendon_count(c: &mut Criterion) {
+    let mut group = c.benchmark_group("tendon_count");
+    for count in [1usize, 2, 4, 8, 16, 32] {
+        let mut robot = cases::prototype();
+        robot.tendons.clear();
+        for k in 0..count {
+            let angle = 0.3 + std::f64::consts::TAU * k as f64 / count as f64;
+            let routing = tdcr::Routing::straight(0.008 * angle.cos(), 0.008 * angle.sin());
+            robot.tendons.push(tdcr::Tendon::new(
+                routing,
+                2.94 / count as f64 * (1.0 + 0.5 * (k == 0) as u8 as f64),
+            ));
+        }
+        let options = collocation::Options::default();
+        group.bench_function(BenchmarkId::from_parameter(count), |b| {
+            b.iter(|| black_box(collocation::solve(&robot, &options).unwrap()))
+        });
+    }
+    group.finish();
+}
+
+/// Throughput of independent solves over all cores: 1000 random tension vectors on the
+/// prototype's four straight tendons (0..3 N each), solved by `solve_batch`.
+fn batch(c: &mut Criterion) {
+    // A fixed linear congruential sequence: the same robots every run.
+    let mut state = 12345u64;
+    let mut next = || {
+        state = state
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        (state >> 11) as f64 / (1u64 << 53) as f64
+    };
+    let robots: Vec<tdcr::Robot> = (0..1000)
+        .map(|_| {
+            let mut robot = cases::prototype();
+            for t in robot.tendons.iter_mut().take(4) {
+                t.tension = 3.0 * next();
+            }
+            robot
+        })
+        .collect();
+    let options = collocation::Options::default();
+    let mut group = c.benchmark_group("batch");
+    group.sample_size(10);
+    group.throughput(criterion::Throughput::Elements(robots.len() as u64));
+    group.bench_function("1000_random_tensions", |b| {
+        b.iter(|| black_box(collocation::solve_batch(&robots, &options)))
+    });
+    group.finish();
+}
+
+criterion_group!(benches, prototype_s, newton_iteration, tendon_count, batch);
 criterion_main!(benches);

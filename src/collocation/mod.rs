@@ -159,7 +159,10 @@ fn solve_impl(robot: &Robot, options: &Options, warm: Option<&Solution>) -> Resu
         Some(g) => interpolate(g, &mesh),
         None => guess::initial(&model, &mesh.nodes, options.initial_guess),
     };
-    let (mut mesh, mut x) = (mesh.clone(), solve_on_mesh(&model, mesh, x0, options, &mut report).map_err(|e| timed(e, start))?);
+    let (mut mesh, mut x) = (
+        mesh.clone(),
+        solve_on_mesh(&model, mesh, x0, options, &mut report).map_err(|e| timed(e, start))?,
+    );
     if let Some(tol) = options.tolerance {
         loop {
             let sys = System::new(model, mesh.clone());
@@ -373,4 +376,12 @@ pub fn interval_errors(system: &System, x: &[State]) -> Result<Vec<f64>> {
             Ok(worst * h / model.robot.length())
         })
         .collect()
+}
+
+/// Solves many independent robots in parallel on rayon's global thread pool, one result per
+/// robot in input order. Each solve is the same deterministic computation as [`solve`], so
+/// results are bitwise identical to solving them one by one.
+pub fn solve_batch(robots: &[Robot], options: &Options) -> Vec<Result<Solution>> {
+    use rayon::prelude::*;
+    robots.par_iter().map(|robot| solve(robot, options)).collect()
 }
