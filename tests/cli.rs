@@ -470,3 +470,22 @@ fn forced_non_convergence_exits_3_with_diagnostics() {
     assert!(message.contains("iter   residual"), "{message}");
     assert!(stdout(&out).is_empty());
 }
+
+#[test]
+fn bench_reports_both_cases_cold_and_warm_as_json() {
+    let dir = scratch("bench");
+    let out = run(&dir, &["bench", "--repeats", "1", "--format", "json"], None);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let rows: serde_json::Value = serde_json::from_str(&stdout(&out)).unwrap();
+    let rows = rows.as_array().unwrap();
+    assert_eq!(rows.len(), 4);
+    for (row, (case, start)) in rows.iter().zip([("S", "cold"), ("S", "warm"), ("H", "cold"), ("H", "warm")]) {
+        assert_eq!(row["case"], case);
+        assert_eq!(row["start"], start);
+        assert!(row["median_seconds"].as_f64().unwrap() > 0.0);
+        assert!(row["iterations"].as_u64().unwrap() >= 1);
+        // 1e-7 m: the default target error, met against the published reference tips
+        assert!(row["tip_error_m"].as_f64().unwrap() <= 1e-7);
+        assert!(row["nodes"].as_u64().unwrap() >= 9);
+    }
+}

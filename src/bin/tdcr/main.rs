@@ -4,6 +4,8 @@
 //! Table 2, one table on standard output and a picture of all shapes in `./out/`.
 //! Exit codes: 0 success, 2 bad input, 3 did not converge, 1 anything else.
 
+mod bench;
+
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use std::fmt::Write as _;
 use std::io::{IsTerminal, Read, Write};
@@ -47,6 +49,8 @@ enum Command {
     },
     /// Print the prototype (tendon 1 at 2.94 N) as a commented robot file to start from.
     Example,
+    /// Time the reference cases S and H, cold and warm (docs/benchmarks.md).
+    Bench(bench::BenchArgs),
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -306,6 +310,9 @@ fn main() -> ExitCode {
         Some(Command::Sweep(args)) => sweep(&args),
         Some(Command::Check { file }) => check(&file),
         Some(Command::Example) => emit(&tdcr::io::example()),
+        Some(Command::Bench(args)) => bench::run(&args)
+            .map_err(Failure::NotConverged)
+            .and_then(|text| emit(&text)),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
