@@ -47,3 +47,16 @@ fn repeated_and_batched_solves_are_bitwise_identical() {
     assert_eq!(sequential, again);
     assert_eq!(sequential, batched);
 }
+
+#[test]
+fn reusing_a_solver_changes_nothing_but_the_setup() {
+    let options = collocation::Options {
+        linear_solver: collocation::LinearSolver::SparseLu,
+        ..Default::default()
+    };
+    let mut solver = collocation::Solver::new(options.clone());
+    for robot in robots().iter().take(6) {
+        let fresh = bits(&collocation::solve(robot, &options).unwrap());
+        assert_eq!(bits(&solver.solve(robot).unwrap()), fresh);
+    }
+}

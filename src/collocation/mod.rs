@@ -86,7 +86,7 @@ impl Default for Options {
 /// assert!((tip.x - 0.151823122).abs() < 1e-6);
 /// ```
 pub fn solve(robot: &Robot, options: &Options) -> Result<Solution> {
-    solve_impl(robot, options, None)
+    solve_impl(robot, options, None, &mut None)
 }
 
 /// Solves `robot` starting from a previous solution (of this or a nearby robot), which is
@@ -95,7 +95,42 @@ pub fn solve(robot: &Robot, options: &Options) -> Result<Solution> {
 /// # Errors
 /// As [`solve`].
 pub fn solve_from(robot: &Robot, options: &Options, guess: &Solution) -> Result<Solution> {
-    solve_impl(robot, options, Some(guess))
+    solve_impl(robot, options, Some(guess), &mut None)
+}
+
+/// A mesh and the Newton workspace built for it.
+type Cache = Option<(Mesh, LinearSolver, Workspace)>;
+
+/// A collocation solver that keeps its Newton workspace (buffers and, on the sparse path,
+/// the pattern and symbolic LU) between solves, so that repeated solves on the same mesh
+/// (sweeps, control loops, calibration) skip the setup.
+pub struct Solver {
+    /// The options of every solve.
+    pub options: Options,
+    cache: Cache,
+}
+
+impl Solver {
+    /// A solver with these options and an empty cache.
+    pub fn new(options: Options) -> Self {
+        Solver { options, cache: None }
+    }
+
+    /// As [`solve`], reusing the workspace of the previous solve when the mesh is the same.
+    ///
+    /// # Errors
+    /// As [`solve`].
+    pub fn solve(&mut self, robot: &Robot) -> Result<Solution> {
+        solve_impl(robot, &self.options, None, &mut self.cache)
+    }
+
+    /// As [`solve_from`], reusing the workspace of the previous solve when the mesh is the same.
+    ///
+    /// # Errors
+    /// As [`solve`].
+    pub fn solve_from(&mut self, robot: &Robot, guess: &Solution) -> Result<Solution> {
+        solve_impl(robot, &self.options, Some(guess), &mut self.cache)
+    }
 }
 
 fn initial_mesh(robot: &Robot, options: &Options) -> Result<Mesh> {
@@ -133,7 +168,7 @@ fn interpolate(guess: &Solution, mesh: &Mesh) -> Vec<State> {
         .collect()
 }
 
-fn solve_impl(robot: &Robot, options: &Options, warm: Option<&Solution>) -> Result<Solution> {
+fn solve_impl(robot: &Robot, options: &Options, warm: Option<&Solution>, cache: &mut Cache) -> Result<Solution> {
     robot.validate()?;
     if options.residual_tolerance.is_nan() || options.residual_tolerance <= 0.0 || options.max_iterations == 0 {
         return Err(invalid(
@@ -161,7 +196,7 @@ fn solve_impl(robot: &Robot, options: &Options, warm: Option<&Solution>) -> Resu
     };
     let (mut mesh, mut x) = (
         mesh.clone(),
-        solve_on_mesh(&model, mesh, x0, options, &mut report).map_err(|e| timed(e, start))?,
+        solve_on_mesh(&model, mesh, x0, options, &mut report, cache).map_err(|e| timed(e, start))?,
     );
     if let Some(tol) = options.tolerance {
         loop {
@@ -181,8 +216,15 @@ fn solve_impl(robot: &Robot, options: &Options, warm: Option<&Solution>) -> Resu
                 });
             }
             let guess = Solution::from_states(&model, &x, &segment_ends(&mesh), report.clone())?;
-            let xf = solve_on_mesh(&model, fine.clone(), interpolate(&guess, &fine), options, &mut report)
-                .map_err(|e| timed(e, start))?;
+            let xf = solve_on_mesh(
+                &model,
+                fine.clone(),
+                interpolate(&guess, &fine),
+                options,
+                &mut report,
+                cache,
+            )
+            .map_err(|e| timed(e, start))?;
             let change = (xf[xf.len() - 1].p - x[x.len() - 1].p).norm();
             // Order 4: halving every interval cuts the error 16-fold, so the finer error is
             // about change / 15; with partial splitting use the change itself (conservative).
@@ -213,6 +255,7 @@ fn solve_on_mesh(
     x0: Vec<State>,
     options: &Options,
     report: &mut SolveReport,
+    cache: &mut Cache,
 ) -> Result<Vec<State>> {
     report.meshes += 1;
     let settings = Settings {
@@ -220,27 +263,43 @@ fn solve_on_mesh(
         max_iterations: options.max_iterations,
     };
     let mut system = System::new(*model, mesh);
-    let mut ws = Workspace::new(&system, options.linear_solver)?;
+    let mut ws = match cache.take() {
+        Some((m, kind, ws)) if m == system.mesh && kind == options.linear_solver => ws,
+        _ => Workspace::new(&system, options.linear_solver)?,
+    };
+    let result = newton_with_continuation(&mut system, &mut ws, x0, options, &settings, report);
+    *cache = Some((system.mesh, options.linear_solver, ws));
+    result
+}
+
+/// Newton from `x0`; on failure, load continuation (when enabled).
+fn newton_with_continuation(
+    system: &mut System,
+    ws: &mut Workspace,
+    x0: Vec<State>,
+    options: &Options,
+    settings: &Settings,
+    report: &mut SolveReport,
+) -> Result<Vec<State>> {
     report.unknowns = system.unknowns();
     report.nonzeros = ws.nonzeros();
     report.intervals = system.mesh.intervals();
     let mut x = x0;
     report.load_steps += 1;
-    let (termination, worst) = newton::run(&system, &mut ws, &mut x, &settings, report);
+    let (termination, worst) = newton::run(system, ws, &mut x, settings, report);
     report.termination = termination;
     if termination == Termination::Converged {
         return Ok(x);
     }
     if !options.continuation {
         return Err(not_converged(
-            &system,
+            system,
             report,
             worst,
             "enable load continuation, refine the mesh, or warm-start from a nearby solution",
         ));
     }
-    continuation(&mut system, &mut ws, &settings, report)
-        .map_err(|(hint, row)| not_converged(&system, report, row, &hint))
+    continuation(system, ws, settings, report).map_err(|(hint, row)| not_converged(system, report, row, &hint))
 }
 
 /// What load continuation ramps.
