@@ -16,7 +16,7 @@ use crate::{Error, Real};
 use nalgebra::{Matrix3, Matrix6, Vector3, Vector6};
 
 /// Below this |p_i'| (body frame, dimensionless) a tendon's path has no usable tangent.
-const MIN_TENDON_SPEED: f64 = 1e-9;
+pub(crate) const MIN_TENDON_SPEED: f64 = 1e-9;
 
 /// Lifts an f64 vector into the scalar type `T`.
 pub fn lift<T: Real>(v: &Vector3<f64>) -> Vector3<T> {

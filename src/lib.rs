@@ -13,6 +13,7 @@ pub mod equilibrium;
 pub mod error;
 pub mod guess;
 pub mod io;
+pub mod linearize;
 pub mod loads;
 pub mod mesh;
 pub mod plot;

@@ -20,9 +20,10 @@
 
 use crate::equations::{Model, Site, lift, lift_m};
 use crate::error::Result;
+use crate::linearize::{Linearization, linearize};
 use crate::solution::State;
 use crate::{Real, so3};
-use nalgebra::{Matrix3, Matrix6, SMatrix, SVector, Vector3, Vector6};
+use nalgebra::{Matrix3, SMatrix, SVector, Vector3};
 use num_dual::Dual64;
 
 /// Scaled perturbation of one node's unknowns.
@@ -198,47 +199,6 @@ struct PointLinearization {
     f_frame: SMatrix<f64, 12, 3>,
 }
 
-/// The strain rates (v', u') and their derivatives with respect to (v, u) (6 x 6) and to a
-/// right perturbation of R (6 x 3).
-fn strain_linearization(
-    model: &Model,
-    site: &Site,
-    segment_end: f64,
-    R: &Matrix3<f64>,
-    v: &Vector3<f64>,
-    u: &Vector3<f64>,
-) -> Result<(Vector6<f64>, Matrix6<f64>, SMatrix<f64, 6, 3>)> {
-    let mut rates = Vector6::zeros();
-    let mut d_strains = Matrix6::zeros();
-    let mut d_rotation = SMatrix::<f64, 6, 3>::zeros();
-    for j in 0..9 {
-        let seed = |i: usize| {
-            if i == j {
-                Dual64::from(0.0).derivative()
-            } else {
-                Dual64::from(0.0)
-            }
-        };
-        let vd = lift::<Dual64>(v) + Vector3::from_fn(|i, _| seed(i));
-        let ud = lift::<Dual64>(u) + Vector3::from_fn(|i, _| seed(i + 3));
-        let Rd = lift_m::<Dual64>(R) * so3::exp(&Vector3::from_fn(|i, _| seed(i + 6)));
-        let (dv, du) = model.strain_rates(site, segment_end, &Rd, &vd, &ud)?;
-        for i in 0..3 {
-            rates[i] = dv[i].re;
-            rates[i + 3] = du[i].re;
-            let col = [dv[i].eps, du[i].eps];
-            for (r, d) in col.into_iter().enumerate() {
-                if j < 6 {
-                    d_strains[(i + 3 * r, j)] = d;
-                } else {
-                    d_rotation[(i + 3 * r, j - 6)] = d;
-                }
-            }
-        }
-    }
-    Ok((rates, d_strains, d_rotation))
-}
-
 /// F(s, y) of an interval with frame `Rk` and its derivatives, assembled from the strain-rate
 /// linearization and the kinematics p' = R_k exp(theta) v, theta' = J_r(theta)^-1 u.
 fn rhs_linearized(
@@ -255,7 +215,11 @@ fn rhs_linearized(
     let R = Rk * E;
     let Jr = so3::right_jacobian(&theta);
     let Jri = so3::right_jacobian_inv(&theta);
-    let (rates, d_strains, d_rotation) = strain_linearization(model, site, segment_end, &R, &v, &u)?;
+    let Linearization {
+        rates,
+        d_strains,
+        d_rotation,
+    } = linearize(model, site, segment_end, &R, &v, &u)?;
     let mut f = Block::zeros();
     f.fixed_rows_mut::<3>(0).copy_from(&(R * v));
     f.fixed_rows_mut::<3>(3).copy_from(&(Jri * u));

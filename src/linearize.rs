@@ -1,0 +1,758 @@
+//! Exact, hand-derived linearization of eq. 13 (corrected, docs/model.md): the strain rates
+//! (v', u') of [`Model::strain_rates`] together with their derivatives with respect to the
+//! strains (v, u) and to a right perturbation of the orientation R, in f64 and without
+//! automatic differentiation.
+//!
+//! # Derivation
+//!
+//! Write the unknown rates as x = (x_v, x_u) = (v', u'). Eq. 13 is the linear system
+//! M x = rhs, or F(x; R, v, u) = M x - rhs = 0 with
+//! ```text
+//! F_v = D x_v + (u^ D + D')(v - v*) - D v*' + R^T f_e + sum_i q_i
+//! F_u = C x_u + (u^ C + C')(u - u*) - C u*' + v^ D (v - v*) + R^T l_e + sum_i r_i x q_i
+//! ```
+//! where, per tendon i (body frame, symbols of docs/model.md section 4),
+//! ```text
+//! p_i  = u x r_i + r_i' + v             (p_i^b', the tendon path tangent)
+//! e_i  = p_i + r_i'
+//! c_i  = u x e_i + r_i''                (= u^ p_i^b' + u^ r_i' + r_i'')
+//! w_i  = x_v - r_i x x_u                (= v' - r_i^ u', the part of p_i^b'' they drive)
+//! z_i  = w_i + c_i                      (= p_i^b'')
+//! q_i  = A_i z_i,   A_i = -tau_i (p_i^)^2 / |p_i|^3 = k_i P_i
+//! k_i  = tau_i / |p_i|,   t_i = p_i / |p_i|,   P_i = I - t_i t_i^T.
+//! ```
+//! Indeed sum_i [A_i; r_i^ A_i] w_i = [A x_v + G x_u; B x_v + H x_u] (because
+//! G = -sum A_i r_i^, B = sum r_i^ A_i, H = -sum r_i^ A_i r_i^) and
+//! sum_i [A_i; r_i^ A_i] c_i = [a; b], so the tendon terms of F are sum_i [q_i; r_i x q_i].
+//!
+//! Differentiating F = 0 at the solution x gives dx = -M^-1 dF, where dF is the partial
+//! derivative of F with x held fixed. M is factored once; the 9 directions (3 of v, 3 of u,
+//! 3 of the rotation) are one solve with a 6x9 right-hand side. No 3x3x3 tensor is formed:
+//! every derivative of A_i appears already contracted with z_i.
+//!
+//! **Derivative of A_i.** A_i = tau_i Hess |p| (p = p_i), so its derivative is the (totally
+//! symmetric) third derivative of tau_i |p|. Contracted with z = alpha t + z_perp
+//! (alpha = t . z, z_perp = P z) it is the symmetric 3x3 matrix
+//! ```text
+//! J_i(z) = d(A_i z)/dp |_(z fixed)
+//!        = -(tau_i / |p|^2) (z t^T + t z^T + alpha I - 3 alpha t t^T)
+//!        = -(alpha / |p|) A_i - (k_i / |p|) (z_perp t^T + t z_perp^T).
+//! ```
+//! **Derivative of q_i.** With dp_i/dv = I, dp_i/du = -r_i^, dc_i/dv = u^ and
+//! dc_i/du = -(e_i^ + u^ r_i^) (from d(u x e_i) = du x e_i + u x (du x r_i)):
+//! ```text
+//! Q_i     := dq_i/dv = J_i(z_i) + A_i u^
+//! dq_i/du = -J_i(z_i) r_i^ - A_i (e_i^ + u^ r_i^) = -Q_i r_i^ - A_i e_i^
+//! ```
+//! and the moment terms follow as r_i^ dq_i (r_i does not depend on the state).
+//!
+//! **Rod terms.** With n_b = D (v - v*) and m_b = C (u - u*) (body frame), and
+//! d(a x b) = da x b + a x db:
+//! ```text
+//! dF_v/dv = u^ D + D'              dF_v/du = -n_b^
+//! dF_u/dv = v^ D - n_b^            dF_u/du = u^ C + C' - m_b^
+//! ```
+//! **Rotation.** R enters only through R^T f_e and R^T l_e. For R -> R exp(phi^),
+//! (R exp(phi^))^T f = R^T f - phi x R^T f + O(phi^2), so
+//! ```text
+//! dF_v/dphi = (R^T f_e)^          dF_u/dphi = (R^T l_e)^
+//! ```
+//! **Assembled.** With the sums over the tendons of [`Which::ActiveTo`]`(segment_end)`:
+//! ```text
+//!             v                          u                               phi
+//! dF = [ u^ D + D' + sum Q_i        -n_b^ + sum dq_i/du           (R^T f_e)^ ]
+//!      [ v^ D - n_b^ + sum r_i^ Q_i  u^ C + C' - m_b^
+//!                                       + sum r_i^ dq_i/du        (R^T l_e)^ ]
+//! d(v', u')/d(v, u, phi) = -M^-1 dF.
+//! ```
+//! Products with a hat matrix are written as cross products (m a^ has rows m_j x a, a^ m
+//! has columns a x m_k), which halves their flops against a dense 3x3 product.
+//!
+//! # Cost
+//! Two passes over the tendons (the second needs x); the per-tendon quantities of the first
+//! are kept on the stack for up to 8 tendons, further ones are re-evaluated. M is factored
+//! once by a 6x6 Cholesky written out for the fixed size (LU fallback as in
+//! [`Model::strain_rates`]); x is one solve and the nine derivative directions one solve with
+//! a 6x9 right-hand side. For case H (one active tendon) a release build took about 390 ns
+//! per call on the development machine, against 280 ns for `strain_rates::<f64>` alone and
+//! 5.6 us for nine `strain_rates::<Dual64>` passes.
+#![allow(non_snake_case)]
+
+use crate::Error;
+use crate::equations::MIN_TENDON_SPEED;
+use crate::equations::{Model, Site, Which};
+use crate::error::Result;
+use crate::routing::RoutingPoint;
+use nalgebra::{LU, Matrix3, Matrix3x6, Matrix6, Matrix6x3, SMatrix, U6, Vector3, Vector6};
+
+/// Tendons whose per-tendon quantities are kept on the stack between the two passes (solve
+/// for x, then differentiate at x); further tendons are re-evaluated from their routing.
+/// 8 covers the usual 3-6 tendon robots (the prototype has 5) at 0.9 kB of stack.
+const CACHED_TENDONS: usize = 8;
+
+/// Strain rates and their exact derivatives at one point.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Linearization {
+    /// (v', u') stacked, 6-vector (1/m, rad/m^2), body frame: eq. 13 (corrected).
+    pub rates: Vector6<f64>,
+    /// d(v', u') / d(v, u): 6x6, rows (v', u'), columns (v, u), body frame.
+    pub d_strains: Matrix6<f64>,
+    /// d(v', u') / d(phi) for a right perturbation R -> R exp(hat(phi)): 6x3, phi in the body
+    /// frame (rad).
+    pub d_rotation: Matrix6x3<f64>,
+}
+
+/// Per-tendon quantities of the derivation (body frame) that both passes need.
+#[derive(Clone, Copy, Debug)]
+struct TendonPoint {
+    /// r_i (m).
+    r: Vector3<f64>,
+    /// e_i = p_i^b' + r_i'.
+    e: Vector3<f64>,
+    /// c_i = u x e_i + r_i'' (1/m), the state-dependent part of p_i^b''.
+    c: Vector3<f64>,
+    /// t_i = p_i^b' / |p_i^b'|, the unit tangent.
+    t: Vector3<f64>,
+    /// k_i = tau_i / |p_i^b'| (N).
+    k: f64,
+    /// 1 / |p_i^b'|.
+    inv_speed: f64,
+}
+
+impl TendonPoint {
+    const ZERO: TendonPoint = TendonPoint {
+        r: Vector3::new(0.0, 0.0, 0.0),
+        e: Vector3::new(0.0, 0.0, 0.0),
+        c: Vector3::new(0.0, 0.0, 0.0),
+        t: Vector3::new(0.0, 0.0, 0.0),
+        k: 0.0,
+        inv_speed: 0.0,
+    };
+
+    /// Tendon `i` with tension `tension` (N) at the routing point `rp` of arc length `s`.
+    fn new(i: usize, tension: f64, rp: &RoutingPoint, s: f64, v: &Vector3<f64>, u: &Vector3<f64>) -> Result<Self> {
+        let p = u.cross(&rp.r) + rp.r_s + v;
+        let speed = p.norm();
+        if speed < MIN_TENDON_SPEED {
+            return Err(Error::SingularRouting { tendon: i, s, speed });
+        }
+        let inv_speed = 1.0 / speed;
+        let e = p + rp.r_s;
+        Ok(TendonPoint {
+            r: rp.r,
+            e,
+            c: u.cross(&e) + rp.r_ss,
+            t: p * inv_speed,
+            k: tension * inv_speed,
+            inv_speed,
+        })
+    }
+
+    /// A_i = k_i (I - t_i t_i^T) (N), symmetric.
+    fn A(&self) -> Matrix3<f64> {
+        let (t, k) = (&self.t, self.k);
+        let kt = t * k;
+        let (xy, xz, yz) = (-kt[0] * t[1], -kt[0] * t[2], -kt[1] * t[2]);
+        Matrix3::new(
+            k - kt[0] * t[0],
+            xy,
+            xz,
+            xy,
+            k - kt[1] * t[1],
+            yz,
+            xz,
+            yz,
+            k - kt[2] * t[2],
+        )
+    }
+
+    /// Adds [dq_i/dv, dq_i/du] to `top` and r_i^ [dq_i/dv, dq_i/du] to `bottom` (module docs),
+    /// at the rates x = (x_v, x_u).
+    fn add_derivatives(
+        &self,
+        x_v: &Vector3<f64>,
+        x_u: &Vector3<f64>,
+        u: &Vector3<f64>,
+        top: &mut Matrix3x6<f64>,
+        bottom: &mut Matrix3x6<f64>,
+    ) {
+        let A = self.A();
+        let t = &self.t;
+        let z = x_v - self.r.cross(x_u) + self.c; // p_i^b''
+        let alpha = t.dot(&z);
+        let z_perp = z - t * alpha;
+        // J = -(alpha/|p|) A - (k/|p|) (z_perp t^T + t z_perp^T)
+        let g = -alpha * self.inv_speed;
+        let h = -self.k * self.inv_speed;
+        let hz = z_perp * h;
+        let mut Q = Matrix3::zeros();
+        for j in 0..3 {
+            for l in j..3 {
+                let J_jl = g * A[(j, l)] + hz[j] * t[l] + t[j] * hz[l];
+                Q[(j, l)] = J_jl;
+                Q[(l, j)] = J_jl;
+            }
+        }
+        Q += mul_hat(&A, u); // + A u^
+        // dq/du = -Q r^ - A e^: rows r x Q_j + e x A_j
+        let dq_du = mul_hat(&Q, &-self.r) + mul_hat(&A, &-self.e);
+        let mut QQ = Matrix3x6::zeros();
+        QQ.fixed_columns_mut::<3>(0).copy_from(&Q);
+        QQ.fixed_columns_mut::<3>(3).copy_from(&dq_du);
+        *top += QQ;
+        *bottom += hat_mul(&self.r, &QQ);
+    }
+}
+
+/// m a^: row j is (m_j x a)^T.
+fn mul_hat(m: &Matrix3<f64>, a: &Vector3<f64>) -> Matrix3<f64> {
+    Matrix3::from_fn(|j, l| match l {
+        0 => m[(j, 1)] * a[2] - m[(j, 2)] * a[1],
+        1 => m[(j, 2)] * a[0] - m[(j, 0)] * a[2],
+        _ => m[(j, 0)] * a[1] - m[(j, 1)] * a[0],
+    })
+}
+
+/// a^ m: column l is a x m_l.
+fn hat_mul<const C: usize>(a: &Vector3<f64>, m: &SMatrix<f64, 3, C>) -> SMatrix<f64, 3, C> {
+    SMatrix::<f64, 3, C>::from_fn(|j, l| match j {
+        0 => a[1] * m[(2, l)] - a[2] * m[(1, l)],
+        1 => a[2] * m[(0, l)] - a[0] * m[(2, l)],
+        _ => a[0] * m[(1, l)] - a[1] * m[(0, l)],
+    })
+}
+
+/// a^ diag(d) + diag(d_s): column l of a^ scaled by d_l, plus d_s on the diagonal.
+fn hat_diag(a: &Vector3<f64>, d: &Vector3<f64>, d_s: &Vector3<f64>) -> Matrix3<f64> {
+    Matrix3::new(
+        d_s[0],
+        -a[2] * d[1],
+        a[1] * d[2],
+        a[2] * d[0],
+        d_s[1],
+        -a[0] * d[2],
+        -a[1] * d[0],
+        a[0] * d[1],
+        d_s[2],
+    )
+}
+
+/// The hat map in f64 (`so3::hat` without the generic scalar).
+fn hat3(a: &Vector3<f64>) -> Matrix3<f64> {
+    Matrix3::new(0.0, -a[2], a[1], a[2], 0.0, -a[0], -a[1], a[0], 0.0)
+}
+
+/// The Cholesky factor M = L L^T of a symmetric positive definite 6x6 matrix, written out
+/// for the fixed size. nalgebra's generic `Cholesky` (column views of run-time length) took
+/// 112 ns to factor and 170 ns to solve with a 6x9 right-hand side in a release build on
+/// the development machine; this takes 44 ns and 96 ns.
+struct Cholesky6 {
+    /// L, lower triangular (the strict upper part is zero).
+    L: Matrix6<f64>,
+    /// 1 / L_jj.
+    inv_diag: Vector6<f64>,
+}
+
+impl Cholesky6 {
+    /// Factors the lower triangle of `M` into `self`; false when a pivot is not positive
+    /// (zero, negative or NaN: the criterion of nalgebra's `Cholesky::new`, which
+    /// `strain_rates` uses), and `self` is then incomplete.
+    fn factor(&mut self, M: &Matrix6<f64>) -> bool {
+        let L = &mut self.L;
+        for j in 0..6 {
+            let mut d = M[(j, j)];
+            for k in 0..j {
+                d -= L[(j, k)] * L[(j, k)];
+            }
+            if d.is_nan() || d <= 0.0 {
+                return false;
+            }
+            // sqrt(d) and 1/d are independent, so they overlap instead of chaining sqrt then
+            // divide: 1/L_jj = sqrt(d) / d.
+            let l = d.sqrt();
+            let inv = l * (1.0 / d);
+            L[(j, j)] = l;
+            self.inv_diag[j] = inv;
+            for i in j + 1..6 {
+                let mut e = M[(i, j)];
+                for k in 0..j {
+                    e -= L[(i, k)] * L[(j, k)];
+                }
+                L[(i, j)] = e * inv;
+            }
+        }
+        true
+    }
+
+    /// Overwrites the rows of `bt` with those of bt M^-1, i.e. solves M X = B for B = bt^T
+    /// (M is symmetric). Working on the transpose keeps each right-hand side's entries
+    /// i = 0..6 in separate contiguous columns of C values, so the substitution updates
+    /// (column i -= L_ik column k) are contiguous and vectorize across the C right-hand sides.
+    fn solve_transposed_mut<const C: usize>(&self, bt: &mut SMatrix<f64, C, 6>) {
+        let L = &self.L;
+        // forward substitution L y = b
+        for i in 0..6 {
+            for k in 0..i {
+                let l = L[(i, k)];
+                for c in 0..C {
+                    bt[(c, i)] -= l * bt[(c, k)];
+                }
+            }
+            let inv = self.inv_diag[i];
+            for c in 0..C {
+                bt[(c, i)] *= inv;
+            }
+        }
+        // back substitution L^T x = y
+        for i in (0..6).rev() {
+            for k in i + 1..6 {
+                let l = L[(k, i)];
+                for c in 0..C {
+                    bt[(c, i)] -= l * bt[(c, k)];
+                }
+            }
+            let inv = self.inv_diag[i];
+            for c in 0..C {
+                bt[(c, i)] *= inv;
+            }
+        }
+    }
+}
+
+/// The factorization of M reused for all right-hand sides: Cholesky, or LU where rounding
+/// made Cholesky fail (as in [`Model::strain_rates`]). Everything is solved in place on
+/// transposed right-hand sides, so no 6x9 matrix is moved or wrapped in an `Option`.
+struct Factor {
+    /// Valid when `lu` is `None`.
+    cholesky: Cholesky6,
+    /// The fallback, computed only when Cholesky failed.
+    lu: Option<LU<f64, U6, U6>>,
+}
+
+impl Factor {
+    /// Factors M (only its lower triangle is read by Cholesky; LU reads all of it).
+    fn new(M: &Matrix6<f64>) -> Self {
+        let mut cholesky = Cholesky6 {
+            L: Matrix6::zeros(),
+            inv_diag: Vector6::zeros(),
+        };
+        let lu = (!cholesky.factor(M)).then(|| M.lu());
+        Factor { cholesky, lu }
+    }
+
+    /// Overwrites `bt` with (M^-1 bt^T)^T; false when M is singular.
+    fn solve_transposed_mut<const C: usize>(&self, bt: &mut SMatrix<f64, C, 6>) -> bool {
+        match &self.lu {
+            None => {
+                self.cholesky.solve_transposed_mut(bt);
+                true
+            }
+            Some(lu) => {
+                let mut b = bt.transpose();
+                let solved = lu.solve_mut(&mut b);
+                bt.copy_from(&b.transpose());
+                solved
+            }
+        }
+    }
+}
+
+/// Eq. 13 (corrected) and its exact first derivatives at a site for the state (R, v, u):
+/// the rates (v', u') of [`Model::strain_rates`], d(v', u')/d(v, u), and d(v', u')/d(phi)
+/// for R -> R exp(hat(phi)). The tendons that reach `segment_end` load the backbone, as in
+/// [`Model::strain_rates`]. f64 only; allocates nothing (unless it returns an error).
+///
+/// The derivation is in the module docs: M = [D + A, G; B, C + H] is factored once and the
+/// nine derivative directions are a single solve with a 6x9 right-hand side.
+///
+/// # Errors
+/// [`Error::SingularRouting`] where a tendon's path tangent vanishes,
+/// [`Error::Breakdown`] where the 6x6 system is singular (the same as
+/// [`Model::strain_rates`]).
+///
+/// # Examples
+/// ```
+/// use nalgebra::Vector3;
+/// use tdcr::equations::Model;
+/// use tdcr::linearize::linearize;
+///
+/// let robot = tdcr::cases::case_h();
+/// let model = Model::new(&robot);
+/// let site = model.site(0.1);
+/// let (v, u) = (Vector3::z(), Vector3::new(0.0, 10.0, 0.0));
+/// let lin = linearize(&model, &site, robot.length(), &robot.base_rotation, &v, &u)?;
+/// let (v_s, u_s) = model.strain_rates(&site, robot.length(), &robot.base_rotation, &v, &u)?;
+/// assert!((lin.rates.fixed_rows::<3>(3) - u_s).norm() <= 1e-9 * u_s.norm());
+/// assert!((lin.rates.fixed_rows::<3>(0) - v_s).norm() <= 1e-9 * v_s.norm().max(1e-12));
+/// # Ok::<(), tdcr::Error>(())
+/// ```
+pub fn linearize(
+    model: &Model,
+    site: &Site,
+    segment_end: f64,
+    R: &Matrix3<f64>,
+    v: &Vector3<f64>,
+    u: &Vector3<f64>,
+) -> Result<Linearization> {
+    let kse = &site.section.section.kse;
+    let kbt = &site.section.section.kbt;
+    let (kse_s, kbt_s) = (&site.section.kse_s, &site.section.kbt_s);
+    let reference = &site.reference;
+    let dv = v - reference.v_star;
+    let du = u - reference.u_star;
+    let n_b = dv.component_mul(kse); // D (v - v*)
+    let m_b = du.component_mul(kbt); // C (u - u*)
+    let f_b = R.tr_mul(&site.f_e); // R^T f_e
+    let l_b = R.tr_mul(&site.l_e); // R^T l_e
+
+    // Pass 1: the tendon blocks A, G and H of M, and a, b.
+    let mut cache = [TendonPoint::ZERO; CACHED_TENDONS];
+    let mut count = 0;
+    let mut A = Matrix3::<f64>::zeros();
+    let mut G = Matrix3::<f64>::zeros();
+    let mut H = Matrix3::<f64>::zeros();
+    let mut a = Vector3::<f64>::zeros();
+    let mut b = Vector3::<f64>::zeros();
+    for (i, tension, rp) in model.tendons(site.s, Which::ActiveTo(segment_end)) {
+        let tp = TendonPoint::new(i, tension, &rp, site.s, v, u)?;
+        let A_i = tp.A();
+        let G_i = mul_hat(&A_i, &-tp.r); // -A_i r^
+        A += A_i;
+        G += G_i;
+        H += hat_mul(&tp.r, &G_i); // -r^ A_i r^
+        let a_i = A_i * tp.c;
+        b += tp.r.cross(&a_i);
+        a += a_i;
+        if count < CACHED_TENDONS {
+            cache[count] = tp;
+        }
+        count += 1;
+    }
+
+    let rhs_v = reference.v_star_s.component_mul(kse) - u.cross(&n_b) - dv.component_mul(kse_s) - f_b - a;
+    let rhs_u =
+        reference.u_star_s.component_mul(kbt) - u.cross(&m_b) - du.component_mul(kbt_s) - v.cross(&n_b) - l_b - b;
+    let mut M = Matrix6::<f64>::zeros();
+    M.fixed_view_mut::<3, 3>(0, 0).copy_from(&A);
+    M.fixed_view_mut::<3, 3>(0, 3).copy_from(&G);
+    M.fixed_view_mut::<3, 3>(3, 0).copy_from(&G.transpose()); // B = G^T
+    M.fixed_view_mut::<3, 3>(3, 3).copy_from(&H);
+    for j in 0..3 {
+        M[(j, j)] += kse[j];
+        M[(j + 3, j + 3)] += kbt[j];
+    }
+    // The right-hand side as a row, (rhs_v^T, rhs_u^T).
+    let mut x = SMatrix::<f64, 1, 6>::new(rhs_v[0], rhs_v[1], rhs_v[2], rhs_u[0], rhs_u[1], rhs_u[2]);
+    // M is SPD (docs/model.md section 4): Cholesky, LU only if rounding made it fail.
+    let factor = Factor::new(&M);
+    let breakdown = || Error::Breakdown {
+        s: site.s,
+        what: "the 6x6 matrix [D + A, G; B, C + H] of eq. 13 is singular".into(),
+    };
+    if !factor.solve_transposed_mut(&mut x) {
+        return Err(breakdown());
+    }
+    let x_v = Vector3::new(x[0], x[1], x[2]);
+    let x_u = Vector3::new(x[3], x[4], x[5]);
+
+    // Pass 2: dF (module docs), the partial derivative of M x - rhs at this x.
+    let mut top = Matrix3x6::<f64>::zeros();
+    let mut bottom = Matrix3x6::<f64>::zeros();
+    for tp in &cache[..count.min(CACHED_TENDONS)] {
+        tp.add_derivatives(&x_v, &x_u, u, &mut top, &mut bottom);
+    }
+    if count > CACHED_TENDONS {
+        for (i, tension, rp) in model.tendons(site.s, Which::ActiveTo(segment_end)).skip(CACHED_TENDONS) {
+            TendonPoint::new(i, tension, &rp, site.s, v, u)?.add_derivatives(&x_v, &x_u, u, &mut top, &mut bottom);
+        }
+    }
+    let n_hat = hat3(&n_b);
+    let blocks = [
+        [
+            hat_diag(u, kse, kse_s) + top.fixed_columns::<3>(0),
+            top.fixed_columns::<3>(3) - n_hat,
+            hat3(&f_b),
+        ],
+        [
+            hat_diag(v, kse, &Vector3::zeros()) - n_hat + bottom.fixed_columns::<3>(0),
+            hat_diag(u, kbt, kbt_s) - hat3(&m_b) + bottom.fixed_columns::<3>(3),
+            hat3(&l_b),
+        ],
+    ];
+    // dF^T: row k is direction k of (v, u, phi), column j is row j of F.
+    let mut dFt = SMatrix::<f64, 9, 6>::zeros();
+    for (row, blocks_row) in blocks.iter().enumerate() {
+        for (col, block) in blocks_row.iter().enumerate() {
+            dFt.fixed_view_mut::<3, 3>(3 * col, 3 * row)
+                .copy_from(&block.transpose());
+        }
+    }
+    if !factor.solve_transposed_mut(&mut dFt) {
+        return Err(breakdown());
+    }
+    // d(v', u') = -M^-1 dF
+    Ok(Linearization {
+        rates: Vector6::from_fn(|i, _| x[i]),
+        d_strains: Matrix6::from_fn(|i, k| -dFt[(k, i)]),
+        d_rotation: Matrix6x3::from_fn(|i, k| -dFt[(6 + k, i)]),
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::loads::{Field, Loads};
+    use crate::robot::Robot;
+    use crate::rod::{ReferenceStrains, Rod, Section, SectionPoint, Stiffness, StrainPoint, shear_modulus};
+    use crate::routing::Routing;
+    use crate::tendon::Tendon;
+    use crate::{cases, so3};
+    use num_dual::{Dual64, DualNum};
+    use std::sync::Arc;
+
+    /// (rates, d_strains, d_rotation) by forward-mode AD through the generic
+    /// `Model::strain_rates`, one seeded direction per pass.
+    fn by_dual(
+        model: &Model,
+        site: &Site,
+        end: f64,
+        R: &Matrix3<f64>,
+        v: &Vector3<f64>,
+        u: &Vector3<f64>,
+    ) -> (Vector6<f64>, Matrix6<f64>, Matrix6x3<f64>) {
+        let lift = |a: &Vector3<f64>| a.map(Dual64::from);
+        let mut rates = Vector6::zeros();
+        let mut d_strains = Matrix6::zeros();
+        let mut d_rotation = Matrix6x3::zeros();
+        for k in 0..9 {
+            let (mut v_d, mut u_d, mut phi) = (lift(v), lift(u), Vector3::<Dual64>::zeros());
+            match k {
+                0..3 => v_d[k] = v_d[k].derivative(),
+                3..6 => u_d[k - 3] = u_d[k - 3].derivative(),
+                _ => phi[k - 6] = phi[k - 6].derivative(),
+            }
+            let R_d = R.map(Dual64::from) * so3::exp(&phi);
+            let (v_s, u_s) = model.strain_rates(site, end, &R_d, &v_d, &u_d).unwrap();
+            let col = Vector6::from_fn(|j, _| if j < 3 { v_s[j] } else { u_s[j - 3] });
+            rates = col.map(|d| d.re);
+            let d = col.map(|d| d.eps);
+            if k < 6 {
+                d_strains.set_column(k, &d);
+            } else {
+                d_rotation.set_column(k - 6, &d);
+            }
+        }
+        (rates, d_strains, d_rotation)
+    }
+
+    /// Largest relative difference over every column, taken separately on the v' rows and the
+    /// u' rows (their units differ): |a - b|_inf / |b|_inf per 3-vector.
+    fn rel<const C: usize>(a: &SMatrix<f64, 6, C>, b: &SMatrix<f64, 6, C>) -> f64 {
+        let mut worst = 0.0_f64;
+        for l in 0..C {
+            for r0 in [0, 3] {
+                let (x, y) = (a.fixed_view::<3, 1>(r0, l), b.fixed_view::<3, 1>(r0, l));
+                worst = worst.max((x - y).amax() / y.amax().max(f64::MIN_POSITIVE));
+            }
+        }
+        worst
+    }
+
+    /// [`check_model`] for the robot at full load.
+    fn check(robot: &Robot, s: f64, end: f64, R: &Matrix3<f64>, v: &Vector3<f64>, u: &Vector3<f64>) {
+        check_model(&Model::new(robot), s, end, R, v, u);
+    }
+
+    /// Checks `linearize` at (s, R, v, u) against f64 `strain_rates` and against AD.
+    fn check_model(model: &Model, s: f64, end: f64, R: &Matrix3<f64>, v: &Vector3<f64>, u: &Vector3<f64>) {
+        let site = model.site(s);
+        let lin = linearize(model, &site, end, R, v, u).unwrap();
+        let (v_s, u_s) = model.strain_rates(&site, end, R, v, u).unwrap();
+        let rates = Vector6::from_fn(|j, _| if j < 3 { v_s[j] } else { u_s[j - 3] });
+        let (ad_rates, d_strains, d_rotation) = by_dual(model, &site, end, R, v, u);
+        let errors = [
+            rel(&lin.rates, &rates),
+            rel(&ad_rates, &rates),
+            rel(&lin.d_strains, &d_strains),
+            rel(&lin.d_rotation, &d_rotation),
+        ];
+        let worst = errors.iter().fold(0.0_f64, |w, e| w.max(*e));
+        println!(
+            "rates {:.1e}, d_strains {:.1e}, d_rotation {:.1e}",
+            errors[0], errors[2], errors[3]
+        );
+        // 1e-12: both sides are exact derivatives in f64; only rounding in M^-1 differs
+        assert!(worst < 1e-12, "worst relative difference {worst:.3e}: {errors:?}");
+        assert!(lin.d_strains.iter().chain(lin.d_rotation.iter()).all(|x| x.is_finite()));
+    }
+
+    fn generic_rotation() -> Matrix3<f64> {
+        so3::exp(&Vector3::new(0.3, -0.7, 1.1)) * cases::prototype_base_rotation()
+    }
+
+    fn state() -> (Vector3<f64>, Vector3<f64>) {
+        (Vector3::new(1e-4, -2e-4, 1.0 - 3e-5), Vector3::new(3.0, -5.0, 2.0))
+    }
+
+    #[test]
+    fn case_h_matches_ad() {
+        let robot = cases::case_h();
+        let (v, u) = state();
+        for s in [0.0, 0.1, 0.2] {
+            check(&robot, s, robot.length(), &generic_rotation(), &v, &u);
+        }
+    }
+
+    #[test]
+    fn case_h_with_distributed_moment_matches_ad() {
+        let mut robot = cases::case_h();
+        robot.loads.distributed_moment = Field::Constant(Vector3::new(0.02, -0.05, 0.01));
+        let (v, u) = state();
+        check(&robot, 0.13, robot.length(), &generic_rotation(), &v, &u);
+    }
+
+    fn several_tendons() -> Robot {
+        let l = cases::LENGTH;
+        let curve = Routing::from_dual(|s, l| {
+            let a = s / l;
+            [(a * a * 3.0).cos() * 0.005 + a * 0.002, (a * 2.0 + 0.3).sin() * 0.006]
+        });
+        cases::prototype()
+            .with_tendon(Tendon::new(Routing::straight(0.008, 0.0), 2.0))
+            .with_tendon(Tendon::new(Routing::straight(0.0, -0.006), 1.3))
+            .with_tendon(Tendon::new(Routing::helical(0.007, -0.75, 0.4), 3.1))
+            .with_tendon(Tendon::new(curve, 0.8))
+            .with_tendon(Tendon::new(Routing::straight(-0.008, 0.001), 1.5).ending_at(0.5 * l))
+            .with_tendon(Tendon::new(Routing::straight(0.0, 0.008), 0.0))
+    }
+
+    #[test]
+    fn several_tendons_match_ad() {
+        let robot = several_tendons();
+        let mut loads = Loads::self_weight(0.47, -Vector3::z()).with_tip_force(Vector3::new(0.0, 0.0, -0.1));
+        loads.distributed_moment = Field::Constant(Vector3::new(-0.01, 0.0, 0.03));
+        let robot = robot.with_loads(loads);
+        let (v, u) = state();
+        let l = robot.length();
+        // the tendon ending at L/2 is active in the first segment only
+        check(&robot, 0.07, l, &generic_rotation(), &v, &u);
+        check(&robot, 0.07, 0.5 * l, &generic_rotation(), &v, &u);
+        let (v, u) = (Vector3::new(-3e-5, 4e-5, 0.9999), Vector3::new(-8.0, 12.0, -1.0));
+        check(&robot, 0.2, l, &Matrix3::identity(), &v, &u);
+    }
+
+    #[test]
+    fn more_tendons_than_cached_match_ad() {
+        let mut robot = cases::prototype();
+        for j in 0..CACHED_TENDONS + 3 {
+            let angle = j as f64 * 0.7;
+            let routing = if j % 2 == 0 {
+                Routing::straight(0.008 * angle.cos(), 0.008 * angle.sin())
+            } else {
+                Routing::helical(0.006, 0.5 + j as f64 * 0.1, angle)
+            };
+            robot = robot.with_tendon(Tendon::new(routing, 0.5 + 0.1 * j as f64));
+        }
+        let (v, u) = state();
+        check(&robot, 0.11, robot.length(), &generic_rotation(), &v, &u);
+    }
+
+    #[test]
+    fn varying_stiffness_and_precurvature_match_ad() {
+        let e = cases::YOUNGS_MODULUS;
+        let base = Section::solid_circle(cases::RADIUS, e, shear_modulus(e, cases::POISSON_RATIO));
+        let mut rod = Rod::new(cases::LENGTH, base);
+        // stiffness growing linearly (axial) and quadratically (bending) with s
+        rod.stiffness = Stiffness::Varying(Arc::new(move |s| {
+            let f = 1.0 + 2.0 * s;
+            SectionPoint {
+                section: Section {
+                    kse: base.kse * f,
+                    kbt: base.kbt * (f * f),
+                },
+                kse_s: base.kse * 2.0,
+                kbt_s: base.kbt * (4.0 * f),
+            }
+        }));
+        rod.reference = ReferenceStrains::Varying(Arc::new(|s| StrainPoint {
+            v_star: Vector3::new(1e-3 * s, -2e-3, 1.0 + 1e-3 * s),
+            u_star: Vector3::new(2.0 + 3.0 * s, -1.0, 4.0 * s * s),
+            v_star_s: Vector3::new(1e-3, 0.0, 1e-3),
+            u_star_s: Vector3::new(3.0, 0.0, 8.0 * s),
+        }));
+        let mut loads = Loads::self_weight(0.47, Vector3::new(0.2, -0.1, -1.0));
+        loads.distributed_moment = Field::Constant(Vector3::new(0.02, 0.01, -0.04));
+        let robot = Robot::new(rod)
+            .with_loads(loads)
+            .with_tendon(Tendon::new(Routing::straight(0.006, -0.004), 2.5))
+            .with_tendon(Tendon::new(Routing::helical(0.008, 1.5, 0.2), 1.7));
+        let (v, u) = state();
+        for s in [0.05, 0.19] {
+            check(&robot, s, robot.length(), &generic_rotation(), &v, &u);
+        }
+    }
+
+    #[test]
+    fn errors_match_strain_rates() {
+        // a straight tendon at (8, 0) mm with v = 0, u = 0 has p_i^b' = 0
+        let robot = cases::case_s();
+        let model = Model::new(&robot);
+        let site = model.site(0.1);
+        let (R, z) = (Matrix3::identity(), Vector3::zeros());
+        let lin = linearize(&model, &site, robot.length(), &R, &z, &z);
+        let generic = model.strain_rates(&site, robot.length(), &R, &z, &z);
+        assert!(matches!(lin, Err(Error::SingularRouting { tendon: 0, .. })), "{lin:?}");
+        assert!(
+            matches!(generic, Err(Error::SingularRouting { tendon: 0, .. })),
+            "{generic:?}"
+        );
+
+        // zero stiffness and no tendon: M = 0
+        let robot = Robot::new(Rod::new(0.1, Section::explicit(0.0, 0.0, 0.0, 0.0, 0.0)));
+        let model = Model::new(&robot);
+        let site = model.site(0.05);
+        let v = Vector3::z();
+        let lin = linearize(&model, &site, 0.1, &R, &v, &z);
+        let generic = model.strain_rates(&site, 0.1, &R, &v, &z);
+        let message = lin.as_ref().map(|_| String::new()).unwrap_or_else(|e| e.to_string());
+        assert!(matches!(lin, Err(Error::Breakdown { .. })), "{lin:?}");
+        assert!(matches!(generic, Err(Error::Breakdown { .. })), "{generic:?}");
+        assert!(message.contains("is singular"), "{message}");
+    }
+
+    #[test]
+    fn scaled_loads_match_ad() {
+        let mut robot = several_tendons();
+        robot.loads.distributed_moment = Field::Constant(Vector3::new(0.03, 0.02, -0.01));
+        let model = Model {
+            robot: &robot,
+            tension_factor: 0.4,
+            load_factor: 0.7,
+        };
+        let (v, u) = state();
+        check_model(&model, 0.09, robot.length(), &generic_rotation(), &v, &u);
+    }
+
+    #[test]
+    fn factor_solves_like_nalgebra() {
+        let B = SMatrix::<f64, 6, 9>::from_fn(|i, j| ((i * 7 + j * 3) % 5) as f64 - 1.7);
+        let N = Matrix6::from_fn(|i, j| ((i * 5 + j * 11) % 7) as f64 * 0.3 - 0.8);
+        // SPD with the prototype's spread of scales (GA, EA ~ 1e4-1e5 N, EI ~ 1e-3 N m^2)
+        let scale = Vector6::new(4e4, 4e4, 1e5, 4e-3, 4e-3, 3e-3).map(f64::sqrt);
+        let spd =
+            Matrix6::from_diagonal(&scale) * (N * N.transpose() + Matrix6::identity()) * Matrix6::from_diagonal(&scale);
+        // symmetric indefinite: Cholesky fails, the LU fallback solves
+        let indefinite = N + N.transpose() - Matrix6::from_diagonal_element(0.1);
+        for (M, uses_lu) in [(spd, false), (indefinite, true)] {
+            let factor = Factor::new(&M);
+            assert_eq!(factor.lu.is_some(), uses_lu);
+            let mut Xt = B.transpose();
+            assert!(factor.solve_transposed_mut(&mut Xt));
+            let reference = M.lu().solve(&B).unwrap();
+            // 1e-12: backward-stable solves of a system with condition number below 1e3 after
+            // diagonal scaling
+            assert!(rel(&Xt.transpose(), &reference) < 1e-12);
+        }
+        assert!(!Factor::new(&Matrix6::zeros()).solve_transposed_mut(&mut B.transpose()));
+    }
+}
