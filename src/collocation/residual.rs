@@ -295,8 +295,9 @@ pub fn interval_jacobian(
         .copy_from(&(-Jri1 * so3::exp(&theta1).transpose()));
     Y1.fixed_view_mut::<3, 3>(3, 15).copy_from(&Jri1);
     // The frame R_k = R_a exp(d_a) enters every F through columns 3..6.
+    // F does not depend on p (columns 0..3 of dF/dy are zero): multiply the other nine only.
     let total = |p: &PointLinearization, Y: &SMatrix<f64, 12, 24>| {
-        let mut d = p.f_y * Y;
+        let mut d = p.f_y.fixed_columns::<9>(3) * Y.fixed_rows::<9>(3);
         let mut frame = d.fixed_view_mut::<12, 3>(0, 3);
         frame += p.f_frame;
         d
