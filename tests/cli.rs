@@ -479,7 +479,10 @@ fn bench_reports_both_cases_cold_and_warm_as_json() {
     let rows: serde_json::Value = serde_json::from_str(&stdout(&out)).unwrap();
     let rows = rows.as_array().unwrap();
     assert_eq!(rows.len(), 4);
-    for (row, (case, start)) in rows.iter().zip([("S", "cold"), ("S", "warm"), ("H", "cold"), ("H", "warm")]) {
+    for (row, (case, start)) in rows
+        .iter()
+        .zip([("S", "cold"), ("S", "warm"), ("H", "cold"), ("H", "warm")])
+    {
         assert_eq!(row["case"], case);
         assert_eq!(row["start"], start);
         assert!(row["median_seconds"].as_f64().unwrap() > 0.0);

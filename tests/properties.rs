@@ -1,0 +1,183 @@
+//! Property tests over random physical robots: collocation either returns a solution that is
+//! in global equilibrium, has orthonormal rotations and finite values everywhere, and agrees
+//! with a refined mesh, or a typed error. Never a panic.
+//!
+//! CI runs 150 cases. The long run (10 000 cases, about 10 minutes in release):
+//! `cargo test --release --test properties -- --ignored`.
+
+use nalgebra::Vector3;
+use proptest::prelude::*;
+use proptest::test_runner::{Config, FileFailurePersistence, TestRunner};
+use std::f64::consts::PI;
+use std::sync::atomic::{AtomicUsize, Ordering};
+use tdcr::{Loads, Robot, Rod, Routing, Tendon, collocation, equilibrium};
+
+/// Steel-like density (kg/m^3) and gravity (m/s^2) for the self weight of a random rod.
+const DENSITY: f64 = 8000.0;
+const GRAVITY: f64 = 9.81;
+
+/// A random physical robot. Ranges (documented in docs/validation.md): length 0.05..1 m,
+/// radius 0.2..2 mm, E 1..300 GPa, Poisson 0.25..0.45, 1..8 tendons at 1..10 mm (straight,
+/// or helical with -2..2 turns), each ending in (0.3 L, L], tensions up to the one that bends
+/// the whole rod through 2 pi, self weight 1..3 times the rod's own in a random direction,
+/// a tip force up to 2 E I / L^2 in a random direction.
+fn robot() -> impl Strategy<Value = Robot> {
+    let rod = (0.05f64..1.0, 0.2e-3f64..2e-3, 1e9f64..300e9, 0.25f64..0.45);
+    let tendon = (
+        0.001f64..0.01,
+        0.0..2.0 * PI,
+        prop::bool::ANY,
+        -2.0f64..2.0,
+        0.3f64..1.0,
+        prop::bool::ANY,
+        0.0f64..1.0,
+    );
+    let direction = (-1.0f64..1.0, -1.0f64..1.0, -1.0f64..1.0);
+    (
+        rod,
+        prop::collection::vec(tendon, 1..=8),
+        1.0f64..3.0,
+        direction.clone(),
+        0.0f64..2.0,
+        direction,
+    )
+        .prop_map(|((length, radius, e, nu), tendons, weight, down, tip, tip_dir)| {
+            let rod = Rod::solid_circle(length, radius, e, nu);
+            let ei = rod.section_at(0.0).section.kbt[0];
+            let w = weight * DENSITY * GRAVITY * PI * radius * radius;
+            let down = Vector3::new(down.0, down.1, down.2 - 1.5); // mostly downward, never zero
+            let tip_dir = Vector3::new(tip_dir.0, tip_dir.1, tip_dir.2 + 1e-3);
+            let mut robot = Robot::new(rod).with_loads(
+                Loads::self_weight(w, down).with_tip_force(tip_dir.normalize() * tip * ei / (length * length)),
+            );
+            let count = tendons.len() as f64;
+            for (offset, angle, helical, turns, end, at_tip, pull) in tendons {
+                let routing = if helical {
+                    Routing::helical(offset, turns, angle)
+                } else {
+                    Routing::straight(offset * angle.cos(), offset * angle.sin())
+                };
+                // Tension that bends the rod through 2 pi by itself, shared among the tendons.
+                let tension = pull * 2.0 * PI * ei / (offset * length) / count;
+                let mut t = Tendon::new(routing, tension);
+                if !at_tip {
+                    t = t.ending_at(end * length);
+                }
+                robot = robot.with_tendon(t);
+            }
+            robot
+        })
+}
+
+/// Checks the property for one robot; returns whether it was solved.
+fn check(robot: &Robot) -> Result<bool, TestCaseError> {
+    let length = robot.length();
+    // Adaptive to 1e-6 L at the tip, from 16 intervals, capped at 1024.
+    let tolerance = 1e-6 * length;
+    let options = collocation::Options {
+        intervals: 16,
+        tolerance: Some(tolerance),
+        max_intervals: 1024,
+        ..Default::default()
+    };
+    let solution = match collocation::solve(robot, &options) {
+        Ok(s) => s,
+        // A typed error is an acceptable outcome, but its message must say something.
+        Err(e) => {
+            prop_assert!(!e.to_string().is_empty());
+            prop_assert!(
+                !matches!(e, tdcr::Error::InvalidInput { .. }),
+                "valid robot rejected: {e}"
+            );
+            return Ok(false);
+        }
+    };
+    for n in &solution.nodes {
+        let values =
+            n.p.iter()
+                .chain(n.R.iter())
+                .chain(n.v.iter())
+                .chain(n.u.iter())
+                .chain(n.n.iter())
+                .chain(n.m.iter());
+        prop_assert!(values.clone().all(|x| x.is_finite()), "non-finite value at s = {}", n.s);
+    }
+    // 1e-12: every R is built through exp from R0, never projected
+    prop_assert!(solution.max_orthonormality_error() < 1e-12);
+    // Equilibrium holds to the discretization error (the tip is good to 1e-6 L, so force and
+    // moment balances to about 1e-5 relative) or the rounding floor of tiny loads relative to
+    // the axial stiffness (30 eps EA over the smallest load scale).
+    let e = equilibrium::imbalance(robot, &solution);
+    let ea = robot.rod.section_at(0.0).section.kse.max();
+    let floor = 30.0 * f64::EPSILON * ea
+        / robot
+            .tendons
+            .iter()
+            .map(|t| t.tension)
+            .fold(robot.loads.tip_force.norm(), f64::max)
+            .max(1e-12);
+    prop_assert!(e.max() < 1e-5f64.max(floor), "imbalance {e:?}");
+    // Agreement with the mesh refined once more: within ten times the tolerance (the
+    // refinement estimate is asymptotic).
+    let finer: Vec<f64> = solution
+        .nodes
+        .windows(2)
+        .flat_map(|w| [w[0].s, 0.5 * (w[0].s + w[1].s)])
+        .collect();
+    let refined = collocation::solve_from(
+        robot,
+        &collocation::Options {
+            mesh: Some(finer),
+            tolerance: None,
+            ..options.clone()
+        },
+        &solution,
+    );
+    if let Ok(refined) = refined {
+        let d = (refined.tip_position() - solution.tip_position()).norm();
+        prop_assert!(d < 10.0 * tolerance, "refined mesh moves the tip by {d:.3e} m");
+    }
+    Ok(true)
+}
+
+fn run(cases: u32) {
+    let solved = AtomicUsize::new(0);
+    let config = Config {
+        cases,
+        failure_persistence: Some(Box::new(FileFailurePersistence::Off)),
+        ..Config::default()
+    };
+    // A fixed seed: the same robots every run, so CI is deterministic.
+    let mut runner = TestRunner::new_with_rng(
+        config,
+        proptest::test_runner::TestRng::deterministic_rng(config_algorithm()),
+    );
+    runner
+        .run(&robot(), |robot| {
+            if check(&robot)? {
+                solved.fetch_add(1, Ordering::Relaxed);
+            }
+            Ok(())
+        })
+        .unwrap();
+    let solved = solved.load(Ordering::Relaxed);
+    eprintln!("{solved} of {cases} random robots solved, the rest returned typed errors");
+    // Most random robots are well within reach: a test where nothing converges proves nothing.
+    assert!(solved as f64 >= 0.8 * cases as f64, "only {solved} of {cases} solved");
+}
+
+fn config_algorithm() -> proptest::test_runner::RngAlgorithm {
+    proptest::test_runner::RngAlgorithm::ChaCha
+}
+
+#[test]
+fn random_robots_are_solved_or_fail_cleanly() {
+    run(150);
+}
+
+/// The long run: `cargo test --release --test properties -- --ignored`.
+#[test]
+#[ignore = "long: 10 000 random robots, about 10 minutes in release"]
+fn ten_thousand_random_robots() {
+    run(10_000);
+}
