@@ -2,7 +2,8 @@
 
 use crate::error::{Result, invalid};
 use crate::loads::Loads;
-use crate::rod::{Geometry, Rod};
+use crate::rod::{Geometry, ReferenceStrains, Rod};
+use crate::routing::Routing;
 use crate::tendon::Tendon;
 use crate::{Error, so3};
 use nalgebra::{Matrix3, Vector3};
@@ -204,6 +205,23 @@ impl Robot {
                 format!("is s = {end} m, outside (0, {l}]"),
                 "set the termination to at most the rod length and above 0",
             ));
+        }
+        let parameters: &[f64] = match &t.routing {
+            Routing::Straight { x, y } => &[*x, *y],
+            Routing::Helical { radius, turns, phase } => &[*radius, *turns, *phase],
+            Routing::Custom(_) => &[],
+        };
+        if parameters.iter().any(|x| !x.is_finite()) {
+            return Err(invalid(
+                format!("tendons[{i}].routing"),
+                format!("is not finite ({:?})", t.routing),
+                "give finite offsets (m), turns and phase (rad)",
+            ));
+        }
+        // A built-in routing on a straight reference rod cannot lose its tangent: r' lies in
+        // the cross-section, so |p_i'| = |e3 + r'| >= 1.
+        if !matches!(t.routing, Routing::Custom(_)) && matches!(self.rod.reference, ReferenceStrains::Straight) {
+            return Ok(());
         }
         // Look for a vanishing path tangent in the unloaded shape: |u* x r + r' + v*|.
         let n = ROUTING_SAMPLES;
