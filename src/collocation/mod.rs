@@ -3,8 +3,10 @@
 //! Stages, in the order data flows:
 //! 1. [`Mesh`]: nodes on [0, L] with two nodes at every breakpoint.
 //! 2. [`system`]: residual rows (base, Hermite-Simpson intervals in Lie-group local
-//!    coordinates, jump conditions, tip) and their exact Jacobian by forward-mode AD.
-//! 3. [`newton`]: damped Newton with the symbolic LU computed once per mesh.
+//!    coordinates, jump conditions, tip) and their exact Jacobian (chain rule through the
+//!    scheme with the analytic linearization of eq. 13; AD for the few other blocks).
+//! 3. [`newton`]: damped Newton; steps by the structured elimination of [`blocks`] or faer's
+//!    sparse LU, every buffer (and the symbolic LU) built once per mesh.
 //! 4. Robustness: rigid-equilibrium initial guess or a warm start, and automatic load
 //!    continuation when a direct solve fails.
 //! 5. Error control: optional adaptive refinement until the tip moves less than a

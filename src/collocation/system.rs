@@ -17,10 +17,9 @@
 //!
 //! The base rows depend only on p and R of node 0, the tip rows on R, v, u of node N; each
 //! link block is a dense 12 x 24. The pattern is built once per mesh; each Newton
-//! iteration refills the values in the same order. The Jacobian is exact: the same generic
-//! residual code is run on num-dual dual numbers seeded with the node unknowns (one
-//! direction per pass for the 12 x 24 link blocks, which measured twice as fast as one
-//! pass with 24-wide dual vectors).
+//! iteration refills the values in the same order. The Jacobian is exact: interval blocks by
+//! the chain rule of [`residual::interval_jacobian`], the base, jump and tip blocks by
+//! num-dual dual numbers run through the same generic residual code.
 
 use super::residual::{self, Delta, IntervalSites};
 use crate::equations::{Model, Site};
