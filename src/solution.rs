@@ -32,6 +32,19 @@ pub struct Node {
     pub m: Vector3<f64>,
 }
 
+impl Node {
+    /// The node's state (s, p, R, v, u).
+    pub fn state(&self) -> State {
+        State {
+            s: self.s,
+            p: self.p,
+            R: self.R,
+            v: self.v,
+            u: self.u,
+        }
+    }
+}
+
 /// The state at an arbitrary arc length.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct State {

@@ -24,7 +24,7 @@ use crate::error::{Result, invalid};
 use crate::guess::{self, InitialGuess, rigid_estimate};
 use crate::mesh::Mesh;
 use crate::report::{Method, SolveReport, Termination};
-use crate::solution::{Solution, State};
+use crate::solution::{Node, Solution, State};
 use crate::{Error, Robot};
 pub use newton::LinearSolver;
 use newton::{Settings, Workspace};
@@ -146,17 +146,7 @@ fn initial_mesh(robot: &Robot, options: &Options) -> Result<Mesh> {
 fn interpolate(guess: &Solution, mesh: &Mesh) -> Vec<State> {
     let same = guess.nodes.len() == mesh.nodes.len() && guess.nodes.iter().zip(&mesh.nodes).all(|(a, b)| a.s == b.s);
     if same {
-        return guess
-            .nodes
-            .iter()
-            .map(|n| State {
-                s: n.s,
-                p: n.p,
-                R: n.R,
-                v: n.v,
-                u: n.u,
-            })
-            .collect();
+        return guess.nodes.iter().map(Node::state).collect();
     }
     (0..mesh.nodes.len())
         .map(|k| {
