@@ -2,7 +2,7 @@
 //! in global equilibrium, has orthonormal rotations and finite values everywhere, and agrees
 //! with a refined mesh, or a typed error. Never a panic.
 //!
-//! CI runs 150 cases. The long run (10 000 cases, about 2 minutes in release; last run: 9986
+//! CI runs 300 cases. The long run (10 000 cases, about 2 minutes in release; last run: 9986
 //! solved, 14 typed errors, no failure):
 //! `cargo test --release --test properties -- --ignored`.
 
@@ -174,7 +174,7 @@ fn config_algorithm() -> proptest::test_runner::RngAlgorithm {
 
 #[test]
 fn random_robots_are_solved_or_fail_cleanly() {
-    run(150);
+    run(300);
 }
 
 /// The long run: `cargo test --release --test properties -- --ignored`.
