@@ -1,5 +1,8 @@
 //! Known-answer cases shared by tests, benches, examples and the CLI: the paper's prototype
-//! (section 5, data in ERRATA.md) with the 32 experiments of Table 2, and reference tips.
+//! (section 5, data in ERRATA.md) with the 32 experiments of Table 2, its reference tips, and
+//! the closed-form answers of [`analytic`].
+
+pub mod analytic;
 
 use crate::loads::Loads;
 use crate::robot::Robot;
