@@ -31,6 +31,10 @@ use newton::{Settings, Workspace};
 use std::time::Instant;
 use system::System;
 
+/// The most intervals any mesh may have: memory grows by about 5 kB per interval (Jacobian
+/// values and elimination panels), so this is about 0.5 GB.
+pub const MAX_INTERVALS: usize = 100_000;
+
 /// Collocation options. `Options { intervals: 64, ..Default::default() }`.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Options {
@@ -43,7 +47,8 @@ pub struct Options {
     /// Tip position tolerance (m) for adaptive refinement; `None` solves on the given mesh
     /// only. Default `None`.
     pub tolerance: Option<f64>,
-    /// Cap on intervals during refinement. Default 8192.
+    /// Cap on intervals: the starting mesh must not exceed it and refinement stops at it.
+    /// Default 8192; at most [`MAX_INTERVALS`].
     pub max_intervals: usize,
     /// Newton stops when the scaled residual max-norm is at or below this (dimensionless).
     /// Default 1e-11 (a few hundred times rounding of O(1) scaled quantities).
@@ -182,6 +187,21 @@ fn solve_impl(robot: &Robot, options: &Options, warm: Option<&Solution>, cache: 
             "options",
             "needs residual_tolerance > 0 and max_iterations >= 1",
             "use Options::default() and change single fields",
+        ));
+    }
+    if options.max_intervals > MAX_INTERVALS {
+        return Err(invalid(
+            "options.max_intervals",
+            format!("is {}, above the limit of {MAX_INTERVALS}", options.max_intervals),
+            "memory grows by about 5 kB per interval; use a tip tolerance instead of a huge mesh",
+        ));
+    }
+    let requested = options.mesh.as_ref().map_or(options.intervals, Vec::len);
+    if requested > options.max_intervals {
+        return Err(invalid(
+            "options.intervals",
+            format!("is {requested}, above `max_intervals` = {}", options.max_intervals),
+            format!("raise `max_intervals` (at most {MAX_INTERVALS}) or use fewer intervals"),
         ));
     }
     if let Some(tol) = options.tolerance

@@ -545,13 +545,34 @@ impl Checker<'_> {
         if solver.nodes == Some(0) {
             self.report("solver.nodes", "is 0, but the mesh needs at least 1 interval".into());
         }
-        if let (Some(cap), Some(n)) = (solver.max_nodes, solver.nodes)
-            && cap < n
+        let default_cap = collocation::Options::default().max_intervals;
+        if let Some(cap) = solver.max_nodes
+            && cap > collocation::MAX_INTERVALS
         {
             self.report(
                 "solver.max_nodes",
-                format!("is {cap}, but must be at least `nodes` = {n}"),
+                format!(
+                    "is {cap}, above the limit of {} intervals (about 5 kB each)",
+                    collocation::MAX_INTERVALS
+                ),
             );
+        }
+        if let Some(n) = solver.nodes
+            && n > solver.max_nodes.unwrap_or(default_cap)
+        {
+            match solver.max_nodes {
+                Some(cap) => self.report(
+                    "solver.max_nodes",
+                    format!("is {cap}, but must be at least `nodes` = {n}"),
+                ),
+                None => self.report(
+                    "solver.nodes",
+                    format!(
+                        "is {n}, above `max_nodes` (default {default_cap}); raise `max_nodes` (at most {})",
+                        collocation::MAX_INTERVALS
+                    ),
+                ),
+            }
         }
         if solver.max_iterations == Some(0) {
             self.report("solver.max_iterations", "is 0, but must be at least 1".into());

@@ -162,17 +162,23 @@ fn parse_vector(text: &str) -> Result<[f64; 3], String> {
     Ok(v)
 }
 
+/// The most values a count option accepts (sweep steps, output samples): each costs memory
+/// and a line of output.
+const MAX_COUNT: usize = 1_000_000;
+
 fn parse_count(text: &str) -> Result<usize, String> {
     match text.parse::<usize>() {
-        Ok(n) if n >= 1 => Ok(n),
-        _ => Err(format!("`{text}` is not a whole number >= 1")),
+        Ok(n) if (1..=MAX_COUNT).contains(&n) => Ok(n),
+        _ => Err(format!("`{text}` is not a whole number from 1 to {MAX_COUNT}")),
     }
 }
 
 fn parse_samples(text: &str) -> Result<usize, String> {
     match text.parse::<usize>() {
-        Ok(n) if n >= 2 => Ok(n),
-        _ => Err(format!("`{text}` is not a whole number >= 2 (the ends count)")),
+        Ok(n) if (2..=MAX_COUNT).contains(&n) => Ok(n),
+        _ => Err(format!(
+            "`{text}` is not a whole number from 2 (the ends count) to {MAX_COUNT}"
+        )),
     }
 }
 
