@@ -5,7 +5,7 @@ mod common;
 
 use common::try_solve_all;
 use nalgebra::{Matrix3, Vector3};
-use tdcr::{Error, Loads, Robot, Rod, Routing, Tendon};
+use tdcr::{Error, Loads, Robot, Rod, Routing, Tendon, collocation};
 
 const LENGTH: f64 = 0.2;
 const RADIUS: f64 = 5e-4;
@@ -202,4 +202,28 @@ fn routing_leaving_the_cross_section_or_not_finite_is_rejected() {
     assert_invalid(&robot, "tendons[0].routing", &["has a z component", "z must be 0"]);
     robot.tendons[0].routing = Routing::helical(f64::NAN, 1.0, 0.0);
     assert_invalid(&robot, "tendons[0].routing", &["is not finite", "give finite offsets"]);
+}
+
+#[test]
+fn meshes_beyond_the_caps_are_bad_input() {
+    let robot = good();
+    let too_many = collocation::Options {
+        intervals: 10_000,
+        ..Default::default()
+    };
+    let err = collocation::solve(&robot, &too_many).unwrap_err();
+    assert!(
+        matches!(&err, Error::InvalidInput { field, .. } if field == "options.intervals"),
+        "{err}"
+    );
+    assert!(err.to_string().contains("raise `max_intervals`"));
+    let huge = collocation::Options {
+        max_intervals: usize::MAX,
+        ..Default::default()
+    };
+    let err = collocation::solve(&robot, &huge).unwrap_err();
+    assert!(
+        matches!(&err, Error::InvalidInput { field, .. } if field == "options.max_intervals"),
+        "{err}"
+    );
 }
