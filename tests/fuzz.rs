@@ -294,7 +294,7 @@ fn check_rejection(text: &str, e: &FileError) -> Result<(), String> {
             shown.lines().count()
         ));
     }
-    if let Some(line) = shown.lines().find(|l| !exempt && !l.starts_with(NAME)) {
+    if let Some(line) = shown.lines().find(|l| !l.starts_with(NAME)) {
         return Err(format!("message line without the file name: {line:?}"));
     }
     let lines: Vec<&str> = text.split('\n').collect();
@@ -303,7 +303,7 @@ fn check_rejection(text: &str, e: &FileError) -> Result<(), String> {
         if message.is_empty() {
             return Err(format!("problem without a message: {p:?}"));
         }
-        if !exempt && p.message.contains(['\n', '\r']) {
+        if p.message.contains(['\n', '\r']) {
             return Err(format!("message spans lines: {p:?}"));
         }
         match p.position {
