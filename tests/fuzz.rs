@@ -340,7 +340,19 @@ fn check_rejection(text: &str, e: &FileError) -> Result<(), String> {
             if !["rod", "base", "loads", "tendon", "solver"].contains(&table) {
                 return Err(format!("field outside the file's tables: {p:?}"));
             }
-            if !shown.contains(&format!("`{}`", p.field)) {
+            // Shown with control characters escaped, as the message prints them.
+            let printed: String = p
+                .field
+                .chars()
+                .flat_map(|c| {
+                    if c.is_control() {
+                        c.escape_default().collect()
+                    } else {
+                        vec![c]
+                    }
+                })
+                .collect();
+            if !shown.contains(&format!("`{printed}`")) {
                 return Err(format!("field not shown in the message:\n{shown}"));
             }
         }

@@ -46,16 +46,16 @@ impl fmt::Display for Problem {
             write!(f, "{}:{}: ", p.line, p.column)?;
         }
         if !self.field.is_empty() {
-            write!(f, "`{}` ", printable(&self.field))?;
+            write!(f, "`{}` ", self.field)?;
         }
-        f.write_str(&printable(&self.message))
+        f.write_str(&self.message)
     }
 }
 
 /// `text` with control characters (newlines, terminal escapes) written as escapes, so that a
 /// key read from a file can neither break the one-line-per-problem format nor reach the
 /// terminal raw.
-fn printable(text: &str) -> String {
+pub(crate) fn printable(text: &str) -> String {
     text.chars()
         .flat_map(|c| {
             if c.is_control() {

@@ -3,6 +3,7 @@
 //! against its rule, then the [`Robot`] built and checked once more by [`Robot::validate`].
 
 use super::locate::{Locator, position};
+use super::printable;
 use super::{FileError, Problem};
 use crate::loads::{Field, Loads, PointLoad};
 use crate::report::Method;
@@ -152,6 +153,12 @@ pub struct RobotFile {
 pub fn parse(text: &str, file: &str) -> Result<RobotFile, FileError> {
     let fail = |mut problems: Vec<Problem>| {
         problems.sort_by_key(|p| p.position.map_or((0, 0), |q| (q.line, q.column)));
+        // Keys come from the file: escape control characters so that a quoted key cannot
+        // break the one-line-per-problem format or reach the terminal raw.
+        for p in &mut problems {
+            p.field = printable(&p.field);
+            p.message = printable(&p.message);
+        }
         FileError {
             file: file.to_string(),
             problems,
