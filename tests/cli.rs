@@ -432,7 +432,7 @@ fn bad_options_exit_2() {
             "three comma-separated numbers",
         ),
         (&["solve", "robot.toml", "--tol", "nan"][..], "not finite"),
-        (&["solve", "robot.toml", "--nodes", "0"][..], ">= 1"),
+        (&["solve", "robot.toml", "--nodes", "0"][..], "from 1 to"),
         (
             &["sweep", "robot.toml", "--tension", "1=0:1:3", "--tension", "2=0:1:4"][..],
             "the same COUNT",
