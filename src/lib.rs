@@ -21,6 +21,7 @@ pub mod report;
 pub mod robot;
 pub mod rod;
 pub mod routing;
+pub mod sensitivity;
 pub mod shooting;
 pub mod so3;
 pub mod solution;

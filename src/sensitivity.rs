@@ -1,0 +1,615 @@
+//! Sensitivities of a solved shape to tensions, loads, material and base pose, by the
+//! implicit function theorem on the converged collocation system.
+//!
+//! # Method
+//!
+//! A collocation solution is a root of F(x; q) = 0, where x are the node states and q a
+//! parameter of the robot (a tension, a tip-force component, E, ...). Differentiating
+//! F(x(q); q) = 0 gives
+//!
+//! ```text
+//! dx/dq = -J^-1 dF/dq,    J = dF/dx at the solution
+//! ```
+//!
+//! J is the exact Newton Jacobian the solver already uses ([`System::jacobian`]), assembled
+//! once per [`Sensitivity`]; every parameter then costs one linear solve plus whatever
+//! dF/dq costs. x is the solver's scaled right perturbation, 12 per node,
+//! d = (dp / L, dtheta, dv, du L) with R -> R exp(hat(dtheta)) (docs/numerics.md), so the
+//! solve gives dp/dq = L d_p, the world-frame rotation R dtheta, dv/dq = d_v and
+//! du/dq = d_u / L at every node.
+//!
+//! The result is the exact derivative of the *discrete* solution on the solution's mesh:
+//! it agrees with finite differences of full solves on that mesh to the finite-difference
+//! error (tests/sensitivity.rs), and with the derivative of the continuous model to the
+//! discretization error (order 4).
+//!
+//! # dF/dq
+//!
+//! **Exact** where the residual is linear in the parameter: the tip force and moment enter
+//! only the tip rows, as -D^-1 R^T e and -L C^-1 R^T e (strain units, as the rows are
+//! scaled); the base position only the base rows, as -e / L; a base rotation
+//! R0 -> exp(hat(phi)) R0 only the base rotation rows log(R0^T R(0)), as -J_l^-1 R0^T.
+//!
+//! **Differences** elsewhere (tensions, moduli, anything passed to
+//! [`Sensitivity::derivative`]): the residual takes its parameters from a [`Robot`], so
+//! dF/dq is differenced at fixed x with the parameter moved in a clone of the robot
+//! (exact derivatives would need the model generic in its parameters, not only in the
+//! state). The step is [`RELATIVE_STEP`] = 1e-4 times the parameter's scale. The residual
+//! resolves a parameter's effect only to about 1e-11 relative, some 1e5 eps: eq. 13 is a
+//! 6 x 6 solve that mixes EA (1e5 N on the prototype) with EI (4e-3 N m^2), so a change of
+//! q perturbs its rounding. A central difference then carries a rounding error of about
+//! 1e-11 / h_rel and a truncation error of about h_rel^2 (exactly h_rel^2 for E, where the
+//! shape goes as 1/E), which balance near h_rel = 1e-4 at about 1e-8. Measured on the
+//! prototype (cases S and H, 64 intervals) against Richardson-extrapolated references:
+//! 1e-8 to 6e-8 relative for tensions and moduli at 1e-4, against up to 7e-7 at
+//! eps^(1/3) = 6e-6 and 5e-5 at 1e-7.
+//!
+//! Scales: a tension's is its value, but at least E I / (L |r_i(0)|), the tension that
+//! bends the rod through about a radian (2.2 N on the prototype; E I / L^2 for a tendon on
+//! the centreline); E's and G's are their values.
+//!
+//! A tendon with zero tension is left out of the model, and a string cannot push, so its
+//! derivative is the one-sided (right) derivative, taken by the second-order forward
+//! difference (-3 F(0) + 4 F(h) - F(2h)) / (2h) ([`Difference::Forward`]).
+//!
+//! # Conventions
+//!
+//! - Tip pose rows: position (m per unit of the parameter), then the tip rotation as a
+//!   world-frame rotation vector omega, R_tip -> exp(hat(omega)) R_tip (rad per unit).
+//!   The solver's body-frame perturbation dtheta of the last node maps to omega = R_tip dtheta.
+//! - Base rotation: R0 -> exp(hat(phi)) R0 with phi a world-frame rotation vector (rad), the
+//!   same convention as the tip rotation; base position p0 -> p0 + dp0 (m, world).
+//! - Moduli (rods built from geometry, [`crate::rod::Geometry`]): d/dE at fixed Poisson's
+//!   ratio (G = E / (2 (1 + nu)) follows E, as when a material's E is calibrated), d/dG at
+//!   fixed E, and d/dE at fixed G from the chain rule
+//!   d/dE|_G = d/dE|_nu - (G / E) d/dG|_E (dG/dE at fixed nu is G / E).
+//!
+//! # Cost
+//!
+//! One Jacobian assembly, then per parameter one linear solve with the structured
+//! elimination of [`crate::collocation::blocks`], plus two residual evaluations for a
+//! differenced parameter (three one-sided). The Newton workspace offers only a solve that
+//! eliminates afresh each call ([`Workspace::solve_linear`]), so every parameter repeats
+//! the elimination instead of one back substitution. On case H with 48 intervals (release
+//! build, development machine): setup (validation, Jacobian assembly) 0.35 ms, an exact
+//! parameter 0.05 ms (the linear solve), a differenced one 0.17 ms, and
+//! [`tip_sensitivities`] (21 parameters) 2.4 ms, against 0.93 ms for the solve itself.
+#![allow(non_snake_case)]
+
+use crate::collocation::LinearSolver;
+use crate::collocation::newton::Workspace;
+use crate::collocation::system::{NODE, System, pattern};
+use crate::equations::Model;
+use crate::error::{Result, invalid};
+use crate::mesh::Mesh;
+use crate::robot::Robot;
+use crate::rod::{Section, Stiffness, shear_modulus};
+use crate::so3;
+use crate::solution::{Solution, State};
+use nalgebra::{DMatrix, Matrix3, Matrix6, Matrix6x3, Vector3, Vector6};
+
+/// Relative finite-difference step for dF/dq, 1e-4: it balances the truncation (about
+/// h_rel^2) against the rounding (about 1e-11 / h_rel) of differencing the residual in a
+/// parameter (module docs), for an error near 1e-8.
+pub const RELATIVE_STEP: f64 = 1e-4;
+
+/// Largest scaled residual max-norm accepted at the given solution, 1e-8: a guard against
+/// a solution of another robot or an unconverged one, not a precision target. The
+/// linearization point is off the discrete solution by about 1e3 to 1e4 times the residual
+/// (measured on case H: a residual of 5e-12 left the tip 8e-9 m off) and the sensitivities
+/// err relatively by about as much: 1e-7 or less at the solver's default tolerance 1e-11,
+/// up to 1e-4 at this limit. Shooting solutions at tolerance 1e-12 leave 5e-11 to 4e-10 on
+/// their own nodes and pass.
+pub const RESIDUAL_LIMIT: f64 = 1e-8;
+
+/// How dF/dq is differenced.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Difference {
+    /// (F(q + h) - F(q - h)) / (2h): second order, for parameters free on both sides.
+    Central,
+    /// (-3 F(q) + 4 F(q + h) - F(q + 2h)) / (2h): second order and one-sided, for a
+    /// parameter at a bound (a slack tendon's tension, which cannot go negative).
+    Forward,
+}
+
+/// The derivative of one node's state with respect to a scalar parameter q.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct NodeDerivative {
+    /// Arc length of the node (m).
+    pub s: f64,
+    /// dp/dq, world frame (m per unit of q).
+    pub p: Vector3<f64>,
+    /// World-frame rotation vector omega with R -> exp(hat(omega dq)) R (rad per unit of q).
+    pub rotation: Vector3<f64>,
+    /// dv/dq, body frame (per unit of q).
+    pub v: Vector3<f64>,
+    /// du/dq, body frame (rad/m per unit of q).
+    pub u: Vector3<f64>,
+}
+
+impl NodeDerivative {
+    /// The pose part: position rows then rotation rows.
+    pub fn pose(&self) -> Vector6<f64> {
+        let mut out = Vector6::zeros();
+        out.fixed_rows_mut::<3>(0).copy_from(&self.p);
+        out.fixed_rows_mut::<3>(3).copy_from(&self.rotation);
+        out
+    }
+}
+
+/// The collocation system linearized at a solution: its Jacobian and a linear-solver
+/// workspace, ready to give the derivative of every node state with respect to any
+/// parameter of the robot.
+pub struct Sensitivity<'a> {
+    /// The system at the solution (the robot as given, full load).
+    system: System<'a>,
+    /// Node states of the solution.
+    states: Vec<State>,
+    /// Jacobian values at the solution, in [`pattern`] order.
+    values: Vec<f64>,
+    /// Linear solver buffers for the mesh.
+    workspace: Workspace,
+    /// Scratch: residuals at the stencil points and the right-hand side.
+    scratch: [Vec<f64>; 3],
+}
+
+impl<'a> Sensitivity<'a> {
+    /// Linearizes `robot`'s collocation system at `solution`, on the mesh through the
+    /// solution's nodes.
+    ///
+    /// `solution` should come from [`crate::collocation::solve`] on this robot: the mesh is
+    /// rebuilt from its node arc lengths and the robot's breakpoints, and the sensitivities
+    /// are those of the collocation discretization on it. A fine shooting solution also
+    /// works (its nodes then form the mesh; on the prototype the result agrees with a
+    /// 64-interval collocation solution to 1e-6).
+    ///
+    /// # Errors
+    /// [`crate::Error::InvalidInput`] when the robot is invalid, when the solution's nodes do
+    /// not form a mesh of this robot (other breakpoints), when the solution does not solve
+    /// the robot's collocation system (scaled residual above [`RESIDUAL_LIMIT`]), or when the
+    /// Jacobian there is singular (a bifurcation, where no sensitivity exists); a model
+    /// breakdown at the solution's states.
+    pub fn new(robot: &'a Robot, solution: &Solution) -> Result<Self> {
+        robot.validate()?;
+        let s: Vec<f64> = solution.nodes.iter().map(|n| n.s).collect();
+        let mesh = Mesh::from_points(robot, &s)?;
+        let same = mesh.nodes.len() == s.len() && mesh.nodes.iter().zip(&s).all(|(m, s)| m.s == *s);
+        if !same {
+            return Err(invalid(
+                "solution",
+                format!(
+                    "has {} nodes, but the mesh through their arc lengths and the robot's {} breakpoints has {}",
+                    s.len(),
+                    robot.breakpoints().len(),
+                    mesh.nodes.len()
+                ),
+                "pass a solution of this robot (same tendon terminations and point loads)",
+            ));
+        }
+        let states: Vec<State> = solution.nodes.iter().map(|n| n.state()).collect();
+        let system = System::new(Model::new(robot), mesh);
+        let n = system.unknowns();
+        let mut residual = vec![0.0; n];
+        let mut values = vec![0.0; pattern(&system.mesh).len()];
+        system.jacobian(&states, &mut residual, &mut values)?;
+        let norm = residual.iter().fold(0.0f64, |m, r| m.max(r.abs()));
+        if norm > RESIDUAL_LIMIT || residual.iter().any(|r| !r.is_finite()) {
+            return Err(invalid(
+                "solution",
+                format!(
+                    "leaves a scaled residual of {norm:.3e} on this robot's collocation system (limit {RESIDUAL_LIMIT:.0e})"
+                ),
+                "pass a converged collocation solution of this robot (collocation::solve_from polishes a nearby one)",
+            ));
+        }
+        let workspace = Workspace::new(&system, LinearSolver::Auto)?;
+        Ok(Sensitivity {
+            system,
+            states,
+            values,
+            workspace,
+            scratch: [residual, vec![0.0; n], vec![0.0; n]],
+        })
+    }
+
+    /// The robot the system belongs to.
+    pub fn robot(&self) -> &'a Robot {
+        self.system.model.robot
+    }
+
+    /// Number of nodes (the solution's).
+    pub fn nodes(&self) -> usize {
+        self.states.len()
+    }
+
+    /// The derivative of every node state with respect to a scalar parameter q, one entry
+    /// per node.
+    ///
+    /// `perturb(robot, dq)` changes q by dq in a clone of the robot (it must not move
+    /// breakpoints); `step` is the difference step h in q's unit, `difference` the stencil.
+    ///
+    /// # Errors
+    /// [`crate::Error::InvalidInput`] for a step that is not positive and finite, a
+    /// perturbation that moves a breakpoint, or a singular Jacobian (a bifurcation such as
+    /// buckling, where no sensitivity exists); a model breakdown at a perturbed robot.
+    ///
+    /// # Examples
+    /// ```
+    /// use tdcr::sensitivity::{Difference, Sensitivity};
+    /// let robot = tdcr::cases::case_s();
+    /// let solution = tdcr::collocation::solve(&robot, &Default::default()).unwrap();
+    /// let mut sens = Sensitivity::new(&robot, &solution).unwrap();
+    /// // Tip motion per newton of tendon 1's tension (2.94 N), stepping 1e-4 of it.
+    /// let step = tdcr::sensitivity::RELATIVE_STEP * 2.94;
+    /// let d = sens
+    ///     .derivative(step, Difference::Central, |r, dq| r.tendons[0].tension += dq)
+    ///     .unwrap();
+    /// let tip = d.last().unwrap();
+    /// assert!(tip.p.norm() > 0.0);
+    /// ```
+    pub fn derivative(
+        &mut self,
+        step: f64,
+        difference: Difference,
+        perturb: impl Fn(&mut Robot, f64),
+    ) -> Result<Vec<NodeDerivative>> {
+        if !(step.is_finite() && step > 0.0) {
+            return Err(invalid(
+                "step",
+                format!("is {step}"),
+                "give a positive finite difference step",
+            ));
+        }
+        let [f0, f1, f2] = &mut self.scratch;
+        let (offsets, weights): ([f64; 3], [f64; 3]) = match difference {
+            Difference::Central => ([step, -step, 0.0], [1.0, -1.0, 0.0]),
+            Difference::Forward => ([0.0, step, 2.0 * step], [-3.0, 4.0, -1.0]),
+        };
+        let terms = if difference == Difference::Central { 2 } else { 3 };
+        for (out, &dq) in [&mut *f0, &mut *f1, &mut *f2].into_iter().zip(&offsets).take(terms) {
+            residual_at(&self.system, &self.states, &perturb, dq, out)?;
+        }
+        // rhs = -dF/dq, written over f0.
+        let scale = -1.0 / (2.0 * step);
+        for i in 0..f0.len() {
+            let mut d = weights[0] * f0[i] + weights[1] * f1[i];
+            if terms == 3 {
+                d += weights[2] * f2[i];
+            }
+            f0[i] = d * scale;
+        }
+        self.respond()
+    }
+
+    /// Solves J dx = rhs for the right-hand side in `scratch[0]` (-dF/dq) and converts the
+    /// scaled dx into node derivatives.
+    fn respond(&mut self) -> Result<Vec<NodeDerivative>> {
+        let dx = self
+            .workspace
+            .solve_linear(&self.values, &self.scratch[0])
+            .ok_or_else(|| {
+                invalid(
+                    "solution",
+                    "is at a singular point of the collocation system (zero pivot or non-finite step)",
+                    "no sensitivity exists at a bifurcation such as buckling; move the loads slightly",
+                )
+            })?;
+        let length = self.system.model.robot.length();
+        Ok(self
+            .states
+            .iter()
+            .enumerate()
+            .map(|(k, x)| {
+                let part = |i: usize| Vector3::new(dx[k * NODE + i], dx[k * NODE + i + 1], dx[k * NODE + i + 2]);
+                NodeDerivative {
+                    s: x.s,
+                    p: part(0) * length,
+                    rotation: x.R * part(3),
+                    v: part(6),
+                    u: part(9) / length,
+                }
+            })
+            .collect())
+    }
+
+    /// Checks a Cartesian axis index: [`crate::Error::InvalidInput`] unless 0, 1 or 2.
+    fn check_axis(axis: usize) -> Result<()> {
+        if axis < 3 {
+            Ok(())
+        } else {
+            Err(invalid("axis", format!("is {axis}"), "give 0, 1 or 2 for x, y or z"))
+        }
+    }
+
+    /// The right-hand side buffer, zeroed.
+    fn zeroed_rhs(&mut self) -> &mut [f64] {
+        let rhs = &mut self.scratch[0];
+        rhs.fill(0.0);
+        rhs
+    }
+
+    /// The derivative of every node state with respect to component `axis` (0, 1, 2 for
+    /// x, y, z) of the tip force (per N, world frame). Exact: the residual is linear in the
+    /// tip force, which enters only the tip rows, as -D^-1 R^T e_axis (strain units).
+    ///
+    /// # Errors
+    /// [`crate::Error::InvalidInput`] for an axis other than 0, 1, 2 or a singular Jacobian.
+    pub fn tip_force(&mut self, axis: usize) -> Result<Vec<NodeDerivative>> {
+        Self::check_axis(axis)?;
+        let (R, kse, _) = self.tip_frame();
+        let column = R.transpose().column(axis).component_div(&kse);
+        let rhs = self.zeroed_rhs();
+        let n = rhs.len();
+        for i in 0..3 {
+            rhs[n - 6 + i] = column[i];
+        }
+        self.respond()
+    }
+
+    /// As [`Sensitivity::tip_force`] for the tip moment (per N m, world frame): the tip's
+    /// moment rows carry -L C^-1 R^T e_axis.
+    ///
+    /// # Errors
+    /// [`crate::Error::InvalidInput`] for an axis other than 0, 1, 2 or a singular Jacobian.
+    pub fn tip_moment(&mut self, axis: usize) -> Result<Vec<NodeDerivative>> {
+        Self::check_axis(axis)?;
+        let (R, _, kbt) = self.tip_frame();
+        let column = R.transpose().column(axis).component_div(&kbt) * self.robot().length();
+        let rhs = self.zeroed_rhs();
+        let n = rhs.len();
+        for i in 0..3 {
+            rhs[n - 3 + i] = column[i];
+        }
+        self.respond()
+    }
+
+    /// Tip orientation and section stiffness (kse, kbt) there.
+    fn tip_frame(&self) -> (Matrix3<f64>, Vector3<f64>, Vector3<f64>) {
+        let tip = &self.states[self.states.len() - 1];
+        let section = self.robot().rod.section_at(tip.s).section;
+        (tip.R, section.kse, section.kbt)
+    }
+
+    /// The derivative of every node state with respect to component `axis` of the base
+    /// position p0 (per m, world frame). Exact: the base rows (p(0) - p0) / L give
+    /// dF/dp0 = -e_axis / L.
+    ///
+    /// # Errors
+    /// [`crate::Error::InvalidInput`] for an axis other than 0, 1, 2 or a singular Jacobian.
+    pub fn base_position(&mut self, axis: usize) -> Result<Vec<NodeDerivative>> {
+        Self::check_axis(axis)?;
+        let length = self.robot().length();
+        self.zeroed_rhs()[axis] = 1.0 / length;
+        self.respond()
+    }
+
+    /// The derivative of every node state with respect to component `axis` of a world-frame
+    /// rotation vector phi turning the base, R0 -> exp(hat(phi)) R0 (per rad). Exact: the
+    /// base rows log(R0^T R(0)) = eps become log(exp(-hat(R0^T phi)) exp(hat(eps))), whose
+    /// derivative is -J_l(eps)^-1 R0^T, with J_l(eps)^-1 = J_r(-eps)^-1 (eps is the
+    /// residual, about 0).
+    ///
+    /// # Errors
+    /// [`crate::Error::InvalidInput`] for an axis other than 0, 1, 2 or a singular Jacobian.
+    pub fn base_rotation(&mut self, axis: usize) -> Result<Vec<NodeDerivative>> {
+        Self::check_axis(axis)?;
+        let R0 = self.robot().base_rotation;
+        let eps = so3::log(&(R0.transpose() * self.states[0].R));
+        let column = so3::right_jacobian_inv(&(-eps)) * R0.transpose().column(axis);
+        let rhs = self.zeroed_rhs();
+        for i in 0..3 {
+            rhs[3 + i] = column[i];
+        }
+        self.respond()
+    }
+
+    /// The derivative of every node state with respect to tendon `tendon`'s tension
+    /// (per N): central differences, or the one-sided right derivative for a slack tendon.
+    ///
+    /// # Errors
+    /// [`crate::Error::InvalidInput`] for a tendon index out of range; as
+    /// [`Sensitivity::derivative`].
+    pub fn tension(&mut self, tendon: usize) -> Result<Vec<NodeDerivative>> {
+        let robot = self.robot();
+        let Some(t) = robot.tendons.get(tendon) else {
+            return Err(invalid(
+                "tendon",
+                format!("is {tendon}, but the robot has {} tendons", robot.tendons.len()),
+                "give a 0-based tendon index",
+            ));
+        };
+        let offset = t.routing.at(0.0, robot.length()).r.norm();
+        let bend = if offset > 0.0 {
+            robot.bending_stiffness() / (robot.length() * offset)
+        } else {
+            force_scale(robot)
+        };
+        let step = RELATIVE_STEP * t.tension.max(bend);
+        // Central needs q - h inside the model's domain (tension > 0 keeps the tendon in it).
+        let difference = if t.tension > step {
+            Difference::Central
+        } else {
+            Difference::Forward
+        };
+        self.derivative(step, difference, |r, dq| r.tendons[tendon].tension += dq)
+    }
+
+    /// Tip pose derivative (6-vector) for a perturbation, central differences.
+    fn tip(&mut self, step: f64, perturb: impl Fn(&mut Robot, f64)) -> Result<Vector6<f64>> {
+        tip_pose(self.derivative(step, Difference::Central, perturb))
+    }
+}
+
+/// The tip entry's pose of a derivative.
+fn tip_pose(d: Result<Vec<NodeDerivative>>) -> Result<Vector6<f64>> {
+    let d = d?;
+    Ok(d[d.len() - 1].pose())
+}
+
+/// The residual of `system`'s mesh at `states` for the robot with its parameter moved by dq.
+fn residual_at(
+    system: &System,
+    states: &[State],
+    perturb: &impl Fn(&mut Robot, f64),
+    dq: f64,
+    out: &mut [f64],
+) -> Result<()> {
+    let robot = system.model.robot;
+    let mut probe = robot.clone();
+    perturb(&mut probe, dq);
+    if probe.breakpoints() != robot.breakpoints() {
+        return Err(invalid(
+            "perturbation",
+            "moves a breakpoint (tendon termination or point load), which changes the mesh",
+            "differentiate with respect to parameters that keep the breakpoints",
+        ));
+    }
+    System::new(Model::new(&probe), system.mesh.clone()).residual(states, out)
+}
+
+/// Characteristic force E I / L^2 (N): the step scale of a tendon on the centreline.
+fn force_scale(robot: &Robot) -> f64 {
+    robot.bending_stiffness() / robot.length().powi(2)
+}
+
+/// Tip pose derivatives with respect to the moduli of a rod built from geometry. Each is a
+/// 6-vector: tip position (m/Pa), then tip rotation vector, world frame (rad/Pa).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ModulusSensitivities {
+    /// d(tip pose)/dE at fixed Poisson's ratio (G follows E).
+    pub youngs_modulus: Vector6<f64>,
+    /// d(tip pose)/dE at fixed G (bending and extension only).
+    pub youngs_modulus_fixed_shear: Vector6<f64>,
+    /// d(tip pose)/dG at fixed E (shear and torsion only).
+    pub shear_modulus: Vector6<f64>,
+}
+
+/// Derivatives of the tip pose at a solution. Every matrix has 6 rows: tip position x, y, z
+/// (m per unit of the parameter), then the tip rotation as a world-frame rotation vector
+/// omega, R_tip -> exp(hat(omega)) R_tip (rad per unit).
+#[derive(Clone, Debug, PartialEq)]
+pub struct TipSensitivities {
+    /// d(tip pose)/d(tension_i), 6 x k (per N), one column per tendon. For a slack tendon
+    /// the one-sided (pulling) derivative.
+    pub tension: DMatrix<f64>,
+    /// d(tip pose)/d(tip force), 6 x 3 (per N, world frame): the force half of the compliance.
+    pub tip_force: Matrix6x3<f64>,
+    /// d(tip pose)/d(tip moment), 6 x 3 (per N m, world frame): the moment half of the compliance.
+    pub tip_moment: Matrix6x3<f64>,
+    /// Derivatives with respect to E and G when the rod was built from geometry with a
+    /// uniform section ([`crate::Rod::tube`], [`crate::Rod::solid_circle`]); `None` otherwise.
+    pub moduli: Option<ModulusSensitivities>,
+    /// d(tip pose)/d(base position), 6 x 3 (per m, world frame).
+    pub base_position: Matrix6x3<f64>,
+    /// d(tip pose)/d(base rotation), 6 x 3 (per rad): columns are the components of the
+    /// world-frame rotation vector phi with R0 -> exp(hat(phi)) R0.
+    pub base_rotation: Matrix6x3<f64>,
+}
+
+impl TipSensitivities {
+    /// The 6 x 6 tip compliance: d(tip pose)/d(tip force, tip moment), columns force x, y, z
+    /// (per N) then moment x, y, z (per N m).
+    pub fn compliance(&self) -> Matrix6<f64> {
+        let mut c = Matrix6::zeros();
+        c.fixed_columns_mut::<3>(0).copy_from(&self.tip_force);
+        c.fixed_columns_mut::<3>(3).copy_from(&self.tip_moment);
+        c
+    }
+}
+
+/// The derivatives of `solution`'s tip pose with respect to the tensions, the tip wrench,
+/// the moduli (rods built from geometry) and the base pose, by the implicit function
+/// theorem on the collocation system (module docs).
+///
+/// Costs one Jacobian assembly, then one linear solve for each of the 12 exact parameters
+/// (tip wrench, base pose) and each of the k + 2 differenced ones (tensions, E, G; k
+/// without geometry), which also take two or three residual evaluations each.
+///
+/// # Errors
+/// As [`Sensitivity::new`] and [`Sensitivity::derivative`].
+///
+/// # Examples
+/// ```
+/// let robot = tdcr::cases::case_h();
+/// let solution = tdcr::collocation::solve(&robot, &Default::default()).unwrap();
+/// let sens = tdcr::sensitivity::tip_sensitivities(&robot, &solution).unwrap();
+/// assert_eq!(sens.tension.shape(), (6, 5));
+/// // A tip force along world +z moves the tip up.
+/// assert!(sens.tip_force[(2, 2)] > 0.0);
+/// ```
+pub fn tip_sensitivities(robot: &Robot, solution: &Solution) -> Result<TipSensitivities> {
+    let mut sens = Sensitivity::new(robot, solution)?;
+    let k = robot.tendons.len();
+    let mut tension = DMatrix::zeros(6, k);
+    for i in 0..k {
+        tension.set_column(i, &tip_pose(sens.tension(i))?);
+    }
+    let mut tip_force = Matrix6x3::zeros();
+    let mut tip_moment = Matrix6x3::zeros();
+    let mut base_position = Matrix6x3::zeros();
+    let mut base_rotation = Matrix6x3::zeros();
+    for j in 0..3 {
+        tip_force.set_column(j, &tip_pose(sens.tip_force(j))?);
+        tip_moment.set_column(j, &tip_pose(sens.tip_moment(j))?);
+        base_position.set_column(j, &tip_pose(sens.base_position(j))?);
+        base_rotation.set_column(j, &tip_pose(sens.base_rotation(j))?);
+    }
+    let moduli = moduli(&mut sens)?;
+    Ok(TipSensitivities {
+        tension,
+        tip_force,
+        tip_moment,
+        moduli,
+        base_position,
+        base_rotation,
+    })
+}
+
+/// The modulus derivatives when the rod's uniform section is the one its geometry gives.
+fn moduli(sens: &mut Sensitivity) -> Result<Option<ModulusSensitivities>> {
+    let rod = &sens.robot().rod;
+    let (Some(g), Stiffness::Uniform(section)) = (rod.geometry, &rod.stiffness) else {
+        return Ok(None);
+    };
+    let (o, i, e, nu) = (g.outer_radius, g.inner_radius, g.youngs_modulus, g.poisson_ratio);
+    let shear = shear_modulus(e, nu);
+    // The section must be the geometry's (to rounding): otherwise E and G are not what
+    // the stiffness was built from.
+    let built = Section::tube(o, i, e, shear);
+    let close = |a: &Vector3<f64>, b: &Vector3<f64>| (a - b).norm() <= 1e-12 * b.norm();
+    if !(close(&section.kse, &built.kse) && close(&section.kbt, &built.kbt)) {
+        return Ok(None);
+    }
+    let youngs_modulus = sens.tip(RELATIVE_STEP * e, |r, d| {
+        r.rod.stiffness = Stiffness::Uniform(Section::tube(o, i, e + d, shear_modulus(e + d, nu)));
+    })?;
+    let shear_modulus = sens.tip(RELATIVE_STEP * shear, |r, d| {
+        r.rod.stiffness = Stiffness::Uniform(Section::tube(o, i, e, shear + d));
+    })?;
+    Ok(Some(ModulusSensitivities {
+        youngs_modulus,
+        // d/dE|_nu = d/dE|_G + (dG/dE)|_nu d/dG|_E with dG/dE|_nu = G / E.
+        youngs_modulus_fixed_shear: youngs_modulus - shear_modulus * (shear / e),
+        shear_modulus,
+    }))
+}
+
+/// Whole-backbone sensitivity: d p(s) / d tau_i (m/N, world frame) at each of `solution`'s
+/// nodes, for tendon index `tendon` (0-based). For a slack tendon, the one-sided (pulling)
+/// derivative.
+///
+/// # Errors
+/// As [`Sensitivity::new`] and [`Sensitivity::tension`].
+///
+/// # Examples
+/// ```
+/// let robot = tdcr::cases::case_s();
+/// let solution = tdcr::collocation::solve(&robot, &Default::default()).unwrap();
+/// let dp = tdcr::sensitivity::backbone_tension_sensitivity(&robot, &solution, 0).unwrap();
+/// assert_eq!(dp.len(), solution.nodes.len());
+/// assert!(dp[0].norm() < 1e-12); // the base is clamped
+/// ```
+pub fn backbone_tension_sensitivity(robot: &Robot, solution: &Solution, tendon: usize) -> Result<Vec<Vector3<f64>>> {
+    let mut sens = Sensitivity::new(robot, solution)?;
+    Ok(sens.tension(tendon)?.iter().map(|d| d.p).collect())
+}
