@@ -492,3 +492,34 @@ fn bench_reports_both_cases_cold_and_warm_as_json() {
         assert!(row["nodes"].as_u64().unwrap() >= 9);
     }
 }
+
+#[test]
+fn jacobian_in_json_matches_the_library_and_a_finite_difference() {
+    let dir = scratch("jacobian");
+    let solve = |tension: &str| {
+        let out = run(
+            &dir,
+            &["solve", "-", "--format", "json", "--jacobian", "--tension", tension],
+            Some(&example()),
+        );
+        assert!(out.status.success(), "{}", stderr(&out));
+        serde_json::from_str::<serde_json::Value>(&stdout(&out)).unwrap()
+    };
+    let json = solve("1=2.94");
+    let jacobian = &json["jacobian"];
+    assert_eq!(jacobian["tension"].as_array().unwrap().len(), 6);
+    assert_eq!(jacobian["tension"][0].as_array().unwrap().len(), 5);
+    assert_eq!(jacobian["tip_force"][5].as_array().unwrap().len(), 3);
+    assert_eq!(jacobian["tip_moment"][0].as_array().unwrap().len(), 3);
+    // d tip / d tau_1 against a central difference of two solves 1e-3 N apart: agreement to
+    // 1e-4 relative (the difference's truncation error, tau^2 terms over a 2.94 N base)
+    let (a, b) = (tip_of(&solve("1=2.939")), tip_of(&solve("1=2.941")));
+    for row in 0..3 {
+        let fd = (b[row] - a[row]) / 2e-3;
+        let exact = jacobian["tension"][row][0].as_f64().unwrap();
+        assert!(
+            (fd - exact).abs() <= 1e-4 * exact.abs().max(1e-3),
+            "row {row}: {fd} vs {exact}"
+        );
+    }
+}

@@ -5,7 +5,7 @@
 //! ```
 //! let file = tdcr::io::parse(&tdcr::io::example(), "example.toml").unwrap();
 //! let solution = tdcr::collocation::solve(&file.robot, &file.solver.collocation).unwrap();
-//! let json = tdcr::io::output::json(&file.robot, &solution, None);
+//! let json = tdcr::io::output::json(&file.robot, &solution, None, None);
 //! assert!(json.contains("\"converged\": true"));
 //! ```
 

@@ -3,6 +3,7 @@
 #![allow(non_snake_case)]
 
 use crate::equations::Model;
+use crate::sensitivity::TipSensitivities;
 use crate::{Robot, Solution};
 use nalgebra::{Matrix3, Vector3};
 use std::fmt::Write;
@@ -177,9 +178,9 @@ impl Json {
 }
 
 /// The solution as JSON (every field and unit in docs/cli.md): the solve report, the tip
-/// pose and wrench, the samples of [`samples`] for `count`, and each tendon's tension, end
-/// and path. Vectors are `[x, y, z]`, matrices lists of rows; one sample per line.
-pub fn json(robot: &Robot, solution: &Solution, count: Option<usize>) -> String {
+/// pose and wrench, the samples of [`samples`] for `count`, each tendon's tension, end and
+/// path, and the tip Jacobians when given. Vectors are `[x, y, z]`, matrices lists of rows; one sample per line.
+pub fn json(robot: &Robot, solution: &Solution, count: Option<usize>, jacobian: Option<&TipSensitivities>) -> String {
     let report = &solution.report;
     let tip = solution.tip();
     let samples = samples(robot, solution, count)
@@ -206,7 +207,7 @@ pub fn json(robot: &Robot, solution: &Solution, count: Option<usize>) -> String 
             ])
         })
         .collect();
-    let out = Json::Object(vec![
+    let mut fields = vec![
         (
             "converged",
             Json::Bool(report.termination == crate::Termination::Converged),
@@ -231,7 +232,27 @@ pub fn json(robot: &Robot, solution: &Solution, count: Option<usize>) -> String 
         ),
         ("samples", Json::Array(samples)),
         ("tendons", Json::Array(tendons)),
-    ]);
+    ];
+    if let Some(j) = jacobian {
+        // Rows: tip position (m per unit), then the tip rotation as a world-frame rotation
+        // vector (rad per unit); one column per tendon (N), force (N) or moment (N m) component.
+        let rows = |m: &dyn Fn(usize, usize) -> f64, cols: usize| {
+            Json::Array(
+                (0..6)
+                    .map(|r| Json::Array((0..cols).map(|c| Json::Number(m(r, c))).collect()))
+                    .collect(),
+            )
+        };
+        fields.push((
+            "jacobian",
+            Json::Object(vec![
+                ("tension", rows(&|r, c| j.tension[(r, c)], j.tension.ncols())),
+                ("tip_force", rows(&|r, c| j.tip_force[(r, c)], 3)),
+                ("tip_moment", rows(&|r, c| j.tip_moment[(r, c)], 3)),
+            ]),
+        ));
+    }
+    let out = Json::Object(fields);
     let mut text = String::new();
     out.write(&mut text, 0, false);
     text.push('\n');

@@ -109,6 +109,10 @@ struct SolveArgs {
     /// interpolant) instead of at the solution's nodes.
     #[arg(long, value_name = "K", value_parser = parse_samples)]
     samples: Option<usize>,
+    /// Add the tip Jacobians (d tip pose / d tensions, tip force, tip moment) to the JSON
+    /// output (docs/cli.md).
+    #[arg(long)]
+    jacobian: bool,
     /// Output format.
     #[arg(long, value_enum, default_value_t = Format::Table)]
     format: Format,
@@ -565,12 +569,25 @@ fn solve(args: &SolveArgs) -> Result<(), Failure> {
     }
     apply(&mut file, &args.solver);
     let solution = run_solver(&file.robot, &file, None)?;
+    if args.jacobian && !matches!(args.format, Format::Json) {
+        note("note: --jacobian adds the tip Jacobians to the JSON output only (--format json)");
+    }
     if args.solver.verbose {
         note(&format!("{name}: {}", summary(&solution.report, &file.solver)));
         note(diagnostics(&solution.report).trim_end());
     }
     let text = match args.format {
-        Format::Json => output::json(&file.robot, &solution, args.samples),
+        Format::Json => {
+            let jacobian = if args.jacobian {
+                Some(
+                    tdcr::sensitivity::tip_sensitivities(&file.robot, &solution)
+                        .map_err(|e| Failure::Other(e.to_string()))?,
+                )
+            } else {
+                None
+            };
+            output::json(&file.robot, &solution, args.samples, jacobian.as_ref())
+        }
         Format::Csv => output::csv(&output::samples(&file.robot, &solution, args.samples)),
         Format::Table => solution_table(
             &name,
