@@ -8,7 +8,7 @@
 #![allow(non_snake_case)]
 
 use crate::error::Result;
-use crate::robot::Robot;
+use crate::robot::{Robot, TendonModel};
 use crate::rod::{SectionPoint, StrainPoint};
 use crate::routing::RoutingPoint;
 use crate::so3::hat;
@@ -103,6 +103,17 @@ impl<'a> Model<'a> {
         })
     }
 
+    /// The tendons whose distributed loads act on the segment ending at `segment_end` (none in
+    /// the point-moment model): (index, tension tau_i in N, routing point).
+    pub fn distributed_tendons(
+        &self,
+        s: f64,
+        segment_end: f64,
+    ) -> impl Iterator<Item = (usize, f64, RoutingPoint)> + '_ {
+        let coupled = self.robot.tendon_model == TendonModel::Coupled;
+        self.tendons(s, Which::ActiveTo(segment_end)).filter(move |_| coupled)
+    }
+
     /// Eq. 13 (corrected): the strain rates (v', u') at a site for the state (R, v, u),
     /// with the tendons that reach `segment_end` loading the backbone.
     ///
@@ -136,7 +147,7 @@ impl<'a> Model<'a> {
         let mut H = Matrix3::<T>::zeros();
         let mut a = Vector3::<T>::zeros();
         let mut b = Vector3::<T>::zeros();
-        for (i, tension, rp) in self.tendons(site.s, Which::ActiveTo(segment_end)) {
+        for (i, tension, rp) in self.distributed_tendons(site.s, segment_end) {
             let r = lift::<T>(&rp.r);
             let r_s = lift::<T>(&rp.r_s);
             let r_ss = lift::<T>(&rp.r_ss);
@@ -207,6 +218,7 @@ impl<'a> Model<'a> {
     ) -> Result<(Vector3<T>, Vector3<T>)> {
         let mut force = Vector3::<T>::zeros();
         let mut moment = Vector3::<T>::zeros();
+        let coupled = self.robot.tendon_model == TendonModel::Coupled;
         for (i, tension, rp) in self.tendons(s, which) {
             let r = lift::<T>(&rp.r);
             let pb_s = u.cross(&r) + lift::<T>(&rp.r_s) + v;
@@ -219,7 +231,10 @@ impl<'a> Model<'a> {
                 });
             }
             let f_b = pb_s * (T::from_f64(tension).unwrap_or_else(T::zero) / speed);
-            force += R * f_b;
+            // The point-moment model keeps only the moment of the tendon's pull.
+            if coupled {
+                force += R * f_b;
+            }
             moment += R * r.cross(&f_b);
         }
         Ok((force, moment))
@@ -309,7 +324,7 @@ impl Model<'_> {
             let (nb, mb) = self.internal_wrench(site_b, Rb, vb, ub);
             dn -= nb;
             dm -= mb;
-            if self.robot.corner_forces {
+            if self.robot.corner_forces && self.robot.tendon_model == TendonModel::Coupled {
                 let (fa, ma) = self.tendon_pull(s, Which::Past(s), Ra, va, ua)?;
                 let (fb, mb) = self.tendon_pull(s, Which::Past(s), Rb, vb, ub)?;
                 dn += fa - fb;

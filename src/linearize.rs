@@ -80,7 +80,7 @@
 
 use crate::Error;
 use crate::equations::MIN_TENDON_SPEED;
-use crate::equations::{Model, Site, Which};
+use crate::equations::{Model, Site};
 use crate::error::Result;
 use crate::routing::RoutingPoint;
 use nalgebra::{LU, Matrix3, Matrix3x6, Matrix6, Matrix6x3, SMatrix, U6, Vector3, Vector6};
@@ -413,7 +413,7 @@ pub fn linearize(
     let mut H = Matrix3::<f64>::zeros();
     let mut a = Vector3::<f64>::zeros();
     let mut b = Vector3::<f64>::zeros();
-    for (i, tension, rp) in model.tendons(site.s, Which::ActiveTo(segment_end)) {
+    for (i, tension, rp) in model.distributed_tendons(site.s, segment_end) {
         let tp = TendonPoint::new(i, tension, &rp, site.s, v, u)?;
         let A_i = tp.A();
         let G_i = mul_hat(&A_i, &-tp.r); // -A_i r^
@@ -462,7 +462,7 @@ pub fn linearize(
         tp.add_derivatives(&x_v, &x_u, u, &mut top, &mut bottom);
     }
     if count > CACHED_TENDONS {
-        for (i, tension, rp) in model.tendons(site.s, Which::ActiveTo(segment_end)).skip(CACHED_TENDONS) {
+        for (i, tension, rp) in model.distributed_tendons(site.s, segment_end).skip(CACHED_TENDONS) {
             TendonPoint::new(i, tension, &rp, site.s, v, u)?.add_derivatives(&x_v, &x_u, u, &mut top, &mut bottom);
         }
     }

@@ -26,6 +26,22 @@ pub struct Robot {
     /// tendon (ERRATA.md addendum). `true` is the physically consistent model; `false`
     /// reproduces the paper's jump conditions for comparison.
     pub corner_forces: bool,
+    /// How the tendons load the backbone: the full coupled model (default) or, for
+    /// comparison, the simpler point-moment model.
+    pub tendon_model: TendonModel,
+}
+
+/// How tendons load the backbone.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum TendonModel {
+    /// Rucker & Webster's coupled Cosserat rod/string model: distributed loads along the
+    /// path, point loads where a path ends or bends.
+    #[default]
+    Coupled,
+    /// The point-moment model (Jones et al., cited by the paper): each tendon acts only
+    /// through the moment (R r_i) x F_i of its termination force F_i = -tau_i t_i; no
+    /// distributed load, no force on the backbone, no corner forces.
+    PointMoment,
 }
 
 /// Samples along each tendon used to look for a vanishing path tangent in validation (a
@@ -42,6 +58,7 @@ impl Robot {
             base_position: Vector3::zeros(),
             base_rotation: Matrix3::identity(),
             corner_forces: true,
+            tendon_model: TendonModel::Coupled,
         }
     }
 
