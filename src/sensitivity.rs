@@ -66,14 +66,10 @@
 //!
 //! # Cost
 //!
-//! One Jacobian assembly, then per parameter one linear solve with the structured
-//! elimination of [`crate::collocation::blocks`], plus two residual evaluations for a
-//! differenced parameter (three one-sided). The Newton workspace offers only a solve that
-//! eliminates afresh each call ([`Workspace::solve_linear`]), so every parameter repeats
-//! the elimination instead of one back substitution. On case H with 48 intervals (release
-//! build, development machine): setup (validation, Jacobian assembly) 0.35 ms, an exact
-//! parameter 0.05 ms (the linear solve), a differenced one 0.17 ms, and
-//! [`tip_sensitivities`] (21 parameters) 2.4 ms, against 0.93 ms for the solve itself.
+//! One Jacobian assembly and one factorization (the structured elimination of
+//! [`crate::collocation::blocks`]), then per parameter one solve with the stored factors
+//! ([`Workspace::solve_again`]), plus two residual evaluations for a differenced parameter
+//! (three one-sided).
 #![allow(non_snake_case)]
 
 use crate::collocation::LinearSolver;
@@ -145,9 +141,7 @@ pub struct Sensitivity<'a> {
     system: System<'a>,
     /// Node states of the solution.
     states: Vec<State>,
-    /// Jacobian values at the solution, in [`pattern`] order.
-    values: Vec<f64>,
-    /// Linear solver buffers for the mesh.
+    /// Linear solver buffers for the mesh, holding the factors of the Jacobian at the solution.
     workspace: Workspace,
     /// Scratch: residuals at the stencil points and the right-hand side.
     scratch: [Vec<f64>; 3],
@@ -202,11 +196,14 @@ impl<'a> Sensitivity<'a> {
                 "pass a converged collocation solution of this robot (collocation::solve_from polishes a nearby one)",
             ));
         }
-        let workspace = Workspace::new(&system, LinearSolver::Auto)?;
+        let mut workspace = Workspace::new(&system, LinearSolver::Auto)?;
+        // Factor once; every parameter then costs one solve with the stored factors.
+        if workspace.solve_linear(&values, &vec![0.0; n]).is_none() {
+            return Err(singular());
+        }
         Ok(Sensitivity {
             system,
             states,
-            values,
             workspace,
             scratch: [residual, vec![0.0; n], vec![0.0; n]],
         })
@@ -284,16 +281,7 @@ impl<'a> Sensitivity<'a> {
     /// Solves J dx = rhs for the right-hand side in `scratch[0]` (-dF/dq) and converts the
     /// scaled dx into node derivatives.
     fn respond(&mut self) -> Result<Vec<NodeDerivative>> {
-        let dx = self
-            .workspace
-            .solve_linear(&self.values, &self.scratch[0])
-            .ok_or_else(|| {
-                invalid(
-                    "solution",
-                    "is at a singular point of the collocation system (zero pivot or non-finite step)",
-                    "no sensitivity exists at a bifurcation such as buckling; move the loads slightly",
-                )
-            })?;
+        let dx = self.workspace.solve_again(&self.scratch[0]).ok_or_else(singular)?;
         let length = self.system.model.robot.length();
         Ok(self
             .states
@@ -612,4 +600,13 @@ fn moduli(sens: &mut Sensitivity) -> Result<Option<ModulusSensitivities>> {
 pub fn backbone_tension_sensitivity(robot: &Robot, solution: &Solution, tendon: usize) -> Result<Vec<Vector3<f64>>> {
     let mut sens = Sensitivity::new(robot, solution)?;
     Ok(sens.tension(tendon)?.iter().map(|d| d.p).collect())
+}
+
+/// The error for a solution at a singular point of the collocation system.
+fn singular() -> crate::Error {
+    invalid(
+        "solution",
+        "is at a singular point of the collocation system (zero pivot or non-finite step)",
+        "no sensitivity exists at a bifurcation such as buckling; move the loads slightly",
+    )
 }

@@ -94,3 +94,20 @@ fn singular_matrix_is_reported_not_panicked() {
         );
     }
 }
+
+#[test]
+fn solving_again_with_stored_factors_matches_a_fresh_solve() {
+    let robot = two_segment();
+    let (system, values, rhs) = jacobian(&robot, 16);
+    let other: Vec<f64> = (0..rhs.len()).map(|i| ((i as f64) * 0.37).sin()).collect();
+    for solver in [LinearSolver::Auto, LinearSolver::SparseLu] {
+        let mut ws = Workspace::new(&system, solver).unwrap();
+        let fresh = ws.solve_linear(&values, &other).unwrap().to_vec();
+        ws.solve_linear(&values, &rhs).unwrap();
+        let again = ws.solve_again(&other).unwrap().to_vec();
+        let scale = fresh.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+        let diff = fresh.iter().zip(&again).fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
+        // 1e-12: the same factors and operations; only the order of rounding differs
+        assert!(diff <= 1e-12 * scale, "{solver:?}: {diff:.3e} of {scale:.3e}");
+    }
+}

@@ -61,7 +61,7 @@ pub enum LinearSolver {
 
 enum Linear {
     Sparse(Box<SparseLu>),
-    Blocks(BlockElimination),
+    Blocks(Box<BlockElimination>),
 }
 
 /// faer's sparse LU with the pattern, value slots and symbolic factorization of one mesh.
@@ -148,6 +148,28 @@ impl SparseLu {
     }
 }
 
+impl SparseLu {
+    /// Solves in place with the numeric factors of the last successful [`SparseLu::solve`].
+    fn solve_again(&mut self, x: &mut [f64]) {
+        let SparseLu {
+            symbolic, numeric, mem, ..
+        } = self;
+        let lu = faer::sparse::linalg::lu::LuRef::new_unchecked(symbolic, numeric);
+        // A panic here would mean no factorization was made: report it as non-finite.
+        let solved = catch_unwind(AssertUnwindSafe(|| {
+            lu.solve_in_place_with_conj(
+                Conj::No,
+                ColMut::from_slice_mut(x).as_mat_mut(),
+                Par::Seq,
+                MemStack::new(mem),
+            );
+        }));
+        if solved.is_err() {
+            x.fill(f64::NAN);
+        }
+    }
+}
+
 impl Workspace {
     /// Builds the buffers and, for the sparse path, the pattern and symbolic LU of
     /// `system`'s mesh.
@@ -157,7 +179,7 @@ impl Workspace {
     pub fn new(system: &System, solver: LinearSolver) -> Result<Self> {
         let n = system.unknowns();
         let linear = match solver {
-            LinearSolver::Auto => Linear::Blocks(BlockElimination::new(system.mesh.nodes.len())),
+            LinearSolver::Auto => Linear::Blocks(Box::new(BlockElimination::new(system.mesh.nodes.len()))),
             LinearSolver::SparseLu => Linear::Sparse(Box::new(SparseLu::new(system)?)),
         };
         Ok(Workspace {
@@ -207,6 +229,21 @@ impl Workspace {
         }
         let mut report = SolveReport::new(crate::report::Method::Collocation);
         self.solve(&mut report).then_some(&self.step[..])
+    }
+
+    /// Solves J x = rhs with the factorization of the last successful solve (a Newton step or
+    /// [`Workspace::solve_linear`]) for another right-hand side: no refactorization, so many
+    /// right-hand sides (sensitivities, one per parameter) cost one factorization. None for
+    /// a non-finite result.
+    pub fn solve_again(&mut self, rhs: &[f64]) -> Option<&[f64]> {
+        match &mut self.linear {
+            Linear::Blocks(blocks) => blocks.solve_again(rhs, &mut self.step),
+            Linear::Sparse(lu) => {
+                self.step.copy_from_slice(rhs);
+                lu.solve_again(&mut self.step);
+            }
+        }
+        self.step.iter().all(|x| x.is_finite()).then_some(&self.step[..])
     }
 }
 
