@@ -12,6 +12,7 @@ pub mod equations;
 pub mod equilibrium;
 pub mod error;
 pub mod guess;
+pub mod inverse;
 pub mod io;
 pub mod linearize;
 pub mod loads;
