@@ -6,6 +6,7 @@
 //! by shooting (an independent cross-check).
 #![warn(missing_docs)]
 
+pub mod calibration;
 pub mod cases;
 pub mod collocation;
 pub mod equations;

@@ -5,6 +5,7 @@
 //! Exit codes: 0 success, 2 bad input, 3 did not converge, 1 anything else.
 
 mod bench;
+mod calibrate;
 
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use std::fmt::Write as _;
@@ -51,6 +52,8 @@ enum Command {
     Example,
     /// Time the reference cases S and H, cold and warm (docs/benchmarks.md).
     Bench(bench::BenchArgs),
+    /// Fit E and the base XYZ Euler angles to measured tip positions (docs/calibration.md).
+    Calibrate(calibrate::CalibrateArgs),
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -323,6 +326,7 @@ fn main() -> ExitCode {
         Some(Command::Bench(args)) => bench::run(&args)
             .map_err(Failure::NotConverged)
             .and_then(|text| emit(&text)),
+        Some(Command::Calibrate(args)) => calibrate::run(&args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
