@@ -10,30 +10,10 @@
 use nalgebra::Vector3;
 use std::fmt::Write as _;
 use tdcr::calibration::{
-    self, CalibrationOptions, Experiment, Parameters, TipErrorStatistics, calibrate, paper_frame_rotation, predict,
-    prototype_in_paper_frame, table2_experiment,
+    self, CalibrationOptions, Experiment, GaussianNoise, Parameters, TipErrorStatistics, calibrate,
+    paper_frame_rotation, predict, prototype_in_paper_frame, table2_experiment,
 };
 use tdcr::{Routing, cases};
-
-/// Deterministic standard normal numbers: splitmix64 uniforms through Box-Muller.
-struct Gaussian(u64);
-
-impl Gaussian {
-    fn uniform(&mut self) -> f64 {
-        // splitmix64 (Steele, Lea, Flood 2014).
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^= z >> 31;
-        ((z >> 11) as f64 + 1.0) / (1u64 << 53) as f64
-    }
-
-    fn next(&mut self) -> f64 {
-        let (u, v) = (self.uniform(), self.uniform());
-        (-2.0 * u.ln()).sqrt() * (2.0 * std::f64::consts::PI * v).cos()
-    }
-}
 
 /// The prototype in the paper's frame as a robot file: nominal E and base angles, gravity
 /// along +y, the five tendons of Table 1 (tensions come from the CSV).
@@ -95,7 +75,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .collect();
     let options = CalibrationOptions::default();
     let tips = predict(&robot, &truth, &experiments, &options)?;
-    let mut gauss = Gaussian(2011);
+    let mut gauss = GaussianNoise::new(2011);
     for (e, tip) in experiments.iter_mut().zip(tips) {
         e.measured_tip = tip + noise * Vector3::new(gauss.next(), gauss.next(), gauss.next());
     }

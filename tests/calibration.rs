@@ -13,9 +13,9 @@ use nalgebra::{Matrix3, Vector3};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 use tdcr::calibration::{
-    self, Calibration, CalibrationOptions, Experiment, Fit, Parameters, Termination, TipErrorStatistics, calibrate,
-    euler_rates, euler_xyz, euler_xyz_from, paper_frame_rotation, parse_csv, predict, prototype_in_paper_frame,
-    table2_experiment, to_csv,
+    self, Calibration, CalibrationOptions, Experiment, Fit, GaussianNoise, Parameters, Termination, TipErrorStatistics,
+    calibrate, euler_rates, euler_xyz, euler_xyz_from, paper_frame_rotation, parse_csv, predict,
+    prototype_in_paper_frame, table2_experiment, to_csv,
 };
 use tdcr::{Error, Robot, cases, collocation, so3};
 
@@ -42,34 +42,13 @@ fn truth(robot: &Robot) -> Parameters {
     }
 }
 
-/// A deterministic Gaussian sequence: splitmix64 uniforms through Box-Muller.
-struct Gaussian(u64);
-
-impl Gaussian {
-    fn uniform(&mut self) -> f64 {
-        // splitmix64 (Steele, Lea, Flood 2014): a full-period 64-bit generator.
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^= z >> 31;
-        // 53 random bits in (0, 1], so that ln(u) is finite.
-        ((z >> 11) as f64 + 1.0) / (1u64 << 53) as f64
-    }
-
-    fn next(&mut self) -> f64 {
-        let (u, v) = (self.uniform(), self.uniform());
-        (-2.0 * u.ln()).sqrt() * (2.0 * std::f64::consts::PI * v).cos()
-    }
-}
-
 /// The chosen experiments in the world frame turned by `frame`, with tips measured on
 /// `truth` plus `noise` (m) per coordinate; also the RMS of the noise actually added (m).
 fn synthetic(robot: &Robot, frame: &Matrix3<f64>, truth: &Parameters, noise: f64, seed: u64) -> (Vec<Experiment>, f64) {
     let table = cases::table2();
     let mut experiments: Vec<Experiment> = CHOSEN.iter().map(|&i| table2_experiment(&table[i], frame)).collect();
     let tips = predict(robot, truth, &experiments, &CalibrationOptions::default()).unwrap();
-    let mut gauss = Gaussian(seed);
+    let mut gauss = GaussianNoise::new(seed);
     let mut sum = 0.0;
     for (e, tip) in experiments.iter_mut().zip(tips) {
         let n = noise * Vector3::new(gauss.next(), gauss.next(), gauss.next());
