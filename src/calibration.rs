@@ -364,6 +364,16 @@ impl Default for Fit {
 }
 
 impl Fit {
+    /// Every parameter: E, the Euler angles, the base position and the tendon offset scale.
+    pub fn all() -> Self {
+        Fit {
+            youngs_modulus: true,
+            euler: true,
+            base_position: true,
+            offset_scale: true,
+        }
+    }
+
     /// Names of the fitted parameters, e.g. `["E", "alpha", "beta", "gamma"]`.
     pub fn names(&self) -> Vec<&'static str> {
         layout(self).iter().map(|u| u.name()).collect()

@@ -241,12 +241,7 @@ fn every_parameter_group_is_recovered() {
     truth.offset_scale = 1.03;
     let (experiments, _) = synthetic(&robot, &paper_frame_rotation(), &truth, 0.0, 1);
     let options = CalibrationOptions {
-        fit: Fit {
-            youngs_modulus: true,
-            euler: true,
-            base_position: true,
-            offset_scale: true,
-        },
+        fit: Fit::all(),
         ..Default::default()
     };
     let fit = calibrate(&robot, &experiments, &options).unwrap();
@@ -497,12 +492,7 @@ fn invalid_inputs_name_the_field() {
     check(&experiments, &none, "options.fit", "selects no parameter");
 
     let everything = CalibrationOptions {
-        fit: Fit {
-            youngs_modulus: true,
-            euler: true,
-            base_position: true,
-            offset_scale: true,
-        },
+        fit: Fit::all(),
         ..Default::default()
     };
     check(
