@@ -357,6 +357,124 @@ impl Factor {
     }
 }
 
+/// Pass 1 of the linearization at one point: the per-tendon quantities (the first
+/// [`CACHED_TENDONS`] of them, when a cache is given), the factored M and the rates x.
+struct Assembled {
+    factor: Factor,
+    /// The rates (v', u') as a row.
+    x: SMatrix<f64, 1, 6>,
+    /// Tendons that load the backbone here.
+    count: usize,
+    /// n_b = D (v - v*), body frame (N).
+    n_b: Vector3<f64>,
+    /// m_b = C (u - u*), body frame (N m).
+    m_b: Vector3<f64>,
+    /// R^T f_e (N/m).
+    f_b: Vector3<f64>,
+    /// R^T l_e (N m/m).
+    l_b: Vector3<f64>,
+}
+
+/// Eq. 13 (corrected) at (R, v, u): builds M and the right-hand side (module docs), factors
+/// M and solves for the rates, keeping the first tendons' quantities in `cache` if given.
+fn assemble(
+    model: &Model,
+    site: &Site,
+    segment_end: f64,
+    (R, v, u): (&Matrix3<f64>, &Vector3<f64>, &Vector3<f64>),
+    mut cache: Option<&mut [TendonPoint; CACHED_TENDONS]>,
+) -> Result<Assembled> {
+    let kse = &site.section.section.kse;
+    let kbt = &site.section.section.kbt;
+    let (kse_s, kbt_s) = (&site.section.kse_s, &site.section.kbt_s);
+    let reference = &site.reference;
+    let dv = v - reference.v_star;
+    let du = u - reference.u_star;
+    let n_b = dv.component_mul(kse); // D (v - v*)
+    let m_b = du.component_mul(kbt); // C (u - u*)
+    let f_b = R.tr_mul(&site.f_e); // R^T f_e
+    let l_b = R.tr_mul(&site.l_e); // R^T l_e
+
+    // The tendon blocks A, G and H of M, and a, b.
+    let mut count = 0;
+    let mut A = Matrix3::<f64>::zeros();
+    let mut G = Matrix3::<f64>::zeros();
+    let mut H = Matrix3::<f64>::zeros();
+    let mut a = Vector3::<f64>::zeros();
+    let mut b = Vector3::<f64>::zeros();
+    for (i, tension, rp) in model.distributed_tendons(site.s, segment_end) {
+        let tp = TendonPoint::new(i, tension, &rp, site.s, v, u)?;
+        let A_i = tp.A();
+        let G_i = mul_hat(&A_i, &-tp.r); // -A_i r^
+        A += A_i;
+        G += G_i;
+        H += hat_mul(&tp.r, &G_i); // -r^ A_i r^
+        let a_i = A_i * tp.c;
+        b += tp.r.cross(&a_i);
+        a += a_i;
+        if let Some(cache) = cache.as_deref_mut()
+            && count < CACHED_TENDONS
+        {
+            cache[count] = tp;
+        }
+        count += 1;
+    }
+
+    let rhs_v = reference.v_star_s.component_mul(kse) - u.cross(&n_b) - dv.component_mul(kse_s) - f_b - a;
+    let rhs_u =
+        reference.u_star_s.component_mul(kbt) - u.cross(&m_b) - du.component_mul(kbt_s) - v.cross(&n_b) - l_b - b;
+    let mut M = Matrix6::<f64>::zeros();
+    M.fixed_view_mut::<3, 3>(0, 0).copy_from(&A);
+    M.fixed_view_mut::<3, 3>(0, 3).copy_from(&G);
+    M.fixed_view_mut::<3, 3>(3, 0).copy_from(&G.transpose()); // B = G^T
+    M.fixed_view_mut::<3, 3>(3, 3).copy_from(&H);
+    for j in 0..3 {
+        M[(j, j)] += kse[j];
+        M[(j + 3, j + 3)] += kbt[j];
+    }
+    // The right-hand side as a row, (rhs_v^T, rhs_u^T).
+    let mut x = SMatrix::<f64, 1, 6>::new(rhs_v[0], rhs_v[1], rhs_v[2], rhs_u[0], rhs_u[1], rhs_u[2]);
+    // M is SPD (docs/model.md section 4): Cholesky, LU only if rounding made it fail.
+    let factor = Factor::new(&M);
+    if !factor.solve_transposed_mut(&mut x) {
+        return Err(breakdown(site.s));
+    }
+    Ok(Assembled {
+        factor,
+        x,
+        count,
+        n_b,
+        m_b,
+        f_b,
+        l_b,
+    })
+}
+
+fn breakdown(s: f64) -> Error {
+    Error::Breakdown {
+        s,
+        what: "the 6x6 matrix [D + A, G; B, C + H] of eq. 13 is singular".into(),
+    }
+}
+
+/// Eq. 13 (corrected): the strain rates (v', u') stacked, the same as
+/// [`Model::strain_rates`] in f64 but without its generic-scalar overhead (the fast path of
+/// every residual evaluation).
+///
+/// # Errors
+/// As [`Model::strain_rates`].
+pub fn rates(
+    model: &Model,
+    site: &Site,
+    segment_end: f64,
+    R: &Matrix3<f64>,
+    v: &Vector3<f64>,
+    u: &Vector3<f64>,
+) -> Result<Vector6<f64>> {
+    let x = assemble(model, site, segment_end, (R, v, u), None)?.x;
+    Ok(Vector6::from_fn(|i, _| x[i]))
+}
+
 /// Eq. 13 (corrected) and its exact first derivatives at a site for the state (R, v, u):
 /// the rates (v', u') of [`Model::strain_rates`], d(v', u')/d(v, u), and d(v', u')/d(phi)
 /// for R -> R exp(hat(phi)). The tendons that reach `segment_end` load the backbone, as in
@@ -394,64 +512,18 @@ pub fn linearize(
     v: &Vector3<f64>,
     u: &Vector3<f64>,
 ) -> Result<Linearization> {
-    let kse = &site.section.section.kse;
-    let kbt = &site.section.section.kbt;
-    let (kse_s, kbt_s) = (&site.section.kse_s, &site.section.kbt_s);
-    let reference = &site.reference;
-    let dv = v - reference.v_star;
-    let du = u - reference.u_star;
-    let n_b = dv.component_mul(kse); // D (v - v*)
-    let m_b = du.component_mul(kbt); // C (u - u*)
-    let f_b = R.tr_mul(&site.f_e); // R^T f_e
-    let l_b = R.tr_mul(&site.l_e); // R^T l_e
-
-    // Pass 1: the tendon blocks A, G and H of M, and a, b.
     let mut cache = [TendonPoint::ZERO; CACHED_TENDONS];
-    let mut count = 0;
-    let mut A = Matrix3::<f64>::zeros();
-    let mut G = Matrix3::<f64>::zeros();
-    let mut H = Matrix3::<f64>::zeros();
-    let mut a = Vector3::<f64>::zeros();
-    let mut b = Vector3::<f64>::zeros();
-    for (i, tension, rp) in model.distributed_tendons(site.s, segment_end) {
-        let tp = TendonPoint::new(i, tension, &rp, site.s, v, u)?;
-        let A_i = tp.A();
-        let G_i = mul_hat(&A_i, &-tp.r); // -A_i r^
-        A += A_i;
-        G += G_i;
-        H += hat_mul(&tp.r, &G_i); // -r^ A_i r^
-        let a_i = A_i * tp.c;
-        b += tp.r.cross(&a_i);
-        a += a_i;
-        if count < CACHED_TENDONS {
-            cache[count] = tp;
-        }
-        count += 1;
-    }
-
-    let rhs_v = reference.v_star_s.component_mul(kse) - u.cross(&n_b) - dv.component_mul(kse_s) - f_b - a;
-    let rhs_u =
-        reference.u_star_s.component_mul(kbt) - u.cross(&m_b) - du.component_mul(kbt_s) - v.cross(&n_b) - l_b - b;
-    let mut M = Matrix6::<f64>::zeros();
-    M.fixed_view_mut::<3, 3>(0, 0).copy_from(&A);
-    M.fixed_view_mut::<3, 3>(0, 3).copy_from(&G);
-    M.fixed_view_mut::<3, 3>(3, 0).copy_from(&G.transpose()); // B = G^T
-    M.fixed_view_mut::<3, 3>(3, 3).copy_from(&H);
-    for j in 0..3 {
-        M[(j, j)] += kse[j];
-        M[(j + 3, j + 3)] += kbt[j];
-    }
-    // The right-hand side as a row, (rhs_v^T, rhs_u^T).
-    let mut x = SMatrix::<f64, 1, 6>::new(rhs_v[0], rhs_v[1], rhs_v[2], rhs_u[0], rhs_u[1], rhs_u[2]);
-    // M is SPD (docs/model.md section 4): Cholesky, LU only if rounding made it fail.
-    let factor = Factor::new(&M);
-    let breakdown = || Error::Breakdown {
-        s: site.s,
-        what: "the 6x6 matrix [D + A, G; B, C + H] of eq. 13 is singular".into(),
-    };
-    if !factor.solve_transposed_mut(&mut x) {
-        return Err(breakdown());
-    }
+    let Assembled {
+        factor,
+        x,
+        count,
+        n_b,
+        m_b,
+        f_b,
+        l_b,
+    } = assemble(model, site, segment_end, (R, v, u), Some(&mut cache))?;
+    let (kse, kbt) = (&site.section.section.kse, &site.section.section.kbt);
+    let (kse_s, kbt_s) = (&site.section.kse_s, &site.section.kbt_s);
     let x_v = Vector3::new(x[0], x[1], x[2]);
     let x_u = Vector3::new(x[3], x[4], x[5]);
 
@@ -488,7 +560,7 @@ pub fn linearize(
         }
     }
     if !factor.solve_transposed_mut(&mut dFt) {
-        return Err(breakdown());
+        return Err(breakdown(site.s));
     }
     // d(v', u') = -M^-1 dF
     Ok(Linearization {
@@ -563,15 +635,16 @@ mod tests {
         check_model(&Model::new(robot), s, end, R, v, u);
     }
 
-    /// Checks `linearize` at (s, R, v, u) against f64 `strain_rates` and against AD.
+    /// Checks `linearize` and `rates` at (s, R, v, u) against f64 `strain_rates` and against AD.
     fn check_model(model: &Model, s: f64, end: f64, R: &Matrix3<f64>, v: &Vector3<f64>, u: &Vector3<f64>) {
         let site = model.site(s);
         let lin = linearize(model, &site, end, R, v, u).unwrap();
         let (v_s, u_s) = model.strain_rates(&site, end, R, v, u).unwrap();
         let rates = Vector6::from_fn(|j, _| if j < 3 { v_s[j] } else { u_s[j - 3] });
         let (ad_rates, d_strains, d_rotation) = by_dual(model, &site, end, R, v, u);
+        let fast = super::rates(model, &site, end, R, v, u).unwrap();
         let errors = [
-            rel(&lin.rates, &rates),
+            rel(&lin.rates, &rates).max(rel(&fast, &rates)),
             rel(&ad_rates, &rates),
             rel(&lin.d_strains, &d_strains),
             rel(&lin.d_rotation, &d_rotation),

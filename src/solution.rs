@@ -87,7 +87,8 @@ impl Solution {
         let mut nodes = Vec::with_capacity(states.len());
         for (k, &State { s, p, R, v, u }) in states.iter().enumerate() {
             let site = model.site(s);
-            let (v_s, u_s) = model.strain_rates(&site, segment_ends[k], &R, &v, &u)?;
+            let rates = crate::linearize::rates(model, &site, segment_ends[k], &R, &v, &u)?;
+            let (v_s, u_s) = (rates.fixed_rows::<3>(0).into(), rates.fixed_rows::<3>(3).into());
             let (n, m) = model.internal_wrench(&site, &R, &v, &u);
             nodes.push(Node {
                 s,

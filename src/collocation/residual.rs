@@ -20,7 +20,7 @@
 
 use crate::equations::{Model, Site, lift, lift_m};
 use crate::error::Result;
-use crate::linearize::{Linearization, linearize};
+use crate::linearize::{self, Linearization, linearize};
 use crate::solution::State;
 use crate::{Real, so3};
 use nalgebra::{Matrix3, SMatrix, SVector, Vector3};
@@ -104,13 +104,17 @@ pub fn jump<T: Real>(
 }
 
 /// The right-hand side F(s, y) in the local coordinates of an interval starting at `Rk`.
-fn rhs<T: Real>(model: &Model, site: &Site, segment_end: f64, Rk: &Matrix3<T>, y: &Block<T>) -> Result<Block<T>> {
-    let theta: Vector3<T> = y.fixed_rows::<3>(3).into();
-    let v: Vector3<T> = y.fixed_rows::<3>(6).into();
-    let u: Vector3<T> = y.fixed_rows::<3>(9).into();
+fn rhs(model: &Model, site: &Site, segment_end: f64, Rk: &Matrix3<f64>, y: &Block<f64>) -> Result<Block<f64>> {
+    let theta: Vector3<f64> = y.fixed_rows::<3>(3).into();
+    let v: Vector3<f64> = y.fixed_rows::<3>(6).into();
+    let u: Vector3<f64> = y.fixed_rows::<3>(9).into();
     let R = Rk * so3::exp(&theta);
-    let (v_s, u_s) = model.strain_rates(site, segment_end, &R, &v, &u)?;
-    Ok(stack(&(R * v), &(so3::right_jacobian_inv(&theta) * u), &v_s, &u_s))
+    let rates = linearize::rates(model, site, segment_end, &R, &v, &u)?;
+    let mut f = Block::zeros();
+    f.fixed_rows_mut::<3>(0).copy_from(&(R * v));
+    f.fixed_rows_mut::<3>(3).copy_from(&(so3::right_jacobian_inv(&theta) * u));
+    f.fixed_rows_mut::<6>(6).copy_from(&rates);
+    Ok(f)
 }
 
 /// The sites an interval needs: at its start, midpoint and end.
@@ -124,32 +128,26 @@ pub struct IntervalSites {
     pub end: Site,
 }
 
-/// Interval rows: Hermite-Simpson collocation in local coordinates (12 rows).
-pub fn interval<T: Real>(
-    model: &Model,
-    sites: &IntervalSites,
-    segment_end: f64,
-    a: &State,
-    b: &State,
-    da: &Delta<T>,
-    db: &Delta<T>,
-) -> Result<Block<T>> {
-    let length = model.robot.length();
-    let (na, nb) = (perturb(a, da, length), perturb(b, db, length));
-    let h = T::from_f64(sites.end.s - sites.start.s).unwrap_or_else(T::zero);
-    let zero = Vector3::<T>::zeros();
-    let theta1 = so3::log(&(na.R.transpose() * nb.R));
-    let y0 = stack(&na.p, &zero, &na.v, &na.u);
-    let y1 = stack(&nb.p, &theta1, &nb.v, &nb.u);
-    let f0 = rhs(model, &sites.start, segment_end, &na.R, &y0)?;
-    let f1 = rhs(model, &sites.end, segment_end, &na.R, &y1)?;
-    let half = T::from_f64(0.5).unwrap_or_else(T::one);
-    let eighth = T::from_f64(0.125).unwrap_or_else(T::one);
-    let ym = (y0 + y1) * half + (f0 - f1) * (h * eighth);
-    let fm = rhs(model, &sites.mid, segment_end, &na.R, &ym)?;
-    let sixth = T::from_f64(1.0 / 6.0).unwrap_or_else(T::one);
-    let four = T::from_f64(4.0).unwrap_or_else(T::one);
-    Ok(scale_rows(y1 - y0 - (f0 + fm * four + f1) * (h * sixth), length))
+/// The interval's end points in its local coordinates: y_0 = (p_a, 0, v_a, u_a) and
+/// y_1 = (p_b, log(R_a^T R_b), v_b, u_b).
+fn end_points(a: &State, b: &State) -> (Block<f64>, Block<f64>) {
+    let theta1 = so3::log(&a.R.tr_mul(&b.R));
+    (
+        stack(&a.p, &Vector3::zeros(), &a.v, &a.u),
+        stack(&b.p, &theta1, &b.v, &b.u),
+    )
+}
+
+/// Interval rows: Hermite-Simpson collocation in local coordinates (12 rows) between the
+/// node states `a` and `b`.
+pub fn interval(model: &Model, sites: &IntervalSites, segment_end: f64, a: &State, b: &State) -> Result<Block<f64>> {
+    let h = sites.end.s - sites.start.s;
+    let (y0, y1) = end_points(a, b);
+    let f0 = rhs(model, &sites.start, segment_end, &a.R, &y0)?;
+    let f1 = rhs(model, &sites.end, segment_end, &a.R, &y1)?;
+    let ym = (y0 + y1) * 0.5 + (f0 - f1) * (h / 8.0);
+    let fm = rhs(model, &sites.mid, segment_end, &a.R, &ym)?;
+    Ok(scale_rows(y1 - y0 - (f0 + fm * 4.0 + f1) * (h / 6.0), model.robot.length()))
 }
 
 /// The defect y'(s) - F(s, y(s)) of the interval's cubic Hermite interpolant at fraction
@@ -164,10 +162,7 @@ pub fn defect(
     t: f64,
 ) -> Result<Block<f64>> {
     let h = sites.end.s - sites.start.s;
-    let zero = Vector3::zeros();
-    let theta1 = so3::log(&(a.R.transpose() * b.R));
-    let y0 = stack(&a.p, &zero, &a.v, &a.u);
-    let y1 = stack(&b.p, &theta1, &b.v, &b.u);
+    let (y0, y1) = end_points(a, b);
     let f0 = rhs(model, &sites.start, segment_end, &a.R, &y0)?;
     let f1 = rhs(model, &sites.end, segment_end, &a.R, &y1)?;
     // Cubic Hermite basis and its derivative at t.

@@ -122,21 +122,6 @@ impl<'a> System<'a> {
         }
     }
 
-    fn link<T: crate::Real>(&self, k: usize, x: &[State], da: &Delta<T>, db: &Delta<T>) -> Result<residual::Block<T>> {
-        match &self.interval_sites[k] {
-            Some(sites) => residual::interval(
-                &self.model,
-                sites,
-                self.mesh.nodes[k].segment_end,
-                &x[k],
-                &x[k + 1],
-                da,
-                db,
-            ),
-            None => residual::jump(&self.model, &self.node_sites[k], &x[k], &x[k + 1], da, db),
-        }
-    }
-
     /// The residual at the states `x` (one per mesh node), written into `out`.
     ///
     /// # Errors
@@ -147,7 +132,10 @@ impl<'a> System<'a> {
         out[..6].copy_from_slice(base.as_slice());
         let links = x.len() - 1;
         for k in 0..links {
-            let r = self.link(k, x, &z, &z)?;
+            let r = match &self.interval_sites[k] {
+                Some(sites) => residual::interval(&self.model, sites, self.mesh.nodes[k].segment_end, &x[k], &x[k + 1])?,
+                None => residual::jump(&self.model, &self.node_sites[k], &x[k], &x[k + 1], &z, &z)?,
+            };
             out[6 + k * NODE..6 + (k + 1) * NODE].copy_from_slice(r.as_slice());
         }
         let tip = residual::tip(&self.model, &self.node_sites[links], &x[links], &z)?;
@@ -199,7 +187,7 @@ impl<'a> System<'a> {
                             Dual64::from(0.0)
                         }
                     });
-                    let r = self.link(k, x, &da, &db)?;
+                    let r = residual::jump(&self.model, &self.node_sites[k], &x[k], &x[k + 1], &da, &db)?;
                     for (i, d) in r.iter().enumerate() {
                         out[6 + k * NODE + i] = d.re;
                         values[at + i * width + j] = d.eps;
