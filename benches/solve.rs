@@ -61,6 +61,7 @@ fn newton_iteration(c: &mut Criterion) {
         let settings = Settings {
             tolerance: 0.0,
             max_iterations: 1,
+            reuse_factors: false,
         };
         let mut report = SolveReport::new(Method::Collocation);
         let mut x = start.clone();

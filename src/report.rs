@@ -57,6 +57,9 @@ pub struct Iteration {
     pub step: f64,
     /// Line-search fraction of the step taken, in (0, 1].
     pub damping: f64,
+    /// Whether the step was solved with a Jacobian evaluated at this iterate (a Newton
+    /// step); false for a chord step, solved with the factors of an earlier Jacobian.
+    pub fresh_jacobian: bool,
 }
 
 /// Evaluation counts.

@@ -142,6 +142,7 @@ pub fn solve(robot: &Robot, options: &Options) -> Result<Solution> {
                     residual: norm,
                     step: step.amax(),
                     damping,
+                    fresh_jacobian: true,
                 });
                 x = trial;
                 res = r;
@@ -173,6 +174,7 @@ pub fn solve(robot: &Robot, options: &Options) -> Result<Solution> {
                     residual: norm,
                     step: step.amax(),
                     damping: 1.0,
+                    fresh_jacobian: true,
                 });
                 norm = r.amax();
                 trajectory = traj;

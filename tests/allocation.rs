@@ -61,6 +61,7 @@ fn newton_solve_does_not_allocate(solver: LinearSolver) {
         let settings = Settings {
             tolerance: 1e-11,
             max_iterations: 30,
+            reuse_factors: false,
         };
         let mut report = SolveReport::new(Method::Collocation);
         // Setup: buffers sized by a first solve (the trial-state vector gets its capacity).
@@ -82,6 +83,25 @@ fn newton_solve_does_not_allocate(solver: LinearSolver) {
             ALLOCATIONS.load(Ordering::Relaxed),
             0,
             "allocations inside the Newton loop"
+        );
+        // Counted: a solve that starts with chord steps on the stored factors.
+        x.clone_from(&warm_up);
+        let reuse = Settings {
+            reuse_factors: true,
+            ..settings
+        };
+        COUNTING.with(|c| c.set(true));
+        let (termination, _) = newton::run(&system, &mut ws, &mut x, &reuse, &mut report);
+        COUNTING.with(|c| c.set(false));
+        assert_eq!(termination, Termination::Converged);
+        assert!(
+            report.history.iter().any(|it| !it.fresh_jacobian),
+            "the stored factors must have been used"
+        );
+        assert_eq!(
+            ALLOCATIONS.load(Ordering::Relaxed),
+            0,
+            "allocations inside the Newton loop (chord steps)"
         );
     }
 }

@@ -190,9 +190,10 @@ fn noise_free_data_give_the_parameters_back() {
     assert!(fit.start_errors.mean > 5e-3, "{:?}", fit.start_errors);
     let tips = predict(&robot, &fit.fitted, &experiments, &CalibrationOptions::default()).unwrap();
     for (tip, model) in tips.iter().zip(&fit.tips) {
-        // 1e-11 m: the same solves from other starts stop at other points below the
-        // residual tolerance 1e-12, a few 1e-12 m apart (tests/sensitivity.rs). Measured 1.3e-12.
-        assert!((tip - model).norm() < 1e-11, "{tip} {model}");
+        // 5e-11 m: the same solves from other starts stop at other points below the
+        // residual tolerance 1e-12; chord steps converge linearly, so a solve may stop just
+        // below it, 1e-11 m from another (measured 1.1e-11).
+        assert!((tip - model).norm() < 5e-11, "{tip} {model}");
     }
 }
 

@@ -105,12 +105,25 @@ pub fn solve_from(robot: &Robot, options: &Options, guess: &Solution) -> Result<
     solve_impl(robot, options, Some(guess), &mut None)
 }
 
-/// A mesh and the Newton workspace built for it.
-type Cache = Option<(Mesh, LinearSolver, Workspace)>;
+/// The Newton workspace of the last solve, the mesh and linear solver it was built for,
+/// and the states that solve ended at (its factors belong to a Jacobian near them).
+struct Cached {
+    mesh: Mesh,
+    solver: LinearSolver,
+    workspace: Workspace,
+    last: Option<Vec<State>>,
+}
+
+type Cache = Option<Cached>;
 
 /// A collocation solver that keeps its Newton workspace (buffers and, on the sparse path,
 /// the pattern and symbolic LU) between solves, so that repeated solves on the same mesh
 /// (sweeps, control loops, calibration) skip the setup.
+///
+/// It also keeps the factors of the last Newton matrix: [`Solver::solve_from`] given the
+/// solution this solver just returned (the usual step of a sweep or a control loop) starts
+/// with chord steps on those factors, which for a small change of tensions or loads
+/// converge without evaluating a new Jacobian.
 pub struct Solver {
     /// The options of every solve.
     pub options: Options,
@@ -131,7 +144,8 @@ impl Solver {
         solve_impl(robot, &self.options, None, &mut self.cache)
     }
 
-    /// As [`solve_from`], reusing the workspace of the previous solve when the mesh is the same.
+    /// As [`solve_from`], reusing the workspace of the previous solve when the mesh is the
+    /// same, and its factors when `guess` is the solution it returned.
     ///
     /// # Errors
     /// As [`solve`].
@@ -217,14 +231,24 @@ fn solve_impl(robot: &Robot, options: &Options, warm: Option<&Solution>, cache: 
     let model = Model::new(robot);
     let mut report = SolveReport::new(Method::Collocation);
     let mesh = initial_mesh(robot, options)?;
-    let cold = guess::initial(&model, &mesh.nodes, options.initial_guess);
+    let warm = warm.map(|g| interpolate(g, &mesh));
+    // The cached factors belong to the guess when it is the cached solver's last solution.
+    let reuse = match (cache.as_ref(), &warm) {
+        (Some(c), Some(w)) => c.mesh == mesh && c.solver == options.linear_solver && c.last.as_ref() == Some(w),
+        _ => false,
+    };
     let x0 = match warm {
-        Some(g) => better_start(&System::new(model, mesh.clone()), interpolate(g, &mesh), cold),
-        None => cold,
+        Some(w) if reuse => w,
+        Some(w) => better_start(
+            &System::new(model, mesh.clone()),
+            w,
+            guess::initial(&model, &mesh.nodes, options.initial_guess),
+        ),
+        None => guess::initial(&model, &mesh.nodes, options.initial_guess),
     };
     let (mut mesh, mut x) = (
         mesh.clone(),
-        solve_on_mesh(&model, mesh, x0, options, &mut report, cache).map_err(|e| timed(e, start))?,
+        solve_on_mesh(&model, mesh, x0, reuse, options, &mut report, cache).map_err(|e| timed(e, start))?,
     );
     if let Some(tol) = options.tolerance {
         loop {
@@ -248,6 +272,7 @@ fn solve_impl(robot: &Robot, options: &Options, warm: Option<&Solution>, cache: 
                 &model,
                 fine.clone(),
                 interpolate(&guess, &fine),
+                false,
                 options,
                 &mut report,
                 cache,
@@ -276,11 +301,13 @@ fn segment_ends(mesh: &Mesh) -> Vec<f64> {
     mesh.nodes.iter().map(|n| n.segment_end).collect()
 }
 
-/// Newton on one mesh; on failure, load continuation from the unloaded shape.
+/// Newton on one mesh (starting with chord steps on the cached factors when
+/// `reuse_factors`); on failure, load continuation from the unloaded shape.
 fn solve_on_mesh(
     model: &Model,
     mesh: Mesh,
     x0: Vec<State>,
+    reuse_factors: bool,
     options: &Options,
     report: &mut SolveReport,
     cache: &mut Cache,
@@ -289,14 +316,20 @@ fn solve_on_mesh(
     let settings = Settings {
         tolerance: options.residual_tolerance,
         max_iterations: options.max_iterations,
+        reuse_factors,
     };
     let mut system = System::new(*model, mesh);
-    let mut ws = match cache.take() {
-        Some((m, kind, ws)) if m == system.mesh && kind == options.linear_solver => ws,
+    let mut workspace = match cache.take() {
+        Some(c) if c.mesh == system.mesh && c.solver == options.linear_solver => c.workspace,
         _ => Workspace::new(&system, options.linear_solver)?,
     };
-    let result = newton_with_continuation(&mut system, &mut ws, x0, options, &settings, report);
-    *cache = Some((system.mesh, options.linear_solver, ws));
+    let result = newton_with_continuation(&mut system, &mut workspace, x0, options, &settings, report);
+    *cache = Some(Cached {
+        mesh: system.mesh,
+        solver: options.linear_solver,
+        workspace,
+        last: result.as_ref().ok().cloned(),
+    });
     result
 }
 
@@ -386,6 +419,11 @@ fn continuation(
             );
             continue;
         }
+        // Each load step starts from the last converged one, whose factors are in `ws`.
+        let step_settings = Settings {
+            reuse_factors: true,
+            ..*settings
+        };
         let (mut lambda, mut dl): (f64, f64) = (0.0, 0.25);
         while lambda < 1.0 {
             let target = (lambda + dl).min(1.0);
@@ -393,7 +431,7 @@ fn continuation(
             system.set_factors(t, l);
             let mut trial = x.clone();
             report.load_steps += 1;
-            let (term, row) = newton::run(system, ws, &mut trial, settings, report);
+            let (term, row) = newton::run(system, ws, &mut trial, &step_settings, report);
             report.termination = term;
             if term == Termination::Converged {
                 lambda = target;

@@ -23,7 +23,7 @@ use crate::error::Result;
 use crate::linearize::{self, Linearization, linearize};
 use crate::solution::State;
 use crate::{Real, so3};
-use nalgebra::{Matrix3, SMatrix, SVector, Vector3};
+use nalgebra::{Matrix3, SMatrix, SVector, Vector3, Vector6};
 use num_dual::Dual64;
 
 /// Scaled perturbation of one node's unknowns.
@@ -112,7 +112,8 @@ fn rhs(model: &Model, site: &Site, segment_end: f64, Rk: &Matrix3<f64>, y: &Bloc
     let rates = linearize::rates(model, site, segment_end, &R, &v, &u)?;
     let mut f = Block::zeros();
     f.fixed_rows_mut::<3>(0).copy_from(&(R * v));
-    f.fixed_rows_mut::<3>(3).copy_from(&(so3::right_jacobian_inv(&theta) * u));
+    f.fixed_rows_mut::<3>(3)
+        .copy_from(&(so3::right_jacobian_inv(&theta) * u));
     f.fixed_rows_mut::<6>(6).copy_from(&rates);
     Ok(f)
 }
@@ -138,16 +139,50 @@ fn end_points(a: &State, b: &State) -> (Block<f64>, Block<f64>) {
     )
 }
 
+/// F at an interval's end point y_1 = (p_b, theta_1, v_b, u_b) in the local coordinates of
+/// a frame R_a, given the rates (v', u') at node b: (R_b v_b, J_r^-1(theta_1) u_b, rates),
+/// with R_b = R_a exp(theta_1).
+fn end_rhs(b: &State, theta1: &Vector3<f64>, rates: &Vector6<f64>) -> Block<f64> {
+    let mut f = Block::zeros();
+    f.fixed_rows_mut::<3>(0).copy_from(&(b.R * b.v));
+    f.fixed_rows_mut::<3>(3)
+        .copy_from(&(so3::right_jacobian_inv(theta1) * b.u));
+    f.fixed_rows_mut::<6>(6).copy_from(rates);
+    f
+}
+
 /// Interval rows: Hermite-Simpson collocation in local coordinates (12 rows) between the
-/// node states `a` and `b`.
-pub fn interval(model: &Model, sites: &IntervalSites, segment_end: f64, a: &State, b: &State) -> Result<Block<f64>> {
+/// node states `a` and `b`, and the rates (v', u') of eq. 13 at node b, which the next
+/// interval takes as `start_rates` (node rates do not depend on the interval: eq. 13 sees R
+/// only through R^T f_e and R^T l_e, and R_a exp(theta_1) is R_b). Without `start_rates` the
+/// rates at node a are evaluated here.
+///
+/// # Errors
+/// A model breakdown at a node or at the midpoint.
+pub fn interval(
+    model: &Model,
+    sites: &IntervalSites,
+    segment_end: f64,
+    a: &State,
+    b: &State,
+    start_rates: Option<Vector6<f64>>,
+) -> Result<(Block<f64>, Vector6<f64>)> {
     let h = sites.end.s - sites.start.s;
     let (y0, y1) = end_points(a, b);
-    let f0 = rhs(model, &sites.start, segment_end, &a.R, &y0)?;
-    let f1 = rhs(model, &sites.end, segment_end, &a.R, &y1)?;
+    let rates0 = match start_rates {
+        Some(r) => r,
+        None => linearize::rates(model, &sites.start, segment_end, &a.R, &a.v, &a.u)?,
+    };
+    let rates1 = linearize::rates(model, &sites.end, segment_end, &b.R, &b.v, &b.u)?;
+    let theta1: Vector3<f64> = y1.fixed_rows::<3>(3).into();
+    let f0 = end_rhs(a, &Vector3::zeros(), &rates0);
+    let f1 = end_rhs(b, &theta1, &rates1);
     let ym = (y0 + y1) * 0.5 + (f0 - f1) * (h / 8.0);
     let fm = rhs(model, &sites.mid, segment_end, &a.R, &ym)?;
-    Ok(scale_rows(y1 - y0 - (f0 + fm * 4.0 + f1) * (h / 6.0), model.robot.length()))
+    Ok((
+        scale_rows(y1 - y0 - (f0 + fm * 4.0 + f1) * (h / 6.0), model.robot.length()),
+        rates1,
+    ))
 }
 
 /// The defect y'(s) - F(s, y(s)) of the interval's cubic Hermite interpolant at fraction
@@ -194,36 +229,9 @@ struct PointLinearization {
     f_frame: SMatrix<f64, 12, 3>,
 }
 
-/// F(s, y) of an interval with frame `Rk` and its derivatives, assembled from the strain-rate
-/// linearization and the kinematics p' = R_k exp(theta) v, theta' = J_r(theta)^-1 u.
-fn rhs_linearized(
-    model: &Model,
-    site: &Site,
-    segment_end: f64,
-    Rk: &Matrix3<f64>,
-    y: &Block<f64>,
-) -> Result<PointLinearization> {
-    let theta: Vector3<f64> = y.fixed_rows::<3>(3).into();
-    let v: Vector3<f64> = y.fixed_rows::<3>(6).into();
-    let u: Vector3<f64> = y.fixed_rows::<3>(9).into();
-    let E = so3::exp(&theta);
-    let R = Rk * E;
-    let Jr = so3::right_jacobian(&theta);
-    let Jri = so3::right_jacobian_inv(&theta);
-    let Linearization {
-        rates,
-        d_strains,
-        d_rotation,
-    } = linearize(model, site, segment_end, &R, &v, &u)?;
-    let mut f = Block::zeros();
-    f.fixed_rows_mut::<3>(0).copy_from(&(R * v));
-    f.fixed_rows_mut::<3>(3).copy_from(&(Jri * u));
-    f.fixed_rows_mut::<6>(6).copy_from(&rates);
-    let mut f_y = SMatrix::<f64, 12, 12>::zeros();
-    // p' = R_k exp(theta) v: exp(theta + d) = exp(theta) exp(J_r d)
-    f_y.fixed_view_mut::<3, 3>(0, 3).copy_from(&(-R * so3::hat(&v) * Jr));
-    f_y.fixed_view_mut::<3, 3>(0, 6).copy_from(&R);
-    // theta' = J_r^-1(theta) u: the theta-derivative by three dual passes (a few dozen flops)
+/// d(J_r^-1(theta) u)/dtheta by three forward-mode passes (a few dozen flops each).
+fn d_right_jacobian_inv_u(theta: &Vector3<f64>, u: &Vector3<f64>) -> Matrix3<f64> {
+    let mut d = Matrix3::zeros();
     for j in 0..3 {
         let t = Vector3::from_fn(|i, _| {
             if i == j {
@@ -232,15 +240,39 @@ fn rhs_linearized(
                 Dual64::from(theta[i])
             }
         });
-        let d = so3::right_jacobian_inv(&t) * lift::<Dual64>(&u);
+        let column = so3::right_jacobian_inv(&t) * lift::<Dual64>(u);
         for i in 0..3 {
-            f_y[(3 + i, 3 + j)] = d[i].eps;
+            d[(i, j)] = column[i].eps;
         }
     }
+    d
+}
+
+/// F(s, y) of an interval with frame `Rk` and its derivatives, assembled from the strain-rate
+/// linearization `lin` at R = R_k exp(theta) and the kinematics p' = R_k exp(theta) v,
+/// theta' = J_r(theta)^-1 u.
+fn rhs_linearized(lin: &Linearization, Rk: &Matrix3<f64>, y: &Block<f64>) -> PointLinearization {
+    let theta: Vector3<f64> = y.fixed_rows::<3>(3).into();
+    let v: Vector3<f64> = y.fixed_rows::<3>(6).into();
+    let u: Vector3<f64> = y.fixed_rows::<3>(9).into();
+    let E = so3::exp(&theta);
+    let R = Rk * E;
+    let Jr = so3::right_jacobian(&theta);
+    let Jri = so3::right_jacobian_inv(&theta);
+    let mut f = Block::zeros();
+    f.fixed_rows_mut::<3>(0).copy_from(&(R * v));
+    f.fixed_rows_mut::<3>(3).copy_from(&(Jri * u));
+    f.fixed_rows_mut::<6>(6).copy_from(&lin.rates);
+    let mut f_y = SMatrix::<f64, 12, 12>::zeros();
+    // p' = R_k exp(theta) v: exp(theta + d) = exp(theta) exp(J_r d)
+    f_y.fixed_view_mut::<3, 3>(0, 3).copy_from(&(-R * so3::hat(&v) * Jr));
+    f_y.fixed_view_mut::<3, 3>(0, 6).copy_from(&R);
+    f_y.fixed_view_mut::<3, 3>(3, 3)
+        .copy_from(&d_right_jacobian_inv_u(&theta, &u));
     f_y.fixed_view_mut::<3, 3>(3, 9).copy_from(&Jri);
     // (v', u') depend on theta through R = R_k exp(theta): a right perturbation J_r d
-    f_y.fixed_view_mut::<6, 3>(6, 3).copy_from(&(d_rotation * Jr));
-    f_y.fixed_view_mut::<6, 6>(6, 6).copy_from(&d_strains);
+    f_y.fixed_view_mut::<6, 3>(6, 3).copy_from(&(lin.d_rotation * Jr));
+    f_y.fixed_view_mut::<6, 6>(6, 6).copy_from(&lin.d_strains);
     let mut f_frame = SMatrix::<f64, 12, 3>::zeros();
     // R_k exp(phi) w = R_k w - R_k hat(w) phi;  R_k exp(phi) E = R_k E exp(E^T phi)
     f_frame
@@ -248,65 +280,104 @@ fn rhs_linearized(
         .copy_from(&(-Rk * so3::hat(&(E * v))));
     f_frame
         .fixed_view_mut::<6, 3>(6, 0)
-        .copy_from(&(d_rotation * E.transpose()));
-    Ok(PointLinearization { f, f_y, f_frame })
+        .copy_from(&(lin.d_rotation * E.transpose()));
+    PointLinearization { f, f_y, f_frame }
 }
 
-/// Interval rows and their exact Jacobian with respect to the scaled unknowns of both
-/// nodes (12 x 24), by the chain rule through the Hermite-Simpson formula: three pointwise
+/// Interval rows, their exact Jacobian with respect to the scaled unknowns of both nodes
+/// (12 x 24), and the linearization of eq. 13 at node b (the next interval's `start`, shared
+/// as in [`interval`]), by the chain rule through the Hermite-Simpson formula: pointwise
 /// linearizations instead of differentiating the whole block.
+///
+/// The p columns are constant (F does not depend on p), so the chain rule runs on the other
+/// 18 columns, ordered (theta, v, u) of node a then of node b; of those, y_0 depends on
+/// v_a, u_a only and y_1 on theta_a, theta_b, v_b, u_b, so F_0 and F_1 need no products
+/// and only the midpoint needs a 12 x 9 by 9 x 18 one.
+///
+/// # Errors
+/// A model breakdown at a node or at the midpoint.
 pub fn interval_jacobian(
     model: &Model,
     sites: &IntervalSites,
     segment_end: f64,
     a: &State,
     b: &State,
-) -> Result<(Block<f64>, SMatrix<f64, 12, 24>)> {
+    start: Option<Linearization>,
+) -> Result<(Block<f64>, SMatrix<f64, 12, 24>, Linearization)> {
     let length = model.robot.length();
     let h = sites.end.s - sites.start.s;
-    let theta1 = so3::log(&(a.R.transpose() * b.R));
-    let y0 = stack(&a.p, &Vector3::zeros(), &a.v, &a.u);
-    let y1 = stack(&b.p, &theta1, &b.v, &b.u);
-    let p0 = rhs_linearized(model, &sites.start, segment_end, &a.R, &y0)?;
-    let p1 = rhs_linearized(model, &sites.end, segment_end, &a.R, &y1)?;
+    let (y0, y1) = end_points(a, b);
+    let theta1: Vector3<f64> = y1.fixed_rows::<3>(3).into();
+    let lin0 = match start {
+        Some(l) => l,
+        None => linearize(model, &sites.start, segment_end, &a.R, &a.v, &a.u)?,
+    };
+    let lin1 = linearize(model, &sites.end, segment_end, &b.R, &b.v, &b.u)?;
+    let p0 = rhs_linearized(&lin0, &a.R, &y0);
+    let p1 = rhs_linearized(&lin1, &a.R, &y1);
     let ym = (y0 + y1) * 0.5 + (p0.f - p1.f) * (h / 8.0);
-    let pm = rhs_linearized(model, &sites.mid, segment_end, &a.R, &ym)?;
+    let pm = rhs_linearized(
+        &linearize(
+            model,
+            &sites.mid,
+            segment_end,
+            &(a.R * so3::exp(&ym.fixed_rows::<3>(3).into())),
+            &ym.fixed_rows::<3>(6).into(),
+            &ym.fixed_rows::<3>(9).into(),
+        )?,
+        &a.R,
+        &ym,
+    );
     let residual = scale_rows(y1 - y0 - (p0.f + pm.f * 4.0 + p1.f) * (h / 6.0), length);
 
-    // dy0/dz and dy1/dz for z = (d_a, d_b) in scaled units (p + L dp, u + du / L).
-    let mut Y0 = SMatrix::<f64, 12, 24>::zeros();
-    let mut Y1 = SMatrix::<f64, 12, 24>::zeros();
+    // Columns (theta_a, v_a, u_a, theta_b, v_b, u_b) of dy0, dy1 and dF0, dF1 for the
+    // scaled unknowns (p + L dp, R exp(dtheta), v + dv, u + du / L).
+    let mut Y0 = SMatrix::<f64, 12, 18>::zeros();
+    let mut Y1 = SMatrix::<f64, 12, 18>::zeros();
     for i in 0..3 {
-        Y0[(i, i)] = length;
-        Y0[(6 + i, 6 + i)] = 1.0;
-        Y0[(9 + i, 9 + i)] = 1.0 / length;
-        Y1[(i, 12 + i)] = length;
-        Y1[(6 + i, 18 + i)] = 1.0;
-        Y1[(9 + i, 21 + i)] = 1.0 / length;
+        Y0[(6 + i, 3 + i)] = 1.0;
+        Y0[(9 + i, 6 + i)] = 1.0 / length;
+        Y1[(6 + i, 12 + i)] = 1.0;
+        Y1[(9 + i, 15 + i)] = 1.0 / length;
     }
     // theta_1 = log(exp(-d_a) Q exp(d_b)): d/d d_b = J_r^-1, d/d d_a = -J_r^-1 exp(theta_1)^T
     let Jri1 = so3::right_jacobian_inv(&theta1);
-    Y1.fixed_view_mut::<3, 3>(3, 3)
-        .copy_from(&(-Jri1 * so3::exp(&theta1).transpose()));
-    Y1.fixed_view_mut::<3, 3>(3, 15).copy_from(&Jri1);
-    // The frame R_k = R_a exp(d_a) enters every F through columns 3..6.
-    // F does not depend on p (columns 0..3 of dF/dy are zero): multiply the other nine only.
-    let total = |p: &PointLinearization, Y: &SMatrix<f64, 12, 24>| {
-        let mut d = p.f_y.fixed_columns::<9>(3) * Y.fixed_rows::<9>(3);
-        let mut frame = d.fixed_view_mut::<12, 3>(0, 3);
-        frame += p.f_frame;
-        d
-    };
-    let dF0 = total(&p0, &Y0);
-    let dF1 = total(&p1, &Y1);
+    let dtheta1_da = -Jri1 * so3::exp(&theta1).transpose();
+    Y1.fixed_view_mut::<3, 3>(3, 0).copy_from(&dtheta1_da);
+    Y1.fixed_view_mut::<3, 3>(3, 9).copy_from(&Jri1);
+    // The frame R_k = R_a exp(d_a) enters every F through the theta_a columns.
+    let mut dF0 = SMatrix::<f64, 12, 18>::zeros();
+    dF0.fixed_columns_mut::<3>(0).copy_from(&p0.f_frame);
+    dF0.fixed_columns_mut::<3>(3).copy_from(&p0.f_y.fixed_columns::<3>(6));
+    dF0.fixed_columns_mut::<3>(6)
+        .copy_from(&(p0.f_y.fixed_columns::<3>(9) / length));
+    let mut dF1 = SMatrix::<f64, 12, 18>::zeros();
+    let f1_theta = p1.f_y.fixed_columns::<3>(3);
+    dF1.fixed_columns_mut::<3>(0)
+        .copy_from(&(f1_theta * dtheta1_da + p1.f_frame));
+    dF1.fixed_columns_mut::<3>(9).copy_from(&(f1_theta * Jri1));
+    dF1.fixed_columns_mut::<3>(12).copy_from(&p1.f_y.fixed_columns::<3>(6));
+    dF1.fixed_columns_mut::<3>(15)
+        .copy_from(&(p1.f_y.fixed_columns::<3>(9) / length));
     let dYm = (Y0 + Y1) * 0.5 + (dF0 - dF1) * (h / 8.0);
-    let dFm = total(&pm, &dYm);
-    let mut J = Y1 - Y0 - (dF0 + dFm * 4.0 + dF1) * (h / 6.0);
+    let mut dFm = pm.f_y.fixed_columns::<9>(3) * dYm.fixed_rows::<9>(3);
+    let mut frame = dFm.fixed_columns_mut::<3>(0);
+    frame += pm.f_frame;
+    let Jc = Y1 - Y0 - (dF0 + dFm * 4.0 + dF1) * (h / 6.0);
+
+    let mut J = SMatrix::<f64, 12, 24>::zeros();
+    for i in 0..3 {
+        // p_1 - p_0 = L (dp_b - dp_a), and the p rows are divided by L below.
+        J[(i, i)] = -length;
+        J[(i, 12 + i)] = length;
+    }
+    J.fixed_view_mut::<12, 9>(0, 3).copy_from(&Jc.fixed_columns::<9>(0));
+    J.fixed_view_mut::<12, 9>(0, 15).copy_from(&Jc.fixed_columns::<9>(9));
     for c in 0..24 {
         for i in 0..3 {
             J[(i, c)] /= length;
             J[(9 + i, c)] *= length;
         }
     }
-    Ok((residual, J))
+    Ok((residual, J, lin1))
 }

@@ -131,10 +131,20 @@ impl<'a> System<'a> {
         let base = residual::base(&self.model, &x[0], &z);
         out[..6].copy_from_slice(base.as_slice());
         let links = x.len() - 1;
+        // Rates at the shared node of consecutive intervals, evaluated once.
+        let mut node_rates = None;
         for k in 0..links {
             let r = match &self.interval_sites[k] {
-                Some(sites) => residual::interval(&self.model, sites, self.mesh.nodes[k].segment_end, &x[k], &x[k + 1])?,
-                None => residual::jump(&self.model, &self.node_sites[k], &x[k], &x[k + 1], &z, &z)?,
+                Some(sites) => {
+                    let seg = self.mesh.nodes[k].segment_end;
+                    let (r, end) = residual::interval(&self.model, sites, seg, &x[k], &x[k + 1], node_rates)?;
+                    node_rates = Some(end);
+                    r
+                }
+                None => {
+                    node_rates = None;
+                    residual::jump(&self.model, &self.node_sites[k], &x[k], &x[k + 1], &z, &z)?
+                }
             };
             out[6 + k * NODE..6 + (k + 1) * NODE].copy_from_slice(r.as_slice());
         }
@@ -159,11 +169,14 @@ impl<'a> System<'a> {
         }
         let links = x.len() - 1;
         let width = 2 * NODE;
+        // Linearization at the shared node of consecutive intervals, evaluated once.
+        let mut node_lin = None;
         for k in 0..links {
             let rows = 6 + k * NODE..6 + (k + 1) * NODE;
             if let Some(sites) = &self.interval_sites[k] {
-                let (r, block) =
-                    residual::interval_jacobian(&self.model, sites, self.mesh.nodes[k].segment_end, &x[k], &x[k + 1])?;
+                let seg = self.mesh.nodes[k].segment_end;
+                let (r, block, end) = residual::interval_jacobian(&self.model, sites, seg, &x[k], &x[k + 1], node_lin)?;
+                node_lin = Some(end);
                 out[rows].copy_from_slice(r.as_slice());
                 for i in 0..NODE {
                     for j in 0..width {
@@ -171,6 +184,7 @@ impl<'a> System<'a> {
                     }
                 }
             } else {
+                node_lin = None;
                 // Jumps: one dual pass per unknown (they are few).
                 for j in 0..width {
                     let da = Delta::<Dual64>::from_fn(|i, _| {

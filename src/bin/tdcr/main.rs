@@ -427,15 +427,16 @@ fn fixed(x: f64, width: usize, decimals: usize) -> String {
 }
 
 fn history_table(history: &[Iteration]) -> String {
-    let mut out = String::from("   iter   residual       step    damping\n");
+    let mut out = String::from("   iter   residual       step    damping  jacobian\n");
     for (k, it) in history.iter().enumerate() {
         let _ = writeln!(
             out,
-            "  {:>5}  {:>9.3e}  {:>9.3e}  {:>9.4}",
+            "  {:>5}  {:>9.3e}  {:>9.3e}  {:>9.4}  {}",
             k + 1,
             it.residual,
             it.step,
-            it.damping
+            it.damping,
+            if it.fresh_jacobian { "new" } else { "reused" }
         );
     }
     out
