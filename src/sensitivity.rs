@@ -74,7 +74,7 @@
 
 use crate::collocation::LinearSolver;
 use crate::collocation::newton::Workspace;
-use crate::collocation::system::{NODE, System, pattern};
+use crate::collocation::system::{NODE, System, nonzeros};
 use crate::equations::Model;
 use crate::error::{Result, invalid};
 use crate::mesh::Mesh;
@@ -184,7 +184,7 @@ impl<'a> Sensitivity<'a> {
         let system = System::new(Model::new(robot), mesh);
         let n = system.unknowns();
         let mut residual = vec![0.0; n];
-        let mut values = vec![0.0; pattern(&system.mesh).len()];
+        let mut values = vec![0.0; nonzeros(&system.mesh)];
         system.jacobian(&states, &mut residual, &mut values)?;
         let norm = residual.iter().fold(0.0f64, |m, r| m.max(r.abs()));
         if norm > RESIDUAL_LIMIT || residual.iter().any(|r| !r.is_finite()) {

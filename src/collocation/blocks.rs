@@ -210,18 +210,23 @@ fn eliminate<const W: usize>(rows: &mut [[f64; W]], pivots: usize, width: usize,
 
 /// Solves the upper-triangular pivot rows for this node's 12 unknowns with right-hand side
 /// `rhs`, given the next node's (`next`, columns 12..24) when there is one.
+///
+/// The coupling to the next node and the pivots' reciprocals do not depend on this node's
+/// unknowns, so they are computed first, off the substitution's dependency chain.
 fn back_substitute<const W: usize>(rows: &[[f64; W]], rhs: &[f64; NODE], x: &mut [f64], next: Option<&[f64]>) {
+    let mut sums = *rhs;
+    if let Some(next) = next {
+        for (sum, row) in sums.iter_mut().zip(rows) {
+            *sum -= row[NODE..2 * NODE].iter().zip(next).map(|(a, b)| a * b).sum::<f64>();
+        }
+    }
+    let inverse: [f64; NODE] = std::array::from_fn(|i| 1.0 / rows[i][i]);
     for i in (0..NODE).rev() {
         let row = &rows[i];
-        let mut sum = rhs[i];
-        if let Some(next) = next {
-            for j in 0..NODE {
-                sum -= row[NODE + j] * next[j];
-            }
-        }
+        let mut sum = sums[i];
         for j in i + 1..NODE {
             sum -= row[j] * x[j];
         }
-        x[i] = sum / row[i];
+        x[i] = sum * inverse[i];
     }
 }

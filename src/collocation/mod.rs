@@ -292,7 +292,7 @@ fn solve_impl(robot: &Robot, options: &Options, warm: Option<&Solution>, cache: 
     }
     report.intervals = mesh.intervals();
     report.unknowns = mesh.nodes.len() * system::NODE;
-    report.nonzeros = system::pattern(&mesh).len();
+    report.nonzeros = system::nonzeros(&mesh);
     report.timings.total = start.elapsed();
     Solution::from_states(&model, &x, &segment_ends(&mesh), report)
 }

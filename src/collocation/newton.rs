@@ -9,7 +9,7 @@
 //! result is a [`Termination::SingularJacobian`], never a panic.
 
 use super::blocks::BlockElimination;
-use super::system::{System, pattern};
+use super::system::{System, nonzeros, pattern};
 use crate::error::{Result, invalid};
 use crate::report::{Iteration, SolveReport, Termination};
 use crate::solution::State;
@@ -197,7 +197,7 @@ impl Workspace {
         };
         Ok(Workspace {
             linear,
-            values: vec![0.0; pattern(&system.mesh).len()],
+            values: vec![0.0; nonzeros(&system.mesh)],
             residual: vec![0.0; n],
             trial_residual: vec![0.0; n],
             rhs: vec![0.0; n],

@@ -47,11 +47,17 @@ pub struct System<'a> {
     node_sites: Vec<Site>,
 }
 
+/// Stored non-zeros of the Jacobian on `mesh`: the base block (6 x 6), one 12 x 24 block per
+/// link and the tip block (6 x 9); the length of [`pattern`].
+pub fn nonzeros(mesh: &Mesh) -> usize {
+    36 + (mesh.nodes.len() - 1) * NODE * 2 * NODE + 54
+}
+
 /// The (row, column) pattern of the Jacobian in assembly order.
 pub fn pattern(mesh: &Mesh) -> Vec<(usize, usize)> {
     let nodes = mesh.nodes.len();
     let links = nodes - 1;
-    let mut out = Vec::with_capacity(36 + links * 12 * 24 + 54);
+    let mut out = Vec::with_capacity(nonzeros(mesh));
     for r in 0..6 {
         for c in 0..6 {
             out.push((r, c));
