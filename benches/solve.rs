@@ -1,5 +1,9 @@
 //! Solve-time benchmarks: `cargo bench --bench solve`.
 //!
+//! - `reference`: the cases S (16 intervals) and H (48 intervals, the smallest
+//!   meshes reaching 1e-7 m): cold, warm with a `Solver` that has just solved 0.99x the
+//!   tension (its stored factors start chord steps), and warm through the stateless
+//!   `solve_from` (no stored factors).
 //! - `prototype_s`: the prototype with tendon 1 at 2.94 N plus self weight; collocation at
 //!   16..128 intervals from a cold start and warm-started from the solution at 0.99x the
 //!   tension; shooting at integration tolerances giving comparable tip accuracy.
@@ -17,6 +21,48 @@ use tdcr::guess::rigid_estimate;
 use tdcr::mesh::Mesh;
 use tdcr::report::{Method, SolveReport};
 use tdcr::{cases, collocation, shooting};
+
+/// The robot with every tension scaled by `factor`.
+fn scaled(robot: &tdcr::Robot, factor: f64) -> tdcr::Robot {
+    let mut r = robot.clone();
+    for t in r.tendons.iter_mut() {
+        t.tension *= factor;
+    }
+    r
+}
+
+fn reference(c: &mut Criterion) {
+    let mut group = c.benchmark_group("reference");
+    for (case, robot, intervals) in [("S", cases::case_s(), 16), ("H", cases::case_h(), 48)] {
+        let options = collocation::Options {
+            intervals,
+            ..Default::default()
+        };
+        let previous = scaled(&robot, 0.99);
+        group.bench_function(BenchmarkId::new("cold", case), |b| {
+            b.iter(|| black_box(collocation::solve(&robot, &options).unwrap()))
+        });
+        // Each timed solve follows an untimed solve of the robot at 0.99x the tension.
+        let mut solver = collocation::Solver::new(options.clone());
+        group.bench_function(BenchmarkId::new("warm_solver", case), |b| {
+            b.iter_custom(|iterations| {
+                let mut total = std::time::Duration::ZERO;
+                for _ in 0..iterations {
+                    let guess = solver.solve(&previous).unwrap();
+                    let t = std::time::Instant::now();
+                    black_box(solver.solve_from(&robot, &guess).unwrap());
+                    total += t.elapsed();
+                }
+                total
+            })
+        });
+        let guess = collocation::solve(&previous, &options).unwrap();
+        group.bench_function(BenchmarkId::new("warm_stateless", case), |b| {
+            b.iter(|| black_box(collocation::solve_from(&robot, &options, &guess).unwrap()))
+        });
+    }
+    group.finish();
+}
 
 fn prototype_s(c: &mut Criterion) {
     let robot = cases::case_s();
@@ -128,5 +174,5 @@ fn batch(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, prototype_s, newton_iteration, tendon_count, batch);
+criterion_group!(benches, reference, prototype_s, newton_iteration, tendon_count, batch);
 criterion_main!(benches);
