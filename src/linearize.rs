@@ -71,11 +71,12 @@
 //! # Cost
 //! Two passes over the tendons (the second needs x); the per-tendon quantities of the first
 //! are kept on the stack for up to 8 tendons, further ones are re-evaluated. M is factored
-//! once by a 6x6 Cholesky written out for the fixed size (LU fallback as in
-//! [`Model::strain_rates`]); x is one solve and the nine derivative directions one solve with
-//! a 6x9 right-hand side. For case H (one active tendon) a release build took about 390 ns
-//! per call on the development machine, against 280 ns for `strain_rates::<f64>` alone and
-//! 5.6 us for nine `strain_rates::<Dual64>` passes.
+//! once by block elimination on its 3x3 blocks (LU fallback as in [`Model::strain_rates`]);
+//! x is one solve and the nine derivative directions one solve with a 6x9 right-hand side.
+//! For case H (one active tendon) a release build took about 390 ns per call on the
+//! development machine with a 6x6 Cholesky factorization (before the block elimination),
+//! against 280 ns for `strain_rates::<f64>` alone and 5.6 us for nine
+//! `strain_rates::<Dual64>` passes. [`rates`] is pass 1 alone, for residuals.
 #![allow(non_snake_case)]
 
 use crate::Error;
@@ -242,112 +243,91 @@ fn hat3(a: &Vector3<f64>) -> Matrix3<f64> {
     Matrix3::new(0.0, -a[2], a[1], a[2], 0.0, -a[0], -a[1], a[0], 0.0)
 }
 
-/// The Cholesky factor M = L L^T of a symmetric positive definite 6x6 matrix, written out
-/// for the fixed size. nalgebra's generic `Cholesky` (column views of run-time length) took
-/// 112 ns to factor and 170 ns to solve with a 6x9 right-hand side in a release build on
-/// the development machine; this takes 44 ns and 96 ns.
-struct Cholesky6 {
-    /// L, lower triangular (the strict upper part is zero).
-    L: Matrix6<f64>,
-    /// 1 / L_jj.
-    inv_diag: Vector6<f64>,
+/// The inverse of a symmetric positive definite 3x3 matrix by its adjugate, or None when a
+/// leading principal minor is not positive (not SPD, singular or NaN: by Sylvester's
+/// criterion exactly when a Cholesky factorization would meet a non-positive pivot).
+fn spd_inverse3(a: &Matrix3<f64>) -> Option<Matrix3<f64>> {
+    let c00 = a[(1, 1)] * a[(2, 2)] - a[(1, 2)] * a[(1, 2)];
+    let c01 = a[(0, 2)] * a[(1, 2)] - a[(0, 1)] * a[(2, 2)];
+    let c02 = a[(0, 1)] * a[(1, 2)] - a[(0, 2)] * a[(1, 1)];
+    let minor2 = a[(0, 0)] * a[(1, 1)] - a[(0, 1)] * a[(0, 1)];
+    let det = a[(0, 0)] * c00 + a[(0, 1)] * c01 + a[(0, 2)] * c02;
+    // `!(x > 0)` also rejects NaN.
+    if !(a[(0, 0)] > 0.0 && minor2 > 0.0 && det > 0.0 && det.is_finite()) {
+        return None;
+    }
+    let c11 = a[(0, 0)] * a[(2, 2)] - a[(0, 2)] * a[(0, 2)];
+    let c12 = a[(0, 2)] * a[(0, 1)] - a[(0, 0)] * a[(1, 2)];
+    let inv = 1.0 / det;
+    Some(Matrix3::new(c00, c01, c02, c01, c11, c12, c02, c12, minor2) * inv)
 }
 
-impl Cholesky6 {
-    /// Factors the lower triangle of `M` into `self`; false when a pivot is not positive
-    /// (zero, negative or NaN: the criterion of nalgebra's `Cholesky::new`, which
-    /// `strain_rates` uses), and `self` is then incomplete.
-    fn factor(&mut self, M: &Matrix6<f64>) -> bool {
-        let L = &mut self.L;
-        for j in 0..6 {
-            let mut d = M[(j, j)];
-            for k in 0..j {
-                d -= L[(j, k)] * L[(j, k)];
-            }
-            if d.is_nan() || d <= 0.0 {
-                return false;
-            }
-            // sqrt(d) and 1/d are independent, so they overlap instead of chaining sqrt then
-            // divide: 1/L_jj = sqrt(d) / d.
-            let l = d.sqrt();
-            let inv = l * (1.0 / d);
-            L[(j, j)] = l;
-            self.inv_diag[j] = inv;
-            for i in j + 1..6 {
-                let mut e = M[(i, j)];
-                for k in 0..j {
-                    e -= L[(i, k)] * L[(j, k)];
-                }
-                L[(i, j)] = e * inv;
-            }
-        }
-        true
+/// M = [P, G; G^T, Q] (symmetric positive definite, 3x3 blocks) factored by block
+/// elimination: P^-1, W = P^-1 G and the inverse of the Schur complement
+/// S = Q - G^T P^-1 G, each 3x3 inverse by its adjugate. M is SPD exactly when P and S are,
+/// so this succeeds exactly when a Cholesky factorization would (up to rounding). It has
+/// two independent divisions and no square roots on its dependency chain; replacing a 6x6
+/// Cholesky written out for the fixed size (six dependent square roots) by it took a warm
+/// solve of case H from 256 to 203 us on the development machine.
+struct Schur6 {
+    P_inv: Matrix3<f64>,
+    G: Matrix3<f64>,
+    W: Matrix3<f64>,
+    S_inv: Matrix3<f64>,
+}
+
+impl Schur6 {
+    /// Factors M (reads its upper-left, upper-right and lower-right blocks); None when M
+    /// is not SPD.
+    fn new(M: &Matrix6<f64>) -> Option<Self> {
+        let P_inv = spd_inverse3(&M.fixed_view::<3, 3>(0, 0).into_owned())?;
+        let G: Matrix3<f64> = M.fixed_view::<3, 3>(0, 3).into_owned();
+        let W = P_inv * G;
+        let S = M.fixed_view::<3, 3>(3, 3) - G.tr_mul(&W);
+        // S is symmetric; average out the rounding of the product.
+        let S_inv = spd_inverse3(&((S + S.transpose()) * 0.5))?;
+        Some(Schur6 { P_inv, G, W, S_inv })
     }
 
     /// Overwrites the rows of `bt` with those of bt M^-1, i.e. solves M X = B for B = bt^T
-    /// (M is symmetric). Working on the transpose keeps each right-hand side's entries
-    /// i = 0..6 in separate contiguous columns of C values, so the substitution updates
-    /// (column i -= L_ik column k) are contiguous and vectorize across the C right-hand sides.
+    /// (M and the block inverses are symmetric): with rows (b_v, b_u),
+    /// w = b_v P^-1, x_u = (b_u - w G) S^-1, x_v = w - x_u W^T.
     fn solve_transposed_mut<const C: usize>(&self, bt: &mut SMatrix<f64, C, 6>) {
-        let L = &self.L;
-        // forward substitution L y = b
-        for i in 0..6 {
-            for k in 0..i {
-                let l = L[(i, k)];
-                for c in 0..C {
-                    bt[(c, i)] -= l * bt[(c, k)];
-                }
-            }
-            let inv = self.inv_diag[i];
-            for c in 0..C {
-                bt[(c, i)] *= inv;
-            }
-        }
-        // back substitution L^T x = y
-        for i in (0..6).rev() {
-            for k in i + 1..6 {
-                let l = L[(k, i)];
-                for c in 0..C {
-                    bt[(c, i)] -= l * bt[(c, k)];
-                }
-            }
-            let inv = self.inv_diag[i];
-            for c in 0..C {
-                bt[(c, i)] *= inv;
-            }
-        }
+        let w = bt.fixed_columns::<3>(0) * self.P_inv;
+        let x_u = (bt.fixed_columns::<3>(3) - w * self.G) * self.S_inv;
+        let x_v = w - x_u * self.W.transpose();
+        bt.fixed_columns_mut::<3>(0).copy_from(&x_v);
+        bt.fixed_columns_mut::<3>(3).copy_from(&x_u);
     }
 }
 
-/// The factorization of M reused for all right-hand sides: Cholesky, or LU where rounding
-/// made Cholesky fail (as in [`Model::strain_rates`]). Everything is solved in place on
-/// transposed right-hand sides, so no 6x9 matrix is moved or wrapped in an `Option`.
-struct Factor {
-    /// Valid when `lu` is `None`.
-    cholesky: Cholesky6,
-    /// The fallback, computed only when Cholesky failed.
-    lu: Option<LU<f64, U6, U6>>,
+/// The factorization of M reused for all right-hand sides: block elimination for SPD M, or
+/// LU where rounding made M fail the SPD test (as in [`Model::strain_rates`]). Everything
+/// is solved in place on transposed right-hand sides, so no 6x9 matrix is moved or wrapped
+/// in an `Option`.
+enum Factor {
+    Spd(Schur6),
+    /// The fallback, computed only when M is not numerically SPD.
+    Lu(LU<f64, U6, U6>),
 }
 
 impl Factor {
-    /// Factors M (only its lower triangle is read by Cholesky; LU reads all of it).
+    /// Factors M.
     fn new(M: &Matrix6<f64>) -> Self {
-        let mut cholesky = Cholesky6 {
-            L: Matrix6::zeros(),
-            inv_diag: Vector6::zeros(),
-        };
-        let lu = (!cholesky.factor(M)).then(|| M.lu());
-        Factor { cholesky, lu }
+        match Schur6::new(M) {
+            Some(f) => Factor::Spd(f),
+            None => Factor::Lu(M.lu()),
+        }
     }
 
     /// Overwrites `bt` with (M^-1 bt^T)^T; false when M is singular.
     fn solve_transposed_mut<const C: usize>(&self, bt: &mut SMatrix<f64, C, 6>) -> bool {
-        match &self.lu {
-            None => {
-                self.cholesky.solve_transposed_mut(bt);
+        match self {
+            Factor::Spd(f) => {
+                f.solve_transposed_mut(bt);
                 true
             }
-            Some(lu) => {
+            Factor::Lu(lu) => {
                 let mut b = bt.transpose();
                 let solved = lu.solve_mut(&mut b);
                 bt.copy_from(&b.transpose());
@@ -434,7 +414,7 @@ fn assemble(
     }
     // The right-hand side as a row, (rhs_v^T, rhs_u^T).
     let mut x = SMatrix::<f64, 1, 6>::new(rhs_v[0], rhs_v[1], rhs_v[2], rhs_u[0], rhs_u[1], rhs_u[2]);
-    // M is SPD (docs/model.md section 4): Cholesky, LU only if rounding made it fail.
+    // M is SPD (docs/model.md section 4): block elimination, LU only if rounding made it fail.
     let factor = Factor::new(&M);
     if !factor.solve_transposed_mut(&mut x) {
         return Err(breakdown(site.s));
@@ -814,11 +794,11 @@ mod tests {
         let scale = Vector6::new(4e4, 4e4, 1e5, 4e-3, 4e-3, 3e-3).map(f64::sqrt);
         let spd =
             Matrix6::from_diagonal(&scale) * (N * N.transpose() + Matrix6::identity()) * Matrix6::from_diagonal(&scale);
-        // symmetric indefinite: Cholesky fails, the LU fallback solves
+        // symmetric indefinite: the SPD test fails, the LU fallback solves
         let indefinite = N + N.transpose() - Matrix6::from_diagonal_element(0.1);
         for (M, uses_lu) in [(spd, false), (indefinite, true)] {
             let factor = Factor::new(&M);
-            assert_eq!(factor.lu.is_some(), uses_lu);
+            assert_eq!(matches!(factor, Factor::Lu(_)), uses_lu);
             let mut Xt = B.transpose();
             assert!(factor.solve_transposed_mut(&mut Xt));
             let reference = M.lu().solve(&B).unwrap();

@@ -85,7 +85,9 @@ fn a_warm_sweep_is_reproducible_bit_for_bit() {
         let mut last = solver.solve(&scaled(&robot, 0.5)).unwrap();
         let mut tips = Vec::new();
         for k in 1..=10 {
-            last = solver.solve_from(&scaled(&robot, 0.5 + 0.05 * k as f64), &last).unwrap();
+            last = solver
+                .solve_from(&scaled(&robot, 0.5 + 0.05 * k as f64), &last)
+                .unwrap();
             tips.push(last.tip_position().map(f64::to_bits));
         }
         tips
