@@ -150,12 +150,11 @@ impl BlockElimination {
             x[k * NODE..(k + 1) * NODE].copy_from_slice(&transformed[..NODE]);
             carry.copy_from_slice(&transformed[NODE..]);
         }
-        let mut last = [0.0; ROWS];
+        let mut last = [0.0; NODE];
         last[..CARRY].copy_from_slice(&carry);
-        last[CARRY..NODE].copy_from_slice(&rhs[6 + n * NODE..]);
-        replay(&self.last_record, &mut last[..NODE]);
-        let last_rhs: [f64; NODE] = std::array::from_fn(|i| last[i]);
-        back_substitute(&self.last, &last_rhs, &mut x[n * NODE..(n + 1) * NODE], None);
+        last[CARRY..].copy_from_slice(&rhs[6 + n * NODE..]);
+        replay(&self.last_record, &mut last);
+        back_substitute(&self.last, &last, &mut x[n * NODE..(n + 1) * NODE], None);
         for k in (0..n).rev() {
             let (head, tail) = x.split_at_mut((k + 1) * NODE);
             let step_rhs: [f64; NODE] = std::array::from_fn(|i| head[k * NODE + i]);
@@ -165,11 +164,12 @@ impl BlockElimination {
 }
 
 /// Applies a step's recorded row swaps and eliminations to a right-hand side.
-fn replay(record: &Record, v: &mut [f64]) {
+fn replay<const N: usize>(record: &Record, v: &mut [f64; N]) {
     for c in 0..NODE {
         v.swap(c, record.swaps[c]);
-        for r in c + 1..v.len() {
-            v[r] -= record.factors[c][r] * v[c];
+        let pivot = v[c];
+        for (x, f) in v[c + 1..].iter_mut().zip(&record.factors[c][c + 1..]) {
+            *x -= f * pivot;
         }
     }
 }
