@@ -8,9 +8,9 @@
 //!   16..128 intervals from a cold start and warm-started from the solution at 0.99x the
 //!   tension; shooting at integration tolerances giving comparable tip accuracy.
 //! - `newton_iteration`: one full Newton iteration (Jacobian, factorization, solve, line
-//!   search) on case H from 64 to 8192 intervals: the cost must grow linearly.
+//!   search) on case H from 64 to 10 000 intervals: the cost must grow linearly.
 //! - `tendon_count`: a solve with 1..32 tendons.
-//! - `batch`: 1000 independent solves over all cores with `collocation::solve_batch`.
+//! - `batch`: 10 000 independent solves over all cores with `collocation::solve_batch`.
 
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
 use std::hint::black_box;
@@ -99,7 +99,7 @@ fn newton_iteration(c: &mut Criterion) {
     let model = Model::new(&robot);
     let mut group = c.benchmark_group("newton_iteration");
     group.sample_size(10);
-    for intervals in [64, 256, 1024, 4096, 8192] {
+    for intervals in [64, 256, 1024, 4096, 10_000] {
         let system = System::new(model, Mesh::uniform(&robot, intervals).unwrap());
         let mut ws = Workspace::new(&system, LinearSolver::Auto).unwrap();
         let start = rigid_estimate(&model, &system.mesh.nodes);
@@ -144,7 +144,7 @@ fn tendon_count(c: &mut Criterion) {
     group.finish();
 }
 
-/// Throughput of independent solves over all cores: 1000 random tension vectors on the
+/// Throughput of independent solves over all cores: 10 000 random tension vectors on the
 /// prototype's four straight tendons (0..3 N each), solved by `solve_batch`.
 fn batch(c: &mut Criterion) {
     // A fixed linear congruential sequence: the same robots every run.
@@ -155,7 +155,7 @@ fn batch(c: &mut Criterion) {
             .wrapping_add(1442695040888963407);
         (state >> 11) as f64 / (1u64 << 53) as f64
     };
-    let robots: Vec<tdcr::Robot> = (0..1000)
+    let robots: Vec<tdcr::Robot> = (0..10_000)
         .map(|_| {
             let mut robot = cases::prototype();
             for t in robot.tendons.iter_mut().take(4) {
@@ -168,7 +168,7 @@ fn batch(c: &mut Criterion) {
     let mut group = c.benchmark_group("batch");
     group.sample_size(10);
     group.throughput(criterion::Throughput::Elements(robots.len() as u64));
-    group.bench_function("1000_random_tensions", |b| {
+    group.bench_function("10000_random_tensions", |b| {
         b.iter(|| black_box(collocation::solve_batch(&robots, &options)))
     });
     group.finish();

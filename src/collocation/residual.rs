@@ -24,7 +24,6 @@ use crate::linearize::{self, Linearization, linearize};
 use crate::solution::State;
 use crate::{Real, so3};
 use nalgebra::{Matrix3, SMatrix, SVector, Vector3, Vector6};
-use num_dual::Dual64;
 
 /// Scaled perturbation of one node's unknowns.
 pub type Delta<T> = SVector<T, 12>;
@@ -61,7 +60,12 @@ fn scale_rows<T: Real>(mut y: Block<T>, length: f64) -> Block<T> {
 }
 
 fn stack<T: Real>(a: &Vector3<T>, b: &Vector3<T>, c: &Vector3<T>, d: &Vector3<T>) -> Block<T> {
-    Block::from_iterator(a.iter().chain(b.iter()).chain(c.iter()).chain(d.iter()).copied())
+    // Block by block: a chained iterator here cost 9% of a residual evaluation.
+    let mut y = Block::zeros();
+    for (k, part) in [a, b, c, d].into_iter().enumerate() {
+        y.fixed_rows_mut::<3>(3 * k).copy_from(part);
+    }
+    y
 }
 
 /// Base rows: p(0) = p0, R(0) = R0 (6 rows).
@@ -229,25 +233,6 @@ struct PointLinearization {
     f_frame: SMatrix<f64, 12, 3>,
 }
 
-/// d(J_r^-1(theta) u)/dtheta by three forward-mode passes (a few dozen flops each).
-fn d_right_jacobian_inv_u(theta: &Vector3<f64>, u: &Vector3<f64>) -> Matrix3<f64> {
-    let mut d = Matrix3::zeros();
-    for j in 0..3 {
-        let t = Vector3::from_fn(|i, _| {
-            if i == j {
-                Dual64::new(theta[i], 1.0)
-            } else {
-                Dual64::from(theta[i])
-            }
-        });
-        let column = so3::right_jacobian_inv(&t) * lift::<Dual64>(u);
-        for i in 0..3 {
-            d[(i, j)] = column[i].eps;
-        }
-    }
-    d
-}
-
 /// F(s, y) of an interval with frame `Rk` and its derivatives, assembled from the strain-rate
 /// linearization `lin` at R = R_k exp(theta) and the kinematics p' = R_k exp(theta) v,
 /// theta' = J_r(theta)^-1 u.
@@ -268,7 +253,7 @@ fn rhs_linearized(lin: &Linearization, Rk: &Matrix3<f64>, y: &Block<f64>) -> Poi
     f_y.fixed_view_mut::<3, 3>(0, 3).copy_from(&(-R * so3::hat(&v) * Jr));
     f_y.fixed_view_mut::<3, 3>(0, 6).copy_from(&R);
     f_y.fixed_view_mut::<3, 3>(3, 3)
-        .copy_from(&d_right_jacobian_inv_u(&theta, &u));
+        .copy_from(&so3::d_right_jacobian_inv_u(&theta, &u));
     f_y.fixed_view_mut::<3, 3>(3, 9).copy_from(&Jri);
     // (v', u') depend on theta through R = R_k exp(theta): a right perturbation J_r d
     f_y.fixed_view_mut::<6, 3>(6, 3).copy_from(&(lin.d_rotation * Jr));
