@@ -270,7 +270,7 @@ fn rhs_linearized(lin: &Linearization, Rk: &Matrix3<f64>, y: &Block<f64>) -> Poi
 }
 
 /// Interval rows, their exact Jacobian with respect to the scaled unknowns of both nodes
-/// (12 x 24), and the linearization of eq. 13 at node b (the next interval's `start`, shared
+/// (12 x 24, written row by row into `jac`), and the linearization of eq. 13 at node b (the next interval's `start`, shared
 /// as in [`interval`]), by the chain rule through the Hermite-Simpson formula: pointwise
 /// linearizations instead of differentiating the whole block.
 ///
@@ -288,7 +288,8 @@ pub fn interval_jacobian(
     a: &State,
     b: &State,
     start: Option<Linearization>,
-) -> Result<(Block<f64>, SMatrix<f64, 12, 24>, Linearization)> {
+    jac: &mut [f64],
+) -> Result<(Block<f64>, Linearization)> {
     let length = model.robot.length();
     let h = sites.end.s - sites.start.s;
     let (y0, y1) = end_points(a, b);
@@ -334,35 +335,40 @@ pub fn interval_jacobian(
     let mut dF0 = SMatrix::<f64, 12, 18>::zeros();
     dF0.fixed_columns_mut::<3>(0).copy_from(&p0.f_frame);
     dF0.fixed_columns_mut::<3>(3).copy_from(&p0.f_y.fixed_columns::<3>(6));
-    dF0.fixed_columns_mut::<3>(6)
-        .copy_from(&(p0.f_y.fixed_columns::<3>(9) / length));
+    dF0.fixed_columns_mut::<3>(6).copy_from(&p0.f_y.fixed_columns::<3>(9));
+    dF0.fixed_columns_mut::<3>(6).scale_mut(1.0 / length);
     let mut dF1 = SMatrix::<f64, 12, 18>::zeros();
     let f1_theta = p1.f_y.fixed_columns::<3>(3);
     dF1.fixed_columns_mut::<3>(0)
         .copy_from(&(f1_theta * dtheta1_da + p1.f_frame));
     dF1.fixed_columns_mut::<3>(9).copy_from(&(f1_theta * Jri1));
     dF1.fixed_columns_mut::<3>(12).copy_from(&p1.f_y.fixed_columns::<3>(6));
-    dF1.fixed_columns_mut::<3>(15)
-        .copy_from(&(p1.f_y.fixed_columns::<3>(9) / length));
+    dF1.fixed_columns_mut::<3>(15).copy_from(&p1.f_y.fixed_columns::<3>(9));
+    dF1.fixed_columns_mut::<3>(15).scale_mut(1.0 / length);
     let dYm = (Y0 + Y1) * 0.5 + (dF0 - dF1) * (h / 8.0);
     let mut dFm = pm.f_y.fixed_columns::<9>(3) * dYm.fixed_rows::<9>(3);
     let mut frame = dFm.fixed_columns_mut::<3>(0);
     frame += pm.f_frame;
-    let Jc = Y1 - Y0 - (dF0 + dFm * 4.0 + dF1) * (h / 6.0);
-
-    let mut J = SMatrix::<f64, 12, 24>::zeros();
-    for i in 0..3 {
-        // p_1 - p_0 = L (dp_b - dp_a), and the p rows are divided by L below.
-        J[(i, i)] = -length;
-        J[(i, 12 + i)] = length;
-    }
-    J.fixed_view_mut::<12, 9>(0, 3).copy_from(&Jc.fixed_columns::<9>(0));
-    J.fixed_view_mut::<12, 9>(0, 15).copy_from(&Jc.fixed_columns::<9>(9));
-    for c in 0..24 {
-        for i in 0..3 {
-            J[(i, c)] /= length;
-            J[(9 + i, c)] *= length;
+    // J = Y1 - Y0 - (dF0 + 4 dFm + dF1) h / 6 on the 18 columns, written straight into the
+    // row-major block with the row scaling of the residual (p rows / L, u' rows * L); the p
+    // columns hold L (dp_b - dp_a) / L.
+    let c = h / 6.0;
+    for (i, row) in jac.chunks_exact_mut(24).take(12).enumerate() {
+        let scale = match i {
+            0..3 => 1.0 / length,
+            9.. => length,
+            _ => 1.0,
+        };
+        row[..3].fill(0.0);
+        row[12..15].fill(0.0);
+        if i < 3 {
+            row[i] = -1.0;
+            row[12 + i] = 1.0;
+        }
+        for j in 0..18 {
+            let column = if j < 9 { 3 + j } else { 6 + j };
+            row[column] = scale * (Y1[(i, j)] - Y0[(i, j)] - c * (dF0[(i, j)] + 4.0 * dFm[(i, j)] + dF1[(i, j)]));
         }
     }
-    Ok((residual, J, lin1))
+    Ok((residual, lin1))
 }

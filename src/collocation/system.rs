@@ -181,14 +181,10 @@ impl<'a> System<'a> {
             let rows = 6 + k * NODE..6 + (k + 1) * NODE;
             if let Some(sites) = &self.interval_sites[k] {
                 let seg = self.mesh.nodes[k].segment_end;
-                let (r, block, end) = residual::interval_jacobian(&self.model, sites, seg, &x[k], &x[k + 1], node_lin)?;
+                let block = &mut values[at..at + NODE * width];
+                let (r, end) = residual::interval_jacobian(&self.model, sites, seg, &x[k], &x[k + 1], node_lin, block)?;
                 node_lin = Some(end);
                 out[rows].copy_from_slice(r.as_slice());
-                for i in 0..NODE {
-                    for j in 0..width {
-                        values[at + i * width + j] = block[(i, j)];
-                    }
-                }
             } else {
                 node_lin = None;
                 // Jumps: one dual pass per unknown (they are few).
