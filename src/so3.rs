@@ -9,8 +9,61 @@
 use crate::Real;
 use nalgebra::{Matrix3, Vector3};
 
-/// Below this theta^2 the series are used; their first omitted term is then below 1e-24.
-const SERIES_THETA_SQ: f64 = 1e-6;
+/// Below this theta^2 (|theta| < 1/2) the trigonometric ratios come from their Taylor
+/// series in theta^2 ([`SIN_RATIO`] and the others, seven terms each): the first omitted
+/// term is then below 1e-16 relative, no sin/cos is evaluated for the short rotations of a
+/// mesh interval, and the cancellation of the closed forms near 0 is avoided.
+const SERIES_THETA_SQ: f64 = 0.25;
+/// Below this sin^2(theta) [`log`] uses its (shorter) series for asin(x)/x; its first
+/// omitted term is then below 1e-24.
+const LOG_SERIES_SIN_SQ: f64 = 1e-6;
+
+/// sin t / t = sum (-1)^k t^2k / (2k+1)!.
+const SIN_RATIO: [f64; 7] = [
+    1.0,
+    -1.0 / 6.0,
+    1.0 / 120.0,
+    -1.0 / 5_040.0,
+    1.0 / 362_880.0,
+    -1.0 / 39_916_800.0,
+    1.0 / 6_227_020_800.0,
+];
+/// (1 - cos t) / t^2 = sum (-1)^k t^2k / (2k+2)!.
+const COS_RATIO: [f64; 7] = [
+    0.5,
+    -1.0 / 24.0,
+    1.0 / 720.0,
+    -1.0 / 40_320.0,
+    1.0 / 3_628_800.0,
+    -1.0 / 479_001_600.0,
+    1.0 / 87_178_291_200.0,
+];
+/// (t - sin t) / t^3 = sum (-1)^k t^2k / (2k+3)!.
+const SIN_DEFECT_RATIO: [f64; 7] = [
+    1.0 / 6.0,
+    -1.0 / 120.0,
+    1.0 / 5_040.0,
+    -1.0 / 362_880.0,
+    1.0 / 39_916_800.0,
+    -1.0 / 6_227_020_800.0,
+    1.0 / 1_307_674_368_000.0,
+];
+/// e(t) = 1/t^2 - (1 + cos t) / (2 t sin t) = sum (-1)^k B_2k+2 t^2k / (2k+2)! (B: the
+/// Bernoulli numbers), the coefficient of hat(theta)^2 in J_r^-1.
+const JR_INV_RATIO: [f64; 7] = [
+    1.0 / 12.0,
+    1.0 / 720.0,
+    1.0 / 30_240.0,
+    1.0 / 1_209_600.0,
+    1.0 / 47_900_160.0,
+    691.0 / 1_307_674_368_000.0,
+    1.0 / 74_724_249_600.0,
+];
+
+/// sum coefficients[k] t2^k by Horner's rule.
+fn series<T: Real>(t2: T, coefficients: &[f64]) -> T {
+    coefficients.iter().rev().fold(T::zero(), |acc, &k| acc * t2 + c(k))
+}
 
 /// The hat map: `hat(a) * b == a x b`.
 pub fn hat<T: Real>(a: &Vector3<T>) -> Matrix3<T> {
@@ -36,9 +89,7 @@ fn c<T: Real>(x: f64) -> T {
 fn ratios<T: Real>(theta: &Vector3<T>) -> (T, T, T) {
     let t2 = theta.norm_squared();
     if t2 < c(SERIES_THETA_SQ) {
-        let a = T::one() - t2 / c(6.0) + t2 * t2 / c(120.0) - t2 * t2 * t2 / c(5040.0);
-        let b = c::<T>(0.5) - t2 / c(24.0) + t2 * t2 / c(720.0) - t2 * t2 * t2 / c(40320.0);
-        (a, b, t2)
+        (series(t2, &SIN_RATIO), series(t2, &COS_RATIO), t2)
     } else {
         let t = t2.sqrt();
         (t.sin() / t, (T::one() - t.cos()) / t2, t2)
@@ -58,10 +109,7 @@ pub fn right_jacobian<T: Real>(theta: &Vector3<T>) -> Matrix3<T> {
     let k = hat(theta);
     // (1 - cos t) / t^2 and (t - sin t) / t^3
     let (b, d) = if t2 < c(SERIES_THETA_SQ) {
-        (
-            c::<T>(0.5) - t2 / c(24.0) + t2 * t2 / c(720.0),
-            c::<T>(1.0 / 6.0) - t2 / c(120.0) + t2 * t2 / c(5040.0),
-        )
+        (series(t2, &COS_RATIO), series(t2, &SIN_DEFECT_RATIO))
     } else {
         let t = t2.sqrt();
         ((T::one() - t.cos()) / t2, (t - t.sin()) / (t2 * t))
@@ -74,9 +122,8 @@ pub fn right_jacobian<T: Real>(theta: &Vector3<T>) -> Matrix3<T> {
 pub fn right_jacobian_inv<T: Real>(theta: &Vector3<T>) -> Matrix3<T> {
     let t2 = theta.norm_squared();
     let k = hat(theta);
-    // 1/t^2 - (1 + cos t) / (2 t sin t) = 1/12 + t^2/720 + t^4/30240 + ...
     let e = if t2 < c(SERIES_THETA_SQ) {
-        c::<T>(1.0 / 12.0) + t2 / c(720.0) + t2 * t2 / c(30240.0)
+        series(t2, &JR_INV_RATIO)
     } else {
         let t = t2.sqrt();
         T::one() / t2 - (T::one() + t.cos()) / (c::<T>(2.0) * t * t.sin())
@@ -96,20 +143,11 @@ pub fn right_jacobian_inv<T: Real>(theta: &Vector3<T>) -> Matrix3<T> {
 /// de/dt = -2/t^3 + (t / sin^2(t/2) + 2 cot(t/2)) / (4 t^2), e' = (de/dt) / (2 t).
 pub fn d_right_jacobian_inv_u(theta: &Vector3<f64>, u: &Vector3<f64>) -> Matrix3<f64> {
     let t2 = theta.norm_squared();
-    let (e, de) = if t2 < 0.25 {
-        // e = sum c_k t^2k, c_k = (-1)^k B_2k+2 / (2k+2)!; e' = sum k c_k t^2(k-1).
-        const E: [f64; 7] = [
-            1.0 / 12.0,
-            1.0 / 720.0,
-            1.0 / 30_240.0,
-            1.0 / 1_209_600.0,
-            1.0 / 47_900_160.0,
-            691.0 / 1_307_674_368_000.0,
-            1.0 / 74_724_249_600.0,
-        ];
-        let e = E.iter().rev().fold(0.0, |acc, c| acc * t2 + c);
-        let de = (1..E.len()).rev().fold(0.0, |acc, k| acc * t2 + k as f64 * E[k]);
-        (e, de)
+    let (e, de) = if t2 < SERIES_THETA_SQ {
+        // e' = sum k c_k t^2(k-1) for e = sum c_k t^2k.
+        let k = &JR_INV_RATIO;
+        let de = (1..k.len()).rev().fold(0.0, |acc, i| acc * t2 + i as f64 * k[i]);
+        (series(t2, k), de)
     } else {
         let t = t2.sqrt();
         let (sin, cos) = (0.5 * t).sin_cos();
@@ -134,7 +172,7 @@ pub fn log<T: Real>(q: &Matrix3<T>) -> Vector3<T> {
     let w = vee(q); // sin(t) * axis
     let cos = (q.trace() - T::one()) * c(0.5);
     let s2 = w.norm_squared();
-    if cos > c(0.0) && s2 < c(SERIES_THETA_SQ) {
+    if cos > c(0.0) && s2 < c(LOG_SERIES_SIN_SQ) {
         // asin(x)/x = 1 + x^2/6 + 3x^4/40 + 5x^6/112 with x^2 = sin^2 t
         let f = T::one() + s2 / c(6.0) + s2 * s2 * c(3.0 / 40.0) + s2 * s2 * s2 * c(5.0 / 112.0);
         return w * f;
@@ -171,6 +209,24 @@ mod tests {
     use super::*;
     use approx::assert_relative_eq;
     use num_dual::Dual64;
+
+    #[test]
+    fn series_match_closed_forms_below_the_switch() {
+        for t in [0.1f64, 0.3, 0.4999] {
+            let t2 = t * t;
+            let (sin, cos) = t.sin_cos();
+            let pairs = [
+                (series(t2, &SIN_RATIO), sin / t),
+                (series(t2, &COS_RATIO), (1.0 - cos) / t2),
+                (series(t2, &SIN_DEFECT_RATIO), (t - sin) / (t2 * t)),
+                (series(t2, &JR_INV_RATIO), 1.0 / t2 - (1.0 + cos) / (2.0 * t * sin)),
+            ];
+            for (from_series, closed) in pairs {
+                // 1e-13: the closed forms lose about eps / t^2 to cancellation at t = 0.1
+                assert_relative_eq!(from_series, closed, max_relative = 1e-13);
+            }
+        }
+    }
 
     #[test]
     fn d_right_jacobian_inv_u_matches_forward_mode() {
