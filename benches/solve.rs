@@ -9,6 +9,7 @@
 //!   tension; shooting at integration tolerances giving comparable tip accuracy.
 //! - `newton_iteration`: one full Newton iteration (Jacobian, factorization, solve, line
 //!   search) on case H from 64 to 10 000 intervals: the cost must grow linearly.
+//! - `linear_solve`: the Newton linear solve alone, structured elimination and sparse LU.
 //! - `tendon_count`: a solve with 1..32 tendons.
 //! - `batch`: 10 000 independent solves over all cores with `collocation::solve_batch`.
 
@@ -121,6 +122,29 @@ fn newton_iteration(c: &mut Criterion) {
     group.finish();
 }
 
+/// The Newton linear solve alone (factorization and solve of the Jacobian at the initial
+/// guess of case H) with the structured elimination and with faer's sparse LU: per node,
+/// against the flop floor of 22.6 kflop per node.
+fn linear_solve(c: &mut Criterion) {
+    let robot = cases::case_h();
+    let model = Model::new(&robot);
+    let mut group = c.benchmark_group("linear_solve");
+    for intervals in [48, 1024] {
+        let system = System::new(model, Mesh::uniform(&robot, intervals).unwrap());
+        let x = rigid_estimate(&model, &system.mesh.nodes);
+        let mut rhs = vec![0.0; system.unknowns()];
+        let mut values = vec![0.0; tdcr::collocation::system::nonzeros(&system.mesh)];
+        system.jacobian(&x, &mut rhs, &mut values).unwrap();
+        for (name, solver) in [("blocks", LinearSolver::Auto), ("sparse_lu", LinearSolver::SparseLu)] {
+            let mut ws = Workspace::new(&system, solver).unwrap();
+            group.bench_function(BenchmarkId::new(name, intervals), |b| {
+                b.iter(|| black_box(ws.solve_linear(&values, &rhs).is_some()))
+            });
+        }
+    }
+    group.finish();
+}
+
 /// Cost against the number of tendons: 1..32 straight tendons evenly spaced around the
 /// prototype's backbone at 8 mm, each at 2.94 N / count, with self weight.
 fn tendon_count(c: &mut Criterion) {
@@ -174,5 +198,13 @@ fn batch(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, reference, prototype_s, newton_iteration, tendon_count, batch);
+criterion_group!(
+    benches,
+    reference,
+    prototype_s,
+    newton_iteration,
+    linear_solve,
+    tendon_count,
+    batch
+);
 criterion_main!(benches);

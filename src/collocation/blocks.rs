@@ -89,7 +89,7 @@ impl BlockElimination {
                 row[2 * NODE] = rhs[6 + k * NODE + r];
             }
             at += NODE * 2 * NODE;
-            if !eliminate(&mut panel, NODE, COLS, &mut self.records[k]) {
+            if !eliminate_fast(&mut panel, NODE, &mut self.records[k]) {
                 return None;
             }
             self.pivots[k].copy_from_slice(&panel[..NODE]);
@@ -112,7 +112,7 @@ impl BlockElimination {
             last[CARRY + r][..3].fill(0.0);
             last[CARRY + r][NODE] = rhs[tip_row0 + r];
         }
-        if !eliminate(&mut last, NODE, NODE + 1, &mut self.last_record) {
+        if !eliminate_fast(&mut last, NODE, &mut self.last_record) {
             return None;
         }
         self.last = last;
@@ -174,11 +174,31 @@ fn replay<const N: usize>(record: &Record, v: &mut [f64; N]) {
     }
 }
 
+/// [`eliminate`] compiled for AVX2 and FMA when the processor has them (checked at run
+/// time, the result cached by std), else for the baseline x86-64 or other target.
+fn eliminate_fast<const W: usize>(rows: &mut [[f64; W]], pivots: usize, record: &mut Record) -> bool {
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma") {
+        // SAFETY: the processor supports the features the function is compiled for.
+        return unsafe { eliminate_avx2(rows, pivots, record) };
+    }
+    eliminate(rows, pivots, record)
+}
+
+/// [`eliminate`] with AVX2 and FMA enabled.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+unsafe fn eliminate_avx2<const W: usize>(rows: &mut [[f64; W]], pivots: usize, record: &mut Record) -> bool {
+    eliminate(rows, pivots, record)
+}
+
 /// Gaussian elimination with partial pivoting of the first `pivots` columns of `rows`
-/// (each `width` wide, the last entry the right-hand side): afterwards rows 0..pivots are
-/// upper triangular in those columns and the remaining rows are zero there. Returns false
-/// on a zero pivot.
-fn eliminate<const W: usize>(rows: &mut [[f64; W]], pivots: usize, width: usize, record: &mut Record) -> bool {
+/// (each `W` wide, the last entry the right-hand side): afterwards rows 0..pivots are
+/// upper triangular in those columns and the remaining rows are zero there. The
+/// multipliers use the pivot's reciprocal (one division per column, as LAPACK's dgetf2).
+/// Returns false on a zero pivot.
+#[inline(always)]
+fn eliminate<const W: usize>(rows: &mut [[f64; W]], pivots: usize, record: &mut Record) -> bool {
     for c in 0..pivots {
         let mut best = c;
         for r in c + 1..rows.len() {
@@ -192,15 +212,16 @@ fn eliminate<const W: usize>(rows: &mut [[f64; W]], pivots: usize, width: usize,
         }
         rows.swap(c, best);
         record.swaps[c] = best;
+        let inverse = 1.0 / pivot;
         let (top, below) = rows.split_at_mut(c + 1);
-        let prow = &top[c];
+        let prow = &top[c][c + 1..];
         for (i, row) in below.iter_mut().enumerate() {
-            let f = row[c] / pivot;
+            let f = row[c] * inverse;
             record.factors[c][c + 1 + i] = f;
             if f != 0.0 {
                 row[c] = 0.0;
-                for j in c + 1..width {
-                    row[j] -= f * prow[j];
+                for (x, p) in row[c + 1..].iter_mut().zip(prow) {
+                    *x -= f * p;
                 }
             }
         }

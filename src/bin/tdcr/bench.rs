@@ -41,7 +41,7 @@ struct Row {
     intervals: usize,
 }
 
-/// The same robot with every tension and external point load scaled by `factor`.
+/// The same robot with every tension scaled by `factor`.
 fn scaled(robot: &Robot, factor: f64) -> Robot {
     let mut r = robot.clone();
     for t in r.tendons.iter_mut() {
