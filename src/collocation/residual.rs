@@ -270,9 +270,10 @@ fn rhs_linearized(lin: &Linearization, Rk: &Matrix3<f64>, y: &Block<f64>) -> Poi
 }
 
 /// Interval rows, their exact Jacobian with respect to the scaled unknowns of both nodes
-/// (12 x 24, written row by row into `jac`), and the linearization of eq. 13 at node b (the next interval's `start`, shared
-/// as in [`interval`]), by the chain rule through the Hermite-Simpson formula: pointwise
-/// linearizations instead of differentiating the whole block.
+/// (12 x 24, written row by row into `jac`), and the linearization of eq. 13 at node b (the
+/// next interval's `start`, shared as in [`interval`]), by the chain rule through the
+/// Hermite-Simpson formula: pointwise linearizations instead of differentiating the whole
+/// block.
 ///
 /// The p columns are constant (F does not depend on p), so the chain rule runs on the other
 /// 18 columns, ordered (theta, v, u) of node a then of node b; of those, y_0 depends on
@@ -352,8 +353,9 @@ pub fn interval_jacobian(
     // J = Y1 - Y0 - (dF0 + 4 dFm + dF1) h / 6 on the 18 columns, written straight into the
     // row-major block with the row scaling of the residual (p rows / L, u' rows * L); the p
     // columns hold L (dp_b - dp_a) / L.
+    debug_assert_eq!(jac.len(), 12 * 24);
     let c = h / 6.0;
-    for (i, row) in jac.chunks_exact_mut(24).take(12).enumerate() {
+    for (i, row) in jac.chunks_exact_mut(24).enumerate() {
         let scale = match i {
             0..3 => 1.0 / length,
             9.. => length,
