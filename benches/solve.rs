@@ -17,9 +17,9 @@ use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
 use std::hint::black_box;
 use tdcr::collocation::newton::{self, LinearSolver, Settings, Workspace};
 use tdcr::collocation::system::System;
-use tdcr::equations::Model;
-use tdcr::guess::rigid_estimate;
 use tdcr::mesh::Mesh;
+use tdcr::mesh::guess::rigid_estimate;
+use tdcr::model::equations::Model;
 use tdcr::report::{Method, SolveReport};
 use tdcr::{cases, collocation, shooting};
 

@@ -9,7 +9,7 @@
 
 use nalgebra::Vector3;
 use std::fmt::Write as _;
-use tdcr::calibration::{
+use tdcr::fit::calibration::{
     self, CalibrationOptions, Experiment, GaussianNoise, Parameters, TipErrorStatistics, calibrate,
     paper_frame_rotation, predict, prototype_in_paper_frame, table2_experiment,
 };

@@ -1,6 +1,6 @@
 //! Resolved-rate control with the tip Jacobian: move the prototype's tip along a straight
 //! line by updating the four straight tendons' tensions with the pseudo-inverse of
-//! d(tip position)/d(tension) (`tdcr::sensitivity`), each forward solve warm-started from the
+//! d(tip position)/d(tension) (`tdcr::collocation::sensitivity`), each forward solve warm-started from the
 //! last on a reused solver.
 //!
 //! `cargo run --release --example control_loop`
@@ -10,7 +10,8 @@
 //! 12 mm) and shrinks again near the goal, where one tendon runs slack at zero tension.
 
 use nalgebra::{DMatrix, DVector, Vector3};
-use tdcr::{cases, collocation, sensitivity};
+use tdcr::collocation::sensitivity;
+use tdcr::{cases, collocation};
 
 /// Tension every straight tendon starts from (N).
 const PRETENSION: f64 = 1.0;

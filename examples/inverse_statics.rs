@@ -6,7 +6,7 @@
 
 use nalgebra::Vector3;
 use std::time::Instant;
-use tdcr::inverse::{InverseOptions, Target, solve_tensions};
+use tdcr::fit::inverse::{InverseOptions, Target, solve_tensions};
 use tdcr::{cases, collocation};
 
 fn main() -> tdcr::Result<()> {

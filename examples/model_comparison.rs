@@ -4,7 +4,7 @@
 //!
 //! `cargo run --release --example model_comparison`
 
-use tdcr::models::constant_curvature;
+use tdcr::analysis::comparison::constant_curvature;
 use tdcr::{TendonModel, cases, collocation};
 
 fn main() -> Result<(), tdcr::Error> {

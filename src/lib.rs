@@ -6,38 +6,28 @@
 //! by shooting (an independent cross-check).
 #![warn(missing_docs)]
 
-pub mod calibration;
+pub mod analysis;
 pub mod cases;
 pub mod collocation;
-pub mod equations;
-pub mod equilibrium;
 pub mod error;
-pub mod guess;
-pub mod inverse;
+pub mod fit;
 pub mod io;
-pub mod linearize;
-pub mod loads;
 pub mod mesh;
-pub mod models;
+pub mod model;
 pub mod plot;
 pub mod report;
-pub mod robot;
-pub mod rod;
-pub mod routing;
-pub mod sensitivity;
 pub mod shooting;
 pub mod so3;
 pub mod solution;
-pub mod tendon;
 
 pub use error::{Error, Result};
-pub use loads::{Field, Loads, PointLoad};
+pub use model::loads::{Field, Loads, PointLoad};
+pub use model::robot::{Robot, TendonModel};
+pub use model::rod::{Rod, Section};
+pub use model::routing::{Routing, RoutingPoint};
+pub use model::tendon::Tendon;
 pub use report::{Method, SolveReport, Termination};
-pub use robot::{Robot, TendonModel};
-pub use rod::{Rod, Section};
-pub use routing::{Routing, RoutingPoint};
 pub use solution::{Node, Solution, State};
-pub use tendon::Tendon;
 
 /// The scalar types the model equations accept: f64, and num-dual's dual numbers for exact
 /// derivatives.

@@ -3,7 +3,7 @@
 //! interpolant of the Hermite-Simpson scheme; 4th-order accurate between nodes).
 #![allow(non_snake_case)]
 
-use crate::equations::Model;
+use crate::model::equations::Model;
 use crate::report::SolveReport;
 use crate::so3;
 use nalgebra::{Matrix3, Vector3};
@@ -87,7 +87,7 @@ impl Solution {
         let mut nodes = Vec::with_capacity(states.len());
         for (k, &State { s, p, R, v, u }) in states.iter().enumerate() {
             let site = model.site(s);
-            let rates = crate::linearize::rates(model, &site, segment_ends[k], &R, &v, &u)?;
+            let rates = crate::model::linearize::rates(model, &site, segment_ends[k], &R, &v, &u)?;
             let (v_s, u_s) = (rates.fixed_rows::<3>(0).into(), rates.fixed_rows::<3>(3).into());
             let (n, m) = model.internal_wrench(&site, &R, &v, &u);
             nodes.push(Node {

@@ -6,9 +6,9 @@ use std::cell::Cell;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use tdcr::collocation::newton::{self, LinearSolver, Settings, Workspace};
 use tdcr::collocation::system::System;
-use tdcr::equations::Model;
-use tdcr::guess::rigid_estimate;
 use tdcr::mesh::Mesh;
+use tdcr::mesh::guess::rigid_estimate;
+use tdcr::model::equations::Model;
 use tdcr::report::{Method, SolveReport, Termination};
 
 struct Counting;

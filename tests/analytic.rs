@@ -7,8 +7,9 @@ mod common;
 use common::solve_all;
 use nalgebra::{Matrix3, Vector3};
 use std::f64::consts::FRAC_PI_2;
+use tdcr::analysis::equilibrium;
 use tdcr::cases::analytic::{self, arc_about_y, elastica_tip};
-use tdcr::{Field, Loads, PointLoad, Robot, Rod, Routing, Section, Solution, Tendon, cases, equilibrium};
+use tdcr::{Field, Loads, PointLoad, Robot, Rod, Routing, Section, Solution, Tendon, cases};
 
 /// Relative global-equilibrium error every solution must meet: shooting at integration
 /// tolerance 1e-12 balances to about 1e-11 (see `equilibrium` docs for the scales).

@@ -12,7 +12,7 @@
 use nalgebra::{Matrix3, Vector3};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
-use tdcr::calibration::{
+use tdcr::fit::calibration::{
     self, Calibration, CalibrationOptions, Experiment, Fit, GaussianNoise, Parameters, Termination, TipErrorStatistics,
     calibrate, euler_rates, euler_xyz, euler_xyz_from, paper_frame_rotation, parse_csv, predict,
     prototype_in_paper_frame, table2_experiment, to_csv,

@@ -1,8 +1,9 @@
 //! Heavily loaded cases where shooting gives up and collocation (with load continuation)
 //! still converges, verified by global equilibrium and mesh refinement.
 
-use tdcr::guess::InitialGuess;
-use tdcr::{cases, collocation, equilibrium, shooting};
+use tdcr::analysis::equilibrium;
+use tdcr::mesh::guess::InitialGuess;
+use tdcr::{cases, collocation, shooting};
 
 /// A 1 m rod with the prototype's cross-section under its own weight, with a 40 N tendon at
 /// 8 mm: curvature about tau r / (E I) = 76 1/m, a coil of about twelve turns.

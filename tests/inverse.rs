@@ -10,7 +10,7 @@
 
 use nalgebra::{DMatrix, Vector3};
 use std::time::Instant;
-use tdcr::inverse::{Bound, InverseOptions, InverseSolution, InverseTermination, Target, solve_tensions};
+use tdcr::fit::inverse::{Bound, InverseOptions, InverseSolution, InverseTermination, Target, solve_tensions};
 use tdcr::{Error, Robot, Solution, cases, collocation};
 
 /// Upper tension bound (N) of the recovery tests: above every tension used to make the
@@ -124,7 +124,7 @@ fn recovers_unique_tensions() {
     let options = InverseOptions::new(MAX_TENSION);
     let found = run(&robot, &Target::position(goal), &options, "two tendons");
     assert!(found.reachable, "{}", found.explain());
-    let sens = tdcr::sensitivity::tip_sensitivities(&loaded, &solution).unwrap_or_else(|e| panic!("{e}"));
+    let sens = tdcr::collocation::sensitivity::tip_sensitivities(&loaded, &solution).unwrap_or_else(|e| panic!("{e}"));
     let position: DMatrix<f64> = sens.tension.rows(0, 3).into_owned();
     let sigma_min = position.singular_values().min();
     let bound = 2.0 * (options.tolerance + SOLVE_NOISE) / sigma_min;

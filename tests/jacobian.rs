@@ -2,9 +2,9 @@
 //! residual at a non-trivial state.
 
 use tdcr::collocation::system::{System, pattern};
-use tdcr::equations::Model;
-use tdcr::guess::rigid_estimate;
 use tdcr::mesh::Mesh;
+use tdcr::mesh::guess::rigid_estimate;
+use tdcr::model::equations::Model;
 
 fn check(robot: &tdcr::Robot, intervals: usize) {
     let model = Model::new(robot);

@@ -4,9 +4,9 @@
 use tdcr::collocation::newton::{LinearSolver, Workspace};
 use tdcr::collocation::system::{System, pattern};
 use tdcr::collocation::{self, Options};
-use tdcr::equations::Model;
-use tdcr::guess::rigid_estimate;
 use tdcr::mesh::Mesh;
+use tdcr::mesh::guess::rigid_estimate;
+use tdcr::model::equations::Model;
 use tdcr::{PointLoad, cases};
 
 /// A robot with a breakpoint (tendon ending mid-way) and an interior point load, so jump

@@ -1,8 +1,8 @@
 //! The comparison models: the point-moment tendon model (a switch on the robot, solved by
 //! both solvers) and the closed-form constant-curvature model.
 
+use tdcr::analysis::comparison::constant_curvature;
 use tdcr::cases::analytic::arc_about_y;
-use tdcr::models::constant_curvature;
 use tdcr::{Robot, Rod, Routing, Tendon, TendonModel, cases, collocation, shooting};
 
 #[test]

@@ -11,7 +11,8 @@ use proptest::prelude::*;
 use proptest::test_runner::{Config, FileFailurePersistence, TestRunner};
 use std::f64::consts::PI;
 use std::sync::atomic::{AtomicUsize, Ordering};
-use tdcr::{Loads, Robot, Rod, Routing, Tendon, collocation, equilibrium};
+use tdcr::analysis::equilibrium;
+use tdcr::{Loads, Robot, Rod, Routing, Tendon, collocation};
 
 /// Steel-like density (kg/m^3) and gravity (m/s^2) for the self weight of a random rod.
 const DENSITY: f64 = 8000.0;

@@ -10,12 +10,12 @@
 //! relative tests the sensitivities, not the differences. Measured: 1e-9 to 2e-7.
 
 use nalgebra::{Vector3, Vector6};
-use tdcr::collocation::{self, Options};
-use tdcr::rod::{Section, Stiffness, shear_modulus};
-use tdcr::sensitivity::{
+use tdcr::collocation::sensitivity::{
     Difference, NodeDerivative, RELATIVE_STEP, Sensitivity, TipSensitivities, backbone_tension_sensitivity,
     tip_sensitivities,
 };
+use tdcr::collocation::{self, Options};
+use tdcr::model::rod::{Section, Stiffness, shear_modulus};
 use tdcr::{Error, Robot, Solution, cases, so3};
 
 /// Finite-difference step relative to the parameter's scale (module docs).

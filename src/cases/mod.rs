@@ -4,11 +4,11 @@
 
 pub mod analytic;
 
-use crate::loads::Loads;
-use crate::robot::Robot;
-use crate::rod::Rod;
-use crate::routing::Routing;
-use crate::tendon::Tendon;
+use crate::model::loads::Loads;
+use crate::model::robot::Robot;
+use crate::model::rod::Rod;
+use crate::model::routing::Routing;
+use crate::model::tendon::Tendon;
 use nalgebra::{Matrix3, Vector3};
 
 /// Prototype backbone length: 242 mm.

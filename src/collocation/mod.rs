@@ -17,12 +17,13 @@
 pub mod blocks;
 pub mod newton;
 pub mod residual;
+pub mod sensitivity;
 pub mod system;
 
-use crate::equations::Model;
 use crate::error::{Result, invalid};
-use crate::guess::{self, InitialGuess, rigid_estimate};
 use crate::mesh::Mesh;
+use crate::mesh::guess::{self, InitialGuess, rigid_estimate};
+use crate::model::equations::Model;
 use crate::report::{Method, SolveReport, Termination};
 use crate::solution::{Node, Solution, State};
 use crate::{Error, Robot};

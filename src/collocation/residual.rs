@@ -18,9 +18,9 @@
 //! ```
 #![allow(non_snake_case)]
 
-use crate::equations::{Model, Site, lift, lift_m};
 use crate::error::Result;
-use crate::linearize::{self, Linearization, linearize};
+use crate::model::equations::{Model, Site, lift, lift_m};
+use crate::model::linearize::{self, Linearization, linearize};
 use crate::solution::State;
 use crate::{Real, so3};
 use nalgebra::{Matrix3, SMatrix, SVector, Vector3, Vector6};

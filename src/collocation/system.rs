@@ -22,9 +22,9 @@
 //! num-dual dual numbers run through the same generic residual code.
 
 use super::residual::{self, Delta, IntervalSites};
-use crate::equations::{Model, Site};
 use crate::error::Result;
 use crate::mesh::Mesh;
+use crate::model::equations::{Model, Site};
 use crate::so3;
 use crate::solution::State;
 use nalgebra::{SVector, Vector3};

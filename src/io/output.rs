@@ -2,8 +2,8 @@
 //! lists every field and unit). SI units throughout.
 #![allow(non_snake_case)]
 
-use crate::equations::Model;
-use crate::sensitivity::TipSensitivities;
+use crate::collocation::sensitivity::TipSensitivities;
+use crate::model::equations::Model;
 use crate::{Robot, Solution};
 use nalgebra::{Matrix3, Vector3};
 use std::fmt::Write;

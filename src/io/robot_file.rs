@@ -5,11 +5,11 @@
 use super::locate::{Locator, position};
 use super::printable;
 use super::{FileError, Problem};
-use crate::loads::{Field, Loads, PointLoad};
+use crate::model::loads::{Field, Loads, PointLoad};
+use crate::model::rod::{Rod, Section};
+use crate::model::routing::Routing;
+use crate::model::tendon::Tendon;
 use crate::report::Method;
-use crate::rod::{Rod, Section};
-use crate::routing::Routing;
-use crate::tendon::Tendon;
 use crate::{Error, Robot, collocation, shooting, so3};
 use nalgebra::{Matrix3, Rotation3, Vector3};
 use serde::Deserialize;

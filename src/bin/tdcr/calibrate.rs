@@ -9,7 +9,7 @@ use nalgebra::Vector3;
 use serde::Serialize;
 use std::fmt::Write as _;
 use std::io::Read;
-use tdcr::calibration::{
+use tdcr::fit::calibration::{
     Calibration, CalibrationOptions, Fit, Parameters, TipErrorStatistics, calibrate, csv_header, parse_csv,
 };
 

@@ -585,7 +585,7 @@ fn solve(args: &SolveArgs) -> Result<(), Failure> {
         Format::Json => {
             let jacobian = if args.jacobian {
                 Some(
-                    tdcr::sensitivity::tip_sensitivities(&file.robot, &solution)
+                    tdcr::collocation::sensitivity::tip_sensitivities(&file.robot, &solution)
                         .map_err(|e| Failure::Other(e.to_string()))?,
                 )
             } else {

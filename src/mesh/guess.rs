@@ -7,8 +7,8 @@
 //! linear beam theory; with no load it is the reference shape itself.
 #![allow(non_snake_case)]
 
-use crate::equations::{Model, Which};
 use crate::mesh::MeshNode;
+use crate::model::equations::{Model, Which};
 use crate::so3;
 use crate::solution::State;
 use nalgebra::{Matrix3, Vector3};

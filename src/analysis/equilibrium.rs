@@ -32,7 +32,7 @@
 //! tendon bends at another tendon's interior termination.
 #![allow(non_snake_case)]
 
-use crate::robot::Robot;
+use crate::model::robot::Robot;
 use crate::solution::Solution;
 use nalgebra::Vector3;
 
@@ -84,7 +84,8 @@ const GAUSS_W: [f64; 4] = [
 ///
 /// # Examples
 /// ```
-/// use tdcr::{Robot, Rod, Routing, Tendon, equilibrium, shooting};
+/// use tdcr::analysis::equilibrium;
+/// use tdcr::{Robot, Rod, Routing, Tendon, shooting};
 /// let robot = Robot::new(Rod::solid_circle(0.2, 0.0005, 200e9, 0.3))
 ///     .with_tendon(Tendon::new(Routing::straight(0.005, 0.0), 1.0));
 /// let solution = shooting::solve(&robot, &Default::default()).unwrap();
@@ -164,12 +165,12 @@ pub fn imbalance(robot: &Robot, solution: &Solution) -> Equilibrium {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::loads::{Field, Loads, PointLoad};
+    use crate::model::loads::{Field, Loads, PointLoad};
+    use crate::model::rod::{Rod, Section};
+    use crate::model::routing::Routing;
+    use crate::model::tendon::Tendon;
     use crate::report::{Method, SolveReport};
-    use crate::rod::{Rod, Section};
-    use crate::routing::Routing;
     use crate::solution::Node;
-    use crate::tendon::Tendon;
     use nalgebra::Matrix3;
 
     /// A circular arc in the world xz plane (curvature `kappa` about body y) sampled at

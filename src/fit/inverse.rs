@@ -17,7 +17,7 @@
 //! # Method: bounded Levenberg-Marquardt
 //!
 //! Each iteration linearizes e at the current tensions with the tip sensitivities of
-//! [`crate::sensitivity`] (d(tip position)/d tau and the world-frame rotation vector
+//! [`crate::collocation::sensitivity`] (d(tip position)/d tau and the world-frame rotation vector
 //! d omega/d tau by the implicit function theorem on the converged collocation system; for
 //! a slack tendon the one-sided, pulling derivative). The rotation rows are mapped by
 //! J_l(e_R)^-1, the derivative of log(exp(hat(omega)) exp(hat(e_R))) in omega. The step d
@@ -68,10 +68,10 @@
 //! refinement changes the mesh, and so the tip, discontinuously between iterates.
 #![allow(non_snake_case)]
 
+use crate::collocation::sensitivity::Sensitivity;
 use crate::collocation::{self, Solver};
 use crate::error::{Result, invalid};
-use crate::robot::Robot;
-use crate::sensitivity::Sensitivity;
+use crate::model::robot::Robot;
 use crate::so3;
 use crate::solution::Solution;
 use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
@@ -345,7 +345,7 @@ impl InverseSolution {
 /// (`target.orientation`), `options.max_tension` not positive and finite,
 /// `options.tolerance` not positive and finite, `options.max_iterations` zero,
 /// `options.orientation_weight` not positive and finite,
-/// `options.solver.residual_tolerance` above [`crate::sensitivity::RESIDUAL_LIMIT`] (the
+/// `options.solver.residual_tolerance` above [`crate::collocation::sensitivity::RESIDUAL_LIMIT`] (the
 /// sensitivities need converged solves), an index out of range or repeated
 /// in `options.free_tendons[i]`, an empty `options.free_tendons`, or a robot without
 /// tendons (`robot.tendons`); an invalid robot; any error of a forward solve
@@ -353,7 +353,7 @@ impl InverseSolution {
 ///
 /// # Examples
 /// ```
-/// use tdcr::inverse::{InverseOptions, Target, solve_tensions};
+/// use tdcr::fit::inverse::{InverseOptions, Target, solve_tensions};
 /// let mut robot = tdcr::cases::prototype();
 /// robot.tendons[1].tension = 1.5;
 /// let options = InverseOptions::new(5.0);
@@ -541,7 +541,7 @@ fn validate(robot: &Robot, target: &Target, options: &InverseOptions) -> Result<
             "give a positive weight in m/rad, or None for the rod length",
         ));
     }
-    let limit = crate::sensitivity::RESIDUAL_LIMIT;
+    let limit = crate::collocation::sensitivity::RESIDUAL_LIMIT;
     if options.solver.residual_tolerance > limit {
         return Err(invalid(
             "options.solver.residual_tolerance",

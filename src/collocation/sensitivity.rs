@@ -59,7 +59,7 @@
 //!   The solver's body-frame perturbation dtheta of the last node maps to omega = R_tip dtheta.
 //! - Base rotation: R0 -> exp(hat(phi)) R0 with phi a world-frame rotation vector (rad), the
 //!   same convention as the tip rotation; base position p0 -> p0 + dp0 (m, world).
-//! - Moduli (rods built from geometry, [`crate::rod::Geometry`]): d/dE at fixed Poisson's
+//! - Moduli (rods built from geometry, [`crate::model::rod::Geometry`]): d/dE at fixed Poisson's
 //!   ratio (G = E / (2 (1 + nu)) follows E, as when a material's E is calibrated), d/dG at
 //!   fixed E, and d/dE at fixed G from the chain rule
 //!   d/dE|_G = d/dE|_nu - (G / E) d/dG|_E (dG/dE at fixed nu is G / E).
@@ -75,11 +75,11 @@
 use crate::collocation::LinearSolver;
 use crate::collocation::newton::Workspace;
 use crate::collocation::system::{NODE, System, nonzeros};
-use crate::equations::Model;
 use crate::error::{Result, invalid};
 use crate::mesh::Mesh;
-use crate::robot::Robot;
-use crate::rod::{Section, Stiffness, shear_modulus};
+use crate::model::equations::Model;
+use crate::model::robot::Robot;
+use crate::model::rod::{Section, Stiffness, shear_modulus};
 use crate::so3;
 use crate::solution::{Solution, State};
 use nalgebra::{DMatrix, Matrix3, Matrix6, Matrix6x3, Vector3, Vector6};
@@ -232,12 +232,12 @@ impl<'a> Sensitivity<'a> {
     ///
     /// # Examples
     /// ```
-    /// use tdcr::sensitivity::{Difference, Sensitivity};
+    /// use tdcr::collocation::sensitivity::{Difference, Sensitivity};
     /// let robot = tdcr::cases::case_s();
     /// let solution = tdcr::collocation::solve(&robot, &Default::default()).unwrap();
     /// let mut sens = Sensitivity::new(&robot, &solution).unwrap();
     /// // Tip motion per newton of tendon 1's tension (2.94 N), stepping 1e-4 of it.
-    /// let step = tdcr::sensitivity::RELATIVE_STEP * 2.94;
+    /// let step = tdcr::collocation::sensitivity::RELATIVE_STEP * 2.94;
     /// let d = sens
     ///     .derivative(step, Difference::Central, |r, dq| r.tendons[0].tension += dq)
     ///     .unwrap();
@@ -520,7 +520,7 @@ impl TipSensitivities {
 /// ```
 /// let robot = tdcr::cases::case_h();
 /// let solution = tdcr::collocation::solve(&robot, &Default::default()).unwrap();
-/// let sens = tdcr::sensitivity::tip_sensitivities(&robot, &solution).unwrap();
+/// let sens = tdcr::collocation::sensitivity::tip_sensitivities(&robot, &solution).unwrap();
 /// assert_eq!(sens.tension.shape(), (6, 5));
 /// // A tip force along world +z moves the tip up.
 /// assert!(sens.tip_force[(2, 2)] > 0.0);
@@ -593,7 +593,7 @@ fn moduli(sens: &mut Sensitivity) -> Result<Option<ModulusSensitivities>> {
 /// ```
 /// let robot = tdcr::cases::case_s();
 /// let solution = tdcr::collocation::solve(&robot, &Default::default()).unwrap();
-/// let dp = tdcr::sensitivity::backbone_tension_sensitivity(&robot, &solution, 0).unwrap();
+/// let dp = tdcr::collocation::sensitivity::backbone_tension_sensitivity(&robot, &solution, 0).unwrap();
 /// assert_eq!(dp.len(), solution.nodes.len());
 /// assert!(dp[0].norm() < 1e-12); // the base is clamped
 /// ```

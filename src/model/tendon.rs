@@ -1,6 +1,6 @@
 //! A tendon: its routing, tension and where it ends.
 
-use crate::routing::Routing;
+use crate::model::routing::Routing;
 
 /// One tendon, modelled as a frictionless Cosserat string (section 3 of the paper).
 #[derive(Clone, Debug)]

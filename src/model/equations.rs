@@ -8,9 +8,9 @@
 #![allow(non_snake_case)]
 
 use crate::error::Result;
-use crate::robot::{Robot, TendonModel};
-use crate::rod::{SectionPoint, StrainPoint};
-use crate::routing::RoutingPoint;
+use crate::model::robot::{Robot, TendonModel};
+use crate::model::rod::{SectionPoint, StrainPoint};
+use crate::model::routing::RoutingPoint;
 use crate::so3::hat;
 use crate::{Error, Real};
 use nalgebra::{Matrix3, Matrix6, Vector3, Vector6};

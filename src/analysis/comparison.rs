@@ -6,7 +6,7 @@
 #![allow(non_snake_case)]
 
 use crate::error::Result;
-use crate::robot::Robot;
+use crate::model::robot::Robot;
 use crate::so3;
 use crate::solution::State;
 use nalgebra::Vector3;

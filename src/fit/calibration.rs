@@ -2,7 +2,7 @@
 //! paper's section 5.1): Young's modulus E and the base orientation as XYZ Euler angles,
 //! optionally the base position and a scale on the tendon offsets, fitted by
 //! Levenberg-Marquardt with Jacobians from the implicit-function-theorem sensitivities of
-//! [`crate::sensitivity`].
+//! [`crate::collocation::sensitivity`].
 //!
 //! # Problem
 //!
@@ -74,15 +74,15 @@
 #![allow(non_snake_case)]
 
 use crate::cases;
+use crate::collocation::sensitivity::{Difference, RELATIVE_STEP, Sensitivity, tip_sensitivities};
 use crate::collocation::{self, Solver};
 use crate::error::{Result, invalid};
 use crate::io::locate::Position;
 use crate::io::{FileError, Problem};
-use crate::loads::{Field, PointLoad};
-use crate::robot::Robot;
-use crate::rod::{Section, Stiffness, shear_modulus};
-use crate::routing::{Routing, RoutingPoint};
-use crate::sensitivity::{Difference, RELATIVE_STEP, Sensitivity, tip_sensitivities};
+use crate::model::loads::{Field, PointLoad};
+use crate::model::robot::Robot;
+use crate::model::rod::{Section, Stiffness, shear_modulus};
+use crate::model::routing::{Routing, RoutingPoint};
 use crate::solution::Solution;
 use nalgebra::{DMatrix, DVector, Matrix3, Rotation3, Vector3};
 use rayon::prelude::*;
@@ -187,7 +187,7 @@ impl Parameters {
 /// # Examples
 /// ```
 /// use nalgebra::Vector3;
-/// use tdcr::calibration::euler_xyz;
+/// use tdcr::fit::calibration::euler_xyz;
 /// // The prototype's base rotation (body z along world +x) is Ry(90 deg).
 /// let r = euler_xyz(&Vector3::new(0.0, 90f64.to_radians(), 0.0));
 /// assert!((r - tdcr::cases::prototype_base_rotation()).amax() < 1e-15);
@@ -213,7 +213,7 @@ const EULER_SINGULAR: f64 = 1.5e-8;
 /// # Examples
 /// ```
 /// use nalgebra::Vector3;
-/// use tdcr::calibration::{euler_xyz, euler_xyz_from};
+/// use tdcr::fit::calibration::{euler_xyz, euler_xyz_from};
 /// let angles = Vector3::new(3.1, -0.4, -1.6);
 /// assert!((euler_xyz_from(&euler_xyz(&angles)) - angles).amax() < 1e-14);
 /// ```
@@ -797,7 +797,7 @@ fn validate(robot: &Robot, experiments: &[Experiment], options: &CalibrationOpti
 ///
 /// # Examples
 /// ```
-/// use tdcr::calibration::{CalibrationOptions, Parameters, predict, table2_experiment};
+/// use tdcr::fit::calibration::{CalibrationOptions, Parameters, predict, table2_experiment};
 /// let robot = tdcr::cases::prototype();
 /// let case_s = &tdcr::cases::table2()[11]; // tendon 1 at 2.94 N
 /// let experiment = table2_experiment(case_s, &nalgebra::Matrix3::identity());
@@ -958,7 +958,7 @@ fn per_experiment(r: &DVector<f64>) -> Vec<Vector3<f64>> {
 ///
 /// # Examples
 /// ```
-/// use tdcr::calibration::{calibrate, predict, prototype_in_paper_frame, table2_experiment,
+/// use tdcr::fit::calibration::{calibrate, predict, prototype_in_paper_frame, table2_experiment,
 ///     paper_frame_rotation, CalibrationOptions, Parameters};
 /// let robot = prototype_in_paper_frame();
 /// // Synthetic data: E 5 % stiffer than nominal, six experiments of Table 2.
@@ -1245,9 +1245,9 @@ const MAX_CSV_PROBLEMS: usize = 20;
 /// ```
 /// let text = "tension_1,tip_force_x,tip_force_y,tip_force_z,measured_x,measured_y,measured_z\n\
 ///             2.94,0,0,-0.098,0.15,0,-0.16\n";
-/// let experiments = tdcr::calibration::parse_csv(text, "data.csv", 1).unwrap();
+/// let experiments = tdcr::fit::calibration::parse_csv(text, "data.csv", 1).unwrap();
 /// assert_eq!(experiments[0].tensions, vec![2.94]);
-/// let bad = tdcr::calibration::parse_csv(&text.replace("0.15", "x"), "data.csv", 1).unwrap_err();
+/// let bad = tdcr::fit::calibration::parse_csv(&text.replace("0.15", "x"), "data.csv", 1).unwrap_err();
 /// assert!(bad.to_string().starts_with("data.csv:2:17: `measured_x` (column 5)"), "{bad}");
 /// ```
 pub fn parse_csv(text: &str, file: &str, tendons: usize) -> std::result::Result<Vec<Experiment>, FileError> {

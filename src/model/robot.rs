@@ -1,10 +1,10 @@
 //! The whole robot: backbone, tendons, loads and base pose, validated once.
 
 use crate::error::{Result, invalid};
-use crate::loads::Loads;
-use crate::rod::{Geometry, ReferenceStrains, Rod};
-use crate::routing::Routing;
-use crate::tendon::Tendon;
+use crate::model::loads::Loads;
+use crate::model::rod::{Geometry, ReferenceStrains, Rod};
+use crate::model::routing::Routing;
+use crate::model::tendon::Tendon;
 use crate::{Error, so3};
 use nalgebra::{Matrix3, Vector3};
 

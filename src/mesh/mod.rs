@@ -1,8 +1,10 @@
 //! Collocation meshes: nodes on [0, L] with a node on each side of every breakpoint
 //! (tendon termination or interior point load), joined there by the jump conditions.
 
+pub mod guess;
+
 use crate::error::{Result, invalid};
-use crate::robot::Robot;
+use crate::model::robot::Robot;
 
 /// A mesh node: where it is and which segment (stretch between breakpoints) it belongs to.
 #[derive(Clone, Copy, Debug, PartialEq)]

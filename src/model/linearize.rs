@@ -80,10 +80,10 @@
 #![allow(non_snake_case)]
 
 use crate::Error;
-use crate::equations::MIN_TENDON_SPEED;
-use crate::equations::{Model, Site};
 use crate::error::Result;
-use crate::routing::RoutingPoint;
+use crate::model::equations::MIN_TENDON_SPEED;
+use crate::model::equations::{Model, Site};
+use crate::model::routing::RoutingPoint;
 use nalgebra::{LU, Matrix3, Matrix3x6, Matrix6, Matrix6x3, SMatrix, U6, Vector3, Vector6};
 
 /// Tendons whose per-tendon quantities are kept on the stack between the two passes (solve
@@ -471,8 +471,8 @@ pub fn rates(
 /// # Examples
 /// ```
 /// use nalgebra::Vector3;
-/// use tdcr::equations::Model;
-/// use tdcr::linearize::linearize;
+/// use tdcr::model::equations::Model;
+/// use tdcr::model::linearize::linearize;
 ///
 /// let robot = tdcr::cases::case_h();
 /// let model = Model::new(&robot);
@@ -553,11 +553,11 @@ pub fn linearize(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::loads::{Field, Loads};
-    use crate::robot::Robot;
-    use crate::rod::{ReferenceStrains, Rod, Section, SectionPoint, Stiffness, StrainPoint, shear_modulus};
-    use crate::routing::Routing;
-    use crate::tendon::Tendon;
+    use crate::model::loads::{Field, Loads};
+    use crate::model::robot::Robot;
+    use crate::model::rod::{ReferenceStrains, Rod, Section, SectionPoint, Stiffness, StrainPoint, shear_modulus};
+    use crate::model::routing::Routing;
+    use crate::model::tendon::Tendon;
     use crate::{cases, so3};
     use num_dual::{Dual64, DualNum};
     use std::sync::Arc;

@@ -9,10 +9,10 @@
 //! Jacobian is taken by central differences.
 #![allow(non_snake_case)]
 
-use crate::equations::{Model, Site};
 use crate::error::{Result, invalid};
-use crate::guess::{self, InitialGuess};
 use crate::mesh::Mesh;
+use crate::mesh::guess::{self, InitialGuess};
+use crate::model::equations::{Model, Site};
 use crate::report::{Iteration, Method, SolveReport, Termination};
 use crate::solution::{Solution, State};
 use crate::{Error, Robot, so3};

@@ -1,0 +1,11 @@
+//! The robot and its pointwise physics: plain data (rod, tendon routings, tendons, loads,
+//! the robot) validated once, and eq. 13 (corrected, docs/model.md) with its exact
+//! linearization.
+
+pub mod equations;
+pub mod linearize;
+pub mod loads;
+pub mod robot;
+pub mod rod;
+pub mod routing;
+pub mod tendon;
