@@ -1,6 +1,6 @@
 //! The crate's one error type.
 
-use crate::report::SolveReport;
+use crate::report::{Method, SolveReport};
 
 /// Everything that can go wrong in tdcr. Each message says what is wrong, the values
 /// involved, and what to try.
@@ -46,7 +46,7 @@ pub enum Error {
     #[error("{method} did not converge: {}; largest residual at s = {worst_s:.6} m; {hint}", report.termination)]
     NotConverged {
         /// Which solver.
-        method: &'static str,
+        method: Method,
         /// The whole report: iterations, residual history, termination reason.
         report: Box<SolveReport>,
         /// Arc length (m) where the scaled residual is largest.
@@ -54,12 +54,12 @@ pub enum Error {
         /// What to try next.
         hint: String,
     },
-    /// Adaptive mesh refinement reached the node cap before the tip tolerance was met.
+    /// Adaptive mesh refinement reached the interval cap before the tip tolerance was met.
     #[error(
         "mesh refinement reached the cap of {cap} intervals with an estimated tip error of \
          {estimate:.3e} m > tolerance {tolerance:.3e} m; raise `max_intervals` or loosen `tolerance`"
     )]
-    NodeCap {
+    IntervalCap {
         /// The cap (intervals).
         cap: usize,
         /// Estimated tip position error of the last mesh (m).

@@ -93,6 +93,6 @@ fn refinement_cap_is_reported() {
         },
     )
     .unwrap_err();
-    assert!(matches!(err, tdcr::Error::NodeCap { cap: 64, .. }), "{err}");
+    assert!(matches!(err, tdcr::Error::IntervalCap { cap: 64, .. }), "{err}");
     assert!(err.to_string().contains("max_intervals"));
 }

@@ -84,7 +84,7 @@ impl Default for Options {
 ///
 /// # Errors
 /// Invalid input, [`Error::NotConverged`] (with the report and where the residual is
-/// largest), [`Error::NodeCap`] when refinement cannot meet the tolerance.
+/// largest), [`Error::IntervalCap`] when refinement cannot meet the tolerance.
 ///
 /// # Examples
 /// ```
@@ -262,7 +262,7 @@ fn solve_impl(robot: &Robot, options: &Options, warm: Option<&Solution>, cache: 
             let all = (0..mesh.nodes.len() - 1).all(|k| mesh.is_jump(k) || split[k]);
             let fine = mesh.bisected(&split);
             if fine.intervals() > options.max_intervals {
-                return Err(Error::NodeCap {
+                return Err(Error::IntervalCap {
                     cap: options.max_intervals,
                     estimate: report.tip_error_estimate.unwrap_or(f64::NAN),
                     tolerance: tol,
@@ -471,7 +471,7 @@ fn timed(mut error: Error, start: Instant) -> Error {
 
 fn not_converged(system: &System, report: &SolveReport, worst_row: usize, hint: &str) -> Error {
     Error::NotConverged {
-        method: "collocation",
+        method: Method::Collocation,
         report: Box::new(report.clone()),
         worst_s: system.row_position(worst_row),
         hint: hint.into(),

@@ -186,7 +186,7 @@ pub fn solve(robot: &Robot, options: &Options) -> Result<Solution> {
     report.timings.total = start.elapsed();
     if report.termination != Termination::Converged {
         return Err(Error::NotConverged {
-            method: "shooting",
+            method: Method::Shooting,
             report: Box::new(report),
             worst_s: length,
             hint: "shooting is a cross-check; use collocation (with load continuation) for hard cases".into(),

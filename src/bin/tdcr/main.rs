@@ -281,7 +281,7 @@ fn solver_failure(e: Error) -> Failure {
     if let Error::NotConverged { report, .. } = &e {
         return Failure::NotConverged(format!("{text}\n{}", diagnostics(report)));
     }
-    if matches!(e, Error::NodeCap { .. } | Error::Breakdown { .. }) {
+    if matches!(e, Error::IntervalCap { .. } | Error::Breakdown { .. }) {
         Failure::NotConverged(text)
     } else if matches!(e, Error::InvalidInput { .. } | Error::SingularRouting { .. }) {
         Failure::Input(text)
