@@ -4,7 +4,8 @@
 use std::alloc::{GlobalAlloc, Layout, System as Heap};
 use std::cell::Cell;
 use std::sync::atomic::{AtomicUsize, Ordering};
-use tdcr::collocation::newton::{self, LinearSolver, Settings, Workspace};
+use tdcr::collocation::LinearSolver;
+use tdcr::collocation::newton::{self, Settings, Workspace};
 use tdcr::collocation::system::System;
 use tdcr::mesh::Mesh;
 use tdcr::mesh::guess::rigid_estimate;

@@ -1,7 +1,8 @@
 //! The collocation Jacobian (forward-mode AD) against central finite differences of the
 //! residual at a non-trivial state.
 
-use tdcr::collocation::system::{System, pattern};
+use tdcr::collocation::system::System;
+use tdcr::collocation::unknowns::pattern;
 use tdcr::mesh::Mesh;
 use tdcr::mesh::guess::rigid_estimate;
 use tdcr::model::equations::Model;

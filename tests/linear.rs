@@ -1,8 +1,10 @@
 //! The structured block elimination against faer's sparse LU, and singular matrices reported
 //! as such by both (never a panic, never a non-finite step).
 
-use tdcr::collocation::newton::{LinearSolver, Workspace};
-use tdcr::collocation::system::{System, pattern};
+use tdcr::collocation::LinearSolver;
+use tdcr::collocation::newton::Workspace;
+use tdcr::collocation::system::System;
+use tdcr::collocation::unknowns::pattern;
 use tdcr::collocation::{self, Options};
 use tdcr::mesh::Mesh;
 use tdcr::mesh::guess::rigid_estimate;

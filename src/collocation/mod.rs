@@ -5,7 +5,7 @@
 //! 2. [`system`]: residual rows (base, Hermite-Simpson intervals in Lie-group local
 //!    coordinates, jump conditions, tip) and their exact Jacobian (chain rule through the
 //!    scheme with the analytic linearization of eq. 13; AD for the few other blocks).
-//! 3. [`newton`]: damped Newton; steps by the structured elimination of [`blocks`] or faer's
+//! 3. [`newton`]: damped Newton; steps by the structured elimination of [`linear::blocks`] or faer's
 //!    sparse LU, every buffer (and the symbolic LU) built once per mesh.
 //! 4. Robustness: rigid-equilibrium initial guess or a warm start, and automatic load
 //!    continuation when a direct solve fails.
@@ -14,12 +14,13 @@
 //!
 //! docs/numerics.md documents the scheme (order 4), the scaling and the stopping tests.
 
-pub mod blocks;
+pub mod linear;
 pub mod newton;
 mod options;
 pub mod residual;
 pub mod sensitivity;
 pub mod system;
+pub mod unknowns;
 
 use crate::error::Result;
 use crate::mesh::Mesh;
@@ -28,7 +29,7 @@ use crate::model::equations::Model;
 use crate::report::{Method, SolveReport, Termination};
 use crate::solution::{Node, Solution, State};
 use crate::{Error, Robot};
-pub use newton::LinearSolver;
+pub use linear::LinearSolver;
 use newton::{Settings, Workspace};
 pub use options::{MAX_INTERVALS, Options};
 use std::time::Instant;
@@ -216,8 +217,8 @@ fn solve_impl(robot: &Robot, options: &Options, warm: Option<&Solution>, cache: 
         }
     }
     report.intervals = mesh.intervals();
-    report.unknowns = mesh.nodes.len() * system::NODE;
-    report.nonzeros = system::nonzeros(&mesh);
+    report.unknowns = unknowns::unknowns(mesh.nodes.len());
+    report.nonzeros = unknowns::nonzeros(&mesh);
     report.timings.total = start.elapsed();
     Solution::from_states(&model, &x, &segment_ends(&mesh), report)
 }

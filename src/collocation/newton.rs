@@ -1,26 +1,18 @@
-//! Damped Newton on the collocation system with faer's sparse LU.
+//! Damped Newton on the collocation system, with chord steps on stored factors.
 //!
-//! The sparsity pattern, the map from assembly order to storage, the symbolic LU (COLAMD
-//! ordering, elimination tree) and every buffer are built once per mesh in [`Workspace`];
-//! each iteration refills the matrix values, refactors numerically and solves without
-//! allocating. faer reports only structurally singular matrices, so every step is checked
-//! for finiteness (a numerically zero pivot shows up as inf/NaN) and the factorization is
-//! run under `catch_unwind` in case a faer version panics on a zero pivot: either way the
-//! result is a [`Termination::SingularJacobian`], never a panic.
+//! Every buffer and the linear solver (for the sparse LU: the pattern and symbolic
+//! factorization) are built once per mesh in [`Workspace`]; each iteration refills the
+//! matrix values, refactors numerically and solves without allocating. Every step is
+//! checked for finiteness (a numerically zero pivot shows up as inf/NaN): a singular matrix
+//! is a [`Termination::SingularJacobian`], never a panic.
 
-use super::blocks::BlockElimination;
-use super::system::{System, nonzeros, pattern};
-use crate::error::{Result, invalid};
+use super::linear::{Linear, LinearSolver};
+use super::system::System;
+use super::unknowns::nonzeros;
+use crate::error::Result;
 use crate::report::{Iteration, SolveReport, Termination};
 use crate::solution::State;
-use faer::col::ColMut;
-use faer::dyn_stack::{MemBuffer, MemStack};
-use faer::sparse::linalg::SupernodalThreshold;
-use faer::sparse::linalg::lu::{LuSymbolicParams, NumericLu, SymbolicLu, factorize_symbolic_lu};
-use faer::sparse::{SparseColMat, Triplet};
-use faer::{Conj, Par};
-use std::panic::{AssertUnwindSafe, catch_unwind};
-use std::time::{Duration, Instant};
+use std::time::Instant;
 
 /// Armijo sufficient-decrease constant (Dennis & Schnabel's customary 1e-4).
 const ARMIJO: f64 = 1e-4;
@@ -61,128 +53,6 @@ pub struct Workspace {
     factored: bool,
 }
 
-/// The linear solver behind Newton's steps.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub enum LinearSolver {
-    /// The structured almost-block-diagonal elimination ([`super::blocks`]): the collocation
-    /// Jacobian always has that structure, so this is the automatic choice.
-    #[default]
-    Auto,
-    /// faer's general sparse LU (COLAMD ordering, simplicial), the reference path.
-    SparseLu,
-}
-
-enum Linear {
-    Sparse(Box<SparseLu>),
-    Blocks(Box<BlockElimination>),
-}
-
-/// faer's sparse LU with the pattern, value slots and symbolic factorization of one mesh.
-struct SparseLu {
-    matrix: SparseColMat<usize, f64>,
-    slots: Vec<usize>,
-    symbolic: SymbolicLu<usize>,
-    numeric: NumericLu<usize, f64>,
-    mem: MemBuffer,
-}
-
-impl SparseLu {
-    fn new(system: &System) -> Result<Self> {
-        let n = system.unknowns();
-        let pat = pattern(&system.mesh);
-        let triplets: Vec<Triplet<usize, usize, f64>> = pat.iter().map(|&(r, c)| Triplet::new(r, c, 1.0)).collect();
-        let matrix = SparseColMat::<usize, f64>::try_new_from_triplets(n, n, &triplets).map_err(|e| {
-            invalid(
-                "mesh",
-                format!("gives an invalid sparsity pattern ({e:?})"),
-                "report this as a bug",
-            )
-        })?;
-        let (cp, ri) = (matrix.symbolic().col_ptr(), matrix.symbolic().row_idx());
-        let slots = pat
-            .iter()
-            .map(|&(r, c)| cp[c] + ri[cp[c]..cp[c + 1]].binary_search(&r).unwrap_or(0))
-            .collect();
-        // Simplicial LU: no allocation per refactorization (the supernodal path allocates per call).
-        let params = LuSymbolicParams {
-            supernodal_flop_ratio_threshold: SupernodalThreshold::FORCE_SIMPLICIAL,
-            ..Default::default()
-        };
-        let symbolic = factorize_symbolic_lu(matrix.symbolic(), params)
-            .map_err(|e| invalid("mesh", format!("symbolic LU failed ({e:?})"), "report this as a bug"))?;
-        let req = symbolic
-            .factorize_numeric_lu_scratch::<f64>(Par::Seq, Default::default())
-            .or(symbolic.solve_in_place_scratch::<f64>(1, Par::Seq));
-        Ok(SparseLu {
-            matrix,
-            slots,
-            symbolic,
-            numeric: NumericLu::new(),
-            mem: MemBuffer::new(req),
-        })
-    }
-
-    /// Refills the values, factorizes and solves in place; None on a zero pivot (or a panic
-    /// inside faer), else the factorization and solve times.
-    fn solve(&mut self, values: &[f64], x: &mut [f64]) -> Option<(Duration, Duration)> {
-        for (slot, v) in self.slots.iter().zip(values) {
-            self.matrix.val_mut()[*slot] = *v;
-        }
-        let SparseLu {
-            matrix,
-            symbolic,
-            numeric,
-            mem,
-            ..
-        } = self;
-        catch_unwind(AssertUnwindSafe(|| {
-            let t = Instant::now();
-            let lu = symbolic
-                .factorize_numeric_lu(
-                    numeric,
-                    matrix.as_ref(),
-                    Par::Seq,
-                    MemStack::new(mem),
-                    Default::default(),
-                )
-                .ok()?;
-            let factor_time = t.elapsed();
-            let t = Instant::now();
-            lu.solve_in_place_with_conj(
-                Conj::No,
-                ColMut::from_slice_mut(x).as_mat_mut(),
-                Par::Seq,
-                MemStack::new(mem),
-            );
-            Some((factor_time, t.elapsed()))
-        }))
-        .ok()
-        .flatten()
-    }
-}
-
-impl SparseLu {
-    /// Solves in place with the numeric factors of the last successful [`SparseLu::solve`].
-    fn solve_again(&mut self, x: &mut [f64]) {
-        let SparseLu {
-            symbolic, numeric, mem, ..
-        } = self;
-        let lu = faer::sparse::linalg::lu::LuRef::new_unchecked(symbolic, numeric);
-        // A panic here would mean no factorization was made: report it as non-finite.
-        let solved = catch_unwind(AssertUnwindSafe(|| {
-            lu.solve_in_place_with_conj(
-                Conj::No,
-                ColMut::from_slice_mut(x).as_mat_mut(),
-                Par::Seq,
-                MemStack::new(mem),
-            );
-        }));
-        if solved.is_err() {
-            x.fill(f64::NAN);
-        }
-    }
-}
-
 impl Workspace {
     /// Builds the buffers and, for the sparse path, the pattern and symbolic LU of
     /// `system`'s mesh.
@@ -191,12 +61,8 @@ impl Workspace {
     /// [`crate::Error::InvalidInput`] if faer rejects the pattern (cannot happen for a valid mesh).
     pub fn new(system: &System, solver: LinearSolver) -> Result<Self> {
         let n = system.unknowns();
-        let linear = match solver {
-            LinearSolver::Auto => Linear::Blocks(Box::new(BlockElimination::new(system.mesh.nodes.len()))),
-            LinearSolver::SparseLu => Linear::Sparse(Box::new(SparseLu::new(system)?)),
-        };
         Ok(Workspace {
-            linear,
+            linear: Linear::new(&system.mesh, solver)?,
             values: vec![0.0; nonzeros(&system.mesh)],
             residual: vec![0.0; n],
             trial_residual: vec![0.0; n],
@@ -218,13 +84,7 @@ impl Workspace {
         for (r, f) in self.rhs.iter_mut().zip(&self.residual) {
             *r = -f;
         }
-        let times = match &mut self.linear {
-            Linear::Sparse(lu) => {
-                self.step.copy_from_slice(&self.rhs);
-                lu.solve(&self.values, &mut self.step)
-            }
-            Linear::Blocks(blocks) => blocks.solve(&self.values, &self.rhs, &mut self.step),
-        };
+        let times = self.linear.solve(&self.values, &self.rhs, &mut self.step);
         let Some((factor_time, solve_time)) = times else {
             return false;
         };
@@ -244,13 +104,7 @@ impl Workspace {
             *r = -f;
         }
         let t = Instant::now();
-        match &mut self.linear {
-            Linear::Blocks(blocks) => blocks.solve_again(&self.rhs, &mut self.step),
-            Linear::Sparse(lu) => {
-                self.step.copy_from_slice(&self.rhs);
-                lu.solve_again(&mut self.step);
-            }
-        }
+        self.linear.solve_again(&self.rhs, &mut self.step);
         report.timings.solve += t.elapsed();
         self.step.iter().all(|x| x.is_finite())
     }
@@ -267,6 +121,17 @@ impl Workspace {
         self.solve(&mut report).then_some(&self.step[..])
     }
 
+    /// Factors the Jacobian with these `values` (in [`crate::collocation::unknowns::pattern`]
+    /// order) for later [`Workspace::solve_again`] calls, as the sensitivities need. The
+    /// structured elimination carries the right-hand side through its panels, so factoring
+    /// is a solve with a zero right-hand side at the same cost. False for a zero pivot.
+    pub fn factor(&mut self, values: &[f64]) -> bool {
+        self.values.copy_from_slice(values);
+        self.residual.fill(0.0);
+        let mut report = SolveReport::new(crate::report::Method::Collocation);
+        self.solve(&mut report)
+    }
+
     /// Solves J x = rhs with the factorization of the last successful solve (a Newton step or
     /// [`Workspace::solve_linear`]) for another right-hand side: no refactorization, so many
     /// right-hand sides (sensitivities, one per parameter) cost one factorization. None for
@@ -275,13 +140,7 @@ impl Workspace {
         if !self.factored {
             return None;
         }
-        match &mut self.linear {
-            Linear::Blocks(blocks) => blocks.solve_again(rhs, &mut self.step),
-            Linear::Sparse(lu) => {
-                self.step.copy_from_slice(rhs);
-                lu.solve_again(&mut self.step);
-            }
-        }
+        self.linear.solve_again(rhs, &mut self.step);
         self.step.iter().all(|x| x.is_finite()).then_some(&self.step[..])
     }
 }

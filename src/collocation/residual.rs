@@ -1,7 +1,12 @@
-//! The residual blocks of the collocation system, generic over the scalar so that one code
-//! path gives both the residual (f64) and its exact Jacobian (num-dual forward mode).
+//! The residual blocks of the collocation system. The base, jump and tip blocks are generic
+//! over the scalar, so one code path gives their residual (f64) and their exact Jacobian
+//! (num-dual forward mode). The interval blocks have two f64 paths: [`interval`] for the
+//! residual and [`interval_jacobian`] for the residual with its exact Jacobian by the chain
+//! rule through the scheme and the analytic linearization of eq. 13
+//! ([`crate::model::linearize`]); tests/jacobian.rs checks the two against central
+//! differences.
 //!
-//! Unknowns: at every node a scaled perturbation d = (dp / L, dtheta, dv, du L) of the
+//! Unknowns (layout in [`super::unknowns`]): at every node a scaled perturbation d = (dp / L, dtheta, dv, du L) of the
 //! current state, applied as p + L dp, R exp(dtheta), v + dv, u + du / L (rotations are
 //! updated on SO(3), so every R stays orthonormal). Residual rows are scaled the same way:
 //! positions by 1/L, curvatures by L, wrenches in strain units (D^-1 n, C^-1 m L), so all
@@ -18,6 +23,7 @@
 //! ```
 #![allow(non_snake_case)]
 
+use super::unknowns::{P, THETA, U, V};
 use crate::error::Result;
 use crate::model::equations::{Model, Site, lift, lift_m};
 use crate::model::linearize::{self, Linearization, linearize};
@@ -109,16 +115,16 @@ pub fn jump<T: Real>(
 
 /// The right-hand side F(s, y) in the local coordinates of an interval starting at `Rk`.
 fn rhs(model: &Model, site: &Site, segment_end: f64, Rk: &Matrix3<f64>, y: &Block<f64>) -> Result<Block<f64>> {
-    let theta: Vector3<f64> = y.fixed_rows::<3>(3).into();
-    let v: Vector3<f64> = y.fixed_rows::<3>(6).into();
-    let u: Vector3<f64> = y.fixed_rows::<3>(9).into();
+    let theta: Vector3<f64> = y.fixed_rows::<3>(THETA).into();
+    let v: Vector3<f64> = y.fixed_rows::<3>(V).into();
+    let u: Vector3<f64> = y.fixed_rows::<3>(U).into();
     let R = Rk * so3::exp(&theta);
     let rates = linearize::rates(model, site, segment_end, &R, &v, &u)?;
     let mut f = Block::zeros();
-    f.fixed_rows_mut::<3>(0).copy_from(&(R * v));
-    f.fixed_rows_mut::<3>(3)
+    f.fixed_rows_mut::<3>(P).copy_from(&(R * v));
+    f.fixed_rows_mut::<3>(THETA)
         .copy_from(&(so3::right_jacobian_inv(&theta) * u));
-    f.fixed_rows_mut::<6>(6).copy_from(&rates);
+    f.fixed_rows_mut::<6>(V).copy_from(&rates);
     Ok(f)
 }
 
@@ -148,10 +154,10 @@ fn end_points(a: &State, b: &State) -> (Block<f64>, Block<f64>) {
 /// with R_b = R_a exp(theta_1).
 fn end_rhs(b: &State, theta1: &Vector3<f64>, rates: &Vector6<f64>) -> Block<f64> {
     let mut f = Block::zeros();
-    f.fixed_rows_mut::<3>(0).copy_from(&(b.R * b.v));
-    f.fixed_rows_mut::<3>(3)
+    f.fixed_rows_mut::<3>(P).copy_from(&(b.R * b.v));
+    f.fixed_rows_mut::<3>(THETA)
         .copy_from(&(so3::right_jacobian_inv(theta1) * b.u));
-    f.fixed_rows_mut::<6>(6).copy_from(rates);
+    f.fixed_rows_mut::<6>(V).copy_from(rates);
     f
 }
 
@@ -178,7 +184,7 @@ pub fn interval(
         None => linearize::rates(model, &sites.start, segment_end, &a.R, &a.v, &a.u)?,
     };
     let rates1 = linearize::rates(model, &sites.end, segment_end, &b.R, &b.v, &b.u)?;
-    let theta1: Vector3<f64> = y1.fixed_rows::<3>(3).into();
+    let theta1: Vector3<f64> = y1.fixed_rows::<3>(THETA).into();
     let f0 = end_rhs(a, &Vector3::zeros(), &rates0);
     let f1 = end_rhs(b, &theta1, &rates1);
     let ym = (y0 + y1) * 0.5 + (f0 - f1) * (h / 8.0);
@@ -237,17 +243,17 @@ struct PointLinearization {
 /// linearization `lin` at R = R_k exp(theta) and the kinematics p' = R_k exp(theta) v,
 /// theta' = J_r(theta)^-1 u.
 fn rhs_linearized(lin: &Linearization, Rk: &Matrix3<f64>, y: &Block<f64>) -> PointLinearization {
-    let theta: Vector3<f64> = y.fixed_rows::<3>(3).into();
-    let v: Vector3<f64> = y.fixed_rows::<3>(6).into();
-    let u: Vector3<f64> = y.fixed_rows::<3>(9).into();
+    let theta: Vector3<f64> = y.fixed_rows::<3>(THETA).into();
+    let v: Vector3<f64> = y.fixed_rows::<3>(V).into();
+    let u: Vector3<f64> = y.fixed_rows::<3>(U).into();
     let E = so3::exp(&theta);
     let R = Rk * E;
     let Jr = so3::right_jacobian(&theta);
     let Jri = so3::right_jacobian_inv(&theta);
     let mut f = Block::zeros();
-    f.fixed_rows_mut::<3>(0).copy_from(&(R * v));
-    f.fixed_rows_mut::<3>(3).copy_from(&(Jri * u));
-    f.fixed_rows_mut::<6>(6).copy_from(&lin.rates);
+    f.fixed_rows_mut::<3>(P).copy_from(&(R * v));
+    f.fixed_rows_mut::<3>(THETA).copy_from(&(Jri * u));
+    f.fixed_rows_mut::<6>(V).copy_from(&lin.rates);
     let mut f_y = SMatrix::<f64, 12, 12>::zeros();
     // p' = R_k exp(theta) v: exp(theta + d) = exp(theta) exp(J_r d)
     f_y.fixed_view_mut::<3, 3>(0, 3).copy_from(&(-R * so3::hat(&v) * Jr));
@@ -294,7 +300,7 @@ pub fn interval_jacobian(
     let length = model.robot.length();
     let h = sites.end.s - sites.start.s;
     let (y0, y1) = end_points(a, b);
-    let theta1: Vector3<f64> = y1.fixed_rows::<3>(3).into();
+    let theta1: Vector3<f64> = y1.fixed_rows::<3>(THETA).into();
     let lin0 = match start {
         Some(l) => l,
         None => linearize(model, &sites.start, segment_end, &a.R, &a.v, &a.u)?,
@@ -308,9 +314,9 @@ pub fn interval_jacobian(
             model,
             &sites.mid,
             segment_end,
-            &(a.R * so3::exp(&ym.fixed_rows::<3>(3).into())),
-            &ym.fixed_rows::<3>(6).into(),
-            &ym.fixed_rows::<3>(9).into(),
+            &(a.R * so3::exp(&ym.fixed_rows::<3>(THETA).into())),
+            &ym.fixed_rows::<3>(V).into(),
+            &ym.fixed_rows::<3>(U).into(),
         )?,
         &a.R,
         &ym,

@@ -67,14 +67,15 @@
 //! # Cost
 //!
 //! One Jacobian assembly and one factorization (the structured elimination of
-//! [`crate::collocation::blocks`]), then per parameter one solve with the stored factors
+//! [`crate::collocation::linear::blocks`]), then per parameter one solve with the stored factors
 //! ([`Workspace::solve_again`]), plus two residual evaluations for a differenced parameter
 //! (three one-sided).
 #![allow(non_snake_case)]
 
 use crate::collocation::LinearSolver;
 use crate::collocation::newton::Workspace;
-use crate::collocation::system::{NODE, System, nonzeros};
+use crate::collocation::system::System;
+use crate::collocation::unknowns::{self, TIP_ROWS, nonzeros, tip_row};
 use crate::error::{Result, invalid};
 use crate::mesh::Mesh;
 use crate::model::equations::Model;
@@ -198,7 +199,7 @@ impl<'a> Sensitivity<'a> {
         }
         let mut workspace = Workspace::new(&system, LinearSolver::Auto)?;
         // Factor once; every parameter then costs one solve with the stored factors.
-        if workspace.solve_linear(&values, &vec![0.0; n]).is_none() {
+        if !workspace.factor(&values) {
             return Err(singular());
         }
         Ok(Sensitivity {
@@ -288,13 +289,13 @@ impl<'a> Sensitivity<'a> {
             .iter()
             .enumerate()
             .map(|(k, x)| {
-                let part = |i: usize| Vector3::new(dx[k * NODE + i], dx[k * NODE + i + 1], dx[k * NODE + i + 2]);
+                let [p, theta, v, u] = unknowns::node_increments(dx, k, length);
                 NodeDerivative {
                     s: x.s,
-                    p: part(0) * length,
-                    rotation: x.R * part(3),
-                    v: part(6),
-                    u: part(9) / length,
+                    p,
+                    rotation: x.R * theta,
+                    v,
+                    u,
                 }
             })
             .collect())
@@ -326,10 +327,10 @@ impl<'a> Sensitivity<'a> {
         Self::check_axis(axis)?;
         let (R, kse, _) = self.tip_frame();
         let column = R.transpose().column(axis).component_div(&kse);
+        let force_rows = tip_row(self.states.len());
         let rhs = self.zeroed_rhs();
-        let n = rhs.len();
         for i in 0..3 {
-            rhs[n - 6 + i] = column[i];
+            rhs[force_rows + i] = column[i];
         }
         self.respond()
     }
@@ -343,10 +344,10 @@ impl<'a> Sensitivity<'a> {
         Self::check_axis(axis)?;
         let (R, _, kbt) = self.tip_frame();
         let column = R.transpose().column(axis).component_div(&kbt) * self.robot().length();
+        let moment_rows = tip_row(self.states.len()) + TIP_ROWS / 2;
         let rhs = self.zeroed_rhs();
-        let n = rhs.len();
         for i in 0..3 {
-            rhs[n - 3 + i] = column[i];
+            rhs[moment_rows + i] = column[i];
         }
         self.respond()
     }

@@ -13,10 +13,13 @@
 
 use std::time::{Duration, Instant};
 
-/// Unknowns per node.
-const NODE: usize = 12;
-/// Rows carried from one step to the next (and base and tip rows).
-const CARRY: usize = 6;
+use crate::collocation::unknowns::{BASE_COLUMNS, BASE_ROWS, NODE, THETA, TIP_COLUMNS, TIP_ROWS, link_row, tip_row};
+
+/// Rows carried from one step to the next: at step 0 the base rows; after each step the
+/// rows left over once a node's 12 pivots are chosen, as many as there are base rows.
+const CARRY: usize = BASE_ROWS;
+// The last step solves the carried rows together with the tip rows for the last node.
+const _: () = assert!(CARRY + TIP_ROWS == NODE && BASE_COLUMNS == CARRY);
 /// Rows of a panel: carried rows plus one link.
 const ROWS: usize = CARRY + NODE;
 /// Columns of a panel (two nodes) plus the right-hand side.
@@ -63,7 +66,7 @@ impl BlockElimination {
     }
 
     /// Solves J x = rhs where J's values are in the assembly order of
-    /// [`super::system::pattern`] (base 6 x 6 on p, R of node 0; links 12 x 24 row major;
+    /// [`crate::collocation::unknowns::pattern`] (base 6 x 6 on p, R of node 0; links 12 x 24 row major;
     /// tip 6 x 9 on R, v, u of the last node). Writes x into `x`. Returns None on a zero
     /// pivot, else the times of the elimination and of the back substitution.
     pub fn solve(&mut self, values: &[f64], rhs: &[f64], x: &mut [f64]) -> Option<(Duration, Duration)> {
@@ -72,10 +75,10 @@ impl BlockElimination {
         // Carried rows start as the base rows: columns 0..6 of block 0.
         let mut carry = [[0.0; COLS]; CARRY];
         for (r, row) in carry.iter_mut().enumerate() {
-            row[..6].copy_from_slice(&values[r * 6..r * 6 + 6]);
+            row[..BASE_COLUMNS].copy_from_slice(&values[r * BASE_COLUMNS..(r + 1) * BASE_COLUMNS]);
             row[2 * NODE] = rhs[r];
         }
-        let mut at = 36;
+        let mut at = BASE_ROWS * BASE_COLUMNS;
         for k in 0..self.links {
             // Panel: carried rows (block k only) over link k's rows (blocks k and k + 1).
             for (r, row) in carry.iter().enumerate() {
@@ -86,7 +89,7 @@ impl BlockElimination {
             for r in 0..NODE {
                 let row = &mut panel[CARRY + r];
                 row[..2 * NODE].copy_from_slice(&values[at + r * 2 * NODE..at + (r + 1) * 2 * NODE]);
-                row[2 * NODE] = rhs[6 + k * NODE + r];
+                row[2 * NODE] = rhs[link_row(k) + r];
             }
             at += NODE * 2 * NODE;
             if !eliminate_fast(&mut panel, NODE, &mut self.records[k]) {
@@ -106,10 +109,10 @@ impl BlockElimination {
             last[r][..NODE].copy_from_slice(&row[..NODE]);
             last[r][NODE] = row[2 * NODE];
         }
-        let tip_row0 = 6 + self.links * NODE;
-        for r in 0..CARRY {
-            last[CARRY + r][3..NODE].copy_from_slice(&values[at + r * 9..at + r * 9 + 9]);
-            last[CARRY + r][..3].fill(0.0);
+        let tip_row0 = tip_row(self.links + 1);
+        for r in 0..TIP_ROWS {
+            last[CARRY + r][THETA..NODE].copy_from_slice(&values[at + r * TIP_COLUMNS..at + (r + 1) * TIP_COLUMNS]);
+            last[CARRY + r][..THETA].fill(0.0);
             last[CARRY + r][NODE] = rhs[tip_row0 + r];
         }
         if !eliminate_fast(&mut last, NODE, &mut self.last_record) {
@@ -145,14 +148,14 @@ impl BlockElimination {
         let mut transformed = [0.0; ROWS];
         for k in 0..n {
             transformed[..CARRY].copy_from_slice(&carry);
-            transformed[CARRY..].copy_from_slice(&rhs[6 + k * NODE..6 + (k + 1) * NODE]);
+            transformed[CARRY..].copy_from_slice(&rhs[link_row(k)..link_row(k + 1)]);
             replay(&self.records[k], &mut transformed);
             x[k * NODE..(k + 1) * NODE].copy_from_slice(&transformed[..NODE]);
             carry.copy_from_slice(&transformed[NODE..]);
         }
         let mut last = [0.0; NODE];
         last[..CARRY].copy_from_slice(&carry);
-        last[CARRY..].copy_from_slice(&rhs[6 + n * NODE..]);
+        last[CARRY..].copy_from_slice(&rhs[tip_row(n + 1)..]);
         replay(&self.last_record, &mut last);
         back_substitute(&self.last, &last, &mut x[n * NODE..(n + 1) * NODE], None);
         for k in (0..n).rev() {

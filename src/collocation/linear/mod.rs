@@ -1,0 +1,66 @@
+//! The linear solvers behind Newton's steps, both for the collocation Jacobian with values
+//! in [`crate::collocation::unknowns::pattern`] order: the structured elimination of
+//! [`blocks`] (automatic) and faer's sparse LU of [`sparse`] (the general reference path).
+//! Each keeps its factors, so further right-hand sides cost a re-solve only.
+
+pub mod blocks;
+pub mod sparse;
+
+use crate::error::Result;
+use crate::mesh::Mesh;
+use blocks::BlockElimination;
+use sparse::SparseLu;
+use std::time::Duration;
+
+/// The linear solver behind Newton's steps.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum LinearSolver {
+    /// The structured almost-block-diagonal elimination ([`blocks`]): the collocation
+    /// Jacobian always has that structure, so this is the automatic choice.
+    #[default]
+    Auto,
+    /// faer's general sparse LU (COLAMD ordering, simplicial), the reference path.
+    SparseLu,
+}
+
+/// A linear solver built for one mesh.
+pub(crate) enum Linear {
+    /// faer's sparse LU.
+    Sparse(Box<SparseLu>),
+    /// The structured elimination.
+    Blocks(Box<BlockElimination>),
+}
+
+impl Linear {
+    /// The solver `kind` with its buffers (and, for the sparse LU, symbolic factors) for `mesh`.
+    pub(crate) fn new(mesh: &Mesh, kind: LinearSolver) -> Result<Self> {
+        Ok(match kind {
+            LinearSolver::Auto => Linear::Blocks(Box::new(BlockElimination::new(mesh.nodes.len()))),
+            LinearSolver::SparseLu => Linear::Sparse(Box::new(SparseLu::new(mesh)?)),
+        })
+    }
+
+    /// Factors the matrix with these `values` and solves J x = rhs. None on a zero pivot,
+    /// else the factorization and solve times.
+    pub(crate) fn solve(&mut self, values: &[f64], rhs: &[f64], x: &mut [f64]) -> Option<(Duration, Duration)> {
+        match self {
+            Linear::Sparse(lu) => {
+                x.copy_from_slice(rhs);
+                lu.solve(values, x)
+            }
+            Linear::Blocks(blocks) => blocks.solve(values, rhs, x),
+        }
+    }
+
+    /// Solves J x = rhs with the factors of the last successful [`Linear::solve`]; the
+    /// caller checks x for finiteness.
+    pub(crate) fn solve_again(&mut self, rhs: &[f64], x: &mut [f64]) {
+        match self {
+            Linear::Blocks(blocks) => blocks.solve_again(rhs, x),
+            Linear::Sparse(lu) => {
+                x.copy_from_slice(rhs);
+                lu.solve_again(x);
+            }
+        }
+    }
+}
