@@ -1,19 +1,20 @@
-//! Pointwise physics: the coupled rod-tendon equations (eq. 13 as corrected in ERRATA.md
-//! and docs/model.md), the tendon point wrenches, and the internal force and moment.
+//! Pointwise physics: the coupled rod-tendon equations (eq. 13 as corrected in
+//! docs/model.md), the tendon point wrenches, and the internal force and moment.
 //!
-//! Everything that depends on the state (R, v, u) is generic over the scalar so the
-//! collocation Jacobian can be taken exactly by forward-mode automatic differentiation;
-//! everything that depends only on s (stiffness, reference strains, routings, external
-//! loads) is evaluated once in f64 as a [`Site`].
+//! Everything that depends only on s (stiffness, reference strains, routings, external
+//! loads) is evaluated once in f64 as a [`Site`]. The tendon pulls, point wrenches and
+//! internal wrench are generic over the scalar, so the base, jump and tip blocks of the
+//! collocation Jacobian are taken exactly by forward-mode automatic differentiation. Eq. 13
+//! itself is in f64 only, in [`linearize`] with its exact linearization.
 #![allow(non_snake_case)]
 
 use crate::error::Result;
+use crate::model::linearize;
 use crate::model::robot::{Robot, TendonModel};
 use crate::model::rod::{SectionPoint, StrainPoint};
 use crate::model::routing::RoutingPoint;
-use crate::so3::hat;
 use crate::{Error, Real};
-use nalgebra::{Matrix3, Matrix6, Vector3, Vector6};
+use nalgebra::{Matrix3, Vector3};
 
 /// Below this |p_i'| (body frame, dimensionless) a tendon's path has no usable tangent.
 pub(crate) const MIN_TENDON_SPEED: f64 = 1e-9;
@@ -115,88 +116,22 @@ impl<'a> Model<'a> {
     }
 
     /// Eq. 13 (corrected): the strain rates (v', u') at a site for the state (R, v, u),
-    /// with the tendons that reach `segment_end` loading the backbone.
+    /// with the tendons that reach `segment_end` loading the backbone. This is
+    /// [`linearize::rates`] (the one f64 implementation of eq. 13, shared with the exact
+    /// linearization), split into its v' and u' parts.
     ///
     /// # Errors
     /// [`Error::SingularRouting`] where a tendon's path tangent vanishes,
     /// [`Error::Breakdown`] where the 6x6 system is singular.
-    pub fn strain_rates<T: Real>(
+    pub fn strain_rates(
         &self,
         site: &Site,
         segment_end: f64,
-        R: &Matrix3<T>,
-        v: &Vector3<T>,
-        u: &Vector3<T>,
-    ) -> Result<(Vector3<T>, Vector3<T>)> {
-        let kse = lift::<T>(&site.section.section.kse);
-        let kbt = lift::<T>(&site.section.section.kbt);
-        let D = Matrix3::from_diagonal(&kse);
-        let C = Matrix3::from_diagonal(&kbt);
-        let D_s = Matrix3::from_diagonal(&lift::<T>(&site.section.kse_s));
-        let C_s = Matrix3::from_diagonal(&lift::<T>(&site.section.kbt_s));
-        let v_star = lift::<T>(&site.reference.v_star);
-        let u_star = lift::<T>(&site.reference.u_star);
-        let dv = v - v_star;
-        let du = u - u_star;
-        let u_hat = hat(u);
-        let Rt = R.transpose();
-
-        let mut A = Matrix3::<T>::zeros();
-        let mut B = Matrix3::<T>::zeros();
-        let mut G = Matrix3::<T>::zeros();
-        let mut H = Matrix3::<T>::zeros();
-        let mut a = Vector3::<T>::zeros();
-        let mut b = Vector3::<T>::zeros();
-        for (i, tension, rp) in self.distributed_tendons(site.s, segment_end) {
-            let r = lift::<T>(&rp.r);
-            let r_s = lift::<T>(&rp.r_s);
-            let r_ss = lift::<T>(&rp.r_ss);
-            let pb_s = u.cross(&r) + r_s + v; // p_i^b'
-            let speed = pb_s.norm();
-            if speed < T::from_f64(MIN_TENDON_SPEED).unwrap_or_else(T::zero) {
-                return Err(Error::SingularRouting {
-                    tendon: i,
-                    s: site.s,
-                    speed: to_f64(speed),
-                });
-            }
-            let ph = hat(&pb_s);
-            let tau = T::from_f64(tension).unwrap_or_else(T::zero);
-            let A_i = ph * ph * (-tau / (speed * speed * speed));
-            let r_hat = hat(&r);
-            let B_i = r_hat * A_i;
-            let a_i = A_i * (u_hat * pb_s + u_hat * r_s + r_ss);
-            A += A_i;
-            B += B_i;
-            G -= A_i * r_hat;
-            H -= B_i * r_hat;
-            b += r.cross(&a_i);
-            a += a_i;
-        }
-
-        let rhs_v = D * lift::<T>(&site.reference.v_star_s) - (u_hat * D + D_s) * dv - Rt * lift::<T>(&site.f_e) - a;
-        let rhs_u = C * lift::<T>(&site.reference.u_star_s)
-            - (u_hat * C + C_s) * du
-            - hat(v) * D * dv
-            - Rt * lift::<T>(&site.l_e)
-            - b;
-        let mut M = Matrix6::<T>::zeros();
-        M.fixed_view_mut::<3, 3>(0, 0).copy_from(&(D + A));
-        M.fixed_view_mut::<3, 3>(0, 3).copy_from(&G);
-        M.fixed_view_mut::<3, 3>(3, 0).copy_from(&B);
-        M.fixed_view_mut::<3, 3>(3, 3).copy_from(&(C + H));
-        let mut rhs = Vector6::<T>::zeros();
-        rhs.fixed_rows_mut::<3>(0).copy_from(&rhs_v);
-        rhs.fixed_rows_mut::<3>(3).copy_from(&rhs_u);
-        // M is symmetric positive definite (B = G^T, H symmetric, A_i PSD): Cholesky first;
-        // LU only if rounding made the factorization fail.
-        let x = match M.cholesky() {
-            Some(ch) => ch.solve(&rhs),
-            None => M.lu().solve(&rhs).ok_or_else(|| Error::Breakdown {
-                s: site.s,
-                what: "the 6x6 matrix [D + A, G; B, C + H] of eq. 13 is singular".into(),
-            })?,
-        };
+        R: &Matrix3<f64>,
+        v: &Vector3<f64>,
+        u: &Vector3<f64>,
+    ) -> Result<(Vector3<f64>, Vector3<f64>)> {
+        let x = linearize::rates(self, site, segment_end, R, v, u)?;
         Ok((x.fixed_rows::<3>(0).into(), x.fixed_rows::<3>(3).into()))
     }
 

@@ -1,7 +1,9 @@
-//! Exact, hand-derived linearization of eq. 13 (corrected, docs/model.md): the strain rates
-//! (v', u') of [`Model::strain_rates`] together with their derivatives with respect to the
-//! strains (v, u) and to a right perturbation of the orientation R, in f64 and without
-//! automatic differentiation.
+//! Eq. 13 (corrected, docs/model.md) in f64, the crate's one implementation of it
+//! ([`rates`]), and its exact, hand-derived linearization ([`linearize`]): the strain rates
+//! (v', u') together with their derivatives with respect to the strains (v, u) and to a
+//! right perturbation of the orientation R, without automatic differentiation. The unit
+//! tests check both against a direct generic transcription of eq. 13 run in f64 and with
+//! dual numbers.
 //!
 //! # Derivation
 //!
@@ -71,12 +73,12 @@
 //! # Cost
 //! Two passes over the tendons (the second needs x); the per-tendon quantities of the first
 //! are kept on the stack for up to 8 tendons, further ones are re-evaluated. M is factored
-//! once by block elimination on its 3x3 blocks (LU fallback as in [`Model::strain_rates`]);
+//! once by block elimination on its 3x3 blocks (LU fallback where rounding makes M fail the SPD test);
 //! x is one solve and the nine derivative directions one solve with a 6x9 right-hand side.
 //! For case H (one active tendon) a release build took about 390 ns per call on the
 //! development machine with a 6x6 Cholesky factorization (before the block elimination),
-//! against 280 ns for `strain_rates::<f64>` alone and 5.6 us for nine
-//! `strain_rates::<Dual64>` passes. [`rates`] is pass 1 alone, for residuals.
+//! against 280 ns for a generic 6x6 Cholesky solve of eq. 13 alone and 5.6 us for nine
+//! dual-number passes of it. [`rates`] is pass 1 alone, for residuals.
 #![allow(non_snake_case)]
 
 use crate::Error;
@@ -302,7 +304,7 @@ impl Schur6 {
 }
 
 /// The factorization of M reused for all right-hand sides: block elimination for SPD M, or
-/// LU where rounding made M fail the SPD test (as in [`Model::strain_rates`]). Everything
+/// LU where rounding made M fail the SPD test. Everything
 /// is solved in place on transposed right-hand sides, so no 6x9 matrix is moved or wrapped
 /// in an `Option`.
 enum Factor {
@@ -437,12 +439,13 @@ fn breakdown(s: f64) -> Error {
     }
 }
 
-/// Eq. 13 (corrected): the strain rates (v', u') stacked, the same as
-/// [`Model::strain_rates`] in f64 but without its generic-scalar overhead (the fast path of
-/// every residual evaluation).
+/// Eq. 13 (corrected): the strain rates (v', u') stacked. The one f64 implementation of
+/// eq. 13 (pass 1 of [`linearize`]): residuals of both solvers, the solution's node rates
+/// and [`Model::strain_rates`] all come here.
 ///
 /// # Errors
-/// As [`Model::strain_rates`].
+/// [`Error::SingularRouting`] where a tendon's path tangent vanishes,
+/// [`Error::Breakdown`] where the 6x6 system is singular.
 pub fn rates(
     model: &Model,
     site: &Site,
@@ -456,17 +459,16 @@ pub fn rates(
 }
 
 /// Eq. 13 (corrected) and its exact first derivatives at a site for the state (R, v, u):
-/// the rates (v', u') of [`Model::strain_rates`], d(v', u')/d(v, u), and d(v', u')/d(phi)
+/// the rates (v', u') of [`rates`], d(v', u')/d(v, u), and d(v', u')/d(phi)
 /// for R -> R exp(hat(phi)). The tendons that reach `segment_end` load the backbone, as in
-/// [`Model::strain_rates`]. f64 only; allocates nothing (unless it returns an error).
+/// [`rates`]. f64 only; allocates nothing (unless it returns an error).
 ///
 /// The derivation is in the module docs: M = [D + A, G; B, C + H] is factored once and the
 /// nine derivative directions are a single solve with a 6x9 right-hand side.
 ///
 /// # Errors
 /// [`Error::SingularRouting`] where a tendon's path tangent vanishes,
-/// [`Error::Breakdown`] where the 6x6 system is singular (the same as
-/// [`Model::strain_rates`]).
+/// [`Error::Breakdown`] where the 6x6 system is singular (the same as [`rates`]).
 ///
 /// # Examples
 /// ```
@@ -553,17 +555,104 @@ pub fn linearize(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::Real;
+    use crate::model::equations::{MIN_TENDON_SPEED, lift, to_f64};
     use crate::model::loads::{Field, Loads};
     use crate::model::robot::Robot;
     use crate::model::rod::{ReferenceStrains, Rod, Section, SectionPoint, Stiffness, StrainPoint, shear_modulus};
     use crate::model::routing::Routing;
     use crate::model::tendon::Tendon;
+    use crate::so3::hat;
     use crate::{cases, so3};
     use num_dual::{Dual64, DualNum};
     use std::sync::Arc;
 
+    /// The test oracle: eq. 13 (corrected, docs/model.md) transcribed directly, generic over
+    /// the scalar, with nalgebra's Cholesky (LU fallback). Dual numbers through it give the
+    /// forward-mode derivatives the hand-derived linearization is checked against; in f64 it
+    /// checks [`rates`], which factors M by 3x3 blocks instead.
+    fn strain_rates<T: Real>(
+        model: &Model,
+        site: &Site,
+        segment_end: f64,
+        R: &Matrix3<T>,
+        v: &Vector3<T>,
+        u: &Vector3<T>,
+    ) -> Result<(Vector3<T>, Vector3<T>)> {
+        let kse = lift::<T>(&site.section.section.kse);
+        let kbt = lift::<T>(&site.section.section.kbt);
+        let D = Matrix3::from_diagonal(&kse);
+        let C = Matrix3::from_diagonal(&kbt);
+        let D_s = Matrix3::from_diagonal(&lift::<T>(&site.section.kse_s));
+        let C_s = Matrix3::from_diagonal(&lift::<T>(&site.section.kbt_s));
+        let v_star = lift::<T>(&site.reference.v_star);
+        let u_star = lift::<T>(&site.reference.u_star);
+        let dv = v - v_star;
+        let du = u - u_star;
+        let u_hat = hat(u);
+        let Rt = R.transpose();
+
+        let mut A = Matrix3::<T>::zeros();
+        let mut B = Matrix3::<T>::zeros();
+        let mut G = Matrix3::<T>::zeros();
+        let mut H = Matrix3::<T>::zeros();
+        let mut a = Vector3::<T>::zeros();
+        let mut b = Vector3::<T>::zeros();
+        for (i, tension, rp) in model.distributed_tendons(site.s, segment_end) {
+            let r = lift::<T>(&rp.r);
+            let r_s = lift::<T>(&rp.r_s);
+            let r_ss = lift::<T>(&rp.r_ss);
+            let pb_s = u.cross(&r) + r_s + v; // p_i^b'
+            let speed = pb_s.norm();
+            if speed < T::from_f64(MIN_TENDON_SPEED).unwrap_or_else(T::zero) {
+                return Err(Error::SingularRouting {
+                    tendon: i,
+                    s: site.s,
+                    speed: to_f64(speed),
+                });
+            }
+            let ph = hat(&pb_s);
+            let tau = T::from_f64(tension).unwrap_or_else(T::zero);
+            let A_i = ph * ph * (-tau / (speed * speed * speed));
+            let r_hat = hat(&r);
+            let B_i = r_hat * A_i;
+            let a_i = A_i * (u_hat * pb_s + u_hat * r_s + r_ss);
+            A += A_i;
+            B += B_i;
+            G -= A_i * r_hat;
+            H -= B_i * r_hat;
+            b += r.cross(&a_i);
+            a += a_i;
+        }
+
+        let rhs_v = D * lift::<T>(&site.reference.v_star_s) - (u_hat * D + D_s) * dv - Rt * lift::<T>(&site.f_e) - a;
+        let rhs_u = C * lift::<T>(&site.reference.u_star_s)
+            - (u_hat * C + C_s) * du
+            - hat(v) * D * dv
+            - Rt * lift::<T>(&site.l_e)
+            - b;
+        let mut M = Matrix6::<T>::zeros();
+        M.fixed_view_mut::<3, 3>(0, 0).copy_from(&(D + A));
+        M.fixed_view_mut::<3, 3>(0, 3).copy_from(&G);
+        M.fixed_view_mut::<3, 3>(3, 0).copy_from(&B);
+        M.fixed_view_mut::<3, 3>(3, 3).copy_from(&(C + H));
+        let mut rhs = Vector6::<T>::zeros();
+        rhs.fixed_rows_mut::<3>(0).copy_from(&rhs_v);
+        rhs.fixed_rows_mut::<3>(3).copy_from(&rhs_u);
+        // M is symmetric positive definite (B = G^T, H symmetric, A_i PSD): Cholesky first;
+        // LU only if rounding made the factorization fail.
+        let x = match M.cholesky() {
+            Some(ch) => ch.solve(&rhs),
+            None => M.lu().solve(&rhs).ok_or_else(|| Error::Breakdown {
+                s: site.s,
+                what: "the 6x6 matrix [D + A, G; B, C + H] of eq. 13 is singular".into(),
+            })?,
+        };
+        Ok((x.fixed_rows::<3>(0).into(), x.fixed_rows::<3>(3).into()))
+    }
+
     /// (rates, d_strains, d_rotation) by forward-mode AD through the generic
-    /// `Model::strain_rates`, one seeded direction per pass.
+    /// the oracle [`strain_rates`], one seeded direction per pass.
     fn by_dual(
         model: &Model,
         site: &Site,
@@ -584,7 +673,7 @@ mod tests {
                 _ => phi[k - 6] = phi[k - 6].derivative(),
             }
             let R_d = R.map(Dual64::from) * so3::exp(&phi);
-            let (v_s, u_s) = model.strain_rates(site, end, &R_d, &v_d, &u_d).unwrap();
+            let (v_s, u_s) = strain_rates(model, site, end, &R_d, &v_d, &u_d).unwrap();
             let col = Vector6::from_fn(|j, _| if j < 3 { v_s[j] } else { u_s[j - 3] });
             rates = col.map(|d| d.re);
             let d = col.map(|d| d.eps);
@@ -615,11 +704,11 @@ mod tests {
         check_model(&Model::new(robot), s, end, R, v, u);
     }
 
-    /// Checks `linearize` and `rates` at (s, R, v, u) against f64 `strain_rates` and against AD.
+    /// Checks `linearize` and `rates` at (s, R, v, u) against the f64 oracle `strain_rates` and against AD.
     fn check_model(model: &Model, s: f64, end: f64, R: &Matrix3<f64>, v: &Vector3<f64>, u: &Vector3<f64>) {
         let site = model.site(s);
         let lin = linearize(model, &site, end, R, v, u).unwrap();
-        let (v_s, u_s) = model.strain_rates(&site, end, R, v, u).unwrap();
+        let (v_s, u_s) = strain_rates(model, &site, end, R, v, u).unwrap();
         let rates = Vector6::from_fn(|j, _| if j < 3 { v_s[j] } else { u_s[j - 3] });
         let (ad_rates, d_strains, d_rotation) = by_dual(model, &site, end, R, v, u);
         let fast = super::rates(model, &site, end, R, v, u).unwrap();
@@ -753,7 +842,7 @@ mod tests {
         let site = model.site(0.1);
         let (R, z) = (Matrix3::identity(), Vector3::zeros());
         let lin = linearize(&model, &site, robot.length(), &R, &z, &z);
-        let generic = model.strain_rates(&site, robot.length(), &R, &z, &z);
+        let generic = strain_rates(&model, &site, robot.length(), &R, &z, &z);
         assert!(matches!(lin, Err(Error::SingularRouting { tendon: 0, .. })), "{lin:?}");
         assert!(
             matches!(generic, Err(Error::SingularRouting { tendon: 0, .. })),
@@ -766,7 +855,7 @@ mod tests {
         let site = model.site(0.05);
         let v = Vector3::z();
         let lin = linearize(&model, &site, 0.1, &R, &v, &z);
-        let generic = model.strain_rates(&site, 0.1, &R, &v, &z);
+        let generic = strain_rates(&model, &site, 0.1, &R, &v, &z);
         let message = lin.as_ref().map(|_| String::new()).unwrap_or_else(|e| e.to_string());
         assert!(matches!(lin, Err(Error::Breakdown { .. })), "{lin:?}");
         assert!(matches!(generic, Err(Error::Breakdown { .. })), "{generic:?}");
