@@ -1,9 +1,11 @@
 //! The solved shape, shared by all solvers: nodes along the backbone, tendon paths, the tip
 //! pose, and evaluation at any arc length with the cubic Hermite interpolant (the natural
 //! interpolant of the Hermite-Simpson scheme; 4th-order accurate between nodes).
+//!
+//! A plain output type: it computes no physics. The solvers fill it from their node states
+//! with the mesh layer's `nodes::solution`.
 #![allow(non_snake_case)]
 
-use crate::model::equations::Model;
 use crate::report::SolveReport;
 use crate::so3;
 use nalgebra::{Matrix3, Vector3};
@@ -73,55 +75,6 @@ pub struct Solution {
 }
 
 impl Solution {
-    /// Builds a solution from node states (s, p, R, v, u): fills v', u', n, m and the
-    /// tendon paths from the model. `segment_ends[k]` is the end of the segment node k
-    /// belongs to (which tendons load it).
-    pub(crate) fn from_states(
-        model: &Model,
-        states: &[State],
-        segment_ends: &[f64],
-        report: SolveReport,
-    ) -> crate::Result<Self> {
-        let robot = model.robot;
-        let length = robot.length();
-        let mut nodes = Vec::with_capacity(states.len());
-        for (k, &State { s, p, R, v, u }) in states.iter().enumerate() {
-            let site = model.site(s);
-            let rates = crate::model::linearize::rates(model, &site, segment_ends[k], &R, &v, &u)?;
-            let (v_s, u_s) = (rates.fixed_rows::<3>(0).into(), rates.fixed_rows::<3>(3).into());
-            let (n, m) = model.internal_wrench(&site, &R, &v, &u);
-            nodes.push(Node {
-                s,
-                p,
-                R,
-                v,
-                u,
-                v_s,
-                u_s,
-                n,
-                m,
-            });
-        }
-        let tendon_paths = robot
-            .tendons
-            .iter()
-            .map(|t| {
-                let end = t.end(length);
-                let mut last_s = f64::NEG_INFINITY;
-                nodes
-                    .iter()
-                    .filter(|nd| nd.s <= end && std::mem::replace(&mut last_s, nd.s) < nd.s)
-                    .map(|nd| nd.p + nd.R * t.routing.at(nd.s, length).r)
-                    .collect()
-            })
-            .collect();
-        Ok(Solution {
-            nodes,
-            tendon_paths,
-            report,
-        })
-    }
-
     /// Backbone length (m).
     pub fn length(&self) -> f64 {
         self.nodes.last().map_or(0.0, |n| n.s)

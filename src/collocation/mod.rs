@@ -23,8 +23,8 @@ pub mod system;
 pub mod unknowns;
 
 use crate::error::Result;
-use crate::mesh::Mesh;
 use crate::mesh::guess::{self, rigid_estimate};
+use crate::mesh::{Mesh, nodes};
 use crate::model::equations::Model;
 use crate::report::{Method, SolveReport, Termination};
 use crate::solution::{Node, Solution, State};
@@ -193,7 +193,7 @@ fn solve_impl(robot: &Robot, options: &Options, warm: Option<&Solution>, cache: 
                     tolerance: tol,
                 });
             }
-            let guess = Solution::from_states(&model, &x, &segment_ends(&mesh), report.clone())?;
+            let guess = nodes::solution(&model, &x, &segment_ends(&mesh), report.clone())?;
             let xf = solve_on_mesh(
                 &model,
                 fine.clone(),
@@ -220,7 +220,7 @@ fn solve_impl(robot: &Robot, options: &Options, warm: Option<&Solution>, cache: 
     report.unknowns = unknowns::unknowns(mesh.nodes.len());
     report.nonzeros = unknowns::nonzeros(&mesh);
     report.timings.total = start.elapsed();
-    Solution::from_states(&model, &x, &segment_ends(&mesh), report)
+    nodes::solution(&model, &x, &segment_ends(&mesh), report)
 }
 
 fn segment_ends(mesh: &Mesh) -> Vec<f64> {

@@ -2,71 +2,11 @@
 //! lists every field and unit). SI units throughout.
 #![allow(non_snake_case)]
 
+pub use crate::analysis::samples::{Sample, bending_angle, samples};
 use crate::collocation::sensitivity::TipSensitivities;
-use crate::model::equations::Model;
 use crate::{Robot, Solution};
 use nalgebra::{Matrix3, Vector3};
 use std::fmt::Write;
-
-/// The state at one output arc length.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Sample {
-    /// Arc length (m).
-    pub s: f64,
-    /// Centreline position (m), world frame.
-    pub p: Vector3<f64>,
-    /// Orientation, body to world.
-    pub R: Matrix3<f64>,
-    /// Internal force (N), world frame.
-    pub n: Vector3<f64>,
-    /// Internal moment (N m), world frame.
-    pub m: Vector3<f64>,
-}
-
-/// The solution at the output arc lengths: its own nodes when `count` is `None` (both
-/// limits where the solution jumps), otherwise `count` (>= 2; fewer are raised to 2) evenly
-/// spaced arc lengths from 0 to L, interpolated with the solution's Hermite interpolant
-/// ([`Solution::at`]) and n, m from the constitutive law (eq. 3) at the interpolated strains.
-pub fn samples(robot: &Robot, solution: &Solution, count: Option<usize>) -> Vec<Sample> {
-    let Some(count) = count else {
-        return solution
-            .nodes
-            .iter()
-            .map(|n| Sample {
-                s: n.s,
-                p: n.p,
-                R: n.R,
-                n: n.n,
-                m: n.m,
-            })
-            .collect();
-    };
-    let model = Model::new(robot);
-    let count = count.max(2);
-    let length = solution.length();
-    (0..count)
-        .map(|k| {
-            let s = length * k as f64 / (count - 1) as f64;
-            let state = solution.at(s);
-            let (n, m) = model.internal_wrench(&model.site(s), &state.R, &state.v, &state.u);
-            Sample {
-                s,
-                p: state.p,
-                R: state.R,
-                n,
-                m,
-            }
-        })
-        .collect()
-}
-
-/// Bending angle (rad): the angle between the base tangent R(0) e3 and the tip tangent
-/// R(L) e3, in [0, pi].
-pub fn bending_angle(solution: &Solution) -> f64 {
-    let a = solution.base().R.column(2).into_owned();
-    let b = solution.tip().R.column(2).into_owned();
-    a.cross(&b).norm().atan2(a.dot(&b))
-}
 
 fn rows(R: &Matrix3<f64>) -> [[f64; 3]; 3] {
     [0, 1, 2].map(|i| [R[(i, 0)], R[(i, 1)], R[(i, 2)]])

@@ -2,6 +2,7 @@
 //! (tendon termination or interior point load), joined there by the jump conditions.
 
 pub mod guess;
+pub mod nodes;
 
 use crate::error::{Result, invalid};
 use crate::model::robot::Robot;

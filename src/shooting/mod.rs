@@ -10,8 +10,8 @@
 #![allow(non_snake_case)]
 
 use crate::error::{Result, invalid};
-use crate::mesh::Mesh;
 use crate::mesh::guess::{self, InitialGuess};
+use crate::mesh::{Mesh, nodes};
 use crate::model::equations::{Model, Site};
 use crate::report::{Iteration, Method, SolveReport, Termination};
 use crate::solution::{Solution, State};
@@ -193,7 +193,7 @@ pub fn solve(robot: &Robot, options: &Options) -> Result<Solution> {
         });
     }
     let ends = segment_ends(&model, &trajectory);
-    Solution::from_states(&model, &trajectory, &ends, report)
+    nodes::solution(&model, &trajectory, &ends, report)
 }
 
 /// The end of the segment each trajectory point belongs to (a breakpoint appears twice:
