@@ -1,29 +1,37 @@
 //! The collocation solver: the whole robot as one sparse Newton system solved with faer.
 //!
-//! Stages, in the order data flows:
-//! 1. [`Mesh`]: nodes on [0, L] with two nodes at every breakpoint.
-//! 2. [`system`]: residual rows (base, Hermite-Simpson intervals in Lie-group local
-//!    coordinates, jump conditions, tip) and their exact Jacobian (chain rule through the
-//!    scheme with the analytic linearization of eq. 13; AD for the few other blocks).
-//! 3. [`newton`]: damped Newton; steps by the structured elimination of [`linear::blocks`] or faer's
-//!    sparse LU, every buffer (and the symbolic LU) built once per mesh.
-//! 4. Robustness: rigid-equilibrium initial guess or a warm start, and automatic load
-//!    continuation when a direct solve fails.
-//! 5. Error control: optional adaptive refinement until the tip moves less than a
-//!    tolerance, guided by per-interval defect estimates ([`interval_errors`]).
+//! Stages, in the order data flows (one module each):
+//! 1. [`Options`] (`options.rs`), checked by [`Options::validate`]; [`Mesh`]: nodes on
+//!    [0, L] with two nodes at every breakpoint.
+//! 2. [`unknowns`]: the layout of unknowns and rows, the Jacobian's block pattern.
+//! 3. [`residual`] and [`system`]: residual rows (base, Hermite-Simpson intervals in
+//!    Lie-group local coordinates, jump conditions, tip) and their exact Jacobian (chain
+//!    rule through the scheme with the analytic linearization of eq. 13; AD for the few
+//!    other blocks).
+//! 4. [`linear`]: the structured elimination of [`linear::blocks`] (automatic) or faer's
+//!    sparse LU; [`newton`]: damped Newton with chord steps on stored factors, every buffer
+//!    (and the symbolic LU) built once per mesh.
+//! 5. Robustness: rigid-equilibrium initial guess or a warm start, and load continuation
+//!    (`continuation.rs`) when a direct solve fails.
+//! 6. Error control (`refine.rs`): optional adaptive refinement until the tip moves less
+//!    than a tolerance, guided by per-interval defect estimates ([`interval_errors`]).
+//! 7. [`sensitivity`]: derivatives of the converged solution by the implicit function
+//!    theorem, from one factorization.
 //!
 //! docs/numerics.md documents the scheme (order 4), the scaling and the stopping tests.
 
+mod continuation;
 pub mod linear;
 pub mod newton;
 mod options;
+mod refine;
 pub mod residual;
 pub mod sensitivity;
 pub mod system;
 pub mod unknowns;
 
 use crate::error::Result;
-use crate::mesh::guess::{self, rigid_estimate};
+use crate::mesh::guess;
 use crate::mesh::{Mesh, nodes};
 use crate::model::equations::Model;
 use crate::report::{Method, SolveReport, Termination};
@@ -32,6 +40,7 @@ use crate::{Error, Robot};
 pub use linear::LinearSolver;
 use newton::{Settings, Workspace};
 pub use options::{MAX_INTERVALS, Options};
+pub use refine::interval_errors;
 use std::time::Instant;
 use system::System;
 
@@ -177,44 +186,8 @@ fn solve_impl(robot: &Robot, options: &Options, warm: Option<&Solution>, cache: 
         solve_on_mesh(&model, mesh, x0, reuse, options, &mut report, cache).map_err(|e| timed(e, start))?,
     );
     if let Some(tol) = options.tolerance {
-        loop {
-            let sys = System::new(model, mesh.clone());
-            let errors = interval_errors(&sys, &x)?;
-            let worst = errors.iter().copied().fold(0.0, f64::max);
-            // Split every interval within three orders of magnitude of the worst one: the
-            // rest cannot matter at the next level.
-            let split: Vec<bool> = errors.iter().map(|&e| e > 1e-3 * worst).collect();
-            let all = (0..mesh.nodes.len() - 1).all(|k| mesh.is_jump(k) || split[k]);
-            let fine = mesh.bisected(&split);
-            if fine.intervals() > options.max_intervals {
-                return Err(Error::IntervalCap {
-                    cap: options.max_intervals,
-                    estimate: report.tip_error_estimate.unwrap_or(f64::NAN),
-                    tolerance: tol,
-                });
-            }
-            let guess = nodes::solution(&model, &x, &segment_ends(&mesh), report.clone())?;
-            let xf = solve_on_mesh(
-                &model,
-                fine.clone(),
-                interpolate(&guess, &fine),
-                false,
-                options,
-                &mut report,
-                cache,
-            )
-            .map_err(|e| timed(e, start))?;
-            let change = (xf[xf.len() - 1].p - x[x.len() - 1].p).norm();
-            // Order 4: halving every interval cuts the error 16-fold, so the finer error is
-            // about change / 15; with partial splitting use the change itself (conservative).
-            let estimate = if all { change / 15.0 } else { change };
-            report.tip_error_estimate = Some(estimate);
-            mesh = fine;
-            x = xf;
-            if estimate <= tol {
-                break;
-            }
-        }
+        (mesh, x) =
+            refine::to_tolerance(&model, mesh, x, tol, options, &mut report, cache).map_err(|e| timed(e, start))?;
     }
     report.intervals = mesh.intervals();
     report.unknowns = unknowns::unknowns(mesh.nodes.len());
@@ -286,104 +259,7 @@ fn newton_with_continuation(
             "enable load continuation, refine the mesh, or warm-start from a nearby solution",
         ));
     }
-    continuation(system, ws, settings, report).map_err(|(hint, row)| not_converged(system, report, row, &hint))
-}
-
-/// What load continuation ramps.
-#[derive(Clone, Copy, PartialEq)]
-enum Ramp {
-    /// External loads, with the tendons at full tension.
-    Loads,
-    /// Tensions and external loads together.
-    All,
-}
-
-/// Load continuation on `system` (whose direct solve failed). First, when the robot has
-/// both tendons and external loads, the tensions stay and the external loads are ramped:
-/// the tendon-only shape is the one the rigid estimate gets (nearly) right. Failing that,
-/// everything is ramped from the unloaded shape. Each step warm-starts from the last; the
-/// step halves on failure and grows by half after a success. Returns the states, or a hint
-/// and the worst residual row.
-fn continuation(
-    system: &mut System,
-    ws: &mut Workspace,
-    settings: &Settings,
-    report: &mut SolveReport,
-) -> std::result::Result<Vec<State>, (String, usize)> {
-    let robot = system.model.robot;
-    let loaded = system.model.point_wrench(robot.length()) != Default::default()
-        || !robot.loads.point.is_empty()
-        || system.mesh.nodes.iter().any(|n| {
-            let site = system.model.site(n.s);
-            site.f_e != nalgebra::Vector3::zeros() || site.l_e != nalgebra::Vector3::zeros()
-        });
-    let pulled = robot.tendons.iter().any(|t| t.tension > 0.0);
-    let ramps: &[Ramp] = if loaded && pulled {
-        &[Ramp::Loads, Ramp::All]
-    } else {
-        &[Ramp::All]
-    };
-    let factors = |ramp: Ramp, lambda: f64| {
-        if ramp == Ramp::Loads {
-            (1.0, lambda)
-        } else {
-            (lambda, lambda)
-        }
-    };
-    let mut failure = (String::new(), 0);
-    for &ramp in ramps {
-        let (t, l) = factors(ramp, 0.0);
-        system.set_factors(t, l);
-        let mut x = rigid_estimate(&system.model, &system.mesh.nodes);
-        report.load_steps += 1;
-        let (start, row) = newton::run(system, ws, &mut x, settings, report);
-        if start != Termination::Converged {
-            report.termination = start;
-            failure = (
-                "the starting problem of load continuation did not converge: refine the mesh".into(),
-                row,
-            );
-            continue;
-        }
-        // Each load step starts from the last converged one, whose factors are in `ws`.
-        let step_settings = Settings {
-            reuse_factors: true,
-            ..*settings
-        };
-        let (mut lambda, mut dl): (f64, f64) = (0.0, 0.25);
-        while lambda < 1.0 {
-            let target = (lambda + dl).min(1.0);
-            let (t, l) = factors(ramp, target);
-            system.set_factors(t, l);
-            let mut trial = x.clone();
-            report.load_steps += 1;
-            let (term, row) = newton::run(system, ws, &mut trial, &step_settings, report);
-            report.termination = term;
-            if term == Termination::Converged {
-                lambda = target;
-                x = trial;
-                dl *= 1.5;
-            } else {
-                dl *= 0.5;
-                // 1e-4 of the full load: the solution is not continuous in the load, or
-                // there is none nearby (buckling, a tendon losing its tangent).
-                if dl < 1e-4 {
-                    failure = (
-                        format!(
-                            "load continuation stalled at {:.1} % of the load; refine the mesh or check for buckling",
-                            lambda * 100.0
-                        ),
-                        row,
-                    );
-                    break;
-                }
-            }
-        }
-        if lambda >= 1.0 {
-            return Ok(x);
-        }
-    }
-    Err(failure)
+    continuation::run(system, ws, settings, report).map_err(|(hint, row)| not_converged(system, report, row, &hint))
 }
 
 /// Stamps the total time on the report a non-convergence error carries.
@@ -401,32 +277,6 @@ fn not_converged(system: &System, report: &SolveReport, worst_row: usize, hint: 
         worst_s: system.row_position(worst_row),
         hint: hint.into(),
     }
-}
-
-/// Estimated discretization error of each link (0 for jumps): the interval length times the
-/// largest scaled defect of the cubic interpolant at s_k + h/4 and s_k + 3h/4 (the defect
-/// vanishes at the collocation points 0, 1/2, 1), in the dimensionless units of the residual.
-///
-/// # Errors
-/// A model breakdown at the solution (cannot happen for a converged one).
-pub fn interval_errors(system: &System, x: &[State]) -> Result<Vec<f64>> {
-    let model = &system.model;
-    (0..x.len() - 1)
-        .map(|k| {
-            let Some(sites) = system.interval_sites(k) else {
-                return Ok(0.0);
-            };
-            let h = sites.end.s - sites.start.s;
-            let seg = system.mesh.nodes[k].segment_end;
-            let mut worst: f64 = 0.0;
-            for t in [0.25, 0.75] {
-                let site = model.site(sites.start.s + t * h);
-                let d = residual::defect(model, sites, &site, seg, &x[k], &x[k + 1], t)?;
-                worst = worst.max(d.amax());
-            }
-            Ok(worst * h / model.robot.length())
-        })
-        .collect()
 }
 
 /// Solves many independent robots in parallel on rayon's global thread pool, one result per

@@ -1,0 +1,152 @@
+//! Tip sensitivities in one call ([`tip_sensitivities`]: tensions, tip wrench, moduli,
+//! base pose) and the whole-backbone position derivative with respect to one tension, both
+//! from one [`Sensitivity`] (one factorization).
+
+use super::{RELATIVE_STEP, Sensitivity, tip_pose};
+use crate::error::Result;
+use crate::model::robot::Robot;
+use crate::model::rod::{Section, Stiffness, shear_modulus};
+use crate::solution::Solution;
+use nalgebra::{DMatrix, Matrix6, Matrix6x3, Vector3, Vector6};
+
+/// Tip pose derivatives with respect to the moduli of a rod built from geometry. Each is a
+/// 6-vector: tip position (m/Pa), then tip rotation vector, world frame (rad/Pa).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ModulusSensitivities {
+    /// d(tip pose)/dE at fixed Poisson's ratio (G follows E).
+    pub youngs_modulus: Vector6<f64>,
+    /// d(tip pose)/dE at fixed G (bending and extension only).
+    pub youngs_modulus_fixed_shear: Vector6<f64>,
+    /// d(tip pose)/dG at fixed E (shear and torsion only).
+    pub shear_modulus: Vector6<f64>,
+}
+
+/// Derivatives of the tip pose at a solution. Every matrix has 6 rows: tip position x, y, z
+/// (m per unit of the parameter), then the tip rotation as a world-frame rotation vector
+/// omega, R_tip -> exp(hat(omega)) R_tip (rad per unit).
+#[derive(Clone, Debug, PartialEq)]
+pub struct TipSensitivities {
+    /// d(tip pose)/d(tension_i), 6 x k (per N), one column per tendon. For a slack tendon
+    /// the one-sided (pulling) derivative.
+    pub tension: DMatrix<f64>,
+    /// d(tip pose)/d(tip force), 6 x 3 (per N, world frame): the force half of the compliance.
+    pub tip_force: Matrix6x3<f64>,
+    /// d(tip pose)/d(tip moment), 6 x 3 (per N m, world frame): the moment half of the compliance.
+    pub tip_moment: Matrix6x3<f64>,
+    /// Derivatives with respect to E and G when the rod was built from geometry with a
+    /// uniform section ([`crate::Rod::tube`], [`crate::Rod::solid_circle`]); `None` otherwise.
+    pub moduli: Option<ModulusSensitivities>,
+    /// d(tip pose)/d(base position), 6 x 3 (per m, world frame).
+    pub base_position: Matrix6x3<f64>,
+    /// d(tip pose)/d(base rotation), 6 x 3 (per rad): columns are the components of the
+    /// world-frame rotation vector phi with R0 -> exp(hat(phi)) R0.
+    pub base_rotation: Matrix6x3<f64>,
+}
+
+impl TipSensitivities {
+    /// The 6 x 6 tip compliance: d(tip pose)/d(tip force, tip moment), columns force x, y, z
+    /// (per N) then moment x, y, z (per N m).
+    pub fn compliance(&self) -> Matrix6<f64> {
+        let mut c = Matrix6::zeros();
+        c.fixed_columns_mut::<3>(0).copy_from(&self.tip_force);
+        c.fixed_columns_mut::<3>(3).copy_from(&self.tip_moment);
+        c
+    }
+}
+
+/// The derivatives of `solution`'s tip pose with respect to the tensions, the tip wrench,
+/// the moduli (rods built from geometry) and the base pose, by the implicit function
+/// theorem on the collocation system (module docs).
+///
+/// Costs one Jacobian assembly, then one linear solve for each of the 12 exact parameters
+/// (tip wrench, base pose) and each of the k + 2 differenced ones (tensions, E, G; k
+/// without geometry), which also take two or three residual evaluations each.
+///
+/// # Errors
+/// As [`Sensitivity::new`] and [`Sensitivity::derivative`].
+///
+/// # Examples
+/// ```
+/// let robot = tdcr::cases::case_h();
+/// let solution = tdcr::collocation::solve(&robot, &Default::default()).unwrap();
+/// let sens = tdcr::collocation::sensitivity::tip_sensitivities(&robot, &solution).unwrap();
+/// assert_eq!(sens.tension.shape(), (6, 5));
+/// // A tip force along world +z moves the tip up.
+/// assert!(sens.tip_force[(2, 2)] > 0.0);
+/// ```
+pub fn tip_sensitivities(robot: &Robot, solution: &Solution) -> Result<TipSensitivities> {
+    let mut sens = Sensitivity::new(robot, solution)?;
+    let k = robot.tendons.len();
+    let mut tension = DMatrix::zeros(6, k);
+    for i in 0..k {
+        tension.set_column(i, &tip_pose(sens.tension(i))?);
+    }
+    let mut tip_force = Matrix6x3::zeros();
+    let mut tip_moment = Matrix6x3::zeros();
+    let mut base_position = Matrix6x3::zeros();
+    let mut base_rotation = Matrix6x3::zeros();
+    for j in 0..3 {
+        tip_force.set_column(j, &tip_pose(sens.tip_force(j))?);
+        tip_moment.set_column(j, &tip_pose(sens.tip_moment(j))?);
+        base_position.set_column(j, &tip_pose(sens.base_position(j))?);
+        base_rotation.set_column(j, &tip_pose(sens.base_rotation(j))?);
+    }
+    let moduli = moduli(&mut sens)?;
+    Ok(TipSensitivities {
+        tension,
+        tip_force,
+        tip_moment,
+        moduli,
+        base_position,
+        base_rotation,
+    })
+}
+
+/// The modulus derivatives when the rod's uniform section is the one its geometry gives.
+fn moduli(sens: &mut Sensitivity) -> Result<Option<ModulusSensitivities>> {
+    let rod = &sens.robot().rod;
+    let (Some(g), Stiffness::Uniform(section)) = (rod.geometry, &rod.stiffness) else {
+        return Ok(None);
+    };
+    let (o, i, e, nu) = (g.outer_radius, g.inner_radius, g.youngs_modulus, g.poisson_ratio);
+    let shear = shear_modulus(e, nu);
+    // The section must be the geometry's (to rounding): otherwise E and G are not what
+    // the stiffness was built from.
+    let built = Section::tube(o, i, e, shear);
+    let close = |a: &Vector3<f64>, b: &Vector3<f64>| (a - b).norm() <= 1e-12 * b.norm();
+    if !(close(&section.kse, &built.kse) && close(&section.kbt, &built.kbt)) {
+        return Ok(None);
+    }
+    let youngs_modulus = sens.tip(RELATIVE_STEP * e, |r, d| {
+        r.rod.stiffness = Stiffness::Uniform(Section::tube(o, i, e + d, shear_modulus(e + d, nu)));
+    })?;
+    let shear_modulus = sens.tip(RELATIVE_STEP * shear, |r, d| {
+        r.rod.stiffness = Stiffness::Uniform(Section::tube(o, i, e, shear + d));
+    })?;
+    Ok(Some(ModulusSensitivities {
+        youngs_modulus,
+        // d/dE|_nu = d/dE|_G + (dG/dE)|_nu d/dG|_E with dG/dE|_nu = G / E.
+        youngs_modulus_fixed_shear: youngs_modulus - shear_modulus * (shear / e),
+        shear_modulus,
+    }))
+}
+
+/// Whole-backbone sensitivity: d p(s) / d tau_i (m/N, world frame) at each of `solution`'s
+/// nodes, for tendon index `tendon` (0-based). For a slack tendon, the one-sided (pulling)
+/// derivative.
+///
+/// # Errors
+/// As [`Sensitivity::new`] and [`Sensitivity::tension`].
+///
+/// # Examples
+/// ```
+/// let robot = tdcr::cases::case_s();
+/// let solution = tdcr::collocation::solve(&robot, &Default::default()).unwrap();
+/// let dp = tdcr::collocation::sensitivity::backbone_tension_sensitivity(&robot, &solution, 0).unwrap();
+/// assert_eq!(dp.len(), solution.nodes.len());
+/// assert!(dp[0].norm() < 1e-12); // the base is clamped
+/// ```
+pub fn backbone_tension_sensitivity(robot: &Robot, solution: &Solution, tendon: usize) -> Result<Vec<Vector3<f64>>> {
+    let mut sens = Sensitivity::new(robot, solution)?;
+    Ok(sens.tension(tendon)?.iter().map(|d| d.p).collect())
+}
