@@ -15,13 +15,13 @@
 
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
 use std::hint::black_box;
+use tdcr::advanced::equations::Model;
+use tdcr::advanced::guess::rigid_estimate;
+use tdcr::advanced::mesh::Mesh;
+use tdcr::advanced::newton::{self, Settings, Workspace};
+use tdcr::advanced::system::System;
 use tdcr::collocation::LinearSolver;
-use tdcr::collocation::newton::{self, Settings, Workspace};
-use tdcr::collocation::system::System;
-use tdcr::mesh::Mesh;
-use tdcr::mesh::guess::rigid_estimate;
-use tdcr::model::equations::Model;
-use tdcr::report::{Method, SolveReport};
+use tdcr::{Method, SolveReport};
 use tdcr::{cases, collocation, shooting};
 
 /// The robot with every tension scaled by `factor`.
@@ -134,7 +134,7 @@ fn linear_solve(c: &mut Criterion) {
         let system = System::new(model, Mesh::uniform(&robot, intervals).unwrap());
         let x = rigid_estimate(&model, &system.mesh.nodes);
         let mut rhs = vec![0.0; system.unknowns()];
-        let mut values = vec![0.0; tdcr::collocation::unknowns::nonzeros(&system.mesh)];
+        let mut values = vec![0.0; tdcr::advanced::unknowns::nonzeros(&system.mesh)];
         system.jacobian(&x, &mut rhs, &mut values).unwrap();
         for (name, solver) in [("blocks", LinearSolver::Auto), ("sparse_lu", LinearSolver::SparseLu)] {
             let mut ws = Workspace::new(&system, solver).unwrap();

@@ -24,7 +24,7 @@ impl fmt::Display for Method {
 /// Why a Newton iteration stopped.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Termination {
-    /// Scaled residual and step are below their tolerances.
+    /// The scaled residual max-norm is at or below the tolerance, after at least one step.
     Converged,
     /// The iteration limit was reached first.
     MaxIterations,
@@ -39,7 +39,7 @@ pub enum Termination {
 impl fmt::Display for Termination {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         f.write_str(match self {
-            Termination::Converged => "converged: the scaled residual and the Newton step are below tolerance",
+            Termination::Converged => "converged: the scaled residual is below tolerance",
             Termination::MaxIterations => "stopped at the iteration limit before the residual reached tolerance",
             Termination::LineSearchFailed => "the line search found no step that reduces the residual",
             Termination::SingularJacobian => "the Newton matrix is singular: zero pivot or non-finite step",
@@ -69,7 +69,8 @@ pub struct Evaluations {
     pub residual: usize,
     /// Jacobian evaluations.
     pub jacobian: usize,
-    /// Evaluations of eq. 13.
+    /// Evaluations of eq. 13 (solves of its 6x6 system, alone or with its linearization),
+    /// counted the same way by both solvers.
     pub equations: usize,
 }
 

@@ -4,13 +4,13 @@
 use std::alloc::{GlobalAlloc, Layout, System as Heap};
 use std::cell::Cell;
 use std::sync::atomic::{AtomicUsize, Ordering};
+use tdcr::advanced::equations::Model;
+use tdcr::advanced::guess::rigid_estimate;
+use tdcr::advanced::mesh::Mesh;
+use tdcr::advanced::newton::{self, Settings, Workspace};
+use tdcr::advanced::system::System;
 use tdcr::collocation::LinearSolver;
-use tdcr::collocation::newton::{self, Settings, Workspace};
-use tdcr::collocation::system::System;
-use tdcr::mesh::Mesh;
-use tdcr::mesh::guess::rigid_estimate;
-use tdcr::model::equations::Model;
-use tdcr::report::{Method, SolveReport, Termination};
+use tdcr::{Method, SolveReport, Termination};
 
 struct Counting;
 

@@ -2,7 +2,7 @@
 //! still converges, verified by global equilibrium and mesh refinement.
 
 use tdcr::analysis::equilibrium;
-use tdcr::mesh::guess::InitialGuess;
+use tdcr::collocation::InitialGuess;
 use tdcr::{cases, collocation, shooting};
 
 /// A 1 m rod with the prototype's cross-section under its own weight, with a 40 N tendon at

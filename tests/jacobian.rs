@@ -1,11 +1,11 @@
 //! The collocation Jacobian (forward-mode AD) against central finite differences of the
 //! residual at a non-trivial state.
 
-use tdcr::collocation::system::System;
-use tdcr::collocation::unknowns::pattern;
-use tdcr::mesh::Mesh;
-use tdcr::mesh::guess::rigid_estimate;
-use tdcr::model::equations::Model;
+use tdcr::advanced::equations::Model;
+use tdcr::advanced::guess::rigid_estimate;
+use tdcr::advanced::mesh::Mesh;
+use tdcr::advanced::system::System;
+use tdcr::advanced::unknowns::pattern;
 
 fn check(robot: &tdcr::Robot, intervals: usize) {
     let model = Model::new(robot);

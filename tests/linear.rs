@@ -1,14 +1,14 @@
 //! The structured block elimination against faer's sparse LU, and singular matrices reported
 //! as such by both (never a panic, never a non-finite step).
 
+use tdcr::advanced::equations::Model;
+use tdcr::advanced::guess::rigid_estimate;
+use tdcr::advanced::mesh::Mesh;
+use tdcr::advanced::newton::Workspace;
+use tdcr::advanced::system::System;
+use tdcr::advanced::unknowns::pattern;
 use tdcr::collocation::LinearSolver;
-use tdcr::collocation::newton::Workspace;
-use tdcr::collocation::system::System;
-use tdcr::collocation::unknowns::pattern;
 use tdcr::collocation::{self, Options};
-use tdcr::mesh::Mesh;
-use tdcr::mesh::guess::rigid_estimate;
-use tdcr::model::equations::Model;
 use tdcr::{PointLoad, cases};
 
 /// A robot with a breakpoint (tendon ending mid-way) and an interior point load, so jump

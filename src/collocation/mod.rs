@@ -3,35 +3,36 @@
 //! Stages, in the order data flows (one module each):
 //! 1. [`Options`] (`options.rs`), checked by [`Options::validate`]; [`Mesh`]: nodes on
 //!    [0, L] with two nodes at every breakpoint.
-//! 2. [`unknowns`]: the layout of unknowns and rows, the Jacobian's block pattern.
-//! 3. [`residual`] and [`system`]: residual rows (base, Hermite-Simpson intervals in
+//! 2. [`unknowns`](crate::advanced::unknowns): the layout of unknowns and rows, the Jacobian's block pattern.
+//! 3. [`residual`](crate::advanced::residual) and [`system`](crate::advanced::system): residual rows (base, Hermite-Simpson intervals in
 //!    Lie-group local coordinates, jump conditions, tip) and their exact Jacobian (chain
 //!    rule through the scheme with the analytic linearization of eq. 13; AD for the few
 //!    other blocks).
-//! 4. [`linear`]: the structured elimination of [`linear::blocks`] (automatic) or faer's
-//!    sparse LU; [`newton`]: damped Newton with chord steps on stored factors, every buffer
+//! 4. `linear`: the structured elimination of `linear/blocks.rs` (automatic) or faer's
+//!    sparse LU (`linear/sparse.rs`); [`newton`](crate::advanced::newton): damped Newton with chord steps on stored factors, every buffer
 //!    (and the symbolic LU) built once per mesh.
 //! 5. Robustness: rigid-equilibrium initial guess or a warm start, and load continuation
 //!    (`continuation.rs`) when a direct solve fails.
 //! 6. Error control (`refine.rs`): optional adaptive refinement until the tip moves less
-//!    than a tolerance, guided by per-interval defect estimates ([`interval_errors`]).
+//!    than a tolerance, guided by per-interval defect estimates ([`interval_errors`](crate::advanced::system::interval_errors)).
 //! 7. [`sensitivity`]: derivatives of the converged solution by the implicit function
 //!    theorem, from one factorization.
 //!
 //! docs/numerics.md documents the scheme (order 4), the scaling and the stopping tests.
 
 mod continuation;
-pub mod linear;
-pub mod newton;
+pub(crate) mod linear;
+pub(crate) mod newton;
 mod options;
-mod refine;
-pub mod residual;
+pub(crate) mod refine;
+pub(crate) mod residual;
 pub mod sensitivity;
-pub mod system;
-pub mod unknowns;
+pub(crate) mod system;
+pub(crate) mod unknowns;
 
 use crate::error::Result;
 use crate::mesh::guess;
+pub use crate::mesh::guess::InitialGuess;
 use crate::mesh::{Mesh, nodes};
 use crate::model::equations::Model;
 use crate::report::{Method, SolveReport, Termination};
@@ -40,7 +41,6 @@ use crate::{Error, Robot};
 pub use linear::LinearSolver;
 use newton::{Settings, Workspace};
 pub use options::{MAX_INTERVALS, Options};
-pub use refine::interval_errors;
 use std::time::Instant;
 use system::System;
 

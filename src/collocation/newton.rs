@@ -23,7 +23,7 @@ const MIN_DAMPING: f64 = 1.0 / 1_048_576.0;
 /// evaluated afresh. Near a solution chord steps contract by the relative change of the
 /// Jacobian since it was factored (1e-2 .. 1e-5 in the benchmarks) at a fifth of a Newton
 /// step's cost; a step that does less than quarter the residual is not worth keeping.
-const CHORD_CONTRACTION: f64 = 0.25;
+pub const CHORD_CONTRACTION: f64 = 0.25;
 
 /// Newton settings.
 #[derive(Clone, Copy, Debug)]
@@ -109,7 +109,7 @@ impl Workspace {
         self.step.iter().all(|x| x.is_finite())
     }
 
-    /// Solves J x = rhs for Jacobian `values` in [`pattern`] order with this workspace's
+    /// Solves J x = rhs for Jacobian `values` in [`pattern`](super::unknowns::pattern) order with this workspace's
     /// linear solver: the hook tests use to cross-check the solvers and to force a singular
     /// matrix. None for a zero pivot or a non-finite result.
     pub fn solve_linear(&mut self, values: &[f64], rhs: &[f64]) -> Option<&[f64]> {
@@ -177,6 +177,7 @@ pub fn run(
     let first = system.residual(x, &mut ws.residual);
     report.timings.assembly += t.elapsed();
     report.evaluations.residual += 1;
+    report.evaluations.equations += system.rate_evaluations();
     if first.is_err() || !ws.residual.iter().all(|r| r.is_finite()) {
         return (Termination::NonFinite, worst_row(&ws.residual));
     }
@@ -197,6 +198,7 @@ pub fn run(
             let ok = system.residual(&ws.trial, &mut ws.trial_residual).is_ok();
             report.timings.assembly += t.elapsed();
             report.evaluations.residual += 1;
+            report.evaluations.equations += system.rate_evaluations();
             let trial_norm = max_norm(&ws.trial_residual);
             if ok && (trial_norm <= settings.tolerance || trial_norm <= CHORD_CONTRACTION * norm) {
                 report.history.push(Iteration {
@@ -215,7 +217,7 @@ pub fn run(
         let ok = system.jacobian(x, &mut ws.residual, &mut ws.values).is_ok();
         report.timings.assembly += t.elapsed();
         report.evaluations.jacobian += 1;
-        report.evaluations.equations += 3 * system.mesh.intervals();
+        report.evaluations.equations += system.rate_evaluations();
         if !ok || !ws.values.iter().all(|v| v.is_finite()) {
             return (Termination::NonFinite, worst_row(&ws.residual));
         }
@@ -231,6 +233,7 @@ pub fn run(
             let ok = system.residual(&ws.trial, &mut ws.trial_residual).is_ok();
             report.timings.assembly += t.elapsed();
             report.evaluations.residual += 1;
+            report.evaluations.equations += system.rate_evaluations();
             let phi_trial = merit(&ws.trial_residual);
             // Armijo on 0.5|F|^2, whose slope along the Newton step is -|F|^2 = -2 phi; a
             // trial already within tolerance is accepted (at rounding level phi cannot fall).

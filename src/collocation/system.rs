@@ -29,6 +29,8 @@ pub struct System<'a> {
     interval_sites: Vec<Option<IntervalSites>>,
     /// Site at each node.
     node_sites: Vec<Site>,
+    /// Evaluations of eq. 13 in one residual or Jacobian pass.
+    rate_evaluations: usize,
 }
 
 impl<'a> System<'a> {
@@ -39,6 +41,7 @@ impl<'a> System<'a> {
             mesh,
             interval_sites: Vec::new(),
             node_sites: Vec::new(),
+            rate_evaluations: 0,
         };
         sys.set_factors(model.tension_factor, model.load_factor);
         sys
@@ -60,6 +63,27 @@ impl<'a> System<'a> {
                 })
             })
             .collect();
+        // Each interval evaluates eq. 13 at its midpoint and end, and at its start unless
+        // the interval before it already did (the shared node is evaluated once).
+        let mut shared = false;
+        self.rate_evaluations = self
+            .interval_sites
+            .iter()
+            .map(|sites| {
+                let count = match sites {
+                    Some(_) if shared => 2,
+                    Some(_) => 3,
+                    None => 0,
+                };
+                shared = sites.is_some();
+                count
+            })
+            .sum();
+    }
+
+    /// Evaluations of eq. 13 in one [`System::residual`] or [`System::jacobian`] pass.
+    pub fn rate_evaluations(&self) -> usize {
+        self.rate_evaluations
     }
 
     /// Number of unknowns (= rows).
@@ -103,7 +127,7 @@ impl<'a> System<'a> {
         Ok(())
     }
 
-    /// The residual into `out` and the Jacobian values, in [`pattern`] order, into `values`.
+    /// The residual into `out` and the Jacobian values, in [`pattern`](super::unknowns::pattern) order, into `values`.
     ///
     /// # Errors
     /// A model breakdown at a visited state.

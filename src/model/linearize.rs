@@ -473,8 +473,8 @@ pub fn rates(
 /// # Examples
 /// ```
 /// use nalgebra::Vector3;
-/// use tdcr::model::equations::Model;
-/// use tdcr::model::linearize::linearize;
+/// use tdcr::advanced::equations::Model;
+/// use tdcr::advanced::linearize::linearize;
 ///
 /// let robot = tdcr::cases::case_h();
 /// let model = Model::new(&robot);

@@ -2,8 +2,8 @@
 //! the robot) validated once, and eq. 13 (corrected, docs/model.md) with its exact
 //! linearization.
 
-pub mod equations;
-pub mod linearize;
+pub(crate) mod equations;
+pub(crate) mod linearize;
 pub mod loads;
 pub mod robot;
 pub mod rod;

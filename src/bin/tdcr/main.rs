@@ -13,9 +13,9 @@ use std::io::{IsTerminal, Read, Write};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::time::{Duration, Instant};
+use tdcr::Iteration;
 use tdcr::io::{RobotFile, output};
 use tdcr::plot::{Figure, LegendEntry, PALETTE, Style};
-use tdcr::report::Iteration;
 use tdcr::{Error, Method, Robot, Routing, Solution, SolveReport, cases, collocation, shooting};
 
 /// Shape of tendon-driven continuum robots under load.

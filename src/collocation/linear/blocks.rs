@@ -8,7 +8,8 @@
 //! k's 12 columns choosing pivots among all 18 rows (every row with a non-zero in those
 //! columns: this *is* partial pivoting on the whole matrix), keeps the 12 pivot rows for back
 //! substitution and passes the other 6 rows on. The last step is a 12 x 12 dense solve of
-//! the leftover and tip rows. No fill outside the staircase, about 5 kflop per node, no
+//! the leftover and tip rows. No fill outside the staircase, about 6 kflop per node (5.4 in the elimination, 0.4 in
+//! the back substitution), no
 //! allocation after construction.
 
 use std::time::{Duration, Instant};

@@ -15,7 +15,7 @@ use std::time::Duration;
 /// The linear solver behind Newton's steps.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum LinearSolver {
-    /// The structured almost-block-diagonal elimination ([`blocks`]): the collocation
+    /// The structured almost-block-diagonal elimination (`collocation/linear/blocks.rs`): the collocation
     /// Jacobian always has that structure, so this is the automatic choice.
     #[default]
     Auto,

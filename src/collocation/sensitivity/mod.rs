@@ -67,7 +67,7 @@
 //! # Cost
 //!
 //! One Jacobian assembly and one factorization (the structured elimination of
-//! [`crate::collocation::linear::blocks`]), then per parameter one solve with the stored factors
+//! `collocation/linear/blocks.rs`), then per parameter one solve with the stored factors
 //! ([`Workspace::solve_again`]), plus two residual evaluations for a differenced parameter
 //! (three one-sided).
 #![allow(non_snake_case)]
