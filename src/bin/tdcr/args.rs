@@ -24,9 +24,9 @@ pub struct SolverArgs {
     #[arg(long, value_enum)]
     pub method: Option<MethodArg>,
     /// A fixed mesh of N intervals (no refinement; Newton still converges fully). With
-    /// --tol, the starting mesh.
-    #[arg(long, value_name = "N", value_parser = parse_count)]
-    pub nodes: Option<usize>,
+    /// --tol, the starting mesh. `--nodes` is its old name: it counts intervals too.
+    #[arg(long, visible_alias = "nodes", value_name = "N", value_parser = parse_count)]
+    pub intervals: Option<usize>,
     /// Refine the mesh adaptively until the estimated tip position error is below T (m).
     #[arg(long, value_name = "T", value_parser = parse_positive)]
     pub tol: Option<f64>,
@@ -65,7 +65,7 @@ pub fn parse_vector(text: &str) -> Result<[f64; 3], String> {
 /// and a line of output.
 pub const MAX_COUNT: usize = 1_000_000;
 
-/// A whole number from 1 to [`MAX_COUNT`] (`--nodes`, sweep COUNT).
+/// A whole number from 1 to [`MAX_COUNT`] (`--intervals`, sweep COUNT).
 pub fn parse_count(text: &str) -> Result<usize, String> {
     match text.parse::<usize>() {
         Ok(n) if (1..=MAX_COUNT).contains(&n) => Ok(n),

@@ -54,10 +54,10 @@ pub fn apply(file: &mut RobotFile, args: &SolverArgs) {
         None => {}
     }
     let c = &mut settings.collocation;
-    if let Some(n) = args.nodes {
+    if let Some(n) = args.intervals {
         c.intervals = n;
         c.max_intervals = c.max_intervals.max(n);
-        // --nodes alone means a fixed mesh, even if the file asks for refinement.
+        // --intervals alone means a fixed mesh, even if the file asks for refinement.
         if args.tol.is_none() {
             c.tolerance = None;
         }
@@ -65,8 +65,8 @@ pub fn apply(file: &mut RobotFile, args: &SolverArgs) {
     if let Some(t) = args.tol {
         c.tolerance = Some(t);
     }
-    if settings.method == Method::Shooting && (args.nodes.is_some() || args.tol.is_some()) {
-        note("note: --nodes and --tol apply to collocation only; shooting integrates adaptively");
+    if settings.method == Method::Shooting && (args.intervals.is_some() || args.tol.is_some()) {
+        note("note: --intervals and --tol apply to collocation only; shooting integrates adaptively");
     }
 }
 
