@@ -125,7 +125,7 @@ fn json_tip_equals_the_library_for_overrides_and_samples() {
         "5=4.91",
         "--tip-force",
         "0,0,-0.196",
-        "--nodes",
+        "--intervals",
         "48",
         "--samples",
         "5",
@@ -432,7 +432,7 @@ fn bad_options_exit_2() {
             "three comma-separated numbers",
         ),
         (&["solve", "robot.toml", "--tol", "nan"][..], "not finite"),
-        (&["solve", "robot.toml", "--nodes", "0"][..], "from 1 to"),
+        (&["solve", "robot.toml", "--intervals", "0"][..], "from 1 to"),
         (
             &["sweep", "robot.toml", "--tension", "1=0:1:3", "--tension", "2=0:1:4"][..],
             "the same COUNT",
@@ -442,6 +442,61 @@ fn bad_options_exit_2() {
         let out = run(&dir, args, None);
         assert_eq!(out.status.code(), Some(2), "{args:?}: {}", stderr(&out));
         assert!(stderr(&out).contains(fragment), "{args:?}: {}", stderr(&out));
+    }
+}
+
+/// `--nodes` and the file keys `nodes` / `max_nodes` are the old names of `--intervals`,
+/// `intervals` / `max_intervals`: still accepted, with the same meaning.
+#[test]
+fn old_names_of_intervals_still_work() {
+    let dir = scratch("old-names");
+    std::fs::write(dir.join("robot.toml"), example()).unwrap();
+    let intervals = |out: &Output| -> serde_json::Value {
+        assert_eq!(out.status.code(), Some(0), "{}", stderr(out));
+        serde_json::from_str::<serde_json::Value>(&stdout(out)).unwrap()["intervals"].clone()
+    };
+    for flag in ["--intervals", "--nodes"] {
+        let out = run(&dir, &["solve", "robot.toml", flag, "24", "--format", "json"], None);
+        assert_eq!(intervals(&out), 24, "{flag}");
+    }
+    let text = edited("\nintervals = 32 ", "\nnodes = 40 ");
+    std::fs::write(dir.join("alias.toml"), &text).unwrap();
+    let out = run(&dir, &["solve", "alias.toml", "--format", "json"], None);
+    assert_eq!(intervals(&out), 40);
+    // `max_nodes` is read as the cap: 20 is below `nodes` = 40.
+    let capped = text.replacen("# max_intervals = 8192 ", "max_nodes = 20 ", 1);
+    assert_ne!(capped, text);
+    std::fs::write(dir.join("capped.toml"), capped).unwrap();
+    let out = run(&dir, &["check", "capped.toml"], None);
+    assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
+    let message = stderr(&out);
+    assert!(
+        message.contains("`solver.nodes` is 40, above `max_intervals` = 20"),
+        "{message}"
+    );
+}
+
+/// A key given together with its old name is bad input, and the message names both.
+#[test]
+fn a_key_and_its_old_name_together_exit_2_naming_both() {
+    let dir = scratch("both-names");
+    let text = edited("\nintervals = 32 ", "\nintervals = 32\nnodes = 32 ").replacen(
+        "# max_intervals = 8192 ",
+        "max_intervals = 64\nmax_nodes = 64 ",
+        1,
+    );
+    std::fs::write(dir.join("robot.toml"), text).unwrap();
+    for command in ["check", "solve"] {
+        let out = run(&dir, &[command, "robot.toml"], None);
+        assert_eq!(out.status.code(), Some(2), "{command}: {}", stderr(&out));
+        let message = stderr(&out);
+        for (alias, name) in [("nodes", "intervals"), ("max_nodes", "max_intervals")] {
+            assert!(
+                message.lines().any(|l| l.starts_with("error: robot.toml:")
+                    && l.contains(&format!("`solver.{alias}` is given together with `{name}`"))),
+                "{command}: {message}"
+            );
+        }
     }
 }
 

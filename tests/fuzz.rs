@@ -78,8 +78,10 @@ const KEYS: &[&str] = &[
     "turns",
     "phase",
     "method",
+    "intervals",
     "nodes",
     "tolerance",
+    "max_intervals",
     "max_nodes",
     "residual_tolerance",
     "max_iterations",
@@ -183,6 +185,7 @@ const TOKENS: &[&str] = &[
     "\"helical\"",
     "x",
     "y",
+    "intervals",
     "nodes",
     "true",
     "false",
@@ -1058,11 +1061,16 @@ fn parser_survives_hand_picked_edge_cases() {
     .map(|s| s.to_string())
     .collect();
     for tail in [
+        "[solver]\nintervals = 0",
+        "[solver]\nintervals = -1",
+        "[solver]\nintervals = 1.5",
+        "[solver]\nintervals = 9223372036854775807",
+        "[solver]\nmax_intervals = 1\nintervals = 2",
+        "[solver]\nmax_intervals = 1",
         "[solver]\nnodes = 0",
-        "[solver]\nnodes = -1",
-        "[solver]\nnodes = 1.5",
-        "[solver]\nnodes = 9223372036854775807",
         "[solver]\nmax_nodes = 1\nnodes = 2",
+        "[solver]\nnodes = 2\nintervals = 2",
+        "[solver]\nmax_nodes = 0\nmax_intervals = 0",
         "[solver]\nmethod = \"newton\"",
         "[solver]\nmax_iterations = 0",
         "[solver]\ncontinuation = 1",
@@ -1335,29 +1343,30 @@ fn solve_with_huge_samples_is_bad_input() {
     result.unwrap_or_else(|e| panic!("{e}"));
 }
 
-/// `--nodes` near `usize::MAX` panics with a capacity overflow while building the mesh
-/// (exit 101); `--nodes 1000000000000` aborts on a failed allocation (exit 134).
+/// `--intervals` (then `--nodes`) near `usize::MAX` panics with a capacity overflow while
+/// building the mesh (exit 101); `--intervals 1000000000000` aborts on a failed allocation
+/// (exit 134).
 #[test]
-fn solve_with_huge_nodes_is_bad_input() {
+fn solve_with_huge_intervals_is_bad_input() {
     let result = example_run(
-        "nodes",
+        "intervals",
         &tdcr::io::example(),
         "solve",
-        &["--nodes", "18446744073709551615"],
+        &["--intervals", "18446744073709551615"],
     );
     result.unwrap_or_else(|e| panic!("{e}"));
 }
 
-/// `[solver] nodes = 9223372036854775807` is accepted by `tdcr::io::parse` (and `tdcr check`
-/// says OK), then `tdcr solve` panics with a capacity overflow building the mesh (exit 101);
-/// `nodes = 100000000` aborts on a 4.8 GB allocation (exit 134). The file should be rejected
-/// with a bound on `nodes` (or the solve fail with a typed error).
+/// `[solver] intervals = 9223372036854775807` (then `nodes`) is accepted by `tdcr::io::parse`
+/// (and `tdcr check` says OK), then `tdcr solve` panics with a capacity overflow building the
+/// mesh (exit 101); `intervals = 100000000` aborts on a 4.8 GB allocation (exit 134). The file
+/// should be rejected with a bound on `intervals` (or the solve fail with a typed error).
 #[test]
-fn file_with_huge_nodes_is_bad_input() {
+fn file_with_huge_intervals_is_bad_input() {
     let text = tdcr::io::example();
-    assert!(text.contains("\nnodes = 32 "));
-    let text = text.replacen("\nnodes = 32 ", "\nnodes = 9223372036854775807 ", 1);
-    let result = example_run("file-nodes", &text, "solve", &[]);
+    assert!(text.contains("\nintervals = 32 "));
+    let text = text.replacen("\nintervals = 32 ", "\nintervals = 9223372036854775807 ", 1);
+    let result = example_run("file-intervals", &text, "solve", &[]);
     result.unwrap_or_else(|e| panic!("{e}"));
 }
 

@@ -62,9 +62,9 @@ tension = 0.0
 
 [solver]                         # every field optional
 method = "collocation"           # or "shooting" (the independent cross-check)
-nodes = 32                       # mesh intervals (collocation)
+intervals = 32                   # mesh intervals (collocation)
 # tolerance = 1e-7               # m: refine the mesh until the tip moves less than this
-# max_nodes = 8192               # cap on intervals during refinement
+# max_intervals = 8192           # cap on intervals during refinement
 # residual_tolerance = 1e-11     # Newton stopping test (scaled, dimensionless)
 # max_iterations = 30            # Newton iterations per load step
 # continuation = true            # ramp the loads up when a direct solve fails

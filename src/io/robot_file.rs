@@ -91,8 +91,12 @@ enum RoutingTable {
 #[serde(deny_unknown_fields)]
 struct SolverTable {
     method: Option<MethodName>,
+    intervals: Option<usize>,
+    /// The old name of `intervals`, still accepted.
     nodes: Option<usize>,
     tolerance: Option<f64>,
+    max_intervals: Option<usize>,
+    /// The old name of `max_intervals`, still accepted.
     max_nodes: Option<usize>,
     residual_tolerance: Option<f64>,
     max_iterations: Option<usize>,
@@ -116,8 +120,8 @@ const TABLES: &str = "[rod], [base], [loads], [[tendon]], [solver]";
 pub struct SolverSettings {
     /// The solver (`method`). Default collocation.
     pub method: Method,
-    /// Collocation options (`nodes` -> `intervals`, `tolerance`, `max_nodes` ->
-    /// `max_intervals`, `residual_tolerance`, `max_iterations`, `continuation`).
+    /// Collocation options (`intervals` (alias `nodes`), `tolerance`, `max_intervals` (alias
+    /// `max_nodes`), `residual_tolerance`, `max_iterations`, `continuation`).
     pub collocation: collocation::Options,
     /// Shooting options (`residual_tolerance` -> `tolerance`, `max_iterations`,
     /// `integration_tolerance`).
@@ -548,49 +552,131 @@ impl Checker<'_> {
         }
     }
 
-    fn solver(&mut self, solver: &SolverTable) {
-        if solver.nodes == Some(0) {
-            self.report("solver.nodes", "is 0, but the mesh needs at least 1 interval".into());
-        }
-        let default_cap = collocation::Options::default().max_intervals;
-        if let Some(cap) = solver.max_nodes
-            && cap > collocation::MAX_INTERVALS
-        {
-            self.report(
-                "solver.max_nodes",
-                format!(
-                    "is {cap}, above the limit of {} intervals (about 5 kB each)",
-                    collocation::MAX_INTERVALS
-                ),
-            );
-        }
-        if let Some(n) = solver.nodes
-            && n > solver.max_nodes.unwrap_or(default_cap)
-        {
-            match solver.max_nodes {
-                Some(cap) => self.report(
-                    "solver.max_nodes",
-                    format!("is {cap}, but must be at least `nodes` = {n}"),
-                ),
-                None => self.report(
-                    "solver.nodes",
-                    format!(
-                        "is {n}, above `max_nodes` (default {default_cap}); raise `max_nodes` (at most {})",
-                        collocation::MAX_INTERVALS
-                    ),
-                ),
+    /// A key given under its name or its old name (an alias): the field path and value of
+    /// the one given (the new name if both, which is a problem naming both).
+    fn renamed(
+        &mut self,
+        name: &str,
+        alias: &str,
+        value: Option<usize>,
+        old: Option<usize>,
+    ) -> Option<(String, usize)> {
+        match (value, old) {
+            (Some(n), Some(_)) => {
+                self.report(
+                    &format!("solver.{alias}"),
+                    format!("is given together with `{name}`: `{alias}` is its old name; give one of them"),
+                );
+                Some((format!("solver.{name}"), n))
             }
+            (Some(n), None) => Some((format!("solver.{name}"), n)),
+            (None, Some(n)) => Some((format!("solver.{alias}"), n)),
+            (None, None) => None,
         }
-        if solver.max_iterations == Some(0) {
-            self.report("solver.max_iterations", "is 0, but must be at least 1".into());
+    }
+
+    /// Reports the first rule of the library that `checks` (each the options' `validate()`
+    /// with only `field` changed from the defaults) says `field` = `shown` breaks.
+    fn library_rule(&mut self, field: &str, shown: &str, checks: &[Result<(), Error>]) -> bool {
+        let Some(Err(e)) = checks.iter().find(|c| c.is_err()) else {
+            return true;
+        };
+        let message = match e {
+            // A rule about the options as a whole: its hint speaks of the Rust API.
+            Error::InvalidInput { field: f, problem, .. } if !f.contains('.') => format!("is {shown}, but {problem}"),
+            Error::InvalidInput { problem, hint, .. } => format!("{problem}; {hint}"),
+            other => other.to_string(),
+        };
+        self.report(field, message);
+        false
+    }
+
+    /// The `[solver]` rules: the library's own (`collocation::Options::validate`,
+    /// `shooting::Options::validate`), checked one field at a time from the defaults so
+    /// that every broken rule is reported at its key, plus the file's: numbers finite, a
+    /// mesh of at least one interval, a key and its old name not both given.
+    fn solver(&mut self, solver: &SolverTable) {
+        let intervals = self.renamed("intervals", "nodes", solver.intervals, solver.nodes);
+        let cap = self.renamed("max_intervals", "max_nodes", solver.max_intervals, solver.max_nodes);
+        if let Some((field, 0)) = &intervals {
+            self.report(field, "is 0, but the mesh needs at least 1 interval".into());
         }
-        for (field, value, unit) in [
-            ("solver.tolerance", solver.tolerance, " m"),
-            ("solver.residual_tolerance", solver.residual_tolerance, ""),
-            ("solver.integration_tolerance", solver.integration_tolerance, ""),
-        ] {
-            if let Some(x) = value {
-                self.positive(field, x, unit);
+        let mut finite = |field: &str, x: Option<f64>, unit: &str| x.filter(|&x| self.finite(field, x, unit));
+        let tolerance = finite("solver.tolerance", solver.tolerance, " m");
+        let residual = finite("solver.residual_tolerance", solver.residual_tolerance, "");
+        let integration = finite("solver.integration_tolerance", solver.integration_tolerance, "");
+        let c = collocation::Options::default;
+        let s = shooting::Options::default;
+        if let Some(x) = residual {
+            let checks = [
+                collocation::Options {
+                    residual_tolerance: x,
+                    ..c()
+                }
+                .validate(),
+                shooting::Options { tolerance: x, ..s() }.validate(),
+            ];
+            self.library_rule("solver.residual_tolerance", &x.to_string(), &checks);
+        }
+        if let Some(n) = solver.max_iterations {
+            let checks = [
+                collocation::Options {
+                    max_iterations: n,
+                    ..c()
+                }
+                .validate(),
+                shooting::Options {
+                    max_iterations: n,
+                    ..s()
+                }
+                .validate(),
+            ];
+            self.library_rule("solver.max_iterations", &n.to_string(), &checks);
+        }
+        if let Some(t) = tolerance {
+            let checks = [collocation::Options {
+                tolerance: Some(t),
+                ..c()
+            }
+            .validate()];
+            self.library_rule("solver.tolerance", &format!("{t} m"), &checks);
+        }
+        if let Some(x) = integration {
+            let checks = [shooting::Options {
+                integration_tolerance: x,
+                ..s()
+            }
+            .validate()];
+            self.library_rule("solver.integration_tolerance", &x.to_string(), &checks);
+        }
+        // The cap on its own (with a starting mesh within it), then the starting mesh
+        // against the cap: at `intervals` if given, else at the cap that the default breaks.
+        let cap_ok = match &cap {
+            Some((field, n)) => {
+                let checks = [collocation::Options {
+                    max_intervals: *n,
+                    intervals: c().intervals.min(*n),
+                    ..c()
+                }
+                .validate()];
+                self.library_rule(field, &n.to_string(), &checks)
+            }
+            None => true,
+        };
+        if cap_ok && !matches!(intervals, Some((_, 0))) {
+            let options = collocation::Options {
+                intervals: intervals.as_ref().map_or(c().intervals, |i| i.1),
+                max_intervals: cap.as_ref().map_or(c().max_intervals, |m| m.1),
+                ..c()
+            };
+            if let Err(Error::InvalidInput { problem, hint, .. }) = options.validate() {
+                match (&intervals, &cap) {
+                    (Some((field, _)), _) => self.report(field, format!("{problem}; {hint}")),
+                    (None, Some((field, n))) => {
+                        self.report(field, format!("is {n}: the default `intervals` {problem}; {hint}"));
+                    }
+                    (None, None) => {}
+                }
             }
         }
     }
@@ -670,9 +756,9 @@ fn settings(solver: &SolverTable) -> SolverSettings {
         out.method = Method::Shooting;
     }
     let c = &mut out.collocation;
-    c.intervals = solver.nodes.unwrap_or(c.intervals);
+    c.intervals = solver.intervals.or(solver.nodes).unwrap_or(c.intervals);
     c.tolerance = solver.tolerance;
-    c.max_intervals = solver.max_nodes.unwrap_or(c.max_intervals);
+    c.max_intervals = solver.max_intervals.or(solver.max_nodes).unwrap_or(c.max_intervals);
     c.residual_tolerance = solver.residual_tolerance.unwrap_or(c.residual_tolerance);
     c.max_iterations = solver.max_iterations.unwrap_or(c.max_iterations);
     c.continuation = solver.continuation.unwrap_or(c.continuation);

@@ -28,7 +28,8 @@ pub struct BenchArgs {
 pub enum BenchFormat {
     /// A table for people.
     Table,
-    /// A JSON list of {case, start, median_seconds, iterations, tip_error_m, nodes}.
+    /// A JSON list of {case, start, median_seconds, iterations, tip_error_m, nodes}; `nodes`
+    /// counts mesh points, the table's intervals + 1.
     Json,
 }
 
@@ -163,6 +164,7 @@ pub fn run(args: &BenchArgs) -> Result<String, String> {
             let list: Vec<serde_json::Value> = rows
                 .iter()
                 .map(|r| {
+                    // `nodes` counts mesh points (intervals + 1); other tools read the key.
                     serde_json::json!({
                         "case": r.case, "start": r.start, "median_seconds": r.median.as_secs_f64(),
                         "iterations": r.iterations, "tip_error_m": r.error, "nodes": r.intervals + 1,

@@ -1,0 +1,139 @@
+//! Arguments shared by the commands and the value parsers of every option.
+
+use clap::{Args, ValueEnum};
+
+/// Which solver `--method` picks.
+#[derive(Clone, Copy, ValueEnum)]
+pub enum MethodArg {
+    /// Sparse collocation with Newton (the main solver).
+    Collocation,
+    /// Shooting from the base (the independent cross-check).
+    Shooting,
+}
+
+/// Options shared by `solve` and `sweep`.
+#[derive(Args)]
+pub struct SolverArgs {
+    /// Tip force (N, world frame), replacing the file's.
+    #[arg(long, value_name = "X,Y,Z", value_parser = parse_vector, allow_hyphen_values = true)]
+    pub tip_force: Option<[f64; 3]>,
+    /// Tip moment (N m, world frame), replacing the file's.
+    #[arg(long, value_name = "X,Y,Z", value_parser = parse_vector, allow_hyphen_values = true)]
+    pub tip_moment: Option<[f64; 3]>,
+    /// Solver, replacing the file's `[solver] method`.
+    #[arg(long, value_enum)]
+    pub method: Option<MethodArg>,
+    /// A fixed mesh of N intervals (no refinement; Newton still converges fully). With
+    /// --tol, the starting mesh. `--nodes` is its old name: it counts intervals too.
+    #[arg(long, visible_alias = "nodes", value_name = "N", value_parser = parse_count)]
+    pub intervals: Option<usize>,
+    /// Refine the mesh adaptively until the estimated tip position error is below T (m).
+    #[arg(long, value_name = "T", value_parser = parse_positive)]
+    pub tol: Option<f64>,
+    /// Print the solver's per-iteration table and counts to standard error.
+    #[arg(short, long)]
+    pub verbose: bool,
+}
+
+/// A finite number; `what` names it in the message.
+fn parse_number(text: &str, what: &str) -> Result<f64, String> {
+    let x: f64 = text
+        .trim()
+        .parse()
+        .map_err(|_| format!("`{text}` is not a number ({what})"))?;
+    if x.is_finite() {
+        Ok(x)
+    } else {
+        Err(format!("`{text}` is not finite ({what})"))
+    }
+}
+
+/// `X,Y,Z`: three finite numbers (`--tip-force`, `--tip-moment`).
+pub fn parse_vector(text: &str) -> Result<[f64; 3], String> {
+    let parts: Vec<&str> = text.split(',').collect();
+    if parts.len() != 3 {
+        return Err(format!("`{text}` needs three comma-separated numbers X,Y,Z"));
+    }
+    let mut v = [0.0; 3];
+    for (x, part) in v.iter_mut().zip(parts) {
+        *x = parse_number(part, "a component")?;
+    }
+    Ok(v)
+}
+
+/// The most values a count option accepts (sweep steps, output samples): each costs memory
+/// and a line of output.
+pub const MAX_COUNT: usize = 1_000_000;
+
+/// A whole number from 1 to [`MAX_COUNT`] (`--intervals`, sweep COUNT).
+pub fn parse_count(text: &str) -> Result<usize, String> {
+    match text.parse::<usize>() {
+        Ok(n) if (1..=MAX_COUNT).contains(&n) => Ok(n),
+        _ => Err(format!("`{text}` is not a whole number from 1 to {MAX_COUNT}")),
+    }
+}
+
+/// A whole number of output samples from 2 to [`MAX_COUNT`] (`--samples`).
+pub fn parse_samples(text: &str) -> Result<usize, String> {
+    match text.parse::<usize>() {
+        Ok(n) if (2..=MAX_COUNT).contains(&n) => Ok(n),
+        _ => Err(format!(
+            "`{text}` is not a whole number from 2 (the ends count) to {MAX_COUNT}"
+        )),
+    }
+}
+
+/// A positive tolerance in m (`--tol`).
+pub fn parse_positive(text: &str) -> Result<f64, String> {
+    let x = parse_number(text, "a tolerance in m")?;
+    if x > 0.0 {
+        Ok(x)
+    } else {
+        Err(format!("`{text}` must be positive"))
+    }
+}
+
+/// Splits `I=VALUE` into the tendon number (from 1) and the value text.
+fn parse_tendon(text: &str) -> Result<(usize, &str), String> {
+    let (index, value) = text
+        .split_once('=')
+        .ok_or_else(|| format!("`{text}` must look like I=NEWTONS, e.g. 1=2.94"))?;
+    let index = parse_count(index.trim()).map_err(|_| format!("tendon number `{index}` must be 1 or more"))?;
+    Ok((index, value))
+}
+
+/// `I=NEWTONS` (`solve --tension`): a tendon number and a tension >= 0.
+pub fn parse_tension(text: &str) -> Result<(usize, f64), String> {
+    let (index, value) = parse_tendon(text)?;
+    let tension = parse_number(value, "a tension in N")?;
+    if tension < 0.0 {
+        return Err(format!("tension {tension} N is negative: a tendon can only pull"));
+    }
+    Ok((index, tension))
+}
+
+/// `I=START:STOP:COUNT` or `I=NEWTONS` (`sweep --tension`): a tendon number and its
+/// tensions, COUNT evenly spaced values from START to STOP, all >= 0.
+pub fn parse_sweep(text: &str) -> Result<(usize, Vec<f64>), String> {
+    let (index, value) = parse_tendon(text)?;
+    let parts: Vec<&str> = value.split(':').collect();
+    let values = match parts.as_slice() {
+        [single] => vec![parse_number(single, "a tension in N")?],
+        [start, stop, count] => {
+            let (a, b) = (parse_number(start, "START")?, parse_number(stop, "STOP")?);
+            let count = parse_count(count).map_err(|e| format!("COUNT: {e}"))?;
+            if count == 1 {
+                vec![a]
+            } else {
+                (0..count)
+                    .map(|k| a + (b - a) * k as f64 / (count - 1) as f64)
+                    .collect()
+            }
+        }
+        _ => return Err(format!("`{text}` must look like I=START:STOP:COUNT or I=NEWTONS")),
+    };
+    if values.iter().any(|&t| t < 0.0) {
+        return Err(format!("`{text}` has negative tensions: a tendon can only pull"));
+    }
+    Ok((index, values))
+}

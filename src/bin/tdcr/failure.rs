@@ -1,0 +1,86 @@
+//! Why a command stopped (its exit code and message), and writing to standard output,
+//! standard error and files.
+
+use std::io::Write;
+use std::path::Path;
+use tdcr::Error;
+
+use crate::tables::diagnostics;
+
+/// Why the command stopped, and its exit code.
+pub enum Failure {
+    /// Bad input: a file, an option, a value (exit 2).
+    Input(String),
+    /// A solver did not converge (exit 3).
+    NotConverged(String),
+    /// Anything else, e.g. an output file that cannot be written (exit 1).
+    Other(String),
+    /// Standard output was closed by the reader (`tdcr | head`): stop quietly (exit 0).
+    BrokenPipe,
+}
+
+impl Failure {
+    /// The exit code.
+    pub fn code(&self) -> u8 {
+        match self {
+            Failure::Input(_) => 2,
+            Failure::NotConverged(_) => 3,
+            Failure::Other(_) => 1,
+            Failure::BrokenPipe => 0,
+        }
+    }
+
+    /// Prints the message to standard error, each line after `error: ` unless indented.
+    pub fn print(&self) {
+        let text = match self {
+            Failure::Input(t) | Failure::NotConverged(t) | Failure::Other(t) => t,
+            Failure::BrokenPipe => return,
+        };
+        let mut err = std::io::stderr().lock();
+        for line in text.lines() {
+            // Indented lines continue the message above them (diagnostics, hints).
+            let prefix = if line.starts_with(' ') { "" } else { "error: " };
+            let _ = writeln!(err, "{prefix}{line}");
+        }
+    }
+}
+
+/// A solver error as a failure: input problems exit 2, solver failures 3, the rest 1.
+pub fn solver_failure(e: Error) -> Failure {
+    let text = e.to_string();
+    if let Error::NotConverged { report, .. } = &e {
+        return Failure::NotConverged(format!("{text}\n{}", diagnostics(report)));
+    }
+    if matches!(e, Error::IntervalCap { .. } | Error::Breakdown { .. }) {
+        Failure::NotConverged(text)
+    } else if matches!(e, Error::InvalidInput { .. } | Error::SingularRouting { .. }) {
+        Failure::Input(text)
+    } else {
+        Failure::Other(text)
+    }
+}
+
+/// Standard error, ignoring write errors (there is nowhere left to report them).
+pub fn note(text: &str) {
+    let _ = writeln!(std::io::stderr().lock(), "{text}");
+}
+
+/// Writes to standard output; a closed pipe stops the command quietly.
+pub fn emit(text: &str) -> Result<(), Failure> {
+    let mut out = std::io::stdout().lock();
+    match out.write_all(text.as_bytes()).and_then(|()| out.flush()) {
+        Ok(()) => Ok(()),
+        Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => Err(Failure::BrokenPipe),
+        Err(e) => Err(Failure::Other(format!("cannot write to standard output: {e}"))),
+    }
+}
+
+/// Writes `text` to `path`, creating its folder; `what` names the file in messages.
+pub fn write_file(path: &Path, text: &str, what: &str) -> Result<(), Failure> {
+    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir)
+            .map_err(|e| Failure::Other(format!("cannot create folder {} for the {what}: {e}", dir.display())))?;
+    }
+    std::fs::write(path, text)
+        .map_err(|e| Failure::Other(format!("cannot write the {what} to {}: {e}", path.display())))
+}

@@ -1,0 +1,83 @@
+//! Reading robot files, applying the command-line overrides and running the chosen solver.
+
+use std::io::Read;
+use tdcr::io::RobotFile;
+use tdcr::{Method, Robot, Solution, collocation, shooting};
+
+use crate::args::{MethodArg, SolverArgs};
+use crate::failure::{Failure, note, solver_failure};
+
+/// Reads and checks a robot file (`-`: standard input); every problem is one message line.
+pub fn read_robot(file: &str) -> Result<(String, RobotFile), Failure> {
+    let (name, text) = if file == "-" {
+        let mut text = String::new();
+        std::io::stdin()
+            .read_to_string(&mut text)
+            .map_err(|e| Failure::Input(format!("cannot read the robot file from standard input: {e}")))?;
+        ("<stdin>".to_string(), text)
+    } else {
+        let text =
+            std::fs::read_to_string(file).map_err(|e| Failure::Input(format!("cannot read robot file {file}: {e}")))?;
+        (file.to_string(), text)
+    };
+    let robot = tdcr::io::parse(&text, &name).map_err(|e| Failure::Input(e.to_string()))?;
+    Ok((name, robot))
+}
+
+/// Sets the tension of tendon `index` (from 1); a number past the last tendon is bad input.
+pub fn set_tension(robot: &mut Robot, index: usize, tension: f64) -> Result<(), Failure> {
+    let count = robot.tendons.len();
+    match robot.tendons.get_mut(index.wrapping_sub(1)) {
+        Some(t) => {
+            t.tension = tension;
+            Ok(())
+        }
+        None => Err(Failure::Input(format!(
+            "--tension {index}=...: the robot has {count} tendon(s), numbered 1 to {count} in file order"
+        ))),
+    }
+}
+
+/// Applies the overrides shared by `solve` and `sweep` (loads, method, mesh) to the file.
+pub fn apply(file: &mut RobotFile, args: &SolverArgs) {
+    let robot = &mut file.robot;
+    if let Some(f) = args.tip_force {
+        robot.loads.tip_force = f.into();
+    }
+    if let Some(m) = args.tip_moment {
+        robot.loads.tip_moment = m.into();
+    }
+    let settings = &mut file.solver;
+    match args.method {
+        Some(MethodArg::Collocation) => settings.method = Method::Collocation,
+        Some(MethodArg::Shooting) => settings.method = Method::Shooting,
+        None => {}
+    }
+    let c = &mut settings.collocation;
+    if let Some(n) = args.intervals {
+        c.intervals = n;
+        c.max_intervals = c.max_intervals.max(n);
+        // --intervals alone means a fixed mesh, even if the file asks for refinement.
+        if args.tol.is_none() {
+            c.tolerance = None;
+        }
+    }
+    if let Some(t) = args.tol {
+        c.tolerance = Some(t);
+    }
+    if settings.method == Method::Shooting && (args.intervals.is_some() || args.tol.is_some()) {
+        note("note: --intervals and --tol apply to collocation only; shooting integrates adaptively");
+    }
+}
+
+/// Solves `robot` with the file's solver settings, warm-started from `warm` (collocation
+/// only; shooting always starts cold).
+pub fn run_solver(robot: &Robot, file: &RobotFile, warm: Option<&Solution>) -> Result<Solution, Failure> {
+    let s = &file.solver;
+    match (s.method, warm) {
+        (Method::Collocation, None) => collocation::solve(robot, &s.collocation),
+        (Method::Collocation, Some(w)) => collocation::solve_from(robot, &s.collocation, w),
+        (Method::Shooting, _) => shooting::solve(robot, &s.shooting),
+    }
+    .map_err(solver_failure)
+}

@@ -1,0 +1,214 @@
+//! `tdcr sweep`: a sequence of robots over tension ranges, each solve warm-started from the
+//! last; CSV out, optionally the tip trajectory as a picture.
+
+use clap::Args;
+use std::fmt::Write as _;
+use std::io::{IsTerminal, Write};
+use std::path::PathBuf;
+use std::time::{Duration, Instant};
+use tdcr::io::output;
+use tdcr::plot::{Figure, LegendEntry, PALETTE, Style};
+use tdcr::{Robot, Solution};
+
+use crate::args::{SolverArgs, parse_sweep};
+use crate::failure::{Failure, emit, note, write_file};
+use crate::robot_args::{apply, read_robot, run_solver, set_tension};
+use crate::tables::summary;
+
+/// The arguments of `tdcr sweep`.
+#[derive(Args)]
+pub struct SweepArgs {
+    /// Robot file (TOML; `-` reads standard input).
+    file: String,
+    /// Tension of tendon I (from 1): `I=START:STOP:COUNT` (COUNT evenly spaced values, N) or a
+    /// fixed `I=NEWTONS`. Repeatable; every range must have the same COUNT.
+    #[arg(long, value_name = "I=START:STOP:COUNT", value_parser = parse_sweep, required = true)]
+    tension: Vec<(usize, Vec<f64>)>,
+    #[command(flatten)]
+    solver: SolverArgs,
+    /// Write the CSV to FILE instead of standard output.
+    #[arg(long, value_name = "FILE")]
+    out: Option<PathBuf>,
+    /// Draw the tip trajectory (with the first and last shapes) into FILE.svg.
+    #[arg(long, value_name = "FILE.svg")]
+    plot: Option<PathBuf>,
+}
+
+/// A progress bar on standard error, shown only on a terminal and only once the work has
+/// taken longer than [`Progress::DELAY`].
+struct Progress {
+    start: Instant,
+    shown: bool,
+    terminal: bool,
+}
+
+impl Progress {
+    /// Half a second: shorter runs finish before a bar would be worth reading.
+    const DELAY: Duration = Duration::from_millis(500);
+
+    /// A bar that starts its clock now.
+    fn new() -> Self {
+        Progress {
+            start: Instant::now(),
+            shown: false,
+            terminal: std::io::stderr().is_terminal(),
+        }
+    }
+
+    /// Shows `done` of `total` steps (on a terminal, after [`Progress::DELAY`]).
+    fn update(&mut self, done: usize, total: usize) {
+        if !self.terminal || self.start.elapsed() < Self::DELAY {
+            return;
+        }
+        let width = 30;
+        let filled = width * done / total.max(1);
+        let _ = write!(
+            std::io::stderr().lock(),
+            "\r[{}{}] {done}/{total}  {:.1} s ",
+            "#".repeat(filled),
+            ".".repeat(width - filled),
+            self.start.elapsed().as_secs_f64()
+        );
+        self.shown = true;
+    }
+
+    /// Clears the bar, if shown.
+    fn finish(&mut self) {
+        if self.shown {
+            let _ = write!(std::io::stderr().lock(), "\r{}\r", " ".repeat(60));
+            self.shown = false;
+        }
+    }
+}
+
+/// `tdcr sweep`: solves every step, writes the CSV (the steps before a failure too) and the
+/// picture.
+pub fn run(args: &SweepArgs) -> Result<(), Failure> {
+    let (name, mut file) = read_robot(&args.file)?;
+    apply(&mut file, &args.solver);
+    let steps = args.tension.iter().map(|(_, v)| v.len()).max().unwrap_or(0);
+    if steps < 2 {
+        return Err(Failure::Input(
+            "sweep needs at least one range with COUNT >= 2, e.g. --tension 1=0:6:61".into(),
+        ));
+    }
+    if let Some((i, v)) = args.tension.iter().find(|(_, v)| v.len() != 1 && v.len() != steps) {
+        return Err(Failure::Input(format!(
+            "--tension {i}=... has {} values but another range has {steps}: give every range the same COUNT",
+            v.len()
+        )));
+    }
+    for &(i, ref v) in &args.tension {
+        set_tension(&mut file.robot, i, v[0])?;
+    }
+    let count = file.robot.tendons.len();
+    let mut csv = String::from("step");
+    for i in 1..=count {
+        let _ = write!(csv, ",tension_{i}");
+    }
+    csv.push_str(",tip_x,tip_y,tip_z,bending_angle_deg,iterations,load_steps,solve_time\n");
+    let mut tips = Vec::with_capacity(steps);
+    let (mut first, mut last): (Option<(Robot, Solution)>, Option<Solution>) = (None, None);
+    let mut progress = Progress::new();
+    let mut failure = None;
+    for k in 0..steps {
+        let mut robot = file.robot.clone();
+        for &(i, ref v) in &args.tension {
+            set_tension(&mut robot, i, v[if v.len() == 1 { 0 } else { k }])?;
+        }
+        let solution = match run_solver(&robot, &file, last.as_ref()) {
+            Ok(s) => s,
+            Err(f) => {
+                let tensions: Vec<String> = robot.tendons.iter().map(|t| format!("{}", t.tension)).collect();
+                let text = match f {
+                    Failure::NotConverged(t) | Failure::Input(t) | Failure::Other(t) => t,
+                    Failure::BrokenPipe => String::new(),
+                };
+                failure = Some(Failure::NotConverged(format!(
+                    "sweep step {} of {steps} (tensions {} N) failed; the CSV holds the steps before it\n{text}",
+                    k + 1,
+                    tensions.join(", ")
+                )));
+                break;
+            }
+        };
+        let tip = solution.tip_position();
+        let _ = write!(csv, "{}", k + 1);
+        for t in &robot.tendons {
+            let _ = write!(csv, ",{}", t.tension);
+        }
+        let report = &solution.report;
+        let _ = writeln!(
+            csv,
+            ",{},{},{},{},{},{},{}",
+            output::number(tip.x),
+            output::number(tip.y),
+            output::number(tip.z),
+            output::bending_angle(&solution).to_degrees(),
+            report.iterations,
+            report.load_steps,
+            report.timings.total.as_secs_f64()
+        );
+        if args.solver.verbose {
+            progress.finish();
+            note(&format!("step {}: {}", k + 1, summary(report, &file.solver)));
+        }
+        tips.push(tip);
+        if first.is_none() {
+            first = Some((robot.clone(), solution.clone()));
+        }
+        last = Some(solution);
+        progress.update(k + 1, steps);
+    }
+    progress.finish();
+    match &args.out {
+        Some(path) => {
+            write_file(path, &csv, "CSV")?;
+            note(&format!("wrote {}", path.display()));
+        }
+        None => emit(&csv)?,
+    }
+    if let (Some(path), Some((robot0, first)), Some(last)) = (&args.plot, &first, &last) {
+        let mut figure = Figure::new(&format!("{name}: tip trajectory over {} solves", tips.len()));
+        let ranges: Vec<String> = args
+            .tension
+            .iter()
+            .map(|(i, v)| format!("tendon {i}: {} to {} N", v[0], v[v.len() - 1]))
+            .collect();
+        figure.subtitle.push(ranges.join("; "));
+        let mut start = Style::new("#999999");
+        start.dash = Some("5 3".into());
+        figure.add_shape(robot0, first, &start);
+        let mut robot1 = file.robot.clone();
+        for &(i, ref v) in &args.tension {
+            set_tension(&mut robot1, i, v[(tips.len() - 1).min(v.len() - 1)])?;
+        }
+        figure.add_shape(&robot1, last, &Style::new("#555555"));
+        figure.curves.push(tdcr::plot::Curve {
+            points: tips.clone(),
+            color: PALETTE[3].into(),
+            width: 2.0,
+            dash: None,
+            opacity: 1.0,
+        });
+        figure.markers.extend(tips.iter().map(|&point| tdcr::plot::Marker {
+            point,
+            color: PALETTE[3].into(),
+            radius: 1.8,
+        }));
+        for (label, color, dash) in [
+            ("tip trajectory", PALETTE[3], None),
+            ("first shape", "#999999", Some("5 3")),
+            ("last shape", "#555555", None),
+        ] {
+            figure.legend.push(LegendEntry {
+                label: label.into(),
+                color: color.into(),
+                dash: dash.map(Into::into),
+            });
+        }
+        write_file(path, &figure.to_svg(), "plot")?;
+        note(&format!("wrote {}", path.display()));
+    }
+    failure.map_or(Ok(()), Err)
+}

@@ -1,0 +1,150 @@
+//! Text reports: solver diagnostics and summaries, the solution table, routing descriptions
+//! and number formatting.
+
+use std::fmt::Write as _;
+use std::time::Duration;
+use tdcr::io::{RobotFile, output};
+use tdcr::report::Iteration;
+use tdcr::{Method, Routing, Solution, SolveReport};
+
+/// A duration in milliseconds.
+pub fn ms(d: Duration) -> f64 {
+    d.as_secs_f64() * 1e3
+}
+
+/// `x` with `decimals` decimals, right-aligned in `width`, without a minus sign on a
+/// value that rounds to zero.
+pub fn fixed(x: f64, width: usize, decimals: usize) -> String {
+    let scale = 10f64.powi(decimals as i32);
+    let x = if (x * scale).round() == 0.0 { 0.0 } else { x };
+    format!("{x:>width$.decimals$}")
+}
+
+/// The Newton iterations of one run, one row each.
+fn history_table(history: &[Iteration]) -> String {
+    let mut out = String::from("   iter   residual       step    damping  jacobian\n");
+    for (k, it) in history.iter().enumerate() {
+        let _ = writeln!(
+            out,
+            "  {:>5}  {:>9.3e}  {:>9.3e}  {:>9.4}  {}",
+            k + 1,
+            it.residual,
+            it.step,
+            it.damping,
+            if it.fresh_jacobian { "new" } else { "reused" }
+        );
+    }
+    out
+}
+
+/// What a solver did, for `-v` and for failures (indented: continuation lines).
+pub fn diagnostics(report: &SolveReport) -> String {
+    let mut out = String::new();
+    let _ = writeln!(out, "  termination: {}", report.termination);
+    let _ = writeln!(
+        out,
+        "  {} Newton iterations over {} load step(s) on {} mesh(es); final scaled residual {:.3e}",
+        report.iterations, report.load_steps, report.meshes, report.residual
+    );
+    let _ = writeln!(
+        out,
+        "  {} intervals, {} unknowns, {} Jacobian non-zeros{}",
+        report.intervals,
+        report.unknowns,
+        report.nonzeros,
+        report
+            .tip_error_estimate
+            .map_or(String::new(), |e| format!(", estimated tip error {e:.2e} m"))
+    );
+    let e = &report.evaluations;
+    let _ = writeln!(
+        out,
+        "  evaluations: {} residuals, {} Jacobians, {} of eq. 13",
+        e.residual, e.jacobian, e.equations
+    );
+    let t = &report.timings;
+    let _ = writeln!(
+        out,
+        "  time: assembly {:.2} ms, factorization {:.2} ms, solve {:.2} ms, total {:.2} ms",
+        ms(t.assembly),
+        ms(t.factorization),
+        ms(t.solve),
+        ms(t.total)
+    );
+    if !report.history.is_empty() {
+        let _ = writeln!(out, "  last Newton run (scaled max-norms):");
+        out.push_str(&history_table(&report.history));
+    }
+    out
+}
+
+/// One line about a solve: method, mesh, iterations, residual, time.
+pub fn summary(report: &SolveReport, settings: &tdcr::io::SolverSettings) -> String {
+    let mesh = match (report.method, settings.collocation.tolerance) {
+        (Method::Shooting, _) => format!("{} integration steps", report.intervals),
+        (Method::Collocation, None) => format!("a fixed mesh of {} intervals", report.intervals),
+        (Method::Collocation, Some(t)) => format!(
+            "an adaptive mesh of {} intervals (tip tolerance {t:.1e} m, estimate {})",
+            report.intervals,
+            report.tip_error_estimate.map_or("n/a".into(), |e| format!("{e:.1e} m"))
+        ),
+    };
+    format!(
+        "{} on {mesh}: converged in {} Newton iterations ({} load step(s)), scaled residual {:.1e}, {:.1} ms",
+        report.method,
+        report.iterations,
+        report.load_steps,
+        report.residual,
+        ms(report.timings.total)
+    )
+}
+
+/// The table of `tdcr solve`: the summary, the tip pose and one row per sample.
+pub fn solution_table(name: &str, file: &RobotFile, solution: &Solution, samples: &[output::Sample]) -> String {
+    let tip = solution.tip();
+    let tangent = tip.R.column(2);
+    let mut out = String::new();
+    let _ = writeln!(out, "{name}: {}", summary(&solution.report, &file.solver));
+    let row = |v: [f64; 3], w: usize, d: usize| v.map(|x| fixed(x, w, d)).join(" ");
+    let _ = writeln!(out, "tip position (mm):     {}", row((tip.p * 1e3).into(), 10, 4));
+    let _ = writeln!(
+        out,
+        "tip tangent R(L) e3:   {}",
+        row(tangent.into_owned().into(), 10, 6)
+    );
+    let _ = writeln!(
+        out,
+        "bending angle (deg):   {}",
+        fixed(output::bending_angle(solution).to_degrees(), 10, 4)
+    );
+    let _ = writeln!(
+        out,
+        "\n{:>9} {:>10} {:>10} {:>10} {:>10} {:>10} {:>10} {:>10} {:>10} {:>10}",
+        "s/mm", "x/mm", "y/mm", "z/mm", "nx/N", "ny/N", "nz/N", "mx/N mm", "my/N mm", "mz/N mm"
+    );
+    for x in samples {
+        let _ = writeln!(
+            out,
+            "{} {} {} {}",
+            fixed(x.s * 1e3, 9, 3),
+            row((x.p * 1e3).into(), 10, 4),
+            row(x.n.into(), 10, 5),
+            row((x.m * 1e3).into(), 10, 4)
+        );
+    }
+    out
+}
+
+/// A routing in a few words (`straight (8, 0) mm`, `helix, 1 turn, 8 mm`).
+pub fn describe(routing: &Routing) -> String {
+    match routing {
+        Routing::Straight { x, y } => format!("straight ({:.3}, {:.3}) mm", x * 1e3, y * 1e3)
+            .replace(".000", "")
+            .replace("-0)", "0)"),
+        Routing::Helical { radius, turns, .. } => {
+            let plural = if turns.abs() == 1.0 { "" } else { "s" };
+            format!("helix, {turns} turn{plural}, {:.3} mm", radius * 1e3).replace(".000", "")
+        }
+        Routing::Custom(_) => "custom routing".into(),
+    }
+}
