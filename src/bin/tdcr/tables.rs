@@ -3,8 +3,8 @@
 
 use std::fmt::Write as _;
 use std::time::Duration;
+use tdcr::Iteration;
 use tdcr::io::{RobotFile, output};
-use tdcr::report::Iteration;
 use tdcr::{Method, Routing, Solution, SolveReport};
 
 /// A duration in milliseconds.
