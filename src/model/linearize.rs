@@ -495,15 +495,9 @@ pub fn linearize(
     u: &Vector3<f64>,
 ) -> Result<Linearization> {
     let mut cache = [TendonPoint::ZERO; CACHED_TENDONS];
-    let Assembled {
-        factor,
-        x,
-        count,
-        n_b,
-        m_b,
-        f_b,
-        l_b,
-    } = assemble(model, site, segment_end, (R, v, u), Some(&mut cache))?;
+    let assembled = assemble(model, site, segment_end, (R, v, u), Some(&mut cache))?;
+    let (factor, x, count) = (&assembled.factor, &assembled.x, assembled.count);
+    let (n_b, m_b, f_b, l_b) = (assembled.n_b, assembled.m_b, assembled.f_b, assembled.l_b);
     let (kse, kbt) = (&site.section.section.kse, &site.section.section.kbt);
     let (kse_s, kbt_s) = (&site.section.kse_s, &site.section.kbt_s);
     let x_v = Vector3::new(x[0], x[1], x[2]);

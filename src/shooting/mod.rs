@@ -413,15 +413,11 @@ const A: [[f64; 6]; 7] = [
     ],
 ];
 /// 5th-order weights (the last row of A).
-const B5: [f64; 7] = [
-    35.0 / 384.0,
-    0.0,
-    500.0 / 1113.0,
-    125.0 / 192.0,
-    -2187.0 / 6784.0,
-    11.0 / 84.0,
-    0.0,
-];
+const B5: [f64; 7] = {
+    // First same as last: the 5th-order weights are the last row of A, with 0 for stage 7.
+    let last = A[6];
+    [last[0], last[1], last[2], last[3], last[4], last[5], 0.0]
+};
 /// 4th-order embedded weights.
 const B4: [f64; 7] = [
     5179.0 / 57600.0,
