@@ -140,9 +140,30 @@ impl Damping {
         self.value
     }
 
+    /// Judges a trial step of largest component `step` and gain ratio `gain` from `cost` to
+    /// `trial_cost`: moves the damping (Nielsen's update) and returns the step's record, with
+    /// the trial's cost and the updated damping if `accepted`, else the unchanged cost and
+    /// the damping the step was computed with.
+    pub(crate) fn update(&mut self, accepted: bool, gain: f64, step: f64, cost: f64, trial_cost: f64) -> FitIteration {
+        if accepted {
+            self.accept(gain);
+        }
+        let record = FitIteration {
+            cost: if accepted { trial_cost } else { cost },
+            step,
+            damping: self.value,
+            gain,
+            accepted,
+        };
+        if !accepted {
+            self.reject();
+        }
+        record
+    }
+
     /// After an accepted step of gain ratio `gain`: shrink by max(1/3, 1 - (2 gain - 1)^3)
     /// and reset the growth factor to 2.
-    pub(crate) fn accept(&mut self, gain: f64) {
+    fn accept(&mut self, gain: f64) {
         self.value *= (1.0 - (2.0 * gain - 1.0).powi(3)).max(1.0 / 3.0);
         self.growth = 2.0;
     }
@@ -186,6 +207,13 @@ mod tests {
         d.accept(0.5);
         d.reject();
         assert_eq!(d.value(), 16.0 / 3.0);
+        let rejected = d.update(false, 0.1, 1e-3, 2.0, 3.0);
+        assert_eq!(
+            (rejected.cost, rejected.damping, d.value()),
+            (2.0, 16.0 / 3.0, 64.0 / 3.0)
+        );
+        let taken = d.update(true, 1.0, 1e-3, 2.0, 1.0);
+        assert_eq!((taken.cost, taken.damping, d.value()), (1.0, 64.0 / 9.0, 64.0 / 9.0));
         assert!(!accepts(f64::NAN, 1.0, 0.0) && !accepts(1.0, 0.0, 0.0) && accepts(1e-3, 1.0, 1e-4));
         assert_eq!(gain_ratio(3.0, 1.0, 4.0), 0.5);
     }

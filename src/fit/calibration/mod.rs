@@ -83,7 +83,7 @@ pub use problem::{CalibrationOptions, Fit, Measurement, Parameters};
 pub use result::{Calibration, CalibrationTimings, TipErrorStatistics};
 pub use robots::{rotate_world, scaled_routing};
 
-use super::lm::{Damping, FitIteration, FitTermination, accepts, gain_ratio};
+use super::lm::{Damping, FitTermination, accepts, gain_ratio};
 use crate::collocation::sensitivity::{Difference, RELATIVE_STEP, Sensitivity, tip_sensitivities};
 use crate::collocation::{self, Solver};
 use crate::error::{Result, invalid};
@@ -406,6 +406,8 @@ pub fn calibrate(robot: &Robot, experiments: &[Measurement], options: &Calibrati
         };
         // Any decrease is taken (the ratio threshold is 0).
         let accepted = accepts(gain, predicted, 0.0);
+        let trial_cost = new.as_ref().map_or(f64::NAN, |(_, _, c)| *c);
+        history.push(damping.update(accepted, gain, step, cost, trial_cost));
         if let (true, Some((solutions, r_new, c))) = (accepted, new) {
             let decrease = (cost - c) / cost;
             z = trial_z;
@@ -420,31 +422,13 @@ pub fn calibrate(robot: &Robot, experiments: &[Measurement], options: &Calibrati
             for (site, s) in sites.iter_mut().zip(solutions) {
                 site.solution = Some(s);
             }
-            damping.accept(gain);
-            history.push(FitIteration {
-                cost,
-                step,
-                damping: damping.value(),
-                gain,
-                accepted: true,
-            });
             if decrease <= options.cost_tolerance {
                 termination = FitTermination::CostTolerance;
                 break;
             }
-        } else {
-            history.push(FitIteration {
-                cost,
-                step,
-                damping: damping.value(),
-                gain,
-                accepted: false,
-            });
-            damping.reject();
-            if damping.value() > MAX_DAMPING {
-                termination = FitTermination::Stalled;
-                break;
-            }
+        } else if damping.value() > MAX_DAMPING {
+            termination = FitTermination::Stalled;
+            break;
         }
     }
 

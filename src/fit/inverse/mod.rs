@@ -343,25 +343,14 @@ pub fn solve_tensions(robot: &Robot, target: &Target, options: &InverseOptions) 
         let trial_cost = 0.5 * e_trial.norm_squared();
         let rho = gain_ratio(cost, trial_cost, predicted);
         let accepted = accepts(rho, predicted, ACCEPT_RATIO);
+        trials.push(damping.update(accepted, rho, d.amax(), cost, trial_cost));
         if accepted {
             current = trial;
             solution = trial_solution;
             e = e_trial;
             history.push(e.norm());
-            damping.accept(rho);
         } else {
             jacobian = Some(J);
-        }
-        // Recorded as calibration records: after an acceptance the updated damping.
-        trials.push(FitIteration {
-            cost: if accepted { trial_cost } else { cost },
-            step: d.amax(),
-            damping: damping.value(),
-            gain: rho,
-            accepted,
-        });
-        if !accepted {
-            damping.reject();
         }
     };
     let tensions: Vec<f64> = current.tendons.iter().map(|t| t.tension).collect();
