@@ -133,11 +133,11 @@ pub fn predict(
     };
     validate(robot, experiments, &check, parameters)?;
     let applied = parameters.apply(robot);
-    let mut sites: Vec<ExperimentSolver> = experiments
+    let mut solvers: Vec<ExperimentSolver> = experiments
         .iter()
         .map(|_| ExperimentSolver::new(&options.collocation))
         .collect();
-    Ok(solve_all(&applied, experiments, &mut sites)?
+    Ok(solve_all(&applied, experiments, &mut solvers)?
         .iter()
         .map(Solution::tip_position)
         .collect())
@@ -163,16 +163,16 @@ impl ExperimentSolver {
 }
 
 /// Solves every experiment for the robot `applied` (parameters already set), warm-started
-/// from each experiment's accepted solution; `sites` are not updated.
-fn solve_all(applied: &Robot, experiments: &[Measurement], sites: &mut [ExperimentSolver]) -> Result<Vec<Solution>> {
+/// from each experiment's accepted solution; `solvers` are not updated.
+fn solve_all(applied: &Robot, experiments: &[Measurement], solvers: &mut [ExperimentSolver]) -> Result<Vec<Solution>> {
     experiments
         .par_iter()
-        .zip(sites.par_iter_mut())
-        .map(|(e, site)| {
+        .zip(solvers.par_iter_mut())
+        .map(|(e, es)| {
             let robot = e.load(applied);
-            match &site.solution {
-                Some(warm) => site.solver.solve_from(&robot, warm),
-                None => site.solver.solve(&robot),
+            match &es.solution {
+                Some(warm) => es.solver.solve_from(&robot, warm),
+                None => es.solver.solve(&robot),
             }
         })
         .collect()
@@ -317,7 +317,7 @@ pub fn calibrate(robot: &Robot, experiments: &[Measurement], options: &Calibrati
         unknowns.iter().zip(&scales).map(|(u, s)| u.get(&start) / s),
     );
     let mut timings = CalibrationTimings::default();
-    let mut sites: Vec<ExperimentSolver> = experiments
+    let mut solvers: Vec<ExperimentSolver> = experiments
         .iter()
         .map(|_| ExperimentSolver::new(&options.collocation))
         .collect();
@@ -327,7 +327,7 @@ pub fn calibrate(robot: &Robot, experiments: &[Measurement], options: &Calibrati
     let mut params = start;
     let mut applied = params.apply(robot);
     let t = Instant::now();
-    let solutions = solve_all(&applied, experiments, &mut sites)?;
+    let solutions = solve_all(&applied, experiments, &mut solvers)?;
     timings.solves += t.elapsed();
     solves += experiments.len();
     let mut r = residual_vector(&solutions, experiments);
@@ -337,8 +337,8 @@ pub fn calibrate(robot: &Robot, experiments: &[Measurement], options: &Calibrati
     let mut J = jacobian(&applied, &params, experiments, &solutions, &unknowns, &start)?;
     timings.sensitivities += t.elapsed();
     sensitivity_evaluations += experiments.len();
-    for (site, s) in sites.iter_mut().zip(solutions) {
-        site.solution = Some(s);
+    for (es, s) in solvers.iter_mut().zip(solutions) {
+        es.solution = Some(s);
     }
 
     let mut damping = Damping::new(options.initial_damping);
@@ -390,7 +390,7 @@ pub fn calibrate(robot: &Robot, experiments: &[Measurement], options: &Calibrati
         let trial = to_params(&trial_z);
         let trial_robot = trial.apply(robot);
         let t = Instant::now();
-        let solved = solve_all(&trial_robot, experiments, &mut sites);
+        let solved = solve_all(&trial_robot, experiments, &mut solvers);
         timings.solves += t.elapsed();
         solves += experiments.len();
         // Decrease of S = |r|^2 predicted by the linear model |r + J delta|^2:
@@ -419,8 +419,8 @@ pub fn calibrate(robot: &Robot, experiments: &[Measurement], options: &Calibrati
             J = jacobian(&applied, &params, experiments, &solutions, &unknowns, &start)?;
             timings.sensitivities += t.elapsed();
             sensitivity_evaluations += experiments.len();
-            for (site, s) in sites.iter_mut().zip(solutions) {
-                site.solution = Some(s);
+            for (es, s) in solvers.iter_mut().zip(solutions) {
+                es.solution = Some(s);
             }
             if decrease <= options.cost_tolerance {
                 termination = FitTermination::CostTolerance;
@@ -454,7 +454,7 @@ pub fn calibrate(robot: &Robot, experiments: &[Measurement], options: &Calibrati
     let mut fitted = params;
     fitted.euler = fitted.euler.map(wrap);
     let residuals = per_experiment(&r);
-    let tips = sites
+    let tips = solvers
         .iter()
         .map(|s| {
             s.solution
