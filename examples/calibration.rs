@@ -9,17 +9,16 @@
 
 use nalgebra::Vector3;
 use std::fmt::Write as _;
-use tdcr::fit::calibration::{
-    self, CalibrationOptions, Experiment, GaussianNoise, Parameters, TipErrorStatistics, calibrate,
-    paper_frame_rotation, predict, prototype_in_paper_frame, table2_experiment,
-};
+use tdcr::cases::{GaussianNoise, paper_frame_rotation, prototype_in_paper_frame, table2_measurement};
+use tdcr::fit::calibration::{CalibrationOptions, Measurement, Parameters, TipErrorStatistics, calibrate, predict};
+use tdcr::io::experiments::to_csv;
 use tdcr::{Routing, cases};
 
 /// The prototype in the paper's frame as a robot file: nominal E and base angles, gravity
 /// along +y, the five tendons of Table 1 (tensions come from the CSV).
 fn robot_file() -> String {
     let g = paper_frame_rotation() * Vector3::new(0.0, 0.0, -cases::WEIGHT_PER_LENGTH);
-    let [a, b, c] = calibration::PAPER_NOMINAL_EULER_DEG;
+    let [a, b, c] = cases::PAPER_NOMINAL_EULER_DEG;
     let mut text = format!(
         "# The prototype of Rucker & Webster (2011) in the paper's frame: the base at the nominal\n\
          # XYZ Euler angles of section 5.1, gravity along +y. Made by examples/calibration.rs.\n\n\
@@ -62,16 +61,16 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let robot = prototype_in_paper_frame();
     let nominal = Parameters::of(&robot);
     let truth = Parameters {
-        youngs_modulus: calibration::PAPER_CALIBRATED_YOUNGS_MODULUS,
-        euler: Vector3::from(calibration::PAPER_CALIBRATED_EULER_DEG).map(f64::to_radians),
+        youngs_modulus: cases::PAPER_CALIBRATED_YOUNGS_MODULUS,
+        euler: Vector3::from(cases::PAPER_CALIBRATED_EULER_DEG).map(f64::to_radians),
         ..nominal
     };
 
     // 2. Synthetic experiments: Table 2's loads, tips from the truth plus noise.
     let table = cases::table2();
-    let mut experiments: Vec<Experiment> = table
+    let mut experiments: Vec<Measurement> = table
         .iter()
-        .map(|e| table2_experiment(e, &paper_frame_rotation()))
+        .map(|e| table2_measurement(e, &paper_frame_rotation()))
         .collect();
     let options = CalibrationOptions::default();
     let tips = predict(&robot, &truth, &experiments, &options)?;
@@ -81,7 +80,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     }
     std::fs::create_dir_all(&dir)?;
     std::fs::write(dir.join("robot.toml"), robot_file())?;
-    std::fs::write(dir.join("experiments.csv"), calibration::to_csv(&experiments))?;
+    std::fs::write(dir.join("experiments.csv"), to_csv(&experiments))?;
     println!(
         "wrote {0}/robot.toml and {0}/experiments.csv: {1} experiments, noise {noise_mm} mm per coordinate\n\
          try: cargo run --release -- calibrate {0}/robot.toml {0}/experiments.csv\n",

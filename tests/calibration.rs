@@ -12,11 +12,13 @@
 use nalgebra::{Matrix3, Vector3};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
+use tdcr::cases::{GaussianNoise, paper_frame_rotation, prototype_in_paper_frame, table2_measurement};
 use tdcr::fit::calibration::{
-    self, Calibration, CalibrationOptions, Experiment, Fit, GaussianNoise, Parameters, Termination, TipErrorStatistics,
-    calibrate, euler_rates, euler_xyz, euler_xyz_from, paper_frame_rotation, parse_csv, predict,
-    prototype_in_paper_frame, table2_experiment, to_csv,
+    self, Calibration, CalibrationOptions, Fit, Measurement, Parameters, TipErrorStatistics, calibrate, euler_rates,
+    euler_xyz, euler_xyz_from, predict,
 };
+use tdcr::fit::lm::FitTermination;
+use tdcr::io::experiments::{parse_csv, to_csv};
 use tdcr::{Error, Robot, cases, collocation, so3};
 
 /// Twelve of the 32 experiments of Table 2 (indices into `cases::table2()`): no tension;
@@ -36,17 +38,23 @@ const EXACT: f64 = 1e-9;
 /// The truth: the paper's calibrated set {230 GPa, 177.8, 2.2, -89.7 deg}.
 fn truth(robot: &Robot) -> Parameters {
     Parameters {
-        youngs_modulus: calibration::PAPER_CALIBRATED_YOUNGS_MODULUS,
-        euler: Vector3::from(calibration::PAPER_CALIBRATED_EULER_DEG).map(f64::to_radians),
+        youngs_modulus: cases::PAPER_CALIBRATED_YOUNGS_MODULUS,
+        euler: Vector3::from(cases::PAPER_CALIBRATED_EULER_DEG).map(f64::to_radians),
         ..Parameters::of(robot)
     }
 }
 
 /// The chosen experiments in the world frame turned by `frame`, with tips measured on
 /// `truth` plus `noise` (m) per coordinate; also the RMS of the noise actually added (m).
-fn synthetic(robot: &Robot, frame: &Matrix3<f64>, truth: &Parameters, noise: f64, seed: u64) -> (Vec<Experiment>, f64) {
+fn synthetic(
+    robot: &Robot,
+    frame: &Matrix3<f64>,
+    truth: &Parameters,
+    noise: f64,
+    seed: u64,
+) -> (Vec<Measurement>, f64) {
     let table = cases::table2();
-    let mut experiments: Vec<Experiment> = CHOSEN.iter().map(|&i| table2_experiment(&table[i], frame)).collect();
+    let mut experiments: Vec<Measurement> = CHOSEN.iter().map(|&i| table2_measurement(&table[i], frame)).collect();
     let tips = predict(robot, truth, &experiments, &CalibrationOptions::default()).unwrap();
     let mut gauss = GaussianNoise::new(seed);
     let mut sum = 0.0;
@@ -300,7 +308,7 @@ fn the_iteration_limit_returns_the_last_parameters_as_not_converged() {
         ..Default::default()
     };
     let fit = calibrate(&robot, &experiments, &options).unwrap();
-    assert_eq!(fit.termination, Termination::MaxIterations);
+    assert_eq!(fit.termination, FitTermination::MaxIterations);
     assert!(!fit.converged());
     assert_eq!(fit.iterations, 1);
     // One Gauss-Newton-like step already removes most of the error.
@@ -310,11 +318,11 @@ fn the_iteration_limit_returns_the_last_parameters_as_not_converged() {
 #[test]
 fn every_termination_has_its_own_sentence() {
     let all = [
-        Termination::StepTolerance,
-        Termination::GradientTolerance,
-        Termination::CostTolerance,
-        Termination::MaxIterations,
-        Termination::Stalled,
+        FitTermination::StepTolerance,
+        FitTermination::GradientTolerance,
+        FitTermination::CostTolerance,
+        FitTermination::MaxIterations,
+        FitTermination::Stalled,
     ];
     let texts: Vec<String> = all.iter().map(ToString::to_string).collect();
     for (t, text) in all.iter().zip(&texts) {
@@ -370,7 +378,7 @@ fn euler_angles_read_back_from_their_rotation() {
     }
     // The paper's nominal angles read back from the paper-frame prototype.
     let nominal = Parameters::of(&prototype_in_paper_frame()).euler_deg();
-    let expected = Vector3::from(calibration::PAPER_NOMINAL_EULER_DEG);
+    let expected = Vector3::from(cases::PAPER_NOMINAL_EULER_DEG);
     assert!((nominal - expected).amax() < 1e-12, "{nominal}");
 }
 
@@ -403,7 +411,7 @@ fn the_paper_frame_is_the_prototype_turned() {
     let tip = predict(
         &turned,
         &Parameters::of(&turned),
-        &[table2_experiment(case_s, &frame)],
+        &[table2_measurement(case_s, &frame)],
         &options,
     )
     .unwrap()[0];
@@ -435,13 +443,13 @@ fn invalid_field(result: Result<Calibration, Error>) -> (String, String) {
     }
 }
 
-fn a_few() -> (Robot, Vec<Experiment>) {
+fn a_few() -> (Robot, Vec<Measurement>) {
     let robot = prototype_in_paper_frame();
     let table = cases::table2();
     let experiments = [0, 11, 22]
         .iter()
         .map(|&i| {
-            let mut e = table2_experiment(&table[i], &paper_frame_rotation());
+            let mut e = table2_measurement(&table[i], &paper_frame_rotation());
             e.measured_tip = Vector3::new(0.0, 0.1, -0.2);
             e
         })
@@ -453,7 +461,7 @@ fn a_few() -> (Robot, Vec<Experiment>) {
 fn invalid_inputs_name_the_field() {
     let (robot, experiments) = a_few();
     let options = CalibrationOptions::default();
-    let check = |experiments: &[Experiment], options: &CalibrationOptions, field: &str, fragment: &str| {
+    let check = |experiments: &[Measurement], options: &CalibrationOptions, field: &str, fragment: &str| {
         let (f, message) = invalid_field(calibrate(&robot, experiments, options));
         assert_eq!(f, field, "{message}");
         assert!(message.contains(fragment), "{message}");
@@ -621,9 +629,9 @@ fn cli_files(dir: &Path) {
     let mut truth = Parameters::of(&robot);
     truth.youngs_modulus = 230e9;
     let table = cases::table2();
-    let mut experiments: Vec<Experiment> = [0, 11, 12, 15, 22, 30]
+    let mut experiments: Vec<Measurement> = [0, 11, 12, 15, 22, 30]
         .iter()
-        .map(|&i| table2_experiment(&table[i], &Matrix3::identity()))
+        .map(|&i| table2_measurement(&table[i], &Matrix3::identity()))
         .collect();
     let tips = predict(&robot, &truth, &experiments, &CalibrationOptions::default()).unwrap();
     for (e, tip) in experiments.iter_mut().zip(tips) {

@@ -10,7 +10,8 @@
 
 use nalgebra::{DMatrix, Vector3};
 use std::time::Instant;
-use tdcr::fit::inverse::{Bound, InverseOptions, InverseSolution, InverseTermination, Target, solve_tensions};
+use tdcr::fit::inverse::{Bound, InverseOptions, InverseSolution, Target, solve_tensions};
+use tdcr::fit::lm::FitTermination;
 use tdcr::{Error, Robot, Solution, cases, collocation};
 
 /// Upper tension bound (N) of the recovery tests: above every tension used to make the
@@ -65,7 +66,7 @@ fn recovers_position_targets() {
             &format!("position {truth:?}"),
         );
         assert!(found.reachable, "{}", found.explain());
-        assert_eq!(found.termination, InverseTermination::Reached);
+        assert_eq!(found.termination, FitTermination::Reached);
         assert!(found.explain().contains("target reached"), "{}", found.explain());
         let achieved = (found.tip_position() - goal).norm();
         assert!(achieved <= options.tolerance, "tip {achieved:.3e} m off");
@@ -146,7 +147,7 @@ fn reports_unreachable_target() {
     let options = InverseOptions::new(MAX_TENSION);
     let found = run(&robot, &target, &options, "1 m away");
     assert!(!found.reachable);
-    assert_ne!(found.termination, InverseTermination::Reached);
+    assert_ne!(found.termination, FitTermination::Reached);
     let lower = 1.0 - cases::LENGTH;
     assert!(
         found.residual >= lower - 1e-9 && found.residual <= lower + 2e-3,
@@ -360,10 +361,10 @@ fn rejects_invalid_inputs() {
 #[test]
 fn termination_sentences() {
     let all = [
-        InverseTermination::Reached,
-        InverseTermination::Stationary,
-        InverseTermination::Stalled,
-        InverseTermination::MaxIterations,
+        FitTermination::Reached,
+        FitTermination::Stationary,
+        FitTermination::NoProgress,
+        FitTermination::MaxIterations,
     ];
     let texts: Vec<String> = all.iter().map(ToString::to_string).collect();
     for (i, t) in texts.iter().enumerate() {

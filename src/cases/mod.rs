@@ -1,8 +1,18 @@
 //! Known-answer cases shared by tests, benches, examples and the CLI: the paper's prototype
-//! (section 5, data in ERRATA.md) with the 32 experiments of Table 2, its reference tips, and
-//! the closed-form answers of [`analytic`].
+//! (section 5, data in ERRATA.md) with the 32 experiments of Table 2, its reference tips, the
+//! closed-form answers of [`analytic`], the prototype in the paper's measurement frame with
+//! the parameters the paper calibrated ([`prototype_in_paper_frame`], [`table2_measurement`]),
+//! and seeded noise for synthetic measurements ([`GaussianNoise`]).
 
 pub mod analytic;
+mod noise;
+mod paper_frame;
+
+pub use noise::GaussianNoise;
+pub use paper_frame::{
+    PAPER_CALIBRATED_EULER_DEG, PAPER_CALIBRATED_YOUNGS_MODULUS, PAPER_NOMINAL_EULER_DEG, paper_frame_rotation,
+    prototype_in_paper_frame, table2_measurement,
+};
 
 use crate::model::loads::Loads;
 use crate::model::robot::Robot;

@@ -10,6 +10,7 @@
 //! ```
 
 mod example;
+pub mod experiments;
 pub mod locate;
 pub mod output;
 mod robot_file;

@@ -9,9 +9,8 @@ use nalgebra::Vector3;
 use serde::Serialize;
 use std::fmt::Write as _;
 use std::io::Read;
-use tdcr::fit::calibration::{
-    Calibration, CalibrationOptions, Fit, Parameters, TipErrorStatistics, calibrate, csv_header, parse_csv,
-};
+use tdcr::fit::calibration::{Calibration, CalibrationOptions, Fit, Parameters, TipErrorStatistics, calibrate};
+use tdcr::io::experiments::{csv_header, parse_csv};
 
 /// The CSV format, shown after `tdcr calibrate --help`.
 const CSV_HELP: &str = "EXPERIMENTS.csv: a header row, then one row per experiment, comma-separated, SI units:\n  \

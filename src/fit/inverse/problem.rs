@@ -1,0 +1,194 @@
+//! The data of an inverse-statics problem: the target and the options, and the checks on
+//! them before any solve.
+#![allow(non_snake_case)]
+
+use super::ROTATION_TOLERANCE;
+use crate::collocation;
+use crate::error::{Result, invalid};
+use crate::model::robot::Robot;
+use crate::so3;
+use nalgebra::{Matrix3, Vector3};
+
+/// Where the tip should go.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Target {
+    /// Tip position p* (m), world frame.
+    pub position: Vector3<f64>,
+    /// Tip orientation R* (body to world), or `None` for a position-only target. Its error
+    /// log(R_tip R*^T) (rad) is weighted by [`InverseOptions::orientation_weight`].
+    pub orientation: Option<Matrix3<f64>>,
+}
+
+impl Target {
+    /// A position-only target (m, world frame).
+    pub fn position(position: Vector3<f64>) -> Self {
+        Target {
+            position,
+            orientation: None,
+        }
+    }
+
+    /// A full-pose target: position (m, world frame) and orientation (body to world).
+    pub fn pose(position: Vector3<f64>, orientation: Matrix3<f64>) -> Self {
+        Target {
+            position,
+            orientation: Some(orientation),
+        }
+    }
+}
+
+/// Options of [`super::solve_tensions`]. `max_tension` has no meaningful default and must be set:
+/// `InverseOptions { max_tension: 5.0, ..Default::default() }` or `InverseOptions::new(5.0)`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct InverseOptions {
+    /// Upper bound tau_max for every tendon that may change (N), > 0 and finite; the lower
+    /// bound is 0 (a string cannot push). Default 0, which is rejected: set it.
+    pub max_tension: f64,
+    /// Weighted tip error |e| at or below which the target counts as reached (m). Default
+    /// 1e-6.
+    pub tolerance: f64,
+    /// Trial steps (each one forward solve) before giving up. Default 50.
+    pub max_iterations: usize,
+    /// Weight w of the orientation error (m/rad), > 0: a radian of tip rotation counts as w
+    /// metres of tip displacement. Default `None`: the rod length.
+    pub orientation_weight: Option<f64>,
+    /// Options of every forward collocation solve. Default: [`collocation::Options`]'s
+    /// default (32 intervals, fixed mesh).
+    pub solver: collocation::Options,
+    /// Indices (0-based) of the tendons whose tension may change; the others keep the
+    /// robot's tension and are not bounded by `max_tension`. Default `None`: all tendons.
+    pub free_tendons: Option<Vec<usize>>,
+}
+
+impl Default for InverseOptions {
+    fn default() -> Self {
+        InverseOptions {
+            max_tension: 0.0,
+            tolerance: 1e-6,
+            max_iterations: 50,
+            orientation_weight: None,
+            solver: collocation::Options::default(),
+            free_tendons: None,
+        }
+    }
+}
+
+impl InverseOptions {
+    /// Default options with the upper tension bound `max_tension` (N).
+    pub fn new(max_tension: f64) -> Self {
+        InverseOptions {
+            max_tension,
+            ..Default::default()
+        }
+    }
+}
+
+/// Checks the target and options; returns the free tendon indices.
+pub(super) fn validate(robot: &Robot, target: &Target, options: &InverseOptions) -> Result<Vec<usize>> {
+    let p = target.position;
+    if p.iter().any(|x| !x.is_finite()) {
+        return Err(invalid(
+            "target.position",
+            format!("is ({}, {}, {}) m", p.x, p.y, p.z),
+            "give a finite tip position in m, world frame",
+        ));
+    }
+    if let Some(R) = target.orientation {
+        let error = if R.iter().all(|x| x.is_finite()) {
+            so3::orthonormality_error(&R)
+        } else {
+            f64::INFINITY
+        };
+        if !(error <= ROTATION_TOLERANCE && R.determinant() > 0.0) {
+            return Err(invalid(
+                "target.orientation",
+                format!(
+                    "is not a rotation (orthonormality error {error:.3e}, determinant {:.6})",
+                    R.determinant()
+                ),
+                "give a proper rotation matrix, body to world, or None for a position-only target",
+            ));
+        }
+    }
+    let max = options.max_tension;
+    if !(max.is_finite() && max > 0.0) {
+        return Err(invalid(
+            "options.max_tension",
+            format!("is {max} N"),
+            "set the upper tension bound to a positive, finite value in N (it has no default)",
+        ));
+    }
+    let tol = options.tolerance;
+    if !(tol.is_finite() && tol > 0.0) {
+        return Err(invalid(
+            "options.tolerance",
+            format!("is {tol} m"),
+            "give a positive tip tolerance in m (default 1e-6)",
+        ));
+    }
+    if options.max_iterations == 0 {
+        return Err(invalid(
+            "options.max_iterations",
+            "is 0",
+            "allow at least one step (default 50)",
+        ));
+    }
+    if let Some(w) = options.orientation_weight
+        && !(w.is_finite() && w > 0.0)
+    {
+        return Err(invalid(
+            "options.orientation_weight",
+            format!("is {w} m/rad"),
+            "give a positive weight in m/rad, or None for the rod length",
+        ));
+    }
+    let limit = crate::collocation::sensitivity::RESIDUAL_LIMIT;
+    if options.solver.residual_tolerance > limit {
+        return Err(invalid(
+            "options.solver.residual_tolerance",
+            format!(
+                "is {:e}, above the {limit:e} the sensitivities need",
+                options.solver.residual_tolerance
+            ),
+            "keep the collocation default 1e-11",
+        ));
+    }
+    let k = robot.tendons.len();
+    if k == 0 {
+        return Err(invalid(
+            "robot.tendons",
+            "is empty",
+            "inverse statics needs at least one tendon to adjust",
+        ));
+    }
+    let free = match &options.free_tendons {
+        None => (0..k).collect(),
+        Some(list) => {
+            if list.is_empty() {
+                return Err(invalid(
+                    "options.free_tendons",
+                    "lists no tendon",
+                    "give at least one tendon index, or None for all tendons",
+                ));
+            }
+            for (j, &i) in list.iter().enumerate() {
+                if i >= k {
+                    return Err(invalid(
+                        format!("options.free_tendons[{j}]"),
+                        format!("is {i}, but the robot has {k} tendons"),
+                        format!("give 0-based tendon indices below {k}"),
+                    ));
+                }
+                if list[..j].contains(&i) {
+                    return Err(invalid(
+                        format!("options.free_tendons[{j}]"),
+                        format!("repeats tendon {i}"),
+                        "list each tendon once",
+                    ));
+                }
+            }
+            list.clone()
+        }
+    };
+    Ok(free)
+}

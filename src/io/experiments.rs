@@ -1,0 +1,219 @@
+//! The experiments CSV of `tdcr calibrate` (docs/calibration.md): one calibration
+//! [`Measurement`] per row, tensions, tip force and measured tip in SI units; written
+//! exactly by [`to_csv`], read with every problem reported by line, column and name by
+//! [`parse_csv`].
+
+use super::locate::Position;
+use super::{FileError, Problem, printable};
+use crate::fit::calibration::Measurement;
+use nalgebra::Vector3;
+
+/// The tip-force and measured-tip columns of the experiments CSV, after the tensions.
+pub const CSV_VECTOR_COLUMNS: [&str; 6] = [
+    "tip_force_x",
+    "tip_force_y",
+    "tip_force_z",
+    "measured_x",
+    "measured_y",
+    "measured_z",
+];
+
+/// The header of an experiments CSV for a robot with `tendons` tendons:
+/// `tension_1,...,tension_k,tip_force_x,tip_force_y,tip_force_z,measured_x,measured_y,measured_z`.
+pub fn csv_header(tendons: usize) -> String {
+    let mut names: Vec<String> = (1..=tendons).map(|i| format!("tension_{i}")).collect();
+    names.extend(CSV_VECTOR_COLUMNS.iter().map(|s| s.to_string()));
+    names.join(",")
+}
+
+/// The experiments as CSV (docs/calibration.md): the header of [`csv_header`], then one row
+/// per experiment in SI units (N, N, m), numbers written to round-trip exactly.
+///
+/// Precondition: every experiment has the same number of tensions.
+pub fn to_csv(experiments: &[Measurement]) -> String {
+    let k = experiments.first().map_or(0, |e| e.tensions.len());
+    let mut out = csv_header(k);
+    out.push('\n');
+    for e in experiments {
+        let values: Vec<String> = e
+            .tensions
+            .iter()
+            .chain(e.tip_force.iter())
+            .chain(e.measured_tip.iter())
+            .map(|x| format!("{x:?}"))
+            .collect();
+        out.push_str(&values.join(","));
+        out.push('\n');
+    }
+    out
+}
+
+/// At most this many problems are listed for one CSV file: enough to see a pattern.
+const MAX_CSV_PROBLEMS: usize = 20;
+
+/// Reads an experiments CSV (docs/calibration.md) for a robot with `tendons` tendons.
+///
+/// The first line that is neither blank nor a `#` comment is the header: the column names
+/// of [`csv_header`] in any order, each once. Every following non-blank, non-comment line is
+/// one experiment with a finite number in every column (tensions >= 0). `file` names the
+/// source in messages.
+///
+/// # Errors
+/// A [`FileError`] listing every problem (up to 20) with its line and column (characters,
+/// from 1) and the column name: unknown, repeated or missing columns, a row with the wrong
+/// number of fields, a value that is not a finite number, a negative tension, no rows.
+///
+/// # Examples
+/// ```
+/// let text = "tension_1,tip_force_x,tip_force_y,tip_force_z,measured_x,measured_y,measured_z\n\
+///             2.94,0,0,-0.098,0.15,0,-0.16\n";
+/// let experiments = tdcr::io::experiments::parse_csv(text, "data.csv", 1).unwrap();
+/// assert_eq!(experiments[0].tensions, vec![2.94]);
+/// let bad = tdcr::io::experiments::parse_csv(&text.replace("0.15", "x"), "data.csv", 1).unwrap_err();
+/// assert!(bad.to_string().starts_with("data.csv:2:17: `measured_x` (column 5)"), "{bad}");
+/// ```
+pub fn parse_csv(text: &str, file: &str, tendons: usize) -> Result<Vec<Measurement>, FileError> {
+    let mut problems = Vec::new();
+    let at = |line: usize, column: usize| Some(Position { line, column });
+    let mut lines = text
+        .split('\n')
+        .enumerate()
+        .map(|(i, l)| (i + 1, l.strip_suffix('\r').unwrap_or(l)))
+        .filter(|(_, l)| !l.trim().is_empty() && !l.trim_start().starts_with('#'));
+    let expected: Vec<String> = csv_header(tendons).split(',').map(str::to_string).collect();
+    let Some((header_line, header)) = lines.next() else {
+        return Err(FileError {
+            file: file.to_string(),
+            problems: vec![Problem {
+                position: None,
+                field: String::new(),
+                message: format!("has no header line; start with `{}`", csv_header(tendons)),
+            }],
+        });
+    };
+    // Column index -> which value it holds (index into `expected`).
+    let mut slots: Vec<Option<usize>> = Vec::new();
+    for (column, name) in fields(header) {
+        let name = name.trim();
+        let slot = expected.iter().position(|e| e == name);
+        if slot.is_some() && slots.contains(&slot) {
+            problems.push(Problem {
+                position: at(header_line, column),
+                field: printable(name),
+                message: "is repeated; give each column once".into(),
+            });
+        } else if slot.is_none() {
+            let hint = match name.strip_prefix("tension_").and_then(|i| i.parse::<usize>().ok()) {
+                Some(i) => format!("the robot has {tendons} tendon(s), so tension_{i} is not one of its columns"),
+                None => format!("the columns are {}", expected.join(",")),
+            };
+            problems.push(Problem {
+                position: at(header_line, column),
+                field: printable(name),
+                message: format!("is not a column of the experiments file; {hint}"),
+            });
+        }
+        slots.push(slot);
+    }
+    for (i, name) in expected.iter().enumerate() {
+        if !slots.contains(&Some(i)) {
+            problems.push(Problem {
+                position: at(header_line, 1),
+                field: name.clone(),
+                message: format!(
+                    "is missing from the header; the robot has {tendons} tendon(s), so the header is `{}`",
+                    expected.join(",")
+                ),
+            });
+        }
+    }
+    if !problems.is_empty() {
+        return Err(FileError {
+            file: file.to_string(),
+            problems,
+        });
+    }
+    let mut experiments = Vec::new();
+    for (line, row) in lines {
+        if problems.len() >= MAX_CSV_PROBLEMS {
+            break;
+        }
+        let cells = fields(row);
+        if cells.len() != slots.len() {
+            problems.push(Problem {
+                position: at(line, 1),
+                field: String::new(),
+                message: format!("has {} fields, but the header has {} columns", cells.len(), slots.len()),
+            });
+            continue;
+        }
+        let mut values = vec![0.0; expected.len()];
+        let mut ok = true;
+        for (index, ((column, cell), slot)) in cells.into_iter().zip(&slots).enumerate() {
+            let Some(slot) = *slot else { continue };
+            let name = &expected[slot];
+            let cell = cell.trim();
+            let problem = match cell.parse::<f64>() {
+                Ok(x) if !x.is_finite() => Some(format!("is `{cell}`, not a finite number")),
+                Ok(x) if slot < tendons && x < 0.0 => Some(format!("is {x} N: a tendon can only pull (tension >= 0)")),
+                Ok(x) => {
+                    values[slot] = x;
+                    None
+                }
+                Err(_) => Some(format!(
+                    "is `{}`, not a number (SI units: N and m, e.g. 2.94 or -1.5e-3)",
+                    printable(cell)
+                )),
+            };
+            if let Some(message) = problem {
+                ok = false;
+                problems.push(Problem {
+                    position: at(line, column),
+                    field: name.clone(),
+                    message: format!("(column {}) {message}", index + 1),
+                });
+            }
+        }
+        if ok {
+            let v = |i: usize| Vector3::new(values[tendons + i], values[tendons + i + 1], values[tendons + i + 2]);
+            experiments.push(Measurement {
+                tensions: values[..tendons].to_vec(),
+                tip_force: v(0),
+                measured_tip: v(3),
+            });
+        }
+    }
+    if problems.is_empty() && experiments.is_empty() {
+        problems.push(Problem {
+            position: None,
+            field: String::new(),
+            message: "has a header but no experiments; add one row per experiment".into(),
+        });
+    }
+    if problems.is_empty() {
+        Ok(experiments)
+    } else {
+        if problems.len() >= MAX_CSV_PROBLEMS {
+            problems.push(Problem {
+                position: None,
+                field: String::new(),
+                message: format!("stopped after {MAX_CSV_PROBLEMS} problems"),
+            });
+        }
+        Err(FileError {
+            file: file.to_string(),
+            problems,
+        })
+    }
+}
+
+/// The comma-separated fields of a line with the character column (from 1) where each starts.
+fn fields(line: &str) -> Vec<(usize, &str)> {
+    let mut out = Vec::new();
+    let mut column = 1;
+    for field in line.split(',') {
+        out.push((column, field));
+        column += field.chars().count() + 1;
+    }
+    out
+}
