@@ -35,9 +35,10 @@ pub struct CalibrateArgs {
     /// euler (base XYZ Euler angles), position (base position), offset (tendon offset scale).
     #[arg(long, value_name = "LIST", default_value = "e,euler", value_parser = parse_fit)]
     fit: Fit,
-    /// Mesh intervals of every solve (a fixed mesh). Default: the robot file's `nodes`.
-    #[arg(long, value_name = "N", value_parser = parse_count)]
-    nodes: Option<usize>,
+    /// Mesh intervals of every solve (a fixed mesh). Default: the robot file's `intervals`.
+    /// `--nodes` is its old name, still accepted: it counts intervals too.
+    #[arg(long, visible_alias = "nodes", value_name = "N", value_parser = parse_count)]
+    intervals: Option<usize>,
     /// Levenberg-Marquardt iteration limit.
     #[arg(long, value_name = "N", default_value_t = 50, value_parser = parse_count)]
     max_iterations: usize,
@@ -117,7 +118,7 @@ pub fn run(args: &CalibrateArgs) -> Result<(), Failure> {
         ..Default::default()
     };
     let c = &mut options.collocation;
-    c.intervals = args.nodes.unwrap_or(file.solver.collocation.intervals);
+    c.intervals = args.intervals.unwrap_or(file.solver.collocation.intervals);
     c.max_intervals = c.max_intervals.max(c.intervals);
     if file.solver.collocation.tolerance.is_some() {
         note("note: calibrate solves on a fixed mesh; the robot file's [solver] tolerance is ignored");
