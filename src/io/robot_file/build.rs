@@ -1,0 +1,164 @@
+//! From checked tables to the library's types: the [`Robot`] and the [`SolverSettings`],
+//! and back from a library validation error to the file field it is about.
+
+use super::SolverSettings;
+use super::tables::{BaseTable, LoadsTable, MethodName, RodTable, RoutingTable, SolverTable, TendonTable, Vec3};
+use crate::io::Problem;
+use crate::io::locate::Locator;
+use crate::model::loads::{Field, Loads, PointLoad};
+use crate::model::rod::{Rod, Section};
+use crate::model::routing::Routing;
+use crate::model::tendon::Tendon;
+use crate::report::Method;
+use crate::{Error, Robot};
+use nalgebra::{Matrix3, Rotation3, Vector3};
+
+/// The matrix whose rows the file gives as `base.rotation`.
+pub(super) fn rotation_from_rows(r: &[Vec3; 3]) -> Matrix3<f64> {
+    Matrix3::new(
+        r[0][0], r[0][1], r[0][2], r[1][0], r[1][1], r[1][2], r[2][0], r[2][1], r[2][2],
+    )
+}
+
+/// R = Rx(a) Ry(b) Rz(c), angles in degrees (intrinsic x, then y', then z'').
+fn rotation_from_euler(angles: &Vec3) -> Matrix3<f64> {
+    let [a, b, c] = angles.map(f64::to_radians);
+    (Rotation3::from_axis_angle(&Vector3::x_axis(), a)
+        * Rotation3::from_axis_angle(&Vector3::y_axis(), b)
+        * Rotation3::from_axis_angle(&Vector3::z_axis(), c))
+    .into_inner()
+}
+
+/// A vector of the file, zero if not given.
+fn vector(v: &Option<Vec3>) -> Vector3<f64> {
+    v.map_or_else(Vector3::zeros, Vector3::from)
+}
+
+/// The robot of tables that passed every check (not yet validated by the library).
+pub(super) fn build(rod: &RodTable, base: &BaseTable, loads: &LoadsTable, tendons: &[TendonTable]) -> Robot {
+    let mut backbone = match (rod.poisson_ratio, rod.shear_modulus) {
+        (Some(nu), _) => Rod::tube(rod.length, rod.outer_radius, rod.inner_radius, rod.youngs_modulus, nu),
+        (None, g) => {
+            let g = g.unwrap_or(f64::NAN);
+            Rod::new(
+                rod.length,
+                Section::tube(rod.outer_radius, rod.inner_radius, rod.youngs_modulus, g),
+            )
+        }
+    };
+    if let Some(u) = rod.precurvature {
+        backbone = backbone.with_precurvature(Vector3::from(u));
+    }
+    let rotation = match (&base.rotation, &base.euler_xyz_deg) {
+        (Some(rows), _) => rotation_from_rows(rows),
+        (None, Some(angles)) => rotation_from_euler(angles),
+        (None, None) => Matrix3::identity(),
+    };
+    let loads = Loads {
+        distributed_force: Field::Constant(vector(&loads.distributed_force)),
+        distributed_moment: Field::Constant(vector(&loads.distributed_moment)),
+        tip_force: vector(&loads.tip_force),
+        tip_moment: vector(&loads.tip_moment),
+        point: loads
+            .point
+            .iter()
+            .map(|p| PointLoad {
+                s: p.s,
+                force: vector(&p.force),
+                moment: vector(&p.moment),
+            })
+            .collect(),
+    };
+    let mut robot = Robot::new(backbone)
+        .with_loads(loads)
+        .with_base(vector(&base.position), rotation);
+    for t in tendons {
+        let routing = match t.routing {
+            RoutingTable::Straight { x, y } => Routing::straight(x, y),
+            RoutingTable::Helical { radius, turns, phase } => Routing::helical(radius, turns, phase),
+        };
+        let mut tendon = Tendon::new(routing, t.tension);
+        tendon.termination = t.end;
+        robot = robot.with_tendon(tendon);
+    }
+    robot
+}
+
+/// The solver settings: the library defaults, changed by the `[solver]` table.
+pub(super) fn settings(solver: &SolverTable) -> SolverSettings {
+    let mut out = SolverSettings::default();
+    if let Some(MethodName::Shooting) = solver.method {
+        out.method = Method::Shooting;
+    }
+    let c = &mut out.collocation;
+    c.intervals = solver.intervals.or(solver.nodes).unwrap_or(c.intervals);
+    c.tolerance = solver.tolerance;
+    c.max_intervals = solver.max_intervals.or(solver.max_nodes).unwrap_or(c.max_intervals);
+    c.residual_tolerance = solver.residual_tolerance.unwrap_or(c.residual_tolerance);
+    c.max_iterations = solver.max_iterations.unwrap_or(c.max_iterations);
+    c.continuation = solver.continuation.unwrap_or(c.continuation);
+    let s = &mut out.shooting;
+    s.tolerance = solver.residual_tolerance.unwrap_or(s.tolerance);
+    s.max_iterations = solver.max_iterations.unwrap_or(s.max_iterations);
+    s.integration_tolerance = solver.integration_tolerance.unwrap_or(s.integration_tolerance);
+    out
+}
+
+/// The file path of a field path of the library (`tendons[0].termination` ->
+/// `tendon[1].end`).
+fn file_field(field: &str, euler: bool) -> String {
+    let renumber = |prefix: &str, to: &str| -> Option<String> {
+        let rest = field.strip_prefix(prefix)?;
+        let close = rest.find(']')?;
+        let index: usize = rest[..close].parse().ok()?;
+        let tail = rest[close + 1..].replace(".termination", ".end");
+        Some(format!("{to}[{}]{tail}", index + 1))
+    };
+    if let Some(f) = renumber("tendons[", "tendon").or_else(|| renumber("loads.point[", "loads.point")) {
+        return f;
+    }
+    match field {
+        "base_position" => "base.position".into(),
+        "base_rotation" if euler => "base.euler_xyz_deg".into(),
+        "base_rotation" => "base.rotation".into(),
+        "rod.stiffness" => "rod".into(),
+        f if f.starts_with("rod.reference") => "rod.precurvature".into(),
+        f => f.into(),
+    }
+}
+
+/// A library validation error as a problem at the line of the field it names.
+pub(super) fn library_problem(locator: &Locator, e: &Error, euler: bool) -> Problem {
+    let (field, message) = match e {
+        Error::InvalidInput { field, problem, hint } => (file_field(field, euler), format!("{problem}; {hint}")),
+        Error::SingularRouting { tendon, .. } => (format!("tendon[{}].routing", tendon + 1), e.to_string()),
+        other => (String::new(), other.to_string()),
+    };
+    Problem {
+        position: locator.find(&field),
+        field,
+        message,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn library_paths_map_to_file_paths() {
+        assert_eq!(file_field("tendons[0].termination", false), "tendon[1].end");
+        assert_eq!(file_field("tendons[4].tension", false), "tendon[5].tension");
+        assert_eq!(file_field("loads.point[2].s", false), "loads.point[3].s");
+        assert_eq!(file_field("base_rotation", true), "base.euler_xyz_deg");
+        assert_eq!(file_field("rod.length", false), "rod.length");
+    }
+
+    #[test]
+    fn euler_angles_compose_about_x_then_y_then_z() {
+        let r = rotation_from_euler(&[0.0, 90.0, 0.0]);
+        let prototype = crate::cases::prototype_base_rotation();
+        // 1e-15: cos(pi/2) rounds to 6e-17
+        assert!((r - prototype).amax() < 1e-15);
+    }
+}

@@ -1,0 +1,335 @@
+//! The field-by-field rules of a robot file: every value checked against its rule (finite,
+//! positive, on the rod, a rotation, the solver library's own option rules), each broken
+//! rule one problem at its field path.
+
+use super::build::rotation_from_rows;
+use super::tables::{BaseTable, LoadsTable, RodTable, RoutingTable, SolverTable, TendonTable, Vec3};
+use crate::io::Problem;
+use crate::io::locate::Locator;
+use crate::{Error, collocation, shooting, so3};
+
+/// Largest |R^T R - I|, |det R - 1| accepted for a base rotation (the issue's 1e-6: loose
+/// enough for matrices typed with 7 digits).
+const ROTATION_TOLERANCE: f64 = 1e-6;
+
+/// A number as TOML spells it (`nan`, `inf`, `-inf` for the non-finite ones).
+fn toml_number(x: f64) -> String {
+    if x.is_nan() {
+        "nan".into()
+    } else if x.is_infinite() {
+        if x > 0.0 { "inf".into() } else { "-inf".into() }
+    } else {
+        x.to_string()
+    }
+}
+
+/// Field-by-field rules; every broken rule is one problem.
+pub(super) struct Checker<'a> {
+    /// Where each field is in the file.
+    pub(super) locator: &'a Locator,
+    /// The broken rules found so far, in the order checked.
+    pub(super) problems: Vec<Problem>,
+}
+
+impl Checker<'_> {
+    /// One problem at `field`, placed where the file has it.
+    fn report(&mut self, field: &str, message: String) {
+        self.problems.push(Problem {
+            position: self.locator.find(field),
+            field: field.to_string(),
+            message,
+        });
+    }
+
+    /// Whether `x` is finite; if not, reports it (`unit` follows the value in the message).
+    fn finite(&mut self, field: &str, x: f64, unit: &str) -> bool {
+        if x.is_finite() {
+            return true;
+        }
+        self.report(
+            field,
+            format!("is {}{unit}, but every number must be finite", toml_number(x)),
+        );
+        false
+    }
+
+    /// Reports `x` unless it is finite and above 0.
+    fn positive(&mut self, field: &str, x: f64, unit: &str) {
+        if self.finite(field, x, unit) && x <= 0.0 {
+            self.report(field, format!("is {x}{unit}, but must be positive"));
+        }
+    }
+
+    /// Reports each non-finite component of `v`, if given.
+    fn vector(&mut self, field: &str, v: &Option<Vec3>, unit: &str) {
+        if let Some(v) = v {
+            for (k, x) in v.iter().enumerate() {
+                if !x.is_finite() {
+                    let axis = ["x", "y", "z"][k];
+                    self.report(
+                        field,
+                        format!(
+                            "has {axis} = {}{unit}, but every number must be finite",
+                            toml_number(*x)
+                        ),
+                    );
+                }
+            }
+        }
+    }
+
+    /// The `[rod]` rules.
+    pub(super) fn rod(&mut self, rod: &RodTable) {
+        self.positive("rod.length", rod.length, " m");
+        self.positive("rod.outer_radius", rod.outer_radius, " m");
+        if self.finite("rod.inner_radius", rod.inner_radius, " m") {
+            if rod.inner_radius < 0.0 {
+                self.report(
+                    "rod.inner_radius",
+                    format!("is {} m, but must be >= 0 (0 for a solid rod)", rod.inner_radius),
+                );
+            } else if rod.outer_radius.is_finite() && rod.inner_radius >= rod.outer_radius {
+                self.report(
+                    "rod.inner_radius",
+                    format!(
+                        "is {} m, but must be below the outer radius {} m",
+                        rod.inner_radius, rod.outer_radius
+                    ),
+                );
+            }
+        }
+        self.positive("rod.youngs_modulus", rod.youngs_modulus, " Pa");
+        match (rod.poisson_ratio, rod.shear_modulus) {
+            (Some(_), Some(_)) => self.report(
+                "rod.shear_modulus",
+                "is given together with `poisson_ratio`: give one of them".into(),
+            ),
+            (None, None) => self.report(
+                "rod",
+                "needs `poisson_ratio` or `shear_modulus` (Pa) for the torsion stiffness G J".into(),
+            ),
+            (Some(nu), None) => {
+                if self.finite("rod.poisson_ratio", nu, "") && !(nu > -1.0 && nu <= 0.5) {
+                    self.report("rod.poisson_ratio", format!("is {nu}, but must lie in (-1, 0.5]"));
+                }
+            }
+            (None, Some(g)) => self.positive("rod.shear_modulus", g, " Pa"),
+        }
+        self.vector("rod.precurvature", &rod.precurvature, " rad/m");
+    }
+
+    /// The `[base]` rules: a finite position, one rotation that is a rotation.
+    pub(super) fn base(&mut self, base: &BaseTable) {
+        self.vector("base.position", &base.position, " m");
+        if base.rotation.is_some() && base.euler_xyz_deg.is_some() {
+            self.report(
+                "base.euler_xyz_deg",
+                "is given together with `rotation`: give one of them".into(),
+            );
+            return;
+        }
+        self.vector("base.euler_xyz_deg", &base.euler_xyz_deg, " deg");
+        if let Some(rows) = &base.rotation {
+            if rows.iter().flatten().any(|x| !x.is_finite()) {
+                self.report(
+                    "base.rotation",
+                    "has a non-finite entry, but every number must be finite".into(),
+                );
+                return;
+            }
+            let error = so3::orthonormality_error(&rotation_from_rows(rows));
+            if error > ROTATION_TOLERANCE {
+                self.report(
+                    "base.rotation",
+                    format!(
+                        "is not a rotation: |R^T R - I|, |det R - 1| = {error:.2e} > {ROTATION_TOLERANCE:.0e}; \
+                         its rows must be orthonormal with determinant +1"
+                    ),
+                );
+            }
+        }
+    }
+
+    /// The `[loads]` rules: finite loads, point loads on the rod of `length` (NaN if unknown).
+    pub(super) fn loads(&mut self, loads: &LoadsTable, length: f64) {
+        self.vector("loads.distributed_force", &loads.distributed_force, " N/m");
+        self.vector("loads.distributed_moment", &loads.distributed_moment, " N m/m");
+        self.vector("loads.tip_force", &loads.tip_force, " N");
+        self.vector("loads.tip_moment", &loads.tip_moment, " N m");
+        for (i, p) in loads.point.iter().enumerate() {
+            let path = format!("loads.point[{}]", i + 1);
+            let s = format!("{path}.s");
+            if self.finite(&s, p.s, " m") && length.is_finite() && !(p.s > 0.0 && p.s <= length) {
+                self.report(&s, format!("is {} m, but must lie on the rod, in (0, {length}] m", p.s));
+            }
+            self.vector(&format!("{path}.force"), &p.force, " N");
+            self.vector(&format!("{path}.moment"), &p.moment, " N m");
+        }
+    }
+
+    /// The rules of `[[tendon]]` number `i` (from 0) on a rod of `length` (NaN if unknown).
+    pub(super) fn tendon(&mut self, i: usize, t: &TendonTable, length: f64) {
+        let path = format!("tendon[{}]", i + 1);
+        let tension = format!("{path}.tension");
+        if self.finite(&tension, t.tension, " N") && t.tension < 0.0 {
+            self.report(
+                &tension,
+                format!("is {} N, but a tendon can only pull: must be >= 0", t.tension),
+            );
+        }
+        if let Some(end) = t.end {
+            let field = format!("{path}.end");
+            if self.finite(&field, end, " m") && length.is_finite() {
+                if end > length {
+                    self.report(
+                        &field,
+                        format!("is {end} m, past the tip at {length} m: must be at most rod.length"),
+                    );
+                } else if end <= 0.0 {
+                    self.report(&field, format!("is {end} m, but must be above 0 (the base)"));
+                }
+            }
+        }
+        let routing = format!("{path}.routing");
+        match t.routing {
+            RoutingTable::Straight { x, y } => {
+                self.finite(&format!("{routing}.x"), x, " m");
+                self.finite(&format!("{routing}.y"), y, " m");
+            }
+            RoutingTable::Helical { radius, turns, phase } => {
+                self.positive(&format!("{routing}.radius"), radius, " m");
+                self.finite(&format!("{routing}.turns"), turns, "");
+                self.finite(&format!("{routing}.phase"), phase, " rad");
+            }
+        }
+    }
+
+    /// A key given under its name or its old name (an alias): the field path and value of
+    /// the one given (the new name if both, which is a problem naming both).
+    fn renamed(
+        &mut self,
+        name: &str,
+        alias: &str,
+        value: Option<usize>,
+        old: Option<usize>,
+    ) -> Option<(String, usize)> {
+        match (value, old) {
+            (Some(n), Some(_)) => {
+                self.report(
+                    &format!("solver.{alias}"),
+                    format!("is given together with `{name}`: `{alias}` is its old name; give one of them"),
+                );
+                Some((format!("solver.{name}"), n))
+            }
+            (Some(n), None) => Some((format!("solver.{name}"), n)),
+            (None, Some(n)) => Some((format!("solver.{alias}"), n)),
+            (None, None) => None,
+        }
+    }
+
+    /// Reports the first rule of the library that `checks` (each the options' `validate()`
+    /// with only `field` changed from the defaults) says `field` = `shown` breaks.
+    fn library_rule(&mut self, field: &str, shown: &str, checks: &[Result<(), Error>]) -> bool {
+        let Some(Err(e)) = checks.iter().find(|c| c.is_err()) else {
+            return true;
+        };
+        let message = match e {
+            // A rule about the options as a whole: its hint speaks of the Rust API.
+            Error::InvalidInput { field: f, problem, .. } if !f.contains('.') => format!("is {shown}, but {problem}"),
+            Error::InvalidInput { problem, hint, .. } => format!("{problem}; {hint}"),
+            other => other.to_string(),
+        };
+        self.report(field, message);
+        false
+    }
+
+    /// The `[solver]` rules: the library's own (`collocation::Options::validate`,
+    /// `shooting::Options::validate`), checked one field at a time from the defaults so
+    /// that every broken rule is reported at its key, plus the file's: numbers finite, a
+    /// mesh of at least one interval, a key and its old name not both given.
+    pub(super) fn solver(&mut self, solver: &SolverTable) {
+        let intervals = self.renamed("intervals", "nodes", solver.intervals, solver.nodes);
+        let cap = self.renamed("max_intervals", "max_nodes", solver.max_intervals, solver.max_nodes);
+        if let Some((field, 0)) = &intervals {
+            self.report(field, "is 0, but the mesh needs at least 1 interval".into());
+        }
+        let mut finite = |field: &str, x: Option<f64>, unit: &str| x.filter(|&x| self.finite(field, x, unit));
+        let tolerance = finite("solver.tolerance", solver.tolerance, " m");
+        let residual = finite("solver.residual_tolerance", solver.residual_tolerance, "");
+        let integration = finite("solver.integration_tolerance", solver.integration_tolerance, "");
+        let c = collocation::Options::default;
+        let s = shooting::Options::default;
+        if let Some(x) = residual {
+            let checks = [
+                collocation::Options {
+                    residual_tolerance: x,
+                    ..c()
+                }
+                .validate(),
+                shooting::Options { tolerance: x, ..s() }.validate(),
+            ];
+            self.library_rule("solver.residual_tolerance", &x.to_string(), &checks);
+        }
+        if let Some(n) = solver.max_iterations {
+            let checks = [
+                collocation::Options {
+                    max_iterations: n,
+                    ..c()
+                }
+                .validate(),
+                shooting::Options {
+                    max_iterations: n,
+                    ..s()
+                }
+                .validate(),
+            ];
+            self.library_rule("solver.max_iterations", &n.to_string(), &checks);
+        }
+        if let Some(t) = tolerance {
+            let checks = [collocation::Options {
+                tolerance: Some(t),
+                ..c()
+            }
+            .validate()];
+            self.library_rule("solver.tolerance", &format!("{t} m"), &checks);
+        }
+        if let Some(x) = integration {
+            let checks = [shooting::Options {
+                integration_tolerance: x,
+                ..s()
+            }
+            .validate()];
+            self.library_rule("solver.integration_tolerance", &x.to_string(), &checks);
+        }
+        // The cap on its own (with a starting mesh within it), then the starting mesh
+        // against the cap: at `intervals` if given, else at the cap that the default breaks.
+        let cap_ok = match &cap {
+            Some((field, n)) => {
+                let checks = [collocation::Options {
+                    max_intervals: *n,
+                    intervals: c().intervals.min(*n),
+                    ..c()
+                }
+                .validate()];
+                self.library_rule(field, &n.to_string(), &checks)
+            }
+            None => true,
+        };
+        if cap_ok && !matches!(intervals, Some((_, 0))) {
+            let options = collocation::Options {
+                intervals: intervals.as_ref().map_or(c().intervals, |i| i.1),
+                max_intervals: cap.as_ref().map_or(c().max_intervals, |m| m.1),
+                ..c()
+            };
+            if let Err(Error::InvalidInput { problem, hint, .. }) = options.validate() {
+                match (&intervals, &cap) {
+                    (Some((field, _)), _) => self.report(field, format!("{problem}; {hint}")),
+                    (None, Some((field, n))) => {
+                        self.report(field, format!("is {n}: the default `intervals` {problem}; {hint}"));
+                    }
+                    (None, None) => {}
+                }
+            }
+        }
+    }
+}

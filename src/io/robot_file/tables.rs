@@ -1,0 +1,106 @@
+//! The serde tables of a robot file, one per TOML table, as deserialized and before any
+//! check: unknown keys are rejected, missing required fields reported by serde.
+
+use serde::Deserialize;
+
+/// A world- or body-frame vector as written in the file, `[x, y, z]`.
+pub(super) type Vec3 = [f64; 3];
+
+/// `[rod]`: the backbone rod, a tube (`inner_radius` 0, the default, for a solid rod), with
+/// `poisson_ratio` or `shear_modulus` for the torsion stiffness.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct RodTable {
+    pub(super) length: f64,
+    pub(super) outer_radius: f64,
+    #[serde(default)]
+    pub(super) inner_radius: f64,
+    pub(super) youngs_modulus: f64,
+    pub(super) poisson_ratio: Option<f64>,
+    pub(super) shear_modulus: Option<f64>,
+    pub(super) precurvature: Option<Vec3>,
+}
+
+/// `[base]`: where the rod starts, with its rotation as `rotation` rows or `euler_xyz_deg`.
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct BaseTable {
+    pub(super) position: Option<Vec3>,
+    pub(super) rotation: Option<[Vec3; 3]>,
+    pub(super) euler_xyz_deg: Option<Vec3>,
+}
+
+/// `[loads]`: distributed and tip loads, and the `[[loads.point]]` point loads.
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct LoadsTable {
+    pub(super) distributed_force: Option<Vec3>,
+    pub(super) distributed_moment: Option<Vec3>,
+    pub(super) tip_force: Option<Vec3>,
+    pub(super) tip_moment: Option<Vec3>,
+    #[serde(default)]
+    pub(super) point: Vec<PointTable>,
+}
+
+/// One `[[loads.point]]`: a force and moment at arc length `s`.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct PointTable {
+    pub(super) s: f64,
+    pub(super) force: Option<Vec3>,
+    pub(super) moment: Option<Vec3>,
+}
+
+/// One `[[tendon]]`: its routing, tension and, optionally, where it ends (`end`).
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct TendonTable {
+    pub(super) routing: RoutingTable,
+    pub(super) tension: f64,
+    pub(super) end: Option<f64>,
+}
+
+/// A tendon's `routing`, chosen by its `kind`: `straight` or `helical`.
+#[derive(Debug, Deserialize)]
+#[serde(tag = "kind", rename_all = "lowercase", deny_unknown_fields)]
+pub(super) enum RoutingTable {
+    Straight {
+        x: f64,
+        y: f64,
+    },
+    Helical {
+        radius: f64,
+        turns: f64,
+        #[serde(default)]
+        phase: f64,
+    },
+}
+
+/// `[solver]`: the solver and its options, each optional (the library default if not given).
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct SolverTable {
+    pub(super) method: Option<MethodName>,
+    pub(super) intervals: Option<usize>,
+    /// The old name of `intervals`, still accepted.
+    pub(super) nodes: Option<usize>,
+    pub(super) tolerance: Option<f64>,
+    pub(super) max_intervals: Option<usize>,
+    /// The old name of `max_intervals`, still accepted.
+    pub(super) max_nodes: Option<usize>,
+    pub(super) residual_tolerance: Option<f64>,
+    pub(super) max_iterations: Option<usize>,
+    pub(super) continuation: Option<bool>,
+    pub(super) integration_tolerance: Option<f64>,
+}
+
+/// The `method` of `[solver]`: the solver's name as written in the file.
+#[derive(Clone, Copy, Debug, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub(super) enum MethodName {
+    Collocation,
+    Shooting,
+}
+
+/// The tables a robot file may have, in the order docs/robot-file.md describes them.
+pub(super) const TABLES: &str = "[rod], [base], [loads], [[tendon]], [solver]";
