@@ -38,6 +38,7 @@ fn reference(c: &mut Criterion) {
     for (case, robot, intervals) in [("S", cases::case_s(), 16), ("H", cases::case_h(), 48)] {
         let options = collocation::Options {
             intervals,
+            tolerance: None,
             ..Default::default()
         };
         let previous = scaled(&robot, 0.99);
@@ -74,6 +75,7 @@ fn prototype_s(c: &mut Criterion) {
     for intervals in [16, 32, 64, 128] {
         let options = collocation::Options {
             intervals,
+            tolerance: None,
             ..Default::default()
         };
         group.bench_with_input(BenchmarkId::new("collocation_cold", intervals), &options, |b, o| {

@@ -8,10 +8,7 @@ use tdcr::analysis::comparison::constant_curvature;
 use tdcr::{TendonModel, cases, collocation};
 
 fn main() -> Result<(), tdcr::Error> {
-    let options = collocation::Options {
-        intervals: 64,
-        ..Default::default()
-    };
+    let options = collocation::Options::fixed(64);
     println!("| experiment | coupled tip (mm) | point-moment model (mm off) | constant curvature (mm off) |");
     println!("| --- | --- | --- | --- |");
     for experiment in cases::table2() {

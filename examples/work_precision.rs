@@ -35,18 +35,13 @@ struct Point {
 
 fn study(case: &'static str, robot: &Robot, out: &mut Vec<Point>) {
     // Reference: collocation on 2048 intervals (order 4: error ~1e-14 m on these cases).
-    let reference = collocation::solve(
-        robot,
-        &collocation::Options {
-            intervals: 2048,
-            ..Default::default()
-        },
-    )
-    .expect("reference solve")
-    .tip_position();
+    let reference = collocation::solve(robot, &collocation::Options::fixed(2048))
+        .expect("reference solve")
+        .tip_position();
     for intervals in [4, 8, 16, 32, 64, 128, 256] {
         let options = collocation::Options {
             intervals,
+            tolerance: None,
             ..Default::default()
         };
         let (t, s) = median_time(|| collocation::solve(robot, &options).expect("collocation"));

@@ -46,10 +46,9 @@ pub mod unknowns {
     pub use crate::collocation::unknowns::*;
 }
 
-/// The collocation system on one mesh: residual and exact Jacobian; per-interval error
-/// estimates.
+/// The collocation system on one mesh: residual, exact Jacobian, and the order-6 residual
+/// of the error estimate.
 pub mod system {
-    pub use crate::collocation::refine::interval_errors;
     pub use crate::collocation::system::*;
 }
 

@@ -83,8 +83,25 @@ pub struct Timings {
     pub factorization: Duration,
     /// Triangular solves (sparse LU) or back substitution (block elimination).
     pub solve: Duration,
+    /// The error estimate (order-6 residual and its correction solve), not part of the
+    /// three above.
+    pub estimate: Duration,
     /// Whole call.
     pub total: Duration,
+}
+
+/// The estimated discretization error of a collocation solution: the deferred correction of
+/// docs/numerics.md ("Error estimate"), an asymptotically exact estimate of the difference
+/// between the solution and the exact solution of the model.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ErrorEstimate {
+    /// Estimated error of the tip position (m).
+    pub tip_position: f64,
+    /// Estimated error of the tip orientation: the angle of the rotation between the
+    /// solution's and the exact tip frame (rad).
+    pub tip_rotation: f64,
+    /// Largest estimated position error over the nodes (m).
+    pub backbone_max: f64,
 }
 
 /// What a solve did. Filled by both solvers.
@@ -114,8 +131,14 @@ pub struct SolveReport {
     pub nonzeros: usize,
     /// Mesh intervals (collocation) or accepted integration steps (shooting).
     pub intervals: usize,
-    /// Estimated tip-position discretization error (m), when the solver estimated it.
-    pub tip_error_estimate: Option<f64>,
+    /// The estimated discretization error (collocation; `None` for shooting, whose
+    /// integrator controls its own local error).
+    pub error_estimate: Option<ErrorEstimate>,
+    /// The tip tolerance the solve worked to, relative to L (position error at most
+    /// tolerance x L, orientation error at most tolerance rad); `None` on a fixed mesh.
+    pub tolerance: Option<f64>,
+    /// Whether the error estimate meets the tolerance (`None` without either).
+    pub tolerance_met: Option<bool>,
 }
 
 impl SolveReport {
@@ -134,7 +157,9 @@ impl SolveReport {
             unknowns: 0,
             nonzeros: 0,
             intervals: 0,
-            tip_error_estimate: None,
+            error_estimate: None,
+            tolerance: None,
+            tolerance_met: None,
         }
     }
 }

@@ -135,10 +135,8 @@ fn json_tip_equals_the_library_for_overrides_and_samples() {
     let out = run(&dir, &args, None);
     assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
     let json: serde_json::Value = serde_json::from_str(&stdout(&out)).unwrap();
-    let options = tdcr::collocation::Options {
-        intervals: 48,
-        ..Default::default()
-    };
+    // `--intervals` without `--tol`: a fixed mesh.
+    let options = tdcr::collocation::Options::fixed(48);
     let expected = tdcr::collocation::solve(&tdcr::cases::case_h(), &options)
         .unwrap()
         .tip_position();
@@ -192,7 +190,7 @@ fn table_output_and_plot() {
     assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
     let text = stdout(&out);
     assert!(
-        text.contains("tip position (mm):") && text.contains("adaptive mesh"),
+        text.contains("tip position (mm):") && text.contains("(error-controlled)") && text.contains("(met)"),
         "{text}"
     );
     assert!(stderr(&out).contains("iter   residual"), "{}", stderr(&out));
@@ -459,7 +457,7 @@ fn old_names_of_intervals_still_work() {
         let out = run(&dir, &["solve", "robot.toml", flag, "24", "--format", "json"], None);
         assert_eq!(intervals(&out), 24, "{flag}");
     }
-    let text = edited("\nintervals = 32 ", "\nnodes = 40 ");
+    let text = edited("\n# intervals = 32 ", "\nnodes = 40 ");
     std::fs::write(dir.join("alias.toml"), &text).unwrap();
     let out = run(&dir, &["solve", "alias.toml", "--format", "json"], None);
     assert_eq!(intervals(&out), 40);
@@ -480,7 +478,7 @@ fn old_names_of_intervals_still_work() {
 #[test]
 fn a_key_and_its_old_name_together_exit_2_naming_both() {
     let dir = scratch("both-names");
-    let text = edited("\nintervals = 32 ", "\nintervals = 32\nnodes = 32 ").replacen(
+    let text = edited("\n# intervals = 32 ", "\nintervals = 32\nnodes = 32 ").replacen(
         "# max_intervals = 8192 ",
         "max_intervals = 64\nmax_nodes = 64 ",
         1,

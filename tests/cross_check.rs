@@ -6,10 +6,7 @@ use tdcr::{cases, collocation, shooting};
 
 fn fine() -> collocation::Options {
     // 128 intervals: the order-4 error on the prototype is about 1.4e-9 m (case H)
-    collocation::Options {
-        intervals: 128,
-        ..Default::default()
-    }
+    collocation::Options::fixed(128)
 }
 
 fn tight() -> shooting::Options {

@@ -207,10 +207,7 @@ fn routing_leaving_the_cross_section_or_not_finite_is_rejected() {
 #[test]
 fn meshes_beyond_the_caps_are_bad_input() {
     let robot = good();
-    let too_many = collocation::Options {
-        intervals: 10_000,
-        ..Default::default()
-    };
+    let too_many = collocation::Options::fixed(10_000);
     let err = collocation::solve(&robot, &too_many).unwrap_err();
     assert!(
         matches!(&err, Error::InvalidInput { field, .. } if field == "options.intervals"),

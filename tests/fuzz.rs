@@ -1364,8 +1364,8 @@ fn solve_with_huge_intervals_is_bad_input() {
 #[test]
 fn file_with_huge_intervals_is_bad_input() {
     let text = tdcr::io::example();
-    assert!(text.contains("\nintervals = 32 "));
-    let text = text.replacen("\nintervals = 32 ", "\nintervals = 9223372036854775807 ", 1);
+    assert!(text.contains("\n# intervals = 32 "));
+    let text = text.replacen("\n# intervals = 32 ", "\nintervals = 9223372036854775807 ", 1);
     let result = example_run("file-intervals", &text, "solve", &[]);
     result.unwrap_or_else(|e| panic!("{e}"));
 }

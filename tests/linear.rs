@@ -57,18 +57,12 @@ fn block_elimination_matches_sparse_lu() {
 #[test]
 fn full_solves_agree_between_linear_solvers() {
     let robot = two_segment();
-    let a = collocation::solve(
-        &robot,
-        &Options {
-            intervals: 48,
-            ..Default::default()
-        },
-    )
-    .unwrap();
+    let a = collocation::solve(&robot, &Options::fixed(48)).unwrap();
     let b = collocation::solve(
         &robot,
         &Options {
             intervals: 48,
+            tolerance: None,
             linear_solver: LinearSolver::SparseLu,
             ..Default::default()
         },

@@ -12,14 +12,7 @@ fn point_moment_model_of_one_tendon_is_an_unstretched_arc() {
     let (offset, tension) = (0.005, 20.0);
     let mut robot = Robot::new(rod).with_tendon(Tendon::new(Routing::straight(offset, 0.0), tension));
     robot.tendon_model = TendonModel::PointMoment;
-    let s = collocation::solve(
-        &robot,
-        &collocation::Options {
-            intervals: 64,
-            ..Default::default()
-        },
-    )
-    .unwrap();
+    let s = collocation::solve(&robot, &collocation::Options::fixed(64)).unwrap();
     // No tendon force on the backbone: no compression, v_z = 1, and curvature tau r / EI.
     let expected = arc_about_y(tension * offset / ei, 0.2, 1.0);
     // 1e-10 m: the arc is exact for this model; order-4 error at 64 intervals is far below
@@ -38,14 +31,7 @@ fn point_moment_model_agrees_between_solvers_under_gravity() {
     for experiment in [cases::table2()[12], cases::table2()[30]] {
         let mut robot = experiment.robot();
         robot.tendon_model = TendonModel::PointMoment;
-        let c = collocation::solve(
-            &robot,
-            &collocation::Options {
-                intervals: 128,
-                ..Default::default()
-            },
-        )
-        .unwrap();
+        let c = collocation::solve(&robot, &collocation::Options::fixed(128)).unwrap();
         let s = shooting::solve(
             &robot,
             &shooting::Options {

@@ -31,6 +31,7 @@ const NOISE: f64 = 3e-12;
 fn options() -> Options {
     Options {
         intervals: 64,
+        tolerance: None,
         // 1e-12 instead of the default 1e-11: a solve that stops at a scaled residual just
         // under 1e-11 can leave the tip 1e-8 m off (measured: 5e-12 after one iteration),
         // which a 1e-4 step would turn into 3e-4 relative; at 1e-12 Newton always takes the

@@ -21,6 +21,7 @@ fn scaled(robot: &Robot, factor: f64) -> Robot {
 fn options(intervals: usize, linear_solver: LinearSolver) -> Options {
     Options {
         intervals,
+        tolerance: None,
         linear_solver,
         ..Default::default()
     }

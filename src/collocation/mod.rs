@@ -13,14 +13,17 @@
 //!    (and the symbolic LU) built once per mesh.
 //! 5. Robustness: rigid-equilibrium initial guess or a warm start, and load continuation
 //!    (`continuation.rs`) when a direct solve fails.
-//! 6. Error control (`refine.rs`): optional adaptive refinement until the tip moves less
-//!    than a tolerance, guided by per-interval defect estimates ([`interval_errors`](crate::advanced::system::interval_errors)).
+//! 6. Error control: every converged mesh gets a deferred-correction error estimate
+//!    (`estimate.rs`, one order-6 residual and one solve with Newton's factors); by default
+//!    (`refine.rs`) the starting mesh resolves the initial guess and the mesh is
+//!    re-distributed until the estimated tip error meets the tolerance.
 //! 7. [`sensitivity`]: derivatives of the converged solution by the implicit function
 //!    theorem, from one factorization.
 //!
 //! docs/numerics.md documents the scheme (order 4), the scaling and the stopping tests.
 
 mod continuation;
+mod estimate;
 pub(crate) mod linear;
 pub(crate) mod newton;
 mod options;
@@ -40,7 +43,7 @@ use crate::solution::{Node, Solution, State};
 use crate::{Error, Robot};
 pub use linear::LinearSolver;
 use newton::{Settings, Workspace};
-pub use options::{MAX_INTERVALS, Options};
+pub use options::{DEFAULT_TOLERANCE, MAX_INTERVALS, Options};
 use std::time::Instant;
 use system::System;
 
@@ -119,10 +122,16 @@ impl Solver {
     }
 }
 
-fn initial_mesh(robot: &Robot, options: &Options) -> Result<Mesh> {
-    match &options.mesh {
-        Some(points) => Mesh::from_points(robot, points),
-        None => Mesh::uniform(robot, options.intervals),
+/// The mesh a solve starts on: the explicit points, else (error-controlled, warm-started)
+/// the warm start's own mesh, else `options.intervals` uniform intervals.
+fn initial_mesh(robot: &Robot, options: &Options, warm: Option<&Solution>) -> Result<Mesh> {
+    match (&options.mesh, warm) {
+        (Some(points), _) => Mesh::from_points(robot, points),
+        (None, Some(guess)) if options.tolerance.is_some() && guess.length() == robot.length() => {
+            let points: Vec<f64> = guess.nodes.iter().map(|n| n.s).collect();
+            Mesh::from_points(robot, &points)
+        }
+        (None, _) => Mesh::uniform(robot, options.intervals),
     }
 }
 
@@ -165,35 +174,51 @@ fn solve_impl(robot: &Robot, options: &Options, warm: Option<&Solution>, cache: 
     let start = Instant::now();
     let model = Model::new(robot);
     let mut report = SolveReport::new(Method::Collocation);
-    let mesh = initial_mesh(robot, options)?;
+    let mut mesh = initial_mesh(robot, options, warm)?;
     let warm = warm.map(|g| interpolate(g, &mesh));
     // The cached factors belong to the guess when it is the cached solver's last solution.
     let reuse = match (cache.as_ref(), &warm) {
         (Some(c), Some(w)) => c.mesh == mesh && c.solver == options.linear_solver && c.last.as_ref() == Some(w),
         _ => false,
     };
+    let mut cold = guess::initial(&model, &mesh.nodes, options.initial_guess);
+    // Error-controlled cold starts begin on a mesh that resolves the initial guess.
+    if options.tolerance.is_some() && options.mesh.is_none() && warm.is_none() {
+        let needed = refine::start_intervals(robot, &cold, options.intervals).min(options.max_intervals);
+        if needed > mesh.intervals() {
+            mesh = Mesh::uniform(robot, needed)?;
+            cold = guess::initial(&model, &mesh.nodes, options.initial_guess);
+        }
+    }
     let x0 = match warm {
         Some(w) if reuse => w,
-        Some(w) => better_start(
-            &System::new(model, mesh.clone()),
-            w,
-            guess::initial(&model, &mesh.nodes, options.initial_guess),
-        ),
-        None => guess::initial(&model, &mesh.nodes, options.initial_guess),
+        Some(w) => better_start(&System::new(model, mesh.clone()), w, cold),
+        None => cold,
     };
-    let (mut mesh, mut x) = (
-        mesh.clone(),
-        solve_on_mesh(&model, mesh, x0, reuse, options, &mut report, cache).map_err(|e| timed(e, start))?,
-    );
+    let mut level = solve_on_mesh(&model, mesh, x0, reuse, options, &mut report, cache).map_err(|e| timed(e, start))?;
     if let Some(tol) = options.tolerance {
-        (mesh, x) =
-            refine::to_tolerance(&model, mesh, x, tol, options, &mut report, cache).map_err(|e| timed(e, start))?;
+        level = refine::to_tolerance(&model, level, tol, options, &mut report, cache).map_err(|e| timed(e, start))?;
     }
+    let Level { mesh, x, correction } = level;
     report.intervals = mesh.intervals();
     report.unknowns = unknowns::unknowns(mesh.nodes.len());
     report.nonzeros = unknowns::nonzeros(&mesh);
+    report.error_estimate = correction.map(|c| c.estimate);
+    report.tolerance = options.tolerance;
+    report.tolerance_met = options
+        .tolerance
+        .zip(report.error_estimate)
+        .map(|(tol, e)| refine::meets(&e, tol, robot.length()));
     report.timings.total = start.elapsed();
     nodes::solution(&model, &x, &segment_ends(&mesh), report)
+}
+
+/// A converged solve on one mesh: its states and their error estimate.
+struct Level {
+    mesh: Mesh,
+    x: Vec<State>,
+    /// `None` where the estimate's linear solve failed.
+    correction: Option<estimate::Correction>,
 }
 
 fn segment_ends(mesh: &Mesh) -> Vec<f64> {
@@ -201,7 +226,8 @@ fn segment_ends(mesh: &Mesh) -> Vec<f64> {
 }
 
 /// Newton on one mesh (starting with chord steps on the cached factors when
-/// `reuse_factors`); on failure, load continuation from the unloaded shape.
+/// `reuse_factors`); on failure, load continuation from the unloaded shape. Then the error
+/// estimate with the factors Newton left.
 fn solve_on_mesh(
     model: &Model,
     mesh: Mesh,
@@ -210,7 +236,7 @@ fn solve_on_mesh(
     options: &Options,
     report: &mut SolveReport,
     cache: &mut Cache,
-) -> Result<Vec<State>> {
+) -> Result<Level> {
     report.meshes += 1;
     let settings = Settings {
         tolerance: options.residual_tolerance,
@@ -223,13 +249,24 @@ fn solve_on_mesh(
         _ => Workspace::new(&system, options.linear_solver)?,
     };
     let result = newton_with_continuation(&mut system, &mut workspace, x0, options, &settings, report);
+    let correction = result.as_ref().ok().and_then(|x| {
+        let t = Instant::now();
+        // A breakdown at a stage of the order-6 scheme leaves the solution without an estimate.
+        let c = estimate::estimate(&system, &mut workspace, x).ok().flatten();
+        report.timings.estimate += t.elapsed();
+        c
+    });
     *cache = Some(Cached {
-        mesh: system.mesh,
+        mesh: system.mesh.clone(),
         solver: options.linear_solver,
         workspace,
         last: result.as_ref().ok().cloned(),
     });
-    result
+    result.map(|x| Level {
+        mesh: system.mesh,
+        x,
+        correction,
+    })
 }
 
 /// Newton from `x0`; on failure, load continuation (when enabled).

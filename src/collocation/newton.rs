@@ -121,6 +121,11 @@ impl Workspace {
         self.solve(&mut report).then_some(&self.step[..])
     }
 
+    /// Whether the workspace holds the factors of a successful solve.
+    pub fn has_factors(&self) -> bool {
+        self.factored
+    }
+
     /// Factors the Jacobian with these `values` (in [`crate::collocation::unknowns::pattern`]
     /// order) for later [`Workspace::solve_again`] calls, as the sensitivities need. The
     /// structured elimination carries the right-hand side through its panels, so factoring

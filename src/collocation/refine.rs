@@ -1,95 +1,137 @@
-//! Adaptive mesh refinement to a tip tolerance, guided by per-interval defect estimates.
+//! Error control: a starting mesh that resolves the initial guess, and re-meshing until the
+//! deferred-correction estimate ([`super::estimate`]) meets the tip tolerance.
 
+use super::estimate::Correction;
 use super::options::Options;
-use super::residual;
-use super::system::System;
-use super::{Cache, interpolate, segment_ends, solve_on_mesh};
+use super::{Cache, Level, interpolate, segment_ends, solve_on_mesh};
 use crate::Error;
 use crate::error::Result;
 use crate::mesh::{Mesh, nodes};
 use crate::model::equations::Model;
-use crate::report::SolveReport;
+use crate::model::robot::Robot;
+use crate::report::{ErrorEstimate, SolveReport};
 use crate::solution::State;
 
-/// Refines `mesh` (on which `x` is converged) until the estimated tip position error is at
-/// most `tol` (m): each level bisects the intervals whose defect estimate is within three
-/// orders of magnitude of the worst and re-solves warm-started from the coarser solution.
-/// Returns the final mesh and states; the estimate is in `report.tip_error_estimate`.
+/// Largest rotation of the backbone over one interval of a starting mesh, pi/8 rad: the
+/// Hermite-Simpson error of an arc grows like (h |u|)^4, and at this angle a coil's first
+/// solve is within a few times of the default tolerance, so one re-mesh at most finishes it,
+/// while Newton and load continuation see a shape the mesh resolves.
+const START_ANGLE: f64 = std::f64::consts::PI / 8.0;
+
+/// Re-meshing aims at this fraction of the tolerance, so that the new mesh meets it despite
+/// the estimate's own O(h^6) error and a non-asymptotic coarse mesh.
+const TARGET_FRACTION: f64 = 0.5;
+
+/// Each re-mesh has at least this factor more intervals, so refinement ends at the cap in
+/// a bounded number of levels even where the error does not yet fall like h^4.
+const MIN_GROWTH: f64 = 1.25;
+
+/// Intervals a uniform starting mesh needs so that the initial guess `x0` turns by at most
+/// [`START_ANGLE`] over any interval, and at least `floor`.
+pub(super) fn start_intervals(robot: &Robot, x0: &[State], floor: usize) -> usize {
+    let bending = x0.iter().map(|s| s.u.norm()).fold(0.0, f64::max);
+    let needed = (robot.length() * bending / START_ANGLE).ceil();
+    if needed.is_finite() {
+        floor.max(needed as usize)
+    } else {
+        floor
+    }
+}
+
+/// Whether `estimate` meets the relative tolerance `tol` on a rod of length `length` (m).
+pub(super) fn meets(estimate: &ErrorEstimate, tol: f64, length: f64) -> bool {
+    estimate.tip_position <= tol * length && estimate.tip_rotation <= tol
+}
+
+/// Re-meshes until the estimated tip error meets `tol` (relative to L): each level takes
+/// enough intervals for the error to fall below [`TARGET_FRACTION`] of the tolerance if it
+/// falls like h^4, distributes them so that every interval's local error is about equal,
+/// and solves warm-started from the previous level. A level without an estimate (a
+/// singular Jacobian at the solution) ends the loop: the report then says no estimate.
 ///
 /// # Errors
 /// [`Error::IntervalCap`] when the next level would exceed `options.max_intervals`, or the
 /// errors of a failed solve on a finer mesh.
 pub(super) fn to_tolerance(
     model: &Model,
-    mut mesh: Mesh,
-    mut x: Vec<State>,
+    mut level: Level,
     tol: f64,
     options: &Options,
     report: &mut SolveReport,
     cache: &mut Cache,
-) -> Result<(Mesh, Vec<State>)> {
+) -> Result<Level> {
+    let length = model.robot.length();
     loop {
-        let sys = System::new(*model, mesh.clone());
-        let errors = interval_errors(&sys, &x)?;
-        let worst = errors.iter().copied().fold(0.0, f64::max);
-        // Split every interval within three orders of magnitude of the worst one: the
-        // rest cannot matter at the next level.
-        let split: Vec<bool> = errors.iter().map(|&e| e > 1e-3 * worst).collect();
-        let all = (0..mesh.nodes.len() - 1).all(|k| mesh.is_jump(k) || split[k]);
-        let fine = mesh.bisected(&split);
-        if fine.intervals() > options.max_intervals {
+        let Some(Correction { estimate, local }) = &level.correction else {
+            return Ok(level);
+        };
+        if meets(estimate, tol, length) {
+            return Ok(level);
+        }
+        let intervals = level.mesh.intervals();
+        let ratio = (estimate.tip_position / (tol * length)).max(estimate.tip_rotation / tol);
+        // Order 4: the error falls like N^-4.
+        let wanted = (intervals as f64 * (ratio / TARGET_FRACTION).powf(0.25)).max(intervals as f64 * MIN_GROWTH);
+        let target = wanted.ceil() as usize;
+        if target > options.max_intervals {
             return Err(Error::IntervalCap {
                 cap: options.max_intervals,
-                estimate: report.tip_error_estimate.unwrap_or(f64::NAN),
-                tolerance: tol,
+                estimate: estimate.tip_position,
+                tolerance: tol * length,
             });
         }
-        let guess = nodes::solution(model, &x, &segment_ends(&mesh), report.clone())?;
-        let xf = solve_on_mesh(
-            model,
-            fine.clone(),
-            interpolate(&guess, &fine),
-            false,
-            options,
-            report,
-            cache,
-        )?;
-        let change = (xf[xf.len() - 1].p - x[x.len() - 1].p).norm();
-        // Order 4: halving every interval cuts the error 16-fold, so the finer error is
-        // about change / 15; with partial splitting use the change itself (conservative).
-        let estimate = if all { change / 15.0 } else { change };
-        report.tip_error_estimate = Some(estimate);
-        mesh = fine;
-        x = xf;
-        if estimate <= tol {
-            break;
-        }
+        let fine = equidistributed(model.robot, &level.mesh, local, target)?;
+        let guess = nodes::solution(model, &level.x, &segment_ends(&level.mesh), report.clone())?;
+        let start = interpolate(&guess, &fine);
+        level = solve_on_mesh(model, fine, start, false, options, report, cache)?;
     }
-    Ok((mesh, x))
 }
 
-/// Estimated discretization error of each link (0 for jumps): the interval length times the
-/// largest scaled defect of the cubic interpolant at s_k + h/4 and s_k + 3h/4 (the defect
-/// vanishes at the collocation points 0, 1/2, 1), in the dimensionless units of the residual.
-///
-/// # Errors
-/// A model breakdown at the solution (cannot happen for a converged one).
-pub fn interval_errors(system: &System, x: &[State]) -> Result<Vec<f64>> {
-    let model = &system.model;
-    (0..x.len() - 1)
-        .map(|k| {
-            let Some(sites) = system.interval_sites(k) else {
-                return Ok(0.0);
-            };
-            let h = sites.end.s - sites.start.s;
-            let seg = system.mesh.nodes[k].segment_end;
-            let mut worst: f64 = 0.0;
-            for t in [0.25, 0.75] {
-                let site = model.site(sites.start.s + t * h);
-                let d = residual::defect(model, sites, &site, seg, &x[k], &x[k + 1], t)?;
-                worst = worst.max(d.amax());
+/// A mesh of about `target` intervals whose intervals share the local error equally: with
+/// local errors e_k ~ C_k h_k^5 on the current mesh, the density of intervals is
+/// proportional to e_k^(1/5) / h_k, so each current interval receives a share of the new
+/// intervals proportional to e_k^(1/5), spread evenly over it. Segments between breakpoints
+/// keep their end points and get at least one interval.
+fn equidistributed(robot: &Robot, mesh: &Mesh, local: &[f64], target: usize) -> Result<Mesh> {
+    let weights: Vec<f64> = local.iter().map(|e| e.powf(0.2)).collect();
+    // No interval starves: at least 1e-3 of the largest weight (an interval whose error is
+    // 1e-15 of the worst one still gets a share).
+    let floor = 1e-3 * weights.iter().copied().fold(0.0, f64::max);
+    let weight = |k: usize| if mesh.is_jump(k) { 0.0 } else { weights[k].max(floor) };
+    let total: f64 = (0..local.len()).map(weight).sum();
+    let mut points = Vec::with_capacity(target + 1);
+    let mut k = 0;
+    while k < local.len() {
+        if mesh.is_jump(k) {
+            k += 1;
+            continue;
+        }
+        // One segment: links k..end, all intervals.
+        let end = (k..local.len()).find(|&j| mesh.is_jump(j)).unwrap_or(local.len());
+        let segment: f64 = (k..end).map(weight).sum();
+        let count = if total > 0.0 {
+            ((target as f64 * segment / total).round() as usize).max(1)
+        } else {
+            end - k
+        };
+        // Points at equal shares of the cumulative weight, linear within each interval.
+        let step = segment / count as f64;
+        let (mut j, mut before) = (k, 0.0);
+        for i in 1..count {
+            let share = step * i as f64;
+            while j + 1 < end && before + weight(j) < share {
+                before += weight(j);
+                j += 1;
             }
-            Ok(worst * h / model.robot.length())
-        })
-        .collect()
+            let (a, b) = (mesh.nodes[j].s, mesh.nodes[j + 1].s);
+            let t = if weight(j) > 0.0 {
+                ((share - before) / weight(j)).clamp(0.0, 1.0)
+            } else {
+                0.5
+            };
+            points.push(a + t * (b - a));
+        }
+        k = end;
+    }
+    Mesh::from_points(robot, &points)
 }

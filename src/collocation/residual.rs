@@ -195,40 +195,55 @@ pub fn interval(
     ))
 }
 
-/// The defect y'(s) - F(s, y(s)) of the interval's cubic Hermite interpolant at fraction
-/// `t` of the interval, scaled like the residual (f64 only; used for error estimates).
-pub fn defect(
+/// The sites the order-6 residual of an interval needs besides its [`IntervalSites`]: at
+/// a quarter and three quarters of the interval.
+#[derive(Clone, Copy, Debug)]
+pub struct QuarterSites {
+    /// Site at s_k + h/4.
+    pub quarter: Site,
+    /// Site at s_k + 3h/4.
+    pub three_quarters: Site,
+}
+
+/// Interval rows of the order-6 scheme (the 5-stage mono-implicit Runge-Kutta formula of
+/// Cash and Singhal, whose quadrature is Boole's rule on 0, 1/4, 1/2, 3/4, 1), evaluated at
+/// the states `a`, `b` of the order-4 solution, in the same local coordinates and scaling
+/// as [`interval`]; `start_rates` and `end_rates` are the rates (v', u') at the two nodes.
+/// Every stage is explicit in the end points (docs/numerics.md, "Error estimate"):
+///
+/// ```text
+/// y_1/4 = (27 y_0 + 5 y_1) / 32 + h (9 F_0 - 3 F_1) / 64
+/// y_3/4 = (5 y_0 + 27 y_1) / 32 + h (3 F_0 - 9 F_1) / 64
+/// y_1/2 = (y_0 + y_1) / 2 + h (5 (F_1 - F_0) / 24 + 2 (F_1/4 - F_3/4) / 3)
+/// phi_6 = y_1 - y_0 - h (7 (F_0 + F_1) + 32 (F_1/4 + F_3/4) + 12 F_1/2) / 90
+/// ```
+///
+/// # Errors
+/// A model breakdown at a stage.
+#[allow(clippy::too_many_arguments)]
+pub fn interval_order6(
     model: &Model,
     sites: &IntervalSites,
-    site: &Site,
+    quarters: &QuarterSites,
     segment_end: f64,
     a: &State,
     b: &State,
-    t: f64,
+    start_rates: &Vector6<f64>,
+    end_rates: &Vector6<f64>,
 ) -> Result<Block<f64>> {
     let h = sites.end.s - sites.start.s;
     let (y0, y1) = end_points(a, b);
-    let f0 = rhs(model, &sites.start, segment_end, &a.R, &y0)?;
-    let f1 = rhs(model, &sites.end, segment_end, &a.R, &y1)?;
-    // Cubic Hermite basis and its derivative at t.
-    let (h00, h10, h01, h11) = (
-        2.0 * t.powi(3) - 3.0 * t * t + 1.0,
-        t.powi(3) - 2.0 * t * t + t,
-        -2.0 * t.powi(3) + 3.0 * t * t,
-        t.powi(3) - t * t,
-    );
-    let (d00, d10, d01, d11) = (
-        6.0 * t * t - 6.0 * t,
-        3.0 * t * t - 4.0 * t + 1.0,
-        -6.0 * t * t + 6.0 * t,
-        3.0 * t * t - 2.0 * t,
-    );
-    let y = y0 * h00 + f0 * (h10 * h) + y1 * h01 + f1 * (h11 * h);
-    let dy = (y0 * d00 + y1 * d01) / h + f0 * d10 + f1 * d11;
-    Ok(scale_rows(
-        dy - rhs(model, site, segment_end, &a.R, &y)?,
-        model.robot.length(),
-    ))
+    let theta1: Vector3<f64> = y1.fixed_rows::<3>(THETA).into();
+    let f0 = end_rhs(a, &Vector3::zeros(), start_rates);
+    let f1 = end_rhs(b, &theta1, end_rates);
+    let y_q = (y0 * 27.0 + y1 * 5.0) / 32.0 + (f0 * 9.0 - f1 * 3.0) * (h / 64.0);
+    let y_tq = (y0 * 5.0 + y1 * 27.0) / 32.0 + (f0 * 3.0 - f1 * 9.0) * (h / 64.0);
+    let f_q = rhs(model, &quarters.quarter, segment_end, &a.R, &y_q)?;
+    let f_tq = rhs(model, &quarters.three_quarters, segment_end, &a.R, &y_tq)?;
+    let y_m = (y0 + y1) * 0.5 + ((f1 - f0) * (5.0 / 24.0) + (f_q - f_tq) * (2.0 / 3.0)) * h;
+    let f_m = rhs(model, &sites.mid, segment_end, &a.R, &y_m)?;
+    let quadrature = ((f0 + f1) * 7.0 + (f_q + f_tq) * 32.0 + f_m * 12.0) * (h / 90.0);
+    Ok(scale_rows(y1 - y0 - quadrature, model.robot.length()))
 }
 
 /// F, dF/dy (12 x 12) and dF/dphi (12 x 3, for a right perturbation of the interval's frame

@@ -8,11 +8,12 @@
 //! the chain rule of [`residual::interval_jacobian`], the base, jump and tip blocks by
 //! num-dual dual numbers run through the same generic residual code.
 
-use super::residual::{self, Delta, IntervalSites};
+use super::residual::{self, Delta, IntervalSites, QuarterSites};
 use super::unknowns::{self, BASE_COLUMNS, BASE_ROWS, NODE, THETA, TIP_COLUMNS, link_row, tip_row};
 use crate::error::Result;
 use crate::mesh::Mesh;
 use crate::model::equations::{Model, Site};
+use crate::model::linearize;
 use crate::solution::State;
 use nalgebra::SVector;
 use num_dual::{Dual64, DualSVec64};
@@ -117,6 +118,52 @@ impl<'a> System<'a> {
                 }
                 None => {
                     node_rates = None;
+                    residual::jump(&self.model, &self.node_sites[k], &x[k], &x[k + 1], &z, &z)?
+                }
+            };
+            out[link_row(k)..link_row(k + 1)].copy_from_slice(r.as_slice());
+        }
+        let tip = residual::tip(&self.model, &self.node_sites[links], &x[links], &z)?;
+        out[tip_row(x.len())..].copy_from_slice(tip.as_slice());
+        Ok(())
+    }
+
+    /// The residual of the order-6 scheme at the states `x` (converged for the order-4
+    /// scheme) into `out`: base, jump and tip rows as in [`System::residual`], interval rows
+    /// by [`residual::interval_order6`]. `local[k]` gets link k's local error, the max-norm
+    /// of its order-6 rows (0 for jumps). The right-hand side of the deferred correction.
+    ///
+    /// # Errors
+    /// A model breakdown at a visited state.
+    pub fn order6_residual(&self, x: &[State], out: &mut [f64], local: &mut [f64]) -> Result<()> {
+        let z = Delta::<f64>::zeros();
+        let base = residual::base(&self.model, &x[0], &z);
+        out[..BASE_ROWS].copy_from_slice(base.as_slice());
+        let links = x.len() - 1;
+        let mut node_rates = None;
+        for k in 0..links {
+            let r = match &self.interval_sites[k] {
+                Some(sites) => {
+                    let seg = self.mesh.nodes[k].segment_end;
+                    let (a, b) = (&x[k], &x[k + 1]);
+                    let start = match node_rates {
+                        Some(r) => r,
+                        None => linearize::rates(&self.model, &sites.start, seg, &a.R, &a.v, &a.u)?,
+                    };
+                    let end = linearize::rates(&self.model, &sites.end, seg, &b.R, &b.v, &b.u)?;
+                    let h = sites.end.s - sites.start.s;
+                    let quarters = QuarterSites {
+                        quarter: self.model.site(sites.start.s + 0.25 * h),
+                        three_quarters: self.model.site(sites.start.s + 0.75 * h),
+                    };
+                    node_rates = Some(end);
+                    let r = residual::interval_order6(&self.model, sites, &quarters, seg, a, b, &start, &end)?;
+                    local[k] = r.amax();
+                    r
+                }
+                None => {
+                    node_rates = None;
+                    local[k] = 0.0;
                     residual::jump(&self.model, &self.node_sites[k], &x[k], &x[k + 1], &z, &z)?
                 }
             };

@@ -62,8 +62,10 @@ tension = 0.0
 
 [solver]                         # every field optional
 method = "collocation"           # or "shooting" (the independent cross-check)
-intervals = 32                   # mesh intervals (collocation)
-# tolerance = 1e-7               # m: refine the mesh until the tip moves less than this
+# tolerance = 1e-7               # tip error relative to the rod length (the default): the
+#                                # mesh is chosen until the estimated tip error is below
+#                                # 1e-7 L and 1e-7 rad
+# intervals = 32                 # the starting mesh; alone (no tolerance), a fixed mesh
 # max_intervals = 8192           # cap on intervals during refinement
 # residual_tolerance = 1e-11     # Newton stopping test (scaled, dimensionless)
 # max_iterations = 30            # Newton iterations per load step

@@ -14,6 +14,7 @@ fn rows(R: &Matrix3<f64>) -> [[f64; 3]; 3] {
 
 /// A JSON value with its keys in the order written (serde_json's own map sorts them).
 enum Json {
+    Null,
     Bool(bool),
     Integer(usize),
     Number(f64),
@@ -67,6 +68,7 @@ impl Json {
         match self {
             // serde_json formats numbers (shortest round-trip form; NaN, inf as null) and
             // escapes strings; neither can fail.
+            Json::Null => out.push_str("null"),
             Json::Bool(b) => out.push_str(if *b { "true" } else { "false" }),
             Json::Integer(i) => out.push_str(&i.to_string()),
             Json::Number(x) => out.push_str(&serde_json::to_string(x).unwrap_or_else(|_| "null".into())),
@@ -158,7 +160,23 @@ pub fn json(robot: &Robot, solution: &Solution, count: Option<usize>, jacobian: 
         ("load_steps", Json::Integer(report.load_steps)),
         ("residual", Json::Number(report.residual)),
         ("intervals", Json::Integer(report.intervals)),
-        ("tip_error_estimate", Json::optional(report.tip_error_estimate)),
+        (
+            "tip_error_estimate",
+            Json::optional(report.error_estimate.map(|e| e.tip_position)),
+        ),
+        (
+            "error_estimate",
+            match report.error_estimate {
+                Some(e) => Json::Object(vec![
+                    ("tip_position_m", Json::Number(e.tip_position)),
+                    ("tip_rotation_rad", Json::Number(e.tip_rotation)),
+                    ("backbone_max_m", Json::Number(e.backbone_max)),
+                ]),
+                None => Json::Null,
+            },
+        ),
+        ("tolerance", Json::optional(report.tolerance)),
+        ("tolerance_met", report.tolerance_met.map_or(Json::Null, Json::Bool)),
         ("solve_time", Json::Number(report.timings.total.as_secs_f64())),
         ("bending_angle_deg", Json::Number(bending_angle(solution).to_degrees())),
         (

@@ -101,22 +101,6 @@ impl Mesh {
     pub fn is_jump(&self, k: usize) -> bool {
         self.nodes[k + 1].s == self.nodes[k].s
     }
-
-    /// The same mesh with link k bisected wherever `split[k]` is set (jumps are never split).
-    pub fn bisected(&self, split: &[bool]) -> Self {
-        let mut nodes = Vec::with_capacity(self.nodes.len() * 2);
-        for (k, node) in self.nodes.iter().enumerate() {
-            nodes.push(*node);
-            if k + 1 < self.nodes.len() && split[k] && !self.is_jump(k) {
-                let s = 0.5 * (node.s + self.nodes[k + 1].s);
-                nodes.push(MeshNode {
-                    s,
-                    segment_end: node.segment_end,
-                });
-            }
-        }
-        Mesh { nodes }
-    }
 }
 
 #[cfg(test)]
@@ -136,8 +120,5 @@ mod tests {
         assert_eq!(ends, vec![0.5, 0.5, 0.5, 1.0, 1.0, 1.0]);
         assert_eq!(mesh.intervals(), 4);
         assert!(mesh.is_jump(2) && !mesh.is_jump(1));
-        let fine = mesh.bisected(&[true; 5]);
-        assert_eq!(fine.intervals(), 8);
-        assert_eq!(fine.nodes.len(), 10);
     }
 }

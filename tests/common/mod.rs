@@ -13,13 +13,7 @@ pub fn try_solve_all(robot: &Robot) -> Vec<(&'static str, Result<Solution>)> {
         (
             "collocation",
             // 256 intervals: order-4 error below 1e-10 relative on the smooth analytic cases
-            tdcr::collocation::solve(
-                robot,
-                &tdcr::collocation::Options {
-                    intervals: 256,
-                    ..Default::default()
-                },
-            ),
+            tdcr::collocation::solve(robot, &tdcr::collocation::Options::fixed(256)),
         ),
         (
             "shooting",

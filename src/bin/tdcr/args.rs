@@ -83,9 +83,9 @@ pub fn parse_samples(text: &str) -> Result<usize, String> {
     }
 }
 
-/// A positive tolerance in m (`--tol`).
+/// A positive tolerance, relative to the rod length (`--tol`).
 pub fn parse_positive(text: &str) -> Result<f64, String> {
-    let x = parse_number(text, "a tolerance in m")?;
+    let x = parse_number(text, "a tolerance relative to the rod length")?;
     if x > 0.0 {
         Ok(x)
     } else {

@@ -63,7 +63,7 @@ pub fn run(args: &SolveArgs) -> Result<(), Failure> {
         note("note: --jacobian adds the tip Jacobians to the JSON output only (--format json)");
     }
     if args.solver.verbose {
-        note(&format!("{name}: {}", summary(&solution.report, &file.solver)));
+        note(&format!("{name}: {}", summary(&solution.report, file.robot.length())));
         note(diagnostics(&solution.report).trim_end());
     }
     let text = match args.format {
@@ -95,7 +95,7 @@ pub fn run(args: &SolveArgs) -> Result<(), Failure> {
     }
     if let Some(path) = &args.plot {
         let mut figure = Figure::new(&format!("{name}: solved shape"));
-        figure.subtitle.push(summary(&solution.report, &file.solver));
+        figure.subtitle.push(summary(&solution.report, file.robot.length()));
         let mut style = Style::new("#000000");
         style.slack_tendons = true;
         style.tendon_colors = true;

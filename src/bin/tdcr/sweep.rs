@@ -151,7 +151,7 @@ pub fn run(args: &SweepArgs) -> Result<(), Failure> {
         );
         if args.solver.verbose {
             progress.finish();
-            note(&format!("step {}: {}", k + 1, summary(report, &file.solver)));
+            note(&format!("step {}: {}", k + 1, summary(report, file.robot.length())));
         }
         tips.push(tip);
         if first.is_none() {

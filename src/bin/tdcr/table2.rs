@@ -34,9 +34,9 @@ pub fn run(out_dir: &Path) -> Result<(), Failure> {
     let routings = cases::prototype_routings();
     emit(&format!(
         "The prototype of Rucker & Webster (2011, section 5) under the {} experiments of Table 2\n\
-         collocation on a fixed mesh of {} intervals (tdcr::collocation::Options::default()); tip in mm, world frame\n\n",
+         collocation at the default settings (tip error estimated and held below {:.0e} L); tip in mm, world frame\n\n",
         experiments.len(),
-        options.intervals
+        options.tolerance.unwrap_or(f64::NAN)
     ))?;
     let header = format!(
         "{:>3}  {:<24} {:<27} {:>7} {:>8} {:>9} {:>9} {:>9} {:>7} {:>5} {:>7}\n\

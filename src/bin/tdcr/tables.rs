@@ -52,9 +52,10 @@ pub fn diagnostics(report: &SolveReport) -> String {
         report.intervals,
         report.unknowns,
         report.nonzeros,
-        report
-            .tip_error_estimate
-            .map_or(String::new(), |e| format!(", estimated tip error {e:.2e} m"))
+        report.error_estimate.map_or(String::new(), |e| format!(
+            "; estimated errors: tip {:.2e} m, {:.2e} rad, backbone {:.2e} m",
+            e.tip_position, e.tip_rotation, e.backbone_max
+        ))
     );
     let e = &report.evaluations;
     let _ = writeln!(
@@ -65,10 +66,11 @@ pub fn diagnostics(report: &SolveReport) -> String {
     let t = &report.timings;
     let _ = writeln!(
         out,
-        "  time: assembly {:.2} ms, factorization {:.2} ms, solve {:.2} ms, total {:.2} ms",
+        "  time: assembly {:.2} ms, factorization {:.2} ms, solve {:.2} ms, error estimate {:.2} ms, total {:.2} ms",
         ms(t.assembly),
         ms(t.factorization),
         ms(t.solve),
+        ms(t.estimate),
         ms(t.total)
     );
     if !report.history.is_empty() {
@@ -78,25 +80,43 @@ pub fn diagnostics(report: &SolveReport) -> String {
     out
 }
 
-/// One line about a solve: method, mesh, iterations, residual, time.
-pub fn summary(report: &SolveReport, settings: &tdcr::io::SolverSettings) -> String {
-    let mesh = match (report.method, settings.collocation.tolerance) {
-        (Method::Shooting, _) => format!("{} integration steps", report.intervals),
-        (Method::Collocation, None) => format!("a fixed mesh of {} intervals", report.intervals),
-        (Method::Collocation, Some(t)) => format!(
-            "an adaptive mesh of {} intervals (tip tolerance {t:.1e} m, estimate {})",
-            report.intervals,
-            report.tip_error_estimate.map_or("n/a".into(), |e| format!("{e:.1e} m"))
+/// One line about a solve: method, mesh, iterations, time, and the estimated tip error
+/// against the tolerance (collocation on a rod of length `length`, m).
+pub fn summary(report: &SolveReport, length: f64) -> String {
+    let head = format!(
+        "{} on {} {}: {} Newton iterations, {:.2} ms",
+        report.method,
+        report.intervals,
+        if report.method == Method::Shooting {
+            "integration steps"
+        } else if report.tolerance.is_some() {
+            "intervals (error-controlled)"
+        } else {
+            "intervals (fixed mesh)"
+        },
+        report.iterations,
+        ms(report.timings.total)
+    );
+    let accuracy = match (report.method, report.error_estimate, report.tolerance) {
+        (Method::Shooting, ..) => "tip error not estimated (shooting controls its local integration error)".to_string(),
+        (_, None, _) => "no error estimate: the Jacobian is singular at the solution".to_string(),
+        (_, Some(e), None) => format!(
+            "estimated tip error {:.1e} m, {:.1e} rad (no tolerance)",
+            e.tip_position, e.tip_rotation
+        ),
+        (_, Some(e), Some(t)) => format!(
+            "estimated tip error {:.1e} m, {:.1e} rad against tolerance {:.1e} m, {t:.1e} rad ({})",
+            e.tip_position,
+            e.tip_rotation,
+            t * length,
+            if report.tolerance_met == Some(true) {
+                "met"
+            } else {
+                "NOT met"
+            }
         ),
     };
-    format!(
-        "{} on {mesh}: converged in {} Newton iterations ({} load step(s)), scaled residual {:.1e}, {:.1} ms",
-        report.method,
-        report.iterations,
-        report.load_steps,
-        report.residual,
-        ms(report.timings.total)
-    )
+    format!("{head}; {accuracy}")
 }
 
 /// The table of `tdcr solve`: the summary, the tip pose and one row per sample.
@@ -104,7 +124,7 @@ pub fn solution_table(name: &str, file: &RobotFile, solution: &Solution, samples
     let tip = solution.tip();
     let tangent = tip.R.column(2);
     let mut out = String::new();
-    let _ = writeln!(out, "{name}: {}", summary(&solution.report, &file.solver));
+    let _ = writeln!(out, "{name}: {}", summary(&solution.report, file.robot.length()));
     let row = |v: [f64; 3], w: usize, d: usize| v.map(|x| fixed(x, w, d)).join(" ");
     let _ = writeln!(out, "tip position (mm):     {}", row((tip.p * 1e3).into(), 10, 4));
     let _ = writeln!(

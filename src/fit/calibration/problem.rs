@@ -177,8 +177,11 @@ impl Default for CalibrationOptions {
         CalibrationOptions {
             fit: Fit::default(),
             start: None,
+            // A fixed mesh: every experiment and iteration solves the same discretization,
+            // so the cost function is smooth in the parameters.
             collocation: collocation::Options {
                 residual_tolerance: 1e-12,
+                tolerance: None,
                 ..Default::default()
             },
             max_iterations: 50,

@@ -67,7 +67,9 @@ impl Default for InverseOptions {
             tolerance: 1e-6,
             max_iterations: 50,
             orientation_weight: None,
-            solver: collocation::Options::default(),
+            // A fixed mesh: every iteration solves the same discretization, so the tip
+            // error is smooth in the tensions.
+            solver: collocation::Options::fixed(collocation::Options::default().intervals),
             free_tendons: None,
         }
     }

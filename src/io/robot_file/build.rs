@@ -92,7 +92,12 @@ pub(super) fn settings(solver: &SolverTable) -> SolverSettings {
     }
     let c = &mut out.collocation;
     c.intervals = solver.intervals.or(solver.nodes).unwrap_or(c.intervals);
-    c.tolerance = solver.tolerance;
+    // `intervals` without `tolerance` asks for a fixed mesh, as `--intervals` does.
+    c.tolerance = match (solver.tolerance, solver.intervals.or(solver.nodes)) {
+        (Some(t), _) => Some(t),
+        (None, Some(_)) => None,
+        (None, None) => c.tolerance,
+    };
     c.max_intervals = solver.max_intervals.or(solver.max_nodes).unwrap_or(c.max_intervals);
     c.residual_tolerance = solver.residual_tolerance.unwrap_or(c.residual_tolerance);
     c.max_iterations = solver.max_iterations.unwrap_or(c.max_iterations);

@@ -1,0 +1,66 @@
+//! The error estimate of a converged collocation solution, by deferred correction.
+//!
+//! At the order-4 solution x4 the residual of an order-6 scheme on the same mesh,
+//! phi6(x4), is of the size of x4's own error times the Jacobian: since phi6 vanishes to
+//! O(h^6) at the exact solution x*, phi6(x4) = J (x4 - x*) + O(h^6) + O(|x4 - x*|^2). One
+//! solve with the factors Newton already holds, J delta = -phi6(x4), therefore gives
+//! delta = x* - x4 up to O(h^6): an asymptotically exact estimate of the error of every
+//! node, at the cost of one residual-like pass and one re-solve (docs/numerics.md, "Error
+//! estimate").
+
+use super::newton::Workspace;
+use super::system::System;
+use super::unknowns::{self, nonzeros};
+use crate::error::Result;
+use crate::report::ErrorEstimate;
+use crate::solution::State;
+
+/// The estimate and what re-meshing needs from it.
+#[derive(Clone, Debug)]
+pub(crate) struct Correction {
+    /// Tip and backbone error estimates.
+    pub estimate: ErrorEstimate,
+    /// Local error of each link: the max-norm of its order-6 residual (dimensionless, about
+    /// C h^5 on an interval; 0 for jumps).
+    pub local: Vec<f64>,
+}
+
+/// Estimates the error of `x`, converged on `system`, with the factors in `ws` (factoring
+/// the Jacobian at `x` first when there are none). `None` when the linear solve fails (a
+/// singular Jacobian: no estimate exists there).
+///
+/// # Errors
+/// A model breakdown at a stage of the order-6 scheme.
+pub(crate) fn estimate(system: &System, ws: &mut Workspace, x: &[State]) -> Result<Option<Correction>> {
+    let n = system.unknowns();
+    let mut rhs = vec![0.0; n];
+    let mut local = vec![0.0; x.len() - 1];
+    system.order6_residual(x, &mut rhs, &mut local)?;
+    for r in &mut rhs {
+        *r = -*r;
+    }
+    if !ws.has_factors() {
+        let mut residual = vec![0.0; n];
+        let mut values = vec![0.0; nonzeros(&system.mesh)];
+        system.jacobian(x, &mut residual, &mut values)?;
+        if !ws.factor(&values) {
+            return Ok(None);
+        }
+    }
+    let Some(dx) = ws.solve_again(&rhs) else {
+        return Ok(None);
+    };
+    let length = system.model.robot.length();
+    let backbone_max = (0..x.len())
+        .map(|k| unknowns::node_increments(dx, k, length)[0].norm())
+        .fold(0.0, f64::max);
+    let [dp, dtheta, _, _] = unknowns::node_increments(dx, x.len() - 1, length);
+    Ok(Some(Correction {
+        estimate: ErrorEstimate {
+            tip_position: dp.norm(),
+            tip_rotation: dtheta.norm(),
+            backbone_max,
+        },
+        local,
+    }))
+}
