@@ -543,6 +543,13 @@ fn bench_reports_both_cases_cold_and_warm_as_json() {
         // 1e-7 m: the default target error, met against the published reference tips
         assert!(row["tip_error_m"].as_f64().unwrap() <= 1e-7);
         assert!(row["nodes"].as_u64().unwrap() >= 9);
+        // The solver's own estimate, asymptotically exact: within 30 % of the true error
+        // (the reference tips themselves are good to 5e-10 m, 10 % of S's error of 5e-9 m)
+        let (estimate, error) = (
+            row["error_estimate_m"].as_f64().unwrap(),
+            row["tip_error_m"].as_f64().unwrap(),
+        );
+        assert!((estimate / error - 1.0).abs() < 0.3, "{row}");
     }
 }
 
@@ -575,4 +582,46 @@ fn jacobian_in_json_matches_the_library_and_a_finite_difference() {
             "row {row}: {fd} vs {exact}"
         );
     }
+}
+
+/// The first line of `tdcr solve` states the mesh, the iterations, the time and the estimated
+/// tip error against the tolerance; the JSON carries the estimate, the tolerance and whether
+/// it is met, on fixed meshes too.
+#[test]
+fn solve_reports_its_error_estimate_against_the_tolerance() {
+    let dir = scratch("estimate");
+    std::fs::write(dir.join("robot.toml"), example()).unwrap();
+    let out = run(&dir, &["solve", "robot.toml"], None);
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    let first = stdout(&out).lines().next().unwrap_or_default().to_string();
+    for part in [
+        "intervals (error-controlled)",
+        "Newton iterations",
+        " ms",
+        "estimated tip error",
+        "against tolerance 2.4e-8 m",
+        "(met)",
+    ] {
+        assert!(first.contains(part), "{part}: {first}");
+    }
+    let out = run(&dir, &["solve", "robot.toml", "--format", "json"], None);
+    let json: serde_json::Value = serde_json::from_str(&stdout(&out)).unwrap();
+    let estimate = &json["error_estimate"];
+    for key in ["tip_position_m", "tip_rotation_rad", "backbone_max_m"] {
+        assert!(estimate[key].as_f64().unwrap() > 0.0, "{key}: {estimate}");
+    }
+    assert_eq!(json["tolerance"].as_f64(), Some(1e-7));
+    assert_eq!(json["tolerance_met"].as_bool(), Some(true));
+    assert_eq!(json["tip_error_estimate"], estimate["tip_position_m"]);
+    // A fixed mesh: no tolerance, still an estimate.
+    let out = run(
+        &dir,
+        &["solve", "robot.toml", "--intervals", "8", "--format", "json"],
+        None,
+    );
+    let json: serde_json::Value = serde_json::from_str(&stdout(&out)).unwrap();
+    assert!(json["tolerance"].is_null() && json["tolerance_met"].is_null(), "{json}");
+    assert!(json["error_estimate"]["tip_position_m"].as_f64().unwrap() > 1e-7);
+    let out = run(&dir, &["solve", "robot.toml", "--intervals", "8"], None);
+    assert!(stdout(&out).lines().next().unwrap_or_default().contains("(fixed mesh)"));
 }

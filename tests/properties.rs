@@ -71,17 +71,23 @@ fn robot() -> impl Strategy<Value = Robot> {
         })
 }
 
-/// Checks the property for one robot; returns whether it was solved.
-fn check(robot: &Robot) -> Result<bool, TestCaseError> {
+/// How a solved robot's error compares with its estimate and the tolerance.
+#[derive(Clone, Copy, Debug)]
+struct Accuracy {
+    /// Tip position error against the solution on a 4x finer mesh (m).
+    error: f64,
+    /// The solver's own estimate of it (m).
+    estimate: f64,
+    /// Whether the error is within the tolerance.
+    within: bool,
+}
+
+/// Checks the property for one robot; returns its accuracy if it was solved.
+fn check(robot: &Robot) -> Result<Option<Accuracy>, TestCaseError> {
     let length = robot.length();
-    // Adaptive to 1e-6 L at the tip, from 16 intervals, capped at 1024.
-    let tolerance = 1e-6;
-    let options = collocation::Options {
-        intervals: 16,
-        tolerance: Some(tolerance),
-        max_intervals: 1024,
-        ..Default::default()
-    };
+    // The default error control (tip to 1e-7 L and 1e-7 rad, from 32 intervals, cap 8192).
+    let options = collocation::Options::default();
+    let tolerance = options.tolerance.unwrap();
     let solution = match collocation::solve(robot, &options) {
         Ok(s) => s,
         // A typed error is an acceptable outcome, but its message must say something.
@@ -91,7 +97,7 @@ fn check(robot: &Robot) -> Result<bool, TestCaseError> {
                 !matches!(e, tdcr::Error::InvalidInput { .. }),
                 "valid robot rejected: {e}"
             );
-            return Ok(false);
+            return Ok(None);
         }
     };
     for n in &solution.nodes {
@@ -120,12 +126,13 @@ fn check(robot: &Robot) -> Result<bool, TestCaseError> {
             .fold(robot.loads.tip_force.norm(), f64::max)
             .max(1e-12);
     prop_assert!(e.max() < 1e-4f64.max(floor), "imbalance {e:?}");
-    // Agreement with the mesh refined once more: within ten times the tolerance (the
-    // refinement estimate is asymptotic).
+    // Agreement with a mesh 4x finer (its error is 256x smaller at order 4): within 3x the
+    // tolerance on every robot, and never more than 3x the solver's own estimate where the
+    // error is above rounding (1e-12 m); `run` asserts the tolerance itself on 99 %.
     let finer: Vec<f64> = solution
         .nodes
         .windows(2)
-        .flat_map(|w| [w[0].s, 0.5 * (w[0].s + w[1].s)])
+        .flat_map(|w| (0..4).map(move |i| w[0].s + 0.25 * i as f64 * (w[1].s - w[0].s)))
         .collect();
     let refined = collocation::solve_from(
         robot,
@@ -136,15 +143,30 @@ fn check(robot: &Robot) -> Result<bool, TestCaseError> {
         },
         &solution,
     );
-    if let Ok(refined) = refined {
-        let d = (refined.tip_position() - solution.tip_position()).norm();
-        prop_assert!(d < 10.0 * tolerance * length, "refined mesh moves the tip by {d:.3e} m");
-    }
-    Ok(true)
+    let Ok(refined) = refined else {
+        return Ok(None);
+    };
+    let error = (refined.tip_position() - solution.tip_position()).norm();
+    let estimate = solution.report.error_estimate.map_or(f64::NAN, |e| e.tip_position);
+    prop_assert!(
+        error < 3.0 * tolerance * length,
+        "true tip error {error:.3e} m above 3x the tolerance {:.3e} m",
+        tolerance * length
+    );
+    prop_assert!(
+        error <= 1e-12 || estimate >= error / 3.0,
+        "estimate {estimate:.3e} m below a third of the true error {error:.3e} m"
+    );
+    Ok(Some(Accuracy {
+        error,
+        estimate,
+        within: error <= tolerance * length,
+    }))
 }
 
 fn run(cases: u32) {
     let solved = AtomicUsize::new(0);
+    let accuracy = std::sync::Mutex::new(Vec::new());
     let config = Config {
         cases,
         failure_persistence: Some(Box::new(FileFailurePersistence::Off)),
@@ -157,14 +179,38 @@ fn run(cases: u32) {
     );
     runner
         .run(&robot(), |robot| {
-            if check(&robot)? {
+            if let Some(a) = check(&robot)? {
                 solved.fetch_add(1, Ordering::Relaxed);
+                accuracy.lock().unwrap().push(a);
             }
             Ok(())
         })
         .unwrap();
     let solved = solved.load(Ordering::Relaxed);
     eprintln!("{solved} of {cases} random robots solved, the rest returned typed errors");
+    let accuracy = accuracy.into_inner().unwrap();
+    let within = accuracy.iter().filter(|a| a.within).count();
+    let mut ratios: Vec<f64> = accuracy
+        .iter()
+        .filter(|a| a.error > 1e-12)
+        .map(|a| a.error / a.estimate)
+        .collect();
+    ratios.sort_by(f64::total_cmp);
+    if let (Some(lo), Some(hi)) = (ratios.first(), ratios.last()) {
+        eprintln!(
+            "true/estimate over {} robots with errors above 1e-12 m: min {lo:.3}, median {:.3}, \
+             99th percentile {:.3}, max {hi:.3}; {within} of {solved} within the tolerance",
+            ratios.len(),
+            ratios[ratios.len() / 2],
+            ratios[(ratios.len() * 99) / 100]
+        );
+    }
+    // The default tolerance holds on at least 99 % of the solved robots (issue 13).
+    assert!(
+        within as f64 >= 0.99 * accuracy.len() as f64,
+        "only {within} of {} within the tolerance",
+        accuracy.len()
+    );
     // Most random robots are well within reach: a test where nothing converges proves nothing.
     assert!(solved as f64 >= 0.8 * cases as f64, "only {solved} of {cases} solved");
 }

@@ -106,7 +106,9 @@ pub fn run(args: &SweepArgs) -> Result<(), Failure> {
     for i in 1..=count {
         let _ = write!(csv, ",tension_{i}");
     }
-    csv.push_str(",tip_x,tip_y,tip_z,bending_angle_deg,iterations,load_steps,solve_time\n");
+    csv.push_str(
+        ",tip_x,tip_y,tip_z,bending_angle_deg,iterations,load_steps,solve_time,intervals,tip_error_estimate\n",
+    );
     let mut tips = Vec::with_capacity(steps);
     let (mut first, mut last): (Option<(Robot, Solution)>, Option<Solution>) = (None, None);
     let mut progress = Progress::new();
@@ -140,14 +142,18 @@ pub fn run(args: &SweepArgs) -> Result<(), Failure> {
         let report = &solution.report;
         let _ = writeln!(
             csv,
-            ",{},{},{},{},{},{},{}",
+            ",{},{},{},{},{},{},{},{},{}",
             output::number(tip.x),
             output::number(tip.y),
             output::number(tip.z),
             output::bending_angle(&solution).to_degrees(),
             report.iterations,
             report.load_steps,
-            report.timings.total.as_secs_f64()
+            report.timings.total.as_secs_f64(),
+            report.intervals,
+            report
+                .error_estimate
+                .map_or(String::new(), |e| output::number(e.tip_position))
         );
         if args.solver.verbose {
             progress.finish();
