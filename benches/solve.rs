@@ -1,9 +1,11 @@
 //! Solve-time benchmarks: `cargo bench --bench solve`.
 //!
-//! - `reference`: the cases S (16 intervals) and H (48 intervals, the smallest
-//!   meshes reaching 1e-7 m): cold, warm with a `Solver` that has just solved 0.99x the
-//!   tension (its stored factors start chord steps), and warm through the stateless
-//!   `solve_from` (no stored factors).
+//! - `default_settings`: what users get: cases S and H at the default error control (tip to
+//!   1e-7 L) and at 1e-9 L, cold and warm with a `Solver` that has just solved 0.99x the
+//!   tension (its stored factors start chord steps). The mesh is the solver's choice.
+//! - `reference`: S and H on the fixed meshes earlier versions were timed on (16 and 48
+//!   intervals), kept for comparisons across versions: cold, warm with a `Solver`, and warm
+//!   through the stateless `solve_from` (no stored factors).
 //! - `prototype_s`: the prototype with tendon 1 at 2.94 N plus self weight; collocation at
 //!   16..128 intervals from a cold start and warm-started from the solution at 0.99x the
 //!   tension; shooting at integration tolerances giving comparable tip accuracy.
@@ -33,6 +35,46 @@ fn scaled(robot: &tdcr::Robot, factor: f64) -> tdcr::Robot {
     r
 }
 
+/// A timed warm solve per iteration, each after an untimed solve of `previous` by the same
+/// solver (its stored factors then belong to that solution).
+fn warm_solves(
+    solver: &mut collocation::Solver,
+    previous: &tdcr::Robot,
+    robot: &tdcr::Robot,
+    iterations: u64,
+) -> std::time::Duration {
+    let mut total = std::time::Duration::ZERO;
+    for _ in 0..iterations {
+        let guess = solver.solve(previous).unwrap();
+        let t = std::time::Instant::now();
+        black_box(solver.solve_from(robot, &guess).unwrap());
+        total += t.elapsed();
+    }
+    total
+}
+
+fn default_settings(c: &mut Criterion) {
+    let mut group = c.benchmark_group("default_settings");
+    for (case, robot) in [("S", cases::case_s()), ("H", cases::case_h())] {
+        for tolerance in [1e-7, 1e-9] {
+            let options = collocation::Options {
+                tolerance: Some(tolerance),
+                ..Default::default()
+            };
+            let previous = scaled(&robot, 0.99);
+            let id = format!("{case}/{tolerance:.0e}");
+            group.bench_function(BenchmarkId::new("cold", &id), |b| {
+                b.iter(|| black_box(collocation::solve(&robot, &options).unwrap()))
+            });
+            let mut solver = collocation::Solver::new(options.clone());
+            group.bench_function(BenchmarkId::new("warm_solver", &id), |b| {
+                b.iter_custom(|iterations| warm_solves(&mut solver, &previous, &robot, iterations))
+            });
+        }
+    }
+    group.finish();
+}
+
 fn reference(c: &mut Criterion) {
     let mut group = c.benchmark_group("reference");
     for (case, robot, intervals) in [("S", cases::case_s(), 16), ("H", cases::case_h(), 48)] {
@@ -48,16 +90,7 @@ fn reference(c: &mut Criterion) {
         // Each timed solve follows an untimed solve of the robot at 0.99x the tension.
         let mut solver = collocation::Solver::new(options.clone());
         group.bench_function(BenchmarkId::new("warm_solver", case), |b| {
-            b.iter_custom(|iterations| {
-                let mut total = std::time::Duration::ZERO;
-                for _ in 0..iterations {
-                    let guess = solver.solve(&previous).unwrap();
-                    let t = std::time::Instant::now();
-                    black_box(solver.solve_from(&robot, &guess).unwrap());
-                    total += t.elapsed();
-                }
-                total
-            })
+            b.iter_custom(|iterations| warm_solves(&mut solver, &previous, &robot, iterations))
         });
         let guess = collocation::solve(&previous, &options).unwrap();
         group.bench_function(BenchmarkId::new("warm_stateless", case), |b| {
@@ -203,6 +236,7 @@ fn batch(c: &mut Criterion) {
 
 criterion_group!(
     benches,
+    default_settings,
     reference,
     prototype_s,
     newton_iteration,
