@@ -1,6 +1,7 @@
 //! The crate's one error type.
 
 use crate::report::{Method, SolveReport};
+use std::fmt;
 
 /// Everything that can go wrong in tdcr. Each message says what is wrong, the values
 /// involved, and what to try.
@@ -56,17 +57,50 @@ pub enum Error {
     },
     /// Adaptive mesh refinement reached the interval cap before the tip tolerance was met.
     #[error(
-        "mesh refinement reached the cap of {cap} intervals with an estimated tip error of \
-         {estimate:.3e} m > tolerance {tolerance:.3e} m; raise `max_intervals` or loosen `tolerance`"
+        "mesh refinement reached the cap of {cap} intervals {}; raise `max_intervals` or loosen `tolerance`",
+        cap_reason(*estimate, *tolerance)
     )]
     IntervalCap {
         /// The cap (intervals).
         cap: usize,
-        /// Estimated tip position error of the last mesh (m).
-        estimate: f64,
+        /// Estimated tip position error of the last mesh (m); `None` when the cap stopped
+        /// refinement before its first level, so that no error could be estimated.
+        estimate: Option<f64>,
         /// The requested tolerance (m).
         tolerance: f64,
     },
+}
+
+/// Why refinement stopped at the cap: the estimate against the tolerance, or why there is
+/// no estimate.
+fn cap_reason(estimate: Option<f64>, tolerance: f64) -> String {
+    match estimate {
+        Some(e) => format!("with an estimated tip error of {e:.3e} m > tolerance {tolerance:.3e} m"),
+        None => format!(
+            "before any tip error could be estimated (tolerance {tolerance:.3e} m): bisecting the \
+             starting mesh once would already exceed the cap, and an estimate needs two meshes; \
+             start from fewer `intervals`"
+        ),
+    }
+}
+
+/// A number as messages print it, like C's `%g`: plain (shortest round-trip digits) for
+/// ordinary magnitudes, scientific beyond 1e6 or below 1e-4, so that an extreme value reads
+/// `-1e300`, not three hundred digits. `format!("is {} m", Readable(x))`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Readable(pub f64);
+
+impl fmt::Display for Readable {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let x = self.0;
+        // 1e6 and 1e-4: the magnitudes where plain digits stop being quicker to read
+        // (%g switches at 1e-5 and at its precision, 1e6 by default).
+        if x != 0.0 && x.is_finite() && !(1e-4..1e6).contains(&x.abs()) {
+            write!(f, "{x:e}")
+        } else {
+            write!(f, "{x}")
+        }
+    }
 }
 
 /// Shorthand for results in this crate.

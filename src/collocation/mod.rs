@@ -40,7 +40,7 @@ use crate::solution::{Node, Solution, State};
 use crate::{Error, Robot};
 pub use linear::LinearSolver;
 use newton::{Settings, Workspace};
-pub use options::{MAX_INTERVALS, Options};
+pub use options::{MAX_INTERVALS, MAX_ITERATIONS, Options};
 use std::time::Instant;
 use system::System;
 

@@ -40,7 +40,7 @@ pub(super) fn to_tolerance(
         if fine.intervals() > options.max_intervals {
             return Err(Error::IntervalCap {
                 cap: options.max_intervals,
-                estimate: report.tip_error_estimate.unwrap_or(f64::NAN),
+                estimate: report.tip_error_estimate,
                 tolerance: tol,
             });
         }

@@ -13,7 +13,7 @@ mod tables;
 use self::build::{build, library_problem, settings};
 use self::check::Checker;
 use self::tables::{BaseTable, LoadsTable, RodTable, SolverTable, TABLES, TendonTable};
-use super::locate::{Locator, position};
+use super::locate::{Lines, Locator};
 use super::printable;
 use super::{FileError, Problem};
 use crate::report::Method;
@@ -81,12 +81,13 @@ pub fn parse(text: &str, file: &str) -> Result<RobotFile, FileError> {
             "is empty: a robot file needs at least a [rod] table (`tdcr example` prints one to start from)",
         )]));
     }
+    let lines = Lines::new(text);
     let (root, errors) = DeTable::parse_recoverable(text);
     if !errors.is_empty() {
         let problems = errors
             .iter()
             .map(|e| Problem {
-                position: e.span().map(|s| position(text, s.start)),
+                position: e.span().map(|s| lines.position(s.start)),
                 field: String::new(),
                 message: format!("is not valid TOML: {}", e.message().trim()),
             })
@@ -95,7 +96,7 @@ pub fn parse(text: &str, file: &str) -> Result<RobotFile, FileError> {
     }
     let locator = Locator::new(text, root.get_ref());
     let mut reader = Reader {
-        text,
+        lines: &lines,
         locator: &locator,
         problems: Vec::new(),
     };
@@ -174,7 +175,7 @@ struct Tables {
 
 /// Deserializes the tables of a file, each failure one problem at its place in `text`.
 struct Reader<'a> {
-    text: &'a str,
+    lines: &'a Lines<'a>,
     locator: &'a Locator,
     problems: Vec<Problem>,
 }
@@ -202,7 +203,7 @@ impl Reader<'_> {
                         }
                     }
                     _ => self.problems.push(Problem {
-                        position: Some(position(self.text, key.span().start)),
+                        position: Some(self.lines.position(key.span().start)),
                         field: name,
                         message: "must be an array of tables: start each tendon with [[tendon]] \
                                   (double brackets)"
@@ -216,7 +217,7 @@ impl Reader<'_> {
                         _ => String::new(),
                     };
                     self.problems.push(Problem {
-                        position: Some(position(self.text, key.span().start)),
+                        position: Some(self.lines.position(key.span().start)),
                         field: String::new(),
                         message: format!("unknown key `{name}` at the top level; the tables are {TABLES}{hint}"),
                     });
@@ -232,7 +233,7 @@ impl Reader<'_> {
         match T::deserialize(ValueDeserializer::from(value)) {
             Ok(t) => Some(t),
             Err(e) => {
-                let at = position(self.text, e.span().unwrap_or(span).start);
+                let at = self.lines.position(e.span().unwrap_or(span).start);
                 let raw = e.message().trim().replace('\n', " ");
                 let message = raw
                     .replace("expected f64", "expected a number")
