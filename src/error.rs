@@ -57,7 +57,7 @@ pub enum Error {
     },
     /// Adaptive mesh refinement reached the interval cap before the tip tolerance was met.
     #[error(
-        "mesh refinement reached the cap of {cap} intervals {}; raise `max_intervals` or loosen `tolerance`",
+        "mesh refinement reached the cap of {cap} intervals {}",
         cap_reason(*estimate, *tolerance)
     )]
     IntervalCap {
@@ -75,11 +75,14 @@ pub enum Error {
 /// no estimate.
 fn cap_reason(estimate: Option<f64>, tolerance: f64) -> String {
     match estimate {
-        Some(e) => format!("with an estimated tip error of {e:.3e} m > tolerance {tolerance:.3e} m"),
+        Some(e) => format!(
+            "with an estimated tip error of {e:.3e} m > tolerance {tolerance:.3e} m; raise \
+             `max_intervals` or loosen `tolerance`"
+        ),
         None => format!(
-            "before any tip error could be estimated (tolerance {tolerance:.3e} m): bisecting the \
-             starting mesh once would already exceed the cap, and an estimate needs two meshes; \
-             start from fewer `intervals`"
+            "before any tip error could be estimated for the tolerance {tolerance:.3e} m: an \
+             estimate compares two meshes, and bisecting the starting mesh once would already \
+             exceed the cap; start from fewer `intervals` or raise `max_intervals`"
         ),
     }
 }

@@ -3,6 +3,7 @@
 
 pub mod guess;
 pub mod nodes;
+pub mod resolution;
 
 use crate::error::{Result, invalid};
 use crate::model::robot::Robot;
