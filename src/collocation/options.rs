@@ -1,6 +1,7 @@
 //! The collocation solver's options: mesh, error control, Newton and the linear solver.
 
 use super::linear::LinearSolver;
+use crate::Readable;
 use crate::error::{Result, invalid};
 use crate::mesh::guess::InitialGuess;
 
@@ -101,7 +102,7 @@ impl Options {
         {
             return Err(invalid(
                 "options.tolerance",
-                format!("is {tol} m"),
+                format!("is {} m", Readable(tol)),
                 "give a positive tip tolerance in m",
             ));
         }

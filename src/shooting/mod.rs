@@ -16,7 +16,7 @@ use crate::mesh::{Mesh, nodes};
 use crate::model::equations::{Model, Site};
 use crate::report::{Iteration, Method, SolveReport, Termination};
 use crate::solution::{Solution, State};
-use crate::{Error, Robot, so3};
+use crate::{Error, Readable, Robot, so3};
 use nalgebra::{Matrix3, SMatrix, SVector, Vector3};
 use num_dual::DualSVec64;
 use std::time::Instant;
@@ -57,14 +57,14 @@ impl Options {
         if !(self.integration_tolerance.is_finite() && (1e-14..=1e-2).contains(&self.integration_tolerance)) {
             return Err(invalid(
                 "shooting.integration_tolerance",
-                format!("is {}", self.integration_tolerance),
+                format!("is {}", Readable(self.integration_tolerance)),
                 "use a value in [1e-14, 1e-2] (1e-10 by default)",
             ));
         }
         if !(self.tolerance.is_finite() && self.tolerance > 0.0) {
             return Err(invalid(
                 "shooting.tolerance",
-                format!("is {}", self.tolerance),
+                format!("is {}", Readable(self.tolerance)),
                 "use a positive value (1e-9 by default)",
             ));
         }
