@@ -152,3 +152,28 @@ impl Locator {
             .map(|(_, path)| path.clone())
     }
 }
+
+/// A [`Locator`] built at its first use by parsing the text again: only a file with
+/// problems needs one, so a valid file (of 10^5 tendons, say) never pays for the key paths.
+pub(crate) struct LazyLocator<'a> {
+    text: &'a str,
+    locator: OnceCell<Locator>,
+}
+
+impl<'a> LazyLocator<'a> {
+    /// The locator of `text` (which must be the text already parsed), not yet built.
+    pub(crate) fn new(text: &'a str) -> Self {
+        LazyLocator {
+            text,
+            locator: OnceCell::new(),
+        }
+    }
+
+    /// The locator, built now if this is its first use.
+    pub(crate) fn get(&self) -> &Locator {
+        self.locator.get_or_init(|| {
+            let (root, _) = DeTable::parse_recoverable(self.text);
+            Locator::new(self.text, root.get_ref())
+        })
+    }
+}

@@ -5,7 +5,7 @@
 use super::build::rotation_from_rows;
 use super::tables::{BaseTable, LoadsTable, RodTable, RoutingTable, SolverTable, TendonTable, Vec3};
 use crate::io::Problem;
-use crate::io::locate::Locator;
+use crate::io::locate::LazyLocator;
 use crate::{Error, Readable, collocation, shooting, so3};
 
 /// Largest |R^T R - I|, |det R - 1| accepted for a base rotation (the 1e-6: loose
@@ -26,7 +26,7 @@ fn toml_number(x: f64) -> String {
 /// Field-by-field rules; every broken rule is one problem.
 pub(super) struct Checker<'a> {
     /// Where each field is in the file.
-    pub(super) locator: &'a Locator,
+    pub(super) locator: &'a LazyLocator<'a>,
     /// The broken rules found so far, in the order checked.
     pub(super) problems: Vec<Problem>,
 }
@@ -35,7 +35,7 @@ impl Checker<'_> {
     /// One problem at `field`, placed where the file has it.
     fn report(&mut self, field: &str, message: String) {
         self.problems.push(Problem {
-            position: self.locator.find(field),
+            position: self.locator.get().find(field),
             field: field.to_string(),
             message,
         });
