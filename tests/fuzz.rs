@@ -1646,3 +1646,40 @@ fn a_key_with_a_newline_stays_on_its_message_line() {
         assert_eq!(shown.lines().count(), e.problems.len(), "{text:?} gives:\n{shown}");
     }
 }
+
+/// Issue 18: `[solver] max_iterations = 9223372036854775807` (and 2^64 - 1) panicked with a
+/// capacity overflow, 1e9, 2^32 - 1 and 2^32 aborted on a 137 GB allocation. Every count key
+/// of `[solver]`, one at a time, at values up to u64::MAX beyond its bound: `tdcr solve`
+/// exits 2 naming a `[solver]` key, never 101 (panic) or 134 (abort).
+#[test]
+fn solve_with_huge_solver_counts_exits_2() {
+    // The example fixes `intervals = 32`: without it, `nodes` is not given twice.
+    let example = tdcr::io::example().replacen("\nintervals = 32 ", "\n# intervals = 32 ", 1);
+    assert!(example.contains("\nmethod = \"collocation\""));
+    let dir = scratch("counts");
+    let file = dir.join("robot.toml");
+    for key in SOLVER_COUNTS {
+        for n in [
+            "0",
+            "100001",
+            "1000000000",
+            "4294967295",
+            "4294967296",
+            "9223372036854775807",
+            "18446744073709551615",
+        ] {
+            // 100001: just beyond MAX_INTERVALS (and MAX_ITERATIONS); 0 is below every rule.
+            let text = example.replacen("\nmethod = ", &format!("\n{key} = {n}\nmethod = "), 1);
+            std::fs::write(&file, &text).unwrap_or_else(|e| panic!("cannot write {}: {e}", file.display()));
+            let args = vec!["solve".to_string(), file.display().to_string()];
+            let (code, stderr) = run(&dir, &args);
+            clean_exit(&args, code, &stderr).unwrap_or_else(|e| panic!("{key} = {n}: {e}"));
+            assert_eq!(code, Some(2), "{key} = {n}: {stderr}");
+            assert!(
+                stderr.contains("robot.toml:") && stderr.contains("`solver."),
+                "{key} = {n}: {stderr}"
+            );
+        }
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
