@@ -740,10 +740,21 @@ fn a_fixed_mesh_that_aliases_a_helix_exits_2_with_the_intervals_needed() {
     ] {
         assert!(message.contains(fragment), "no `{fragment}` in {message}");
     }
+    // `check` gives the same verdict without solving.
+    let out = run(&dir, &["check", "robot.toml"], None);
+    assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
+    assert!(stderr(&out).starts_with("error: robot.toml: invalid input: `options.intervals` is 32 intervals"));
+    assert!(stderr(&out).contains("400 intervals resolve it"), "{}", stderr(&out));
     let out = run(
         &dir,
         &["solve", "robot.toml", "--tension", "5=2", "--intervals", "400"],
         None,
     );
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    // A tolerance instead of the fixed mesh lets refinement choose it.
+    let tolerant = text.replacen("\nintervals = 32 ", "\ntolerance = 1e-4\nintervals = 32 ", 1);
+    assert_ne!(tolerant, text);
+    std::fs::write(dir.join("robot.toml"), &tolerant).unwrap();
+    let out = run(&dir, &["check", "robot.toml"], None);
     assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
 }

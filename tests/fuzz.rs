@@ -20,14 +20,20 @@
 //! (docs/robot-file.md) and requires a rejection that names that field on that line, so an
 //! invalid file that is accepted fails the test.
 //!
-//! CI runs about 5 500 parser inputs (under a second in release, a few seconds in debug) and
-//! 50 command lines. The long run, 125 000 parser inputs (about 25 s in release), prints
-//! per input family how many were accepted and where the others were rejected:
-//! `cargo test --release --test fuzz -- --ignored --nocapture long_`.
+//! A third family (issue 18) sets the `[solver]` counts to values up to u64::MAX (an accepted
+//! file must hold them within the solvers' bounds), gives every vector field and the base
+//! rotation's rows 0 to 6 entries (only 3 may be accepted: anything else is counted as a
+//! silent truncation and fails), and reads files of 10^3 to 10^5 tendons and point loads.
+//!
+//! CI runs about 7 100 parser inputs (under a second in release, a few seconds in debug), the
+//! 10^3 and 10^4 files, 50 random command lines and 35 with huge counts. The long run, 165 000
+//! parser inputs and the 10^5 files (about 25 s in release), prints per input family how many
+//! were accepted and where the others were rejected, then the panics, aborts and silent
+//! truncations: `cargo test --release --test fuzz -- --ignored --nocapture long_`.
 //! Every runner has a fixed seed and no failure persistence: runs are repeatable and write
 //! no files. The five bugs the fuzzing found (huge counts that overflowed an allocation, a key
 //! with an escaped newline that broke the one-line message format) are fixed; their
-//! reproducers are the last tests of this file.
+//! reproducers are the last tests of this file, with those of issue 18.
 
 use proptest::prelude::*;
 use proptest::sample::Index;
@@ -234,7 +240,11 @@ impl Stats {
         let stage = |p: &tdcr::io::Problem| {
             if p.position.is_none() || p.message.starts_with("is not valid TOML") {
                 0
-            } else if p.message.contains(" in [") || p.message.contains("unknown key") || p.field == "tendon" {
+            } else if p.message.starts_with("in [")
+                || p.message.contains(" in [")
+                || p.message.contains("unknown key")
+                || p.field == "tendon"
+            {
                 1
             } else {
                 2

@@ -127,6 +127,22 @@ fn initial_mesh(robot: &Robot, options: &Options) -> Result<Mesh> {
     }
 }
 
+/// Checks that the mesh `options` fix resolves `robot` (validated) by the resolution rule
+/// (at most pi/2 rad of a routing's turn or of the precurvature per interval, docs/numerics.md
+/// "Resolution"): what [`solve`] checks before it iterates, for a caller (such as `tdcr
+/// check`) that wants the verdict without solving. Options with a `tolerance` pass: their mesh
+/// is only the start of refinement.
+///
+/// # Errors
+/// [`Error::InvalidInput`] on `options.intervals` (`options.mesh` for explicit points) with
+/// the intervals that would resolve the robot, or for a mesh that cannot be built.
+pub fn check_resolution(robot: &Robot, options: &Options) -> Result<()> {
+    if options.tolerance.is_some() {
+        return Ok(());
+    }
+    resolves(robot, options, &initial_mesh(robot, options)?)
+}
+
 /// Checks that a fixed `mesh` (no tolerance) resolves the robot ([`resolution::required`]):
 /// a coarser one would converge to an aliased shape without a sign of it.
 ///
