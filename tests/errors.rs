@@ -414,3 +414,24 @@ fn extreme_values_print_in_scientific_notation() {
         assert_eq!(tdcr::Readable(x).to_string(), shown);
     }
 }
+
+/// Newton reserves its iteration history up front: called directly (through
+/// `tdcr::advanced`, past `Options::validate`) with `usize::MAX` iterations it reserves at most
+/// `MAX_ITERATIONS` records instead of panicking with a capacity overflow.
+#[test]
+fn newton_called_directly_with_a_huge_limit_does_not_overflow_its_history() {
+    use tdcr::advanced::{equations::Model, guess, mesh::Mesh, newton, system::System};
+    let robot = tdcr::cases::case_s();
+    let system = System::new(Model::new(&robot), Mesh::uniform(&robot, 16).unwrap());
+    let mut workspace = newton::Workspace::new(&system, collocation::LinearSolver::Auto).unwrap();
+    let mut x = guess::rigid_estimate(&system.model, &system.mesh.nodes);
+    let settings = newton::Settings {
+        tolerance: 1e-11,
+        max_iterations: usize::MAX,
+        reuse_factors: false,
+    };
+    let mut report = tdcr::SolveReport::new(tdcr::Method::Collocation);
+    let (termination, _) = newton::run(&system, &mut workspace, &mut x, &settings, &mut report);
+    assert_eq!(termination, tdcr::Termination::Converged);
+    assert!(report.history.capacity() <= collocation::MAX_ITERATIONS);
+}
