@@ -33,6 +33,7 @@ pub mod linearize {
 
 /// Collocation meshes: nodes with two nodes at every breakpoint.
 pub mod mesh {
+    pub use crate::mesh::resolution::{self, Feature, MAX_ANGLE, Resolution, required};
     pub use crate::mesh::{Mesh, MeshNode};
 }
 

@@ -1,6 +1,7 @@
 //! The crate's one error type.
 
 use crate::report::{Method, SolveReport};
+use std::fmt;
 
 /// Everything that can go wrong in tdcr. Each message says what is wrong, the values
 /// involved, and what to try.
@@ -54,19 +55,39 @@ pub enum Error {
         /// What to try next.
         hint: String,
     },
-    /// Adaptive mesh refinement reached the interval cap before the tip tolerance was met.
+    /// Error control needs more intervals than the cap allows to meet the tip tolerance.
     #[error(
-        "mesh refinement reached the cap of {cap} intervals with an estimated tip error of \
-         {estimate:.3e} m > tolerance {tolerance:.3e} m; raise `max_intervals` or loosen `tolerance`"
+        "meeting the tip tolerance needs more than the cap of {cap} intervals: the last mesh \
+         has an estimated tip error of {estimate:.3e} m > tolerance {tolerance:.3e} m; raise \
+         `max_intervals` or loosen `tolerance`"
     )]
     IntervalCap {
         /// The cap (intervals).
         cap: usize,
-        /// Estimated tip position error of the last mesh (m).
+        /// Estimated tip position error of the last mesh solved (m).
         estimate: f64,
-        /// The requested tolerance (m).
+        /// The requested tolerance, tolerance x L (m).
         tolerance: f64,
     },
+}
+
+/// A number as messages print it, like C's `%g`: plain (shortest round-trip digits) for
+/// ordinary magnitudes, scientific beyond 1e6 or below 1e-4, so that an extreme value reads
+/// `-1e300`, not three hundred digits. `format!("is {} m", Readable(x))`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Readable(pub f64);
+
+impl fmt::Display for Readable {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let x = self.0;
+        // 1e6 and 1e-4: the magnitudes where plain digits stop being quicker to read
+        // (%g switches at 1e-5 and at its precision, 1e6 by default).
+        if x != 0.0 && x.is_finite() && !(1e-4..1e6).contains(&x.abs()) {
+            write!(f, "{x:e}")
+        } else {
+            write!(f, "{x}")
+        }
+    }
 }
 
 /// Shorthand for results in this crate.

@@ -59,7 +59,7 @@ mod solution;
 
 pub use collocation::sensitivity::{TipSensitivities, backbone_tension_sensitivity, tip_sensitivities};
 pub use collocation::{Solver, solve, solve_batch, solve_from};
-pub use error::{Error, Result};
+pub use error::{Error, Readable, Result};
 pub use model::loads::{Field, Loads, PointLoad};
 pub use model::robot::{Robot, TendonModel};
 pub use model::rod::{Rod, Section};

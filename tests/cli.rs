@@ -625,3 +625,181 @@ fn solve_reports_its_error_estimate_against_the_tolerance() {
     let out = run(&dir, &["solve", "robot.toml", "--intervals", "8"], None);
     assert!(stdout(&out).lines().next().unwrap_or_default().contains("(fixed mesh)"));
 }
+
+/// Issue 18: counts that size allocations are bounded before use. `max_iterations` of 2^63 - 1
+/// panicked with a capacity overflow; 1e9 and 2^32 aborted on a 137 GB allocation.
+#[test]
+fn huge_iteration_counts_exit_2_naming_the_bound() {
+    for n in ["9223372036854775807", "1000000000", "4294967296", "10001"] {
+        let text = edited("# max_iterations = 30 ", &format!("max_iterations = {n} "));
+        rejected(
+            &format!("iterations-{n}"),
+            &text,
+            &[
+                "robot.toml:62:1: `solver.max_iterations`",
+                &format!("is {n}, above the limit of 10000"),
+            ],
+        );
+    }
+}
+
+/// Issue 18: arrays longer than 3 were cut to their first 3 entries (even with NaN, strings or
+/// tables in the rest); a wrong length names the field, the length found and the expected.
+#[test]
+fn arrays_of_the_wrong_length_exit_2_naming_both_lengths() {
+    for (value, found) in [
+        ("[1.0, 2.0, 3.0, nan]", 4),
+        ("[1.0, 2.0, 3.0, \"x\"]", 4),
+        ("[1.0, 2.0, 3.0, { a = 1 }]", 4),
+        ("[1.0, 2.0]", 2),
+        ("[]", 0),
+        ("[0.0, 0.0, 0.0, 0.0, 0.0, 0.0]", 6),
+    ] {
+        let text = edited("tip_force = [0.0, 0.0, 0.0]", &format!("tip_force = {value}"));
+        rejected(
+            &format!("tip-force-{found}"),
+            &text,
+            &[
+                "`loads.tip_force`",
+                &format!("has {found} entries, but must have 3 (numbers x, y, z)"),
+            ],
+        );
+    }
+    let rod = "[rod]\nlength = 0.2\nouter_radius = 0.001\nyoungs_modulus = 2e11\npoisson_ratio = 0.3\n";
+    for (table, line, field) in [
+        ("rod", "precurvature = [0.0, 0.0, 0.0, 0.0]", "rod.precurvature"),
+        ("base", "position = [0.0, 0.0, 0.0, 0.0]", "base.position"),
+        ("base", "euler_xyz_deg = [0.0, 0.0]", "base.euler_xyz_deg"),
+    ] {
+        let text = if table == "rod" {
+            format!("{rod}{line}\n")
+        } else {
+            format!("{rod}[{table}]\n{line}\n")
+        };
+        rejected(field, &text, &[&format!("`{field}`"), "entries, but must have 3"]);
+    }
+    let rows =
+        format!("{rod}[base]\nrotation = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [0.0, 0.0, 0.0]]\n");
+    rejected(
+        "rotation-rows",
+        &rows,
+        &["`base.rotation`", "has 4 entries, but must have 3 (rows of 3 numbers)"],
+    );
+    let row = format!("{rod}[base]\nrotation = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0, 0.0]]\n");
+    rejected(
+        "rotation-row",
+        &row,
+        &[
+            "`base.rotation[3]`",
+            "has 4 entries, but must have 3 (numbers in each row)",
+        ],
+    );
+}
+
+/// Issue 18: a sweep given the same tendon twice took the last range silently.
+#[test]
+fn a_sweep_with_a_tendon_given_twice_exits_2() {
+    let dir = scratch("sweep-twice");
+    std::fs::write(dir.join("robot.toml"), example()).unwrap();
+    let out = run(
+        &dir,
+        &["sweep", "robot.toml", "--tension", "1=0:1:3", "--tension", "1=0:2:3"],
+        None,
+    );
+    assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
+    assert!(
+        stderr(&out).contains("error: --tension 1=... is given twice: give each tendon one range or value"),
+        "{}",
+        stderr(&out)
+    );
+}
+
+/// Issue 18: `--intervals 8192 --tol 1e-12` reported "an estimated tip error of NaN m"; now
+/// every mesh carries its estimate and a cap names it (here 64 intervals cannot reach 1e-12 L).
+#[test]
+fn an_interval_cap_names_its_estimate_and_exits_3() {
+    let dir = scratch("cap-estimate");
+    let text = edited("# max_intervals = 8192 ", "max_intervals = 64 ");
+    std::fs::write(dir.join("robot.toml"), text).unwrap();
+    let out = run(&dir, &["solve", "robot.toml", "--tol", "1e-12"], None);
+    assert_eq!(out.status.code(), Some(3), "{}", stderr(&out));
+    let message = stderr(&out);
+    assert!(!message.contains("NaN"), "{message}");
+    assert!(
+        message.contains("needs more than the cap of 64 intervals") && message.contains("estimated tip error of"),
+        "{message}"
+    );
+}
+
+/// Issue 18: a file that is not UTF-8 was rejected without a position.
+#[test]
+fn a_file_that_is_not_utf8_names_the_line_and_byte() {
+    let dir = scratch("not-utf8");
+    let mut bytes = example().into_bytes();
+    let at = bytes.iter().position(|&b| b == b'\n').unwrap() + 1;
+    bytes.insert(at + 2, 0xFF);
+    std::fs::write(dir.join("robot.toml"), &bytes).unwrap();
+    for command in ["check", "solve"] {
+        let out = run(&dir, &[command, "robot.toml"], None);
+        assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
+        let expected = format!(
+            "error: robot.toml:2: is not UTF-8 text: byte 0xFF at byte offset {} (byte 3 of line 2)",
+            at + 2
+        );
+        assert!(stderr(&out).starts_with(&expected), "{}", stderr(&out));
+    }
+}
+
+/// Issue 18: extreme values printed as hundreds of digits (`is -1000...0 m`).
+#[test]
+fn extreme_values_are_printed_in_scientific_notation() {
+    let text = edited("length = 0.242 ", "length = -1e300 ");
+    rejected("extreme", &text, &["`rod.length` is -1e300 m, but must be positive"]);
+    let dir = scratch("extreme-tension");
+    std::fs::write(dir.join("robot.toml"), example()).unwrap();
+    let out = run(&dir, &["solve", "robot.toml", "--tension", "1=-1e300"], None);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(
+        stderr(&out).contains("tension -1e300 N is negative"),
+        "{}",
+        stderr(&out)
+    );
+}
+
+/// Issue 18: a helix of 100 turns on the file's fixed 32 intervals exited 0 with a tip 18 cm
+/// (76 % of L) off; now exit 2 with the intervals that resolve it, and a solve on those.
+#[test]
+fn a_fixed_mesh_that_aliases_a_helix_exits_2_with_the_intervals_needed() {
+    // The file fixes its mesh (`intervals` without `tolerance`).
+    let text = edited("turns = 1.0,", "turns = 100.0,").replacen("\n# intervals = 32 ", "\nintervals = 32 ", 1);
+    let dir = scratch("aliased");
+    std::fs::write(dir.join("robot.toml"), &text).unwrap();
+    let out = run(&dir, &["solve", "robot.toml", "--tension", "5=2"], None);
+    assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
+    let message = stderr(&out);
+    for fragment in [
+        "`options.intervals` is 32 intervals",
+        "cannot resolve the robot",
+        "400 intervals resolve it",
+        "--tol",
+    ] {
+        assert!(message.contains(fragment), "no `{fragment}` in {message}");
+    }
+    // `check` gives the same verdict without solving.
+    let out = run(&dir, &["check", "robot.toml"], None);
+    assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
+    assert!(stderr(&out).starts_with("error: robot.toml: invalid input: `options.intervals` is 32 intervals"));
+    assert!(stderr(&out).contains("400 intervals resolve it"), "{}", stderr(&out));
+    let out = run(
+        &dir,
+        &["solve", "robot.toml", "--tension", "5=2", "--intervals", "400"],
+        None,
+    );
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    // A tolerance instead of the fixed mesh lets refinement choose it.
+    let tolerant = text.replacen("\nintervals = 32 ", "\ntolerance = 1e-4\nintervals = 32 ", 1);
+    assert_ne!(tolerant, text);
+    std::fs::write(dir.join("robot.toml"), &tolerant).unwrap();
+    let out = run(&dir, &["check", "robot.toml"], None);
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+}

@@ -224,3 +224,195 @@ fn meshes_beyond_the_caps_are_bad_input() {
         "{err}"
     );
 }
+
+/// Issue 18: an iteration count sizes the iteration history, so both solvers bound it before
+/// reserving anything (`usize::MAX` used to panic with a capacity overflow).
+#[test]
+fn iteration_counts_beyond_the_bound_are_bad_input() {
+    let robot = good();
+    for n in [collocation::MAX_ITERATIONS + 1, 1 << 32, usize::MAX] {
+        let c = collocation::Options {
+            max_iterations: n,
+            ..Default::default()
+        };
+        let err = collocation::solve(&robot, &c).unwrap_err();
+        assert!(
+            matches!(&err, Error::InvalidInput { field, .. } if field == "options.max_iterations"),
+            "{err}"
+        );
+        assert!(
+            err.to_string().contains(&format!("is {n}, above the limit of 10000")),
+            "{err}"
+        );
+        let s = tdcr::shooting::Options {
+            max_iterations: n,
+            ..Default::default()
+        };
+        let err = tdcr::shooting::solve(&robot, &s).unwrap_err();
+        assert!(
+            matches!(&err, Error::InvalidInput { field, .. } if field == "shooting.max_iterations"),
+            "{err}"
+        );
+        assert!(err.to_string().contains("above the limit of 10000"), "{err}");
+    }
+    let at_bound = collocation::Options {
+        max_iterations: collocation::MAX_ITERATIONS,
+        ..Default::default()
+    };
+    assert!(at_bound.validate().is_ok());
+}
+
+/// A robot of case H with its helical tendon making `turns` turns, pulled.
+fn helix(turns: f64) -> Robot {
+    let mut robot = tdcr::cases::case_h();
+    robot.tendons[4].routing = Routing::helical(tdcr::cases::TENDON_OFFSET, turns, 0.0);
+    robot
+}
+
+/// Issue 18: 100 helical turns on the default fixed mesh of 32 intervals converged to a tip
+/// 18 cm from the answer. A fixed mesh coarser than the resolution rule (pi/2 rad per
+/// interval: 4 per turn) is refused with the intervals that resolve it.
+#[test]
+fn a_fixed_mesh_that_cannot_resolve_the_routing_is_refused() {
+    let robot = helix(100.0);
+    let err = collocation::solve(&robot, &collocation::Options::fixed(32)).unwrap_err();
+    assert!(
+        matches!(&err, Error::InvalidInput { field, .. } if field == "options.intervals"),
+        "{err}"
+    );
+    let message = err.to_string();
+    for fragment in [
+        "is 32 intervals",
+        "the routing of `tendons[4]` turns about the backbone by up to 19.63 rad",
+        "at most pi/2 rad",
+        "aliased",
+        "400 intervals resolve it",
+        "give a tip tolerance",
+    ] {
+        assert!(message.contains(fragment), "no `{fragment}` in: {message}");
+    }
+    // Explicit mesh points are held to the same rule, at `options.mesh`.
+    let points = collocation::Options {
+        mesh: Some((0..=100).map(|k| robot.length() * k as f64 / 100.0).collect()),
+        tolerance: None,
+        max_intervals: 1000,
+        ..Default::default()
+    };
+    let err = collocation::solve(&robot, &points).unwrap_err();
+    assert!(
+        matches!(&err, Error::InvalidInput { field, .. } if field == "options.mesh"),
+        "{err}"
+    );
+    // The resolving mesh is accepted, and a tolerance lets refinement choose.
+    let resolved = collocation::Options::fixed(400);
+    assert!(collocation::solve(&robot, &resolved).is_ok());
+    // A rod precurved by 4 pi rad needs 8 intervals.
+    let bent = Robot::new(
+        Rod::solid_circle(LENGTH, RADIUS, MODULUS, POISSON).with_precurvature(Vector3::new(
+            0.0,
+            4.0 * std::f64::consts::PI / LENGTH,
+            0.0,
+        )),
+    );
+    let coarse = collocation::Options::fixed(7);
+    let err = collocation::solve(&bent, &coarse).unwrap_err();
+    assert!(err.to_string().contains("the rod's precurvature turns"), "{err}");
+    assert!(err.to_string().contains("8 intervals resolve it"), "{err}");
+}
+
+/// The rule refuses only aliased meshes: one helical turn (case H) on 4 intervals, the
+/// coarsest mesh the rule allows, is solved to within 0.6 % of the rod length, and 16 turns
+/// on 64 intervals within 3 %, while 3 intervals per turn (refused) are 8 % off for 16 turns
+/// (the study in `tdcr::advanced::mesh::resolution`).
+#[test]
+fn the_coarsest_mesh_the_rule_allows_is_not_aliased() {
+    for (turns, intervals, bound) in [(1.0, 4, 0.006), (16.0, 64, 0.03)] {
+        let robot = helix(turns);
+        let fine = collocation::Options {
+            intervals: 64 * turns as usize,
+            tolerance: Some(1e-9),
+            max_intervals: 100_000,
+            ..Default::default()
+        };
+        let reference = collocation::solve(&robot, &fine).unwrap().tip_position();
+        let coarse = collocation::Options::fixed(intervals);
+        let tip = collocation::solve(&robot, &coarse).unwrap().tip_position();
+        let error = (tip - reference).norm() / robot.length();
+        // bound: the study's error at pi/2 rad per interval (5.2e-3 and 2.4e-2), rounded up
+        assert!(
+            error < bound,
+            "{turns} turns on {intervals} intervals: tip error {error:.2e} L"
+        );
+        let refused = collocation::Options::fixed(intervals - 1);
+        assert!(collocation::solve(&robot, &refused).is_err());
+    }
+}
+
+/// Issue 18: `--intervals 8192 --tol 1e-12` said "estimated tip error of NaN m": every mesh
+/// now has its deferred-correction estimate, so the cap names a finite one.
+#[test]
+fn an_interval_cap_names_a_finite_estimate() {
+    let options = collocation::Options {
+        intervals: 64,
+        max_intervals: 64,
+        tolerance: Some(1e-12),
+        ..Default::default()
+    };
+    // Case H on 64 intervals is 1.7e-8 m off, far from 1e-12 L.
+    let err = collocation::solve(&tdcr::cases::case_h(), &options).unwrap_err();
+    let Error::IntervalCap { cap, estimate, .. } = err else {
+        panic!("{err}");
+    };
+    assert_eq!(cap, 64);
+    assert!(estimate.is_finite() && estimate > 0.0, "{estimate}");
+    let message = err.to_string();
+    assert!(!message.contains("NaN"), "{message}");
+    for fragment in [
+        "needs more than the cap of 64 intervals",
+        "estimated tip error of",
+        "raise `max_intervals`",
+    ] {
+        assert!(message.contains(fragment), "no `{fragment}` in: {message}");
+    }
+}
+
+/// Issue 18: extreme values printed as hundreds of digits; messages print them like `%g`.
+#[test]
+fn extreme_values_print_in_scientific_notation() {
+    let mut robot = good();
+    robot.tendons[1].tension = -1e300;
+    assert_invalid(&robot, "tendons[1].tension", &["is -1e300 N"]);
+    for (x, shown) in [
+        (0.25, "0.25"),
+        (-1e300, "-1e300"),
+        (1e6, "1e6"),
+        (999_999.5, "999999.5"),
+        (1e-4, "0.0001"),
+        (3e-5, "3e-5"),
+        (0.0, "0"),
+        (f64::NAN, "NaN"),
+    ] {
+        assert_eq!(tdcr::Readable(x).to_string(), shown);
+    }
+}
+
+/// Newton reserves its iteration history up front: called directly (through
+/// `tdcr::advanced`, past `Options::validate`) with `usize::MAX` iterations it reserves at most
+/// `MAX_ITERATIONS` records instead of panicking with a capacity overflow.
+#[test]
+fn newton_called_directly_with_a_huge_limit_does_not_overflow_its_history() {
+    use tdcr::advanced::{equations::Model, guess, mesh::Mesh, newton, system::System};
+    let robot = tdcr::cases::case_s();
+    let system = System::new(Model::new(&robot), Mesh::uniform(&robot, 16).unwrap());
+    let mut workspace = newton::Workspace::new(&system, collocation::LinearSolver::Auto).unwrap();
+    let mut x = guess::rigid_estimate(&system.model, &system.mesh.nodes);
+    let settings = newton::Settings {
+        tolerance: 1e-11,
+        max_iterations: usize::MAX,
+        reuse_factors: false,
+    };
+    let mut report = tdcr::SolveReport::new(tdcr::Method::Collocation);
+    let (termination, _) = newton::run(&system, &mut workspace, &mut x, &settings, &mut report);
+    assert_eq!(termination, tdcr::Termination::Converged);
+    assert!(report.history.capacity() <= collocation::MAX_ITERATIONS);
+}

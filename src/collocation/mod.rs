@@ -34,16 +34,17 @@ pub(crate) mod system;
 pub(crate) mod unknowns;
 
 use crate::error::Result;
+use crate::error::invalid;
 use crate::mesh::guess;
 pub use crate::mesh::guess::InitialGuess;
-use crate::mesh::{Mesh, nodes};
+use crate::mesh::{Mesh, nodes, resolution};
 use crate::model::equations::Model;
 use crate::report::{Method, SolveReport, Termination};
 use crate::solution::{Node, Solution, State};
 use crate::{Error, Robot};
 pub use linear::LinearSolver;
 use newton::{Settings, Workspace};
-pub use options::{DEFAULT_TOLERANCE, MAX_INTERVALS, Options};
+pub use options::{DEFAULT_TOLERANCE, MAX_INTERVALS, MAX_ITERATIONS, Options};
 use std::time::Instant;
 use system::System;
 
@@ -135,6 +136,67 @@ fn initial_mesh(robot: &Robot, options: &Options, warm: Option<&Solution>) -> Re
     }
 }
 
+/// Checks that the mesh `options` fix resolves `robot` (validated) by the resolution rule
+/// (at most pi/2 rad of a routing's turn or of the precurvature per interval, docs/numerics.md
+/// "Resolution"): what [`solve`] checks before it iterates, for a caller (such as `tdcr
+/// check`) that wants the verdict without solving. Options with a `tolerance` pass: their mesh
+/// is only the start of refinement.
+///
+/// # Errors
+/// [`Error::InvalidInput`] on `options.intervals` (`options.mesh` for explicit points) with
+/// the intervals that would resolve the robot, or for a mesh that cannot be built.
+pub fn check_resolution(robot: &Robot, options: &Options) -> Result<()> {
+    if options.tolerance.is_some() {
+        return Ok(());
+    }
+    resolves(robot, options, &initial_mesh(robot, options, None)?)
+}
+
+/// Checks that a fixed `mesh` (no tolerance) resolves the robot ([`resolution::required`]):
+/// a coarser one would converge to an aliased shape without a sign of it.
+///
+/// # Errors
+/// [`Error::InvalidInput`] on `options.intervals` (`options.mesh` for explicit points) with
+/// the intervals that would resolve the robot.
+fn resolves(robot: &Robot, options: &Options, mesh: &Mesh) -> Result<()> {
+    let need = resolution::required(robot);
+    let longest = mesh.nodes.windows(2).map(|w| w[1].s - w[0].s).fold(0.0, f64::max);
+    let (field, given, coarse) = match &options.mesh {
+        // 1e-9: a uniform mesh of exactly the needed intervals passes despite rounding.
+        Some(_) => (
+            "options.mesh",
+            mesh.intervals(),
+            longest > need.longest_interval() * (1.0 + 1e-9),
+        ),
+        None => (
+            "options.intervals",
+            options.intervals,
+            options.intervals < need.intervals,
+        ),
+    };
+    if !coarse {
+        return Ok(());
+    }
+    let what = match need.feature {
+        Some(resolution::Feature::Routing(i)) => format!("the routing of `tendons[{i}]` turns about the backbone"),
+        _ => "the rod's precurvature turns".to_string(),
+    };
+    Err(invalid(
+        field,
+        format!(
+            "is {given} intervals, but {what} by up to {:.2} rad in one of them, and an interval may \
+             span at most pi/2 rad (the resolution rule, docs/numerics.md): this mesh cannot resolve \
+             the robot and would give an aliased shape; {} intervals resolve it",
+            need.rate * longest,
+            need.intervals
+        ),
+        format!(
+            "use at least {} intervals, or give a tip tolerance (`tolerance`, --tol) instead of a fixed mesh",
+            need.intervals
+        ),
+    ))
+}
+
 /// Of a warm start and the cold initial guess, the one with the smaller scaled residual. A
 /// previous solution for other tensions can be a worse start than the rigid-equilibrium
 /// estimate, which is nearly exact for tendon-dominated loading; comparing costs one
@@ -175,6 +237,9 @@ fn solve_impl(robot: &Robot, options: &Options, warm: Option<&Solution>, cache: 
     let model = Model::new(robot);
     let mut report = SolveReport::new(Method::Collocation);
     let mut mesh = initial_mesh(robot, options, warm)?;
+    if options.tolerance.is_none() {
+        resolves(robot, options, &mesh)?;
+    }
     let warm = warm.map(|g| interpolate(g, &mesh));
     // The cached factors belong to the guess when it is the cached solver's last solution.
     let reuse = match (cache.as_ref(), &warm) {
@@ -182,9 +247,11 @@ fn solve_impl(robot: &Robot, options: &Options, warm: Option<&Solution>, cache: 
         _ => false,
     };
     let mut cold = guess::initial(&model, &mesh.nodes, options.initial_guess);
-    // Error-controlled cold starts begin on a mesh that resolves the initial guess.
+    // Error-controlled cold starts begin on a mesh that resolves the initial guess and the
+    // routings (the resolution rule).
     if options.tolerance.is_some() && options.mesh.is_none() && warm.is_none() {
-        let needed = refine::start_intervals(robot, &cold, options.intervals).min(options.max_intervals);
+        let floor = options.intervals.max(resolution::required(robot).intervals);
+        let needed = refine::start_intervals(robot, &cold, floor).min(options.max_intervals);
         if needed > mesh.intervals() {
             mesh = Mesh::uniform(robot, needed)?;
             cold = guess::initial(&model, &mesh.nodes, options.initial_guess);

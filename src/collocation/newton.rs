@@ -6,6 +6,7 @@
 //! checked for finiteness (a numerically zero pivot shows up as inf/NaN): a singular matrix
 //! is a [`Termination::SingularJacobian`], never a panic.
 
+use super::MAX_ITERATIONS;
 use super::linear::{Linear, LinearSolver};
 use super::system::System;
 use super::unknowns::nonzeros;
@@ -176,8 +177,10 @@ pub fn run(
     report: &mut SolveReport,
 ) -> (Termination, usize) {
     report.history.clear();
-    // Reserved up front so that recording iterations never allocates inside the loop.
-    report.history.reserve(settings.max_iterations);
+    // Reserved up front so that recording iterations never allocates inside the loop; at
+    // most MAX_ITERATIONS records, the bound `Options::validate` enforces, so that a caller
+    // of this function with a huge limit cannot overflow the reservation.
+    report.history.reserve(settings.max_iterations.min(MAX_ITERATIONS));
     let t = Instant::now();
     let first = system.residual(x, &mut ws.residual);
     report.timings.assembly += t.elapsed();

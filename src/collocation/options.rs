@@ -1,12 +1,18 @@
 //! The collocation solver's options: mesh, error control, Newton and the linear solver.
 
 use super::linear::LinearSolver;
+use crate::Readable;
 use crate::error::{Result, invalid};
 use crate::mesh::guess::InitialGuess;
 
 /// The most intervals any mesh may have: memory grows by about 5 kB per interval (Jacobian
 /// values and elimination panels), so this is about 0.5 GB.
 pub const MAX_INTERVALS: usize = 100_000;
+
+/// The most Newton iterations a solve may be given (`max_iterations` of both solvers): the
+/// solvers reserve one history record per allowed iteration, and Newton converges
+/// quadratically in a few dozen iterations or not at all, so more only costs memory.
+pub const MAX_ITERATIONS: usize = 10_000;
 
 /// The default tip tolerance, relative to the rod length: the tip position to 1e-7 L and the
 /// tip orientation to 1e-7 rad (0.024 um and 0.1 urad on the paper's 0.242 m prototype),
@@ -37,7 +43,8 @@ pub struct Options {
     /// Newton stops when the scaled residual max-norm is at or below this (dimensionless).
     /// Default 1e-11 (a few hundred times rounding of O(1) scaled quantities).
     pub residual_tolerance: f64,
-    /// Newton iterations per solve (per load step with continuation). Default 30.
+    /// Newton iterations per solve (per load step with continuation). Default 30; at most
+    /// [`MAX_ITERATIONS`].
     pub max_iterations: usize,
     /// Use load continuation when the direct solve fails. Default true.
     pub continuation: bool,
@@ -74,8 +81,8 @@ impl Options {
         }
     }
 
-    /// Checks the options that do not depend on the robot: positive tolerances, at least one
-    /// Newton iteration, the starting mesh within `max_intervals` and that within
+    /// Checks the options that do not depend on the robot: positive tolerances, from one to
+    /// [`MAX_ITERATIONS`] Newton iterations, the starting mesh within `max_intervals` and that within
     /// [`MAX_INTERVALS`].
     ///
     /// # Errors
@@ -87,6 +94,13 @@ impl Options {
                 "options",
                 "needs residual_tolerance > 0 and max_iterations >= 1",
                 "use Options::default() and change single fields",
+            ));
+        }
+        if self.max_iterations > MAX_ITERATIONS {
+            return Err(invalid(
+                "options.max_iterations",
+                format!("is {}, above the limit of {MAX_ITERATIONS}", self.max_iterations),
+                "Newton converges in a few dozen iterations or not at all, so more only costs memory; the default is 30",
             ));
         }
         if self.max_intervals > MAX_INTERVALS {
@@ -109,7 +123,7 @@ impl Options {
         {
             return Err(invalid(
                 "options.tolerance",
-                format!("is {tol}"),
+                format!("is {}", Readable(tol)),
                 "give a positive tip tolerance relative to the rod length (1e-7 is the default), or None for a fixed mesh",
             ));
         }

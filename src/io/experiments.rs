@@ -155,7 +155,10 @@ pub fn parse_csv(text: &str, file: &str, tendons: usize) -> Result<Vec<Measureme
             let cell = cell.trim();
             let problem = match cell.parse::<f64>() {
                 Ok(x) if !x.is_finite() => Some(format!("is `{cell}`, not a finite number")),
-                Ok(x) if slot < tendons && x < 0.0 => Some(format!("is {x} N: a tendon can only pull (tension >= 0)")),
+                Ok(x) if slot < tendons && x < 0.0 => Some(format!(
+                    "is {} N: a tendon can only pull (tension >= 0)",
+                    crate::Readable(x)
+                )),
                 Ok(x) => {
                     values[slot] = x;
                     None

@@ -3,7 +3,9 @@
 
 pub mod guess;
 pub mod nodes;
+pub mod resolution;
 
+use crate::Readable;
 use crate::error::{Result, invalid};
 use crate::model::robot::Robot;
 
@@ -63,7 +65,7 @@ impl Mesh {
         {
             return Err(invalid(
                 format!("mesh[{i}]"),
-                format!("is {s} m, outside [0, {length}]"),
+                format!("is {} m, outside [0, {}]", Readable(s), Readable(length)),
                 "give mesh points on the rod",
             ));
         }

@@ -1,5 +1,6 @@
 //! The whole robot: backbone, tendons, loads and base pose, validated once.
 
+use crate::Readable;
 use crate::error::{Result, invalid};
 use crate::model::loads::Loads;
 use crate::model::rod::{Geometry, ReferenceStrains, Rod};
@@ -118,7 +119,7 @@ impl Robot {
         if !(l.is_finite() && l > 0.0) {
             return Err(invalid(
                 "rod.length",
-                format!("is {l}"),
+                format!("is {}", Readable(l)),
                 "give a positive, finite length in m",
             ));
         }
@@ -135,7 +136,13 @@ impl Robot {
                 if v.iter().any(|x| !(x.is_finite() && *x > 0.0)) {
                     return Err(invalid(
                         "rod.stiffness",
-                        format!("{name} is ({}, {}, {}) at s = {s} m", v[0], v[1], v[2]),
+                        format!(
+                            "{name} is ({}, {}, {}) at s = {} m",
+                            Readable(v[0]),
+                            Readable(v[1]),
+                            Readable(v[2]),
+                            Readable(s)
+                        ),
                         "every stiffness must be positive and finite: check radius and moduli",
                     ));
                 }
@@ -143,7 +150,7 @@ impl Robot {
             if !(sp.kse_s.iter().chain(sp.kbt_s.iter()).all(|x| x.is_finite())) {
                 return Err(invalid(
                     "rod.stiffness",
-                    format!("derivative is not finite at s = {s} m"),
+                    format!("derivative is not finite at s = {} m", Readable(s)),
                     "fix the stiffness function",
                 ));
             }
@@ -152,14 +159,14 @@ impl Robot {
             if all.iter().any(|v| v.iter().any(|x| !x.is_finite())) {
                 return Err(invalid(
                     "rod.reference",
-                    format!("is not finite at s = {s} m"),
+                    format!("is not finite at s = {} m", Readable(s)),
                     "fix v*, u* or their derivatives",
                 ));
             }
             if r.v_star[2] <= 0.0 {
                 return Err(invalid(
                     "rod.reference.v_star",
-                    format!("has z = {} <= 0 at s = {s} m", r.v_star[2]),
+                    format!("has z = {} <= 0 at s = {} m", Readable(r.v_star[2]), Readable(s)),
                     "the reference axial strain v*_z must be positive (1 for an unstretched rod)",
                 ));
             }
@@ -196,7 +203,7 @@ impl Robot {
             if !(p.s.is_finite() && p.s > 0.0 && p.s <= l) {
                 return Err(invalid(
                     format!("loads.point[{i}].s"),
-                    format!("is {} m, outside (0, {l}]", p.s),
+                    format!("is {} m, outside (0, {}]", Readable(p.s), Readable(l)),
                     "place point loads on the rod, after the base",
                 ));
             }
@@ -211,7 +218,7 @@ impl Robot {
         if !(t.tension.is_finite() && t.tension >= 0.0) {
             return Err(invalid(
                 format!("tendons[{i}].tension"),
-                format!("is {} N", t.tension),
+                format!("is {} N", Readable(t.tension)),
                 "a string can only pull: give a finite tension >= 0",
             ));
         }
@@ -219,7 +226,7 @@ impl Robot {
         if !(end.is_finite() && end > 0.0 && end <= l) {
             return Err(invalid(
                 format!("tendons[{i}].termination"),
-                format!("is s = {end} m, outside (0, {l}]"),
+                format!("is s = {} m, outside (0, {}]", Readable(end), Readable(l)),
                 "set the termination to at most the rod length and above 0",
             ));
         }
@@ -248,14 +255,14 @@ impl Robot {
             if [rp.r, rp.r_s, rp.r_ss].iter().any(|v| v.iter().any(|x| !x.is_finite())) {
                 return Err(invalid(
                     format!("tendons[{i}].routing"),
-                    format!("is not finite at s = {s} m"),
+                    format!("is not finite at s = {} m", Readable(s)),
                     "fix the routing function",
                 ));
             }
             if rp.r[2] != 0.0 || rp.r_s[2] != 0.0 || rp.r_ss[2] != 0.0 {
                 return Err(invalid(
                     format!("tendons[{i}].routing"),
-                    format!("has a z component at s = {s} m"),
+                    format!("has a z component at s = {} m", Readable(s)),
                     "r(s) lies in the cross-section: z must be 0",
                 ));
             }
@@ -277,7 +284,7 @@ fn validate_geometry(g: &Geometry) -> Result<()> {
         } else {
             Err(invalid(
                 field,
-                format!("is {x} {unit}"),
+                format!("is {} {unit}", Readable(x)),
                 format!("give a positive, finite value in {unit}"),
             ))
         }
@@ -287,7 +294,11 @@ fn validate_geometry(g: &Geometry) -> Result<()> {
     if !(g.inner_radius.is_finite() && g.inner_radius >= 0.0 && g.inner_radius < g.outer_radius) {
         return Err(invalid(
             "rod.inner_radius",
-            format!("is {} m with outer radius {} m", g.inner_radius, g.outer_radius),
+            format!(
+                "is {} m with outer radius {} m",
+                Readable(g.inner_radius),
+                Readable(g.outer_radius)
+            ),
             "the inner radius must be >= 0 and below the outer radius",
         ));
     }
@@ -295,7 +306,7 @@ fn validate_geometry(g: &Geometry) -> Result<()> {
     if !(nu.is_finite() && nu > -1.0 && nu <= 0.5) {
         return Err(invalid(
             "rod.poisson_ratio",
-            format!("is {nu}"),
+            format!("is {}", Readable(nu)),
             "Poisson's ratio must lie in (-1, 0.5]",
         ));
     }
@@ -308,7 +319,7 @@ fn check_vec(field: &str, v: &Vector3<f64>) -> Result<()> {
     } else {
         Err(invalid(
             field,
-            format!("is ({}, {}, {})", v[0], v[1], v[2]),
+            format!("is ({}, {}, {})", Readable(v[0]), Readable(v[1]), Readable(v[2])),
             "every component must be a finite number",
         ))
     }

@@ -1,6 +1,7 @@
 //! Tendon routings: where a tendon crosses each cross-section, r(s) = (x(s), y(s), 0) in the
 //! body frame (eq. 6), with exact first and second derivatives.
 
+use crate::Readable;
 use nalgebra::Vector3;
 use num_dual::{Dual2_64, second_derivative};
 use std::f64::consts::PI;
@@ -100,10 +101,14 @@ impl Routing {
 impl fmt::Debug for Routing {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
-            Routing::Straight { x, y } => write!(f, "Straight {{ x: {x}, y: {y} }}"),
-            Routing::Helical { radius, turns, phase } => {
-                write!(f, "Helical {{ radius: {radius}, turns: {turns}, phase: {phase} }}")
-            }
+            Routing::Straight { x, y } => write!(f, "Straight {{ x: {}, y: {} }}", Readable(*x), Readable(*y)),
+            Routing::Helical { radius, turns, phase } => write!(
+                f,
+                "Helical {{ radius: {}, turns: {}, phase: {} }}",
+                Readable(*radius),
+                Readable(*turns),
+                Readable(*phase)
+            ),
             Routing::Custom(_) => f.write_str("Custom(<fn>)"),
         }
     }

@@ -9,13 +9,14 @@
 //! Jacobian is taken by central differences.
 #![allow(non_snake_case)]
 
+use crate::collocation::MAX_ITERATIONS;
 use crate::error::{Result, invalid};
 use crate::mesh::guess::{self, InitialGuess};
 use crate::mesh::{Mesh, nodes};
 use crate::model::equations::{Model, Site};
 use crate::report::{Iteration, Method, SolveReport, Termination};
 use crate::solution::{Solution, State};
-use crate::{Error, Robot, so3};
+use crate::{Error, Readable, Robot, so3};
 use nalgebra::{Matrix3, SMatrix, SVector, Vector3};
 use num_dual::DualSVec64;
 use std::time::Instant;
@@ -28,7 +29,7 @@ pub struct Options {
     pub integration_tolerance: f64,
     /// Newton stops when the scaled tip residual is below this. Default 1e-9 (dimensionless).
     pub tolerance: f64,
-    /// Newton iteration limit. Default 50.
+    /// Newton iteration limit. Default 50; at most [`MAX_ITERATIONS`].
     pub max_iterations: usize,
     /// Where Newton starts. Default: the rigid-equilibrium estimate.
     pub initial_guess: InitialGuess,
@@ -46,7 +47,8 @@ impl Default for Options {
 }
 
 impl Options {
-    /// Checks the options.
+    /// Checks the options: the integration tolerance in [1e-14, 1e-2], a positive Newton
+    /// tolerance, from one to [`MAX_ITERATIONS`] iterations.
     ///
     /// # Errors
     /// [`Error::InvalidInput`] naming the field.
@@ -55,14 +57,14 @@ impl Options {
         if !(self.integration_tolerance.is_finite() && (1e-14..=1e-2).contains(&self.integration_tolerance)) {
             return Err(invalid(
                 "shooting.integration_tolerance",
-                format!("is {}", self.integration_tolerance),
+                format!("is {}", Readable(self.integration_tolerance)),
                 "use a value in [1e-14, 1e-2] (1e-10 by default)",
             ));
         }
         if !(self.tolerance.is_finite() && self.tolerance > 0.0) {
             return Err(invalid(
                 "shooting.tolerance",
-                format!("is {}", self.tolerance),
+                format!("is {}", Readable(self.tolerance)),
                 "use a positive value (1e-9 by default)",
             ));
         }
@@ -71,6 +73,13 @@ impl Options {
                 "shooting.max_iterations",
                 "is 0",
                 "allow at least one Newton iteration",
+            ));
+        }
+        if self.max_iterations > MAX_ITERATIONS {
+            return Err(invalid(
+                "shooting.max_iterations",
+                format!("is {}, above the limit of {MAX_ITERATIONS}", self.max_iterations),
+                "Newton converges in a few dozen iterations or not at all, so more only costs memory; the default is 50",
             ));
         }
         Ok(())

@@ -107,7 +107,10 @@ pub fn parse_tension(text: &str) -> Result<(usize, f64), String> {
     let (index, value) = parse_tendon(text)?;
     let tension = parse_number(value, "a tension in N")?;
     if tension < 0.0 {
-        return Err(format!("tension {tension} N is negative: a tendon can only pull"));
+        return Err(format!(
+            "tension {} N is negative: a tendon can only pull",
+            tdcr::Readable(tension)
+        ));
     }
     Ok((index, tension))
 }

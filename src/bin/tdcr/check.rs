@@ -2,11 +2,18 @@
 
 use crate::failure::{Failure, emit};
 use crate::robot_args::read_robot;
+use tdcr::Method;
 
-/// `tdcr check FILE`: reads and checks a robot file, one line on success.
+/// `tdcr check FILE`: reads and checks a robot file (with its fixed mesh, if any, against the
+/// resolution rule), one line on success.
 pub fn run(file: &str) -> Result<(), Failure> {
     let (name, parsed) = read_robot(file)?;
     let r = &parsed.robot;
+    // The file's fixed mesh must resolve the robot, as `solve` would require.
+    if parsed.solver.method == Method::Collocation {
+        tdcr::collocation::check_resolution(r, &parsed.solver.collocation)
+            .map_err(|e| Failure::Input(format!("{name}: {e}")))?;
+    }
     let pulled = r.tendons.iter().filter(|t| t.tension > 0.0).count();
     emit(&format!(
         "{name}: OK: a {:.4} m rod with {} tendon(s) ({pulled} pulled), {} point load(s); solver: {}\n",

@@ -9,19 +9,33 @@ use crate::failure::{Failure, note, solver_failure};
 
 /// Reads and checks a robot file (`-`: standard input); every problem is one message line.
 pub fn read_robot(file: &str) -> Result<(String, RobotFile), Failure> {
-    let (name, text) = if file == "-" {
-        let mut text = String::new();
+    let (name, bytes) = if file == "-" {
+        let mut bytes = Vec::new();
         std::io::stdin()
-            .read_to_string(&mut text)
+            .read_to_end(&mut bytes)
             .map_err(|e| Failure::Input(format!("cannot read the robot file from standard input: {e}")))?;
-        ("<stdin>".to_string(), text)
+        ("<stdin>".to_string(), bytes)
     } else {
-        let text =
-            std::fs::read_to_string(file).map_err(|e| Failure::Input(format!("cannot read robot file {file}: {e}")))?;
-        (file.to_string(), text)
+        let bytes = std::fs::read(file).map_err(|e| Failure::Input(format!("cannot read robot file {file}: {e}")))?;
+        (file.to_string(), bytes)
     };
-    let robot = tdcr::io::parse(&text, &name).map_err(|e| Failure::Input(e.to_string()))?;
+    let text = std::str::from_utf8(&bytes).map_err(|e| Failure::Input(not_utf8(&name, &bytes, &e)))?;
+    let robot = tdcr::io::parse(text, &name).map_err(|e| Failure::Input(e.to_string()))?;
     Ok((name, robot))
+}
+
+/// Where a file stops being UTF-8: the line and byte offset of its first invalid byte.
+fn not_utf8(name: &str, bytes: &[u8], e: &std::str::Utf8Error) -> String {
+    let at = e.valid_up_to();
+    let before = &bytes[..at];
+    let line = before.iter().filter(|&&b| b == b'\n').count() + 1;
+    let line_start = before.iter().rposition(|&b| b == b'\n').map_or(0, |i| i + 1);
+    format!(
+        "{name}:{line}: is not UTF-8 text: byte 0x{:02X} at byte offset {at} (byte {} of line {line}) \
+         is not valid UTF-8; save the file as UTF-8 (robot files are TOML, which is UTF-8)",
+        bytes[at],
+        at - line_start + 1
+    )
 }
 
 /// Sets the tension of tendon `index` (from 1); a number past the last tendon is bad input.

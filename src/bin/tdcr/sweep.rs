@@ -98,6 +98,13 @@ pub fn run(args: &SweepArgs) -> Result<(), Failure> {
             v.len()
         )));
     }
+    for (k, (i, _)) in args.tension.iter().enumerate() {
+        if args.tension[..k].iter().any(|(j, _)| j == i) {
+            return Err(Failure::Input(format!(
+                "--tension {i}=... is given twice: give each tendon one range or value"
+            )));
+        }
+    }
     for &(i, ref v) in &args.tension {
         set_tension(&mut file.robot, i, v[0])?;
     }
@@ -121,7 +128,11 @@ pub fn run(args: &SweepArgs) -> Result<(), Failure> {
         let solution = match run_solver(&robot, &file, last.as_ref()) {
             Ok(s) => s,
             Err(f) => {
-                let tensions: Vec<String> = robot.tendons.iter().map(|t| format!("{}", t.tension)).collect();
+                let tensions: Vec<String> = robot
+                    .tendons
+                    .iter()
+                    .map(|t| tdcr::Readable(t.tension).to_string())
+                    .collect();
                 let text = match f {
                     Failure::NotConverged(t) | Failure::Input(t) | Failure::Other(t) => t,
                     Failure::BrokenPipe => String::new(),

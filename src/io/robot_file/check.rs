@@ -5,8 +5,8 @@
 use super::build::rotation_from_rows;
 use super::tables::{BaseTable, LoadsTable, RodTable, RoutingTable, SolverTable, TendonTable, Vec3};
 use crate::io::Problem;
-use crate::io::locate::Locator;
-use crate::{Error, collocation, shooting, so3};
+use crate::io::locate::LazyLocator;
+use crate::{Error, Readable, collocation, shooting, so3};
 
 /// Largest |R^T R - I|, |det R - 1| accepted for a base rotation (the 1e-6: loose
 /// enough for matrices typed with 7 digits).
@@ -19,14 +19,14 @@ fn toml_number(x: f64) -> String {
     } else if x.is_infinite() {
         if x > 0.0 { "inf".into() } else { "-inf".into() }
     } else {
-        x.to_string()
+        Readable(x).to_string()
     }
 }
 
 /// Field-by-field rules; every broken rule is one problem.
 pub(super) struct Checker<'a> {
     /// Where each field is in the file.
-    pub(super) locator: &'a Locator,
+    pub(super) locator: &'a LazyLocator<'a>,
     /// The broken rules found so far, in the order checked.
     pub(super) problems: Vec<Problem>,
 }
@@ -35,7 +35,7 @@ impl Checker<'_> {
     /// One problem at `field`, placed where the file has it.
     fn report(&mut self, field: &str, message: String) {
         self.problems.push(Problem {
-            position: self.locator.find(field),
+            position: self.locator.get().find(field),
             field: field.to_string(),
             message,
         });
@@ -56,7 +56,7 @@ impl Checker<'_> {
     /// Reports `x` unless it is finite and above 0.
     fn positive(&mut self, field: &str, x: f64, unit: &str) {
         if self.finite(field, x, unit) && x <= 0.0 {
-            self.report(field, format!("is {x}{unit}, but must be positive"));
+            self.report(field, format!("is {}{unit}, but must be positive", Readable(x)));
         }
     }
 
@@ -86,14 +86,18 @@ impl Checker<'_> {
             if rod.inner_radius < 0.0 {
                 self.report(
                     "rod.inner_radius",
-                    format!("is {} m, but must be >= 0 (0 for a solid rod)", rod.inner_radius),
+                    format!(
+                        "is {} m, but must be >= 0 (0 for a solid rod)",
+                        Readable(rod.inner_radius)
+                    ),
                 );
             } else if rod.outer_radius.is_finite() && rod.inner_radius >= rod.outer_radius {
                 self.report(
                     "rod.inner_radius",
                     format!(
                         "is {} m, but must be below the outer radius {} m",
-                        rod.inner_radius, rod.outer_radius
+                        Readable(rod.inner_radius),
+                        Readable(rod.outer_radius)
                     ),
                 );
             }
@@ -110,7 +114,10 @@ impl Checker<'_> {
             ),
             (Some(nu), None) => {
                 if self.finite("rod.poisson_ratio", nu, "") && !(nu > -1.0 && nu <= 0.5) {
-                    self.report("rod.poisson_ratio", format!("is {nu}, but must lie in (-1, 0.5]"));
+                    self.report(
+                        "rod.poisson_ratio",
+                        format!("is {}, but must lie in (-1, 0.5]", Readable(nu)),
+                    );
                 }
             }
             (None, Some(g)) => self.positive("rod.shear_modulus", g, " Pa"),
@@ -160,7 +167,14 @@ impl Checker<'_> {
             let path = format!("loads.point[{}]", i + 1);
             let s = format!("{path}.s");
             if self.finite(&s, p.s, " m") && length.is_finite() && !(p.s > 0.0 && p.s <= length) {
-                self.report(&s, format!("is {} m, but must lie on the rod, in (0, {length}] m", p.s));
+                self.report(
+                    &s,
+                    format!(
+                        "is {} m, but must lie on the rod, in (0, {}] m",
+                        Readable(p.s),
+                        Readable(length)
+                    ),
+                );
             }
             self.vector(&format!("{path}.force"), &p.force, " N");
             self.vector(&format!("{path}.moment"), &p.moment, " N m");
@@ -174,7 +188,7 @@ impl Checker<'_> {
         if self.finite(&tension, t.tension, " N") && t.tension < 0.0 {
             self.report(
                 &tension,
-                format!("is {} N, but a tendon can only pull: must be >= 0", t.tension),
+                format!("is {} N, but a tendon can only pull: must be >= 0", Readable(t.tension)),
             );
         }
         if let Some(end) = t.end {
@@ -183,10 +197,17 @@ impl Checker<'_> {
                 if end > length {
                     self.report(
                         &field,
-                        format!("is {end} m, past the tip at {length} m: must be at most rod.length"),
+                        format!(
+                            "is {} m, past the tip at {} m: must be at most rod.length",
+                            Readable(end),
+                            Readable(length)
+                        ),
                     );
                 } else if end <= 0.0 {
-                    self.report(&field, format!("is {end} m, but must be above 0 (the base)"));
+                    self.report(
+                        &field,
+                        format!("is {} m, but must be above 0 (the base)", Readable(end)),
+                    );
                 }
             }
         }
@@ -268,7 +289,7 @@ impl Checker<'_> {
                 .validate(),
                 shooting::Options { tolerance: x, ..s() }.validate(),
             ];
-            self.library_rule("solver.residual_tolerance", &x.to_string(), &checks);
+            self.library_rule("solver.residual_tolerance", &Readable(x).to_string(), &checks);
         }
         if let Some(n) = solver.max_iterations {
             let checks = [
@@ -291,7 +312,7 @@ impl Checker<'_> {
                 ..c()
             }
             .validate()];
-            self.library_rule("solver.tolerance", &format!("{t} m"), &checks);
+            self.library_rule("solver.tolerance", &format!("{} m", Readable(t)), &checks);
         }
         if let Some(x) = integration {
             let checks = [shooting::Options {
@@ -299,7 +320,7 @@ impl Checker<'_> {
                 ..s()
             }
             .validate()];
-            self.library_rule("solver.integration_tolerance", &x.to_string(), &checks);
+            self.library_rule("solver.integration_tolerance", &Readable(x).to_string(), &checks);
         }
         // The cap on its own (with a starting mesh within it), then the starting mesh
         // against the cap: at `intervals` if given, else at the cap that the default breaks.

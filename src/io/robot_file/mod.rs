@@ -13,7 +13,7 @@ mod tables;
 use self::build::{build, library_problem, settings};
 use self::check::Checker;
 use self::tables::{BaseTable, LoadsTable, RodTable, SolverTable, TABLES, TendonTable};
-use super::locate::{Locator, position};
+use super::locate::{LazyLocator, Lines};
 use super::printable;
 use super::{FileError, Problem};
 use crate::report::Method;
@@ -81,21 +81,22 @@ pub fn parse(text: &str, file: &str) -> Result<RobotFile, FileError> {
             "is empty: a robot file needs at least a [rod] table (`tdcr example` prints one to start from)",
         )]));
     }
+    let lines = Lines::new(text);
     let (root, errors) = DeTable::parse_recoverable(text);
     if !errors.is_empty() {
         let problems = errors
             .iter()
             .map(|e| Problem {
-                position: e.span().map(|s| position(text, s.start)),
+                position: e.span().map(|s| lines.position(s.start)),
                 field: String::new(),
                 message: format!("is not valid TOML: {}", e.message().trim()),
             })
             .collect();
         return Err(fail(problems));
     }
-    let locator = Locator::new(text, root.get_ref());
+    let locator = LazyLocator::new(text);
     let mut reader = Reader {
-        text,
+        lines: &lines,
         locator: &locator,
         problems: Vec::new(),
     };
@@ -142,7 +143,11 @@ pub fn parse(text: &str, file: &str) -> Result<RobotFile, FileError> {
     );
     let robot = build(&rod, &base, &loads, &tendons);
     if let Err(e) = robot.validate() {
-        return Err(fail(vec![library_problem(&locator, &e, base.euler_xyz_deg.is_some())]));
+        return Err(fail(vec![library_problem(
+            locator.get(),
+            &e,
+            base.euler_xyz_deg.is_some(),
+        )]));
     }
     Ok(RobotFile {
         robot,
@@ -174,8 +179,8 @@ struct Tables {
 
 /// Deserializes the tables of a file, each failure one problem at its place in `text`.
 struct Reader<'a> {
-    text: &'a str,
-    locator: &'a Locator,
+    lines: &'a Lines<'a>,
+    locator: &'a LazyLocator<'a>,
     problems: Vec<Problem>,
 }
 
@@ -194,15 +199,15 @@ impl Reader<'_> {
                 "base" => tables.base = self.table(&name, value),
                 "loads" => tables.loads = self.table(&name, value),
                 "solver" => tables.solver = self.table(&name, value),
-                "tendon" => match value.get_ref() {
+                "tendon" => match value.into_inner() {
                     DeValue::Array(items) if items.iter().all(|t| t.get_ref().is_table()) => {
-                        for (i, item) in items.iter().enumerate() {
-                            let t = self.table(&format!("tendon[{}]", i + 1), item.clone());
+                        for (i, item) in items.into_iter().enumerate() {
+                            let t = self.table(&format!("tendon[{}]", i + 1), item);
                             tables.tendons.push(t);
                         }
                     }
                     _ => self.problems.push(Problem {
-                        position: Some(position(self.text, key.span().start)),
+                        position: Some(self.lines.position(key.span().start)),
                         field: name,
                         message: "must be an array of tables: start each tendon with [[tendon]] \
                                   (double brackets)"
@@ -216,7 +221,7 @@ impl Reader<'_> {
                         _ => String::new(),
                     };
                     self.problems.push(Problem {
-                        position: Some(position(self.text, key.span().start)),
+                        position: Some(self.lines.position(key.span().start)),
                         field: String::new(),
                         message: format!("unknown key `{name}` at the top level; the tables are {TABLES}{hint}"),
                     });
@@ -232,13 +237,13 @@ impl Reader<'_> {
         match T::deserialize(ValueDeserializer::from(value)) {
             Ok(t) => Some(t),
             Err(e) => {
-                let at = position(self.text, e.span().unwrap_or(span).start);
+                let at = self.lines.position(e.span().unwrap_or(span).start);
                 let raw = e.message().trim().replace('\n', " ");
                 let message = raw
                     .replace("expected f64", "expected a number")
                     .replace("expected usize", "expected a whole number >= 0");
                 // The key the error is at, if it belongs to this table.
-                let key = self.locator.key_at(at).filter(|p| p.starts_with(name));
+                let key = self.locator.get().key_at(at).filter(|p| p.starts_with(name));
                 let parent = |p: &str| p.rfind('.').map_or(name.to_string(), |i| p[..i].to_string());
                 let shown = match name.strip_prefix("tendon[") {
                     Some(rest) => format!("[[tendon]] #{}", rest.trim_end_matches(']')),
@@ -247,7 +252,7 @@ impl Reader<'_> {
                 // Missing and unknown fields are reported at their table (the key's value
                 // when that is a table, else the key's parent): name it.
                 let table = match &key {
-                    Some(k) if self.locator.is_table(k) => k.clone(),
+                    Some(k) if self.locator.get().is_table(k) => k.clone(),
                     Some(k) => parent(k),
                     None => name.to_string(),
                 };

@@ -1,10 +1,83 @@
 //! The serde tables of a robot file, one per TOML table, as deserialized and before any
 //! check: unknown keys are rejected, missing required fields reported by serde.
 
-use serde::Deserialize;
+use serde::de::{self, Deserializer, IgnoredAny, SeqAccess, Visitor};
+use serde::{Deserialize, de::DeserializeOwned};
+use std::fmt;
+use std::marker::PhantomData;
 
 /// A world- or body-frame vector as written in the file, `[x, y, z]`.
 pub(super) type Vec3 = [f64; 3];
+
+/// An array of exactly `N` entries of `T`: a longer or shorter one is an error that gives the
+/// length found and the length expected (serde's own arrays read the first `N` entries and
+/// ignore the rest). `what` says what the entries are.
+struct Exact<T, const N: usize> {
+    what: &'static str,
+    entries: PhantomData<T>,
+}
+
+impl<'de, T: DeserializeOwned + Copy + Default, const N: usize> Visitor<'de> for Exact<T, N> {
+    type Value = [T; N];
+
+    fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "an array of {N} {}", self.what)
+    }
+
+    fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> Result<[T; N], A::Error> {
+        let mut out = [T::default(); N];
+        let mut found = 0;
+        while found < N {
+            match seq.next_element::<T>()? {
+                Some(x) => out[found] = x,
+                None => break,
+            }
+            found += 1;
+        }
+        // Count the extra entries whatever their type: the length is the problem.
+        while seq.next_element::<IgnoredAny>()?.is_some() {
+            found += 1;
+        }
+        if found == N {
+            Ok(out)
+        } else {
+            Err(de::Error::custom(format_args!(
+                "has {found} entries, but must have {N} ({})",
+                self.what
+            )))
+        }
+    }
+}
+
+/// An optional `[x, y, z]` of exactly three numbers.
+fn vector<'de, D: Deserializer<'de>>(d: D) -> Result<Option<Vec3>, D::Error> {
+    d.deserialize_seq(Exact::<f64, 3> {
+        what: "numbers x, y, z",
+        entries: PhantomData,
+    })
+    .map(Some)
+}
+
+/// An optional 3 x 3 matrix given as exactly three rows of exactly three numbers.
+fn rows<'de, D: Deserializer<'de>>(d: D) -> Result<Option<[Vec3; 3]>, D::Error> {
+    /// One row of the matrix.
+    #[derive(Clone, Copy, Default)]
+    struct Row(Vec3);
+    impl<'de> Deserialize<'de> for Row {
+        fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Row, D::Error> {
+            d.deserialize_seq(Exact::<f64, 3> {
+                what: "numbers in each row",
+                entries: PhantomData,
+            })
+            .map(Row)
+        }
+    }
+    d.deserialize_seq(Exact::<Row, 3> {
+        what: "rows of 3 numbers",
+        entries: PhantomData,
+    })
+    .map(|r| Some(r.map(|row| row.0)))
+}
 
 /// `[rod]`: the backbone rod, a tube (`inner_radius` 0, the default, for a solid rod), with
 /// `poisson_ratio` or `shear_modulus` for the torsion stiffness.
@@ -18,6 +91,7 @@ pub(super) struct RodTable {
     pub(super) youngs_modulus: f64,
     pub(super) poisson_ratio: Option<f64>,
     pub(super) shear_modulus: Option<f64>,
+    #[serde(default, deserialize_with = "vector")]
     pub(super) precurvature: Option<Vec3>,
 }
 
@@ -25,8 +99,11 @@ pub(super) struct RodTable {
 #[derive(Debug, Default, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(super) struct BaseTable {
+    #[serde(default, deserialize_with = "vector")]
     pub(super) position: Option<Vec3>,
+    #[serde(default, deserialize_with = "rows")]
     pub(super) rotation: Option<[Vec3; 3]>,
+    #[serde(default, deserialize_with = "vector")]
     pub(super) euler_xyz_deg: Option<Vec3>,
 }
 
@@ -34,9 +111,13 @@ pub(super) struct BaseTable {
 #[derive(Debug, Default, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(super) struct LoadsTable {
+    #[serde(default, deserialize_with = "vector")]
     pub(super) distributed_force: Option<Vec3>,
+    #[serde(default, deserialize_with = "vector")]
     pub(super) distributed_moment: Option<Vec3>,
+    #[serde(default, deserialize_with = "vector")]
     pub(super) tip_force: Option<Vec3>,
+    #[serde(default, deserialize_with = "vector")]
     pub(super) tip_moment: Option<Vec3>,
     #[serde(default)]
     pub(super) point: Vec<PointTable>,
@@ -47,7 +128,9 @@ pub(super) struct LoadsTable {
 #[serde(deny_unknown_fields)]
 pub(super) struct PointTable {
     pub(super) s: f64,
+    #[serde(default, deserialize_with = "vector")]
     pub(super) force: Option<Vec3>,
+    #[serde(default, deserialize_with = "vector")]
     pub(super) moment: Option<Vec3>,
 }
 
