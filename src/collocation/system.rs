@@ -8,14 +8,14 @@
 //! the chain rule of [`residual::interval_jacobian`], the base, jump and tip blocks by
 //! num-dual dual numbers run through the same generic residual code.
 
-use super::residual::{self, Delta, IntervalSites, QuarterSites};
+use super::residual::{self, Block, Delta, IntervalSites, QuarterSites};
 use super::unknowns::{self, BASE_COLUMNS, BASE_ROWS, NODE, THETA, TIP_COLUMNS, link_row, tip_row};
 use crate::error::Result;
 use crate::mesh::Mesh;
 use crate::model::equations::{Model, Site};
 use crate::model::linearize;
 use crate::solution::State;
-use nalgebra::SVector;
+use nalgebra::{SVector, Vector6};
 use num_dual::{Dual64, DualSVec64};
 
 type D12 = DualSVec64<12>;
@@ -102,30 +102,9 @@ impl<'a> System<'a> {
     /// # Errors
     /// A model breakdown at a visited state.
     pub fn residual(&self, x: &[State], out: &mut [f64]) -> Result<()> {
-        let z = Delta::<f64>::zeros();
-        let base = residual::base(&self.model, &x[0], &z);
-        out[..BASE_ROWS].copy_from_slice(base.as_slice());
-        let links = x.len() - 1;
-        // Rates at the shared node of consecutive intervals, evaluated once.
-        let mut node_rates = None;
-        for k in 0..links {
-            let r = match &self.interval_sites[k] {
-                Some(sites) => {
-                    let seg = self.mesh.nodes[k].segment_end;
-                    let (r, end) = residual::interval(&self.model, sites, seg, &x[k], &x[k + 1], node_rates)?;
-                    node_rates = Some(end);
-                    r
-                }
-                None => {
-                    node_rates = None;
-                    residual::jump(&self.model, &self.node_sites[k], &x[k], &x[k + 1], &z, &z)?
-                }
-            };
-            out[link_row(k)..link_row(k + 1)].copy_from_slice(r.as_slice());
-        }
-        let tip = residual::tip(&self.model, &self.node_sites[links], &x[links], &z)?;
-        out[tip_row(x.len())..].copy_from_slice(tip.as_slice());
-        Ok(())
+        self.rows(x, out, |_, sites, seg, a, b, start| {
+            residual::interval(&self.model, sites, seg, a, b, start)
+        })
     }
 
     /// The residual of the order-6 scheme at the states `x` (converged for the order-4
@@ -136,6 +115,39 @@ impl<'a> System<'a> {
     /// # Errors
     /// A model breakdown at a visited state.
     pub fn order6_residual(&self, x: &[State], out: &mut [f64], local: &mut [f64]) -> Result<()> {
+        local.fill(0.0);
+        self.rows(x, out, |k, sites, seg, a, b, start| {
+            let start = match start {
+                Some(r) => r,
+                None => linearize::rates(&self.model, &sites.start, seg, &a.R, &a.v, &a.u)?,
+            };
+            let end = linearize::rates(&self.model, &sites.end, seg, &b.R, &b.v, &b.u)?;
+            let h = sites.end.s - sites.start.s;
+            let quarters = QuarterSites {
+                quarter: self.model.site(sites.start.s + 0.25 * h),
+                three_quarters: self.model.site(sites.start.s + 0.75 * h),
+            };
+            let r = residual::interval_order6(&self.model, sites, &quarters, seg, a, b, &start, &end)?;
+            local[k] = r.amax();
+            Ok((r, end))
+        })
+    }
+
+    /// Writes the base, link and tip rows at `x` into `out`, interval k's rows by `interval(k,
+    /// sites, segment end, node k, node k + 1, rates at node k)`, which returns them with the
+    /// rates at node k + 1 (shared with the next interval, so each node's rates are evaluated
+    /// once).
+    fn rows<F>(&self, x: &[State], out: &mut [f64], mut interval: F) -> Result<()>
+    where
+        F: FnMut(
+            usize,
+            &IntervalSites,
+            f64,
+            &State,
+            &State,
+            Option<Vector6<f64>>,
+        ) -> Result<(Block<f64>, Vector6<f64>)>,
+    {
         let z = Delta::<f64>::zeros();
         let base = residual::base(&self.model, &x[0], &z);
         out[..BASE_ROWS].copy_from_slice(base.as_slice());
@@ -145,25 +157,12 @@ impl<'a> System<'a> {
             let r = match &self.interval_sites[k] {
                 Some(sites) => {
                     let seg = self.mesh.nodes[k].segment_end;
-                    let (a, b) = (&x[k], &x[k + 1]);
-                    let start = match node_rates {
-                        Some(r) => r,
-                        None => linearize::rates(&self.model, &sites.start, seg, &a.R, &a.v, &a.u)?,
-                    };
-                    let end = linearize::rates(&self.model, &sites.end, seg, &b.R, &b.v, &b.u)?;
-                    let h = sites.end.s - sites.start.s;
-                    let quarters = QuarterSites {
-                        quarter: self.model.site(sites.start.s + 0.25 * h),
-                        three_quarters: self.model.site(sites.start.s + 0.75 * h),
-                    };
+                    let (r, end) = interval(k, sites, seg, &x[k], &x[k + 1], node_rates)?;
                     node_rates = Some(end);
-                    let r = residual::interval_order6(&self.model, sites, &quarters, seg, a, b, &start, &end)?;
-                    local[k] = r.amax();
                     r
                 }
                 None => {
                     node_rates = None;
-                    local[k] = 0.0;
                     residual::jump(&self.model, &self.node_sites[k], &x[k], &x[k + 1], &z, &z)?
                 }
             };
