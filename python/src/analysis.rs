@@ -184,3 +184,151 @@ pub fn solve_tensions(
         explanation: out.explain(),
     })
 }
+
+/// The result of `calibrate`.
+#[pyclass(module = "tdcr", name = "Calibration", frozen, get_all)]
+pub struct PyCalibration {
+    /// Names of the fitted unknowns, e.g. `["E", "alpha", "beta", "gamma"]`.
+    names: Vec<&'static str>,
+    /// Fitted Young's modulus E (Pa).
+    youngs_modulus: f64,
+    /// Fitted base XYZ Euler angles (deg), (3,).
+    euler_deg: Py<PyArray1<f64>>,
+    /// Fitted base position (m), (3,).
+    base_position: Py<PyArray1<f64>>,
+    /// Fitted factor on every tendon offset.
+    offset_scale: f64,
+    /// The robot with the fitted parameters (and the input robot's solver settings).
+    robot: Py<PyRobot>,
+    /// Predicted tips of the fitted robot (m), (M, 3).
+    tips: Py<PyArray2<f64>>,
+    /// |predicted - measured| per measurement (m), (M,).
+    tip_errors: Py<PyArray1<f64>>,
+    /// RMS of the tip errors (m).
+    rms_error: f64,
+    /// Largest tip error (m).
+    max_error: f64,
+    /// Whether the fit converged.
+    converged: bool,
+    /// Why it stopped, as a sentence.
+    termination: String,
+    /// Levenberg-Marquardt trial steps.
+    iterations: usize,
+    /// Forward solves.
+    solves: usize,
+}
+
+/// (M, 3) rows from a nested sequence; `what` names it in messages.
+fn rows3(values: &[Vec<f64>], what: &str) -> PyResult<Vec<Vector3<f64>>> {
+    values
+        .iter()
+        .map(|r| match r[..] {
+            [x, y, z] => Ok(Vector3::new(x, y, z)),
+            _ => Err(invalid(format!(
+                "calibrate: every row of `{what}` needs 3 values, one has {}",
+                r.len()
+            ))),
+        })
+        .collect()
+}
+
+/// Calibration (`tdcr::fit::calibrate`): fits Young's modulus and the base XYZ Euler angles
+/// (by default; `fit` names any of "youngs_modulus", "euler", "base_position",
+/// "offset_scale") to measured tips. `tensions` is (M, k) (N, file order), `tip_forces`
+/// (M, 3) (N, world frame), `measured_tips` (M, 3) (m). The fit starts from the robot's own
+/// parameters; `options` are the forward solver's (as `solve`, collocation).
+#[pyfunction]
+#[pyo3(signature = (robot, tensions, tip_forces, measured_tips, *, fit=None, max_iterations=50, **options))]
+#[allow(clippy::too_many_arguments)]
+pub fn calibrate(
+    py: Python<'_>,
+    robot: &PyRobot,
+    tensions: Vec<Vec<f64>>,
+    tip_forces: Vec<Vec<f64>>,
+    measured_tips: Vec<Vec<f64>>,
+    fit: Option<Vec<String>>,
+    max_iterations: usize,
+    options: Option<&Bound<'_, PyDict>>,
+) -> PyResult<PyCalibration> {
+    use tdcr::fit::calibration::{CalibrationOptions, Fit, Measurement};
+    let (forces, tips) = (
+        rows3(&tip_forces, "tip_forces")?,
+        rows3(&measured_tips, "measured_tips")?,
+    );
+    if tensions.len() != forces.len() || tips.len() != forces.len() {
+        return Err(invalid(format!(
+            "calibrate: {} rows of tensions, {} of tip_forces, {} of measured_tips; give one row per measurement",
+            tensions.len(),
+            forces.len(),
+            tips.len()
+        )));
+    }
+    let experiments: Vec<Measurement> = tensions
+        .into_iter()
+        .zip(forces.into_iter().zip(tips))
+        .map(|(tensions, (tip_force, measured_tip))| Measurement {
+            tensions,
+            tip_force,
+            measured_tip,
+        })
+        .collect();
+    let mut chosen = Fit::default();
+    if let Some(names) = fit {
+        chosen = Fit {
+            youngs_modulus: false,
+            euler: false,
+            base_position: false,
+            offset_scale: false,
+        };
+        for name in names {
+            match name.as_str() {
+                "youngs_modulus" => chosen.youngs_modulus = true,
+                "euler" => chosen.euler = true,
+                "base_position" => chosen.base_position = true,
+                "offset_scale" => chosen.offset_scale = true,
+                other => {
+                    return Err(invalid(format!(
+                        "calibrate: cannot fit `{other}`; choose from youngs_modulus, euler, base_position, offset_scale"
+                    )));
+                }
+            }
+        }
+    }
+    let defaults = CalibrationOptions::default();
+    let mut settings = robot.file.solver.clone();
+    settings.collocation.residual_tolerance = defaults.collocation.residual_tolerance;
+    let settings = crate::options::apply(&settings, options)?;
+    let calibration_options = CalibrationOptions {
+        fit: chosen,
+        max_iterations,
+        collocation: settings.collocation.clone(),
+        ..defaults
+    };
+    let r = &robot.file.robot;
+    let out = py
+        .detach(|| tdcr::fit::calibrate(r, &experiments, &calibration_options))
+        .map_err(to_py)?;
+    let fitted = PyRobot {
+        file: tdcr::io::RobotFile {
+            robot: out.robot.clone(),
+            solver: robot.file.solver.clone(),
+        },
+    };
+    let predicted = Array2::from_shape_fn((out.tips.len(), 3), |(i, k)| out.tips[i][k]);
+    Ok(PyCalibration {
+        names: out.fit.names(),
+        youngs_modulus: out.fitted.youngs_modulus,
+        euler_deg: PyArray1::from_slice(py, out.fitted.euler_deg().as_slice()).unbind(),
+        base_position: PyArray1::from_slice(py, out.fitted.base_position.as_slice()).unbind(),
+        offset_scale: out.fitted.offset_scale,
+        robot: Py::new(py, fitted)?,
+        tips: predicted.into_pyarray(py).unbind(),
+        tip_errors: PyArray1::from_vec(py, out.tip_errors()).unbind(),
+        rms_error: out.errors.rms,
+        max_error: out.errors.max,
+        converged: out.converged(),
+        termination: out.termination.to_string(),
+        iterations: out.iterations,
+        solves: out.solves,
+    })
+}

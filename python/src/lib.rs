@@ -289,12 +289,14 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<solution::PyState>()?;
     m.add_class::<analysis::PyTipSensitivities>()?;
     m.add_class::<analysis::PyInverseResult>()?;
+    m.add_class::<analysis::PyCalibration>()?;
     m.add_function(wrap_pyfunction!(solve, m)?)?;
     m.add_function(wrap_pyfunction!(solve_batch, m)?)?;
     m.add_function(wrap_pyfunction!(solve_parameters, m)?)?;
     m.add_function(wrap_pyfunction!(sweep, m)?)?;
     m.add_function(wrap_pyfunction!(analysis::tip_sensitivities, m)?)?;
     m.add_function(wrap_pyfunction!(analysis::solve_tensions, m)?)?;
+    m.add_function(wrap_pyfunction!(analysis::calibrate, m)?)?;
     m.add_function(wrap_pyfunction!(case_s, m)?)?;
     m.add_function(wrap_pyfunction!(case_h, m)?)?;
     m.add_function(wrap_pyfunction!(prototype, m)?)?;

@@ -167,3 +167,23 @@ def test_solve_tensions_finds_case_s_from_its_tip():
     # 1e-3 N: the 1e-6 m tip tolerance over a tip sensitivity of a few cm/N.
     assert abs(result.tensions[0] - 2.94) < 1e-3
     assert result.position_error <= 1e-6
+
+
+def test_calibrate_recovers_a_stiffer_rod_from_synthetic_tips():
+    robot = tdcr.cases.prototype()
+    truth = robot.with_parameters({"youngs_modulus": 1.05 * 210e9})
+    tensions = np.array([[2.94, 0, 0, 0, 0], [0, 2.94, 0, 0, 0], [0, 0, 1.96, 0, 0], [0, 0, 0, 0, 4.91]])
+    forces = np.array([[0.0, 0.0, -0.098]] * 4)
+    tips = np.array(
+        [
+            tdcr.solve(truth.with_tensions(list(t)).with_parameters({"tip_force.z": f[2]}), residual_tolerance=1e-12).tip_position
+            for t, f in zip(tensions, forces)
+        ]
+    )
+    fit = tdcr.calibrate(robot, tensions, forces, tips, fit=["youngs_modulus"])
+    assert fit.converged and fit.names == ["E"]
+    # 1e-6: the library's own calibration check (synthetic tips exact to the solve precision).
+    assert abs(fit.youngs_modulus / (1.05 * 210e9) - 1.0) < 1e-6
+    assert fit.tips.shape == (4, 3) and fit.tip_errors.shape == (4,) and fit.max_error < 1e-8
+    with pytest.raises(tdcr.InvalidInput, match="cannot fit `mass`"):
+        tdcr.calibrate(robot, tensions, forces, tips, fit=["mass"])

@@ -11,7 +11,7 @@ The Rust crate tdcr is the one implementation; this package converts types and c
 Robots: `Robot` (from TOML text, a file, keyword arguments or a dict; the robot file's
 fields and rules). Solving: `solve`, `solve_batch` (all cores, GIL released), `sweep`
 (warm-started sequence), `solve_parameters` (arrays in, arrays out). Analyses:
-`tip_sensitivities` (Jacobians, compliance), `solve_tensions` (inverse statics). Cases:
+`tip_sensitivities` (Jacobians, compliance), `solve_tensions` (inverse statics), `calibrate` (E and base angles from measured tips). Cases:
 `tdcr.cases`. A cluster: `tdcr.distributed` (Dask). Errors: `Error` and its subclasses
 `InvalidInput` (with `FileError`, `SingularRouting`), `NotConverged`, `IntervalCap`,
 `Breakdown`. docs/python.md is the walk-through.
@@ -19,6 +19,7 @@ fields and rules). Solving: `solve`, `solve_batch` (all cores, GIL released), `s
 
 from ._native import (
     Breakdown,
+    Calibration,
     Error,
     FileError,
     IntervalCap,
@@ -32,6 +33,7 @@ from ._native import (
     State,
     TipSensitivities,
     __version__,
+    calibrate,
     example,
     solve,
     solve_batch,
@@ -44,6 +46,7 @@ from . import cases
 
 __all__ = [
     "Breakdown",
+    "Calibration",
     "Error",
     "FileError",
     "IntervalCap",
@@ -57,6 +60,7 @@ __all__ = [
     "State",
     "TipSensitivities",
     "__version__",
+    "calibrate",
     "cases",
     "example",
     "solve",

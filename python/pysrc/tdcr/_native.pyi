@@ -294,6 +294,37 @@ def solve_tensions(
 ) -> InverseResult:
     """Inverse statics: tensions in [0, max_tension] that put the tip at `position`."""
 
+class Calibration:
+    """The result of `calibrate`."""
+
+    names: List[str]
+    youngs_modulus: float
+    euler_deg: FloatArray
+    base_position: FloatArray
+    offset_scale: float
+    robot: Robot
+    tips: FloatArray
+    tip_errors: FloatArray
+    rms_error: float
+    max_error: float
+    converged: bool
+    termination: str
+    iterations: int
+    solves: int
+
+def calibrate(
+    robot: Robot,
+    tensions: ArrayLike,
+    tip_forces: ArrayLike,
+    measured_tips: ArrayLike,
+    *,
+    fit: Optional[Sequence[Literal["youngs_modulus", "euler", "base_position", "offset_scale"]]] = None,
+    max_iterations: int = 50,
+    intervals: Optional[int] = None,
+    residual_tolerance: Optional[float] = None,
+) -> Calibration:
+    """Fits E and the base Euler angles (by default) to measured tips."""
+
 def case_s() -> Robot:
     """Reference case S."""
 
