@@ -250,7 +250,7 @@ pub fn from_library(robot: tdcr::Robot) -> PyResult<PyRobot> {
 }
 
 impl PyRobot {
-    /// This robot with parameter `name` (`tension.1`, `tip_force.z`, ...) set to `value`.
+    /// Sets `parameter` (`tension.1`, `tip_force.z`, ...) of this robot to `value`.
     pub fn set(&mut self, parameter: &Parameter, value: f64) -> PyResult<()> {
         parameter.apply(&mut self.file.robot, value).map_err(to_py)
     }

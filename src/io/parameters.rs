@@ -39,6 +39,11 @@ pub const NAMES: &str =
 
 const AXES: [&str; 3] = ["x", "y", "z"];
 
+/// The name of component `k` (`x`, `y`, `z`; `?` past z).
+fn axis(k: usize) -> &'static str {
+    AXES.get(k).copied().unwrap_or("?")
+}
+
 impl FromStr for Parameter {
     type Err = String;
 
@@ -70,9 +75,9 @@ impl fmt::Display for Parameter {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
             Parameter::Tension(i) => write!(f, "tension.{i}"),
-            Parameter::TipForce(k) => write!(f, "tip_force.{}", AXES[*k]),
-            Parameter::TipMoment(k) => write!(f, "tip_moment.{}", AXES[*k]),
-            Parameter::BasePosition(k) => write!(f, "base_position.{}", AXES[*k]),
+            Parameter::TipForce(k) => write!(f, "tip_force.{}", axis(*k)),
+            Parameter::TipMoment(k) => write!(f, "tip_moment.{}", axis(*k)),
+            Parameter::BasePosition(k) => write!(f, "base_position.{}", axis(*k)),
             Parameter::YoungsModulus => f.write_str("youngs_modulus"),
         }
     }
@@ -87,24 +92,33 @@ impl Parameter {
     /// [`Error::InvalidInput`] for a tendon number past the last tendon, or `youngs_modulus`
     /// on a rod not built from geometry and Poisson's ratio.
     pub fn apply(&self, robot: &mut Robot, value: f64) -> Result<()> {
-        match *self {
-            Parameter::Tension(i) => {
-                let count = robot.tendons.len();
-                let tendon = robot.tendons.get_mut(i - 1).ok_or_else(|| {
-                    invalid(
-                        self.to_string(),
-                        format!("names tendon {i}, but the robot has {count} tendon(s)"),
-                        format!("number the tendons from 1 to {count} in file order"),
-                    )
-                })?;
-                tendon.tension = value;
+        let count = robot.tendons.len();
+        let slot = match *self {
+            Parameter::Tension(i) => i
+                .checked_sub(1)
+                .and_then(|k| robot.tendons.get_mut(k))
+                .map(|t| &mut t.tension),
+            Parameter::TipForce(k) => robot.loads.tip_force.get_mut(k),
+            Parameter::TipMoment(k) => robot.loads.tip_moment.get_mut(k),
+            Parameter::BasePosition(k) => robot.base_position.get_mut(k),
+            Parameter::YoungsModulus => return set_youngs_modulus(robot, value),
+        };
+        match (slot, self) {
+            (Some(x), _) => {
+                *x = value;
+                Ok(())
             }
-            Parameter::TipForce(k) => robot.loads.tip_force[k] = value,
-            Parameter::TipMoment(k) => robot.loads.tip_moment[k] = value,
-            Parameter::BasePosition(k) => robot.base_position[k] = value,
-            Parameter::YoungsModulus => set_youngs_modulus(robot, value)?,
+            (None, Parameter::Tension(i)) => Err(invalid(
+                self.to_string(),
+                format!("names tendon {i}, but the robot has {count} tendon(s)"),
+                format!("number the tendons from 1 to {count} in file order"),
+            )),
+            (None, _) => Err(invalid(
+                self.to_string(),
+                "names a component past z",
+                "use the components x, y, z (0, 1, 2)",
+            )),
         }
-        Ok(())
     }
 }
 
@@ -164,5 +178,9 @@ mod tests {
         assert!((a.kse - b.kse).component_div(&b.kse).amax() < 1e-15);
         let e = Parameter::Tension(6).apply(&mut robot, 1.0).unwrap_err();
         assert!(e.to_string().contains("has 5 tendon(s)"), "{e}");
+        // Payloads no name parses to are errors, not panics.
+        assert!(Parameter::Tension(0).apply(&mut robot, 1.0).is_err());
+        let e = Parameter::TipForce(3).apply(&mut robot, 1.0).unwrap_err();
+        assert!(e.to_string().contains("`tip_force.?` names a component past z"), "{e}");
     }
 }

@@ -16,8 +16,9 @@ use crate::robot_args::{apply, read_robot};
 use crate::sweep::Progress;
 
 /// Rows per warm-started block: each block is solved in row order, every solve starting
-/// from the previous one's solution with a solver that keeps its workspace; blocks run in
-/// parallel. Shards are made of whole blocks, so a sharded run repeats the unsharded run's
+/// from the previous row's solution or the cold guess, whichever has the smaller residual
+/// (`tdcr::solve_from`; chord steps on the previous factors, as `tdcr::Solver` takes them,
+/// cost ten times more on tables of unrelated rows); blocks run in parallel. Shards are made of whole blocks, so a sharded run repeats the unsharded run's
 /// computation exactly. 64 rows keep both cores of a small run busy from a few hundred rows
 /// while most solves still start warm.
 pub const BLOCK: usize = 64;
@@ -210,20 +211,20 @@ struct Outcome {
     error: Option<String>,
 }
 
-/// Solves one block of rows in order, each warm-started from the last solution.
+/// Solves one block of rows in order, each warm-started from the last solution (when that
+/// is a better start than the cold guess).
 fn solve_block(
     robots: &[Robot],
     settings: &tdcr::io::SolverSettings,
     progress: &Mutex<(Progress, usize, usize)>,
 ) -> Vec<Outcome> {
-    let mut solver = tdcr::Solver::new(settings.collocation.clone());
     let mut last: Option<Solution> = None;
     let mut out = Vec::with_capacity(robots.len());
     for robot in robots {
         let result = match (settings.method, &last) {
             (Method::Shooting, _) => tdcr::shooting::solve(robot, &settings.shooting),
-            (Method::Collocation, Some(warm)) => solver.solve_from(robot, warm),
-            (Method::Collocation, None) => solver.solve(robot),
+            (Method::Collocation, Some(warm)) => tdcr::solve_from(robot, &settings.collocation, warm),
+            (Method::Collocation, None) => tdcr::solve(robot, &settings.collocation),
         };
         let outcome = match result {
             Ok(solution) => {
