@@ -47,14 +47,22 @@ def solve_chunk(robot_toml: str, parameters: Dict[str, np.ndarray], options: Dic
     return _native.solve_parameters(robot, parameters, **options)
 
 
-def solve_parameters(client: Any, robot: _native.Robot, parameters: Mapping[str, Any], chunk_size: int = 256, **options: Any) -> Dict[str, Any]:
+def solve_parameters(
+    client: Any,
+    robot: _native.Robot,
+    parameters: Mapping[str, Any],
+    chunk_size: int = 256,
+    retries: int = 0,
+    **options: Any,
+) -> Dict[str, Any]:
     """`tdcr.solve_parameters(robot, parameters, **options)` on a Dask cluster: one task per
-    chunk of `chunk_size` rows, submitted with `client.map`, gathered and joined in row
-    order. Returns the same dict (`converged`, `tip_position`, `iterations`, `error`),
-    bitwise identical to the local call."""
+    chunk of `chunk_size` rows, submitted with `client.map` (Dask reruns a task up to
+    `retries` times when its worker fails), gathered and joined in row order. Returns the
+    same dict (`converged`, `tip_position`, `iterations`, `error`), bitwise identical to the
+    local call."""
     text = robot.to_toml()
     parts = chunks(parameters, chunk_size)
-    futures = client.map(solve_chunk, [text] * len(parts), parts, [options] * len(parts), pure=False)
+    futures = client.map(solve_chunk, [text] * len(parts), parts, [options] * len(parts), pure=False, retries=retries)
     results = client.gather(futures)
     if not results:
         return _native.solve_parameters(robot, dict(parameters), **options)
