@@ -287,15 +287,13 @@ pub fn run(args: &BatchArgs) -> Result<(), Failure> {
     let mut robots = Vec::with_capacity(rows.len());
     for row in rows {
         let mut robot = file.robot.clone();
-        for (p, x) in table.parameters.iter().zip(&row.values) {
-            if let Some(x) = x {
-                p.apply(&mut robot, *x)
-                    .and_then(|()| robot.validate())
-                    .map_err(|e| at(&args.cases, row.line, 1, &format!("row {}: {e}", row.index)))?;
-            }
-        }
-        robot
-            .validate()
+        table
+            .parameters
+            .iter()
+            .zip(&row.values)
+            .filter_map(|(p, x)| x.map(|x| (p, x)))
+            .try_for_each(|(p, x)| p.apply(&mut robot, x))
+            .and_then(|()| robot.validate())
             .map_err(|e| at(&args.cases, row.line, 1, &format!("row {}: {e}", row.index)))?;
         robots.push(robot);
     }
