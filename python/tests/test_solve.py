@@ -187,3 +187,16 @@ def test_calibrate_recovers_a_stiffer_rod_from_synthetic_tips():
     assert fit.tips.shape == (4, 3) and fit.tip_errors.shape == (4,) and fit.max_error < 1e-8
     with pytest.raises(tdcr.InvalidInput, match="cannot fit `mass`"):
         tdcr.calibrate(robot, tensions, forces, tips, fit=["mass"])
+
+
+def test_every_public_name_has_a_docstring():
+    for name in tdcr.__all__:
+        if name == "__version__":
+            continue
+        obj = getattr(tdcr, name)
+        assert (obj.__doc__ or "").strip(), name
+        if isinstance(obj, type) and not issubclass(obj, BaseException):
+            for attr, member in vars(obj).items():
+                if not attr.startswith("_"):
+                    assert (member.__doc__ or "").strip(), f"{name}.{attr}"
+    assert "warm_start" in tdcr.solve.__doc__ and "tol" in tdcr.solve.__doc__
