@@ -13,6 +13,7 @@ mod example;
 pub mod experiments;
 pub mod locate;
 pub mod output;
+pub mod parameters;
 mod robot_file;
 
 pub use example::example;

@@ -7,6 +7,7 @@
 //! This file holds the command line and the dispatch; each command has its own module.
 
 mod args;
+mod batch;
 mod bench;
 mod calibrate;
 mod check;
@@ -51,6 +52,9 @@ enum Command {
     Solve(solve::SolveArgs),
     /// Solve a sequence of robots (tension ranges), each warm-started from the last; CSV out.
     Sweep(sweep::SweepArgs),
+    /// Solve one robot file for every row of a parameter table (CSV or JSON lines), on all
+    /// cores; `--shard K/N` for job arrays; CSV out.
+    Batch(batch::BatchArgs),
     /// Check a robot file and explain every problem.
     Check {
         /// Robot file (TOML; `-` reads standard input).
@@ -71,6 +75,7 @@ fn main() -> ExitCode {
         None => table2::run(&cli.out_dir),
         Some(Command::Solve(args)) => solve::run(&args),
         Some(Command::Sweep(args)) => sweep::run(&args),
+        Some(Command::Batch(args)) => batch::run(&args),
         Some(Command::Check { file }) => check::run(&file),
         Some(Command::Example) => check::example(),
         Some(Command::Bench(args)) => bench::run(&args)

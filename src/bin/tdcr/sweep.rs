@@ -35,8 +35,8 @@ pub struct SweepArgs {
 }
 
 /// A progress bar on standard error, shown only on a terminal and only once the work has
-/// taken longer than [`Progress::DELAY`].
-struct Progress {
+/// taken longer than [`Progress::DELAY`]; `batch` shows its progress with it too.
+pub struct Progress {
     start: Instant,
     shown: bool,
     terminal: bool,
@@ -47,7 +47,7 @@ impl Progress {
     const DELAY: Duration = Duration::from_millis(500);
 
     /// A bar that starts its clock now.
-    fn new() -> Self {
+    pub fn new() -> Self {
         Progress {
             start: Instant::now(),
             shown: false,
@@ -56,7 +56,7 @@ impl Progress {
     }
 
     /// Shows `done` of `total` steps (on a terminal, after [`Progress::DELAY`]).
-    fn update(&mut self, done: usize, total: usize) {
+    pub fn update(&mut self, done: usize, total: usize) {
         if !self.terminal || self.start.elapsed() < Self::DELAY {
             return;
         }
@@ -73,7 +73,7 @@ impl Progress {
     }
 
     /// Clears the bar, if shown.
-    fn finish(&mut self) {
+    pub fn finish(&mut self) {
         if self.shown {
             let _ = write!(std::io::stderr().lock(), "\r{}\r", " ".repeat(60));
             self.shown = false;

@@ -1,0 +1,347 @@
+"""Type stubs of the native module tdcr._native (the Rust crate tdcr through PyO3)."""
+
+from os import PathLike
+from typing import Any, Dict, List, Literal, Mapping, Optional, Sequence, Tuple, Union
+
+import numpy as np
+import numpy.typing as npt
+
+FloatArray = npt.NDArray[np.float64]
+ArrayLike = npt.ArrayLike
+
+__version__: str
+#: Tip of case S (m), `tdcr::cases::TIP_S`.
+TIP_S: List[float]
+#: Tip of case H (m), `tdcr::cases::TIP_H`.
+TIP_H: List[float]
+
+class Error(Exception):
+    """The base class of every tdcr exception."""
+
+class InvalidInput(Error):
+    """A robot, an option or a parameter is not acceptable (CLI exit code 2)."""
+
+class FileError(InvalidInput):
+    """A robot file (or dict) breaks a rule; one line per problem."""
+
+    problems: List[Tuple[Optional[int], Optional[int], str, str]]
+
+class SingularRouting(InvalidInput):
+    """A tendon's path has (nearly) no tangent."""
+
+class Breakdown(Error):
+    """The model equations broke down numerically."""
+
+class NotConverged(Error):
+    """A solver stopped without meeting its tolerances."""
+
+    report: SolveReport
+
+class IntervalCap(Error):
+    """Adaptive refinement reached `max_intervals` before the tip tolerance was met."""
+
+class Robot:
+    """A robot (SI units) with its `[solver]` settings; the robot file's fields and rules."""
+
+    def __init__(
+        self,
+        rod: Mapping[str, Any],
+        tendons: Optional[Sequence[Mapping[str, Any]]] = None,
+        loads: Optional[Mapping[str, Any]] = None,
+        base: Optional[Mapping[str, Any]] = None,
+        solver: Optional[Mapping[str, Any]] = None,
+    ) -> None: ...
+    @staticmethod
+    def from_dict(tables: Mapping[str, Any]) -> Robot:
+        """A robot from a dict of the robot file's tables."""
+    @staticmethod
+    def from_toml(text: str, name: str = "<string>") -> Robot:
+        """A robot from robot-file text; `name` is the file name in messages."""
+    @staticmethod
+    def from_file(path: Union[str, PathLike[str]]) -> Robot:
+        """A robot from a robot file."""
+    def to_toml(self) -> str:
+        """The robot as robot-file text that reads back to the same robot, bitwise."""
+    def with_tensions(self, tensions: Sequence[float]) -> Robot:
+        """A copy with the tensions (N) of all tendons, in file order."""
+    def with_parameters(self, parameters: Mapping[str, float]) -> Robot:
+        """A copy with named parameters (`tension.1`, `tip_force.z`, ...) set."""
+    @property
+    def length(self) -> float:
+        """Rod length L (m)."""
+    @property
+    def tendon_count(self) -> int:
+        """Number of tendons."""
+    @property
+    def tensions(self) -> FloatArray:
+        """Tendon tensions (N), shape (k,)."""
+    @property
+    def tip_force(self) -> FloatArray:
+        """Tip force (N, world frame), shape (3,)."""
+    @property
+    def tip_moment(self) -> FloatArray:
+        """Tip moment (N m, world frame), shape (3,)."""
+    @property
+    def base_position(self) -> FloatArray:
+        """Base position (m), shape (3,)."""
+    @property
+    def base_rotation(self) -> FloatArray:
+        """Base rotation, body to world, shape (3, 3)."""
+    @property
+    def method(self) -> str:
+        """The `[solver]` method: "collocation" or "shooting"."""
+
+class State:
+    """The state at one arc length."""
+
+    s: float
+    p: FloatArray
+    R: FloatArray
+    v: FloatArray
+    u: FloatArray
+
+class SolveReport:
+    """What a solve did."""
+
+    @property
+    def method(self) -> str: ...
+    @property
+    def termination(self) -> str:
+        """"converged", "max_iterations", "line_search_failed", "singular_jacobian" or "non_finite"."""
+    @property
+    def termination_message(self) -> str: ...
+    @property
+    def converged(self) -> bool: ...
+    @property
+    def iterations(self) -> int: ...
+    @property
+    def load_steps(self) -> int: ...
+    @property
+    def meshes(self) -> int: ...
+    @property
+    def residual(self) -> float: ...
+    @property
+    def history(self) -> FloatArray:
+        """Scaled residual before each step of the last Newton run."""
+    @property
+    def intervals(self) -> int: ...
+    @property
+    def unknowns(self) -> int: ...
+    @property
+    def tip_error_estimate(self) -> Optional[float]:
+        """Estimated tip position error (m); None for shooting."""
+    @property
+    def error_estimate(self) -> Optional[Dict[str, float]]:
+        """{"tip_position_m", "tip_rotation_rad", "backbone_max_m"}; None for shooting."""
+    @property
+    def tolerance(self) -> Optional[float]:
+        """The tip tolerance relative to the rod length; None on a fixed mesh."""
+    @property
+    def tolerance_met(self) -> Optional[bool]:
+        """Whether the estimate meets the tolerance; None on a fixed mesh."""
+    @property
+    def timings(self) -> Dict[str, float]:
+        """Seconds: assembly, factorization, solve, estimate, total."""
+    @property
+    def evaluations(self) -> Dict[str, int]:
+        """Counts: residual, jacobian, equations."""
+
+class Solution:
+    """A solved shape; arrays are float64, SI units."""
+
+    @property
+    def s(self) -> FloatArray:
+        """Arc lengths (m), shape (N,)."""
+    @property
+    def p(self) -> FloatArray:
+        """Positions (m), shape (N, 3)."""
+    @property
+    def R(self) -> FloatArray:
+        """Orientations, shape (N, 3, 3)."""
+    @property
+    def v(self) -> FloatArray:
+        """Shear/extension strains (body frame), shape (N, 3)."""
+    @property
+    def u(self) -> FloatArray:
+        """Curvature/twist (rad/m, body frame), shape (N, 3)."""
+    @property
+    def n(self) -> FloatArray:
+        """Internal forces (N), shape (N, 3)."""
+    @property
+    def m(self) -> FloatArray:
+        """Internal moments (N m), shape (N, 3)."""
+    @property
+    def tendon_paths(self) -> List[FloatArray]:
+        """Each tendon's path (m), (N_i, 3) arrays."""
+    @property
+    def tip_position(self) -> FloatArray:
+        """Tip position (m), shape (3,)."""
+    @property
+    def tip_rotation(self) -> FloatArray:
+        """Tip orientation, shape (3, 3)."""
+    @property
+    def length(self) -> float: ...
+    @property
+    def report(self) -> SolveReport: ...
+    def at(self, s: float, left: bool = False) -> State:
+        """The state at arc length s (m) from the scheme's interpolant."""
+    def to_json(self) -> str:
+        """The whole solution as JSON."""
+    @staticmethod
+    def from_json(text: str) -> Solution:
+        """Reads the JSON of `to_json`, bitwise."""
+
+class TipSensitivities:
+    """Derivatives of the tip pose (6 rows: position, rotation vector)."""
+
+    @property
+    def tension(self) -> FloatArray:
+        """(6, k), per N."""
+    @property
+    def tip_force(self) -> FloatArray:
+        """(6, 3), per N."""
+    @property
+    def tip_moment(self) -> FloatArray:
+        """(6, 3), per N m."""
+    @property
+    def compliance(self) -> FloatArray:
+        """(6, 6): tip force then tip moment columns."""
+    @property
+    def base_position(self) -> FloatArray:
+        """(6, 3), per m."""
+    @property
+    def base_rotation(self) -> FloatArray:
+        """(6, 3), per rad."""
+    @property
+    def youngs_modulus(self) -> Optional[FloatArray]:
+        """(6,), per Pa, or None."""
+
+class InverseResult:
+    """The result of `solve_tensions`."""
+
+    tensions: FloatArray
+    solution: Solution
+    residual: float
+    position_error: float
+    orientation_error: Optional[float]
+    reachable: bool
+    termination: str
+    iterations: int
+    forward_solves: int
+    explanation: str
+
+def solve(
+    robot: Robot,
+    *,
+    warm_start: Optional[Solution] = None,
+    method: Optional[Literal["collocation", "shooting"]] = None,
+    tol: Optional[float] = None,
+    intervals: Optional[int] = None,
+    max_intervals: Optional[int] = None,
+    residual_tolerance: Optional[float] = None,
+    max_iterations: Optional[int] = None,
+    continuation: Optional[bool] = None,
+    integration_tolerance: Optional[float] = None,
+) -> Solution:
+    """Solves `robot` (GIL released)."""
+
+def solve_batch(
+    robots: Union[Sequence[Robot], Robot],
+    parameters: Optional[Mapping[str, ArrayLike]] = None,
+    *,
+    errors: Literal["raise", "return"] = "raise",
+    tol: Optional[float] = None,
+    intervals: Optional[int] = None,
+    max_intervals: Optional[int] = None,
+    residual_tolerance: Optional[float] = None,
+    max_iterations: Optional[int] = None,
+    continuation: Optional[bool] = None,
+) -> List[Any]:
+    """Solves many robots on all cores (GIL released), results in input order."""
+
+def solve_parameters(
+    robot: Robot,
+    parameters: Mapping[str, ArrayLike],
+    *,
+    tol: Optional[float] = None,
+    intervals: Optional[int] = None,
+    max_intervals: Optional[int] = None,
+    residual_tolerance: Optional[float] = None,
+    max_iterations: Optional[int] = None,
+    continuation: Optional[bool] = None,
+) -> Dict[str, Any]:
+    """`solve_batch` of parameter rows reduced to arrays."""
+
+def sweep(
+    robot: Robot,
+    parameters: Mapping[str, ArrayLike],
+    *,
+    tol: Optional[float] = None,
+    intervals: Optional[int] = None,
+    max_intervals: Optional[int] = None,
+    residual_tolerance: Optional[float] = None,
+    max_iterations: Optional[int] = None,
+    continuation: Optional[bool] = None,
+) -> List[Solution]:
+    """Solves parameter rows in order, each warm-started from the last."""
+
+def tip_sensitivities(robot: Robot, solution: Solution) -> TipSensitivities:
+    """Tip Jacobians and compliance of a collocation solution."""
+
+def solve_tensions(
+    robot: Robot,
+    position: ArrayLike,
+    rotation: Optional[ArrayLike] = None,
+    *,
+    max_tension: float,
+    tolerance: float = 1e-6,
+    max_iterations: int = 50,
+    orientation_weight: Optional[float] = None,
+    free_tendons: Optional[Sequence[int]] = None,
+    intervals: Optional[int] = None,
+    residual_tolerance: Optional[float] = None,
+) -> InverseResult:
+    """Inverse statics: tensions in [0, max_tension] that put the tip at `position`."""
+
+class Calibration:
+    """The result of `calibrate`."""
+
+    names: List[str]
+    youngs_modulus: float
+    euler_deg: FloatArray
+    base_position: FloatArray
+    offset_scale: float
+    robot: Robot
+    tips: FloatArray
+    tip_errors: FloatArray
+    rms_error: float
+    max_error: float
+    converged: bool
+    termination: str
+    iterations: int
+    solves: int
+
+def calibrate(
+    robot: Robot,
+    tensions: ArrayLike,
+    tip_forces: ArrayLike,
+    measured_tips: ArrayLike,
+    *,
+    fit: Optional[Sequence[Literal["youngs_modulus", "euler", "base_position", "offset_scale"]]] = None,
+    max_iterations: int = 50,
+    intervals: Optional[int] = None,
+    residual_tolerance: Optional[float] = None,
+) -> Calibration:
+    """Fits E and the base Euler angles (by default) to measured tips."""
+
+def case_s() -> Robot:
+    """Reference case S."""
+
+def case_h() -> Robot:
+    """Reference case H."""
+
+def prototype() -> Robot:
+    """The prototype, all tendons slack."""
+
+def example() -> str:
+    """The commented example robot file."""

@@ -1,0 +1,110 @@
+//! The exceptions: one class per kind of `tdcr::Error`, all under `tdcr.Error`, each carrying
+//! the library's message (the Display the command line prints).
+
+use crate::solution::PySolveReport;
+use pyo3::exceptions::PyException;
+use pyo3::prelude::*;
+use pyo3::{PyErr, create_exception};
+
+create_exception!(
+    tdcr,
+    Error,
+    PyException,
+    "The base class of every tdcr exception; the message says what is wrong and what to try."
+);
+create_exception!(
+    tdcr,
+    InvalidInput,
+    Error,
+    "A robot, an option or a parameter is not acceptable (the command line's exit code 2)."
+);
+create_exception!(
+    tdcr,
+    FileError,
+    InvalidInput,
+    "A robot file (or dict) breaks a rule: one line per problem, `FILE:LINE:COLUMN: `FIELD` MESSAGE`; `problems` lists them."
+);
+create_exception!(
+    tdcr,
+    SingularRouting,
+    InvalidInput,
+    "A tendon's path has (nearly) no tangent, so its force per unit length is undefined."
+);
+create_exception!(
+    tdcr,
+    Breakdown,
+    Error,
+    "The model equations broke down numerically at a state the solver visited."
+);
+create_exception!(
+    tdcr,
+    NotConverged,
+    Error,
+    "A solver stopped without meeting its tolerances; `report` is its SolveReport."
+);
+create_exception!(
+    tdcr,
+    IntervalCap,
+    Error,
+    "Adaptive refinement reached `max_intervals` before the tip tolerance was met."
+);
+
+/// A library error as the matching exception, with the same message.
+pub fn to_py(error: tdcr::Error) -> PyErr {
+    let text = error.to_string();
+    match error {
+        tdcr::Error::InvalidInput { .. } => InvalidInput::new_err(text),
+        tdcr::Error::SingularRouting { .. } => SingularRouting::new_err(text),
+        tdcr::Error::Breakdown { .. } => Breakdown::new_err(text),
+        tdcr::Error::IntervalCap { .. } => IntervalCap::new_err(text),
+        tdcr::Error::NotConverged { report, .. } => {
+            let err = NotConverged::new_err(text);
+            Python::attach(|py| {
+                let value = err.value(py);
+                // Setting an attribute on a fresh exception instance cannot fail.
+                let _ = value.setattr("report", PySolveReport { report: *report });
+            });
+            err
+        }
+    }
+}
+
+/// A robot-file error as `tdcr.FileError`, with the command line's message and the problems
+/// as `(line, column, field, message)` tuples (line and column `None` when not placed).
+pub fn file_error(error: &tdcr::io::FileError) -> PyErr {
+    let err = FileError::new_err(error.to_string());
+    Python::attach(|py| {
+        let problems: Vec<(Option<usize>, Option<usize>, String, String)> = error
+            .problems
+            .iter()
+            .map(|p| {
+                (
+                    p.position.map(|q| q.line),
+                    p.position.map(|q| q.column),
+                    p.field.clone(),
+                    p.message.clone(),
+                )
+            })
+            .collect();
+        let _ = err.value(py).setattr("problems", problems);
+    });
+    err
+}
+
+/// `tdcr.InvalidInput` with `message`.
+pub fn invalid(message: impl Into<String>) -> PyErr {
+    InvalidInput::new_err(message.into())
+}
+
+/// Registers the exception classes in `module`.
+pub fn register(module: &Bound<'_, PyModule>) -> PyResult<()> {
+    let py = module.py();
+    module.add("Error", py.get_type::<Error>())?;
+    module.add("InvalidInput", py.get_type::<InvalidInput>())?;
+    module.add("FileError", py.get_type::<FileError>())?;
+    module.add("SingularRouting", py.get_type::<SingularRouting>())?;
+    module.add("Breakdown", py.get_type::<Breakdown>())?;
+    module.add("NotConverged", py.get_type::<NotConverged>())?;
+    module.add("IntervalCap", py.get_type::<IntervalCap>())?;
+    Ok(())
+}

@@ -1,0 +1,376 @@
+//! `tdcr batch`: one robot file solved for every row of a parameter table (CSV with a header
+//! of parameter names, or JSON lines), rows warm-started in blocks on all cores, one result
+//! row per input row; `--shard K/N` takes one contiguous share of the rows for a job array.
+
+use clap::Args;
+use rayon::prelude::*;
+use std::fmt::Write as _;
+use std::sync::Mutex;
+use tdcr::io::output;
+use tdcr::io::parameters::{NAMES, Parameter};
+use tdcr::{Error, Method, Robot, Solution};
+
+use crate::args::SolverArgs;
+use crate::failure::{Failure, emit, note, write_file};
+use crate::robot_args::{apply, read_robot};
+use crate::sweep::Progress;
+
+/// Rows per warm-started block: each block is solved in row order, every solve starting
+/// from the previous row's solution or the cold guess, whichever has the smaller residual
+/// (`tdcr::solve_from`; chord steps on the previous factors, as `tdcr::Solver` takes them,
+/// cost ten times more on tables of unrelated rows); blocks run in parallel. Shards are made of whole blocks, so a sharded run repeats the unsharded run's
+/// computation exactly. 64 rows keep both cores of a small run busy from a few hundred rows
+/// while most solves still start warm.
+pub const BLOCK: usize = 64;
+
+/// The arguments of `tdcr batch`.
+#[derive(Args)]
+pub struct BatchArgs {
+    /// Parameter table: CSV whose header names the parameters (`tension.1`, `tip_force.z`,
+    /// ...; docs/cli.md), or JSON lines (`.jsonl`), one object of parameters per line.
+    cases: String,
+    /// Robot file (TOML) whose values the rows change.
+    #[arg(long, value_name = "ROBOT.toml")]
+    robot: String,
+    /// Write the result CSV to FILE instead of standard output.
+    #[arg(long, value_name = "FILE")]
+    out: Option<std::path::PathBuf>,
+    /// Solve only shard K of N (K = 0, ..., N-1): a contiguous range of rows (whole blocks
+    /// of 64 rows, split evenly); the shards' outputs, concatenated in K order without their
+    /// repeated headers, are the unsharded output.
+    #[arg(long, value_name = "K/N", value_parser = parse_shard)]
+    shard: Option<(usize, usize)>,
+    #[command(flatten)]
+    solver: SolverArgs,
+}
+
+/// `K/N` with 0 <= K < N.
+fn parse_shard(text: &str) -> Result<(usize, usize), String> {
+    let bad = || format!("`{text}` must look like K/N with 0 <= K < N, e.g. 0/4");
+    let (k, n) = text.split_once('/').ok_or_else(bad)?;
+    let (k, n): (usize, usize) = (
+        k.trim().parse().map_err(|_| bad())?,
+        n.trim().parse().map_err(|_| bad())?,
+    );
+    if k < n { Ok((k, n)) } else { Err(bad()) }
+}
+
+/// One input row: its 0-based number, the line it came from, and its parameter values.
+struct Row {
+    index: usize,
+    line: usize,
+    values: Vec<Option<f64>>,
+}
+
+/// A parameter table: the parameters in column order and the rows.
+struct Table {
+    parameters: Vec<Parameter>,
+    rows: Vec<Row>,
+}
+
+/// A problem at `file:line:column`.
+fn at(file: &str, line: usize, column: usize, message: &str) -> Failure {
+    Failure::Input(format!("{file}:{line}:{column}: {message}"))
+}
+
+/// Checks a value's own range (the rest is the robot's validation per row).
+fn check_value(parameter: &Parameter, value: f64) -> Result<(), String> {
+    if !value.is_finite() {
+        return Err(format!("`{parameter}` is {value}, but every number must be finite"));
+    }
+    match parameter {
+        Parameter::Tension(_) if value < 0.0 => Err(format!(
+            "`{parameter}` is {value} N, but a tendon can only pull: must be >= 0"
+        )),
+        Parameter::YoungsModulus if value <= 0.0 => Err(format!("`{parameter}` is {value} Pa, but must be positive")),
+        _ => Ok(()),
+    }
+}
+
+/// Reads a CSV table: a header of parameter names, then one row of numbers per line
+/// (blank lines skipped).
+fn read_csv(file: &str, text: &str) -> Result<Table, Failure> {
+    let mut lines = text.lines().enumerate().filter(|(_, l)| !l.trim().is_empty());
+    let Some((header_at, header)) = lines.next() else {
+        return Err(Failure::Input(format!(
+            "{file}: is empty: the first line must name the parameters ({NAMES})"
+        )));
+    };
+    let fields = |line: &str| -> Vec<(usize, String)> {
+        let mut column = 1;
+        line.split(',')
+            .map(|f| {
+                let start = column + f.len() - f.trim_start().len();
+                column += f.chars().count() + 1;
+                (start, f.trim().to_string())
+            })
+            .collect()
+    };
+    let mut parameters = Vec::new();
+    for (column, name) in fields(header) {
+        let p: Parameter = name.parse().map_err(|e: String| at(file, header_at + 1, column, &e))?;
+        if parameters.contains(&p) {
+            return Err(at(
+                file,
+                header_at + 1,
+                column,
+                &format!("parameter `{name}` is given twice"),
+            ));
+        }
+        parameters.push(p);
+    }
+    let mut rows = Vec::new();
+    for (i, line) in lines {
+        let cells = fields(line);
+        if cells.len() != parameters.len() {
+            return Err(at(
+                file,
+                i + 1,
+                1,
+                &format!(
+                    "has {} fields, but the header names {} parameters",
+                    cells.len(),
+                    parameters.len()
+                ),
+            ));
+        }
+        let mut values = Vec::with_capacity(cells.len());
+        for ((column, cell), p) in cells.iter().zip(&parameters) {
+            let x: f64 = cell
+                .parse()
+                .map_err(|_| at(file, i + 1, *column, &format!("`{p}` value `{cell}` is not a number")))?;
+            check_value(p, x).map_err(|e| at(file, i + 1, *column, &e))?;
+            values.push(Some(x));
+        }
+        rows.push(Row {
+            index: rows.len(),
+            line: i + 1,
+            values,
+        });
+    }
+    Ok(Table { parameters, rows })
+}
+
+/// Reads JSON lines: one object `{"tension.1": 2.0, ...}` per non-blank line; a row sets
+/// only the parameters it names.
+fn read_jsonl(file: &str, text: &str) -> Result<Table, Failure> {
+    let mut parameters: Vec<Parameter> = Vec::new();
+    let mut parsed = Vec::new();
+    for (i, line) in text.lines().enumerate().filter(|(_, l)| !l.trim().is_empty()) {
+        let object: serde_json::Map<String, serde_json::Value> = serde_json::from_str(line).map_err(|e| {
+            at(
+                file,
+                i + 1,
+                e.column().max(1),
+                &format!("is not a JSON object of parameters: {e}"),
+            )
+        })?;
+        let column_of = |key: &str| {
+            line.find(&format!("\"{key}\""))
+                .map_or(1, |c| line[..c].chars().count() + 1)
+        };
+        let mut row = Vec::new();
+        for (key, value) in &object {
+            let p: Parameter = key.parse().map_err(|e: String| at(file, i + 1, column_of(key), &e))?;
+            let x = value.as_f64().ok_or_else(|| {
+                at(
+                    file,
+                    i + 1,
+                    column_of(key),
+                    &format!("`{key}` is {value}, not a number"),
+                )
+            })?;
+            check_value(&p, x).map_err(|e| at(file, i + 1, column_of(key), &e))?;
+            if !parameters.contains(&p) {
+                parameters.push(p);
+            }
+            row.push((p, x));
+        }
+        parsed.push((i + 1, row));
+    }
+    let rows = parsed
+        .into_iter()
+        .enumerate()
+        .map(|(index, (line, row))| Row {
+            index,
+            line,
+            values: parameters
+                .iter()
+                .map(|p| row.iter().find(|(q, _)| q == p).map(|(_, x)| *x))
+                .collect(),
+        })
+        .collect();
+    Ok(Table { parameters, rows })
+}
+
+/// The result of one row.
+struct Outcome {
+    solution: Option<Solution>,
+    /// Newton iterations, also of a failed solve when its report says.
+    iterations: Option<usize>,
+    error: Option<String>,
+}
+
+/// Solves one block of rows in order, each warm-started from the last solution (when that
+/// is a better start than the cold guess).
+fn solve_block(
+    robots: &[Robot],
+    settings: &tdcr::io::SolverSettings,
+    progress: &Mutex<(Progress, usize, usize)>,
+) -> Vec<Outcome> {
+    let mut last: Option<Solution> = None;
+    let mut out = Vec::with_capacity(robots.len());
+    for robot in robots {
+        let result = match (settings.method, &last) {
+            (Method::Shooting, _) => tdcr::shooting::solve(robot, &settings.shooting),
+            (Method::Collocation, Some(warm)) => tdcr::solve_from(robot, &settings.collocation, warm),
+            (Method::Collocation, None) => tdcr::solve(robot, &settings.collocation),
+        };
+        let outcome = match result {
+            Ok(solution) => {
+                last = Some(solution.clone());
+                Outcome {
+                    iterations: Some(solution.report.iterations),
+                    solution: Some(solution),
+                    error: None,
+                }
+            }
+            Err(e) => Outcome {
+                solution: None,
+                iterations: match &e {
+                    Error::NotConverged { report, .. } => Some(report.iterations),
+                    _ => None,
+                },
+                error: Some(e.to_string()),
+            },
+        };
+        out.push(outcome);
+        if let Ok(mut p) = progress.lock() {
+            p.1 += 1;
+            let (done, total) = (p.1, p.2);
+            p.0.update(done, total);
+        }
+    }
+    out
+}
+
+/// A CSV field: quoted when it holds a comma or a quote, newlines as `; `.
+fn csv_text(text: &str) -> String {
+    let one_line = text.replace('\n', "; ");
+    if one_line.contains([',', '"']) {
+        format!("\"{}\"", one_line.replace('"', "\"\""))
+    } else {
+        one_line
+    }
+}
+
+/// `tdcr batch`: reads the robot and the table, solves the shard's rows, writes one result
+/// row per input row; exit code 3 when any row failed (after writing all of them).
+pub fn run(args: &BatchArgs) -> Result<(), Failure> {
+    let (_, mut file) = read_robot(&args.robot)?;
+    apply(&mut file, &args.solver);
+    let text = std::fs::read_to_string(&args.cases)
+        .map_err(|e| Failure::Input(format!("cannot read parameter table {}: {e}", args.cases)))?;
+    let table = if args.cases.ends_with(".jsonl") || args.cases.ends_with(".ndjson") {
+        read_jsonl(&args.cases, &text)?
+    } else {
+        read_csv(&args.cases, &text)?
+    };
+    let blocks = table.rows.len().div_ceil(BLOCK);
+    let (first, end) = match args.shard {
+        Some((k, n)) => (k * blocks / n, (k + 1) * blocks / n),
+        None => (0, blocks),
+    };
+    let rows = &table.rows[(first * BLOCK).min(table.rows.len())..(end * BLOCK).min(table.rows.len())];
+    // Every row's robot is built and checked before any solve, so bad input stops the run
+    // before it spends time.
+    let mut robots = Vec::with_capacity(rows.len());
+    for row in rows {
+        let mut robot = file.robot.clone();
+        table
+            .parameters
+            .iter()
+            .zip(&row.values)
+            .filter_map(|(p, x)| x.map(|x| (p, x)))
+            .try_for_each(|(p, x)| p.apply(&mut robot, x))
+            .and_then(|()| robot.validate())
+            .map_err(|e| at(&args.cases, row.line, 1, &format!("row {}: {e}", row.index)))?;
+        robots.push(robot);
+    }
+    let progress = Mutex::new((Progress::new(), 0, robots.len()));
+    let outcomes: Vec<Outcome> = robots
+        .par_chunks(BLOCK)
+        .map(|block| solve_block(block, &file.solver, &progress))
+        .collect::<Vec<_>>()
+        .into_iter()
+        .flatten()
+        .collect();
+    if let Ok(mut p) = progress.lock() {
+        p.0.finish();
+    }
+    let mut csv = String::from("row");
+    for p in &table.parameters {
+        let _ = write!(csv, ",{p}");
+    }
+    csv.push_str(",converged,iterations,tip_x,tip_y,tip_z,error\n");
+    let mut failed = 0;
+    for (row, outcome) in rows.iter().zip(&outcomes) {
+        let _ = write!(csv, "{}", row.index);
+        for x in &row.values {
+            let _ = write!(csv, ",{}", x.map_or(String::new(), output::number));
+        }
+        let iterations = outcome.iterations.map_or(String::new(), |n| n.to_string());
+        match &outcome.solution {
+            Some(s) => {
+                let tip = s.tip_position();
+                let _ = writeln!(
+                    csv,
+                    ",true,{iterations},{},{},{},",
+                    output::number(tip.x),
+                    output::number(tip.y),
+                    output::number(tip.z)
+                );
+            }
+            None => {
+                failed += 1;
+                let message = outcome.error.as_deref().unwrap_or_default();
+                let _ = writeln!(csv, ",false,{iterations},,,,{}", csv_text(message));
+            }
+        }
+    }
+    match &args.out {
+        Some(path) => {
+            write_file(path, &csv, "results")?;
+            note(&format!("wrote {} ({} rows)", path.display(), rows.len()));
+        }
+        None => emit(&csv)?,
+    }
+    if failed > 0 {
+        return Err(Failure::NotConverged(format!(
+            "{failed} of {} rows did not solve; their `error` column says why",
+            rows.len()
+        )));
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn shards_parse_and_bad_ones_say_the_form() {
+        assert_eq!(parse_shard("1/4"), Ok((1, 4)));
+        for bad in ["4/4", "1", "a/2", "1/0"] {
+            assert!(parse_shard(bad).unwrap_err().contains("K/N"), "{bad}");
+        }
+    }
+
+    #[test]
+    fn csv_columns_are_counted_from_1_at_the_field() {
+        let e = read_csv("t.csv", "tension.1, mass\n").err().unwrap();
+        assert!(matches!(e, Failure::Input(t) if t.starts_with("t.csv:1:12: unknown parameter `mass`")));
+        let e = read_csv("t.csv", "tension.1,tension.2\n1,x\n").err().unwrap();
+        assert!(matches!(e, Failure::Input(t) if t.starts_with("t.csv:2:3: `tension.2` value `x`")));
+    }
+}

@@ -1,0 +1,200 @@
+//! `tdcr batch`, run as a built binary: results against `tdcr solve`, input order, shards
+//! that add up to the unsharded run exactly, JSON lines, bad input with file:line:column and
+//! exit code 2, failed rows with exit code 3.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+const TDCR: &str = env!("CARGO_BIN_EXE_tdcr");
+
+/// A fresh scratch folder holding the example robot file.
+fn scratch(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("tdcr-batch-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(dir.join("robot.toml"), tdcr::io::example()).unwrap();
+    dir
+}
+
+fn run(dir: &Path, args: &[&str]) -> Output {
+    let out = Command::new(TDCR).args(args).current_dir(dir).output().unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    out
+}
+
+fn text(bytes: &[u8]) -> String {
+    String::from_utf8_lossy(bytes).into_owned()
+}
+
+/// `rows` rows of four tensions in [0, 3] N from a fixed linear congruential sequence.
+fn tensions(rows: usize) -> Vec<[f64; 4]> {
+    let mut state: u64 = 12345;
+    let mut next = || {
+        state = state
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        ((state >> 11) as f64 / (1u64 << 53) as f64 * 3000.0).round() / 1000.0
+    };
+    (0..rows).map(|_| [next(), next(), next(), next()]).collect()
+}
+
+fn write_csv(dir: &Path, rows: &[[f64; 4]]) {
+    let mut csv = String::from("tension.1,tension.2,tension.3,tension.4\n");
+    for r in rows {
+        csv.push_str(&format!("{},{},{},{}\n", r[0], r[1], r[2], r[3]));
+    }
+    std::fs::write(dir.join("cases.csv"), csv).unwrap();
+}
+
+#[test]
+fn rows_come_back_in_order_with_the_tips_of_solve() {
+    let dir = scratch("order");
+    let rows = tensions(5);
+    write_csv(&dir, &rows);
+    let out = run(
+        &dir,
+        &["batch", "cases.csv", "--robot", "robot.toml", "--out", "results.csv"],
+    );
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+    let results = std::fs::read_to_string(dir.join("results.csv")).unwrap();
+    let lines: Vec<&str> = results.lines().collect();
+    assert_eq!(
+        lines[0],
+        "row,tension.1,tension.2,tension.3,tension.4,converged,iterations,tip_x,tip_y,tip_z,error"
+    );
+    assert_eq!(lines.len(), 6);
+    for (k, (line, r)) in lines[1..].iter().zip(&rows).enumerate() {
+        let cells: Vec<&str> = line.split(',').collect();
+        assert_eq!(cells[0], k.to_string());
+        assert_eq!(cells[5], "true");
+        let mut args = vec![
+            "solve".to_string(),
+            "robot.toml".into(),
+            "--format".into(),
+            "json".into(),
+        ];
+        for (i, t) in r.iter().enumerate() {
+            args.push("--tension".into());
+            args.push(format!("{}={t}", i + 1));
+        }
+        let args: Vec<&str> = args.iter().map(String::as_str).collect();
+        let solved: serde_json::Value = serde_json::from_str(&text(&run(&dir, &args).stdout)).unwrap();
+        for axis in 0..3 {
+            let cold = solved["tip"]["position"][axis].as_f64().unwrap();
+            let warm: f64 = cells[7 + axis].parse().unwrap();
+            // 1e-8 m: warm and cold Newton runs both stop at the scaled residual 1e-11,
+            // which leaves the tip about 1e-8 m from the exact discrete solution.
+            assert!((warm - cold).abs() < 1e-8, "row {k}: {warm} vs {cold}");
+        }
+    }
+}
+
+#[test]
+fn shards_add_up_to_the_unsharded_run_and_json_lines_read_the_same() {
+    let dir = scratch("shards");
+    let rows = tensions(150);
+    write_csv(&dir, &rows);
+    let solve = |extra: &[&str]| {
+        let mut args = vec!["batch", "cases.csv", "--robot", "robot.toml", "--intervals", "8"];
+        args.extend_from_slice(extra);
+        let out = run(&dir, &args);
+        assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+        text(&out.stdout)
+    };
+    let all = solve(&[]);
+    let mut joined = String::new();
+    for k in 0..3 {
+        let shard = solve(&["--shard", &format!("{k}/3")]);
+        let body = if k == 0 {
+            &shard[..]
+        } else {
+            &shard[shard.find('\n').unwrap() + 1..]
+        };
+        joined.push_str(body);
+    }
+    assert_eq!(joined, all);
+    assert_eq!(all.lines().count(), 151);
+    let mut jsonl = String::new();
+    for r in &rows {
+        jsonl.push_str(&format!(
+            "{{\"tension.1\": {}, \"tension.2\": {}, \"tension.3\": {}, \"tension.4\": {}}}\n",
+            r[0], r[1], r[2], r[3]
+        ));
+    }
+    std::fs::write(dir.join("cases.jsonl"), jsonl).unwrap();
+    let out = run(
+        &dir,
+        &["batch", "cases.jsonl", "--robot", "robot.toml", "--intervals", "8"],
+    );
+    assert_eq!(text(&out.stdout), all);
+    let out = run(&dir, &["batch", "cases.csv", "--robot", "robot.toml", "--shard", "3/3"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(text(&out.stderr).contains("K/N"), "{}", text(&out.stderr));
+}
+
+#[test]
+fn bad_tables_name_file_line_and_column_and_exit_2() {
+    let dir = scratch("bad");
+    for (name, table, expected) in [
+        (
+            "a.csv",
+            "tension.1, mass\n1,2\n",
+            "a.csv:1:12: unknown parameter `mass`",
+        ),
+        (
+            "b.csv",
+            "tension.1,tip_force.z\n1,0\n2,heavy\n",
+            "b.csv:3:3: `tip_force.z` value `heavy` is not a number",
+        ),
+        (
+            "c.csv",
+            "tension.1\n-1\n",
+            "c.csv:2:1: `tension.1` is -1 N, but a tendon can only pull",
+        ),
+        (
+            "d.csv",
+            "tension.1,tension.2\n1\n",
+            "d.csv:2:1: has 1 fields, but the header names 2 parameters",
+        ),
+        (
+            "e.csv",
+            "tension.9\n1\n",
+            "e.csv:2:1: row 0: invalid input: `tension.9` names tendon 9, but the robot has 5",
+        ),
+        (
+            "f.jsonl",
+            "{\"tension.1\": 1}\n{\"tension.1\": 1, \"tip_mass\": 2}\n",
+            "f.jsonl:2:18: unknown parameter `tip_mass`",
+        ),
+        (
+            "g.jsonl",
+            "{\"tension.1\": 1\n",
+            "g.jsonl:1:15: is not a JSON object of parameters",
+        ),
+    ] {
+        std::fs::write(dir.join(name), table).unwrap();
+        let out = run(&dir, &["batch", name, "--robot", "robot.toml"]);
+        assert_eq!(out.status.code(), Some(2), "{name}");
+        let err = text(&out.stderr);
+        assert!(err.starts_with(&format!("error: {expected}")), "{name}: {err}");
+    }
+}
+
+#[test]
+fn failed_rows_keep_their_place_and_exit_3() {
+    let dir = scratch("failed");
+    let robot = tdcr::io::example().replace(
+        "intervals = 32",
+        "intervals = 32\nmax_iterations = 1\ncontinuation = false",
+    );
+    std::fs::write(dir.join("robot.toml"), robot).unwrap();
+    std::fs::write(dir.join("cases.csv"), "tension.1\n0\n4.9\n").unwrap();
+    let out = run(&dir, &["batch", "cases.csv", "--robot", "robot.toml"]);
+    assert_eq!(out.status.code(), Some(3), "{}", text(&out.stderr));
+    let results = text(&out.stdout);
+    let failed: Vec<&str> = results.lines().filter(|l| l.contains(",false,")).collect();
+    assert!(!failed.is_empty(), "{results}");
+    assert!(failed.iter().all(|l| l.contains("did not converge")), "{results}");
+    assert!(text(&out.stderr).contains("rows did not solve"));
+}
