@@ -121,7 +121,8 @@ pub struct PyInverseResult {
 /// `position` (m, (3,)) and, if given, `rotation` ((3, 3), body to world), by bounded
 /// Levenberg-Marquardt on the forward solver (`tdcr::fit::solve_tensions`).
 /// `free_tendons` lists the 0-based indices of the tendons that may change (default all);
-/// `options` are the forward solver's (as `solve`, collocation only).
+/// `options` are the forward solver's (as `solve`, collocation only); without `tol` the
+/// forward solves use a fixed mesh, as the library's inverse statics do.
 #[pyfunction]
 #[pyo3(signature = (robot, position, rotation=None, *, max_tension, tolerance=1e-6, max_iterations=50, orientation_weight=None, free_tendons=None, **options))]
 #[allow(clippy::too_many_arguments)]
@@ -153,7 +154,12 @@ pub fn solve_tensions(
             Target::pose(position, Matrix3::from_fn(|i, j| r[i][j]))
         }
     };
-    let settings = crate::options::apply(&robot.file.solver, options)?;
+    let mut settings = crate::options::apply(&robot.file.solver, options)?;
+    // As the library's inverse statics: a fixed mesh unless `tol` asks otherwise, so that
+    // every iteration solves the same discretization.
+    if !options.is_some_and(|o| o.contains("tol").unwrap_or(false)) {
+        settings.collocation.tolerance = None;
+    }
     let options = InverseOptions {
         max_tension,
         tolerance,
@@ -236,7 +242,9 @@ fn rows3(values: &[Vec<f64>], what: &str) -> PyResult<Vec<Vector3<f64>>> {
 /// (by default; `fit` names any of "youngs_modulus", "euler", "base_position",
 /// "offset_scale") to measured tips. `tensions` is (M, k) (N, file order), `tip_forces`
 /// (M, 3) (N, world frame), `measured_tips` (M, 3) (m). The fit starts from the robot's own
-/// parameters; `options` are the forward solver's (as `solve`, collocation).
+/// parameters; `options` are the forward solver's (as `solve`, collocation), on a fixed
+/// mesh (`intervals`; a `tol` is ignored) so that the model tips are smooth in the
+/// parameters.
 #[pyfunction]
 #[pyo3(signature = (robot, tensions, tip_forces, measured_tips, *, fit=None, max_iterations=50, **options))]
 #[allow(clippy::too_many_arguments)]
@@ -297,7 +305,10 @@ pub fn calibrate(
     let defaults = CalibrationOptions::default();
     let mut settings = robot.file.solver.clone();
     settings.collocation.residual_tolerance = defaults.collocation.residual_tolerance;
-    let settings = crate::options::apply(&settings, options)?;
+    let mut settings = crate::options::apply(&settings, options)?;
+    // Calibration solves on a fixed mesh (the model tips must be smooth in the parameters),
+    // as `tdcr calibrate` does.
+    settings.collocation.tolerance = None;
     let calibration_options = CalibrationOptions {
         fit: chosen,
         max_iterations,
