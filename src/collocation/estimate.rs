@@ -14,6 +14,7 @@ use super::unknowns::{self, nonzeros};
 use crate::error::Result;
 use crate::report::ErrorEstimate;
 use crate::solution::State;
+use nalgebra::Vector6;
 
 /// The estimate and what re-meshing needs from it.
 #[derive(Clone, Debug)]
@@ -23,6 +24,9 @@ pub(crate) struct Correction {
     /// Local error of each link: the max-norm of its order-6 residual (dimensionless, about
     /// C h^5 on an interval; 0 for jumps).
     pub local: Vec<f64>,
+    /// The rates (v', u') of eq. 13 at every node, evaluated on the way (the solution's
+    /// nodes reuse them).
+    pub node_rates: Vec<Vector6<f64>>,
 }
 
 /// Estimates the error of `x`, converged on `system`, with the factors in `ws` (factoring
@@ -35,7 +39,8 @@ pub(crate) fn estimate(system: &System, ws: &mut Workspace, x: &[State]) -> Resu
     let n = system.unknowns();
     let mut rhs = vec![0.0; n];
     let mut local = vec![0.0; x.len() - 1];
-    system.order6_residual(x, &mut rhs, &mut local)?;
+    let mut node_rates = vec![Vector6::zeros(); x.len()];
+    system.order6_residual(x, &mut rhs, &mut local, &mut node_rates)?;
     for r in &mut rhs {
         *r = -*r;
     }
@@ -62,5 +67,6 @@ pub(crate) fn estimate(system: &System, ws: &mut Workspace, x: &[State]) -> Resu
             backbone_max,
         },
         local,
+        node_rates,
     }))
 }

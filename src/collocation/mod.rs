@@ -246,21 +246,24 @@ fn solve_impl(robot: &Robot, options: &Options, warm: Option<&Solution>, cache: 
         (Some(c), Some(w)) => c.mesh == mesh && c.solver == options.linear_solver && c.last.as_ref() == Some(w),
         _ => false,
     };
-    let mut cold = guess::initial(&model, &mesh.nodes, options.initial_guess);
-    // Error-controlled cold starts begin on a mesh that resolves the initial guess and the
-    // routings (the resolution rule).
-    if options.tolerance.is_some() && options.mesh.is_none() && warm.is_none() {
-        let floor = options.intervals.max(resolution::required(robot).intervals);
-        let needed = refine::start_intervals(robot, &cold, floor).min(options.max_intervals);
-        if needed > mesh.intervals() {
-            mesh = Mesh::uniform(robot, needed)?;
-            cold = guess::initial(&model, &mesh.nodes, options.initial_guess);
-        }
-    }
+    let cold = |mesh: &Mesh| guess::initial(&model, &mesh.nodes, options.initial_guess);
     let x0 = match warm {
         Some(w) if reuse => w,
-        Some(w) => better_start(&System::new(model, mesh.clone()), w, cold),
-        None => cold,
+        Some(w) => better_start(&System::new(model, mesh.clone()), w, cold(&mesh)),
+        None => {
+            let mut x0 = cold(&mesh);
+            // Error-controlled cold starts begin on a mesh that resolves the initial guess and
+            // the routings (the resolution rule).
+            if options.tolerance.is_some() && options.mesh.is_none() {
+                let floor = options.intervals.max(resolution::required(robot).intervals);
+                let needed = refine::start_intervals(robot, &x0, floor).min(options.max_intervals);
+                if needed > mesh.intervals() {
+                    mesh = Mesh::uniform(robot, needed)?;
+                    x0 = cold(&mesh);
+                }
+            }
+            x0
+        }
     };
     let mut level = solve_on_mesh(&model, mesh, x0, reuse, options, &mut report, cache).map_err(|e| timed(e, start))?;
     if let Some(tol) = options.tolerance {
@@ -270,14 +273,15 @@ fn solve_impl(robot: &Robot, options: &Options, warm: Option<&Solution>, cache: 
     report.intervals = mesh.intervals();
     report.unknowns = unknowns::unknowns(mesh.nodes.len());
     report.nonzeros = unknowns::nonzeros(&mesh);
-    report.error_estimate = correction.map(|c| c.estimate);
+    report.error_estimate = correction.as_ref().map(|c| c.estimate);
     report.tolerance = options.tolerance;
     report.tolerance_met = options
         .tolerance
         .zip(report.error_estimate)
         .map(|(tol, e)| refine::meets(&e, tol, robot.length()));
     report.timings.total = start.elapsed();
-    nodes::solution(&model, &x, &segment_ends(&mesh), report)
+    let rates = correction.as_ref().map(|c| c.node_rates.as_slice());
+    nodes::solution(&model, &x, &segment_ends(&mesh), rates, report)
 }
 
 /// A converged solve on one mesh: its states and their error estimate.

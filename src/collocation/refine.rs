@@ -62,7 +62,12 @@ pub(super) fn to_tolerance(
 ) -> Result<Level> {
     let length = model.robot.length();
     loop {
-        let Some(Correction { estimate, local }) = &level.correction else {
+        let Some(Correction {
+            estimate,
+            local,
+            node_rates,
+        }) = &level.correction
+        else {
             return Ok(level);
         };
         if meets(estimate, tol, length) {
@@ -81,7 +86,13 @@ pub(super) fn to_tolerance(
             });
         }
         let fine = equidistributed(model.robot, &level.mesh, local, target)?;
-        let guess = nodes::solution(model, &level.x, &segment_ends(&level.mesh), report.clone())?;
+        let guess = nodes::solution(
+            model,
+            &level.x,
+            &segment_ends(&level.mesh),
+            Some(node_rates),
+            report.clone(),
+        )?;
         let start = interpolate(&guess, &fine);
         level = solve_on_mesh(model, fine, start, false, options, report, cache)?;
     }

@@ -110,11 +110,18 @@ impl<'a> System<'a> {
     /// The residual of the order-6 scheme at the states `x` (converged for the order-4
     /// scheme) into `out`: base, jump and tip rows as in [`System::residual`], interval rows
     /// by [`residual::interval_order6`]. `local[k]` gets link k's local error, the max-norm
-    /// of its order-6 rows (0 for jumps). The right-hand side of the deferred correction.
+    /// of its order-6 rows (0 for jumps), and `rates[k]` the rates (v', u') at node k. The
+    /// right-hand side of the deferred correction.
     ///
     /// # Errors
     /// A model breakdown at a visited state.
-    pub fn order6_residual(&self, x: &[State], out: &mut [f64], local: &mut [f64]) -> Result<()> {
+    pub fn order6_residual(
+        &self,
+        x: &[State],
+        out: &mut [f64],
+        local: &mut [f64],
+        rates: &mut [Vector6<f64>],
+    ) -> Result<()> {
         local.fill(0.0);
         self.rows(x, out, |k, sites, seg, a, b, start| {
             let start = match start {
@@ -122,6 +129,7 @@ impl<'a> System<'a> {
                 None => linearize::rates(&self.model, &sites.start, seg, &a.R, &a.v, &a.u)?,
             };
             let end = linearize::rates(&self.model, &sites.end, seg, &b.R, &b.v, &b.u)?;
+            (rates[k], rates[k + 1]) = (start, end);
             let h = sites.end.s - sites.start.s;
             let quarters = QuarterSites {
                 quarter: self.model.site(sites.start.s + 0.25 * h),

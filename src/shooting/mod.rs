@@ -202,7 +202,7 @@ pub fn solve(robot: &Robot, options: &Options) -> Result<Solution> {
         });
     }
     let ends = segment_ends(&model, &trajectory);
-    nodes::solution(&model, &trajectory, &ends, report)
+    nodes::solution(&model, &trajectory, &ends, None, report)
 }
 
 /// The end of the segment each trajectory point belongs to (a breakpoint appears twice:
