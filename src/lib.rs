@@ -1,7 +1,8 @@
 //! # tdcr: statics of tendon-driven continuum robots
 //!
 //! The coupled Cosserat-rod / Cosserat-string model of Rucker & Webster ("Mechanics of
-//! Continuum Robots with External Loading and General Tendon Routing"), with the
+//! Continuum Robots with External Loading and General Tendon Routing"; full citation,
+//! prototype data and the list of corrections in docs/reference.md), with the
 //! corrections of docs/model.md, solved either by sparse collocation (the main solver) or
 //! by shooting (an independent cross-check). SI units throughout (m, N, Pa, rad).
 //!

@@ -284,7 +284,7 @@ fn prototype_reference_tips() {
     ] {
         for (name, solution) in solve_all(&robot) {
             let err = (solution.tip_position() - Vector3::from(tip)).norm();
-            // 1e-9 m: the references are good to about 2e-10 m (ERRATA.md)
+            // 1e-9 m: the references are good to about 2e-10 m (docs/reference.md)
             assert!(err < 1e-9, "{name} case {label}: tip error {err:.3e} m");
         }
     }
@@ -318,7 +318,8 @@ fn table2_experiments_are_in_global_equilibrium() {
 #[test]
 fn varying_loads_and_interior_terminations_balance() {
     // Exercises every term of the balance: varying f_e, l_e, a point load, and a tendon
-    // ending mid-way so that the helical tendon has a corner there (ERRATA.md addendum).
+    // ending mid-way so that the helical tendon has a corner there (docs/reference.md, corner
+    // forces).
     let length = 0.25;
     let (rod, _, _) = steel_rod(length);
     let mut loads = Loads::none()
@@ -346,7 +347,7 @@ fn varying_loads_and_interior_terminations_balance() {
         let e = equilibrium::imbalance(&robot, &solution);
         eprintln!("{name} without corner forces: imbalance {e:?}");
         // 1e-7: the omitted corner force is a first-order error (measured 2e-3 here; about
-        // 1e-5 on the ERRATA.md example), far above the solvers' 1e-10
+        // 1e-5 on the docs/reference.md example), far above the solvers' 1e-10
         assert!(e.max() > 1e-7, "{name}: {e:?}");
     }
 }

@@ -2,8 +2,8 @@
 //!
 //! Cut the robot (backbone and tendons together) just after the base and look at the free
 //! body s in (0, L]. Everything the backbone and the tendons do to each other (distributed
-//! tendon loads of eq. 11, termination wrenches, corner forces of ERRATA.md) is internal to
-//! it and cancels. What remains acts from outside:
+//! tendon loads of eq. 11, termination wrenches, corner forces of docs/model.md) is internal
+//! to it and cancels. What remains acts from outside:
 //!
 //! - the base section pulls with -n(0), -m(0) (n, m: internal force and moment, world
 //!   frame, exerted by the material at larger s on the material at smaller s);

@@ -1,8 +1,8 @@
 //! Known-answer cases shared by tests, benches, examples and the CLI: the paper's prototype
-//! (section 5, data in ERRATA.md) with the 32 experiments of Table 2, its reference tips, the
-//! closed-form answers of [`analytic`], the prototype in the paper's measurement frame with
-//! the parameters the paper calibrated ([`prototype_in_paper_frame`], [`table2_measurement`]),
-//! and seeded noise for synthetic measurements ([`GaussianNoise`]).
+//! (section 5, data in docs/reference.md) with the 32 experiments of Table 2, its reference
+//! tips, the closed-form answers of [`analytic`], the prototype in the paper's measurement
+//! frame with the parameters the paper calibrated ([`prototype_in_paper_frame`],
+//! [`table2_measurement`]), and seeded noise for synthetic measurements ([`GaussianNoise`]).
 
 pub mod analytic;
 mod noise;
@@ -158,7 +158,7 @@ pub fn case_h() -> Robot {
     .robot()
 }
 
-/// Tip of case S (m), agreed by four independent solvers to about 2e-10 m (ERRATA.md).
+/// Tip of case S (m), agreed by four independent solvers to about 2e-10 m (docs/reference.md).
 pub const TIP_S: [f64; 3] = [0.151823122, 0.0, -0.159529649];
 /// Tip of case H (m), same provenance.
 pub const TIP_H: [f64; 3] = [0.155616146, 0.0596521926, -0.158035195];

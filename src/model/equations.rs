@@ -141,8 +141,8 @@ impl<'a> Model<'a> {
     /// (R, v, u).
     ///
     /// The point load of tendon i on the backbone where its path ends or bends is
-    /// tau_i (t_i(s+) - t_i(s-)) (ERRATA.md), so jump and tip conditions are differences
-    /// of these sums.
+    /// tau_i (t_i(s+) - t_i(s-)) (docs/model.md section 5), so jump and tip conditions are
+    /// differences of these sums.
     pub fn tendon_pull<T: Real>(
         &self,
         s: f64,
@@ -229,7 +229,7 @@ impl Model<'_> {
     }
 
     /// Imbalance of the point-load condition at s (jump conditions and tip boundary
-    /// condition, ERRATA.md):
+    /// condition, docs/model.md section 5):
     ///
     /// n(s-) = n(s+) + F_ext + sum_i tau_i (t_i(s+) - t_i(s-)),
     /// m(s-) = m(s+) + L_ext + sum_i (R r_i) x tau_i (t_i(s+) - t_i(s-)),

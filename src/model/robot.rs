@@ -24,8 +24,8 @@ pub struct Robot {
     /// Base orientation R(0), body to world.
     pub base_rotation: Matrix3<f64>,
     /// Include the point forces of tendons that bend at an interior termination of another
-    /// tendon (ERRATA.md addendum). `true` is the physically consistent model; `false`
-    /// reproduces the paper's jump conditions for comparison.
+    /// tendon (docs/reference.md, corner forces). `true` is the physically consistent model;
+    /// `false` reproduces the paper's jump conditions for comparison.
     pub corner_forces: bool,
     /// How the tendons load the backbone: the full coupled model (default) or, for
     /// comparison, the simpler point-moment model.

@@ -6,7 +6,7 @@ use std::fmt;
 use std::sync::Arc;
 
 /// Stiffness of one cross-section: `kse` = diag(GA, GA, EA) (N), the paper's D, and
-/// `kbt` = diag(E Ixx, E Iyy, G J) (N m^2), the paper's C with torsion G J (ERRATA.md).
+/// `kbt` = diag(E Ixx, E Iyy, G J) (N m^2), the paper's C with torsion G J (docs/reference.md).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Section {
     /// Shear and extension stiffness (GA, GA, EA), body frame, N.
