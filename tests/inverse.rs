@@ -195,7 +195,8 @@ fn stops_at_tension_bound() {
     let text = found.explain();
     println!("{text}");
     assert!(text.contains("unreachable"), "{text}");
-    assert!(text.contains("at the upper bound 1.5 N: tendons[1]"), "{text}");
+    // Tendons are numbered from 1, as on the command line and in robot files.
+    assert!(text.contains("at the upper bound 1.5 N: tendon 2"), "{text}");
 
     // Only tendon 2 free: the other tendons are held slack and the answer is exactly the
     // bound, the closest tip along the one-tendon path.

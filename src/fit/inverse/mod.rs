@@ -178,7 +178,8 @@ impl InverseSolution {
     }
 
     /// A few sentences for a person: whether the target was reached, how far the tip
-    /// stayed, why the iteration stopped, and which tendons sit at their bounds.
+    /// stayed, why the iteration stopped, and which tendons sit at their bounds (numbered from
+    /// 1, as on the command line).
     pub fn explain(&self) -> String {
         let mut text = if self.reachable {
             format!(
@@ -208,7 +209,8 @@ impl InverseSolution {
         let list = |b: Bound| {
             let items: Vec<String> = (0..self.bounds.len())
                 .filter(|&i| self.bounds[i] == b)
-                .map(|i| format!("tendons[{i}]"))
+                // 1-based, as the command line and robot files number tendons.
+                .map(|i| format!("tendon {}", i + 1))
                 .collect();
             items.join(", ")
         };
