@@ -86,6 +86,9 @@ pub struct Timings {
     /// The error estimate (order-6 residual and its correction solve), not part of the
     /// three above.
     pub estimate: Duration,
+    /// The stability verdict (the conjugate-point test, and the Jacobian it needed when
+    /// Newton's last one was not at the solution).
+    pub stability: Duration,
     /// Whole call.
     pub total: Duration,
 }
@@ -104,6 +107,78 @@ pub struct ErrorEstimate {
     pub backbone_max: f64,
 }
 
+/// Whether an equilibrium is stable: the second variation of the potential energy is
+/// positive definite (docs/stability.md).
+#[derive(Clone, Debug, PartialEq)]
+pub enum Stability {
+    /// No conjugate point in [0, L): a local minimum of the energy, the state a real robot
+    /// can rest in.
+    Stable,
+    /// The energy decreases along `directions` independent perturbations: a small
+    /// disturbance makes the robot leave this state (buckle or snap).
+    Unstable {
+        /// Number of unstable directions (negative eigenvalues of the second variation,
+        /// counted with multiplicity: a round column past Euler's load has two).
+        directions: usize,
+        /// Arc length of the conjugate point nearest the tip (m).
+        conjugate_point: f64,
+    },
+    /// The test does not apply or could not be carried out.
+    Unknown {
+        /// Why.
+        reason: String,
+    },
+}
+
+impl Stability {
+    /// `"stable"`, `"unstable"` or `"unknown"`.
+    pub fn verdict(&self) -> &'static str {
+        match self {
+            Stability::Stable => "stable",
+            Stability::Unstable { .. } => "unstable",
+            Stability::Unknown { .. } => "unknown",
+        }
+    }
+
+    /// Whether the verdict is [`Stability::Stable`].
+    pub fn is_stable(&self) -> bool {
+        matches!(self, Stability::Stable)
+    }
+}
+
+impl fmt::Display for Stability {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Stability::Stable => f.write_str("stable"),
+            Stability::Unstable {
+                directions,
+                conjugate_point,
+            } => write!(
+                f,
+                "UNSTABLE ({directions} unstable direction{}, conjugate point at s = {:.1} mm)",
+                if *directions == 1 { "" } else { "s" },
+                conjugate_point * 1e3
+            ),
+            Stability::Unknown { reason } => write!(f, "stability unknown: {reason}"),
+        }
+    }
+}
+
+/// Where a solve's answer came from: Newton from the guess, or the load path.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Path {
+    /// Newton converged from the initial guess or warm start to a stable state (or the
+    /// caller asked for the equilibrium nearest the guess).
+    Direct,
+    /// The loads were followed from the unloaded robot (load factor 0 to 1) by
+    /// pseudo-arclength continuation.
+    LoadPath {
+        /// Load factors at which the path turned back (folds); past a fold the robot
+        /// snaps through to another state.
+        folds: Vec<f64>,
+    },
+}
+
 /// What a solve did. Filled by both solvers.
 #[derive(Clone, Debug, PartialEq)]
 pub struct SolveReport {
@@ -111,9 +186,15 @@ pub struct SolveReport {
     pub method: Method,
     /// Why it stopped (of the last Newton run).
     pub termination: Termination,
-    /// Newton iterations, summed over load steps and meshes.
+    /// Iterations (updates of the state), summed over load steps and meshes: Newton steps
+    /// plus chord steps.
     pub iterations: usize,
-    /// Load-continuation steps taken (1 for a direct solve).
+    /// Newton steps: iterations that evaluated and factored a fresh Jacobian.
+    pub newton_steps: usize,
+    /// Chord steps: iterations solved with the factors of an earlier Jacobian (a fifth of a
+    /// Newton step's cost).
+    pub chord_steps: usize,
+    /// Continuation steps along the load path (0 when Newton from the guess was enough).
     pub load_steps: usize,
     /// Meshes solved on (1 without refinement).
     pub meshes: usize,
@@ -139,6 +220,10 @@ pub struct SolveReport {
     pub tolerance: Option<f64>,
     /// Whether the error estimate meets the tolerance (`None` without either).
     pub tolerance_met: Option<bool>,
+    /// Stability of the equilibrium returned.
+    pub stability: Stability,
+    /// How it was reached.
+    pub path: Path,
 }
 
 impl SolveReport {
@@ -148,6 +233,8 @@ impl SolveReport {
             method,
             termination: Termination::MaxIterations,
             iterations: 0,
+            newton_steps: 0,
+            chord_steps: 0,
             load_steps: 0,
             meshes: 0,
             history: Vec::new(),
@@ -160,6 +247,10 @@ impl SolveReport {
             error_estimate: None,
             tolerance: None,
             tolerance_met: None,
+            stability: Stability::Unknown {
+                reason: "not assessed".into(),
+            },
+            path: Path::Direct,
         }
     }
 }

@@ -63,6 +63,7 @@ fn newton_solve_does_not_allocate(solver: LinearSolver) {
             tolerance: 1e-11,
             max_iterations: 30,
             reuse_factors: false,
+            stop_when_damped: false,
         };
         let mut report = SolveReport::new(Method::Collocation);
         // Setup: buffers sized by a first solve (the trial-state vector gets its capacity).

@@ -410,6 +410,7 @@ fn newton_called_directly_with_a_huge_limit_does_not_overflow_its_history() {
         tolerance: 1e-11,
         max_iterations: usize::MAX,
         reuse_factors: false,
+        stop_when_damped: false,
     };
     let mut report = tdcr::SolveReport::new(tdcr::Method::Collocation);
     let (termination, _) = newton::run(&system, &mut workspace, &mut x, &settings, &mut report);

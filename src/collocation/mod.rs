@@ -22,14 +22,15 @@
 //!
 //! docs/numerics.md documents the scheme (order 4), the scaling and the stopping tests.
 
-mod continuation;
 mod estimate;
 pub(crate) mod linear;
 pub(crate) mod newton;
 mod options;
+mod path;
 pub(crate) mod refine;
 pub(crate) mod residual;
 pub mod sensitivity;
+pub(crate) mod stability;
 pub(crate) mod system;
 pub(crate) mod unknowns;
 
@@ -39,12 +40,12 @@ use crate::mesh::guess;
 pub use crate::mesh::guess::InitialGuess;
 use crate::mesh::{Mesh, nodes, resolution};
 use crate::model::equations::Model;
-use crate::report::{Method, SolveReport, Termination};
+use crate::report::{Method, Path, SolveReport, Stability, Termination};
 use crate::solution::{Node, Solution, State};
 use crate::{Error, Robot};
 pub use linear::LinearSolver;
 use newton::{Settings, Workspace};
-pub use options::{DEFAULT_TOLERANCE, MAX_INTERVALS, MAX_ITERATIONS, Options};
+pub use options::{DEFAULT_TOLERANCE, Equilibrium, MAX_INTERVALS, MAX_ITERATIONS, Options};
 use std::time::Instant;
 use system::System;
 
@@ -265,7 +266,7 @@ fn solve_impl(robot: &Robot, options: &Options, warm: Option<&Solution>, cache: 
             x0
         }
     };
-    let mut level = solve_on_mesh(&model, mesh, x0, reuse, options, &mut report, cache).map_err(|e| timed(e, start))?;
+    let mut level = solve_on_mesh(&model, mesh, x0, reuse, true, options, &mut report, cache).map_err(|e| timed(e, start))?;
     if let Some(tol) = options.tolerance {
         level = refine::to_tolerance(&model, level, tol, options, &mut report, cache).map_err(|e| timed(e, start))?;
     }
@@ -279,6 +280,13 @@ fn solve_impl(robot: &Robot, options: &Options, warm: Option<&Solution>, cache: 
         .tolerance
         .zip(report.error_estimate)
         .map(|(tol, e)| refine::meets(&e, tol, robot.length()));
+    if let Some(c) = cache.as_mut() {
+        let system = System::new(model, mesh.clone());
+        let fresh = report.history.iter().any(|i| i.fresh_jacobian);
+        let t = Instant::now();
+        report.stability = stability_of(&system, &mut c.workspace, &x, fresh, &mut report);
+        report.timings.stability += t.elapsed();
+    }
     report.timings.total = start.elapsed();
     let rates = correction.as_ref().map(|c| c.node_rates.as_slice());
     nodes::solution(&model, &x, &segment_ends(&mesh), rates, report)
@@ -297,13 +305,16 @@ fn segment_ends(mesh: &Mesh) -> Vec<f64> {
 }
 
 /// Newton on one mesh (starting with chord steps on the cached factors when
-/// `reuse_factors`); on failure, load continuation from the unloaded shape. Then the error
+/// `reuse_factors`); on the first mesh (`choose`), the load path from the unloaded shape
+/// when Newton did not find a stable state cleanly ([`choose_equilibrium`]). Then the error
 /// estimate with the factors Newton left.
+#[allow(clippy::too_many_arguments)]
 fn solve_on_mesh(
     model: &Model,
     mesh: Mesh,
     x0: Vec<State>,
     reuse_factors: bool,
+    choose: bool,
     options: &Options,
     report: &mut SolveReport,
     cache: &mut Cache,
@@ -313,13 +324,18 @@ fn solve_on_mesh(
         tolerance: options.residual_tolerance,
         max_iterations: options.max_iterations,
         reuse_factors,
+        stop_when_damped: false,
     };
     let mut system = System::new(*model, mesh);
     let mut workspace = match cache.take() {
         Some(c) if c.mesh == system.mesh && c.solver == options.linear_solver => c.workspace,
         _ => Workspace::new(&system, options.linear_solver)?,
     };
-    let result = newton_with_continuation(&mut system, &mut workspace, x0, options, &settings, report);
+    let result = if choose {
+        choose_equilibrium(&mut system, &mut workspace, x0, options, &settings, report)
+    } else {
+        newton_only(&system, &mut workspace, x0, &settings, report)
+    };
     let correction = result.as_ref().ok().and_then(|x| {
         let t = Instant::now();
         // A breakdown at a stage of the order-6 scheme leaves the solution without an estimate.
@@ -340,8 +356,52 @@ fn solve_on_mesh(
     })
 }
 
-/// Newton from `x0`; on failure, load continuation (when enabled).
-fn newton_with_continuation(
+/// Newton from `x0` on a mesh after the first, warm-started from the previous level: the
+/// equilibrium is chosen already.
+fn newton_only(system: &System, ws: &mut Workspace, x0: Vec<State>, settings: &Settings, report: &mut SolveReport) -> Result<Vec<State>> {
+    let mut x = x0;
+    let (termination, worst) = newton::run(system, ws, &mut x, settings, report);
+    report.termination = termination;
+    if termination == Termination::Converged {
+        Ok(x)
+    } else {
+        Err(not_converged(system, report, worst, "refine the mesh or warm-start from a nearby solution"))
+    }
+}
+
+/// The most Newton iterations of a direct solve that counts as clean: from a guess on the
+/// right branch Newton converges in 2-8 (docs/numerics.md); more means it wandered.
+const CLEAN_ITERATIONS: usize = 12;
+
+/// Whether Newton went straight to its root: no damped step and few iterations. A damped
+/// step means the guess was outside Newton's region of quadratic convergence, where the
+/// iteration can cross to another branch of equilibria.
+fn clean(history: &[crate::report::Iteration]) -> bool {
+    history.len() <= CLEAN_ITERATIONS && history.iter().all(|i| i.damping == 1.0)
+}
+
+/// The stability of the equilibrium `x` of `system` ([`stability`]): with the Jacobian in
+/// `ws` when it was evaluated at the last iterate's predecessor (`fresh`), else a new one
+/// (which also leaves its factors at `x`).
+fn stability_of(system: &System, ws: &mut Workspace, x: &[State], fresh: bool, report: &mut SolveReport) -> Stability {
+    if let Some(reason) = stability::non_conservative(system.model.robot) {
+        return Stability::Unknown { reason };
+    }
+    if !fresh && !ws.linearize(system, x, report) {
+        return Stability::Unknown {
+            reason: "the Jacobian at the solution is singular or not finite".into(),
+        };
+    }
+    let s: Vec<f64> = system.mesh.nodes.iter().map(|n| n.s).collect();
+    stability::assess(ws.jacobian(), &s)
+}
+
+/// Newton from `x0`, and the equilibrium choice of docs/stability.md: Newton's answer stands
+/// when it converged cleanly to a state that is not unstable (or the caller asked for the
+/// nearest equilibrium); otherwise the load path from the unloaded robot decides
+/// ([`path::follow`]), and Newton's answer is the fallback when the path cannot be
+/// followed.
+fn choose_equilibrium(
     system: &mut System,
     ws: &mut Workspace,
     x0: Vec<State>,
@@ -352,12 +412,28 @@ fn newton_with_continuation(
     report.unknowns = system.unknowns();
     report.nonzeros = ws.nonzeros();
     report.intervals = system.mesh.intervals();
-    let mut x = x0;
-    report.load_steps += 1;
-    let (termination, worst) = newton::run(system, ws, &mut x, settings, report);
+    let mut x = x0.clone();
+    let nearest = options.equilibrium == Equilibrium::Nearest || !options.continuation;
+    // Unless any root will do, Newton only gets the chance to reach one cleanly.
+    let direct = Settings {
+        max_iterations: if nearest { settings.max_iterations } else { settings.max_iterations.min(CLEAN_ITERATIONS) },
+        stop_when_damped: !nearest,
+        ..*settings
+    };
+    let (termination, worst) = newton::run(system, ws, &mut x, &direct, report);
     report.termination = termination;
-    if termination == Termination::Converged {
+    let converged = termination == Termination::Converged;
+    if converged && nearest {
         return Ok(x);
+    }
+    if converged && clean(&report.history) {
+        let fresh = report.history.iter().any(|i| i.fresh_jacobian);
+        let t = Instant::now();
+        let verdict = stability_of(system, ws, &x, fresh, report);
+        report.timings.stability += t.elapsed();
+        if !matches!(verdict, Stability::Unstable { .. }) {
+            return Ok(x);
+        }
     }
     if !options.continuation {
         return Err(not_converged(
@@ -367,7 +443,42 @@ fn newton_with_continuation(
             "enable load continuation, refine the mesh, or warm-start from a nearby solution",
         ));
     }
-    continuation::run(system, ws, settings, report).map_err(|(hint, row)| not_converged(system, report, row, &hint))
+    let direct = converged.then_some(x);
+    let mesh = system.mesh.clone();
+    match path::follow(system, ws, options, settings, report) {
+        Ok(end) => {
+            report.path = Path::LoadPath { folds: end.folds };
+            report.unknowns = system.unknowns();
+            report.nonzeros = ws.nonzeros();
+            report.intervals = system.mesh.intervals();
+            Ok(end.x)
+        }
+        // The path is lost: Newton's answer, if it has one, with its verdict.
+        Err((hint, row)) => {
+            if system.mesh != mesh {
+                *system = System::new(system.model, mesh);
+                *ws = Workspace::new(system, options.linear_solver)?;
+            }
+            system.set_factors(1.0, 1.0);
+            let x = match direct {
+                Some(x) => x,
+                None => {
+                    let mut x = x0;
+                    let (termination, _) = newton::run(system, ws, &mut x, settings, report);
+                    report.termination = termination;
+                    if termination != Termination::Converged {
+                        return Err(not_converged(system, report, row, &hint));
+                    }
+                    x
+                }
+            };
+            if !ws.linearize(system, &x, report) {
+                return Err(not_converged(system, report, row, &hint));
+            }
+            report.termination = Termination::Converged;
+            Ok(x)
+        }
+    }
 }
 
 /// Stamps the total time on the report a non-convergence error carries.

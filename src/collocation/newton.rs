@@ -38,6 +38,9 @@ pub struct Settings {
     /// sweep, the previous load step). A chord step that does not contract fast enough
     /// falls back to a Newton step, so a wrong setting costs time, never the answer.
     pub reuse_factors: bool,
+    /// Stop at the first damped step (returning [`Termination::MaxIterations`]): a caller
+    /// that only wants a root Newton reaches directly, and has a better way otherwise.
+    pub stop_when_damped: bool,
 }
 
 /// Everything Newton needs for one mesh, built once and reused across iterations, load
@@ -120,6 +123,31 @@ impl Workspace {
         }
         let mut report = SolveReport::new(crate::report::Method::Collocation);
         self.solve(&mut report).then_some(&self.step[..])
+    }
+
+    /// Evaluates the residual and the Jacobian of `system` at `x`, factors the Jacobian and
+    /// solves for the Newton step (a Newton step's work, without moving `x`); counted in
+    /// `report` as a Jacobian evaluation. False for a non-finite residual or Jacobian or a
+    /// zero pivot. The residual is then [`Workspace::residual`], the Jacobian
+    /// [`Workspace::jacobian`], and [`Workspace::solve_again`] solves with its factors.
+    pub fn linearize(&mut self, system: &System, x: &[State], report: &mut SolveReport) -> bool {
+        let t = Instant::now();
+        let ok = system.jacobian(x, &mut self.residual, &mut self.values).is_ok();
+        report.timings.assembly += t.elapsed();
+        report.evaluations.jacobian += 1;
+        report.evaluations.equations += system.rate_evaluations();
+        ok && self.values.iter().chain(&self.residual).all(|v| v.is_finite()) && self.solve(report)
+    }
+
+    /// The residual of the last [`Workspace::linearize`] or Newton run (its final iterate).
+    pub fn residual(&self) -> &[f64] {
+        &self.residual
+    }
+
+    /// The Jacobian values of the last evaluation, in
+    /// [`pattern`](super::unknowns::pattern) order.
+    pub fn jacobian(&self) -> &[f64] {
+        &self.values
     }
 
     /// Whether the workspace holds the factors of a successful solve.
@@ -215,12 +243,14 @@ pub fn run(
                     damping: 1.0,
                     fresh_jacobian: false,
                 });
+                report.chord_steps += 1;
                 std::mem::swap(x, &mut ws.trial);
                 std::mem::swap(&mut ws.residual, &mut ws.trial_residual);
                 continue;
             }
         }
         // A Newton step: the Jacobian at x.
+        report.newton_steps += 1;
         let t = Instant::now();
         let ok = system.jacobian(x, &mut ws.residual, &mut ws.values).is_ok();
         report.timings.assembly += t.elapsed();
@@ -261,6 +291,10 @@ pub fn run(
             damping: alpha,
             fresh_jacobian: true,
         });
+        if alpha < 1.0 && settings.stop_when_damped {
+            report.residual = norm;
+            return (Termination::MaxIterations, worst_row(&ws.residual));
+        }
         std::mem::swap(x, &mut ws.trial);
         std::mem::swap(&mut ws.residual, &mut ws.trial_residual);
         // Far from the solution (a damped step) a stale Jacobian is not worth trying.

@@ -20,6 +20,19 @@ pub const MAX_ITERATIONS: usize = 10_000;
 /// on these meshes), so the default answer can serve as a reference in benchmarks.
 pub const DEFAULT_TOLERANCE: f64 = 1e-7;
 
+/// Which of several equilibria a solve returns.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Equilibrium {
+    /// The state the robot reaches when its loads grow from zero (the load path), which
+    /// Newton's answer is checked against: a clean Newton run to a state that is not
+    /// unstable stands; otherwise the load path is followed.
+    #[default]
+    LoadPath,
+    /// The equilibrium Newton converges to from the initial guess or warm start, whatever
+    /// its stability (reported).
+    Nearest,
+}
+
 /// Collocation options. By default every solve is error-controlled (the tip to
 /// [`DEFAULT_TOLERANCE`]); [`Options::fixed`] solves on a fixed mesh, still with an error
 /// estimate in the report. `Options { tolerance: Some(1e-9), ..Default::default() }`.
@@ -46,8 +59,11 @@ pub struct Options {
     /// Newton iterations per solve (per load step with continuation). Default 30; at most
     /// [`MAX_ITERATIONS`].
     pub max_iterations: usize,
-    /// Use load continuation when the direct solve fails. Default true.
+    /// Follow the load path from the unloaded robot when Newton from the guess fails or does
+    /// not end cleanly on a stable state (docs/stability.md). Default true.
     pub continuation: bool,
+    /// Which equilibrium to return. Default [`Equilibrium::LoadPath`].
+    pub equilibrium: Equilibrium,
     /// Where Newton starts without a warm start. Default: the rigid-equilibrium estimate.
     pub initial_guess: InitialGuess,
     /// The linear solver for Newton steps. Default: automatic (the structured elimination).
@@ -64,6 +80,7 @@ impl Default for Options {
             residual_tolerance: 1e-11,
             max_iterations: 30,
             continuation: true,
+            equilibrium: Equilibrium::LoadPath,
             initial_guess: InitialGuess::RigidEquilibrium,
             linear_solver: LinearSolver::Auto,
         }

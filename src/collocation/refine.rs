@@ -94,7 +94,7 @@ pub(super) fn to_tolerance(
             report.clone(),
         )?;
         let start = interpolate(&guess, &fine);
-        level = solve_on_mesh(model, fine, start, false, options, report, cache)?;
+        level = solve_on_mesh(model, fine, start, false, false, options, report, cache)?;
     }
 }
 

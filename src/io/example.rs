@@ -69,7 +69,8 @@ method = "collocation"           # or "shooting" (the independent cross-check)
 # max_intervals = 8192           # cap on intervals during refinement
 # residual_tolerance = 1e-11     # Newton stopping test (scaled, dimensionless)
 # max_iterations = 30            # Newton iterations per load step
-# continuation = true            # ramp the loads up when a direct solve fails
+# continuation = true            # follow the load path when Newton alone is not enough
+# equilibrium = "load_path"      # or "nearest": Newton's root from the guess, stable or not
 "#;
 
 #[cfg(test)]

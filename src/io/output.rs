@@ -157,7 +157,19 @@ pub fn json(robot: &Robot, solution: &Solution, count: Option<usize>, jacobian: 
         ("method", Json::Text(report.method.to_string())),
         ("termination", Json::Text(report.termination.to_string())),
         ("iterations", Json::Integer(report.iterations)),
+        (
+            "counts",
+            Json::Object(vec![
+                ("newton_steps", Json::Integer(report.newton_steps)),
+                ("chord_steps", Json::Integer(report.chord_steps)),
+                ("jacobian_evaluations", Json::Integer(report.evaluations.jacobian)),
+                ("residual_evaluations", Json::Integer(report.evaluations.residual)),
+                ("load_steps", Json::Integer(report.load_steps)),
+                ("meshes", Json::Integer(report.meshes)),
+            ]),
+        ),
         ("load_steps", Json::Integer(report.load_steps)),
+        ("stability", stability(report)),
         ("residual", Json::Number(report.residual)),
         ("intervals", Json::Integer(report.intervals)),
         (
@@ -219,6 +231,29 @@ pub fn json(robot: &Robot, solution: &Solution, count: Option<usize>, jacobian: 
 
 /// The CSV header: arc length, position, internal force and moment, and R row-major.
 pub const CSV_HEADER: &str = "s,px,py,pz,nx,ny,nz,mx,my,mz,R11,R12,R13,R21,R22,R23,R31,R32,R33";
+
+/// The `stability` object: the verdict, its details, and how the equilibrium was reached.
+fn stability(report: &crate::SolveReport) -> Json {
+    let mut fields = vec![("verdict", Json::Text(report.stability.verdict().into()))];
+    match &report.stability {
+        crate::Stability::Stable => {}
+        crate::Stability::Unstable {
+            directions,
+            conjugate_point,
+        } => {
+            fields.push(("unstable_directions", Json::Integer(*directions)));
+            fields.push(("conjugate_point_s", Json::Number(*conjugate_point)));
+        }
+        crate::Stability::Unknown { reason } => fields.push(("reason", Json::Text(reason.clone()))),
+    }
+    let (path, folds) = match &report.path {
+        crate::Path::Direct => ("direct", Vec::new()),
+        crate::Path::LoadPath { folds } => ("load_path", folds.clone()),
+    };
+    fields.push(("path", Json::Text(path.into())));
+    fields.push(("folds", Json::Array(folds.into_iter().map(Json::Number).collect())));
+    Json::Object(fields)
+}
 
 /// The samples as CSV: [`CSV_HEADER`], then one row per sample (SI units, full precision).
 pub fn csv(samples: &[Sample]) -> String {

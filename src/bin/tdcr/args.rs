@@ -30,6 +30,10 @@ pub struct SolverArgs {
     /// Refine the mesh adaptively until the estimated tip position error is below T (m).
     #[arg(long, value_name = "T", value_parser = parse_positive)]
     pub tol: Option<f64>,
+    /// Return the equilibrium Newton reaches from the initial guess, whatever its stability,
+    /// instead of the one on the load path from rest (docs/stability.md).
+    #[arg(long)]
+    pub nearest: bool,
     /// Print the solver's per-iteration table and counts to standard error.
     #[arg(short, long)]
     pub verbose: bool,

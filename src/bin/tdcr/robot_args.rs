@@ -79,6 +79,9 @@ pub fn apply(file: &mut RobotFile, args: &SolverArgs) {
     if let Some(t) = args.tol {
         c.tolerance = Some(t);
     }
+    if args.nearest {
+        c.equilibrium = collocation::Equilibrium::Nearest;
+    }
     if settings.method == Method::Shooting && (args.intervals.is_some() || args.tol.is_some()) {
         note("note: --intervals and --tol apply to collocation only; shooting integrates adaptively");
     }

@@ -5,7 +5,7 @@ use std::fmt::Write as _;
 use std::time::Duration;
 use tdcr::Iteration;
 use tdcr::io::{RobotFile, output};
-use tdcr::{Method, Routing, Solution, SolveReport};
+use tdcr::{Method, Path, Routing, Solution, SolveReport};
 
 /// A duration in milliseconds.
 pub fn ms(d: Duration) -> f64 {
@@ -37,15 +37,49 @@ fn history_table(history: &[Iteration]) -> String {
     out
 }
 
+/// The iteration counts, each named: "3 Newton + 2 chord steps", with the load steps and
+/// meshes when there were more than the direct solve's.
+pub fn counts(report: &SolveReport) -> String {
+    let mut out = format!("{} Newton", report.newton_steps);
+    if report.chord_steps > 0 {
+        let _ = write!(out, " + {} chord", report.chord_steps);
+    }
+    out.push_str(" steps");
+    if report.load_steps > 0 {
+        let _ = write!(out, " over {} load steps", report.load_steps);
+    }
+    if report.meshes > 1 {
+        let _ = write!(out, " on {} meshes", report.meshes);
+    }
+    out
+}
+
+/// How the answer was reached, when it was not Newton from the guess.
+fn path_note(report: &SolveReport) -> String {
+    match &report.path {
+        Path::Direct => String::new(),
+        Path::LoadPath { folds } if folds.is_empty() => " (followed the load path from rest)".into(),
+        Path::LoadPath { folds } => format!(
+            " (followed the load path from rest; it SNAPS THROUGH at {} of the load)",
+            folds
+                .iter()
+                .map(|f| format!("{:.1} %", 100.0 * f))
+                .collect::<Vec<_>>()
+                .join(", ")
+        ),
+    }
+}
+
 /// What a solver did, for `-v` and for failures (indented: continuation lines).
 pub fn diagnostics(report: &SolveReport) -> String {
     let mut out = String::new();
     let _ = writeln!(out, "  termination: {}", report.termination);
     let _ = writeln!(
         out,
-        "  {} Newton iterations over {} load step(s) on {} mesh(es); final scaled residual {:.3e}",
-        report.iterations, report.load_steps, report.meshes, report.residual
+        "  {} iterations: {} Newton steps (fresh Jacobian) and {} chord steps, over {} load steps on {} mesh(es); final scaled residual {:.3e}",
+        report.iterations, report.newton_steps, report.chord_steps, report.load_steps, report.meshes, report.residual
     );
+    let _ = writeln!(out, "  equilibrium: {}{}", report.stability, path_note(report));
     let _ = writeln!(
         out,
         "  {} intervals, {} unknowns, {} Jacobian non-zeros{}",
@@ -66,11 +100,12 @@ pub fn diagnostics(report: &SolveReport) -> String {
     let t = &report.timings;
     let _ = writeln!(
         out,
-        "  time: assembly {:.2} ms, factorization {:.2} ms, solve {:.2} ms, error estimate {:.2} ms, total {:.2} ms",
+        "  time: assembly {:.2} ms, factorization {:.2} ms, solve {:.2} ms, error estimate {:.2} ms, stability {:.2} ms, total {:.2} ms",
         ms(t.assembly),
         ms(t.factorization),
         ms(t.solve),
         ms(t.estimate),
+        ms(t.stability),
         ms(t.total)
     );
     if !report.history.is_empty() {
@@ -84,7 +119,7 @@ pub fn diagnostics(report: &SolveReport) -> String {
 /// against the tolerance (collocation on a rod of length `length`, m).
 pub fn summary(report: &SolveReport, length: f64) -> String {
     let head = format!(
-        "{} on {} {}: {} Newton iterations, {:.2} ms",
+        "{} on {} {}: {}, {:.2} ms; {}{}",
         report.method,
         report.intervals,
         if report.method == Method::Shooting {
@@ -94,8 +129,10 @@ pub fn summary(report: &SolveReport, length: f64) -> String {
         } else {
             "intervals (fixed mesh)"
         },
-        report.iterations,
-        ms(report.timings.total)
+        counts(report),
+        ms(report.timings.total),
+        report.stability,
+        path_note(report)
     );
     let accuracy = match (report.method, report.error_estimate, report.tolerance) {
         (Method::Shooting, ..) => "tip error not estimated (shooting controls its local integration error)".to_string(),

@@ -2,7 +2,7 @@
 //! and back from a library validation error to the file field it is about.
 
 use super::SolverSettings;
-use super::tables::{BaseTable, LoadsTable, MethodName, RodTable, RoutingTable, SolverTable, TendonTable, Vec3};
+use super::tables::{BaseTable, EquilibriumKey, LoadsTable, MethodName, RodTable, RoutingTable, SolverTable, TendonTable, Vec3};
 use crate::io::Problem;
 use crate::io::locate::Locator;
 use crate::model::loads::{Field, Loads, PointLoad};
@@ -102,6 +102,11 @@ pub(super) fn settings(solver: &SolverTable) -> SolverSettings {
     c.residual_tolerance = solver.residual_tolerance.unwrap_or(c.residual_tolerance);
     c.max_iterations = solver.max_iterations.unwrap_or(c.max_iterations);
     c.continuation = solver.continuation.unwrap_or(c.continuation);
+    c.equilibrium = match solver.equilibrium {
+        Some(EquilibriumKey::Nearest) => crate::collocation::Equilibrium::Nearest,
+        Some(EquilibriumKey::LoadPath) => crate::collocation::Equilibrium::LoadPath,
+        None => c.equilibrium,
+    };
     let s = &mut out.shooting;
     s.tolerance = solver.residual_tolerance.unwrap_or(s.tolerance);
     s.max_iterations = solver.max_iterations.unwrap_or(s.max_iterations);

@@ -174,6 +174,7 @@ pub(super) struct SolverTable {
     pub(super) residual_tolerance: Option<f64>,
     pub(super) max_iterations: Option<usize>,
     pub(super) continuation: Option<bool>,
+    pub(super) equilibrium: Option<EquilibriumKey>,
     pub(super) integration_tolerance: Option<f64>,
 }
 
@@ -183,6 +184,14 @@ pub(super) struct SolverTable {
 pub(super) enum MethodName {
     Collocation,
     Shooting,
+}
+
+/// The `equilibrium` of `[solver]`: `"load_path"` (the default) or `"nearest"`.
+#[derive(Clone, Copy, Debug, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub(super) enum EquilibriumKey {
+    LoadPath,
+    Nearest,
 }
 
 /// The tables a robot file may have, in the order docs/robot-file.md describes them.

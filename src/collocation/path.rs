@@ -1,0 +1,374 @@
+//! The load path: pseudo-arclength continuation in the load factor lambda (every tension and
+//! external load times lambda) from the unloaded robot (lambda = 0) to the robot as given
+//! (lambda = 1), the path a robot loaded from rest follows (docs/numerics.md, "Load path").
+//!
+//! Each step predicts along the tangent of the branch, (dx, dlambda) with
+//! J dx + F_lambda dlambda = 0, from the factors of the Jacobian at the last point, and
+//! corrects with chord steps on those factors on the bordered system
+//!
+//! ```text
+//! F(x, lambda) = 0,    <t_x, x - x_pred> / n + t_lambda (lambda - lambda_pred) = 0,
+//! ```
+//!
+//! eliminating the one extra unknown by two solves with the same factors (Keller's
+//! bordering). A fold in lambda, where the branch turns back, is passed like any other
+//! point: t_lambda changes sign there, and the fold is recorded (past it the robot snaps
+//! through). The step grows when the corrector converges in a few steps and shrinks on
+//! failure; when the shape bends more than the mesh resolves, the path continues on a finer
+//! mesh. Near lambda = 1 the last point is predicted onto lambda = 1 and Newton lands there.
+
+use super::newton::{self, Settings, Workspace};
+use super::options::Options;
+use super::refine;
+use super::system::System;
+use crate::mesh::guess::rigid_estimate;
+use crate::mesh::{Mesh, nodes};
+use crate::report::{SolveReport, Termination};
+use crate::solution::State;
+
+/// Step control: the corrector iterations of an easy step, and the most it may take.
+const EASY: usize = 2;
+const MAX_CORRECTOR: usize = 8;
+/// The first step and the bounds of the step, in units of the normalized arclength.
+const FIRST_STEP: f64 = 0.3;
+const MAX_STEP: f64 = 1.0;
+/// Below this step the path has stalled: no solution nearby is continuous in the load.
+const MIN_STEP: f64 = 1e-5;
+/// The most steps along one path (a path of this many steps does not converge in practice).
+const MAX_STEPS: usize = 400;
+/// A chord corrector step must at least halve the residual, or the Jacobian is refreshed.
+const CHORD_RATIO: f64 = 0.5;
+/// Points on the way to lambda = 1 are guides, not answers: they are corrected to this
+/// scaled residual (a relative state error of about 1e-6), and only the landing at
+/// lambda = 1 is converged to the solve's tolerance.
+const PATH_TOLERANCE: f64 = 1e-6;
+/// Difference step of F_lambda: the residual is smooth in lambda and resolves it to about
+/// 1e-11, so a central difference at 1e-5 is accurate to about 1e-6 relative, plenty for
+/// a tangent.
+const DELTA: f64 = 1e-5;
+
+/// The end of a load path.
+pub(super) struct End {
+    /// The converged states at lambda = 1.
+    pub x: Vec<State>,
+    /// Load factors where the path turned back.
+    pub folds: Vec<f64>,
+}
+
+/// A point of the path with the tangent there.
+struct Point {
+    x: Vec<State>,
+    lambda: f64,
+    /// Tangent, scaled unknowns (the Newton step's units) then lambda, normalized so that
+    /// |t_x|^2 / n + t_lambda^2 = 1.
+    tx: Vec<f64>,
+    tl: f64,
+}
+
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| x * y).sum()
+}
+
+fn max_norm(v: &[f64]) -> f64 {
+    v.iter()
+        .fold(0.0, |m, x| if x.is_nan() { f64::INFINITY } else { m.max(x.abs()) })
+}
+
+/// The residual at (x, lambda) into `out`; false when the model breaks down.
+fn residual(system: &mut System, x: &[State], lambda: f64, out: &mut [f64], report: &mut SolveReport) -> bool {
+    system.set_factors(lambda, lambda);
+    report.evaluations.residual += 1;
+    report.evaluations.equations += system.rate_evaluations();
+    system.residual(x, out).is_ok() && out.iter().all(|v| v.is_finite())
+}
+
+/// dF/dlambda at x by a central difference (one-sided at lambda = 0, where tensions would
+/// turn negative).
+fn f_lambda(system: &mut System, x: &[State], lambda: f64, report: &mut SolveReport) -> Option<Vec<f64>> {
+    let n = system.unknowns();
+    let (mut hi, mut lo) = (vec![0.0; n], vec![0.0; n]);
+    let (a, b) = if lambda >= DELTA {
+        (lambda - DELTA, lambda + DELTA)
+    } else {
+        (lambda, lambda + DELTA)
+    };
+    let ok = residual(system, x, b, &mut hi, report) && residual(system, x, a, &mut lo, report);
+    system.set_factors(lambda, lambda);
+    ok.then(|| hi.iter().zip(&lo).map(|(h, l)| (h - l) / (b - a)).collect())
+}
+
+/// The tangent at a converged point whose Jacobian is factored in `ws`, oriented along
+/// `previous` (or towards growing lambda).
+fn tangent(
+    system: &mut System,
+    ws: &mut Workspace,
+    x: Vec<State>,
+    lambda: f64,
+    previous: Option<(&[f64], f64)>,
+    report: &mut SolveReport,
+) -> Option<(Point, Vec<f64>)> {
+    let fl = f_lambda(system, &x, lambda, report)?;
+    let rhs: Vec<f64> = fl.iter().map(|v| -v).collect();
+    let z = ws.solve_again(&rhs)?.to_vec();
+    let n = z.len() as f64;
+    let norm = (dot(&z, &z) / n + 1.0).sqrt();
+    let mut tx: Vec<f64> = z.iter().map(|v| v / norm).collect();
+    let mut tl = 1.0 / norm;
+    let forward = match previous {
+        Some((ptx, ptl)) if ptx.len() == tx.len() => dot(ptx, &tx) / n + ptl * tl >= 0.0,
+        Some((_, ptl)) => ptl >= 0.0,
+        None => true,
+    };
+    if !forward {
+        tx.iter_mut().for_each(|v| *v = -*v);
+        tl = -tl;
+    }
+    Some((Point { x, lambda, tx, tl }, fl))
+}
+
+/// Follows the load path on `system` (whose mesh it may refine, replacing `system` and
+/// `ws`) from lambda = 0 to 1. Returns the end, or a hint and the worst residual row.
+pub(super) fn follow(
+    system: &mut System,
+    ws: &mut Workspace,
+    options: &Options,
+    settings: &Settings,
+    report: &mut SolveReport,
+) -> std::result::Result<End, (String, usize)> {
+    let robot = system.model.robot;
+    system.set_factors(0.0, 0.0);
+    let mut x = rigid_estimate(&system.model, &system.mesh.nodes);
+    let (start, row) = newton::run(system, ws, &mut x, settings, report);
+    if start != Termination::Converged {
+        report.termination = start;
+        return Err(("the unloaded robot did not converge: refine the mesh".into(), row));
+    }
+    if !ws.linearize(system, &x, report) {
+        return Err(("the Jacobian of the unloaded robot is singular".into(), 0));
+    }
+    let Some((mut point, mut fl)) = tangent(system, ws, x, 0.0, None, report) else {
+        return Err(("the load path's first tangent is not finite".into(), 0));
+    };
+    let n = system.unknowns();
+    let mut folds = Vec::new();
+    let mut h = FIRST_STEP;
+    let mut factored_at_point = true;
+    let mut worst = 0;
+    let mut trial: Vec<State> = Vec::with_capacity(system.mesh.nodes.len());
+    let mut r = vec![0.0; n];
+    for _ in 0..MAX_STEPS {
+        report.load_steps += 1;
+        // The last step lands on lambda = 1 by Newton at fixed lambda.
+        if point.tl > 0.0 && point.lambda + h * point.tl >= 1.0 {
+            let h1 = (1.0 - point.lambda) / point.tl;
+            let step: Vec<f64> = point.tx.iter().map(|v| v * h1).collect();
+            system.retract(&point.x, &step, 1.0, &mut trial);
+            let mut landed = trial.clone();
+            system.set_factors(1.0, 1.0);
+            let land = Settings {
+                reuse_factors: factored_at_point,
+                ..*settings
+            };
+            let (term, row) = newton::run(system, ws, &mut landed, &land, report);
+            report.termination = term;
+            if term == Termination::Converged {
+                return Ok(End { x: landed, folds });
+            }
+            worst = row;
+            factored_at_point = false;
+            h = 0.5 * h1;
+            if h < MIN_STEP {
+                break;
+            }
+            continue;
+        }
+        let res = correct(system, ws, &point, h, &fl, factored_at_point, settings, report, &mut r);
+        match res {
+            Some((xc, lambda, iterations)) => {
+                if !ws.linearize(system, &xc, report) {
+                    h *= 0.5;
+                    factored_at_point = false;
+                    if h < MIN_STEP {
+                        break;
+                    }
+                    continue;
+                }
+                let previous = (point.tx.as_slice(), point.tl);
+                let Some((next, next_fl)) = tangent(system, ws, xc, lambda, Some(previous), report) else {
+                    break;
+                };
+                if (next.tl > 0.0) != (point.tl > 0.0) {
+                    folds.push(lambda);
+                }
+                // The angle between successive tangents bounds the next step.
+                let cos = (dot(&next.tx, &point.tx) / n as f64 + next.tl * point.tl).clamp(-1.0, 1.0);
+                let grow = match iterations {
+                    i if i <= EASY => 2.0,
+                    3 => 1.3,
+                    _ => 0.8,
+                };
+                h = (h * grow).min(MAX_STEP);
+                if cos < 0.9 {
+                    h *= 0.5;
+                }
+                point = next;
+                fl = next_fl;
+                factored_at_point = true;
+                // A shape the mesh no longer resolves: continue on a finer one.
+                let floor = system.mesh.intervals();
+                let needed = refine::start_intervals(robot, &point.x, floor).min(options.max_intervals);
+                if needed as f64 > 1.25 * floor as f64 {
+                    match remesh(system, ws, &point, needed, options, settings, report) {
+                        Some((p, f)) => {
+                            point = p;
+                            fl = f;
+                            r = vec![0.0; system.unknowns()];
+                        }
+                        None => return Err((remesh_hint(point.lambda), worst)),
+                    }
+                }
+            }
+            None => {
+                h *= 0.5;
+                factored_at_point = false;
+                if h < MIN_STEP {
+                    break;
+                }
+            }
+        }
+    }
+    system.set_factors(1.0, 1.0);
+    Err((
+        format!(
+            "the load path stalled at {:.1} % of the load: no equilibrium nearby is continuous in the load there",
+            point.lambda * 100.0
+        ),
+        worst,
+    ))
+}
+
+fn remesh_hint(lambda: f64) -> String {
+    format!(
+        "the load path could not move to a finer mesh at {:.1} % of the load",
+        lambda * 100.0
+    )
+}
+
+/// One predictor-corrector step of length `h` from `point`. Returns the converged states,
+/// their lambda and the corrector iterations, or None (the step is to be shortened).
+#[allow(clippy::too_many_arguments)]
+fn correct(
+    system: &mut System,
+    ws: &mut Workspace,
+    point: &Point,
+    h: f64,
+    fl: &[f64],
+    factored_at_point: bool,
+    settings: &Settings,
+    report: &mut SolveReport,
+    r: &mut [f64],
+) -> Option<(Vec<State>, f64, usize)> {
+    let n = point.tx.len();
+    let nf = n as f64;
+    let step: Vec<f64> = point.tx.iter().map(|v| v * h).collect();
+    let mut x = Vec::with_capacity(point.x.len());
+    system.retract(&point.x, &step, 1.0, &mut x);
+    let lambda_pred = point.lambda + h * point.tl;
+    let mut lambda = lambda_pred;
+    // Displacement from the predicted point, in the scaled unknowns.
+    let mut d = vec![0.0; n];
+    let mut fl = fl.to_vec();
+    let mut fresh = !factored_at_point;
+    if fresh {
+        system.set_factors(lambda, lambda);
+        if !ws.linearize(system, &x, report) {
+            return None;
+        }
+        fl = f_lambda(system, &x, lambda, report)?;
+    }
+    let mut norm = f64::INFINITY;
+    let mut next = Vec::with_capacity(x.len());
+    for iteration in 1..=MAX_CORRECTOR {
+        if !residual(system, &x, lambda, r, report) {
+            return None;
+        }
+        let new_norm = max_norm(r);
+        if new_norm <= PATH_TOLERANCE.max(settings.tolerance) && iteration > 1 {
+            return Some((x, lambda, iteration - 1));
+        }
+        if iteration > 1 && new_norm > CHORD_RATIO * norm {
+            // The chord contracts too slowly: refresh the Jacobian here.
+            if !ws.linearize(system, &x, report) {
+                return None;
+            }
+            fl = f_lambda(system, &x, lambda, report)?;
+            fresh = true;
+            if new_norm > 2.0 * norm {
+                return None;
+            }
+        }
+        norm = new_norm;
+        report.iterations += 1;
+        if fresh {
+            report.newton_steps += 1;
+        } else {
+            report.chord_steps += 1;
+        }
+        fresh = false;
+        let rhs: Vec<f64> = r.iter().map(|v| -v).collect();
+        let a = ws.solve_again(&rhs)?.to_vec();
+        let rhs: Vec<f64> = fl.iter().map(|v| -v).collect();
+        let b = ws.solve_again(&rhs)?.to_vec();
+        let g = (dot(&point.tx, &d) + dot(&point.tx, &a)) / nf + point.tl * (lambda - lambda_pred);
+        let denominator = dot(&point.tx, &b) / nf + point.tl;
+        if denominator.abs() < 1e-14 {
+            return None;
+        }
+        let dl = -g / denominator;
+        let delta: Vec<f64> = a.iter().zip(&b).map(|(a, b)| a + dl * b).collect();
+        if !delta.iter().all(|v| v.is_finite()) {
+            return None;
+        }
+        system.retract(&x, &delta, 1.0, &mut next);
+        std::mem::swap(&mut x, &mut next);
+        d.iter_mut().zip(&delta).for_each(|(d, s)| *d += s);
+        lambda += dl;
+    }
+    None
+}
+
+/// Moves the path to a uniform mesh of `intervals` intervals at `point`: interpolates the
+/// shape, converges Newton there at the same lambda and takes the tangent.
+fn remesh(
+    system: &mut System,
+    ws: &mut Workspace,
+    point: &Point,
+    intervals: usize,
+    options: &Options,
+    settings: &Settings,
+    report: &mut SolveReport,
+) -> Option<(Point, Vec<f64>)> {
+    let model = system.model;
+    let ends: Vec<f64> = system.mesh.nodes.iter().map(|n| n.segment_end).collect();
+    let shape = nodes::solution(&model, &point.x, &ends, None, report.clone()).ok()?;
+    let mesh = Mesh::uniform(model.robot, intervals).ok()?;
+    let mut x: Vec<State> = (0..mesh.nodes.len())
+        .map(|k| {
+            let s = mesh.nodes[k].s;
+            let left = k + 1 < mesh.nodes.len() && mesh.is_jump(k);
+            State {
+                s,
+                ..shape.at_limit(s, left)
+            }
+        })
+        .collect();
+    *system = System::new(model, mesh);
+    system.set_factors(point.lambda, point.lambda);
+    *ws = Workspace::new(system, options.linear_solver).ok()?;
+    report.meshes += 1;
+    let (term, _) = newton::run(system, ws, &mut x, settings, report);
+    if term != Termination::Converged || !ws.linearize(system, &x, report) {
+        return None;
+    }
+    tangent(system, ws, x, point.lambda, Some((&[], point.tl)), report)
+}

@@ -1,0 +1,165 @@
+//! Stability of a converged equilibrium: Jacobi's conjugate-point test on the linearized
+//! collocation system (docs/stability.md).
+//!
+//! For conservative loading the equilibria are the critical points of the potential energy
+//! (strain energy, plus tension x path length for every tendon, minus the work of the dead
+//! forces), and an equilibrium is stable when the second variation is positive definite.
+//! By the Morse index theorem the number of its negative eigenvalues equals the number of
+//! conjugate points: the arc lengths sigma in [0, L) at which the linearized equations
+//! (Jacobi's equations) have a non-zero solution that is clamped at sigma (dp = dtheta = 0)
+//! and meets the linearized tip conditions at L.
+//!
+//! The test runs on the collocation Jacobian J that Newton already assembles: six Jacobi
+//! fields start at the tip with the identity in (dp, dtheta) and the (dv, du) the linearized
+//! tip rows demand; each link's rows carry them from node k + 1 to node k. A conjugate point
+//! is where the 6 x 6 block of their (dp, dtheta) parts, Q(s), is singular. Crossings are
+//! counted with their multiplicity (a round rod under axial load buckles in two planes at
+//! once, so det Q only touches zero there): between two nodes Q is interpolated linearly,
+//! Q(t) = Q0 + t (Q1 - Q0), and each real root t in (0, 1] of det Q(t) = 0 is an eigenvalue
+//! -1/t of Q0^-1 (Q1 - Q0), found with a 6 x 6 eigenvalue solve in the few links where a
+//! root is possible at all (norm of Q0^-1 (Q1 - Q0) at least 1).
+
+use super::unknowns::{BASE_COLUMNS, BASE_ROWS, NODE, P, THETA, TIP_COLUMNS, TIP_ROWS, U, V};
+use crate::model::robot::Robot;
+use crate::report::Stability;
+use nalgebra::{Complex, DMatrix, Matrix6, SMatrix};
+
+type M12x6 = SMatrix<f64, 12, 6>;
+type M12 = SMatrix<f64, 12, 12>;
+
+/// Why stability cannot be decided for `robot`, if it cannot: the test needs conservative
+/// loading. Constant tensions and dead forces are conservative; a dead moment (tip, point or
+/// distributed) is not in 3D in general (its work depends on the path of the rotation).
+pub fn non_conservative(robot: &Robot) -> Option<String> {
+    let loads = &robot.loads;
+    if loads.tip_moment != nalgebra::Vector3::zeros() {
+        return Some("the tip moment is a dead moment, which is not conservative in 3D".into());
+    }
+    if loads.point.iter().any(|p| p.moment != nalgebra::Vector3::zeros()) {
+        return Some("a point load carries a dead moment, which is not conservative in 3D".into());
+    }
+    // The distributed moment is sampled: a field that vanishes at the ends and midpoints of
+    // every interval of a 64-interval grid is taken as absent.
+    let l = robot.length();
+    if (0..=128).any(|i| loads.distributed_moment.at(l * i as f64 / 128.0) != nalgebra::Vector3::zeros()) {
+        return Some("the distributed moment is a dead moment, which is not conservative in 3D".into());
+    }
+    None
+}
+
+/// The verdict for the Jacobian `values` (in [`pattern`](super::unknowns::pattern) order)
+/// at an equilibrium on a mesh with node arc lengths `s` (m).
+pub fn assess(values: &[f64], s: &[f64]) -> Stability {
+    let nodes = s.len();
+    let links = nodes - 1;
+    let link_block = NODE * 2 * NODE;
+    let tip_at = BASE_ROWS * BASE_COLUMNS + links * link_block;
+    // The tip rows act on (dtheta, dv, du) of the last node.
+    let tip = SMatrix::<f64, TIP_ROWS, TIP_COLUMNS>::from_row_slice(&values[tip_at..tip_at + TIP_ROWS * TIP_COLUMNS]);
+    let t_theta = tip.fixed_view::<6, 3>(0, 0).into_owned();
+    let t_vu: Matrix6<f64> = tip.fixed_view::<6, 6>(0, 3).into_owned();
+    let Some(t_vu_lu) = t_vu.try_inverse() else {
+        return Stability::Unknown {
+            reason: "the linearized tip conditions do not fix the tip strains (singular tip block)".into(),
+        };
+    };
+    let mut y = M12x6::zeros();
+    for j in 0..6 {
+        y[(P + j, j)] = 1.0;
+    }
+    let vu = -t_vu_lu * t_theta * y.fixed_view::<3, 6>(THETA, 0);
+    y.fixed_view_mut::<3, 6>(V, 0).copy_from(&vu.fixed_view::<3, 6>(0, 0));
+    y.fixed_view_mut::<3, 6>(U, 0).copy_from(&vu.fixed_view::<3, 6>(3, 0));
+
+    let mut count = 0;
+    let mut first = None;
+    for k in (0..links).rev() {
+        let at = BASE_ROWS * BASE_COLUMNS + k * link_block;
+        let block = &values[at..at + link_block];
+        let a = M12::from_fn(|r, c| block[r * 2 * NODE + c]);
+        let b = M12::from_fn(|r, c| block[r * 2 * NODE + NODE + c]);
+        let Some(next) = a.lu().solve(&(-b * y)) else {
+            return Stability::Unknown {
+                reason: format!(
+                    "the linearized equations of the link at s = {:.4} m cannot be carried across it",
+                    s[k]
+                ),
+            };
+        };
+        let q0: Matrix6<f64> = y.fixed_view::<6, 6>(0, 0).into_owned();
+        let q1: Matrix6<f64> = next.fixed_view::<6, 6>(0, 0).into_owned();
+        if !next.iter().all(|v| v.is_finite()) {
+            return Stability::Unknown {
+                reason: format!("the Jacobi fields became non-finite at s = {:.4} m", s[k]),
+            };
+        }
+        let roots = crossings(&q0, &q1);
+        if let Some(&t) = roots.first() {
+            first.get_or_insert(s[k + 1] + t * (s[k] - s[k + 1]));
+        }
+        count += roots.len();
+        // Re-orthonormalize: the fields grow or shrink exponentially along a stiff rod; the
+        // span is what matters, and a change of basis moves no root.
+        y = next.qr().q();
+    }
+    match first {
+        None => Stability::Stable,
+        Some(s) => Stability::Unstable {
+            directions: count,
+            conjugate_point: s,
+        },
+    }
+}
+
+/// Roots t in (0, 1] of det(q0 + t (q1 - q0)) = 0, in increasing t, counted with
+/// multiplicity.
+fn crossings(q0: &Matrix6<f64>, q1: &Matrix6<f64>) -> Vec<f64> {
+    let dq = q1 - q0;
+    // Solve from the better-conditioned end: a conjugate point exactly at a node makes that
+    // end's block singular.
+    let (from, to_dq, flip) = if q0.determinant().abs() >= q1.determinant().abs() {
+        (q0, dq, false)
+    } else {
+        (q1, -dq, true)
+    };
+    let Some(inv) = from.try_inverse() else {
+        return Vec::new();
+    };
+    let m = inv * to_dq;
+    // Every eigenvalue mu of m has |mu| <= its max row sum; a root needs mu <= -1.
+    let bound = (0..6).map(|r| m.row(r).iter().map(|v| v.abs()).sum::<f64>()).fold(0.0, f64::max);
+    if bound < 1.0 {
+        return Vec::new();
+    }
+    let parity_changes = (q0.determinant() < 0.0) != (q1.determinant() < 0.0);
+    let eig: Vec<Complex<f64>> = DMatrix::from_column_slice(6, 6, m.as_slice())
+        .complex_eigenvalues()
+        .iter()
+        .copied()
+        .collect();
+    let mut roots: Vec<f64> = eig
+        .iter()
+        .filter_map(|mu| {
+            if mu.norm() < 1e-300 {
+                return None;
+            }
+            let t = -mu.inv();
+            // A double crossing interpolated linearly can come out as a complex pair with a
+            // small imaginary part: count it (a quarter of the link is the allowance).
+            let real = t.im.abs() <= 0.25;
+            let inside = if flip { t.re >= 0.0 && t.re < 1.0 } else { t.re > 0.0 && t.re <= 1.0 };
+            (real && inside).then_some(if flip { 1.0 - t.re } else { t.re })
+        })
+        .collect();
+    // The determinant's sign is exact about the parity of the count: where the eigenvalues
+    // disagree (a root at the allowance's edge), it decides.
+    if (roots.len() % 2 == 1) != parity_changes {
+        if parity_changes {
+            roots.push(1.0);
+        } else {
+            roots.pop();
+        }
+    }
+    roots.sort_by(f64::total_cmp);
+    roots
+}
