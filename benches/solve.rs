@@ -145,6 +145,7 @@ fn newton_iteration(c: &mut Criterion) {
             tolerance: 0.0,
             max_iterations: 1,
             reuse_factors: false,
+            stop_when_damped: false,
         };
         let mut report = SolveReport::new(Method::Collocation);
         let mut x = start.clone();

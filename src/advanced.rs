@@ -14,7 +14,7 @@
 //! let system = System::new(Model::new(&robot), mesh);
 //! let mut workspace = newton::Workspace::new(&system, LinearSolver::Auto)?;
 //! let mut x = guess::rigid_estimate(&system.model, &system.mesh.nodes);
-//! let settings = newton::Settings { tolerance: 1e-11, max_iterations: 30, reuse_factors: false };
+//! let settings = newton::Settings { tolerance: 1e-11, max_iterations: 30, reuse_factors: false, stop_when_damped: false };
 //! let mut report = tdcr::SolveReport::new(tdcr::Method::Collocation);
 //! let (termination, _) = newton::run(&system, &mut workspace, &mut x, &settings, &mut report);
 //! assert_eq!(termination, tdcr::Termination::Converged);

@@ -596,8 +596,8 @@ fn solve_reports_its_error_estimate_against_the_tolerance() {
     let first = stdout(&out).lines().next().unwrap_or_default().to_string();
     for part in [
         "intervals (error-controlled)",
-        "Newton iterations",
-        " ms",
+        " Newton",
+        " ms; stable;",
         "estimated tip error",
         "against tolerance 2.4e-8 m",
         "(met)",
@@ -610,6 +610,16 @@ fn solve_reports_its_error_estimate_against_the_tolerance() {
     for key in ["tip_position_m", "tip_rotation_rad", "backbone_max_m"] {
         assert!(estimate[key].as_f64().unwrap() > 0.0, "{key}: {estimate}");
     }
+    // The counts are separate and add up: iterations = Newton steps + chord steps; a direct
+    // solve takes no load steps.
+    let counts = &json["counts"];
+    let count = |k: &str| counts[k].as_u64().unwrap_or_else(|| panic!("{k}: {counts}"));
+    assert_eq!(json["iterations"].as_u64(), Some(count("newton_steps") + count("chord_steps")));
+    assert!(count("newton_steps") >= 1 && count("jacobian_evaluations") >= count("newton_steps"));
+    assert_eq!(count("load_steps"), 0);
+    assert!(count("meshes") >= 1);
+    assert_eq!(json["stability"]["verdict"], "stable");
+    assert_eq!(json["stability"]["path"], "direct");
     assert_eq!(json["tolerance"].as_f64(), Some(1e-7));
     assert_eq!(json["tolerance_met"].as_bool(), Some(true));
     assert_eq!(json["tip_error_estimate"], estimate["tip_position_m"]);

@@ -46,7 +46,7 @@ fn twelve_turn_coil_converges_where_shooting_from_the_unloaded_rod_fails() {
     assert!(change < 1e-5);
     // The default rigid-equilibrium start needs no continuation and lands on the same shape.
     let direct = collocation::solve(&robot, &collocation::Options::fixed(512)).unwrap();
-    assert_eq!(direct.report.load_steps, 1);
+    assert_eq!(direct.report.load_steps, 0);
     // 1e-9 m: the same discrete problem solved to a residual of 1e-11
     assert!((direct.tip_position() - fine.tip_position()).norm() < 1e-9);
     let (ec, ef) = (
@@ -121,14 +121,14 @@ fn tension_near_the_routing_geometric_limit() {
         curvature * cases::TENDON_OFFSET > 0.9,
         "curvature {curvature} should approach 1/r"
     );
-    // Past the limit there is no solution: a typed error that names continuation.
+    // Past the limit there is no solution: a typed error that says where the load path ended.
     let err = collocation::solve(
         &prototype_without_gravity(1.1 * limit),
         &collocation::Options::fixed(64),
     )
     .unwrap_err();
     assert!(matches!(err, tdcr::Error::NotConverged { .. }), "{err}");
-    assert!(err.to_string().contains("load continuation stalled"), "{err}");
+    assert!(err.to_string().contains("the load path stalled"), "{err}");
 }
 
 #[test]

@@ -282,9 +282,9 @@ fn solve_impl(robot: &Robot, options: &Options, warm: Option<&Solution>, cache: 
         .map(|(tol, e)| refine::meets(&e, tol, robot.length()));
     if let Some(c) = cache.as_mut() {
         let system = System::new(model, mesh.clone());
-        let fresh = report.history.iter().any(|i| i.fresh_jacobian);
+        let exact = report.path != Path::Direct && !report.history.iter().any(|i| i.fresh_jacobian);
         let t = Instant::now();
-        report.stability = stability_of(&system, &mut c.workspace, &x, fresh, &mut report);
+        report.stability = stability_of(&system, &mut c.workspace, &x, exact, &mut report);
         report.timings.stability += t.elapsed();
     }
     report.timings.total = start.elapsed();
@@ -380,20 +380,22 @@ fn clean(history: &[crate::report::Iteration]) -> bool {
     history.len() <= CLEAN_ITERATIONS && history.iter().all(|i| i.damping == 1.0)
 }
 
-/// The stability of the equilibrium `x` of `system` ([`stability`]): with the Jacobian in
-/// `ws` when it was evaluated at the last iterate's predecessor (`fresh`), else a new one
-/// (which also leaves its factors at `x`).
-fn stability_of(system: &System, ws: &mut Workspace, x: &[State], fresh: bool, report: &mut SolveReport) -> Stability {
+/// The stability of the equilibrium `x` of `system` ([`stability`]), from the Jacobian
+/// last factored in `ws`: Newton's last (evaluated one step before `x`), or for a solve
+/// that converged by chord steps alone the earlier Jacobian those steps used, whose verdict
+/// is then reused. A new Jacobian at `x` is evaluated only when `exact` (at the end of a
+/// load path, whose last Jacobian may belong to a point before the end).
+fn stability_of(system: &System, ws: &mut Workspace, x: &[State], exact: bool, report: &mut SolveReport) -> Stability {
     if let Some(reason) = stability::non_conservative(system.model.robot) {
         return Stability::Unknown { reason };
     }
-    if !fresh && !ws.linearize(system, x, report) {
+    if (exact || !ws.has_factors()) && !ws.linearize(system, x, report) {
         return Stability::Unknown {
             reason: "the Jacobian at the solution is singular or not finite".into(),
         };
     }
     let s: Vec<f64> = system.mesh.nodes.iter().map(|n| n.s).collect();
-    stability::assess(ws.jacobian(), &s)
+    ws.verdict(|values| stability::assess(values, &s))
 }
 
 /// Newton from `x0`, and the equilibrium choice of docs/stability.md: Newton's answer stands
@@ -427,9 +429,8 @@ fn choose_equilibrium(
         return Ok(x);
     }
     if converged && clean(&report.history) {
-        let fresh = report.history.iter().any(|i| i.fresh_jacobian);
         let t = Instant::now();
-        let verdict = stability_of(system, ws, &x, fresh, report);
+        let verdict = stability_of(system, ws, &x, false, report);
         report.timings.stability += t.elapsed();
         if !matches!(verdict, Stability::Unstable { .. }) {
             return Ok(x);

@@ -11,7 +11,7 @@ use super::linear::{Linear, LinearSolver};
 use super::system::System;
 use super::unknowns::nonzeros;
 use crate::error::Result;
-use crate::report::{Iteration, SolveReport, Termination};
+use crate::report::{Iteration, SolveReport, Stability, Termination};
 use crate::solution::State;
 use std::time::Instant;
 
@@ -55,6 +55,9 @@ pub struct Workspace {
     trial: Vec<State>,
     /// Whether the linear solver holds the factors of a successful solve.
     factored: bool,
+    /// The stability verdict of the Jacobian in `values`, once assessed (cleared whenever
+    /// `values` change).
+    verdict: Option<Stability>,
 }
 
 impl Workspace {
@@ -74,6 +77,7 @@ impl Workspace {
             step: vec![0.0; n],
             trial: Vec::with_capacity(system.mesh.nodes.len()),
             factored: false,
+            verdict: None,
         })
     }
 
@@ -85,6 +89,7 @@ impl Workspace {
     /// Factorizes the current matrix and solves J step = -residual.
     /// Returns false for a zero pivot or a non-finite step.
     fn solve(&mut self, report: &mut SolveReport) -> bool {
+        self.verdict = None;
         for (r, f) in self.rhs.iter_mut().zip(&self.residual) {
             *r = -f;
         }
@@ -148,6 +153,18 @@ impl Workspace {
     /// [`pattern`](super::unknowns::pattern) order.
     pub fn jacobian(&self) -> &[f64] {
         &self.values
+    }
+
+    /// The stability verdict of the Jacobian last factored (docs/stability.md), assessed
+    /// by `assess` once per Jacobian: warm-started solves that converge by chord steps on
+    /// an earlier, nearby Jacobian reuse its verdict at no cost.
+    pub fn verdict(&mut self, assess: impl FnOnce(&[f64]) -> Stability) -> Stability {
+        if self.verdict.is_none() {
+            self.verdict = Some(assess(&self.values));
+        }
+        self.verdict.clone().unwrap_or(Stability::Unknown {
+            reason: "not assessed".into(),
+        })
     }
 
     /// Whether the workspace holds the factors of a successful solve.
