@@ -176,6 +176,10 @@ pub enum Path {
         /// Load factors at which the path turned back (folds); past a fold the robot
         /// snaps through to another state.
         folds: Vec<f64>,
+        /// Load factors at which the path crossed a bifurcation (the number of unstable
+        /// directions changed without a fold), as a perfectly symmetric column does at
+        /// Euler's load.
+        bifurcations: Vec<f64>,
     },
 }
 

@@ -614,7 +614,10 @@ fn solve_reports_its_error_estimate_against_the_tolerance() {
     // solve takes no load steps.
     let counts = &json["counts"];
     let count = |k: &str| counts[k].as_u64().unwrap_or_else(|| panic!("{k}: {counts}"));
-    assert_eq!(json["iterations"].as_u64(), Some(count("newton_steps") + count("chord_steps")));
+    assert_eq!(
+        json["iterations"].as_u64(),
+        Some(count("newton_steps") + count("chord_steps"))
+    );
     assert!(count("newton_steps") >= 1 && count("jacobian_evaluations") >= count("newton_steps"));
     assert_eq!(count("load_steps"), 0);
     assert!(count("meshes") >= 1);

@@ -1,6 +1,6 @@
 //! Property tests over random physical robots at default settings: collocation either
 //! returns a solution that is in global equilibrium, has orthonormal rotations and finite
-//! values everywhere, and is within its tolerance of a 4x finer mesh with an error estimate
+//! values everywhere, a positive semi-definite tip compliance when it is reported stable, and is within its tolerance of a 4x finer mesh with an error estimate
 //! that is never below a third of the true error, or a typed error. Never a panic.
 //!
 //! CI runs 300 cases (about 20 s). The long run (10 000 cases, about 5 minutes in release;
@@ -127,6 +127,20 @@ fn check(robot: &Robot) -> Result<Option<Accuracy>, TestCaseError> {
             .fold(robot.loads.tip_force.norm(), f64::max)
             .max(1e-12);
     prop_assert!(e.max() < 1e-4f64.max(floor), "imbalance {e:?}");
+    // A state reported stable is a local minimum of the energy, so its tip compliance
+    // d p(L) / d F(L) (dead tip force: conservative) is positive semi-definite. 1e-6 of the
+    // largest eigenvalue: the sensitivities are differenced to about 1e-8 relative.
+    if solution.report.stability.is_stable() {
+        let c = tdcr::collocation::sensitivity::tip_sensitivities(robot, &solution)
+            .map_err(|e| TestCaseError::fail(format!("sensitivities: {e}")))?
+            .compliance();
+        let block = c.fixed_view::<3, 3>(0, 0).into_owned();
+        let eig = (0.5 * (block + block.transpose())).symmetric_eigenvalues();
+        prop_assert!(
+            eig.min() >= -1e-6 * eig.amax(),
+            "stable but compliance eigenvalues {eig:?}"
+        );
+    }
     // Agreement with a mesh 4x finer (its error is 256x smaller at order 4): within 3x the
     // tolerance on every robot, and never more than 3x the solver's own estimate where the
     // error is above rounding (1e-12 m); `run` asserts the tolerance itself on 99 %.

@@ -266,7 +266,8 @@ fn solve_impl(robot: &Robot, options: &Options, warm: Option<&Solution>, cache: 
             x0
         }
     };
-    let mut level = solve_on_mesh(&model, mesh, x0, reuse, true, options, &mut report, cache).map_err(|e| timed(e, start))?;
+    let mut level =
+        solve_on_mesh(&model, mesh, x0, reuse, true, options, &mut report, cache).map_err(|e| timed(e, start))?;
     if let Some(tol) = options.tolerance {
         level = refine::to_tolerance(&model, level, tol, options, &mut report, cache).map_err(|e| timed(e, start))?;
     }
@@ -358,14 +359,25 @@ fn solve_on_mesh(
 
 /// Newton from `x0` on a mesh after the first, warm-started from the previous level: the
 /// equilibrium is chosen already.
-fn newton_only(system: &System, ws: &mut Workspace, x0: Vec<State>, settings: &Settings, report: &mut SolveReport) -> Result<Vec<State>> {
+fn newton_only(
+    system: &System,
+    ws: &mut Workspace,
+    x0: Vec<State>,
+    settings: &Settings,
+    report: &mut SolveReport,
+) -> Result<Vec<State>> {
     let mut x = x0;
     let (termination, worst) = newton::run(system, ws, &mut x, settings, report);
     report.termination = termination;
     if termination == Termination::Converged {
         Ok(x)
     } else {
-        Err(not_converged(system, report, worst, "refine the mesh or warm-start from a nearby solution"))
+        Err(not_converged(
+            system,
+            report,
+            worst,
+            "refine the mesh or warm-start from a nearby solution",
+        ))
     }
 }
 
@@ -418,7 +430,11 @@ fn choose_equilibrium(
     let nearest = options.equilibrium == Equilibrium::Nearest || !options.continuation;
     // Unless any root will do, Newton only gets the chance to reach one cleanly.
     let direct = Settings {
-        max_iterations: if nearest { settings.max_iterations } else { settings.max_iterations.min(CLEAN_ITERATIONS) },
+        max_iterations: if nearest {
+            settings.max_iterations
+        } else {
+            settings.max_iterations.min(CLEAN_ITERATIONS)
+        },
         stop_when_damped: !nearest,
         ..*settings
     };
@@ -448,7 +464,10 @@ fn choose_equilibrium(
     let mesh = system.mesh.clone();
     match path::follow(system, ws, options, settings, report) {
         Ok(end) => {
-            report.path = Path::LoadPath { folds: end.folds };
+            report.path = Path::LoadPath {
+                folds: end.folds,
+                bifurcations: end.bifurcations,
+            };
             report.unknowns = system.unknowns();
             report.nonzeros = ws.nonzeros();
             report.intervals = system.mesh.intervals();

@@ -20,10 +20,11 @@
 use super::newton::{self, Settings, Workspace};
 use super::options::Options;
 use super::refine;
+use super::stability;
 use super::system::System;
 use crate::mesh::guess::rigid_estimate;
 use crate::mesh::{Mesh, nodes};
-use crate::report::{SolveReport, Termination};
+use crate::report::{SolveReport, Stability, Termination};
 use crate::solution::State;
 
 /// Step control: the corrector iterations of an easy step, and the most it may take.
@@ -53,6 +54,27 @@ pub(super) struct End {
     pub x: Vec<State>,
     /// Load factors where the path turned back.
     pub folds: Vec<f64>,
+    /// Load factors where the number of unstable directions changed without a fold: the
+    /// path crossed a bifurcation (the symmetric column at Euler's load).
+    pub bifurcations: Vec<f64>,
+}
+
+/// A step that changes the number of unstable directions without a fold has jumped to
+/// another branch near a bifurcation, unless it is this short (in normalized arclength):
+/// then the path crosses a bifurcation point itself.
+const BIFURCATION_STEP: f64 = 1e-3;
+
+/// Unstable directions at the point whose Jacobian `ws` holds: None when unknown.
+fn index(system: &System, ws: &mut Workspace) -> Option<usize> {
+    if stability::non_conservative(system.model.robot).is_some() {
+        return None;
+    }
+    let s: Vec<f64> = system.mesh.nodes.iter().map(|n| n.s).collect();
+    match ws.verdict(|values| stability::assess(values, &s)) {
+        Stability::Stable => Some(0),
+        Stability::Unstable { directions, .. } => Some(directions),
+        Stability::Unknown { .. } => None,
+    }
 }
 
 /// A point of the path with the tangent there.
@@ -150,7 +172,9 @@ pub(super) fn follow(
         return Err(("the load path's first tangent is not finite".into(), 0));
     };
     let n = system.unknowns();
+    let mut unstable = index(system, ws);
     let mut folds = Vec::new();
+    let mut bifurcations = Vec::new();
     let mut h = FIRST_STEP;
     let mut factored_at_point = true;
     let mut worst = 0;
@@ -172,7 +196,11 @@ pub(super) fn follow(
             let (term, row) = newton::run(system, ws, &mut landed, &land, report);
             report.termination = term;
             if term == Termination::Converged {
-                return Ok(End { x: landed, folds });
+                return Ok(End {
+                    x: landed,
+                    folds,
+                    bifurcations,
+                });
             }
             worst = row;
             factored_at_point = false;
@@ -197,7 +225,22 @@ pub(super) fn follow(
                 let Some((next, next_fl)) = tangent(system, ws, xc, lambda, Some(previous), report) else {
                     break;
                 };
-                if (next.tl > 0.0) != (point.tl > 0.0) {
+                let fold = (next.tl > 0.0) != (point.tl > 0.0);
+                let next_unstable = index(system, ws);
+                if let (Some(a), Some(b)) = (unstable, next_unstable)
+                    && a != b
+                    && !fold
+                {
+                    if h > BIFURCATION_STEP {
+                        // Jumped to another branch: retry shorter.
+                        h *= 0.25;
+                        factored_at_point = false;
+                        continue;
+                    }
+                    bifurcations.push(lambda);
+                }
+                unstable = next_unstable;
+                if fold {
                     folds.push(lambda);
                 }
                 // The angle between successive tangents bounds the next step.

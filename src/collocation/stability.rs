@@ -127,7 +127,9 @@ fn crossings(q0: &Matrix6<f64>, q1: &Matrix6<f64>) -> Vec<f64> {
     };
     let m = inv * to_dq;
     // Every eigenvalue mu of m has |mu| <= its max row sum; a root needs mu <= -1.
-    let bound = (0..6).map(|r| m.row(r).iter().map(|v| v.abs()).sum::<f64>()).fold(0.0, f64::max);
+    let bound = (0..6)
+        .map(|r| m.row(r).iter().map(|v| v.abs()).sum::<f64>())
+        .fold(0.0, f64::max);
     if bound < 1.0 {
         return Vec::new();
     }
@@ -147,7 +149,11 @@ fn crossings(q0: &Matrix6<f64>, q1: &Matrix6<f64>) -> Vec<f64> {
             // A double crossing interpolated linearly can come out as a complex pair with a
             // small imaginary part: count it (a quarter of the link is the allowance).
             let real = t.im.abs() <= 0.25;
-            let inside = if flip { t.re >= 0.0 && t.re < 1.0 } else { t.re > 0.0 && t.re <= 1.0 };
+            let inside = if flip {
+                t.re >= 0.0 && t.re < 1.0
+            } else {
+                t.re > 0.0 && t.re <= 1.0
+            };
             (real && inside).then_some(if flip { 1.0 - t.re } else { t.re })
         })
         .collect();

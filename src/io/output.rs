@@ -246,12 +246,14 @@ fn stability(report: &crate::SolveReport) -> Json {
         }
         crate::Stability::Unknown { reason } => fields.push(("reason", Json::Text(reason.clone()))),
     }
-    let (path, folds) = match &report.path {
-        crate::Path::Direct => ("direct", Vec::new()),
-        crate::Path::LoadPath { folds } => ("load_path", folds.clone()),
+    let (path, folds, bifurcations) = match &report.path {
+        crate::Path::Direct => ("direct", Vec::new(), Vec::new()),
+        crate::Path::LoadPath { folds, bifurcations } => ("load_path", folds.clone(), bifurcations.clone()),
     };
+    let numbers = |v: Vec<f64>| Json::Array(v.into_iter().map(Json::Number).collect());
     fields.push(("path", Json::Text(path.into())));
-    fields.push(("folds", Json::Array(folds.into_iter().map(Json::Number).collect())));
+    fields.push(("folds", numbers(folds)));
+    fields.push(("bifurcations", numbers(bifurcations)));
     Json::Object(fields)
 }
 

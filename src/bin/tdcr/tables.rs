@@ -58,15 +58,23 @@ pub fn counts(report: &SolveReport) -> String {
 fn path_note(report: &SolveReport) -> String {
     match &report.path {
         Path::Direct => String::new(),
-        Path::LoadPath { folds } if folds.is_empty() => " (followed the load path from rest)".into(),
-        Path::LoadPath { folds } => format!(
-            " (followed the load path from rest; it SNAPS THROUGH at {} of the load)",
-            folds
-                .iter()
-                .map(|f| format!("{:.1} %", 100.0 * f))
-                .collect::<Vec<_>>()
-                .join(", ")
-        ),
+        Path::LoadPath { folds, bifurcations } => {
+            let at = |v: &[f64]| {
+                v.iter()
+                    .map(|f| format!("{:.1} %", 100.0 * f))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            };
+            let mut out = String::from(" (followed the load path from rest");
+            if !folds.is_empty() {
+                let _ = write!(out, "; it SNAPS THROUGH at {} of the load", at(folds));
+            }
+            if !bifurcations.is_empty() {
+                let _ = write!(out, "; it crosses a BIFURCATION at {} of the load", at(bifurcations));
+            }
+            out.push(')');
+            out
+        }
     }
 }
 

@@ -2,7 +2,9 @@
 //! and back from a library validation error to the file field it is about.
 
 use super::SolverSettings;
-use super::tables::{BaseTable, EquilibriumKey, LoadsTable, MethodName, RodTable, RoutingTable, SolverTable, TendonTable, Vec3};
+use super::tables::{
+    BaseTable, EquilibriumKey, LoadsTable, MethodName, RodTable, RoutingTable, SolverTable, TendonTable, Vec3,
+};
 use crate::io::Problem;
 use crate::io::locate::Locator;
 use crate::model::loads::{Field, Loads, PointLoad};
