@@ -73,6 +73,11 @@ pub fn assess(values: &[f64], s: &[f64]) -> Stability {
 
     let mut count = 0;
     let mut first = None;
+    // The fields are kept normalized so that their (dp, dtheta) block is the identity (a
+    // change of basis, which moves no root): then Q0 = I, and most links need only the
+    // bound on Q1 - I to exclude a root. Near a conjugate point, where Q1 is nearly
+    // singular, they are orthonormalized instead, and the next link takes the general path.
+    let mut identity = true;
     for k in (0..links).rev() {
         let at = BASE_ROWS * BASE_COLUMNS + k * link_block;
         let block = &values[at..at + link_block];
@@ -86,21 +91,34 @@ pub fn assess(values: &[f64], s: &[f64]) -> Stability {
                 ),
             };
         };
-        let q0: Matrix6<f64> = y.fixed_view::<6, 6>(0, 0).into_owned();
-        let q1: Matrix6<f64> = next.fixed_view::<6, 6>(0, 0).into_owned();
         if !next.iter().all(|v| v.is_finite()) {
             return Stability::Unknown {
                 reason: format!("the Jacobi fields became non-finite at s = {:.4} m", s[k]),
             };
         }
-        let roots = crossings(&q0, &q1);
+        let q0: Matrix6<f64> = y.fixed_view::<6, 6>(0, 0).into_owned();
+        let q1: Matrix6<f64> = next.fixed_view::<6, 6>(0, 0).into_owned();
+        let roots = if identity { crossings_from_identity(&q1) } else { crossings(&q0, &q1) };
         if let Some(&t) = roots.first() {
             first.get_or_insert(s[k + 1] + t * (s[k] - s[k + 1]));
         }
         count += roots.len();
-        // Re-orthonormalize: the fields grow or shrink exponentially along a stiff rod; the
-        // span is what matters, and a change of basis moves no root.
-        y = next.qr().q();
+        // 1e-6: Q1 is then far enough from singular that its inverse is accurate to about
+        // 1e-10 relative.
+        let inverse = q1.try_inverse().filter(|inv| {
+            let norm = |m: &Matrix6<f64>| m.iter().fold(0.0f64, |x, v| x.max(v.abs()));
+            norm(&q1) * norm(inv) < 1e6
+        });
+        match inverse {
+            Some(inv) => {
+                y = next * inv;
+                identity = true;
+            }
+            None => {
+                y = next.qr().q();
+                identity = false;
+            }
+        }
     }
     match first {
         None => Stability::Stable,
@@ -109,6 +127,17 @@ pub fn assess(values: &[f64], s: &[f64]) -> Stability {
             conjugate_point: s,
         },
     }
+}
+
+/// [`crossings`] from q0 = I: the roots of det(I + t (q1 - I)).
+fn crossings_from_identity(q1: &Matrix6<f64>) -> Vec<f64> {
+    let m = q1 - Matrix6::identity();
+    // Every eigenvalue mu of m has |mu| <= its max row sum; a root needs mu <= -1.
+    let bound = (0..6).map(|r| m.row(r).iter().map(|v| v.abs()).sum::<f64>()).fold(0.0, f64::max);
+    if bound < 1.0 {
+        return Vec::new();
+    }
+    roots(&m, q1.determinant() < 0.0, false)
 }
 
 /// Roots t in (0, 1] of det(q0 + t (q1 - q0)) = 0, in increasing t, counted with
@@ -134,6 +163,13 @@ fn crossings(q0: &Matrix6<f64>, q1: &Matrix6<f64>) -> Vec<f64> {
         return Vec::new();
     }
     let parity_changes = (q0.determinant() < 0.0) != (q1.determinant() < 0.0);
+    roots(&m, parity_changes, flip)
+}
+
+/// The roots t in (0, 1] of det(I + t m) (of det(I + (1 - t) m) when `flip`), in
+/// increasing t: eigenvalues mu of m give t = -1/mu; `parity_changes` says whether the
+/// determinant changes sign over the link.
+fn roots(m: &Matrix6<f64>, parity_changes: bool, flip: bool) -> Vec<f64> {
     let eig: Vec<Complex<f64>> = DMatrix::from_column_slice(6, 6, m.as_slice())
         .complex_eigenvalues()
         .iter()
