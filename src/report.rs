@@ -170,6 +170,15 @@ pub enum Path {
     /// Newton converged from the initial guess or warm start to a stable state (or the
     /// caller asked for the equilibrium nearest the guess).
     Direct,
+    /// Newton's residual at the warm start was followed to zero (a Newton homotopy from
+    /// the warm start, docs/numerics.md "Load path"): the state the robot moves to from
+    /// the warm start's shape.
+    FromWarmStart {
+        /// Homotopy parameters at which the path turned back.
+        folds: Vec<f64>,
+        /// Homotopy parameters at which the path crossed a bifurcation.
+        bifurcations: Vec<f64>,
+    },
     /// The loads were followed from the unloaded robot (load factor 0 to 1) by
     /// pseudo-arclength continuation.
     LoadPath {

@@ -202,7 +202,7 @@ fn resolves(robot: &Robot, options: &Options, mesh: &Mesh) -> Result<()> {
 /// previous solution for other tensions can be a worse start than the rigid-equilibrium
 /// estimate, which is nearly exact for tendon-dominated loading; comparing costs one
 /// residual evaluation each.
-fn better_start(system: &System, warm: Vec<State>, cold: Vec<State>) -> Vec<State> {
+fn better_start(system: &System, warm: Vec<State>, cold: Vec<State>) -> (Vec<State>, Choose) {
     let mut r = vec![0.0; system.unknowns()];
     let mut norm = |x: &[State]| match system.residual(x, &mut r) {
         Ok(()) => r
@@ -210,7 +210,23 @@ fn better_start(system: &System, warm: Vec<State>, cold: Vec<State>) -> Vec<Stat
             .fold(0.0f64, |m, v| if v.is_nan() { f64::INFINITY } else { m.max(v.abs()) }),
         Err(_) => f64::INFINITY,
     };
-    if norm(&cold) < norm(&warm) { cold } else { warm }
+    if norm(&cold) < norm(&warm) {
+        (cold, Choose::FromCold)
+    } else {
+        (warm, Choose::FromWarm)
+    }
+}
+
+/// Whether a mesh's Newton solve chooses the equilibrium ([`choose_equilibrium`]), and from
+/// which start.
+#[derive(Clone, Copy, PartialEq)]
+enum Choose {
+    /// The initial guess.
+    FromCold,
+    /// A warm start (a solution of a nearby robot).
+    FromWarm,
+    /// No choice: a finer mesh warm-started from the chosen equilibrium on the last one.
+    No,
 }
 
 /// Node states of `guess` on `mesh` (left limits for the left node of a jump).
@@ -248,8 +264,8 @@ fn solve_impl(robot: &Robot, options: &Options, warm: Option<&Solution>, cache: 
         _ => false,
     };
     let cold = |mesh: &Mesh| guess::initial(&model, &mesh.nodes, options.initial_guess);
-    let x0 = match warm {
-        Some(w) if reuse => w,
+    let (x0, choose) = match warm {
+        Some(w) if reuse => (w, Choose::FromWarm),
         Some(w) => better_start(&System::new(model, mesh.clone()), w, cold(&mesh)),
         None => {
             let mut x0 = cold(&mesh);
@@ -263,11 +279,11 @@ fn solve_impl(robot: &Robot, options: &Options, warm: Option<&Solution>, cache: 
                     x0 = cold(&mesh);
                 }
             }
-            x0
+            (x0, Choose::FromCold)
         }
     };
     let mut level =
-        solve_on_mesh(&model, mesh, x0, reuse, true, options, &mut report, cache).map_err(|e| timed(e, start))?;
+        solve_on_mesh(&model, mesh, x0, reuse, choose, options, &mut report, cache).map_err(|e| timed(e, start))?;
     if let Some(tol) = options.tolerance {
         level = refine::to_tolerance(&model, level, tol, options, &mut report, cache).map_err(|e| timed(e, start))?;
     }
@@ -306,16 +322,15 @@ fn segment_ends(mesh: &Mesh) -> Vec<f64> {
 }
 
 /// Newton on one mesh (starting with chord steps on the cached factors when
-/// `reuse_factors`); on the first mesh (`choose`), the load path from the unloaded shape
-/// when Newton did not find a stable state cleanly ([`choose_equilibrium`]). Then the error
-/// estimate with the factors Newton left.
+/// `reuse_factors`); on the first mesh (`choose`), the equilibrium choice of
+/// [`choose_equilibrium`]. Then the error estimate with the factors Newton left.
 #[allow(clippy::too_many_arguments)]
 fn solve_on_mesh(
     model: &Model,
     mesh: Mesh,
     x0: Vec<State>,
     reuse_factors: bool,
-    choose: bool,
+    choose: Choose,
     options: &Options,
     report: &mut SolveReport,
     cache: &mut Cache,
@@ -332,10 +347,12 @@ fn solve_on_mesh(
         Some(c) if c.mesh == system.mesh && c.solver == options.linear_solver => c.workspace,
         _ => Workspace::new(&system, options.linear_solver)?,
     };
-    let result = if choose {
-        choose_equilibrium(&mut system, &mut workspace, x0, options, &settings, report)
-    } else {
-        newton_only(&system, &mut workspace, x0, &settings, report)
+    let result = match choose {
+        Choose::No => newton_only(&system, &mut workspace, x0, &settings, report),
+        _ => {
+            let warm = choose == Choose::FromWarm;
+            choose_equilibrium(&mut system, &mut workspace, x0, warm, options, &settings, report)
+        }
     };
     let correction = result.as_ref().ok().and_then(|x| {
         let t = Instant::now();
@@ -410,25 +427,16 @@ fn stability_of(system: &System, ws: &mut Workspace, x: &[State], exact: bool, r
     ws.verdict(|values| stability::assess(values, &s))
 }
 
-/// Newton from `x0`, and the equilibrium choice of docs/stability.md: Newton's answer stands
-/// when it converged cleanly to a state that is not unstable (or the caller asked for the
-/// nearest equilibrium); otherwise the load path from the unloaded robot decides
-/// ([`path::follow`]), and Newton's answer is the fallback when the path cannot be
-/// followed.
-fn choose_equilibrium(
-    system: &mut System,
+/// Newton from `x`, given only the chance to converge cleanly ([`clean`]) unless
+/// `nearest`: the converged states, if they are not unstable (or `nearest`).
+fn direct(
+    system: &System,
     ws: &mut Workspace,
-    x0: Vec<State>,
-    options: &Options,
+    x: &mut Vec<State>,
+    nearest: bool,
     settings: &Settings,
     report: &mut SolveReport,
-) -> Result<Vec<State>> {
-    report.unknowns = system.unknowns();
-    report.nonzeros = ws.nonzeros();
-    report.intervals = system.mesh.intervals();
-    let mut x = x0.clone();
-    let nearest = options.equilibrium == Equilibrium::Nearest || !options.continuation;
-    // Unless any root will do, Newton only gets the chance to reach one cleanly.
+) -> (bool, usize) {
     let direct = Settings {
         max_iterations: if nearest {
             settings.max_iterations
@@ -438,19 +446,47 @@ fn choose_equilibrium(
         stop_when_damped: !nearest,
         ..*settings
     };
-    let (termination, worst) = newton::run(system, ws, &mut x, &direct, report);
+    let (termination, worst) = newton::run(system, ws, x, &direct, report);
     report.termination = termination;
-    let converged = termination == Termination::Converged;
-    if converged && nearest {
-        return Ok(x);
+    if termination != Termination::Converged {
+        return (false, worst);
     }
-    if converged && clean(&report.history) {
-        let t = Instant::now();
-        let verdict = stability_of(system, ws, &x, false, report);
-        report.timings.stability += t.elapsed();
-        if !matches!(verdict, Stability::Unstable { .. }) {
-            return Ok(x);
-        }
+    if nearest {
+        return (true, worst);
+    }
+    if !clean(&report.history) {
+        return (false, worst);
+    }
+    let t = Instant::now();
+    let verdict = stability_of(system, ws, x, false, report);
+    report.timings.stability += t.elapsed();
+    (!matches!(verdict, Stability::Unstable { .. }), worst)
+}
+
+/// Newton from `x0`, and the equilibrium choice of docs/stability.md. Newton's answer
+/// stands when it converged cleanly to a state that is not unstable (or the caller asked
+/// for the nearest equilibrium). Otherwise, from a warm start (`warm`), the Newton homotopy
+/// from it ([`path::follow`]), whose end stands if it is not unstable; then Newton from the
+/// cold guess, as above; then the load path from the unloaded robot. Newton's answer from
+/// `x0`, if it converged at all, is the fallback when no path can be followed.
+fn choose_equilibrium(
+    system: &mut System,
+    ws: &mut Workspace,
+    x0: Vec<State>,
+    warm: bool,
+    options: &Options,
+    settings: &Settings,
+    report: &mut SolveReport,
+) -> Result<Vec<State>> {
+    report.unknowns = system.unknowns();
+    report.nonzeros = ws.nonzeros();
+    report.intervals = system.mesh.intervals();
+    let nearest = options.equilibrium == Equilibrium::Nearest || !options.continuation;
+    let mut x = x0.clone();
+    let (accept, worst) = direct(system, ws, &mut x, nearest, settings, report);
+    let converged = report.termination == Termination::Converged;
+    if accept {
+        return Ok(x);
     }
     if !options.continuation {
         return Err(not_converged(
@@ -460,9 +496,26 @@ fn choose_equilibrium(
             "enable load continuation, refine the mesh, or warm-start from a nearby solution",
         ));
     }
-    let direct = converged.then_some(x);
+    let fallback = converged.then_some(x);
+    if warm {
+        if let Ok(end) = path::follow(system, ws, Some(&x0), options, settings, report) {
+            let exact = !report.history.iter().any(|i| i.fresh_jacobian);
+            if !matches!(stability_of(system, ws, &end.x, exact, report), Stability::Unstable { .. }) {
+                report.path = Path::FromWarmStart {
+                    folds: end.folds,
+                    bifurcations: end.bifurcations,
+                };
+                return Ok(end.x);
+            }
+        }
+        system.set_factors(1.0, 1.0);
+        let mut cold = guess::initial(&system.model, &system.mesh.nodes, options.initial_guess);
+        if direct(system, ws, &mut cold, false, settings, report).0 {
+            return Ok(cold);
+        }
+    }
     let mesh = system.mesh.clone();
-    match path::follow(system, ws, options, settings, report) {
+    match path::follow(system, ws, None, options, settings, report) {
         Ok(end) => {
             report.path = Path::LoadPath {
                 folds: end.folds,
@@ -480,7 +533,7 @@ fn choose_equilibrium(
                 *ws = Workspace::new(system, options.linear_solver)?;
             }
             system.set_factors(1.0, 1.0);
-            let x = match direct {
+            let x = match fallback {
                 Some(x) => x,
                 None => {
                     let mut x = x0;

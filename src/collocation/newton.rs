@@ -50,6 +50,8 @@ pub struct Workspace {
     values: Vec<f64>,
     residual: Vec<f64>,
     trial_residual: Vec<f64>,
+    /// The simplified Newton correction -J^-1 F(trial) of the monotonicity test.
+    simplified: Vec<f64>,
     rhs: Vec<f64>,
     step: Vec<f64>,
     trial: Vec<State>,
@@ -73,6 +75,7 @@ impl Workspace {
             values: vec![0.0; nonzeros(&system.mesh)],
             residual: vec![0.0; n],
             trial_residual: vec![0.0; n],
+            simplified: vec![0.0; n],
             rhs: vec![0.0; n],
             step: vec![0.0; n],
             trial: Vec::with_capacity(system.mesh.nodes.len()),
@@ -293,8 +296,24 @@ pub fn run(
             // Armijo on 0.5|F|^2, whose slope along the Newton step is -|F|^2 = -2 phi; a
             // trial already within tolerance is accepted (at rounding level phi cannot fall).
             let done = max_norm(&ws.trial_residual) <= settings.tolerance;
-            if ok && phi_trial.is_finite() && (done || phi_trial <= (1.0 - 2.0 * ARMIJO * alpha) * phi) {
+            let finite = ok && phi_trial.is_finite();
+            if finite && (done || phi_trial <= (1.0 - 2.0 * ARMIJO * alpha) * phi) {
                 break;
+            }
+            // Or the natural monotonicity test (Deuflhard's NLEQ-ERR), which measures the
+            // trial by its simplified Newton correction -J^-1 F(trial) with the same factors
+            // and so does not depend on how the rows are scaled: a tiny tip force in rows
+            // scaled by EA can make the residual grow along a step that halves the error.
+            if finite {
+                for (r, f) in ws.rhs.iter_mut().zip(&ws.trial_residual) {
+                    *r = -f;
+                }
+                let t = Instant::now();
+                ws.linear.solve_again(&ws.rhs, &mut ws.simplified);
+                report.timings.solve += t.elapsed();
+                if max_norm(&ws.simplified) <= (1.0 - alpha / 4.0) * step_norm {
+                    break;
+                }
             }
             alpha *= 0.5;
             if alpha < MIN_DAMPING {

@@ -27,6 +27,8 @@ use crate::mesh::{Mesh, nodes};
 use crate::report::{SolveReport, Stability, Termination};
 use crate::solution::State;
 
+/// The most Newton iterations of the landing at lambda = 1 from the predicted point.
+const LANDING_ITERATIONS: usize = 12;
 /// Step control: the corrector iterations of an easy step, and the most it may take.
 const EASY: usize = 2;
 const MAX_CORRECTOR: usize = 8;
@@ -96,17 +98,49 @@ fn max_norm(v: &[f64]) -> f64 {
         .fold(0.0, |m, x| if x.is_nan() { f64::INFINITY } else { m.max(x.abs()) })
 }
 
-/// The residual at (x, lambda) into `out`; false when the model breaks down.
-fn residual(system: &mut System, x: &[State], lambda: f64, out: &mut [f64], report: &mut SolveReport) -> bool {
-    system.set_factors(lambda, lambda);
-    report.evaluations.residual += 1;
-    report.evaluations.equations += system.rate_evaluations();
-    system.residual(x, out).is_ok() && out.iter().all(|v| v.is_finite())
+/// Which problems the path connects.
+pub(super) enum Homotopy {
+    /// The load path: every tension and external load times lambda, from the unloaded
+    /// robot at lambda = 0.
+    Load,
+    /// From a warm start x0 (not a solution) to the robot: F(x) - (1 - lambda) F(x0) = 0,
+    /// which x0 solves at lambda = 0 (a Newton homotopy). Holds F(x0).
+    Newton(Vec<f64>),
 }
 
-/// dF/dlambda at x by a central difference (one-sided at lambda = 0, where tensions would
-/// turn negative).
-fn f_lambda(system: &mut System, x: &[State], lambda: f64, report: &mut SolveReport) -> Option<Vec<f64>> {
+/// The residual at (x, lambda) into `out`; false when the model breaks down.
+fn residual(
+    system: &mut System,
+    homotopy: &Homotopy,
+    x: &[State],
+    lambda: f64,
+    out: &mut [f64],
+    report: &mut SolveReport,
+) -> bool {
+    if matches!(homotopy, Homotopy::Load) {
+        system.set_factors(lambda, lambda);
+    }
+    report.evaluations.residual += 1;
+    report.evaluations.equations += system.rate_evaluations();
+    let ok = system.residual(x, out).is_ok();
+    if let Homotopy::Newton(r0) = homotopy {
+        out.iter_mut().zip(r0).for_each(|(o, r)| *o -= (1.0 - lambda) * r);
+    }
+    ok && out.iter().all(|v| v.is_finite())
+}
+
+/// dF/dlambda at x: F(x0) for a Newton homotopy; for the load path a central difference
+/// (one-sided at lambda = 0, where tensions would turn negative).
+fn f_lambda(
+    system: &mut System,
+    homotopy: &Homotopy,
+    x: &[State],
+    lambda: f64,
+    report: &mut SolveReport,
+) -> Option<Vec<f64>> {
+    if let Homotopy::Newton(r0) = homotopy {
+        return Some(r0.clone());
+    }
     let n = system.unknowns();
     let (mut hi, mut lo) = (vec![0.0; n], vec![0.0; n]);
     let (a, b) = if lambda >= DELTA {
@@ -114,7 +148,7 @@ fn f_lambda(system: &mut System, x: &[State], lambda: f64, report: &mut SolveRep
     } else {
         (lambda, lambda + DELTA)
     };
-    let ok = residual(system, x, b, &mut hi, report) && residual(system, x, a, &mut lo, report);
+    let ok = residual(system, homotopy, x, b, &mut hi, report) && residual(system, homotopy, x, a, &mut lo, report);
     system.set_factors(lambda, lambda);
     ok.then(|| hi.iter().zip(&lo).map(|(h, l)| (h - l) / (b - a)).collect())
 }
@@ -123,13 +157,14 @@ fn f_lambda(system: &mut System, x: &[State], lambda: f64, report: &mut SolveRep
 /// `previous` (or towards growing lambda).
 fn tangent(
     system: &mut System,
+    homotopy: &Homotopy,
     ws: &mut Workspace,
     x: Vec<State>,
     lambda: f64,
     previous: Option<(&[f64], f64)>,
     report: &mut SolveReport,
 ) -> Option<(Point, Vec<f64>)> {
-    let fl = f_lambda(system, &x, lambda, report)?;
+    let fl = f_lambda(system, homotopy, &x, lambda, report)?;
     let rhs: Vec<f64> = fl.iter().map(|v| -v).collect();
     let z = ws.solve_again(&rhs)?.to_vec();
     let n = z.len() as f64;
@@ -149,33 +184,52 @@ fn tangent(
 }
 
 /// Follows the load path on `system` (whose mesh it may refine, replacing `system` and
-/// `ws`) from lambda = 0 to 1. Returns the end, or a hint and the worst residual row.
+/// `ws`) from lambda = 0 to 1, or with a warm start `from`, the Newton homotopy from it
+/// (on its mesh). Returns the end, or a hint and the worst residual row.
 pub(super) fn follow(
     system: &mut System,
     ws: &mut Workspace,
+    from: Option<&[State]>,
     options: &Options,
     settings: &Settings,
     report: &mut SolveReport,
 ) -> std::result::Result<End, (String, usize)> {
     let robot = system.model.robot;
-    system.set_factors(0.0, 0.0);
-    let mut x = rigid_estimate(&system.model, &system.mesh.nodes);
-    let (start, row) = newton::run(system, ws, &mut x, settings, report);
-    if start != Termination::Converged {
-        report.termination = start;
-        return Err(("the unloaded robot did not converge: refine the mesh".into(), row));
-    }
+    let (x, homotopy) = match from {
+        None => {
+            system.set_factors(0.0, 0.0);
+            let mut x = rigid_estimate(&system.model, &system.mesh.nodes);
+            let (start, row) = newton::run(system, ws, &mut x, settings, report);
+            if start != Termination::Converged {
+                report.termination = start;
+                return Err(("the unloaded robot did not converge: refine the mesh".into(), row));
+            }
+            (x, Homotopy::Load)
+        }
+        Some(x0) => {
+            let mut r0 = vec![0.0; system.unknowns()];
+            if system.residual(x0, &mut r0).is_err() || !r0.iter().all(|v| v.is_finite()) {
+                return Err(("the warm start is not a state the model can evaluate".into(), 0));
+            }
+            (x0.to_vec(), Homotopy::Newton(r0))
+        }
+    };
     if !ws.linearize(system, &x, report) {
-        return Err(("the Jacobian of the unloaded robot is singular".into(), 0));
+        return Err(("the Jacobian at the start of the path is singular".into(), 0));
     }
-    let Some((mut point, mut fl)) = tangent(system, ws, x, 0.0, None, report) else {
-        return Err(("the load path's first tangent is not finite".into(), 0));
+    let Some((mut point, mut fl)) = tangent(system, &homotopy, ws, x, 0.0, None, report) else {
+        return Err(("the path's first tangent is not finite".into(), 0));
     };
     let n = system.unknowns();
     let mut unstable = index(system, ws);
     let mut folds = Vec::new();
     let mut bifurcations = Vec::new();
-    let mut h = FIRST_STEP;
+    // From a warm start the first try is the whole way: predict with the sensitivities
+    // (the tangent) to lambda = 1 and land there, a step shortened only if that fails.
+    let mut h = match homotopy {
+        Homotopy::Load => FIRST_STEP,
+        Homotopy::Newton(_) => 1.0 / point.tl.max(1e-3),
+    };
     let mut factored_at_point = true;
     let mut worst = 0;
     let mut trial: Vec<State> = Vec::with_capacity(system.mesh.nodes.len());
@@ -189,8 +243,12 @@ pub(super) fn follow(
             system.retract(&point.x, &step, 1.0, &mut trial);
             let mut landed = trial.clone();
             system.set_factors(1.0, 1.0);
+            // Newton lands only if it lands cleanly (no damped step): a damped step could
+            // cross to another branch.
             let land = Settings {
                 reuse_factors: factored_at_point,
+                stop_when_damped: true,
+                max_iterations: settings.max_iterations.min(LANDING_ITERATIONS),
                 ..*settings
             };
             let (term, row) = newton::run(system, ws, &mut landed, &land, report);
@@ -210,7 +268,7 @@ pub(super) fn follow(
             }
             continue;
         }
-        let res = correct(system, ws, &point, h, &fl, factored_at_point, settings, report, &mut r);
+        let res = correct(system, &homotopy, ws, &point, h, &fl, factored_at_point, settings, report, &mut r);
         match res {
             Some((xc, lambda, iterations)) => {
                 if !ws.linearize(system, &xc, report) {
@@ -222,7 +280,7 @@ pub(super) fn follow(
                     continue;
                 }
                 let previous = (point.tx.as_slice(), point.tl);
-                let Some((next, next_fl)) = tangent(system, ws, xc, lambda, Some(previous), report) else {
+                let Some((next, next_fl)) = tangent(system, &homotopy, ws, xc, lambda, Some(previous), report) else {
                     break;
                 };
                 let fold = (next.tl > 0.0) != (point.tl > 0.0);
@@ -257,10 +315,11 @@ pub(super) fn follow(
                 point = next;
                 fl = next_fl;
                 factored_at_point = true;
-                // A shape the mesh no longer resolves: continue on a finer one.
+                // A shape the mesh no longer resolves: continue on a finer one (the load
+                // path only: a Newton homotopy's F(x0) belongs to its mesh).
                 let floor = system.mesh.intervals();
                 let needed = refine::start_intervals(robot, &point.x, floor).min(options.max_intervals);
-                if needed as f64 > 1.25 * floor as f64 {
+                if matches!(homotopy, Homotopy::Load) && needed as f64 > 1.25 * floor as f64 {
                     match remesh(system, ws, &point, needed, options, settings, report) {
                         Some((p, f)) => {
                             point = p;
@@ -302,6 +361,7 @@ fn remesh_hint(lambda: f64) -> String {
 #[allow(clippy::too_many_arguments)]
 fn correct(
     system: &mut System,
+    homotopy: &Homotopy,
     ws: &mut Workspace,
     point: &Point,
     h: f64,
@@ -323,16 +383,18 @@ fn correct(
     let mut fl = fl.to_vec();
     let mut fresh = !factored_at_point;
     if fresh {
-        system.set_factors(lambda, lambda);
+        if matches!(homotopy, Homotopy::Load) {
+            system.set_factors(lambda, lambda);
+        }
         if !ws.linearize(system, &x, report) {
             return None;
         }
-        fl = f_lambda(system, &x, lambda, report)?;
+        fl = f_lambda(system, homotopy, &x, lambda, report)?;
     }
     let mut norm = f64::INFINITY;
     let mut next = Vec::with_capacity(x.len());
     for iteration in 1..=MAX_CORRECTOR {
-        if !residual(system, &x, lambda, r, report) {
+        if !residual(system, homotopy, &x, lambda, r, report) {
             return None;
         }
         let new_norm = max_norm(r);
@@ -344,7 +406,7 @@ fn correct(
             if !ws.linearize(system, &x, report) {
                 return None;
             }
-            fl = f_lambda(system, &x, lambda, report)?;
+            fl = f_lambda(system, homotopy, &x, lambda, report)?;
             fresh = true;
             if new_norm > 2.0 * norm {
                 return None;
@@ -413,5 +475,5 @@ fn remesh(
     if term != Termination::Converged || !ws.linearize(system, &x, report) {
         return None;
     }
-    tangent(system, ws, x, point.lambda, Some((&[], point.tl)), report)
+    tangent(system, &Homotopy::Load, ws, x, point.lambda, Some((&[], point.tl)), report)
 }

@@ -3,7 +3,7 @@
 
 use super::estimate::Correction;
 use super::options::Options;
-use super::{Cache, Level, interpolate, segment_ends, solve_on_mesh};
+use super::{Cache, Choose, Level, interpolate, segment_ends, solve_on_mesh};
 use crate::Error;
 use crate::error::Result;
 use crate::mesh::{Mesh, nodes};
@@ -94,7 +94,7 @@ pub(super) fn to_tolerance(
             report.clone(),
         )?;
         let start = interpolate(&guess, &fine);
-        level = solve_on_mesh(model, fine, start, false, false, options, report, cache)?;
+        level = solve_on_mesh(model, fine, start, false, Choose::No, options, report, cache)?;
     }
 }
 

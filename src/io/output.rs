@@ -248,6 +248,7 @@ fn stability(report: &crate::SolveReport) -> Json {
     }
     let (path, folds, bifurcations) = match &report.path {
         crate::Path::Direct => ("direct", Vec::new(), Vec::new()),
+        crate::Path::FromWarmStart { folds, bifurcations } => ("from_warm_start", folds.clone(), bifurcations.clone()),
         crate::Path::LoadPath { folds, bifurcations } => ("load_path", folds.clone(), bifurcations.clone()),
     };
     let numbers = |v: Vec<f64>| Json::Array(v.into_iter().map(Json::Number).collect());

@@ -58,7 +58,7 @@ pub fn counts(report: &SolveReport) -> String {
 fn path_note(report: &SolveReport) -> String {
     match &report.path {
         Path::Direct => String::new(),
-        Path::LoadPath { folds, bifurcations } => {
+        Path::LoadPath { folds, bifurcations } | Path::FromWarmStart { folds, bifurcations } => {
             let at = |v: &[f64]| {
                 v.iter()
                     .map(|f| format!("{:.1} %", 100.0 * f))
@@ -67,10 +67,10 @@ fn path_note(report: &SolveReport) -> String {
             };
             let mut out = String::from(" (followed the load path from rest");
             if !folds.is_empty() {
-                let _ = write!(out, "; it SNAPS THROUGH at {} of the load", at(folds));
+                let _ = write!(out, "; it SNAPS THROUGH at {} of the way", at(folds));
             }
             if !bifurcations.is_empty() {
-                let _ = write!(out, "; it crosses a BIFURCATION at {} of the load", at(bifurcations));
+                let _ = write!(out, "; it crosses a BIFURCATION at {} of the way", at(bifurcations));
             }
             out.push(')');
             out
