@@ -166,3 +166,30 @@ fn bad_actuation_input_is_a_clear_error() {
     assert_eq!(invalid_field(&pair(0.3, 0.0)), "tendons[0].displacement");
     assert_eq!(invalid_field(&pair(f64::NAN, 0.0)), "tendons[0].displacement");
 }
+
+#[test]
+fn tip_sensitivity_to_pull_ins_matches_central_differences() {
+    // Case H's helical tendon and tendon 1 both displacement-controlled.
+    let mut robot = cases::case_h();
+    robot.tendons[0].displacement = Some(0.002);
+    robot.tendons[4].displacement = Some(0.015);
+    robot.tendons[4].tension = 0.0;
+    let options = collocation::Options::fixed(64);
+    let solution = collocation::solve(&robot, &options).unwrap();
+    let sens = collocation::sensitivity::displacement_sensitivities(&robot, &solution).unwrap();
+    assert_eq!(sens.tendons, vec![0, 4]);
+    // 1e-5 m: central differences of full solves on the same mesh err by about h^2 (1e-10
+    // relative) plus Newton's 1e-11 residual over h, both far below the 1e-6 checked
+    let h = 1e-5;
+    for (c, &i) in sens.tendons.iter().enumerate() {
+        let solve = |dq: f64| {
+            let mut r = robot.clone();
+            r.tendons[i].displacement = Some(r.tendons[i].displacement.unwrap() + dq);
+            collocation::solve_from(&r, &options, &solution).unwrap().tip_position()
+        };
+        let fd = (solve(h) - solve(-h)) / (2.0 * h);
+        let analytic = sens.tip.fixed_view::<3, 1>(0, c).into_owned();
+        // 1e-6 relative: the bound; the sensitivity's own error is about 1e-8
+        assert!((fd - analytic).norm() <= 1e-6 * fd.norm(), "tendon {i}: {fd:?} vs {analytic:?}");
+    }
+}
