@@ -190,6 +190,9 @@ fn tip_sensitivity_to_pull_ins_matches_central_differences() {
         let fd = (solve(h) - solve(-h)) / (2.0 * h);
         let analytic = sens.tip.fixed_view::<3, 1>(0, c).into_owned();
         // 1e-6 relative: the bound; the sensitivity's own error is about 1e-8
-        assert!((fd - analytic).norm() <= 1e-6 * fd.norm(), "tendon {i}: {fd:?} vs {analytic:?}");
+        assert!(
+            (fd - analytic).norm() <= 1e-6 * fd.norm(),
+            "tendon {i}: {fd:?} vs {analytic:?}"
+        );
     }
 }

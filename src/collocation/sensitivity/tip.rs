@@ -196,7 +196,10 @@ pub fn displacement_sensitivities(robot: &Robot, solution: &Solution) -> Result<
     let s: Vec<f64> = solution.nodes.iter().map(|n| n.s).collect();
     let mut tip_by_tension = DMatrix::zeros(6, k);
     let mut schur = DMatrix::zeros(k, k);
-    let taut: Vec<bool> = tendons.iter().map(|&i| solution.tendons[i].slack == 0.0 && solution.tendons[i].tension > 0.0).collect();
+    let taut: Vec<bool> = tendons
+        .iter()
+        .map(|&i| solution.tendons[i].slack == 0.0 && solution.tendons[i].tension > 0.0)
+        .collect();
     for (m, &tm) in tendons.iter().enumerate() {
         let d = sens.tension(tm)?;
         tip_by_tension.set_column(m, &d[d.len() - 1].pose());
