@@ -124,7 +124,7 @@ impl Workspace {
 
     /// Factors the Jacobian `values` (in [`pattern`](super::unknowns::pattern) order) and
     /// solves J x = rhs, adding the times to `report`: a Newton step of a solver that builds
-    /// its own right-hand side (the bordered steps of [`super::actuation`]). None for a zero
+    /// its own right-hand side (the bordered steps of `collocation/actuation.rs`). None for a zero
     /// pivot or a non-finite result.
     pub fn factor_solve(&mut self, values: &[f64], rhs: &[f64], report: &mut SolveReport) -> Option<&[f64]> {
         self.values.copy_from_slice(values);

@@ -36,7 +36,7 @@ pub struct System<'a> {
 
 /// A system without its model: the mesh and the sites, which depend on the external loads
 /// but not on the tendon tensions. A solve whose tensions are unknowns
-/// ([`super::actuation`]) detaches the system to change a tension and attaches it again,
+/// (`collocation/actuation.rs`) detaches the system to change a tension and attaches it again,
 /// without rebuilding the sites.
 pub struct Frame {
     mesh: Mesh,
