@@ -68,7 +68,7 @@ pub use model::routing::{Routing, RoutingPoint};
 pub use model::tendon::Tendon;
 pub use nalgebra;
 pub use report::{ErrorEstimate, Evaluations, Iteration, Method, Path, SolveReport, Stability, Termination, Timings};
-pub use solution::{Node, Solution, State};
+pub use solution::{Node, Solution, State, TendonState};
 
 /// The scalar types the model equations accept: f64, and num-dual's dual numbers for exact
 /// derivatives.

@@ -62,6 +62,26 @@ pub struct State {
     pub u: Vector3<f64>,
 }
 
+/// What a solution says about one tendon: its tension, its actuator's pull-in, its path
+/// length and slack (docs/actuation.md).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TendonState {
+    /// Tension tau_i (N): the input of a tension-controlled tendon, the solved one of a
+    /// displacement-controlled tendon (0 when slack).
+    pub tension: f64,
+    /// Pull-in q_i of the actuator (m): the input of a displacement-controlled tendon; for a
+    /// tension-controlled one the pull-in that holds it taut at its tension,
+    /// reference_length - length + stretch.
+    pub displacement: f64,
+    /// Path length l_i from the base to the termination (m), the integral of |p_i'|.
+    pub length: f64,
+    /// Path length in the unloaded shape (m), the reference of the pull-in.
+    pub reference_length: f64,
+    /// Length of tendon the actuator's pull-in has not taken up (m): 0 when taut, > 0 when
+    /// a displacement-controlled tendon is slack.
+    pub slack: f64,
+}
+
 /// A solved robot shape.
 #[derive(Clone, Debug)]
 pub struct Solution {
@@ -70,6 +90,8 @@ pub struct Solution {
     /// For each tendon, its path p_i(s) = p + R r_i (m, world) at the nodes up to its
     /// termination.
     pub tendon_paths: Vec<Vec<Vector3<f64>>>,
+    /// For each tendon, its tension, pull-in, lengths and slack.
+    pub tendons: Vec<TendonState>,
     /// How the solve went.
     pub report: SolveReport,
 }
@@ -78,6 +100,12 @@ impl Solution {
     /// Backbone length (m).
     pub fn length(&self) -> f64 {
         self.nodes.last().map_or(0.0, |n| n.s)
+    }
+
+    /// The tension of every tendon (N), solved ones included: what
+    /// [`crate::Robot::with_tensions`] takes.
+    pub fn tensions(&self) -> Vec<f64> {
+        self.tendons.iter().map(|t| t.tension).collect()
     }
 
     /// The tip node.

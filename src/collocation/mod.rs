@@ -22,6 +22,7 @@
 //!
 //! docs/numerics.md documents the scheme (order 4), the scaling and the stopping tests.
 
+mod actuation;
 mod estimate;
 pub(crate) mod linear;
 pub(crate) mod newton;
@@ -250,6 +251,9 @@ fn interpolate(guess: &Solution, mesh: &Mesh) -> Vec<State> {
 fn solve_impl(robot: &Robot, options: &Options, warm: Option<&Solution>, cache: &mut Cache) -> Result<Solution> {
     robot.validate()?;
     options.validate()?;
+    if robot.has_displacement_inputs() {
+        return actuation::solve(robot, options, warm, cache);
+    }
     let start = Instant::now();
     let model = Model::new(robot);
     let mut report = SolveReport::new(Method::Collocation);

@@ -170,6 +170,18 @@ impl Workspace {
         })
     }
 
+    /// Factors the Jacobian `values` (in [`pattern`](super::unknowns::pattern) order) and
+    /// solves J x = rhs, adding the times to `report`: a Newton step of a solver that builds
+    /// its own right-hand side (the bordered steps of `collocation/actuation.rs`). None for a zero
+    /// pivot or a non-finite result.
+    pub fn factor_solve(&mut self, values: &[f64], rhs: &[f64], report: &mut SolveReport) -> Option<&[f64]> {
+        self.values.copy_from_slice(values);
+        for (r, f) in self.residual.iter_mut().zip(rhs) {
+            *r = -f;
+        }
+        self.solve(report).then_some(&self.step[..])
+    }
+
     /// Whether the workspace holds the factors of a successful solve.
     pub fn has_factors(&self) -> bool {
         self.factored

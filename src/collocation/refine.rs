@@ -60,42 +60,57 @@ pub(super) fn to_tolerance(
     report: &mut SolveReport,
     cache: &mut Cache,
 ) -> Result<Level> {
-    let length = model.robot.length();
     loop {
-        let Some(Correction {
-            estimate,
-            local,
-            node_rates,
-        }) = &level.correction
-        else {
+        let Some(correction) = &level.correction else {
             return Ok(level);
         };
-        if meets(estimate, tol, length) {
+        let Some(fine) = next_mesh(model.robot, &level.mesh, correction, tol, options)? else {
             return Ok(level);
-        }
-        let intervals = level.mesh.intervals();
-        let ratio = (estimate.tip_position / (tol * length)).max(estimate.tip_rotation / tol);
-        // Order 4: the error falls like N^-4.
-        let wanted = (intervals as f64 * (ratio / TARGET_FRACTION).powf(0.25)).max(intervals as f64 * MIN_GROWTH);
-        let target = wanted.ceil() as usize;
-        if target > options.max_intervals {
-            return Err(Error::IntervalCap {
-                cap: options.max_intervals,
-                estimate: estimate.tip_position,
-                tolerance: tol * length,
-            });
-        }
-        let fine = equidistributed(model.robot, &level.mesh, local, target)?;
+        };
         let guess = nodes::solution(
             model,
             &level.x,
             &segment_ends(&level.mesh),
-            Some(node_rates),
+            Some(&correction.node_rates),
             report.clone(),
         )?;
         let start = interpolate(&guess, &fine);
         level = solve_on_mesh(model, fine, start, false, Choose::No, options, report, cache)?;
     }
+}
+
+/// The next mesh of refinement after a converged solve on `mesh` with the error estimate
+/// `correction`, or `None` when the estimate meets `tol` (relative to L): enough intervals for the error to fall below
+/// [`TARGET_FRACTION`] of the tolerance if it falls like h^4, distributed so that every
+/// interval's local error is about equal.
+///
+/// # Errors
+/// [`Error::IntervalCap`] when the next mesh would exceed `options.max_intervals`.
+pub(super) fn next_mesh(
+    robot: &Robot,
+    mesh: &Mesh,
+    correction: &Correction,
+    tol: f64,
+    options: &Options,
+) -> Result<Option<Mesh>> {
+    let Correction { estimate, local, .. } = correction;
+    let length = robot.length();
+    if meets(estimate, tol, length) {
+        return Ok(None);
+    }
+    let intervals = mesh.intervals();
+    let ratio = (estimate.tip_position / (tol * length)).max(estimate.tip_rotation / tol);
+    // Order 4: the error falls like N^-4.
+    let wanted = (intervals as f64 * (ratio / TARGET_FRACTION).powf(0.25)).max(intervals as f64 * MIN_GROWTH);
+    let target = wanted.ceil() as usize;
+    if target > options.max_intervals {
+        return Err(Error::IntervalCap {
+            cap: options.max_intervals,
+            estimate: estimate.tip_position,
+            tolerance: tol * length,
+        });
+    }
+    equidistributed(robot, mesh, local, target).map(Some)
 }
 
 /// A mesh of about `target` intervals whose intervals share the local error equally: with

@@ -120,8 +120,8 @@ impl Json {
 }
 
 /// The solution as JSON (every field and unit in docs/cli.md): the solve report, the tip
-/// pose and wrench, the samples of [`samples`] for `count`, each tendon's tension, end and
-/// path, and the tip Jacobians when given. Vectors are `[x, y, z]`, matrices lists of rows; one sample per line.
+/// pose and wrench, the samples of [`samples`] for `count`, each tendon's tension, pull-in,
+/// lengths, slack, end and path, and the tip Jacobians when given. Vectors are `[x, y, z]`, matrices lists of rows; one sample per line.
 pub fn json(robot: &Robot, solution: &Solution, count: Option<usize>, jacobian: Option<&TipSensitivities>) -> String {
     let report = &solution.report;
     let tip = solution.tip();
@@ -141,9 +141,14 @@ pub fn json(robot: &Robot, solution: &Solution, count: Option<usize>, jacobian: 
         .tendons
         .iter()
         .zip(&solution.tendon_paths)
-        .map(|(t, path)| {
+        .zip(&solution.tendons)
+        .map(|((t, path), state)| {
             Json::Object(vec![
-                ("tension", Json::Number(t.tension)),
+                ("tension", Json::Number(state.tension)),
+                ("displacement", Json::Number(state.displacement)),
+                ("length", Json::Number(state.length)),
+                ("reference_length", Json::Number(state.reference_length)),
+                ("slack", Json::Number(state.slack)),
                 ("end", Json::Number(t.end(robot.length()))),
                 ("path", Json::Array(path.iter().map(Json::vector).collect())),
             ])

@@ -2,11 +2,13 @@
 //! (eq. 13) and internal wrenches at every node from the model, and the tendon paths.
 #![allow(non_snake_case)]
 
+use crate::Robot;
 use crate::error::Result;
 use crate::model::equations::Model;
+use crate::model::length;
 use crate::model::linearize;
 use crate::report::SolveReport;
-use crate::solution::{Node, Solution, State};
+use crate::solution::{Node, Solution, State, TendonState};
 use nalgebra::Vector6;
 
 /// Builds a solution from node states (s, p, R, v, u): fills v', u', n, m and the
@@ -56,9 +58,56 @@ pub(crate) fn solution(
                 .collect()
         })
         .collect();
+    let tendons = tendon_states(model, &nodes);
     Ok(Solution {
         nodes,
         tendon_paths,
+        tendons,
         report,
     })
+}
+
+/// Each tendon's tension, pull-in, lengths and slack at the solved `nodes` (docs/actuation.md):
+/// the length by the node quadrature, and for a displacement-controlled tendon the slack
+/// phi = l_ref - l - q + c tau when its tension is 0 (phi is the solver's residual, about 0,
+/// when taut).
+fn tendon_states(model: &Model, nodes: &[Node]) -> Vec<TendonState> {
+    let robot = model.robot;
+    let s: Vec<f64> = nodes.iter().map(|n| n.s).collect();
+    robot
+        .tendons
+        .iter()
+        .enumerate()
+        .map(|(i, t)| {
+            let length = tendon_length(robot, i, &s, nodes);
+            let reference_length = length::reference_length(robot, i);
+            let tension = t.tension;
+            let taken_up = reference_length - length + t.compliance(reference_length) * tension;
+            match t.displacement {
+                Some(q) => TendonState {
+                    tension,
+                    displacement: q,
+                    length,
+                    reference_length,
+                    slack: if tension > 0.0 { 0.0 } else { (taken_up - q).max(0.0) },
+                },
+                None => TendonState {
+                    tension,
+                    displacement: taken_up,
+                    length,
+                    reference_length,
+                    slack: 0.0,
+                },
+            }
+        })
+        .collect()
+}
+
+/// The path length of tendon `i` over solved `nodes` at arc lengths `s`
+/// ([`length::NodeQuadrature`]).
+pub(crate) fn tendon_length(robot: &Robot, i: usize, s: &[f64], nodes: &[Node]) -> f64 {
+    let t = &robot.tendons[i];
+    let l = robot.length();
+    length::NodeQuadrature::new(s, t.end(l))
+        .integrate(|k| length::speed(&t.routing.at(s[k], l), &nodes[k].v, &nodes[k].u))
 }

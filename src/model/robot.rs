@@ -2,6 +2,7 @@
 
 use crate::Readable;
 use crate::error::{Result, invalid};
+use crate::model::length;
 use crate::model::loads::Loads;
 use crate::model::rod::{Geometry, ReferenceStrains, Rod};
 use crate::model::routing::Routing;
@@ -186,6 +187,69 @@ impl Robot {
         self.validate_loads()?;
         for (i, t) in self.tendons.iter().enumerate() {
             self.validate_tendon(i, t)?;
+            self.validate_actuation(i, t)?;
+        }
+        Ok(())
+    }
+
+    /// Whether any tendon is displacement-controlled (its tension an unknown of the solve).
+    pub fn has_displacement_inputs(&self) -> bool {
+        self.tendons.iter().any(|t| t.displacement.is_some())
+    }
+
+    /// The robot with the tendon tensions `tensions` (N, one per tendon, as
+    /// [`crate::Solution::tensions`] reports them): for a displacement-controlled tendon the
+    /// starting value of its tension unknown, so that a solved displacement-controlled robot
+    /// becomes one whose every tension the analyses (equilibrium, sensitivities) can read.
+    pub fn with_tensions(&self, tensions: &[f64]) -> Robot {
+        let mut robot = self.clone();
+        for (t, &tau) in robot.tendons.iter_mut().zip(tensions) {
+            t.tension = tau;
+        }
+        robot
+    }
+
+    /// Checks a tendon's elasticity and displacement input (docs/actuation.md).
+    fn validate_actuation(&self, i: usize, t: &Tendon) -> Result<()> {
+        if let Some(k) = t.stiffness
+            && !(k.is_finite() && k > 0.0)
+        {
+            return Err(invalid(
+                format!("tendons[{i}].stiffness"),
+                format!("is {} N", Readable(k)),
+                "give the tendon's axial stiffness E_t A_t as a positive finite force in N, or none for an inextensible tendon",
+            ));
+        }
+        if !(t.free_length.is_finite() && t.free_length >= 0.0) {
+            return Err(invalid(
+                format!("tendons[{i}].free_length"),
+                format!("is {} m", Readable(t.free_length)),
+                "give the length between the base and the actuator as a finite length >= 0 m",
+            ));
+        }
+        let Some(q) = t.displacement else {
+            return Ok(());
+        };
+        if !q.is_finite() {
+            return Err(invalid(
+                format!("tendons[{i}].displacement"),
+                format!("is {} m", Readable(q)),
+                "give a finite pull-in in m",
+            ));
+        }
+        // An inextensible tendon shortens its path by q: the path would have to be shorter
+        // than nothing to take up its whole reference length.
+        let reference = length::reference_length(self, i);
+        if t.stiffness.is_none() && q >= reference {
+            return Err(invalid(
+                format!("tendons[{i}].displacement"),
+                format!(
+                    "is {} m, but the tendon's path is only {} m long in the unloaded shape, so no shape can take up this pull-in",
+                    Readable(q),
+                    Readable(reference)
+                ),
+                "give a pull-in smaller than the tendon's path length",
+            ));
         }
         Ok(())
     }

@@ -1,17 +1,34 @@
-//! A tendon: its routing, tension and where it ends.
+//! A tendon: its routing, how it is actuated (a tension or an actuator displacement), its
+//! axial stiffness and where it ends.
 
 use crate::model::routing::Routing;
 
 /// One tendon, modelled as a frictionless Cosserat string (section 3 of the paper).
+///
+/// It is actuated either by its tension tau_i (the paper's input) or, when `displacement`
+/// is set, by the pull-in q_i of its actuator: the tension is then an unknown of the solve,
+/// fixed by the length constraint of docs/actuation.md, and a tendon that would need to push
+/// goes slack (tau_i = 0).
 #[derive(Clone, Debug)]
 pub struct Tendon {
     /// Path in the cross-section along s.
     pub routing: Routing,
-    /// Tension tau_i (N), >= 0, constant along the tendon (frictionless).
+    /// Tension tau_i (N), >= 0, constant along the tendon (frictionless). For a
+    /// displacement-controlled tendon only the tension Newton starts from (0: the solver
+    /// estimates it from a linear small-deflection model).
     pub tension: f64,
     /// Arc length l_i where it is attached to the backbone (m), in (0, L]; `None` means
     /// the tip.
     pub termination: Option<f64>,
+    /// Pull-in q_i of the actuator (m; positive pulls the tendon in, negative lets it out),
+    /// measured from the unloaded shape with the tendon just taut. `None` (the default):
+    /// tension-controlled.
+    pub displacement: Option<f64>,
+    /// Axial stiffness E_t A_t of the tendon (N); `None` (the default): inextensible.
+    pub stiffness: Option<f64>,
+    /// Length of tendon between the base, where it enters the backbone, and the actuator
+    /// (m, >= 0): it stretches with the rest of an elastic tendon. Default 0.
+    pub free_length: f64,
 }
 
 impl Tendon {
@@ -21,6 +38,18 @@ impl Tendon {
             routing,
             tension,
             termination: None,
+            displacement: None,
+            stiffness: None,
+            free_length: 0.0,
+        }
+    }
+
+    /// A displacement-controlled tendon along `routing` whose actuator pulls it in by
+    /// `displacement` q (m), ending at the tip.
+    pub fn pulled(routing: Routing, displacement: f64) -> Self {
+        Tendon {
+            displacement: Some(displacement),
+            ..Tendon::new(routing, 0.0)
         }
     }
 
@@ -30,8 +59,24 @@ impl Tendon {
         self
     }
 
+    /// The same tendon, elastic with axial stiffness E_t A_t = `stiffness` (N) and
+    /// `free_length` (m) between the base and the actuator.
+    pub fn elastic(mut self, stiffness: f64, free_length: f64) -> Self {
+        self.stiffness = Some(stiffness);
+        self.free_length = free_length;
+        self
+    }
+
     /// Termination arc length on a rod of `length` L (m).
     pub fn end(&self, length: f64) -> f64 {
         self.termination.unwrap_or(length)
+    }
+
+    /// The tendon's compliance to tension in its pull-in (m/N): its unstretched length
+    /// L0 = `reference_length` + free length over E_t A_t, 0 when inextensible. A tendon
+    /// taut at tension tau stretches by tau L0 / (E_t A_t) (docs/actuation.md).
+    pub fn compliance(&self, reference_length: f64) -> f64 {
+        self.stiffness
+            .map_or(0.0, |k| (reference_length + self.free_length) / k)
     }
 }

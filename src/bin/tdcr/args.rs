@@ -119,6 +119,13 @@ pub fn parse_tension(text: &str) -> Result<(usize, f64), String> {
     Ok((index, tension))
 }
 
+/// `I=METRES` (`--displacement`): a tendon number from 1 and its actuator pull-in in m
+/// (negative lets the tendon out).
+pub fn parse_displacement(text: &str) -> Result<(usize, f64), String> {
+    let (index, value) = parse_tendon(text)?;
+    Ok((index, parse_number(value, "a displacement in m")?))
+}
+
 /// `I=START:STOP:COUNT` or `I=NEWTONS` (`sweep --tension`): a tendon number and its
 /// tensions, COUNT evenly spaced values from START to STOP, all >= 0.
 pub fn parse_sweep(text: &str) -> Result<(usize, Vec<f64>), String> {

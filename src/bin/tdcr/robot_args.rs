@@ -38,12 +38,29 @@ fn not_utf8(name: &str, bytes: &[u8], e: &std::str::Utf8Error) -> String {
     )
 }
 
+/// Makes tendon `index` (from 1) displacement-controlled with pull-in `displacement` (m)
+/// (its tension becomes an unknown); a number past the last tendon is bad input.
+pub fn set_displacement(robot: &mut Robot, index: usize, displacement: f64) -> Result<(), Failure> {
+    let count = robot.tendons.len();
+    match index.checked_sub(1).and_then(|i| robot.tendons.get_mut(i)) {
+        Some(t) => {
+            t.displacement = Some(displacement);
+            t.tension = 0.0;
+            Ok(())
+        }
+        None => Err(Failure::Input(format!(
+            "--displacement {index}=...: the robot has {count} tendon(s), numbered 1 to {count} in file order"
+        ))),
+    }
+}
+
 /// Sets the tension of tendon `index` (from 1); a number past the last tendon is bad input.
 pub fn set_tension(robot: &mut Robot, index: usize, tension: f64) -> Result<(), Failure> {
     let count = robot.tendons.len();
     match robot.tendons.get_mut(index.wrapping_sub(1)) {
         Some(t) => {
             t.tension = tension;
+            t.displacement = None;
             Ok(())
         }
         None => Err(Failure::Input(format!(

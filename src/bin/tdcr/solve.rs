@@ -5,9 +5,9 @@ use std::path::PathBuf;
 use tdcr::io::output;
 use tdcr::plot::{Figure, LegendEntry, PALETTE, Style};
 
-use crate::args::{SolverArgs, parse_samples, parse_tension};
+use crate::args::{SolverArgs, parse_displacement, parse_samples, parse_tension};
 use crate::failure::{Failure, emit, note, write_file};
-use crate::robot_args::{apply, read_robot, run_solver, set_tension};
+use crate::robot_args::{apply, read_robot, run_solver, set_displacement, set_tension};
 use crate::tables::{describe, diagnostics, solution_table, summary};
 
 /// The output formats of `solve`.
@@ -30,6 +30,10 @@ pub struct SolveArgs {
     /// Tension of tendon I (numbered from 1) in N, replacing the file's. Repeatable.
     #[arg(long, value_name = "I=NEWTONS", value_parser = parse_tension)]
     tension: Vec<(usize, f64)>,
+    /// Drive tendon I (numbered from 1) by its actuator's pull-in in m instead of a tension
+    /// (its tension is then solved for; docs/actuation.md). Repeatable.
+    #[arg(long, value_name = "I=METRES", value_parser = parse_displacement)]
+    displacement: Vec<(usize, f64)>,
     #[command(flatten)]
     solver: SolverArgs,
     /// Output at K evenly spaced arc lengths (interpolated with the scheme's own
@@ -56,6 +60,14 @@ pub fn run(args: &SolveArgs) -> Result<(), Failure> {
     let (name, mut file) = read_robot(&args.file)?;
     for &(i, t) in &args.tension {
         set_tension(&mut file.robot, i, t)?;
+    }
+    for &(i, q) in &args.displacement {
+        if args.tension.iter().any(|&(j, _)| j == i) {
+            return Err(Failure::Input(format!(
+                "--tension {i}=... and --displacement {i}=... both given: drive a tendon by its tension or by its displacement"
+            )));
+        }
+        set_displacement(&mut file.robot, i, q)?;
     }
     apply(&mut file, &args.solver);
     let solution = run_solver(&file.robot, &file, None)?;

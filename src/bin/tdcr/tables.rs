@@ -184,6 +184,23 @@ pub fn solution_table(name: &str, file: &RobotFile, solution: &Solution, samples
     );
     let _ = writeln!(
         out,
+        "\n{:>7} {:>12} {:>12} {:>12} {:>12} {:>9}",
+        "tendon", "tension/N", "pull-in/mm", "length/mm", "ref len/mm", "slack/mm"
+    );
+    for (i, t) in solution.tendons.iter().enumerate() {
+        let _ = writeln!(
+            out,
+            "{:>7} {} {} {} {} {}",
+            i + 1,
+            fixed(t.tension, 12, 5),
+            fixed(t.displacement * 1e3, 12, 5),
+            fixed(t.length * 1e3, 12, 4),
+            fixed(t.reference_length * 1e3, 12, 4),
+            fixed(t.slack * 1e3, 9, 4)
+        );
+    }
+    let _ = writeln!(
+        out,
         "\n{:>9} {:>10} {:>10} {:>10} {:>10} {:>10} {:>10} {:>10} {:>10} {:>10}",
         "s/mm", "x/mm", "y/mm", "z/mm", "nx/N", "ny/N", "nz/N", "mx/N mm", "my/N mm", "mz/N mm"
     );

@@ -74,7 +74,10 @@
 
 mod tip;
 
-pub use tip::{ModulusSensitivities, TipSensitivities, backbone_tension_sensitivity, tip_sensitivities};
+pub use tip::{
+    DisplacementSensitivities, ModulusSensitivities, TipSensitivities, backbone_tension_sensitivity,
+    displacement_sensitivities, tip_sensitivities,
+};
 
 use crate::collocation::LinearSolver;
 use crate::collocation::newton::Workspace;

@@ -4,6 +4,7 @@
 
 use super::{RELATIVE_STEP, Sensitivity, tip_pose};
 use crate::error::Result;
+use crate::model::length::{NodeQuadrature, speed_gradient};
 use crate::model::robot::Robot;
 use crate::model::rod::{Section, Stiffness, shear_modulus};
 use crate::solution::Solution;
@@ -149,4 +150,86 @@ fn moduli(sens: &mut Sensitivity) -> Result<Option<ModulusSensitivities>> {
 pub fn backbone_tension_sensitivity(robot: &Robot, solution: &Solution, tendon: usize) -> Result<Vec<Vector3<f64>>> {
     let mut sens = Sensitivity::new(robot, solution)?;
     Ok(sens.tension(tendon)?.iter().map(|d| d.p).collect())
+}
+
+/// Derivatives of a solution with respect to the pull-ins of its displacement-controlled
+/// tendons (docs/actuation.md): what a resolved-rate controller needs.
+#[derive(Clone, Debug, PartialEq)]
+pub struct DisplacementSensitivities {
+    /// The displacement-controlled tendons (0-based indices), the columns' order.
+    pub tendons: Vec<usize>,
+    /// d(tip pose)/dq, 6 x k: tip position (m/m), then the world-frame tip rotation vector
+    /// (rad/m), as in [`TipSensitivities`].
+    pub tip: DMatrix<f64>,
+    /// d(tau)/dq, k x k (N/m): row i the tension of `tendons[i]`. A slack tendon's row is
+    /// 0 (it stays slack for small changes).
+    pub tension: DMatrix<f64>,
+}
+
+/// The derivatives of `solution`'s tip pose and tensions with respect to the pull-ins q of
+/// `robot`'s displacement-controlled tendons, by the implicit function theorem on the
+/// bordered system: with D_m = dx/dtau_m (one solve each with the factors of
+/// [`Sensitivity`]), the taut tendons' constraints phi_j = l_ref_j - l_j - q_j + c_j tau_j = 0
+/// give S dtau/dq = I with S_jm = c_j delta_jm - dl_j/dtau_m, where dl_j/dtau_m is
+/// the length quadrature's derivative along D_m; slack tendons keep dtau = 0. Then
+/// d(tip)/dq = d(tip)/dtau dtau/dq.
+///
+/// # Errors
+/// [`crate::Error::InvalidInput`] when the robot has no displacement-controlled tendon or
+/// the Schur complement is singular (a tendon that cannot change its length); as
+/// [`Sensitivity::new`] (the solution must be `robot`'s).
+pub fn displacement_sensitivities(robot: &Robot, solution: &Solution) -> Result<DisplacementSensitivities> {
+    let tendons: Vec<usize> = (0..robot.tendons.len())
+        .filter(|&i| robot.tendons[i].displacement.is_some())
+        .collect();
+    if tendons.is_empty() {
+        return Err(crate::error::invalid(
+            "robot.tendons",
+            "has no displacement-controlled tendon",
+            "give a tendon a displacement (pull-in) or use tip_sensitivities for tensions",
+        ));
+    }
+    let solved = robot.with_tensions(&solution.tensions());
+    let mut sens = Sensitivity::new(&solved, solution)?;
+    let k = tendons.len();
+    let length = robot.length();
+    let s: Vec<f64> = solution.nodes.iter().map(|n| n.s).collect();
+    let mut tip_by_tension = DMatrix::zeros(6, k);
+    let mut schur = DMatrix::zeros(k, k);
+    let taut: Vec<bool> = tendons
+        .iter()
+        .map(|&i| solution.tendons[i].slack == 0.0 && solution.tendons[i].tension > 0.0)
+        .collect();
+    for (m, &tm) in tendons.iter().enumerate() {
+        let d = sens.tension(tm)?;
+        tip_by_tension.set_column(m, &d[d.len() - 1].pose());
+        for (j, &tj) in tendons.iter().enumerate() {
+            let t = &solved.tendons[tj];
+            let quadrature = NodeQuadrature::new(&s, t.end(length));
+            let dl = quadrature.integrate(|node| {
+                let rp = t.routing.at(s[node], length);
+                let (dv, du) = speed_gradient(&rp, &solution.nodes[node].v, &solution.nodes[node].u);
+                dv.dot(&d[node].v) + du.dot(&d[node].u)
+            });
+            schur[(j, m)] = -dl;
+        }
+    }
+    for (j, &tj) in tendons.iter().enumerate() {
+        if taut[j] {
+            schur[(j, j)] += solved.tendons[tj].compliance(solution.tendons[tj].reference_length);
+        } else {
+            schur.row_mut(j).fill(0.0);
+            schur[(j, j)] = 1.0;
+        }
+    }
+    let mut rhs = DMatrix::<f64>::identity(k, k);
+    for j in (0..k).filter(|&j| !taut[j]) {
+        rhs[(j, j)] = 0.0;
+    }
+    let tension = schur.lu().solve(&rhs).ok_or_else(super::singular)?;
+    Ok(DisplacementSensitivities {
+        tip: &tip_by_tension * &tension,
+        tendons,
+        tension,
+    })
 }

@@ -79,8 +79,11 @@ pub(super) fn build(rod: &RodTable, base: &BaseTable, loads: &LoadsTable, tendon
             RoutingTable::Straight { x, y } => Routing::straight(x, y),
             RoutingTable::Helical { radius, turns, phase } => Routing::helical(radius, turns, phase),
         };
-        let mut tendon = Tendon::new(routing, t.tension);
+        let mut tendon = Tendon::new(routing, t.tension.unwrap_or(0.0));
         tendon.termination = t.end;
+        tendon.displacement = t.displacement;
+        tendon.stiffness = t.stiffness;
+        tendon.free_length = t.free_length.unwrap_or(0.0);
         robot = robot.with_tendon(tendon);
     }
     robot

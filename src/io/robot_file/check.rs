@@ -185,11 +185,28 @@ impl Checker<'_> {
     pub(super) fn tendon(&mut self, i: usize, t: &TendonTable, length: f64) {
         let path = format!("tendon[{}]", i + 1);
         let tension = format!("{path}.tension");
-        if self.finite(&tension, t.tension, " N") && t.tension < 0.0 {
-            self.report(
-                &tension,
-                format!("is {} N, but a tendon can only pull: must be >= 0", Readable(t.tension)),
-            );
+        match (t.tension, t.displacement) {
+            (Some(tau), None) => {
+                if self.finite(&tension, tau, " N") && tau < 0.0 {
+                    self.report(
+                        &tension,
+                        format!("is {} N, but a tendon can only pull: must be >= 0", Readable(tau)),
+                    );
+                }
+            }
+            (None, Some(q)) => {
+                self.finite(&format!("{path}.displacement"), q, " m");
+            }
+            (Some(_), Some(_)) => self.report(
+                &format!("{path}.displacement"),
+                "is given together with `tension`: a tendon is driven by its tension (N) or by its \
+                 actuator's displacement (m), so give one of them"
+                    .to_string(),
+            ),
+            (None, None) => self.report(
+                &path,
+                "has neither `tension` (N) nor `displacement` (m, the actuator's pull-in): give one".to_string(),
+            ),
         }
         if let Some(end) = t.end {
             let field = format!("{path}.end");

@@ -134,13 +134,18 @@ pub(super) struct PointTable {
     pub(super) moment: Option<Vec3>,
 }
 
-/// One `[[tendon]]`: its routing, tension and, optionally, where it ends (`end`).
+/// One `[[tendon]]`: its routing, its `tension` (N) or actuator `displacement` (m, one of
+/// the two), optionally where it ends (`end`), and for an elastic tendon its `stiffness`
+/// E_t A_t (N) and `free_length` (m) between the base and the actuator.
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(super) struct TendonTable {
     pub(super) routing: RoutingTable,
-    pub(super) tension: f64,
+    pub(super) tension: Option<f64>,
+    pub(super) displacement: Option<f64>,
     pub(super) end: Option<f64>,
+    pub(super) stiffness: Option<f64>,
+    pub(super) free_length: Option<f64>,
 }
 
 /// A tendon's `routing`, chosen by its `kind`: `straight` or `helical`.

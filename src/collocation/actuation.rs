@@ -1,0 +1,725 @@
+//! Displacement-controlled tendons in the collocation solver (docs/actuation.md).
+//!
+//! A tendon given a pull-in q_j instead of a tension makes its tension tau_j an unknown,
+//! fixed by the length constraint (with the gap phi_j, the length the actuator has not
+//! taken up)
+//!
+//! ```text
+//! phi_j(x, tau) = l_ref_j - l_j(x) - q_j + c_j tau_j,   tau_j >= 0, phi_j >= 0, tau_j phi_j = 0,
+//! ```
+//!
+//! where l_j(x) is the path length by the node quadrature ([`NodeQuadrature`]), l_ref_j its
+//! unloaded value and c_j the tendon's compliance (0 when inextensible). The
+//! complementarity (a tendon cannot push) is solved inside Newton in the semismooth form
+//! psi_j = min(tau_j / T_j, phi_j / L) = 0 (T_j a tension scale): each iteration either
+//! enforces the constraint (taut) or sets tau_j = 0 (slack), whichever branch the min
+//! takes, a primal-dual active set method that converges superlinearly like Newton.
+//!
+//! The k tension unknowns border the block-banded system without changing its structure:
+//!
+//! ```text
+//! [ J     F_tau ] [dx  ]   [ -F   ]
+//! [ -G    C     ] [dtau] = [ -phi ]      (taut rows; slack rows are dtau_j = -tau_j)
+//! ```
+//!
+//! with G_j = dl_j/dx (exact: the quadrature weights times the speed's gradient, on the
+//! strains of each node) and F_tau = dF/dtau by a forward difference of the residual at
+//! fixed x. One factorization of J (the structured elimination) gives a = J^-1 (-F) and the
+//! k columns X = J^-1 F_tau; then dx = a - X dtau with dtau from the k x k Schur complement
+//! S = G X + C (rows G_j . a - phi_j). Chord steps reuse the factors and X.
+//!
+//! Meshing follows the tension solve: the starting mesh from the initial guess, an error
+//! estimate on every converged mesh, re-meshing to the tolerance, each mesh's solve
+//! warm-started from the last.
+#![allow(non_snake_case)]
+
+use super::estimate;
+use super::newton::{CHORD_CONTRACTION, Settings, Workspace};
+use super::system::{Frame, System};
+use super::unknowns::{self, NODE, U, V};
+use super::{Cache, Cached, Options, initial_mesh, interpolate, refine, resolves, segment_ends};
+use crate::error::Result;
+use crate::mesh::{Mesh, guess, nodes, resolution};
+use crate::model::equations::Model;
+use crate::model::length::{self, NodeQuadrature};
+use crate::model::routing::RoutingPoint;
+use crate::report::{Iteration, Method, SolveReport, Stability, Termination};
+use crate::solution::{Solution, State};
+use crate::{Error, Robot};
+use nalgebra::Vector3;
+use std::time::Instant;
+
+/// Relative step of the forward difference dF/dtau_j: the residual resolves a parameter's
+/// effect to about 1e-11 relative (collocation::sensitivity), so the error of a forward
+/// difference, about h + 1e-11 / h, is smallest near h = sqrt(1e-11) = 3e-6. Newton then
+/// contracts by at least that factor per step near the solution.
+const TENSION_STEP: f64 = 3e-6;
+
+/// Armijo sufficient-decrease constant (as in Newton, Dennis & Schnabel's 1e-4).
+const ARMIJO: f64 = 1e-4;
+/// Smallest line-search fraction (2^-20), as in Newton.
+const MIN_DAMPING: f64 = 1.0 / 1_048_576.0;
+
+/// One displacement-controlled tendon's length constraint on one mesh.
+struct Constraint {
+    /// Index of the tendon in the robot.
+    tendon: usize,
+    /// Pull-in q_j (m).
+    displacement: f64,
+    /// l_ref_j (m).
+    reference_length: f64,
+    /// c_j (m/N).
+    compliance: f64,
+    /// T_j (N): the tension that bends the rod through about a radian, E I / (L |r_j(0)|)
+    /// (E I / L^2 on the centreline), the scale of the semismooth min.
+    tension_scale: f64,
+    /// The path-length quadrature on the mesh's nodes.
+    quadrature: NodeQuadrature,
+    /// The routing at each quadrature node, in the quadrature's order.
+    routing: Vec<RoutingPoint>,
+}
+
+impl Constraint {
+    fn new(robot: &Robot, tendon: usize, mesh: &Mesh) -> Self {
+        let t = &robot.tendons[tendon];
+        let length = robot.length();
+        let s: Vec<f64> = mesh.nodes.iter().map(|n| n.s).collect();
+        let quadrature = NodeQuadrature::new(&s, t.end(length));
+        let routing = quadrature
+            .weights
+            .iter()
+            .map(|&(k, _)| t.routing.at(s[k], length))
+            .collect();
+        let reference_length = length::reference_length(robot, tendon);
+        let offset = t.routing.at(0.0, length).r.norm();
+        let bend = robot.bending_stiffness() / length;
+        Constraint {
+            tendon,
+            displacement: t.displacement.unwrap_or(0.0),
+            reference_length,
+            compliance: t.compliance(reference_length),
+            tension_scale: if offset > 0.0 { bend / offset } else { bend / length },
+            quadrature,
+            routing,
+        }
+    }
+
+    /// l_j(x) (m).
+    fn length(&self, x: &[State]) -> f64 {
+        self.quadrature
+            .weights
+            .iter()
+            .zip(&self.routing)
+            .map(|(&(k, w), rp)| w * length::speed(rp, &x[k].v, &x[k].u))
+            .sum()
+    }
+
+    /// phi_j (m).
+    fn gap(&self, x: &[State], tension: f64) -> f64 {
+        self.reference_length - self.length(x) - self.displacement + self.compliance * tension
+    }
+
+    /// Whether the semismooth min takes the constraint branch (taut) at (phi, tau).
+    fn taut(&self, gap: f64, tension: f64, length: f64) -> bool {
+        gap / length <= tension / self.tension_scale
+    }
+
+    /// psi_j = min(tau_j / T_j, phi_j / L), zero at a solution (dimensionless).
+    fn complementarity(&self, gap: f64, tension: f64, length: f64) -> f64 {
+        (tension / self.tension_scale).min(gap / length)
+    }
+
+    /// G_j . z: the change of l_j along the scaled step z (12 per node, du = z_U / L).
+    fn length_change(&self, x: &[State], z: &[f64], length: f64) -> f64 {
+        self.quadrature
+            .weights
+            .iter()
+            .zip(&self.routing)
+            .map(|(&(k, w), rp)| {
+                let (dv, du) = length::speed_gradient(rp, &x[k].v, &x[k].u);
+                let part = |i: usize| Vector3::new(z[k * NODE + i], z[k * NODE + i + 1], z[k * NODE + i + 2]);
+                w * (dv.dot(&part(V)) + du.dot(&part(U)) / length)
+            })
+            .sum()
+    }
+}
+
+/// Evaluates `f` on the system of `robot` (its current tensions) on `frame`.
+fn on<R>(robot: &Robot, frame: &mut Frame, f: impl FnOnce(&System) -> R) -> R {
+    let system = System::attach(Model::new(robot), std::mem::replace(frame, Frame::empty()));
+    let r = f(&system);
+    *frame = system.detach();
+    r
+}
+
+fn set_tensions(robot: &mut Robot, constraints: &[Constraint], tau: &[f64]) {
+    for (c, &t) in constraints.iter().zip(tau) {
+        robot.tendons[c.tendon].tension = t;
+    }
+}
+
+fn max_norm(v: &[f64]) -> f64 {
+    v.iter()
+        .fold(0.0, |m, x| if x.is_nan() { f64::NAN } else { m.max(x.abs()) })
+}
+
+/// Buffers of the bordered Newton on one mesh, built once per mesh.
+struct Bordered {
+    constraints: Vec<Constraint>,
+    values: Vec<f64>,
+    residual: Vec<f64>,
+    trial_residual: Vec<f64>,
+    probe: Vec<f64>,
+    rhs: Vec<f64>,
+    /// a = J^-1 (-F).
+    a: Vec<f64>,
+    /// X_j = J^-1 dF/dtau_j, one per constraint (zero for a slack tendon at tau = 0).
+    columns: Vec<Vec<f64>>,
+    step: Vec<f64>,
+    trial: Vec<State>,
+    /// Current tensions tau_j and gaps phi_j, and their trial values.
+    tau: Vec<f64>,
+    trial_tau: Vec<f64>,
+    psi: Vec<f64>,
+    trial_psi: Vec<f64>,
+    dtau: Vec<f64>,
+    /// The k x k Schur system, row major, and its right-hand side.
+    schur: Vec<f64>,
+    schur_rhs: Vec<f64>,
+}
+
+impl Bordered {
+    fn new(robot: &Robot, mesh: &Mesh) -> Self {
+        let constraints: Vec<Constraint> = robot
+            .tendons
+            .iter()
+            .enumerate()
+            .filter(|(_, t)| t.displacement.is_some())
+            .map(|(i, _)| Constraint::new(robot, i, mesh))
+            .collect();
+        let n = unknowns::unknowns(mesh.nodes.len());
+        let k = constraints.len();
+        Bordered {
+            constraints,
+            values: vec![0.0; unknowns::nonzeros(mesh)],
+            residual: vec![0.0; n],
+            trial_residual: vec![0.0; n],
+            probe: vec![0.0; n],
+            rhs: vec![0.0; n],
+            a: vec![0.0; n],
+            columns: vec![vec![0.0; n]; k],
+            step: vec![0.0; n],
+            trial: Vec::with_capacity(mesh.nodes.len()),
+            tau: vec![0.0; k],
+            trial_tau: vec![0.0; k],
+            psi: vec![0.0; k],
+            trial_psi: vec![0.0; k],
+            dtau: vec![0.0; k],
+            schur: vec![0.0; k * k],
+            schur_rhs: vec![0.0; k],
+        }
+    }
+
+    /// psi at (x, tau) into `out`.
+    fn complementarity(constraints: &[Constraint], x: &[State], tau: &[f64], length: f64, out: &mut [f64]) {
+        for ((c, &t), o) in constraints.iter().zip(tau).zip(out.iter_mut()) {
+            *o = c.complementarity(c.gap(x, t), t, length);
+        }
+    }
+
+    /// The Schur step: dtau from the stored columns, then the state step dx = a - X dtau
+    /// into `step`. False when the Schur system is singular.
+    fn schur_step(&mut self, x: &[State], length: f64) -> bool {
+        let k = self.constraints.len();
+        for (j, c) in self.constraints.iter().enumerate() {
+            let t = self.tau[j];
+            let gap = c.gap(x, t);
+            let row = &mut self.schur[j * k..(j + 1) * k];
+            if c.taut(gap, t, length) {
+                for (m, entry) in row.iter_mut().enumerate() {
+                    *entry = c.length_change(x, &self.columns[m], length) + if m == j { c.compliance } else { 0.0 };
+                }
+                self.schur_rhs[j] = c.length_change(x, &self.a, length) - gap;
+            } else {
+                row.fill(0.0);
+                row[j] = 1.0;
+                self.schur_rhs[j] = -t;
+            }
+        }
+        if !solve_dense(&mut self.schur, &mut self.schur_rhs, k) {
+            return false;
+        }
+        self.dtau.copy_from_slice(&self.schur_rhs);
+        self.step.copy_from_slice(&self.a);
+        for (column, &d) in self.columns.iter().zip(&self.dtau) {
+            if d != 0.0 {
+                for (s, c) in self.step.iter_mut().zip(column) {
+                    *s -= c * d;
+                }
+            }
+        }
+        self.step.iter().chain(&self.dtau).all(|v| v.is_finite())
+    }
+
+    /// Trial tensions tau + alpha dtau, kept >= 0 (a string cannot push).
+    fn trial_tensions(&mut self, alpha: f64) {
+        for ((t, &tau), &d) in self.trial_tau.iter_mut().zip(&self.tau).zip(&self.dtau) {
+            *t = (tau + alpha * d).max(0.0);
+        }
+    }
+
+    /// The residual and psi at the trial point (trial states, trial tensions); false on a
+    /// model breakdown.
+    fn evaluate_trial(&mut self, robot: &mut Robot, frame: &mut Frame, report: &mut SolveReport) -> bool {
+        set_tensions(robot, &self.constraints, &self.trial_tau);
+        let length = robot.length();
+        let t = Instant::now();
+        let ok = on(robot, frame, |s| {
+            report.evaluations.equations += s.rate_evaluations();
+            s.residual(&self.trial, &mut self.trial_residual).is_ok()
+        });
+        report.timings.assembly += t.elapsed();
+        report.evaluations.residual += 1;
+        Self::complementarity(
+            &self.constraints,
+            &self.trial,
+            &self.trial_tau,
+            length,
+            &mut self.trial_psi,
+        );
+        ok
+    }
+
+    /// The row of the largest residual: a collocation row, or n + j for constraint j.
+    fn worst_row(&self) -> usize {
+        let rows = self.residual.iter().chain(&self.psi);
+        rows.enumerate()
+            .max_by(|a, b| a.1.abs().total_cmp(&b.1.abs()))
+            .map_or(0, |(i, _)| i)
+    }
+
+    fn norm(residual: &[f64], psi: &[f64]) -> f64 {
+        max_norm(residual).max(max_norm(psi))
+    }
+
+    fn merit(residual: &[f64], psi: &[f64]) -> f64 {
+        0.5 * residual.iter().chain(psi).map(|x| x * x).sum::<f64>()
+    }
+
+    /// Accepts the trial point.
+    fn accept(&mut self) {
+        std::mem::swap(&mut self.residual, &mut self.trial_residual);
+        std::mem::swap(&mut self.psi, &mut self.trial_psi);
+        self.tau.copy_from_slice(&self.trial_tau);
+    }
+
+    /// The Jacobian, its factors, a and the columns X at (x, tau). False with the
+    /// termination when it fails.
+    fn linearize(
+        &mut self,
+        robot: &mut Robot,
+        frame: &mut Frame,
+        ws: &mut Workspace,
+        x: &[State],
+        report: &mut SolveReport,
+    ) -> std::result::Result<(), Termination> {
+        set_tensions(robot, &self.constraints, &self.tau);
+        let t = Instant::now();
+        let ok = on(robot, frame, |s| {
+            report.evaluations.equations += s.rate_evaluations();
+            s.jacobian(x, &mut self.residual, &mut self.values).is_ok()
+        });
+        report.timings.assembly += t.elapsed();
+        report.evaluations.jacobian += 1;
+        if !ok || !self.values.iter().all(|v| v.is_finite()) {
+            return Err(Termination::NonFinite);
+        }
+        for (r, f) in self.rhs.iter_mut().zip(&self.residual) {
+            *r = -f;
+        }
+        match ws.factor_solve(&self.values, &self.rhs, report) {
+            Some(a) if a.iter().all(|v| v.is_finite()) => self.a.copy_from_slice(a),
+            _ => return Err(Termination::SingularJacobian),
+        }
+        // X_j = J^-1 dF/dtau_j by a forward difference in tau_j at fixed x (the right
+        // derivative at tau_j = 0, where a string starts to pull).
+        for j in 0..self.constraints.len() {
+            let c = &self.constraints[j];
+            let (tau, slack) = (self.tau[j], !c.taut(c.gap(x, self.tau[j]), self.tau[j], robot.length()));
+            if slack && tau == 0.0 {
+                // dtau_j = 0 in this step: its column does not enter.
+                self.columns[j].fill(0.0);
+                continue;
+            }
+            let h = TENSION_STEP * tau.max(c.tension_scale);
+            robot.tendons[c.tendon].tension = tau + h;
+            let t = Instant::now();
+            let ok = on(robot, frame, |s| {
+                report.evaluations.equations += s.rate_evaluations();
+                s.residual(x, &mut self.probe).is_ok()
+            });
+            report.timings.assembly += t.elapsed();
+            report.evaluations.residual += 1;
+            robot.tendons[self.constraints[j].tendon].tension = tau;
+            if !ok {
+                return Err(Termination::NonFinite);
+            }
+            for (p, f) in self.probe.iter_mut().zip(&self.residual) {
+                *p = (*p - f) / h;
+            }
+            let t = Instant::now();
+            let column = ws.solve_again(&self.probe);
+            report.timings.solve += t.elapsed();
+            match column {
+                Some(col) => self.columns[j].copy_from_slice(col),
+                None => return Err(Termination::SingularJacobian),
+            }
+        }
+        Ok(())
+    }
+
+    /// A chord step's a = J^-1 (-F) with the stored factors; false when there are none.
+    fn chord(&mut self, ws: &mut Workspace, report: &mut SolveReport) -> bool {
+        for (r, f) in self.rhs.iter_mut().zip(&self.residual) {
+            *r = -f;
+        }
+        let t = Instant::now();
+        let a = ws.solve_again(&self.rhs);
+        report.timings.solve += t.elapsed();
+        match a {
+            Some(a) => {
+                self.a.copy_from_slice(a);
+                true
+            }
+            None => false,
+        }
+    }
+}
+
+/// Gaussian elimination with partial pivoting on the row-major `n x n` matrix `a`, solving
+/// in place into `b`. False for a zero pivot or a non-finite result.
+fn solve_dense(a: &mut [f64], b: &mut [f64], n: usize) -> bool {
+    for col in 0..n {
+        let Some(pivot) = (col..n).max_by(|&i, &j| a[i * n + col].abs().total_cmp(&a[j * n + col].abs())) else {
+            return false;
+        };
+        if a[pivot * n + col] == 0.0 || !a[pivot * n + col].is_finite() {
+            return false;
+        }
+        if pivot != col {
+            for c in 0..n {
+                a.swap(pivot * n + c, col * n + c);
+            }
+            b.swap(pivot, col);
+        }
+        for row in col + 1..n {
+            let factor = a[row * n + col] / a[col * n + col];
+            for c in col..n {
+                a[row * n + c] -= factor * a[col * n + c];
+            }
+            b[row] -= factor * b[col];
+        }
+    }
+    for row in (0..n).rev() {
+        let mut sum = b[row];
+        for c in row + 1..n {
+            sum -= a[row * n + c] * b[c];
+        }
+        b[row] = sum / a[row * n + row];
+    }
+    b.iter().all(|v| v.is_finite())
+}
+
+/// The bordered semismooth Newton on `b`'s mesh from `x` (updated in place) and the
+/// tensions of `robot`'s displacement-controlled tendons (updated to the solution). Chord
+/// steps on the stored factors and columns after an undamped step, as in
+/// [`super::newton::run`]. Returns the termination and the worst residual row (a row of the
+/// collocation system, or the first constraint row past its end).
+fn run(
+    robot: &mut Robot,
+    b: &mut Bordered,
+    frame: &mut Frame,
+    ws: &mut Workspace,
+    x: &mut Vec<State>,
+    settings: &Settings,
+    report: &mut SolveReport,
+) -> (Termination, usize) {
+    let length = robot.length();
+    report.history.clear();
+    report
+        .history
+        .reserve(settings.max_iterations.min(super::MAX_ITERATIONS));
+    b.tau = b.constraints.iter().map(|c| robot.tendons[c.tendon].tension).collect();
+    // The starting point: its residual and psi.
+    b.trial.clone_from(x);
+    b.trial_tau.clone_from(&b.tau);
+    let ok = b.evaluate_trial(robot, frame, report);
+    b.accept();
+    if !ok || !b.residual.iter().chain(&b.psi).all(|r| r.is_finite()) {
+        return (Termination::NonFinite, b.worst_row());
+    }
+    let mut chord = false;
+    let mut factored = false;
+    let mut termination = Termination::MaxIterations;
+    for iteration in 0..settings.max_iterations {
+        let norm = Bordered::norm(&b.residual, &b.psi);
+        if norm <= settings.tolerance && iteration > 0 {
+            termination = Termination::Converged;
+            break;
+        }
+        report.iterations += 1;
+        if chord && factored && b.chord(ws, report) && b.schur_step(x, length) {
+            let step_norm = max_norm(&b.step);
+            unknowns::retract(x, &b.step, 1.0, length, &mut b.trial);
+            b.trial_tensions(1.0);
+            let ok = b.evaluate_trial(robot, frame, report);
+            let trial_norm = Bordered::norm(&b.trial_residual, &b.trial_psi);
+            if ok && (trial_norm <= settings.tolerance || trial_norm <= CHORD_CONTRACTION * norm) {
+                report.history.push(Iteration {
+                    residual: norm,
+                    step: step_norm,
+                    damping: 1.0,
+                    fresh_jacobian: false,
+                });
+                report.chord_steps += 1;
+                std::mem::swap(x, &mut b.trial);
+                b.accept();
+                continue;
+            }
+        }
+        report.newton_steps += 1;
+        if let Err(t) = b.linearize(robot, frame, ws, x, report) {
+            termination = t;
+            break;
+        }
+        factored = true;
+        if !b.schur_step(x, length) {
+            termination = Termination::SingularJacobian;
+            break;
+        }
+        let step_norm = max_norm(&b.step);
+        let phi = Bordered::merit(&b.residual, &b.psi);
+        let mut alpha = 1.0;
+        let accepted = loop {
+            unknowns::retract(x, &b.step, alpha, length, &mut b.trial);
+            b.trial_tensions(alpha);
+            let ok = b.evaluate_trial(robot, frame, report);
+            let phi_trial = Bordered::merit(&b.trial_residual, &b.trial_psi);
+            let done = Bordered::norm(&b.trial_residual, &b.trial_psi) <= settings.tolerance;
+            // Armijo on the merit 0.5 (|F|^2 + |psi|^2), whose slope along the
+            // semismooth Newton step is -2 phi (as in Newton).
+            if ok && phi_trial.is_finite() && (done || phi_trial <= (1.0 - 2.0 * ARMIJO * alpha) * phi) {
+                break true;
+            }
+            alpha *= 0.5;
+            if alpha < MIN_DAMPING {
+                break false;
+            }
+        };
+        if !accepted {
+            termination = Termination::LineSearchFailed;
+            break;
+        }
+        report.history.push(Iteration {
+            residual: norm,
+            step: step_norm,
+            damping: alpha,
+            fresh_jacobian: true,
+        });
+        std::mem::swap(x, &mut b.trial);
+        b.accept();
+        chord = alpha == 1.0;
+    }
+    let norm = Bordered::norm(&b.residual, &b.psi);
+    report.residual = norm;
+    if termination == Termination::MaxIterations && norm <= settings.tolerance {
+        termination = Termination::Converged;
+    }
+    set_tensions(robot, &b.constraints, &b.tau);
+    (termination, b.worst_row())
+}
+
+/// Solves a robot with displacement-controlled tendons (validated, with `options`
+/// validated): the bordered Newton on each mesh of the error-controlled sequence that a
+/// tension solve would take, from the warm start's tensions, else the given ones, else the
+/// tensions of the small-deflection estimate ([`starting_tensions`]).
+///
+/// # Errors
+/// As [`super::solve`].
+pub(super) fn solve(robot: &Robot, options: &Options, warm: Option<&Solution>, cache: &mut Cache) -> Result<Solution> {
+    let start = Instant::now();
+    let mut work = robot.clone();
+    starting_tensions(&mut work, warm);
+    let mut report = SolveReport::new(Method::Collocation);
+    let mut mesh = initial_mesh(&work, options, warm)?;
+    if options.tolerance.is_none() {
+        resolves(&work, options, &mesh)?;
+    }
+    let cold = |robot: &Robot, mesh: &Mesh| guess::initial(&Model::new(robot), &mesh.nodes, options.initial_guess);
+    let mut x = match warm {
+        Some(w) => interpolate(w, &mesh),
+        None => {
+            let mut x0 = cold(&work, &mesh);
+            // As a tension solve: an error-controlled cold start begins on a mesh that
+            // resolves the initial guess and the routings.
+            if options.tolerance.is_some() && options.mesh.is_none() {
+                let floor = options.intervals.max(resolution::required(&work).intervals);
+                let needed = refine::start_intervals(&work, &x0, floor).min(options.max_intervals);
+                if needed > mesh.intervals() {
+                    mesh = Mesh::uniform(&work, needed)?;
+                    x0 = cold(&work, &mesh);
+                }
+            }
+            x0
+        }
+    };
+    let settings = Settings {
+        tolerance: options.residual_tolerance,
+        max_iterations: options.max_iterations,
+        reuse_factors: false,
+        stop_when_damped: false,
+    };
+    // The conjugate-point test is for constant tensions; with a length constraint the
+    // tendon is not a dead load.
+    report.stability = Stability::Unknown {
+        reason: "displacement-controlled tendons: the stability test covers constant tensions only".into(),
+    };
+    loop {
+        report.meshes += 1;
+        let system = System::new(Model::new(&work), mesh.clone());
+        let mut ws = match cache.take() {
+            Some(c) if c.mesh == mesh && c.solver == options.linear_solver => c.workspace,
+            _ => Workspace::new(&system, options.linear_solver)?,
+        };
+        let mut frame = system.detach();
+        let mut bordered = Bordered::new(&work, &mesh);
+        let (termination, worst) = run(
+            &mut work,
+            &mut bordered,
+            &mut frame,
+            &mut ws,
+            &mut x,
+            &settings,
+            &mut report,
+        );
+        report.termination = termination;
+        report.intervals = mesh.intervals();
+        report.unknowns = unknowns::unknowns(mesh.nodes.len()) + bordered.constraints.len();
+        report.nonzeros = unknowns::nonzeros(&mesh);
+        let system = System::attach(Model::new(&work), frame);
+        if termination != Termination::Converged {
+            report.timings.total = start.elapsed();
+            let error = Error::NotConverged {
+                method: Method::Collocation,
+                report: Box::new(report.clone()),
+                worst_s: system.row_position(worst.min(system.unknowns() - 1)),
+                hint: "warm-start from the solution of a smaller pull-in (a sweep), refine the mesh, or check that \
+                       the pull-ins are reachable"
+                    .into(),
+            };
+            store(cache, mesh, options, ws);
+            return Err(error);
+        }
+        let t = Instant::now();
+        // A breakdown at a stage of the order-6 scheme leaves the solution without an estimate.
+        let correction = estimate::estimate(&system, &mut ws, &x).ok().flatten();
+        report.timings.estimate += t.elapsed();
+        let next = match (options.tolerance, &correction) {
+            (Some(tol), Some(c)) => refine::next_mesh(&work, &mesh, c, tol, options)?,
+            _ => None,
+        };
+        let ends = segment_ends(&mesh);
+        let rates = correction.as_ref().map(|c| c.node_rates.as_slice());
+        let Some(fine) = next else {
+            report.error_estimate = correction.as_ref().map(|c| c.estimate);
+            report.tolerance = options.tolerance;
+            report.tolerance_met = options
+                .tolerance
+                .zip(report.error_estimate)
+                .map(|(tol, e)| refine::meets(&e, tol, work.length()));
+            report.timings.total = start.elapsed();
+            let solution = nodes::solution(&system.model, &x, &ends, rates, report);
+            store(cache, mesh, options, ws);
+            return solution;
+        };
+        let guess = nodes::solution(&system.model, &x, &ends, rates, report.clone())?;
+        x = interpolate(&guess, &fine);
+        store(cache, mesh, options, ws);
+        mesh = fine;
+    }
+}
+
+/// Keeps the workspace for the next solve on the same mesh (its buffers; its factors are
+/// not reused, since the cache holds no tension columns).
+fn store(cache: &mut Cache, mesh: Mesh, options: &Options, workspace: Workspace) {
+    *cache = Some(Cached {
+        mesh,
+        solver: options.linear_solver,
+        workspace,
+        last: None,
+    });
+}
+
+/// Sets the starting tension of every displacement-controlled tendon of `robot`: the warm
+/// start's, else the one given (when every such tendon has one), else the small-deflection
+/// estimate: the tensions that produce the pull-ins through the compliance K of
+/// [`length::pull_in_compliance`] plus the tendons' own stretch, q = (K + C) tau, with the
+/// tendons that would push left at 0 and the rest solved again (a few passes at most).
+fn starting_tensions(robot: &mut Robot, warm: Option<&Solution>) {
+    let displaced: Vec<usize> = (0..robot.tendons.len())
+        .filter(|&i| robot.tendons[i].displacement.is_some())
+        .collect();
+    if let Some(w) = warm
+        && w.tendons.len() == robot.tendons.len()
+    {
+        for &i in &displaced {
+            robot.tendons[i].tension = w.tendons[i].tension;
+        }
+        return;
+    }
+    if displaced.iter().all(|&i| robot.tendons[i].tension > 0.0) {
+        return;
+    }
+    let n = robot.tendons.len();
+    let compliance = length::pull_in_compliance(robot);
+    let mut active: Vec<usize> = displaced.clone();
+    for &i in &displaced {
+        robot.tendons[i].tension = 0.0;
+    }
+    while !active.is_empty() {
+        let k = active.len();
+        let mut a = vec![0.0; k * k];
+        let mut b = vec![0.0; k];
+        for (r, &j) in active.iter().enumerate() {
+            let t = &robot.tendons[j];
+            let stretch = t.compliance(length::reference_length(robot, j));
+            b[r] = t.displacement.unwrap_or(0.0);
+            for m in (0..n).filter(|m| !active.contains(m)) {
+                b[r] -= compliance[j * n + m] * robot.tendons[m].tension;
+            }
+            for (c, &m) in active.iter().enumerate() {
+                a[r * k + c] = compliance[j * n + m] + if m == j { stretch } else { 0.0 };
+            }
+        }
+        if !solve_dense(&mut a, &mut b, k) {
+            // A tendon on the neutral axis of an inextensible rod: start at 0.
+            break;
+        }
+        let pushing: Vec<usize> = active
+            .iter()
+            .zip(&b)
+            .filter(|&(_, &t)| t < 0.0)
+            .map(|(&j, _)| j)
+            .collect();
+        for (&j, &t) in active.iter().zip(&b) {
+            robot.tendons[j].tension = t.max(0.0);
+        }
+        if pushing.is_empty() {
+            break;
+        }
+        active.retain(|j| !pushing.contains(j));
+        for &j in &pushing {
+            robot.tendons[j].tension = 0.0;
+        }
+    }
+}

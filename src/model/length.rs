@@ -1,0 +1,220 @@
+//! Tendon path lengths (docs/actuation.md): the speed |p_i'| of a tendon's path at one
+//! arc length and its derivatives, the reference length in the unloaded shape, and the
+//! node quadrature that gives the length of a solved path.
+//!
+//! The path of tendon i is p_i = p + R r_i (eq. 6), so p_i' = R (v + u x r_i + r_i') and
+//! its speed is |w_i| with w_i = v + u x r_i + r_i' (body frame; the rotation drops out).
+//! Its length from the base to the termination l_i is
+//!
+//! ```text
+//! l_i = integral over [0, l_i] of |v + u x r_i + r_i'| ds.
+//! ```
+//!
+//! On a solution the integrand is known at the nodes. [`NodeQuadrature`] integrates, on
+//! every interval, the cubic through the four nearest nodes of the same smooth segment
+//! (segments end at breakpoints, where v and u jump): an O(h^5) local and O(h^4) global
+//! error, the order of the collocation scheme, with weights on the node values alone, so
+//! the length's derivative with respect to the node strains is exact and touches only
+//! (v, u) of each node ([`speed_gradient`]).
+
+use crate::model::robot::Robot;
+use crate::model::routing::RoutingPoint;
+use nalgebra::Vector3;
+
+/// The speed |w| of a tendon path, w = v + u x r + r' (body frame, dimensionless).
+pub fn speed(rp: &RoutingPoint, v: &Vector3<f64>, u: &Vector3<f64>) -> f64 {
+    (v + u.cross(&rp.r) + rp.r_s).norm()
+}
+
+/// The derivatives of [`speed`] with respect to v and u: with t = w / |w|,
+/// d|w|/dv = t and d|w|/du = r x t (since d(u x r) = du x r and t . (du x r) = du . (r x t)).
+pub fn speed_gradient(rp: &RoutingPoint, v: &Vector3<f64>, u: &Vector3<f64>) -> (Vector3<f64>, Vector3<f64>) {
+    let w = v + u.cross(&rp.r) + rp.r_s;
+    let t = w / w.norm();
+    (t, rp.r.cross(&t))
+}
+
+/// Gauss-Legendre panels per smooth piece of the reference integral.
+const REFERENCE_PANELS: usize = 32;
+
+/// 5-point Gauss-Legendre nodes on [-1, 1] and their weights (exact to degree 9).
+const GAUSS5: [(f64, f64); 5] = [
+    (0.0, 0.568_888_888_888_888_9),
+    (-0.538_469_310_105_683_1, 0.478_628_670_499_366_5),
+    (0.538_469_310_105_683_1, 0.478_628_670_499_366_5),
+    (-0.906_179_845_938_664, 0.236_926_885_056_189_1),
+    (0.906_179_845_938_664, 0.236_926_885_056_189_1),
+];
+
+/// The reference length of tendon `i` (m): its path length in the unloaded shape
+/// (v = v*, u = u*), by composite 5-point Gauss-Legendre on 32 panels
+/// between consecutive breakpoints (order 10: to rounding for the prototype's straight and
+/// helical routings, whose speed is constant on a straight rod, and about 1e-12 relative
+/// for a precurved rod turning a radian per panel).
+pub fn reference_length(robot: &Robot, i: usize) -> f64 {
+    let length = robot.length();
+    let tendon = &robot.tendons[i];
+    let end = tendon.end(length);
+    let mut cuts = vec![0.0];
+    cuts.extend(robot.breakpoints().into_iter().filter(|&b| b < end));
+    cuts.push(end);
+    let mut total = 0.0;
+    for w in cuts.windows(2) {
+        let h = (w[1] - w[0]) / REFERENCE_PANELS as f64;
+        for k in 0..REFERENCE_PANELS {
+            let mid = w[0] + (k as f64 + 0.5) * h;
+            for (x, weight) in GAUSS5 {
+                let s = mid + 0.5 * h * x;
+                let reference = robot.rod.reference_at(s);
+                let rp = tendon.routing.at(s, length);
+                total += 0.5 * h * weight * speed(&rp, &reference.v_star, &reference.u_star);
+            }
+        }
+    }
+    total
+}
+
+/// The pull-in compliance of the unloaded robot (m/N), `k x k` for its k tendons, row
+/// major: entry (j, m) is the pull-in of tendon j per newton of tendon m's tension in the
+/// small-deflection linearization about the unloaded shape (docs/actuation.md),
+///
+/// ```text
+/// K_jm = integral over [0, min(l_j, l_m)] of t_j . D^-1 t_m + (r_j x t_j) . C^-1 (r_m x t_m) ds,
+/// ```
+///
+/// with t_i the unit tangent of tendon i's reference path: tension tau_m compresses the
+/// backbone by D^-1 tau_m t_m and bends it by C^-1 tau_m (r_m x t_m), which shortens path j
+/// by t_j . (dv + du x r_j). Symmetric and positive semidefinite; the displacement solve
+/// starts from the tensions it predicts.
+pub fn pull_in_compliance(robot: &Robot) -> Vec<f64> {
+    let length = robot.length();
+    let k = robot.tendons.len();
+    let mut cuts = vec![0.0];
+    cuts.extend(robot.breakpoints());
+    cuts.push(length);
+    let mut out = vec![0.0; k * k];
+    let mut tangents = vec![(Vector3::zeros(), Vector3::zeros()); k];
+    // A starting estimate: a few panels per piece resolve these smooth integrands well enough.
+    let panels = 8;
+    for w in cuts.windows(2) {
+        let h = (w[1] - w[0]) / panels as f64;
+        for p in 0..panels {
+            let mid = w[0] + (p as f64 + 0.5) * h;
+            for (x, weight) in GAUSS5 {
+                let s = mid + 0.5 * h * x;
+                let reference = robot.rod.reference_at(s);
+                let section = robot.rod.section_at(s).section;
+                for (i, t) in robot.tendons.iter().enumerate() {
+                    let rp = t.routing.at(s, length);
+                    let w = reference.v_star + reference.u_star.cross(&rp.r) + rp.r_s;
+                    let tangent = w / w.norm();
+                    tangents[i] = (tangent, rp.r.cross(&tangent));
+                }
+                for j in 0..k {
+                    for m in 0..k {
+                        if s > robot.tendons[j].end(length).min(robot.tendons[m].end(length)) {
+                            continue;
+                        }
+                        let (tj, bj) = tangents[j];
+                        let (tm, bm) = tangents[m];
+                        let integrand =
+                            tj.dot(&tm.component_div(&section.kse)) + bj.dot(&bm.component_div(&section.kbt));
+                        out[j * k + m] += 0.5 * h * weight * integrand;
+                    }
+                }
+            }
+        }
+    }
+    out
+}
+
+/// Weights w_k with sum_k w_k f(s_k) ~ integral of f over [0, end] for node arc lengths
+/// `s` (increasing; a repeated value is a breakpoint, where f may jump), built once per
+/// mesh and tendon.
+#[derive(Clone, Debug, PartialEq)]
+pub struct NodeQuadrature {
+    /// (node index, weight in m), for the nodes on [0, end] that carry weight.
+    pub weights: Vec<(usize, f64)>,
+}
+
+impl NodeQuadrature {
+    /// The quadrature over [0, `end`] on nodes at arc lengths `s`: on each interval of a
+    /// smooth segment, the exact integral of the Lagrange interpolant through the four
+    /// nearest nodes of that segment (fewer when the segment has fewer), evaluated by
+    /// 2-point Gauss-Legendre (exact for cubics). A node at `end` that starts a new
+    /// segment (the right limit at a termination) gets no weight.
+    pub fn new(s: &[f64], end: f64) -> Self {
+        let mut weights = vec![0.0; s.len()];
+        let mut first = 0;
+        while first + 1 < s.len() && s[first] < end {
+            // One smooth segment: nodes first..=last with increasing s.
+            let mut last = first;
+            while last + 1 < s.len() && s[last + 1] > s[last] && s[last] < end {
+                last += 1;
+            }
+            for k in first..last {
+                let lo = k.saturating_sub(1).max(first).min(last.saturating_sub(3).max(first));
+                let hi = (lo + 3).min(last);
+                let stencil = lo..=hi;
+                let (a, b) = (s[k], s[k + 1]);
+                let half = 0.5 * (b - a);
+                for g in [-1.0 / 3f64.sqrt(), 1.0 / 3f64.sqrt()] {
+                    let x = 0.5 * (a + b) + half * g;
+                    for j in stencil.clone() {
+                        let basis: f64 = stencil
+                            .clone()
+                            .filter(|&m| m != j)
+                            .map(|m| (x - s[m]) / (s[j] - s[m]))
+                            .product();
+                        weights[j] += half * basis;
+                    }
+                }
+            }
+            first = last + 1;
+        }
+        NodeQuadrature {
+            weights: weights.into_iter().enumerate().filter(|&(_, w)| w != 0.0).collect(),
+        }
+    }
+
+    /// The integral of the node values `f(k)`.
+    pub fn integrate(&self, f: impl Fn(usize) -> f64) -> f64 {
+        self.weights.iter().map(|&(k, w)| w * f(k)).sum()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use approx::assert_relative_eq;
+
+    #[test]
+    fn node_quadrature_is_order_four_and_splits_at_jumps() {
+        // f = cos on [0, 0.5), 2 + s^3 on [0.5, 1] (a jump at the breakpoint 0.5).
+        let f = |s: f64, right: bool| if right { 2.0 + s * s * s } else { s.cos() };
+        let exact = 0.5f64.sin() + (2.0 * 0.5 + (1.0 - 0.5f64.powi(4)) / 4.0);
+        let error = |n: usize| {
+            let mut s: Vec<f64> = (0..=n).map(|k| 0.5 * k as f64 / n as f64).collect();
+            s.extend((0..=n).map(|k| 0.5 + 0.5 * k as f64 / n as f64));
+            let q = NodeQuadrature::new(&s, 1.0);
+            (q.integrate(|k| f(s[k], k > n)) - exact).abs()
+        };
+        let (coarse, fine) = (error(32), error(64));
+        // Order 4: halving h cuts the error 16-fold asymptotically; the one-sided end
+        // stencils approach it slowly (7.8 at 8 -> 16 intervals, 12.8 at 16 -> 32), so 12
+        // separates order 4 from order 3 (8).
+        assert!(coarse / fine > 12.0, "{coarse:e} {fine:e}");
+        // 1e-10: the cubic part is exact, the cosine's error at h = 1/128 is about 2e-11.
+        assert!(fine < 1e-10, "{fine:e}");
+    }
+
+    #[test]
+    fn quadrature_stops_at_a_termination_before_the_right_limit() {
+        let s = [0.0, 0.25, 0.5, 0.5, 0.75, 1.0];
+        let q = NodeQuadrature::new(&s, 0.5);
+        // Integral of 1 over [0, 0.5]; the right limit (index 3) and beyond get nothing.
+        // 1e-15: exact weights up to rounding.
+        assert_relative_eq!(q.integrate(|_| 1.0), 0.5, epsilon = 1e-15);
+        assert!(q.weights.iter().all(|&(k, _)| k <= 2));
+    }
+}
