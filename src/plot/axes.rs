@@ -13,16 +13,18 @@ pub(super) fn round_length(target: f64) -> f64 {
         .unwrap_or(power)
 }
 
-/// The tick step for about `count` ticks over `span` (m): the smallest 1, 2 or 5 times a
-/// power of ten that is at least `span / count`.
-pub(super) fn tick_step(span: f64, count: f64) -> f64 {
-    let target = (span / count).max(f64::MIN_POSITIVE);
+/// The tick step for about `count` ticks over `span` (m), at least `least` (m): of the
+/// steps 1, 2 or 5 times a power of ten that are at least `least`, the nearest to
+/// `span / count` in ratio.
+pub(super) fn tick_step(span: f64, count: f64, least: f64) -> f64 {
+    let target = (span / count).max(least).max(f64::MIN_POSITIVE);
     let power = 10f64.powf(target.log10().floor());
-    // 1e-9: a target that is already round must not step up through rounding.
+    // 1e-9: a step equal to `least` up to rounding is allowed.
     [1.0, 2.0, 5.0, 10.0]
         .into_iter()
         .map(|k| k * power)
-        .find(|&l| l >= target * (1.0 - 1e-9))
+        .filter(|&l| l >= least * (1.0 - 1e-9))
+        .min_by(|a, b| (a / target).ln().abs().total_cmp(&(b / target).ln().abs()))
         .unwrap_or(10.0 * power)
 }
 
@@ -106,17 +108,22 @@ mod tests {
     }
 
     #[test]
-    fn tick_steps_round_up_to_one_two_five() {
-        for (span, step) in [
-            (0.5, 0.1),
-            (0.45, 0.1),
-            (0.3, 0.1),
-            (0.26, 0.1),
-            (0.011, 0.005),
-            (0.1, 0.02),
+    fn tick_steps_are_the_nearest_one_two_five() {
+        for (span, least, step) in [
+            (0.5, 0.0, 0.1),
+            (0.45, 0.0, 0.1),
+            (0.3, 0.0, 0.05),
+            (0.26, 0.0, 0.05),
+            (0.011, 0.0, 0.002),
+            (0.1, 0.0, 0.02),
+            (0.3, 0.06, 0.1),
+            (0.3, 0.05, 0.05),
         ] {
             // 1e-12: powers of ten are not exact in binary
-            assert!((tick_step(span, 5.0) / step - 1.0).abs() < 1e-12, "{span}");
+            assert!(
+                (tick_step(span, 5.0, least) / step - 1.0).abs() < 1e-12,
+                "{span} {least}"
+            );
         }
     }
 

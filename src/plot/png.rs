@@ -57,7 +57,7 @@ fn fonts() -> Arc<fontdb::Database> {
 
 /// Whether the system has a font for the PNG's text.
 pub fn fonts_found() -> bool {
-    fonts().len() > 0
+    !fonts().is_empty()
 }
 
 /// Renders the SVG document `svg` at `scale` pixels per SVG pixel.
@@ -70,7 +70,7 @@ pub fn render(svg: &str, scale: f64) -> Result<Png> {
         ));
     }
     let fontdb = fonts();
-    let text = fontdb.len() > 0;
+    let text = !fontdb.is_empty();
     let options = usvg::Options {
         fontdb,
         ..Default::default()

@@ -260,11 +260,12 @@ impl Panel {
                 .collect();
             let largest = arrows.iter().map(|(_, f)| f.norm()).fold(0.0, f64::max);
             if largest > 0.0 {
-                let labelled = arrows
-                    .iter()
-                    .enumerate()
-                    .max_by(|a, b| a.1.1.norm().total_cmp(&b.1.1.norm()))
-                    .map_or(0, |(k, _)| k);
+                // Label the largest arrow nearest the middle (away from the tip's labels).
+                let middle = (DISTRIBUTED_ARROWS - 1) as f64 / 2.0;
+                let labelled = (0..DISTRIBUTED_ARROWS)
+                    .filter(|&k| arrows[k].1.norm() >= 0.99 * largest)
+                    .min_by(|&a, &b| (a as f64 - middle).abs().total_cmp(&(b as f64 - middle).abs()))
+                    .unwrap_or(0);
                 for (k, (s, f)) in arrows.into_iter().enumerate() {
                     self.arrows.push(Arrow {
                         point: solution.at(s).p,

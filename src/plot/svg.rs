@@ -11,6 +11,8 @@ use std::fmt::Write;
 const MARGIN: f64 = 24.0;
 /// Space between a cell's frame and what it shows (px).
 const PAD: f64 = 14.0;
+/// Space between a cell's top edge and what it shows, below the view's title (px).
+const TOP_PAD: f64 = 28.0;
 /// Gutter left of a cell: tick numbers and the vertical axis label (px).
 const LEFT: f64 = 58.0;
 /// Gutter under a cell: tick numbers and the horizontal axis label (px).
@@ -173,6 +175,12 @@ impl Scene {
     fn arrow_head(&self, a: &Arrow) -> Vector3<f64> {
         a.point + a.vector * self.arrow_scale(a.kind)
     }
+
+    /// A point beyond the head of a labelled arrow, kept inside the views so the label fits.
+    fn label_room(&self, a: &Arrow) -> Vector3<f64> {
+        let room = if a.label.is_some() { 0.06 * self.extent } else { 0.0 };
+        self.arrow_head(a) + a.vector.try_normalize(0.0).unwrap_or_default() * room
+    }
 }
 
 fn finite(p: &Vector3<f64>) -> bool {
@@ -242,7 +250,7 @@ fn scene(panels: &[Panel]) -> Scene {
     let heads: Vec<Vector3<f64>> = panels
         .iter()
         .flat_map(|p| &p.arrows)
-        .map(|a| scene.arrow_head(a))
+        .map(|a| scene.label_room(a))
         .filter(finite)
         .collect();
     let (lo, hi) = bounds([scene.lo, scene.hi].into_iter().chain(heads));
@@ -278,6 +286,18 @@ pub(super) fn wrap(text: &str, width: f64, size: f64) -> Vec<String> {
     }
     if !line.is_empty() || lines.is_empty() {
         lines.push(line);
+    }
+    // No orphans: a last line of a few characters (`N)`) takes the previous line's last word.
+    let n = lines.len();
+    if n >= 2
+        && lines[n - 1].chars().count() < 10
+        && let Some(cut) = lines[n - 2].rfind(' ')
+    {
+        let word = lines[n - 2][cut + 1..].to_string();
+        if word.chars().count() + 1 + lines[n - 1].chars().count() <= max {
+            lines[n - 2].truncate(cut);
+            lines[n - 1] = format!("{word} {}", lines[n - 1]);
+        }
     }
     lines
 }
@@ -471,7 +491,7 @@ pub(super) fn document(figure: &Figure) -> String {
     let camera = Camera::new(center, (scene.hi - scene.lo).norm() / 2.0);
     let axis_length = round_length(scene.extent / 4.0);
     let base = panels.iter().find_map(|p| p.origin).unwrap_or(scene.lo);
-    let inner = cell - 2.0 * PAD;
+    let inner = cell - PAD - TOP_PAD;
     for c in &layout.cells {
         let mut pr = Projection {
             view: c.view,
@@ -485,7 +505,7 @@ pub(super) fn document(figure: &Figure) -> String {
             let all: Vec<Vector2<f64>> = panels
                 .iter()
                 .flat_map(points)
-                .chain(panels.iter().flat_map(|p| &p.arrows).map(|a| scene.arrow_head(a)))
+                .chain(panels.iter().flat_map(|p| &p.arrows).map(|a| scene.label_room(a)))
                 .chain(triad)
                 .filter(finite)
                 .map(|p| pr.raw(&p))
@@ -509,7 +529,9 @@ pub(super) fn document(figure: &Figure) -> String {
         } else {
             inner / scene.extent
         };
-        pr.offset = Vector2::repeat(cell / 2.0) - (a + b) / 2.0 * pr.scale;
+        // Centred in the cell below the title: the centre (a + b) / 2 goes (TOP_PAD - PAD) / 2
+        // below the cell's centre.
+        pr.offset = Vector2::new(cell / 2.0, (cell - (TOP_PAD - PAD)) / 2.0) - (a + b) / 2.0 * pr.scale;
         cell_svg(
             &mut svg,
             &panels[c.panel],
@@ -587,7 +609,7 @@ fn cell_svg(
         }
         let _ = writeln!(
             svg,
-            r##"<polygon class="disk" fill="#9a9a9a" fill-opacity="0.18" stroke="{DISK_COLOR}" stroke-width="0.8" stroke-opacity="0.8" stroke-linejoin="round" points="{}"/>"##,
+            r##"<polygon class="disk" fill="#9a9a9a" fill-opacity="0.1" stroke="{DISK_COLOR}" stroke-width="0.8" stroke-opacity="0.7" stroke-linejoin="round" points="{}"/>"##,
             polyline(rim(d).map(|p| pr.px(&p)))
         );
     }
@@ -649,7 +671,7 @@ fn cell_svg(
         arrow_svg(svg, pr, a, scene, &mut placed);
     }
     let title = if multiples {
-        format!(r##" fill="#555""##)
+        r##" fill="#555""##.to_string()
     } else {
         r#" font-weight="bold""#.to_string()
     };
@@ -679,8 +701,8 @@ fn ticks_svg(svg: &mut String, pr: &Projection, c: &Cell, scene: &Scene) {
     // The window in world coordinates (m): pixel 0..size on each axis.
     let h_range = (-pr.offset.x / pr.scale, (size - pr.offset.x) / pr.scale);
     let v_range = (-pr.offset.y / pr.scale, (size - pr.offset.y) / pr.scale);
-    // About 5 ticks over the cell, at least 45 px apart so numbers do not touch.
-    let step = tick_step(size / pr.scale, 5.0).max(tick_step(45.0 / pr.scale, 1.0));
+    // About 6 ticks over the cell, at least 45 px apart so numbers do not touch.
+    let step = tick_step(size / pr.scale, 6.0, 45.0 / pr.scale);
     let inside = |q: f64| (2.0..=size - 2.0).contains(&q);
     for t in ticks(h_range.0, h_range.1, step) {
         let x = pr.offset.x + t * pr.scale;
