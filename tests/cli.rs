@@ -82,6 +82,13 @@ fn main_job_prints_all_table2_rows_and_draws_them() {
     let svg = std::fs::read_to_string(dir.join("out/table2.svg")).unwrap();
     assert!(svg.starts_with("<svg") && svg.trim_end().ends_with("</svg>"));
     assert!(svg.contains("perspective") && svg.contains("side view (XZ)"));
+    // Small multiples: a column per tendon, each with its four views.
+    assert_eq!(svg.matches("side view (XZ)").count(), 5);
+    assert!(svg.contains("tendon 5: helix of radius 8 mm, 1 turn"));
+    // The prototype's 12 disks on the 31 shapes with a tendon pulled, in 4 views.
+    assert_eq!(svg.matches(r#"class="disk""#).count(), 31 * 12 * 4);
+    let png = std::fs::read(dir.join("out/table2.png")).unwrap();
+    assert!(png.starts_with(b"\x89PNG\r\n\x1a\n"));
     let csv = std::fs::read_to_string(dir.join("out/table2.csv")).unwrap();
     assert_eq!(csv.lines().count(), 33);
 }
@@ -194,11 +201,33 @@ fn table_output_and_plot() {
         "{text}"
     );
     assert!(stderr(&out).contains("iter   residual"), "{}", stderr(&out));
+    let svg = std::fs::read_to_string(dir.join("shape.svg")).unwrap();
     assert!(
-        std::fs::read_to_string(dir.join("shape.svg"))
-            .unwrap()
-            .contains("<polyline")
+        svg.contains("<polyline") && svg.contains("tendon 1 (thin line)"),
+        "{svg}"
     );
+
+    // The extension picks the format; --disks sets the disks drawn.
+    let out = run(
+        &dir,
+        &["solve", "robot.toml", "--plot", "shape.png", "--disks", "5"],
+        None,
+    );
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    assert!(stderr(&out).contains("wrote shape.png"), "{}", stderr(&out));
+    let png = std::fs::read(dir.join("shape.png")).unwrap();
+    assert!(png.starts_with(b"\x89PNG\r\n\x1a\n"));
+    let out = run(
+        &dir,
+        &["solve", "robot.toml", "--plot", "shape.svg", "--disks", "5"],
+        None,
+    );
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    let svg = std::fs::read_to_string(dir.join("shape.svg")).unwrap();
+    assert_eq!(svg.matches(r#"class="disk""#).count(), 5 * 4);
+    let out = run(&dir, &["solve", "robot.toml", "--plot", "shape.jpg"], None);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(stderr(&out).contains("FILE.png"), "{}", stderr(&out));
 }
 
 #[test]

@@ -77,6 +77,17 @@ pub fn parse_count(text: &str) -> Result<usize, String> {
     }
 }
 
+/// The most spacer disks a picture draws (`--disks`).
+pub const MAX_DISKS: usize = 1000;
+
+/// A number of spacer disks from 0 to [`MAX_DISKS`] (`--disks`).
+pub fn parse_disks(text: &str) -> Result<usize, String> {
+    match text.parse::<usize>() {
+        Ok(n) if n <= MAX_DISKS => Ok(n),
+        _ => Err(format!("`{text}` is not a whole number from 0 to {MAX_DISKS}")),
+    }
+}
+
 /// A whole number of output samples from 2 to [`MAX_COUNT`] (`--samples`).
 pub fn parse_samples(text: &str) -> Result<usize, String> {
     match text.parse::<usize>() {

@@ -4,6 +4,7 @@
 use std::io::Write;
 use std::path::Path;
 use tdcr::Error;
+use tdcr::plot::{Figure, Format};
 
 use crate::tables::diagnostics;
 
@@ -76,11 +77,34 @@ pub fn emit(text: &str) -> Result<(), Failure> {
 }
 
 /// Writes `text` to `path`, creating its folder; `what` names the file in messages.
-pub fn write_file(path: &Path, text: &str, what: &str) -> Result<(), Failure> {
+pub fn write_file(path: &Path, text: impl AsRef<[u8]>, what: &str) -> Result<(), Failure> {
     if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir)
             .map_err(|e| Failure::Other(format!("cannot create folder {} for the {what}: {e}", dir.display())))?;
     }
     std::fs::write(path, text)
         .map_err(|e| Failure::Other(format!("cannot write the {what} to {}: {e}", path.display())))
+}
+
+/// The picture format `path` asks for (`.png`: PNG, else SVG), checked before any work.
+pub fn picture_format(path: &Path) -> Result<Format, Failure> {
+    Format::from_path(path).map_err(|e| Failure::Input(e.to_string()))
+}
+
+/// Writes `figure` to `path` in the format its extension names and says so on standard
+/// error, with a warning if a PNG could not get its text (no fonts on the system).
+pub fn write_picture(path: &Path, figure: &Figure, what: &str) -> Result<(), Failure> {
+    let (bytes, text) = figure
+        .render(picture_format(path)?)
+        .map_err(|e| Failure::Other(format!("cannot draw the {what}: {e}")))?;
+    write_file(path, bytes, what)?;
+    if !text {
+        note(&format!(
+            "warning: no fonts found on this system, so {} has no text; install a font (for \
+             example fonts-dejavu-core) or write SVG",
+            path.display()
+        ));
+    }
+    note(&format!("wrote {}", path.display()));
+    Ok(())
 }

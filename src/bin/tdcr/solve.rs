@@ -3,12 +3,12 @@
 use clap::{Args, ValueEnum};
 use std::path::PathBuf;
 use tdcr::io::output;
-use tdcr::plot::{Figure, LegendEntry, PALETTE, Style};
+use tdcr::plot::{Figure, Style, shape_legend};
 
-use crate::args::{SolverArgs, parse_displacement, parse_samples, parse_tension};
-use crate::failure::{Failure, emit, note, write_file};
+use crate::args::{SolverArgs, parse_disks, parse_displacement, parse_samples, parse_tension};
+use crate::failure::{Failure, emit, note, picture_format, write_file, write_picture};
 use crate::robot_args::{apply, read_robot, run_solver, set_displacement, set_tension};
-use crate::tables::{describe, diagnostics, solution_table, summary};
+use crate::tables::{diagnostics, solution_table, summary};
 
 /// The output formats of `solve`.
 #[derive(Clone, Copy, Default, ValueEnum)]
@@ -50,13 +50,20 @@ pub struct SolveArgs {
     /// Write the output to FILE instead of standard output.
     #[arg(long, value_name = "FILE")]
     out: Option<PathBuf>,
-    /// Draw the shape into FILE.svg.
-    #[arg(long, value_name = "FILE.svg")]
+    /// Draw the shape into FILE: PNG if its name ends in .png, else SVG.
+    #[arg(long, value_name = "FILE.svg|FILE.png")]
     plot: Option<PathBuf>,
+    /// Spacer disks drawn in the picture, evenly spaced (default: about 2.5 tendon offsets
+    /// apart, 12 on the prototype; 0: none).
+    #[arg(long, value_name = "N", value_parser = parse_disks, requires = "plot")]
+    disks: Option<usize>,
 }
 
 /// `tdcr solve`: solves one robot file and writes the output (and the picture).
 pub fn run(args: &SolveArgs) -> Result<(), Failure> {
+    if let Some(path) = &args.plot {
+        picture_format(path)?;
+    }
     let (name, mut file) = read_robot(&args.file)?;
     for &(i, t) in &args.tension {
         set_tension(&mut file.robot, i, t)?;
@@ -111,21 +118,10 @@ pub fn run(args: &SolveArgs) -> Result<(), Failure> {
         let mut style = Style::new("#000000");
         style.slack_tendons = true;
         style.tendon_colors = true;
+        style.disks = args.disks;
         figure.add_shape(&file.robot, &solution, &style);
-        figure.legend.push(LegendEntry {
-            label: "backbone".into(),
-            color: "#000000".into(),
-            dash: None,
-        });
-        for (i, t) in file.robot.tendons.iter().enumerate() {
-            figure.legend.push(LegendEntry {
-                label: format!("tendon {}: {}, {} N", i + 1, describe(&t.routing), t.tension),
-                color: PALETTE[i % PALETTE.len()].into(),
-                dash: (t.tension == 0.0).then(|| "1 2".into()),
-            });
-        }
-        write_file(path, &figure.to_svg(), "plot")?;
-        note(&format!("wrote {}", path.display()));
+        figure.legend = shape_legend(&file.robot, &style);
+        write_picture(path, &figure, "plot")?;
     }
     Ok(())
 }

@@ -7,11 +7,11 @@ use std::io::{IsTerminal, Write};
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
 use tdcr::io::output;
-use tdcr::plot::{Figure, LegendEntry, PALETTE, Style};
+use tdcr::plot::{Figure, LegendEntry, PALETTE, Style, shape_legend};
 use tdcr::{Robot, Solution};
 
-use crate::args::{SolverArgs, parse_sweep};
-use crate::failure::{Failure, emit, note, write_file};
+use crate::args::{SolverArgs, parse_disks, parse_sweep};
+use crate::failure::{Failure, emit, note, picture_format, write_file, write_picture};
 use crate::robot_args::{apply, read_robot, run_solver, set_tension};
 use crate::tables::summary;
 
@@ -29,9 +29,14 @@ pub struct SweepArgs {
     /// Write the CSV to FILE instead of standard output.
     #[arg(long, value_name = "FILE")]
     out: Option<PathBuf>,
-    /// Draw the tip trajectory (with the first and last shapes) into FILE.svg.
-    #[arg(long, value_name = "FILE.svg")]
+    /// Draw the tip trajectory (with the first and last shapes) into FILE: PNG if its name
+    /// ends in .png, else SVG.
+    #[arg(long, value_name = "FILE.svg|FILE.png")]
     plot: Option<PathBuf>,
+    /// Spacer disks drawn on the two shapes of the picture (default: about 2.5 tendon offsets
+    /// apart, 12 on the prototype; 0: none).
+    #[arg(long, value_name = "N", value_parser = parse_disks, requires = "plot")]
+    disks: Option<usize>,
 }
 
 /// A progress bar on standard error, shown only on a terminal and only once the work has
@@ -84,6 +89,9 @@ impl Progress {
 /// `tdcr sweep`: solves every step, writes the CSV (the steps before a failure too) and the
 /// picture.
 pub fn run(args: &SweepArgs) -> Result<(), Failure> {
+    if let Some(path) = &args.plot {
+        picture_format(path)?;
+    }
     let (name, mut file) = read_robot(&args.file)?;
     apply(&mut file, &args.solver);
     let steps = args.tension.iter().map(|(_, v)| v.len()).max().unwrap_or(0);
@@ -195,37 +203,42 @@ pub fn run(args: &SweepArgs) -> Result<(), Failure> {
         figure.subtitle.push(ranges.join("; "));
         let mut start = Style::new("#999999");
         start.dash = Some("5 3".into());
+        start.disks = args.disks;
+        start.distributed_load = false;
         figure.add_shape(robot0, first, &start);
         let mut robot1 = file.robot.clone();
         for &(i, ref v) in &args.tension {
             set_tension(&mut robot1, i, v[(tips.len() - 1).min(v.len() - 1)])?;
         }
-        figure.add_shape(&robot1, last, &Style::new("#555555"));
-        figure.curves.push(tdcr::plot::Curve {
+        let mut end = Style::new("#555555");
+        end.disks = args.disks;
+        figure.add_shape(&robot1, last, &end);
+        figure.panel_mut().curves.push(tdcr::plot::Curve {
             points: tips.clone(),
             color: PALETTE[3].into(),
             width: 2.0,
             dash: None,
             opacity: 1.0,
         });
-        figure.markers.extend(tips.iter().map(|&point| tdcr::plot::Marker {
-            point,
-            color: PALETTE[3].into(),
-            radius: 1.8,
-        }));
-        for (label, color, dash) in [
-            ("tip trajectory", PALETTE[3], None),
-            ("first shape", "#999999", Some("5 3")),
-            ("last shape", "#555555", None),
-        ] {
-            figure.legend.push(LegendEntry {
-                label: label.into(),
-                color: color.into(),
-                dash: dash.map(Into::into),
-            });
-        }
-        write_file(path, &figure.to_svg(), "plot")?;
-        note(&format!("wrote {}", path.display()));
+        figure
+            .panel_mut()
+            .markers
+            .extend(tips.iter().map(|&point| tdcr::plot::Marker {
+                point,
+                color: PALETTE[3].into(),
+                radius: 1.8,
+            }));
+        figure.legend = vec![
+            LegendEntry::line("tip trajectory (a dot per solve)", PALETTE[3]).width(2.0),
+            LegendEntry::line("first shape", "#999999").dash("5 3"),
+            LegendEntry::line("last shape", "#555555"),
+            LegendEntry::line("pulled tendons of each shape (thin lines)", "#555555").width(1.2),
+        ];
+        // Disks and loads of the last shape.
+        let legend = shape_legend(&robot1, &end);
+        let extra = legend.into_iter().filter(|e| e.symbol != tdcr::plot::Symbol::Line);
+        figure.legend.extend(extra);
+        write_picture(path, &figure, "plot")?;
     }
     failure.map_or(Ok(()), Err)
 }

@@ -1,32 +1,109 @@
 //! The main job (`tdcr` without a command): the paper's prototype under the 32 experiments of
-//! Table 2, a table on standard output, a picture and a CSV in the output folder.
+//! Table 2, a table on standard output, a picture (SVG and PNG) and a CSV in the output folder.
 
 use std::fmt::Write as _;
 use std::path::Path;
 use std::time::{Duration, Instant};
+use tdcr::Routing;
 use tdcr::io::output;
-use tdcr::plot::{Figure, LegendEntry, PALETTE, Style};
+use tdcr::plot::{Figure, Format, LegendEntry, Style, Symbol, routing_label};
 use tdcr::{cases, collocation};
 
-use crate::failure::{Failure, emit, write_file};
+use crate::failure::{Failure, emit, note, write_file};
 use crate::tables::{describe, fixed, ms};
 
-/// Styles of the main job's picture: colour by tendon, dash by tip load.
+/// Spacer disks of the paper's prototype, drawn on every shape of the main job's picture.
+const PROTOTYPE_DISKS: usize = 12;
+
+/// The tensions of Table 2 (N) and their colours in the main job's picture, light to dark
+/// (the plasma colour map).
+const TENSION_COLORS: [(f64, &str); 5] = [
+    (0.98, "#f0a030"),
+    (1.96, "#e16462"),
+    (2.94, "#b12a90"),
+    (4.91, "#6a00a8"),
+    (6.87, "#0d0887"),
+];
+
+/// Tip loads of Table 2 (N), their dash patterns and legend labels.
+const TIP_LOAD_DASHES: [(f64, Option<&str>, &str); 3] = [
+    (0.0, None, "no tip load"),
+    (0.098, Some("7 3"), "0.098 N tip load (10 g)"),
+    (0.196, Some("2 2"), "0.196 N tip load (20 g)"),
+];
+
+/// Styles of the main job's picture: colour by tension, dash by tip load, the prototype's
+/// disks, arrows for the tip loads; self weight is said in the subtitle, not drawn.
 fn table2_style(e: &cases::Experiment) -> Style {
-    let color = e.tendon.map_or("#000000", |i| PALETTE[(i - 1) % PALETTE.len()]);
-    let mut style = Style::new(color);
-    style.dash = if e.tip_load == 0.0 {
-        None
-    } else if e.tip_load < 0.15 {
-        Some("7 3".into())
-    } else {
-        Some("2 2".into())
+    let color = match e.tendon {
+        None => "#000000",
+        Some(_) => TENSION_COLORS
+            .iter()
+            .find(|(t, _)| (t - e.tension).abs() < 1e-9)
+            .map_or("#000000", |(_, c)| c),
     };
+    let mut style = Style::new(color);
+    style.dash = TIP_LOAD_DASHES
+        .iter()
+        .find(|(load, _, _)| (load - e.tip_load).abs() < 1e-9)
+        .and_then(|(_, dash, _)| dash.map(Into::into));
+    style.disks = Some(if e.tendon.is_none() { 0 } else { PROTOTYPE_DISKS });
+    style.distributed_load = false;
     style
 }
 
-/// Solves the 32 experiments, prints their table and writes `table2.svg` and `table2.csv` into
-/// `out_dir`.
+/// The main job's picture: small multiples, a column per tendon with the experiments that pull
+/// it, the unloaded prototype in every column for reference.
+fn picture(solved: &[(cases::Experiment, tdcr::Robot, tdcr::Solution)], routings: &[Routing], mesh: &str) -> Figure {
+    let mut figure = Figure::new("The prototype under the 32 experiments of Table 2 (Rucker & Webster 2011)");
+    figure.subtitle.push(format!(
+        "collocation, {mesh}. A column per tendon pulled; colour: its tension; dash: the tip load (arrows); \
+         the unloaded prototype in black in every column; self weight 0.47 N/m along -z on every shape (not drawn)"
+    ));
+    let length = cases::LENGTH;
+    for (i, routing) in routings.iter().enumerate() {
+        let tendon = tdcr::Tendon::new(routing.clone(), 0.0);
+        figure.add_panel(&format!("tendon {}: {}", i + 1, routing_label(&tendon, length)));
+        for (e, robot, solution) in solved {
+            if e.tendon.is_none_or(|t| t == i + 1) {
+                figure.add_shape(robot, solution, &table2_style(e));
+            }
+        }
+    }
+    figure
+        .legend
+        .push(LegendEntry::line("no tension (experiment 1)", "#000000"));
+    for (tension, color) in TENSION_COLORS {
+        let only = if tension == 6.87 { " (tendon 5 only)" } else { "" };
+        figure
+            .legend
+            .push(LegendEntry::line(&format!("tendon pulled at {tension} N{only}"), color));
+    }
+    for (_, dash, label) in TIP_LOAD_DASHES {
+        let entry = LegendEntry::line(label, "#666666");
+        figure.legend.push(match dash {
+            Some(d) => entry.dash(d),
+            None => entry,
+        });
+    }
+    figure
+        .legend
+        .push(LegendEntry::line("the pulled tendon (thin line)", "#666666").width(1.2));
+    figure.legend.push(LegendEntry::new(
+        Symbol::Disk,
+        &format!("{PROTOTYPE_DISKS} spacer disks, evenly spaced, as on the prototype"),
+        "#6b6b6b",
+    ));
+    figure.legend.push(LegendEntry::new(
+        Symbol::Arrow,
+        "tip load (N), arrow length proportional to force",
+        "#c0392b",
+    ));
+    figure
+}
+
+/// Solves the 32 experiments, prints their table and writes `table2.svg`, `table2.png` and
+/// `table2.csv` into `out_dir`.
 pub fn run(out_dir: &Path) -> Result<(), Failure> {
     let start = Instant::now();
     let experiments = cases::table2();
@@ -68,7 +145,7 @@ pub fn run(out_dir: &Path) -> Result<(), Failure> {
     let mut csv = String::from(
         "experiment,configuration,tendon,tension,tip_load,tip_x,tip_y,tip_z,bending_angle_deg,iterations,intervals,solve_time\n",
     );
-    let mut figure = Figure::new("The prototype under the 32 experiments of Table 2 (Rucker & Webster 2011)");
+    let mut solved = Vec::new();
     let mut failures = Vec::new();
     let mut solver_time = Duration::ZERO;
     let mut intervals = Vec::new();
@@ -114,7 +191,7 @@ pub fn run(out_dir: &Path) -> Result<(), Failure> {
                     report.iterations,
                     ms(report.timings.total)
                 );
-                figure.add_shape(&robot, &solution, &table2_style(e));
+                solved.push((*e, robot, solution));
                 line
             }
             Err(err) => {
@@ -145,39 +222,23 @@ pub fn run(out_dir: &Path) -> Result<(), Failure> {
         ms(start.elapsed())
     ))?;
 
-    figure.subtitle.push(format!(
-        "collocation, {mesh}; colour: the tendon pulled (0.98 to 6.87 N); dash: the tip load"
-    ));
-    figure.legend.push(LegendEntry {
-        label: "no tension".into(),
-        color: "#000000".into(),
-        dash: None,
-    });
-    for (i, routing) in routings.iter().enumerate() {
-        figure.legend.push(LegendEntry {
-            label: format!("tendon {}: {}", i + 1, describe(routing)),
-            color: PALETTE[i].into(),
-            dash: None,
-        });
-    }
-    for (label, dash) in [
-        ("no tip load", None),
-        ("0.098 N tip load (10 g)", Some("7 3")),
-        ("0.196 N tip load (20 g)", Some("2 2")),
-    ] {
-        figure.legend.push(LegendEntry {
-            label: label.into(),
-            color: "#666666".into(),
-            dash: dash.map(Into::into),
-        });
-    }
+    let figure = picture(&solved, &routings, &mesh);
     let svg_path = out_dir.join("table2.svg");
+    let png_path = out_dir.join("table2.png");
     let csv_path = out_dir.join("table2.csv");
-    write_file(&svg_path, &figure.to_svg(), "picture")?;
+    write_file(&svg_path, figure.to_svg(), "picture")?;
+    let (png, text) = figure
+        .render(Format::Png)
+        .map_err(|e| Failure::Other(format!("cannot draw the picture: {e}")))?;
+    write_file(&png_path, png, "picture")?;
+    if !text {
+        note("warning: no fonts found on this system, so the PNG has no text; the SVG has it");
+    }
     write_file(&csv_path, &csv, "table")?;
     emit(&format!(
-        "picture of all shapes: {}\ntable as CSV (SI units): {}\n",
+        "picture of all shapes: {} and {}\ntable as CSV (SI units): {}\n",
         svg_path.display(),
+        png_path.display(),
         csv_path.display()
     ))?;
     if failures.is_empty() {

@@ -1,0 +1,242 @@
+//! What the pictures must show: ticks, legend entries naming the tendons, disks, arrows,
+//! wrapped subtitles, small multiples, true helix turns, and PNG files of the asked size.
+
+use super::*;
+use crate::cases;
+use crate::model::routing::{Routing, RoutingPoint};
+use crate::model::tendon::Tendon;
+
+fn solve(robot: &Robot) -> Solution {
+    crate::collocation::solve(robot, &Default::default()).unwrap()
+}
+
+fn count(svg: &str, needle: &str) -> usize {
+    svg.matches(needle).count()
+}
+
+/// Case S drawn with every tendon, 12 disks, and its legend.
+fn case_s_figure() -> Figure {
+    let robot = cases::case_s();
+    let mut style = Style::new("#000000");
+    style.slack_tendons = true;
+    style.tendon_colors = true;
+    style.disks = Some(12);
+    let mut figure = Figure::new("case S");
+    figure.add_shape(&robot, &solve(&robot), &style);
+    figure.legend = shape_legend(&robot, &style);
+    figure
+}
+
+#[test]
+fn orthographic_views_have_tick_numbers_and_axis_labels_in_mm() {
+    let svg = case_s_figure().to_svg();
+    // Three orthographic views, each with at least 3 numbers on each of its two axes.
+    assert!(count(&svg, r#"class="tick""#) >= 3 * 6, "{svg}");
+    for label in ["x (mm)", "y (mm)", "z (mm)"] {
+        assert!(svg.contains(label), "{label}");
+    }
+    // The base is at the origin: 0 is a tick of every axis.
+    assert!(svg.contains(">0</text>"));
+}
+
+#[test]
+fn legend_names_the_thin_lines_as_tendons_with_their_tension() {
+    let figure = case_s_figure();
+    let svg = figure.to_svg();
+    assert!(
+        svg.contains("tendon 1 (thin line): straight at (8, 0) mm; 2.94 N"),
+        "{svg}"
+    );
+    assert!(svg.contains("backbone (thick line)"));
+    let slack = &figure.legend[2];
+    assert_eq!(
+        slack.label,
+        "tendon 2 (thin dashed line): straight at (0, 8) mm; slack (0 N)"
+    );
+    assert_eq!(slack.dash.as_deref(), Some(shape::SLACK_DASH));
+}
+
+#[test]
+fn slack_tendons_are_drawn_dashed_and_visible() {
+    let svg = case_s_figure().to_svg();
+    // Four slack tendons in four views, dashed, at opacity 0.8.
+    let slack = format!(
+        r#"stroke-opacity="0.8" stroke-linejoin="round" stroke-linecap="round" stroke-dasharray="{}""#,
+        shape::SLACK_DASH
+    );
+    assert_eq!(count(&svg, &slack), 4 * 4, "{svg}");
+}
+
+#[test]
+fn disks_are_drawn_as_many_as_asked_in_every_view() {
+    let figure = case_s_figure();
+    assert_eq!(figure.panels[0].disks.len(), 12);
+    assert_eq!(count(&figure.to_svg(), r#"class="disk""#), 12 * 4);
+    assert!(figure.legend.iter().any(|e| e.label.starts_with("12 spacer disks")));
+    // The default for the prototype's 8 mm tendons on 242 mm is its 12 disks too.
+    assert_eq!(default_disks(&cases::case_s()), 12);
+}
+
+#[test]
+fn tip_force_gets_an_arrow_labelled_in_newtons() {
+    let robot = cases::case_h();
+    let style = Style::new("#000000");
+    let mut figure = Figure::new("case H");
+    figure.add_shape(&robot, &solve(&robot), &style);
+    figure.legend = shape_legend(&robot, &style);
+    let svg = figure.to_svg();
+    // One tip-force arrow per view (the -z force is seen end-on from the top: a symbol).
+    assert_eq!(count(&svg, r#"class="arrow""#), 4, "{svg}");
+    assert!(svg.contains(">0.196 N</text>"));
+    assert!(svg.contains("tip force 0.196 N"));
+    // Self weight: six small arrows per view, labelled once in N/m.
+    assert!(count(&svg, r#"class="load-hint""#) >= 6 * 3);
+    assert!(svg.contains(">0.47 N/m</text>"));
+
+    let unloaded = cases::case_s();
+    let mut figure = Figure::new("case S");
+    figure.add_shape(&unloaded, &solve(&unloaded), &style);
+    assert_eq!(count(&figure.to_svg(), r#"class="arrow""#), 0);
+}
+
+#[test]
+fn long_subtitles_wrap_instead_of_leaving_the_picture() {
+    let mut figure = case_s_figure();
+    let long = "collocation (error-controlled): 32 -> 64 -> 128 -> 256 intervals, estimated tip error \
+                3.1e-9 m <= 2.42e-8 m (met), 9 Newton iterations, 2 Jacobian evaluations, 3 chord steps, \
+                1 load step, residual 4.4e-13, 5.9 ms";
+    figure.subtitle.push(long.into());
+    let svg = figure.to_svg();
+    let lines: Vec<&str> = svg.lines().filter(|l| l.contains(r#"class="subtitle""#)).collect();
+    assert!(lines.len() >= 2, "{lines:?}");
+    let width: f64 = svg.split('"').nth(3).unwrap().parse().unwrap();
+    for line in lines {
+        let text = line.split('>').nth(1).unwrap().trim_end_matches("</text");
+        let text = text.replace("&gt;", ">").replace("&lt;", "<").replace("&amp;", "&");
+        // 0.6 em per glyph over-estimates DejaVu Sans, the widest face named; 24 px margins.
+        assert!(text.chars().count() as f64 * 12.0 * 0.6 <= width - 48.0, "{text}");
+    }
+}
+
+#[test]
+fn several_panels_make_small_multiples_with_ticks_in_every_cell() {
+    let mut figure = Figure::new("two panels");
+    for (title, robot) in [("S", cases::case_s()), ("H", cases::case_h())] {
+        figure.add_panel(title);
+        figure.add_shape(&robot, &solve(&robot), &Style::new("#000000"));
+    }
+    let svg = figure.to_svg();
+    assert_eq!(count(&svg, "side view (XZ)"), 2);
+    assert_eq!(count(&svg, ">perspective<"), 2);
+    // Horizontal numbers under each of the 6 orthographic cells.
+    assert_eq!(count(&svg, "x (mm)</text>"), 2 * 2);
+    assert_eq!(count(&svg, "y (mm)</text>"), 2 + 1);
+}
+
+/// A helix of one turn per rod length written as a custom routing: independent of what the
+/// `turns` of [`Routing::Helical`] counts.
+fn one_turn_per_length(radius: f64) -> Routing {
+    Routing::custom(move |s, length| {
+        let k = std::f64::consts::TAU / length;
+        let (c, d) = ((k * s).cos(), (k * s).sin());
+        RoutingPoint {
+            r: nalgebra::Vector3::new(radius * c, radius * d, 0.0),
+            r_s: nalgebra::Vector3::new(-radius * k * d, radius * k * c, 0.0),
+            r_ss: nalgebra::Vector3::new(-radius * k * k * c, -radius * k * k * d, 0.0),
+        }
+    })
+}
+
+#[test]
+fn turns_count_over_the_tendons_own_length() {
+    let length = cases::LENGTH;
+    let half = Tendon::new(one_turn_per_length(0.008), 1.0).ending_at(length / 2.0);
+    // 1e-9 turns: the unwrapped angle is exact to rounding
+    assert!((tendon_turns(&half, length) - 0.5).abs() < 1e-9);
+    let full = Tendon::new(one_turn_per_length(0.008), 1.0);
+    assert!((tendon_turns(&full, length) - 1.0).abs() < 1e-9);
+    let left = Tendon::new(Routing::helical(0.008, -3.0, 0.4), 1.0);
+    assert!((tendon_turns(&left, length) + 3.0).abs() < 1e-9);
+    assert_eq!(
+        tendon_turns(&Tendon::new(Routing::straight(0.008, 0.0), 1.0), length),
+        0.0
+    );
+    assert_eq!(turns_label(0.5), "0.5 turns");
+    assert_eq!(turns_label(1.0), "1 turn");
+    assert_eq!(turns_label(-3.0), "-3 turns (left-handed)");
+}
+
+#[test]
+fn legend_shows_half_a_turn_for_a_helix_ending_at_half_length() {
+    let mut robot = cases::prototype();
+    // The prototype's tendon 5 is a helix of one turn over the rod length.
+    robot.tendons[4] = Tendon::new(robot.tendons[4].routing.clone(), 2.0).ending_at(cases::LENGTH / 2.0);
+    assert_eq!(
+        tendon_label(&robot, 4),
+        "tendon 5: helix of radius 8 mm, 0.5 turns, ends at s = 121 mm; 2 N"
+    );
+    robot.tendons[3] = Tendon::new(one_turn_per_length(0.008), 0.0).ending_at(cases::LENGTH / 2.0);
+    assert_eq!(
+        tendon_label(&robot, 3),
+        "tendon 4: custom routing, 0.5 turns, ends at s = 121 mm; slack (0 N)"
+    );
+}
+
+#[test]
+fn tendon_paths_come_from_the_dense_interpolant() {
+    let mut robot = cases::prototype();
+    robot.tendons[4] = Tendon::new(Routing::helical(0.008, 3.0, 0.0), 1.0);
+    let solution = solve(&robot);
+    let path = tendon_path(&robot, &solution, 4);
+    // At least 64 points per turn, many more than the mesh has nodes.
+    assert!(
+        path.len() > 3 * 64 && path.len() > solution.nodes.len(),
+        "{}",
+        path.len()
+    );
+    let nodes = &solution.tendon_paths[4];
+    for (a, b) in [(path[0], nodes[0]), (path[path.len() - 1], nodes[nodes.len() - 1])] {
+        // 1e-12 m: the interpolant reproduces the nodes up to rounding
+        assert!((a - b).norm() < 1e-12, "{a} vs {b}");
+    }
+}
+
+#[test]
+fn file_formats_follow_the_extension() {
+    assert_eq!(Format::from_path(Path::new("a/shape.PNG")).unwrap(), Format::Png);
+    assert_eq!(Format::from_path(Path::new("shape.svg")).unwrap(), Format::Svg);
+    assert_eq!(Format::from_path(Path::new("shape")).unwrap(), Format::Svg);
+    let e = Format::from_path(Path::new("shape.jpg")).unwrap_err().to_string();
+    assert!(e.contains(".jpg") && e.contains("FILE.png"), "{e}");
+}
+
+/// Width and height from a PNG's IHDR chunk.
+fn png_size(data: &[u8]) -> (u32, u32) {
+    let word = |k: usize| u32::from_be_bytes([data[k], data[k + 1], data[k + 2], data[k + 3]]);
+    (word(16), word(20))
+}
+
+#[test]
+fn png_has_the_signature_and_the_asked_size() {
+    let figure = case_s_figure();
+    let svg = figure.to_svg();
+    let number = |k: usize| -> f64 { svg.split('"').nth(k).unwrap().parse().unwrap() };
+    let (width, height) = (number(3), number(5));
+    for scale in [1.0, 2.0] {
+        let png = figure.to_png(scale).unwrap();
+        assert_eq!(&png.data[..8], b"\x89PNG\r\n\x1a\n");
+        let asked = ((width * scale).round() as u32, (height * scale).round() as u32);
+        assert_eq!(png_size(&png.data), asked);
+        assert_eq!((png.width, png.height), asked);
+    }
+    assert!(figure.to_png(0.0).is_err());
+}
+
+#[test]
+fn png_text_is_set_when_the_system_has_fonts() {
+    let with = Figure::new("WWWWWWWWWWWWWWWWWWWW").to_png(1.0).unwrap();
+    let without = Figure::new("").to_png(1.0).unwrap();
+    assert_eq!(with.text, fonts_found());
+    // The title is drawn exactly when a font was found to draw it in.
+    assert_eq!(with.data != without.data, fonts_found());
+}
