@@ -83,6 +83,7 @@ const KEYS: &[&str] = &[
     "y",
     "radius",
     "turns",
+    "turns_per_rod_length",
     "phase",
     "method",
     "intervals",
@@ -894,7 +895,7 @@ const RULES: &[Rule] = &[
     Rule {
         line: "routing = { kind = \"helical\"",
         value: "1.0",
-        field: "tendon[5].routing.turns",
+        field: "tendon[5].routing.turns_per_rod_length",
         breaks: not_finite,
     },
     Rule {
