@@ -120,8 +120,8 @@ impl Json {
 }
 
 /// The solution as JSON (every field and unit in docs/cli.md): the solve report, the tip
-/// pose and wrench, the samples of [`samples`] for `count`, each tendon's tension, end and
-/// path, and the tip Jacobians when given. Vectors are `[x, y, z]`, matrices lists of rows; one sample per line.
+/// pose and wrench, the samples of [`samples`] for `count`, each tendon's tension, end,
+/// turns about the backbone over its own length ([`crate::Tendon::turns`]) and path, and the tip Jacobians when given. Vectors are `[x, y, z]`, matrices lists of rows; one sample per line.
 pub fn json(robot: &Robot, solution: &Solution, count: Option<usize>, jacobian: Option<&TipSensitivities>) -> String {
     let report = &solution.report;
     let tip = solution.tip();
@@ -145,6 +145,8 @@ pub fn json(robot: &Robot, solution: &Solution, count: Option<usize>, jacobian: 
             Json::Object(vec![
                 ("tension", Json::Number(t.tension)),
                 ("end", Json::Number(t.end(robot.length()))),
+                // The turns the tendon makes over its own length (null: a custom routing).
+                ("turns", Json::optional(t.turns(robot.length()))),
                 ("path", Json::Array(path.iter().map(Json::vector).collect())),
             ])
         })
