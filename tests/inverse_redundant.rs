@@ -34,8 +34,7 @@ fn redundant_tendons_keep_the_starting_co_contraction() {
         assert!(solution.reachable, "{}", solution.explain());
         let text = solution.explain();
         assert!(
-            text.contains("4 free tendons for 3 target coordinates")
-                && text.contains("not the least-norm tensions"),
+            text.contains("4 free tendons for 3 target coordinates") && text.contains("not the least-norm tensions"),
             "{text}"
         );
         // The change from the start against the null space of d(tip)/d(tension) there.
@@ -58,7 +57,10 @@ fn redundant_tendons_keep_the_starting_co_contraction() {
         // the path, and the null space turns with them
         // 0.1: exactly 0 for a linear tip map; the tip is nonlinear in the tensions along the
         // path and the null space turns with them (measured 0.05 from the 1 N start)
-        assert!(cosine < 0.1, "start {start:?}: change {change:?} has cosine {cosine} with the null space");
+        assert!(
+            cosine < 0.1,
+            "start {start:?}: change {change:?} has cosine {cosine} with the null space"
+        );
         // Least-norm tensions would be orthogonal to the null space (pulling all four
         // together adds to every tension): these are far from it.
         let tau = DVector::from_column_slice(&solution.tensions[..4]);
