@@ -1487,7 +1487,9 @@ fn clean_exit(args: &[String], code: Option<i32>, stderr: &str) -> Result<(), St
     if !matches!(code, Some(0 | 2 | 3)) {
         return Err(format!("tdcr {args:?} exited with {code:?}:\n{stderr}"));
     }
-    if code != Some(0) && !stderr.starts_with("error: ") {
+    // `warning:` lines (implausible scales, before a solve) may precede the error.
+    let first = stderr.lines().find(|l| !l.starts_with("warning: ")).unwrap_or("");
+    if code != Some(0) && !first.starts_with("error: ") {
         return Err(format!(
             "tdcr {args:?} exited with {code:?} without an error line:\n{stderr}"
         ));

@@ -56,9 +56,7 @@ tension = 0.0
 routing = { kind = "straight", x = 0.0, y = -0.008 }
 tension = 0.0
 
-[[tendon]]                       # tendon 5: one full helical turn (< 0: left-handed)
-# turns_per_rod_length counts over the rod length L: a tendon ending at L/2 with 1.0 makes
-# half a turn (`tdcr check` prints each tendon's own turns). `turns` is its old name.
+[[tendon]]                       # tendon 5: one helical turn per rod length L (< 0: left-handed)
 routing = { kind = "helical", radius = 0.008, turns_per_rod_length = 1.0, phase = 0.0 }   # m, -, rad
 tension = 0.0
 
