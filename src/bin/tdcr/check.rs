@@ -4,6 +4,10 @@ use crate::failure::{Failure, emit};
 use crate::robot_args::read_robot;
 use tdcr::{Method, Readable, Routing, Tendon};
 
+/// Tendons `check` describes one line each; a file with more (a stress test, not a robot)
+/// gets a count for the rest.
+const LISTED_TENDONS: usize = 32;
+
 /// `tdcr check FILE`: reads and checks a robot file (with its fixed mesh, if any, against the
 /// resolution rule), one line on success.
 pub fn run(file: &str) -> Result<(), Failure> {
@@ -28,8 +32,14 @@ pub fn run(file: &str) -> Result<(), Failure> {
         r.loads.point.len(),
         parsed.solver.method
     );
-    for (i, t) in r.tendons.iter().enumerate() {
+    for (i, t) in r.tendons.iter().enumerate().take(LISTED_TENDONS) {
         out.push_str(&format!("  tendon {}: {}\n", i + 1, tendon(t, r.length())));
+    }
+    if r.tendons.len() > LISTED_TENDONS {
+        out.push_str(&format!(
+            "  ... and {} more tendon(s) (`tdcr solve --format json` gives each one's turns)\n",
+            r.tendons.len() - LISTED_TENDONS
+        ));
     }
     for w in &warnings {
         out.push_str(&format!("warning: {w}\n"));
