@@ -813,7 +813,11 @@ fn extreme_values_are_printed_in_scientific_notation() {
 #[test]
 fn a_fixed_mesh_that_aliases_a_helix_exits_2_with_the_intervals_needed() {
     // The file fixes its mesh (`intervals` without `tolerance`).
-    let text = edited("turns = 1.0,", "turns = 100.0,").replacen("\n# intervals = 32 ", "\nintervals = 32 ", 1);
+    let text = edited("turns_per_rod_length = 1.0,", "turns_per_rod_length = 100.0,").replacen(
+        "\n# intervals = 32 ",
+        "\nintervals = 32 ",
+        1,
+    );
     let dir = scratch("aliased");
     std::fs::write(dir.join("robot.toml"), &text).unwrap();
     let out = run(&dir, &["solve", "robot.toml", "--tension", "5=2"], None);

@@ -83,6 +83,7 @@ const KEYS: &[&str] = &[
     "y",
     "radius",
     "turns",
+    "turns_per_rod_length",
     "phase",
     "method",
     "intervals",
@@ -894,7 +895,7 @@ const RULES: &[Rule] = &[
     Rule {
         line: "routing = { kind = \"helical\"",
         value: "1.0",
-        field: "tendon[5].routing.turns",
+        field: "tendon[5].routing.turns_per_rod_length",
         breaks: not_finite,
     },
     Rule {
@@ -1486,7 +1487,9 @@ fn clean_exit(args: &[String], code: Option<i32>, stderr: &str) -> Result<(), St
     if !matches!(code, Some(0 | 2 | 3)) {
         return Err(format!("tdcr {args:?} exited with {code:?}:\n{stderr}"));
     }
-    if code != Some(0) && !stderr.starts_with("error: ") {
+    // `warning:` lines (implausible scales, before a solve) may precede the error.
+    let first = stderr.lines().find(|l| !l.starts_with("warning: ")).unwrap_or("");
+    if code != Some(0) && !first.starts_with("error: ") {
         return Err(format!(
             "tdcr {args:?} exited with {code:?} without an error line:\n{stderr}"
         ));

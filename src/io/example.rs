@@ -56,8 +56,8 @@ tension = 0.0
 routing = { kind = "straight", x = 0.0, y = -0.008 }
 tension = 0.0
 
-[[tendon]]                       # tendon 5: one full helical turn (turns < 0: left-handed)
-routing = { kind = "helical", radius = 0.008, turns = 1.0, phase = 0.0 }   # m, -, rad
+[[tendon]]                       # tendon 5: one helical turn per rod length L (< 0: left-handed)
+routing = { kind = "helical", radius = 0.008, turns_per_rod_length = 1.0, phase = 0.0 }   # m, -, rad
 tension = 0.0
 
 [solver]                         # every field optional

@@ -121,7 +121,8 @@ impl Json {
 
 /// The solution as JSON (every field and unit in docs/cli.md): the solve report, the tip
 /// pose and wrench, the samples of [`samples`] for `count`, each tendon's tension, pull-in,
-/// lengths, slack, end and path, and the tip Jacobians when given. Vectors are `[x, y, z]`, matrices lists of rows; one sample per line.
+/// lengths, slack, end, turns about the backbone over its own length ([`crate::Tendon::turns`])
+/// and path, and the tip Jacobians when given. Vectors are `[x, y, z]`, matrices lists of rows; one sample per line.
 pub fn json(robot: &Robot, solution: &Solution, count: Option<usize>, jacobian: Option<&TipSensitivities>) -> String {
     let report = &solution.report;
     let tip = solution.tip();
@@ -150,6 +151,8 @@ pub fn json(robot: &Robot, solution: &Solution, count: Option<usize>, jacobian: 
                 ("reference_length", Json::Number(state.reference_length)),
                 ("slack", Json::Number(state.slack)),
                 ("end", Json::Number(t.end(robot.length()))),
+                // The turns the tendon makes over its own length (null: a custom routing).
+                ("turns", Json::optional(t.turns(robot.length()))),
                 ("path", Json::Array(path.iter().map(Json::vector).collect())),
             ])
         })

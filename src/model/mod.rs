@@ -9,4 +9,5 @@ pub mod loads;
 pub mod robot;
 pub mod rod;
 pub mod routing;
+pub mod scales;
 pub mod tendon;

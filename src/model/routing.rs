@@ -32,11 +32,20 @@ pub enum Routing {
         /// y offset, m.
         y: f64,
     },
-    /// A helix: x = radius cos(2 pi turns s / L + phase), y = radius sin(...).
+    /// A helix: x = radius cos(2 pi turns s / L + phase), y = radius sin(...), with L the
+    /// rod length.
+    ///
+    /// `turns` is a rate: turns per rod length L, not the turns of any one tendon. A tendon
+    /// on this routing that ends at l <= L makes `turns * l / L` turns ([`Tendon::turns`]
+    /// gives that number): `turns = 1` on a tendon ending at L/2 is half a turn. The rate
+    /// does not depend on where a tendon ends, so moving an end keeps the helix's pitch.
+    ///
+    /// [`Tendon::turns`]: crate::model::tendon::Tendon::turns
     Helical {
         /// Radius, m.
         radius: f64,
-        /// Turns over the rod length (negative: left-handed).
+        /// Turns per rod length L (the helix turns by 2 pi `turns` over s in [0, L]);
+        /// negative: left-handed. Not the turns of a tendon that ends before the tip.
         turns: f64,
         /// Angle at s = 0, rad.
         phase: f64,
@@ -51,8 +60,19 @@ impl Routing {
         Routing::Straight { x, y }
     }
 
-    /// A helical routing of `radius` (m) making `turns` turns over the rod length, starting
-    /// at angle `phase` (rad); turns < 0 is left-handed.
+    /// A helical routing of `radius` (m) at `turns` turns per rod length L (the angle
+    /// advances by 2 pi `turns` over s in [0, L], whatever the tendon's end), starting at
+    /// angle `phase` (rad); turns < 0 is left-handed. A tendon ending at l makes
+    /// `turns * l / L` turns: for one full turn on a tendon that ends at L/2, give
+    /// `turns = 2`.
+    ///
+    /// # Examples
+    /// ```
+    /// use tdcr::{Routing, Tendon};
+    /// // 1 turn per rod length on a tendon that ends half-way: half a turn.
+    /// let tendon = Tendon::new(Routing::helical(0.008, 1.0, 0.0), 1.0).ending_at(0.121);
+    /// assert_eq!(tendon.turns(0.242), Some(0.5));
+    /// ```
     pub fn helical(radius: f64, turns: f64, phase: f64) -> Self {
         Routing::Helical { radius, turns, phase }
     }
@@ -74,6 +94,30 @@ impl Routing {
                 r_ss: Vector3::new(x_ss, y_ss, 0.0),
             }
         })
+    }
+
+    /// The signed turns this routing makes about the backbone between arc lengths `from` and
+    /// `to` (m) on a rod of `length` L (m): 0 for a straight routing, `turns (to - from) / L`
+    /// for a helix, `None` for a custom routing (its angle is not known in closed form).
+    pub fn turns_between(&self, from: f64, to: f64, length: f64) -> Option<f64> {
+        match self {
+            Routing::Straight { .. } => Some(0.0),
+            Routing::Helical { turns, .. } => Some(turns * (to - from) / length),
+            Routing::Custom(_) => None,
+        }
+    }
+
+    /// The largest offset |r(s)| (m) of the routing from the backbone over s in [0, `end`]
+    /// on a rod of `length` L (m): exact for straight and helical routings, the largest of
+    /// 65 samples for a custom one.
+    pub fn max_offset(&self, end: f64, length: f64) -> f64 {
+        match self {
+            Routing::Straight { x, y } => x.hypot(*y),
+            Routing::Helical { radius, .. } => radius.abs(),
+            Routing::Custom(_) => (0..=64)
+                .map(|k| self.at(end * f64::from(k) / 64.0, length).r.norm())
+                .fold(0.0, f64::max),
+        }
     }
 
     /// r, r', r'' at arc length `s` of a rod of `length` L (m).
@@ -119,6 +163,27 @@ mod tests {
     use super::*;
     use approx::assert_relative_eq;
     use num_dual::DualNum;
+
+    /// Issue 17: `turns` counts per rod length; a tendon ending at L/2 on `turns = 1` makes
+    /// half a turn, and the routing's angle at its end says so.
+    #[test]
+    fn helix_turns_count_per_rod_length() {
+        use crate::model::tendon::Tendon;
+        let length = 0.242;
+        let helix = Routing::helical(0.008, 1.0, 0.0);
+        let half = Tendon::new(helix.clone(), 1.0).ending_at(length / 2.0);
+        assert_eq!(half.turns(length), Some(0.5));
+        assert_eq!(Tendon::new(helix.clone(), 1.0).turns(length), Some(1.0));
+        // The path itself: at L/2 the offset points the opposite way from the base (pi rad).
+        let (base, end) = (helix.at(0.0, length).r, helix.at(length / 2.0, length).r);
+        // 1e-15: cos(pi) rounds to -1 within an ulp of the 8 mm radius
+        assert_relative_eq!(end, -base, epsilon = 1e-15);
+        assert_eq!(Tendon::new(Routing::straight(0.008, 0.0), 1.0).turns(length), Some(0.0));
+        assert_eq!(
+            Routing::helical(0.008, -3.0, 0.0).turns_between(0.0, length / 3.0, length),
+            Some(-1.0)
+        );
+    }
 
     #[test]
     fn helix_derivatives_match_dual_version() {

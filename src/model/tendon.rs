@@ -67,6 +67,13 @@ impl Tendon {
         self
     }
 
+    /// The signed turns this tendon's path makes about the backbone from the base to its
+    /// end, on a rod of `length` L (m): a helical routing of `turns` per rod length ending
+    /// at l makes `turns * l / L`; 0 for a straight routing; `None` for a custom one.
+    pub fn turns(&self, length: f64) -> Option<f64> {
+        self.routing.turns_between(0.0, self.end(length), length)
+    }
+
     /// Termination arc length on a rod of `length` L (m).
     pub fn end(&self, length: f64) -> f64 {
         self.termination.unwrap_or(length)

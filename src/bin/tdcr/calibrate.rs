@@ -9,7 +9,10 @@ use nalgebra::Vector3;
 use serde::Serialize;
 use std::fmt::Write as _;
 use std::io::Read;
-use tdcr::fit::calibration::{Calibration, CalibrationOptions, Fit, Parameters, TipErrorStatistics, calibrate};
+use tdcr::fit::calibration::{
+    Calibration, CalibrationOptions, Fit, NOISE_FACTOR, Parameters, PoorFit, TipErrorStatistics,
+    UNSTATED_NOISE_FRACTION, calibrate,
+};
 use tdcr::io::experiments::{csv_header, parse_csv};
 
 /// The CSV format, shown after `tdcr calibrate --help`.
@@ -45,6 +48,11 @@ pub struct CalibrateArgs {
     /// Output format.
     #[arg(long, value_enum, default_value_t = CalibrateFormat::Table)]
     format: CalibrateFormat,
+    /// Measurement noise of the tip positions, per coordinate (m, e.g. 1e-4 for 0.1 mm): a
+    /// fit whose noise estimate is above 3 times it is reported as not explaining the data.
+    /// Without it the limit is 1.5 % of the rod length.
+    #[arg(long, value_name = "METRES", value_parser = parse_noise)]
+    noise: Option<f64>,
     /// Print every Levenberg-Marquardt iteration to standard error.
     #[arg(short, long)]
     verbose: bool,
@@ -80,6 +88,16 @@ fn parse_fit(text: &str) -> Result<Fit, String> {
         }
     }
     Ok(fit)
+}
+
+fn parse_noise(text: &str) -> Result<f64, String> {
+    match text.trim().parse::<f64>() {
+        Ok(x) if x.is_finite() && x > 0.0 => Ok(x),
+        _ => Err(format!(
+            "`{text}` is not a noise level: give the measurement noise per coordinate in metres, a positive \
+             number such as 1e-4 (0.1 mm)"
+        )),
+    }
 }
 
 fn read_csv(file: &str) -> Result<(String, String), Failure> {
@@ -141,10 +159,14 @@ pub fn run(args: &CalibrateArgs) -> Result<(), Failure> {
             if beta > 0.0 { "+" } else { "-" }
         ));
     }
+    let poor = fit.poor_fit(args.noise);
     let text = match args.format {
-        CalibrateFormat::Table => table(&name, &csv_name, &fit, &options),
-        CalibrateFormat::Json => json(&name, &csv_name, &fit, &options),
+        CalibrateFormat::Table => table(&name, &csv_name, &fit, &options, poor.as_ref()),
+        CalibrateFormat::Json => json(&name, &csv_name, &fit, &options, args.noise, poor.as_ref()),
     };
+    if let Some(p) = &poor {
+        note(&format!("warning: {p}"));
+    }
     emit(&text)?;
     if fit.converged() {
         Ok(())
@@ -227,7 +249,13 @@ fn parameter_rows(fit: &Calibration) -> Vec<(String, f64, f64, f64, &'static str
     rows
 }
 
-fn table(name: &str, csv_name: &str, fit: &Calibration, options: &CalibrationOptions) -> String {
+fn table(
+    name: &str,
+    csv_name: &str,
+    fit: &Calibration,
+    options: &CalibrationOptions,
+    poor: Option<&PoorFit>,
+) -> String {
     let mut out = String::new();
     let n = fit.residuals.len();
     let _ = writeln!(
@@ -279,6 +307,9 @@ fn table(name: &str, csv_name: &str, fit: &Calibration, options: &CalibrationOpt
         "noise estimate from the fitted residuals: {:.4} mm per coordinate\n",
         fit.noise_estimate * 1e3
     );
+    if let Some(p) = poor {
+        let _ = writeln!(out, "warning: {p}\n");
+    }
     let _ = writeln!(
         out,
         "{:>4} {:>12} {:>12}   {:>9} {:>9} {:>9}",
@@ -375,6 +406,19 @@ struct Statistics {
     fitted: StatisticsJson,
 }
 
+/// Whether the fitted residuals are at the measurement noise.
+#[derive(Serialize)]
+struct FitQuality {
+    /// The stated measurement noise per coordinate (m), `--noise`, if given.
+    stated_noise: Option<f64>,
+    /// The noise estimate the fit may reach before it is a misfit (m per coordinate).
+    limit: f64,
+    /// Whether the noise estimate is above `limit`.
+    poor: bool,
+    /// The warning's text when `poor`.
+    warning: Option<String>,
+}
+
 #[derive(Serialize)]
 struct CalibrationJson<'a> {
     robot_file: &'a str,
@@ -391,11 +435,21 @@ struct CalibrationJson<'a> {
     fitted: ParametersJson,
     standard_errors: Option<ParametersJson>,
     noise_estimate: f64,
+    /// The fit's residuals against the measurement noise ([`Calibration::poor_fit`]).
+    fit_quality: FitQuality,
     tip_errors: Statistics,
     experiments: Vec<ExperimentJson>,
 }
 
-fn json(name: &str, csv_name: &str, fit: &Calibration, options: &CalibrationOptions) -> String {
+/// The JSON output; `noise` is `--noise`, `poor` the fit's warning.
+fn json(
+    name: &str,
+    csv_name: &str,
+    fit: &Calibration,
+    options: &CalibrationOptions,
+    noise: Option<f64>,
+    poor: Option<&PoorFit>,
+) -> String {
     let value = CalibrationJson {
         robot_file: name,
         experiments_file: csv_name,
@@ -411,6 +465,12 @@ fn json(name: &str, csv_name: &str, fit: &Calibration, options: &CalibrationOpti
         fitted: (&fit.fitted).into(),
         standard_errors: fit.standard_errors.as_ref().map(Into::into),
         noise_estimate: fit.noise_estimate,
+        fit_quality: FitQuality {
+            stated_noise: noise,
+            limit: noise.map_or(UNSTATED_NOISE_FRACTION * fit.robot.length(), |n| NOISE_FACTOR * n),
+            poor: poor.is_some(),
+            warning: poor.map(ToString::to_string),
+        },
         tip_errors: Statistics {
             start: (&fit.start_errors).into(),
             fitted: (&fit.errors).into(),

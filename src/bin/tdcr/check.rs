@@ -2,7 +2,11 @@
 
 use crate::failure::{Failure, emit};
 use crate::robot_args::read_robot;
-use tdcr::Method;
+use tdcr::{Method, Readable, Routing, Tendon};
+
+/// Tendons `check` describes one line each; a file with more (a stress test, not a robot)
+/// gets a count for the rest.
+const LISTED_TENDONS: usize = 32;
 
 /// `tdcr check FILE`: reads and checks a robot file (with its fixed mesh, if any, against the
 /// resolution rule), one line on success.
@@ -15,13 +19,68 @@ pub fn run(file: &str) -> Result<(), Failure> {
             .map_err(|e| Failure::Input(format!("{name}: {e}")))?;
     }
     let pulled = r.tendons.iter().filter(|t| t.tension > 0.0).count();
-    emit(&format!(
-        "{name}: OK: a {:.4} m rod with {} tendon(s) ({pulled} pulled), {} point load(s); solver: {}\n",
+    let warnings = r.plausibility();
+    let mut out = format!(
+        "{name}: OK{}: a {:.4} m rod with {} tendon(s) ({pulled} pulled), {} point load(s); solver: {}\n",
+        match warnings.len() {
+            0 => String::new(),
+            1 => ", with 1 warning".to_string(),
+            n => format!(", with {n} warnings"),
+        },
         r.length(),
         r.tendons.len(),
         r.loads.point.len(),
         parsed.solver.method
-    ))
+    );
+    for (i, t) in r.tendons.iter().enumerate().take(LISTED_TENDONS) {
+        out.push_str(&format!("  tendon {}: {}\n", i + 1, tendon(t, r.length())));
+    }
+    if r.tendons.len() > LISTED_TENDONS {
+        out.push_str(&format!(
+            "  ... and {} more tendon(s) (`tdcr solve --format json` gives each one's turns)\n",
+            r.tendons.len() - LISTED_TENDONS
+        ));
+    }
+    for w in &warnings {
+        out.push_str(&format!("warning: {w}\n"));
+    }
+    emit(&out)
+}
+
+/// A tendon in a few words for `check`: its routing with the turns it makes over its own
+/// length, its end and tension.
+fn tendon(t: &Tendon, length: f64) -> String {
+    let end = t.end(length);
+    let at = if end < length {
+        format!("ends at s = {} m", Readable(end))
+    } else {
+        format!("ends at the tip ({} m)", Readable(end))
+    };
+    let routing = match &t.routing {
+        Routing::Straight { x, y } => format!("straight at ({}, {}) m", Readable(*x), Readable(*y)),
+        Routing::Helical { radius, turns, phase } => {
+            let own = t.turns(length).unwrap_or(f64::NAN);
+            let plural = if own.abs() == 1.0 { "" } else { "s" };
+            let rate = if end < length {
+                format!(
+                    " (turns_per_rod_length {} counts over L = {} m)",
+                    Readable(*turns),
+                    Readable(length)
+                )
+            } else {
+                String::new()
+            };
+            format!(
+                "helical, radius {} m, phase {} rad, {} turn{plural} over its {} m{rate}",
+                Readable(*radius),
+                Readable(*phase),
+                Readable((own * 1e6).round() / 1e6),
+                Readable(end)
+            )
+        }
+        Routing::Custom(_) => "custom routing".into(),
+    };
+    format!("{routing}, {at}, tension {} N", Readable(t.tension))
 }
 
 /// `tdcr example`: the prototype as a commented robot file.

@@ -3,8 +3,8 @@
 
 use std::io::Write;
 use std::path::Path;
-use tdcr::Error;
 use tdcr::plot::{Figure, Format};
+use tdcr::{Error, Robot};
 
 use crate::tables::diagnostics;
 
@@ -58,6 +58,33 @@ pub fn solver_failure(e: Error) -> Failure {
         Failure::Input(text)
     } else {
         Failure::Other(text)
+    }
+}
+
+/// A solver failure with the robot's implausible scales ([`Robot::plausibility`]) named as
+/// its likely cause, after the failure's first line; other failures unchanged.
+pub fn with_likely_causes(failure: Failure, robot: &Robot) -> Failure {
+    let Failure::NotConverged(text) = failure else {
+        return failure;
+    };
+    let warnings = robot.plausibility();
+    if warnings.is_empty() {
+        return Failure::NotConverged(text);
+    }
+    let (head, rest) = text.split_once('\n').unwrap_or((&text, ""));
+    let mut out = format!("{head}\n  likely cause{}:\n", if warnings.len() > 1 { "s" } else { "" });
+    for w in &warnings {
+        out.push_str(&format!("    {w}\n"));
+    }
+    out.push_str(rest);
+    Failure::NotConverged(out)
+}
+
+/// Prints the robot's implausible scales ([`Robot::plausibility`]) to standard error, one
+/// `warning:` line each.
+pub fn warn_scales(name: &str, robot: &Robot) {
+    for w in robot.plausibility() {
+        note(&format!("warning: {name}: {w}"));
     }
 }
 

@@ -5,7 +5,7 @@ use tdcr::io::RobotFile;
 use tdcr::{Method, Robot, Solution, collocation, shooting};
 
 use crate::args::{MethodArg, SolverArgs};
-use crate::failure::{Failure, note, solver_failure};
+use crate::failure::{Failure, note, solver_failure, with_likely_causes};
 
 /// Reads and checks a robot file (`-`: standard input); every problem is one message line.
 pub fn read_robot(file: &str) -> Result<(String, RobotFile), Failure> {
@@ -113,5 +113,5 @@ pub fn run_solver(robot: &Robot, file: &RobotFile, warm: Option<&Solution>) -> R
         (Method::Collocation, Some(w)) => collocation::solve_from(robot, &s.collocation, w),
         (Method::Shooting, _) => shooting::solve(robot, &s.shooting),
     }
-    .map_err(solver_failure)
+    .map_err(|e| with_likely_causes(solver_failure(e), robot))
 }

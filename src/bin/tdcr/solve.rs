@@ -77,6 +77,7 @@ pub fn run(args: &SolveArgs) -> Result<(), Failure> {
         set_displacement(&mut file.robot, i, q)?;
     }
     apply(&mut file, &args.solver);
+    crate::failure::warn_scales(&name, &file.robot);
     let solution = run_solver(&file.robot, &file, None)?;
     if args.jacobian && !matches!(args.format, Format::Json) {
         note("note: --jacobian adds the tip Jacobians to the JSON output only (--format json)");

@@ -80,7 +80,7 @@ mod robots;
 
 pub use euler::{euler_rates, euler_xyz, euler_xyz_from, wrap};
 pub use problem::{CalibrationOptions, Fit, Measurement, Parameters};
-pub use result::{Calibration, CalibrationTimings, TipErrorStatistics};
+pub use result::{Calibration, CalibrationTimings, NOISE_FACTOR, PoorFit, TipErrorStatistics, UNSTATED_NOISE_FRACTION};
 pub use robots::{rotate_world, scaled_routing};
 
 use super::lm::{Damping, FitTermination, accepts, gain_ratio};

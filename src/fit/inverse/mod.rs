@@ -54,6 +54,19 @@
 //!   dominates there), or after the damping grew through repeated rejections.
 //! - `MaxIterations`: `max_iterations` trial steps were taken.
 //!
+//! # Redundant tendons
+//!
+//! With more free tendons than target coordinates (four straight tendons for a tip
+//! position), many tensions put the tip at the target. The iteration returns the one it
+//! reaches from the starting tensions: each damped step minimizes |e + J d|^2 + mu |d|^2,
+//! whose minimizer has no component in the null space of J (tension changes the
+//! linearized tip does not see, such as pulling opposing tendons together) unless a bound
+//! is active. The result keeps the start's share of such co-contraction: for a linear tip
+//! map without active bounds it is exactly the solution nearest the start, and on the
+//! prototype its change from the start is within a few per cent of orthogonal to the null
+//! space (tests/inverse_redundant.rs). It is not the least-norm tension; start from low
+//! tensions to get low ones.
+//!
 //! Only `Reached` sets `reachable`. Every other outcome returns the best tensions found and
 //! their residual; [`InverseSolution::explain`] says how far the tip stayed and which
 //! tendons sit at their bounds. The minimum found is local: a target that needs the rod to
@@ -178,8 +191,10 @@ impl InverseSolution {
     }
 
     /// A few sentences for a person: whether the target was reached, how far the tip
-    /// stayed, why the iteration stopped, and which tendons sit at their bounds (numbered from
-    /// 1, as on the command line).
+    /// stayed, why the iteration stopped, which tendons sit at their bounds (numbered from
+    /// 1, as on the command line), and, with more free tendons than target coordinates, which
+    /// of the many solutions this is (the one reached from the starting tensions, close to
+    /// the nearest to them; not the least-norm one).
     pub fn explain(&self) -> String {
         let mut text = if self.reachable {
             format!(
@@ -221,6 +236,20 @@ impl InverseSolution {
         let slack = list(Bound::Slack);
         if !slack.is_empty() {
             text.push_str(&format!("; slack (0 N): {slack}"));
+        }
+        let free = self.bounds.iter().filter(|&&b| b != Bound::Held).count();
+        let coordinates = if self.target.orientation.is_some() { 6 } else { 3 };
+        if free > coordinates {
+            // What the iteration does (module docs): damped least-squares steps from the
+            // starting tensions, each without a component in the null space of the tip
+            // Jacobian at its iterate.
+            text.push_str(&format!(
+                "; {free} free tendons for {coordinates} target coordinates, so many tensions give this tip: \
+                 these are the ones reached from the starting tensions, each step the smallest tension change \
+                 that makes its progress (no component along changes the tip does not see, such as pulling \
+                 opposing tendons together), so they keep the start's co-contraction: close to the solution \
+                 nearest the start, not the least-norm tensions (start from lower tensions for lower ones)"
+            ));
         }
         if !self.reachable {
             // A tip cannot get farther from the base than the rod is long (tendons only

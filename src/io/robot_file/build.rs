@@ -77,7 +77,12 @@ pub(super) fn build(rod: &RodTable, base: &BaseTable, loads: &LoadsTable, tendon
     for t in tendons {
         let routing = match t.routing {
             RoutingTable::Straight { x, y } => Routing::straight(x, y),
-            RoutingTable::Helical { radius, turns, phase } => Routing::helical(radius, turns, phase),
+            RoutingTable::Helical {
+                radius,
+                turns_per_rod_length,
+                turns,
+                phase,
+            } => Routing::helical(radius, turns_per_rod_length.or(turns).unwrap_or(f64::NAN), phase),
         };
         let mut tendon = Tendon::new(routing, t.tension.unwrap_or(0.0));
         tendon.termination = t.end;

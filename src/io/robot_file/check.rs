@@ -234,9 +234,36 @@ impl Checker<'_> {
                 self.finite(&format!("{routing}.x"), x, " m");
                 self.finite(&format!("{routing}.y"), y, " m");
             }
-            RoutingTable::Helical { radius, turns, phase } => {
+            RoutingTable::Helical {
+                radius,
+                turns_per_rod_length,
+                turns,
+                phase,
+            } => {
                 self.positive(&format!("{routing}.radius"), radius, " m");
-                self.finite(&format!("{routing}.turns"), turns, "");
+                // `turns` is the old name of `turns_per_rod_length`, with the same meaning.
+                match (turns_per_rod_length, turns) {
+                    (Some(_), Some(_)) => self.report(
+                        &format!("{routing}.turns"),
+                        "is given together with `turns_per_rod_length`: `turns` is its old name \
+                         (the same meaning, turns per rod length); give one of them"
+                            .into(),
+                    ),
+                    (Some(n), None) => {
+                        self.finite(&format!("{routing}.turns_per_rod_length"), n, "");
+                    }
+                    (None, Some(n)) => {
+                        self.finite(&format!("{routing}.turns"), n, "");
+                    }
+                    (None, None) => self.report(
+                        &format!("{routing}.turns_per_rod_length"),
+                        format!(
+                            "is required but missing in [[tendon]] #{}: the helix's turns per rod \
+                             length L (a tendon ending at l makes turns_per_rod_length * l / L turns)",
+                            i + 1
+                        ),
+                    ),
+                }
                 self.finite(&format!("{routing}.phase"), phase, " rad");
             }
         }

@@ -59,7 +59,8 @@ pub struct RobotFile {
 ///
 /// # Errors
 /// A [`FileError`] listing every problem found: syntax errors (all of them), then for each
-/// table a missing field, wrong type or unknown key (the first per table), then every value
+/// table every missing required field and the first wrong type or unknown key (with a
+/// did-you-mean for a likely misspelling), then every value
 /// that breaks its rule, each with line, column and field path. Only a file without such
 /// problems is built into a [`Robot`] and checked by [`Robot::validate`].
 pub fn parse(text: &str, file: &str) -> Result<RobotFile, FileError> {
@@ -218,7 +219,11 @@ impl Reader<'_> {
                     let hint = match name.as_str() {
                         "tendons" => "; did you mean [[tendon]]?".to_string(),
                         "load" => "; did you mean [loads]?".to_string(),
-                        _ => String::new(),
+                        _ => match closest(&name, ["rod", "base", "loads", "solver", "tendon"].into_iter()) {
+                            Some("tendon") => "; did you mean [[tendon]]?".to_string(),
+                            Some(table) => format!("; did you mean [{table}]?"),
+                            None => String::new(),
+                        },
                     };
                     self.problems.push(Problem {
                         position: Some(self.lines.position(key.span().start)),
@@ -231,9 +236,27 @@ impl Reader<'_> {
         tables
     }
 
+    /// Reports every required field missing from table `name` (serde reports only the
+    /// first); returns their paths.
+    fn missing(&mut self, name: &str, value: &Spanned<DeValue<'_>>) -> Vec<String> {
+        let mut found = Vec::new();
+        let shown = shown_table(name);
+        for (path, at, table) in required_fields(name, value) {
+            let position = self.lines.position(at);
+            self.problems.push(Problem {
+                position: Some(position),
+                field: path.clone(),
+                message: format!("is required but missing in {shown}{}", near_miss(&path, table)),
+            });
+            found.push(path);
+        }
+        found
+    }
+
     /// Deserializes one table; a failure becomes a problem that names the table.
     fn table<T: DeserializeOwned>(&mut self, name: &str, value: Spanned<DeValue<'_>>) -> Option<T> {
         let span = value.span();
+        let missing = self.missing(name, &value);
         match T::deserialize(ValueDeserializer::from(value)) {
             Ok(t) => Some(t),
             Err(e) => {
@@ -245,10 +268,7 @@ impl Reader<'_> {
                 // The key the error is at, if it belongs to this table.
                 let key = self.locator.get().key_at(at).filter(|p| p.starts_with(name));
                 let parent = |p: &str| p.rfind('.').map_or(name.to_string(), |i| p[..i].to_string());
-                let shown = match name.strip_prefix("tendon[") {
-                    Some(rest) => format!("[[tendon]] #{}", rest.trim_end_matches(']')),
-                    None => format!("[{name}]"),
-                };
+                let shown = shown_table(name);
                 // Missing and unknown fields are reported at their table (the key's value
                 // when that is a table, else the key's parent): name it.
                 let table = match &key {
@@ -256,19 +276,22 @@ impl Reader<'_> {
                     Some(k) => parent(k),
                     None => name.to_string(),
                 };
-                let (field, message) = if let Some(missing) = missing_field(&message) {
-                    (
-                        format!("{table}.{missing}"),
-                        format!("is required but missing in {shown}"),
-                    )
+                let hint = did_you_mean(&message);
+                let (field, message) = if let Some(field) = missing_field(&message) {
+                    let path = format!("{table}.{field}");
+                    if missing.contains(&path) {
+                        // Already reported, with the table's other missing fields.
+                        return None;
+                    }
+                    (path, format!("is required but missing in {shown}"))
                 } else if message.starts_with("unknown field")
                     || message.starts_with("unknown variant") && key.is_none()
                 {
-                    (table, format!("in {shown}: {message}"))
+                    (table, format!("in {shown}: {message}{hint}"))
                 } else {
                     (
                         key.unwrap_or_else(|| name.to_string()),
-                        format!("in {shown}: {message}"),
+                        format!("in {shown}: {message}{hint}"),
                     )
                 };
                 self.problems.push(Problem {
@@ -282,7 +305,221 @@ impl Reader<'_> {
     }
 }
 
+/// How messages name table `name`: `[rod]`, `[[tendon]] #2`.
+fn shown_table(name: &str) -> String {
+    match name.strip_prefix("tendon[") {
+        Some(rest) => format!("[[tendon]] #{}", rest.trim_end_matches(']')),
+        None => format!("[{name}]"),
+    }
+}
+
+/// The keys of `value` if it is a table.
+fn keys<'a>(value: &'a Spanned<DeValue<'_>>) -> Option<Vec<&'a str>> {
+    match value.get_ref() {
+        DeValue::Table(t) => Some(t.iter().map(|(k, _)| k.get_ref().as_ref()).collect()),
+        _ => None,
+    }
+}
+
+/// The entry `key` of `value` if it is a table that has it.
+fn entry<'a, 'i>(value: &'a Spanned<DeValue<'i>>, key: &str) -> Option<&'a Spanned<DeValue<'i>>> {
+    match value.get_ref() {
+        DeValue::Table(t) => t.iter().find(|(k, _)| k.get_ref().as_ref() == key).map(|(_, v)| v),
+        _ => None,
+    }
+}
+
+/// The required fields (docs/robot-file.md) missing from table `name` of the file and
+/// from its nested tables (a tendon's `routing`, each `[[loads.point]]`): each one's path,
+/// the byte offset of the table it is missing from, and that table's keys. Only tables
+/// that are tables are looked into; a value of the wrong type is serde's to report.
+fn required_fields<'a>(name: &str, value: &'a Spanned<DeValue<'_>>) -> Vec<(String, usize, Vec<&'a str>)> {
+    let mut out = Vec::new();
+    let mut need = |path: &str, table: &'a Spanned<DeValue<'_>>, fields: &[&str]| {
+        if let Some(present) = keys(table) {
+            for f in fields.iter().filter(|f| !present.contains(f)) {
+                out.push((format!("{path}.{f}"), table.span().start, present.clone()));
+            }
+        }
+    };
+    if name == "rod" {
+        need(name, value, &["length", "outer_radius", "youngs_modulus"]);
+    } else if name == "loads" {
+        if let Some(DeValue::Array(points)) = entry(value, "point").map(|p| p.get_ref()) {
+            for (i, p) in points.iter().enumerate() {
+                need(&format!("loads.point[{}]", i + 1), p, &["s"]);
+            }
+        }
+    } else if name.starts_with("tendon[") {
+        need(name, value, &["routing", "tension"]);
+        if let Some(routing) = entry(value, "routing") {
+            let path = format!("{name}.routing");
+            match entry(routing, "kind").map(|k| k.get_ref()) {
+                None => need(&path, routing, &["kind"]),
+                Some(DeValue::String(kind)) if kind.as_ref() == "straight" => need(&path, routing, &["x", "y"]),
+                // `turns_per_rod_length` (or its old name `turns`) is checked with the values.
+                Some(DeValue::String(kind)) if kind.as_ref() == "helical" => need(&path, routing, &["radius"]),
+                Some(_) => {}
+            }
+        }
+    }
+    out
+}
+
+/// ` (the table has `x`: a misspelling?)` when a key of `present` is a likely misspelling
+/// of the missing field at the end of `path`, else nothing.
+fn near_miss(path: &str, present: Vec<&str>) -> String {
+    let field = path.rsplit('.').next().unwrap_or(path);
+    match closest(field, present.iter().copied()) {
+        Some(key) => format!(" (the table has `{key}`: a misspelling?)"),
+        None => String::new(),
+    }
+}
+
+/// `; did you mean `x`?` for serde's "unknown field `a`, expected one of `x`, `y`" (or
+/// "unknown variant") when one of the expected names is a likely misspelling of `a`.
+fn did_you_mean(message: &str) -> String {
+    if !(message.starts_with("unknown field") || message.starts_with("unknown variant")) {
+        return String::new();
+    }
+    // The names are the back-quoted words: the unknown one first, then the expected ones.
+    let mut names = message.split('`').skip(1).step_by(2);
+    let Some(given) = names.next() else {
+        return String::new();
+    };
+    match closest(given, names) {
+        Some(name) => format!("; did you mean `{name}`?"),
+        None => String::new(),
+    }
+}
+
+/// The candidate closest to `given` by edit distance, if it is close enough to be a
+/// misspelling: at most a third of the length of `given` in edits, and at least 1 (so
+/// `young_modulus` finds `youngs_modulus`, 1 edit, and `lenght` finds `length`, 2), or a
+/// candidate that starts with the same 4 or more characters (`helix` finds `helical`).
+fn closest<'a>(given: &str, candidates: impl Iterator<Item = &'a str>) -> Option<&'a str> {
+    let limit = (given.chars().count() / 3).max(1);
+    let stem: String = given.to_lowercase().chars().take(4).collect();
+    let same_stem = |c: &str| stem.chars().count() == 4 && c.to_lowercase().starts_with(&stem);
+    candidates
+        .filter(|c| *c != given)
+        .map(|c| (edit_distance(given, c), c))
+        .filter(|(d, c)| *d <= limit || same_stem(c))
+        .min_by_key(|(d, _)| *d)
+        .map(|(_, c)| c)
+}
+
+/// Levenshtein distance between `a` and `b` (insertions, deletions and substitutions of
+/// one character each count 1; case is ignored).
+fn edit_distance(a: &str, b: &str) -> usize {
+    let a: Vec<char> = a.to_lowercase().chars().collect();
+    let b: Vec<char> = b.to_lowercase().chars().collect();
+    let mut row: Vec<usize> = (0..=b.len()).collect();
+    for (i, ca) in a.iter().enumerate() {
+        let mut diagonal = row[0];
+        row[0] = i + 1;
+        for (j, cb) in b.iter().enumerate() {
+            let above = row[j + 1];
+            row[j + 1] = (above + 1).min(row[j] + 1).min(diagonal + usize::from(ca != cb));
+            diagonal = above;
+        }
+    }
+    row[b.len()]
+}
+
 /// The field name of serde's "missing field `x`" message.
 fn missing_field(message: &str) -> Option<&str> {
     message.strip_prefix("missing field `")?.split('`').next()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::Routing;
+
+    #[test]
+    fn edit_distance_counts_single_character_edits() {
+        assert_eq!(edit_distance("young_modulus", "youngs_modulus"), 1);
+        assert_eq!(edit_distance("lenght", "length"), 2);
+        assert_eq!(edit_distance("", "rod"), 3);
+        assert_eq!(edit_distance("Rod", "rod"), 0);
+        assert_eq!(
+            closest("young_modulus", ["youngs_modulus", "length"].into_iter()),
+            Some("youngs_modulus")
+        );
+        // `colour` is nothing like a tendon field: no suggestion.
+        assert_eq!(closest("colour", ["routing", "tension", "end"].into_iter()), None);
+    }
+
+    /// Issue 17: every missing field of a table is reported, not only the first, each at the
+    /// table's line.
+    #[test]
+    fn every_missing_field_of_a_table_is_reported() {
+        let text = "[rod]\npoisson_ratio = 0.3\n\n[[tendon]]\nrouting = { kind = \"straight\" }\n";
+        let e = parse(text, "robot.toml").unwrap_err().to_string();
+        for line in [
+            "robot.toml:1:1: `rod.length` is required but missing in [rod]",
+            "robot.toml:1:1: `rod.outer_radius` is required but missing in [rod]",
+            "robot.toml:1:1: `rod.youngs_modulus` is required but missing in [rod]",
+            "`tendon[1].tension` is required but missing in [[tendon]] #1",
+            "`tendon[1].routing.x` is required but missing in [[tendon]] #1",
+            "`tendon[1].routing.y` is required but missing in [[tendon]] #1",
+        ] {
+            assert!(e.contains(line), "`{line}` not in:\n{e}");
+        }
+    }
+
+    /// Issue 17: a misspelled key gets a did-you-mean, and the field it misspells is
+    /// reported missing with a pointer to the misspelling.
+    #[test]
+    fn misspelled_keys_get_a_suggestion() {
+        let text = crate::io::example().replace("youngs_modulus = 210e9", "young_modulus = 210e9");
+        let e = parse(&text, "robot.toml").unwrap_err().to_string();
+        assert!(
+            e.contains("unknown field `young_modulus`") && e.contains("did you mean `youngs_modulus`?"),
+            "{e}"
+        );
+        assert!(
+            e.contains(
+                "`rod.youngs_modulus` is required but missing in [rod] (the table has `young_modulus`: a misspelling?)"
+            ),
+            "{e}"
+        );
+        let text = crate::io::example().replace("kind = \"helical\"", "kind = \"helix\"");
+        let e = parse(&text, "robot.toml").unwrap_err().to_string();
+        assert!(
+            e.contains("unknown variant `helix`") && e.contains("did you mean `helical`?"),
+            "{e}"
+        );
+        let text = format!("{}\n[solvr]\nmethod = \"shooting\"\n", crate::io::example());
+        let e = parse(&text, "robot.toml").unwrap_err().to_string();
+        assert!(
+            e.contains("unknown key `solvr` at the top level") && e.contains("did you mean [solver]?"),
+            "{e}"
+        );
+    }
+
+    /// Issue 17: `turns` is the old name of `turns_per_rod_length`, with the same meaning.
+    #[test]
+    fn helix_turns_keep_their_old_name() {
+        let example = crate::io::example();
+        let old = example.replace("turns_per_rod_length = 1.0", "turns = 1.0");
+        assert_ne!(old, example, "the example lost its helix");
+        let (new, old) = (parse(&example, "new").unwrap(), parse(&old, "old").unwrap());
+        for robot in [&new.robot, &old.robot] {
+            assert!(matches!(robot.tendons[4].routing, Routing::Helical { turns, .. } if turns == 1.0));
+        }
+        let both = example.replace("turns_per_rod_length = 1.0", "turns_per_rod_length = 1.0, turns = 1.0");
+        let e = parse(&both, "robot.toml").unwrap_err().to_string();
+        assert!(
+            e.contains("`tendon[5].routing.turns` is given together with `turns_per_rod_length`"),
+            "{e}"
+        );
+        let none = example.replace("turns_per_rod_length = 1.0, ", "");
+        let e = parse(&none, "robot.toml").unwrap_err().to_string();
+        assert!(
+            e.contains("`tendon[5].routing.turns_per_rod_length` is required but missing"),
+            "{e}"
+        );
+    }
 }

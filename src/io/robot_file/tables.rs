@@ -156,9 +156,12 @@ pub(super) enum RoutingTable {
         x: f64,
         y: f64,
     },
+    /// `turns_per_rod_length`, or its old name `turns` (the same meaning), one of them
+    /// required (checked in `check`).
     Helical {
         radius: f64,
-        turns: f64,
+        turns_per_rod_length: Option<f64>,
+        turns: Option<f64>,
         #[serde(default)]
         phase: f64,
     },
