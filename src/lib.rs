@@ -62,6 +62,7 @@ pub use collocation::sensitivity::{TipSensitivities, backbone_tension_sensitivit
 pub use collocation::{Solver, solve, solve_batch, solve_from};
 pub use error::{Error, Readable, Result};
 pub use model::loads::{Field, Loads, PointLoad};
+pub use model::parameter::Parameter;
 pub use model::robot::{Robot, TendonModel};
 pub use model::rod::{Rod, Section};
 pub use model::routing::{Routing, RoutingPoint};

@@ -849,3 +849,40 @@ fn a_fixed_mesh_that_aliases_a_helix_exits_2_with_the_intervals_needed() {
     let out = run(&dir, &["check", "robot.toml"], None);
     assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
 }
+
+#[test]
+fn trace_writes_the_branch_with_stability_and_a_picture() {
+    let dir = scratch("trace");
+    std::fs::write(dir.join("robot.toml"), example()).unwrap();
+    let out = run(
+        &dir,
+        &[
+            "trace",
+            "robot.toml",
+            "--param",
+            "tension.1=0:4",
+            "--plot",
+            "branch.svg",
+        ],
+        None,
+    );
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    let csv = stdout(&out);
+    let mut lines = csv.lines();
+    assert_eq!(
+        lines.next(),
+        Some("point,tension.1,tip_x,tip_y,tip_z,stability,unstable_directions,fold,iterations")
+    );
+    let rows: Vec<&str> = lines.collect();
+    // At least 20 points on a branch that runs straight from 0 to 4 N (steps of at most
+    // 0.05 in the normalized arclength), all stable, the last at 4 N.
+    assert!(rows.len() >= 20, "{} rows", rows.len());
+    assert!(rows.iter().all(|r| r.contains(",stable,0,0,")), "{csv}");
+    assert!(rows.last().unwrap().starts_with(&format!("{},4,", rows.len())), "{csv}");
+    let svg = std::fs::read_to_string(dir.join("branch.svg")).unwrap();
+    assert!(svg.contains("tension.1 (N)") && svg.contains("stable equilibria"));
+    // A parameter that does not exist is bad input, named with the accepted forms.
+    let out = run(&dir, &["trace", "robot.toml", "--param", "youngs_modulus=1:2"], None);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(stderr(&out).contains("tension.I"), "{}", stderr(&out));
+}

@@ -142,7 +142,11 @@ fn opposing_loads_return_the_load_path_state_and_flag_the_other_one() {
     // Newton from the guess lands elsewhere (the curl before the monotonicity test, now a
     // state with the tip at (-59, 0, -40) mm), and that state is unstable.
     let other = collocation::solve(&proto, &nearest()).unwrap();
-    assert!((other.tip_position() - default.tip_position()).norm() > 0.05, "{:?}", other.tip_position());
+    assert!(
+        (other.tip_position() - default.tip_position()).norm() > 0.05,
+        "{:?}",
+        other.tip_position()
+    );
     assert_eq!(other.report.stability.verdict(), "unstable");
 }
 

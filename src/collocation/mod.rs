@@ -33,6 +33,7 @@ pub(crate) mod residual;
 pub mod sensitivity;
 pub(crate) mod stability;
 pub(crate) mod system;
+mod trace;
 pub(crate) mod unknowns;
 
 use crate::error::Result;
@@ -49,6 +50,7 @@ use newton::{Settings, Workspace};
 pub use options::{DEFAULT_TOLERANCE, Equilibrium, MAX_INTERVALS, MAX_ITERATIONS, Options};
 use std::time::Instant;
 use system::System;
+pub use trace::{Trace, TracePoint, trace};
 
 /// Solves `robot` by collocation from the rigid-equilibrium initial guess.
 ///
@@ -502,9 +504,12 @@ fn choose_equilibrium(
     }
     let fallback = converged.then_some(x);
     if warm {
-        if let Ok(end) = path::follow(system, ws, Some(&x0), options, settings, report) {
+        if let Ok(end) = path::follow(system, ws, path::Start::Warm(&x0), options, settings, report, None) {
             let exact = !report.history.iter().any(|i| i.fresh_jacobian);
-            if !matches!(stability_of(system, ws, &end.x, exact, report), Stability::Unstable { .. }) {
+            if !matches!(
+                stability_of(system, ws, &end.x, exact, report),
+                Stability::Unstable { .. }
+            ) {
                 report.path = Path::FromWarmStart {
                     folds: end.folds,
                     bifurcations: end.bifurcations,
@@ -519,7 +524,7 @@ fn choose_equilibrium(
         }
     }
     let mesh = system.mesh.clone();
-    match path::follow(system, ws, None, options, settings, report) {
+    match path::follow(system, ws, path::Start::Rest, options, settings, report, None) {
         Ok(end) => {
             report.path = Path::LoadPath {
                 folds: end.folds,

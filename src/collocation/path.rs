@@ -24,6 +24,7 @@ use super::stability;
 use super::system::System;
 use crate::mesh::guess::rigid_estimate;
 use crate::mesh::{Mesh, nodes};
+use crate::model::parameter::Parameter;
 use crate::report::{SolveReport, Stability, Termination};
 use crate::solution::State;
 
@@ -100,12 +101,78 @@ fn max_norm(v: &[f64]) -> f64 {
 
 /// Which problems the path connects.
 pub(super) enum Homotopy {
-    /// The load path: every tension and external load times lambda, from the unloaded
-    /// robot at lambda = 0.
-    Load,
+    /// One input moved along a line: `parameter` = from + lambda (to - from). The load
+    /// path is the load scale from 0 to 1, from the unloaded robot.
+    Parameter {
+        /// The input.
+        parameter: Parameter,
+        /// Its value at lambda = 0.
+        from: f64,
+        /// Its value at lambda = 1.
+        to: f64,
+    },
     /// From a warm start x0 (not a solution) to the robot: F(x) - (1 - lambda) F(x0) = 0,
     /// which x0 solves at lambda = 0 (a Newton homotopy). Holds F(x0).
     Newton(Vec<f64>),
+}
+
+impl Homotopy {
+    /// The load path: every tension and load scaled from 0 to 1.
+    fn load() -> Self {
+        Homotopy::Parameter {
+            parameter: Parameter::LoadScale,
+            from: 0.0,
+            to: 1.0,
+        }
+    }
+
+    /// Sets `system` to the problem at `lambda`.
+    fn set(&self, system: &mut System, lambda: f64) {
+        if let Homotopy::Parameter { parameter, from, to } = *self {
+            let value = from + lambda * (to - from);
+            match parameter {
+                Parameter::LoadScale => system.set_factors(value, value),
+                p => system.set_parameter(p, value),
+            }
+        }
+    }
+}
+
+/// Where a path starts and what it connects.
+pub(super) enum Start<'x> {
+    /// The load path from the unloaded robot.
+    Rest,
+    /// The Newton homotopy from a warm start (not a solution of the system).
+    Warm(&'x [State]),
+    /// A trace of `parameter` from `from` (where `x` is the converged solution) towards
+    /// `to`, recording every point; it ends where lambda leaves [0, 1].
+    Trace {
+        /// The states at `from`.
+        x: &'x [State],
+        /// The input traced.
+        parameter: Parameter,
+        /// Its first value.
+        from: f64,
+        /// Its last value.
+        to: f64,
+        /// The longest step (normalized arclength), for a resolved picture of the branch.
+        max_step: f64,
+    },
+}
+
+/// A point of a traced branch.
+#[derive(Clone, Debug)]
+pub(super) struct Recorded {
+    /// The path parameter.
+    pub lambda: f64,
+    /// The tip state.
+    pub tip: State,
+    /// Unstable directions (None: unknown).
+    pub unstable: Option<usize>,
+    /// Whether the branch turned back at this point.
+    pub fold: bool,
+    /// Iterations (Newton and chord) spent on the path so far.
+    pub iterations: usize,
 }
 
 /// The residual at (x, lambda) into `out`; false when the model breaks down.
@@ -117,9 +184,7 @@ fn residual(
     out: &mut [f64],
     report: &mut SolveReport,
 ) -> bool {
-    if matches!(homotopy, Homotopy::Load) {
-        system.set_factors(lambda, lambda);
-    }
+    homotopy.set(system, lambda);
     report.evaluations.residual += 1;
     report.evaluations.equations += system.rate_evaluations();
     let ok = system.residual(x, out).is_ok();
@@ -129,7 +194,7 @@ fn residual(
     ok && out.iter().all(|v| v.is_finite())
 }
 
-/// dF/dlambda at x: F(x0) for a Newton homotopy; for the load path a central difference
+/// dF/dlambda at x: F(x0) for a Newton homotopy; for a parameter a central difference
 /// (one-sided at lambda = 0, where tensions would turn negative).
 fn f_lambda(
     system: &mut System,
@@ -149,7 +214,7 @@ fn f_lambda(
         (lambda, lambda + DELTA)
     };
     let ok = residual(system, homotopy, x, b, &mut hi, report) && residual(system, homotopy, x, a, &mut lo, report);
-    system.set_factors(lambda, lambda);
+    homotopy.set(system, lambda);
     ok.then(|| hi.iter().zip(&lo).map(|(h, l)| (h - l) / (b - a)).collect())
 }
 
@@ -183,20 +248,23 @@ fn tangent(
     Some((Point { x, lambda, tx, tl }, fl))
 }
 
-/// Follows the load path on `system` (whose mesh it may refine, replacing `system` and
-/// `ws`) from lambda = 0 to 1, or with a warm start `from`, the Newton homotopy from it
-/// (on its mesh). Returns the end, or a hint and the worst residual row.
+/// Follows a path on `system` (whose mesh it may refine, replacing `system` and `ws`) from
+/// lambda = 0 to 1 ([`Start`]): the load path from rest, the Newton homotopy from a warm
+/// start (on its mesh), or a trace, whose points go to `record`. Returns the end, or a
+/// hint and the worst residual row.
 pub(super) fn follow(
     system: &mut System,
     ws: &mut Workspace,
-    from: Option<&[State]>,
+    start: Start,
     options: &Options,
     settings: &Settings,
     report: &mut SolveReport,
+    mut record: Option<&mut Vec<Recorded>>,
 ) -> std::result::Result<End, (String, usize)> {
     let robot = system.model.robot;
-    let (x, homotopy) = match from {
-        None => {
+    let mut max_step = MAX_STEP;
+    let (x, homotopy) = match start {
+        Start::Rest => {
             system.set_factors(0.0, 0.0);
             let mut x = rigid_estimate(&system.model, &system.mesh.nodes);
             let (start, row) = newton::run(system, ws, &mut x, settings, report);
@@ -204,16 +272,29 @@ pub(super) fn follow(
                 report.termination = start;
                 return Err(("the unloaded robot did not converge: refine the mesh".into(), row));
             }
-            (x, Homotopy::Load)
+            (x, Homotopy::load())
         }
-        Some(x0) => {
+        Start::Warm(x0) => {
             let mut r0 = vec![0.0; system.unknowns()];
             if system.residual(x0, &mut r0).is_err() || !r0.iter().all(|v| v.is_finite()) {
                 return Err(("the warm start is not a state the model can evaluate".into(), 0));
             }
             (x0.to_vec(), Homotopy::Newton(r0))
         }
+        Start::Trace {
+            x,
+            parameter,
+            from,
+            to,
+            max_step: m,
+        } => {
+            max_step = m;
+            let homotopy = Homotopy::Parameter { parameter, from, to };
+            homotopy.set(system, 0.0);
+            (x.to_vec(), homotopy)
+        }
     };
+    let tracing = record.is_some();
     if !ws.linearize(system, &x, report) {
         return Err(("the Jacobian at the start of the path is singular".into(), 0));
     }
@@ -227,9 +308,21 @@ pub(super) fn follow(
     // From a warm start the first try is the whole way: predict with the sensitivities
     // (the tangent) to lambda = 1 and land there, a step shortened only if that fails.
     let mut h = match homotopy {
-        Homotopy::Load => FIRST_STEP,
+        Homotopy::Parameter { .. } => FIRST_STEP.min(max_step),
         Homotopy::Newton(_) => 1.0 / point.tl.max(1e-3),
     };
+    let push = |record: &mut Option<&mut Vec<Recorded>>, p: &Point, unstable, fold, report: &SolveReport| {
+        if let Some(r) = record.as_mut() {
+            r.push(Recorded {
+                lambda: p.lambda,
+                tip: p.x[p.x.len() - 1],
+                unstable,
+                fold,
+                iterations: report.iterations,
+            });
+        }
+    };
+    push(&mut record, &point, unstable, false, report);
     let mut factored_at_point = true;
     let mut worst = 0;
     let mut trial: Vec<State> = Vec::with_capacity(system.mesh.nodes.len());
@@ -242,7 +335,7 @@ pub(super) fn follow(
             let step: Vec<f64> = point.tx.iter().map(|v| v * h1).collect();
             system.retract(&point.x, &step, 1.0, &mut trial);
             let mut landed = trial.clone();
-            system.set_factors(1.0, 1.0);
+            homotopy.set(system, 1.0);
             // Newton lands only if it lands cleanly (no damped step): a damped step could
             // cross to another branch.
             let land = Settings {
@@ -254,6 +347,16 @@ pub(super) fn follow(
             let (term, row) = newton::run(system, ws, &mut landed, &land, report);
             report.termination = term;
             if term == Termination::Converged {
+                if tracing && ws.linearize(system, &landed, report) {
+                    let end = Point {
+                        x: landed.clone(),
+                        lambda: 1.0,
+                        tx: Vec::new(),
+                        tl: 1.0,
+                    };
+                    let unstable = index(system, ws);
+                    push(&mut record, &end, unstable, false, report);
+                }
                 return Ok(End {
                     x: landed,
                     folds,
@@ -268,7 +371,18 @@ pub(super) fn follow(
             }
             continue;
         }
-        let res = correct(system, &homotopy, ws, &point, h, &fl, factored_at_point, settings, report, &mut r);
+        let res = correct(
+            system,
+            &homotopy,
+            ws,
+            &point,
+            h,
+            &fl,
+            factored_at_point,
+            settings,
+            report,
+            &mut r,
+        );
         match res {
             Some((xc, lambda, iterations)) => {
                 if !ws.linearize(system, &xc, report) {
@@ -301,6 +415,18 @@ pub(super) fn follow(
                 if fold {
                     folds.push(lambda);
                 }
+                if next.lambda >= 0.0 {
+                    push(&mut record, &next, unstable, fold, report);
+                }
+                // A trace ends where its branch leaves the range back past the start (that
+                // point lies outside the range and is not recorded).
+                if tracing && next.lambda < 0.0 {
+                    return Ok(End {
+                        x: next.x,
+                        folds,
+                        bifurcations,
+                    });
+                }
                 // The angle between successive tangents bounds the next step.
                 let cos = (dot(&next.tx, &point.tx) / n as f64 + next.tl * point.tl).clamp(-1.0, 1.0);
                 let grow = match iterations {
@@ -308,7 +434,7 @@ pub(super) fn follow(
                     3 => 1.3,
                     _ => 0.8,
                 };
-                h = (h * grow).min(MAX_STEP);
+                h = (h * grow).min(max_step);
                 if cos < 0.9 {
                     h *= 0.5;
                 }
@@ -319,8 +445,8 @@ pub(super) fn follow(
                 // path only: a Newton homotopy's F(x0) belongs to its mesh).
                 let floor = system.mesh.intervals();
                 let needed = refine::start_intervals(robot, &point.x, floor).min(options.max_intervals);
-                if matches!(homotopy, Homotopy::Load) && needed as f64 > 1.25 * floor as f64 {
-                    match remesh(system, ws, &point, needed, options, settings, report) {
+                if matches!(homotopy, Homotopy::Parameter { .. }) && needed as f64 > 1.25 * floor as f64 {
+                    match remesh(system, &homotopy, ws, &point, needed, options, settings, report) {
                         Some((p, f)) => {
                             point = p;
                             fl = f;
@@ -339,7 +465,7 @@ pub(super) fn follow(
             }
         }
     }
-    system.set_factors(1.0, 1.0);
+    homotopy.set(system, 1.0);
     Err((
         format!(
             "the load path stalled at {:.1} % of the load: no equilibrium nearby is continuous in the load there",
@@ -383,9 +509,7 @@ fn correct(
     let mut fl = fl.to_vec();
     let mut fresh = !factored_at_point;
     if fresh {
-        if matches!(homotopy, Homotopy::Load) {
-            system.set_factors(lambda, lambda);
-        }
+        homotopy.set(system, lambda);
         if !ws.linearize(system, &x, report) {
             return None;
         }
@@ -444,8 +568,10 @@ fn correct(
 
 /// Moves the path to a uniform mesh of `intervals` intervals at `point`: interpolates the
 /// shape, converges Newton there at the same lambda and takes the tangent.
+#[allow(clippy::too_many_arguments)]
 fn remesh(
     system: &mut System,
+    homotopy: &Homotopy,
     ws: &mut Workspace,
     point: &Point,
     intervals: usize,
@@ -468,12 +594,12 @@ fn remesh(
         })
         .collect();
     *system = System::new(model, mesh);
-    system.set_factors(point.lambda, point.lambda);
+    homotopy.set(system, point.lambda);
     *ws = Workspace::new(system, options.linear_solver).ok()?;
     report.meshes += 1;
     let (term, _) = newton::run(system, ws, &mut x, settings, report);
     if term != Termination::Converged || !ws.linearize(system, &x, report) {
         return None;
     }
-    tangent(system, &Homotopy::Load, ws, x, point.lambda, Some((&[], point.tl)), report)
+    tangent(system, homotopy, ws, x, point.lambda, Some((&[], point.tl)), report)
 }

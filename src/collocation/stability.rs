@@ -98,7 +98,11 @@ pub fn assess(values: &[f64], s: &[f64]) -> Stability {
         }
         let q0: Matrix6<f64> = y.fixed_view::<6, 6>(0, 0).into_owned();
         let q1: Matrix6<f64> = next.fixed_view::<6, 6>(0, 0).into_owned();
-        let roots = if identity { crossings_from_identity(&q1) } else { crossings(&q0, &q1) };
+        let roots = if identity {
+            crossings_from_identity(&q1)
+        } else {
+            crossings(&q0, &q1)
+        };
         if let Some(&t) = roots.first() {
             first.get_or_insert(s[k + 1] + t * (s[k] - s[k + 1]));
         }
@@ -133,7 +137,9 @@ pub fn assess(values: &[f64], s: &[f64]) -> Stability {
 fn crossings_from_identity(q1: &Matrix6<f64>) -> Vec<f64> {
     let m = q1 - Matrix6::identity();
     // Every eigenvalue mu of m has |mu| <= its max row sum; a root needs mu <= -1.
-    let bound = (0..6).map(|r| m.row(r).iter().map(|v| v.abs()).sum::<f64>()).fold(0.0, f64::max);
+    let bound = (0..6)
+        .map(|r| m.row(r).iter().map(|v| v.abs()).sum::<f64>())
+        .fold(0.0, f64::max);
     if bound < 1.0 {
         return Vec::new();
     }

@@ -99,6 +99,18 @@ impl<'a> System<'a> {
     pub fn set_factors(&mut self, tension_factor: f64, load_factor: f64) {
         self.model.tension_factor = tension_factor;
         self.model.load_factor = load_factor;
+        self.refresh();
+    }
+
+    /// Replaces one input of the model by `value` ([`Model::parameter`]; not the load
+    /// scale, which is [`System::set_factors`]) and recomputes the sites.
+    pub fn set_parameter(&mut self, parameter: crate::model::parameter::Parameter, value: f64) {
+        self.model.parameter = Some((parameter, value));
+        self.refresh();
+    }
+
+    /// Recomputes the sites from the model.
+    fn refresh(&mut self) {
         let model = self.model;
         self.node_sites = self.mesh.nodes.iter().map(|n| model.site(n.s)).collect();
         self.interval_sites = (0..self.mesh.nodes.len() - 1)

@@ -10,6 +10,7 @@
 
 use crate::error::Result;
 use crate::model::linearize;
+use crate::model::parameter::Parameter;
 use crate::model::robot::{Robot, TendonModel};
 use crate::model::rod::{SectionPoint, StrainPoint};
 use crate::model::routing::RoutingPoint;
@@ -66,6 +67,9 @@ pub struct Model<'a> {
     pub tension_factor: f64,
     /// Multiplier on all external loads (distributed, point and tip), in [0, 1].
     pub load_factor: f64,
+    /// One input replaced by a value (a trace's parameter; [`Parameter::LoadScale`] is the
+    /// two factors instead and is not set here).
+    pub parameter: Option<(Parameter, f64)>,
 }
 
 impl<'a> Model<'a> {
@@ -75,6 +79,7 @@ impl<'a> Model<'a> {
             robot,
             tension_factor: 1.0,
             load_factor: 1.0,
+            parameter: None,
         }
     }
 
@@ -85,7 +90,13 @@ impl<'a> Model<'a> {
             s,
             section: self.robot.rod.section_at(s),
             reference: self.robot.rod.reference_at(s),
-            f_e: loads.distributed_force.at(s) * self.load_factor,
+            f_e: {
+                let mut f = loads.distributed_force.at(s);
+                if let Some((Parameter::DistributedForce(c), value)) = self.parameter {
+                    f[c] = value;
+                }
+                f * self.load_factor
+            },
             l_e: loads.distributed_moment.at(s) * self.load_factor,
         }
     }
@@ -100,7 +111,11 @@ impl<'a> Model<'a> {
                 Which::EndingAt(x) => end == x,
                 Which::Past(x) => end > x,
             };
-            (take && t.tension > 0.0).then(|| (i, t.tension * self.tension_factor, t.routing.at(s, l)))
+            let tension = match self.parameter {
+                Some((Parameter::Tension(j), value)) if j == i => value,
+                _ => t.tension,
+            };
+            (take && tension > 0.0).then(|| (i, tension * self.tension_factor, t.routing.at(s, l)))
         })
     }
 
@@ -217,7 +232,11 @@ impl Model<'_> {
     pub fn point_wrench(&self, s: f64) -> (Vector3<f64>, Vector3<f64>) {
         let loads = &self.robot.loads;
         let (mut f, mut l) = if s == self.robot.length() {
-            (loads.tip_force, loads.tip_moment)
+            let mut f = loads.tip_force;
+            if let Some((Parameter::TipForce(c), value)) = self.parameter {
+                f[c] = value;
+            }
+            (f, loads.tip_moment)
         } else {
             (Vector3::zeros(), Vector3::zeros())
         };

@@ -864,6 +864,7 @@ mod tests {
             robot: &robot,
             tension_factor: 0.4,
             load_factor: 0.7,
+            parameter: None,
         };
         let (v, u) = state();
         check_model(&model, 0.09, robot.length(), &generic_rotation(), &v, &u);

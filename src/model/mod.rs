@@ -6,6 +6,7 @@ pub(crate) mod equations;
 pub mod length;
 pub(crate) mod linearize;
 pub mod loads;
+pub mod parameter;
 pub mod robot;
 pub mod rod;
 pub mod routing;

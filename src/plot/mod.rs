@@ -23,11 +23,13 @@
 //! ```
 
 mod axes;
+mod chart;
 mod png;
 mod shape;
 mod svg;
 
 pub use axes::significant;
+pub use chart::{Chart, Mark, Segment};
 pub use png::{Png, fonts_found};
 pub use shape::{
     default_disks, disk_radius, routing_label, shape_legend, tendon_description, tendon_label, tendon_path,

@@ -17,6 +17,7 @@ mod solve;
 mod sweep;
 mod table2;
 mod tables;
+mod trace;
 
 use clap::{Parser, Subcommand};
 use std::path::PathBuf;
@@ -52,6 +53,9 @@ enum Command {
     Solve(solve::SolveArgs),
     /// Solve a sequence of robots (tension ranges), each warm-started from the last; CSV out.
     Sweep(sweep::SweepArgs),
+    /// Trace a branch of equilibria in one input (a tension, a load component or the load
+    /// scale) through folds, with the stability of every point; CSV or JSON out.
+    Trace(trace::TraceArgs),
     /// Solve one robot file for every row of a parameter table (CSV or JSON lines), on all
     /// cores; `--shard K/N` for job arrays; CSV out.
     Batch(batch::BatchArgs),
@@ -76,6 +80,7 @@ fn main() -> ExitCode {
         Some(Command::Solve(args)) => solve::run(&args),
         Some(Command::Sweep(args)) => sweep::run(&args),
         Some(Command::Batch(args)) => batch::run(&args),
+        Some(Command::Trace(args)) => trace::run(&args),
         Some(Command::Check { file }) => check::run(&file),
         Some(Command::Example) => check::example(),
         Some(Command::Bench(args)) => bench::run(&args)

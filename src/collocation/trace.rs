@@ -1,0 +1,148 @@
+//! Tracing a branch of equilibria in one input ([`Parameter`]) by pseudo-arclength
+//! continuation through folds (docs/stability.md, "Tracing a branch"): the start is the
+//! default solve at the first value (the load-path equilibrium), then the branch is followed
+//! with the stability of every point, until it passes the last value (or turns back past the
+//! first).
+
+use super::newton::{Settings, Workspace};
+use super::options::Options;
+use super::path::{self, Recorded};
+use super::system::System;
+use super::{MAX_ITERATIONS, solve};
+use crate::Robot;
+use crate::error::Result;
+use crate::mesh::Mesh;
+use crate::model::equations::Model;
+use crate::model::parameter::Parameter;
+use crate::report::{Method, SolveReport};
+use crate::solution::Node;
+use nalgebra::{Matrix3, Vector3};
+use std::time::Instant;
+
+/// The longest step of a trace along the normalized arclength: at least about 20 points on
+/// a branch that runs straight from the first value to the last.
+const TRACE_STEP: f64 = 0.05;
+
+/// One point of a traced branch.
+#[derive(Clone, Debug, PartialEq)]
+pub struct TracePoint {
+    /// The parameter's value (N, N/m, or the load scale).
+    pub value: f64,
+    /// Tip position (m, world).
+    pub tip_position: Vector3<f64>,
+    /// Tip orientation R(L).
+    pub tip_rotation: Matrix3<f64>,
+    /// Unstable directions: 0 stable, more unstable, `None` unknown (non-conservative
+    /// loads).
+    pub unstable_directions: Option<usize>,
+    /// Whether the branch turns back in the parameter here (a fold: loading past it, the
+    /// robot snaps through).
+    pub fold: bool,
+    /// Iterations (Newton and chord) spent along the branch up to this point.
+    pub iterations: usize,
+}
+
+/// A traced branch.
+#[derive(Clone, Debug)]
+pub struct Trace {
+    /// The input traced.
+    pub parameter: Parameter,
+    /// Its first and last values.
+    pub range: (f64, f64),
+    /// The points in the order the branch passes them.
+    pub points: Vec<TracePoint>,
+    /// Parameter values of the folds.
+    pub folds: Vec<f64>,
+    /// Parameter values where the number of unstable directions changed without a fold.
+    pub bifurcations: Vec<f64>,
+    /// `None` when the branch reached the last value or turned back past the first; else
+    /// why it stopped (the points up to there are kept).
+    pub stopped: Option<String>,
+    /// Counts and timings of the whole trace, the start's solve included.
+    pub report: SolveReport,
+}
+
+/// Traces the branch of `robot`'s equilibria as `parameter` goes from `from` to `to`
+/// ([`Trace`]), starting at the equilibrium [`solve`] returns for `from`, on the mesh that
+/// solve chose (refined along the way where the shape needs it).
+///
+/// # Errors
+/// Invalid input, or the start's solve failing ([`solve`]'s errors). A branch that cannot
+/// be followed to the end is not an error: [`Trace::stopped`] says why.
+pub fn trace(robot: &Robot, parameter: Parameter, from: f64, to: f64, options: &Options) -> Result<Trace> {
+    let clock = Instant::now();
+    robot.validate()?;
+    options.validate()?;
+    if !from.is_finite() || !to.is_finite() || from == to {
+        return Err(crate::error::invalid(
+            "trace range",
+            format!(
+                "{parameter} from {} to {}: the range needs two different finite values",
+                crate::Readable(from),
+                crate::Readable(to)
+            ),
+            "give START:STOP with START != STOP",
+        ));
+    }
+    let first = solve(&parameter.apply(robot, from), options)?;
+    let points: Vec<f64> = first.nodes.iter().map(|n| n.s).collect();
+    let mesh = Mesh::from_points(robot, &points)?;
+    let x: Vec<_> = first.nodes.iter().map(Node::state).collect();
+    let mut system = System::new(Model::new(robot), mesh);
+    let mut ws = Workspace::new(&system, options.linear_solver)?;
+    let settings = Settings {
+        tolerance: options.residual_tolerance,
+        max_iterations: options.max_iterations.min(MAX_ITERATIONS),
+        reuse_factors: false,
+        stop_when_damped: false,
+    };
+    let mut report = SolveReport::new(Method::Collocation);
+    let mut recorded: Vec<Recorded> = Vec::new();
+    let start = path::Start::Trace {
+        x: &x,
+        parameter,
+        from,
+        to,
+        max_step: TRACE_STEP,
+    };
+    let end = path::follow(
+        &mut system,
+        &mut ws,
+        start,
+        options,
+        &settings,
+        &mut report,
+        Some(&mut recorded),
+    );
+    let value = |lambda: f64| from + lambda * (to - from);
+    let (folds, bifurcations, stopped) = match end {
+        Ok(end) => (end.folds, end.bifurcations, None),
+        Err((hint, _)) => (Vec::new(), Vec::new(), Some(hint)),
+    };
+    let start_counts = &first.report;
+    report.iterations += start_counts.iterations;
+    report.newton_steps += start_counts.newton_steps;
+    report.chord_steps += start_counts.chord_steps;
+    report.meshes += start_counts.meshes;
+    report.intervals = system.mesh.intervals();
+    report.timings.total = clock.elapsed();
+    Ok(Trace {
+        parameter,
+        range: (from, to),
+        points: recorded
+            .into_iter()
+            .map(|r| TracePoint {
+                value: value(r.lambda),
+                tip_position: r.tip.p,
+                tip_rotation: r.tip.R,
+                unstable_directions: r.unstable,
+                fold: r.fold,
+                iterations: r.iterations + start_counts.iterations,
+            })
+            .collect(),
+        folds: folds.into_iter().map(value).collect(),
+        bifurcations: bifurcations.into_iter().map(value).collect(),
+        stopped,
+        report,
+    })
+}
