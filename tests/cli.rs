@@ -886,3 +886,45 @@ fn trace_writes_the_branch_with_stability_and_a_picture() {
     assert_eq!(out.status.code(), Some(2));
     assert!(stderr(&out).contains("tension.I"), "{}", stderr(&out));
 }
+
+#[test]
+fn sweep_reports_a_jump_and_varies_any_input() {
+    let dir = scratch("sweep-jump");
+    // About twice Euler's load on a 0.5 m rod buckled towards -x by a 10 mN imperfection; a
+    // tendon on the +x side makes that state unstable out of plane at 0.13 N, and the robot
+    // ends bent towards +x: the tip jumps by about 0.8 m.
+    let robot = "[rod]\nlength = 0.5\nouter_radius = 0.001\nyoungs_modulus = 200e9\npoisson_ratio = 0.3\n\
+                 [loads]\ndistributed_force = [0.0, 0.0, -0.24]\ntip_force = [-0.01, 0.0, -3.0]\n\
+                 [[tendon]]\nrouting = { kind = \"straight\", x = 0.015, y = 0.0 }\ntension = 0.0\n";
+    std::fs::write(dir.join("robot.toml"), robot).unwrap();
+    let out = run(&dir, &["sweep", "robot.toml", "--tension", "1=0:2:3"], None);
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    assert!(
+        stderr(&out).contains("sweep step 2: the tip jumps by"),
+        "{}",
+        stderr(&out)
+    );
+    let csv = stdout(&out);
+    let header: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
+    assert_eq!(&header[header.len() - 3..], ["stability", "path", "event"]);
+    let rows: Vec<Vec<&str>> = csv.lines().skip(1).map(|l| l.split(',').collect()).collect();
+    assert!(rows[1].last().unwrap().contains("snap-through"), "{csv}");
+    assert!(rows[2].last().unwrap().is_empty(), "{csv}");
+    // --param varies E: a stiffer rod bends less under the same tendon.
+    std::fs::write(dir.join("ex.toml"), example()).unwrap();
+    let out = run(
+        &dir,
+        &["sweep", "ex.toml", "--param", "youngs_modulus=100e9:300e9:3"],
+        None,
+    );
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    let csv = stdout(&out);
+    let header: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
+    let angle = header.iter().position(|h| *h == "bending_angle_deg").unwrap();
+    let angles: Vec<f64> = csv
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').nth(angle).unwrap().parse().unwrap())
+        .collect();
+    assert!(angles.windows(2).all(|w| w[1] < w[0]), "{angles:?}");
+}

@@ -73,6 +73,13 @@ pub fn trace(robot: &Robot, parameter: Parameter, from: f64, to: f64, options: &
     let clock = Instant::now();
     robot.validate()?;
     options.validate()?;
+    if parameter == Parameter::YoungsModulus {
+        return Err(crate::error::invalid(
+            "parameter",
+            "`youngs_modulus` cannot be traced: a trace varies a tension or a load",
+            "sweep E instead (tdcr sweep --param youngs_modulus=START:STOP:COUNT), each solve warm-started",
+        ));
+    }
     if !from.is_finite() || !to.is_finite() || from == to {
         return Err(crate::error::invalid(
             "trace range",

@@ -7,7 +7,7 @@ use crate::error::{Result, invalid};
 use std::fmt;
 
 /// A scalar input of a robot, named in text as `tension.I` (I from 1), `tip_force.x|y|z`,
-/// `distributed_force.x|y|z` or `load_scale`.
+/// `distributed_force.x|y|z`, `load_scale` or `youngs_modulus`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Parameter {
     /// The tension of tendon i (index from 0), N.
@@ -19,6 +19,9 @@ pub enum Parameter {
     /// A factor on every tension and external load (1 is the robot as given), the load
     /// path's parameter.
     LoadScale,
+    /// Young's modulus E (Pa) of a rod built from its geometry, at fixed Poisson's ratio
+    /// (G follows). Sweeps only: a trace varies tensions and loads.
+    YoungsModulus,
 }
 
 const AXES: [&str; 3] = ["x", "y", "z"];
@@ -30,10 +33,20 @@ impl Parameter {
     /// [`crate::Error::InvalidInput`] naming the text and the accepted forms, or a tendon
     /// number past the robot's tendons.
     pub fn parse(text: &str, robot: &Robot) -> Result<Self> {
-        let accepted = "tension.I (I from 1), tip_force.x|y|z, distributed_force.x|y|z or load_scale";
+        let accepted = "tension.I (I from 1), tip_force.x|y|z, distributed_force.x|y|z, load_scale or youngs_modulus";
         let bad = |problem: String| invalid("parameter", problem, format!("name one of {accepted}"));
         if text == "load_scale" {
             return Ok(Parameter::LoadScale);
+        }
+        if text == "youngs_modulus" {
+            return match robot.rod.geometry {
+                Some(_) => Ok(Parameter::YoungsModulus),
+                None => Err(invalid(
+                    "parameter",
+                    "`youngs_modulus`: the rod's stiffness is given directly, not built from a radius and E",
+                    "give the rod by outer_radius, youngs_modulus and poisson_ratio to vary E",
+                )),
+            };
         }
         let Some((name, part)) = text.split_once('.') else {
             return Err(bad(format!("`{text}` is not a parameter")));
@@ -68,12 +81,14 @@ impl Parameter {
             Parameter::TipForce(c) => robot.loads.tip_force[c],
             Parameter::DistributedForce(c) => robot.loads.distributed_force.at(0.0)[c],
             Parameter::LoadScale => 1.0,
+            Parameter::YoungsModulus => robot.rod.geometry.map_or(f64::NAN, |g| g.youngs_modulus),
         }
     }
 
     /// `robot` with this parameter set to `value` (a distributed force becomes uniform,
     /// with its value at s = 0 in the other components; a load scale multiplies every
-    /// tension and load).
+    /// tension and load; E rebuilds a uniform rod's section from its geometry, and leaves a
+    /// rod without geometry as it is, which [`Parameter::parse`] does not accept).
     pub fn apply(&self, robot: &Robot, value: f64) -> Robot {
         let mut out = robot.clone();
         match *self {
@@ -105,6 +120,18 @@ impl Parameter {
                     p.moment *= value;
                 }
             }
+            Parameter::YoungsModulus => {
+                if let Some(g) = out.rod.geometry.as_mut() {
+                    g.youngs_modulus = value;
+                    let shear = super::rod::shear_modulus(value, g.poisson_ratio);
+                    out.rod.stiffness = super::rod::Stiffness::Uniform(super::rod::Section::tube(
+                        g.outer_radius,
+                        g.inner_radius,
+                        value,
+                        shear,
+                    ));
+                }
+            }
         }
         out
     }
@@ -115,6 +142,7 @@ impl Parameter {
             Parameter::Tension(_) | Parameter::TipForce(_) => "N",
             Parameter::DistributedForce(_) => "N/m",
             Parameter::LoadScale => "",
+            Parameter::YoungsModulus => "Pa",
         }
     }
 }
@@ -126,6 +154,7 @@ impl fmt::Display for Parameter {
             Parameter::TipForce(c) => write!(f, "tip_force.{}", AXES[c]),
             Parameter::DistributedForce(c) => write!(f, "distributed_force.{}", AXES[c]),
             Parameter::LoadScale => f.write_str("load_scale"),
+            Parameter::YoungsModulus => f.write_str("youngs_modulus"),
         }
     }
 }
@@ -148,6 +177,12 @@ mod tests {
             assert_eq!(p.to_string(), text);
             if p != Parameter::LoadScale {
                 assert_eq!(p.value(&p.apply(&robot, 0.25)), 0.25);
+            }
+            if p == Parameter::YoungsModulus {
+                let soft = p.apply(&robot, 105e9);
+                // Half of E halves every stiffness (G follows at fixed nu).
+                let (a, b) = (soft.rod.section_at(0.0).section, robot.rod.section_at(0.0).section);
+                assert!((a.kbt - 0.5 * b.kbt).norm() < 1e-12 * b.kbt.norm());
             }
         }
         let half = Parameter::LoadScale.apply(&robot, 0.5);

@@ -139,6 +139,32 @@ pub fn parse_displacement(text: &str) -> Result<(usize, f64), String> {
 
 /// `I=START:STOP:COUNT` or `I=NEWTONS` (`sweep --tension`): a tendon number and its
 /// tensions, COUNT evenly spaced values from START to STOP, all >= 0.
+/// `NAME=START:STOP:COUNT` or `NAME=VALUE` (`sweep --param`): the name as written (checked
+/// against the robot later) and the values.
+pub fn parse_param_sweep(text: &str) -> Result<(String, Vec<f64>), String> {
+    let (name, value) = text
+        .split_once('=')
+        .ok_or_else(|| format!("`{text}` must look like NAME=START:STOP:COUNT or NAME=VALUE"))?;
+    let parts: Vec<&str> = value.split(':').collect();
+    let values = match parts.as_slice() {
+        [single] => vec![parse_number(single, "a value")?],
+        [start, stop, count] => {
+            let (a, b) = (parse_number(start, "START")?, parse_number(stop, "STOP")?);
+            let count = parse_count(count).map_err(|e| format!("COUNT: {e}"))?;
+            if count == 1 {
+                vec![a]
+            } else {
+                (0..count)
+                    .map(|k| a + (b - a) * k as f64 / (count - 1) as f64)
+                    .collect()
+            }
+        }
+        _ => return Err(format!("`{text}` must look like NAME=START:STOP:COUNT or NAME=VALUE")),
+    };
+    Ok((name.trim().to_string(), values))
+}
+
+/// `I=START:STOP:COUNT` or `I=NEWTONS` (`sweep --tension`).
 pub fn parse_sweep(text: &str) -> Result<(usize, Vec<f64>), String> {
     let (index, value) = parse_tendon(text)?;
     let parts: Vec<&str> = value.split(':').collect();

@@ -8,9 +8,9 @@ use std::path::PathBuf;
 use std::time::{Duration, Instant};
 use tdcr::io::output;
 use tdcr::plot::{Figure, LegendEntry, PALETTE, Style, shape_legend};
-use tdcr::{Robot, Solution};
+use tdcr::{Parameter, Robot, Solution};
 
-use crate::args::{SolverArgs, parse_disks, parse_sweep};
+use crate::args::{SolverArgs, parse_disks, parse_param_sweep, parse_sweep};
 use crate::failure::{Failure, emit, note, picture_format, write_file, write_picture};
 use crate::robot_args::{apply, read_robot, run_solver, set_tension};
 use crate::tables::summary;
@@ -22,8 +22,13 @@ pub struct SweepArgs {
     file: String,
     /// Tension of tendon I (from 1): `I=START:STOP:COUNT` (COUNT evenly spaced values, N) or a
     /// fixed `I=NEWTONS`. Repeatable; every range must have the same COUNT.
-    #[arg(long, value_name = "I=START:STOP:COUNT", value_parser = parse_sweep, required = true)]
+    #[arg(long, value_name = "I=START:STOP:COUNT", value_parser = parse_sweep, required_unless_present = "param")]
     tension: Vec<(usize, Vec<f64>)>,
+    /// Any other input: `NAME=START:STOP:COUNT` or `NAME=VALUE`, NAME one of
+    /// `tip_force.x|y|z` (N), `distributed_force.x|y|z` (N/m), `load_scale`, `youngs_modulus`
+    /// (Pa) or `tension.I`. Repeatable, with the same COUNT as every other range.
+    #[arg(long, value_name = "NAME=START:STOP:COUNT", value_parser = parse_param_sweep, allow_hyphen_values = true)]
+    param: Vec<(String, Vec<f64>)>,
     #[command(flatten)]
     solver: SolverArgs,
     /// Write the CSV to FILE instead of standard output.
@@ -94,16 +99,30 @@ pub fn run(args: &SweepArgs) -> Result<(), Failure> {
     }
     let (name, mut file) = read_robot(&args.file)?;
     apply(&mut file, &args.solver);
-    let steps = args.tension.iter().map(|(_, v)| v.len()).max().unwrap_or(0);
+    let params: Vec<(Parameter, &Vec<f64>)> = args
+        .param
+        .iter()
+        .map(|(name, v)| {
+            Parameter::parse(name, &file.robot)
+                .map(|p| (p, v))
+                .map_err(|e| Failure::Input(format!("--param {name}=...: {e}")))
+        })
+        .collect::<Result<_, _>>()?;
+    let lengths = args
+        .tension
+        .iter()
+        .map(|(_, v)| v.len())
+        .chain(params.iter().map(|(_, v)| v.len()));
+    let steps = lengths.clone().max().unwrap_or(0);
     if steps < 2 {
         return Err(Failure::Input(
-            "sweep needs at least one range with COUNT >= 2, e.g. --tension 1=0:6:61".into(),
+            "sweep needs at least one range with COUNT >= 2, e.g. --tension 1=0:6:61 or --param tip_force.z=0:-1:11"
+                .into(),
         ));
     }
-    if let Some((i, v)) = args.tension.iter().find(|(_, v)| v.len() != 1 && v.len() != steps) {
+    if let Some(n) = lengths.clone().find(|&n| n != 1 && n != steps) {
         return Err(Failure::Input(format!(
-            "--tension {i}=... has {} values but another range has {steps}: give every range the same COUNT",
-            v.len()
+            "a range has {n} values but another has {steps}: give every range the same COUNT"
         )));
     }
     for (k, (i, _)) in args.tension.iter().enumerate() {
@@ -121,9 +140,15 @@ pub fn run(args: &SweepArgs) -> Result<(), Failure> {
     for i in 1..=count {
         let _ = write!(csv, ",tension_{i}");
     }
+    for (p, _) in &params {
+        let _ = write!(csv, ",{p}");
+    }
     csv.push_str(
-        ",tip_x,tip_y,tip_z,bending_angle_deg,iterations,load_steps,solve_time,intervals,tip_error_estimate\n",
+        ",tip_x,tip_y,tip_z,bending_angle_deg,iterations,load_steps,solve_time,intervals,tip_error_estimate,stability,path,event\n",
     );
+    let length = file.robot.length();
+    let mut previous_move: Option<f64> = None;
+    let mut last_robot: Option<Robot> = None;
     let mut tips = Vec::with_capacity(steps);
     let (mut first, mut last): (Option<(Robot, Solution)>, Option<Solution>) = (None, None);
     let mut progress = Progress::new();
@@ -132,6 +157,9 @@ pub fn run(args: &SweepArgs) -> Result<(), Failure> {
         let mut robot = file.robot.clone();
         for &(i, ref v) in &args.tension {
             set_tension(&mut robot, i, v[if v.len() == 1 { 0 } else { k }])?;
+        }
+        for (p, v) in &params {
+            robot = p.apply(&robot, v[if v.len() == 1 { 0 } else { k }]);
         }
         let solution = match run_solver(&robot, &file, last.as_ref()) {
             Ok(s) => s,
@@ -158,10 +186,42 @@ pub fn run(args: &SweepArgs) -> Result<(), Failure> {
         for t in &robot.tendons {
             let _ = write!(csv, ",{}", t.tension);
         }
+        for (p, _) in &params {
+            let _ = write!(csv, ",{}", p.value(&robot));
+        }
         let report = &solution.report;
+        // A step whose tip moves far more than the last one did (four times, and more than
+        // 1 % of L) left the branch it was on: a fold passed (snap-through) or a jump to
+        // another equilibrium; so did a step that fell back to the load path from rest (no
+        // stable state was reachable from the warm start) and moved the tip by more than
+        // 5 % of L.
+        let moved = tips.last().map(|t: &tdcr::nalgebra::Vector3<f64>| (tip - t).norm());
+        let pathed = matches!(report.path, tdcr::Path::LoadPath { .. });
+        let jump = match (moved, previous_move) {
+            (Some(m), Some(p)) => (m > 4.0 * p && m > 0.01 * length) || (pathed && m > 0.05 * length),
+            (Some(m), None) => pathed && m > 0.05 * length,
+            _ => false,
+        };
+        let event = if jump {
+            let text = format!(
+                "the tip jumps by {:.1} mm: a snap-through (fold) or another branch",
+                moved.unwrap_or(0.0) * 1e3
+            );
+            progress.finish();
+            note(&format!("warning: sweep step {}: {text}", k + 1));
+            text
+        } else {
+            String::new()
+        };
+        previous_move = moved.or(previous_move);
+        let path = match &report.path {
+            tdcr::Path::Direct => "direct",
+            tdcr::Path::FromWarmStart { .. } => "from_warm_start",
+            tdcr::Path::LoadPath { .. } => "load_path",
+        };
         let _ = writeln!(
             csv,
-            ",{},{},{},{},{},{},{},{},{}",
+            ",{},{},{},{},{},{},{},{},{},{},{path},{event}",
             output::number(tip.x),
             output::number(tip.y),
             output::number(tip.z),
@@ -172,7 +232,8 @@ pub fn run(args: &SweepArgs) -> Result<(), Failure> {
             report.intervals,
             report
                 .error_estimate
-                .map_or(String::new(), |e| output::number(e.tip_position))
+                .map_or(String::new(), |e| output::number(e.tip_position)),
+            report.stability.verdict()
         );
         if args.solver.verbose {
             progress.finish();
@@ -183,6 +244,7 @@ pub fn run(args: &SweepArgs) -> Result<(), Failure> {
             first = Some((robot.clone(), solution.clone()));
         }
         last = Some(solution);
+        last_robot = Some(robot);
         progress.update(k + 1, steps);
     }
     progress.finish();
@@ -199,6 +261,11 @@ pub fn run(args: &SweepArgs) -> Result<(), Failure> {
             .tension
             .iter()
             .map(|(i, v)| format!("tendon {i}: {} to {} N", v[0], v[v.len() - 1]))
+            .chain(
+                params
+                    .iter()
+                    .map(|(p, v)| format!("{p}: {} to {} {}", v[0], v[v.len() - 1], p.unit())),
+            )
             .collect();
         figure.subtitle.push(ranges.join("; "));
         let mut start = Style::new("#999999");
@@ -206,10 +273,7 @@ pub fn run(args: &SweepArgs) -> Result<(), Failure> {
         start.disks = args.disks;
         start.distributed_load = false;
         figure.add_shape(robot0, first, &start);
-        let mut robot1 = file.robot.clone();
-        for &(i, ref v) in &args.tension {
-            set_tension(&mut robot1, i, v[(tips.len() - 1).min(v.len() - 1)])?;
-        }
+        let robot1 = last_robot.clone().unwrap_or_else(|| file.robot.clone());
         let mut end = Style::new("#555555");
         end.disks = args.disks;
         figure.add_shape(&robot1, last, &end);
