@@ -881,10 +881,18 @@ fn trace_writes_the_branch_with_stability_and_a_picture() {
     assert!(rows.last().unwrap().starts_with(&format!("{},4,", rows.len())), "{csv}");
     let svg = std::fs::read_to_string(dir.join("branch.svg")).unwrap();
     assert!(svg.contains("tension.1 (N)") && svg.contains("stable equilibria"));
-    // A parameter that does not exist is bad input, named with the accepted forms.
-    let out = run(&dir, &["trace", "robot.toml", "--param", "youngs_modulus=1:2"], None);
+    // A parameter that does not exist is bad input, named with the accepted forms; E is one
+    // that only a sweep varies, and the message says so.
+    let out = run(&dir, &["trace", "robot.toml", "--param", "poisson_ratio=0.3:0.4"], None);
     assert_eq!(out.status.code(), Some(2));
     assert!(stderr(&out).contains("tension.I"), "{}", stderr(&out));
+    let out = run(
+        &dir,
+        &["trace", "robot.toml", "--param", "youngs_modulus=1e11:2e11"],
+        None,
+    );
+    assert_eq!(out.status.code(), Some(2));
+    assert!(stderr(&out).contains("sweep E instead"), "{}", stderr(&out));
 }
 
 #[test]
