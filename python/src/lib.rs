@@ -29,7 +29,7 @@ fn run(robot: &tdcr::Robot, s: &SolverSettings, warm: Option<&Solution>) -> tdcr
 }
 
 /// solve(robot, *, method=None, tol=None, intervals=None, max_intervals=None,
-/// residual_tolerance=None, max_iterations=None, continuation=None,
+/// residual_tolerance=None, max_iterations=None, continuation=None, equilibrium=None,
 /// integration_tolerance=None, warm_start=None) -> Solution
 ///
 /// Solves `robot` with its `[solver]` settings changed by the options: `method`
@@ -37,8 +37,11 @@ fn run(robot: &tdcr::Robot, s: &SolverSettings, warm: Option<&Solution>) -> tdcr
 /// default 1e-7: the mesh is chosen until the estimated tip error is at most tol x L and
 /// tol rad; `report.error_estimate` holds the estimate), `intervals` (mesh intervals; alone
 /// it fixes the mesh, still with an error estimate), `max_intervals`, `residual_tolerance` (scaled
-/// Newton residual), `max_iterations`, `continuation` (load continuation on failure),
-/// `integration_tolerance` (shooting), `warm_start` (a Solution of a nearby robot to start
+/// Newton residual), `max_iterations`, `continuation` (follow the load path when Newton
+/// from the guess fails or ends on an unstable state), `equilibrium` ("load_path", the
+/// default: the state reached by loading the robot from rest; or "nearest": Newton's root
+/// from the guess or warm start whatever its stability; collocation; `report.stability`
+/// and `report.path` say what was found), `integration_tolerance` (shooting), `warm_start` (a Solution of a nearby robot to start
 /// Newton from; collocation). The GIL is released while solving.
 ///
 /// Raises `tdcr.InvalidInput` for bad options, `tdcr.NotConverged` (with `.report`),
@@ -163,8 +166,9 @@ fn solve_batch(
 ///
 /// `solve_batch(robot, parameters, errors="return", **options)` reduced to arrays, the
 /// shape a distributed map wants: `converged` (M,) bool, `tip_position` (M, 3) (NaN where
-/// a row failed), `iterations` (M,) int64 (-1 where failed), `error` (list of M strings,
-/// empty where solved).
+/// a row failed), `iterations` (M,) int64 (-1 where failed), `stability` (list of M
+/// strings: "stable", "unstable" or "unknown", empty where failed), `error` (list of M
+/// strings, empty where solved).
 #[pyfunction]
 #[pyo3(signature = (robot, parameters, **options))]
 fn solve_parameters<'py>(
@@ -180,6 +184,7 @@ fn solve_parameters<'py>(
     let mut converged = Array1::from_elem(n, false);
     let mut iterations = Array1::from_elem(n, -1i64);
     let mut messages = Vec::with_capacity(n);
+    let mut stability = Vec::with_capacity(n);
     for (i, result) in results.iter().enumerate() {
         match result {
             Ok(s) => {
@@ -190,14 +195,19 @@ fn solve_parameters<'py>(
                 converged[i] = true;
                 iterations[i] = i64::try_from(s.report.iterations).unwrap_or(i64::MAX);
                 messages.push(String::new());
+                stability.push(s.report.stability.verdict());
             }
-            Err(e) => messages.push(e.to_string()),
+            Err(e) => {
+                messages.push(e.to_string());
+                stability.push("");
+            }
         }
     }
     let d = PyDict::new(py);
     d.set_item("converged", converged.into_pyarray(py))?;
     d.set_item("tip_position", tips.into_pyarray(py))?;
     d.set_item("iterations", iterations.into_pyarray(py))?;
+    d.set_item("stability", stability)?;
     d.set_item("error", messages)?;
     Ok(d)
 }

@@ -5,11 +5,34 @@ use crate::errors::invalid;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use tdcr::Method;
+use tdcr::collocation::Equilibrium;
 use tdcr::io::SolverSettings;
 
 /// The keyword arguments every solving function accepts, for messages.
-pub const OPTION_NAMES: &str =
-    "method, tol, intervals, max_intervals, residual_tolerance, max_iterations, continuation, integration_tolerance";
+pub const OPTION_NAMES: &str = "method, tol, intervals, max_intervals, residual_tolerance, max_iterations, continuation, equilibrium, integration_tolerance";
+
+/// The values of the `equilibrium` option, for messages.
+pub const EQUILIBRIUM_NAMES: &str = "\"load_path\" or \"nearest\"";
+
+/// The option value of `equilibrium`: `"load_path"` or `"nearest"`.
+pub fn equilibrium_name(e: Equilibrium) -> &'static str {
+    match e {
+        Equilibrium::LoadPath => "load_path",
+        Equilibrium::Nearest => "nearest",
+    }
+}
+
+/// Reads the value of the `equilibrium` option; anything but the two names is
+/// `tdcr.InvalidInput` naming both.
+fn equilibrium(value: &str) -> PyResult<Equilibrium> {
+    match value {
+        "load_path" => Ok(Equilibrium::LoadPath),
+        "nearest" => Ok(Equilibrium::Nearest),
+        other => Err(invalid(format!(
+            "option `equilibrium` is \"{other}\"; use {EQUILIBRIUM_NAMES} (the state reached by loading from rest, or Newton's root nearest the guess whatever its stability)"
+        ))),
+    }
+}
 
 /// Reads one option; a value of the wrong type is `tdcr.InvalidInput` naming it.
 fn get<'py, T: FromPyObjectOwned<'py>>(value: &Bound<'py, PyAny>, name: &str, what: &str) -> PyResult<T> {
@@ -29,7 +52,8 @@ pub fn type_name(value: &Bound<'_, PyAny>) -> String {
 /// `settings` with the options of `kwargs` applied: `method` ("collocation" or "shooting"),
 /// `tol` (tip tolerance for adaptive refinement, m), `intervals` (a fixed mesh unless `tol`
 /// is given too), `max_intervals`, `residual_tolerance`, `max_iterations`, `continuation`,
-/// `integration_tolerance` (shooting). Unknown names and wrong types are
+/// `equilibrium` ("load_path" or "nearest", collocation), `integration_tolerance`
+/// (shooting). Unknown names and wrong types are
 /// `tdcr.InvalidInput`; the values are checked by the solvers' own `Options::validate`.
 pub fn apply(settings: &SolverSettings, kwargs: Option<&Bound<'_, PyDict>>) -> PyResult<SolverSettings> {
     let mut out = settings.clone();
@@ -69,6 +93,13 @@ pub fn apply(settings: &SolverSettings, kwargs: Option<&Bound<'_, PyDict>>) -> P
                 out.shooting.max_iterations = n;
             }
             "continuation" => c.continuation = get::<bool>(&value, &name, "True or False")?,
+            "equilibrium" => {
+                c.equilibrium = equilibrium(&get::<String>(
+                    &value,
+                    &name,
+                    &format!("a string, {EQUILIBRIUM_NAMES}"),
+                )?)?;
+            }
             "integration_tolerance" => out.shooting.integration_tolerance = get::<f64>(&value, &name, "a number")?,
             _ => {
                 return Err(invalid(format!(

@@ -26,9 +26,14 @@ use toml::{Table, Value};
 ///         base={"position": [0, 0, 0], "euler_xyz_deg": [0, 90, 0]},
 ///     )
 ///
-/// or with `Robot.from_toml(text)`, `Robot.from_file(path)`, `Robot.from_dict(tables)`,
+/// A tendon dict takes the keys of the file's `[[tendon]]`: `routing`, `tension` (N) or
+/// `displacement` (m, the actuator's pull-in; the tension is then solved for), `end` (m),
+/// and for an elastic tendon `stiffness` (E_t A_t, N) and `free_length` (m).
+///
+/// Or build it with `Robot.from_toml(text)`, `Robot.from_file(path)`, `Robot.from_dict(tables)`,
 /// `tdcr.cases.case_s()`. Bad input raises `tdcr.FileError` with the command line's
-/// messages. Robots are immutable; `with_tensions` and `with_parameters` return new ones.
+/// messages. Robots are immutable; `with_tensions`, `with_displacements` and
+/// `with_parameters` return new ones.
 #[pyclass(module = "tdcr", name = "Robot", frozen)]
 #[derive(Clone)]
 pub struct PyRobot {
@@ -189,9 +194,31 @@ pub fn document(file: &RobotFile) -> PyResult<String> {
         }
         let mut tendon = Table::new();
         tendon.insert("routing".into(), Value::Table(routing));
-        tendon.insert("tension".into(), Value::Float(t.tension));
+        match t.displacement {
+            None => {
+                tendon.insert("tension".into(), Value::Float(t.tension));
+            }
+            // The file gives a displacement-controlled tendon no starting tension (the
+            // parser sets 0: the solver estimates it), so only 0 is written exactly.
+            Some(_) if t.tension != 0.0 => {
+                return Err(cannot(&format!(
+                    "tendon {} is displacement-controlled with a starting tension of {} N, which a robot file cannot hold (set its tension with `with_tensions` to make it tension-controlled)",
+                    i + 1,
+                    t.tension
+                )));
+            }
+            Some(q) => {
+                tendon.insert("displacement".into(), Value::Float(q));
+            }
+        }
         if let Some(end) = t.termination {
             tendon.insert("end".into(), Value::Float(end));
+        }
+        if let Some(k) = t.stiffness {
+            tendon.insert("stiffness".into(), Value::Float(k));
+        }
+        if t.free_length != 0.0 {
+            tendon.insert("free_length".into(), Value::Float(t.free_length));
         }
         tendons.push(Value::Table(tendon));
     }
@@ -230,6 +257,10 @@ fn solver_table(s: &SolverSettings) -> Table {
         t.insert("max_iterations".into(), Value::Integer(c.max_iterations as i64));
     }
     t.insert("continuation".into(), Value::Boolean(c.continuation));
+    t.insert(
+        "equilibrium".into(),
+        Value::String(crate::options::equilibrium_name(c.equilibrium).into()),
+    );
     t.insert(
         "integration_tolerance".into(),
         Value::Float(s.shooting.integration_tolerance),
@@ -297,7 +328,9 @@ fn numpy_column(value: &Bound<'_, PyAny>, name: &str) -> PyResult<Vec<f64>> {
 impl PyRobot {
     /// A robot from keyword arguments shaped like a robot file's tables: `rod` (dict),
     /// `tendons` (list of dicts, the file's `[[tendon]]`), `loads`, `base`, `solver`
-    /// (dicts). Raises `tdcr.FileError` (messages name the field, e.g. `tendon[2].tension`).
+    /// (dicts). A tendon dict has `routing`, `tension` (N) or `displacement` (m), and
+    /// optionally `end` (m), `stiffness` (N) and `free_length` (m). Raises `tdcr.FileError`
+    /// (messages name the field, e.g. `tendon[2].tension`).
     #[new]
     #[pyo3(signature = (rod, tendons=None, loads=None, base=None, solver=None))]
     fn new(
@@ -359,7 +392,8 @@ impl PyRobot {
         Ok((slf.get_type().getattr("from_toml")?, (text,)))
     }
 
-    /// A copy with the tensions (N) of all tendons, in file order.
+    /// A copy with the tensions (N) of all tendons, in file order; every tendon becomes
+    /// tension-controlled (a displacement-controlled one drops its `displacement`).
     fn with_tensions(&self, tensions: Vec<f64>) -> PyResult<Self> {
         let count = self.file.robot.tendons.len();
         if tensions.len() != count {
@@ -371,6 +405,39 @@ impl PyRobot {
         let mut out = self.clone();
         for (t, &tau) in out.file.robot.tendons.iter_mut().zip(&tensions) {
             t.tension = tau;
+            t.displacement = None;
+        }
+        out.file.robot.validate().map_err(to_py)?;
+        Ok(out)
+    }
+
+    /// A copy with the actuator pull-ins q (m, positive pulls the tendon in) of all
+    /// tendons, in file order: a number makes that tendon displacement-controlled (its
+    /// tension is solved for, starting from the solver's estimate), None makes it
+    /// tension-controlled at its current tension (0 for one that was displacement-controlled).
+    /// E.g. `robot.with_displacements([s.tendons[0]["displacement"], None, None])`. Raises
+    /// `tdcr.InvalidInput` for a wrong count or a pull-in the model rejects.
+    fn with_displacements(&self, displacements: Vec<Option<f64>>) -> PyResult<Self> {
+        let count = self.file.robot.tendons.len();
+        if displacements.len() != count {
+            return Err(invalid(format!(
+                "with_displacements got {} displacement(s) for a robot with {count} tendon(s); give None for a tension-controlled tendon",
+                displacements.len()
+            )));
+        }
+        let mut out = self.clone();
+        for (t, &q) in out.file.robot.tendons.iter_mut().zip(&displacements) {
+            match (q, t.displacement) {
+                (Some(q), _) => {
+                    t.displacement = Some(q);
+                    t.tension = 0.0;
+                }
+                (None, Some(_)) => {
+                    t.displacement = None;
+                    t.tension = 0.0;
+                }
+                (None, None) => {}
+            }
         }
         out.file.robot.validate().map_err(to_py)?;
         Ok(out)
@@ -405,11 +472,34 @@ impl PyRobot {
         self.file.robot.tendons.len()
     }
 
-    /// Tendon tensions (N), shape (k,), file order.
+    /// Tendon tensions (N), shape (k,), file order; for a displacement-controlled tendon
+    /// the tension its solve starts from (0: the solver's estimate).
     #[getter]
     fn tensions<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
         let t: Vec<f64> = self.file.robot.tendons.iter().map(|t| t.tension).collect();
         PyArray1::from_vec(py, t)
+    }
+
+    /// The actuator pull-ins q (m) of the displacement-controlled tendons, None for the
+    /// tension-controlled ones: a list of k entries, file order.
+    #[getter]
+    fn displacements(&self) -> Vec<Option<f64>> {
+        self.file.robot.tendons.iter().map(|t| t.displacement).collect()
+    }
+
+    /// Axial stiffnesses E_t A_t (N) of the elastic tendons, None for the inextensible
+    /// ones: a list of k entries, file order.
+    #[getter]
+    fn tendon_stiffnesses(&self) -> Vec<Option<f64>> {
+        self.file.robot.tendons.iter().map(|t| t.stiffness).collect()
+    }
+
+    /// Free lengths (m) of tendon between the base and the actuator, shape (k,), file order
+    /// (0 unless given; it stretches with the rest of an elastic tendon).
+    #[getter]
+    fn free_lengths<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        let l: Vec<f64> = self.file.robot.tendons.iter().map(|t| t.free_length).collect();
+        PyArray1::from_vec(py, l)
     }
 
     /// Tip force (N, world frame), shape (3,).
@@ -444,12 +534,19 @@ impl PyRobot {
 
     fn __repr__(&self) -> String {
         let r = &self.file.robot;
-        let tensions: Vec<String> = r.tendons.iter().map(|t| t.tension.to_string()).collect();
+        let inputs: Vec<String> = r
+            .tendons
+            .iter()
+            .map(|t| match t.displacement {
+                None => format!("{} N", t.tension),
+                Some(q) => format!("q={q} m"),
+            })
+            .collect();
         format!(
-            "Robot(length={} m, tendons={}, tensions=[{}] N, method={})",
+            "Robot(length={} m, tendons={}, inputs=[{}], method={})",
             r.length(),
             r.tendons.len(),
-            tensions.join(", "),
+            inputs.join(", "),
             self.file.solver.method
         )
     }

@@ -9,7 +9,10 @@ use pyo3::types::PyDict;
 use serde_json::{Value, json};
 use std::time::Duration;
 use tdcr::nalgebra::{Matrix3, Vector3};
-use tdcr::{ErrorEstimate, Evaluations, Iteration, Method, Node, Solution, SolveReport, Termination, Timings};
+use tdcr::{
+    ErrorEstimate, Evaluations, Iteration, Method, Node, Path, Solution, SolveReport, Stability, TendonState,
+    Termination, Timings,
+};
 
 /// A 3x3 matrix as a (3, 3) array.
 pub fn matrix<'py>(py: Python<'py>, m: &Matrix3<f64>) -> Bound<'py, PyArray2<f64>> {
@@ -27,7 +30,8 @@ pub fn vectors<'py>(py: Python<'py>, v: impl ExactSizeIterator<Item = Vector3<f6
 }
 
 /// A solved shape: the nodes along the backbone (two at every jump: left then right limit),
-/// the tendon paths, the tip pose, the scheme's interpolant (`at`) and the `report`. Arrays
+/// the tendon paths and states, the tip pose, the scheme's interpolant (`at`) and the
+/// `report`. Arrays
 /// are float64, SI units, world frame unless said otherwise; each access returns a new array.
 #[pyclass(module = "tdcr", name = "Solution", frozen)]
 #[derive(Clone)]
@@ -117,6 +121,24 @@ impl PySolution {
             .collect()
     }
 
+    /// What the solution says about each tendon, file order: a list of dicts with
+    /// `tension` (N: the input of a tension-controlled tendon, the solved one of a
+    /// displacement-controlled tendon, 0 when slack), `displacement` (m: the actuator's
+    /// pull-in, the input of a displacement-controlled tendon, for a tension-controlled one
+    /// the pull-in that holds it taut at its tension), `length` (m, the path length from the
+    /// base to the termination), `reference_length` (m, the same in the unloaded shape) and
+    /// `slack` (m, 0 when taut). docs/actuation.md has the definitions.
+    #[getter]
+    fn tendons<'py>(&self, py: Python<'py>) -> PyResult<Vec<Bound<'py, PyDict>>> {
+        self.solution.tendons.iter().map(|t| tendon_dict(py, t)).collect()
+    }
+
+    /// Tendon tensions (N), shape (k,), file order (the `tension` of `tendons`).
+    #[getter]
+    fn tensions<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        PyArray1::from_vec(py, self.solution.tensions())
+    }
+
     /// Tip position (m), shape (3,).
     #[getter]
     fn tip_position<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
@@ -186,12 +208,13 @@ impl PySolution {
     fn __repr__(&self) -> String {
         let p = self.solution.tip_position();
         format!(
-            "Solution(nodes={}, tip=[{:.9}, {:.9}, {:.9}] m, {})",
+            "Solution(nodes={}, tip=[{:.9}, {:.9}, {:.9}] m, {}, {})",
             self.solution.nodes.len(),
             p.x,
             p.y,
             p.z,
-            termination_name(self.solution.report.termination)
+            termination_name(self.solution.report.termination),
+            self.solution.report.stability.verdict()
         )
     }
 }
@@ -212,6 +235,41 @@ pub fn termination_name(t: Termination) -> &'static str {
         Termination::LineSearchFailed => "line_search_failed",
         Termination::SingularJacobian => "singular_jacobian",
         Termination::NonFinite => "non_finite",
+    }
+}
+
+/// A tendon state as the dict of `Solution.tendons`.
+fn tendon_dict<'py>(py: Python<'py>, t: &TendonState) -> PyResult<Bound<'py, PyDict>> {
+    let d = PyDict::new(py);
+    d.set_item("tension", t.tension)?;
+    d.set_item("displacement", t.displacement)?;
+    d.set_item("length", t.length)?;
+    d.set_item("reference_length", t.reference_length)?;
+    d.set_item("slack", t.slack)?;
+    Ok(d)
+}
+
+/// The short name of a path, its folds and its bifurcations: `direct`, `from_warm_start`
+/// or `load_path`.
+pub fn path_parts(path: &Path) -> (&'static str, &[f64], &[f64]) {
+    match path {
+        Path::Direct => ("direct", &[], &[]),
+        Path::FromWarmStart { folds, bifurcations } => ("from_warm_start", folds, bifurcations),
+        Path::LoadPath { folds, bifurcations } => ("load_path", folds, bifurcations),
+    }
+}
+
+/// The details of a stability verdict: unstable directions (0 when stable, None when
+/// unknown), the conjugate point's arc length (m, when unstable) and the reason (when
+/// unknown).
+fn stability_parts(stability: &Stability) -> (Option<usize>, Option<f64>, Option<&str>) {
+    match stability {
+        Stability::Stable => (Some(0), None, None),
+        Stability::Unstable {
+            directions,
+            conjugate_point,
+        } => (Some(*directions), Some(*conjugate_point), None),
+        Stability::Unknown { reason } => (None, None, Some(reason)),
     }
 }
 
@@ -250,13 +308,33 @@ impl PySolveReport {
         self.report.termination == Termination::Converged
     }
 
-    /// Newton iterations, summed over load steps and meshes.
+    /// Iterations (updates of the state), summed over load steps and meshes:
+    /// `newton_steps + chord_steps`.
     #[getter]
     fn iterations(&self) -> usize {
         self.report.iterations
     }
 
-    /// Load-continuation steps (1 for a direct solve).
+    /// Newton steps: iterations that evaluated and factored a fresh Jacobian.
+    #[getter]
+    fn newton_steps(&self) -> usize {
+        self.report.newton_steps
+    }
+
+    /// Chord steps: iterations solved with the factors of an earlier Jacobian.
+    #[getter]
+    fn chord_steps(&self) -> usize {
+        self.report.chord_steps
+    }
+
+    /// Jacobian evaluations (`evaluations["jacobian"]`).
+    #[getter]
+    fn jacobian_evaluations(&self) -> usize {
+        self.report.evaluations.jacobian
+    }
+
+    /// Continuation steps along the load path (0 for a direct solve, when Newton from the
+    /// guess or warm start was enough).
     #[getter]
     fn load_steps(&self) -> usize {
         self.report.load_steps
@@ -328,7 +406,60 @@ impl PySolveReport {
         self.report.tolerance_met
     }
 
-    /// Wall-clock seconds by stage: `assembly`, `factorization`, `solve`, `total`.
+    /// The stability verdict of the equilibrium returned: "stable" (a local minimum of
+    /// the energy, a state a real robot can rest in), "unstable" (a small disturbance makes
+    /// it buckle or snap) or "unknown" (the test does not apply; `stability_detail["reason"]`
+    /// says why). docs/stability.md.
+    #[getter]
+    fn stability(&self) -> &'static str {
+        self.report.stability.verdict()
+    }
+
+    /// The verdict as a sentence (as the command line prints it).
+    #[getter]
+    fn stability_message(&self) -> String {
+        self.report.stability.to_string()
+    }
+
+    /// The verdict with its details: `{"verdict", "unstable_directions",
+    /// "conjugate_point_s", "reason"}`: the number of unstable directions (0 when stable,
+    /// None when unknown), the arc length of the conjugate point nearest the tip (m; None
+    /// unless unstable) and why the verdict is unknown (None otherwise).
+    #[getter]
+    fn stability_detail<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let (directions, conjugate_point, reason) = stability_parts(&self.report.stability);
+        let d = PyDict::new(py);
+        d.set_item("verdict", self.report.stability.verdict())?;
+        d.set_item("unstable_directions", directions)?;
+        d.set_item("conjugate_point_s", conjugate_point)?;
+        d.set_item("reason", reason)?;
+        Ok(d)
+    }
+
+    /// How the equilibrium was reached: "direct" (Newton from the guess or warm start),
+    /// "from_warm_start" (Newton's residual at the warm start followed to zero) or
+    /// "load_path" (the loads followed from the unloaded robot).
+    #[getter]
+    fn path(&self) -> &'static str {
+        path_parts(&self.report.path).0
+    }
+
+    /// Where the path turned back (load factors for "load_path", homotopy parameters for
+    /// "from_warm_start"; empty for "direct"); past a fold the robot snaps through.
+    #[getter]
+    fn folds(&self) -> Vec<f64> {
+        path_parts(&self.report.path).1.to_vec()
+    }
+
+    /// Where the path crossed a bifurcation (the number of unstable directions changed
+    /// without a fold); load factors or homotopy parameters as `folds`.
+    #[getter]
+    fn bifurcations(&self) -> Vec<f64> {
+        path_parts(&self.report.path).2.to_vec()
+    }
+
+    /// Wall-clock seconds by stage: `assembly`, `factorization`, `solve`, `estimate` (the
+    /// error estimate), `stability` (the stability verdict), `total`.
     #[getter]
     fn timings<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let t = &self.report.timings;
@@ -337,6 +468,7 @@ impl PySolveReport {
         d.set_item("factorization", t.factorization.as_secs_f64())?;
         d.set_item("solve", t.solve.as_secs_f64())?;
         d.set_item("estimate", t.estimate.as_secs_f64())?;
+        d.set_item("stability", t.stability.as_secs_f64())?;
         d.set_item("total", t.total.as_secs_f64())?;
         Ok(d)
     }
@@ -352,14 +484,70 @@ impl PySolveReport {
         Ok(d)
     }
 
+    /// The report's scalars as one flat dict (a row for a table of runs): `method`,
+    /// `termination`, `converged`, `iterations`, `newton_steps`, `chord_steps`,
+    /// `load_steps`, `meshes`, `jacobian_evaluations`, `residual_evaluations`, `residual`,
+    /// `intervals`, `unknowns`, `tip_error_estimate`, `tolerance`, `tolerance_met`,
+    /// `stability`, `unstable_directions`, `conjugate_point_s`, `stability_reason`, `path`,
+    /// `folds`, `bifurcations`, and the timings in seconds as `time_assembly`, ...,
+    /// `time_total`.
+    fn to_dict<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let r = &self.report;
+        let d = PyDict::new(py);
+        d.set_item("method", r.method.to_string())?;
+        d.set_item("termination", termination_name(r.termination))?;
+        d.set_item("converged", r.termination == Termination::Converged)?;
+        d.set_item("iterations", r.iterations)?;
+        d.set_item("newton_steps", r.newton_steps)?;
+        d.set_item("chord_steps", r.chord_steps)?;
+        d.set_item("load_steps", r.load_steps)?;
+        d.set_item("meshes", r.meshes)?;
+        d.set_item("jacobian_evaluations", r.evaluations.jacobian)?;
+        d.set_item("residual_evaluations", r.evaluations.residual)?;
+        d.set_item("residual", r.residual)?;
+        d.set_item("intervals", r.intervals)?;
+        d.set_item("unknowns", r.unknowns)?;
+        d.set_item("tip_error_estimate", r.error_estimate.map(|e| e.tip_position))?;
+        d.set_item("tolerance", r.tolerance)?;
+        d.set_item("tolerance_met", r.tolerance_met)?;
+        let (directions, conjugate_point, reason) = stability_parts(&r.stability);
+        d.set_item("stability", r.stability.verdict())?;
+        d.set_item("unstable_directions", directions)?;
+        d.set_item("conjugate_point_s", conjugate_point)?;
+        d.set_item("stability_reason", reason)?;
+        let (path, folds, bifurcations) = path_parts(&r.path);
+        d.set_item("path", path)?;
+        d.set_item("folds", folds.to_vec())?;
+        d.set_item("bifurcations", bifurcations.to_vec())?;
+        let t = &r.timings;
+        for (name, time) in [
+            ("time_assembly", t.assembly),
+            ("time_factorization", t.factorization),
+            ("time_solve", t.solve),
+            ("time_estimate", t.estimate),
+            ("time_stability", t.stability),
+            ("time_total", t.total),
+        ] {
+            d.set_item(name, time.as_secs_f64())?;
+        }
+        Ok(d)
+    }
+
     fn __repr__(&self) -> String {
+        let r = &self.report;
         format!(
-            "SolveReport(method={}, termination={}, iterations={}, residual={:.3e}, total={:.3} ms)",
-            self.report.method,
-            termination_name(self.report.termination),
-            self.report.iterations,
-            self.report.residual,
-            self.report.timings.total.as_secs_f64() * 1e3
+            "SolveReport(method={}, termination={}, iterations={} ({} Newton, {} chord), load_steps={}, meshes={}, residual={:.3e}, stability={}, path={}, total={:.3} ms)",
+            r.method,
+            termination_name(r.termination),
+            r.iterations,
+            r.newton_steps,
+            r.chord_steps,
+            r.load_steps,
+            r.meshes,
+            r.residual,
+            r.stability.verdict(),
+            path_parts(&r.path).0,
+            r.timings.total.as_secs_f64() * 1e3
         )
     }
 }
@@ -379,6 +567,9 @@ fn mat_json(m: &Matrix3<f64>) -> Value {
 fn nanos(d: Duration) -> u64 {
     u64::try_from(d.as_nanos()).unwrap_or(u64::MAX)
 }
+
+/// The `format` of `Solution.to_json` texts (1 had no tendon states, counts or stability).
+const FORMAT: &str = "tdcr-solution-2";
 
 /// The solution as JSON (non-finite numbers as null, read back as NaN).
 fn solution_json(solution: &Solution) -> Value {
@@ -401,21 +592,34 @@ fn solution_json(solution: &Solution) -> Value {
         .iter()
         .map(|i| json!({"residual": i.residual, "step": i.step, "damping": i.damping, "fresh_jacobian": i.fresh_jacobian}))
         .collect();
+    let tendons: Vec<Value> = solution
+        .tendons
+        .iter()
+        .map(|t| {
+            json!({"tension": t.tension, "displacement": t.displacement, "length": t.length,
+                   "reference_length": t.reference_length, "slack": t.slack})
+        })
+        .collect();
     let t = &r.timings;
+    let (directions, conjugate_point, reason) = stability_parts(&r.stability);
+    let (path, folds, bifurcations) = path_parts(&r.path);
     json!({
-        "format": "tdcr-solution-1",
+        "format": FORMAT,
         "nodes": nodes,
         "tendon_paths": paths,
+        "tendons": tendons,
         "report": {
             "method": r.method.to_string(),
             "termination": termination_name(r.termination),
             "iterations": r.iterations,
+            "newton_steps": r.newton_steps,
+            "chord_steps": r.chord_steps,
             "load_steps": r.load_steps,
             "meshes": r.meshes,
             "history": history,
             "residual": r.residual,
             "evaluations": {"residual": r.evaluations.residual, "jacobian": r.evaluations.jacobian, "equations": r.evaluations.equations},
-            "timings_ns": {"assembly": nanos(t.assembly), "factorization": nanos(t.factorization), "solve": nanos(t.solve), "estimate": nanos(t.estimate), "total": nanos(t.total)},
+            "timings_ns": {"assembly": nanos(t.assembly), "factorization": nanos(t.factorization), "solve": nanos(t.solve), "estimate": nanos(t.estimate), "stability": nanos(t.stability), "total": nanos(t.total)},
             "unknowns": r.unknowns,
             "nonzeros": r.nonzeros,
             "intervals": r.intervals,
@@ -424,6 +628,8 @@ fn solution_json(solution: &Solution) -> Value {
             })),
             "tolerance": r.tolerance,
             "tolerance_met": r.tolerance_met,
+            "stability": {"verdict": r.stability.verdict(), "unstable_directions": directions, "conjugate_point_s": conjugate_point, "reason": reason},
+            "path": {"kind": path, "folds": folds, "bifurcations": bifurcations},
         }
     })
 }
@@ -485,8 +691,14 @@ fn read_node(v: &Value) -> Result<Node, String> {
 }
 
 fn read_solution(v: &Value) -> Result<Solution, String> {
-    if field(v, "format")?.as_str() != Some("tdcr-solution-1") {
-        return Err("`format` is not \"tdcr-solution-1\" (not a Solution.to_json text)".into());
+    match field(v, "format")?.as_str() {
+        Some(FORMAT) => {}
+        Some("tdcr-solution-1") => {
+            return Err(format!(
+                "`format` is \"tdcr-solution-1\", written by an older tdcr without tendon states and stability; this version reads \"{FORMAT}\": solve the robot again"
+            ));
+        }
+        _ => return Err(format!("`format` is not \"{FORMAT}\" (not a Solution.to_json text)")),
     }
     let nodes: Vec<Node> = field(v, "nodes")?
         .as_array()
@@ -497,7 +709,7 @@ fn read_solution(v: &Value) -> Result<Solution, String> {
     if nodes.len() < 2 {
         return Err(format!("a solution needs at least 2 nodes, got {}", nodes.len()));
     }
-    let tendon_paths = field(v, "tendon_paths")?
+    let tendon_paths: Vec<Vec<Vector3<f64>>> = field(v, "tendon_paths")?
         .as_array()
         .ok_or("`tendon_paths` is not a list")?
         .iter()
@@ -509,6 +721,27 @@ fn read_solution(v: &Value) -> Result<Solution, String> {
                 .collect::<Result<Vec<_>, _>>()
         })
         .collect::<Result<_, _>>()?;
+    let tendons: Vec<TendonState> = field(v, "tendons")?
+        .as_array()
+        .ok_or("`tendons` is not a list")?
+        .iter()
+        .map(|t| {
+            Ok(TendonState {
+                tension: number(t, "tension")?,
+                displacement: number(t, "displacement")?,
+                length: number(t, "length")?,
+                reference_length: number(t, "reference_length")?,
+                slack: number(t, "slack")?,
+            })
+        })
+        .collect::<Result<_, String>>()?;
+    if tendons.len() != tendon_paths.len() {
+        return Err(format!(
+            "`tendons` has {} entries but `tendon_paths` {}: give one state per tendon",
+            tendons.len(),
+            tendon_paths.len()
+        ));
+    }
     let r = field(v, "report")?;
     let method = match field(r, "method")?.as_str() {
         Some("collocation") => Method::Collocation,
@@ -546,6 +779,8 @@ fn read_solution(v: &Value) -> Result<Solution, String> {
     let mut report = SolveReport::new(method);
     report.termination = termination;
     report.iterations = count(r, "iterations")?;
+    report.newton_steps = count(r, "newton_steps")?;
+    report.chord_steps = count(r, "chord_steps")?;
     report.load_steps = count(r, "load_steps")?;
     report.meshes = count(r, "meshes")?;
     report.history = history;
@@ -560,6 +795,7 @@ fn read_solution(v: &Value) -> Result<Solution, String> {
         factorization: ns("factorization")?,
         solve: ns("solve")?,
         estimate: ns("estimate")?,
+        stability: ns("stability")?,
         total: ns("total")?,
     };
     report.unknowns = count(r, "unknowns")?;
@@ -581,9 +817,57 @@ fn read_solution(v: &Value) -> Result<Solution, String> {
         Value::Null => None,
         x => Some(x.as_bool().ok_or("`tolerance_met` is not a bool")?),
     };
+    report.stability = read_stability(field(r, "stability")?)?;
+    report.path = read_path(field(r, "path")?)?;
     Ok(Solution {
         nodes,
         tendon_paths,
+        tendons,
         report,
     })
+}
+
+/// A list of numbers (null read as NaN).
+fn numbers(v: &Value, key: &str) -> Result<Vec<f64>, String> {
+    field(v, key)?
+        .as_array()
+        .ok_or_else(|| format!("`{key}` is not a list"))?
+        .iter()
+        .map(|x| match x {
+            Value::Null => Ok(f64::NAN),
+            x => x.as_f64().ok_or_else(|| format!("`{key}` has a non-number")),
+        })
+        .collect()
+}
+
+/// The `report.stability` object of the JSON.
+fn read_stability(v: &Value) -> Result<Stability, String> {
+    match field(v, "verdict")?.as_str() {
+        Some("stable") => Ok(Stability::Stable),
+        Some("unstable") => Ok(Stability::Unstable {
+            directions: count(v, "unstable_directions")?,
+            conjugate_point: number(v, "conjugate_point_s")?,
+        }),
+        Some("unknown") => Ok(Stability::Unknown {
+            reason: field(v, "reason")?
+                .as_str()
+                .ok_or("`stability.reason` is not a string")?
+                .to_string(),
+        }),
+        _ => Err("`report.stability.verdict` is not \"stable\", \"unstable\" or \"unknown\"".into()),
+    }
+}
+
+/// The `report.path` object of the JSON.
+fn read_path(v: &Value) -> Result<Path, String> {
+    let kind = field(v, "kind")?.as_str();
+    if kind == Some("direct") {
+        return Ok(Path::Direct);
+    }
+    let (folds, bifurcations) = (numbers(v, "folds")?, numbers(v, "bifurcations")?);
+    match kind {
+        Some("from_warm_start") => Ok(Path::FromWarmStart { folds, bifurcations }),
+        Some("load_path") => Ok(Path::LoadPath { folds, bifurcations }),
+        _ => Err("`report.path.kind` is not \"direct\", \"from_warm_start\" or \"load_path\"".into()),
+    }
 }

@@ -20,6 +20,7 @@ def test_dask_cluster_equals_local_batch():
     assert np.array_equal(remote["tip_position"], local["tip_position"])
     assert np.array_equal(remote["converged"], local["converged"]) and remote["error"] == local["error"]
     assert np.array_equal(remote["iterations"], local["iterations"])
+    assert remote["stability"] == local["stability"] and len(local["stability"]) == 60
 
 
 def test_chunks_cover_the_rows_in_order():

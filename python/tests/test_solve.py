@@ -70,7 +70,9 @@ def test_arrays_have_their_shapes_and_dtypes():
     assert robot.tensions.shape == (5,) and robot.base_rotation.shape == (3, 3)
     report = solution.report
     assert report.converged and report.termination == "converged" and report.method == "collocation"
-    assert report.iterations >= 1 and report.history.shape == (report.iterations,) if report.load_steps == 1 else True
+    # A direct solve on one mesh: every iteration is in the history of its one Newton run.
+    assert report.load_steps == 0 and report.meshes == 1 and report.path == "direct"
+    assert report.iterations >= 1 and report.history.shape == (report.iterations,)
     assert report.timings["total"] > 0.0 and report.intervals == 20
     # A fixed mesh (`intervals` alone): no tolerance, still the deferred-correction estimate.
     assert report.tolerance is None and report.tolerance_met is None

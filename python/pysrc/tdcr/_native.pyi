@@ -63,7 +63,9 @@ class Robot:
     def to_toml(self) -> str:
         """The robot as robot-file text that reads back to the same robot, bitwise."""
     def with_tensions(self, tensions: Sequence[float]) -> Robot:
-        """A copy with the tensions (N) of all tendons, in file order."""
+        """A copy with the tensions (N) of all tendons, in file order; all tension-controlled."""
+    def with_displacements(self, displacements: Sequence[Optional[float]]) -> Robot:
+        """A copy with actuator pull-ins (m) per tendon; None: tension-controlled."""
     def with_parameters(self, parameters: Mapping[str, float]) -> Robot:
         """A copy with named parameters (`tension.1`, `tip_force.z`, ...) set."""
     @property
@@ -75,6 +77,15 @@ class Robot:
     @property
     def tensions(self) -> FloatArray:
         """Tendon tensions (N), shape (k,)."""
+    @property
+    def displacements(self) -> List[Optional[float]]:
+        """Actuator pull-ins (m) of displacement-controlled tendons, None for the others."""
+    @property
+    def tendon_stiffnesses(self) -> List[Optional[float]]:
+        """Axial stiffnesses E_t A_t (N) of elastic tendons, None for inextensible ones."""
+    @property
+    def free_lengths(self) -> FloatArray:
+        """Free lengths (m) between base and actuator, shape (k,)."""
     @property
     def tip_force(self) -> FloatArray:
         """Tip force (N, world frame), shape (3,)."""
@@ -113,9 +124,17 @@ class SolveReport:
     @property
     def converged(self) -> bool: ...
     @property
-    def iterations(self) -> int: ...
+    def iterations(self) -> int:
+        """newton_steps + chord_steps, over load steps and meshes."""
     @property
-    def load_steps(self) -> int: ...
+    def newton_steps(self) -> int: ...
+    @property
+    def chord_steps(self) -> int: ...
+    @property
+    def jacobian_evaluations(self) -> int: ...
+    @property
+    def load_steps(self) -> int:
+        """Continuation steps along the load path; 0 for a direct solve."""
     @property
     def meshes(self) -> int: ...
     @property
@@ -140,11 +159,26 @@ class SolveReport:
     def tolerance_met(self) -> Optional[bool]:
         """Whether the estimate meets the tolerance; None on a fixed mesh."""
     @property
+    def stability(self) -> Literal["stable", "unstable", "unknown"]: ...
+    @property
+    def stability_message(self) -> str: ...
+    @property
+    def stability_detail(self) -> Dict[str, Any]:
+        """{"verdict", "unstable_directions", "conjugate_point_s", "reason"}."""
+    @property
+    def path(self) -> Literal["direct", "from_warm_start", "load_path"]: ...
+    @property
+    def folds(self) -> List[float]: ...
+    @property
+    def bifurcations(self) -> List[float]: ...
+    @property
     def timings(self) -> Dict[str, float]:
-        """Seconds: assembly, factorization, solve, estimate, total."""
+        """Seconds: assembly, factorization, solve, estimate, stability, total."""
     @property
     def evaluations(self) -> Dict[str, int]:
         """Counts: residual, jacobian, equations."""
+    def to_dict(self) -> Dict[str, Any]:
+        """The report's scalars as one flat dict."""
 
 class Solution:
     """A solved shape; arrays are float64, SI units."""
@@ -173,6 +207,12 @@ class Solution:
     @property
     def tendon_paths(self) -> List[FloatArray]:
         """Each tendon's path (m), (N_i, 3) arrays."""
+    @property
+    def tendons(self) -> List[Dict[str, float]]:
+        """Per tendon: tension, displacement, length, reference_length, slack."""
+    @property
+    def tensions(self) -> FloatArray:
+        """Tendon tensions (N), shape (k,)."""
     @property
     def tip_position(self) -> FloatArray:
         """Tip position (m), shape (3,)."""
@@ -241,6 +281,7 @@ def solve(
     residual_tolerance: Optional[float] = None,
     max_iterations: Optional[int] = None,
     continuation: Optional[bool] = None,
+    equilibrium: Optional[Literal["load_path", "nearest"]] = None,
     integration_tolerance: Optional[float] = None,
 ) -> Solution:
     """Solves `robot` (GIL released)."""
@@ -256,6 +297,7 @@ def solve_batch(
     residual_tolerance: Optional[float] = None,
     max_iterations: Optional[int] = None,
     continuation: Optional[bool] = None,
+    equilibrium: Optional[Literal["load_path", "nearest"]] = None,
 ) -> List[Any]:
     """Solves many robots on all cores (GIL released), results in input order."""
 
@@ -269,6 +311,7 @@ def solve_parameters(
     residual_tolerance: Optional[float] = None,
     max_iterations: Optional[int] = None,
     continuation: Optional[bool] = None,
+    equilibrium: Optional[Literal["load_path", "nearest"]] = None,
 ) -> Dict[str, Any]:
     """`solve_batch` of parameter rows reduced to arrays."""
 
@@ -282,6 +325,7 @@ def sweep(
     residual_tolerance: Optional[float] = None,
     max_iterations: Optional[int] = None,
     continuation: Optional[bool] = None,
+    equilibrium: Optional[Literal["load_path", "nearest"]] = None,
 ) -> List[Solution]:
     """Solves parameter rows in order, each warm-started from the last."""
 

@@ -58,7 +58,7 @@ def solve_parameters(
     """`tdcr.solve_parameters(robot, parameters, **options)` on a Dask cluster: one task per
     chunk of `chunk_size` rows, submitted with `client.map` (Dask reruns a task up to
     `retries` times when its worker fails), gathered and joined in row order. Returns the
-    same dict (`converged`, `tip_position`, `iterations`, `error`), bitwise identical to the
+    same dict (`converged`, `tip_position`, `iterations`, `stability`, `error`), bitwise identical to the
     local call."""
     text = robot.to_toml()
     parts = chunks(parameters, chunk_size)
@@ -70,5 +70,6 @@ def solve_parameters(
         "converged": np.concatenate([r["converged"] for r in results]),
         "tip_position": np.concatenate([r["tip_position"] for r in results]),
         "iterations": np.concatenate([r["iterations"] for r in results]),
+        "stability": [verdict for r in results for verdict in r["stability"]],
         "error": [message for r in results for message in r["error"]],
     }
