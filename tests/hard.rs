@@ -128,7 +128,7 @@ fn tension_near_the_routing_geometric_limit() {
     )
     .unwrap_err();
     assert!(matches!(err, tdcr::Error::NotConverged { .. }), "{err}");
-    assert!(err.to_string().contains("the load path stalled"), "{err}");
+    assert!(err.to_string().contains("the path stalled"), "{err}");
 }
 
 #[test]

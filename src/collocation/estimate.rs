@@ -3,10 +3,11 @@
 //! At the order-4 solution x4 the residual of an order-6 scheme on the same mesh,
 //! phi6(x4), is of the size of x4's own error times the Jacobian: since phi6 vanishes to
 //! O(h^6) at the exact solution x*, phi6(x4) = J (x4 - x*) + O(h^6) + O(|x4 - x*|^2). One
-//! solve with the factors Newton already holds, J delta = -phi6(x4), therefore gives
-//! delta = x* - x4 up to O(h^6): an asymptotically exact estimate of the error of every
-//! node, at the cost of one residual-like pass and one re-solve (docs/numerics.md, "Error
-//! estimate").
+//! solve with the factors Newton already holds, J delta = phi4(x4) - phi6(x4) (phi4(x4) is
+//! zero for the exact discrete solution; subtracting Newton's final residual keeps the
+//! iteration's own error out), therefore gives delta = x* - x4 up to O(h^6): an
+//! asymptotically exact estimate of the discretization error of every node, at the cost of
+//! two residual-like passes and one re-solve (docs/numerics.md, "Error estimate").
 
 use super::newton::Workspace;
 use super::system::System;
@@ -41,8 +42,13 @@ pub(crate) fn estimate(system: &System, ws: &mut Workspace, x: &[State]) -> Resu
     let mut local = vec![0.0; x.len() - 1];
     let mut node_rates = vec![Vector6::zeros(); x.len()];
     system.order6_residual(x, &mut rhs, &mut local, &mut node_rates)?;
-    for r in &mut rhs {
-        *r = -*r;
+    // The difference phi4(x) - phi6(x), not -phi6(x) alone: Newton stops at a small but
+    // non-zero phi4(x), whose part J^-1 phi4 is the iteration's error, not the mesh's; it
+    // must not make the mesh finer.
+    let mut phi4 = vec![0.0; n];
+    system.residual(x, &mut phi4)?;
+    for (r, f) in rhs.iter_mut().zip(&phi4) {
+        *r = f - *r;
     }
     if !ws.has_factors() {
         let mut residual = vec![0.0; n];

@@ -26,6 +26,17 @@ const MIN_DAMPING: f64 = 1.0 / 1_048_576.0;
 /// step's cost; a step that does less than quarter the residual is not worth keeping.
 pub const CHORD_CONTRACTION: f64 = 0.25;
 
+/// Newton stops only when its remaining error is also below this (scaled unknowns: 1e-10 L
+/// of position, 1e-10 rad): the residual test alone is not enough where the rows' scaling
+/// (force rows in units of EA) hides a large bending compliance, and chord steps converge
+/// only linearly. The remaining error is estimated from the last step and the contraction
+/// of the last two (Deuflhard's error-oriented test), theta / (1 - theta) |dx|.
+const STEP_TOLERANCE: f64 = 1e-10;
+
+/// Chord steps go on while each shrinks the step at least this much (tenfold): slower
+/// linear convergence costs more chord steps than one new Jacobian.
+const CHORD_STEP_RATIO: f64 = 0.1;
+
 /// Newton settings.
 #[derive(Clone, Copy, Debug)]
 pub struct Settings {
@@ -250,11 +261,22 @@ pub fn run(
         return (Termination::NonFinite, worst_row(&ws.residual));
     }
     let mut chord = settings.reuse_factors;
+    // Norms of the last two steps taken (full steps only: a damped one says nothing of the
+    // remaining error).
+    let (mut last_step, mut before_last) = (f64::INFINITY, f64::INFINITY);
     for iteration in 0..settings.max_iterations {
         let norm = max_norm(&ws.residual);
+        let theta = last_step / before_last;
+        // One step: its length bounds the error; two: the contraction extrapolates it; steps
+        // that no longer contract have reached the rounding floor.
+        let settled = if before_last.is_infinite() {
+            last_step <= STEP_TOLERANCE
+        } else {
+            theta >= 1.0 || theta / (1.0 - theta) * last_step <= STEP_TOLERANCE
+        };
         // At least one step: a guess (the rigid estimate of a lightly loaded rod, say) can
         // meet an absolute tolerance without being the discrete solution.
-        if norm <= settings.tolerance && iteration > 0 {
+        if norm <= settings.tolerance && iteration > 0 && (settled || norm == 0.0) {
             report.residual = norm;
             return (Termination::Converged, worst_row(&ws.residual));
         }
@@ -276,6 +298,12 @@ pub fn run(
                     fresh_jacobian: false,
                 });
                 report.chord_steps += 1;
+                // A chord step that shrinks the step less than tenfold converges slowly
+                // (the Jacobian has moved): the next step is a Newton step.
+                if step_norm > CHORD_STEP_RATIO * last_step {
+                    chord = false;
+                }
+                (before_last, last_step) = (last_step, step_norm);
                 std::mem::swap(x, &mut ws.trial);
                 std::mem::swap(&mut ws.residual, &mut ws.trial_residual);
                 continue;
@@ -345,6 +373,11 @@ pub fn run(
         }
         std::mem::swap(x, &mut ws.trial);
         std::mem::swap(&mut ws.residual, &mut ws.trial_residual);
+        (before_last, last_step) = if alpha == 1.0 {
+            (last_step, step_norm)
+        } else {
+            (f64::INFINITY, f64::INFINITY)
+        };
         // Far from the solution (a damped step) a stale Jacobian is not worth trying.
         chord = alpha == 1.0;
     }

@@ -68,12 +68,15 @@ pub(super) struct End {
 const BIFURCATION_STEP: f64 = 1e-3;
 
 /// Unstable directions at the point whose Jacobian `ws` holds: None when unknown.
-fn index(system: &System, ws: &mut Workspace) -> Option<usize> {
+fn index(system: &System, ws: &mut Workspace, report: &mut SolveReport) -> Option<usize> {
     if stability::non_conservative(system.model.robot).is_some() {
         return None;
     }
+    let t = std::time::Instant::now();
     let s: Vec<f64> = system.mesh.nodes.iter().map(|n| n.s).collect();
-    match ws.verdict(|values| stability::assess(values, &s)) {
+    let verdict = ws.verdict(|values| stability::assess(values, &s));
+    report.timings.stability += t.elapsed();
+    match verdict {
         Stability::Stable => Some(0),
         Stability::Unstable { directions, .. } => Some(directions),
         Stability::Unknown { .. } => None,
@@ -302,7 +305,7 @@ pub(super) fn follow(
         return Err(("the path's first tangent is not finite".into(), 0));
     };
     let n = system.unknowns();
-    let mut unstable = index(system, ws);
+    let mut unstable = index(system, ws, report);
     let mut folds = Vec::new();
     let mut bifurcations = Vec::new();
     // From a warm start the first try is the whole way: predict with the sensitivities
@@ -324,6 +327,7 @@ pub(super) fn follow(
     };
     push(&mut record, &point, unstable, false, report);
     let mut factored_at_point = true;
+    let mut furthest = 0.0f64;
     let mut worst = 0;
     let mut trial: Vec<State> = Vec::with_capacity(system.mesh.nodes.len());
     let mut r = vec![0.0; n];
@@ -346,22 +350,36 @@ pub(super) fn follow(
             };
             let (term, row) = newton::run(system, ws, &mut landed, &land, report);
             report.termination = term;
-            if term == Termination::Converged {
-                if tracing && ws.linearize(system, &landed, report) {
-                    let end = Point {
-                        x: landed.clone(),
-                        lambda: 1.0,
-                        tx: Vec::new(),
-                        tl: 1.0,
-                    };
-                    let unstable = index(system, ws);
-                    push(&mut record, &end, unstable, false, report);
+            // The landing is a step like any other: if it changes the number of unstable
+            // directions it jumped to another branch near a bifurcation (unless it is short).
+            let landed_unstable = if term == Termination::Converged && ws.linearize(system, &landed, report) {
+                index(system, ws, report)
+            } else {
+                None
+            };
+            let jumped = matches!((unstable, landed_unstable), (Some(a), Some(b)) if a != b);
+            if term == Termination::Converged && !(jumped && h1 > BIFURCATION_STEP) {
+                if jumped {
+                    bifurcations.push(1.0);
                 }
+                let end = Point {
+                    x: landed.clone(),
+                    lambda: 1.0,
+                    tx: Vec::new(),
+                    tl: 1.0,
+                };
+                push(&mut record, &end, landed_unstable, false, report);
                 return Ok(End {
                     x: landed,
                     folds,
                     bifurcations,
                 });
+            }
+            if jumped {
+                // Retry shorter from the last point, whose factors are gone.
+                h = 0.25 * h1;
+                factored_at_point = false;
+                continue;
             }
             worst = row;
             factored_at_point = false;
@@ -398,7 +416,7 @@ pub(super) fn follow(
                     break;
                 };
                 let fold = (next.tl > 0.0) != (point.tl > 0.0);
-                let next_unstable = index(system, ws);
+                let next_unstable = index(system, ws, report);
                 if let (Some(a), Some(b)) = (unstable, next_unstable)
                     && a != b
                     && !fold
@@ -439,6 +457,7 @@ pub(super) fn follow(
                     h *= 0.5;
                 }
                 point = next;
+                furthest = furthest.max(point.lambda);
                 fl = next_fl;
                 factored_at_point = true;
                 // A shape the mesh no longer resolves: continue on a finer one (the load
@@ -468,8 +487,10 @@ pub(super) fn follow(
     homotopy.set(system, 1.0);
     Err((
         format!(
-            "the load path stalled at {:.1} % of the load: no equilibrium nearby is continuous in the load there",
-            point.lambda * 100.0
+            "the path stalled at {:.1} % of the way (after reaching {:.1} %): no equilibrium nearby is continuous \
+             in the parameter there",
+            point.lambda * 100.0,
+            furthest * 100.0
         ),
         worst,
     ))
