@@ -11,8 +11,12 @@
 //! 4. `linear`: the structured elimination of `linear/blocks.rs` (automatic) or faer's
 //!    sparse LU (`linear/sparse.rs`); [`newton`](crate::advanced::newton): damped Newton with chord steps on stored factors, every buffer
 //!    (and the symbolic LU) built once per mesh.
-//! 5. Robustness: rigid-equilibrium initial guess or a warm start, and load continuation
-//!    (`continuation.rs`) when a direct solve fails.
+//! 5. Robustness and the equilibrium choice: rigid-equilibrium initial guess or a warm
+//!    start; Newton's answer stands when it converged cleanly to a state that is not
+//!    unstable, else a path is followed (`path.rs`: the Newton homotopy from a warm start,
+//!    the load path from the unloaded robot); every answer gets a stability verdict
+//!    (`stability.rs`, docs/stability.md). Displacement-controlled tendons are solved by
+//!    `actuation.rs`.
 //! 6. Error control: every converged mesh gets a deferred-correction error estimate
 //!    (`estimate.rs`, one order-6 residual and one solve with Newton's factors); by default
 //!    (`refine.rs`) the starting mesh resolves the initial guess and the mesh is
@@ -20,7 +24,8 @@
 //! 7. [`sensitivity`]: derivatives of the converged solution by the implicit function
 //!    theorem, from one factorization.
 //!
-//! docs/numerics.md documents the scheme (order 4), the scaling and the stopping tests.
+//! docs/numerics.md documents the scheme (order 4), the scaling, the stopping tests and the
+//! load path.
 
 mod actuation;
 mod estimate;

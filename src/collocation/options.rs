@@ -56,11 +56,14 @@ pub struct Options {
     /// Newton stops when the scaled residual max-norm is at or below this (dimensionless).
     /// Default 1e-11 (a few hundred times rounding of O(1) scaled quantities).
     pub residual_tolerance: f64,
-    /// Newton iterations per solve (per load step with continuation). Default 30; at most
-    /// [`MAX_ITERATIONS`].
+    /// Newton iterations per Newton run (each mesh; the first try from the guess and the
+    /// landing of a load path take at most 12 of them, unless `equilibrium` is
+    /// [`Equilibrium::Nearest`] for the first try). Default 30; at most [`MAX_ITERATIONS`].
     pub max_iterations: usize,
-    /// Follow the load path from the unloaded robot when Newton from the guess fails or does
-    /// not end cleanly on a stable state (docs/stability.md). Default true.
+    /// Follow a path when Newton from the guess fails or does not end cleanly on a state
+    /// that is not unstable: from a warm start the Newton homotopy, else the load path from
+    /// the unloaded robot (docs/stability.md). `false` returns Newton's answer from the
+    /// guess, whatever its stability, or an error. Default true.
     pub continuation: bool,
     /// Which equilibrium to return. Default [`Equilibrium::LoadPath`].
     pub equilibrium: Equilibrium,
