@@ -188,12 +188,19 @@ fn tendons_ending_a_micrometre_apart_and_next_to_the_base() {
 
 #[test]
 fn compressive_tip_load_beyond_euler_buckling() {
-    // Newton finds an equilibrium, not necessarily the stable one: past the Euler load
-    // pi^2 EI / (4 L^2) = 0.18 N the nearly straight shape is an (unstable) equilibrium.
+    // Past the Euler load pi^2 EI / (4 L^2) = 0.18 N the nearly straight shape is an
+    // unstable equilibrium; the default solve returns the stable, buckled one.
     for force in [0.1, 1.0] {
         let mut robot = tdcr::Robot::new(cases::prototype().rod.clone());
         robot.loads.tip_force = nalgebra::Vector3::new(0.001, 0.0, -force);
-        converges(&robot);
+        let solution = converges(&robot);
+        assert!(
+            solution.report.stability.is_stable(),
+            "{force} N: {}",
+            solution.report.stability
+        );
+        // Buckled past the Euler load: the tip well off the axis (measured 129.5 mm at 1 N).
+        assert_eq!(solution.tip_position().x > 0.05, force > 0.5, "{force} N");
     }
 }
 

@@ -68,7 +68,7 @@ method = "collocation"           # or "shooting" (the independent cross-check)
 # intervals = 32                 # the starting mesh; alone (no tolerance), a fixed mesh
 # max_intervals = 8192           # cap on intervals during refinement
 # residual_tolerance = 1e-11     # Newton stopping test (scaled, dimensionless)
-# max_iterations = 30            # Newton iterations per load step
+# max_iterations = 30            # Newton iterations per Newton run
 # continuation = true            # follow the load path when Newton alone is not enough
 # equilibrium = "load_path"      # or "nearest": Newton's root from the guess, stable or not
 "#;
