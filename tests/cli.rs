@@ -572,6 +572,12 @@ fn bench_reports_both_cases_cold_and_warm_as_json() {
         // 1e-7 m: the default target error, met against the published reference tips
         assert!(row["tip_error_m"].as_f64().unwrap() <= 1e-7);
         assert!(row["nodes"].as_u64().unwrap() >= 9);
+        // Intervals and nodes name their own counts; iterations are Newton plus chord steps.
+        assert_eq!(row["nodes"].as_u64(), row["intervals"].as_u64().map(|n| n + 1));
+        assert_eq!(
+            row["iterations"].as_u64(),
+            Some(row["newton_steps"].as_u64().unwrap() + row["chord_steps"].as_u64().unwrap())
+        );
         // The solver's own estimate, asymptotically exact: within 30 % of the true error
         // (the reference tips themselves are good to 5e-10 m, 10 % of S's error of 5e-9 m)
         let (estimate, error) = (

@@ -31,8 +31,9 @@ pub struct BenchArgs {
 pub enum BenchFormat {
     /// A table for people.
     Table,
-    /// A JSON list of {case, start, median_seconds, iterations, tip_error_m, error_estimate_m,
-    /// nodes}; `nodes` counts mesh points, the table's intervals + 1.
+    /// A JSON list of {case, start, median_seconds, iterations, newton_steps, chord_steps,
+    /// tip_error_m, error_estimate_m, intervals, nodes}; `nodes` counts mesh points
+    /// (intervals + 1).
     Json,
 }
 
@@ -41,6 +42,8 @@ struct Row {
     start: &'static str,
     median: Duration,
     iterations: usize,
+    newton: usize,
+    chord: usize,
     error: f64,
     estimate: Option<f64>,
     intervals: usize,
@@ -59,6 +62,8 @@ impl Row {
             start,
             median,
             iterations: solution.report.iterations,
+            newton: solution.report.newton_steps,
+            chord: solution.report.chord_steps,
             error: (solution.tip_position() - reference).norm(),
             estimate: solution.report.error_estimate.map(|e| e.tip_position),
             intervals: solution.report.intervals,
@@ -144,16 +149,16 @@ pub fn run(args: &BenchArgs) -> Result<String, String> {
             );
             let _ = writeln!(
                 out,
-                "case  start  median (ms)  iterations  tip error (m)  estimate (m)  intervals"
+                "case  start  median (ms)  Newton + chord steps  tip error (m)  estimate (m)  intervals"
             );
             for r in &rows {
                 let _ = writeln!(
                     out,
-                    "{:<4}  {:<5}  {:>11.4}  {:>10}  {:>13.2e}  {:>12}  {:>9}",
+                    "{:<4}  {:<5}  {:>11.4}  {:>20}  {:>13.2e}  {:>12}  {:>9}",
                     r.case,
                     r.start,
                     r.median.as_secs_f64() * 1e3,
-                    r.iterations,
+                    format!("{} + {}", r.newton, r.chord),
                     r.error,
                     r.estimate.map_or("none".into(), |e| format!("{e:.2e}")),
                     r.intervals
@@ -164,11 +169,12 @@ pub fn run(args: &BenchArgs) -> Result<String, String> {
             let list: Vec<serde_json::Value> = rows
                 .iter()
                 .map(|r| {
-                    // `nodes` counts mesh points (intervals + 1); other tools read the key.
+                    // `nodes` counts mesh points (intervals + 1), kept for tools that read it.
                     serde_json::json!({
                         "case": r.case, "start": r.start, "median_seconds": r.median.as_secs_f64(),
-                        "iterations": r.iterations, "tip_error_m": r.error,
-                        "error_estimate_m": r.estimate, "nodes": r.intervals + 1,
+                        "iterations": r.iterations, "newton_steps": r.newton, "chord_steps": r.chord,
+                        "tip_error_m": r.error, "error_estimate_m": r.estimate,
+                        "intervals": r.intervals, "nodes": r.intervals + 1,
                     })
                 })
                 .collect();
