@@ -351,7 +351,10 @@ fn required_fields<'a>(name: &str, value: &'a Spanned<DeValue<'_>>) -> Vec<(Stri
             }
         }
     } else if name.starts_with("tendon[") {
-        need(name, value, &["routing", "tension"]);
+        // A tendon is driven by `tension` or by `displacement`; the check of the values
+        // reports a tendon with neither (or both).
+        let driven = keys(value).is_some_and(|k| k.contains(&"displacement"));
+        need(name, value, if driven { &["routing"] } else { &["routing", "tension"] });
         if let Some(routing) = entry(value, "routing") {
             let path = format!("{name}.routing");
             match entry(routing, "kind").map(|k| k.get_ref()) {
