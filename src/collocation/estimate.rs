@@ -37,6 +37,20 @@ pub(crate) struct Correction {
 /// # Errors
 /// A model breakdown at a stage of the order-6 scheme.
 pub(crate) fn estimate(system: &System, ws: &mut Workspace, x: &[State]) -> Result<Option<Correction>> {
+    estimate_with(system, ws, x, None)
+}
+
+/// [`estimate`] with the order-4 residual at `x` when the caller has it (Newton's last
+/// residual), saving its evaluation.
+///
+/// # Errors
+/// As [`estimate`].
+pub(crate) fn estimate_with(
+    system: &System,
+    ws: &mut Workspace,
+    x: &[State],
+    phi4: Option<&[f64]>,
+) -> Result<Option<Correction>> {
     let n = system.unknowns();
     let mut rhs = vec![0.0; n];
     let mut local = vec![0.0; x.len() - 1];
@@ -45,9 +59,17 @@ pub(crate) fn estimate(system: &System, ws: &mut Workspace, x: &[State]) -> Resu
     // The difference phi4(x) - phi6(x), not -phi6(x) alone: Newton stops at a small but
     // non-zero phi4(x), whose part J^-1 phi4 is the iteration's error, not the mesh's; it
     // must not make the mesh finer.
-    let mut phi4 = vec![0.0; n];
-    system.residual(x, &mut phi4)?;
-    for (r, f) in rhs.iter_mut().zip(&phi4) {
+    let evaluated;
+    let phi4 = match phi4 {
+        Some(r) => r,
+        None => {
+            let mut r = vec![0.0; n];
+            system.residual(x, &mut r)?;
+            evaluated = r;
+            &evaluated[..]
+        }
+    };
+    for (r, f) in rhs.iter_mut().zip(phi4) {
         *r = f - *r;
     }
     if !ws.has_factors() {

@@ -368,7 +368,12 @@ fn solve_on_mesh(
     let correction = result.as_ref().ok().and_then(|x| {
         let t = Instant::now();
         // A breakdown at a stage of the order-6 scheme leaves the solution without an estimate.
-        let c = estimate::estimate(&system, &mut workspace, x).ok().flatten();
+        // The workspace's residual is the one at x: Newton's last, or a linearization's
+        // there (the stability verdict, a path's landing).
+        let phi4 = workspace.residual().to_vec();
+        let c = estimate::estimate_with(&system, &mut workspace, x, Some(&phi4))
+            .ok()
+            .flatten();
         report.timings.estimate += t.elapsed();
         c
     });

@@ -30,7 +30,8 @@ pub const CHORD_CONTRACTION: f64 = 0.25;
 /// of position, 1e-10 rad): the residual test alone is not enough where the rows' scaling
 /// (force rows in units of EA) hides a large bending compliance, and chord steps converge
 /// only linearly. The remaining error is estimated from the last step and the contraction
-/// of the last two (Deuflhard's error-oriented test), theta / (1 - theta) |dx|.
+/// theta of the last two (Deuflhard's error-oriented test): theta / (1 - theta) |dx| after a
+/// chord step (linear convergence), theta^2 |dx| after a Newton step (quadratic).
 const STEP_TOLERANCE: f64 = 1e-10;
 
 /// Chord steps go on while each shrinks the step at least this much (tenfold): slower
@@ -264,6 +265,8 @@ pub fn run(
     // Norms of the last two steps taken (full steps only: a damped one says nothing of the
     // remaining error).
     let (mut last_step, mut before_last) = (f64::INFINITY, f64::INFINITY);
+    // Whether the last step was a Newton step (quadratic convergence) or a chord step.
+    let mut last_fresh = false;
     for iteration in 0..settings.max_iterations {
         let norm = max_norm(&ws.residual);
         let theta = last_step / before_last;
@@ -271,8 +274,14 @@ pub fn run(
         // that no longer contract have reached the rounding floor.
         let settled = if before_last.is_infinite() {
             last_step <= STEP_TOLERANCE
+        } else if theta >= 1.0 {
+            true
+        } else if last_fresh {
+            // Quadratic: e_k+1 = C e_k^2 with theta = C e_k-1 gives e_k+1 = theta^2 |dx_k|.
+            theta * theta * last_step <= STEP_TOLERANCE
         } else {
-            theta >= 1.0 || theta / (1.0 - theta) * last_step <= STEP_TOLERANCE
+            // Linear: e_k+1 = theta e_k and |dx_k| = (1 - theta) e_k.
+            theta / (1.0 - theta) * last_step <= STEP_TOLERANCE
         };
         // At least one step: a guess (the rigid estimate of a lightly loaded rod, say) can
         // meet an absolute tolerance without being the discrete solution.
@@ -304,6 +313,7 @@ pub fn run(
                     chord = false;
                 }
                 (before_last, last_step) = (last_step, step_norm);
+                last_fresh = false;
                 std::mem::swap(x, &mut ws.trial);
                 std::mem::swap(&mut ws.residual, &mut ws.trial_residual);
                 continue;
@@ -373,6 +383,7 @@ pub fn run(
         }
         std::mem::swap(x, &mut ws.trial);
         std::mem::swap(&mut ws.residual, &mut ws.trial_residual);
+        last_fresh = true;
         (before_last, last_step) = if alpha == 1.0 {
             (last_step, step_norm)
         } else {

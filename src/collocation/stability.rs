@@ -25,7 +25,6 @@ use crate::report::Stability;
 use nalgebra::{Complex, DMatrix, Matrix6, SMatrix};
 
 type M12x6 = SMatrix<f64, 12, 6>;
-type M12 = SMatrix<f64, 12, 12>;
 
 /// Why stability cannot be decided for `robot`, if it cannot: the test needs conservative
 /// loading. Constant tensions and dead forces are conservative; a dead moment (tip, point or
@@ -81,9 +80,7 @@ pub fn assess(values: &[f64], s: &[f64]) -> Stability {
     for k in (0..links).rev() {
         let at = BASE_ROWS * BASE_COLUMNS + k * link_block;
         let block = &values[at..at + link_block];
-        let a = M12::from_fn(|r, c| block[r * 2 * NODE + c]);
-        let b = M12::from_fn(|r, c| block[r * 2 * NODE + NODE + c]);
-        let Some(next) = a.lu().solve(&(-b * y)) else {
+        let Some(next) = carry(block, &y) else {
             return Stability::Unknown {
                 reason: format!(
                     "the linearized equations of the link at s = {:.4} m cannot be carried across it",
@@ -131,6 +128,53 @@ pub fn assess(values: &[f64], s: &[f64]) -> Stability {
             conjugate_point: s,
         },
     }
+}
+
+/// The fields at node k from those at node k + 1 through one link's rows
+/// [A | B] (12 x 24, row major in `block`): A next = -B y, by Gaussian elimination with
+/// partial pivoting on the 12 x 18 augmented matrix (a hand-written kernel: the verdict
+/// runs it once per link, and a generic LU costs twice as much). None for a zero pivot.
+fn carry(block: &[f64], y: &M12x6) -> Option<M12x6> {
+    const W: usize = 2 * NODE;
+    let mut m = [[0.0f64; NODE + 6]; NODE];
+    for (r, row) in m.iter_mut().enumerate() {
+        let line = &block[r * W..(r + 1) * W];
+        row[..NODE].copy_from_slice(&line[..NODE]);
+        for j in 0..6 {
+            let mut acc = 0.0;
+            for (c, b) in line[NODE..].iter().enumerate() {
+                acc += b * y[(c, j)];
+            }
+            row[NODE + j] = -acc;
+        }
+    }
+    for c in 0..NODE {
+        let pivot = (c..NODE).max_by(|&i, &j| m[i][c].abs().total_cmp(&m[j][c].abs()))?;
+        if m[pivot][c] == 0.0 {
+            return None;
+        }
+        m.swap(c, pivot);
+        let inv = 1.0 / m[c][c];
+        for r in c + 1..NODE {
+            let f = m[r][c] * inv;
+            if f != 0.0 {
+                for k in c..NODE + 6 {
+                    m[r][k] -= f * m[c][k];
+                }
+            }
+        }
+    }
+    let mut out = M12x6::zeros();
+    for r in (0..NODE).rev() {
+        for j in 0..6 {
+            let mut v = m[r][NODE + j];
+            for k in r + 1..NODE {
+                v -= m[r][k] * out[(k, j)];
+            }
+            out[(r, j)] = v / m[r][r];
+        }
+    }
+    Some(out)
 }
 
 /// [`crossings`] from q0 = I: the roots of det(I + t (q1 - I)).
