@@ -155,11 +155,13 @@ fn carry(block: &[f64], y: &M12x6) -> Option<M12x6> {
         }
         m.swap(c, pivot);
         let inv = 1.0 / m[c][c];
-        for r in c + 1..NODE {
-            let f = m[r][c] * inv;
+        let (upper, lower) = m.split_at_mut(c + 1);
+        let pivot_row = &upper[c];
+        for row in lower.iter_mut() {
+            let f = row[c] * inv;
             if f != 0.0 {
-                for k in c..NODE + 6 {
-                    m[r][k] -= f * m[c][k];
+                for (x, p) in row[c..].iter_mut().zip(&pivot_row[c..]) {
+                    *x -= f * p;
                 }
             }
         }
