@@ -4,8 +4,10 @@
 //! that is never below a third of the true error, or a typed error. Never a panic.
 //!
 //! CI runs 300 cases (about 20 s). The long run (10 000 cases, about 5 minutes in release;
-//! last run: 9999 solved, 1 typed error, true/estimate 0.988 to 1.011, all 9999 within the
-//! tolerance, no failure): `cargo test --release --test properties -- --ignored`.
+//! last run, with the load path and the stability verdict: 10 000 solved, no typed error,
+//! true/estimate 0.983 to 1.034, all 10 000 within the tolerance, every stable one with a
+//! positive semi-definite tip compliance, no failure):
+//! `cargo test --release --test properties -- --ignored`.
 
 use nalgebra::Vector3;
 use proptest::prelude::*;
