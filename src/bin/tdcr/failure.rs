@@ -80,6 +80,42 @@ pub fn with_likely_causes(failure: Failure, robot: &Robot) -> Failure {
     Failure::NotConverged(out)
 }
 
+/// Says on standard error what a user must not miss about the equilibrium returned: that
+/// it is unstable, or that the load path snapped through a fold or crossed a bifurcation on
+/// the way (docs/stability.md).
+pub fn warn_equilibrium(name: &str, report: &tdcr::SolveReport) {
+    if let tdcr::Stability::Unstable { .. } = report.stability {
+        note(&format!(
+            "warning: {name}: the equilibrium returned is {}: a real robot would not stay in it",
+            report.stability
+        ));
+    }
+    if let tdcr::Path::LoadPath { folds, bifurcations } | tdcr::Path::FromWarmStart { folds, bifurcations } =
+        &report.path
+    {
+        let at = |v: &[f64]| {
+            v.iter()
+                .map(|f| format!("{:.1} %", 100.0 * f))
+                .collect::<Vec<_>>()
+                .join(", ")
+        };
+        if !folds.is_empty() {
+            note(&format!(
+                "warning: {name}: on its way the robot SNAPS THROUGH (the path folds at {} of the way): \
+                 the state returned is the one after the snap",
+                at(folds)
+            ));
+        }
+        if !bifurcations.is_empty() {
+            note(&format!(
+                "warning: {name}: the path crossed a bifurcation at {} of the way (a symmetric robot \
+                 can leave it either way; an imperfection decides)",
+                at(bifurcations)
+            ));
+        }
+    }
+}
+
 /// Prints the robot's implausible scales ([`Robot::plausibility`]) to standard error, one
 /// `warning:` line each.
 pub fn warn_scales(name: &str, robot: &Robot) {

@@ -79,6 +79,7 @@ pub fn run(args: &SolveArgs) -> Result<(), Failure> {
     apply(&mut file, &args.solver);
     crate::failure::warn_scales(&name, &file.robot);
     let solution = run_solver(&file.robot, &file, None)?;
+    crate::failure::warn_equilibrium(&name, &solution.report);
     if args.jacobian && !matches!(args.format, Format::Json) {
         note("note: --jacobian adds the tip Jacobians to the JSON output only (--format json)");
     }
