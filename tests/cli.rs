@@ -942,3 +942,47 @@ fn sweep_reports_a_jump_and_varies_any_input() {
         .collect();
     assert!(angles.windows(2).all(|w| w[1] < w[0]), "{angles:?}");
 }
+
+#[test]
+fn a_saved_solution_warm_starts_solve_and_sweep() {
+    let dir = scratch("start");
+    std::fs::write(dir.join("robot.toml"), example()).unwrap();
+    let out = run(
+        &dir,
+        &["solve", "robot.toml", "--format", "json", "--out", "saved.json"],
+        None,
+    );
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    // From its own solution a solve has nothing left to do: one step, the same tip.
+    let out = run(
+        &dir,
+        &["solve", "robot.toml", "--start", "saved.json", "--format", "json"],
+        None,
+    );
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    let again: serde_json::Value = serde_json::from_str(&stdout(&out)).unwrap();
+    let saved: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("saved.json")).unwrap()).unwrap();
+    assert!(again["iterations"].as_u64().unwrap() <= 2, "{}", again["iterations"]);
+    let (a, b) = (tip_of(&again), tip_of(&saved));
+    // 1e-10 m: the same discrete solution, read back from 17-digit JSON
+    assert!((0..3).all(|i| (a[i] - b[i]).abs() < 1e-10), "{a:?} {b:?}");
+    let out = run(
+        &dir,
+        &[
+            "sweep",
+            "robot.toml",
+            "--start",
+            "saved.json",
+            "--tension",
+            "1=2.94:3.5:3",
+        ],
+        None,
+    );
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    // A solution of another robot (a longer rod) is bad input, with the lengths.
+    std::fs::write(dir.join("long.toml"), edited("length = 0.242", "length = 0.3")).unwrap();
+    let out = run(&dir, &["solve", "long.toml", "--start", "saved.json"], None);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(stderr(&out).contains("0.3 m long"), "{}", stderr(&out));
+}

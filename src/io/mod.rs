@@ -15,9 +15,11 @@ pub mod locate;
 pub mod output;
 pub mod parameters;
 mod robot_file;
+mod solution_file;
 
 pub use example::example;
 pub use robot_file::{RobotFile, SolverSettings, parse};
+pub use solution_file::read_solution;
 
 use std::fmt;
 

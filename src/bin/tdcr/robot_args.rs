@@ -104,6 +104,13 @@ pub fn apply(file: &mut RobotFile, args: &SolverArgs) {
     }
 }
 
+/// Reads a saved solution (`--start`) of `robot` as a warm start.
+pub fn read_start(path: &std::path::Path, robot: &Robot) -> Result<Solution, Failure> {
+    let text = std::fs::read_to_string(path)
+        .map_err(|e| Failure::Input(format!("cannot read the start solution {}: {e}", path.display())))?;
+    tdcr::io::read_solution(&text, robot).map_err(|e| Failure::Input(format!("{}: {e}", path.display())))
+}
+
 /// Solves `robot` with the file's solver settings, warm-started from `warm` (collocation
 /// only; shooting always starts cold).
 pub fn run_solver(robot: &Robot, file: &RobotFile, warm: Option<&Solution>) -> Result<Solution, Failure> {

@@ -53,6 +53,10 @@ pub struct SolveArgs {
     /// Draw the shape into FILE: PNG if its name ends in .png, else SVG.
     #[arg(long, value_name = "FILE.svg|FILE.png")]
     plot: Option<PathBuf>,
+    /// Warm-start from a saved solution: the JSON of `tdcr solve --format json` (without
+    /// --samples) for this robot, for example of other tensions.
+    #[arg(long, value_name = "SOLUTION.json")]
+    start: Option<PathBuf>,
     /// Spacer disks drawn in the picture, evenly spaced (default: about 2.5 tendon offsets
     /// apart, 12 on the prototype; 0: none).
     #[arg(long, value_name = "N", value_parser = parse_disks, requires = "plot")]
@@ -78,7 +82,12 @@ pub fn run(args: &SolveArgs) -> Result<(), Failure> {
     }
     apply(&mut file, &args.solver);
     crate::failure::warn_scales(&name, &file.robot);
-    let solution = run_solver(&file.robot, &file, None)?;
+    let start = args
+        .start
+        .as_deref()
+        .map(|p| crate::robot_args::read_start(p, &file.robot))
+        .transpose()?;
+    let solution = run_solver(&file.robot, &file, start.as_ref())?;
     crate::failure::warn_equilibrium(&name, &solution.report);
     if args.jacobian && !matches!(args.format, Format::Json) {
         note("note: --jacobian adds the tip Jacobians to the JSON output only (--format json)");

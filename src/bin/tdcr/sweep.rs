@@ -31,6 +31,10 @@ pub struct SweepArgs {
     param: Vec<(String, Vec<f64>)>,
     #[command(flatten)]
     solver: SolverArgs,
+    /// Warm-start the first step from a saved solution: the JSON of `tdcr solve --format
+    /// json` (without --samples) for this robot.
+    #[arg(long, value_name = "SOLUTION.json")]
+    start: Option<PathBuf>,
     /// Write the CSV to FILE instead of standard output.
     #[arg(long, value_name = "FILE")]
     out: Option<PathBuf>,
@@ -150,7 +154,13 @@ pub fn run(args: &SweepArgs) -> Result<(), Failure> {
     let mut previous_move: Option<f64> = None;
     let mut last_robot: Option<Robot> = None;
     let mut tips = Vec::with_capacity(steps);
-    let (mut first, mut last): (Option<(Robot, Solution)>, Option<Solution>) = (None, None);
+    let (mut first, mut last): (Option<(Robot, Solution)>, Option<Solution>) = (
+        None,
+        args.start
+            .as_deref()
+            .map(|p| crate::robot_args::read_start(p, &file.robot))
+            .transpose()?,
+    );
     let mut progress = Progress::new();
     let mut failure = None;
     for k in 0..steps {
