@@ -137,52 +137,41 @@ pub fn parse_displacement(text: &str) -> Result<(usize, f64), String> {
     Ok((index, parse_number(value, "a displacement in m")?))
 }
 
-/// `I=START:STOP:COUNT` or `I=NEWTONS` (`sweep --tension`): a tendon number and its
-/// tensions, COUNT evenly spaced values from START to STOP, all >= 0.
+/// The values of `START:STOP:COUNT` (COUNT evenly spaced from START to STOP) or of a single
+/// value; `text` is the whole argument and `form` its expected shape, for the messages.
+fn range_values(value: &str, text: &str, form: &str, what: &str) -> Result<Vec<f64>, String> {
+    match value.split(':').collect::<Vec<_>>().as_slice() {
+        [single] => Ok(vec![parse_number(single, what)?]),
+        [start, stop, count] => {
+            let (a, b) = (parse_number(start, "START")?, parse_number(stop, "STOP")?);
+            let count = parse_count(count).map_err(|e| format!("COUNT: {e}"))?;
+            if count == 1 {
+                Ok(vec![a])
+            } else {
+                Ok((0..count)
+                    .map(|k| a + (b - a) * k as f64 / (count - 1) as f64)
+                    .collect())
+            }
+        }
+        _ => Err(format!("`{text}` must look like {form}")),
+    }
+}
+
 /// `NAME=START:STOP:COUNT` or `NAME=VALUE` (`sweep --param`): the name as written (checked
 /// against the robot later) and the values.
 pub fn parse_param_sweep(text: &str) -> Result<(String, Vec<f64>), String> {
+    let form = "NAME=START:STOP:COUNT or NAME=VALUE";
     let (name, value) = text
         .split_once('=')
-        .ok_or_else(|| format!("`{text}` must look like NAME=START:STOP:COUNT or NAME=VALUE"))?;
-    let parts: Vec<&str> = value.split(':').collect();
-    let values = match parts.as_slice() {
-        [single] => vec![parse_number(single, "a value")?],
-        [start, stop, count] => {
-            let (a, b) = (parse_number(start, "START")?, parse_number(stop, "STOP")?);
-            let count = parse_count(count).map_err(|e| format!("COUNT: {e}"))?;
-            if count == 1 {
-                vec![a]
-            } else {
-                (0..count)
-                    .map(|k| a + (b - a) * k as f64 / (count - 1) as f64)
-                    .collect()
-            }
-        }
-        _ => return Err(format!("`{text}` must look like NAME=START:STOP:COUNT or NAME=VALUE")),
-    };
-    Ok((name.trim().to_string(), values))
+        .ok_or_else(|| format!("`{text}` must look like {form}"))?;
+    Ok((name.trim().to_string(), range_values(value, text, form, "a value")?))
 }
 
-/// `I=START:STOP:COUNT` or `I=NEWTONS` (`sweep --tension`).
+/// `I=START:STOP:COUNT` or `I=NEWTONS` (`sweep --tension`): a tendon number and its
+/// tensions, COUNT evenly spaced values from START to STOP, all >= 0.
 pub fn parse_sweep(text: &str) -> Result<(usize, Vec<f64>), String> {
     let (index, value) = parse_tendon(text)?;
-    let parts: Vec<&str> = value.split(':').collect();
-    let values = match parts.as_slice() {
-        [single] => vec![parse_number(single, "a tension in N")?],
-        [start, stop, count] => {
-            let (a, b) = (parse_number(start, "START")?, parse_number(stop, "STOP")?);
-            let count = parse_count(count).map_err(|e| format!("COUNT: {e}"))?;
-            if count == 1 {
-                vec![a]
-            } else {
-                (0..count)
-                    .map(|k| a + (b - a) * k as f64 / (count - 1) as f64)
-                    .collect()
-            }
-        }
-        _ => return Err(format!("`{text}` must look like I=START:STOP:COUNT or I=NEWTONS")),
-    };
+    let values = range_values(value, text, "I=START:STOP:COUNT or I=NEWTONS", "a tension in N")?;
     if values.iter().any(|&t| t < 0.0) {
         return Err(format!("`{text}` has negative tensions: a tendon can only pull"));
     }
