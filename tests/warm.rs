@@ -108,8 +108,8 @@ fn warm_starts_after_any_change_take_no_more_newton_steps_than_cold() {
         r.base_rotation = *tdcr::nalgebra::Rotation3::from_euler_angles(0.0, 0.05, 0.0).matrix() * r.base_rotation;
         r
     };
-    let changes: [(&str, &dyn Fn(&Robot) -> Robot); 3] =
-        [("E x 1.05", &stiffer), ("tip load", &loaded), ("base", &tilted)];
+    type Change<'a> = (&'a str, &'a dyn Fn(&Robot) -> Robot);
+    let changes: [Change; 3] = [("E x 1.05", &stiffer), ("tip load", &loaded), ("base", &tilted)];
     for robot in [cases::case_s(), cases::case_h(), cases::prototype()] {
         let before = collocation::solve(&robot, &Default::default()).unwrap();
         for (what, change) in changes {
