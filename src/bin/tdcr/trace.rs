@@ -292,5 +292,12 @@ fn picture(name: &str, t: &Trace, coordinate: Coordinate) -> Chart {
             None,
         ),
     ];
+    if !t.bifurcations.is_empty() {
+        chart.legend.push((
+            "bifurcation: stability changes without a fold (another branch crosses)".into(),
+            "#7d3c98".into(),
+            None,
+        ));
+    }
     chart
 }
