@@ -166,10 +166,26 @@ pub fn parse_param_sweep(text: &str) -> Result<(String, Vec<f64>), String> {
 
 /// `I=START:STOP:COUNT` or `I=NEWTONS` (`sweep --tension`).
 pub fn parse_sweep(text: &str) -> Result<(usize, Vec<f64>), String> {
+    let (index, values) = parse_range(text, "a tension in N", "NEWTONS")?;
+    if values.iter().any(|&t| t < 0.0) {
+        return Err(format!("`{text}` has negative tensions: a tendon can only pull"));
+    }
+    Ok((index, values))
+}
+
+/// `I=START:STOP:COUNT` or `I=METRES` (`sweep --displacement`): actuator pull-ins in m,
+/// negative ones (releases) allowed.
+pub fn parse_displacement_sweep(text: &str) -> Result<(usize, Vec<f64>), String> {
+    parse_range(text, "a displacement in m", "METRES")
+}
+
+/// A tendon number and COUNT evenly spaced values from START to STOP, or one value
+/// (`what` names it in messages, `unit` is the single value's placeholder).
+fn parse_range(text: &str, what: &str, unit: &str) -> Result<(usize, Vec<f64>), String> {
     let (index, value) = parse_tendon(text)?;
     let parts: Vec<&str> = value.split(':').collect();
     let values = match parts.as_slice() {
-        [single] => vec![parse_number(single, "a tension in N")?],
+        [single] => vec![parse_number(single, what)?],
         [start, stop, count] => {
             let (a, b) = (parse_number(start, "START")?, parse_number(stop, "STOP")?);
             let count = parse_count(count).map_err(|e| format!("COUNT: {e}"))?;
@@ -181,10 +197,7 @@ pub fn parse_sweep(text: &str) -> Result<(usize, Vec<f64>), String> {
                     .collect()
             }
         }
-        _ => return Err(format!("`{text}` must look like I=START:STOP:COUNT or I=NEWTONS")),
+        _ => return Err(format!("`{text}` must look like I=START:STOP:COUNT or I={unit}")),
     };
-    if values.iter().any(|&t| t < 0.0) {
-        return Err(format!("`{text}` has negative tensions: a tendon can only pull"));
-    }
     Ok((index, values))
 }
