@@ -81,6 +81,14 @@ fn polyline(chart: &mut Chart, points: &[(f64, f64)], color: &str, dashed: bool)
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let pretensioned = sweep(PRETENSION)?;
     let loose = sweep(0.0)?;
+    if let (Some(a), Some(b)) = (pretensioned.last(), loose.last()) {
+        println!(
+            "at q = {:.1} mm the tip deflects {:.3} mm pretensioned, {:.3} mm without",
+            a.q * 1e3,
+            a.deflection * 1e3,
+            b.deflection * 1e3
+        );
+    }
     println!("q (mm)  tension 1 (N)  tension 2 (N)  tip deflection (mm)  slack 2 (mm)");
     for s in &pretensioned {
         println!(

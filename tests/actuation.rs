@@ -230,7 +230,13 @@ fn both_solvers_agree(robot: &Robot) -> Solution {
             a.tension,
             b.tension
         );
-        assert_eq!(a.slack > 0.0, b.slack > 0.0, "tendon {i}: slack {} vs {}", a.slack, b.slack);
+        assert_eq!(
+            a.slack > 0.0,
+            b.slack > 0.0,
+            "tendon {i}: slack {} vs {}",
+            a.slack,
+            b.slack
+        );
     }
     eprintln!(
         "tip gap {gap:e} m; tensions {:?} vs {:?}",

@@ -994,7 +994,14 @@ fn a_sweep_over_pull_ins_reports_solved_tensions_and_slack() {
     // Both by tension and by displacement for one tendon: bad input.
     let out = run(
         &dir,
-        &["sweep", "pair.toml", "--tension", "1=0:1:3", "--displacement", "1=0:0.001:3"],
+        &[
+            "sweep",
+            "pair.toml",
+            "--tension",
+            "1=0:1:3",
+            "--displacement",
+            "1=0:0.001:3",
+        ],
         None,
     );
     assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));

@@ -16,10 +16,10 @@ use crate::error::{Result, invalid};
 use crate::mesh::guess::{self, InitialGuess};
 use crate::mesh::{Mesh, nodes};
 use crate::model::equations::{Model, Site};
+use crate::model::length;
 use crate::report::{Iteration, Method, SolveReport, Termination};
 use crate::solution::{Solution, State};
 use crate::{Error, Readable, Robot, so3};
-use crate::model::length;
 use nalgebra::{DMatrix, DVector, Matrix3, SMatrix, SVector, Vector3};
 use num_dual::DualSVec64;
 use std::time::Instant;
@@ -438,7 +438,12 @@ impl Scale {
     }
 }
 
-fn jacobian(problem: &mut Problem, x: &DVector<f64>, options: &Options, report: &mut SolveReport) -> Result<DMatrix<f64>> {
+fn jacobian(
+    problem: &mut Problem,
+    x: &DVector<f64>,
+    options: &Options,
+    report: &mut SolveReport,
+) -> Result<DMatrix<f64>> {
     report.evaluations.jacobian += 1;
     let n = x.len();
     let mut J = DMatrix::<f64>::zeros(n, n);
@@ -716,9 +721,8 @@ fn integrate(
             }
         }
         let tracked = paths.slots.len();
-        let step_lengths = |b: &[f64; 7], slot: usize| -> f64 {
-            (0..7).map(|i| b[i] * speeds[i * tracked + slot]).sum::<f64>() * h
-        };
+        let step_lengths =
+            |b: &[f64; 7], slot: usize| -> f64 { (0..7).map(|i| b[i] * speeds[i * tracked + slot]).sum::<f64>() * h };
         let mut y5 = y0;
         let mut y4 = y0;
         for i in 0..7 {
