@@ -3,7 +3,7 @@
 //! inputs, and bad input.
 
 use nalgebra::Vector3;
-use tdcr::{Error, Robot, Routing, Solution, Tendon, cases, collocation};
+use tdcr::{Error, Robot, Routing, Solution, Tendon, cases, collocation, shooting};
 
 /// The robot with every tensioned tendon displacement-controlled at the pull-in `solution`
 /// reports for it (tension left at 0, so the solver estimates its start).
@@ -195,4 +195,74 @@ fn tip_sensitivity_to_pull_ins_matches_central_differences() {
             "tendon {i}: {fd:?} vs {analytic:?}"
         );
     }
+}
+
+/// Shooting as tight as it goes: integration at 1e-12 (its supported floor, local errors
+/// that sum to about 1e-11 m along the rod) and Newton to 1e-10 (the tip wrench in N and
+/// N m / L, and the gaps over L; case H's residual noise floor at this integration
+/// tolerance is about 7e-11, and 1e-10 moves the tip by well under 1e-9 m).
+fn tight_shooting() -> shooting::Options {
+    shooting::Options {
+        integration_tolerance: 1e-12,
+        tolerance: 1e-10,
+        ..Default::default()
+    }
+}
+
+/// Solves `robot` by both solvers and checks tip and tensions agree.
+fn both_solvers_agree(robot: &Robot) -> Solution {
+    // 1e-10 m: the collocation error estimate two orders below the 1e-8 m compared
+    let options = collocation::Options {
+        tolerance: Some(1e-10),
+        ..Default::default()
+    };
+    let c = collocation::solve(robot, &options).unwrap();
+    let s = shooting::solve(robot, &tight_shooting()).unwrap();
+    let gap = (c.tip_position() - s.tip_position()).norm();
+    // 1e-8 m: the bound; both solutions are accurate to about 1e-10 m
+    assert!(gap < 1e-8, "tips differ by {gap:e} m");
+    for (i, (a, b)) in c.tendons.iter().zip(&s.tendons).enumerate() {
+        // 1e-7 relative (of 1 mN for a slack tendon): tip positions at 1e-10 m of a
+        // 0.24 m rod pin the tensions to about 1e-9 relative
+        assert!(
+            (a.tension - b.tension).abs() <= 1e-7 * a.tension.max(1e-3),
+            "tendon {i}: {} N (collocation) vs {} N (shooting)",
+            a.tension,
+            b.tension
+        );
+        assert_eq!(
+            a.slack > 0.0,
+            b.slack > 0.0,
+            "tendon {i}: slack {} vs {}",
+            a.slack,
+            b.slack
+        );
+    }
+    eprintln!(
+        "tip gap {gap:e} m; tensions {:?} vs {:?}",
+        c.tendons.iter().map(|t| t.tension).collect::<Vec<_>>(),
+        s.tendons.iter().map(|t| t.tension).collect::<Vec<_>>()
+    );
+    s
+}
+
+#[test]
+fn collocation_and_shooting_agree_on_displacement_inputs() {
+    // Case S with tendon 1 pulled by the displacement its 2.94 N gives.
+    let s = cases::case_s();
+    let tensioned = collocation::solve(&s, &Default::default()).unwrap();
+    let solved = both_solvers_agree(&displaced(&s, &tensioned));
+    // 1e-6 relative: the pull-in came from a default-tolerance solve (tip to about 1e-7 m),
+    // which the tension inherits at about 1e-7 relative
+    assert!((solved.tendons[0].tension - 2.94).abs() < 1e-6 * 2.94);
+    // Case H with its helical tendon 5 displacement-controlled, the others by tension.
+    let mut h = cases::case_h();
+    let tensioned = collocation::solve(&h, &Default::default()).unwrap();
+    h.tendons[4].displacement = Some(tensioned.tendons[4].displacement);
+    h.tendons[4].tension = 0.0;
+    both_solvers_agree(&h);
+    // The antagonistic pair with the released tendon slack.
+    let solved = both_solvers_agree(&pair(0.004, -0.008));
+    assert_eq!(solved.tendons[1].tension, 0.0);
+    assert!(solved.tendons[1].slack > 3e-3, "slack {} m", solved.tendons[1].slack);
 }

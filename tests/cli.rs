@@ -986,3 +986,68 @@ fn a_saved_solution_warm_starts_solve_and_sweep() {
     assert_eq!(out.status.code(), Some(2));
     assert!(stderr(&out).contains("0.3 m long"), "{}", stderr(&out));
 }
+
+/// Issue 16: `sweep --displacement` pulls tendon 1 of an antagonistic pair in and lets
+/// tendon 2 out by the same amount; the CSV has the pull-ins and the solved tensions.
+#[test]
+fn a_sweep_over_pull_ins_reports_solved_tensions_and_slack() {
+    let dir = scratch("sweep-displacement");
+    let robot = "[rod]\nlength = 0.242\nouter_radius = 0.0004\nyoungs_modulus = 210e9\npoisson_ratio = 0.3125\n\
+                 [[tendon]]\nrouting = { kind = \"straight\", x = 0.008, y = 0.0 }\ntension = 0.0\n\
+                 [[tendon]]\nrouting = { kind = \"straight\", x = -0.008, y = 0.0 }\ntension = 0.0\n";
+    std::fs::write(dir.join("pair.toml"), robot).unwrap();
+    let out = run(
+        &dir,
+        &[
+            "sweep",
+            "pair.toml",
+            "--displacement",
+            "1=0:0.004:5",
+            "--displacement",
+            "2=0:-0.004:5",
+        ],
+        None,
+    );
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    let csv = stdout(&out);
+    let header: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
+    assert_eq!(
+        &header[..5],
+        ["step", "tension_1", "tension_2", "displacement_1", "displacement_2"]
+    );
+    let rows: Vec<Vec<f64>> = csv
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').take(5).map(|x| x.parse().unwrap()).collect())
+        .collect();
+    assert_eq!(rows.len(), 5);
+    for (k, row) in rows.iter().enumerate() {
+        // 1e-15 m: the pull-ins are the inputs, printed in full
+        assert!((row[3] - 0.001 * k as f64).abs() < 1e-15, "{row:?}");
+        assert!((row[4] + 0.001 * k as f64).abs() < 1e-15, "{row:?}");
+        // The released tendon goes slack (tension exactly 0) once the rod bends.
+        if k > 0 {
+            assert_eq!(row[2], 0.0, "{row:?}");
+        }
+    }
+    // At no pull-in the weightless rod stays straight with both tendons just taut: 1e-6 N,
+    // the semismooth Newton's residual scale on zero tensions (measured 7e-11 N).
+    assert!(rows[0][1].abs() < 1e-6 && rows[0][2].abs() < 1e-6, "{csv}");
+    // The pulled tendon's solved tension grows with its pull-in.
+    assert!(rows.windows(2).all(|w| w[1][1] > w[0][1]), "{csv}");
+    // Both by tension and by displacement for one tendon: bad input.
+    let out = run(
+        &dir,
+        &[
+            "sweep",
+            "pair.toml",
+            "--tension",
+            "1=0:1:3",
+            "--displacement",
+            "1=0:0.001:3",
+        ],
+        None,
+    );
+    assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
+    assert!(stderr(&out).contains("both given"), "{}", stderr(&out));
+}

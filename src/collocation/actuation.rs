@@ -665,7 +665,7 @@ fn store(cache: &mut Cache, mesh: Mesh, options: &Options, workspace: Workspace)
 /// estimate: the tensions that produce the pull-ins through the compliance K of
 /// [`length::pull_in_compliance`] plus the tendons' own stretch, q = (K + C) tau, with the
 /// tendons that would push left at 0 and the rest solved again (a few passes at most).
-fn starting_tensions(robot: &mut Robot, warm: Option<&Solution>) {
+pub(crate) fn starting_tensions(robot: &mut Robot, warm: Option<&Solution>) {
     let displaced: Vec<usize> = (0..robot.tendons.len())
         .filter(|&i| robot.tendons[i].displacement.is_some())
         .collect();

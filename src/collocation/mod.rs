@@ -27,7 +27,7 @@
 //! docs/numerics.md documents the scheme (order 4), the scaling, the stopping tests and the
 //! load path.
 
-mod actuation;
+pub(crate) mod actuation;
 mod estimate;
 pub(crate) mod linear;
 pub(crate) mod newton;

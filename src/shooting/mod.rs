@@ -6,7 +6,9 @@
 //! R = R_n exp(theta), theta' = J_r(theta)^-1 u, so R stays orthonormal). At every interior
 //! breakpoint the right-hand strains are found from the jump conditions by a small Newton
 //! solve; the 6 tip conditions are the residual of an outer damped Newton iteration whose
-//! Jacobian is taken by central differences.
+//! Jacobian is taken by central differences. Displacement-controlled tendons add their
+//! tensions to the unknowns and their length constraints to the residual, the path lengths
+//! integrated along with the state (docs/actuation.md).
 #![allow(non_snake_case)]
 
 use crate::collocation::MAX_ITERATIONS;
@@ -14,10 +16,11 @@ use crate::error::{Result, invalid};
 use crate::mesh::guess::{self, InitialGuess};
 use crate::mesh::{Mesh, nodes};
 use crate::model::equations::{Model, Site};
+use crate::model::length;
 use crate::report::{Iteration, Method, SolveReport, Termination};
 use crate::solution::{Solution, State};
 use crate::{Error, Readable, Robot, so3};
-use nalgebra::{Matrix3, SMatrix, SVector, Vector3};
+use nalgebra::{DMatrix, DVector, Matrix3, SMatrix, SVector, Vector3};
 use num_dual::DualSVec64;
 use std::time::Instant;
 
@@ -94,26 +97,68 @@ type Local = SVector<f64, 12>;
 
 /// Solves `robot` by shooting.
 ///
+/// Displacement-controlled tendons (docs/actuation.md) add their tensions to the unknowns
+/// and their length constraints phi_j = l_ref_j - l_j - q_j + c_j tau_j = 0 to the
+/// residuals, the path lengths l_j integrated along with the state. Slack is found by a
+/// simple active set: solve with the tendons the small-deflection estimate keeps taut,
+/// release those whose tension comes out negative (tension 0, reported slack), take back
+/// those whose gap comes out negative, and solve again until nothing changes.
+///
 /// # Errors
 /// Invalid input, a model breakdown, or [`Error::NotConverged`] with the report.
 pub fn solve(robot: &Robot, options: &Options) -> Result<Solution> {
     robot.validate()?;
     options.validate()?;
     let start = Instant::now();
-    let model = Model::new(robot);
-    let length = robot.length();
+    let mut problem = Problem::new(robot);
     let mut report = SolveReport::new(Method::Shooting);
     report.meshes = 1;
     report.load_steps = 1;
-    report.unknowns = 6;
 
-    // Initial guess: base strains of the rigid-equilibrium estimate.
-    let base = guess::initial(&model, &Mesh::uniform(robot, 64)?.nodes, options.initial_guess)[0];
-    let scale = Scale::new(&model);
-    let mut x = scale.to_unknowns(&base.v, &base.u);
+    // Initial guess: base strains of the rigid-equilibrium estimate at the starting tensions.
+    let base = guess::initial(
+        &Model::new(&problem.robot),
+        &Mesh::uniform(robot, 64)?.nodes,
+        options.initial_guess,
+    )[0];
+    let mut base_x = problem.scale.to_unknowns(&base.v, &base.u);
+    // Each pass changes the active set; k + 2 passes allow every tendon to change once
+    // and a final check.
+    for _ in 0..problem.displaced.len() + 2 {
+        let x0 = problem.unknowns(&base_x);
+        report.unknowns = x0.len();
+        let (x, trajectory, lengths) = newton(&mut problem, x0, options, &mut report)?;
+        problem.set_tensions(&x);
+        base_x = x.fixed_rows::<6>(0).into_owned();
+        if !problem.update_active_set(&lengths) {
+            report.intervals = trajectory.len().saturating_sub(1);
+            report.timings.total = start.elapsed();
+            let model = Model::new(&problem.robot);
+            let ends = segment_ends(&model, &trajectory);
+            return nodes::solution(&model, &trajectory, &ends, None, report);
+        }
+    }
+    report.termination = Termination::MaxIterations;
+    report.timings.total = start.elapsed();
+    Err(Error::NotConverged {
+        method: Method::Shooting,
+        report: Box::new(report),
+        worst_s: robot.length(),
+        hint: "the slack tendons kept changing; solve with collocation, whose semismooth Newton handles slack".into(),
+    })
+}
 
+/// The Newton iteration on the current active set from `x`: the converged unknowns, the
+/// trajectory and the displacement-controlled tendons' lengths.
+fn newton(
+    problem: &mut Problem,
+    mut x: DVector<f64>,
+    options: &Options,
+    report: &mut SolveReport,
+) -> Result<(DVector<f64>, Vec<Point>, Vec<f64>)> {
+    let length = problem.robot.length();
     let mut trajectory = Vec::new();
-    let mut res = shoot(&model, &scale, &x, options, &mut trajectory, &mut report)?;
+    let (mut res, mut lengths) = problem.residual(&x, options, &mut trajectory, report)?;
     let mut norm = res.amax();
     report.termination = Termination::MaxIterations;
     for _ in 0..options.max_iterations {
@@ -124,11 +169,11 @@ pub fn solve(robot: &Robot, options: &Options) -> Result<Solution> {
         report.iterations += 1;
         // A breakdown while differencing (a trial state where a tendon loses its tangent,
         // say) ends the iteration: the state is unphysical, not the input.
-        let Ok(J) = jacobian(&model, &scale, &x, options, &mut report) else {
+        let Ok(J) = jacobian(problem, &x, options, report) else {
             report.termination = Termination::NonFinite;
             break;
         };
-        let Some(step) = J.lu().solve(&(-res)) else {
+        let Some(step) = J.lu().solve(&(-&res)) else {
             report.termination = Termination::SingularJacobian;
             break;
         };
@@ -141,9 +186,9 @@ pub fn solve(robot: &Robot, options: &Options) -> Result<Solution> {
         let mut damping = 1.0;
         let mut accepted = false;
         while damping > 1e-4 {
-            let trial = x + step * damping;
+            let trial = &x + &step * damping;
             let mut traj = Vec::new();
-            if let Ok(r) = shoot(&model, &scale, &trial, options, &mut traj, &mut report)
+            if let Ok((r, l)) = problem.residual(&trial, options, &mut traj, report)
                 && r.amax().is_finite()
                 && (r.amax() < norm || r.amax() <= options.tolerance)
             {
@@ -154,8 +199,9 @@ pub fn solve(robot: &Robot, options: &Options) -> Result<Solution> {
                     fresh_jacobian: true,
                 });
                 x = trial;
-                res = r;
                 norm = r.amax();
+                res = r;
+                lengths = l;
                 trajectory = traj;
                 accepted = true;
                 break;
@@ -171,11 +217,11 @@ pub fn solve(robot: &Robot, options: &Options) -> Result<Solution> {
         report.termination = Termination::Converged;
         // One more full Newton step, kept only if it lowers the residual: at quadratic
         // convergence it takes the residual from the tolerance down to the noise floor.
-        let J = jacobian(&model, &scale, &x, options, &mut report)?;
-        if let Some(step) = J.lu().solve(&(-res)) {
-            let trial = x + step;
+        let J = jacobian(problem, &x, options, report)?;
+        if let Some(step) = J.lu().solve(&(-&res)) {
+            let trial = &x + &step;
             let mut traj = Vec::new();
-            if let Ok(r) = shoot(&model, &scale, &trial, options, &mut traj, &mut report)
+            if let Ok((r, l)) = problem.residual(&trial, options, &mut traj, report)
                 && r.amax() < norm
             {
                 report.iterations += 1;
@@ -186,23 +232,169 @@ pub fn solve(robot: &Robot, options: &Options) -> Result<Solution> {
                     fresh_jacobian: true,
                 });
                 norm = r.amax();
+                x = trial;
+                lengths = l;
                 trajectory = traj;
             }
         }
     }
     report.residual = norm;
-    report.intervals = trajectory.len().saturating_sub(1);
-    report.timings.total = start.elapsed();
     if report.termination != Termination::Converged {
+        report.intervals = trajectory.len().saturating_sub(1);
         return Err(Error::NotConverged {
             method: Method::Shooting,
-            report: Box::new(report),
+            report: Box::new(report.clone()),
             worst_s: length,
             hint: "shooting is a cross-check; use collocation (with load continuation) for hard cases".into(),
         });
     }
-    let ends = segment_ends(&model, &trajectory);
-    nodes::solution(&model, &trajectory, &ends, None, report)
+    Ok((x, trajectory, lengths))
+}
+
+/// A displacement-controlled tendon's length constraint.
+struct Constraint {
+    /// Index of the tendon in the robot.
+    tendon: usize,
+    /// Pull-in q_j (m).
+    displacement: f64,
+    /// l_ref_j (m).
+    reference_length: f64,
+    /// c_j (m/N).
+    compliance: f64,
+    /// Where the tendon ends (m): its path length is integrated up to here.
+    end: f64,
+    /// Whether the tendon is taut (its tension an unknown) rather than slack (tension 0).
+    active: bool,
+}
+
+impl Constraint {
+    /// phi_j (m) at path length `l` and tension `tau`.
+    fn gap(&self, l: f64, tau: f64) -> f64 {
+        self.reference_length - l - self.displacement + self.compliance * tau
+    }
+}
+
+/// The shooting problem: the robot at the current tensions, the length constraints and
+/// the scaling of the unknowns.
+struct Problem {
+    /// The robot, its displacement-controlled tendons at the current tensions.
+    robot: Robot,
+    /// One per displacement-controlled tendon, in tendon order.
+    displaced: Vec<Constraint>,
+    scale: Scale,
+}
+
+impl Problem {
+    fn new(robot: &Robot) -> Self {
+        let mut work = robot.clone();
+        let length = robot.length();
+        if robot.has_displacement_inputs() {
+            crate::collocation::actuation::starting_tensions(&mut work, None);
+        }
+        let displaced: Vec<Constraint> = (0..robot.tendons.len())
+            .filter(|&i| robot.tendons[i].displacement.is_some())
+            .map(|i| {
+                let t = &work.tendons[i];
+                let reference_length = length::reference_length(robot, i);
+                Constraint {
+                    tendon: i,
+                    displacement: t.displacement.unwrap_or(0.0),
+                    reference_length,
+                    compliance: t.compliance(reference_length),
+                    end: t.end(length),
+                    active: t.tension > 0.0,
+                }
+            })
+            .collect();
+        let bend = robot.bending_stiffness() / length;
+        let tension_scales = displaced
+            .iter()
+            .map(|c| {
+                let offset = robot.tendons[c.tendon].routing.at(0.0, length).r.norm();
+                if offset > 0.0 { bend / offset } else { bend / length }
+            })
+            .collect();
+        Problem {
+            robot: work,
+            displaced,
+            scale: Scale { length, tension_scales },
+        }
+    }
+
+    /// The unknowns: the scaled base strains, then tau_j / T_j of each taut tendon.
+    fn unknowns(&self, base: &SVector<f64, 6>) -> DVector<f64> {
+        let taut = self
+            .displaced
+            .iter()
+            .zip(&self.scale.tension_scales)
+            .filter(|(c, _)| c.active)
+            .map(|(c, t)| self.robot.tendons[c.tendon].tension / t);
+        DVector::from_iterator(6 + self.active_count(), base.iter().copied().chain(taut))
+    }
+
+    fn active_count(&self) -> usize {
+        self.displaced.iter().filter(|c| c.active).count()
+    }
+
+    /// Sets the tensions of the displacement-controlled tendons from the unknowns `x` (0
+    /// for slack ones).
+    fn set_tensions(&mut self, x: &DVector<f64>) {
+        let mut next = 6;
+        for (c, t) in self.displaced.iter().zip(&self.scale.tension_scales) {
+            self.robot.tendons[c.tendon].tension = if c.active {
+                next += 1;
+                x[next - 1] * t
+            } else {
+                0.0
+            };
+        }
+    }
+
+    /// One active-set update at the solved tensions and `lengths`: a taut tendon with a
+    /// negative tension goes slack, a slack one with a negative gap (pulled beyond its
+    /// length) becomes taut. Whether anything changed.
+    fn update_active_set(&mut self, lengths: &[f64]) -> bool {
+        let mut changed = false;
+        for (c, &l) in self.displaced.iter_mut().zip(lengths) {
+            let tension = &mut self.robot.tendons[c.tendon].tension;
+            if c.active && *tension < 0.0 {
+                c.active = false;
+                *tension = 0.0;
+                changed = true;
+            } else if !c.active && c.gap(l, 0.0) < 0.0 {
+                c.active = true;
+                changed = true;
+            }
+        }
+        changed
+    }
+
+    /// The scaled residual at `x`: the tip wrench (f in N, m L) and phi_j / L of each taut
+    /// tendon; also the path lengths of all displacement-controlled tendons.
+    fn residual(
+        &mut self,
+        x: &DVector<f64>,
+        options: &Options,
+        traj: &mut Vec<Point>,
+        report: &mut SolveReport,
+    ) -> Result<(DVector<f64>, Vec<f64>)> {
+        self.set_tensions(x);
+        let paths: Vec<(usize, f64)> = self.displaced.iter().map(|c| (c.tendon, c.end)).collect();
+        let model = Model::new(&self.robot);
+        let base = x.fixed_rows::<6>(0).into_owned();
+        let (tip, lengths) = shoot(&model, &self.scale, &base, &paths, options, traj, report)?;
+        let length = self.scale.length;
+        let gaps = self
+            .displaced
+            .iter()
+            .zip(&lengths)
+            .filter(|(c, _)| c.active)
+            .map(|(c, &l)| c.gap(l, self.robot.tendons[c.tendon].tension) / length);
+        Ok((
+            DVector::from_iterator(x.len(), tip.iter().copied().chain(gaps)),
+            lengths,
+        ))
+    }
 }
 
 /// The end of the segment each trajectory point belongs to (a breakpoint appears twice:
@@ -223,21 +415,21 @@ fn segment_ends(model: &Model, traj: &[Point]) -> Vec<f64> {
     out
 }
 
-/// The unknowns: the base strains (v, u L). Central differences in these units with step
-/// 1e-6 keep the Jacobian well above the integration noise for the strains of ordinary
-/// rods; for rods extremely stiff in shear and extension (EA L^2 / EI above about 1e6)
-/// the v columns become noise-limited, one reason shooting is only a cross-check.
+/// The unknowns: the base strains (v, u L) and tau_j / T_j of the taut
+/// displacement-controlled tendons, T_j = E I / (L |r_j(0)|) the tension that bends the
+/// rod through about a radian (E I / L^2 on the centreline). Central differences in these
+/// units with step 1e-6 keep the Jacobian well above the integration noise for the
+/// strains of ordinary rods; for rods extremely stiff in shear and extension (EA L^2 / EI
+/// above about 1e6) the v columns become noise-limited, one reason shooting is only a
+/// cross-check.
 struct Scale {
     /// L (m).
     length: f64,
+    /// T_j (N), one per displacement-controlled tendon.
+    tension_scales: Vec<f64>,
 }
 
 impl Scale {
-    fn new(model: &Model) -> Self {
-        Scale {
-            length: model.robot.length(),
-        }
-    }
     fn to_unknowns(&self, v: &Vector3<f64>, u: &Vector3<f64>) -> SVector<f64, 6> {
         SVector::<f64, 6>::from_iterator(v.iter().copied().chain(u.iter().map(|x| x * self.length)))
     }
@@ -247,39 +439,48 @@ impl Scale {
 }
 
 fn jacobian(
-    model: &Model,
-    scale: &Scale,
-    x: &SVector<f64, 6>,
+    problem: &mut Problem,
+    x: &DVector<f64>,
     options: &Options,
     report: &mut SolveReport,
-) -> Result<SMatrix<f64, 6, 6>> {
+) -> Result<DMatrix<f64>> {
     report.evaluations.jacobian += 1;
-    // Central differences; 1e-6 balances truncation (h^2) and integration noise (tol / h).
-    let h = 1e-6;
-    let mut J = SMatrix::<f64, 6, 6>::zeros();
+    let n = x.len();
+    let mut J = DMatrix::<f64>::zeros(n, n);
     let mut scratch = Vec::new();
-    for j in 0..6 {
-        let mut xp = *x;
-        let mut xm = *x;
+    for j in 0..n {
+        // Central differences; 1e-6 balances truncation (h^2) and integration noise (tol / h).
+        // The shear and extension strains v of a slender rod change the base force by E A
+        // per unit, so the residual is strongly nonlinear in them: with E A L^2 / E I of
+        // 1e6 (the prototype), d f / d v_z changes by 12 % between h = 1e-9 and 1e-6,
+        // enough to stall the Newton with tension unknowns; h = 1e-8 errs by 0.04 %.
+        // Tension inputs alone keep 1e-6 (their Newton converges with it; 1e-8 would also
+        // change which hard cases the cross-check reaches, tests/hard.rs).
+        let h = if j < 3 && n > 6 { 1e-8 } else { 1e-6 };
+        let mut xp = x.clone();
+        let mut xm = x.clone();
         xp[j] += h;
         xm[j] -= h;
-        let rp = shoot(model, scale, &xp, options, &mut scratch, report)?;
-        let rm = shoot(model, scale, &xm, options, &mut scratch, report)?;
+        let (rp, _) = problem.residual(&xp, options, &mut scratch, report)?;
+        let (rm, _) = problem.residual(&xm, options, &mut scratch, report)?;
         J.set_column(j, &((rp - rm) / (2.0 * h)));
     }
+    problem.set_tensions(x);
     Ok(J)
 }
 
 /// Integrates from the base with base strains `x` (scaled) and returns the scaled tip
-/// residual; `traj` receives every accepted step.
+/// residual and the path lengths of the tendons `paths` ((tendon index, end) each,
+/// integrated over the segments up to its end); `traj` receives every accepted step.
 fn shoot(
     model: &Model,
     scale: &Scale,
     x: &SVector<f64, 6>,
+    paths: &[(usize, f64)],
     options: &Options,
     traj: &mut Vec<Point>,
     report: &mut SolveReport,
-) -> Result<SVector<f64, 6>> {
+) -> Result<(SVector<f64, 6>, Vec<f64>)> {
     report.evaluations.residual += 1;
     traj.clear();
     let robot = model.robot;
@@ -293,15 +494,23 @@ fn shoot(
         u,
     };
     traj.push(state);
+    let mut lengths = vec![0.0; paths.len()];
     let mut seg_start = 0.0;
     let breaks = robot.breakpoints();
     for seg_end in breaks.iter().copied().chain(std::iter::once(length)) {
+        // The tendons whose paths run over this segment (terminations are breakpoints).
+        let slots: Vec<usize> = (0..paths.len()).filter(|&j| seg_end <= paths[j].1).collect();
         state = integrate(
             model,
             seg_start,
             seg_end,
             state,
             options.integration_tolerance,
+            Paths {
+                paths,
+                slots: &slots,
+                lengths: &mut lengths,
+            },
             traj,
             report,
         )?;
@@ -320,8 +529,9 @@ fn shoot(
     let site = model.site(length);
     let State { s, R, v, u, .. } = state;
     let (f, m) = model.wrench_balance(s, (&site, &R, &v, &u), None)?;
-    Ok(SVector::<f64, 6>::from_iterator(
-        f.iter().copied().chain(m.iter().map(|x| x * length)),
+    Ok((
+        SVector::<f64, 6>::from_iterator(f.iter().copied().chain(m.iter().map(|x| x * length))),
+        lengths,
     ))
 }
 
@@ -438,13 +648,27 @@ const B4: [f64; 7] = [
     1.0 / 40.0,
 ];
 
-/// Integrates one segment [s0, s1] with adaptive steps, pushing every accepted step.
+/// The tendon path lengths integrated along with the state over one segment.
+struct Paths<'a> {
+    /// (tendon index, end) of every tracked tendon.
+    paths: &'a [(usize, f64)],
+    /// The entries of `paths` whose tendons run over this segment.
+    slots: &'a [usize],
+    /// The path length so far of each entry of `paths` (m).
+    lengths: &'a mut [f64],
+}
+
+/// Integrates one segment [s0, s1] with adaptive steps, pushing every accepted step; the
+/// path lengths of `paths` grow by the integral of |v + u x r_j + r_j'| with the same
+/// stages, their error (relative to L) in the step control.
+#[allow(clippy::too_many_arguments)]
 fn integrate(
     model: &Model,
     s0: f64,
     s1: f64,
     start: Point,
     tol: f64,
+    paths: Paths,
     traj: &mut Vec<Point>,
     report: &mut SolveReport,
 ) -> Result<Point> {
@@ -460,6 +684,7 @@ fn integrate(
     // First step: a few percent of the segment; the controller adapts it at once.
     let mut h = (s1 - s0) * 0.02;
     let mut steps = 0usize;
+    let mut speeds = Vec::with_capacity(7 * paths.slots.len());
     while s < s1 {
         steps += 1;
         // 1e6 steps means the tolerance cannot be met: report instead of looping
@@ -478,15 +703,26 @@ fn integrate(
         y0.fixed_rows_mut::<3>(6).copy_from(&v);
         y0.fixed_rows_mut::<3>(9).copy_from(&u);
         let mut k = [Local::zeros(); 7];
+        // Speeds |w_j| of the tracked tendon paths at each stage.
+        speeds.clear();
         for i in 0..7 {
             let mut yi = y0;
             for (j, kj) in k.iter().enumerate().take(i) {
                 yi += kj * (h * A[i][j]);
             }
-            let site = model.site(s + C[i] * h);
+            let si = s + C[i] * h;
+            let site = model.site(si);
             k[i] = local_rhs(model, &site, s1, &R, &yi)?;
             report.evaluations.equations += 1;
+            let (vi, ui): (Vector3<f64>, Vector3<f64>) = (yi.fixed_rows::<3>(6).into(), yi.fixed_rows::<3>(9).into());
+            for &j in paths.slots {
+                let rp = model.robot.tendons[paths.paths[j].0].routing.at(si, length);
+                speeds.push(length::speed(&rp, &vi, &ui));
+            }
         }
+        let tracked = paths.slots.len();
+        let step_lengths =
+            |b: &[f64; 7], slot: usize| -> f64 { (0..7).map(|i| b[i] * speeds[i * tracked + slot]).sum::<f64>() * h };
         let mut y5 = y0;
         let mut y4 = y0;
         for i in 0..7 {
@@ -499,6 +735,11 @@ fn integrate(
             let sc = tol * (1.0 + z0[i].abs().max(z5[i].abs()));
             err = err.max(((z5[i] - z4[i]) / sc).abs());
         }
+        for (slot, &j) in paths.slots.iter().enumerate() {
+            let (l0, dl5) = (paths.lengths[j] / length, step_lengths(&B5, slot) / length);
+            let sc = tol * (1.0 + l0.abs().max((l0 + dl5).abs()));
+            err = err.max(((dl5 - step_lengths(&B4, slot) / length) / sc).abs());
+        }
         if !err.is_finite() {
             h *= 0.25;
             continue;
@@ -509,6 +750,9 @@ fn integrate(
             R *= so3::exp(&y5.fixed_rows::<3>(3).into());
             v = y5.fixed_rows::<3>(6).into();
             u = y5.fixed_rows::<3>(9).into();
+            for (slot, &j) in paths.slots.iter().enumerate() {
+                paths.lengths[j] += step_lengths(&B5, slot);
+            }
             traj.push(State { s, p, R, v, u });
         }
         // Standard controller: safety 0.9, exponent 1/5, growth limited to [0.2, 5].

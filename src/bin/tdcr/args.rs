@@ -170,10 +170,23 @@ pub fn parse_param_sweep(text: &str) -> Result<(String, Vec<f64>), String> {
 /// `I=START:STOP:COUNT` or `I=NEWTONS` (`sweep --tension`): a tendon number and its
 /// tensions, COUNT evenly spaced values from START to STOP, all >= 0.
 pub fn parse_sweep(text: &str) -> Result<(usize, Vec<f64>), String> {
-    let (index, value) = parse_tendon(text)?;
-    let values = range_values(value, text, "I=START:STOP:COUNT or I=NEWTONS", "a tension in N")?;
+    let (index, values) = parse_range(text, "a tension in N", "NEWTONS")?;
     if values.iter().any(|&t| t < 0.0) {
         return Err(format!("`{text}` has negative tensions: a tendon can only pull"));
     }
     Ok((index, values))
+}
+
+/// `I=START:STOP:COUNT` or `I=METRES` (`sweep --displacement`): actuator pull-ins in m,
+/// negative ones (releases) allowed.
+pub fn parse_displacement_sweep(text: &str) -> Result<(usize, Vec<f64>), String> {
+    parse_range(text, "a displacement in m", "METRES")
+}
+
+/// A tendon number and COUNT evenly spaced values from START to STOP, or one value
+/// (`what` names it in messages, `unit` is the single value's placeholder).
+fn parse_range(text: &str, what: &str, unit: &str) -> Result<(usize, Vec<f64>), String> {
+    let (index, value) = parse_tendon(text)?;
+    let form = format!("I=START:STOP:COUNT or I={unit}");
+    Ok((index, range_values(value, text, &form, what)?))
 }

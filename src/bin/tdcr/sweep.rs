@@ -1,5 +1,5 @@
-//! `tdcr sweep`: a sequence of robots over tension ranges, each solve warm-started from the
-//! last; CSV out, optionally the tip trajectory as a picture.
+//! `tdcr sweep`: a sequence of robots over tension, pull-in or other input ranges, each
+//! solve warm-started from the last; CSV out, optionally the tip trajectory as a picture.
 
 use clap::Args;
 use std::fmt::Write as _;
@@ -10,9 +10,9 @@ use tdcr::io::output;
 use tdcr::plot::{Figure, LegendEntry, PALETTE, Style, shape_legend};
 use tdcr::{Parameter, Robot, Solution};
 
-use crate::args::{SolverArgs, parse_disks, parse_param_sweep, parse_sweep};
+use crate::args::{SolverArgs, parse_disks, parse_displacement_sweep, parse_param_sweep, parse_sweep};
 use crate::failure::{Failure, emit, note, picture_format, write_file, write_picture};
-use crate::robot_args::{apply, read_robot, run_solver, set_tension};
+use crate::robot_args::{apply, read_robot, run_solver, set_displacement, set_tension};
 use crate::tables::summary;
 
 /// The arguments of `tdcr sweep`.
@@ -22,8 +22,14 @@ pub struct SweepArgs {
     file: String,
     /// Tension of tendon I (from 1): `I=START:STOP:COUNT` (COUNT evenly spaced values, N) or a
     /// fixed `I=NEWTONS`. Repeatable; every range must have the same COUNT.
-    #[arg(long, value_name = "I=START:STOP:COUNT", value_parser = parse_sweep, required_unless_present = "param")]
+    #[arg(long, value_name = "I=START:STOP:COUNT", value_parser = parse_sweep, required_unless_present_any = ["param", "displacement"])]
     tension: Vec<(usize, Vec<f64>)>,
+    /// Actuator pull-in of tendon I (from 1), which makes it displacement-controlled (its
+    /// tension solved): `I=START:STOP:COUNT` (COUNT evenly spaced values, m; negative
+    /// releases it) or a fixed `I=METRES`. Repeatable; every range must have the same COUNT.
+    /// The CSV gets a `displacement_I` column, and `tension_I` holds the solved tension.
+    #[arg(long, value_name = "I=START:STOP:COUNT", value_parser = parse_displacement_sweep, allow_hyphen_values = true)]
+    displacement: Vec<(usize, Vec<f64>)>,
     /// Any other input: `NAME=START:STOP:COUNT` or `NAME=VALUE`, NAME one of
     /// `tip_force.x|y|z` (N), `distributed_force.x|y|z` (N/m), `load_scale`, `youngs_modulus`
     /// (Pa) or `tension.I`. Repeatable, with the same COUNT as every other range.
@@ -116,11 +122,13 @@ pub fn run(args: &SweepArgs) -> Result<(), Failure> {
         .tension
         .iter()
         .map(|(_, v)| v.len())
+        .chain(args.displacement.iter().map(|(_, v)| v.len()))
         .chain(params.iter().map(|(_, v)| v.len()));
     let steps = lengths.clone().max().unwrap_or(0);
     if steps < 2 {
         return Err(Failure::Input(
-            "sweep needs at least one range with COUNT >= 2, e.g. --tension 1=0:6:61 or --param tip_force.z=0:-1:11"
+            "sweep needs at least one range with COUNT >= 2, e.g. --tension 1=0:6:61, --displacement 1=0:0.004:41 \
+             or --param tip_force.z=0:-1:11"
                 .into(),
         ));
     }
@@ -136,13 +144,32 @@ pub fn run(args: &SweepArgs) -> Result<(), Failure> {
             )));
         }
     }
+    for (k, (i, _)) in args.displacement.iter().enumerate() {
+        if args.displacement[..k].iter().any(|(j, _)| j == i) {
+            return Err(Failure::Input(format!(
+                "--displacement {i}=... is given twice: give each tendon one range or value"
+            )));
+        }
+        if args.tension.iter().any(|(j, _)| j == i) {
+            return Err(Failure::Input(format!(
+                "--tension {i}=... and --displacement {i}=... both given: drive a tendon by its tension or by its \
+                 displacement"
+            )));
+        }
+    }
     for &(i, ref v) in &args.tension {
         set_tension(&mut file.robot, i, v[0])?;
+    }
+    for &(i, ref v) in &args.displacement {
+        set_displacement(&mut file.robot, i, v[0])?;
     }
     let count = file.robot.tendons.len();
     let mut csv = String::from("step");
     for i in 1..=count {
         let _ = write!(csv, ",tension_{i}");
+    }
+    for (i, _) in &args.displacement {
+        let _ = write!(csv, ",displacement_{i}");
     }
     for (p, _) in &params {
         let _ = write!(csv, ",{p}");
@@ -168,6 +195,9 @@ pub fn run(args: &SweepArgs) -> Result<(), Failure> {
         for &(i, ref v) in &args.tension {
             set_tension(&mut robot, i, v[if v.len() == 1 { 0 } else { k }])?;
         }
+        for &(i, ref v) in &args.displacement {
+            set_displacement(&mut robot, i, v[if v.len() == 1 { 0 } else { k }])?;
+        }
         for (p, v) in &params {
             robot = p.apply(&robot, v[if v.len() == 1 { 0 } else { k }]);
         }
@@ -177,14 +207,17 @@ pub fn run(args: &SweepArgs) -> Result<(), Failure> {
                 let tensions: Vec<String> = robot
                     .tendons
                     .iter()
-                    .map(|t| tdcr::Readable(t.tension).to_string())
+                    .map(|t| match t.displacement {
+                        Some(q) => format!("pull-in {} m", tdcr::Readable(q)),
+                        None => format!("{} N", tdcr::Readable(t.tension)),
+                    })
                     .collect();
                 let text = match f {
                     Failure::NotConverged(t) | Failure::Input(t) | Failure::Other(t) => t,
                     Failure::BrokenPipe => String::new(),
                 };
                 failure = Some(Failure::NotConverged(format!(
-                    "sweep step {} of {steps} (tensions {} N) failed; the CSV holds the steps before it\n{text}",
+                    "sweep step {} of {steps} (tendons {}) failed; the CSV holds the steps before it\n{text}",
                     k + 1,
                     tensions.join(", ")
                 )));
@@ -193,8 +226,13 @@ pub fn run(args: &SweepArgs) -> Result<(), Failure> {
         };
         let tip = solution.tip_position();
         let _ = write!(csv, "{}", k + 1);
-        for t in &robot.tendons {
+        // The solved tensions: the inputs of tension-controlled tendons, the unknowns of
+        // displacement-controlled ones.
+        for t in &solution.tendons {
             let _ = write!(csv, ",{}", t.tension);
+        }
+        for &(i, _) in &args.displacement {
+            let _ = write!(csv, ",{}", solution.tendons[i - 1].displacement);
         }
         for (p, _) in &params {
             let _ = write!(csv, ",{}", p.value(&robot));
@@ -271,6 +309,11 @@ pub fn run(args: &SweepArgs) -> Result<(), Failure> {
             .tension
             .iter()
             .map(|(i, v)| format!("tendon {i}: {} to {} N", v[0], v[v.len() - 1]))
+            .chain(
+                args.displacement
+                    .iter()
+                    .map(|(i, v)| format!("tendon {i} pulled in: {} to {} mm", v[0] * 1e3, v[v.len() - 1] * 1e3)),
+            )
             .chain(
                 params
                     .iter()
