@@ -538,6 +538,17 @@ fn correct(
     }
     let mut norm = f64::INFINITY;
     let mut next = Vec::with_capacity(x.len());
+    // b = -J^-1 F_lambda belongs to the factors: solved once per factorization, not per
+    // corrector step. The other buffers are allocated once per step.
+    let solve_b = |ws: &mut Workspace, fl: &[f64], b: &mut Vec<f64>| -> Option<()> {
+        let rhs: Vec<f64> = fl.iter().map(|v| -v).collect();
+        b.clear();
+        b.extend_from_slice(ws.solve_again(&rhs)?);
+        Some(())
+    };
+    let mut b = Vec::with_capacity(n);
+    solve_b(ws, &fl, &mut b)?;
+    let (mut rhs, mut delta) = (vec![0.0; n], vec![0.0; n]);
     for iteration in 1..=MAX_CORRECTOR {
         if !residual(system, homotopy, &x, lambda, r, report) {
             return None;
@@ -552,6 +563,7 @@ fn correct(
                 return None;
             }
             fl = f_lambda(system, homotopy, &x, lambda, report)?;
+            solve_b(ws, &fl, &mut b)?;
             fresh = true;
             if new_norm > 2.0 * norm {
                 return None;
@@ -565,17 +577,18 @@ fn correct(
             report.chord_steps += 1;
         }
         fresh = false;
-        let rhs: Vec<f64> = r.iter().map(|v| -v).collect();
-        let a = ws.solve_again(&rhs)?.to_vec();
-        let rhs: Vec<f64> = fl.iter().map(|v| -v).collect();
-        let b = ws.solve_again(&rhs)?.to_vec();
-        let g = (dot(&point.tx, &d) + dot(&point.tx, &a)) / nf + point.tl * (lambda - lambda_pred);
+        rhs.iter_mut().zip(r.iter()).for_each(|(q, v)| *q = -v);
+        let a = ws.solve_again(&rhs)?;
+        let g = (dot(&point.tx, &d) + dot(&point.tx, a)) / nf + point.tl * (lambda - lambda_pred);
         let denominator = dot(&point.tx, &b) / nf + point.tl;
         if denominator.abs() < 1e-14 {
             return None;
         }
         let dl = -g / denominator;
-        let delta: Vec<f64> = a.iter().zip(&b).map(|(a, b)| a + dl * b).collect();
+        delta
+            .iter_mut()
+            .zip(a.iter().zip(&b))
+            .for_each(|(s, (a, b))| *s = a + dl * b);
         if !delta.iter().all(|v| v.is_finite()) {
             return None;
         }
