@@ -1,5 +1,5 @@
-//! Tip sensitivities and inverse statics: `tdcr::tip_sensitivities` and
-//! `tdcr::fit::solve_tensions` with numpy in and out.
+//! Tip sensitivities and inverse statics: `tdcr::tip_sensitivities`,
+//! `tdcr::fit::solve_tensions` and `tdcr::fit::solve_displacements` with numpy in and out.
 
 use crate::errors::{invalid, to_py};
 use crate::robot::PyRobot;
@@ -8,7 +8,7 @@ use numpy::ndarray::Array2;
 use numpy::{IntoPyArray, PyArray1, PyArray2};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
-use tdcr::fit::inverse::{InverseOptions, Target};
+use tdcr::fit::inverse::{InverseOptions, InverseSolution, Target};
 use tdcr::nalgebra::{DMatrix, Matrix3, Vector3};
 
 /// A 6 x k matrix as a (6, k) array.
@@ -92,12 +92,17 @@ pub fn tip_sensitivities(py: Python<'_>, robot: &PyRobot, solution: &PySolution)
         .map_err(to_py)
 }
 
-/// The result of `solve_tensions`.
+/// The result of `solve_tensions` and `solve_displacements`.
 #[pyclass(module = "tdcr", name = "InverseResult", frozen, get_all)]
 pub struct PyInverseResult {
     /// Tension of every tendon (N), shape (k,), file order.
     tensions: Py<PyArray1<f64>>,
-    /// The forward solution at these tensions.
+    /// Actuator pull-in of every tendon (m), shape (k,), file order.
+    displacements: Py<PyArray1<f64>>,
+    /// Where each tendon's adjusted input ended up: "inside", "slack", "saturated" (at the
+    /// upper bound), "released" (at the lower pull-in bound) or "held" (not free).
+    bounds: Vec<&'static str>,
+    /// The forward solution at these inputs.
     solution: Py<PySolution>,
     /// Weighted tip error (m).
     residual: f64,
@@ -115,6 +120,79 @@ pub struct PyInverseResult {
     forward_solves: usize,
     /// A few sentences for a person: reached or how far the tip stayed, and why.
     explanation: String,
+}
+
+/// The target of `function` from a (3,) position and an optional (3, 3) rotation.
+fn target(function: &str, position: Vec<f64>, rotation: Option<Vec<Vec<f64>>>) -> PyResult<Target> {
+    let [x, y, z] = position[..] else {
+        return Err(invalid(format!(
+            "{function}: position has {} values, not 3",
+            position.len()
+        )));
+    };
+    let position = Vector3::new(x, y, z);
+    match rotation {
+        None => Ok(Target::position(position)),
+        Some(r) => {
+            if r.len() != 3 || r.iter().any(|row| row.len() != 3) {
+                return Err(invalid(format!("{function}: rotation must be a (3, 3) matrix")));
+            }
+            Ok(Target::pose(position, Matrix3::from_fn(|i, j| r[i][j])))
+        }
+    }
+}
+
+/// The forward solver's settings of inverse statics: the robot file's and `options`, on a
+/// fixed mesh unless `tol` asks otherwise (as the library's inverse statics: every
+/// iteration then solves the same discretization).
+fn forward_options(robot: &PyRobot, options: Option<&Bound<'_, PyDict>>) -> PyResult<tdcr::collocation::Options> {
+    let mut settings = crate::options::apply(&robot.file.solver, options)?;
+    if !options.is_some_and(|o| o.contains("tol").unwrap_or(false)) {
+        settings.collocation.tolerance = None;
+    }
+    Ok(settings.collocation)
+}
+
+/// Runs `inverse` on `robot` and converts its result.
+fn run_inverse(
+    py: Python<'_>,
+    robot: &PyRobot,
+    target: Target,
+    options: InverseOptions,
+    inverse: fn(&tdcr::Robot, &Target, &InverseOptions) -> tdcr::Result<InverseSolution>,
+) -> PyResult<PyInverseResult> {
+    let r = &robot.file.robot;
+    let out = py.detach(|| inverse(r, &target, &options)).map_err(to_py)?;
+    let bounds = out
+        .bounds
+        .iter()
+        .map(|b| match b {
+            tdcr::fit::Bound::Inside => "inside",
+            tdcr::fit::Bound::Slack => "slack",
+            tdcr::fit::Bound::Saturated => "saturated",
+            tdcr::fit::Bound::Released => "released",
+            tdcr::fit::Bound::Held => "held",
+        })
+        .collect();
+    Ok(PyInverseResult {
+        tensions: PyArray1::from_slice(py, &out.tensions).unbind(),
+        displacements: PyArray1::from_slice(py, &out.displacements).unbind(),
+        bounds,
+        solution: Py::new(
+            py,
+            PySolution {
+                solution: out.solution.clone(),
+            },
+        )?,
+        residual: out.residual,
+        position_error: out.position_error,
+        orientation_error: out.orientation_error,
+        reachable: out.reachable,
+        termination: out.termination.to_string(),
+        iterations: out.iterations,
+        forward_solves: out.forward_solves,
+        explanation: out.explain(),
+    })
 }
 
 /// Inverse statics: the tensions, each in [0, `max_tension`] (N), that put the tip at
@@ -138,57 +216,53 @@ pub fn solve_tensions(
     free_tendons: Option<Vec<usize>>,
     options: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<PyInverseResult> {
-    let [x, y, z] = position[..] else {
-        return Err(invalid(format!(
-            "solve_tensions: position has {} values, not 3",
-            position.len()
-        )));
-    };
-    let position = Vector3::new(x, y, z);
-    let target = match rotation {
-        None => Target::position(position),
-        Some(r) => {
-            if r.len() != 3 || r.iter().any(|row| row.len() != 3) {
-                return Err(invalid("solve_tensions: rotation must be a (3, 3) matrix"));
-            }
-            Target::pose(position, Matrix3::from_fn(|i, j| r[i][j]))
-        }
-    };
-    let mut settings = crate::options::apply(&robot.file.solver, options)?;
-    // As the library's inverse statics: a fixed mesh unless `tol` asks otherwise, so that
-    // every iteration solves the same discretization.
-    if !options.is_some_and(|o| o.contains("tol").unwrap_or(false)) {
-        settings.collocation.tolerance = None;
-    }
+    let target = target("solve_tensions", position, rotation)?;
     let options = InverseOptions {
         max_tension,
         tolerance,
         max_iterations,
         orientation_weight,
-        solver: settings.collocation,
+        solver: forward_options(robot, options)?,
         free_tendons,
+        ..Default::default()
     };
-    let r = &robot.file.robot;
-    let out = py
-        .detach(|| tdcr::fit::solve_tensions(r, &target, &options))
-        .map_err(to_py)?;
-    Ok(PyInverseResult {
-        tensions: PyArray1::from_slice(py, &out.tensions).unbind(),
-        solution: Py::new(
-            py,
-            PySolution {
-                solution: out.solution.clone(),
-            },
-        )?,
-        residual: out.residual,
-        position_error: out.position_error,
-        orientation_error: out.orientation_error,
-        reachable: out.reachable,
-        termination: out.termination.to_string(),
-        iterations: out.iterations,
-        forward_solves: out.forward_solves,
-        explanation: out.explain(),
-    })
+    run_inverse(py, robot, target, options, tdcr::fit::solve_tensions)
+}
+
+/// Inverse statics in actuator space: the pull-ins, each in [`min_displacement`,
+/// `max_displacement`] (m), that put the tip at `position` (m, (3,)) and, if given,
+/// `rotation` ((3, 3), body to world) (`tdcr::fit::solve_displacements`). The free tendons
+/// (`free_tendons`, 0-based, default all) become displacement-controlled, starting from
+/// the pull-ins their tensions hold; slack tendons are reported in `bounds`. `options` as
+/// `solve_tensions`.
+#[pyfunction]
+#[pyo3(signature = (robot, position, rotation=None, *, max_displacement, min_displacement=0.0, tolerance=1e-6, max_iterations=50, orientation_weight=None, free_tendons=None, **options))]
+#[allow(clippy::too_many_arguments)]
+pub fn solve_displacements(
+    py: Python<'_>,
+    robot: &PyRobot,
+    position: Vec<f64>,
+    rotation: Option<Vec<Vec<f64>>>,
+    max_displacement: f64,
+    min_displacement: f64,
+    tolerance: f64,
+    max_iterations: usize,
+    orientation_weight: Option<f64>,
+    free_tendons: Option<Vec<usize>>,
+    options: Option<&Bound<'_, PyDict>>,
+) -> PyResult<PyInverseResult> {
+    let target = target("solve_displacements", position, rotation)?;
+    let options = InverseOptions {
+        min_displacement,
+        max_displacement,
+        tolerance,
+        max_iterations,
+        orientation_weight,
+        solver: forward_options(robot, options)?,
+        free_tendons,
+        ..Default::default()
+    };
+    run_inverse(py, robot, target, options, tdcr::fit::solve_displacements)
 }
 
 /// The result of `calibrate`.

@@ -307,6 +307,7 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(sweep, m)?)?;
     m.add_function(wrap_pyfunction!(analysis::tip_sensitivities, m)?)?;
     m.add_function(wrap_pyfunction!(analysis::solve_tensions, m)?)?;
+    m.add_function(wrap_pyfunction!(analysis::solve_displacements, m)?)?;
     m.add_function(wrap_pyfunction!(analysis::calibrate, m)?)?;
     m.add_function(wrap_pyfunction!(case_s, m)?)?;
     m.add_function(wrap_pyfunction!(case_h, m)?)?;

@@ -175,6 +175,19 @@ def test_solve_tensions_finds_case_s_from_its_tip():
     assert result.position_error <= 1e-6
 
 
+def test_solve_displacements_recovers_a_pull_in():
+    robot = tdcr.cases.prototype()
+    pulled = robot.with_displacements([None, 0.003, None, None, None])
+    target = tdcr.solve(pulled, intervals=32).tip_position
+    result = tdcr.solve_displacements(robot, target, max_displacement=0.01, free_tendons=[1])
+    assert result.reachable and result.displacements.shape == (5,)
+    # 1e-6 m: the 1e-6 m tip tolerance over a tip sensitivity of about 25 m/m.
+    assert abs(result.displacements[1] - 0.003) < 1e-6
+    assert result.bounds == ["held", "inside", "held", "held", "held"]
+    with pytest.raises(tdcr.InvalidInput, match="max_displacement"):
+        tdcr.solve_displacements(robot, target, max_displacement=0.3)
+
+
 def test_calibrate_recovers_a_stiffer_rod_from_synthetic_tips():
     robot = tdcr.cases.prototype()
     truth = robot.with_parameters({"youngs_modulus": 1.05 * 210e9})

@@ -41,8 +41,8 @@ pub enum FitTermination {
     Stalled,
     /// Inverse statics: the weighted tip error is at or below the tolerance.
     Reached,
-    /// Inverse statics: the gradient of the tip error, projected onto the tension bounds,
-    /// vanishes (a minimum within the bounds that is not the target).
+    /// Inverse statics: the gradient of the tip error, projected onto the bounds of the
+    /// inputs, vanishes (a minimum within the bounds that is not the target).
     Stationary,
     /// Inverse statics: the damped step became negligible, or would lower the tip error by
     /// less than [`super::inverse::PROGRESS_FRACTION`] of the tolerance.
@@ -82,7 +82,7 @@ impl fmt::Display for FitTermination {
             }
             FitTermination::Reached => "reached: the weighted tip error is within the tolerance",
             FitTermination::Stationary => {
-                "stationary: no tension change within the bounds reduces the tip error to first order"
+                "stationary: no change of the inputs within their bounds reduces the tip error to first order"
             }
             FitTermination::NoProgress => {
                 "stalled: no step within the bounds promises to reduce the tip error by a meaningful amount"

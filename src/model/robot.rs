@@ -110,6 +110,16 @@ impl Robot {
         k[0].max(k[1])
     }
 
+    /// The tension scale T_i of tendon `i` (N): the tension that bends the rod through about
+    /// a radian, E I / (L |r_i(0)|) at its offset at the base (E I / L^2 on the centreline,
+    /// where a tension only compresses). The scale of tension unknowns in the solvers.
+    pub fn tension_scale(&self, i: usize) -> f64 {
+        let length = self.length();
+        let offset = self.tendons[i].routing.at(0.0, length).r.norm();
+        let bend = self.bending_stiffness() / length;
+        if offset > 0.0 { bend / offset } else { bend / length }
+    }
+
     /// Checks every field; returns the first problem with the path of the offending field.
     ///
     /// # Errors

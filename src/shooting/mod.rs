@@ -306,14 +306,7 @@ impl Problem {
                 }
             })
             .collect();
-        let bend = robot.bending_stiffness() / length;
-        let tension_scales = displaced
-            .iter()
-            .map(|c| {
-                let offset = robot.tendons[c.tendon].routing.at(0.0, length).r.norm();
-                if offset > 0.0 { bend / offset } else { bend / length }
-            })
-            .collect();
+        let tension_scales = displaced.iter().map(|c| robot.tension_scale(c.tendon)).collect();
         Problem {
             robot: work,
             displaced,

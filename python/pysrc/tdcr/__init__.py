@@ -11,7 +11,7 @@ The Rust crate tdcr is the one implementation; this package converts types and c
 Robots: `Robot` (from TOML text, a file, keyword arguments or a dict; the robot file's
 fields and rules). Solving: `solve`, `solve_batch` (all cores, GIL released), `sweep`
 (warm-started sequence), `solve_parameters` (arrays in, arrays out). Analyses:
-`tip_sensitivities` (Jacobians, compliance), `solve_tensions` (inverse statics), `calibrate` (E and base angles from measured tips). Cases:
+`tip_sensitivities` (Jacobians, compliance), `solve_tensions` and `solve_displacements` (inverse statics), `calibrate` (E and base angles from measured tips). Cases:
 `tdcr.cases`. A cluster: `tdcr.distributed` (Dask). Errors: `Error` and its subclasses
 `InvalidInput` (with `FileError`, `SingularRouting`), `NotConverged`, `IntervalCap`,
 `Breakdown`. docs/python.md is the walk-through.
@@ -37,6 +37,7 @@ from ._native import (
     example,
     solve,
     solve_batch,
+    solve_displacements,
     solve_parameters,
     solve_tensions,
     sweep,
@@ -65,6 +66,7 @@ __all__ = [
     "example",
     "solve",
     "solve_batch",
+    "solve_displacements",
     "solve_parameters",
     "solve_tensions",
     "sweep",

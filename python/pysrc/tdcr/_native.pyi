@@ -257,9 +257,11 @@ class TipSensitivities:
         """(6,), per Pa, or None."""
 
 class InverseResult:
-    """The result of `solve_tensions`."""
+    """The result of `solve_tensions` and `solve_displacements`."""
 
     tensions: FloatArray
+    displacements: FloatArray
+    bounds: List[Literal["inside", "slack", "saturated", "released", "held"]]
     solution: Solution
     residual: float
     position_error: float
@@ -346,6 +348,23 @@ def solve_tensions(
     residual_tolerance: Optional[float] = None,
 ) -> InverseResult:
     """Inverse statics: tensions in [0, max_tension] that put the tip at `position`."""
+
+def solve_displacements(
+    robot: Robot,
+    position: ArrayLike,
+    rotation: Optional[ArrayLike] = None,
+    *,
+    max_displacement: float,
+    min_displacement: float = 0.0,
+    tolerance: float = 1e-6,
+    max_iterations: int = 50,
+    orientation_weight: Optional[float] = None,
+    free_tendons: Optional[Sequence[int]] = None,
+    intervals: Optional[int] = None,
+    residual_tolerance: Optional[float] = None,
+) -> InverseResult:
+    """Inverse statics in actuator space: pull-ins in [min_displacement, max_displacement]
+    (m) that put the tip at `position`."""
 
 class Calibration:
     """The result of `calibrate`."""

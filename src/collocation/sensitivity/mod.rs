@@ -74,6 +74,7 @@
 
 mod tip;
 
+pub(crate) use tip::TensionDirections;
 pub use tip::{
     DisplacementSensitivities, ModulusSensitivities, TipSensitivities, backbone_tension_sensitivity,
     displacement_sensitivities, tip_sensitivities,

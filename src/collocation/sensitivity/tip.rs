@@ -162,7 +162,7 @@ pub struct DisplacementSensitivities {
     /// (rad/m), as in [`TipSensitivities`].
     pub tip: DMatrix<f64>,
     /// d(tau)/dq, k x k (N/m): row i the tension of `tendons[i]`. A slack tendon's row is
-    /// 0 (it stays slack for small changes).
+    /// 0 (it stays slack for small changes), also one just taut at 0 N.
     pub tension: DMatrix<f64>,
 }
 
@@ -171,8 +171,8 @@ pub struct DisplacementSensitivities {
 /// bordered system: with D_m = dx/dtau_m (one solve each with the factors of
 /// [`Sensitivity`]), the taut tendons' constraints phi_j = l_ref_j - l_j - q_j + c_j tau_j = 0
 /// give S dtau/dq = I with S_jm = c_j delta_jm - dl_j/dtau_m, where dl_j/dtau_m is
-/// the length quadrature's derivative along D_m; slack tendons keep dtau = 0. Then
-/// d(tip)/dq = d(tip)/dtau dtau/dq.
+/// the length quadrature's derivative along D_m; slack tendons (at 0 N) keep dtau = 0.
+/// Then d(tip)/dq = d(tip)/dtau dtau/dq.
 ///
 /// # Errors
 /// [`crate::Error::InvalidInput`] when the robot has no displacement-controlled tendon or
@@ -189,47 +189,99 @@ pub fn displacement_sensitivities(robot: &Robot, solution: &Solution) -> Result<
             "give a tendon a displacement (pull-in) or use tip_sensitivities for tensions",
         ));
     }
-    let solved = robot.with_tensions(&solution.tensions());
-    let mut sens = Sensitivity::new(&solved, solution)?;
-    let k = tendons.len();
-    let length = robot.length();
-    let s: Vec<f64> = solution.nodes.iter().map(|n| n.s).collect();
-    let mut tip_by_tension = DMatrix::zeros(6, k);
-    let mut schur = DMatrix::zeros(k, k);
-    let taut: Vec<bool> = tendons
+    let directions = TensionDirections::new(robot, solution, tendons)?;
+    let taut: Vec<bool> = directions
+        .tendons
         .iter()
         .map(|&i| solution.tendons[i].slack == 0.0 && solution.tendons[i].tension > 0.0)
         .collect();
-    for (m, &tm) in tendons.iter().enumerate() {
-        let d = sens.tension(tm)?;
-        tip_by_tension.set_column(m, &d[d.len() - 1].pose());
-        for (j, &tj) in tendons.iter().enumerate() {
-            let t = &solved.tendons[tj];
-            let quadrature = NodeQuadrature::new(&s, t.end(length));
-            let dl = quadrature.integrate(|node| {
-                let rp = t.routing.at(s[node], length);
-                let (dv, du) = speed_gradient(&rp, &solution.nodes[node].v, &solution.nodes[node].u);
-                dv.dot(&d[node].v) + du.dot(&d[node].u)
-            });
-            schur[(j, m)] = -dl;
-        }
-    }
-    for (j, &tj) in tendons.iter().enumerate() {
-        if taut[j] {
-            schur[(j, j)] += solved.tendons[tj].compliance(solution.tendons[tj].reference_length);
-        } else {
-            schur.row_mut(j).fill(0.0);
-            schur[(j, j)] = 1.0;
-        }
-    }
-    let mut rhs = DMatrix::<f64>::identity(k, k);
-    for j in (0..k).filter(|&j| !taut[j]) {
-        rhs[(j, j)] = 0.0;
-    }
-    let tension = schur.lu().solve(&rhs).ok_or_else(super::singular)?;
+    let tension = directions.tension_by_displacement(&taut)?;
     Ok(DisplacementSensitivities {
-        tip: &tip_by_tension * &tension,
-        tendons,
+        tip: &directions.tip * &tension,
+        tendons: directions.tendons,
         tension,
     })
+}
+
+/// What every pull-in derivative is made of: the tip's and the path lengths' derivatives
+/// along each of k tendons' tensions (the k solves of [`displacement_sensitivities`]);
+/// combining them for a set of taut tendons is a k x k solve.
+pub(crate) struct TensionDirections {
+    /// The tendons (0-based), the columns' order.
+    pub(crate) tendons: Vec<usize>,
+    /// d(tip pose)/dtau_m, 6 x k.
+    pub(crate) tip: DMatrix<f64>,
+    /// dl_j/dtau_m (m/N), k x k.
+    length: DMatrix<f64>,
+    /// c_j (m/N): each tendon's compliance at its reference length.
+    compliance: Vec<f64>,
+}
+
+impl TensionDirections {
+    /// The tension directions of `tendons` (0-based) at `solution`, a solution of `robot`,
+    /// whatever their inputs.
+    ///
+    /// # Errors
+    /// As [`Sensitivity::new`] and [`Sensitivity::tension`].
+    pub(crate) fn new(robot: &Robot, solution: &Solution, tendons: Vec<usize>) -> Result<Self> {
+        let solved = robot.with_tensions(&solution.tensions());
+        let mut sens = Sensitivity::new(&solved, solution)?;
+        let k = tendons.len();
+        let rod_length = robot.length();
+        let s: Vec<f64> = solution.nodes.iter().map(|n| n.s).collect();
+        let mut tip = DMatrix::zeros(6, k);
+        let mut length = DMatrix::zeros(k, k);
+        for (m, &tm) in tendons.iter().enumerate() {
+            let d = sens.tension(tm)?;
+            tip.set_column(m, &d[d.len() - 1].pose());
+            for (j, &tj) in tendons.iter().enumerate() {
+                let t = &solved.tendons[tj];
+                let quadrature = NodeQuadrature::new(&s, t.end(rod_length));
+                length[(j, m)] = quadrature.integrate(|node| {
+                    let rp = t.routing.at(s[node], rod_length);
+                    let (dv, du) = speed_gradient(&rp, &solution.nodes[node].v, &solution.nodes[node].u);
+                    dv.dot(&d[node].v) + du.dot(&d[node].u)
+                });
+            }
+        }
+        let compliance = tendons
+            .iter()
+            .map(|&i| solved.tendons[i].compliance(solution.tendons[i].reference_length))
+            .collect();
+        Ok(TensionDirections {
+            tendons,
+            tip,
+            length,
+            compliance,
+        })
+    }
+
+    /// dq/dtau (m/N, k x k): how the pull-ins that hold the tendons just taut change with
+    /// the tensions, C - dl/dtau (q_j = l_ref_j - l_j + c_j tau_j).
+    pub(crate) fn displacement_by_tension(&self) -> DMatrix<f64> {
+        let mut q = -&self.length;
+        for (j, c) in self.compliance.iter().enumerate() {
+            q[(j, j)] += c;
+        }
+        q
+    }
+
+    /// dtau/dq (N/m, k x k) with the tendons flagged in `taut` taut (their constraints
+    /// hold: S dtau = dq, S = C - dl/dtau) and the others slack (dtau = 0).
+    ///
+    /// # Errors
+    /// [`crate::Error::InvalidInput`] when the Schur complement is singular.
+    pub(crate) fn tension_by_displacement(&self, taut: &[bool]) -> Result<DMatrix<f64>> {
+        let k = self.tendons.len();
+        let mut schur = self.displacement_by_tension();
+        let mut rhs = DMatrix::<f64>::identity(k, k);
+        for j in 0..k {
+            if !taut[j] {
+                schur.row_mut(j).fill(0.0);
+                schur[(j, j)] = 1.0;
+                rhs[(j, j)] = 0.0;
+            }
+        }
+        schur.lu().solve(&rhs).ok_or_else(super::singular)
+    }
 }

@@ -1,5 +1,6 @@
-//! Inverse statics: tendon tensions, each within [0, tau_max], that put the tip at a target
-//! position (and optionally orientation).
+//! Inverse statics: tendon tensions, each within [0, tau_max] ([`solve_tensions`]), or
+//! actuator pull-ins, each within [q_min, q_max] ([`solve_displacements`]), that put the tip
+//! at a target position (and optionally orientation).
 //!
 //! # Problem
 //!
@@ -10,7 +11,8 @@
 //!          [ w log(R_tip(tau) R*^T)          ]   (only with a target orientation; w in m/rad)
 //! ```
 //!
-//! and the solver minimizes F = |e|^2 / 2 over the box 0 <= tau_i <= tau_max. The residual
+//! and the solver minimizes F = |e|^2 / 2 over the box 0 <= tau_i <= tau_max (for pull-ins,
+//! e(q) over q_min <= q_i <= q_max; below, read q for tau where it differs). The residual
 //! |e| is a length: the orientation part is an angle times the weight w (default: the rod
 //! length, so that a radian counts like a tip displacement of one rod length).
 //!
@@ -32,6 +34,31 @@
 //! the box, this keeps a tendon at a bound only while the model wants it there, so the
 //! iteration slides along the faces of the box.
 //!
+//! # Pull-ins
+//!
+//! [`solve_displacements`] iterates on the same unknowns, the free tendons' tensions, where
+//! the tip is a smooth function of them and a slack tendon is simply one at the bound
+//! tau = 0. (In the pull-ins themselves the tip has a kink wherever a tendon goes slack or
+//! taut, and a slack tendon's derivative is zero.) The stroke is a constraint on the
+//! tensions: the pull-in that holds tendon j just taut at tension tau_j,
+//!
+//! ```text
+//! q_j(tau) = l_ref_j - l_j(tau) + c_j tau_j      (docs/actuation.md),
+//! ```
+//!
+//! must lie in [q_min, q_max]; each step linearizes it with dq/dtau = C - dl/dtau, from the
+//! same k solves as the tip's derivative
+//! ([`crate::collocation::sensitivity::displacement_sensitivities`]'s tension directions),
+//! so the step's model is minimized under the tension bound tau + d >= 0 and
+//! q_min <= q + (dq/dtau) d <= q_max, a QP with general linear constraints (the primal
+//! active-set method of `qp.rs`). A tendon at 0 N is given the pull-in q_j(tau): the largest
+//! that leaves it slack, just taut. At the end the free tendons are made
+//! displacement-controlled at those pull-ins (one within 1e-9 of the stroke's span of a
+//! bound is put on it) and the robot is solved once more, warm, under displacement control:
+//! the reported solution. The start is the robot solved with its free tendons' pull-ins
+//! clamped into the stroke (a tension-controlled tendon's pull-in is the one its tension
+//! holds).
+//!
 //! The trial tensions are solved forward, warm-started from the last accepted solution with
 //! a [`crate::collocation::Solver`] that keeps its Newton workspace. The gain ratio rho = (actual
 //! decrease of F) / (decrease predicted by the undamped model |e + J d|^2 / 2) decides:
@@ -45,10 +72,11 @@
 //! # Termination ([`FitTermination`])
 //!
 //! - `Reached`: |e| <= `tolerance`; the target is reachable.
-//! - `Stationary`: the gradient J^T e projected onto the box vanishes (relative to
+//! - `Stationary`: the gradient J^T e projected onto the moves the active bounds allow
+//!   vanishes (relative to
 //!   |J_i| |e|, below [`GRADIENT_TOLERANCE`]): a (local) minimum of the tip error within
 //!   the bounds, the closest the tendons can bring the tip.
-//! - `NoProgress`: the step is below [`STEP_TOLERANCE`] times `max_tension`, or it would
+//! - `NoProgress`: the step is below [`STEP_TOLERANCE`] times the tension scale, or it would
 //!   lower |e| by less than [`PROGRESS_FRACTION`] times `tolerance` even by the linear
 //!   model: at a minimum that the gradient test did not resolve (forward-solve noise
 //!   dominates there), or after the damping grew through repeated rejections.
@@ -81,21 +109,24 @@
 //! refinement changes the mesh, and so the tip, discontinuously between iterates.
 #![allow(non_snake_case)]
 
+mod inputs;
 mod problem;
 mod qp;
+mod result;
 
-pub use problem::{InverseOptions, Target};
+pub use problem::{Adjusted, InverseOptions, Target};
+pub use result::{Bound, InverseSolution};
 
-use super::lm::{Damping, FitIteration, FitTermination, accepts, gain_ratio};
+use super::lm::{Damping, FitTermination, accepts, gain_ratio};
 use crate::collocation::Solver;
-use crate::collocation::sensitivity::Sensitivity;
 use crate::error::Result;
 use crate::model::robot::Robot;
 use crate::so3;
 use crate::solution::Solution;
+use inputs::Inputs;
 use nalgebra::{DMatrix, DVector, Vector3};
 use problem::validate;
-use qp::box_qp;
+use qp::{Constraints, solve_qp};
 
 /// First damping mu relative to the largest diagonal entry of J^T J, 1e-3: the value
 /// Madsen, Nielsen & Tingleff (2004, section 3.2) recommend when the start is not known to
@@ -114,9 +145,11 @@ pub const ACCEPT_RATIO: f64 = 1e-4;
 /// where the predicted decrease of F is 1e-11 of F, the size of the solve's noise.
 pub const GRADIENT_TOLERANCE: f64 = 1e-6;
 
-/// Step test, 1e-10 relative to `max_tension`: below it the tension change moves the tip by
-/// less than the forward-solve noise (about 1e-8 m; tip sensitivities are at most a few
-/// centimetres per newton on the prototype, so 1e-10 of a 5 N bound moves it 1e-11 m).
+/// Step test, 1e-10 relative to the tension scale (`max_tension`, or for pull-ins the
+/// largest [`Robot::tension_scale`] of the free tendons, 2.2 N on the prototype): below it
+/// the tension change moves the tip by less than the forward-solve noise (about 1e-8 m; tip
+/// sensitivities are at most a few centimetres per newton on the prototype, so 1e-10 of a
+/// 5 N bound moves it 1e-11 m).
 pub const STEP_TOLERANCE: f64 = 1e-10;
 
 /// Progress test, 1e-3: the iteration stops when the step would lower the weighted tip
@@ -130,143 +163,6 @@ pub const PROGRESS_FRACTION: f64 = 1e-3;
 /// Largest deviation from orthonormality accepted for a target orientation, 1e-6: a
 /// rotation matrix typed with seven digits passes; anything else is not a rotation.
 pub const ROTATION_TOLERANCE: f64 = 1e-6;
-
-/// Where a tendon's tension ended up relative to its bounds.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Bound {
-    /// Strictly between 0 and `max_tension`.
-    Inside,
-    /// At the lower bound 0: slack.
-    Slack,
-    /// At the upper bound `max_tension`.
-    Saturated,
-    /// Not free to change (not in `free_tendons`): the robot's tension.
-    Held,
-}
-
-/// The result of [`solve_tensions`]: the best tensions found, their solved shape, and how
-/// close the tip came.
-#[derive(Clone, Debug)]
-pub struct InverseSolution {
-    /// Tension of every tendon (N), in the robot's order (held tendons keep theirs).
-    pub tensions: Vec<f64>,
-    /// The forward solution at these tensions.
-    pub solution: Solution,
-    /// Weighted tip error |e| (m): position error and, with a target orientation, the
-    /// rotation angle times the orientation weight.
-    pub residual: f64,
-    /// Tip position error |p_tip - p*| (m).
-    pub position_error: f64,
-    /// Tip rotation error, the angle of R_tip R*^T (rad), when the target has an orientation.
-    pub orientation_error: Option<f64>,
-    /// Whether the residual is within the tolerance (only for [`FitTermination::Reached`]).
-    pub reachable: bool,
-    /// Why the iteration stopped.
-    pub termination: FitTermination,
-    /// Where each tendon's tension sits relative to [0, `max_tension`].
-    pub bounds: Vec<Bound>,
-    /// Trial steps taken (accepted and rejected).
-    pub iterations: usize,
-    /// Forward collocation solves (the start plus one per trial step).
-    pub forward_solves: usize,
-    /// Sensitivity evaluations (the start plus one per accepted step, when needed).
-    pub jacobians: usize,
-    /// Residual (m) at the start and after each accepted step.
-    pub history: Vec<f64>,
-    /// Every trial step: cost F = |e|^2 / 2 (m^2), largest tension change (N), damping mu,
-    /// gain ratio, whether accepted.
-    pub trials: Vec<FitIteration>,
-    /// The tolerance the residual was tested against (m).
-    pub tolerance: f64,
-    /// The upper tension bound (N).
-    pub max_tension: f64,
-    /// The target.
-    pub target: Target,
-}
-
-impl InverseSolution {
-    /// Achieved tip position (m), world frame.
-    pub fn tip_position(&self) -> Vector3<f64> {
-        self.solution.tip_position()
-    }
-
-    /// A few sentences for a person: whether the target was reached, how far the tip
-    /// stayed, why the iteration stopped, which tendons sit at their bounds (numbered from
-    /// 1, as on the command line), and, with more free tendons than target coordinates, which
-    /// of the many solutions this is (the one reached from the starting tensions, close to
-    /// the nearest to them; not the least-norm one).
-    pub fn explain(&self) -> String {
-        let mut text = if self.reachable {
-            format!(
-                "target reached: weighted tip error {:.3e} m <= tolerance {:.1e} m after {} iterations",
-                self.residual, self.tolerance, self.iterations
-            )
-        } else {
-            let mut t = format!(
-                "target unreachable with tensions in [0, {} N]: the closest tip found is {:.6} m from the target \
-                 position (weighted tip error {:.6} m > tolerance {:.1e} m)",
-                self.max_tension, self.position_error, self.residual, self.tolerance
-            );
-            if self.termination == FitTermination::MaxIterations {
-                t.push_str(&format!(
-                    "; not settled after {} iterations, so more iterations may still reach it",
-                    self.iterations
-                ));
-            }
-            t
-        };
-        if let Some(angle) = self.orientation_error {
-            text.push_str(&format!("; orientation error {:.4} deg", angle.to_degrees()));
-        }
-        if !self.reachable {
-            text.push_str(&format!("; {}", self.termination));
-        }
-        let list = |b: Bound| {
-            let items: Vec<String> = (0..self.bounds.len())
-                .filter(|&i| self.bounds[i] == b)
-                // 1-based, as the command line and robot files number tendons.
-                .map(|i| format!("tendon {}", i + 1))
-                .collect();
-            items.join(", ")
-        };
-        let saturated = list(Bound::Saturated);
-        if !saturated.is_empty() {
-            text.push_str(&format!("; at the upper bound {} N: {saturated}", self.max_tension));
-        }
-        let slack = list(Bound::Slack);
-        if !slack.is_empty() {
-            text.push_str(&format!("; slack (0 N): {slack}"));
-        }
-        let free = self.bounds.iter().filter(|&&b| b != Bound::Held).count();
-        let coordinates = if self.target.orientation.is_some() { 6 } else { 3 };
-        if free > coordinates {
-            // What the iteration does (module docs): damped least-squares steps from the
-            // starting tensions, each without a component in the null space of the tip
-            // Jacobian at its iterate.
-            text.push_str(&format!(
-                "; {free} free tendons for {coordinates} target coordinates, so many tensions give this tip: \
-                 these are the ones reached from the starting tensions, each step the smallest tension change \
-                 that makes its progress (no component along changes the tip does not see, such as pulling \
-                 opposing tendons together), so they keep the start's co-contraction: close to the solution \
-                 nearest the start, not the least-norm tensions (start from lower tensions for lower ones)"
-            ));
-        }
-        if !self.reachable {
-            // A tip cannot get farther from the base than the rod is long (tendons only
-            // compress it), so this distance bounds the position error from below.
-            let distance = (self.target.position - self.solution.base().p).norm();
-            let length = self.solution.length();
-            if distance > length {
-                text.push_str(&format!(
-                    "; the target is {distance:.6} m from the base, farther than the rod length {length} m, \
-                     so no tensions reach it (the position error is at least about {:.6} m)",
-                    distance - length
-                ));
-            }
-        }
-        text
-    }
-}
 
 /// Tensions within [0, `max_tension`] that bring the tip of `robot` to `target`, by bounded
 /// Levenberg-Marquardt on the tip sensitivities (module docs).
@@ -300,38 +196,84 @@ impl InverseSolution {
 /// assert!((found.tip_position() - goal).norm() <= options.tolerance);
 /// ```
 pub fn solve_tensions(robot: &Robot, target: &Target, options: &InverseOptions) -> Result<InverseSolution> {
+    let adjusted = Adjusted::Tensions {
+        max: options.max_tension,
+    };
+    minimize(robot, target, options, adjusted)
+}
+
+/// Actuator pull-ins within [`min_displacement`, `max_displacement`] that bring the tip of
+/// `robot` to `target`, by the same bounded Levenberg-Marquardt on d(tip)/dq (module docs,
+/// "Pull-ins"). The free tendons become displacement-controlled: a tension-controlled one
+/// starts at the pull-in its tension holds, a displacement-controlled one at its pull-in,
+/// both clamped into the bounds. Slack tendons are reported as [`Bound::Slack`]; the
+/// returned pull-in of a tendon that ends slack is the largest that leaves the same shape
+/// (the tendon just taut at 0 N), unless a bound holds it lower.
+///
+/// [`min_displacement`]: InverseOptions::min_displacement
+/// [`max_displacement`]: InverseOptions::max_displacement
+///
+/// # Errors
+/// As [`solve_tensions`], with `options.min_displacement` not finite and
+/// `options.max_displacement` not finite or not above the lower bound, or not below an
+/// inextensible free tendon's path length, in place of `options.max_tension`.
+///
+/// # Examples
+/// ```
+/// use tdcr::fit::inverse::{InverseOptions, Target, solve_displacements};
+/// let mut robot = tdcr::cases::prototype();
+/// robot.tendons[1].displacement = Some(0.003); // pull tendon 2 in by 3 mm
+/// let options = InverseOptions::displacements(0.0, 0.01);
+/// let goal = tdcr::collocation::solve(&robot, &options.solver).unwrap().tip_position();
+/// robot.tendons[1].displacement = None; // forget it: start from the tensions (all 0)
+/// let found = solve_displacements(&robot, &Target::position(goal), &options).unwrap();
+/// assert!(found.reachable);
+/// assert!((found.tip_position() - goal).norm() <= options.tolerance);
+/// ```
+pub fn solve_displacements(robot: &Robot, target: &Target, options: &InverseOptions) -> Result<InverseSolution> {
+    let adjusted = Adjusted::Displacements {
+        min: options.min_displacement,
+        max: options.max_displacement,
+    };
+    minimize(robot, target, options, adjusted)
+}
+
+/// The bounded Levenberg-Marquardt iteration (module docs) on the inputs `adjusted`.
+fn minimize(robot: &Robot, target: &Target, options: &InverseOptions, adjusted: Adjusted) -> Result<InverseSolution> {
     robot.validate()?;
-    let free = validate(robot, target, options)?;
-    let max = options.max_tension;
+    let inputs = Inputs {
+        adjusted,
+        free: validate(robot, target, options, adjusted)?,
+    };
     let weight = options.orientation_weight.unwrap_or_else(|| robot.length());
-    let mut current = robot.clone();
-    for &i in &free {
-        let t = &mut current.tendons[i].tension;
-        *t = t.clamp(0.0, max);
-    }
     let mut solver = Solver::new(options.solver.clone());
-    let mut solution = solver.solve(&current)?;
-    let (mut forward_solves, mut jacobians, mut iterations) = (1, 0, 0);
+    let (mut current, mut solution, mut forward_solves) = inputs.start(robot, &mut solver)?;
+    let (mut jacobians, mut iterations) = (0, 0);
     let mut e = tip_error(&solution, target, weight);
     let mut history = vec![e.norm()];
     // Damping mu (set from the first Jacobian) and its growth factor nu on rejection.
     let mut damping: Option<Damping> = None;
     let mut trials = Vec::new();
-    let mut jacobian: Option<DMatrix<f64>> = None;
+    // The last linearization, kept when a step is rejected (the iterate did not move).
+    let mut linearization: Option<(DMatrix<f64>, Constraints)> = None;
+    // The tension scale of the step test: the bound, or for pull-ins the tensions that
+    // bend the rod through about a radian (E I / (L |r|) at the free tendons' offsets).
+    let scale = inputs.tension_scale(&current);
     let termination = loop {
         if e.norm() <= options.tolerance {
             break FitTermination::Reached;
         }
-        let J = match jacobian.take() {
-            Some(J) => J,
+        let tau = inputs.tensions(&current);
+        let (J, constraints) = match linearization.take() {
+            Some(l) => l,
             None => {
                 jacobians += 1;
-                error_jacobian(&current, &solution, weight, &e, &free)?
+                let l = inputs.linearize(&current, &solution, &tau)?;
+                (error_jacobian(&l.tip, weight, &e), l.constraints)
             }
         };
-        let tau = DVector::from_iterator(free.len(), free.iter().map(|&i| current.tendons[i].tension));
         let g = J.transpose() * &e;
-        if stationary(&J, &g, &e, &tau, max) {
+        if stationary(&J, &g, &e, &constraints) {
             break FitTermination::Stationary;
         }
         if iterations >= options.max_iterations {
@@ -340,19 +282,17 @@ pub fn solve_tensions(robot: &Robot, target: &Target, options: &InverseOptions) 
         let JtJ = J.transpose() * &J;
         let largest = JtJ.diagonal().amax();
         if largest <= 0.0 {
-            // No free tendon moves the tip at all (caught by `stationary` unless rounding).
+            // No free input moves the tip at all (caught by `stationary` unless rounding).
             break FitTermination::Stationary;
         }
         let damping = damping.get_or_insert_with(|| Damping::new(INITIAL_DAMPING * largest));
         let mu = damping.value();
         let mut H = JtJ;
-        for i in 0..free.len() {
+        for i in 0..tau.len() {
             H[(i, i)] += mu;
         }
-        let lower = -&tau;
-        let upper = tau.map(|t| max - t);
-        let d = box_qp(&H, &g, &lower, &upper);
-        if d.amax() <= STEP_TOLERANCE * max {
+        let d = solve_qp(&H, &g, &constraints);
+        if d.amax() <= STEP_TOLERANCE * scale {
             break FitTermination::NoProgress;
         }
         // Decrease of F predicted by the undamped linear model: positive for the minimizer
@@ -363,9 +303,7 @@ pub fn solve_tensions(robot: &Robot, target: &Target, options: &InverseOptions) 
             break FitTermination::NoProgress;
         }
         let mut trial = current.clone();
-        for (k, &i) in free.iter().enumerate() {
-            trial.tendons[i].tension = (tau[k] + d[k]).clamp(0.0, max);
-        }
+        inputs.set(&mut trial, &(&tau + &d));
         iterations += 1;
         forward_solves += 1;
         let trial_solution = solver.solve_from(&trial, &solution)?;
@@ -381,30 +319,23 @@ pub fn solve_tensions(robot: &Robot, target: &Target, options: &InverseOptions) 
             e = e_trial;
             history.push(e.norm());
         } else {
-            jacobian = Some(J);
+            linearization = Some((J, constraints));
         }
     };
-    let tensions: Vec<f64> = current.tendons.iter().map(|t| t.tension).collect();
-    let bounds = (0..tensions.len())
-        .map(|i| {
-            if !free.contains(&i) {
-                Bound::Held
-            } else if tensions[i] <= 0.0 {
-                Bound::Slack
-            } else if tensions[i] >= max {
-                Bound::Saturated
-            } else {
-                Bound::Inside
-            }
-        })
+    let (current, solution, finishing) = inputs.finish(current, solution, &mut solver)?;
+    forward_solves += finishing;
+    let e = tip_error(&solution, target, weight);
+    let bounds = (0..current.tendons.len())
+        .map(|i| inputs.bound(i, &current, &solution))
         .collect();
     let tip = solution.tip();
     Ok(InverseSolution {
-        tensions,
+        tensions: solution.tensions(),
+        displacements: solution.tendons.iter().map(|t| t.displacement).collect(),
         residual: e.norm(),
         position_error: (tip.p - target.position).norm(),
         orientation_error: target.orientation.map(|R| so3::log(&(tip.R * R.transpose())).norm()),
-        reachable: termination == FitTermination::Reached,
+        reachable: termination == FitTermination::Reached && e.norm() <= options.tolerance,
         termination,
         bounds,
         iterations,
@@ -413,7 +344,7 @@ pub fn solve_tensions(robot: &Robot, target: &Target, options: &InverseOptions) 
         history,
         trials,
         tolerance: options.tolerance,
-        max_tension: max,
+        adjusted,
         target: target.clone(),
         solution,
     })
@@ -432,47 +363,32 @@ fn tip_error(solution: &Solution, target: &Target, weight: f64) -> DVector<f64> 
     }
 }
 
-/// de/d tau for the free tendons: one column per free tendon, rows as [`tip_error`]. The
-/// rotation rows map the world-frame rotation vector omega (R -> exp(hat(omega)) R) through
-/// d log(exp(hat(omega)) exp(hat(e_R))) / d omega = J_l(e_R)^-1 = J_r(-e_R)^-1.
-fn error_jacobian(
-    robot: &Robot,
-    solution: &Solution,
-    weight: f64,
-    e: &DVector<f64>,
-    free: &[usize],
-) -> Result<DMatrix<f64>> {
-    let mut sens = Sensitivity::new(robot, solution)?;
-    let rows = e.len();
-    let map = (rows == 6).then(|| {
+/// de/d(inputs) from the tip pose's derivative columns `tip` (6 x free): rows as
+/// [`tip_error`]. The rotation rows map the world-frame rotation vector omega
+/// (R -> exp(hat(omega)) R) through d log(exp(hat(omega)) exp(hat(e_R))) / d omega =
+/// J_l(e_R)^-1 = J_r(-e_R)^-1.
+fn error_jacobian(tip: &DMatrix<f64>, weight: f64, e: &DVector<f64>) -> DMatrix<f64> {
+    let mut J = tip.rows(0, 3).into_owned();
+    if e.len() == 6 {
         let e_R = Vector3::new(e[3], e[4], e[5]) / weight;
-        so3::right_jacobian_inv(&(-e_R)) * weight
-    });
-    let mut J = DMatrix::zeros(rows, free.len());
-    for (k, &i) in free.iter().enumerate() {
-        let d = sens.tension(i)?;
-        let tip = &d[d.len() - 1];
-        for r in 0..3 {
-            J[(r, k)] = tip.p[r];
-        }
-        if let Some(m) = map {
-            let w = m * tip.rotation;
-            for r in 0..3 {
-                J[(3 + r, k)] = w[r];
-            }
-        }
+        let map = so3::right_jacobian_inv(&(-e_R)) * weight;
+        let rotation = map * tip.rows(3, 3);
+        J = J.insert_rows(3, 3, 0.0);
+        J.rows_mut(3, 3).copy_from(&rotation);
     }
-    Ok(J)
+    J
 }
 
-/// Whether the gradient g = J^T e, projected onto the box [0, max], vanishes relative to
-/// |J_i| |e| (the cosine between e and each free column) for every free tendon.
-fn stationary(J: &DMatrix<f64>, g: &DVector<f64>, e: &DVector<f64>, tau: &DVector<f64>, max: f64) -> bool {
+/// Whether the gradient g = J^T e, projected onto the cone of moves the active constraints
+/// allow (the projection of -g, by the QP min |d|^2 / 2 + g^T d under them), vanishes
+/// relative to |J_i| |e| (the cosine between e and each free column) for every free input.
+/// On a box this is the usual projected gradient: g_i, or 0 where a bound blocks -g_i.
+fn stationary(J: &DMatrix<f64>, g: &DVector<f64>, e: &DVector<f64>, constraints: &Constraints) -> bool {
+    let identity = DMatrix::identity(g.len(), g.len());
+    let projected = solve_qp(&identity, g, &constraints.active());
     let norm_e = e.norm();
     (0..g.len()).all(|i| {
-        // Moving tension i by -g_i decreases F; a bound blocks that direction.
-        let blocked = (tau[i] <= 0.0 && g[i] >= 0.0) || (tau[i] >= max && g[i] <= 0.0);
         let scale = J.column(i).norm() * norm_e;
-        blocked || scale == 0.0 || g[i].abs() <= GRADIENT_TOLERANCE * scale
+        scale == 0.0 || projected[i].abs() <= GRADIENT_TOLERANCE * scale
     })
 }

@@ -5,6 +5,7 @@
 use super::ROTATION_TOLERANCE;
 use crate::collocation;
 use crate::error::{Result, invalid};
+use crate::model::length;
 use crate::model::robot::Robot;
 use crate::so3;
 use nalgebra::{Matrix3, Vector3};
@@ -37,13 +38,23 @@ impl Target {
     }
 }
 
-/// Options of [`super::solve_tensions`]. `max_tension` has no meaningful default and must be set:
-/// `InverseOptions { max_tension: 5.0, ..Default::default() }` or `InverseOptions::new(5.0)`.
+/// Options of [`super::solve_tensions`] and [`super::solve_displacements`]. The bounds of the
+/// adjusted inputs have no meaningful default and must be set: `InverseOptions::new(5.0)`
+/// (tensions in [0, 5 N]) or `InverseOptions::displacements(0.0, 0.01)` (pull-ins in
+/// [0, 10 mm]), or `InverseOptions { max_tension: 5.0, ..Default::default() }`.
 #[derive(Clone, Debug, PartialEq)]
 pub struct InverseOptions {
-    /// Upper bound tau_max for every tendon that may change (N), > 0 and finite; the lower
-    /// bound is 0 (a string cannot push). Default 0, which is rejected: set it.
+    /// [`super::solve_tensions`]: upper bound tau_max for every tendon that may change (N),
+    /// positive and finite; the lower bound is 0 (a string cannot push). Default 0, which
+    /// is rejected: set it.
     pub max_tension: f64,
+    /// [`super::solve_displacements`]: lower bound of every adjusted pull-in (m), finite; a
+    /// negative value lets the actuator pay out tendon past its reference. Default 0.
+    pub min_displacement: f64,
+    /// [`super::solve_displacements`]: upper bound of every adjusted pull-in (m), the
+    /// actuator's stroke, finite and above `min_displacement` (and, for an inextensible
+    /// tendon, below its reference length). Default 0, which is rejected: set it.
+    pub max_displacement: f64,
     /// Weighted tip error |e| at or below which the target counts as reached (m). Default
     /// 1e-6.
     pub tolerance: f64,
@@ -55,8 +66,8 @@ pub struct InverseOptions {
     /// Options of every forward collocation solve. Default: [`collocation::Options`]'s
     /// default (32 intervals, fixed mesh).
     pub solver: collocation::Options,
-    /// Indices (0-based) of the tendons whose tension may change; the others keep the
-    /// robot's tension and are not bounded by `max_tension`. Default `None`: all tendons.
+    /// Indices (0-based) of the tendons whose input may change; the others keep the robot's
+    /// input (tension or pull-in) and are not bounded. Default `None`: all tendons.
     pub free_tendons: Option<Vec<usize>>,
 }
 
@@ -64,6 +75,8 @@ impl Default for InverseOptions {
     fn default() -> Self {
         InverseOptions {
             max_tension: 0.0,
+            min_displacement: 0.0,
+            max_displacement: 0.0,
             tolerance: 1e-6,
             max_iterations: 50,
             orientation_weight: None,
@@ -83,10 +96,52 @@ impl InverseOptions {
             ..Default::default()
         }
     }
+
+    /// Default options with the pull-in bounds `min_displacement`..`max_displacement` (m)
+    /// for [`super::solve_displacements`].
+    pub fn displacements(min_displacement: f64, max_displacement: f64) -> Self {
+        InverseOptions {
+            min_displacement,
+            max_displacement,
+            ..Default::default()
+        }
+    }
 }
 
-/// Checks the target and options; returns the free tendon indices.
-pub(super) fn validate(robot: &Robot, target: &Target, options: &InverseOptions) -> Result<Vec<usize>> {
+/// The inputs inverse statics adjusts, with their bounds.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Adjusted {
+    /// Tensions in [0, `max`] (N).
+    Tensions {
+        /// Upper bound (N).
+        max: f64,
+    },
+    /// Actuator pull-ins in [`min`, `max`] (m).
+    Displacements {
+        /// Lower bound (m).
+        min: f64,
+        /// Upper bound (m).
+        max: f64,
+    },
+}
+
+impl Adjusted {
+    /// The lower and upper bounds of every adjusted input (N or m).
+    pub fn range(&self) -> (f64, f64) {
+        match *self {
+            Adjusted::Tensions { max } => (0.0, max),
+            Adjusted::Displacements { min, max } => (min, max),
+        }
+    }
+}
+
+/// Checks the target and options for adjusting `adjusted`; returns the free tendon indices.
+pub(super) fn validate(
+    robot: &Robot,
+    target: &Target,
+    options: &InverseOptions,
+    adjusted: Adjusted,
+) -> Result<Vec<usize>> {
     let p = target.position;
     if p.iter().any(|x| !x.is_finite()) {
         return Err(invalid(
@@ -112,13 +167,33 @@ pub(super) fn validate(robot: &Robot, target: &Target, options: &InverseOptions)
             ));
         }
     }
-    let max = options.max_tension;
-    if !(max.is_finite() && max > 0.0) {
-        return Err(invalid(
-            "options.max_tension",
-            format!("is {max} N"),
-            "set the upper tension bound to a positive, finite value in N (it has no default)",
-        ));
+    match adjusted {
+        Adjusted::Tensions { max } => {
+            if !(max.is_finite() && max > 0.0) {
+                return Err(invalid(
+                    "options.max_tension",
+                    format!("is {max} N"),
+                    "set the upper tension bound to a positive, finite value in N (it has no default)",
+                ));
+            }
+        }
+        Adjusted::Displacements { min, max } => {
+            if !min.is_finite() {
+                return Err(invalid(
+                    "options.min_displacement",
+                    format!("is {min} m"),
+                    "give a finite lower pull-in bound in m (default 0)",
+                ));
+            }
+            if !(max.is_finite() && max > min) {
+                return Err(invalid(
+                    "options.max_displacement",
+                    format!("is {max} m, with min_displacement {min} m"),
+                    "set the actuator's stroke: a finite upper pull-in bound in m above min_displacement \
+                     (it has no default)",
+                ));
+            }
+        }
     }
     let tol = options.tolerance;
     if !(tol.is_finite() && tol > 0.0) {
@@ -192,5 +267,22 @@ pub(super) fn validate(robot: &Robot, target: &Target, options: &InverseOptions)
             list.clone()
         }
     };
+    if let Adjusted::Displacements { max, .. } = adjusted {
+        for &i in &free {
+            let t = &robot.tendons[i];
+            let path = length::reference_length(robot, i);
+            // No shape takes up an inextensible tendon's whole path (docs/actuation.md).
+            if t.stiffness.is_none() && max >= path {
+                return Err(invalid(
+                    "options.max_displacement",
+                    format!(
+                        "is {max} m, but tendon {} (inextensible) runs {path:.6} m along the backbone",
+                        i + 1
+                    ),
+                    "give a stroke below the tendon's path length, or make the tendon elastic",
+                ));
+            }
+        }
+    }
     Ok(free)
 }
