@@ -274,24 +274,13 @@ fn solve_impl(robot: &Robot, options: &Options, warm: Option<&Solution>, cache: 
         (Some(c), Some(w)) => c.mesh == mesh && c.solver == options.linear_solver && c.last.as_ref() == Some(w),
         _ => false,
     };
-    let cold = |mesh: &Mesh| guess::initial(&model, &mesh.nodes, options.initial_guess);
     let (x0, choose) = match warm {
         Some(w) if reuse => (w, Choose::FromWarm),
-        Some(w) => better_start(&System::new(model, mesh.clone()), w, cold(&mesh)),
-        None => {
-            let mut x0 = cold(&mesh);
-            // Error-controlled cold starts begin on a mesh that resolves the initial guess and
-            // the routings (the resolution rule).
-            if options.tolerance.is_some() && options.mesh.is_none() {
-                let floor = options.intervals.max(resolution::required(robot).intervals);
-                let needed = refine::start_intervals(robot, &x0, floor).min(options.max_intervals);
-                if needed > mesh.intervals() {
-                    mesh = Mesh::uniform(robot, needed)?;
-                    x0 = cold(&mesh);
-                }
-            }
-            (x0, Choose::FromCold)
+        Some(w) => {
+            let cold = guess::initial(&model, &mesh.nodes, options.initial_guess);
+            better_start(&System::new(model, mesh.clone()), w, cold)
         }
+        None => (cold_start(robot, options, &mut mesh)?, Choose::FromCold),
     };
     let mut level =
         solve_on_mesh(&model, mesh, x0, reuse, choose, options, &mut report, cache).map_err(|e| timed(e, start))?;
@@ -318,6 +307,27 @@ fn solve_impl(robot: &Robot, options: &Options, warm: Option<&Solution>, cache: 
     report.timings.total = start.elapsed();
     let rates = correction.as_ref().map(|c| c.node_rates.as_slice());
     nodes::solution(&model, &x, &segment_ends(&mesh), rates, report)
+}
+
+/// The initial guess of a cold start on `mesh`. With error control and no fixed mesh, the
+/// start moves first to a mesh that resolves the initial guess and the routings (the
+/// resolution rule), when `mesh` does not.
+///
+/// # Errors
+/// [`Error::InvalidInput`] if the finer mesh cannot be built.
+fn cold_start(robot: &Robot, options: &Options, mesh: &mut Mesh) -> Result<Vec<State>> {
+    let model = Model::new(robot);
+    let x0 = guess::initial(&model, &mesh.nodes, options.initial_guess);
+    if options.tolerance.is_none() || options.mesh.is_some() {
+        return Ok(x0);
+    }
+    let floor = options.intervals.max(resolution::required(robot).intervals);
+    let needed = refine::start_intervals(robot, &x0, floor).min(options.max_intervals);
+    if needed <= mesh.intervals() {
+        return Ok(x0);
+    }
+    *mesh = Mesh::uniform(robot, needed)?;
+    Ok(guess::initial(&model, &mesh.nodes, options.initial_guess))
 }
 
 /// A converged solve on one mesh: its states and their error estimate.

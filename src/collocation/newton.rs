@@ -5,12 +5,17 @@
 //! matrix values, refactors numerically and solves without allocating. Every step is
 //! checked for finiteness (a numerically zero pivot shows up as inf/NaN): a singular matrix
 //! is a [`Termination::SingularJacobian`], never a panic.
+//!
+//! One loop serves the plain system F(x) = 0 and the system bordered by unknowns of its own
+//! (the tensions of displacement-controlled tendons and their length constraints,
+//! `collocation/actuation.rs`): the border ([`Border`]) turns each step of J into the
+//! bordered step and adds its rows to the residual, so that chord steps, the line search and
+//! the stopping tests are the same code for both.
 
 use super::MAX_ITERATIONS;
 use super::linear::{Linear, LinearSolver};
 use super::system::System;
-use super::unknowns::nonzeros;
-use crate::error::Result;
+use super::unknowns::{self, nonzeros};
 use crate::report::{Iteration, SolveReport, Stability, Termination};
 use crate::solution::State;
 use std::time::Instant;
@@ -80,7 +85,7 @@ impl Workspace {
     ///
     /// # Errors
     /// [`crate::Error::InvalidInput`] if faer rejects the pattern (cannot happen for a valid mesh).
-    pub fn new(system: &System, solver: LinearSolver) -> Result<Self> {
+    pub fn new(system: &System, solver: LinearSolver) -> crate::error::Result<Self> {
         let n = system.unknowns();
         Ok(Workspace {
             linear: Linear::new(&system.mesh, solver)?,
@@ -182,18 +187,6 @@ impl Workspace {
         })
     }
 
-    /// Factors the Jacobian `values` (in [`pattern`](super::unknowns::pattern) order) and
-    /// solves J x = rhs, adding the times to `report`: a Newton step of a solver that builds
-    /// its own right-hand side (the bordered steps of `collocation/actuation.rs`). None for a zero
-    /// pivot or a non-finite result.
-    pub fn factor_solve(&mut self, values: &[f64], rhs: &[f64], report: &mut SolveReport) -> Option<&[f64]> {
-        self.values.copy_from_slice(values);
-        for (r, f) in self.residual.iter_mut().zip(rhs) {
-            *r = -f;
-        }
-        self.solve(report).then_some(&self.step[..])
-    }
-
     /// Whether the workspace holds the factors of a successful solve.
     pub fn has_factors(&self) -> bool {
         self.factored
@@ -223,13 +216,131 @@ impl Workspace {
     }
 }
 
+/// Which point of a Newton step an evaluation belongs to.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Point {
+    /// The current iterate.
+    Current,
+    /// The trial point of a step (a line-search fraction of it).
+    Trial,
+}
+
+/// Unknowns y and rows psi(x, y) = 0 that border the collocation system F(x, y) = 0, for
+/// [`run_bordered`]: the tensions of displacement-controlled tendons and their length
+/// constraints (`collocation/actuation.rs`). Newton's loop holds x, F and the step dx and
+/// takes every decision (chord or Newton step, line search, stopping); the border holds y,
+/// psi and its step dy, and the collocation system at its y (F depends on the tensions). Its
+/// rows count in the residual norm and the merit, its scaled step in the step norm.
+/// [`NoBorder`] is the plain system's.
+pub(crate) trait Border {
+    /// Runs `f` on the collocation system at the border unknowns of `point`.
+    fn on<R>(&mut self, point: Point, f: impl FnOnce(&System) -> R) -> R;
+
+    /// Evaluates the border's rows at the states `x` and the unknowns of `point`, kept as
+    /// that point's rows.
+    fn rows(&mut self, point: Point, x: &[State]);
+
+    /// The rows of `point` (scaled, dimensionless), as last evaluated.
+    fn residual(&self, point: Point) -> &[f64];
+
+    /// Called after Newton has factored the Jacobian J at the current point (states `x`):
+    /// computes what the steps need from this linearization.
+    ///
+    /// # Errors
+    /// The [`Termination`] to stop with (a model breakdown, a singular solve).
+    fn factored(&mut self, x: &[State], at: &mut Linearization, report: &mut SolveReport) -> Result<(), Termination>;
+
+    /// The bordered step at `point` (states `x`): `a` holds J^-1 (-F) for the factored J and
+    /// the residual F at `point`, and becomes dx. The border's step dy goes with it: for
+    /// [`Point::Current`] it is kept for [`Border::trial`]; for [`Point::Trial`] (a simplified
+    /// correction, measured only) it is not. Returns the max-norm of the scaled dy, None when
+    /// the border's own system is singular.
+    fn step(&mut self, point: Point, x: &[State], a: &mut [f64]) -> Option<f64>;
+
+    /// Sets the trial unknowns to y + alpha dy.
+    fn trial(&mut self, alpha: f64);
+
+    /// Makes the trial point's unknowns and rows the current ones.
+    fn accept(&mut self);
+}
+
+/// The border of no unknowns: Newton on the plain collocation system.
+pub(crate) struct NoBorder<'s, 'a>(pub &'s System<'a>);
+
+impl Border for NoBorder<'_, '_> {
+    fn on<R>(&mut self, _: Point, f: impl FnOnce(&System) -> R) -> R {
+        f(self.0)
+    }
+    fn rows(&mut self, _: Point, _: &[State]) {}
+    fn residual(&self, _: Point) -> &[f64] {
+        &[]
+    }
+    fn factored(&mut self, _: &[State], _: &mut Linearization, _: &mut SolveReport) -> Result<(), Termination> {
+        Ok(())
+    }
+    fn step(&mut self, _: Point, _: &[State], _: &mut [f64]) -> Option<f64> {
+        Some(0.0)
+    }
+    fn trial(&mut self, _: f64) {}
+    fn accept(&mut self) {}
+}
+
+/// Newton's linearization at the current point, lent to a border: the collocation residual F
+/// there and the factors of its Jacobian J, for further right-hand sides.
+pub(crate) struct Linearization<'w> {
+    linear: &'w mut Linear,
+    residual: &'w [f64],
+}
+
+impl Linearization<'_> {
+    /// The collocation residual F at the current point.
+    pub(crate) fn residual(&self) -> &[f64] {
+        self.residual
+    }
+
+    /// Solves J out = rhs with the factors (timed into `report`); false for a non-finite
+    /// result.
+    pub(crate) fn solve(&mut self, rhs: &[f64], out: &mut [f64], report: &mut SolveReport) -> bool {
+        let t = Instant::now();
+        self.linear.solve_again(rhs, out);
+        report.timings.solve += t.elapsed();
+        out.iter().all(|v| v.is_finite())
+    }
+}
+
+/// The residual of `system` at the states `x` into `out`, counted and timed in `report`;
+/// false on a model breakdown.
+pub(crate) fn residual(system: &System, x: &[State], out: &mut [f64], report: &mut SolveReport) -> bool {
+    let t = Instant::now();
+    let ok = system.residual(x, out).is_ok();
+    report.timings.assembly += t.elapsed();
+    report.evaluations.residual += 1;
+    report.evaluations.equations += system.rate_evaluations();
+    ok
+}
+
+/// The collocation residual at the states `x` and `point`'s border unknowns into `out`, and
+/// the border's rows there; false on a model breakdown.
+fn evaluate<B: Border>(border: &mut B, point: Point, x: &[State], out: &mut [f64], report: &mut SolveReport) -> bool {
+    let ok = border.on(point, |system| residual(system, x, out, report));
+    border.rows(point, x);
+    ok
+}
+
 fn max_norm(v: &[f64]) -> f64 {
     v.iter()
         .fold(0.0, |m, x| if x.is_nan() { f64::NAN } else { m.max(x.abs()) })
 }
 
-fn merit(v: &[f64]) -> f64 {
-    0.5 * v.iter().map(|x| x * x).sum::<f64>()
+/// The scaled residual max-norm over the collocation rows and the border's.
+fn norm(residual: &[f64], border: &[f64]) -> f64 {
+    let (a, b) = (max_norm(residual), max_norm(border));
+    if a.is_nan() || b.is_nan() { f64::NAN } else { a.max(b) }
+}
+
+/// The merit 0.5 |(F, psi)|^2 of the line search.
+fn merit(residual: &[f64], border: &[f64]) -> f64 {
+    0.5 * residual.iter().chain(border).map(|x| x * x).sum::<f64>()
 }
 
 /// Runs damped Newton from `x` (updated in place). Returns the termination reason and the
@@ -248,18 +359,32 @@ pub fn run(
     settings: &Settings,
     report: &mut SolveReport,
 ) -> (Termination, usize) {
+    run_bordered(&mut NoBorder(system), ws, x, settings, report)
+}
+
+/// [`run`] on the collocation system bordered by `border`'s unknowns and rows (docs/actuation.md
+/// for the tensions of displacement-controlled tendons): the same steps and tests, with the
+/// border's rows in the residual norm and the merit and its scaled step in the step norm.
+/// The worst row of the result counts the border's rows after the collocation rows.
+pub(crate) fn run_bordered<B: Border>(
+    border: &mut B,
+    ws: &mut Workspace,
+    x: &mut Vec<State>,
+    settings: &Settings,
+    report: &mut SolveReport,
+) -> (Termination, usize) {
+    use Point::{Current, Trial};
     report.history.clear();
     // Reserved up front so that recording iterations never allocates inside the loop; at
     // most MAX_ITERATIONS records, the bound `Options::validate` enforces, so that a caller
     // of this function with a huge limit cannot overflow the reservation.
     report.history.reserve(settings.max_iterations.min(MAX_ITERATIONS));
-    let t = Instant::now();
-    let first = system.residual(x, &mut ws.residual);
-    report.timings.assembly += t.elapsed();
-    report.evaluations.residual += 1;
-    report.evaluations.equations += system.rate_evaluations();
-    if first.is_err() || !ws.residual.iter().all(|r| r.is_finite()) {
-        return (Termination::NonFinite, worst_row(&ws.residual));
+    let length = border.on(Current, |system| system.model.robot.length());
+    let worst = |ws: &Workspace, border: &B| worst_row(&ws.residual, border.residual(Current));
+    if !evaluate(border, Current, x, &mut ws.residual, report)
+        || !norm(&ws.residual, border.residual(Current)).is_finite()
+    {
+        return (Termination::NonFinite, worst(ws, border));
     }
     let mut chord = settings.reuse_factors;
     // Norms of the last two steps taken (full steps only: a damped one says nothing of the
@@ -268,7 +393,7 @@ pub fn run(
     // Whether the last step was a Newton step (quadratic convergence) or a chord step.
     let mut last_fresh = false;
     for iteration in 0..settings.max_iterations {
-        let norm = max_norm(&ws.residual);
+        let norm_x = norm(&ws.residual, border.residual(Current));
         let theta = last_step / before_last;
         // One step: its length bounds the error; two: the contraction extrapolates it; steps
         // that no longer contract have reached the rounding floor.
@@ -285,23 +410,23 @@ pub fn run(
         };
         // At least one step: a guess (the rigid estimate of a lightly loaded rod, say) can
         // meet an absolute tolerance without being the discrete solution.
-        if norm <= settings.tolerance && iteration > 0 && (settled || norm == 0.0) {
-            report.residual = norm;
-            return (Termination::Converged, worst_row(&ws.residual));
+        if norm_x <= settings.tolerance && iteration > 0 && (settled || norm_x == 0.0) {
+            report.residual = norm_x;
+            return (Termination::Converged, worst(ws, border));
         }
         report.iterations += 1;
-        if chord && ws.chord(report) {
-            let step_norm = max_norm(&ws.step);
-            system.retract(x, &ws.step, 1.0, &mut ws.trial);
-            let t = Instant::now();
-            let ok = system.residual(&ws.trial, &mut ws.trial_residual).is_ok();
-            report.timings.assembly += t.elapsed();
-            report.evaluations.residual += 1;
-            report.evaluations.equations += system.rate_evaluations();
-            let trial_norm = max_norm(&ws.trial_residual);
-            if ok && (trial_norm <= settings.tolerance || trial_norm <= CHORD_CONTRACTION * norm) {
+        if chord
+            && ws.chord(report)
+            && let Some(border_step) = border.step(Current, x, &mut ws.step)
+        {
+            let step_norm = max_norm(&ws.step).max(border_step);
+            unknowns::retract(x, &ws.step, 1.0, length, &mut ws.trial);
+            border.trial(1.0);
+            let ok = evaluate(border, Trial, &ws.trial, &mut ws.trial_residual, report);
+            let trial_norm = norm(&ws.trial_residual, border.residual(Trial));
+            if ok && (trial_norm <= settings.tolerance || trial_norm <= CHORD_CONTRACTION * norm_x) {
                 report.history.push(Iteration {
-                    residual: norm,
+                    residual: norm_x,
                     step: step_norm,
                     damping: 1.0,
                     fresh_jacobian: false,
@@ -316,36 +441,47 @@ pub fn run(
                 last_fresh = false;
                 std::mem::swap(x, &mut ws.trial);
                 std::mem::swap(&mut ws.residual, &mut ws.trial_residual);
+                border.accept();
                 continue;
             }
         }
         // A Newton step: the Jacobian at x.
         report.newton_steps += 1;
         let t = Instant::now();
-        let ok = system.jacobian(x, &mut ws.residual, &mut ws.values).is_ok();
+        let ok = border.on(Current, |system| {
+            report.evaluations.equations += system.rate_evaluations();
+            system.jacobian(x, &mut ws.residual, &mut ws.values).is_ok()
+        });
         report.timings.assembly += t.elapsed();
         report.evaluations.jacobian += 1;
-        report.evaluations.equations += system.rate_evaluations();
         if !ok || !ws.values.iter().all(|v| v.is_finite()) {
-            return (Termination::NonFinite, worst_row(&ws.residual));
+            return (Termination::NonFinite, worst(ws, border));
         }
         if !ws.solve(report) {
-            return (Termination::SingularJacobian, worst_row(&ws.residual));
+            return (Termination::SingularJacobian, worst(ws, border));
         }
-        let step_norm = max_norm(&ws.step);
-        let phi = merit(&ws.residual);
+        let mut at = Linearization {
+            linear: &mut ws.linear,
+            residual: &ws.residual,
+        };
+        if let Err(termination) = border.factored(x, &mut at, report) {
+            return (termination, worst(ws, border));
+        }
+        let Some(border_step) = border.step(Current, x, &mut ws.step) else {
+            return (Termination::SingularJacobian, worst(ws, border));
+        };
+        let step_norm = max_norm(&ws.step).max(border_step);
+        let phi = merit(&ws.residual, border.residual(Current));
         let mut alpha = 1.0;
         loop {
-            system.retract(x, &ws.step, alpha, &mut ws.trial);
-            let t = Instant::now();
-            let ok = system.residual(&ws.trial, &mut ws.trial_residual).is_ok();
-            report.timings.assembly += t.elapsed();
-            report.evaluations.residual += 1;
-            report.evaluations.equations += system.rate_evaluations();
-            let phi_trial = merit(&ws.trial_residual);
+            unknowns::retract(x, &ws.step, alpha, length, &mut ws.trial);
+            border.trial(alpha);
+            let ok = evaluate(border, Trial, &ws.trial, &mut ws.trial_residual, report);
+            let phi_trial = merit(&ws.trial_residual, border.residual(Trial));
             // Armijo on 0.5|F|^2, whose slope along the Newton step is -|F|^2 = -2 phi; a
             // trial already within tolerance is accepted (at rounding level phi cannot fall).
-            let done = max_norm(&ws.trial_residual) <= settings.tolerance;
+            // With a border, F includes its rows: the semismooth step has the same slope.
+            let done = norm(&ws.trial_residual, border.residual(Trial)) <= settings.tolerance;
             let finite = ok && phi_trial.is_finite();
             if finite && (done || phi_trial <= (1.0 - 2.0 * ARMIJO * alpha) * phi) {
                 break;
@@ -361,28 +497,31 @@ pub fn run(
                 let t = Instant::now();
                 ws.linear.solve_again(&ws.rhs, &mut ws.simplified);
                 report.timings.solve += t.elapsed();
-                if max_norm(&ws.simplified) <= (1.0 - alpha / 4.0) * step_norm {
+                if let Some(border_step) = border.step(Trial, &ws.trial, &mut ws.simplified)
+                    && max_norm(&ws.simplified).max(border_step) <= (1.0 - alpha / 4.0) * step_norm
+                {
                     break;
                 }
             }
             alpha *= 0.5;
             if alpha < MIN_DAMPING {
-                report.residual = norm;
-                return (Termination::LineSearchFailed, worst_row(&ws.residual));
+                report.residual = norm_x;
+                return (Termination::LineSearchFailed, worst(ws, border));
             }
         }
         report.history.push(Iteration {
-            residual: norm,
+            residual: norm_x,
             step: step_norm,
             damping: alpha,
             fresh_jacobian: true,
         });
         if alpha < 1.0 && settings.stop_when_damped {
-            report.residual = norm;
-            return (Termination::MaxIterations, worst_row(&ws.residual));
+            report.residual = norm_x;
+            return (Termination::MaxIterations, worst(ws, border));
         }
         std::mem::swap(x, &mut ws.trial);
         std::mem::swap(&mut ws.residual, &mut ws.trial_residual);
+        border.accept();
         last_fresh = true;
         (before_last, last_step) = if alpha == 1.0 {
             (last_step, step_norm)
@@ -392,17 +531,21 @@ pub fn run(
         // Far from the solution (a damped step) a stale Jacobian is not worth trying.
         chord = alpha == 1.0;
     }
-    let norm = max_norm(&ws.residual);
-    report.residual = norm;
-    if norm <= settings.tolerance {
-        (Termination::Converged, worst_row(&ws.residual))
+    let norm_x = norm(&ws.residual, border.residual(Current));
+    report.residual = norm_x;
+    if norm_x <= settings.tolerance {
+        (Termination::Converged, worst(ws, border))
     } else {
-        (Termination::MaxIterations, worst_row(&ws.residual))
+        (Termination::MaxIterations, worst(ws, border))
     }
 }
 
-fn worst_row(r: &[f64]) -> usize {
-    r.iter()
+/// The row of the largest residual over the collocation rows and then the border's
+/// (numbered after them).
+fn worst_row(residual: &[f64], border: &[f64]) -> usize {
+    residual
+        .iter()
+        .chain(border)
         .enumerate()
         .max_by(|a, b| a.1.abs().partial_cmp(&b.1.abs()).unwrap_or(std::cmp::Ordering::Greater))
         .map_or(0, |(i, _)| i)
