@@ -195,3 +195,22 @@ fn bad_bounds_name_their_field() {
         }
     }
 }
+
+/// A stroke that cannot let out the tendons the rod's own weight lengthens: at rest tendon 3
+/// needs -2.06 mm; held at 0 it fights tendon 1 at 224 N, past 0.9 of their geometric limit
+/// (66 N). A typed error that says so and what to do, not an iteration from that state.
+#[test]
+fn a_stroke_that_cannot_let_out_is_an_error_that_says_so() {
+    let goal = Target::position(nalgebra::Vector3::new(0.2, 0.0, -0.05));
+    match solve_displacements(&cases::prototype(), &goal, &InverseOptions::displacements(0.0, STROKE)) {
+        Err(Error::InvalidInput { field, problem, hint }) => {
+            assert_eq!(field, "options.min_displacement");
+            assert!(
+                problem.contains("tendon 3") && problem.contains("past its limit"),
+                "{problem}"
+            );
+            assert!(hint.contains("min_displacement = -max_displacement"), "{hint}");
+        }
+        other => panic!("expected an error, got {:?}", other.map(|s| s.explain())),
+    }
+}

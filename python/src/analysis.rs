@@ -100,7 +100,8 @@ pub struct PyInverseResult {
     /// Actuator pull-in of every tendon (m), shape (k,), file order.
     displacements: Py<PyArray1<f64>>,
     /// Where each tendon's adjusted input ended up: "inside", "slack", "saturated" (at the
-    /// upper bound), "released" (at the lower pull-in bound) or "held" (not free).
+    /// upper bound), "released" (at the lower pull-in bound), "tension_limit" (pull-ins: at
+    /// the tension limit) or "held" (not free).
     bounds: Vec<&'static str>,
     /// The forward solution at these inputs.
     solution: Py<PySolution>,
@@ -171,6 +172,7 @@ fn run_inverse(
             tdcr::fit::Bound::Slack => "slack",
             tdcr::fit::Bound::Saturated => "saturated",
             tdcr::fit::Bound::Released => "released",
+            tdcr::fit::Bound::TensionLimit => "tension_limit",
             tdcr::fit::Bound::Held => "held",
         })
         .collect();
@@ -230,13 +232,14 @@ pub fn solve_tensions(
 }
 
 /// Inverse statics in actuator space: the pull-ins, each in [`min_displacement`,
-/// `max_displacement`] (m), that put the tip at `position` (m, (3,)) and, if given,
+/// `max_displacement`] (m; `min_displacement` defaults to -`max_displacement`), that put the tip at `position` (m, (3,)) and, if given,
 /// `rotation` ((3, 3), body to world) (`tdcr::fit::solve_displacements`). The free tendons
 /// (`free_tendons`, 0-based, default all) become displacement-controlled, starting from
-/// the pull-ins their tensions hold; slack tendons are reported in `bounds`. `options` as
-/// `solve_tensions`.
+/// the pull-ins their tensions hold; slack tendons are reported in `bounds`. Tensions stay
+/// below 0.9 of each tendon's geometric limit EI / r^2 and below `max_tension` (N) when it
+/// is above 0. `options` as `solve_tensions`.
 #[pyfunction]
-#[pyo3(signature = (robot, position, rotation=None, *, max_displacement, min_displacement=0.0, tolerance=1e-6, max_iterations=50, orientation_weight=None, free_tendons=None, **options))]
+#[pyo3(signature = (robot, position, rotation=None, *, max_displacement, min_displacement=None, max_tension=0.0, tolerance=1e-6, max_iterations=50, orientation_weight=None, free_tendons=None, **options))]
 #[allow(clippy::too_many_arguments)]
 pub fn solve_displacements(
     py: Python<'_>,
@@ -244,7 +247,8 @@ pub fn solve_displacements(
     position: Vec<f64>,
     rotation: Option<Vec<Vec<f64>>>,
     max_displacement: f64,
-    min_displacement: f64,
+    min_displacement: Option<f64>,
+    max_tension: f64,
     tolerance: f64,
     max_iterations: usize,
     orientation_weight: Option<f64>,
@@ -253,8 +257,11 @@ pub fn solve_displacements(
 ) -> PyResult<PyInverseResult> {
     let target = target("solve_displacements", position, rotation)?;
     let options = InverseOptions {
-        min_displacement,
+        // A symmetric stroke unless told: under its own weight the unactuated robot's
+        // upper tendons need letting out.
+        min_displacement: min_displacement.unwrap_or(-max_displacement),
         max_displacement,
+        max_tension,
         tolerance,
         max_iterations,
         orientation_weight,

@@ -10,23 +10,32 @@
 //!
 //! where l_j(x) is the path length by the node quadrature ([`NodeQuadrature`]), l_ref_j its
 //! unloaded value and c_j the tendon's compliance (0 when inextensible). The
-//! complementarity (a tendon cannot push) is solved inside Newton in the semismooth form
-//! psi_j = min(tau_j / T_j, phi_j / L) = 0 (T_j a tension scale): each iteration either
-//! enforces the constraint (taut) or sets tau_j = 0 (slack), whichever branch the min
-//! takes, a primal-dual active set method that converges superlinearly like Newton.
+//! complementarity (a tendon cannot push) is solved inside Newton in the semismooth
+//! Fischer-Burmeister form psi_j = sqrt(a^2 + b^2) - a - b = 0 with a = tau_j / T_j and
+//! b = phi_j / L (T_j a tension scale): psi_j = 0 exactly when a, b >= 0 and a b = 0. Unlike
+//! min(a, b), its square is continuously differentiable, so the Newton step is a descent
+//! direction of the merit |F|^2 + |psi|^2 and the line search works across the kink
+//! between taut and slack (with min, solves with several antagonists stalled there).
+//! Iterates may pass through negative tensions; at convergence a tendon on the slack side
+//! (b > a) gets exactly 0 N.
 //!
 //! The k tension unknowns border the block-banded system without changing its structure:
 //!
 //! ```text
-//! [ J     F_tau ] [dx  ]   [ -F   ]
-//! [ -G    C     ] [dtau] = [ -phi ]      (taut rows; slack rows are dtau_j = -tau_j)
+//! [ J                   F_tau          ] [dx  ]   [ -F   ]
+//! [ -(q_j/L) G_j   p_j/T_j + (q_j/L) c_j ] [dtau] = [ -psi ]
 //! ```
 //!
 //! with G_j = dl_j/dx (exact: the quadrature weights times the speed's gradient, on the
 //! strains of each node) and F_tau = dF/dtau by a forward difference of the residual at
 //! fixed x. One factorization of J (the structured elimination) gives a = J^-1 (-F) and the
 //! k columns X = J^-1 F_tau; then dx = a - X dtau with dtau from the k x k Schur complement
-//! S = G X + C (rows G_j . a - phi_j). Chord steps reuse the factors and X.
+//! S_jm = p_j / T_j delta_jm + (q_j / L) (G_j . X_m + c_j delta_jm) (right-hand side
+//! -psi_j + (q_j / L) G_j . a). Here (p_j, q_j) = (a / r - 1, b / r - 1), r = sqrt(a^2 + b^2),
+//! is the derivative of psi_j in (a, b); at a = b = 0, where psi is not differentiable, the
+//! element (1/sqrt 2 - 1)(1, 1) of its generalized gradient. Taut (b = 0 < a) the row is the
+//! linearized constraint; slack (a = 0 < b) it is dtau_j = -tau_j. Chord steps reuse the
+//! factors and X.
 //!
 //! The Newton loop is the tension solve's ([`newton::run_bordered`]: chord steps, line
 //! search, stopping tests); this module is its border ([`Tensions`]): the tensions, the rows
@@ -70,8 +79,7 @@ struct Constraint {
     reference_length: f64,
     /// c_j (m/N).
     compliance: f64,
-    /// T_j (N): the tension that bends the rod through about a radian, E I / (L |r_j(0)|)
-    /// (E I / L^2 on the centreline), the scale of the semismooth min.
+    /// T_j (N), [`Robot::tension_scale`]: the scale of a in psi_j.
     tension_scale: f64,
     /// The path-length quadrature on the mesh's nodes.
     quadrature: NodeQuadrature,
@@ -91,14 +99,12 @@ impl Constraint {
             .map(|&(k, _)| t.routing.at(s[k], length))
             .collect();
         let reference_length = length::reference_length(robot, tendon);
-        let offset = t.routing.at(0.0, length).r.norm();
-        let bend = robot.bending_stiffness() / length;
         Constraint {
             tendon,
             displacement: t.displacement.unwrap_or(0.0),
             reference_length,
             compliance: t.compliance(reference_length),
-            tension_scale: if offset > 0.0 { bend / offset } else { bend / length },
+            tension_scale: robot.tension_scale(tendon),
             quadrature,
             routing,
         }
@@ -119,14 +125,29 @@ impl Constraint {
         self.reference_length - self.length(x) - self.displacement + self.compliance * tension
     }
 
-    /// Whether the semismooth min takes the constraint branch (taut) at (phi, tau).
+    /// Whether (phi, tau) is on the taut side of the complementarity (b <= a).
     fn taut(&self, gap: f64, tension: f64, length: f64) -> bool {
         gap / length <= tension / self.tension_scale
     }
 
-    /// psi_j = min(tau_j / T_j, phi_j / L), zero at a solution (dimensionless).
+    /// psi_j = sqrt(a^2 + b^2) - a - b, a = tau_j / T_j, b = phi_j / L: zero at a solution
+    /// (dimensionless, Fischer-Burmeister).
     fn complementarity(&self, gap: f64, tension: f64, length: f64) -> f64 {
-        (tension / self.tension_scale).min(gap / length)
+        let (a, b) = (tension / self.tension_scale, gap / length);
+        a.hypot(b) - a - b
+    }
+
+    /// (dpsi/da, dpsi/db) at (phi, tau): (a / r - 1, b / r - 1), and at a = b = 0 the
+    /// generalized gradient's element (1/sqrt 2 - 1)(1, 1).
+    fn complementarity_gradient(&self, gap: f64, tension: f64, length: f64) -> (f64, f64) {
+        let (a, b) = (tension / self.tension_scale, gap / length);
+        let r = a.hypot(b);
+        if r == 0.0 {
+            let g = std::f64::consts::FRAC_1_SQRT_2 - 1.0;
+            (g, g)
+        } else {
+            (a / r - 1.0, b / r - 1.0)
+        }
     }
 
     /// G_j . z: the change of l_j along the scaled step z (12 per node, du = z_U / L).
@@ -173,7 +194,7 @@ struct Tensions<'r> {
     length: f64,
     /// F at (x, tau + h e_j), then its difference quotient.
     probe: Vec<f64>,
-    /// X_j = J^-1 dF/dtau_j, one per constraint (zero for a slack tendon at tau = 0).
+    /// X_j = J^-1 dF/dtau_j, one per constraint.
     columns: Vec<Vec<f64>>,
     /// Tensions tau_j (N) of the current and the trial point.
     tau: Vec<f64>,
@@ -221,8 +242,19 @@ impl<'r> Tensions<'r> {
         }
     }
 
-    /// Sets the robot's tensions to the current ones and returns the frame.
-    fn finish(self) -> Frame {
+    /// Sets the robot's tensions to the current ones and returns the frame. After
+    /// convergence (`converged`, at the states `x`), a tendon on the slack side gets exactly
+    /// 0 N (its tension is then within the solve's tolerance of 0) and a taut one at least 0.
+    fn finish(mut self, converged: bool, x: &[State]) -> Frame {
+        if converged {
+            for (c, t) in self.constraints.iter().zip(self.tau.iter_mut()) {
+                *t = if c.taut(c.gap(x, *t), *t, self.length) {
+                    t.max(0.0)
+                } else {
+                    0.0
+                };
+            }
+        }
         set_tensions(self.robot, &self.constraints, &self.tau);
         self.frame
     }
@@ -238,7 +270,7 @@ impl Border for Tensions<'_> {
         on(self.robot, &mut self.frame, f)
     }
 
-    /// psi_j = min(tau_j / T_j, phi_j / L).
+    /// psi_j (Fischer-Burmeister, [`Constraint::complementarity`]).
     fn rows(&mut self, point: Point, x: &[State]) {
         let (tau, psi) = match point {
             Point::Current => (&self.tau, &mut self.psi),
@@ -256,17 +288,12 @@ impl Border for Tensions<'_> {
         }
     }
 
-    /// X_j = J^-1 dF/dtau_j by a forward difference in tau_j at fixed x (the right
-    /// derivative at tau_j = 0, where a string starts to pull).
+    /// X_j = J^-1 dF/dtau_j by a forward difference in tau_j at fixed x (F is linear in
+    /// the tensions up to the curvature of the tendon paths' dependence on x, which x fixes).
     fn factored(&mut self, x: &[State], at: &mut Linearization, report: &mut SolveReport) -> Result<(), Termination> {
         set_tensions(self.robot, &self.constraints, &self.tau);
         for (j, c) in self.constraints.iter().enumerate() {
             let tau = self.tau[j];
-            if tau == 0.0 && !c.taut(c.gap(x, tau), tau, self.length) {
-                // dtau_j = 0 in this step: its column does not enter.
-                self.columns[j].fill(0.0);
-                continue;
-            }
             let h = TENSION_STEP * tau.max(c.tension_scale);
             self.robot.tendons[c.tendon].tension = tau + h;
             let ok = on(self.robot, &mut self.frame, |s| {
@@ -286,8 +313,8 @@ impl Border for Tensions<'_> {
         Ok(())
     }
 
-    /// The Schur step: dtau from S dtau = G a - phi (taut rows; dtau_j = -tau_j for slack
-    /// ones), then dx = a - X dtau. The norm is max_j |dtau_j| / T_j.
+    /// The Schur step (module docs): dtau from the k x k system of the linearized psi rows,
+    /// then dx = a - X dtau. The norm is max_j |dtau_j| / T_j.
     fn step(&mut self, point: Point, x: &[State], a: &mut [f64]) -> Option<f64> {
         let k = self.constraints.len();
         let (tau, dtau) = match point {
@@ -297,18 +324,15 @@ impl Border for Tensions<'_> {
         for (j, c) in self.constraints.iter().enumerate() {
             let t = tau[j];
             let gap = c.gap(x, t);
+            let (p, q) = c.complementarity_gradient(gap, t, self.length);
+            let (p, q) = (p / c.tension_scale, q / self.length);
             let row = &mut self.schur[j * k..(j + 1) * k];
-            if c.taut(gap, t, self.length) {
-                for (m, entry) in row.iter_mut().enumerate() {
-                    *entry =
-                        c.length_change(x, &self.columns[m], self.length) + if m == j { c.compliance } else { 0.0 };
-                }
-                self.schur_rhs[j] = c.length_change(x, a, self.length) - gap;
-            } else {
-                row.fill(0.0);
-                row[j] = 1.0;
-                self.schur_rhs[j] = -t;
+            // dpsi = p dtau + q dphi, dphi = -G (a - X dtau) + c dtau.
+            for (m, entry) in row.iter_mut().enumerate() {
+                let own = if m == j { p + q * c.compliance } else { 0.0 };
+                *entry = q * c.length_change(x, &self.columns[m], self.length) + own;
             }
+            self.schur_rhs[j] = q * c.length_change(x, a, self.length) - c.complementarity(gap, t, self.length);
         }
         if !solve_dense(&mut self.schur, &mut self.schur_rhs, k) {
             return None;
@@ -329,10 +353,11 @@ impl Border for Tensions<'_> {
         finite.then_some(norm)
     }
 
-    /// tau + alpha dtau, kept >= 0 (a string cannot push).
+    /// tau + alpha dtau (psi keeps the solution's tensions >= 0; an iterate may pass
+    /// through negative ones).
     fn trial(&mut self, alpha: f64) {
         for ((t, &tau), &d) in self.trial_tau.iter_mut().zip(&self.tau).zip(&self.dtau) {
-            *t = (tau + alpha * d).max(0.0);
+            *t = tau + alpha * d;
         }
     }
 
@@ -430,7 +455,7 @@ pub(super) fn solve(
         let mut tensions = Tensions::new(&mut work, frame, &mesh);
         let (termination, worst) = newton::run_bordered(&mut tensions, &mut ws, &mut x, &settings, &mut report);
         let k = tensions.constraints.len();
-        let frame = tensions.finish();
+        let frame = tensions.finish(termination == Termination::Converged, &x);
         report.termination = termination;
         report.intervals = mesh.intervals();
         report.unknowns = unknowns::unknowns(mesh.nodes.len()) + k;

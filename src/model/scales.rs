@@ -314,6 +314,18 @@ impl Robot {
             .fold(f64::INFINITY, f64::min)
     }
 
+    /// The geometric limit of tendon `i` (N): EI / r^2 with r its largest offset and EI the
+    /// smallest bending stiffness along it, the tension at which the bend radius
+    /// EI / (tau r) falls to the offset; past it no equilibrium exists (module docs).
+    /// Infinite for a tendon on the centreline.
+    pub fn geometric_limit(&self, i: usize) -> f64 {
+        let length = self.length();
+        let t = &self.tendons[i];
+        let end = t.end(length);
+        let offset = t.routing.max_offset(end, length);
+        self.weakest_bending(end) / (offset * offset)
+    }
+
     /// The robot's figures outside their plausible ranges (module [`crate::model::scales`]):
     /// length, slenderness, modulus, self weight, each tendon's tension against its
     /// geometric limit EI / r^2, and the tip and point loads against EI. Empty for a robot

@@ -261,7 +261,7 @@ class InverseResult:
 
     tensions: FloatArray
     displacements: FloatArray
-    bounds: List[Literal["inside", "slack", "saturated", "released", "held"]]
+    bounds: List[Literal["inside", "slack", "saturated", "released", "tension_limit", "held"]]
     solution: Solution
     residual: float
     position_error: float
@@ -355,7 +355,8 @@ def solve_displacements(
     rotation: Optional[ArrayLike] = None,
     *,
     max_displacement: float,
-    min_displacement: float = 0.0,
+    min_displacement: Optional[float] = None,
+    max_tension: float = 0.0,
     tolerance: float = 1e-6,
     max_iterations: int = 50,
     orientation_weight: Optional[float] = None,
@@ -364,7 +365,7 @@ def solve_displacements(
     residual_tolerance: Optional[float] = None,
 ) -> InverseResult:
     """Inverse statics in actuator space: pull-ins in [min_displacement, max_displacement]
-    (m) that put the tip at `position`."""
+    (m; min_displacement defaults to -max_displacement) that put the tip at `position`."""
 
 class Calibration:
     """The result of `calibrate`."""

@@ -16,7 +16,7 @@ use super::qp::Constraints;
 use super::result::Bound;
 use crate::collocation::Solver;
 use crate::collocation::sensitivity::TensionDirections;
-use crate::error::Result;
+use crate::error::{Result, invalid};
 use crate::model::robot::Robot;
 use crate::solution::Solution;
 use nalgebra::{DMatrix, DVector};
@@ -33,12 +33,20 @@ const BOUND_SNAP: f64 = 1e-9;
 /// lands within that of 0 (1.7e-12 N of a 2.2 N scale measured).
 const SLACK_TENSION: f64 = 1e-9;
 
+/// Share of the geometric limit EI / r^2 that bounds the tensions of [`super::solve_displacements`],
+/// 0.9: past the limit no equilibrium exists, and forward solves converge up to about 0.97
+/// of it (tests/hard.rs), so every trial stays where they do.
+pub const GEOMETRIC_SHARE: f64 = 0.9;
+
 /// The adjusted inputs: which, within which bounds, of which tendons.
 pub(super) struct Inputs {
     /// Tensions or pull-ins, with their bounds.
     pub(super) adjusted: Adjusted,
     /// The free tendons (0-based), the order of the unknowns.
     pub(super) free: Vec<usize>,
+    /// Each free tendon's upper tension bound (N): `max_tension` for tensions; for pull-ins
+    /// [`GEOMETRIC_SHARE`] of its geometric limit, or `max_tension` when set and lower.
+    limits: Vec<f64>,
 }
 
 /// The linearization of one iterate: the tip's derivative and the step's constraints.
@@ -50,25 +58,35 @@ pub(super) struct Linearization {
 }
 
 impl Inputs {
+    /// The inputs `adjusted` of the tendons `free` of `robot`, with `max_tension` (N, 0 for
+    /// none with pull-ins).
+    pub(super) fn new(robot: &Robot, adjusted: Adjusted, free: Vec<usize>, max_tension: f64) -> Self {
+        let limits = free
+            .iter()
+            .map(|&i| match adjusted {
+                Adjusted::Tensions { max } => max,
+                Adjusted::Displacements { .. } => {
+                    let geometric = GEOMETRIC_SHARE * robot.geometric_limit(i);
+                    if max_tension > 0.0 {
+                        geometric.min(max_tension)
+                    } else {
+                        geometric
+                    }
+                }
+            })
+            .collect();
+        Inputs { adjusted, free, limits }
+    }
+
     /// The free tendons' tensions in `robot` (N).
     pub(super) fn tensions(&self, robot: &Robot) -> DVector<f64> {
         DVector::from_iterator(self.free.len(), self.free.iter().map(|&i| robot.tendons[i].tension))
     }
 
-    /// Sets the free tendons' tensions in `robot` to `tau`, at least 0 (and at most the
-    /// tension bound).
+    /// Sets the free tendons' tensions in `robot` to `tau`, within [0, their limit].
     pub(super) fn set(&self, robot: &mut Robot, tau: &DVector<f64>) {
-        let max = self.max_tension();
         for (k, &i) in self.free.iter().enumerate() {
-            robot.tendons[i].tension = tau[k].clamp(0.0, max);
-        }
-    }
-
-    /// The tension bound: `max_tension` for tensions, none for pull-ins.
-    fn max_tension(&self) -> f64 {
-        match self.adjusted {
-            Adjusted::Tensions { max } => max,
-            Adjusted::Displacements { .. } => f64::INFINITY,
+            robot.tendons[i].tension = tau[k].clamp(0.0, self.limits[k]);
         }
     }
 
@@ -102,18 +120,22 @@ impl Inputs {
         };
         let mut solution = solver.solve(&current)?;
         let mut solves = 1;
-        let mut moved = false;
+        // The tendons the stroke moved: (0-based index, pull-in before, after).
+        let mut moved = Vec::new();
         for &i in &self.free {
             // The pull-in that holds the tendon's state: its input, or for a
             // tension-controlled tendon the one its tension holds.
             let q = solution.tendons[i].displacement;
             let clamped = q.clamp(min, max);
-            moved |= clamped != q;
+            if clamped != q {
+                moved.push((i, q, clamped));
+            }
             current.tendons[i].displacement = Some(clamped);
         }
-        if moved {
+        if !moved.is_empty() {
             solution = solver.solve_from(&current, &solution)?;
             solves += 1;
+            self.check_start(&solution, &moved)?;
         }
         for &i in &self.free {
             let t = &mut current.tendons[i];
@@ -123,13 +145,50 @@ impl Inputs {
         Ok((current, solution, solves))
     }
 
+    /// Checks that the start the stroke imposed (`moved`: tendon, pull-in before and after
+    /// clamping) stays within the tension limits: an actuator that cannot let out as far as
+    /// the robot's state needs makes its tendon fight the others (the rod only compresses,
+    /// at EA), and no iteration starts sensibly past the limits.
+    fn check_start(&self, solution: &Solution, moved: &[(usize, f64, f64)]) -> Result<()> {
+        let over: Vec<usize> = (0..self.free.len())
+            .filter(|&k| solution.tendons[self.free[k]].tension > self.limits[k])
+            .collect();
+        let Some(&k) = over.first() else {
+            return Ok(());
+        };
+        // The tendon the stroke moved farthest.
+        let (i, before, after) = moved
+            .iter()
+            .copied()
+            .max_by(|a, b| (a.1 - a.2).abs().total_cmp(&(b.1 - b.2).abs()))
+            .unwrap_or(moved[0]);
+        let (lo, _) = self.adjusted.range();
+        let field = if after == lo {
+            "options.min_displacement"
+        } else {
+            "options.max_displacement"
+        };
+        Err(invalid(
+            field,
+            format!(
+                "puts tendon {} at {after} m where the robot's state needs {before:.6} m, and with that start tendon {} \
+                 pulls {:.1} N, past its limit {:.1} N ({GEOMETRIC_SHARE} of its geometric limit EI/r^2)",
+                i + 1,
+                self.free[k] + 1,
+                solution.tendons[self.free[k]].tension,
+                self.limits[k],
+            ),
+            "widen the stroke so that the actuators can let the tendons out as far as the unactuated robot needs \
+             (its own weight lengthens the paths on one side): for example min_displacement = -max_displacement",
+        ))
+    }
+
     /// The linearization at `solution`, the solution of `robot` (free tendons
     /// tension-controlled at `tau`).
     pub(super) fn linearize(&self, robot: &Robot, solution: &Solution, tau: &DVector<f64>) -> Result<Linearization> {
         let directions = TensionDirections::new(robot, solution, self.free.clone())?;
-        let max = self.max_tension();
         let lower = -tau;
-        let upper = tau.map(|t| max - t);
+        let upper = DVector::from_fn(tau.len(), |k, _| self.limits[k] - tau[k]);
         let mut constraints = Constraints::bounds(&lower, &upper);
         if let Adjusted::Displacements { min, max } = self.adjusted {
             let Q = directions.displacement_by_tension();
@@ -185,8 +244,11 @@ impl Inputs {
             Adjusted::Tensions { .. } => tension,
             Adjusted::Displacements { .. } => robot.tendons[i].displacement.unwrap_or(0.0),
         };
+        let k = self.free.iter().position(|&j| j == i).unwrap_or(0);
         if tension <= SLACK_TENSION * robot.tension_scale(i) {
             Bound::Slack
+        } else if matches!(self.adjusted, Adjusted::Displacements { .. }) && tension >= self.limits[k] {
+            Bound::TensionLimit
         } else if value >= hi - self.snap() {
             Bound::Saturated
         } else if value <= lo + self.snap() {

@@ -114,10 +114,12 @@ mod problem;
 mod qp;
 mod result;
 
+pub use inputs::GEOMETRIC_SHARE;
 pub use problem::{Adjusted, InverseOptions, Target};
 pub use result::{Bound, InverseSolution};
 
 use super::lm::{Damping, FitTermination, accepts, gain_ratio};
+use crate::Error;
 use crate::collocation::Solver;
 use crate::error::Result;
 use crate::model::robot::Robot;
@@ -223,7 +225,8 @@ pub fn solve_tensions(robot: &Robot, target: &Target, options: &InverseOptions) 
 /// use tdcr::fit::inverse::{InverseOptions, Target, solve_displacements};
 /// let mut robot = tdcr::cases::prototype();
 /// robot.tendons[1].displacement = Some(0.003); // pull tendon 2 in by 3 mm
-/// let options = InverseOptions::displacements(0.0, 0.01);
+/// // A stroke of +-1 cm: under its own weight the rod's upper tendons need letting out.
+/// let options = InverseOptions::displacements(-0.01, 0.01);
 /// let goal = tdcr::collocation::solve(&robot, &options.solver).unwrap().tip_position();
 /// robot.tendons[1].displacement = None; // forget it: start from the tensions (all 0)
 /// let found = solve_displacements(&robot, &Target::position(goal), &options).unwrap();
@@ -241,10 +244,8 @@ pub fn solve_displacements(robot: &Robot, target: &Target, options: &InverseOpti
 /// The bounded Levenberg-Marquardt iteration (module docs) on the inputs `adjusted`.
 fn minimize(robot: &Robot, target: &Target, options: &InverseOptions, adjusted: Adjusted) -> Result<InverseSolution> {
     robot.validate()?;
-    let inputs = Inputs {
-        adjusted,
-        free: validate(robot, target, options, adjusted)?,
-    };
+    let free = validate(robot, target, options, adjusted)?;
+    let inputs = Inputs::new(robot, adjusted, free, options.max_tension);
     let weight = options.orientation_weight.unwrap_or_else(|| robot.length());
     let mut solver = Solver::new(options.solver.clone());
     let (mut current, mut solution, mut forward_solves) = inputs.start(robot, &mut solver)?;
@@ -306,20 +307,27 @@ fn minimize(robot: &Robot, target: &Target, options: &InverseOptions, adjusted: 
         inputs.set(&mut trial, &(&tau + &d));
         iterations += 1;
         forward_solves += 1;
-        let trial_solution = solver.solve_from(&trial, &solution)?;
-        let e_trial = tip_error(&trial_solution, target, weight);
+        // A trial the forward solver cannot converge (a step into a hard region) is a
+        // rejected step: the damping grows and the next step is shorter.
+        let trial_solution = match solver.solve_from(&trial, &solution) {
+            Ok(s) => Some(s),
+            Err(Error::NotConverged { .. }) => None,
+            Err(other) => return Err(other),
+        };
+        let e_trial = trial_solution.as_ref().map(|s| tip_error(s, target, weight));
         let cost = 0.5 * e.norm_squared();
-        let trial_cost = 0.5 * e_trial.norm_squared();
+        let trial_cost = e_trial.as_ref().map_or(f64::NAN, |e| 0.5 * e.norm_squared());
         let rho = gain_ratio(cost, trial_cost, predicted);
         let accepted = accepts(rho, predicted, ACCEPT_RATIO);
         trials.push(damping.update(accepted, rho, d.amax(), cost, trial_cost));
-        if accepted {
-            current = trial;
-            solution = trial_solution;
-            e = e_trial;
-            history.push(e.norm());
-        } else {
-            linearization = Some((J, constraints));
+        match (accepted, trial_solution, e_trial) {
+            (true, Some(s), Some(e_new)) => {
+                current = trial;
+                solution = s;
+                e = e_new;
+                history.push(e.norm());
+            }
+            _ => linearization = Some((J, constraints)),
         }
     };
     let (current, solution, finishing) = inputs.finish(current, solution, &mut solver)?;

@@ -46,7 +46,9 @@ impl Target {
 pub struct InverseOptions {
     /// [`super::solve_tensions`]: upper bound tau_max for every tendon that may change (N),
     /// positive and finite; the lower bound is 0 (a string cannot push). Default 0, which
-    /// is rejected: set it.
+    /// is rejected: set it. [`super::solve_displacements`]: an optional tension limit (N)
+    /// below the one it always applies, [`super::GEOMETRIC_SHARE`] of each tendon's
+    /// geometric limit EI / r^2 (past which no equilibrium exists); 0 for none.
     pub max_tension: f64,
     /// [`super::solve_displacements`]: lower bound of every adjusted pull-in (m), finite; a
     /// negative value lets the actuator pay out tendon past its reference. Default 0.
@@ -178,6 +180,14 @@ pub(super) fn validate(
             }
         }
         Adjusted::Displacements { min, max } => {
+            let limit = options.max_tension;
+            if !(limit.is_finite() && limit >= 0.0) {
+                return Err(invalid(
+                    "options.max_tension",
+                    format!("is {limit} N"),
+                    "give a positive tension limit in N, or 0 for the geometric limits alone",
+                ));
+            }
             if !min.is_finite() {
                 return Err(invalid(
                     "options.min_displacement",

@@ -17,6 +17,9 @@ pub enum Bound {
     Saturated,
     /// Pull-ins only: at the lower bound `min_displacement`, taut.
     Released,
+    /// Pull-ins only: the tension reached its bound, `max_tension` when set or
+    /// [`super::GEOMETRIC_SHARE`] of the tendon's geometric limit EI / r^2.
+    TensionLimit,
     /// Not free to change (not in `free_tendons`): the robot's input.
     Held,
 }
@@ -121,6 +124,7 @@ impl InverseSolution {
             (Bound::Saturated, format!("at the upper bound {hi} {unit}")),
             (Bound::Released, format!("at the lower bound {lo} {unit}")),
             (Bound::Slack, "slack (0 N)".to_string()),
+            (Bound::TensionLimit, "at the tension limit".to_string()),
         ] {
             let tendons = list(bound);
             if !tendons.is_empty() {
