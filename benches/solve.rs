@@ -14,6 +14,8 @@
 //! - `linear_solve`: the Newton linear solve alone, structured elimination and sparse LU.
 //! - `tendon_count`: a solve with 1..32 tendons.
 //! - `batch`: 10 000 independent solves over all cores with `collocation::solve_batch`.
+//! - `displacement`: S and H at default settings, cold, driven by the tension and by the
+//!   pull-in that tension holds (docs/actuation.md: the goal is at most 1.5x).
 
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
 use std::hint::black_box;
@@ -235,6 +237,24 @@ fn batch(c: &mut Criterion) {
     group.finish();
 }
 
+fn displacement(c: &mut Criterion) {
+    let mut group = c.benchmark_group("displacement");
+    for (case, robot, tendon) in [("S", cases::case_s(), 0), ("H", cases::case_h(), 4)] {
+        let options = collocation::Options::default();
+        let solved = collocation::solve(&robot, &options).unwrap();
+        let mut pulled = robot.clone();
+        pulled.tendons[tendon].displacement = Some(solved.tendons[tendon].displacement);
+        pulled.tendons[tendon].tension = 0.0;
+        group.bench_function(BenchmarkId::new("tension", case), |b| {
+            b.iter(|| black_box(collocation::solve(&robot, &options).unwrap()))
+        });
+        group.bench_function(BenchmarkId::new("displacement", case), |b| {
+            b.iter(|| black_box(collocation::solve(&pulled, &options).unwrap()))
+        });
+    }
+    group.finish();
+}
+
 criterion_group!(
     benches,
     default_settings,
@@ -243,6 +263,7 @@ criterion_group!(
     newton_iteration,
     linear_solve,
     tendon_count,
-    batch
+    batch,
+    displacement
 );
 criterion_main!(benches);
