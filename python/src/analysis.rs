@@ -267,7 +267,6 @@ pub fn solve_displacements(
         orientation_weight,
         solver: forward_options(robot, options)?,
         free_tendons,
-        ..Default::default()
     };
     run_inverse(py, robot, target, options, tdcr::fit::solve_displacements)
 }
