@@ -197,6 +197,48 @@ fn tip_sensitivity_to_pull_ins_matches_central_differences() {
     }
 }
 
+/// With displacement-controlled tendons, `tip_sensitivities` holds their pull-ins: its
+/// pull-in columns equal `displacement_sensitivities`, and its tip force and tension columns
+/// match central differences of full displacement-controlled solves (the tensions of the
+/// held tendons follow).
+#[test]
+fn tip_sensitivities_hold_the_pull_ins() {
+    let mut robot = cases::case_h();
+    robot.tendons[0].displacement = Some(0.002);
+    robot.tendons[4].displacement = Some(0.015);
+    robot.tendons[4].tension = 0.0;
+    robot.tendons[1].tension = 0.5;
+    let options = collocation::Options::fixed(64);
+    let solution = collocation::solve(&robot, &options).unwrap();
+    let sens = tdcr::tip_sensitivities(&robot, &solution).unwrap();
+    let by_pull_in = collocation::sensitivity::displacement_sensitivities(&robot, &solution).unwrap();
+    for (c, &i) in by_pull_in.tendons.iter().enumerate() {
+        let (a, b) = (sens.displacement.column(i), by_pull_in.tip.column(c));
+        // 1e-9 relative: the same solves combined in another order
+        assert!((a - b).norm() <= 1e-9 * b.norm(), "tendon {i}: {a:?} vs {b:?}");
+        assert_eq!(sens.tension.column(i).norm(), 0.0);
+    }
+    // As above: 1e-5 steps, compared to 1e-6 relative.
+    let h = 1e-5;
+    let solve = |change: &dyn Fn(&mut Robot)| {
+        let mut r = robot.clone();
+        change(&mut r);
+        collocation::solve_from(&r, &options, &solution).unwrap().tip_position()
+    };
+    let fd = (solve(&|r| r.loads.tip_force.z += h) - solve(&|r| r.loads.tip_force.z -= h)) / (2.0 * h);
+    let analytic = sens.tip_force.fixed_view::<3, 1>(0, 2).into_owned();
+    assert!(
+        (fd - analytic).norm() <= 1e-6 * fd.norm(),
+        "tip force z: {fd:?} vs {analytic:?}"
+    );
+    let fd = (solve(&|r| r.tendons[1].tension += h) - solve(&|r| r.tendons[1].tension -= h)) / (2.0 * h);
+    let analytic = sens.tension.fixed_view::<3, 1>(0, 1).into_owned();
+    assert!(
+        (fd - analytic).norm() <= 1e-6 * fd.norm(),
+        "tension 2: {fd:?} vs {analytic:?}"
+    );
+}
+
 /// Shooting as tight as it goes: integration at 1e-12 (its supported floor, local errors
 /// that sum to about 1e-11 m along the rod) and Newton to 1e-10 (the tip wrench in N and
 /// N m / L, and the gaps over L; case H's residual noise floor at this integration

@@ -114,3 +114,22 @@ fn a_monotone_branch_ends_where_the_default_solve_lands() {
     );
     assert!(t.points.iter().all(|p| p.unstable_directions == Some(0)));
 }
+
+/// A displacement-controlled tendon cannot be traced through (its tension is a border the
+/// path follower does not carry): a typed error pointing to the sweep, unless the traced
+/// tension is that tendon's, which makes it tension-controlled.
+#[test]
+fn a_displacement_controlled_tendon_is_refused_unless_its_tension_is_traced() {
+    let mut robot = tdcr::cases::prototype();
+    robot.tendons[0].displacement = Some(0.003);
+    let options = tdcr::collocation::Options::default();
+    match tdcr::collocation::trace(&robot, tdcr::Parameter::LoadScale, 0.0, 1.0, &options) {
+        Err(tdcr::Error::InvalidInput { field, hint, .. }) => {
+            assert_eq!(field, "tendons[0].displacement");
+            assert!(hint.contains("--displacement"), "{hint}");
+        }
+        other => panic!("expected an error, got {:?}", other.map(|t| t.points.len())),
+    }
+    let traced = tdcr::collocation::trace(&robot, tdcr::Parameter::Tension(0), 0.0, 1.0, &options).unwrap();
+    assert!(traced.stopped.is_none() && traced.points.len() > 2);
+}

@@ -26,10 +26,19 @@ pub struct PyTipSensitivities {
 
 #[pymethods]
 impl PyTipSensitivities {
-    /// d(tip pose)/d(tension_i) (per N), shape (6, k), one column per tendon.
+    /// d(tip pose)/d(tension_i) (per N), shape (6, k), one column per tendon (zero for a
+    /// displacement-controlled one: see `displacement`).
     #[getter]
     fn tension<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
         rows(py, &self.inner.tension)
+    }
+
+    /// d(tip pose)/d(pull-in q_i) (per m), shape (6, k), one column per tendon: zero for a
+    /// tension-controlled or slack tendon. With displacement-controlled tendons every
+    /// derivative here holds their pull-ins (their tensions follow).
+    #[getter]
+    fn displacement<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
+        rows(py, &self.inner.displacement)
     }
 
     /// d(tip pose)/d(tip force) (per N, world frame), shape (6, 3).

@@ -188,6 +188,19 @@ def test_solve_displacements_recovers_a_pull_in():
         tdcr.solve_displacements(robot, target, max_displacement=0.3)
 
 
+def test_tip_sensitivities_of_a_displacement_controlled_robot():
+    pulled = lambda q: tdcr.cases.prototype().with_displacements([q, None, None, None, None])
+    # One fixed mesh for all three solves, so that the difference sees one discretization.
+    solution = tdcr.solve(pulled(0.003), intervals=32)
+    sens = tdcr.tip_sensitivities(pulled(0.003), solution)
+    assert sens.displacement.shape == (6, 5) and not sens.tension[:, 0].any()
+    h = 1e-5
+    fd = (tdcr.solve(pulled(0.003 + h), intervals=32).tip_position - tdcr.solve(pulled(0.003 - h), intervals=32).tip_position) / (2 * h)
+    # 1e-6 relative: central differences err by about h^2 (1e-10) plus the solves' remaining
+    # error, about 1e-10 L (Newton's error-oriented stop), over h: 1e-7 of the 25 m/m here.
+    assert np.abs(fd - sens.displacement[:3, 0]).max() <= 1e-6 * np.abs(fd).max()
+
+
 def test_calibrate_recovers_a_stiffer_rod_from_synthetic_tips():
     robot = tdcr.cases.prototype()
     truth = robot.with_parameters({"youngs_modulus": 1.05 * 210e9})

@@ -243,16 +243,16 @@ impl<'r> Tensions<'r> {
     }
 
     /// Sets the robot's tensions to the current ones and returns the frame. After
-    /// convergence (`converged`, at the states `x`), a tendon on the slack side gets exactly
-    /// 0 N (its tension is then within the solve's tolerance of 0) and a taut one at least 0.
-    fn finish(mut self, converged: bool, x: &[State]) -> Frame {
-        if converged {
+    /// convergence to the scaled residual `tolerance` (`converged`, at the states `x`), a
+    /// tendon on the slack side, or on the taut side within `tolerance` of 0 N in tau / T
+    /// (just taut), gets exactly 0 N: its tension is within the solve's tolerance of 0.
+    fn finish(mut self, converged: Option<f64>, x: &[State]) -> Frame {
+        if let Some(tolerance) = converged {
             for (c, t) in self.constraints.iter().zip(self.tau.iter_mut()) {
-                *t = if c.taut(c.gap(x, *t), *t, self.length) {
-                    t.max(0.0)
-                } else {
-                    0.0
-                };
+                let taut = c.taut(c.gap(x, *t), *t, self.length) && *t > tolerance * c.tension_scale;
+                if !taut {
+                    *t = 0.0;
+                }
             }
         }
         set_tensions(self.robot, &self.constraints, &self.tau);
@@ -455,7 +455,8 @@ pub(super) fn solve(
         let mut tensions = Tensions::new(&mut work, frame, &mesh);
         let (termination, worst) = newton::run_bordered(&mut tensions, &mut ws, &mut x, &settings, &mut report);
         let k = tensions.constraints.len();
-        let frame = tensions.finish(termination == Termination::Converged, &x);
+        let converged = (termination == Termination::Converged).then_some(settings.tolerance);
+        let frame = tensions.finish(converged, &x);
         report.termination = termination;
         report.intervals = mesh.intervals();
         report.unknowns = unknowns::unknowns(mesh.nodes.len()) + k;

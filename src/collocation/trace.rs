@@ -67,7 +67,9 @@ pub struct Trace {
 /// solve chose (refined along the way where the shape needs it).
 ///
 /// # Errors
-/// Invalid input, or the start's solve failing ([`solve`]'s errors). A branch that cannot
+/// Invalid input (also a displacement-controlled tendon left after setting `parameter`:
+/// trace its tension or sweep its pull-in), or the start's solve failing ([`solve`]'s
+/// errors). A branch that cannot
 /// be followed to the end is not an error: [`Trace::stopped`] says why.
 pub fn trace(robot: &Robot, parameter: Parameter, from: f64, to: f64, options: &Options) -> Result<Trace> {
     let clock = Instant::now();
@@ -78,6 +80,23 @@ pub fn trace(robot: &Robot, parameter: Parameter, from: f64, to: f64, options: &
             "parameter",
             "`youngs_modulus` cannot be traced: a trace varies a tension or a load",
             "sweep E instead (tdcr sweep --param youngs_modulus=START:STOP:COUNT), each solve warm-started",
+        ));
+    }
+    if let Some(i) = parameter
+        .apply(robot, from)
+        .tendons
+        .iter()
+        .position(|t| t.displacement.is_some())
+    {
+        return Err(crate::error::invalid(
+            format!("tendons[{i}].displacement"),
+            format!(
+                "tendon {} is displacement-controlled: a trace follows tensions and loads (its tension would be a \
+                 border the path follower does not carry)",
+                i + 1
+            ),
+            "sweep pull-ins instead (tdcr sweep --displacement I=START:STOP:COUNT, each solve warm-started), or \
+             trace the tendon's tension (tension.I makes it tension-controlled)",
         ));
     }
     if !from.is_finite() || !to.is_finite() || from == to {

@@ -44,7 +44,9 @@ fn matrix(v: &Value, what: &str) -> Result<Matrix3<f64>> {
 
 /// The solution of `robot` saved in `text` (the JSON of `tdcr solve --format json`): its
 /// nodes' s, p and R, with v and u recovered from the saved internal wrench n, m by the
-/// constitutive law of `robot`'s rod (exact for the robot it was solved for).
+/// constitutive law of `robot`'s rod (exact for the robot it was solved for), and the saved
+/// tendon tensions (the solved ones of displacement-controlled tendons) when the file has
+/// one per tendon.
 ///
 /// # Errors
 /// [`crate::Error::InvalidInput`] on `start` for text that is not such JSON, samples that are
@@ -56,7 +58,18 @@ pub fn read_solution(text: &str, robot: &Robot) -> Result<Solution> {
         .as_array()
         .filter(|s| s.len() >= 2)
         .ok_or_else(|| bad("has no `samples` list of at least two nodes".into()))?;
-    let model = Model::new(robot);
+    // The solved tensions (a displacement-controlled tendon's is an unknown of the solve,
+    // and a warm start needs it), when the file has one per tendon.
+    let solved = json["tendons"]
+        .as_array()
+        .filter(|t| t.len() == robot.tendons.len())
+        .and_then(|t| {
+            t.iter()
+                .map(|t| t["tension"].as_f64().filter(|x| x.is_finite()))
+                .collect::<Option<Vec<f64>>>()
+        })
+        .map(|tensions| robot.with_tensions(&tensions));
+    let model = Model::new(solved.as_ref().unwrap_or(robot));
     let mut states = Vec::with_capacity(samples.len());
     for (k, sample) in samples.iter().enumerate() {
         let what = |field: &str| format!("samples[{k}].{field}");
@@ -123,6 +136,15 @@ mod tests {
             let warm = crate::collocation::solve_from(&robot, &Default::default(), &back).unwrap();
             assert!(warm.report.iterations <= 2, "{}", warm.report.iterations);
         }
+        // A displacement-controlled tendon's solved tension comes back with the shape.
+        let mut pulled = crate::cases::prototype();
+        pulled.tendons[0].displacement = Some(0.005);
+        let solution = crate::collocation::solve(&pulled, &Default::default()).unwrap();
+        let back = read_solution(&crate::io::output::json(&pulled, &solution, None, None), &pulled).unwrap();
+        // 1e-12 relative: 17 printed digits
+        assert!((back.tendons[0].tension / solution.tendons[0].tension - 1.0).abs() < 1e-12);
+        let warm = crate::collocation::solve_from(&pulled, &Default::default(), &back).unwrap();
+        assert!(warm.report.iterations <= 2, "{}", warm.report.iterations);
         let robot = crate::cases::case_s();
         let mut longer = robot.clone();
         longer.rod.length = 0.3;

@@ -16,8 +16,8 @@ pub enum Parameter {
     TipForce(usize),
     /// Component of the distributed force f_e, N/m, world frame, made uniform.
     DistributedForce(usize),
-    /// A factor on every tension and external load (1 is the robot as given), the load
-    /// path's parameter.
+    /// A factor on every tension, actuator pull-in and external load (1 is the robot as
+    /// given), the load path's parameter.
     LoadScale,
     /// Young's modulus E (Pa) of a rod built from its geometry, at fixed Poisson's ratio
     /// (G follows). Sweeps only: a trace varies tensions and loads.
@@ -85,14 +85,19 @@ impl Parameter {
         }
     }
 
-    /// `robot` with this parameter set to `value` (a distributed force becomes uniform,
-    /// with its value at s = 0 in the other components; a load scale multiplies every
-    /// tension and load; E rebuilds a uniform rod's section from its geometry, and leaves a
+    /// `robot` with this parameter set to `value` (a tension makes its tendon
+    /// tension-controlled, as `--tension` does; a distributed force becomes uniform, with its
+    /// value at s = 0 in the other components; a load scale multiplies every tension,
+    /// pull-in and load, so that 0 is the unloaded robot; E rebuilds a uniform rod's section from its geometry, and leaves a
     /// rod without geometry as it is, which [`Parameter::parse`] does not accept).
     pub fn apply(&self, robot: &Robot, value: f64) -> Robot {
         let mut out = robot.clone();
         match *self {
-            Parameter::Tension(i) => out.tendons[i].tension = value,
+            Parameter::Tension(i) => {
+                // As `--tension`: the tendon becomes tension-controlled.
+                out.tendons[i].tension = value;
+                out.tendons[i].displacement = None;
+            }
             Parameter::TipForce(c) => out.loads.tip_force[c] = value,
             Parameter::DistributedForce(c) => {
                 let mut f = out.loads.distributed_force.at(0.0);
@@ -102,6 +107,7 @@ impl Parameter {
             Parameter::LoadScale => {
                 for t in &mut out.tendons {
                     t.tension *= value;
+                    t.displacement = t.displacement.map(|q| q * value);
                 }
                 let loads = &mut out.loads;
                 let scale = |f: &Field| match f {
@@ -187,6 +193,14 @@ mod tests {
         }
         let half = Parameter::LoadScale.apply(&robot, 0.5);
         assert_eq!(half.tendons[0].tension, 0.5 * robot.tendons[0].tension);
+        let mut pulled = robot.clone();
+        pulled.tendons[1].displacement = Some(0.002);
+        assert_eq!(
+            Parameter::LoadScale.apply(&pulled, 0.5).tendons[1].displacement,
+            Some(0.001)
+        );
+        let held = Parameter::Tension(1).apply(&pulled, 1.5);
+        assert_eq!((held.tendons[1].tension, held.tendons[1].displacement), (1.5, None));
         assert_eq!(half.loads.tip_force, 0.5 * robot.loads.tip_force);
         for bad in ["tension.0", "tension.6", "tip_force.w", "speed", "tip_force"] {
             let e = Parameter::parse(bad, &robot).unwrap_err().to_string();

@@ -236,7 +236,10 @@ class TipSensitivities:
 
     @property
     def tension(self) -> FloatArray:
-        """(6, k), per N."""
+        """(6, k), per N (zero columns for displacement-controlled tendons)."""
+    @property
+    def displacement(self) -> FloatArray:
+        """(6, k), per m of pull-in (zero columns for tension-controlled or slack tendons)."""
     @property
     def tip_force(self) -> FloatArray:
         """(6, 3), per N."""

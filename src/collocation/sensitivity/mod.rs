@@ -429,17 +429,6 @@ impl<'a> Sensitivity<'a> {
         };
         self.derivative(step, difference, |r, dq| r.tendons[tendon].tension += dq)
     }
-
-    /// Tip pose derivative (6-vector) for a perturbation, central differences.
-    fn tip(&mut self, step: f64, perturb: impl Fn(&mut Robot, f64)) -> Result<Vector6<f64>> {
-        tip_pose(self.derivative(step, Difference::Central, perturb))
-    }
-}
-
-/// The tip entry's pose of a derivative.
-pub(super) fn tip_pose(d: Result<Vec<NodeDerivative>>) -> Result<Vector6<f64>> {
-    let d = d?;
-    Ok(d[d.len() - 1].pose())
 }
 
 /// The residual of `system`'s mesh at `states` for the robot with its parameter moved by dq.

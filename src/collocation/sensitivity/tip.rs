@@ -2,13 +2,14 @@
 //! base pose) and the whole-backbone position derivative with respect to one tension, both
 //! from one [`Sensitivity`] (one factorization).
 
-use super::{RELATIVE_STEP, Sensitivity, tip_pose};
+use super::{Difference, NodeDerivative, RELATIVE_STEP, Sensitivity};
 use crate::error::Result;
 use crate::model::length::{NodeQuadrature, speed_gradient};
 use crate::model::robot::Robot;
 use crate::model::rod::{Section, Stiffness, shear_modulus};
+use crate::model::routing::RoutingPoint;
 use crate::solution::Solution;
-use nalgebra::{DMatrix, Matrix6, Matrix6x3, Vector3, Vector6};
+use nalgebra::{DMatrix, DVector, Matrix6, Matrix6x3, Vector3, Vector6};
 
 /// Tip pose derivatives with respect to the moduli of a rod built from geometry. Each is a
 /// 6-vector: tip position (m/Pa), then tip rotation vector, world frame (rad/Pa).
@@ -28,8 +29,14 @@ pub struct ModulusSensitivities {
 #[derive(Clone, Debug, PartialEq)]
 pub struct TipSensitivities {
     /// d(tip pose)/d(tension_i), 6 x k (per N), one column per tendon. For a slack tendon
-    /// the one-sided (pulling) derivative.
+    /// the one-sided (pulling) derivative; zero for a displacement-controlled tendon (see
+    /// `displacement`).
     pub tension: DMatrix<f64>,
+    /// d(tip pose)/d(q_i), 6 x k (per m of actuator pull-in), one column per tendon: zero
+    /// for a tension-controlled tendon and for a slack one. With displacement-controlled
+    /// tendons every derivative here holds their pull-ins (their tensions follow, as the
+    /// actuators hold position).
+    pub displacement: DMatrix<f64>,
     /// d(tip pose)/d(tip force), 6 x 3 (per N, world frame): the force half of the compliance.
     pub tip_force: Matrix6x3<f64>,
     /// d(tip pose)/d(tip moment), 6 x 3 (per N m, world frame): the moment half of the compliance.
@@ -76,25 +83,34 @@ impl TipSensitivities {
 /// assert!(sens.tip_force[(2, 2)] > 0.0);
 /// ```
 pub fn tip_sensitivities(robot: &Robot, solution: &Solution) -> Result<TipSensitivities> {
-    let mut sens = Sensitivity::new(robot, solution)?;
+    // A displacement-controlled tendon's tension is the solved one.
+    let solved = robot.with_tensions(&solution.tensions());
+    let mut sens = Sensitivity::new(&solved, solution)?;
+    let held = Held::new(&mut sens, robot, solution)?;
     let k = robot.tendons.len();
     let mut tension = DMatrix::zeros(6, k);
+    let mut displacement = DMatrix::zeros(6, k);
     for i in 0..k {
-        tension.set_column(i, &tip_pose(sens.tension(i))?);
+        if robot.tendons[i].displacement.is_some() {
+            displacement.set_column(i, &held.pull(i)?);
+        } else {
+            tension.set_column(i, &held.tip(&sens.tension(i)?)?);
+        }
     }
     let mut tip_force = Matrix6x3::zeros();
     let mut tip_moment = Matrix6x3::zeros();
     let mut base_position = Matrix6x3::zeros();
     let mut base_rotation = Matrix6x3::zeros();
     for j in 0..3 {
-        tip_force.set_column(j, &tip_pose(sens.tip_force(j))?);
-        tip_moment.set_column(j, &tip_pose(sens.tip_moment(j))?);
-        base_position.set_column(j, &tip_pose(sens.base_position(j))?);
-        base_rotation.set_column(j, &tip_pose(sens.base_rotation(j))?);
+        tip_force.set_column(j, &held.tip(&sens.tip_force(j)?)?);
+        tip_moment.set_column(j, &held.tip(&sens.tip_moment(j)?)?);
+        base_position.set_column(j, &held.tip(&sens.base_position(j)?)?);
+        base_rotation.set_column(j, &held.tip(&sens.base_rotation(j)?)?);
     }
-    let moduli = moduli(&mut sens)?;
+    let moduli = moduli(&mut sens, &held)?;
     Ok(TipSensitivities {
         tension,
+        displacement,
         tip_force,
         tip_moment,
         moduli,
@@ -103,8 +119,70 @@ pub fn tip_sensitivities(robot: &Robot, solution: &Solution) -> Result<TipSensit
     })
 }
 
+/// Derivatives with the pull-ins of the taut displacement-controlled tendons held: a
+/// parameter's state derivative D_p changes their path lengths by dl = G D_p, and their
+/// tensions follow to keep the lengths, S dtau = dl with S = C - dl/dtau
+/// ([`TensionDirections`]); the tip moves by its own derivative plus d(tip)/dtau dtau.
+/// Without such tendons it passes the derivatives through.
+struct Held {
+    /// The taut displacement-controlled tendons' directions; `None` without any.
+    directions: Option<TensionDirections>,
+}
+
+impl Held {
+    /// The held tendons of `robot` at `solution` (`sens` linearized there): taut ones (a
+    /// slack tendon stays slack for small changes, also one just taut at 0 N).
+    fn new(sens: &mut Sensitivity, robot: &Robot, solution: &Solution) -> Result<Self> {
+        let taut: Vec<usize> = (0..robot.tendons.len())
+            .filter(|&i| {
+                let state = &solution.tendons[i];
+                robot.tendons[i].displacement.is_some() && state.slack == 0.0 && state.tension > 0.0
+            })
+            .collect();
+        let directions = if taut.is_empty() {
+            None
+        } else {
+            Some(TensionDirections::from(sens, solution, taut)?)
+        };
+        Ok(Held { directions })
+    }
+
+    /// The tip pose's derivative for the state derivative `d`, the pull-ins held.
+    fn tip(&self, d: &[NodeDerivative]) -> Result<Vector6<f64>> {
+        let own = d[d.len() - 1].pose();
+        let Some(h) = &self.directions else {
+            return Ok(own);
+        };
+        let dtau = h
+            .displacement_by_tension()
+            .lu()
+            .solve(&h.length_change(d))
+            .ok_or_else(super::singular)?;
+        Ok(own + Vector6::from_iterator((&h.tip * dtau).iter().copied()))
+    }
+
+    /// d(tip pose)/dq_i for the displacement-controlled tendon `i` (per m): S dtau = e_i
+    /// over the held tendons; zero for a slack one.
+    fn pull(&self, i: usize) -> Result<Vector6<f64>> {
+        let Some(h) = &self.directions else {
+            return Ok(Vector6::zeros());
+        };
+        let Some(m) = h.tendons.iter().position(|&j| j == i) else {
+            return Ok(Vector6::zeros());
+        };
+        let mut unit = DVector::zeros(h.tendons.len());
+        unit[m] = 1.0;
+        let dtau = h
+            .displacement_by_tension()
+            .lu()
+            .solve(&unit)
+            .ok_or_else(super::singular)?;
+        Ok(Vector6::from_iterator((&h.tip * dtau).iter().copied()))
+    }
+}
+
 /// The modulus derivatives when the rod's uniform section is the one its geometry gives.
-fn moduli(sens: &mut Sensitivity) -> Result<Option<ModulusSensitivities>> {
+fn moduli(sens: &mut Sensitivity, held: &Held) -> Result<Option<ModulusSensitivities>> {
     let rod = &sens.robot().rod;
     let (Some(g), Stiffness::Uniform(section)) = (rod.geometry, &rod.stiffness) else {
         return Ok(None);
@@ -118,12 +196,12 @@ fn moduli(sens: &mut Sensitivity) -> Result<Option<ModulusSensitivities>> {
     if !(close(&section.kse, &built.kse) && close(&section.kbt, &built.kbt)) {
         return Ok(None);
     }
-    let youngs_modulus = sens.tip(RELATIVE_STEP * e, |r, d| {
+    let youngs_modulus = held.tip(&sens.derivative(RELATIVE_STEP * e, Difference::Central, |r, d| {
         r.rod.stiffness = Stiffness::Uniform(Section::tube(o, i, e + d, shear_modulus(e + d, nu)));
-    })?;
-    let shear_modulus = sens.tip(RELATIVE_STEP * shear, |r, d| {
+    })?)?;
+    let shear_modulus = held.tip(&sens.derivative(RELATIVE_STEP * shear, Difference::Central, |r, d| {
         r.rod.stiffness = Stiffness::Uniform(Section::tube(o, i, e, shear + d));
-    })?;
+    })?)?;
     Ok(Some(ModulusSensitivities {
         youngs_modulus,
         // d/dE|_nu = d/dE|_G + (dG/dE)|_nu d/dG|_E with dG/dE|_nu = G / E.
@@ -215,6 +293,10 @@ pub(crate) struct TensionDirections {
     length: DMatrix<f64>,
     /// c_j (m/N): each tendon's compliance at its reference length.
     compliance: Vec<f64>,
+    /// Each tendon's path-length quadrature and routing along it: dl_j along any derivative.
+    paths: Vec<(NodeQuadrature, Vec<RoutingPoint>)>,
+    /// The solution's node strains (v, u), where the path speeds are linearized.
+    strains: Vec<(Vector3<f64>, Vector3<f64>)>,
 }
 
 impl TensionDirections {
@@ -226,34 +308,72 @@ impl TensionDirections {
     pub(crate) fn new(robot: &Robot, solution: &Solution, tendons: Vec<usize>) -> Result<Self> {
         let solved = robot.with_tensions(&solution.tensions());
         let mut sens = Sensitivity::new(&solved, solution)?;
+        Self::from(&mut sens, solution, tendons)
+    }
+
+    /// As [`TensionDirections::new`], with the factors of `sens` (linearized at `solution`
+    /// with its solved tensions).
+    ///
+    /// # Errors
+    /// As [`Sensitivity::tension`].
+    fn from(sens: &mut Sensitivity, solution: &Solution, tendons: Vec<usize>) -> Result<Self> {
+        let robot = sens.robot();
         let k = tendons.len();
         let rod_length = robot.length();
         let s: Vec<f64> = solution.nodes.iter().map(|n| n.s).collect();
-        let mut tip = DMatrix::zeros(6, k);
-        let mut length = DMatrix::zeros(k, k);
-        for (m, &tm) in tendons.iter().enumerate() {
-            let d = sens.tension(tm)?;
-            tip.set_column(m, &d[d.len() - 1].pose());
-            for (j, &tj) in tendons.iter().enumerate() {
-                let t = &solved.tendons[tj];
+        let paths = tendons
+            .iter()
+            .map(|&i| {
+                let t = &robot.tendons[i];
                 let quadrature = NodeQuadrature::new(&s, t.end(rod_length));
-                length[(j, m)] = quadrature.integrate(|node| {
-                    let rp = t.routing.at(s[node], rod_length);
-                    let (dv, du) = speed_gradient(&rp, &solution.nodes[node].v, &solution.nodes[node].u);
-                    dv.dot(&d[node].v) + du.dot(&d[node].u)
-                });
-            }
-        }
+                let routing = quadrature
+                    .weights
+                    .iter()
+                    .map(|&(node, _)| t.routing.at(s[node], rod_length))
+                    .collect();
+                (quadrature, routing)
+            })
+            .collect();
+        let strains = solution.nodes.iter().map(|n| (n.v, n.u)).collect();
         let compliance = tendons
             .iter()
-            .map(|&i| solved.tendons[i].compliance(solution.tendons[i].reference_length))
+            .map(|&i| robot.tendons[i].compliance(solution.tendons[i].reference_length))
             .collect();
-        Ok(TensionDirections {
+        let mut directions = TensionDirections {
+            tip: DMatrix::zeros(6, k),
+            length: DMatrix::zeros(k, k),
             tendons,
-            tip,
-            length,
             compliance,
-        })
+            paths,
+            strains,
+        };
+        for m in 0..k {
+            let d = sens.tension(directions.tendons[m])?;
+            directions.tip.set_column(m, &d[d.len() - 1].pose());
+            let change = directions.length_change(&d);
+            directions.length.set_column(m, &change);
+        }
+        Ok(directions)
+    }
+
+    /// dl_j (m per unit of the parameter) of every tendon along the derivative `d` of the
+    /// node states: the quadrature of the path speed's gradient (docs/actuation.md).
+    fn length_change(&self, d: &[NodeDerivative]) -> DVector<f64> {
+        DVector::from_iterator(
+            self.tendons.len(),
+            self.paths.iter().map(|(quadrature, routing)| {
+                quadrature
+                    .weights
+                    .iter()
+                    .zip(routing)
+                    .map(|(&(node, w), rp)| {
+                        let (v, u) = &self.strains[node];
+                        let (dv, du) = speed_gradient(rp, v, u);
+                        w * (dv.dot(&d[node].v) + du.dot(&d[node].u))
+                    })
+                    .sum::<f64>()
+            }),
+        )
     }
 
     /// dq/dtau (m/N, k x k): how the pull-ins that hold the tendons just taut change with

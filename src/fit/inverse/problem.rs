@@ -188,17 +188,25 @@ pub(super) fn validate(
                     "give a positive tension limit in N, or 0 for the geometric limits alone",
                 ));
             }
+            if !max.is_finite() {
+                return Err(invalid(
+                    "options.max_displacement",
+                    format!("is {max} m"),
+                    "set the actuator's stroke: a finite upper pull-in bound in m (it has no default)",
+                ));
+            }
             if !min.is_finite() {
                 return Err(invalid(
                     "options.min_displacement",
                     format!("is {min} m"),
-                    "give a finite lower pull-in bound in m (default 0)",
+                    "give a finite lower pull-in bound in m",
                 ));
             }
-            if !(max.is_finite() && max > min) {
+            if max <= min {
                 return Err(invalid(
                     "options.max_displacement",
-                    format!("is {max} m, with min_displacement {min} m"),
+                    // + 0.0: -0 prints as 0
+                    format!("is {max} m, not above min_displacement {} m", min + 0.0),
                     "set the actuator's stroke: a finite upper pull-in bound in m above min_displacement \
                      (it has no default)",
                 ));
