@@ -137,12 +137,13 @@ impl InverseSolution {
             // What the iteration does (module docs): damped least-squares steps from the
             // starting inputs, each without a component in the null space of the tip
             // Jacobian at its iterate.
+            // Both iterate on the tensions, so the steps are smallest in tension.
             text.push_str(&format!(
                 "; {free} free tendons for {coordinates} target coordinates, so many {inputs} give this tip: \
-                 these are the ones reached from the starting {inputs}, each step the smallest change that \
-                 makes its progress (no component along changes the tip does not see, such as pulling \
+                 these are the ones reached from the starting {inputs}, each step the smallest tension change \
+                 that makes its progress (no component along changes the tip does not see, such as pulling \
                  opposing tendons together), so they keep the start's co-contraction: close to the solution \
-                 nearest the start, not the least-norm {inputs} (start from lower {inputs} for lower ones)"
+                 nearest the start, not the least-norm tensions (start from lower {inputs} for lower tensions)"
             ));
         }
         if !self.reachable {
