@@ -1051,3 +1051,289 @@ fn a_sweep_over_pull_ins_reports_solved_tensions_and_slack() {
     assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
     assert!(stderr(&out).contains("both given"), "{}", stderr(&out));
 }
+
+/// A weightless antagonistic pair (tendons at +-8 mm on the prototype's rod), both driven by
+/// tension 0 unless a command line or an edit says otherwise.
+const PAIR: &str = "[rod]\nlength = 0.242\nouter_radius = 0.0004\nyoungs_modulus = 210e9\npoisson_ratio = 0.3125\n\
+                    [[tendon]]\nrouting = { kind = \"straight\", x = 0.008, y = 0.0 }\ntension = 0.0\n\
+                    [[tendon]]\nrouting = { kind = \"straight\", x = -0.008, y = 0.0 }\ntension = 0.0\n";
+
+/// The prototype with tendon 1 pulled in by `pull` (m) and every other tendon held by its
+/// actuator at `others` (m).
+fn pulled_prototype(pull: &str, others: &str) -> String {
+    example()
+        .replacen("tension = 2.94", &format!("displacement = {pull}"), 1)
+        .replace("tension = 0.0", &format!("displacement = {others}"))
+}
+
+/// Review item 1: a displacement solve that converges to tensions past the geometric limit
+/// (actuators holding the antagonists the pull stretches) says so, as a tension input
+/// would; letting the antagonists out gives no warning.
+#[test]
+fn solved_tensions_past_the_geometric_limit_are_warned_about() {
+    let dir = scratch("solved-tension");
+    std::fs::write(dir.join("held.toml"), pulled_prototype("0.03", "0.0")).unwrap();
+    let out = run(&dir, &["solve", "held.toml"], None);
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    let err = stderr(&out);
+    // Tendons 1 and 3 (opposite it) both at about 3270 N, against EI/r^2 = 66 N.
+    for tendon in [1, 3] {
+        let head = format!("warning: held.toml: tendon {tendon}: solved tension 32");
+        assert!(err.contains(&head), "{err}");
+    }
+    assert!(
+        !err.contains("tendon 2: solved") && !err.contains("tendon 5: solved"),
+        "{err}"
+    );
+    for words in [
+        "past the geometric limit EI/r^2 = 66 N",
+        "antagonistic",
+        "Let the antagonists out",
+    ] {
+        assert!(err.contains(words), "`{words}` not in {err}");
+    }
+    // The same pull with every other tendon let out by as much: no such tensions.
+    std::fs::write(dir.join("free.toml"), pulled_prototype("0.03", "-0.03")).unwrap();
+    let out = run(&dir, &["solve", "free.toml"], None);
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    assert!(!stderr(&out).contains("solved tension"), "{}", stderr(&out));
+    // A tension input past the limit keeps its own warning, not this one.
+    std::fs::write(dir.join("pair.toml"), PAIR).unwrap();
+    let out = run(
+        &dir,
+        &["solve", "pair.toml", "--tension", "1=70", "--format", "csv"],
+        None,
+    );
+    assert!(!stderr(&out).contains("solved tension"), "{}", stderr(&out));
+}
+
+/// Review item 1 in `sweep`: the warning comes once per tendon, at its first step past the
+/// limit, and a last line counts the steps and gives the largest tension.
+#[test]
+fn a_sweep_warns_about_solved_tensions_once_per_tendon() {
+    let dir = scratch("sweep-solved-tension");
+    std::fs::write(dir.join("pair.toml"), PAIR).unwrap();
+    let args = [
+        "sweep",
+        "pair.toml",
+        "--displacement",
+        "1=0:0.03:4",
+        "--displacement",
+        "2=0",
+    ];
+    let out = run(&dir, &args, None);
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    let err = stderr(&out);
+    for tendon in [1, 2] {
+        let warning = format!("tendon {tendon}: solved tension");
+        assert_eq!(err.matches(&warning).count(), 1, "{err}");
+        let total = format!(
+            "tendon {tendon}: the solved tension was at or past the geometric limit (66 N) in 3 of the 4 steps \
+             solved, from step 2; the largest 32"
+        );
+        assert!(err.contains(&total), "{err}");
+    }
+    assert!(err.contains("sweep step 2: tendon 1: solved tension"), "{err}");
+    // Tendon 2 let out as tendon 1 is pulled in: slack, no warning.
+    let args = [
+        "sweep",
+        "pair.toml",
+        "--displacement",
+        "1=0:0.03:4",
+        "--displacement",
+        "2=0:-0.03:4",
+    ];
+    let out = run(&dir, &args, None);
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    assert!(!stderr(&out).contains("solved tension"), "{}", stderr(&out));
+}
+
+/// Review items 2 and 6: a sweep step that is not a valid robot (a pull-in longer than the
+/// tendon's path) is bad input, exit 2 as for `solve`, found before any solve; the message
+/// names each tendon's input and prints the path length readably.
+#[test]
+fn a_sweep_step_with_invalid_input_exits_2() {
+    let dir = scratch("sweep-invalid");
+    std::fs::write(dir.join("pair.toml"), PAIR).unwrap();
+    let out = run(&dir, &["sweep", "pair.toml", "--displacement", "1=0:0.3:4"], None);
+    assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
+    let err = stderr(&out);
+    assert!(
+        err.contains("sweep step 4 of 4 (tendon 1 pull-in 0.3 m, tendon 2 tension 0 N) is not a valid robot"),
+        "{err}"
+    );
+    assert!(err.contains("path is 0.242 m long"), "{err}");
+    assert!(!err.contains("0.2419999"), "{err}");
+    assert_eq!(stdout(&out), "", "no step is solved");
+    // `solve` on the same input: exit 2, the same readable length.
+    let out = run(&dir, &["solve", "pair.toml", "--displacement", "1=0.3"], None);
+    assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
+    assert!(stderr(&out).contains("path is 0.242 m long"), "{}", stderr(&out));
+    // In the file: at its line, the same message.
+    let text = PAIR.replacen("tension = 0.0", "displacement = 0.3", 1);
+    std::fs::write(dir.join("long.toml"), text).unwrap();
+    let out = run(&dir, &["check", "long.toml"], None);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(
+        stderr(&out)
+            .contains("long.toml:8:1: `tendon[1].displacement` is 0.3 m, but the tendon's path is 0.242 m long"),
+        "{}",
+        stderr(&out)
+    );
+}
+
+/// Review items 3 and 8: `--displacement` without a value asks for metres, `--tension` for
+/// newtons; a tendon given twice to `solve` is bad input, as in `sweep`.
+#[test]
+fn solve_option_messages_name_their_units_and_refuse_repeats() {
+    let dir = scratch("solve-options");
+    std::fs::write(dir.join("pair.toml"), PAIR).unwrap();
+    let out = run(&dir, &["solve", "pair.toml", "--displacement", "1"], None);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(
+        stderr(&out).contains("must look like I=METRES, e.g. 1=0.002"),
+        "{}",
+        stderr(&out)
+    );
+    assert!(!stderr(&out).contains("NEWTONS"), "{}", stderr(&out));
+    let out = run(&dir, &["solve", "pair.toml", "--tension", "1"], None);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(
+        stderr(&out).contains("must look like I=NEWTONS, e.g. 1=2.94"),
+        "{}",
+        stderr(&out)
+    );
+    let out = run(&dir, &["sweep", "pair.toml", "--displacement", "1"], None);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(
+        stderr(&out).contains("I=START:STOP:COUNT or I=METRES"),
+        "{}",
+        stderr(&out)
+    );
+    for option in ["--displacement", "--tension"] {
+        let args = ["solve", "pair.toml", option, "1=0.001", option, "1=0.002"];
+        let out = run(&dir, &args, None);
+        assert_eq!(out.status.code(), Some(2), "{option}: {}", stderr(&out));
+        let message = format!("{option} 1=... is given twice ({option} 1=0.001 and {option} 1=0.002)");
+        assert!(stderr(&out).contains(&message), "{}", stderr(&out));
+        assert_eq!(stdout(&out), "");
+    }
+    // Different tendons are fine.
+    let out = run(
+        &dir,
+        &[
+            "solve",
+            "pair.toml",
+            "--displacement",
+            "1=0.001",
+            "--displacement",
+            "2=-0.001",
+        ],
+        None,
+    );
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+}
+
+/// Review item 4: `check` shows a displacement-controlled tendon's pull-in (and an elastic
+/// tendon's stiffness and free length) and counts it.
+#[test]
+fn check_shows_pull_ins_and_elastic_tendons() {
+    let dir = scratch("check-displacement");
+    let text = PAIR
+        .replacen(
+            "tension = 0.0",
+            "displacement = 0.002\nstiffness = 2000.0\nfree_length = 0.1",
+            1,
+        )
+        .replacen("tension = 0.0", "displacement = -0.002", 1);
+    std::fs::write(dir.join("pair.toml"), text).unwrap();
+    let out = run(&dir, &["check", "pair.toml"], None);
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    let text = stdout(&out);
+    assert!(
+        text.contains("2 tendon(s) (0 pulled by tension, 2 driven by displacement)"),
+        "{text}"
+    );
+    assert!(
+        text.contains("tendon 1: straight at (0.008, 0) m, ends at the tip (0.242 m), displacement-controlled, pull-in 0.002 m, elastic: stiffness 2000 N, free length 0.1 m"),
+        "{text}"
+    );
+    assert!(text.contains("tendon 2: straight at (-0.008, 0) m, ends at the tip (0.242 m), displacement-controlled, pull-in -0.002 m (let out)\n"), "{text}");
+    assert!(!text.contains("tension 0 N"), "{text}");
+    // Without displacement-controlled tendons the count reads as before.
+    let out = run(&dir, &["check", "-"], Some(&example()));
+    assert!(stdout(&out).contains("5 tendon(s) (1 pulled), "), "{}", stdout(&out));
+}
+
+/// Review item 5: `free_length` without `stiffness` has no effect (the tendon is
+/// inextensible): `check` and `solve` warn, and the solve is that of the tendon without it.
+#[test]
+fn a_free_length_without_stiffness_is_warned_about() {
+    let dir = scratch("free-length");
+    let text = PAIR.replacen("tension = 0.0", "displacement = 0.002\nfree_length = 0.1", 1);
+    std::fs::write(dir.join("pair.toml"), &text).unwrap();
+    let warning = "`tendon[1].free_length` is 0.1 m, but the tendon has no `stiffness`, so it is inextensible \
+                   and its free length has no effect";
+    let out = run(&dir, &["check", "pair.toml"], None);
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    assert!(
+        stdout(&out).contains("pair.toml: OK, with 1 warning:"),
+        "{}",
+        stdout(&out)
+    );
+    assert!(
+        stdout(&out).contains(&format!("warning: {warning}")),
+        "{}",
+        stdout(&out)
+    );
+    let out = run(&dir, &["solve", "pair.toml", "--format", "csv"], None);
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    assert!(
+        stderr(&out).contains(&format!("warning: pair.toml: {warning}")),
+        "{}",
+        stderr(&out)
+    );
+    let with = stdout(&out);
+    let plain = PAIR.replacen("tension = 0.0", "displacement = 0.002", 1);
+    std::fs::write(dir.join("plain.toml"), plain).unwrap();
+    let out = run(&dir, &["solve", "plain.toml", "--format", "csv"], None);
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    assert!(!stderr(&out).contains("free_length"), "{}", stderr(&out));
+    assert_eq!(with, stdout(&out), "the free length changed the solve");
+    // With a stiffness it counts, and there is no warning.
+    let elastic = text.replacen("free_length = 0.1", "free_length = 0.1\nstiffness = 2000.0", 1);
+    std::fs::write(dir.join("elastic.toml"), elastic).unwrap();
+    let out = run(&dir, &["check", "elastic.toml"], None);
+    assert!(!stdout(&out).contains("warning"), "{}", stdout(&out));
+}
+
+/// Review item 7: a tendon with neither `tension` nor `displacement` gets one message that
+/// offers both, not also "`tension` is required".
+#[test]
+fn a_tendon_without_tension_or_displacement_gets_one_message() {
+    let dir = scratch("no-actuation");
+    let text = PAIR.replacen("tension = 0.0\n", "", 1);
+    std::fs::write(dir.join("pair.toml"), text).unwrap();
+    let out = run(&dir, &["check", "pair.toml"], None);
+    assert_eq!(out.status.code(), Some(2));
+    let err = stderr(&out);
+    assert_eq!(err.lines().count(), 1, "{err}");
+    assert!(
+        err.contains(
+            "pair.toml:6:1: `tendon[1]` in [[tendon]] #1 has neither `tension` nor `displacement`: give `tension` (N)"
+        ),
+        "{err}"
+    );
+    assert!(err.contains("`displacement` (m, the actuator's pull-in"), "{err}");
+    assert!(!err.contains("is required"), "{err}");
+    // A misspelling of one of them is pointed at.
+    let text = PAIR.replacen("tension = 0.0", "tensoin = 0.0", 1);
+    std::fs::write(dir.join("typo.toml"), text).unwrap();
+    let out = run(&dir, &["check", "typo.toml"], None);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(
+        stderr(&out).contains("(the table has `tensoin`: a misspelling of `tension`?)"),
+        "{}",
+        stderr(&out)
+    );
+}

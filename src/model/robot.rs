@@ -254,11 +254,13 @@ impl Robot {
             return Err(invalid(
                 format!("tendons[{i}].displacement"),
                 format!(
-                    "is {} m, but the tendon's path is only {} m long in the unloaded shape, so no shape can take up this pull-in",
+                    "is {} m, but the tendon's path is {} m long in the unloaded shape, and an inextensible \
+                     tendon cannot be pulled in by its whole path or more (no shape takes it up)",
                     Readable(q),
-                    Readable(reference)
+                    // Computed, not given: 6 significant digits, not 0.24199999999999972.
+                    Readable(significant(reference, 6))
                 ),
-                "give a pull-in smaller than the tendon's path length",
+                "give a pull-in smaller than the tendon's path length (in m: 0.003 for 3 mm)",
             ));
         }
         Ok(())
@@ -397,4 +399,14 @@ fn check_vec(field: &str, v: &Vector3<f64>) -> Result<()> {
             "every component must be a finite number",
         ))
     }
+}
+
+/// `x` rounded to `digits` significant digits, for computed values in messages.
+fn significant(x: f64, digits: i32) -> f64 {
+    if x == 0.0 || !x.is_finite() {
+        return x;
+    }
+    let scale = 10f64.powi(digits - 1 - x.abs().log10().floor() as i32);
+    let rounded = (x * scale).round() / scale;
+    if rounded.is_finite() { rounded } else { x }
 }

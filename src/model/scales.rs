@@ -17,6 +17,11 @@
 //! | F a^2 / EI | a tip force (a = L) or point force (a = its s) against stiffness | above 100: the rod bends only within (EI/F)^(1/2) < a/10 of the load |
 //! | M a / EI | the bending angle a tip or point moment alone causes (rad) | above 20 pi (ten turns) |
 //!
+//! A displacement-controlled tendon's tension is solved for, so these figures cannot check
+//! it; [`Robot::solved_tensions`] holds a solution's tensions to the same geometric limit
+//! ([`Warning::SolvedTension`]): a displacement solve can converge past it when actuators
+//! hold antagonistic tendons that the pull stretches and the tendons fight each other.
+//!
 //! The thresholds come from the solves that fail and those that do not: the prototype's
 //! rod at 1 m (w L^3 / EI = 111) hangs and converges, at E = 1 MPa (3e5) it fails on every
 //! mesh a default solve tries; a tendon at 0.97 EI / r^2 converges and at 1.1 EI / r^2 has
@@ -96,6 +101,22 @@ pub enum Warning {
         /// EI, N m^2.
         bending_stiffness: f64,
     },
+    /// The solved tension of a displacement-controlled tendon ([`Robot::solved_tensions`])
+    /// times its offset^2 against EI is at or above [`TENDON_LIMIT`]: the solve converged,
+    /// but to a tension past the limit no tension input may reach, which is what tendons
+    /// that fight each other give (actuators holding antagonists that the pull stretches).
+    SolvedTension {
+        /// The tendon (from 0; messages number from 1).
+        tendon: usize,
+        /// The solved tension tau, N.
+        tension: f64,
+        /// The tendon's actuator pull-in q, m.
+        displacement: f64,
+        /// The tendon's largest offset |r| from the backbone, m.
+        offset: f64,
+        /// EI, N m^2.
+        bending_stiffness: f64,
+    },
     /// A tip or point force against the stiffness, F a^2 / EI, is above [`FORCE_LIMIT`].
     Force {
         /// Where it acts.
@@ -134,6 +155,12 @@ impl Warning {
                 bending_stiffness,
             } => weight_per_length * length.powi(3) / bending_stiffness,
             Warning::TendonCurl {
+                tension,
+                offset,
+                bending_stiffness,
+                ..
+            }
+            | Warning::SolvedTension {
                 tension,
                 offset,
                 bending_stiffness,
@@ -259,6 +286,32 @@ impl fmt::Display for Warning {
                 fig(offset),
                 fig(bending_stiffness / (offset * offset))
             ),
+            Warning::SolvedTension {
+                tendon,
+                tension,
+                displacement,
+                offset,
+                bending_stiffness,
+            } => write!(
+                f,
+                "tendon {}: solved tension {} N (actuator pull-in {} m) x offset^2 ({} m)^2 = {} N m^2 is {}x \
+                 the bending stiffness EI = {} N m^2: {} the geometric limit EI/r^2 = {} N that bounds a tension \
+                 input (a tension-controlled tendon has no equilibrium beyond it). Displacement control reaches \
+                 such tensions when actuators hold antagonistic tendons that the pull stretches (a bend lengthens \
+                 the paths on its far side): held at their pull-ins, they pull back, and the tendons compress the \
+                 rod instead of bending it. Let the antagonists out (a negative displacement, about the \
+                 lengthening of their paths; `tdcr solve` prints the lengths), drive them by tension (e.g. \
+                 tension = 0), or pull in less",
+                tendon + 1,
+                fig(tension),
+                fig(displacement),
+                fig(offset),
+                fig(tension * offset * offset),
+                fig(x),
+                fig(bending_stiffness),
+                if x > TENDON_LIMIT { "past" } else { "at" },
+                fig(bending_stiffness / (offset * offset)),
+            ),
             Warning::Force {
                 site: s,
                 force,
@@ -324,6 +377,46 @@ impl Robot {
         let end = t.end(length);
         let offset = t.routing.max_offset(end, length);
         self.weakest_bending(end) / (offset * offset)
+    }
+
+    /// The displacement-controlled tendons whose solved tensions are at or past their
+    /// geometric limit EI / r^2, one [`Warning::SolvedTension`] each. `tensions` are the
+    /// solution's, one per tendon ([`crate::Solution::tensions`]); tension-controlled
+    /// tendons are left to [`Robot::plausibility`], which checks their inputs.
+    ///
+    /// A displacement solve can converge to such tensions: actuators that hold antagonistic
+    /// tendons which the pull stretches make the tendons fight, compressing the rod.
+    ///
+    /// # Examples
+    /// ```
+    /// use tdcr::model::scales::Warning;
+    /// let mut robot = tdcr::cases::case_s();
+    /// robot.tendons[0].displacement = Some(0.03);
+    /// robot.tendons[0].tension = 0.0;
+    /// // Tension 3270 N on the displacement-controlled tendon, 2 N on a tension-controlled one.
+    /// let warnings = robot.solved_tensions(&[3270.0, 2.0, 0.0, 0.0, 0.0]);
+    /// assert!(matches!(warnings[..], [Warning::SolvedTension { tendon: 0, .. }]));
+    /// assert!(warnings[0].to_string().contains("solved tension 3270 N"));
+    /// ```
+    pub fn solved_tensions(&self, tensions: &[f64]) -> Vec<Warning> {
+        let length = self.length();
+        self.tendons
+            .iter()
+            .zip(tensions)
+            .enumerate()
+            .filter_map(|(i, (t, &tension))| {
+                let displacement = t.displacement?;
+                let end = t.end(length);
+                let w = Warning::SolvedTension {
+                    tendon: i,
+                    tension,
+                    displacement,
+                    offset: t.routing.max_offset(end, length),
+                    bending_stiffness: self.weakest_bending(end),
+                };
+                (w.figure() >= TENDON_LIMIT).then_some(w)
+            })
+            .collect()
     }
 
     /// The robot's figures outside their plausible ranges (module [`crate::model::scales`]):

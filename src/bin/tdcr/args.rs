@@ -108,18 +108,19 @@ pub fn parse_positive(text: &str) -> Result<f64, String> {
     }
 }
 
-/// Splits `I=VALUE` into the tendon number (from 1) and the value text.
-fn parse_tendon(text: &str) -> Result<(usize, &str), String> {
+/// Splits `I=VALUE` into the tendon number (from 1) and the value text; `form` is the
+/// expected shape with an example (`I=NEWTONS, e.g. 1=2.94`), for the message.
+fn parse_tendon<'a>(text: &'a str, form: &str) -> Result<(usize, &'a str), String> {
     let (index, value) = text
         .split_once('=')
-        .ok_or_else(|| format!("`{text}` must look like I=NEWTONS, e.g. 1=2.94"))?;
+        .ok_or_else(|| format!("`{text}` must look like {form}"))?;
     let index = parse_count(index.trim()).map_err(|_| format!("tendon number `{index}` must be 1 or more"))?;
     Ok((index, value))
 }
 
 /// `I=NEWTONS` (`solve --tension`): a tendon number and a tension >= 0.
 pub fn parse_tension(text: &str) -> Result<(usize, f64), String> {
-    let (index, value) = parse_tendon(text)?;
+    let (index, value) = parse_tendon(text, "I=NEWTONS, e.g. 1=2.94")?;
     let tension = parse_number(value, "a tension in N")?;
     if tension < 0.0 {
         return Err(format!(
@@ -133,7 +134,7 @@ pub fn parse_tension(text: &str) -> Result<(usize, f64), String> {
 /// `I=METRES` (`--displacement`): a tendon number from 1 and its actuator pull-in in m
 /// (negative lets the tendon out).
 pub fn parse_displacement(text: &str) -> Result<(usize, f64), String> {
-    let (index, value) = parse_tendon(text)?;
+    let (index, value) = parse_tendon(text, "I=METRES, e.g. 1=0.002 (a pull-in in m; negative lets it out)")?;
     Ok((index, parse_number(value, "a displacement in m")?))
 }
 
@@ -186,7 +187,7 @@ pub fn parse_displacement_sweep(text: &str) -> Result<(usize, Vec<f64>), String>
 /// A tendon number and COUNT evenly spaced values from START to STOP, or one value
 /// (`what` names it in messages, `unit` is the single value's placeholder).
 fn parse_range(text: &str, what: &str, unit: &str) -> Result<(usize, Vec<f64>), String> {
-    let (index, value) = parse_tendon(text)?;
     let form = format!("I=START:STOP:COUNT or I={unit}");
+    let (index, value) = parse_tendon(text, &form)?;
     Ok((index, range_values(value, text, &form, what)?))
 }

@@ -18,10 +18,25 @@ pub fn run(file: &str) -> Result<(), Failure> {
         tdcr::collocation::check_resolution(r, &parsed.solver.collocation)
             .map_err(|e| Failure::Input(format!("{name}: {e}")))?;
     }
-    let pulled = r.tendons.iter().filter(|t| t.tension > 0.0).count();
-    let warnings = r.plausibility();
+    // Tendons pulled by a tension, and those driven by their actuator's pull-in (pulled
+    // in, held or let out: their tensions are solved for).
+    let pulled = r
+        .tendons
+        .iter()
+        .filter(|t| t.displacement.is_none() && t.tension > 0.0)
+        .count();
+    let driven = r.tendons.iter().filter(|t| t.displacement.is_some()).count();
+    let actuation = match driven {
+        0 => format!("{pulled} pulled"),
+        _ => format!("{pulled} pulled by tension, {driven} driven by displacement"),
+    };
+    let warnings: Vec<String> = parsed
+        .warnings()
+        .into_iter()
+        .chain(r.plausibility().iter().map(ToString::to_string))
+        .collect();
     let mut out = format!(
-        "{name}: OK{}: a {:.4} m rod with {} tendon(s) ({pulled} pulled), {} point load(s); solver: {}\n",
+        "{name}: OK{}: a {:.4} m rod with {} tendon(s) ({actuation}), {} point load(s); solver: {}\n",
         match warnings.len() {
             0 => String::new(),
             1 => ", with 1 warning".to_string(),
@@ -48,7 +63,7 @@ pub fn run(file: &str) -> Result<(), Failure> {
 }
 
 /// A tendon in a few words for `check`: its routing with the turns it makes over its own
-/// length, its end and tension.
+/// length, its end, its tension or pull-in, and its stiffness and free length when set.
 fn tendon(t: &Tendon, length: f64) -> String {
     let end = t.end(length);
     let at = if end < length {
@@ -80,7 +95,27 @@ fn tendon(t: &Tendon, length: f64) -> String {
         }
         Routing::Custom(_) => "custom routing".into(),
     };
-    format!("{routing}, {at}, tension {} N", Readable(t.tension))
+    let actuation = match t.displacement {
+        Some(q) => format!(
+            "displacement-controlled, pull-in {} m{}",
+            Readable(q),
+            if q < 0.0 { " (let out)" } else { "" }
+        ),
+        None => format!("tension {} N", Readable(t.tension)),
+    };
+    let elastic = match t.stiffness {
+        Some(k) => format!(
+            ", elastic: stiffness {} N, free length {} m",
+            Readable(k),
+            Readable(t.free_length)
+        ),
+        None if t.free_length != 0.0 => format!(
+            ", inextensible (free length {} m, no effect without stiffness)",
+            Readable(t.free_length)
+        ),
+        None => String::new(),
+    };
+    format!("{routing}, {at}, {actuation}{elastic}")
 }
 
 /// `tdcr example`: the prototype as a commented robot file.

@@ -124,6 +124,36 @@ pub fn warn_scales(name: &str, robot: &Robot) {
     }
 }
 
+/// Prints what the robot file gives that has no effect (`RobotFile::warnings`, a
+/// `free_length` without `stiffness`) to standard error, one `warning:` line each.
+pub fn warn_file(name: &str, file: &tdcr::io::RobotFile) {
+    for w in file.warnings() {
+        note(&format!("warning: {name}: {w}"));
+    }
+}
+
+/// The solved tensions of displacement-controlled tendons at or past their geometric
+/// limit ([`Robot::solved_tensions`]), one warning line each, headed by `at` (`FILE` or
+/// `FILE: sweep step K`); `skip(i)` leaves tendon `i` out (a sweep warns once per tendon).
+/// Returns the tendons warned about.
+pub fn warn_solved_tensions(
+    at: &str,
+    robot: &Robot,
+    solution: &tdcr::Solution,
+    skip: impl Fn(usize) -> bool,
+) -> Vec<usize> {
+    let mut warned = Vec::new();
+    for w in robot.solved_tensions(&solution.tensions()) {
+        if let tdcr::model::scales::Warning::SolvedTension { tendon, .. } = w
+            && !skip(tendon)
+        {
+            note(&format!("warning: {at}: {w}"));
+            warned.push(tendon);
+        }
+    }
+    warned
+}
+
 /// Standard error, ignoring write errors (there is nowhere left to report them).
 pub fn note(text: &str) {
     let _ = writeln!(std::io::stderr().lock(), "{text}");

@@ -63,12 +63,29 @@ pub struct SolveArgs {
     disks: Option<usize>,
 }
 
+/// Bad input if `values` (the `option`'s `I=VALUE` arguments) give a tendon twice: the
+/// second would silently replace the first.
+fn once(option: &str, values: &[(usize, f64)]) -> Result<(), Failure> {
+    for (k, &(i, a)) in values.iter().enumerate() {
+        if let Some(&(_, b)) = values[..k].iter().find(|&&(j, _)| j == i) {
+            return Err(Failure::Input(format!(
+                "{option} {i}=... is given twice ({option} {i}={} and {option} {i}={}): give each tendon one value",
+                tdcr::Readable(b),
+                tdcr::Readable(a)
+            )));
+        }
+    }
+    Ok(())
+}
+
 /// `tdcr solve`: solves one robot file and writes the output (and the picture).
 pub fn run(args: &SolveArgs) -> Result<(), Failure> {
     if let Some(path) = &args.plot {
         picture_format(path)?;
     }
     let (name, mut file) = read_robot(&args.file)?;
+    once("--tension", &args.tension)?;
+    once("--displacement", &args.displacement)?;
     for &(i, t) in &args.tension {
         set_tension(&mut file.robot, i, t)?;
     }
@@ -81,6 +98,7 @@ pub fn run(args: &SolveArgs) -> Result<(), Failure> {
         set_displacement(&mut file.robot, i, q)?;
     }
     apply(&mut file, &args.solver);
+    crate::failure::warn_file(&name, &file);
     crate::failure::warn_scales(&name, &file.robot);
     let start = args
         .start
@@ -89,6 +107,7 @@ pub fn run(args: &SolveArgs) -> Result<(), Failure> {
         .transpose()?;
     let solution = run_solver(&file.robot, &file, start.as_ref())?;
     crate::failure::warn_equilibrium(&name, &solution.report);
+    crate::failure::warn_solved_tensions(&name, &file.robot, &solution, |_| false);
     if args.jacobian && !matches!(args.format, Format::Json) {
         note("note: --jacobian adds the tip Jacobians to the JSON output only (--format json)");
     }

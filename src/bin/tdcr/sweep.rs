@@ -163,6 +163,34 @@ pub fn run(args: &SweepArgs) -> Result<(), Failure> {
     for &(i, ref v) in &args.displacement {
         set_displacement(&mut file.robot, i, v[0])?;
     }
+    crate::failure::warn_file(&name, &file);
+    // The robot of step k (from 0): every range at its k-th value.
+    let robot_at = |k: usize| -> Result<Robot, Failure> {
+        let at = |v: &Vec<f64>| v[if v.len() == 1 { 0 } else { k }];
+        let mut robot = file.robot.clone();
+        for &(i, ref v) in &args.tension {
+            set_tension(&mut robot, i, at(v))?;
+        }
+        for &(i, ref v) in &args.displacement {
+            set_displacement(&mut robot, i, at(v))?;
+        }
+        for (p, v) in &params {
+            robot = p.apply(&robot, at(v));
+        }
+        Ok(robot)
+    };
+    // Every step's robot must be valid before any is solved (a pull-in longer than the
+    // tendon's path, a negative modulus): bad input, exit 2, not a failed solve.
+    for k in 0..steps {
+        let robot = robot_at(k)?;
+        if let Err(e) = robot.validate() {
+            return Err(Failure::Input(format!(
+                "sweep step {} of {steps} ({}) is not a valid robot: {e}",
+                k + 1,
+                step_inputs(&robot)
+            )));
+        }
+    }
     let count = file.robot.tendons.len();
     let mut csv = String::from("step");
     for i in 1..=count {
@@ -190,40 +218,56 @@ pub fn run(args: &SweepArgs) -> Result<(), Failure> {
     );
     let mut progress = Progress::new();
     let mut failure = None;
+    // Per tendon whose solved tension reached the geometric limit: each is warned about at
+    // its first such step and summed up at the end.
+    let mut past_limit: Vec<PastLimit> = Vec::new();
     for k in 0..steps {
-        let mut robot = file.robot.clone();
-        for &(i, ref v) in &args.tension {
-            set_tension(&mut robot, i, v[if v.len() == 1 { 0 } else { k }])?;
-        }
-        for &(i, ref v) in &args.displacement {
-            set_displacement(&mut robot, i, v[if v.len() == 1 { 0 } else { k }])?;
-        }
-        for (p, v) in &params {
-            robot = p.apply(&robot, v[if v.len() == 1 { 0 } else { k }]);
-        }
+        let robot = robot_at(k)?;
         let solution = match run_solver(&robot, &file, last.as_ref()) {
             Ok(s) => s,
             Err(f) => {
-                let tensions: Vec<String> = robot
-                    .tendons
-                    .iter()
-                    .map(|t| match t.displacement {
-                        Some(q) => format!("pull-in {} m", tdcr::Readable(q)),
-                        None => format!("{} N", tdcr::Readable(t.tension)),
-                    })
-                    .collect();
-                let text = match f {
-                    Failure::NotConverged(t) | Failure::Input(t) | Failure::Other(t) => t,
-                    Failure::BrokenPipe => String::new(),
-                };
-                failure = Some(Failure::NotConverged(format!(
-                    "sweep step {} of {steps} (tendons {}) failed; the CSV holds the steps before it\n{text}",
-                    k + 1,
-                    tensions.join(", ")
-                )));
+                let head = format!("sweep step {} of {steps} ({})", k + 1, step_inputs(&robot));
+                failure = Some(match f {
+                    // Exit 2 for bad input, as `solve` exits (the checks above should
+                    // have found it).
+                    Failure::Input(t) => Failure::Input(format!("{head}: {t}")),
+                    Failure::NotConverged(t) => {
+                        Failure::NotConverged(format!("{head} failed; the CSV holds the steps before it\n{t}"))
+                    }
+                    Failure::Other(t) => {
+                        Failure::Other(format!("{head} failed; the CSV holds the steps before it\n{t}"))
+                    }
+                    Failure::BrokenPipe => Failure::BrokenPipe,
+                });
                 break;
             }
         };
+        for w in robot.solved_tensions(&solution.tensions()) {
+            let tdcr::model::scales::Warning::SolvedTension { tendon, tension, .. } = w else {
+                continue;
+            };
+            let limit = robot.geometric_limit(tendon);
+            match past_limit.iter_mut().find(|p| p.tendon == tendon) {
+                Some(p) => {
+                    p.steps += 1;
+                    if tension > p.largest.1 {
+                        p.largest = (k + 1, tension);
+                    }
+                    p.limits = (p.limits.0.min(limit), p.limits.1.max(limit));
+                }
+                None => {
+                    progress.finish();
+                    note(&format!("warning: {name}: sweep step {}: {w}", k + 1));
+                    past_limit.push(PastLimit {
+                        tendon,
+                        steps: 1,
+                        first: k + 1,
+                        largest: (k + 1, tension),
+                        limits: (limit, limit),
+                    });
+                }
+            }
+        }
         let tip = solution.tip_position();
         let _ = write!(csv, "{}", k + 1);
         // The solved tensions: the inputs of tension-controlled tendons, the unknowns of
@@ -296,6 +340,23 @@ pub fn run(args: &SweepArgs) -> Result<(), Failure> {
         progress.update(k + 1, steps);
     }
     progress.finish();
+    for p in past_limit.iter().filter(|p| p.steps > 1) {
+        let limit = if p.limits.0 == p.limits.1 {
+            format!("{} N", limit_text(p.limits.0))
+        } else {
+            format!("{} to {} N", limit_text(p.limits.0), limit_text(p.limits.1))
+        };
+        note(&format!(
+            "warning: {name}: tendon {}: the solved tension was at or past the geometric limit ({limit}) in {} of \
+             the {} steps solved, from step {}; the largest {} N at step {}",
+            p.tendon + 1,
+            p.steps,
+            tips.len(),
+            p.first,
+            limit_text(p.largest.1),
+            p.largest.0
+        ));
+    }
     match &args.out {
         Some(path) => {
             write_file(path, &csv, "CSV")?;
@@ -358,4 +419,56 @@ pub fn run(args: &SweepArgs) -> Result<(), Failure> {
         write_picture(path, &figure, "plot")?;
     }
     failure.map_or(Ok(()), Err)
+}
+
+/// A tendon whose solved tension reached its geometric limit in a sweep.
+struct PastLimit {
+    /// The tendon (from 0).
+    tendon: usize,
+    /// The steps at or past the limit.
+    steps: usize,
+    /// The first of them (from 1).
+    first: usize,
+    /// The step (from 1) of the largest tension, and the tension (N).
+    largest: (usize, f64),
+    /// The smallest and largest limit EI / r^2 over those steps (N; a swept modulus moves it).
+    limits: (f64, f64),
+}
+
+/// The tendon inputs of a sweep step, each tendon named: `tendon 1 pull-in 0.3 m, tendon 2
+/// tension 0 N` (the first 8 tendons, then a count).
+fn step_inputs(robot: &Robot) -> String {
+    const SHOWN: usize = 8;
+    let mut parts: Vec<String> = robot
+        .tendons
+        .iter()
+        .take(SHOWN)
+        .enumerate()
+        .map(|(i, t)| match t.displacement {
+            Some(q) => format!("tendon {} pull-in {} m", i + 1, tdcr::Readable(q)),
+            None => format!("tendon {} tension {} N", i + 1, tdcr::Readable(t.tension)),
+        })
+        .collect();
+    if robot.tendons.len() > SHOWN {
+        parts.push(format!("{} more tendons", robot.tendons.len() - SHOWN));
+    }
+    if parts.is_empty() {
+        "no tendons".into()
+    } else {
+        parts.join(", ")
+    }
+}
+
+/// A tension for a message as the warnings print it: 3 significant digits, whole newtons
+/// from 100 N (a solved tension has many more digits).
+fn limit_text(x: f64) -> String {
+    if !(x.is_finite() && x != 0.0) {
+        tdcr::Readable(x).to_string()
+    } else if (100.0..1e5).contains(&x.abs()) {
+        format!("{x:.0}")
+    } else {
+        let digits = 2 - x.abs().log10().floor() as i32;
+        let scale = 10f64.powi(digits);
+        tdcr::Readable((x * scale).round() / scale).to_string()
+    }
 }

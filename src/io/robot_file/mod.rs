@@ -55,6 +55,31 @@ pub struct RobotFile {
     pub solver: SolverSettings,
 }
 
+impl RobotFile {
+    /// What the file gives that has no effect on the solve, one message each (`tdcr check`
+    /// and `tdcr solve` print them as warnings; they are not errors): a `free_length` on a
+    /// tendon without `stiffness`. An inextensible tendon's free length, between the base
+    /// and the actuator, is there but does not stretch, so it changes nothing; the free
+    /// length counts only in the stretch of an elastic tendon (docs/actuation.md).
+    pub fn warnings(&self) -> Vec<String> {
+        self.robot
+            .tendons
+            .iter()
+            .enumerate()
+            .filter(|(_, t)| t.stiffness.is_none() && t.free_length != 0.0)
+            .map(|(i, t)| {
+                format!(
+                    "`tendon[{}].free_length` is {} m, but the tendon has no `stiffness`, so it is \
+                     inextensible and its free length has no effect (only an elastic tendon's free length \
+                     stretches); give `stiffness` (E_t A_t, N) to make it elastic, or remove `free_length`",
+                    i + 1,
+                    crate::Readable(t.free_length)
+                )
+            })
+            .collect()
+    }
+}
+
 /// Reads a robot file from its text; `file` is the name used in messages.
 ///
 /// # Errors
@@ -250,6 +275,28 @@ impl Reader<'_> {
             });
             found.push(path);
         }
+        // A tendon is driven by `tension` or by `displacement`: one message for neither
+        // (the check of the values reports both).
+        if let Some(present) = keys(value).filter(|_| name.starts_with("tendon["))
+            && !present.contains(&"tension")
+            && !present.contains(&"displacement")
+        {
+            let hint = ["tension", "displacement"]
+                .iter()
+                .find_map(|f| closest(f, present.iter().copied()).map(|key| (f, key)))
+                .map_or(String::new(), |(f, key)| {
+                    format!(" (the table has `{key}`: a misspelling of `{f}`?)")
+                });
+            self.problems.push(Problem {
+                position: Some(self.lines.position(value.span().start)),
+                field: name.to_string(),
+                message: format!(
+                    "in {shown} has neither `tension` nor `displacement`{hint}: give `tension` (N) for a \
+                     tension-controlled tendon or `displacement` (m, the actuator's pull-in; its tension is \
+                     then solved for)"
+                ),
+            });
+        }
         found
     }
 
@@ -351,10 +398,9 @@ fn required_fields<'a>(name: &str, value: &'a Spanned<DeValue<'_>>) -> Vec<(Stri
             }
         }
     } else if name.starts_with("tendon[") {
-        // A tendon is driven by `tension` or by `displacement`; the check of the values
-        // reports a tendon with neither (or both).
-        let driven = keys(value).is_some_and(|k| k.contains(&"displacement"));
-        need(name, value, if driven { &["routing"] } else { &["routing", "tension"] });
+        // A tendon is driven by `tension` or by `displacement`: `missing` reports a tendon
+        // with neither, the check of the values one with both.
+        need(name, value, &["routing"]);
         if let Some(routing) = entry(value, "routing") {
             let path = format!("{name}.routing");
             match entry(routing, "kind").map(|k| k.get_ref()) {
@@ -464,7 +510,9 @@ mod tests {
             "robot.toml:1:1: `rod.length` is required but missing in [rod]",
             "robot.toml:1:1: `rod.outer_radius` is required but missing in [rod]",
             "robot.toml:1:1: `rod.youngs_modulus` is required but missing in [rod]",
-            "`tendon[1].tension` is required but missing in [[tendon]] #1",
+            "robot.toml:4:1: `tendon[1]` in [[tendon]] #1 has neither `tension` nor `displacement`: give \
+             `tension` (N) for a tension-controlled tendon or `displacement` (m, the actuator's pull-in; its \
+             tension is then solved for)",
             "`tendon[1].routing.x` is required but missing in [[tendon]] #1",
             "`tendon[1].routing.y` is required but missing in [[tendon]] #1",
         ] {
