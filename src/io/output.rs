@@ -213,7 +213,8 @@ pub fn json(robot: &Robot, solution: &Solution, count: Option<usize>, jacobian: 
     ];
     if let Some(j) = jacobian {
         // Rows: tip position (m per unit), then the tip rotation as a world-frame rotation
-        // vector (rad per unit); one column per tendon (N), force (N) or moment (N m) component.
+        // vector (rad per unit); one column per tendon (N of tension, m of pull-in), force (N)
+        // or moment (N m) component.
         let rows = |m: &dyn Fn(usize, usize) -> f64, cols: usize| {
             Json::Array(
                 (0..6)
@@ -225,6 +226,10 @@ pub fn json(robot: &Robot, solution: &Solution, count: Option<usize>, jacobian: 
             "jacobian",
             Json::Object(vec![
                 ("tension", rows(&|r, c| j.tension[(r, c)], j.tension.ncols())),
+                (
+                    "displacement",
+                    rows(&|r, c| j.displacement[(r, c)], j.displacement.ncols()),
+                ),
                 ("tip_force", rows(&|r, c| j.tip_force[(r, c)], 3)),
                 ("tip_moment", rows(&|r, c| j.tip_moment[(r, c)], 3)),
             ]),

@@ -157,6 +157,17 @@ pub fn run(args: &SweepArgs) -> Result<(), Failure> {
             )));
         }
     }
+    for (p, _) in &params {
+        if let Parameter::Tension(t) = p
+            && args.displacement.iter().any(|(j, _)| *j == t + 1)
+        {
+            return Err(Failure::Input(format!(
+                "--displacement {}=... and --param {p}=... both given: drive a tendon by its tension or by its \
+                 displacement",
+                t + 1
+            )));
+        }
+    }
     for &(i, ref v) in &args.tension {
         set_tension(&mut file.robot, i, v[0])?;
     }
@@ -278,8 +289,9 @@ pub fn run(args: &SweepArgs) -> Result<(), Failure> {
         for &(i, _) in &args.displacement {
             let _ = write!(csv, ",{}", solution.tendons[i - 1].displacement);
         }
-        for (p, _) in &params {
-            let _ = write!(csv, ",{}", p.value(&robot));
+        // The swept value itself (a load scale is not a property of the scaled robot).
+        for (_, v) in &params {
+            let _ = write!(csv, ",{}", v[if v.len() == 1 { 0 } else { k }]);
         }
         let report = &solution.report;
         // A step whose tip moves far more than the last one did (four times, and more than
