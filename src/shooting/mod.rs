@@ -7,7 +7,8 @@
 //! breakpoint the right-hand strains are found from the jump conditions by a small Newton
 //! solve; the 6 tip conditions are the residual of an outer damped Newton iteration whose
 //! Jacobian is taken by central differences. Displacement-controlled tendons add their
-//! tensions to the unknowns and their length constraints to the residual, the path lengths
+//! tensions to the unknowns and their complementarity (taut at its length or slack at 0 N,
+//! in the Fischer-Burmeister form of collocation) to the residual, the path lengths
 //! integrated along with the state (docs/actuation.md).
 #![allow(non_snake_case)]
 
@@ -98,11 +99,12 @@ type Local = SVector<f64, 12>;
 /// Solves `robot` by shooting.
 ///
 /// Displacement-controlled tendons (docs/actuation.md) add their tensions to the unknowns
-/// and their length constraints phi_j = l_ref_j - l_j - q_j + c_j tau_j = 0 to the
-/// residuals, the path lengths l_j integrated along with the state. Slack is found by a
-/// simple active set: solve with the tendons the small-deflection estimate keeps taut,
-/// release those whose tension comes out negative (tension 0, reported slack), take back
-/// those whose gap comes out negative, and solve again until nothing changes.
+/// and one complementarity row each to the residual, in the Fischer-Burmeister form of the
+/// collocation solve: psi_j = sqrt(a^2 + b^2) - a - b with a = tau_j / T_j and
+/// b = phi_j / L, phi_j = l_ref_j - l_j - q_j + c_j tau_j the gap, the path lengths l_j
+/// integrated along with the state. psi_j = 0 exactly when the tendon is taut (phi_j = 0,
+/// tau_j >= 0) or slack (tau_j = 0, phi_j >= 0), so one semismooth Newton iteration finds
+/// which tendons are slack; at convergence a tendon on the slack side gets exactly 0 N.
 ///
 /// # Errors
 /// Invalid input, a model breakdown, or [`Error::NotConverged`] with the report.
@@ -121,44 +123,48 @@ pub fn solve(robot: &Robot, options: &Options) -> Result<Solution> {
         &Mesh::uniform(robot, 64)?.nodes,
         options.initial_guess,
     )[0];
-    let mut base_x = problem.scale.to_unknowns(&base.v, &base.u);
-    // Each pass changes the active set; k + 2 passes allow every tendon to change once
-    // and a final check.
-    for _ in 0..problem.displaced.len() + 2 {
-        let x0 = problem.unknowns(&base_x);
-        report.unknowns = x0.len();
-        let (x, trajectory, lengths) = newton(&mut problem, x0, options, &mut report)?;
-        problem.set_tensions(&x);
-        base_x = x.fixed_rows::<6>(0).into_owned();
-        if !problem.update_active_set(&lengths) {
-            report.intervals = trajectory.len().saturating_sub(1);
-            report.timings.total = start.elapsed();
-            let model = Model::new(&problem.robot);
-            let ends = segment_ends(&model, &trajectory);
-            return nodes::solution(&model, &trajectory, &ends, None, report);
-        }
+    let base_x = problem.scale.to_unknowns(&base.v, &base.u);
+    let x0 = problem.unknowns(&base_x);
+    report.unknowns = x0.len();
+    let (x, smooth, mut trajectory) = newton(&mut problem, x0, options, &mut report)?;
+    if problem.finish(&x, &smooth) {
+        // A slack tendon's tension went from its iterate (within the tolerance of 0) to
+        // exactly 0: integrate once more, so that the shape is the one of the tensions
+        // reported, and report the residual there.
+        let at = problem.unknowns(&x.fixed_rows::<6>(0).into_owned());
+        let mut traj = Vec::new();
+        let g = problem.residual(&at, options, &mut traj, &mut report)?;
+        report.residual = problem.complementarity(&at, &g).amax();
+        trajectory = traj;
     }
-    report.termination = Termination::MaxIterations;
+    report.intervals = trajectory.len().saturating_sub(1);
     report.timings.total = start.elapsed();
-    Err(Error::NotConverged {
-        method: Method::Shooting,
-        report: Box::new(report),
-        worst_s: robot.length(),
-        hint: "the slack tendons kept changing; solve with collocation, whose semismooth Newton handles slack".into(),
-    })
+    let model = Model::new(&problem.robot);
+    let ends = segment_ends(&model, &trajectory);
+    nodes::solution(&model, &trajectory, &ends, None, report)
 }
 
-/// The Newton iteration on the current active set from `x`: the converged unknowns, the
-/// trajectory and the displacement-controlled tendons' lengths.
+/// The merit a trial step must decrease: the residual's max-norm for tension inputs (as
+/// before displacement inputs), its Euclidean norm with complementarity rows, since the
+/// semismooth Newton step is a descent direction of 0.5 |F|^2 (De Luca, Facchinei & Kanzow
+/// 1996) but need not decrease the max-norm.
+fn merit(res: &DVector<f64>, complementarity: bool) -> f64 {
+    if complementarity { res.norm() } else { res.amax() }
+}
+
+/// The Newton iteration from `x`: the converged unknowns, the smooth residual there
+/// ([`Problem::residual`]) and the trajectory.
 fn newton(
     problem: &mut Problem,
     mut x: DVector<f64>,
     options: &Options,
     report: &mut SolveReport,
-) -> Result<(DVector<f64>, Vec<Point>, Vec<f64>)> {
+) -> Result<(DVector<f64>, DVector<f64>, Vec<Point>)> {
     let length = problem.robot.length();
+    let bordered = !problem.displaced.is_empty();
     let mut trajectory = Vec::new();
-    let (mut res, mut lengths) = problem.residual(&x, options, &mut trajectory, report)?;
+    let mut smooth = problem.residual(&x, options, &mut trajectory, report)?;
+    let mut res = problem.complementarity(&x, &smooth);
     let mut norm = res.amax();
     report.termination = Termination::MaxIterations;
     for _ in 0..options.max_iterations {
@@ -166,14 +172,13 @@ fn newton(
             report.termination = Termination::Converged;
             break;
         }
-        report.iterations += 1;
         // A breakdown while differencing (a trial state where a tendon loses its tangent,
         // say) ends the iteration: the state is unphysical, not the input.
-        let Ok(J) = jacobian(problem, &x, options, report) else {
+        let Ok(J) = jacobian(problem, &x, &smooth, options, report) else {
             report.termination = Termination::NonFinite;
             break;
         };
-        let Some(step) = J.lu().solve(&(-&res)) else {
+        let Some(step) = problem.bounded_step(&J, &x, &res) else {
             report.termination = Termination::SingularJacobian;
             break;
         };
@@ -181,30 +186,33 @@ fn newton(
             report.termination = Termination::SingularJacobian;
             break;
         }
-        // Backtracking: halve until the residual decreases (Armijo-free: the cross-check
+        // Backtracking: halve until the merit decreases (Armijo-free: the cross-check
         // only needs robustness, not efficiency).
+        let current = merit(&res, bordered);
         let mut damping = 1.0;
         let mut accepted = false;
         while damping > 1e-4 {
-            let trial = &x + &step * damping;
+            let trial = problem.project(&x + &step * damping);
             let mut traj = Vec::new();
-            if let Ok((r, l)) = problem.residual(&trial, options, &mut traj, report)
-                && r.amax().is_finite()
-                && (r.amax() < norm || r.amax() <= options.tolerance)
-            {
-                report.history.push(Iteration {
-                    residual: norm,
-                    step: step.amax(),
-                    damping,
-                    fresh_jacobian: true,
-                });
-                x = trial;
-                norm = r.amax();
-                res = r;
-                lengths = l;
-                trajectory = traj;
-                accepted = true;
-                break;
+            if let Ok(g) = problem.residual(&trial, options, &mut traj, report) {
+                let r = problem.complementarity(&trial, &g);
+                if r.amax().is_finite() && (merit(&r, bordered) < current || r.amax() <= options.tolerance) {
+                    report.iterations += 1;
+                    report.newton_steps += 1;
+                    report.history.push(Iteration {
+                        residual: norm,
+                        step: step.amax(),
+                        damping,
+                        fresh_jacobian: true,
+                    });
+                    x = trial;
+                    norm = r.amax();
+                    res = r;
+                    smooth = g;
+                    trajectory = traj;
+                    accepted = true;
+                    break;
+                }
             }
             damping *= 0.5;
         }
@@ -217,27 +225,30 @@ fn newton(
         report.termination = Termination::Converged;
         // One more full Newton step, kept only if it lowers the residual: at quadratic
         // convergence it takes the residual from the tolerance down to the noise floor.
-        let J = jacobian(problem, &x, options, report)?;
-        if let Some(step) = J.lu().solve(&(-&res)) {
-            let trial = &x + &step;
+        let J = jacobian(problem, &x, &smooth, options, report)?;
+        if let Some(step) = problem.bounded_step(&J, &x, &res) {
+            let trial = problem.project(&x + &step);
             let mut traj = Vec::new();
-            if let Ok((r, l)) = problem.residual(&trial, options, &mut traj, report)
-                && r.amax() < norm
-            {
-                report.iterations += 1;
-                report.history.push(Iteration {
-                    residual: norm,
-                    step: step.amax(),
-                    damping: 1.0,
-                    fresh_jacobian: true,
-                });
-                norm = r.amax();
-                x = trial;
-                lengths = l;
-                trajectory = traj;
+            if let Ok(g) = problem.residual(&trial, options, &mut traj, report) {
+                let r = problem.complementarity(&trial, &g);
+                if r.amax() < norm {
+                    report.iterations += 1;
+                    report.newton_steps += 1;
+                    report.history.push(Iteration {
+                        residual: norm,
+                        step: step.amax(),
+                        damping: 1.0,
+                        fresh_jacobian: true,
+                    });
+                    norm = r.amax();
+                    x = trial;
+                    smooth = g;
+                    trajectory = traj;
+                }
             }
         }
     }
+    problem.set_tensions(&x);
     report.residual = norm;
     if report.termination != Termination::Converged {
         report.intervals = trajectory.len().saturating_sub(1);
@@ -248,7 +259,7 @@ fn newton(
             hint: "shooting is a cross-check; use collocation (with load continuation) for hard cases".into(),
         });
     }
-    Ok((x, trajectory, lengths))
+    Ok((x, smooth, trajectory))
 }
 
 /// A displacement-controlled tendon's length constraint.
@@ -263,14 +274,25 @@ struct Constraint {
     compliance: f64,
     /// Where the tendon ends (m): its path length is integrated up to here.
     end: f64,
-    /// Whether the tendon is taut (its tension an unknown) rather than slack (tension 0).
-    active: bool,
 }
 
 impl Constraint {
     /// phi_j (m) at path length `l` and tension `tau`.
     fn gap(&self, l: f64, tau: f64) -> f64 {
         self.reference_length - l - self.displacement + self.compliance * tau
+    }
+}
+
+/// psi(a, b) = sqrt(a^2 + b^2) - a - b and (dpsi/da, dpsi/db) = (a / r - 1, b / r - 1),
+/// r = sqrt(a^2 + b^2); at a = b = 0, where psi is not differentiable, the element
+/// (1/sqrt 2 - 1)(1, 1) of its generalized gradient (as collocation, docs/actuation.md).
+fn fischer_burmeister(a: f64, b: f64) -> (f64, f64, f64) {
+    let r = a.hypot(b);
+    if r == 0.0 {
+        let g = std::f64::consts::FRAC_1_SQRT_2 - 1.0;
+        (0.0, g, g)
+    } else {
+        (r - a - b, a / r - 1.0, b / r - 1.0)
     }
 }
 
@@ -302,7 +324,6 @@ impl Problem {
                     reference_length,
                     compliance: t.compliance(reference_length),
                     end: t.end(length),
-                    active: t.tension > 0.0,
                 }
             })
             .collect();
@@ -314,63 +335,98 @@ impl Problem {
         }
     }
 
-    /// The unknowns: the scaled base strains, then tau_j / T_j of each taut tendon.
+    /// The unknowns: the scaled base strains, then tau_j / T_j of every
+    /// displacement-controlled tendon at its current tension.
     fn unknowns(&self, base: &SVector<f64, 6>) -> DVector<f64> {
-        let taut = self
+        let tensions = self
             .displaced
             .iter()
             .zip(&self.scale.tension_scales)
-            .filter(|(c, _)| c.active)
             .map(|(c, t)| self.robot.tendons[c.tendon].tension / t);
-        DVector::from_iterator(6 + self.active_count(), base.iter().copied().chain(taut))
+        DVector::from_iterator(6 + self.displaced.len(), base.iter().copied().chain(tensions))
     }
 
-    fn active_count(&self) -> usize {
-        self.displaced.iter().filter(|c| c.active).count()
+    /// `x` with its tensions at least 0. The model drops a tendon at a tension <= 0 (a
+    /// string cannot push), so the tip residual does not depend on a negative tension
+    /// and a Newton step that makes one negative predicts an effect that does not occur;
+    /// the iterates are kept at tau >= 0, where the residual is smooth (projected
+    /// semismooth Newton). A slack tendon's psi row then drives its tension to 0 exactly.
+    fn project(&self, mut x: DVector<f64>) -> DVector<f64> {
+        for j in 6..x.len() {
+            x[j] = x[j].max(0.0);
+        }
+        x
     }
 
-    /// Sets the tensions of the displacement-controlled tendons from the unknowns `x` (0
-    /// for slack ones).
-    fn set_tensions(&mut self, x: &DVector<f64>) {
-        let mut next = 6;
-        for (c, t) in self.displaced.iter().zip(&self.scale.tension_scales) {
-            self.robot.tendons[c.tendon].tension = if c.active {
-                next += 1;
-                x[next - 1] * t
-            } else {
-                0.0
-            };
+    /// The Newton step from `x` (Newton matrix `J`, residual `res`) with the tensions at
+    /// their bound 0 that the step would make negative held there: their columns and psi
+    /// rows are dropped and the rest solved again, until no held tension remains to add.
+    /// Projecting such a step instead would spoil it: the other components count on the
+    /// tension's (non-existent) negative effect, which for a tendon's axial load is
+    /// enormous (a change of v at the base of E A L^2 / E I times the tip's response).
+    /// `None` when a system is singular.
+    fn bounded_step(&self, J: &DMatrix<f64>, x: &DVector<f64>, res: &DVector<f64>) -> Option<DVector<f64>> {
+        let n = x.len();
+        let mut held = vec![false; n];
+        loop {
+            let free: Vec<usize> = (0..n).filter(|&j| !held[j]).collect();
+            let Jr = DMatrix::from_fn(free.len(), free.len(), |r, c| J[(free[r], free[c])]);
+            let rr = DVector::from_iterator(free.len(), free.iter().map(|&r| -res[r]));
+            let reduced = Jr.lu().solve(&rr)?;
+            let mut step = DVector::zeros(n);
+            for (&j, &d) in free.iter().zip(reduced.iter()) {
+                step[j] = d;
+            }
+            let mut more = false;
+            for j in 6..n {
+                if !held[j] && x[j] <= 0.0 && step[j] < 0.0 {
+                    held[j] = true;
+                    more = true;
+                }
+            }
+            if !more {
+                return Some(step);
+            }
         }
     }
 
-    /// One active-set update at the solved tensions and `lengths`: a taut tendon with a
-    /// negative tension goes slack, a slack one with a negative gap (pulled beyond its
-    /// length) becomes taut. Whether anything changed.
-    fn update_active_set(&mut self, lengths: &[f64]) -> bool {
+    /// Sets the tensions of the displacement-controlled tendons from the unknowns `x`.
+    fn set_tensions(&mut self, x: &DVector<f64>) {
+        for (j, (c, t)) in self.displaced.iter().zip(&self.scale.tension_scales).enumerate() {
+            self.robot.tendons[c.tendon].tension = x[6 + j] * t;
+        }
+    }
+
+    /// After convergence at `x`, with `smooth` the residual there: a tendon on the slack
+    /// side (b > a) gets exactly 0 N (its iterate is then within the tolerance of 0), a
+    /// taut one at least 0. Whether a tension changed.
+    fn finish(&mut self, x: &DVector<f64>, smooth: &DVector<f64>) -> bool {
+        self.set_tensions(x);
         let mut changed = false;
-        for (c, &l) in self.displaced.iter_mut().zip(lengths) {
+        for (j, c) in self.displaced.iter().enumerate() {
             let tension = &mut self.robot.tendons[c.tendon].tension;
-            if c.active && *tension < 0.0 {
-                c.active = false;
-                *tension = 0.0;
-                changed = true;
-            } else if !c.active && c.gap(l, 0.0) < 0.0 {
-                c.active = true;
+            let exact = if smooth[6 + j] > x[6 + j] {
+                0.0
+            } else {
+                tension.max(0.0)
+            };
+            if exact != *tension {
+                *tension = exact;
                 changed = true;
             }
         }
         changed
     }
 
-    /// The scaled residual at `x`: the tip wrench (f in N, m L) and phi_j / L of each taut
-    /// tendon; also the path lengths of all displacement-controlled tendons.
+    /// The smooth residual at `x`: the scaled tip wrench (f in N, m L) and phi_j / L of
+    /// every displacement-controlled tendon. Sets the tensions to those of `x`.
     fn residual(
         &mut self,
         x: &DVector<f64>,
         options: &Options,
         traj: &mut Vec<Point>,
         report: &mut SolveReport,
-    ) -> Result<(DVector<f64>, Vec<f64>)> {
+    ) -> Result<DVector<f64>> {
         self.set_tensions(x);
         let paths: Vec<(usize, f64)> = self.displaced.iter().map(|c| (c.tendon, c.end)).collect();
         let model = Model::new(&self.robot);
@@ -381,12 +437,18 @@ impl Problem {
             .displaced
             .iter()
             .zip(&lengths)
-            .filter(|(c, _)| c.active)
             .map(|(c, &l)| c.gap(l, self.robot.tendons[c.tendon].tension) / length);
-        Ok((
-            DVector::from_iterator(x.len(), tip.iter().copied().chain(gaps)),
-            lengths,
-        ))
+        Ok(DVector::from_iterator(x.len(), tip.iter().copied().chain(gaps)))
+    }
+
+    /// The Newton residual from the smooth one `smooth` at `x`: the tip rows, then
+    /// psi(tau_j / T_j, phi_j / L) of each displacement-controlled tendon.
+    fn complementarity(&self, x: &DVector<f64>, smooth: &DVector<f64>) -> DVector<f64> {
+        let mut out = smooth.clone();
+        for j in 0..self.displaced.len() {
+            out[6 + j] = fischer_burmeister(x[6 + j], smooth[6 + j]).0;
+        }
+        out
     }
 }
 
@@ -408,7 +470,7 @@ fn segment_ends(model: &Model, traj: &[Point]) -> Vec<f64> {
     out
 }
 
-/// The unknowns: the base strains (v, u L) and tau_j / T_j of the taut
+/// The unknowns: the base strains (v, u L) and tau_j / T_j of the
 /// displacement-controlled tendons, T_j = E I / (L |r_j(0)|) the tension that bends the
 /// rod through about a radian (E I / L^2 on the centreline). Central differences in these
 /// units with step 1e-6 keep the Jacobian well above the integration noise for the
@@ -431,9 +493,17 @@ impl Scale {
     }
 }
 
+/// The Newton matrix at `x`, `smooth` the smooth residual there: central differences of
+/// the smooth residual (tip wrench and gaps, [`Problem::residual`]), then each gap row
+/// turned into the row of psi_j by the chain rule with the (generalized) gradient of the
+/// Fischer-Burmeister function. Differencing psi itself would straddle its kink at
+/// a = b = 0 (a slack tendon just reaching its length at 0 N); the chain rule keeps the
+/// row of a slack tendon -e_j (its tension 0, whatever its effect on the tip) and that of
+/// a taut one the gap's gradient.
 fn jacobian(
     problem: &mut Problem,
     x: &DVector<f64>,
+    smooth: &DVector<f64>,
     options: &Options,
     report: &mut SolveReport,
 ) -> Result<DMatrix<f64>> {
@@ -451,14 +521,31 @@ fn jacobian(
         // change which hard cases the cross-check reaches, tests/hard.rs).
         let h = if j < 3 && n > 6 { 1e-8 } else { 1e-6 };
         let mut xp = x.clone();
-        let mut xm = x.clone();
         xp[j] += h;
-        xm[j] -= h;
-        let (rp, _) = problem.residual(&xp, options, &mut scratch, report)?;
-        let (rm, _) = problem.residual(&xm, options, &mut scratch, report)?;
-        J.set_column(j, &((rp - rm) / (2.0 * h)));
+        let rp = problem.residual(&xp, options, &mut scratch, report)?;
+        if j >= 6 && x[j] < h {
+            // A tension within h of 0: the model drops a tendon at tau <= 0, so the
+            // residual has a kink there and a central difference would halve the slope.
+            // The one-sided second-order difference (-3 r(x) + 4 r(x + h) - r(x + 2h)) / 2h
+            // stays at tau >= 0, where the residual is smooth.
+            let mut xpp = x.clone();
+            xpp[j] += 2.0 * h;
+            let rpp = problem.residual(&xpp, options, &mut scratch, report)?;
+            J.set_column(j, &((rp * 4.0 - rpp - smooth * 3.0) / (2.0 * h)));
+        } else {
+            let mut xm = x.clone();
+            xm[j] -= h;
+            let rm = problem.residual(&xm, options, &mut scratch, report)?;
+            J.set_column(j, &((rp - rm) / (2.0 * h)));
+        }
     }
     problem.set_tensions(x);
+    for j in 6..n {
+        let (_, da, db) = fischer_burmeister(x[j], smooth[j]);
+        let mut row = J.row(j) * db;
+        row[j] += da;
+        J.set_row(j, &row);
+    }
     Ok(J)
 }
 
