@@ -1376,3 +1376,25 @@ fn a_tendon_without_tension_or_displacement_gets_one_message() {
         stderr(&out)
     );
 }
+
+/// A sweep over a pull-in that takes up a slack tendon's slack: the step where it goes taut
+/// is an event `tendon 1 taut`, not a snap-through warning (the review: the tip's rate
+/// changes there because the tendon engages).
+#[test]
+fn a_sweep_names_the_step_where_a_tendon_goes_taut() {
+    let dir = scratch("sweep_taut");
+    // The prototype's tendon 1 driven by its pull-in: under the rod's weight it is slack up
+    // to about 2.06 mm.
+    let text = example().replacen("tension = 2.94", "displacement = 0.0", 1);
+    std::fs::write(dir.join("robot.toml"), text).unwrap();
+    let out = run(&dir, &["sweep", "robot.toml", "--displacement", "1=0:0.01:6"], None);
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    assert!(!stderr(&out).contains("snap-through"), "{}", stderr(&out));
+    let csv = stdout(&out);
+    let events: Vec<&str> = csv
+        .lines()
+        .skip(1)
+        .map(|l| l.rsplit(',').next().unwrap_or(""))
+        .collect();
+    assert_eq!(events, vec!["", "", "tendon 1 taut", "", "", ""], "{csv}");
+}

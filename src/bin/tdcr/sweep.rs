@@ -218,6 +218,8 @@ pub fn run(args: &SweepArgs) -> Result<(), Failure> {
     );
     let length = file.robot.length();
     let mut previous_move: Option<f64> = None;
+    // Which displacement-controlled tendons were taut at the last step.
+    let mut previous_taut: Option<Vec<(usize, bool)>> = None;
     let mut last_robot: Option<Robot> = None;
     let mut tips = Vec::with_capacity(steps);
     let (mut first, mut last): (Option<(Robot, Solution)>, Option<Solution>) = (
@@ -301,12 +303,31 @@ pub fn run(args: &SweepArgs) -> Result<(), Failure> {
         // 5 % of L.
         let moved = tips.last().map(|t: &tdcr::nalgebra::Vector3<f64>| (tip - t).norm());
         let pathed = matches!(report.path, tdcr::Path::LoadPath { .. });
-        let jump = match (moved, previous_move) {
-            (Some(m), Some(p)) => (m > 4.0 * p && m > 0.01 * length) || (pathed && m > 0.05 * length),
-            (Some(m), None) => pathed && m > 0.05 * length,
-            _ => false,
+        // A displacement-controlled tendon that went taut (or slack) since the last step
+        // changes how fast the tip moves: an event of its own, not a jump off the branch.
+        let taut: Vec<(usize, bool)> = (0..robot.tendons.len())
+            .filter(|&i| robot.tendons[i].displacement.is_some())
+            .map(|i| (i, solution.tendons[i].tension > 0.0))
+            .collect();
+        let engaged: Vec<String> = match &previous_taut {
+            Some(before) => taut
+                .iter()
+                .zip(before)
+                .filter(|(now, then)| now.1 != then.1)
+                .map(|(now, _)| format!("tendon {} {}", now.0 + 1, if now.1 { "taut" } else { "slack" }))
+                .collect(),
+            None => Vec::new(),
         };
-        let event = if jump {
+        previous_taut = Some(taut);
+        let jump = engaged.is_empty()
+            && match (moved, previous_move) {
+                (Some(m), Some(p)) => (m > 4.0 * p && m > 0.01 * length) || (pathed && m > 0.05 * length),
+                (Some(m), None) => pathed && m > 0.05 * length,
+                _ => false,
+            };
+        let event = if !engaged.is_empty() {
+            engaged.join("; ")
+        } else if jump {
             let text = format!(
                 "the tip jumps by {:.1} mm: a snap-through (fold) or another branch",
                 moved.unwrap_or(0.0) * 1e3
