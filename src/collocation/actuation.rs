@@ -50,7 +50,9 @@ use super::estimate;
 use super::newton::{self, Border, Linearization, Point, Settings, Workspace};
 use super::system::{Frame, System};
 use super::unknowns::{self, NODE, U, V};
-use super::{Cache, Cached, Options, cold_start, initial_mesh, interpolate, refine, resolves, segment_ends};
+use super::{
+    Cache, Cached, Options, cold_start, initial_mesh, interpolate, record_estimate, refine, resolves, segment_ends,
+};
 use crate::error;
 use crate::mesh::guess::{self, InitialGuess};
 use crate::mesh::{Mesh, nodes};
@@ -486,12 +488,7 @@ pub(super) fn solve(
         let ends = segment_ends(&mesh);
         let rates = correction.as_ref().map(|c| c.node_rates.as_slice());
         let Some(fine) = next else {
-            report.error_estimate = correction.as_ref().map(|c| c.estimate);
-            report.tolerance = options.tolerance;
-            report.tolerance_met = options
-                .tolerance
-                .zip(report.error_estimate)
-                .map(|(tol, e)| refine::meets(&e, tol, work.length()));
+            record_estimate(&mut report, correction.as_ref(), options, work.length());
             report.timings.total = start.elapsed();
             let solution = nodes::solution(&system.model, &x, &ends, rates, report);
             store(cache, mesh, options, ws);

@@ -291,12 +291,7 @@ fn solve_impl(robot: &Robot, options: &Options, warm: Option<&Solution>, cache: 
     report.intervals = mesh.intervals();
     report.unknowns = unknowns::unknowns(mesh.nodes.len());
     report.nonzeros = unknowns::nonzeros(&mesh);
-    report.error_estimate = correction.as_ref().map(|c| c.estimate);
-    report.tolerance = options.tolerance;
-    report.tolerance_met = options
-        .tolerance
-        .zip(report.error_estimate)
-        .map(|(tol, e)| refine::meets(&e, tol, robot.length()));
+    record_estimate(&mut report, correction.as_ref(), options, robot.length());
     if let Some(c) = cache.as_mut() {
         let system = System::new(model, mesh.clone());
         let exact = report.path != Path::Direct && !report.history.iter().any(|i| i.fresh_jacobian);
@@ -307,6 +302,22 @@ fn solve_impl(robot: &Robot, options: &Options, warm: Option<&Solution>, cache: 
     report.timings.total = start.elapsed();
     let rates = correction.as_ref().map(|c| c.node_rates.as_slice());
     nodes::solution(&model, &x, &segment_ends(&mesh), rates, report)
+}
+
+/// Records the final mesh's error estimate in `report`, with the tolerance it was tested
+/// against and whether it meets it (rod length `length`).
+fn record_estimate(
+    report: &mut SolveReport,
+    correction: Option<&estimate::Correction>,
+    options: &Options,
+    length: f64,
+) {
+    report.error_estimate = correction.map(|c| c.estimate);
+    report.tolerance = options.tolerance;
+    report.tolerance_met = options
+        .tolerance
+        .zip(report.error_estimate)
+        .map(|(tol, e)| refine::meets(&e, tol, length));
 }
 
 /// The initial guess of a cold start on `mesh`. With error control and no fixed mesh, the

@@ -55,23 +55,31 @@ pub fn reference_length(robot: &Robot, i: usize) -> f64 {
     let length = robot.length();
     let tendon = &robot.tendons[i];
     let end = tendon.end(length);
+    gauss_points(robot, end, REFERENCE_PANELS)
+        .map(|(s, weight)| {
+            let reference = robot.rod.reference_at(s);
+            let rp = tendon.routing.at(s, length);
+            weight * speed(&rp, &reference.v_star, &reference.u_star)
+        })
+        .sum()
+}
+
+/// The points s and weights of composite 5-point Gauss-Legendre on `panels` equal panels
+/// between consecutive breakpoints of `robot` in [0, `end`] (integrands may jump there).
+fn gauss_points(robot: &Robot, end: f64, panels: usize) -> impl Iterator<Item = (f64, f64)> {
     let mut cuts = vec![0.0];
     cuts.extend(robot.breakpoints().into_iter().filter(|&b| b < end));
     cuts.push(end);
-    let mut total = 0.0;
-    for w in cuts.windows(2) {
-        let h = (w[1] - w[0]) / REFERENCE_PANELS as f64;
-        for k in 0..REFERENCE_PANELS {
-            let mid = w[0] + (k as f64 + 0.5) * h;
-            for (x, weight) in GAUSS5 {
-                let s = mid + 0.5 * h * x;
-                let reference = robot.rod.reference_at(s);
-                let rp = tendon.routing.at(s, length);
-                total += 0.5 * h * weight * speed(&rp, &reference.v_star, &reference.u_star);
-            }
-        }
-    }
-    total
+    let pieces: Vec<(f64, f64)> = cuts.windows(2).map(|w| (w[0], w[1])).collect();
+    pieces.into_iter().flat_map(move |(a, b)| {
+        let h = (b - a) / panels as f64;
+        (0..panels).flat_map(move |k| {
+            let mid = a + (k as f64 + 0.5) * h;
+            GAUSS5
+                .into_iter()
+                .map(move |(x, weight)| (mid + 0.5 * h * x, 0.5 * h * weight))
+        })
+    })
 }
 
 /// The pull-in compliance of the unloaded robot (m/N), `k x k` for its k tendons, row
@@ -89,39 +97,27 @@ pub fn reference_length(robot: &Robot, i: usize) -> f64 {
 pub fn pull_in_compliance(robot: &Robot) -> Vec<f64> {
     let length = robot.length();
     let k = robot.tendons.len();
-    let mut cuts = vec![0.0];
-    cuts.extend(robot.breakpoints());
-    cuts.push(length);
     let mut out = vec![0.0; k * k];
     let mut tangents = vec![(Vector3::zeros(), Vector3::zeros()); k];
     // A starting estimate: a few panels per piece resolve these smooth integrands well enough.
-    let panels = 8;
-    for w in cuts.windows(2) {
-        let h = (w[1] - w[0]) / panels as f64;
-        for p in 0..panels {
-            let mid = w[0] + (p as f64 + 0.5) * h;
-            for (x, weight) in GAUSS5 {
-                let s = mid + 0.5 * h * x;
-                let reference = robot.rod.reference_at(s);
-                let section = robot.rod.section_at(s).section;
-                for (i, t) in robot.tendons.iter().enumerate() {
-                    let rp = t.routing.at(s, length);
-                    let w = reference.v_star + reference.u_star.cross(&rp.r) + rp.r_s;
-                    let tangent = w / w.norm();
-                    tangents[i] = (tangent, rp.r.cross(&tangent));
+    for (s, weight) in gauss_points(robot, length, 8) {
+        let reference = robot.rod.reference_at(s);
+        let section = robot.rod.section_at(s).section;
+        for (i, t) in robot.tendons.iter().enumerate() {
+            let rp = t.routing.at(s, length);
+            let w = reference.v_star + reference.u_star.cross(&rp.r) + rp.r_s;
+            let tangent = w / w.norm();
+            tangents[i] = (tangent, rp.r.cross(&tangent));
+        }
+        for j in 0..k {
+            for m in 0..k {
+                if s > robot.tendons[j].end(length).min(robot.tendons[m].end(length)) {
+                    continue;
                 }
-                for j in 0..k {
-                    for m in 0..k {
-                        if s > robot.tendons[j].end(length).min(robot.tendons[m].end(length)) {
-                            continue;
-                        }
-                        let (tj, bj) = tangents[j];
-                        let (tm, bm) = tangents[m];
-                        let integrand =
-                            tj.dot(&tm.component_div(&section.kse)) + bj.dot(&bm.component_div(&section.kbt));
-                        out[j * k + m] += 0.5 * h * weight * integrand;
-                    }
-                }
+                let (tj, bj) = tangents[j];
+                let (tm, bm) = tangents[m];
+                let integrand = tj.dot(&tm.component_div(&section.kse)) + bj.dot(&bm.component_div(&section.kbt));
+                out[j * k + m] += weight * integrand;
             }
         }
     }

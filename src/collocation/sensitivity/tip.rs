@@ -125,8 +125,9 @@ pub fn tip_sensitivities(robot: &Robot, solution: &Solution) -> Result<TipSensit
 /// ([`TensionDirections`]); the tip moves by its own derivative plus d(tip)/dtau dtau.
 /// Without such tendons it passes the derivatives through.
 struct Held {
-    /// The taut displacement-controlled tendons' directions; `None` without any.
-    directions: Option<TensionDirections>,
+    /// The taut displacement-controlled tendons' directions and the LU factors of their
+    /// S = C - dl/dtau; `None` without any.
+    directions: Option<(TensionDirections, nalgebra::LU<f64, nalgebra::Dyn, nalgebra::Dyn>)>,
 }
 
 impl Held {
@@ -142,7 +143,9 @@ impl Held {
         let directions = if taut.is_empty() {
             None
         } else {
-            Some(TensionDirections::from(sens, solution, taut)?)
+            let h = TensionDirections::from(sens, solution, taut)?;
+            let schur = h.displacement_by_tension().lu();
+            Some((h, schur))
         };
         Ok(Held { directions })
     }
@@ -150,21 +153,17 @@ impl Held {
     /// The tip pose's derivative for the state derivative `d`, the pull-ins held.
     fn tip(&self, d: &[NodeDerivative]) -> Result<Vector6<f64>> {
         let own = d[d.len() - 1].pose();
-        let Some(h) = &self.directions else {
+        let Some((h, schur)) = &self.directions else {
             return Ok(own);
         };
-        let dtau = h
-            .displacement_by_tension()
-            .lu()
-            .solve(&h.length_change(d))
-            .ok_or_else(super::singular)?;
+        let dtau = schur.solve(&h.length_change(d)).ok_or_else(super::singular)?;
         Ok(own + Vector6::from_iterator((&h.tip * dtau).iter().copied()))
     }
 
     /// d(tip pose)/dq_i for the displacement-controlled tendon `i` (per m): S dtau = e_i
     /// over the held tendons; zero for a slack one.
     fn pull(&self, i: usize) -> Result<Vector6<f64>> {
-        let Some(h) = &self.directions else {
+        let Some((h, schur)) = &self.directions else {
             return Ok(Vector6::zeros());
         };
         let Some(m) = h.tendons.iter().position(|&j| j == i) else {
@@ -172,11 +171,7 @@ impl Held {
         };
         let mut unit = DVector::zeros(h.tendons.len());
         unit[m] = 1.0;
-        let dtau = h
-            .displacement_by_tension()
-            .lu()
-            .solve(&unit)
-            .ok_or_else(super::singular)?;
+        let dtau = schur.solve(&unit).ok_or_else(super::singular)?;
         Ok(Vector6::from_iterator((&h.tip * dtau).iter().copied()))
     }
 }
