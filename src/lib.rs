@@ -36,8 +36,14 @@
 //! - Analyses: sensitivities ([`tip_sensitivities`], [`collocation::sensitivity`]), global
 //!   equilibrium and model comparisons ([`analysis`]), inverse statics and calibration
 //!   ([`fit`]).
-//! - Files and pictures: robot files, experiment CSVs and result files ([`io`]), SVG plots
-//!   ([`plot`]); rotations ([`so3`]).
+//! - Files and pictures: robot files, experiment CSVs and result files ([`io`]), SVG and PNG
+//!   plots (`plot`); rotations ([`so3`]).
+//!
+//! # Features
+//! The solver needs none of the optional features; `default-features = false` builds it
+//! without clap, resvg and toml. `files`: robot files (TOML: `io::parse`, `io::example`, the
+//! problem locator). `plot`: the `plot` module (SVG, PNG through resvg). `cli` (default): the
+//! `tdcr` command, with both.
 //! - Internals for tests and solver research: [`advanced`].
 //!
 //! docs/architecture.md in the repository describes the layers and where new code goes.
@@ -52,6 +58,7 @@ pub mod fit;
 pub mod io;
 mod mesh;
 pub mod model;
+#[cfg(feature = "plot")]
 pub mod plot;
 mod report;
 pub mod shooting;

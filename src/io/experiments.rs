@@ -3,7 +3,7 @@
 //! exactly by [`to_csv`], read with every problem reported by line, column and name by
 //! [`parse_csv`].
 
-use super::locate::Position;
+use super::Position;
 use super::{FileError, Problem, printable};
 use crate::fit::calibration::Measurement;
 use nalgebra::Vector3;

@@ -5,14 +5,7 @@ use std::collections::{HashMap, HashSet};
 use toml::Spanned;
 use toml::de::{DeTable, DeValue};
 
-/// A 1-based line and column in the source text.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct Position {
-    /// Line, from 1.
-    pub line: usize,
-    /// Column in characters, from 1.
-    pub column: usize,
-}
+pub use super::Position;
 
 /// Line and column of byte `offset` in `text` (clamped to the text). This scans `text`; for
 /// many offsets into one text, build [`Lines`] once.

@@ -1,25 +1,41 @@
 //! Files in and out of the `tdcr` command: the TOML robot file (docs/robot-file.md), read
-//! with every problem reported by file, line, field and rule, and the JSON and CSV result
-//! files (docs/cli.md).
+//! with every problem reported by file, line, field and rule (feature `files`), and the JSON
+//! and CSV result files (docs/cli.md).
 //!
 //! ```
+//! # #[cfg(feature = "files")] {
 //! let file = tdcr::io::parse(&tdcr::io::example(), "example.toml").unwrap();
 //! let solution = tdcr::collocation::solve(&file.robot, &file.solver.collocation).unwrap();
 //! let json = tdcr::io::output::json(&file.robot, &solution, None, None);
 //! assert!(json.contains("\"converged\": true"));
+//! # }
 //! ```
 
+#[cfg(feature = "files")]
 mod example;
 pub mod experiments;
+#[cfg(feature = "files")]
 pub mod locate;
 pub mod output;
 pub mod parameters;
+#[cfg(feature = "files")]
 mod robot_file;
 mod solution_file;
 
+#[cfg(feature = "files")]
 pub use example::example;
+#[cfg(feature = "files")]
 pub use robot_file::{RobotFile, SolverSettings, parse};
 pub use solution_file::read_solution;
+
+/// A 1-based line and column in the source text.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Position {
+    /// Line, from 1.
+    pub line: usize,
+    /// Column in characters, from 1.
+    pub column: usize,
+}
 
 use std::fmt;
 
@@ -27,7 +43,7 @@ use std::fmt;
 #[derive(Clone, Debug, PartialEq)]
 pub struct Problem {
     /// Line and column (from 1) when the problem has a place in the file.
-    pub position: Option<locate::Position>,
+    pub position: Option<Position>,
     /// Field path in the file, e.g. `tendon[2].end` (array elements numbered from 1, as
     /// on the command line); empty for problems of the whole file.
     pub field: String,
