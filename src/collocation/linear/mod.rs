@@ -1,31 +1,39 @@
 //! The linear solvers behind Newton's steps, both for the collocation Jacobian with values
 //! in [`crate::collocation::unknowns::pattern`] order: the structured elimination of
-//! [`blocks`] (automatic) and faer's sparse LU of [`sparse`] (the general reference path).
-//! Each keeps its factors, so further right-hand sides cost a re-solve only.
+//! [`blocks`] (automatic) and faer's sparse LU of `sparse` (the general reference path,
+//! feature `sparse-lu`). Each keeps its factors, so further right-hand sides cost a re-solve
+//! only.
 
 pub mod blocks;
+#[cfg(feature = "sparse-lu")]
 pub mod sparse;
 
 use crate::error::Result;
 use crate::mesh::Mesh;
 use blocks::BlockElimination;
+#[cfg(feature = "sparse-lu")]
 use sparse::SparseLu;
 use std::time::Duration;
 
-/// The linear solver behind Newton's steps.
+/// The linear solver behind Newton's steps. Non-exhaustive: the feature `sparse-lu` adds
+/// `LinearSolver::SparseLu`.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[non_exhaustive]
 pub enum LinearSolver {
     /// The structured almost-block-diagonal elimination (`collocation/linear/blocks.rs`): the collocation
     /// Jacobian always has that structure, so this is the automatic choice.
     #[default]
     Auto,
-    /// faer's general sparse LU (COLAMD ordering, simplicial), the reference path.
+    /// faer's general sparse LU (COLAMD ordering, simplicial), the reference path (feature
+    /// `sparse-lu`).
+    #[cfg(feature = "sparse-lu")]
     SparseLu,
 }
 
 /// A linear solver built for one mesh.
 pub(crate) enum Linear {
     /// faer's sparse LU.
+    #[cfg(feature = "sparse-lu")]
     Sparse(Box<SparseLu>),
     /// The structured elimination.
     Blocks(Box<BlockElimination>),
@@ -36,6 +44,7 @@ impl Linear {
     pub(crate) fn new(mesh: &Mesh, kind: LinearSolver) -> Result<Self> {
         Ok(match kind {
             LinearSolver::Auto => Linear::Blocks(Box::new(BlockElimination::new(mesh.nodes.len()))),
+            #[cfg(feature = "sparse-lu")]
             LinearSolver::SparseLu => Linear::Sparse(Box::new(SparseLu::new(mesh)?)),
         })
     }
@@ -44,6 +53,7 @@ impl Linear {
     /// else the factorization and solve times.
     pub(crate) fn solve(&mut self, values: &[f64], rhs: &[f64], x: &mut [f64]) -> Option<(Duration, Duration)> {
         match self {
+            #[cfg(feature = "sparse-lu")]
             Linear::Sparse(lu) => {
                 x.copy_from_slice(rhs);
                 lu.solve(values, x)
@@ -57,6 +67,7 @@ impl Linear {
     pub(crate) fn solve_again(&mut self, rhs: &[f64], x: &mut [f64]) {
         match self {
             Linear::Blocks(blocks) => blocks.solve_again(rhs, x),
+            #[cfg(feature = "sparse-lu")]
             Linear::Sparse(lu) => {
                 x.copy_from_slice(rhs);
                 lu.solve_again(x);
