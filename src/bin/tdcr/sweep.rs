@@ -235,13 +235,13 @@ pub fn run(args: &SweepArgs) -> Result<(), Failure> {
         .transpose()?;
     let solver = match file.solver.method {
         tdcr::Method::Collocation => SweepSolver::Collocation(file.solver.collocation.clone()),
-        tdcr::Method::Shooting => SweepSolver::Shooting(file.solver.shooting.clone()),
+        tdcr::Method::Shooting => SweepSolver::Shooting(file.solver.shooting),
     };
     let mut sweep = Sweep::new(solver, start);
     let mut progress = Progress::new();
     let mut failure = None;
     let mut past_limit = PastLimits::default();
-    let (mut first, mut last): (Option<(Robot, Solution)>, Option<(Robot, Solution)>) = (None, None);
+    let (mut first, mut last): (Option<Shape>, Option<Shape>) = (None, None);
     let mut tips = Vec::with_capacity(steps);
     for k in 0..steps {
         let robot = plan.robot(args, &file.robot, k)?;
@@ -298,6 +298,9 @@ pub fn run(args: &SweepArgs) -> Result<(), Failure> {
     }
     failure.map_or(Ok(()), Err)
 }
+
+/// A solved step's robot and solution, as the picture draws it.
+type Shape = (Robot, Solution);
 
 /// A failed step's failure, its message headed by the step and its tendon inputs.
 fn step_failure(f: Failure, k: usize, steps: usize, robot: &Robot) -> Failure {
@@ -379,8 +382,8 @@ fn picture(
     plan: &Plan,
     name: &str,
     tips: &[tdcr::nalgebra::Vector3<f64>],
-    (robot0, first): &(Robot, Solution),
-    (robot1, last): &(Robot, Solution),
+    (robot0, first): &Shape,
+    (robot1, last): &Shape,
 ) -> Figure {
     let mut figure = Figure::new(&format!("{name}: tip trajectory over {} solves", tips.len()));
     let ranges: Vec<String> = args
