@@ -42,6 +42,17 @@ pub struct TracePoint {
     pub iterations: usize,
 }
 
+impl TracePoint {
+    /// `stable`, `unstable` or `unknown`, the words of [`crate::Stability::verdict`].
+    pub fn verdict(&self) -> &'static str {
+        match self.unstable_directions {
+            Some(0) => "stable",
+            Some(_) => "unstable",
+            None => "unknown",
+        }
+    }
+}
+
 /// A traced branch.
 #[derive(Clone, Debug)]
 pub struct Trace {

@@ -174,14 +174,6 @@ fn with_flags(e: tdcr::Error, parameter: Parameter) -> Failure {
     }
 }
 
-fn verdict(p: &tdcr::collocation::TracePoint) -> &'static str {
-    match p.unstable_directions {
-        Some(0) => "stable",
-        Some(_) => "unstable",
-        None => "unknown",
-    }
-}
-
 fn csv(t: &Trace) -> String {
     let mut out = format!(
         "point,{},tip_x,tip_y,tip_z,stability,unstable_directions,fold,iterations\n",
@@ -196,7 +188,7 @@ fn csv(t: &Trace) -> String {
             output::number(p.tip_position.x),
             output::number(p.tip_position.y),
             output::number(p.tip_position.z),
-            verdict(p),
+            p.verdict(),
             p.unstable_directions.map_or(String::new(), |d| d.to_string()),
             u8::from(p.fold),
             p.iterations
@@ -213,7 +205,7 @@ fn json(t: &Trace) -> String {
             serde_json::json!({
                 "value": p.value,
                 "tip": [p.tip_position.x, p.tip_position.y, p.tip_position.z],
-                "stability": verdict(p),
+                "stability": p.verdict(),
                 "unstable_directions": p.unstable_directions,
                 "fold": p.fold,
                 "iterations": p.iterations,
