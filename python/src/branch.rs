@@ -189,7 +189,9 @@ pub fn trace(
 ) -> PyResult<PyTrace> {
     let settings = crate::options::apply(&robot.file.solver, options)?;
     if settings.method != Method::Collocation {
-        return Err(invalid("trace continues collocation solutions; use method=\"collocation\""));
+        return Err(invalid(
+            "trace continues collocation solutions; use method=\"collocation\"",
+        ));
     }
     let r = &robot.file.robot;
     let p = tdcr::Parameter::parse(parameter, r).map_err(to_py)?;

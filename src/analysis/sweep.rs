@@ -283,4 +283,34 @@ mod tests {
         assert!((0.5..1.0).contains(&distance), "{distance}");
         assert!(out.steps[2].event.is_none());
     }
+
+    /// Euler's column (the prototype's rod along +z, P_cr = pi^2 EI / (4 L^2) = 0.177893 N,
+    /// docs/stability.md) loaded past P_cr in a sweep: the straight column that every step
+    /// ends on is stable below P_cr and unstable (two directions) above, and each step's
+    /// verdict says so, not the verdict of an earlier step's Jacobian.
+    #[test]
+    fn every_step_has_its_own_stability_verdict() {
+        let p_cr = 0.177893;
+        let base = Robot::new(Rod::tube(0.242, 0.0004, 0.0, 210e9, 0.3125));
+        let robots: Vec<Robot> = [0.9, 0.95, 1.05, 1.1]
+            .iter()
+            .map(|&f| {
+                let mut r = base.clone();
+                r.loads.tip_force = Vector3::new(0.0, 0.0, -f * p_cr);
+                r
+            })
+            .collect();
+        let options = collocation::Options {
+            equilibrium: collocation::Equilibrium::Nearest,
+            ..Default::default()
+        };
+        let out = sweep(&robots, SweepSolver::Collocation(options), None);
+        assert!(out.failure.is_none());
+        let verdicts: Vec<&str> = out
+            .steps
+            .iter()
+            .map(|s| s.solution.report.stability.verdict())
+            .collect();
+        assert_eq!(verdicts, ["stable", "stable", "unstable", "unstable"]);
+    }
 }
