@@ -287,7 +287,9 @@ mod tests {
     /// Euler's column (the prototype's rod along +z, P_cr = pi^2 EI / (4 L^2) = 0.177893 N,
     /// docs/stability.md) loaded past P_cr in a sweep: the straight column that every step
     /// ends on is stable below P_cr and unstable (two directions) above, and each step's
-    /// verdict says so, not the verdict of an earlier step's Jacobian.
+    /// verdict says so, not the verdict of an earlier step's Jacobian (a
+    /// `collocation::Solver`, whose chord-only steps reuse the first step's factors, says
+    /// `stable` at all four).
     #[test]
     fn every_step_has_its_own_stability_verdict() {
         let p_cr = 0.177893;
