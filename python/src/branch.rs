@@ -3,7 +3,7 @@
 //! input), with numpy out.
 
 use crate::errors::{invalid, to_py};
-use crate::robot::{PyRobot, columns};
+use crate::robot::{PyRobot, robots_of};
 use crate::solution::PySolution;
 use numpy::ndarray::Array2;
 use numpy::{IntoPyArray, PyArray1, PyArray2};
@@ -120,15 +120,7 @@ pub fn sweep(
     if settings.method != Method::Collocation {
         return Err(invalid("sweep warm-starts collocation; use method=\"collocation\""));
     }
-    let (cols, n) = columns(parameters)?;
-    let mut robots = Vec::with_capacity(n);
-    for row in 0..n {
-        let mut r = robot.clone();
-        for (p, values) in &cols {
-            r.set(p, values[row])?;
-        }
-        robots.push(r.file.robot);
-    }
+    let robots = robots_of(robot, parameters)?;
     let solver = SweepSolver::Collocation(settings.collocation);
     let out = py.detach(|| tdcr::analysis::sweep::sweep(&robots, solver, None));
     let result = PySweep::new(py, out.steps)?;

@@ -15,7 +15,7 @@ use numpy::IntoPyArray;
 use numpy::ndarray::{Array1, Array2};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
-use robot::{PyRobot, columns};
+use robot::{PyRobot, robots_of};
 use solution::PySolution;
 use tdcr::io::SolverSettings;
 use tdcr::{Method, Solution, collocation, shooting};
@@ -77,16 +77,10 @@ fn batch_robots(
                 "solve_batch: give a list of robots, or one robot with `parameters` (a dict of arrays)",
             ));
         };
-        let (cols, n) = columns(parameters)?;
-        let mut out = Vec::with_capacity(n);
-        for row in 0..n {
-            let mut r = base.clone();
-            for (p, values) in &cols {
-                r.set(p, values[row])?;
-            }
-            out.push(r.file.robot);
-        }
-        (out, options::apply(&base.file.solver, options)?)
+        (
+            robots_of(base, parameters)?,
+            options::apply(&base.file.solver, options)?,
+        )
     } else {
         if parameters.is_some() {
             return Err(invalid("solve_batch: `parameters` needs one robot, not a list"));

@@ -1,7 +1,7 @@
 //! The collocation solver: the whole robot as one sparse Newton system solved with faer.
 //!
 //! Stages, in the order data flows (one module each):
-//! 1. [`Options`] (`options.rs`), checked by [`Options::validate`]; [`Mesh`]: nodes on
+//! 1. [`Options`] (`options.rs`), checked by [`Options::validate`]; [`Mesh`](crate::mesh::Mesh): nodes on
 //!    [0, L] with two nodes at every breakpoint.
 //! 2. [`unknowns`](crate::advanced::unknowns): the layout of unknowns and rows, the Jacobian's block pattern.
 //! 3. [`residual`](crate::advanced::residual) and [`system`](crate::advanced::system): residual rows (base, Hermite-Simpson intervals in
