@@ -126,7 +126,8 @@ fn a_displacement_controlled_tendon_is_refused_unless_its_tension_is_traced() {
     match tdcr::collocation::trace(&robot, tdcr::Parameter::LoadScale, 0.0, 1.0, &options) {
         Err(tdcr::Error::InvalidInput { field, hint, .. }) => {
             assert_eq!(field, "tendons[0].displacement");
-            assert!(hint.contains("--displacement"), "{hint}");
+            // The library names no command-line flag (issue 23): the hint says what to sweep.
+            assert!(hint.contains("sweep its pull-in"), "{hint}");
         }
         other => panic!("expected an error, got {:?}", other.map(|t| t.points.len())),
     }

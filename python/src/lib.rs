@@ -4,6 +4,7 @@
 //! walk-through.
 
 mod analysis;
+mod branch;
 mod errors;
 mod options;
 mod robot;
@@ -14,7 +15,7 @@ use numpy::IntoPyArray;
 use numpy::ndarray::{Array1, Array2};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
-use robot::{PyRobot, columns};
+use robot::{PyRobot, robots_of};
 use solution::PySolution;
 use tdcr::io::SolverSettings;
 use tdcr::{Method, Solution, collocation, shooting};
@@ -76,16 +77,10 @@ fn batch_robots(
                 "solve_batch: give a list of robots, or one robot with `parameters` (a dict of arrays)",
             ));
         };
-        let (cols, n) = columns(parameters)?;
-        let mut out = Vec::with_capacity(n);
-        for row in 0..n {
-            let mut r = base.clone();
-            for (p, values) in &cols {
-                r.set(p, values[row])?;
-            }
-            out.push(r.file.robot);
-        }
-        (out, options::apply(&base.file.solver, options)?)
+        (
+            robots_of(base, parameters)?,
+            options::apply(&base.file.solver, options)?,
+        )
     } else {
         if parameters.is_some() {
             return Err(invalid("solve_batch: `parameters` needs one robot, not a list"));
@@ -212,55 +207,6 @@ fn solve_parameters<'py>(
     Ok(d)
 }
 
-/// sweep(robot, parameters, **options) -> list[Solution]
-///
-/// Solves the rows of `parameters` (a dict of 1-D arrays, names as `solve_batch`) in
-/// order, each warm-started from the last with a `tdcr::Solver` that keeps its Newton
-/// workspace and factors (as `tdcr sweep`); collocation. A failure is raised with `index`
-/// set to its row.
-#[pyfunction]
-#[pyo3(signature = (robot, parameters, **options))]
-fn sweep(
-    py: Python<'_>,
-    robot: &PyRobot,
-    parameters: &Bound<'_, PyDict>,
-    options: Option<&Bound<'_, PyDict>>,
-) -> PyResult<Vec<PySolution>> {
-    let settings = options::apply(&robot.file.solver, options)?;
-    if settings.method != Method::Collocation {
-        return Err(invalid("sweep warm-starts collocation; use method=\"collocation\""));
-    }
-    let (cols, n) = columns(parameters)?;
-    let mut robots = Vec::with_capacity(n);
-    for row in 0..n {
-        let mut r = robot.clone();
-        for (p, values) in &cols {
-            r.set(p, values[row])?;
-        }
-        robots.push(r.file.robot);
-    }
-    let result = py.detach(|| {
-        let mut solver = tdcr::Solver::new(settings.collocation.clone());
-        let mut out: Vec<Solution> = Vec::with_capacity(n);
-        for (i, r) in robots.iter().enumerate() {
-            let s = match out.last() {
-                Some(last) => solver.solve_from(r, last),
-                None => solver.solve(r),
-            };
-            out.push(s.map_err(|e| (i, e))?);
-        }
-        Ok(out)
-    });
-    match result {
-        Ok(list) => Ok(list.into_iter().map(|solution| PySolution { solution }).collect()),
-        Err((i, e)) => {
-            let err = to_py(e);
-            err.value(py).setattr("index", i)?;
-            Err(err)
-        }
-    }
-}
-
 /// Reference case S: the paper's prototype, tendon 1 at 2.94 N, no tip load
 /// (`tdcr::cases::case_s`), read back through its robot file like every Python robot.
 #[pyfunction]
@@ -301,10 +247,13 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<analysis::PyTipSensitivities>()?;
     m.add_class::<analysis::PyInverseResult>()?;
     m.add_class::<analysis::PyCalibration>()?;
+    m.add_class::<branch::PySweep>()?;
+    m.add_class::<branch::PyTrace>()?;
     m.add_function(wrap_pyfunction!(solve, m)?)?;
     m.add_function(wrap_pyfunction!(solve_batch, m)?)?;
     m.add_function(wrap_pyfunction!(solve_parameters, m)?)?;
-    m.add_function(wrap_pyfunction!(sweep, m)?)?;
+    m.add_function(wrap_pyfunction!(branch::sweep, m)?)?;
+    m.add_function(wrap_pyfunction!(branch::trace, m)?)?;
     m.add_function(wrap_pyfunction!(analysis::tip_sensitivities, m)?)?;
     m.add_function(wrap_pyfunction!(analysis::solve_tensions, m)?)?;
     m.add_function(wrap_pyfunction!(analysis::solve_displacements, m)?)?;

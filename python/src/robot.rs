@@ -288,10 +288,10 @@ impl PyRobot {
 }
 
 /// Parameter names and their values as read from a dict of equal-length 1-D arrays.
-pub type Columns = Vec<(Parameter, Vec<f64>)>;
+type Columns = Vec<(Parameter, Vec<f64>)>;
 
 /// Reads `{name: array}` (names as in `tdcr batch` headers); every array 1-D of one length.
-pub fn columns(parameters: &Bound<'_, PyDict>) -> PyResult<(Columns, usize)> {
+fn columns(parameters: &Bound<'_, PyDict>) -> PyResult<(Columns, usize)> {
     let mut out = Vec::new();
     let mut rows = None;
     for (key, value) in parameters.iter() {
@@ -310,6 +310,21 @@ pub fn columns(parameters: &Bound<'_, PyDict>) -> PyResult<(Columns, usize)> {
         out.push((parameter, array));
     }
     Ok((out, rows.unwrap_or(0)))
+}
+
+/// One robot per row of `parameters` (a dict of equal-length 1-D arrays, [`columns`]):
+/// `base` with that row's values set.
+pub fn robots_of(base: &PyRobot, parameters: &Bound<'_, PyDict>) -> PyResult<Vec<tdcr::Robot>> {
+    let (cols, n) = columns(parameters)?;
+    let mut out = Vec::with_capacity(n);
+    for row in 0..n {
+        let mut r = base.clone();
+        for (p, values) in &cols {
+            r.set(p, values[row])?;
+        }
+        out.push(r.file.robot);
+    }
+    Ok(out)
 }
 
 /// A 1-D sequence of numbers (numpy array, list, tuple) as f64 values.

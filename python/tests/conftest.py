@@ -28,3 +28,14 @@ def cli():
         return json.loads(out.stdout)
 
     return run
+
+
+@pytest.fixture(scope="session")
+def cli_text():
+    """Runs `tdcr ARGS` with `stdin`; returns standard output as text (CSV commands)."""
+    binary = _binary()
+
+    def run(args, stdin=None):
+        return subprocess.run([str(binary), *args], input=stdin, capture_output=True, text=True, check=True).stdout
+
+    return run

@@ -1,6 +1,8 @@
 //! Analyses of solved shapes: the global equilibrium check, the shape sampled at output arc
-//! lengths with its internal wrenches, and simpler models to compare with.
+//! lengths with its internal wrenches, simpler models to compare with, and sweeps (robots
+//! solved in order, with the events between steps).
 
 pub mod comparison;
 pub mod equilibrium;
 pub mod samples;
+pub mod sweep;

@@ -17,12 +17,13 @@
 //! failure; when the shape bends more than the mesh resolves, the path continues on a finer
 //! mesh. Near lambda = 1 the last point is predicted onto lambda = 1 and Newton lands there.
 
+use super::homotopy::{Homotopy, Point, dot, f_lambda, max_norm, residual, tangent};
 use super::newton::{self, Settings, Workspace};
 use super::options::Options;
 use super::refine;
 use super::stability;
 use super::system::System;
-use crate::mesh::guess::rigid_estimate;
+use crate::mesh::guess::{interpolate, rigid_estimate};
 use crate::mesh::{Mesh, nodes};
 use crate::model::parameter::Parameter;
 use crate::report::{SolveReport, Stability, Termination};
@@ -46,11 +47,6 @@ const CHORD_RATIO: f64 = 0.5;
 /// scaled residual (a relative state error of about 1e-6), and only the landing at
 /// lambda = 1 is converged to the solve's tolerance.
 const PATH_TOLERANCE: f64 = 1e-6;
-/// Difference step of F_lambda: the residual is smooth in lambda and resolves it to about
-/// 1e-11, so a central difference at 1e-5 is accurate to about 1e-6 relative, plenty for
-/// a tangent.
-const DELTA: f64 = 1e-5;
-
 /// The end of a load path.
 pub(super) struct End {
     /// The converged states at lambda = 1.
@@ -80,64 +76,6 @@ fn index(system: &System, ws: &mut Workspace, report: &mut SolveReport) -> Optio
         Stability::Stable => Some(0),
         Stability::Unstable { directions, .. } => Some(directions),
         Stability::Unknown { .. } => None,
-    }
-}
-
-/// A point of the path with the tangent there.
-struct Point {
-    x: Vec<State>,
-    lambda: f64,
-    /// Tangent, scaled unknowns (the Newton step's units) then lambda, normalized so that
-    /// |t_x|^2 / n + t_lambda^2 = 1.
-    tx: Vec<f64>,
-    tl: f64,
-}
-
-fn dot(a: &[f64], b: &[f64]) -> f64 {
-    a.iter().zip(b).map(|(x, y)| x * y).sum()
-}
-
-fn max_norm(v: &[f64]) -> f64 {
-    v.iter()
-        .fold(0.0, |m, x| if x.is_nan() { f64::INFINITY } else { m.max(x.abs()) })
-}
-
-/// Which problems the path connects.
-pub(super) enum Homotopy {
-    /// One input moved along a line: `parameter` = from + lambda (to - from). The load
-    /// path is the load scale from 0 to 1, from the unloaded robot.
-    Parameter {
-        /// The input.
-        parameter: Parameter,
-        /// Its value at lambda = 0.
-        from: f64,
-        /// Its value at lambda = 1.
-        to: f64,
-    },
-    /// From a warm start x0 (not a solution) to the robot: F(x) - (1 - lambda) F(x0) = 0,
-    /// which x0 solves at lambda = 0 (a Newton homotopy). Holds F(x0).
-    Newton(Vec<f64>),
-}
-
-impl Homotopy {
-    /// The load path: every tension and load scaled from 0 to 1.
-    fn load() -> Self {
-        Homotopy::Parameter {
-            parameter: Parameter::LoadScale,
-            from: 0.0,
-            to: 1.0,
-        }
-    }
-
-    /// Sets `system` to the problem at `lambda`.
-    fn set(&self, system: &mut System, lambda: f64) {
-        if let Homotopy::Parameter { parameter, from, to } = *self {
-            let value = from + lambda * (to - from);
-            match parameter {
-                Parameter::LoadScale => system.set_factors(value, value),
-                p => system.set_parameter(p, value),
-            }
-        }
     }
 }
 
@@ -176,79 +114,6 @@ pub(super) struct Recorded {
     pub fold: bool,
     /// Iterations (Newton and chord) spent on the path so far.
     pub iterations: usize,
-}
-
-/// The residual at (x, lambda) into `out`; false when the model breaks down.
-fn residual(
-    system: &mut System,
-    homotopy: &Homotopy,
-    x: &[State],
-    lambda: f64,
-    out: &mut [f64],
-    report: &mut SolveReport,
-) -> bool {
-    homotopy.set(system, lambda);
-    report.evaluations.residual += 1;
-    report.evaluations.equations += system.rate_evaluations();
-    let ok = system.residual(x, out).is_ok();
-    if let Homotopy::Newton(r0) = homotopy {
-        out.iter_mut().zip(r0).for_each(|(o, r)| *o -= (1.0 - lambda) * r);
-    }
-    ok && out.iter().all(|v| v.is_finite())
-}
-
-/// dF/dlambda at x: F(x0) for a Newton homotopy; for a parameter a central difference
-/// (one-sided at lambda = 0, where tensions would turn negative).
-fn f_lambda(
-    system: &mut System,
-    homotopy: &Homotopy,
-    x: &[State],
-    lambda: f64,
-    report: &mut SolveReport,
-) -> Option<Vec<f64>> {
-    if let Homotopy::Newton(r0) = homotopy {
-        return Some(r0.clone());
-    }
-    let n = system.unknowns();
-    let (mut hi, mut lo) = (vec![0.0; n], vec![0.0; n]);
-    let (a, b) = if lambda >= DELTA {
-        (lambda - DELTA, lambda + DELTA)
-    } else {
-        (lambda, lambda + DELTA)
-    };
-    let ok = residual(system, homotopy, x, b, &mut hi, report) && residual(system, homotopy, x, a, &mut lo, report);
-    homotopy.set(system, lambda);
-    ok.then(|| hi.iter().zip(&lo).map(|(h, l)| (h - l) / (b - a)).collect())
-}
-
-/// The tangent at a converged point whose Jacobian is factored in `ws`, oriented along
-/// `previous` (or towards growing lambda).
-fn tangent(
-    system: &mut System,
-    homotopy: &Homotopy,
-    ws: &mut Workspace,
-    x: Vec<State>,
-    lambda: f64,
-    previous: Option<(&[f64], f64)>,
-    report: &mut SolveReport,
-) -> Option<(Point, Vec<f64>)> {
-    let fl = f_lambda(system, homotopy, &x, lambda, report)?;
-    let rhs: Vec<f64> = fl.iter().map(|v| -v).collect();
-    let z = ws.solve_again(&rhs)?.to_vec();
-    let n = z.len() as f64;
-    let norm = (dot(&z, &z) / n + 1.0).sqrt();
-    let mut tx: Vec<f64> = z.iter().map(|v| v / norm).collect();
-    let mut tl = 1.0 / norm;
-    let forward = match previous {
-        Some((ptx, ptl)) if ptx.len() == tx.len() => dot(ptx, &tx) / n + ptl * tl >= 0.0,
-        Some((_, ptl)) => ptl >= 0.0,
-        None => true,
-    };
-    if !forward {
-        tx.iter_mut().for_each(|v| *v = -*v);
-        tl = -tl;
-    }
-    Some((Point { x, lambda, tx, tl }, fl))
 }
 
 /// Follows a path on `system` (whose mesh it may refine, replacing `system` and `ws`) from
@@ -601,7 +466,7 @@ fn correct(
 }
 
 /// Moves the path to a uniform mesh of `intervals` intervals at `point`: interpolates the
-/// shape, converges Newton there at the same lambda and takes the tangent.
+/// shape ([`interpolate`]), converges Newton there at the same lambda and takes the tangent.
 #[allow(clippy::too_many_arguments)]
 fn remesh(
     system: &mut System,
@@ -617,16 +482,7 @@ fn remesh(
     let ends: Vec<f64> = system.mesh.nodes.iter().map(|n| n.segment_end).collect();
     let shape = nodes::solution(&model, &point.x, &ends, None, report.clone()).ok()?;
     let mesh = Mesh::uniform(model.robot, intervals).ok()?;
-    let mut x: Vec<State> = (0..mesh.nodes.len())
-        .map(|k| {
-            let s = mesh.nodes[k].s;
-            let left = k + 1 < mesh.nodes.len() && mesh.is_jump(k);
-            State {
-                s,
-                ..shape.at_limit(s, left)
-            }
-        })
-        .collect();
+    let mut x = interpolate(&shape, &mesh);
     *system = System::new(model, mesh);
     homotopy.set(system, point.lambda);
     *ws = Workspace::new(system, options.linear_solver).ok()?;

@@ -42,6 +42,17 @@ pub struct TracePoint {
     pub iterations: usize,
 }
 
+impl TracePoint {
+    /// `stable`, `unstable` or `unknown`, the words of [`crate::Stability::verdict`].
+    pub fn verdict(&self) -> &'static str {
+        match self.unstable_directions {
+            Some(0) => "stable",
+            Some(_) => "unstable",
+            None => "unknown",
+        }
+    }
+}
+
 /// A traced branch.
 #[derive(Clone, Debug)]
 pub struct Trace {
@@ -68,9 +79,10 @@ pub struct Trace {
 ///
 /// # Errors
 /// Invalid input (also a displacement-controlled tendon left after setting `parameter`:
-/// trace its tension or sweep its pull-in), or the start's solve failing ([`solve`]'s
-/// errors). A branch that cannot
-/// be followed to the end is not an error: [`Trace::stopped`] says why.
+/// trace its tension or sweep its pull-in; `youngs_modulus`, which only a sweep varies; a
+/// negative tension; a range of two equal or non-finite values), or the start's solve
+/// failing ([`solve`]'s errors). A branch that cannot be followed to the end is not an
+/// error: [`Trace::stopped`] says why.
 pub fn trace(robot: &Robot, parameter: Parameter, from: f64, to: f64, options: &Options) -> Result<Trace> {
     let clock = Instant::now();
     robot.validate()?;
@@ -79,7 +91,7 @@ pub fn trace(robot: &Robot, parameter: Parameter, from: f64, to: f64, options: &
         return Err(crate::error::invalid(
             "parameter",
             "`youngs_modulus` cannot be traced: a trace varies a tension or a load",
-            "sweep E instead (tdcr sweep --param youngs_modulus=START:STOP:COUNT), each solve warm-started",
+            "sweep E instead (a sweep of `youngs_modulus` solves each value warm-started from the last)",
         ));
     }
     if let Some(i) = parameter
@@ -95,8 +107,8 @@ pub fn trace(robot: &Robot, parameter: Parameter, from: f64, to: f64, options: &
                  border the path follower does not carry)",
                 i + 1
             ),
-            "sweep pull-ins instead (tdcr sweep --displacement I=START:STOP:COUNT, each solve warm-started), or \
-             trace the tendon's tension (tension.I makes it tension-controlled)",
+            "sweep its pull-in instead (a sweep solves each value warm-started from the last), or trace the \
+             tendon's tension (`tension.I` makes it tension-controlled)",
         ));
     }
     if !from.is_finite() || !to.is_finite() || from == to {
@@ -108,6 +120,17 @@ pub fn trace(robot: &Robot, parameter: Parameter, from: f64, to: f64, options: &
                 crate::Readable(to)
             ),
             "give START:STOP with START != STOP",
+        ));
+    }
+    if matches!(parameter, Parameter::Tension(_)) && from.min(to) < 0.0 {
+        return Err(crate::error::invalid(
+            "trace range",
+            format!(
+                "{parameter} from {} to {} N: a tendon can only pull",
+                crate::Readable(from),
+                crate::Readable(to)
+            ),
+            "give tensions >= 0",
         ));
     }
     let first = solve(&parameter.apply(robot, from), options)?;

@@ -1,4 +1,5 @@
-//! Initial guesses: the rigid-equilibrium estimate.
+//! Initial guesses: the rigid-equilibrium estimate, and a previous solution moved onto a
+//! mesh ([`interpolate`]).
 //!
 //! The loads distal to each node are summed on the unloaded (reference) shape, giving an
 //! estimate of the internal wrench there; the linear constitutive law turns it into strains,
@@ -7,10 +8,10 @@
 //! linear beam theory; with no load it is the reference shape itself.
 #![allow(non_snake_case)]
 
-use crate::mesh::MeshNode;
+use crate::mesh::{Mesh, MeshNode};
 use crate::model::equations::{Model, Which};
 use crate::so3;
-use crate::solution::State;
+use crate::solution::{Node, Solution, State};
 use nalgebra::{Matrix3, Vector3};
 
 /// Poses along the mesh integrated from the base with the node strains `v`, `u` (midpoint
@@ -61,6 +62,25 @@ pub fn initial(model: &Model, nodes: &[MeshNode], kind: InitialGuess) -> Vec<Sta
                 .collect()
         }
     }
+}
+
+/// Node states of a previous solution on `mesh`, a warm start: its own node states when the
+/// meshes are the same, else its interpolant, with left limits for the left node of a jump.
+pub fn interpolate(guess: &Solution, mesh: &Mesh) -> Vec<State> {
+    let same = guess.nodes.len() == mesh.nodes.len() && guess.nodes.iter().zip(&mesh.nodes).all(|(a, b)| a.s == b.s);
+    if same {
+        return guess.nodes.iter().map(Node::state).collect();
+    }
+    (0..mesh.nodes.len())
+        .map(|k| {
+            let s = mesh.nodes[k].s;
+            let left = k + 1 < mesh.nodes.len() && mesh.is_jump(k);
+            State {
+                s,
+                ..guess.at_limit(s, left)
+            }
+        })
+        .collect()
 }
 
 fn reference_strains(model: &Model, nodes: &[MeshNode]) -> Vec<(Vector3<f64>, Vector3<f64>)> {

@@ -10,7 +10,8 @@ The Rust crate tdcr is the one implementation; this package converts types and c
 
 Robots: `Robot` (from TOML text, a file, keyword arguments or a dict; the robot file's
 fields and rules). Solving: `solve`, `solve_batch` (all cores, GIL released), `sweep`
-(warm-started sequence), `solve_parameters` (arrays in, arrays out). Analyses:
+(warm-started sequence with its events), `trace` (a branch of equilibria through folds),
+`solve_parameters` (arrays in, arrays out). Analyses:
 `tip_sensitivities` (Jacobians, compliance), `solve_tensions` and `solve_displacements` (inverse statics), `calibrate` (E and base angles from measured tips). Cases:
 `tdcr.cases`. A cluster: `tdcr.distributed` (Dask). Errors: `Error` and its subclasses
 `InvalidInput` (with `FileError`, `SingularRouting`), `NotConverged`, `IntervalCap`,
@@ -31,7 +32,9 @@ from ._native import (
     Solution,
     SolveReport,
     State,
+    Sweep,
     TipSensitivities,
+    Trace,
     __version__,
     calibrate,
     example,
@@ -42,6 +45,7 @@ from ._native import (
     solve_tensions,
     sweep,
     tip_sensitivities,
+    trace,
 )
 from . import cases
 
@@ -59,7 +63,9 @@ __all__ = [
     "Solution",
     "SolveReport",
     "State",
+    "Sweep",
     "TipSensitivities",
+    "Trace",
     "__version__",
     "calibrate",
     "cases",
@@ -71,4 +77,5 @@ __all__ = [
     "solve_tensions",
     "sweep",
     "tip_sensitivities",
+    "trace",
 ]

@@ -1,7 +1,7 @@
 """Type stubs of the native module tdcr._native (the Rust crate tdcr through PyO3)."""
 
 from os import PathLike
-from typing import Any, Dict, List, Literal, Mapping, Optional, Sequence, Tuple, Union
+from typing import Any, Dict, Iterator, List, Literal, Mapping, Optional, Sequence, Tuple, Union
 
 import numpy as np
 import numpy.typing as npt
@@ -320,6 +320,26 @@ def solve_parameters(
 ) -> Dict[str, Any]:
     """`solve_batch` of parameter rows reduced to arrays."""
 
+class Sweep:
+    """The result of `sweep`: every step's solution and the events between steps; also the
+    sequence of the solutions."""
+
+    @property
+    def solutions(self) -> List[Solution]:
+        """The solutions, one per step solved, in order."""
+    @property
+    def events(self) -> List[Optional[str]]:
+        """Per step: None, or what happened since the step before (`tdcr sweep`'s `event`)."""
+    @property
+    def jumps(self) -> List[int]:
+        """The steps (from 0) where the tip jumped: a snap-through or another branch."""
+    @property
+    def tip_positions(self) -> FloatArray:
+        """Tip positions (m, world frame), shape (n, 3)."""
+    def __len__(self) -> int: ...
+    def __getitem__(self, index: int, /) -> Solution: ...
+    def __iter__(self) -> Iterator[Solution]: ...
+
 def sweep(
     robot: Robot,
     parameters: Mapping[str, ArrayLike],
@@ -331,8 +351,38 @@ def sweep(
     max_iterations: Optional[int] = None,
     continuation: Optional[bool] = None,
     equilibrium: Optional[Literal["load_path", "nearest"]] = None,
-) -> List[Solution]:
-    """Solves parameter rows in order, each warm-started from the last."""
+) -> Sweep:
+    """Solves parameter rows in order, each warm-started from the last, with the events."""
+
+class Trace:
+    """The result of `trace`: the points of a branch of equilibria, in the order it passes them."""
+
+    parameter: str
+    values: FloatArray
+    tip_positions: FloatArray
+    unstable_directions: List[Optional[int]]
+    stability: List[str]
+    fold: List[bool]
+    folds: List[float]
+    bifurcations: List[float]
+    stopped: Optional[str]
+    iterations: int
+
+def trace(
+    robot: Robot,
+    parameter: str,
+    start: float,
+    stop: float,
+    *,
+    tol: Optional[float] = None,
+    intervals: Optional[int] = None,
+    max_intervals: Optional[int] = None,
+    residual_tolerance: Optional[float] = None,
+    max_iterations: Optional[int] = None,
+    continuation: Optional[bool] = None,
+    equilibrium: Optional[Literal["load_path", "nearest"]] = None,
+) -> Trace:
+    """Follows the branch of equilibria from `start` to `stop` of one input, through folds."""
 
 def tip_sensitivities(robot: Robot, solution: Solution) -> TipSensitivities:
     """Tip Jacobians and compliance of a collocation solution."""

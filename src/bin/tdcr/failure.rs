@@ -46,6 +46,15 @@ impl Failure {
     }
 }
 
+/// The command-line flags that set the solver option `field` of a library message (the
+/// library names options, not flags), for the options whose message suggests a change.
+fn flags(field: &str) -> Option<&'static str> {
+    match field {
+        "options.intervals" | "options.mesh" => Some("--intervals N, or --tol TOL for a tip tolerance"),
+        _ => None,
+    }
+}
+
 /// A solver error as a failure: input problems exit 2, solver failures 3, the rest 1.
 pub fn solver_failure(e: Error) -> Failure {
     let text = e.to_string();
@@ -54,7 +63,12 @@ pub fn solver_failure(e: Error) -> Failure {
     }
     if matches!(e, Error::IntervalCap { .. } | Error::Breakdown { .. }) {
         Failure::NotConverged(text)
-    } else if matches!(e, Error::InvalidInput { .. } | Error::SingularRouting { .. }) {
+    } else if let Error::InvalidInput { field, .. } = &e {
+        Failure::Input(match flags(field) {
+            Some(flags) => format!("{text} (on the command line: {flags})"),
+            None => text,
+        })
+    } else if matches!(e, Error::SingularRouting { .. }) {
         Failure::Input(text)
     } else {
         Failure::Other(text)

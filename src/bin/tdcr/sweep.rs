@@ -1,18 +1,22 @@
-//! `tdcr sweep`: a sequence of robots over tension, pull-in or other input ranges, each
-//! solve warm-started from the last; CSV out, optionally the tip trajectory as a picture.
+//! `tdcr sweep`: a sequence of robots over tension, pull-in or other input ranges, solved by
+//! the library's sweep (`tdcr::analysis::sweep`: each solve warm-started from the last, the
+//! jumps and taut/slack tendons between steps); CSV out, optionally the tip trajectory as a
+//! picture.
 
 use clap::Args;
 use std::fmt::Write as _;
 use std::io::{IsTerminal, Write};
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
+use tdcr::analysis::sweep::{Event, Sweep, SweepSolver};
 use tdcr::io::output;
 use tdcr::plot::{Figure, LegendEntry, PALETTE, Style, shape_legend};
 use tdcr::{Parameter, Robot, Solution};
 
 use crate::args::{SolverArgs, parse_disks, parse_displacement_sweep, parse_param_sweep, parse_sweep};
 use crate::failure::{Failure, emit, note, picture_format, write_file, write_picture};
-use crate::robot_args::{apply, read_robot, run_solver, set_displacement, set_tension};
+use crate::failure::{solver_failure, with_likely_causes};
+use crate::robot_args::{apply, read_robot, set_displacement, set_tension};
 use crate::tables::summary;
 
 /// The arguments of `tdcr sweep`.
@@ -101,73 +105,109 @@ impl Progress {
     }
 }
 
-/// `tdcr sweep`: solves every step, writes the CSV (the steps before a failure too) and the
-/// picture.
+/// The ranges of a sweep: the `--param` inputs parsed for the robot, and the number of steps.
+struct Plan<'a> {
+    params: Vec<(Parameter, &'a Vec<f64>)>,
+    steps: usize,
+}
+
+impl<'a> Plan<'a> {
+    /// Checks the ranges of `args` for `robot`: at least one with COUNT >= 2, one COUNT for
+    /// all, each tendon given once and by tension or pull-in, not both.
+    fn new(args: &'a SweepArgs, robot: &Robot) -> Result<Self, Failure> {
+        let params: Vec<(Parameter, &Vec<f64>)> = args
+            .param
+            .iter()
+            .map(|(name, v)| {
+                Parameter::parse(name, robot)
+                    .map(|p| (p, v))
+                    .map_err(|e| Failure::Input(format!("--param {name}=...: {e}")))
+            })
+            .collect::<Result<_, _>>()?;
+        let lengths = args
+            .tension
+            .iter()
+            .map(|(_, v)| v.len())
+            .chain(args.displacement.iter().map(|(_, v)| v.len()))
+            .chain(params.iter().map(|(_, v)| v.len()));
+        let steps = lengths.clone().max().unwrap_or(0);
+        if steps < 2 {
+            return Err(Failure::Input(
+                "sweep needs at least one range with COUNT >= 2, e.g. --tension 1=0:6:61, --displacement 1=0:0.004:41 \
+                 or --param tip_force.z=0:-1:11"
+                    .into(),
+            ));
+        }
+        if let Some(n) = lengths.clone().find(|&n| n != 1 && n != steps) {
+            return Err(Failure::Input(format!(
+                "a range has {n} values but another has {steps}: give every range the same COUNT"
+            )));
+        }
+        for (k, (i, _)) in args.tension.iter().enumerate() {
+            if args.tension[..k].iter().any(|(j, _)| j == i) {
+                return Err(Failure::Input(format!(
+                    "--tension {i}=... is given twice: give each tendon one range or value"
+                )));
+            }
+        }
+        for (k, (i, _)) in args.displacement.iter().enumerate() {
+            if args.displacement[..k].iter().any(|(j, _)| j == i) {
+                return Err(Failure::Input(format!(
+                    "--displacement {i}=... is given twice: give each tendon one range or value"
+                )));
+            }
+            if args.tension.iter().any(|(j, _)| j == i) {
+                return Err(Failure::Input(format!(
+                    "--tension {i}=... and --displacement {i}=... both given: drive a tendon by its tension or by its \
+                     displacement"
+                )));
+            }
+        }
+        for (p, _) in &params {
+            if let Parameter::Tension(t) = p
+                && args.displacement.iter().any(|(j, _)| *j == t + 1)
+            {
+                return Err(Failure::Input(format!(
+                    "--displacement {}=... and --param {p}=... both given: drive a tendon by its tension or by its \
+                     displacement",
+                    t + 1
+                )));
+            }
+        }
+        Ok(Plan { params, steps })
+    }
+
+    /// The robot of step `k` (from 0): `base` with every range at its k-th value.
+    fn robot(&self, args: &SweepArgs, base: &Robot, k: usize) -> Result<Robot, Failure> {
+        let mut robot = base.clone();
+        for &(i, ref v) in &args.tension {
+            set_tension(&mut robot, i, at(v, k))?;
+        }
+        for &(i, ref v) in &args.displacement {
+            set_displacement(&mut robot, i, at(v, k))?;
+        }
+        for (p, v) in &self.params {
+            robot = p.apply(&robot, at(v, k));
+        }
+        Ok(robot)
+    }
+}
+
+/// The k-th value of a range, or its one value.
+fn at(v: &[f64], k: usize) -> f64 {
+    v[if v.len() == 1 { 0 } else { k }]
+}
+
+/// `tdcr sweep`: solves every step ([`tdcr::analysis::sweep::Sweep`]), writes the CSV (the
+/// steps before a failure too) and the picture.
 pub fn run(args: &SweepArgs) -> Result<(), Failure> {
     if let Some(path) = &args.plot {
         picture_format(path)?;
     }
     let (name, mut file) = read_robot(&args.file)?;
     apply(&mut file, &args.solver);
-    let params: Vec<(Parameter, &Vec<f64>)> = args
-        .param
-        .iter()
-        .map(|(name, v)| {
-            Parameter::parse(name, &file.robot)
-                .map(|p| (p, v))
-                .map_err(|e| Failure::Input(format!("--param {name}=...: {e}")))
-        })
-        .collect::<Result<_, _>>()?;
-    let lengths = args
-        .tension
-        .iter()
-        .map(|(_, v)| v.len())
-        .chain(args.displacement.iter().map(|(_, v)| v.len()))
-        .chain(params.iter().map(|(_, v)| v.len()));
-    let steps = lengths.clone().max().unwrap_or(0);
-    if steps < 2 {
-        return Err(Failure::Input(
-            "sweep needs at least one range with COUNT >= 2, e.g. --tension 1=0:6:61, --displacement 1=0:0.004:41 \
-             or --param tip_force.z=0:-1:11"
-                .into(),
-        ));
-    }
-    if let Some(n) = lengths.clone().find(|&n| n != 1 && n != steps) {
-        return Err(Failure::Input(format!(
-            "a range has {n} values but another has {steps}: give every range the same COUNT"
-        )));
-    }
-    for (k, (i, _)) in args.tension.iter().enumerate() {
-        if args.tension[..k].iter().any(|(j, _)| j == i) {
-            return Err(Failure::Input(format!(
-                "--tension {i}=... is given twice: give each tendon one range or value"
-            )));
-        }
-    }
-    for (k, (i, _)) in args.displacement.iter().enumerate() {
-        if args.displacement[..k].iter().any(|(j, _)| j == i) {
-            return Err(Failure::Input(format!(
-                "--displacement {i}=... is given twice: give each tendon one range or value"
-            )));
-        }
-        if args.tension.iter().any(|(j, _)| j == i) {
-            return Err(Failure::Input(format!(
-                "--tension {i}=... and --displacement {i}=... both given: drive a tendon by its tension or by its \
-                 displacement"
-            )));
-        }
-    }
-    for (p, _) in &params {
-        if let Parameter::Tension(t) = p
-            && args.displacement.iter().any(|(j, _)| *j == t + 1)
-        {
-            return Err(Failure::Input(format!(
-                "--displacement {}=... and --param {p}=... both given: drive a tendon by its tension or by its \
-                 displacement",
-                t + 1
-            )));
-        }
-    }
+    let plan = Plan::new(args, &file.robot)?;
+    let steps = plan.steps;
     for &(i, ref v) in &args.tension {
         set_tension(&mut file.robot, i, v[0])?;
     }
@@ -175,25 +215,10 @@ pub fn run(args: &SweepArgs) -> Result<(), Failure> {
         set_displacement(&mut file.robot, i, v[0])?;
     }
     crate::failure::warn_file(&name, &file);
-    // The robot of step k (from 0): every range at its k-th value.
-    let robot_at = |k: usize| -> Result<Robot, Failure> {
-        let at = |v: &Vec<f64>| v[if v.len() == 1 { 0 } else { k }];
-        let mut robot = file.robot.clone();
-        for &(i, ref v) in &args.tension {
-            set_tension(&mut robot, i, at(v))?;
-        }
-        for &(i, ref v) in &args.displacement {
-            set_displacement(&mut robot, i, at(v))?;
-        }
-        for (p, v) in &params {
-            robot = p.apply(&robot, at(v));
-        }
-        Ok(robot)
-    };
     // Every step's robot must be valid before any is solved (a pull-in longer than the
     // tendon's path, a negative modulus): bad input, exit 2, not a failed solve.
     for k in 0..steps {
-        let robot = robot_at(k)?;
+        let robot = plan.robot(args, &file.robot, k)?;
         if let Err(e) = robot.validate() {
             return Err(Failure::Input(format!(
                 "sweep step {} of {steps} ({}) is not a valid robot: {e}",
@@ -202,7 +227,99 @@ pub fn run(args: &SweepArgs) -> Result<(), Failure> {
             )));
         }
     }
-    let count = file.robot.tendons.len();
+    let mut csv = header(args, &plan, file.robot.tendons.len());
+    let start = args
+        .start
+        .as_deref()
+        .map(|p| crate::robot_args::read_start(p, &file.robot))
+        .transpose()?;
+    let solver = match file.solver.method {
+        tdcr::Method::Collocation => SweepSolver::Collocation(file.solver.collocation.clone()),
+        tdcr::Method::Shooting => SweepSolver::Shooting(file.solver.shooting),
+    };
+    let mut sweep = Sweep::new(solver, start);
+    let mut progress = Progress::new();
+    let mut failure = None;
+    let mut past_limit = PastLimits::default();
+    let (mut first, mut last): (Option<Shape>, Option<Shape>) = (None, None);
+    let mut tips = Vec::with_capacity(steps);
+    for k in 0..steps {
+        let robot = plan.robot(args, &file.robot, k)?;
+        let step = match sweep.step(&robot) {
+            Ok(step) => step,
+            Err(e) => {
+                failure = Some(step_failure(
+                    with_likely_causes(solver_failure(e), &robot),
+                    k,
+                    steps,
+                    &robot,
+                ));
+                break;
+            }
+        };
+        past_limit.record(&robot, &step.solution, k, &name, &mut progress);
+        let event = match &step.event {
+            Some(e @ Event::Jump { .. }) => {
+                progress.finish();
+                note(&format!("warning: sweep step {}: {e}", k + 1));
+                e.to_string()
+            }
+            Some(e) => e.to_string(),
+            None => String::new(),
+        };
+        row(&mut csv, args, &plan, k, &step.solution, &event);
+        if args.solver.verbose {
+            progress.finish();
+            note(&format!(
+                "step {}: {}",
+                k + 1,
+                summary(&step.solution.report, file.robot.length())
+            ));
+        }
+        tips.push(step.solution.tip_position());
+        if first.is_none() {
+            first = Some((robot.clone(), step.solution.clone()));
+        }
+        last = Some((robot, step.solution));
+        progress.update(k + 1, steps);
+    }
+    progress.finish();
+    past_limit.summary(&name, tips.len());
+    match &args.out {
+        Some(path) => {
+            write_file(path, &csv, "CSV")?;
+            note(&format!("wrote {}", path.display()));
+        }
+        None => emit(&csv)?,
+    }
+    if let (Some(path), Some(first), Some(last)) = (&args.plot, &first, &last) {
+        let figure = picture(args, &plan, &name, &tips, first, last);
+        write_picture(path, &figure, "plot")?;
+    }
+    failure.map_or(Ok(()), Err)
+}
+
+/// A solved step's robot and solution, as the picture draws it.
+type Shape = (Robot, Solution);
+
+/// A failed step's failure, its message headed by the step and its tendon inputs.
+fn step_failure(f: Failure, k: usize, steps: usize, robot: &Robot) -> Failure {
+    let head = format!("sweep step {} of {steps} ({})", k + 1, step_inputs(robot));
+    match f {
+        // Exit 2 for bad input, as `solve` exits (the checks before the first solve should
+        // have found it).
+        Failure::Input(t) => Failure::Input(format!("{head}: {t}")),
+        Failure::NotConverged(t) => {
+            Failure::NotConverged(format!("{head} failed; the CSV holds the steps before it\n{t}"))
+        }
+        Failure::Other(t) => Failure::Other(format!("{head} failed; the CSV holds the steps before it\n{t}")),
+        Failure::BrokenPipe => Failure::BrokenPipe,
+    }
+}
+
+/// The CSV header: the tensions of the `count` tendons, the pull-ins of the
+/// `--displacement` tendons, the `--param` inputs, then the results.
+fn header(args: &SweepArgs, plan: &Plan, count: usize) -> String {
     let mut csv = String::from("step");
     for i in 1..=count {
         let _ = write!(csv, ",tension_{i}");
@@ -210,57 +327,132 @@ pub fn run(args: &SweepArgs) -> Result<(), Failure> {
     for (i, _) in &args.displacement {
         let _ = write!(csv, ",displacement_{i}");
     }
-    for (p, _) in &params {
+    for (p, _) in &plan.params {
         let _ = write!(csv, ",{p}");
     }
     csv.push_str(
         ",tip_x,tip_y,tip_z,bending_angle_deg,iterations,load_steps,solve_time,intervals,tip_error_estimate,stability,path,event\n",
     );
-    let length = file.robot.length();
-    let mut previous_move: Option<f64> = None;
-    // Which displacement-controlled tendons were taut at the last step.
-    let mut previous_taut: Option<Vec<(usize, bool)>> = None;
-    let mut last_robot: Option<Robot> = None;
-    let mut tips = Vec::with_capacity(steps);
-    let (mut first, mut last): (Option<(Robot, Solution)>, Option<Solution>) = (
-        None,
-        args.start
-            .as_deref()
-            .map(|p| crate::robot_args::read_start(p, &file.robot))
-            .transpose()?,
+    csv
+}
+
+/// The CSV row of step `k` (from 0).
+fn row(csv: &mut String, args: &SweepArgs, plan: &Plan, k: usize, solution: &Solution, event: &str) {
+    let tip = solution.tip_position();
+    let _ = write!(csv, "{}", k + 1);
+    // The solved tensions: the inputs of tension-controlled tendons, the unknowns of
+    // displacement-controlled ones.
+    for t in &solution.tendons {
+        let _ = write!(csv, ",{}", t.tension);
+    }
+    for &(i, _) in &args.displacement {
+        let _ = write!(csv, ",{}", solution.tendons[i - 1].displacement);
+    }
+    // The swept value itself (a load scale is not a property of the scaled robot).
+    for (_, v) in &plan.params {
+        let _ = write!(csv, ",{}", at(v, k));
+    }
+    let report = &solution.report;
+    let path = match &report.path {
+        tdcr::Path::Direct => "direct",
+        tdcr::Path::FromWarmStart { .. } => "from_warm_start",
+        tdcr::Path::LoadPath { .. } => "load_path",
+    };
+    let _ = writeln!(
+        csv,
+        ",{},{},{},{},{},{},{},{},{},{},{path},{event}",
+        output::number(tip.x),
+        output::number(tip.y),
+        output::number(tip.z),
+        output::bending_angle(solution).to_degrees(),
+        report.iterations,
+        report.load_steps,
+        report.timings.total.as_secs_f64(),
+        report.intervals,
+        report
+            .error_estimate
+            .map_or(String::new(), |e| output::number(e.tip_position)),
+        report.stability.verdict()
     );
-    let mut progress = Progress::new();
-    let mut failure = None;
-    // Per tendon whose solved tension reached the geometric limit: each is warned about at
-    // its first such step and summed up at the end.
-    let mut past_limit: Vec<PastLimit> = Vec::new();
-    for k in 0..steps {
-        let robot = robot_at(k)?;
-        let solution = match run_solver(&robot, &file, last.as_ref()) {
-            Ok(s) => s,
-            Err(f) => {
-                let head = format!("sweep step {} of {steps} ({})", k + 1, step_inputs(&robot));
-                failure = Some(match f {
-                    // Exit 2 for bad input, as `solve` exits (the checks above should
-                    // have found it).
-                    Failure::Input(t) => Failure::Input(format!("{head}: {t}")),
-                    Failure::NotConverged(t) => {
-                        Failure::NotConverged(format!("{head} failed; the CSV holds the steps before it\n{t}"))
-                    }
-                    Failure::Other(t) => {
-                        Failure::Other(format!("{head} failed; the CSV holds the steps before it\n{t}"))
-                    }
-                    Failure::BrokenPipe => Failure::BrokenPipe,
-                });
-                break;
-            }
-        };
+}
+
+/// The tip trajectory with the first and last shapes.
+fn picture(
+    args: &SweepArgs,
+    plan: &Plan,
+    name: &str,
+    tips: &[tdcr::nalgebra::Vector3<f64>],
+    (robot0, first): &Shape,
+    (robot1, last): &Shape,
+) -> Figure {
+    let mut figure = Figure::new(&format!("{name}: tip trajectory over {} solves", tips.len()));
+    let ranges: Vec<String> = args
+        .tension
+        .iter()
+        .map(|(i, v)| format!("tendon {i}: {} to {} N", v[0], v[v.len() - 1]))
+        .chain(
+            args.displacement
+                .iter()
+                .map(|(i, v)| format!("tendon {i} pulled in: {} to {} mm", v[0] * 1e3, v[v.len() - 1] * 1e3)),
+        )
+        .chain(
+            plan.params
+                .iter()
+                .map(|(p, v)| format!("{p}: {} to {} {}", v[0], v[v.len() - 1], p.unit())),
+        )
+        .collect();
+    figure.subtitle.push(ranges.join("; "));
+    let mut start = Style::new("#999999");
+    start.dash = Some("5 3".into());
+    start.disks = args.disks;
+    start.distributed_load = false;
+    figure.add_shape(robot0, first, &start);
+    let mut end = Style::new("#555555");
+    end.disks = args.disks;
+    figure.add_shape(robot1, last, &end);
+    figure.panel_mut().curves.push(tdcr::plot::Curve {
+        points: tips.to_vec(),
+        color: PALETTE[3].into(),
+        width: 2.0,
+        dash: None,
+        opacity: 1.0,
+    });
+    figure
+        .panel_mut()
+        .markers
+        .extend(tips.iter().map(|&point| tdcr::plot::Marker {
+            point,
+            color: PALETTE[3].into(),
+            radius: 1.8,
+        }));
+    figure.legend = vec![
+        LegendEntry::line("tip trajectory (a dot per solve)", PALETTE[3]).width(2.0),
+        LegendEntry::line("first shape", "#999999").dash("5 3"),
+        LegendEntry::line("last shape", "#555555"),
+        LegendEntry::line("pulled tendons of each shape (thin lines)", "#555555").width(1.2),
+    ];
+    // Disks and loads of the last shape.
+    let legend = shape_legend(robot1, &end);
+    let extra = legend.into_iter().filter(|e| e.symbol != tdcr::plot::Symbol::Line);
+    figure.legend.extend(extra);
+    figure
+}
+
+/// The tendons whose solved tension reached the geometric limit in a sweep: each is warned
+/// about at its first such step and summed up at the end.
+#[derive(Default)]
+struct PastLimits(Vec<PastLimit>);
+
+impl PastLimits {
+    /// Records the solved tensions of step `k` (from 0), warning at a tendon's first step
+    /// past its limit.
+    fn record(&mut self, robot: &Robot, solution: &Solution, k: usize, name: &str, progress: &mut Progress) {
         for w in robot.solved_tensions(&solution.tensions()) {
             let tdcr::model::scales::Warning::SolvedTension { tendon, tension, .. } = w else {
                 continue;
             };
             let limit = robot.geometric_limit(tendon);
-            match past_limit.iter_mut().find(|p| p.tendon == tendon) {
+            match self.0.iter_mut().find(|p| p.tendon == tendon) {
                 Some(p) => {
                     p.steps += 1;
                     if tension > p.largest.1 {
@@ -271,7 +463,7 @@ pub fn run(args: &SweepArgs) -> Result<(), Failure> {
                 None => {
                     progress.finish();
                     note(&format!("warning: {name}: sweep step {}: {w}", k + 1));
-                    past_limit.push(PastLimit {
+                    self.0.push(PastLimit {
                         tendon,
                         steps: 1,
                         first: k + 1,
@@ -281,177 +473,27 @@ pub fn run(args: &SweepArgs) -> Result<(), Failure> {
                 }
             }
         }
-        let tip = solution.tip_position();
-        let _ = write!(csv, "{}", k + 1);
-        // The solved tensions: the inputs of tension-controlled tendons, the unknowns of
-        // displacement-controlled ones.
-        for t in &solution.tendons {
-            let _ = write!(csv, ",{}", t.tension);
-        }
-        for &(i, _) in &args.displacement {
-            let _ = write!(csv, ",{}", solution.tendons[i - 1].displacement);
-        }
-        // The swept value itself (a load scale is not a property of the scaled robot).
-        for (_, v) in &params {
-            let _ = write!(csv, ",{}", v[if v.len() == 1 { 0 } else { k }]);
-        }
-        let report = &solution.report;
-        // A step whose tip moves far more than the last one did (four times, and more than
-        // 1 % of L) left the branch it was on: a fold passed (snap-through) or a jump to
-        // another equilibrium; so did a step that fell back to the load path from rest (no
-        // stable state was reachable from the warm start) and moved the tip by more than
-        // 5 % of L.
-        let moved = tips.last().map(|t: &tdcr::nalgebra::Vector3<f64>| (tip - t).norm());
-        let pathed = matches!(report.path, tdcr::Path::LoadPath { .. });
-        // A displacement-controlled tendon that went taut (or slack) since the last step
-        // changes how fast the tip moves: an event of its own, not a jump off the branch.
-        let taut: Vec<(usize, bool)> = (0..robot.tendons.len())
-            .filter(|&i| robot.tendons[i].displacement.is_some())
-            .map(|i| (i, solution.tendons[i].tension > 0.0))
-            .collect();
-        let engaged: Vec<String> = match &previous_taut {
-            Some(before) => taut
-                .iter()
-                .zip(before)
-                .filter(|(now, then)| now.1 != then.1)
-                .map(|(now, _)| format!("tendon {} {}", now.0 + 1, if now.1 { "taut" } else { "slack" }))
-                .collect(),
-            None => Vec::new(),
-        };
-        previous_taut = Some(taut);
-        let jump = engaged.is_empty()
-            && match (moved, previous_move) {
-                (Some(m), Some(p)) => (m > 4.0 * p && m > 0.01 * length) || (pathed && m > 0.05 * length),
-                (Some(m), None) => pathed && m > 0.05 * length,
-                _ => false,
+    }
+
+    /// A line per tendon past its limit at more than one of the `solved` steps.
+    fn summary(&self, name: &str, solved: usize) {
+        for p in self.0.iter().filter(|p| p.steps > 1) {
+            let limit = if p.limits.0 == p.limits.1 {
+                format!("{} N", limit_text(p.limits.0))
+            } else {
+                format!("{} to {} N", limit_text(p.limits.0), limit_text(p.limits.1))
             };
-        let event = if !engaged.is_empty() {
-            engaged.join("; ")
-        } else if jump {
-            let text = format!(
-                "the tip jumps by {:.1} mm: a snap-through (fold) or another branch",
-                moved.unwrap_or(0.0) * 1e3
-            );
-            progress.finish();
-            note(&format!("warning: sweep step {}: {text}", k + 1));
-            text
-        } else {
-            String::new()
-        };
-        previous_move = moved.or(previous_move);
-        let path = match &report.path {
-            tdcr::Path::Direct => "direct",
-            tdcr::Path::FromWarmStart { .. } => "from_warm_start",
-            tdcr::Path::LoadPath { .. } => "load_path",
-        };
-        let _ = writeln!(
-            csv,
-            ",{},{},{},{},{},{},{},{},{},{},{path},{event}",
-            output::number(tip.x),
-            output::number(tip.y),
-            output::number(tip.z),
-            output::bending_angle(&solution).to_degrees(),
-            report.iterations,
-            report.load_steps,
-            report.timings.total.as_secs_f64(),
-            report.intervals,
-            report
-                .error_estimate
-                .map_or(String::new(), |e| output::number(e.tip_position)),
-            report.stability.verdict()
-        );
-        if args.solver.verbose {
-            progress.finish();
-            note(&format!("step {}: {}", k + 1, summary(report, file.robot.length())));
+            note(&format!(
+                "warning: {name}: tendon {}: the solved tension was at or past the geometric limit ({limit}) in {} of \
+                 the {solved} steps solved, from step {}; the largest {} N at step {}",
+                p.tendon + 1,
+                p.steps,
+                p.first,
+                limit_text(p.largest.1),
+                p.largest.0
+            ));
         }
-        tips.push(tip);
-        if first.is_none() {
-            first = Some((robot.clone(), solution.clone()));
-        }
-        last = Some(solution);
-        last_robot = Some(robot);
-        progress.update(k + 1, steps);
     }
-    progress.finish();
-    for p in past_limit.iter().filter(|p| p.steps > 1) {
-        let limit = if p.limits.0 == p.limits.1 {
-            format!("{} N", limit_text(p.limits.0))
-        } else {
-            format!("{} to {} N", limit_text(p.limits.0), limit_text(p.limits.1))
-        };
-        note(&format!(
-            "warning: {name}: tendon {}: the solved tension was at or past the geometric limit ({limit}) in {} of \
-             the {} steps solved, from step {}; the largest {} N at step {}",
-            p.tendon + 1,
-            p.steps,
-            tips.len(),
-            p.first,
-            limit_text(p.largest.1),
-            p.largest.0
-        ));
-    }
-    match &args.out {
-        Some(path) => {
-            write_file(path, &csv, "CSV")?;
-            note(&format!("wrote {}", path.display()));
-        }
-        None => emit(&csv)?,
-    }
-    if let (Some(path), Some((robot0, first)), Some(last)) = (&args.plot, &first, &last) {
-        let mut figure = Figure::new(&format!("{name}: tip trajectory over {} solves", tips.len()));
-        let ranges: Vec<String> = args
-            .tension
-            .iter()
-            .map(|(i, v)| format!("tendon {i}: {} to {} N", v[0], v[v.len() - 1]))
-            .chain(
-                args.displacement
-                    .iter()
-                    .map(|(i, v)| format!("tendon {i} pulled in: {} to {} mm", v[0] * 1e3, v[v.len() - 1] * 1e3)),
-            )
-            .chain(
-                params
-                    .iter()
-                    .map(|(p, v)| format!("{p}: {} to {} {}", v[0], v[v.len() - 1], p.unit())),
-            )
-            .collect();
-        figure.subtitle.push(ranges.join("; "));
-        let mut start = Style::new("#999999");
-        start.dash = Some("5 3".into());
-        start.disks = args.disks;
-        start.distributed_load = false;
-        figure.add_shape(robot0, first, &start);
-        let robot1 = last_robot.clone().unwrap_or_else(|| file.robot.clone());
-        let mut end = Style::new("#555555");
-        end.disks = args.disks;
-        figure.add_shape(&robot1, last, &end);
-        figure.panel_mut().curves.push(tdcr::plot::Curve {
-            points: tips.clone(),
-            color: PALETTE[3].into(),
-            width: 2.0,
-            dash: None,
-            opacity: 1.0,
-        });
-        figure
-            .panel_mut()
-            .markers
-            .extend(tips.iter().map(|&point| tdcr::plot::Marker {
-                point,
-                color: PALETTE[3].into(),
-                radius: 1.8,
-            }));
-        figure.legend = vec![
-            LegendEntry::line("tip trajectory (a dot per solve)", PALETTE[3]).width(2.0),
-            LegendEntry::line("first shape", "#999999").dash("5 3"),
-            LegendEntry::line("last shape", "#555555"),
-            LegendEntry::line("pulled tendons of each shape (thin lines)", "#555555").width(1.2),
-        ];
-        // Disks and loads of the last shape.
-        let legend = shape_legend(&robot1, &end);
-        let extra = legend.into_iter().filter(|e| e.symbol != tdcr::plot::Symbol::Line);
-        figure.legend.extend(extra);
-        write_picture(path, &figure, "plot")?;
-    }
-    failure.map_or(Ok(()), Err)
 }
 
 /// A tendon whose solved tension reached its geometric limit in a sweep.

@@ -93,13 +93,7 @@ pub fn run(args: &TraceArgs) -> Result<(), Failure> {
     apply(&mut file, &args.solver);
     let (param, from, to) = parse_range(&args.param)?;
     let parameter = Parameter::parse(param, &file.robot).map_err(|e| Failure::Input(e.to_string()))?;
-    if matches!(parameter, Parameter::Tension(_)) && from.min(to) < 0.0 {
-        return Err(Failure::Input(format!(
-            "--param {param}={from}:{to}: a tendon can only pull; give tensions >= 0"
-        )));
-    }
-    let t =
-        trace(&file.robot, parameter, from, to, &file.solver.collocation).map_err(crate::failure::solver_failure)?;
+    let t = trace(&file.robot, parameter, from, to, &file.solver.collocation).map_err(|e| with_flags(e, parameter))?;
     let text = match args.format {
         TraceFormat::Csv => csv(&t),
         TraceFormat::Json => json(&t),
@@ -162,11 +156,21 @@ pub fn run(args: &TraceArgs) -> Result<(), Failure> {
     }
 }
 
-fn verdict(p: &tdcr::collocation::TracePoint) -> &'static str {
-    match p.unstable_directions {
-        Some(0) => "stable",
-        Some(_) => "unstable",
-        None => "unknown",
+/// A trace's error as the command line prints it: the library's message, and where it
+/// suggests a sweep instead, the `tdcr sweep` arguments that run it.
+fn with_flags(e: tdcr::Error, parameter: Parameter) -> Failure {
+    let sweep = match &e {
+        tdcr::Error::InvalidInput { field, .. } if field == "parameter" && parameter == Parameter::YoungsModulus => {
+            Some("tdcr sweep --param youngs_modulus=START:STOP:COUNT".to_string())
+        }
+        tdcr::Error::InvalidInput { field, .. } if field.ends_with(".displacement") => {
+            Some("tdcr sweep --displacement I=START:STOP:COUNT".to_string())
+        }
+        _ => None,
+    };
+    match (crate::failure::solver_failure(e), sweep) {
+        (Failure::Input(text), Some(command)) => Failure::Input(format!("{text} (on the command line: {command})")),
+        (f, _) => f,
     }
 }
 
@@ -184,7 +188,7 @@ fn csv(t: &Trace) -> String {
             output::number(p.tip_position.x),
             output::number(p.tip_position.y),
             output::number(p.tip_position.z),
-            verdict(p),
+            p.verdict(),
             p.unstable_directions.map_or(String::new(), |d| d.to_string()),
             u8::from(p.fold),
             p.iterations
@@ -201,7 +205,7 @@ fn json(t: &Trace) -> String {
             serde_json::json!({
                 "value": p.value,
                 "tip": [p.tip_position.x, p.tip_position.y, p.tip_position.z],
-                "stability": verdict(p),
+                "stability": p.verdict(),
                 "unstable_directions": p.unstable_directions,
                 "fold": p.fold,
                 "iterations": p.iterations,

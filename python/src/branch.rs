@@ -1,0 +1,207 @@
+//! Sweeps and traces: `tdcr::analysis::sweep::sweep` (robots solved in order, with the
+//! events between steps) and `tdcr::collocation::trace` (a branch of equilibria in one
+//! input), with numpy out.
+
+use crate::errors::{invalid, to_py};
+use crate::robot::{PyRobot, robots_of};
+use crate::solution::PySolution;
+use numpy::ndarray::Array2;
+use numpy::{IntoPyArray, PyArray1, PyArray2};
+use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyList};
+use tdcr::Method;
+use tdcr::analysis::sweep::{Event, Step, SweepSolver};
+use tdcr::nalgebra::Vector3;
+
+/// (n, 3) rows of tip positions.
+fn tip_rows<'py>(py: Python<'py>, tips: &[Vector3<f64>]) -> Bound<'py, PyArray2<f64>> {
+    Array2::from_shape_fn((tips.len(), 3), |(i, k)| tips[i][k]).into_pyarray(py)
+}
+
+/// The result of `sweep`: every step's solution and what happened since the step before.
+/// It is also the sequence of the solutions (`len`, indexing, iteration).
+#[pyclass(module = "tdcr", name = "Sweep", frozen)]
+pub struct PySweep {
+    solutions: Py<PyList>,
+    events: Vec<Option<String>>,
+    jumps: Vec<usize>,
+    tips: Vec<Vector3<f64>>,
+}
+
+impl PySweep {
+    fn new(py: Python<'_>, steps: Vec<Step>) -> PyResult<Self> {
+        let solutions = PyList::empty(py);
+        let (mut events, mut jumps, mut tips) = (Vec::new(), Vec::new(), Vec::new());
+        for (k, step) in steps.into_iter().enumerate() {
+            if matches!(step.event, Some(Event::Jump { .. })) {
+                jumps.push(k);
+            }
+            events.push(step.event.as_ref().map(ToString::to_string));
+            tips.push(step.solution.tip_position());
+            solutions.append(PySolution {
+                solution: step.solution,
+            })?;
+        }
+        Ok(PySweep {
+            solutions: solutions.unbind(),
+            events,
+            jumps,
+            tips,
+        })
+    }
+}
+
+#[pymethods]
+impl PySweep {
+    /// The solutions, one per step solved, in order.
+    #[getter]
+    fn solutions(&self, py: Python<'_>) -> Py<PyList> {
+        self.solutions.clone_ref(py)
+    }
+
+    /// One entry per step: None, or what happened since the step before, as `tdcr sweep`'s
+    /// `event` column says it: `the tip jumps by 798.2 mm: a snap-through (fold) or another
+    /// branch`, or `tendon 1 taut` / `tendon 2 slack` (displacement-controlled tendons).
+    #[getter]
+    fn events(&self) -> Vec<Option<String>> {
+        self.events.clone()
+    }
+
+    /// The steps (from 0) where the tip jumped: a snap-through at a fold or a jump to
+    /// another branch of equilibria.
+    #[getter]
+    fn jumps(&self) -> Vec<usize> {
+        self.jumps.clone()
+    }
+
+    /// Tip positions (m, world frame), shape (n, 3).
+    #[getter]
+    fn tip_positions<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
+        tip_rows(py, &self.tips)
+    }
+
+    fn __len__(&self) -> usize {
+        self.tips.len()
+    }
+
+    fn __getitem__<'py>(&self, py: Python<'py>, index: isize) -> PyResult<Bound<'py, PyAny>> {
+        let n = self.tips.len() as isize;
+        let k = if index < 0 { index + n } else { index };
+        if !(0..n).contains(&k) {
+            return Err(pyo3::exceptions::PyIndexError::new_err(format!(
+                "sweep step {index} out of range: the sweep has {n} steps"
+            )));
+        }
+        self.solutions.bind(py).get_item(k as usize)
+    }
+
+    fn __iter__<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, pyo3::types::PyIterator>> {
+        self.solutions.bind(py).try_iter()
+    }
+}
+
+/// sweep(robot, parameters, **options) -> Sweep
+///
+/// Solves the rows of `parameters` (a dict of 1-D arrays, names as `solve_batch`) in
+/// order with the library's sweep, as `tdcr sweep` does: each step warm-started from the
+/// last (`tdcr::solve_from`, so every step's stability verdict is its own), and the events
+/// between steps (the tip jumping off its branch, displacement-controlled tendons going
+/// taut or slack); collocation. A failure is raised with `index` set to its row and
+/// `partial` to the `Sweep` of the rows before it.
+#[pyfunction]
+#[pyo3(signature = (robot, parameters, **options))]
+pub fn sweep(
+    py: Python<'_>,
+    robot: &PyRobot,
+    parameters: &Bound<'_, PyDict>,
+    options: Option<&Bound<'_, PyDict>>,
+) -> PyResult<PySweep> {
+    let settings = crate::options::apply(&robot.file.solver, options)?;
+    if settings.method != Method::Collocation {
+        return Err(invalid("sweep warm-starts collocation; use method=\"collocation\""));
+    }
+    let robots = robots_of(robot, parameters)?;
+    let solver = SweepSolver::Collocation(settings.collocation);
+    let out = py.detach(|| tdcr::analysis::sweep::sweep(&robots, solver, None));
+    let result = PySweep::new(py, out.steps)?;
+    match out.failure {
+        None => Ok(result),
+        Some((i, e)) => {
+            let err = to_py(e);
+            err.value(py).setattr("index", i)?;
+            err.value(py).setattr("partial", Py::new(py, result)?)?;
+            Err(err)
+        }
+    }
+}
+
+/// The result of `trace`: the points of a branch of equilibria in the order the branch
+/// passes them.
+#[pyclass(module = "tdcr", name = "Trace", frozen, get_all)]
+pub struct PyTrace {
+    /// The input traced, e.g. `tension.1`.
+    parameter: String,
+    /// Its value at every point (N, N/m, or the load scale), shape (n,).
+    values: Py<PyArray1<f64>>,
+    /// Tip positions (m, world frame), shape (n, 3).
+    tip_positions: Py<PyArray2<f64>>,
+    /// Unstable directions at every point: 0 stable, more unstable, None unknown.
+    unstable_directions: Vec<Option<usize>>,
+    /// "stable", "unstable" or "unknown" at every point.
+    stability: Vec<&'static str>,
+    /// Whether the branch turns back at each point (a fold).
+    fold: Vec<bool>,
+    /// Parameter values of the folds.
+    folds: Vec<f64>,
+    /// Parameter values where the number of unstable directions changed without a fold.
+    bifurcations: Vec<f64>,
+    /// None when the branch reached the last value (or turned back past the first); else
+    /// why it stopped (the points up to there are kept).
+    stopped: Option<String>,
+    /// Iterations (Newton and chord) of the whole trace, the start's solve included.
+    iterations: usize,
+}
+
+/// trace(robot, parameter, start, stop, **options) -> Trace
+///
+/// Follows the branch of equilibria through the default solve's state at `parameter` =
+/// `start` as it goes to `stop`, through folds, with the stability of every point
+/// (`tdcr::collocation::trace`, as `tdcr trace`). `parameter` is `tension.I` (I from 1),
+/// `tip_force.x|y|z`, `distributed_force.x|y|z` or `load_scale`; options as `solve`
+/// (collocation). The GIL is released while tracing.
+#[pyfunction]
+#[pyo3(signature = (robot, parameter, start, stop, **options))]
+pub fn trace(
+    py: Python<'_>,
+    robot: &PyRobot,
+    parameter: &str,
+    start: f64,
+    stop: f64,
+    options: Option<&Bound<'_, PyDict>>,
+) -> PyResult<PyTrace> {
+    let settings = crate::options::apply(&robot.file.solver, options)?;
+    if settings.method != Method::Collocation {
+        return Err(invalid(
+            "trace continues collocation solutions; use method=\"collocation\"",
+        ));
+    }
+    let r = &robot.file.robot;
+    let p = tdcr::Parameter::parse(parameter, r).map_err(to_py)?;
+    let t = py
+        .detach(|| tdcr::collocation::trace(r, p, start, stop, &settings.collocation))
+        .map_err(to_py)?;
+    let tips: Vec<Vector3<f64>> = t.points.iter().map(|q| q.tip_position).collect();
+    let values: Vec<f64> = t.points.iter().map(|q| q.value).collect();
+    Ok(PyTrace {
+        parameter: t.parameter.to_string(),
+        values: PyArray1::from_vec(py, values).unbind(),
+        tip_positions: tip_rows(py, &tips).unbind(),
+        unstable_directions: t.points.iter().map(|q| q.unstable_directions).collect(),
+        stability: t.points.iter().map(|q| q.verdict()).collect(),
+        fold: t.points.iter().map(|q| q.fold).collect(),
+        folds: t.folds,
+        bifurcations: t.bifurcations,
+        stopped: t.stopped,
+        iterations: t.report.iterations,
+    })
+}

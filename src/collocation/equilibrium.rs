@@ -1,0 +1,212 @@
+//! The equilibrium choice (docs/stability.md, "Which equilibrium a solve returns"): Newton's
+//! answer from the start stands when it converged cleanly to a state that is not unstable;
+//! otherwise the Newton homotopy from a warm start, Newton from the cold guess, and the load
+//! path from rest are tried in turn, and every answer gets its stability verdict.
+
+use super::newton::{self, Settings, Workspace};
+use super::options::{Equilibrium, Options};
+use super::path;
+use super::pipeline::not_converged;
+use super::stability;
+use super::system::System;
+use crate::error::Result;
+use crate::mesh::guess;
+use crate::report::{Path, SolveReport, Stability, Termination};
+use crate::solution::State;
+use std::time::Instant;
+
+/// Of a warm start and the cold initial guess, the one with the smaller scaled residual. A
+/// previous solution for other tensions can be a worse start than the rigid-equilibrium
+/// estimate, which is nearly exact for tendon-dominated loading; comparing costs one
+/// residual evaluation each.
+pub(crate) fn better_start(system: &System, warm: Vec<State>, cold: Vec<State>) -> (Vec<State>, Choose) {
+    let mut r = vec![0.0; system.unknowns()];
+    let mut norm = |x: &[State]| match system.residual(x, &mut r) {
+        Ok(()) => r
+            .iter()
+            .fold(0.0f64, |m, v| if v.is_nan() { f64::INFINITY } else { m.max(v.abs()) }),
+        Err(_) => f64::INFINITY,
+    };
+    if norm(&cold) < norm(&warm) {
+        (cold, Choose::FromCold)
+    } else {
+        (warm, Choose::FromWarm)
+    }
+}
+
+/// Whether a mesh's Newton solve chooses the equilibrium ([`choose_equilibrium`]), and from
+/// which start.
+#[derive(Clone, Copy, PartialEq)]
+pub(crate) enum Choose {
+    /// The initial guess.
+    FromCold,
+    /// A warm start (a solution of a nearby robot).
+    FromWarm,
+    /// No choice: a finer mesh warm-started from the chosen equilibrium on the last one.
+    No,
+}
+
+/// The most Newton iterations of a direct solve that counts as clean: from a guess on the
+/// right branch Newton converges in 2-8 (docs/numerics.md); more means it wandered.
+const CLEAN_ITERATIONS: usize = 12;
+
+/// Whether Newton went straight to its root: no damped step and few iterations. A damped
+/// step means the guess was outside Newton's region of quadratic convergence, where the
+/// iteration can cross to another branch of equilibria.
+fn clean(history: &[crate::report::Iteration]) -> bool {
+    history.len() <= CLEAN_ITERATIONS && history.iter().all(|i| i.damping == 1.0)
+}
+
+/// The stability of the equilibrium `x` of `system` ([`stability`]), from the Jacobian
+/// last factored in `ws`: Newton's last (evaluated one step before `x`), or for a solve
+/// that converged by chord steps alone the earlier Jacobian those steps used, whose verdict
+/// is then reused. A new Jacobian at `x` is evaluated only when `exact` (at the end of a
+/// load path, whose last Jacobian may belong to a point before the end).
+pub(crate) fn stability_of(
+    system: &System,
+    ws: &mut Workspace,
+    x: &[State],
+    exact: bool,
+    report: &mut SolveReport,
+) -> Stability {
+    if let Some(reason) = stability::non_conservative(system.model.robot) {
+        return Stability::Unknown { reason };
+    }
+    if (exact || !ws.has_factors()) && !ws.linearize(system, x, report) {
+        return Stability::Unknown {
+            reason: "the Jacobian at the solution is singular or not finite".into(),
+        };
+    }
+    let s: Vec<f64> = system.mesh.nodes.iter().map(|n| n.s).collect();
+    ws.verdict(|values| stability::assess(values, &s))
+}
+
+/// Newton from `x`, given only the chance to converge cleanly ([`clean`]) unless
+/// `nearest`: the converged states, if they are not unstable (or `nearest`).
+fn direct(
+    system: &System,
+    ws: &mut Workspace,
+    x: &mut Vec<State>,
+    nearest: bool,
+    settings: &Settings,
+    report: &mut SolveReport,
+) -> (bool, usize) {
+    let direct = Settings {
+        max_iterations: if nearest {
+            settings.max_iterations
+        } else {
+            settings.max_iterations.min(CLEAN_ITERATIONS)
+        },
+        stop_when_damped: !nearest,
+        ..*settings
+    };
+    let (termination, worst) = newton::run(system, ws, x, &direct, report);
+    report.termination = termination;
+    if termination != Termination::Converged {
+        return (false, worst);
+    }
+    if nearest {
+        return (true, worst);
+    }
+    if !clean(&report.history) {
+        return (false, worst);
+    }
+    let t = Instant::now();
+    let verdict = stability_of(system, ws, x, false, report);
+    report.timings.stability += t.elapsed();
+    (!matches!(verdict, Stability::Unstable { .. }), worst)
+}
+
+/// Newton from `x0`, and the equilibrium choice of docs/stability.md. Newton's answer
+/// stands when it converged cleanly to a state that is not unstable (or the caller asked
+/// for the nearest equilibrium). Otherwise, from a warm start (`warm`), the Newton homotopy
+/// from it ([`path::follow`]), whose end stands if it is not unstable; then Newton from the
+/// cold guess, as above; then the load path from the unloaded robot. Newton's answer from
+/// `x0`, if it converged at all, is the fallback when no path can be followed.
+pub(crate) fn choose_equilibrium(
+    system: &mut System,
+    ws: &mut Workspace,
+    x0: Vec<State>,
+    warm: bool,
+    options: &Options,
+    settings: &Settings,
+    report: &mut SolveReport,
+) -> Result<Vec<State>> {
+    report.unknowns = system.unknowns();
+    report.nonzeros = ws.nonzeros();
+    report.intervals = system.mesh.intervals();
+    let nearest = options.equilibrium == Equilibrium::Nearest || !options.continuation;
+    let mut x = x0.clone();
+    let (accept, worst) = direct(system, ws, &mut x, nearest, settings, report);
+    let converged = report.termination == Termination::Converged;
+    if accept {
+        return Ok(x);
+    }
+    if !options.continuation {
+        return Err(not_converged(
+            system,
+            report,
+            worst,
+            "enable load continuation, refine the mesh, or warm-start from a nearby solution",
+        ));
+    }
+    let fallback = converged.then_some(x);
+    if warm {
+        if let Ok(end) = path::follow(system, ws, path::Start::Warm(&x0), options, settings, report, None) {
+            let exact = !report.history.iter().any(|i| i.fresh_jacobian);
+            if !matches!(
+                stability_of(system, ws, &end.x, exact, report),
+                Stability::Unstable { .. }
+            ) {
+                report.path = Path::FromWarmStart {
+                    folds: end.folds,
+                    bifurcations: end.bifurcations,
+                };
+                return Ok(end.x);
+            }
+        }
+        system.set_factors(1.0, 1.0);
+        let mut cold = guess::initial(&system.model, &system.mesh.nodes, options.initial_guess);
+        if direct(system, ws, &mut cold, false, settings, report).0 {
+            return Ok(cold);
+        }
+    }
+    let mesh = system.mesh.clone();
+    match path::follow(system, ws, path::Start::Rest, options, settings, report, None) {
+        Ok(end) => {
+            report.path = Path::LoadPath {
+                folds: end.folds,
+                bifurcations: end.bifurcations,
+            };
+            report.unknowns = system.unknowns();
+            report.nonzeros = ws.nonzeros();
+            report.intervals = system.mesh.intervals();
+            Ok(end.x)
+        }
+        // The path is lost: Newton's answer, if it has one, with its verdict.
+        Err((hint, row)) => {
+            if system.mesh != mesh {
+                *system = System::new(system.model, mesh);
+                *ws = Workspace::new(system, options.linear_solver)?;
+            }
+            system.set_factors(1.0, 1.0);
+            let x = match fallback {
+                Some(x) => x,
+                None => {
+                    let mut x = x0;
+                    let (termination, _) = newton::run(system, ws, &mut x, settings, report);
+                    report.termination = termination;
+                    if termination != Termination::Converged {
+                        return Err(not_converged(system, report, row, &hint));
+                    }
+                    x
+                }
+            };
+            if !ws.linearize(system, &x, report) {
+                return Err(not_converged(system, report, row, &hint));
+            }
+            report.termination = Termination::Converged;
+            Ok(x)
+        }
+    }
+}

@@ -1,0 +1,210 @@
+//! One solve's stages in order: the start (mesh, warm or cold states), Newton and the
+//! equilibrium choice on the first mesh, refinement to the tolerance, the error estimate and
+//! the stability verdict, and the [`Solution`] built from the node states.
+
+use super::equilibrium::{Choose, better_start, choose_equilibrium, stability_of};
+use super::estimate;
+use super::newton::{self, Settings, Workspace};
+use super::options::Options;
+use super::refine;
+use super::solver::{Cache, Cached};
+use super::start::{cold_start, initial_mesh, resolves};
+use super::system::System;
+use super::unknowns;
+use crate::error::Result;
+use crate::mesh::guess::{self, interpolate};
+use crate::mesh::{Mesh, nodes};
+use crate::model::equations::Model;
+use crate::report::{Method, Path, SolveReport, Termination};
+use crate::solution::{Solution, State};
+use crate::{Error, Robot};
+use std::time::Instant;
+
+/// Solves `robot` from `warm` (or cold), reusing what `cache` holds: what [`super::solve`],
+/// [`super::solve_from`] and [`super::Solver`] run.
+///
+/// # Errors
+/// As [`super::solve`].
+pub(crate) fn solve_impl(
+    robot: &Robot,
+    options: &Options,
+    warm: Option<&Solution>,
+    cache: &mut Cache,
+) -> Result<Solution> {
+    robot.validate()?;
+    options.validate()?;
+    if robot.has_displacement_inputs() {
+        return super::actuation::solve(robot, options, warm, cache);
+    }
+    let start = Instant::now();
+    let model = Model::new(robot);
+    let mut report = SolveReport::new(Method::Collocation);
+    let mut mesh = initial_mesh(robot, options, warm)?;
+    if options.tolerance.is_none() {
+        resolves(robot, options, &mesh)?;
+    }
+    let warm = warm.map(|g| interpolate(g, &mesh));
+    // The cached factors belong to the guess when it is the cached solver's last solution.
+    let reuse = match (cache.as_ref(), &warm) {
+        (Some(c), Some(w)) => c.mesh == mesh && c.solver == options.linear_solver && c.last.as_ref() == Some(w),
+        _ => false,
+    };
+    let (x0, choose) = match warm {
+        Some(w) if reuse => (w, Choose::FromWarm),
+        Some(w) => {
+            let cold = guess::initial(&model, &mesh.nodes, options.initial_guess);
+            better_start(&System::new(model, mesh.clone()), w, cold)
+        }
+        None => (cold_start(robot, options, &mut mesh)?, Choose::FromCold),
+    };
+    let mut level =
+        solve_on_mesh(&model, mesh, x0, reuse, choose, options, &mut report, cache).map_err(|e| timed(e, start))?;
+    if let Some(tol) = options.tolerance {
+        level = refine::to_tolerance(&model, level, tol, options, &mut report, cache).map_err(|e| timed(e, start))?;
+    }
+    let Level { mesh, x, correction } = level;
+    report.intervals = mesh.intervals();
+    report.unknowns = unknowns::unknowns(mesh.nodes.len());
+    report.nonzeros = unknowns::nonzeros(&mesh);
+    record_estimate(&mut report, correction.as_ref(), options, robot.length());
+    if let Some(c) = cache.as_mut() {
+        let system = System::new(model, mesh.clone());
+        let exact = report.path != Path::Direct && !report.history.iter().any(|i| i.fresh_jacobian);
+        let t = Instant::now();
+        report.stability = stability_of(&system, &mut c.workspace, &x, exact, &mut report);
+        report.timings.stability += t.elapsed();
+    }
+    report.timings.total = start.elapsed();
+    let rates = correction.as_ref().map(|c| c.node_rates.as_slice());
+    nodes::solution(&model, &x, &segment_ends(&mesh), rates, report)
+}
+
+/// Records the final mesh's error estimate in `report`, with the tolerance it was tested
+/// against and whether it meets it (rod length `length`).
+pub(crate) fn record_estimate(
+    report: &mut SolveReport,
+    correction: Option<&estimate::Correction>,
+    options: &Options,
+    length: f64,
+) {
+    report.error_estimate = correction.map(|c| c.estimate);
+    report.tolerance = options.tolerance;
+    report.tolerance_met = options
+        .tolerance
+        .zip(report.error_estimate)
+        .map(|(tol, e)| refine::meets(&e, tol, length));
+}
+
+/// A converged solve on one mesh: its states and their error estimate.
+pub(crate) struct Level {
+    pub(crate) mesh: Mesh,
+    pub(crate) x: Vec<State>,
+    /// `None` where the estimate's linear solve failed.
+    pub(crate) correction: Option<estimate::Correction>,
+}
+
+/// The end of the segment (between breakpoints) of every node, as [`nodes::solution`] wants.
+pub(crate) fn segment_ends(mesh: &Mesh) -> Vec<f64> {
+    mesh.nodes.iter().map(|n| n.segment_end).collect()
+}
+
+/// Newton on one mesh (starting with chord steps on the cached factors when
+/// `reuse_factors`); on the first mesh (`choose`), the equilibrium choice of
+/// [`choose_equilibrium`]. Then the error estimate with the factors Newton left.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn solve_on_mesh(
+    model: &Model,
+    mesh: Mesh,
+    x0: Vec<State>,
+    reuse_factors: bool,
+    choose: Choose,
+    options: &Options,
+    report: &mut SolveReport,
+    cache: &mut Cache,
+) -> Result<Level> {
+    report.meshes += 1;
+    let settings = Settings {
+        tolerance: options.residual_tolerance,
+        max_iterations: options.max_iterations,
+        reuse_factors,
+        stop_when_damped: false,
+    };
+    let mut system = System::new(*model, mesh);
+    let mut workspace = match cache.take() {
+        Some(c) if c.mesh == system.mesh && c.solver == options.linear_solver => c.workspace,
+        _ => Workspace::new(&system, options.linear_solver)?,
+    };
+    let result = match choose {
+        Choose::No => newton_only(&system, &mut workspace, x0, &settings, report),
+        _ => {
+            let warm = choose == Choose::FromWarm;
+            choose_equilibrium(&mut system, &mut workspace, x0, warm, options, &settings, report)
+        }
+    };
+    let correction = result.as_ref().ok().and_then(|x| {
+        let t = Instant::now();
+        // A breakdown at a stage of the order-6 scheme leaves the solution without an estimate.
+        // The workspace's residual is the one at x: Newton's last, or a linearization's
+        // there (the stability verdict, a path's landing).
+        let phi4 = workspace.residual().to_vec();
+        let c = estimate::estimate_with(&system, &mut workspace, x, Some(&phi4))
+            .ok()
+            .flatten();
+        report.timings.estimate += t.elapsed();
+        c
+    });
+    *cache = Some(Cached {
+        mesh: system.mesh.clone(),
+        solver: options.linear_solver,
+        workspace,
+        last: result.as_ref().ok().cloned(),
+    });
+    result.map(|x| Level {
+        mesh: system.mesh,
+        x,
+        correction,
+    })
+}
+
+/// Newton from `x0` on a mesh after the first, warm-started from the previous level: the
+/// equilibrium is chosen already.
+fn newton_only(
+    system: &System,
+    ws: &mut Workspace,
+    x0: Vec<State>,
+    settings: &Settings,
+    report: &mut SolveReport,
+) -> Result<Vec<State>> {
+    let mut x = x0;
+    let (termination, worst) = newton::run(system, ws, &mut x, settings, report);
+    report.termination = termination;
+    if termination == Termination::Converged {
+        Ok(x)
+    } else {
+        Err(not_converged(
+            system,
+            report,
+            worst,
+            "refine the mesh or warm-start from a nearby solution",
+        ))
+    }
+}
+
+/// Stamps the total time on the report a non-convergence error carries.
+fn timed(mut error: Error, start: Instant) -> Error {
+    if let Error::NotConverged { report, .. } = &mut error {
+        report.timings.total = start.elapsed();
+    }
+    error
+}
+
+/// The error of a solve that did not converge: its report, where the residual is largest
+/// and what to try (`hint`).
+pub(crate) fn not_converged(system: &System, report: &SolveReport, worst_row: usize, hint: &str) -> Error {
+    Error::NotConverged {
+        method: Method::Collocation,
+        report: Box::new(report.clone()),
+        worst_s: system.row_position(worst_row),
+        hint: hint.into(),
+    }
+}
