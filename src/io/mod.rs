@@ -1,6 +1,7 @@
-//! Files in and out of the `tdcr` command: the TOML robot file (docs/robot-file.md), read
-//! with every problem reported by file, line, field and rule, and the JSON and CSV result
-//! files (docs/cli.md).
+//! Files in and out of the `tdcr` command and the Python package: the TOML robot file
+//! (docs/robot-file.md), read with every problem reported by file, line, field and rule; the
+//! solution JSON, written and read back bitwise (docs/cli.md); the experiments and result
+//! CSVs, through the `csv` crate, every number written by [`number`].
 //!
 //! ```
 //! let file = tdcr::io::parse(&tdcr::io::example(), "example.toml").unwrap();
@@ -9,17 +10,20 @@
 //! assert!(json.contains("\"converged\": true"));
 //! ```
 
+pub mod csv_table;
 mod example;
 pub mod experiments;
+mod json_layout;
 pub mod locate;
 pub mod output;
 pub mod parameters;
 mod robot_file;
 mod solution_file;
 
+pub use csv_table::number;
 pub use example::example;
 pub use robot_file::{RobotFile, SolverSettings, parse};
-pub use solution_file::read_solution;
+pub use solution_file::{parse_solution, read_solution};
 
 use std::fmt;
 
