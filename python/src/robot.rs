@@ -9,9 +9,6 @@ use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyDict, PyFloat, PyInt, PyList, PyString, PyTuple};
 use tdcr::io::parameters::Parameter;
 use tdcr::io::{RobotFile, SolverSettings};
-use tdcr::model::rod::{ReferenceStrains, Stiffness};
-use tdcr::nalgebra::{Matrix3, Vector3};
-use tdcr::{Field, Method, Routing};
 use toml::{Table, Value};
 
 /// A tendon-driven continuum robot (SI units) with the solver settings of its `[solver]`

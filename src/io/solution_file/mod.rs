@@ -150,7 +150,8 @@ impl SolutionFile {
                 )));
             }
             let R = matrix(&x.R);
-            if !(so3::orthonormality_error(&R) <= ROTATION_TOLERANCE) {
+            let error = so3::orthonormality_error(&R);
+            if error.is_nan() || error > ROTATION_TOLERANCE {
                 return Err(bad(format!("{} is not a rotation matrix", what("R"))));
             }
             nodes.push(Node {
@@ -175,7 +176,7 @@ impl SolutionFile {
                     nodes.len()
                 )));
             }
-            if !(t.tension.0 >= 0.0 && t.tension.0.is_finite()) {
+            if !t.tension.0.is_finite() || t.tension.0 < 0.0 {
                 return Err(bad(format!(
                     "tendons[{i}].tension = {} N: a tension is finite and >= 0",
                     Readable(t.tension.0)
