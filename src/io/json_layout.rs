@@ -65,7 +65,7 @@ impl Json {
             Json::Integer(i) => out.push_str(&i.to_string()),
             // serde_json formats numbers and escapes strings; neither can fail.
             Json::Number(x) => out.push_str(&serde_json::to_string(x).unwrap_or_else(|_| "null".into())),
-            Json::Text(t) => out.push_str(&serde_json::to_string(t).unwrap_or_else(|_| "\"\"".into())),
+            Json::Text(t) => out.push_str(&quoted(t)),
             Json::Array(items) if items.is_empty() => out.push_str("[]"),
             Json::Array(items) if self.is_small() => {
                 out.push('[');
@@ -93,7 +93,7 @@ impl Json {
                     if k > 0 {
                         out.push_str(", ");
                     }
-                    let _ = write!(out, "{}: ", Json::Text(key.clone()).text());
+                    let _ = write!(out, "{}: ", quoted(key));
                     value.write(out, indent, true);
                 }
                 out.push('}');
@@ -101,7 +101,7 @@ impl Json {
             Json::Object(fields) => {
                 out.push_str("{\n");
                 for (k, (key, value)) in fields.iter().enumerate() {
-                    let _ = write!(out, "{}{}: ", pad(indent + 2), Json::Text(key.clone()).text());
+                    let _ = write!(out, "{}{}: ", pad(indent + 2), quoted(key));
                     value.write(out, indent + 2, false);
                     out.push_str(if k + 1 < fields.len() { ",\n" } else { "\n" });
                 }
@@ -110,13 +110,12 @@ impl Json {
             }
         }
     }
+}
 
-    /// A scalar's text.
-    fn text(&self) -> String {
-        let mut out = String::new();
-        self.write(&mut out, 0, false);
-        out
-    }
+/// A string as JSON writes it, quoted and escaped by serde_json (which cannot fail on a
+/// string).
+fn quoted(text: &str) -> String {
+    serde_json::to_string(text).unwrap_or_else(|_| "\"\"".into())
 }
 
 /// Reads serde_json's compact text back into a tree, keys in file order.

@@ -51,7 +51,7 @@ fn bad(problem: String) -> crate::Error {
 /// # Examples
 /// ```
 /// let robot = tdcr::cases::case_s();
-/// let solution = tdcr::solve(&robot).unwrap();
+/// let solution = tdcr::solve(&robot, &Default::default()).unwrap();
 /// let text = tdcr::io::output::solution_json(&solution);
 /// let back = tdcr::io::parse_solution(&text).unwrap();
 /// assert_eq!(back.nodes, solution.nodes);
@@ -318,6 +318,9 @@ impl SolutionFile {
 mod tests {
     use super::*;
 
+    /// A change to a solution JSON.
+    type Edit<'a> = &'a dyn Fn(&mut Value);
+
     /// Everything a solution holds, compared bitwise (NaN equal to NaN).
     fn assert_same(a: &Solution, b: &Solution) {
         assert_eq!(a.nodes, b.nodes);
@@ -376,7 +379,7 @@ mod tests {
             edit(&mut v);
             parse_solution(&v.to_string()).unwrap_err().to_string()
         };
-        let cases: [(&dyn Fn(&mut Value), &str); 12] = [
+        let cases: [(Edit, &str); 12] = [
             (&|v| v["nodes"][3]["s"] = Value::Null, "nodes[3].s = NaN m"),
             (&|v| v["nodes"][0]["s"] = (-1.0).into(), "nodes[0].s = -1 m"),
             (&|v| v["nodes"][5]["s"] = 0.0.into(), "never decrease"),
