@@ -697,7 +697,7 @@ fn command_rejects_bad_input_with_exit_code_2() {
     cli_files(&dir);
     let csv = std::fs::read_to_string(dir.join("experiments.csv")).unwrap();
     let mut lines: Vec<String> = csv.lines().map(String::from).collect();
-    lines[3] = lines[3].replacen(",0.0,", ",zero,", 1);
+    lines[3] = lines[3].replacen(",0,", ",zero,", 1);
     std::fs::write(dir.join("bad.csv"), lines.join("\n")).unwrap();
     let out = tdcr(&dir, &["calibrate", "robot.toml", "bad.csv"]);
     let stderr = String::from_utf8_lossy(&out.stderr);

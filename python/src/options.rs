@@ -14,14 +14,6 @@ pub const OPTION_NAMES: &str = "method, tol, intervals, max_intervals, residual_
 /// The values of the `equilibrium` option, for messages.
 pub const EQUILIBRIUM_NAMES: &str = "\"load_path\" or \"nearest\"";
 
-/// The option value of `equilibrium`: `"load_path"` or `"nearest"`.
-pub fn equilibrium_name(e: Equilibrium) -> &'static str {
-    match e {
-        Equilibrium::LoadPath => "load_path",
-        Equilibrium::Nearest => "nearest",
-    }
-}
-
 /// Reads the value of the `equilibrium` option; anything but the two names is
 /// `tdcr.InvalidInput` naming both.
 fn equilibrium(value: &str) -> PyResult<Equilibrium> {

@@ -9,9 +9,6 @@ use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyDict, PyFloat, PyInt, PyList, PyString, PyTuple};
 use tdcr::io::parameters::Parameter;
 use tdcr::io::{RobotFile, SolverSettings};
-use tdcr::model::rod::{ReferenceStrains, Stiffness};
-use tdcr::nalgebra::{Matrix3, Vector3};
-use tdcr::{Field, Method, Routing};
 use toml::{Table, Value};
 
 /// A tendon-driven continuum robot (SI units) with the solver settings of its `[solver]`
@@ -103,171 +100,6 @@ pub fn parse(text: &str, name: &str) -> PyResult<PyRobot> {
         .map_err(|e| file_error(&e))
 }
 
-fn vector(v: &Vector3<f64>) -> Value {
-    Value::Array(v.iter().map(|&x| Value::Float(x)).collect())
-}
-
-fn rows(r: &Matrix3<f64>) -> Value {
-    Value::Array(
-        (0..3)
-            .map(|i| vector(&Vector3::new(r[(i, 0)], r[(i, 1)], r[(i, 2)])))
-            .collect(),
-    )
-}
-
-fn constant(field: &Field, name: &str) -> PyResult<Vector3<f64>> {
-    match field {
-        Field::Constant(v) => Ok(*v),
-        Field::Varying(_) => Err(invalid(format!(
-            "`loads.{name}` varies along the rod, which a robot file cannot hold"
-        ))),
-    }
-}
-
-/// The robot file of `file`: every value written so that parsing it gives the same robot
-/// bitwise (TOML floats are written in their shortest round-trip form).
-pub fn document(file: &RobotFile) -> PyResult<String> {
-    let robot = &file.robot;
-    let rod = &robot.rod;
-    let cannot = |what: &str| invalid(format!("this robot cannot be written as a robot file: {what}"));
-    let (Some(g), Stiffness::Uniform(_)) = (rod.geometry, &rod.stiffness) else {
-        return Err(cannot(
-            "its rod is not given by `outer_radius`, `youngs_modulus` and `poisson_ratio` (a rod given by `shear_modulus` keeps no geometry)",
-        ));
-    };
-    let mut rod_table = Table::new();
-    rod_table.insert("length".into(), Value::Float(rod.length));
-    rod_table.insert("outer_radius".into(), Value::Float(g.outer_radius));
-    rod_table.insert("inner_radius".into(), Value::Float(g.inner_radius));
-    rod_table.insert("youngs_modulus".into(), Value::Float(g.youngs_modulus));
-    rod_table.insert("poisson_ratio".into(), Value::Float(g.poisson_ratio));
-    match &rod.reference {
-        ReferenceStrains::Straight => {}
-        ReferenceStrains::Constant { v_star, u_star } if *v_star == Vector3::z() => {
-            rod_table.insert("precurvature".into(), vector(u_star));
-        }
-        _ => return Err(cannot("its reference strains are not a constant precurvature")),
-    }
-    let mut base = Table::new();
-    base.insert("position".into(), vector(&robot.base_position));
-    base.insert("rotation".into(), rows(&robot.base_rotation));
-    let loads_in = &robot.loads;
-    let mut loads = Table::new();
-    loads.insert(
-        "distributed_force".into(),
-        vector(&constant(&loads_in.distributed_force, "distributed_force")?),
-    );
-    loads.insert(
-        "distributed_moment".into(),
-        vector(&constant(&loads_in.distributed_moment, "distributed_moment")?),
-    );
-    loads.insert("tip_force".into(), vector(&loads_in.tip_force));
-    loads.insert("tip_moment".into(), vector(&loads_in.tip_moment));
-    let points = loads_in
-        .point
-        .iter()
-        .map(|p| {
-            let mut t = Table::new();
-            t.insert("s".into(), Value::Float(p.s));
-            t.insert("force".into(), vector(&p.force));
-            t.insert("moment".into(), vector(&p.moment));
-            Value::Table(t)
-        })
-        .collect();
-    loads.insert("point".into(), Value::Array(points));
-    let mut tendons = Vec::new();
-    for (i, t) in robot.tendons.iter().enumerate() {
-        let mut routing = Table::new();
-        match t.routing {
-            Routing::Straight { x, y } => {
-                routing.insert("kind".into(), Value::String("straight".into()));
-                routing.insert("x".into(), Value::Float(x));
-                routing.insert("y".into(), Value::Float(y));
-            }
-            Routing::Helical { radius, turns, phase } => {
-                routing.insert("kind".into(), Value::String("helical".into()));
-                routing.insert("radius".into(), Value::Float(radius));
-                routing.insert("turns".into(), Value::Float(turns));
-                routing.insert("phase".into(), Value::Float(phase));
-            }
-            Routing::Custom(_) => return Err(cannot(&format!("tendon {} has a custom routing", i + 1))),
-        }
-        let mut tendon = Table::new();
-        tendon.insert("routing".into(), Value::Table(routing));
-        match t.displacement {
-            None => {
-                tendon.insert("tension".into(), Value::Float(t.tension));
-            }
-            // The file gives a displacement-controlled tendon no starting tension (the
-            // parser sets 0: the solver estimates it), so only 0 is written exactly.
-            Some(_) if t.tension != 0.0 => {
-                return Err(cannot(&format!(
-                    "tendon {} is displacement-controlled with a starting tension of {} N, which a robot file cannot hold (set its tension with `with_tensions` to make it tension-controlled)",
-                    i + 1,
-                    t.tension
-                )));
-            }
-            Some(q) => {
-                tendon.insert("displacement".into(), Value::Float(q));
-            }
-        }
-        if let Some(end) = t.termination {
-            tendon.insert("end".into(), Value::Float(end));
-        }
-        if let Some(k) = t.stiffness {
-            tendon.insert("stiffness".into(), Value::Float(k));
-        }
-        if t.free_length != 0.0 {
-            tendon.insert("free_length".into(), Value::Float(t.free_length));
-        }
-        tendons.push(Value::Table(tendon));
-    }
-    let mut doc = Table::new();
-    doc.insert("rod".into(), Value::Table(rod_table));
-    doc.insert("base".into(), Value::Table(base));
-    doc.insert("loads".into(), Value::Table(loads));
-    if !tendons.is_empty() {
-        doc.insert("tendon".into(), Value::Array(tendons));
-    }
-    doc.insert("solver".into(), Value::Table(solver_table(&file.solver)));
-    toml::to_string(&doc).map_err(|e| invalid(format!("cannot write the robot file: {e}")))
-}
-
-/// The `[solver]` table of `s`: every key, except `residual_tolerance` and `max_iterations`
-/// where both solvers keep their own defaults (the file sets both at once).
-fn solver_table(s: &SolverSettings) -> Table {
-    let defaults = SolverSettings::default();
-    let (c, d) = (&s.collocation, &defaults.collocation);
-    let mut t = Table::new();
-    let method = if s.method == Method::Shooting {
-        "shooting"
-    } else {
-        "collocation"
-    };
-    t.insert("method".into(), Value::String(method.into()));
-    t.insert("intervals".into(), Value::Integer(c.intervals as i64));
-    if let Some(tol) = c.tolerance {
-        t.insert("tolerance".into(), Value::Float(tol));
-    }
-    t.insert("max_intervals".into(), Value::Integer(c.max_intervals as i64));
-    if c.residual_tolerance != d.residual_tolerance || s.shooting.tolerance != defaults.shooting.tolerance {
-        t.insert("residual_tolerance".into(), Value::Float(c.residual_tolerance));
-    }
-    if c.max_iterations != d.max_iterations || s.shooting.max_iterations != defaults.shooting.max_iterations {
-        t.insert("max_iterations".into(), Value::Integer(c.max_iterations as i64));
-    }
-    t.insert("continuation".into(), Value::Boolean(c.continuation));
-    t.insert(
-        "equilibrium".into(),
-        Value::String(crate::options::equilibrium_name(c.equilibrium).into()),
-    );
-    t.insert(
-        "integration_tolerance".into(),
-        Value::Float(s.shooting.integration_tolerance),
-    );
-    t
-}
-
 /// A robot of the library with default solver settings, written as its robot file and
 /// parsed back, so that it is exactly what `Robot.from_toml(robot.to_toml())` gives (the
 /// library's compiled constants can differ from parsed ones in the last bit of a
@@ -277,7 +109,7 @@ pub fn from_library(robot: tdcr::Robot) -> PyResult<PyRobot> {
         robot,
         solver: SolverSettings::default(),
     };
-    parse(&document(&file)?, "<tdcr.cases>")
+    parse(&file.to_toml().map_err(to_py)?, "<tdcr.cases>")
 }
 
 impl PyRobot {
@@ -398,12 +230,12 @@ impl PyRobot {
     /// The robot as robot-file text (TOML) that `Robot.from_toml` reads back to the same
     /// robot, bitwise. Raises `tdcr.InvalidInput` for a rod given by `shear_modulus`.
     fn to_toml(&self) -> PyResult<String> {
-        document(&self.file)
+        self.file.to_toml().map_err(to_py)
     }
 
     /// Pickling goes through the robot file.
     fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<(Bound<'py, PyAny>, (String,))> {
-        let text = document(&slf.get().file)?;
+        let text = slf.get().file.to_toml().map_err(to_py)?;
         Ok((slf.get_type().getattr("from_toml")?, (text,)))
     }
 

@@ -1,18 +1,13 @@
 //! `tdcr.Solution`, `tdcr.SolveReport` and `tdcr.State`: the library's output types seen
 //! as numpy arrays, and the solution's JSON round trip.
 
-use crate::errors::invalid;
+use crate::errors::{invalid, to_py};
 use numpy::ndarray::{Array1, Array2, Array3};
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyArray3};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
-use serde_json::{Value, json};
-use std::time::Duration;
 use tdcr::nalgebra::{Matrix3, Vector3};
-use tdcr::{
-    ErrorEstimate, Evaluations, Iteration, Method, Node, Path, Solution, SolveReport, Stability, TendonState,
-    Termination, Timings,
-};
+use tdcr::{Path, Solution, SolveReport, Stability, TendonState, Termination};
 
 /// A 3x3 matrix as a (3, 3) array.
 pub fn matrix<'py>(py: Python<'py>, m: &Matrix3<f64>) -> Bound<'py, PyArray2<f64>> {
@@ -182,18 +177,20 @@ impl PySolution {
         })
     }
 
-    /// The whole solution as JSON (every node with its derivatives, the tendon paths and
-    /// the report); `Solution.from_json` reads it back to the same solution, bitwise.
+    /// The whole solution as the solution JSON of `tdcr solve --format json` (every node
+    /// with its derivatives, the tendon paths and states, the report; docs/cli.md), without
+    /// the keys that need the robot (`end`, `turns`, `jacobian`); `Solution.from_json` reads
+    /// it back to the same solution, bitwise.
     fn to_json(&self) -> String {
-        solution_json(&self.solution).to_string()
+        tdcr::io::output::solution_json(&self.solution)
     }
 
-    /// Reads the JSON of `Solution.to_json`. Raises `tdcr.InvalidInput` naming what is wrong.
+    /// Reads a solution JSON: `Solution.to_json`'s or the file `tdcr solve --format json`
+    /// wrote. Raises `tdcr.InvalidInput` naming what is wrong.
     #[staticmethod]
     fn from_json(text: &str) -> PyResult<Self> {
-        let value: Value = serde_json::from_str(text).map_err(|e| invalid(format!("Solution.from_json: {e}")))?;
         Ok(PySolution {
-            solution: read_solution(&value).map_err(|e| invalid(format!("Solution.from_json: {e}")))?,
+            solution: tdcr::io::parse_solution(text).map_err(to_py)?,
         })
     }
 
@@ -201,7 +198,7 @@ impl PySolution {
     fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<(Bound<'py, PyAny>, (String,))> {
         Ok((
             slf.get_type().getattr("from_json")?,
-            (solution_json(&slf.get().solution).to_string(),),
+            (tdcr::io::output::solution_json(&slf.get().solution),),
         ))
     }
 
@@ -272,14 +269,6 @@ fn stability_parts(stability: &Stability) -> (Option<usize>, Option<f64>, Option
         Stability::Unknown { reason } => (None, None, Some(reason)),
     }
 }
-
-const TERMINATIONS: [Termination; 5] = [
-    Termination::Converged,
-    Termination::MaxIterations,
-    Termination::LineSearchFailed,
-    Termination::SingularJacobian,
-    Termination::NonFinite,
-];
 
 #[pymethods]
 impl PySolveReport {
@@ -549,325 +538,5 @@ impl PySolveReport {
             path_parts(&r.path).0,
             r.timings.total.as_secs_f64() * 1e3
         )
-    }
-}
-
-fn vec_json(v: &Vector3<f64>) -> Value {
-    json!([v.x, v.y, v.z])
-}
-
-fn mat_json(m: &Matrix3<f64>) -> Value {
-    json!([
-        [m[(0, 0)], m[(0, 1)], m[(0, 2)]],
-        [m[(1, 0)], m[(1, 1)], m[(1, 2)]],
-        [m[(2, 0)], m[(2, 1)], m[(2, 2)]]
-    ])
-}
-
-fn nanos(d: Duration) -> u64 {
-    u64::try_from(d.as_nanos()).unwrap_or(u64::MAX)
-}
-
-/// The `format` of `Solution.to_json` texts (1 had no tendon states, counts or stability).
-const FORMAT: &str = "tdcr-solution-2";
-
-/// The solution as JSON (non-finite numbers as null, read back as NaN).
-fn solution_json(solution: &Solution) -> Value {
-    let nodes: Vec<Value> = solution
-        .nodes
-        .iter()
-        .map(|n| {
-            json!({"s": n.s, "p": vec_json(&n.p), "R": mat_json(&n.R), "v": vec_json(&n.v), "u": vec_json(&n.u),
-                   "v_s": vec_json(&n.v_s), "u_s": vec_json(&n.u_s), "n": vec_json(&n.n), "m": vec_json(&n.m)})
-        })
-        .collect();
-    let paths: Vec<Value> = solution
-        .tendon_paths
-        .iter()
-        .map(|p| Value::Array(p.iter().map(vec_json).collect()))
-        .collect();
-    let r = &solution.report;
-    let history: Vec<Value> = r
-        .history
-        .iter()
-        .map(|i| json!({"residual": i.residual, "step": i.step, "damping": i.damping, "fresh_jacobian": i.fresh_jacobian}))
-        .collect();
-    let tendons: Vec<Value> = solution
-        .tendons
-        .iter()
-        .map(|t| {
-            json!({"tension": t.tension, "displacement": t.displacement, "length": t.length,
-                   "reference_length": t.reference_length, "slack": t.slack})
-        })
-        .collect();
-    let t = &r.timings;
-    let (directions, conjugate_point, reason) = stability_parts(&r.stability);
-    let (path, folds, bifurcations) = path_parts(&r.path);
-    json!({
-        "format": FORMAT,
-        "nodes": nodes,
-        "tendon_paths": paths,
-        "tendons": tendons,
-        "report": {
-            "method": r.method.to_string(),
-            "termination": termination_name(r.termination),
-            "iterations": r.iterations,
-            "newton_steps": r.newton_steps,
-            "chord_steps": r.chord_steps,
-            "load_steps": r.load_steps,
-            "meshes": r.meshes,
-            "history": history,
-            "residual": r.residual,
-            "evaluations": {"residual": r.evaluations.residual, "jacobian": r.evaluations.jacobian, "equations": r.evaluations.equations},
-            "timings_ns": {"assembly": nanos(t.assembly), "factorization": nanos(t.factorization), "solve": nanos(t.solve), "estimate": nanos(t.estimate), "stability": nanos(t.stability), "total": nanos(t.total)},
-            "unknowns": r.unknowns,
-            "nonzeros": r.nonzeros,
-            "intervals": r.intervals,
-            "error_estimate": r.error_estimate.map(|e| json!({
-                "tip_position_m": e.tip_position, "tip_rotation_rad": e.tip_rotation, "backbone_max_m": e.backbone_max,
-            })),
-            "tolerance": r.tolerance,
-            "tolerance_met": r.tolerance_met,
-            "stability": {"verdict": r.stability.verdict(), "unstable_directions": directions, "conjugate_point_s": conjugate_point, "reason": reason},
-            "path": {"kind": path, "folds": folds, "bifurcations": bifurcations},
-        }
-    })
-}
-
-fn field<'a>(v: &'a Value, key: &str) -> Result<&'a Value, String> {
-    v.get(key).ok_or_else(|| format!("missing `{key}`"))
-}
-
-fn number(v: &Value, key: &str) -> Result<f64, String> {
-    match field(v, key)? {
-        Value::Null => Ok(f64::NAN),
-        x => x.as_f64().ok_or_else(|| format!("`{key}` is not a number")),
-    }
-}
-
-fn count(v: &Value, key: &str) -> Result<usize, String> {
-    field(v, key)?
-        .as_u64()
-        .and_then(|x| usize::try_from(x).ok())
-        .ok_or_else(|| format!("`{key}` is not a whole number"))
-}
-
-fn read_vec(v: &Value, key: &str) -> Result<Vector3<f64>, String> {
-    let items = v
-        .as_array()
-        .filter(|a| a.len() == 3)
-        .ok_or_else(|| format!("`{key}` is not [x, y, z]"))?;
-    let mut out = Vector3::zeros();
-    for (k, item) in items.iter().enumerate() {
-        out[k] = match item {
-            Value::Null => f64::NAN,
-            x => x.as_f64().ok_or_else(|| format!("`{key}` has a non-number"))?,
-        };
-    }
-    Ok(out)
-}
-
-fn read_node(v: &Value) -> Result<Node, String> {
-    let vec = |key: &str| read_vec(field(v, key)?, key);
-    let rows = field(v, "R")?
-        .as_array()
-        .filter(|a| a.len() == 3)
-        .ok_or("`R` is not a list of 3 rows")?;
-    let mut r = Matrix3::zeros();
-    for (i, row) in rows.iter().enumerate() {
-        r.set_row(i, &read_vec(row, "R")?.transpose());
-    }
-    Ok(Node {
-        s: number(v, "s")?,
-        p: vec("p")?,
-        R: r,
-        v: vec("v")?,
-        u: vec("u")?,
-        v_s: vec("v_s")?,
-        u_s: vec("u_s")?,
-        n: vec("n")?,
-        m: vec("m")?,
-    })
-}
-
-fn read_solution(v: &Value) -> Result<Solution, String> {
-    match field(v, "format")?.as_str() {
-        Some(FORMAT) => {}
-        Some("tdcr-solution-1") => {
-            return Err(format!(
-                "`format` is \"tdcr-solution-1\", written by an older tdcr without tendon states and stability; this version reads \"{FORMAT}\": solve the robot again"
-            ));
-        }
-        _ => return Err(format!("`format` is not \"{FORMAT}\" (not a Solution.to_json text)")),
-    }
-    let nodes: Vec<Node> = field(v, "nodes")?
-        .as_array()
-        .ok_or("`nodes` is not a list")?
-        .iter()
-        .map(read_node)
-        .collect::<Result<_, _>>()?;
-    if nodes.len() < 2 {
-        return Err(format!("a solution needs at least 2 nodes, got {}", nodes.len()));
-    }
-    let tendon_paths: Vec<Vec<Vector3<f64>>> = field(v, "tendon_paths")?
-        .as_array()
-        .ok_or("`tendon_paths` is not a list")?
-        .iter()
-        .map(|p| {
-            p.as_array()
-                .ok_or_else(|| "a tendon path is not a list".to_string())?
-                .iter()
-                .map(|x| read_vec(x, "tendon_paths"))
-                .collect::<Result<Vec<_>, _>>()
-        })
-        .collect::<Result<_, _>>()?;
-    let tendons: Vec<TendonState> = field(v, "tendons")?
-        .as_array()
-        .ok_or("`tendons` is not a list")?
-        .iter()
-        .map(|t| {
-            Ok(TendonState {
-                tension: number(t, "tension")?,
-                displacement: number(t, "displacement")?,
-                length: number(t, "length")?,
-                reference_length: number(t, "reference_length")?,
-                slack: number(t, "slack")?,
-            })
-        })
-        .collect::<Result<_, String>>()?;
-    if tendons.len() != tendon_paths.len() {
-        return Err(format!(
-            "`tendons` has {} entries but `tendon_paths` {}: give one state per tendon",
-            tendons.len(),
-            tendon_paths.len()
-        ));
-    }
-    let r = field(v, "report")?;
-    let method = match field(r, "method")?.as_str() {
-        Some("collocation") => Method::Collocation,
-        Some("shooting") => Method::Shooting,
-        _ => return Err("`report.method` is not \"collocation\" or \"shooting\"".into()),
-    };
-    let name = field(r, "termination")?.as_str().unwrap_or("");
-    let termination = *TERMINATIONS
-        .iter()
-        .find(|t| termination_name(**t) == name)
-        .ok_or_else(|| format!("`report.termination` \"{name}\" is not a termination"))?;
-    let history = field(r, "history")?
-        .as_array()
-        .ok_or("`report.history` is not a list")?
-        .iter()
-        .map(|i| {
-            Ok(Iteration {
-                residual: number(i, "residual")?,
-                step: number(i, "step")?,
-                damping: number(i, "damping")?,
-                fresh_jacobian: field(i, "fresh_jacobian")?
-                    .as_bool()
-                    .ok_or("`fresh_jacobian` is not a bool")?,
-            })
-        })
-        .collect::<Result<_, String>>()?;
-    let e = field(r, "evaluations")?;
-    let t = field(r, "timings_ns")?;
-    let ns = |key: &str| -> Result<Duration, String> {
-        field(t, key)?
-            .as_u64()
-            .map(Duration::from_nanos)
-            .ok_or_else(|| format!("`timings_ns.{key}` is not a whole number"))
-    };
-    let mut report = SolveReport::new(method);
-    report.termination = termination;
-    report.iterations = count(r, "iterations")?;
-    report.newton_steps = count(r, "newton_steps")?;
-    report.chord_steps = count(r, "chord_steps")?;
-    report.load_steps = count(r, "load_steps")?;
-    report.meshes = count(r, "meshes")?;
-    report.history = history;
-    report.residual = number(r, "residual")?;
-    report.evaluations = Evaluations {
-        residual: count(e, "residual")?,
-        jacobian: count(e, "jacobian")?,
-        equations: count(e, "equations")?,
-    };
-    report.timings = Timings {
-        assembly: ns("assembly")?,
-        factorization: ns("factorization")?,
-        solve: ns("solve")?,
-        estimate: ns("estimate")?,
-        stability: ns("stability")?,
-        total: ns("total")?,
-    };
-    report.unknowns = count(r, "unknowns")?;
-    report.nonzeros = count(r, "nonzeros")?;
-    report.intervals = count(r, "intervals")?;
-    report.error_estimate = match field(r, "error_estimate")? {
-        Value::Null => None,
-        e => Some(ErrorEstimate {
-            tip_position: number(e, "tip_position_m")?,
-            tip_rotation: number(e, "tip_rotation_rad")?,
-            backbone_max: number(e, "backbone_max_m")?,
-        }),
-    };
-    report.tolerance = match field(r, "tolerance")? {
-        Value::Null => None,
-        x => Some(x.as_f64().ok_or("`tolerance` is not a number")?),
-    };
-    report.tolerance_met = match field(r, "tolerance_met")? {
-        Value::Null => None,
-        x => Some(x.as_bool().ok_or("`tolerance_met` is not a bool")?),
-    };
-    report.stability = read_stability(field(r, "stability")?)?;
-    report.path = read_path(field(r, "path")?)?;
-    Ok(Solution {
-        nodes,
-        tendon_paths,
-        tendons,
-        report,
-    })
-}
-
-/// A list of numbers (null read as NaN).
-fn numbers(v: &Value, key: &str) -> Result<Vec<f64>, String> {
-    field(v, key)?
-        .as_array()
-        .ok_or_else(|| format!("`{key}` is not a list"))?
-        .iter()
-        .map(|x| match x {
-            Value::Null => Ok(f64::NAN),
-            x => x.as_f64().ok_or_else(|| format!("`{key}` has a non-number")),
-        })
-        .collect()
-}
-
-/// The `report.stability` object of the JSON.
-fn read_stability(v: &Value) -> Result<Stability, String> {
-    match field(v, "verdict")?.as_str() {
-        Some("stable") => Ok(Stability::Stable),
-        Some("unstable") => Ok(Stability::Unstable {
-            directions: count(v, "unstable_directions")?,
-            conjugate_point: number(v, "conjugate_point_s")?,
-        }),
-        Some("unknown") => Ok(Stability::Unknown {
-            reason: field(v, "reason")?
-                .as_str()
-                .ok_or("`stability.reason` is not a string")?
-                .to_string(),
-        }),
-        _ => Err("`report.stability.verdict` is not \"stable\", \"unstable\" or \"unknown\"".into()),
-    }
-}
-
-/// The `report.path` object of the JSON.
-fn read_path(v: &Value) -> Result<Path, String> {
-    let kind = field(v, "kind")?.as_str();
-    if kind == Some("direct") {
-        return Ok(Path::Direct);
-    }
-    let (folds, bifurcations) = (numbers(v, "folds")?, numbers(v, "bifurcations")?);
-    match kind {
-        Some("from_warm_start") => Ok(Path::FromWarmStart { folds, bifurcations }),
-        Some("load_path") => Ok(Path::LoadPath { folds, bifurcations }),
-        _ => Err("`report.path.kind` is not \"direct\", \"from_warm_start\" or \"load_path\"".into()),
     }
 }

@@ -32,10 +32,11 @@ def cli():
 
 @pytest.fixture(scope="session")
 def cli_text():
-    """Runs `tdcr ARGS` with `stdin`; returns standard output as text (CSV commands)."""
+    """Runs `tdcr ARGS` with `stdin` in `cwd`; returns standard output as text."""
     binary = _binary()
 
-    def run(args, stdin=None):
-        return subprocess.run([str(binary), *args], input=stdin, capture_output=True, text=True, check=True).stdout
+    def run(args, stdin=None, cwd=None):
+        out = subprocess.run([str(binary), *args], input=stdin, capture_output=True, text=True, check=True, cwd=cwd)
+        return out.stdout
 
     return run

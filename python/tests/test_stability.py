@@ -107,7 +107,7 @@ def test_stability_and_counts_round_trip_through_json_and_pickle(r1_solutions):
             assert b.timings == a.timings
             assert back.tendons == solution.tendons
     with pytest.raises(tdcr.InvalidInput, match="older tdcr"):
-        tdcr.Solution.from_json(default.to_json().replace("tdcr-solution-2", "tdcr-solution-1"))
+        tdcr.Solution.from_json(default.to_json().replace("tdcr-solution-3", "tdcr-solution-2"))
 
 
 def test_a_bad_equilibrium_raises_invalid_input_naming_the_choices():

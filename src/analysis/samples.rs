@@ -27,17 +27,7 @@ pub struct Sample {
 /// ([`Solution::at`]) and n, m from the constitutive law (eq. 3) at the interpolated strains.
 pub fn samples(robot: &Robot, solution: &Solution, count: Option<usize>) -> Vec<Sample> {
     let Some(count) = count else {
-        return solution
-            .nodes
-            .iter()
-            .map(|n| Sample {
-                s: n.s,
-                p: n.p,
-                R: n.R,
-                n: n.n,
-                m: n.m,
-            })
-            .collect();
+        return node_samples(solution);
     };
     let model = Model::new(robot);
     let count = count.max(2);
@@ -54,6 +44,21 @@ pub fn samples(robot: &Robot, solution: &Solution, count: Option<usize>) -> Vec<
                 n,
                 m,
             }
+        })
+        .collect()
+}
+
+/// The solution's own nodes as samples (both limits where the solution jumps).
+pub fn node_samples(solution: &Solution) -> Vec<Sample> {
+    solution
+        .nodes
+        .iter()
+        .map(|n| Sample {
+            s: n.s,
+            p: n.p,
+            R: n.R,
+            n: n.n,
+            m: n.m,
         })
         .collect()
 }

@@ -1,9 +1,10 @@
 //! The experiments CSV of `tdcr calibrate` (docs/calibration.md): one calibration
 //! [`Measurement`] per row, tensions, tip force and measured tip in SI units; written
 //! exactly by [`to_csv`], read with every problem reported by line, column and name by
-//! [`parse_csv`].
+//! [`parse_csv`]; both through the `csv` crate.
 
 use super::Position;
+use super::csv_table::CsvTable;
 use super::{FileError, Problem, printable};
 use crate::fit::calibration::Measurement;
 use nalgebra::Vector3;
@@ -27,25 +28,23 @@ pub fn csv_header(tendons: usize) -> String {
 }
 
 /// The experiments as CSV (docs/calibration.md): the header of [`csv_header`], then one row
-/// per experiment in SI units (N, N, m), numbers written to round-trip exactly.
+/// per experiment in SI units (N, N, m), numbers written by [`crate::io::number`] to
+/// round-trip exactly.
 ///
 /// Precondition: every experiment has the same number of tensions.
 pub fn to_csv(experiments: &[Measurement]) -> String {
     let k = experiments.first().map_or(0, |e| e.tensions.len());
-    let mut out = csv_header(k);
-    out.push('\n');
+    let mut table = CsvTable::new(csv_header(k).split(','));
     for e in experiments {
-        let values: Vec<String> = e
-            .tensions
-            .iter()
-            .chain(e.tip_force.iter())
-            .chain(e.measured_tip.iter())
-            .map(|x| format!("{x:?}"))
-            .collect();
-        out.push_str(&values.join(","));
-        out.push('\n');
+        table.numbers(
+            e.tensions
+                .iter()
+                .chain(e.tip_force.iter())
+                .chain(e.measured_tip.iter())
+                .copied(),
+        );
     }
-    out
+    table.finish()
 }
 
 /// At most this many problems are listed for one CSV file: enough to see a pattern.
@@ -75,11 +74,7 @@ const MAX_CSV_PROBLEMS: usize = 20;
 pub fn parse_csv(text: &str, file: &str, tendons: usize) -> Result<Vec<Measurement>, FileError> {
     let mut problems = Vec::new();
     let at = |line: usize, column: usize| Some(Position { line, column });
-    let mut lines = text
-        .split('\n')
-        .enumerate()
-        .map(|(i, l)| (i + 1, l.strip_suffix('\r').unwrap_or(l)))
-        .filter(|(_, l)| !l.trim().is_empty() && !l.trim_start().starts_with('#'));
+    let mut lines = records(text);
     let expected: Vec<String> = csv_header(tendons).split(',').map(str::to_string).collect();
     let Some((header_line, header)) = lines.next() else {
         return Err(FileError {
@@ -93,7 +88,7 @@ pub fn parse_csv(text: &str, file: &str, tendons: usize) -> Result<Vec<Measureme
     };
     // Column index -> which value it holds (index into `expected`).
     let mut slots: Vec<Option<usize>> = Vec::new();
-    for (column, name) in fields(header) {
+    for (column, name) in fields(&header) {
         let name = name.trim();
         let slot = expected.iter().position(|e| e == name);
         if slot.is_some() && slots.contains(&slot) {
@@ -138,7 +133,7 @@ pub fn parse_csv(text: &str, file: &str, tendons: usize) -> Result<Vec<Measureme
         if problems.len() >= MAX_CSV_PROBLEMS {
             break;
         }
-        let cells = fields(row);
+        let cells = fields(&row);
         if cells.len() != slots.len() {
             problems.push(Problem {
                 position: at(line, 1),
@@ -210,11 +205,29 @@ pub fn parse_csv(text: &str, file: &str, tendons: usize) -> Result<Vec<Measureme
     }
 }
 
-/// The comma-separated fields of a line with the character column (from 1) where each starts.
-fn fields(line: &str) -> Vec<(usize, &str)> {
+/// The records of a CSV text, read by the `csv` crate (quoted fields, CRLF line ends),
+/// with the line each starts on (from 1); blank records and `#` comment lines skipped. A
+/// record the reader cannot split ends the list (there is none for unquoted text).
+fn records(text: &str) -> impl Iterator<Item = (usize, csv::StringRecord)> + '_ {
+    csv::ReaderBuilder::new()
+        .has_headers(false)
+        .flexible(true)
+        .from_reader(text.as_bytes())
+        .into_records()
+        .map_while(Result::ok)
+        .map(|r| (r.position().map_or(1, |p| p.line() as usize), r))
+        .filter(|(_, r)| {
+            let first = r.get(0).unwrap_or_default().trim_start();
+            !first.starts_with('#') && r.iter().any(|f| !f.trim().is_empty())
+        })
+}
+
+/// The fields of a record with the character column (from 1) where each starts (exact for
+/// unquoted fields, which the experiments CSV has).
+fn fields(record: &csv::StringRecord) -> Vec<(usize, &str)> {
     let mut out = Vec::new();
     let mut column = 1;
-    for field in line.split(',') {
+    for field in record {
         out.push((column, field));
         column += field.chars().count() + 1;
     }

@@ -1,6 +1,7 @@
-//! Files in and out of the `tdcr` command: the TOML robot file (docs/robot-file.md), read
-//! with every problem reported by file, line, field and rule (feature `files`), and the JSON
-//! and CSV result files (docs/cli.md).
+//! Files in and out of the `tdcr` command and the Python package: the TOML robot file
+//! (docs/robot-file.md, feature `files`), read with every problem reported by file, line,
+//! field and rule; the solution JSON, written and read back bitwise (docs/cli.md); the
+//! experiments and result CSVs, through the `csv` crate, every number written by [`number`].
 //!
 //! ```
 //! # #[cfg(feature = "files")] {
@@ -11,9 +12,11 @@
 //! # }
 //! ```
 
+pub mod csv_table;
 #[cfg(feature = "files")]
 mod example;
 pub mod experiments;
+mod json_layout;
 #[cfg(feature = "files")]
 pub mod locate;
 pub mod output;
@@ -22,11 +25,12 @@ pub mod parameters;
 mod robot_file;
 mod solution_file;
 
+pub use csv_table::number;
 #[cfg(feature = "files")]
 pub use example::example;
 #[cfg(feature = "files")]
 pub use robot_file::{RobotFile, SolverSettings, parse};
-pub use solution_file::read_solution;
+pub use solution_file::{parse_solution, read_solution};
 
 /// A 1-based line and column in the source text.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

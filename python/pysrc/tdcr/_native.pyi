@@ -226,10 +226,10 @@ class Solution:
     def at(self, s: float, left: bool = False) -> State:
         """The state at arc length s (m) from the scheme's interpolant."""
     def to_json(self) -> str:
-        """The whole solution as JSON."""
+        """The whole solution as the solution JSON of `tdcr solve --format json` (docs/cli.md)."""
     @staticmethod
     def from_json(text: str) -> Solution:
-        """Reads the JSON of `to_json`, bitwise."""
+        """Reads a solution JSON (`to_json`'s or the command line's), bitwise."""
 
 class TipSensitivities:
     """Derivatives of the tip pose (6 rows: position, rotation vector)."""

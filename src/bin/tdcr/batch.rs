@@ -4,9 +4,9 @@
 
 use clap::Args;
 use rayon::prelude::*;
-use std::fmt::Write as _;
 use std::sync::Mutex;
-use tdcr::io::output;
+use tdcr::io::csv_table::CsvTable;
+use tdcr::io::number;
 use tdcr::io::parameters::{NAMES, Parameter};
 use tdcr::{Error, Method, Robot, Solution};
 
@@ -254,16 +254,6 @@ fn solve_block(
     out
 }
 
-/// A CSV field: quoted when it holds a comma or a quote, newlines as `; `.
-fn csv_text(text: &str) -> String {
-    let one_line = text.replace('\n', "; ");
-    if one_line.contains([',', '"']) {
-        format!("\"{}\"", one_line.replace('"', "\"\""))
-    } else {
-        one_line
-    }
-}
-
 /// `tdcr batch`: reads the robot and the table, solves the shard's rows, writes one result
 /// row per input row; exit code 3 when any row failed (after writing all of them).
 pub fn run(args: &BatchArgs) -> Result<(), Failure> {
@@ -308,36 +298,31 @@ pub fn run(args: &BatchArgs) -> Result<(), Failure> {
     if let Ok(mut p) = progress.lock() {
         p.0.finish();
     }
-    let mut csv = String::from("row");
-    for p in &table.parameters {
-        let _ = write!(csv, ",{p}");
-    }
-    csv.push_str(",converged,iterations,tip_x,tip_y,tip_z,error\n");
+    let mut header = vec!["row".to_string()];
+    header.extend(table.parameters.iter().map(ToString::to_string));
+    header.extend(["converged", "iterations", "tip_x", "tip_y", "tip_z", "error"].map(String::from));
+    let mut csv = CsvTable::new(header);
     let mut failed = 0;
     for (row, outcome) in rows.iter().zip(&outcomes) {
-        let _ = write!(csv, "{}", row.index);
-        for x in &row.values {
-            let _ = write!(csv, ",{}", x.map_or(String::new(), output::number));
-        }
-        let iterations = outcome.iterations.map_or(String::new(), |n| n.to_string());
+        let mut fields = vec![row.index.to_string()];
+        fields.extend(row.values.iter().map(|x| x.map_or(String::new(), number)));
+        fields.push(outcome.solution.is_some().to_string());
+        fields.push(outcome.iterations.map_or(String::new(), |n| n.to_string()));
         match &outcome.solution {
             Some(s) => {
-                let tip = s.tip_position();
-                let _ = writeln!(
-                    csv,
-                    ",true,{iterations},{},{},{},",
-                    output::number(tip.x),
-                    output::number(tip.y),
-                    output::number(tip.z)
-                );
+                fields.extend(s.tip_position().iter().map(|&x| number(x)));
+                fields.push(String::new());
             }
             None => {
                 failed += 1;
-                let message = outcome.error.as_deref().unwrap_or_default();
-                let _ = writeln!(csv, ",false,{iterations},,,,{}", csv_text(message));
+                fields.extend(["", "", ""].map(String::from));
+                // One line per row: a multi-line message joined with "; ".
+                fields.push(outcome.error.as_deref().unwrap_or_default().replace('\n', "; "));
             }
         }
+        csv.row(fields);
     }
+    let csv = csv.finish();
     match &args.out {
         Some(path) => {
             write_file(path, &csv, "results")?;

@@ -1,11 +1,11 @@
 //! The main job (`tdcr` without a command): the paper's prototype under the 32 experiments of
 //! Table 2, a table on standard output, a picture (SVG and PNG) and a CSV in the output folder.
 
-use std::fmt::Write as _;
 use std::path::Path;
 use std::time::{Duration, Instant};
 use tdcr::Routing;
-use tdcr::io::output;
+use tdcr::io::csv_table::CsvTable;
+use tdcr::io::{number, output};
 use tdcr::plot::{Figure, Format, LegendEntry, Style, Symbol, routing_label};
 use tdcr::{cases, collocation};
 
@@ -142,8 +142,9 @@ pub fn run(out_dir: &Path) -> Result<(), Failure> {
         "ms"
     );
     emit(&header)?;
-    let mut csv = String::from(
-        "experiment,configuration,tendon,tension,tip_load,tip_x,tip_y,tip_z,bending_angle_deg,iterations,intervals,solve_time\n",
+    let mut csv = CsvTable::new(
+        "experiment,configuration,tendon,tension,tip_load,tip_x,tip_y,tip_z,bending_angle_deg,iterations,intervals,solve_time"
+            .split(','),
     );
     let mut solved = Vec::new();
     let mut failures = Vec::new();
@@ -161,22 +162,20 @@ pub fn run(out_dir: &Path) -> Result<(), Failure> {
                 let report = &solution.report;
                 solver_time += report.timings.total;
                 intervals.push(report.intervals);
-                let _ = writeln!(
-                    csv,
-                    "{},\"{}\",{},{},{},{},{},{},{},{},{},{}",
-                    k + 1,
+                csv.row([
+                    (k + 1).to_string(),
                     e.label(),
                     e.tendon.map_or(String::new(), |i| i.to_string()),
-                    e.tension,
-                    e.tip_load,
-                    output::number(tip.x),
-                    output::number(tip.y),
-                    output::number(tip.z),
-                    bend,
-                    report.iterations,
-                    report.intervals,
-                    report.timings.total.as_secs_f64()
-                );
+                    number(e.tension),
+                    number(e.tip_load),
+                    number(tip.x),
+                    number(tip.y),
+                    number(tip.z),
+                    number(bend),
+                    report.iterations.to_string(),
+                    report.intervals.to_string(),
+                    number(report.timings.total.as_secs_f64()),
+                ]);
                 let line = format!(
                     "{:>3}  {:<24} {:<27} {:>7.2} {:>8.3} {} {} {} {:>7.2} {:>5} {:>7.1}\n",
                     k + 1,
@@ -234,7 +233,7 @@ pub fn run(out_dir: &Path) -> Result<(), Failure> {
     if !text {
         note("warning: no fonts found on this system, so the PNG has no text; the SVG has it");
     }
-    write_file(&csv_path, &csv, "table")?;
+    write_file(&csv_path, csv.finish(), "table")?;
     emit(&format!(
         "picture of all shapes: {} and {}\ntable as CSV (SI units): {}\n",
         svg_path.display(),

@@ -3,9 +3,9 @@
 //! picture of the branch.
 
 use clap::{Args, ValueEnum};
-use std::fmt::Write as _;
 use std::path::PathBuf;
 use tdcr::collocation::{Trace, trace};
+use tdcr::io::csv_table::CsvTable;
 use tdcr::io::output;
 use tdcr::plot::{Chart, Mark, Segment, significant};
 use tdcr::{Parameter, Readable};
@@ -175,26 +175,32 @@ fn with_flags(e: tdcr::Error, parameter: Parameter) -> Failure {
 }
 
 fn csv(t: &Trace) -> String {
-    let mut out = format!(
-        "point,{},tip_x,tip_y,tip_z,stability,unstable_directions,fold,iterations\n",
-        t.parameter
-    );
+    let parameter = t.parameter.to_string();
+    let mut table = CsvTable::new([
+        "point",
+        &parameter,
+        "tip_x",
+        "tip_y",
+        "tip_z",
+        "stability",
+        "unstable_directions",
+        "fold",
+        "iterations",
+    ]);
     for (k, p) in t.points.iter().enumerate() {
-        let _ = writeln!(
-            out,
-            "{},{},{},{},{},{},{},{},{}",
-            k + 1,
+        table.row([
+            (k + 1).to_string(),
             output::number(p.value),
             output::number(p.tip_position.x),
             output::number(p.tip_position.y),
             output::number(p.tip_position.z),
-            p.verdict(),
+            p.verdict().to_string(),
             p.unstable_directions.map_or(String::new(), |d| d.to_string()),
-            u8::from(p.fold),
-            p.iterations
-        );
+            u8::from(p.fold).to_string(),
+            p.iterations.to_string(),
+        ]);
     }
-    out
+    table.finish()
 }
 
 fn json(t: &Trace) -> String {

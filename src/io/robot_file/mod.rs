@@ -9,6 +9,7 @@
 mod build;
 mod check;
 mod tables;
+mod write;
 
 use self::build::{build, library_problem, settings};
 use self::check::Checker;

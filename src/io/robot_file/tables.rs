@@ -2,7 +2,7 @@
 //! check: unknown keys are rejected, missing required fields reported by serde.
 
 use serde::de::{self, Deserializer, IgnoredAny, SeqAccess, Visitor};
-use serde::{Deserialize, de::DeserializeOwned};
+use serde::{Deserialize, Serialize, de::DeserializeOwned};
 use std::fmt;
 use std::marker::PhantomData;
 
@@ -195,7 +195,7 @@ pub(super) enum MethodName {
 }
 
 /// The `equilibrium` of `[solver]`: `"load_path"` (the default) or `"nearest"`.
-#[derive(Clone, Copy, Debug, Deserialize)]
+#[derive(Clone, Copy, Debug, Deserialize, Serialize)]
 #[serde(rename_all = "snake_case")]
 pub(super) enum EquilibriumKey {
     LoadPath,
