@@ -7,7 +7,7 @@ use crate::options::type_name;
 use numpy::{PyArray1, PyArray2, PyReadonlyArray1};
 use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyDict, PyFloat, PyInt, PyList, PyString, PyTuple};
-use tdcr::io::parameters::Parameter;
+use tdcr::Parameter;
 use tdcr::io::{RobotFile, SolverSettings};
 use tdcr::model::rod::{ReferenceStrains, Stiffness};
 use tdcr::nalgebra::{Matrix3, Vector3};
@@ -444,8 +444,9 @@ impl PyRobot {
     }
 
     /// A copy with named parameters set, e.g. `{"tension.1": 3.0, "tip_force.z": -0.1}`
-    /// (the names of `tdcr batch` headers: `tension.I`, `tip_force.x|y|z`,
-    /// `tip_moment.x|y|z`, `base_position.x|y|z`, `youngs_modulus`).
+    /// (the names of `tdcr batch` headers and of sweeps: `tension.I`, which makes tendon I
+    /// tension-controlled, `tip_force.x|y|z`, `tip_moment.x|y|z`, `base_position.x|y|z`,
+    /// `distributed_force.x|y|z`, `load_scale`, `youngs_modulus`; docs/parameters.md).
     fn with_parameters(&self, parameters: &Bound<'_, PyDict>) -> PyResult<Self> {
         let mut out = self.clone();
         for (key, value) in parameters.iter() {

@@ -82,8 +82,8 @@ pub fn trace(robot: &Robot, parameter: Parameter, from: f64, to: f64, options: &
             "sweep E instead (tdcr sweep --param youngs_modulus=START:STOP:COUNT), each solve warm-started",
         ));
     }
-    if let Some(i) = parameter
-        .apply(robot, from)
+    let start = parameter.applied(robot, from)?;
+    if let Some(i) = start
         .tendons
         .iter()
         .position(|t| t.displacement.is_some())
@@ -110,7 +110,7 @@ pub fn trace(robot: &Robot, parameter: Parameter, from: f64, to: f64, options: &
             "give START:STOP with START != STOP",
         ));
     }
-    let first = solve(&parameter.apply(robot, from), options)?;
+    let first = solve(&start, options)?;
     let points: Vec<f64> = first.nodes.iter().map(|n| n.s).collect();
     let mesh = Mesh::from_points(robot, &points)?;
     let x: Vec<_> = first.nodes.iter().map(Node::state).collect();

@@ -67,8 +67,9 @@ pub struct Model<'a> {
     pub tension_factor: f64,
     /// Multiplier on all external loads (distributed, point and tip), in [0, 1].
     pub load_factor: f64,
-    /// One input replaced by a value (a trace's parameter; [`Parameter::LoadScale`] is the
-    /// two factors instead and is not set here).
+    /// One input replaced by a value, with the meaning [`Parameter::apply`] gives it (a
+    /// trace's parameter; [`Parameter::LoadScale`] is the two factors instead and
+    /// [`Parameter::YoungsModulus`] is not traced, so neither is set here).
     pub parameter: Option<(Parameter, f64)>,
 }
 
@@ -83,6 +84,16 @@ impl<'a> Model<'a> {
         }
     }
 
+    /// The base position (m, world frame), with the parameter's value when it is a
+    /// component of it.
+    pub fn base_position(&self) -> Vector3<f64> {
+        let mut p = self.robot.base_position;
+        if let Some((Parameter::BasePosition(c), value)) = self.parameter {
+            p[c] = value;
+        }
+        p
+    }
+
     /// State-independent data at arc length s.
     pub fn site(&self, s: f64) -> Site {
         let loads = &self.robot.loads;
@@ -91,10 +102,8 @@ impl<'a> Model<'a> {
             section: self.robot.rod.section_at(s),
             reference: self.robot.rod.reference_at(s),
             f_e: {
-                let mut f = loads.distributed_force.at(s);
-                if let Some((Parameter::DistributedForce(c), value)) = self.parameter {
-                    f[c] = value;
-                }
+                let f = loads.distributed_force.at(s);
+                let f = self.parameter.map_or(f, |(p, value)| p.distributed_force(f, value));
                 f * self.load_factor
             },
             l_e: loads.distributed_moment.at(s) * self.load_factor,
@@ -232,11 +241,13 @@ impl Model<'_> {
     pub fn point_wrench(&self, s: f64) -> (Vector3<f64>, Vector3<f64>) {
         let loads = &self.robot.loads;
         let (mut f, mut l) = if s == self.robot.length() {
-            let mut f = loads.tip_force;
-            if let Some((Parameter::TipForce(c), value)) = self.parameter {
-                f[c] = value;
+            let (mut f, mut l) = (loads.tip_force, loads.tip_moment);
+            match self.parameter {
+                Some((Parameter::TipForce(c), value)) => f[c] = value,
+                Some((Parameter::TipMoment(c), value)) => l[c] = value,
+                _ => {}
             }
-            (f, loads.tip_moment)
+            (f, l)
         } else {
             (Vector3::zeros(), Vector3::zeros())
         };

@@ -208,13 +208,24 @@ impl Robot {
     }
 
     /// The robot with the tendon tensions `tensions` (N, one per tendon, as
-    /// [`crate::Solution::tensions`] reports them): for a displacement-controlled tendon the
-    /// starting value of its tension unknown, so that a solved displacement-controlled robot
-    /// becomes one whose every tension the analyses (equilibrium, sensitivities) can read.
+    /// [`crate::Solution::tensions`] reports them), every tendon given one tension-controlled
+    /// (as setting [`crate::Parameter::Tension`] does): a solved displacement-controlled robot
+    /// becomes the tension-controlled robot with the same equilibrium, whose every tension
+    /// the analyses (equilibrium, sensitivities) can read. Tendons past the end of
+    /// `tensions` keep their actuation.
+    ///
+    /// # Examples
+    /// ```
+    /// let mut robot = tdcr::cases::case_s();
+    /// robot.tendons[0].displacement = Some(0.002);
+    /// let held = robot.with_tensions(&[1.5, 0.0, 0.0, 0.0, 0.0]);
+    /// assert_eq!((held.tendons[0].tension, held.tendons[0].displacement), (1.5, None));
+    /// ```
     pub fn with_tensions(&self, tensions: &[f64]) -> Robot {
         let mut robot = self.clone();
         for (t, &tau) in robot.tendons.iter_mut().zip(tensions) {
             t.tension = tau;
+            t.displacement = None;
         }
         robot
     }

@@ -186,7 +186,7 @@ pub fn run(args: &SweepArgs) -> Result<(), Failure> {
             set_displacement(&mut robot, i, at(v))?;
         }
         for (p, v) in &params {
-            robot = p.apply(&robot, at(v));
+            p.apply(&mut robot, at(v)).map_err(|e| Failure::Input(e.to_string()))?;
         }
         Ok(robot)
     };
