@@ -224,13 +224,26 @@ fn a_tension_column_makes_a_displacement_controlled_tendon_tension_controlled() 
         let cells: Vec<&str> = line.split(',').collect();
         assert_eq!(cells[2], "true", "{line}");
         let batch: Vec<f64> = cells[4..7].iter().map(|c| c.parse().unwrap()).collect();
-        let solved = tip(&["solve", "robot.toml", "--format", "json", "--tension", &format!("1={tension}")]);
+        let solved = tip(&[
+            "solve",
+            "robot.toml",
+            "--format",
+            "json",
+            "--tension",
+            &format!("1={tension}"),
+        ]);
         for k in 0..3 {
             // 1e-8 m: both solves stop at the scaled residual 1e-11 from different starts,
             // which leaves the tip about 1e-8 m from the exact discrete solution.
-            assert!((batch[k] - solved[k]).abs() < 1e-8, "{tension} N: {batch:?} vs {solved:?}");
+            assert!(
+                (batch[k] - solved[k]).abs() < 1e-8,
+                "{tension} N: {batch:?} vs {solved:?}"
+            );
         }
         // The pull-in's tip is millimetres away: the column did change the actuation.
-        assert!((batch[2] - held[2]).abs() > 1e-4, "{tension} N: {batch:?} vs the pull-in's {held:?}");
+        assert!(
+            (batch[2] - held[2]).abs() > 1e-4,
+            "{tension} N: {batch:?} vs the pull-in's {held:?}"
+        );
     }
 }

@@ -145,8 +145,9 @@ fn trace_and_sweep_agree_on_every_parameter() {
     let mut robot = cases::case_s();
     let w = robot.loads.distributed_force.at(0.0).z;
     let length = robot.length();
-    robot.loads.distributed_force =
-        tdcr::model::loads::Field::Varying(std::sync::Arc::new(move |s| Vector3::new(0.0, 0.0, w * (1.0 + s / length))));
+    robot.loads.distributed_force = tdcr::model::loads::Field::Varying(std::sync::Arc::new(move |s| {
+        Vector3::new(0.0, 0.0, w * (1.0 + s / length))
+    }));
     let tension = robot.tendons[0].tension;
     for (p, from, to) in [
         (Parameter::Tension(0), tension, tension + 0.5),

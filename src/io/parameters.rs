@@ -154,7 +154,12 @@ pub fn read_csv(file: &str, text: &str) -> Result<Table, FileError> {
     for (column, name) in header {
         let p: Parameter = name.parse().map_err(|e: String| at(file, header_line, column, e))?;
         if parameters.contains(&p) {
-            return Err(at(file, header_line, column, format!("parameter `{name}` is given twice")));
+            return Err(at(
+                file,
+                header_line,
+                column,
+                format!("parameter `{name}` is given twice"),
+            ));
         }
         parameters.push(p);
     }

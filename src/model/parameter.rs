@@ -344,7 +344,10 @@ mod tests {
         // section formulas.
         assert!((a.kbt - 0.5 * b.kbt).norm() < 1e-12 * b.kbt.norm());
         let e = Parameter::Tension(5).apply(&mut robot, 1.0).unwrap_err();
-        assert!(e.to_string().contains("names tendon 6, but the robot has 5 tendon(s)"), "{e}");
+        assert!(
+            e.to_string().contains("names tendon 6, but the robot has 5 tendon(s)"),
+            "{e}"
+        );
         // Payloads no name parses to are errors, not panics.
         let e = Parameter::TipForce(3).apply(&mut robot, 1.0).unwrap_err();
         assert!(e.to_string().contains("`tip_force.?` names a component past z"), "{e}");
@@ -384,7 +387,11 @@ mod tests {
             for s in [0.0, 0.3 * length, length] {
                 let (a, b) = (on_robot.site(s), on_model.site(s));
                 assert_eq!((a.f_e, a.l_e), (b.f_e, b.l_e), "{p} at s = {s}");
-                let tensions = |m: &Model| m.tendons(s, Which::ActiveTo(s)).map(|(i, t, _)| (i, t)).collect::<Vec<_>>();
+                let tensions = |m: &Model| {
+                    m.tendons(s, Which::ActiveTo(s))
+                        .map(|(i, t, _)| (i, t))
+                        .collect::<Vec<_>>()
+                };
                 assert_eq!(tensions(&on_robot), tensions(&on_model), "{p} at s = {s}");
                 assert_eq!(on_robot.point_wrench(s), on_model.point_wrench(s), "{p} at s = {s}");
             }
