@@ -66,7 +66,7 @@ pub use model::parameter::Parameter;
 pub use model::robot::{Robot, TendonModel};
 pub use model::rod::{Rod, Section};
 pub use model::routing::{Routing, RoutingPoint};
-pub use model::tendon::Tendon;
+pub use model::tendon::{Actuation, Tendon};
 pub use nalgebra;
 pub use report::{ErrorEstimate, Evaluations, Iteration, Method, Path, SolveReport, Stability, Termination, Timings};
 pub use solution::{Node, Solution, State, TendonState};

@@ -121,7 +121,7 @@ fn a_monotone_branch_ends_where_the_default_solve_lands() {
 #[test]
 fn a_displacement_controlled_tendon_is_refused_unless_its_tension_is_traced() {
     let mut robot = tdcr::cases::prototype();
-    robot.tendons[0].displacement = Some(0.003);
+    robot.tendons[0].set_displacement(0.003);
     let options = tdcr::collocation::Options::default();
     match tdcr::collocation::trace(&robot, tdcr::Parameter::LoadScale, 0.0, 1.0, &options) {
         Err(tdcr::Error::InvalidInput { field, hint, .. }) => {
@@ -148,7 +148,7 @@ fn trace_and_sweep_agree_on_every_parameter() {
     robot.loads.distributed_force = tdcr::model::loads::Field::Varying(std::sync::Arc::new(move |s| {
         Vector3::new(0.0, 0.0, w * (1.0 + s / length))
     }));
-    let tension = robot.tendons[0].tension;
+    let tension = robot.tendons[0].tension();
     for (p, from, to) in [
         (Parameter::Tension(0), tension, tension + 0.5),
         (Parameter::TipForce(0), 0.0, 0.05),

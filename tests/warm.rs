@@ -13,7 +13,7 @@ const SAME_ANSWER: f64 = 1e-10;
 fn scaled(robot: &Robot, factor: f64) -> Robot {
     let mut r = robot.clone();
     for t in r.tendons.iter_mut() {
-        t.tension *= factor;
+        t.set_tension(t.tension() * factor);
     }
     r
 }

@@ -194,17 +194,17 @@ pub fn document(file: &RobotFile) -> PyResult<String> {
         }
         let mut tendon = Table::new();
         tendon.insert("routing".into(), Value::Table(routing));
-        match t.displacement {
+        match t.displacement() {
             None => {
-                tendon.insert("tension".into(), Value::Float(t.tension));
+                tendon.insert("tension".into(), Value::Float(t.tension()));
             }
             // The file gives a displacement-controlled tendon no starting tension (the
             // parser sets 0: the solver estimates it), so only 0 is written exactly.
-            Some(_) if t.tension != 0.0 => {
+            Some(_) if t.tension() != 0.0 => {
                 return Err(cannot(&format!(
                     "tendon {} is displacement-controlled with a starting tension of {} N, which a robot file cannot hold (set its tension with `with_tensions` to make it tension-controlled)",
                     i + 1,
-                    t.tension
+                    t.tension()
                 )));
             }
             Some(q) => {
@@ -404,8 +404,7 @@ impl PyRobot {
         }
         let mut out = self.clone();
         for (t, &tau) in out.file.robot.tendons.iter_mut().zip(&tensions) {
-            t.tension = tau;
-            t.displacement = None;
+            t.set_tension(tau);
         }
         out.file.robot.validate().map_err(to_py)?;
         Ok(out)
@@ -427,14 +426,12 @@ impl PyRobot {
         }
         let mut out = self.clone();
         for (t, &q) in out.file.robot.tendons.iter_mut().zip(&displacements) {
-            match (q, t.displacement) {
+            match (q, t.displacement()) {
                 (Some(q), _) => {
-                    t.displacement = Some(q);
-                    t.tension = 0.0;
+                    t.set_displacement(q);
                 }
                 (None, Some(_)) => {
-                    t.displacement = None;
-                    t.tension = 0.0;
+                    t.set_tension(0.0);
                 }
                 (None, None) => {}
             }
@@ -477,7 +474,7 @@ impl PyRobot {
     /// the tension its solve starts from (0: the solver's estimate).
     #[getter]
     fn tensions<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        let t: Vec<f64> = self.file.robot.tendons.iter().map(|t| t.tension).collect();
+        let t: Vec<f64> = self.file.robot.tendons.iter().map(|t| t.tension()).collect();
         PyArray1::from_vec(py, t)
     }
 
@@ -485,7 +482,7 @@ impl PyRobot {
     /// tension-controlled ones: a list of k entries, file order.
     #[getter]
     fn displacements(&self) -> Vec<Option<f64>> {
-        self.file.robot.tendons.iter().map(|t| t.displacement).collect()
+        self.file.robot.tendons.iter().map(|t| t.displacement()).collect()
     }
 
     /// Axial stiffnesses E_t A_t (N) of the elastic tendons, None for the inextensible
@@ -538,8 +535,8 @@ impl PyRobot {
         let inputs: Vec<String> = r
             .tendons
             .iter()
-            .map(|t| match t.displacement {
-                None => format!("{} N", t.tension),
+            .map(|t| match t.displacement() {
+                None => format!("{} N", t.tension()),
                 Some(q) => format!("q={q} m"),
             })
             .collect();

@@ -83,7 +83,7 @@ pub fn trace(robot: &Robot, parameter: Parameter, from: f64, to: f64, options: &
         ));
     }
     let start = parameter.applied(robot, from)?;
-    if let Some(i) = start.tendons.iter().position(|t| t.displacement.is_some()) {
+    if let Some(i) = start.tendons.iter().position(|t| t.displacement().is_some()) {
         return Err(crate::error::invalid(
             format!("tendons[{i}].displacement"),
             format!(

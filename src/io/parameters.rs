@@ -7,7 +7,7 @@
 //! ```
 //! let table = tdcr::io::parameters::read("rows.csv", "tension.1,tip_force.z\n2.94,-0.1\n").unwrap();
 //! let robot = table.robot(&table.rows[0], &tdcr::cases::prototype()).unwrap();
-//! assert_eq!((robot.tendons[0].tension, robot.loads.tip_force.z), (2.94, -0.1));
+//! assert_eq!((robot.tendons[0].tension(), robot.loads.tip_force.z), (2.94, -0.1));
 //! ```
 
 use super::locate::Position;

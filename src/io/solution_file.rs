@@ -138,7 +138,7 @@ mod tests {
         }
         // A displacement-controlled tendon's solved tension comes back with the shape.
         let mut pulled = crate::cases::prototype();
-        pulled.tendons[0].displacement = Some(0.005);
+        pulled.tendons[0].set_displacement(0.005);
         let solution = crate::collocation::solve(&pulled, &Default::default()).unwrap();
         let back = read_solution(&crate::io::output::json(&pulled, &solution, None, None), &pulled).unwrap();
         // 1e-12 relative: 17 printed digits

@@ -56,13 +56,20 @@ pub enum Which {
     Past(f64),
 }
 
-/// The robot's equations with its tensions multiplied by `tension_factor` and its external
-/// loads by `load_factor` (1 and 1 is the robot as given; smaller values are used by load
-/// continuation).
-#[derive(Clone, Copy, Debug)]
+/// The robot's equations with its inputs: the tendon tensions, multiplied by
+/// `tension_factor`, the external loads, multiplied by `load_factor` (1 and 1 is the robot as
+/// given; smaller values are used by load continuation), and one input a trace replaces.
+/// The model owns the inputs a solve changes, so that a solver changes them here, in place,
+/// without cloning or changing the robot: the tensions of displacement-controlled tendons
+/// (Newton's unknowns), the factors, the traced parameter.
+#[derive(Clone, Debug)]
 pub struct Model<'a> {
-    /// The robot (validated).
+    /// The robot (validated): geometry, stiffness, routings, loads.
     pub robot: &'a Robot,
+    /// The tension tau_i (N) of every tendon, in the robot's order: the robot's
+    /// ([`crate::model::tendon::Tendon::tension`]: the input, or the starting tension of a
+    /// displacement-controlled tendon) until a solver sets the unknown tensions.
+    pub tensions: Vec<f64>,
     /// Multiplier on all tendon tensions, in [0, 1].
     pub tension_factor: f64,
     /// Multiplier on all external loads (distributed, point and tip), in [0, 1].
@@ -78,6 +85,7 @@ impl<'a> Model<'a> {
     pub fn new(robot: &'a Robot) -> Self {
         Model {
             robot,
+            tensions: robot.tendons.iter().map(|t| t.tension()).collect(),
             tension_factor: 1.0,
             load_factor: 1.0,
             parameter: None,
@@ -122,7 +130,7 @@ impl<'a> Model<'a> {
             };
             let tension = match self.parameter {
                 Some((Parameter::Tension(j), value)) if j == i => value,
-                _ => t.tension,
+                _ => self.tensions[i],
             };
             (take && tension > 0.0).then(|| (i, tension * self.tension_factor, t.routing.at(s, l)))
         })

@@ -19,13 +19,14 @@
 //! let mut robot = tdcr::cases::prototype();
 //! let p: Parameter = "tension.5".parse().unwrap();
 //! p.apply(&mut robot, 4.91).unwrap();
-//! assert_eq!(robot.tendons[4].tension, 4.91);
+//! assert_eq!(robot.tendons[4].tension(), 4.91);
 //! assert_eq!(p.to_string(), "tension.5");
 //! ```
 
 use super::loads::Field;
 use super::robot::Robot;
 use super::rod::Rod;
+use super::tendon::Actuation;
 use crate::error::{Result, invalid};
 use nalgebra::Vector3;
 use std::fmt;
@@ -167,7 +168,7 @@ impl Parameter {
     pub fn value(&self, robot: &Robot) -> Result<f64> {
         self.check(robot)?;
         Ok(match *self {
-            Parameter::Tension(i) => robot.tendons[i].tension,
+            Parameter::Tension(i) => robot.tendons[i].tension(),
             Parameter::TipForce(c) => robot.loads.tip_force[c],
             Parameter::TipMoment(c) => robot.loads.tip_moment[c],
             Parameter::BasePosition(c) => robot.base_position[c],
@@ -189,9 +190,7 @@ impl Parameter {
         self.check(robot)?;
         match *self {
             Parameter::Tension(i) => {
-                let t = &mut robot.tendons[i];
-                t.tension = value;
-                t.displacement = None;
+                robot.tendons[i].set_tension(value);
             }
             Parameter::TipForce(c) => robot.loads.tip_force[c] = value,
             Parameter::TipMoment(c) => robot.loads.tip_moment[c] = value,
@@ -260,8 +259,13 @@ fn with_component(mut v: Vector3<f64>, c: usize, value: f64) -> Vector3<f64> {
 /// Multiplies every tension, pull-in and external load of `robot` by `factor`.
 fn scale_loads(robot: &mut Robot, factor: f64) {
     for t in &mut robot.tendons {
-        t.tension *= factor;
-        t.displacement = t.displacement.map(|q| q * factor);
+        t.actuation = match t.actuation {
+            Actuation::Tension(tension) => Actuation::Tension(tension * factor),
+            Actuation::PullIn { displacement, start } => Actuation::PullIn {
+                displacement: displacement * factor,
+                start: start.map(|tau| tau * factor),
+            },
+        };
     }
     let loads = &mut robot.loads;
     let scale = |f: &Field| match f {
@@ -318,7 +322,7 @@ mod tests {
     #[test]
     fn apply_sets_the_field_and_value_reads_it() {
         let mut robot = crate::cases::case_s();
-        robot.tendons[1].displacement = Some(0.002);
+        robot.tendons[1].set_displacement(0.002);
         for text in [
             "tension.1",
             "tension.2",
@@ -333,10 +337,10 @@ mod tests {
             assert_eq!(p.value(&p.applied(&robot, value).unwrap()).unwrap(), value, "{p}");
         }
         let held = Parameter::Tension(1).applied(&robot, 1.5).unwrap();
-        assert_eq!((held.tendons[1].tension, held.tendons[1].displacement), (1.5, None));
+        assert_eq!((held.tendons[1].tension(), held.tendons[1].displacement()), (1.5, None));
         let half = Parameter::LoadScale.applied(&robot, 0.5).unwrap();
-        assert_eq!(half.tendons[0].tension, 0.5 * robot.tendons[0].tension);
-        assert_eq!(half.tendons[1].displacement, Some(0.001));
+        assert_eq!(half.tendons[0].tension(), 0.5 * robot.tendons[0].tension());
+        assert_eq!(half.tendons[1].displacement(), Some(0.001));
         assert_eq!(half.loads.tip_force, 0.5 * robot.loads.tip_force);
         let soft = Parameter::YoungsModulus.applied(&robot, 105e9).unwrap();
         let (a, b) = (soft.rod.section_at(0.0).section, robot.rod.section_at(0.0).section);
@@ -364,7 +368,7 @@ mod tests {
     fn model_and_robot_settings_agree_on_every_parameter() {
         let mut robot = crate::cases::case_s();
         robot.loads.distributed_force = Field::Varying(std::sync::Arc::new(|s| Vector3::new(0.1 * s, -0.2, -1.0 - s)));
-        robot.tendons[2].displacement = Some(0.001);
+        robot.tendons[2].set_displacement(0.001);
         let length = robot.length();
         let every = [
             Parameter::Tension(0),

@@ -208,7 +208,7 @@ impl Robot {
 
     /// Whether any tendon is displacement-controlled (its tension an unknown of the solve).
     pub fn has_displacement_inputs(&self) -> bool {
-        self.tendons.iter().any(|t| t.displacement.is_some())
+        self.tendons.iter().any(|t| t.displacement().is_some())
     }
 
     /// The robot with the tendon tensions `tensions` (N, one per tendon, as
@@ -221,15 +221,14 @@ impl Robot {
     /// # Examples
     /// ```
     /// let mut robot = tdcr::cases::case_s();
-    /// robot.tendons[0].displacement = Some(0.002);
+    /// robot.tendons[0].set_displacement(0.002);
     /// let held = robot.with_tensions(&[1.5, 0.0, 0.0, 0.0, 0.0]);
-    /// assert_eq!((held.tendons[0].tension, held.tendons[0].displacement), (1.5, None));
+    /// assert_eq!((held.tendons[0].tension(), held.tendons[0].displacement()), (1.5, None));
     /// ```
     pub fn with_tensions(&self, tensions: &[f64]) -> Robot {
         let mut robot = self.clone();
         for (t, &tau) in robot.tendons.iter_mut().zip(tensions) {
-            t.tension = tau;
-            t.displacement = None;
+            t.set_tension(tau);
         }
         robot
     }
@@ -252,7 +251,7 @@ impl Robot {
                 "give the length between the base and the actuator as a finite length >= 0 m",
             ));
         }
-        let Some(q) = t.displacement else {
+        let Some(q) = t.displacement() else {
             return Ok(());
         };
         if !q.is_finite() {
@@ -306,10 +305,10 @@ impl Robot {
 
     fn validate_tendon(&self, i: usize, t: &Tendon) -> Result<()> {
         let l = self.rod.length;
-        if !(t.tension.is_finite() && t.tension >= 0.0) {
+        if !(t.tension().is_finite() && t.tension() >= 0.0) {
             return Err(invalid(
                 format!("tendons[{i}].tension"),
-                format!("is {} N", Readable(t.tension)),
+                format!("is {} N", Readable(t.tension())),
                 "a string can only pull: give a finite tension >= 0",
             ));
         }
@@ -468,8 +467,7 @@ impl Robot {
     /// ```
     /// use tdcr::model::scales::Warning;
     /// let mut robot = tdcr::cases::case_s();
-    /// robot.tendons[0].displacement = Some(0.03);
-    /// robot.tendons[0].tension = 0.0;
+    /// robot.tendons[0].set_displacement(0.03);
     /// // Tension 3270 N on the displacement-controlled tendon, 2 N on a tension-controlled one.
     /// let warnings = robot.solved_tensions(&[3270.0, 2.0, 0.0, 0.0, 0.0]);
     /// assert!(matches!(warnings[..], [Warning::SolvedTension { tendon: 0, .. }]));
@@ -482,7 +480,7 @@ impl Robot {
             .zip(tensions)
             .enumerate()
             .filter_map(|(i, (t, &tension))| {
-                let displacement = t.displacement?;
+                let displacement = t.displacement()?;
                 let end = t.end(length);
                 let w = Warning::SolvedTension {
                     tendon: i,
@@ -507,7 +505,7 @@ impl Robot {
     /// use tdcr::model::scales::Warning;
     /// let mut robot = tdcr::cases::case_s();
     /// assert!(robot.plausibility().is_empty());
-    /// robot.tendons[0].tension = 2940.0; // 2.94 N typed in mN
+    /// robot.tendons[0].set_tension(2940.0); // 2.94 N typed in mN
     /// let warnings = robot.plausibility();
     /// assert!(matches!(warnings[0], Warning::TendonCurl { tendon: 0, .. }));
     /// assert!(warnings[0].to_string().contains("past the geometric limit EI/r^2 = 66 N"));
@@ -555,7 +553,7 @@ impl Robot {
             let end = t.end(length);
             let curl = Warning::TendonCurl {
                 tendon: i,
-                tension: t.tension,
+                tension: t.tension(),
                 offset: t.routing.max_offset(end, length),
                 bending_stiffness: self.weakest_bending(end),
             };

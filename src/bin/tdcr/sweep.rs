@@ -306,7 +306,7 @@ pub fn run(args: &SweepArgs) -> Result<(), Failure> {
         // A displacement-controlled tendon that went taut (or slack) since the last step
         // changes how fast the tip moves: an event of its own, not a jump off the branch.
         let taut: Vec<(usize, bool)> = (0..robot.tendons.len())
-            .filter(|&i| robot.tendons[i].displacement.is_some())
+            .filter(|&i| robot.tendons[i].displacement().is_some())
             .map(|i| (i, solution.tendons[i].tension > 0.0))
             .collect();
         let engaged: Vec<String> = match &previous_taut {
@@ -477,9 +477,9 @@ fn step_inputs(robot: &Robot) -> String {
         .iter()
         .take(SHOWN)
         .enumerate()
-        .map(|(i, t)| match t.displacement {
+        .map(|(i, t)| match t.displacement() {
             Some(q) => format!("tendon {} pull-in {} m", i + 1, tdcr::Readable(q)),
-            None => format!("tendon {} tension {} N", i + 1, tdcr::Readable(t.tension)),
+            None => format!("tendon {} tension {} N", i + 1, tdcr::Readable(t.tension())),
         })
         .collect();
     if robot.tendons.len() > SHOWN {
