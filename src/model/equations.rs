@@ -121,7 +121,8 @@ impl<'a> Model<'a> {
     /// (tension tau_i in N, routing point) for the selected tendons at s.
     pub fn tendons(&self, s: f64, which: Which) -> impl Iterator<Item = (usize, f64, RoutingPoint)> + '_ {
         let l = self.robot.length();
-        self.robot.tendons.iter().enumerate().filter_map(move |(i, t)| {
+        let tendons = self.robot.tendons.iter().zip(&self.tensions);
+        tendons.enumerate().filter_map(move |(i, (t, &own))| {
             let end = t.end(l);
             let take = match which {
                 Which::ActiveTo(e) => end >= e,
@@ -130,7 +131,7 @@ impl<'a> Model<'a> {
             };
             let tension = match self.parameter {
                 Some((Parameter::Tension(j), value)) if j == i => value,
-                _ => self.tensions[i],
+                _ => own,
             };
             (take && tension > 0.0).then(|| (i, tension * self.tension_factor, t.routing.at(s, l)))
         })
