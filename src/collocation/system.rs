@@ -58,11 +58,12 @@ impl<'a> System<'a> {
         self.refresh();
     }
 
-    /// Replaces one input of the model by `value` ([`Model::parameter`]; not the load
-    /// scale, which is [`System::set_factors`]) and recomputes the sites.
+    /// Sets one input of the model to `value` ([`Model::set`]) and recomputes the sites
+    /// when the external loads changed.
     pub fn set_parameter(&mut self, parameter: crate::model::parameter::Parameter, value: f64) {
-        self.model.parameter = Some((parameter, value));
-        self.refresh();
+        if self.model.set(parameter, value) {
+            self.refresh();
+        }
     }
 
     /// Recomputes the sites from the model.

@@ -74,9 +74,9 @@ pub struct Model<'a> {
     pub tension_factor: f64,
     /// Multiplier on all external loads (distributed, point and tip), in [0, 1].
     pub load_factor: f64,
-    /// One input replaced by a value, with the meaning [`Parameter::apply`] gives it (a
-    /// trace's parameter; [`Parameter::LoadScale`] is the two factors instead and
-    /// [`Parameter::YoungsModulus`] is not traced, so neither is set here).
+    /// One load or base input replaced by a value, with the meaning [`Parameter::apply`]
+    /// gives it (a trace's parameter, set by [`Model::set`]; a tension is set in
+    /// `tensions`, the load scale is the two factors).
     pub parameter: Option<(Parameter, f64)>,
 }
 
@@ -89,6 +89,29 @@ impl<'a> Model<'a> {
             tension_factor: 1.0,
             load_factor: 1.0,
             parameter: None,
+        }
+    }
+
+    /// Sets `parameter` to `value` on the model, with the meaning [`Parameter::apply`] gives
+    /// it on the robot: a tension in [`Model::tensions`], the load scale as both factors,
+    /// any other input as [`Model::parameter`] (`youngs_modulus` changes the rod's sections,
+    /// which only a new robot has: set it with [`Parameter::apply`]). Returns whether the
+    /// sites changed (external loads), which a system must then recompute.
+    pub fn set(&mut self, parameter: Parameter, value: f64) -> bool {
+        match parameter {
+            Parameter::Tension(i) => {
+                self.tensions[i] = value;
+                false
+            }
+            Parameter::LoadScale => {
+                self.tension_factor = value;
+                self.load_factor = value;
+                true
+            }
+            _ => {
+                self.parameter = Some((parameter, value));
+                true
+            }
         }
     }
 
@@ -129,10 +152,7 @@ impl<'a> Model<'a> {
                 Which::EndingAt(x) => end == x,
                 Which::Past(x) => end > x,
             };
-            let tension = match self.parameter {
-                Some((Parameter::Tension(j), value)) if j == i => value,
-                _ => own,
-            };
+            let tension = own;
             (take && tension > 0.0).then(|| (i, tension * self.tension_factor, t.routing.at(s, l)))
         })
     }

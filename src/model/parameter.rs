@@ -379,15 +379,14 @@ mod tests {
             Parameter::BasePosition(2),
             Parameter::DistributedForce(0),
             Parameter::DistributedForce(2),
+            Parameter::LoadScale,
         ];
         for p in every {
             let value = 0.37;
             let set = p.applied(&robot, value).unwrap();
             let on_robot = Model::new(&set);
-            let on_model = Model {
-                parameter: Some((p, value)),
-                ..Model::new(&robot)
-            };
+            let mut on_model = Model::new(&robot);
+            on_model.set(p, value);
             for s in [0.0, 0.3 * length, length] {
                 let (a, b) = (on_robot.site(s), on_model.site(s));
                 assert_eq!((a.f_e, a.l_e), (b.f_e, b.l_e), "{p} at s = {s}");
