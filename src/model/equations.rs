@@ -143,17 +143,16 @@ impl<'a> Model<'a> {
 
     /// (tension tau_i in N, routing point) for the selected tendons at s.
     pub fn tendons(&self, s: f64, which: Which) -> impl Iterator<Item = (usize, f64, RoutingPoint)> + '_ {
-        let l = self.robot.length();
+        let (l, factor) = (self.robot.length(), self.tension_factor);
         let tendons = self.robot.tendons.iter().zip(&self.tensions);
-        tendons.enumerate().filter_map(move |(i, (t, &own))| {
+        tendons.enumerate().filter_map(move |(i, (t, &tension))| {
             let end = t.end(l);
             let take = match which {
                 Which::ActiveTo(e) => end >= e,
                 Which::EndingAt(x) => end == x,
                 Which::Past(x) => end > x,
             };
-            let tension = own;
-            (take && tension > 0.0).then(|| (i, tension * self.tension_factor, t.routing.at(s, l)))
+            (take && tension > 0.0).then(|| (i, tension * factor, t.routing.at(s, l)))
         })
     }
 
