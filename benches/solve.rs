@@ -32,7 +32,7 @@ use tdcr::{cases, collocation, shooting};
 fn scaled(robot: &tdcr::Robot, factor: f64) -> tdcr::Robot {
     let mut r = robot.clone();
     for t in r.tendons.iter_mut() {
-        t.tension *= factor;
+        t.set_tension(t.tension() * factor);
     }
     r
 }
@@ -105,7 +105,10 @@ fn reference(c: &mut Criterion) {
 fn prototype_s(c: &mut Criterion) {
     let robot = cases::case_s();
     let mut previous = robot.clone();
-    previous.tendons[0].tension *= 0.99;
+    {
+        let t = &mut previous.tendons[0];
+        t.set_tension(t.tension() * 0.99);
+    }
     let mut group = c.benchmark_group("prototype_s");
     for intervals in [16, 32, 64, 128] {
         let options = collocation::Options {
@@ -139,7 +142,7 @@ fn newton_iteration(c: &mut Criterion) {
     let mut group = c.benchmark_group("newton_iteration");
     group.sample_size(10);
     for intervals in [64, 256, 1024, 4096, 10_000] {
-        let system = System::new(model, Mesh::uniform(&robot, intervals).unwrap());
+        let system = System::new(model.clone(), Mesh::uniform(&robot, intervals).unwrap());
         let mut ws = Workspace::new(&system, LinearSolver::Auto).unwrap();
         let start = rigid_estimate(&model, &system.mesh.nodes);
         // Tolerance 0 and one iteration: exactly one Newton step per call.
@@ -169,7 +172,7 @@ fn linear_solve(c: &mut Criterion) {
     let model = Model::new(&robot);
     let mut group = c.benchmark_group("linear_solve");
     for intervals in [48, 1024] {
-        let system = System::new(model, Mesh::uniform(&robot, intervals).unwrap());
+        let system = System::new(model.clone(), Mesh::uniform(&robot, intervals).unwrap());
         let x = rigid_estimate(&model, &system.mesh.nodes);
         let mut rhs = vec![0.0; system.unknowns()];
         let mut values = vec![0.0; tdcr::advanced::unknowns::nonzeros(&system.mesh)];
@@ -222,7 +225,7 @@ fn batch(c: &mut Criterion) {
         .map(|_| {
             let mut robot = cases::prototype();
             for t in robot.tendons.iter_mut().take(4) {
-                t.tension = 3.0 * next();
+                t.set_tension(3.0 * next());
             }
             robot
         })
@@ -243,8 +246,7 @@ fn displacement(c: &mut Criterion) {
         let options = collocation::Options::default();
         let solved = collocation::solve(&robot, &options).unwrap();
         let mut pulled = robot.clone();
-        pulled.tendons[tendon].displacement = Some(solved.tendons[tendon].displacement);
-        pulled.tendons[tendon].tension = 0.0;
+        pulled.tendons[tendon].set_displacement(solved.tendons[tendon].displacement);
         group.bench_function(BenchmarkId::new("tension", case), |b| {
             b.iter(|| black_box(collocation::solve(&robot, &options).unwrap()))
         });

@@ -80,7 +80,7 @@ fn tension_step(robot: &Robot, solution: &Solution, error: &Vector3<f64>) -> Res
         (Some(u), (k, _)) => u.column(k).into_owned(),
         (None, _) => DVector::zeros(4),
     };
-    let current = DVector::from_iterator(4, robot.tendons[..4].iter().map(|t| t.tension));
+    let current = DVector::from_iterator(4, robot.tendons[..4].iter().map(|t| t.tension()));
     let relax = &free * (free.dot(&(current - DVector::from_element(4, PRETENSION))) * -RELAXATION);
     Ok(tracking + relax)
 }
@@ -92,7 +92,7 @@ pub fn run() -> Result<Vec<Record>, tdcr::Error> {
     let mut robot = cases::prototype();
     // The helix stays slack; the four straight tendons steer from a common pre-tension.
     for t in robot.tendons[..4].iter_mut() {
-        t.tension = PRETENSION;
+        t.set_tension(PRETENSION);
     }
     let mut solver = collocation::Solver::new(collocation::Options::default());
     let mut solution = solver.solve(&robot)?;
@@ -100,7 +100,7 @@ pub fn run() -> Result<Vec<Record>, tdcr::Error> {
     // A goal the robot can reach: the tip under other tensions.
     let mut other = robot.clone();
     for (t, tension) in other.tendons[..4].iter_mut().zip([0.2, 2.5, 1.5, 0.4]) {
-        t.tension = tension;
+        t.set_tension(tension);
     }
     let goal: Vector3<f64> = collocation::solve(&other, &collocation::Options::default())?.tip_position();
     let reference =
@@ -111,7 +111,7 @@ pub fn run() -> Result<Vec<Record>, tdcr::Error> {
         let error = (reference(step) - tip).norm();
         let mut tensions = [0.0; 4];
         for (x, t) in tensions.iter_mut().zip(&robot.tendons) {
-            *x = t.tension;
+            *x = t.tension();
         }
         records.push(Record {
             step,
@@ -125,7 +125,7 @@ pub fn run() -> Result<Vec<Record>, tdcr::Error> {
         let dtau = tension_step(&robot, &solution, &(reference(step + 1) - tip))?;
         for (t, d) in robot.tendons[..4].iter_mut().zip(dtau.iter()) {
             // A string can only pull.
-            t.tension = (t.tension + d).max(0.0);
+            t.set_tension((t.tension() + d).max(0.0));
         }
         solution = solver.solve_from(&robot, &solution)?;
     }

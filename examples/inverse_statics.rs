@@ -14,8 +14,8 @@ fn main() -> tdcr::Result<()> {
     let options = InverseOptions::new(5.0);
 
     let mut pulled = cases::prototype();
-    pulled.tendons[1].tension = 1.5;
-    pulled.tendons[4].tension = 2.0;
+    pulled.tendons[1].set_tension(1.5);
+    pulled.tendons[4].set_tension(2.0);
     let goal = collocation::solve(&pulled, &options.solver)?.tip_position();
     println!("target tip: ({:.6}, {:.6}, {:.6}) m", goal.x, goal.y, goal.z);
     println!("made with tensions [0, 1.5, 0, 0, 2] N; starting from all slack\n");

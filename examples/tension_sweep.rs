@@ -12,7 +12,7 @@ fn main() -> Result<(), tdcr::Error> {
     println!("tension (N)  tip x (mm)  tip y (mm)  tip z (mm)  iterations  time (ms)");
     for step in 0..=12 {
         // Tendon 5 (the helix) from 0 to 6 N.
-        robot.tendons[4].tension = 0.5 * step as f64;
+        robot.tendons[4].set_tension(0.5 * step as f64);
         let solution = match &previous {
             Some(guess) => solver.solve_from(&robot, guess)?,
             None => solver.solve(&robot)?,
@@ -20,7 +20,7 @@ fn main() -> Result<(), tdcr::Error> {
         let tip = solution.tip_position() * 1e3;
         println!(
             "{:>11.2}  {:>10.2}  {:>10.2}  {:>10.2}  {:>10}  {:>9.3}",
-            robot.tendons[4].tension,
+            robot.tendons[4].tension(),
             tip.x,
             tip.y,
             tip.z,

@@ -10,9 +10,8 @@ use tdcr::{Error, Robot, Routing, Solution, Tendon, cases, collocation, shooting
 fn displaced(robot: &Robot, solution: &Solution) -> Robot {
     let mut out = robot.clone();
     for (t, state) in out.tendons.iter_mut().zip(&solution.tendons) {
-        if t.tension > 0.0 {
-            t.displacement = Some(state.displacement);
-            t.tension = 0.0;
+        if t.tension() > 0.0 {
+            t.set_displacement(state.displacement);
         }
     }
     out
@@ -48,9 +47,9 @@ fn round_trip(robot: &Robot) {
 /// A two-segment robot: tendon 1 ends at L/2, the helical tendon 5 at the tip.
 fn two_segment() -> Robot {
     let mut robot = cases::prototype();
-    robot.tendons[0].tension = 2.0;
+    robot.tendons[0].set_tension(2.0);
     robot.tendons[0].termination = Some(cases::LENGTH / 2.0);
-    robot.tendons[4].tension = 3.0;
+    robot.tendons[4].set_tension(3.0);
     robot.loads.tip_force = Vector3::new(0.0, 0.0, -0.098);
     robot
 }
@@ -171,9 +170,8 @@ fn bad_actuation_input_is_a_clear_error() {
 fn tip_sensitivity_to_pull_ins_matches_central_differences() {
     // Case H's helical tendon and tendon 1 both displacement-controlled.
     let mut robot = cases::case_h();
-    robot.tendons[0].displacement = Some(0.002);
-    robot.tendons[4].displacement = Some(0.015);
-    robot.tendons[4].tension = 0.0;
+    robot.tendons[0].set_displacement(0.002);
+    robot.tendons[4].set_displacement(0.015);
     let options = collocation::Options::fixed(64);
     let solution = collocation::solve(&robot, &options).unwrap();
     let sens = collocation::sensitivity::displacement_sensitivities(&robot, &solution).unwrap();
@@ -184,7 +182,8 @@ fn tip_sensitivity_to_pull_ins_matches_central_differences() {
     for (c, &i) in sens.tendons.iter().enumerate() {
         let solve = |dq: f64| {
             let mut r = robot.clone();
-            r.tendons[i].displacement = Some(r.tendons[i].displacement.unwrap() + dq);
+            let q = r.tendons[i].displacement().unwrap();
+            r.tendons[i].set_displacement(q + dq);
             collocation::solve_from(&r, &options, &solution).unwrap().tip_position()
         };
         let fd = (solve(h) - solve(-h)) / (2.0 * h);
@@ -204,10 +203,9 @@ fn tip_sensitivity_to_pull_ins_matches_central_differences() {
 #[test]
 fn tip_sensitivities_hold_the_pull_ins() {
     let mut robot = cases::case_h();
-    robot.tendons[0].displacement = Some(0.002);
-    robot.tendons[4].displacement = Some(0.015);
-    robot.tendons[4].tension = 0.0;
-    robot.tendons[1].tension = 0.5;
+    robot.tendons[0].set_displacement(0.002);
+    robot.tendons[4].set_displacement(0.015);
+    robot.tendons[1].set_tension(0.5);
     let options = collocation::Options::fixed(64);
     let solution = collocation::solve(&robot, &options).unwrap();
     let sens = tdcr::tip_sensitivities(&robot, &solution).unwrap();
@@ -231,7 +229,13 @@ fn tip_sensitivities_hold_the_pull_ins() {
         (fd - analytic).norm() <= 1e-6 * fd.norm(),
         "tip force z: {fd:?} vs {analytic:?}"
     );
-    let fd = (solve(&|r| r.tendons[1].tension += h) - solve(&|r| r.tendons[1].tension -= h)) / (2.0 * h);
+    let moved = |d: f64| {
+        move |r: &mut Robot| {
+            let t = &mut r.tendons[1];
+            t.set_tension(t.tension() + d)
+        }
+    };
+    let fd = (solve(&moved(h)) - solve(&moved(-h))) / (2.0 * h);
     let analytic = sens.tension.fixed_view::<3, 1>(0, 1).into_owned();
     assert!(
         (fd - analytic).norm() <= 1e-6 * fd.norm(),
@@ -300,8 +304,7 @@ fn collocation_and_shooting_agree_on_displacement_inputs() {
     // Case H with its helical tendon 5 displacement-controlled, the others by tension.
     let mut h = cases::case_h();
     let tensioned = collocation::solve(&h, &Default::default()).unwrap();
-    h.tendons[4].displacement = Some(tensioned.tendons[4].displacement);
-    h.tendons[4].tension = 0.0;
+    h.tendons[4].set_displacement(tensioned.tendons[4].displacement);
     both_solvers_agree(&h);
     // The antagonistic pair with the released tendon slack.
     let solved = both_solvers_agree(&pair(0.004, -0.008));

@@ -17,8 +17,10 @@ use tdcr::{Robot, cases, collocation};
 fn pulled(q: [Option<f64>; 4]) -> Robot {
     let mut robot = cases::prototype();
     for (t, q) in robot.tendons.iter_mut().zip(q) {
-        t.tension = 0.0;
-        t.displacement = q;
+        match q {
+            Some(q) => t.set_displacement(q),
+            None => t.set_tension(0.0),
+        }
     }
     robot
 }
@@ -64,7 +66,7 @@ fn a_grid_of_pull_ins_converges_cold_and_matches_the_tension_solve() {
             let tensions = solution.tensions();
             let mut by_tension = cases::prototype();
             for (t, &tau) in by_tension.tendons.iter_mut().zip(&tensions) {
-                t.tension = tau;
+                t.set_tension(tau);
             }
             let mesh = collocation::Options {
                 mesh: Some(solution.nodes.iter().map(|n| n.s).collect()),

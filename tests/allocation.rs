@@ -57,7 +57,7 @@ fn newton_loop_does_not_allocate_after_setup() {
 fn newton_solve_does_not_allocate(solver: LinearSolver) {
     for robot in [tdcr::cases::case_s(), tdcr::cases::case_h()] {
         let model = Model::new(&robot);
-        let system = System::new(model, Mesh::uniform(&robot, 64).unwrap());
+        let system = System::new(model.clone(), Mesh::uniform(&robot, 64).unwrap());
         let mut ws = Workspace::new(&system, solver).unwrap();
         let settings = Settings {
             tolerance: 1e-11,

@@ -198,3 +198,52 @@ fn failed_rows_keep_their_place_and_exit_3() {
     assert!(failed.iter().all(|l| l.contains("did not converge")), "{results}");
     assert!(text(&out.stderr).contains("rows did not solve"));
 }
+
+/// A `tension.1` column sets tendon 1's tension and makes it tension-controlled, also when
+/// the robot file drives it by a pull-in (issue 23: the column used to set only the
+/// starting guess of the displacement-controlled tendon's tension): each row's tip is the
+/// tip of `tdcr solve` on the file with that tension, and not the tip of the pull-in.
+#[test]
+fn a_tension_column_makes_a_displacement_controlled_tendon_tension_controlled() {
+    let dir = scratch("tension_column");
+    let pulled = tdcr::io::example().replacen("tension = 2.94 ", "displacement = 0.002 ", 1);
+    assert_ne!(pulled, tdcr::io::example(), "the example's first tendon is at 2.94 N");
+    std::fs::write(dir.join("pulled.toml"), pulled).unwrap();
+    std::fs::write(dir.join("cases.csv"), "tension.1\n1.0\n2.5\n").unwrap();
+    let out = run(&dir, &["batch", "cases.csv", "--robot", "pulled.toml"]);
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+    let tip = |args: &[&str]| -> Vec<f64> {
+        let out = run(&dir, args);
+        assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+        let json: serde_json::Value = serde_json::from_str(&text(&out.stdout)).unwrap();
+        (0..3).map(|k| json["tip"]["position"][k].as_f64().unwrap()).collect()
+    };
+    let held = tip(&["solve", "pulled.toml", "--format", "json"]);
+    let results = text(&out.stdout);
+    for (line, tension) in results.lines().skip(1).zip(["1", "2.5"]) {
+        let cells: Vec<&str> = line.split(',').collect();
+        assert_eq!(cells[2], "true", "{line}");
+        let batch: Vec<f64> = cells[4..7].iter().map(|c| c.parse().unwrap()).collect();
+        let solved = tip(&[
+            "solve",
+            "robot.toml",
+            "--format",
+            "json",
+            "--tension",
+            &format!("1={tension}"),
+        ]);
+        for k in 0..3 {
+            // 1e-8 m: both solves stop at the scaled residual 1e-11 from different starts,
+            // which leaves the tip about 1e-8 m from the exact discrete solution.
+            assert!(
+                (batch[k] - solved[k]).abs() < 1e-8,
+                "{tension} N: {batch:?} vs {solved:?}"
+            );
+        }
+        // The pull-in's tip is millimetres away: the column did change the actuation.
+        assert!(
+            (batch[2] - held[2]).abs() > 1e-4,
+            "{tension} N: {batch:?} vs the pull-in's {held:?}"
+        );
+    }
+}

@@ -47,9 +47,9 @@ fn two_segment_robot_agrees_with_shooting() {
     // Tendon 1 ends at L/2, the helical tendon 5 at L: a jump mid-way, with the corner
     // force of the helix where tendon 1 ends.
     let mut robot = cases::prototype();
-    robot.tendons[0].tension = 2.0;
+    robot.tendons[0].set_tension(2.0);
     robot.tendons[0].termination = Some(cases::LENGTH / 2.0);
-    robot.tendons[4].tension = 3.0;
+    robot.tendons[4].set_tension(3.0);
     robot.loads.tip_force = Vector3::new(0.0, 0.0, -0.098);
     for corners in [true, false] {
         robot.corner_forces = corners;

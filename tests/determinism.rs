@@ -6,7 +6,7 @@ fn robots() -> Vec<tdcr::Robot> {
     (0..24)
         .map(|k| {
             let mut robot = cases::prototype();
-            robot.tendons[k % 5].tension = 0.5 + 0.2 * k as f64;
+            robot.tendons[k % 5].set_tension(0.5 + 0.2 * k as f64);
             robot.loads.tip_force.z = -0.01 * (k % 3) as f64;
             robot
         })

@@ -117,9 +117,9 @@ fn the_default_resolves_a_ten_turn_coil_without_continuation() {
     robot.rod = Rod::solid_circle(1.0, cases::RADIUS, cases::YOUNGS_MODULUS, cases::POISSON_RATIO);
     robot.loads = Loads::none();
     for t in robot.tendons.iter_mut() {
-        t.tension = 0.0;
+        t.set_tension(0.0);
     }
-    robot.tendons[0].tension = 40.0;
+    robot.tendons[0].set_tension(40.0);
     let solution = collocation::solve(&robot, &Default::default()).unwrap();
     let report = &solution.report;
     eprintln!(

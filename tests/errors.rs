@@ -101,7 +101,7 @@ fn zero_explicit_stiffness_is_rejected() {
 fn bad_tension_is_rejected() {
     for tension in [f64::NAN, -1.0, f64::INFINITY] {
         let mut robot = good();
-        robot.tendons[1].tension = tension;
+        robot.tendons[1].set_tension(tension);
         assert_invalid(
             &robot,
             "tendons[1].tension",
@@ -380,7 +380,7 @@ fn an_interval_cap_names_a_finite_estimate() {
 #[test]
 fn extreme_values_print_in_scientific_notation() {
     let mut robot = good();
-    robot.tendons[1].tension = -1e300;
+    robot.tendons[1].set_tension(-1e300);
     assert_invalid(&robot, "tendons[1].tension", &["is -1e300 N"]);
     for (x, shown) in [
         (0.25, "0.25"),

@@ -1190,7 +1190,7 @@ fn check_big_file(n: usize) -> f64 {
     };
     let seconds = start.elapsed().as_secs_f64();
     assert_eq!((file.robot.tendons.len(), file.robot.loads.point.len()), (n, n));
-    assert_eq!(file.robot.tendons[n - 1].tension, 1.0);
+    assert_eq!(file.robot.tendons[n - 1].tension(), 1.0);
     let bad = big_file(n, n, -1.0);
     let line = bad.lines().count();
     let e = match parse(&bad) {

@@ -10,7 +10,7 @@ use tdcr::{cases, collocation, shooting};
 fn coil() -> tdcr::Robot {
     let mut robot = cases::prototype();
     robot.rod.length = 1.0;
-    robot.tendons[0].tension = 40.0;
+    robot.tendons[0].set_tension(40.0);
     robot
 }
 
@@ -67,7 +67,7 @@ fn twelve_turn_coil_converges_where_shooting_from_the_unloaded_rod_fails() {
 fn prototype_bent_past_500_degrees() {
     // 20 N on tendon 1 bends the prototype about 9 rad.
     let mut robot = cases::prototype();
-    robot.tendons[0].tension = 20.0;
+    robot.tendons[0].set_tension(20.0);
     let a = collocation::solve(&robot, &collocation::Options::fixed(128)).unwrap();
     let b = collocation::solve(&robot, &collocation::Options::fixed(256)).unwrap();
     let angle = a.nodes.iter().map(|n| n.u.norm()).fold(0.0, f64::max) * robot.length();
@@ -105,7 +105,7 @@ fn converges(robot: &tdcr::Robot) -> tdcr::Solution {
 fn prototype_without_gravity(tension: f64) -> tdcr::Robot {
     let mut robot = cases::prototype();
     robot.loads = tdcr::Loads::none();
-    robot.tendons[0].tension = tension;
+    robot.tendons[0].set_tension(tension);
     robot
 }
 
@@ -174,15 +174,15 @@ fn ten_helical_turns() {
 #[test]
 fn tendons_ending_a_micrometre_apart_and_next_to_the_base() {
     let mut robot = cases::prototype();
-    robot.tendons[0].tension = 2.0;
+    robot.tendons[0].set_tension(2.0);
     robot.tendons[0].termination = Some(0.1);
-    robot.tendons[1].tension = 2.0;
+    robot.tendons[1].set_tension(2.0);
     robot.tendons[1].termination = Some(0.1 + 1e-6);
     converges(&robot);
     let mut robot = cases::prototype();
-    robot.tendons[0].tension = 2.0;
+    robot.tendons[0].set_tension(2.0);
     robot.tendons[0].termination = Some(1e-4);
-    robot.tendons[4].tension = 3.0;
+    robot.tendons[4].set_tension(3.0);
     converges(&robot);
 }
 

@@ -30,7 +30,7 @@ fn forward(robot: &Robot) -> Solution {
 fn prototype_with(tensions: &[(usize, f64)]) -> Robot {
     let mut robot = cases::prototype();
     for &(i, t) in tensions {
-        robot.tendons[i].tension = t;
+        robot.tendons[i].set_tension(t);
     }
     robot
 }
@@ -118,7 +118,7 @@ fn recovers_unique_tensions() {
     let truth = [1.2, 2.1];
     let mut loaded = robot.clone();
     for (t, &v) in loaded.tendons.iter_mut().zip(&truth) {
-        t.tension = v;
+        t.set_tension(v);
     }
     let solution = forward(&loaded);
     let goal = solution.tip_position();
@@ -353,7 +353,7 @@ fn rejects_invalid_inputs() {
     assert_eq!(got, "robot.tendons", "{message}");
     // The robot is validated too: a negative tension on a held tendon names it.
     let mut bad = robot.clone();
-    bad.tendons[3].tension = -1.0;
+    bad.tendons[3].set_tension(-1.0);
     let (got, message) = invalid_field(&bad, &good, &options);
     assert_eq!(got, "tendons[3].tension", "{message}");
 }

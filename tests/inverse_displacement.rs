@@ -37,7 +37,7 @@ fn run(robot: &Robot, target: &Target, options: &InverseOptions, label: &str) ->
 fn prototype_pulled(pull_ins: &[(usize, f64)]) -> Robot {
     let mut robot = cases::prototype();
     for &(i, q) in pull_ins {
-        robot.tendons[i].displacement = Some(q);
+        robot.tendons[i].set_displacement(q);
     }
     robot
 }
@@ -97,8 +97,8 @@ fn reaches_a_two_actuator_target_with_all_five_free() {
     // Letting out allowed: at rest the rod sags and the upper tendons' paths lengthen.
     let options = InverseOptions::displacements(-STROKE, STROKE);
     let mut made = cases::prototype();
-    made.tendons[0].tension = 1.0;
-    made.tendons[3].tension = 2.5;
+    made.tendons[0].set_tension(1.0);
+    made.tendons[3].set_tension(2.5);
     let goal = forward(&made, &options).tip_position();
     let found = run(&cases::prototype(), &Target::position(goal), &options, "five free");
     assert!(found.reachable, "{}", found.explain());

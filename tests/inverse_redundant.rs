@@ -10,7 +10,7 @@ use tdcr::{cases, collocation};
 fn robot(tensions: [f64; 4]) -> tdcr::Robot {
     let mut robot = cases::prototype();
     for (t, x) in robot.tendons.iter_mut().zip(tensions) {
-        t.tension = x;
+        t.set_tension(x);
     }
     robot
 }
@@ -41,7 +41,7 @@ fn redundant_tendons_keep_the_starting_co_contraction() {
         let robot = robot([0.0; 4]);
         let mut at = robot.clone();
         for (t, &x) in at.tendons.iter_mut().zip(&solution.tensions) {
-            t.tension = x;
+            t.set_tension(x);
         }
         let j = tdcr::tip_sensitivities(&at, &solution.solution).unwrap().tension;
         let j = DMatrix::from_fn(3, 4, |r, c| j[(r, c)]);

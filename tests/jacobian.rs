@@ -10,7 +10,7 @@ use tdcr::advanced::unknowns::pattern;
 fn check(robot: &tdcr::Robot, intervals: usize) {
     let model = Model::new(robot);
     let mesh = Mesh::uniform(robot, intervals).unwrap();
-    let sys = System::new(model, mesh);
+    let sys = System::new(model.clone(), mesh);
     // A non-trivial state: the rigid estimate, moved off it by a smooth pseudo-random step.
     let x0 = rigid_estimate(&model, &sys.mesh.nodes);
     let n = sys.unknowns();
@@ -65,7 +65,7 @@ fn jacobian_matches_finite_differences_helix_tip_load() {
 #[test]
 fn jacobian_matches_finite_differences_two_segments() {
     let mut robot = tdcr::cases::case_h();
-    robot.tendons[1].tension = 1.5;
+    robot.tendons[1].set_tension(1.5);
     robot.tendons[1].termination = Some(0.121);
     robot.loads.point.push(tdcr::PointLoad {
         s: 0.06,

@@ -15,7 +15,7 @@ use tdcr::{PointLoad, cases};
 /// blocks are part of the matrix.
 fn two_segment() -> tdcr::Robot {
     let mut robot = cases::case_h();
-    robot.tendons[0].tension = 1.0;
+    robot.tendons[0].set_tension(1.0);
     robot.tendons[0].termination = Some(0.1);
     robot.loads.point.push(PointLoad {
         s: 0.17,
@@ -27,7 +27,7 @@ fn two_segment() -> tdcr::Robot {
 
 fn jacobian(robot: &tdcr::Robot, intervals: usize) -> (System<'_>, Vec<f64>, Vec<f64>) {
     let model = Model::new(robot);
-    let system = System::new(model, Mesh::uniform(robot, intervals).unwrap());
+    let system = System::new(model.clone(), Mesh::uniform(robot, intervals).unwrap());
     let x = rigid_estimate(&model, &system.mesh.nodes);
     let mut values = vec![0.0; pattern(&system.mesh).len()];
     let mut residual = vec![0.0; system.unknowns()];

@@ -72,9 +72,9 @@ fn tension_past_the_geometric_limit_is_the_named_cause() {
     robot.loads = tdcr::Loads::none();
     let ei = robot.rod.section_at(0.0).section.kbt[0];
     let limit = ei / cases::TENDON_OFFSET.powi(2);
-    robot.tendons[0].tension = 0.97 * limit;
+    robot.tendons[0].set_tension(0.97 * limit);
     assert!(robot.plausibility().is_empty());
-    robot.tendons[0].tension = 1.1 * limit;
+    robot.tendons[0].set_tension(1.1 * limit);
     let w = robot.plausibility();
     assert_eq!(w.len(), 1, "{w:?}");
     assert!(matches!(w[0], Warning::TendonCurl { tendon: 0, .. }));

@@ -125,7 +125,7 @@ fn check(robot: &Robot) -> Result<Option<Accuracy>, TestCaseError> {
         / robot
             .tendons
             .iter()
-            .map(|t| t.tension)
+            .map(|t| t.tension())
             .fold(robot.loads.tip_force.norm(), f64::max)
             .max(1e-12);
     prop_assert!(e.max() < 1e-4f64.max(floor), "imbalance {e:?}");

@@ -124,11 +124,14 @@ fn check_tip(name: &str, robot: &Robot) -> TipSensitivities {
     for (i, t) in robot.tendons.iter().enumerate() {
         // A slack tendon can only be pulled: one-sided differences, scaled by the tension
         // that bends the rod through about a radian, E I / (L r) (2.2 N).
-        let slack = t.tension == 0.0;
+        let slack = t.tension() == 0.0;
         let bend = ei / (length * t.routing.at(0.0, length).r.norm());
-        let h = FD_STEP * if slack { bend } else { t.tension };
+        let h = FD_STEP * if slack { bend } else { t.tension() };
         let ift = sens.tension.fixed_view::<6, 1>(0, i).into_owned();
-        c.column(&format!("tension {i}"), ift, h, slack, |r, d| r.tendons[i].tension += d);
+        c.column(&format!("tension {i}"), ift, h, slack, |r, d| {
+            let t = &mut r.tendons[i];
+            t.set_tension(t.tension() + d)
+        });
     }
     // Scales of the load's effect on the shape: E I / L^2 for forces, E I / L for moments.
     let (force, moment) = (ei / length.powi(2), ei / length);
@@ -187,7 +190,7 @@ fn check_tip(name: &str, robot: &Robot) -> TipSensitivities {
 /// Case H with tendon 2 at 1.5 N ending at mid-length: a breakpoint with jump conditions.
 fn two_segments() -> Robot {
     let mut robot = cases::case_h();
-    robot.tendons[1].tension = 1.5;
+    robot.tendons[1].set_tension(1.5);
     robot.tendons[1].termination = Some(0.5 * cases::LENGTH);
     robot
 }
@@ -221,11 +224,14 @@ fn check_backbone(robot: &Robot, tendon: usize) {
     let reference = solve(robot);
     let dp = backbone_tension_sensitivity(robot, &reference, tendon).unwrap();
     assert_eq!(dp.len(), reference.nodes.len());
-    let tau = robot.tendons[tendon].tension;
+    let tau = robot.tendons[tendon].tension();
     let h = FD_STEP * tau;
     let at = |d: f64| {
         let mut r = robot.clone();
-        r.tendons[tendon].tension += d;
+        {
+            let t = &mut r.tendons[tendon];
+            t.set_tension(t.tension() + d);
+        }
         collocation::solve_from(&r, &options(), &reference).unwrap()
     };
     let (plus, minus) = (at(h), at(-h));
@@ -341,7 +347,10 @@ fn errors_name_the_problem() {
     let mut sens = Sensitivity::new(&robot, &solution).unwrap();
     let (field, _) = invalid_field(sens.tip_force(3));
     assert_eq!(field, "axis");
-    let (field, _) = invalid_field(sens.derivative(0.0, Difference::Central, |r, d| r.tendons[0].tension += d));
+    let (field, _) = invalid_field(sens.derivative(0.0, Difference::Central, |r, d| {
+        let t = &mut r.tendons[0];
+        t.set_tension(t.tension() + d)
+    }));
     assert_eq!(field, "step");
     let (field, problem) = invalid_field(sens.derivative(1e-3, Difference::Central, |r, d| {
         r.tendons[0].termination = Some(0.1 + d)

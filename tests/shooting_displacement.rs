@@ -63,7 +63,7 @@ fn agree(robot: &Robot, what: &str) -> (Solution, Solution, f64) {
 /// The `tdcr example` robot (case S) with tendon 1's tension replaced by `tension`.
 fn example(tension: f64) -> Robot {
     let mut robot = cases::case_s();
-    robot.tendons[0].tension = tension;
+    robot.tendons[0].set_tension(tension);
     robot
 }
 
@@ -72,7 +72,7 @@ fn a_small_pull_in_that_leaves_the_tendon_slack() {
     // Tendon 1 pulled by 2 mm: the sag under the self weight already shortens its path by
     // more, so it is slack (the active set drove its tension to 0 and stalled, singular).
     let mut robot = example(0.0);
-    robot.tendons[0].displacement = Some(0.002);
+    robot.tendons[0].set_displacement(0.002);
     let (c, s, gap) = agree(&robot, "tendon 1 at 2 mm");
     assert_eq!(s.tendons[0].tension, 0.0);
     // 5e-5 m: collocation reports about 0.056 mm of slack
@@ -90,7 +90,7 @@ fn a_neutral_tendon_held_at_its_length() {
     // Tendon 4 lies on the neutral axis of the sag: at q = 0 it is just taut at about 0 N,
     // both sides of the complementarity at once (the old Newton oscillated between them).
     let mut robot = example(0.0);
-    robot.tendons[3].displacement = Some(0.0);
+    robot.tendons[3].set_displacement(0.0);
     let (c, s, gap) = agree(&robot, "tendon 4 at 0");
     eprintln!(
         "tendon 4: tip gap {gap:e} m, {} / {} N",
@@ -102,7 +102,7 @@ fn a_neutral_tendon_held_at_its_length() {
 fn a_tendon_held_at_its_length_carries_the_weight() {
     // Tendon 3 on the lengthened side of the sag, held at q = 0: it carries the weight.
     let mut robot = example(0.0);
-    robot.tendons[2].displacement = Some(0.0);
+    robot.tendons[2].set_displacement(0.0);
     let (_, s, gap) = agree(&robot, "tendon 3 at 0");
     // 1e-5 N: collocation's 0.57116 N, to the 5 decimals `tdcr solve` prints
     assert!(

@@ -74,7 +74,7 @@ fn straight_tendons_are_stable_up_to_the_geometric_limit() {
     let ei = robot.rod.section_at(0.0).section.kbt[0];
     let limit = ei / cases::TENDON_OFFSET.powi(2);
     for fraction in [0.1, 0.5, 0.9] {
-        robot.tendons[0].tension = fraction * limit;
+        robot.tendons[0].set_tension(fraction * limit);
         let solution = collocation::solve(&robot, &Default::default()).unwrap();
         assert!(
             solution.report.stability.is_stable(),

@@ -121,7 +121,7 @@ fn a_monotone_branch_ends_where_the_default_solve_lands() {
 #[test]
 fn a_displacement_controlled_tendon_is_refused_unless_its_tension_is_traced() {
     let mut robot = tdcr::cases::prototype();
-    robot.tendons[0].displacement = Some(0.003);
+    robot.tendons[0].set_displacement(0.003);
     let options = tdcr::collocation::Options::default();
     match tdcr::collocation::trace(&robot, tdcr::Parameter::LoadScale, 0.0, 1.0, &options) {
         Err(tdcr::Error::InvalidInput { field, hint, .. }) => {
@@ -133,4 +133,48 @@ fn a_displacement_controlled_tendon_is_refused_unless_its_tension_is_traced() {
     }
     let traced = tdcr::collocation::trace(&robot, tdcr::Parameter::Tension(0), 0.0, 1.0, &options).unwrap();
     assert!(traced.stopped.is_none() && traced.points.len() > 2);
+}
+
+/// A trace and a sweep mean the same by every parameter (issue 23): a trace sets its
+/// parameter on the model, a sweep (and a batch row, and Python) on the robot
+/// (`Parameter::apply`), and the trace's last point is the solve of the robot with the
+/// parameter set to the last value. The robot's distributed force varies along the rod, so
+/// that `distributed_force.x` must keep z's profile and `distributed_force.z` must replace
+/// it at every s.
+#[test]
+fn trace_and_sweep_agree_on_every_parameter() {
+    let mut robot = cases::case_s();
+    let w = robot.loads.distributed_force.at(0.0).z;
+    let length = robot.length();
+    robot.loads.distributed_force = tdcr::model::loads::Field::Varying(std::sync::Arc::new(move |s| {
+        Vector3::new(0.0, 0.0, w * (1.0 + s / length))
+    }));
+    let tension = robot.tendons[0].tension();
+    for (p, from, to) in [
+        (Parameter::Tension(0), tension, tension + 0.5),
+        (Parameter::TipForce(0), 0.0, 0.05),
+        (Parameter::TipMoment(1), 0.0, 0.005),
+        (Parameter::BasePosition(2), 0.0, 0.01),
+        (Parameter::DistributedForce(0), 0.0, 0.2),
+        (Parameter::DistributedForce(2), w, 2.0 * w),
+        (Parameter::LoadScale, 0.5, 1.0),
+    ] {
+        let t = trace(&robot, p, from, to, &Default::default()).unwrap();
+        assert!(t.stopped.is_none(), "{p}: {:?}", t.stopped);
+        let solved = collocation::solve(&p.applied(&robot, to).unwrap(), &Default::default()).unwrap();
+        let last = t.points.last().unwrap();
+        // 1e-6 m: the trace's mesh and the solve's differ, each meeting the default error
+        // tolerance (as in a_monotone_branch_ends_where_the_default_solve_lands); a
+        // different meaning of the parameter moves the tip by millimetres.
+        let gap = (last.tip_position - solved.tip_position()).norm();
+        assert!(gap < 1e-6, "{p}: the trace ends {gap} m from the solve");
+        if p == Parameter::DistributedForce(0) {
+            // The meaning a sweep used to give it (the whole force made uniform at its value
+            // at s = 0) is far off: the test tells the two apart.
+            let mut flat = robot.clone();
+            flat.loads.distributed_force = tdcr::model::loads::Field::Constant(Vector3::new(to, 0.0, w));
+            let other = collocation::solve(&flat, &Default::default()).unwrap();
+            assert!((other.tip_position() - solved.tip_position()).norm() > 1e-4);
+        }
+    }
 }

@@ -7,7 +7,7 @@ use crate::options::type_name;
 use numpy::{PyArray1, PyArray2, PyReadonlyArray1};
 use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyDict, PyFloat, PyInt, PyList, PyString, PyTuple};
-use tdcr::io::parameters::Parameter;
+use tdcr::Parameter;
 use tdcr::io::{RobotFile, SolverSettings};
 use toml::{Table, Value};
 
@@ -251,8 +251,7 @@ impl PyRobot {
         }
         let mut out = self.clone();
         for (t, &tau) in out.file.robot.tendons.iter_mut().zip(&tensions) {
-            t.tension = tau;
-            t.displacement = None;
+            t.set_tension(tau);
         }
         out.file.robot.validate().map_err(to_py)?;
         Ok(out)
@@ -274,14 +273,12 @@ impl PyRobot {
         }
         let mut out = self.clone();
         for (t, &q) in out.file.robot.tendons.iter_mut().zip(&displacements) {
-            match (q, t.displacement) {
+            match (q, t.displacement()) {
                 (Some(q), _) => {
-                    t.displacement = Some(q);
-                    t.tension = 0.0;
+                    t.set_displacement(q);
                 }
                 (None, Some(_)) => {
-                    t.displacement = None;
-                    t.tension = 0.0;
+                    t.set_tension(0.0);
                 }
                 (None, None) => {}
             }
@@ -291,8 +288,9 @@ impl PyRobot {
     }
 
     /// A copy with named parameters set, e.g. `{"tension.1": 3.0, "tip_force.z": -0.1}`
-    /// (the names of `tdcr batch` headers: `tension.I`, `tip_force.x|y|z`,
-    /// `tip_moment.x|y|z`, `base_position.x|y|z`, `youngs_modulus`).
+    /// (the names of `tdcr batch` headers and of sweeps: `tension.I`, which makes tendon I
+    /// tension-controlled, `tip_force.x|y|z`, `tip_moment.x|y|z`, `base_position.x|y|z`,
+    /// `distributed_force.x|y|z`, `load_scale`, `youngs_modulus`; docs/parameters.md).
     fn with_parameters(&self, parameters: &Bound<'_, PyDict>) -> PyResult<Self> {
         let mut out = self.clone();
         for (key, value) in parameters.iter() {
@@ -323,7 +321,7 @@ impl PyRobot {
     /// the tension its solve starts from (0: the solver's estimate).
     #[getter]
     fn tensions<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        let t: Vec<f64> = self.file.robot.tendons.iter().map(|t| t.tension).collect();
+        let t: Vec<f64> = self.file.robot.tendons.iter().map(|t| t.tension()).collect();
         PyArray1::from_vec(py, t)
     }
 
@@ -331,7 +329,7 @@ impl PyRobot {
     /// tension-controlled ones: a list of k entries, file order.
     #[getter]
     fn displacements(&self) -> Vec<Option<f64>> {
-        self.file.robot.tendons.iter().map(|t| t.displacement).collect()
+        self.file.robot.tendons.iter().map(|t| t.displacement()).collect()
     }
 
     /// Axial stiffnesses E_t A_t (N) of the elastic tendons, None for the inextensible
@@ -384,8 +382,8 @@ impl PyRobot {
         let inputs: Vec<String> = r
             .tendons
             .iter()
-            .map(|t| match t.displacement {
-                None => format!("{} N", t.tension),
+            .map(|t| match t.displacement() {
+                None => format!("{} N", t.tension()),
                 Some(q) => format!("q={q} m"),
             })
             .collect();

@@ -73,3 +73,22 @@ def test_failures_are_raised_or_returned_with_their_index():
         tdcr.solve_batch(robot, {"mass": [1.0]})
     with pytest.raises(tdcr.InvalidInput, match="has 1 values but another has 2"):
         tdcr.solve_batch(robot, {"tension.1": [1.0, 2.0], "tension.2": [1.0]})
+
+
+def test_tension_parameters_make_a_displacement_controlled_tendon_tension_controlled():
+    # Issue 23: `tension.1` used to set only the starting guess of a displacement-controlled
+    # tendon's tension; now it means what Robot.with_tensions and the CLI's --tension mean.
+    robot = tdcr.cases.prototype()
+    pulled = robot.with_displacements([0.002, None, None, None, None])
+    tensions = np.array([1.0, 2.5])
+    reference = [tdcr.solve(robot.with_tensions([t, 0, 0, 0, 0])) for t in tensions]
+    for name, solutions in [
+        ("solve_batch", tdcr.solve_batch(pulled, {"tension.1": tensions})),
+        ("sweep", tdcr.sweep(pulled, {"tension.1": tensions})),
+        ("with_parameters", [tdcr.solve(pulled.with_parameters({"tension.1": t})) for t in tensions]),
+    ]:
+        for s, r in zip(solutions, reference):
+            # 1e-8 m: warm and cold solves both stop at the scaled residual 1e-11, which
+            # leaves the tip about 1e-8 m from the exact discrete solution.
+            assert np.abs(s.tip_position - r.tip_position).max() < 1e-8, name
+    assert pulled.with_parameters({"tension.1": 1.0}).displacements == [None] * 5

@@ -45,7 +45,7 @@ pub fn constant_curvature(robot: &Robot, samples_per_segment: usize) -> Result<V
                 })
                 .sum::<Vector3<f64>>()
                 / OFFSET_SAMPLES as f64;
-            moment += Vector3::z().cross(&mean) * t.tension;
+            moment += Vector3::z().cross(&mean) * t.tension();
         }
         let u = reference.u_star + moment.component_div(&section.kbt);
         for k in 0..=samples {

@@ -138,13 +138,13 @@ pub fn imbalance(robot: &Robot, solution: &Solution) -> Equilibrium {
 
     // Actuators pull every tensioned tendon back along its path at the base.
     let mut tension_sum = 0.0;
-    for tendon in robot.tendons.iter().filter(|t| t.tension > 0.0) {
+    for tendon in robot.tendons.iter().filter(|t| t.tension() > 0.0) {
         let rp = tendon.routing.at(base.s, length);
         let tangent = R0 * (base.u.cross(&rp.r) + rp.r_s + base.v);
-        let pull = tangent * (tendon.tension / tangent.norm());
+        let pull = tangent * (tendon.tension() / tangent.norm());
         force -= pull;
         moment -= (R0 * rp.r).cross(&pull);
-        tension_sum += tendon.tension;
+        tension_sum += tendon.tension();
     }
 
     let force_scale = [loads.tip_force.norm(), tension_sum, f_abs, point_force_sum]

@@ -159,7 +159,7 @@ impl Sweep {
         // A displacement-controlled tendon that went taut (or slack) since the last step
         // changes how fast the tip moves: an event of its own, not a jump off the branch.
         let taut: Vec<(usize, bool)> = (0..robot.tendons.len())
-            .filter(|&i| robot.tendons[i].displacement.is_some())
+            .filter(|&i| robot.tendons[i].displacement().is_some())
             .map(|i| (i, solution.tendons[i].tension > 0.0))
             .collect();
         let changes: Vec<Engagement> = match &self.taut {
@@ -236,13 +236,12 @@ mod tests {
     #[test]
     fn a_tendon_going_taut_is_an_event_not_a_jump() {
         let mut base = crate::cases::case_s();
-        base.tendons[0].displacement = Some(0.0);
-        base.tendons[0].tension = 0.0;
+        base.tendons[0].set_displacement(0.0);
         let robots: Vec<Robot> = [0.0, 0.002, 0.004, 0.006]
             .iter()
             .map(|&q| {
                 let mut r = base.clone();
-                r.tendons[0].displacement = Some(q);
+                r.tendons[0].set_displacement(q);
                 r
             })
             .collect();
@@ -270,7 +269,7 @@ mod tests {
             .iter()
             .map(|&t| {
                 let mut r = base.clone();
-                r.tendons[0].tension = t;
+                r.tendons[0].set_tension(t);
                 r
             })
             .collect();

@@ -82,7 +82,7 @@ impl Experiment {
     pub fn robot(&self) -> Robot {
         let mut robot = prototype();
         if let Some(i) = self.tendon {
-            robot.tendons[i - 1].tension = self.tension;
+            robot.tendons[i - 1].set_tension(self.tension);
         }
         robot.loads.tip_force = Vector3::new(0.0, 0.0, -self.tip_load);
         robot

@@ -48,11 +48,12 @@
 
 use super::estimate;
 use super::newton::{self, Border, Linearization, Point, Settings, Workspace};
-use super::system::{Frame, System};
+use super::system::System;
 use super::unknowns::{self, NODE, U, V};
 use super::{
     Cache, Cached, Options, cold_start, initial_mesh, interpolate, record_estimate, refine, resolves, segment_ends,
 };
+use crate::dense::solve_dense;
 use crate::error;
 use crate::mesh::guess::{self, InitialGuess};
 use crate::mesh::{Mesh, nodes};
@@ -103,7 +104,7 @@ impl Constraint {
         let reference_length = length::reference_length(robot, tendon);
         Constraint {
             tendon,
-            displacement: t.displacement.unwrap_or(0.0),
+            displacement: t.displacement().unwrap_or(0.0),
             reference_length,
             compliance: t.compliance(reference_length),
             tension_scale: robot.tension_scale(tendon),
@@ -167,30 +168,20 @@ impl Constraint {
     }
 }
 
-/// Evaluates `f` on the system of `robot` (its current tensions) on `frame`.
-fn on<R>(robot: &Robot, frame: &mut Frame, f: impl FnOnce(&System) -> R) -> R {
-    let system = System::attach(Model::new(robot), std::mem::replace(frame, Frame::empty()));
-    let r = f(&system);
-    *frame = system.detach();
-    r
-}
-
-/// Sets the tensions of the constrained tendons of `robot` to `tau`.
-fn set_tensions(robot: &mut Robot, constraints: &[Constraint], tau: &[f64]) {
+/// Sets the tensions of the constrained tendons in `model` to `tau`.
+fn load(model: &mut Model, constraints: &[Constraint], tau: &[f64]) {
     for (c, &t) in constraints.iter().zip(tau) {
-        robot.tendons[c.tendon].tension = t;
+        model.tensions[c.tendon] = t;
     }
 }
 
 /// The border of the displacement-controlled tendons on one mesh, built once per mesh: their
 /// tensions tau and complementarity rows psi (at the current and the trial point), the
-/// columns X = J^-1 dF/dtau of the last Jacobian, and the robot and frame whose system
-/// Newton evaluates at those tensions.
+/// columns X = J^-1 dF/dtau of the last Jacobian, and the collocation system, whose model
+/// holds the tensions of the last evaluation.
 struct Tensions<'r> {
-    /// The robot, its displacement-controlled tendons at the tensions of the last evaluation.
-    robot: &'r mut Robot,
-    /// The mesh and sites of the collocation system.
-    frame: Frame,
+    /// The collocation system; its model's tensions are set before every evaluation.
+    system: System<'r>,
     constraints: Vec<Constraint>,
     /// Backbone length L (m).
     length: f64,
@@ -213,23 +204,23 @@ struct Tensions<'r> {
 }
 
 impl<'r> Tensions<'r> {
-    /// The border of `robot`'s displacement-controlled tendons on `frame`'s mesh, starting
-    /// from their tensions in `robot`.
-    fn new(robot: &'r mut Robot, frame: Frame, mesh: &Mesh) -> Self {
+    /// The border of the robot's displacement-controlled tendons on `system`'s mesh,
+    /// starting from their tensions in its model.
+    fn new(system: System<'r>) -> Self {
+        let robot = system.model.robot;
         let constraints: Vec<Constraint> = robot
             .tendons
             .iter()
             .enumerate()
-            .filter(|(_, t)| t.displacement.is_some())
-            .map(|(i, _)| Constraint::new(robot, i, mesh))
+            .filter(|(_, t)| t.displacement().is_some())
+            .map(|(i, _)| Constraint::new(robot, i, &system.mesh))
             .collect();
-        let n = unknowns::unknowns(mesh.nodes.len());
+        let n = unknowns::unknowns(system.mesh.nodes.len());
         let k = constraints.len();
-        let tau: Vec<f64> = constraints.iter().map(|c| robot.tendons[c.tendon].tension).collect();
+        let tau: Vec<f64> = constraints.iter().map(|c| system.model.tensions[c.tendon]).collect();
         Tensions {
             length: robot.length(),
-            robot,
-            frame,
+            system,
             constraints,
             probe: vec![0.0; n],
             columns: vec![vec![0.0; n]; k],
@@ -244,11 +235,11 @@ impl<'r> Tensions<'r> {
         }
     }
 
-    /// Sets the robot's tensions to the current ones and returns the frame. After
+    /// Sets the model's tensions to the current ones and returns the system. After
     /// convergence to the scaled residual `tolerance` (`converged`, at the states `x`), a
     /// tendon on the slack side, or on the taut side within `tolerance` of 0 N in tau / T
     /// (just taut), gets exactly 0 N: its tension is within the solve's tolerance of 0.
-    fn finish(mut self, converged: Option<f64>, x: &[State]) -> Frame {
+    fn finish(mut self, converged: Option<f64>, x: &[State]) -> System<'r> {
         if let Some(tolerance) = converged {
             for (c, t) in self.constraints.iter().zip(self.tau.iter_mut()) {
                 let taut = c.taut(c.gap(x, *t), *t, self.length) && *t > tolerance * c.tension_scale;
@@ -257,8 +248,8 @@ impl<'r> Tensions<'r> {
                 }
             }
         }
-        set_tensions(self.robot, &self.constraints, &self.tau);
-        self.frame
+        load(&mut self.system.model, &self.constraints, &self.tau);
+        self.system
     }
 }
 
@@ -268,8 +259,8 @@ impl Border for Tensions<'_> {
             Point::Current => &self.tau,
             Point::Trial => &self.trial_tau,
         };
-        set_tensions(self.robot, &self.constraints, tau);
-        on(self.robot, &mut self.frame, f)
+        load(&mut self.system.model, &self.constraints, tau);
+        f(&self.system)
     }
 
     /// psi_j (Fischer-Burmeister, [`Constraint::complementarity`]).
@@ -293,15 +284,13 @@ impl Border for Tensions<'_> {
     /// X_j = J^-1 dF/dtau_j by a forward difference in tau_j at fixed x (F is linear in
     /// the tensions up to the curvature of the tendon paths' dependence on x, which x fixes).
     fn factored(&mut self, x: &[State], at: &mut Linearization, report: &mut SolveReport) -> Result<(), Termination> {
-        set_tensions(self.robot, &self.constraints, &self.tau);
+        load(&mut self.system.model, &self.constraints, &self.tau);
         for (j, c) in self.constraints.iter().enumerate() {
             let tau = self.tau[j];
             let h = TENSION_STEP * tau.max(c.tension_scale);
-            self.robot.tendons[c.tendon].tension = tau + h;
-            let ok = on(self.robot, &mut self.frame, |s| {
-                newton::residual(s, x, &mut self.probe, report)
-            });
-            self.robot.tendons[c.tendon].tension = tau;
+            self.system.model.tensions[c.tendon] = tau + h;
+            let ok = newton::residual(&self.system, x, &mut self.probe, report);
+            self.system.model.tensions[c.tendon] = tau;
             if !ok {
                 return Err(Termination::NonFinite);
             }
@@ -369,40 +358,6 @@ impl Border for Tensions<'_> {
     }
 }
 
-/// Gaussian elimination with partial pivoting on the row-major `n x n` matrix `a`, solving
-/// in place into `b`. False for a zero pivot or a non-finite result.
-fn solve_dense(a: &mut [f64], b: &mut [f64], n: usize) -> bool {
-    for col in 0..n {
-        let Some(pivot) = (col..n).max_by(|&i, &j| a[i * n + col].abs().total_cmp(&a[j * n + col].abs())) else {
-            return false;
-        };
-        if a[pivot * n + col] == 0.0 || !a[pivot * n + col].is_finite() {
-            return false;
-        }
-        if pivot != col {
-            for c in 0..n {
-                a.swap(pivot * n + c, col * n + c);
-            }
-            b.swap(pivot, col);
-        }
-        for row in col + 1..n {
-            let factor = a[row * n + col] / a[col * n + col];
-            for c in col..n {
-                a[row * n + c] -= factor * a[col * n + c];
-            }
-            b[row] -= factor * b[col];
-        }
-    }
-    for row in (0..n).rev() {
-        let mut sum = b[row];
-        for c in row + 1..n {
-            sum -= a[row * n + c] * b[c];
-        }
-        b[row] = sum / a[row * n + row];
-    }
-    b.iter().all(|v| v.is_finite())
-}
-
 /// Solves a robot with displacement-controlled tendons (validated, with `options`
 /// validated): Newton bordered by the tensions ([`Tensions`]) on each mesh of the
 /// error-controlled sequence that a tension solve would take, from the warm start's tensions, else the given ones, else the
@@ -453,17 +408,15 @@ pub(super) fn solve(
             Some(c) if c.mesh == mesh && c.solver == options.linear_solver => c.workspace,
             _ => Workspace::new(&system, options.linear_solver)?,
         };
-        let frame = system.detach();
-        let mut tensions = Tensions::new(&mut work, frame, &mesh);
+        let mut tensions = Tensions::new(system);
         let (termination, worst) = newton::run_bordered(&mut tensions, &mut ws, &mut x, &settings, &mut report);
         let k = tensions.constraints.len();
         let converged = (termination == Termination::Converged).then_some(settings.tolerance);
-        let frame = tensions.finish(converged, &x);
+        let system = tensions.finish(converged, &x);
         report.termination = termination;
         report.intervals = mesh.intervals();
         report.unknowns = unknowns::unknowns(mesh.nodes.len()) + k;
         report.nonzeros = unknowns::nonzeros(&mesh);
-        let system = System::attach(Model::new(&work), frame);
         if termination != Termination::Converged {
             report.timings.total = start.elapsed();
             let error = Error::NotConverged {
@@ -495,6 +448,11 @@ pub(super) fn solve(
             return solution;
         };
         let guess = nodes::solution(&system.model, &x, &ends, rates, report.clone())?;
+        // The next mesh's Newton starts from these tensions.
+        let solved = system.model.tensions.clone();
+        for (t, &tau) in work.tendons.iter_mut().zip(&solved) {
+            t.hold_tension(tau);
+        }
         x = interpolate(&guess, &fine);
         store(cache, mesh, options, ws);
         mesh = fine;
@@ -521,24 +479,24 @@ fn store(cache: &mut Cache, mesh: Mesh, options: &Options, workspace: Workspace)
 /// initial guess, [`correct_on_guess`]).
 pub(crate) fn starting_tensions(robot: &mut Robot, warm: Option<&Solution>) -> bool {
     let displaced: Vec<usize> = (0..robot.tendons.len())
-        .filter(|&i| robot.tendons[i].displacement.is_some())
+        .filter(|&i| robot.tendons[i].displacement().is_some())
         .collect();
     if let Some(w) = warm
         && w.tendons.len() == robot.tendons.len()
     {
         for &i in &displaced {
-            robot.tendons[i].tension = w.tendons[i].tension;
+            robot.tendons[i].hold_tension(w.tendons[i].tension);
         }
         return false;
     }
-    if displaced.iter().all(|&i| robot.tendons[i].tension > 0.0) {
+    if displaced.iter().all(|&i| robot.tendons[i].tension() > 0.0) {
         return false;
     }
     let n = robot.tendons.len();
     let compliance = length::pull_in_compliance(robot);
     let mut active: Vec<usize> = displaced.clone();
     for &i in &displaced {
-        robot.tendons[i].tension = 0.0;
+        robot.tendons[i].hold_tension(0.0);
     }
     while !active.is_empty() {
         let mut a = pull_in_matrix(robot, &compliance, &active);
@@ -546,9 +504,9 @@ pub(crate) fn starting_tensions(robot: &mut Robot, warm: Option<&Solution>) -> b
             .iter()
             .map(|&j| {
                 let inactive = (0..n).filter(|m| !active.contains(m));
-                robot.tendons[j].displacement.unwrap_or(0.0)
+                robot.tendons[j].displacement().unwrap_or(0.0)
                     - inactive
-                        .map(|m| compliance[j * n + m] * robot.tendons[m].tension)
+                        .map(|m| compliance[j * n + m] * robot.tendons[m].tension())
                         .sum::<f64>()
             })
             .collect();
@@ -563,14 +521,14 @@ pub(crate) fn starting_tensions(robot: &mut Robot, warm: Option<&Solution>) -> b
             .map(|(&j, _)| j)
             .collect();
         for (&j, &t) in active.iter().zip(&b) {
-            robot.tendons[j].tension = t.max(0.0);
+            robot.tendons[j].hold_tension(t.max(0.0));
         }
         if pushing.is_empty() {
             break;
         }
         active.retain(|j| !pushing.contains(j));
         for &j in &pushing {
-            robot.tendons[j].tension = 0.0;
+            robot.tendons[j].hold_tension(0.0);
         }
     }
     true
@@ -604,7 +562,7 @@ fn pull_in_matrix(robot: &Robot, compliance: &[f64], active: &[usize]) -> Vec<f6
 /// and a second would not pay for itself (measured, docs/actuation.md "Cost").
 fn correct_on_guess(robot: &mut Robot, mesh: &Mesh, x: &mut Vec<State>) {
     let taut: Vec<usize> = (0..robot.tendons.len())
-        .filter(|&i| robot.tendons[i].displacement.is_some() && robot.tendons[i].tension > 0.0)
+        .filter(|&i| robot.tendons[i].displacement().is_some() && robot.tendons[i].tension() > 0.0)
         .collect();
     if taut.is_empty() {
         return;
@@ -620,14 +578,14 @@ fn correct_on_guess(robot: &mut Robot, mesh: &Mesh, x: &mut Vec<State>) {
         .collect();
     let mut dtau: Vec<f64> = constraints
         .iter()
-        .map(|c| -c.gap(x, robot.tendons[c.tendon].tension))
+        .map(|c| -c.gap(x, robot.tendons[c.tendon].tension()))
         .collect();
     if !solve_dense(&mut a, &mut dtau, k) {
         return;
     }
     for (c, d) in constraints.iter().zip(&dtau) {
-        let t = &mut robot.tendons[c.tendon].tension;
-        *t = (*t + d).max(0.0);
+        let t = &mut robot.tendons[c.tendon];
+        t.hold_tension((t.tension() + d).max(0.0));
     }
     *x = guess::initial(&Model::new(robot), &mesh.nodes, InitialGuess::RigidEquilibrium);
 }

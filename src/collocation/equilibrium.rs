@@ -186,7 +186,7 @@ pub(crate) fn choose_equilibrium(
         // The path is lost: Newton's answer, if it has one, with its verdict.
         Err((hint, row)) => {
             if system.mesh != mesh {
-                *system = System::new(system.model, mesh);
+                *system = System::new(system.model.clone(), mesh);
                 *ws = Workspace::new(system, options.linear_solver)?;
             }
             system.set_factors(1.0, 1.0);

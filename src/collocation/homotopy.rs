@@ -66,11 +66,7 @@ impl Homotopy {
     /// Sets `system` to the problem at `lambda`.
     pub(super) fn set(&self, system: &mut System, lambda: f64) {
         if let Homotopy::Parameter { parameter, from, to } = *self {
-            let value = from + lambda * (to - from);
-            match parameter {
-                Parameter::LoadScale => system.set_factors(value, value),
-                p => system.set_parameter(p, value),
-            }
+            system.set_parameter(parameter, from + lambda * (to - from));
         }
     }
 }

@@ -478,7 +478,7 @@ fn remesh(
     settings: &Settings,
     report: &mut SolveReport,
 ) -> Option<(Point, Vec<f64>)> {
-    let model = system.model;
+    let model = system.model.clone();
     let ends: Vec<f64> = system.mesh.nodes.iter().map(|n| n.segment_end).collect();
     let shape = nodes::solution(&model, &point.x, &ends, None, report.clone()).ok()?;
     let mesh = Mesh::uniform(model.robot, intervals).ok()?;

@@ -53,7 +53,7 @@ pub(crate) fn solve_impl(
         Some(w) if reuse => (w, Choose::FromWarm),
         Some(w) => {
             let cold = guess::initial(&model, &mesh.nodes, options.initial_guess);
-            better_start(&System::new(model, mesh.clone()), w, cold)
+            better_start(&System::new(model.clone(), mesh.clone()), w, cold)
         }
         None => (cold_start(robot, options, &mut mesh)?, Choose::FromCold),
     };
@@ -68,7 +68,7 @@ pub(crate) fn solve_impl(
     report.nonzeros = unknowns::nonzeros(&mesh);
     record_estimate(&mut report, correction.as_ref(), options, robot.length());
     if let Some(c) = cache.as_mut() {
-        let system = System::new(model, mesh.clone());
+        let system = System::new(model.clone(), mesh.clone());
         let exact = report.path != Path::Direct && !report.history.iter().any(|i| i.fresh_jacobian);
         let t = Instant::now();
         report.stability = stability_of(&system, &mut c.workspace, &x, exact, &mut report);
@@ -129,7 +129,7 @@ pub(crate) fn solve_on_mesh(
         reuse_factors,
         stop_when_damped: false,
     };
-    let mut system = System::new(*model, mesh);
+    let mut system = System::new(model.clone(), mesh);
     let mut workspace = match cache.take() {
         Some(c) if c.mesh == system.mesh && c.solver == options.linear_solver => c.workspace,
         _ => Workspace::new(&system, options.linear_solver)?,

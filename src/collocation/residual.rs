@@ -79,7 +79,7 @@ pub fn base<T: Real>(model: &Model, x: &State, d: &Delta<T>) -> SVector<T, 6> {
     let robot = model.robot;
     let n = perturb(x, d, robot.length());
     let l = T::from_f64(robot.length()).unwrap_or_else(T::one);
-    let dp = (n.p - lift::<T>(&robot.base_position)) / l;
+    let dp = (n.p - lift::<T>(&model.base_position())) / l;
     let dr = so3::log(&(lift_m::<T>(&robot.base_rotation).transpose() * n.R));
     SVector::<T, 6>::from_iterator(dp.iter().chain(dr.iter()).copied())
 }

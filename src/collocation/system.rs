@@ -22,7 +22,9 @@ type D12 = DualSVec64<12>;
 
 /// The collocation system on one mesh at one load factor.
 pub struct System<'a> {
-    /// The model (robot and load factor).
+    /// The model (robot and its inputs: tensions, factors, a traced parameter). The sites
+    /// depend on its external loads, not on its tensions, which a solver may change in place
+    /// ([`Model::tensions`]) between evaluations.
     pub model: Model<'a>,
     /// The mesh.
     pub mesh: Mesh,
@@ -34,53 +36,7 @@ pub struct System<'a> {
     rate_evaluations: usize,
 }
 
-/// A system without its model: the mesh and the sites, which depend on the external loads
-/// but not on the tendon tensions. A solve whose tensions are unknowns
-/// (`collocation/actuation.rs`) detaches the system to change a tension and attaches it again,
-/// without rebuilding the sites.
-pub struct Frame {
-    mesh: Mesh,
-    interval_sites: Vec<Option<IntervalSites>>,
-    node_sites: Vec<Site>,
-    rate_evaluations: usize,
-}
-
-impl Frame {
-    /// A frame of no nodes (allocates nothing): the placeholder while a frame is attached.
-    pub fn empty() -> Self {
-        Frame {
-            mesh: Mesh { nodes: Vec::new() },
-            interval_sites: Vec::new(),
-            node_sites: Vec::new(),
-            rate_evaluations: 0,
-        }
-    }
-}
-
 impl<'a> System<'a> {
-    /// The mesh and sites, without the model.
-    pub fn detach(self) -> Frame {
-        Frame {
-            mesh: self.mesh,
-            interval_sites: self.interval_sites,
-            node_sites: self.node_sites,
-            rate_evaluations: self.rate_evaluations,
-        }
-    }
-
-    /// The system of `model` on a detached `frame`, whose sites must be `model`'s: the
-    /// robot may differ from the one the frame was built for only in its tendons' tensions,
-    /// and the load factor must be the same.
-    pub fn attach(model: Model<'a>, frame: Frame) -> Self {
-        System {
-            model,
-            mesh: frame.mesh,
-            interval_sites: frame.interval_sites,
-            node_sites: frame.node_sites,
-            rate_evaluations: frame.rate_evaluations,
-        }
-    }
-
     /// The system of `model` on `mesh`.
     pub fn new(model: Model<'a>, mesh: Mesh) -> Self {
         let mut sys = System {
@@ -90,7 +46,7 @@ impl<'a> System<'a> {
             node_sites: Vec::new(),
             rate_evaluations: 0,
         };
-        sys.set_factors(model.tension_factor, model.load_factor);
+        sys.set_factors(sys.model.tension_factor, sys.model.load_factor);
         sys
     }
 
@@ -102,16 +58,17 @@ impl<'a> System<'a> {
         self.refresh();
     }
 
-    /// Replaces one input of the model by `value` ([`Model::parameter`]; not the load
-    /// scale, which is [`System::set_factors`]) and recomputes the sites.
+    /// Sets one input of the model to `value` ([`Model::set`]) and recomputes the sites
+    /// when the external loads changed.
     pub fn set_parameter(&mut self, parameter: crate::model::parameter::Parameter, value: f64) {
-        self.model.parameter = Some((parameter, value));
-        self.refresh();
+        if self.model.set(parameter, value) {
+            self.refresh();
+        }
     }
 
     /// Recomputes the sites from the model.
     fn refresh(&mut self) {
-        let model = self.model;
+        let model = &self.model;
         self.node_sites = self.mesh.nodes.iter().map(|n| model.site(n.s)).collect();
         self.interval_sites = (0..self.mesh.nodes.len() - 1)
             .map(|k| {

@@ -94,12 +94,8 @@ pub fn trace(robot: &Robot, parameter: Parameter, from: f64, to: f64, options: &
             "sweep E instead (a sweep of `youngs_modulus` solves each value warm-started from the last)",
         ));
     }
-    if let Some(i) = parameter
-        .apply(robot, from)
-        .tendons
-        .iter()
-        .position(|t| t.displacement.is_some())
-    {
+    let start = parameter.applied(robot, from)?;
+    if let Some(i) = start.tendons.iter().position(|t| t.displacement().is_some()) {
         return Err(crate::error::invalid(
             format!("tendons[{i}].displacement"),
             format!(
@@ -133,7 +129,7 @@ pub fn trace(robot: &Robot, parameter: Parameter, from: f64, to: f64, options: &
             "give tensions >= 0",
         ));
     }
-    let first = solve(&parameter.apply(robot, from), options)?;
+    let first = solve(&start, options)?;
     let points: Vec<f64> = first.nodes.iter().map(|n| n.s).collect();
     let mesh = Mesh::from_points(robot, &points)?;
     let x: Vec<_> = first.nodes.iter().map(Node::state).collect();

@@ -93,7 +93,7 @@ mod tests {
         assert_eq!(a.loads.tip_force, b.loads.tip_force);
         assert_eq!(a.tendons.len(), b.tendons.len());
         for (s, t) in a.tendons.iter().zip(&b.tendons) {
-            assert_eq!(s.tension, t.tension);
+            assert_eq!(s.tension(), t.tension());
             assert_eq!(s.termination, t.termination);
             assert_eq!(s.routing.at(0.1, 0.242), t.routing.at(0.1, 0.242));
         }

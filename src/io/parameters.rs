@@ -1,141 +1,248 @@
-//! Named robot parameters, the column names of `tdcr batch` input files and the keys of the
-//! Python package's parameter arrays: `tension.I` (tendon I from 1, N), `tip_force.x|y|z`
-//! (N, world frame), `tip_moment.x|y|z` (N m, world frame), `base_position.x|y|z` (m, world
-//! frame) and `youngs_modulus` (Pa; rods given by `poisson_ratio`, G follows E).
+//! Parameter tables, the input of `tdcr batch`: a CSV file whose header names
+//! [`Parameter`]s (`tension.1`, `tip_force.z`, ...; the one vocabulary of
+//! [`crate::model::parameter`]) with one row of numbers per robot, or JSON lines, one object
+//! of parameters per line (a row sets only the parameters it names). Every problem says its
+//! file, line and column.
 //!
 //! ```
-//! use tdcr::io::parameters::Parameter;
-//! let mut robot = tdcr::cases::prototype();
-//! let p: Parameter = "tension.5".parse().unwrap();
-//! p.apply(&mut robot, 4.91).unwrap();
-//! assert_eq!(robot.tendons[4].tension, 4.91);
-//! assert_eq!(p.to_string(), "tension.5");
+//! let table = tdcr::io::parameters::read("rows.csv", "tension.1,tip_force.z\n2.94,-0.1\n").unwrap();
+//! let robot = table.robot(&table.rows[0], &tdcr::cases::prototype()).unwrap();
+//! assert_eq!((robot.tendons[0].tension(), robot.loads.tip_force.z), (2.94, -0.1));
 //! ```
 
-use crate::error::{Result, invalid};
-use crate::model::rod::Rod;
-use crate::{Error, Robot};
-use std::fmt;
-use std::str::FromStr;
+use super::locate::Position;
+use super::{FileError, Problem};
+use crate::model::parameter::{NAMES, Parameter};
+use crate::{Result, Robot};
 
-/// One named scalar of a robot that a batch may set per row.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Parameter {
-    /// Tension (N) of the tendon with this 1-based number (file order, as on the command line).
-    Tension(usize),
-    /// Component 0, 1, 2 (x, y, z) of the tip force (N, world frame).
-    TipForce(usize),
-    /// Component of the tip moment (N m, world frame).
-    TipMoment(usize),
-    /// Component of the base position (m, world frame).
-    BasePosition(usize),
-    /// Young's modulus E (Pa) of a rod built from its geometry and Poisson's ratio.
-    YoungsModulus,
+/// One row of a parameter table.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Row {
+    /// Its number among the rows, from 0.
+    pub index: usize,
+    /// The line of the file it came from, from 1.
+    pub line: usize,
+    /// The value of each of the table's parameters, in its order (`None`: a JSON line that
+    /// does not name it).
+    pub values: Vec<Option<f64>>,
 }
 
-/// The names [`Parameter`] accepts, for messages.
-pub const NAMES: &str =
-    "tension.I (I = 1, 2, ...), tip_force.x|y|z, tip_moment.x|y|z, base_position.x|y|z, youngs_modulus";
-
-const AXES: [&str; 3] = ["x", "y", "z"];
-
-/// The name of component `k` (`x`, `y`, `z`; `?` past z).
-fn axis(k: usize) -> &'static str {
-    AXES.get(k).copied().unwrap_or("?")
+/// A parameter table: the parameters in column order and the rows.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Table {
+    /// The parameters, each once.
+    pub parameters: Vec<Parameter>,
+    /// The rows, in file order.
+    pub rows: Vec<Row>,
 }
 
-impl FromStr for Parameter {
-    type Err = String;
-
-    /// Parses a name such as `tension.2` or `tip_force.z`; the error says which names exist.
-    fn from_str(name: &str) -> std::result::Result<Self, String> {
-        let unknown = || format!("unknown parameter `{name}`; the parameters are {NAMES}");
-        if name == "youngs_modulus" {
-            return Ok(Parameter::YoungsModulus);
-        }
-        let (head, tail) = name.split_once('.').ok_or_else(unknown)?;
-        let axis = || AXES.iter().position(|a| *a == tail).ok_or_else(unknown);
-        match head {
-            "tension" => match tail.parse::<usize>() {
-                Ok(i) if i >= 1 => Ok(Parameter::Tension(i)),
-                _ => Err(format!(
-                    "parameter `{name}`: the tendon number must be a whole number from 1 (file order)"
-                )),
-            },
-            "tip_force" => Ok(Parameter::TipForce(axis()?)),
-            "tip_moment" => Ok(Parameter::TipMoment(axis()?)),
-            "base_position" => Ok(Parameter::BasePosition(axis()?)),
-            _ => Err(unknown()),
-        }
-    }
-}
-
-impl fmt::Display for Parameter {
-    /// The parameter's name, as [`Parameter::from_str`] reads it.
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self {
-            Parameter::Tension(i) => write!(f, "tension.{i}"),
-            Parameter::TipForce(k) => write!(f, "tip_force.{}", axis(*k)),
-            Parameter::TipMoment(k) => write!(f, "tip_moment.{}", axis(*k)),
-            Parameter::BasePosition(k) => write!(f, "base_position.{}", axis(*k)),
-            Parameter::YoungsModulus => f.write_str("youngs_modulus"),
-        }
-    }
-}
-
-impl Parameter {
-    /// Sets this parameter of `robot` to `value`. Only the value's place is checked here
-    /// (the tendon exists, the rod has a geometry); its range is checked by the solvers'
-    /// [`Robot::validate`].
+impl Table {
+    /// `base` with `row`'s values set ([`Parameter::apply`]) and validated.
     ///
     /// # Errors
-    /// [`Error::InvalidInput`] for a tendon number past the last tendon, or `youngs_modulus`
-    /// on a rod not built from geometry and Poisson's ratio.
-    pub fn apply(&self, robot: &mut Robot, value: f64) -> Result<()> {
-        let count = robot.tendons.len();
-        let slot = match *self {
-            Parameter::Tension(i) => i
-                .checked_sub(1)
-                .and_then(|k| robot.tendons.get_mut(k))
-                .map(|t| &mut t.tension),
-            Parameter::TipForce(k) => robot.loads.tip_force.get_mut(k),
-            Parameter::TipMoment(k) => robot.loads.tip_moment.get_mut(k),
-            Parameter::BasePosition(k) => robot.base_position.get_mut(k),
-            Parameter::YoungsModulus => return set_youngs_modulus(robot, value),
-        };
-        match (slot, self) {
-            (Some(x), _) => {
-                *x = value;
-                Ok(())
+    /// As [`Parameter::apply`] and [`Robot::validate`].
+    pub fn robot(&self, row: &Row, base: &Robot) -> Result<Robot> {
+        let mut robot = base.clone();
+        for (p, x) in self.parameters.iter().zip(&row.values) {
+            if let Some(x) = x {
+                p.apply(&mut robot, *x)?;
             }
-            (None, Parameter::Tension(i)) => Err(invalid(
-                self.to_string(),
-                format!("names tendon {i}, but the robot has {count} tendon(s)"),
-                format!("number the tendons from 1 to {count} in file order"),
-            )),
-            (None, _) => Err(invalid(
-                self.to_string(),
-                "names a component past z",
-                "use the components x, y, z (0, 1, 2)",
-            )),
         }
+        robot.validate()?;
+        Ok(robot)
     }
 }
 
-/// Rebuilds the rod from its geometry with Young's modulus `e`, keeping its reference
-/// strains.
-fn set_youngs_modulus(robot: &mut Robot, e: f64) -> Result<(), Error> {
-    let Some(g) = robot.rod.geometry else {
-        return Err(invalid(
-            "youngs_modulus",
-            "cannot be set: the rod was not built from its geometry and Poisson's ratio",
-            "give the rod by `outer_radius`, `youngs_modulus` and `poisson_ratio`",
-        ));
+/// Reads the table `text` of the file `file`: JSON lines when its name ends in `.jsonl` or
+/// `.ndjson`, else CSV.
+///
+/// # Errors
+/// A [`FileError`] with the first problem's line and column (from 1): an unknown or repeated
+/// parameter, a row with the wrong number of fields, a value that is not a finite number, a
+/// negative tension or a modulus <= 0.
+pub fn read(file: &str, text: &str) -> Result<Table, FileError> {
+    if file.ends_with(".jsonl") || file.ends_with(".ndjson") {
+        read_jsonl(file, text)
+    } else {
+        read_csv(file, text)
+    }
+}
+
+/// A problem at `line:column` of `file`.
+fn at(file: &str, line: usize, column: usize, message: impl Into<String>) -> FileError {
+    FileError {
+        file: file.to_string(),
+        problems: vec![Problem {
+            position: Some(Position { line, column }),
+            field: String::new(),
+            message: message.into(),
+        }],
+    }
+}
+
+/// Checks a value's own range (the rest is the robot's validation per row).
+fn check_value(parameter: &Parameter, value: f64) -> std::result::Result<(), String> {
+    if !value.is_finite() {
+        return Err(format!("`{parameter}` is {value}, but every number must be finite"));
+    }
+    match parameter {
+        Parameter::Tension(_) if value < 0.0 => Err(format!(
+            "`{parameter}` is {value} N, but a tendon can only pull: must be >= 0"
+        )),
+        Parameter::YoungsModulus if value <= 0.0 => Err(format!("`{parameter}` is {value} Pa, but must be positive")),
+        _ => Ok(()),
+    }
+}
+
+/// Reads a CSV table (the `csv` crate): a header of parameter names, then one row of
+/// numbers per line (blank lines skipped; fields may have spaces around them).
+///
+/// # Errors
+/// As [`read`].
+pub fn read_csv(file: &str, text: &str) -> Result<Table, FileError> {
+    let mut reader = csv::ReaderBuilder::new()
+        .has_headers(false)
+        .flexible(true)
+        .from_reader(text.as_bytes());
+    // The line (from 1) of the record at a byte offset: the reader's own line count skips
+    // blank lines, and its offset can be at the line ends before the record.
+    let line_at = |byte: u64| {
+        let bytes = text.as_bytes();
+        let mut start = (byte as usize).min(bytes.len());
+        while bytes.get(start).is_some_and(|c| matches!(c, b'\r' | b'\n')) {
+            start += 1;
+        }
+        1 + bytes[..start].iter().filter(|&&c| c == b'\n').count()
     };
-    let reference = robot.rod.reference.clone();
-    robot.rod = Rod::tube(robot.rod.length, g.outer_radius, g.inner_radius, e, g.poisson_ratio);
-    robot.rod.reference = reference;
-    Ok(())
+    // Each record with its line and the column (characters, from 1) where each field's text
+    // starts, counted over the unquoted fields and their commas.
+    let mut records = reader.records().filter_map(|record| {
+        let record = match record {
+            Ok(r) => r,
+            Err(e) => {
+                let line = e.position().map_or(1, |p| line_at(p.byte()));
+                return Some(Err(at(file, line, 1, format!("is not CSV: {e}"))));
+            }
+        };
+        let line = record.position().map_or(1, |p| line_at(p.byte()));
+        if record.iter().all(|f| f.trim().is_empty()) {
+            return None;
+        }
+        let mut column = 1;
+        let fields: Vec<(usize, String)> = record
+            .iter()
+            .map(|f| {
+                let start = column + f.chars().count() - f.trim_start().chars().count();
+                column += f.chars().count() + 1;
+                (start, f.trim().to_string())
+            })
+            .collect();
+        Some(Ok((line, fields)))
+    });
+    let Some(header) = records.next() else {
+        return Err(FileError {
+            file: file.to_string(),
+            problems: vec![Problem {
+                position: None,
+                field: String::new(),
+                message: format!("is empty: the first line must name the parameters ({NAMES})"),
+            }],
+        });
+    };
+    let (header_line, header) = header?;
+    let mut parameters = Vec::new();
+    for (column, name) in header {
+        let p: Parameter = name.parse().map_err(|e: String| at(file, header_line, column, e))?;
+        if parameters.contains(&p) {
+            return Err(at(
+                file,
+                header_line,
+                column,
+                format!("parameter `{name}` is given twice"),
+            ));
+        }
+        parameters.push(p);
+    }
+    let mut rows = Vec::new();
+    for record in records {
+        let (line, cells) = record?;
+        if cells.len() != parameters.len() {
+            return Err(at(
+                file,
+                line,
+                1,
+                format!(
+                    "has {} fields, but the header names {} parameters",
+                    cells.len(),
+                    parameters.len()
+                ),
+            ));
+        }
+        let mut values = Vec::with_capacity(cells.len());
+        for ((column, cell), p) in cells.iter().zip(&parameters) {
+            let x: f64 = cell
+                .parse()
+                .map_err(|_| at(file, line, *column, format!("`{p}` value `{cell}` is not a number")))?;
+            check_value(p, x).map_err(|e| at(file, line, *column, e))?;
+            values.push(Some(x));
+        }
+        rows.push(Row {
+            index: rows.len(),
+            line,
+            values,
+        });
+    }
+    Ok(Table { parameters, rows })
+}
+
+/// Reads JSON lines: one object `{"tension.1": 2.0, ...}` per non-blank line; a row sets
+/// only the parameters it names.
+///
+/// # Errors
+/// As [`read`].
+pub fn read_jsonl(file: &str, text: &str) -> Result<Table, FileError> {
+    let mut parameters: Vec<Parameter> = Vec::new();
+    let mut parsed = Vec::new();
+    for (i, line) in text.lines().enumerate().filter(|(_, l)| !l.trim().is_empty()) {
+        let object: serde_json::Map<String, serde_json::Value> = serde_json::from_str(line).map_err(|e| {
+            at(
+                file,
+                i + 1,
+                e.column().max(1),
+                format!("is not a JSON object of parameters: {e}"),
+            )
+        })?;
+        let column_of = |key: &str| {
+            line.find(&format!("\"{key}\""))
+                .map_or(1, |c| line[..c].chars().count() + 1)
+        };
+        let mut row = Vec::new();
+        for (key, value) in &object {
+            let p: Parameter = key.parse().map_err(|e: String| at(file, i + 1, column_of(key), e))?;
+            let x = value
+                .as_f64()
+                .ok_or_else(|| at(file, i + 1, column_of(key), format!("`{key}` is {value}, not a number")))?;
+            check_value(&p, x).map_err(|e| at(file, i + 1, column_of(key), e))?;
+            if !parameters.contains(&p) {
+                parameters.push(p);
+            }
+            row.push((p, x));
+        }
+        parsed.push((i + 1, row));
+    }
+    let rows = parsed
+        .into_iter()
+        .enumerate()
+        .map(|(index, (line, row))| Row {
+            index,
+            line,
+            values: parameters
+                .iter()
+                .map(|p| row.iter().find(|(q, _)| q == p).map(|(_, x)| *x))
+                .collect(),
+        })
+        .collect();
+    Ok(Table { parameters, rows })
 }
 
 #[cfg(test)]
@@ -143,44 +250,27 @@ mod tests {
     use super::*;
 
     #[test]
-    fn names_round_trip_and_bad_names_list_the_good_ones() {
-        for name in [
-            "tension.1",
-            "tension.12",
-            "tip_force.z",
-            "tip_moment.x",
-            "base_position.y",
-            "youngs_modulus",
-        ] {
-            assert_eq!(name.parse::<Parameter>().unwrap().to_string(), name);
-        }
-        for bad in ["tension.0", "tension.x", "tip_force.w", "mass", "tip_force"] {
-            let e = bad.parse::<Parameter>().unwrap_err();
-            assert!(e.contains(bad), "{e}");
-        }
-        assert!("mass".parse::<Parameter>().unwrap_err().contains(NAMES));
+    fn csv_columns_are_counted_from_1_at_the_field() {
+        let e = read_csv("t.csv", "tension.1, mass\n").unwrap_err().to_string();
+        assert!(e.starts_with("t.csv:1:12: unknown parameter `mass`"), "{e}");
+        let e = read_csv("t.csv", "tension.1,tension.2\n1,x\n").unwrap_err().to_string();
+        assert!(e.starts_with("t.csv:2:3: `tension.2` value `x`"), "{e}");
+        let e = read_csv("t.csv", "tension.1\n\n  \n-1\n").unwrap_err().to_string();
+        assert!(e.starts_with("t.csv:4:1: `tension.1` is -1 N"), "{e}");
     }
 
     #[test]
-    fn apply_sets_the_field_and_rejects_a_missing_tendon() {
-        let mut robot = crate::cases::prototype();
-        Parameter::TipForce(2).apply(&mut robot, -0.196).unwrap();
-        assert_eq!(robot.loads.tip_force.z, -0.196);
-        Parameter::YoungsModulus.apply(&mut robot, 230e9).unwrap();
-        assert_eq!(robot.rod.geometry.unwrap().youngs_modulus, 230e9);
-        let (a, b) = (
-            robot.rod.section_at(0.0).section,
-            Rod::solid_circle(0.242, 0.0004, 230e9, 0.3125).section_at(0.0).section,
-        );
-        // 1e-15: the same formulas; the compiler may fold powi of the constants differently
-        // from the run-time powi (last bit).
-        assert!((a.kbt - b.kbt).component_div(&b.kbt).amax() < 1e-15);
-        assert!((a.kse - b.kse).component_div(&b.kse).amax() < 1e-15);
-        let e = Parameter::Tension(6).apply(&mut robot, 1.0).unwrap_err();
-        assert!(e.to_string().contains("has 5 tendon(s)"), "{e}");
-        // Payloads no name parses to are errors, not panics.
-        assert!(Parameter::Tension(0).apply(&mut robot, 1.0).is_err());
-        let e = Parameter::TipForce(3).apply(&mut robot, 1.0).unwrap_err();
-        assert!(e.to_string().contains("`tip_force.?` names a component past z"), "{e}");
+    fn csv_and_json_lines_give_the_same_table() {
+        let csv = read("t.csv", "tension.2 , tip_moment.x\r\n\r\n1.5, -0.01\r\n2,0\r\n").unwrap();
+        let json = read(
+            "t.jsonl",
+            "{\"tension.2\": 1.5, \"tip_moment.x\": -0.01}\n\n{\"tension.2\": 2, \"tip_moment.x\": 0}\n",
+        )
+        .unwrap();
+        assert_eq!(csv.parameters, json.parameters);
+        assert_eq!(csv.parameters, [Parameter::Tension(1), Parameter::TipMoment(0)]);
+        let values = |t: &Table| t.rows.iter().map(|r| r.values.clone()).collect::<Vec<_>>();
+        assert_eq!(values(&csv), values(&json));
+        assert_eq!(csv.rows[1].line, 4);
     }
 }

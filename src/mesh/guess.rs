@@ -21,7 +21,7 @@ fn integrate_poses(
     nodes: &[MeshNode],
     strains: &[(Vector3<f64>, Vector3<f64>)],
 ) -> Vec<(Vector3<f64>, Matrix3<f64>)> {
-    let mut p = model.robot.base_position;
+    let mut p = model.base_position();
     let mut R = model.robot.base_rotation;
     let mut out = Vec::with_capacity(nodes.len());
     out.push((p, R));

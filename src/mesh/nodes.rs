@@ -81,9 +81,9 @@ fn tendon_states(model: &Model, nodes: &[Node]) -> Vec<TendonState> {
         .map(|(i, t)| {
             let length = tendon_length(robot, i, &s, nodes);
             let reference_length = length::reference_length(robot, i);
-            let tension = t.tension;
+            let tension = model.tensions[i];
             let taken_up = reference_length - length + t.compliance(reference_length) * tension;
-            match t.displacement {
+            match t.displacement() {
                 Some(q) => TendonState {
                     tension,
                     displacement: q,

@@ -56,19 +56,27 @@ pub enum Which {
     Past(f64),
 }
 
-/// The robot's equations with its tensions multiplied by `tension_factor` and its external
-/// loads by `load_factor` (1 and 1 is the robot as given; smaller values are used by load
-/// continuation).
-#[derive(Clone, Copy, Debug)]
+/// The robot's equations with its inputs: the tendon tensions, multiplied by
+/// `tension_factor`, the external loads, multiplied by `load_factor` (1 and 1 is the robot as
+/// given; smaller values are used by load continuation), and one input a trace replaces.
+/// The model owns the inputs a solve changes, so that a solver changes them here, in place,
+/// without cloning or changing the robot: the tensions of displacement-controlled tendons
+/// (Newton's unknowns), the factors, the traced parameter.
+#[derive(Clone, Debug)]
 pub struct Model<'a> {
-    /// The robot (validated).
+    /// The robot (validated): geometry, stiffness, routings, loads.
     pub robot: &'a Robot,
+    /// The tension tau_i (N) of every tendon, in the robot's order: the robot's
+    /// ([`crate::model::tendon::Tendon::tension`]: the input, or the starting tension of a
+    /// displacement-controlled tendon) until a solver sets the unknown tensions.
+    pub tensions: Vec<f64>,
     /// Multiplier on all tendon tensions, in [0, 1].
     pub tension_factor: f64,
     /// Multiplier on all external loads (distributed, point and tip), in [0, 1].
     pub load_factor: f64,
-    /// One input replaced by a value (a trace's parameter; [`Parameter::LoadScale`] is the
-    /// two factors instead and is not set here).
+    /// One load or base input replaced by a value, with the meaning [`Parameter::apply`]
+    /// gives it (a trace's parameter, set by [`Model::set`]; a tension is set in
+    /// `tensions`, the load scale is the two factors).
     pub parameter: Option<(Parameter, f64)>,
 }
 
@@ -77,10 +85,44 @@ impl<'a> Model<'a> {
     pub fn new(robot: &'a Robot) -> Self {
         Model {
             robot,
+            tensions: robot.tendons.iter().map(|t| t.tension()).collect(),
             tension_factor: 1.0,
             load_factor: 1.0,
             parameter: None,
         }
+    }
+
+    /// Sets `parameter` to `value` on the model, with the meaning [`Parameter::apply`] gives
+    /// it on the robot: a tension in [`Model::tensions`], the load scale as both factors,
+    /// any other input as [`Model::parameter`] (`youngs_modulus` changes the rod's sections,
+    /// which only a new robot has: set it with [`Parameter::apply`]). Returns whether the
+    /// sites changed (external loads), which a system must then recompute.
+    pub fn set(&mut self, parameter: Parameter, value: f64) -> bool {
+        match parameter {
+            Parameter::Tension(i) => {
+                self.tensions[i] = value;
+                false
+            }
+            Parameter::LoadScale => {
+                self.tension_factor = value;
+                self.load_factor = value;
+                true
+            }
+            _ => {
+                self.parameter = Some((parameter, value));
+                true
+            }
+        }
+    }
+
+    /// The base position (m, world frame), with the parameter's value when it is a
+    /// component of it.
+    pub fn base_position(&self) -> Vector3<f64> {
+        let mut p = self.robot.base_position;
+        if let Some((Parameter::BasePosition(c), value)) = self.parameter {
+            p[c] = value;
+        }
+        p
     }
 
     /// State-independent data at arc length s.
@@ -91,10 +133,8 @@ impl<'a> Model<'a> {
             section: self.robot.rod.section_at(s),
             reference: self.robot.rod.reference_at(s),
             f_e: {
-                let mut f = loads.distributed_force.at(s);
-                if let Some((Parameter::DistributedForce(c), value)) = self.parameter {
-                    f[c] = value;
-                }
+                let f = loads.distributed_force.at(s);
+                let f = self.parameter.map_or(f, |(p, value)| p.distributed_force(f, value));
                 f * self.load_factor
             },
             l_e: loads.distributed_moment.at(s) * self.load_factor,
@@ -103,19 +143,16 @@ impl<'a> Model<'a> {
 
     /// (tension tau_i in N, routing point) for the selected tendons at s.
     pub fn tendons(&self, s: f64, which: Which) -> impl Iterator<Item = (usize, f64, RoutingPoint)> + '_ {
-        let l = self.robot.length();
-        self.robot.tendons.iter().enumerate().filter_map(move |(i, t)| {
+        let (l, factor) = (self.robot.length(), self.tension_factor);
+        let tendons = self.robot.tendons.iter().zip(&self.tensions);
+        tendons.enumerate().filter_map(move |(i, (t, &tension))| {
             let end = t.end(l);
             let take = match which {
                 Which::ActiveTo(e) => end >= e,
                 Which::EndingAt(x) => end == x,
                 Which::Past(x) => end > x,
             };
-            let tension = match self.parameter {
-                Some((Parameter::Tension(j), value)) if j == i => value,
-                _ => t.tension,
-            };
-            (take && tension > 0.0).then(|| (i, tension * self.tension_factor, t.routing.at(s, l)))
+            (take && tension > 0.0).then(|| (i, tension * factor, t.routing.at(s, l)))
         })
     }
 
@@ -232,11 +269,13 @@ impl Model<'_> {
     pub fn point_wrench(&self, s: f64) -> (Vector3<f64>, Vector3<f64>) {
         let loads = &self.robot.loads;
         let (mut f, mut l) = if s == self.robot.length() {
-            let mut f = loads.tip_force;
-            if let Some((Parameter::TipForce(c), value)) = self.parameter {
-                f[c] = value;
+            let (mut f, mut l) = (loads.tip_force, loads.tip_moment);
+            match self.parameter {
+                Some((Parameter::TipForce(c), value)) => f[c] = value,
+                Some((Parameter::TipMoment(c), value)) => l[c] = value,
+                _ => {}
             }
-            (f, loads.tip_moment)
+            (f, l)
         } else {
             (Vector3::zeros(), Vector3::zeros())
         };

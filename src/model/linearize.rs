@@ -861,10 +861,9 @@ mod tests {
         let mut robot = several_tendons();
         robot.loads.distributed_moment = Field::Constant(Vector3::new(0.03, 0.02, -0.01));
         let model = Model {
-            robot: &robot,
             tension_factor: 0.4,
             load_factor: 0.7,
-            parameter: None,
+            ..Model::new(&robot)
         };
         let (v, u) = state();
         check_model(&model, 0.09, robot.length(), &generic_rotation(), &v, &u);

@@ -3,9 +3,11 @@
 //! to try.
 //!
 //! None of these is an error: a robot outside every range may be intentional, and the
-//! solvers accept it. They are what `tdcr check` and `tdcr solve` print as warnings, and what
-//! a failed solve names as its likely cause. Every figure compares a load with the bending
-//! stiffness EI (N m^2), the smallest of E Ixx and E Iyy along the rod:
+//! solvers accept it. [`crate::Robot::plausibility`] computes them (and
+//! [`crate::Robot::solved_tensions`] the solved tensions' figure); the command line's check
+//! and solve print them as warnings, and a failed solve names them as its likely cause.
+//! Every figure compares a load with the bending stiffness EI (N m^2), the smallest of
+//! E Ixx and E Iyy along the rod:
 //!
 //! | figure | meaning | warned when |
 //! | --- | --- | --- |
@@ -18,7 +20,7 @@
 //! | M a / EI | the bending angle a tip or point moment alone causes (rad) | above 20 pi (ten turns) |
 //!
 //! A displacement-controlled tendon's tension is solved for, so these figures cannot check
-//! it; [`Robot::solved_tensions`] holds a solution's tensions to the same geometric limit
+//! it; [`crate::Robot::solved_tensions`] holds a solution's tensions to the same geometric limit
 //! ([`Warning::SolvedTension`]): a displacement solve can converge past it when actuators
 //! hold antagonistic tendons that the pull stretches and the tendons fight each other.
 //!
@@ -28,7 +30,6 @@
 //! no solution (tests/hard.rs). The Table 2 experiments stay well inside every range
 //! (w L^3 / EI = 1.6, tau r^2 / EI <= 0.074, F L^2 / EI <= 2.7).
 
-use crate::model::robot::Robot;
 use std::f64::consts::PI;
 use std::fmt;
 
@@ -58,7 +59,7 @@ pub enum LoadSite {
     Point(usize),
 }
 
-/// A figure of the robot outside its plausible range ([`Robot::plausibility`]), with the
+/// A figure of the robot outside its plausible range ([`crate::Robot::plausibility`]), with the
 /// numbers it was computed from (SI units).
 #[derive(Clone, Debug, PartialEq)]
 pub enum Warning {
@@ -101,7 +102,7 @@ pub enum Warning {
         /// EI, N m^2.
         bending_stiffness: f64,
     },
-    /// The solved tension of a displacement-controlled tendon ([`Robot::solved_tensions`])
+    /// The solved tension of a displacement-controlled tendon ([`crate::Robot::solved_tensions`])
     /// times its offset^2 against EI is at or above [`TENDON_LIMIT`]: the solve converged,
     /// but to a tension past the limit no tension input may reach, which is what tendons
     /// that fight each other give (actuators holding antagonists that the pull stretches).
@@ -300,7 +301,7 @@ impl fmt::Display for Warning {
                  such tensions when actuators hold antagonistic tendons that the pull stretches (a bend lengthens \
                  the paths on its far side): held at their pull-ins, they pull back, and the tendons compress the \
                  rod instead of bending it. Let the antagonists out (a negative displacement, about the \
-                 lengthening of their paths; `tdcr solve` prints the lengths), drive them by tension (e.g. \
+                 lengthening of their paths; a solution reports each tendon's length), drive them by tension (e.g. \
                  tension = 0), or pull in less",
                 tendon + 1,
                 fig(tension),
@@ -347,170 +348,6 @@ impl fmt::Display for Warning {
                 fig(bending_stiffness)
             ),
         }
-    }
-}
-
-/// Arc lengths where the stiffness and distributed loads are sampled: 33 evenly spaced.
-fn samples(length: f64) -> impl Iterator<Item = f64> {
-    (0..=32).map(move |k| length * f64::from(k) / 32.0)
-}
-
-impl Robot {
-    /// The smallest bending stiffness min(E Ixx, E Iyy) (N m^2) over 33 evenly spaced
-    /// arc lengths in [0, `end`] (m).
-    fn weakest_bending(&self, end: f64) -> f64 {
-        samples(end)
-            .map(|s| {
-                let k = self.rod.section_at(s).section.kbt;
-                k[0].min(k[1])
-            })
-            .fold(f64::INFINITY, f64::min)
-    }
-
-    /// The geometric limit of tendon `i` (N): EI / r^2 with r its largest offset and EI the
-    /// smallest bending stiffness along it, the tension at which the bend radius
-    /// EI / (tau r) falls to the offset; past it no equilibrium exists (module docs).
-    /// Infinite for a tendon on the centreline.
-    pub fn geometric_limit(&self, i: usize) -> f64 {
-        let length = self.length();
-        let t = &self.tendons[i];
-        let end = t.end(length);
-        let offset = t.routing.max_offset(end, length);
-        self.weakest_bending(end) / (offset * offset)
-    }
-
-    /// The displacement-controlled tendons whose solved tensions are at or past their
-    /// geometric limit EI / r^2, one [`Warning::SolvedTension`] each. `tensions` are the
-    /// solution's, one per tendon ([`crate::Solution::tensions`]); tension-controlled
-    /// tendons are left to [`Robot::plausibility`], which checks their inputs.
-    ///
-    /// A displacement solve can converge to such tensions: actuators that hold antagonistic
-    /// tendons which the pull stretches make the tendons fight, compressing the rod.
-    ///
-    /// # Examples
-    /// ```
-    /// use tdcr::model::scales::Warning;
-    /// let mut robot = tdcr::cases::case_s();
-    /// robot.tendons[0].displacement = Some(0.03);
-    /// robot.tendons[0].tension = 0.0;
-    /// // Tension 3270 N on the displacement-controlled tendon, 2 N on a tension-controlled one.
-    /// let warnings = robot.solved_tensions(&[3270.0, 2.0, 0.0, 0.0, 0.0]);
-    /// assert!(matches!(warnings[..], [Warning::SolvedTension { tendon: 0, .. }]));
-    /// assert!(warnings[0].to_string().contains("solved tension 3270 N"));
-    /// ```
-    pub fn solved_tensions(&self, tensions: &[f64]) -> Vec<Warning> {
-        let length = self.length();
-        self.tendons
-            .iter()
-            .zip(tensions)
-            .enumerate()
-            .filter_map(|(i, (t, &tension))| {
-                let displacement = t.displacement?;
-                let end = t.end(length);
-                let w = Warning::SolvedTension {
-                    tendon: i,
-                    tension,
-                    displacement,
-                    offset: t.routing.max_offset(end, length),
-                    bending_stiffness: self.weakest_bending(end),
-                };
-                (w.figure() >= TENDON_LIMIT).then_some(w)
-            })
-            .collect()
-    }
-
-    /// The robot's figures outside their plausible ranges (module [`crate::model::scales`]):
-    /// length, slenderness, modulus, self weight, each tendon's tension against its
-    /// geometric limit EI / r^2, and the tip and point loads against EI. Empty for a robot
-    /// of ordinary scales such as the paper's prototype. Not a validation: call it on a
-    /// robot that passed [`Robot::validate`] (non-finite values give no warnings).
-    ///
-    /// # Examples
-    /// ```
-    /// use tdcr::model::scales::Warning;
-    /// let mut robot = tdcr::cases::case_s();
-    /// assert!(robot.plausibility().is_empty());
-    /// robot.tendons[0].tension = 2940.0; // 2.94 N typed in mN
-    /// let warnings = robot.plausibility();
-    /// assert!(matches!(warnings[0], Warning::TendonCurl { tendon: 0, .. }));
-    /// assert!(warnings[0].to_string().contains("past the geometric limit EI/r^2 = 66 N"));
-    /// ```
-    pub fn plausibility(&self) -> Vec<Warning> {
-        let mut out = Vec::new();
-        let length = self.length();
-        let ei = self.weakest_bending(length);
-        if !(length.is_finite() && length > 0.0 && ei.is_finite() && ei > 0.0) {
-            return out;
-        }
-        if !(LENGTH_RANGE.0..=LENGTH_RANGE.1).contains(&length) {
-            out.push(Warning::Length { length });
-        }
-        let radius = match &self.rod.geometry {
-            Some(g) => g.outer_radius,
-            None => {
-                // A solid circle has EI / EA = r^2 / 4.
-                let k = self.rod.section_at(0.0).section;
-                2.0 * (k.kbt[0].min(k.kbt[1]) / k.kse[2]).sqrt()
-            }
-        };
-        if radius > 0.0 && !(SLENDERNESS_RANGE.0..=SLENDERNESS_RANGE.1).contains(&(length / radius)) {
-            out.push(Warning::Slenderness { length, radius });
-        }
-        if let Some(g) = &self.rod.geometry
-            && !(MODULUS_RANGE.0..=MODULUS_RANGE.1).contains(&g.youngs_modulus)
-        {
-            out.push(Warning::Modulus {
-                youngs_modulus: g.youngs_modulus,
-            });
-        }
-        let w = samples(length)
-            .map(|s| self.loads.distributed_force.at(s).norm())
-            .fold(0.0, f64::max);
-        let self_weight = Warning::SelfWeight {
-            weight_per_length: w,
-            length,
-            bending_stiffness: ei,
-        };
-        if self_weight.figure() > SELF_WEIGHT_LIMIT {
-            out.push(self_weight);
-        }
-        for (i, t) in self.tendons.iter().enumerate() {
-            let end = t.end(length);
-            let curl = Warning::TendonCurl {
-                tendon: i,
-                tension: t.tension,
-                offset: t.routing.max_offset(end, length),
-                bending_stiffness: self.weakest_bending(end),
-            };
-            if curl.figure() >= TENDON_LIMIT {
-                out.push(curl);
-            }
-        }
-        let points = self.loads.point.iter().enumerate();
-        let sites = std::iter::once((LoadSite::Tip, length, self.loads.tip_force, self.loads.tip_moment))
-            .chain(points.map(|(i, p)| (LoadSite::Point(i), p.s, p.force, p.moment)));
-        for (site, arm, force, moment) in sites {
-            let bending_stiffness = self.weakest_bending(arm);
-            let force = Warning::Force {
-                site,
-                force: force.norm(),
-                arm,
-                bending_stiffness,
-            };
-            if force.figure() > FORCE_LIMIT {
-                out.push(force);
-            }
-            let moment = Warning::Moment {
-                site,
-                moment: moment.norm(),
-                arm,
-                bending_stiffness,
-            };
-            if moment.figure() > MOMENT_LIMIT {
-                out.push(moment);
-            }
-        }
-        out
     }
 }
 

@@ -1,29 +1,38 @@
-//! A tendon: its routing, how it is actuated (a tension or an actuator displacement), its
-//! axial stiffness and where it ends.
+//! A tendon: its routing, how it is actuated ([`Actuation`]: a tension or an actuator
+//! pull-in), its axial stiffness and where it ends.
 
 use crate::model::routing::Routing;
 
-/// One tendon, modelled as a frictionless Cosserat string (section 3 of the paper).
-///
-/// It is actuated either by its tension tau_i (the paper's input) or, when `displacement`
-/// is set, by the pull-in q_i of its actuator: the tension is then an unknown of the solve,
-/// fixed by the length constraint of docs/actuation.md, and a tendon that would need to push
-/// goes slack (tau_i = 0).
+/// How a tendon is driven.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Actuation {
+    /// By its tension tau_i (N), >= 0, constant along the tendon (frictionless): the paper's
+    /// input.
+    Tension(f64),
+    /// By the pull-in q_i of its actuator: the tension is then an unknown of the solve, fixed
+    /// by the length constraint of docs/actuation.md, and a tendon that would need to push
+    /// goes slack (tau_i = 0).
+    PullIn {
+        /// Pull-in q_i (m; positive pulls the tendon in, negative lets it out), measured from
+        /// the unloaded shape with the tendon just taut.
+        displacement: f64,
+        /// The tension (N) Newton starts from; `None` (or 0): the solver estimates it from a
+        /// linear small-deflection model.
+        start: Option<f64>,
+    },
+}
+
+/// One tendon, modelled as a frictionless Cosserat string (section 3 of the paper), driven
+/// by its tension or by the pull-in of its actuator ([`Actuation`]).
 #[derive(Clone, Debug)]
 pub struct Tendon {
     /// Path in the cross-section along s.
     pub routing: Routing,
-    /// Tension tau_i (N), >= 0, constant along the tendon (frictionless). For a
-    /// displacement-controlled tendon only the tension Newton starts from (0: the solver
-    /// estimates it from a linear small-deflection model).
-    pub tension: f64,
+    /// How it is driven: a tension or a pull-in.
+    pub actuation: Actuation,
     /// Arc length l_i where it is attached to the backbone (m), in (0, L]; `None` means
     /// the tip.
     pub termination: Option<f64>,
-    /// Pull-in q_i of the actuator (m; positive pulls the tendon in, negative lets it out),
-    /// measured from the unloaded shape with the tendon just taut. `None` (the default):
-    /// tension-controlled.
-    pub displacement: Option<f64>,
     /// Axial stiffness E_t A_t of the tendon (N); `None` (the default): inextensible.
     pub stiffness: Option<f64>,
     /// Length of tendon between the base, where it enters the backbone, and the actuator
@@ -36,20 +45,65 @@ impl Tendon {
     pub fn new(routing: Routing, tension: f64) -> Self {
         Tendon {
             routing,
-            tension,
+            actuation: Actuation::Tension(tension),
             termination: None,
-            displacement: None,
             stiffness: None,
             free_length: 0.0,
         }
     }
 
     /// A displacement-controlled tendon along `routing` whose actuator pulls it in by
-    /// `displacement` q (m), ending at the tip.
+    /// `displacement` q (m), ending at the tip; its starting tension is estimated.
     pub fn pulled(routing: Routing, displacement: f64) -> Self {
         Tendon {
-            displacement: Some(displacement),
+            actuation: Actuation::PullIn {
+                displacement,
+                start: None,
+            },
             ..Tendon::new(routing, 0.0)
+        }
+    }
+
+    /// The tension (N) the model loads the rod with: the input of a tension-controlled
+    /// tendon; for a displacement-controlled one the tension Newton starts from (0 when the
+    /// solver is to estimate it).
+    pub fn tension(&self) -> f64 {
+        match self.actuation {
+            Actuation::Tension(tension) => tension,
+            Actuation::PullIn { start, .. } => start.unwrap_or(0.0),
+        }
+    }
+
+    /// The actuator pull-in q (m) of a displacement-controlled tendon; `None` for a
+    /// tension-controlled one.
+    pub fn displacement(&self) -> Option<f64> {
+        match self.actuation {
+            Actuation::Tension(_) => None,
+            Actuation::PullIn { displacement, .. } => Some(displacement),
+        }
+    }
+
+    /// Makes the tendon tension-controlled at `tension` (N).
+    pub fn set_tension(&mut self, tension: f64) {
+        self.actuation = Actuation::Tension(tension);
+    }
+
+    /// Makes the tendon displacement-controlled with pull-in `displacement` (m), its
+    /// starting tension estimated by the solver.
+    pub fn set_displacement(&mut self, displacement: f64) {
+        self.actuation = Actuation::PullIn {
+            displacement,
+            start: None,
+        };
+    }
+
+    /// Sets the tension the model uses without changing how the tendon is driven: the input
+    /// of a tension-controlled tendon, the starting tension of a displacement-controlled one
+    /// (a solver's current iterate).
+    pub(crate) fn hold_tension(&mut self, tension: f64) {
+        match &mut self.actuation {
+            Actuation::Tension(t) => *t = tension,
+            Actuation::PullIn { start, .. } => *start = Some(tension),
         }
     }
 

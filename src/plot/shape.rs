@@ -86,8 +86,8 @@ pub fn tendon_label(robot: &Robot, index: usize) -> String {
 /// tension, `helix of radius 8 mm, 0.5 turns, ends at s = 121 mm; 4.91 N`.
 pub fn tendon_description(robot: &Robot, index: usize) -> String {
     let tendon = &robot.tendons[index];
-    let tension = if tendon.tension > 0.0 {
-        format!("{} N", significant(tendon.tension))
+    let tension = if tendon.tension() > 0.0 {
+        format!("{} N", significant(tendon.tension()))
     } else {
         "slack (0 N)".to_string()
     };
@@ -196,7 +196,7 @@ impl Panel {
     pub fn add_shape(&mut self, robot: &Robot, solution: &Solution, style: &Style) {
         let length = solution.length();
         for (i, tendon) in robot.tendons.iter().enumerate() {
-            let pulled = tendon.tension > 0.0;
+            let pulled = tendon.tension() > 0.0;
             if !pulled && !style.slack_tendons {
                 continue;
             }
@@ -295,7 +295,7 @@ pub(super) fn tendon_color(style: &Style, index: usize) -> &str {
 pub fn shape_legend(robot: &Robot, style: &Style) -> Vec<LegendEntry> {
     let mut legend = vec![LegendEntry::new(Symbol::Line, "backbone (thick line)", &style.color).width(BACKBONE_WIDTH)];
     for (i, tendon) in robot.tendons.iter().enumerate() {
-        let pulled = tendon.tension > 0.0;
+        let pulled = tendon.tension() > 0.0;
         if !pulled && !style.slack_tendons {
             continue;
         }

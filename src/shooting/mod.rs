@@ -314,13 +314,13 @@ impl Problem {
             crate::collocation::actuation::starting_tensions(&mut work, None);
         }
         let displaced: Vec<Constraint> = (0..robot.tendons.len())
-            .filter(|&i| robot.tendons[i].displacement.is_some())
+            .filter(|&i| robot.tendons[i].displacement().is_some())
             .map(|i| {
                 let t = &work.tendons[i];
                 let reference_length = length::reference_length(robot, i);
                 Constraint {
                     tendon: i,
-                    displacement: t.displacement.unwrap_or(0.0),
+                    displacement: t.displacement().unwrap_or(0.0),
                     reference_length,
                     compliance: t.compliance(reference_length),
                     end: t.end(length),
@@ -342,7 +342,7 @@ impl Problem {
             .displaced
             .iter()
             .zip(&self.scale.tension_scales)
-            .map(|(c, t)| self.robot.tendons[c.tendon].tension / t);
+            .map(|(c, t)| self.robot.tendons[c.tendon].tension() / t);
         DVector::from_iterator(6 + self.displaced.len(), base.iter().copied().chain(tensions))
     }
 
@@ -393,7 +393,7 @@ impl Problem {
     /// Sets the tensions of the displacement-controlled tendons from the unknowns `x`.
     fn set_tensions(&mut self, x: &DVector<f64>) {
         for (j, (c, t)) in self.displaced.iter().zip(&self.scale.tension_scales).enumerate() {
-            self.robot.tendons[c.tendon].tension = x[6 + j] * t;
+            self.robot.tendons[c.tendon].hold_tension(x[6 + j] * t);
         }
     }
 
@@ -404,14 +404,15 @@ impl Problem {
         self.set_tensions(x);
         let mut changed = false;
         for (j, c) in self.displaced.iter().enumerate() {
-            let tension = &mut self.robot.tendons[c.tendon].tension;
+            let tendon = &mut self.robot.tendons[c.tendon];
+            let tension = tendon.tension();
             let exact = if smooth[6 + j] > x[6 + j] {
                 0.0
             } else {
                 tension.max(0.0)
             };
-            if exact != *tension {
-                *tension = exact;
+            if exact != tension {
+                tendon.hold_tension(exact);
                 changed = true;
             }
         }
@@ -437,7 +438,7 @@ impl Problem {
             .displaced
             .iter()
             .zip(&lengths)
-            .map(|(c, &l)| c.gap(l, self.robot.tendons[c.tendon].tension) / length);
+            .map(|(c, &l)| c.gap(l, self.robot.tendons[c.tendon].tension()) / length);
         Ok(DVector::from_iterator(x.len(), tip.iter().copied().chain(gaps)))
     }
 

@@ -67,7 +67,9 @@ class Robot:
     def with_displacements(self, displacements: Sequence[Optional[float]]) -> Robot:
         """A copy with actuator pull-ins (m) per tendon; None: tension-controlled."""
     def with_parameters(self, parameters: Mapping[str, float]) -> Robot:
-        """A copy with named parameters (`tension.1`, `tip_force.z`, ...) set."""
+        """A copy with named parameters set (`tension.1`, `tip_force.z`, ...; docs/parameters.md).
+
+        `tension.I` makes tendon I tension-controlled, as `with_tensions` does."""
     @property
     def length(self) -> float:
         """Rod length L (m)."""

@@ -7,7 +7,7 @@ use rayon::prelude::*;
 use std::sync::Mutex;
 use tdcr::io::csv_table::CsvTable;
 use tdcr::io::number;
-use tdcr::io::parameters::{NAMES, Parameter};
+use tdcr::io::parameters;
 use tdcr::{Error, Method, Robot, Solution};
 
 use crate::args::SolverArgs;
@@ -53,154 +53,6 @@ fn parse_shard(text: &str) -> Result<(usize, usize), String> {
         n.trim().parse().map_err(|_| bad())?,
     );
     if k < n { Ok((k, n)) } else { Err(bad()) }
-}
-
-/// One input row: its 0-based number, the line it came from, and its parameter values.
-struct Row {
-    index: usize,
-    line: usize,
-    values: Vec<Option<f64>>,
-}
-
-/// A parameter table: the parameters in column order and the rows.
-struct Table {
-    parameters: Vec<Parameter>,
-    rows: Vec<Row>,
-}
-
-/// A problem at `file:line:column`.
-fn at(file: &str, line: usize, column: usize, message: &str) -> Failure {
-    Failure::Input(format!("{file}:{line}:{column}: {message}"))
-}
-
-/// Checks a value's own range (the rest is the robot's validation per row).
-fn check_value(parameter: &Parameter, value: f64) -> Result<(), String> {
-    if !value.is_finite() {
-        return Err(format!("`{parameter}` is {value}, but every number must be finite"));
-    }
-    match parameter {
-        Parameter::Tension(_) if value < 0.0 => Err(format!(
-            "`{parameter}` is {value} N, but a tendon can only pull: must be >= 0"
-        )),
-        Parameter::YoungsModulus if value <= 0.0 => Err(format!("`{parameter}` is {value} Pa, but must be positive")),
-        _ => Ok(()),
-    }
-}
-
-/// Reads a CSV table: a header of parameter names, then one row of numbers per line
-/// (blank lines skipped).
-fn read_csv(file: &str, text: &str) -> Result<Table, Failure> {
-    let mut lines = text.lines().enumerate().filter(|(_, l)| !l.trim().is_empty());
-    let Some((header_at, header)) = lines.next() else {
-        return Err(Failure::Input(format!(
-            "{file}: is empty: the first line must name the parameters ({NAMES})"
-        )));
-    };
-    let fields = |line: &str| -> Vec<(usize, String)> {
-        let mut column = 1;
-        line.split(',')
-            .map(|f| {
-                let start = column + f.len() - f.trim_start().len();
-                column += f.chars().count() + 1;
-                (start, f.trim().to_string())
-            })
-            .collect()
-    };
-    let mut parameters = Vec::new();
-    for (column, name) in fields(header) {
-        let p: Parameter = name.parse().map_err(|e: String| at(file, header_at + 1, column, &e))?;
-        if parameters.contains(&p) {
-            return Err(at(
-                file,
-                header_at + 1,
-                column,
-                &format!("parameter `{name}` is given twice"),
-            ));
-        }
-        parameters.push(p);
-    }
-    let mut rows = Vec::new();
-    for (i, line) in lines {
-        let cells = fields(line);
-        if cells.len() != parameters.len() {
-            return Err(at(
-                file,
-                i + 1,
-                1,
-                &format!(
-                    "has {} fields, but the header names {} parameters",
-                    cells.len(),
-                    parameters.len()
-                ),
-            ));
-        }
-        let mut values = Vec::with_capacity(cells.len());
-        for ((column, cell), p) in cells.iter().zip(&parameters) {
-            let x: f64 = cell
-                .parse()
-                .map_err(|_| at(file, i + 1, *column, &format!("`{p}` value `{cell}` is not a number")))?;
-            check_value(p, x).map_err(|e| at(file, i + 1, *column, &e))?;
-            values.push(Some(x));
-        }
-        rows.push(Row {
-            index: rows.len(),
-            line: i + 1,
-            values,
-        });
-    }
-    Ok(Table { parameters, rows })
-}
-
-/// Reads JSON lines: one object `{"tension.1": 2.0, ...}` per non-blank line; a row sets
-/// only the parameters it names.
-fn read_jsonl(file: &str, text: &str) -> Result<Table, Failure> {
-    let mut parameters: Vec<Parameter> = Vec::new();
-    let mut parsed = Vec::new();
-    for (i, line) in text.lines().enumerate().filter(|(_, l)| !l.trim().is_empty()) {
-        let object: serde_json::Map<String, serde_json::Value> = serde_json::from_str(line).map_err(|e| {
-            at(
-                file,
-                i + 1,
-                e.column().max(1),
-                &format!("is not a JSON object of parameters: {e}"),
-            )
-        })?;
-        let column_of = |key: &str| {
-            line.find(&format!("\"{key}\""))
-                .map_or(1, |c| line[..c].chars().count() + 1)
-        };
-        let mut row = Vec::new();
-        for (key, value) in &object {
-            let p: Parameter = key.parse().map_err(|e: String| at(file, i + 1, column_of(key), &e))?;
-            let x = value.as_f64().ok_or_else(|| {
-                at(
-                    file,
-                    i + 1,
-                    column_of(key),
-                    &format!("`{key}` is {value}, not a number"),
-                )
-            })?;
-            check_value(&p, x).map_err(|e| at(file, i + 1, column_of(key), &e))?;
-            if !parameters.contains(&p) {
-                parameters.push(p);
-            }
-            row.push((p, x));
-        }
-        parsed.push((i + 1, row));
-    }
-    let rows = parsed
-        .into_iter()
-        .enumerate()
-        .map(|(index, (line, row))| Row {
-            index,
-            line,
-            values: parameters
-                .iter()
-                .map(|p| row.iter().find(|(q, _)| q == p).map(|(_, x)| *x))
-                .collect(),
-        })
-        .collect();
-    Ok(Table { parameters, rows })
 }
 
 /// The result of one row.
@@ -261,11 +113,7 @@ pub fn run(args: &BatchArgs) -> Result<(), Failure> {
     apply(&mut file, &args.solver);
     let text = std::fs::read_to_string(&args.cases)
         .map_err(|e| Failure::Input(format!("cannot read parameter table {}: {e}", args.cases)))?;
-    let table = if args.cases.ends_with(".jsonl") || args.cases.ends_with(".ndjson") {
-        read_jsonl(&args.cases, &text)?
-    } else {
-        read_csv(&args.cases, &text)?
-    };
+    let table = parameters::read(&args.cases, &text).map_err(|e| Failure::Input(e.to_string()))?;
     let blocks = table.rows.len().div_ceil(BLOCK);
     let (first, end) = match args.shard {
         Some((k, n)) => (k * blocks / n, (k + 1) * blocks / n),
@@ -276,15 +124,9 @@ pub fn run(args: &BatchArgs) -> Result<(), Failure> {
     // before it spends time.
     let mut robots = Vec::with_capacity(rows.len());
     for row in rows {
-        let mut robot = file.robot.clone();
-        table
-            .parameters
-            .iter()
-            .zip(&row.values)
-            .filter_map(|(p, x)| x.map(|x| (p, x)))
-            .try_for_each(|(p, x)| p.apply(&mut robot, x))
-            .and_then(|()| robot.validate())
-            .map_err(|e| at(&args.cases, row.line, 1, &format!("row {}: {e}", row.index)))?;
+        let robot = table
+            .robot(row, &file.robot)
+            .map_err(|e| Failure::Input(format!("{}:{}:1: row {}: {e}", args.cases, row.line, row.index)))?;
         robots.push(robot);
     }
     let progress = Mutex::new((Progress::new(), 0, robots.len()));
@@ -349,13 +191,5 @@ mod tests {
         for bad in ["4/4", "1", "a/2", "1/0"] {
             assert!(parse_shard(bad).unwrap_err().contains("K/N"), "{bad}");
         }
-    }
-
-    #[test]
-    fn csv_columns_are_counted_from_1_at_the_field() {
-        let e = read_csv("t.csv", "tension.1, mass\n").err().unwrap();
-        assert!(matches!(e, Failure::Input(t) if t.starts_with("t.csv:1:12: unknown parameter `mass`")));
-        let e = read_csv("t.csv", "tension.1,tension.2\n1,x\n").err().unwrap();
-        assert!(matches!(e, Failure::Input(t) if t.starts_with("t.csv:2:3: `tension.2` value `x`")));
     }
 }

@@ -75,7 +75,7 @@ impl Row {
 fn scaled(robot: &Robot, factor: f64) -> Robot {
     let mut r = robot.clone();
     for t in r.tendons.iter_mut() {
-        t.tension *= factor;
+        t.set_tension(t.tension() * factor);
     }
     r
 }

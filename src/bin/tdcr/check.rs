@@ -23,9 +23,9 @@ pub fn run(file: &str) -> Result<(), Failure> {
     let pulled = r
         .tendons
         .iter()
-        .filter(|t| t.displacement.is_none() && t.tension > 0.0)
+        .filter(|t| t.displacement().is_none() && t.tension() > 0.0)
         .count();
-    let driven = r.tendons.iter().filter(|t| t.displacement.is_some()).count();
+    let driven = r.tendons.iter().filter(|t| t.displacement().is_some()).count();
     let actuation = match driven {
         0 => format!("{pulled} pulled"),
         _ => format!("{pulled} pulled by tension, {driven} driven by displacement"),
@@ -95,13 +95,13 @@ fn tendon(t: &Tendon, length: f64) -> String {
         }
         Routing::Custom(_) => "custom routing".into(),
     };
-    let actuation = match t.displacement {
+    let actuation = match t.displacement() {
         Some(q) => format!(
             "displacement-controlled, pull-in {} m{}",
             Readable(q),
             if q < 0.0 { " (let out)" } else { "" }
         ),
-        None => format!("tension {} N", Readable(t.tension)),
+        None => format!("tension {} N", Readable(t.tension())),
     };
     let elastic = match t.stiffness {
         Some(k) => format!(

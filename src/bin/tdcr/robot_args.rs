@@ -44,8 +44,7 @@ pub fn set_displacement(robot: &mut Robot, index: usize, displacement: f64) -> R
     let count = robot.tendons.len();
     match index.checked_sub(1).and_then(|i| robot.tendons.get_mut(i)) {
         Some(t) => {
-            t.displacement = Some(displacement);
-            t.tension = 0.0;
+            t.set_displacement(displacement);
             Ok(())
         }
         None => Err(Failure::Input(format!(
@@ -59,8 +58,7 @@ pub fn set_tension(robot: &mut Robot, index: usize, tension: f64) -> Result<(), 
     let count = robot.tendons.len();
     match robot.tendons.get_mut(index.wrapping_sub(1)) {
         Some(t) => {
-            t.tension = tension;
-            t.displacement = None;
+            t.set_tension(tension);
             Ok(())
         }
         None => Err(Failure::Input(format!(

@@ -187,7 +187,8 @@ impl<'a> Plan<'a> {
             set_displacement(&mut robot, i, at(v, k))?;
         }
         for (p, v) in &self.params {
-            robot = p.apply(&robot, at(v, k));
+            p.apply(&mut robot, at(v, k))
+                .map_err(|e| Failure::Input(e.to_string()))?;
         }
         Ok(robot)
     }
@@ -519,9 +520,9 @@ fn step_inputs(robot: &Robot) -> String {
         .iter()
         .take(SHOWN)
         .enumerate()
-        .map(|(i, t)| match t.displacement {
+        .map(|(i, t)| match t.displacement() {
             Some(q) => format!("tendon {} pull-in {} m", i + 1, tdcr::Readable(q)),
-            None => format!("tendon {} tension {} N", i + 1, tdcr::Readable(t.tension)),
+            None => format!("tendon {} tension {} N", i + 1, tdcr::Readable(t.tension())),
         })
         .collect();
     if robot.tendons.len() > SHOWN {

@@ -247,7 +247,10 @@ impl<'a> Sensitivity<'a> {
     /// // Tip motion per newton of tendon 1's tension (2.94 N), stepping 1e-4 of it.
     /// let step = tdcr::collocation::sensitivity::RELATIVE_STEP * 2.94;
     /// let d = sens
-    ///     .derivative(step, Difference::Central, |r, dq| r.tendons[0].tension += dq)
+    ///     .derivative(step, Difference::Central, |r, dq| {
+    ///         let t = &mut r.tendons[0];
+    ///         t.set_tension(t.tension() + dq)
+    ///     })
     ///     .unwrap();
     /// let tip = d.last().unwrap();
     /// assert!(tip.p.norm() > 0.0);
@@ -257,6 +260,19 @@ impl<'a> Sensitivity<'a> {
         step: f64,
         difference: Difference,
         perturb: impl Fn(&mut Robot, f64),
+    ) -> Result<Vec<NodeDerivative>> {
+        self.differenced(step, difference, |system, states, dq, out| {
+            residual_at(system, states, &perturb, dq, out)
+        })
+    }
+
+    /// As [`Sensitivity::derivative`], with `residual(system, states, dq, out)` writing the
+    /// residual at the solution's `states` for the parameter moved by dq into `out`.
+    fn differenced(
+        &mut self,
+        step: f64,
+        difference: Difference,
+        mut residual: impl FnMut(&mut System<'a>, &[State], f64, &mut [f64]) -> Result<()>,
     ) -> Result<Vec<NodeDerivative>> {
         if !(step.is_finite() && step > 0.0) {
             return Err(invalid(
@@ -272,7 +288,7 @@ impl<'a> Sensitivity<'a> {
         };
         let terms = if difference == Difference::Central { 2 } else { 3 };
         for (out, &dq) in [&mut *f0, &mut *f1, &mut *f2].into_iter().zip(&offsets).take(terms) {
-            residual_at(&self.system, &self.states, &perturb, dq, out)?;
+            residual(&mut self.system, &self.states, dq, out)?;
         }
         // rhs = -dF/dq, written over f0.
         let scale = -1.0 / (2.0 * step);
@@ -420,14 +436,21 @@ impl<'a> Sensitivity<'a> {
         } else {
             force_scale(robot)
         };
-        let step = RELATIVE_STEP * t.tension.max(bend);
+        let tension = self.system.model.tensions[tendon];
+        let step = RELATIVE_STEP * tension.max(bend);
         // Central needs q - h inside the model's domain (tension > 0 keeps the tendon in it).
-        let difference = if t.tension > step {
+        let difference = if tension > step {
             Difference::Central
         } else {
             Difference::Forward
         };
-        self.derivative(step, difference, |r, dq| r.tendons[tendon].tension += dq)
+        // The tension is an input the model owns: moved in place, no robot to clone.
+        self.differenced(step, difference, |system, states, dq, out| {
+            system.model.tensions[tendon] = tension + dq;
+            let result = system.residual(states, out);
+            system.model.tensions[tendon] = tension;
+            result
+        })
     }
 }
 

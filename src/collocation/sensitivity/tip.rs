@@ -91,7 +91,7 @@ pub fn tip_sensitivities(robot: &Robot, solution: &Solution) -> Result<TipSensit
     let mut tension = DMatrix::zeros(6, k);
     let mut displacement = DMatrix::zeros(6, k);
     for i in 0..k {
-        if robot.tendons[i].displacement.is_some() {
+        if robot.tendons[i].displacement().is_some() {
             displacement.set_column(i, &held.pull(i)?);
         } else {
             tension.set_column(i, &held.tip(&sens.tension(i)?)?);
@@ -137,7 +137,7 @@ impl Held {
         let taut: Vec<usize> = (0..robot.tendons.len())
             .filter(|&i| {
                 let state = &solution.tendons[i];
-                robot.tendons[i].displacement.is_some() && state.slack == 0.0 && state.tension > 0.0
+                robot.tendons[i].displacement().is_some() && state.slack == 0.0 && state.tension > 0.0
             })
             .collect();
         let directions = if taut.is_empty() {
@@ -253,7 +253,7 @@ pub struct DisplacementSensitivities {
 /// [`Sensitivity::new`] (the solution must be `robot`'s).
 pub fn displacement_sensitivities(robot: &Robot, solution: &Solution) -> Result<DisplacementSensitivities> {
     let tendons: Vec<usize> = (0..robot.tendons.len())
-        .filter(|&i| robot.tendons[i].displacement.is_some())
+        .filter(|&i| robot.tendons[i].displacement().is_some())
         .collect();
     if tendons.is_empty() {
         return Err(crate::error::invalid(

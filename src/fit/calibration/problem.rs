@@ -30,7 +30,7 @@ impl Measurement {
     pub fn load(&self, robot: &Robot) -> Robot {
         let mut loaded = robot.clone();
         for (t, &tension) in loaded.tendons.iter_mut().zip(&self.tensions) {
-            t.tension = tension;
+            t.set_tension(tension);
         }
         loaded.loads.tip_force = self.tip_force;
         loaded

@@ -80,13 +80,13 @@ impl Inputs {
 
     /// The free tendons' tensions in `robot` (N).
     pub(super) fn tensions(&self, robot: &Robot) -> DVector<f64> {
-        DVector::from_iterator(self.free.len(), self.free.iter().map(|&i| robot.tendons[i].tension))
+        DVector::from_iterator(self.free.len(), self.free.iter().map(|&i| robot.tendons[i].tension()))
     }
 
     /// Sets the free tendons' tensions in `robot` to `tau`, within [0, their limit].
     pub(super) fn set(&self, robot: &mut Robot, tau: &DVector<f64>) {
         for (k, &i) in self.free.iter().enumerate() {
-            robot.tendons[i].tension = tau[k].clamp(0.0, self.limits[k]);
+            robot.tendons[i].hold_tension(tau[k].clamp(0.0, self.limits[k]));
         }
     }
 
@@ -130,7 +130,7 @@ impl Inputs {
             if clamped != q {
                 moved.push((i, q, clamped));
             }
-            current.tendons[i].displacement = Some(clamped);
+            current.tendons[i].set_displacement(clamped);
         }
         if !moved.is_empty() {
             solution = solver.solve_from(&current, &solution)?;
@@ -139,8 +139,7 @@ impl Inputs {
         }
         for &i in &self.free {
             let t = &mut current.tendons[i];
-            t.displacement = None;
-            t.tension = solution.tendons[i].tension;
+            t.set_tension(solution.tendons[i].tension);
         }
         Ok((current, solution, solves))
     }
@@ -227,7 +226,7 @@ impl Inputs {
             } else {
                 q
             };
-            displaced.tendons[i].displacement = Some(q);
+            displaced.tendons[i].set_displacement(q);
         }
         let solved = solver.solve_from(&displaced, &solution)?;
         Ok((displaced, solved, 1))
@@ -242,7 +241,7 @@ impl Inputs {
         let tension = solution.tendons[i].tension;
         let value = match self.adjusted {
             Adjusted::Tensions { .. } => tension,
-            Adjusted::Displacements { .. } => robot.tendons[i].displacement.unwrap_or(0.0),
+            Adjusted::Displacements { .. } => robot.tendons[i].displacement().unwrap_or(0.0),
         };
         let k = self.free.iter().position(|&j| j == i).unwrap_or(0);
         if tension <= SLACK_TENSION * robot.tension_scale(i) {

@@ -189,10 +189,10 @@ pub const ROTATION_TOLERANCE: f64 = 1e-6;
 /// ```
 /// use tdcr::fit::inverse::{InverseOptions, Target, solve_tensions};
 /// let mut robot = tdcr::cases::prototype();
-/// robot.tendons[1].tension = 1.5;
+/// robot.tendons[1].set_tension(1.5);
 /// let options = InverseOptions::new(5.0);
 /// let goal = tdcr::collocation::solve(&robot, &options.solver).unwrap().tip_position();
-/// robot.tendons[1].tension = 0.0;
+/// robot.tendons[1].set_tension(0.0);
 /// let found = solve_tensions(&robot, &Target::position(goal), &options).unwrap();
 /// assert!(found.reachable);
 /// assert!((found.tip_position() - goal).norm() <= options.tolerance);
@@ -224,11 +224,11 @@ pub fn solve_tensions(robot: &Robot, target: &Target, options: &InverseOptions) 
 /// ```
 /// use tdcr::fit::inverse::{InverseOptions, Target, solve_displacements};
 /// let mut robot = tdcr::cases::prototype();
-/// robot.tendons[1].displacement = Some(0.003); // pull tendon 2 in by 3 mm
+/// robot.tendons[1].set_displacement(0.003); // pull tendon 2 in by 3 mm
 /// // A stroke of +-1 cm: under its own weight the rod's upper tendons need letting out.
 /// let options = InverseOptions::displacements(-0.01, 0.01);
 /// let goal = tdcr::collocation::solve(&robot, &options.solver).unwrap().tip_position();
-/// robot.tendons[1].displacement = None; // forget it: start from the tensions (all 0)
+/// robot.tendons[1].set_tension(0.0); // forget it: start from the tensions (all 0)
 /// let found = solve_displacements(&robot, &Target::position(goal), &options).unwrap();
 /// assert!(found.reachable);
 /// assert!((found.tip_position() - goal).norm() <= options.tolerance);

@@ -10,7 +10,7 @@ use crate::io::locate::Locator;
 use crate::model::loads::{Field, Loads, PointLoad};
 use crate::model::rod::{Rod, Section};
 use crate::model::routing::Routing;
-use crate::model::tendon::Tendon;
+use crate::model::tendon::{Actuation, Tendon};
 use crate::report::Method;
 use crate::{Error, Robot};
 use nalgebra::{Matrix3, Rotation3, Vector3};
@@ -86,7 +86,12 @@ pub(super) fn build(rod: &RodTable, base: &BaseTable, loads: &LoadsTable, tendon
         };
         let mut tendon = Tendon::new(routing, t.tension.unwrap_or(0.0));
         tendon.termination = t.end;
-        tendon.displacement = t.displacement;
+        if let Some(displacement) = t.displacement {
+            tendon.actuation = Actuation::PullIn {
+                displacement,
+                start: t.tension,
+            };
+        }
         tendon.stiffness = t.stiffness;
         tendon.free_length = t.free_length.unwrap_or(0.0);
         robot = robot.with_tendon(tendon);

@@ -8,6 +8,7 @@ use crate::error::{Result, invalid};
 use crate::model::loads::Field;
 use crate::model::rod::{ReferenceStrains, Stiffness};
 use crate::model::routing::Routing;
+use crate::model::tendon::Actuation;
 use crate::report::Method;
 use nalgebra::{Matrix3, Vector3};
 use toml::{Table, Value};
@@ -132,21 +133,24 @@ fn document(file: &RobotFile) -> Result<String> {
         }
         let mut tendon = Table::new();
         tendon.insert("routing".into(), Value::Table(routing));
-        match t.displacement {
-            None => {
-                tendon.insert("tension".into(), Value::Float(t.tension));
+        match t.actuation {
+            Actuation::Tension(tension) => {
+                tendon.insert("tension".into(), Value::Float(tension));
+            }
+            Actuation::PullIn {
+                displacement,
+                start: None,
+            } => {
+                tendon.insert("displacement".into(), Value::Float(displacement));
             }
             // The file gives a displacement-controlled tendon no starting tension (the
-            // parser sets 0: the solver estimates it), so only 0 is written exactly.
-            Some(_) if t.tension != 0.0 => {
+            // solver estimates it), so a given one cannot be written.
+            Actuation::PullIn { start: Some(start), .. } => {
                 return Err(cannot(&format!(
                     "tendon {} is displacement-controlled with a starting tension of {} N, which a robot file cannot hold (set its tension to make it tension-controlled)",
                     i + 1,
-                    t.tension
+                    start
                 )));
-            }
-            Some(q) => {
-                tendon.insert("displacement".into(), Value::Float(q));
             }
         }
         if let Some(end) = t.termination {

@@ -332,7 +332,7 @@ mod tests {
     #[test]
     fn a_saved_solution_reads_back_bitwise_and_warm_starts_in_a_step() {
         let mut pulled = crate::cases::prototype();
-        pulled.tendons[0].displacement = Some(0.005);
+        pulled.tendons[0].set_displacement(0.005);
         for robot in [crate::cases::case_s(), crate::cases::case_h(), pulled] {
             let solution = crate::collocation::solve(&robot, &Default::default()).unwrap();
             for text in [
