@@ -103,7 +103,7 @@ pub struct Step {
 /// let mut sweep = Sweep::new(SweepSolver::Collocation(Default::default()), None);
 /// for tension in [0.0, 1.0, 2.0] {
 ///     let mut robot = tdcr::cases::case_s();
-///     robot.tendons[0].tension = tension;
+///     robot.tendons[0].set_tension(tension);
 ///     let step = sweep.step(&robot).unwrap();
 ///     assert!(step.event.is_none());
 /// }
