@@ -151,8 +151,8 @@ pub fn json(robot: &Robot, solution: &Solution, count: Option<usize>, jacobian: 
                 ("reference_length", Json::Number(state.reference_length)),
                 ("slack", Json::Number(state.slack)),
                 ("end", Json::Number(t.end(robot.length()))),
-                // The turns the tendon makes over its own length (null: a custom routing).
-                ("turns", Json::optional(t.turns(robot.length()))),
+                // The turns the tendon makes over its own length.
+                ("turns", Json::Number(t.turns(robot.length()))),
                 ("path", Json::Array(path.iter().map(Json::vector).collect())),
             ])
         })
