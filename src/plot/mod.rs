@@ -38,8 +38,7 @@ pub use axes::significant;
 pub use chart::{Chart, Mark, Segment};
 pub use png::{Png, fonts_found};
 pub use shape::{
-    default_disks, disk_radius, routing_label, shape_legend, tendon_description, tendon_label, tendon_path,
-    turns_label,
+    default_disks, disk_radius, routing_label, shape_legend, tendon_description, tendon_label, tendon_path, turns_label,
 };
 
 use crate::error::{Result, invalid};

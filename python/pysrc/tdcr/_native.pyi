@@ -289,7 +289,9 @@ def solve(
     equilibrium: Optional[Literal["load_path", "nearest"]] = None,
     integration_tolerance: Optional[float] = None,
 ) -> Solution:
-    """Solves `robot` (GIL released)."""
+    """Solves `robot` (GIL released). `tol` is the tip tolerance relative to the rod
+    length L (default 1e-7): the mesh is refined until the estimated tip position error is at
+    most tol x L and the orientation error at most tol rad."""
 
 def solve_batch(
     robots: Union[Sequence[Robot], Robot],
