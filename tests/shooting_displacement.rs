@@ -104,7 +104,9 @@ fn a_tendon_held_at_its_length_carries_the_weight() {
     let mut robot = example(0.0);
     robot.tendons[2].displacement = Some(0.0);
     let (_, s, gap) = agree(&robot, "tendon 3 at 0");
-    // 1e-5 N: collocation's 0.57116 N, to the 5 decimals `tdcr solve` prints
+    // Regression value: collocation's earlier output 0.57116 N (the independent check is
+    // `agree` above, against this run's collocation). 1e-5 N: the 5 decimals `tdcr solve`
+    // printed
     assert!(
         (s.tendons[2].tension - 0.57116).abs() < 1e-5,
         "{} N",
