@@ -47,6 +47,7 @@ pub mod advanced;
 pub mod analysis;
 pub mod cases;
 pub mod collocation;
+mod dense;
 mod error;
 pub mod fit;
 pub mod io;

@@ -53,6 +53,7 @@ use super::unknowns::{self, NODE, U, V};
 use super::{
     Cache, Cached, Options, cold_start, initial_mesh, interpolate, record_estimate, refine, resolves, segment_ends,
 };
+use crate::dense::solve_dense;
 use crate::error;
 use crate::mesh::guess::{self, InitialGuess};
 use crate::mesh::{Mesh, nodes};
@@ -368,40 +369,6 @@ impl Border for Tensions<'_> {
         std::mem::swap(&mut self.psi, &mut self.trial_psi);
         self.tau.copy_from_slice(&self.trial_tau);
     }
-}
-
-/// Gaussian elimination with partial pivoting on the row-major `n x n` matrix `a`, solving
-/// in place into `b`. False for a zero pivot or a non-finite result.
-fn solve_dense(a: &mut [f64], b: &mut [f64], n: usize) -> bool {
-    for col in 0..n {
-        let Some(pivot) = (col..n).max_by(|&i, &j| a[i * n + col].abs().total_cmp(&a[j * n + col].abs())) else {
-            return false;
-        };
-        if a[pivot * n + col] == 0.0 || !a[pivot * n + col].is_finite() {
-            return false;
-        }
-        if pivot != col {
-            for c in 0..n {
-                a.swap(pivot * n + c, col * n + c);
-            }
-            b.swap(pivot, col);
-        }
-        for row in col + 1..n {
-            let factor = a[row * n + col] / a[col * n + col];
-            for c in col..n {
-                a[row * n + c] -= factor * a[col * n + c];
-            }
-            b[row] -= factor * b[col];
-        }
-    }
-    for row in (0..n).rev() {
-        let mut sum = b[row];
-        for c in row + 1..n {
-            sum -= a[row * n + c] * b[c];
-        }
-        b[row] = sum / a[row * n + row];
-    }
-    b.iter().all(|v| v.is_finite())
 }
 
 /// Solves a robot with displacement-controlled tendons (validated, with `options`

@@ -8,10 +8,10 @@
 //! gives tensions close enough for Newton to start from; collocation then corrects them
 //! once on its initial guess, shooting starts from them as they are.
 
+use crate::dense::solve_dense;
 use crate::model::length;
 use crate::model::robot::Robot;
 use crate::solution::Solution;
-use nalgebra::{DMatrix, DVector};
 
 /// Sets the starting tension of every displacement-controlled tendon of `robot`: the warm
 /// start's, else the one given (when every such tendon has one), else the small-deflection
@@ -42,18 +42,19 @@ pub(crate) fn starting_tensions(robot: &mut Robot, warm: Option<&Solution>) -> b
         robot.tendons[i].tension = 0.0;
     }
     while !active.is_empty() {
-        let a = pull_in_matrix(robot, &compliance, &active);
-        let b = DVector::from_iterator(
-            active.len(),
-            active.iter().map(|&j| {
+        let mut a = pull_in_matrix(robot, &compliance, &active);
+        let b: Vec<f64> = active
+            .iter()
+            .map(|&j| {
                 let inactive = (0..n).filter(|m| !active.contains(m));
                 robot.tendons[j].displacement.unwrap_or(0.0)
                     - inactive
                         .map(|m| compliance[j * n + m] * robot.tendons[m].tension)
                         .sum::<f64>()
-            }),
-        );
-        let Some(tau) = a.lu().solve(&b).filter(|t| t.iter().all(|x| x.is_finite())) else {
+            })
+            .collect();
+        let mut tau = b;
+        if !solve_dense(&mut a, &mut tau, active.len()) {
             // A tendon on the neutral axis of an inextensible rod: start at 0.
             break;
         };
@@ -77,21 +78,21 @@ pub(crate) fn starting_tensions(robot: &mut Robot, warm: Option<&Solution>) -> b
     true
 }
 
-/// K + C restricted to the tendons `active` (m/N): the pull-in of each per newton of each in
-/// the small-deflection estimate, with `compliance` the full K of
-/// [`length::pull_in_compliance`] (row major) and C the tendons' own stretch c_j on the
-/// diagonal.
-fn pull_in_matrix(robot: &Robot, compliance: &[f64], active: &[usize]) -> DMatrix<f64> {
+/// K + C restricted to the tendons `active` (row major, m/N): the pull-in of each per newton
+/// of each in the small-deflection estimate, with `compliance` the full K of
+/// [`length::pull_in_compliance`] and C the tendons' own stretch c_j on the diagonal.
+fn pull_in_matrix(robot: &Robot, compliance: &[f64], active: &[usize]) -> Vec<f64> {
     let n = robot.tendons.len();
-    DMatrix::from_fn(active.len(), active.len(), |r, c| {
-        let (j, m) = (active[r], active[c]);
-        let stretch = if m == j {
-            robot.tendons[j].compliance(length::reference_length(robot, j))
-        } else {
-            0.0
-        };
-        compliance[j * n + m] + stretch
-    })
+    let mut a = Vec::with_capacity(active.len() * active.len());
+    for &j in active {
+        let stretch = robot.tendons[j].compliance(length::reference_length(robot, j));
+        a.extend(
+            active
+                .iter()
+                .map(|&m| compliance[j * n + m] + if m == j { stretch } else { 0.0 }),
+        );
+    }
+    a
 }
 
 #[cfg(test)]
@@ -111,7 +112,7 @@ mod tests {
         assert!(tau > 0.0, "{tau} N");
         let k = length::pull_in_compliance(&robot);
         let c = robot.tendons[0].compliance(length::reference_length(&robot, 0));
-        // 1e-12 relative: one LU solve of a 1 x 1 system, rounding only
+        // 1e-12 relative: one elimination of a 1 x 1 system, rounding only
         assert!(((k[0] + c) * tau - 1e-4).abs() < 1e-12 * 1e-4, "{} m", (k[0] + c) * tau);
     }
 
