@@ -5,9 +5,13 @@
 //! Every function is smooth at the identity: near theta = 0 the trigonometric ratios are
 //! evaluated from their Taylor series in theta^2, so dual numbers get exact derivatives
 //! there too (sqrt(theta^2) would have an infinite derivative at 0).
+//!
+//! XYZ Euler angles (f64 only): [`euler_xyz`], its inverse [`euler_xyz_from`] and the rates
+//! [`euler_rates`], for the robot file's `euler_xyz_deg` and the calibration's base angles.
 
 use crate::Real;
-use nalgebra::{Matrix3, Vector3};
+use nalgebra::{Matrix3, Rotation3, Vector3};
+use std::f64::consts::PI;
 
 /// Below this theta^2 (|theta| < 1/2) the trigonometric ratios come from their Taylor
 /// series in theta^2 ([`SIN_RATIO`] and the others, seven terms each): the first omitted
@@ -204,6 +208,78 @@ pub fn orthonormality_error(r: &Matrix3<f64>) -> f64 {
     e.max((r.determinant() - 1.0).abs())
 }
 
+// XYZ Euler angles: R0 = Rx(alpha) Ry(beta) Rz(gamma), the robot file's `euler_xyz_deg` and the
+// base orientation calibration fits; the matrix, the angles of a matrix, and the rates
+// d phi / d(alpha, beta, gamma) (docs/calibration.md).
+
+/// R = Rx(alpha) Ry(beta) Rz(gamma) for angles (alpha, beta, gamma) in rad: intrinsic
+/// rotations about x, then the new y, then the newest z (equivalently extrinsic z, y, x).
+/// The robot file's `euler_xyz_deg` is this with the angles in degrees, and calibration
+/// fits the base orientation as these angles (docs/calibration.md).
+///
+/// # Examples
+/// ```
+/// use nalgebra::Vector3;
+/// use tdcr::so3::euler_xyz;
+/// // The prototype's base rotation (body z along world +x) is Ry(90 deg).
+/// let r = euler_xyz(&Vector3::new(0.0, 90f64.to_radians(), 0.0));
+/// assert!((r - tdcr::cases::prototype_base_rotation()).amax() < 1e-15);
+/// ```
+pub fn euler_xyz(angles: &Vector3<f64>) -> Matrix3<f64> {
+    (Rotation3::from_axis_angle(&Vector3::x_axis(), angles[0])
+        * Rotation3::from_axis_angle(&Vector3::y_axis(), angles[1])
+        * Rotation3::from_axis_angle(&Vector3::z_axis(), angles[2]))
+    .into_inner()
+}
+
+/// Below this |cos(beta)| the XYZ angles are taken as singular (beta = +-90 deg) when read
+/// from a matrix: sqrt(eps) = 1.5e-8, where reading alpha and gamma from entries of size
+/// |cos(beta)| would lose as much as setting gamma = 0 does (about 1e-8 rad either way).
+const EULER_SINGULAR: f64 = 1.5e-8;
+
+/// The XYZ Euler angles (alpha, beta, gamma) (rad) of a rotation, R = [`euler_xyz`] of them:
+/// beta in [-pi/2, pi/2], alpha and gamma in (-pi, pi]. At beta = +-pi/2, where only
+/// alpha +- gamma is determined, gamma is set to 0.
+///
+/// Precondition: `rotation` is orthonormal with determinant +1.
+///
+/// # Examples
+/// ```
+/// use nalgebra::Vector3;
+/// use tdcr::so3::{euler_xyz, euler_xyz_from};
+/// let angles = Vector3::new(3.1, -0.4, -1.6);
+/// assert!((euler_xyz_from(&euler_xyz(&angles)) - angles).amax() < 1e-14);
+/// ```
+pub fn euler_xyz_from(rotation: &Matrix3<f64>) -> Vector3<f64> {
+    let r = rotation;
+    // R = [[cb cc, -cb sc, sb], [., ., -sa cb], [., ., ca cb]] (docs/calibration.md).
+    let cb = r[(0, 0)].hypot(r[(0, 1)]);
+    let beta = r[(0, 2)].atan2(cb);
+    let (alpha, gamma) = if cb > EULER_SINGULAR {
+        ((-r[(1, 2)]).atan2(r[(2, 2)]), (-r[(0, 1)]).atan2(r[(0, 0)]))
+    } else {
+        // Rx(a) Ry(+-90 deg) = rows [., ., .], [sa, ca, 0], [., sa, 0] up to the sign of
+        // the first column: alpha from R[2,1], R[1,1] with gamma = 0.
+        (r[(2, 1)].atan2(r[(1, 1)]), 0.0)
+    };
+    Vector3::new(wrap_angle(alpha), beta, wrap_angle(gamma))
+}
+
+/// An angle (rad) in (-pi, pi].
+pub fn wrap_angle(angle: f64) -> f64 {
+    let a = angle.rem_euclid(2.0 * PI);
+    if a > PI { a - 2.0 * PI } else { a }
+}
+
+/// W = d phi / d(alpha, beta, gamma): the world-frame rotation vector phi
+/// (R -> exp(hat(phi)) R) per unit change of each XYZ Euler angle, columns
+/// x, Rx(alpha) y, Rx(alpha) Ry(beta) z. det W = cos(beta).
+pub fn euler_rates(angles: &Vector3<f64>) -> Matrix3<f64> {
+    let rx = Rotation3::from_axis_angle(&Vector3::x_axis(), angles[0]);
+    let ry = Rotation3::from_axis_angle(&Vector3::y_axis(), angles[1]);
+    Matrix3::from_columns(&[Vector3::x(), rx * Vector3::y(), rx * (ry * Vector3::z())])
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -293,5 +369,61 @@ mod tests {
         let l = log(&r);
         assert_eq!(l[0].eps, 1.0);
         assert!(l[1].eps == 0.0 && l[2].eps == 0.0);
+    }
+    #[test]
+    fn euler_angles_compose_about_x_then_y_then_z() {
+        // Rx(a) Ry(b) Rz(c) applied to e_z: Rz leaves it, Ry(90 deg) turns it to +x.
+        let r = euler_xyz(&Vector3::new(0.0, 90f64.to_radians(), 0.0));
+        // 1e-15: cos(pi/2) rounds to 6e-17
+        assert!((r * Vector3::z() - Vector3::x()).amax() < 1e-15);
+        // The order: with alpha = 90 deg first about x, then beta = 90 deg about the new y
+        // (which is world z), e_z ends at Rx(90) (Ry(90) e_z) = Rx(90) e_x = e_x, and e_x
+        // at Rx(90) (Ry(90) e_x) = Rx(90) (-e_z) = e_y.
+        let r = euler_xyz(&Vector3::new(90f64.to_radians(), 90f64.to_radians(), 0.0));
+        // 1e-15: products of cos(pi/2) rounding
+        assert!((r * Vector3::z() - Vector3::x()).amax() < 1e-15);
+        assert!((r * Vector3::x() - Vector3::y()).amax() < 1e-15);
+    }
+
+    #[test]
+    fn euler_angles_round_trip_and_at_the_singularity() {
+        for angles in [
+            Vector3::new(3.1, -0.4, -1.6),
+            Vector3::new(-0.2, 1.2, 2.9),
+            Vector3::new(0.0, 0.0, 0.0),
+        ] {
+            let back = euler_xyz_from(&euler_xyz(&angles));
+            // 1e-14: atan2 of entries accurate to rounding
+            assert!((back - angles).amax() < 1e-14, "{angles:?} -> {back:?}");
+        }
+        // beta = 90 deg: only alpha + gamma is determined; gamma comes back 0 and the matrix
+        // is the same.
+        let angles = Vector3::new(0.3, std::f64::consts::FRAC_PI_2, 0.2);
+        let back = euler_xyz_from(&euler_xyz(&angles));
+        assert_eq!(back.z, 0.0);
+        // 1e-14: the rotation is recovered to rounding
+        assert!((euler_xyz(&back) - euler_xyz(&angles)).amax() < 1e-14);
+        assert_eq!(wrap_angle(3.0 * PI), PI);
+        // 1e-15: one rem_euclid of a value of order 2 pi
+        assert!((wrap_angle(-3.0 * PI / 2.0) - PI / 2.0).abs() < 1e-15);
+    }
+
+    #[test]
+    fn euler_rates_are_the_rotation_vector_per_angle() {
+        let angles = Vector3::new(0.4, -0.7, 1.1);
+        let w = euler_rates(&angles);
+        let r0 = euler_xyz(&angles);
+        for k in 0..3 {
+            // Central difference of R(angles + h e_k) R0^T = exp(hat(phi)): phi / (2h).
+            let h = 1e-6;
+            let plus = euler_xyz(&(angles + Vector3::ith(k, h)));
+            let minus = euler_xyz(&(angles - Vector3::ith(k, h)));
+            let phi = (log(&(plus * r0.transpose())) - log(&(minus * r0.transpose()))) / (2.0 * h);
+            // 1e-8: central difference with step 1e-6
+            assert!((phi - w.column(k)).amax() < 1e-8, "{k}: {phi:?}");
+        }
+        // det W = cos(beta)
+        // 1e-14: a 3 x 3 determinant of unit columns, rounding only
+        assert!((w.determinant() - angles.y.cos()).abs() < 1e-14);
     }
 }

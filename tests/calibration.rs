@@ -14,11 +14,11 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 use tdcr::cases::{GaussianNoise, paper_frame_rotation, prototype_in_paper_frame, table2_measurement};
 use tdcr::fit::calibration::{
-    self, Calibration, CalibrationOptions, Fit, Measurement, Parameters, TipErrorStatistics, calibrate, euler_rates,
-    euler_xyz, euler_xyz_from, predict,
+    Calibration, CalibrationOptions, Fit, Measurement, Parameters, TipErrorStatistics, calibrate, predict,
 };
 use tdcr::fit::lm::FitTermination;
 use tdcr::io::experiments::{parse_csv, to_csv};
+use tdcr::so3::{euler_rates, euler_xyz, euler_xyz_from, wrap_angle};
 use tdcr::{Error, Robot, cases, collocation, so3};
 
 /// Twelve of the 32 experiments of Table 2 (indices into `cases::table2()`): no tension;
@@ -76,7 +76,7 @@ fn scaled_errors(fit: &Calibration, truth: &Parameters, length: f64) -> Vec<(&'s
     }
     if fit.fit.euler {
         for (i, name) in ["alpha", "beta", "gamma"].iter().enumerate() {
-            out.push((*name, calibration::wrap(f.euler[i] - t.euler[i])));
+            out.push((*name, wrap_angle(f.euler[i] - t.euler[i])));
         }
     }
     if fit.fit.base_position {
@@ -366,7 +366,7 @@ fn euler_angles_read_back_from_their_rotation() {
         let v = Vector3::from(angles);
         let back = euler_xyz_from(&euler_xyz(&v));
         // 1e-14: atan2 of entries with rounding errors of a few eps.
-        let d = (back - v).map(calibration::wrap);
+        let d = (back - v).map(wrap_angle);
         assert!(d.amax() < 1e-14, "{angles:?} -> {back}");
     }
     // At beta = +-90 deg only alpha +- gamma is determined: the rotation must still match.

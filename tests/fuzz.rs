@@ -1418,9 +1418,9 @@ fn long_parser_fuzz() {
     total.print("total");
     for n in [1000, 10_000, 100_000] {
         let seconds = check_big_file(n);
+        // Printed, not asserted: wall time depends on the machine's load. That the work
+        // grows linearly is asserted by tests/parse_time.rs (allocations and bytes).
         eprintln!("{n:>7} tendons and {n} point loads: parsed and checked in {seconds:.2} s");
-        // 5 s: the bound for 10^5 tendons (they took over 120 s)
-        assert!(seconds < 5.0, "{n} tendons took {seconds:.2} s");
     }
     let inputs = total.counts()[0];
     let (panics, truncations) = (PANICS.load(Ordering::Relaxed), TRUNCATIONS.load(Ordering::Relaxed));

@@ -181,7 +181,9 @@ fn check(robot: &Robot) -> Result<Option<Accuracy>, TestCaseError> {
     }))
 }
 
-fn run(cases: u32) {
+/// Runs the property on `cases` random robots (a fixed seed) and asserts that the ratio of
+/// true error to estimate lies in `band` on every robot whose error is above rounding.
+fn run(cases: u32, band: (f64, f64)) {
     let solved = AtomicUsize::new(0);
     let accuracy = std::sync::Mutex::new(Vec::new());
     let config = Config {
@@ -213,13 +215,19 @@ fn run(cases: u32) {
         .map(|a| a.error / a.estimate)
         .collect();
     ratios.sort_by(f64::total_cmp);
-    if let (Some(lo), Some(hi)) = (ratios.first(), ratios.last()) {
+    if let (Some(&lo), Some(&hi)) = (ratios.first(), ratios.last()) {
         eprintln!(
             "true/estimate over {} robots with errors above 1e-12 m: min {lo:.3}, median {:.3}, \
              99th percentile {:.3}, max {hi:.3}; {within} of {solved} within the tolerance",
             ratios.len(),
             ratios[ratios.len() / 2],
             ratios[(ratios.len() * 99) / 100]
+        );
+        // The estimate is asymptotically exact (docs/numerics.md, "Error control"): the
+        // band docs/numerics.md and docs/validation.md give for these robots.
+        assert!(
+            band.0 <= lo && hi <= band.1,
+            "true/estimate from {lo:.3} to {hi:.3}, outside {band:?}"
         );
     }
     // The default tolerance holds on at least 99 % of the solved robots (issue 13).
@@ -238,12 +246,15 @@ fn config_algorithm() -> proptest::test_runner::RngAlgorithm {
 
 #[test]
 fn random_robots_are_solved_or_fail_cleanly() {
-    run(300);
+    // Measured 0.986 to 1.012 on these 300 robots; 0.98 to 1.02 leaves room for the rounding
+    // differences between CPUs with and without FMA, which move the smallest errors.
+    run(300, (0.98, 1.02));
 }
 
 /// The long run: `cargo test --release --test properties -- --ignored`.
 #[test]
 #[ignore = "long: 10 000 random robots, about 5 minutes in release"]
 fn ten_thousand_random_robots() {
-    run(10_000);
+    // The last long run measured 0.983 to 1.034 (module docs); the same room as above.
+    run(10_000, (0.97, 1.05));
 }

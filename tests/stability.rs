@@ -109,8 +109,9 @@ fn r1_at_two_newtons_follows_the_load_path_in_few_iterations() {
     // Before the load path this took 16 528 Newton iterations over 666 load steps.
     assert!(report.iterations <= 50, "{} iterations", report.iterations);
     assert!(report.stability.is_stable());
-    // The tip of the load path (and of the old ramp): (392.74, 0, 91.64) mm; 1e-6 m is
-    // well above the 5e-8 m tolerance
+    // Regression value, not an independent reference: the tip this solver reached on the
+    // load path (and on the old ramp), (392.74, 0, 91.64) mm; 1e-6 m is well above the
+    // 5e-8 m tolerance
     let tip = solution.tip_position();
     assert!((tip - Vector3::new(0.3927429, 0.0, 0.0916372)).norm() < 1e-6, "{tip:?}");
 }
@@ -123,7 +124,8 @@ fn opposing_loads_return_the_load_path_state_and_flag_the_other_one() {
     let default = collocation::solve(&r, &Default::default()).unwrap();
     assert!(default.report.stability.is_stable());
     assert!(matches!(default.report.path, Path::LoadPath { .. }));
-    // 1e-4 m: the issue quotes the loaded-from-rest tip to 0.1 mm
+    // Regression value, not an independent reference: the loaded-from-rest tip this solver
+    // gave when issue 14 was filed. 1e-4 m: the issue quotes it to 0.1 mm
     assert!((default.tip_position() - Vector3::new(0.3684, 0.0, -0.0365)).norm() < 1e-4);
     let s_shape = collocation::solve(&r, &nearest()).unwrap();
     assert!(s_shape.tip_position().x < 0.0, "{:?}", s_shape.tip_position());
@@ -137,7 +139,8 @@ fn opposing_loads_return_the_load_path_state_and_flag_the_other_one() {
     proto.loads.tip_force = Vector3::new(0.0, 0.0, -1.0);
     let default = collocation::solve(&proto, &Default::default()).unwrap();
     assert!(default.report.stability.is_stable());
-    // 1e-3 m: the reference is quoted to the millimetre
+    // Regression value (this solver's earlier output, not an independent reference).
+    // 1e-3 m: it is quoted to the millimetre
     assert!((default.tip_position() - Vector3::new(0.125, 0.0, -0.194)).norm() < 1e-3);
     // Newton from the guess lands elsewhere (the curl before the monotonicity test, now a
     // state with the tip at (-59, 0, -40) mm), and that state is unstable.

@@ -42,7 +42,8 @@ pub fn type_name(value: &Bound<'_, PyAny>) -> String {
 }
 
 /// `settings` with the options of `kwargs` applied: `method` ("collocation" or "shooting"),
-/// `tol` (tip tolerance for adaptive refinement, m), `intervals` (a fixed mesh unless `tol`
+/// `tol` (tip tolerance for adaptive refinement, relative to the rod length L: position to
+/// tol x L, orientation to tol rad), `intervals` (a fixed mesh unless `tol`
 /// is given too), `max_intervals`, `residual_tolerance`, `max_iterations`, `continuation`,
 /// `equilibrium` ("load_path" or "nearest", collocation), `integration_tolerance`
 /// (shooting). Unknown names and wrong types are

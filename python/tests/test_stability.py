@@ -67,7 +67,8 @@ def test_r1_follows_the_load_path_to_a_stable_state_and_nearest_finds_the_unstab
     report = default.report
     assert report.converged and report.path == "load_path" and report.stability == "stable"
     assert report.load_steps >= 1 and report.iterations == report.newton_steps + report.chord_steps
-    # 1e-4 m: issue 14 quotes the loaded-from-rest tip to 0.1 mm.
+    # Regression value, not an independent reference: the loaded-from-rest tip the solver
+    # gave when issue 14 was filed. 1e-4 m: the issue quotes it to 0.1 mm.
     assert np.linalg.norm(default.tip_position - np.array([0.3684, 0.0, -0.0365])) < 1e-4
     # Newton from the guess: the S-shape bending against the pulled tendon, unstable.
     s_shape = nearest.report

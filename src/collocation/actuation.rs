@@ -60,6 +60,7 @@ use crate::mesh::{Mesh, nodes};
 use crate::model::equations::Model;
 use crate::model::length::{self, NodeQuadrature};
 use crate::model::routing::RoutingPoint;
+use crate::model::tension_guess::starting_tensions;
 use crate::report::{Method, SolveReport, Stability, Termination};
 use crate::solution::{Solution, State};
 use crate::{Error, Robot};
@@ -468,87 +469,6 @@ fn store(cache: &mut Cache, mesh: Mesh, options: &Options, workspace: Workspace)
         workspace,
         last: None,
     });
-}
-
-/// Sets the starting tension of every displacement-controlled tendon of `robot`: the warm
-/// start's, else the one given (when every such tendon has one), else the small-deflection
-/// estimate: the tensions that produce the pull-ins through the compliance K of
-/// [`length::pull_in_compliance`] plus the tendons' own stretch, q = (K + C) tau, with the
-/// tendons that would push left at 0 and the rest solved again (a few passes at most).
-/// Returns whether it estimated them (the collocation solve then corrects the estimate on its
-/// initial guess, [`correct_on_guess`]).
-pub(crate) fn starting_tensions(robot: &mut Robot, warm: Option<&Solution>) -> bool {
-    let displaced: Vec<usize> = (0..robot.tendons.len())
-        .filter(|&i| robot.tendons[i].displacement().is_some())
-        .collect();
-    if let Some(w) = warm
-        && w.tendons.len() == robot.tendons.len()
-    {
-        for &i in &displaced {
-            robot.tendons[i].hold_tension(w.tendons[i].tension);
-        }
-        return false;
-    }
-    if displaced.iter().all(|&i| robot.tendons[i].tension() > 0.0) {
-        return false;
-    }
-    let n = robot.tendons.len();
-    let compliance = length::pull_in_compliance(robot);
-    let mut active: Vec<usize> = displaced.clone();
-    for &i in &displaced {
-        robot.tendons[i].hold_tension(0.0);
-    }
-    while !active.is_empty() {
-        let mut a = pull_in_matrix(robot, &compliance, &active);
-        let mut b: Vec<f64> = active
-            .iter()
-            .map(|&j| {
-                let inactive = (0..n).filter(|m| !active.contains(m));
-                robot.tendons[j].displacement().unwrap_or(0.0)
-                    - inactive
-                        .map(|m| compliance[j * n + m] * robot.tendons[m].tension())
-                        .sum::<f64>()
-            })
-            .collect();
-        if !solve_dense(&mut a, &mut b, active.len()) {
-            // A tendon on the neutral axis of an inextensible rod: start at 0.
-            break;
-        }
-        let pushing: Vec<usize> = active
-            .iter()
-            .zip(&b)
-            .filter(|&(_, &t)| t < 0.0)
-            .map(|(&j, _)| j)
-            .collect();
-        for (&j, &t) in active.iter().zip(&b) {
-            robot.tendons[j].hold_tension(t.max(0.0));
-        }
-        if pushing.is_empty() {
-            break;
-        }
-        active.retain(|j| !pushing.contains(j));
-        for &j in &pushing {
-            robot.tendons[j].hold_tension(0.0);
-        }
-    }
-    true
-}
-
-/// K + C restricted to the tendons `active` (row major, m/N): the pull-in of each per newton
-/// of each in the small-deflection estimate, with `compliance` the full K of
-/// [`length::pull_in_compliance`] and C the tendons' own stretch c_j on the diagonal.
-fn pull_in_matrix(robot: &Robot, compliance: &[f64], active: &[usize]) -> Vec<f64> {
-    let n = robot.tendons.len();
-    let mut a = Vec::with_capacity(active.len() * active.len());
-    for &j in active {
-        let stretch = robot.tendons[j].compliance(length::reference_length(robot, j));
-        a.extend(
-            active
-                .iter()
-                .map(|&m| compliance[j * n + m] + if m == j { stretch } else { 0.0 }),
-        );
-    }
-    a
 }
 
 /// Corrects the small-deflection tensions of `robot`'s taut displacement-controlled tendons

@@ -30,7 +30,7 @@ pub fn json(robot: &Robot, solution: &Solution, count: Option<usize>, jacobian: 
     for (entry, tendon) in file.tendons.iter_mut().zip(&robot.tendons) {
         entry.end = Some(Num(tendon.end(length)));
         // The turns the tendon makes over its own length (null: a custom routing).
-        entry.turns = Some(Num(tendon.turns(length).unwrap_or(f64::NAN)));
+        entry.turns = Some(Num(tendon.turns(length)));
     }
     file.jacobian = jacobian.map(|j| {
         // Rows: tip position (m per unit), then the tip rotation as a world-frame rotation

@@ -12,3 +12,4 @@ pub mod rod;
 pub mod routing;
 pub mod scales;
 pub mod tendon;
+pub(crate) mod tension_guess;

@@ -71,7 +71,7 @@ impl Routing {
     /// use tdcr::{Routing, Tendon};
     /// // 1 turn per rod length on a tendon that ends half-way: half a turn.
     /// let tendon = Tendon::new(Routing::helical(0.008, 1.0, 0.0), 1.0).ending_at(0.121);
-    /// assert_eq!(tendon.turns(0.242), Some(0.5));
+    /// assert_eq!(tendon.turns(0.242), 0.5);
     /// ```
     pub fn helical(radius: f64, turns: f64, phase: f64) -> Self {
         Routing::Helical { radius, turns, phase }
@@ -97,13 +97,44 @@ impl Routing {
     }
 
     /// The signed turns this routing makes about the backbone between arc lengths `from` and
-    /// `to` (m) on a rod of `length` L (m): 0 for a straight routing, `turns (to - from) / L`
-    /// for a helix, `None` for a custom routing (its angle is not known in closed form).
-    pub fn turns_between(&self, from: f64, to: f64, length: f64) -> Option<f64> {
+    /// `to` (m) on a rod of `length` L (m): the winding angle of r(s) in the cross-section
+    /// divided by 2 pi (negative: left-handed). 0 for a straight routing, `turns (to - from) / L`
+    /// for a helix; for a custom routing the angle unwrapped on a grid fine enough that no
+    /// step exceeds pi/4 (then every unwrapped step is the true one), exact to rounding for a
+    /// routing that does not pass through the backbone.
+    pub fn turns_between(&self, from: f64, to: f64, length: f64) -> f64 {
         match self {
-            Routing::Straight { .. } => Some(0.0),
-            Routing::Helical { turns, .. } => Some(turns * (to - from) / length),
-            Routing::Custom(_) => None,
+            Routing::Straight { .. } => 0.0,
+            Routing::Helical { turns, .. } => turns * (to - from) / length,
+            Routing::Custom(_) => self.winding(from, to, length),
+        }
+    }
+
+    /// The winding of r(s) for s from `from` to `to` (m), in turns, unwrapped numerically: 4096 steps,
+    /// doubled until no step turns by more than pi/4 (at most 2^22 steps). Points on the
+    /// backbone (r = 0) have no angle and are skipped.
+    fn winding(&self, from: f64, to: f64, length: f64) -> f64 {
+        let angle = |s: f64| {
+            let r = self.at(s, length).r;
+            (r.norm() > 0.0).then(|| r.y.atan2(r.x))
+        };
+        let mut count = 4096;
+        loop {
+            let (mut total, mut largest) = (0.0, 0.0f64);
+            let mut previous = angle(from);
+            for k in 1..=count {
+                let current = angle(from + (to - from) * k as f64 / count as f64);
+                if let (Some(a), Some(b)) = (previous, current) {
+                    let step = (b - a + PI).rem_euclid(2.0 * PI) - PI;
+                    total += step;
+                    largest = largest.max(step.abs());
+                }
+                previous = current.or(previous);
+            }
+            if largest <= PI / 4.0 || count >= 1 << 22 {
+                return total / (2.0 * PI);
+            }
+            count *= 2;
         }
     }
 
@@ -172,16 +203,16 @@ mod tests {
         let length = 0.242;
         let helix = Routing::helical(0.008, 1.0, 0.0);
         let half = Tendon::new(helix.clone(), 1.0).ending_at(length / 2.0);
-        assert_eq!(half.turns(length), Some(0.5));
-        assert_eq!(Tendon::new(helix.clone(), 1.0).turns(length), Some(1.0));
+        assert_eq!(half.turns(length), 0.5);
+        assert_eq!(Tendon::new(helix.clone(), 1.0).turns(length), 1.0);
         // The path itself: at L/2 the offset points the opposite way from the base (pi rad).
         let (base, end) = (helix.at(0.0, length).r, helix.at(length / 2.0, length).r);
         // 1e-15: cos(pi) rounds to -1 within an ulp of the 8 mm radius
         assert_relative_eq!(end, -base, epsilon = 1e-15);
-        assert_eq!(Tendon::new(Routing::straight(0.008, 0.0), 1.0).turns(length), Some(0.0));
+        assert_eq!(Tendon::new(Routing::straight(0.008, 0.0), 1.0).turns(length), 0.0);
         assert_eq!(
             Routing::helical(0.008, -3.0, 0.0).turns_between(0.0, length / 3.0, length),
-            Some(-1.0)
+            -1.0
         );
     }
 

@@ -122,9 +122,11 @@ impl Tendon {
     }
 
     /// The signed turns this tendon's path makes about the backbone from the base to its
-    /// end, on a rod of `length` L (m): a helical routing of `turns` per rod length ending
-    /// at l makes `turns * l / L`; 0 for a straight routing; `None` for a custom one.
-    pub fn turns(&self, length: f64) -> Option<f64> {
+    /// end, on a rod of `length` L (m) ([`Routing::turns_between`]): a helical routing of
+    /// `turns` per rod length ending at l makes `turns * l / L`; 0 for a straight routing;
+    /// a custom one its winding angle over 2 pi. A helix of one turn per rod length ending
+    /// at L/2 makes 0.5 turns.
+    pub fn turns(&self, length: f64) -> f64 {
         self.routing.turns_between(0.0, self.end(length), length)
     }
 

@@ -3,6 +3,7 @@
 
 use super::axes::{significant, tick_step, ticks};
 use super::png::{self, Png};
+use super::text::escape;
 use crate::error::Result;
 use std::fmt::Write as _;
 
@@ -53,10 +54,6 @@ const LEFT: f64 = 80.0;
 const RIGHT: f64 = 30.0;
 const TOP: f64 = 80.0;
 const BOTTOM: f64 = 130.0;
-
-fn escape(text: &str) -> String {
-    text.replace('&', "&amp;").replace('<', "&lt;").replace('>', "&gt;")
-}
 
 impl Chart {
     /// The range of the data along one axis, padded by 5 % (a flat range gets +-1).

@@ -7,7 +7,7 @@
 //! its backbone, its tendon paths (thin; slack ones dashed), spacer disks, arrows for the tip
 //! force and point loads (length proportional to force, labelled in N) and small arrows for a
 //! distributed force; [`shape_legend`] names each of them, tendons with their routing, the
-//! turns they truly make over their own length ([`tendon_turns`]) and their tension.
+//! turns they truly make over their own length ([`crate::Tendon::turns`]) and their tension.
 //!
 //! ```
 //! use tdcr::plot::{Figure, Style, shape_legend};
@@ -22,18 +22,23 @@
 //! assert!(svg.contains("tendon 1 (thin line): straight at (8, 0) mm; 2.94 N"));
 //! ```
 
+mod arrow;
 mod axes;
 mod chart;
+mod layout;
+mod legend;
 mod png;
+mod scene;
 mod shape;
 mod svg;
+mod text;
+mod view;
 
 pub use axes::significant;
 pub use chart::{Chart, Mark, Segment};
 pub use png::{Png, fonts_found};
 pub use shape::{
-    default_disks, disk_radius, routing_label, shape_legend, tendon_description, tendon_label, tendon_path,
-    tendon_turns, turns_label,
+    default_disks, disk_radius, routing_label, shape_legend, tendon_description, tendon_label, tendon_path, turns_label,
 };
 
 use crate::error::{Result, invalid};

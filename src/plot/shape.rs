@@ -1,6 +1,6 @@
 //! A solved shape as drawing elements: the backbone and the tendon paths sampled from the
-//! solution's dense interpolant, spacer disks, load arrows; the number of turns a tendon
-//! makes over its own length; legend labels for tendons and loads.
+//! solution's dense interpolant, spacer disks, load arrows; legend labels for tendons (with
+//! the turns each makes over its own length, [`Tendon::turns`]) and loads.
 
 use super::axes::significant;
 use super::{Arrow, ArrowKind, Curve, Disk, LegendEntry, Marker, PALETTE, Panel, Style, Symbol};
@@ -8,7 +8,6 @@ use crate::model::routing::Routing;
 use crate::model::tendon::Tendon;
 use crate::{Robot, Solution};
 use nalgebra::Vector3;
-use std::f64::consts::{PI, TAU};
 
 /// Points per metre of backbone or tendon drawn, at least [`MIN_SAMPLES`]: 1 mm spacing on
 /// the prototype, far below a pixel's worth of Hermite interpolation error.
@@ -31,42 +30,6 @@ pub(super) const DISK_COLOR: &str = "#6b6b6b";
 pub(super) const DISTRIBUTED_COLOR: &str = "#8a8a8a";
 /// Colour of the tip-force and point-load arrows.
 pub(super) const FORCE_COLOR: &str = "#c0392b";
-
-/// The number of turns tendon `tendon` of a rod of `length` L (m) makes about the backbone
-/// over its own length, from s = 0 to its termination: the winding angle of its routing
-/// r(s) in the cross-section divided by 2 pi (negative: left-handed). Computed from the
-/// routing itself, so it holds for any routing; 0 for a straight one. A helix of one turn
-/// per rod length ending at L/2 makes 0.5 turns.
-pub fn tendon_turns(tendon: &Tendon, length: f64) -> f64 {
-    let end = tendon.end(length).clamp(0.0, length);
-    if matches!(tendon.routing, Routing::Straight { .. }) || end <= 0.0 {
-        return 0.0;
-    }
-    let angle = |s: f64| {
-        let r = tendon.routing.at(s, length).r;
-        (r.norm() > 0.0).then(|| r.y.atan2(r.x))
-    };
-    // Unwrap the angle on a grid fine enough that no step exceeds pi/4 (then the unwrapped
-    // steps are the true ones); double it until it is.
-    let mut count = 4096;
-    loop {
-        let (mut total, mut largest) = (0.0, 0.0f64);
-        let mut previous = angle(0.0);
-        for k in 1..=count {
-            let current = angle(end * k as f64 / count as f64);
-            if let (Some(a), Some(b)) = (previous, current) {
-                let step = (b - a + PI).rem_euclid(TAU) - PI;
-                total += step;
-                largest = largest.max(step.abs());
-            }
-            previous = current.or(previous);
-        }
-        if largest <= PI / 4.0 || count >= 1 << 22 {
-            return total / TAU;
-        }
-        count *= 2;
-    }
-}
 
 /// A number of turns as legends write it: `1 turn`, `0.5 turns`, `-2 turns (left-handed)`.
 pub fn turns_label(turns: f64) -> String {
@@ -95,10 +58,10 @@ pub fn tendon_description(robot: &Robot, index: usize) -> String {
 }
 
 /// Where `tendon` runs on a rod of `length` L (m): its routing (offsets in mm), for a helix
-/// the true number of turns over its own length ([`tendon_turns`]), and where it ends if
+/// the true number of turns over its own length ([`Tendon::turns`]), and where it ends if
 /// before the tip: `helix of radius 8 mm, 0.5 turns, ends at s = 121 mm`.
 pub fn routing_label(tendon: &Tendon, length: f64) -> String {
-    let turns = tendon_turns(tendon, length);
+    let turns = tendon.turns(length);
     let routing = match &tendon.routing {
         Routing::Straight { x, y } => format!("straight at ({}, {}) mm", mm(*x), mm(*y)),
         Routing::Helical { radius, .. } => {
@@ -121,17 +84,14 @@ fn mm(x: f64) -> String {
     significant(x * 1e3)
 }
 
-/// The largest tendon offset |r| (m) of the robot, at the base, middle and end of each
-/// tendon; 0 without tendons.
+/// The largest tendon offset |r| (m) of the robot over each tendon's own length
+/// ([`Routing::max_offset`]); 0 without tendons.
 fn largest_offset(robot: &Robot) -> f64 {
     let length = robot.length();
     robot
         .tendons
         .iter()
-        .flat_map(|t| {
-            let end = t.end(length);
-            [0.0, 0.5, 1.0].map(|f| t.routing.at(f * end, length).r.norm())
-        })
+        .map(|t| t.routing.max_offset(t.end(length), length))
         .fold(0.0, f64::max)
 }
 
@@ -173,7 +133,7 @@ pub fn tendon_path(robot: &Robot, solution: &Solution, index: usize) -> Vec<Vect
     let tendon = &robot.tendons[index];
     let length = solution.length();
     let end = tendon.end(length).min(length);
-    let turns = tendon_turns(tendon, length).abs();
+    let turns = tendon.turns(length).abs();
     let count = ((end * SAMPLES_PER_METRE) as usize)
         .max(MIN_SAMPLES)
         .max((turns * SAMPLES_PER_TURN).ceil() as usize);

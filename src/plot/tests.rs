@@ -152,15 +152,12 @@ fn turns_count_over_the_tendons_own_length() {
     let length = cases::LENGTH;
     let half = Tendon::new(one_turn_per_length(0.008), 1.0).ending_at(length / 2.0);
     // 1e-9 turns: the unwrapped angle is exact to rounding
-    assert!((tendon_turns(&half, length) - 0.5).abs() < 1e-9);
+    assert!((half.turns(length) - 0.5).abs() < 1e-9);
     let full = Tendon::new(one_turn_per_length(0.008), 1.0);
-    assert!((tendon_turns(&full, length) - 1.0).abs() < 1e-9);
+    assert!((full.turns(length) - 1.0).abs() < 1e-9);
     let left = Tendon::new(Routing::helical(0.008, -3.0, 0.4), 1.0);
-    assert!((tendon_turns(&left, length) + 3.0).abs() < 1e-9);
-    assert_eq!(
-        tendon_turns(&Tendon::new(Routing::straight(0.008, 0.0), 1.0), length),
-        0.0
-    );
+    assert!((left.turns(length) + 3.0).abs() < 1e-9);
+    assert_eq!(Tendon::new(Routing::straight(0.008, 0.0), 1.0).turns(length), 0.0);
     assert_eq!(turns_label(0.5), "0.5 turns");
     assert_eq!(turns_label(1.0), "1 turn");
     assert_eq!(turns_label(-3.0), "-3 turns (left-handed)");

@@ -4,7 +4,7 @@ The Rust crate tdcr is the one implementation; this package converts types and c
 
     import tdcr
     robot = tdcr.cases.case_h()            # or tdcr.Robot.from_file("robot.toml")
-    solution = tdcr.solve(robot, tol=1e-9)
+    solution = tdcr.solve(robot, tol=1e-9) # tip error to 1e-9 x rod length
     solution.tip_position                  # (3,) float64, m
     solution.p, solution.R                 # (N, 3), (N, 3, 3)
 

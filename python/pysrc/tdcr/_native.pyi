@@ -1,13 +1,45 @@
 """Type stubs of the native module tdcr._native (the Rust crate tdcr through PyO3)."""
 
 from os import PathLike
-from typing import Any, Dict, Iterator, List, Literal, Mapping, Optional, Sequence, Tuple, Union
+from typing import Any, Dict, Iterator, List, Literal, Mapping, Optional, Sequence, Tuple, Union, final
 
 import numpy as np
 import numpy.typing as npt
 
 FloatArray = npt.NDArray[np.float64]
 ArrayLike = npt.ArrayLike
+
+__all__ = [
+    "__version__",
+    "TIP_S",
+    "TIP_H",
+    "Robot",
+    "Solution",
+    "SolveReport",
+    "State",
+    "TipSensitivities",
+    "InverseResult",
+    "Calibration",
+    "solve",
+    "solve_batch",
+    "solve_parameters",
+    "sweep",
+    "tip_sensitivities",
+    "solve_tensions",
+    "solve_displacements",
+    "calibrate",
+    "case_s",
+    "case_h",
+    "prototype",
+    "example",
+    "Error",
+    "InvalidInput",
+    "FileError",
+    "SingularRouting",
+    "Breakdown",
+    "NotConverged",
+    "IntervalCap",
+]
 
 __version__: str
 #: Tip of case S (m), `tdcr::cases::TIP_S`.
@@ -40,17 +72,18 @@ class NotConverged(Error):
 class IntervalCap(Error):
     """Adaptive refinement reached `max_intervals` before the tip tolerance was met."""
 
+@final
 class Robot:
     """A robot (SI units) with its `[solver]` settings; the robot file's fields and rules."""
 
-    def __init__(
-        self,
+    def __new__(
+        cls,
         rod: Mapping[str, Any],
         tendons: Optional[Sequence[Mapping[str, Any]]] = None,
         loads: Optional[Mapping[str, Any]] = None,
         base: Optional[Mapping[str, Any]] = None,
         solver: Optional[Mapping[str, Any]] = None,
-    ) -> None: ...
+    ) -> Robot: ...
     @staticmethod
     def from_dict(tables: Mapping[str, Any]) -> Robot:
         """A robot from a dict of the robot file's tables."""
@@ -104,6 +137,7 @@ class Robot:
     def method(self) -> str:
         """The `[solver]` method: "collocation" or "shooting"."""
 
+@final
 class State:
     """The state at one arc length."""
 
@@ -113,6 +147,7 @@ class State:
     v: FloatArray
     u: FloatArray
 
+@final
 class SolveReport:
     """What a solve did."""
 
@@ -182,6 +217,7 @@ class SolveReport:
     def to_dict(self) -> Dict[str, Any]:
         """The report's scalars as one flat dict."""
 
+@final
 class Solution:
     """A solved shape; arrays are float64, SI units."""
 
@@ -233,6 +269,7 @@ class Solution:
     def from_json(text: str) -> Solution:
         """Reads a solution JSON (`to_json`'s or the command line's), bitwise."""
 
+@final
 class TipSensitivities:
     """Derivatives of the tip pose (6 rows: position, rotation vector)."""
 
@@ -261,6 +298,7 @@ class TipSensitivities:
     def youngs_modulus(self) -> Optional[FloatArray]:
         """(6,), per Pa, or None."""
 
+@final
 class InverseResult:
     """The result of `solve_tensions` and `solve_displacements`."""
 
@@ -291,7 +329,9 @@ def solve(
     equilibrium: Optional[Literal["load_path", "nearest"]] = None,
     integration_tolerance: Optional[float] = None,
 ) -> Solution:
-    """Solves `robot` (GIL released)."""
+    """Solves `robot` (GIL released). `tol` is the tip tolerance relative to the rod
+    length L (default 1e-7): the mesh is refined until the estimated tip position error is at
+    most tol x L and the orientation error at most tol rad."""
 
 def solve_batch(
     robots: Union[Sequence[Robot], Robot],
@@ -422,6 +462,7 @@ def solve_displacements(
     """Inverse statics in actuator space: pull-ins in [min_displacement, max_displacement]
     (m; min_displacement defaults to -max_displacement) that put the tip at `position`."""
 
+@final
 class Calibration:
     """The result of `calibrate`."""
 

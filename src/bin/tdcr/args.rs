@@ -27,7 +27,8 @@ pub struct SolverArgs {
     /// --tol, the starting mesh. `--nodes` is its old name: it counts intervals too.
     #[arg(long, visible_alias = "nodes", value_name = "N", value_parser = parse_count)]
     pub intervals: Option<usize>,
-    /// Refine the mesh adaptively until the estimated tip position error is below T (m).
+    /// Refine the mesh adaptively until the estimated tip error is at most T relative to the
+    /// rod length: position error at most T L (m), orientation error at most T rad.
     #[arg(long, value_name = "T", value_parser = parse_positive)]
     pub tol: Option<f64>,
     /// Return the equilibrium Newton reaches from the initial guess, whatever its stability,

@@ -74,7 +74,7 @@ fn tendon(t: &Tendon, length: f64) -> String {
     let routing = match &t.routing {
         Routing::Straight { x, y } => format!("straight at ({}, {}) m", Readable(*x), Readable(*y)),
         Routing::Helical { radius, turns, phase } => {
-            let own = t.turns(length).unwrap_or(f64::NAN);
+            let own = t.turns(length);
             let plural = if own.abs() == 1.0 { "" } else { "s" };
             let rate = if end < length {
                 format!(

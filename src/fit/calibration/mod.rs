@@ -27,7 +27,7 @@
 //! - E (Pa) at fixed Poisson's ratio: G = E / (2 (1 + nu)) follows E, as in the paper
 //!   (nu = 0.3125 held constant). The rod must be built from geometry with a uniform section
 //!   ([`crate::Rod::tube`], [`crate::Rod::solid_circle`], or `poisson_ratio` in a robot file).
-//! - Base orientation R0 = Rx(alpha) Ry(beta) Rz(gamma) (rad): [`euler_xyz`], the convention
+//! - Base orientation R0 = Rx(alpha) Ry(beta) Rz(gamma) (rad): [`crate::so3::euler_xyz`], the convention
 //!   of the robot file's `euler_xyz_deg` (rotate about x, then the new y, then the newest z;
 //!   the columns of R0 are the body axes in world components). XYZ angles are singular at
 //!   beta = +-90 deg, where only alpha + gamma (beta = 90 deg) or alpha - gamma (beta = -90
@@ -61,7 +61,7 @@
 //! R0 -> exp(hat(phi)) R0. With R0 = Rx Ry Rz, dR0/dalpha = hat(x) R0,
 //! dR0/dbeta = Rx hat(y) Ry Rz = hat(Rx y) R0 and dR0/dgamma = Rx Ry hat(z) Rz = hat(Rx Ry z) R0,
 //! so d phi / d(alpha, beta, gamma) = W = [x, Rx(alpha) y, Rx(alpha) Ry(beta) z] (columns;
-//! [`euler_rates`]). Its determinant is cos(beta): the singularity above.
+//! [`crate::so3::euler_rates`]). Its determinant is cos(beta): the singularity above.
 //!
 //! The model is solved by collocation on a fixed mesh (default 32 intervals) so that the tips
 //! are smooth functions of the parameters; an adaptive mesh would make them jump.
@@ -73,12 +73,10 @@
 //! Table 3 (mean, min, max, standard deviation) at the start and at the fit.
 #![allow(non_snake_case)]
 
-mod euler;
 mod problem;
 mod result;
 mod robots;
 
-pub use euler::{euler_rates, euler_xyz, euler_xyz_from, wrap};
 pub use problem::{CalibrationOptions, Fit, Measurement, Parameters};
 pub use result::{Calibration, CalibrationTimings, NOISE_FACTOR, PoorFit, TipErrorStatistics, UNSTATED_NOISE_FRACTION};
 pub use robots::{rotate_world, scaled_routing};
@@ -88,6 +86,7 @@ use crate::collocation::sensitivity::{Difference, RELATIVE_STEP, Sensitivity, ti
 use crate::collocation::{self, Solver};
 use crate::error::{Result, invalid};
 use crate::model::robot::Robot;
+use crate::so3::{euler_rates, wrap_angle};
 use crate::solution::Solution;
 use nalgebra::{DMatrix, DVector, Vector3};
 use problem::{Unknown, layout, validate};
@@ -452,7 +451,7 @@ pub fn calibrate(robot: &Robot, experiments: &[Measurement], options: &Calibrati
         se
     });
     let mut fitted = params;
-    fitted.euler = fitted.euler.map(wrap);
+    fitted.euler = fitted.euler.map(wrap_angle);
     let residuals = per_experiment(&r);
     let tips = solvers
         .iter()

@@ -1,12 +1,12 @@
 //! The data of a calibration problem: the measurements, the parameters fitted, which of them
 //! to fit and the options, and the checks on them before any solve.
 
-use super::euler::{euler_xyz, euler_xyz_from};
 use super::robots::scaled_routing;
 use crate::collocation;
 use crate::error::{Result, invalid};
 use crate::model::robot::Robot;
 use crate::model::rod::{Section, Stiffness, shear_modulus};
+use crate::so3::{euler_xyz, euler_xyz_from};
 use nalgebra::{Matrix3, Vector3};
 
 /// One measurement of a calibration experiment: the tensions and tip force applied and the

@@ -12,23 +12,14 @@ use crate::model::rod::{Rod, Section};
 use crate::model::routing::Routing;
 use crate::model::tendon::{Actuation, Tendon};
 use crate::report::Method;
-use crate::{Error, Robot};
-use nalgebra::{Matrix3, Rotation3, Vector3};
+use crate::{Error, Robot, so3};
+use nalgebra::{Matrix3, Vector3};
 
 /// The matrix whose rows the file gives as `base.rotation`.
 pub(super) fn rotation_from_rows(r: &[Vec3; 3]) -> Matrix3<f64> {
     Matrix3::new(
         r[0][0], r[0][1], r[0][2], r[1][0], r[1][1], r[1][2], r[2][0], r[2][1], r[2][2],
     )
-}
-
-/// R = Rx(a) Ry(b) Rz(c), angles in degrees (intrinsic x, then y', then z'').
-fn rotation_from_euler(angles: &Vec3) -> Matrix3<f64> {
-    let [a, b, c] = angles.map(f64::to_radians);
-    (Rotation3::from_axis_angle(&Vector3::x_axis(), a)
-        * Rotation3::from_axis_angle(&Vector3::y_axis(), b)
-        * Rotation3::from_axis_angle(&Vector3::z_axis(), c))
-    .into_inner()
 }
 
 /// A vector of the file, zero if not given.
@@ -53,7 +44,7 @@ pub(super) fn build(rod: &RodTable, base: &BaseTable, loads: &LoadsTable, tendon
     }
     let rotation = match (&base.rotation, &base.euler_xyz_deg) {
         (Some(rows), _) => rotation_from_rows(rows),
-        (None, Some(angles)) => rotation_from_euler(angles),
+        (None, Some(angles)) => so3::euler_xyz(&Vector3::from(*angles).map(f64::to_radians)),
         (None, None) => Matrix3::identity(),
     };
     let loads = Loads {
@@ -177,13 +168,5 @@ mod tests {
         assert_eq!(file_field("loads.point[2].s", false), "loads.point[3].s");
         assert_eq!(file_field("base_rotation", true), "base.euler_xyz_deg");
         assert_eq!(file_field("rod.length", false), "rod.length");
-    }
-
-    #[test]
-    fn euler_angles_compose_about_x_then_y_then_z() {
-        let r = rotation_from_euler(&[0.0, 90.0, 0.0]);
-        let prototype = crate::cases::prototype_base_rotation();
-        // 1e-15: cos(pi/2) rounds to 6e-17
-        assert!((r - prototype).amax() < 1e-15);
     }
 }
