@@ -143,7 +143,7 @@ fn newton_iteration(c: &mut Criterion) {
     group.sample_size(10);
     for intervals in [64, 256, 1024, 4096, 10_000] {
         let system = System::new(model.clone(), Mesh::uniform(&robot, intervals).unwrap());
-        let mut ws = Workspace::new(&system, LinearSolver::Auto).unwrap();
+        let mut ws = Workspace::new(&system, LinearSolver::Blocks).unwrap();
         let start = rigid_estimate(&model, &system.mesh.nodes);
         // Tolerance 0 and one iteration: exactly one Newton step per call.
         let settings = Settings {
@@ -177,7 +177,7 @@ fn linear_solve(c: &mut Criterion) {
         let mut rhs = vec![0.0; system.unknowns()];
         let mut values = vec![0.0; tdcr::advanced::unknowns::nonzeros(&system.mesh)];
         system.jacobian(&x, &mut rhs, &mut values).unwrap();
-        for (name, solver) in [("blocks", LinearSolver::Auto), ("sparse_lu", LinearSolver::SparseLu)] {
+        for (name, solver) in [("blocks", LinearSolver::Blocks), ("sparse_lu", LinearSolver::SparseLu)] {
             let mut ws = Workspace::new(&system, solver).unwrap();
             group.bench_function(BenchmarkId::new(name, intervals), |b| {
                 b.iter(|| black_box(ws.solve_linear(&values, &rhs).is_some()))

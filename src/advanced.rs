@@ -12,7 +12,7 @@
 //! let robot = tdcr::cases::case_s();
 //! let mesh = Mesh::uniform(&robot, 16)?;
 //! let system = System::new(Model::new(&robot), mesh);
-//! let mut workspace = newton::Workspace::new(&system, LinearSolver::Auto)?;
+//! let mut workspace = newton::Workspace::new(&system, LinearSolver::Blocks)?;
 //! let mut x = guess::rigid_estimate(&system.model, &system.mesh.nodes);
 //! let settings = newton::Settings { tolerance: 1e-11, max_iterations: 30, reuse_factors: false, stop_when_damped: false };
 //! let mut report = tdcr::SolveReport::new(tdcr::Method::Collocation);

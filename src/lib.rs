@@ -76,7 +76,9 @@ pub use model::rod::{Rod, Section};
 pub use model::routing::{Routing, RoutingPoint};
 pub use model::tendon::{Actuation, Tendon};
 pub use nalgebra;
-pub use report::{ErrorEstimate, Evaluations, Iteration, Method, Path, SolveReport, Stability, Termination, Timings};
+pub use report::{
+    ErrorEstimate, Evaluations, Iteration, Method, PathTaken, SolveReport, Stability, Termination, Timings,
+};
 pub use solution::{Node, Solution, State, TendonState};
 
 /// The scalar types the model equations accept: f64, and num-dual's dual numbers for exact

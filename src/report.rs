@@ -164,9 +164,10 @@ impl fmt::Display for Stability {
     }
 }
 
-/// Where a solve's answer came from: Newton from the guess, or the load path.
+/// Where a solve's answer came from: Newton from the guess, or the load path. (Named so
+/// that it never shadows `std::path::Path`.)
 #[derive(Clone, Debug, PartialEq)]
-pub enum Path {
+pub enum PathTaken {
     /// Newton converged from the initial guess or warm start to a stable state (or the
     /// caller asked for the equilibrium nearest the guess).
     Direct,
@@ -190,6 +191,48 @@ pub enum Path {
         /// Euler's load.
         bifurcations: Vec<f64>,
     },
+}
+
+impl PathTaken {
+    /// The names of the kinds, as every file and front end writes them.
+    pub const NAMES: [&'static str; 3] = ["direct", "from_warm_start", "load_path"];
+
+    /// The kind's name: `direct`, `from_warm_start` or `load_path`.
+    pub fn name(&self) -> &'static str {
+        match self {
+            PathTaken::Direct => Self::NAMES[0],
+            PathTaken::FromWarmStart { .. } => Self::NAMES[1],
+            PathTaken::LoadPath { .. } => Self::NAMES[2],
+        }
+    }
+
+    /// Where the path turned back (load factors, or homotopy parameters from a warm start);
+    /// empty for `Direct`.
+    pub fn folds(&self) -> &[f64] {
+        match self {
+            PathTaken::Direct => &[],
+            PathTaken::FromWarmStart { folds, .. } | PathTaken::LoadPath { folds, .. } => folds,
+        }
+    }
+
+    /// Where the path crossed a bifurcation; empty for `Direct`.
+    pub fn bifurcations(&self) -> &[f64] {
+        match self {
+            PathTaken::Direct => &[],
+            PathTaken::FromWarmStart { bifurcations, .. } | PathTaken::LoadPath { bifurcations, .. } => bifurcations,
+        }
+    }
+
+    /// The path of kind `name` (one of [`PathTaken::NAMES`]) with these folds and
+    /// bifurcations (ignored for `direct`); `None` for another name.
+    pub fn from_name(name: &str, folds: Vec<f64>, bifurcations: Vec<f64>) -> Option<PathTaken> {
+        match name {
+            "direct" => Some(PathTaken::Direct),
+            "from_warm_start" => Some(PathTaken::FromWarmStart { folds, bifurcations }),
+            "load_path" => Some(PathTaken::LoadPath { folds, bifurcations }),
+            _ => None,
+        }
+    }
 }
 
 /// What a solve did. Filled by both solvers.
@@ -236,7 +279,7 @@ pub struct SolveReport {
     /// Stability of the equilibrium returned.
     pub stability: Stability,
     /// How it was reached.
-    pub path: Path,
+    pub path: PathTaken,
 }
 
 impl SolveReport {
@@ -263,7 +306,7 @@ impl SolveReport {
             stability: Stability::Unknown {
                 reason: "not assessed".into(),
             },
-            path: Path::Direct,
+            path: PathTaken::Direct,
         }
     }
 }

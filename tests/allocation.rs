@@ -49,7 +49,7 @@ fn newton_loop_does_not_allocate_after_setup() {
     COUNTING.with(|c| c.set(false));
     drop(boxed);
     assert_eq!(ALLOCATIONS.swap(0, Ordering::Relaxed), 1);
-    for solver in [LinearSolver::Auto, LinearSolver::SparseLu] {
+    for solver in [LinearSolver::Blocks, LinearSolver::SparseLu] {
         newton_solve_does_not_allocate(solver);
     }
 }

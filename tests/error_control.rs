@@ -129,7 +129,7 @@ fn the_default_resolves_a_ten_turn_coil_without_continuation() {
     assert_eq!(report.tolerance_met, Some(true));
     // No load step: Newton converged directly on every mesh, to a stable coil.
     assert_eq!(report.load_steps, 0);
-    assert_eq!(report.path, tdcr::Path::Direct);
+    assert_eq!(report.path, tdcr::PathTaken::Direct);
     assert!(report.stability.is_stable(), "{}", report.stability);
     // The starting mesh resolves the coil's ten turns at pi/8 per interval: 160 or more.
     assert!(report.intervals >= 160, "{} intervals", report.intervals);

@@ -404,7 +404,7 @@ fn newton_called_directly_with_a_huge_limit_does_not_overflow_its_history() {
     use tdcr::advanced::{equations::Model, guess, mesh::Mesh, newton, system::System};
     let robot = tdcr::cases::case_s();
     let system = System::new(Model::new(&robot), Mesh::uniform(&robot, 16).unwrap());
-    let mut workspace = newton::Workspace::new(&system, collocation::LinearSolver::Auto).unwrap();
+    let mut workspace = newton::Workspace::new(&system, collocation::LinearSolver::Blocks).unwrap();
     let mut x = guess::rigid_estimate(&system.model, &system.mesh.nodes);
     let settings = newton::Settings {
         tolerance: 1e-11,

@@ -39,7 +39,7 @@ fn jacobian(robot: &tdcr::Robot, intervals: usize) -> (System<'_>, Vec<f64>, Vec
 fn block_elimination_matches_sparse_lu() {
     for robot in [cases::case_s(), cases::case_h(), two_segment()] {
         let (system, values, rhs) = jacobian(&robot, 24);
-        let mut blocks = Workspace::new(&system, LinearSolver::Auto).unwrap();
+        let mut blocks = Workspace::new(&system, LinearSolver::Blocks).unwrap();
         let mut sparse = Workspace::new(&system, LinearSolver::SparseLu).unwrap();
         let a = blocks.solve_linear(&values, &rhs).unwrap().to_vec();
         let b = sparse.solve_linear(&values, &rhs).unwrap().to_vec();
@@ -82,7 +82,7 @@ fn singular_matrix_is_reported_not_panicked() {
             *v = 0.0;
         }
     }
-    for solver in [LinearSolver::Auto, LinearSolver::SparseLu] {
+    for solver in [LinearSolver::Blocks, LinearSolver::SparseLu] {
         let mut ws = Workspace::new(&system, solver).unwrap();
         assert!(
             ws.solve_linear(&values, &rhs).is_none(),
@@ -96,7 +96,7 @@ fn solving_again_with_stored_factors_matches_a_fresh_solve() {
     let robot = two_segment();
     let (system, values, rhs) = jacobian(&robot, 16);
     let other: Vec<f64> = (0..rhs.len()).map(|i| ((i as f64) * 0.37).sin()).collect();
-    for solver in [LinearSolver::Auto, LinearSolver::SparseLu] {
+    for solver in [LinearSolver::Blocks, LinearSolver::SparseLu] {
         let mut ws = Workspace::new(&system, solver).unwrap();
         let fresh = ws.solve_linear(&values, &other).unwrap().to_vec();
         ws.solve_linear(&values, &rhs).unwrap();

@@ -7,7 +7,7 @@ use nalgebra::{Matrix3, Vector3};
 use std::f64::consts::PI;
 use tdcr::collocation::sensitivity::tip_sensitivities;
 use tdcr::collocation::{self, Equilibrium, Options};
-use tdcr::{Loads, Path, Robot, Rod, Routing, Stability, Tendon, cases};
+use tdcr::{Loads, PathTaken, Robot, Rod, Routing, Stability, Tendon, cases};
 
 /// A clamped-free column of the prototype's rod, standing along +z, under a dead
 /// compressive tip load `p` (N) and a lateral tip force `lateral` (N, along x).
@@ -39,7 +39,7 @@ fn the_straight_column_is_stable_below_euler_load_and_unstable_above() {
     let p_cr = euler_load();
     let below = collocation::solve(&column(0.99 * p_cr, 0.0), &Default::default()).unwrap();
     assert_eq!(below.report.stability, Stability::Stable);
-    assert_eq!(below.report.path, Path::Direct);
+    assert_eq!(below.report.path, PathTaken::Direct);
     // Past Euler's load the straight column is still an equilibrium, unstable in both
     // bending planes of the round rod: two directions, counted with multiplicity.
     let above = collocation::solve(&column(1.01 * p_cr, 0.0), &nearest()).unwrap();
@@ -123,7 +123,7 @@ fn opposing_loads_return_the_load_path_state_and_flag_the_other_one() {
     let r = r1(3.0);
     let default = collocation::solve(&r, &Default::default()).unwrap();
     assert!(default.report.stability.is_stable());
-    assert!(matches!(default.report.path, Path::LoadPath { .. }));
+    assert!(matches!(default.report.path, PathTaken::LoadPath { .. }));
     // Regression value, not an independent reference: the loaded-from-rest tip this solver
     // gave when issue 14 was filed. 1e-4 m: the issue quotes it to 0.1 mm
     assert!((default.tip_position() - Vector3::new(0.3684, 0.0, -0.0365)).norm() < 1e-4);
@@ -163,7 +163,7 @@ fn every_table2_experiment_is_stable() {
             e.label(),
             solution.report.stability
         );
-        assert_eq!(solution.report.path, Path::Direct, "{}", e.label());
+        assert_eq!(solution.report.path, PathTaken::Direct, "{}", e.label());
     }
 }
 

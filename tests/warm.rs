@@ -34,7 +34,7 @@ fn tip_gap(a: &Solution, b: &Solution) -> f64 {
 #[test]
 fn a_one_percent_change_needs_no_new_jacobian() {
     for (robot, intervals) in [(cases::case_s(), 16), (cases::case_h(), 48)] {
-        for linear_solver in [LinearSolver::Auto, LinearSolver::SparseLu] {
+        for linear_solver in [LinearSolver::Blocks, LinearSolver::SparseLu] {
             let options = options(intervals, linear_solver);
             let mut solver = Solver::new(options.clone());
             let previous = solver.solve(&scaled(&robot, 0.99)).unwrap();
@@ -52,7 +52,7 @@ fn a_one_percent_change_needs_no_new_jacobian() {
 #[test]
 fn a_large_change_falls_back_to_newton_steps() {
     let robot = cases::case_h();
-    let options = options(48, LinearSolver::Auto);
+    let options = options(48, LinearSolver::Blocks);
     let mut solver = Solver::new(options.clone());
     let previous = solver.solve(&scaled(&robot, 0.3)).unwrap();
     let mut pulled = robot.clone();
@@ -66,7 +66,7 @@ fn a_large_change_falls_back_to_newton_steps() {
 #[test]
 fn factors_are_reused_only_for_the_solvers_own_last_solution() {
     let robot = cases::case_s();
-    let options = options(16, LinearSolver::Auto);
+    let options = options(16, LinearSolver::Blocks);
     // A guess from elsewhere: the solver's factors belong to another robot's solution.
     let other = collocation::solve(&scaled(&robot, 0.99), &options).unwrap();
     let mut solver = Solver::new(options.clone());
@@ -82,7 +82,7 @@ fn factors_are_reused_only_for_the_solvers_own_last_solution() {
 fn a_warm_sweep_is_reproducible_bit_for_bit() {
     let robot = cases::case_h();
     let sweep = || {
-        let mut solver = Solver::new(options(48, LinearSolver::Auto));
+        let mut solver = Solver::new(options(48, LinearSolver::Blocks));
         let mut last = solver.solve(&scaled(&robot, 0.5)).unwrap();
         let mut tips = Vec::new();
         for k in 1..=10 {

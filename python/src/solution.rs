@@ -7,7 +7,7 @@ use numpy::{IntoPyArray, PyArray1, PyArray2, PyArray3};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use tdcr::nalgebra::{Matrix3, Vector3};
-use tdcr::{Path, Solution, SolveReport, Stability, TendonState, Termination};
+use tdcr::{Solution, SolveReport, Stability, TendonState, Termination};
 
 /// A 3x3 matrix as a (3, 3) array.
 pub fn matrix<'py>(py: Python<'py>, m: &Matrix3<f64>) -> Bound<'py, PyArray2<f64>> {
@@ -246,16 +246,6 @@ fn tendon_dict<'py>(py: Python<'py>, t: &TendonState) -> PyResult<Bound<'py, PyD
     Ok(d)
 }
 
-/// The short name of a path, its folds and its bifurcations: `direct`, `from_warm_start`
-/// or `load_path`.
-pub fn path_parts(path: &Path) -> (&'static str, &[f64], &[f64]) {
-    match path {
-        Path::Direct => ("direct", &[], &[]),
-        Path::FromWarmStart { folds, bifurcations } => ("from_warm_start", folds, bifurcations),
-        Path::LoadPath { folds, bifurcations } => ("load_path", folds, bifurcations),
-    }
-}
-
 /// The details of a stability verdict: unstable directions (0 when stable, None when
 /// unknown), the conjugate point's arc length (m, when unstable) and the reason (when
 /// unknown).
@@ -430,21 +420,21 @@ impl PySolveReport {
     /// "load_path" (the loads followed from the unloaded robot).
     #[getter]
     fn path(&self) -> &'static str {
-        path_parts(&self.report.path).0
+        self.report.path.name()
     }
 
     /// Where the path turned back (load factors for "load_path", homotopy parameters for
     /// "from_warm_start"; empty for "direct"); past a fold the robot snaps through.
     #[getter]
     fn folds(&self) -> Vec<f64> {
-        path_parts(&self.report.path).1.to_vec()
+        self.report.path.folds().to_vec()
     }
 
     /// Where the path crossed a bifurcation (the number of unstable directions changed
     /// without a fold); load factors or homotopy parameters as `folds`.
     #[getter]
     fn bifurcations(&self) -> Vec<f64> {
-        path_parts(&self.report.path).2.to_vec()
+        self.report.path.bifurcations().to_vec()
     }
 
     /// Wall-clock seconds by stage: `assembly`, `factorization`, `solve`, `estimate` (the
@@ -504,7 +494,7 @@ impl PySolveReport {
         d.set_item("unstable_directions", directions)?;
         d.set_item("conjugate_point_s", conjugate_point)?;
         d.set_item("stability_reason", reason)?;
-        let (path, folds, bifurcations) = path_parts(&r.path);
+        let (path, folds, bifurcations) = (r.path.name(), r.path.folds(), r.path.bifurcations());
         d.set_item("path", path)?;
         d.set_item("folds", folds.to_vec())?;
         d.set_item("bifurcations", bifurcations.to_vec())?;
@@ -535,7 +525,7 @@ impl PySolveReport {
             r.meshes,
             r.residual,
             r.stability.verdict(),
-            path_parts(&r.path).0,
+            r.path.name(),
             r.timings.total.as_secs_f64() * 1e3
         )
     }

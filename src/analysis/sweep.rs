@@ -13,7 +13,7 @@
 use crate::collocation;
 use crate::error::{Error, Result};
 use crate::model::robot::Robot;
-use crate::report::Path;
+use crate::report::PathTaken;
 use crate::shooting;
 use crate::solution::Solution;
 use nalgebra::Vector3;
@@ -176,7 +176,7 @@ impl Sweep {
         };
         self.taut = Some(taut);
         let length = robot.length();
-        let pathed = matches!(solution.report.path, Path::LoadPath { .. });
+        let pathed = matches!(solution.report.path, PathTaken::LoadPath { .. });
         let jump = match (moved, self.moved) {
             (Some(m), Some(p)) => {
                 (m > JUMP_RATIO * p && m > JUMP_SHARE * length) || (pathed && m > PATHED_SHARE * length)

@@ -11,7 +11,7 @@ use super::stability;
 use super::system::System;
 use crate::error::Result;
 use crate::mesh::guess;
-use crate::report::{Path, SolveReport, Stability, Termination};
+use crate::report::{PathTaken, SolveReport, Stability, Termination};
 use crate::solution::State;
 use std::time::Instant;
 
@@ -158,7 +158,7 @@ pub(crate) fn choose_equilibrium(
                 stability_of(system, ws, &end.x, exact, report),
                 Stability::Unstable { .. }
             ) {
-                report.path = Path::FromWarmStart {
+                report.path = PathTaken::FromWarmStart {
                     folds: end.folds,
                     bifurcations: end.bifurcations,
                 };
@@ -174,7 +174,7 @@ pub(crate) fn choose_equilibrium(
     let mesh = system.mesh.clone();
     match path::follow(system, ws, path::Start::Rest, options, settings, report, None) {
         Ok(end) => {
-            report.path = Path::LoadPath {
+            report.path = PathTaken::LoadPath {
                 folds: end.folds,
                 bifurcations: end.bifurcations,
             };

@@ -69,7 +69,7 @@ pub struct Options {
     pub equilibrium: Equilibrium,
     /// Where Newton starts without a warm start. Default: the rigid-equilibrium estimate.
     pub initial_guess: InitialGuess,
-    /// The linear solver for Newton steps. Default: automatic (the structured elimination).
+    /// The linear solver for Newton steps. Default: `Blocks` (the structured elimination).
     pub linear_solver: LinearSolver,
 }
 
@@ -85,7 +85,7 @@ impl Default for Options {
             continuation: true,
             equilibrium: Equilibrium::LoadPath,
             initial_guess: InitialGuess::RigidEquilibrium,
-            linear_solver: LinearSolver::Auto,
+            linear_solver: LinearSolver::Blocks,
         }
     }
 }

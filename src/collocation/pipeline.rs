@@ -15,7 +15,7 @@ use crate::error::Result;
 use crate::mesh::guess::{self, interpolate};
 use crate::mesh::{Mesh, nodes};
 use crate::model::equations::Model;
-use crate::report::{Method, Path, SolveReport, Termination};
+use crate::report::{Method, PathTaken, SolveReport, Termination};
 use crate::solution::{Solution, State};
 use crate::{Error, Robot};
 use std::time::Instant;
@@ -69,7 +69,7 @@ pub(crate) fn solve_impl(
     record_estimate(&mut report, correction.as_ref(), options, robot.length());
     if let Some(c) = cache.as_mut() {
         let system = System::new(model.clone(), mesh.clone());
-        let exact = report.path != Path::Direct && !report.history.iter().any(|i| i.fresh_jacobian);
+        let exact = report.path != PathTaken::Direct && !report.history.iter().any(|i| i.fresh_jacobian);
         let t = Instant::now();
         report.stability = stability_of(&system, &mut c.workspace, &x, exact, &mut report);
         report.timings.stability += t.elapsed();

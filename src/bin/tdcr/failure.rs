@@ -104,7 +104,7 @@ pub fn warn_equilibrium(name: &str, report: &tdcr::SolveReport) {
             report.stability
         ));
     }
-    if let tdcr::Path::LoadPath { folds, bifurcations } | tdcr::Path::FromWarmStart { folds, bifurcations } =
+    if let tdcr::PathTaken::LoadPath { folds, bifurcations } | tdcr::PathTaken::FromWarmStart { folds, bifurcations } =
         &report.path
     {
         let at = |v: &[f64]| {

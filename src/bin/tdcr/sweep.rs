@@ -4,12 +4,12 @@
 //! picture.
 
 use clap::Args;
-use std::fmt::Write as _;
 use std::io::{IsTerminal, Write};
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
 use tdcr::analysis::sweep::{Event, Sweep, SweepSolver};
-use tdcr::io::output;
+use tdcr::io::csv_table::CsvTable;
+use tdcr::io::{number, output};
 use tdcr::plot::{Figure, LegendEntry, PALETTE, Style, shape_legend};
 use tdcr::{Parameter, Robot, Solution};
 
@@ -286,6 +286,7 @@ pub fn run(args: &SweepArgs) -> Result<(), Failure> {
     }
     progress.finish();
     past_limit.summary(&name, tips.len());
+    let csv = csv.finish();
     match &args.out {
         Some(path) => {
             write_file(path, &csv, "CSV")?;
@@ -318,63 +319,63 @@ fn step_failure(f: Failure, k: usize, steps: usize, robot: &Robot) -> Failure {
     }
 }
 
-/// The CSV header: the tensions of the `count` tendons, the pull-ins of the
+/// The CSV table with its header: the tensions of the `count` tendons, the pull-ins of the
 /// `--displacement` tendons, the `--param` inputs, then the results.
-fn header(args: &SweepArgs, plan: &Plan, count: usize) -> String {
-    let mut csv = String::from("step");
-    for i in 1..=count {
-        let _ = write!(csv, ",tension_{i}");
-    }
-    for (i, _) in &args.displacement {
-        let _ = write!(csv, ",displacement_{i}");
-    }
-    for (p, _) in &plan.params {
-        let _ = write!(csv, ",{p}");
-    }
-    csv.push_str(
-        ",tip_x,tip_y,tip_z,bending_angle_deg,iterations,load_steps,solve_time,intervals,tip_error_estimate,stability,path,event\n",
+fn header(args: &SweepArgs, plan: &Plan, count: usize) -> CsvTable {
+    let mut names = vec!["step".to_string()];
+    names.extend((1..=count).map(|i| format!("tension_{i}")));
+    names.extend(args.displacement.iter().map(|(i, _)| format!("displacement_{i}")));
+    names.extend(plan.params.iter().map(|(p, _)| p.to_string()));
+    names.extend(
+        [
+            "tip_x",
+            "tip_y",
+            "tip_z",
+            "bending_angle_deg",
+            "iterations",
+            "load_steps",
+            "solve_time",
+            "intervals",
+            "tip_error_estimate",
+            "stability",
+            "path",
+            "event",
+        ]
+        .map(String::from),
     );
-    csv
+    CsvTable::new(names)
 }
 
-/// The CSV row of step `k` (from 0).
-fn row(csv: &mut String, args: &SweepArgs, plan: &Plan, k: usize, solution: &Solution, event: &str) {
+/// Appends the CSV row of step `k` (from 0).
+fn row(csv: &mut CsvTable, args: &SweepArgs, plan: &Plan, k: usize, solution: &Solution, event: &str) {
     let tip = solution.tip_position();
-    let _ = write!(csv, "{}", k + 1);
+    let report = &solution.report;
+    let mut fields = vec![(k + 1).to_string()];
     // The solved tensions: the inputs of tension-controlled tendons, the unknowns of
     // displacement-controlled ones.
-    for t in &solution.tendons {
-        let _ = write!(csv, ",{}", t.tension);
-    }
-    for &(i, _) in &args.displacement {
-        let _ = write!(csv, ",{}", solution.tendons[i - 1].displacement);
-    }
-    // The swept value itself (a load scale is not a property of the scaled robot).
-    for (_, v) in &plan.params {
-        let _ = write!(csv, ",{}", at(v, k));
-    }
-    let report = &solution.report;
-    let path = match &report.path {
-        tdcr::Path::Direct => "direct",
-        tdcr::Path::FromWarmStart { .. } => "from_warm_start",
-        tdcr::Path::LoadPath { .. } => "load_path",
-    };
-    let _ = writeln!(
-        csv,
-        ",{},{},{},{},{},{},{},{},{},{},{path},{event}",
-        output::number(tip.x),
-        output::number(tip.y),
-        output::number(tip.z),
-        output::bending_angle(solution).to_degrees(),
-        report.iterations,
-        report.load_steps,
-        report.timings.total.as_secs_f64(),
-        report.intervals,
-        report
-            .error_estimate
-            .map_or(String::new(), |e| output::number(e.tip_position)),
-        report.stability.verdict()
+    fields.extend(solution.tendons.iter().map(|t| number(t.tension)));
+    fields.extend(
+        args.displacement
+            .iter()
+            .map(|&(i, _)| number(solution.tendons[i - 1].displacement)),
     );
+    // The swept value itself (a load scale is not a property of the scaled robot).
+    fields.extend(plan.params.iter().map(|(_, v)| number(at(v, k))));
+    fields.extend([
+        number(tip.x),
+        number(tip.y),
+        number(tip.z),
+        number(output::bending_angle(solution).to_degrees()),
+        report.iterations.to_string(),
+        report.load_steps.to_string(),
+        number(report.timings.total.as_secs_f64()),
+        report.intervals.to_string(),
+        report.error_estimate.map_or(String::new(), |e| number(e.tip_position)),
+        report.stability.verdict().to_string(),
+        report.path.name().to_string(),
+        event.to_string(),
+    ]);
+    csv.row(fields);
 }
 
 /// The tip trajectory with the first and last shapes.

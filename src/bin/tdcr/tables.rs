@@ -5,7 +5,7 @@ use std::fmt::Write as _;
 use std::time::Duration;
 use tdcr::Iteration;
 use tdcr::io::{RobotFile, output};
-use tdcr::{Method, Path, Routing, Solution, SolveReport};
+use tdcr::{Method, PathTaken, Routing, Solution, SolveReport};
 
 /// A duration in milliseconds.
 pub fn ms(d: Duration) -> f64 {
@@ -57,8 +57,8 @@ pub fn counts(report: &SolveReport) -> String {
 /// How the answer was reached, when it was not Newton from the guess.
 fn path_note(report: &SolveReport) -> String {
     match &report.path {
-        Path::Direct => String::new(),
-        Path::LoadPath { folds, bifurcations } | Path::FromWarmStart { folds, bifurcations } => {
+        PathTaken::Direct => String::new(),
+        PathTaken::LoadPath { folds, bifurcations } | PathTaken::FromWarmStart { folds, bifurcations } => {
             let at = |v: &[f64]| {
                 v.iter()
                     .map(|f| format!("{:.1} %", 100.0 * f))

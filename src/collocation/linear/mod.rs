@@ -1,6 +1,6 @@
 //! The linear solvers behind Newton's steps, both for the collocation Jacobian with values
 //! in [`crate::collocation::unknowns::pattern`] order: the structured elimination of
-//! [`blocks`] (automatic) and faer's sparse LU of `sparse` (the general reference path,
+//! [`blocks`] (the default) and faer's sparse LU of `sparse` (the general reference path,
 //! feature `sparse-lu`). Each keeps its factors, so further right-hand sides cost a re-solve
 //! only.
 
@@ -20,10 +20,10 @@ use std::time::Duration;
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 #[non_exhaustive]
 pub enum LinearSolver {
-    /// The structured almost-block-diagonal elimination (`collocation/linear/blocks.rs`): the collocation
-    /// Jacobian always has that structure, so this is the automatic choice.
+    /// The structured almost-block-diagonal elimination (`collocation/linear/blocks.rs`):
+    /// the collocation Jacobian always has that structure, so this is the default.
     #[default]
-    Auto,
+    Blocks,
     /// faer's general sparse LU (COLAMD ordering, simplicial), the reference path (feature
     /// `sparse-lu`).
     #[cfg(feature = "sparse-lu")]
@@ -43,7 +43,7 @@ impl Linear {
     /// The solver `kind` with its buffers (and, for the sparse LU, symbolic factors) for `mesh`.
     pub(crate) fn new(mesh: &Mesh, kind: LinearSolver) -> Result<Self> {
         Ok(match kind {
-            LinearSolver::Auto => Linear::Blocks(Box::new(BlockElimination::new(mesh.nodes.len()))),
+            LinearSolver::Blocks => Linear::Blocks(Box::new(BlockElimination::new(mesh.nodes.len()))),
             #[cfg(feature = "sparse-lu")]
             LinearSolver::SparseLu => Linear::Sparse(Box::new(SparseLu::new(mesh)?)),
         })

@@ -204,7 +204,7 @@ impl<'a> Sensitivity<'a> {
                 "pass a converged collocation solution of this robot (collocation::solve_from polishes a nearby one)",
             ));
         }
-        let mut workspace = Workspace::new(&system, LinearSolver::Auto)?;
+        let mut workspace = Workspace::new(&system, LinearSolver::Blocks)?;
         // Factor once; every parameter then costs one solve with the stored factors.
         if !workspace.factor(&values) {
             return Err(singular());

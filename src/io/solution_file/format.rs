@@ -6,7 +6,7 @@
 #![allow(non_snake_case)] // R, as the paper names it
 
 use crate::analysis::samples::{Sample, bending_angle, node_samples};
-use crate::report::{Path, Stability, Termination};
+use crate::report::{Stability, Termination};
 use crate::{Solution, TendonState};
 use nalgebra::{Matrix3, Vector3};
 use serde::{Deserialize, Deserializer, Serialize};
@@ -226,11 +226,7 @@ impl SolutionFile {
             } => (Some(*directions), Some(Num(*conjugate_point)), None),
             Stability::Unknown { reason } => (None, None, Some(reason.clone())),
         };
-        let (path, folds, bifurcations): (&str, &[f64], &[f64]) = match &report.path {
-            Path::Direct => ("direct", &[], &[]),
-            Path::FromWarmStart { folds, bifurcations } => ("from_warm_start", folds, bifurcations),
-            Path::LoadPath { folds, bifurcations } => ("load_path", folds, bifurcations),
-        };
+        let (path, folds, bifurcations) = (report.path.name(), report.path.folds(), report.path.bifurcations());
         let numbers = |x: &[f64]| x.iter().map(|&x| Num(x)).collect();
         let t = &report.timings;
         SolutionFile {

@@ -14,7 +14,7 @@ pub(crate) mod format;
 
 use crate::error::{Result, invalid};
 use crate::report::{
-    ErrorEstimate, Evaluations, Iteration, Method, Path, SolveReport, Stability, Termination, Timings,
+    ErrorEstimate, Evaluations, Iteration, Method, PathTaken, SolveReport, Stability, Termination, Timings,
 };
 use crate::solution::{Node, Solution, TendonState};
 use crate::{Readable, Robot, so3};
@@ -299,18 +299,15 @@ impl SolutionFile {
     }
 
     /// How the equilibrium was reached.
-    fn path(&self) -> Result<Path> {
+    fn path(&self) -> Result<PathTaken> {
         let s = &self.stability;
         let numbers = |x: &[Num]| x.iter().map(|x| x.0).collect();
-        let (folds, bifurcations) = (numbers(&s.folds), numbers(&s.bifurcations));
-        match s.path.as_str() {
-            "direct" => Ok(Path::Direct),
-            "from_warm_start" => Ok(Path::FromWarmStart { folds, bifurcations }),
-            "load_path" => Ok(Path::LoadPath { folds, bifurcations }),
-            other => Err(bad(format!(
-                "has `stability.path` \"{other}\", not \"direct\", \"from_warm_start\" or \"load_path\""
-            ))),
-        }
+        PathTaken::from_name(&s.path, numbers(&s.folds), numbers(&s.bifurcations)).ok_or_else(|| {
+            bad(format!(
+                "has `stability.path` \"{}\", not \"direct\", \"from_warm_start\" or \"load_path\"",
+                s.path
+            ))
+        })
     }
 }
 
