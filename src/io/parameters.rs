@@ -10,7 +10,7 @@
 //! assert_eq!((robot.tendons[0].tension(), robot.loads.tip_force.z), (2.94, -0.1));
 //! ```
 
-use super::locate::Position;
+use super::Position;
 use super::{FileError, Problem};
 use crate::model::parameter::{NAMES, Parameter};
 use crate::{Result, Robot};
