@@ -41,10 +41,9 @@
 //! search, stopping tests); this module is its border ([`Tensions`]): the tensions, the rows
 //! psi, the columns X and the Schur step.
 //!
-//! Meshing is the tension solve's ([`refine::to_tolerance`], with this module's solve on one
-//! mesh): the starting mesh from the initial guess, an error estimate on every converged
-//! mesh, re-meshing to the tolerance, each mesh's solve warm-started from the last, states
-//! and tensions.
+//! Meshing is the tension solve's ([`refine::to_tolerance`]): the starting mesh from the
+//! initial guess, an error estimate on every converged mesh, re-meshing to the tolerance,
+//! each mesh's solve warm-started from the last one's states and tensions.
 #![allow(non_snake_case)]
 
 use super::estimate;
@@ -52,9 +51,10 @@ use super::newton::{self, Border, Linearization, Point, Settings, Workspace};
 use super::system::System;
 use super::unknowns::{self, NODE, U, V};
 use super::{
-    Cache, Cached, Level, Options, cold_start, initial_mesh, interpolate, record_estimate, refine, resolves,
-    segment_ends,
+    Cache, Cached, Level, Options, cold_start, initial_mesh, interpolate, not_converged, record_estimate, refine,
+    resolves, segment_ends,
 };
+use crate::Robot;
 use crate::dense::solve_dense;
 use crate::error;
 use crate::mesh::guess::{self, InitialGuess};
@@ -64,7 +64,6 @@ use crate::model::length::{self, NodeQuadrature};
 use crate::model::routing::RoutingPoint;
 use crate::report::{Method, SolveReport, Stability, Termination};
 use crate::solution::{Solution, State};
-use crate::{Error, Robot};
 use nalgebra::Vector3;
 use std::time::Instant;
 
@@ -361,11 +360,9 @@ impl Border for Tensions<'_> {
 }
 
 /// Solves a robot with displacement-controlled tendons (validated, with `options`
-/// validated): Newton bordered by the tensions ([`Tensions`]) on each mesh of the
-/// error-controlled sequence of a tension solve ([`refine::to_tolerance`]), from the warm
-/// start's tensions, else the given ones, else the tensions of the small-deflection estimate
-/// ([`starting_tensions`]); each mesh after the first starts from the tensions solved on the
-/// one before.
+/// validated): Newton bordered by the tensions ([`Tensions`]) on each mesh of the sequence of
+/// [`refine::to_tolerance`], from the warm start's tensions, else the given ones, else the
+/// tensions of the small-deflection estimate ([`starting_tensions`]).
 ///
 /// # Errors
 /// As [`super::solve`].
@@ -394,12 +391,6 @@ pub(super) fn solve(
             x0
         }
     };
-    let settings = Settings {
-        tolerance: options.residual_tolerance,
-        max_iterations: options.max_iterations,
-        reuse_factors: false,
-        stop_when_damped: false,
-    };
     // The conjugate-point test is for constant tensions; with a length constraint the
     // tendon is not a dead load.
     report.stability = Stability::Unknown {
@@ -413,7 +404,7 @@ pub(super) fn solve(
         options,
         &mut report,
         cache,
-        |model, mesh, x, report, cache| solve_on_mesh(model, mesh, x, &settings, options, start, report, cache),
+        |model, mesh, x, report, cache| solve_on_mesh(model, mesh, x, options, start, report, cache),
     )?;
     record_estimate(&mut report, level.correction.as_ref(), options, work.length());
     report.timings.total = start.elapsed();
@@ -421,76 +412,70 @@ pub(super) fn solve(
     nodes::solution(&model, &level.x, &segment_ends(&level.mesh), rates, report)
 }
 
-/// Newton bordered by the tensions on one mesh from `x` and the tensions in `model`, which
-/// then holds the solved ones; the report's sizes, the error estimate, and the workspace kept
-/// in `cache`.
-///
-/// # Errors
-/// [`Error::NotConverged`] (its report's total time from `start`), or a workspace that cannot
-/// be built.
-#[allow(clippy::too_many_arguments)]
+/// Newton bordered by the tensions on `mesh` from `x` and the tensions in `model` (then the
+/// solved ones), and the error estimate; `cache` keeps the workspace's buffers (not its
+/// factors: it holds no tension columns). A non-convergence's report has the total time.
 fn solve_on_mesh(
     model: &mut Model,
     mesh: Mesh,
     mut x: Vec<State>,
-    settings: &Settings,
     options: &Options,
     start: Instant,
     report: &mut SolveReport,
     cache: &mut Cache,
 ) -> error::Result<Level> {
-    report.meshes += 1;
-    let system = System::new(model.clone(), mesh);
+    let settings = Settings {
+        tolerance: options.residual_tolerance,
+        max_iterations: options.max_iterations,
+        reuse_factors: false,
+        stop_when_damped: false,
+    };
+    // The tensions move into this mesh's system and back (on an error the sequence ends).
+    let given = std::mem::take(&mut model.tensions);
+    let system = System::new(
+        Model {
+            tensions: given,
+            ..*model
+        },
+        mesh,
+    );
     let mut ws = match cache.take() {
         Some(c) if c.mesh == system.mesh && c.solver == options.linear_solver => c.workspace,
         _ => Workspace::new(&system, options.linear_solver)?,
     };
     let mut tensions = Tensions::new(system);
-    let (termination, worst) = newton::run_bordered(&mut tensions, &mut ws, &mut x, settings, report);
+    let (termination, worst) = newton::run_bordered(&mut tensions, &mut ws, &mut x, &settings, report);
     let k = tensions.constraints.len();
     let converged = (termination == Termination::Converged).then_some(settings.tolerance);
     let system = tensions.finish(converged, &x);
-    let mesh = &system.mesh;
     report.termination = termination;
-    report.intervals = mesh.intervals();
-    report.unknowns = unknowns::unknowns(mesh.nodes.len()) + k;
-    report.nonzeros = unknowns::nonzeros(mesh);
-    if termination != Termination::Converged {
+    report.intervals = system.mesh.intervals();
+    report.unknowns = unknowns::unknowns(system.mesh.nodes.len()) + k;
+    report.nonzeros = unknowns::nonzeros(&system.mesh);
+    let correction = if termination == Termination::Converged {
+        let t = Instant::now();
+        // A breakdown at a stage of the order-6 scheme leaves the solution without an estimate.
+        let correction = estimate::estimate(&system, &mut ws, &x).ok().flatten();
+        report.timings.estimate += t.elapsed();
+        Ok(correction)
+    } else {
         report.timings.total = start.elapsed();
-        let error = Error::NotConverged {
-            method: Method::Collocation,
-            report: Box::new(report.clone()),
-            worst_s: system.row_position(worst.min(system.unknowns() - 1)),
-            hint: "warm-start from the solution of a smaller pull-in (a sweep), refine the mesh, or check that \
-                   the pull-ins are reachable"
-                .into(),
-        };
-        store(cache, system.mesh, options, ws);
-        return Err(error);
-    }
-    let t = Instant::now();
-    // A breakdown at a stage of the order-6 scheme leaves the solution without an estimate.
-    let correction = estimate::estimate(&system, &mut ws, &x).ok().flatten();
-    report.timings.estimate += t.elapsed();
-    // The next mesh's Newton starts from these tensions.
-    model.tensions.copy_from_slice(&system.model.tensions);
-    store(cache, system.mesh.clone(), options, ws);
-    Ok(Level {
+        let hint = "warm-start from the solution of a smaller pull-in (a sweep), refine the mesh, or check that the \
+                    pull-ins are reachable";
+        Err(not_converged(&system, report, worst.min(system.unknowns() - 1), hint))
+    };
+    model.tensions = system.model.tensions;
+    *cache = Some(Cached {
+        mesh: system.mesh.clone(),
+        solver: options.linear_solver,
+        workspace: ws,
+        last: None,
+    });
+    correction.map(|correction| Level {
         mesh: system.mesh,
         x,
         correction,
     })
-}
-
-/// Keeps the workspace for the next solve on the same mesh (its buffers; its factors are
-/// not reused, since the cache holds no tension columns).
-fn store(cache: &mut Cache, mesh: Mesh, options: &Options, workspace: Workspace) {
-    *cache = Some(Cached {
-        mesh,
-        solver: options.linear_solver,
-        workspace,
-        last: None,
-    });
 }
 
 /// Sets the starting tension of every displacement-controlled tendon of `robot`: the warm

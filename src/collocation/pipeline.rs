@@ -132,7 +132,6 @@ pub(crate) fn solve_on_mesh(
     report: &mut SolveReport,
     cache: &mut Cache,
 ) -> Result<Level> {
-    report.meshes += 1;
     let settings = Settings {
         tolerance: options.residual_tolerance,
         max_iterations: options.max_iterations,

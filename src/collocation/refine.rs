@@ -45,7 +45,7 @@ pub(super) fn meets(estimate: &ErrorEstimate, tol: f64, length: f64) -> bool {
 }
 
 /// The error-controlled mesh sequence of one solve, for every input: `solve` on `mesh` from
-/// `x0`, then, with a tolerance in `options`, re-meshing until the estimated tip error meets
+/// `x`, then, with a tolerance in `options`, re-meshing until the estimated tip error meets
 /// it (relative to L) by [`next_mesh`], each level solved by `solve` again from the last
 /// level's solution interpolated onto the finer mesh. A level without an estimate (a singular
 /// Jacobian at the solution) ends the sequence: the report then says no estimate.
@@ -54,26 +54,25 @@ pub(super) fn meets(estimate: &ErrorEstimate, tol: f64, length: f64) -> bool {
 /// tensions, Newton bordered by the unknown tensions for pull-ins), with its error estimate;
 /// it stores its workspace in `cache`. It gets `model`, the model the sequence builds each
 /// level's guess for the next from, and may set in it what the next mesh starts from (the
-/// solved tensions of displacement-controlled tendons).
+/// solved tensions of displacement-controlled tendons). Each mesh counts in
+/// `report.meshes`.
 ///
 /// # Errors
 /// [`Error::IntervalCap`] when the next level would exceed `options.max_intervals`, or the
 /// errors of `solve`.
 pub(super) fn to_tolerance<'r>(
     model: &mut Model<'r>,
-    mesh: Mesh,
-    x0: Vec<State>,
+    mut mesh: Mesh,
+    mut x: Vec<State>,
     options: &Options,
     report: &mut SolveReport,
     cache: &mut Cache,
     mut solve: impl FnMut(&mut Model<'r>, Mesh, Vec<State>, &mut SolveReport, &mut Cache) -> Result<Level>,
 ) -> Result<Level> {
-    let mut level = solve(model, mesh, x0, report, cache)?;
-    let Some(tol) = options.tolerance else {
-        return Ok(level);
-    };
     loop {
-        let Some(correction) = &level.correction else {
+        report.meshes += 1;
+        let level = solve(model, mesh, x, report, cache)?;
+        let (Some(tol), Some(correction)) = (options.tolerance, &level.correction) else {
             return Ok(level);
         };
         let Some(fine) = next_mesh(model.robot, &level.mesh, correction, tol, options)? else {
@@ -86,8 +85,8 @@ pub(super) fn to_tolerance<'r>(
             Some(&correction.node_rates),
             report.clone(),
         )?;
-        let start = interpolate(&guess, &fine);
-        level = solve(model, fine, start, report, cache)?;
+        x = interpolate(&guess, &fine);
+        mesh = fine;
     }
 }
 
