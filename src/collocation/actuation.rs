@@ -51,8 +51,8 @@ use super::newton::{self, Border, Linearization, Point, Settings, Workspace};
 use super::system::System;
 use super::unknowns::{self, NODE, U, V};
 use super::{
-    Cache, Cached, Level, Options, cold_start, initial_mesh, interpolate, not_converged, record_estimate, refine,
-    resolves, segment_ends,
+    Cache, Cached, Level, Options, cold_start, initial_mesh, interpolate, record_estimate, refine, resolves,
+    segment_ends,
 };
 use crate::Robot;
 use crate::dense::solve_dense;
@@ -396,6 +396,12 @@ pub(super) fn solve(
     report.stability = Stability::Unknown {
         reason: "displacement-controlled tendons: the stability test covers constant tensions only".into(),
     };
+    let settings = Settings {
+        tolerance: options.residual_tolerance,
+        max_iterations: options.max_iterations,
+        reuse_factors: false,
+        stop_when_damped: false,
+    };
     let mut model = Model::new(&work);
     let level = refine::to_tolerance(
         &mut model,
@@ -404,7 +410,7 @@ pub(super) fn solve(
         options,
         &mut report,
         cache,
-        |model, mesh, x, report, cache| solve_on_mesh(model, mesh, x, options, start, report, cache),
+        |model, mesh, x, report, cache| solve_on_mesh(model, mesh, x, &settings, options, start, report, cache),
     )?;
     record_estimate(&mut report, level.correction.as_ref(), options, work.length());
     report.timings.total = start.elapsed();
@@ -415,36 +421,26 @@ pub(super) fn solve(
 /// Newton bordered by the tensions on `mesh` from `x` and the tensions in `model` (then the
 /// solved ones), and the error estimate; `cache` keeps the workspace's buffers (not its
 /// factors: it holds no tension columns). A non-convergence's report has the total time.
+#[allow(clippy::too_many_arguments)]
 fn solve_on_mesh(
     model: &mut Model,
     mesh: Mesh,
     mut x: Vec<State>,
+    settings: &Settings,
     options: &Options,
     start: Instant,
     report: &mut SolveReport,
     cache: &mut Cache,
 ) -> error::Result<Level> {
-    let settings = Settings {
-        tolerance: options.residual_tolerance,
-        max_iterations: options.max_iterations,
-        reuse_factors: false,
-        stop_when_damped: false,
-    };
     // The tensions move into this mesh's system and back (on an error the sequence ends).
-    let given = std::mem::take(&mut model.tensions);
-    let system = System::new(
-        Model {
-            tensions: given,
-            ..*model
-        },
-        mesh,
-    );
+    let tensions = std::mem::take(&mut model.tensions);
+    let system = System::new(Model { tensions, ..*model }, mesh);
     let mut ws = match cache.take() {
         Some(c) if c.mesh == system.mesh && c.solver == options.linear_solver => c.workspace,
         _ => Workspace::new(&system, options.linear_solver)?,
     };
     let mut tensions = Tensions::new(system);
-    let (termination, worst) = newton::run_bordered(&mut tensions, &mut ws, &mut x, &settings, report);
+    let (termination, worst) = newton::run_bordered(&mut tensions, &mut ws, &mut x, settings, report);
     let k = tensions.constraints.len();
     let converged = (termination == Termination::Converged).then_some(settings.tolerance);
     let system = tensions.finish(converged, &x);
@@ -460,9 +456,14 @@ fn solve_on_mesh(
         Ok(correction)
     } else {
         report.timings.total = start.elapsed();
-        let hint = "warm-start from the solution of a smaller pull-in (a sweep), refine the mesh, or check that the \
-                    pull-ins are reachable";
-        Err(not_converged(&system, report, worst.min(system.unknowns() - 1), hint))
+        Err(crate::Error::NotConverged {
+            method: Method::Collocation,
+            report: Box::new(report.clone()),
+            worst_s: system.row_position(worst.min(system.unknowns() - 1)),
+            hint: "warm-start from the solution of a smaller pull-in (a sweep), refine the mesh, or check that \
+                   the pull-ins are reachable"
+                .into(),
+        })
     };
     model.tensions = system.model.tensions;
     *cache = Some(Cached {

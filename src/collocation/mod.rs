@@ -56,7 +56,7 @@ use crate::mesh::guess::interpolate;
 use crate::solution::Solution;
 pub use linear::LinearSolver;
 pub use options::{DEFAULT_TOLERANCE, Equilibrium, MAX_INTERVALS, MAX_ITERATIONS, Options};
-use pipeline::{Level, not_converged, record_estimate, segment_ends, solve_impl};
+use pipeline::{Level, record_estimate, segment_ends, solve_impl};
 pub use solver::Solver;
 use solver::{Cache, Cached};
 use start::{cold_start, initial_mesh, resolves};
