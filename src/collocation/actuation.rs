@@ -41,9 +41,9 @@
 //! search, stopping tests); this module is its border ([`Tensions`]): the tensions, the rows
 //! psi, the columns X and the Schur step.
 //!
-//! Meshing follows the tension solve: the starting mesh from the initial guess, an error
-//! estimate on every converged mesh, re-meshing to the tolerance, each mesh's solve
-//! warm-started from the last.
+//! Meshing is the tension solve's ([`refine::to_tolerance`]): the starting mesh from the
+//! initial guess, an error estimate on every converged mesh, re-meshing to the tolerance,
+//! each mesh's solve warm-started from the last one's states and tensions.
 #![allow(non_snake_case)]
 
 use super::estimate;
@@ -51,8 +51,10 @@ use super::newton::{self, Border, Linearization, Point, Settings, Workspace};
 use super::system::System;
 use super::unknowns::{self, NODE, U, V};
 use super::{
-    Cache, Cached, Options, cold_start, initial_mesh, interpolate, record_estimate, refine, resolves, segment_ends,
+    Cache, Cached, Level, Options, cold_start, initial_mesh, interpolate, record_estimate, refine, resolves,
+    segment_ends,
 };
+use crate::Robot;
 use crate::dense::solve_dense;
 use crate::error;
 use crate::mesh::guess::{self, InitialGuess};
@@ -63,7 +65,6 @@ use crate::model::routing::RoutingPoint;
 use crate::model::tension_guess::starting_tensions;
 use crate::report::{Method, SolveReport, Stability, Termination};
 use crate::solution::{Solution, State};
-use crate::{Error, Robot};
 use nalgebra::Vector3;
 use std::time::Instant;
 
@@ -360,8 +361,8 @@ impl Border for Tensions<'_> {
 }
 
 /// Solves a robot with displacement-controlled tendons (validated, with `options`
-/// validated): Newton bordered by the tensions ([`Tensions`]) on each mesh of the
-/// error-controlled sequence that a tension solve would take, from the warm start's tensions, else the given ones, else the
+/// validated): Newton bordered by the tensions ([`Tensions`]) on each mesh of the sequence of
+/// [`refine::to_tolerance`], from the warm start's tensions, else the given ones, else the
 /// tensions of the small-deflection estimate ([`starting_tensions`]).
 ///
 /// # Errors
@@ -380,7 +381,7 @@ pub(super) fn solve(
     if options.tolerance.is_none() {
         resolves(&work, options, &mesh)?;
     }
-    let mut x = match warm {
+    let x = match warm {
         Some(w) => interpolate(w, &mesh),
         None => {
             // As a tension solve; then estimated tensions are corrected on the guess.
@@ -391,84 +392,92 @@ pub(super) fn solve(
             x0
         }
     };
+    // The conjugate-point test is for constant tensions; with a length constraint the
+    // tendon is not a dead load.
+    report.stability = Stability::Unknown {
+        reason: "displacement-controlled tendons: the stability test covers constant tensions only".into(),
+    };
     let settings = Settings {
         tolerance: options.residual_tolerance,
         max_iterations: options.max_iterations,
         reuse_factors: false,
         stop_when_damped: false,
     };
-    // The conjugate-point test is for constant tensions; with a length constraint the
-    // tendon is not a dead load.
-    report.stability = Stability::Unknown {
-        reason: "displacement-controlled tendons: the stability test covers constant tensions only".into(),
+    let mut model = Model::new(&work);
+    let level = refine::to_tolerance(
+        &mut model,
+        mesh,
+        x,
+        options,
+        &mut report,
+        cache,
+        |model, mesh, x, report, cache| solve_on_mesh(model, mesh, x, &settings, options, start, report, cache),
+    )?;
+    record_estimate(&mut report, level.correction.as_ref(), options, work.length());
+    report.timings.total = start.elapsed();
+    let rates = level.correction.as_ref().map(|c| c.node_rates.as_slice());
+    nodes::solution(&model, &level.x, &segment_ends(&level.mesh), rates, report)
+}
+
+/// Newton bordered by the tensions on `mesh` from `x` and the tensions in `model` (then the
+/// solved ones), and the error estimate; `cache` keeps the workspace's buffers (not its
+/// factors: it holds no tension columns). A non-convergence's report has the total time.
+#[allow(clippy::too_many_arguments)]
+fn solve_on_mesh(
+    model: &mut Model,
+    mesh: Mesh,
+    mut x: Vec<State>,
+    settings: &Settings,
+    options: &Options,
+    start: Instant,
+    report: &mut SolveReport,
+    cache: &mut Cache,
+) -> error::Result<Level> {
+    // The tensions move into this mesh's system and back (on an error the sequence ends).
+    let tensions = std::mem::take(&mut model.tensions);
+    let system = System::new(Model { tensions, ..*model }, mesh);
+    let mut ws = match cache.take() {
+        Some(c) if c.mesh == system.mesh && c.solver == options.linear_solver => c.workspace,
+        _ => Workspace::new(&system, options.linear_solver)?,
     };
-    loop {
-        report.meshes += 1;
-        let system = System::new(Model::new(&work), mesh.clone());
-        let mut ws = match cache.take() {
-            Some(c) if c.mesh == mesh && c.solver == options.linear_solver => c.workspace,
-            _ => Workspace::new(&system, options.linear_solver)?,
-        };
-        let mut tensions = Tensions::new(system);
-        let (termination, worst) = newton::run_bordered(&mut tensions, &mut ws, &mut x, &settings, &mut report);
-        let k = tensions.constraints.len();
-        let converged = (termination == Termination::Converged).then_some(settings.tolerance);
-        let system = tensions.finish(converged, &x);
-        report.termination = termination;
-        report.intervals = mesh.intervals();
-        report.unknowns = unknowns::unknowns(mesh.nodes.len()) + k;
-        report.nonzeros = unknowns::nonzeros(&mesh);
-        if termination != Termination::Converged {
-            report.timings.total = start.elapsed();
-            let error = Error::NotConverged {
-                method: Method::Collocation,
-                report: Box::new(report.clone()),
-                worst_s: system.row_position(worst.min(system.unknowns() - 1)),
-                hint: "warm-start from the solution of a smaller pull-in (a sweep), refine the mesh, or check that \
-                       the pull-ins are reachable"
-                    .into(),
-            };
-            store(cache, mesh, options, ws);
-            return Err(error);
-        }
+    let mut tensions = Tensions::new(system);
+    let (termination, worst) = newton::run_bordered(&mut tensions, &mut ws, &mut x, settings, report);
+    let k = tensions.constraints.len();
+    let converged = (termination == Termination::Converged).then_some(settings.tolerance);
+    let system = tensions.finish(converged, &x);
+    report.termination = termination;
+    report.intervals = system.mesh.intervals();
+    report.unknowns = unknowns::unknowns(system.mesh.nodes.len()) + k;
+    report.nonzeros = unknowns::nonzeros(&system.mesh);
+    let correction = if termination == Termination::Converged {
         let t = Instant::now();
         // A breakdown at a stage of the order-6 scheme leaves the solution without an estimate.
         let correction = estimate::estimate(&system, &mut ws, &x).ok().flatten();
         report.timings.estimate += t.elapsed();
-        let next = match (options.tolerance, &correction) {
-            (Some(tol), Some(c)) => refine::next_mesh(&work, &mesh, c, tol, options)?,
-            _ => None,
-        };
-        let ends = segment_ends(&mesh);
-        let rates = correction.as_ref().map(|c| c.node_rates.as_slice());
-        let Some(fine) = next else {
-            record_estimate(&mut report, correction.as_ref(), options, work.length());
-            report.timings.total = start.elapsed();
-            let solution = nodes::solution(&system.model, &x, &ends, rates, report);
-            store(cache, mesh, options, ws);
-            return solution;
-        };
-        let guess = nodes::solution(&system.model, &x, &ends, rates, report.clone())?;
-        // The next mesh's Newton starts from these tensions.
-        let solved = system.model.tensions.clone();
-        for (t, &tau) in work.tendons.iter_mut().zip(&solved) {
-            t.hold_tension(tau);
-        }
-        x = interpolate(&guess, &fine);
-        store(cache, mesh, options, ws);
-        mesh = fine;
-    }
-}
-
-/// Keeps the workspace for the next solve on the same mesh (its buffers; its factors are
-/// not reused, since the cache holds no tension columns).
-fn store(cache: &mut Cache, mesh: Mesh, options: &Options, workspace: Workspace) {
+        Ok(correction)
+    } else {
+        report.timings.total = start.elapsed();
+        Err(crate::Error::NotConverged {
+            method: Method::Collocation,
+            report: Box::new(report.clone()),
+            worst_s: system.row_position(worst.min(system.unknowns() - 1)),
+            hint: "warm-start from the solution of a smaller pull-in (a sweep), refine the mesh, or check that \
+                   the pull-ins are reachable"
+                .into(),
+        })
+    };
+    model.tensions = system.model.tensions;
     *cache = Some(Cached {
-        mesh,
+        mesh: system.mesh.clone(),
         solver: options.linear_solver,
-        workspace,
+        workspace: ws,
         last: None,
     });
+    correction.map(|correction| Level {
+        mesh: system.mesh,
+        x,
+        correction,
+    })
 }
 
 /// Corrects the small-deflection tensions of `robot`'s taut displacement-controlled tendons

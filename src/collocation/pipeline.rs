@@ -37,7 +37,7 @@ pub(crate) fn solve_impl(
         return super::actuation::solve(robot, options, warm, cache);
     }
     let start = Instant::now();
-    let model = Model::new(robot);
+    let mut model = Model::new(robot);
     let mut report = SolveReport::new(Method::Collocation);
     let mut mesh = initial_mesh(robot, options, warm)?;
     if options.tolerance.is_none() {
@@ -57,11 +57,21 @@ pub(crate) fn solve_impl(
         }
         None => (cold_start(robot, options, &mut mesh)?, Choose::FromCold),
     };
-    let mut level =
-        solve_on_mesh(&model, mesh, x0, reuse, choose, options, &mut report, cache).map_err(|e| timed(e, start))?;
-    if let Some(tol) = options.tolerance {
-        level = refine::to_tolerance(&model, level, tol, options, &mut report, cache).map_err(|e| timed(e, start))?;
-    }
+    // The first mesh reuses the factors and chooses the equilibrium; finer ones start from it.
+    let mut first = Some((reuse, choose));
+    let level = refine::to_tolerance(
+        &mut model,
+        mesh,
+        x0,
+        options,
+        &mut report,
+        cache,
+        |model, mesh, x0, report, cache| {
+            let (reuse, choose) = first.take().unwrap_or((false, Choose::No));
+            solve_on_mesh(model, mesh, x0, reuse, choose, options, report, cache)
+        },
+    )
+    .map_err(|e| timed(e, start))?;
     let Level { mesh, x, correction } = level;
     report.intervals = mesh.intervals();
     report.unknowns = unknowns::unknowns(mesh.nodes.len());
@@ -122,7 +132,6 @@ pub(crate) fn solve_on_mesh(
     report: &mut SolveReport,
     cache: &mut Cache,
 ) -> Result<Level> {
-    report.meshes += 1;
     let settings = Settings {
         tolerance: options.residual_tolerance,
         max_iterations: options.max_iterations,

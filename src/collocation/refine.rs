@@ -1,9 +1,10 @@
-//! Error control: a starting mesh that resolves the initial guess, and re-meshing until the
+//! Error control: a starting mesh that resolves the initial guess, and the mesh sequence of
+//! every solve ([`to_tolerance`], for tension and pull-in inputs alike): re-meshing until the
 //! deferred-correction estimate ([`super::estimate`]) meets the tip tolerance.
 
 use super::estimate::Correction;
 use super::options::Options;
-use super::{Cache, Choose, Level, interpolate, segment_ends, solve_on_mesh};
+use super::{Cache, Level, interpolate, segment_ends};
 use crate::Error;
 use crate::error::Result;
 use crate::mesh::{Mesh, nodes};
@@ -43,25 +44,35 @@ pub(super) fn meets(estimate: &ErrorEstimate, tol: f64, length: f64) -> bool {
     estimate.tip_position <= tol * length && estimate.tip_rotation <= tol
 }
 
-/// Re-meshes until the estimated tip error meets `tol` (relative to L): each level takes
-/// enough intervals for the error to fall below [`TARGET_FRACTION`] of the tolerance if it
-/// falls like h^4, distributes them so that every interval's local error is about equal,
-/// and solves warm-started from the previous level. A level without an estimate (a
-/// singular Jacobian at the solution) ends the loop: the report then says no estimate.
+/// The error-controlled mesh sequence of one solve, for every input: `solve` on `mesh` from
+/// `x`, then, with a tolerance in `options`, re-meshing until the estimated tip error meets
+/// it (relative to L) by [`next_mesh`], each level solved by `solve` again from the last
+/// level's solution interpolated onto the finer mesh. A level without an estimate (a singular
+/// Jacobian at the solution) ends the sequence: the report then says no estimate.
+///
+/// `solve` is the input's solve on one mesh (Newton and the equilibrium choice for given
+/// tensions, Newton bordered by the unknown tensions for pull-ins), with its error estimate;
+/// it stores its workspace in `cache`. It gets `model`, the model the sequence builds each
+/// level's guess for the next from, and may set in it what the next mesh starts from (the
+/// solved tensions of displacement-controlled tendons). Each mesh counts in
+/// `report.meshes`.
 ///
 /// # Errors
 /// [`Error::IntervalCap`] when the next level would exceed `options.max_intervals`, or the
-/// errors of a failed solve on a finer mesh.
-pub(super) fn to_tolerance(
-    model: &Model,
-    mut level: Level,
-    tol: f64,
+/// errors of `solve`.
+pub(super) fn to_tolerance<'r>(
+    model: &mut Model<'r>,
+    mut mesh: Mesh,
+    mut x: Vec<State>,
     options: &Options,
     report: &mut SolveReport,
     cache: &mut Cache,
+    mut solve: impl FnMut(&mut Model<'r>, Mesh, Vec<State>, &mut SolveReport, &mut Cache) -> Result<Level>,
 ) -> Result<Level> {
     loop {
-        let Some(correction) = &level.correction else {
+        report.meshes += 1;
+        let level = solve(model, mesh, x, report, cache)?;
+        let (Some(tol), Some(correction)) = (options.tolerance, &level.correction) else {
             return Ok(level);
         };
         let Some(fine) = next_mesh(model.robot, &level.mesh, correction, tol, options)? else {
@@ -74,8 +85,8 @@ pub(super) fn to_tolerance(
             Some(&correction.node_rates),
             report.clone(),
         )?;
-        let start = interpolate(&guess, &fine);
-        level = solve_on_mesh(model, fine, start, false, Choose::No, options, report, cache)?;
+        x = interpolate(&guess, &fine);
+        mesh = fine;
     }
 }
 
