@@ -560,6 +560,16 @@ fn csv_columns_may_be_reordered_and_comments_skipped() {
     assert_eq!(experiments[0].tip_force, Vector3::new(0.0, 0.098, 0.0));
     assert_eq!(experiments[0].measured_tip, Vector3::new(0.05, 0.1, -0.2));
     assert_eq!(experiments[1].tensions, vec![2.94, 0.0]);
+    // A quote in a comment opens no field: the rows after it are read, on their own lines.
+    let quoted = text.replace("# a comment between rows", "  # run 2,\"second batch");
+    assert_eq!(parse_csv(&quoted, "x.csv", 2).unwrap(), experiments);
+    let bad = quoted.replace("-0.21,", "-0.21x,");
+    assert!(
+        parse_csv(&bad, "x.csv", 2)
+            .unwrap_err()
+            .to_string()
+            .starts_with("x.csv:6:1:")
+    );
 }
 
 #[test]

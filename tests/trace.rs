@@ -115,6 +115,23 @@ fn a_monotone_branch_ends_where_the_default_solve_lands() {
     assert!(t.points.iter().all(|p| p.unstable_directions == Some(0)));
 }
 
+/// A traced dead tip moment makes the loading non-conservative: every point with a
+/// non-zero moment has an unknown verdict (as `solve` says of the same robot), and the
+/// unloaded start keeps its own.
+#[test]
+fn a_traced_tip_moment_has_no_verdict() {
+    let robot = r1(15.0, 0.0, 0.0);
+    let t = trace(&robot, Parameter::TipMoment(0), 0.0, 0.02, &Default::default()).unwrap();
+    assert!(t.points.len() > 2, "{}", t.points.len());
+    for p in t.points.iter().filter(|p| p.value != 0.0) {
+        assert_eq!(p.unstable_directions, None, "at {} N m", p.value);
+    }
+    let mut end = robot.clone();
+    end.loads.tip_moment.x = 0.02;
+    let solved = collocation::solve(&end, &Default::default()).unwrap();
+    assert!(matches!(solved.report.stability, tdcr::Stability::Unknown { .. }));
+}
+
 /// A displacement-controlled tendon cannot be traced through (its tension is a border the
 /// path follower does not carry): a typed error pointing to the sweep, unless the traced
 /// tension is that tendon's, which makes it tension-controlled.

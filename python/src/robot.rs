@@ -147,7 +147,9 @@ fn columns(parameters: &Bound<'_, PyDict>) -> PyResult<(Columns, usize)> {
 /// One robot per row of `parameters` (a dict of equal-length 1-D arrays, [`columns`]):
 /// `base` with that row's values set.
 pub fn robots_of(base: &PyRobot, parameters: &Bound<'_, PyDict>) -> PyResult<Vec<tdcr::Robot>> {
-    let (cols, n) = columns(parameters)?;
+    let (mut cols, n) = columns(parameters)?;
+    // `load_scale` last: it scales the values the row sets, whatever the key order.
+    cols.sort_by_key(|(p, _)| *p == Parameter::LoadScale);
     let mut out = Vec::with_capacity(n);
     for row in 0..n {
         let mut r = base.clone();
@@ -293,12 +295,18 @@ impl PyRobot {
     /// `distributed_force.x|y|z`, `load_scale`, `youngs_modulus`; docs/parameters.md).
     fn with_parameters(&self, parameters: &Bound<'_, PyDict>) -> PyResult<Self> {
         let mut out = self.clone();
+        let mut set = Vec::with_capacity(parameters.len());
         for (key, value) in parameters.iter() {
             let name: String = key.extract().map_err(|_| invalid("parameter names must be strings"))?;
             let parameter: Parameter = name.parse().map_err(invalid)?;
             let value: f64 = value
                 .extract()
                 .map_err(|_| invalid(format!("parameter `{name}` must be a number")))?;
+            set.push((parameter, value));
+        }
+        // `load_scale` last: it scales the values the call sets, whatever the key order.
+        set.sort_by_key(|(p, _)| *p == Parameter::LoadScale);
+        for (parameter, value) in set {
             out.set(&parameter, value)?;
         }
         out.file.robot.validate().map_err(to_py)?;

@@ -69,7 +69,7 @@ pub(crate) fn stability_of(
     exact: bool,
     report: &mut SolveReport,
 ) -> Stability {
-    if let Some(reason) = stability::non_conservative(system.model.robot) {
+    if let Some(reason) = stability::non_conservative(&system.model) {
         return Stability::Unknown { reason };
     }
     if (exact || !ws.has_factors()) && !ws.linearize(system, x, report) {

@@ -65,7 +65,7 @@ const BIFURCATION_STEP: f64 = 1e-3;
 
 /// Unstable directions at the point whose Jacobian `ws` holds: None when unknown.
 fn index(system: &System, ws: &mut Workspace, report: &mut SolveReport) -> Option<usize> {
-    if stability::non_conservative(system.model.robot).is_some() {
+    if stability::non_conservative(&system.model).is_some() {
         return None;
     }
     let t = std::time::Instant::now();

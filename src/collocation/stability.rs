@@ -20,18 +20,25 @@
 //! root is possible at all (norm of Q0^-1 (Q1 - Q0) at least 1).
 
 use super::unknowns::{BASE_COLUMNS, BASE_ROWS, NODE, P, THETA, TIP_COLUMNS, TIP_ROWS, U, V};
-use crate::model::robot::Robot;
+use crate::model::equations::Model;
+use crate::model::parameter::Parameter;
 use crate::report::Stability;
 use nalgebra::{Complex, DMatrix, Matrix6, SMatrix};
 
 type M12x6 = SMatrix<f64, 12, 6>;
 
-/// Why stability cannot be decided for `robot`, if it cannot: the test needs conservative
-/// loading. Constant tensions and dead forces are conservative; a dead moment (tip, point or
-/// distributed) is not in 3D in general (its work depends on the path of the rotation).
-pub fn non_conservative(robot: &Robot) -> Option<String> {
+/// Why stability cannot be decided for the loads of `model` (its robot's, with a traced
+/// parameter's value), if it cannot: the test needs conservative loading. Constant tensions
+/// and dead forces are conservative; a dead moment (tip, point or distributed) is not in 3D
+/// in general (its work depends on the path of the rotation).
+pub fn non_conservative(model: &Model) -> Option<String> {
+    let robot = model.robot;
     let loads = &robot.loads;
-    if loads.tip_moment != nalgebra::Vector3::zeros() {
+    let mut tip_moment = loads.tip_moment;
+    if let Some((Parameter::TipMoment(c), value)) = model.parameter {
+        tip_moment[c] = value;
+    }
+    if tip_moment != nalgebra::Vector3::zeros() {
         return Some("the tip moment is a dead moment, which is not conservative in 3D".into());
     }
     if loads.point.iter().any(|p| p.moment != nalgebra::Vector3::zeros()) {

@@ -115,7 +115,7 @@ pub fn trace(robot: &Robot, parameter: Parameter, from: f64, to: f64, options: &
                 crate::Readable(from),
                 crate::Readable(to)
             ),
-            "give START:STOP with START != STOP",
+            "give two different values for the start and the end of the range",
         ));
     }
     if matches!(parameter, Parameter::Tension(_)) && from.min(to) < 0.0 {

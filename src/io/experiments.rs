@@ -74,7 +74,7 @@ const MAX_CSV_PROBLEMS: usize = 20;
 pub fn parse_csv(text: &str, file: &str, tendons: usize) -> Result<Vec<Measurement>, FileError> {
     let mut problems = Vec::new();
     let at = |line: usize, column: usize| Some(Position { line, column });
-    let mut lines = records(text);
+    let mut lines = records(text).into_iter();
     let expected: Vec<String> = csv_header(tendons).split(',').map(str::to_string).collect();
     let Some((header_line, header)) = lines.next() else {
         return Err(FileError {
@@ -206,20 +206,30 @@ pub fn parse_csv(text: &str, file: &str, tendons: usize) -> Result<Vec<Measureme
 }
 
 /// The records of a CSV text, read by the `csv` crate (quoted fields, CRLF line ends),
-/// with the line each starts on (from 1); blank records and `#` comment lines skipped. A
-/// record the reader cannot split ends the list (there is none for unquoted text).
-fn records(text: &str) -> impl Iterator<Item = (usize, csv::StringRecord)> + '_ {
+/// with the line each starts on (from 1); blank records and `#` comment lines skipped. The
+/// comment lines are blanked before the reader sees them, so a quote in a comment cannot
+/// open a field that swallows the rows after it. (Text in memory has no read errors: the
+/// reader fails only on invalid UTF-8, which a `&str` cannot hold.)
+fn records(text: &str) -> Vec<(usize, csv::StringRecord)> {
+    let uncommented: String = text
+        .split_inclusive('\n')
+        .map(|line| {
+            if line.trim_start().starts_with('#') {
+                if line.ends_with('\n') { "\n" } else { "" }
+            } else {
+                line
+            }
+        })
+        .collect();
     csv::ReaderBuilder::new()
         .has_headers(false)
         .flexible(true)
-        .from_reader(text.as_bytes())
+        .from_reader(uncommented.as_bytes())
         .into_records()
         .map_while(Result::ok)
         .map(|r| (r.position().map_or(1, |p| p.line() as usize), r))
-        .filter(|(_, r)| {
-            let first = r.get(0).unwrap_or_default().trim_start();
-            !first.starts_with('#') && r.iter().any(|f| !f.trim().is_empty())
-        })
+        .filter(|(_, r)| r.iter().any(|f| !f.trim().is_empty()))
+        .collect()
 }
 
 /// The fields of a record with the character column (from 1) where each starts (exact for

@@ -37,16 +37,22 @@ pub struct Table {
 }
 
 impl Table {
-    /// `base` with `row`'s values set ([`Parameter::apply`]) and validated.
+    /// `base` with `row`'s values set ([`Parameter::apply`]) and validated; `load_scale`
+    /// last, so that it scales the values the row sets whatever the column order.
     ///
     /// # Errors
     /// As [`Parameter::apply`] and [`Robot::validate`].
     pub fn robot(&self, row: &Row, base: &Robot) -> Result<Robot> {
         let mut robot = base.clone();
-        for (p, x) in self.parameters.iter().zip(&row.values) {
-            if let Some(x) = x {
-                p.apply(&mut robot, *x)?;
-            }
+        let mut set: Vec<(Parameter, f64)> = self
+            .parameters
+            .iter()
+            .zip(&row.values)
+            .filter_map(|(&p, x)| x.map(|x| (p, x)))
+            .collect();
+        set.sort_by_key(|(p, _)| *p == Parameter::LoadScale);
+        for (p, x) in set {
+            p.apply(&mut robot, x)?;
         }
         robot.validate()?;
         Ok(robot)
@@ -257,6 +263,19 @@ mod tests {
         assert!(e.starts_with("t.csv:2:3: `tension.2` value `x`"), "{e}");
         let e = read_csv("t.csv", "tension.1\n\n  \n-1\n").unwrap_err().to_string();
         assert!(e.starts_with("t.csv:4:1: `tension.1` is -1 N"), "{e}");
+    }
+
+    /// `load_scale` scales the tension the row sets in either column order (1 N from 2 N at
+    /// half scale; exact in binary).
+    #[test]
+    fn load_scale_applies_last_in_any_column_order() {
+        let base = crate::cases::case_s();
+        for text in ["tension.1,load_scale\n2,0.5\n", "load_scale,tension.1\n0.5,2\n"] {
+            let table = read_csv("t.csv", text).unwrap();
+            let robot = table.robot(&table.rows[0], &base).unwrap();
+            assert_eq!(robot.tendons[0].tension(), 1.0, "{text}");
+            assert_eq!(robot.tendons[1].tension(), base.tendons[1].tension() * 0.5, "{text}");
+        }
     }
 
     #[test]

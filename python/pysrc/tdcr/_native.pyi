@@ -24,6 +24,9 @@ __all__ = [
     "solve_batch",
     "solve_parameters",
     "sweep",
+    "Sweep",
+    "trace",
+    "Trace",
     "tip_sensitivities",
     "solve_tensions",
     "solve_displacements",
@@ -362,6 +365,7 @@ def solve_parameters(
 ) -> Dict[str, Any]:
     """`solve_batch` of parameter rows reduced to arrays."""
 
+@final
 class Sweep:
     """The result of `sweep`: every step's solution and the events between steps; also the
     sequence of the solutions."""
@@ -396,6 +400,7 @@ def sweep(
 ) -> Sweep:
     """Solves parameter rows in order, each warm-started from the last, with the events."""
 
+@final
 class Trace:
     """The result of `trace`: the points of a branch of equilibria, in the order it passes them."""
 

@@ -53,8 +53,8 @@ pub struct SolveArgs {
     /// Draw the shape into FILE: PNG if its name ends in .png, else SVG.
     #[arg(long, value_name = "FILE.svg|FILE.png")]
     plot: Option<PathBuf>,
-    /// Warm-start from a saved solution: the JSON of `tdcr solve --format json` (without
-    /// --samples) for this robot, for example of other tensions.
+    /// Warm-start from a saved solution: the JSON of `tdcr solve --format json` for this
+    /// robot, for example of other tensions.
     #[arg(long, value_name = "SOLUTION.json")]
     start: Option<PathBuf>,
     /// Spacer disks drawn in the picture, evenly spaced (default: about 2.5 tendon offsets

@@ -35,14 +35,16 @@ pub struct SweepArgs {
     #[arg(long, value_name = "I=START:STOP:COUNT", value_parser = parse_displacement_sweep, allow_hyphen_values = true)]
     displacement: Vec<(usize, Vec<f64>)>,
     /// Any other input: `NAME=START:STOP:COUNT` or `NAME=VALUE`, NAME one of
-    /// `tip_force.x|y|z` (N), `distributed_force.x|y|z` (N/m), `load_scale`, `youngs_modulus`
-    /// (Pa) or `tension.I`. Repeatable, with the same COUNT as every other range.
+    /// `tension.I` (N), `tip_force.x|y|z` (N), `tip_moment.x|y|z` (N m),
+    /// `base_position.x|y|z` (m), `distributed_force.x|y|z` (N/m, that component at every s),
+    /// `load_scale` or `youngs_modulus` (Pa) (docs/parameters.md). Repeatable, with the same
+    /// COUNT as every other range.
     #[arg(long, value_name = "NAME=START:STOP:COUNT", value_parser = parse_param_sweep, allow_hyphen_values = true)]
     param: Vec<(String, Vec<f64>)>,
     #[command(flatten)]
     solver: SolverArgs,
     /// Warm-start the first step from a saved solution: the JSON of `tdcr solve --format
-    /// json` (without --samples) for this robot.
+    /// json` for this robot.
     #[arg(long, value_name = "SOLUTION.json")]
     start: Option<PathBuf>,
     /// Write the CSV to FILE instead of standard output.
@@ -186,7 +188,9 @@ impl<'a> Plan<'a> {
         for &(i, ref v) in &args.displacement {
             set_displacement(&mut robot, i, at(v, k))?;
         }
-        for (p, v) in &self.params {
+        // `load_scale` last: it scales the values the step sets, whatever the order given.
+        let (scales, others): (Vec<_>, Vec<_>) = self.params.iter().partition(|(p, _)| *p == Parameter::LoadScale);
+        for (p, v) in others.into_iter().chain(scales) {
             p.apply(&mut robot, at(v, k))
                 .map_err(|e| Failure::Input(e.to_string()))?;
         }

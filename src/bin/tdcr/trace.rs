@@ -42,8 +42,9 @@ pub struct TraceArgs {
     /// Robot file (TOML; `-` reads standard input).
     file: String,
     /// The input and its range, NAME=START:STOP: `tension.I` (N, I from 1),
-    /// `tip_force.x|y|z` (N), `distributed_force.x|y|z` (N/m, made uniform) or `load_scale`
-    /// (every tension and load times the value).
+    /// `tip_force.x|y|z` (N), `tip_moment.x|y|z` (N m), `base_position.x|y|z` (m),
+    /// `distributed_force.x|y|z` (N/m, that component at every s) or `load_scale` (every
+    /// tension and load times the value) (docs/parameters.md).
     #[arg(long, value_name = "NAME=START:STOP", allow_hyphen_values = true)]
     param: String,
     #[command(flatten)]

@@ -137,19 +137,16 @@ fn document(file: &RobotFile) -> Result<String> {
             Actuation::Tension(tension) => {
                 tendon.insert("tension".into(), Value::Float(tension));
             }
-            Actuation::PullIn {
-                displacement,
-                start: None,
-            } => {
+            // The file gives a displacement-controlled tendon no starting tension (the
+            // solver estimates it, as it does from a start of 0), so only those are written.
+            Actuation::PullIn { displacement, start } if start.unwrap_or(0.0) == 0.0 => {
                 tendon.insert("displacement".into(), Value::Float(displacement));
             }
-            // The file gives a displacement-controlled tendon no starting tension (the
-            // solver estimates it), so a given one cannot be written.
-            Actuation::PullIn { start: Some(start), .. } => {
+            Actuation::PullIn { start, .. } => {
                 return Err(cannot(&format!(
                     "tendon {} is displacement-controlled with a starting tension of {} N, which a robot file cannot hold (set its tension to make it tension-controlled)",
                     i + 1,
-                    start
+                    start.unwrap_or(0.0)
                 )));
             }
         }
