@@ -250,7 +250,7 @@ fn tip_sensitivities_hold_the_pull_ins() {
 fn tight_shooting() -> shooting::Options {
     shooting::Options {
         integration_tolerance: 1e-12,
-        tolerance: 1e-10,
+        residual_tolerance: 1e-10,
         ..Default::default()
     }
 }

@@ -400,7 +400,7 @@ fn check_acceptance(file: &RobotFile) -> Result<(), String> {
         return Err(format!("accepted a count beyond its bound: {:?}", file.solver));
     }
     let positive = |x: f64| x.is_finite() && x > 0.0;
-    if !(positive(c.residual_tolerance) && positive(s.tolerance) && positive(s.integration_tolerance))
+    if !(positive(c.residual_tolerance) && positive(s.residual_tolerance) && positive(s.integration_tolerance))
         || c.tolerance.is_some_and(|t| !positive(t))
     {
         return Err(format!("accepted a tolerance that is not positive: {:?}", file.solver));

@@ -10,7 +10,7 @@ use tdcr::{Robot, Solution, Tendon, cases, collocation, shooting};
 fn tight_shooting() -> shooting::Options {
     shooting::Options {
         integration_tolerance: 1e-12,
-        tolerance: 1e-10,
+        residual_tolerance: 1e-10,
         ..Default::default()
     }
 }

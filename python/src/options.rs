@@ -78,7 +78,7 @@ pub fn apply(settings: &SolverSettings, kwargs: Option<&Bound<'_, PyDict>>) -> P
             "residual_tolerance" => {
                 let t = get::<f64>(&value, &name, "a number")?;
                 c.residual_tolerance = t;
-                out.shooting.tolerance = t;
+                out.shooting.residual_tolerance = t;
             }
             "max_iterations" => {
                 let n = get::<usize>(&value, &name, "a whole number >= 1")?;

@@ -39,8 +39,9 @@ pub struct Options {
     /// Relative and absolute local error tolerance of the integrator on the scaled state
     /// (p / L, theta, v, u L). Default 1e-10; down to 1e-12 is supported.
     pub integration_tolerance: f64,
-    /// Newton stops when the scaled tip residual is below this. Default 1e-9 (dimensionless).
-    pub tolerance: f64,
+    /// Newton stops when the scaled tip residual is below this. Default 1e-9 (dimensionless;
+    /// the same meaning as `collocation::Options::residual_tolerance`).
+    pub residual_tolerance: f64,
     /// Newton iteration limit. Default 50; at most [`MAX_ITERATIONS`].
     pub max_iterations: usize,
     /// Where Newton starts. Default: the rigid-equilibrium estimate.
@@ -51,7 +52,7 @@ impl Default for Options {
     fn default() -> Self {
         Options {
             integration_tolerance: 1e-10,
-            tolerance: 1e-9,
+            residual_tolerance: 1e-9,
             max_iterations: 50,
             initial_guess: InitialGuess::RigidEquilibrium,
         }
@@ -73,10 +74,10 @@ impl Options {
                 "use a value in [1e-14, 1e-2] (1e-10 by default)",
             ));
         }
-        if !(self.tolerance.is_finite() && self.tolerance > 0.0) {
+        if !(self.residual_tolerance.is_finite() && self.residual_tolerance > 0.0) {
             return Err(invalid(
-                "shooting.tolerance",
-                format!("is {}", Readable(self.tolerance)),
+                "shooting.residual_tolerance",
+                format!("is {}", Readable(self.residual_tolerance)),
                 "use a positive value (1e-9 by default)",
             ));
         }
@@ -173,7 +174,7 @@ fn newton(
     let mut norm = res.amax();
     report.termination = Termination::MaxIterations;
     for _ in 0..options.max_iterations {
-        if norm < options.tolerance {
+        if norm < options.residual_tolerance {
             report.termination = Termination::Converged;
             break;
         }
@@ -201,7 +202,7 @@ fn newton(
             let mut traj = Vec::new();
             if let Ok(g) = problem.residual(&trial, options, &mut traj, report) {
                 let r = problem.complementarity(&trial, &g);
-                if r.amax().is_finite() && (merit(&r, bordered) < current || r.amax() <= options.tolerance) {
+                if r.amax().is_finite() && (merit(&r, bordered) < current || r.amax() <= options.residual_tolerance) {
                     report.iterations += 1;
                     report.newton_steps += 1;
                     report.history.push(Iteration {
@@ -226,7 +227,7 @@ fn newton(
             break;
         }
     }
-    if norm < options.tolerance {
+    if norm < options.residual_tolerance {
         report.termination = Termination::Converged;
         // One more full Newton step, kept only if it lowers the residual: at quadratic
         // convergence it takes the residual from the tolerance down to the noise floor.

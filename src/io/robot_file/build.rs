@@ -114,7 +114,7 @@ pub(super) fn settings(solver: &SolverTable) -> SolverSettings {
         None => c.equilibrium,
     };
     let s = &mut out.shooting;
-    s.tolerance = solver.residual_tolerance.unwrap_or(s.tolerance);
+    s.residual_tolerance = solver.residual_tolerance.unwrap_or(s.residual_tolerance);
     s.max_iterations = solver.max_iterations.unwrap_or(s.max_iterations);
     s.integration_tolerance = solver.integration_tolerance.unwrap_or(s.integration_tolerance);
     out

@@ -317,7 +317,7 @@ impl Checker<'_> {
             self.report(field, "is 0, but the mesh needs at least 1 interval".into());
         }
         let mut finite = |field: &str, x: Option<f64>, unit: &str| x.filter(|&x| self.finite(field, x, unit));
-        let tolerance = finite("solver.tolerance", solver.tolerance, " m");
+        let tolerance = finite("solver.tolerance", solver.tolerance, " (relative to the rod length)");
         let residual = finite("solver.residual_tolerance", solver.residual_tolerance, "");
         let integration = finite("solver.integration_tolerance", solver.integration_tolerance, "");
         let c = collocation::Options::default;
@@ -329,7 +329,11 @@ impl Checker<'_> {
                     ..c()
                 }
                 .validate(),
-                shooting::Options { tolerance: x, ..s() }.validate(),
+                shooting::Options {
+                    residual_tolerance: x,
+                    ..s()
+                }
+                .validate(),
             ];
             self.library_rule("solver.residual_tolerance", &Readable(x).to_string(), &checks);
         }
@@ -354,7 +358,11 @@ impl Checker<'_> {
                 ..c()
             }
             .validate()];
-            self.library_rule("solver.tolerance", &format!("{} m", Readable(t)), &checks);
+            self.library_rule(
+                "solver.tolerance",
+                &format!("{} (relative to the rod length)", Readable(t)),
+                &checks,
+            );
         }
         if let Some(x) = integration {
             let checks = [shooting::Options {

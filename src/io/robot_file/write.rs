@@ -195,7 +195,9 @@ fn solver_table(s: &SolverSettings) -> Table {
         t.insert("tolerance".into(), Value::Float(tol));
     }
     t.insert("max_intervals".into(), Value::Integer(c.max_intervals as i64));
-    if c.residual_tolerance != d.residual_tolerance || s.shooting.tolerance != defaults.shooting.tolerance {
+    if c.residual_tolerance != d.residual_tolerance
+        || s.shooting.residual_tolerance != defaults.shooting.residual_tolerance
+    {
         t.insert("residual_tolerance".into(), Value::Float(c.residual_tolerance));
     }
     if c.max_iterations != d.max_iterations || s.shooting.max_iterations != defaults.shooting.max_iterations {
