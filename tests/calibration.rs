@@ -564,12 +564,8 @@ fn csv_columns_may_be_reordered_and_comments_skipped() {
     let quoted = text.replace("# a comment between rows", "  # run 2,\"second batch");
     assert_eq!(parse_csv(&quoted, "x.csv", 2).unwrap(), experiments);
     let bad = quoted.replace("-0.21,", "-0.21x,");
-    assert!(
-        parse_csv(&bad, "x.csv", 2)
-            .unwrap_err()
-            .to_string()
-            .starts_with("x.csv:6:1:")
-    );
+    let e = parse_csv(&bad, "x.csv", 2).unwrap_err().to_string();
+    assert!(e.starts_with("x.csv:6:1:"), "{e}");
 }
 
 #[test]

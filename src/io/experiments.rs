@@ -214,8 +214,11 @@ fn records(text: &str) -> Vec<(usize, csv::StringRecord)> {
     let uncommented: String = text
         .split_inclusive('\n')
         .map(|line| {
-            if line.trim_start().starts_with('#') {
-                if line.ends_with('\n') { "\n" } else { "" }
+            // A space, not nothing: the reader skips empty lines without counting them, and
+            // a record of one blank field keeps every later record's line number right.
+            let text = line.trim_start();
+            if text.is_empty() || text.starts_with('#') {
+                if line.ends_with('\n') { " \n" } else { " " }
             } else {
                 line
             }
