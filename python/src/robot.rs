@@ -112,13 +112,6 @@ pub fn from_library(robot: tdcr::Robot) -> PyResult<PyRobot> {
     parse(&file.to_toml().map_err(to_py)?, "<tdcr.cases>")
 }
 
-impl PyRobot {
-    /// Sets `parameter` (`tension.1`, `tip_force.z`, ...) of this robot to `value`.
-    pub fn set(&mut self, parameter: &Parameter, value: f64) -> PyResult<()> {
-        parameter.apply(&mut self.file.robot, value).map_err(to_py)
-    }
-}
-
 /// Parameter names and their values as read from a dict of equal-length 1-D arrays.
 type Columns = Vec<(Parameter, Vec<f64>)>;
 
@@ -147,16 +140,12 @@ fn columns(parameters: &Bound<'_, PyDict>) -> PyResult<(Columns, usize)> {
 /// One robot per row of `parameters` (a dict of equal-length 1-D arrays, [`columns`]):
 /// `base` with that row's values set.
 pub fn robots_of(base: &PyRobot, parameters: &Bound<'_, PyDict>) -> PyResult<Vec<tdcr::Robot>> {
-    let (mut cols, n) = columns(parameters)?;
-    // `load_scale` last: it scales the values the row sets, whatever the key order.
-    cols.sort_by_key(|(p, _)| *p == Parameter::LoadScale);
+    let (cols, n) = columns(parameters)?;
     let mut out = Vec::with_capacity(n);
     for row in 0..n {
-        let mut r = base.clone();
-        for (p, values) in &cols {
-            r.set(p, values[row])?;
-        }
-        out.push(r.file.robot);
+        let mut robot = base.file.robot.clone();
+        Parameter::apply_all(&mut robot, cols.iter().map(|(p, values)| (*p, values[row]))).map_err(to_py)?;
+        out.push(robot);
     }
     Ok(out)
 }
@@ -304,11 +293,7 @@ impl PyRobot {
                 .map_err(|_| invalid(format!("parameter `{name}` must be a number")))?;
             set.push((parameter, value));
         }
-        // `load_scale` last: it scales the values the call sets, whatever the key order.
-        set.sort_by_key(|(p, _)| *p == Parameter::LoadScale);
-        for (parameter, value) in set {
-            out.set(&parameter, value)?;
-        }
+        Parameter::apply_all(&mut out.file.robot, set).map_err(to_py)?;
         out.file.robot.validate().map_err(to_py)?;
         Ok(out)
     }

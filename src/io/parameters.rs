@@ -37,23 +37,15 @@ pub struct Table {
 }
 
 impl Table {
-    /// `base` with `row`'s values set ([`Parameter::apply`]) and validated; `load_scale`
-    /// last, so that it scales the values the row sets whatever the column order.
+    /// `base` with `row`'s values set ([`Parameter::apply_all`]: `load_scale` last) and
+    /// validated.
     ///
     /// # Errors
     /// As [`Parameter::apply`] and [`Robot::validate`].
     pub fn robot(&self, row: &Row, base: &Robot) -> Result<Robot> {
         let mut robot = base.clone();
-        let mut set: Vec<(Parameter, f64)> = self
-            .parameters
-            .iter()
-            .zip(&row.values)
-            .filter_map(|(&p, x)| x.map(|x| (p, x)))
-            .collect();
-        set.sort_by_key(|(p, _)| *p == Parameter::LoadScale);
-        for (p, x) in set {
-            p.apply(&mut robot, x)?;
-        }
+        let values = self.parameters.iter().zip(&row.values);
+        Parameter::apply_all(&mut robot, values.filter_map(|(&p, x)| x.map(|x| (p, x))))?;
         robot.validate()?;
         Ok(robot)
     }

@@ -217,6 +217,21 @@ impl Parameter {
         Ok(())
     }
 
+    /// Sets every `(parameter, value)` of `values` on `robot` ([`Parameter::apply`]) with
+    /// `load_scale` last, whatever its place: a scale applies to the robot the other values
+    /// describe. A batch row, a sweep step and Python's `with_parameters` all set their values
+    /// this way.
+    ///
+    /// # Errors
+    /// As [`Parameter::check`], for the first parameter that fails.
+    pub fn apply_all(robot: &mut Robot, values: impl IntoIterator<Item = (Parameter, f64)>) -> Result<()> {
+        let (scales, others): (Vec<_>, Vec<_>) = values.into_iter().partition(|(p, _)| *p == Parameter::LoadScale);
+        for (p, value) in others.into_iter().chain(scales) {
+            p.apply(robot, value)?;
+        }
+        Ok(())
+    }
+
     /// A copy of `robot` with this parameter set to `value` ([`Parameter::apply`]).
     ///
     /// # Errors

@@ -188,12 +188,8 @@ impl<'a> Plan<'a> {
         for &(i, ref v) in &args.displacement {
             set_displacement(&mut robot, i, at(v, k))?;
         }
-        // `load_scale` last: it scales the values the step sets, whatever the order given.
-        let (scales, others): (Vec<_>, Vec<_>) = self.params.iter().partition(|(p, _)| *p == Parameter::LoadScale);
-        for (p, v) in others.into_iter().chain(scales) {
-            p.apply(&mut robot, at(v, k))
-                .map_err(|e| Failure::Input(e.to_string()))?;
-        }
+        let values = self.params.iter().map(|(p, v)| (*p, at(v, k)));
+        Parameter::apply_all(&mut robot, values).map_err(|e| Failure::Input(e.to_string()))?;
         Ok(robot)
     }
 }
