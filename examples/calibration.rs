@@ -7,49 +7,10 @@
 //! `cargo run --release --example calibration -- [DIR] [NOISE_MM]`
 //! (default `out/calibration` and 0.1 mm per coordinate).
 
-use nalgebra::Vector3;
-use std::fmt::Write as _;
-use tdcr::cases::{GaussianNoise, paper_frame_rotation, prototype_in_paper_frame, table2_measurement};
-use tdcr::fit::calibration::{CalibrationOptions, Measurement, Parameters, TipErrorStatistics, calibrate, predict};
+use tdcr::cases::{self, prototype_in_paper_frame};
+use tdcr::fit::calibration::{CalibrationOptions, Parameters, TipErrorStatistics, calibrate};
 use tdcr::io::experiments::to_csv;
-use tdcr::{Routing, cases};
-
-/// The prototype in the paper's frame as a robot file: nominal E and base angles, gravity
-/// along +y, the five tendons of Table 1 (tensions come from the CSV).
-fn robot_file() -> String {
-    let g = paper_frame_rotation() * Vector3::new(0.0, 0.0, -cases::WEIGHT_PER_LENGTH);
-    let [a, b, c] = cases::PAPER_NOMINAL_EULER_DEG;
-    let mut text = format!(
-        "# The prototype of Rucker & Webster (2011) in the paper's frame: the base at the nominal\n\
-         # XYZ Euler angles of section 5.1, gravity along +y. Made by examples/calibration.rs.\n\n\
-         [rod]\nlength = {}\nouter_radius = {}\nyoungs_modulus = {:e}\npoisson_ratio = {}\n\n\
-         [base]\nposition = [0.0, 0.0, 0.0]\neuler_xyz_deg = [{a:?}, {b:?}, {c:?}]\n\n\
-         [loads]\ndistributed_force = [{:?}, {:?}, {:?}]   # N/m, self weight\n",
-        cases::LENGTH,
-        cases::RADIUS,
-        cases::YOUNGS_MODULUS,
-        cases::POISSON_RATIO,
-        g.x + 0.0,
-        g.y + 0.0,
-        g.z + 0.0
-    );
-    for (i, routing) in cases::prototype_routings().iter().enumerate() {
-        let routing = match routing {
-            Routing::Straight { x, y } => format!("{{ kind = \"straight\", x = {x:?}, y = {y:?} }}"),
-            Routing::Helical { radius, turns, phase } => {
-                format!("{{ kind = \"helical\", radius = {radius:?}, turns = {turns:?}, phase = {phase:?} }}")
-            }
-            Routing::Custom(_) => unreachable!("the prototype's routings are straight or helical"),
-        };
-        let _ = write!(
-            text,
-            "\n[[tendon]]   # tendon {}\nrouting = {routing}\ntension = 0.0\n",
-            i + 1
-        );
-    }
-    text.push_str("\n[solver]\nnodes = 32\n");
-    text
-}
+use tdcr::io::{calibration_truth, example_experiments, paper_frame_example};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().collect();
@@ -60,26 +21,15 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     // 1. The robot at its nominal parameters, and the truth that made the "measurements".
     let robot = prototype_in_paper_frame();
     let nominal = Parameters::of(&robot);
-    let truth = Parameters {
-        youngs_modulus: cases::PAPER_CALIBRATED_YOUNGS_MODULUS,
-        euler: Vector3::from(cases::PAPER_CALIBRATED_EULER_DEG).map(f64::to_radians),
-        ..nominal
-    };
+    let truth = calibration_truth();
 
-    // 2. Synthetic experiments: Table 2's loads, tips from the truth plus noise.
+    // 2. Synthetic experiments: Table 2's loads, tips from the truth plus noise (the same
+    // files as `tdcr example paper-robot` and `tdcr example experiments` at 0.1 mm).
     let table = cases::table2();
-    let mut experiments: Vec<Measurement> = table
-        .iter()
-        .map(|e| table2_measurement(e, &paper_frame_rotation()))
-        .collect();
+    let experiments = example_experiments(noise)?;
     let options = CalibrationOptions::default();
-    let tips = predict(&robot, &truth, &experiments, &options)?;
-    let mut gauss = GaussianNoise::new(2011);
-    for (e, tip) in experiments.iter_mut().zip(tips) {
-        e.measured_tip = tip + noise * Vector3::new(gauss.next(), gauss.next(), gauss.next());
-    }
     std::fs::create_dir_all(&dir)?;
-    std::fs::write(dir.join("robot.toml"), robot_file())?;
+    std::fs::write(dir.join("robot.toml"), paper_frame_example())?;
     std::fs::write(dir.join("experiments.csv"), to_csv(&experiments))?;
     println!(
         "wrote {0}/robot.toml and {0}/experiments.csv: {1} experiments, noise {noise_mm} mm per coordinate\n\

@@ -27,7 +27,7 @@ mod solution_file;
 
 pub use csv_table::number;
 #[cfg(feature = "files")]
-pub use example::example;
+pub use example::{calibration_truth, example, example_cases, example_experiments, paper_frame_example};
 #[cfg(feature = "files")]
 pub use robot_file::{RobotFile, SolverSettings, parse};
 pub use solution_file::{parse_solution, read_solution};

@@ -138,7 +138,9 @@ pub fn run(args: &CalibrateArgs) -> Result<(), Failure> {
     let c = &mut options.collocation;
     c.intervals = args.intervals.unwrap_or(file.solver.collocation.intervals);
     c.max_intervals = c.max_intervals.max(c.intervals);
-    if file.solver.collocation.tolerance != tdcr::collocation::Options::default().tolerance {
+    // A fixed mesh in the file (no tolerance) is what calibrate does anyway: no note.
+    let tolerance = file.solver.collocation.tolerance;
+    if tolerance.is_some() && tolerance != tdcr::collocation::Options::default().tolerance {
         note("note: calibrate solves on a fixed mesh; the robot file's [solver] tolerance is ignored");
     }
     if file.solver.method == tdcr::Method::Shooting {

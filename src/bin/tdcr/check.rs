@@ -119,6 +119,27 @@ fn tendon(t: &Tendon, length: f64) -> String {
 }
 
 /// `tdcr example`: the prototype as a commented robot file.
-pub fn example() -> Result<(), Failure> {
-    emit(&tdcr::io::example())
+/// The sample files of `tdcr example`.
+#[derive(Clone, Copy, Debug, clap::ValueEnum)]
+pub enum Sample {
+    /// The commented robot file.
+    Robot,
+    /// A parameter table for `tdcr batch` with the robot file.
+    Cases,
+    /// The prototype in the paper's frame, for `tdcr calibrate`.
+    PaperRobot,
+    /// Synthetic measured tips of the paper-frame prototype (0.1 mm noise).
+    Experiments,
+}
+
+pub fn example(sample: Sample) -> Result<(), Failure> {
+    match sample {
+        Sample::Robot => emit(&tdcr::io::example()),
+        Sample::Cases => emit(&tdcr::io::example_cases()),
+        Sample::PaperRobot => emit(&tdcr::io::paper_frame_example()),
+        Sample::Experiments => {
+            let experiments = tdcr::io::example_experiments(1e-4).map_err(crate::solver_failure)?;
+            emit(&tdcr::io::experiments::to_csv(&experiments))
+        }
+    }
 }

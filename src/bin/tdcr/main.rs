@@ -64,8 +64,16 @@ enum Command {
         /// Robot file (TOML; `-` reads standard input).
         file: String,
     },
-    /// Print the prototype (tendon 1 at 2.94 N) as a commented robot file to start from.
-    Example,
+    /// Print a sample file: the prototype (tendon 1 at 2.94 N) as a commented robot file to
+    /// start from (default), a parameter table for `batch`, or a robot and experiments for
+    /// `calibrate`.
+    Example {
+        /// Which sample: `robot` (the commented robot file), `cases` (a parameter table for
+        /// `tdcr batch CASES --robot ROBOT`), `paper-robot` (the prototype in the paper's frame,
+        /// for `calibrate`) or `experiments` (32 synthetic measured tips of `paper-robot`).
+        #[arg(value_enum, default_value_t = check::Sample::Robot)]
+        sample: check::Sample,
+    },
     /// Time the reference cases S and H, cold and warm (docs/benchmarks.md).
     Bench(bench::BenchArgs),
     /// Fit E and the base XYZ Euler angles to measured tip positions (docs/calibration.md).
@@ -82,7 +90,7 @@ fn main() -> ExitCode {
         Some(Command::Batch(args)) => batch::run(&args),
         Some(Command::Trace(args)) => trace::run(&args),
         Some(Command::Check { file }) => check::run(&file),
-        Some(Command::Example) => check::example(),
+        Some(Command::Example { sample }) => check::example(sample),
         Some(Command::Bench(args)) => bench::run(&args)
             .map_err(Failure::NotConverged)
             .and_then(|text| emit(&text)),
