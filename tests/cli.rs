@@ -89,8 +89,37 @@ fn main_job_prints_all_table2_rows_and_draws_them() {
     assert_eq!(svg.matches(r#"class="disk""#).count(), 31 * 12 * 4);
     let png = std::fs::read(dir.join("out/table2.png")).unwrap();
     assert!(png.starts_with(b"\x89PNG\r\n\x1a\n"));
+    // The journal-column figure: side views only, 525 px wide (a 1050-pixel PNG).
+    let compact = std::fs::read_to_string(dir.join("out/table2_compact.svg")).unwrap();
+    assert!(compact.starts_with(r#"<svg xmlns="http://www.w3.org/2000/svg" width="525""#));
+    assert_eq!(compact.matches("side view (XZ)").count(), 5);
+    assert!(!compact.contains("top view") && !compact.contains("perspective"));
     let csv = std::fs::read_to_string(dir.join("out/table2.csv")).unwrap();
     assert_eq!(csv.lines().count(), 33);
+}
+
+#[test]
+fn the_samples_run_the_readme_commands() {
+    let dir = scratch("samples");
+    std::fs::write(dir.join("robot.toml"), example()).unwrap();
+    let cases = run(&dir, &["example", "cases"], None);
+    std::fs::write(dir.join("cases.csv"), stdout(&cases)).unwrap();
+    let out = run(&dir, &["batch", "cases.csv", "--robot", "robot.toml"], None);
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    assert_eq!(stdout(&out).lines().count(), 22, "a header and 21 rows");
+    for (sample, file) in [("paper-robot", "paper.toml"), ("experiments", "experiments.csv")] {
+        let out = run(&dir, &["example", sample], None);
+        assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+        std::fs::write(dir.join(file), stdout(&out)).unwrap();
+    }
+    let out = run(&dir, &["calibrate", "paper.toml", "experiments.csv"], None);
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    // The synthetic tips come from E = 230 GPa: the fit finds it (0.1 mm noise moves it by
+    // about 0.04 GPa, its standard error).
+    let e_line = stdout(&out).lines().find(|l| l.starts_with("E ")).unwrap().to_string();
+    let fitted: f64 = e_line.split_whitespace().nth(2).unwrap().parse().unwrap();
+    assert!((fitted - 230.0).abs() < 0.2, "{e_line}");
+    assert!(!stderr(&out).contains("tolerance is ignored"), "{}", stderr(&out));
 }
 
 #[test]
@@ -228,6 +257,36 @@ fn table_output_and_plot() {
     let out = run(&dir, &["solve", "robot.toml", "--plot", "shape.jpg"], None);
     assert_eq!(out.status.code(), Some(2));
     assert!(stderr(&out).contains("FILE.png"), "{}", stderr(&out));
+    // Views, title, subtitle, width and text size for a paper.
+    let args = [
+        "solve",
+        "robot.toml",
+        "--plot",
+        "paper.svg",
+        "--views",
+        "side,perspective",
+        "--title",
+        "",
+        "--no-subtitle",
+        "--width",
+        "700",
+        "--font-size",
+        "10",
+    ];
+    let out = run(&dir, &args, None);
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    let svg = std::fs::read_to_string(dir.join("paper.svg")).unwrap();
+    assert!(svg.starts_with(r#"<svg xmlns="http://www.w3.org/2000/svg" width="700""#));
+    assert!(svg.contains("side view (XZ)") && svg.contains("perspective"));
+    assert!(!svg.contains("top view") && !svg.contains("front view") && !svg.contains("solved shape"));
+    assert!(!svg.contains("class=\"subtitle\""));
+    let out = run(
+        &dir,
+        &["solve", "robot.toml", "--plot", "x.svg", "--views", "side,iso"],
+        None,
+    );
+    assert_eq!(out.status.code(), Some(2));
+    assert!(stderr(&out).contains("`iso` is not a view"), "{}", stderr(&out));
 }
 
 #[test]
@@ -963,6 +1022,17 @@ fn sweep_reports_a_jump_and_varies_any_input() {
     let rows: Vec<Vec<&str>> = csv.lines().skip(1).map(|l| l.split(',').collect()).collect();
     assert!(rows[1].last().unwrap().contains("snap-through"), "{csv}");
     assert!(rows[2].last().unwrap().is_empty(), "{csv}");
+    // The picture marks the snap: the shapes either side and the tip's jump, in the legend.
+    let args = ["sweep", "robot.toml", "--tension", "1=0:2:3", "--out", "s.csv"];
+    let out = run(
+        &dir,
+        &[&args[..], &["--plot", "snap.svg", "--shapes", "all"]].concat(),
+        None,
+    );
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    let svg = std::fs::read_to_string(dir.join("snap.svg")).unwrap();
+    assert!(svg.contains("snap at step 2: the tip jumps by"), "{svg}");
+    assert!(svg.contains("1 shape in between"), "{svg}");
     // --param varies E: a stiffer rod bends less under the same tendon.
     std::fs::write(dir.join("ex.toml"), example()).unwrap();
     let out = run(

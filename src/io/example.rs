@@ -92,7 +92,12 @@ pub fn example_experiments(noise: f64) -> crate::Result<Vec<Measurement>> {
         .iter()
         .map(|e| table2_measurement(e, &paper_frame_rotation()))
         .collect();
-    let tips = predict(&robot, &calibration_truth(), &experiments, &CalibrationOptions::default())?;
+    let tips = predict(
+        &robot,
+        &calibration_truth(),
+        &experiments,
+        &CalibrationOptions::default(),
+    )?;
     let mut gauss = GaussianNoise::new(2011);
     for (e, tip) in experiments.iter_mut().zip(tips) {
         e.measured_tip = tip + noise * Vector3::new(gauss.next(), gauss.next(), gauss.next());

@@ -1,5 +1,6 @@
 //! Force and distributed-load arrows in one cell: shaft and head, the symbol of a force along
-//! the line of sight, and labels moved clear of the ones already placed.
+//! the line of sight, and labels placed clear of the labels already placed, the markers and
+//! the curves, inside the cell.
 
 use super::scene::{Scene, finite};
 use super::text::{FONT, halo_text, text_width};
@@ -11,7 +12,7 @@ use std::fmt::Write;
 /// One arrow: shaft and head in pixels from the projected tail and head; for a force along
 /// the line of sight of an orthographic view, a circle with a dot (towards the viewer) or a
 /// cross (away).
-pub(super) fn arrow_svg(svg: &mut String, pr: &Projection, a: &Arrow, scene: &Scene, placed: &mut Vec<[f64; 4]>) {
+pub(super) fn arrow_svg(svg: &mut String, pr: &Projection, a: &Arrow, scene: &Scene, room: &mut Room) {
     if !finite(&a.point) || !finite(&a.vector) {
         return;
     }
@@ -24,8 +25,18 @@ pub(super) fn arrow_svg(svg: &mut String, pr: &Projection, a: &Arrow, scene: &Sc
     };
     let color = &a.color;
     let _ = writeln!(svg, r#"<g class="{class}">"#);
-    let label_at = if length < head {
-        if a.kind == ArrowKind::Force && pr.view != View::Perspective {
+    // A force mostly along the line of sight (less than a third of it in the view's plane)
+    // is a circle with a dot or a cross; any other arrow at least a head and a bit long.
+    let along_sight =
+        pr.view != View::Perspective && a.vector.dot(&pr.view.toward_viewer()).abs() > 0.94 * a.vector.norm();
+    let (q1, d, length) = if !along_sight && length > 0.0 && length < head + 4.0 {
+        let q1 = q0 + d * ((head + 4.0) / length);
+        (q1, q1 - q0, head + 4.0)
+    } else {
+        (q1, d, length)
+    };
+    let label_at = if length < head || along_sight {
+        if a.kind == ArrowKind::Force && pr.view != View::Perspective && along_sight {
             let toward = a.vector.dot(&pr.view.toward_viewer()) > 0.0;
             let _ = writeln!(
                 svg,
@@ -85,24 +96,16 @@ pub(super) fn arrow_svg(svg: &mut String, pr: &Projection, a: &Arrow, scene: &Sc
             4.0
         };
         let size = if a.kind == ArrowKind::Force { FONT } else { FONT - 1.0 };
-        // Move the label down past the labels already placed in this cell that it would cover.
         let w = text_width(label, size);
         let x0 = match anchor {
             "start" => at.x,
             "end" => at.x - w,
             _ => at.x - w / 2.0,
         };
-        let mut y = at.y + dy;
-        while let Some(b) = placed
-            .iter()
-            .find(|b| x0 < b[2] && x0 + w > b[0] && y - size < b[3] && y > b[1])
-        {
-            y = b[3] + size + 1.0;
-        }
-        placed.push([x0, y - size, x0 + w, y + 2.0]);
+        let (dx, y) = room.place(x0, at.y + dy, w, size, pr.size);
         halo_text(
             svg,
-            at.x,
+            at.x + dx,
             y,
             anchor,
             &format!(r#" fill="{color}" font-size="{size}""#),
@@ -110,4 +113,72 @@ pub(super) fn arrow_svg(svg: &mut String, pr: &Projection, a: &Arrow, scene: &Sc
         );
     }
     svg.push_str("</g>\n");
+}
+
+/// What labels of one cell must keep clear of: the boxes of the labels placed so far and the
+/// pixel points of the curves and markers drawn.
+pub(super) struct Room {
+    /// Placed label boxes: [left, top, right, bottom] (px).
+    boxes: Vec<[f64; 4]>,
+    /// Points of curves (px); a label covering them hides a line.
+    points: Vec<Vector2<f64>>,
+    /// Marker centres (px); covering one hides it.
+    markers: Vec<Vector2<f64>>,
+}
+
+impl Room {
+    /// Room in a cell with curve points `points` and marker centres `markers` (px).
+    pub(super) fn new(points: Vec<Vector2<f64>>, markers: Vec<Vector2<f64>>) -> Self {
+        Room {
+            boxes: Vec::new(),
+            points,
+            markers,
+        }
+    }
+
+    /// Where a label of width `w` and font size `size` goes whose preferred box starts at
+    /// `x0` with its baseline at `y`, in a cell `cell` px wide: of candidate shifts (up and
+    /// down by up to four lines, sideways by up to one and a half label widths), nearest
+    /// first, the first that keeps inside the cell and clear of every placed label, marker
+    /// and curve point; failing that, the one covering least. Returns the horizontal shift
+    /// and the baseline, and records the box.
+    pub(super) fn place(&mut self, x0: f64, y: f64, w: f64, size: f64, cell: f64) -> (f64, f64) {
+        let line = size + 2.0;
+        let mut shifts = Vec::new();
+        for i in -3..=3 {
+            for j in -4..=4 {
+                shifts.push((f64::from(i) * (w / 2.0 + 6.0), f64::from(j) * line));
+            }
+        }
+        shifts.sort_by(|a: &(f64, f64), b| a.0.hypot(a.1).total_cmp(&b.0.hypot(b.1)));
+        let mut best = (f64::INFINITY, 0.0, y);
+        for (dx, dy) in shifts {
+            let b = [x0 + dx, y + dy - size, x0 + dx + w, y + dy + 2.0];
+            let cost = self.cost(&b, cell);
+            if cost < best.0 {
+                best = (cost, dx, y + dy);
+            }
+            if cost == 0.0 {
+                break;
+            }
+        }
+        let (_, dx, y) = best;
+        self.boxes.push([x0 + dx, y - size, x0 + dx + w, y + 2.0]);
+        (dx, y)
+    }
+
+    /// How badly the box `b` sits: past the cell's edge (heaviest), over a placed label, a
+    /// marker or curve points (lightest); 0 when clear.
+    fn cost(&self, b: &[f64; 4], cell: f64) -> f64 {
+        let inside = |p: &Vector2<f64>| p.x > b[0] - 2.0 && p.x < b[2] + 2.0 && p.y > b[1] - 2.0 && p.y < b[3] + 2.0;
+        let outside = (-b[0]).max(0.0) + (b[2] - cell).max(0.0) + (-b[1]).max(0.0) + (b[3] - cell).max(0.0);
+        let labels = self
+            .boxes
+            .iter()
+            .filter(|o| b[0] < o[2] && b[2] > o[0] && b[1] < o[3] && b[3] > o[1])
+            .count();
+        let markers = self.markers.iter().filter(|p| inside(p)).count();
+        let points = self.points.iter().filter(|p| inside(p)).count();
+        1e4 * outside + 1e3 * labels as f64 + 1e2 * markers as f64 + points as f64
+    }
 }

@@ -74,10 +74,17 @@ pub(super) fn tick_label(value: f64, step: f64, unit: Unit) -> String {
     }
 }
 
-/// `x` to three significant digits without trailing zeros: 0.196, 4.91, 12.3, 1230.
+/// `x` to three significant digits without trailing zeros: 0.196, 4.91, 12.3, 1230; below
+/// 1e-3 in scientific notation (6.12e-13), never a long run of zeros.
 pub fn significant(x: f64) -> String {
     if x == 0.0 || !x.is_finite() {
-        return format!("{x}");
+        return format!("{}", x + 0.0);
+    }
+    if x.abs() < 1e-3 {
+        let text = format!("{x:.2e}");
+        let (mantissa, exponent) = text.split_once('e').unwrap_or((&text, "0"));
+        let mantissa = mantissa.trim_end_matches('0').trim_end_matches('.');
+        return format!("{mantissa}e{exponent}");
     }
     let decimals = (2.0 - x.abs().log10().floor()).max(0.0) as usize;
     let text = format!("{:.*}", decimals, x);
@@ -98,6 +105,20 @@ pub fn significant(x: f64) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn significant_digits_never_print_float_noise() {
+        for (x, text) in [
+            (0.196, "0.196"),
+            (4.91, "4.91"),
+            (1234.0, "1230"),
+            (6.12e-16, "6.12e-16"),
+            (-0.0, "0"),
+            (-5.0, "-5"),
+        ] {
+            assert_eq!(significant(x), text);
+        }
+    }
 
     #[test]
     fn round_lengths_are_one_two_five() {

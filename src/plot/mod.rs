@@ -38,17 +38,21 @@ pub use axes::significant;
 pub use chart::{Chart, Mark, Segment};
 pub use png::{Png, fonts_found};
 pub use shape::{
-    default_disks, disk_radius, routing_label, shape_legend, tendon_description, tendon_label, tendon_path, turns_label,
+    FORCE_COLOR, default_disks, disk_radius, routing_label, shape_legend, tendon_description, tendon_label,
+    tendon_path, turns_label,
 };
+pub use view::{VIEWS, View};
 
 use crate::error::{Result, invalid};
 use crate::{Robot, Solution};
 use nalgebra::{Matrix3, Vector3};
 use std::path::Path;
 
-/// Colours for tendon numbers 1, 2, ... (cycled), from the Tableau 10 palette.
-pub const PALETTE: [&str; 10] = [
-    "#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd", "#8c564b", "#e377c2", "#7f7f7f", "#bcbd22", "#17becf",
+/// Colours for tendon numbers 1, 2, ... (cycled): colour-blind safe, the Okabe-Ito colours
+/// without black (the backbone's) and yellow (too light on white), then two of Paul Tol's
+/// (wine, indigo).
+pub const PALETTE: [&str; 8] = [
+    "#0072B2", "#D55E00", "#009E73", "#CC79A7", "#E69F00", "#56B4E9", "#882255", "#332288",
 ];
 
 /// A polyline in world coordinates (m).
@@ -245,15 +249,36 @@ impl Panel {
 /// A picture: a title, subtitle lines, panels and a legend.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Figure {
-    /// Title line (wrapped to the figure's width).
+    /// Title line (wrapped to the figure's width); empty for none.
     pub title: String,
-    /// Lines under the title (e.g. the solver used), each wrapped to the figure's width.
+    /// Lines under the title (e.g. the solver used), each wrapped to the figure's width;
+    /// empty for none.
     pub subtitle: Vec<String>,
-    /// One panel: four views of it; several: small multiples.
+    /// One panel: a cell per view of it; several: small multiples.
     pub panels: Vec<Panel>,
     /// Legend entries, under the views.
     pub legend: Vec<LegendEntry>,
+    /// The views drawn, in order. `None` (default): every view that shows something
+    /// ([`VIEWS`] without an orthographic view in which the whole scene spans less than
+    /// [`FLAT_VIEW`] of its extent on both axes, such as the top view of an upright rod).
+    pub views: Option<Vec<View>>,
+    /// The picture's width (SVG px; a PNG has [`PNG_SCALE`] times as many pixels): the cells
+    /// shrink or grow to fill it. `None` (default): cells of 430 px for one panel, 180 to 300
+    /// px for small multiples.
+    pub width: Option<f64>,
+    /// Size of the body text (SVG px at the picture's width; titles and tick numbers in
+    /// proportion). `None` (default): 12 px. At a given width, larger text means smaller
+    /// drawings: for a journal column, e.g. 520 px (1040 PNG pixels) with 9 px text.
+    pub font_size: Option<f64>,
+    /// Small multiples: panels per row before the next row of panels starts (each panel keeps
+    /// its views in a column). `None` (default): every panel in one row.
+    pub columns: Option<usize>,
 }
+
+/// An orthographic view is left out by default when the scene spans less than this share of
+/// its extent along both of the view's axes: it would show a dot or a short stub in an
+/// empty cell.
+pub const FLAT_VIEW: f64 = 0.05;
 
 /// A picture file format.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -28,8 +28,9 @@ pub(super) const TENDON_WIDTH: f64 = 1.2;
 pub(super) const DISK_COLOR: &str = "#6b6b6b";
 /// Colour of the distributed-load arrows.
 pub(super) const DISTRIBUTED_COLOR: &str = "#8a8a8a";
-/// Colour of the tip-force and point-load arrows.
-pub(super) const FORCE_COLOR: &str = "#c0392b";
+/// Colour of the tip-force and point-load arrows (Tol's wine: apart from every tendon and
+/// tension colour).
+pub const FORCE_COLOR: &str = "#882255";
 
 /// A number of turns as legends write it: `1 turn`, `0.5 turns`, `-2 turns (left-handed)`.
 pub fn turns_label(turns: f64) -> String {
@@ -63,7 +64,13 @@ pub fn tendon_description(robot: &Robot, index: usize) -> String {
 pub fn routing_label(tendon: &Tendon, length: f64) -> String {
     let turns = tendon.turns(length);
     let routing = match &tendon.routing {
-        Routing::Straight { x, y } => format!("straight at ({}, {}) mm", mm(*x), mm(*y)),
+        Routing::Straight { x, y } => {
+            // A coordinate below 1e-9 of the offset is rounding (8 mm at 120 deg puts 6e-19 m
+            // in cos 90 deg): written as 0, not as float noise.
+            let noise = 1e-9 * x.hypot(*y);
+            let clean = |c: f64| if c.abs() < noise { 0.0 } else { c };
+            format!("straight at ({}, {}) mm", mm(clean(*x)), mm(clean(*y)))
+        }
         Routing::Helical { radius, .. } => {
             format!("helix of radius {} mm, {}", mm(*radius), turns_label(turns))
         }

@@ -2,14 +2,14 @@
 //! markers, the base square, the perspective's world axes, arrows) and the legend, placed by
 //! [`layout`](super::layout) and projected by [`view`](super::view).
 
-use super::arrow::arrow_svg;
+use super::arrow::{Room, arrow_svg};
 use super::axes::{round_length, tick_label, tick_step, ticks};
-use super::layout::{Cell, GAP, LEFT, MARGIN, PAD, TOP_PAD, layout};
+use super::layout::{Cell, GAP, MARGIN, PAD, TOP_PAD, layout};
 use super::legend::{legend_entry, legend_layout};
 use super::scene::{Scene, finite, points, rim, scene};
 use super::shape::DISK_COLOR;
 use super::text::{FONT, FONT_FAMILY, TITLE_FONT, escape, halo_text, wrap};
-use super::view::{Camera, Projection, View};
+use super::view::{Camera, Projection, VIEWS, View};
 use super::{Figure, Panel};
 use nalgebra::{Vector2, Vector3};
 use std::fmt::Write;
@@ -23,7 +23,10 @@ pub(super) fn document(figure: &Figure) -> String {
         &figure.panels
     };
     let scene = scene(panels);
-    let layout = layout(figure, panels.len());
+    let views = figure.views.clone().unwrap_or_else(|| shown_views(panels));
+    // The layout is made at the body font size FONT and then zoomed to the asked size.
+    let zoom = figure.font_size.map_or(1.0, |f| f / FONT);
+    let layout = layout(figure, panels.len(), &views, figure.width.map(|w| w / zoom));
     let legend = legend_layout(&figure.legend, layout.width, layout.legend_top);
     let width = layout.width;
     let height = (layout.legend_top + legend.height + MARGIN).ceil();
@@ -32,7 +35,9 @@ pub(super) fn document(figure: &Figure) -> String {
     let mut svg = String::new();
     let _ = writeln!(
         svg,
-        r#"<svg xmlns="http://www.w3.org/2000/svg" width="{width}" height="{height}" viewBox="0 0 {width} {height}" font-family="{FONT_FAMILY}" font-size="{FONT}">"#
+        r#"<svg xmlns="http://www.w3.org/2000/svg" width="{:.0}" height="{:.0}" viewBox="0 0 {width} {height}" font-family="{FONT_FAMILY}" font-size="{FONT}">"#,
+        width * zoom,
+        height * zoom
     );
     let _ = writeln!(
         svg,
@@ -60,9 +65,13 @@ pub(super) fn document(figure: &Figure) -> String {
     }
     if layout.multiples {
         for (k, panel) in panels.iter().enumerate() {
-            let x = MARGIN + LEFT + k as f64 * (cell + GAP);
+            // Over the panel's first cell (the top of its column in its block of rows).
+            let Some(top) = layout.cells.iter().find(|c| c.panel == k) else {
+                continue;
+            };
+            let x = top.x;
             let lines = wrap(&panel.title, cell + GAP, FONT);
-            let first = layout.grid_top - 8.0 - 15.0 * (lines.len().min(2) - 1) as f64;
+            let first = top.y - 8.0 - 15.0 * (lines.len().min(2) - 1) as f64;
             for (j, line) in lines.iter().take(2).enumerate() {
                 let _ = writeln!(
                     svg,
@@ -80,6 +89,15 @@ pub(super) fn document(figure: &Figure) -> String {
     let axis_length = round_length(scene.extent / 4.0);
     let base = panels.iter().find_map(|p| p.origin).unwrap_or(scene.lo);
     let inner = cell - PAD - TOP_PAD;
+    // The orthographic views drawn share one scale: the largest span along their axes fills
+    // a cell (a figure of side views alone is not shrunk by the scene's depth).
+    let span = scene.hi - scene.lo;
+    let ortho_extent = views
+        .iter()
+        .filter_map(|v| v.axis_indices())
+        .map(|(a, b)| span[a].max(span[b]))
+        .fold(0.0, f64::max)
+        .max(1e-6);
     for c in &layout.cells {
         let mut pr = Projection {
             view: c.view,
@@ -115,7 +133,7 @@ pub(super) fn document(figure: &Figure) -> String {
         pr.scale = if c.view == View::Perspective {
             inner / (b - a).amax().max(1e-12)
         } else {
-            inner / scene.extent
+            inner / ortho_extent
         };
         // Centred in the cell below the title: the centre (a + b) / 2 goes (TOP_PAD - PAD) / 2
         // below the cell's centre.
@@ -135,6 +153,32 @@ pub(super) fn document(figure: &Figure) -> String {
     }
     svg.push_str("</svg>\n");
     svg
+}
+
+/// The views drawn by default: every view but an orthographic one in which the curves and
+/// markers span less than [`FLAT_VIEW`](super::FLAT_VIEW) of their extent on both axes.
+fn shown_views(panels: &[Panel]) -> Vec<View> {
+    let (mut lo, mut hi) = (Vector3::repeat(f64::INFINITY), Vector3::repeat(f64::NEG_INFINITY));
+    for p in panels.iter().flat_map(|p| {
+        p.curves
+            .iter()
+            .flat_map(|c| c.points.iter().copied())
+            .chain(p.markers.iter().map(|m| m.point))
+    }) {
+        if finite(&p) {
+            lo = lo.inf(&p);
+            hi = hi.sup(&p);
+        }
+    }
+    let span = hi - lo;
+    let extent = span.amax();
+    VIEWS
+        .into_iter()
+        .filter(|v| match v.axis_indices() {
+            Some((a, b)) if extent.is_finite() && extent > 0.0 => span[a].max(span[b]) >= super::FLAT_VIEW * extent,
+            _ => true,
+        })
+        .collect()
 }
 
 /// Pixel points as an SVG `points` list, leaving out points closer than [`THIN`] to the last
@@ -244,10 +288,36 @@ fn cell_svg(
         }
     }
     svg.push_str("</g>\n");
-    // Arrows are not clipped: their labels may reach over the frame.
-    let mut placed = Vec::new();
-    for a in &panel.arrows {
-        arrow_svg(svg, pr, a, scene, &mut placed);
+    // Arrows are not clipped; their labels keep inside the cell, clear of each other, the
+    // markers and the curves.
+    let mut points: Vec<Vector2<f64>> = panel
+        .curves
+        .iter()
+        .flat_map(|c| c.points.iter().filter(|p| finite(p)).map(|p| pr.px(p)))
+        .collect();
+    // The arrows' shafts too, sampled every few pixels.
+    for a in panel.arrows.iter().filter(|a| finite(&a.point) && finite(&a.vector)) {
+        let (q0, q1) = (pr.px(&a.point), pr.px(&scene.arrow_head(a)));
+        let n = ((q1 - q0).norm() / 3.0).ceil().max(1.0) as usize;
+        points.extend((0..=n).map(|k| q0 + (q1 - q0) * (k as f64 / n as f64)));
+    }
+    let markers = panel
+        .markers
+        .iter()
+        .filter(|m| finite(&m.point))
+        .map(|m| pr.px(&m.point))
+        .collect();
+    let mut room = Room::new(points, markers);
+    // Forces before distributed loads, the largest first: a short arrow's label then moves
+    // off the long shaft beside it rather than taking the long arrow's place.
+    let mut order: Vec<&super::Arrow> = panel.arrows.iter().collect();
+    order.sort_by(|a, b| {
+        let key = |x: &super::Arrow| (x.kind != super::ArrowKind::Force, -x.vector.norm());
+        let (ka, kb) = (key(a), key(b));
+        ka.0.cmp(&kb.0).then(ka.1.total_cmp(&kb.1))
+    });
+    for a in order {
+        arrow_svg(svg, pr, a, scene, &mut room);
     }
     let title = if multiples {
         r##" fill="#555""##.to_string()

@@ -237,3 +237,107 @@ fn png_text_is_set_when_the_system_has_fonts() {
     // The title is drawn exactly when a font was found to draw it in.
     assert_eq!(with.data != without.data, fonts_found());
 }
+
+/// The label boxes ([left, top, right, bottom], px, in the cell's frame) of the arrow labels
+/// of each cell of `svg`, estimated as the layout estimates them.
+fn label_boxes(svg: &str) -> Vec<Vec<[f64; 4]>> {
+    let attr = |tag: &str, name: &str| -> Option<String> {
+        let at = tag.find(&format!(" {name}=\""))? + name.len() + 3;
+        Some(tag[at..].split('"').next()?.to_string())
+    };
+    svg.split(r#"<g transform="translate("#)
+        .skip(1)
+        .map(|cell| {
+            cell.split(r#"<g class="arrow">"#)
+                .skip(1)
+                .filter_map(|group| {
+                    let group = group.split("</g>").next()?;
+                    let tag = &group[group.find("<text")?..];
+                    let (x, y): (f64, f64) = (attr(tag, "x")?.parse().ok()?, attr(tag, "y")?.parse().ok()?);
+                    let size: f64 = attr(tag, "font-size")?.parse().ok()?;
+                    let text = tag[tag.find('>')? + 1..tag.find("</text>")?].to_string();
+                    let w = super::text::text_width(&text, size);
+                    let x0 = match attr(tag, "text-anchor")?.as_str() {
+                        "start" => x,
+                        "end" => x - w,
+                        _ => x - w / 2.0,
+                    };
+                    Some([x0, y - size, x0 + w, y + 2.0])
+                })
+                .collect()
+        })
+        .collect()
+}
+
+#[test]
+fn force_labels_never_overlap_each_other_and_stay_inside_their_cell() {
+    // Two tip loads a factor 2 apart on the same shape family: their arrows and labels crowd
+    // the same corner of every view, as in the main job's columns.
+    let mut figure = Figure::new("two tip loads");
+    for fz in [-0.098, -0.196] {
+        let mut robot = cases::case_s();
+        robot.loads.tip_force = Vector3::new(0.0, 0.0, fz);
+        figure.add_shape(&robot, &solve(&robot), &Style::new("#000000"));
+    }
+    let svg = figure.to_svg();
+    let cells = label_boxes(&svg);
+    assert_eq!(cells.len(), 4, "four views");
+    let size = 430.0;
+    for boxes in &cells {
+        assert!(boxes.len() >= 2, "{boxes:?}");
+        for (i, a) in boxes.iter().enumerate() {
+            // 0.5 px: coordinates are written with one decimal
+            assert!(
+                a[0] >= -0.5 && a[2] <= size + 0.5 && a[1] >= -0.5 && a[3] <= size + 0.5,
+                "{a:?}"
+            );
+            for b in &boxes[..i] {
+                let overlap = a[0] < b[2] - 0.5 && a[2] > b[0] + 0.5 && a[1] < b[3] - 0.5 && a[3] > b[1] + 0.5;
+                assert!(!overlap, "{a:?} overlaps {b:?}");
+            }
+        }
+    }
+}
+
+#[test]
+fn views_that_show_a_dot_are_left_out_and_the_rest_fill_one_row() {
+    // An upright rod under a small tip force: from the top it is a dot.
+    let mut robot = Robot::new(crate::Rod::solid_circle(0.2, 0.001, 200e9, 0.3));
+    robot.loads.tip_force = Vector3::new(0.0, 0.0, -0.01);
+    let mut figure = Figure::new("upright");
+    figure.add_shape(&robot, &solve(&robot), &Style::new("#000000"));
+    let svg = figure.to_svg();
+    assert!(!svg.contains("top view (XY)"), "{svg}");
+    assert!(svg.contains("side view (XZ)") && svg.contains("front view (YZ)") && svg.contains("perspective"));
+    // One row of three 430 px cells (and their gutters): wider than tall.
+    let width: f64 = svg
+        .split("width=\"")
+        .nth(1)
+        .unwrap()
+        .split('"')
+        .next()
+        .unwrap()
+        .parse()
+        .unwrap();
+    assert_eq!(width, 2.0 * 24.0 + 3.0 * (58.0 + 430.0));
+    // Asked for: the views given, in order, at the width and text size given.
+    figure.views = Some(vec![View::Perspective, View::Top]);
+    figure.width = Some(600.0);
+    figure.font_size = Some(9.0);
+    figure.title.clear();
+    let svg = figure.to_svg();
+    assert!(svg.find("perspective").unwrap() < svg.find("top view (XY)").unwrap());
+    assert!(!svg.contains("side view") && !svg.contains("upright"));
+    assert!(
+        svg.starts_with(r#"<svg xmlns="http://www.w3.org/2000/svg" width="600""#),
+        "{}",
+        &svg[..200]
+    );
+}
+
+#[test]
+fn routing_labels_print_no_float_noise() {
+    let angle = std::f64::consts::PI;
+    let tendon = Tendon::new(Routing::straight(0.005 * angle.cos(), 0.005 * angle.sin()), 1.0);
+    assert_eq!(shape::routing_label(&tendon, 0.2), "straight at (-5, 0) mm");
+}

@@ -3,19 +3,50 @@
 
 use nalgebra::{Vector2, Vector3};
 
-/// The views, in panel order.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub(super) enum View {
+/// A view of a panel: three orthographic projections at one scale and a perspective.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum View {
+    /// Looking down the world z axis: x right, y up.
     Top,
+    /// Looking along world +y: x right, z up.
     Side,
+    /// Looking along world -x: y right, z up.
     Front,
+    /// An oblique perspective (azimuth -60 deg, elevation 25 deg) with the world axes.
     Perspective,
 }
 
 /// Every view, in the order of the cells.
-pub(super) const VIEWS: [View; 4] = [View::Top, View::Side, View::Front, View::Perspective];
+pub const VIEWS: [View; 4] = [View::Top, View::Side, View::Front, View::Perspective];
 
 impl View {
+    /// The view's name as the command line's `--views` writes it: `top`, `side`, `front`,
+    /// `perspective`.
+    pub fn name(self) -> &'static str {
+        match self {
+            View::Top => "top",
+            View::Side => "side",
+            View::Front => "front",
+            View::Perspective => "perspective",
+        }
+    }
+
+    /// The view named `name` ([`View::name`]), if any.
+    pub fn from_name(name: &str) -> Option<View> {
+        VIEWS.into_iter().find(|v| v.name() == name)
+    }
+
+    /// The world axes (0 = x, 1 = y, 2 = z) an orthographic view shows, horizontal then
+    /// vertical; `None` for the perspective.
+    pub(super) fn axis_indices(self) -> Option<(usize, usize)> {
+        match self {
+            View::Top => Some((0, 1)),
+            View::Side => Some((0, 2)),
+            View::Front => Some((1, 2)),
+            View::Perspective => None,
+        }
+    }
+
     pub(super) fn title(self) -> &'static str {
         match self {
             View::Top => "top view (XY)",

@@ -61,6 +61,8 @@ pub struct SolveArgs {
     /// apart, 12 on the prototype; 0: none).
     #[arg(long, value_name = "N", value_parser = parse_disks, requires = "plot")]
     disks: Option<usize>,
+    #[command(flatten)]
+    picture: crate::picture::PictureArgs,
 }
 
 /// Bad input if `values` (the `option`'s `I=VALUE` arguments) give a tendon twice: the
@@ -151,6 +153,7 @@ pub fn run(args: &SolveArgs) -> Result<(), Failure> {
         style.disks = args.disks;
         figure.add_shape(&file.robot, &solution, &style);
         figure.legend = shape_legend(&file.robot, &style);
+        args.picture.apply(&mut figure);
         write_picture(path, &figure, "plot")?;
     }
     Ok(())

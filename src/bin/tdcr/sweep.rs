@@ -10,13 +10,13 @@ use std::time::{Duration, Instant};
 use tdcr::analysis::sweep::{Event, Sweep, SweepSolver};
 use tdcr::io::csv_table::CsvTable;
 use tdcr::io::{number, output};
-use tdcr::plot::{Figure, LegendEntry, PALETTE, Style, shape_legend};
 use tdcr::{Parameter, Robot, Solution};
 
 use crate::args::{SolverArgs, parse_disks, parse_displacement_sweep, parse_param_sweep, parse_sweep};
 use crate::failure::{Failure, emit, note, picture_format, write_file, write_picture};
 use crate::failure::{solver_failure, with_likely_causes};
 use crate::robot_args::{apply, read_robot, set_displacement, set_tension};
+use crate::sweep_picture::{Drawn, Shape, chosen, picture};
 use crate::tables::summary;
 
 /// The arguments of `tdcr sweep`.
@@ -54,10 +54,16 @@ pub struct SweepArgs {
     /// ends in .png, else SVG.
     #[arg(long, value_name = "FILE.svg|FILE.png")]
     plot: Option<PathBuf>,
-    /// Spacer disks drawn on the two shapes of the picture (default: about 2.5 tendon offsets
-    /// apart, 12 on the prototype; 0: none).
+    /// Spacer disks drawn on the first and last shapes of the picture (default: about 2.5
+    /// tendon offsets apart, 12 on the prototype; 0: none).
     #[arg(long, value_name = "N", value_parser = parse_disks, requires = "plot")]
     disks: Option<usize>,
+    /// Shapes drawn in the picture: N evenly spaced steps including the first and last
+    /// (default 2), or `all`. Snaps are always drawn with the shapes either side.
+    #[arg(long, value_name = "N|all", value_parser = parse_shapes, default_value = "2", requires = "plot")]
+    shapes: Shapes,
+    #[command(flatten)]
+    picture: crate::picture::PictureArgs,
 }
 
 /// A progress bar on standard error, shown only on a terminal and only once the work has
@@ -194,6 +200,20 @@ impl<'a> Plan<'a> {
     }
 }
 
+/// The number of shapes a sweep picture draws (`--shapes`; `None`: all).
+#[derive(Clone, Copy, Debug)]
+struct Shapes(Option<usize>);
+
+fn parse_shapes(text: &str) -> Result<Shapes, String> {
+    match text {
+        "all" => Ok(Shapes(None)),
+        _ => match text.parse::<usize>() {
+            Ok(n) if n >= 1 => Ok(Shapes(Some(n))),
+            _ => Err(format!("`{text}` is not a number of shapes (1 or more) or `all`")),
+        },
+    }
+}
+
 /// The k-th value of a range, or its one value.
 fn at(v: &[f64], k: usize) -> f64 {
     v[if v.len() == 1 { 0 } else { k }]
@@ -242,8 +262,9 @@ pub fn run(args: &SweepArgs) -> Result<(), Failure> {
     let mut progress = Progress::new();
     let mut failure = None;
     let mut past_limit = PastLimits::default();
-    let (mut first, mut last): (Option<Shape>, Option<Shape>) = (None, None);
-    let mut tips = Vec::with_capacity(steps);
+    let chosen = chosen(args.shapes.0, steps);
+    let mut drawn = Drawn::default();
+    let mut previous: Option<Shape> = None;
     for k in 0..steps {
         let robot = plan.robot(args, &file.robot, k)?;
         let step = match sweep.step(&robot) {
@@ -263,6 +284,10 @@ pub fn run(args: &SweepArgs) -> Result<(), Failure> {
             Some(e @ Event::Jump { .. }) => {
                 progress.finish();
                 note(&format!("warning: sweep step {}: {e}", k + 1));
+                if let (true, Some(before)) = (args.plot.is_some(), previous.take()) {
+                    let after = (robot.clone(), step.solution.clone());
+                    drawn.snaps.push((k, before, after, e.to_string()));
+                }
                 e.to_string()
             }
             Some(e) => e.to_string(),
@@ -277,15 +302,18 @@ pub fn run(args: &SweepArgs) -> Result<(), Failure> {
                 summary(&step.solution.report, file.robot.length())
             ));
         }
-        tips.push(step.solution.tip_position());
-        if first.is_none() {
-            first = Some((robot.clone(), step.solution.clone()));
+        drawn.tips.push(step.solution.tip_position());
+        if args.plot.is_some() {
+            let shape = (robot, step.solution);
+            if chosen.binary_search(&k).is_ok() {
+                drawn.shapes.push((k, shape.clone()));
+            }
+            previous = Some(shape);
         }
-        last = Some((robot, step.solution));
         progress.update(k + 1, steps);
     }
     progress.finish();
-    past_limit.summary(&name, tips.len());
+    past_limit.summary(&name, drawn.tips.len());
     let csv = csv.finish();
     match &args.out {
         Some(path) => {
@@ -294,15 +322,24 @@ pub fn run(args: &SweepArgs) -> Result<(), Failure> {
         }
         None => emit(&csv)?,
     }
-    if let (Some(path), Some(first), Some(last)) = (&args.plot, &first, &last) {
-        let figure = picture(args, &plan, &name, &tips, first, last);
-        write_picture(path, &figure, "plot")?;
+    if let Some(path) = &args.plot {
+        // A sweep that failed part-way draws the steps it solved; the last of them is the
+        // last shape.
+        if let (Some(last), false) = (
+            previous,
+            drawn.shapes.last().is_some_and(|(k, _)| k + 1 == drawn.tips.len()),
+        ) {
+            drawn.shapes.push((drawn.tips.len() - 1, last));
+        }
+        if !drawn.tips.is_empty() {
+            let title = format!("{name}: tip trajectory over {} solves", drawn.tips.len());
+            let mut figure = picture(&title, ranges(args, &plan), args.disks, &drawn);
+            args.picture.apply(&mut figure);
+            write_picture(path, &figure, "plot")?;
+        }
     }
     failure.map_or(Ok(()), Err)
 }
-
-/// A solved step's robot and solution, as the picture draws it.
-type Shape = (Robot, Solution);
 
 /// A failed step's failure, its message headed by the step and its tendon inputs.
 fn step_failure(f: Failure, k: usize, steps: usize, robot: &Robot) -> Failure {
@@ -378,16 +415,8 @@ fn row(csv: &mut CsvTable, args: &SweepArgs, plan: &Plan, k: usize, solution: &S
     csv.row(fields);
 }
 
-/// The tip trajectory with the first and last shapes.
-fn picture(
-    args: &SweepArgs,
-    plan: &Plan,
-    name: &str,
-    tips: &[tdcr::nalgebra::Vector3<f64>],
-    (robot0, first): &Shape,
-    (robot1, last): &Shape,
-) -> Figure {
-    let mut figure = Figure::new(&format!("{name}: tip trajectory over {} solves", tips.len()));
+/// The swept ranges, as the picture's subtitle says them.
+fn ranges(args: &SweepArgs, plan: &Plan) -> String {
     let ranges: Vec<String> = args
         .tension
         .iter()
@@ -403,41 +432,7 @@ fn picture(
                 .map(|(p, v)| format!("{p}: {} to {} {}", v[0], v[v.len() - 1], p.unit())),
         )
         .collect();
-    figure.subtitle.push(ranges.join("; "));
-    let mut start = Style::new("#999999");
-    start.dash = Some("5 3".into());
-    start.disks = args.disks;
-    start.distributed_load = false;
-    figure.add_shape(robot0, first, &start);
-    let mut end = Style::new("#555555");
-    end.disks = args.disks;
-    figure.add_shape(robot1, last, &end);
-    figure.panel_mut().curves.push(tdcr::plot::Curve {
-        points: tips.to_vec(),
-        color: PALETTE[3].into(),
-        width: 2.0,
-        dash: None,
-        opacity: 1.0,
-    });
-    figure
-        .panel_mut()
-        .markers
-        .extend(tips.iter().map(|&point| tdcr::plot::Marker {
-            point,
-            color: PALETTE[3].into(),
-            radius: 1.8,
-        }));
-    figure.legend = vec![
-        LegendEntry::line("tip trajectory (a dot per solve)", PALETTE[3]).width(2.0),
-        LegendEntry::line("first shape", "#999999").dash("5 3"),
-        LegendEntry::line("last shape", "#555555"),
-        LegendEntry::line("pulled tendons of each shape (thin lines)", "#555555").width(1.2),
-    ];
-    // Disks and loads of the last shape.
-    let legend = shape_legend(robot1, &end);
-    let extra = legend.into_iter().filter(|e| e.symbol != tdcr::plot::Symbol::Line);
-    figure.legend.extend(extra);
-    figure
+    ranges.join("; ")
 }
 
 /// The tendons whose solved tension reached the geometric limit in a sweep: each is warned

@@ -6,7 +6,7 @@ use std::time::{Duration, Instant};
 use tdcr::Routing;
 use tdcr::io::csv_table::CsvTable;
 use tdcr::io::{number, output};
-use tdcr::plot::{Figure, Format, LegendEntry, Style, Symbol, routing_label};
+use tdcr::plot::{FORCE_COLOR, Figure, Format, LegendEntry, Style, Symbol, View, routing_label};
 use tdcr::{cases, collocation};
 
 use crate::failure::{Failure, emit, note, write_file};
@@ -15,14 +15,14 @@ use crate::tables::{describe, fixed, ms};
 /// Spacer disks of the paper's prototype, drawn on every shape of the main job's picture.
 const PROTOTYPE_DISKS: usize = 12;
 
-/// The tensions of Table 2 (N) and their colours in the main job's picture, light to dark
-/// (the plasma colour map).
+/// The tensions of Table 2 (N) and their colours in the main job's picture: Okabe-Ito
+/// colours, distinct for colour-blind readers and apart from the tip-load arrows' wine.
 const TENSION_COLORS: [(f64, &str); 5] = [
-    (0.98, "#f0a030"),
-    (1.96, "#e16462"),
-    (2.94, "#b12a90"),
-    (4.91, "#6a00a8"),
-    (6.87, "#0d0887"),
+    (0.98, "#E69F00"),
+    (1.96, "#56B4E9"),
+    (2.94, "#009E73"),
+    (4.91, "#D55E00"),
+    (6.87, "#0072B2"),
 ];
 
 /// Tip loads of Table 2 (N), their dash patterns and legend labels.
@@ -97,7 +97,47 @@ fn picture(solved: &[(cases::Experiment, tdcr::Robot, tdcr::Solution)], routings
     figure.legend.push(LegendEntry::new(
         Symbol::Arrow,
         "tip load (N), arrow length proportional to force",
-        "#c0392b",
+        FORCE_COLOR,
+    ));
+    figure
+}
+
+/// The main job's picture for a journal column: side views only, two panels a row, 525 px
+/// wide (a 1050-pixel PNG: 3.5 in at 300 dpi), a one-line legend of what tells the shapes
+/// apart, no subtitle.
+fn compact(full: &Figure) -> Figure {
+    let mut figure = full.clone();
+    figure.title = "Table 2, side views (XZ)".into();
+    figure.subtitle.clear();
+    figure.views = Some(vec![View::Side]);
+    figure.columns = Some(2);
+    figure.width = Some(525.0);
+    for panel in &mut figure.panels {
+        if let Some((tendon, _)) = panel.title.split_once(':') {
+            panel.title = tendon.to_string();
+        }
+        // Two tip loads per column at this size: the legend tells them apart, not labels.
+        for arrow in &mut panel.arrows {
+            arrow.label = None;
+        }
+    }
+    // Short labels, so that the legend takes several columns.
+    figure.legend = vec![LegendEntry::line("no tension", "#000000")];
+    for (tension, color) in TENSION_COLORS {
+        figure.legend.push(LegendEntry::line(&format!("{tension} N"), color));
+    }
+    for (_, dash, label) in TIP_LOAD_DASHES {
+        let label = label.split_once(" (").map_or(label, |(a, _)| a);
+        let entry = LegendEntry::line(label, "#666666");
+        figure.legend.push(match dash {
+            Some(d) => entry.dash(d),
+            None => entry,
+        });
+    }
+    figure.legend.push(LegendEntry::new(
+        Symbol::Arrow,
+        "tip load, length proportional to force",
+        FORCE_COLOR,
     ));
     figure
 }
@@ -222,22 +262,24 @@ pub fn run(out_dir: &Path) -> Result<(), Failure> {
     ))?;
 
     let figure = picture(&solved, &routings, &mesh);
-    let svg_path = out_dir.join("table2.svg");
-    let png_path = out_dir.join("table2.png");
-    let csv_path = out_dir.join("table2.csv");
-    write_file(&svg_path, figure.to_svg(), "picture")?;
-    let (png, text) = figure
-        .render(Format::Png)
-        .map_err(|e| Failure::Other(format!("cannot draw the picture: {e}")))?;
-    write_file(&png_path, png, "picture")?;
-    if !text {
-        note("warning: no fonts found on this system, so the PNG has no text; the SVG has it");
+    let mut text = true;
+    for (name, figure) in [("table2", &figure), ("table2_compact", &compact(&figure))] {
+        write_file(&out_dir.join(format!("{name}.svg")), figure.to_svg(), "picture")?;
+        let (png, fonts) = figure
+            .render(Format::Png)
+            .map_err(|e| Failure::Other(format!("cannot draw the picture: {e}")))?;
+        write_file(&out_dir.join(format!("{name}.png")), png, "picture")?;
+        text &= fonts;
     }
+    if !text {
+        note("warning: no fonts found on this system, so the PNGs have no text; the SVGs have it");
+    }
+    let csv_path = out_dir.join("table2.csv");
     write_file(&csv_path, csv.finish(), "table")?;
+    let d = out_dir.display();
     emit(&format!(
-        "picture of all shapes: {} and {}\ntable as CSV (SI units): {}\n",
-        svg_path.display(),
-        png_path.display(),
+        "picture of all shapes: {d}/table2.svg and {d}/table2.png; for a journal column (side views): \
+         {d}/table2_compact.svg and .png\ntable as CSV (SI units): {}\n",
         csv_path.display()
     ))?;
     if failures.is_empty() {

@@ -62,6 +62,12 @@ pub struct TraceArgs {
     /// The tip coordinate of the picture.
     #[arg(long, value_enum, default_value_t)]
     coordinate: Coordinate,
+    /// The picture's title instead of the file name and the parameter (`--title ""`: none).
+    #[arg(long, value_name = "TEXT", requires = "plot")]
+    title: Option<String>,
+    /// Leave out the picture's subtitle (the range, points and iterations).
+    #[arg(long, requires = "plot")]
+    no_subtitle: bool,
 }
 
 /// `NAME=START:STOP`.
@@ -133,7 +139,13 @@ pub fn run(args: &TraceArgs) -> Result<(), Failure> {
         }
     ));
     if let Some(path) = &args.plot {
-        let chart = picture(&name, &t, args.coordinate);
+        let mut chart = picture(&name, &t, args.coordinate);
+        if let Some(title) = &args.title {
+            chart.title = title.clone();
+        }
+        if args.no_subtitle {
+            chart.subtitle.clear();
+        }
         let bytes = match picture_format(path)? {
             tdcr::plot::Format::Svg => chart.to_svg().into_bytes(),
             tdcr::plot::Format::Png => {
@@ -234,6 +246,15 @@ fn json(t: &Trace) -> String {
     text
 }
 
+/// `value` with its unit, if it has one: `0.173 N`, `1.5` (a load scale).
+fn with_unit(value: f64, unit: &str) -> String {
+    if unit.is_empty() {
+        significant(value)
+    } else {
+        format!("{} {unit}", significant(value))
+    }
+}
+
 /// The branch: parameter against a tip coordinate (mm), stable solid, unstable dashed,
 /// folds and bifurcations marked.
 fn picture(name: &str, t: &Trace, coordinate: Coordinate) -> Chart {
@@ -273,7 +294,7 @@ fn picture(name: &str, t: &Trace, coordinate: Coordinate) -> Chart {
     for p in t.points.iter().filter(|p| p.fold) {
         chart.marks.push(Mark {
             at: (p.value, y(p)),
-            label: format!("fold at {}", significant(p.value)),
+            label: format!("fold at {}", with_unit(p.value, t.parameter.unit())),
             color: "#c0392b".into(),
         });
     }
@@ -285,24 +306,32 @@ fn picture(name: &str, t: &Trace, coordinate: Coordinate) -> Chart {
         if let Some(p) = nearest {
             chart.marks.push(Mark {
                 at: (p.value, y(p)),
-                label: format!("bifurcation at {}", significant(b)),
+                label: format!("bifurcation at {}", with_unit(b, t.parameter.unit())),
                 color: "#7d3c98".into(),
             });
         }
     }
-    chart.legend = vec![
-        ("stable equilibria".into(), stable.into(), Some(false)),
-        (
+    // The legend names only what the chart shows.
+    let dashed = chart.segments.iter().any(|s| s.dashed);
+    if chart.segments.iter().any(|s| !s.dashed) {
+        chart
+            .legend
+            .push(("stable equilibria".into(), stable.into(), Some(false)));
+    }
+    if dashed {
+        chart.legend.push((
             "unstable equilibria (a disturbance makes the robot leave them)".into(),
             unstable.into(),
             Some(true),
-        ),
-        (
+        ));
+    }
+    if t.points.iter().any(|p| p.fold) {
+        chart.legend.push((
             "fold: loaded past it, the robot snaps to another state".into(),
             "#c0392b".into(),
             None,
-        ),
-    ];
+        ));
+    }
     if !t.bifurcations.is_empty() {
         chart.legend.push((
             "bifurcation: stability changes without a fold (another branch crosses)".into(),
