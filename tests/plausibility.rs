@@ -77,13 +77,54 @@ fn tension_past_the_geometric_limit_is_the_named_cause() {
     robot.tendons[0].set_tension(1.1 * limit);
     let w = robot.plausibility();
     assert_eq!(w.len(), 1, "{w:?}");
-    assert!(matches!(w[0], Warning::TendonCurl { tendon: 0, .. }));
+    assert!(matches!(w[0], Warning::TendonBend { tendon: 0, .. }), "{w:?}");
     // 1e-12: tau r^2 / EI = 1.1 by construction, to rounding
     assert!((w[0].figure() - 1.1).abs() < 1e-12);
     assert!(matches!(
         collocation::solve(&robot, &collocation::Options::fixed(64)),
         Err(tdcr::Error::NotConverged { .. })
     ));
+}
+
+/// The limit concerns the bend the tendons cause: four tendons pulled against each other at
+/// 150 N (2.3 times one tendon's limit each) cause no bend, draw no warning and solve
+/// straight; two tendons side by side at 0.6 of the limit each bend the rod as one at 1.2.
+#[test]
+fn the_bend_limit_sums_the_tendons_moments() {
+    let mut robot = cases::prototype();
+    robot.loads = tdcr::Loads::none();
+    let ei = robot.rod.section_at(0.0).section.kbt[0];
+    let limit = ei / cases::TENDON_OFFSET.powi(2);
+    for i in 0..4 {
+        robot.tendons[i].set_tension(150.0);
+    }
+    assert!(150.0 > 2.0 * limit);
+    assert!(robot.plausibility().is_empty(), "{:?}", robot.plausibility());
+    let solution = collocation::solve(&robot, &Default::default()).unwrap();
+    // 1e-9 m: the four moments cancel to rounding; the rod (along world x) only shortens
+    assert!(
+        solution.tip_position().yz().norm() < 1e-9,
+        "{}",
+        solution.tip_position()
+    );
+    // Tendons 1 and 2 are 90 degrees apart: their moments add to sqrt(2) 0.6 limit r, and
+    // each lies r / sqrt(2) along it: kappa r = 0.6 (no warning); a second tendon on tendon
+    // 1's side instead makes 1.2.
+    let mut robot = cases::prototype();
+    robot.loads = tdcr::Loads::none();
+    robot.tendons[0].set_tension(0.6 * limit);
+    robot.tendons[1].set_tension(0.6 * limit);
+    assert!(robot.plausibility().is_empty(), "{:?}", robot.plausibility());
+    robot.tendons[1] = tdcr::Tendon::new(tdcr::Routing::straight(cases::TENDON_OFFSET, 0.0), 0.6 * limit);
+    let w = robot.plausibility();
+    assert!(matches!(w[..], [Warning::TendonBend { .. }]), "{w:?}");
+    // 1e-12: 1.2 by construction, to rounding
+    assert!((w[0].figure() - 1.2).abs() < 1e-12, "{}", w[0].figure());
+    assert!(
+        w[0].to_string().contains("curvature x offset = 1.2 is past 1"),
+        "{}",
+        w[0]
+    );
 }
 
 #[test]
@@ -158,8 +199,9 @@ fn a_failed_solve_names_the_tension_past_the_geometric_limit() {
     let out = run("mN", &["solve"], &file);
     let stderr = text(&out.stderr);
     assert_eq!(out.status.code(), Some(3), "{stderr}");
-    let cause = "tendon 1: tension 2940 N x offset^2 (0.008 m)^2 = 0.188 N m^2 is 44.6x the bending \
-                 stiffness EI = 0.00422 N m^2: past the geometric limit EI/r^2 = 66 N";
+    let cause = "the tendons bend the rod at s = 0 m with a moment of 23.5 N m, a curvature of 5570 1/m \
+                 over EI = 0.00422 N m^2 (bend radius 1.8e-4 m); tendon 1 runs 0.008 m inside that bend, so \
+                 curvature x offset = 44.6 is past 1";
     // The warning comes first, before the solve's error.
     let warned = stderr.find(&format!("robot.toml: {cause}")).expect("the warning");
     assert!(warned < stderr.find("error:").expect("the error"), "{stderr}");

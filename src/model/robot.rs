@@ -496,7 +496,7 @@ impl Robot {
 
     /// The robot's figures outside their plausible ranges (module [`crate::model::scales`], whose docs give every figure's range and source):
     /// length, slenderness, modulus, self weight, each tendon's tension against its
-    /// geometric limit EI / r^2, and the tip and point loads against EI. Empty for a robot
+    /// geometric limit: the bend the tendons cause, and the tip and point loads against EI. Empty for a robot
     /// of ordinary scales such as the paper's prototype. Not a validation: call it on a
     /// robot that passed [`Robot::validate`] (non-finite values give no warnings).
     ///
@@ -507,8 +507,8 @@ impl Robot {
     /// assert!(robot.plausibility().is_empty());
     /// robot.tendons[0].set_tension(2940.0); // 2.94 N typed in mN
     /// let warnings = robot.plausibility();
-    /// assert!(matches!(warnings[0], Warning::TendonCurl { tendon: 0, .. }));
-    /// assert!(warnings[0].to_string().contains("past the geometric limit EI/r^2 = 66 N"));
+    /// assert!(matches!(warnings[0], Warning::TendonBend { tendon: 0, .. }));
+    /// assert!(warnings[0].to_string().contains("alone reaches the limit at EI/r^2 = 66 N"));
     /// ```
     pub fn plausibility(&self) -> Vec<Warning> {
         let mut out = Vec::new();
@@ -549,18 +549,7 @@ impl Robot {
         if self_weight.figure() > SELF_WEIGHT_LIMIT {
             out.push(self_weight);
         }
-        for (i, t) in self.tendons.iter().enumerate() {
-            let end = t.end(length);
-            let curl = Warning::TendonCurl {
-                tendon: i,
-                tension: t.tension(),
-                offset: t.routing.max_offset(end, length),
-                bending_stiffness: self.weakest_bending(end),
-            };
-            if curl.figure() >= TENDON_LIMIT {
-                out.push(curl);
-            }
-        }
+        out.extend(crate::model::scales::tendon_bend(self));
         let points = self.loads.point.iter().enumerate();
         let sites = std::iter::once((LoadSite::Tip, length, self.loads.tip_force, self.loads.tip_moment))
             .chain(points.map(|(i, p)| (LoadSite::Point(i), p.s, p.force, p.moment)));

@@ -15,7 +15,7 @@
 //! | L / r | slenderness (r the outer radius) | outside [5, 2e4]: rod theory needs a slender rod; beyond 2e4 a thread |
 //! | E | Young's modulus | outside [1e4, 1e12] Pa: from soft silicones (about 5e4 Pa) to diamond (1.2e12 Pa) |
 //! | w L^3 / EI | self weight (w the distributed force, N/m) against stiffness | above 1e3: the rod hangs like a string, bending only within (EI/w)^(1/3) < L/10 of its base |
-//! | tau r^2 / EI | a tendon's tension against the geometric limit EI / r^2 (r its largest offset) | at or above 1: the bend radius EI / (tau r) would fall below the offset; past it the tendon path folds and no equilibrium exists |
+//! | kappa r | the bend the tendons cause: the curvature kappa = \|sum tau_i r_i\| / EI of their net moment on a straight rod, times the offset r of the tendon furthest inside that bend (along it) | at or above 1 somewhere along the rod: the bend radius 1 / kappa would fall below that tendon's offset, its path would fold and no equilibrium exists past it; for one tendon kappa r = tau r^2 / EI, the geometric limit EI / r^2; tendons pulled against each other (co-contraction) cause no bend and no warning |
 //! | F a^2 / EI | a tip force (a = L) or point force (a = its s) against stiffness | above 100: the rod bends only within (EI/F)^(1/2) < a/10 of the load |
 //! | M a / EI | the bending angle a tip or point moment alone causes (rad) | above 20 pi (ten turns) |
 //!
@@ -30,6 +30,8 @@
 //! no solution (tests/hard.rs). The Table 2 experiments stay well inside every range
 //! (w L^3 / EI = 1.6, tau r^2 / EI <= 0.074, F L^2 / EI <= 2.7).
 
+use crate::Robot;
+use nalgebra::Vector3;
 use std::f64::consts::PI;
 use std::fmt;
 
@@ -91,16 +93,21 @@ pub enum Warning {
         /// EI, N m^2.
         bending_stiffness: f64,
     },
-    /// A tendon's tension x offset^2 against EI is at or above [`TENDON_LIMIT`].
-    TendonCurl {
-        /// The tendon (from 0; messages number from 1).
+    /// The bend the tendons cause, curvature x offset of the tendon furthest inside it, is at
+    /// or above [`TENDON_LIMIT`] ([`tendon_bend`]).
+    TendonBend {
+        /// The tendon furthest inside the bend (from 0; messages number from 1).
         tendon: usize,
-        /// tau, N.
-        tension: f64,
-        /// The tendon's largest offset |r| from the backbone, m.
+        /// Where the bend is sharpest against that offset (m).
+        s: f64,
+        /// |sum tau_i r_i| there: the tendons' net bending moment on a straight rod (N m).
+        moment: f64,
+        /// That tendon's offset along the bend's direction, r . d / |d| (m).
         offset: f64,
-        /// EI, N m^2.
+        /// EI there, N m^2.
         bending_stiffness: f64,
+        /// The tension alone that would bring that tendon to the limit, EI / r^2 (N).
+        limit: f64,
     },
     /// The solved tension of a displacement-controlled tendon ([`crate::Robot::solved_tensions`])
     /// times its offset^2 against EI is at or above [`TENDON_LIMIT`]: the solve converged,
@@ -155,13 +162,13 @@ impl Warning {
                 length,
                 bending_stiffness,
             } => weight_per_length * length.powi(3) / bending_stiffness,
-            Warning::TendonCurl {
-                tension,
+            Warning::TendonBend {
+                moment,
                 offset,
                 bending_stiffness,
                 ..
-            }
-            | Warning::SolvedTension {
+            } => moment / bending_stiffness * offset,
+            Warning::SolvedTension {
                 tension,
                 offset,
                 bending_stiffness,
@@ -181,6 +188,56 @@ impl Warning {
             } => moment * arm / bending_stiffness,
         }
     }
+}
+
+/// The sharpest bend the tendons cause ([`Warning::TendonBend`]) if it reaches
+/// [`TENDON_LIMIT`]: at 33 evenly spaced arc lengths and at every tendon's end, the net moment
+/// d = sum tau_i r_i of the tendons that reach there (their tensions about the backbone on a
+/// straight rod: they bend it towards d), the curvature |d| / EI with EI the weaker bending
+/// stiffness there, and of those tendons the taut one furthest along d, whose path the bend
+/// shortens most (by the factor 1 - kappa r . d / |d|). Tension-controlled tendons only
+/// (a displacement-controlled tendon's tension is solved for: [`Warning::SolvedTension`]).
+pub(crate) fn tendon_bend(robot: &Robot) -> Option<Warning> {
+    let length = robot.length();
+    let ends: Vec<f64> = robot.tendons.iter().map(|t| t.end(length)).collect();
+    let grid = (0..=32).map(|k| length * f64::from(k) / 32.0);
+    let mut worst: Option<Warning> = None;
+    for s in grid.chain(ends.clone()) {
+        let active: Vec<(usize, &crate::Tendon)> = robot
+            .tendons
+            .iter()
+            .enumerate()
+            .filter(|(i, t)| ends[*i] >= s && t.displacement().is_none())
+            .collect();
+        let offset = |t: &crate::Tendon| t.routing.at(s, length).r;
+        let d: Vector3<f64> = active.iter().map(|(_, t)| t.tension() * offset(t)).sum();
+        let moment = d.norm();
+        let k = robot.rod.section_at(s).section.kbt;
+        let bending_stiffness = k[0].min(k[1]);
+        if !(moment > 0.0 && bending_stiffness > 0.0) {
+            continue;
+        }
+        // A slack tendon's path may fold: it goes slack. The first of equals is named.
+        let inside = active
+            .iter()
+            .filter(|(_, t)| t.tension() > 0.0)
+            .map(|&(i, t)| (i, offset(t).dot(&d) / moment, t.routing.max_offset(ends[i], length)));
+        let Some((tendon, along, radius)) = inside.reduce(|a, b| if b.1 > a.1 { b } else { a }) else {
+            continue;
+        };
+        let w = Warning::TendonBend {
+            tendon,
+            s,
+            moment,
+            offset: along,
+            bending_stiffness,
+            limit: bending_stiffness / (radius * radius),
+        };
+        if worst.as_ref().is_none_or(|o| w.figure() > o.figure()) {
+            worst = Some(w);
+        }
+    }
+    worst.filter(|w| w.figure() >= TENDON_LIMIT)
 }
 
 /// `x` to 3 significant digits, plain from 1e-3 to 1e5 and scientific beyond.
@@ -264,28 +321,31 @@ impl fmt::Display for Warning {
                 fig(SELF_WEIGHT_LIMIT),
                 fig((bending_stiffness / weight_per_length).cbrt())
             ),
-            Warning::TendonCurl {
+            Warning::TendonBend {
                 tendon,
-                tension,
+                s,
+                moment,
                 offset,
                 bending_stiffness,
+                limit,
             } => write!(
                 f,
-                "tendon {}: tension {} N x offset^2 ({} m)^2 = {} N m^2 is {}x the bending stiffness EI = {} N m^2: \
-                 {} the geometric limit EI/r^2 = {} N, the rod would curl tighter than the tendon \
-                 offset (bend radius EI/(tau r) = {} m against the offset {} m) and no equilibrium exists \
-                 past it; check the tension's units (N) and the offset (m), or lower the tension below {} N",
-                tendon + 1,
-                fig(tension),
-                fig(offset),
-                fig(tension * offset * offset),
-                fig(x),
+                "the tendons bend the rod at s = {} m with a moment of {} N m, a curvature of {} 1/m over \
+                 EI = {} N m^2 (bend radius {} m); tendon {} runs {} m inside that bend, so curvature x \
+                 offset = {} is {} 1: the bend would be tighter than the tendon's offset, its path would \
+                 fold, and no equilibrium exists past 1; check the tensions' units (N) and the offsets (m), \
+                 or lower the tensions (tendon {} alone reaches the limit at EI/r^2 = {} N)",
+                fig(s),
+                fig(moment),
+                fig(moment / bending_stiffness),
                 fig(bending_stiffness),
-                if x > TENDON_LIMIT { "past" } else { "at" },
-                fig(bending_stiffness / (offset * offset)),
-                fig(bending_stiffness / (tension * offset)),
+                fig(bending_stiffness / moment),
+                tendon + 1,
                 fig(offset),
-                fig(bending_stiffness / (offset * offset))
+                fig(x),
+                if x > TENDON_LIMIT { "past" } else { "at" },
+                tendon + 1,
+                fig(limit)
             ),
             Warning::SolvedTension {
                 tendon,
