@@ -94,7 +94,7 @@ pub enum Warning {
         bending_stiffness: f64,
     },
     /// The bend the tendons cause, curvature x offset of the tendon furthest inside it, is at
-    /// or above [`TENDON_LIMIT`] ([`tendon_bend`]).
+    /// or above [`TENDON_LIMIT`] ([`crate::Robot::plausibility`] computes it).
     TendonBend {
         /// The tendon furthest inside the bend (from 0; messages number from 1).
         tendon: usize,
