@@ -350,8 +350,9 @@ fn ticks_svg(svg: &mut String, pr: &Projection, c: &Cell, scene: &Scene) {
     // The window in world coordinates (m): pixel 0..size on each axis.
     let h_range = (-pr.offset.x / pr.scale, (size - pr.offset.x) / pr.scale);
     let v_range = (-pr.offset.y / pr.scale, (size - pr.offset.y) / pr.scale);
-    // About 6 ticks over the cell, at least 45 px apart so numbers do not touch.
-    let step = tick_step(size / pr.scale, 6.0, 45.0 / pr.scale);
+    // About 6 ticks over the cell, at least 36 px apart so numbers (`-200`: 29 px) do not
+    // touch.
+    let step = tick_step(size / pr.scale, 6.0, 36.0 / pr.scale);
     let inside = |q: f64| (2.0..=size - 2.0).contains(&q);
     for t in ticks(h_range.0, h_range.1, step) {
         let x = pr.offset.x + t * pr.scale;

@@ -102,7 +102,7 @@ fn picture(solved: &[(cases::Experiment, tdcr::Robot, tdcr::Solution)], routings
     figure
 }
 
-/// The main job's picture for a journal column: side views only, two panels a row, 525 px
+/// The main job's picture for a journal column: side views only, three panels a row, 525 px
 /// wide (a 1050-pixel PNG: 3.5 in at 300 dpi), a one-line legend of what tells the shapes
 /// apart, no subtitle.
 fn compact(full: &Figure) -> Figure {
@@ -110,7 +110,7 @@ fn compact(full: &Figure) -> Figure {
     figure.title = "Table 2, side views (XZ)".into();
     figure.subtitle.clear();
     figure.views = Some(vec![View::Side]);
-    figure.columns = Some(2);
+    figure.columns = Some(3);
     figure.width = Some(525.0);
     for panel in &mut figure.panels {
         if let Some((tendon, _)) = panel.title.split_once(':') {
@@ -121,24 +121,21 @@ fn compact(full: &Figure) -> Figure {
             arrow.label = None;
         }
     }
-    // Short labels, so that the legend takes several columns.
+    // Short labels, so that the legend takes three columns.
     figure.legend = vec![LegendEntry::line("no tension", "#000000")];
     for (tension, color) in TENSION_COLORS {
         figure.legend.push(LegendEntry::line(&format!("{tension} N"), color));
     }
-    for (_, dash, label) in TIP_LOAD_DASHES {
-        let label = label.split_once(" (").map_or(label, |(a, _)| a);
+    for ((_, dash, _), label) in TIP_LOAD_DASHES.into_iter().zip(["no tip load", "10 g", "20 g"]) {
         let entry = LegendEntry::line(label, "#666666");
         figure.legend.push(match dash {
             Some(d) => entry.dash(d),
             None => entry,
         });
     }
-    figure.legend.push(LegendEntry::new(
-        Symbol::Arrow,
-        "tip load, length proportional to force",
-        FORCE_COLOR,
-    ));
+    figure
+        .legend
+        .push(LegendEntry::new(Symbol::Arrow, "tip load", FORCE_COLOR));
     figure
 }
 
