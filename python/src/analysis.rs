@@ -1,7 +1,9 @@
 //! Tip sensitivities and inverse statics: `tdcr::tip_sensitivities`,
 //! `tdcr::fit::solve_tensions` and `tdcr::fit::solve_displacements` with numpy in and out.
 
-use crate::errors::{invalid, to_py};
+use crate::boundary;
+use crate::errors::invalid;
+use crate::options::Use;
 use crate::robot::PyRobot;
 use crate::solution::PySolution;
 use numpy::ndarray::Array2;
@@ -96,9 +98,7 @@ impl PyTipSensitivities {
 #[pyfunction]
 pub fn tip_sensitivities(py: Python<'_>, robot: &PyRobot, solution: &PySolution) -> PyResult<PyTipSensitivities> {
     let (r, s) = (&robot.file.robot, &solution.solution);
-    py.detach(|| tdcr::tip_sensitivities(r, s))
-        .map(|inner| PyTipSensitivities { inner })
-        .map_err(to_py)
+    boundary::detached(py, || tdcr::tip_sensitivities(r, s)).map(|inner| PyTipSensitivities { inner })
 }
 
 /// The result of `solve_tensions` and `solve_displacements`.
@@ -155,8 +155,12 @@ fn target(function: &str, position: Vec<f64>, rotation: Option<Vec<Vec<f64>>>) -
 /// The forward solver's settings of inverse statics: the robot file's and `options`, on a
 /// fixed mesh unless `tol` asks otherwise (as the library's inverse statics: every
 /// iteration then solves the same discretization).
-fn forward_options(robot: &PyRobot, options: Option<&Bound<'_, PyDict>>) -> PyResult<tdcr::collocation::Options> {
-    let mut settings = crate::options::apply(&robot.file.solver, options)?;
+fn forward_options(
+    function: &str,
+    robot: &PyRobot,
+    options: Option<&Bound<'_, PyDict>>,
+) -> PyResult<tdcr::collocation::Options> {
+    let mut settings = crate::options::apply(&robot.file.solver, options, Use::Collocation(function))?;
     if !options.is_some_and(|o| o.contains("tol").unwrap_or(false)) {
         settings.collocation.tolerance = None;
     }
@@ -172,7 +176,7 @@ fn run_inverse(
     inverse: fn(&tdcr::Robot, &Target, &InverseOptions) -> tdcr::Result<InverseSolution>,
 ) -> PyResult<PyInverseResult> {
     let r = &robot.file.robot;
-    let out = py.detach(|| inverse(r, &target, &options)).map_err(to_py)?;
+    let out = boundary::detached(py, || inverse(r, &target, &options))?;
     let bounds = out
         .bounds
         .iter()
@@ -233,7 +237,7 @@ pub fn solve_tensions(
         tolerance,
         max_iterations,
         orientation_weight,
-        solver: forward_options(robot, options)?,
+        solver: forward_options("solve_tensions", robot, options)?,
         free_tendons,
         ..Default::default()
     };
@@ -274,7 +278,7 @@ pub fn solve_displacements(
         tolerance,
         max_iterations,
         orientation_weight,
-        solver: forward_options(robot, options)?,
+        solver: forward_options("solve_displacements", robot, options)?,
         free_tendons,
     };
     run_inverse(py, robot, target, options, tdcr::fit::solve_displacements)
@@ -332,7 +336,7 @@ fn rows3(values: &[Vec<f64>], what: &str) -> PyResult<Vec<Vector3<f64>>> {
 /// "offset_scale") to measured tips. `tensions` is (M, k) (N, file order), `tip_forces`
 /// (M, 3) (N, world frame), `measured_tips` (M, 3) (m). The fit starts from the robot's own
 /// parameters; `options` are the forward solver's (as `solve`, collocation), on a fixed
-/// mesh (`intervals`; a `tol` is ignored) so that the model tips are smooth in the
+/// mesh (`intervals`; `tol` is refused) so that the model tips are smooth in the
 /// parameters.
 #[pyfunction]
 #[pyo3(signature = (robot, tensions, tip_forces, measured_tips, *, fit=None, max_iterations=50, **options))]
@@ -394,7 +398,7 @@ pub fn calibrate(
     let defaults = CalibrationOptions::default();
     let mut settings = robot.file.solver.clone();
     settings.collocation.residual_tolerance = defaults.collocation.residual_tolerance;
-    let mut settings = crate::options::apply(&settings, options)?;
+    let mut settings = crate::options::apply(&settings, options, Use::FixedMesh("calibrate"))?;
     // Calibration solves on a fixed mesh (the model tips must be smooth in the parameters),
     // as `tdcr calibrate` does.
     settings.collocation.tolerance = None;
@@ -405,9 +409,7 @@ pub fn calibrate(
         ..defaults
     };
     let r = &robot.file.robot;
-    let out = py
-        .detach(|| tdcr::fit::calibrate(r, &experiments, &calibration_options))
-        .map_err(to_py)?;
+    let out = boundary::pooled(py, || tdcr::fit::calibrate(r, &experiments, &calibration_options))?;
     let fitted = PyRobot {
         file: tdcr::io::RobotFile {
             robot: out.robot.clone(),

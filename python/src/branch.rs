@@ -2,15 +2,16 @@
 //! events between steps) and `tdcr::collocation::trace` (a branch of equilibria in one
 //! input), with numpy out.
 
-use crate::errors::{invalid, to_py};
-use crate::robot::{PyRobot, robots_of};
+use crate::boundary;
+use crate::errors::to_py;
+use crate::options::Use;
+use crate::robot::{PyRobot, Rows};
 use crate::solution::PySolution;
 use numpy::ndarray::Array2;
 use numpy::{IntoPyArray, PyArray1, PyArray2};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
-use tdcr::Method;
-use tdcr::analysis::sweep::{Event, Step, SweepSolver};
+use tdcr::analysis::sweep::{Event, Step, Sweep, SweepSolver};
 use tdcr::nalgebra::Vector3;
 
 /// (n, 3) rows of tip positions.
@@ -107,7 +108,9 @@ impl PySweep {
 /// last (`tdcr::solve_from`, so every step's stability verdict is its own), and the events
 /// between steps (the tip jumping off its branch, displacement-controlled tendons going
 /// taut or slack); collocation. A failure is raised with `index` set to its row and
-/// `partial` to the `Sweep` of the rows before it.
+/// `partial` to the `Sweep` of the rows before it. Ctrl-C stops it within about 0.1 s
+/// with `KeyboardInterrupt`, whose `completed` and `partial` say the same of the rows
+/// finished.
 #[pyfunction]
 #[pyo3(signature = (robot, parameters, **options))]
 pub fn sweep(
@@ -116,19 +119,36 @@ pub fn sweep(
     parameters: &Bound<'_, PyDict>,
     options: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<PySweep> {
-    let settings = crate::options::apply(&robot.file.solver, options)?;
-    if settings.method != Method::Collocation {
-        return Err(invalid("sweep warm-starts collocation; use method=\"collocation\""));
+    let settings = crate::options::apply(&robot.file.solver, options, Use::Collocation("sweep"))?;
+    let rows = Rows::new(robot, parameters)?;
+    let mut sweep = Sweep::new(SweepSolver::Collocation(settings.collocation), None);
+    let mut steps = Vec::new();
+    let mut failure = None;
+    let run = boundary::steps(py, || {
+        let k = steps.len();
+        if k == rows.len() {
+            return false;
+        }
+        match boundary::caught(|| sweep.step(&rows.robot(k)?)) {
+            Ok(step) => {
+                steps.push(step);
+                true
+            }
+            Err(e) => {
+                failure = Some((k, e));
+                false
+            }
+        }
+    });
+    let done = steps.len();
+    let result = PySweep::new(py, steps)?;
+    if let Err(e) = run {
+        return Err(boundary::with_partial(py, e, done, Bound::new(py, result)?.into_any()));
     }
-    let robots = robots_of(robot, parameters)?;
-    let solver = SweepSolver::Collocation(settings.collocation);
-    let out = py.detach(|| tdcr::analysis::sweep::sweep(&robots, solver, None));
-    let result = PySweep::new(py, out.steps)?;
-    match out.failure {
+    match failure {
         None => Ok(result),
         Some((i, e)) => {
-            let err = to_py(e);
-            err.value(py).setattr("index", i)?;
+            let err = e.into_py_at(py, "", i);
             err.value(py).setattr("partial", Py::new(py, result)?)?;
             Err(err)
         }
@@ -179,17 +199,12 @@ pub fn trace(
     stop: f64,
     options: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<PyTrace> {
-    let settings = crate::options::apply(&robot.file.solver, options)?;
-    if settings.method != Method::Collocation {
-        return Err(invalid(
-            "trace continues collocation solutions; use method=\"collocation\"",
-        ));
-    }
+    let settings = crate::options::apply(&robot.file.solver, options, Use::Collocation("trace"))?;
     let r = &robot.file.robot;
     let p = tdcr::Parameter::parse(parameter, r).map_err(to_py)?;
-    let t = py
-        .detach(|| tdcr::collocation::trace(r, p, start, stop, &settings.collocation))
-        .map_err(to_py)?;
+    let t = boundary::detached(py, || {
+        tdcr::collocation::trace(r, p, start, stop, &settings.collocation)
+    })?;
     let tips: Vec<Vector3<f64>> = t.points.iter().map(|q| q.tip_position).collect();
     let values: Vec<f64> = t.points.iter().map(|q| q.value).collect();
     Ok(PyTrace {
