@@ -28,6 +28,64 @@ pub struct PyTipSensitivities {
 
 #[pymethods]
 impl PyTipSensitivities {
+    /// Pickling and copying go through the matrices (column-major values).
+    fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<(Bound<'py, PyAny>, (Bound<'py, PyDict>,))> {
+        let s = &slf.get().inner;
+        let state = PyDict::new(slf.py());
+        state.set_item("tendons", s.tension.ncols())?;
+        state.set_item("tension", s.tension.as_slice())?;
+        state.set_item("displacement", s.displacement.as_slice())?;
+        state.set_item("tip_force", s.tip_force.as_slice())?;
+        state.set_item("tip_moment", s.tip_moment.as_slice())?;
+        state.set_item("base_position", s.base_position.as_slice())?;
+        state.set_item("base_rotation", s.base_rotation.as_slice())?;
+        let moduli = s
+            .moduli
+            .map(|m| [m.youngs_modulus, m.youngs_modulus_fixed_shear, m.shear_modulus].map(|v| v.as_slice().to_vec()));
+        state.set_item("moduli", moduli)?;
+        Ok((slf.get_type().getattr("_from_state")?, (state,)))
+    }
+
+    /// The sensitivities of a state `__reduce__` made.
+    #[staticmethod]
+    fn _from_state(state: &Bound<'_, PyDict>) -> PyResult<Self> {
+        use crate::pickle::field;
+        use tdcr::nalgebra::{Matrix6x3, Vector6};
+        let k: usize = field(state, "tendons")?;
+        let matrix = |name: &str| -> PyResult<DMatrix<f64>> {
+            let values: Vec<f64> = field(state, name)?;
+            if values.len() != 6 * k {
+                return Err(invalid(format!(
+                    "the pickled `{name}` has {} values, not 6 x {k}",
+                    values.len()
+                )));
+            }
+            Ok(DMatrix::from_vec(6, k, values))
+        };
+        let six_by_three = |name: &str| -> PyResult<Matrix6x3<f64>> {
+            let values: [f64; 18] = field(state, name)?;
+            Ok(Matrix6x3::from_column_slice(&values))
+        };
+        let moduli: Option<[[f64; 6]; 3]> = field(state, "moduli")?;
+        Ok(PyTipSensitivities {
+            inner: tdcr::TipSensitivities {
+                tension: matrix("tension")?,
+                displacement: matrix("displacement")?,
+                tip_force: six_by_three("tip_force")?,
+                tip_moment: six_by_three("tip_moment")?,
+                base_position: six_by_three("base_position")?,
+                base_rotation: six_by_three("base_rotation")?,
+                moduli: moduli.map(
+                    |[e, e_fixed_shear, g]| tdcr::collocation::sensitivity::ModulusSensitivities {
+                        youngs_modulus: Vector6::from_column_slice(&e),
+                        youngs_modulus_fixed_shear: Vector6::from_column_slice(&e_fixed_shear),
+                        shear_modulus: Vector6::from_column_slice(&g),
+                    },
+                ),
+            },
+        })
+    }
+
     /// d(tip pose)/d(tension_i) (per N), shape (6, k), one column per tendon (zero for a
     /// displacement-controlled one: see `displacement`).
     #[getter]
@@ -111,7 +169,7 @@ pub struct PyInverseResult {
     /// Where each tendon's adjusted input ended up: "inside", "slack", "saturated" (at the
     /// upper bound), "released" (at the lower pull-in bound), "tension_limit" (pull-ins: at
     /// the tension limit) or "held" (not free).
-    bounds: Vec<&'static str>,
+    bounds: Vec<String>,
     /// The forward solution at these inputs.
     solution: Py<PySolution>,
     /// Weighted tip error (m).
@@ -130,6 +188,13 @@ pub struct PyInverseResult {
     forward_solves: usize,
     /// A few sentences for a person: reached or how far the tip stayed, and why.
     explanation: String,
+}
+
+crate::pickle::pickled_fields! {
+    PyInverseResult {
+        tensions, displacements, bounds, solution, residual, position_error, orientation_error,
+        reachable, termination, iterations, forward_solves, explanation,
+    }
 }
 
 /// The target of `function` from a (3,) position and an optional (3, 3) rotation.
@@ -188,6 +253,7 @@ fn run_inverse(
             tdcr::fit::Bound::TensionLimit => "tension_limit",
             tdcr::fit::Bound::Held => "held",
         })
+        .map(String::from)
         .collect();
     Ok(PyInverseResult {
         tensions: PyArray1::from_slice(py, &out.tensions).unbind(),
@@ -288,7 +354,7 @@ pub fn solve_displacements(
 #[pyclass(module = "tdcr", name = "Calibration", frozen, get_all)]
 pub struct PyCalibration {
     /// Names of the fitted unknowns, e.g. `["E", "alpha", "beta", "gamma"]`.
-    names: Vec<&'static str>,
+    names: Vec<String>,
     /// Fitted Young's modulus E (Pa).
     youngs_modulus: f64,
     /// Fitted base XYZ Euler angles (deg), (3,).
@@ -315,6 +381,13 @@ pub struct PyCalibration {
     iterations: usize,
     /// Forward solves.
     solves: usize,
+}
+
+crate::pickle::pickled_fields! {
+    PyCalibration {
+        names, youngs_modulus, euler_deg, base_position, offset_scale, robot, tips, tip_errors,
+        rms_error, max_error, converged, termination, iterations, solves,
+    }
 }
 
 /// (M, 3) rows from a nested sequence; `what` names it in messages.
@@ -415,10 +488,12 @@ pub fn calibrate(
             robot: out.robot.clone(),
             solver: robot.file.solver.clone(),
         },
+        // Calibration does not change a rod given by `shear_modulus` (it cannot fit its E).
+        given_rod: robot.given_rod.clone(),
     };
     let predicted = Array2::from_shape_fn((out.tips.len(), 3), |(i, k)| out.tips[i][k]);
     Ok(PyCalibration {
-        names: out.fit.names(),
+        names: out.fit.names().into_iter().map(String::from).collect(),
         youngs_modulus: out.fitted.youngs_modulus,
         euler_deg: PyArray1::from_slice(py, out.fitted.euler_deg().as_slice()).unbind(),
         base_position: PyArray1::from_slice(py, out.fitted.base_position.as_slice()).unbind(),

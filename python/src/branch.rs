@@ -12,10 +12,9 @@ use numpy::{IntoPyArray, PyArray1, PyArray2};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 use tdcr::analysis::sweep::{Event, Step, Sweep, SweepSolver};
-use tdcr::nalgebra::Vector3;
 
 /// (n, 3) rows of tip positions.
-fn tip_rows<'py>(py: Python<'py>, tips: &[Vector3<f64>]) -> Bound<'py, PyArray2<f64>> {
+fn tip_rows<'py>(py: Python<'py>, tips: &[[f64; 3]]) -> Bound<'py, PyArray2<f64>> {
     Array2::from_shape_fn((tips.len(), 3), |(i, k)| tips[i][k]).into_pyarray(py)
 }
 
@@ -26,7 +25,7 @@ pub struct PySweep {
     solutions: Py<PyList>,
     events: Vec<Option<String>>,
     jumps: Vec<usize>,
-    tips: Vec<Vector3<f64>>,
+    tips: Vec<[f64; 3]>,
 }
 
 impl PySweep {
@@ -38,7 +37,8 @@ impl PySweep {
                 jumps.push(k);
             }
             events.push(step.event.as_ref().map(ToString::to_string));
-            tips.push(step.solution.tip_position());
+            let p = step.solution.tip_position();
+            tips.push([p.x, p.y, p.z]);
             solutions.append(PySolution {
                 solution: step.solution,
             })?;
@@ -52,8 +52,9 @@ impl PySweep {
     }
 }
 
-#[pymethods]
-impl PySweep {
+crate::pickle::pickled_fields! {
+    PySweep { solutions, events, jumps, tips }
+
     /// The solutions, one per step solved, in order.
     #[getter]
     fn solutions(&self, py: Python<'_>) -> Py<PyList> {
@@ -168,7 +169,7 @@ pub struct PyTrace {
     /// Unstable directions at every point: 0 stable, more unstable, None unknown.
     unstable_directions: Vec<Option<usize>>,
     /// "stable", "unstable" or "unknown" at every point.
-    stability: Vec<&'static str>,
+    stability: Vec<String>,
     /// Whether the branch turns back at each point (a fold).
     fold: Vec<bool>,
     /// Parameter values of the folds.
@@ -180,6 +181,13 @@ pub struct PyTrace {
     stopped: Option<String>,
     /// Iterations (Newton and chord) of the whole trace, the start's solve included.
     iterations: usize,
+}
+
+crate::pickle::pickled_fields! {
+    PyTrace {
+        parameter, values, tip_positions, unstable_directions, stability, fold, folds,
+        bifurcations, stopped, iterations,
+    }
 }
 
 /// trace(robot, parameter, start, stop, **options) -> Trace
@@ -205,14 +213,14 @@ pub fn trace(
     let t = boundary::detached(py, || {
         tdcr::collocation::trace(r, p, start, stop, &settings.collocation)
     })?;
-    let tips: Vec<Vector3<f64>> = t.points.iter().map(|q| q.tip_position).collect();
+    let tips: Vec<[f64; 3]> = t.points.iter().map(|q| q.tip_position.into()).collect();
     let values: Vec<f64> = t.points.iter().map(|q| q.value).collect();
     Ok(PyTrace {
         parameter: t.parameter.to_string(),
         values: PyArray1::from_vec(py, values).unbind(),
         tip_positions: tip_rows(py, &tips).unbind(),
         unstable_directions: t.points.iter().map(|q| q.unstable_directions).collect(),
-        stability: t.points.iter().map(|q| q.verdict()).collect(),
+        stability: t.points.iter().map(|q| q.verdict().to_string()).collect(),
         fold: t.points.iter().map(|q| q.fold).collect(),
         folds: t.folds,
         bifurcations: t.bifurcations,

@@ -9,6 +9,7 @@ mod branch;
 mod convert;
 mod errors;
 mod options;
+mod pickle;
 mod robot;
 mod solution;
 

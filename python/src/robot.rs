@@ -36,13 +36,51 @@ use toml::Table;
 pub struct PyRobot {
     /// The robot and its settings, validated.
     pub file: RobotFile,
+    /// The `[rod]` table as given, for a rod the library's writer cannot write back (one
+    /// given by `shear_modulus` keeps no geometry); such a rod never changes afterwards (its
+    /// Young's modulus cannot be set or fitted).
+    pub given_rod: Option<Table>,
 }
 
 /// Parses robot-file text (`name` in messages) into a robot.
 pub fn parse(text: &str, name: &str) -> PyResult<PyRobot> {
-    tdcr::io::parse(text, name)
-        .map(|file| PyRobot { file })
-        .map_err(|e| file_error(&e))
+    let file = tdcr::io::parse(text, name).map_err(|e| file_error(&e))?;
+    let given_rod = if file.robot.rod.geometry.is_none() {
+        toml::from_str::<Table>(text)
+            .ok()
+            .and_then(|doc| doc.get("rod").and_then(toml::Value::as_table).cloned())
+    } else {
+        None
+    };
+    Ok(PyRobot { file, given_rod })
+}
+
+impl PyRobot {
+    /// The robot file of this robot, which reads back to the same robot, bitwise: the
+    /// library's writer, with the `[rod]` table as given for a rod it cannot write (written
+    /// with a stand-in rod of the same length and reference strains, then replaced).
+    ///
+    /// # Errors
+    /// `tdcr.InvalidInput` for a robot no robot file can hold.
+    pub fn text(&self) -> PyResult<String> {
+        let error = match self.file.to_toml() {
+            Ok(text) => return Ok(text),
+            Err(e) => e,
+        };
+        let Some(rod) = &self.given_rod else {
+            return Err(to_py(error));
+        };
+        let mut stand_in = self.file.clone();
+        let old = &self.file.robot.rod;
+        // Any rod of geometry: its table is replaced below.
+        stand_in.robot.rod = tdcr::Rod::tube(old.length, 1e-3, 0.0, 1e9, 0.3);
+        stand_in.robot.rod.reference = old.reference.clone();
+        let text = stand_in.to_toml().map_err(|_| to_py(error))?;
+        let mut doc: Table =
+            toml::from_str(&text).map_err(|e| invalid(format!("cannot read back the robot file written: {e}")))?;
+        doc.insert("rod".into(), toml::Value::Table(rod.clone()));
+        toml::to_string(&doc).map_err(|e| invalid(format!("cannot write the robot file: {e}")))
+    }
 }
 
 /// A robot of the library with default solver settings, written as its robot file and
@@ -170,14 +208,14 @@ impl PyRobot {
     }
 
     /// The robot as robot-file text (TOML) that `Robot.from_toml` reads back to the same
-    /// robot, bitwise. Raises `tdcr.InvalidInput` for a rod given by `shear_modulus`.
+    /// robot, bitwise (a rod given by `shear_modulus` as it was given).
     fn to_toml(&self) -> PyResult<String> {
-        self.file.to_toml().map_err(to_py)
+        self.text()
     }
 
     /// Pickling goes through the robot file.
     fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<(Bound<'py, PyAny>, (String,))> {
-        let text = slf.get().file.to_toml().map_err(to_py)?;
+        let text = slf.get().text()?;
         Ok((slf.get_type().getattr("from_toml")?, (text,)))
     }
 

@@ -51,8 +51,9 @@ pub struct PyState {
     u: Py<PyArray1<f64>>,
 }
 
-#[pymethods]
-impl PyState {
+crate::pickle::pickled_fields! {
+    PyState { s, p, R, v, u }
+
     fn __repr__(&self) -> String {
         format!("State(s={} m)", self.s)
     }
@@ -262,6 +263,20 @@ fn stability_parts(stability: &Stability) -> (Option<usize>, Option<f64>, Option
 
 #[pymethods]
 impl PySolveReport {
+    /// Pickling and copying go through the solution JSON (bitwise).
+    fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<(Bound<'py, PyAny>, (String,))> {
+        Ok((
+            slf.get_type().getattr("_from_state")?,
+            (crate::pickle::report_text(&slf.get().report),),
+        ))
+    }
+
+    /// The report of a text `__reduce__` made.
+    #[staticmethod]
+    fn _from_state(text: &str) -> PyResult<Self> {
+        crate::pickle::report_from(text).map(|report| PySolveReport { report })
+    }
+
     /// "collocation" or "shooting".
     #[getter]
     fn method(&self) -> String {

@@ -134,3 +134,109 @@ def test_robot_files_are_read_only_when_regular(tmp_path):
         f.truncate((16 << 20) + 1)
     with pytest.raises(tdcr.InvalidInput, match="more than the 16777216"):
         tdcr.Robot.from_file(big)
+
+
+def failing_solve():
+    """A solve that stops at its iteration limit (NotConverged with a report)."""
+    return tdcr.solve(tdcr.cases.case_h(), max_iterations=1, continuation=False)
+
+
+def returned_and_raised():
+    """One of everything the package returns or raises, built from small solves."""
+    robot = tdcr.cases.case_h()
+    solution = tdcr.solve(robot)
+    shear = tdcr.Robot(
+        rod={"length": 0.2, "outer_radius": 0.001, "youngs_modulus": 2e11, "shear_modulus": 8e10},
+        tendons=[{"routing": {"kind": "straight", "x": 0.001, "y": 0.0}, "tension": 1.0}],
+    )
+    prototype = tdcr.cases.prototype()
+    tensions = np.array([[1.0, 0, 0, 0, 0], [0, 1.0, 0, 0, 0], [0, 0, 1.0, 0, 0]])
+    forces = np.zeros((3, 3))
+    tips = np.array([tdcr.solve(prototype.with_tensions(list(t)), intervals=16).tip_position for t in tensions])
+    out = {
+        "Robot": robot,
+        "Robot (shear_modulus)": shear,
+        "Solution": solution,
+        "SolveReport": solution.report,
+        "State": solution.at(0.1),
+        "TipSensitivities": tdcr.tip_sensitivities(robot, solution),
+        "InverseResult": tdcr.solve_tensions(robot, solution.tip_position, max_tension=6.0),
+        "Calibration": tdcr.calibrate(prototype, tensions, forces, tips, fit=["youngs_modulus"], intervals=16),
+        "Sweep": tdcr.sweep(robot, {"tension.5": [4.5, 4.91]}),
+        "Trace": tdcr.trace(tdcr.cases.case_s(), "tension.1", 0.0, 0.5),
+    }
+    for name, call in [
+        ("NotConverged", failing_solve),
+        ("FileError", lambda: tdcr.Robot(rod=dict(ROD, length=-1.0))),
+        ("InvalidInput", lambda: tdcr.solve(robot, equilibrium="closest")),
+    ]:
+        try:
+            call()
+        except tdcr.Error as e:
+            out[name] = e
+    return out
+
+
+def test_everything_returned_or_raised_pickles_and_deep_copies_bitwise():
+    import copy
+    import pickle
+
+    for name, value in returned_and_raised().items():
+        text = pickle.dumps(value)
+        back = pickle.loads(text)
+        assert type(back) is type(value), name
+        # Pickled again, the same bytes: every field came back bitwise.
+        assert pickle.dumps(back) == text, name
+        assert pickle.dumps(copy.deepcopy(value)) == text, name
+        if isinstance(value, tdcr.Error):
+            assert str(back) == str(value) and back.__dict__.keys() == value.__dict__.keys(), name
+    shear = returned_and_raised()["Robot (shear_modulus)"]
+    assert np.array_equal(tdcr.solve(pickle.loads(pickle.dumps(shear))).p, tdcr.solve(shear).p)
+    assert tdcr.Robot.from_toml(shear.to_toml()).to_toml() == shear.to_toml()
+
+
+def test_process_pool_in_a_forked_child_after_batches_returns_and_raises_the_same():
+    # Issue 30: after solve_batch had run, a child made by fork hung in the batch functions
+    # (the parent's thread pool has no threads there); and NotConverged could not travel
+    # back from a worker (its report did not pickle).
+    import multiprocessing
+    from concurrent.futures import ProcessPoolExecutor
+
+    robot = tdcr.cases.prototype()
+    rows = {"tension.1": np.linspace(0.0, 2.0, 8)}
+    local = tdcr.solve_parameters(robot, rows, intervals=16)
+    batch = tdcr.solve_batch(robot, rows, intervals=16)
+    with ProcessPoolExecutor(1, mp_context=multiprocessing.get_context("fork")) as pool:
+        remote = pool.submit(tdcr.solve_parameters, robot, rows, intervals=16).result(timeout=120)
+        remote_batch = pool.submit(tdcr.solve_batch, robot, rows, intervals=16).result(timeout=120)
+        with pytest.raises(tdcr.NotConverged) as e:
+            pool.submit(failing_solve).result(timeout=120)
+    assert e.value.report.iterations == 1 and e.value.report.termination == "max_iterations"
+    assert np.array_equal(remote["tip_position"], local["tip_position"])
+    assert all(np.array_equal(a.p, b.p) for a, b in zip(remote_batch, batch))
+
+
+def fork_child(queue):
+    robot = tdcr.cases.prototype()
+    rows = {"tension.2": np.linspace(0.0, 2.0, 6)}
+    tips = tdcr.solve_parameters(robot, rows, intervals=16)["tip_position"]
+    queue.put(tips)
+
+
+def test_batch_functions_work_in_a_child_made_by_fork():
+    import multiprocessing
+
+    robot = tdcr.cases.prototype()
+    rows = {"tension.2": np.linspace(0.0, 2.0, 6)}
+    local = tdcr.solve_parameters(robot, rows, intervals=16)["tip_position"]
+    context = multiprocessing.get_context("fork")
+    queue = context.Queue()
+    child = context.Process(target=fork_child, args=(queue,))
+    child.start()
+    try:
+        tips = queue.get(timeout=120)
+    finally:
+        child.join(timeout=10)
+        if child.is_alive():
+            child.kill()
+    assert child.exitcode == 0 and np.array_equal(tips, local)
