@@ -410,7 +410,7 @@ fn rows3(values: &[Vec<f64>], what: &str) -> PyResult<Vec<Vector3<f64>>> {
 /// (M, 3) (N, world frame), `measured_tips` (M, 3) (m). The fit starts from the robot's own
 /// parameters; `options` are the forward solver's (as `solve`, collocation), on a fixed
 /// mesh (`intervals`; `tol` is refused) so that the model tips are smooth in the
-/// parameters.
+/// parameters. Ctrl-C stops it within about 0.1 s with `KeyboardInterrupt` (no result).
 #[pyfunction]
 #[pyo3(signature = (robot, tensions, tip_forces, measured_tips, *, fit=None, max_iterations=50, **options))]
 #[allow(clippy::too_many_arguments)]
@@ -482,7 +482,13 @@ pub fn calibrate(
         ..defaults
     };
     let r = &robot.file.robot;
-    let out = boundary::pooled(py, || tdcr::fit::calibrate(r, &experiments, &calibration_options))?;
+    let fit = boundary::stoppable(py, |stop| {
+        tdcr::fit::calibrate_until(r, &experiments, &calibration_options, stop)
+    })?;
+    // No fit without a result: a stop comes with the signal's exception, raised above.
+    let Some(out) = fit else {
+        return Err(crate::errors::Error::new_err("calibrate stopped without a result"));
+    };
     let fitted = PyRobot {
         file: tdcr::io::RobotFile {
             robot: out.robot.clone(),

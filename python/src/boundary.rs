@@ -126,13 +126,6 @@ pub fn pool() -> PyResult<Arc<rayon::ThreadPool>> {
     }
 }
 
-/// `f()` on this process's pool (for library calls that use rayon), with the GIL released
-/// and panics caught.
-pub fn pooled<T: Send>(py: Python<'_>, f: impl FnOnce() -> tdcr::Result<T> + Send) -> PyResult<T> {
-    let pool = pool()?;
-    py.detach(|| caught(|| pool.install(f))).map_err(Failure::into_py)
-}
-
 /// Runs `job` for rows `0..rows` in parallel on this process's pool, in chunks of about
 /// [`CHUNK_TIME`], giving each row's result to `sink` in row order with the GIL held;
 /// between chunks Python's signal handlers run. `sink` returns false to stop (e.g. at the
@@ -206,6 +199,61 @@ pub fn steps(py: Python<'_>, mut step: impl FnMut() -> bool + Send) -> PyResult<
             return Ok(());
         }
     }
+}
+
+/// `f(stop)` on this process's pool in a helper thread, while the calling thread (the GIL
+/// released) takes the GIL back about every [`CHUNK_TIME`] to run Python's signal handlers;
+/// once one raises, `stop()` returns true for `f`, which is to give up soon, and that
+/// exception is raised when `f` has returned. For a library call that asks a stop
+/// between chunks of its work (`tdcr::fit::calibrate_until`).
+///
+/// # Errors
+/// The exception of a signal handler (`KeyboardInterrupt` for Ctrl-C), `f`'s error, or
+/// `tdcr.Error` for a panic.
+pub fn stoppable<T: Send>(py: Python<'_>, f: impl FnOnce(&dyn Fn() -> bool) -> tdcr::Result<T> + Send) -> PyResult<T> {
+    use std::sync::atomic::{AtomicBool, Ordering};
+    use std::sync::mpsc;
+    let pool = pool()?;
+    let stop = AtomicBool::new(false);
+    let (send, receive) = mpsc::channel();
+    std::thread::scope(|scope| {
+        scope.spawn(|| {
+            let result = caught(|| pool.install(|| f(&|| stop.load(Ordering::Relaxed))));
+            // The receiver waits until this arrives.
+            let _ = send.send(result);
+        });
+        let mut signal: Option<PyErr> = None;
+        let mut receive = receive;
+        loop {
+            // The receiver goes into the detached closure and back (it cannot be shared).
+            let (back, received) = py.detach(move || {
+                let received = receive.recv_timeout(CHUNK_TIME);
+                (receive, received)
+            });
+            receive = back;
+            match received {
+                Ok(result) => {
+                    return match signal {
+                        Some(e) => Err(e),
+                        None => result.map_err(Failure::into_py),
+                    };
+                }
+                Err(mpsc::RecvTimeoutError::Timeout) => {
+                    if signal.is_none()
+                        && let Err(e) = py.check_signals()
+                    {
+                        stop.store(true, Ordering::Relaxed);
+                        signal = Some(e);
+                    }
+                }
+                Err(mpsc::RecvTimeoutError::Disconnected) => {
+                    return Err(PyTdcrError::new_err(internal_message(
+                        "the worker thread ended without a result",
+                    )));
+                }
+            }
+        }
+    })
 }
 
 /// `error` with `completed` (the rows finished before it) and `partial` (their results) set,
