@@ -1,12 +1,13 @@
 //! Pickling and copying of what the module returns and raises. A class pickles as a call of
 //! its private static method `_from_state` on a dict of its fields (each field pickles by
-//! itself: numbers, strings, numpy arrays, robots, solutions); a solve report as the
-//! solution JSON (the one format that holds a whole report), bitwise.
+//! itself: numbers, strings, numpy arrays, robots, solutions); a solve report as a dict
+//! of its fields in plain values, bitwise.
 
+use crate::solution::termination_name;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
-use tdcr::nalgebra::{Matrix3, Vector3};
-use tdcr::{Solution, SolveReport};
+use std::time::Duration;
+use tdcr::{ErrorEstimate, Evaluations, Iteration, Method, PathTaken, SolveReport, Stability, Termination, Timings};
 
 /// Field `name` of a pickled state.
 ///
@@ -51,34 +52,133 @@ macro_rules! pickled_fields {
 }
 pub(crate) use pickled_fields;
 
-/// A report as solution JSON text: the report on a rest state of two nodes, s = 0 and 1 m
-/// (the format's checks need a rod), no tendons.
-pub fn report_text(report: &SolveReport) -> String {
-    let node = |s: f64| tdcr::Node {
-        s,
-        p: Vector3::new(0.0, 0.0, s),
-        R: Matrix3::identity(),
-        v: Vector3::z(),
-        u: Vector3::zeros(),
-        v_s: Vector3::zeros(),
-        u_s: Vector3::zeros(),
-        n: Vector3::zeros(),
-        m: Vector3::zeros(),
+/// The five terminations, to read one back from its name.
+const TERMINATIONS: [Termination; 5] = [
+    Termination::Converged,
+    Termination::MaxIterations,
+    Termination::LineSearchFailed,
+    Termination::SingularJacobian,
+    Termination::NonFinite,
+];
+
+/// A report as a dict of plain values (floats kept bitwise, infinities and NaN signs
+/// included, which JSON could not keep).
+pub fn report_state<'py>(py: Python<'py>, r: &SolveReport) -> PyResult<Bound<'py, PyDict>> {
+    let d = PyDict::new(py);
+    d.set_item("method", r.method.to_string())?;
+    d.set_item("termination", termination_name(r.termination))?;
+    let counts = [r.iterations, r.newton_steps, r.chord_steps, r.load_steps, r.meshes];
+    d.set_item("counts", counts)?;
+    let history: Vec<(f64, f64, f64, bool)> = r
+        .history
+        .iter()
+        .map(|i| (i.residual, i.step, i.damping, i.fresh_jacobian))
+        .collect();
+    d.set_item("history", history)?;
+    d.set_item("residual", r.residual)?;
+    let e = &r.evaluations;
+    d.set_item("evaluations", [e.residual, e.jacobian, e.equations])?;
+    let t = &r.timings;
+    let nanos = [t.assembly, t.factorization, t.solve, t.estimate, t.stability, t.total].map(|d| d.as_nanos());
+    d.set_item("timings_ns", nanos)?;
+    d.set_item("sizes", [r.unknowns, r.nonzeros, r.intervals])?;
+    let estimate = r
+        .error_estimate
+        .map(|e| [e.tip_position, e.tip_rotation, e.backbone_max]);
+    d.set_item("error_estimate", estimate)?;
+    d.set_item("tolerance", r.tolerance)?;
+    d.set_item("tolerance_met", r.tolerance_met)?;
+    let (directions, conjugate_point, reason) = match &r.stability {
+        Stability::Stable => (None, None, None),
+        Stability::Unstable {
+            directions,
+            conjugate_point,
+        } => (Some(*directions), Some(*conjugate_point), None),
+        Stability::Unknown { reason } => (None, None, Some(reason.clone())),
     };
-    tdcr::io::output::solution_json(&Solution {
-        nodes: vec![node(0.0), node(1.0)],
-        tendon_paths: Vec::new(),
-        tendons: Vec::new(),
-        report: report.clone(),
-    })
+    d.set_item(
+        "stability",
+        (r.stability.verdict(), directions, conjugate_point, reason),
+    )?;
+    d.set_item(
+        "path",
+        (r.path.name(), r.path.folds().to_vec(), r.path.bifurcations().to_vec()),
+    )?;
+    Ok(d)
 }
 
-/// The report in `text`, as [`report_text`] wrote it.
+/// The report of a dict [`report_state`] made.
 ///
 /// # Errors
-/// `tdcr.InvalidInput` for a text that is not a solution JSON.
-pub fn report_from(text: &str) -> PyResult<SolveReport> {
-    tdcr::io::parse_solution(text)
-        .map(|s| s.report)
-        .map_err(crate::errors::to_py)
+/// `tdcr.InvalidInput` for a dict of another version.
+pub fn report_from(d: &Bound<'_, PyDict>) -> PyResult<SolveReport> {
+    let bad = |what: &str| {
+        crate::errors::invalid(format!(
+            "the pickled report has an unknown {what}: it was made by another version of tdcr"
+        ))
+    };
+    let method = match field::<String>(d, "method")?.as_str() {
+        "collocation" => Method::Collocation,
+        "shooting" => Method::Shooting,
+        _ => return Err(bad("method")),
+    };
+    let mut r = SolveReport::new(method);
+    let termination: String = field(d, "termination")?;
+    r.termination = TERMINATIONS
+        .into_iter()
+        .find(|t| termination_name(*t) == termination)
+        .ok_or_else(|| bad("termination"))?;
+    [r.iterations, r.newton_steps, r.chord_steps, r.load_steps, r.meshes] = field(d, "counts")?;
+    let history: Vec<(f64, f64, f64, bool)> = field(d, "history")?;
+    r.history = history
+        .into_iter()
+        .map(|(residual, step, damping, fresh_jacobian)| Iteration {
+            residual,
+            step,
+            damping,
+            fresh_jacobian,
+        })
+        .collect();
+    r.residual = field(d, "residual")?;
+    let [residual, jacobian, equations] = field(d, "evaluations")?;
+    r.evaluations = Evaluations {
+        residual,
+        jacobian,
+        equations,
+    };
+    let [assembly, factorization, solve, estimate, stability, total] =
+        field::<[u64; 6]>(d, "timings_ns")?.map(Duration::from_nanos);
+    r.timings = Timings {
+        assembly,
+        factorization,
+        solve,
+        estimate,
+        stability,
+        total,
+    };
+    [r.unknowns, r.nonzeros, r.intervals] = field(d, "sizes")?;
+    r.error_estimate =
+        field::<Option<[f64; 3]>>(d, "error_estimate")?.map(|[tip_position, tip_rotation, backbone_max]| {
+            ErrorEstimate {
+                tip_position,
+                tip_rotation,
+                backbone_max,
+            }
+        });
+    r.tolerance = field(d, "tolerance")?;
+    r.tolerance_met = field(d, "tolerance_met")?;
+    let (verdict, directions, conjugate_point, reason): (String, Option<usize>, Option<f64>, Option<String>) =
+        field(d, "stability")?;
+    r.stability = match (verdict.as_str(), directions, conjugate_point, reason) {
+        ("stable", ..) => Stability::Stable,
+        ("unstable", Some(directions), Some(conjugate_point), _) => Stability::Unstable {
+            directions,
+            conjugate_point,
+        },
+        ("unknown", _, _, Some(reason)) => Stability::Unknown { reason },
+        _ => return Err(bad("stability")),
+    };
+    let (path, folds, bifurcations): (String, Vec<f64>, Vec<f64>) = field(d, "path")?;
+    r.path = PathTaken::from_name(&path, folds, bifurcations).ok_or_else(|| bad("path"))?;
+    Ok(r)
 }

@@ -263,18 +263,18 @@ fn stability_parts(stability: &Stability) -> (Option<usize>, Option<f64>, Option
 
 #[pymethods]
 impl PySolveReport {
-    /// Pickling and copying go through the solution JSON (bitwise).
-    fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<(Bound<'py, PyAny>, (String,))> {
+    /// Pickling and copying go through the report's fields (bitwise).
+    fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<(Bound<'py, PyAny>, (Bound<'py, PyDict>,))> {
         Ok((
             slf.get_type().getattr("_from_state")?,
-            (crate::pickle::report_text(&slf.get().report),),
+            (crate::pickle::report_state(slf.py(), &slf.get().report)?,),
         ))
     }
 
-    /// The report of a text `__reduce__` made.
+    /// The report of a state `__reduce__` made.
     #[staticmethod]
-    fn _from_state(text: &str) -> PyResult<Self> {
-        crate::pickle::report_from(text).map(|report| PySolveReport { report })
+    fn _from_state(state: &Bound<'_, PyDict>) -> PyResult<Self> {
+        crate::pickle::report_from(state).map(|report| PySolveReport { report })
     }
 
     /// "collocation" or "shooting".
