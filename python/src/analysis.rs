@@ -2,6 +2,7 @@
 //! `tdcr::fit::solve_tensions` and `tdcr::fit::solve_displacements` with numpy in and out.
 
 use crate::boundary;
+use crate::convert::{count, counts, number, numbers, optional_number, table_of};
 use crate::errors::invalid;
 use crate::options::Use;
 use crate::robot::PyRobot;
@@ -198,7 +199,8 @@ crate::pickle::pickled_fields! {
 }
 
 /// The target of `function` from a (3,) position and an optional (3, 3) rotation.
-fn target(function: &str, position: Vec<f64>, rotation: Option<Vec<Vec<f64>>>) -> PyResult<Target> {
+fn target(function: &str, position: &Bound<'_, PyAny>, rotation: Option<&Bound<'_, PyAny>>) -> PyResult<Target> {
+    let position = numbers(position, &format!("{function}: `position`"))?;
     let [x, y, z] = position[..] else {
         return Err(invalid(format!(
             "{function}: position has {} values, not 3",
@@ -206,10 +208,11 @@ fn target(function: &str, position: Vec<f64>, rotation: Option<Vec<Vec<f64>>>) -
         )));
     };
     let position = Vector3::new(x, y, z);
-    match rotation {
+    match rotation.filter(|r| !r.is_none()) {
         None => Ok(Target::position(position)),
         Some(r) => {
-            if r.len() != 3 || r.iter().any(|row| row.len() != 3) {
+            let r = table_of(r, &format!("{function}: `rotation`"), Some(3))?;
+            if r.len() != 3 {
                 return Err(invalid(format!("{function}: rotation must be a (3, 3) matrix")));
             }
             Ok(Target::pose(position, Matrix3::from_fn(|i, j| r[i][j])))
@@ -283,28 +286,40 @@ fn run_inverse(
 /// `options` are the forward solver's (as `solve`, collocation only); without `tol` the
 /// forward solves use a fixed mesh, as the library's inverse statics do.
 #[pyfunction]
-#[pyo3(signature = (robot, position, rotation=None, *, max_tension, tolerance=1e-6, max_iterations=50, orientation_weight=None, free_tendons=None, **options))]
+#[pyo3(
+    signature = (robot, position, rotation=None, *, max_tension, tolerance=None, max_iterations=None, orientation_weight=None, free_tendons=None, **options),
+    text_signature = "(robot, position, rotation=None, *, max_tension, tolerance=1e-6, max_iterations=50, orientation_weight=None, free_tendons=None, **options)"
+)]
 #[allow(clippy::too_many_arguments)]
 pub fn solve_tensions(
     py: Python<'_>,
     robot: &PyRobot,
-    position: Vec<f64>,
-    rotation: Option<Vec<Vec<f64>>>,
-    max_tension: f64,
-    tolerance: f64,
-    max_iterations: usize,
-    orientation_weight: Option<f64>,
-    free_tendons: Option<Vec<usize>>,
+    position: &Bound<'_, PyAny>,
+    rotation: Option<&Bound<'_, PyAny>>,
+    max_tension: &Bound<'_, PyAny>,
+    tolerance: Option<&Bound<'_, PyAny>>,
+    max_iterations: Option<&Bound<'_, PyAny>>,
+    orientation_weight: Option<&Bound<'_, PyAny>>,
+    free_tendons: Option<&Bound<'_, PyAny>>,
     options: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<PyInverseResult> {
-    let target = target("solve_tensions", position, rotation)?;
+    let f = "solve_tensions";
+    let target = target(f, position, rotation)?;
+    let defaults = InverseOptions::default();
     let options = InverseOptions {
-        max_tension,
-        tolerance,
-        max_iterations,
-        orientation_weight,
-        solver: forward_options("solve_tensions", robot, options)?,
-        free_tendons,
+        max_tension: number(max_tension, &format!("{f}: `max_tension`"))?,
+        tolerance: optional_number(tolerance, &format!("{f}: `tolerance`"))?.unwrap_or(defaults.tolerance),
+        max_iterations: max_iterations
+            .filter(|n| !n.is_none())
+            .map_or(Ok(defaults.max_iterations), |n| {
+                count(n, &format!("{f}: `max_iterations`"))
+            })?,
+        orientation_weight: optional_number(orientation_weight, &format!("{f}: `orientation_weight`"))?,
+        solver: forward_options(f, robot, options)?,
+        free_tendons: free_tendons
+            .filter(|t| !t.is_none())
+            .map(|t| counts(t, &format!("{f}: `free_tendons`")))
+            .transpose()?,
         ..Default::default()
     };
     run_inverse(py, robot, target, options, tdcr::fit::solve_tensions)
@@ -318,34 +333,48 @@ pub fn solve_tensions(
 /// below 0.9 of each tendon's geometric limit EI / r^2 and below `max_tension` (N) when it
 /// is above 0. `options` as `solve_tensions`.
 #[pyfunction]
-#[pyo3(signature = (robot, position, rotation=None, *, max_displacement, min_displacement=None, max_tension=0.0, tolerance=1e-6, max_iterations=50, orientation_weight=None, free_tendons=None, **options))]
+#[pyo3(
+    signature = (robot, position, rotation=None, *, max_displacement, min_displacement=None, max_tension=None, tolerance=None, max_iterations=None, orientation_weight=None, free_tendons=None, **options),
+    text_signature = "(robot, position, rotation=None, *, max_displacement, min_displacement=None, max_tension=0.0, tolerance=1e-6, max_iterations=50, orientation_weight=None, free_tendons=None, **options)"
+)]
 #[allow(clippy::too_many_arguments)]
 pub fn solve_displacements(
     py: Python<'_>,
     robot: &PyRobot,
-    position: Vec<f64>,
-    rotation: Option<Vec<Vec<f64>>>,
-    max_displacement: f64,
-    min_displacement: Option<f64>,
-    max_tension: f64,
-    tolerance: f64,
-    max_iterations: usize,
-    orientation_weight: Option<f64>,
-    free_tendons: Option<Vec<usize>>,
+    position: &Bound<'_, PyAny>,
+    rotation: Option<&Bound<'_, PyAny>>,
+    max_displacement: &Bound<'_, PyAny>,
+    min_displacement: Option<&Bound<'_, PyAny>>,
+    max_tension: Option<&Bound<'_, PyAny>>,
+    tolerance: Option<&Bound<'_, PyAny>>,
+    max_iterations: Option<&Bound<'_, PyAny>>,
+    orientation_weight: Option<&Bound<'_, PyAny>>,
+    free_tendons: Option<&Bound<'_, PyAny>>,
     options: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<PyInverseResult> {
-    let target = target("solve_displacements", position, rotation)?;
+    let f = "solve_displacements";
+    let target = target(f, position, rotation)?;
+    let defaults = InverseOptions::default();
+    let max_displacement = number(max_displacement, &format!("{f}: `max_displacement`"))?;
     let options = InverseOptions {
         // A symmetric stroke unless told: under its own weight the unactuated robot's
         // upper tendons need letting out.
-        min_displacement: min_displacement.unwrap_or(-max_displacement),
+        min_displacement: optional_number(min_displacement, &format!("{f}: `min_displacement`"))?
+            .unwrap_or(-max_displacement),
         max_displacement,
-        max_tension,
-        tolerance,
-        max_iterations,
-        orientation_weight,
-        solver: forward_options("solve_displacements", robot, options)?,
-        free_tendons,
+        max_tension: optional_number(max_tension, &format!("{f}: `max_tension`"))?.unwrap_or(0.0),
+        tolerance: optional_number(tolerance, &format!("{f}: `tolerance`"))?.unwrap_or(defaults.tolerance),
+        max_iterations: max_iterations
+            .filter(|n| !n.is_none())
+            .map_or(Ok(defaults.max_iterations), |n| {
+                count(n, &format!("{f}: `max_iterations`"))
+            })?,
+        orientation_weight: optional_number(orientation_weight, &format!("{f}: `orientation_weight`"))?,
+        solver: forward_options(f, robot, options)?,
+        free_tendons: free_tendons
+            .filter(|t| !t.is_none())
+            .map(|t| counts(t, &format!("{f}: `free_tendons`")))
+            .transpose()?,
     };
     run_inverse(py, robot, target, options, tdcr::fit::solve_displacements)
 }
@@ -390,18 +419,12 @@ crate::pickle::pickled_fields! {
     }
 }
 
-/// (M, 3) rows from a nested sequence; `what` names it in messages.
-fn rows3(values: &[Vec<f64>], what: &str) -> PyResult<Vec<Vector3<f64>>> {
-    values
-        .iter()
-        .map(|r| match r[..] {
-            [x, y, z] => Ok(Vector3::new(x, y, z)),
-            _ => Err(invalid(format!(
-                "calibrate: every row of `{what}` needs 3 values, one has {}",
-                r.len()
-            ))),
-        })
-        .collect()
+/// (M, 3) rows of `calibrate`'s argument `what`.
+fn rows3(value: &Bound<'_, PyAny>, what: &str) -> PyResult<Vec<Vector3<f64>>> {
+    Ok(table_of(value, &format!("calibrate: `{what}`"), Some(3))?
+        .into_iter()
+        .map(|r| Vector3::new(r[0], r[1], r[2]))
+        .collect())
 }
 
 /// Calibration (`tdcr::fit::calibrate`): fits Young's modulus and the base XYZ Euler angles
@@ -412,23 +435,29 @@ fn rows3(values: &[Vec<f64>], what: &str) -> PyResult<Vec<Vector3<f64>>> {
 /// mesh (`intervals`; `tol` is refused) so that the model tips are smooth in the
 /// parameters. Ctrl-C stops it within about 0.1 s with `KeyboardInterrupt` (no result).
 #[pyfunction]
-#[pyo3(signature = (robot, tensions, tip_forces, measured_tips, *, fit=None, max_iterations=50, **options))]
+#[pyo3(
+    signature = (robot, tensions, tip_forces, measured_tips, *, fit=None, max_iterations=None, **options),
+    text_signature = "(robot, tensions, tip_forces, measured_tips, *, fit=None, max_iterations=50, **options)"
+)]
 #[allow(clippy::too_many_arguments)]
 pub fn calibrate(
     py: Python<'_>,
     robot: &PyRobot,
-    tensions: Vec<Vec<f64>>,
-    tip_forces: Vec<Vec<f64>>,
-    measured_tips: Vec<Vec<f64>>,
+    tensions: &Bound<'_, PyAny>,
+    tip_forces: &Bound<'_, PyAny>,
+    measured_tips: &Bound<'_, PyAny>,
     fit: Option<Vec<String>>,
-    max_iterations: usize,
+    max_iterations: Option<&Bound<'_, PyAny>>,
     options: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<PyCalibration> {
     use tdcr::fit::calibration::{CalibrationOptions, Fit, Measurement};
-    let (forces, tips) = (
-        rows3(&tip_forces, "tip_forces")?,
-        rows3(&measured_tips, "measured_tips")?,
-    );
+    let (forces, tips) = (rows3(tip_forces, "tip_forces")?, rows3(measured_tips, "measured_tips")?);
+    let tensions = table_of(tensions, "calibrate: `tensions`", None)?;
+    let max_iterations = max_iterations
+        .filter(|n| !n.is_none())
+        .map_or(Ok(CalibrationOptions::default().max_iterations), |n| {
+            count(n, "calibrate: `max_iterations`")
+        })?;
     if tensions.len() != forces.len() || tips.len() != forces.len() {
         return Err(invalid(format!(
             "calibrate: {} rows of tensions, {} of tip_forces, {} of measured_tips; give one row per measurement",

@@ -3,6 +3,7 @@
 //! input), with numpy out.
 
 use crate::boundary;
+use crate::convert::number;
 use crate::errors::to_py;
 use crate::options::Use;
 use crate::robot::{PyRobot, Rows};
@@ -203,10 +204,11 @@ pub fn trace(
     py: Python<'_>,
     robot: &PyRobot,
     parameter: &str,
-    start: f64,
-    stop: f64,
+    start: &Bound<'_, PyAny>,
+    stop: &Bound<'_, PyAny>,
     options: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<PyTrace> {
+    let (start, stop) = (number(start, "trace: `start`")?, number(stop, "trace: `stop`")?);
     let settings = crate::options::apply(&robot.file.solver, options, Use::Collocation("trace"))?;
     let r = &robot.file.robot;
     let p = tdcr::Parameter::parse(parameter, r).map_err(to_py)?;

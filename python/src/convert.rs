@@ -178,10 +178,60 @@ pub fn numbers(value: &Bound<'_, PyAny>, what: &str) -> PyResult<Vec<f64>> {
     let bad = || invalid(format!("{what} must be a 1-D sequence of numbers"));
     let raw = np.call_method1("asarray", (value,)).map_err(|_| bad())?;
     let kind: String = raw.getattr("dtype")?.getattr("kind")?.extract()?;
-    if kind == "b" {
+    // numpy turns [True, 2] into integers: look at the items of a list or tuple too.
+    let items = value
+        .cast::<PyList>()
+        .map(|l| l.iter().collect::<Vec<_>>())
+        .ok()
+        .or_else(|| value.cast::<PyTuple>().map(|t| t.iter().collect()).ok());
+    if kind == "b" || items.is_some_and(|items| items.iter().any(is_boolean)) {
         return Err(invalid(format!("{what} holds booleans; give numbers")));
     }
     let array = np.call_method1("asarray", (raw, "float64")).map_err(|_| bad())?;
     let view: numpy::PyReadonlyArray1<f64> = array.extract().map_err(|_| bad())?;
     Ok(view.as_array().to_vec())
+}
+
+/// [`number`] of an optional value (None stays None).
+pub fn optional_number(value: Option<&Bound<'_, PyAny>>, what: &str) -> PyResult<Option<f64>> {
+    value.filter(|v| !v.is_none()).map(|v| number(v, what)).transpose()
+}
+
+/// A sequence of whole numbers >= 0 (no booleans); `what` names it.
+pub fn counts(value: &Bound<'_, PyAny>, what: &str) -> PyResult<Vec<usize>> {
+    let items = value.try_iter().map_err(|_| {
+        invalid(format!(
+            "{what} must be a sequence of whole numbers, not {}",
+            type_name(value)
+        ))
+    })?;
+    items
+        .enumerate()
+        .map(|(i, item)| count(&item?, &format!("{what}[{i}]")))
+        .collect()
+}
+
+/// A 2-D nested sequence or array of numbers (no booleans), every row `width` long when
+/// given; `what` names it.
+pub fn table_of(value: &Bound<'_, PyAny>, what: &str, width: Option<usize>) -> PyResult<Vec<Vec<f64>>> {
+    let np = value.py().import("numpy")?;
+    let shape = width.map_or("(M, k)".to_string(), |w| format!("(M, {w})"));
+    let bad = || invalid(format!("{what} must be a {shape} array of numbers"));
+    let raw = np.call_method1("asarray", (value,)).map_err(|_| bad())?;
+    let kind: String = raw.getattr("dtype")?.getattr("kind")?.extract()?;
+    if kind == "b" {
+        return Err(invalid(format!("{what} holds booleans; give numbers")));
+    }
+    let array = np.call_method1("asarray", (raw, "float64")).map_err(|_| bad())?;
+    let view: numpy::PyReadonlyArray2<f64> = array.extract().map_err(|_| bad())?;
+    let view = view.as_array();
+    if let Some(w) = width
+        && view.ncols() != w
+    {
+        return Err(invalid(format!(
+            "{what} has rows of {} values; give {shape}",
+            view.ncols()
+        )));
+    }
+    Ok(view.rows().into_iter().map(|r| r.to_vec()).collect())
 }

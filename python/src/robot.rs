@@ -221,7 +221,8 @@ impl PyRobot {
 
     /// A copy with the tensions (N) of all tendons, in file order; every tendon becomes
     /// tension-controlled (a displacement-controlled one drops its `displacement`).
-    fn with_tensions(&self, tensions: Vec<f64>) -> PyResult<Self> {
+    fn with_tensions(&self, tensions: &Bound<'_, PyAny>) -> PyResult<Self> {
+        let tensions = crate::convert::numbers(tensions, "with_tensions: `tensions`")?;
         let count = self.file.robot.tendons.len();
         if tensions.len() != count {
             return Err(invalid(format!(
@@ -243,7 +244,14 @@ impl PyRobot {
     /// tension-controlled at its current tension (0 for one that was displacement-controlled).
     /// E.g. `robot.with_displacements([s.tendons[0]["displacement"], None, None])`. Raises
     /// `tdcr.InvalidInput` for a wrong count or a pull-in the model rejects.
-    fn with_displacements(&self, displacements: Vec<Option<f64>>) -> PyResult<Self> {
+    fn with_displacements(&self, displacements: &Bound<'_, PyAny>) -> PyResult<Self> {
+        let items = displacements
+            .try_iter()
+            .map_err(|_| invalid("with_displacements: give a sequence of pull-ins (m) and None, one per tendon"))?;
+        let displacements: Vec<Option<f64>> = items
+            .enumerate()
+            .map(|(i, q)| crate::convert::optional_number(Some(&q?), &format!("with_displacements: item {i}")))
+            .collect::<PyResult<_>>()?;
         let count = self.file.robot.tendons.len();
         if displacements.len() != count {
             return Err(invalid(format!(
@@ -277,9 +285,7 @@ impl PyRobot {
         for (key, value) in parameters.iter() {
             let name: String = key.extract().map_err(|_| invalid("parameter names must be strings"))?;
             let parameter: Parameter = name.parse().map_err(invalid)?;
-            let value: f64 = value
-                .extract()
-                .map_err(|_| invalid(format!("parameter `{name}` must be a number")))?;
+            let value = crate::convert::number(&value, &format!("parameter `{name}`"))?;
             set.push((parameter, value));
         }
         Parameter::apply_all(&mut out.file.robot, set).map_err(to_py)?;

@@ -164,7 +164,8 @@ impl PySolution {
     /// The state (s, p, R, v, u) at arc length `s` (m, clamped to [0, L]) from the scheme's
     /// cubic Hermite interpolant on SO(3); at a jump the right limit (`left=True`: the left).
     #[pyo3(signature = (s, left=false))]
-    fn at(&self, py: Python<'_>, s: f64, left: bool) -> PyResult<PyState> {
+    fn at(&self, py: Python<'_>, s: &Bound<'_, PyAny>, left: bool) -> PyResult<PyState> {
+        let s = crate::convert::number(s, "Solution.at: `s`")?;
         if !s.is_finite() {
             return Err(invalid(format!("Solution.at: s = {s} m is not finite")));
         }

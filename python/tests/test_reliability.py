@@ -323,3 +323,87 @@ def test_ctrl_c_stops_long_calls_promptly_with_the_finished_rows(call):
         assert out["completed"] is None  # an interrupted fit has no result
     else:
         assert out["partial"] == out["completed"] and 0 < out["completed"] < 200_000
+
+
+def test_options_a_function_does_not_use_are_errors():
+    robot = tdcr.cases.case_h()
+    target = tdcr.solve(robot).tip_position
+    for call, fragment in [
+        (lambda: tdcr.solve_tensions(robot, target, max_tension=6.0, method="shooting"), "solves by collocation"),
+        (lambda: tdcr.solve_displacements(robot, target, max_displacement=0.01, method="shooting"), "solves by collocation"),
+        (lambda: tdcr.calibrate(robot, [[0, 0, 0, 0, 4.91]], [[0, 0, 0]], [target], method="shooting"), "by collocation"),
+        (lambda: tdcr.calibrate(robot, [[0, 0, 0, 0, 4.91]], [[0, 0, 0]], [target], tol=1e-8), "fixed mesh"),
+        (lambda: tdcr.solve_batch(robot, {"tension.1": [1.0]}, integration_tolerance=-5), "shooting method's"),
+        (lambda: tdcr.solve(robot, integration_tolerance=1e-9), "shooting method's"),
+        (lambda: tdcr.solve(robot, method="shooting", tol=1e-8), "option `tol` is collocation's"),
+        (lambda: tdcr.solve(robot, method="shooting", warm_start=tdcr.solve(robot)), "`warm_start`"),
+        (lambda: tdcr.sweep(robot, {"tension.1": [1.0]}, method="shooting"), "sweep solves by collocation"),
+    ]:
+        with pytest.raises(tdcr.InvalidInput) as e:
+            call()
+        assert fragment in str(e.value)
+
+
+def test_booleans_are_not_numbers_and_counts_name_their_field():
+    robot = tdcr.cases.case_h()
+    for call, fragment in [
+        (lambda: tdcr.solve(robot, intervals=True), "option `intervals` must be a whole number, not a boolean"),
+        (lambda: tdcr.solve(robot, tol=False), "option `tol` must be a number, not a boolean"),
+        (lambda: robot.with_parameters({"tension.1": True}), "parameter `tension.1` must be a number, not a boolean"),
+        (lambda: robot.with_tensions([True, 0, 0, 0, 0]), "holds booleans"),
+        (lambda: tdcr.solve_batch(robot, {"tension.1": np.array([True])}), "holds booleans"),
+        (lambda: tdcr.solve(robot, intervals=2**70), "option `intervals` is 1180591620717411303424"),
+        (lambda: tdcr.solve(robot, max_iterations=-3), "option `max_iterations` is -3"),
+        (lambda: tdcr.solve_tensions(robot, [0, 0, 0.2], max_tension=5.0, max_iterations=-1), "`max_iterations` is -1"),
+        (lambda: tdcr.solve_tensions(robot, [0, 0, 0.2], max_tension=5.0, free_tendons=[2**65]), "`free_tendons`[0]"),
+        (lambda: tdcr.calibrate(robot, [[0] * 5], [[0, 0, 0]], [[0, 0, 0.2]], max_iterations=True), "not a boolean"),
+        (lambda: tdcr.trace(robot, "tension.1", False, 1.0), "trace: `start` must be a number"),
+    ]:
+        with pytest.raises(tdcr.InvalidInput) as e:
+            call()
+        assert fragment in str(e.value), str(e.value)
+
+
+def test_parameter_names_are_canonical():
+    robot = tdcr.cases.case_h()
+    for name in ["tension.01", "tension.+1", "tension. 1"]:
+        with pytest.raises(tdcr.InvalidInput, match="the tendon number must be a whole number"):
+            robot.with_parameters({name: 1.0})
+        with pytest.raises(tdcr.InvalidInput):
+            tdcr.solve_batch(robot, {name: [1.0]})
+
+
+def test_errors_raise_stops_at_the_first_bad_row_and_names_it():
+    robot = tdcr.cases.case_h()
+    # Row 2 has a negative tension; the rows after it are never solved.
+    tensions = np.r_[4.0, 4.5, -1.0, np.full(5000, 4.91)]
+    with pytest.raises(tdcr.InvalidInput) as e:
+        tdcr.solve_batch(robot, {"tension.5": tensions})
+    assert e.value.index == 2 and str(e.value).startswith("solve_batch: row 2 (from 0): ")
+    out = tdcr.solve_batch(robot, {"tension.5": tensions[:4]}, errors="return")
+    assert isinstance(out[2], tdcr.InvalidInput) and out[2].index == 2 and isinstance(out[3], tdcr.Solution)
+
+
+def test_distributed_raises_what_the_local_call_raises():
+    import tdcr.distributed
+
+    robot = tdcr.cases.prototype()
+
+    class NoCluster:
+        def map(self, *args, **kwargs):
+            raise AssertionError("no task may be submitted for bad input")
+
+    for parameters, options in [
+        ({"tension.1": [True]}, {}),
+        ({"tension.1": [[1.0]]}, {}),
+        ({"tension.1": ["a"]}, {}),
+        ({"mass": [1.0]}, {}),
+        ({"tension.01": [1.0]}, {}),
+        ({"tension.1": [1.0]}, {"method": "shooting"}),
+        ({"tension.1": [1.0]}, {"intervals": True}),
+    ]:
+        with pytest.raises(tdcr.InvalidInput) as local:
+            tdcr.solve_parameters(robot, parameters, **options)
+        with pytest.raises(tdcr.InvalidInput) as remote:
+            tdcr.distributed.solve_parameters(NoCluster(), robot, parameters, **options)
+        assert str(remote.value) == str(local.value)
