@@ -126,26 +126,26 @@ pub fn pool() -> PyResult<Arc<rayon::ThreadPool>> {
     }
 }
 
-/// Runs `job` for rows `0..rows` in parallel on this process's pool, in chunks of about
+/// Runs `job` for rows `0..count` in parallel on this process's pool, in chunks of about
 /// [`CHUNK_TIME`], giving each row's result to `sink` in row order with the GIL held;
-/// between chunks Python's signal handlers run. `sink` returns false to stop (e.g. at the
-/// first failure). Every row given to `sink` is finished; rows after it are not started
-/// unless they were in the same chunk.
+/// between chunks Python's signal handlers run. An error of `sink` (say, at the first
+/// failed row) stops the run: every row given to `sink` is finished, and no row after the
+/// chunk is started.
 ///
 /// # Errors
 /// The exception of a signal handler (`KeyboardInterrupt` for Ctrl-C) and `sink`'s errors.
 pub fn rows<T: Send>(
     py: Python<'_>,
-    rows: usize,
+    count: usize,
     job: impl Fn(usize) -> Result<T, Failure> + Sync,
-    mut sink: impl FnMut(usize, Result<T, Failure>) -> PyResult<bool>,
+    mut sink: impl FnMut(usize, Result<T, Failure>) -> PyResult<()>,
 ) -> PyResult<()> {
     use rayon::prelude::*;
     let pool = pool()?;
     let threads = pool.current_num_threads().max(1);
     let (mut start, mut size) = (0, threads);
-    while start < rows {
-        let end = rows.min(start + size);
+    while start < count {
+        let end = count.min(start + size);
         let began = Instant::now();
         let results: Vec<Result<T, Failure>> = py.detach(|| {
             pool.install(|| {
@@ -160,9 +160,7 @@ pub fn rows<T: Send>(
         });
         let took = began.elapsed().as_secs_f64();
         for (row, result) in (start..end).zip(results) {
-            if !sink(row, result)? {
-                return Ok(());
-            }
+            sink(row, result)?;
         }
         py.check_signals()?;
         // The next chunk: as many rows as the last ones took per CHUNK_TIME, at least one

@@ -194,7 +194,7 @@ fn solve_batch(
                     out.push(err.value(py).clone().into_any().unbind());
                 }
             }
-            Ok(true)
+            Ok(())
         },
     );
     match run {
@@ -297,7 +297,7 @@ fn solve_parameters<'py>(
                     table.errors.push(failure.to_string());
                 }
             }
-            Ok(true)
+            Ok(())
         },
     );
     match run {
