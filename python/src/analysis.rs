@@ -279,6 +279,38 @@ fn run_inverse(
     })
 }
 
+/// The arguments both inverse statics calls take, as given.
+struct Common<'a, 'py> {
+    tolerance: Option<&'a Bound<'py, PyAny>>,
+    max_iterations: Option<&'a Bound<'py, PyAny>>,
+    orientation_weight: Option<&'a Bound<'py, PyAny>>,
+    free_tendons: Option<&'a Bound<'py, PyAny>>,
+    options: Option<&'a Bound<'py, PyDict>>,
+}
+
+impl Common<'_, '_> {
+    /// The library's defaults with these arguments of `function` set.
+    fn options(&self, function: &str, robot: &PyRobot) -> PyResult<InverseOptions> {
+        let defaults = InverseOptions::default();
+        let what = |name: &str| format!("{function}: `{name}`");
+        Ok(InverseOptions {
+            tolerance: optional_number(self.tolerance, &what("tolerance"))?.unwrap_or(defaults.tolerance),
+            max_iterations: self
+                .max_iterations
+                .filter(|n| !n.is_none())
+                .map_or(Ok(defaults.max_iterations), |n| count(n, &what("max_iterations")))?,
+            orientation_weight: optional_number(self.orientation_weight, &what("orientation_weight"))?,
+            solver: forward_options(function, robot, self.options)?,
+            free_tendons: self
+                .free_tendons
+                .filter(|t| !t.is_none())
+                .map(|t| counts(t, &what("free_tendons")))
+                .transpose()?,
+            ..defaults
+        })
+    }
+}
+
 /// Inverse statics: the tensions, each in [0, `max_tension`] (N), that put the tip at
 /// `position` (m, (3,)) and, if given, `rotation` ((3, 3), body to world), by bounded
 /// Levenberg-Marquardt on the forward solver (`tdcr::fit::solve_tensions`).
@@ -305,22 +337,16 @@ pub fn solve_tensions(
 ) -> PyResult<PyInverseResult> {
     let f = "solve_tensions";
     let target = target(f, position, rotation)?;
-    let defaults = InverseOptions::default();
+    let common = Common {
+        tolerance,
+        max_iterations,
+        orientation_weight,
+        free_tendons,
+        options,
+    };
     let options = InverseOptions {
         max_tension: number(max_tension, &format!("{f}: `max_tension`"))?,
-        tolerance: optional_number(tolerance, &format!("{f}: `tolerance`"))?.unwrap_or(defaults.tolerance),
-        max_iterations: max_iterations
-            .filter(|n| !n.is_none())
-            .map_or(Ok(defaults.max_iterations), |n| {
-                count(n, &format!("{f}: `max_iterations`"))
-            })?,
-        orientation_weight: optional_number(orientation_weight, &format!("{f}: `orientation_weight`"))?,
-        solver: forward_options(f, robot, options)?,
-        free_tendons: free_tendons
-            .filter(|t| !t.is_none())
-            .map(|t| counts(t, &format!("{f}: `free_tendons`")))
-            .transpose()?,
-        ..Default::default()
+        ..common.options(f, robot)?
     };
     run_inverse(py, robot, target, options, tdcr::fit::solve_tensions)
 }
@@ -354,7 +380,13 @@ pub fn solve_displacements(
 ) -> PyResult<PyInverseResult> {
     let f = "solve_displacements";
     let target = target(f, position, rotation)?;
-    let defaults = InverseOptions::default();
+    let common = Common {
+        tolerance,
+        max_iterations,
+        orientation_weight,
+        free_tendons,
+        options,
+    };
     let max_displacement = number(max_displacement, &format!("{f}: `max_displacement`"))?;
     let options = InverseOptions {
         // A symmetric stroke unless told: under its own weight the unactuated robot's
@@ -363,18 +395,7 @@ pub fn solve_displacements(
             .unwrap_or(-max_displacement),
         max_displacement,
         max_tension: optional_number(max_tension, &format!("{f}: `max_tension`"))?.unwrap_or(0.0),
-        tolerance: optional_number(tolerance, &format!("{f}: `tolerance`"))?.unwrap_or(defaults.tolerance),
-        max_iterations: max_iterations
-            .filter(|n| !n.is_none())
-            .map_or(Ok(defaults.max_iterations), |n| {
-                count(n, &format!("{f}: `max_iterations`"))
-            })?,
-        orientation_weight: optional_number(orientation_weight, &format!("{f}: `orientation_weight`"))?,
-        solver: forward_options(f, robot, options)?,
-        free_tendons: free_tendons
-            .filter(|t| !t.is_none())
-            .map(|t| counts(t, &format!("{f}: `free_tendons`")))
-            .transpose()?,
+        ..common.options(f, robot)?
     };
     run_inverse(py, robot, target, options, tdcr::fit::solve_displacements)
 }

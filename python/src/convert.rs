@@ -171,24 +171,42 @@ pub fn count(value: &Bound<'_, PyAny>, what: &str) -> PyResult<usize> {
     })
 }
 
-/// A 1-D sequence of numbers (list, tuple, numpy array; no booleans) as f64 values; `what`
-/// names it.
-pub fn numbers(value: &Bound<'_, PyAny>, what: &str) -> PyResult<Vec<f64>> {
+/// Whether `value` is a boolean or a list or tuple holding one, `depth` levels down.
+fn holds_boolean(value: &Bound<'_, PyAny>, depth: usize) -> bool {
+    if is_boolean(value) {
+        return true;
+    }
+    let items = match (value.cast::<PyList>(), value.cast::<PyTuple>()) {
+        (Ok(list), _) => list.iter().collect::<Vec<_>>(),
+        (_, Ok(tuple)) => tuple.iter().collect(),
+        _ => return false,
+    };
+    depth > 0 && items.iter().any(|item| holds_boolean(item, depth - 1))
+}
+
+/// `value` as a float64 numpy array of `ndim` dimensions (a list, tuple or array of
+/// numbers; not booleans, which numpy would take as 1 and 0); `shape` says what is wanted
+/// and `what` names it in messages.
+fn float_array<'py>(value: &Bound<'py, PyAny>, ndim: usize, shape: &str, what: &str) -> PyResult<Bound<'py, PyAny>> {
     let np = value.py().import("numpy")?;
-    let bad = || invalid(format!("{what} must be a 1-D sequence of numbers"));
+    let bad = || invalid(format!("{what} must be {shape} of numbers"));
     let raw = np.call_method1("asarray", (value,)).map_err(|_| bad())?;
     let kind: String = raw.getattr("dtype")?.getattr("kind")?.extract()?;
-    // numpy turns [True, 2] into integers: look at the items of a list or tuple too.
-    let items = value
-        .cast::<PyList>()
-        .map(|l| l.iter().collect::<Vec<_>>())
-        .ok()
-        .or_else(|| value.cast::<PyTuple>().map(|t| t.iter().collect()).ok());
-    if kind == "b" || items.is_some_and(|items| items.iter().any(is_boolean)) {
+    if kind == "b" || holds_boolean(value, ndim) {
         return Err(invalid(format!("{what} holds booleans; give numbers")));
     }
     let array = np.call_method1("asarray", (raw, "float64")).map_err(|_| bad())?;
-    let view: numpy::PyReadonlyArray1<f64> = array.extract().map_err(|_| bad())?;
+    if array.getattr("ndim")?.extract::<usize>()? != ndim {
+        return Err(bad());
+    }
+    Ok(array)
+}
+
+/// A 1-D sequence of numbers (list, tuple, numpy array; no booleans) as f64 values; `what`
+/// names it.
+pub fn numbers(value: &Bound<'_, PyAny>, what: &str) -> PyResult<Vec<f64>> {
+    let array = float_array(value, 1, "a 1-D sequence", what)?;
+    let view: numpy::PyReadonlyArray1<f64> = array.extract()?;
     Ok(view.as_array().to_vec())
 }
 
@@ -214,16 +232,9 @@ pub fn counts(value: &Bound<'_, PyAny>, what: &str) -> PyResult<Vec<usize>> {
 /// A 2-D nested sequence or array of numbers (no booleans), every row `width` long when
 /// given; `what` names it.
 pub fn table_of(value: &Bound<'_, PyAny>, what: &str, width: Option<usize>) -> PyResult<Vec<Vec<f64>>> {
-    let np = value.py().import("numpy")?;
     let shape = width.map_or("(M, k)".to_string(), |w| format!("(M, {w})"));
-    let bad = || invalid(format!("{what} must be a {shape} array of numbers"));
-    let raw = np.call_method1("asarray", (value,)).map_err(|_| bad())?;
-    let kind: String = raw.getattr("dtype")?.getattr("kind")?.extract()?;
-    if kind == "b" {
-        return Err(invalid(format!("{what} holds booleans; give numbers")));
-    }
-    let array = np.call_method1("asarray", (raw, "float64")).map_err(|_| bad())?;
-    let view: numpy::PyReadonlyArray2<f64> = array.extract().map_err(|_| bad())?;
+    let array = float_array(value, 2, &format!("a {shape} array"), what)?;
+    let view: numpy::PyReadonlyArray2<f64> = array.extract()?;
     let view = view.as_array();
     if let Some(w) = width
         && view.ncols() != w
