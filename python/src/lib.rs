@@ -15,8 +15,8 @@ mod solution;
 
 use convert::type_name;
 use errors::invalid;
-use numpy::IntoPyArray;
 use numpy::ndarray::{Array1, Array2};
+use numpy::{IntoPyArray, PyArrayMethods};
 use options::Use;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
@@ -365,8 +365,10 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(prototype, m)?)?;
     m.add_function(wrap_pyfunction!(example, m)?)?;
     errors::register(m)?;
-    // NumPy's C API now, while importing: looked up on first use instead, an interrupt
-    // arriving during that lookup would fail it for the rest of the process.
-    numpy::PyArray1::<f64>::zeros(m.py(), 0, false);
+    // NumPy's C API and rust-numpy's borrow checking now, while importing: looked up on
+    // first use instead, an interrupt arriving during that lookup made it panic ("Failed to
+    // access NumPy array API capsule").
+    let empty = numpy::PyArray1::<f64>::zeros(m.py(), 0, false);
+    drop(empty.readonly());
     Ok(())
 }

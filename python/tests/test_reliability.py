@@ -285,6 +285,8 @@ try:
     print(json.dumps({"finished": True}), flush=True)
 except KeyboardInterrupt as e:
     partial = getattr(e, "partial", None)
+    # Arrays still come back after the interrupt (it once broke NumPy's C API for good).
+    assert tdcr.solve(tdcr.cases.case_s()).p.shape[1] == 3
     print(json.dumps({
         "at": time.monotonic(),
         "completed": getattr(e, "completed", None),
