@@ -532,10 +532,13 @@ pub fn calibrate(
         ..defaults
     };
     let r = &robot.file.robot;
-    let fit = boundary::stoppable(py, |stop| {
+    let (fit, signal) = boundary::stoppable(py, |stop| {
         tdcr::fit::calibrate_until(r, &experiments, &calibration_options, stop)
     })?;
-    // No fit without a result: a stop comes with the signal's exception, raised above.
+    if let Some(e) = signal {
+        return Err(e);
+    }
+    // Only a stop ends a fit without a result, and a stop comes with a signal.
     let Some(out) = fit else {
         return Err(crate::errors::Error::new_err("calibrate stopped without a result"));
     };

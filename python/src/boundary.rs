@@ -201,14 +201,18 @@ pub fn steps(py: Python<'_>, mut step: impl FnMut() -> bool + Send) -> PyResult<
 
 /// `f(stop)` on this process's pool in a helper thread, while the calling thread (the GIL
 /// released) takes the GIL back about every [`CHUNK_TIME`] to run Python's signal handlers;
-/// once one raises, `stop()` returns true for `f`, which is to give up soon, and that
-/// exception is raised when `f` has returned. For a library call that asks a stop
-/// between chunks of its work (`tdcr::fit::calibrate_until`).
+/// once one raises, `stop()` returns true for `f`, which is to give up soon. For a library
+/// call that asks a stop between chunks of its work (`tdcr::fit::calibrate_until`,
+/// `tdcr::collocation::trace_until`). Returns `f`'s result and the signal handler's
+/// exception (`KeyboardInterrupt` for Ctrl-C), if one raised, for the caller to raise.
 ///
 /// # Errors
-/// The exception of a signal handler (`KeyboardInterrupt` for Ctrl-C), `f`'s error, or
-/// `tdcr.Error` for a panic.
-pub fn stoppable<T: Send>(py: Python<'_>, f: impl FnOnce(&dyn Fn() -> bool) -> tdcr::Result<T> + Send) -> PyResult<T> {
+/// `f`'s error (the signal's exception instead when there was one), or `tdcr.Error` for a
+/// panic.
+pub fn stoppable<T: Send>(
+    py: Python<'_>,
+    f: impl FnOnce(&dyn Fn() -> bool) -> tdcr::Result<T> + Send,
+) -> PyResult<(T, Option<PyErr>)> {
     use std::sync::atomic::{AtomicBool, Ordering};
     use std::sync::mpsc;
     let pool = pool()?;
@@ -231,9 +235,10 @@ pub fn stoppable<T: Send>(py: Python<'_>, f: impl FnOnce(&dyn Fn() -> bool) -> t
             receive = back;
             match received {
                 Ok(result) => {
-                    return match signal {
-                        Some(e) => Err(e),
-                        None => result.map_err(Failure::into_py),
+                    return match (result, signal) {
+                        (Ok(value), signal) => Ok((value, signal)),
+                        (Err(_), Some(e)) => Err(e),
+                        (Err(failure), None) => Err(failure.into_py()),
                     };
                 }
                 Err(mpsc::RecvTimeoutError::Timeout) => {

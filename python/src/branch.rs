@@ -197,7 +197,9 @@ crate::pickle::pickled_fields! {
 /// `start` as it goes to `stop`, through folds, with the stability of every point
 /// (`tdcr::collocation::trace`, as `tdcr trace`). `parameter` is `tension.I` (I from 1),
 /// `tip_force.x|y|z`, `distributed_force.x|y|z` or `load_scale`; options as `solve`
-/// (collocation). The GIL is released while tracing.
+/// (collocation). The GIL is released while tracing; Ctrl-C stops it before the next
+/// continuation step with `KeyboardInterrupt`, whose `completed` is the number of points
+/// and `partial` the `Trace` so far.
 #[pyfunction]
 #[pyo3(signature = (robot, parameter, start, stop, **options))]
 pub fn trace(
@@ -212,12 +214,13 @@ pub fn trace(
     let settings = crate::options::apply(&robot.file.solver, options, Use::Collocation("trace"))?;
     let r = &robot.file.robot;
     let p = tdcr::Parameter::parse(parameter, r).map_err(to_py)?;
-    let t = boundary::detached(py, || {
-        tdcr::collocation::trace(r, p, start, stop, &settings.collocation)
+    let (t, signal) = boundary::stoppable(py, |asked| {
+        tdcr::collocation::trace_until(r, p, start, stop, &settings.collocation, asked)
     })?;
     let tips: Vec<[f64; 3]> = t.points.iter().map(|q| q.tip_position.into()).collect();
     let values: Vec<f64> = t.points.iter().map(|q| q.value).collect();
-    Ok(PyTrace {
+    let values_len = values.len();
+    let result = PyTrace {
         parameter: t.parameter.to_string(),
         values: PyArray1::from_vec(py, values).unbind(),
         tip_positions: tip_rows(py, &tips).unbind(),
@@ -228,5 +231,12 @@ pub fn trace(
         bifurcations: t.bifurcations,
         stopped: t.stopped,
         iterations: t.report.iterations,
-    })
+    };
+    match signal {
+        None => Ok(result),
+        Some(e) => {
+            let done = values_len;
+            Err(boundary::with_partial(py, e, done, Bound::new(py, result)?.into_any()))
+        }
+    }
 }
