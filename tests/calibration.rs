@@ -315,6 +315,45 @@ fn the_iteration_limit_returns_the_last_parameters_as_not_converged() {
     assert!(fit.errors.mean < 0.1 * fit.start_errors.mean, "{:?}", fit.errors);
 }
 
+/// Issue 30: a front end's stop (Python's Ctrl-C) is asked between chunks of solves; the
+/// fit gives up at the first `true`, and a stop that never fires changes nothing.
+#[test]
+fn a_stop_is_asked_between_chunks_and_ends_the_fit() {
+    use std::cell::Cell;
+    use tdcr::fit::calibration::calibrate_until;
+    let robot = prototype_in_paper_frame();
+    let truth = truth(&robot);
+    let (experiments, _) = synthetic(&robot, &paper_frame_rotation(), &truth, 0.0, 1);
+    let options = CalibrationOptions {
+        max_iterations: 2,
+        ..Default::default()
+    };
+    let asked = Cell::new(0);
+    let never = calibrate_until(&robot, &experiments, &options, &|| {
+        asked.set(asked.get() + 1);
+        false
+    })
+    .unwrap()
+    .unwrap();
+    let plain = calibrate(&robot, &experiments, &options).unwrap();
+    assert_eq!(never.fitted, plain.fitted);
+    // At least once per pass over the experiments: start solves, Jacobian, each trial.
+    assert!(asked.get() >= 4, "{}", asked.get());
+    for after in [0, 1, 3] {
+        let asked = Cell::new(0);
+        let stopped = calibrate_until(&robot, &experiments, &options, &|| {
+            asked.set(asked.get() + 1);
+            asked.get() > after
+        })
+        .unwrap();
+        assert!(
+            stopped.is_none() && asked.get() == after + 1,
+            "{after}: {}",
+            asked.get()
+        );
+    }
+}
+
 #[test]
 fn every_termination_has_its_own_sentence() {
     let all = [

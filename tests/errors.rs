@@ -417,3 +417,31 @@ fn newton_called_directly_with_a_huge_limit_does_not_overflow_its_history() {
     assert_eq!(termination, tdcr::Termination::Converged);
     assert!(report.history.capacity() <= collocation::MAX_ITERATIONS);
 }
+
+/// Issue 30: a rod so long that `intervals * length` overflows used to panic with a capacity
+/// overflow while building the first mesh; it is now solved (and fails to converge, as a
+/// 1e300 m rod does) or refused, never a panic.
+#[test]
+fn a_rod_of_1e308_m_is_an_error_not_a_panic() {
+    let mut robot = good();
+    robot.rod.length = 1e308;
+    assert!(collocation::solve(&robot, &Default::default()).is_err());
+}
+
+/// Issue 30: sensitivities of a solution with another number of tendon states than the
+/// robot's tendons (an edited solution JSON) used to index past the end.
+#[test]
+fn sensitivities_of_a_solution_with_other_tendons_are_bad_input() {
+    let robot = good();
+    let mut solution = collocation::solve(&robot, &Default::default()).unwrap();
+    solution.tendons.clear();
+    let err = tdcr::tip_sensitivities(&robot, &solution).unwrap_err();
+    assert!(
+        matches!(&err, Error::InvalidInput { field, .. } if field == "solution"),
+        "{err}"
+    );
+    assert!(
+        err.to_string().contains("has 0 tendon state(s), but the robot has"),
+        "{err}"
+    );
+}

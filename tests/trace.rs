@@ -195,3 +195,34 @@ fn trace_and_sweep_agree_on_every_parameter() {
         }
     }
 }
+
+/// Issue 30: a front end's stop (Python's Ctrl-C) is asked before every continuation step;
+/// the trace ends at the first `true` with the points so far, and a stop that never fires
+/// changes nothing.
+#[test]
+fn a_stop_ends_the_trace_with_the_points_so_far() {
+    use std::cell::Cell;
+    let robot = cases::case_s();
+    let options = collocation::Options::default();
+    let whole = trace(&robot, Parameter::Tension(0), 0.0, 10.0, &options).unwrap();
+    let never = collocation::trace_until(&robot, Parameter::Tension(0), 0.0, 10.0, &options, &|| false).unwrap();
+    assert_eq!(format!("{:?}", never.points), format!("{:?}", whole.points));
+    assert!(
+        whole.stopped.is_none() && whole.points.len() > 5,
+        "{}",
+        whole.points.len()
+    );
+    let asked = Cell::new(0);
+    let stopped = collocation::trace_until(&robot, Parameter::Tension(0), 0.0, 10.0, &options, &|| {
+        asked.set(asked.get() + 1);
+        asked.get() > 3
+    })
+    .unwrap();
+    assert_eq!(
+        stopped.stopped.as_deref(),
+        Some("stopped on request before the end of the range")
+    );
+    // The start and one point per step taken; the same points as the whole trace's first.
+    assert_eq!(stopped.points.len(), 4);
+    assert_eq!(format!("{:?}", stopped.points), format!("{:?}", &whole.points[..4]));
+}

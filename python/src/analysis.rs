@@ -1,7 +1,10 @@
 //! Tip sensitivities and inverse statics: `tdcr::tip_sensitivities`,
 //! `tdcr::fit::solve_tensions` and `tdcr::fit::solve_displacements` with numpy in and out.
 
-use crate::errors::{invalid, to_py};
+use crate::boundary;
+use crate::convert::{count, counts, number, numbers, optional_number, table_of};
+use crate::errors::invalid;
+use crate::options::Use;
 use crate::robot::PyRobot;
 use crate::solution::PySolution;
 use numpy::ndarray::Array2;
@@ -26,6 +29,64 @@ pub struct PyTipSensitivities {
 
 #[pymethods]
 impl PyTipSensitivities {
+    /// Pickling and copying go through the matrices (column-major values).
+    fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<(Bound<'py, PyAny>, (Bound<'py, PyDict>,))> {
+        let s = &slf.get().inner;
+        let state = PyDict::new(slf.py());
+        state.set_item("tendons", s.tension.ncols())?;
+        state.set_item("tension", s.tension.as_slice())?;
+        state.set_item("displacement", s.displacement.as_slice())?;
+        state.set_item("tip_force", s.tip_force.as_slice())?;
+        state.set_item("tip_moment", s.tip_moment.as_slice())?;
+        state.set_item("base_position", s.base_position.as_slice())?;
+        state.set_item("base_rotation", s.base_rotation.as_slice())?;
+        let moduli = s
+            .moduli
+            .map(|m| [m.youngs_modulus, m.youngs_modulus_fixed_shear, m.shear_modulus].map(|v| v.as_slice().to_vec()));
+        state.set_item("moduli", moduli)?;
+        Ok((slf.get_type().getattr("_from_state")?, (state,)))
+    }
+
+    /// The sensitivities of a state `__reduce__` made.
+    #[staticmethod]
+    fn _from_state(state: &Bound<'_, PyDict>) -> PyResult<Self> {
+        use crate::pickle::field;
+        use tdcr::nalgebra::{Matrix6x3, Vector6};
+        let k: usize = field(state, "tendons")?;
+        let matrix = |name: &str| -> PyResult<DMatrix<f64>> {
+            let values: Vec<f64> = field(state, name)?;
+            if values.len() != 6 * k {
+                return Err(invalid(format!(
+                    "the pickled `{name}` has {} values, not 6 x {k}",
+                    values.len()
+                )));
+            }
+            Ok(DMatrix::from_vec(6, k, values))
+        };
+        let six_by_three = |name: &str| -> PyResult<Matrix6x3<f64>> {
+            let values: [f64; 18] = field(state, name)?;
+            Ok(Matrix6x3::from_column_slice(&values))
+        };
+        let moduli: Option<[[f64; 6]; 3]> = field(state, "moduli")?;
+        Ok(PyTipSensitivities {
+            inner: tdcr::TipSensitivities {
+                tension: matrix("tension")?,
+                displacement: matrix("displacement")?,
+                tip_force: six_by_three("tip_force")?,
+                tip_moment: six_by_three("tip_moment")?,
+                base_position: six_by_three("base_position")?,
+                base_rotation: six_by_three("base_rotation")?,
+                moduli: moduli.map(
+                    |[e, e_fixed_shear, g]| tdcr::collocation::sensitivity::ModulusSensitivities {
+                        youngs_modulus: Vector6::from_column_slice(&e),
+                        youngs_modulus_fixed_shear: Vector6::from_column_slice(&e_fixed_shear),
+                        shear_modulus: Vector6::from_column_slice(&g),
+                    },
+                ),
+            },
+        })
+    }
+
     /// d(tip pose)/d(tension_i) (per N), shape (6, k), one column per tendon (zero for a
     /// displacement-controlled one: see `displacement`).
     #[getter]
@@ -96,9 +157,7 @@ impl PyTipSensitivities {
 #[pyfunction]
 pub fn tip_sensitivities(py: Python<'_>, robot: &PyRobot, solution: &PySolution) -> PyResult<PyTipSensitivities> {
     let (r, s) = (&robot.file.robot, &solution.solution);
-    py.detach(|| tdcr::tip_sensitivities(r, s))
-        .map(|inner| PyTipSensitivities { inner })
-        .map_err(to_py)
+    boundary::detached(py, || tdcr::tip_sensitivities(r, s)).map(|inner| PyTipSensitivities { inner })
 }
 
 /// The result of `solve_tensions` and `solve_displacements`.
@@ -111,7 +170,7 @@ pub struct PyInverseResult {
     /// Where each tendon's adjusted input ended up: "inside", "slack", "saturated" (at the
     /// upper bound), "released" (at the lower pull-in bound), "tension_limit" (pull-ins: at
     /// the tension limit) or "held" (not free).
-    bounds: Vec<&'static str>,
+    bounds: Vec<String>,
     /// The forward solution at these inputs.
     solution: Py<PySolution>,
     /// Weighted tip error (m).
@@ -132,8 +191,16 @@ pub struct PyInverseResult {
     explanation: String,
 }
 
+crate::pickle::pickled_fields! {
+    PyInverseResult {
+        tensions, displacements, bounds, solution, residual, position_error, orientation_error,
+        reachable, termination, iterations, forward_solves, explanation,
+    }
+}
+
 /// The target of `function` from a (3,) position and an optional (3, 3) rotation.
-fn target(function: &str, position: Vec<f64>, rotation: Option<Vec<Vec<f64>>>) -> PyResult<Target> {
+fn target(function: &str, position: &Bound<'_, PyAny>, rotation: Option<&Bound<'_, PyAny>>) -> PyResult<Target> {
+    let position = numbers(position, &format!("{function}: `position`"))?;
     let [x, y, z] = position[..] else {
         return Err(invalid(format!(
             "{function}: position has {} values, not 3",
@@ -141,10 +208,11 @@ fn target(function: &str, position: Vec<f64>, rotation: Option<Vec<Vec<f64>>>) -
         )));
     };
     let position = Vector3::new(x, y, z);
-    match rotation {
+    match rotation.filter(|r| !r.is_none()) {
         None => Ok(Target::position(position)),
         Some(r) => {
-            if r.len() != 3 || r.iter().any(|row| row.len() != 3) {
+            let r = table_of(r, &format!("{function}: `rotation`"), Some(3))?;
+            if r.len() != 3 {
                 return Err(invalid(format!("{function}: rotation must be a (3, 3) matrix")));
             }
             Ok(Target::pose(position, Matrix3::from_fn(|i, j| r[i][j])))
@@ -155,8 +223,12 @@ fn target(function: &str, position: Vec<f64>, rotation: Option<Vec<Vec<f64>>>) -
 /// The forward solver's settings of inverse statics: the robot file's and `options`, on a
 /// fixed mesh unless `tol` asks otherwise (as the library's inverse statics: every
 /// iteration then solves the same discretization).
-fn forward_options(robot: &PyRobot, options: Option<&Bound<'_, PyDict>>) -> PyResult<tdcr::collocation::Options> {
-    let mut settings = crate::options::apply(&robot.file.solver, options)?;
+fn forward_options(
+    function: &str,
+    robot: &PyRobot,
+    options: Option<&Bound<'_, PyDict>>,
+) -> PyResult<tdcr::collocation::Options> {
+    let mut settings = crate::options::apply(&robot.file.solver, options, Use::Collocation(function))?;
     if !options.is_some_and(|o| o.contains("tol").unwrap_or(false)) {
         settings.collocation.tolerance = None;
     }
@@ -172,7 +244,7 @@ fn run_inverse(
     inverse: fn(&tdcr::Robot, &Target, &InverseOptions) -> tdcr::Result<InverseSolution>,
 ) -> PyResult<PyInverseResult> {
     let r = &robot.file.robot;
-    let out = py.detach(|| inverse(r, &target, &options)).map_err(to_py)?;
+    let out = boundary::detached(py, || inverse(r, &target, &options))?;
     let bounds = out
         .bounds
         .iter()
@@ -184,6 +256,7 @@ fn run_inverse(
             tdcr::fit::Bound::TensionLimit => "tension_limit",
             tdcr::fit::Bound::Held => "held",
         })
+        .map(String::from)
         .collect();
     Ok(PyInverseResult {
         tensions: PyArray1::from_slice(py, &out.tensions).unbind(),
@@ -206,6 +279,38 @@ fn run_inverse(
     })
 }
 
+/// The arguments both inverse statics calls take, as given.
+struct Common<'a, 'py> {
+    tolerance: Option<&'a Bound<'py, PyAny>>,
+    max_iterations: Option<&'a Bound<'py, PyAny>>,
+    orientation_weight: Option<&'a Bound<'py, PyAny>>,
+    free_tendons: Option<&'a Bound<'py, PyAny>>,
+    options: Option<&'a Bound<'py, PyDict>>,
+}
+
+impl Common<'_, '_> {
+    /// The library's defaults with these arguments of `function` set.
+    fn options(&self, function: &str, robot: &PyRobot) -> PyResult<InverseOptions> {
+        let defaults = InverseOptions::default();
+        let what = |name: &str| format!("{function}: `{name}`");
+        Ok(InverseOptions {
+            tolerance: optional_number(self.tolerance, &what("tolerance"))?.unwrap_or(defaults.tolerance),
+            max_iterations: self
+                .max_iterations
+                .filter(|n| !n.is_none())
+                .map_or(Ok(defaults.max_iterations), |n| count(n, &what("max_iterations")))?,
+            orientation_weight: optional_number(self.orientation_weight, &what("orientation_weight"))?,
+            solver: forward_options(function, robot, self.options)?,
+            free_tendons: self
+                .free_tendons
+                .filter(|t| !t.is_none())
+                .map(|t| counts(t, &what("free_tendons")))
+                .transpose()?,
+            ..defaults
+        })
+    }
+}
+
 /// Inverse statics: the tensions, each in [0, `max_tension`] (N), that put the tip at
 /// `position` (m, (3,)) and, if given, `rotation` ((3, 3), body to world), by bounded
 /// Levenberg-Marquardt on the forward solver (`tdcr::fit::solve_tensions`).
@@ -213,29 +318,35 @@ fn run_inverse(
 /// `options` are the forward solver's (as `solve`, collocation only); without `tol` the
 /// forward solves use a fixed mesh, as the library's inverse statics do.
 #[pyfunction]
-#[pyo3(signature = (robot, position, rotation=None, *, max_tension, tolerance=1e-6, max_iterations=50, orientation_weight=None, free_tendons=None, **options))]
+#[pyo3(
+    signature = (robot, position, rotation=None, *, max_tension, tolerance=None, max_iterations=None, orientation_weight=None, free_tendons=None, **options),
+    text_signature = "(robot, position, rotation=None, *, max_tension, tolerance=1e-6, max_iterations=50, orientation_weight=None, free_tendons=None, **options)"
+)]
 #[allow(clippy::too_many_arguments)]
 pub fn solve_tensions(
     py: Python<'_>,
     robot: &PyRobot,
-    position: Vec<f64>,
-    rotation: Option<Vec<Vec<f64>>>,
-    max_tension: f64,
-    tolerance: f64,
-    max_iterations: usize,
-    orientation_weight: Option<f64>,
-    free_tendons: Option<Vec<usize>>,
+    position: &Bound<'_, PyAny>,
+    rotation: Option<&Bound<'_, PyAny>>,
+    max_tension: &Bound<'_, PyAny>,
+    tolerance: Option<&Bound<'_, PyAny>>,
+    max_iterations: Option<&Bound<'_, PyAny>>,
+    orientation_weight: Option<&Bound<'_, PyAny>>,
+    free_tendons: Option<&Bound<'_, PyAny>>,
     options: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<PyInverseResult> {
-    let target = target("solve_tensions", position, rotation)?;
-    let options = InverseOptions {
-        max_tension,
+    let f = "solve_tensions";
+    let target = target(f, position, rotation)?;
+    let common = Common {
         tolerance,
         max_iterations,
         orientation_weight,
-        solver: forward_options(robot, options)?,
         free_tendons,
-        ..Default::default()
+        options,
+    };
+    let options = InverseOptions {
+        max_tension: number(max_tension, &format!("{f}: `max_tension`"))?,
+        ..common.options(f, robot)?
     };
     run_inverse(py, robot, target, options, tdcr::fit::solve_tensions)
 }
@@ -248,34 +359,43 @@ pub fn solve_tensions(
 /// below 0.9 of each tendon's geometric limit EI / r^2 and below `max_tension` (N) when it
 /// is above 0. `options` as `solve_tensions`.
 #[pyfunction]
-#[pyo3(signature = (robot, position, rotation=None, *, max_displacement, min_displacement=None, max_tension=0.0, tolerance=1e-6, max_iterations=50, orientation_weight=None, free_tendons=None, **options))]
+#[pyo3(
+    signature = (robot, position, rotation=None, *, max_displacement, min_displacement=None, max_tension=None, tolerance=None, max_iterations=None, orientation_weight=None, free_tendons=None, **options),
+    text_signature = "(robot, position, rotation=None, *, max_displacement, min_displacement=None, max_tension=0.0, tolerance=1e-6, max_iterations=50, orientation_weight=None, free_tendons=None, **options)"
+)]
 #[allow(clippy::too_many_arguments)]
 pub fn solve_displacements(
     py: Python<'_>,
     robot: &PyRobot,
-    position: Vec<f64>,
-    rotation: Option<Vec<Vec<f64>>>,
-    max_displacement: f64,
-    min_displacement: Option<f64>,
-    max_tension: f64,
-    tolerance: f64,
-    max_iterations: usize,
-    orientation_weight: Option<f64>,
-    free_tendons: Option<Vec<usize>>,
+    position: &Bound<'_, PyAny>,
+    rotation: Option<&Bound<'_, PyAny>>,
+    max_displacement: &Bound<'_, PyAny>,
+    min_displacement: Option<&Bound<'_, PyAny>>,
+    max_tension: Option<&Bound<'_, PyAny>>,
+    tolerance: Option<&Bound<'_, PyAny>>,
+    max_iterations: Option<&Bound<'_, PyAny>>,
+    orientation_weight: Option<&Bound<'_, PyAny>>,
+    free_tendons: Option<&Bound<'_, PyAny>>,
     options: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<PyInverseResult> {
-    let target = target("solve_displacements", position, rotation)?;
-    let options = InverseOptions {
-        // A symmetric stroke unless told: under its own weight the unactuated robot's
-        // upper tendons need letting out.
-        min_displacement: min_displacement.unwrap_or(-max_displacement),
-        max_displacement,
-        max_tension,
+    let f = "solve_displacements";
+    let target = target(f, position, rotation)?;
+    let common = Common {
         tolerance,
         max_iterations,
         orientation_weight,
-        solver: forward_options(robot, options)?,
         free_tendons,
+        options,
+    };
+    let max_displacement = number(max_displacement, &format!("{f}: `max_displacement`"))?;
+    let options = InverseOptions {
+        // A symmetric stroke unless told: under its own weight the unactuated robot's
+        // upper tendons need letting out.
+        min_displacement: optional_number(min_displacement, &format!("{f}: `min_displacement`"))?
+            .unwrap_or(-max_displacement),
+        max_displacement,
+        max_tension: optional_number(max_tension, &format!("{f}: `max_tension`"))?.unwrap_or(0.0),
+        ..common.options(f, robot)?
     };
     run_inverse(py, robot, target, options, tdcr::fit::solve_displacements)
 }
@@ -284,7 +404,7 @@ pub fn solve_displacements(
 #[pyclass(module = "tdcr", name = "Calibration", frozen, get_all)]
 pub struct PyCalibration {
     /// Names of the fitted unknowns, e.g. `["E", "alpha", "beta", "gamma"]`.
-    names: Vec<&'static str>,
+    names: Vec<String>,
     /// Fitted Young's modulus E (Pa).
     youngs_modulus: f64,
     /// Fitted base XYZ Euler angles (deg), (3,).
@@ -313,18 +433,19 @@ pub struct PyCalibration {
     solves: usize,
 }
 
-/// (M, 3) rows from a nested sequence; `what` names it in messages.
-fn rows3(values: &[Vec<f64>], what: &str) -> PyResult<Vec<Vector3<f64>>> {
-    values
-        .iter()
-        .map(|r| match r[..] {
-            [x, y, z] => Ok(Vector3::new(x, y, z)),
-            _ => Err(invalid(format!(
-                "calibrate: every row of `{what}` needs 3 values, one has {}",
-                r.len()
-            ))),
-        })
-        .collect()
+crate::pickle::pickled_fields! {
+    PyCalibration {
+        names, youngs_modulus, euler_deg, base_position, offset_scale, robot, tips, tip_errors,
+        rms_error, max_error, converged, termination, iterations, solves,
+    }
+}
+
+/// (M, 3) rows of `calibrate`'s argument `what`.
+fn rows3(value: &Bound<'_, PyAny>, what: &str) -> PyResult<Vec<Vector3<f64>>> {
+    Ok(table_of(value, &format!("calibrate: `{what}`"), Some(3))?
+        .into_iter()
+        .map(|r| Vector3::new(r[0], r[1], r[2]))
+        .collect())
 }
 
 /// Calibration (`tdcr::fit::calibrate`): fits Young's modulus and the base XYZ Euler angles
@@ -332,26 +453,32 @@ fn rows3(values: &[Vec<f64>], what: &str) -> PyResult<Vec<Vector3<f64>>> {
 /// "offset_scale") to measured tips. `tensions` is (M, k) (N, file order), `tip_forces`
 /// (M, 3) (N, world frame), `measured_tips` (M, 3) (m). The fit starts from the robot's own
 /// parameters; `options` are the forward solver's (as `solve`, collocation), on a fixed
-/// mesh (`intervals`; a `tol` is ignored) so that the model tips are smooth in the
-/// parameters.
+/// mesh (`intervals`; `tol` is refused) so that the model tips are smooth in the
+/// parameters. Ctrl-C stops it within about 0.1 s with `KeyboardInterrupt` (no result).
 #[pyfunction]
-#[pyo3(signature = (robot, tensions, tip_forces, measured_tips, *, fit=None, max_iterations=50, **options))]
+#[pyo3(
+    signature = (robot, tensions, tip_forces, measured_tips, *, fit=None, max_iterations=None, **options),
+    text_signature = "(robot, tensions, tip_forces, measured_tips, *, fit=None, max_iterations=50, **options)"
+)]
 #[allow(clippy::too_many_arguments)]
 pub fn calibrate(
     py: Python<'_>,
     robot: &PyRobot,
-    tensions: Vec<Vec<f64>>,
-    tip_forces: Vec<Vec<f64>>,
-    measured_tips: Vec<Vec<f64>>,
+    tensions: &Bound<'_, PyAny>,
+    tip_forces: &Bound<'_, PyAny>,
+    measured_tips: &Bound<'_, PyAny>,
     fit: Option<Vec<String>>,
-    max_iterations: usize,
+    max_iterations: Option<&Bound<'_, PyAny>>,
     options: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<PyCalibration> {
     use tdcr::fit::calibration::{CalibrationOptions, Fit, Measurement};
-    let (forces, tips) = (
-        rows3(&tip_forces, "tip_forces")?,
-        rows3(&measured_tips, "measured_tips")?,
-    );
+    let (forces, tips) = (rows3(tip_forces, "tip_forces")?, rows3(measured_tips, "measured_tips")?);
+    let tensions = table_of(tensions, "calibrate: `tensions`", None)?;
+    let max_iterations = max_iterations
+        .filter(|n| !n.is_none())
+        .map_or(Ok(CalibrationOptions::default().max_iterations), |n| {
+            count(n, "calibrate: `max_iterations`")
+        })?;
     if tensions.len() != forces.len() || tips.len() != forces.len() {
         return Err(invalid(format!(
             "calibrate: {} rows of tensions, {} of tip_forces, {} of measured_tips; give one row per measurement",
@@ -394,7 +521,7 @@ pub fn calibrate(
     let defaults = CalibrationOptions::default();
     let mut settings = robot.file.solver.clone();
     settings.collocation.residual_tolerance = defaults.collocation.residual_tolerance;
-    let mut settings = crate::options::apply(&settings, options)?;
+    let mut settings = crate::options::apply(&settings, options, Use::FixedMesh("calibrate"))?;
     // Calibration solves on a fixed mesh (the model tips must be smooth in the parameters),
     // as `tdcr calibrate` does.
     settings.collocation.tolerance = None;
@@ -405,18 +532,27 @@ pub fn calibrate(
         ..defaults
     };
     let r = &robot.file.robot;
-    let out = py
-        .detach(|| tdcr::fit::calibrate(r, &experiments, &calibration_options))
-        .map_err(to_py)?;
+    let (fit, signal) = boundary::stoppable(py, |stop| {
+        tdcr::fit::calibrate_until(r, &experiments, &calibration_options, stop)
+    })?;
+    if let Some(e) = signal {
+        return Err(e);
+    }
+    // Only a stop ends a fit without a result, and a stop comes with a signal.
+    let Some(out) = fit else {
+        return Err(crate::errors::Error::new_err("calibrate stopped without a result"));
+    };
     let fitted = PyRobot {
         file: tdcr::io::RobotFile {
             robot: out.robot.clone(),
             solver: robot.file.solver.clone(),
         },
+        // Calibration does not change a rod given by `shear_modulus` (it cannot fit its E).
+        given_rod: robot.given_rod.clone(),
     };
     let predicted = Array2::from_shape_fn((out.tips.len(), 3), |(i, k)| out.tips[i][k]);
     Ok(PyCalibration {
-        names: out.fit.names(),
+        names: out.fit.names().into_iter().map(String::from).collect(),
         youngs_modulus: out.fitted.youngs_modulus,
         euler_deg: PyArray1::from_slice(py, out.fitted.euler_deg().as_slice()).unbind(),
         base_position: PyArray1::from_slice(py, out.fitted.base_position.as_slice()).unbind(),

@@ -2,19 +2,20 @@
 //! events between steps) and `tdcr::collocation::trace` (a branch of equilibria in one
 //! input), with numpy out.
 
-use crate::errors::{invalid, to_py};
-use crate::robot::{PyRobot, robots_of};
+use crate::boundary;
+use crate::convert::number;
+use crate::errors::to_py;
+use crate::options::Use;
+use crate::robot::{PyRobot, Rows};
 use crate::solution::PySolution;
 use numpy::ndarray::Array2;
 use numpy::{IntoPyArray, PyArray1, PyArray2};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
-use tdcr::Method;
-use tdcr::analysis::sweep::{Event, Step, SweepSolver};
-use tdcr::nalgebra::Vector3;
+use tdcr::analysis::sweep::{Event, Step, Sweep, SweepSolver};
 
 /// (n, 3) rows of tip positions.
-fn tip_rows<'py>(py: Python<'py>, tips: &[Vector3<f64>]) -> Bound<'py, PyArray2<f64>> {
+fn tip_rows<'py>(py: Python<'py>, tips: &[[f64; 3]]) -> Bound<'py, PyArray2<f64>> {
     Array2::from_shape_fn((tips.len(), 3), |(i, k)| tips[i][k]).into_pyarray(py)
 }
 
@@ -25,7 +26,7 @@ pub struct PySweep {
     solutions: Py<PyList>,
     events: Vec<Option<String>>,
     jumps: Vec<usize>,
-    tips: Vec<Vector3<f64>>,
+    tips: Vec<[f64; 3]>,
 }
 
 impl PySweep {
@@ -37,7 +38,8 @@ impl PySweep {
                 jumps.push(k);
             }
             events.push(step.event.as_ref().map(ToString::to_string));
-            tips.push(step.solution.tip_position());
+            let p = step.solution.tip_position();
+            tips.push([p.x, p.y, p.z]);
             solutions.append(PySolution {
                 solution: step.solution,
             })?;
@@ -51,8 +53,9 @@ impl PySweep {
     }
 }
 
-#[pymethods]
-impl PySweep {
+crate::pickle::pickled_fields! {
+    PySweep { solutions, events, jumps, tips }
+
     /// The solutions, one per step solved, in order.
     #[getter]
     fn solutions(&self, py: Python<'_>) -> Py<PyList> {
@@ -107,7 +110,9 @@ impl PySweep {
 /// last (`tdcr::solve_from`, so every step's stability verdict is its own), and the events
 /// between steps (the tip jumping off its branch, displacement-controlled tendons going
 /// taut or slack); collocation. A failure is raised with `index` set to its row and
-/// `partial` to the `Sweep` of the rows before it.
+/// `partial` to the `Sweep` of the rows before it. Ctrl-C stops it within about 0.1 s
+/// with `KeyboardInterrupt`, whose `completed` and `partial` say the same of the rows
+/// finished.
 #[pyfunction]
 #[pyo3(signature = (robot, parameters, **options))]
 pub fn sweep(
@@ -116,19 +121,36 @@ pub fn sweep(
     parameters: &Bound<'_, PyDict>,
     options: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<PySweep> {
-    let settings = crate::options::apply(&robot.file.solver, options)?;
-    if settings.method != Method::Collocation {
-        return Err(invalid("sweep warm-starts collocation; use method=\"collocation\""));
+    let settings = crate::options::apply(&robot.file.solver, options, Use::Collocation("sweep"))?;
+    let rows = Rows::new(robot, parameters)?;
+    let mut sweep = Sweep::new(SweepSolver::Collocation(settings.collocation), None);
+    let mut steps = Vec::new();
+    let mut failure = None;
+    let run = boundary::steps(py, || {
+        let k = steps.len();
+        if k == rows.len() {
+            return false;
+        }
+        match boundary::caught(|| sweep.step(&rows.robot(k)?)) {
+            Ok(step) => {
+                steps.push(step);
+                true
+            }
+            Err(e) => {
+                failure = Some((k, e));
+                false
+            }
+        }
+    });
+    let done = steps.len();
+    let result = PySweep::new(py, steps)?;
+    if let Err(e) = run {
+        return Err(boundary::with_partial(py, e, done, Bound::new(py, result)?.into_any()));
     }
-    let robots = robots_of(robot, parameters)?;
-    let solver = SweepSolver::Collocation(settings.collocation);
-    let out = py.detach(|| tdcr::analysis::sweep::sweep(&robots, solver, None));
-    let result = PySweep::new(py, out.steps)?;
-    match out.failure {
+    match failure {
         None => Ok(result),
         Some((i, e)) => {
-            let err = to_py(e);
-            err.value(py).setattr("index", i)?;
+            let err = e.into_py_at(py, "", i);
             err.value(py).setattr("partial", Py::new(py, result)?)?;
             Err(err)
         }
@@ -148,7 +170,7 @@ pub struct PyTrace {
     /// Unstable directions at every point: 0 stable, more unstable, None unknown.
     unstable_directions: Vec<Option<usize>>,
     /// "stable", "unstable" or "unknown" at every point.
-    stability: Vec<&'static str>,
+    stability: Vec<String>,
     /// Whether the branch turns back at each point (a fold).
     fold: Vec<bool>,
     /// Parameter values of the folds.
@@ -162,46 +184,59 @@ pub struct PyTrace {
     iterations: usize,
 }
 
+crate::pickle::pickled_fields! {
+    PyTrace {
+        parameter, values, tip_positions, unstable_directions, stability, fold, folds,
+        bifurcations, stopped, iterations,
+    }
+}
+
 /// trace(robot, parameter, start, stop, **options) -> Trace
 ///
 /// Follows the branch of equilibria through the default solve's state at `parameter` =
 /// `start` as it goes to `stop`, through folds, with the stability of every point
 /// (`tdcr::collocation::trace`, as `tdcr trace`). `parameter` is `tension.I` (I from 1),
 /// `tip_force.x|y|z`, `distributed_force.x|y|z` or `load_scale`; options as `solve`
-/// (collocation). The GIL is released while tracing.
+/// (collocation). The GIL is released while tracing; Ctrl-C stops it before the next
+/// continuation step with `KeyboardInterrupt`, whose `completed` is the number of points
+/// and `partial` the `Trace` so far.
 #[pyfunction]
 #[pyo3(signature = (robot, parameter, start, stop, **options))]
 pub fn trace(
     py: Python<'_>,
     robot: &PyRobot,
     parameter: &str,
-    start: f64,
-    stop: f64,
+    start: &Bound<'_, PyAny>,
+    stop: &Bound<'_, PyAny>,
     options: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<PyTrace> {
-    let settings = crate::options::apply(&robot.file.solver, options)?;
-    if settings.method != Method::Collocation {
-        return Err(invalid(
-            "trace continues collocation solutions; use method=\"collocation\"",
-        ));
-    }
+    let (start, stop) = (number(start, "trace: `start`")?, number(stop, "trace: `stop`")?);
+    let settings = crate::options::apply(&robot.file.solver, options, Use::Collocation("trace"))?;
     let r = &robot.file.robot;
     let p = tdcr::Parameter::parse(parameter, r).map_err(to_py)?;
-    let t = py
-        .detach(|| tdcr::collocation::trace(r, p, start, stop, &settings.collocation))
-        .map_err(to_py)?;
-    let tips: Vec<Vector3<f64>> = t.points.iter().map(|q| q.tip_position).collect();
+    let (t, signal) = boundary::stoppable(py, |asked| {
+        tdcr::collocation::trace_until(r, p, start, stop, &settings.collocation, asked)
+    })?;
+    let tips: Vec<[f64; 3]> = t.points.iter().map(|q| q.tip_position.into()).collect();
     let values: Vec<f64> = t.points.iter().map(|q| q.value).collect();
-    Ok(PyTrace {
+    let values_len = values.len();
+    let result = PyTrace {
         parameter: t.parameter.to_string(),
         values: PyArray1::from_vec(py, values).unbind(),
         tip_positions: tip_rows(py, &tips).unbind(),
         unstable_directions: t.points.iter().map(|q| q.unstable_directions).collect(),
-        stability: t.points.iter().map(|q| q.verdict()).collect(),
+        stability: t.points.iter().map(|q| q.verdict().to_string()).collect(),
         fold: t.points.iter().map(|q| q.fold).collect(),
         folds: t.folds,
         bifurcations: t.bifurcations,
         stopped: t.stopped,
         iterations: t.report.iterations,
-    })
+    };
+    match signal {
+        None => Ok(result),
+        Some(e) => {
+            let done = values_len;
+            Err(boundary::with_partial(py, e, done, Bound::new(py, result)?.into_any()))
+        }
+    }
 }

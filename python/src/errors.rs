@@ -51,7 +51,17 @@ create_exception!(
 
 /// A library error as the matching exception, with the same message.
 pub fn to_py(error: tdcr::Error) -> PyErr {
-    let text = error.to_string();
+    to_py_with(error, "")
+}
+
+/// A library error as the matching exception, its message after `prefix` (say, the row of
+/// a batch) when that is not empty.
+pub fn to_py_with(error: tdcr::Error, prefix: &str) -> PyErr {
+    let text = if prefix.is_empty() {
+        error.to_string()
+    } else {
+        format!("{prefix}: {error}")
+    };
     match error {
         tdcr::Error::InvalidInput { .. } => InvalidInput::new_err(text),
         tdcr::Error::SingularRouting { .. } => SingularRouting::new_err(text),

@@ -4,18 +4,23 @@
 //! walk-through.
 
 mod analysis;
+mod boundary;
 mod branch;
+mod convert;
 mod errors;
 mod options;
+mod pickle;
 mod robot;
 mod solution;
 
-use errors::{invalid, to_py};
-use numpy::IntoPyArray;
+use convert::type_name;
+use errors::invalid;
 use numpy::ndarray::{Array1, Array2};
+use numpy::{IntoPyArray, PyArrayMethods};
+use options::Use;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
-use robot::{PyRobot, robots_of};
+use robot::{PyRobot, Rows};
 use solution::PySolution;
 use tdcr::io::SolverSettings;
 use tdcr::{Method, Solution, collocation, shooting};
@@ -56,70 +61,112 @@ fn solve(
     warm_start: Option<&PySolution>,
     options: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<PySolution> {
-    let settings = options::apply(&robot.file.solver, options)?;
+    let settings = options::apply(&robot.file.solver, options, Use::Any("solve"))?;
+    if warm_start.is_some() && settings.method != Method::Collocation {
+        return Err(invalid(
+            "solve: `warm_start` starts collocation's Newton iteration; the shooting method does not use it (leave it out, or use method=\"collocation\")",
+        ));
+    }
     let (r, warm) = (&robot.file.robot, warm_start.map(|w| &w.solution));
-    py.detach(|| run(r, &settings, warm))
-        .map(|solution| PySolution { solution })
-        .map_err(to_py)
+    boundary::detached(py, || run(r, &settings, warm)).map(|solution| PySolution { solution })
 }
 
-/// The robots of a batch: a list of robots, or one robot with parameter arrays (one robot
-/// per row), and the one set of collocation options for all of them.
+/// The robots of a batch: a list, or one robot with parameter columns (built row by row).
+enum Batch {
+    /// Robots given one by one.
+    List(Vec<tdcr::Robot>),
+    /// One robot and parameter columns.
+    Rows(Box<Rows>),
+}
+
+impl Batch {
+    /// The number of robots.
+    fn len(&self) -> usize {
+        match self {
+            Batch::List(list) => list.len(),
+            Batch::Rows(rows) => rows.len(),
+        }
+    }
+
+    /// Solves robot `i` by collocation with `options`.
+    fn solve(&self, i: usize, options: &collocation::Options) -> tdcr::Result<Solution> {
+        match self {
+            Batch::List(list) => tdcr::solve(&list[i], options),
+            Batch::Rows(rows) => tdcr::solve(&rows.robot(i)?, options),
+        }
+    }
+}
+
+/// The robots of a batch (a list of robots, or one robot with parameter arrays: one robot
+/// per row) and the one set of collocation options for all of them; `function` names the
+/// caller in messages.
 fn batch_robots(
+    function: &str,
     robots: &Bound<'_, PyAny>,
     parameters: Option<&Bound<'_, PyDict>>,
     options: Option<&Bound<'_, PyDict>>,
-) -> PyResult<(Vec<tdcr::Robot>, collocation::Options)> {
-    let (list, settings) = if let Ok(base) = robots.cast::<PyRobot>() {
+) -> PyResult<(Batch, collocation::Options)> {
+    let (batch, settings) = if let Ok(base) = robots.cast::<PyRobot>() {
         let base = base.get();
         let Some(parameters) = parameters else {
-            return Err(invalid(
-                "solve_batch: give a list of robots, or one robot with `parameters` (a dict of arrays)",
-            ));
+            return Err(invalid(format!(
+                "{function}: give a list of robots, or one robot with `parameters` (a dict of arrays)"
+            )));
         };
         (
-            robots_of(base, parameters)?,
-            options::apply(&base.file.solver, options)?,
+            Batch::Rows(Box::new(Rows::new(base, parameters)?)),
+            options::apply(&base.file.solver, options, Use::Collocation(function))?,
         )
     } else {
         if parameters.is_some() {
-            return Err(invalid("solve_batch: `parameters` needs one robot, not a list"));
+            return Err(invalid(format!("{function}: `parameters` needs one robot, not a list")));
         }
         let mut list = Vec::new();
         let mut settings: Option<SolverSettings> = None;
-        for (i, item) in robots.try_iter()?.enumerate() {
+        let items = robots.try_iter().map_err(|_| {
+            invalid(format!(
+                "{function}: give a list of tdcr.Robot, not {}",
+                type_name(robots)
+            ))
+        })?;
+        for (i, item) in items.enumerate() {
             let item = item?;
             let r = item
                 .cast::<PyRobot>()
-                .map_err(|_| invalid(format!("solve_batch: item {i} is not a tdcr.Robot")))?;
-            let s = options::apply(&r.get().file.solver, options)?;
+                .map_err(|_| invalid(format!("{function}: item {i} is not a tdcr.Robot")))?;
+            let s = options::apply(&r.get().file.solver, options, Use::Collocation(function))?;
             if let Some(first) = &settings
                 && (first.collocation != s.collocation || first.method != s.method)
             {
                 return Err(invalid(format!(
-                    "solve_batch: robot {i} has other [solver] settings than robot 0; a batch solves every robot with one set of options"
+                    "{function}: robot {i} has other [solver] settings than robot 0; a batch solves every robot with one set of options"
                 )));
             }
             settings.get_or_insert(s);
             list.push(r.get().file.robot.clone());
         }
-        (list, settings.unwrap_or_default())
+        (Batch::List(list), settings.unwrap_or_default())
     };
     if settings.method != Method::Collocation {
-        return Err(invalid("solve_batch solves by collocation; use method=\"collocation\""));
+        return Err(invalid(format!(
+            "{function} solves by collocation; use method=\"collocation\""
+        )));
     }
-    Ok((list, settings.collocation))
+    Ok((batch, settings.collocation))
 }
 
 /// solve_batch(robots, parameters=None, *, errors="raise", **options) -> list[Solution]
 ///
-/// Solves many robots in parallel on all cores (rayon, through `tdcr::solve_batch`) with the
-/// GIL released; results in input order, bitwise identical to solving one by one with
+/// Solves many robots in parallel on all cores (this process's thread pool) with the GIL
+/// released; results in input order, bitwise identical to solving one by one with
 /// `solve`. `robots` is a list of robots, or one robot with `parameters`: a dict of 1-D
 /// arrays of one length M, named as `tdcr batch` columns (`tension.1`, `tip_force.z`, ...;
 /// one robot per row). Options as `solve` (one set for all robots; collocation). With
-/// `errors="raise"` the first failure is raised (its `index` attribute says which robot);
-/// with `errors="return"` failed entries are the exception objects.
+/// `errors="raise"` the batch stops at the first failure and raises it, its message
+/// starting with the row and its `index` attribute set to it; with `errors="return"` failed
+/// entries are the exception objects. Rows are solved in chunks of about 0.1 s; Ctrl-C
+/// between them raises `KeyboardInterrupt` with `completed` (the rows finished, from
+/// the first) and `partial` (their list).
 #[pyfunction]
 #[pyo3(signature = (robots, parameters=None, *, errors="raise", **options))]
 fn solve_batch(
@@ -129,32 +176,77 @@ fn solve_batch(
     errors: &str,
     options: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<Py<PyList>> {
-    let raise = match errors {
-        "raise" => true,
-        "return" => false,
-        other => {
-            return Err(invalid(format!(
-                "solve_batch: errors=\"{other}\"; use \"raise\" or \"return\""
-            )));
-        }
-    };
-    let (list, options) = batch_robots(robots, parameters, options)?;
-    let results = py.detach(|| tdcr::solve_batch(&list, &options));
-    let out = PyList::empty(py);
-    for (i, result) in results.into_iter().enumerate() {
-        match result {
-            Ok(solution) => out.append(PySolution { solution })?,
-            Err(e) => {
-                let err = to_py(e);
-                err.value(py).setattr("index", i)?;
-                if raise {
-                    return Err(err);
+    let raise = raise_errors("solve_batch", errors)?;
+    let (batch, options) = batch_robots("solve_batch", robots, parameters, options)?;
+    let mut out: Vec<Py<PyAny>> = Vec::with_capacity(batch.len());
+    let run = boundary::rows(
+        py,
+        batch.len(),
+        |i| Ok(batch.solve(i, &options)?),
+        |i, result| {
+            match result {
+                Ok(solution) => out.push(Py::new(py, PySolution { solution })?.into_any()),
+                Err(failure) => {
+                    if raise {
+                        return Err(failure.into_py_at(py, &format!("solve_batch: row {i} (from 0)"), i));
+                    }
+                    let err = failure.into_py_at(py, "", i);
+                    out.push(err.value(py).clone().into_any().unbind());
                 }
-                out.append(err.value(py))?;
             }
+            Ok(())
+        },
+    );
+    match run {
+        Ok(()) => Ok(PyList::new(py, out)?.unbind()),
+        Err(e) => {
+            let done = out.len();
+            Err(boundary::with_partial(py, e, done, PyList::new(py, out)?.into_any()))
         }
     }
-    Ok(out.unbind())
+}
+
+/// The `errors` argument of a batch: true for "raise", false for "return".
+fn raise_errors(function: &str, errors: &str) -> PyResult<bool> {
+    match errors {
+        "raise" => Ok(true),
+        "return" => Ok(false),
+        other => Err(invalid(format!(
+            "{function}: errors=\"{other}\"; use \"raise\" or \"return\""
+        ))),
+    }
+}
+
+/// What `solve_parameters` keeps of a solved row.
+struct Outcome {
+    tip: [f64; 3],
+    iterations: i64,
+    stability: &'static str,
+}
+
+/// The columns of `solve_parameters`, filled row by row.
+#[derive(Default)]
+struct Table {
+    tips: Vec<[f64; 3]>,
+    converged: Vec<bool>,
+    iterations: Vec<i64>,
+    stability: Vec<&'static str>,
+    errors: Vec<String>,
+}
+
+impl Table {
+    /// The table as `solve_parameters` returns it.
+    fn into_dict(self, py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
+        let n = self.tips.len();
+        let tips = Array2::from_shape_fn((n, 3), |(i, k)| self.tips[i][k]);
+        let d = PyDict::new(py);
+        d.set_item("converged", Array1::from(self.converged).into_pyarray(py))?;
+        d.set_item("tip_position", tips.into_pyarray(py))?;
+        d.set_item("iterations", Array1::from(self.iterations).into_pyarray(py))?;
+        d.set_item("stability", self.stability)?;
+        d.set_item("error", self.errors)?;
+        Ok(d)
+    }
 }
 
 /// solve_parameters(robot, parameters, **options) -> dict
@@ -163,7 +255,9 @@ fn solve_batch(
 /// shape a distributed map wants: `converged` (M,) bool, `tip_position` (M, 3) (NaN where
 /// a row failed), `iterations` (M,) int64 (-1 where failed), `stability` (list of M
 /// strings: "stable", "unstable" or "unknown", empty where failed), `error` (list of M
-/// strings, empty where solved).
+/// strings, empty where solved). Each solution is reduced to its row as soon as it is
+/// solved, so memory does not grow with M beyond the arrays. Ctrl-C raises
+/// `KeyboardInterrupt` with `completed` and `partial` (this dict for the finished rows).
 #[pyfunction]
 #[pyo3(signature = (robot, parameters, **options))]
 fn solve_parameters<'py>(
@@ -172,39 +266,47 @@ fn solve_parameters<'py>(
     parameters: &Bound<'py, PyDict>,
     options: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let (list, options) = batch_robots(robot.as_any(), Some(parameters), options)?;
-    let results = py.detach(|| tdcr::solve_batch(&list, &options));
-    let n = results.len();
-    let mut tips = Array2::from_elem((n, 3), f64::NAN);
-    let mut converged = Array1::from_elem(n, false);
-    let mut iterations = Array1::from_elem(n, -1i64);
-    let mut messages = Vec::with_capacity(n);
-    let mut stability = Vec::with_capacity(n);
-    for (i, result) in results.iter().enumerate() {
-        match result {
-            Ok(s) => {
-                let p = s.tip_position();
-                for k in 0..3 {
-                    tips[(i, k)] = p[k];
+    let (batch, options) = batch_robots("solve_parameters", robot.as_any(), Some(parameters), options)?;
+    let mut table = Table::default();
+    let run = boundary::rows(
+        py,
+        batch.len(),
+        |i| {
+            let s = batch.solve(i, &options)?;
+            let p = s.tip_position();
+            Ok(Outcome {
+                tip: [p.x, p.y, p.z],
+                iterations: i64::try_from(s.report.iterations).unwrap_or(i64::MAX),
+                stability: s.report.stability.verdict(),
+            })
+        },
+        |_, result| {
+            match result {
+                Ok(o) => {
+                    table.tips.push(o.tip);
+                    table.converged.push(true);
+                    table.iterations.push(o.iterations);
+                    table.stability.push(o.stability);
+                    table.errors.push(String::new());
                 }
-                converged[i] = true;
-                iterations[i] = i64::try_from(s.report.iterations).unwrap_or(i64::MAX);
-                messages.push(String::new());
-                stability.push(s.report.stability.verdict());
+                Err(failure) => {
+                    table.tips.push([f64::NAN; 3]);
+                    table.converged.push(false);
+                    table.iterations.push(-1);
+                    table.stability.push("");
+                    table.errors.push(failure.to_string());
+                }
             }
-            Err(e) => {
-                messages.push(e.to_string());
-                stability.push("");
-            }
+            Ok(())
+        },
+    );
+    match run {
+        Ok(()) => table.into_dict(py),
+        Err(e) => {
+            let done = table.tips.len();
+            Err(boundary::with_partial(py, e, done, table.into_dict(py)?.into_any()))
         }
     }
-    let d = PyDict::new(py);
-    d.set_item("converged", converged.into_pyarray(py))?;
-    d.set_item("tip_position", tips.into_pyarray(py))?;
-    d.set_item("iterations", iterations.into_pyarray(py))?;
-    d.set_item("stability", stability)?;
-    d.set_item("error", messages)?;
-    Ok(d)
 }
 
 /// Reference case S: the paper's prototype, tendon 1 at 2.94 N, no tip load
@@ -263,5 +365,10 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(prototype, m)?)?;
     m.add_function(wrap_pyfunction!(example, m)?)?;
     errors::register(m)?;
+    // NumPy's C API and rust-numpy's borrow checking now, while importing: looked up on
+    // first use instead, an interrupt arriving during that lookup made it panic ("Failed to
+    // access NumPy array API capsule").
+    let empty = numpy::PyArray1::<f64>::zeros(m.py(), 0, false);
+    drop(empty.readonly());
     Ok(())
 }

@@ -1,9 +1,10 @@
 //! Solver options given as keyword arguments, applied over a robot's `[solver]` settings the
 //! way the command line applies its flags.
 
+use crate::convert::{self, type_name};
 use crate::errors::invalid;
 use pyo3::prelude::*;
-use pyo3::types::PyDict;
+use pyo3::types::{PyBool, PyDict, PyString};
 use tdcr::Method;
 use tdcr::collocation::Equilibrium;
 use tdcr::io::SolverSettings;
@@ -26,19 +27,55 @@ fn equilibrium(value: &str) -> PyResult<Equilibrium> {
     }
 }
 
-/// Reads one option; a value of the wrong type is `tdcr.InvalidInput` naming it.
-fn get<'py, T: FromPyObjectOwned<'py>>(value: &Bound<'py, PyAny>, name: &str, what: &str) -> PyResult<T> {
+/// Reads a string option; another type is `tdcr.InvalidInput` naming it.
+fn text(value: &Bound<'_, PyAny>, name: &str, what: &str) -> PyResult<String> {
     value
-        .extract::<T>()
+        .cast::<PyString>()
+        .map(|s| s.to_string())
         .map_err(|_| invalid(format!("option `{name}` must be {what}, not {}", type_name(value))))
 }
 
-/// The Python type name of `value`, for messages.
-pub fn type_name(value: &Bound<'_, PyAny>) -> String {
-    value
-        .get_type()
-        .name()
-        .map_or_else(|_| "?".to_string(), |n| n.to_string())
+/// Which options a function uses, and its name for messages.
+#[derive(Clone, Copy)]
+pub enum Use<'a> {
+    /// Either method's options, as the method chosen uses them (`solve`).
+    Any(&'a str),
+    /// Collocation's options (batches, sweeps, traces, inverse statics).
+    Collocation(&'a str),
+    /// Collocation's options on a fixed mesh, without `tol` (calibration).
+    FixedMesh(&'a str),
+}
+
+/// The options only collocation uses.
+const COLLOCATION_ONLY: [&str; 5] = ["tol", "intervals", "max_intervals", "continuation", "equilibrium"];
+
+/// Refuses an option given to a function (or method) that would not use it.
+fn check_used(given: &[String], method: Method, usage: Use<'_>) -> PyResult<()> {
+    let (function, collocation_only) = match usage {
+        Use::Any(f) => (f, false),
+        Use::Collocation(f) | Use::FixedMesh(f) => (f, true),
+    };
+    if collocation_only && method != Method::Collocation {
+        return Err(invalid(format!(
+            "{function} solves by collocation; method=\"{method}\" is not used (leave `method` out or give \"collocation\")"
+        )));
+    }
+    for name in given {
+        let unused = match (name.as_str(), method) {
+            ("integration_tolerance", Method::Collocation) => Some("the shooting method's"),
+            ("tol", _) if matches!(usage, Use::FixedMesh(_)) => {
+                Some("adaptive refinement's, and this function solves on a fixed mesh (give `intervals`)")
+            }
+            (n, Method::Shooting) if COLLOCATION_ONLY.contains(&n) => Some("collocation's"),
+            _ => None,
+        };
+        if let Some(whose) = unused {
+            return Err(invalid(format!(
+                "{function}: option `{name}` is {whose}; it would not be used with method=\"{method}\" (leave it out)"
+            )));
+        }
+    }
+    Ok(())
 }
 
 /// `settings` with the options of `kwargs` applied: `method` ("collocation" or "shooting"),
@@ -48,21 +85,28 @@ pub fn type_name(value: &Bound<'_, PyAny>) -> String {
 /// `equilibrium` ("load_path" or "nearest", collocation), `integration_tolerance`
 /// (shooting). Unknown names and wrong types are
 /// `tdcr.InvalidInput`; the values are checked by the solvers' own `Options::validate`.
-pub fn apply(settings: &SolverSettings, kwargs: Option<&Bound<'_, PyDict>>) -> PyResult<SolverSettings> {
+pub fn apply(
+    settings: &SolverSettings,
+    kwargs: Option<&Bound<'_, PyDict>>,
+    usage: Use<'_>,
+) -> PyResult<SolverSettings> {
     let mut out = settings.clone();
     let Some(kwargs) = kwargs else {
         return Ok(out);
     };
     let (mut intervals, mut tol, mut cap) = (None, None, None);
+    let mut given = Vec::new();
     for (key, value) in kwargs.iter() {
         let name: String = key.extract()?;
         if value.is_none() {
             continue;
         }
+        let what = format!("option `{name}`");
+        let (number, count) = (|| convert::number(&value, &what), || convert::count(&value, &what));
         let c = &mut out.collocation;
         match name.as_str() {
             "method" => {
-                out.method = match get::<String>(&value, &name, "a string")?.as_str() {
+                out.method = match text(&value, &name, "a string")?.as_str() {
                     "collocation" => Method::Collocation,
                     "shooting" => Method::Shooting,
                     other => {
@@ -72,35 +116,38 @@ pub fn apply(settings: &SolverSettings, kwargs: Option<&Bound<'_, PyDict>>) -> P
                     }
                 }
             }
-            "tol" => tol = Some(get::<f64>(&value, &name, "a number (relative to the rod length)")?),
-            "intervals" => intervals = Some(get::<usize>(&value, &name, "a whole number >= 1")?),
-            "max_intervals" => cap = Some(get::<usize>(&value, &name, "a whole number >= 1")?),
+            "tol" => tol = Some(number()?),
+            "intervals" => intervals = Some(count()?),
+            "max_intervals" => cap = Some(count()?),
             "residual_tolerance" => {
-                let t = get::<f64>(&value, &name, "a number")?;
+                let t = number()?;
                 c.residual_tolerance = t;
                 out.shooting.residual_tolerance = t;
             }
             "max_iterations" => {
-                let n = get::<usize>(&value, &name, "a whole number >= 1")?;
+                let n = count()?;
                 c.max_iterations = n;
                 out.shooting.max_iterations = n;
             }
-            "continuation" => c.continuation = get::<bool>(&value, &name, "True or False")?,
-            "equilibrium" => {
-                c.equilibrium = equilibrium(&get::<String>(
-                    &value,
-                    &name,
-                    &format!("a string, {EQUILIBRIUM_NAMES}"),
-                )?)?;
+            "continuation" => {
+                c.continuation = value
+                    .cast::<PyBool>()
+                    .map_err(|_| invalid(format!("{what} must be True or False, not {}", type_name(&value))))?
+                    .is_true();
             }
-            "integration_tolerance" => out.shooting.integration_tolerance = get::<f64>(&value, &name, "a number")?,
+            "equilibrium" => {
+                c.equilibrium = equilibrium(&text(&value, &name, &format!("a string, {EQUILIBRIUM_NAMES}"))?)?;
+            }
+            "integration_tolerance" => out.shooting.integration_tolerance = number()?,
             _ => {
                 return Err(invalid(format!(
                     "unknown option `{name}`; the options are {OPTION_NAMES}"
                 )));
             }
         }
+        given.push(name);
     }
+    check_used(&given, out.method, usage)?;
     let c = &mut out.collocation;
     if let Some(n) = cap {
         c.max_intervals = n;

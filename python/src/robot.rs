@@ -2,14 +2,14 @@
 //! (`tdcr::io::parse`), whether from TOML text, a file, keyword arguments or a dict, and
 //! written back as a robot file for pickling.
 
+use crate::convert::Walk;
 use crate::errors::{file_error, invalid, to_py};
-use crate::options::type_name;
-use numpy::{PyArray1, PyArray2, PyReadonlyArray1};
+use numpy::{PyArray1, PyArray2};
 use pyo3::prelude::*;
-use pyo3::types::{PyBool, PyDict, PyFloat, PyInt, PyList, PyString, PyTuple};
+use pyo3::types::PyDict;
 use tdcr::Parameter;
 use tdcr::io::{RobotFile, SolverSettings};
-use toml::{Table, Value};
+use toml::Table;
 
 /// A tendon-driven continuum robot (SI units) with the solver settings of its `[solver]`
 /// table; the same fields and rules as a robot file (docs/robot-file.md).
@@ -36,68 +36,51 @@ use toml::{Table, Value};
 pub struct PyRobot {
     /// The robot and its settings, validated.
     pub file: RobotFile,
-}
-
-/// A Python value (numbers, strings, bools, lists, tuples, dicts, numpy arrays) as TOML;
-/// `path` names it in messages.
-fn to_toml(value: &Bound<'_, PyAny>, path: &str) -> PyResult<Value> {
-    if value.is_instance_of::<PyBool>() {
-        return Ok(Value::Boolean(value.extract()?));
-    }
-    if value.is_instance_of::<PyInt>() {
-        return Ok(Value::Integer(value.extract()?));
-    }
-    if value.is_instance_of::<PyFloat>() {
-        return Ok(Value::Float(value.extract()?));
-    }
-    if value.is_instance_of::<PyString>() {
-        return Ok(Value::String(value.extract()?));
-    }
-    if let Ok(dict) = value.cast::<PyDict>() {
-        return Ok(Value::Table(table(dict, path)?));
-    }
-    if value.is_instance_of::<PyList>() || value.is_instance_of::<PyTuple>() {
-        let items: PyResult<Vec<Value>> = value
-            .try_iter()?
-            .enumerate()
-            .map(|(i, item)| to_toml(&item?, &format!("{path}[{}]", i + 1)))
-            .collect();
-        return Ok(Value::Array(items?));
-    }
-    // numpy arrays and scalars: their Python equivalents.
-    if value.hasattr("tolist")? {
-        return to_toml(&value.call_method0("tolist")?, path);
-    }
-    Err(invalid(format!(
-        "`{path}` is a {}; give numbers, strings, booleans, lists or dicts as in a robot file",
-        type_name(value)
-    )))
-}
-
-/// A dict with string keys as a TOML table.
-fn table(dict: &Bound<'_, PyDict>, path: &str) -> PyResult<Table> {
-    let mut out = Table::new();
-    for (key, value) in dict.iter() {
-        let key: String = key
-            .extract()
-            .map_err(|_| invalid(format!("`{path}` has a key that is not a string: {key}")))?;
-        let inner = if path.is_empty() {
-            key.clone()
-        } else {
-            format!("{path}.{key}")
-        };
-        if !value.is_none() {
-            out.insert(key, to_toml(&value, &inner)?);
-        }
-    }
-    Ok(out)
+    /// The `[rod]` table as given, for a rod the library's writer cannot write back (one
+    /// given by `shear_modulus` keeps no geometry); such a rod never changes afterwards (its
+    /// Young's modulus cannot be set or fitted).
+    pub given_rod: Option<Table>,
 }
 
 /// Parses robot-file text (`name` in messages) into a robot.
 pub fn parse(text: &str, name: &str) -> PyResult<PyRobot> {
-    tdcr::io::parse(text, name)
-        .map(|file| PyRobot { file })
-        .map_err(|e| file_error(&e))
+    let file = tdcr::io::parse(text, name).map_err(|e| file_error(&e))?;
+    let given_rod = if file.robot.rod.geometry.is_none() {
+        toml::from_str::<Table>(text)
+            .ok()
+            .and_then(|doc| doc.get("rod").and_then(toml::Value::as_table).cloned())
+    } else {
+        None
+    };
+    Ok(PyRobot { file, given_rod })
+}
+
+impl PyRobot {
+    /// The robot file of this robot, which reads back to the same robot, bitwise: the
+    /// library's writer, with the `[rod]` table as given for a rod it cannot write (written
+    /// with a stand-in rod of the same length and reference strains, then replaced).
+    ///
+    /// # Errors
+    /// `tdcr.InvalidInput` for a robot no robot file can hold.
+    pub fn text(&self) -> PyResult<String> {
+        let error = match self.file.to_toml() {
+            Ok(text) => return Ok(text),
+            Err(e) => e,
+        };
+        let Some(rod) = &self.given_rod else {
+            return Err(to_py(error));
+        };
+        let mut stand_in = self.file.clone();
+        let old = &self.file.robot.rod;
+        // Any rod of geometry: its table is replaced below.
+        stand_in.robot.rod = tdcr::Rod::tube(old.length, 1e-3, 0.0, 1e9, 0.3);
+        stand_in.robot.rod.reference = old.reference.clone();
+        let text = stand_in.to_toml().map_err(|_| to_py(error))?;
+        let mut doc: Table =
+            toml::from_str(&text).map_err(|e| invalid(format!("cannot read back the robot file written: {e}")))?;
+        doc.insert("rod".into(), toml::Value::Table(rod.clone()));
+        toml::to_string(&doc).map_err(|e| invalid(format!("cannot write the robot file: {e}")))
+    }
 }
 
 /// A robot of the library with default solver settings, written as its robot file and
@@ -112,54 +95,58 @@ pub fn from_library(robot: tdcr::Robot) -> PyResult<PyRobot> {
     parse(&file.to_toml().map_err(to_py)?, "<tdcr.cases>")
 }
 
-/// Parameter names and their values as read from a dict of equal-length 1-D arrays.
-type Columns = Vec<(Parameter, Vec<f64>)>;
+/// The robots of a batch or sweep given as one robot and parameter columns (`{name:
+/// array}`, names as in `tdcr batch` headers, every array 1-D of one length): row k is the
+/// base robot with row k's values set. Rows are built when asked for, so a long batch does
+/// not hold all its robots at once.
+pub struct Rows {
+    base: tdcr::Robot,
+    columns: Vec<(Parameter, Vec<f64>)>,
+    count: usize,
+}
 
-/// Reads `{name: array}` (names as in `tdcr batch` headers); every array 1-D of one length.
-fn columns(parameters: &Bound<'_, PyDict>) -> PyResult<(Columns, usize)> {
-    let mut out = Vec::new();
-    let mut rows = None;
-    for (key, value) in parameters.iter() {
-        let name: String = key.extract().map_err(|_| invalid("parameter names must be strings"))?;
-        let parameter: Parameter = name.parse().map_err(invalid)?;
-        let array = numpy_column(&value, &name)?;
-        match rows {
-            Some(n) if n != array.len() => {
-                return Err(invalid(format!(
-                    "parameter `{name}` has {} values but another has {n}: give every parameter one value per row",
-                    array.len()
-                )));
+impl Rows {
+    /// Reads the columns and checks that the base robot has every parameter.
+    pub fn new(base: &PyRobot, parameters: &Bound<'_, PyDict>) -> PyResult<Self> {
+        let mut columns = Vec::new();
+        let mut count = None;
+        for (key, value) in parameters.iter() {
+            let name: String = key.extract().map_err(|_| invalid("parameter names must be strings"))?;
+            let parameter: Parameter = name.parse().map_err(invalid)?;
+            parameter.check(&base.file.robot).map_err(to_py)?;
+            let values = crate::convert::numbers(&value, &format!("parameter `{name}`"))?;
+            match count {
+                Some(n) if n != values.len() => {
+                    return Err(invalid(format!(
+                        "parameter `{name}` has {} values but another has {n}: give every parameter one value per row",
+                        values.len()
+                    )));
+                }
+                _ => count = Some(values.len()),
             }
-            _ => rows = Some(array.len()),
+            columns.push((parameter, values));
         }
-        out.push((parameter, array));
+        Ok(Rows {
+            base: base.file.robot.clone(),
+            columns,
+            count: count.unwrap_or(0),
+        })
     }
-    Ok((out, rows.unwrap_or(0)))
-}
 
-/// One robot per row of `parameters` (a dict of equal-length 1-D arrays, [`columns`]):
-/// `base` with that row's values set.
-pub fn robots_of(base: &PyRobot, parameters: &Bound<'_, PyDict>) -> PyResult<Vec<tdcr::Robot>> {
-    let (cols, n) = columns(parameters)?;
-    let mut out = Vec::with_capacity(n);
-    for row in 0..n {
-        let mut robot = base.file.robot.clone();
-        Parameter::apply_all(&mut robot, cols.iter().map(|(p, values)| (*p, values[row]))).map_err(to_py)?;
-        out.push(robot);
+    /// The number of rows.
+    pub fn len(&self) -> usize {
+        self.count
     }
-    Ok(out)
-}
 
-/// A 1-D sequence of numbers (numpy array, list, tuple) as f64 values.
-fn numpy_column(value: &Bound<'_, PyAny>, name: &str) -> PyResult<Vec<f64>> {
-    let np = value.py().import("numpy")?;
-    let array = np
-        .call_method1("asarray", (value, "float64"))
-        .map_err(|_| invalid(format!("parameter `{name}` must be a 1-D array of numbers")))?;
-    let view: PyReadonlyArray1<f64> = array
-        .extract()
-        .map_err(|_| invalid(format!("parameter `{name}` must be a 1-D array of numbers")))?;
-    Ok(view.as_array().to_vec())
+    /// The robot of row `row` (< `len()`).
+    ///
+    /// # Errors
+    /// As `Parameter::apply_all` (not for parameters `new` checked).
+    pub fn robot(&self, row: usize) -> tdcr::Result<tdcr::Robot> {
+        let mut robot = self.base.clone();
+        Parameter::apply_all(&mut robot, self.columns.iter().map(|(p, values)| (*p, values[row])))?;
+        Ok(robot)
+    }
 }
 
 #[pymethods]
@@ -187,7 +174,7 @@ impl PyRobot {
             ("solver", solver),
         ] {
             if let Some(v) = value.filter(|v| !v.is_none()) {
-                doc.insert(key.into(), to_toml(v, key)?);
+                doc.insert(key.into(), Walk::default().toml(v, key)?);
             }
         }
         parse_table(&doc, "<arguments>")
@@ -197,7 +184,7 @@ impl PyRobot {
     /// "loads": {...}, "base": {...}, "solver": {...}}`), e.g. `tomllib.load` of a file.
     #[staticmethod]
     fn from_dict(tables: &Bound<'_, PyDict>) -> PyResult<Self> {
-        parse_table(&table(tables, "")?, "<dict>")
+        parse_table(&Walk::default().table(tables, "")?, "<dict>")
     }
 
     /// A robot from robot-file text (TOML, docs/robot-file.md); `name` is the file name in
@@ -208,31 +195,34 @@ impl PyRobot {
         parse(text, name)
     }
 
-    /// A robot from a robot file. Raises `tdcr.FileError` for a bad file and
-    /// `tdcr.InvalidInput` when it cannot be read.
+    /// A robot from a robot file (a regular file of at most 16 MiB, read with the GIL
+    /// released). Raises `tdcr.FileError` for a bad file and `tdcr.InvalidInput` when it
+    /// cannot be read.
     #[staticmethod]
-    fn from_file(path: std::path::PathBuf) -> PyResult<Self> {
+    fn from_file(py: Python<'_>, path: std::path::PathBuf) -> PyResult<Self> {
         let shown = path.display().to_string();
-        let text =
-            std::fs::read_to_string(&path).map_err(|e| invalid(format!("cannot read robot file {shown}: {e}")))?;
+        let text = py
+            .detach(|| read_robot_file(&path))
+            .map_err(|e| invalid(format!("cannot read robot file {shown}: {e}")))?;
         parse(&text, &shown)
     }
 
     /// The robot as robot-file text (TOML) that `Robot.from_toml` reads back to the same
-    /// robot, bitwise. Raises `tdcr.InvalidInput` for a rod given by `shear_modulus`.
+    /// robot, bitwise (a rod given by `shear_modulus` as it was given).
     fn to_toml(&self) -> PyResult<String> {
-        self.file.to_toml().map_err(to_py)
+        self.text()
     }
 
     /// Pickling goes through the robot file.
     fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<(Bound<'py, PyAny>, (String,))> {
-        let text = slf.get().file.to_toml().map_err(to_py)?;
+        let text = slf.get().text()?;
         Ok((slf.get_type().getattr("from_toml")?, (text,)))
     }
 
     /// A copy with the tensions (N) of all tendons, in file order; every tendon becomes
     /// tension-controlled (a displacement-controlled one drops its `displacement`).
-    fn with_tensions(&self, tensions: Vec<f64>) -> PyResult<Self> {
+    fn with_tensions(&self, tensions: &Bound<'_, PyAny>) -> PyResult<Self> {
+        let tensions = crate::convert::numbers(tensions, "with_tensions: `tensions`")?;
         let count = self.file.robot.tendons.len();
         if tensions.len() != count {
             return Err(invalid(format!(
@@ -254,7 +244,14 @@ impl PyRobot {
     /// tension-controlled at its current tension (0 for one that was displacement-controlled).
     /// E.g. `robot.with_displacements([s.tendons[0]["displacement"], None, None])`. Raises
     /// `tdcr.InvalidInput` for a wrong count or a pull-in the model rejects.
-    fn with_displacements(&self, displacements: Vec<Option<f64>>) -> PyResult<Self> {
+    fn with_displacements(&self, displacements: &Bound<'_, PyAny>) -> PyResult<Self> {
+        let items = displacements
+            .try_iter()
+            .map_err(|_| invalid("with_displacements: give a sequence of pull-ins (m) and None, one per tendon"))?;
+        let displacements: Vec<Option<f64>> = items
+            .enumerate()
+            .map(|(i, q)| crate::convert::optional_number(Some(&q?), &format!("with_displacements: item {i}")))
+            .collect::<PyResult<_>>()?;
         let count = self.file.robot.tendons.len();
         if displacements.len() != count {
             return Err(invalid(format!(
@@ -288,9 +285,7 @@ impl PyRobot {
         for (key, value) in parameters.iter() {
             let name: String = key.extract().map_err(|_| invalid("parameter names must be strings"))?;
             let parameter: Parameter = name.parse().map_err(invalid)?;
-            let value: f64 = value
-                .extract()
-                .map_err(|_| invalid(format!("parameter `{name}` must be a number")))?;
+            let value = crate::convert::number(&value, &format!("parameter `{name}`"))?;
             set.push((parameter, value));
         }
         Parameter::apply_all(&mut out.file.robot, set).map_err(to_py)?;
@@ -388,6 +383,38 @@ impl PyRobot {
             self.file.solver.method
         )
     }
+}
+
+/// The largest robot file read: far above any robot's (a few kilobytes), far below what
+/// would exhaust memory (a device such as /dev/zero never ends).
+const MAX_FILE_BYTES: u64 = 16 << 20;
+
+/// The text of the robot file at `path`: only a regular file (a FIFO would block until a
+/// writer came, a device might never end), at most [`MAX_FILE_BYTES`].
+fn read_robot_file(path: &std::path::Path) -> Result<String, String> {
+    use std::io::Read;
+    let meta = std::fs::metadata(path).map_err(|e| e.to_string())?;
+    if !meta.is_file() {
+        return Err("it is not a regular file (a directory, FIFO, socket or device)".into());
+    }
+    if meta.len() > MAX_FILE_BYTES {
+        return Err(format!(
+            "it has {} bytes, more than the {MAX_FILE_BYTES} a robot file may have",
+            meta.len()
+        ));
+    }
+    let file = std::fs::File::open(path).map_err(|e| e.to_string())?;
+    let mut text = String::new();
+    // The file may grow after the check: read one byte past the limit at most.
+    file.take(MAX_FILE_BYTES + 1)
+        .read_to_string(&mut text)
+        .map_err(|e| e.to_string())?;
+    if text.len() as u64 > MAX_FILE_BYTES {
+        return Err(format!(
+            "it has more than the {MAX_FILE_BYTES} bytes a robot file may have"
+        ));
+    }
+    Ok(text)
 }
 
 /// Parses a TOML table built from Python values.

@@ -51,8 +51,9 @@ pub struct PyState {
     u: Py<PyArray1<f64>>,
 }
 
-#[pymethods]
-impl PyState {
+crate::pickle::pickled_fields! {
+    PyState { s, p, R, v, u }
+
     fn __repr__(&self) -> String {
         format!("State(s={} m)", self.s)
     }
@@ -163,7 +164,8 @@ impl PySolution {
     /// The state (s, p, R, v, u) at arc length `s` (m, clamped to [0, L]) from the scheme's
     /// cubic Hermite interpolant on SO(3); at a jump the right limit (`left=True`: the left).
     #[pyo3(signature = (s, left=false))]
-    fn at(&self, py: Python<'_>, s: f64, left: bool) -> PyResult<PyState> {
+    fn at(&self, py: Python<'_>, s: &Bound<'_, PyAny>, left: bool) -> PyResult<PyState> {
+        let s = crate::convert::number(s, "Solution.at: `s`")?;
         if !s.is_finite() {
             return Err(invalid(format!("Solution.at: s = {s} m is not finite")));
         }
@@ -262,6 +264,20 @@ fn stability_parts(stability: &Stability) -> (Option<usize>, Option<f64>, Option
 
 #[pymethods]
 impl PySolveReport {
+    /// Pickling and copying go through the report's fields (bitwise).
+    fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<(Bound<'py, PyAny>, (Bound<'py, PyDict>,))> {
+        Ok((
+            slf.get_type().getattr("_from_state")?,
+            (crate::pickle::report_state(slf.py(), &slf.get().report)?,),
+        ))
+    }
+
+    /// The report of a state `__reduce__` made.
+    #[staticmethod]
+    fn _from_state(state: &Bound<'_, PyDict>) -> PyResult<Self> {
+        crate::pickle::report_from(state).map(|report| PySolveReport { report })
+    }
+
     /// "collocation" or "shooting".
     #[getter]
     fn method(&self) -> String {

@@ -1,5 +1,6 @@
 """The same batch on a Dask cluster: a LocalCluster of two worker processes gives the local
-`solve_parameters` result bitwise."""
+`solve_parameters` result bitwise, and what a task returns or raises comes back as the
+local call's object or exception."""
 
 import numpy as np
 import pytest
@@ -9,18 +10,42 @@ import tdcr
 import tdcr.distributed
 
 
-def test_dask_cluster_equals_local_batch():
+@pytest.fixture(scope="module")
+def client():
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as cluster:
+        with distributed.Client(cluster) as client:
+            yield client
+
+
+def test_dask_cluster_equals_local_batch(client):
     robot = tdcr.cases.prototype()
     tensions = np.random.default_rng(3).uniform(0.0, 3.0, size=(60, 4))
     parameters = {f"tension.{i + 1}": tensions[:, i] for i in range(4)}
     local = tdcr.solve_parameters(robot, parameters)
-    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as cluster:
-        with distributed.Client(cluster) as client:
-            remote = tdcr.distributed.solve_parameters(client, robot, parameters, chunk_size=16, retries=1)
+    remote = tdcr.distributed.solve_parameters(client, robot, parameters, chunk_size=16, retries=1)
     assert np.array_equal(remote["tip_position"], local["tip_position"])
     assert np.array_equal(remote["converged"], local["converged"]) and remote["error"] == local["error"]
     assert np.array_equal(remote["iterations"], local["iterations"])
     assert remote["stability"] == local["stability"] and len(local["stability"]) == 60
+
+
+def test_results_and_exceptions_travel_through_dask(client):
+    # Issue 30: a NotConverged raised in a task reached the caller as a bare Exception
+    # (its report did not pickle), which `except tdcr.NotConverged` never caught.
+    robot = tdcr.cases.case_h()
+    solution = tdcr.solve(robot)
+    with pytest.raises(tdcr.NotConverged) as e:
+        client.submit(tdcr.solve, robot, max_iterations=1, continuation=False, pure=False).result()
+    assert e.value.report.termination == "max_iterations" and e.value.report.iterations == 1
+    sens = client.submit(tdcr.tip_sensitivities, robot, solution).result()
+    assert np.array_equal(sens.compliance, tdcr.tip_sensitivities(robot, solution).compliance)
+    shear = tdcr.Robot(
+        rod={"length": 0.2, "outer_radius": 0.001, "youngs_modulus": 2e11, "shear_modulus": 8e10},
+        tendons=[{"routing": {"kind": "straight", "x": 0.001, "y": 0.0}, "tension": 1.0}],
+    )
+    rows = {"tension.1": [0.5, 1.0]}
+    remote = tdcr.distributed.solve_parameters(client, shear, rows, chunk_size=1)
+    assert np.array_equal(remote["tip_position"], tdcr.solve_parameters(shear, rows)["tip_position"])
 
 
 def test_chunks_cover_the_rows_in_order():

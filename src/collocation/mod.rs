@@ -60,7 +60,7 @@ use pipeline::{Level, record_estimate, segment_ends, solve_impl};
 pub use solver::Solver;
 use solver::{Cache, Cached};
 use start::{cold_start, initial_mesh, resolves};
-pub use trace::{Trace, TracePoint, trace};
+pub use trace::{Trace, TracePoint, trace, trace_until};
 
 /// Solves `robot` by collocation from the rigid-equilibrium initial guess.
 ///

@@ -98,6 +98,8 @@ pub(super) enum Start<'x> {
         to: f64,
         /// The longest step (normalized arclength), for a resolved picture of the branch.
         max_step: f64,
+        /// Asked before every step whether to give up (a front end's Ctrl-C).
+        stop: &'x dyn Fn() -> bool,
     },
 }
 
@@ -131,6 +133,7 @@ pub(super) fn follow(
 ) -> std::result::Result<End, (String, usize)> {
     let robot = system.model.robot;
     let mut max_step = MAX_STEP;
+    let mut stop: &dyn Fn() -> bool = &|| false;
     let (x, homotopy) = match start {
         Start::Rest => {
             system.set_factors(0.0, 0.0);
@@ -155,8 +158,10 @@ pub(super) fn follow(
             from,
             to,
             max_step: m,
+            stop: asked,
         } => {
             max_step = m;
+            stop = asked;
             let homotopy = Homotopy::Parameter { parameter, from, to };
             homotopy.set(system, 0.0);
             (x.to_vec(), homotopy)
@@ -197,6 +202,9 @@ pub(super) fn follow(
     let mut trial: Vec<State> = Vec::with_capacity(system.mesh.nodes.len());
     let mut r = vec![0.0; n];
     for _ in 0..MAX_STEPS {
+        if stop() {
+            return Err(("stopped on request before the end of the range".into(), 0));
+        }
         report.load_steps += 1;
         // The last step lands on lambda = 1 by Newton at fixed lambda.
         if point.tl > 0.0 && point.lambda + h * point.tl >= 1.0 {

@@ -84,6 +84,23 @@ pub struct Trace {
 /// failing ([`solve`]'s errors). A branch that cannot be followed to the end is not an
 /// error: [`Trace::stopped`] says why.
 pub fn trace(robot: &Robot, parameter: Parameter, from: f64, to: f64, options: &Options) -> Result<Trace> {
+    trace_until(robot, parameter, from, to, options, &|| false)
+}
+
+/// [`trace`], asking `stop` before every continuation step whether to give up (a front
+/// end's Ctrl-C): the points up to there are kept and [`Trace::stopped`] says "stopped on
+/// request".
+///
+/// # Errors
+/// As [`trace`].
+pub fn trace_until(
+    robot: &Robot,
+    parameter: Parameter,
+    from: f64,
+    to: f64,
+    options: &Options,
+    stop: &dyn Fn() -> bool,
+) -> Result<Trace> {
     let clock = Instant::now();
     robot.validate()?;
     options.validate()?;
@@ -149,6 +166,7 @@ pub fn trace(robot: &Robot, parameter: Parameter, from: f64, to: f64, options: &
         from,
         to,
         max_step: TRACE_STEP,
+        stop,
     };
     let end = path::follow(
         &mut system,

@@ -12,6 +12,8 @@ pub mod calibration;
 pub mod inverse;
 pub mod lm;
 
-pub use calibration::{Calibration, CalibrationOptions, Fit, Measurement, Parameters, calibrate, predict};
+pub use calibration::{
+    Calibration, CalibrationOptions, Fit, Measurement, Parameters, calibrate, calibrate_until, predict,
+};
 pub use inverse::{Adjusted, Bound, InverseOptions, InverseSolution, Target, solve_displacements, solve_tensions};
 pub use lm::{FitIteration, FitTermination};

@@ -44,7 +44,16 @@ impl Mesh {
         let mut points = Vec::new();
         let mut start = 0.0;
         for end in robot.breakpoints().into_iter().chain(std::iter::once(length)) {
-            let count = ((intervals as f64) * (end - start) / length).round().max(1.0) as usize;
+            // The share of the intervals between two breakpoints; on a rod so long that
+            // `intervals * length` overflows, the same share computed the other way round
+            // (which would change the last bit of ordinary meshes, so only then).
+            let share = (intervals as f64) * (end - start) / length;
+            let share = if share.is_finite() {
+                share
+            } else {
+                (intervals as f64) * ((end - start) / length)
+            };
+            let count = share.round().max(1.0) as usize;
             points.extend((0..count).map(|k| start + (end - start) * k as f64 / count as f64));
             start = end;
         }

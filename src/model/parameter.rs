@@ -81,8 +81,9 @@ impl FromStr for Parameter {
         let (head, tail) = name.split_once('.').ok_or_else(unknown)?;
         let axis = || AXES.iter().position(|a| *a == tail).ok_or_else(unknown);
         match head {
+            // Canonical numbers only (`tension.01` and `tension.+1` are not names).
             "tension" => match tail.parse::<usize>() {
-                Ok(i) if i >= 1 => Ok(Parameter::Tension(i - 1)),
+                Ok(i) if i >= 1 && tail == i.to_string() => Ok(Parameter::Tension(i - 1)),
                 _ => Err(format!(
                     "parameter `{name}`: the tendon number must be a whole number from 1 (file order)"
                 )),
@@ -320,7 +321,15 @@ mod tests {
         ] {
             assert_eq!(name.parse::<Parameter>().unwrap().to_string(), name);
         }
-        for bad in ["tension.0", "tension.x", "tip_force.w", "mass", "tip_force"] {
+        for bad in [
+            "tension.0",
+            "tension.x",
+            "tension.01",
+            "tension.+1",
+            "tip_force.w",
+            "mass",
+            "tip_force",
+        ] {
             let e = bad.parse::<Parameter>().unwrap_err();
             assert!(e.contains(bad), "{e}");
         }

@@ -95,7 +95,7 @@ class Robot:
         """A robot from robot-file text; `name` is the file name in messages."""
     @staticmethod
     def from_file(path: Union[str, PathLike[str]]) -> Robot:
-        """A robot from a robot file."""
+        """A robot from a robot file (a regular file of at most 16 MiB)."""
     def to_toml(self) -> str:
         """The robot as robot-file text that reads back to the same robot, bitwise."""
     def with_tensions(self, tensions: Sequence[float]) -> Robot:
@@ -349,7 +349,9 @@ def solve_batch(
     continuation: Optional[bool] = None,
     equilibrium: Optional[Literal["load_path", "nearest"]] = None,
 ) -> List[Any]:
-    """Solves many robots on all cores (GIL released), results in input order."""
+    """Solves many robots on all cores (GIL released), results in input order; stops at the
+    first failure with errors="raise"; Ctrl-C raises KeyboardInterrupt with `completed` and
+    `partial` (the finished rows)."""
 
 def solve_parameters(
     robot: Robot,
@@ -363,7 +365,8 @@ def solve_parameters(
     continuation: Optional[bool] = None,
     equilibrium: Optional[Literal["load_path", "nearest"]] = None,
 ) -> Dict[str, Any]:
-    """`solve_batch` of parameter rows reduced to arrays."""
+    """`solve_batch` of parameter rows reduced to arrays (constant memory per row); Ctrl-C
+    raises KeyboardInterrupt with `completed` and `partial` (this dict for the finished rows)."""
 
 @final
 class Sweep:
@@ -398,7 +401,8 @@ def sweep(
     continuation: Optional[bool] = None,
     equilibrium: Optional[Literal["load_path", "nearest"]] = None,
 ) -> Sweep:
-    """Solves parameter rows in order, each warm-started from the last, with the events."""
+    """Solves parameter rows in order, each warm-started from the last, with the events;
+    Ctrl-C raises KeyboardInterrupt with `completed` and `partial` (the Sweep so far)."""
 
 @final
 class Trace:
@@ -497,7 +501,8 @@ def calibrate(
     intervals: Optional[int] = None,
     residual_tolerance: Optional[float] = None,
 ) -> Calibration:
-    """Fits E and the base Euler angles (by default) to measured tips."""
+    """Fits E and the base Euler angles (by default) to measured tips; Ctrl-C raises
+    KeyboardInterrupt (no result)."""
 
 def case_s() -> Robot:
     """Reference case S."""

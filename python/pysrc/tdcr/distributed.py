@@ -27,17 +27,38 @@ __all__ = ["chunks", "solve_chunk", "solve_parameters"]
 def chunks(parameters: Mapping[str, Any], chunk_size: int) -> List[Dict[str, np.ndarray]]:
     """Cuts a dict of equal-length 1-D arrays into consecutive chunks of at most
     `chunk_size` rows (the last may be shorter), in row order."""
-    if chunk_size < 1:
-        raise _native.InvalidInput(f"chunk_size is {chunk_size}; give a whole number >= 1")
-    columns = {name: np.asarray(values, dtype=np.float64) for name, values in parameters.items()}
-    lengths = {len(v) for v in columns.values()}
-    if len(lengths) > 1:
-        raise _native.InvalidInput(f"parameters have different lengths {sorted(lengths)}; give one value per row")
-    rows = lengths.pop() if lengths else 0
+    if isinstance(chunk_size, bool) or not isinstance(chunk_size, (int, np.integer)) or chunk_size < 1:
+        raise _native.InvalidInput(f"chunk_size is {chunk_size!r}; give a whole number >= 1")
+    columns = {name: _column(name, values) for name, values in parameters.items()}
+    rows = None
+    for name, values in columns.items():
+        if rows is not None and len(values) != rows:
+            raise _native.InvalidInput(
+                f"parameter `{name}` has {len(values)} values but another has {rows}: give every parameter one value per row"
+            )
+        rows = len(values)
+    rows = rows or 0
     return [
         {name: values[start : start + chunk_size] for name, values in columns.items()}
         for start in range(0, rows, chunk_size)
     ]
+
+
+def _column(name: Any, values: Any) -> np.ndarray:
+    """A parameter's values as a 1-D float64 array, refused as `tdcr.solve_parameters`
+    refuses them (`tdcr.InvalidInput` with the same message)."""
+    if not isinstance(name, str):
+        raise _native.InvalidInput("parameter names must be strings")
+    try:
+        raw = np.asarray(values)
+        if raw.dtype.kind == "b":
+            raise _native.InvalidInput(f"parameter `{name}` holds booleans; give numbers")
+        column = np.asarray(raw, dtype=np.float64)
+    except (TypeError, ValueError, RecursionError):
+        column = None
+    if column is None or column.ndim != 1:
+        raise _native.InvalidInput(f"parameter `{name}` must be a 1-D sequence of numbers")
+    return column
 
 
 def solve_chunk(robot_toml: str, parameters: Dict[str, np.ndarray], options: Dict[str, Any]) -> Dict[str, Any]:
@@ -62,6 +83,8 @@ def solve_parameters(
     local call."""
     text = robot.to_toml()
     parts = chunks(parameters, chunk_size)
+    # Names and options checked here, as the local call checks them, before any task runs.
+    _native.solve_parameters(robot, {name: np.zeros(0) for name in parameters}, **options)
     futures = client.map(solve_chunk, [text] * len(parts), parts, [options] * len(parts), pure=False, retries=retries)
     results = client.gather(futures)
     if not results:

@@ -173,6 +173,17 @@ impl<'a> Sensitivity<'a> {
     /// breakdown at the solution's states.
     pub fn new(robot: &'a Robot, solution: &Solution) -> Result<Self> {
         robot.validate()?;
+        if solution.tendons.len() != robot.tendons.len() {
+            return Err(invalid(
+                "solution",
+                format!(
+                    "has {} tendon state(s), but the robot has {} tendon(s)",
+                    solution.tendons.len(),
+                    robot.tendons.len()
+                ),
+                "pass a solution of this robot (same tendons in file order)",
+            ));
+        }
         let s: Vec<f64> = solution.nodes.iter().map(|n| n.s).collect();
         let mesh = Mesh::from_points(robot, &s)?;
         let same = mesh.nodes.len() == s.len() && mesh.nodes.iter().zip(&s).all(|(m, s)| m.s == *s);

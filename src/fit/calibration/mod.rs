@@ -136,10 +136,21 @@ pub fn predict(
         .iter()
         .map(|_| ExperimentSolver::new(&options.collocation))
         .collect();
-    Ok(solve_all(&applied, experiments, &mut solvers)?
+    // Never stopped: every experiment is solved.
+    Ok(solve_all(&applied, experiments, &mut solvers, &|| false)?
+        .unwrap_or_default()
         .iter()
         .map(Solution::tip_position)
         .collect())
+}
+
+/// Asked between chunks of a calibration's solves whether to stop ([`calibrate_until`]).
+pub type Stop<'a> = &'a dyn Fn() -> bool;
+
+/// The experiments solved (or differentiated) in parallel between two calls of a [`Stop`]:
+/// 16 per thread keeps every thread busy and a chunk short (16 solves, a few ms each).
+fn chunk_size() -> usize {
+    16 * rayon::current_num_threads().max(1)
 }
 
 /// Per-experiment solver state: a collocation solver (keeping its workspace) and the last
@@ -162,19 +173,34 @@ impl ExperimentSolver {
 }
 
 /// Solves every experiment for the robot `applied` (parameters already set), warm-started
-/// from each experiment's accepted solution; `solvers` are not updated.
-fn solve_all(applied: &Robot, experiments: &[Measurement], solvers: &mut [ExperimentSolver]) -> Result<Vec<Solution>> {
-    experiments
-        .par_iter()
-        .zip(solvers.par_iter_mut())
-        .map(|(e, es)| {
-            let robot = e.load(applied);
-            match &es.solution {
-                Some(warm) => es.solver.solve_from(&robot, warm),
-                None => es.solver.solve(&robot),
-            }
-        })
-        .collect()
+/// from each experiment's accepted solution; `solvers` are not updated. `None` when `stop`
+/// said so between two chunks.
+fn solve_all(
+    applied: &Robot,
+    experiments: &[Measurement],
+    solvers: &mut [ExperimentSolver],
+    stop: Stop<'_>,
+) -> Result<Option<Vec<Solution>>> {
+    let mut out = Vec::with_capacity(experiments.len());
+    let size = chunk_size();
+    for (chunk, chunk_solvers) in experiments.chunks(size).zip(solvers.chunks_mut(size)) {
+        if stop() {
+            return Ok(None);
+        }
+        let solved: Vec<Solution> = chunk
+            .par_iter()
+            .zip(chunk_solvers.par_iter_mut())
+            .map(|(e, es)| {
+                let robot = e.load(applied);
+                match &es.solution {
+                    Some(warm) => es.solver.solve_from(&robot, warm),
+                    None => es.solver.solve(&robot),
+                }
+            })
+            .collect::<Result<_>>()?;
+        out.extend(solved);
+    }
+    Ok(Some(out))
 }
 
 /// The 3N x n Jacobian of the tips in the scaled unknowns at the solutions of `applied`.
@@ -185,43 +211,52 @@ fn jacobian(
     solutions: &[Solution],
     unknowns: &[Unknown],
     start: &Parameters,
-) -> Result<DMatrix<f64>> {
+    stop: Stop<'_>,
+) -> Result<Option<DMatrix<f64>>> {
     let length = applied.length();
     let W = euler_rates(&params.euler);
-    let blocks: Vec<DMatrix<f64>> = experiments
-        .par_iter()
-        .zip(solutions.par_iter())
-        .map(|(e, solution)| -> Result<DMatrix<f64>> {
-            let robot = e.load(applied);
-            let sens = tip_sensitivities(&robot, solution)?;
-            let mut block = DMatrix::zeros(3, unknowns.len());
-            let rotation = sens.base_rotation.fixed_rows::<3>(0) * W;
-            for (j, u) in unknowns.iter().enumerate() {
-                let column: Vector3<f64> = match u {
-                    Unknown::YoungsModulus => match &sens.moduli {
-                        Some(m) => m.youngs_modulus.fixed_rows::<3>(0).into_owned(),
-                        None => {
-                            return Err(invalid(
-                                "robot.rod",
-                                "has no modulus sensitivity (its section is not the one its geometry gives)",
-                                "build the rod from geometry, or do not fit E",
-                            ));
-                        }
-                    },
-                    Unknown::Euler(i) => rotation.column(*i).into_owned(),
-                    Unknown::BasePosition(i) => sens.base_position.fixed_rows::<3>(0).column(*i).into_owned(),
-                    Unknown::OffsetScale => offset_column(&robot, solution, params.offset_scale)?,
-                };
-                block.set_column(j, &(column * u.scale(start, length)));
-            }
-            Ok(block)
-        })
-        .collect::<Result<_>>()?;
+    let mut blocks: Vec<DMatrix<f64>> = Vec::with_capacity(experiments.len());
+    let size = chunk_size();
+    for (chunk, chunk_solutions) in experiments.chunks(size).zip(solutions.chunks(size)) {
+        if stop() {
+            return Ok(None);
+        }
+        let chunk_blocks: Vec<DMatrix<f64>> = chunk
+            .par_iter()
+            .zip(chunk_solutions.par_iter())
+            .map(|(e, solution)| -> Result<DMatrix<f64>> {
+                let robot = e.load(applied);
+                let sens = tip_sensitivities(&robot, solution)?;
+                let mut block = DMatrix::zeros(3, unknowns.len());
+                let rotation = sens.base_rotation.fixed_rows::<3>(0) * W;
+                for (j, u) in unknowns.iter().enumerate() {
+                    let column: Vector3<f64> = match u {
+                        Unknown::YoungsModulus => match &sens.moduli {
+                            Some(m) => m.youngs_modulus.fixed_rows::<3>(0).into_owned(),
+                            None => {
+                                return Err(invalid(
+                                    "robot.rod",
+                                    "has no modulus sensitivity (its section is not the one its geometry gives)",
+                                    "build the rod from geometry, or do not fit E",
+                                ));
+                            }
+                        },
+                        Unknown::Euler(i) => rotation.column(*i).into_owned(),
+                        Unknown::BasePosition(i) => sens.base_position.fixed_rows::<3>(0).column(*i).into_owned(),
+                        Unknown::OffsetScale => offset_column(&robot, solution, params.offset_scale)?,
+                    };
+                    block.set_column(j, &(column * u.scale(start, length)));
+                }
+                Ok(block)
+            })
+            .collect::<Result<_>>()?;
+        blocks.extend(chunk_blocks);
+    }
     let mut J = DMatrix::zeros(3 * experiments.len(), unknowns.len());
     for (k, b) in blocks.iter().enumerate() {
         J.view_mut((3 * k, 0), (3, unknowns.len())).copy_from(b);
     }
-    Ok(J)
+    Ok(Some(J))
 }
 
 /// d tip / d c for the offset scale c: the routings of `robot` are c times the original, so
@@ -298,6 +333,22 @@ fn per_experiment(r: &DVector<f64>) -> Vec<Vector3<f64>> {
 /// assert!(fit.errors.max < 1e-8);
 /// ```
 pub fn calibrate(robot: &Robot, experiments: &[Measurement], options: &CalibrationOptions) -> Result<Calibration> {
+    // A stop that never fires: the fit always runs to its end.
+    calibrate_until(robot, experiments, options, &|| false).map(|fit| fit.expect("never stopped"))
+}
+
+/// [`calibrate`], asking `stop` between chunks of its solves and sensitivities (a few
+/// milliseconds of work each) whether to give up: `None` when it said so (a front end's
+/// Ctrl-C), the calibration otherwise.
+///
+/// # Errors
+/// As [`calibrate`].
+pub fn calibrate_until(
+    robot: &Robot,
+    experiments: &[Measurement],
+    options: &CalibrationOptions,
+    stop: Stop<'_>,
+) -> Result<Option<Calibration>> {
     let begin = Instant::now();
     let start = options.start.unwrap_or_else(|| Parameters::of(robot));
     validate(robot, experiments, options, &start)?;
@@ -326,14 +377,18 @@ pub fn calibrate(robot: &Robot, experiments: &[Measurement], options: &Calibrati
     let mut params = start;
     let mut applied = params.apply(robot);
     let t = Instant::now();
-    let solutions = solve_all(&applied, experiments, &mut solvers)?;
+    let Some(solutions) = solve_all(&applied, experiments, &mut solvers, stop)? else {
+        return Ok(None);
+    };
     timings.solves += t.elapsed();
     solves += experiments.len();
     let mut r = residual_vector(&solutions, experiments);
     let start_residuals = per_experiment(&r);
     let mut cost = r.norm_squared();
     let t = Instant::now();
-    let mut J = jacobian(&applied, &params, experiments, &solutions, &unknowns, &start)?;
+    let Some(mut J) = jacobian(&applied, &params, experiments, &solutions, &unknowns, &start, stop)? else {
+        return Ok(None);
+    };
     timings.sensitivities += t.elapsed();
     sensitivity_evaluations += experiments.len();
     for (es, s) in solvers.iter_mut().zip(solutions) {
@@ -389,7 +444,11 @@ pub fn calibrate(robot: &Robot, experiments: &[Measurement], options: &Calibrati
         let trial = to_params(&trial_z);
         let trial_robot = trial.apply(robot);
         let t = Instant::now();
-        let solved = solve_all(&trial_robot, experiments, &mut solvers);
+        let solved = match solve_all(&trial_robot, experiments, &mut solvers, stop) {
+            Ok(None) => return Ok(None),
+            Ok(Some(solutions)) => Ok(solutions),
+            Err(e) => Err(e),
+        };
         timings.solves += t.elapsed();
         solves += experiments.len();
         // Decrease of S = |r|^2 predicted by the linear model |r + J delta|^2:
@@ -415,7 +474,10 @@ pub fn calibrate(robot: &Robot, experiments: &[Measurement], options: &Calibrati
             r = r_new;
             cost = c;
             let t = Instant::now();
-            J = jacobian(&applied, &params, experiments, &solutions, &unknowns, &start)?;
+            let Some(next) = jacobian(&applied, &params, experiments, &solutions, &unknowns, &start, stop)? else {
+                return Ok(None);
+            };
+            J = next;
             timings.sensitivities += t.elapsed();
             sensitivity_evaluations += experiments.len();
             for (es, s) in solvers.iter_mut().zip(solutions) {
@@ -464,7 +526,7 @@ pub fn calibrate(robot: &Robot, experiments: &[Measurement], options: &Calibrati
     let errors: Vec<f64> = residuals.iter().map(|r| r.norm()).collect();
     let start_errors: Vec<f64> = start_residuals.iter().map(|r| r.norm()).collect();
     timings.total = begin.elapsed();
-    Ok(Calibration {
+    Ok(Some(Calibration {
         fit: options.fit,
         start,
         fitted,
@@ -482,5 +544,5 @@ pub fn calibrate(robot: &Robot, experiments: &[Measurement], options: &Calibrati
         solves,
         sensitivity_evaluations,
         timings,
-    })
+    }))
 }

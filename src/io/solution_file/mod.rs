@@ -43,7 +43,7 @@ fn bad(problem: String) -> crate::Error {
 /// # Errors
 /// [`crate::Error::InvalidInput`] on `solution` for text that is not JSON, not this format
 /// (an older one included), lacks a key, or is inconsistent: fewer than two nodes, an arc
-/// length that is not finite, negative, decreasing or not 0 at the first node, a non-finite
+/// length that is not finite, negative, decreasing, not 0 at the first node or 0 at the last, a non-finite
 /// node state or tendon path, a node rotation that is not a rotation, a tendon without a path
 /// or with more path points than nodes, a negative or non-finite tension, or report fields
 /// that disagree.
@@ -165,6 +165,13 @@ impl SolutionFile {
                 n: finite(&x.n, &what("n"))?,
                 m: finite(&x.m, &what("m"))?,
             });
+        }
+        if let Some(last) = nodes.last().filter(|n| n.s <= 0.0) {
+            return Err(bad(format!(
+                "nodes[{}].s = {} m: the last node is the tip, at the rod's length > 0",
+                nodes.len() - 1,
+                Readable(last.s)
+            )));
         }
         let mut tendon_paths = Vec::with_capacity(self.tendons.len());
         let mut tendons = Vec::with_capacity(self.tendons.len());
@@ -376,7 +383,15 @@ mod tests {
             edit(&mut v);
             parse_solution(&v.to_string()).unwrap_err().to_string()
         };
-        let cases: [(Edit, &str); 12] = [
+        let cases: [(Edit, &str); 13] = [
+            (
+                &|v| {
+                    for node in v["nodes"].as_array_mut().unwrap() {
+                        node["s"] = 0.0.into();
+                    }
+                },
+                "the last node is the tip",
+            ),
             (&|v| v["nodes"][3]["s"] = Value::Null, "nodes[3].s = NaN m"),
             (&|v| v["nodes"][0]["s"] = (-1.0).into(), "nodes[0].s = -1 m"),
             (&|v| v["nodes"][5]["s"] = 0.0.into(), "never decrease"),
