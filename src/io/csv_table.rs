@@ -22,11 +22,17 @@ impl CsvTable {
     {
         // flexible: a row may have other than the header's number of fields (the writer
         // would otherwise refuse it, and the row would be lost).
-        let mut table = CsvTable {
-            writer: csv::WriterBuilder::new().flexible(true).from_writer(Vec::new()),
-        };
+        let mut table = CsvTable::rows_only();
         table.row(header);
         table
+    }
+
+    /// A table without a header: more rows of a table whose header was written before (a
+    /// file written as it is computed).
+    pub fn rows_only() -> CsvTable {
+        CsvTable {
+            writer: csv::WriterBuilder::new().flexible(true).from_writer(Vec::new()),
+        }
     }
 
     /// Appends one row of fields (numbers already written by [`number`]).

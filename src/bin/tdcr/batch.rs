@@ -4,6 +4,7 @@
 
 use clap::Args;
 use rayon::prelude::*;
+use std::io::Write as _;
 use std::sync::Mutex;
 use tdcr::io::csv_table::CsvTable;
 use tdcr::io::number;
@@ -55,9 +56,11 @@ fn parse_shard(text: &str) -> Result<(usize, usize), String> {
     if k < n { Ok((k, n)) } else { Err(bad()) }
 }
 
-/// The result of one row.
+/// The result of one row: what its CSV row holds (the solution itself is not kept, so
+/// memory does not grow with the table).
 struct Outcome {
-    solution: Option<Solution>,
+    /// Tip position (m), if it solved.
+    tip: Option<tdcr::nalgebra::Vector3<f64>>,
     /// Newton iterations, also of a failed solve when its report says.
     iterations: Option<usize>,
     error: Option<String>,
@@ -65,11 +68,7 @@ struct Outcome {
 
 /// Solves one block of rows in order, each warm-started from the last solution (when that
 /// is a better start than the cold guess).
-fn solve_block(
-    robots: &[Robot],
-    settings: &tdcr::io::SolverSettings,
-    progress: &Mutex<(Progress, usize, usize)>,
-) -> Vec<Outcome> {
+fn solve_block(robots: &[Robot], settings: &tdcr::io::SolverSettings, progress: &Mutex<Counted>) -> Vec<Outcome> {
     let mut last: Option<Solution> = None;
     let mut out = Vec::with_capacity(robots.len());
     for robot in robots {
@@ -80,15 +79,16 @@ fn solve_block(
         };
         let outcome = match result {
             Ok(solution) => {
-                last = Some(solution.clone());
-                Outcome {
+                let outcome = Outcome {
+                    tip: Some(solution.tip_position()),
                     iterations: Some(solution.report.iterations),
-                    solution: Some(solution),
                     error: None,
-                }
+                };
+                last = Some(solution);
+                outcome
             }
             Err(e) => Outcome {
-                solution: None,
+                tip: None,
                 iterations: match &e {
                     Error::NotConverged { report, .. } => Some(report.iterations),
                     _ => None,
@@ -98,16 +98,57 @@ fn solve_block(
         };
         out.push(outcome);
         if let Ok(mut p) = progress.lock() {
-            p.1 += 1;
-            let (done, total) = (p.1, p.2);
-            p.0.update(done, total);
+            p.done += 1;
+            let (done, total) = (p.done, p.total);
+            p.bar.update(done, total);
         }
     }
     out
 }
 
+/// The progress bar and the rows done of the total.
+struct Counted {
+    bar: Progress,
+    done: usize,
+    total: usize,
+}
+
+/// Rows solved between two writes of results, per thread: 4 blocks, so every core stays
+/// busy while the rows in memory stay a few hundred whatever the table's length.
+const WAVE_BLOCKS_PER_THREAD: usize = 4;
+
+/// Where the result rows go, written as each wave of rows is solved.
+enum Sink {
+    Stdout,
+    File(std::path::PathBuf, std::io::BufWriter<std::fs::File>),
+}
+
+impl Sink {
+    fn open(out: Option<&std::path::Path>) -> Result<Sink, Failure> {
+        let Some(path) = out else {
+            return Ok(Sink::Stdout);
+        };
+        // The folder and an empty file first, so a bad path fails before any solve.
+        write_file(path, "", "results")?;
+        let file = std::fs::File::create(path)
+            .map_err(|e| Failure::Other(format!("cannot write the results to {}: {e}", path.display())))?;
+        Ok(Sink::File(path.to_path_buf(), std::io::BufWriter::new(file)))
+    }
+
+    fn write(&mut self, text: &str) -> Result<(), Failure> {
+        match self {
+            Sink::Stdout => emit(text),
+            Sink::File(path, file) => file
+                .write_all(text.as_bytes())
+                .and_then(|()| file.flush())
+                .map_err(|e| Failure::Other(format!("cannot write the results to {}: {e}", path.display()))),
+        }
+    }
+}
+
 /// `tdcr batch`: reads the robot and the table, solves the shard's rows, writes one result
-/// row per input row; exit code 3 when any row failed (after writing all of them).
+/// row per input row as the rows are solved (in waves of blocks, in row order, so memory
+/// stays flat); exit code 3 when any row failed (after writing all of them).
 pub fn run(args: &BatchArgs) -> Result<(), Failure> {
     let (_, mut file) = read_robot(&args.robot)?;
     apply(&mut file, &args.solver);
@@ -120,57 +161,64 @@ pub fn run(args: &BatchArgs) -> Result<(), Failure> {
         None => (0, blocks),
     };
     let rows = &table.rows[(first * BLOCK).min(table.rows.len())..(end * BLOCK).min(table.rows.len())];
-    // Every row's robot is built and checked before any solve, so bad input stops the run
-    // before it spends time.
-    let mut robots = Vec::with_capacity(rows.len());
-    for row in rows {
-        let robot = table
+    let robot = |row: &parameters::Row| {
+        table
             .robot(row, &file.robot)
-            .map_err(|e| Failure::Input(format!("{}:{}:1: row {}: {e}", args.cases, row.line, row.index)))?;
-        robots.push(robot);
+            .map_err(|e| Failure::Input(format!("{}:{}:1: row {}: {e}", args.cases, row.line, row.index)))
+    };
+    // Every row's robot is checked before any solve, so bad input stops the run before it
+    // spends time; each is built again when its wave is solved.
+    for row in rows {
+        robot(row)?;
     }
-    let progress = Mutex::new((Progress::new(), 0, robots.len()));
-    let outcomes: Vec<Outcome> = robots
-        .par_chunks(BLOCK)
-        .map(|block| solve_block(block, &file.solver, &progress))
-        .collect::<Vec<_>>()
-        .into_iter()
-        .flatten()
-        .collect();
-    if let Ok(mut p) = progress.lock() {
-        p.0.finish();
-    }
+    let mut sink = Sink::open(args.out.as_deref())?;
     let mut header = vec!["row".to_string()];
     header.extend(table.parameters.iter().map(ToString::to_string));
     header.extend(["converged", "iterations", "tip_x", "tip_y", "tip_z", "error"].map(String::from));
-    let mut csv = CsvTable::new(header);
+    sink.write(&CsvTable::new(header).finish())?;
+    let progress = Mutex::new(Counted {
+        bar: Progress::new(),
+        done: 0,
+        total: rows.len(),
+    });
+    let wave = BLOCK * WAVE_BLOCKS_PER_THREAD * rayon::current_num_threads();
     let mut failed = 0;
-    for (row, outcome) in rows.iter().zip(&outcomes) {
-        let mut fields = vec![row.index.to_string()];
-        fields.extend(row.values.iter().map(|x| x.map_or(String::new(), number)));
-        fields.push(outcome.solution.is_some().to_string());
-        fields.push(outcome.iterations.map_or(String::new(), |n| n.to_string()));
-        match &outcome.solution {
-            Some(s) => {
-                fields.extend(s.tip_position().iter().map(|&x| number(x)));
-                fields.push(String::new());
+    for rows in rows.chunks(wave) {
+        let robots = rows.iter().map(robot).collect::<Result<Vec<Robot>, Failure>>()?;
+        let outcomes: Vec<Outcome> = robots
+            .par_chunks(BLOCK)
+            .map(|block| solve_block(block, &file.solver, &progress))
+            .collect::<Vec<_>>()
+            .into_iter()
+            .flatten()
+            .collect();
+        let mut csv = CsvTable::rows_only();
+        for (row, outcome) in rows.iter().zip(&outcomes) {
+            let mut fields = vec![row.index.to_string()];
+            fields.extend(row.values.iter().map(|x| x.map_or(String::new(), number)));
+            fields.push(outcome.tip.is_some().to_string());
+            fields.push(outcome.iterations.map_or(String::new(), |n| n.to_string()));
+            match &outcome.tip {
+                Some(tip) => {
+                    fields.extend(tip.iter().map(|&x| number(x)));
+                    fields.push(String::new());
+                }
+                None => {
+                    failed += 1;
+                    fields.extend(["", "", ""].map(String::from));
+                    // One line per row: a multi-line message joined with "; ".
+                    fields.push(outcome.error.as_deref().unwrap_or_default().replace('\n', "; "));
+                }
             }
-            None => {
-                failed += 1;
-                fields.extend(["", "", ""].map(String::from));
-                // One line per row: a multi-line message joined with "; ".
-                fields.push(outcome.error.as_deref().unwrap_or_default().replace('\n', "; "));
-            }
+            csv.row(fields);
         }
-        csv.row(fields);
+        sink.write(&csv.finish())?;
     }
-    let csv = csv.finish();
-    match &args.out {
-        Some(path) => {
-            write_file(path, &csv, "results")?;
-            note(&format!("wrote {} ({} rows)", path.display(), rows.len()));
-        }
-        None => emit(&csv)?,
+    if let Ok(mut p) = progress.lock() {
+        p.bar.finish();
+    }
+    if let Some(path) = &args.out {
+        note(&format!("wrote {} ({} rows)", path.display(), rows.len()));
     }
     if failed > 0 {
         return Err(Failure::NotConverged(format!(

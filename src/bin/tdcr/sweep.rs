@@ -87,19 +87,26 @@ impl Progress {
         }
     }
 
-    /// Shows `done` of `total` steps (on a terminal, after [`Progress::DELAY`]).
+    /// Shows `done` of `total` steps, the rate and the time left (on a terminal, after
+    /// [`Progress::DELAY`]).
     pub fn update(&mut self, done: usize, total: usize) {
-        if !self.terminal || self.start.elapsed() < Self::DELAY {
+        let elapsed = self.start.elapsed().as_secs_f64();
+        if !self.terminal || elapsed < Self::DELAY.as_secs_f64() {
             return;
         }
         let width = 30;
         let filled = width * done / total.max(1);
+        let rate = done as f64 / elapsed;
+        let left = if rate > 0.0 {
+            format!("{:.0} s left", total.saturating_sub(done) as f64 / rate)
+        } else {
+            String::new()
+        };
         let _ = write!(
             std::io::stderr().lock(),
-            "\r[{}{}] {done}/{total}  {:.1} s ",
+            "\r[{}{}] {done}/{total}  {elapsed:.1} s, {rate:.0}/s, {left} ",
             "#".repeat(filled),
             ".".repeat(width - filled),
-            self.start.elapsed().as_secs_f64()
         );
         self.shown = true;
     }
@@ -107,7 +114,7 @@ impl Progress {
     /// Clears the bar, if shown.
     pub fn finish(&mut self) {
         if self.shown {
-            let _ = write!(std::io::stderr().lock(), "\r{}\r", " ".repeat(60));
+            let _ = write!(std::io::stderr().lock(), "\r{}\r", " ".repeat(90));
             self.shown = false;
         }
     }
