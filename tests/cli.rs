@@ -1398,3 +1398,37 @@ fn a_sweep_names_the_step_where_a_tendon_goes_taut() {
         .collect();
     assert_eq!(events, vec!["", "", "tendon 1 taut", "", "", ""], "{csv}");
 }
+
+/// Issue 27: `--corner-forces` and `--tendons` set what the file's `[model]` table sets,
+/// bitwise, and replace it.
+#[test]
+fn model_flags_equal_the_model_table() {
+    let dir = scratch("model");
+    // Tendon 1 ends mid-way, tendon 2 goes on at 1 N and a tip force shears the rod: the
+    // corner forces of tendon 2 matter.
+    let base = edited("# end = 0.242 ", "end = 0.121 #")
+        .replace("tip_force = [0.0, 0.0, 0.0]", "tip_force = [0.0, 0.1, -0.05]")
+        .replacen("tension = 0.0", "tension = 1.0", 1);
+    let tip = |text: &str, flags: &[&str]| {
+        let args = [&["solve", "-", "--format", "json"], flags].concat();
+        let out = run(&dir, &args, Some(text));
+        assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+        tip_of(&serde_json::from_str(&stdout(&out)).unwrap())
+    };
+    let with_table = |table: &str| format!("{base}\n[model]\n{table}\n");
+    let coupled = tip(&base, &[]);
+    let paper = tip(&with_table("corner_forces = false"), &[]);
+    assert_ne!(paper, coupled);
+    assert_eq!(tip(&base, &["--corner-forces", "false"]), paper);
+    // The flag replaces the file's key.
+    assert_eq!(
+        tip(&with_table("corner_forces = false"), &["--corner-forces", "true"]),
+        coupled
+    );
+    let point_moment = tip(&with_table("tendons = \"point_moment\""), &[]);
+    assert_ne!(point_moment, coupled);
+    assert_eq!(tip(&base, &["--tendons", "point_moment"]), point_moment);
+    let out = run(&dir, &["solve", "robot.toml", "--tendons", "pointmoment"], None);
+    assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
+    assert!(stderr(&out).contains("point_moment"), "{}", stderr(&out));
+}

@@ -86,6 +86,7 @@ class Robot:
         loads: Optional[Mapping[str, Any]] = None,
         base: Optional[Mapping[str, Any]] = None,
         solver: Optional[Mapping[str, Any]] = None,
+        model: Optional[Mapping[str, Any]] = None,
     ) -> Robot: ...
     @staticmethod
     def from_dict(tables: Mapping[str, Any]) -> Robot:
@@ -136,6 +137,9 @@ class Robot:
     @property
     def base_rotation(self) -> FloatArray:
         """Base rotation, body to world, shape (3, 3)."""
+    @property
+    def model(self) -> Dict[str, Any]:
+        """The `[model]` table: `corner_forces` (bool) and `tendons` ("coupled" or "point_moment")."""
     @property
     def method(self) -> str:
         """The `[solver]` method: "collocation" or "shooting"."""

@@ -3,7 +3,8 @@
 
 use super::SolverSettings;
 use super::tables::{
-    BaseTable, EquilibriumKey, LoadsTable, MethodName, RodTable, RoutingTable, SolverTable, TendonTable, Vec3,
+    BaseTable, EquilibriumKey, LoadsTable, MethodName, ModelTable, RodTable, RoutingTable, SolverTable, TendonModelKey,
+    TendonTable, Vec3,
 };
 use crate::io::Problem;
 use crate::io::locate::Locator;
@@ -12,7 +13,7 @@ use crate::model::rod::{Rod, Section};
 use crate::model::routing::Routing;
 use crate::model::tendon::{Actuation, Tendon};
 use crate::report::Method;
-use crate::{Error, Robot, so3};
+use crate::{Error, Robot, TendonModel, so3};
 use nalgebra::{Matrix3, Vector3};
 
 /// The matrix whose rows the file gives as `base.rotation`.
@@ -88,6 +89,19 @@ pub(super) fn build(rod: &RodTable, base: &BaseTable, loads: &LoadsTable, tendon
         robot = robot.with_tendon(tendon);
     }
     robot
+}
+
+/// Sets the model variant of the `[model]` table on `robot`; keys not given keep the
+/// library's defaults (corner forces, the coupled tendon model).
+pub(super) fn model(robot: &mut Robot, model: &ModelTable) {
+    if let Some(corners) = model.corner_forces {
+        robot.corner_forces = corners;
+    }
+    match model.tendons {
+        Some(TendonModelKey::Coupled) => robot.tendon_model = TendonModel::Coupled,
+        Some(TendonModelKey::PointMoment) => robot.tendon_model = TendonModel::PointMoment,
+        None => {}
+    }
 }
 
 /// The solver settings: the library defaults, changed by the `[solver]` table.

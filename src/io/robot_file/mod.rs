@@ -11,9 +11,9 @@ mod check;
 mod tables;
 mod write;
 
-use self::build::{build, library_problem, settings};
+use self::build::{build, library_problem, model, settings};
 use self::check::Checker;
-use self::tables::{BaseTable, LoadsTable, RodTable, SolverTable, TABLES, TendonTable};
+use self::tables::{BaseTable, LoadsTable, ModelTable, RodTable, SolverTable, TABLES, TendonTable};
 use super::locate::{LazyLocator, Lines};
 use super::printable;
 use super::{FileError, Problem};
@@ -168,7 +168,8 @@ pub fn parse(text: &str, file: &str) -> Result<RobotFile, FileError> {
         tables.loads.unwrap_or_default(),
         tables.solver.unwrap_or_default(),
     );
-    let robot = build(&rod, &base, &loads, &tendons);
+    let mut robot = build(&rod, &base, &loads, &tendons);
+    model(&mut robot, &tables.model.unwrap_or_default());
     if let Err(e) = robot.validate() {
         return Err(fail(vec![library_problem(
             locator.get(),
@@ -202,6 +203,7 @@ struct Tables {
     /// One entry per [[tendon]], `None` where it could not be read.
     tendons: Vec<Option<TendonTable>>,
     solver: Option<SolverTable>,
+    model: Option<ModelTable>,
 }
 
 /// Deserializes the tables of a file, each failure one problem at its place in `text`.
@@ -226,6 +228,7 @@ impl Reader<'_> {
                 "base" => tables.base = self.table(&name, value),
                 "loads" => tables.loads = self.table(&name, value),
                 "solver" => tables.solver = self.table(&name, value),
+                "model" => tables.model = self.table(&name, value),
                 "tendon" => match value.into_inner() {
                     DeValue::Array(items) if items.iter().all(|t| t.get_ref().is_table()) => {
                         for (i, item) in items.into_iter().enumerate() {
@@ -245,7 +248,7 @@ impl Reader<'_> {
                     let hint = match name.as_str() {
                         "tendons" => "; did you mean [[tendon]]?".to_string(),
                         "load" => "; did you mean [loads]?".to_string(),
-                        _ => match closest(&name, ["rod", "base", "loads", "solver", "tendon"].into_iter()) {
+                        _ => match closest(&name, ["rod", "base", "loads", "model", "solver", "tendon"].into_iter()) {
                             Some("tendon") => "; did you mean [[tendon]]?".to_string(),
                             Some(table) => format!("; did you mean [{table}]?"),
                             None => String::new(),
@@ -549,6 +552,28 @@ mod tests {
             e.contains("unknown key `solvr` at the top level") && e.contains("did you mean [solver]?"),
             "{e}"
         );
+    }
+
+    /// Issue 27: the `[model]` table's keys and values are checked like every other table's.
+    #[test]
+    fn model_table_rejects_unknown_keys_and_variants() {
+        let text = format!("{}\n[model]\ntendons = \"point-moment\"\n", crate::io::example());
+        let e = parse(&text, "robot.toml").unwrap_err().to_string();
+        assert!(
+            e.contains(
+                "`model.tendons` in [model]: unknown variant `point-moment`, expected `coupled` or `point_moment`"
+            ) && e.contains("did you mean `point_moment`?"),
+            "{e}"
+        );
+        let text = format!("{}\n[model]\ncorner_force = false\n", crate::io::example());
+        let e = parse(&text, "robot.toml").unwrap_err().to_string();
+        assert!(
+            e.contains("unknown field `corner_force`") && e.contains("did you mean `corner_forces`?"),
+            "{e}"
+        );
+        let text = format!("{}\n[modl]\n", crate::io::example());
+        let e = parse(&text, "robot.toml").unwrap_err().to_string();
+        assert!(e.contains("did you mean [model]?"), "{e}");
     }
 
     /// Issue 17: `turns` is the old name of `turns_per_rod_length`, with the same meaning.

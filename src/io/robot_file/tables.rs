@@ -202,5 +202,22 @@ pub(super) enum EquilibriumKey {
     Nearest,
 }
 
+/// `[model]`: which variant of the model to solve, each key optional (the library default,
+/// the coupled model with corner forces, if not given).
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct ModelTable {
+    pub(super) corner_forces: Option<bool>,
+    pub(super) tendons: Option<TendonModelKey>,
+}
+
+/// The `tendons` of `[model]`: `"coupled"` (the default) or `"point_moment"`.
+#[derive(Clone, Copy, Debug, Deserialize, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub(super) enum TendonModelKey {
+    Coupled,
+    PointMoment,
+}
+
 /// The tables a robot file may have, in the order docs/robot-file.md describes them.
-pub(super) const TABLES: &str = "[rod], [base], [loads], [[tendon]], [solver]";
+pub(super) const TABLES: &str = "[rod], [base], [loads], [[tendon]], [model], [solver]";

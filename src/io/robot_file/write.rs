@@ -1,7 +1,7 @@
 //! Writing a robot file: the inverse of the reader, for robots built in code or edited
 //! (Python pickles a robot as its file).
 
-use super::tables::EquilibriumKey;
+use super::tables::{EquilibriumKey, TendonModelKey};
 use super::{RobotFile, SolverSettings};
 use crate::collocation::Equilibrium;
 use crate::error::{Result, invalid};
@@ -168,6 +168,7 @@ fn document(file: &RobotFile) -> Result<String> {
     if !tendons.is_empty() {
         doc.insert("tendon".into(), Value::Array(tendons));
     }
+    doc.insert("model".into(), Value::Table(model_table(robot)));
     doc.insert("solver".into(), Value::Table(solver_table(&file.solver)));
     toml::to_string(&doc).map_err(|e| {
         invalid(
@@ -176,6 +177,21 @@ fn document(file: &RobotFile) -> Result<String> {
             "report this as a bug",
         )
     })
+}
+
+/// The `[model]` table of `robot`: both keys.
+fn model_table(robot: &crate::Robot) -> Table {
+    let mut t = Table::new();
+    t.insert("corner_forces".into(), Value::Boolean(robot.corner_forces));
+    let tendons = match robot.tendon_model {
+        crate::TendonModel::Coupled => TendonModelKey::Coupled,
+        crate::TendonModel::PointMoment => TendonModelKey::PointMoment,
+    };
+    // The key's own name, as the reader spells it (tables.rs).
+    if let Ok(name) = Value::try_from(tendons) {
+        t.insert("tendons".into(), name);
+    }
+    t
 }
 
 /// The `[solver]` table of `s`: every key, except `residual_tolerance` and `max_iterations`
@@ -257,6 +273,9 @@ max_iterations = 40
 continuation = false
 equilibrium = "nearest"
 integration_tolerance = 1e-10
+[model]
+corner_forces = false
+tendons = "point_moment"
 "#;
 
     #[test]

@@ -1,0 +1,52 @@
+"""Model variants from Python (issue 27): the `model` keyword and property are the robot
+file's `[model]` table."""
+
+import pickle
+
+import numpy as np
+
+import tdcr
+
+# Tendon 1 ends mid-way, tendon 2 goes on at 1 N, and a tip force shears the rod: the corner
+# forces of tendon 2 at the termination move the tip.
+EXAMPLE = (
+    tdcr.example()
+    .replace("# end = 0.242 ", "end = 0.121 #")
+    .replace("tip_force = [0.0, 0.0, 0.0]", "tip_force = [0.0, 0.1, -0.05]")
+    .replace("tension = 0.0", "tension = 1.0", 1)
+)
+
+
+def test_the_model_keyword_is_the_model_table(cli):
+    default = tdcr.Robot.from_toml(EXAMPLE)
+    assert default.model == {"corner_forces": True, "tendons": "coupled"}
+    tables = tdcr.Robot.from_toml(EXAMPLE)
+    for model, flags in [
+        ({"corner_forces": False}, ["--corner-forces", "false"]),
+        ({"tendons": "point_moment"}, ["--tendons", "point_moment"]),
+    ]:
+        table = "\n[model]\n" + "".join(
+            f"{k} = {str(v).lower() if isinstance(v, bool) else repr(v).replace(chr(39), chr(34))}\n"
+            for k, v in model.items()
+        )
+        from_file = tdcr.Robot.from_toml(EXAMPLE + table)
+        from_dict = tdcr.Robot.from_dict({**_tables(default), "model": model})
+        assert from_file.model == from_dict.model == {**default.model, **model}
+        tips = [tdcr.solve(r).tip_position for r in [from_file, from_dict, pickle.loads(pickle.dumps(from_file))]]
+        json = cli(["solve", "-", "--format", "json", *flags], EXAMPLE)
+        # Bitwise: the keyword, the table, the pickle and the flag set the same switch.
+        for tip in tips[1:] + [np.array(json["tip"]["position"])]:
+            assert np.array_equal(tip, tips[0])
+        assert not np.array_equal(tips[0], tdcr.solve(default).tip_position)
+    keywords = tdcr.Robot(
+        {"length": 0.2, "outer_radius": 0.0005, "youngs_modulus": 50e9, "poisson_ratio": 0.3},
+        model={"corner_forces": False, "tendons": "point_moment"},
+    )
+    assert keywords.model == {"corner_forces": False, "tendons": "point_moment"}
+
+
+def _tables(robot):
+    """The robot's tables as a dict, through its robot file."""
+    import tomllib
+
+    return tomllib.loads(robot.to_toml())
