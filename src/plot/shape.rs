@@ -63,7 +63,12 @@ pub fn tendon_description(robot: &Robot, index: usize) -> String {
 pub fn routing_label(tendon: &Tendon, length: f64) -> String {
     let turns = tendon.turns(length);
     let routing = match &tendon.routing {
-        Routing::Straight { x, y } => format!("straight at ({}, {}) mm", mm(*x), mm(*y)),
+        Routing::Straight { x, y } => {
+            // A component a billion times smaller than the offset is the rounding residue of
+            // a computed cosine (0.008 cos(pi/2) = 4.9e-19 m), not a placement: shown as 0.
+            let shown = |c: f64| if c.abs() < 1e-9 * x.hypot(*y) { 0.0 } else { c };
+            format!("straight at ({}, {}) mm", mm(shown(*x)), mm(shown(*y)))
+        }
         Routing::Helical { radius, .. } => {
             format!("helix of radius {} mm, {}", mm(*radius), turns_label(turns))
         }

@@ -237,3 +237,19 @@ fn png_text_is_set_when_the_system_has_fonts() {
     // The title is drawn exactly when a font was found to draw it in.
     assert_eq!(with.data != without.data, fonts_found());
 }
+
+/// Issue 27: a tendon placed at 90 degrees, in polar form or by a computed cosine, is
+/// labelled at (0, 8) mm, not at (0.0000000000000612, 8) mm.
+#[test]
+fn legend_prints_zero_offsets_as_zero() {
+    let length = 0.242;
+    for routing in [
+        Routing::polar(0.008, 90.0),
+        Routing::straight(0.008 * std::f64::consts::FRAC_PI_2.cos(), 0.008),
+    ] {
+        let label = shape::routing_label(&Tendon::new(routing, 1.0), length);
+        assert_eq!(label, "straight at (0, 8) mm");
+    }
+    let label = shape::routing_label(&Tendon::new(Routing::polar(0.01, 120.0), 1.0), length);
+    assert_eq!(label, "straight at (-5, 8.66) mm");
+}

@@ -68,13 +68,22 @@ pub(super) fn build(rod: &RodTable, base: &BaseTable, loads: &LoadsTable, tendon
         .with_base(vector(&base.position), rotation);
     for t in tendons {
         let routing = match t.routing {
-            RoutingTable::Straight { x, y } => Routing::straight(x, y),
+            RoutingTable::Straight {
+                x: Some(x), y: Some(y), ..
+            } => Routing::straight(x, y),
+            RoutingTable::Straight { radius, angle_deg, .. } => {
+                Routing::polar(radius.unwrap_or(f64::NAN), angle_deg.unwrap_or(f64::NAN))
+            }
             RoutingTable::Helical {
                 radius,
                 turns_per_rod_length,
                 turns,
                 phase,
-            } => Routing::helical(radius, turns_per_rod_length.or(turns).unwrap_or(f64::NAN), phase),
+                angle_deg,
+            } => {
+                let phase = phase.or(angle_deg.map(f64::to_radians)).unwrap_or(0.0);
+                Routing::helical(radius, turns_per_rod_length.or(turns).unwrap_or(f64::NAN), phase)
+            }
         };
         let mut tendon = Tendon::new(routing, t.tension.unwrap_or(0.0));
         tendon.termination = t.end;

@@ -228,15 +228,48 @@ impl Checker<'_> {
         }
         let routing = format!("{path}.routing");
         match t.routing {
-            RoutingTable::Straight { x, y } => {
-                self.finite(&format!("{routing}.x"), x, " m");
-                self.finite(&format!("{routing}.y"), y, " m");
+            RoutingTable::Straight {
+                x,
+                y,
+                radius,
+                angle_deg,
+            } => {
+                // The missing half of a pair was reported when the table was read.
+                let cartesian = x.is_some() || y.is_some();
+                if cartesian && (radius.is_some() || angle_deg.is_some()) {
+                    let given = if radius.is_some() { "radius" } else { "angle_deg" };
+                    self.report(
+                        &format!("{routing}.{given}"),
+                        "is given together with `x` or `y`: place the tendon by `x` and `y` (m) or by \
+                         `radius` (m) and `angle_deg` (degrees from body x toward body y), not both"
+                            .to_string(),
+                    );
+                }
+                for (key, value, unit) in [("x", x, " m"), ("y", y, " m"), ("angle_deg", angle_deg, " deg")] {
+                    if let Some(v) = value {
+                        self.finite(&format!("{routing}.{key}"), v, unit);
+                    }
+                }
+                if let Some(r) = radius {
+                    let field = format!("{routing}.radius");
+                    if self.finite(&field, r, " m") && r < 0.0 {
+                        self.report(
+                            &field,
+                            format!(
+                                "is {} m, but a distance from the backbone must be >= 0 (turn `angle_deg` \
+                                 by 180 to place the tendon on the other side)",
+                                Readable(r)
+                            ),
+                        );
+                    }
+                }
             }
             RoutingTable::Helical {
                 radius,
                 turns_per_rod_length,
                 turns,
                 phase,
+                angle_deg,
             } => {
                 self.positive(&format!("{routing}.radius"), radius, " m");
                 // `turns` is the old name of `turns_per_rod_length`, with the same meaning.
@@ -262,7 +295,21 @@ impl Checker<'_> {
                         ),
                     ),
                 }
-                self.finite(&format!("{routing}.phase"), phase, " rad");
+                match (phase, angle_deg) {
+                    (Some(_), Some(_)) => self.report(
+                        &format!("{routing}.angle_deg"),
+                        "is given together with `phase`: give the helix's starting angle as `phase` \
+                         (rad) or as `angle_deg` (degrees), not both"
+                            .into(),
+                    ),
+                    (Some(p), None) => {
+                        self.finite(&format!("{routing}.phase"), p, " rad");
+                    }
+                    (None, Some(a)) => {
+                        self.finite(&format!("{routing}.angle_deg"), a, " deg");
+                    }
+                    (None, None) => {}
+                }
             }
         }
     }

@@ -409,7 +409,12 @@ fn required_fields<'a>(name: &str, value: &'a Spanned<DeValue<'_>>) -> Vec<(Stri
             let path = format!("{name}.routing");
             match entry(routing, "kind").map(|k| k.get_ref()) {
                 None => need(&path, routing, &["kind"]),
-                Some(DeValue::String(kind)) if kind.as_ref() == "straight" => need(&path, routing, &["x", "y"]),
+                // Polar form if it has either polar key: then both are needed, else x and y.
+                Some(DeValue::String(kind)) if kind.as_ref() == "straight" => {
+                    let polar = keys(routing).is_some_and(|k| k.contains(&"radius") || k.contains(&"angle_deg"));
+                    let pair: &[&str] = if polar { &["radius", "angle_deg"] } else { &["x", "y"] };
+                    need(&path, routing, pair);
+                }
                 // `turns_per_rod_length` (or its old name `turns`) is checked with the values.
                 Some(DeValue::String(kind)) if kind.as_ref() == "helical" => need(&path, routing, &["radius"]),
                 Some(_) => {}
@@ -574,6 +579,68 @@ mod tests {
         let text = format!("{}\n[modl]\n", crate::io::example());
         let e = parse(&text, "robot.toml").unwrap_err().to_string();
         assert!(e.contains("did you mean [model]?"), "{e}");
+    }
+
+    /// Issue 27: a tendon placed in polar form is the same robot as one placed at the
+    /// exact (x, y); a helix's `angle_deg` is its `phase` in degrees; half pairs, mixed
+    /// forms and negative radii are reported at their keys.
+    #[test]
+    fn polar_placements_read_as_their_exact_offsets() {
+        let tendon = |routing: &str| {
+            let text = crate::io::example().replacen(
+                "routing = { kind = \"straight\", x = 0.008, y = 0.0 }",
+                &format!("routing = {{ {routing} }}"),
+                1,
+            );
+            parse(&text, "robot.toml").map(|f| f.robot.tendons[0].routing.clone())
+        };
+        let debug = |r: Result<Routing, FileError>| format!("{:?}", r.unwrap());
+        for (polar, cartesian) in [
+            (
+                "kind = \"straight\", radius = 0.008, angle_deg = 90",
+                "kind = \"straight\", x = 0.0, y = 0.008",
+            ),
+            (
+                "kind = \"straight\", radius = 0.01, angle_deg = 180",
+                "kind = \"straight\", x = -0.01, y = 0.0",
+            ),
+            (
+                "kind = \"straight\", radius = 0.01, angle_deg = -90",
+                "kind = \"straight\", x = 0.0, y = -0.01",
+            ),
+            (
+                "kind = \"helical\", radius = 0.008, turns_per_rod_length = 1, angle_deg = 90",
+                &format!(
+                    "kind = \"helical\", radius = 0.008, turns_per_rod_length = 1, phase = {:?}",
+                    90f64.to_radians()
+                ),
+            ),
+        ] {
+            assert_eq!(debug(tendon(polar)), debug(tendon(cartesian)), "{polar}");
+        }
+        let at_120 = tendon("kind = \"straight\", radius = 0.01, angle_deg = 120").unwrap();
+        assert!(matches!(at_120, Routing::Straight { x, .. } if x == -0.005));
+        for (routing, message) in [
+            (
+                "kind = \"straight\", radius = 0.01",
+                "`tendon[1].routing.angle_deg` is required but missing in [[tendon]] #1",
+            ),
+            (
+                "kind = \"straight\", x = 0.01, radius = 0.01, angle_deg = 0",
+                "`tendon[1].routing.radius` is given together with `x` or `y`",
+            ),
+            (
+                "kind = \"straight\", radius = -0.01, angle_deg = 0",
+                "`tendon[1].routing.radius` is -0.01 m, but a distance from the backbone must be >= 0",
+            ),
+            (
+                "kind = \"helical\", radius = 0.01, turns = 1, phase = 0.1, angle_deg = 5",
+                "`tendon[1].routing.angle_deg` is given together with `phase`",
+            ),
+        ] {
+            let e = tendon(routing).unwrap_err().to_string();
+            assert!(e.contains(message), "{routing}: {e}");
+        }
     }
 
     /// Issue 17: `turns` is the old name of `turns_per_rod_length`, with the same meaning.

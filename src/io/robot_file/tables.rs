@@ -152,18 +152,23 @@ pub(super) struct TendonTable {
 #[derive(Debug, Deserialize)]
 #[serde(tag = "kind", rename_all = "lowercase", deny_unknown_fields)]
 pub(super) enum RoutingTable {
+    /// At (`x`, `y`) or, in polar form, at `radius` and `angle_deg`: one of the two pairs,
+    /// whole (checked in `check`).
     Straight {
-        x: f64,
-        y: f64,
+        x: Option<f64>,
+        y: Option<f64>,
+        radius: Option<f64>,
+        angle_deg: Option<f64>,
     },
     /// `turns_per_rod_length`, or its old name `turns` (the same meaning), one of them
-    /// required (checked in `check`).
+    /// required; the starting angle as `phase` (rad) or `angle_deg`, at most one (checked
+    /// in `check`).
     Helical {
         radius: f64,
         turns_per_rod_length: Option<f64>,
         turns: Option<f64>,
-        #[serde(default)]
-        phase: f64,
+        phase: Option<f64>,
+        angle_deg: Option<f64>,
     },
 }
 
