@@ -412,6 +412,7 @@ pub fn calibrate(
         file: tdcr::io::RobotFile {
             robot: out.robot.clone(),
             solver: robot.file.solver.clone(),
+            disks: robot.file.disks.clone(),
         },
     };
     let predicted = Array2::from_shape_fn((out.tips.len(), 3), |(i, k)| out.tips[i][k]);

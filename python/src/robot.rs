@@ -110,6 +110,7 @@ pub fn from_library(robot: tdcr::Robot) -> PyResult<PyRobot> {
     let file = RobotFile {
         robot,
         solver: SolverSettings::default(),
+        disks: None,
     };
     parse(&file.to_toml().map_err(to_py)?, "<tdcr.cases>")
 }
@@ -168,11 +169,11 @@ fn numpy_column(value: &Bound<'_, PyAny>, name: &str) -> PyResult<Vec<f64>> {
 impl PyRobot {
     /// A robot from keyword arguments shaped like a robot file's tables: `rod` (dict),
     /// `tendons` (list of dicts, the file's `[[tendon]]`), `loads`, `base`, `solver`,
-    /// `model` (dicts). A tendon dict has `routing`, `tension` (N) or `displacement` (m), and
+    /// `model`, `disks` (dicts). A tendon dict has `routing`, `tension` (N) or `displacement` (m), and
     /// optionally `end` (m), `stiffness` (N) and `free_length` (m). Raises `tdcr.FileError`
     /// (messages name the field, e.g. `tendon[2].tension`).
     #[new]
-    #[pyo3(signature = (rod, tendons=None, loads=None, base=None, solver=None, model=None))]
+    #[pyo3(signature = (rod, tendons=None, loads=None, base=None, solver=None, model=None, disks=None))]
     fn new(
         rod: &Bound<'_, PyAny>,
         tendons: Option<&Bound<'_, PyAny>>,
@@ -180,6 +181,7 @@ impl PyRobot {
         base: Option<&Bound<'_, PyAny>>,
         solver: Option<&Bound<'_, PyAny>>,
         model: Option<&Bound<'_, PyAny>>,
+        disks: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<Self> {
         let mut doc = Table::new();
         for (key, value) in [
@@ -189,6 +191,7 @@ impl PyRobot {
             ("base", base),
             ("solver", solver),
             ("model", model),
+            ("disks", disks),
         ] {
             if let Some(v) = value.filter(|v| !v.is_none()) {
                 doc.insert(key.into(), to_toml(v, key)?);

@@ -50,3 +50,21 @@ def _tables(robot):
     import tomllib
 
     return tomllib.loads(robot.to_toml())
+
+
+def test_disks_are_point_loads_that_survive_a_pickle():
+    rod = {"length": 0.242, "outer_radius": 0.0004, "youngs_modulus": 210e9, "poisson_ratio": 0.3125}
+    tendons = [{"routing": {"kind": "straight", "radius": 0.008, "angle_deg": 90}, "tension": 1.0}]
+    base = {"euler_xyz_deg": [0.0, 90.0, 0.0]}
+    disks = {"positions": [0.1, 0.242], "mass": 0.005, "gravity": [0.0, 0.0, -9.81]}
+    with_disks = tdcr.Robot(rod, tendons=tendons, base=base, disks=disks)
+    weight = [0.0, 0.0, 0.005 * -9.81]
+    by_hand = tdcr.Robot(
+        rod, tendons=tendons, base=base, loads={"point": [{"s": 0.1, "force": weight}, {"s": 0.242, "force": weight}]}
+    )
+    again = pickle.loads(pickle.dumps(with_disks))
+    assert "[disks]" in again.to_toml()
+    tips = [tdcr.solve(r).tip_position for r in [with_disks, by_hand, again]]
+    # Bitwise: the disks are these point loads, and the pickle keeps them.
+    assert np.array_equal(tips[0], tips[1]) and np.array_equal(tips[0], tips[2])
+    assert not np.array_equal(tips[0], tdcr.solve(tdcr.Robot(rod, tendons=tendons, base=base)).tip_position)

@@ -60,10 +60,6 @@ tension = 0.0
 routing = { kind = "helical", radius = 0.008, turns_per_rod_length = 1.0, phase = 0.0 }   # m, -, rad
 tension = 0.0
 
-# [model]                        # the model variant; every field optional
-# corner_forces = true           # false: the paper's jump conditions (no corner forces)
-# tendons = "coupled"            # or "point_moment": tendons act by their end moments only
-
 [solver]                         # every field optional
 method = "collocation"           # or "shooting" (the independent cross-check)
 # tolerance = 1e-7               # tip error relative to the rod length (the default): the
@@ -75,6 +71,10 @@ method = "collocation"           # or "shooting" (the independent cross-check)
 # max_iterations = 30            # Newton iterations per Newton run
 # continuation = true            # follow the load path when Newton alone is not enough
 # equilibrium = "load_path"      # or "nearest": Newton's root from the guess, stable or not
+
+# [model]                        # the model variant; every field optional
+# corner_forces = true           # false: the paper's jump conditions (no corner forces)
+# tendons = "coupled"            # or "point_moment": tendons act by their end moments only
 "#;
 
 #[cfg(test)]

@@ -253,3 +253,42 @@ fn legend_prints_zero_offsets_as_zero() {
     let label = shape::routing_label(&Tendon::new(Routing::polar(0.01, 120.0), 1.0), length);
     assert_eq!(label, "straight at (-5, 8.66) mm");
 }
+
+/// Issue 27: a robot's own disks are drawn at their positions and radius; their weights
+/// are named once in the disks' legend entry, not as one arrow each.
+#[test]
+fn placed_disks_are_drawn_where_they_sit_with_their_weight_in_the_legend() {
+    let mut robot = cases::case_s();
+    let disks = crate::Disks {
+        positions: vec![0.05, 0.1, 0.242],
+        weight: nalgebra::Vector3::new(0.0, 0.0, -0.02),
+        radius: Some(0.012),
+    };
+    robot.loads.point.push(crate::PointLoad {
+        s: 0.2,
+        force: nalgebra::Vector3::new(0.0, 0.0, -0.05),
+        moment: nalgebra::Vector3::zeros(),
+    });
+    robot.loads.point.extend(disks.point_loads());
+    let mut style = Style::new("#000000");
+    style.placed_disks = Some(disks);
+    let solution = solve(&robot);
+    let mut figure = Figure::new("disks");
+    figure.add_shape(&robot, &solution, &style);
+    figure.legend = shape_legend(&robot, &style);
+    let drawn = &figure.panels[0].disks;
+    assert_eq!(drawn.len(), 3);
+    assert_eq!(drawn[1].center, solution.at_limit(0.1, true).p);
+    assert_eq!(drawn[1].radius, 0.012);
+    let labels: Vec<&str> = figure.legend.iter().map(|e| e.label.as_str()).collect();
+    assert!(
+        labels.contains(&"3 spacer disks, 0.02 N each (drawn 12 mm in radius)"),
+        "{labels:?}"
+    );
+    // The other point load keeps its arrow and entry; the disks' weights get none.
+    assert_eq!(
+        labels.iter().filter(|l| l.starts_with("point load")).count(),
+        1,
+        "{labels:?}"
+    );
+}

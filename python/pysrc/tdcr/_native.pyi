@@ -87,6 +87,7 @@ class Robot:
         base: Optional[Mapping[str, Any]] = None,
         solver: Optional[Mapping[str, Any]] = None,
         model: Optional[Mapping[str, Any]] = None,
+        disks: Optional[Mapping[str, Any]] = None,
     ) -> Robot: ...
     @staticmethod
     def from_dict(tables: Mapping[str, Any]) -> Robot:

@@ -3,8 +3,8 @@
 
 use super::SolverSettings;
 use super::tables::{
-    BaseTable, EquilibriumKey, LoadsTable, MethodName, ModelTable, RodTable, RoutingTable, SolverTable, TendonModelKey,
-    TendonTable, Vec3,
+    BaseTable, DisksTable, EquilibriumKey, LoadsTable, MethodName, ModelTable, RodTable, RoutingTable, SolverTable,
+    TendonModelKey, TendonTable, Vec3,
 };
 use crate::io::Problem;
 use crate::io::locate::Locator;
@@ -13,7 +13,7 @@ use crate::model::rod::{Rod, Section};
 use crate::model::routing::Routing;
 use crate::model::tendon::{Actuation, Tendon};
 use crate::report::Method;
-use crate::{Error, Robot, TendonModel, so3};
+use crate::{Disks, Error, Robot, TendonModel, so3};
 use nalgebra::{Matrix3, Vector3};
 
 /// The matrix whose rows the file gives as `base.rotation`.
@@ -98,6 +98,25 @@ pub(super) fn build(rod: &RodTable, base: &BaseTable, loads: &LoadsTable, tendon
         robot = robot.with_tendon(tendon);
     }
     robot
+}
+
+/// The spacer disks of a checked `[disks]` table on a rod of `length` (m): at `positions`
+/// or `count` evenly spaced, each weighing `mass` times `gravity` or `weight`.
+pub(super) fn disks(table: &DisksTable, length: f64) -> Disks {
+    let weight = match (table.mass, table.weight) {
+        (Some(mass), _) => vector(&table.gravity) * mass,
+        (None, weight) => vector(&weight),
+    };
+    let mut out = match &table.positions {
+        Some(positions) => Disks {
+            positions: positions.clone(),
+            weight,
+            radius: None,
+        },
+        None => Disks::evenly(table.count.unwrap_or(0), length, weight),
+    };
+    out.radius = table.radius;
+    out
 }
 
 /// Sets the model variant of the `[model]` table on `robot`; keys not given keep the

@@ -11,14 +11,14 @@ mod check;
 mod tables;
 mod write;
 
-use self::build::{build, library_problem, model, settings};
+use self::build::{build, disks, library_problem, model, settings};
 use self::check::Checker;
-use self::tables::{BaseTable, LoadsTable, ModelTable, RodTable, SolverTable, TABLES, TendonTable};
+use self::tables::{BaseTable, DisksTable, LoadsTable, ModelTable, RodTable, SolverTable, TABLES, TendonTable};
 use super::locate::{LazyLocator, Lines};
 use super::printable;
 use super::{FileError, Problem};
 use crate::report::Method;
-use crate::{Robot, collocation, shooting};
+use crate::{Disks, Robot, collocation, shooting};
 use serde::de::DeserializeOwned;
 use toml::Spanned;
 use toml::de::{DeTable, DeValue, ValueDeserializer};
@@ -54,6 +54,10 @@ pub struct RobotFile {
     pub robot: Robot,
     /// The solver settings of the `[solver]` table, defaults where not given.
     pub solver: SolverSettings,
+    /// The spacer disks of the `[disks]` table, if any: their weights are already among
+    /// the robot's point loads (the last ones, [`Disks::point_loads`]); kept to draw them
+    /// and to write the table back.
+    pub disks: Option<Disks>,
 }
 
 impl RobotFile {
@@ -158,6 +162,9 @@ pub fn parse(text: &str, file: &str) -> Result<RobotFile, FileError> {
     if let Some(solver) = &tables.solver {
         check.solver(solver);
     }
+    if let Some(d) = &tables.disks {
+        check.disks(d, length);
+    }
     problems.extend(check.problems);
     let tendons: Option<Vec<TendonTable>> = tables.tendons.into_iter().collect();
     let (Some(rod), Some(tendons), true) = (tables.rod, tendons, problems.is_empty()) else {
@@ -170,6 +177,10 @@ pub fn parse(text: &str, file: &str) -> Result<RobotFile, FileError> {
     );
     let mut robot = build(&rod, &base, &loads, &tendons);
     model(&mut robot, &tables.model.unwrap_or_default());
+    let disks = tables.disks.map(|d| disks(&d, robot.length()));
+    if let Some(d) = &disks {
+        robot.loads.point.extend(d.point_loads());
+    }
     if let Err(e) = robot.validate() {
         return Err(fail(vec![library_problem(
             locator.get(),
@@ -180,6 +191,7 @@ pub fn parse(text: &str, file: &str) -> Result<RobotFile, FileError> {
     Ok(RobotFile {
         robot,
         solver: settings(&solver),
+        disks,
     })
 }
 
@@ -204,6 +216,7 @@ struct Tables {
     tendons: Vec<Option<TendonTable>>,
     solver: Option<SolverTable>,
     model: Option<ModelTable>,
+    disks: Option<DisksTable>,
 }
 
 /// Deserializes the tables of a file, each failure one problem at its place in `text`.
@@ -229,6 +242,7 @@ impl Reader<'_> {
                 "loads" => tables.loads = self.table(&name, value),
                 "solver" => tables.solver = self.table(&name, value),
                 "model" => tables.model = self.table(&name, value),
+                "disks" => tables.disks = self.table(&name, value),
                 "tendon" => match value.into_inner() {
                     DeValue::Array(items) if items.iter().all(|t| t.get_ref().is_table()) => {
                         for (i, item) in items.into_iter().enumerate() {
@@ -248,7 +262,10 @@ impl Reader<'_> {
                     let hint = match name.as_str() {
                         "tendons" => "; did you mean [[tendon]]?".to_string(),
                         "load" => "; did you mean [loads]?".to_string(),
-                        _ => match closest(&name, ["rod", "base", "loads", "model", "solver", "tendon"].into_iter()) {
+                        _ => match closest(
+                            &name,
+                            ["rod", "base", "loads", "disks", "model", "solver", "tendon"].into_iter(),
+                        ) {
                             Some("tendon") => "; did you mean [[tendon]]?".to_string(),
                             Some(table) => format!("; did you mean [{table}]?"),
                             None => String::new(),

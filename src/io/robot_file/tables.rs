@@ -207,6 +207,22 @@ pub(super) enum EquilibriumKey {
     Nearest,
 }
 
+/// `[disks]`: spacer disks, `count` evenly spaced or at `positions` (one of the two), each
+/// of `mass` (kg, with `gravity` in m/s^2, world) or `weight` (N, world) (one of the two),
+/// with an optional `radius` (m) for pictures.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct DisksTable {
+    pub(super) count: Option<usize>,
+    pub(super) positions: Option<Vec<f64>>,
+    pub(super) mass: Option<f64>,
+    #[serde(default, deserialize_with = "vector")]
+    pub(super) gravity: Option<Vec3>,
+    #[serde(default, deserialize_with = "vector")]
+    pub(super) weight: Option<Vec3>,
+    pub(super) radius: Option<f64>,
+}
+
 /// `[model]`: which variant of the model to solve, each key optional (the library default,
 /// the coupled model with corner forces, if not given).
 #[derive(Debug, Default, Deserialize)]
@@ -225,4 +241,4 @@ pub(super) enum TendonModelKey {
 }
 
 /// The tables a robot file may have, in the order docs/robot-file.md describes them.
-pub(super) const TABLES: &str = "[rod], [base], [loads], [[tendon]], [model], [solver]";
+pub(super) const TABLES: &str = "[rod], [base], [loads], [disks], [[tendon]], [model], [solver]";
