@@ -173,3 +173,38 @@ fn the_papers_jump_conditions_differ_from_corner_forces_under_tip_loads() {
     // a few thousand ulps of the 0.4 m rod). Tip loads shear and twist the rod and turn them.
     assert!(free < 1e-12, "{free}");
 }
+
+#[test]
+fn compare_models_solves_each_variant_as_its_switches_say() {
+    use tdcr::analysis::comparison::{SHAPE_SAMPLES, Variant, compare_models};
+    let text = two_segments("[model]\ncorner_forces = false", ([0.0, 0.3, -0.2], [0.01, 0.0, 0.0]));
+    // The file's own [model] does not matter: each variant sets both switches.
+    let robot = tdcr::io::parse(&text, "two.toml").unwrap().robot;
+    let options = collocation::Options::default();
+    let shapes = compare_models(&robot, &Variant::ALL, |r| collocation::solve(r, &options)).unwrap();
+    let names: Vec<&str> = shapes.iter().map(|c| c.name.as_str()).collect();
+    assert_eq!(names, ["coupled", "point_moment", "constant_curvature", "paper_jumps"]);
+    let mut coupled = robot.clone();
+    coupled.corner_forces = true;
+    let mut point_moment = coupled.clone();
+    point_moment.tendon_model = TendonModel::PointMoment;
+    let cc = constant_curvature(&robot, 1).unwrap().last().unwrap().p;
+    // Bitwise: the same robots solved with the same options, the same closed form.
+    assert_eq!(shapes[0].tip_position(), tip(&coupled).0);
+    assert_eq!(shapes[1].tip_position(), tip(&point_moment).0);
+    assert_eq!(shapes[3].tip_position(), tip(&robot).0);
+    // 1e-12 m: the closed form evaluated in one step or in many, rounding only
+    assert!((shapes[2].tip_position() - cc).norm() < 1e-12);
+    assert_eq!(shapes[0].states.len(), SHAPE_SAMPLES + 1);
+    assert_eq!((shapes[0].tip_distance, shapes[0].tip_angle), (0.0, 0.0));
+    for c in &shapes[1..] {
+        assert_eq!(c.tip_distance, (c.tip_position() - shapes[0].tip_position()).norm());
+        assert!(c.tip_angle > 0.0, "{}", c.name);
+    }
+    // The jump conditions move the tip by what the test above measures.
+    assert!(
+        (shapes[3].tip_distance - 350e-6).abs() < 1e-6,
+        "{}",
+        shapes[3].tip_distance
+    );
+}
