@@ -68,3 +68,27 @@ def test_disks_are_point_loads_that_survive_a_pickle():
     # Bitwise: the disks are these point loads, and the pickle keeps them.
     assert np.array_equal(tips[0], tips[1]) and np.array_equal(tips[0], tips[2])
     assert not np.array_equal(tips[0], tdcr.solve(tdcr.Robot(rod, tendons=tendons, base=base)).tip_position)
+
+
+def test_compare_solves_each_model_and_measures_the_tips():
+    robot = tdcr.Robot.from_toml(EXAMPLE + "\n[model]\ncorner_forces = false\n")
+    shapes = tdcr.compare(robot)
+    assert [c["name"] for c in shapes] == ["coupled", "point_moment", "constant_curvature", "paper_jumps"]
+    coupled = tdcr.Robot.from_toml(EXAMPLE)
+    # Bitwise: each model is the robot with its switches set, solved as tdcr.solve does.
+    assert np.array_equal(shapes[0]["tip_position"], tdcr.solve(coupled).tip_position)
+    assert np.array_equal(shapes[3]["tip_position"], tdcr.solve(robot).tip_position)
+    assert shapes[0]["tip_distance"] == 0.0 and shapes[0]["tip_angle"] == 0.0
+    for c in shapes[1:]:
+        assert c["tip_distance"] == np.linalg.norm(c["tip_position"] - shapes[0]["tip_position"])
+        assert c["tip_distance"] > 0.0 and c["tip_angle"] > 0.0
+        assert c["p"].shape == (c["s"].shape[0], 3)
+    methods = tdcr.compare(coupled, methods=["collocation", "shooting"])
+    # 1e-8 m: the solvers' agreement at their default tolerances (tests/cross_check.rs)
+    assert [c["name"] for c in methods] == ["collocation", "shooting"] and methods[1]["tip_distance"] < 1e-8
+    for bad in [{"models": ["kirchhoff"]}, {"methods": ["euler"]}, {"models": ["coupled"], "methods": ["shooting"]}]:
+        try:
+            tdcr.compare(coupled, **bad)
+        except tdcr.InvalidInput:
+            continue
+        raise AssertionError(bad)
