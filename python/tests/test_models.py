@@ -30,7 +30,7 @@ def test_the_model_keyword_is_the_model_table(cli):
             for k, v in model.items()
         )
         from_file = tdcr.Robot.from_toml(EXAMPLE + table)
-        from_dict = tdcr.Robot.from_dict({**_tables(default), "model": model})
+        from_dict = tdcr.Robot(**KEYWORDS, model=model)
         assert from_file.model == from_dict.model == {**default.model, **model}
         tips = [tdcr.solve(r).tip_position for r in [from_file, from_dict, pickle.loads(pickle.dumps(from_file))]]
         json = cli(["solve", "-", "--format", "json", *flags], EXAMPLE)
@@ -45,11 +45,19 @@ def test_the_model_keyword_is_the_model_table(cli):
     assert keywords.model == {"corner_forces": False, "tendons": "point_moment"}
 
 
-def _tables(robot):
-    """The robot's tables as a dict, through its robot file."""
-    import tomllib
-
-    return tomllib.loads(robot.to_toml())
+# EXAMPLE as keyword arguments.
+KEYWORDS = {
+    "rod": {"length": 0.242, "outer_radius": 0.0004, "youngs_modulus": 210e9, "poisson_ratio": 0.3125},
+    "base": {"position": [0.0, 0.0, 0.0], "rotation": [[0.0, 0.0, 1.0], [0.0, 1.0, 0.0], [-1.0, 0.0, 0.0]]},
+    "loads": {"distributed_force": [0.0, 0.0, -0.47], "tip_force": [0.0, 0.1, -0.05]},
+    "tendons": [
+        {"routing": {"kind": "straight", "x": 0.008, "y": 0.0}, "tension": 2.94, "end": 0.121},
+        {"routing": {"kind": "straight", "x": 0.0, "y": 0.008}, "tension": 1.0},
+        {"routing": {"kind": "straight", "x": -0.008, "y": 0.0}, "tension": 0.0},
+        {"routing": {"kind": "straight", "x": 0.0, "y": -0.008}, "tension": 0.0},
+        {"routing": {"kind": "helical", "radius": 0.008, "turns_per_rod_length": 1.0}, "tension": 0.0},
+    ],
+}
 
 
 def test_disks_are_point_loads_that_survive_a_pickle():
