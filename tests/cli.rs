@@ -1495,3 +1495,23 @@ fn compare_prints_and_draws_models_and_methods() {
     );
     assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
 }
+
+/// Issue 27: `check` counts a file's disks apart from its point loads and names a model
+/// variant other than the default.
+#[test]
+fn check_names_disks_and_the_model() {
+    let dir = scratch("check-model");
+    let text = format!(
+        "{}\n[disks]\ncount = 12\nmass = 0.001\ngravity = [0.0, 0.0, -9.81]\n[model]\ncorner_forces = false\n",
+        example()
+    );
+    let out = run(&dir, &["check", "-"], Some(&text));
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    assert!(
+        stdout(&out).contains(
+            "0 point load(s), 12 disk(s) of 0.00981 N; model: the paper's jump conditions (no corner forces); solver"
+        ),
+        "{}",
+        stdout(&out)
+    );
+}
