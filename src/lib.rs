@@ -69,6 +69,7 @@ mod solution;
 pub use collocation::sensitivity::{TipSensitivities, backbone_tension_sensitivity, tip_sensitivities};
 pub use collocation::{Solver, solve, solve_batch, solve_from};
 pub use error::{Error, Readable, Result};
+pub use model::disks::Disks;
 pub use model::loads::{Field, Loads, PointLoad};
 pub use model::parameter::Parameter;
 pub use model::robot::{Robot, TendonModel};

@@ -1468,3 +1468,120 @@ fn a_sweep_names_the_step_where_a_tendon_goes_taut() {
         .collect();
     assert_eq!(events, vec!["", "", "tendon 1 taut", "", "", ""], "{csv}");
 }
+
+/// Issue 27: `--corner-forces` and `--tendons` set what the file's `[model]` table sets,
+/// bitwise, and replace it.
+#[test]
+fn model_flags_equal_the_model_table() {
+    let dir = scratch("model");
+    // Tendon 1 ends mid-way, tendon 2 goes on at 1 N and a tip force shears the rod: the
+    // corner forces of tendon 2 matter.
+    let base = edited("# end = 0.242 ", "end = 0.121 #")
+        .replace("tip_force = [0.0, 0.0, 0.0]", "tip_force = [0.0, 0.1, -0.05]")
+        .replacen("tension = 0.0", "tension = 1.0", 1);
+    let tip = |text: &str, flags: &[&str]| {
+        let args = [&["solve", "-", "--format", "json"], flags].concat();
+        let out = run(&dir, &args, Some(text));
+        assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+        tip_of(&serde_json::from_str(&stdout(&out)).unwrap())
+    };
+    let with_table = |table: &str| format!("{base}\n[model]\n{table}\n");
+    let coupled = tip(&base, &[]);
+    let paper = tip(&with_table("corner_forces = false"), &[]);
+    assert_ne!(paper, coupled);
+    assert_eq!(tip(&base, &["--corner-forces", "false"]), paper);
+    // The flag replaces the file's key.
+    assert_eq!(
+        tip(&with_table("corner_forces = false"), &["--corner-forces", "true"]),
+        coupled
+    );
+    let point_moment = tip(&with_table("tendons = \"point_moment\""), &[]);
+    assert_ne!(point_moment, coupled);
+    assert_eq!(tip(&base, &["--tendons", "point_moment"]), point_moment);
+    let out = run(&dir, &["solve", "robot.toml", "--tendons", "pointmoment"], None);
+    assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
+    assert!(stderr(&out).contains("point_moment"), "{}", stderr(&out));
+}
+
+/// Issue 27: `tdcr compare` prints each model's tip and its distance from the first's and
+/// draws the shapes overlaid; `--methods` compares the two solvers the same way.
+#[test]
+fn compare_prints_and_draws_models_and_methods() {
+    let dir = scratch("compare");
+    let text = edited("# end = 0.242 ", "end = 0.121 #")
+        .replace("tip_force = [0.0, 0.0, 0.0]", "tip_force = [0.0, 0.1, -0.05]")
+        .replacen("tension = 0.0", "tension = 1.0", 1);
+    std::fs::write(dir.join("robot.toml"), &text).unwrap();
+    let out = run(&dir, &["compare", "robot.toml", "--plot", "compare.svg"], None);
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    let table = stdout(&out);
+    let rows: Vec<Vec<&str>> = table
+        .lines()
+        .skip(1)
+        .take(4)
+        .map(|l| l.split_whitespace().collect())
+        .collect();
+    let names: Vec<&str> = rows.iter().map(|r| r[0]).collect();
+    assert_eq!(
+        names,
+        ["coupled", "point_moment", "constant_curvature", "paper_jumps"],
+        "{table}"
+    );
+    assert_eq!(rows[0][4..], ["0.000000", "0.000000"], "{table}");
+    for row in &rows[1..] {
+        assert!(row[4].parse::<f64>().unwrap() > 0.0, "{table}");
+    }
+    let svg = std::fs::read_to_string(dir.join("compare.svg")).unwrap();
+    for name in [
+        "coupled (reference)",
+        "point_moment: tip",
+        "constant_curvature: tip",
+        "paper_jumps: tip",
+    ] {
+        assert!(svg.contains(name), "{name}");
+    }
+    let out = run(
+        &dir,
+        &["compare", "robot.toml", "--methods", "collocation,shooting"],
+        None,
+    );
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    let table = stdout(&out);
+    let shooting: Vec<&str> = table.lines().nth(2).unwrap().split_whitespace().collect();
+    assert_eq!(shooting[0], "shooting", "{table}");
+    // 1e-5 mm: the solvers agree to about 1e-8 m at their default tolerances (cross_check.rs)
+    assert!(shooting[4].parse::<f64>().unwrap() < 1e-5, "{table}");
+    let out = run(&dir, &["compare", "robot.toml", "--models", "coupled,kirchhoff"], None);
+    assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
+    assert!(
+        stderr(&out).contains("`kirchhoff`, which is not a model"),
+        "{}",
+        stderr(&out)
+    );
+    let out = run(
+        &dir,
+        &["compare", "robot.toml", "--models", "coupled", "--methods", "shooting"],
+        None,
+    );
+    assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
+}
+
+/// Issue 27: `check` counts a file's disks apart from its point loads and names a model
+/// variant other than the default.
+#[test]
+fn check_names_disks_and_the_model() {
+    let dir = scratch("check-model");
+    let text = format!(
+        "{}\n[disks]\ncount = 12\nmass = 0.001\ngravity = [0.0, 0.0, -9.81]\n[model]\ncorner_forces = false\n",
+        example()
+    );
+    let out = run(&dir, &["check", "-"], Some(&text));
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    assert!(
+        stdout(&out).contains(
+            "0 point load(s), 12 disk(s) of 0.00981 N; model: the paper's jump conditions (no corner forces); solver"
+        ),
+        "{}",
+        stdout(&out)
+    );
+}

@@ -359,7 +359,7 @@ fn check_rejection(text: &str, e: &FileError) -> Result<(), String> {
             }
         } else {
             let table = p.field.split(['.', '[']).next().unwrap_or_default();
-            if !["rod", "base", "loads", "tendon", "solver"].contains(&table) {
+            if !["rod", "base", "loads", "tendon", "model", "solver"].contains(&table) {
                 return Err(format!("field outside the file's tables: {p:?}"));
             }
             // Shown with control characters escaped, as the message prints them.

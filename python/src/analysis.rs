@@ -546,6 +546,7 @@ pub fn calibrate(
         file: tdcr::io::RobotFile {
             robot: out.robot.clone(),
             solver: robot.file.solver.clone(),
+            disks: robot.file.disks.clone(),
         },
         // Calibration does not change a rod given by `shear_modulus` (it cannot fit its E).
         given_rod: robot.given_rod.clone(),

@@ -6,6 +6,7 @@
 mod analysis;
 mod boundary;
 mod branch;
+mod compare;
 mod convert;
 mod errors;
 mod options;
@@ -360,6 +361,7 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(analysis::solve_tensions, m)?)?;
     m.add_function(wrap_pyfunction!(analysis::solve_displacements, m)?)?;
     m.add_function(wrap_pyfunction!(analysis::calibrate, m)?)?;
+    m.add_function(wrap_pyfunction!(compare::compare, m)?)?;
     m.add_function(wrap_pyfunction!(case_s, m)?)?;
     m.add_function(wrap_pyfunction!(case_h, m)?)?;
     m.add_function(wrap_pyfunction!(prototype, m)?)?;

@@ -25,7 +25,9 @@ use toml::Table;
 ///
 /// A tendon dict takes the keys of the file's `[[tendon]]`: `routing`, `tension` (N) or
 /// `displacement` (m, the actuator's pull-in; the tension is then solved for), `end` (m),
-/// and for an elastic tendon `stiffness` (E_t A_t, N) and `free_length` (m).
+/// and for an elastic tendon `stiffness` (E_t A_t, N) and `free_length` (m). `model` is the
+/// file's `[model]` table: `{"corner_forces": False}` solves the paper's jump conditions,
+/// `{"tendons": "point_moment"}` the point-moment tendon model.
 ///
 /// Or build it with `Robot.from_toml(text)`, `Robot.from_file(path)`, `Robot.from_dict(tables)`,
 /// `tdcr.cases.case_s()`. Bad input raises `tdcr.FileError` with the command line's
@@ -91,6 +93,7 @@ pub fn from_library(robot: tdcr::Robot) -> PyResult<PyRobot> {
     let file = RobotFile {
         robot,
         solver: SolverSettings::default(),
+        disks: None,
     };
     parse(&file.to_toml().map_err(to_py)?, "<tdcr.cases>")
 }
@@ -152,18 +155,20 @@ impl Rows {
 #[pymethods]
 impl PyRobot {
     /// A robot from keyword arguments shaped like a robot file's tables: `rod` (dict),
-    /// `tendons` (list of dicts, the file's `[[tendon]]`), `loads`, `base`, `solver`
-    /// (dicts). A tendon dict has `routing`, `tension` (N) or `displacement` (m), and
+    /// `tendons` (list of dicts, the file's `[[tendon]]`), `loads`, `base`, `solver`,
+    /// `model`, `disks` (dicts). A tendon dict has `routing`, `tension` (N) or `displacement` (m), and
     /// optionally `end` (m), `stiffness` (N) and `free_length` (m). Raises `tdcr.FileError`
     /// (messages name the field, e.g. `tendon[2].tension`).
     #[new]
-    #[pyo3(signature = (rod, tendons=None, loads=None, base=None, solver=None))]
+    #[pyo3(signature = (rod, tendons=None, loads=None, base=None, solver=None, model=None, disks=None))]
     fn new(
         rod: &Bound<'_, PyAny>,
         tendons: Option<&Bound<'_, PyAny>>,
         loads: Option<&Bound<'_, PyAny>>,
         base: Option<&Bound<'_, PyAny>>,
         solver: Option<&Bound<'_, PyAny>>,
+        model: Option<&Bound<'_, PyAny>>,
+        disks: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<Self> {
         let mut doc = Table::new();
         for (key, value) in [
@@ -172,6 +177,8 @@ impl PyRobot {
             ("loads", loads),
             ("base", base),
             ("solver", solver),
+            ("model", model),
+            ("disks", disks),
         ] {
             if let Some(v) = value.filter(|v| !v.is_none()) {
                 doc.insert(key.into(), Walk::default().toml(v, key)?);
@@ -357,6 +364,21 @@ impl PyRobot {
     #[getter]
     fn base_rotation<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
         crate::solution::matrix(py, &self.file.robot.base_rotation)
+    }
+
+    /// The model variant, as the file's `[model]` table: `corner_forces` (bool) and
+    /// `tendons` ("coupled" or "point_moment").
+    #[getter]
+    fn model<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let r = &self.file.robot;
+        let tendons = match r.tendon_model {
+            tdcr::TendonModel::Coupled => "coupled",
+            tdcr::TendonModel::PointMoment => "point_moment",
+        };
+        let out = PyDict::new(py);
+        out.set_item("corner_forces", r.corner_forces)?;
+        out.set_item("tendons", tendons)?;
+        Ok(out)
     }
 
     /// The solver of the `[solver]` table: "collocation" or "shooting".

@@ -3,13 +3,181 @@
 //! - the point-moment tendon model (Jones et al., cited by the paper) is a switch on the robot,
 //!   [`crate::TendonModel::PointMoment`], solved by the same solvers as the coupled model;
 //! - the constant-curvature model is closed form: [`constant_curvature`].
+//!
+//! [`compare_models`] solves one robot as several of these [`Variant`]s and [`compare`]
+//! measures how far each shape's tip is from the first's (`tdcr compare`, `tdcr.compare`).
 #![allow(non_snake_case)]
 
-use crate::error::Result;
-use crate::model::robot::Robot;
+use crate::error::{Result, invalid};
+use crate::model::robot::{Robot, TendonModel};
 use crate::so3;
-use crate::solution::State;
-use nalgebra::Vector3;
+use crate::solution::{Solution, State};
+use nalgebra::{Matrix3, Vector3};
+
+/// Intervals a solved shape is sampled on for a comparison ([`Solution::at`], the scheme's
+/// own interpolant), and segments a constant-curvature arc is cut into: enough for a smooth
+/// picture of a robot of a few turns.
+pub const SHAPE_SAMPLES: usize = 256;
+
+/// One model of the robot in a comparison.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Variant {
+    /// The coupled Cosserat rod/string model with corner forces (the library's default).
+    Coupled,
+    /// The point-moment tendon model ([`TendonModel::PointMoment`]).
+    PointMoment,
+    /// The closed-form constant-curvature model ([`constant_curvature`]).
+    ConstantCurvature,
+    /// The coupled model with the paper's jump conditions (`Robot::corner_forces = false`).
+    PaperJumps,
+}
+
+impl Variant {
+    /// Every variant, in the order the docs list them.
+    pub const ALL: [Variant; 4] = [
+        Variant::Coupled,
+        Variant::PointMoment,
+        Variant::ConstantCurvature,
+        Variant::PaperJumps,
+    ];
+
+    /// The variant's name, as `tdcr compare --models` and `tdcr.compare` spell it.
+    pub fn name(self) -> &'static str {
+        match self {
+            Variant::Coupled => "coupled",
+            Variant::PointMoment => "point_moment",
+            Variant::ConstantCurvature => "constant_curvature",
+            Variant::PaperJumps => "paper_jumps",
+        }
+    }
+
+    /// The variant called `name`.
+    ///
+    /// # Errors
+    /// [`crate::Error::InvalidInput`] naming the known variants.
+    pub fn from_name(name: &str) -> Result<Variant> {
+        Variant::ALL.into_iter().find(|v| v.name() == name).ok_or_else(|| {
+            let names: Vec<&str> = Variant::ALL.iter().map(|v| v.name()).collect();
+            invalid(
+                "models",
+                format!("has `{name}`, which is not a model"),
+                format!("give some of {}", names.join(", ")),
+            )
+        })
+    }
+
+    /// `robot` with this variant's switches set (both, whatever the robot had): the
+    /// coupled tendon model with or without corner forces, or the point-moment model. The
+    /// constant-curvature variant is not solved, so it keeps the robot as the coupled one.
+    pub fn robot(self, robot: &Robot) -> Robot {
+        let mut out = robot.clone();
+        out.corner_forces = self != Variant::PaperJumps;
+        out.tendon_model = match self {
+            Variant::PointMoment => TendonModel::PointMoment,
+            _ => TendonModel::Coupled,
+        };
+        out
+    }
+}
+
+/// One shape of a comparison and how far its tip is from the first shape's.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Compared {
+    /// What it is (a [`Variant::name`] or a solver's name).
+    pub name: String,
+    /// The backbone from base to tip ([`SHAPE_SAMPLES`] intervals of a solved shape).
+    pub states: Vec<State>,
+    /// Distance of the tip from the first shape's tip (m); 0 for the first.
+    pub tip_distance: f64,
+    /// Angle of the rotation between the tip frames, |log(R_first(L)^T R(L))| (rad); 0 for
+    /// the first.
+    pub tip_angle: f64,
+}
+
+impl Compared {
+    /// The tip position p(L) (m, world frame).
+    pub fn tip_position(&self) -> Vector3<f64> {
+        self.states.last().map_or_else(Vector3::zeros, |s| s.p)
+    }
+
+    /// The tip rotation R(L), body to world.
+    pub fn tip_rotation(&self) -> Matrix3<f64> {
+        self.states.last().map_or_else(Matrix3::identity, |s| s.R)
+    }
+}
+
+/// The states of a solved shape at [`SHAPE_SAMPLES`] + 1 evenly spaced arc lengths from the
+/// base to the tip, from the solution's interpolant.
+pub fn shape(solution: &Solution) -> Vec<State> {
+    let length = solution.length();
+    (0..=SHAPE_SAMPLES)
+        .map(|k| solution.at_limit(length * k as f64 / SHAPE_SAMPLES as f64, k == SHAPE_SAMPLES))
+        .collect()
+}
+
+/// Named shapes, each with its tip's distance and angle from the first's. Shapes without
+/// states are compared as if their tip were at the origin with the identity rotation.
+pub fn compare(shapes: Vec<(String, Vec<State>)>) -> Vec<Compared> {
+    let mut out: Vec<Compared> = shapes
+        .into_iter()
+        .map(|(name, states)| Compared {
+            name,
+            states,
+            tip_distance: 0.0,
+            tip_angle: 0.0,
+        })
+        .collect();
+    if let Some((first, rest)) = out.split_first_mut() {
+        let (p, R) = (first.tip_position(), first.tip_rotation());
+        for c in rest {
+            c.tip_distance = (c.tip_position() - p).norm();
+            c.tip_angle = so3::log(&(R.transpose() * c.tip_rotation())).norm();
+        }
+    }
+    out
+}
+
+/// `robot` solved as each of `variants` (with `solve`, the caller's solver and options;
+/// the constant-curvature variant in closed form), each tip compared with the first's.
+///
+/// # Errors
+/// The first error of `solve` or of [`constant_curvature`].
+///
+/// # Examples
+/// ```
+/// use tdcr::analysis::comparison::{Variant, compare_models};
+/// let robot = tdcr::cases::case_s();
+/// let variants = [Variant::Coupled, Variant::PointMoment];
+/// let shapes = compare_models(&robot, &variants, |r| tdcr::collocation::solve(r, &Default::default())).unwrap();
+/// // Case S's straight tendon: the point-moment model misses only the compression, microns.
+/// assert!(shapes[1].tip_distance < 1e-4);
+/// ```
+pub fn compare_models(
+    robot: &Robot,
+    variants: &[Variant],
+    solve: impl Fn(&Robot) -> Result<Solution>,
+) -> Result<Vec<Compared>> {
+    let shapes = variants
+        .iter()
+        .map(|&v| {
+            let states = match v {
+                Variant::ConstantCurvature => arcs(robot)?,
+                _ => shape(&solve(&v.robot(robot))?),
+            };
+            Ok((v.name().to_string(), states))
+        })
+        .collect::<Result<Vec<_>>>()?;
+    Ok(compare(shapes))
+}
+
+/// The constant-curvature shape cut into about [`SHAPE_SAMPLES`] segments over the robot.
+fn arcs(robot: &Robot) -> Result<Vec<State>> {
+    let segments = robot.breakpoints().len() + 1;
+    let mut states = constant_curvature(robot, SHAPE_SAMPLES.div_ceil(segments))?;
+    // Each segment's last state is the next one's first: keep one of each pair.
+    states.dedup_by(|b, a| a.s == b.s);
+    Ok(states)
+}
 
 /// Points along each segment used to average a routing's offset.
 const OFFSET_SAMPLES: usize = 64;

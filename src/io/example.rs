@@ -169,6 +169,10 @@ method = "collocation"           # or "shooting" (the independent cross-check)
 # max_iterations = 30            # Newton iterations per Newton run
 # continuation = true            # follow the load path when Newton alone is not enough
 # equilibrium = "load_path"      # or "nearest": Newton's root from the guess, stable or not
+
+# [model]                        # the model variant; every field optional
+# corner_forces = true           # false: the paper's jump conditions (no corner forces)
+# tendons = "coupled"            # or "point_moment": tendons act by their end moments only
 "#;
 
 #[cfg(test)]

@@ -2,6 +2,7 @@
 //! the robot) validated once, and eq. 13 (corrected, docs/model.md) with its exact
 //! linearization.
 
+pub mod disks;
 pub(crate) mod equations;
 pub mod length;
 pub(crate) mod linearize;

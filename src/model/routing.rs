@@ -60,6 +60,28 @@ impl Routing {
         Routing::Straight { x, y }
     }
 
+    /// A straight routing at `radius` (m) from the backbone, at `angle_deg` (degrees) from
+    /// body x toward body y: (x, y) = radius (cos, sin) of the angle. The cosine and sine are
+    /// exact where they are simple numbers: at multiples of 90 degrees one of them is exactly
+    /// 0 (not the 6.1e-17 of `cos(pi / 2)`), at 30 degrees off an axis the sine is exactly
+    /// 1/2, so a tendon at 120 degrees has x = -radius / 2 exactly.
+    ///
+    /// # Examples
+    /// ```
+    /// use tdcr::Routing;
+    /// let r = Routing::polar(0.008, 90.0).at(0.0, 0.2).r;
+    /// assert_eq!((r.x, r.y), (0.0, 0.008));
+    /// let r = Routing::polar(0.008, 240.0).at(0.0, 0.2).r;
+    /// assert_eq!(r.x, -0.004);
+    /// ```
+    pub fn polar(radius: f64, angle_deg: f64) -> Self {
+        let (cos, sin) = cos_sin_degrees(angle_deg);
+        Routing::Straight {
+            x: radius * cos,
+            y: radius * sin,
+        }
+    }
+
     /// A helical routing of `radius` (m) at `turns` turns per rod length L (the angle
     /// advances by 2 pi `turns` over s in [0, L], whatever the tendon's end), starting at
     /// angle `phase` (rad); turns < 0 is left-handed. A tendon ending at l makes
@@ -173,6 +195,31 @@ impl Routing {
     }
 }
 
+/// cos and sin of `angle` in degrees, reduced to within 45 degrees of an axis first so that
+/// multiples of 90 degrees give exact zeros and ones, and 30 degrees off an axis an exact 1/2
+/// for the sine (the cosine is then sqrt(3)/2 rounded once). Within rounding of
+/// `angle.to_radians().sin_cos()` everywhere else.
+fn cos_sin_degrees(angle: f64) -> (f64, f64) {
+    let turned = angle.rem_euclid(360.0);
+    let quadrant = (turned / 90.0).round();
+    let rest = turned - 90.0 * quadrant;
+    let (cos, sin) = if rest.abs() == 30.0 {
+        (0.75f64.sqrt(), 0.5f64.copysign(rest))
+    } else {
+        let (sin, cos) = rest.to_radians().sin_cos();
+        (cos, sin)
+    };
+    // Turn by `quadrant` right angles exactly: (c, s) -> (-s, c) per quarter turn.
+    let (cos, sin) = match quadrant as i64 {
+        1 => (-sin, cos),
+        2 => (-cos, -sin),
+        3 => (sin, -cos),
+        _ => (cos, sin),
+    };
+    // + 0.0 makes a negated exact zero +0, which prints as `0`, not `-0`.
+    (cos + 0.0, sin + 0.0)
+}
+
 impl fmt::Debug for Routing {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
@@ -214,6 +261,36 @@ mod tests {
             Routing::helical(0.008, -3.0, 0.0).turns_between(0.0, length / 3.0, length),
             -1.0
         );
+    }
+
+    /// Issue 27: polar placements give exact zeros on the axes and exact halves at 30
+    /// degrees off them, and agree with the radian formula everywhere.
+    #[test]
+    fn polar_offsets_are_exact_where_simple() {
+        let offset = |deg: f64| {
+            let r = Routing::polar(0.01, deg).at(0.0, 0.4).r;
+            (r.x, r.y)
+        };
+        assert_eq!(offset(0.0), (0.01, 0.0));
+        assert_eq!(offset(90.0), (0.0, 0.01));
+        assert!(offset(90.0).0.is_sign_positive() && offset(180.0).1.is_sign_positive());
+        assert_eq!(offset(180.0), (-0.01, 0.0));
+        assert_eq!(offset(-90.0), (0.0, -0.01));
+        assert_eq!(offset(450.0), (0.0, 0.01));
+        assert_eq!(offset(120.0).0, -0.005);
+        assert_eq!(offset(240.0).0, -0.005);
+        assert_eq!(offset(30.0).1, 0.005);
+        assert_eq!(offset(330.0).1, -0.005);
+        for deg in (-720..=720).map(|k| f64::from(k) * 0.7) {
+            let (x, y) = offset(deg);
+            let (sin, cos) = deg.to_radians().sin_cos();
+            // 2e-17 m: the radian formula's own rounding of deg * pi / 180 (up to ~1e-15 rad
+            // at 504 degrees) on the 1 cm radius, plus a few ulps
+            assert!(
+                (x - 0.01 * cos).abs() < 2e-17 && (y - 0.01 * sin).abs() < 2e-17,
+                "{deg}"
+            );
+        }
     }
 
     #[test]

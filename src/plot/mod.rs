@@ -194,6 +194,10 @@ pub struct Style {
     /// disks: they are for the picture only). `None` (default): [`default_disks`], disks
     /// about 2.5 tendon offsets apart (12 on the paper's prototype); `Some(0)`: none.
     pub disks: Option<usize>,
+    /// The robot's own spacer disks (a robot file's `[disks]`): drawn at their positions
+    /// and radius (the default radius if they have none) instead of [`Style::disks`].
+    /// Default `None`.
+    pub placed_disks: Option<crate::Disks>,
     /// Arrows for the tip force and point loads, labelled in N. Default true.
     pub loads: bool,
     /// Small arrows along the backbone for a distributed force, the largest labelled in N/m.
@@ -212,6 +216,7 @@ impl Style {
             tendon_colors: false,
             opacity: 1.0,
             disks: None,
+            placed_disks: None,
             loads: true,
             distributed_load: true,
         }

@@ -6,7 +6,7 @@ use super::axes::significant;
 use super::{Arrow, ArrowKind, Curve, Disk, LegendEntry, Marker, PALETTE, Panel, Style, Symbol};
 use crate::model::routing::Routing;
 use crate::model::tendon::Tendon;
-use crate::{Robot, Solution};
+use crate::{PointLoad, Robot, Solution};
 use nalgebra::Vector3;
 
 /// Points per metre of backbone or tendon drawn, at least [`MIN_SAMPLES`]: 1 mm spacing on
@@ -65,11 +65,10 @@ pub fn routing_label(tendon: &Tendon, length: f64) -> String {
     let turns = tendon.turns(length);
     let routing = match &tendon.routing {
         Routing::Straight { x, y } => {
-            // A coordinate below 1e-9 of the offset is rounding (8 mm at 120 deg puts 6e-19 m
-            // in cos 90 deg): written as 0, not as float noise.
-            let noise = 1e-9 * x.hypot(*y);
-            let clean = |c: f64| if c.abs() < noise { 0.0 } else { c };
-            format!("straight at ({}, {}) mm", mm(clean(*x)), mm(clean(*y)))
+            // A component a billion times smaller than the offset is the rounding residue of
+            // a computed cosine (0.008 cos(pi/2) = 4.9e-19 m), not a placement: shown as 0.
+            let shown = |c: f64| if c.abs() < 1e-9 * x.hypot(*y) { 0.0 } else { c };
+            format!("straight at ({}, {}) mm", mm(shown(*x)), mm(shown(*y)))
         }
         Routing::Helical { radius, .. } => {
             format!("helix of radius {} mm, {}", mm(*radius), turns_label(turns))
@@ -124,9 +123,32 @@ pub fn disk_radius(robot: &Robot) -> f64 {
     }
 }
 
+/// The point loads drawn as arrows: all but the weights of [`Style::placed_disks`], which
+/// the disks' legend entry gives.
+fn drawn_point_loads<'a>(robot: &'a Robot, style: &Style) -> &'a [PointLoad] {
+    let all = &robot.loads.point[..];
+    style.placed_disks.as_ref().and_then(|d| d.others(all)).unwrap_or(all)
+}
+
 /// The number of disks `style` draws on `robot`.
 pub(super) fn disk_count(robot: &Robot, style: &Style) -> usize {
-    style.disks.unwrap_or_else(|| default_disks(robot))
+    match &style.placed_disks {
+        Some(d) => d.positions.len(),
+        None => style.disks.unwrap_or_else(|| default_disks(robot)),
+    }
+}
+
+/// Where the disks `style` draws on `robot` sit (m) and their radius (m): the robot's own
+/// ([`Style::placed_disks`]) or [`disk_count`] evenly spaced.
+fn disk_places(robot: &Robot, style: &Style) -> (Vec<f64>, f64) {
+    let radius = disk_radius(robot);
+    match &style.placed_disks {
+        Some(d) => (d.positions.clone(), d.radius.unwrap_or(radius)),
+        None => {
+            let (length, count) = (robot.length(), disk_count(robot, style));
+            ((1..=count).map(|k| length * k as f64 / count as f64).collect(), radius)
+        }
+    }
 }
 
 /// Evenly spaced arc lengths from 0 to `end` (m), `count + 1` of them.
@@ -183,10 +205,9 @@ impl Panel {
             dash: style.dash.clone(),
             opacity: style.opacity,
         });
-        let disks = disk_count(robot, style);
-        let radius = disk_radius(robot);
-        for k in 1..=disks {
-            let state = solution.at_limit(length * k as f64 / disks as f64, true);
+        let (places, radius) = disk_places(robot, style);
+        for s in places {
+            let state = solution.at_limit(s, true);
             self.disks.push(Disk {
                 center: state.p,
                 rotation: state.R,
@@ -210,7 +231,7 @@ impl Panel {
                     label: Some(format!("{} N", significant(loads.tip_force.norm()))),
                 });
             }
-            for load in loads.point.iter().filter(|l| l.force.norm() > 0.0) {
+            for load in drawn_point_loads(robot, style).iter().filter(|l| l.force.norm() > 0.0) {
                 self.arrows.push(Arrow {
                     point: solution.at(load.s).p,
                     vector: load.force,
@@ -280,12 +301,16 @@ pub fn shape_legend(robot: &Robot, style: &Style) -> Vec<LegendEntry> {
     }
     let disks = disk_count(robot, style);
     if disks > 0 {
+        let placed = match &style.placed_disks {
+            Some(d) => format!("{} N each", significant(d.weight.norm())),
+            None => "evenly spaced".to_string(),
+        };
         legend.push(LegendEntry::new(
             Symbol::Disk,
             &format!(
-                "{disks} spacer disk{}, evenly spaced (drawn {} mm in radius)",
+                "{disks} spacer disk{}, {placed} (drawn {} mm in radius)",
                 if disks == 1 { "" } else { "s" },
-                mm(disk_radius(robot))
+                mm(disk_places(robot, style).1)
             ),
             DISK_COLOR,
         ));
@@ -302,7 +327,7 @@ pub fn shape_legend(robot: &Robot, style: &Style) -> Vec<LegendEntry> {
         ));
     }
     if style.loads {
-        for load in loads.point.iter().filter(|l| l.force.norm() > 0.0) {
+        for load in drawn_point_loads(robot, style).iter().filter(|l| l.force.norm() > 0.0) {
             legend.push(LegendEntry::new(
                 Symbol::Arrow,
                 &format!(

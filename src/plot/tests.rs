@@ -335,9 +335,57 @@ fn views_that_show_a_dot_are_left_out_and_the_rest_fill_one_row() {
     );
 }
 
+/// Issue 27: a tendon placed at 90 degrees, in polar form or by a computed cosine, is
+/// labelled at (0, 8) mm, not at (0.0000000000000612, 8) mm.
 #[test]
-fn routing_labels_print_no_float_noise() {
-    let angle = std::f64::consts::PI;
-    let tendon = Tendon::new(Routing::straight(0.005 * angle.cos(), 0.005 * angle.sin()), 1.0);
-    assert_eq!(shape::routing_label(&tendon, 0.2), "straight at (-5, 0) mm");
+fn legend_prints_zero_offsets_as_zero() {
+    let length = 0.242;
+    for routing in [
+        Routing::polar(0.008, 90.0),
+        Routing::straight(0.008 * std::f64::consts::FRAC_PI_2.cos(), 0.008),
+    ] {
+        let label = shape::routing_label(&Tendon::new(routing, 1.0), length);
+        assert_eq!(label, "straight at (0, 8) mm");
+    }
+    let label = shape::routing_label(&Tendon::new(Routing::polar(0.01, 120.0), 1.0), length);
+    assert_eq!(label, "straight at (-5, 8.66) mm");
+}
+
+/// Issue 27: a robot's own disks are drawn at their positions and radius; their weights
+/// are named once in the disks' legend entry, not as one arrow each.
+#[test]
+fn placed_disks_are_drawn_where_they_sit_with_their_weight_in_the_legend() {
+    let mut robot = cases::case_s();
+    let disks = crate::Disks {
+        positions: vec![0.05, 0.1, 0.242],
+        weight: nalgebra::Vector3::new(0.0, 0.0, -0.02),
+        radius: Some(0.012),
+    };
+    robot.loads.point.push(crate::PointLoad {
+        s: 0.2,
+        force: nalgebra::Vector3::new(0.0, 0.0, -0.05),
+        moment: nalgebra::Vector3::zeros(),
+    });
+    robot.loads.point.extend(disks.point_loads());
+    let mut style = Style::new("#000000");
+    style.placed_disks = Some(disks);
+    let solution = solve(&robot);
+    let mut figure = Figure::new("disks");
+    figure.add_shape(&robot, &solution, &style);
+    figure.legend = shape_legend(&robot, &style);
+    let drawn = &figure.panels[0].disks;
+    assert_eq!(drawn.len(), 3);
+    assert_eq!(drawn[1].center, solution.at_limit(0.1, true).p);
+    assert_eq!(drawn[1].radius, 0.012);
+    let labels: Vec<&str> = figure.legend.iter().map(|e| e.label.as_str()).collect();
+    assert!(
+        labels.contains(&"3 spacer disks, 0.02 N each (drawn 12 mm in radius)"),
+        "{labels:?}"
+    );
+    // The other point load keeps its arrow and entry; the disks' weights get none.
+    assert_eq!(
+        labels.iter().filter(|l| l.starts_with("point load")).count(),
+        1,
+        "{labels:?}"
+    );
 }

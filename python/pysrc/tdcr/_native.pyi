@@ -31,6 +31,7 @@ __all__ = [
     "solve_tensions",
     "solve_displacements",
     "calibrate",
+    "compare",
     "case_s",
     "case_h",
     "prototype",
@@ -86,6 +87,8 @@ class Robot:
         loads: Optional[Mapping[str, Any]] = None,
         base: Optional[Mapping[str, Any]] = None,
         solver: Optional[Mapping[str, Any]] = None,
+        model: Optional[Mapping[str, Any]] = None,
+        disks: Optional[Mapping[str, Any]] = None,
     ) -> Robot: ...
     @staticmethod
     def from_dict(tables: Mapping[str, Any]) -> Robot:
@@ -136,6 +139,9 @@ class Robot:
     @property
     def base_rotation(self) -> FloatArray:
         """Base rotation, body to world, shape (3, 3)."""
+    @property
+    def model(self) -> Dict[str, Any]:
+        """The `[model]` table: `corner_forces` (bool) and `tendons` ("coupled" or "point_moment")."""
     @property
     def method(self) -> str:
         """The `[solver]` method: "collocation" or "shooting"."""
@@ -335,6 +341,25 @@ def solve(
     """Solves `robot` (GIL released). `tol` is the tip tolerance relative to the rod
     length L (default 1e-7): the mesh is refined until the estimated tip position error is at
     most tol x L and the orientation error at most tol rad."""
+
+def compare(
+    robot: Robot,
+    *,
+    models: Optional[Sequence[Literal["coupled", "point_moment", "constant_curvature", "paper_jumps"]]] = None,
+    methods: Optional[Sequence[Literal["collocation", "shooting"]]] = None,
+    method: Optional[Literal["collocation", "shooting"]] = None,
+    tol: Optional[float] = None,
+    intervals: Optional[int] = None,
+    max_intervals: Optional[int] = None,
+    residual_tolerance: Optional[float] = None,
+    max_iterations: Optional[int] = None,
+    continuation: Optional[bool] = None,
+    equilibrium: Optional[Literal["load_path", "nearest"]] = None,
+    integration_tolerance: Optional[float] = None,
+) -> List[Dict[str, Any]]:
+    """`robot` solved as each of `models` (default all four) or by each of `methods`; one
+    dict per shape: name, s, p, tip_position, tip_rotation, tip_distance (m) and tip_angle
+    (rad) from the first shape's tip."""
 
 def solve_batch(
     robots: Union[Sequence[Robot], Robot],

@@ -11,6 +11,16 @@ pub enum MethodArg {
     Shooting,
 }
 
+/// Which tendon model `--tendons` picks (the robot file's `[model] tendons`).
+#[derive(Clone, Copy, ValueEnum)]
+pub enum TendonsArg {
+    /// The coupled Cosserat rod/string model (the default).
+    Coupled,
+    /// The point-moment model: each tendon acts only by its termination moment.
+    #[value(name = "point_moment")]
+    PointMoment,
+}
+
 /// Options shared by `solve` and `sweep`.
 #[derive(Args)]
 pub struct SolverArgs {
@@ -31,6 +41,14 @@ pub struct SolverArgs {
     /// rod length: position error at most T L (m), orientation error at most T rad.
     #[arg(long, value_name = "T", value_parser = parse_positive)]
     pub tol: Option<f64>,
+    /// Whether continuing tendons push on the backbone where another tendon ends or a point
+    /// load acts (`true`, the default); `false` solves the paper's jump conditions. Replaces
+    /// the file's `[model] corner_forces`.
+    #[arg(long, value_name = "BOOL", action = clap::ArgAction::Set)]
+    pub corner_forces: Option<bool>,
+    /// How the tendons load the backbone, replacing the file's `[model] tendons`.
+    #[arg(long, value_enum)]
+    pub tendons: Option<TendonsArg>,
     /// Return the equilibrium Newton reaches from the initial guess, whatever its stability,
     /// instead of the one on the load path from rest (docs/stability.md).
     #[arg(long)]

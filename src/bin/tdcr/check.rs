@@ -35,8 +35,21 @@ pub fn run(file: &str) -> Result<(), Failure> {
         .into_iter()
         .chain(r.plausibility().iter().map(ToString::to_string))
         .collect();
+    // The disks' weights are point loads of the model; counted as disks here.
+    let disks = parsed.disks.as_ref().filter(|d| d.others(&r.loads.point).is_some());
+    let points = r.loads.point.len() - disks.map_or(0, |d| d.positions.len());
+    let disks = disks.map_or(String::new(), |d| {
+        // Computed: three significant digits, not 0.009810000000000001.
+        let weight = tdcr::plot::significant(d.weight.norm());
+        format!(", {} disk(s) of {weight} N", d.positions.len())
+    });
+    let model = match (r.tendon_model, r.corner_forces) {
+        (tdcr::TendonModel::PointMoment, _) => "; model: point-moment tendons",
+        (_, false) => "; model: the paper's jump conditions (no corner forces)",
+        _ => "",
+    };
     let mut out = format!(
-        "{name}: OK{}: a {:.4} m rod with {} tendon(s) ({actuation}), {} point load(s); solver: {}\n",
+        "{name}: OK{}: a {:.4} m rod with {} tendon(s) ({actuation}), {points} point load(s){disks}{model}; solver: {}\n",
         match warnings.len() {
             0 => String::new(),
             1 => ", with 1 warning".to_string(),
@@ -44,7 +57,6 @@ pub fn run(file: &str) -> Result<(), Failure> {
         },
         r.length(),
         r.tendons.len(),
-        r.loads.point.len(),
         parsed.solver.method
     );
     for (i, t) in r.tendons.iter().enumerate().take(LISTED_TENDONS) {

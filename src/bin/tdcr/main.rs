@@ -11,6 +11,7 @@ mod batch;
 mod bench;
 mod calibrate;
 mod check;
+mod compare;
 mod failure;
 mod picture;
 mod robot_args;
@@ -61,6 +62,8 @@ enum Command {
     /// Solve one robot file for every row of a parameter table (CSV or JSON lines), on all
     /// cores; `--shard K/N` for job arrays; CSV out.
     Batch(batch::BatchArgs),
+    /// Solve one robot file as several models (or by both solvers) and compare the tips.
+    Compare(compare::CompareArgs),
     /// Check a robot file and explain every problem.
     Check {
         /// Robot file (TOML; `-` reads standard input).
@@ -91,6 +94,7 @@ fn main() -> ExitCode {
         Some(Command::Sweep(args)) => sweep::run(&args),
         Some(Command::Batch(args)) => batch::run(&args),
         Some(Command::Trace(args)) => trace::run(&args),
+        Some(Command::Compare(args)) => compare::run(&args),
         Some(Command::Check { file }) => check::run(&file),
         Some(Command::Example { sample }) => check::example(sample),
         Some(Command::Bench(args)) => bench::run(&args)

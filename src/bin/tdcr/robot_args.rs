@@ -4,7 +4,7 @@ use std::io::Read;
 use tdcr::io::RobotFile;
 use tdcr::{Method, Robot, Solution, collocation, shooting};
 
-use crate::args::{MethodArg, SolverArgs};
+use crate::args::{MethodArg, SolverArgs, TendonsArg};
 use crate::failure::{Failure, note, solver_failure, with_likely_causes};
 
 /// Reads and checks a robot file (`-`: standard input); every problem is one message line.
@@ -67,7 +67,8 @@ pub fn set_tension(robot: &mut Robot, index: usize, tension: f64) -> Result<(), 
     }
 }
 
-/// Applies the overrides shared by `solve` and `sweep` (loads, method, mesh) to the file.
+/// Applies the overrides shared by `solve` and `sweep` (loads, model, method, mesh) to the
+/// file.
 pub fn apply(file: &mut RobotFile, args: &SolverArgs) {
     let robot = &mut file.robot;
     if let Some(f) = args.tip_force {
@@ -75,6 +76,14 @@ pub fn apply(file: &mut RobotFile, args: &SolverArgs) {
     }
     if let Some(m) = args.tip_moment {
         robot.loads.tip_moment = m.into();
+    }
+    if let Some(corners) = args.corner_forces {
+        robot.corner_forces = corners;
+    }
+    match args.tendons {
+        Some(TendonsArg::Coupled) => robot.tendon_model = tdcr::TendonModel::Coupled,
+        Some(TendonsArg::PointMoment) => robot.tendon_model = tdcr::TendonModel::PointMoment,
+        None => {}
     }
     let settings = &mut file.solver;
     match args.method {

@@ -151,6 +151,8 @@ pub fn run(args: &SolveArgs) -> Result<(), Failure> {
         style.slack_tendons = true;
         style.tendon_colors = true;
         style.disks = args.disks;
+        // The file's own disks, unless --disks asks for others.
+        style.placed_disks = file.disks.clone().filter(|_| args.disks.is_none());
         figure.add_shape(&file.robot, &solution, &style);
         figure.legend = shape_legend(&file.robot, &style);
         args.picture.apply(&mut figure);

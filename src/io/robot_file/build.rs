@@ -3,7 +3,8 @@
 
 use super::SolverSettings;
 use super::tables::{
-    BaseTable, EquilibriumKey, LoadsTable, MethodName, RodTable, RoutingTable, SolverTable, TendonTable, Vec3,
+    BaseTable, DisksTable, EquilibriumKey, LoadsTable, MethodName, ModelTable, RodTable, RoutingTable, SolverTable,
+    TendonModelKey, TendonTable, Vec3,
 };
 use crate::io::Problem;
 use crate::io::locate::Locator;
@@ -12,7 +13,7 @@ use crate::model::rod::{Rod, Section};
 use crate::model::routing::Routing;
 use crate::model::tendon::{Actuation, Tendon};
 use crate::report::Method;
-use crate::{Error, Robot, so3};
+use crate::{Disks, Error, Robot, TendonModel, so3};
 use nalgebra::{Matrix3, Vector3};
 
 /// The matrix whose rows the file gives as `base.rotation`.
@@ -67,13 +68,22 @@ pub(super) fn build(rod: &RodTable, base: &BaseTable, loads: &LoadsTable, tendon
         .with_base(vector(&base.position), rotation);
     for t in tendons {
         let routing = match t.routing {
-            RoutingTable::Straight { x, y } => Routing::straight(x, y),
+            RoutingTable::Straight {
+                x: Some(x), y: Some(y), ..
+            } => Routing::straight(x, y),
+            RoutingTable::Straight { radius, angle_deg, .. } => {
+                Routing::polar(radius.unwrap_or(f64::NAN), angle_deg.unwrap_or(f64::NAN))
+            }
             RoutingTable::Helical {
                 radius,
                 turns_per_rod_length,
                 turns,
                 phase,
-            } => Routing::helical(radius, turns_per_rod_length.or(turns).unwrap_or(f64::NAN), phase),
+                angle_deg,
+            } => {
+                let phase = phase.or(angle_deg.map(f64::to_radians)).unwrap_or(0.0);
+                Routing::helical(radius, turns_per_rod_length.or(turns).unwrap_or(f64::NAN), phase)
+            }
         };
         let mut tendon = Tendon::new(routing, t.tension.unwrap_or(0.0));
         tendon.termination = t.end;
@@ -88,6 +98,38 @@ pub(super) fn build(rod: &RodTable, base: &BaseTable, loads: &LoadsTable, tendon
         robot = robot.with_tendon(tendon);
     }
     robot
+}
+
+/// The spacer disks of a checked `[disks]` table on a rod of `length` (m): at `positions`
+/// or `count` evenly spaced, each weighing `mass` times `gravity` or `weight`.
+pub(super) fn disks(table: &DisksTable, length: f64) -> Disks {
+    let weight = match (table.mass, table.weight) {
+        (Some(mass), _) => vector(&table.gravity) * mass,
+        (None, weight) => vector(&weight),
+    };
+    let mut out = match &table.positions {
+        Some(positions) => Disks {
+            positions: positions.clone(),
+            weight,
+            radius: None,
+        },
+        None => Disks::evenly(table.count.unwrap_or(0), length, weight),
+    };
+    out.radius = table.radius;
+    out
+}
+
+/// Sets the model variant of the `[model]` table on `robot`; keys not given keep the
+/// library's defaults (corner forces, the coupled tendon model).
+pub(super) fn model(robot: &mut Robot, model: &ModelTable) {
+    if let Some(corners) = model.corner_forces {
+        robot.corner_forces = corners;
+    }
+    match model.tendons {
+        Some(TendonModelKey::Coupled) => robot.tendon_model = TendonModel::Coupled,
+        Some(TendonModelKey::PointMoment) => robot.tendon_model = TendonModel::PointMoment,
+        None => {}
+    }
 }
 
 /// The solver settings: the library defaults, changed by the `[solver]` table.

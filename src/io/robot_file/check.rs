@@ -3,7 +3,7 @@
 //! rule one problem at its field path.
 
 use super::build::rotation_from_rows;
-use super::tables::{BaseTable, LoadsTable, RodTable, RoutingTable, SolverTable, TendonTable, Vec3};
+use super::tables::{BaseTable, DisksTable, LoadsTable, RodTable, RoutingTable, SolverTable, TendonTable, Vec3};
 use crate::io::Problem;
 use crate::io::locate::LazyLocator;
 use crate::{Error, Readable, collocation, shooting, so3};
@@ -11,6 +11,10 @@ use crate::{Error, Readable, collocation, shooting, so3};
 /// Largest |R^T R - I|, |det R - 1| accepted for a base rotation (the issue's 1e-6: loose
 /// enough for matrices typed with 7 digits).
 const ROTATION_TOLERANCE: f64 = 1e-6;
+
+/// The most spacer disks a `[disks]` table may give: each is a point load and a breakpoint
+/// of the mesh, and a robot with more is better modelled by a distributed weight.
+pub(super) const MAX_DISKS: usize = 10_000;
 
 /// A number as TOML spells it (`nan`, `inf`, `-inf` for the non-finite ones).
 fn toml_number(x: f64) -> String {
@@ -228,15 +232,48 @@ impl Checker<'_> {
         }
         let routing = format!("{path}.routing");
         match t.routing {
-            RoutingTable::Straight { x, y } => {
-                self.finite(&format!("{routing}.x"), x, " m");
-                self.finite(&format!("{routing}.y"), y, " m");
+            RoutingTable::Straight {
+                x,
+                y,
+                radius,
+                angle_deg,
+            } => {
+                // The missing half of a pair was reported when the table was read.
+                let cartesian = x.is_some() || y.is_some();
+                if cartesian && (radius.is_some() || angle_deg.is_some()) {
+                    let given = if radius.is_some() { "radius" } else { "angle_deg" };
+                    self.report(
+                        &format!("{routing}.{given}"),
+                        "is given together with `x` or `y`: place the tendon by `x` and `y` (m) or by \
+                         `radius` (m) and `angle_deg` (degrees from body x toward body y), not both"
+                            .to_string(),
+                    );
+                }
+                for (key, value, unit) in [("x", x, " m"), ("y", y, " m"), ("angle_deg", angle_deg, " deg")] {
+                    if let Some(v) = value {
+                        self.finite(&format!("{routing}.{key}"), v, unit);
+                    }
+                }
+                if let Some(r) = radius {
+                    let field = format!("{routing}.radius");
+                    if self.finite(&field, r, " m") && r < 0.0 {
+                        self.report(
+                            &field,
+                            format!(
+                                "is {} m, but a distance from the backbone must be >= 0 (turn `angle_deg` \
+                                 by 180 to place the tendon on the other side)",
+                                Readable(r)
+                            ),
+                        );
+                    }
+                }
             }
             RoutingTable::Helical {
                 radius,
                 turns_per_rod_length,
                 turns,
                 phase,
+                angle_deg,
             } => {
                 self.positive(&format!("{routing}.radius"), radius, " m");
                 // `turns` is the old name of `turns_per_rod_length`, with the same meaning.
@@ -262,7 +299,118 @@ impl Checker<'_> {
                         ),
                     ),
                 }
-                self.finite(&format!("{routing}.phase"), phase, " rad");
+                match (phase, angle_deg) {
+                    (Some(_), Some(_)) => self.report(
+                        &format!("{routing}.angle_deg"),
+                        "is given together with `phase`: give the helix's starting angle as `phase` \
+                         (rad) or as `angle_deg` (degrees), not both"
+                            .into(),
+                    ),
+                    (Some(p), None) => {
+                        self.finite(&format!("{routing}.phase"), p, " rad");
+                    }
+                    (None, Some(a)) => {
+                        self.finite(&format!("{routing}.angle_deg"), a, " deg");
+                    }
+                    (None, None) => {}
+                }
+            }
+        }
+    }
+
+    /// The `[disks]` rules on a rod of `length` (m; NaN if unknown): `count` or `positions`
+    /// (on the rod, increasing), `mass` (>= 0, with `gravity`) or `weight`, finite vectors,
+    /// a positive `radius`.
+    pub(super) fn disks(&mut self, d: &DisksTable, length: f64) {
+        match (d.count, &d.positions) {
+            (Some(_), Some(_)) => self.report(
+                "disks.positions",
+                "is given together with `count`: give `count` (evenly spaced, the last at the tip) or \
+                 `positions` (m), not both"
+                    .into(),
+            ),
+            (None, None) => self.report(
+                "disks",
+                "needs `count` (evenly spaced, the last at the tip) or `positions` (arc lengths in m)".into(),
+            ),
+            (Some(n), None) if !(1..=MAX_DISKS).contains(&n) => {
+                self.report("disks.count", format!("is {n}, but must be from 1 to {MAX_DISKS}"))
+            }
+            (None, Some(positions)) => self.disk_positions(positions, length),
+            (Some(_), None) => {}
+        }
+        match (d.mass, d.weight, d.gravity) {
+            (Some(_), Some(_), _) => self.report(
+                "disks.weight",
+                "is given together with `mass`: give each disk's `mass` (kg, with `gravity`) or its \
+                 `weight` (N, world frame), not both"
+                    .into(),
+            ),
+            (None, None, _) => self.report(
+                "disks",
+                "needs each disk's `mass` (kg, with `gravity`) or `weight` (N, world frame, e.g. \
+                 [0.0, 0.0, -0.0098] for 1 g); `mass = 0.0` for disks that are only drawn"
+                    .into(),
+            ),
+            (Some(_), None, None) => self.report(
+                "disks.gravity",
+                "is required with `mass`: give the gravity vector in m/s^2, world frame, e.g. \
+                 [0.0, 0.0, -9.81]"
+                    .into(),
+            ),
+            (None, Some(_), Some(_)) => self.report(
+                "disks.gravity",
+                "is given with `weight`, which is already a force (N, world frame): give `mass` \
+                 with `gravity`, or `weight` alone"
+                    .into(),
+            ),
+            (Some(m), None, Some(_)) => {
+                if self.finite("disks.mass", m, " kg") && m < 0.0 {
+                    self.report("disks.mass", format!("is {} kg, but must be >= 0", Readable(m)));
+                }
+            }
+            (None, Some(_), None) => {}
+        }
+        self.vector("disks.gravity", &d.gravity, " m/s^2");
+        self.vector("disks.weight", &d.weight, " N");
+        if let Some(r) = d.radius {
+            self.positive("disks.radius", r, " m");
+        }
+    }
+
+    /// The rules of `[disks] positions` on a rod of `length` (m; NaN if unknown).
+    fn disk_positions(&mut self, positions: &[f64], length: f64) {
+        let field = "disks.positions";
+        if positions.is_empty() || positions.len() > MAX_DISKS {
+            let n = positions.len();
+            self.report(field, format!("has {n} entries, but must have 1 to {MAX_DISKS}"));
+            return;
+        }
+        for (k, &s) in positions.iter().enumerate() {
+            if !self.finite(field, s, " m") {
+                continue;
+            }
+            if length.is_finite() && !(s > 0.0 && s <= length) {
+                self.report(
+                    field,
+                    format!(
+                        "has {} m (entry {}), but every disk must lie on the rod, in (0, {}] m",
+                        Readable(s),
+                        k + 1,
+                        Readable(length)
+                    ),
+                );
+            }
+            if k > 0 && s <= positions[k - 1] {
+                self.report(
+                    field,
+                    format!(
+                        "has {} m after {} m (entry {}): give the positions increasing, each once",
+                        Readable(s),
+                        Readable(positions[k - 1]),
+                        k + 1
+                    ),
+                );
             }
         }
     }

@@ -11,14 +11,14 @@ mod check;
 mod tables;
 mod write;
 
-use self::build::{build, library_problem, settings};
+use self::build::{build, disks, library_problem, model, settings};
 use self::check::Checker;
-use self::tables::{BaseTable, LoadsTable, RodTable, SolverTable, TABLES, TendonTable};
+use self::tables::{BaseTable, DisksTable, LoadsTable, ModelTable, RodTable, SolverTable, TABLES, TendonTable};
 use super::locate::{LazyLocator, Lines};
 use super::printable;
 use super::{FileError, Problem};
 use crate::report::Method;
-use crate::{Robot, collocation, shooting};
+use crate::{Disks, Robot, collocation, shooting};
 use serde::de::DeserializeOwned;
 use toml::Spanned;
 use toml::de::{DeTable, DeValue, ValueDeserializer};
@@ -54,6 +54,10 @@ pub struct RobotFile {
     pub robot: Robot,
     /// The solver settings of the `[solver]` table, defaults where not given.
     pub solver: SolverSettings,
+    /// The spacer disks of the `[disks]` table, if any: their weights are already among
+    /// the robot's point loads (the last ones, [`Disks::point_loads`]); kept to draw them
+    /// and to write the table back.
+    pub disks: Option<Disks>,
 }
 
 impl RobotFile {
@@ -158,6 +162,9 @@ pub fn parse(text: &str, file: &str) -> Result<RobotFile, FileError> {
     if let Some(solver) = &tables.solver {
         check.solver(solver);
     }
+    if let Some(d) = &tables.disks {
+        check.disks(d, length);
+    }
     problems.extend(check.problems);
     let tendons: Option<Vec<TendonTable>> = tables.tendons.into_iter().collect();
     let (Some(rod), Some(tendons), true) = (tables.rod, tendons, problems.is_empty()) else {
@@ -168,7 +175,12 @@ pub fn parse(text: &str, file: &str) -> Result<RobotFile, FileError> {
         tables.loads.unwrap_or_default(),
         tables.solver.unwrap_or_default(),
     );
-    let robot = build(&rod, &base, &loads, &tendons);
+    let mut robot = build(&rod, &base, &loads, &tendons);
+    model(&mut robot, &tables.model.unwrap_or_default());
+    let disks = tables.disks.map(|d| disks(&d, robot.length()));
+    if let Some(d) = &disks {
+        robot.loads.point.extend(d.point_loads());
+    }
     if let Err(e) = robot.validate() {
         return Err(fail(vec![library_problem(
             locator.get(),
@@ -179,6 +191,7 @@ pub fn parse(text: &str, file: &str) -> Result<RobotFile, FileError> {
     Ok(RobotFile {
         robot,
         solver: settings(&solver),
+        disks,
     })
 }
 
@@ -202,6 +215,8 @@ struct Tables {
     /// One entry per [[tendon]], `None` where it could not be read.
     tendons: Vec<Option<TendonTable>>,
     solver: Option<SolverTable>,
+    model: Option<ModelTable>,
+    disks: Option<DisksTable>,
 }
 
 /// Deserializes the tables of a file, each failure one problem at its place in `text`.
@@ -226,6 +241,8 @@ impl Reader<'_> {
                 "base" => tables.base = self.table(&name, value),
                 "loads" => tables.loads = self.table(&name, value),
                 "solver" => tables.solver = self.table(&name, value),
+                "model" => tables.model = self.table(&name, value),
+                "disks" => tables.disks = self.table(&name, value),
                 "tendon" => match value.into_inner() {
                     DeValue::Array(items) if items.iter().all(|t| t.get_ref().is_table()) => {
                         for (i, item) in items.into_iter().enumerate() {
@@ -245,7 +262,10 @@ impl Reader<'_> {
                     let hint = match name.as_str() {
                         "tendons" => "; did you mean [[tendon]]?".to_string(),
                         "load" => "; did you mean [loads]?".to_string(),
-                        _ => match closest(&name, ["rod", "base", "loads", "solver", "tendon"].into_iter()) {
+                        _ => match closest(
+                            &name,
+                            ["rod", "base", "loads", "disks", "model", "solver", "tendon"].into_iter(),
+                        ) {
                             Some("tendon") => "; did you mean [[tendon]]?".to_string(),
                             Some(table) => format!("; did you mean [{table}]?"),
                             None => String::new(),
@@ -406,7 +426,12 @@ fn required_fields<'a>(name: &str, value: &'a Spanned<DeValue<'_>>) -> Vec<(Stri
             let path = format!("{name}.routing");
             match entry(routing, "kind").map(|k| k.get_ref()) {
                 None => need(&path, routing, &["kind"]),
-                Some(DeValue::String(kind)) if kind.as_ref() == "straight" => need(&path, routing, &["x", "y"]),
+                // Polar form if it has either polar key: then both are needed, else x and y.
+                Some(DeValue::String(kind)) if kind.as_ref() == "straight" => {
+                    let polar = keys(routing).is_some_and(|k| k.contains(&"radius") || k.contains(&"angle_deg"));
+                    let pair: &[&str] = if polar { &["radius", "angle_deg"] } else { &["x", "y"] };
+                    need(&path, routing, pair);
+                }
                 // `turns_per_rod_length` (or its old name `turns`) is checked with the values.
                 Some(DeValue::String(kind)) if kind.as_ref() == "helical" => need(&path, routing, &["radius"]),
                 Some(_) => {}
@@ -549,6 +574,90 @@ mod tests {
             e.contains("unknown key `solvr` at the top level") && e.contains("did you mean [solver]?"),
             "{e}"
         );
+    }
+
+    /// Issue 27: the `[model]` table's keys and values are checked like every other table's.
+    #[test]
+    fn model_table_rejects_unknown_keys_and_variants() {
+        let text = format!("{}\n[model]\ntendons = \"point-moment\"\n", crate::io::example());
+        let e = parse(&text, "robot.toml").unwrap_err().to_string();
+        assert!(
+            e.contains(
+                "`model.tendons` in [model]: unknown variant `point-moment`, expected `coupled` or `point_moment`"
+            ) && e.contains("did you mean `point_moment`?"),
+            "{e}"
+        );
+        let text = format!("{}\n[model]\ncorner_force = false\n", crate::io::example());
+        let e = parse(&text, "robot.toml").unwrap_err().to_string();
+        assert!(
+            e.contains("unknown field `corner_force`") && e.contains("did you mean `corner_forces`?"),
+            "{e}"
+        );
+        let text = format!("{}\n[modl]\n", crate::io::example());
+        let e = parse(&text, "robot.toml").unwrap_err().to_string();
+        assert!(e.contains("did you mean [model]?"), "{e}");
+    }
+
+    /// Issue 27: a tendon placed in polar form is the same robot as one placed at the
+    /// exact (x, y); a helix's `angle_deg` is its `phase` in degrees; half pairs, mixed
+    /// forms and negative radii are reported at their keys.
+    #[test]
+    fn polar_placements_read_as_their_exact_offsets() {
+        let tendon = |routing: &str| {
+            let text = crate::io::example().replacen(
+                "routing = { kind = \"straight\", x = 0.008, y = 0.0 }",
+                &format!("routing = {{ {routing} }}"),
+                1,
+            );
+            parse(&text, "robot.toml").map(|f| f.robot.tendons[0].routing.clone())
+        };
+        let debug = |r: Result<Routing, FileError>| format!("{:?}", r.unwrap());
+        for (polar, cartesian) in [
+            (
+                "kind = \"straight\", radius = 0.008, angle_deg = 90",
+                "kind = \"straight\", x = 0.0, y = 0.008",
+            ),
+            (
+                "kind = \"straight\", radius = 0.01, angle_deg = 180",
+                "kind = \"straight\", x = -0.01, y = 0.0",
+            ),
+            (
+                "kind = \"straight\", radius = 0.01, angle_deg = -90",
+                "kind = \"straight\", x = 0.0, y = -0.01",
+            ),
+            (
+                "kind = \"helical\", radius = 0.008, turns_per_rod_length = 1, angle_deg = 90",
+                &format!(
+                    "kind = \"helical\", radius = 0.008, turns_per_rod_length = 1, phase = {:?}",
+                    90f64.to_radians()
+                ),
+            ),
+        ] {
+            assert_eq!(debug(tendon(polar)), debug(tendon(cartesian)), "{polar}");
+        }
+        let at_120 = tendon("kind = \"straight\", radius = 0.01, angle_deg = 120").unwrap();
+        assert!(matches!(at_120, Routing::Straight { x, .. } if x == -0.005));
+        for (routing, message) in [
+            (
+                "kind = \"straight\", radius = 0.01",
+                "`tendon[1].routing.angle_deg` is required but missing in [[tendon]] #1",
+            ),
+            (
+                "kind = \"straight\", x = 0.01, radius = 0.01, angle_deg = 0",
+                "`tendon[1].routing.radius` is given together with `x` or `y`",
+            ),
+            (
+                "kind = \"straight\", radius = -0.01, angle_deg = 0",
+                "`tendon[1].routing.radius` is -0.01 m, but a distance from the backbone must be >= 0",
+            ),
+            (
+                "kind = \"helical\", radius = 0.01, turns = 1, phase = 0.1, angle_deg = 5",
+                "`tendon[1].routing.angle_deg` is given together with `phase`",
+            ),
+        ] {
+            let e = tendon(routing).unwrap_err().to_string();
+            assert!(e.contains(message), "{routing}: {e}");
+        }
     }
 
     /// Issue 17: `turns` is the old name of `turns_per_rod_length`, with the same meaning.

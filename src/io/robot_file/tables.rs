@@ -152,18 +152,23 @@ pub(super) struct TendonTable {
 #[derive(Debug, Deserialize)]
 #[serde(tag = "kind", rename_all = "lowercase", deny_unknown_fields)]
 pub(super) enum RoutingTable {
+    /// At (`x`, `y`) or, in polar form, at `radius` and `angle_deg`: one of the two pairs,
+    /// whole (checked in `check`).
     Straight {
-        x: f64,
-        y: f64,
+        x: Option<f64>,
+        y: Option<f64>,
+        radius: Option<f64>,
+        angle_deg: Option<f64>,
     },
     /// `turns_per_rod_length`, or its old name `turns` (the same meaning), one of them
-    /// required (checked in `check`).
+    /// required; the starting angle as `phase` (rad) or `angle_deg`, at most one (checked
+    /// in `check`).
     Helical {
         radius: f64,
         turns_per_rod_length: Option<f64>,
         turns: Option<f64>,
-        #[serde(default)]
-        phase: f64,
+        phase: Option<f64>,
+        angle_deg: Option<f64>,
     },
 }
 
@@ -202,5 +207,38 @@ pub(super) enum EquilibriumKey {
     Nearest,
 }
 
+/// `[disks]`: spacer disks, `count` evenly spaced or at `positions` (one of the two), each
+/// of `mass` (kg, with `gravity` in m/s^2, world) or `weight` (N, world) (one of the two),
+/// with an optional `radius` (m) for pictures.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct DisksTable {
+    pub(super) count: Option<usize>,
+    pub(super) positions: Option<Vec<f64>>,
+    pub(super) mass: Option<f64>,
+    #[serde(default, deserialize_with = "vector")]
+    pub(super) gravity: Option<Vec3>,
+    #[serde(default, deserialize_with = "vector")]
+    pub(super) weight: Option<Vec3>,
+    pub(super) radius: Option<f64>,
+}
+
+/// `[model]`: which variant of the model to solve, each key optional (the library default,
+/// the coupled model with corner forces, if not given).
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct ModelTable {
+    pub(super) corner_forces: Option<bool>,
+    pub(super) tendons: Option<TendonModelKey>,
+}
+
+/// The `tendons` of `[model]`: `"coupled"` (the default) or `"point_moment"`.
+#[derive(Clone, Copy, Debug, Deserialize, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub(super) enum TendonModelKey {
+    Coupled,
+    PointMoment,
+}
+
 /// The tables a robot file may have, in the order docs/robot-file.md describes them.
-pub(super) const TABLES: &str = "[rod], [base], [loads], [[tendon]], [solver]";
+pub(super) const TABLES: &str = "[rod], [base], [loads], [disks], [[tendon]], [model], [solver]";

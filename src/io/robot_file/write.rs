@@ -1,7 +1,7 @@
 //! Writing a robot file: the inverse of the reader, for robots built in code or edited
 //! (Python pickles a robot as its file).
 
-use super::tables::EquilibriumKey;
+use super::tables::{EquilibriumKey, TendonModelKey};
 use super::{RobotFile, SolverSettings};
 use crate::collocation::Equilibrium;
 use crate::error::{Result, invalid};
@@ -40,7 +40,10 @@ impl RobotFile {
     /// The robot file of this robot and its settings (docs/robot-file.md): every value
     /// written so that [`crate::io::parse`] of the text gives the same robot bitwise (TOML
     /// floats are written in their shortest round-trip form), the `[solver]` table with every
-    /// key.
+    /// key. The `[disks]` table is written (with its `positions` and `weight`) when the
+    /// robot's last point loads are still the disks' weights; if they were changed since
+    /// (a load scale, say), every point load is written as `[[loads.point]]` and the disks
+    /// are left out, so the robot still reads back the same.
     ///
     /// # Errors
     /// [`crate::Error::InvalidInput`] on `robot` for what a robot file cannot hold: a rod
@@ -102,8 +105,8 @@ fn document(file: &RobotFile) -> Result<String> {
     );
     loads.insert("tip_force".into(), vector(&loads_in.tip_force));
     loads.insert("tip_moment".into(), vector(&loads_in.tip_moment));
-    let points = loads_in
-        .point
+    let (points, disks) = split_disks(file);
+    let points = points
         .iter()
         .map(|p| {
             let mut t = Table::new();
@@ -168,6 +171,10 @@ fn document(file: &RobotFile) -> Result<String> {
     if !tendons.is_empty() {
         doc.insert("tendon".into(), Value::Array(tendons));
     }
+    if let Some(d) = disks {
+        doc.insert("disks".into(), Value::Table(disks_table(d)));
+    }
+    doc.insert("model".into(), Value::Table(model_table(robot)));
     doc.insert("solver".into(), Value::Table(solver_table(&file.solver)));
     toml::to_string(&doc).map_err(|e| {
         invalid(
@@ -176,6 +183,43 @@ fn document(file: &RobotFile) -> Result<String> {
             "report this as a bug",
         )
     })
+}
+
+/// The robot's point loads that the file gives as `[[loads.point]]`, and the disks it gives
+/// as `[disks]`: the disks only if the last point loads are still exactly their weights.
+fn split_disks(file: &RobotFile) -> (&[crate::PointLoad], Option<&crate::Disks>) {
+    let all = &file.robot.loads.point[..];
+    match file.disks.as_ref().and_then(|d| Some((d.others(all)?, d))) {
+        Some((others, d)) => (others, Some(d)),
+        None => (all, None),
+    }
+}
+
+/// The `[disks]` table of `d`: positions, weight and the radius if given.
+fn disks_table(d: &crate::Disks) -> Table {
+    let mut t = Table::new();
+    let positions = d.positions.iter().map(|&s| Value::Float(s)).collect();
+    t.insert("positions".into(), Value::Array(positions));
+    t.insert("weight".into(), vector(&d.weight));
+    if let Some(r) = d.radius {
+        t.insert("radius".into(), Value::Float(r));
+    }
+    t
+}
+
+/// The `[model]` table of `robot`: both keys.
+fn model_table(robot: &crate::Robot) -> Table {
+    let mut t = Table::new();
+    t.insert("corner_forces".into(), Value::Boolean(robot.corner_forces));
+    let tendons = match robot.tendon_model {
+        crate::TendonModel::Coupled => TendonModelKey::Coupled,
+        crate::TendonModel::PointMoment => TendonModelKey::PointMoment,
+    };
+    // The key's own name, as the reader spells it (tables.rs).
+    if let Ok(name) = Value::try_from(tendons) {
+        t.insert("tendons".into(), name);
+    }
+    t
 }
 
 /// The `[solver]` table of `s`: every key, except `residual_tolerance` and `max_iterations`
@@ -257,6 +301,14 @@ max_iterations = 40
 continuation = false
 equilibrium = "nearest"
 integration_tolerance = 1e-10
+[model]
+corner_forces = false
+tendons = "point_moment"
+[disks]
+count = 3
+mass = 0.002
+gravity = [0.0, 0.0, -9.81]
+radius = 0.012
 "#;
 
     #[test]
@@ -267,14 +319,24 @@ integration_tolerance = 1e-10
             let back = parse(&written, "written.toml").unwrap();
             assert_eq!(format!("{:?}", back.robot), format!("{:?}", file.robot));
             assert_eq!(format!("{:?}", back.solver), format!("{:?}", file.solver));
+            assert_eq!(back.disks, file.disks);
             assert_eq!(back.to_toml().unwrap(), written);
         }
+        // Disks whose weights were changed since (a load scale) are written as point loads.
+        let mut scaled = parse(FULL, "robot.toml").unwrap();
+        assert!(scaled.to_toml().unwrap().contains("[disks]"));
+        crate::Parameter::LoadScale.apply(&mut scaled.robot, 0.5).unwrap();
+        let written = scaled.to_toml().unwrap();
+        assert!(!written.contains("[disks]"), "{written}");
+        let back = parse(&written, "scaled.toml").unwrap();
+        assert_eq!(format!("{:?}", back.robot), format!("{:?}", scaled.robot));
         // What a file cannot hold is bad input, not a panic.
         let mut custom = crate::cases::case_s();
         custom.tendons[0].routing = crate::Routing::from_dual(|s, _| [s * 0.0 + 0.008, s * 0.01]);
         let file = crate::io::RobotFile {
             robot: custom,
             solver: Default::default(),
+            disks: None,
         };
         let e = file.to_toml().unwrap_err().to_string();
         assert!(e.contains("tendon 1 has a custom routing"), "{e}");
