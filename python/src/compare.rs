@@ -31,7 +31,7 @@ pub fn compare<'py>(
     methods: Option<Vec<String>>,
     options: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyList>> {
-    let settings = crate::options::apply(&robot.file.solver, options)?;
+    let settings = crate::options::apply(&robot.file.solver, options, crate::options::Use::Any("compare"))?;
     let r = &robot.file.robot;
     let shapes = match (models, methods) {
         (Some(_), Some(_)) => return Err(invalid("compare: give `models` or `methods`, not both")),
@@ -44,8 +44,7 @@ pub fn compare<'py>(
                     .map_err(to_py)?,
                 None => Variant::ALL.to_vec(),
             };
-            py.detach(|| compare_models(r, &variants, |v| crate::run(v, &settings, None)))
-                .map_err(to_py)?
+            crate::boundary::detached(py, || compare_models(r, &variants, |v| crate::run(v, &settings, None)))?
         }
         (None, Some(names)) => {
             let mut shapes = Vec::new();
@@ -61,7 +60,7 @@ pub fn compare<'py>(
                 };
                 let mut s = settings.clone();
                 s.method = method;
-                let solution = py.detach(|| crate::run(r, &s, None)).map_err(to_py)?;
+                let solution = crate::boundary::detached(py, || crate::run(r, &s, None))?;
                 shapes.push((name, shape(&solution)));
             }
             compare_shapes(shapes)
