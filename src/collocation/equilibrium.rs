@@ -1,5 +1,5 @@
 //! The equilibrium choice (docs/stability.md, "Which equilibrium a solve returns"): Newton's
-//! answer from the start stands when it converged cleanly to a state that is not unstable;
+//! answer from the start stands when it converged cleanly to a stable state;
 //! otherwise the Newton homotopy from a warm start, Newton from the cold guess, and the load
 //! path from rest are tried in turn, and every answer gets its stability verdict.
 
@@ -82,7 +82,7 @@ pub(crate) fn stability_of(
 }
 
 /// Newton from `x`, given only the chance to converge cleanly ([`clean`]) unless
-/// `nearest`: the converged states, if they are not unstable (or `nearest`).
+/// `nearest`: the converged states, if they are stable ([`acceptable`]) or `nearest`.
 fn direct(
     system: &System,
     ws: &mut Workspace,
@@ -114,13 +114,34 @@ fn direct(
     let t = Instant::now();
     let verdict = stability_of(system, ws, x, false, report);
     report.timings.stability += t.elapsed();
-    (!matches!(verdict, Stability::Unstable { .. }), worst)
+    (acceptable(system, &verdict), worst)
+}
+
+/// Whether a state with this verdict may be the answer without a path: only a stable one,
+/// or, where the loads admit no conjugate-point verdict, one of unknown stability.
+fn acceptable(system: &System, verdict: &Stability) -> bool {
+    match verdict {
+        Stability::Stable => true,
+        Stability::Unstable { .. } => false,
+        Stability::Unknown { .. } => stability::non_conservative(&system.model).is_some(),
+    }
+}
+
+/// The note of a side picked at a perfectly symmetric bifurcation at load factor `lambda`.
+fn picked_note(lambda: f64) -> String {
+    format!(
+        "the path crossed a perfectly symmetric bifurcation at {:.1} % of the way, where nothing \
+         prefers a side: it took the branch along the Jacobian's kernel direction; its mirror state \
+         (bent the opposite way, along the reversed kernel direction) is equally valid, and an \
+         imperfection of the other sign selects it",
+        100.0 * lambda
+    )
 }
 
 /// Newton from `x0`, and the equilibrium choice of docs/stability.md. Newton's answer
-/// stands when it converged cleanly to a state that is not unstable (or the caller asked
+/// stands when it converged cleanly to a stable state ([`acceptable`]; or the caller asked
 /// for the nearest equilibrium). Otherwise, from a warm start (`warm`), the Newton homotopy
-/// from it ([`path::follow`]), whose end stands if it is not unstable; then Newton from the
+/// from it ([`path::follow`]), whose end stands if it is stable; then Newton from the
 /// cold guess, as above; then the load path from the unloaded robot. Newton's answer from
 /// `x0`, if it converged at all, is the fallback when no path can be followed.
 pub(crate) fn choose_equilibrium(
@@ -154,10 +175,9 @@ pub(crate) fn choose_equilibrium(
     if warm {
         if let Ok(end) = path::follow(system, ws, path::Start::Warm(&x0), options, settings, report, None) {
             let exact = !report.history.iter().any(|i| i.fresh_jacobian);
-            if !matches!(
-                stability_of(system, ws, &end.x, exact, report),
-                Stability::Unstable { .. }
-            ) {
+            let verdict = stability_of(system, ws, &end.x, exact, report);
+            if acceptable(system, &verdict) {
+                report.notes.extend(end.picked.iter().map(|&l| picked_note(l)));
                 report.path = PathTaken::FromWarmStart {
                     folds: end.folds,
                     bifurcations: end.bifurcations,
@@ -174,6 +194,7 @@ pub(crate) fn choose_equilibrium(
     let mesh = system.mesh.clone();
     match path::follow(system, ws, path::Start::Rest, options, settings, report, None) {
         Ok(end) => {
+            report.notes.extend(end.picked.iter().map(|&l| picked_note(l)));
             report.path = PathTaken::LoadPath {
                 folds: end.folds,
                 bifurcations: end.bifurcations,
@@ -205,6 +226,10 @@ pub(crate) fn choose_equilibrium(
             if !ws.linearize(system, &x, report) {
                 return Err(not_converged(system, report, row, &hint));
             }
+            report.notes.push(format!(
+                "the load path could not be followed ({hint}): this is Newton's root from the guess, \
+                 not the state the robot reaches when loaded from rest"
+            ));
             report.termination = Termination::Converged;
             Ok(x)
         }
