@@ -58,10 +58,10 @@ fn clean(history: &[crate::report::Iteration]) -> bool {
 }
 
 /// The stability of the equilibrium `x` of `system` ([`stability`]), from the Jacobian
-/// last factored in `ws`: Newton's last (evaluated one step before `x`), or for a solve
-/// that converged by chord steps alone the earlier Jacobian those steps used, whose verdict
-/// is then reused. A new Jacobian at `x` is evaluated only when `exact` (at the end of a
-/// load path, whose last Jacobian may belong to a point before the end).
+/// last factored in `ws`: Newton's last (evaluated one step before `x`). A new Jacobian at
+/// `x` is evaluated and factored when `exact` (at the end of a load path, whose last
+/// Jacobian may belong to a point before the end); after a solve that converged by chord
+/// steps on a cached solve's factors, [`fresh_stability`].
 pub(crate) fn stability_of(
     system: &System,
     ws: &mut Workspace,
@@ -79,6 +79,21 @@ pub(crate) fn stability_of(
     }
     let s: Vec<f64> = system.mesh.nodes.iter().map(|n| n.s).collect();
     ws.verdict(|values| stability::assess(values, &s))
+}
+
+/// The stability of the equilibrium `x` of `system` after a solve that converged by chord
+/// steps on a cached solve's factors alone: those belong to an earlier state, whose verdict a
+/// change of inputs can have made wrong, so the Jacobian at `x` is evaluated for it (not
+/// factored: [`Workspace::verdict_at`]).
+pub(crate) fn fresh_stability(system: &System, ws: &mut Workspace, x: &[State], report: &mut SolveReport) -> Stability {
+    if let Some(reason) = stability::non_conservative(&system.model) {
+        return Stability::Unknown { reason };
+    }
+    let s: Vec<f64> = system.mesh.nodes.iter().map(|n| n.s).collect();
+    ws.verdict_at(system, x, report, |values| stability::assess(values, &s))
+        .unwrap_or_else(|| Stability::Unknown {
+            reason: "the Jacobian at the solution is not finite".into(),
+        })
 }
 
 /// Newton from `x`, given only the chance to converge cleanly ([`clean`]) unless
@@ -112,7 +127,13 @@ fn direct(
         return (false, worst);
     }
     let t = Instant::now();
-    let verdict = stability_of(system, ws, x, false, report);
+    // Converged by chord steps on a cached solve's factors alone: the Jacobian they belong to
+    // is an earlier state's, whose verdict a change of inputs can have made wrong.
+    let verdict = if report.evaluations.jacobian == 0 {
+        fresh_stability(system, ws, x, report)
+    } else {
+        stability_of(system, ws, x, false, report)
+    };
     report.timings.stability += t.elapsed();
     (acceptable(system, &verdict), worst)
 }

@@ -187,6 +187,31 @@ impl Workspace {
         })
     }
 
+    /// The stability verdict of the Jacobian of `system` at `x`, assessed by `assess`, for a
+    /// state the stored factors do not belong to (a solve that converged by chord steps on an
+    /// earlier state's factors). The Jacobian is evaluated into the value buffer but not
+    /// factored: the factors, and the residual of the last iterate, stay as they were (the
+    /// error estimate and later chord steps use them); counted as a Jacobian evaluation.
+    /// None for a non-finite Jacobian.
+    pub fn verdict_at(
+        &mut self,
+        system: &System,
+        x: &[State],
+        report: &mut SolveReport,
+        assess: impl FnOnce(&[f64]) -> Stability,
+    ) -> Option<Stability> {
+        let t = Instant::now();
+        let ok = system.jacobian(x, &mut self.trial_residual, &mut self.values).is_ok();
+        report.timings.assembly += t.elapsed();
+        report.evaluations.jacobian += 1;
+        report.evaluations.equations += system.rate_evaluations();
+        self.verdict = None;
+        if !ok || !self.values.iter().all(|v| v.is_finite()) {
+            return None;
+        }
+        Some(self.verdict(assess))
+    }
+
     /// Whether the workspace holds the factors of a successful solve.
     pub fn has_factors(&self) -> bool {
         self.factored

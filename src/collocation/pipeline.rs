@@ -2,7 +2,7 @@
 //! equilibrium choice on the first mesh, refinement to the tolerance, the error estimate and
 //! the stability verdict, and the [`Solution`] built from the node states.
 
-use super::equilibrium::{Choose, better_start, choose_equilibrium, stability_of};
+use super::equilibrium::{Choose, better_start, choose_equilibrium, fresh_stability, stability_of};
 use super::estimate;
 use super::newton::{self, Settings, Workspace};
 use super::options::Options;
@@ -79,9 +79,17 @@ pub(crate) fn solve_impl(
     record_estimate(&mut report, correction.as_ref(), options, robot.length());
     if let Some(c) = cache.as_mut() {
         let system = System::new(model.clone(), mesh.clone());
+        // The verdict belongs to this solve's state: a solve that evaluated no Jacobian
+        // (chord steps on a cached solve's factors) would otherwise read the verdict of an
+        // earlier state, which the change of inputs can have crossed.
+        let stale = report.evaluations.jacobian == 0;
         let exact = report.path != PathTaken::Direct && !report.history.iter().any(|i| i.fresh_jacobian);
         let t = Instant::now();
-        report.stability = stability_of(&system, &mut c.workspace, &x, exact, &mut report);
+        report.stability = if stale {
+            fresh_stability(&system, &mut c.workspace, &x, &mut report)
+        } else {
+            stability_of(&system, &mut c.workspace, &x, exact, &mut report)
+        };
         report.timings.stability += t.elapsed();
     }
     report.timings.total = start.elapsed();
