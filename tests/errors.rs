@@ -369,7 +369,7 @@ fn an_interval_cap_names_a_finite_estimate() {
     assert!(!message.contains("NaN"), "{message}");
     for fragment in [
         "needs more than the cap of 64 intervals",
-        "estimated tip error of",
+        "estimated tip position error of",
         "raise `max_intervals`",
     ] {
         assert!(message.contains(fragment), "no `{fragment}` in: {message}");
