@@ -19,12 +19,14 @@ pub enum Error {
     },
     /// A tendon's path has (nearly) no tangent, so its force per unit length is undefined.
     #[error(
-        "tendon {tendon} has a vanishing path tangent |p_i'| = {speed:.3e} at s = {s:.6} m; \
+        "tendon {} has a vanishing path tangent |p_i'| = {speed:.3e} at s = {s:.6} m; \
          its routing turns faster than the backbone can follow (|r'| too large or r, u* \
-         cancel the axial strain); smooth or shorten the routing"
+         cancel the axial strain); smooth or shorten the routing",
+        tendon + 1
     )]
     SingularRouting {
-        /// Index of the tendon (0-based).
+        /// Index of the tendon (0-based; messages number tendons from 1, as robot files,
+        /// parameters and the CLI do).
         tendon: usize,
         /// Arc length (m).
         s: f64,
