@@ -15,7 +15,7 @@
 //! | L / r | slenderness (r the outer radius) | outside [5, 2e4]: rod theory needs a slender rod; beyond 2e4 a thread |
 //! | E | Young's modulus | outside [1e4, 1e12] Pa: from soft silicones (about 5e4 Pa) to diamond (1.2e12 Pa) |
 //! | w L^3 / EI | self weight (w the distributed force, N/m) against stiffness | above 1e3: the rod hangs like a string, bending only within (EI/w)^(1/3) < L/10 of its base |
-//! | tau r^2 / EI | a tendon's tension against the geometric limit EI / r^2 (r its largest offset) | at or above 1: the bend radius EI / (tau r) would fall below the offset; past it the tendon path folds and no equilibrium exists |
+//! | tau r^2 / EI | a tendon's tension against the geometric limit EI / r^2 (r its largest offset) | at or above 1: the bend radius EI / (tau r) would fall below the offset; past it, with nothing holding the bend back (antagonist tendons, loads), the tendon path folds and no equilibrium exists |
 //! | F a^2 / EI | a tip force (a = L) or point force (a = its s) against stiffness | above 100: the rod bends only within (EI/F)^(1/2) < a/10 of the load |
 //! | M a / EI | the bending angle a tip or point moment alone causes (rad) | above 20 pi (ten turns) |
 //!
@@ -272,9 +272,11 @@ impl fmt::Display for Warning {
             } => write!(
                 f,
                 "tendon {}: tension {} N x offset^2 ({} m)^2 = {} N m^2 is {}x the bending stiffness EI = {} N m^2: \
-                 {} the geometric limit EI/r^2 = {} N, the rod would curl tighter than the tendon \
-                 offset (bend radius EI/(tau r) = {} m against the offset {} m) and no equilibrium exists \
-                 past it; check the tension's units (N) and the offset (m), or lower the tension below {} N",
+                 {} the geometric limit EI/r^2 = {} N: bent by this tendon alone, the rod would curl tighter \
+                 than the tendon offset (bend radius EI/(tau r) = {} m against the offset {} m), and past the \
+                 limit no equilibrium exists unless other tendons or loads hold the bend back (antagonists \
+                 pulling against it, a load that straightens it); check the tension's units (N) and the \
+                 offset (m), or lower the tension below {} N",
                 tendon + 1,
                 fig(tension),
                 fig(offset),
@@ -364,6 +366,27 @@ mod tests {
         assert_eq!(fig(366_000.0), "3.66e5");
         assert_eq!(fig(200.0), "200");
         assert_eq!(fig(1e-5), "1e-5");
+    }
+
+    /// Issue 25: co-contracted robots past a tendon's limit converge, so the warning says
+    /// the limit holds for the tendon bending the rod alone.
+    #[test]
+    fn the_curl_warning_allows_for_what_holds_the_bend_back() {
+        let text = Warning::TendonCurl {
+            tendon: 0,
+            tension: 100.0,
+            offset: 0.008,
+            bending_stiffness: 0.004_223,
+        }
+        .to_string();
+        assert!(
+            text.contains("tendon 1:") && text.contains("bent by this tendon alone"),
+            "{text}"
+        );
+        assert!(
+            text.contains("unless other tendons or loads hold the bend back"),
+            "{text}"
+        );
     }
 
     /// The prototype in every experiment of Table 2 is a robot of ordinary scales.
