@@ -3,6 +3,7 @@
 //! otherwise the Newton homotopy from a warm start, Newton from the cold guess, and the load
 //! path from rest are tried in turn, and every answer gets its stability verdict.
 
+use super::linear::LinearSolver;
 use super::newton::{self, Settings, Workspace};
 use super::options::{Equilibrium, Options};
 use super::path;
@@ -14,6 +15,33 @@ use crate::mesh::guess;
 use crate::report::{PathTaken, SolveReport, Stability, Termination};
 use crate::solution::State;
 use std::time::Instant;
+
+/// A warm start whose predicted Newton step is at most this (max-norm in the scaled unknowns:
+/// a tenth of L in position, 0.1 rad in rotation) is near the new equilibrium on its branch:
+/// Newton from there converges in a few steps (4-6 in a fine sweep), whatever the residual of
+/// the cold guess, which for an upright buckled robot can be smaller (the straight rod nearly
+/// balances) and lead to the other, unstable branch.
+const NEAR: f64 = 0.1;
+
+/// The Newton workspace factored at the warm start `warm` of a stable state, when the Newton
+/// step predicted from it is at most [`NEAR`]: the warm start is kept, and Newton's first
+/// step is a chord step on these factors (the step predicted). None otherwise, and then the
+/// start is chosen by [`better_start`].
+pub(crate) fn near_start(
+    system: &System,
+    warm: &[State],
+    solver: LinearSolver,
+    report: &mut SolveReport,
+) -> Option<Workspace> {
+    let mut ws = Workspace::new(system, solver).ok()?;
+    if !ws.linearize(system, warm, report) {
+        return None;
+    }
+    let rhs: Vec<f64> = ws.residual().iter().map(|v| -v).collect();
+    let step = ws.solve_again(&rhs)?;
+    let size = step.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    (size <= NEAR).then_some(ws)
+}
 
 /// Of a warm start and the cold initial guess, the one with the smaller scaled residual. A
 /// previous solution for other tensions can be a worse start than the rigid-equilibrium
@@ -127,9 +155,10 @@ fn direct(
         return (false, worst);
     }
     let t = Instant::now();
-    // Converged by chord steps on a cached solve's factors alone: the Jacobian they belong to
-    // is an earlier state's, whose verdict a change of inputs can have made wrong.
-    let verdict = if report.evaluations.jacobian == 0 {
+    // Converged by chord steps alone (on a cached solve's factors, or a warm start's): the
+    // Jacobian they belong to is an earlier state's, whose verdict a change of inputs can
+    // have made wrong.
+    let verdict = if report.newton_steps == 0 {
         fresh_stability(system, ws, x, report)
     } else {
         stability_of(system, ws, x, false, report)
