@@ -92,7 +92,7 @@ fn the_imperfect_column_returns_the_stable_state_on_the_imperfections_side() {
             }
             worst = worst.max(report.iterations);
             // Measured at most 73 (1.5 P_cr, eps 1e-5): a regression bound, not issue 25's
-            // target of 50, which the load path misses on 14 of these 60 cases.
+            // target of 50, which the load path misses on 13 of these 60 cases (51-73).
             assert!(report.iterations <= 80, "{case}: {} iterations", report.iterations);
         }
     }
