@@ -53,6 +53,11 @@ const PATH_TOLERANCE: f64 = 1e-6;
 /// Near the sharp turn of a slightly imperfect column a guide's state error, amplified by
 /// the nearly singular Jacobian, tilts the tangent so that no step from it converges.
 const POLISH_BELOW: f64 = 1e-3;
+/// A path that tries only steps of at most [`POLISH_BELOW`] this many times since its last
+/// longer accepted step crawls instead of following its branch (the buckled family of a perfectly round
+/// column, whose Jacobian is singular all along it): it has stalled. Healthy paths recover
+/// their step length within a few steps after a turn.
+const CRAWL_STEPS: usize = 40;
 /// The end of a load path.
 pub(super) struct End {
     /// The converged states at lambda = 1.
@@ -207,12 +212,20 @@ pub(super) fn follow(
     let mut factored_at_point = true;
     // Whether the point was converged to the solve's tolerance after steps from it failed.
     let mut polished = false;
+    // Tries of at most POLISH_BELOW since the last longer accepted step.
+    let mut crawl = 0;
     let mut furthest = 0.0f64;
     let mut worst = 0;
     let mut trial: Vec<State> = Vec::with_capacity(system.mesh.nodes.len());
     let mut r = vec![0.0; n];
     for _ in 0..MAX_STEPS {
         report.load_steps += 1;
+        if h <= POLISH_BELOW {
+            crawl += 1;
+            if crawl > CRAWL_STEPS {
+                break;
+            }
+        }
         // The last step lands on lambda = 1 by Newton at fixed lambda.
         if point.tl > 0.0 && point.lambda + h * point.tl >= 1.0 {
             let h1 = (1.0 - point.lambda) / point.tl;
@@ -366,6 +379,9 @@ pub(super) fn follow(
                 }
                 // The angle between successive tangents bounds the next step.
                 let cos = (dot(&next.tx, &point.tx) / n as f64 + next.tl * point.tl).clamp(-1.0, 1.0);
+                if h > POLISH_BELOW {
+                    crawl = 0;
+                }
                 let grow = match iterations {
                     i if i <= EASY => 2.0,
                     3 => 1.3,
@@ -378,6 +394,7 @@ pub(super) fn follow(
                 point = next;
                 polished = false;
                 furthest = furthest.max(point.lambda);
+
                 fl = next_fl;
                 factored_at_point = true;
                 // A shape the mesh no longer resolves: continue on a finer one (the load
