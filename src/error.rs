@@ -19,12 +19,14 @@ pub enum Error {
     },
     /// A tendon's path has (nearly) no tangent, so its force per unit length is undefined.
     #[error(
-        "tendon {tendon} has a vanishing path tangent |p_i'| = {speed:.3e} at s = {s:.6} m; \
+        "tendon {} has a vanishing path tangent |p_i'| = {speed:.3e} at s = {s:.6} m; \
          its routing turns faster than the backbone can follow (|r'| too large or r, u* \
-         cancel the axial strain); smooth or shorten the routing"
+         cancel the axial strain); smooth or shorten the routing",
+        tendon + 1
     )]
     SingularRouting {
-        /// Index of the tendon (0-based).
+        /// Index of the tendon (0-based; messages number tendons from 1, as robot files,
+        /// parameters and the CLI do).
         tendon: usize,
         /// Arc length (m).
         s: f64,
@@ -55,19 +57,24 @@ pub enum Error {
         /// What to try next.
         hint: String,
     },
-    /// Error control needs more intervals than the cap allows to meet the tip tolerance.
+    /// Error control needs more intervals than the cap allows to meet the tip tolerance: a
+    /// mesh of the cap (or the finest one it allows) was solved and misses it.
     #[error(
         "meeting the tip tolerance needs more than the cap of {cap} intervals: the last mesh \
-         has an estimated tip error of {estimate:.3e} m > tolerance {tolerance:.3e} m; raise \
-         `max_intervals` or loosen `tolerance`"
+         has {}; raise `max_intervals` or loosen `tolerance`",
+        binding(*estimate, *tolerance, *rotation_estimate, *rotation_tolerance)
     )]
     IntervalCap {
         /// The cap (intervals).
         cap: usize,
         /// Estimated tip position error of the last mesh solved (m).
         estimate: f64,
-        /// The requested tolerance, tolerance x L (m).
+        /// The requested position tolerance, tolerance x L (m).
         tolerance: f64,
+        /// Estimated tip orientation error of the last mesh solved (rad).
+        rotation_estimate: f64,
+        /// The requested orientation tolerance (rad).
+        rotation_tolerance: f64,
     },
 }
 
@@ -90,6 +97,25 @@ impl fmt::Display for Readable {
     }
 }
 
+/// Which estimate of an [`Error::IntervalCap`] misses its tolerance, in words: the position,
+/// the orientation or both, each with its value and tolerance (and, when only one binds, the
+/// other's margin).
+fn binding(position: f64, tolerance: f64, rotation: f64, rotation_tolerance: f64) -> String {
+    let p = format!("an estimated tip position error of {position:.3e} m");
+    let r = format!("an estimated tip orientation error of {rotation:.3e} rad");
+    match (position > tolerance, rotation > rotation_tolerance) {
+        (true, true) => format!("{p} > tolerance {tolerance:.3e} m and {r} > tolerance {rotation_tolerance:.3e} rad"),
+        (false, true) => format!(
+            "{r} > tolerance {rotation_tolerance:.3e} rad (its position error, {position:.3e} m, meets \
+             the tolerance {tolerance:.3e} m)"
+        ),
+        _ => format!(
+            "{p} > tolerance {tolerance:.3e} m (its orientation error, {rotation:.3e} rad, meets the \
+             tolerance {rotation_tolerance:.3e} rad)"
+        ),
+    }
+}
+
 /// Shorthand for results in this crate.
 pub type Result<T, E = Error> = std::result::Result<T, E>;
 
@@ -98,5 +124,44 @@ pub(crate) fn invalid(field: impl Into<String>, problem: impl Into<String>, hint
         field: field.into(),
         problem: problem.into(),
         hint: hint.into(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_interval_cap_names_the_estimate_that_binds() {
+        let cap = |estimate, rotation_estimate| Error::IntervalCap {
+            cap: 64,
+            estimate,
+            tolerance: 1e-8,
+            rotation_estimate,
+            rotation_tolerance: 1e-7,
+        };
+        let orientation = cap(1e-10, 3e-7).to_string();
+        assert!(
+            orientation.contains("orientation error of 3.000e-7 rad > tolerance 1.000e-7 rad"),
+            "{orientation}"
+        );
+        assert!(
+            orientation.contains("position error, 1.000e-10 m, meets"),
+            "{orientation}"
+        );
+        let position = cap(2e-8, 1e-8).to_string();
+        assert!(
+            position.contains("position error of 2.000e-8 m > tolerance 1.000e-8 m"),
+            "{position}"
+        );
+        assert!(
+            position.contains("orientation error, 1.000e-8 rad, meets"),
+            "{position}"
+        );
+        let both = cap(2e-8, 3e-7).to_string();
+        assert!(
+            both.contains("m > tolerance") && both.contains("rad > tolerance"),
+            "{both}"
+        );
     }
 }

@@ -280,6 +280,10 @@ pub struct SolveReport {
     pub stability: Stability,
     /// How it was reached.
     pub path: PathTaken,
+    /// What a user should know about the choice of this answer, one sentence each: a side
+    /// picked at a perfectly symmetric bifurcation (and the mirror state left out), or a
+    /// fallback returned because the load path could not be followed.
+    pub notes: Vec<String>,
 }
 
 impl SolveReport {
@@ -307,6 +311,7 @@ impl SolveReport {
                 reason: "not assessed".into(),
             },
             path: PathTaken::Direct,
+            notes: Vec::new(),
         }
     }
 }

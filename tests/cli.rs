@@ -872,7 +872,8 @@ fn an_interval_cap_names_its_estimate_and_exits_3() {
     let message = stderr(&out);
     assert!(!message.contains("NaN"), "{message}");
     assert!(
-        message.contains("needs more than the cap of 64 intervals") && message.contains("estimated tip error of"),
+        message.contains("needs more than the cap of 64 intervals")
+            && message.contains("estimated tip position error of"),
         "{message}"
     );
 }

@@ -134,3 +134,26 @@ fn the_default_resolves_a_ten_turn_coil_without_continuation() {
     // The starting mesh resolves the coil's ten turns at pi/8 per interval: 160 or more.
     assert!(report.intervals >= 160, "{} intervals", report.intervals);
 }
+
+#[test]
+fn a_mesh_of_the_cap_is_tried_before_the_cap_refuses() {
+    // Case H at the default tolerance: from 32 intervals the estimate asks for 85 (the
+    // h^4 prediction aiming at 0.8 of the tolerance), which meet it. A cap of 84 used to
+    // refuse; 84 intervals meet the tolerance too (tip 5.3e-9 m, 8.4e-8 rad).
+    let options = |cap| collocation::Options {
+        max_intervals: cap,
+        ..Default::default()
+    };
+    let solution = collocation::solve(&cases::case_h(), &options(84)).unwrap();
+    assert_eq!(solution.report.tolerance_met, Some(true), "{:?}", solution.report);
+    assert_eq!(solution.report.intervals, 84);
+    // At 80 the orientation estimate binds (1.02e-7 rad) while the position error is well
+    // inside its tolerance: the refusal says so.
+    let err = collocation::solve(&cases::case_h(), &options(80)).unwrap_err();
+    let message = err.to_string();
+    assert!(matches!(err, tdcr::Error::IntervalCap { cap: 80, .. }), "{message}");
+    assert!(
+        message.contains("tip orientation error of") && message.contains("its position error"),
+        "{message}"
+    );
+}

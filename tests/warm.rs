@@ -41,7 +41,10 @@ fn a_one_percent_change_needs_no_new_jacobian() {
             let warm = solver.solve_from(&robot, &previous).unwrap();
             let cold = collocation::solve(&robot, &options).unwrap();
             let report = &warm.report;
-            assert_eq!(report.evaluations.jacobian, 0, "{report:?}");
+            // No Newton step; the one Jacobian is the stability verdict's, at the solution
+            // (the factors the chord steps used belong to the previous state).
+            assert_eq!(report.newton_steps, 0, "{report:?}");
+            assert_eq!(report.evaluations.jacobian, 1, "{report:?}");
             assert!(report.history.iter().all(|it| !it.fresh_jacobian), "{report:?}");
             assert!(report.residual <= options.residual_tolerance);
             assert!(tip_gap(&warm, &cold) < SAME_ANSWER, "{:.3e}", tip_gap(&warm, &cold));
@@ -72,8 +75,13 @@ fn factors_are_reused_only_for_the_solvers_own_last_solution() {
     let mut solver = Solver::new(options.clone());
     solver.solve(&scaled(&robot, 0.5)).unwrap();
     let warm = solver.solve_from(&robot, &other).unwrap();
-    assert!(warm.report.evaluations.jacobian >= 1, "{:?}", warm.report);
-    assert!(warm.report.history.first().is_some_and(|it| it.fresh_jacobian));
+    // Its first step is a Newton step, or (a stable guess whose predicted step is small,
+    // docs/numerics.md "Robustness") a chord step on the Jacobian evaluated at the guess
+    // itself, then one more Jacobian for the verdict at the solution: never a chord step on
+    // the factors of the solver's own last solve.
+    let report = &warm.report;
+    let fresh_first = report.history.first().is_some_and(|it| it.fresh_jacobian);
+    assert!(fresh_first || report.evaluations.jacobian >= 2, "{report:?}");
     let cold = collocation::solve(&robot, &options).unwrap();
     assert!(tip_gap(&warm, &cold) < SAME_ANSWER);
 }
@@ -141,4 +149,49 @@ fn warm_starts_after_any_change_take_no_more_newton_steps_than_cold() {
             assert!(tip_gap(&warm, &cold) < 1e-7, "{what}: {:.3e}", tip_gap(&warm, &cold));
         }
     }
+}
+
+/// The force block of the tip compliance, d p(L) / d F(L), symmetrized: its smallest
+/// eigenvalue (negative proves instability for a conservative model).
+fn smallest_compliance_eigenvalue(robot: &Robot, solution: &Solution) -> f64 {
+    let c = tdcr::collocation::sensitivity::tip_sensitivities(robot, solution)
+        .unwrap()
+        .compliance();
+    let block: nalgebra::Matrix3<f64> = c.fixed_view::<3, 3>(0, 0).into_owned();
+    (0.5 * (block + block.transpose())).symmetric_eigenvalues().min()
+}
+
+#[test]
+fn a_solver_that_converges_by_chord_steps_gives_each_state_its_own_verdict() {
+    // Euler's column (the prototype's rod along +z, P_cr = pi^2 EI / (4 L^2) = 0.177893 N)
+    // swept past P_cr by one Solver from the equilibrium nearest the guess: the straight
+    // column, stable below P_cr and unstable above. The steps past P_cr converge by chord
+    // steps on the factors of the step before, which belong to a stable state.
+    let p_cr = 0.177893;
+    let options = Options {
+        equilibrium: collocation::Equilibrium::Nearest,
+        ..Default::default()
+    };
+    let mut solver = Solver::new(options);
+    let mut previous: Option<Solution> = None;
+    let mut verdicts = Vec::new();
+    for f in [0.9, 0.95, 1.05, 1.1] {
+        let mut robot = Robot::new(tdcr::Rod::tube(0.242, 0.0004, 0.0, 210e9, 0.3125));
+        robot.loads.tip_force = nalgebra::Vector3::new(0.0, 0.0, -f * p_cr);
+        let s = match &previous {
+            None => solver.solve(&robot).unwrap(),
+            Some(p) => solver.solve_from(&robot, p).unwrap(),
+        };
+        if f > 1.0 {
+            assert_eq!(s.report.newton_steps, 0, "{:?}", s.report);
+        }
+        // A stable verdict never where the compliance proves instability (1e-9 of the
+        // largest compliance, 1/k of the column's bending: rounding)
+        if s.report.stability.is_stable() {
+            assert!(smallest_compliance_eigenvalue(&robot, &s) > -1e-9, "{f}");
+        }
+        verdicts.push(s.report.stability.verdict());
+        previous = Some(s);
+    }
+    assert_eq!(verdicts, ["stable", "stable", "unstable", "unstable"]);
 }

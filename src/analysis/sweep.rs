@@ -7,8 +7,8 @@
 //! Every collocation step is [`collocation::solve_from`] the previous step's solution, with a
 //! fresh Newton workspace: its first Newton iteration evaluates the Jacobian at the warm
 //! start, so its stability verdict belongs to the Jacobian of the step's own last Newton
-//! step, never to an earlier step's (as a [`collocation::Solver`]'s chord-only solves would
-//! reuse). Shooting steps start cold (shooting takes no warm start).
+//! step, never to an earlier step's. Shooting steps start cold (shooting takes no warm
+//! start).
 
 use crate::collocation;
 use crate::error::{Error, Result};
@@ -286,9 +286,7 @@ mod tests {
     /// Euler's column (the prototype's rod along +z, P_cr = pi^2 EI / (4 L^2) = 0.177893 N,
     /// docs/stability.md) loaded past P_cr in a sweep: the straight column that every step
     /// ends on is stable below P_cr and unstable (two directions) above, and each step's
-    /// verdict says so, not the verdict of an earlier step's Jacobian (a
-    /// `collocation::Solver`, whose chord-only steps reuse the first step's factors, says
-    /// `stable` at all four).
+    /// verdict says so, not the verdict of an earlier step's Jacobian.
     #[test]
     fn every_step_has_its_own_stability_verdict() {
         let p_cr = 0.177893;

@@ -1,8 +1,9 @@
 //! The equilibrium choice (docs/stability.md, "Which equilibrium a solve returns"): Newton's
-//! answer from the start stands when it converged cleanly to a state that is not unstable;
+//! answer from the start stands when it converged cleanly to a stable state;
 //! otherwise the Newton homotopy from a warm start, Newton from the cold guess, and the load
 //! path from rest are tried in turn, and every answer gets its stability verdict.
 
+use super::linear::LinearSolver;
 use super::newton::{self, Settings, Workspace};
 use super::options::{Equilibrium, Options};
 use super::path;
@@ -14,6 +15,33 @@ use crate::mesh::guess;
 use crate::report::{PathTaken, SolveReport, Stability, Termination};
 use crate::solution::State;
 use std::time::Instant;
+
+/// A warm start whose predicted Newton step is at most this (max-norm in the scaled unknowns:
+/// a tenth of L in position, 0.1 rad in rotation) is near the new equilibrium on its branch:
+/// Newton from there converges in a few steps (4-6 in a fine sweep), whatever the residual of
+/// the cold guess, which for an upright buckled robot can be smaller (the straight rod nearly
+/// balances) and lead to the other, unstable branch.
+const NEAR: f64 = 0.1;
+
+/// The Newton workspace factored at the warm start `warm` of a stable state, when the Newton
+/// step predicted from it is at most [`NEAR`]: the warm start is kept, and Newton's first
+/// step is a chord step on these factors (the step predicted). None otherwise, and then the
+/// start is chosen by [`better_start`].
+pub(crate) fn near_start(
+    system: &System,
+    warm: &[State],
+    solver: LinearSolver,
+    report: &mut SolveReport,
+) -> Option<Workspace> {
+    let mut ws = Workspace::new(system, solver).ok()?;
+    if !ws.linearize(system, warm, report) {
+        return None;
+    }
+    let rhs: Vec<f64> = ws.residual().iter().map(|v| -v).collect();
+    let step = ws.solve_again(&rhs)?;
+    let size = step.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    (size <= NEAR).then_some(ws)
+}
 
 /// Of a warm start and the cold initial guess, the one with the smaller scaled residual. A
 /// previous solution for other tensions can be a worse start than the rigid-equilibrium
@@ -58,10 +86,10 @@ fn clean(history: &[crate::report::Iteration]) -> bool {
 }
 
 /// The stability of the equilibrium `x` of `system` ([`stability`]), from the Jacobian
-/// last factored in `ws`: Newton's last (evaluated one step before `x`), or for a solve
-/// that converged by chord steps alone the earlier Jacobian those steps used, whose verdict
-/// is then reused. A new Jacobian at `x` is evaluated only when `exact` (at the end of a
-/// load path, whose last Jacobian may belong to a point before the end).
+/// last factored in `ws`: Newton's last (evaluated one step before `x`). A new Jacobian at
+/// `x` is evaluated and factored when `exact` (at the end of a load path, whose last
+/// Jacobian may belong to a point before the end); after a solve that converged by chord
+/// steps on a cached solve's factors, [`fresh_stability`].
 pub(crate) fn stability_of(
     system: &System,
     ws: &mut Workspace,
@@ -81,8 +109,23 @@ pub(crate) fn stability_of(
     ws.verdict(|values| stability::assess(values, &s))
 }
 
+/// The stability of the equilibrium `x` of `system` after a solve that converged by chord
+/// steps on a cached solve's factors alone: those belong to an earlier state, whose verdict a
+/// change of inputs can have made wrong, so the Jacobian at `x` is evaluated for it (not
+/// factored: [`Workspace::verdict_at`]).
+pub(crate) fn fresh_stability(system: &System, ws: &mut Workspace, x: &[State], report: &mut SolveReport) -> Stability {
+    if let Some(reason) = stability::non_conservative(&system.model) {
+        return Stability::Unknown { reason };
+    }
+    let s: Vec<f64> = system.mesh.nodes.iter().map(|n| n.s).collect();
+    ws.verdict_at(system, x, report, |values| stability::assess(values, &s))
+        .unwrap_or_else(|| Stability::Unknown {
+            reason: "the Jacobian at the solution is not finite".into(),
+        })
+}
+
 /// Newton from `x`, given only the chance to converge cleanly ([`clean`]) unless
-/// `nearest`: the converged states, if they are not unstable (or `nearest`).
+/// `nearest`: the converged states, if they are stable ([`acceptable`]) or `nearest`.
 fn direct(
     system: &System,
     ws: &mut Workspace,
@@ -112,15 +155,43 @@ fn direct(
         return (false, worst);
     }
     let t = Instant::now();
-    let verdict = stability_of(system, ws, x, false, report);
+    // Converged by chord steps alone (on a cached solve's factors, or a warm start's): the
+    // Jacobian they belong to is an earlier state's, whose verdict a change of inputs can
+    // have made wrong.
+    let verdict = if report.newton_steps == 0 {
+        fresh_stability(system, ws, x, report)
+    } else {
+        stability_of(system, ws, x, false, report)
+    };
     report.timings.stability += t.elapsed();
-    (!matches!(verdict, Stability::Unstable { .. }), worst)
+    (acceptable(system, &verdict), worst)
+}
+
+/// Whether a state with this verdict may be the answer without a path: only a stable one,
+/// or, where the loads admit no conjugate-point verdict, one of unknown stability.
+fn acceptable(system: &System, verdict: &Stability) -> bool {
+    match verdict {
+        Stability::Stable => true,
+        Stability::Unstable { .. } => false,
+        Stability::Unknown { .. } => stability::non_conservative(&system.model).is_some(),
+    }
+}
+
+/// The note of a side picked at a perfectly symmetric bifurcation at load factor `lambda`.
+fn picked_note(lambda: f64) -> String {
+    format!(
+        "the path crossed a perfectly symmetric bifurcation at {:.1} % of the way, where nothing \
+         prefers a side: it took the branch along the Jacobian's kernel direction; its mirror state \
+         (bent the opposite way, along the reversed kernel direction) is equally valid, and an \
+         imperfection of the other sign selects it",
+        100.0 * lambda
+    )
 }
 
 /// Newton from `x0`, and the equilibrium choice of docs/stability.md. Newton's answer
-/// stands when it converged cleanly to a state that is not unstable (or the caller asked
+/// stands when it converged cleanly to a stable state ([`acceptable`]; or the caller asked
 /// for the nearest equilibrium). Otherwise, from a warm start (`warm`), the Newton homotopy
-/// from it ([`path::follow`]), whose end stands if it is not unstable; then Newton from the
+/// from it ([`path::follow`]), whose end stands if it is stable; then Newton from the
 /// cold guess, as above; then the load path from the unloaded robot. Newton's answer from
 /// `x0`, if it converged at all, is the fallback when no path can be followed.
 pub(crate) fn choose_equilibrium(
@@ -154,10 +225,9 @@ pub(crate) fn choose_equilibrium(
     if warm {
         if let Ok(end) = path::follow(system, ws, path::Start::Warm(&x0), options, settings, report, None) {
             let exact = !report.history.iter().any(|i| i.fresh_jacobian);
-            if !matches!(
-                stability_of(system, ws, &end.x, exact, report),
-                Stability::Unstable { .. }
-            ) {
+            let verdict = stability_of(system, ws, &end.x, exact, report);
+            if acceptable(system, &verdict) {
+                report.notes.extend(end.picked.iter().map(|&l| picked_note(l)));
                 report.path = PathTaken::FromWarmStart {
                     folds: end.folds,
                     bifurcations: end.bifurcations,
@@ -174,6 +244,7 @@ pub(crate) fn choose_equilibrium(
     let mesh = system.mesh.clone();
     match path::follow(system, ws, path::Start::Rest, options, settings, report, None) {
         Ok(end) => {
+            report.notes.extend(end.picked.iter().map(|&l| picked_note(l)));
             report.path = PathTaken::LoadPath {
                 folds: end.folds,
                 bifurcations: end.bifurcations,
@@ -205,6 +276,10 @@ pub(crate) fn choose_equilibrium(
             if !ws.linearize(system, &x, report) {
                 return Err(not_converged(system, report, row, &hint));
             }
+            report.notes.push(format!(
+                "the load path could not be followed ({hint}): this is Newton's root from the guess, \
+                 not the state the robot reaches when loaded from rest"
+            ));
             report.termination = Termination::Converged;
             Ok(x)
         }

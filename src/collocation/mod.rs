@@ -31,6 +31,7 @@
 //! load path.
 
 pub(crate) mod actuation;
+mod branch;
 mod equilibrium;
 mod estimate;
 mod homotopy;

@@ -77,6 +77,8 @@ pub struct Workspace {
     /// The stability verdict of the Jacobian in `values`, once assessed (cleared whenever
     /// `values` change).
     verdict: Option<Stability>,
+    /// Whether `values` hold the Jacobian [`Workspace::verdict_at`] evaluated (not factored).
+    at_solution: bool,
 }
 
 impl Workspace {
@@ -98,6 +100,7 @@ impl Workspace {
             trial: Vec::with_capacity(system.mesh.nodes.len()),
             factored: false,
             verdict: None,
+            at_solution: false,
         })
     }
 
@@ -110,6 +113,7 @@ impl Workspace {
     /// Returns false for a zero pivot or a non-finite step.
     fn solve(&mut self, report: &mut SolveReport) -> bool {
         self.verdict = None;
+        self.at_solution = false;
         for (r, f) in self.rhs.iter_mut().zip(&self.residual) {
             *r = -f;
         }
@@ -129,6 +133,8 @@ impl Workspace {
         if !self.factored {
             return false;
         }
+        // The iterate moves on from the solution a verdict_at Jacobian belonged to.
+        self.at_solution = false;
         for (r, f) in self.rhs.iter_mut().zip(&self.residual) {
             *r = -f;
         }
@@ -175,6 +181,12 @@ impl Workspace {
         &self.values
     }
 
+    /// Whether the verdict held is [`Workspace::verdict_at`]'s, of the Jacobian at a solution
+    /// (the stored factors belonging to an earlier state).
+    pub fn assessed_at_solution(&self) -> bool {
+        self.at_solution && self.verdict.is_some()
+    }
+
     /// The stability verdict of the Jacobian last factored (docs/stability.md), assessed
     /// by `assess` once per Jacobian: warm-started solves that converge by chord steps on
     /// an earlier, nearby Jacobian reuse its verdict at no cost.
@@ -185,6 +197,32 @@ impl Workspace {
         self.verdict.clone().unwrap_or(Stability::Unknown {
             reason: "not assessed".into(),
         })
+    }
+
+    /// The stability verdict of the Jacobian of `system` at `x`, assessed by `assess`, for a
+    /// state the stored factors do not belong to (a solve that converged by chord steps on an
+    /// earlier state's factors). The Jacobian is evaluated into the value buffer but not
+    /// factored: the factors, and the residual of the last iterate, stay as they were (the
+    /// error estimate and later chord steps use them); counted as a Jacobian evaluation.
+    /// None for a non-finite Jacobian.
+    pub fn verdict_at(
+        &mut self,
+        system: &System,
+        x: &[State],
+        report: &mut SolveReport,
+        assess: impl FnOnce(&[f64]) -> Stability,
+    ) -> Option<Stability> {
+        let t = Instant::now();
+        let ok = system.jacobian(x, &mut self.trial_residual, &mut self.values).is_ok();
+        report.timings.assembly += t.elapsed();
+        report.evaluations.jacobian += 1;
+        report.evaluations.equations += system.rate_evaluations();
+        self.verdict = None;
+        self.at_solution = true;
+        if !ok || !self.values.iter().all(|v| v.is_finite()) {
+            return None;
+        }
+        Some(self.verdict(assess))
     }
 
     /// Whether the workspace holds the factors of a successful solve.

@@ -60,8 +60,8 @@ pub struct Options {
     /// landing of a load path take at most 12 of them, unless `equilibrium` is
     /// [`Equilibrium::Nearest`] for the first try). Default 30; at most [`MAX_ITERATIONS`].
     pub max_iterations: usize,
-    /// Follow a path when Newton from the guess fails or does not end cleanly on a state
-    /// that is not unstable: from a warm start the Newton homotopy, else the load path from
+    /// Follow a path when Newton from the guess fails or does not end cleanly on a stable
+    /// state (or, for loads with no verdict, one of unknown stability): from a warm start the Newton homotopy, else the load path from
     /// the unloaded robot (docs/stability.md). `false` returns Newton's answer from the
     /// guess, whatever its stability, or an error. Default true.
     pub continuation: bool,

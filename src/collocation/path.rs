@@ -17,6 +17,7 @@
 //! failure; when the shape bends more than the mesh resolves, the path continues on a finer
 //! mesh. Near lambda = 1 the last point is predicted onto lambda = 1 and Newton lands there.
 
+use super::branch;
 use super::homotopy::{Homotopy, Point, dot, f_lambda, max_norm, residual, tangent};
 use super::newton::{self, Settings, Workspace};
 use super::options::Options;
@@ -47,6 +48,16 @@ const CHORD_RATIO: f64 = 0.5;
 /// scaled residual (a relative state error of about 1e-6), and only the landing at
 /// lambda = 1 is converged to the solve's tolerance.
 const PATH_TOLERANCE: f64 = 1e-6;
+/// Steps from a point fail below this length: the point (a guide corrected to
+/// [`PATH_TOLERANCE`]) is converged to the solve's tolerance and its tangent taken again.
+/// Near the sharp turn of a slightly imperfect column a guide's state error, amplified by
+/// the nearly singular Jacobian, tilts the tangent so that no step from it converges.
+const POLISH_BELOW: f64 = 1e-3;
+/// A path that tries only steps of at most [`POLISH_BELOW`] this many times since its last
+/// longer accepted step crawls instead of following its branch (the buckled family of a perfectly round
+/// column, whose Jacobian is singular all along it): it has stalled. Healthy paths recover
+/// their step length within a few steps after a turn.
+const CRAWL_STEPS: usize = 40;
 /// The end of a load path.
 pub(super) struct End {
     /// The converged states at lambda = 1.
@@ -56,6 +67,9 @@ pub(super) struct End {
     /// Load factors where the number of unstable directions changed without a fold: the
     /// path crossed a bifurcation (the symmetric column at Euler's load).
     pub bifurcations: Vec<f64>,
+    /// Load factors where the path left a perfectly symmetric bifurcation along a picked
+    /// side of the Jacobian's kernel (nothing preferred either).
+    pub picked: Vec<f64>,
 }
 
 /// A step that changes the number of unstable directions without a fold has jumped to
@@ -64,7 +78,7 @@ pub(super) struct End {
 const BIFURCATION_STEP: f64 = 1e-3;
 
 /// Unstable directions at the point whose Jacobian `ws` holds: None when unknown.
-fn index(system: &System, ws: &mut Workspace, report: &mut SolveReport) -> Option<usize> {
+pub(super) fn index(system: &System, ws: &mut Workspace, report: &mut SolveReport) -> Option<usize> {
     if stability::non_conservative(&system.model).is_some() {
         return None;
     }
@@ -168,6 +182,10 @@ pub(super) fn follow(
         }
     };
     let tracing = record.is_some();
+    // A trace records its own branch; every other path leaves a stable branch for a stable
+    // one where the branch it is on loses stability (module `branch`).
+    let mut switching = !tracing;
+    let mut picked = Vec::new();
     if !ws.linearize(system, &x, report) {
         return Err(("the Jacobian at the start of the path is singular".into(), 0));
     }
@@ -197,6 +215,10 @@ pub(super) fn follow(
     };
     push(&mut record, &point, unstable, false, report);
     let mut factored_at_point = true;
+    // Whether the point was converged to the solve's tolerance after steps from it failed.
+    let mut polished = false;
+    // Tries of at most POLISH_BELOW since the last longer accepted step.
+    let mut crawl = 0;
     let mut furthest = 0.0f64;
     let mut worst = 0;
     let mut trial: Vec<State> = Vec::with_capacity(system.mesh.nodes.len());
@@ -206,6 +228,12 @@ pub(super) fn follow(
             return Err(("stopped on request before the end of the range".into(), 0));
         }
         report.load_steps += 1;
+        if h <= POLISH_BELOW {
+            crawl += 1;
+            if crawl > CRAWL_STEPS {
+                break;
+            }
+        }
         // The last step lands on lambda = 1 by Newton at fixed lambda.
         if point.tl > 0.0 && point.lambda + h * point.tl >= 1.0 {
             let h1 = (1.0 - point.lambda) / point.tl;
@@ -246,7 +274,25 @@ pub(super) fn follow(
                     x: landed,
                     folds,
                     bifurcations,
+                    picked,
                 });
+            }
+            if let (true, Some(a), Some(b)) = (switching, unstable, landed_unstable)
+                && b > a
+                && let Some(s) = branch::switch(system, &homotopy, ws, &point, a, settings, report, &mut r)
+            {
+                if s.picked {
+                    bifurcations.push(point.lambda);
+                    picked.push(point.lambda);
+                }
+                switching = false;
+                unstable = s.unstable;
+                push(&mut record, &s.point, unstable, false, report);
+                (point, fl) = (s.point, s.fl);
+                polished = false;
+                factored_at_point = true;
+                h = h1.abs().min(max_step);
+                continue;
             }
             if jumped {
                 // Retry shorter from the last point, whose factors are gone.
@@ -294,6 +340,26 @@ pub(super) fn follow(
                     && a != b
                     && !fold
                 {
+                    if switching
+                        && b > a
+                        && let Some(s) = branch::switch(system, &homotopy, ws, &point, a, settings, report, &mut r)
+                    {
+                        if s.picked {
+                            bifurcations.push(point.lambda);
+                            picked.push(point.lambda);
+                        }
+                        // One switch per path: the branch taken can keep a nearly neutral
+                        // direction (the plane of a round column's bend), whose count rounding
+                        // decides, and the path does not leave it along that direction.
+                        switching = false;
+                        unstable = s.unstable;
+                        push(&mut record, &s.point, unstable, false, report);
+                        (point, fl) = (s.point, s.fl);
+                        polished = false;
+                        furthest = furthest.max(point.lambda);
+                        factored_at_point = true;
+                        continue;
+                    }
                     if h > BIFURCATION_STEP {
                         // Jumped to another branch: retry shorter.
                         h *= 0.25;
@@ -316,10 +382,14 @@ pub(super) fn follow(
                         x: next.x,
                         folds,
                         bifurcations,
+                        picked,
                     });
                 }
                 // The angle between successive tangents bounds the next step.
                 let cos = (dot(&next.tx, &point.tx) / n as f64 + next.tl * point.tl).clamp(-1.0, 1.0);
+                if h > POLISH_BELOW {
+                    crawl = 0;
+                }
                 let grow = match iterations {
                     i if i <= EASY => 2.0,
                     3 => 1.3,
@@ -330,7 +400,9 @@ pub(super) fn follow(
                     h *= 0.5;
                 }
                 point = next;
+                polished = false;
                 furthest = furthest.max(point.lambda);
+
                 fl = next_fl;
                 factored_at_point = true;
                 // A shape the mesh no longer resolves: continue on a finer one (the load
@@ -351,6 +423,16 @@ pub(super) fn follow(
             None => {
                 h *= 0.5;
                 factored_at_point = false;
+                if !polished
+                    && h < POLISH_BELOW
+                    && let Some((p, f)) = polish(system, &homotopy, ws, &point, settings, report)
+                {
+                    (point, fl) = (p, f);
+                    factored_at_point = true;
+                    polished = true;
+                    h = POLISH_BELOW;
+                    continue;
+                }
                 if h < MIN_STEP {
                     break;
                 }
@@ -358,15 +440,52 @@ pub(super) fn follow(
         }
     }
     homotopy.set(system, 1.0);
+    // The point can lie outside [0, 1] (a Newton homotopy's path may turn back past its
+    // start): the share of the way is the furthest point reached, and the point itself is
+    // named only when it lies on the way behind it.
+    let back = if (0.0..furthest).contains(&point.lambda) {
+        format!(", turned back to {:.1} %", point.lambda * 100.0)
+    } else {
+        String::new()
+    };
     Err((
         format!(
-            "the path stalled at {:.1} % of the way (after reaching {:.1} %): no equilibrium nearby is continuous \
+            "the path stalled after reaching {:.1} % of the way{back}: no equilibrium nearby is continuous \
              in the parameter there",
-            point.lambda * 100.0,
             furthest * 100.0
         ),
         worst,
     ))
+}
+
+/// `point` converged to the solve's tolerance at its lambda (a parameter's path only: Newton
+/// solves F = 0, not a Newton homotopy's residual), with its tangent oriented as before.
+fn polish(
+    system: &mut System,
+    homotopy: &Homotopy,
+    ws: &mut Workspace,
+    point: &Point,
+    settings: &Settings,
+    report: &mut SolveReport,
+) -> Option<(Point, Vec<f64>)> {
+    if !matches!(homotopy, Homotopy::Parameter { .. }) {
+        return None;
+    }
+    homotopy.set(system, point.lambda);
+    let mut x = point.x.clone();
+    let (term, _) = newton::run(system, ws, &mut x, settings, report);
+    if term != Termination::Converged || !ws.linearize(system, &x, report) {
+        return None;
+    }
+    tangent(
+        system,
+        homotopy,
+        ws,
+        x,
+        point.lambda,
+        Some((&point.tx, point.tl)),
+        report,
+    )
 }
 
 fn remesh_hint(lambda: f64) -> String {
@@ -379,7 +498,7 @@ fn remesh_hint(lambda: f64) -> String {
 /// One predictor-corrector step of length `h` from `point`. Returns the converged states,
 /// their lambda and the corrector iterations, or None (the step is to be shortened).
 #[allow(clippy::too_many_arguments)]
-fn correct(
+pub(super) fn correct(
     system: &mut System,
     homotopy: &Homotopy,
     ws: &mut Workspace,

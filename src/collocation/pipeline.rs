@@ -2,7 +2,7 @@
 //! equilibrium choice on the first mesh, refinement to the tolerance, the error estimate and
 //! the stability verdict, and the [`Solution`] built from the node states.
 
-use super::equilibrium::{Choose, better_start, choose_equilibrium, stability_of};
+use super::equilibrium::{Choose, better_start, choose_equilibrium, fresh_stability, near_start, stability_of};
 use super::estimate;
 use super::newton::{self, Settings, Workspace};
 use super::options::Options;
@@ -43,17 +43,38 @@ pub(crate) fn solve_impl(
     if options.tolerance.is_none() {
         resolves(robot, options, &mesh)?;
     }
+    let warm_stable = warm.is_some_and(|g| g.report.stability.is_stable());
     let warm = warm.map(|g| interpolate(g, &mesh));
     // The cached factors belong to the guess when it is the cached solver's last solution.
-    let reuse = match (cache.as_ref(), &warm) {
+    let mut reuse = match (cache.as_ref(), &warm) {
         (Some(c), Some(w)) => c.mesh == mesh && c.solver == options.linear_solver && c.last.as_ref() == Some(w),
         _ => false,
     };
     let (x0, choose) = match warm {
         Some(w) if reuse => (w, Choose::FromWarm),
         Some(w) => {
-            let cold = guess::initial(&model, &mesh.nodes, options.initial_guess);
-            better_start(&System::new(model.clone(), mesh.clone()), w, cold)
+            let system = System::new(model.clone(), mesh.clone());
+            // A stable warm start near the answer (by the predicted step) is kept; else the
+            // start with the smaller residual.
+            let near = warm_stable
+                .then(|| near_start(&system, &w, options.linear_solver, &mut report))
+                .flatten();
+            match near {
+                Some(workspace) => {
+                    *cache = Some(Cached {
+                        mesh: mesh.clone(),
+                        solver: options.linear_solver,
+                        workspace,
+                        last: Some(w.clone()),
+                    });
+                    reuse = true;
+                    (w, Choose::FromWarm)
+                }
+                None => {
+                    let cold = guess::initial(&model, &mesh.nodes, options.initial_guess);
+                    better_start(&system, w, cold)
+                }
+            }
         }
         None => (cold_start(robot, options, &mut mesh)?, Choose::FromCold),
     };
@@ -79,9 +100,17 @@ pub(crate) fn solve_impl(
     record_estimate(&mut report, correction.as_ref(), options, robot.length());
     if let Some(c) = cache.as_mut() {
         let system = System::new(model.clone(), mesh.clone());
+        // The verdict belongs to this solve's state: a solve that took no Newton step (chord
+        // steps on a cached solve's or a warm start's factors) would otherwise read the verdict of an
+        // earlier state, which the change of inputs can have crossed.
+        let stale = report.newton_steps == 0 && !c.workspace.assessed_at_solution();
         let exact = report.path != PathTaken::Direct && !report.history.iter().any(|i| i.fresh_jacobian);
         let t = Instant::now();
-        report.stability = stability_of(&system, &mut c.workspace, &x, exact, &mut report);
+        report.stability = if stale {
+            fresh_stability(&system, &mut c.workspace, &x, &mut report)
+        } else {
+            stability_of(&system, &mut c.workspace, &x, exact, &mut report)
+        };
         report.timings.stability += t.elapsed();
     }
     report.timings.total = start.elapsed();

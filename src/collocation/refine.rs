@@ -96,7 +96,8 @@ pub(super) fn to_tolerance<'r>(
 /// interval's local error is about equal.
 ///
 /// # Errors
-/// [`Error::IntervalCap`] when the next mesh would exceed `options.max_intervals`.
+/// [`Error::IntervalCap`] when no mesh within `options.max_intervals` finer than `mesh` is
+/// left to try (the cap is tried before refusing).
 pub(super) fn next_mesh(
     robot: &Robot,
     mesh: &Mesh,
@@ -113,15 +114,33 @@ pub(super) fn next_mesh(
     let ratio = (estimate.tip_position / (tol * length)).max(estimate.tip_rotation / tol);
     // Order 4: the error falls like N^-4.
     let wanted = (intervals as f64 * (ratio / TARGET_FRACTION).powf(0.25)).max(intervals as f64 * MIN_GROWTH);
-    let target = wanted.ceil() as usize;
-    if target > options.max_intervals {
-        return Err(Error::IntervalCap {
-            cap: options.max_intervals,
-            estimate: estimate.tip_position,
-            tolerance: tol * length,
-        });
+    let cap = options.max_intervals;
+    let refused = || Error::IntervalCap {
+        cap,
+        estimate: estimate.tip_position,
+        tolerance: tol * length,
+        rotation_estimate: estimate.tip_rotation,
+        rotation_tolerance: tol,
+    };
+    // The h^4 prediction is not a bound: a mesh of the cap can meet the tolerance where the
+    // prediction wants more, so the cap is tried before refusing.
+    let mut target = wanted.ceil().min(cap as f64) as usize;
+    if target <= intervals {
+        return Err(refused());
     }
-    equidistributed(robot, mesh, local, target).map(Some)
+    // Rounding each segment's share can overshoot the target by a few intervals.
+    for _ in 0..4 {
+        let fine = equidistributed(robot, mesh, local, target)?;
+        if fine.intervals() <= cap {
+            return if fine.intervals() > intervals {
+                Ok(Some(fine))
+            } else {
+                Err(refused())
+            };
+        }
+        target -= (fine.intervals() - cap).min(target - 1);
+    }
+    Err(refused())
 }
 
 /// A mesh of about `target` intervals whose intervals share the local error equally: with

@@ -29,9 +29,9 @@ pub(crate) type Cache = Option<Cached>;
 /// It also keeps the factors of the last Newton matrix: [`Solver::solve_from`] given the
 /// solution this solver just returned (the usual step of a control loop) starts with chord
 /// steps on those factors, which for a small change of tensions or loads converge without
-/// evaluating a new Jacobian. Such a solve's stability verdict is then the one of the
-/// Jacobian it solved with (docs/stability.md, "Which Jacobian"); a sweep that reports the
-/// verdict of every step ([`crate::analysis::sweep`]) uses [`super::solve_from`] instead.
+/// evaluating a new Jacobian for the iteration; the stability verdict then evaluates one at
+/// the solution, since the factors belong to the previous state (docs/stability.md, "Which
+/// Jacobian").
 pub struct Solver {
     /// The options of every solve.
     pub options: Options,

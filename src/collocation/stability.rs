@@ -27,6 +27,12 @@ use nalgebra::{Complex, DMatrix, Matrix6, SMatrix};
 
 type M12x6 = SMatrix<f64, 12, 6>;
 
+/// A root of det Q within this fraction of the rod length from the base counts as at the
+/// base (a singular second variation, not an unstable direction): in a converged state,
+/// rounding moves an exact zero (the neutral direction of a perfectly round buckled
+/// column) by up to 5e-8 L (measured: 2e-8 to 5e-8 L).
+const NEUTRAL: f64 = 1e-6;
+
 /// Why stability cannot be decided for the loads of `model` (its robot's, with a traced
 /// parameter's value), if it cannot: the test needs conservative loading. Constant tensions
 /// and dead forces are conservative; a dead moment (tip, point or distributed) is not in 3D
@@ -102,11 +108,18 @@ pub fn assess(values: &[f64], s: &[f64]) -> Stability {
         }
         let q0: Matrix6<f64> = y.fixed_view::<6, 6>(0, 0).into_owned();
         let q1: Matrix6<f64> = next.fixed_view::<6, 6>(0, 0).into_owned();
-        let roots = if identity {
+        let mut roots = if identity {
             crossings_from_identity(&q1)
         } else {
             crossings(&q0, &q1)
         };
+        if k == 0 {
+            // A root at the base itself is a zero eigenvalue of the second variation, not a
+            // negative one: the state is on the verge (exactly at a fold or bifurcation), or
+            // it has a neutral direction along a continuous symmetry (a perfectly round
+            // column buckles in any plane, and turning the plane costs no energy).
+            roots.retain(|&t| (1.0 - t) * s[1] >= NEUTRAL * s[links]);
+        }
         if let Some(&t) = roots.first() {
             first.get_or_insert(s[k + 1] + t * (s[k] - s[k + 1]));
         }

@@ -333,8 +333,8 @@ impl fmt::Display for Warning {
                 "the tendons bend the rod at s = {} m with a moment of {} N m, a curvature of {} 1/m over \
                  EI = {} N m^2 (bend radius {} m); tendon {} runs {} m inside that bend, so curvature x \
                  offset = {} is {} 1: the bend would be tighter than the tendon's offset, its path would \
-                 fold, and no equilibrium exists past 1; check the tensions' units (N) and the offsets (m), \
-                 or lower the tensions (tendon {} alone reaches the limit at EI/r^2 = {} N)",
+                 fold, and no equilibrium exists past 1 unless loads hold the bend back (they are not \
+                 counted here); check the tensions' units (N) and the offsets (m), or lower the tensions (tendon {} alone reaches the limit at EI/r^2 = {} N)",
                 fig(s),
                 fig(moment),
                 fig(moment / bending_stiffness),
@@ -424,6 +424,27 @@ mod tests {
         assert_eq!(fig(366_000.0), "3.66e5");
         assert_eq!(fig(200.0), "200");
         assert_eq!(fig(1e-5), "1e-5");
+    }
+
+    /// Issues 25 and 28: the warning speaks of the bend the tendons cause together (the
+    /// co-contracted are left out by the figure itself) and says that loads straightening the
+    /// rod are not counted.
+    #[test]
+    fn the_bend_warning_says_what_it_does_not_count() {
+        let text = Warning::TendonBend {
+            tendon: 0,
+            s: 0.0,
+            moment: 0.8,
+            offset: 0.008,
+            bending_stiffness: 0.004_223,
+            limit: 66.0,
+        }
+        .to_string();
+        assert!(
+            text.contains("the tendons bend the rod") && text.contains("tendon 1 runs"),
+            "{text}"
+        );
+        assert!(text.contains("unless loads hold the bend back"), "{text}");
     }
 
     /// The prototype in every experiment of Table 2 is a robot of ordinary scales.

@@ -102,6 +102,24 @@ impl Options {
 /// A point of the integrated trajectory.
 type Point = State;
 
+/// An error at a state the iteration visited: the robot passed validation, so a tendon path
+/// tangent that vanishes there (near the geometric limit a trial state can fold a tendon's
+/// path) says nothing wrong of the input, and is a breakdown of the model at that state, not
+/// [`crate::Error::SingularRouting`].
+fn visited(error: crate::Error) -> crate::Error {
+    match error {
+        crate::Error::SingularRouting { tendon, s, speed } => crate::Error::Breakdown {
+            s,
+            what: format!(
+                "tendon {}'s path tangent vanished (|p_i'| = {speed:.3e}) at a state shooting visited, \
+                 not at the robot's unloaded shape",
+                tendon + 1
+            ),
+        },
+        other => other,
+    }
+}
+
 /// Solves `robot` by shooting.
 ///
 /// Displacement-controlled tendons (docs/actuation.md) add their tensions to the unknowns
@@ -132,14 +150,16 @@ pub fn solve(robot: &Robot, options: &Options) -> Result<Solution> {
     let base_x = problem.scale.to_unknowns(&base.v, &base.u);
     let x0 = problem.unknowns(&base_x);
     report.unknowns = x0.len();
-    let (x, smooth, mut trajectory) = newton(&mut problem, x0, options, &mut report)?;
+    let (x, smooth, mut trajectory) = newton(&mut problem, x0, options, &mut report).map_err(visited)?;
     if problem.finish(&x, &smooth) {
         // A slack tendon's tension went from its iterate (within the tolerance of 0) to
         // exactly 0: integrate once more, so that the shape is the one of the tensions
         // reported, and report the residual there.
         let at = problem.unknowns(&x.fixed_rows::<6>(0).into_owned());
         let mut traj = Vec::new();
-        let g = problem.residual(&at, options, &mut traj, &mut report)?;
+        let g = problem
+            .residual(&at, options, &mut traj, &mut report)
+            .map_err(visited)?;
         report.residual = problem.complementarity(&at, &g).amax();
         trajectory = traj;
     }

@@ -98,6 +98,9 @@ pub fn with_likely_causes(failure: Failure, robot: &Robot) -> Failure {
 /// it is unstable, or that the load path snapped through a fold or crossed a bifurcation on
 /// the way (docs/stability.md).
 pub fn warn_equilibrium(name: &str, report: &tdcr::SolveReport) {
+    for n in &report.notes {
+        note(&format!("note: {name}: {n}"));
+    }
     if let tdcr::Stability::Unstable { .. } = report.stability {
         note(&format!(
             "warning: {name}: the equilibrium returned is {}: a real robot would not stay in it",

@@ -1,0 +1,154 @@
+//! Branch switching: where a path would pass from a stable branch onto an unstable one
+//! (it crossed a bifurcation, or a step jumped across the sharp turn of a slightly
+//! imperfect one), it leaves along the kernel direction of the Jacobian instead
+//! (docs/stability.md, "Branch switching").
+//!
+//! At a bifurcation point the Jacobian J of the equilibrium equations is singular and the
+//! branches that leave it are tangent to its kernel; close to one, J has an eigenvalue near
+//! zero whose eigenvector phi is that direction, which inverse iteration with the factors of
+//! J finds in a few solves. The side is the one the path's own tangent t_x leans to: an
+//! imperfection (a small lateral load on a column) gives t_x a component along phi with its
+//! sign, and a perfectly symmetric problem none, in which case one side is picked and the
+//! report says so. The switching step predicts x + h phi at fixed load and corrects on the
+//! hyperplane through the prediction normal to (phi, 0) with the load free, which lands on
+//! the branch whose amplitude along phi is h; the path then goes on from there.
+
+use super::homotopy::{Homotopy, Point, dot, f_lambda, tangent};
+use super::newton::{Settings, Workspace};
+use super::path::{correct, index};
+use super::system::System;
+use crate::report::SolveReport;
+
+/// The most inverse-iteration solves for the kernel direction; near a bifurcation the
+/// small eigenvalue is orders of magnitude below the next, so a few suffice.
+const INVERSE_ITERATIONS: usize = 8;
+/// Inverse iteration stops when successive directions agree to this cosine.
+const CONVERGED_COS: f64 = 1.0 - 1e-10;
+/// Below this |cos| between the path's tangent and the kernel direction the path has no
+/// side: a perfect symmetry (the tangent's component along the kernel is rounding, 1e-16
+/// relative in a symmetric problem; the smallest imperfection of issue 25's column, 1e-5 of
+/// the load, gives 1e-6 and more).
+const SYMMETRIC_COS: f64 = 1e-9;
+/// The switching step's amplitudes along the kernel direction (normalized arclength, as the
+/// path's steps): the first, and the shorter retries when its corrector fails.
+const SWITCH_STEPS: [f64; 3] = [0.1, 0.03, 0.01];
+
+/// The path after a branch switch.
+pub(super) struct Switched {
+    /// The first point on the new branch, with its tangent.
+    pub point: Point,
+    /// dF/dlambda there.
+    pub fl: Vec<f64>,
+    /// Unstable directions there (None: unknown).
+    pub unstable: Option<usize>,
+    /// Whether the side was picked (a perfect symmetry: nothing preferred one).
+    pub picked: bool,
+}
+
+/// A deterministic generic vector (entries spread over [-0.5, 0.5) by the golden ratio),
+/// with a component along any given direction.
+fn generic(n: usize) -> Vec<f64> {
+    (0..n)
+        .map(|i| (i as f64 * 0.618_033_988_749_895).fract() - 0.5)
+        .collect()
+}
+
+/// `v` scaled to |v|^2 / n = 1 (the tangent's normalization); None if zero or not finite.
+fn normalized(mut v: Vec<f64>) -> Option<Vec<f64>> {
+    let norm = (dot(&v, &v) / v.len() as f64).sqrt();
+    if !(norm.is_finite() && norm > 0.0) {
+        return None;
+    }
+    v.iter_mut().for_each(|x| *x /= norm);
+    Some(v)
+}
+
+/// Inverse iteration with the factors in `ws` from `start`: the eigenvector of J's
+/// eigenvalue of least magnitude in the span `start` reaches, normalized, and the growth
+/// |J^-1 z| / |z| of its last solve (the inverse of that eigenvalue's magnitude).
+fn kernel(ws: &mut Workspace, start: Vec<f64>) -> Option<(Vec<f64>, f64)> {
+    let n = start.len() as f64;
+    let mut z = normalized(start)?;
+    let mut growth = 0.0;
+    for _ in 0..INVERSE_ITERATIONS {
+        let next = ws.solve_again(&z)?.to_vec();
+        growth = (dot(&next, &next) / n).sqrt();
+        let next = normalized(next)?;
+        let cos = dot(&next, &z) / n;
+        z = next;
+        if cos.abs() >= CONVERGED_COS {
+            break;
+        }
+    }
+    Some((z, growth))
+}
+
+/// Leaves `point` (on the path of `homotopy`, tangent `point.tx`) along the kernel direction
+/// of the Jacobian there, on the side its tangent leans to (or a picked side when it leans
+/// to none), and converges the first point of the new branch. None when no switching step
+/// converges to a point with at most `unstable_before` unstable directions (those of
+/// `point`: the new branch must be as stable as the one the path was on).
+#[allow(clippy::too_many_arguments)]
+pub(super) fn switch(
+    system: &mut System,
+    homotopy: &Homotopy,
+    ws: &mut Workspace,
+    point: &Point,
+    unstable_before: usize,
+    settings: &Settings,
+    report: &mut SolveReport,
+    r: &mut [f64],
+) -> Option<Switched> {
+    homotopy.set(system, point.lambda);
+    if !ws.linearize(system, &point.x, report) {
+        return None;
+    }
+    let n = point.tx.len();
+    let nf = n as f64;
+    // The generic start reaches the whole (near-)kernel; the tangent's start stays in the
+    // subspace the path moves in (for an imperfect round column, the imperfection's plane).
+    let (any, any_growth) = kernel(ws, generic(n))?;
+    let symmetric = (dot(&any, &point.tx) / nf).abs() < SYMMETRIC_COS;
+    let phi = if symmetric {
+        any
+    } else {
+        // The tangent's span must hold a direction nearly as soft as the softest: else the
+        // path is not at the turn its tangent leans into (the soft direction is one it does
+        // not move in, as the plane of a buckled round column), and it does not switch.
+        match kernel(ws, point.tx.clone()) {
+            Some((phi, growth)) if growth >= 0.5 * any_growth => phi,
+            _ => return None,
+        }
+    };
+    let side = if symmetric { 1.0 } else { dot(&phi, &point.tx).signum() };
+    let phi: Vec<f64> = phi.iter().map(|v| v * side).collect();
+    let fl = f_lambda(system, homotopy, &point.x, point.lambda, report)?;
+    let along = Point {
+        x: point.x.clone(),
+        lambda: point.lambda,
+        tx: phi,
+        tl: 0.0,
+    };
+    for h in SWITCH_STEPS {
+        let Some((x, lambda, _)) = correct(system, homotopy, ws, &along, h, &fl, false, settings, report, r) else {
+            continue;
+        };
+        if !ws.linearize(system, &x, report) {
+            continue;
+        }
+        let previous = (along.tx.as_slice(), 0.0);
+        let Some((next, next_fl)) = tangent(system, homotopy, ws, x, lambda, Some(previous), report) else {
+            continue;
+        };
+        let unstable = index(system, ws, report);
+        if unstable.is_some_and(|k| k <= unstable_before) {
+            return Some(Switched {
+                point: next,
+                fl: next_fl,
+                unstable,
+                picked: symmetric,
+            });
+        }
+    }
+    None
+}
