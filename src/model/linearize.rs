@@ -458,6 +458,32 @@ pub fn rates(
     Ok(Vector6::from_fn(|i, _| x[i]))
 }
 
+/// Eq. 13 (corrected) with extra body-frame loads on the backbone: the rates of [`rates`],
+/// and each of `loads` (a 6-vector, a distributed force then moment per unit s, body frame)
+/// overwritten with M^-1 times it, the change of the rates per unit of that load taken off
+/// the right-hand side. One factorization of M serves all (friction, docs/friction.md).
+///
+/// # Errors
+/// As [`rates`].
+pub(crate) fn rates_and_responses(
+    model: &Model,
+    site: &Site,
+    segment_end: f64,
+    (R, v, u): (&Matrix3<f64>, &Vector3<f64>, &Vector3<f64>),
+    loads: &mut [Vector6<f64>],
+) -> Result<Vector6<f64>> {
+    let assembled = assemble(model, site, segment_end, (R, v, u), None)?;
+    for load in loads.iter_mut() {
+        let mut row = load.transpose();
+        if !assembled.factor.solve_transposed_mut(&mut row) {
+            return Err(breakdown(site.s));
+        }
+        *load = row.transpose();
+    }
+    let x = assembled.x;
+    Ok(Vector6::from_fn(|i, _| x[i]))
+}
+
 /// Eq. 13 (corrected) and its exact first derivatives at a site for the state (R, v, u):
 /// the rates (v', u') of [`rates`], d(v', u')/d(v, u), and d(v', u')/d(phi)
 /// for R -> R exp(hat(phi)). The tendons that reach `segment_end` load the backbone, as in

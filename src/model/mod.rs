@@ -3,6 +3,7 @@
 //! linearization.
 
 pub(crate) mod equations;
+pub mod friction;
 pub mod length;
 pub(crate) mod linearize;
 pub mod loads;

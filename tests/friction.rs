@@ -1,0 +1,154 @@
+//! Friction between tendons and channels in full slip (docs/friction.md): the capstan law
+//! on known paths, mu = 0 as the frictionless model, the inputs friction does not support.
+
+use nalgebra::Vector3;
+use tdcr::{Error, Friction, Motion, Robot, Rod, Routing, Tendon, cases, shooting};
+
+/// A rod so stiff that tendon loads leave it in its reference shape: E = 1e22 Pa makes
+/// tau r / (E I) about 1e-11 of the precurvature below, so the path is known to that level.
+fn stiff_rod(u_star: Vector3<f64>) -> Rod {
+    Rod::solid_circle(0.2, 0.0004, 1e22, 0.3).with_precurvature(u_star)
+}
+
+fn tight() -> shooting::Options {
+    shooting::Options {
+        integration_tolerance: 1e-12,
+        ..Default::default()
+    }
+}
+
+/// Delivered over input tension of a solved robot's tendon 0.
+fn ratio(robot: &Robot, solve: impl Fn(&Robot) -> tdcr::Solution) -> f64 {
+    let solution = solve(robot);
+    let t = &solution.tendons[0];
+    t.delivered_tension / t.tension
+}
+
+fn with_tendon(rod: Rod, routing: Routing, friction: Friction) -> Robot {
+    Robot::new(rod).with_tendon(Tendon::new(routing, 2.0).with_friction(friction))
+}
+
+#[test]
+fn capstan_law_on_a_planar_arc() {
+    // A precurved arc of curvature 5 1/m over 0.2 m: a straight tendon's path turns through
+    // theta = 1 rad (its tangent stays the backbone's).
+    let (kappa, mu) = (5.0, 0.2);
+    let theta = kappa * 0.2;
+    for (motion, sign) in [(Motion::Pull, -1.0), (Motion::Release, 1.0)] {
+        let robot = with_tendon(
+            stiff_rod(Vector3::new(0.0, kappa, 0.0)),
+            Routing::straight(0.008, 0.0),
+            Friction {
+                coefficient: mu,
+                motion,
+            },
+        );
+        let got = ratio(&robot, |r| shooting::solve(r, &tight()).unwrap());
+        let want = (sign * mu * theta).exp();
+        // 1e-8 relative: the path is the reference arc to ~1e-11, the integration at 1e-12
+        assert!(
+            (got / want - 1.0).abs() < 1e-8,
+            "{motion:?}: ratio {got} against {want}"
+        );
+    }
+}
+
+#[test]
+fn capstan_law_on_a_helix_counts_the_helix_turning() {
+    // A straight rod and a helix of radius a and one turn per rod length: the path's tangent
+    // turns at a w^2 / sqrt(1 + a^2 w^2) per unit s (w = 2 pi / L), with no bending at all.
+    let (a, mu, length) = (0.008, 0.3, 0.2);
+    let w = 2.0 * std::f64::consts::PI / length;
+    let theta = length * a * w * w / (1.0 + a * a * w * w).sqrt();
+    let robot = with_tendon(
+        stiff_rod(Vector3::zeros()),
+        Routing::helical(a, 1.0, 0.0),
+        Friction::pull(mu),
+    );
+    let got = ratio(&robot, |r| shooting::solve(r, &tight()).unwrap());
+    let want = (-mu * theta).exp();
+    // 1e-8 relative: as for the arc
+    assert!((got / want - 1.0).abs() < 1e-8, "ratio {got} against {want}");
+    // The tension along the helix follows exp(-mu kappa s) at every point of the path.
+    let solution = shooting::solve(&robot, &tight()).unwrap();
+    for s in [0.05, 0.1, 0.15] {
+        let tension = solution.tension_at(0, s).unwrap();
+        let expected = 2.0 * (-mu * theta * s / length).exp();
+        // 1e-8 relative: a constant turning rate, which the log-linear interpolation is exact for
+        assert!(
+            (tension / expected - 1.0).abs() < 1e-8,
+            "s = {s}: {tension} against {expected}"
+        );
+    }
+}
+
+#[test]
+fn zero_friction_is_the_frictionless_model_bit_for_bit() {
+    for robot in [cases::case_s(), cases::case_h()] {
+        let mut zero = robot.clone();
+        for t in &mut zero.tendons {
+            t.friction = Some(Friction::pull(0.0));
+        }
+        let a = shooting::solve(&robot, &Default::default()).unwrap();
+        let b = shooting::solve(&zero, &Default::default()).unwrap();
+        assert_eq!(a.nodes, b.nodes);
+        assert_eq!(a.tendons, b.tendons);
+        let a = tdcr::solve(&robot, &Default::default()).unwrap();
+        let b = tdcr::solve(&zero, &Default::default()).unwrap();
+        assert_eq!(a.nodes, b.nodes);
+        assert_eq!(a.tendons, b.tendons);
+    }
+}
+
+#[test]
+fn friction_lowers_the_delivered_tension_and_the_bending() {
+    let robot = cases::case_s();
+    let mut rough = robot.clone();
+    rough.tendons[0].friction = Some(Friction::pull(0.1));
+    let smooth = shooting::solve(&robot, &Default::default()).unwrap();
+    let solved = shooting::solve(&rough, &Default::default()).unwrap();
+    let t = &solved.tendons[0];
+    assert_eq!(t.tension, 2.94);
+    assert!(t.delivered_tension < t.tension);
+    // The tendon turns through about the tip angle (~90 degrees here): exp(-0.1 * pi / 2) = 0.855
+    // bounds the loss from below; curvature is largest at the base, so the loss is a bit less.
+    assert!(
+        t.delivered_tension > 2.94 * (-0.1 * 2.0_f64).exp(),
+        "{}",
+        t.delivered_tension
+    );
+    // Less tension bends less: the tip moves back toward the straight rod (+x).
+    assert!(solved.tip_position().x > smooth.tip_position().x);
+    // Releasing delivers more than the input.
+    rough.tendons[0].friction = Some(Friction {
+        coefficient: 0.1,
+        motion: Motion::Release,
+    });
+    let released = shooting::solve(&rough, &Default::default()).unwrap();
+    assert!(released.tendons[0].delivered_tension > 2.94);
+}
+
+#[test]
+fn bad_friction_is_an_error_that_names_the_field() {
+    let check = |robot: &Robot, fragment: &str| match robot.validate() {
+        Err(Error::InvalidInput { field, problem, hint }) => {
+            assert_eq!(field, "tendons[0].friction");
+            let text = format!("{problem} {hint}");
+            assert!(text.contains(fragment), "{text}");
+        }
+        other => panic!("expected an invalid friction, got {other:?}"),
+    };
+    for mu in [-0.1, f64::NAN, f64::INFINITY] {
+        let mut robot = cases::case_s();
+        robot.tendons[0].friction = Some(Friction::pull(mu));
+        check(&robot, "finite number >= 0");
+    }
+    let mut robot = cases::case_s();
+    robot.tendons[0].friction = Some(Friction::pull(0.1));
+    robot.tendons[0].set_displacement(0.002);
+    check(&robot, "friction needs tension control");
+    let mut robot = cases::case_s();
+    robot.tendons[0].friction = Some(Friction::pull(0.1));
+    robot.tendons[1] = robot.tendons[1].clone().ending_at(0.1);
+    check(&robot, "s = 0.1 m");
+}
