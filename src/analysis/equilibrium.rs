@@ -196,6 +196,7 @@ mod tests {
         Solution {
             nodes,
             tendon_paths: Vec::new(),
+            tendon_tensions: Vec::new(),
             tendons: Vec::new(),
             report: SolveReport::new(Method::Shooting),
         }

@@ -29,11 +29,11 @@
 
 use crate::error::{Result, invalid};
 use crate::model::equations::{Model, Site};
-use crate::model::linearize;
+use crate::model::linearize::{Linearization, Point, TendonPoint};
 use crate::model::robot::{Robot, TendonModel};
 use crate::model::tendon::Tendon;
 use crate::{Error, Readable};
-use nalgebra::{Matrix3, Vector3, Vector6};
+use nalgebra::{Matrix3, Matrix6, Matrix6x3, SMatrix, Vector3, Vector6};
 
 /// Newton iterations of the tangential loads at one point: each step contracts by the
 /// square of the last (the iteration is smooth away from kappa = 0), and 1e-3 per step is
@@ -99,41 +99,167 @@ pub fn any(robot: &Robot) -> bool {
     robot.tendons.iter().any(|t| t.active_friction().is_some())
 }
 
-/// One tendon with friction at one point (body frame).
+/// The indices of the tendons of `robot` with friction (a coefficient > 0), in order: the
+/// order of every per-tendon friction quantity below.
+pub(crate) fn slipping(robot: &Robot) -> Vec<usize> {
+    (0..robot.tendons.len())
+        .filter(|&i| robot.tendons[i].active_friction().is_some())
+        .collect()
+}
+
+/// One tendon with friction loading the backbone at one point (body frame).
 struct Slip {
-    /// Index of the tendon.
-    tendon: usize,
+    /// Its place in [`slipping`]'s list.
+    slot: usize,
     /// w_i mu_i: the signed friction coefficient.
     signed_mu: f64,
-    /// r_i (m).
-    r: Vector3<f64>,
-    /// c_i = u x (p_i^b' + r_i') + r_i'', the state part of p_i^b'' (1/m).
-    c: Vector3<f64>,
-    /// t_i, the unit tangent.
-    t: Vector3<f64>,
-    /// 1 / |p_i^b'|.
-    inv_speed: f64,
-    /// The tension tau_i here, times the model's tension factor (N).
-    tension: f64,
-    /// y_i = M^-1 (t_i, r_i x t_i): the rates' change per unit tangential load (m/N).
-    response: Vector6<f64>,
+    /// The tendon's point quantities (r_i, t_i, k_i = tau_i / |p_i^b'|, ...).
+    tp: TendonPoint,
+    /// e_i = (t_i, r_i x t_i): the direction of its tangential load in eq. 13's rows.
+    e: Vector6<f64>,
+    /// y_i = M^-1 e_i: the rates' change per unit tangential load (m/N).
+    y: Vector6<f64>,
+    /// The tangential load g_i = tau_i' (N/m) at the solution.
+    g: f64,
+    /// q_i, the normal load (N/m), and its direction q_i / |q_i| (0 where q_i = 0).
+    q: Vector3<f64>,
+    q_hat: Vector3<f64>,
 }
 
 impl Slip {
-    /// The normal load q_i = tau_i |p_i^b'|^-1 (I - t t^T) p_i^b'' at the rates x (N/m).
+    /// The normal load q_i = k_i (I - t t^T) p_i^b'' at the rates x (N/m).
     fn normal(&self, x: &Vector6<f64>) -> Vector3<f64> {
-        let x_v = Vector3::new(x[0], x[1], x[2]);
-        let x_u = Vector3::new(x[3], x[4], x[5]);
-        let z = x_v - self.r.cross(&x_u) + self.c;
-        (z - self.t * self.t.dot(&z)) * (self.tension * self.inv_speed)
+        self.normal_change(x) + self.project(&self.tp.c)
     }
 
-    /// dq_i/dx along the rate change `dx`.
-    fn normal_change(&self, dx: &Vector6<f64>) -> Vector3<f64> {
-        let d_v = Vector3::new(dx[0], dx[1], dx[2]);
-        let d_u = Vector3::new(dx[3], dx[4], dx[5]);
-        let dz = d_v - self.r.cross(&d_u);
-        (dz - self.t * self.t.dot(&dz)) * (self.tension * self.inv_speed)
+    /// The part of q_i the rates x drive: k_i (I - t t^T) (x_v - r_i x x_u).
+    fn normal_change(&self, x: &Vector6<f64>) -> Vector3<f64> {
+        let x_v = Vector3::new(x[0], x[1], x[2]);
+        let x_u = Vector3::new(x[3], x[4], x[5]);
+        self.project(&(x_v - self.tp.r.cross(&x_u)))
+    }
+
+    /// k_i (I - t t^T) a.
+    fn project(&self, a: &Vector3<f64>) -> Vector3<f64> {
+        let t = &self.tp.t;
+        (a - t * t.dot(a)) * self.tp.k
+    }
+
+    /// dg_i/dx = w_i mu_i k_i (q^, r_i x q^): the gradient of the tangential load in the
+    /// rates (q^ is normal to t_i, so the projection drops out).
+    fn gradient(&self) -> Vector6<f64> {
+        let m = self.tp.r.cross(&self.q_hat);
+        let h = &self.q_hat;
+        Vector6::new(h[0], h[1], h[2], m[0], m[1], m[2]) * (self.signed_mu * self.tp.k)
+    }
+}
+
+/// Eq. 13 with friction solved at one point: the tendons with friction that load the
+/// backbone here, with their tangential loads, and the rates.
+struct Solved {
+    point: Point,
+    slips: Vec<Slip>,
+    /// The rates (v', u') with the tangential loads.
+    x: Vector6<f64>,
+}
+
+/// Solves eq. 13 with friction at a site (module docs): every tendon at the tension the
+/// model holds for it here ([`Model::tensions`]; for a tendon with friction, its tension at
+/// this s).
+fn solve(
+    model: &Model,
+    site: &Site,
+    segment_end: f64,
+    (R, v, u): (&Matrix3<f64>, &Vector3<f64>, &Vector3<f64>),
+    slipping: &[usize],
+) -> Result<Solved> {
+    let point = Point::new(model, site, segment_end, (R, v, u))?;
+    let x0 = point.rates();
+    let tendons = &model.robot.tendons;
+    let mut slips = Vec::with_capacity(slipping.len());
+    for (i, tension, rp) in model.distributed_tendons(site.s, segment_end) {
+        let (Some(friction), Some(slot)) = (tendons[i].active_friction(), slipping.iter().position(|&j| j == i))
+        else {
+            continue;
+        };
+        let tp = TendonPoint::new(i, tension, &rp, site.s, v, u)?;
+        let m = tp.r.cross(&tp.t);
+        let e = Vector6::new(tp.t[0], tp.t[1], tp.t[2], m[0], m[1], m[2]);
+        let mut row = e.transpose();
+        if !point.solve_rows(&mut row) {
+            return Err(breakdown(site.s));
+        }
+        slips.push(Slip {
+            slot,
+            signed_mu: friction.motion.sign() * friction.coefficient,
+            tp,
+            e,
+            y: row.transpose(),
+            g: 0.0,
+            q: Vector3::zeros(),
+            q_hat: Vector3::zeros(),
+        });
+    }
+    let k = slips.len();
+    let mut x = x0;
+    let mut matrix = vec![0.0; k * k];
+    let mut step = vec![0.0; k];
+    for iteration in 0..=MAX_ITERATIONS {
+        // h_j(g) = g_j - w_j mu_j |q_j(x(g))|, x(g) = x0 - sum_l g_l y_l, and its Jacobian
+        // dh_j/dg_l = delta_jl + dg_j/dx . y_l.
+        let mut size = 0.0_f64;
+        for sl in slips.iter_mut() {
+            sl.q = sl.normal(&x);
+            let magnitude = sl.q.norm();
+            sl.q_hat = if magnitude > 0.0 { sl.q / magnitude } else { Vector3::zeros() };
+            size = size.max(magnitude);
+        }
+        if k == 0 || size == 0.0 {
+            break;
+        }
+        for (j, sl) in slips.iter().enumerate() {
+            step[j] = sl.signed_mu * sl.q.norm() - sl.g;
+            let gradient = sl.gradient();
+            for (l, other) in slips.iter().enumerate() {
+                matrix[j * k + l] = f64::from(u8::from(j == l)) + gradient.dot(&other.y);
+            }
+        }
+        if !crate::dense::solve_dense(&mut matrix, &mut step, k) {
+            return Err(breakdown(site.s));
+        }
+        let mut change = 0.0_f64;
+        for (sl, d) in slips.iter_mut().zip(&step) {
+            sl.g += d;
+            change = change.max(d.abs());
+        }
+        x = x0;
+        for sl in &slips {
+            x -= sl.y * sl.g;
+        }
+        // Converged to rounding: the last change below 1e-15 of the normal loads' size.
+        // (One more pass refreshes q at the final x.)
+        if change <= 1e-15 * size {
+            for sl in slips.iter_mut() {
+                sl.q = sl.normal(&x);
+                let magnitude = sl.q.norm();
+                sl.q_hat = if magnitude > 0.0 { sl.q / magnitude } else { Vector3::zeros() };
+            }
+            break;
+        }
+        if iteration == MAX_ITERATIONS || !change.is_finite() {
+            return Err(Error::Breakdown {
+                s: site.s,
+                what: "the tangential friction loads did not converge".into(),
+            });
+        }
+    }
+    Ok(Solved { point, slips, x })
+}
+
+fn breakdown(s: f64) -> Error {
+    Error::Breakdown {
+        s,
+        what: "eq. 13 with friction is singular".into(),
     }
 }
 
@@ -144,102 +270,250 @@ impl Slip {
 /// without friction, at zero tension or not loading this segment).
 ///
 /// # Errors
-/// As [`linearize::rates`], and [`Error::Breakdown`] when the tangential loads do not
-/// converge.
+/// As [`crate::model::linearize::rates`], and [`Error::Breakdown`] when the tangential
+/// loads do not converge.
 pub(crate) fn rates(
     model: &Model,
     site: &Site,
     segment_end: f64,
-    (R, v, u): (&Matrix3<f64>, &Vector3<f64>, &Vector3<f64>),
+    state: (&Matrix3<f64>, &Vector3<f64>, &Vector3<f64>),
     turning: &mut [f64],
 ) -> Result<Vector6<f64>> {
     turning.fill(0.0);
-    let tendons = &model.robot.tendons;
-    let mut slips: Vec<Slip> = model
-        .distributed_tendons(site.s, segment_end)
-        .filter_map(|(i, tension, rp)| {
-            let friction = tendons[i].active_friction()?;
-            let pb_s = u.cross(&rp.r) + rp.r_s + v;
-            let inv_speed = 1.0 / pb_s.norm();
-            let t = pb_s * inv_speed;
-            Some(Slip {
-                tendon: i,
-                signed_mu: friction.motion.sign() * friction.coefficient,
-                r: rp.r,
-                c: u.cross(&(pb_s + rp.r_s)) + rp.r_ss,
-                t,
-                inv_speed,
-                tension,
-                response: Vector6::new(t[0], t[1], t[2], 0.0, 0.0, 0.0),
-            })
-        })
-        .collect();
-    let mut loads: Vec<Vector6<f64>> = slips
-        .iter()
-        .map(|sl| {
-            let m = sl.r.cross(&sl.t);
-            Vector6::new(sl.t[0], sl.t[1], sl.t[2], m[0], m[1], m[2])
-        })
-        .collect();
-    let x0 = linearize::rates_and_responses(model, site, segment_end, (R, v, u), &mut loads)?;
-    if slips.is_empty() {
-        return Ok(x0);
+    let slipping = slipping(model.robot);
+    let solved = solve(model, site, segment_end, state, &slipping)?;
+    for sl in &solved.slips {
+        turning[slipping[sl.slot]] = relative(sl);
     }
-    for (sl, y) in slips.iter_mut().zip(&loads) {
-        sl.response = *y;
-    }
-    let k = slips.len();
-    let mut g = vec![0.0; k];
-    let mut matrix = vec![0.0; k * k];
-    let mut step = vec![0.0; k];
-    let mut x = x0;
-    for iteration in 0.. {
-        // h_j(g) = g_j - w_j mu_j |q_j(x(g))| and its Jacobian
-        // dh_j/dg_l = delta_jl + w_j mu_j (q_j / |q_j|) . dq_j/dx y_l.
-        let mut size = 0.0_f64;
-        for (j, sl) in slips.iter().enumerate() {
-            let q = sl.normal(&x);
-            let magnitude = q.norm();
-            step[j] = -(g[j] - sl.signed_mu * magnitude);
-            let direction = if magnitude > 0.0 {
-                q / magnitude
-            } else {
-                Vector3::zeros()
-            };
-            for (l, other) in slips.iter().enumerate() {
-                let dq = sl.normal_change(&other.response);
-                matrix[j * k + l] = f64::from(u8::from(j == l)) + sl.signed_mu * direction.dot(&dq);
+    Ok(solved.x)
+}
+
+/// tau_i' / tau_i = w_i mu_i |q_i| / tau_i (1/m).
+fn relative(sl: &Slip) -> f64 {
+    // k_i = tau_i / |p_i^b'| > 0 for a loading tendon
+    sl.g * sl.tp.inv_speed / sl.tp.k
+}
+
+/// Eq. 13 with friction and its exact first derivatives at one point, for the collocation
+/// solve: at fixed tensions, the rates' [`Linearization`]; the rates' change with the log
+/// tension z_j = ln(tau_j / tau_j(0)) of each tendon with friction; the relative tension
+/// rates (turning) and their derivatives.
+#[derive(Clone, Debug)]
+pub(crate) struct FrictionLinearization {
+    /// The rates and their derivatives in the strains and the rotation, tensions fixed.
+    pub lin: Linearization,
+    /// d(v', u')/dz_j, one per tendon of [`slipping`] (0 for those not loading here).
+    pub d_log_tension: Vec<Vector6<f64>>,
+    /// tau_j' / tau_j = w_j mu_j kappa_j (1/m), one per tendon of [`slipping`].
+    pub turning: Vec<f64>,
+    /// d(turning_j)/d(v, u, phi), as a row of 9.
+    pub d_turning: Vec<SMatrix<f64, 1, 9>>,
+    /// d(turning_j)/dz_l, row-major k x k.
+    pub d_turning_log_tension: Vec<f64>,
+}
+
+/// [`FrictionLinearization`] at a site for the state (R, v, u), the tendons of `slipping`
+/// at the tensions the model holds for them here (module docs, "Linearization" in
+/// docs/friction.md).
+///
+/// # Errors
+/// As [`rates`].
+pub(crate) fn linearize(
+    model: &Model,
+    site: &Site,
+    segment_end: f64,
+    (R, v, u): (&Matrix3<f64>, &Vector3<f64>, &Vector3<f64>),
+    slipping: &[usize],
+) -> Result<FrictionLinearization> {
+    let solved = solve(model, site, segment_end, (R, v, u), slipping)?;
+    let Solved { point, slips, x } = solved;
+    let k = slipping.len();
+    // dPhi/d(v, u, phi) at fixed x: eq. 13's dF plus the tangential loads' change,
+    // sum_i (g_i de_i + e_i dg_i|x); then the columns dPhi/dz_i = (q_i, r_i x q_i) + e_i g_i.
+    let dFt = point.derivative(model, site, segment_end, (v, u), &x.transpose())?;
+    let mut rhs = SMatrix::<f64, 6, 9>::from_fn(|i, j| dFt[(j, i)]);
+    let mut columns = vec![Vector6::<f64>::zeros(); slips.len()];
+    for (sl, column) in slips.iter().zip(columns.iter_mut()) {
+        let tp = &sl.tp;
+        let P = Matrix3::identity() - tp.t * tp.t.transpose();
+        // dt/dv = P / |p|, dt/du = -P r^ / |p|
+        let dt_dv = P * tp.inv_speed;
+        let dt_du = -dt_dv * crate::so3::hat(&tp.r);
+        let QQ = tp.normal_derivative(&Vector3::new(x[0], x[1], x[2]), &Vector3::new(x[3], x[4], x[5]), u);
+        let dg = (sl.q_hat.transpose() * QQ) * sl.signed_mu; // 1 x 6
+        for c in 0..6 {
+            let dt = if c < 3 { dt_dv.column(c).into_owned() } else { dt_du.column(c - 3).into_owned() };
+            let de_top = dt * sl.g;
+            let de_bottom = tp.r.cross(&dt) * sl.g;
+            for r in 0..3 {
+                rhs[(r, c)] += de_top[r] + sl.e[r] * dg[c];
+                rhs[(r + 3, c)] += de_bottom[r] + sl.e[r + 3] * dg[c];
             }
-            size = size.max(magnitude);
         }
-        if !crate::dense::solve_dense(&mut matrix, &mut step, k) {
-            return Err(Error::Breakdown {
-                s: site.s,
-                what: "the friction loads' Newton matrix is singular".into(),
-            });
-        }
-        let mut change = 0.0_f64;
-        for (gj, dj) in g.iter_mut().zip(&step) {
-            *gj += dj;
-            change = change.max(dj.abs());
-        }
-        x = x0;
-        for (sl, gj) in slips.iter().zip(&g) {
-            x -= sl.response * *gj;
-        }
-        // Converged to rounding: the change is below 1e-15 of the normal load's size.
-        if change <= 1e-15 * size || size == 0.0 {
-            break;
-        }
-        if iteration >= MAX_ITERATIONS || !change.is_finite() {
-            return Err(Error::Breakdown {
-                s: site.s,
-                what: "the tangential friction loads did not converge".into(),
-            });
+        let m = tp.r.cross(&sl.q);
+        *column = Vector6::new(sl.q[0], sl.q[1], sl.q[2], m[0], m[1], m[2]) + sl.e * sl.g;
+    }
+    // dx = -J^-1 dPhi with J = M + sum_i e_i (dg_i/dx)^T, by Woodbury on M's factor:
+    // J^-1 B = M^-1 B - Y S^-1 G^T M^-1 B, Y = [y_i], G = [dg_i/dx], S = I + G^T Y.
+    let m_count = slips.len();
+    let gradients: Vec<Vector6<f64>> = slips.iter().map(Slip::gradient).collect();
+    let mut schur = vec![0.0; m_count * m_count];
+    for (j, gj) in gradients.iter().enumerate() {
+        for (l, sl) in slips.iter().enumerate() {
+            schur[j * m_count + l] = f64::from(u8::from(j == l)) + gj.dot(&sl.y);
         }
     }
-    for (sl, gj) in slips.iter().zip(&g) {
-        turning[sl.tendon] = if sl.tension > 0.0 { gj / sl.tension } else { 0.0 };
+    let solve_j = |b: &Vector6<f64>| -> Option<Vector6<f64>> {
+        let mut row = b.transpose();
+        if !point.solve_rows(&mut row) {
+            return None;
+        }
+        let mb = row.transpose();
+        if m_count == 0 {
+            return Some(mb);
+        }
+        let mut a = schur.clone();
+        let mut w: Vec<f64> = gradients.iter().map(|g| g.dot(&mb)).collect();
+        if !crate::dense::solve_dense(&mut a, &mut w, m_count) {
+            return None;
+        }
+        let mut out = mb;
+        for (sl, wj) in slips.iter().zip(&w) {
+            out -= sl.y * *wj;
+        }
+        Some(out)
+    };
+    let mut dx = SMatrix::<f64, 6, 9>::zeros();
+    for c in 0..9 {
+        let col = solve_j(&rhs.column(c).into_owned()).ok_or_else(|| breakdown(site.s))?;
+        dx.set_column(c, &-col);
     }
-    Ok(x)
+    let mut d_log_tension = vec![Vector6::zeros(); k];
+    for (sl, column) in slips.iter().zip(&columns) {
+        d_log_tension[sl.slot] = -solve_j(column).ok_or_else(|| breakdown(site.s))?;
+    }
+    // turning_j = w_j mu_j |q_j| / tau_j: d = (w_j mu_j / tau_j) q^_j . (dq_j|x + k P W dx).
+    let mut turning = vec![0.0; k];
+    let mut d_turning = vec![SMatrix::<f64, 1, 9>::zeros(); k];
+    let mut d_turning_log_tension = vec![0.0; k * k];
+    for sl in &slips {
+        let tp = &sl.tp;
+        turning[sl.slot] = relative(sl);
+        // w mu / tau = w mu inv_speed / k
+        let factor = sl.signed_mu * tp.inv_speed / tp.k;
+        let QQ = tp.normal_derivative(&Vector3::new(x[0], x[1], x[2]), &Vector3::new(x[3], x[4], x[5]), u);
+        let explicit = sl.q_hat.transpose() * QQ; // 1 x 6
+        let mut row = SMatrix::<f64, 1, 9>::zeros();
+        for c in 0..9 {
+            let through_rates = sl.q_hat.dot(&sl.normal_change(&dx.column(c).into_owned()));
+            let direct = if c < 6 { explicit[c] } else { 0.0 };
+            row[c] = factor * (direct + through_rates);
+        }
+        d_turning[sl.slot] = row;
+        for l in 0..k {
+            d_turning_log_tension[sl.slot * k + l] = factor * sl.q_hat.dot(&sl.normal_change(&d_log_tension[l]));
+        }
+    }
+    Ok(FrictionLinearization {
+        lin: Linearization {
+            rates: x,
+            d_strains: Matrix6::from_fn(|i, c| dx[(i, c)]),
+            d_rotation: Matrix6x3::from_fn(|i, c| dx[(i, 6 + c)]),
+        },
+        d_log_tension,
+        turning,
+        d_turning,
+        d_turning_log_tension,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::cases;
+    use crate::model::tendon::Friction;
+    use crate::so3;
+
+    /// Case H with friction on its helical tendon and a straight one, at a bent, twisted
+    /// state with a generic rotation.
+    fn setup() -> (Robot, Matrix3<f64>, Vector3<f64>, Vector3<f64>) {
+        let mut robot = cases::case_h();
+        robot.tendons[4].friction = Some(Friction::pull(0.3));
+        robot.tendons[0].set_tension(1.5);
+        robot.tendons[0].friction = Some(Friction {
+            coefficient: 0.2,
+            motion: crate::model::tendon::Motion::Release,
+        });
+        let R = so3::exp(&Vector3::new(0.3, -0.7, 0.4));
+        (robot, R, Vector3::new(0.01, -0.02, 0.98), Vector3::new(4.0, 9.0, -3.0))
+    }
+
+    #[test]
+    fn linearization_matches_central_differences() {
+        let (robot, R, v, u) = setup();
+        let model = Model::new(&robot);
+        let slipping = slipping(&robot);
+        let site = model.site(0.07);
+        let end = robot.length();
+        let lin = linearize(&model, &site, end, (&R, &v, &u), &slipping).unwrap();
+        let eval = |model: &Model, R: &Matrix3<f64>, v: &Vector3<f64>, u: &Vector3<f64>| {
+            let mut turning = vec![0.0; robot.tendons.len()];
+            let x = rates(model, &site, end, (R, v, u), &mut turning).unwrap();
+            let t: Vec<f64> = slipping.iter().map(|&i| turning[i]).collect();
+            (x, t)
+        };
+        let (x, t) = eval(&model, &R, &v, &u);
+        // The same solve: bitwise
+        assert_eq!(x, lin.lin.rates);
+        assert_eq!(t, lin.turning);
+        // 3e-5: the rates carry rounding of about 1e-16 E A |v - v*| / (E I) ~ 5e-11 (u'), so
+        // a central difference has ~1e-6 of noise there; truncation h^2 is below it.
+        let h = 3e-5;
+        // Richardson-extrapolated central differences (error O(h^4)) of (rates, turning)
+        // along a step `at(t)` of the inputs.
+        let difference = |at: &dyn Fn(f64) -> (Vector6<f64>, Vec<f64>)| {
+            let central = |h: f64| {
+                let ((xp, tp), (xm, tm)) = (at(h), at(-h));
+                let t: Vec<f64> = tp.iter().zip(&tm).map(|(a, b)| (a - b) / (2.0 * h)).collect();
+                ((xp - xm) / (2.0 * h), t)
+            };
+            let ((x1, t1), (x2, t2)) = (central(h), central(h / 2.0));
+            let t: Vec<f64> = t1.iter().zip(&t2).map(|(a, b)| (4.0 * b - a) / 3.0).collect();
+            ((x2 * 4.0 - x1) / 3.0, t)
+        };
+        for c in 0..9 {
+            let at = |step: f64| {
+                let mut d = [0.0; 9];
+                d[c] = step;
+                let dv = Vector3::new(d[0], d[1], d[2]);
+                let du = Vector3::new(d[3], d[4], d[5]);
+                let dphi = Vector3::new(d[6], d[7], d[8]);
+                eval(&model, &(R * so3::exp(&dphi)), &(v + dv), &(u + du))
+            };
+            let (fd, fd_turning) = difference(&at);
+            let exact = if c < 6 { lin.lin.d_strains.column(c).into_owned() } else { lin.lin.d_rotation.column(c - 6).into_owned() };
+            // 1e-6 relative (to at least 10 for the rates, whose strain derivatives are 10..1e3,
+            // and 1 for the turning rates, ~1e3 per unit strain):
+            // the rounding noise of the differences above
+            assert!((fd - exact).norm() <= 1e-6 * exact.norm().max(10.0), "column {c}: {fd} vs {exact}");
+            for (j, fd) in fd_turning.iter().enumerate() {
+                let exact = lin.d_turning[j][c];
+                assert!((fd - exact).abs() <= 1e-6 * fd.abs().max(1.0), "turning {j} column {c}: {fd} vs {exact}");
+            }
+        }
+        for (l, &i) in slipping.iter().enumerate() {
+            let at = |step: f64| {
+                let mut m = model.clone();
+                m.tensions[i] *= step.exp();
+                eval(&m, &R, &v, &u)
+            };
+            let (fd, fd_turning) = difference(&at);
+            // 1e-6 relative: as above
+            assert!((fd - lin.d_log_tension[l]).norm() <= 1e-6 * fd.norm().max(1.0), "z {l}");
+            for (j, fd) in fd_turning.iter().enumerate() {
+                let exact = lin.d_turning_log_tension[j * slipping.len() + l];
+                assert!((fd - exact).abs() <= 1e-6 * fd.abs().max(1.0), "turning {j} z {l}: {fd} vs {exact}");
+            }
+        }
+    }
 }

@@ -107,19 +107,19 @@ pub struct Linearization {
 
 /// Per-tendon quantities of the derivation (body frame) that both passes need.
 #[derive(Clone, Copy, Debug)]
-struct TendonPoint {
+pub(crate) struct TendonPoint {
     /// r_i (m).
-    r: Vector3<f64>,
+    pub(crate) r: Vector3<f64>,
     /// e_i = p_i^b' + r_i'.
-    e: Vector3<f64>,
+    pub(crate) e: Vector3<f64>,
     /// c_i = u x e_i + r_i'' (1/m), the state-dependent part of p_i^b''.
-    c: Vector3<f64>,
+    pub(crate) c: Vector3<f64>,
     /// t_i = p_i^b' / |p_i^b'|, the unit tangent.
-    t: Vector3<f64>,
+    pub(crate) t: Vector3<f64>,
     /// k_i = tau_i / |p_i^b'| (N).
-    k: f64,
+    pub(crate) k: f64,
     /// 1 / |p_i^b'|.
-    inv_speed: f64,
+    pub(crate) inv_speed: f64,
 }
 
 impl TendonPoint {
@@ -133,7 +133,7 @@ impl TendonPoint {
     };
 
     /// Tendon `i` with tension `tension` (N) at the routing point `rp` of arc length `s`.
-    fn new(i: usize, tension: f64, rp: &RoutingPoint, s: f64, v: &Vector3<f64>, u: &Vector3<f64>) -> Result<Self> {
+    pub(crate) fn new(i: usize, tension: f64, rp: &RoutingPoint, s: f64, v: &Vector3<f64>, u: &Vector3<f64>) -> Result<Self> {
         let p = u.cross(&rp.r) + rp.r_s + v;
         let speed = p.norm();
         if speed < MIN_TENDON_SPEED {
@@ -179,6 +179,14 @@ impl TendonPoint {
         top: &mut Matrix3x6<f64>,
         bottom: &mut Matrix3x6<f64>,
     ) {
+        let QQ = self.normal_derivative(x_v, x_u, u);
+        *top += QQ;
+        *bottom += hat_mul(&self.r, &QQ);
+    }
+
+    /// [dq_i/dv, dq_i/du] (module docs) at the rates x = (x_v, x_u), with x held fixed: the
+    /// change of the tendon's normal load q_i with the strains.
+    pub(crate) fn normal_derivative(&self, x_v: &Vector3<f64>, x_u: &Vector3<f64>, u: &Vector3<f64>) -> Matrix3x6<f64> {
         let A = self.A();
         let t = &self.t;
         let z = x_v - self.r.cross(x_u) + self.c; // p_i^b''
@@ -202,8 +210,7 @@ impl TendonPoint {
         let mut QQ = Matrix3x6::zeros();
         QQ.fixed_columns_mut::<3>(0).copy_from(&Q);
         QQ.fixed_columns_mut::<3>(3).copy_from(&dq_du);
-        *top += QQ;
-        *bottom += hat_mul(&self.r, &QQ);
+        QQ
     }
 }
 
@@ -458,32 +465,6 @@ pub fn rates(
     Ok(Vector6::from_fn(|i, _| x[i]))
 }
 
-/// Eq. 13 (corrected) with extra body-frame loads on the backbone: the rates of [`rates`],
-/// and each of `loads` (a 6-vector, a distributed force then moment per unit s, body frame)
-/// overwritten with M^-1 times it, the change of the rates per unit of that load taken off
-/// the right-hand side. One factorization of M serves all (friction, docs/friction.md).
-///
-/// # Errors
-/// As [`rates`].
-pub(crate) fn rates_and_responses(
-    model: &Model,
-    site: &Site,
-    segment_end: f64,
-    (R, v, u): (&Matrix3<f64>, &Vector3<f64>, &Vector3<f64>),
-    loads: &mut [Vector6<f64>],
-) -> Result<Vector6<f64>> {
-    let assembled = assemble(model, site, segment_end, (R, v, u), None)?;
-    for load in loads.iter_mut() {
-        let mut row = load.transpose();
-        if !assembled.factor.solve_transposed_mut(&mut row) {
-            return Err(breakdown(site.s));
-        }
-        *load = row.transpose();
-    }
-    let x = assembled.x;
-    Ok(Vector6::from_fn(|i, _| x[i]))
-}
-
 /// Eq. 13 (corrected) and its exact first derivatives at a site for the state (R, v, u):
 /// the rates (v', u') of [`rates`], d(v', u')/d(v, u), and d(v', u')/d(phi)
 /// for R -> R exp(hat(phi)). The tendons that reach `segment_end` load the backbone, as in
@@ -520,48 +501,10 @@ pub fn linearize(
     v: &Vector3<f64>,
     u: &Vector3<f64>,
 ) -> Result<Linearization> {
-    let mut cache = [TendonPoint::ZERO; CACHED_TENDONS];
-    let assembled = assemble(model, site, segment_end, (R, v, u), Some(&mut cache))?;
-    let (factor, x, count) = (&assembled.factor, &assembled.x, assembled.count);
-    let (n_b, m_b, f_b, l_b) = (assembled.n_b, assembled.m_b, assembled.f_b, assembled.l_b);
-    let (kse, kbt) = (&site.section.section.kse, &site.section.section.kbt);
-    let (kse_s, kbt_s) = (&site.section.kse_s, &site.section.kbt_s);
-    let x_v = Vector3::new(x[0], x[1], x[2]);
-    let x_u = Vector3::new(x[3], x[4], x[5]);
-
-    // Pass 2: dF (module docs), the partial derivative of M x - rhs at this x.
-    let mut top = Matrix3x6::<f64>::zeros();
-    let mut bottom = Matrix3x6::<f64>::zeros();
-    for tp in &cache[..count.min(CACHED_TENDONS)] {
-        tp.add_derivatives(&x_v, &x_u, u, &mut top, &mut bottom);
-    }
-    if count > CACHED_TENDONS {
-        for (i, tension, rp) in model.distributed_tendons(site.s, segment_end).skip(CACHED_TENDONS) {
-            TendonPoint::new(i, tension, &rp, site.s, v, u)?.add_derivatives(&x_v, &x_u, u, &mut top, &mut bottom);
-        }
-    }
-    let n_hat = hat3(&n_b);
-    let blocks = [
-        [
-            hat_diag(u, kse, kse_s) + top.fixed_columns::<3>(0),
-            top.fixed_columns::<3>(3) - n_hat,
-            hat3(&f_b),
-        ],
-        [
-            hat_diag(v, kse, &Vector3::zeros()) - n_hat + bottom.fixed_columns::<3>(0),
-            hat_diag(u, kbt, kbt_s) - hat3(&m_b) + bottom.fixed_columns::<3>(3),
-            hat3(&l_b),
-        ],
-    ];
-    // dF^T: row k is direction k of (v, u, phi), column j is row j of F.
-    let mut dFt = SMatrix::<f64, 9, 6>::zeros();
-    for (row, blocks_row) in blocks.iter().enumerate() {
-        for (col, block) in blocks_row.iter().enumerate() {
-            dFt.fixed_view_mut::<3, 3>(3 * col, 3 * row)
-                .copy_from(&block.transpose());
-        }
-    }
-    if !factor.solve_transposed_mut(&mut dFt) {
+    let point = Point::new(model, site, segment_end, (R, v, u))?;
+    let x = &point.assembled.x;
+    let mut dFt = point.derivative(model, site, segment_end, (v, u), x)?;
+    if !point.assembled.factor.solve_transposed_mut(&mut dFt) {
         return Err(breakdown(site.s));
     }
     // d(v', u') = -M^-1 dF
@@ -570,6 +513,99 @@ pub fn linearize(
         d_strains: Matrix6::from_fn(|i, k| -dFt[(k, i)]),
         d_rotation: Matrix6x3::from_fn(|i, k| -dFt[(6 + k, i)]),
     })
+}
+
+/// Eq. 13 (corrected) at one point, assembled and factored (pass 1 of [`linearize`]) for
+/// what friction adds (docs/friction.md): the rates, solves with M for further right-hand
+/// sides, and dF (the partial derivative of M x - rhs with x held fixed) at any rates x.
+pub(crate) struct Point {
+    assembled: Assembled,
+    cache: [TendonPoint; CACHED_TENDONS],
+}
+
+impl Point {
+    /// Assembles and factors eq. 13 at (R, v, u).
+    ///
+    /// # Errors
+    /// As [`rates`].
+    pub(crate) fn new(
+        model: &Model,
+        site: &Site,
+        segment_end: f64,
+        (R, v, u): (&Matrix3<f64>, &Vector3<f64>, &Vector3<f64>),
+    ) -> Result<Self> {
+        let mut cache = [TendonPoint::ZERO; CACHED_TENDONS];
+        let assembled = assemble(model, site, segment_end, (R, v, u), Some(&mut cache))?;
+        Ok(Point { assembled, cache })
+    }
+
+    /// The rates (v', u') of eq. 13.
+    pub(crate) fn rates(&self) -> Vector6<f64> {
+        let x = &self.assembled.x;
+        Vector6::from_fn(|i, _| x[i])
+    }
+
+    /// Overwrites each row of `bt` (a right-hand side of M, transposed) with the row of
+    /// the solution; false when M is singular.
+    pub(crate) fn solve_rows<const C: usize>(&self, bt: &mut SMatrix<f64, C, 6>) -> bool {
+        self.assembled.factor.solve_transposed_mut(bt)
+    }
+
+    /// dF^T at the rates `x` (a row): row k is direction k of (v, u, phi), column j row j of
+    /// F = M x - rhs (module docs), x held fixed.
+    ///
+    /// # Errors
+    /// [`Error::SingularRouting`] for a tendon beyond the cached ones without a tangent.
+    pub(crate) fn derivative(
+        &self,
+        model: &Model,
+        site: &Site,
+        segment_end: f64,
+        (v, u): (&Vector3<f64>, &Vector3<f64>),
+        x: &SMatrix<f64, 1, 6>,
+    ) -> Result<SMatrix<f64, 9, 6>> {
+        let assembled = &self.assembled;
+        let count = assembled.count;
+        let (n_b, m_b, f_b, l_b) = (assembled.n_b, assembled.m_b, assembled.f_b, assembled.l_b);
+        let (kse, kbt) = (&site.section.section.kse, &site.section.section.kbt);
+        let (kse_s, kbt_s) = (&site.section.kse_s, &site.section.kbt_s);
+        let x_v = Vector3::new(x[0], x[1], x[2]);
+        let x_u = Vector3::new(x[3], x[4], x[5]);
+
+        // Pass 2: dF (module docs), the partial derivative of M x - rhs at this x.
+        let mut top = Matrix3x6::<f64>::zeros();
+        let mut bottom = Matrix3x6::<f64>::zeros();
+        for tp in &self.cache[..count.min(CACHED_TENDONS)] {
+            tp.add_derivatives(&x_v, &x_u, u, &mut top, &mut bottom);
+        }
+        if count > CACHED_TENDONS {
+            for (i, tension, rp) in model.distributed_tendons(site.s, segment_end).skip(CACHED_TENDONS) {
+                TendonPoint::new(i, tension, &rp, site.s, v, u)?.add_derivatives(&x_v, &x_u, u, &mut top, &mut bottom);
+            }
+        }
+        let n_hat = hat3(&n_b);
+        let blocks = [
+            [
+                hat_diag(u, kse, kse_s) + top.fixed_columns::<3>(0),
+                top.fixed_columns::<3>(3) - n_hat,
+                hat3(&f_b),
+            ],
+            [
+                hat_diag(v, kse, &Vector3::zeros()) - n_hat + bottom.fixed_columns::<3>(0),
+                hat_diag(u, kbt, kbt_s) - hat3(&m_b) + bottom.fixed_columns::<3>(3),
+                hat3(&l_b),
+            ],
+        ];
+        // dF^T: row k is direction k of (v, u, phi), column j is row j of F.
+        let mut dFt = SMatrix::<f64, 9, 6>::zeros();
+        for (row, blocks_row) in blocks.iter().enumerate() {
+            for (col, block) in blocks_row.iter().enumerate() {
+                dFt.fixed_view_mut::<3, 3>(3 * col, 3 * row)
+                    .copy_from(&block.transpose());
+            }
+        }
+        Ok(dFt)
+    }
 }
 
 #[cfg(test)]
