@@ -152,3 +152,35 @@ fn bad_friction_is_an_error_that_names_the_field() {
     robot.tendons[1] = robot.tendons[1].clone().ending_at(0.1);
     check(&robot, "s = 0.1 m");
 }
+
+#[test]
+fn collocation_agrees_with_shooting_with_friction() {
+    let mut s = cases::case_s();
+    s.tendons[0].friction = Some(Friction::pull(0.1));
+    let mut h = cases::case_h();
+    h.tendons[4].friction = Some(Friction::pull(0.1));
+    let mut released = cases::case_h();
+    released.tendons[4].friction = Some(Friction {
+        coefficient: 0.2,
+        motion: Motion::Release,
+    });
+    for robot in [s, h, released] {
+        let c = tdcr::collocation::solve(&robot, &tdcr::collocation::Options::fixed(128)).unwrap();
+        let sh = shooting::solve(&robot, &tight()).unwrap();
+        let d = (c.tip_position() - sh.tip_position()).norm();
+        // 1e-8 m: collocation error ~1.4e-9 m at 128 intervals plus shooting at 1e-12
+        assert!(d < 1e-8, "tips differ by {d:.3e} m");
+        let (tc, ts) = (c.tendons.iter(), sh.tendons.iter());
+        for (a, b) in tc.zip(ts) {
+            // 4e-8 relative: the tips' 1e-8 m relative to the 0.24 m rod (the profile converges with the shape)
+            let diff = (a.delivered_tension - b.delivered_tension).abs();
+            assert!(
+                diff <= 4e-8 * a.tension.max(1.0),
+                "delivered {} vs {}",
+                a.delivered_tension,
+                b.delivered_tension
+            );
+        }
+        assert!(matches!(c.report.stability, tdcr::Stability::Unknown { ref reason } if reason.contains("friction")));
+    }
+}

@@ -33,6 +33,7 @@
 pub(crate) mod actuation;
 mod equilibrium;
 mod estimate;
+pub(crate) mod friction;
 mod homotopy;
 pub(crate) mod linear;
 pub(crate) mod newton;

@@ -8,6 +8,7 @@
 //! the chain rule of [`residual::interval_jacobian`], the base, jump and tip blocks by
 //! num-dual dual numbers run through the same generic residual code.
 
+use super::friction::{self, Profile};
 use super::residual::{self, Block, Delta, IntervalSites, QuarterSites};
 use super::unknowns::{self, BASE_COLUMNS, BASE_ROWS, NODE, THETA, TIP_COLUMNS, link_row, tip_row};
 use crate::error::Result;
@@ -34,6 +35,9 @@ pub struct System<'a> {
     node_sites: Vec<Site>,
     /// Evaluations of eq. 13 in one residual or Jacobian pass.
     rate_evaluations: usize,
+    /// The tension profile of the tendons with friction (docs/friction.md), whose intervals
+    /// are then collocated with it; `None` without friction.
+    pub(crate) friction: Option<Profile<'a>>,
 }
 
 impl<'a> System<'a> {
@@ -45,6 +49,7 @@ impl<'a> System<'a> {
             interval_sites: Vec::new(),
             node_sites: Vec::new(),
             rate_evaluations: 0,
+            friction: None,
         };
         sys.set_factors(sys.model.tension_factor, sys.model.load_factor);
         sys
@@ -117,6 +122,13 @@ impl<'a> System<'a> {
     /// # Errors
     /// A model breakdown at a visited state.
     pub fn residual(&self, x: &[State], out: &mut [f64]) -> Result<()> {
+        if let Some(profile) = &self.friction {
+            let length = self.model.robot.length();
+            return self.rows(x, out, |k, sites, seg, a, b, _| {
+                let lin = friction::interval(profile, length, k, sites, seg, a, b, None)?;
+                Ok((lin.residual, Vector6::zeros()))
+            });
+        }
         self.rows(x, out, |_, sites, seg, a, b, start| {
             residual::interval(&self.model, sites, seg, a, b, start)
         })
@@ -219,9 +231,16 @@ impl<'a> System<'a> {
             if let Some(sites) = &self.interval_sites[k] {
                 let seg = self.mesh.nodes[k].segment_end;
                 let block = &mut values[at..at + NODE * width];
-                let (r, end) = residual::interval_jacobian(&self.model, sites, seg, &x[k], &x[k + 1], node_lin, block)?;
-                node_lin = Some(end);
-                out[rows].copy_from_slice(r.as_slice());
+                if let Some(profile) = &self.friction {
+                    let length = self.model.robot.length();
+                    let lin = friction::interval(profile, length, k, sites, seg, &x[k], &x[k + 1], Some(block))?;
+                    out[rows].copy_from_slice(lin.residual.as_slice());
+                } else {
+                    let (r, end) =
+                        residual::interval_jacobian(&self.model, sites, seg, &x[k], &x[k + 1], node_lin, block)?;
+                    node_lin = Some(end);
+                    out[rows].copy_from_slice(r.as_slice());
+                }
             } else {
                 node_lin = None;
                 // Jumps: one dual pass per unknown (they are few).

@@ -178,8 +178,7 @@ fn solve(
     let tendons = &model.robot.tendons;
     let mut slips = Vec::with_capacity(slipping.len());
     for (i, tension, rp) in model.distributed_tendons(site.s, segment_end) {
-        let (Some(friction), Some(slot)) = (tendons[i].active_friction(), slipping.iter().position(|&j| j == i))
-        else {
+        let (Some(friction), Some(slot)) = (tendons[i].active_friction(), slipping.iter().position(|&j| j == i)) else {
             continue;
         };
         let tp = TendonPoint::new(i, tension, &rp, site.s, v, u)?;
@@ -211,7 +210,11 @@ fn solve(
         for sl in slips.iter_mut() {
             sl.q = sl.normal(&x);
             let magnitude = sl.q.norm();
-            sl.q_hat = if magnitude > 0.0 { sl.q / magnitude } else { Vector3::zeros() };
+            sl.q_hat = if magnitude > 0.0 {
+                sl.q / magnitude
+            } else {
+                Vector3::zeros()
+            };
             size = size.max(magnitude);
         }
         if k == 0 || size == 0.0 {
@@ -242,7 +245,11 @@ fn solve(
             for sl in slips.iter_mut() {
                 sl.q = sl.normal(&x);
                 let magnitude = sl.q.norm();
-                sl.q_hat = if magnitude > 0.0 { sl.q / magnitude } else { Vector3::zeros() };
+                sl.q_hat = if magnitude > 0.0 {
+                    sl.q / magnitude
+                } else {
+                    Vector3::zeros()
+                };
             }
             break;
         }
@@ -342,7 +349,11 @@ pub(crate) fn linearize(
         let QQ = tp.normal_derivative(&Vector3::new(x[0], x[1], x[2]), &Vector3::new(x[3], x[4], x[5]), u);
         let dg = (sl.q_hat.transpose() * QQ) * sl.signed_mu; // 1 x 6
         for c in 0..6 {
-            let dt = if c < 3 { dt_dv.column(c).into_owned() } else { dt_du.column(c - 3).into_owned() };
+            let dt = if c < 3 {
+                dt_dv.column(c).into_owned()
+            } else {
+                dt_du.column(c - 3).into_owned()
+            };
             let de_top = dt * sl.g;
             let de_bottom = tp.r.cross(&dt) * sl.g;
             for r in 0..3 {
@@ -491,14 +502,24 @@ mod tests {
                 eval(&model, &(R * so3::exp(&dphi)), &(v + dv), &(u + du))
             };
             let (fd, fd_turning) = difference(&at);
-            let exact = if c < 6 { lin.lin.d_strains.column(c).into_owned() } else { lin.lin.d_rotation.column(c - 6).into_owned() };
+            let exact = if c < 6 {
+                lin.lin.d_strains.column(c).into_owned()
+            } else {
+                lin.lin.d_rotation.column(c - 6).into_owned()
+            };
             // 1e-6 relative (to at least 10 for the rates, whose strain derivatives are 10..1e3,
             // and 1 for the turning rates, ~1e3 per unit strain):
             // the rounding noise of the differences above
-            assert!((fd - exact).norm() <= 1e-6 * exact.norm().max(10.0), "column {c}: {fd} vs {exact}");
+            assert!(
+                (fd - exact).norm() <= 1e-6 * exact.norm().max(10.0),
+                "column {c}: {fd} vs {exact}"
+            );
             for (j, fd) in fd_turning.iter().enumerate() {
                 let exact = lin.d_turning[j][c];
-                assert!((fd - exact).abs() <= 1e-6 * fd.abs().max(1.0), "turning {j} column {c}: {fd} vs {exact}");
+                assert!(
+                    (fd - exact).abs() <= 1e-6 * fd.abs().max(1.0),
+                    "turning {j} column {c}: {fd} vs {exact}"
+                );
             }
         }
         for (l, &i) in slipping.iter().enumerate() {
@@ -512,7 +533,10 @@ mod tests {
             assert!((fd - lin.d_log_tension[l]).norm() <= 1e-6 * fd.norm().max(1.0), "z {l}");
             for (j, fd) in fd_turning.iter().enumerate() {
                 let exact = lin.d_turning_log_tension[j * slipping.len() + l];
-                assert!((fd - exact).abs() <= 1e-6 * fd.abs().max(1.0), "turning {j} z {l}: {fd} vs {exact}");
+                assert!(
+                    (fd - exact).abs() <= 1e-6 * fd.abs().max(1.0),
+                    "turning {j} z {l}: {fd} vs {exact}"
+                );
             }
         }
     }

@@ -133,7 +133,14 @@ impl TendonPoint {
     };
 
     /// Tendon `i` with tension `tension` (N) at the routing point `rp` of arc length `s`.
-    pub(crate) fn new(i: usize, tension: f64, rp: &RoutingPoint, s: f64, v: &Vector3<f64>, u: &Vector3<f64>) -> Result<Self> {
+    pub(crate) fn new(
+        i: usize,
+        tension: f64,
+        rp: &RoutingPoint,
+        s: f64,
+        v: &Vector3<f64>,
+        u: &Vector3<f64>,
+    ) -> Result<Self> {
         let p = u.cross(&rp.r) + rp.r_s + v;
         let speed = p.norm();
         if speed < MIN_TENDON_SPEED {

@@ -1,0 +1,296 @@
+//! The tension profile of the tendons with friction on a mesh ([`Profile`]) and the
+//! collocation of an interval with friction: the 12 rows of the backbone and one capstan row
+//! per tendon with friction, with their exact Jacobian (docs/friction.md, "Collocation").
+//!
+//! Each tendon j with friction carries the log tension z_j = ln(tau_j / tau_j(0)) at the
+//! nodes of its span, z_j = 0 at the base. On an interval, z_j obeys
+//! z_j' = kappa~_j(y) = w_j mu_j kappa_j, collocated by the same Hermite-Simpson formula as
+//! the backbone state y:
+//!
+//! ```text
+//! z_m = (z_a + z_b) / 2 + h/8 (kappa~_a - kappa~_b),  psi = z_b - z_a - h/6 (kappa~_a + 4 kappa~_m + kappa~_b)
+//! ```
+//!
+//! where kappa~ at the midpoint is evaluated at (y_m, z_m): y and z are one collocation
+//! state, so the scheme keeps order 4. The backbone rows see z through the tensions of eq.
+//! 13 with friction at the nodes and the midpoint ([`friction::linearize`]).
+#![allow(non_snake_case)]
+
+use super::super::residual::{Block, EndColumns, IntervalSites, end_points, rhs_linearized, scale_rows};
+use super::super::unknowns::THETA;
+use crate::error::Result;
+use crate::mesh::Mesh;
+use crate::model::equations::{Model, Site};
+use crate::model::friction::{self, FrictionLinearization};
+use crate::so3;
+use crate::solution::State;
+use nalgebra::{DMatrix, SMatrix, Vector3};
+use std::cell::RefCell;
+
+/// The log tensions of the tendons with friction on a mesh, and a model to evaluate eq. 13
+/// with them.
+#[derive(Clone, Debug)]
+pub(crate) struct Profile<'a> {
+    /// Indices of the tendons with friction ([`friction::slipping`]).
+    pub(crate) slipping: Vec<usize>,
+    /// Their tensions at the base entry tau_j(0) (N), the input.
+    pub(crate) base: Vec<f64>,
+    /// The last node of each one's span (its left limit at the termination).
+    pub(crate) spans: Vec<usize>,
+    /// z_j at every node (0 at node 0; past the span, the span's last value).
+    pub(crate) z: Vec<Vec<f64>>,
+    /// The model with the tensions of one point, for eq. 13 with friction.
+    scratch: RefCell<Model<'a>>,
+}
+
+impl<'a> Profile<'a> {
+    /// The profile of `model`'s tendons with friction on `mesh`, constant (z = 0).
+    pub(crate) fn new(model: &Model<'a>, mesh: &Mesh) -> Self {
+        let robot = model.robot;
+        let slipping = friction::slipping(robot);
+        let base = slipping.iter().map(|&i| model.tensions[i]).collect();
+        let spans = slipping
+            .iter()
+            .map(|&i| {
+                let end = robot.tendons[i].end(robot.length());
+                mesh.nodes
+                    .iter()
+                    .position(|n| n.s >= end)
+                    .unwrap_or(mesh.nodes.len() - 1)
+            })
+            .collect();
+        Profile {
+            z: vec![vec![0.0; mesh.nodes.len()]; slipping.len()],
+            slipping,
+            base,
+            spans,
+            scratch: RefCell::new(model.clone()),
+        }
+    }
+
+    /// Number of tendons with friction.
+    pub(crate) fn count(&self) -> usize {
+        self.slipping.len()
+    }
+
+    /// The tension (N) of slip j where its log tension is `z`.
+    pub(crate) fn tension(&self, j: usize, z: f64) -> f64 {
+        self.base[j] * z.exp()
+    }
+
+    /// Whether slip j loads link k (its span reaches node k + 1).
+    pub(crate) fn on_link(&self, j: usize, k: usize) -> bool {
+        k < self.spans[j]
+    }
+
+    /// Sets `model`'s tension of each tendon with friction to the one it delivers at its
+    /// termination, which the jump and tip conditions use.
+    pub(crate) fn deliver(&self, model: &mut Model) {
+        for (j, &i) in self.slipping.iter().enumerate() {
+            model.tensions[i] = self.tension(j, self.z[j][self.spans[j]]);
+        }
+    }
+
+    /// Every tendon's tension (N) at every node: the profile for the slips, the model's
+    /// tension for the others.
+    pub(crate) fn node_tensions(&self, model: &Model) -> Vec<Vec<f64>> {
+        (0..self.z.first().map_or(0, Vec::len))
+            .map(|n| {
+                let mut t = model.tensions.clone();
+                for (j, &i) in self.slipping.iter().enumerate() {
+                    t[i] = self.tension(j, self.z[j][n.min(self.spans[j])]);
+                }
+                t
+            })
+            .collect()
+    }
+
+    /// Eq. 13 with friction at a site and state, the slips at log tensions `z`.
+    fn point(
+        &self,
+        site: &Site,
+        segment_end: f64,
+        R: &nalgebra::Matrix3<f64>,
+        y: (&Vector3<f64>, &Vector3<f64>),
+        z: &[f64],
+    ) -> Result<FrictionLinearization> {
+        let mut model = self.scratch.borrow_mut();
+        for (j, &i) in self.slipping.iter().enumerate() {
+            model.tensions[i] = self.tension(j, z[j]);
+        }
+        friction::linearize(&model, site, segment_end, (R, y.0, y.1), &self.slipping)
+    }
+}
+
+/// The linearization of an interval with friction: its backbone rows, capstan rows and
+/// their derivatives.
+pub(crate) struct IntervalLinearization {
+    /// The 12 backbone rows (scaled).
+    pub(crate) residual: Block<f64>,
+    /// psi_j, one per slip (0 for slips not on this link).
+    pub(crate) psi: Vec<f64>,
+    /// d(backbone rows)/dz: 12 x 2k, columns z_a of every slip, then z_b.
+    pub(crate) rows_z: DMatrix<f64>,
+    /// d psi / d(node unknowns): k x 24, the block's column layout.
+    pub(crate) psi_x: DMatrix<f64>,
+    /// d psi / dz: k x 2k, columns as `rows_z`.
+    pub(crate) psi_z: DMatrix<f64>,
+}
+
+/// Collocation of link k with friction: residual rows and capstan rows, and when `jac` is
+/// given, the backbone rows' Jacobian in the scaled node unknowns there (12 x 24, row major)
+/// and the border's derivatives in the return value.
+///
+/// # Errors
+/// A model breakdown at a node or the midpoint.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn interval(
+    profile: &Profile,
+    length: f64,
+    k: usize,
+    sites: &IntervalSites,
+    segment_end: f64,
+    a: &State,
+    b: &State,
+    jac: Option<&mut [f64]>,
+) -> Result<IntervalLinearization> {
+    let count = profile.count();
+    let h = sites.end.s - sites.start.s;
+    let za: Vec<f64> = profile.z.iter().map(|z| z[k]).collect();
+    let zb: Vec<f64> = profile.z.iter().map(|z| z[k + 1]).collect();
+    let (y0, y1) = end_points(a, b);
+    let theta1: Vector3<f64> = y1.fixed_rows::<3>(THETA).into();
+    let la = profile.point(&sites.start, segment_end, &a.R, (&a.v, &a.u), &za)?;
+    let lb = profile.point(&sites.end, segment_end, &b.R, (&b.v, &b.u), &zb)?;
+    let p0 = rhs_linearized(&la.lin, &a.R, &y0);
+    let p1 = rhs_linearized(&lb.lin, &a.R, &y1);
+    let ym = (y0 + y1) * 0.5 + (p0.f - p1.f) * (h / 8.0);
+    let zm: Vec<f64> = (0..count)
+        .map(|j| 0.5 * (za[j] + zb[j]) + h / 8.0 * (la.turning[j] - lb.turning[j]))
+        .collect();
+    let theta_m: Vector3<f64> = ym.fixed_rows::<3>(THETA).into();
+    let (vm, um): (Vector3<f64>, Vector3<f64>) = (ym.fixed_rows::<3>(6).into(), ym.fixed_rows::<3>(9).into());
+    let Rm = a.R * so3::exp(&theta_m);
+    let lm = profile.point(&sites.mid, segment_end, &Rm, (&vm, &um), &zm)?;
+    let pm = rhs_linearized(&lm.lin, &a.R, &ym);
+    let residual = scale_rows(y1 - y0 - (p0.f + pm.f * 4.0 + p1.f) * (h / 6.0), length);
+    let on: Vec<bool> = (0..count).map(|j| profile.on_link(j, k)).collect();
+    let psi: Vec<f64> = (0..count)
+        .map(|j| {
+            if on[j] {
+                zb[j] - za[j] - h / 6.0 * (la.turning[j] + 4.0 * lm.turning[j] + lb.turning[j])
+            } else {
+                0.0
+            }
+        })
+        .collect();
+    let mut out = IntervalLinearization {
+        residual,
+        psi,
+        rows_z: DMatrix::zeros(12, 2 * count),
+        psi_x: DMatrix::zeros(count, 24),
+        psi_z: DMatrix::zeros(count, 2 * count),
+    };
+    let Some(jac) = jac else {
+        return Ok(out);
+    };
+
+    // The backbone rows: the chain rule of residual::interval_jacobian, with the midpoint's
+    // log tensions z_m depending on the node states through kappa~_a, kappa~_b.
+    let ends = EndColumns::new(&p0, &p1, &theta1, length);
+    let dYm = ends.midpoint(h);
+    // d kappa~ / d(18 columns) at the nodes: (theta, v, u / L) of their own node.
+    let node_turning = |l: &FrictionLinearization, j: usize, first: usize| {
+        let mut row = SMatrix::<f64, 1, 18>::zeros();
+        for c in 0..3 {
+            row[first + c] = l.d_turning[j][6 + c];
+            row[first + 3 + c] = l.d_turning[j][c];
+            row[first + 6 + c] = l.d_turning[j][3 + c] / length;
+        }
+        row
+    };
+    let dzm: Vec<SMatrix<f64, 1, 18>> = (0..count)
+        .map(|j| (node_turning(&la, j, 0) - node_turning(&lb, j, 9)) * (h / 8.0))
+        .collect();
+    // F_m and kappa~_m in the midpoint's local coordinates (theta, v, u) and the frame.
+    let Jr_m = so3::right_jacobian(&theta_m);
+    let Em = so3::exp(&theta_m);
+    let turning_y = |j: usize| {
+        let mut row = SMatrix::<f64, 1, 12>::zeros();
+        let d_phi = lm.d_turning[j].fixed_columns::<3>(6).into_owned();
+        row.fixed_columns_mut::<3>(3).copy_from(&(d_phi * Jr_m));
+        row.fixed_columns_mut::<3>(6)
+            .copy_from(&lm.d_turning[j].fixed_columns::<3>(0));
+        row.fixed_columns_mut::<3>(9)
+            .copy_from(&lm.d_turning[j].fixed_columns::<3>(3));
+        (row, d_phi * Em.transpose())
+    };
+    let mut dFm = pm.f_y.fixed_columns::<9>(3) * dYm.fixed_rows::<9>(3);
+    {
+        let mut frame = dFm.fixed_columns_mut::<3>(0);
+        frame += pm.f_frame;
+    }
+    let rates_z = |l: &FrictionLinearization, j: usize| {
+        let mut col = Block::<f64>::zeros();
+        col.fixed_rows_mut::<6>(6).copy_from(&l.d_log_tension[j]);
+        col
+    };
+    for j in 0..count {
+        dFm += rates_z(&lm, j) * dzm[j];
+    }
+    ends.write(&dFm, h, length, jac);
+
+    // d kappa~_m / d(18 columns), including z_m's dependence.
+    let mut dturn_m: Vec<SMatrix<f64, 1, 18>> = Vec::with_capacity(count);
+    for j in 0..count {
+        let (row_y, row_frame) = turning_y(j);
+        let mut row = row_y.fixed_columns::<9>(3) * dYm.fixed_rows::<9>(3);
+        for c in 0..3 {
+            row[c] += row_frame[c];
+        }
+        for (l, dz) in dzm.iter().enumerate() {
+            row += dz * lm.d_turning_log_tension[j * count + l];
+        }
+        dturn_m.push(row);
+    }
+    // The capstan rows in the block's columns (p columns are 0).
+    for j in (0..count).filter(|&j| on[j]) {
+        let row = (node_turning(&la, j, 0) + dturn_m[j] * 4.0 + node_turning(&lb, j, 9)) * (-h / 6.0);
+        for c in 0..18 {
+            let column = if c < 9 { 3 + c } else { 6 + c };
+            out.psi_x[(j, column)] = row[c];
+        }
+    }
+
+    // The log-tension columns: z_a of slip l (column l), z_b (column count + l).
+    for l in 0..count {
+        for (side, sign, lin) in [(0, 1.0, &la), (1, -1.0, &lb)] {
+            let dF_end = rates_z(lin, l); // dF_a or dF_b / dz
+            // y_m moves by +-h/8 dF_end; z_m by delta/2 +- h/8 d kappa~_end / dz.
+            let dym = dF_end * (sign * h / 8.0);
+            let dzm_l: Vec<f64> = (0..count)
+                .map(|j| {
+                    let own = if j == l { 0.5 } else { 0.0 };
+                    own + sign * h / 8.0 * lin.d_turning_log_tension[j * count + l]
+                })
+                .collect();
+            let mut dFm_z = pm.f_y * dym;
+            for (j, d) in dzm_l.iter().enumerate() {
+                dFm_z += rates_z(&lm, j) * *d;
+            }
+            let column = scale_rows(-(dF_end + dFm_z * 4.0) * (h / 6.0), length);
+            out.rows_z.set_column(side * count + l, &column);
+            for j in (0..count).filter(|&j| on[j]) {
+                let (row_y, _) = turning_y(j);
+                let mut dturn = (row_y * dym)[0];
+                for (m, d) in dzm_l.iter().enumerate() {
+                    dturn += lm.d_turning_log_tension[j * count + m] * d;
+                }
+                let own_end = lin.d_turning_log_tension[j * count + l];
+                let delta = if j == l { -sign } else { 0.0 };
+                out.psi_z[(j, side * count + l)] = delta - h / 6.0 * (own_end + 4.0 * dturn);
+            }
+        }
+    }
+    Ok(out)
+}

@@ -1,0 +1,381 @@
+//! Tendons with friction in the collocation solver (docs/friction.md): the log tensions
+//! z_j = ln(tau_j / tau_j(0)) at the nodes of each tendon's span are unknowns that border
+//! the block-banded system, with one capstan row per interval ([`interval`]):
+//!
+//! ```text
+//! [ J      F_z   ] [dx]   [ -F   ]
+//! [ psi_x  psi_z ] [dz] = [ -psi ]
+//! ```
+//!
+//! Every block is exact: J by the chain rule through eq. 13 with friction, F_z, psi_x and
+//! psi_z from the same interval linearization, the termination's force by its linearity in
+//! the tension. One factorization of J gives a = J^-1 (-F) and the columns X = J^-1 F_z
+//! (one per unknown z), then dz from the Schur complement S = psi_z - psi_x X and
+//! dx = a - X dz, in the Newton loop of displacement-controlled tendons
+//! ([`newton::run_bordered`]). The solve starts from the frictionless solution on its mesh.
+#![allow(non_snake_case)]
+
+mod interval;
+
+pub(crate) use interval::{Profile, interval};
+
+use super::newton::{self, Border, Linearization, Point, Settings, Workspace};
+use super::system::System;
+use super::unknowns::{self, NODE, link_row, tip_row};
+use super::{Cache, Options, pipeline};
+use crate::dense::solve_dense;
+use crate::error::{self, Result};
+use crate::mesh::guess::interpolate;
+use crate::mesh::{Mesh, nodes};
+use crate::model::equations::Model;
+use crate::report::{Method, SolveReport, Stability, Termination};
+use crate::solution::{Solution, State};
+use crate::{Error, Robot};
+use std::time::Instant;
+
+/// The border of the tendons with friction on one mesh.
+struct Capstan<'r> {
+    /// The collocation system, its profile at the log tensions of the last evaluation.
+    system: System<'r>,
+    /// First unknown (= row) of each slip: unknown (j, node n) is offsets[j] + n - 1, row
+    /// (j, link k) is offsets[j] + k.
+    offsets: Vec<usize>,
+    /// z at the current and trial point, and the step dz and the last simplified dz.
+    z: Vec<f64>,
+    trial_z: Vec<f64>,
+    dz: Vec<f64>,
+    simplified: Vec<f64>,
+    /// psi at the current and trial point.
+    psi: Vec<f64>,
+    trial_psi: Vec<f64>,
+    /// X = J^-1 F_z, one column per unknown.
+    columns: Vec<Vec<f64>>,
+    /// psi_x: each row's 24 entries over the unknowns of its link's two nodes.
+    psi_x: Vec<[f64; 2 * NODE]>,
+    /// The link of each row.
+    row_link: Vec<usize>,
+    /// psi_z, dense, row major.
+    psi_z: Vec<f64>,
+    schur: Vec<f64>,
+    schur_rhs: Vec<f64>,
+    probe: Vec<f64>,
+}
+
+impl<'r> Capstan<'r> {
+    fn new(system: System<'r>) -> Self {
+        let profile = system.friction.as_ref().map_or_else(Vec::new, |p| p.spans.clone());
+        let mut offsets = Vec::with_capacity(profile.len());
+        let mut row_link = Vec::new();
+        for &span in &profile {
+            offsets.push(row_link.len());
+            row_link.extend(0..span);
+        }
+        let m = row_link.len();
+        let n = system.unknowns();
+        let mut border = Capstan {
+            system,
+            offsets,
+            z: vec![0.0; m],
+            trial_z: vec![0.0; m],
+            dz: vec![0.0; m],
+            simplified: vec![0.0; m],
+            psi: vec![0.0; m],
+            trial_psi: vec![0.0; m],
+            columns: vec![vec![0.0; n]; m],
+            psi_x: vec![[0.0; 2 * NODE]; m],
+            row_link,
+            psi_z: vec![0.0; m * m],
+            schur: vec![0.0; m * m],
+            schur_rhs: vec![0.0; m],
+            probe: vec![0.0; n],
+        };
+        if let Some(p) = &border.system.friction {
+            for (j, &o) in border.offsets.iter().enumerate() {
+                for n in 1..=p.spans[j] {
+                    border.z[o + n - 1] = p.z[j][n];
+                }
+            }
+        }
+        border.trial_z.copy_from_slice(&border.z);
+        border
+    }
+
+    /// Writes the unknowns `z` into the system's profile and the delivered tensions into
+    /// its model.
+    fn load(&mut self, point: Point) {
+        let z = match point {
+            Point::Current => &self.z,
+            Point::Trial => &self.trial_z,
+        };
+        let Some(profile) = self.system.friction.as_mut() else {
+            return;
+        };
+        for (j, &o) in self.offsets.iter().enumerate() {
+            let span = profile.spans[j];
+            let values = &mut profile.z[j];
+            values[0] = 0.0;
+            for n in 1..values.len() {
+                values[n] = z[o + n.min(span) - 1];
+            }
+        }
+        profile.deliver(&mut self.system.model);
+    }
+
+    /// The unknown of slip j at node n, if it is one (n in 1..=span).
+    fn unknown(&self, j: usize, n: usize) -> Option<usize> {
+        let span = self.system.friction.as_ref()?.spans[j];
+        (1..=span).contains(&n).then(|| self.offsets[j] + n - 1)
+    }
+
+    /// The derivative of the jump or tip rows at slip j's termination with respect to its
+    /// log tension: the termination force is linear in the tension, so it is the rows'
+    /// tendon part, the rows with the tension minus the rows without it. Written into
+    /// `probe` (zeroed first by the caller) at the rows of that condition.
+    fn termination_column(&mut self, j: usize, x: &[State]) -> Result<()> {
+        let Some(profile) = self.system.friction.as_ref() else {
+            return Ok(());
+        };
+        let (tendon, span) = (profile.slipping[j], profile.spans[j]);
+        let nodes = x.len();
+        let length = self.system.model.robot.length();
+        let first = if span + 1 == nodes {
+            tip_row(nodes)
+        } else {
+            link_row(span) + 6
+        };
+        let site = self.system.model.site(x[span].s);
+        let right = (span + 1 < nodes).then(|| self.system.model.site(x[span + 1].s));
+        let rows = |model: &Model| -> Result<[f64; 6]> {
+            let a = &x[span];
+            let right = right
+                .as_ref()
+                .map(|site| (site, &x[span + 1].R, &x[span + 1].v, &x[span + 1].u));
+            let (f, m) = model.wrench_balance(a.s, (&site, &a.R, &a.v, &a.u), right)?;
+            Ok([f[0], f[1], f[2], m[0] * length, m[1] * length, m[2] * length])
+        };
+        let with = rows(&self.system.model)?;
+        let mut without_model = self.system.model.clone();
+        without_model.tensions[tendon] = 0.0;
+        let without = rows(&without_model)?;
+        for r in 0..6 {
+            self.probe[first + r] = with[r] - without[r];
+        }
+        Ok(())
+    }
+}
+
+impl Border for Capstan<'_> {
+    fn on<R>(&mut self, point: Point, f: impl FnOnce(&System) -> R) -> R {
+        self.load(point);
+        f(&self.system)
+    }
+
+    fn rows(&mut self, point: Point, x: &[State]) {
+        self.load(point);
+        let psi = match point {
+            Point::Current => &mut self.psi,
+            Point::Trial => &mut self.trial_psi,
+        };
+        let Some(profile) = self.system.friction.as_ref() else {
+            return;
+        };
+        let length = self.system.model.robot.length();
+        let last = profile.spans.iter().copied().max().unwrap_or(0);
+        for k in 0..last {
+            let Some(sites) = self.system.interval_sites(k) else {
+                continue;
+            };
+            let seg = self.system.mesh.nodes[k].segment_end;
+            match interval(profile, length, k, sites, seg, &x[k], &x[k + 1], None) {
+                Ok(lin) => {
+                    for (j, &o) in self.offsets.iter().enumerate() {
+                        if profile.on_link(j, k) {
+                            psi[o + k] = lin.psi[j];
+                        }
+                    }
+                }
+                Err(_) => psi.fill(f64::NAN),
+            }
+        }
+    }
+
+    fn residual(&self, point: Point) -> &[f64] {
+        match point {
+            Point::Current => &self.psi,
+            Point::Trial => &self.trial_psi,
+        }
+    }
+
+    fn factored(&mut self, x: &[State], at: &mut Linearization, report: &mut SolveReport) -> Result<(), Termination> {
+        self.load(Point::Current);
+        let m = self.z.len();
+        let count = self.offsets.len();
+        let length = self.system.model.robot.length();
+        // F_z columns per unknown, built link by link: rows_z (12 x 2k) of each link.
+        let mut rows_z: Vec<Option<nalgebra::DMatrix<f64>>> = vec![None; x.len() - 1];
+        self.psi_z.fill(0.0);
+        let mut block = [0.0; NODE * 2 * NODE];
+        {
+            let Some(profile) = self.system.friction.as_ref() else {
+                return Ok(());
+            };
+            let last = profile.spans.iter().copied().max().unwrap_or(0);
+            for k in 0..last {
+                let Some(sites) = self.system.interval_sites(k) else {
+                    continue;
+                };
+                let seg = self.system.mesh.nodes[k].segment_end;
+                let lin = interval(profile, length, k, sites, seg, &x[k], &x[k + 1], Some(&mut block))
+                    .map_err(|_| Termination::NonFinite)?;
+                for j in (0..count).filter(|&j| profile.on_link(j, k)) {
+                    let row = self.offsets[j] + k;
+                    for c in 0..2 * NODE {
+                        self.psi_x[row][c] = lin.psi_x[(j, c)];
+                    }
+                    for l in 0..count {
+                        for (side, node) in [(0, k), (1, k + 1)] {
+                            if let Some(u) = self.unknown(l, node) {
+                                self.psi_z[row * m + u] += lin.psi_z[(j, side * count + l)];
+                            }
+                        }
+                    }
+                }
+                rows_z[k] = Some(lin.rows_z);
+            }
+        }
+        for j in 0..count {
+            let span = self.system.friction.as_ref().map_or(0, |p| p.spans[j]);
+            for n in 1..=span {
+                let Some(u) = self.unknown(j, n) else {
+                    continue;
+                };
+                self.probe.fill(0.0);
+                for (k, side) in [(n - 1, 1), (n, 0)] {
+                    if let Some(Some(rz)) = rows_z.get(k) {
+                        let start = link_row(k);
+                        for r in 0..NODE {
+                            self.probe[start + r] = rz[(r, side * count + j)];
+                        }
+                    }
+                }
+                if n == span {
+                    self.termination_column(j, x).map_err(|_| Termination::NonFinite)?;
+                    // The delivered tension is tau(0) e^z: d/dz of the termination rows is
+                    // the tendon's part itself.
+                }
+                if !at.solve(&self.probe, &mut self.columns[u], report) {
+                    return Err(Termination::SingularJacobian);
+                }
+            }
+        }
+        Ok(())
+    }
+
+    fn step(&mut self, point: Point, _x: &[State], a: &mut [f64]) -> Option<f64> {
+        let m = self.z.len();
+        let (psi, dz) = match point {
+            Point::Current => (&self.psi, &mut self.dz),
+            Point::Trial => (&self.trial_psi, &mut self.simplified),
+        };
+        // S = psi_z - psi_x X, right-hand side -psi - psi_x a.
+        for r in 0..m {
+            let first = self.row_link[r] * NODE;
+            let row = &self.psi_x[r];
+            let dot = |v: &[f64]| -> f64 { row.iter().zip(&v[first..first + 2 * NODE]).map(|(p, q)| p * q).sum() };
+            for (c, column) in self.columns.iter().enumerate() {
+                self.schur[r * m + c] = self.psi_z[r * m + c] - dot(column);
+            }
+            self.schur_rhs[r] = -psi[r] - dot(a);
+        }
+        if !solve_dense(&mut self.schur, &mut self.schur_rhs, m) {
+            return None;
+        }
+        dz.copy_from_slice(&self.schur_rhs);
+        for (column, &d) in self.columns.iter().zip(dz.iter()) {
+            if d != 0.0 {
+                for (s, c) in a.iter_mut().zip(column) {
+                    *s -= c * d;
+                }
+            }
+        }
+        let finite = a.iter().chain(dz.iter()).all(|v| v.is_finite());
+        let norm = dz.iter().fold(0.0, |acc: f64, d| acc.max(d.abs()));
+        finite.then_some(norm)
+    }
+
+    fn trial(&mut self, alpha: f64) {
+        for ((t, &z), &d) in self.trial_z.iter_mut().zip(&self.z).zip(&self.dz) {
+            *t = z + alpha * d;
+        }
+    }
+
+    fn accept(&mut self) {
+        std::mem::swap(&mut self.psi, &mut self.trial_psi);
+        self.z.copy_from_slice(&self.trial_z);
+    }
+}
+
+/// Solves a robot with tendons with friction (validated, with `options` validated): the
+/// frictionless robot first (the standard pipeline, which also picks the mesh), then Newton
+/// bordered by the log tensions ([`Capstan`]) on that mesh, from the frictionless shape and
+/// constant tensions.
+///
+/// # Errors
+/// As [`super::solve`].
+pub(super) fn solve(robot: &Robot, options: &Options, warm: Option<&Solution>, cache: &mut Cache) -> Result<Solution> {
+    let start = Instant::now();
+    let mut smooth = robot.clone();
+    for t in &mut smooth.tendons {
+        t.friction = None;
+    }
+    let first = pipeline::solve_impl(&smooth, options, warm, cache)?;
+    let points: Vec<f64> = first.nodes.iter().map(|n| n.s).collect();
+    let mesh = Mesh::from_points(robot, &points)?;
+    let mut x = interpolate(&first, &mesh);
+    let mut report = SolveReport::new(Method::Collocation);
+    report.meshes = first.report.meshes;
+    report.stability = Stability::Unknown {
+        reason: "friction is not conservative".into(),
+    };
+    let settings = Settings {
+        tolerance: options.residual_tolerance,
+        max_iterations: options.max_iterations,
+        reuse_factors: false,
+        stop_when_damped: false,
+    };
+    let model = Model::new(robot);
+    let mut system = System::new(model.clone(), mesh);
+    let profile = Profile::new(&model, &system.mesh);
+    system.friction = Some(profile);
+    let mut ws = Workspace::new(&system, options.linear_solver)?;
+    let mut border = Capstan::new(system);
+    let (termination, worst) = newton::run_bordered(&mut border, &mut ws, &mut x, &settings, &mut report);
+    border.load(Point::Current);
+    let system = border.system;
+    report.termination = termination;
+    report.intervals = system.mesh.intervals();
+    report.unknowns = unknowns::unknowns(system.mesh.nodes.len()) + border.z.len();
+    report.nonzeros = unknowns::nonzeros(&system.mesh);
+    report.timings.total = start.elapsed();
+    if termination != Termination::Converged {
+        return Err(Error::NotConverged {
+            method: Method::Collocation,
+            report: Box::new(report.clone()),
+            worst_s: system.row_position(worst.min(system.unknowns() - 1)),
+            hint: "friction is solved from the frictionless shape: lower the friction coefficient, or solve with \
+                   the shooting solver to compare"
+                .into(),
+        });
+    }
+    let Some(profile) = system.friction.as_ref() else {
+        return Err(error::invalid("tendons", "have no friction", "solve without friction"));
+    };
+    let tensions = profile.node_tensions(&Model::new(robot));
+    nodes::solution_with_tensions(
+        &Model::new(robot),
+        &x,
+        &pipeline::segment_ends(&system.mesh),
+        &tensions,
+        report,
+    )
+}
