@@ -65,10 +65,16 @@ fn capstan_law_on_a_helix_counts_the_helix_turning() {
         Routing::helical(a, 1.0, 0.0),
         Friction::pull(mu),
     );
-    let got = ratio(&robot, |r| shooting::solve(r, &tight()).unwrap());
     let want = (-mu * theta).exp();
+    let got = ratio(&robot, |r| shooting::solve(r, &tight()).unwrap());
     // 1e-8 relative: as for the arc
-    assert!((got / want - 1.0).abs() < 1e-8, "ratio {got} against {want}");
+    assert!((got / want - 1.0).abs() < 1e-8, "shooting ratio {got} against {want}");
+    let got = ratio(&robot, |r| tdcr::solve(r, &Default::default()).unwrap());
+    // 1e-8 relative: as for the arc
+    assert!(
+        (got / want - 1.0).abs() < 1e-8,
+        "collocation ratio {got} against {want}"
+    );
     // The tension along the helix follows exp(-mu kappa s) at every point of the path.
     let solution = shooting::solve(&robot, &tight()).unwrap();
     for s in [0.05, 0.1, 0.15] {
@@ -182,5 +188,67 @@ fn collocation_agrees_with_shooting_with_friction() {
             );
         }
         assert!(matches!(c.report.stability, tdcr::Stability::Unknown { ref reason } if reason.contains("friction")));
+    }
+}
+
+/// Case S with friction on its tendon and case H with friction on its helix (mu = 0.1).
+fn rough_cases() -> [Robot; 2] {
+    let mut s = cases::case_s();
+    s.tendons[0].friction = Some(Friction::pull(0.1));
+    let mut h = cases::case_h();
+    h.tendons[4].friction = Some(Friction::pull(0.1));
+    [s, h]
+}
+
+#[test]
+fn collocation_with_friction_converges_at_order_four() {
+    for robot in rough_cases() {
+        let reference = shooting::solve(&robot, &tight()).unwrap();
+        let error = |intervals: usize| {
+            let c = tdcr::collocation::solve(&robot, &tdcr::collocation::Options::fixed(intervals)).unwrap();
+            let tension = c
+                .tendons
+                .iter()
+                .zip(&reference.tendons)
+                .map(|(a, b)| (a.delivered_tension - b.delivered_tension).abs());
+            (
+                (c.tip_position() - reference.tip_position()).norm(),
+                tension.fold(0.0, f64::max),
+            )
+        };
+        let (coarse, fine) = (error(16), error(32));
+        let order = (coarse.0 / fine.0).log2();
+        // 3.7..4.5: h^4 with the pre-asymptotic drift of 16 -> 32 intervals
+        assert!(
+            (3.7..4.5).contains(&order),
+            "tip order {order:.2} ({:.2e} -> {:.2e})",
+            coarse.0,
+            fine.0
+        );
+        let order = (coarse.1 / fine.1).log2();
+        assert!(
+            (3.5..4.7).contains(&order),
+            "tension order {order:.2} ({:.2e} -> {:.2e})",
+            coarse.1,
+            fine.1
+        );
+    }
+}
+
+#[test]
+fn the_error_estimate_covers_friction_at_default_settings() {
+    for robot in rough_cases() {
+        let reference = shooting::solve(&robot, &tight()).unwrap();
+        let c = tdcr::solve(&robot, &Default::default()).unwrap();
+        let estimate = c.report.error_estimate.expect("an estimate");
+        let truth = (c.tip_position() - reference.tip_position()).norm();
+        // The tolerance 1e-7 L is met, and the estimate is within a factor 3 of the truth
+        // (deferred correction is asymptotically exact; shooting at 1e-12 is ~1e-11 m off)
+        assert!(truth <= 1e-7 * robot.length(), "true error {truth:.2e} m");
+        assert!(
+            truth <= 3.0 * estimate.tip_position + 1e-10 && estimate.tip_position <= 3.0 * truth + 1e-10,
+            "estimate {:.2e} against {truth:.2e}",
+            estimate.tip_position
+        );
     }
 }

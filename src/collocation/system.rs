@@ -150,6 +150,16 @@ impl<'a> System<'a> {
         rates: &mut [Vector6<f64>],
     ) -> Result<()> {
         local.fill(0.0);
+        if let Some(profile) = &self.friction {
+            let length = self.model.robot.length();
+            return self.rows(x, out, |k, sites, seg, a, b, _| {
+                let quarters = self.quarters(sites);
+                let (r, psi, start, end) = friction::interval_order6(profile, length, k, sites, &quarters, seg, a, b)?;
+                (rates[k], rates[k + 1]) = (start, end);
+                local[k] = psi.iter().fold(r.amax(), |m, p| m.max(p.abs()));
+                Ok((r, end))
+            });
+        }
         self.rows(x, out, |k, sites, seg, a, b, start| {
             let start = match start {
                 Some(r) => r,
@@ -157,15 +167,20 @@ impl<'a> System<'a> {
             };
             let end = linearize::rates(&self.model, &sites.end, seg, &b.R, &b.v, &b.u)?;
             (rates[k], rates[k + 1]) = (start, end);
-            let h = sites.end.s - sites.start.s;
-            let quarters = QuarterSites {
-                quarter: self.model.site(sites.start.s + 0.25 * h),
-                three_quarters: self.model.site(sites.start.s + 0.75 * h),
-            };
+            let quarters = self.quarters(sites);
             let r = residual::interval_order6(&self.model, sites, &quarters, seg, a, b, &start, &end)?;
             local[k] = r.amax();
             Ok((r, end))
         })
+    }
+
+    /// The sites at a quarter and three quarters of an interval.
+    fn quarters(&self, sites: &IntervalSites) -> QuarterSites {
+        let h = sites.end.s - sites.start.s;
+        QuarterSites {
+            quarter: self.model.site(sites.start.s + 0.25 * h),
+            three_quarters: self.model.site(sites.start.s + 0.75 * h),
+        }
     }
 
     /// Writes the base, link and tip rows at `x` into `out`, interval k's rows by `interval(k,

@@ -16,7 +16,7 @@
 //! 13 with friction at the nodes and the midpoint ([`friction::linearize`]).
 #![allow(non_snake_case)]
 
-use super::super::residual::{Block, EndColumns, IntervalSites, end_points, rhs_linearized, scale_rows};
+use super::super::residual::{Block, EndColumns, IntervalSites, QuarterSites, end_points, rhs_linearized, scale_rows};
 use super::super::unknowns::THETA;
 use crate::error::Result;
 use crate::mesh::Mesh;
@@ -24,7 +24,7 @@ use crate::model::equations::{Model, Site};
 use crate::model::friction::{self, FrictionLinearization};
 use crate::so3;
 use crate::solution::State;
-use nalgebra::{DMatrix, SMatrix, Vector3};
+use nalgebra::{DMatrix, SMatrix, Vector3, Vector6};
 use std::cell::RefCell;
 
 /// The log tensions of the tendons with friction on a mesh, and a model to evaluate eq. 13
@@ -293,4 +293,72 @@ pub(crate) fn interval(
         }
     }
     Ok(out)
+}
+
+/// Link k's order-6 rows with friction (the Cash-Singhal formula of
+/// [`super::super::residual::interval_order6`] on the state (y, z)): the 12 backbone rows,
+/// the capstan rows psi6 (0 for slips not on the link), and the rates (v', u') at the two
+/// nodes.
+///
+/// # Errors
+/// A model breakdown at a stage.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn interval_order6(
+    profile: &Profile,
+    length: f64,
+    k: usize,
+    sites: &IntervalSites,
+    quarters: &QuarterSites,
+    segment_end: f64,
+    a: &State,
+    b: &State,
+) -> Result<(Block<f64>, Vec<f64>, Vector6<f64>, Vector6<f64>)> {
+    let count = profile.count();
+    let h = sites.end.s - sites.start.s;
+    let za: Vec<f64> = profile.z.iter().map(|z| z[k]).collect();
+    let zb: Vec<f64> = profile.z.iter().map(|z| z[k + 1]).collect();
+    let (y0, y1) = end_points(a, b);
+    // F and kappa~ at a local state (y, z) of the interval.
+    let stage = |site: &Site, y: &Block<f64>, z: &[f64]| -> Result<(Block<f64>, Vec<f64>)> {
+        let theta: Vector3<f64> = y.fixed_rows::<3>(THETA).into();
+        let (v, u): (Vector3<f64>, Vector3<f64>) = (y.fixed_rows::<3>(6).into(), y.fixed_rows::<3>(9).into());
+        let R = a.R * so3::exp(&theta);
+        let lin = profile.point(site, segment_end, &R, (&v, &u), z)?;
+        let mut f = Block::zeros();
+        f.fixed_rows_mut::<3>(0).copy_from(&(R * v));
+        f.fixed_rows_mut::<3>(THETA)
+            .copy_from(&(so3::right_jacobian_inv(&theta) * u));
+        f.fixed_rows_mut::<6>(6).copy_from(&lin.lin.rates);
+        Ok((f, lin.turning))
+    };
+    let (f0, k0) = stage(&sites.start, &y0, &za)?;
+    let (f1, k1) = stage(&sites.end, &y1, &zb)?;
+    let combine = |c0: f64, c1: f64, d0: f64, d1: f64| {
+        let y = (y0 * c0 + y1 * c1) / 32.0 + (f0 * d0 + f1 * d1) * (h / 64.0);
+        let z: Vec<f64> = (0..count)
+            .map(|j| (za[j] * c0 + zb[j] * c1) / 32.0 + (k0[j] * d0 + k1[j] * d1) * (h / 64.0))
+            .collect();
+        (y, z)
+    };
+    let (y_q, z_q) = combine(27.0, 5.0, 9.0, -3.0);
+    let (y_tq, z_tq) = combine(5.0, 27.0, 3.0, -9.0);
+    let (f_q, k_q) = stage(&quarters.quarter, &y_q, &z_q)?;
+    let (f_tq, k_tq) = stage(&quarters.three_quarters, &y_tq, &z_tq)?;
+    let y_m = (y0 + y1) * 0.5 + ((f1 - f0) * (5.0 / 24.0) + (f_q - f_tq) * (2.0 / 3.0)) * h;
+    let z_m: Vec<f64> = (0..count)
+        .map(|j| 0.5 * (za[j] + zb[j]) + ((k1[j] - k0[j]) * (5.0 / 24.0) + (k_q[j] - k_tq[j]) * (2.0 / 3.0)) * h)
+        .collect();
+    let (f_m, k_m) = stage(&sites.mid, &y_m, &z_m)?;
+    let quadrature = ((f0 + f1) * 7.0 + (f_q + f_tq) * 32.0 + f_m * 12.0) * (h / 90.0);
+    let psi: Vec<f64> = (0..count)
+        .map(|j| {
+            if profile.on_link(j, k) {
+                zb[j] - za[j] - (7.0 * (k0[j] + k1[j]) + 32.0 * (k_q[j] + k_tq[j]) + 12.0 * k_m[j]) * (h / 90.0)
+            } else {
+                0.0
+            }
+        })
+        .collect();
+    let rates = |f: &Block<f64>| f.fixed_rows::<6>(6).into_owned();
+    Ok((scale_rows(y1 - y0 - quadrature, length), psi, rates(&f0), rates(&f1)))
 }

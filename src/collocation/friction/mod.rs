@@ -17,18 +17,19 @@
 
 mod interval;
 
-pub(crate) use interval::{Profile, interval};
+pub(crate) use interval::{Profile, interval, interval_order6};
 
 use super::newton::{self, Border, Linearization, Point, Settings, Workspace};
+use super::residual::QuarterSites;
 use super::system::System;
 use super::unknowns::{self, NODE, link_row, tip_row};
-use super::{Cache, Options, pipeline};
+use super::{Cache, Options, estimate, pipeline, refine};
 use crate::dense::solve_dense;
 use crate::error::{self, Result};
 use crate::mesh::guess::interpolate;
 use crate::mesh::{Mesh, nodes};
 use crate::model::equations::Model;
-use crate::report::{Method, SolveReport, Stability, Termination};
+use crate::report::{ErrorEstimate, Method, SolveReport, Stability, Termination};
 use crate::solution::{Solution, State};
 use crate::{Error, Robot};
 use std::time::Instant;
@@ -58,6 +59,8 @@ struct Capstan<'r> {
     psi_z: Vec<f64>,
     schur: Vec<f64>,
     schur_rhs: Vec<f64>,
+    /// The border rows of the elimination in hand (psi, or the estimate's difference).
+    rows_in: Vec<f64>,
     probe: Vec<f64>,
 }
 
@@ -87,6 +90,7 @@ impl<'r> Capstan<'r> {
             psi_z: vec![0.0; m * m],
             schur: vec![0.0; m * m],
             schur_rhs: vec![0.0; m],
+            rows_in: vec![0.0; m],
             probe: vec![0.0; n],
         };
         if let Some(p) = &border.system.friction {
@@ -119,6 +123,35 @@ impl<'r> Capstan<'r> {
             }
         }
         profile.deliver(&mut self.system.model);
+    }
+
+    /// The bordered solve for the border rows `rows_in` (psi) and `a` = J^-1 (-F): dz from
+    /// S dz = -psi - psi_x a, S = psi_z - psi_x X, left in `schur_rhs`, and a becomes
+    /// dx = a - X dz. Returns max |dz|, None when S is singular or a value is not finite.
+    fn eliminate(&mut self, a: &mut [f64]) -> Option<f64> {
+        let m = self.z.len();
+        for r in 0..m {
+            let first = self.row_link[r] * NODE;
+            let row = &self.psi_x[r];
+            let dot = |v: &[f64]| -> f64 { row.iter().zip(&v[first..first + 2 * NODE]).map(|(p, q)| p * q).sum() };
+            for (c, column) in self.columns.iter().enumerate() {
+                self.schur[r * m + c] = self.psi_z[r * m + c] - dot(column);
+            }
+            self.schur_rhs[r] = -self.rows_in[r] - dot(a);
+        }
+        if !solve_dense(&mut self.schur, &mut self.schur_rhs, m) {
+            return None;
+        }
+        for (column, &d) in self.columns.iter().zip(&self.schur_rhs) {
+            if d != 0.0 {
+                for (s, c) in a.iter_mut().zip(column) {
+                    *s -= c * d;
+                }
+            }
+        }
+        let finite = a.iter().chain(&self.schur_rhs).all(|v| v.is_finite());
+        let norm = self.schur_rhs.iter().fold(0.0, |acc: f64, d| acc.max(d.abs()));
+        finite.then_some(norm)
     }
 
     /// The unknown of slip j at node n, if it is one (n in 1..=span).
@@ -272,35 +305,17 @@ impl Border for Capstan<'_> {
     }
 
     fn step(&mut self, point: Point, _x: &[State], a: &mut [f64]) -> Option<f64> {
-        let m = self.z.len();
-        let (psi, dz) = match point {
-            Point::Current => (&self.psi, &mut self.dz),
-            Point::Trial => (&self.trial_psi, &mut self.simplified),
+        let psi = match point {
+            Point::Current => &self.psi,
+            Point::Trial => &self.trial_psi,
         };
-        // S = psi_z - psi_x X, right-hand side -psi - psi_x a.
-        for r in 0..m {
-            let first = self.row_link[r] * NODE;
-            let row = &self.psi_x[r];
-            let dot = |v: &[f64]| -> f64 { row.iter().zip(&v[first..first + 2 * NODE]).map(|(p, q)| p * q).sum() };
-            for (c, column) in self.columns.iter().enumerate() {
-                self.schur[r * m + c] = self.psi_z[r * m + c] - dot(column);
-            }
-            self.schur_rhs[r] = -psi[r] - dot(a);
+        self.rows_in.copy_from_slice(psi);
+        let norm = self.eliminate(a)?;
+        match point {
+            Point::Current => self.dz.copy_from_slice(&self.schur_rhs),
+            Point::Trial => self.simplified.copy_from_slice(&self.schur_rhs),
         }
-        if !solve_dense(&mut self.schur, &mut self.schur_rhs, m) {
-            return None;
-        }
-        dz.copy_from_slice(&self.schur_rhs);
-        for (column, &d) in self.columns.iter().zip(dz.iter()) {
-            if d != 0.0 {
-                for (s, c) in a.iter_mut().zip(column) {
-                    *s -= c * d;
-                }
-            }
-        }
-        let finite = a.iter().chain(dz.iter()).all(|v| v.is_finite());
-        let norm = dz.iter().fold(0.0, |acc: f64, d| acc.max(d.abs()));
-        finite.then_some(norm)
+        Some(norm)
     }
 
     fn trial(&mut self, alpha: f64) {
@@ -315,10 +330,93 @@ impl Border for Capstan<'_> {
     }
 }
 
+/// The error estimate with friction, by deferred correction as in [`estimate`] on the
+/// bordered system: the order-6 residuals of the backbone and capstan rows at the
+/// converged `x`, and one bordered solve with Newton's factors and columns, so that the
+/// estimate carries the tension profile's error into the shape's. Returns the correction
+/// and the largest correction of a log tension (the relative error of the tension
+/// profile); `None` without factors or with a singular border.
+///
+/// # Errors
+/// A model breakdown at a stage of the order-6 scheme.
+fn estimate_with_friction(
+    border: &mut Capstan,
+    ws: &mut Workspace,
+    x: &[State],
+) -> Result<Option<(estimate::Correction, f64)>> {
+    border.load(Point::Current);
+    border.rows(Point::Current, x);
+    let system = &border.system;
+    let n = system.unknowns();
+    let mut rhs = vec![0.0; n];
+    let mut local = vec![0.0; x.len() - 1];
+    let mut node_rates = vec![nalgebra::Vector6::zeros(); x.len()];
+    system.order6_residual(x, &mut rhs, &mut local, &mut node_rates)?;
+    let mut phi4 = vec![0.0; n];
+    system.residual(x, &mut phi4)?;
+    for (r, f) in rhs.iter_mut().zip(&phi4) {
+        *r = f - *r;
+    }
+    let length = system.model.robot.length();
+    let mut difference = border.psi.clone();
+    if let Some(profile) = system.friction.as_ref() {
+        let last = profile.spans.iter().copied().max().unwrap_or(0);
+        for k in 0..last {
+            let Some(sites) = system.interval_sites(k) else {
+                continue;
+            };
+            let h = sites.end.s - sites.start.s;
+            let quarters = QuarterSites {
+                quarter: system.model.site(sites.start.s + 0.25 * h),
+                three_quarters: system.model.site(sites.start.s + 0.75 * h),
+            };
+            let seg = system.mesh.nodes[k].segment_end;
+            let (_, psi6, _, _) = interval_order6(profile, length, k, sites, &quarters, seg, &x[k], &x[k + 1])?;
+            for (j, &o) in border.offsets.iter().enumerate() {
+                if profile.on_link(j, k) {
+                    difference[o + k] -= psi6[j];
+                }
+            }
+        }
+    }
+    if !ws.has_factors() {
+        return Ok(None);
+    }
+    let Some(a) = ws.solve_again(&rhs) else {
+        return Ok(None);
+    };
+    let mut dx = a.to_vec();
+    // S dz = -rows_in - psi_x a with rows_in = -(psi4 - psi6)
+    for (r, d) in border.rows_in.iter_mut().zip(&difference) {
+        *r = -d;
+    }
+    let Some(tension_error) = border.eliminate(&mut dx) else {
+        return Ok(None);
+    };
+    let backbone_max = (0..x.len())
+        .map(|k| unknowns::node_increments(&dx, k, length)[0].norm())
+        .fold(0.0, f64::max);
+    let [dp, dtheta, _, _] = unknowns::node_increments(&dx, x.len() - 1, length);
+    Ok(Some((
+        estimate::Correction {
+            estimate: ErrorEstimate {
+                tip_position: dp.norm(),
+                tip_rotation: dtheta.norm(),
+                backbone_max,
+            },
+            local,
+            node_rates,
+        },
+        tension_error,
+    )))
+}
+
 /// Solves a robot with tendons with friction (validated, with `options` validated): the
-/// frictionless robot first (the standard pipeline, which also picks the mesh), then Newton
-/// bordered by the log tensions ([`Capstan`]) on that mesh, from the frictionless shape and
-/// constant tensions.
+/// frictionless robot first (the standard pipeline, which also picks the first mesh), then
+/// on each mesh Newton bordered by the log tensions ([`Capstan`]) from the last mesh's
+/// solution (the frictionless one and constant tensions on the first), its error estimate
+/// ([`estimate_with_friction`]) and, with a tolerance, re-meshing until the tip's estimate
+/// and the tension profile's (relative, against the same tolerance as the rotation) meet it.
 ///
 /// # Errors
 /// As [`super::solve`].
@@ -330,13 +428,10 @@ pub(super) fn solve(robot: &Robot, options: &Options, warm: Option<&Solution>, c
     }
     let first = pipeline::solve_impl(&smooth, options, warm, cache)?;
     let points: Vec<f64> = first.nodes.iter().map(|n| n.s).collect();
-    let mesh = Mesh::from_points(robot, &points)?;
+    let mut mesh = Mesh::from_points(robot, &points)?;
     let mut x = interpolate(&first, &mesh);
     let mut report = SolveReport::new(Method::Collocation);
     report.meshes = first.report.meshes;
-    report.stability = Stability::Unknown {
-        reason: "friction is not conservative".into(),
-    };
     let settings = Settings {
         tolerance: options.residual_tolerance,
         max_iterations: options.max_iterations,
@@ -344,38 +439,87 @@ pub(super) fn solve(robot: &Robot, options: &Options, warm: Option<&Solution>, c
         stop_when_damped: false,
     };
     let model = Model::new(robot);
-    let mut system = System::new(model.clone(), mesh);
-    let profile = Profile::new(&model, &system.mesh);
-    system.friction = Some(profile);
-    let mut ws = Workspace::new(&system, options.linear_solver)?;
-    let mut border = Capstan::new(system);
-    let (termination, worst) = newton::run_bordered(&mut border, &mut ws, &mut x, &settings, &mut report);
-    border.load(Point::Current);
-    let system = border.system;
-    report.termination = termination;
-    report.intervals = system.mesh.intervals();
-    report.unknowns = unknowns::unknowns(system.mesh.nodes.len()) + border.z.len();
-    report.nonzeros = unknowns::nonzeros(&system.mesh);
-    report.timings.total = start.elapsed();
-    if termination != Termination::Converged {
-        return Err(Error::NotConverged {
-            method: Method::Collocation,
-            report: Box::new(report.clone()),
-            worst_s: system.row_position(worst.min(system.unknowns() - 1)),
-            hint: "friction is solved from the frictionless shape: lower the friction coefficient, or solve with \
-                   the shooting solver to compare"
-                .into(),
-        });
+    let length = robot.length();
+    // The last mesh's node arc lengths and log tensions, interpolated onto the next.
+    let mut previous: Option<(Vec<f64>, Vec<Vec<f64>>)> = None;
+    loop {
+        report.meshes += 1;
+        let mut system = System::new(model.clone(), mesh);
+        let mut profile = Profile::new(&model, &system.mesh);
+        if let Some((s, z)) = &previous {
+            for (zj, old) in profile.z.iter_mut().zip(z) {
+                for (value, node) in zj.iter_mut().zip(&system.mesh.nodes) {
+                    *value = linear(s, old, node.s);
+                }
+            }
+        }
+        system.friction = Some(profile);
+        let mut ws = Workspace::new(&system, options.linear_solver)?;
+        let mut border = Capstan::new(system);
+        let (termination, worst) = newton::run_bordered(&mut border, &mut ws, &mut x, &settings, &mut report);
+        report.termination = termination;
+        report.intervals = border.system.mesh.intervals();
+        report.unknowns = unknowns::unknowns(border.system.mesh.nodes.len()) + border.z.len();
+        report.nonzeros = unknowns::nonzeros(&border.system.mesh);
+        if termination != Termination::Converged {
+            report.timings.total = start.elapsed();
+            let system = &border.system;
+            return Err(Error::NotConverged {
+                method: Method::Collocation,
+                report: Box::new(report.clone()),
+                worst_s: system.row_position(worst.min(system.unknowns() - 1)),
+                hint: "friction is solved from the frictionless shape: lower the friction coefficient, or solve \
+                       with the shooting solver to compare"
+                    .into(),
+            });
+        }
+        let t = Instant::now();
+        let estimated = estimate_with_friction(&mut border, &mut ws, &x).ok().flatten();
+        report.timings.estimate += t.elapsed();
+        border.load(Point::Current);
+        let system = border.system;
+        let Some(profile) = system.friction.as_ref() else {
+            return Err(error::invalid("tendons", "have no friction", "solve without friction"));
+        };
+        let tensions = profile.node_tensions(&model);
+        let ends = pipeline::segment_ends(&system.mesh);
+        let next = match (options.tolerance, &estimated) {
+            (Some(tol), Some((correction, tension_error))) => {
+                // The mesh choice sees the tension profile's error with the rotation's.
+                let mut chosen = correction.clone();
+                chosen.estimate.tip_rotation = chosen.estimate.tip_rotation.max(*tension_error);
+                refine::next_mesh(robot, &system.mesh, &chosen, tol, options)?
+            }
+            _ => None,
+        };
+        let Some(fine) = next else {
+            pipeline::record_estimate(&mut report, estimated.as_ref().map(|(c, _)| c), options, length);
+            report.stability = Stability::Unknown {
+                reason: "friction is not conservative".into(),
+            };
+            report.timings.total = start.elapsed();
+            return nodes::solution_with_tensions(&model, &x, &ends, &tensions, report);
+        };
+        let guess = nodes::solution_with_tensions(&model, &x, &ends, &tensions, report.clone())?;
+        let s: Vec<f64> = system.mesh.nodes.iter().map(|n| n.s).collect();
+        previous = Some((s, profile.z.clone()));
+        x = interpolate(&guess, &fine);
+        mesh = fine;
     }
-    let Some(profile) = system.friction.as_ref() else {
-        return Err(error::invalid("tendons", "have no friction", "solve without friction"));
-    };
-    let tensions = profile.node_tensions(&Model::new(robot));
-    nodes::solution_with_tensions(
-        &Model::new(robot),
-        &x,
-        &pipeline::segment_ends(&system.mesh),
-        &tensions,
-        report,
-    )
+}
+
+/// The value at `s` of the piecewise-linear interpolant through (`points`, `values`)
+/// (clamped at the ends; at a repeated point, the first).
+fn linear(points: &[f64], values: &[f64], s: f64) -> f64 {
+    let k = points
+        .iter()
+        .rposition(|&p| p <= s)
+        .unwrap_or(0)
+        .min(points.len().saturating_sub(2));
+    let (a, b) = (points[k], points[k + 1]);
+    if b <= a {
+        return values[k];
+    }
+    let t = ((s - a) / (b - a)).clamp(0.0, 1.0);
+    values[k] + t * (values[k + 1] - values[k])
 }
