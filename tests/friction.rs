@@ -252,3 +252,29 @@ fn the_error_estimate_covers_friction_at_default_settings() {
         );
     }
 }
+
+#[test]
+fn global_equilibrium_holds_with_friction() {
+    let mut released = cases::case_h();
+    released.tendons[4].friction = Some(Friction {
+        coefficient: 0.3,
+        motion: Motion::Release,
+    });
+    let [s, h] = rough_cases();
+    for robot in [s, h, released] {
+        for solution in [tdcr::solve(&robot, &Default::default()).unwrap(), shooting::solve(&robot, &tight()).unwrap()] {
+            let e = tdcr::analysis::equilibrium::imbalance(&robot, &solution);
+            // 1e-8: the solvers' tolerance (1e-7 L of tip error at default settings) in the
+            // wrenches relative to the tension
+            assert!(e.max() < 1e-8, "imbalance {e:?}");
+        }
+        // The tangential load matters: the frictionless shape is out of balance with the
+        // input tension when the tendon loses a few percent of it along the way.
+        let mut smooth = robot.clone();
+        smooth.tendons.iter_mut().for_each(|t| t.friction = None);
+        let solved = tdcr::solve(&robot, &Default::default()).unwrap();
+        let delivered: Vec<f64> = solved.tendons.iter().map(|t| t.delivered_tension).collect();
+        let held = tdcr::solve(&smooth.with_tensions(&delivered), &Default::default()).unwrap();
+        assert!(tdcr::analysis::equilibrium::imbalance(&robot, &held).max() > 1e-3);
+    }
+}
