@@ -262,7 +262,10 @@ fn global_equilibrium_holds_with_friction() {
     });
     let [s, h] = rough_cases();
     for robot in [s, h, released] {
-        for solution in [tdcr::solve(&robot, &Default::default()).unwrap(), shooting::solve(&robot, &tight()).unwrap()] {
+        for solution in [
+            tdcr::solve(&robot, &Default::default()).unwrap(),
+            shooting::solve(&robot, &tight()).unwrap(),
+        ] {
             let e = tdcr::analysis::equilibrium::imbalance(&robot, &solution);
             // 1e-8: the solvers' tolerance (1e-7 L of tip error at default settings) in the
             // wrenches relative to the tension

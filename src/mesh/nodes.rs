@@ -112,6 +112,24 @@ fn build(model: &Model, states: &[State], segment_ends: &[f64], along: Along, re
     for (state, tensions) in tendons.iter_mut().zip(&tendon_tensions) {
         state.delivered_tension = tensions.last().copied().unwrap_or(state.tension);
     }
+    if let Along::Varying(profile) = along {
+        // An elastic tendon with friction stretches by its varying tension: the integral of
+        // tau(s) / (E_t A_t) over its reference path, plus its free length at the base
+        // tension (docs/friction.md); constant tension gives the compliance of tendon_states.
+        let s: Vec<f64> = nodes.iter().map(|n| n.s).collect();
+        for (i, (t, state)) in robot.tendons.iter().zip(tendons.iter_mut()).enumerate() {
+            let (Some(stiffness), Some(_)) = (t.stiffness, t.active_friction()) else {
+                continue;
+            };
+            let quadrature = length::NodeQuadrature::new(&s, t.end(length));
+            let stretch = quadrature.integrate(|k| {
+                let reference = robot.rod.reference_at(s[k]);
+                profile[k][i] * length::speed(&t.routing.at(s[k], length), &reference.v_star, &reference.u_star)
+            }) / stiffness
+                + t.free_length * state.tension / stiffness;
+            state.displacement = state.reference_length - state.length + stretch;
+        }
+    }
     Ok(Solution {
         nodes,
         tendon_paths,
