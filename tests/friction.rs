@@ -281,3 +281,46 @@ fn global_equilibrium_holds_with_friction() {
         assert!(tdcr::analysis::equilibrium::imbalance(&robot, &held).max() > 1e-3);
     }
 }
+
+#[test]
+fn friction_in_the_robot_file_and_on_the_command_line() {
+    let text = tdcr::io::example();
+    let with = text.replacen("tension = 2.94", "tension = 2.94\nfriction = 0.1\nmotion = \"release\"", 1);
+    let file = tdcr::io::parse(&with, "friction.toml").unwrap();
+    assert_eq!(
+        file.robot.tendons[0].friction,
+        Some(Friction {
+            coefficient: 0.1,
+            motion: Motion::Release
+        })
+    );
+    // Written back and read again: the same friction.
+    let again = tdcr::io::parse(&file.to_toml().unwrap(), "again.toml").unwrap();
+    assert_eq!(again.robot.tendons[0].friction, file.robot.tendons[0].friction);
+    // A bad coefficient is reported at its line, a bad motion by name.
+    let bad = text.replacen("tension = 2.94", "tension = 2.94\nfriction = -1.0", 1);
+    let message = tdcr::io::parse(&bad, "bad.toml").unwrap_err().to_string();
+    assert!(message.contains("tendon[1].friction") && message.contains("finite number >= 0"), "{message}");
+    let bad = text.replacen("tension = 2.94", "tension = 2.94\nfriction = 0.1\nmotion = \"push\"", 1);
+    assert!(tdcr::io::parse(&bad, "bad.toml").is_err());
+
+    // `tdcr solve --friction 1=0.1 --format json`: the input and the delivered tension.
+    let path = std::env::temp_dir().join(format!("tdcr-friction-{}.toml", std::process::id()));
+    std::fs::write(&path, &text).unwrap();
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_tdcr"))
+        .args(["solve", path.to_str().unwrap(), "--friction", "1=0.1", "--format", "json"])
+        .output()
+        .unwrap();
+    std::fs::remove_file(&path).ok();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let json: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let tendon = &json["tendons"][0];
+    assert_eq!(tendon["tension"], 2.94);
+    let delivered = tendon["delivered_tension"].as_f64().unwrap();
+    let mut robot = tdcr::io::parse(&text, "x.toml").unwrap().robot;
+    robot.tendons[0].friction = Some(Friction::pull(0.1));
+    let solved = tdcr::solve(&robot, &Default::default()).unwrap();
+    // The JSON's number is the solution's, printed in full
+    assert_eq!(delivered, solved.tendons[0].delivered_tension);
+    assert_eq!(json["stability"]["reason"], "friction is not conservative");
+}
