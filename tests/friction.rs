@@ -285,7 +285,11 @@ fn global_equilibrium_holds_with_friction() {
 #[test]
 fn friction_in_the_robot_file_and_on_the_command_line() {
     let text = tdcr::io::example();
-    let with = text.replacen("tension = 2.94", "tension = 2.94\nfriction = 0.1\nmotion = \"release\"", 1);
+    let with = text.replacen(
+        "tension = 2.94",
+        "tension = 2.94\nfriction = 0.1\nmotion = \"release\"",
+        1,
+    );
     let file = tdcr::io::parse(&with, "friction.toml").unwrap();
     assert_eq!(
         file.robot.tendons[0].friction,
@@ -300,7 +304,10 @@ fn friction_in_the_robot_file_and_on_the_command_line() {
     // A bad coefficient is reported at its line, a bad motion by name.
     let bad = text.replacen("tension = 2.94", "tension = 2.94\nfriction = -1.0", 1);
     let message = tdcr::io::parse(&bad, "bad.toml").unwrap_err().to_string();
-    assert!(message.contains("tendon[1].friction") && message.contains("finite number >= 0"), "{message}");
+    assert!(
+        message.contains("tendon[1].friction") && message.contains("finite number >= 0"),
+        "{message}"
+    );
     let bad = text.replacen("tension = 2.94", "tension = 2.94\nfriction = 0.1\nmotion = \"push\"", 1);
     assert!(tdcr::io::parse(&bad, "bad.toml").is_err());
 
@@ -308,7 +315,14 @@ fn friction_in_the_robot_file_and_on_the_command_line() {
     let path = std::env::temp_dir().join(format!("tdcr-friction-{}.toml", std::process::id()));
     std::fs::write(&path, &text).unwrap();
     let out = std::process::Command::new(env!("CARGO_BIN_EXE_tdcr"))
-        .args(["solve", path.to_str().unwrap(), "--friction", "1=0.1", "--format", "json"])
+        .args([
+            "solve",
+            path.to_str().unwrap(),
+            "--friction",
+            "1=0.1",
+            "--format",
+            "json",
+        ])
         .output()
         .unwrap();
     std::fs::remove_file(&path).ok();

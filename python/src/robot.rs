@@ -25,7 +25,9 @@ use toml::{Table, Value};
 ///
 /// A tendon dict takes the keys of the file's `[[tendon]]`: `routing`, `tension` (N) or
 /// `displacement` (m, the actuator's pull-in; the tension is then solved for), `end` (m),
-/// and for an elastic tendon `stiffness` (E_t A_t, N) and `free_length` (m).
+/// for an elastic tendon `stiffness` (E_t A_t, N) and `free_length` (m), and `friction`
+/// (the coefficient in its channels) with `motion` (`"pull"` or `"release"`,
+/// docs/friction.md).
 ///
 /// Or build it with `Robot.from_toml(text)`, `Robot.from_file(path)`, `Robot.from_dict(tables)`,
 /// `tdcr.cases.case_s()`. Bad input raises `tdcr.FileError` with the command line's
@@ -167,7 +169,8 @@ impl PyRobot {
     /// A robot from keyword arguments shaped like a robot file's tables: `rod` (dict),
     /// `tendons` (list of dicts, the file's `[[tendon]]`), `loads`, `base`, `solver`
     /// (dicts). A tendon dict has `routing`, `tension` (N) or `displacement` (m), and
-    /// optionally `end` (m), `stiffness` (N) and `free_length` (m). Raises `tdcr.FileError`
+    /// optionally `end` (m), `stiffness` (N), `free_length` (m), `friction` and `motion`
+    /// (`"pull"` or `"release"`). Raises `tdcr.FileError`
     /// (messages name the field, e.g. `tendon[2].tension`).
     #[new]
     #[pyo3(signature = (rod, tendons=None, loads=None, base=None, solver=None))]

@@ -321,7 +321,8 @@ pub(crate) struct FrictionLinearization {
 
 /// [`FrictionLinearization`] at a site for the state (R, v, u), the tendons of `slipping`
 /// at the tensions the model holds for them here (module docs, "Linearization" in
-/// docs/friction.md).
+/// docs/friction.md); without `derivatives` only the rates and the turning rates (the
+/// derivative fields zero or empty), for residuals.
 ///
 /// # Errors
 /// As [`rates`].
@@ -331,10 +332,28 @@ pub(crate) fn linearize(
     segment_end: f64,
     (R, v, u): (&Matrix3<f64>, &Vector3<f64>, &Vector3<f64>),
     slipping: &[usize],
+    derivatives: bool,
 ) -> Result<FrictionLinearization> {
     let solved = solve(model, site, segment_end, (R, v, u), slipping)?;
     let Solved { point, slips, x } = solved;
     let k = slipping.len();
+    if !derivatives {
+        let mut turning = vec![0.0; k];
+        for sl in &slips {
+            turning[sl.slot] = relative(sl);
+        }
+        return Ok(FrictionLinearization {
+            lin: Linearization {
+                rates: x,
+                d_strains: Matrix6::zeros(),
+                d_rotation: Matrix6x3::zeros(),
+            },
+            d_log_tension: Vec::new(),
+            turning,
+            d_turning: Vec::new(),
+            d_turning_log_tension: Vec::new(),
+        });
+    }
     // dPhi/d(v, u, phi) at fixed x: eq. 13's dF plus the tangential loads' change,
     // sum_i (g_i de_i + e_i dg_i|x); then the columns dPhi/dz_i = (q_i, r_i x q_i) + e_i g_i.
     let dFt = point.derivative(model, site, segment_end, (v, u), &x.transpose())?;
@@ -466,7 +485,7 @@ mod tests {
         let slipping = slipping(&robot);
         let site = model.site(0.07);
         let end = robot.length();
-        let lin = linearize(&model, &site, end, (&R, &v, &u), &slipping).unwrap();
+        let lin = linearize(&model, &site, end, (&R, &v, &u), &slipping, true).unwrap();
         let eval = |model: &Model, R: &Matrix3<f64>, v: &Vector3<f64>, u: &Vector3<f64>| {
             let mut turning = vec![0.0; robot.tendons.len()];
             let x = rates(model, &site, end, (R, v, u), &mut turning).unwrap();

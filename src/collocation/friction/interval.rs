@@ -105,7 +105,8 @@ impl<'a> Profile<'a> {
             .collect()
     }
 
-    /// Eq. 13 with friction at a site and state, the slips at log tensions `z`.
+    /// Eq. 13 with friction at a site and state, the slips at log tensions `z` (with its
+    /// derivatives when `derivatives`).
     fn point(
         &self,
         site: &Site,
@@ -113,12 +114,13 @@ impl<'a> Profile<'a> {
         R: &nalgebra::Matrix3<f64>,
         y: (&Vector3<f64>, &Vector3<f64>),
         z: &[f64],
+        derivatives: bool,
     ) -> Result<FrictionLinearization> {
         let mut model = self.scratch.borrow_mut();
         for (j, &i) in self.slipping.iter().enumerate() {
             model.tensions[i] = self.tension(j, z[j]);
         }
-        friction::linearize(&model, site, segment_end, (R, y.0, y.1), &self.slipping)
+        friction::linearize(&model, site, segment_end, (R, y.0, y.1), &self.slipping, derivatives)
     }
 }
 
@@ -160,8 +162,9 @@ pub(crate) fn interval(
     let zb: Vec<f64> = profile.z.iter().map(|z| z[k + 1]).collect();
     let (y0, y1) = end_points(a, b);
     let theta1: Vector3<f64> = y1.fixed_rows::<3>(THETA).into();
-    let la = profile.point(&sites.start, segment_end, &a.R, (&a.v, &a.u), &za)?;
-    let lb = profile.point(&sites.end, segment_end, &b.R, (&b.v, &b.u), &zb)?;
+    let derivatives = jac.is_some();
+    let la = profile.point(&sites.start, segment_end, &a.R, (&a.v, &a.u), &za, derivatives)?;
+    let lb = profile.point(&sites.end, segment_end, &b.R, (&b.v, &b.u), &zb, derivatives)?;
     let p0 = rhs_linearized(&la.lin, &a.R, &y0);
     let p1 = rhs_linearized(&lb.lin, &a.R, &y1);
     let ym = (y0 + y1) * 0.5 + (p0.f - p1.f) * (h / 8.0);
@@ -171,7 +174,7 @@ pub(crate) fn interval(
     let theta_m: Vector3<f64> = ym.fixed_rows::<3>(THETA).into();
     let (vm, um): (Vector3<f64>, Vector3<f64>) = (ym.fixed_rows::<3>(6).into(), ym.fixed_rows::<3>(9).into());
     let Rm = a.R * so3::exp(&theta_m);
-    let lm = profile.point(&sites.mid, segment_end, &Rm, (&vm, &um), &zm)?;
+    let lm = profile.point(&sites.mid, segment_end, &Rm, (&vm, &um), &zm, derivatives)?;
     let pm = rhs_linearized(&lm.lin, &a.R, &ym);
     let residual = scale_rows(y1 - y0 - (p0.f + pm.f * 4.0 + p1.f) * (h / 6.0), length);
     let on: Vec<bool> = (0..count).map(|j| profile.on_link(j, k)).collect();
@@ -323,7 +326,7 @@ pub(crate) fn interval_order6(
         let theta: Vector3<f64> = y.fixed_rows::<3>(THETA).into();
         let (v, u): (Vector3<f64>, Vector3<f64>) = (y.fixed_rows::<3>(6).into(), y.fixed_rows::<3>(9).into());
         let R = a.R * so3::exp(&theta);
-        let lin = profile.point(site, segment_end, &R, (&v, &u), z)?;
+        let lin = profile.point(site, segment_end, &R, (&v, &u), z, false)?;
         let mut f = Block::zeros();
         f.fixed_rows_mut::<3>(0).copy_from(&(R * v));
         f.fixed_rows_mut::<3>(THETA)
