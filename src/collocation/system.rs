@@ -126,7 +126,9 @@ impl<'a> System<'a> {
             let length = self.model.robot.length();
             return self.rows(x, out, |k, sites, seg, a, b, _| {
                 let lin = friction::interval(profile, length, k, sites, seg, a, b, None)?;
-                Ok((lin.residual, Vector6::zeros()))
+                let residual = lin.residual;
+                profile.keep(k, lin);
+                Ok((residual, Vector6::zeros()))
             });
         }
         self.rows(x, out, |_, sites, seg, a, b, start| {
@@ -250,6 +252,7 @@ impl<'a> System<'a> {
                     let length = self.model.robot.length();
                     let lin = friction::interval(profile, length, k, sites, seg, &x[k], &x[k + 1], Some(block))?;
                     out[rows].copy_from_slice(lin.residual.as_slice());
+                    profile.keep(k, lin);
                 } else {
                     let (r, end) =
                         residual::interval_jacobian(&self.model, sites, seg, &x[k], &x[k + 1], node_lin, block)?;

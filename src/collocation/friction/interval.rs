@@ -29,7 +29,7 @@ use std::cell::RefCell;
 
 /// The log tensions of the tendons with friction on a mesh, and a model to evaluate eq. 13
 /// with them.
-#[derive(Clone, Debug)]
+#[derive(Debug)]
 pub(crate) struct Profile<'a> {
     /// Indices of the tendons with friction ([`friction::slipping`]).
     pub(crate) slipping: Vec<usize>,
@@ -41,6 +41,9 @@ pub(crate) struct Profile<'a> {
     pub(crate) z: Vec<Vec<f64>>,
     /// The model with the tensions of one point, for eq. 13 with friction.
     scratch: RefCell<Model<'a>>,
+    /// Each link's last evaluation ([`interval`] through the system's residual or
+    /// Jacobian), which the border reads instead of evaluating the link again.
+    cache: RefCell<Vec<Option<IntervalLinearization>>>,
 }
 
 impl<'a> Profile<'a> {
@@ -65,6 +68,7 @@ impl<'a> Profile<'a> {
             base,
             spans,
             scratch: RefCell::new(model.clone()),
+            cache: RefCell::new((1..mesh.nodes.len()).map(|_| None).collect()),
         }
     }
 
@@ -105,6 +109,16 @@ impl<'a> Profile<'a> {
             .collect()
     }
 
+    /// Keeps link k's evaluation `lin` for the border.
+    pub(crate) fn keep(&self, k: usize, lin: IntervalLinearization) {
+        self.cache.borrow_mut()[k] = Some(lin);
+    }
+
+    /// Runs `f` on link k's last evaluation (None when it has none).
+    pub(crate) fn cached<R>(&self, k: usize, f: impl FnOnce(Option<&IntervalLinearization>) -> R) -> R {
+        f(self.cache.borrow()[k].as_ref())
+    }
+
     /// Eq. 13 with friction at a site and state, the slips at log tensions `z` (with its
     /// derivatives when `derivatives`).
     fn point(
@@ -126,6 +140,7 @@ impl<'a> Profile<'a> {
 
 /// The linearization of an interval with friction: its backbone rows, capstan rows and
 /// their derivatives.
+#[derive(Debug)]
 pub(crate) struct IntervalLinearization {
     /// The 12 backbone rows (scaled).
     pub(crate) residual: Block<f64>,
@@ -137,6 +152,8 @@ pub(crate) struct IntervalLinearization {
     pub(crate) psi_x: DMatrix<f64>,
     /// d psi / dz: k x 2k, columns as `rows_z`.
     pub(crate) psi_z: DMatrix<f64>,
+    /// Whether the derivatives were evaluated (else they are zero).
+    pub(crate) derivatives: bool,
 }
 
 /// Collocation of link k with friction: residual rows and capstan rows, and when `jac` is
@@ -193,6 +210,7 @@ pub(crate) fn interval(
         rows_z: DMatrix::zeros(12, 2 * count),
         psi_x: DMatrix::zeros(count, 24),
         psi_z: DMatrix::zeros(count, 2 * count),
+        derivatives,
     };
     let Some(jac) = jac else {
         return Ok(out);
