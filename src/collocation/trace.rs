@@ -87,6 +87,7 @@ pub fn trace(robot: &Robot, parameter: Parameter, from: f64, to: f64, options: &
     let clock = Instant::now();
     robot.validate()?;
     options.validate()?;
+    crate::model::friction::unsupported(robot, "tracing a branch")?;
     if parameter == Parameter::YoungsModulus {
         return Err(crate::error::invalid(
             "parameter",

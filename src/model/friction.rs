@@ -94,6 +94,25 @@ pub(crate) fn validate(robot: &Robot, i: usize, t: &Tendon) -> Result<()> {
     Ok(())
 }
 
+/// An error naming the first tendon of `robot` with friction when `what` (an analysis that
+/// does not model friction yet) is asked of it.
+///
+/// # Errors
+/// [`Error::InvalidInput`] naming `tendons[i].friction`.
+pub(crate) fn unsupported(robot: &Robot, what: &str) -> Result<()> {
+    match robot.tendons.iter().position(|t| t.active_friction().is_some()) {
+        None => Ok(()),
+        Some(i) => Err(invalid(
+            format!("tendons[{i}].friction"),
+            format!(
+                "is {}, and {what} does not model friction yet",
+                Readable(robot.tendons[i].friction.map_or(0.0, |f| f.coefficient))
+            ),
+            "set the friction to 0 for it; a solve (collocation or shooting) models friction",
+        )),
+    }
+}
+
 /// Whether any tendon of `robot` has friction (a coefficient > 0).
 pub fn any(robot: &Robot) -> bool {
     robot.tendons.iter().any(|t| t.active_friction().is_some())

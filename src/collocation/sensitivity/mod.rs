@@ -173,6 +173,7 @@ impl<'a> Sensitivity<'a> {
     /// breakdown at the solution's states.
     pub fn new(robot: &'a Robot, solution: &Solution) -> Result<Self> {
         robot.validate()?;
+        crate::model::friction::unsupported(robot, "the sensitivity analysis")?;
         let s: Vec<f64> = solution.nodes.iter().map(|n| n.s).collect();
         let mesh = Mesh::from_points(robot, &s)?;
         let same = mesh.nodes.len() == s.len() && mesh.nodes.iter().zip(&s).all(|(m, s)| m.s == *s);
