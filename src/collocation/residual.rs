@@ -360,6 +360,7 @@ pub(super) struct EndColumns {
 
 impl EndColumns {
     /// The columns from the end points' linearizations `p0`, `p1` and theta_1.
+    #[inline(always)]
     pub(super) fn new(p0: &PointLinearization, p1: &PointLinearization, theta1: &Vector3<f64>, length: f64) -> Self {
         let mut Y0 = SMatrix::<f64, 12, 18>::zeros();
         let mut Y1 = SMatrix::<f64, 12, 18>::zeros();
@@ -392,6 +393,7 @@ impl EndColumns {
     }
 
     /// The columns of the midpoint y_m = (y_0 + y_1) / 2 + h/8 (F_0 - F_1).
+    #[inline(always)]
     pub(super) fn midpoint(&self, h: f64) -> SMatrix<f64, 12, 18> {
         (self.Y0 + self.Y1) * 0.5 + (self.dF0 - self.dF1) * (h / 8.0)
     }
@@ -400,6 +402,7 @@ impl EndColumns {
     /// midpoint's columns `dFm`, straight into the row-major 12 x 24 block `jac` with the
     /// row scaling of the residual (p rows / L, u' rows * L); the p columns hold
     /// L (dp_b - dp_a) / L.
+    #[inline(always)]
     pub(super) fn write(&self, dFm: &SMatrix<f64, 12, 18>, h: f64, length: f64, jac: &mut [f64]) {
         let (Y0, Y1, dF0, dF1) = (&self.Y0, &self.Y1, &self.dF0, &self.dF1);
         debug_assert_eq!(jac.len(), 12 * 24);

@@ -50,16 +50,17 @@ fn build(model: &Model, states: &[State], segment_ends: &[f64], along: Along, re
     let robot = model.robot;
     let length = robot.length();
     let mut nodes = Vec::with_capacity(states.len());
-    let mut local = model.clone();
-    let mut turning = vec![0.0; robot.tendons.len()];
+    // A model holding each node's tensions, made when they vary.
+    let mut local: Option<(Model, Vec<f64>)> = None;
     for (k, &State { s, p, R, v, u }) in states.iter().enumerate() {
         let site = model.site(s);
         let rates = match along {
             Along::Constant(Some(r)) => r[k],
             Along::Constant(None) => linearize::rates(model, &site, segment_ends[k], &R, &v, &u)?,
             Along::Varying(profile) => {
+                let (local, turning) = local.get_or_insert_with(|| (model.clone(), vec![0.0; robot.tendons.len()]));
                 local.tensions.copy_from_slice(&profile[k]);
-                friction::rates(&local, &site, segment_ends[k], (&R, &v, &u), &mut turning)?
+                friction::rates(local, &site, segment_ends[k], (&R, &v, &u), turning)?
             }
         };
         let (v_s, u_s) = (rates.fixed_rows::<3>(0).into(), rates.fixed_rows::<3>(3).into());
@@ -78,30 +79,33 @@ fn build(model: &Model, states: &[State], segment_ends: &[f64], along: Along, re
     }
     // The nodes on each tendon's path: up to its end, one per arc length (the left limit at
     // a breakpoint).
-    let on_path = |end: f64| -> Vec<usize> {
-        let mut last_s = f64::NEG_INFINITY;
-        (0..nodes.len())
-            .filter(|&k| nodes[k].s <= end && std::mem::replace(&mut last_s, nodes[k].s) < nodes[k].s)
-            .collect()
-    };
-    let tendon_paths = robot
+    let on_path: Vec<Vec<usize>> = robot
         .tendons
         .iter()
         .map(|t| {
-            on_path(t.end(length))
-                .into_iter()
-                .map(|k| nodes[k].p + nodes[k].R * t.routing.at(nodes[k].s, length).r)
+            let end = t.end(length);
+            let mut last_s = f64::NEG_INFINITY;
+            (0..nodes.len())
+                .filter(|&k| nodes[k].s <= end && std::mem::replace(&mut last_s, nodes[k].s) < nodes[k].s)
                 .collect()
         })
         .collect();
-    let tendon_tensions: Vec<Vec<f64>> = robot
+    let tendon_paths = robot
         .tendons
         .iter()
+        .zip(&on_path)
+        .map(|(t, path)| {
+            path.iter()
+                .map(|&k| nodes[k].p + nodes[k].R * t.routing.at(nodes[k].s, length).r)
+                .collect()
+        })
+        .collect();
+    let tendon_tensions: Vec<Vec<f64>> = on_path
+        .iter()
         .enumerate()
-        .map(|(i, t)| {
-            on_path(t.end(length))
-                .into_iter()
-                .map(|k| match along {
+        .map(|(i, path)| {
+            path.iter()
+                .map(|&k| match along {
                     Along::Constant(_) => model.tensions[i],
                     Along::Varying(profile) => profile[k][i],
                 })

@@ -337,6 +337,7 @@ impl Factor {
     }
 
     /// Overwrites `bt` with (M^-1 bt^T)^T; false when M is singular.
+    #[inline(always)]
     fn solve_transposed_mut<const C: usize>(&self, bt: &mut SMatrix<f64, C, 6>) -> bool {
         match self {
             Factor::Spd(f) => {
@@ -373,6 +374,9 @@ struct Assembled {
 
 /// Eq. 13 (corrected) at (R, v, u): builds M and the right-hand side (module docs), factors
 /// M and solves for the rates, keeping the first tendons' quantities in `cache` if given.
+/// Always inlined: returned by value from a call it would copy M's factors (as it was
+/// before friction made it a function of three callers).
+#[inline(always)]
 fn assemble(
     model: &Model,
     site: &Site,
@@ -508,10 +512,12 @@ pub fn linearize(
     v: &Vector3<f64>,
     u: &Vector3<f64>,
 ) -> Result<Linearization> {
-    let point = Point::new(model, site, segment_end, (R, v, u))?;
-    let x = &point.assembled.x;
-    let mut dFt = point.derivative(model, site, segment_end, (v, u), x)?;
-    if !point.assembled.factor.solve_transposed_mut(&mut dFt) {
+    // Locals, not a Point: the frictionless path moves nothing between the passes.
+    let mut cache = [TendonPoint::ZERO; CACHED_TENDONS];
+    let assembled = assemble(model, site, segment_end, (R, v, u), Some(&mut cache))?;
+    let x = &assembled.x;
+    let mut dFt = derivative(model, site, segment_end, (v, u), x, &assembled, &cache)?;
+    if !assembled.factor.solve_transposed_mut(&mut dFt) {
         return Err(breakdown(site.s));
     }
     // d(v', u') = -M^-1 dF
@@ -571,48 +577,62 @@ impl Point {
         (v, u): (&Vector3<f64>, &Vector3<f64>),
         x: &SMatrix<f64, 1, 6>,
     ) -> Result<SMatrix<f64, 9, 6>> {
-        let assembled = &self.assembled;
-        let count = assembled.count;
-        let (n_b, m_b, f_b, l_b) = (assembled.n_b, assembled.m_b, assembled.f_b, assembled.l_b);
-        let (kse, kbt) = (&site.section.section.kse, &site.section.section.kbt);
-        let (kse_s, kbt_s) = (&site.section.kse_s, &site.section.kbt_s);
-        let x_v = Vector3::new(x[0], x[1], x[2]);
-        let x_u = Vector3::new(x[3], x[4], x[5]);
-
-        // Pass 2: dF (module docs), the partial derivative of M x - rhs at this x.
-        let mut top = Matrix3x6::<f64>::zeros();
-        let mut bottom = Matrix3x6::<f64>::zeros();
-        for tp in &self.cache[..count.min(CACHED_TENDONS)] {
-            tp.add_derivatives(&x_v, &x_u, u, &mut top, &mut bottom);
-        }
-        if count > CACHED_TENDONS {
-            for (i, tension, rp) in model.distributed_tendons(site.s, segment_end).skip(CACHED_TENDONS) {
-                TendonPoint::new(i, tension, &rp, site.s, v, u)?.add_derivatives(&x_v, &x_u, u, &mut top, &mut bottom);
-            }
-        }
-        let n_hat = hat3(&n_b);
-        let blocks = [
-            [
-                hat_diag(u, kse, kse_s) + top.fixed_columns::<3>(0),
-                top.fixed_columns::<3>(3) - n_hat,
-                hat3(&f_b),
-            ],
-            [
-                hat_diag(v, kse, &Vector3::zeros()) - n_hat + bottom.fixed_columns::<3>(0),
-                hat_diag(u, kbt, kbt_s) - hat3(&m_b) + bottom.fixed_columns::<3>(3),
-                hat3(&l_b),
-            ],
-        ];
-        // dF^T: row k is direction k of (v, u, phi), column j is row j of F.
-        let mut dFt = SMatrix::<f64, 9, 6>::zeros();
-        for (row, blocks_row) in blocks.iter().enumerate() {
-            for (col, block) in blocks_row.iter().enumerate() {
-                dFt.fixed_view_mut::<3, 3>(3 * col, 3 * row)
-                    .copy_from(&block.transpose());
-            }
-        }
-        Ok(dFt)
+        derivative(model, site, segment_end, (v, u), x, &self.assembled, &self.cache)
     }
+}
+
+/// Pass 2 of [`linearize`]: dF^T at the rates `x` (a row), x held fixed, from pass 1's
+/// `assembled` and `cache` ([`Point::derivative`]).
+#[inline(always)]
+fn derivative(
+    model: &Model,
+    site: &Site,
+    segment_end: f64,
+    (v, u): (&Vector3<f64>, &Vector3<f64>),
+    x: &SMatrix<f64, 1, 6>,
+    assembled: &Assembled,
+    cache: &[TendonPoint; CACHED_TENDONS],
+) -> Result<SMatrix<f64, 9, 6>> {
+    let count = assembled.count;
+    let (n_b, m_b, f_b, l_b) = (assembled.n_b, assembled.m_b, assembled.f_b, assembled.l_b);
+    let (kse, kbt) = (&site.section.section.kse, &site.section.section.kbt);
+    let (kse_s, kbt_s) = (&site.section.kse_s, &site.section.kbt_s);
+    let x_v = Vector3::new(x[0], x[1], x[2]);
+    let x_u = Vector3::new(x[3], x[4], x[5]);
+
+    // Pass 2: dF (module docs), the partial derivative of M x - rhs at this x.
+    let mut top = Matrix3x6::<f64>::zeros();
+    let mut bottom = Matrix3x6::<f64>::zeros();
+    for tp in &cache[..count.min(CACHED_TENDONS)] {
+        tp.add_derivatives(&x_v, &x_u, u, &mut top, &mut bottom);
+    }
+    if count > CACHED_TENDONS {
+        for (i, tension, rp) in model.distributed_tendons(site.s, segment_end).skip(CACHED_TENDONS) {
+            TendonPoint::new(i, tension, &rp, site.s, v, u)?.add_derivatives(&x_v, &x_u, u, &mut top, &mut bottom);
+        }
+    }
+    let n_hat = hat3(&n_b);
+    let blocks = [
+        [
+            hat_diag(u, kse, kse_s) + top.fixed_columns::<3>(0),
+            top.fixed_columns::<3>(3) - n_hat,
+            hat3(&f_b),
+        ],
+        [
+            hat_diag(v, kse, &Vector3::zeros()) - n_hat + bottom.fixed_columns::<3>(0),
+            hat_diag(u, kbt, kbt_s) - hat3(&m_b) + bottom.fixed_columns::<3>(3),
+            hat3(&l_b),
+        ],
+    ];
+    // dF^T: row k is direction k of (v, u, phi), column j is row j of F.
+    let mut dFt = SMatrix::<f64, 9, 6>::zeros();
+    for (row, blocks_row) in blocks.iter().enumerate() {
+        for (col, block) in blocks_row.iter().enumerate() {
+            dFt.fixed_view_mut::<3, 3>(3 * col, 3 * row)
+                .copy_from(&block.transpose());
+        }
+    }
+    Ok(dFt)
 }
 
 #[cfg(test)]
