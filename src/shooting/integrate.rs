@@ -20,7 +20,9 @@ type Local = SVector<f64, 12>;
 
 /// Integrates from the base with base strains `x` (scaled) and returns the scaled tip
 /// residual and the path lengths of the tendons `paths` ((tendon index, end) each,
-/// integrated over the segments up to its end); `traj` receives every accepted step.
+/// integrated over the segments up to its end); `traj` receives every accepted step and
+/// `profile`, when given, every tendon's tension there (docs/friction.md).
+#[allow(clippy::too_many_arguments)]
 pub(super) fn shoot(
     model: &Model,
     scale: &Scale,

@@ -256,8 +256,8 @@ pub(crate) fn interval(
         col.fixed_rows_mut::<6>(6).copy_from(&l.d_log_tension[j]);
         col
     };
-    for j in 0..count {
-        dFm += rates_z(&lm, j) * dzm[j];
+    for (j, dz) in dzm.iter().enumerate() {
+        dFm += rates_z(&lm, j) * dz;
     }
     ends.write(&dFm, h, length, jac);
 
@@ -316,6 +316,10 @@ pub(crate) fn interval(
     Ok(out)
 }
 
+/// Link k's order-6 rows with friction: backbone rows, capstan rows (one per slip) and the
+/// rates at the two nodes.
+pub(crate) type Order6 = (Block<f64>, Vec<f64>, Vector6<f64>, Vector6<f64>);
+
 /// Link k's order-6 rows with friction (the Cash-Singhal formula of
 /// [`super::super::residual::interval_order6`] on the state (y, z)): the 12 backbone rows,
 /// the capstan rows psi6 (0 for slips not on the link), and the rates (v', u') at the two
@@ -333,7 +337,7 @@ pub(crate) fn interval_order6(
     segment_end: f64,
     a: &State,
     b: &State,
-) -> Result<(Block<f64>, Vec<f64>, Vector6<f64>, Vector6<f64>)> {
+) -> Result<Order6> {
     let count = profile.count();
     let h = sites.end.s - sites.start.s;
     let za: Vec<f64> = profile.z.iter().map(|z| z[k]).collect();
