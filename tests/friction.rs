@@ -356,3 +356,29 @@ fn analyses_without_friction_say_so() {
         }
     }
 }
+
+#[test]
+fn an_elastic_tendon_with_friction_stretches_by_its_varying_tension() {
+    // The stiff arc of the capstan test with an elastic straight tendon at r = 8 mm in the
+    // bending plane: tau(s) = tau0 exp(-mu kappa s) along a reference path of speed
+    // 1 - kappa r, so the stretch is tau0 (1 - kappa r) (1 - exp(-mu kappa L)) / (mu kappa E_t A_t).
+    let (kappa, mu, r, tau0, stiffness, length) = (5.0, 0.2, 0.008, 2.0, 2000.0, 0.2);
+    let robot = Robot::new(stiff_rod(Vector3::new(0.0, kappa, 0.0))).with_tendon(
+        Tendon::new(Routing::straight(r, 0.0), tau0)
+            .elastic(stiffness, 0.0)
+            .with_friction(Friction::pull(mu)),
+    );
+    let want = tau0 * (1.0 - kappa * r) * (1.0 - (-mu * kappa * length).exp()) / (mu * kappa * stiffness);
+    for solution in [
+        tdcr::solve(&robot, &Default::default()).unwrap(),
+        shooting::solve(&robot, &tight()).unwrap(),
+    ] {
+        let t = &solution.tendons[0];
+        let stretch = t.displacement - (t.reference_length - t.length);
+        // 1e-8 relative: the node quadrature is exact for cubics (h^4 on the exponential)
+        assert!(
+            (stretch / want - 1.0).abs() < 1e-8,
+            "stretch {stretch:e} against {want:e}"
+        );
+    }
+}
