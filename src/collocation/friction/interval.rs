@@ -72,6 +72,19 @@ impl<'a> Profile<'a> {
         }
     }
 
+    /// A copy with the same log tensions and a fresh scratch model and cache (tests).
+    #[cfg(test)]
+    fn clone_z(&self) -> Self {
+        Profile {
+            slipping: self.slipping.clone(),
+            base: self.base.clone(),
+            spans: self.spans.clone(),
+            z: self.z.clone(),
+            scratch: RefCell::new(self.scratch.borrow().clone()),
+            cache: RefCell::new(self.cache.borrow().iter().map(|_| None).collect()),
+        }
+    }
+
     /// Number of tendons with friction.
     pub(crate) fn count(&self) -> usize {
         self.slipping.len()
@@ -386,4 +399,128 @@ pub(crate) fn interval_order6(
         .collect();
     let rates = |f: &Block<f64>| f.fixed_rows::<6>(6).into_owned();
     Ok((scale_rows(y1 - y0 - quadrature, length), psi, rates(&f0), rates(&f1)))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::cases;
+    use crate::collocation::residual::IntervalSites;
+    use crate::model::tendon::{Friction, Motion};
+
+    /// The interval's backbone rows and capstan rows against central differences in the
+    /// scaled node unknowns and the log tensions, on case H with friction on its helix and
+    /// (released) on tendon 1, at a bent state.
+    #[test]
+    fn interval_blocks_match_central_differences() {
+        let mut robot = cases::case_h();
+        robot.tendons[4].friction = Some(Friction::pull(0.3));
+        robot.tendons[0].set_tension(1.0);
+        robot.tendons[0].friction = Some(Friction {
+            coefficient: 0.2,
+            motion: Motion::Release,
+        });
+        let solution = crate::solve(&robot, &crate::collocation::Options::fixed(8)).unwrap();
+        let model = Model::new(&robot);
+        let mesh = Mesh::from_points(&robot, &solution.nodes.iter().map(|n| n.s).collect::<Vec<_>>()).unwrap();
+        let mut profile = Profile::new(&model, &mesh);
+        let x: Vec<State> = solution.nodes.iter().map(|n| n.state()).collect();
+        let k = 3;
+        for (j, z) in profile.z.iter_mut().enumerate() {
+            for (n, value) in z.iter_mut().enumerate() {
+                *value = -0.03 * n as f64 * (j as f64 + 1.0);
+            }
+        }
+        let site = |s: f64| model.site(s);
+        let (s0, s1) = (x[k].s, x[k + 1].s);
+        let sites = IntervalSites {
+            start: site(s0),
+            mid: site(0.5 * (s0 + s1)),
+            end: site(s1),
+        };
+        let length = robot.length();
+        let seg = mesh.nodes[k].segment_end;
+        let mut jac = [0.0; 12 * 24];
+        let lin = interval(&profile, length, k, &sites, seg, &x[k], &x[k + 1], Some(&mut jac)).unwrap();
+        let count = profile.count();
+        // One scaled unknown of node a (column < 12) or b moved by h.
+        let moved = |column: usize, h: f64| {
+            let (mut a, mut b) = (x[k], x[k + 1]);
+            let node = if column < 12 { &mut a } else { &mut b };
+            let (part, i) = ((column % 12) / 3, column % 3);
+            let mut d = Vector3::zeros();
+            d[i] = h;
+            match part {
+                0 => node.p += d * length,
+                1 => node.R *= so3::exp(&d),
+                2 => node.v += d,
+                _ => node.u += d / length,
+            }
+            interval(&profile, length, k, &sites, seg, &a, &b, None).unwrap()
+        };
+        // Richardson-extrapolated central differences (error O(h^4)): the strains enter the
+        // rates through E A / (E I) ~ 1e7, so plain differences are too coarse at any h.
+        let h = 1e-5;
+        let extrapolate = |f: &dyn Fn(f64) -> IntervalLinearization, h: f64| -> (Vec<f64>, Vec<f64>) {
+            let central = |h: f64| {
+                let (p, m) = (f(h), f(-h));
+                let rows: Vec<f64> = (0..12).map(|r| (p.residual[r] - m.residual[r]) / (2.0 * h)).collect();
+                let psi: Vec<f64> = (0..p.psi.len()).map(|j| (p.psi[j] - m.psi[j]) / (2.0 * h)).collect();
+                (rows, psi)
+            };
+            let ((r1, p1), (r2, p2)) = (central(h), central(h / 2.0));
+            let mix = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(x, y)| (4.0 * y - x) / 3.0).collect();
+            (mix(&r1, &r2), mix(&p1, &p2))
+        };
+        for column in 0..24 {
+            // The shear/extension strains v move the internal force by E A dv (1e5 N per
+            // unit): a step of 1e-8 keeps that below 1e-3 N.
+            let step = if (6..9).contains(&(column % 12)) { 1e-8 } else { h };
+            let (rows, psi) = extrapolate(&|h| moved(column, h), step);
+            for row in 0..12 {
+                let fd = rows[row];
+                let exact = jac[row * 24 + column];
+                // 1e-6 relative to at least 1: rows are O(1) scaled; the extrapolated
+                // difference carries ~1e-9 of rounding and h^4 of truncation
+                assert!(
+                    (fd - exact).abs() < 1e-6 * (1.0 + exact.abs()),
+                    "row {row}, column {column}: {fd} vs {exact}"
+                );
+            }
+            for j in 0..count {
+                let fd = psi[j];
+                let exact = lin.psi_x[(j, column)];
+                assert!(
+                    (fd - exact).abs() < 1e-6 * (1.0 + exact.abs()),
+                    "psi {j}, column {column}: {fd} vs {exact}"
+                );
+            }
+        }
+        for side in 0..2 {
+            for l in 0..count {
+                let at = |h: f64| {
+                    let mut p = profile.clone_z();
+                    p.z[l][k + side] += h;
+                    interval(&p, length, k, &sites, seg, &x[k], &x[k + 1], None).unwrap()
+                };
+                let (rows, psi) = extrapolate(&at, h);
+                for row in 0..12 {
+                    let fd = rows[row];
+                    let exact = lin.rows_z[(row, side * count + l)];
+                    assert!(
+                        (fd - exact).abs() < 1e-6 * (1.0 + exact.abs()),
+                        "row {row}, z {side} {l}: {fd} vs {exact}"
+                    );
+                }
+                for j in 0..count {
+                    let fd = psi[j];
+                    let exact = lin.psi_z[(j, side * count + l)];
+                    assert!(
+                        (fd - exact).abs() < 1e-6 * (1.0 + exact.abs()),
+                        "psi {j}, z {side} {l}: {fd} vs {exact}"
+                    );
+                }
+            }
+        }
+    }
 }
