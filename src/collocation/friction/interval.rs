@@ -477,8 +477,7 @@ mod tests {
             // unit): a step of 1e-8 keeps that below 1e-3 N.
             let step = if (6..9).contains(&(column % 12)) { 1e-8 } else { h };
             let (rows, psi) = extrapolate(&|h| moved(column, h), step);
-            for row in 0..12 {
-                let fd = rows[row];
+            for (row, &fd) in rows.iter().enumerate() {
                 let exact = jac[row * 24 + column];
                 // 1e-6 relative to at least 1: rows are O(1) scaled; the extrapolated
                 // difference carries ~1e-9 of rounding and h^4 of truncation
@@ -487,8 +486,7 @@ mod tests {
                     "row {row}, column {column}: {fd} vs {exact}"
                 );
             }
-            for j in 0..count {
-                let fd = psi[j];
+            for (j, &fd) in psi.iter().enumerate() {
                 let exact = lin.psi_x[(j, column)];
                 assert!(
                     (fd - exact).abs() < 1e-6 * (1.0 + exact.abs()),
@@ -504,16 +502,14 @@ mod tests {
                     interval(&p, length, k, &sites, seg, &x[k], &x[k + 1], None).unwrap()
                 };
                 let (rows, psi) = extrapolate(&at, h);
-                for row in 0..12 {
-                    let fd = rows[row];
+                for (row, &fd) in rows.iter().enumerate() {
                     let exact = lin.rows_z[(row, side * count + l)];
                     assert!(
                         (fd - exact).abs() < 1e-6 * (1.0 + exact.abs()),
                         "row {row}, z {side} {l}: {fd} vs {exact}"
                     );
                 }
-                for j in 0..count {
-                    let fd = psi[j];
+                for (j, &fd) in psi.iter().enumerate() {
                     let exact = lin.psi_z[(j, side * count + l)];
                     assert!(
                         (fd - exact).abs() < 1e-6 * (1.0 + exact.abs()),
