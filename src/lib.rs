@@ -75,7 +75,7 @@ pub use model::parameter::Parameter;
 pub use model::robot::{Robot, TendonModel};
 pub use model::rod::{Rod, Section};
 pub use model::routing::{Routing, RoutingPoint};
-pub use model::tendon::{Actuation, Tendon};
+pub use model::tendon::{Actuation, Friction, Motion, Tendon};
 pub use nalgebra;
 pub use report::{
     ErrorEstimate, Evaluations, Iteration, Method, PathTaken, SolveReport, Stability, Termination, Timings,

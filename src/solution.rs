@@ -66,9 +66,13 @@ pub struct State {
 /// length and slack (docs/actuation.md).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct TendonState {
-    /// Tension tau_i (N): the input of a tension-controlled tendon, the solved one of a
-    /// displacement-controlled tendon (0 when slack).
+    /// Tension tau_i (N) where the tendon enters the backbone at the base: the input of a
+    /// tension-controlled tendon, the solved one of a displacement-controlled tendon (0 when
+    /// slack).
     pub tension: f64,
+    /// Tension at the termination (N), what the tendon delivers to its attachment: equal to
+    /// `tension` without friction, lower when friction holds it back (docs/friction.md).
+    pub delivered_tension: f64,
     /// Pull-in q_i of the actuator (m): the input of a displacement-controlled tendon; for a
     /// tension-controlled one the pull-in that holds it taut at its tension,
     /// reference_length - length + stretch.
@@ -90,6 +94,9 @@ pub struct Solution {
     /// For each tendon, its path p_i(s) = p + R r_i (m, world) at the nodes up to its
     /// termination.
     pub tendon_paths: Vec<Vec<Vector3<f64>>>,
+    /// For each tendon, its tension tau_i(s) (N) at the points of its path in
+    /// `tendon_paths`: constant without friction, varying along the tendon with it.
+    pub tendon_tensions: Vec<Vec<f64>>,
     /// For each tendon, its tension, pull-in, lengths and slack.
     pub tendons: Vec<TendonState>,
     /// How the solve went.
@@ -106,6 +113,35 @@ impl Solution {
     /// [`crate::Robot::with_tensions`] takes.
     pub fn tensions(&self) -> Vec<f64> {
         self.tendons.iter().map(|t| t.tension).collect()
+    }
+
+    /// The tension (N) of tendon `i` at arc length `s` (clamped to the tendon's span),
+    /// between the points of its path interpolated linearly in the logarithm of the tension
+    /// (exact where the path turns at a constant rate, as the capstan law makes the tension
+    /// exponential in the turning angle there; docs/friction.md). None for a tendon index
+    /// out of range.
+    pub fn tension_at(&self, i: usize, s: f64) -> Option<f64> {
+        let tensions = self.tendon_tensions.get(i)?;
+        // The arc lengths of the path's points: the nodes up to the tendon's end, one per s.
+        let mut last = f64::NEG_INFINITY;
+        let points: Vec<f64> = self
+            .nodes
+            .iter()
+            .map(|n| n.s)
+            .filter(|&x| std::mem::replace(&mut last, x) < x)
+            .take(tensions.len())
+            .collect();
+        let (first, end) = (*points.first()?, *points.last()?);
+        let s = s.clamp(first, end);
+        let k = points
+            .iter()
+            .rposition(|&x| x <= s)?
+            .min(points.len().saturating_sub(2));
+        if points.len() < 2 || tensions[k] <= 0.0 || tensions[k + 1] <= 0.0 {
+            return Some(tensions[k]);
+        }
+        let t = (s - points[k]) / (points[k + 1] - points[k]);
+        Some(tensions[k] * (tensions[k + 1] / tensions[k]).powf(t))
     }
 
     /// The tip node.

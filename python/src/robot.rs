@@ -25,9 +25,11 @@ use toml::Table;
 ///
 /// A tendon dict takes the keys of the file's `[[tendon]]`: `routing`, `tension` (N) or
 /// `displacement` (m, the actuator's pull-in; the tension is then solved for), `end` (m),
-/// and for an elastic tendon `stiffness` (E_t A_t, N) and `free_length` (m). `model` is the
-/// file's `[model]` table: `{"corner_forces": False}` solves the paper's jump conditions,
-/// `{"tendons": "point_moment"}` the point-moment tendon model.
+/// for an elastic tendon `stiffness` (E_t A_t, N) and `free_length` (m), and `friction`
+/// (the coefficient in its channels) with `motion` (`"pull"` or `"release"`,
+/// docs/friction.md). `model` is the file's `[model]` table: `{"corner_forces": False}`
+/// solves the paper's jump conditions, `{"tendons": "point_moment"}` the point-moment tendon
+/// model.
 ///
 /// Or build it with `Robot.from_toml(text)`, `Robot.from_file(path)`, `Robot.from_dict(tables)`,
 /// `tdcr.cases.case_s()`. Bad input raises `tdcr.FileError` with the command line's
@@ -156,8 +158,9 @@ impl Rows {
 impl PyRobot {
     /// A robot from keyword arguments shaped like a robot file's tables: `rod` (dict),
     /// `tendons` (list of dicts, the file's `[[tendon]]`), `loads`, `base`, `solver`,
-    /// `model`, `disks` (dicts). A tendon dict has `routing`, `tension` (N) or `displacement` (m), and
-    /// optionally `end` (m), `stiffness` (N) and `free_length` (m). Raises `tdcr.FileError`
+    /// `model`, `disks` (dicts). A tendon dict has `routing`, `tension` (N) or `displacement` (m),
+    /// and optionally `end` (m), `stiffness` (N), `free_length` (m), `friction` and `motion`
+    /// (`"pull"` or `"release"`). Raises `tdcr.FileError`
     /// (messages name the field, e.g. `tendon[2].tension`).
     #[new]
     #[pyo3(signature = (rod, tendons=None, loads=None, base=None, solver=None, model=None, disks=None))]

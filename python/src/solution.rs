@@ -118,8 +118,10 @@ impl PySolution {
     }
 
     /// What the solution says about each tendon, file order: a list of dicts with
-    /// `tension` (N: the input of a tension-controlled tendon, the solved one of a
-    /// displacement-controlled tendon, 0 when slack), `displacement` (m: the actuator's
+    /// `tension` (N, at the base entry: the input of a tension-controlled tendon, the solved
+    /// one of a displacement-controlled tendon, 0 when slack), `delivered_tension` (N, at the
+    /// termination: lower than `tension` when friction holds the tendon back,
+    /// docs/friction.md), `displacement` (m: the actuator's
     /// pull-in, the input of a displacement-controlled tendon, for a tension-controlled one
     /// the pull-in that holds it taut at its tension), `length` (m, the path length from the
     /// base to the termination), `reference_length` (m, the same in the unloaded shape) and
@@ -127,6 +129,17 @@ impl PySolution {
     #[getter]
     fn tendons<'py>(&self, py: Python<'py>) -> PyResult<Vec<Bound<'py, PyDict>>> {
         self.solution.tendons.iter().map(|t| tendon_dict(py, t)).collect()
+    }
+
+    /// Each tendon's tension (N) at the points of its path (`tendon_paths`), file order:
+    /// constant without friction, varying along the tendon with it (docs/friction.md).
+    #[getter]
+    fn tendon_tensions<'py>(&self, py: Python<'py>) -> Vec<Bound<'py, PyArray1<f64>>> {
+        self.solution
+            .tendon_tensions
+            .iter()
+            .map(|t| PyArray1::from_slice(py, t))
+            .collect()
     }
 
     /// Tendon tensions (N), shape (k,), file order (the `tension` of `tendons`).
@@ -241,6 +254,7 @@ pub fn termination_name(t: Termination) -> &'static str {
 fn tendon_dict<'py>(py: Python<'py>, t: &TendonState) -> PyResult<Bound<'py, PyDict>> {
     let d = PyDict::new(py);
     d.set_item("tension", t.tension)?;
+    d.set_item("delivered_tension", t.delivered_tension)?;
     d.set_item("displacement", t.displacement)?;
     d.set_item("length", t.length)?;
     d.set_item("reference_length", t.reference_length)?;

@@ -235,3 +235,21 @@ def test_every_public_name_has_a_docstring():
                 if not attr.startswith("_"):
                     assert (member.__doc__ or "").strip(), f"{name}.{attr}"
     assert "warm_start" in tdcr.solve.__doc__ and "tol" in tdcr.solve.__doc__
+
+
+def test_friction_keywords_and_the_tension_along_the_tendon():
+    import tdcr
+
+    rod = {"length": 0.242, "outer_radius": 0.0004, "youngs_modulus": 210e9, "poisson_ratio": 0.3125}
+    routing = {"kind": "straight", "x": 0.008, "y": 0.0}
+    smooth = tdcr.Robot(rod=rod, tendons=[{"routing": routing, "tension": 2.94}])
+    rough = tdcr.Robot(rod=rod, tendons=[{"routing": routing, "tension": 2.94, "friction": 0.1}])
+    released = tdcr.Robot(
+        rod=rod, tendons=[{"routing": routing, "tension": 2.94, "friction": 0.1, "motion": "release"}]
+    )
+    a, b, c = (tdcr.solve(r) for r in (smooth, rough, released))
+    assert a.tendons[0]["delivered_tension"] == 2.94
+    assert b.tendons[0]["delivered_tension"] < 2.94 < c.tendons[0]["delivered_tension"]
+    along = b.tendon_tensions[0]
+    assert along[0] == 2.94 and along[-1] == b.tendons[0]["delivered_tension"]
+    assert all(x >= y for x, y in zip(along, along[1:]))

@@ -131,7 +131,8 @@ def test_tension_controlled_tendon_states():
     solution = tdcr.solve(robot)
     states = solution.tendons
     assert len(states) == robot.tendon_count == 5
-    assert all(set(t) == {"tension", "displacement", "length", "reference_length", "slack"} for t in states)
+    assert all(set(t) == {"tension", "delivered_tension", "displacement", "length", "reference_length", "slack"} for t in states)
+    assert all(t["delivered_tension"] == t["tension"] for t in states)  # no friction
     assert [t["tension"] for t in states] == list(robot.tensions) == list(solution.tensions)
     assert all(t["slack"] == 0.0 for t in states)
     # The straight tendons run parallel to the straight unloaded rod: their reference

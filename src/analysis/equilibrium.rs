@@ -10,7 +10,8 @@
 //! - the external loads: F_tip, L_tip at p(L), point wrenches F_k, L_k at p(s_k), and the
 //!   distributed f_e, l_e (world frame, per unit s);
 //! - each tendon i, cut at the base where it leaves toward its actuator, carries its tension
-//!   tau_i along its unit path tangent t_i(0) = p_i'(0) / |p_i'(0)| with
+//!   tau_i (with friction, its tension at the base entry: the input) along its unit path
+//!   tangent t_i(0) = p_i'(0) / |p_i'(0)| with
 //!   p_i' = R (u x r_i + r_i' + v) (eq. 12) taken at the base node; the actuator pulls the
 //!   free body with -tau_i t_i(0), applied at p(0) + R(0) r_i(0).
 //!
@@ -26,6 +27,12 @@
 //! Gauss-Legendre on every interval of positive length between consecutive solution nodes,
 //! with p(s) from [`Solution::at`] (the cubic Hermite interpolant, 4th order), so for smooth
 //! loads the quadrature error is far below the solvers' discretization error.
+//!
+//! Friction between a tendon and its channels (docs/friction.md) is internal to this free
+//! body: the channel's tangential force on the tendon and the tendon's on the backbone
+//! cancel, so the balance is the same with friction. It checks that the backbone receives
+//! the tangential load that makes the tension fall (or rise) along the tendon: without it,
+//! the tension change would be unbalanced.
 //!
 //! The balance holds exactly for the exact solution of the model with corner forces
 //! (`Robot::corner_forces = true`); the paper's jump conditions (`false`) violate it where a
@@ -196,6 +203,7 @@ mod tests {
         Solution {
             nodes,
             tendon_paths: Vec::new(),
+            tendon_tensions: Vec::new(),
             tendons: Vec::new(),
             report: SolveReport::new(Method::Shooting),
         }

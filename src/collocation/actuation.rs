@@ -308,7 +308,14 @@ impl Border for Tensions<'_> {
 
     /// The Schur step (module docs): dtau from the k x k system of the linearized psi rows,
     /// then dx = a - X dtau. The norm is max_j |dtau_j| / T_j.
-    fn step(&mut self, point: Point, x: &[State], a: &mut [f64]) -> Option<f64> {
+    fn step(
+        &mut self,
+        point: Point,
+        x: &[State],
+        a: &mut [f64],
+        _: &mut Linearization,
+        _: &mut SolveReport,
+    ) -> Option<f64> {
         let k = self.constraints.len();
         let (tau, dtau) = match point {
             Point::Current => (&self.tau, &mut self.dtau),

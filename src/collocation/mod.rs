@@ -34,6 +34,7 @@ pub(crate) mod actuation;
 mod branch;
 mod equilibrium;
 mod estimate;
+pub(crate) mod friction;
 mod homotopy;
 pub(crate) mod linear;
 pub(crate) mod newton;

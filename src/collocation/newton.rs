@@ -292,8 +292,16 @@ pub(crate) trait Border {
     /// the residual F at `point`, and becomes dx. The border's step dy goes with it: for
     /// [`Point::Current`] it is kept for [`Border::trial`]; for [`Point::Trial`] (a simplified
     /// correction, measured only) it is not. Returns the max-norm of the scaled dy, None when
-    /// the border's own system is singular.
-    fn step(&mut self, point: Point, x: &[State], a: &mut [f64]) -> Option<f64>;
+    /// the border's own system is singular. `at` lends the factors of J for further
+    /// solves (timed into `report`).
+    fn step(
+        &mut self,
+        point: Point,
+        x: &[State],
+        a: &mut [f64],
+        at: &mut Linearization,
+        report: &mut SolveReport,
+    ) -> Option<f64>;
 
     /// Sets the trial unknowns to y + alpha dy.
     fn trial(&mut self, alpha: f64);
@@ -316,7 +324,14 @@ impl Border for NoBorder<'_, '_> {
     fn factored(&mut self, _: &[State], _: &mut Linearization, _: &mut SolveReport) -> Result<(), Termination> {
         Ok(())
     }
-    fn step(&mut self, _: Point, _: &[State], _: &mut [f64]) -> Option<f64> {
+    fn step(
+        &mut self,
+        _: Point,
+        _: &[State],
+        _: &mut [f64],
+        _: &mut Linearization,
+        _: &mut SolveReport,
+    ) -> Option<f64> {
         Some(0.0)
     }
     fn trial(&mut self, _: f64) {}
@@ -455,7 +470,16 @@ pub(crate) fn run_bordered<B: Border>(
         report.iterations += 1;
         if chord
             && ws.chord(report)
-            && let Some(border_step) = border.step(Current, x, &mut ws.step)
+            && let Some(border_step) = border.step(
+                Current,
+                x,
+                &mut ws.step,
+                &mut Linearization {
+                    linear: &mut ws.linear,
+                    residual: &ws.residual,
+                },
+                report,
+            )
         {
             let step_norm = max_norm(&ws.step).max(border_step);
             unknowns::retract(x, &ws.step, 1.0, length, &mut ws.trial);
@@ -505,7 +529,7 @@ pub(crate) fn run_bordered<B: Border>(
         if let Err(termination) = border.factored(x, &mut at, report) {
             return (termination, worst(ws, border));
         }
-        let Some(border_step) = border.step(Current, x, &mut ws.step) else {
+        let Some(border_step) = border.step(Current, x, &mut ws.step, &mut at, report) else {
             return (Termination::SingularJacobian, worst(ws, border));
         };
         let step_norm = max_norm(&ws.step).max(border_step);
@@ -535,7 +559,11 @@ pub(crate) fn run_bordered<B: Border>(
                 let t = Instant::now();
                 ws.linear.solve_again(&ws.rhs, &mut ws.simplified);
                 report.timings.solve += t.elapsed();
-                if let Some(border_step) = border.step(Trial, &ws.trial, &mut ws.simplified)
+                let mut at = Linearization {
+                    linear: &mut ws.linear,
+                    residual: &ws.residual,
+                };
+                if let Some(border_step) = border.step(Trial, &ws.trial, &mut ws.simplified, &mut at, report)
                     && max_norm(&ws.simplified).max(border_step) <= (1.0 - alpha / 4.0) * step_norm
                 {
                     break;

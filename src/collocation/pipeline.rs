@@ -36,6 +36,9 @@ pub(crate) fn solve_impl(
     if robot.has_displacement_inputs() {
         return super::actuation::solve(robot, options, warm, cache);
     }
+    if crate::model::friction::any(robot) {
+        return super::friction::solve(robot, options, warm, cache);
+    }
     let start = Instant::now();
     let mut model = Model::new(robot);
     let mut report = SolveReport::new(Method::Collocation);

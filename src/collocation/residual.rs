@@ -56,7 +56,7 @@ fn perturb<T: Real>(x: &State, d: &Delta<T>, length: f64) -> Perturbed<T> {
 }
 
 /// Scales a local-coordinate vector (p, theta, v, u) to residual units.
-fn scale_rows<T: Real>(mut y: Block<T>, length: f64) -> Block<T> {
+pub(super) fn scale_rows<T: Real>(mut y: Block<T>, length: f64) -> Block<T> {
     let l = T::from_f64(length).unwrap_or_else(T::one);
     for i in 0..3 {
         y[i] /= l;
@@ -141,7 +141,7 @@ pub struct IntervalSites {
 
 /// The interval's end points in its local coordinates: y_0 = (p_a, 0, v_a, u_a) and
 /// y_1 = (p_b, log(R_a^T R_b), v_b, u_b).
-fn end_points(a: &State, b: &State) -> (Block<f64>, Block<f64>) {
+pub(super) fn end_points(a: &State, b: &State) -> (Block<f64>, Block<f64>) {
     let theta1 = so3::log(&a.R.tr_mul(&b.R));
     (
         stack(&a.p, &Vector3::zeros(), &a.v, &a.u),
@@ -152,7 +152,7 @@ fn end_points(a: &State, b: &State) -> (Block<f64>, Block<f64>) {
 /// F at an interval's end point y_1 = (p_b, theta_1, v_b, u_b) in the local coordinates of
 /// a frame R_a, given the rates (v', u') at node b: (R_b v_b, J_r^-1(theta_1) u_b, rates),
 /// with R_b = R_a exp(theta_1).
-fn end_rhs(b: &State, theta1: &Vector3<f64>, rates: &Vector6<f64>) -> Block<f64> {
+pub(super) fn end_rhs(b: &State, theta1: &Vector3<f64>, rates: &Vector6<f64>) -> Block<f64> {
     let mut f = Block::zeros();
     f.fixed_rows_mut::<3>(P).copy_from(&(b.R * b.v));
     f.fixed_rows_mut::<3>(THETA)
@@ -248,16 +248,16 @@ pub fn interval_order6(
 
 /// F, dF/dy (12 x 12) and dF/dphi (12 x 3, for a right perturbation of the interval's frame
 /// R_k -> R_k exp(hat(phi))) at one point of an interval.
-struct PointLinearization {
-    f: Block<f64>,
-    f_y: SMatrix<f64, 12, 12>,
-    f_frame: SMatrix<f64, 12, 3>,
+pub(super) struct PointLinearization {
+    pub(super) f: Block<f64>,
+    pub(super) f_y: SMatrix<f64, 12, 12>,
+    pub(super) f_frame: SMatrix<f64, 12, 3>,
 }
 
 /// F(s, y) of an interval with frame `Rk` and its derivatives, assembled from the strain-rate
 /// linearization `lin` at R = R_k exp(theta) and the kinematics p' = R_k exp(theta) v,
 /// theta' = J_r(theta)^-1 u.
-fn rhs_linearized(lin: &Linearization, Rk: &Matrix3<f64>, y: &Block<f64>) -> PointLinearization {
+pub(super) fn rhs_linearized(lin: &Linearization, Rk: &Matrix3<f64>, y: &Block<f64>) -> PointLinearization {
     let theta: Vector3<f64> = y.fixed_rows::<3>(THETA).into();
     let v: Vector3<f64> = y.fixed_rows::<3>(V).into();
     let u: Vector3<f64> = y.fixed_rows::<3>(U).into();
@@ -338,60 +338,91 @@ pub fn interval_jacobian(
     );
     let residual = scale_rows(y1 - y0 - (p0.f + pm.f * 4.0 + p1.f) * (h / 6.0), length);
 
-    // Columns (theta_a, v_a, u_a, theta_b, v_b, u_b) of dy0, dy1 and dF0, dF1 for the
-    // scaled unknowns (p + L dp, R exp(dtheta), v + dv, u + du / L).
-    let mut Y0 = SMatrix::<f64, 12, 18>::zeros();
-    let mut Y1 = SMatrix::<f64, 12, 18>::zeros();
-    for i in 0..3 {
-        Y0[(6 + i, 3 + i)] = 1.0;
-        Y0[(9 + i, 6 + i)] = 1.0 / length;
-        Y1[(6 + i, 12 + i)] = 1.0;
-        Y1[(9 + i, 15 + i)] = 1.0 / length;
-    }
-    // theta_1 = log(exp(-d_a) Q exp(d_b)): d/d d_b = J_r^-1, d/d d_a = -J_r^-1 exp(theta_1)^T
-    let Jri1 = so3::right_jacobian_inv(&theta1);
-    let dtheta1_da = -Jri1 * so3::exp(&theta1).transpose();
-    Y1.fixed_view_mut::<3, 3>(3, 0).copy_from(&dtheta1_da);
-    Y1.fixed_view_mut::<3, 3>(3, 9).copy_from(&Jri1);
-    // The frame R_k = R_a exp(d_a) enters every F through the theta_a columns.
-    let mut dF0 = SMatrix::<f64, 12, 18>::zeros();
-    dF0.fixed_columns_mut::<3>(0).copy_from(&p0.f_frame);
-    dF0.fixed_columns_mut::<3>(3).copy_from(&p0.f_y.fixed_columns::<3>(6));
-    dF0.fixed_columns_mut::<3>(6).copy_from(&p0.f_y.fixed_columns::<3>(9));
-    dF0.fixed_columns_mut::<3>(6).scale_mut(1.0 / length);
-    let mut dF1 = SMatrix::<f64, 12, 18>::zeros();
-    let f1_theta = p1.f_y.fixed_columns::<3>(3);
-    dF1.fixed_columns_mut::<3>(0)
-        .copy_from(&(f1_theta * dtheta1_da + p1.f_frame));
-    dF1.fixed_columns_mut::<3>(9).copy_from(&(f1_theta * Jri1));
-    dF1.fixed_columns_mut::<3>(12).copy_from(&p1.f_y.fixed_columns::<3>(6));
-    dF1.fixed_columns_mut::<3>(15).copy_from(&p1.f_y.fixed_columns::<3>(9));
-    dF1.fixed_columns_mut::<3>(15).scale_mut(1.0 / length);
-    let dYm = (Y0 + Y1) * 0.5 + (dF0 - dF1) * (h / 8.0);
+    let ends = EndColumns::new(&p0, &p1, &theta1, length);
+    let dYm = ends.midpoint(h);
     let mut dFm = pm.f_y.fixed_columns::<9>(3) * dYm.fixed_rows::<9>(3);
     let mut frame = dFm.fixed_columns_mut::<3>(0);
     frame += pm.f_frame;
-    // J = Y1 - Y0 - (dF0 + 4 dFm + dF1) h / 6 on the 18 columns, written straight into the
-    // row-major block with the row scaling of the residual (p rows / L, u' rows * L); the p
-    // columns hold L (dp_b - dp_a) / L.
-    debug_assert_eq!(jac.len(), 12 * 24);
-    let c = h / 6.0;
-    for (i, row) in jac.chunks_exact_mut(24).enumerate() {
-        let scale = match i {
-            0..3 => 1.0 / length,
-            9.. => length,
-            _ => 1.0,
-        };
-        row[..3].fill(0.0);
-        row[12..15].fill(0.0);
-        if i < 3 {
-            row[i] = -1.0;
-            row[12 + i] = 1.0;
+    ends.write(&dFm, h, length, jac);
+    Ok((residual, lin1))
+}
+
+/// The columns (theta_a, v_a, u_a, theta_b, v_b, u_b) of the scaled unknowns (p + L dp,
+/// R exp(dtheta), v + dv, u + du / L) in an interval's end points y_0, y_1 and in F_0, F_1,
+/// from the end points' linearizations: the chain rule of [`interval_jacobian`], shared
+/// with the friction intervals (collocation/friction).
+pub(super) struct EndColumns {
+    pub(super) Y0: SMatrix<f64, 12, 18>,
+    pub(super) Y1: SMatrix<f64, 12, 18>,
+    pub(super) dF0: SMatrix<f64, 12, 18>,
+    pub(super) dF1: SMatrix<f64, 12, 18>,
+}
+
+impl EndColumns {
+    /// The columns from the end points' linearizations `p0`, `p1` and theta_1.
+    #[inline(always)]
+    pub(super) fn new(p0: &PointLinearization, p1: &PointLinearization, theta1: &Vector3<f64>, length: f64) -> Self {
+        let mut Y0 = SMatrix::<f64, 12, 18>::zeros();
+        let mut Y1 = SMatrix::<f64, 12, 18>::zeros();
+        for i in 0..3 {
+            Y0[(6 + i, 3 + i)] = 1.0;
+            Y0[(9 + i, 6 + i)] = 1.0 / length;
+            Y1[(6 + i, 12 + i)] = 1.0;
+            Y1[(9 + i, 15 + i)] = 1.0 / length;
         }
-        for j in 0..18 {
-            let column = if j < 9 { 3 + j } else { 6 + j };
-            row[column] = scale * (Y1[(i, j)] - Y0[(i, j)] - c * (dF0[(i, j)] + 4.0 * dFm[(i, j)] + dF1[(i, j)]));
+        // theta_1 = log(exp(-d_a) Q exp(d_b)): d/d d_b = J_r^-1, d/d d_a = -J_r^-1 exp(theta_1)^T
+        let Jri1 = so3::right_jacobian_inv(theta1);
+        let dtheta1_da = -Jri1 * so3::exp(theta1).transpose();
+        Y1.fixed_view_mut::<3, 3>(3, 0).copy_from(&dtheta1_da);
+        Y1.fixed_view_mut::<3, 3>(3, 9).copy_from(&Jri1);
+        // The frame R_k = R_a exp(d_a) enters every F through the theta_a columns.
+        let mut dF0 = SMatrix::<f64, 12, 18>::zeros();
+        dF0.fixed_columns_mut::<3>(0).copy_from(&p0.f_frame);
+        dF0.fixed_columns_mut::<3>(3).copy_from(&p0.f_y.fixed_columns::<3>(6));
+        dF0.fixed_columns_mut::<3>(6).copy_from(&p0.f_y.fixed_columns::<3>(9));
+        dF0.fixed_columns_mut::<3>(6).scale_mut(1.0 / length);
+        let mut dF1 = SMatrix::<f64, 12, 18>::zeros();
+        let f1_theta = p1.f_y.fixed_columns::<3>(3);
+        dF1.fixed_columns_mut::<3>(0)
+            .copy_from(&(f1_theta * dtheta1_da + p1.f_frame));
+        dF1.fixed_columns_mut::<3>(9).copy_from(&(f1_theta * Jri1));
+        dF1.fixed_columns_mut::<3>(12).copy_from(&p1.f_y.fixed_columns::<3>(6));
+        dF1.fixed_columns_mut::<3>(15).copy_from(&p1.f_y.fixed_columns::<3>(9));
+        dF1.fixed_columns_mut::<3>(15).scale_mut(1.0 / length);
+        EndColumns { Y0, Y1, dF0, dF1 }
+    }
+
+    /// The columns of the midpoint y_m = (y_0 + y_1) / 2 + h/8 (F_0 - F_1).
+    #[inline(always)]
+    pub(super) fn midpoint(&self, h: f64) -> SMatrix<f64, 12, 18> {
+        (self.Y0 + self.Y1) * 0.5 + (self.dF0 - self.dF1) * (h / 8.0)
+    }
+
+    /// Writes J = Y1 - Y0 - (dF0 + 4 dFm + dF1) h / 6 on the 18 columns, given the
+    /// midpoint's columns `dFm`, straight into the row-major 12 x 24 block `jac` with the
+    /// row scaling of the residual (p rows / L, u' rows * L); the p columns hold
+    /// L (dp_b - dp_a) / L.
+    #[inline(always)]
+    pub(super) fn write(&self, dFm: &SMatrix<f64, 12, 18>, h: f64, length: f64, jac: &mut [f64]) {
+        let (Y0, Y1, dF0, dF1) = (&self.Y0, &self.Y1, &self.dF0, &self.dF1);
+        debug_assert_eq!(jac.len(), 12 * 24);
+        let c = h / 6.0;
+        for (i, row) in jac.chunks_exact_mut(24).enumerate() {
+            let scale = match i {
+                0..3 => 1.0 / length,
+                9.. => length,
+                _ => 1.0,
+            };
+            row[..3].fill(0.0);
+            row[12..15].fill(0.0);
+            if i < 3 {
+                row[i] = -1.0;
+                row[12 + i] = 1.0;
+            }
+            for j in 0..18 {
+                let column = if j < 9 { 3 + j } else { 6 + j };
+                row[column] = scale * (Y1[(i, j)] - Y0[(i, j)] - c * (dF0[(i, j)] + 4.0 * dFm[(i, j)] + dF1[(i, j)]));
+            }
         }
     }
-    Ok((residual, lin1))
 }

@@ -8,6 +8,7 @@
 //! the chain rule of [`residual::interval_jacobian`], the base, jump and tip blocks by
 //! num-dual dual numbers run through the same generic residual code.
 
+use super::friction::{self, Profile};
 use super::residual::{self, Block, Delta, IntervalSites, QuarterSites};
 use super::unknowns::{self, BASE_COLUMNS, BASE_ROWS, NODE, THETA, TIP_COLUMNS, link_row, tip_row};
 use crate::error::Result;
@@ -34,6 +35,9 @@ pub struct System<'a> {
     node_sites: Vec<Site>,
     /// Evaluations of eq. 13 in one residual or Jacobian pass.
     rate_evaluations: usize,
+    /// The tension profile of the tendons with friction (docs/friction.md), whose intervals
+    /// are then collocated with it; `None` without friction.
+    pub(crate) friction: Option<Profile<'a>>,
 }
 
 impl<'a> System<'a> {
@@ -45,6 +49,7 @@ impl<'a> System<'a> {
             interval_sites: Vec::new(),
             node_sites: Vec::new(),
             rate_evaluations: 0,
+            friction: None,
         };
         sys.set_factors(sys.model.tension_factor, sys.model.load_factor);
         sys
@@ -117,6 +122,15 @@ impl<'a> System<'a> {
     /// # Errors
     /// A model breakdown at a visited state.
     pub fn residual(&self, x: &[State], out: &mut [f64]) -> Result<()> {
+        if let Some(profile) = &self.friction {
+            let length = self.model.robot.length();
+            return self.rows(x, out, |k, sites, seg, a, b, _| {
+                let lin = friction::interval(profile, length, k, sites, seg, a, b, None)?;
+                let residual = lin.residual;
+                profile.keep(k, lin);
+                Ok((residual, Vector6::zeros()))
+            });
+        }
         self.rows(x, out, |_, sites, seg, a, b, start| {
             residual::interval(&self.model, sites, seg, a, b, start)
         })
@@ -138,6 +152,16 @@ impl<'a> System<'a> {
         rates: &mut [Vector6<f64>],
     ) -> Result<()> {
         local.fill(0.0);
+        if let Some(profile) = &self.friction {
+            let length = self.model.robot.length();
+            return self.rows(x, out, |k, sites, seg, a, b, _| {
+                let quarters = self.quarters(sites);
+                let (r, psi, start, end) = friction::interval_order6(profile, length, k, sites, &quarters, seg, a, b)?;
+                (rates[k], rates[k + 1]) = (start, end);
+                local[k] = psi.iter().fold(r.amax(), |m, p| m.max(p.abs()));
+                Ok((r, end))
+            });
+        }
         self.rows(x, out, |k, sites, seg, a, b, start| {
             let start = match start {
                 Some(r) => r,
@@ -145,15 +169,20 @@ impl<'a> System<'a> {
             };
             let end = linearize::rates(&self.model, &sites.end, seg, &b.R, &b.v, &b.u)?;
             (rates[k], rates[k + 1]) = (start, end);
-            let h = sites.end.s - sites.start.s;
-            let quarters = QuarterSites {
-                quarter: self.model.site(sites.start.s + 0.25 * h),
-                three_quarters: self.model.site(sites.start.s + 0.75 * h),
-            };
+            let quarters = self.quarters(sites);
             let r = residual::interval_order6(&self.model, sites, &quarters, seg, a, b, &start, &end)?;
             local[k] = r.amax();
             Ok((r, end))
         })
+    }
+
+    /// The sites at a quarter and three quarters of an interval.
+    fn quarters(&self, sites: &IntervalSites) -> QuarterSites {
+        let h = sites.end.s - sites.start.s;
+        QuarterSites {
+            quarter: self.model.site(sites.start.s + 0.25 * h),
+            three_quarters: self.model.site(sites.start.s + 0.75 * h),
+        }
     }
 
     /// Writes the base, link and tip rows at `x` into `out`, interval k's rows by `interval(k,
@@ -219,9 +248,17 @@ impl<'a> System<'a> {
             if let Some(sites) = &self.interval_sites[k] {
                 let seg = self.mesh.nodes[k].segment_end;
                 let block = &mut values[at..at + NODE * width];
-                let (r, end) = residual::interval_jacobian(&self.model, sites, seg, &x[k], &x[k + 1], node_lin, block)?;
-                node_lin = Some(end);
-                out[rows].copy_from_slice(r.as_slice());
+                if let Some(profile) = &self.friction {
+                    let length = self.model.robot.length();
+                    let lin = friction::interval(profile, length, k, sites, seg, &x[k], &x[k + 1], Some(block))?;
+                    out[rows].copy_from_slice(lin.residual.as_slice());
+                    profile.keep(k, lin);
+                } else {
+                    let (r, end) =
+                        residual::interval_jacobian(&self.model, sites, seg, &x[k], &x[k + 1], node_lin, block)?;
+                    node_lin = Some(end);
+                    out[rows].copy_from_slice(r.as_slice());
+                }
             } else {
                 node_lin = None;
                 // Jumps: one dual pass per unknown (they are few).

@@ -104,6 +104,7 @@ pub fn trace_until(
     let clock = Instant::now();
     robot.validate()?;
     options.validate()?;
+    crate::model::friction::unsupported(robot, "tracing a branch")?;
     if parameter == Parameter::YoungsModulus {
         return Err(crate::error::invalid(
             "parameter",

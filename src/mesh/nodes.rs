@@ -5,6 +5,7 @@
 use crate::Robot;
 use crate::error::Result;
 use crate::model::equations::Model;
+use crate::model::friction;
 use crate::model::length;
 use crate::model::linearize;
 use crate::report::SolveReport;
@@ -22,14 +23,45 @@ pub(crate) fn solution(
     rates: Option<&[Vector6<f64>]>,
     report: SolveReport,
 ) -> Result<Solution> {
+    build(model, states, segment_ends, Along::Constant(rates), report)
+}
+
+/// As [`solution`] for tendons with friction: `profile[k]` holds every tendon's tension
+/// (N) at node k, and the node rates are those of eq. 13 with friction there
+/// ([`friction::rates`]).
+pub(crate) fn solution_with_tensions(
+    model: &Model,
+    states: &[State],
+    segment_ends: &[f64],
+    profile: &[Vec<f64>],
+    report: SolveReport,
+) -> Result<Solution> {
+    build(model, states, segment_ends, Along::Varying(profile), report)
+}
+
+/// The tensions along the tendons: constant (the model's), with the node rates when known,
+/// or given at every node.
+enum Along<'a> {
+    Constant(Option<&'a [Vector6<f64>]>),
+    Varying(&'a [Vec<f64>]),
+}
+
+fn build(model: &Model, states: &[State], segment_ends: &[f64], along: Along, report: SolveReport) -> Result<Solution> {
     let robot = model.robot;
     let length = robot.length();
     let mut nodes = Vec::with_capacity(states.len());
+    // A model holding each node's tensions, made when they vary.
+    let mut local: Option<(Model, Vec<f64>)> = None;
     for (k, &State { s, p, R, v, u }) in states.iter().enumerate() {
         let site = model.site(s);
-        let rates = match rates {
-            Some(r) => r[k],
-            None => linearize::rates(model, &site, segment_ends[k], &R, &v, &u)?,
+        let rates = match along {
+            Along::Constant(Some(r)) => r[k],
+            Along::Constant(None) => linearize::rates(model, &site, segment_ends[k], &R, &v, &u)?,
+            Along::Varying(profile) => {
+                let (local, turning) = local.get_or_insert_with(|| (model.clone(), vec![0.0; robot.tendons.len()]));
+                local.tensions.copy_from_slice(&profile[k]);
+                friction::rates(local, &site, segment_ends[k], (&R, &v, &u), turning)?
+            }
         };
         let (v_s, u_s) = (rates.fixed_rows::<3>(0).into(), rates.fixed_rows::<3>(3).into());
         let (n, m) = model.internal_wrench(&site, &R, &v, &u);
@@ -45,23 +77,67 @@ pub(crate) fn solution(
             m,
         });
     }
-    let tendon_paths = robot
+    // The nodes on each tendon's path: up to its end, one per arc length (the left limit at
+    // a breakpoint).
+    let on_path: Vec<Vec<usize>> = robot
         .tendons
         .iter()
         .map(|t| {
             let end = t.end(length);
             let mut last_s = f64::NEG_INFINITY;
-            nodes
-                .iter()
-                .filter(|nd| nd.s <= end && std::mem::replace(&mut last_s, nd.s) < nd.s)
-                .map(|nd| nd.p + nd.R * t.routing.at(nd.s, length).r)
+            (0..nodes.len())
+                .filter(|&k| nodes[k].s <= end && std::mem::replace(&mut last_s, nodes[k].s) < nodes[k].s)
                 .collect()
         })
         .collect();
-    let tendons = tendon_states(model, &nodes);
+    let tendon_paths = robot
+        .tendons
+        .iter()
+        .zip(&on_path)
+        .map(|(t, path)| {
+            path.iter()
+                .map(|&k| nodes[k].p + nodes[k].R * t.routing.at(nodes[k].s, length).r)
+                .collect()
+        })
+        .collect();
+    let tendon_tensions: Vec<Vec<f64>> = on_path
+        .iter()
+        .enumerate()
+        .map(|(i, path)| {
+            path.iter()
+                .map(|&k| match along {
+                    Along::Constant(_) => model.tensions[i],
+                    Along::Varying(profile) => profile[k][i],
+                })
+                .collect()
+        })
+        .collect();
+    let mut tendons = tendon_states(model, &nodes);
+    for (state, tensions) in tendons.iter_mut().zip(&tendon_tensions) {
+        state.delivered_tension = tensions.last().copied().unwrap_or(state.tension);
+    }
+    if let Along::Varying(profile) = along {
+        // An elastic tendon with friction stretches by its varying tension: the integral of
+        // tau(s) / (E_t A_t) over its reference path, plus its free length at the base
+        // tension (docs/friction.md); constant tension gives the compliance of tendon_states.
+        let s: Vec<f64> = nodes.iter().map(|n| n.s).collect();
+        for (i, (t, state)) in robot.tendons.iter().zip(tendons.iter_mut()).enumerate() {
+            let (Some(stiffness), Some(_)) = (t.stiffness, t.active_friction()) else {
+                continue;
+            };
+            let quadrature = length::NodeQuadrature::new(&s, t.end(length));
+            let stretch = quadrature.integrate(|k| {
+                let reference = robot.rod.reference_at(s[k]);
+                profile[k][i] * length::speed(&t.routing.at(s[k], length), &reference.v_star, &reference.u_star)
+            }) / stiffness
+                + t.free_length * state.tension / stiffness;
+            state.displacement = state.reference_length - state.length + stretch;
+        }
+    }
     Ok(Solution {
         nodes,
         tendon_paths,
+        tendon_tensions,
         tendons,
         report,
     })
@@ -86,6 +162,7 @@ fn tendon_states(model: &Model, nodes: &[Node]) -> Vec<TendonState> {
             match t.displacement() {
                 Some(q) => TendonState {
                     tension,
+                    delivered_tension: tension,
                     displacement: q,
                     length,
                     reference_length,
@@ -93,6 +170,7 @@ fn tendon_states(model: &Model, nodes: &[Node]) -> Vec<TendonState> {
                 },
                 None => TendonState {
                     tension,
+                    delivered_tension: tension,
                     displacement: taken_up,
                     length,
                     reference_length,

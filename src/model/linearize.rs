@@ -107,19 +107,19 @@ pub struct Linearization {
 
 /// Per-tendon quantities of the derivation (body frame) that both passes need.
 #[derive(Clone, Copy, Debug)]
-struct TendonPoint {
+pub(crate) struct TendonPoint {
     /// r_i (m).
-    r: Vector3<f64>,
+    pub(crate) r: Vector3<f64>,
     /// e_i = p_i^b' + r_i'.
-    e: Vector3<f64>,
+    pub(crate) e: Vector3<f64>,
     /// c_i = u x e_i + r_i'' (1/m), the state-dependent part of p_i^b''.
-    c: Vector3<f64>,
+    pub(crate) c: Vector3<f64>,
     /// t_i = p_i^b' / |p_i^b'|, the unit tangent.
-    t: Vector3<f64>,
+    pub(crate) t: Vector3<f64>,
     /// k_i = tau_i / |p_i^b'| (N).
-    k: f64,
+    pub(crate) k: f64,
     /// 1 / |p_i^b'|.
-    inv_speed: f64,
+    pub(crate) inv_speed: f64,
 }
 
 impl TendonPoint {
@@ -133,7 +133,14 @@ impl TendonPoint {
     };
 
     /// Tendon `i` with tension `tension` (N) at the routing point `rp` of arc length `s`.
-    fn new(i: usize, tension: f64, rp: &RoutingPoint, s: f64, v: &Vector3<f64>, u: &Vector3<f64>) -> Result<Self> {
+    pub(crate) fn new(
+        i: usize,
+        tension: f64,
+        rp: &RoutingPoint,
+        s: f64,
+        v: &Vector3<f64>,
+        u: &Vector3<f64>,
+    ) -> Result<Self> {
         let p = u.cross(&rp.r) + rp.r_s + v;
         let speed = p.norm();
         if speed < MIN_TENDON_SPEED {
@@ -179,6 +186,14 @@ impl TendonPoint {
         top: &mut Matrix3x6<f64>,
         bottom: &mut Matrix3x6<f64>,
     ) {
+        let QQ = self.normal_derivative(x_v, x_u, u);
+        *top += QQ;
+        *bottom += hat_mul(&self.r, &QQ);
+    }
+
+    /// [dq_i/dv, dq_i/du] (module docs) at the rates x = (x_v, x_u), with x held fixed: the
+    /// change of the tendon's normal load q_i with the strains.
+    pub(crate) fn normal_derivative(&self, x_v: &Vector3<f64>, x_u: &Vector3<f64>, u: &Vector3<f64>) -> Matrix3x6<f64> {
         let A = self.A();
         let t = &self.t;
         let z = x_v - self.r.cross(x_u) + self.c; // p_i^b''
@@ -202,8 +217,7 @@ impl TendonPoint {
         let mut QQ = Matrix3x6::zeros();
         QQ.fixed_columns_mut::<3>(0).copy_from(&Q);
         QQ.fixed_columns_mut::<3>(3).copy_from(&dq_du);
-        *top += QQ;
-        *bottom += hat_mul(&self.r, &QQ);
+        QQ
     }
 }
 
@@ -323,6 +337,7 @@ impl Factor {
     }
 
     /// Overwrites `bt` with (M^-1 bt^T)^T; false when M is singular.
+    #[inline(always)]
     fn solve_transposed_mut<const C: usize>(&self, bt: &mut SMatrix<f64, C, 6>) -> bool {
         match self {
             Factor::Spd(f) => {
@@ -359,6 +374,9 @@ struct Assembled {
 
 /// Eq. 13 (corrected) at (R, v, u): builds M and the right-hand side (module docs), factors
 /// M and solves for the rates, keeping the first tendons' quantities in `cache` if given.
+/// Always inlined: returned by value from a call it would copy M's factors (as it was
+/// before friction made it a function of three callers).
+#[inline(always)]
 fn assemble(
     model: &Model,
     site: &Site,
@@ -494,9 +512,88 @@ pub fn linearize(
     v: &Vector3<f64>,
     u: &Vector3<f64>,
 ) -> Result<Linearization> {
+    // Locals, not a Point: the frictionless path moves nothing between the passes.
     let mut cache = [TendonPoint::ZERO; CACHED_TENDONS];
     let assembled = assemble(model, site, segment_end, (R, v, u), Some(&mut cache))?;
-    let (factor, x, count) = (&assembled.factor, &assembled.x, assembled.count);
+    let x = &assembled.x;
+    let mut dFt = derivative(model, site, segment_end, (v, u), x, &assembled, &cache)?;
+    if !assembled.factor.solve_transposed_mut(&mut dFt) {
+        return Err(breakdown(site.s));
+    }
+    // d(v', u') = -M^-1 dF
+    Ok(Linearization {
+        rates: Vector6::from_fn(|i, _| x[i]),
+        d_strains: Matrix6::from_fn(|i, k| -dFt[(k, i)]),
+        d_rotation: Matrix6x3::from_fn(|i, k| -dFt[(6 + k, i)]),
+    })
+}
+
+/// Eq. 13 (corrected) at one point, assembled and factored (pass 1 of [`linearize`]) for
+/// what friction adds (docs/friction.md): the rates, solves with M for further right-hand
+/// sides, and dF (the partial derivative of M x - rhs with x held fixed) at any rates x.
+pub(crate) struct Point {
+    assembled: Assembled,
+    cache: [TendonPoint; CACHED_TENDONS],
+}
+
+impl Point {
+    /// Assembles and factors eq. 13 at (R, v, u).
+    ///
+    /// # Errors
+    /// As [`rates`].
+    pub(crate) fn new(
+        model: &Model,
+        site: &Site,
+        segment_end: f64,
+        (R, v, u): (&Matrix3<f64>, &Vector3<f64>, &Vector3<f64>),
+    ) -> Result<Self> {
+        let mut cache = [TendonPoint::ZERO; CACHED_TENDONS];
+        let assembled = assemble(model, site, segment_end, (R, v, u), Some(&mut cache))?;
+        Ok(Point { assembled, cache })
+    }
+
+    /// The rates (v', u') of eq. 13.
+    pub(crate) fn rates(&self) -> Vector6<f64> {
+        let x = &self.assembled.x;
+        Vector6::from_fn(|i, _| x[i])
+    }
+
+    /// Overwrites each row of `bt` (a right-hand side of M, transposed) with the row of
+    /// the solution; false when M is singular.
+    pub(crate) fn solve_rows<const C: usize>(&self, bt: &mut SMatrix<f64, C, 6>) -> bool {
+        self.assembled.factor.solve_transposed_mut(bt)
+    }
+
+    /// dF^T at the rates `x` (a row): row k is direction k of (v, u, phi), column j row j of
+    /// F = M x - rhs (module docs), x held fixed.
+    ///
+    /// # Errors
+    /// [`Error::SingularRouting`] for a tendon beyond the cached ones without a tangent.
+    pub(crate) fn derivative(
+        &self,
+        model: &Model,
+        site: &Site,
+        segment_end: f64,
+        (v, u): (&Vector3<f64>, &Vector3<f64>),
+        x: &SMatrix<f64, 1, 6>,
+    ) -> Result<SMatrix<f64, 9, 6>> {
+        derivative(model, site, segment_end, (v, u), x, &self.assembled, &self.cache)
+    }
+}
+
+/// Pass 2 of [`linearize`]: dF^T at the rates `x` (a row), x held fixed, from pass 1's
+/// `assembled` and `cache` ([`Point::derivative`]).
+#[inline(always)]
+fn derivative(
+    model: &Model,
+    site: &Site,
+    segment_end: f64,
+    (v, u): (&Vector3<f64>, &Vector3<f64>),
+    x: &SMatrix<f64, 1, 6>,
+    assembled: &Assembled,
+    cache: &[TendonPoint; CACHED_TENDONS],
+) -> Result<SMatrix<f64, 9, 6>> {
+    let count = assembled.count;
     let (n_b, m_b, f_b, l_b) = (assembled.n_b, assembled.m_b, assembled.f_b, assembled.l_b);
     let (kse, kbt) = (&site.section.section.kse, &site.section.section.kbt);
     let (kse_s, kbt_s) = (&site.section.kse_s, &site.section.kbt_s);
@@ -535,15 +632,7 @@ pub fn linearize(
                 .copy_from(&block.transpose());
         }
     }
-    if !factor.solve_transposed_mut(&mut dFt) {
-        return Err(breakdown(site.s));
-    }
-    // d(v', u') = -M^-1 dF
-    Ok(Linearization {
-        rates: Vector6::from_fn(|i, _| x[i]),
-        d_strains: Matrix6::from_fn(|i, k| -dFt[(k, i)]),
-        d_rotation: Matrix6x3::from_fn(|i, k| -dFt[(6 + k, i)]),
-    })
+    Ok(dFt)
 }
 
 #[cfg(test)]

@@ -4,6 +4,7 @@
 
 pub mod disks;
 pub(crate) mod equations;
+pub mod friction;
 pub mod length;
 pub(crate) mod linearize;
 pub mod loads;

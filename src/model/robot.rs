@@ -202,6 +202,7 @@ impl Robot {
         for (i, t) in self.tendons.iter().enumerate() {
             self.validate_tendon(i, t)?;
             self.validate_actuation(i, t)?;
+            crate::model::friction::validate(self, i, t)?;
         }
         Ok(())
     }

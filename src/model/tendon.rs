@@ -1,5 +1,6 @@
 //! A tendon: its routing, how it is actuated ([`Actuation`]: a tension or an actuator
-//! pull-in), its axial stiffness and where it ends.
+//! pull-in), its axial stiffness, where it ends and its friction in the channels
+//! ([`Friction`], docs/friction.md).
 
 use crate::model::routing::Routing;
 
@@ -22,8 +23,69 @@ pub enum Actuation {
     },
 }
 
-/// One tendon, modelled as a frictionless Cosserat string (section 3 of the paper), driven
-/// by its tension or by the pull-in of its actuator ([`Actuation`]).
+/// Which way a tendon with friction slides in its channels, which sets the sign of the
+/// friction (docs/friction.md): full slip everywhere along the tendon.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Motion {
+    /// The actuator pulls the tendon in: friction opposes the motion toward the base, so
+    /// the tension falls from the base entry toward the termination (the default).
+    Pull,
+    /// The actuator lets the tendon out: friction opposes the motion toward the tip, so the
+    /// tension rises from the base entry toward the termination.
+    Release,
+}
+
+impl Motion {
+    /// The sign w of the tension's rate tau_i' = w mu_i tau_i kappa_i: -1 pulling, +1
+    /// releasing.
+    pub fn sign(self) -> f64 {
+        match self {
+            Motion::Pull => -1.0,
+            Motion::Release => 1.0,
+        }
+    }
+
+    /// The name files and the command line use: `pull` or `release`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Motion::Pull => "pull",
+            Motion::Release => "release",
+        }
+    }
+
+    /// The motion called `name` (`pull` or `release`), None for any other name.
+    pub fn from_name(name: &str) -> Option<Self> {
+        match name {
+            "pull" => Some(Motion::Pull),
+            "release" => Some(Motion::Release),
+            _ => None,
+        }
+    }
+}
+
+/// Coulomb friction between a tendon and its channels, in full slip (the capstan law along
+/// the tendon, docs/friction.md).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Friction {
+    /// Friction coefficient mu_i (dimensionless, >= 0); 0 is the frictionless tendon.
+    pub coefficient: f64,
+    /// The motion being modelled; default [`Motion::Pull`].
+    pub motion: Motion,
+}
+
+impl Friction {
+    /// Friction `coefficient` mu while the actuator pulls the tendon in.
+    pub fn pull(coefficient: f64) -> Self {
+        Friction {
+            coefficient,
+            motion: Motion::Pull,
+        }
+    }
+}
+
+/// One tendon, modelled as a Cosserat string (section 3 of the paper), driven by its
+/// tension or by the pull-in of its actuator ([`Actuation`]), frictionless unless it has a
+/// [`Friction`].
 #[derive(Clone, Debug)]
 pub struct Tendon {
     /// Path in the cross-section along s.
@@ -38,6 +100,8 @@ pub struct Tendon {
     /// Length of tendon between the base, where it enters the backbone, and the actuator
     /// (m, >= 0): it stretches with the rest of an elastic tendon. Default 0.
     pub free_length: f64,
+    /// Friction in its channels; `None` (the default) or a coefficient of 0: frictionless.
+    pub friction: Option<Friction>,
 }
 
 impl Tendon {
@@ -49,6 +113,7 @@ impl Tendon {
             termination: None,
             stiffness: None,
             free_length: 0.0,
+            friction: None,
         }
     }
 
@@ -128,6 +193,18 @@ impl Tendon {
     /// at L/2 makes 0.5 turns.
     pub fn turns(&self, length: f64) -> f64 {
         self.routing.turns_between(0.0, self.end(length), length)
+    }
+
+    /// The same tendon with `friction` in its channels.
+    pub fn with_friction(mut self, friction: Friction) -> Self {
+        self.friction = Some(friction);
+        self
+    }
+
+    /// The friction of this tendon when it has any: `Some` only for a coefficient > 0, so
+    /// that a coefficient of 0 is the frictionless tendon, solved exactly as without one.
+    pub fn active_friction(&self) -> Option<Friction> {
+        self.friction.filter(|f| f.coefficient > 0.0)
     }
 
     /// Termination arc length on a rod of `length` L (m).

@@ -7,6 +7,7 @@ use super::problem::Scale;
 use super::{Options, Point};
 use crate::error::Result;
 use crate::model::equations::{Model, Site};
+use crate::model::friction;
 use crate::model::length;
 use crate::report::SolveReport;
 use crate::solution::State;
@@ -19,7 +20,9 @@ type Local = SVector<f64, 12>;
 
 /// Integrates from the base with base strains `x` (scaled) and returns the scaled tip
 /// residual and the path lengths of the tendons `paths` ((tendon index, end) each,
-/// integrated over the segments up to its end); `traj` receives every accepted step.
+/// integrated over the segments up to its end); `traj` receives every accepted step and
+/// `profile`, when given, every tendon's tension there (docs/friction.md).
+#[allow(clippy::too_many_arguments)]
 pub(super) fn shoot(
     model: &Model,
     scale: &Scale,
@@ -27,10 +30,21 @@ pub(super) fn shoot(
     paths: &[(usize, f64)],
     options: &Options,
     traj: &mut Vec<Point>,
+    mut profile: Option<&mut Vec<Vec<f64>>>,
     report: &mut SolveReport,
 ) -> Result<(SVector<f64, 6>, Vec<f64>)> {
     report.evaluations.residual += 1;
     traj.clear();
+    // The tensions of tendons with friction vary along s: a copy of the model holds them at
+    // the current s (docs/friction.md).
+    let mut model = model.clone();
+    let slipping: Vec<usize> = (0..model.robot.tendons.len())
+        .filter(|&i| model.robot.tendons[i].active_friction().is_some())
+        .collect();
+    if let Some(out) = profile.as_deref_mut() {
+        out.clear();
+        out.push(model.tensions.clone());
+    }
     let robot = model.robot;
     let length = robot.length();
     let (v, u) = scale.strains(x);
@@ -49,7 +63,7 @@ pub(super) fn shoot(
         // The tendons whose paths run over this segment (terminations are breakpoints).
         let slots: Vec<usize> = (0..paths.len()).filter(|&j| seg_end <= paths[j].1).collect();
         state = integrate(
-            model,
+            &mut model,
             seg_start,
             seg_end,
             state,
@@ -59,11 +73,18 @@ pub(super) fn shoot(
                 slots: &slots,
                 lengths: &mut lengths,
             },
+            Slipping {
+                tendons: &slipping,
+                profile: profile.as_deref_mut(),
+            },
             traj,
             report,
         )?;
         if seg_end < length {
-            let (v_b, u_b) = jump(model, seg_end, &state)?;
+            let (v_b, u_b) = jump(&model, seg_end, &state)?;
+            if let Some(out) = profile.as_deref_mut() {
+                out.push(model.tensions.clone());
+            }
             state = State {
                 s: seg_end,
                 v: v_b,
@@ -131,13 +152,27 @@ fn scaled(y: &Local, length: f64) -> Local {
     z
 }
 
-/// d/ds of the local state (p, theta, v, u) of a step that started at rotation `R_n`.
-fn local_rhs(model: &Model, site: &Site, seg_end: f64, R_n: &Matrix3<f64>, y: &Local) -> Result<Local> {
+/// d/ds of the local state (p, theta, v, u) of a step that started at rotation `R_n`; with
+/// tendons with friction (`turning` not empty, one entry per tendon) eq. 13 with friction,
+/// and the relative tension rates tau_i' / tau_i into `turning`.
+fn local_rhs(
+    model: &Model,
+    site: &Site,
+    seg_end: f64,
+    R_n: &Matrix3<f64>,
+    y: &Local,
+    turning: &mut [f64],
+) -> Result<Local> {
     let theta: Vector3<f64> = y.fixed_rows::<3>(3).into();
     let v: Vector3<f64> = y.fixed_rows::<3>(6).into();
     let u: Vector3<f64> = y.fixed_rows::<3>(9).into();
     let R = R_n * so3::exp(&theta);
-    let (v_s, u_s) = model.strain_rates(site, seg_end, &R, &v, &u)?;
+    let (v_s, u_s) = if turning.is_empty() {
+        model.strain_rates(site, seg_end, &R, &v, &u)?
+    } else {
+        let x = friction::rates(model, site, seg_end, (&R, &v, &u), turning)?;
+        (x.fixed_rows::<3>(0).into(), x.fixed_rows::<3>(3).into())
+    };
     let mut d = Local::zeros();
     d.fixed_rows_mut::<3>(0).copy_from(&(R * v));
     d.fixed_rows_mut::<3>(3)
@@ -206,17 +241,29 @@ struct Paths<'a> {
     lengths: &'a mut [f64],
 }
 
+/// The tendons with friction, whose tensions are integrated along with the state.
+struct Slipping<'a> {
+    /// Indices of the tendons with friction.
+    tendons: &'a [usize],
+    /// When given, receives the model's tensions (all tendons, N) at every accepted step.
+    profile: Option<&'a mut Vec<Vec<f64>>>,
+}
+
 /// Integrates one segment [s0, s1] with adaptive steps, pushing every accepted step; the
 /// path lengths of `paths` grow by the integral of |v + u x r_j + r_j'| with the same
-/// stages, their error (relative to L) in the step control.
+/// stages, their error (relative to L) in the step control. The tensions of the tendons
+/// with friction (`slipping`, held in `model`'s tensions) grow by tau_i' = w_i mu_i
+/// kappa_i tau_i with the same stages, their error relative to the tension in the step
+/// control; `model` ends with the tensions at s1.
 #[allow(clippy::too_many_arguments)]
 fn integrate(
-    model: &Model,
+    model: &mut Model,
     s0: f64,
     s1: f64,
     start: Point,
     tol: f64,
     paths: Paths,
+    mut slipping: Slipping,
     traj: &mut Vec<Point>,
     report: &mut SolveReport,
 ) -> Result<Point> {
@@ -233,6 +280,11 @@ fn integrate(
     let mut h = (s1 - s0) * 0.02;
     let mut steps = 0usize;
     let mut speeds = Vec::with_capacity(7 * paths.slots.len());
+    let slips = slipping.tendons.len();
+    // Tensions at the step's start, the stages' tension rates and each stage's turning.
+    let mut tau: Vec<f64> = slipping.tendons.iter().map(|&i| model.tensions[i]).collect();
+    let mut tau_rates = vec![0.0; 7 * slips];
+    let mut turning = vec![0.0; if slips > 0 { model.robot.tendons.len() } else { 0 }];
     while s < s1 {
         steps += 1;
         // 1e6 steps means the tolerance cannot be met: report instead of looping
@@ -260,7 +312,14 @@ fn integrate(
             }
             let si = s + C[i] * h;
             let site = model.site(si);
-            k[i] = local_rhs(model, &site, s1, &R, &yi)?;
+            for (j, &t) in slipping.tendons.iter().enumerate() {
+                let rate: f64 = (0..i).map(|l| A[i][l] * tau_rates[l * slips + j]).sum();
+                model.tensions[t] = tau[j] + h * rate;
+            }
+            k[i] = local_rhs(model, &site, s1, &R, &yi, &mut turning)?;
+            for (j, &t) in slipping.tendons.iter().enumerate() {
+                tau_rates[i * slips + j] = model.tensions[t] * turning[t];
+            }
             report.evaluations.equations += 1;
             let (vi, ui): (Vector3<f64>, Vector3<f64>) = (yi.fixed_rows::<3>(6).into(), yi.fixed_rows::<3>(9).into());
             for &j in paths.slots {
@@ -288,6 +347,14 @@ fn integrate(
             let sc = tol * (1.0 + l0.abs().max((l0 + dl5).abs()));
             err = err.max(((dl5 - step_lengths(&B4, slot) / length) / sc).abs());
         }
+        let step_tension =
+            |b: &[f64; 7], j: usize| -> f64 { (0..7).map(|i| b[i] * tau_rates[i * slips + j]).sum::<f64>() * h };
+        // Relative to the tension itself: it changes by the factor exp(mu theta), whatever
+        // its size (a tendon at 0 N stays there).
+        for (j, &t0) in tau.iter().enumerate().filter(|(_, t)| **t > 0.0) {
+            let sc = tol * t0.max(t0 + step_tension(&B5, j));
+            err = err.max(((step_tension(&B5, j) - step_tension(&B4, j)) / sc).abs());
+        }
         if !err.is_finite() {
             h *= 0.25;
             continue;
@@ -301,10 +368,22 @@ fn integrate(
             for (slot, &j) in paths.slots.iter().enumerate() {
                 paths.lengths[j] += step_lengths(&B5, slot);
             }
+            for (j, t) in tau.iter_mut().enumerate() {
+                *t += step_tension(&B5, j);
+            }
+            for (j, &t) in slipping.tendons.iter().enumerate() {
+                model.tensions[t] = tau[j];
+            }
+            if let Some(out) = slipping.profile.as_deref_mut() {
+                out.push(model.tensions.clone());
+            }
             traj.push(State { s, p, R, v, u });
         }
         // Standard controller: safety 0.9, exponent 1/5, growth limited to [0.2, 5].
         h *= (0.9 * err.powf(-0.2)).clamp(0.2, 5.0);
+    }
+    for (j, &t) in slipping.tendons.iter().enumerate() {
+        model.tensions[t] = tau[j];
     }
     Ok(State { s, p, R, v, u })
 }

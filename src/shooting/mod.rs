@@ -19,6 +19,7 @@ use crate::error::{Result, invalid};
 use crate::mesh::guess::{self, InitialGuess};
 use crate::mesh::{Mesh, nodes};
 use crate::model::equations::Model;
+use crate::model::friction;
 use crate::report::{Iteration, Method, SolveReport, Termination};
 use crate::solution::{Solution, State};
 use crate::{Error, Readable, Robot};
@@ -164,9 +165,29 @@ pub fn solve(robot: &Robot, options: &Options) -> Result<Solution> {
         trajectory = traj;
     }
     report.intervals = trajectory.len().saturating_sub(1);
-    report.timings.total = start.elapsed();
     let model = Model::new(&problem.robot);
     let ends = segment_ends(&model, &trajectory);
+    if friction::any(&problem.robot) {
+        // The tensions along the tendons with friction: the converged trial once more (it is
+        // deterministic, so the trajectory is the same), recording them.
+        let mut profile = Vec::new();
+        let paths: Vec<(usize, f64)> = Vec::new();
+        let base = x.fixed_rows::<6>(0).into_owned();
+        let mut traj = Vec::new();
+        integrate::shoot(
+            &model,
+            &problem.scale,
+            &base,
+            &paths,
+            options,
+            &mut traj,
+            Some(&mut profile),
+            &mut report,
+        )?;
+        report.timings.total = start.elapsed();
+        return nodes::solution_with_tensions(&model, &traj, &ends, &profile, report);
+    }
+    report.timings.total = start.elapsed();
     nodes::solution(&model, &trajectory, &ends, None, report)
 }
 

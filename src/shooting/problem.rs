@@ -183,7 +183,7 @@ impl Problem {
         let paths: Vec<(usize, f64)> = self.displaced.iter().map(|c| (c.tendon, c.end)).collect();
         let model = Model::new(&self.robot);
         let base = x.fixed_rows::<6>(0).into_owned();
-        let (tip, lengths) = shoot(&model, &self.scale, &base, &paths, options, traj, report)?;
+        let (tip, lengths) = shoot(&model, &self.scale, &base, &paths, options, traj, None, report)?;
         let length = self.scale.length;
         let gaps = self
             .displaced

@@ -256,7 +256,10 @@ class Solution:
         """Each tendon's path (m), (N_i, 3) arrays."""
     @property
     def tendons(self) -> List[Dict[str, float]]:
-        """Per tendon: tension, displacement, length, reference_length, slack."""
+        """Per tendon: tension, delivered_tension, displacement, length, reference_length, slack."""
+    @property
+    def tendon_tensions(self) -> List[FloatArray]:
+        """Each tendon's tension (N) at the points of its path, (N_i,) arrays."""
     @property
     def tensions(self) -> FloatArray:
         """Tendon tensions (N), shape (k,)."""

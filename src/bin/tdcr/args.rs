@@ -150,6 +150,19 @@ pub fn parse_tension(text: &str) -> Result<(usize, f64), String> {
     Ok((index, tension))
 }
 
+/// `I=MU` (`solve --friction`): a tendon number and a friction coefficient >= 0.
+pub fn parse_friction(text: &str) -> Result<(usize, f64), String> {
+    let (index, value) = parse_tendon(text, "I=MU, e.g. 1=0.1")?;
+    let mu = parse_number(value, "a friction coefficient")?;
+    if mu < 0.0 {
+        return Err(format!(
+            "friction coefficient {} is negative: give 0 (none) or more",
+            tdcr::Readable(mu)
+        ));
+    }
+    Ok((index, mu))
+}
+
 /// `I=METRES` (`--displacement`): a tendon number from 1 and its actuator pull-in in m
 /// (negative lets the tendon out).
 pub fn parse_displacement(text: &str) -> Result<(usize, f64), String> {

@@ -67,6 +67,22 @@ pub fn set_tension(robot: &mut Robot, index: usize, tension: f64) -> Result<(), 
     }
 }
 
+/// Sets the friction coefficient of tendon `index` (from 1), keeping the motion the file
+/// gives it (`pull` by default); a number past the last tendon is bad input.
+pub fn set_friction(robot: &mut Robot, index: usize, coefficient: f64) -> Result<(), Failure> {
+    let count = robot.tendons.len();
+    match robot.tendons.get_mut(index.wrapping_sub(1)) {
+        Some(t) => {
+            let motion = t.friction.map_or(tdcr::Motion::Pull, |f| f.motion);
+            t.friction = Some(tdcr::Friction { coefficient, motion });
+            Ok(())
+        }
+        None => Err(Failure::Input(format!(
+            "--friction {index}=...: the robot has {count} tendon(s), numbered 1 to {count} in file order"
+        ))),
+    }
+}
+
 /// Applies the overrides shared by `solve` and `sweep` (loads, model, method, mesh) to the
 /// file.
 pub fn apply(file: &mut RobotFile, args: &SolverArgs) {

@@ -5,9 +5,9 @@ use std::path::PathBuf;
 use tdcr::io::output;
 use tdcr::plot::{Figure, Style, shape_legend};
 
-use crate::args::{SolverArgs, parse_disks, parse_displacement, parse_samples, parse_tension};
+use crate::args::{SolverArgs, parse_disks, parse_displacement, parse_friction, parse_samples, parse_tension};
 use crate::failure::{Failure, emit, note, picture_format, write_file, write_picture};
-use crate::robot_args::{apply, read_robot, run_solver, set_displacement, set_tension};
+use crate::robot_args::{apply, read_robot, run_solver, set_displacement, set_friction, set_tension};
 use crate::tables::{diagnostics, solution_table, summary};
 
 /// The output formats of `solve`.
@@ -34,6 +34,10 @@ pub struct SolveArgs {
     /// (its tension is then solved for; docs/actuation.md). Repeatable.
     #[arg(long, value_name = "I=METRES", value_parser = parse_displacement)]
     displacement: Vec<(usize, f64)>,
+    /// Friction coefficient of tendon I (numbered from 1) in its channels, full slip in the
+    /// file's motion (`pull` unless the file says `release`; docs/friction.md). Repeatable.
+    #[arg(long, value_name = "I=MU", value_parser = parse_friction)]
+    friction: Vec<(usize, f64)>,
     #[command(flatten)]
     solver: SolverArgs,
     /// Output at K evenly spaced arc lengths (interpolated with the scheme's own
@@ -98,6 +102,10 @@ pub fn run(args: &SolveArgs) -> Result<(), Failure> {
             )));
         }
         set_displacement(&mut file.robot, i, q)?;
+    }
+    once("--friction", &args.friction)?;
+    for &(i, mu) in &args.friction {
+        set_friction(&mut file.robot, i, mu)?;
     }
     apply(&mut file, &args.solver);
     crate::failure::warn_file(&name, &file);

@@ -182,17 +182,34 @@ pub fn solution_table(name: &str, file: &RobotFile, solution: &Solution, samples
         "bending angle (deg):   {}",
         fixed(output::bending_angle(solution).to_degrees(), 10, 4)
     );
+    // With friction, the tension a tendon delivers at its termination (docs/friction.md).
+    let friction = solution.tendons.iter().any(|t| t.delivered_tension != t.tension);
     let _ = writeln!(
         out,
-        "\n{:>7} {:>12} {:>12} {:>12} {:>12} {:>9}",
-        "tendon", "tension/N", "pull-in/mm", "length/mm", "ref len/mm", "slack/mm"
+        "\n{:>7} {:>12}{} {:>12} {:>12} {:>12} {:>9}",
+        "tendon",
+        "tension/N",
+        if friction {
+            format!(" {:>12}", "delivered/N")
+        } else {
+            String::new()
+        },
+        "pull-in/mm",
+        "length/mm",
+        "ref len/mm",
+        "slack/mm"
     );
     for (i, t) in solution.tendons.iter().enumerate() {
         let _ = writeln!(
             out,
-            "{:>7} {} {} {} {} {}",
+            "{:>7} {}{} {} {} {} {}",
             i + 1,
             fixed(t.tension, 12, 5),
+            if friction {
+                format!(" {}", fixed(t.delivered_tension, 12, 5))
+            } else {
+                String::new()
+            },
             fixed(t.displacement * 1e3, 12, 5),
             fixed(t.length * 1e3, 12, 4),
             fixed(t.reference_length * 1e3, 12, 4),

@@ -184,6 +184,7 @@ impl<'a> Sensitivity<'a> {
                 "pass a solution of this robot (same tendons in file order)",
             ));
         }
+        crate::model::friction::unsupported(robot, "the sensitivity analysis")?;
         let s: Vec<f64> = solution.nodes.iter().map(|n| n.s).collect();
         let mesh = Mesh::from_points(robot, &s)?;
         let same = mesh.nodes.len() == s.len() && mesh.nodes.iter().zip(&s).all(|(m, s)| m.s == *s);

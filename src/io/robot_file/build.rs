@@ -3,15 +3,15 @@
 
 use super::SolverSettings;
 use super::tables::{
-    BaseTable, DisksTable, EquilibriumKey, LoadsTable, MethodName, ModelTable, RodTable, RoutingTable, SolverTable,
-    TendonModelKey, TendonTable, Vec3,
+    BaseTable, DisksTable, EquilibriumKey, LoadsTable, MethodName, ModelTable, MotionName, RodTable, RoutingTable,
+    SolverTable, TendonModelKey, TendonTable, Vec3,
 };
 use crate::io::Problem;
 use crate::io::locate::Locator;
 use crate::model::loads::{Field, Loads, PointLoad};
 use crate::model::rod::{Rod, Section};
 use crate::model::routing::Routing;
-use crate::model::tendon::{Actuation, Tendon};
+use crate::model::tendon::{Actuation, Friction, Motion, Tendon};
 use crate::report::Method;
 use crate::{Disks, Error, Robot, TendonModel, so3};
 use nalgebra::{Matrix3, Vector3};
@@ -95,6 +95,15 @@ pub(super) fn build(rod: &RodTable, base: &BaseTable, loads: &LoadsTable, tendon
         }
         tendon.stiffness = t.stiffness;
         tendon.free_length = t.free_length.unwrap_or(0.0);
+        if t.friction.is_some() || t.motion.is_some() {
+            tendon.friction = Some(Friction {
+                coefficient: t.friction.unwrap_or(0.0),
+                motion: match t.motion {
+                    Some(MotionName::Release) => Motion::Release,
+                    Some(MotionName::Pull) | None => Motion::Pull,
+                },
+            });
+        }
         robot = robot.with_tendon(tendon);
     }
     robot

@@ -135,8 +135,9 @@ pub(super) struct PointTable {
 }
 
 /// One `[[tendon]]`: its routing, its `tension` (N) or actuator `displacement` (m, one of
-/// the two), optionally where it ends (`end`), and for an elastic tendon its `stiffness`
-/// E_t A_t (N) and `free_length` (m) between the base and the actuator.
+/// the two), optionally where it ends (`end`), for an elastic tendon its `stiffness`
+/// E_t A_t (N) and `free_length` (m) between the base and the actuator, and its `friction`
+/// coefficient in the channels with the `motion` modelled (`pull` or `release`).
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(super) struct TendonTable {
@@ -146,6 +147,16 @@ pub(super) struct TendonTable {
     pub(super) end: Option<f64>,
     pub(super) stiffness: Option<f64>,
     pub(super) free_length: Option<f64>,
+    pub(super) friction: Option<f64>,
+    pub(super) motion: Option<MotionName>,
+}
+
+/// The `motion` of a tendon with friction, as written in the file.
+#[derive(Clone, Copy, Debug, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub(super) enum MotionName {
+    Pull,
+    Release,
 }
 
 /// A tendon's `routing`, chosen by its `kind`: `straight` or `helical`.

@@ -8,7 +8,7 @@ use crate::error::{Result, invalid};
 use crate::model::loads::Field;
 use crate::model::rod::{ReferenceStrains, Stiffness};
 use crate::model::routing::Routing;
-use crate::model::tendon::Actuation;
+use crate::model::tendon::{Actuation, Motion};
 use crate::report::Method;
 use nalgebra::{Matrix3, Vector3};
 use toml::{Table, Value};
@@ -161,6 +161,12 @@ fn document(file: &RobotFile) -> Result<String> {
         }
         if t.free_length != 0.0 {
             tendon.insert("free_length".into(), Value::Float(t.free_length));
+        }
+        if let Some(friction) = t.friction {
+            tendon.insert("friction".into(), Value::Float(friction.coefficient));
+            if friction.motion != Motion::Pull {
+                tendon.insert("motion".into(), Value::String(friction.motion.name().into()));
+            }
         }
         tendons.push(Value::Table(tendon));
     }

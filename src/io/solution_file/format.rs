@@ -140,6 +140,10 @@ pub(crate) struct SampleEntry {
 #[derive(Serialize, Deserialize)]
 pub(crate) struct TendonEntry {
     pub tension: Num,
+    /// The tension at the termination (N); absent in files written before friction: the
+    /// tension.
+    #[serde(default)]
+    pub delivered_tension: Option<Num>,
     pub displacement: Num,
     pub length: Num,
     pub reference_length: Num,
@@ -153,6 +157,10 @@ pub(crate) struct TendonEntry {
     pub turns: Option<Num>,
     /// Its path at the nodes up to its end (m, world frame).
     pub path: Vec<V3>,
+    /// Its tension at the points of `path` (N); absent in files written before friction:
+    /// the tension everywhere.
+    #[serde(default)]
+    pub tensions: Option<Vec<Num>>,
 }
 
 /// Six rows (tip position, tip rotation vector), one column per input.
@@ -276,7 +284,8 @@ impl SolutionFile {
                 .tendons
                 .iter()
                 .zip(&solution.tendon_paths)
-                .map(|(state, path)| tendon_entry(state, path))
+                .zip(&solution.tendon_tensions)
+                .map(|((state, path), tensions)| tendon_entry(state, path, tensions))
                 .collect(),
             jacobian: None,
             format: FORMAT.into(),
@@ -319,9 +328,10 @@ impl SolutionFile {
     }
 }
 
-fn tendon_entry(state: &TendonState, path: &[Vector3<f64>]) -> TendonEntry {
+fn tendon_entry(state: &TendonState, path: &[Vector3<f64>], tensions: &[f64]) -> TendonEntry {
     TendonEntry {
         tension: Num(state.tension),
+        delivered_tension: Some(Num(state.delivered_tension)),
         displacement: Num(state.displacement),
         length: Num(state.length),
         reference_length: Num(state.reference_length),
@@ -329,5 +339,6 @@ fn tendon_entry(state: &TendonState, path: &[Vector3<f64>]) -> TendonEntry {
         end: None,
         turns: None,
         path: path.iter().map(v3).collect(),
+        tensions: Some(tensions.iter().map(|&t| Num(t)).collect()),
     }
 }

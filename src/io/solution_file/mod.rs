@@ -174,6 +174,7 @@ impl SolutionFile {
             )));
         }
         let mut tendon_paths = Vec::with_capacity(self.tendons.len());
+        let mut tendon_tensions = Vec::with_capacity(self.tendons.len());
         let mut tendons = Vec::with_capacity(self.tendons.len());
         for (i, t) in self.tendons.iter().enumerate() {
             if t.path.is_empty() || t.path.len() > nodes.len() {
@@ -195,9 +196,32 @@ impl SolutionFile {
                 .enumerate()
                 .map(|(k, p)| finite(p, &format!("tendons[{i}].path[{k}]")))
                 .collect::<Result<_>>()?;
+            let along: Vec<f64> = match &t.tensions {
+                None => vec![t.tension.0; path.len()],
+                Some(values) if values.len() == path.len() && values.iter().all(|x| x.0.is_finite() && x.0 >= 0.0) => {
+                    values.iter().map(|x| x.0).collect()
+                }
+                Some(values) => {
+                    return Err(bad(format!(
+                        "tendons[{i}].tensions has {} entries; a tendon's tensions are one finite value >= 0 N per \
+                         point of its path ({})",
+                        values.len(),
+                        path.len()
+                    )));
+                }
+            };
+            let delivered = t.delivered_tension.as_ref().map_or(t.tension.0, |x| x.0);
+            if !(delivered.is_finite() && delivered >= 0.0) {
+                return Err(bad(format!(
+                    "tendons[{i}].delivered_tension = {} N: a tension is finite and >= 0",
+                    Readable(delivered)
+                )));
+            }
             tendon_paths.push(path);
+            tendon_tensions.push(along);
             tendons.push(TendonState {
                 tension: t.tension.0,
+                delivered_tension: delivered,
                 displacement: t.displacement.0,
                 length: t.length.0,
                 reference_length: t.reference_length.0,
@@ -208,6 +232,7 @@ impl SolutionFile {
         Ok(Solution {
             nodes,
             tendon_paths,
+            tendon_tensions,
             tendons,
             report,
         })

@@ -1,0 +1,522 @@
+//! The tension profile of the tendons with friction on a mesh ([`Profile`]) and the
+//! collocation of an interval with friction: the 12 rows of the backbone and one capstan row
+//! per tendon with friction, with their exact Jacobian (docs/friction.md, "Collocation").
+//!
+//! Each tendon j with friction carries the log tension z_j = ln(tau_j / tau_j(0)) at the
+//! nodes of its span, z_j = 0 at the base. On an interval, z_j obeys
+//! z_j' = kappa~_j(y) = w_j mu_j kappa_j, collocated by the same Hermite-Simpson formula as
+//! the backbone state y:
+//!
+//! ```text
+//! z_m = (z_a + z_b) / 2 + h/8 (kappa~_a - kappa~_b),  psi = z_b - z_a - h/6 (kappa~_a + 4 kappa~_m + kappa~_b)
+//! ```
+//!
+//! where kappa~ at the midpoint is evaluated at (y_m, z_m): y and z are one collocation
+//! state, so the scheme keeps order 4. The backbone rows see z through the tensions of eq.
+//! 13 with friction at the nodes and the midpoint ([`friction::linearize`]).
+#![allow(non_snake_case)]
+
+use super::super::residual::{Block, EndColumns, IntervalSites, QuarterSites, end_points, rhs_linearized, scale_rows};
+use super::super::unknowns::THETA;
+use crate::error::Result;
+use crate::mesh::Mesh;
+use crate::model::equations::{Model, Site};
+use crate::model::friction::{self, FrictionLinearization};
+use crate::so3;
+use crate::solution::State;
+use nalgebra::{DMatrix, SMatrix, Vector3, Vector6};
+use std::cell::RefCell;
+
+/// The log tensions of the tendons with friction on a mesh, and a model to evaluate eq. 13
+/// with them.
+#[derive(Debug)]
+pub(crate) struct Profile<'a> {
+    /// Indices of the tendons with friction ([`friction::slipping`]).
+    pub(crate) slipping: Vec<usize>,
+    /// Their tensions at the base entry tau_j(0) (N), the input.
+    pub(crate) base: Vec<f64>,
+    /// The last node of each one's span (its left limit at the termination).
+    pub(crate) spans: Vec<usize>,
+    /// z_j at every node (0 at node 0; past the span, the span's last value).
+    pub(crate) z: Vec<Vec<f64>>,
+    /// The model with the tensions of one point, for eq. 13 with friction.
+    scratch: RefCell<Model<'a>>,
+    /// Each link's last evaluation ([`interval`] through the system's residual or
+    /// Jacobian), which the border reads instead of evaluating the link again.
+    cache: RefCell<Vec<Option<IntervalLinearization>>>,
+}
+
+impl<'a> Profile<'a> {
+    /// The profile of `model`'s tendons with friction on `mesh`, constant (z = 0).
+    pub(crate) fn new(model: &Model<'a>, mesh: &Mesh) -> Self {
+        let robot = model.robot;
+        let slipping = friction::slipping(robot);
+        let base = slipping.iter().map(|&i| model.tensions[i]).collect();
+        let spans = slipping
+            .iter()
+            .map(|&i| {
+                let end = robot.tendons[i].end(robot.length());
+                mesh.nodes
+                    .iter()
+                    .position(|n| n.s >= end)
+                    .unwrap_or(mesh.nodes.len() - 1)
+            })
+            .collect();
+        Profile {
+            z: vec![vec![0.0; mesh.nodes.len()]; slipping.len()],
+            slipping,
+            base,
+            spans,
+            scratch: RefCell::new(model.clone()),
+            cache: RefCell::new((1..mesh.nodes.len()).map(|_| None).collect()),
+        }
+    }
+
+    /// A copy with the same log tensions and a fresh scratch model and cache (tests).
+    #[cfg(test)]
+    fn clone_z(&self) -> Self {
+        Profile {
+            slipping: self.slipping.clone(),
+            base: self.base.clone(),
+            spans: self.spans.clone(),
+            z: self.z.clone(),
+            scratch: RefCell::new(self.scratch.borrow().clone()),
+            cache: RefCell::new(self.cache.borrow().iter().map(|_| None).collect()),
+        }
+    }
+
+    /// Number of tendons with friction.
+    pub(crate) fn count(&self) -> usize {
+        self.slipping.len()
+    }
+
+    /// The tension (N) of slip j where its log tension is `z`.
+    pub(crate) fn tension(&self, j: usize, z: f64) -> f64 {
+        self.base[j] * z.exp()
+    }
+
+    /// Whether slip j loads link k (its span reaches node k + 1).
+    pub(crate) fn on_link(&self, j: usize, k: usize) -> bool {
+        k < self.spans[j]
+    }
+
+    /// Sets `model`'s tension of each tendon with friction to the one it delivers at its
+    /// termination, which the jump and tip conditions use.
+    pub(crate) fn deliver(&self, model: &mut Model) {
+        for (j, &i) in self.slipping.iter().enumerate() {
+            model.tensions[i] = self.tension(j, self.z[j][self.spans[j]]);
+        }
+    }
+
+    /// Every tendon's tension (N) at every node: the profile for the slips, the model's
+    /// tension for the others.
+    pub(crate) fn node_tensions(&self, model: &Model) -> Vec<Vec<f64>> {
+        (0..self.z.first().map_or(0, Vec::len))
+            .map(|n| {
+                let mut t = model.tensions.clone();
+                for (j, &i) in self.slipping.iter().enumerate() {
+                    t[i] = self.tension(j, self.z[j][n.min(self.spans[j])]);
+                }
+                t
+            })
+            .collect()
+    }
+
+    /// Keeps link k's evaluation `lin` for the border.
+    pub(crate) fn keep(&self, k: usize, lin: IntervalLinearization) {
+        self.cache.borrow_mut()[k] = Some(lin);
+    }
+
+    /// Runs `f` on link k's last evaluation (None when it has none).
+    pub(crate) fn cached<R>(&self, k: usize, f: impl FnOnce(Option<&IntervalLinearization>) -> R) -> R {
+        f(self.cache.borrow()[k].as_ref())
+    }
+
+    /// Eq. 13 with friction at a site and state, the slips at log tensions `z` (with its
+    /// derivatives when `derivatives`).
+    fn point(
+        &self,
+        site: &Site,
+        segment_end: f64,
+        R: &nalgebra::Matrix3<f64>,
+        y: (&Vector3<f64>, &Vector3<f64>),
+        z: &[f64],
+        derivatives: bool,
+    ) -> Result<FrictionLinearization> {
+        let mut model = self.scratch.borrow_mut();
+        for (j, &i) in self.slipping.iter().enumerate() {
+            model.tensions[i] = self.tension(j, z[j]);
+        }
+        friction::linearize(&model, site, segment_end, (R, y.0, y.1), &self.slipping, derivatives)
+    }
+}
+
+/// The linearization of an interval with friction: its backbone rows, capstan rows and
+/// their derivatives.
+#[derive(Debug)]
+pub(crate) struct IntervalLinearization {
+    /// The 12 backbone rows (scaled).
+    pub(crate) residual: Block<f64>,
+    /// psi_j, one per slip (0 for slips not on this link).
+    pub(crate) psi: Vec<f64>,
+    /// d(backbone rows)/dz: 12 x 2k, columns z_a of every slip, then z_b.
+    pub(crate) rows_z: DMatrix<f64>,
+    /// d psi / d(node unknowns): k x 24, the block's column layout.
+    pub(crate) psi_x: DMatrix<f64>,
+    /// d psi / dz: k x 2k, columns as `rows_z`.
+    pub(crate) psi_z: DMatrix<f64>,
+    /// Whether the derivatives were evaluated (else they are zero).
+    pub(crate) derivatives: bool,
+}
+
+/// Collocation of link k with friction: residual rows and capstan rows, and when `jac` is
+/// given, the backbone rows' Jacobian in the scaled node unknowns there (12 x 24, row major)
+/// and the border's derivatives in the return value.
+///
+/// # Errors
+/// A model breakdown at a node or the midpoint.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn interval(
+    profile: &Profile,
+    length: f64,
+    k: usize,
+    sites: &IntervalSites,
+    segment_end: f64,
+    a: &State,
+    b: &State,
+    jac: Option<&mut [f64]>,
+) -> Result<IntervalLinearization> {
+    let count = profile.count();
+    let h = sites.end.s - sites.start.s;
+    let za: Vec<f64> = profile.z.iter().map(|z| z[k]).collect();
+    let zb: Vec<f64> = profile.z.iter().map(|z| z[k + 1]).collect();
+    let (y0, y1) = end_points(a, b);
+    let theta1: Vector3<f64> = y1.fixed_rows::<3>(THETA).into();
+    let derivatives = jac.is_some();
+    let la = profile.point(&sites.start, segment_end, &a.R, (&a.v, &a.u), &za, derivatives)?;
+    let lb = profile.point(&sites.end, segment_end, &b.R, (&b.v, &b.u), &zb, derivatives)?;
+    let p0 = rhs_linearized(&la.lin, &a.R, &y0);
+    let p1 = rhs_linearized(&lb.lin, &a.R, &y1);
+    let ym = (y0 + y1) * 0.5 + (p0.f - p1.f) * (h / 8.0);
+    let zm: Vec<f64> = (0..count)
+        .map(|j| 0.5 * (za[j] + zb[j]) + h / 8.0 * (la.turning[j] - lb.turning[j]))
+        .collect();
+    let theta_m: Vector3<f64> = ym.fixed_rows::<3>(THETA).into();
+    let (vm, um): (Vector3<f64>, Vector3<f64>) = (ym.fixed_rows::<3>(6).into(), ym.fixed_rows::<3>(9).into());
+    let Rm = a.R * so3::exp(&theta_m);
+    let lm = profile.point(&sites.mid, segment_end, &Rm, (&vm, &um), &zm, derivatives)?;
+    let pm = rhs_linearized(&lm.lin, &a.R, &ym);
+    let residual = scale_rows(y1 - y0 - (p0.f + pm.f * 4.0 + p1.f) * (h / 6.0), length);
+    let on: Vec<bool> = (0..count).map(|j| profile.on_link(j, k)).collect();
+    let psi: Vec<f64> = (0..count)
+        .map(|j| {
+            if on[j] {
+                zb[j] - za[j] - h / 6.0 * (la.turning[j] + 4.0 * lm.turning[j] + lb.turning[j])
+            } else {
+                0.0
+            }
+        })
+        .collect();
+    let mut out = IntervalLinearization {
+        residual,
+        psi,
+        rows_z: DMatrix::zeros(12, 2 * count),
+        psi_x: DMatrix::zeros(count, 24),
+        psi_z: DMatrix::zeros(count, 2 * count),
+        derivatives,
+    };
+    let Some(jac) = jac else {
+        return Ok(out);
+    };
+
+    // The backbone rows: the chain rule of residual::interval_jacobian, with the midpoint's
+    // log tensions z_m depending on the node states through kappa~_a, kappa~_b.
+    let ends = EndColumns::new(&p0, &p1, &theta1, length);
+    let dYm = ends.midpoint(h);
+    // d kappa~ / d(18 columns) at the nodes: (theta, v, u / L) of their own node.
+    let node_turning = |l: &FrictionLinearization, j: usize, first: usize| {
+        let mut row = SMatrix::<f64, 1, 18>::zeros();
+        for c in 0..3 {
+            row[first + c] = l.d_turning[j][6 + c];
+            row[first + 3 + c] = l.d_turning[j][c];
+            row[first + 6 + c] = l.d_turning[j][3 + c] / length;
+        }
+        row
+    };
+    let dzm: Vec<SMatrix<f64, 1, 18>> = (0..count)
+        .map(|j| (node_turning(&la, j, 0) - node_turning(&lb, j, 9)) * (h / 8.0))
+        .collect();
+    // F_m and kappa~_m in the midpoint's local coordinates (theta, v, u) and the frame.
+    let Jr_m = so3::right_jacobian(&theta_m);
+    let Em = so3::exp(&theta_m);
+    let turning_y = |j: usize| {
+        let mut row = SMatrix::<f64, 1, 12>::zeros();
+        let d_phi = lm.d_turning[j].fixed_columns::<3>(6).into_owned();
+        row.fixed_columns_mut::<3>(3).copy_from(&(d_phi * Jr_m));
+        row.fixed_columns_mut::<3>(6)
+            .copy_from(&lm.d_turning[j].fixed_columns::<3>(0));
+        row.fixed_columns_mut::<3>(9)
+            .copy_from(&lm.d_turning[j].fixed_columns::<3>(3));
+        (row, d_phi * Em.transpose())
+    };
+    let mut dFm = pm.f_y.fixed_columns::<9>(3) * dYm.fixed_rows::<9>(3);
+    {
+        let mut frame = dFm.fixed_columns_mut::<3>(0);
+        frame += pm.f_frame;
+    }
+    let rates_z = |l: &FrictionLinearization, j: usize| {
+        let mut col = Block::<f64>::zeros();
+        col.fixed_rows_mut::<6>(6).copy_from(&l.d_log_tension[j]);
+        col
+    };
+    for (j, dz) in dzm.iter().enumerate() {
+        dFm += rates_z(&lm, j) * dz;
+    }
+    ends.write(&dFm, h, length, jac);
+
+    // d kappa~_m / d(18 columns), including z_m's dependence.
+    let mut dturn_m: Vec<SMatrix<f64, 1, 18>> = Vec::with_capacity(count);
+    for j in 0..count {
+        let (row_y, row_frame) = turning_y(j);
+        let mut row = row_y.fixed_columns::<9>(3) * dYm.fixed_rows::<9>(3);
+        for c in 0..3 {
+            row[c] += row_frame[c];
+        }
+        for (l, dz) in dzm.iter().enumerate() {
+            row += dz * lm.d_turning_log_tension[j * count + l];
+        }
+        dturn_m.push(row);
+    }
+    // The capstan rows in the block's columns (p columns are 0).
+    for j in (0..count).filter(|&j| on[j]) {
+        let row = (node_turning(&la, j, 0) + dturn_m[j] * 4.0 + node_turning(&lb, j, 9)) * (-h / 6.0);
+        for c in 0..18 {
+            let column = if c < 9 { 3 + c } else { 6 + c };
+            out.psi_x[(j, column)] = row[c];
+        }
+    }
+
+    // The log-tension columns: z_a of slip l (column l), z_b (column count + l).
+    for l in 0..count {
+        for (side, sign, lin) in [(0, 1.0, &la), (1, -1.0, &lb)] {
+            let dF_end = rates_z(lin, l); // dF_a or dF_b / dz
+            // y_m moves by +-h/8 dF_end; z_m by delta/2 +- h/8 d kappa~_end / dz.
+            let dym = dF_end * (sign * h / 8.0);
+            let dzm_l: Vec<f64> = (0..count)
+                .map(|j| {
+                    let own = if j == l { 0.5 } else { 0.0 };
+                    own + sign * h / 8.0 * lin.d_turning_log_tension[j * count + l]
+                })
+                .collect();
+            let mut dFm_z = pm.f_y * dym;
+            for (j, d) in dzm_l.iter().enumerate() {
+                dFm_z += rates_z(&lm, j) * *d;
+            }
+            let column = scale_rows(-(dF_end + dFm_z * 4.0) * (h / 6.0), length);
+            out.rows_z.set_column(side * count + l, &column);
+            for j in (0..count).filter(|&j| on[j]) {
+                let (row_y, _) = turning_y(j);
+                let mut dturn = (row_y * dym)[0];
+                for (m, d) in dzm_l.iter().enumerate() {
+                    dturn += lm.d_turning_log_tension[j * count + m] * d;
+                }
+                let own_end = lin.d_turning_log_tension[j * count + l];
+                let delta = if j == l { -sign } else { 0.0 };
+                out.psi_z[(j, side * count + l)] = delta - h / 6.0 * (own_end + 4.0 * dturn);
+            }
+        }
+    }
+    Ok(out)
+}
+
+/// Link k's order-6 rows with friction: backbone rows, capstan rows (one per slip) and the
+/// rates at the two nodes.
+pub(crate) type Order6 = (Block<f64>, Vec<f64>, Vector6<f64>, Vector6<f64>);
+
+/// Link k's order-6 rows with friction (the Cash-Singhal formula of
+/// [`super::super::residual::interval_order6`] on the state (y, z)): the 12 backbone rows,
+/// the capstan rows psi6 (0 for slips not on the link), and the rates (v', u') at the two
+/// nodes.
+///
+/// # Errors
+/// A model breakdown at a stage.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn interval_order6(
+    profile: &Profile,
+    length: f64,
+    k: usize,
+    sites: &IntervalSites,
+    quarters: &QuarterSites,
+    segment_end: f64,
+    a: &State,
+    b: &State,
+) -> Result<Order6> {
+    let count = profile.count();
+    let h = sites.end.s - sites.start.s;
+    let za: Vec<f64> = profile.z.iter().map(|z| z[k]).collect();
+    let zb: Vec<f64> = profile.z.iter().map(|z| z[k + 1]).collect();
+    let (y0, y1) = end_points(a, b);
+    // F and kappa~ at a local state (y, z) of the interval.
+    let stage = |site: &Site, y: &Block<f64>, z: &[f64]| -> Result<(Block<f64>, Vec<f64>)> {
+        let theta: Vector3<f64> = y.fixed_rows::<3>(THETA).into();
+        let (v, u): (Vector3<f64>, Vector3<f64>) = (y.fixed_rows::<3>(6).into(), y.fixed_rows::<3>(9).into());
+        let R = a.R * so3::exp(&theta);
+        let lin = profile.point(site, segment_end, &R, (&v, &u), z, false)?;
+        let mut f = Block::zeros();
+        f.fixed_rows_mut::<3>(0).copy_from(&(R * v));
+        f.fixed_rows_mut::<3>(THETA)
+            .copy_from(&(so3::right_jacobian_inv(&theta) * u));
+        f.fixed_rows_mut::<6>(6).copy_from(&lin.lin.rates);
+        Ok((f, lin.turning))
+    };
+    let (f0, k0) = stage(&sites.start, &y0, &za)?;
+    let (f1, k1) = stage(&sites.end, &y1, &zb)?;
+    let combine = |c0: f64, c1: f64, d0: f64, d1: f64| {
+        let y = (y0 * c0 + y1 * c1) / 32.0 + (f0 * d0 + f1 * d1) * (h / 64.0);
+        let z: Vec<f64> = (0..count)
+            .map(|j| (za[j] * c0 + zb[j] * c1) / 32.0 + (k0[j] * d0 + k1[j] * d1) * (h / 64.0))
+            .collect();
+        (y, z)
+    };
+    let (y_q, z_q) = combine(27.0, 5.0, 9.0, -3.0);
+    let (y_tq, z_tq) = combine(5.0, 27.0, 3.0, -9.0);
+    let (f_q, k_q) = stage(&quarters.quarter, &y_q, &z_q)?;
+    let (f_tq, k_tq) = stage(&quarters.three_quarters, &y_tq, &z_tq)?;
+    let y_m = (y0 + y1) * 0.5 + ((f1 - f0) * (5.0 / 24.0) + (f_q - f_tq) * (2.0 / 3.0)) * h;
+    let z_m: Vec<f64> = (0..count)
+        .map(|j| 0.5 * (za[j] + zb[j]) + ((k1[j] - k0[j]) * (5.0 / 24.0) + (k_q[j] - k_tq[j]) * (2.0 / 3.0)) * h)
+        .collect();
+    let (f_m, k_m) = stage(&sites.mid, &y_m, &z_m)?;
+    let quadrature = ((f0 + f1) * 7.0 + (f_q + f_tq) * 32.0 + f_m * 12.0) * (h / 90.0);
+    let psi: Vec<f64> = (0..count)
+        .map(|j| {
+            if profile.on_link(j, k) {
+                zb[j] - za[j] - (7.0 * (k0[j] + k1[j]) + 32.0 * (k_q[j] + k_tq[j]) + 12.0 * k_m[j]) * (h / 90.0)
+            } else {
+                0.0
+            }
+        })
+        .collect();
+    let rates = |f: &Block<f64>| f.fixed_rows::<6>(6).into_owned();
+    Ok((scale_rows(y1 - y0 - quadrature, length), psi, rates(&f0), rates(&f1)))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::cases;
+    use crate::collocation::residual::IntervalSites;
+    use crate::model::tendon::{Friction, Motion};
+
+    /// The interval's backbone rows and capstan rows against central differences in the
+    /// scaled node unknowns and the log tensions, on case H with friction on its helix and
+    /// (released) on tendon 1, at a bent state.
+    #[test]
+    fn interval_blocks_match_central_differences() {
+        let mut robot = cases::case_h();
+        robot.tendons[4].friction = Some(Friction::pull(0.3));
+        robot.tendons[0].set_tension(1.0);
+        robot.tendons[0].friction = Some(Friction {
+            coefficient: 0.2,
+            motion: Motion::Release,
+        });
+        let solution = crate::solve(&robot, &crate::collocation::Options::fixed(8)).unwrap();
+        let model = Model::new(&robot);
+        let mesh = Mesh::from_points(&robot, &solution.nodes.iter().map(|n| n.s).collect::<Vec<_>>()).unwrap();
+        let mut profile = Profile::new(&model, &mesh);
+        let x: Vec<State> = solution.nodes.iter().map(|n| n.state()).collect();
+        let k = 3;
+        for (j, z) in profile.z.iter_mut().enumerate() {
+            for (n, value) in z.iter_mut().enumerate() {
+                *value = -0.03 * n as f64 * (j as f64 + 1.0);
+            }
+        }
+        let site = |s: f64| model.site(s);
+        let (s0, s1) = (x[k].s, x[k + 1].s);
+        let sites = IntervalSites {
+            start: site(s0),
+            mid: site(0.5 * (s0 + s1)),
+            end: site(s1),
+        };
+        let length = robot.length();
+        let seg = mesh.nodes[k].segment_end;
+        let mut jac = [0.0; 12 * 24];
+        let lin = interval(&profile, length, k, &sites, seg, &x[k], &x[k + 1], Some(&mut jac)).unwrap();
+        let count = profile.count();
+        // One scaled unknown of node a (column < 12) or b moved by h.
+        let moved = |column: usize, h: f64| {
+            let (mut a, mut b) = (x[k], x[k + 1]);
+            let node = if column < 12 { &mut a } else { &mut b };
+            let (part, i) = ((column % 12) / 3, column % 3);
+            let mut d = Vector3::zeros();
+            d[i] = h;
+            match part {
+                0 => node.p += d * length,
+                1 => node.R *= so3::exp(&d),
+                2 => node.v += d,
+                _ => node.u += d / length,
+            }
+            interval(&profile, length, k, &sites, seg, &a, &b, None).unwrap()
+        };
+        // Richardson-extrapolated central differences (error O(h^4)): the strains enter the
+        // rates through E A / (E I) ~ 1e7, so plain differences are too coarse at any h.
+        let h = 1e-5;
+        let extrapolate = |f: &dyn Fn(f64) -> IntervalLinearization, h: f64| -> (Vec<f64>, Vec<f64>) {
+            let central = |h: f64| {
+                let (p, m) = (f(h), f(-h));
+                let rows: Vec<f64> = (0..12).map(|r| (p.residual[r] - m.residual[r]) / (2.0 * h)).collect();
+                let psi: Vec<f64> = (0..p.psi.len()).map(|j| (p.psi[j] - m.psi[j]) / (2.0 * h)).collect();
+                (rows, psi)
+            };
+            let ((r1, p1), (r2, p2)) = (central(h), central(h / 2.0));
+            let mix = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(x, y)| (4.0 * y - x) / 3.0).collect();
+            (mix(&r1, &r2), mix(&p1, &p2))
+        };
+        for column in 0..24 {
+            // The shear/extension strains v move the internal force by E A dv (1e5 N per
+            // unit): a step of 1e-8 keeps that below 1e-3 N.
+            let step = if (6..9).contains(&(column % 12)) { 1e-8 } else { h };
+            let (rows, psi) = extrapolate(&|h| moved(column, h), step);
+            for (row, &fd) in rows.iter().enumerate() {
+                let exact = jac[row * 24 + column];
+                // 1e-6 relative to at least 1: rows are O(1) scaled; the extrapolated
+                // difference carries ~1e-9 of rounding and h^4 of truncation
+                assert!(
+                    (fd - exact).abs() < 1e-6 * (1.0 + exact.abs()),
+                    "row {row}, column {column}: {fd} vs {exact}"
+                );
+            }
+            for (j, &fd) in psi.iter().enumerate() {
+                let exact = lin.psi_x[(j, column)];
+                assert!(
+                    (fd - exact).abs() < 1e-6 * (1.0 + exact.abs()),
+                    "psi {j}, column {column}: {fd} vs {exact}"
+                );
+            }
+        }
+        for side in 0..2 {
+            for l in 0..count {
+                let at = |h: f64| {
+                    let mut p = profile.clone_z();
+                    p.z[l][k + side] += h;
+                    interval(&p, length, k, &sites, seg, &x[k], &x[k + 1], None).unwrap()
+                };
+                let (rows, psi) = extrapolate(&at, h);
+                for (row, &fd) in rows.iter().enumerate() {
+                    let exact = lin.rows_z[(row, side * count + l)];
+                    assert!(
+                        (fd - exact).abs() < 1e-6 * (1.0 + exact.abs()),
+                        "row {row}, z {side} {l}: {fd} vs {exact}"
+                    );
+                }
+                for (j, &fd) in psi.iter().enumerate() {
+                    let exact = lin.psi_z[(j, side * count + l)];
+                    assert!(
+                        (fd - exact).abs() < 1e-6 * (1.0 + exact.abs()),
+                        "psi {j}, z {side} {l}: {fd} vs {exact}"
+                    );
+                }
+            }
+        }
+    }
+}

@@ -1,0 +1,581 @@
+//! Friction between tendons and their channels in full slip (the capstan law along the
+//! tendon, docs/friction.md): eq. 13 with the tangential part of the tendon's load on the
+//! backbone, and the rate of the tension along the tendon.
+//!
+//! With friction the tension tau_i(s) varies along the tendon. The channels' force on the
+//! backbone per unit s is then `-f_i = (tau_i t_i)' = tau_i t_i' + tau_i' t_i` (world
+//! frame): the normal part `q_i = tau_i t_i'`, which eq. 13 already has (its body-frame form
+//! is `A_i p_i^b''`), and the new tangential part `tau_i' t_i`. Coulomb's law in full slip
+//! makes the tangential part mu_i times the normal part's magnitude, signed by the motion:
+//!
+//! ```text
+//! tau_i' = w_i mu_i |q_i| = w_i mu_i tau_i kappa_i,   kappa_i = |t_i'|,   w_i = -1 (pull), +1 (release)
+//! ```
+//!
+//! kappa_i is the turning rate of the tendon's path per unit s: the backbone's bending and
+//! the routing's own turning (a helix) together. It depends on the rates (v', u') through
+//! p_i^b'', and the rates depend on tau_i' through the tangential load, so eq. 13 is no
+//! longer explicit. Here the rates with friction are
+//!
+//! ```text
+//! x = x0 - sum_j g_j y_j,   y_j = M^-1 (t_j, r_j x t_j),   g_j = w_j mu_j |q_j(x)|
+//! ```
+//!
+//! (x0 the rates without the tangential loads, M the matrix of eq. 13, t_j the body-frame
+//! unit tangent), solved for the tangential loads g_j (N/m) by Newton on these k scalars.
+//! The tangential loads change the normal forces only through the small moment r_j x t_j,
+//! so the iteration contracts by about mu tau r^2 / (E I) per step (1e-3 for the prototype).
+#![allow(non_snake_case)]
+
+use crate::error::{Result, invalid};
+use crate::model::equations::{Model, Site};
+use crate::model::linearize::{Linearization, Point, TendonPoint};
+use crate::model::robot::{Robot, TendonModel};
+use crate::model::tendon::Tendon;
+use crate::{Error, Readable};
+use nalgebra::{Matrix3, Matrix6, Matrix6x3, SMatrix, Vector3, Vector6};
+
+/// Newton iterations of the tangential loads at one point: each step contracts by the
+/// square of the last (the iteration is smooth away from kappa = 0), and 1e-3 per step is
+/// the linear rate from the module docs, so 30 covers any convergent case many times over.
+const MAX_ITERATIONS: usize = 30;
+
+/// Checks the friction of tendon `i`: a finite coefficient >= 0, and for a coefficient > 0
+/// what the full-slip model needs: a tension input (the tension at the base entry), the
+/// coupled tendon model, and no breakpoint (point load or another tendon's termination)
+/// inside the tendon's span, where its path would have a corner.
+///
+/// # Errors
+/// [`Error::InvalidInput`] naming `tendons[i].friction`.
+pub(crate) fn validate(robot: &Robot, i: usize, t: &Tendon) -> Result<()> {
+    let Some(friction) = t.friction else {
+        return Ok(());
+    };
+    let field = format!("tendons[{i}].friction");
+    let mu = friction.coefficient;
+    if !(mu.is_finite() && mu >= 0.0) {
+        return Err(invalid(
+            field,
+            format!("is {}", Readable(mu)),
+            "give the friction coefficient as a finite number >= 0 (0.1 for steel in steel, 0 for none)",
+        ));
+    }
+    if mu == 0.0 {
+        return Ok(());
+    }
+    if t.displacement().is_some() {
+        return Err(invalid(
+            field,
+            format!("is {} on a displacement-controlled tendon", Readable(mu)),
+            "friction needs tension control for now: give the tendon a tension (the tension at its base \
+             entry) instead of a pull-in, or set its friction to 0",
+        ));
+    }
+    if robot.tendon_model != TendonModel::Coupled {
+        return Err(invalid(
+            field,
+            format!("is {} with the point-moment tendon model", Readable(mu)),
+            "friction needs the coupled tendon model (distributed tendon loads): use it, or set the friction to 0",
+        ));
+    }
+    let end = t.end(robot.length());
+    if let Some(s) = robot.breakpoints().into_iter().find(|&s| s > 0.0 && s < end) {
+        return Err(invalid(
+            field,
+            format!(
+                "is {} on a tendon that passes a point load or another tendon's termination at s = {} m",
+                Readable(mu),
+                Readable(s)
+            ),
+            "friction is supported on tendons whose span holds no breakpoint for now: move the point load or \
+             termination past the tendon's end, or set its friction to 0",
+        ));
+    }
+    Ok(())
+}
+
+/// An error naming the first tendon of `robot` with friction when `what` (an analysis that
+/// does not model friction yet) is asked of it.
+///
+/// # Errors
+/// [`Error::InvalidInput`] naming `tendons[i].friction`.
+pub(crate) fn unsupported(robot: &Robot, what: &str) -> Result<()> {
+    match robot.tendons.iter().position(|t| t.active_friction().is_some()) {
+        None => Ok(()),
+        Some(i) => Err(invalid(
+            format!("tendons[{i}].friction"),
+            format!(
+                "is {}, and {what} does not model friction yet",
+                Readable(robot.tendons[i].friction.map_or(0.0, |f| f.coefficient))
+            ),
+            "set the friction to 0 for it; a solve (collocation or shooting) models friction",
+        )),
+    }
+}
+
+/// Whether any tendon of `robot` has friction (a coefficient > 0).
+pub fn any(robot: &Robot) -> bool {
+    robot.tendons.iter().any(|t| t.active_friction().is_some())
+}
+
+/// The indices of the tendons of `robot` with friction (a coefficient > 0), in order: the
+/// order of every per-tendon friction quantity below.
+pub(crate) fn slipping(robot: &Robot) -> Vec<usize> {
+    (0..robot.tendons.len())
+        .filter(|&i| robot.tendons[i].active_friction().is_some())
+        .collect()
+}
+
+/// One tendon with friction loading the backbone at one point (body frame).
+struct Slip {
+    /// Its place in [`slipping`]'s list.
+    slot: usize,
+    /// w_i mu_i: the signed friction coefficient.
+    signed_mu: f64,
+    /// The tendon's point quantities (r_i, t_i, k_i = tau_i / |p_i^b'|, ...).
+    tp: TendonPoint,
+    /// e_i = (t_i, r_i x t_i): the direction of its tangential load in eq. 13's rows.
+    e: Vector6<f64>,
+    /// y_i = M^-1 e_i: the rates' change per unit tangential load (m/N).
+    y: Vector6<f64>,
+    /// The tangential load g_i = tau_i' (N/m) at the solution.
+    g: f64,
+    /// q_i, the normal load (N/m), and its direction q_i / |q_i| (0 where q_i = 0).
+    q: Vector3<f64>,
+    q_hat: Vector3<f64>,
+}
+
+impl Slip {
+    /// The normal load q_i = k_i (I - t t^T) p_i^b'' at the rates x (N/m).
+    fn normal(&self, x: &Vector6<f64>) -> Vector3<f64> {
+        self.normal_change(x) + self.project(&self.tp.c)
+    }
+
+    /// The part of q_i the rates x drive: k_i (I - t t^T) (x_v - r_i x x_u).
+    fn normal_change(&self, x: &Vector6<f64>) -> Vector3<f64> {
+        let x_v = Vector3::new(x[0], x[1], x[2]);
+        let x_u = Vector3::new(x[3], x[4], x[5]);
+        self.project(&(x_v - self.tp.r.cross(&x_u)))
+    }
+
+    /// k_i (I - t t^T) a.
+    fn project(&self, a: &Vector3<f64>) -> Vector3<f64> {
+        let t = &self.tp.t;
+        (a - t * t.dot(a)) * self.tp.k
+    }
+
+    /// dg_i/dx = w_i mu_i k_i (q^, r_i x q^): the gradient of the tangential load in the
+    /// rates (q^ is normal to t_i, so the projection drops out).
+    fn gradient(&self) -> Vector6<f64> {
+        let m = self.tp.r.cross(&self.q_hat);
+        let h = &self.q_hat;
+        Vector6::new(h[0], h[1], h[2], m[0], m[1], m[2]) * (self.signed_mu * self.tp.k)
+    }
+}
+
+/// Eq. 13 with friction solved at one point: the tendons with friction that load the
+/// backbone here, with their tangential loads, and the rates.
+struct Solved {
+    point: Point,
+    slips: Vec<Slip>,
+    /// The rates (v', u') with the tangential loads.
+    x: Vector6<f64>,
+}
+
+/// Solves eq. 13 with friction at a site (module docs): every tendon at the tension the
+/// model holds for it here ([`Model::tensions`]; for a tendon with friction, its tension at
+/// this s).
+fn solve(
+    model: &Model,
+    site: &Site,
+    segment_end: f64,
+    (R, v, u): (&Matrix3<f64>, &Vector3<f64>, &Vector3<f64>),
+    slipping: &[usize],
+) -> Result<Solved> {
+    let point = Point::new(model, site, segment_end, (R, v, u))?;
+    let x0 = point.rates();
+    let tendons = &model.robot.tendons;
+    let mut slips = Vec::with_capacity(slipping.len());
+    for (i, tension, rp) in model.distributed_tendons(site.s, segment_end) {
+        let (Some(friction), Some(slot)) = (tendons[i].active_friction(), slipping.iter().position(|&j| j == i)) else {
+            continue;
+        };
+        let tp = TendonPoint::new(i, tension, &rp, site.s, v, u)?;
+        let m = tp.r.cross(&tp.t);
+        let e = Vector6::new(tp.t[0], tp.t[1], tp.t[2], m[0], m[1], m[2]);
+        let mut row = e.transpose();
+        if !point.solve_rows(&mut row) {
+            return Err(breakdown(site.s));
+        }
+        slips.push(Slip {
+            slot,
+            signed_mu: friction.motion.sign() * friction.coefficient,
+            tp,
+            e,
+            y: row.transpose(),
+            g: 0.0,
+            q: Vector3::zeros(),
+            q_hat: Vector3::zeros(),
+        });
+    }
+    let k = slips.len();
+    let mut x = x0;
+    let mut matrix = vec![0.0; k * k];
+    let mut step = vec![0.0; k];
+    for iteration in 0..=MAX_ITERATIONS {
+        // h_j(g) = g_j - w_j mu_j |q_j(x(g))|, x(g) = x0 - sum_l g_l y_l, and its Jacobian
+        // dh_j/dg_l = delta_jl + dg_j/dx . y_l.
+        let mut size = 0.0_f64;
+        for sl in slips.iter_mut() {
+            sl.q = sl.normal(&x);
+            let magnitude = sl.q.norm();
+            sl.q_hat = if magnitude > 0.0 {
+                sl.q / magnitude
+            } else {
+                Vector3::zeros()
+            };
+            size = size.max(magnitude);
+        }
+        if k == 0 || size == 0.0 {
+            break;
+        }
+        for (j, sl) in slips.iter().enumerate() {
+            step[j] = sl.signed_mu * sl.q.norm() - sl.g;
+            let gradient = sl.gradient();
+            for (l, other) in slips.iter().enumerate() {
+                matrix[j * k + l] = f64::from(u8::from(j == l)) + gradient.dot(&other.y);
+            }
+        }
+        if !crate::dense::solve_dense(&mut matrix, &mut step, k) {
+            return Err(breakdown(site.s));
+        }
+        let mut change = 0.0_f64;
+        for (sl, d) in slips.iter_mut().zip(&step) {
+            sl.g += d;
+            change = change.max(d.abs());
+        }
+        x = x0;
+        for sl in &slips {
+            x -= sl.y * sl.g;
+        }
+        // Converged to rounding: the last change below 1e-15 of the normal loads' size.
+        // (One more pass refreshes q at the final x.)
+        if change <= 1e-15 * size {
+            for sl in slips.iter_mut() {
+                sl.q = sl.normal(&x);
+                let magnitude = sl.q.norm();
+                sl.q_hat = if magnitude > 0.0 {
+                    sl.q / magnitude
+                } else {
+                    Vector3::zeros()
+                };
+            }
+            break;
+        }
+        if iteration == MAX_ITERATIONS || !change.is_finite() {
+            return Err(Error::Breakdown {
+                s: site.s,
+                what: "the tangential friction loads did not converge".into(),
+            });
+        }
+    }
+    Ok(Solved { point, slips, x })
+}
+
+fn breakdown(s: f64) -> Error {
+    Error::Breakdown {
+        s,
+        what: "eq. 13 with friction is singular".into(),
+    }
+}
+
+/// Eq. 13 with friction at a site: the rates (v', u') for the state (R, v, u), with every
+/// tendon at the tension the model holds for it here ([`Model::tensions`]: for a tendon
+/// with friction its tension at this s), and in `turning` (one entry per tendon) the
+/// relative rate of each tension, tau_i' / tau_i = w_i mu_i kappa_i (1/m; 0 for tendons
+/// without friction, at zero tension or not loading this segment).
+///
+/// # Errors
+/// As [`crate::model::linearize::rates`], and [`Error::Breakdown`] when the tangential
+/// loads do not converge.
+pub(crate) fn rates(
+    model: &Model,
+    site: &Site,
+    segment_end: f64,
+    state: (&Matrix3<f64>, &Vector3<f64>, &Vector3<f64>),
+    turning: &mut [f64],
+) -> Result<Vector6<f64>> {
+    turning.fill(0.0);
+    let slipping = slipping(model.robot);
+    let solved = solve(model, site, segment_end, state, &slipping)?;
+    for sl in &solved.slips {
+        turning[slipping[sl.slot]] = relative(sl);
+    }
+    Ok(solved.x)
+}
+
+/// tau_i' / tau_i = w_i mu_i |q_i| / tau_i (1/m).
+fn relative(sl: &Slip) -> f64 {
+    // k_i = tau_i / |p_i^b'| > 0 for a loading tendon
+    sl.g * sl.tp.inv_speed / sl.tp.k
+}
+
+/// Eq. 13 with friction and its exact first derivatives at one point, for the collocation
+/// solve: at fixed tensions, the rates' [`Linearization`]; the rates' change with the log
+/// tension z_j = ln(tau_j / tau_j(0)) of each tendon with friction; the relative tension
+/// rates (turning) and their derivatives.
+#[derive(Clone, Debug)]
+pub(crate) struct FrictionLinearization {
+    /// The rates and their derivatives in the strains and the rotation, tensions fixed.
+    pub lin: Linearization,
+    /// d(v', u')/dz_j, one per tendon of [`slipping`] (0 for those not loading here).
+    pub d_log_tension: Vec<Vector6<f64>>,
+    /// tau_j' / tau_j = w_j mu_j kappa_j (1/m), one per tendon of [`slipping`].
+    pub turning: Vec<f64>,
+    /// d(turning_j)/d(v, u, phi), as a row of 9.
+    pub d_turning: Vec<SMatrix<f64, 1, 9>>,
+    /// d(turning_j)/dz_l, row-major k x k.
+    pub d_turning_log_tension: Vec<f64>,
+}
+
+/// [`FrictionLinearization`] at a site for the state (R, v, u), the tendons of `slipping`
+/// at the tensions the model holds for them here (module docs, "Linearization" in
+/// docs/friction.md); without `derivatives` only the rates and the turning rates (the
+/// derivative fields zero or empty), for residuals.
+///
+/// # Errors
+/// As [`rates`].
+pub(crate) fn linearize(
+    model: &Model,
+    site: &Site,
+    segment_end: f64,
+    (R, v, u): (&Matrix3<f64>, &Vector3<f64>, &Vector3<f64>),
+    slipping: &[usize],
+    derivatives: bool,
+) -> Result<FrictionLinearization> {
+    let solved = solve(model, site, segment_end, (R, v, u), slipping)?;
+    let Solved { point, slips, x } = solved;
+    let k = slipping.len();
+    if !derivatives {
+        let mut turning = vec![0.0; k];
+        for sl in &slips {
+            turning[sl.slot] = relative(sl);
+        }
+        return Ok(FrictionLinearization {
+            lin: Linearization {
+                rates: x,
+                d_strains: Matrix6::zeros(),
+                d_rotation: Matrix6x3::zeros(),
+            },
+            d_log_tension: Vec::new(),
+            turning,
+            d_turning: Vec::new(),
+            d_turning_log_tension: Vec::new(),
+        });
+    }
+    // dPhi/d(v, u, phi) at fixed x: eq. 13's dF plus the tangential loads' change,
+    // sum_i (g_i de_i + e_i dg_i|x); then the columns dPhi/dz_i = (q_i, r_i x q_i) + e_i g_i.
+    let dFt = point.derivative(model, site, segment_end, (v, u), &x.transpose())?;
+    let mut rhs = SMatrix::<f64, 6, 9>::from_fn(|i, j| dFt[(j, i)]);
+    let mut columns = vec![Vector6::<f64>::zeros(); slips.len()];
+    for (sl, column) in slips.iter().zip(columns.iter_mut()) {
+        let tp = &sl.tp;
+        let P = Matrix3::identity() - tp.t * tp.t.transpose();
+        // dt/dv = P / |p|, dt/du = -P r^ / |p|
+        let dt_dv = P * tp.inv_speed;
+        let dt_du = -dt_dv * crate::so3::hat(&tp.r);
+        let QQ = tp.normal_derivative(&Vector3::new(x[0], x[1], x[2]), &Vector3::new(x[3], x[4], x[5]), u);
+        let dg = (sl.q_hat.transpose() * QQ) * sl.signed_mu; // 1 x 6
+        for c in 0..6 {
+            let dt = if c < 3 {
+                dt_dv.column(c).into_owned()
+            } else {
+                dt_du.column(c - 3).into_owned()
+            };
+            let de_top = dt * sl.g;
+            let de_bottom = tp.r.cross(&dt) * sl.g;
+            for r in 0..3 {
+                rhs[(r, c)] += de_top[r] + sl.e[r] * dg[c];
+                rhs[(r + 3, c)] += de_bottom[r] + sl.e[r + 3] * dg[c];
+            }
+        }
+        let m = tp.r.cross(&sl.q);
+        *column = Vector6::new(sl.q[0], sl.q[1], sl.q[2], m[0], m[1], m[2]) + sl.e * sl.g;
+    }
+    // dx = -J^-1 dPhi with J = M + sum_i e_i (dg_i/dx)^T, by Woodbury on M's factor:
+    // J^-1 B = M^-1 B - Y S^-1 G^T M^-1 B, Y = [y_i], G = [dg_i/dx], S = I + G^T Y.
+    let m_count = slips.len();
+    let gradients: Vec<Vector6<f64>> = slips.iter().map(Slip::gradient).collect();
+    let mut schur = vec![0.0; m_count * m_count];
+    for (j, gj) in gradients.iter().enumerate() {
+        for (l, sl) in slips.iter().enumerate() {
+            schur[j * m_count + l] = f64::from(u8::from(j == l)) + gj.dot(&sl.y);
+        }
+    }
+    let solve_j = |b: &Vector6<f64>| -> Option<Vector6<f64>> {
+        let mut row = b.transpose();
+        if !point.solve_rows(&mut row) {
+            return None;
+        }
+        let mb = row.transpose();
+        if m_count == 0 {
+            return Some(mb);
+        }
+        let mut a = schur.clone();
+        let mut w: Vec<f64> = gradients.iter().map(|g| g.dot(&mb)).collect();
+        if !crate::dense::solve_dense(&mut a, &mut w, m_count) {
+            return None;
+        }
+        let mut out = mb;
+        for (sl, wj) in slips.iter().zip(&w) {
+            out -= sl.y * *wj;
+        }
+        Some(out)
+    };
+    let mut dx = SMatrix::<f64, 6, 9>::zeros();
+    for c in 0..9 {
+        let col = solve_j(&rhs.column(c).into_owned()).ok_or_else(|| breakdown(site.s))?;
+        dx.set_column(c, &-col);
+    }
+    let mut d_log_tension = vec![Vector6::zeros(); k];
+    for (sl, column) in slips.iter().zip(&columns) {
+        d_log_tension[sl.slot] = -solve_j(column).ok_or_else(|| breakdown(site.s))?;
+    }
+    // turning_j = w_j mu_j |q_j| / tau_j: d = (w_j mu_j / tau_j) q^_j . (dq_j|x + k P W dx).
+    let mut turning = vec![0.0; k];
+    let mut d_turning = vec![SMatrix::<f64, 1, 9>::zeros(); k];
+    let mut d_turning_log_tension = vec![0.0; k * k];
+    for sl in &slips {
+        let tp = &sl.tp;
+        turning[sl.slot] = relative(sl);
+        // w mu / tau = w mu inv_speed / k
+        let factor = sl.signed_mu * tp.inv_speed / tp.k;
+        let QQ = tp.normal_derivative(&Vector3::new(x[0], x[1], x[2]), &Vector3::new(x[3], x[4], x[5]), u);
+        let explicit = sl.q_hat.transpose() * QQ; // 1 x 6
+        let mut row = SMatrix::<f64, 1, 9>::zeros();
+        for c in 0..9 {
+            let through_rates = sl.q_hat.dot(&sl.normal_change(&dx.column(c).into_owned()));
+            let direct = if c < 6 { explicit[c] } else { 0.0 };
+            row[c] = factor * (direct + through_rates);
+        }
+        d_turning[sl.slot] = row;
+        for l in 0..k {
+            d_turning_log_tension[sl.slot * k + l] = factor * sl.q_hat.dot(&sl.normal_change(&d_log_tension[l]));
+        }
+    }
+    Ok(FrictionLinearization {
+        lin: Linearization {
+            rates: x,
+            d_strains: Matrix6::from_fn(|i, c| dx[(i, c)]),
+            d_rotation: Matrix6x3::from_fn(|i, c| dx[(i, 6 + c)]),
+        },
+        d_log_tension,
+        turning,
+        d_turning,
+        d_turning_log_tension,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::cases;
+    use crate::model::tendon::Friction;
+    use crate::so3;
+
+    /// Case H with friction on its helical tendon and a straight one, at a bent, twisted
+    /// state with a generic rotation.
+    fn setup() -> (Robot, Matrix3<f64>, Vector3<f64>, Vector3<f64>) {
+        let mut robot = cases::case_h();
+        robot.tendons[4].friction = Some(Friction::pull(0.3));
+        robot.tendons[0].set_tension(1.5);
+        robot.tendons[0].friction = Some(Friction {
+            coefficient: 0.2,
+            motion: crate::model::tendon::Motion::Release,
+        });
+        let R = so3::exp(&Vector3::new(0.3, -0.7, 0.4));
+        (robot, R, Vector3::new(0.01, -0.02, 0.98), Vector3::new(4.0, 9.0, -3.0))
+    }
+
+    #[test]
+    fn linearization_matches_central_differences() {
+        let (robot, R, v, u) = setup();
+        let model = Model::new(&robot);
+        let slipping = slipping(&robot);
+        let site = model.site(0.07);
+        let end = robot.length();
+        let lin = linearize(&model, &site, end, (&R, &v, &u), &slipping, true).unwrap();
+        let eval = |model: &Model, R: &Matrix3<f64>, v: &Vector3<f64>, u: &Vector3<f64>| {
+            let mut turning = vec![0.0; robot.tendons.len()];
+            let x = rates(model, &site, end, (R, v, u), &mut turning).unwrap();
+            let t: Vec<f64> = slipping.iter().map(|&i| turning[i]).collect();
+            (x, t)
+        };
+        let (x, t) = eval(&model, &R, &v, &u);
+        // The same solve: bitwise
+        assert_eq!(x, lin.lin.rates);
+        assert_eq!(t, lin.turning);
+        // 3e-5: the rates carry rounding of about 1e-16 E A |v - v*| / (E I) ~ 5e-11 (u'), so
+        // a central difference has ~1e-6 of noise there; truncation h^2 is below it.
+        let h = 3e-5;
+        // Richardson-extrapolated central differences (error O(h^4)) of (rates, turning)
+        // along a step `at(t)` of the inputs.
+        let difference = |at: &dyn Fn(f64) -> (Vector6<f64>, Vec<f64>)| {
+            let central = |h: f64| {
+                let ((xp, tp), (xm, tm)) = (at(h), at(-h));
+                let t: Vec<f64> = tp.iter().zip(&tm).map(|(a, b)| (a - b) / (2.0 * h)).collect();
+                ((xp - xm) / (2.0 * h), t)
+            };
+            let ((x1, t1), (x2, t2)) = (central(h), central(h / 2.0));
+            let t: Vec<f64> = t1.iter().zip(&t2).map(|(a, b)| (4.0 * b - a) / 3.0).collect();
+            ((x2 * 4.0 - x1) / 3.0, t)
+        };
+        for c in 0..9 {
+            let at = |step: f64| {
+                let mut d = [0.0; 9];
+                d[c] = step;
+                let dv = Vector3::new(d[0], d[1], d[2]);
+                let du = Vector3::new(d[3], d[4], d[5]);
+                let dphi = Vector3::new(d[6], d[7], d[8]);
+                eval(&model, &(R * so3::exp(&dphi)), &(v + dv), &(u + du))
+            };
+            let (fd, fd_turning) = difference(&at);
+            let exact = if c < 6 {
+                lin.lin.d_strains.column(c).into_owned()
+            } else {
+                lin.lin.d_rotation.column(c - 6).into_owned()
+            };
+            // 1e-6 relative (to at least 10 for the rates, whose strain derivatives are 10..1e3,
+            // and 1 for the turning rates, ~1e3 per unit strain):
+            // the rounding noise of the differences above
+            assert!(
+                (fd - exact).norm() <= 1e-6 * exact.norm().max(10.0),
+                "column {c}: {fd} vs {exact}"
+            );
+            for (j, fd) in fd_turning.iter().enumerate() {
+                let exact = lin.d_turning[j][c];
+                assert!(
+                    (fd - exact).abs() <= 1e-6 * fd.abs().max(1.0),
+                    "turning {j} column {c}: {fd} vs {exact}"
+                );
+            }
+        }
+        for (l, &i) in slipping.iter().enumerate() {
+            let at = |step: f64| {
+                let mut m = model.clone();
+                m.tensions[i] *= step.exp();
+                eval(&m, &R, &v, &u)
+            };
+            let (fd, fd_turning) = difference(&at);
+            // 1e-6 relative: as above
+            assert!((fd - lin.d_log_tension[l]).norm() <= 1e-6 * fd.norm().max(1.0), "z {l}");
+            for (j, fd) in fd_turning.iter().enumerate() {
+                let exact = lin.d_turning_log_tension[j * slipping.len() + l];
+                assert!(
+                    (fd - exact).abs() <= 1e-6 * fd.abs().max(1.0),
+                    "turning {j} z {l}: {fd} vs {exact}"
+                );
+            }
+        }
+    }
+}
