@@ -83,12 +83,30 @@ pub(crate) fn estimate_with(
     let Some(dx) = ws.solve_again(&rhs) else {
         return Ok(None);
     };
-    let length = system.model.robot.length();
-    let backbone_max = (0..x.len())
+    Ok(Some(correction(
+        dx,
+        x.len(),
+        system.model.robot.length(),
+        local,
+        node_rates,
+    )))
+}
+
+/// The correction dx of `nodes` node states on a rod of `length` (m) as the error estimate:
+/// the tip's position and rotation increments and the largest position increment, with the
+/// intervals' `local` errors and the `node_rates` of the order-6 pass.
+pub(super) fn correction(
+    dx: &[f64],
+    nodes: usize,
+    length: f64,
+    local: Vec<f64>,
+    node_rates: Vec<Vector6<f64>>,
+) -> Correction {
+    let backbone_max = (0..nodes)
         .map(|k| unknowns::node_increments(dx, k, length)[0].norm())
         .fold(0.0, f64::max);
-    let [dp, dtheta, _, _] = unknowns::node_increments(dx, x.len() - 1, length);
-    Ok(Some(Correction {
+    let [dp, dtheta, _, _] = unknowns::node_increments(dx, nodes - 1, length);
+    Correction {
         estimate: ErrorEstimate {
             tip_position: dp.norm(),
             tip_rotation: dtheta.norm(),
@@ -96,5 +114,5 @@ pub(crate) fn estimate_with(
         },
         local,
         node_rates,
-    }))
+    }
 }

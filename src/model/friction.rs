@@ -146,6 +146,18 @@ struct Slip {
 }
 
 impl Slip {
+    /// Sets the normal load q_i and its direction at the rates x; returns |q_i| (N/m).
+    fn refresh(&mut self, x: &Vector6<f64>) -> f64 {
+        self.q = self.normal(x);
+        let magnitude = self.q.norm();
+        self.q_hat = if magnitude > 0.0 {
+            self.q / magnitude
+        } else {
+            Vector3::zeros()
+        };
+        magnitude
+    }
+
     /// The normal load q_i = k_i (I - t t^T) p_i^b'' at the rates x (N/m).
     fn normal(&self, x: &Vector6<f64>) -> Vector3<f64> {
         self.normal_change(x) + self.project(&self.tp.c)
@@ -227,14 +239,7 @@ fn solve(
         // dh_j/dg_l = delta_jl + dg_j/dx . y_l.
         let mut size = 0.0_f64;
         for sl in slips.iter_mut() {
-            sl.q = sl.normal(&x);
-            let magnitude = sl.q.norm();
-            sl.q_hat = if magnitude > 0.0 {
-                sl.q / magnitude
-            } else {
-                Vector3::zeros()
-            };
-            size = size.max(magnitude);
+            size = size.max(sl.refresh(&x));
         }
         if k == 0 || size == 0.0 {
             break;
@@ -262,13 +267,7 @@ fn solve(
         // (One more pass refreshes q at the final x.)
         if change <= 1e-15 * size {
             for sl in slips.iter_mut() {
-                sl.q = sl.normal(&x);
-                let magnitude = sl.q.norm();
-                sl.q_hat = if magnitude > 0.0 {
-                    sl.q / magnitude
-                } else {
-                    Vector3::zeros()
-                };
+                sl.refresh(&x);
             }
             break;
         }

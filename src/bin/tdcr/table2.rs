@@ -79,13 +79,9 @@ fn picture(solved: &[(cases::Experiment, tdcr::Robot, tdcr::Solution)], routings
             .legend
             .push(LegendEntry::line(&format!("tendon pulled at {tension} N{only}"), color));
     }
-    for (_, dash, label) in TIP_LOAD_DASHES {
-        let entry = LegendEntry::line(label, "#666666");
-        figure.legend.push(match dash {
-            Some(d) => entry.dash(d),
-            None => entry,
-        });
-    }
+    figure
+        .legend
+        .extend(tip_load_entries(TIP_LOAD_DASHES.map(|(_, _, label)| label)));
     figure
         .legend
         .push(LegendEntry::line("the pulled tendon (thin line)", "#666666").width(1.2));
@@ -100,6 +96,17 @@ fn picture(solved: &[(cases::Experiment, tdcr::Robot, tdcr::Solution)], routings
         FORCE_COLOR,
     ));
     figure
+}
+
+/// Legend lines for the tip loads of Table 2, in their dash patterns, with these labels.
+fn tip_load_entries(labels: [&str; 3]) -> impl Iterator<Item = LegendEntry> + '_ {
+    TIP_LOAD_DASHES.iter().zip(labels).map(|((_, dash, _), label)| {
+        let entry = LegendEntry::line(label, "#666666");
+        match dash {
+            Some(d) => entry.dash(d),
+            None => entry,
+        }
+    })
 }
 
 /// The main job's picture for a journal column: side views only, three panels a row, 525 px
@@ -126,13 +133,7 @@ fn compact(full: &Figure) -> Figure {
     for (tension, color) in TENSION_COLORS {
         figure.legend.push(LegendEntry::line(&format!("{tension} N"), color));
     }
-    for ((_, dash, _), label) in TIP_LOAD_DASHES.into_iter().zip(["no tip load", "10 g", "20 g"]) {
-        let entry = LegendEntry::line(label, "#666666");
-        figure.legend.push(match dash {
-            Some(d) => entry.dash(d),
-            None => entry,
-        });
-    }
+    figure.legend.extend(tip_load_entries(["no tip load", "10 g", "20 g"]));
     figure
         .legend
         .push(LegendEntry::new(Symbol::Arrow, "tip load", FORCE_COLOR));

@@ -30,7 +30,7 @@ use crate::error::{self, Result};
 use crate::mesh::guess::interpolate;
 use crate::mesh::{Mesh, nodes};
 use crate::model::equations::Model;
-use crate::report::{ErrorEstimate, Method, SolveReport, Stability, Termination};
+use crate::report::{Method, SolveReport, Stability, Termination};
 use crate::solution::{Solution, State};
 use crate::{Error, Robot};
 use std::time::Instant;
@@ -458,20 +458,8 @@ fn estimate_with_friction(
     let Some(tension_error) = border.bordered(&mut dx, &mut solve) else {
         return Ok(None);
     };
-    let backbone_max = (0..x.len())
-        .map(|k| unknowns::node_increments(&dx, k, length)[0].norm())
-        .fold(0.0, f64::max);
-    let [dp, dtheta, _, _] = unknowns::node_increments(&dx, x.len() - 1, length);
     Ok(Some((
-        estimate::Correction {
-            estimate: ErrorEstimate {
-                tip_position: dp.norm(),
-                tip_rotation: dtheta.norm(),
-                backbone_max,
-            },
-            local,
-            node_rates,
-        },
+        estimate::correction(&dx, x.len(), length, local, node_rates),
         tension_error,
     )))
 }
