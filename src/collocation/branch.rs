@@ -45,6 +45,17 @@ pub(super) struct Switched {
     pub picked: bool,
 }
 
+impl Switched {
+    /// Records the switch made at the path's `lambda`: a side picked by symmetry is a
+    /// bifurcation of the path, and says so in `picked`.
+    pub fn record_at(&self, lambda: f64, bifurcations: &mut Vec<f64>, picked: &mut Vec<f64>) {
+        if self.picked {
+            bifurcations.push(lambda);
+            picked.push(lambda);
+        }
+    }
+}
+
 /// A deterministic generic vector (entries spread over [-0.5, 0.5) by the golden ratio),
 /// with a component along any given direction.
 fn generic(n: usize) -> Vec<f64> {

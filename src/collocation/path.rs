@@ -281,16 +281,10 @@ pub(super) fn follow(
                 && b > a
                 && let Some(s) = branch::switch(system, &homotopy, ws, &point, a, settings, report, &mut r)
             {
-                if s.picked {
-                    bifurcations.push(point.lambda);
-                    picked.push(point.lambda);
-                }
-                switching = false;
-                unstable = s.unstable;
-                push(&mut record, &s.point, unstable, false, report);
-                (point, fl) = (s.point, s.fl);
-                polished = false;
-                factored_at_point = true;
+                s.record_at(point.lambda, &mut bifurcations, &mut picked);
+                push(&mut record, &s.point, s.unstable, false, report);
+                (point, fl, unstable) = (s.point, s.fl, s.unstable);
+                (switching, polished, factored_at_point) = (false, false, true);
                 h = h1.abs().min(max_step);
                 continue;
             }
@@ -344,20 +338,14 @@ pub(super) fn follow(
                         && b > a
                         && let Some(s) = branch::switch(system, &homotopy, ws, &point, a, settings, report, &mut r)
                     {
-                        if s.picked {
-                            bifurcations.push(point.lambda);
-                            picked.push(point.lambda);
-                        }
+                        s.record_at(point.lambda, &mut bifurcations, &mut picked);
+                        push(&mut record, &s.point, s.unstable, false, report);
+                        (point, fl, unstable) = (s.point, s.fl, s.unstable);
                         // One switch per path: the branch taken can keep a nearly neutral
                         // direction (the plane of a round column's bend), whose count rounding
                         // decides, and the path does not leave it along that direction.
-                        switching = false;
-                        unstable = s.unstable;
-                        push(&mut record, &s.point, unstable, false, report);
-                        (point, fl) = (s.point, s.fl);
-                        polished = false;
+                        (switching, polished, factored_at_point) = (false, false, true);
                         furthest = furthest.max(point.lambda);
-                        factored_at_point = true;
                         continue;
                     }
                     if h > BIFURCATION_STEP {
