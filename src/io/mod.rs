@@ -21,6 +21,7 @@ mod json_layout;
 pub mod locate;
 pub mod output;
 pub mod parameters;
+pub mod row_outputs;
 #[cfg(feature = "files")]
 mod robot_file;
 mod solution_file;

@@ -12,7 +12,8 @@ Robots: `Robot` (from TOML text, a file, keyword arguments or a dict; the robot 
 fields and rules). Solving: `solve`, `solve_batch` (all cores, GIL released), `sweep`
 (warm-started sequence with its events), `trace` (a branch of equilibria through folds),
 `solve_parameters` (arrays in, arrays out). Analyses:
-`tip_sensitivities` (Jacobians, compliance), `solve_tensions` and `solve_displacements` (inverse statics), `calibrate` (E and base angles from measured tips). Cases:
+`tip_sensitivities` (Jacobians, compliance), `linearize` (gradients by the adjoint; `tdcr.torch`
+and `tdcr.jax` wrap it, with the `torch` and `jax` extras), `solve_tensions` and `solve_displacements` (inverse statics), `calibrate` (E and base angles from measured tips). Cases:
 `tdcr.cases`. A cluster: `tdcr.distributed` (Dask). Errors: `Error` and its subclasses
 `InvalidInput` (with `FileError`, `SingularRouting`), `NotConverged`, `IntervalCap`,
 `Breakdown`. docs/python.md is the walk-through.
@@ -26,6 +27,7 @@ from ._native import (
     IntervalCap,
     InvalidInput,
     InverseResult,
+    Linearization,
     NotConverged,
     Robot,
     SingularRouting,
@@ -39,6 +41,7 @@ from ._native import (
     calibrate,
     compare,
     example,
+    linearize,
     solve,
     solve_batch,
     solve_displacements,
@@ -58,6 +61,7 @@ __all__ = [
     "IntervalCap",
     "InvalidInput",
     "InverseResult",
+    "Linearization",
     "NotConverged",
     "Robot",
     "SingularRouting",
@@ -72,6 +76,7 @@ __all__ = [
     "cases",
     "compare",
     "example",
+    "linearize",
     "solve",
     "solve_batch",
     "solve_displacements",

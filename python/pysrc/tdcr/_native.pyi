@@ -28,6 +28,8 @@ __all__ = [
     "trace",
     "Trace",
     "tip_sensitivities",
+    "linearize",
+    "Linearization",
     "solve_tensions",
     "solve_displacements",
     "calibrate",
@@ -309,6 +311,38 @@ class TipSensitivities:
     @property
     def youngs_modulus(self) -> Optional[FloatArray]:
         """(6,), per Pa, or None."""
+
+@final
+class Linearization:
+    """Solved rows kept for gradients (`linearize`): outputs and their vector-Jacobian products."""
+
+    @property
+    def parameter_names(self) -> List[str]:
+        """The parameter columns, the order of the gradient's columns."""
+    @property
+    def samples(self) -> FloatArray:
+        """(K,) arc lengths of the backbone points, m."""
+    @property
+    def tip_position(self) -> FloatArray:
+        """(M, 3) tip positions, m."""
+    @property
+    def tip_rotation(self) -> FloatArray:
+        """(M, 3, 3) tip orientations, body to world."""
+    @property
+    def points(self) -> FloatArray:
+        """(M, K, 3) backbone points at the samples, m."""
+    def vjp(
+        self,
+        tip_position: Optional[ArrayLike] = None,
+        tip_rotation: Optional[ArrayLike] = None,
+        points: Optional[ArrayLike] = None,
+    ) -> FloatArray:
+        """(M, P) dloss/dq from cotangents (M, 3), (M, 3, 3), (M, K, 3) (None: zero), by the adjoint."""
+
+def linearize(
+    robot: Robot, parameters: Mapping[str, ArrayLike], samples: Optional[ArrayLike] = None, **options: Any
+) -> Linearization:
+    """Solves the rows (one robot, parameter columns) and keeps them for gradients (docs/python.md)."""
 
 @final
 class InverseResult:

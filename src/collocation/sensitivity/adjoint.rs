@@ -1,6 +1,6 @@
 //! Gradients of a scalar function of a solved shape with respect to the robot's parameters
 //! by the adjoint (reverse, vector-Jacobian) form of the implicit function theorem: what a
-//! training loop's backward pass needs (docs/gradients.md).
+//! training loop's backward pass needs (docs/sensitivity.md, "Adjoint gradients").
 //!
 //! # Method
 //!
