@@ -46,7 +46,7 @@ def test_linearize_refuses_samples_off_the_rod_and_displacement_control():
         tdcr.linearize(held, {"tension.1": [1.0]})
     lin = tdcr.linearize(r, {"tension.1": [1.0, 2.0]}, samples=[0.1])
     with pytest.raises(tdcr.InvalidInput, match=r"shape \(2, 1, 3\)"):
-        lin.vjp(points=np.zeros((2, 3)))
+        lin.vjp(points=np.zeros((2, 2, 3)))
 
 
 def test_torch_gradcheck_on_tensions_loads_and_youngs_modulus():

@@ -11,7 +11,8 @@ The Rust crate tdcr is the one implementation; this package converts types and c
 Robots: `Robot` (from TOML text, a file, keyword arguments or a dict; the robot file's
 fields and rules). Solving: `solve`, `solve_batch` (all cores, GIL released), `sweep`
 (warm-started sequence with its events), `trace` (a branch of equilibria through folds),
-`solve_parameters` (arrays in, arrays out). Analyses:
+`solve_parameters` (arrays in, arrays out), `dataset` (sampled rows solved in chunks to .npz or
+.parquet, resumable). Analyses:
 `tip_sensitivities` (Jacobians, compliance), `linearize` (gradients by the adjoint; `tdcr.torch`
 and `tdcr.jax` wrap it, with the `torch` and `jax` extras), `solve_tensions` and `solve_displacements` (inverse statics), `calibrate` (E and base angles from measured tips). Cases:
 `tdcr.cases`. A cluster: `tdcr.distributed` (Dask). Errors: `Error` and its subclasses
@@ -52,6 +53,7 @@ from ._native import (
     trace,
 )
 from . import cases
+from ._dataset import dataset
 
 __all__ = [
     "Breakdown",
@@ -75,6 +77,7 @@ __all__ = [
     "calibrate",
     "cases",
     "compare",
+    "dataset",
     "example",
     "linearize",
     "solve",

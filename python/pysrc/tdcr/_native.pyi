@@ -419,6 +419,10 @@ def solve_parameters(
     robot: Robot,
     parameters: Mapping[str, ArrayLike],
     *,
+    orientation: bool = False,
+    error_estimate: bool = False,
+    points: int = 0,
+    progress: Optional[bool] = None,
     tol: Optional[float] = None,
     intervals: Optional[int] = None,
     max_intervals: Optional[int] = None,
@@ -427,8 +431,10 @@ def solve_parameters(
     continuation: Optional[bool] = None,
     equilibrium: Optional[Literal["load_path", "nearest"]] = None,
 ) -> Dict[str, Any]:
-    """`solve_batch` of parameter rows reduced to arrays (constant memory per row); Ctrl-C
-    raises KeyboardInterrupt with `completed` and `partial` (this dict for the finished rows)."""
+    """`solve_batch` of parameter rows reduced to arrays (constant memory per row); optional
+    `tip_orientation` (M, 4) quaternion (w, x, y, z), `error_estimate` (M,), `points` (M, K, 3)
+    at s = j L / (K - 1); a progress line on stderr past a second (`progress`, None: on a
+    terminal). Ctrl-C raises KeyboardInterrupt with `completed` and `partial`."""
 
 @final
 class Sweep:
