@@ -59,7 +59,9 @@ fn cotangent(samples: usize) -> Cotangent {
 fn point_derivative(solution: &Solution, d: &[NodeDerivative], s: f64) -> Vector3<f64> {
     let length = solution.length();
     let size = d.iter().fold(0.0f64, |m, d| {
-        m.max(d.p.norm()).max(d.rotation.norm() * length).max(d.v.norm() * length)
+        m.max(d.p.norm())
+            .max(d.rotation.norm() * length)
+            .max(d.v.norm() * length)
     });
     let step = if size > 0.0 { length / size } else { 1.0 };
     let moved = |sign: f64| {
@@ -118,12 +120,20 @@ fn adjoint_gradient_matches_finite_differences_of_solves() {
         let omega = so3::log(&(s.tip().R * reference.transpose()));
         cot.tip_position.dot(&s.tip_position())
             + cot.tip_rotation.dot(&omega)
-            + samples.iter().zip(&cot.points).map(|(&x, c)| c.dot(&s.at(x).p)).sum::<f64>()
+            + samples
+                .iter()
+                .zip(&cot.points)
+                .map(|(&x, c)| c.dot(&s.at(x).p))
+                .sum::<f64>()
     };
     let solution = collocation::solve(&robot, &options()).unwrap();
     let reference = solution.tip().R;
     let mut adjoint = Adjoint::new(&robot, &solution, &samples).unwrap();
-    for (name, step) in [("tension.5", 1e-4 * 4.91), ("tip_force.x", 1e-5), ("youngs_modulus", 1e-4 * 6e10)] {
+    for (name, step) in [
+        ("tension.5", 1e-4 * 4.91),
+        ("tip_force.x", 1e-5),
+        ("youngs_modulus", 1e-4 * 6e10),
+    ] {
         let p = Parameter::parse(name, &robot).unwrap();
         let value = p.value(&robot).unwrap();
         let at = |q: f64| loss(&p.applied(&robot, q).unwrap(), &reference);

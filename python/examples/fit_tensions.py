@@ -30,6 +30,8 @@ for step in range(150):
     if step % 30 == 0:
         print(f"step {step:3d}  rms distance {loss.item() ** 0.5 * 1e3:8.4f} mm  tensions {tension.detach().numpy().round(3)}")
 
+# Five tendons over-determine the shape (antagonistic pairs cancel), so the fit reaches the
+# target shape with tensions that need not be the truth's.
 tension = torch.nn.functional.softplus(z).detach()
 rms = loss.item() ** 0.5
 print(f"fitted tensions {tension.numpy().round(4)} N (truth {truth.numpy()}), rms distance {rms * 1e3:.2e} mm")

@@ -121,7 +121,12 @@ impl Progress {
     fn new(py: Python<'_>, progress: Option<bool>) -> PyResult<Self> {
         let enabled = match progress {
             Some(on) => on,
-            None => py.import("sys")?.getattr("stderr")?.call_method0("isatty")?.extract().unwrap_or(false),
+            None => py
+                .import("sys")?
+                .getattr("stderr")?
+                .call_method0("isatty")?
+                .extract()
+                .unwrap_or(false),
         };
         Ok(Progress {
             start: Instant::now(),
@@ -141,9 +146,15 @@ impl Progress {
         self.last = Some(Instant::now());
         let seconds = elapsed.as_secs_f64();
         let rate = done as f64 / seconds;
-        let left = if rate > 0.0 { total.saturating_sub(done) as f64 / rate } else { 0.0 };
+        let left = if rate > 0.0 {
+            total.saturating_sub(done) as f64 / rate
+        } else {
+            0.0
+        };
         let end = if finished { "\n" } else { "" };
-        let line = format!("\rsolve_parameters: {done}/{total} rows, {seconds:.1} s, {rate:.0} rows/s, {left:.0} s left {end}");
+        let line = format!(
+            "\rsolve_parameters: {done}/{total} rows, {seconds:.1} s, {rate:.0} rows/s, {left:.0} s left {end}"
+        );
         let stderr = py.import("sys")?.getattr("stderr")?;
         stderr.call_method1("write", (line,))?;
         stderr.call_method0("flush")?;
@@ -203,7 +214,11 @@ pub fn solve_parameters<'py>(
                 tip: [p.x, p.y, p.z],
                 iterations: i64::try_from(s.report.iterations).unwrap_or(i64::MAX),
                 stability: s.report.stability.verdict(),
-                orientation: if orientation { quaternion(&s.tip().R) } else { [f64::NAN; 4] },
+                orientation: if orientation {
+                    quaternion(&s.tip().R)
+                } else {
+                    [f64::NAN; 4]
+                },
                 error_estimate: tip_error_estimate(&s),
                 points: outputs.points_of(&s).iter().map(|p| [p.x, p.y, p.z]).collect(),
             })

@@ -9,12 +9,12 @@ use crate::convert;
 use crate::errors::invalid;
 use crate::options::{self, Use};
 use crate::robot::{PyRobot, Rows};
-use tdcr::nalgebra::{Matrix3, Vector3};
 use numpy::ndarray::{Array1, Array2, Array3};
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyArray3};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use tdcr::collocation::sensitivity::{Adjoint, Cotangent, rotation_cotangent};
+use tdcr::nalgebra::{Matrix3, Vector3};
 use tdcr::{Parameter, Robot, Solution, collocation};
 
 /// Solved rows ready for gradients: `linearize(robot, parameters, samples=None, **options)`.
@@ -35,8 +35,21 @@ pub struct PyLinearization {
 }
 
 /// The cotangent of row `row` from the flat arrays (None: zero).
-fn cotangent(row: usize, samples: usize, position: &[f64], rotation: &[f64], points: &[f64], orientation: &Matrix3<f64>) -> Cotangent {
-    let at3 = |a: &[f64], i: usize| if a.is_empty() { Vector3::zeros() } else { Vector3::from_column_slice(&a[3 * i..3 * i + 3]) };
+fn cotangent(
+    row: usize,
+    samples: usize,
+    position: &[f64],
+    rotation: &[f64],
+    points: &[f64],
+    orientation: &Matrix3<f64>,
+) -> Cotangent {
+    let at3 = |a: &[f64], i: usize| {
+        if a.is_empty() {
+            Vector3::zeros()
+        } else {
+            Vector3::from_column_slice(&a[3 * i..3 * i + 3])
+        }
+    };
     let tip_rotation = if rotation.is_empty() {
         Vector3::zeros()
     } else {
@@ -195,8 +208,12 @@ pub fn linearize(
             if let Some(i) = r.tendons.iter().position(|t| t.displacement().is_some()) {
                 return Err(Failure::Library(tdcr::Error::InvalidInput {
                     field: format!("tendon {}", i + 1),
-                    problem: "is displacement-controlled; linearize differentiates with every tension held fixed".into(),
-                    hint: format!("give it a tension (a `tension.{}` column, or Robot.with_tensions)", i + 1),
+                    problem: "is displacement-controlled; linearize differentiates with every tension held fixed"
+                        .into(),
+                    hint: format!(
+                        "give it a tension (a `tension.{}` column, or Robot.with_tensions)",
+                        i + 1
+                    ),
                 }));
             }
             let s = collocation::solve(&r, &settings.collocation)?;

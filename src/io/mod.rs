@@ -21,9 +21,9 @@ mod json_layout;
 pub mod locate;
 pub mod output;
 pub mod parameters;
-pub mod row_outputs;
 #[cfg(feature = "files")]
 mod robot_file;
+pub mod row_outputs;
 mod solution_file;
 
 pub use csv_table::number;

@@ -64,7 +64,10 @@ impl RowOutputs {
 
     /// The backbone points of `solution` ([`RowOutputs::arc_lengths`]).
     pub fn points_of(&self, solution: &Solution) -> Vec<Vector3<f64>> {
-        self.arc_lengths(solution.length()).iter().map(|&s| solution.at(s).p).collect()
+        self.arc_lengths(solution.length())
+            .iter()
+            .map(|&s| solution.at(s).p)
+            .collect()
     }
 }
 
@@ -79,7 +82,11 @@ pub fn quaternion(R: &Matrix3<f64>) -> [f64; 4] {
 
 /// The estimated tip position error of `solution` (m); NaN without an estimate.
 pub fn tip_error_estimate(solution: &Solution) -> f64 {
-    solution.report.error_estimate.as_ref().map_or(f64::NAN, |e| e.tip_position)
+    solution
+        .report
+        .error_estimate
+        .as_ref()
+        .map_or(f64::NAN, |e| e.tip_position)
 }
 
 #[cfg(test)]
@@ -89,7 +96,11 @@ mod tests {
 
     #[test]
     fn quaternion_rotates_like_the_matrix_and_has_nonnegative_w() {
-        for axis in [Vector3::new(0.3, -2.9, 0.4), Vector3::new(0.0, 0.0, 3.1), Vector3::zeros()] {
+        for axis in [
+            Vector3::new(0.3, -2.9, 0.4),
+            Vector3::new(0.0, 0.0, 3.1),
+            Vector3::zeros(),
+        ] {
             let r = so3::exp(&axis);
             let [w, x, y, z] = quaternion(&r);
             assert!(w >= 0.0);

@@ -219,7 +219,11 @@ impl BlockElimination {
 /// multipliers' rows) and the swaps, in reverse order.
 fn replay_transposed<const N: usize>(record: &Record, v: &mut [f64; N]) {
     for c in (0..NODE).rev() {
-        let collected: f64 = v[c + 1..].iter().zip(&record.factors[c][c + 1..]).map(|(x, f)| f * x).sum();
+        let collected: f64 = v[c + 1..]
+            .iter()
+            .zip(&record.factors[c][c + 1..])
+            .map(|(x, f)| f * x)
+            .sum();
         v[c] -= collected;
         v.swap(c, record.swaps[c]);
     }

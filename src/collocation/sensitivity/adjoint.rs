@@ -136,7 +136,12 @@ impl<'a> Adjoint<'a> {
             .iter()
             .map(|&p| {
                 self.sensitivity.parameter_rhs(p)?;
-                Ok(self.multiplier.iter().zip(&self.sensitivity.scratch[0]).map(|(l, r)| l * r).sum())
+                Ok(self
+                    .multiplier
+                    .iter()
+                    .zip(&self.sensitivity.scratch[0])
+                    .map(|(l, r)| l * r)
+                    .sum())
             })
             .collect()
     }
