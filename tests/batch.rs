@@ -247,3 +247,62 @@ fn a_tension_column_makes_a_displacement_controlled_tendon_tension_controlled() 
         );
     }
 }
+
+#[test]
+fn optional_columns_carry_the_quaternion_stability_estimate_and_points() {
+    let dir = scratch("columns");
+    write_csv(&dir, &tensions(3));
+    let out = run(
+        &dir,
+        &[
+            "batch",
+            "cases.csv",
+            "--robot",
+            "robot.toml",
+            "--orientation",
+            "--stability",
+            "--error-estimate",
+            "--points",
+            "3",
+        ],
+    );
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+    let results = text(&out.stdout);
+    let lines: Vec<&str> = results.lines().collect();
+    let header: Vec<&str> = lines[0].split(',').collect();
+    let extra = [
+        "q_w",
+        "q_x",
+        "q_y",
+        "q_z",
+        "stability",
+        "error_estimate",
+        "p1_x",
+        "p1_y",
+        "p1_z",
+        "p2_x",
+        "p2_y",
+        "p2_z",
+        "p3_x",
+        "p3_y",
+        "p3_z",
+    ];
+    assert_eq!(&header[10..25], &extra);
+    assert_eq!(header[25], "error");
+    for line in &lines[1..] {
+        let cells: Vec<&str> = line.split(',').collect();
+        let q: Vec<f64> = cells[10..14].iter().map(|c| c.parse().unwrap()).collect();
+        // 1e-12: a unit quaternion written with the CSV's round-trip number format
+        assert!((q.iter().map(|x| x * x).sum::<f64>() - 1.0).abs() < 1e-12 && q[0] >= 0.0);
+        assert_eq!(cells[14], "stable");
+        assert!(cells[15].parse::<f64>().unwrap() > 0.0);
+        // The last point is the tip, the first the base (at the origin in the example).
+        assert_eq!(&cells[22..25], &cells[7..10]);
+        for c in &cells[16..19] {
+            assert!(c.parse::<f64>().unwrap().abs() < 1e-12);
+        }
+    }
+    let out = run(&dir, &["batch", "cases.csv", "--robot", "robot.toml", "--points", "1"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(text(&out.stderr).contains("at least 2"), "{}", text(&out.stderr));
+}

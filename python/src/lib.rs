@@ -8,7 +8,9 @@ mod boundary;
 mod branch;
 mod compare;
 mod convert;
+mod dataset;
 mod errors;
+mod gradient;
 mod options;
 mod pickle;
 mod robot;
@@ -16,8 +18,7 @@ mod solution;
 
 use convert::type_name;
 use errors::invalid;
-use numpy::ndarray::{Array1, Array2};
-use numpy::{IntoPyArray, PyArrayMethods};
+use numpy::PyArrayMethods;
 use options::Use;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
@@ -218,98 +219,6 @@ fn raise_errors(function: &str, errors: &str) -> PyResult<bool> {
     }
 }
 
-/// What `solve_parameters` keeps of a solved row.
-struct Outcome {
-    tip: [f64; 3],
-    iterations: i64,
-    stability: &'static str,
-}
-
-/// The columns of `solve_parameters`, filled row by row.
-#[derive(Default)]
-struct Table {
-    tips: Vec<[f64; 3]>,
-    converged: Vec<bool>,
-    iterations: Vec<i64>,
-    stability: Vec<&'static str>,
-    errors: Vec<String>,
-}
-
-impl Table {
-    /// The table as `solve_parameters` returns it.
-    fn into_dict(self, py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
-        let n = self.tips.len();
-        let tips = Array2::from_shape_fn((n, 3), |(i, k)| self.tips[i][k]);
-        let d = PyDict::new(py);
-        d.set_item("converged", Array1::from(self.converged).into_pyarray(py))?;
-        d.set_item("tip_position", tips.into_pyarray(py))?;
-        d.set_item("iterations", Array1::from(self.iterations).into_pyarray(py))?;
-        d.set_item("stability", self.stability)?;
-        d.set_item("error", self.errors)?;
-        Ok(d)
-    }
-}
-
-/// solve_parameters(robot, parameters, **options) -> dict
-///
-/// `solve_batch(robot, parameters, errors="return", **options)` reduced to arrays, the
-/// shape a distributed map wants: `converged` (M,) bool, `tip_position` (M, 3) (NaN where
-/// a row failed), `iterations` (M,) int64 (-1 where failed), `stability` (list of M
-/// strings: "stable", "unstable" or "unknown", empty where failed), `error` (list of M
-/// strings, empty where solved). Each solution is reduced to its row as soon as it is
-/// solved, so memory does not grow with M beyond the arrays. Ctrl-C raises
-/// `KeyboardInterrupt` with `completed` and `partial` (this dict for the finished rows).
-#[pyfunction]
-#[pyo3(signature = (robot, parameters, **options))]
-fn solve_parameters<'py>(
-    py: Python<'py>,
-    robot: &Bound<'py, PyRobot>,
-    parameters: &Bound<'py, PyDict>,
-    options: Option<&Bound<'py, PyDict>>,
-) -> PyResult<Bound<'py, PyDict>> {
-    let (batch, options) = batch_robots("solve_parameters", robot.as_any(), Some(parameters), options)?;
-    let mut table = Table::default();
-    let run = boundary::rows(
-        py,
-        batch.len(),
-        |i| {
-            let s = batch.solve(i, &options)?;
-            let p = s.tip_position();
-            Ok(Outcome {
-                tip: [p.x, p.y, p.z],
-                iterations: i64::try_from(s.report.iterations).unwrap_or(i64::MAX),
-                stability: s.report.stability.verdict(),
-            })
-        },
-        |_, result| {
-            match result {
-                Ok(o) => {
-                    table.tips.push(o.tip);
-                    table.converged.push(true);
-                    table.iterations.push(o.iterations);
-                    table.stability.push(o.stability);
-                    table.errors.push(String::new());
-                }
-                Err(failure) => {
-                    table.tips.push([f64::NAN; 3]);
-                    table.converged.push(false);
-                    table.iterations.push(-1);
-                    table.stability.push("");
-                    table.errors.push(failure.to_string());
-                }
-            }
-            Ok(())
-        },
-    );
-    match run {
-        Ok(()) => table.into_dict(py),
-        Err(e) => {
-            let done = table.tips.len();
-            Err(boundary::with_partial(py, e, done, table.into_dict(py)?.into_any()))
-        }
-    }
-}
-
 /// Reference case S: the paper's prototype, tendon 1 at 2.94 N, no tip load
 /// (`tdcr::cases::case_s`), read back through its robot file like every Python robot.
 #[pyfunction]
@@ -352,12 +261,14 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<analysis::PyCalibration>()?;
     m.add_class::<branch::PySweep>()?;
     m.add_class::<branch::PyTrace>()?;
+    m.add_class::<gradient::PyLinearization>()?;
     m.add_function(wrap_pyfunction!(solve, m)?)?;
     m.add_function(wrap_pyfunction!(solve_batch, m)?)?;
-    m.add_function(wrap_pyfunction!(solve_parameters, m)?)?;
+    m.add_function(wrap_pyfunction!(dataset::solve_parameters, m)?)?;
     m.add_function(wrap_pyfunction!(branch::sweep, m)?)?;
     m.add_function(wrap_pyfunction!(branch::trace, m)?)?;
     m.add_function(wrap_pyfunction!(analysis::tip_sensitivities, m)?)?;
+    m.add_function(wrap_pyfunction!(gradient::linearize, m)?)?;
     m.add_function(wrap_pyfunction!(analysis::solve_tensions, m)?)?;
     m.add_function(wrap_pyfunction!(analysis::solve_displacements, m)?)?;
     m.add_function(wrap_pyfunction!(analysis::calibrate, m)?)?;

@@ -252,6 +252,17 @@ impl Workspace {
         self.linear.solve_again(rhs, &mut self.step);
         self.step.iter().all(|x| x.is_finite()).then_some(&self.step[..])
     }
+
+    /// Solves J^T y = c with the same factorization as [`Workspace::solve_again`]: the
+    /// adjoint solve behind gradients of outputs (`collocation/sensitivity/adjoint.rs`).
+    /// None without factors or for a non-finite result.
+    pub fn solve_transposed(&mut self, c: &[f64]) -> Option<&[f64]> {
+        if !self.factored {
+            return None;
+        }
+        self.linear.solve_transposed(c, &mut self.step);
+        self.step.iter().all(|x| x.is_finite()).then_some(&self.step[..])
+    }
 }
 
 /// Which point of a Newton step an evaluation belongs to.

@@ -23,6 +23,7 @@ pub mod output;
 pub mod parameters;
 #[cfg(feature = "files")]
 mod robot_file;
+pub mod row_outputs;
 mod solution_file;
 
 pub use csv_table::number;

@@ -11,8 +11,10 @@ The Rust crate tdcr is the one implementation; this package converts types and c
 Robots: `Robot` (from TOML text, a file, keyword arguments or a dict; the robot file's
 fields and rules). Solving: `solve`, `solve_batch` (all cores, GIL released), `sweep`
 (warm-started sequence with its events), `trace` (a branch of equilibria through folds),
-`solve_parameters` (arrays in, arrays out). Analyses:
-`tip_sensitivities` (Jacobians, compliance), `solve_tensions` and `solve_displacements` (inverse statics), `calibrate` (E and base angles from measured tips). Cases:
+`solve_parameters` (arrays in, arrays out), `dataset` (sampled rows solved in chunks to .npz or
+.parquet, resumable). Analyses:
+`tip_sensitivities` (Jacobians, compliance), `linearize` (gradients by the adjoint; `tdcr.torch`
+and `tdcr.jax` wrap it, with the `torch` and `jax` extras), `solve_tensions` and `solve_displacements` (inverse statics), `calibrate` (E and base angles from measured tips). Cases:
 `tdcr.cases`. A cluster: `tdcr.distributed` (Dask). Errors: `Error` and its subclasses
 `InvalidInput` (with `FileError`, `SingularRouting`), `NotConverged`, `IntervalCap`,
 `Breakdown`. docs/python.md is the walk-through.
@@ -26,6 +28,7 @@ from ._native import (
     IntervalCap,
     InvalidInput,
     InverseResult,
+    Linearization,
     NotConverged,
     Robot,
     SingularRouting,
@@ -39,6 +42,7 @@ from ._native import (
     calibrate,
     compare,
     example,
+    linearize,
     solve,
     solve_batch,
     solve_displacements,
@@ -49,6 +53,7 @@ from ._native import (
     trace,
 )
 from . import cases
+from ._dataset import dataset
 
 __all__ = [
     "Breakdown",
@@ -58,6 +63,7 @@ __all__ = [
     "IntervalCap",
     "InvalidInput",
     "InverseResult",
+    "Linearization",
     "NotConverged",
     "Robot",
     "SingularRouting",
@@ -71,7 +77,9 @@ __all__ = [
     "calibrate",
     "cases",
     "compare",
+    "dataset",
     "example",
+    "linearize",
     "solve",
     "solve_batch",
     "solve_displacements",

@@ -28,6 +28,8 @@ __all__ = [
     "trace",
     "Trace",
     "tip_sensitivities",
+    "linearize",
+    "Linearization",
     "solve_tensions",
     "solve_displacements",
     "calibrate",
@@ -311,6 +313,38 @@ class TipSensitivities:
         """(6,), per Pa, or None."""
 
 @final
+class Linearization:
+    """Solved rows kept for gradients (`linearize`): outputs and their vector-Jacobian products."""
+
+    @property
+    def parameter_names(self) -> List[str]:
+        """The parameter columns, the order of the gradient's columns."""
+    @property
+    def samples(self) -> FloatArray:
+        """(K,) arc lengths of the backbone points, m."""
+    @property
+    def tip_position(self) -> FloatArray:
+        """(M, 3) tip positions, m."""
+    @property
+    def tip_rotation(self) -> FloatArray:
+        """(M, 3, 3) tip orientations, body to world."""
+    @property
+    def points(self) -> FloatArray:
+        """(M, K, 3) backbone points at the samples, m."""
+    def vjp(
+        self,
+        tip_position: Optional[ArrayLike] = None,
+        tip_rotation: Optional[ArrayLike] = None,
+        points: Optional[ArrayLike] = None,
+    ) -> FloatArray:
+        """(M, P) dloss/dq from cotangents (M, 3), (M, 3, 3), (M, K, 3) (None: zero), by the adjoint."""
+
+def linearize(
+    robot: Robot, parameters: Mapping[str, ArrayLike], samples: Optional[ArrayLike] = None, **options: Any
+) -> Linearization:
+    """Solves the rows (one robot, parameter columns) and keeps them for gradients (docs/python.md)."""
+
+@final
 class InverseResult:
     """The result of `solve_tensions` and `solve_displacements`."""
 
@@ -385,6 +419,10 @@ def solve_parameters(
     robot: Robot,
     parameters: Mapping[str, ArrayLike],
     *,
+    orientation: bool = False,
+    error_estimate: bool = False,
+    points: int = 0,
+    progress: Optional[bool] = None,
     tol: Optional[float] = None,
     intervals: Optional[int] = None,
     max_intervals: Optional[int] = None,
@@ -393,8 +431,10 @@ def solve_parameters(
     continuation: Optional[bool] = None,
     equilibrium: Optional[Literal["load_path", "nearest"]] = None,
 ) -> Dict[str, Any]:
-    """`solve_batch` of parameter rows reduced to arrays (constant memory per row); Ctrl-C
-    raises KeyboardInterrupt with `completed` and `partial` (this dict for the finished rows)."""
+    """`solve_batch` of parameter rows reduced to arrays (constant memory per row); optional
+    `tip_orientation` (M, 4) quaternion (w, x, y, z), `error_estimate` (M,), `points` (M, K, 3)
+    at s = j L / (K - 1); a progress line on stderr past a second (`progress`, None: on a
+    terminal). Ctrl-C raises KeyboardInterrupt with `completed` and `partial`."""
 
 @final
 class Sweep:

@@ -9,6 +9,7 @@ use std::sync::Mutex;
 use tdcr::io::csv_table::CsvTable;
 use tdcr::io::number;
 use tdcr::io::parameters;
+use tdcr::io::row_outputs::{RowOutputs, quaternion, tip_error_estimate};
 use tdcr::{Error, Method, Robot, Solution};
 
 use crate::args::SolverArgs;
@@ -41,6 +42,19 @@ pub struct BatchArgs {
     /// repeated headers, are the unsharded output.
     #[arg(long, value_name = "K/N", value_parser = parse_shard)]
     shard: Option<(usize, usize)>,
+    /// Add the tip orientation as a unit quaternion: columns q_w, q_x, q_y, q_z (w >= 0).
+    #[arg(long)]
+    orientation: bool,
+    /// Add the stability verdict: column `stability` (stable, unstable or unknown).
+    #[arg(long)]
+    stability: bool,
+    /// Add the solver's estimate of the tip position error (m): column `error_estimate`.
+    #[arg(long)]
+    error_estimate: bool,
+    /// Add K backbone points evenly spaced from base to tip (s = j L / (K - 1)): columns
+    /// p1_x, p1_y, p1_z, ..., pK_z (m). K = 0 (the default) adds none; else K >= 2.
+    #[arg(long, value_name = "K", default_value_t = 0)]
+    points: usize,
     #[command(flatten)]
     solver: SolverArgs,
 }
@@ -63,12 +77,38 @@ struct Outcome {
     tip: Option<tdcr::nalgebra::Vector3<f64>>,
     /// Newton iterations, also of a failed solve when its report says.
     iterations: Option<usize>,
+    /// The optional columns' fields (empty when the row failed).
+    extra: Vec<String>,
     error: Option<String>,
+}
+
+/// The optional columns of a solved row, as `outputs` asks.
+fn extra_fields(outputs: &RowOutputs, solution: &Solution) -> Vec<String> {
+    let mut out = Vec::new();
+    if outputs.orientation {
+        out.extend(quaternion(&solution.tip().R).map(number));
+    }
+    if outputs.stability {
+        out.push(solution.report.stability.verdict().to_string());
+    }
+    if outputs.error_estimate {
+        let e = tip_error_estimate(solution);
+        out.push(if e.is_finite() { number(e) } else { String::new() });
+    }
+    for p in outputs.points_of(solution) {
+        out.extend(p.iter().map(|&x| number(x)));
+    }
+    out
 }
 
 /// Solves one block of rows in order, each warm-started from the last solution (when that
 /// is a better start than the cold guess).
-fn solve_block(robots: &[Robot], settings: &tdcr::io::SolverSettings, progress: &Mutex<Counted>) -> Vec<Outcome> {
+fn solve_block(
+    robots: &[Robot],
+    settings: &tdcr::io::SolverSettings,
+    outputs: &RowOutputs,
+    progress: &Mutex<Counted>,
+) -> Vec<Outcome> {
     let mut last: Option<Solution> = None;
     let mut out = Vec::with_capacity(robots.len());
     for robot in robots {
@@ -82,6 +122,7 @@ fn solve_block(robots: &[Robot], settings: &tdcr::io::SolverSettings, progress: 
                 let outcome = Outcome {
                     tip: Some(solution.tip_position()),
                     iterations: Some(solution.report.iterations),
+                    extra: extra_fields(outputs, &solution),
                     error: None,
                 };
                 last = Some(solution);
@@ -93,6 +134,7 @@ fn solve_block(robots: &[Robot], settings: &tdcr::io::SolverSettings, progress: 
                     Error::NotConverged { report, .. } => Some(report.iterations),
                     _ => None,
                 },
+                extra: Vec::new(),
                 error: Some(e.to_string()),
             },
         };
@@ -150,6 +192,15 @@ impl Sink {
 /// row per input row as the rows are solved (in waves of blocks, in row order, so memory
 /// stays flat); exit code 3 when any row failed (after writing all of them).
 pub fn run(args: &BatchArgs) -> Result<(), Failure> {
+    let outputs = RowOutputs {
+        orientation: args.orientation,
+        stability: args.stability,
+        error_estimate: args.error_estimate,
+        points: args.points,
+    };
+    outputs
+        .check()
+        .map_err(|e| Failure::Input(format!("--points {}: {e}", args.points)))?;
     let (_, mut file) = read_robot(&args.robot)?;
     apply(&mut file, &args.solver);
     let text = std::fs::read_to_string(&args.cases)
@@ -174,7 +225,11 @@ pub fn run(args: &BatchArgs) -> Result<(), Failure> {
     let mut sink = Sink::open(args.out.as_deref())?;
     let mut header = vec!["row".to_string()];
     header.extend(table.parameters.iter().map(ToString::to_string));
-    header.extend(["converged", "iterations", "tip_x", "tip_y", "tip_z", "error"].map(String::from));
+    header.extend(["converged", "iterations", "tip_x", "tip_y", "tip_z"].map(String::from));
+    let extra_columns = outputs.header();
+    let extra_count = extra_columns.len();
+    header.extend(extra_columns);
+    header.push("error".into());
     sink.write(&CsvTable::new(header).finish())?;
     let progress = Mutex::new(Counted {
         bar: Progress::new(),
@@ -187,7 +242,7 @@ pub fn run(args: &BatchArgs) -> Result<(), Failure> {
         let robots = rows.iter().map(robot).collect::<Result<Vec<Robot>, Failure>>()?;
         let outcomes: Vec<Outcome> = robots
             .par_chunks(BLOCK)
-            .map(|block| solve_block(block, &file.solver, &progress))
+            .map(|block| solve_block(block, &file.solver, &outputs, &progress))
             .collect::<Vec<_>>()
             .into_iter()
             .flatten()
@@ -201,11 +256,12 @@ pub fn run(args: &BatchArgs) -> Result<(), Failure> {
             match &outcome.tip {
                 Some(tip) => {
                     fields.extend(tip.iter().map(|&x| number(x)));
+                    fields.extend(outcome.extra.iter().cloned());
                     fields.push(String::new());
                 }
                 None => {
                     failed += 1;
-                    fields.extend(["", "", ""].map(String::from));
+                    fields.extend(std::iter::repeat_n(String::new(), 3 + extra_count));
                     // One line per row: a multi-line message joined with "; ".
                     fields.push(outcome.error.as_deref().unwrap_or_default().replace('\n', "; "));
                 }

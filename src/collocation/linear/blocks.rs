@@ -167,6 +167,79 @@ impl BlockElimination {
     }
 }
 
+impl BlockElimination {
+    /// Solves J^T y = c with the factors of the last successful [`BlockElimination::solve`]
+    /// (the adjoint solve of the sensitivities, `collocation/sensitivity/adjoint.rs`).
+    ///
+    /// The elimination wrote J = M^-1 U: M the recorded row operations (swaps and
+    /// multipliers, step by step), U block upper bidiagonal with step k's pivot rows
+    /// [A_k B_k] in block row k (A_k 12 x 12 upper triangular, B_k the coupling to node
+    /// k + 1) and the last node's A_n. So J^T = U^T M^-T: first U^T w = c by forward
+    /// substitution over the blocks, A_k^T w_k = c_k - B_{k-1}^T w_{k-1}; then y = M^T w,
+    /// the row operations transposed and run backwards (each step maps its 6 carried rows
+    /// and 12 link rows to 12 pivot rows and 6 carried rows; its transpose maps them back).
+    /// The same cost as [`BlockElimination::solve_again`].
+    pub fn solve_transposed(&self, c: &[f64], y: &mut [f64]) {
+        let n = self.links;
+        // U^T w = c: w_k overwrites y's block k (which holds no row data yet).
+        let mut coupling = [0.0; NODE];
+        for k in 0..=n {
+            let mut sums: [f64; NODE] = std::array::from_fn(|i| c[k * NODE + i] - coupling[i]);
+            let w = &mut y[k * NODE..(k + 1) * NODE];
+            if k < n {
+                forward_substitute(&self.pivots[k], &mut sums, w);
+                // B_k^T w_k, subtracted from the next block's right-hand side.
+                coupling = std::array::from_fn(|j| (0..NODE).map(|i| self.pivots[k][i][NODE + j] * w[i]).sum());
+            } else {
+                forward_substitute(&self.last, &mut sums, w);
+            }
+        }
+        // y = M^T w: the last step first; each step's transpose takes its 12 pivot-row
+        // values and the 6 carried rows' adjoints, and gives the 6 rows it was handed
+        // (carried, or the base rows at step 0) and its 12 link (or tip) rows.
+        let mut last: [f64; NODE] = std::array::from_fn(|i| y[n * NODE + i]);
+        replay_transposed(&self.last_record, &mut last);
+        let mut carry = [0.0; CARRY];
+        carry.copy_from_slice(&last[..CARRY]);
+        let tip = tip_row(n + 1);
+        y[tip..tip + TIP_ROWS].copy_from_slice(&last[CARRY..]);
+        let mut panel = [0.0; ROWS];
+        for k in (0..n).rev() {
+            panel[..NODE].copy_from_slice(&y[k * NODE..(k + 1) * NODE]);
+            panel[NODE..].copy_from_slice(&carry);
+            replay_transposed(&self.records[k], &mut panel);
+            carry.copy_from_slice(&panel[..CARRY]);
+            y[link_row(k)..link_row(k + 1)].copy_from_slice(&panel[CARRY..]);
+        }
+        y[..CARRY].copy_from_slice(&carry);
+    }
+}
+
+/// The transpose of [`replay`]: the eliminations transposed (pivot row c collects its
+/// multipliers' rows) and the swaps, in reverse order.
+fn replay_transposed<const N: usize>(record: &Record, v: &mut [f64; N]) {
+    for c in (0..NODE).rev() {
+        let collected: f64 = v[c + 1..]
+            .iter()
+            .zip(&record.factors[c][c + 1..])
+            .map(|(x, f)| f * x)
+            .sum();
+        v[c] -= collected;
+        v.swap(c, record.swaps[c]);
+    }
+}
+
+/// Solves A^T w = sums for the upper-triangular first 12 columns A of `rows` (forward
+/// substitution; `sums` is consumed).
+fn forward_substitute<const W: usize>(rows: &[[f64; W]], sums: &mut [f64; NODE], w: &mut [f64]) {
+    for i in 0..NODE {
+        w[i] = sums[i] / rows[i][i];
+        for j in i + 1..NODE {
+            sums[j] -= rows[i][j] * w[i];
+        }
+    }
+}
+
 /// Applies a step's recorded row swaps and eliminations to a right-hand side.
 fn replay<const N: usize>(record: &Record, v: &mut [f64; N]) {
     for c in 0..NODE {

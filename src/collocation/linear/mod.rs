@@ -74,4 +74,17 @@ impl Linear {
             }
         }
     }
+
+    /// Solves J^T y = c with the factors of the last successful [`Linear::solve`] (the
+    /// adjoint solve); the caller checks y for finiteness.
+    pub(crate) fn solve_transposed(&mut self, c: &[f64], y: &mut [f64]) {
+        match self {
+            Linear::Blocks(blocks) => blocks.solve_transposed(c, y),
+            #[cfg(feature = "sparse-lu")]
+            Linear::Sparse(lu) => {
+                y.copy_from_slice(c);
+                lu.solve_transposed(y);
+            }
+        }
+    }
 }

@@ -55,7 +55,8 @@ impl SparseLu {
             .map_err(|e| invalid("mesh", format!("symbolic LU failed ({e:?})"), "report this as a bug"))?;
         let req = symbolic
             .factorize_numeric_lu_scratch::<f64>(Par::Seq, Default::default())
-            .or(symbolic.solve_in_place_scratch::<f64>(1, Par::Seq));
+            .or(symbolic.solve_in_place_scratch::<f64>(1, Par::Seq))
+            .or(symbolic.solve_transpose_in_place_scratch::<f64>(1, Par::Seq));
         Ok(SparseLu {
             matrix,
             slots,
@@ -112,6 +113,27 @@ impl SparseLu {
         // A panic here would mean no factorization was made: report it as non-finite.
         let solved = catch_unwind(AssertUnwindSafe(|| {
             lu.solve_in_place_with_conj(
+                Conj::No,
+                ColMut::from_slice_mut(x).as_mat_mut(),
+                Par::Seq,
+                MemStack::new(mem),
+            );
+        }));
+        if solved.is_err() {
+            x.fill(f64::NAN);
+        }
+    }
+
+    /// Solves J^T y = c in place (`x` holds c, then y) with the numeric factors of the last
+    /// successful [`SparseLu::solve`].
+    pub(crate) fn solve_transposed(&mut self, x: &mut [f64]) {
+        let SparseLu {
+            symbolic, numeric, mem, ..
+        } = self;
+        let lu = faer::sparse::linalg::lu::LuRef::new_unchecked(symbolic, numeric);
+        // A panic here would mean no factorization was made: report it as non-finite.
+        let solved = catch_unwind(AssertUnwindSafe(|| {
+            lu.solve_transpose_in_place_with_conj(
                 Conj::No,
                 ColMut::from_slice_mut(x).as_mat_mut(),
                 Par::Seq,

@@ -72,7 +72,11 @@
 //! (three one-sided).
 #![allow(non_snake_case)]
 
+mod adjoint;
+mod named;
 mod tip;
+
+pub use adjoint::{Adjoint, Cotangent, rotation_cotangent};
 
 pub(crate) use tip::TensionDirections;
 pub use tip::{
@@ -284,8 +288,20 @@ impl<'a> Sensitivity<'a> {
         &mut self,
         step: f64,
         difference: Difference,
-        mut residual: impl FnMut(&mut System<'a>, &[State], f64, &mut [f64]) -> Result<()>,
+        residual: impl FnMut(&mut System<'a>, &[State], f64, &mut [f64]) -> Result<()>,
     ) -> Result<Vec<NodeDerivative>> {
+        self.differenced_rhs(step, difference, residual)?;
+        self.respond()
+    }
+
+    /// Writes -dF/dq, differenced as [`Sensitivity::differenced`] says, into the right-hand
+    /// side buffer `scratch[0]`.
+    fn differenced_rhs(
+        &mut self,
+        step: f64,
+        difference: Difference,
+        mut residual: impl FnMut(&mut System<'a>, &[State], f64, &mut [f64]) -> Result<()>,
+    ) -> Result<()> {
         if !(step.is_finite() && step > 0.0) {
             return Err(invalid(
                 "step",
@@ -311,7 +327,7 @@ impl<'a> Sensitivity<'a> {
             }
             f0[i] = d * scale;
         }
-        self.respond()
+        Ok(())
     }
 
     /// Solves J dx = rhs for the right-hand side in `scratch[0]` (-dF/dq) and converts the
@@ -359,6 +375,12 @@ impl<'a> Sensitivity<'a> {
     /// # Errors
     /// [`crate::Error::InvalidInput`] for an axis other than 0, 1, 2 or a singular Jacobian.
     pub fn tip_force(&mut self, axis: usize) -> Result<Vec<NodeDerivative>> {
+        self.tip_force_rhs(axis)?;
+        self.respond()
+    }
+
+    /// Writes -dF/dq of [`Sensitivity::tip_force`] into the right-hand side buffer.
+    fn tip_force_rhs(&mut self, axis: usize) -> Result<()> {
         Self::check_axis(axis)?;
         let (R, kse, _) = self.tip_frame();
         let column = R.transpose().column(axis).component_div(&kse);
@@ -367,7 +389,7 @@ impl<'a> Sensitivity<'a> {
         for i in 0..3 {
             rhs[force_rows + i] = column[i];
         }
-        self.respond()
+        Ok(())
     }
 
     /// As [`Sensitivity::tip_force`] for the tip moment (per N m, world frame): the tip's
@@ -376,6 +398,12 @@ impl<'a> Sensitivity<'a> {
     /// # Errors
     /// [`crate::Error::InvalidInput`] for an axis other than 0, 1, 2 or a singular Jacobian.
     pub fn tip_moment(&mut self, axis: usize) -> Result<Vec<NodeDerivative>> {
+        self.tip_moment_rhs(axis)?;
+        self.respond()
+    }
+
+    /// Writes -dF/dq of [`Sensitivity::tip_moment`] into the right-hand side buffer.
+    fn tip_moment_rhs(&mut self, axis: usize) -> Result<()> {
         Self::check_axis(axis)?;
         let (R, _, kbt) = self.tip_frame();
         let column = R.transpose().column(axis).component_div(&kbt) * self.robot().length();
@@ -384,7 +412,7 @@ impl<'a> Sensitivity<'a> {
         for i in 0..3 {
             rhs[moment_rows + i] = column[i];
         }
-        self.respond()
+        Ok(())
     }
 
     /// Tip orientation and section stiffness (kse, kbt) there.
@@ -401,10 +429,16 @@ impl<'a> Sensitivity<'a> {
     /// # Errors
     /// [`crate::Error::InvalidInput`] for an axis other than 0, 1, 2 or a singular Jacobian.
     pub fn base_position(&mut self, axis: usize) -> Result<Vec<NodeDerivative>> {
+        self.base_position_rhs(axis)?;
+        self.respond()
+    }
+
+    /// Writes -dF/dq of [`Sensitivity::base_position`] into the right-hand side buffer.
+    fn base_position_rhs(&mut self, axis: usize) -> Result<()> {
         Self::check_axis(axis)?;
         let length = self.robot().length();
         self.zeroed_rhs()[axis] = 1.0 / length;
-        self.respond()
+        Ok(())
     }
 
     /// The derivative of every node state with respect to component `axis` of a world-frame
@@ -434,6 +468,12 @@ impl<'a> Sensitivity<'a> {
     /// [`crate::Error::InvalidInput`] for a tendon index out of range; as
     /// [`Sensitivity::derivative`].
     pub fn tension(&mut self, tendon: usize) -> Result<Vec<NodeDerivative>> {
+        self.tension_rhs(tendon)?;
+        self.respond()
+    }
+
+    /// Writes -dF/dq of [`Sensitivity::tension`] into the right-hand side buffer.
+    fn tension_rhs(&mut self, tendon: usize) -> Result<()> {
         let robot = self.robot();
         let Some(t) = robot.tendons.get(tendon) else {
             return Err(invalid(
@@ -457,7 +497,7 @@ impl<'a> Sensitivity<'a> {
             Difference::Forward
         };
         // The tension is an input the model owns: moved in place, no robot to clone.
-        self.differenced(step, difference, |system, states, dq, out| {
+        self.differenced_rhs(step, difference, |system, states, dq, out| {
             system.model.tensions[tendon] = tension + dq;
             let result = system.residual(states, out);
             system.model.tensions[tendon] = tension;

@@ -1,0 +1,112 @@
+"""Datasets that stream: the optional outputs of solve_parameters (one meaning with `tdcr
+batch`), tdcr.dataset's sampling, resumption and files, and the memory of a 10^5-row batch."""
+
+import os
+import subprocess
+import sys
+import textwrap
+
+import numpy as np
+import pytest
+
+import tdcr
+
+
+def robot():
+    return tdcr.cases.prototype()
+
+
+def rotation_of(q):
+    w, x, y, z = q
+    return np.array(
+        [
+            [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+            [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+            [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
+        ]
+    )
+
+
+def test_solve_parameters_outputs_are_the_solutions():
+    r = robot()
+    params = {"tension.1": [0.5, 2.0], "tip_force.y": [0.0, 0.05]}
+    table = tdcr.solve_parameters(r, params, orientation=True, error_estimate=True, points=4)
+    for i in range(2):
+        s = tdcr.solve(r.with_parameters({k: v[i] for k, v in params.items()}))
+        q = table["tip_orientation"][i]
+        assert q[0] >= 0
+        # 1e-14: a rotation from its quaternion, to rounding
+        np.testing.assert_allclose(rotation_of(q), s.tip_rotation, atol=1e-14)
+        assert table["error_estimate"][i] == s.report.tip_error_estimate
+        for j, sj in enumerate(np.linspace(0.0, s.length, 4)):
+            np.testing.assert_array_equal(table["points"][i, j], s.at(sj).p)
+    with pytest.raises(tdcr.InvalidInput, match="at least 2"):
+        tdcr.solve_parameters(r, params, points=1)
+
+
+def test_dataset_latin_hypercube_fills_every_stratum(tmp_path):
+    path = tmp_path / "lhs.npz"
+    tdcr.dataset(robot(), path, ranges={"tension.1": (0.0, 2.0), "tension.3": (0.0, 1.0)}, rows=40, sampling="latin_hypercube", chunk_size=16)
+    with np.load(path) as z:
+        for name, high in [("tension.1", 2.0), ("tension.3", 1.0)]:
+            strata = np.floor(z[f"parameter:{name}"] / high * 40).astype(int)
+            assert sorted(strata) == list(range(40))
+        assert z["tip_position"].shape == (40, 3) and z["converged"].all()
+    assert not os.path.exists(str(path) + ".parts")
+
+
+def test_dataset_resumes_an_interrupted_run(tmp_path, monkeypatch):
+    ranges = {"tension.2": (0.0, 2.0), "tip_force.z": (-0.05, 0.0)}
+    whole = tmp_path / "whole.npz"
+    tdcr.dataset(robot(), whole, ranges=ranges, rows=25, chunk_size=10, orientation=True, points=3)
+    import tdcr._dataset as ds
+
+    calls = []
+    real = ds.solve_parameters
+
+    def interrupted(*args, **kwargs):
+        if len(calls) == 1:
+            raise KeyboardInterrupt
+        calls.append(1)
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(ds, "solve_parameters", interrupted)
+    part = tmp_path / "part.npz"
+    with pytest.raises(KeyboardInterrupt):
+        tdcr.dataset(robot(), part, ranges=ranges, rows=25, chunk_size=10, orientation=True, points=3)
+    assert len(os.listdir(str(part) + ".parts")) == 2  # the manifest and one chunk
+    with pytest.raises(tdcr.InvalidInput, match="other arguments"):
+        tdcr.dataset(robot(), part, ranges=ranges, rows=26, chunk_size=10, orientation=True, points=3)
+    monkeypatch.setattr(ds, "solve_parameters", real)
+    tdcr.dataset(robot(), part, ranges=ranges, rows=25, chunk_size=10, orientation=True, points=3)
+    with np.load(whole) as a, np.load(part) as b:
+        assert sorted(a.keys()) == sorted(b.keys())
+        for key in a.keys():
+            np.testing.assert_array_equal(a[key], b[key])
+
+
+def test_dataset_parquet_has_the_batch_column_names(tmp_path):
+    pq = pytest.importorskip("pyarrow.parquet")
+    path = tmp_path / "d.parquet"
+    tdcr.dataset(robot(), path, given={"tension.1": [0.5, 1.0, 1.5]}, chunk_size=2, orientation=True, points=2)
+    table = pq.read_table(path)
+    for name in ["tension.1", "tip_x", "q_w", "p2_z", "stability", "error"]:
+        assert name in table.column_names
+
+
+def test_a_batch_of_100000_rows_stays_under_100_mb(tmp_path):
+    # In a fresh interpreter, so that the peak RSS is this batch's. The rows are cheap
+    # (one straight tendon from 0 to 0.5 N) to keep the test's time modest; memory per row
+    # does not depend on the row.
+    script = textwrap.dedent(
+        """
+        import resource, numpy as np, tdcr
+        t = np.linspace(0.0, 0.5, 100_000)
+        table = tdcr.solve_parameters(tdcr.cases.prototype(), {"tension.1": t}, orientation=True)
+        assert table["converged"].all()
+        print(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss)
+        """
+    )
+    out = subprocess.run([sys.executable, "-c", script], check=True, capture_output=True, text=True)
+    peak_mb = int(out.stdout.split()[-1]) / 1024  # ru_maxrss is in KiB on Linux
+    assert peak_mb < 100, f"peak RSS {peak_mb:.0f} MB"

@@ -1,0 +1,190 @@
+//! Gradients of a scalar function of a solved shape with respect to the robot's parameters
+//! by the adjoint (reverse, vector-Jacobian) form of the implicit function theorem: what a
+//! training loop's backward pass needs (docs/sensitivity.md, "Adjoint gradients").
+//!
+//! # Method
+//!
+//! The outputs y (tip position, tip orientation, backbone points at chosen arc lengths)
+//! are functions of the node states x, and x(q) solves F(x; q) = 0. For a cotangent ybar
+//! (dloss/dy), the chain rule with dx/dq = J^-1 (-dF/dq) gives
+//!
+//! ```text
+//! dloss/dq = ybar . (dy/dx) dx/dq = lambda . (-dF/dq),   J^T lambda = (dy/dx)^T ybar
+//! ```
+//!
+//! so one transposed solve with the factors of the converged Jacobian serves every
+//! parameter, which then costs only its -dF/dq (exact, or two residual evaluations; the same
+//! vectors as the forward sensitivities, `named.rs`). The gradient equals the forward
+//! sensitivities contracted with the cotangent, to rounding (tests/adjoint.rs).
+//!
+//! # Outputs and their cotangents
+//!
+//! In the solver's scaled increments (12 per node, d = (dp / L, dtheta, dv, du L), R -> R
+//! exp(hat(dtheta))):
+//!
+//! - tip position p(L) (m): dp = L d_p, so the cotangent enters the tip node's d_p slot as
+//!   L pbar;
+//! - tip orientation as the world-frame rotation vector omega, R_tip -> exp(hat(omega))
+//!   R_tip: omega = R_tip dtheta, so omegabar enters the dtheta slot as R_tip^T omegabar.
+//!   A cotangent Rbar on the rotation matrix itself becomes omegabar by
+//!   [`rotation_cotangent`];
+//! - backbone point p(s_j), the cubic Hermite interpolant of [`Solution::at`] on the
+//!   interval (k, k + 1) holding s_j: p = h00 p_k + h10 h R_k v_k + h01 p_k+1 + h11 h
+//!   R_k+1 v_k+1, and d(R v) = R (dtheta x v) + R dv, so node k's slots get L h00 pbar
+//!   (d_p), h10 h v_k x (R_k^T pbar) (dtheta) and h10 h R_k^T pbar (d_v), likewise node k + 1
+//!   with h01 and h11.
+
+use super::{Sensitivity, singular};
+use crate::collocation::unknowns::{NODE, P, THETA, V};
+use crate::error::{Result, invalid};
+use crate::model::parameter::Parameter;
+use crate::model::robot::Robot;
+use crate::solution::Solution;
+use nalgebra::{Matrix3, Vector3};
+
+/// A cotangent (the gradient of a scalar loss) on the outputs of a solved robot.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Cotangent {
+    /// dloss/dp(L): on the tip position (1/m per unit of loss), world frame.
+    pub tip_position: Vector3<f64>,
+    /// dloss/domega: on the tip orientation's world-frame rotation vector omega, R_tip ->
+    /// exp(hat(omega)) R_tip (per rad); [`rotation_cotangent`] converts one on R_tip.
+    pub tip_rotation: Vector3<f64>,
+    /// dloss/dp(s_j): on the backbone points at the [`Adjoint`]'s arc lengths, one each
+    /// (empty when there are none).
+    pub points: Vec<Vector3<f64>>,
+}
+
+/// The cotangent on the world-frame rotation vector omega (R -> exp(hat(omega)) R) of a
+/// cotangent `R_bar` (dloss/dR_ij) on the rotation matrix `R`: dloss = <Rbar, hat(omega) R>
+/// = <Rbar R^T, hat(omega)>, the vee of the antisymmetric part of A = Rbar R^T times two:
+/// (A_32 - A_23, A_13 - A_31, A_21 - A_12).
+pub fn rotation_cotangent(R: &Matrix3<f64>, R_bar: &Matrix3<f64>) -> Vector3<f64> {
+    let a = R_bar * R.transpose();
+    Vector3::new(a[(2, 1)] - a[(1, 2)], a[(0, 2)] - a[(2, 0)], a[(1, 0)] - a[(0, 1)])
+}
+
+/// A solved robot linearized for gradients: the factors of its collocation Jacobian and the
+/// arc lengths of its sampled backbone points.
+pub struct Adjoint<'a> {
+    /// The linearization and the -dF/dq of every parameter.
+    sensitivity: Sensitivity<'a>,
+    /// Arc lengths s_j of the sampled backbone points (m), in [0, L].
+    samples: Vec<f64>,
+    /// The solution (for the Hermite interpolant's intervals and node states).
+    solution: Solution,
+    /// lambda = J^-T (dy/dx)^T ybar for the last cotangent; scratch for the next one.
+    multiplier: Vec<f64>,
+}
+
+impl<'a> Adjoint<'a> {
+    /// Linearizes `robot`'s collocation system at `solution` (as [`Sensitivity::new`]) for
+    /// outputs that include the backbone points at arc lengths `samples` (m).
+    ///
+    /// # Errors
+    /// [`crate::Error::InvalidInput`] for a sample outside [0, L] or not finite, for a robot
+    /// with a displacement-controlled tendon (its tension is solved, not a parameter held
+    /// fixed: give the tensions, e.g. `robot.with_tensions(&solution.tensions())`); as
+    /// [`Sensitivity::new`].
+    pub fn new(robot: &'a Robot, solution: &Solution, samples: &[f64]) -> Result<Self> {
+        if let Some(i) = robot.tendons.iter().position(|t| t.displacement().is_some()) {
+            return Err(invalid(
+                format!("tendon {}", i + 1),
+                "is displacement-controlled; the adjoint gradients hold every tension fixed",
+                "give the tendons tensions (Robot::with_tensions with the solution's tensions)",
+            ));
+        }
+        let length = robot.length();
+        if let Some(s) = samples.iter().find(|s| !(s.is_finite() && (0.0..=length).contains(*s))) {
+            return Err(invalid(
+                "samples",
+                format!("has the arc length {s} m, outside the rod [0, {length}] m"),
+                "give backbone sample points between 0 and the rod length",
+            ));
+        }
+        let sensitivity = Sensitivity::new(robot, solution)?;
+        let unknowns = sensitivity.system.unknowns();
+        Ok(Adjoint {
+            sensitivity,
+            samples: samples.to_vec(),
+            solution: solution.clone(),
+            multiplier: vec![0.0; unknowns],
+        })
+    }
+
+    /// The arc lengths of the sampled backbone points (m).
+    pub fn samples(&self) -> &[f64] {
+        &self.samples
+    }
+
+    /// The backbone points p(s_j) (m, world frame), from [`Solution::at`].
+    pub fn points(&self) -> Vec<Vector3<f64>> {
+        self.samples.iter().map(|&s| self.solution.at(s).p).collect()
+    }
+
+    /// dloss/dq for each of `parameters`, for the loss whose gradient on the outputs is
+    /// `cotangent`: one transposed solve, then a dot product with each parameter's -dF/dq
+    /// (module docs). Units: loss per unit of each parameter (per N, per Pa, ...).
+    ///
+    /// # Errors
+    /// [`crate::Error::InvalidInput`] when `cotangent.points` does not have one entry per
+    /// sample, for a parameter the robot does not have, or a singular Jacobian; as
+    /// [`Sensitivity::parameter`].
+    pub fn gradient(&mut self, cotangent: &Cotangent, parameters: &[Parameter]) -> Result<Vec<f64>> {
+        self.multiplier_for(cotangent)?;
+        parameters
+            .iter()
+            .map(|&p| {
+                self.sensitivity.parameter_rhs(p)?;
+                Ok(self
+                    .multiplier
+                    .iter()
+                    .zip(&self.sensitivity.scratch[0])
+                    .map(|(l, r)| l * r)
+                    .sum())
+            })
+            .collect()
+    }
+
+    /// Solves J^T lambda = (dy/dx)^T ybar into `multiplier`.
+    fn multiplier_for(&mut self, cotangent: &Cotangent) -> Result<()> {
+        if cotangent.points.len() != self.samples.len() {
+            return Err(invalid(
+                "cotangent.points",
+                format!(
+                    "has {} entries, but there are {} sample points",
+                    cotangent.points.len(),
+                    self.samples.len()
+                ),
+                "give one cotangent per backbone sample point",
+            ));
+        }
+        let length = self.solution.length();
+        let g = &mut self.multiplier;
+        g.fill(0.0);
+        let nodes = &self.solution.nodes;
+        let tip = nodes.len() - 1;
+        add(g, tip, P, &(cotangent.tip_position * length));
+        add(g, tip, THETA, &(nodes[tip].R.transpose() * cotangent.tip_rotation));
+        for (&s, pbar) in self.samples.iter().zip(&cotangent.points) {
+            let (k, [h00, h10, h01, h11]) = self.solution.interval(s, false);
+            let h = nodes[k + 1].s - nodes[k].s;
+            for (node, value, slope) in [(k, h00, h10 * h), (k + 1, h01, h11 * h)] {
+                let body = nodes[node].R.transpose() * pbar;
+                add(g, node, P, &(pbar * (length * value)));
+                add(g, node, THETA, &(nodes[node].v.cross(&body) * slope));
+                add(g, node, V, &(body * slope));
+            }
+        }
+        let lambda = self.sensitivity.workspace.solve_transposed(g).ok_or_else(singular)?;
+        self.multiplier.copy_from_slice(lambda);
+        Ok(())
+    }
+}
+
+/// Adds `value` to the three slots from `slot` of node `node` in the scaled vector `g`.
+fn add(g: &mut [f64], node: usize, slot: usize, value: &Vector3<f64>) {
+    for i in 0..3 {
+        g[node * NODE + slot + i] += value[i];
+    }
+}

@@ -1,0 +1,58 @@
+//! Sensitivities to the named parameters of [`Parameter`] (`tension.I`, `tip_force.x`,
+//! `youngs_modulus`, ...): the one vocabulary of batches, sweeps and the gradients of
+//! `adjoint.rs`. Each name picks how its dF/dq is made: exact for the tip wrench and the
+//! base position (module docs of `sensitivity`), the model's own tension moved in place for
+//! a tension, a central difference of the residual with [`Parameter::apply`] on a clone of
+//! the robot otherwise.
+
+use super::{Difference, NodeDerivative, RELATIVE_STEP, Sensitivity, force_scale, residual_at};
+use crate::error::Result;
+use crate::model::parameter::Parameter;
+
+impl Sensitivity<'_> {
+    /// The derivative of every node state with respect to the named parameter `parameter`
+    /// (per unit of it), as [`Parameter::apply`] defines it: a tension's is
+    /// [`Sensitivity::tension`], a tip-force component's [`Sensitivity::tip_force`], a
+    /// tip-moment component's [`Sensitivity::tip_moment`], a base-position component's
+    /// [`Sensitivity::base_position`]; `distributed_force.*`, `youngs_modulus` (at fixed
+    /// Poisson's ratio) and `load_scale` are differenced centrally with steps
+    /// [`RELATIVE_STEP`] times max(|f|, E I / L^3), E and 1.
+    ///
+    /// # Errors
+    /// As [`Parameter::check`] for a parameter the robot does not have; as
+    /// [`Sensitivity::derivative`].
+    pub fn parameter(&mut self, parameter: Parameter) -> Result<Vec<NodeDerivative>> {
+        self.parameter_rhs(parameter)?;
+        self.respond()
+    }
+
+    /// Writes -dF/dq of [`Sensitivity::parameter`] into the right-hand side buffer.
+    pub(super) fn parameter_rhs(&mut self, parameter: Parameter) -> Result<()> {
+        let robot = self.robot();
+        parameter.check(robot)?;
+        let value = parameter.value(robot)?;
+        let step = match parameter {
+            Parameter::Tension(i) => return self.tension_rhs(i),
+            Parameter::TipForce(axis) => return self.tip_force_rhs(axis),
+            Parameter::TipMoment(axis) => return self.tip_moment_rhs(axis),
+            Parameter::BasePosition(axis) => return self.base_position_rhs(axis),
+            // The residual is linear in f_e: any step is exact but for rounding; the scale
+            // is that of the tip force over the rod's length.
+            Parameter::DistributedForce(_) => RELATIVE_STEP * value.abs().max(force_scale(robot) / robot.length()),
+            Parameter::YoungsModulus => RELATIVE_STEP * value,
+            Parameter::LoadScale => RELATIVE_STEP,
+        };
+        self.differenced_rhs(step, Difference::Central, |system, states, dq, out| {
+            residual_at(
+                system,
+                states,
+                &|r: &mut crate::Robot, d: f64| {
+                    // `check` above: the parameter exists, so apply cannot fail.
+                    let _ = parameter.apply(r, value + d);
+                },
+                dq,
+                out,
+            )
+        })
+    }
+}

@@ -1,0 +1,179 @@
+//! Adjoint (vector-Jacobian) gradients against the forward sensitivities contracted with
+//! the same cotangent (they share every -dF/dq, so they agree to the rounding of the two
+//! linear solves), and against finite differences of full solves (the outputs' derivatives
+//! and the orientation convention, independently of the linearization).
+
+use nalgebra::{Matrix3, Vector3};
+use tdcr::collocation::sensitivity::{Adjoint, Cotangent, NodeDerivative, Sensitivity, rotation_cotangent};
+use tdcr::collocation::{self, Options};
+use tdcr::{Parameter, Robot, Solution, cases, so3};
+
+/// Fixed 48-interval mesh with Newton driven to its rounding floor, as tests/sensitivity.rs.
+fn options() -> Options {
+    Options {
+        intervals: 48,
+        tolerance: None,
+        // 1e-12: full solves then differ by rounding only (tests/sensitivity.rs's reason)
+        residual_tolerance: 1e-12,
+        ..Default::default()
+    }
+}
+
+/// Case H with a distributed force and the prototype's geometry (so E is a parameter).
+fn loaded() -> Robot {
+    let mut robot = cases::case_h();
+    Parameter::DistributedForce(1).apply(&mut robot, 0.3).unwrap();
+    robot.tendons[0].set_tension(1.2);
+    robot
+}
+
+fn parameters(robot: &Robot) -> Vec<Parameter> {
+    let mut names: Vec<String> = (1..=robot.tendons.len()).map(|i| format!("tension.{i}")).collect();
+    for axis in ["x", "y", "z"] {
+        names.push(format!("tip_force.{axis}"));
+        names.push(format!("tip_moment.{axis}"));
+        names.push(format!("distributed_force.{axis}"));
+    }
+    names.extend(["base_position.y", "load_scale"].map(String::from));
+    if robot.rod.geometry.is_some() {
+        names.push("youngs_modulus".into());
+    }
+    names.iter().map(|n| Parameter::parse(n, robot).unwrap()).collect()
+}
+
+/// A cotangent with every component non-zero and of mixed sign.
+fn cotangent(samples: usize) -> Cotangent {
+    let v = |k: f64| Vector3::new(0.7 - 0.1 * k, -0.4 + 0.3 * k, 0.9 - 0.2 * k);
+    Cotangent {
+        tip_position: v(0.0),
+        tip_rotation: v(1.5) * 0.05,
+        points: (0..samples).map(|j| v(2.0 + j as f64)).collect(),
+    }
+}
+
+/// dp(s)/dq of the solution's interpolant along the node derivative `d`: Solution::at's
+/// position is linear in the node positions, in R and in v, so moving them by the first-
+/// order change (R by hat(omega) R, not re-orthonormalized) and differencing is exact to
+/// rounding, at any step; the step makes the change about as large as the rod (a change
+/// near rounding of the positions, 1e-12 m per Pa for E, would lose digits).
+fn point_derivative(solution: &Solution, d: &[NodeDerivative], s: f64) -> Vector3<f64> {
+    let length = solution.length();
+    let size = d.iter().fold(0.0f64, |m, d| {
+        m.max(d.p.norm())
+            .max(d.rotation.norm() * length)
+            .max(d.v.norm() * length)
+    });
+    let step = if size > 0.0 { length / size } else { 1.0 };
+    let moved = |sign: f64| {
+        let sign = sign * step;
+        let mut out = solution.clone();
+        for (node, d) in out.nodes.iter_mut().zip(d) {
+            node.p += d.p * sign;
+            node.R += so3::hat(&d.rotation) * node.R * sign;
+            node.v += d.v * sign;
+        }
+        out.at(s).p
+    };
+    (moved(1.0) - moved(-1.0)) / (2.0 * step)
+}
+
+#[test]
+fn adjoint_gradient_equals_contracted_forward_sensitivities() {
+    for robot in [cases::case_s(), loaded()] {
+        let solution = collocation::solve(&robot, &options()).unwrap();
+        let length = robot.length();
+        // A node, points inside intervals, and the tip.
+        let samples = [0.0, 0.31 * length, 0.5 * length, 0.77 * length, length];
+        let cot = cotangent(samples.len());
+        let params = parameters(&robot);
+        let mut adjoint = Adjoint::new(&robot, &solution, &samples).unwrap();
+        let gradient = adjoint.gradient(&cot, &params).unwrap();
+        let mut forward = Sensitivity::new(&robot, &solution).unwrap();
+        for (p, g) in params.iter().zip(&gradient) {
+            let d = forward.parameter(*p).unwrap();
+            let tip = d.last().unwrap();
+            let mut expected = cot.tip_position.dot(&tip.p) + cot.tip_rotation.dot(&tip.rotation);
+            let mut magnitude = cot.tip_position.dot(&tip.p).abs() + cot.tip_rotation.dot(&tip.rotation).abs();
+            for (&s, pbar) in samples.iter().zip(&cot.points) {
+                let term = pbar.dot(&point_derivative(&solution, &d, s));
+                expected += term;
+                magnitude += term.abs();
+            }
+            // 1e-10 of the terms' magnitudes: the transposed and the forward solve of the same
+            // factors differ by rounding amplified by the condition number (~1e5)
+            assert!(
+                (g - expected).abs() <= 1e-10 * magnitude,
+                "{p}: adjoint {g:.15e}, forward {expected:.15e}"
+            );
+        }
+    }
+}
+
+#[test]
+fn adjoint_gradient_matches_finite_differences_of_solves() {
+    let robot = loaded();
+    let samples = [0.4 * robot.length(), robot.length()];
+    let cot = cotangent(samples.len());
+    // The loss the cotangent is the gradient of at the solution (linear in the outputs).
+    let loss = |robot: &Robot, reference: &Matrix3<f64>| {
+        let s = collocation::solve(robot, &options()).unwrap();
+        let omega = so3::log(&(s.tip().R * reference.transpose()));
+        cot.tip_position.dot(&s.tip_position())
+            + cot.tip_rotation.dot(&omega)
+            + samples
+                .iter()
+                .zip(&cot.points)
+                .map(|(&x, c)| c.dot(&s.at(x).p))
+                .sum::<f64>()
+    };
+    let solution = collocation::solve(&robot, &options()).unwrap();
+    let reference = solution.tip().R;
+    let mut adjoint = Adjoint::new(&robot, &solution, &samples).unwrap();
+    for (name, step) in [
+        ("tension.5", 1e-4 * 4.91),
+        ("tip_force.x", 1e-5),
+        ("youngs_modulus", 1e-4 * 6e10),
+    ] {
+        let p = Parameter::parse(name, &robot).unwrap();
+        let value = p.value(&robot).unwrap();
+        let at = |q: f64| loss(&p.applied(&robot, q).unwrap(), &reference);
+        let difference = (at(value + step) - at(value - step)) / (2.0 * step);
+        let g = adjoint.gradient(&cot, &[p]).unwrap()[0];
+        // 1e-6: central differences of full solves at a 1e-4 relative step (truncation ~1e-8,
+        // solve noise ~1e-7; tests/sensitivity.rs measures the same bound)
+        assert!(
+            (g - difference).abs() <= 1e-6 * difference.abs(),
+            "{name}: adjoint {g:.10e}, differences {difference:.10e}"
+        );
+    }
+}
+
+#[test]
+fn rotation_cotangent_is_the_gradient_on_the_rotation_vector() {
+    let r = so3::exp(&Vector3::new(0.3, -0.5, 0.9));
+    let r_bar = Matrix3::new(0.2, -1.0, 0.5, 0.7, 0.1, -0.3, 0.4, 0.8, -0.6);
+    let omega_bar = rotation_cotangent(&r, &r_bar);
+    for axis in 0..3 {
+        let h = 1e-6;
+        let e = Vector3::ith(axis, h);
+        let f = |w: Vector3<f64>| (r_bar.component_mul(&(so3::exp(&w) * r))).sum();
+        let difference = (f(e) - f(-e)) / (2.0 * h);
+        // 1e-8: central difference at h = 1e-6 (truncation h^2, rounding 1e-16 / h)
+        assert!((omega_bar[axis] - difference).abs() < 1e-8, "axis {axis}");
+    }
+}
+
+#[test]
+fn adjoint_rejects_bad_samples_and_displacement_control() {
+    let robot = cases::case_s();
+    let solution = collocation::solve(&robot, &options()).unwrap();
+    let message = Adjoint::new(&robot, &solution, &[0.5]).err().unwrap().to_string();
+    assert!(message.contains("outside the rod"), "{message}");
+    let mut held = robot.clone();
+    held.tendons[0].set_displacement(0.001);
+    let message = Adjoint::new(&held, &solution, &[]).err().unwrap().to_string();
+    assert!(message.contains("displacement-controlled"), "{message}");
+    let mut adjoint = Adjoint::new(&robot, &solution, &[0.1]).unwrap();
+    let message = adjoint.gradient(&Cotangent::default(), &[]).err().unwrap().to_string();
+    assert!(message.contains("one cotangent per backbone sample"), "{message}");
+}
