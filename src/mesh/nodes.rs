@@ -150,12 +150,24 @@ fn build(model: &Model, states: &[State], segment_ends: &[f64], along: Along, re
 fn tendon_states(model: &Model, nodes: &[Node]) -> Vec<TendonState> {
     let robot = model.robot;
     let s: Vec<f64> = nodes.iter().map(|n| n.s).collect();
+    let l = robot.length();
+    // The quadrature depends only on the nodes and the tendon's end: built once for the
+    // tendons that end at the same place (usually all at the tip).
+    let mut quadratures: Vec<(f64, length::NodeQuadrature)> = Vec::new();
     robot
         .tendons
         .iter()
         .enumerate()
         .map(|(i, t)| {
-            let length = tendon_length(robot, i, &s, nodes);
+            let end = t.end(l);
+            let at = match quadratures.iter().position(|(e, _)| *e == end) {
+                Some(at) => at,
+                None => {
+                    quadratures.push((end, length::NodeQuadrature::new(&s, end)));
+                    quadratures.len() - 1
+                }
+            };
+            let length = tendon_length(robot, i, &quadratures[at].1, &s, nodes);
             let reference_length = length::reference_length(robot, i);
             let tension = model.tensions[i];
             let taken_up = reference_length - length + t.compliance(reference_length) * tension;
@@ -181,11 +193,10 @@ fn tendon_states(model: &Model, nodes: &[Node]) -> Vec<TendonState> {
         .collect()
 }
 
-/// The path length of tendon `i` over solved `nodes` at arc lengths `s`
-/// ([`length::NodeQuadrature`]).
-pub(crate) fn tendon_length(robot: &Robot, i: usize, s: &[f64], nodes: &[Node]) -> f64 {
+/// The path length of tendon `i` over solved `nodes` at arc lengths `s`, by `quadrature`
+/// (the [`length::NodeQuadrature`] of those nodes over the tendon's span).
+fn tendon_length(robot: &Robot, i: usize, quadrature: &length::NodeQuadrature, s: &[f64], nodes: &[Node]) -> f64 {
     let t = &robot.tendons[i];
     let l = robot.length();
-    length::NodeQuadrature::new(s, t.end(l))
-        .integrate(|k| length::speed(&t.routing.at(s[k], l), &nodes[k].v, &nodes[k].u))
+    quadrature.integrate(|k| length::speed(&t.routing.at(s[k], l), &nodes[k].v, &nodes[k].u))
 }
