@@ -168,36 +168,7 @@ impl Solution {
 
     /// As [`Solution::at`], choosing the left limit at a jump when `left` is set.
     pub fn at_limit(&self, s: f64, left: bool) -> State {
-        let s = s.clamp(0.0, self.length());
-        let inside = |i: usize| {
-            let (a, b) = (self.nodes[i].s, self.nodes[i + 1].s);
-            b > a && if left { a < s && s <= b } else { a <= s && s < b }
-        };
-        let last = self.nodes.len() - 2;
-        let k = (0..=last)
-            .find(|&i| inside(i))
-            .unwrap_or(if left || s > 0.0 { last } else { 0 });
-        let (a, b) = (&self.nodes[k], &self.nodes[k + 1]);
-        let h = b.s - a.s;
-        let t = (s - a.s) / h;
-        let (h00, h10, h01, h11) = (
-            2.0 * t * t * t - 3.0 * t * t + 1.0,
-            t * t * t - 2.0 * t * t + t,
-            -2.0 * t * t * t + 3.0 * t * t,
-            t * t * t - t * t,
-        );
-        let herm = |y0: Vector3<f64>, d0: Vector3<f64>, y1: Vector3<f64>, d1: Vector3<f64>| {
-            y0 * h00 + d0 * (h10 * h) + y1 * h01 + d1 * (h11 * h)
-        };
-        let theta1 = so3::log(&(a.R.transpose() * b.R));
-        let theta = herm(Vector3::zeros(), a.u, theta1, so3::right_jacobian_inv(&theta1) * b.u);
-        State {
-            s,
-            p: herm(a.p, a.R * a.v, b.p, b.R * b.v),
-            R: a.R * so3::exp(&theta),
-            v: herm(a.v, a.v_s, b.v, b.v_s),
-            u: herm(a.u, a.u_s, b.u, b.u_s),
-        }
+        at_limit(&self.nodes, s, left)
     }
 
     /// Largest deviation from orthonormality over all node rotations (0 for exact rotations).
@@ -206,5 +177,40 @@ impl Solution {
             .iter()
             .map(|n| so3::orthonormality_error(&n.R))
             .fold(0.0, f64::max)
+    }
+}
+
+/// The state at arc length `s` (m) interpolated between the `nodes` of a solution (what
+/// [`Solution::at_limit`] returns), choosing the left limit at a jump when `left` is set.
+pub(crate) fn at_limit(nodes: &[Node], s: f64, left: bool) -> State {
+    let s = s.clamp(0.0, nodes.last().map_or(0.0, |n| n.s));
+    let inside = |i: usize| {
+        let (a, b) = (nodes[i].s, nodes[i + 1].s);
+        b > a && if left { a < s && s <= b } else { a <= s && s < b }
+    };
+    let last = nodes.len() - 2;
+    let k = (0..=last)
+        .find(|&i| inside(i))
+        .unwrap_or(if left || s > 0.0 { last } else { 0 });
+    let (a, b) = (&nodes[k], &nodes[k + 1]);
+    let h = b.s - a.s;
+    let t = (s - a.s) / h;
+    let (h00, h10, h01, h11) = (
+        2.0 * t * t * t - 3.0 * t * t + 1.0,
+        t * t * t - 2.0 * t * t + t,
+        -2.0 * t * t * t + 3.0 * t * t,
+        t * t * t - t * t,
+    );
+    let herm = |y0: Vector3<f64>, d0: Vector3<f64>, y1: Vector3<f64>, d1: Vector3<f64>| {
+        y0 * h00 + d0 * (h10 * h) + y1 * h01 + d1 * (h11 * h)
+    };
+    let theta1 = so3::log(&(a.R.transpose() * b.R));
+    let theta = herm(Vector3::zeros(), a.u, theta1, so3::right_jacobian_inv(&theta1) * b.u);
+    State {
+        s,
+        p: herm(a.p, a.R * a.v, b.p, b.R * b.v),
+        R: a.R * so3::exp(&theta),
+        v: herm(a.v, a.v_s, b.v, b.v_s),
+        u: herm(a.u, a.u_s, b.u, b.u_s),
     }
 }
