@@ -31,15 +31,18 @@ echo "peer commit $COMMIT" >&2
 g++ -O2 -std=c++14 -I "$SRC/Library" -I "$SRC/Library/eigen" -o "$WORK/till_driver" benches/peers/till_driver.cpp
 cargo build --release --quiet --bin tdcr
 
+# Matched accuracy: S on 32 RK4 steps, H on 108, with this LM stop (sum of squares of the
+# distal wrench error), about tdcr's default tip error. Shipped: the peer example's own 100
+# points (99 steps) and stop.
+MATCHED_STOP=1e-18
+SHIPPED_STOP=1e-12
 RAW=$OUT/raw.txt
 : > "$RAW"
 for round in $(seq "$ROUNDS"); do
     echo "round $round of $ROUNDS" >&2
-    # Matched accuracy: RK4 steps and LM stop that give about tdcr's default tip error.
-    "$WORK/till_driver" S 32 1e-18 10 | sed 's/^/peer matched /' >> "$RAW"
-    "$WORK/till_driver" H 108 1e-18 4 | sed 's/^/peer matched /' >> "$RAW"
-    # The peer example's own settings: 100 points (99 steps), stop 1e-12.
-    "$WORK/till_driver" A 99 1e-12 4 | sed 's/^/peer shipped /' >> "$RAW"
+    "$WORK/till_driver" S 32 "$MATCHED_STOP" 10 | sed "s/^/peer matched $MATCHED_STOP /" >> "$RAW"
+    "$WORK/till_driver" H 108 "$MATCHED_STOP" 4 | sed "s/^/peer matched $MATCHED_STOP /" >> "$RAW"
+    "$WORK/till_driver" A 99 "$SHIPPED_STOP" 4 | sed "s/^/peer shipped $SHIPPED_STOP /" >> "$RAW"
     target/release/tdcr bench --format json --repeats 100 | sed 's/^/tdcr /' >> "$RAW"
     if [ -n "$PYTHON" ]; then
         "$PYTHON" benches/peers/scipy_bvp.py 1e-5 3 S 2>/dev/null | sed 's/^/scipy matched /' >> "$RAW"

@@ -26,11 +26,11 @@ def main():
                 tdcr.setdefault((r["case"], r["start"]), []).append(
                     (1e3 * r["median_cpu_seconds"], r["tip_error_m"], detail)
                 )
-        elif words[4] == "failed":
+        elif "failed" in words:
             continue
         elif words[0] == "peer":
-            _, settings, case, start, steps, ms, evals, error = words
-            detail = f"{steps} RK4 steps, {evals} shooting evaluations"
+            _, settings, stop, case, start, steps, ms, evals, error = words
+            detail = f"{steps} RK4 steps, stop {stop}, {evals} shooting evaluations"
             rows.setdefault(("Till, ContinuumRobotExamples", settings, case, start), []).append(
                 (float(ms), float(error), detail)
             )
@@ -44,7 +44,7 @@ def main():
     rng = lambda v: f"{min(x[0] for x in v):.3g}-{max(x[0] for x in v):.3g}"
     print(f"Measured {time.strftime('%Y-%m-%d', time.gmtime())} on {platform.machine()} "
           f"({platform.processor() or 'processor not exposed'}), "
-          f"{len(next(iter(tdcr.values())))} interleaved rounds; peer commit {commit}.")
+          f"interleaved rounds: {len(next(iter(tdcr.values())))}; peer commit {commit}.")
     print()
     print("| code | settings | case | start | CPU ms (median; range over rounds) | tip error (m) "
           "| tdcr CPU ms | tdcr tip error (m) | code / tdcr |")
