@@ -168,22 +168,7 @@ impl Solution {
 
     /// As [`Solution::at`], choosing the left limit at a jump when `left` is set.
     pub fn at_limit(&self, s: f64, left: bool) -> State {
-        let s = s.clamp(0.0, self.length());
-        let (k, [h00, h10, h01, h11]) = self.interval(s, left);
-        let (a, b) = (&self.nodes[k], &self.nodes[k + 1]);
-        let h = b.s - a.s;
-        let herm = |y0: Vector3<f64>, d0: Vector3<f64>, y1: Vector3<f64>, d1: Vector3<f64>| {
-            y0 * h00 + d0 * (h10 * h) + y1 * h01 + d1 * (h11 * h)
-        };
-        let theta1 = so3::log(&(a.R.transpose() * b.R));
-        let theta = herm(Vector3::zeros(), a.u, theta1, so3::right_jacobian_inv(&theta1) * b.u);
-        State {
-            s,
-            p: herm(a.p, a.R * a.v, b.p, b.R * b.v),
-            R: a.R * so3::exp(&theta),
-            v: herm(a.v, a.v_s, b.v, b.v_s),
-            u: herm(a.u, a.u_s, b.u, b.u_s),
-        }
+        at_limit(&self.nodes, s, left)
     }
 
     /// The interval k (nodes k, k + 1) holding arc length `s` (in [0, L]; the left limit's
@@ -191,22 +176,7 @@ impl Solution {
     /// (h00, h10, h01, h11) at t = (s - s_k) / h of [`Solution::at`]: y(s) = h00 y_k +
     /// h10 h y'_k + h01 y_k+1 + h11 h y'_k+1.
     pub(crate) fn interval(&self, s: f64, left: bool) -> (usize, [f64; 4]) {
-        let inside = |i: usize| {
-            let (a, b) = (self.nodes[i].s, self.nodes[i + 1].s);
-            b > a && if left { a < s && s <= b } else { a <= s && s < b }
-        };
-        let last = self.nodes.len() - 2;
-        let k = (0..=last)
-            .find(|&i| inside(i))
-            .unwrap_or(if left || s > 0.0 { last } else { 0 });
-        let t = (s - self.nodes[k].s) / (self.nodes[k + 1].s - self.nodes[k].s);
-        let weights = [
-            2.0 * t * t * t - 3.0 * t * t + 1.0,
-            t * t * t - 2.0 * t * t + t,
-            -2.0 * t * t * t + 3.0 * t * t,
-            t * t * t - t * t,
-        ];
-        (k, weights)
+        interval(&self.nodes, s, left)
     }
 
     /// Largest deviation from orthonormality over all node rotations (0 for exact rotations).
@@ -216,4 +186,48 @@ impl Solution {
             .map(|n| so3::orthonormality_error(&n.R))
             .fold(0.0, f64::max)
     }
+}
+
+/// The state at arc length `s` (m) interpolated between the `nodes` of a solution (what
+/// [`Solution::at_limit`] returns), choosing the left limit at a jump when `left` is set.
+pub(crate) fn at_limit(nodes: &[Node], s: f64, left: bool) -> State {
+    let s = s.clamp(0.0, nodes.last().map_or(0.0, |n| n.s));
+    let (k, [h00, h10, h01, h11]) = interval(nodes, s, left);
+    let (a, b) = (&nodes[k], &nodes[k + 1]);
+    let h = b.s - a.s;
+    let herm = |y0: Vector3<f64>, d0: Vector3<f64>, y1: Vector3<f64>, d1: Vector3<f64>| {
+        y0 * h00 + d0 * (h10 * h) + y1 * h01 + d1 * (h11 * h)
+    };
+    let theta1 = so3::log(&(a.R.transpose() * b.R));
+    let theta = herm(Vector3::zeros(), a.u, theta1, so3::right_jacobian_inv(&theta1) * b.u);
+    State {
+        s,
+        p: herm(a.p, a.R * a.v, b.p, b.R * b.v),
+        R: a.R * so3::exp(&theta),
+        v: herm(a.v, a.v_s, b.v, b.v_s),
+        u: herm(a.u, a.u_s, b.u, b.u_s),
+    }
+}
+
+/// The interval k (nodes k, k + 1) holding arc length `s` (in [0, L]; the left limit's
+/// interval at a jump when `left` is set) and the cubic Hermite basis weights
+/// (h00, h10, h01, h11) at t = (s - s_k) / h of [`Solution::at`]: y(s) = h00 y_k +
+/// h10 h y'_k + h01 y_k+1 + h11 h y'_k+1.
+pub(crate) fn interval(nodes: &[Node], s: f64, left: bool) -> (usize, [f64; 4]) {
+    let inside = |i: usize| {
+        let (a, b) = (nodes[i].s, nodes[i + 1].s);
+        b > a && if left { a < s && s <= b } else { a <= s && s < b }
+    };
+    let last = nodes.len() - 2;
+    let k = (0..=last)
+        .find(|&i| inside(i))
+        .unwrap_or(if left || s > 0.0 { last } else { 0 });
+    let t = (s - nodes[k].s) / (nodes[k + 1].s - nodes[k].s);
+    let weights = [
+        2.0 * t * t * t - 3.0 * t * t + 1.0,
+        t * t * t - 2.0 * t * t + t,
+        -2.0 * t * t * t + 3.0 * t * t,
+        t * t * t - t * t,
+    ];
+    (k, weights)
 }

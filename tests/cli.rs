@@ -627,6 +627,12 @@ fn bench_reports_both_cases_cold_and_warm_as_json() {
         assert_eq!(row["case"], case);
         assert_eq!(row["start"], start);
         assert!(row["median_seconds"].as_f64().unwrap() > 0.0);
+        // Thread CPU time where tdcr bench reads it (64-bit Linux), null elsewhere.
+        if cfg!(all(target_os = "linux", target_pointer_width = "64")) {
+            assert!(row["median_cpu_seconds"].as_f64().unwrap() > 0.0);
+        } else {
+            assert!(row["median_cpu_seconds"].is_null());
+        }
         assert!(row["iterations"].as_u64().unwrap() >= 1);
         // 1e-7 m: the default target error, met against the published reference tips
         assert!(row["tip_error_m"].as_f64().unwrap() <= 1e-7);

@@ -4,9 +4,10 @@
 
 use super::estimate::Correction;
 use super::options::Options;
-use super::{Cache, Level, interpolate, segment_ends};
+use super::{Cache, Level, segment_ends};
 use crate::Error;
 use crate::error::Result;
+use crate::mesh::guess::interpolate_nodes;
 use crate::mesh::{Mesh, nodes};
 use crate::model::equations::Model;
 use crate::model::robot::Robot;
@@ -78,14 +79,14 @@ pub(super) fn to_tolerance<'r>(
         let Some(fine) = next_mesh(model.robot, &level.mesh, correction, tol, options)? else {
             return Ok(level);
         };
-        let guess = nodes::solution(
+        // The guess needs the nodes' dense interpolant only, not tendon paths and lengths.
+        let guess = nodes::nodes(
             model,
             &level.x,
             &segment_ends(&level.mesh),
             Some(&correction.node_rates),
-            report.clone(),
         )?;
-        x = interpolate(&guess, &fine);
+        x = interpolate_nodes(&guess, &fine);
         mesh = fine;
     }
 }

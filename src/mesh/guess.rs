@@ -67,9 +67,14 @@ pub fn initial(model: &Model, nodes: &[MeshNode], kind: InitialGuess) -> Vec<Sta
 /// Node states of a previous solution on `mesh`, a warm start: its own node states when the
 /// meshes are the same, else its interpolant, with left limits for the left node of a jump.
 pub fn interpolate(guess: &Solution, mesh: &Mesh) -> Vec<State> {
-    let same = guess.nodes.len() == mesh.nodes.len() && guess.nodes.iter().zip(&mesh.nodes).all(|(a, b)| a.s == b.s);
+    interpolate_nodes(&guess.nodes, mesh)
+}
+
+/// As [`interpolate`], from a solution's `nodes` alone (what the dense evaluation reads).
+pub(crate) fn interpolate_nodes(nodes: &[Node], mesh: &Mesh) -> Vec<State> {
+    let same = nodes.len() == mesh.nodes.len() && nodes.iter().zip(&mesh.nodes).all(|(a, b)| a.s == b.s);
     if same {
-        return guess.nodes.iter().map(Node::state).collect();
+        return nodes.iter().map(Node::state).collect();
     }
     (0..mesh.nodes.len())
         .map(|k| {
@@ -77,7 +82,7 @@ pub fn interpolate(guess: &Solution, mesh: &Mesh) -> Vec<State> {
             let left = k + 1 < mesh.nodes.len() && mesh.is_jump(k);
             State {
                 s,
-                ..guess.at_limit(s, left)
+                ..crate::solution::at_limit(nodes, s, left)
             }
         })
         .collect()

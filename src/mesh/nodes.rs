@@ -46,37 +46,21 @@ enum Along<'a> {
     Varying(&'a [Vec<f64>]),
 }
 
+/// The nodes of a solution with constant tensions (what [`solution`] builds before the
+/// tendon paths and lengths): enough for a dense evaluation, as the next mesh's guess needs.
+pub(crate) fn nodes(
+    model: &Model,
+    states: &[State],
+    segment_ends: &[f64],
+    rates: Option<&[Vector6<f64>]>,
+) -> Result<Vec<Node>> {
+    node_list(model, states, segment_ends, &Along::Constant(rates))
+}
+
 fn build(model: &Model, states: &[State], segment_ends: &[f64], along: Along, report: SolveReport) -> Result<Solution> {
     let robot = model.robot;
     let length = robot.length();
-    let mut nodes = Vec::with_capacity(states.len());
-    // A model holding each node's tensions, made when they vary.
-    let mut local: Option<(Model, Vec<f64>)> = None;
-    for (k, &State { s, p, R, v, u }) in states.iter().enumerate() {
-        let site = model.site(s);
-        let rates = match along {
-            Along::Constant(Some(r)) => r[k],
-            Along::Constant(None) => linearize::rates(model, &site, segment_ends[k], &R, &v, &u)?,
-            Along::Varying(profile) => {
-                let (local, turning) = local.get_or_insert_with(|| (model.clone(), vec![0.0; robot.tendons.len()]));
-                local.tensions.copy_from_slice(&profile[k]);
-                friction::rates(local, &site, segment_ends[k], (&R, &v, &u), turning)?
-            }
-        };
-        let (v_s, u_s) = (rates.fixed_rows::<3>(0).into(), rates.fixed_rows::<3>(3).into());
-        let (n, m) = model.internal_wrench(&site, &R, &v, &u);
-        nodes.push(Node {
-            s,
-            p,
-            R,
-            v,
-            u,
-            v_s,
-            u_s,
-            n,
-            m,
-        });
-    }
+    let nodes = node_list(model, states, segment_ends, &along)?;
     // The nodes on each tendon's path: up to its end, one per arc length (the left limit at
     // a breakpoint).
     let on_path: Vec<Vec<usize>> = robot
@@ -143,6 +127,40 @@ fn build(model: &Model, states: &[State], segment_ends: &[f64], along: Along, re
     })
 }
 
+/// Node states with their rates (v', u') of eq. 13 and internal wrenches (n, m).
+fn node_list(model: &Model, states: &[State], segment_ends: &[f64], along: &Along) -> Result<Vec<Node>> {
+    let robot = model.robot;
+    let mut nodes = Vec::with_capacity(states.len());
+    // A model holding each node's tensions, made when they vary.
+    let mut local: Option<(Model, Vec<f64>)> = None;
+    for (k, &State { s, p, R, v, u }) in states.iter().enumerate() {
+        let site = model.site(s);
+        let rates = match along {
+            Along::Constant(Some(r)) => r[k],
+            Along::Constant(None) => linearize::rates(model, &site, segment_ends[k], &R, &v, &u)?,
+            Along::Varying(profile) => {
+                let (local, turning) = local.get_or_insert_with(|| (model.clone(), vec![0.0; robot.tendons.len()]));
+                local.tensions.copy_from_slice(&profile[k]);
+                friction::rates(local, &site, segment_ends[k], (&R, &v, &u), turning)?
+            }
+        };
+        let (v_s, u_s) = (rates.fixed_rows::<3>(0).into(), rates.fixed_rows::<3>(3).into());
+        let (n, m) = model.internal_wrench(&site, &R, &v, &u);
+        nodes.push(Node {
+            s,
+            p,
+            R,
+            v,
+            u,
+            v_s,
+            u_s,
+            n,
+            m,
+        });
+    }
+    Ok(nodes)
+}
+
 /// Each tendon's tension, pull-in, lengths and slack at the solved `nodes` (docs/actuation.md):
 /// the length by the node quadrature, and for a displacement-controlled tendon the slack
 /// phi = l_ref - l - q + c tau when its tension is 0 (phi is the solver's residual, about 0,
@@ -150,12 +168,24 @@ fn build(model: &Model, states: &[State], segment_ends: &[f64], along: Along, re
 fn tendon_states(model: &Model, nodes: &[Node]) -> Vec<TendonState> {
     let robot = model.robot;
     let s: Vec<f64> = nodes.iter().map(|n| n.s).collect();
+    let l = robot.length();
+    // The quadrature depends only on the nodes and the tendon's end: built once for the
+    // tendons that end at the same place (usually all at the tip).
+    let mut quadratures: Vec<(f64, length::NodeQuadrature)> = Vec::new();
     robot
         .tendons
         .iter()
         .enumerate()
         .map(|(i, t)| {
-            let length = tendon_length(robot, i, &s, nodes);
+            let end = t.end(l);
+            let at = match quadratures.iter().position(|(e, _)| *e == end) {
+                Some(at) => at,
+                None => {
+                    quadratures.push((end, length::NodeQuadrature::new(&s, end)));
+                    quadratures.len() - 1
+                }
+            };
+            let length = tendon_length(robot, i, &quadratures[at].1, &s, nodes);
             let reference_length = length::reference_length(robot, i);
             let tension = model.tensions[i];
             let taken_up = reference_length - length + t.compliance(reference_length) * tension;
@@ -181,11 +211,10 @@ fn tendon_states(model: &Model, nodes: &[Node]) -> Vec<TendonState> {
         .collect()
 }
 
-/// The path length of tendon `i` over solved `nodes` at arc lengths `s`
-/// ([`length::NodeQuadrature`]).
-pub(crate) fn tendon_length(robot: &Robot, i: usize, s: &[f64], nodes: &[Node]) -> f64 {
+/// The path length of tendon `i` over solved `nodes` at arc lengths `s`, by `quadrature`
+/// (the [`length::NodeQuadrature`] of those nodes over the tendon's span).
+fn tendon_length(robot: &Robot, i: usize, quadrature: &length::NodeQuadrature, s: &[f64], nodes: &[Node]) -> f64 {
     let t = &robot.tendons[i];
     let l = robot.length();
-    length::NodeQuadrature::new(s, t.end(l))
-        .integrate(|k| length::speed(&t.routing.at(s[k], l), &nodes[k].v, &nodes[k].u))
+    quadrature.integrate(|k| length::speed(&t.routing.at(s[k], l), &nodes[k].v, &nodes[k].u))
 }

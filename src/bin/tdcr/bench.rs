@@ -2,7 +2,9 @@
 //! (error-controlled) settings and report the median solve time, Newton iterations, the
 //! solver's own tip error estimate next to the true error against the published reference
 //! tips, and the mesh the solver chose, so anyone can measure what users get on their
-//! machine (docs/benchmarks.md).
+//! machine (docs/benchmarks.md). Each solve is timed twice: wall-clock time and the CPU time
+//! of the solving thread (Linux; the time the thread ran, which a shared machine's other
+//! processes do not inflate the way they inflate wall time).
 
 use super::args::parse_positive;
 use clap::{Args, ValueEnum};
@@ -31,9 +33,9 @@ pub struct BenchArgs {
 pub enum BenchFormat {
     /// A table for people.
     Table,
-    /// A JSON list of {case, start, median_seconds, iterations, newton_steps, chord_steps,
+    /// A JSON list of {case, start, median_seconds, median_cpu_seconds, iterations, newton_steps, chord_steps,
     /// tip_error_m, error_estimate_m, intervals, nodes}; `nodes` counts mesh points
-    /// (intervals + 1).
+    /// (intervals + 1); `median_cpu_seconds` is null where thread CPU time is not available.
     Json,
 }
 
@@ -41,6 +43,7 @@ struct Row {
     case: &'static str,
     start: &'static str,
     median: Duration,
+    cpu: Option<Duration>,
     iterations: usize,
     newton: usize,
     chord: usize,
@@ -53,7 +56,7 @@ impl Row {
     fn of(
         case: &'static str,
         start: &'static str,
-        median: Duration,
+        (median, cpu): (Duration, Option<Duration>),
         solution: &Solution,
         reference: &Vector3<f64>,
     ) -> Self {
@@ -61,6 +64,7 @@ impl Row {
             case,
             start,
             median,
+            cpu,
             iterations: solution.report.iterations,
             newton: solution.report.newton_steps,
             chord: solution.report.chord_steps,
@@ -80,39 +84,106 @@ fn scaled(robot: &Robot, factor: f64) -> Robot {
     r
 }
 
+/// CPU time the calling thread has run so far (`clock_gettime(CLOCK_THREAD_CPUTIME_ID)`), or
+/// `None` where that clock is not available.
+#[cfg(all(target_os = "linux", target_pointer_width = "64"))]
+fn thread_cpu_time() -> Option<Duration> {
+    /// `struct timespec` of 64-bit Linux.
+    #[repr(C)]
+    struct Timespec {
+        tv_sec: i64,
+        tv_nsec: i64,
+    }
+    unsafe extern "C" {
+        fn clock_gettime(clock: i32, time: *mut Timespec) -> i32;
+    }
+    /// Linux's clock id of the calling thread's CPU time.
+    const CLOCK_THREAD_CPUTIME_ID: i32 = 3;
+    let mut t = Timespec { tv_sec: 0, tv_nsec: 0 };
+    // SAFETY: `t` is a valid, writable `struct timespec`; the call writes only into it.
+    let status = unsafe { clock_gettime(CLOCK_THREAD_CPUTIME_ID, &mut t) };
+    (status == 0).then(|| Duration::new(t.tv_sec as u64, t.tv_nsec as u32))
+}
+
+/// CPU time the calling thread has run so far: not available on this platform.
+#[cfg(not(all(target_os = "linux", target_pointer_width = "64")))]
+fn thread_cpu_time() -> Option<Duration> {
+    None
+}
+
+/// Wall-clock and thread CPU time of one call of `f`, with its result.
+fn timed<T>(f: impl FnOnce() -> T) -> (Duration, Option<Duration>, T) {
+    let (c, t) = (thread_cpu_time(), Instant::now());
+    let out = f();
+    let wall = t.elapsed();
+    let cpu = thread_cpu_time().zip(c).map(|(b, a)| b.saturating_sub(a));
+    (wall, cpu, out)
+}
+
+/// Medians of wall and CPU times (`None` if any CPU time is missing).
+struct Times {
+    wall: Vec<Duration>,
+    cpu: Option<Vec<Duration>>,
+}
+
+impl Times {
+    fn with_capacity(n: usize) -> Self {
+        Times {
+            wall: Vec::with_capacity(n),
+            cpu: Some(Vec::with_capacity(n)),
+        }
+    }
+
+    fn push(&mut self, wall: Duration, cpu: Option<Duration>) {
+        self.wall.push(wall);
+        self.cpu = self.cpu.take().and_then(|mut v| {
+            cpu.map(|c| {
+                v.push(c);
+                v
+            })
+        });
+    }
+
+    fn medians(self) -> (Duration, Option<Duration>) {
+        let mid = |mut v: Vec<Duration>| {
+            v.sort();
+            v[v.len() / 2]
+        };
+        (mid(self.wall), self.cpu.map(mid))
+    }
+}
+
 fn median(
     mut solve: impl FnMut() -> Result<Solution, tdcr::Error>,
     repeats: usize,
-) -> Result<(Duration, Solution), tdcr::Error> {
-    let mut times = Vec::with_capacity(repeats);
+) -> Result<((Duration, Option<Duration>), Solution), tdcr::Error> {
+    let mut times = Times::with_capacity(repeats);
     let mut last = solve()?;
     for _ in 0..repeats.max(1) {
-        let t = Instant::now();
-        last = solve()?;
-        times.push(t.elapsed());
+        let (wall, cpu, out) = timed(&mut solve);
+        last = out?;
+        times.push(wall, cpu);
     }
-    times.sort();
-    Ok((times[times.len() / 2], last))
+    Ok((times.medians(), last))
 }
 
-/// The median time of a warm solve of `robot` by a solver that has just solved `previous`
+/// The median times of a warm solve of `robot` by a solver that has just solved `previous`
 /// (untimed, before every timed solve), starting from that solution.
 fn median_warm(
     solver: &mut collocation::Solver,
     previous: &Robot,
     robot: &Robot,
     repeats: usize,
-) -> Result<(Duration, Solution), tdcr::Error> {
-    let mut times = Vec::with_capacity(repeats);
+) -> Result<((Duration, Option<Duration>), Solution), tdcr::Error> {
+    let mut times = Times::with_capacity(repeats);
     let mut last = solver.solve(previous)?;
     for _ in 0..repeats.max(1) {
         let guess = solver.solve(previous)?;
-        let t = Instant::now();
-        last = solver.solve_from(robot, &guess)?;
-        times.push(t.elapsed());
+        let (wall, cpu, out) = timed(|| solver.solve_from(robot, &guess));
+        last = out?;
+        times.push(wall, cpu);
     }
-    times.sort();
-    Ok((times[times.len() / 2], last))
+    Ok((times.medians(), last))
 }
 
 /// Runs the benchmark; the text to print, or a message for a failed solve.
@@ -142,22 +213,23 @@ pub fn run(args: &BenchArgs) -> Result<String, String> {
         BenchFormat::Table => {
             let _ = writeln!(
                 out,
-                "tdcr bench: collocation at tolerance {:.0e} L, median of {} solves each; the solver's \
+                "tdcr bench: collocation at tolerance {:.0e} L, median of {} solves each (wall and thread CPU time); the solver's \
                  estimate of its tip error next to the true error against the published reference tips",
                 options.tolerance.unwrap_or(f64::NAN),
                 args.repeats
             );
             let _ = writeln!(
                 out,
-                "case  start  median (ms)  Newton + chord steps  tip error (m)  estimate (m)  intervals"
+                "case  start  median (ms)  CPU (ms)  Newton + chord steps  tip error (m)  estimate (m)  intervals"
             );
             for r in &rows {
                 let _ = writeln!(
                     out,
-                    "{:<4}  {:<5}  {:>11.4}  {:>20}  {:>13.2e}  {:>12}  {:>9}",
+                    "{:<4}  {:<5}  {:>11.4}  {:>8}  {:>20}  {:>13.2e}  {:>12}  {:>9}",
                     r.case,
                     r.start,
                     r.median.as_secs_f64() * 1e3,
+                    r.cpu.map_or("n/a".into(), |c| format!("{:.4}", c.as_secs_f64() * 1e3)),
                     format!("{} + {}", r.newton, r.chord),
                     r.error,
                     r.estimate.map_or("none".into(), |e| format!("{e:.2e}")),
@@ -172,6 +244,7 @@ pub fn run(args: &BenchArgs) -> Result<String, String> {
                     // `nodes` counts mesh points (intervals + 1), kept for tools that read it.
                     serde_json::json!({
                         "case": r.case, "start": r.start, "median_seconds": r.median.as_secs_f64(),
+                        "median_cpu_seconds": r.cpu.map(|c| c.as_secs_f64()),
                         "iterations": r.iterations, "newton_steps": r.newton, "chord_steps": r.chord,
                         "tip_error_m": r.error, "error_estimate_m": r.estimate,
                         "intervals": r.intervals, "nodes": r.intervals + 1,
