@@ -36,6 +36,7 @@ impl PyTipSensitivities {
         state.set_item("tendons", s.tension.ncols())?;
         state.set_item("tension", s.tension.as_slice())?;
         state.set_item("displacement", s.displacement.as_slice())?;
+        state.set_item("friction", s.friction.as_slice())?;
         state.set_item("tip_force", s.tip_force.as_slice())?;
         state.set_item("tip_moment", s.tip_moment.as_slice())?;
         state.set_item("base_position", s.base_position.as_slice())?;
@@ -72,6 +73,7 @@ impl PyTipSensitivities {
             inner: tdcr::TipSensitivities {
                 tension: matrix("tension")?,
                 displacement: matrix("displacement")?,
+                friction: matrix("friction")?,
                 tip_force: six_by_three("tip_force")?,
                 tip_moment: six_by_three("tip_moment")?,
                 base_position: six_by_three("base_position")?,
@@ -100,6 +102,13 @@ impl PyTipSensitivities {
     #[getter]
     fn displacement<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
         rows(py, &self.inner.displacement)
+    }
+
+    /// d(tip pose)/d(friction coefficient mu_i) (per unit of mu), shape (6, k), one column
+    /// per tendon: zero for a tendon without friction.
+    #[getter]
+    fn friction<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
+        rows(py, &self.inner.friction)
     }
 
     /// d(tip pose)/d(tip force) (per N, world frame), shape (6, 3).

@@ -292,6 +292,9 @@ class TipSensitivities:
     def displacement(self) -> FloatArray:
         """(6, k), per m of pull-in (zero columns for tension-controlled or slack tendons)."""
     @property
+    def friction(self) -> FloatArray:
+        """(6, k), per unit of the friction coefficient (zero columns without friction)."""
+    @property
     def tip_force(self) -> FloatArray:
         """(6, 3), per N."""
     @property
