@@ -527,7 +527,7 @@ def calibrate(
     tip_forces: ArrayLike,
     measured_tips: ArrayLike,
     *,
-    fit: Optional[Sequence[Literal["youngs_modulus", "euler", "base_position", "offset_scale"]]] = None,
+    fit: Optional[Sequence[Literal["youngs_modulus", "euler", "base_position", "offset_scale", "friction"]]] = None,
     max_iterations: int = 50,
     intervals: Optional[int] = None,
     residual_tolerance: Optional[float] = None,

@@ -127,6 +127,7 @@ pub fn predict(
             euler: true,
             base_position: false,
             offset_scale: false,
+            friction: false,
         },
         ..options.clone()
     };
@@ -244,6 +245,10 @@ fn jacobian(
                         Unknown::Euler(i) => rotation.column(*i).into_owned(),
                         Unknown::BasePosition(i) => sens.base_position.fixed_rows::<3>(0).column(*i).into_owned(),
                         Unknown::OffsetScale => offset_column(&robot, solution, params.offset_scale)?,
+                        // Every tendon with friction shares mu: the sum of their columns.
+                        Unknown::Friction => (0..robot.tendons.len())
+                            .map(|i| sens.friction.fixed_view::<3, 1>(0, i).into_owned())
+                            .sum(),
                     };
                     block.set_column(j, &(column * u.scale(start, length)));
                 }
@@ -506,6 +511,7 @@ pub fn calibrate_until(
             euler: Vector3::zeros(),
             base_position: Vector3::zeros(),
             offset_scale: 0.0,
+            friction: 0.0,
         };
         for (j, u) in unknowns.iter().enumerate() {
             u.set(&mut se, noise_estimate * inverse[(j, j)].sqrt() * scales[j]);
