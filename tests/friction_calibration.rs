@@ -150,3 +150,35 @@ fn fitting_mu_needs_friction_and_a_positive_start() {
         other => panic!("expected an error, got {other:?}"),
     }
 }
+
+#[test]
+fn the_command_fits_mu() {
+    // `tdcr example paper-robot` with friction 0.05 on tendon 1 as the start; the data made
+    // with mu = 0.1 (no noise).
+    let mut text = tdcr::io::paper_frame_example();
+    let first = text.find("tension = 0.0\n").unwrap() + "tension = 0.0\n".len();
+    text.insert_str(first, "friction = 0.05\n");
+    let start = tdcr::io::parse(&text, "robot.toml").unwrap().robot;
+    let mut truth = Parameters::of(&start);
+    truth.friction = 0.1;
+    let mut data = experiments();
+    let tips = predict(&start, &truth, &data, &CalibrationOptions::default()).unwrap();
+    for (e, tip) in data.iter_mut().zip(tips) {
+        e.measured_tip = tip;
+    }
+    let dir = std::env::temp_dir().join(format!("tdcr-friction-calibration-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(dir.join("robot.toml"), &text).unwrap();
+    std::fs::write(dir.join("experiments.csv"), to_csv(&data)).unwrap();
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_tdcr"))
+        .args(["calibrate", "robot.toml", "experiments.csv", "--fit", "mu"])
+        .current_dir(&dir)
+        .output()
+        .unwrap();
+    let (stdout, stderr) = (String::from_utf8_lossy(&out.stdout), String::from_utf8_lossy(&out.stderr));
+    assert_eq!(out.status.code(), Some(0), "{stderr}");
+    let row = stdout.lines().find(|l| l.starts_with("mu ")).unwrap_or_else(|| panic!("{stdout}"));
+    assert!(row.contains("0.0500") && row.contains("0.1000"), "{row}");
+    assert!(stdout.contains("friction = 0.100000"), "{stdout}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
