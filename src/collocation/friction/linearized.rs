@@ -25,8 +25,11 @@ impl<'r> Capstan<'r> {
                 let tensions = &solution.tendon_tensions[i];
                 let (base, span) = (profile.base[j], profile.spans[j]);
                 let last = tensions.len().saturating_sub(1);
+                // A tendon at 0 N keeps its log tensions in no tension: 0 here, and
+                // `linearize` solves its capstan rows for them.
                 for (n, z) in profile.z[j].iter_mut().enumerate() {
-                    *z = tensions.get(n.min(span).min(last)).map_or(0.0, |t| (t / base).ln());
+                    let ratio = tensions.get(n.min(span).min(last)).map_or(1.0, |t| t / base);
+                    *z = if ratio > 0.0 && ratio.is_finite() { ratio.ln() } else { 0.0 };
                 }
                 profile.z[j][0] = 0.0;
             }
@@ -102,6 +105,31 @@ impl<'r> Capstan<'r> {
     /// # Errors
     /// A model breakdown at a visited state or a border block that is not finite.
     pub(crate) fn linearize(&mut self, x: &[State], residual: &mut [f64], values: &mut [f64]) -> Result<()> {
+        self.evaluate(x, residual, values)?;
+        let unloaded = self
+            .system
+            .friction
+            .as_ref()
+            .is_some_and(|p| p.base.iter().any(|&b| b == 0.0));
+        if unloaded {
+            // A tendon at 0 N loads nothing, so its capstan rows are linear in its log
+            // tensions (psi_z is their whole derivative): one forward substitution solves them.
+            let n = self.system.unknowns();
+            let rhs: Vec<f64> = residual[n..].iter().map(|p| -p).collect();
+            let mut dz = vec![0.0; rhs.len()];
+            if !self.forward(&rhs, &mut dz) {
+                return Err(super::super::sensitivity::singular());
+            }
+            for (z, d) in self.z.iter_mut().zip(&dz) {
+                *z += d;
+            }
+            self.evaluate(x, residual, values)?;
+        }
+        Ok(())
+    }
+
+    /// The Jacobian and residual at `x` and the current log tensions, and the border's blocks.
+    fn evaluate(&mut self, x: &[State], residual: &mut [f64], values: &mut [f64]) -> Result<()> {
         self.load(Point::Current);
         let n = self.system.unknowns();
         let (rows, psi) = residual.split_at_mut(n);

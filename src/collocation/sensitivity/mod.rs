@@ -435,7 +435,8 @@ impl<'a> Sensitivity<'a> {
     /// (per N): central differences, or the one-sided right derivative for a slack tendon.
     ///
     /// # Errors
-    /// [`crate::Error::InvalidInput`] for a tendon index out of range; as
+    /// [`crate::Error::InvalidInput`] for a tendon index out of range or a tendon with
+    /// friction at 0 N (not modelled: its log tensions jump under the first pull); as
     /// [`Sensitivity::derivative`].
     pub fn tension(&mut self, tendon: usize) -> Result<Vec<NodeDerivative>> {
         let robot = self.robot();
@@ -460,6 +461,14 @@ impl<'a> Sensitivity<'a> {
         } else {
             Difference::Forward
         };
+        if tension == 0.0 && self.robot().tendons[tendon].active_friction().is_some() {
+            return Err(invalid(
+                format!("tendons[{tendon}].tension"),
+                "is 0 N on a tendon with friction, where the tension derivative is not modelled: the capstan \
+                 law leaves the log tension of an unloaded tendon at 0, and its limit under the first pull differs",
+                "give the tendon a small tension (e.g. 1e-3 N) to differentiate there, or set its friction to 0",
+            ));
+        }
         if self.border.border_rows() > 0 {
             // With friction the tension also sets the profile's base and the capstan rows:
             // moved in a clone of the robot, every row follows.
