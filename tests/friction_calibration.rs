@@ -65,8 +65,20 @@ fn loading_and_unloading_tips_recover_mu_within_its_standard_error() {
     truth.friction = 0.1;
     truth.youngs_modulus *= 1.04;
     for (name, fit) in [
-        ("mu", Fit { friction: true, ..Fit::none() }),
-        ("E, euler, mu", Fit { friction: true, ..Fit::default() }),
+        (
+            "mu",
+            Fit {
+                friction: true,
+                ..Fit::none()
+            },
+        ),
+        (
+            "E, euler, mu",
+            Fit {
+                friction: true,
+                ..Fit::default()
+            },
+        ),
     ] {
         let only_mu = !fit.youngs_modulus;
         let mut truth = truth;
@@ -81,19 +93,29 @@ fn loading_and_unloading_tips_recover_mu_within_its_standard_error() {
         };
         let out = calibrate(&start, &data, &options).unwrap();
         assert!(out.converged(), "{name}: {}", out.termination);
-        let se = out.standard_errors.expect("standard errors with more data than unknowns");
+        let se = out
+            .standard_errors
+            .expect("standard errors with more data than unknowns");
         let error = out.fitted.friction - truth.friction;
         eprintln!(
             "{name}: mu = {:.6} +- {:.2e} (truth 0.1, error {error:.2e}); E = {:.4e}; noise estimate {:.3e} m; {} iterations",
             out.fitted.friction, se.friction, out.fitted.youngs_modulus, out.noise_estimate, out.iterations
         );
         // Four standard errors: a Gaussian estimate falls outside with probability 6e-5.
-        assert!(error.abs() <= 4.0 * se.friction, "{name}: mu error {error:.3e}, se {:.3e}", se.friction);
+        assert!(
+            error.abs() <= 4.0 * se.friction,
+            "{name}: mu error {error:.3e}, se {:.3e}",
+            se.friction
+        );
         // The noise is resolved: the standard error is far below mu itself.
         assert!(se.friction < 0.01 * truth.friction, "{name}: se {:.3e}", se.friction);
         if !only_mu {
             let e = out.fitted.youngs_modulus - truth.youngs_modulus;
-            assert!(e.abs() <= 4.0 * se.youngs_modulus, "{name}: E error {e:.3e}, se {:.3e}", se.youngs_modulus);
+            assert!(
+                e.abs() <= 4.0 * se.youngs_modulus,
+                "{name}: E error {e:.3e}, se {:.3e}",
+                se.youngs_modulus
+            );
         }
         // The fitted robot carries the fitted mu.
         let fitted = out.robot.tendons[0].friction.unwrap();
@@ -129,7 +151,10 @@ fn the_experiments_csv_carries_the_motion() {
 fn fitting_mu_needs_friction_and_a_positive_start() {
     let data = experiments();
     let options = CalibrationOptions {
-        fit: Fit { friction: true, ..Fit::none() },
+        fit: Fit {
+            friction: true,
+            ..Fit::none()
+        },
         ..Default::default()
     };
     match calibrate(&prototype_in_paper_frame(), &data, &options) {
@@ -175,9 +200,15 @@ fn the_command_fits_mu() {
         .current_dir(&dir)
         .output()
         .unwrap();
-    let (stdout, stderr) = (String::from_utf8_lossy(&out.stdout), String::from_utf8_lossy(&out.stderr));
+    let (stdout, stderr) = (
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr),
+    );
     assert_eq!(out.status.code(), Some(0), "{stderr}");
-    let row = stdout.lines().find(|l| l.starts_with("mu ")).unwrap_or_else(|| panic!("{stdout}"));
+    let row = stdout
+        .lines()
+        .find(|l| l.starts_with("mu "))
+        .unwrap_or_else(|| panic!("{stdout}"));
     assert!(row.contains("0.0500") && row.contains("0.1000"), "{row}");
     assert!(stdout.contains("friction = 0.100000"), "{stdout}");
     let _ = std::fs::remove_dir_all(&dir);

@@ -247,7 +247,11 @@ fn tip_sensitivities_match_finite_differences_with_friction() {
     let solution = solve(&s);
     let sens = tip_sensitivities(&s, &solution).unwrap();
     assert!(sens.tension.column(1).iter().all(|x| x.is_nan()));
-    assert_eq!(sens.friction.column(1).norm(), 0.0, "an unloaded tendon's friction moves nothing");
+    assert_eq!(
+        sens.friction.column(1).norm(),
+        0.0,
+        "an unloaded tendon's friction moves nothing"
+    );
     let mut plain = cases::case_s();
     plain.tendons[0].friction = Some(Friction::pull(0.1));
     let reference = tip_sensitivities(&plain, &solve(&plain)).unwrap();

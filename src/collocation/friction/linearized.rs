@@ -29,7 +29,11 @@ impl<'r> Capstan<'r> {
                 // `linearize` solves its capstan rows for them.
                 for (n, z) in profile.z[j].iter_mut().enumerate() {
                     let ratio = tensions.get(n.min(span).min(last)).map_or(1.0, |t| t / base);
-                    *z = if ratio > 0.0 && ratio.is_finite() { ratio.ln() } else { 0.0 };
+                    *z = if ratio > 0.0 && ratio.is_finite() {
+                        ratio.ln()
+                    } else {
+                        0.0
+                    };
                 }
                 profile.z[j][0] = 0.0;
             }
@@ -106,11 +110,7 @@ impl<'r> Capstan<'r> {
     /// A model breakdown at a visited state or a border block that is not finite.
     pub(crate) fn linearize(&mut self, x: &[State], residual: &mut [f64], values: &mut [f64]) -> Result<()> {
         self.evaluate(x, residual, values)?;
-        let unloaded = self
-            .system
-            .friction
-            .as_ref()
-            .is_some_and(|p| p.base.iter().any(|&b| b == 0.0));
+        let unloaded = self.system.friction.as_ref().is_some_and(|p| p.base.contains(&0.0));
         if unloaded {
             // A tendon at 0 N loads nothing, so its capstan rows are linear in its log
             // tensions (psi_z is their whole derivative): one forward substitution solves them.

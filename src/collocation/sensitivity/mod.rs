@@ -11,7 +11,7 @@
 //! dx/dq = -J^-1 dF/dq,    J = dF/dx at the solution
 //! ```
 //!
-//! J is the exact Newton Jacobian the solver already uses ([`System::jacobian`]), assembled
+//! J is the exact Newton Jacobian the solver already uses ([`crate::advanced::system::System::jacobian`]), assembled
 //! once per [`Sensitivity`]; every parameter then costs one linear solve plus whatever
 //! dF/dq costs. x is the solver's scaled right perturbation, 12 per node,
 //! d = (dp / L, dtheta, dv, du L) with R -> R exp(hat(dtheta)) (docs/numerics.md), so the
@@ -81,8 +81,8 @@ pub use tip::{
 };
 
 use crate::collocation::LinearSolver;
-use crate::collocation::newton::Workspace;
 use crate::collocation::friction::Capstan;
+use crate::collocation::newton::Workspace;
 use crate::collocation::unknowns::{self, TIP_ROWS, nonzeros, tip_row};
 use crate::error::{Result, invalid};
 use crate::mesh::Mesh;
