@@ -377,7 +377,7 @@ impl From<&Parameters> for ParametersJson {
             euler_xyz_deg: p.euler_deg().into(),
             base_position: p.base_position.into(),
             offset_scale: p.offset_scale,
-            friction: p.friction.is_finite().then_some(p.friction),
+            friction: (p.friction.is_finite() && p.friction > 0.0).then_some(p.friction),
         }
     }
 }

@@ -60,15 +60,15 @@ pub struct Parameters {
     /// Factor on every tendon offset r_i(s), relative to the robot's routings (1: as given).
     pub offset_scale: f64,
     /// Friction coefficient mu (dimensionless) of every tendon with friction (one shared
-    /// value, docs/friction.md). NaN when no tendon of the robot has friction (then mu
-    /// cannot be fitted).
+    /// value, docs/friction.md). 0 when no tendon of the robot has friction (then mu cannot
+    /// be fitted).
     pub friction: f64,
 }
 
 impl Parameters {
     /// The parameters of `robot` as it is: E of its geometry (NaN without one), the Euler
     /// angles of its base rotation ([`euler_xyz_from`]), its base position, offset scale 1,
-    /// the friction coefficient of its first tendon with friction (NaN without one).
+    /// the friction coefficient of its first tendon with friction (0 without one).
     pub fn of(robot: &Robot) -> Self {
         Parameters {
             youngs_modulus: robot.rod.geometry.map_or(f64::NAN, |g| g.youngs_modulus),
@@ -79,7 +79,7 @@ impl Parameters {
                 .tendons
                 .iter()
                 .find_map(|t| t.active_friction())
-                .map_or(f64::NAN, |f| f.coefficient),
+                .map_or(0.0, |f| f.coefficient),
         }
     }
 
@@ -96,7 +96,7 @@ impl Parameters {
     /// A copy of `robot` with these parameters: the section rebuilt from the rod's geometry
     /// with E (when the rod has a geometry and E is finite), the base pose set, and every
     /// tendon offset multiplied by `offset_scale`, and every tendon with friction given the
-    /// coefficient `friction` (when finite).
+    /// coefficient `friction` (when it is > 0 and finite; 0 leaves the robot's).
     pub fn apply(&self, robot: &Robot) -> Robot {
         let mut out = robot.clone();
         if let (Some(g), true) = (&mut out.rod.geometry, self.youngs_modulus.is_finite()) {
@@ -116,7 +116,7 @@ impl Parameters {
                 t.routing = scaled_routing(&t.routing, self.offset_scale);
             }
         }
-        if self.friction.is_finite() {
+        if self.friction.is_finite() && self.friction > 0.0 {
             for f in out.tendons.iter_mut().filter_map(|t| t.friction.as_mut()) {
                 if f.coefficient > 0.0 {
                     f.coefficient = self.friction;
