@@ -173,6 +173,10 @@ fn adjoint_rejects_bad_samples_and_displacement_control() {
     held.tendons[0].set_displacement(0.001);
     let message = Adjoint::new(&held, &solution, &[]).err().unwrap().to_string();
     assert!(message.contains("displacement-controlled"), "{message}");
+    let mut rough = robot.clone();
+    rough.tendons[0].friction = Some(tdcr::Friction::pull(0.1));
+    let message = Adjoint::new(&rough, &solution, &[]).err().unwrap().to_string();
+    assert!(message.contains("has friction"), "{message}");
     let mut adjoint = Adjoint::new(&robot, &solution, &[0.1]).unwrap();
     let message = adjoint.gradient(&Cotangent::default(), &[]).err().unwrap().to_string();
     assert!(message.contains("one cotangent per backbone sample"), "{message}");

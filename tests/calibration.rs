@@ -529,12 +529,7 @@ fn invalid_inputs_name_the_field() {
     check(&bad, &options, "experiments[0].tensions[3]", "can only pull");
 
     let none = CalibrationOptions {
-        fit: Fit {
-            youngs_modulus: false,
-            euler: false,
-            base_position: false,
-            offset_scale: false,
-        },
+        fit: Fit::none(),
         ..Default::default()
     };
     check(&experiments, &none, "options.fit", "selects no parameter");

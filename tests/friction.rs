@@ -340,20 +340,39 @@ fn friction_in_the_robot_file_and_on_the_command_line() {
 }
 
 #[test]
-fn analyses_without_friction_say_so() {
+fn inverse_statics_with_friction_in_the_forward_model() {
+    // Case S's tip with mu = 0.1 reached from tendon 1 at 1 N: the tension found is the
+    // one that made it (the inverse model has the same friction), not the frictionless one.
     let [s, _] = rough_cases();
-    let solution = tdcr::solve(&s, &Default::default()).unwrap();
-    for result in [
-        tdcr::tip_sensitivities(&s, &solution).map(|_| ()),
-        tdcr::collocation::trace(&s, tdcr::Parameter::Tension(0), 0.0, 2.94, &Default::default()).map(|_| ()),
-    ] {
-        match result {
-            Err(Error::InvalidInput { field, problem, .. }) => {
-                assert_eq!(field, "tendons[0].friction");
-                assert!(problem.contains("does not model friction yet"), "{problem}");
-            }
-            other => panic!("expected an error, got {other:?}"),
+    let options = tdcr::fit::inverse::InverseOptions::new(5.0);
+    let goal = tdcr::collocation::solve(&s, &options.solver).unwrap().tip_position();
+    let mut start = s.clone();
+    start.tendons[0].set_tension(1.0);
+    let target = tdcr::fit::inverse::Target::position(goal);
+    let found = tdcr::fit::inverse::solve_tensions(&start, &target, &options).unwrap();
+    assert!(found.reachable);
+    assert!((found.tip_position() - goal).norm() <= options.tolerance);
+    let tension = found.solution.tendons[0].tension;
+    // The tip moves about 0.3 m/N (tests/sensitivity.rs), so a tip within the tolerance
+    // 1e-6 m (InverseOptions) holds the tension to a few 1e-6 N.
+    assert!((tension - 2.94).abs() < 1e-4, "{tension}");
+    // The frictionless model reaches the same tip with less tension (friction costs some).
+    let mut smooth = start.clone();
+    smooth.tendons[0].friction = None;
+    let frictionless = tdcr::fit::inverse::solve_tensions(&smooth, &target, &options).unwrap();
+    let needed = frictionless.solution.tendons[0].tension;
+    assert!(needed < 2.9, "{needed}");
+}
+
+#[test]
+fn branch_tracing_without_friction_says_so() {
+    let [s, _] = rough_cases();
+    match tdcr::collocation::trace(&s, tdcr::Parameter::Tension(0), 0.0, 2.94, &Default::default()) {
+        Err(Error::InvalidInput { field, problem, .. }) => {
+            assert_eq!(field, "tendons[0].friction");
+            assert!(problem.contains("does not model friction yet"), "{problem}");
         }
+        other => panic!("expected an error, got {other:?}"),
     }
 }
 

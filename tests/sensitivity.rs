@@ -16,7 +16,7 @@ use tdcr::collocation::sensitivity::{
 };
 use tdcr::collocation::{self, Options};
 use tdcr::model::rod::{Section, Stiffness, shear_modulus};
-use tdcr::{Error, Robot, Solution, cases, so3};
+use tdcr::{Error, Friction, Motion, Robot, Solution, cases, so3};
 
 /// Finite-difference step relative to the parameter's scale (module docs).
 const FD_STEP: f64 = 1e-4;
@@ -133,6 +133,19 @@ fn check_tip(name: &str, robot: &Robot) -> TipSensitivities {
             t.set_tension(t.tension() + d)
         });
     }
+    for (i, t) in robot.tendons.iter().enumerate() {
+        let Some(friction) = t.active_friction() else {
+            assert_eq!(sens.friction.column(i).norm(), 0.0, "tendon {i} has no friction");
+            continue;
+        };
+        let mu = friction.coefficient;
+        let ift = sens.friction.fixed_view::<6, 1>(0, i).into_owned();
+        c.column(&format!("friction {i}"), ift, FD_STEP * mu, false, |r, d| {
+            if let Some(f) = &mut r.tendons[i].friction {
+                f.coefficient = mu + d;
+            }
+        });
+    }
     // Scales of the load's effect on the shape: E I / L^2 for forces, E I / L for moments.
     let (force, moment) = (ei / length.powi(2), ei / length);
     for j in 0..3 {
@@ -217,6 +230,44 @@ fn tip_sensitivities_match_finite_differences_helix_tip_load() {
 #[test]
 fn tip_sensitivities_match_finite_differences_across_a_termination() {
     check_tip("case H + tendon 2 ending at L/2", &two_segments());
+}
+
+/// Case S with friction mu = 0.1 on its tendon and on one at 0 N, case H with mu = 0.1 on its helix (pull)
+/// and case H with mu = 0.2 on its helix, released: every column, d(tip)/d(mu) included,
+/// through the bordered system of the log tensions.
+#[test]
+fn tip_sensitivities_match_finite_differences_with_friction() {
+    let mut s = cases::case_s();
+    s.tendons[0].friction = Some(Friction::pull(0.1));
+    check_tip("case S, mu = 0.1", &s);
+    // Tendon 2 at 0 N with friction too: its log tensions are not in its tensions (solved
+    // from its capstan rows); its tension derivative is not modelled there (NaN), the others
+    // hold.
+    s.tendons[1].friction = Some(Friction::pull(0.1));
+    let solution = solve(&s);
+    let sens = tip_sensitivities(&s, &solution).unwrap();
+    assert!(sens.tension.column(1).iter().all(|x| x.is_nan()));
+    assert_eq!(
+        sens.friction.column(1).norm(),
+        0.0,
+        "an unloaded tendon's friction moves nothing"
+    );
+    let mut plain = cases::case_s();
+    plain.tendons[0].friction = Some(Friction::pull(0.1));
+    let reference = tip_sensitivities(&plain, &solve(&plain)).unwrap();
+    // 1e-9 relative: the same shape, the unloaded tendon's border only adds rounding.
+    let close = |a: &nalgebra::DMatrix<f64>, b: &nalgebra::DMatrix<f64>, c: usize| {
+        (a.column(c) - b.column(c)).norm() <= 1e-9 * b.column(c).norm()
+    };
+    assert!(close(&sens.tension, &reference.tension, 0) && close(&sens.friction, &reference.friction, 0));
+    let mut h = cases::case_h();
+    h.tendons[4].friction = Some(Friction::pull(0.1));
+    check_tip("case H, mu = 0.1", &h);
+    h.tendons[4].friction = Some(Friction {
+        coefficient: 0.2,
+        motion: Motion::Release,
+    });
+    check_tip("case H, mu = 0.2, release", &h);
 }
 
 /// d p(s)/d tau at every node against differences of full solves, node by node.

@@ -36,6 +36,7 @@ impl PyTipSensitivities {
         state.set_item("tendons", s.tension.ncols())?;
         state.set_item("tension", s.tension.as_slice())?;
         state.set_item("displacement", s.displacement.as_slice())?;
+        state.set_item("friction", s.friction.as_slice())?;
         state.set_item("tip_force", s.tip_force.as_slice())?;
         state.set_item("tip_moment", s.tip_moment.as_slice())?;
         state.set_item("base_position", s.base_position.as_slice())?;
@@ -72,6 +73,7 @@ impl PyTipSensitivities {
             inner: tdcr::TipSensitivities {
                 tension: matrix("tension")?,
                 displacement: matrix("displacement")?,
+                friction: matrix("friction")?,
                 tip_force: six_by_three("tip_force")?,
                 tip_moment: six_by_three("tip_moment")?,
                 base_position: six_by_three("base_position")?,
@@ -100,6 +102,13 @@ impl PyTipSensitivities {
     #[getter]
     fn displacement<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
         rows(py, &self.inner.displacement)
+    }
+
+    /// d(tip pose)/d(friction coefficient mu_i) (per unit of mu), shape (6, k), one column
+    /// per tendon: zero for a tendon without friction.
+    #[getter]
+    fn friction<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
+        rows(py, &self.inner.friction)
     }
 
     /// d(tip pose)/d(tip force) (per N, world frame), shape (6, 3).
@@ -450,7 +459,8 @@ fn rows3(value: &Bound<'_, PyAny>, what: &str) -> PyResult<Vec<Vector3<f64>>> {
 
 /// Calibration (`tdcr::fit::calibrate`): fits Young's modulus and the base XYZ Euler angles
 /// (by default; `fit` names any of "youngs_modulus", "euler", "base_position",
-/// "offset_scale") to measured tips. `tensions` is (M, k) (N, file order), `tip_forces`
+/// "offset_scale", "friction": the coefficient shared by the tendons with friction, read
+/// back from the fitted robot) to measured tips. `tensions` is (M, k) (N, file order), `tip_forces`
 /// (M, 3) (N, world frame), `measured_tips` (M, 3) (m). The fit starts from the robot's own
 /// parameters; `options` are the forward solver's (as `solve`, collocation), on a fixed
 /// mesh (`intervals`; `tol` is refused) so that the model tips are smooth in the
@@ -494,25 +504,22 @@ pub fn calibrate(
             tensions,
             tip_force,
             measured_tip,
+            motion: None,
         })
         .collect();
     let mut chosen = Fit::default();
     if let Some(names) = fit {
-        chosen = Fit {
-            youngs_modulus: false,
-            euler: false,
-            base_position: false,
-            offset_scale: false,
-        };
+        chosen = Fit::none();
         for name in names {
             match name.as_str() {
                 "youngs_modulus" => chosen.youngs_modulus = true,
                 "euler" => chosen.euler = true,
                 "base_position" => chosen.base_position = true,
                 "offset_scale" => chosen.offset_scale = true,
+                "friction" => chosen.friction = true,
                 other => {
                     return Err(invalid(format!(
-                        "calibrate: cannot fit `{other}`; choose from youngs_modulus, euler, base_position, offset_scale"
+                        "calibrate: cannot fit `{other}`; choose from youngs_modulus, euler, base_position, offset_scale, friction"
                     )));
                 }
             }

@@ -44,5 +44,6 @@ pub fn table2_measurement(experiment: &Experiment, frame: &Matrix3<f64>) -> Meas
         tensions,
         tip_force: frame * Vector3::new(0.0, 0.0, -experiment.tip_load),
         measured_tip: Vector3::zeros(),
+        motion: None,
     }
 }

@@ -7,6 +7,7 @@ use super::Position;
 use super::csv_table::CsvTable;
 use super::{FileError, Problem, printable};
 use crate::fit::calibration::Measurement;
+use crate::model::tendon::Motion;
 use nalgebra::Vector3;
 
 /// The tip-force and measured-tip columns of the experiments CSV, after the tensions.
@@ -34,18 +35,33 @@ pub fn csv_header(tendons: usize) -> String {
 /// Precondition: every experiment has the same number of tensions.
 pub fn to_csv(experiments: &[Measurement]) -> String {
     let k = experiments.first().map_or(0, |e| e.tensions.len());
-    let mut table = CsvTable::new(csv_header(k).split(','));
+    // The motion column only when an experiment gives a motion (docs/calibration.md).
+    let motions = experiments.iter().any(|e| e.motion.is_some());
+    let mut header: Vec<String> = csv_header(k).split(',').map(str::to_string).collect();
+    if motions {
+        header.push(MOTION_COLUMN.into());
+    }
+    let mut table = CsvTable::new(header);
     for e in experiments {
-        table.numbers(
-            e.tensions
-                .iter()
-                .chain(e.tip_force.iter())
-                .chain(e.measured_tip.iter())
-                .copied(),
-        );
+        let mut row: Vec<String> = e
+            .tensions
+            .iter()
+            .chain(e.tip_force.iter())
+            .chain(e.measured_tip.iter())
+            .map(|&x| crate::io::number(x))
+            .collect();
+        if motions {
+            row.push(e.motion.map_or("", Motion::name).into());
+        }
+        table.row(row);
     }
     table.finish()
 }
+
+/// The optional column of an experiments CSV giving the motion of the tendons with friction
+/// in each experiment: `pull` (a loading step), `release` (an unloading step) or empty (the
+/// robot's own motion).
+pub const MOTION_COLUMN: &str = "motion";
 
 /// At most this many problems are listed for one CSV file: enough to see a pattern.
 const MAX_CSV_PROBLEMS: usize = 20;
@@ -88,10 +104,21 @@ pub fn parse_csv(text: &str, file: &str, tendons: usize) -> Result<Vec<Measureme
     };
     // Column index -> which value it holds (index into `expected`).
     let mut slots: Vec<Option<usize>> = Vec::new();
+    // The column index of the optional motion column.
+    let mut motion_column = None;
     for (column, name) in fields(&header) {
         let name = name.trim();
         let slot = expected.iter().position(|e| e == name);
-        if slot.is_some() && slots.contains(&slot) {
+        if name == MOTION_COLUMN {
+            if motion_column.is_some() {
+                problems.push(Problem {
+                    position: at(header_line, column),
+                    field: name.into(),
+                    message: "is repeated; give each column once".into(),
+                });
+            }
+            motion_column = Some(slots.len());
+        } else if slot.is_some() && slots.contains(&slot) {
             problems.push(Problem {
                 position: at(header_line, column),
                 field: printable(name),
@@ -144,6 +171,25 @@ pub fn parse_csv(text: &str, file: &str, tendons: usize) -> Result<Vec<Measureme
         }
         let mut values = vec![0.0; expected.len()];
         let mut ok = true;
+        let mut motion = None;
+        if let Some((column, cell)) = motion_column.map(|c| &cells[c]) {
+            match cell.trim() {
+                "" => {}
+                "pull" => motion = Some(Motion::Pull),
+                "release" => motion = Some(Motion::Release),
+                other => {
+                    ok = false;
+                    problems.push(Problem {
+                        position: at(line, *column),
+                        field: MOTION_COLUMN.into(),
+                        message: format!(
+                            "is `{}`; give pull (a loading step), release (an unloading step) or leave it empty",
+                            printable(other)
+                        ),
+                    });
+                }
+            }
+        }
         for (index, ((column, cell), slot)) in cells.into_iter().zip(&slots).enumerate() {
             let Some(slot) = *slot else { continue };
             let name = &expected[slot];
@@ -178,6 +224,7 @@ pub fn parse_csv(text: &str, file: &str, tendons: usize) -> Result<Vec<Measureme
                 tensions: values[..tendons].to_vec(),
                 tip_force: v(0),
                 measured_tip: v(3),
+                motion,
             });
         }
     }

@@ -294,6 +294,9 @@ class TipSensitivities:
     def displacement(self) -> FloatArray:
         """(6, k), per m of pull-in (zero columns for tension-controlled or slack tendons)."""
     @property
+    def friction(self) -> FloatArray:
+        """(6, k), per unit of the friction coefficient (zero columns without friction)."""
+    @property
     def tip_force(self) -> FloatArray:
         """(6, 3), per N."""
     @property
@@ -564,7 +567,7 @@ def calibrate(
     tip_forces: ArrayLike,
     measured_tips: ArrayLike,
     *,
-    fit: Optional[Sequence[Literal["youngs_modulus", "euler", "base_position", "offset_scale"]]] = None,
+    fit: Optional[Sequence[Literal["youngs_modulus", "euler", "base_position", "offset_scale", "friction"]]] = None,
     max_iterations: int = 50,
     intervals: Optional[int] = None,
     residual_tolerance: Optional[float] = None,

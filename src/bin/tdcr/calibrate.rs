@@ -19,7 +19,9 @@ use tdcr::io::experiments::{csv_header, parse_csv};
 const CSV_HELP: &str = "EXPERIMENTS.csv: a header row, then one row per experiment, comma-separated, SI units:\n  \
     tension_1,...,tension_k      tension of each tendon in file order (N, >= 0; k = the robot's tendon count)\n  \
     tip_force_x,tip_force_y,tip_force_z   tip force (N, world frame), replacing the robot file's\n  \
-    measured_x,measured_y,measured_z      measured tip position (m, world frame)\n\
+    measured_x,measured_y,measured_z      measured tip position (m, world frame)\n  \
+    motion (optional)            pull (a loading step) or release (an unloading step) for the tendons with\n  \
+                                 friction, empty for the robot file's motion\n\
     Columns may come in any order; blank lines and lines starting with # are skipped. Everything else\n\
     (geometry, Poisson's ratio, gravity, routings) and the starting E and base pose come from ROBOT.toml.\n\
     Euler angles: R0 = Rx(alpha) Ry(beta) Rz(gamma), as the robot file's euler_xyz_deg.\n\
@@ -35,7 +37,8 @@ pub struct CalibrateArgs {
     /// Experiments CSV (`-` reads standard input): tensions, tip force, measured tip.
     experiments: String,
     /// Parameters to fit, comma-separated: e (Young's modulus at fixed Poisson's ratio),
-    /// euler (base XYZ Euler angles), position (base position), offset (tendon offset scale).
+    /// euler (base XYZ Euler angles), position (base position), offset (tendon offset scale),
+    /// mu (the friction coefficient shared by the robot's tendons with friction).
     #[arg(long, value_name = "LIST", default_value = "e,euler", value_parser = parse_fit)]
     fit: Fit,
     /// Mesh intervals of every solve (a fixed mesh). Default: the robot file's `intervals`.
@@ -68,21 +71,17 @@ enum CalibrateFormat {
 }
 
 fn parse_fit(text: &str) -> Result<Fit, String> {
-    let mut fit = Fit {
-        youngs_modulus: false,
-        euler: false,
-        base_position: false,
-        offset_scale: false,
-    };
+    let mut fit = Fit::none();
     for name in text.split(',').map(str::trim) {
         match name {
             "e" | "E" => fit.youngs_modulus = true,
             "euler" => fit.euler = true,
             "position" => fit.base_position = true,
             "offset" => fit.offset_scale = true,
+            "mu" => fit.friction = true,
             _ => {
                 return Err(format!(
-                    "`{name}` is not a parameter; choose from e, euler, position, offset (e.g. e,euler)"
+                    "`{name}` is not a parameter; choose from e, euler, position, offset, mu (e.g. e,euler)"
                 ));
             }
         }
@@ -204,6 +203,7 @@ fn parameter_rows(fit: &Calibration) -> Vec<(String, f64, f64, f64, &'static str
         euler: Vector3::repeat(f64::NAN),
         base_position: Vector3::repeat(f64::NAN),
         offset_scale: f64::NAN,
+        friction: f64::NAN,
     });
     let (a, b) = (&fit.start, &fit.fitted);
     let mut rows = Vec::new();
@@ -247,6 +247,9 @@ fn parameter_rows(fit: &Calibration) -> Vec<(String, f64, f64, f64, &'static str
             se.offset_scale,
             "-",
         ));
+    }
+    if f.friction {
+        rows.push(("mu".into(), a.friction, b.friction, se.friction, "-"));
     }
     rows
 }
@@ -349,6 +352,9 @@ fn table(
     if fit.fit.offset_scale {
         let _ = writeln!(out, "  every tendon offset (x, y, radius) times {:.6}", p.offset_scale);
     }
+    if fit.fit.friction {
+        let _ = writeln!(out, "  [[tendon]] with friction: friction = {:.6}", p.friction);
+    }
     out
 }
 
@@ -359,6 +365,8 @@ struct ParametersJson {
     euler_xyz_deg: [f64; 3],
     base_position: [f64; 3],
     offset_scale: f64,
+    /// The friction coefficient of the tendons with friction; null without friction.
+    friction: Option<f64>,
 }
 
 impl From<&Parameters> for ParametersJson {
@@ -369,6 +377,7 @@ impl From<&Parameters> for ParametersJson {
             euler_xyz_deg: p.euler_deg().into(),
             base_position: p.base_position.into(),
             offset_scale: p.offset_scale,
+            friction: (p.friction.is_finite() && p.friction > 0.0).then_some(p.friction),
         }
     }
 }

@@ -4,45 +4,10 @@
 
 use super::*;
 
-impl Border for Capstan<'_> {
-    fn on<R>(&mut self, point: Point, f: impl FnOnce(&System) -> R) -> R {
-        self.load(point);
-        f(&self.system)
-    }
-
-    fn rows(&mut self, point: Point, x: &[State]) {
-        self.load(point);
-        let psi = match point {
-            Point::Current => &mut self.psi,
-            Point::Trial => &mut self.trial_psi,
-        };
-        let Some(profile) = self.system.friction.as_ref() else {
-            return;
-        };
-        // The system's residual at this point and x has just evaluated every link.
-        let _ = x;
-        let last = profile.spans.iter().copied().max().unwrap_or(0);
-        for k in 0..last {
-            profile.cached(k, |lin| {
-                for (j, &o) in self.offsets.iter().enumerate() {
-                    if profile.on_link(j, k) {
-                        psi[o + k] = lin.map_or(f64::NAN, |l| l.psi[j]);
-                    }
-                }
-            });
-        }
-    }
-
-    fn residual(&self, point: Point) -> &[f64] {
-        match point {
-            Point::Current => &self.psi,
-            Point::Trial => &self.trial_psi,
-        }
-    }
-
+impl Capstan<'_> {
     /// Reads psi_x, psi_z and F_z from the links' evaluations by the system's Jacobian at
-    /// `x`, which Newton has just factored.
-    fn factored(&mut self, x: &[State], _: &mut Linearization, _: &mut SolveReport) -> Result<(), Termination> {
+    /// `x` (its last evaluation), and the termination rows' columns.
+    pub(super) fn read_border(&mut self, x: &[State]) -> Result<(), Termination> {
         self.load(Point::Current);
         let m = self.z.len();
         let count = self.offsets.len();
@@ -81,6 +46,39 @@ impl Border for Capstan<'_> {
             self.terminations[j] = self.termination_column(j, x).map_err(|_| Termination::NonFinite)?;
         }
         Ok(())
+    }
+}
+
+impl Border for Capstan<'_> {
+    fn on<R>(&mut self, point: Point, f: impl FnOnce(&System) -> R) -> R {
+        self.load(point);
+        f(&self.system)
+    }
+
+    fn rows(&mut self, point: Point, x: &[State]) {
+        self.load(point);
+        let psi = match point {
+            Point::Current => &mut self.psi,
+            Point::Trial => &mut self.trial_psi,
+        };
+        // The system's residual at this point and x has just evaluated every link.
+        let _ = x;
+        if let Some(profile) = self.system.friction.as_ref() {
+            capstan_rows(profile, &self.offsets, psi);
+        }
+    }
+
+    fn residual(&self, point: Point) -> &[f64] {
+        match point {
+            Point::Current => &self.psi,
+            Point::Trial => &self.trial_psi,
+        }
+    }
+
+    /// Reads the border's blocks ([`Capstan::read_border`]) at `x`, which Newton has just
+    /// factored.
+    fn factored(&mut self, x: &[State], _: &mut Linearization, _: &mut SolveReport) -> Result<(), Termination> {
+        self.read_border(x)
     }
 
     fn step(

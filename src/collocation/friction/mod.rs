@@ -17,6 +17,7 @@
 
 mod border;
 mod interval;
+mod linearized;
 
 pub(crate) use interval::{Profile, interval, interval_order6};
 
@@ -45,8 +46,24 @@ fn unknown(offsets: &[usize], spans: &[usize], j: usize, n: usize) -> Option<usi
     (1..=spans[j]).contains(&n).then(|| offsets[j] + n - 1)
 }
 
+/// The capstan rows psi of `profile` from its links' last evaluations (by the system's
+/// residual or Jacobian) into `psi`, row (j, link k) at `offsets[j] + k`; NaN for a link
+/// without an evaluation.
+fn capstan_rows(profile: &Profile, offsets: &[usize], psi: &mut [f64]) {
+    let last = profile.spans.iter().copied().max().unwrap_or(0);
+    for k in 0..last {
+        profile.cached(k, |lin| {
+            for (j, &o) in offsets.iter().enumerate() {
+                if profile.on_link(j, k) {
+                    psi[o + k] = lin.map_or(f64::NAN, |l| l.psi[j]);
+                }
+            }
+        });
+    }
+}
+
 /// The border of the tendons with friction on one mesh.
-struct Capstan<'r> {
+pub(crate) struct Capstan<'r> {
     /// The collocation system, its profile at the log tensions of the last evaluation.
     system: System<'r>,
     /// First unknown (= row) of each slip: unknown (j, node n) is offsets[j] + n - 1, row

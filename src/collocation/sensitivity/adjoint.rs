@@ -94,6 +94,14 @@ impl<'a> Adjoint<'a> {
                 "give the tendons tensions (Robot::with_tensions with the solution's tensions)",
             ));
         }
+        if let Some(i) = robot.tendons.iter().position(|t| t.active_friction().is_some()) {
+            return Err(invalid(
+                format!("tendon {}", i + 1),
+                "has friction; the adjoint gradients solve the frictionless system's transpose, not the system \
+                 bordered by the capstan rows",
+                "use tip_sensitivities (forward sensitivities handle friction), or set the tendon's friction to 0",
+            ));
+        }
         let length = robot.length();
         if let Some(s) = samples.iter().find(|s| !(s.is_finite() && (0.0..=length).contains(*s))) {
             return Err(invalid(
@@ -103,7 +111,7 @@ impl<'a> Adjoint<'a> {
             ));
         }
         let sensitivity = Sensitivity::new(robot, solution)?;
-        let unknowns = sensitivity.system.unknowns();
+        let unknowns = sensitivity.border.system().unknowns();
         Ok(Adjoint {
             sensitivity,
             samples: samples.to_vec(),

@@ -11,7 +11,7 @@
 //! dx/dq = -J^-1 dF/dq,    J = dF/dx at the solution
 //! ```
 //!
-//! J is the exact Newton Jacobian the solver already uses ([`System::jacobian`]), assembled
+//! J is the exact Newton Jacobian the solver already uses ([`crate::advanced::system::System::jacobian`]), assembled
 //! once per [`Sensitivity`]; every parameter then costs one linear solve plus whatever
 //! dF/dq costs. x is the solver's scaled right perturbation, 12 per node,
 //! d = (dp / L, dtheta, dv, du L) with R -> R exp(hat(dtheta)) (docs/numerics.md), so the
@@ -85,8 +85,8 @@ pub use tip::{
 };
 
 use crate::collocation::LinearSolver;
+use crate::collocation::friction::Capstan;
 use crate::collocation::newton::Workspace;
-use crate::collocation::system::System;
 use crate::collocation::unknowns::{self, TIP_ROWS, nonzeros, tip_row};
 use crate::error::{Result, invalid};
 use crate::mesh::Mesh;
@@ -149,8 +149,9 @@ impl NodeDerivative {
 /// workspace, ready to give the derivative of every node state with respect to any
 /// parameter of the robot.
 pub struct Sensitivity<'a> {
-    /// The system at the solution (the robot as given, full load).
-    system: System<'a>,
+    /// The system at the solution (the robot as given, full load), bordered by the log
+    /// tensions of its tendons with friction (a border without rows when it has none).
+    border: Capstan<'a>,
     /// Node states of the solution.
     states: Vec<State>,
     /// Linear solver buffers for the mesh, holding the factors of the Jacobian at the solution.
@@ -188,7 +189,6 @@ impl<'a> Sensitivity<'a> {
                 "pass a solution of this robot (same tendons in file order)",
             ));
         }
-        crate::model::friction::unsupported(robot, "the sensitivity analysis")?;
         let s: Vec<f64> = solution.nodes.iter().map(|n| n.s).collect();
         let mesh = Mesh::from_points(robot, &s)?;
         let same = mesh.nodes.len() == s.len() && mesh.nodes.iter().zip(&s).all(|(m, s)| m.s == *s);
@@ -205,11 +205,11 @@ impl<'a> Sensitivity<'a> {
             ));
         }
         let states: Vec<State> = solution.nodes.iter().map(|n| n.state()).collect();
-        let system = System::new(Model::new(robot), mesh);
-        let n = system.unknowns();
+        let mut border = Capstan::at_solution(Model::new(robot), mesh, solution);
+        let n = border.system().unknowns() + border.border_rows();
         let mut residual = vec![0.0; n];
-        let mut values = vec![0.0; nonzeros(&system.mesh)];
-        system.jacobian(&states, &mut residual, &mut values)?;
+        let mut values = vec![0.0; nonzeros(&border.system().mesh)];
+        border.linearize(&states, &mut residual, &mut values)?;
         let norm = residual.iter().fold(0.0f64, |m, r| m.max(r.abs()));
         if norm > RESIDUAL_LIMIT || residual.iter().any(|r| !r.is_finite()) {
             return Err(invalid(
@@ -220,13 +220,13 @@ impl<'a> Sensitivity<'a> {
                 "pass a converged collocation solution of this robot (collocation::solve_from polishes a nearby one)",
             ));
         }
-        let mut workspace = Workspace::new(&system, LinearSolver::Blocks)?;
+        let mut workspace = Workspace::new(border.system(), LinearSolver::Blocks)?;
         // Factor once; every parameter then costs one solve with the stored factors.
         if !workspace.factor(&values) {
             return Err(singular());
         }
         Ok(Sensitivity {
-            system,
+            border,
             states,
             workspace,
             scratch: [residual, vec![0.0; n], vec![0.0; n]],
@@ -235,7 +235,7 @@ impl<'a> Sensitivity<'a> {
 
     /// The robot the system belongs to.
     pub fn robot(&self) -> &'a Robot {
-        self.system.model.robot
+        self.border.system().model.robot
     }
 
     /// Number of nodes (the solution's).
@@ -277,18 +277,19 @@ impl<'a> Sensitivity<'a> {
         difference: Difference,
         perturb: impl Fn(&mut Robot, f64),
     ) -> Result<Vec<NodeDerivative>> {
-        self.differenced(step, difference, |system, states, dq, out| {
-            residual_at(system, states, &perturb, dq, out)
+        self.differenced(step, difference, |border, states, dq, out| {
+            residual_at(border, states, &perturb, dq, out)
         })
     }
 
-    /// As [`Sensitivity::derivative`], with `residual(system, states, dq, out)` writing the
-    /// residual at the solution's `states` for the parameter moved by dq into `out`.
+    /// As [`Sensitivity::derivative`], with `residual(border, states, dq, out)` writing the
+    /// residual (backbone rows, then the capstan rows of tendons with friction) at the
+    /// solution's `states` (and log tensions) for the parameter moved by dq into `out`.
     fn differenced(
         &mut self,
         step: f64,
         difference: Difference,
-        residual: impl FnMut(&mut System<'a>, &[State], f64, &mut [f64]) -> Result<()>,
+        residual: impl FnMut(&mut Capstan<'a>, &[State], f64, &mut [f64]) -> Result<()>,
     ) -> Result<Vec<NodeDerivative>> {
         self.differenced_rhs(step, difference, residual)?;
         self.respond()
@@ -300,7 +301,7 @@ impl<'a> Sensitivity<'a> {
         &mut self,
         step: f64,
         difference: Difference,
-        mut residual: impl FnMut(&mut System<'a>, &[State], f64, &mut [f64]) -> Result<()>,
+        mut residual: impl FnMut(&mut Capstan<'a>, &[State], f64, &mut [f64]) -> Result<()>,
     ) -> Result<()> {
         if !(step.is_finite() && step > 0.0) {
             return Err(invalid(
@@ -316,7 +317,7 @@ impl<'a> Sensitivity<'a> {
         };
         let terms = if difference == Difference::Central { 2 } else { 3 };
         for (out, &dq) in [&mut *f0, &mut *f1, &mut *f2].into_iter().zip(&offsets).take(terms) {
-            residual(&mut self.system, &self.states, dq, out)?;
+            residual(&mut self.border, &self.states, dq, out)?;
         }
         // rhs = -dF/dq, written over f0.
         let scale = -1.0 / (2.0 * step);
@@ -330,17 +331,20 @@ impl<'a> Sensitivity<'a> {
         Ok(())
     }
 
-    /// Solves J dx = rhs for the right-hand side in `scratch[0]` (-dF/dq) and converts the
-    /// scaled dx into node derivatives.
+    /// Solves J dx = rhs for the right-hand side in `scratch[0]` (-dF/dq, then -dpsi/dq
+    /// with friction: the bordered solve) and converts the scaled dx into node derivatives.
     fn respond(&mut self) -> Result<Vec<NodeDerivative>> {
-        let dx = self.workspace.solve_again(&self.scratch[0]).ok_or_else(singular)?;
-        let length = self.system.model.robot.length();
+        let dx = self
+            .border
+            .respond(&self.scratch[0], &mut self.workspace)
+            .ok_or_else(singular)?;
+        let length = self.robot().length();
         Ok(self
             .states
             .iter()
             .enumerate()
             .map(|(k, x)| {
-                let [p, theta, v, u] = unknowns::node_increments(dx, k, length);
+                let [p, theta, v, u] = unknowns::node_increments(&dx, k, length);
                 NodeDerivative {
                     s: x.s,
                     p,
@@ -465,7 +469,8 @@ impl<'a> Sensitivity<'a> {
     /// (per N): central differences, or the one-sided right derivative for a slack tendon.
     ///
     /// # Errors
-    /// [`crate::Error::InvalidInput`] for a tendon index out of range; as
+    /// [`crate::Error::InvalidInput`] for a tendon index out of range or a tendon with
+    /// friction at 0 N (not modelled: its log tensions jump under the first pull); as
     /// [`Sensitivity::derivative`].
     pub fn tension(&mut self, tendon: usize) -> Result<Vec<NodeDerivative>> {
         self.tension_rhs(tendon)?;
@@ -488,7 +493,7 @@ impl<'a> Sensitivity<'a> {
         } else {
             force_scale(robot)
         };
-        let tension = self.system.model.tensions[tendon];
+        let tension = self.border.input_tension(tendon);
         let step = RELATIVE_STEP * tension.max(bend);
         // Central needs q - h inside the model's domain (tension > 0 keeps the tendon in it).
         let difference = if tension > step {
@@ -496,25 +501,75 @@ impl<'a> Sensitivity<'a> {
         } else {
             Difference::Forward
         };
+        if tension == 0.0 && self.robot().tendons[tendon].active_friction().is_some() {
+            return Err(invalid(
+                format!("tendons[{tendon}].tension"),
+                "is 0 N on a tendon with friction, where the tension derivative is not modelled: the capstan \
+                 law leaves the log tension of an unloaded tendon at 0, and its limit under the first pull differs",
+                "give the tendon a small tension (e.g. 1e-3 N) to differentiate there, or set its friction to 0",
+            ));
+        }
+        if self.border.border_rows() > 0 {
+            // With friction the tension also sets the profile's base and the capstan rows:
+            // moved in a clone of the robot, every row follows.
+            let perturb = |r: &mut Robot, dq: f64| r.tendons[tendon].set_tension(tension + dq);
+            return self.differenced_rhs(step, difference, |border, states, dq, out| {
+                residual_at(border, states, &perturb, dq, out)
+            });
+        }
         // The tension is an input the model owns: moved in place, no robot to clone.
-        self.differenced_rhs(step, difference, |system, states, dq, out| {
+        self.differenced_rhs(step, difference, |border, states, dq, out| {
+            let system = border.system_mut();
             system.model.tensions[tendon] = tension + dq;
             let result = system.residual(states, out);
             system.model.tensions[tendon] = tension;
             result
         })
     }
+
+    /// The derivative of every node state with respect to tendon `tendon`'s friction
+    /// coefficient mu (per unit of mu), by central differences of the residual (backbone and
+    /// capstan rows) at [`RELATIVE_STEP`] of mu and the bordered solve (docs/friction.md).
+    ///
+    /// # Errors
+    /// [`crate::Error::InvalidInput`] for a tendon index out of range or a tendon without
+    /// friction (mu = 0: the log tensions are not unknowns there, so the derivative would
+    /// need another system); as [`Sensitivity::derivative`].
+    pub fn friction(&mut self, tendon: usize) -> Result<Vec<NodeDerivative>> {
+        let robot = self.robot();
+        let Some(t) = robot.tendons.get(tendon) else {
+            return Err(invalid(
+                "tendon",
+                format!("is {tendon}, but the robot has {} tendons", robot.tendons.len()),
+                "give a 0-based tendon index",
+            ));
+        };
+        let Some(friction) = t.active_friction() else {
+            return Err(invalid(
+                format!("tendons[{tendon}].friction"),
+                "is 0 or not set, and the derivative in the friction coefficient is taken where it is > 0",
+                "give the tendon a positive friction coefficient (e.g. 1e-3) to differentiate there",
+            ));
+        };
+        let mu = friction.coefficient;
+        self.derivative(RELATIVE_STEP * mu, Difference::Central, |r, dq| {
+            if let Some(f) = &mut r.tendons[tendon].friction {
+                f.coefficient = mu + dq;
+            }
+        })
+    }
 }
 
-/// The residual of `system`'s mesh at `states` for the robot with its parameter moved by dq.
+/// The residual (backbone rows, then capstan rows) of `border`'s system at `states` and
+/// its log tensions for the robot with its parameter moved by dq.
 fn residual_at(
-    system: &System,
+    border: &Capstan,
     states: &[State],
     perturb: &impl Fn(&mut Robot, f64),
     dq: f64,
     out: &mut [f64],
 ) -> Result<()> {
-    let robot = system.model.robot;
+    let robot = border.system().model.robot;
     let mut probe = robot.clone();
     perturb(&mut probe, dq);
     if probe.breakpoints() != robot.breakpoints() {
@@ -524,7 +579,8 @@ fn residual_at(
             "differentiate with respect to parameters that keep the breakpoints",
         ));
     }
-    System::new(Model::new(&probe), system.mesh.clone()).residual(states, out)
+    let system = border.moved(Model::new(&probe));
+    border.residual_of(&system, states, out)
 }
 
 /// Characteristic force E I / L^2 (N): the step scale of a tendon on the centreline.

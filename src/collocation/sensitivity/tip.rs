@@ -30,13 +30,18 @@ pub struct ModulusSensitivities {
 pub struct TipSensitivities {
     /// d(tip pose)/d(tension_i), 6 x k (per N), one column per tendon. For a slack tendon
     /// the one-sided (pulling) derivative; zero for a displacement-controlled tendon (see
-    /// `displacement`).
+    /// `displacement`); NaN for a tendon with friction at 0 N, where it is not modelled
+    /// ([`super::Sensitivity::tension`]).
     pub tension: DMatrix<f64>,
     /// d(tip pose)/d(q_i), 6 x k (per m of actuator pull-in), one column per tendon: zero
     /// for a tension-controlled tendon and for a slack one. With displacement-controlled
     /// tendons every derivative here holds their pull-ins (their tensions follow, as the
     /// actuators hold position).
     pub displacement: DMatrix<f64>,
+    /// d(tip pose)/d(mu_i), 6 x k (per unit of the friction coefficient), one column per
+    /// tendon: zero for a tendon without friction (mu = 0 or not set), where the derivative
+    /// is not taken (docs/friction.md).
+    pub friction: DMatrix<f64>,
     /// d(tip pose)/d(tip force), 6 x 3 (per N, world frame): the force half of the compliance.
     pub tip_force: Matrix6x3<f64>,
     /// d(tip pose)/d(tip moment), 6 x 3 (per N m, world frame): the moment half of the compliance.
@@ -68,7 +73,9 @@ impl TipSensitivities {
 ///
 /// Costs one Jacobian assembly, then one linear solve for each of the 12 exact parameters
 /// (tip wrench, base pose) and each of the k + 2 differenced ones (tensions, E, G; k
-/// without geometry), which also take two or three residual evaluations each.
+/// without geometry) and the friction coefficients, which also take two or three residual
+/// evaluations each. With friction each solve is the bordered one of
+/// `collocation/friction` (the log tensions are unknowns too).
 ///
 /// # Errors
 /// As [`Sensitivity::new`] and [`Sensitivity::derivative`].
@@ -90,11 +97,18 @@ pub fn tip_sensitivities(robot: &Robot, solution: &Solution) -> Result<TipSensit
     let k = robot.tendons.len();
     let mut tension = DMatrix::zeros(6, k);
     let mut displacement = DMatrix::zeros(6, k);
+    let mut friction = DMatrix::zeros(6, k);
     for i in 0..k {
         if robot.tendons[i].displacement().is_some() {
             displacement.set_column(i, &held.pull(i)?);
+        } else if robot.tendons[i].active_friction().is_some() && solution.tendons[i].tension == 0.0 {
+            // Not modelled at 0 N with friction (Sensitivity::tension): NaN, not a guess.
+            tension.set_column(i, &Vector6::repeat(f64::NAN));
         } else {
             tension.set_column(i, &held.tip(&sens.tension(i)?)?);
+        }
+        if robot.tendons[i].active_friction().is_some() {
+            friction.set_column(i, &held.tip(&sens.friction(i)?)?);
         }
     }
     let mut tip_force = Matrix6x3::zeros();
@@ -111,6 +125,7 @@ pub fn tip_sensitivities(robot: &Robot, solution: &Solution) -> Result<TipSensit
     Ok(TipSensitivities {
         tension,
         displacement,
+        friction,
         tip_force,
         tip_moment,
         moduli,

@@ -40,12 +40,16 @@
 //!   error in where the tendon holes are), off by default. It is nearly interchangeable with
 //!   E for tendon-bent shapes (the tendon moment tau c r bends against E I); experiments with
 //!   a tip load or with no tension separate them.
+//! - Friction coefficient mu (dimensionless), off by default: one value for every tendon with
+//!   friction (docs/friction.md), which the robot must have (its coefficient is the start).
+//!   Each experiment's [`Measurement::motion`] says whether it is a loading (`pull`) or an
+//!   unloading (`release`) step; the difference between the two is what identifies mu.
 //!
 //! # Method
 //!
 //! Levenberg-Marquardt with Marquardt's scaling (damping lambda diag(J^T J), so the step does
 //! not depend on the units of the parameters) and Nielsen's damping update ([`crate::fit::lm`]). The unknowns are
-//! scaled to order one: E / E_start, the angles in rad, p0 / L and c. Each iteration solves
+//! scaled to order one: E / E_start, the angles in rad, p0 / L, c and mu / mu_start. Each iteration solves
 //! every experiment at the trial parameters, warm-started from its last solution; an accepted
 //! step then costs one [`tip_sensitivities`] per experiment, which gives the Jacobian columns:
 //!
@@ -55,6 +59,7 @@
 //! d p_k / d p0    = base_position (rows 0..3)
 //! d p_k / dc      = Sensitivity::derivative of the scaled routings (central difference of
 //!                   the residual, IFT solve)
+//! d p_k / d mu     = sum over the tendons with friction of TipSensitivities::friction
 //! ```
 //!
 //! The sensitivity module differentiates with respect to a world-frame rotation vector phi,
@@ -127,6 +132,7 @@ pub fn predict(
             euler: true,
             base_position: false,
             offset_scale: false,
+            friction: false,
         },
         ..options.clone()
     };
@@ -244,6 +250,10 @@ fn jacobian(
                         Unknown::Euler(i) => rotation.column(*i).into_owned(),
                         Unknown::BasePosition(i) => sens.base_position.fixed_rows::<3>(0).column(*i).into_owned(),
                         Unknown::OffsetScale => offset_column(&robot, solution, params.offset_scale)?,
+                        // Every tendon with friction shares mu: the sum of their columns.
+                        Unknown::Friction => (0..robot.tendons.len())
+                            .map(|i| sens.friction.fixed_view::<3, 1>(0, i).into_owned())
+                            .sum(),
                     };
                     block.set_column(j, &(column * u.scale(start, length)));
                 }
@@ -506,6 +516,7 @@ pub fn calibrate_until(
             euler: Vector3::zeros(),
             base_position: Vector3::zeros(),
             offset_scale: 0.0,
+            friction: 0.0,
         };
         for (j, u) in unknowns.iter().enumerate() {
             u.set(&mut se, noise_estimate * inverse[(j, j)].sqrt() * scales[j]);

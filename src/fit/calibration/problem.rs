@@ -6,6 +6,7 @@ use crate::collocation;
 use crate::error::{Result, invalid};
 use crate::model::robot::Robot;
 use crate::model::rod::{Section, Stiffness, shear_modulus};
+use crate::model::tendon::Motion;
 use crate::so3::{euler_xyz, euler_xyz_from};
 use nalgebra::{Matrix3, Vector3};
 
@@ -21,16 +22,24 @@ pub struct Measurement {
     pub tip_force: Vector3<f64>,
     /// Measured tip position (m, world frame).
     pub measured_tip: Vector3<f64>,
+    /// The motion of the tendons with friction in this experiment (docs/friction.md):
+    /// [`Motion::Pull`] for a step of a loading branch, [`Motion::Release`] for one of an
+    /// unloading branch; `None` keeps each tendon's own. Ignored without friction.
+    pub motion: Option<Motion>,
 }
 
 impl Measurement {
-    /// `robot` loaded as in this experiment: its tensions and tip force set from this one.
+    /// `robot` loaded as in this experiment: its tensions and tip force set from this one,
+    /// and the motion of its tendons with friction when this one gives it.
     ///
     /// Precondition: one tension per tendon ([`super::calibrate`] checks it).
     pub fn load(&self, robot: &Robot) -> Robot {
         let mut loaded = robot.clone();
         for (t, &tension) in loaded.tendons.iter_mut().zip(&self.tensions) {
             t.set_tension(tension);
+            if let (Some(f), Some(motion)) = (&mut t.friction, self.motion) {
+                f.motion = motion;
+            }
         }
         loaded.loads.tip_force = self.tip_force;
         loaded
@@ -50,17 +59,27 @@ pub struct Parameters {
     pub base_position: Vector3<f64>,
     /// Factor on every tendon offset r_i(s), relative to the robot's routings (1: as given).
     pub offset_scale: f64,
+    /// Friction coefficient mu (dimensionless) of every tendon with friction (one shared
+    /// value, docs/friction.md). 0 when no tendon of the robot has friction (then mu cannot
+    /// be fitted).
+    pub friction: f64,
 }
 
 impl Parameters {
     /// The parameters of `robot` as it is: E of its geometry (NaN without one), the Euler
-    /// angles of its base rotation ([`euler_xyz_from`]), its base position, offset scale 1.
+    /// angles of its base rotation ([`euler_xyz_from`]), its base position, offset scale 1,
+    /// the friction coefficient of its first tendon with friction (0 without one).
     pub fn of(robot: &Robot) -> Self {
         Parameters {
             youngs_modulus: robot.rod.geometry.map_or(f64::NAN, |g| g.youngs_modulus),
             euler: euler_xyz_from(&robot.base_rotation),
             base_position: robot.base_position,
             offset_scale: 1.0,
+            friction: robot
+                .tendons
+                .iter()
+                .find_map(|t| t.active_friction())
+                .map_or(0.0, |f| f.coefficient),
         }
     }
 
@@ -76,7 +95,8 @@ impl Parameters {
 
     /// A copy of `robot` with these parameters: the section rebuilt from the rod's geometry
     /// with E (when the rod has a geometry and E is finite), the base pose set, and every
-    /// tendon offset multiplied by `offset_scale`.
+    /// tendon offset multiplied by `offset_scale`, and every tendon with friction given the
+    /// coefficient `friction` (when it is > 0 and finite; 0 leaves the robot's).
     pub fn apply(&self, robot: &Robot) -> Robot {
         let mut out = robot.clone();
         if let (Some(g), true) = (&mut out.rod.geometry, self.youngs_modulus.is_finite()) {
@@ -96,6 +116,13 @@ impl Parameters {
                 t.routing = scaled_routing(&t.routing, self.offset_scale);
             }
         }
+        if self.friction.is_finite() && self.friction > 0.0 {
+            for f in out.tendons.iter_mut().filter_map(|t| t.friction.as_mut()) {
+                if f.coefficient > 0.0 {
+                    f.coefficient = self.friction;
+                }
+            }
+        }
         out
     }
 }
@@ -111,6 +138,8 @@ pub struct Fit {
     pub base_position: bool,
     /// The tendon offset scale. Default false.
     pub offset_scale: bool,
+    /// The friction coefficient shared by the tendons with friction. Default false.
+    pub friction: bool,
 }
 
 impl Default for Fit {
@@ -121,18 +150,32 @@ impl Default for Fit {
             euler: true,
             base_position: false,
             offset_scale: false,
+            friction: false,
         }
     }
 }
 
 impl Fit {
-    /// Every parameter: E, the Euler angles, the base position and the tendon offset scale.
+    /// Every parameter of a frictionless robot: E, the Euler angles, the base position and
+    /// the tendon offset scale (not the friction coefficient).
     pub fn all() -> Self {
         Fit {
             youngs_modulus: true,
             euler: true,
             base_position: true,
             offset_scale: true,
+            friction: false,
+        }
+    }
+
+    /// No parameter: the start of a selection, `Fit { friction: true, ..Fit::none() }`.
+    pub fn none() -> Self {
+        Fit {
+            youngs_modulus: false,
+            euler: false,
+            base_position: false,
+            offset_scale: false,
+            friction: false,
         }
     }
 
@@ -204,6 +247,8 @@ pub(super) enum Unknown {
     BasePosition(usize),
     /// Offset scale.
     OffsetScale,
+    /// mu / mu_start.
+    Friction,
 }
 
 impl Unknown {
@@ -213,6 +258,7 @@ impl Unknown {
             Unknown::Euler(i) => ["alpha", "beta", "gamma"][*i],
             Unknown::BasePosition(i) => ["x0", "y0", "z0"][*i],
             Unknown::OffsetScale => "offset_scale",
+            Unknown::Friction => "mu",
         }
     }
 
@@ -222,6 +268,7 @@ impl Unknown {
             Unknown::YoungsModulus => start.youngs_modulus,
             Unknown::Euler(_) | Unknown::OffsetScale => 1.0,
             Unknown::BasePosition(_) => length,
+            Unknown::Friction => start.friction,
         }
     }
 
@@ -231,6 +278,7 @@ impl Unknown {
             Unknown::Euler(i) => p.euler[*i],
             Unknown::BasePosition(i) => p.base_position[*i],
             Unknown::OffsetScale => p.offset_scale,
+            Unknown::Friction => p.friction,
         }
     }
 
@@ -240,6 +288,7 @@ impl Unknown {
             Unknown::Euler(i) => p.euler[*i] = value,
             Unknown::BasePosition(i) => p.base_position[*i] = value,
             Unknown::OffsetScale => p.offset_scale = value,
+            Unknown::Friction => p.friction = value,
         }
     }
 }
@@ -257,6 +306,9 @@ pub(super) fn layout(fit: &Fit) -> Vec<Unknown> {
     }
     if fit.offset_scale {
         out.push(Unknown::OffsetScale);
+    }
+    if fit.friction {
+        out.push(Unknown::Friction);
     }
     out
 }
@@ -312,7 +364,7 @@ pub(super) fn validate(
         return Err(invalid(
             "options.fit",
             "selects no parameter",
-            "fit at least one of E, the Euler angles, the base position, the offset scale",
+            "fit at least one of E, the Euler angles, the base position, the offset scale, the friction coefficient",
         ));
     }
     if 3 * experiments.len() < unknowns.len() {
@@ -336,7 +388,21 @@ pub(super) fn validate(
             ));
         }
     }
+    if options.fit.friction && !crate::model::friction::any(robot) {
+        return Err(invalid(
+            "robot.tendons",
+            "have no friction, so a friction coefficient cannot be fitted",
+            "give the tendons whose friction to fit a start coefficient (robot file `friction = 0.1`), or do not fit mu",
+        ));
+    }
     let p = start;
+    if options.fit.friction && !(p.friction.is_finite() && p.friction > 0.0) {
+        return Err(invalid(
+            "options.start.friction",
+            format!("is {}", p.friction),
+            "start the friction coefficient above 0 (e.g. 0.1): the fit moves it relative to its start",
+        ));
+    }
     let finite = p.euler.iter().chain(p.base_position.iter()).all(|x| x.is_finite()) && p.offset_scale.is_finite();
     let positive_e = p.youngs_modulus > 0.0 && p.youngs_modulus.is_finite();
     if !finite || p.offset_scale <= 0.0 || (options.fit.youngs_modulus && !positive_e) {

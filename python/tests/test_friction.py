@@ -1,0 +1,38 @@
+"""Friction in the analyses of the Python package: d(tip)/d(mu) against a central difference
+of full solves, its pickle round trip, and `calibrate(fit=["friction"])`."""
+
+import pickle
+
+import numpy as np
+import tdcr
+
+ROD = {"length": 0.242, "outer_radius": 0.0004, "youngs_modulus": 210e9, "poisson_ratio": 0.3125}
+ROUTING = {"kind": "straight", "x": 0.008, "y": 0.0}
+
+
+def rough(mu, tension=2.94):
+    return tdcr.Robot(rod=ROD, tendons=[{"routing": ROUTING, "tension": tension, "friction": mu}])
+
+
+def test_tip_sensitivity_to_mu_matches_a_central_difference():
+    solution = tdcr.solve(rough(0.1))
+    sens = tdcr.tip_sensitivities(rough(0.1), solution)
+    assert sens.friction.shape == (6, 1)
+    h = 1e-4  # central difference in mu: truncation O(h^2), far below the 1e-5 asked
+    fd = (tdcr.solve(rough(0.1 + h)).tip_position - tdcr.solve(rough(0.1 - h)).tip_position) / (2 * h)
+    # 1e-5 relative: both sides solve on their own adaptive meshes (error estimate 1e-9 m
+    # per solve, divided by h), not the fixed mesh of the Rust test.
+    assert np.linalg.norm(sens.friction[:3, 0] - fd) <= 1e-5 * np.linalg.norm(fd)
+    again = pickle.loads(pickle.dumps(sens))
+    assert np.array_equal(again.friction, sens.friction)
+
+
+def test_calibrate_fits_the_friction_coefficient():
+    tensions = np.array([[1.0], [2.0], [3.0]])
+    forces = np.zeros((3, 3))
+    tips = np.array([tdcr.solve(rough(0.1, t)).tip_position for t in tensions[:, 0]])
+    fit = tdcr.calibrate(rough(0.05), tensions, forces, tips, fit=["friction"])
+    assert fit.converged and fit.names == ["mu"]
+    # Noise-free data on the solver's own meshes: mu back to 1e-9 (measured 3e-12).
+    (line,) = [x for x in fit.robot.to_toml().splitlines() if x.startswith("friction")]
+    assert abs(float(line.split("=")[1]) - 0.1) < 1e-9

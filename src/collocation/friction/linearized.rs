@@ -1,0 +1,170 @@
+//! The bordered system of tendons with friction linearized at a given solution, for the
+//! sensitivities of [`crate::collocation::sensitivity`]: the implicit function theorem on
+//! the residual (F, psi) of the backbone and capstan rows in the unknowns (x, z),
+//!
+//! ```text
+//! [ J      F_z   ] [dx/dq]     [ dF/dq   ]
+//! [ psi_x  psi_z ] [dz/dq] = - [ dpsi/dq ]
+//! ```
+//!
+//! with the exact blocks Newton uses (module docs of [`super`]) and the same bordered solve.
+//! A parameter's derivative dF/dq, dpsi/dq is the residual's at fixed (x, z): z is the log
+//! tension relative to the base entry, so a base tension moves the whole profile with it.
+
+use super::*;
+
+impl<'r> Capstan<'r> {
+    /// The system of `model` on `mesh`, bordered by the log tensions of `solution`'s tendons
+    /// with friction (from their tensions at the nodes of their spans); a border without
+    /// rows when the model has no friction.
+    pub(crate) fn at_solution(model: Model<'r>, mesh: Mesh, solution: &Solution) -> Self {
+        let mut system = System::new(model, mesh);
+        if crate::model::friction::any(system.model.robot) {
+            let mut profile = Profile::new(&system.model, &system.mesh);
+            for (j, &i) in profile.slipping.iter().enumerate() {
+                let tensions = &solution.tendon_tensions[i];
+                let (base, span) = (profile.base[j], profile.spans[j]);
+                let last = tensions.len().saturating_sub(1);
+                // A tendon at 0 N keeps its log tensions in no tension: 0 here, and
+                // `linearize` solves its capstan rows for them.
+                for (n, z) in profile.z[j].iter_mut().enumerate() {
+                    let ratio = tensions.get(n.min(span).min(last)).map_or(1.0, |t| t / base);
+                    *z = if ratio > 0.0 && ratio.is_finite() {
+                        ratio.ln()
+                    } else {
+                        0.0
+                    };
+                }
+                profile.z[j][0] = 0.0;
+            }
+            profile.deliver(&mut system.model);
+            system.friction = Some(profile);
+        }
+        Capstan::new(system)
+    }
+
+    /// Number of border rows (= log-tension unknowns); 0 without friction.
+    pub(crate) fn border_rows(&self) -> usize {
+        self.z.len()
+    }
+
+    /// The system whose backbone rows the border borders.
+    pub(crate) fn system(&self) -> &System<'r> {
+        &self.system
+    }
+
+    /// The system, to move a parameter its model owns (a frictionless system's tension).
+    pub(crate) fn system_mut(&mut self) -> &mut System<'r> {
+        &mut self.system
+    }
+
+    /// Tendon `i`'s input tension (N): at the base entry for a tendon with friction (the
+    /// model's own tension there is the delivered one), the model's otherwise.
+    pub(crate) fn input_tension(&self, i: usize) -> f64 {
+        let profile = self.system.friction.as_ref();
+        profile
+            .and_then(|p| p.slipping.iter().position(|&t| t == i).map(|j| p.base[j]))
+            .unwrap_or(self.system.model.tensions[i])
+    }
+
+    /// The system with `model` in place of this one's (a parameter moved), the same mesh
+    /// and the same log tensions: its residual at the same node states is the residual at
+    /// the same unknowns (x, z) for the moved parameter.
+    pub(crate) fn moved<'s>(&self, model: Model<'s>) -> System<'s> {
+        let mut system = System::new(model, self.system.mesh.clone());
+        if let Some(own) = &self.system.friction {
+            let mut profile = Profile::new(&system.model, &system.mesh);
+            profile.z.clone_from(&own.z);
+            profile.deliver(&mut system.model);
+            system.friction = Some(profile);
+        }
+        system
+    }
+
+    /// The residual (F, psi) of `system` (this border's layout) at the node states `x`:
+    /// the backbone rows into `out[..n]` and the capstan rows, read from the links the
+    /// residual has just evaluated, into `out[n..]`.
+    ///
+    /// # Errors
+    /// A model breakdown at a visited state.
+    pub(crate) fn residual_of(&self, system: &System, x: &[State], out: &mut [f64]) -> Result<()> {
+        let n = system.unknowns();
+        let (rows, psi) = out.split_at_mut(n);
+        system.residual(x, rows)?;
+        self.psi_of(system, psi);
+        Ok(())
+    }
+
+    /// The capstan rows of `system`'s profile ([`capstan_rows`]) into `psi`.
+    fn psi_of(&self, system: &System, psi: &mut [f64]) {
+        if let Some(profile) = system.friction.as_ref() {
+            capstan_rows(profile, &self.offsets, psi);
+        }
+    }
+
+    /// The Jacobian of the backbone rows at `x` into `values` and the residual (F, psi)
+    /// into `residual`, then the border's blocks (psi_x, psi_z, F_z) read from the same
+    /// evaluation, ready for [`Capstan::respond`] once `values` are factored.
+    ///
+    /// # Errors
+    /// A model breakdown at a visited state or a border block that is not finite.
+    pub(crate) fn linearize(&mut self, x: &[State], residual: &mut [f64], values: &mut [f64]) -> Result<()> {
+        self.evaluate(x, residual, values)?;
+        let unloaded = self.system.friction.as_ref().is_some_and(|p| p.base.contains(&0.0));
+        if unloaded {
+            // A tendon at 0 N loads nothing, so its capstan rows are linear in its log
+            // tensions (psi_z is their whole derivative): one forward substitution solves them.
+            let n = self.system.unknowns();
+            let rhs: Vec<f64> = residual[n..].iter().map(|p| -p).collect();
+            let mut dz = vec![0.0; rhs.len()];
+            if !self.forward(&rhs, &mut dz) {
+                return Err(super::super::sensitivity::singular());
+            }
+            for (z, d) in self.z.iter_mut().zip(&dz) {
+                *z += d;
+            }
+            self.evaluate(x, residual, values)?;
+        }
+        Ok(())
+    }
+
+    /// The Jacobian and residual at `x` and the current log tensions, and the border's blocks.
+    fn evaluate(&mut self, x: &[State], residual: &mut [f64], values: &mut [f64]) -> Result<()> {
+        self.load(Point::Current);
+        let n = self.system.unknowns();
+        let (rows, psi) = residual.split_at_mut(n);
+        self.system.jacobian(x, rows, values)?;
+        self.psi_of(&self.system, psi);
+        self.read_border(x).map_err(|_| {
+            error::invalid(
+                "solution",
+                "gives a capstan row whose derivatives are not finite",
+                "pass a converged solution of this robot",
+            )
+        })
+    }
+
+    /// (dx/dq, dz/dq) for the right-hand side `rhs` = -(dF/dq, dpsi/dq) by the bordered
+    /// solve with the factors in `ws`: dx/dq (scaled node unknowns), None for a singular
+    /// system or a value that is not finite.
+    pub(crate) fn respond(&mut self, rhs: &[f64], ws: &mut Workspace) -> Option<Vec<f64>> {
+        let n = self.system.unknowns();
+        let mut dx = ws.solve_again(&rhs[..n])?.to_vec();
+        if self.z.is_empty() {
+            return Some(dx);
+        }
+        // The border's rows enter as psi in S dz = -psi - psi_x a: here psi = dpsi/dq.
+        for (r, d) in self.rows_in.iter_mut().zip(&rhs[n..]) {
+            *r = -d;
+        }
+        let mut solve = |rhs: &[f64], out: &mut [f64]| match ws.solve_again(rhs) {
+            Some(x) => {
+                out.copy_from_slice(x);
+                true
+            }
+            None => false,
+        };
+        self.bordered(&mut dx, &mut solve)?;
+        Some(dx)
+    }
+}
