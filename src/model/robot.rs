@@ -92,8 +92,8 @@ impl Robot {
         self.rod.length
     }
 
-    /// Interior arc lengths in (0, L) where the solution may jump (tendon terminations and
-    /// point loads), sorted and without repeats.
+    /// Interior arc lengths in (0, L) where the solution may jump (tendon terminations,
+    /// point loads and the ends of the rod's segments), sorted and without repeats.
     pub fn breakpoints(&self) -> Vec<f64> {
         let l = self.length();
         let mut b: Vec<f64> = self
@@ -101,6 +101,7 @@ impl Robot {
             .iter()
             .map(|t| t.end(l))
             .chain(self.loads.point.iter().map(|p| p.s))
+            .chain(self.rod.segment_ends())
             .filter(|&s| s < l)
             .collect();
         b.sort_by(f64::total_cmp);
