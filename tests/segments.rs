@@ -9,6 +9,9 @@ use tdcr::{Loads, Robot, Rod, Routing, Section, Segment, Tendon, collocation, sh
 
 /// A tube segment of `length` (m), radii (m) and E (Pa) at nu = 0.3, with precurvature u*.
 fn tube(length: f64, outer: f64, inner: f64, e: f64, u_star: Vector3<f64>) -> Segment {
+    // black_box: computed at run time as a robot file's numbers are (the compiler may fold
+    // powi of literals to a different last bit).
+    let [outer, inner, e] = std::hint::black_box([outer, inner, e]);
     Segment {
         length,
         section: Section::tube(outer, inner, e, shear_modulus(e, 0.3)),
@@ -167,4 +170,97 @@ fn observed_order_is_four_across_a_section_jump() {
     eprintln!("observed order across the section jump: {order:.3} ({points:?})");
     // 0.3: the bound around the scheme's order 4 that tests/convergence.rs uses.
     assert!((order - 4.0).abs() < 0.3, "observed order {order:.3}");
+}
+
+/// The robot of `robot()` as a robot file: one segment by geometry, one by stiffnesses
+/// (those of `two_sections`' second segment), tendons ending by segment number.
+fn robot_file(distal: &str) -> String {
+    format!(
+        r#"
+[[segment]]
+length = 0.15
+outer_radius = 0.0008
+inner_radius = 0.0005
+youngs_modulus = 60e9
+poisson_ratio = 0.3
+
+[[segment]]
+length = 0.1
+{distal}
+precurvature = [0.0, 3.0, 0.0]
+
+[loads]
+tip_force = [0.0, 0.05, -0.02]
+
+[[tendon]]
+routing = {{ kind = "straight", radius = 0.004, angle_deg = 0 }}
+tension = 2.0
+end_segment = 1
+[[tendon]]
+routing = {{ kind = "straight", radius = 0.004, angle_deg = 90 }}
+tension = 0.4
+end_segment = 2
+"#
+    )
+}
+
+#[test]
+fn a_robot_file_of_segments_is_the_library_robot() {
+    let geometry = "outer_radius = 0.0004\nyoungs_modulus = 60e9\npoisson_ratio = 0.3";
+    let file = tdcr::io::parse(&robot_file(geometry), "segments.toml").unwrap();
+    let (library, parsed) = (robot(), &file.robot);
+    assert_eq!(parsed.rod.segment_ends(), library.rod.segment_ends());
+    assert_eq!(parsed.tendons[0].termination, Some(0.15));
+    assert_eq!(parsed.tendons[1].end(0.25), 0.25);
+    let tip = |r: &Robot| collocation::solve(r, &Default::default()).unwrap().tip_position();
+    // The same numbers in the same order: the same answer, bitwise.
+    assert_eq!(tip(parsed), tip(&library));
+    // The second segment by its four stiffnesses, those its geometry gives.
+    let k = library.rod.section_at(0.2).section;
+    let stiffnesses = format!(
+        "bending_stiffness = {:e}\ntorsion_stiffness = {:e}\naxial_stiffness = {:e}\nshear_stiffness = {:e}",
+        k.kbt[0], k.kbt[2], k.kse[2], k.kse[0]
+    );
+    let by_stiffness = tdcr::io::parse(&robot_file(&stiffnesses), "segments.toml").unwrap();
+    assert_eq!(tip(&by_stiffness.robot), tip(&library));
+}
+
+#[test]
+fn segment_tables_report_what_is_wrong() {
+    let errors = |text: &str| tdcr::io::parse(text, "bad.toml").unwrap_err().to_string();
+    let mixed = errors(&robot_file(
+        "outer_radius = 0.0004\nyoungs_modulus = 60e9\npoisson_ratio = 0.3\nbending_stiffness = 1e-3",
+    ));
+    assert!(
+        mixed.contains("segment[2].bending_stiffness") && mixed.contains("not a mix"),
+        "{mixed}"
+    );
+    let partial = errors(&robot_file("bending_stiffness = 1e-3\naxial_stiffness = 3e4"));
+    assert!(
+        partial.contains("segment[2].torsion_stiffness") && partial.contains("all four"),
+        "{partial}"
+    );
+    assert!(partial.contains("segment[2].shear_stiffness"), "{partial}");
+    let none = errors(&robot_file(""));
+    assert!(none.contains("has no section"), "{none}");
+    let past = errors(
+        &robot_file("outer_radius = 0.0004\nyoungs_modulus = 60e9\npoisson_ratio = 0.3")
+            .replace("end_segment = 2", "end_segment = 3"),
+    );
+    assert!(
+        past.contains("tendon[2].end_segment") && past.contains("1 to 2"),
+        "{past}"
+    );
+    let both = format!(
+        "[rod]\nlength = 0.1\nouter_radius = 0.001\nyoungs_modulus = 1e9\npoisson_ratio = 0.3\n{}",
+        robot_file("outer_radius = 0.0004\nyoungs_modulus = 60e9\npoisson_ratio = 0.3")
+    );
+    assert!(
+        errors(&both).contains("has both [rod] and [[segment]]"),
+        "{}",
+        errors(&both)
+    );
+    let uniform = "[rod]\nlength = 0.1\nouter_radius = 0.001\nyoungs_modulus = 1e9\npoisson_ratio = 0.3\n\
+                   [[tendon]]\nrouting = { kind = \"straight\", x = 0.002, y = 0.0 }\ntension = 1.0\nend_segment = 1\n";
+    assert!(errors(uniform).contains("has no segments"), "{}", errors(uniform));
 }
