@@ -264,3 +264,13 @@ fn segment_tables_report_what_is_wrong() {
                    [[tendon]]\nrouting = { kind = \"straight\", x = 0.002, y = 0.0 }\ntension = 1.0\nend_segment = 1\n";
     assert!(errors(uniform).contains("has no segments"), "{}", errors(uniform));
 }
+
+#[test]
+fn a_robot_of_segments_writes_back_to_the_same_robot() {
+    let geometry = "outer_radius = 0.0004\nyoungs_modulus = 60e9\npoisson_ratio = 0.3";
+    let file = tdcr::io::parse(&robot_file(geometry), "segments.toml").unwrap();
+    let text = file.to_toml().unwrap();
+    assert!(text.contains("[[segment]]"), "{text}");
+    let back = tdcr::io::parse(&text, "again.toml").unwrap();
+    assert_eq!(format!("{:?}", back.robot), format!("{:?}", file.robot));
+}
