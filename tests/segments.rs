@@ -274,3 +274,25 @@ fn a_robot_of_segments_writes_back_to_the_same_robot() {
     let back = tdcr::io::parse(&text, "again.toml").unwrap();
     assert_eq!(format!("{:?}", back.robot), format!("{:?}", file.robot));
 }
+
+#[test]
+fn inconsistent_segments_are_input_errors_not_panics() {
+    let mut rod = two_sections();
+    if let tdcr::model::rod::Stiffness::Segments { sections, .. } = &mut rod.stiffness {
+        sections.pop();
+    }
+    let e = Robot::new(rod).validate().unwrap_err().to_string();
+    assert!(
+        e.contains("rod.segments") && e.contains("2 segment end(s) but 1"),
+        "{e}"
+    );
+    let negative = Rod::segmented(&[
+        tube(0.15, 0.0008, 0.0, 60e9, Vector3::zeros()),
+        tube(-0.05, 0.0008, 0.0, 60e9, Vector3::zeros()),
+    ]);
+    let e = Robot::new(negative).validate().unwrap_err().to_string();
+    assert!(
+        e.contains("segment 2 ending at") && e.contains("not after its start"),
+        "{e}"
+    );
+}

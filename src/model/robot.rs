@@ -142,6 +142,7 @@ impl Robot {
         if let Some(g) = &self.rod.geometry {
             validate_geometry(g)?;
         }
+        self.rod.validate_segments()?;
         let samples: Vec<f64> = (0..=32).map(|k| l * k as f64 / 32.0).collect();
         for &s in &samples {
             let sp = self.rod.section_at(s);

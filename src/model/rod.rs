@@ -233,6 +233,60 @@ impl Rod {
         out
     }
 
+    /// Checks the segments of a rod of segments: as many sections and precurvatures as
+    /// segment ends, at least one, each segment of positive finite length, the last ending
+    /// at the rod's length. Other rods have nothing to check here.
+    ///
+    /// # Errors
+    /// [`crate::Error::InvalidInput`] on `rod.segments` saying which rule is broken.
+    pub fn validate_segments(&self) -> crate::Result<()> {
+        let lists: Vec<(&[f64], usize)> = [
+            match &self.stiffness {
+                Stiffness::Segments { ends, sections } => Some((&ends[..], sections.len())),
+                _ => None,
+            },
+            match &self.reference {
+                ReferenceStrains::Segments { ends, u_star } => Some((&ends[..], u_star.len())),
+                _ => None,
+            },
+        ]
+        .into_iter()
+        .flatten()
+        .collect();
+        for (ends, values) in lists {
+            let problem = if ends.is_empty() || ends.len() != values {
+                Some(format!(
+                    "has {} segment end(s) but {values} section(s) or precurvature(s)",
+                    ends.len()
+                ))
+            } else if let Some(k) =
+                (0..ends.len()).find(|&k| !(ends[k].is_finite() && ends[k] > if k == 0 { 0.0 } else { ends[k - 1] }))
+            {
+                Some(format!(
+                    "has segment {} ending at {} m, not after its start",
+                    k + 1,
+                    crate::Readable(ends[k])
+                ))
+            } else if ends[ends.len() - 1] != self.length {
+                Some(format!(
+                    "ends at {} m, but the rod's length is {} m",
+                    crate::Readable(ends[ends.len() - 1]),
+                    crate::Readable(self.length)
+                ))
+            } else {
+                None
+            };
+            if let Some(problem) = problem {
+                return Err(crate::error::invalid(
+                    "rod.segments",
+                    problem,
+                    "build the rod with Rod::segmented from segments of positive length",
+                ));
+            }
+        }
+        Ok(())
+    }
+
     /// Section stiffness and its derivative at s; at a segment end, the section of the
     /// segment that ends there (the left limit). [`Rod::section_on`] chooses the side.
     pub fn section_at(&self, s: f64) -> SectionPoint {
