@@ -73,7 +73,7 @@ pub use model::disks::Disks;
 pub use model::loads::{Field, Loads, PointLoad};
 pub use model::parameter::Parameter;
 pub use model::robot::{Robot, TendonModel};
-pub use model::rod::{Rod, Section};
+pub use model::rod::{Rod, Section, Segment};
 pub use model::routing::{Routing, RoutingPoint};
 pub use model::tendon::{Actuation, Friction, Motion, Tendon};
 pub use nalgebra;

@@ -5,12 +5,12 @@ use tdcr::collocation;
 
 const PAGE: &str = include_str!("../docs/modelling.md");
 
-/// The page's ```toml blocks that are robot files (start with `[rod]`).
+/// The page's ```toml blocks that are robot files (start with `[rod]` or `[[segment]]`).
 fn robots() -> Vec<String> {
     PAGE.split("```toml\n")
         .skip(1)
         .filter_map(|block| block.split("```").next())
-        .filter(|text| text.starts_with("[rod]"))
+        .filter(|text| text.starts_with("[rod]") || text.starts_with("[[segment]]"))
         .map(str::to_string)
         .collect()
 }

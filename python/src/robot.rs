@@ -158,24 +158,28 @@ impl Rows {
 impl PyRobot {
     /// A robot from keyword arguments shaped like a robot file's tables: `rod` (dict),
     /// `tendons` (list of dicts, the file's `[[tendon]]`), `loads`, `base`, `solver`,
-    /// `model`, `disks` (dicts). A tendon dict has `routing`, `tension` (N) or `displacement` (m),
-    /// and optionally `end` (m), `stiffness` (N), `free_length` (m), `friction` and `motion`
-    /// (`"pull"` or `"release"`). Raises `tdcr.FileError`
+    /// `model`, `disks` (dicts), or instead of `rod`, `segments` (list of dicts, the file's
+    /// `[[segment]]`). A tendon dict has `routing`, `tension` (N) or `displacement` (m),
+    /// and optionally `end` (m) or `end_segment`, `stiffness` (N), `free_length` (m),
+    /// `friction` and `motion` (`"pull"` or `"release"`). Raises `tdcr.FileError`
     /// (messages name the field, e.g. `tendon[2].tension`).
     #[new]
-    #[pyo3(signature = (rod, tendons=None, loads=None, base=None, solver=None, model=None, disks=None))]
+    #[pyo3(signature = (rod=None, tendons=None, loads=None, base=None, solver=None, model=None, disks=None, segments=None))]
+    #[allow(clippy::too_many_arguments)]
     fn new(
-        rod: &Bound<'_, PyAny>,
+        rod: Option<&Bound<'_, PyAny>>,
         tendons: Option<&Bound<'_, PyAny>>,
         loads: Option<&Bound<'_, PyAny>>,
         base: Option<&Bound<'_, PyAny>>,
         solver: Option<&Bound<'_, PyAny>>,
         model: Option<&Bound<'_, PyAny>>,
         disks: Option<&Bound<'_, PyAny>>,
+        segments: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<Self> {
         let mut doc = Table::new();
         for (key, value) in [
-            ("rod", Some(rod)),
+            ("rod", rod),
+            ("segment", segments),
             ("tendon", tendons),
             ("loads", loads),
             ("base", base),

@@ -95,10 +95,12 @@ pub fn tip<T: Real>(model: &Model, site: &Site, x: &State, d: &Delta<T>) -> Resu
     ))
 }
 
-/// Jump rows at a breakpoint: p and R continuous, the point-load wrench balance (12 rows).
+/// Jump rows at a breakpoint: p and R continuous, the point-load wrench balance (12 rows),
+/// with the sites of its left and right nodes (`sites`: the section and precurvature may
+/// jump there too).
 pub fn jump<T: Real>(
     model: &Model,
-    site: &Site,
+    sites: (&Site, &Site),
     a: &State,
     b: &State,
     da: &Delta<T>,
@@ -109,7 +111,8 @@ pub fn jump<T: Real>(
     let l = T::from_f64(length).unwrap_or_else(T::one);
     let dp = (nb.p - na.p) / l;
     let dr = so3::log(&(na.R.transpose() * nb.R));
-    let (f, m) = model.wrench_balance(site.s, (site, &na.R, &na.v, &na.u), Some((site, &nb.R, &nb.v, &nb.u)))?;
+    let (left, right) = sites;
+    let (f, m) = model.wrench_balance(left.s, (left, &na.R, &na.v, &na.u), Some((right, &nb.R, &nb.v, &nb.u)))?;
     Ok(stack(&dp, &dr, &f, &(m * l)))
 }
 

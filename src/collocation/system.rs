@@ -74,7 +74,12 @@ impl<'a> System<'a> {
     /// Recomputes the sites from the model.
     fn refresh(&mut self) {
         let model = &self.model;
-        self.node_sites = self.mesh.nodes.iter().map(|n| model.site(n.s)).collect();
+        self.node_sites = self
+            .mesh
+            .nodes
+            .iter()
+            .map(|n| model.site_on(n.s, n.segment_end))
+            .collect();
         self.interval_sites = (0..self.mesh.nodes.len() - 1)
             .map(|k| {
                 (!self.mesh.is_jump(k)).then(|| IntervalSites {
@@ -215,7 +220,14 @@ impl<'a> System<'a> {
                 }
                 None => {
                     node_rates = None;
-                    residual::jump(&self.model, &self.node_sites[k], &x[k], &x[k + 1], &z, &z)?
+                    residual::jump(
+                        &self.model,
+                        (&self.node_sites[k], &self.node_sites[k + 1]),
+                        &x[k],
+                        &x[k + 1],
+                        &z,
+                        &z,
+                    )?
                 }
             };
             out[link_row(k)..link_row(k + 1)].copy_from_slice(r.as_slice());
@@ -277,7 +289,14 @@ impl<'a> System<'a> {
                             Dual64::from(0.0)
                         }
                     });
-                    let r = residual::jump(&self.model, &self.node_sites[k], &x[k], &x[k + 1], &da, &db)?;
+                    let r = residual::jump(
+                        &self.model,
+                        (&self.node_sites[k], &self.node_sites[k + 1]),
+                        &x[k],
+                        &x[k + 1],
+                        &da,
+                        &db,
+                    )?;
                     for (i, d) in r.iter().enumerate() {
                         out[link_row(k) + i] = d.re;
                         values[at + i * width + j] = d.eps;

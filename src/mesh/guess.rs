@@ -92,7 +92,7 @@ fn reference_strains(model: &Model, nodes: &[MeshNode]) -> Vec<(Vector3<f64>, Ve
     nodes
         .iter()
         .map(|n| {
-            let r = model.robot.rod.reference_at(n.s);
+            let r = model.robot.rod.reference_on(n.s, n.segment_end);
             (r.v_star, r.u_star)
         })
         .collect()
@@ -180,7 +180,10 @@ fn sweep(
             let (f, l) = model.point_wrench(nodes[k].s);
             (N + f, M + l)
         } else {
-            let (a, b) = (model.site(nodes[k].s), model.site(nodes[k + 1].s));
+            let (a, b) = (
+                model.site_on(nodes[k].s, nodes[k].segment_end),
+                model.site_on(nodes[k + 1].s, nodes[k + 1].segment_end),
+            );
             let d = shape[k + 1].0 - shape[k].0;
             (
                 N + (a.f_e + b.f_e) * (h / 2.0),
@@ -192,7 +195,7 @@ fn sweep(
         .iter()
         .enumerate()
         .map(|(k, node)| {
-            let site = model.site(node.s);
+            let site = model.site_on(node.s, node.segment_end);
             let R = shape[k].1;
             let (v, u) = strains[k];
             let (mut n, mut m) = wrench[k];

@@ -111,7 +111,7 @@ fn build(model: &Model, states: &[State], segment_ends: &[f64], along: Along, re
             };
             let quadrature = length::NodeQuadrature::new(&s, t.end(length));
             let stretch = quadrature.integrate(|k| {
-                let reference = robot.rod.reference_at(s[k]);
+                let reference = robot.rod.reference_on(s[k], segment_ends[k]);
                 profile[k][i] * length::speed(&t.routing.at(s[k], length), &reference.v_star, &reference.u_star)
             }) / stiffness
                 + t.free_length * state.tension / stiffness;
@@ -134,7 +134,7 @@ fn node_list(model: &Model, states: &[State], segment_ends: &[f64], along: &Alon
     // A model holding each node's tensions, made when they vary.
     let mut local: Option<(Model, Vec<f64>)> = None;
     for (k, &State { s, p, R, v, u }) in states.iter().enumerate() {
-        let site = model.site(s);
+        let site = model.site_on(s, segment_ends[k]);
         let rates = match along {
             Along::Constant(Some(r)) => r[k],
             Along::Constant(None) => linearize::rates(model, &site, segment_ends[k], &R, &v, &u)?,

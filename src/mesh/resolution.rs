@@ -107,6 +107,7 @@ pub fn required(robot: &Robot) -> Resolution {
     let curvature = match &robot.rod.reference {
         ReferenceStrains::Straight => 0.0,
         ReferenceStrains::Constant { u_star, .. } => u_star.norm(),
+        ReferenceStrains::Segments { u_star, .. } => u_star.iter().map(|u| u.norm()).fold(0.0, f64::max),
         ReferenceStrains::Varying(_) => (0..=SAMPLES)
             .map(|k| robot.rod.reference_at(length * k as f64 / SAMPLES as f64).u_star.norm())
             .fold(0.0, f64::max),

@@ -125,13 +125,21 @@ impl<'a> Model<'a> {
         p
     }
 
-    /// State-independent data at arc length s.
+    /// State-independent data at arc length s; at the end of one of the rod's segments,
+    /// the segment that ends there (the left limit: [`Model::site_on`] chooses the side).
     pub fn site(&self, s: f64) -> Site {
+        self.site_on(s, s)
+    }
+
+    /// State-independent data at arc length s on the stretch of backbone that ends at
+    /// `segment_end` (m): a mesh node's site, on its side of a breakpoint where the rod's
+    /// section or precurvature jumps ([`crate::model::rod::Rod::section_on`]).
+    pub fn site_on(&self, s: f64, segment_end: f64) -> Site {
         let loads = &self.robot.loads;
         Site {
             s,
-            section: self.robot.rod.section_at(s),
-            reference: self.robot.rod.reference_at(s),
+            section: self.robot.rod.section_on(s, segment_end),
+            reference: self.robot.rod.reference_on(s, segment_end),
             f_e: {
                 let f = loads.distributed_force.at(s);
                 let f = self.parameter.map_or(f, |(p, value)| p.distributed_force(f, value));

@@ -92,8 +92,8 @@ impl Robot {
         self.rod.length
     }
 
-    /// Interior arc lengths in (0, L) where the solution may jump (tendon terminations and
-    /// point loads), sorted and without repeats.
+    /// Interior arc lengths in (0, L) where the solution may jump (tendon terminations,
+    /// point loads and the ends of the rod's segments), sorted and without repeats.
     pub fn breakpoints(&self) -> Vec<f64> {
         let l = self.length();
         let mut b: Vec<f64> = self
@@ -101,6 +101,7 @@ impl Robot {
             .iter()
             .map(|t| t.end(l))
             .chain(self.loads.point.iter().map(|p| p.s))
+            .chain(self.rod.segment_ends())
             .filter(|&s| s < l)
             .collect();
         b.sort_by(f64::total_cmp);
@@ -141,6 +142,7 @@ impl Robot {
         if let Some(g) = &self.rod.geometry {
             validate_geometry(g)?;
         }
+        self.rod.validate_segments()?;
         let samples: Vec<f64> = (0..=32).map(|k| l * k as f64 / 32.0).collect();
         for &s in &samples {
             let sp = self.rod.section_at(s);

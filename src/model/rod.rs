@@ -73,6 +73,14 @@ pub enum Stiffness {
     Uniform(Section),
     /// A section (with exact derivative) given as a function of s (m).
     Varying(Arc<dyn Fn(f64) -> SectionPoint + Send + Sync>),
+    /// One section per segment of a [`Rod::segmented`] rod: `sections[k]` on the segment
+    /// that ends at `ends[k]` (m, increasing, the last at the tip).
+    Segments {
+        /// Where each segment ends (m).
+        ends: Vec<f64>,
+        /// Each segment's section.
+        sections: Vec<Section>,
+    },
 }
 
 /// The stress-free shape of the backbone, as strains.
@@ -89,6 +97,33 @@ pub enum ReferenceStrains {
     },
     /// Strains with exact derivatives as a function of s (m).
     Varying(Arc<dyn Fn(f64) -> StrainPoint + Send + Sync>),
+    /// One constant precurvature per segment of a [`Rod::segmented`] rod (v* = (0, 0, 1)):
+    /// `u_star[k]` (body frame, rad/m) on the segment that ends at `ends[k]` (m).
+    Segments {
+        /// Where each segment ends (m).
+        ends: Vec<f64>,
+        /// Each segment's precurvature u* (body frame, rad/m).
+        u_star: Vec<Vector3<f64>>,
+    },
+}
+
+/// One segment of a rod whose section or precurvature changes from segment to segment.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Segment {
+    /// The segment's length (m).
+    pub length: f64,
+    /// Its cross-section stiffness.
+    pub section: Section,
+    /// Its constant precurvature u* (body frame, rad/m); zero for a straight segment.
+    pub precurvature: Vector3<f64>,
+}
+
+/// The index of the segment of a rod with segments ending at `ends` that holds the stretch
+/// of backbone ending at `segment_end` (m): the first segment that ends at or after it.
+fn segment_index(ends: &[f64], segment_end: f64) -> usize {
+    ends.iter()
+        .position(|&e| e >= segment_end)
+        .unwrap_or(ends.len().saturating_sub(1))
 }
 
 /// The geometry and material a circular rod was built from, kept so that validation can
@@ -157,9 +192,117 @@ impl Rod {
         self
     }
 
-    /// Section stiffness and its derivative at s.
+    /// A straight rod of segments joined end to end, from the base: each with its own
+    /// section and constant precurvature (both jump where one segment meets the next). Its
+    /// length is the sum of the segments' lengths; the segment ends are breakpoints of the
+    /// robot ([`Rod::segment_ends`]), so that meshes put a node on each side of them.
+    pub fn segmented(segments: &[Segment]) -> Self {
+        let mut ends = Vec::with_capacity(segments.len());
+        let mut end = 0.0;
+        for segment in segments {
+            end += segment.length;
+            ends.push(end);
+        }
+        Rod {
+            length: end,
+            stiffness: Stiffness::Segments {
+                ends: ends.clone(),
+                sections: segments.iter().map(|g| g.section).collect(),
+            },
+            reference: ReferenceStrains::Segments {
+                ends,
+                u_star: segments.iter().map(|g| g.precurvature).collect(),
+            },
+            geometry: None,
+        }
+    }
+
+    /// Where the segments of a [`Rod::segmented`] rod meet (m, inside (0, L), increasing):
+    /// the arc lengths where its section or precurvature may jump. Empty for other rods.
+    pub fn segment_ends(&self) -> Vec<f64> {
+        let mut out: Vec<f64> = Vec::new();
+        if let Stiffness::Segments { ends, .. } = &self.stiffness {
+            out.extend(ends);
+        }
+        if let ReferenceStrains::Segments { ends, .. } = &self.reference {
+            out.extend(ends);
+        }
+        out.retain(|&s| s > 0.0 && s < self.length);
+        out.sort_by(f64::total_cmp);
+        out.dedup();
+        out
+    }
+
+    /// Checks the segments of a rod of segments: as many sections and precurvatures as
+    /// segment ends, at least one, each segment of positive finite length, the last ending
+    /// at the rod's length. Other rods have nothing to check here.
+    ///
+    /// # Errors
+    /// [`crate::Error::InvalidInput`] on `rod.segments` saying which rule is broken.
+    pub fn validate_segments(&self) -> crate::Result<()> {
+        let lists: Vec<(&[f64], usize)> = [
+            match &self.stiffness {
+                Stiffness::Segments { ends, sections } => Some((&ends[..], sections.len())),
+                _ => None,
+            },
+            match &self.reference {
+                ReferenceStrains::Segments { ends, u_star } => Some((&ends[..], u_star.len())),
+                _ => None,
+            },
+        ]
+        .into_iter()
+        .flatten()
+        .collect();
+        for (ends, values) in lists {
+            let problem = if ends.is_empty() || ends.len() != values {
+                Some(format!(
+                    "has {} segment end(s) but {values} section(s) or precurvature(s)",
+                    ends.len()
+                ))
+            } else if let Some(k) =
+                (0..ends.len()).find(|&k| !(ends[k].is_finite() && ends[k] > if k == 0 { 0.0 } else { ends[k - 1] }))
+            {
+                Some(format!(
+                    "has segment {} ending at {} m, not after its start",
+                    k + 1,
+                    crate::Readable(ends[k])
+                ))
+            } else if ends[ends.len() - 1] != self.length {
+                Some(format!(
+                    "ends at {} m, but the rod's length is {} m",
+                    crate::Readable(ends[ends.len() - 1]),
+                    crate::Readable(self.length)
+                ))
+            } else {
+                None
+            };
+            if let Some(problem) = problem {
+                return Err(crate::error::invalid(
+                    "rod.segments",
+                    problem,
+                    "build the rod with Rod::segmented from segments of positive length",
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    /// Section stiffness and its derivative at s; at a segment end, the section of the
+    /// segment that ends there (the left limit). [`Rod::section_on`] chooses the side.
     pub fn section_at(&self, s: f64) -> SectionPoint {
+        self.section_on(s, s)
+    }
+
+    /// Section stiffness and its derivative at s on the stretch of backbone that ends at
+    /// `segment_end` (m, at or after s): which side of a segment end s is on, for a mesh
+    /// node ([`crate::mesh::MeshNode::segment_end`]).
+    pub fn section_on(&self, s: f64, segment_end: f64) -> SectionPoint {
         match &self.stiffness {
+            Stiffness::Segments { ends, sections } => SectionPoint {
+                section: sections[segment_index(ends, segment_end)],
+                kse_s: Vector3::zeros(),
+                kbt_s: Vector3::zeros(),
+            },
             Stiffness::Uniform(section) => SectionPoint {
                 section: *section,
                 kse_s: Vector3::zeros(),
@@ -169,9 +312,22 @@ impl Rod {
         }
     }
 
-    /// Reference strains and their derivatives at s.
+    /// Reference strains and their derivatives at s; at a segment end, those of the segment
+    /// that ends there (the left limit). [`Rod::reference_on`] chooses the side.
     pub fn reference_at(&self, s: f64) -> StrainPoint {
+        self.reference_on(s, s)
+    }
+
+    /// Reference strains and their derivatives at s on the stretch of backbone that ends at
+    /// `segment_end` (m, at or after s), as [`Rod::section_on`].
+    pub fn reference_on(&self, s: f64, segment_end: f64) -> StrainPoint {
         match &self.reference {
+            ReferenceStrains::Segments { ends, u_star } => StrainPoint {
+                v_star: Vector3::z(),
+                u_star: u_star[segment_index(ends, segment_end)],
+                v_star_s: Vector3::zeros(),
+                u_star_s: Vector3::zeros(),
+            },
             ReferenceStrains::Straight => StrainPoint {
                 v_star: Vector3::z(),
                 u_star: Vector3::zeros(),
@@ -194,6 +350,11 @@ impl fmt::Debug for Stiffness {
         match self {
             Stiffness::Uniform(s) => f.debug_tuple("Uniform").field(s).finish(),
             Stiffness::Varying(_) => f.write_str("Varying(<fn>)"),
+            Stiffness::Segments { ends, sections } => f
+                .debug_struct("Segments")
+                .field("ends", ends)
+                .field("sections", sections)
+                .finish(),
         }
     }
 }
@@ -208,6 +369,11 @@ impl fmt::Debug for ReferenceStrains {
                 .field("u_star", u_star)
                 .finish(),
             ReferenceStrains::Varying(_) => f.write_str("Varying(<fn>)"),
+            ReferenceStrains::Segments { ends, u_star } => f
+                .debug_struct("Segments")
+                .field("ends", ends)
+                .field("u_star", u_star)
+                .finish(),
         }
     }
 }

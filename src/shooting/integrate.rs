@@ -81,7 +81,9 @@ pub(super) fn shoot(
             report,
         )?;
         if seg_end < length {
-            let (v_b, u_b) = jump(&model, seg_end, &state)?;
+            // The segment after the jump ends at the next breakpoint (or the tip).
+            let next_end = breaks.iter().copied().find(|&b| b > seg_end).unwrap_or(length);
+            let (v_b, u_b) = jump(&model, seg_end, next_end, &state)?;
             if let Some(out) = profile.as_deref_mut() {
                 out.push(model.tensions.clone());
             }
@@ -105,10 +107,11 @@ pub(super) fn shoot(
 }
 
 /// Right-limit strains at breakpoint s from the jump conditions (Newton on 6 unknowns with
-/// an exact dual-number Jacobian; p and R are continuous).
-fn jump(model: &Model, s: f64, left: &Point) -> Result<(Vector3<f64>, Vector3<f64>)> {
+/// an exact dual-number Jacobian; p and R are continuous); `next_end` (m) is where the
+/// segment after s ends, which says the right side's section and precurvature.
+fn jump(model: &Model, s: f64, next_end: f64, left: &Point) -> Result<(Vector3<f64>, Vector3<f64>)> {
     type D6 = DualSVec64<6>;
-    let site = model.site(s);
+    let (site, right) = (model.site(s), model.site_on(s, next_end));
     let State { R, v: va, u: ua, .. } = *left;
     let (mut v, mut u) = (va, ua);
     let lift3 = |x: &Vector3<f64>| x.map(D6::from);
@@ -120,7 +123,7 @@ fn jump(model: &Model, s: f64, left: &Point) -> Result<(Vector3<f64>, Vector3<f6
             vd[i] = D6::from(v[i]).derivative(i);
             ud[i] = D6::from(u[i]).derivative(i + 3);
         }
-        let (fr, mr) = model.wrench_balance(s, (&site, &Rd, &vad, &uad), Some((&site, &Rd, &vd, &ud)))?;
+        let (fr, mr) = model.wrench_balance(s, (&site, &Rd, &vad, &uad), Some((&right, &Rd, &vd, &ud)))?;
         let r = SVector::<f64, 6>::from_iterator(fr.iter().chain(mr.iter()).map(|d| d.re));
         let mut J = SMatrix::<f64, 6, 6>::zeros();
         for (row, d) in fr.iter().chain(mr.iter()).enumerate() {
@@ -311,7 +314,7 @@ fn integrate(
                 yi += kj * (h * A[i][j]);
             }
             let si = s + C[i] * h;
-            let site = model.site(si);
+            let site = model.site_on(si, s1);
             for (j, &t) in slipping.tendons.iter().enumerate() {
                 let rate: f64 = (0..i).map(|l| A[i][l] * tau_rates[l * slips + j]).sum();
                 model.tensions[t] = tau[j] + h * rate;

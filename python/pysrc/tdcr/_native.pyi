@@ -84,13 +84,14 @@ class Robot:
 
     def __new__(
         cls,
-        rod: Mapping[str, Any],
+        rod: Optional[Mapping[str, Any]] = None,
         tendons: Optional[Sequence[Mapping[str, Any]]] = None,
         loads: Optional[Mapping[str, Any]] = None,
         base: Optional[Mapping[str, Any]] = None,
         solver: Optional[Mapping[str, Any]] = None,
         model: Optional[Mapping[str, Any]] = None,
         disks: Optional[Mapping[str, Any]] = None,
+        segments: Optional[Sequence[Mapping[str, Any]]] = None,
     ) -> Robot: ...
     @staticmethod
     def from_dict(tables: Mapping[str, Any]) -> Robot:

@@ -48,8 +48,13 @@ pub fn run(file: &str) -> Result<(), Failure> {
         (_, false) => "; model: the paper's jump conditions (no corner forces)",
         _ => "",
     };
+    let ends = r.rod.segment_ends();
+    let segments = match ends.len() {
+        0 => String::new(),
+        k => format!(" of {} segments", k + 1),
+    };
     let mut out = format!(
-        "{name}: OK{}: a {:.4} m rod with {} tendon(s) ({actuation}), {points} point load(s){disks}{model}; solver: {}\n",
+        "{name}: OK{}: a {:.4} m rod{segments} with {} tendon(s) ({actuation}), {points} point load(s){disks}{model}; solver: {}\n",
         match warnings.len() {
             0 => String::new(),
             1 => ", with 1 warning".to_string(),
@@ -59,8 +64,16 @@ pub fn run(file: &str) -> Result<(), Failure> {
         r.tendons.len(),
         parsed.solver.method
     );
+    if !ends.is_empty() {
+        out.push_str(&segment_lines(&r.rod));
+    }
     for (i, t) in r.tendons.iter().enumerate().take(LISTED_TENDONS) {
-        out.push_str(&format!("  tendon {}: {}\n", i + 1, tendon(t, r.length())));
+        let mut line = tendon(t, r.length());
+        if let Some(k) = ends.iter().position(|&e| e == t.end(r.length())) {
+            let at = format!("ends at s = {} m", Readable(ends[k]));
+            line = line.replacen(&at, &format!("{at} (the end of segment {})", k + 1), 1);
+        }
+        out.push_str(&format!("  tendon {}: {line}\n", i + 1));
     }
     if r.tendons.len() > LISTED_TENDONS {
         out.push_str(&format!(
@@ -72,6 +85,42 @@ pub fn run(file: &str) -> Result<(), Failure> {
         out.push_str(&format!("warning: {w}\n"));
     }
     emit(&out)
+}
+
+/// One line per segment of a rod of segments for `check`: where it runs, its stiffnesses
+/// (three significant digits) and its precurvature.
+fn segment_lines(rod: &tdcr::Rod) -> String {
+    let significant = tdcr::plot::significant;
+    let mut bounds = vec![0.0];
+    bounds.extend(rod.segment_ends());
+    bounds.push(rod.length);
+    let mut out = String::new();
+    for (k, w) in bounds.windows(2).enumerate() {
+        let mid = 0.5 * (w[0] + w[1]);
+        let section = rod.section_at(mid).section;
+        let u_star = rod.reference_at(mid).u_star;
+        let shape = if u_star == tdcr::nalgebra::Vector3::zeros() {
+            "straight".to_string()
+        } else {
+            format!(
+                "precurvature ({}, {}, {}) rad/m",
+                Readable(u_star[0]),
+                Readable(u_star[1]),
+                Readable(u_star[2])
+            )
+        };
+        out.push_str(&format!(
+            "  segment {}: s = {} to {} m, E I {} N m^2, G J {} N m^2, E A {} N, G A {} N, {shape}\n",
+            k + 1,
+            Readable(w[0]),
+            Readable(w[1]),
+            significant(section.kbt[0]),
+            significant(section.kbt[2]),
+            significant(section.kse[2]),
+            significant(section.kse[0]),
+        ));
+    }
+    out
 }
 
 /// A tendon in a few words for `check`: its routing with the turns it makes over its own

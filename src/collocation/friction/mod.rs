@@ -227,8 +227,9 @@ impl<'r> Capstan<'r> {
         } else {
             link_row(span) + 6
         };
-        let site = self.system.model.site(x[span].s);
-        let right = (span + 1 < nodes).then(|| self.system.model.site(x[span + 1].s));
+        let on = |k: usize| self.system.model.site_on(x[k].s, self.system.mesh.nodes[k].segment_end);
+        let site = on(span);
+        let right = (span + 1 < nodes).then(|| on(span + 1));
         let rows = |model: &Model| -> Result<[f64; 6]> {
             let a = &x[span];
             let right = right

@@ -28,8 +28,8 @@ fn vector(v: &Option<Vec3>) -> Vector3<f64> {
     v.map_or_else(Vector3::zeros, Vector3::from)
 }
 
-/// The robot of tables that passed every check (not yet validated by the library).
-pub(super) fn build(rod: &RodTable, base: &BaseTable, loads: &LoadsTable, tendons: &[TendonTable]) -> Robot {
+/// The uniform rod of a `[rod]` table that passed its checks.
+pub(super) fn uniform_rod(rod: &RodTable) -> Rod {
     let mut backbone = match (rod.poisson_ratio, rod.shear_modulus) {
         (Some(nu), _) => Rod::tube(rod.length, rod.outer_radius, rod.inner_radius, rod.youngs_modulus, nu),
         (None, g) => {
@@ -43,6 +43,19 @@ pub(super) fn build(rod: &RodTable, base: &BaseTable, loads: &LoadsTable, tendon
     if let Some(u) = rod.precurvature {
         backbone = backbone.with_precurvature(Vector3::from(u));
     }
+    backbone
+}
+
+/// The robot of tables that passed every check (not yet validated by the library), on the
+/// rod `backbone` built from `[rod]` or `[[segment]]`; `segment_ends` (m) are where its
+/// segments end, for the tendons' `end_segment`.
+pub(super) fn build(
+    backbone: Rod,
+    segment_ends: &[f64],
+    base: &BaseTable,
+    loads: &LoadsTable,
+    tendons: &[TendonTable],
+) -> Robot {
     let rotation = match (&base.rotation, &base.euler_xyz_deg) {
         (Some(rows), _) => rotation_from_rows(rows),
         (None, Some(angles)) => so3::euler_xyz(&Vector3::from(*angles).map(f64::to_radians)),
@@ -86,7 +99,9 @@ pub(super) fn build(rod: &RodTable, base: &BaseTable, loads: &LoadsTable, tendon
             }
         };
         let mut tendon = Tendon::new(routing, t.tension.unwrap_or(0.0));
-        tendon.termination = t.end;
+        tendon.termination = t
+            .end
+            .or(t.end_segment.and_then(|k| segment_ends.get(k.wrapping_sub(1)).copied()));
         if let Some(displacement) = t.displacement {
             tendon.actuation = Actuation::PullIn {
                 displacement,

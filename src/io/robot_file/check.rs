@@ -37,7 +37,7 @@ pub(super) struct Checker<'a> {
 
 impl Checker<'_> {
     /// One problem at `field`, placed where the file has it.
-    fn report(&mut self, field: &str, message: String) {
+    pub(super) fn report(&mut self, field: &str, message: String) {
         self.problems.push(Problem {
             position: self.locator.get().find(field),
             field: field.to_string(),
@@ -46,7 +46,7 @@ impl Checker<'_> {
     }
 
     /// Whether `x` is finite; if not, reports it (`unit` follows the value in the message).
-    fn finite(&mut self, field: &str, x: f64, unit: &str) -> bool {
+    pub(super) fn finite(&mut self, field: &str, x: f64, unit: &str) -> bool {
         if x.is_finite() {
             return true;
         }
@@ -58,14 +58,14 @@ impl Checker<'_> {
     }
 
     /// Reports `x` unless it is finite and above 0.
-    fn positive(&mut self, field: &str, x: f64, unit: &str) {
+    pub(super) fn positive(&mut self, field: &str, x: f64, unit: &str) {
         if self.finite(field, x, unit) && x <= 0.0 {
             self.report(field, format!("is {}{unit}, but must be positive", Readable(x)));
         }
     }
 
     /// Reports each non-finite component of `v`, if given.
-    fn vector(&mut self, field: &str, v: &Option<Vec3>, unit: &str) {
+    pub(super) fn vector(&mut self, field: &str, v: &Option<Vec3>, unit: &str) {
         if let Some(v) = v {
             for (k, x) in v.iter().enumerate() {
                 if !x.is_finite() {
@@ -85,48 +85,59 @@ impl Checker<'_> {
     /// The `[rod]` rules.
     pub(super) fn rod(&mut self, rod: &RodTable) {
         self.positive("rod.length", rod.length, " m");
-        self.positive("rod.outer_radius", rod.outer_radius, " m");
-        if self.finite("rod.inner_radius", rod.inner_radius, " m") {
-            if rod.inner_radius < 0.0 {
+        self.tube(
+            "rod",
+            rod.outer_radius,
+            rod.inner_radius,
+            rod.youngs_modulus,
+            (rod.poisson_ratio, rod.shear_modulus),
+        );
+        self.vector("rod.precurvature", &rod.precurvature, " rad/m");
+    }
+
+    /// The rules of a tube's section in table `path` (`rod`, `segment[2]`): positive outer
+    /// radius and Young's modulus, an inner radius in [0, outer), and one of Poisson's ratio
+    /// (in (-1, 0.5]) and the shear modulus (positive), given as `torsion`.
+    pub(super) fn tube(&mut self, path: &str, outer: f64, inner: f64, e: f64, torsion: (Option<f64>, Option<f64>)) {
+        let field = |key: &str| format!("{path}.{key}");
+        self.positive(&field("outer_radius"), outer, " m");
+        if self.finite(&field("inner_radius"), inner, " m") {
+            if inner < 0.0 {
                 self.report(
-                    "rod.inner_radius",
-                    format!(
-                        "is {} m, but must be >= 0 (0 for a solid rod)",
-                        Readable(rod.inner_radius)
-                    ),
+                    &field("inner_radius"),
+                    format!("is {} m, but must be >= 0 (0 for a solid rod)", Readable(inner)),
                 );
-            } else if rod.outer_radius.is_finite() && rod.inner_radius >= rod.outer_radius {
+            } else if outer.is_finite() && inner >= outer {
                 self.report(
-                    "rod.inner_radius",
+                    &field("inner_radius"),
                     format!(
                         "is {} m, but must be below the outer radius {} m",
-                        Readable(rod.inner_radius),
-                        Readable(rod.outer_radius)
+                        Readable(inner),
+                        Readable(outer)
                     ),
                 );
             }
         }
-        self.positive("rod.youngs_modulus", rod.youngs_modulus, " Pa");
-        match (rod.poisson_ratio, rod.shear_modulus) {
+        self.positive(&field("youngs_modulus"), e, " Pa");
+        match torsion {
             (Some(_), Some(_)) => self.report(
-                "rod.shear_modulus",
+                &field("shear_modulus"),
                 "is given together with `poisson_ratio`: give one of them".into(),
             ),
             (None, None) => self.report(
-                "rod",
+                path,
                 "needs `poisson_ratio` or `shear_modulus` (Pa) for the torsion stiffness G J".into(),
             ),
             (Some(nu), None) => {
-                if self.finite("rod.poisson_ratio", nu, "") && !(nu > -1.0 && nu <= 0.5) {
+                if self.finite(&field("poisson_ratio"), nu, "") && !(nu > -1.0 && nu <= 0.5) {
                     self.report(
-                        "rod.poisson_ratio",
+                        &field("poisson_ratio"),
                         format!("is {}, but must lie in (-1, 0.5]", Readable(nu)),
                     );
                 }
             }
-            (None, Some(g)) => self.positive("rod.shear_modulus", g, " Pa"),
+            (None, Some(g)) => self.positive(&field("shear_modulus"), g, " Pa"),
         }
-        self.vector("rod.precurvature", &rod.precurvature, " rad/m");
     }
 
     /// The `[base]` rules: a finite position, one rotation that is a rotation.

@@ -8,12 +8,15 @@
 
 mod build;
 mod check;
+mod segments;
 mod tables;
 mod write;
 
-use self::build::{build, disks, library_problem, model, settings};
+use self::build::{build, disks, library_problem, model, settings, uniform_rod};
 use self::check::Checker;
-use self::tables::{BaseTable, DisksTable, LoadsTable, ModelTable, RodTable, SolverTable, TABLES, TendonTable};
+use self::tables::{
+    BaseTable, DisksTable, LoadsTable, ModelTable, RodTable, SegmentTable, SolverTable, TABLES, TendonTable,
+};
 use super::locate::{LazyLocator, Lines};
 use super::printable;
 use super::{FileError, Problem};
@@ -133,20 +136,32 @@ pub fn parse(text: &str, file: &str) -> Result<RobotFile, FileError> {
     };
     let tables = reader.tables(root.into_inner());
     let mut problems = reader.problems;
-    if !tables.rod_given {
+    let segmented = !tables.segments.is_empty();
+    if !tables.rod_given && !segmented {
         problems.push(whole_file(
             "has no [rod] table: give at least `length`, `outer_radius`, `youngs_modulus` and \
-             `poisson_ratio` (or `shear_modulus`)",
+             `poisson_ratio` (or `shear_modulus`), or give the backbone as [[segment]] tables",
         ));
+    } else if tables.rod_given && segmented {
+        problems.push(whole_file(segments::BOTH));
     }
     // Check every table that could be read, so one bad table does not hide the others.
     let mut check = Checker {
         locator: &locator,
         problems: Vec::new(),
     };
-    let length = tables.rod.as_ref().map_or(f64::NAN, |r| r.length);
+    let length = match &tables.rod {
+        Some(r) => r.length,
+        None if segmented => segments::length(&tables.segments),
+        None => f64::NAN,
+    };
     if let Some(rod) = &tables.rod {
         check.rod(rod);
+    }
+    for (i, g) in tables.segments.iter().enumerate() {
+        if let Some(g) = g {
+            check.segment(i, g);
+        }
     }
     if let Some(base) = &tables.base {
         check.base(base);
@@ -157,6 +172,7 @@ pub fn parse(text: &str, file: &str) -> Result<RobotFile, FileError> {
     for (i, t) in tables.tendons.iter().enumerate() {
         if let Some(t) = t {
             check.tendon(i, t, length);
+            check.end_segment(i, t, tables.segments.len());
         }
     }
     if let Some(solver) = &tables.solver {
@@ -167,7 +183,13 @@ pub fn parse(text: &str, file: &str) -> Result<RobotFile, FileError> {
     }
     problems.extend(check.problems);
     let tendons: Option<Vec<TendonTable>> = tables.tendons.into_iter().collect();
-    let (Some(rod), Some(tendons), true) = (tables.rod, tendons, problems.is_empty()) else {
+    let segment_tables: Option<Vec<SegmentTable>> = tables.segments.into_iter().collect();
+    let backbone = match (&tables.rod, segment_tables) {
+        (Some(rod), _) => Some(uniform_rod(rod)),
+        (None, Some(g)) if !g.is_empty() => Some(segments::rod(&g)),
+        _ => None,
+    };
+    let (Some(backbone), Some(tendons), true) = (backbone, tendons, problems.is_empty()) else {
         return Err(fail(problems));
     };
     let (base, loads, solver) = (
@@ -175,7 +197,8 @@ pub fn parse(text: &str, file: &str) -> Result<RobotFile, FileError> {
         tables.loads.unwrap_or_default(),
         tables.solver.unwrap_or_default(),
     );
-    let mut robot = build(&rod, &base, &loads, &tendons);
+    let ends = segments::ends(&backbone);
+    let mut robot = build(backbone, &ends, &base, &loads, &tendons);
     model(&mut robot, &tables.model.unwrap_or_default());
     let disks = tables.disks.map(|d| disks(&d, robot.length()));
     if let Some(d) = &disks {
@@ -214,6 +237,8 @@ struct Tables {
     loads: Option<LoadsTable>,
     /// One entry per [[tendon]], `None` where it could not be read.
     tendons: Vec<Option<TendonTable>>,
+    /// One entry per [[segment]], `None` where it could not be read.
+    segments: Vec<Option<SegmentTable>>,
     solver: Option<SolverTable>,
     model: Option<ModelTable>,
     disks: Option<DisksTable>,
@@ -243,30 +268,18 @@ impl Reader<'_> {
                 "solver" => tables.solver = self.table(&name, value),
                 "model" => tables.model = self.table(&name, value),
                 "disks" => tables.disks = self.table(&name, value),
-                "tendon" => match value.into_inner() {
-                    DeValue::Array(items) if items.iter().all(|t| t.get_ref().is_table()) => {
-                        for (i, item) in items.into_iter().enumerate() {
-                            let t = self.table(&format!("tendon[{}]", i + 1), item);
-                            tables.tendons.push(t);
-                        }
-                    }
-                    _ => self.problems.push(Problem {
-                        position: Some(self.lines.position(key.span().start)),
-                        field: name,
-                        message: "must be an array of tables: start each tendon with [[tendon]] \
-                                  (double brackets)"
-                            .into(),
-                    }),
-                },
+                "tendon" => tables.tendons = self.array(&name, key.span().start, value),
+                "segment" => tables.segments = self.array(&name, key.span().start, value),
                 _ => {
                     let hint = match name.as_str() {
                         "tendons" => "; did you mean [[tendon]]?".to_string(),
+                        "segments" => "; did you mean [[segment]]?".to_string(),
                         "load" => "; did you mean [loads]?".to_string(),
                         _ => match closest(
                             &name,
-                            ["rod", "base", "loads", "disks", "model", "solver", "tendon"].into_iter(),
+                            ["rod", "base", "loads", "disks", "model", "solver", "tendon", "segment"].into_iter(),
                         ) {
-                            Some("tendon") => "; did you mean [[tendon]]?".to_string(),
+                            Some(array @ ("tendon" | "segment")) => format!("; did you mean [[{array}]]?"),
                             Some(table) => format!("; did you mean [{table}]?"),
                             None => String::new(),
                         },
@@ -280,6 +293,27 @@ impl Reader<'_> {
             }
         }
         tables
+    }
+
+    /// The tables of the array of tables `name` (`tendon`, `segment`) whose key starts at
+    /// byte `at`, each `None` where it could not be read; a value that is not an array of
+    /// tables is one problem.
+    fn array<T: DeserializeOwned>(&mut self, name: &str, at: usize, value: Spanned<DeValue<'_>>) -> Vec<Option<T>> {
+        match value.into_inner() {
+            DeValue::Array(items) if items.iter().all(|t| t.get_ref().is_table()) => items
+                .into_iter()
+                .enumerate()
+                .map(|(i, item)| self.table(&format!("{name}[{}]", i + 1), item))
+                .collect(),
+            _ => {
+                self.problems.push(Problem {
+                    position: Some(self.lines.position(at)),
+                    field: name.to_string(),
+                    message: format!("must be an array of tables: start each {name} with [[{name}]] (double brackets)"),
+                });
+                Vec::new()
+            }
+        }
     }
 
     /// Reports every required field missing from table `name` (serde reports only the
@@ -375,8 +409,8 @@ impl Reader<'_> {
 
 /// How messages name table `name`: `[rod]`, `[[tendon]] #2`.
 fn shown_table(name: &str) -> String {
-    match name.strip_prefix("tendon[") {
-        Some(rest) => format!("[[tendon]] #{}", rest.trim_end_matches(']')),
+    match name.split_once('[') {
+        Some((array, rest)) => format!("[[{array}]] #{}", rest.trim_end_matches(']')),
         None => format!("[{name}]"),
     }
 }
@@ -412,6 +446,8 @@ fn required_fields<'a>(name: &str, value: &'a Spanned<DeValue<'_>>) -> Vec<(Stri
     };
     if name == "rod" {
         need(name, value, &["length", "outer_radius", "youngs_modulus"]);
+    } else if name.starts_with("segment[") {
+        need(name, value, &["length"]);
     } else if name == "loads" {
         if let Some(DeValue::Array(points)) = entry(value, "point").map(|p| p.get_ref()) {
             for (i, p) in points.iter().enumerate() {

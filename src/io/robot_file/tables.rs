@@ -95,6 +95,29 @@ pub(super) struct RodTable {
     pub(super) precurvature: Option<Vec3>,
 }
 
+/// One `[[segment]]`: a stretch of the backbone of `length` (m), from the end of the one
+/// before it, with its section given by geometry (`outer_radius`, `inner_radius`,
+/// `youngs_modulus`, `poisson_ratio` or `shear_modulus`, as in `[rod]`) or by stiffnesses
+/// (`bending_stiffness` E I and `torsion_stiffness` G J in N m^2, `axial_stiffness` E A and
+/// `shear_stiffness` G A in N), one form whole (checked in `segments`), and its constant
+/// `precurvature` (rad/m, body frame).
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct SegmentTable {
+    pub(super) length: f64,
+    pub(super) outer_radius: Option<f64>,
+    pub(super) inner_radius: Option<f64>,
+    pub(super) youngs_modulus: Option<f64>,
+    pub(super) poisson_ratio: Option<f64>,
+    pub(super) shear_modulus: Option<f64>,
+    pub(super) bending_stiffness: Option<f64>,
+    pub(super) torsion_stiffness: Option<f64>,
+    pub(super) axial_stiffness: Option<f64>,
+    pub(super) shear_stiffness: Option<f64>,
+    #[serde(default, deserialize_with = "vector")]
+    pub(super) precurvature: Option<Vec3>,
+}
+
 /// `[base]`: where the rod starts, with its rotation as `rotation` rows or `euler_xyz_deg`.
 #[derive(Debug, Default, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -135,7 +158,8 @@ pub(super) struct PointTable {
 }
 
 /// One `[[tendon]]`: its routing, its `tension` (N) or actuator `displacement` (m, one of
-/// the two), optionally where it ends (`end`), for an elastic tendon its `stiffness`
+/// the two), optionally where it ends (`end` in m, or `end_segment`, the number of the
+/// `[[segment]]` at whose end it ends), for an elastic tendon its `stiffness`
 /// E_t A_t (N) and `free_length` (m) between the base and the actuator, and its `friction`
 /// coefficient in the channels with the `motion` modelled (`pull` or `release`).
 #[derive(Debug, Deserialize)]
@@ -145,6 +169,8 @@ pub(super) struct TendonTable {
     pub(super) tension: Option<f64>,
     pub(super) displacement: Option<f64>,
     pub(super) end: Option<f64>,
+    /// The 1-based `[[segment]]` whose end the tendon ends at (instead of `end`).
+    pub(super) end_segment: Option<usize>,
     pub(super) stiffness: Option<f64>,
     pub(super) free_length: Option<f64>,
     pub(super) friction: Option<f64>,
@@ -252,4 +278,4 @@ pub(super) enum TendonModelKey {
 }
 
 /// The tables a robot file may have, in the order docs/robot-file.md describes them.
-pub(super) const TABLES: &str = "[rod], [base], [loads], [disks], [[tendon]], [model], [solver]";
+pub(super) const TABLES: &str = "[rod] (or [[segment]]), [base], [loads], [disks], [[tendon]], [model], [solver]";

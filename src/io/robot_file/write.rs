@@ -72,23 +72,26 @@ fn document(file: &RobotFile) -> Result<String> {
             "keep such a robot in code, or give it the file's kinds of rod, loads and routing",
         )
     };
-    let (Some(g), Stiffness::Uniform(_)) = (rod.geometry, &rod.stiffness) else {
-        return Err(cannot(
-            "its rod is not given by `outer_radius`, `youngs_modulus` and `poisson_ratio` (a rod given by `shear_modulus` keeps no geometry)",
-        ));
-    };
+    let segments = segment_tables(rod).map_err(|what| cannot(&what))?;
     let mut rod_table = Table::new();
-    rod_table.insert("length".into(), Value::Float(rod.length));
-    rod_table.insert("outer_radius".into(), Value::Float(g.outer_radius));
-    rod_table.insert("inner_radius".into(), Value::Float(g.inner_radius));
-    rod_table.insert("youngs_modulus".into(), Value::Float(g.youngs_modulus));
-    rod_table.insert("poisson_ratio".into(), Value::Float(g.poisson_ratio));
-    match &rod.reference {
-        ReferenceStrains::Straight => {}
-        ReferenceStrains::Constant { v_star, u_star } if *v_star == Vector3::z() => {
-            rod_table.insert("precurvature".into(), vector(u_star));
+    if segments.is_none() {
+        let (Some(g), Stiffness::Uniform(_)) = (rod.geometry, &rod.stiffness) else {
+            return Err(cannot(
+                "its rod is not given by `outer_radius`, `youngs_modulus` and `poisson_ratio` (a rod given by `shear_modulus` keeps no geometry)",
+            ));
+        };
+        rod_table.insert("length".into(), Value::Float(rod.length));
+        rod_table.insert("outer_radius".into(), Value::Float(g.outer_radius));
+        rod_table.insert("inner_radius".into(), Value::Float(g.inner_radius));
+        rod_table.insert("youngs_modulus".into(), Value::Float(g.youngs_modulus));
+        rod_table.insert("poisson_ratio".into(), Value::Float(g.poisson_ratio));
+        match &rod.reference {
+            ReferenceStrains::Straight => {}
+            ReferenceStrains::Constant { v_star, u_star } if *v_star == Vector3::z() => {
+                rod_table.insert("precurvature".into(), vector(u_star));
+            }
+            _ => return Err(cannot("its reference strains are not a constant precurvature")),
         }
-        _ => return Err(cannot("its reference strains are not a constant precurvature")),
     }
     let mut base = Table::new();
     base.insert("position".into(), vector(&robot.base_position));
@@ -171,7 +174,10 @@ fn document(file: &RobotFile) -> Result<String> {
         tendons.push(Value::Table(tendon));
     }
     let mut doc = Table::new();
-    doc.insert("rod".into(), Value::Table(rod_table));
+    match segments {
+        Some(segments) => doc.insert("segment".into(), Value::Array(segments)),
+        None => doc.insert("rod".into(), Value::Table(rod_table)),
+    };
     doc.insert("base".into(), Value::Table(base));
     doc.insert("loads".into(), Value::Table(loads));
     if !tendons.is_empty() {
@@ -189,6 +195,42 @@ fn document(file: &RobotFile) -> Result<String> {
             "report this as a bug",
         )
     })
+}
+
+/// The `[[segment]]` tables of a rod of segments (each by its four stiffnesses, with its
+/// precurvature), `None` for another rod, or what keeps it from a file: lengths whose sums
+/// do not give back the segment ends bitwise, or stiffnesses that differ between the two
+/// bending axes or the two shear directions.
+fn segment_tables(rod: &crate::Rod) -> std::result::Result<Option<Vec<Value>>, String> {
+    let (Stiffness::Segments { ends, sections }, ReferenceStrains::Segments { ends: same, u_star }) =
+        (&rod.stiffness, &rod.reference)
+    else {
+        return Ok(None);
+    };
+    let mut out = Vec::with_capacity(ends.len());
+    let (mut start, mut sum) = (0.0, 0.0);
+    for (k, ((&end, section), u)) in ends.iter().zip(sections).zip(u_star).enumerate() {
+        let length = end - start;
+        sum += length;
+        let (kse, kbt) = (section.kse, section.kbt);
+        if sum != end || same.get(k) != Some(&end) || kbt[0] != kbt[1] || kse[0] != kse[1] {
+            return Err(format!(
+                "segment {} is not one a file can give (its lengths must add up to its end exactly, \
+                 its bending and shear stiffnesses be the same about both axes)",
+                k + 1
+            ));
+        }
+        let mut t = Table::new();
+        t.insert("length".into(), Value::Float(length));
+        t.insert("bending_stiffness".into(), Value::Float(kbt[0]));
+        t.insert("torsion_stiffness".into(), Value::Float(kbt[2]));
+        t.insert("axial_stiffness".into(), Value::Float(kse[2]));
+        t.insert("shear_stiffness".into(), Value::Float(kse[0]));
+        t.insert("precurvature".into(), vector(u));
+        out.push(Value::Table(t));
+        start = end;
+    }
+    Ok(Some(out))
 }
 
 /// The robot's point loads that the file gives as `[[loads.point]]`, and the disks it gives
