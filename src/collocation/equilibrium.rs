@@ -8,8 +8,8 @@ use super::newton::{self, Settings, Workspace};
 use super::options::{Equilibrium, Options};
 use super::path;
 use super::pipeline::not_converged;
-use super::stability;
 use super::system::System;
+use super::{dynamics, stability};
 use crate::error::Result;
 use crate::mesh::guess;
 use crate::report::{PathTaken, SolveReport, Stability, Termination};
@@ -98,7 +98,7 @@ pub(crate) fn stability_of(
     report: &mut SolveReport,
 ) -> Stability {
     if let Some(reason) = stability::non_conservative(&system.model) {
-        return Stability::Unknown { reason };
+        return linearized_dynamics(system, ws, x, exact || !ws.has_factors(), reason, report);
     }
     if (exact || !ws.has_factors()) && !ws.linearize(system, x, report) {
         return Stability::Unknown {
@@ -115,13 +115,37 @@ pub(crate) fn stability_of(
 /// factored: [`Workspace::verdict_at`]).
 pub(crate) fn fresh_stability(system: &System, ws: &mut Workspace, x: &[State], report: &mut SolveReport) -> Stability {
     if let Some(reason) = stability::non_conservative(&system.model) {
-        return Stability::Unknown { reason };
+        return linearized_dynamics(system, ws, x, true, reason, report);
     }
     let s: Vec<f64> = system.mesh.nodes.iter().map(|n| n.s).collect();
     ws.verdict_at(system, x, report, |values| stability::assess(values, &s))
         .unwrap_or_else(|| Stability::Unknown {
             reason: "the Jacobian at the solution is not finite".into(),
         })
+}
+
+/// The verdict of the linearized dynamics ([`dynamics::assess`]) for loads that are not
+/// conservative (`why`: which load), with the factors of the Jacobian at `x` (evaluated
+/// and factored first when `refactor`; otherwise Newton's last, one step before `x`).
+/// Tendons with friction keep an `unknown` verdict: their capstan rows border the system
+/// and have no mass.
+fn linearized_dynamics(
+    system: &System,
+    ws: &mut Workspace,
+    x: &[State],
+    refactor: bool,
+    why: String,
+    report: &mut SolveReport,
+) -> Stability {
+    if system.friction.is_some() {
+        return Stability::Unknown { reason: why };
+    }
+    if refactor && !ws.linearize(system, x, report) {
+        return Stability::Unknown {
+            reason: "the Jacobian at the solution is singular or not finite".into(),
+        };
+    }
+    dynamics::assess(system, x, ws)
 }
 
 /// Newton from `x`, given only the chance to converge cleanly ([`clean`]) unless
@@ -173,7 +197,9 @@ fn acceptable(system: &System, verdict: &Stability) -> bool {
     match verdict {
         Stability::Stable => true,
         Stability::Unstable { .. } => false,
-        Stability::Unknown { .. } => stability::non_conservative(&system.model).is_some(),
+        // A non-conservative load's verdict: a static path cannot choose among states by
+        // their dynamics (docs/stability.md), so Newton's state stands with its verdict.
+        Stability::Growing { .. } | Stability::Unknown { .. } => stability::non_conservative(&system.model).is_some(),
     }
 }
 
