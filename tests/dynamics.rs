@@ -80,7 +80,6 @@ fn the_dead_load_column_diverges_past_euler_load_as_the_conjugate_point_test_say
         let robot = dead_column(factor * p_cr);
         let solution = collocation::solve(&robot, &nearest()).unwrap();
         let modes = vibration(&robot, &solution).unwrap();
-        eprintln!("{factor}: {:?}", &modes.eigenvalues[..6.min(modes.eigenvalues.len())]);
         assert_eq!(solution.report.stability.is_stable(), stable, "{factor}");
         match (&modes.stability, stable) {
             (Stability::Stable, true) => {}
@@ -94,4 +93,90 @@ fn the_dead_load_column_diverges_past_euler_load_as_the_conjugate_point_test_say
             (other, _) => panic!("{factor} P_cr: {other}"),
         }
     }
+}
+
+/// Beck's column: the clamped rod under a follower compressive tip force `p` (N), which
+/// stays tangent to the tip.
+fn beck(p: f64) -> Robot {
+    rod().with_loads(Loads::none().with_follower_tip_force(Vector3::new(0.0, 0.0, -p)))
+}
+
+/// The verdict of Beck's column at P L^2 / EI = `load` on a fixed mesh of `intervals`.
+fn beck_verdict(load: f64, intervals: usize) -> Stability {
+    let robot = beck(load * ei() / (LENGTH * LENGTH));
+    let options = Options {
+        intervals,
+        tolerance: None,
+        ..Default::default()
+    };
+    let solution = collocation::solve(&robot, &options).unwrap();
+    // The follower force keeps the column straight: 1e-12 m, rounding.
+    assert!(solution.tip_position().x.abs() < 1e-12 && solution.tip_position().y.abs() < 1e-12);
+    let modes = vibration(&robot, &solution).unwrap();
+    assert_eq!(
+        modes.stability, solution.report.stability,
+        "the solve's verdict is the vibration's"
+    );
+    modes.stability
+}
+
+#[test]
+fn becks_column_loses_stability_by_flutter_at_20_05() {
+    // The flutter load of Beck's column (Euler-Bernoulli, uniform mass): P L^2 / EI =
+    // 20.051. Bisection on the verdict, on 64 intervals.
+    let (mut lo, mut hi) = (15.0, 25.0);
+    assert!(beck_verdict(lo, 64).is_stable());
+    for _ in 0..14 {
+        let mid = 0.5 * (lo + hi);
+        match beck_verdict(mid, 64) {
+            Stability::Stable => lo = mid,
+            Stability::Growing {
+                growth: Growth::Flutter { .. },
+                ..
+            } => hi = mid,
+            other => panic!("Beck's column at {mid}: {other}"),
+        }
+    }
+    eprintln!("Beck's column flutters at P L^2 / EI = {lo:.5}..{hi:.5}");
+    // 1 %: the bound (the mass's O(h^2) interpolation and rotary inertia move it
+    // far less, below)
+    assert!((0.5 * (lo + hi) / 20.051 - 1.0).abs() < 0.01);
+    // No divergence before flutter: the straight column is stable at 19.8 and flutters
+    // at 20.3 (1 % either side) with the default mesh, too.
+    assert!(beck_verdict(0.99 * 20.051, 16).is_stable());
+    assert!(matches!(
+        beck_verdict(1.01 * 20.051, 16),
+        Stability::Growing {
+            growth: Growth::Flutter { .. },
+            ..
+        }
+    ));
+}
+
+/// A bent robot under follower tip and distributed loads: collocation against shooting.
+#[test]
+fn follower_loads_agree_with_shooting() {
+    use tdcr::{Routing, Tendon, shooting};
+    let mut loads = Loads::none()
+        .with_follower_tip_force(Vector3::new(0.3, -0.1, -0.5))
+        .with_follower_tip_moment(Vector3::new(0.0, 0.02, 0.005));
+    loads.follower_distributed_force = tdcr::Field::Constant(Vector3::new(0.0, 0.4, 0.0));
+    let robot = rod()
+        .with_tendon(Tendon::new(Routing::straight(0.01, 0.0), 20.0))
+        .with_loads(loads);
+    // 128 intervals: the order-4 error is then about 1e-9 m (tests/cross_check.rs)
+    let c = collocation::solve(&robot, &Options::fixed(128)).unwrap();
+    let shooting_options = shooting::Options {
+        integration_tolerance: 1e-12,
+        ..Default::default()
+    };
+    let s = shooting::solve(&robot, &shooting_options).unwrap();
+    let d = (c.tip_position() - s.tip_position()).norm();
+    eprintln!("tip {:?}, collocation - shooting {d:e} m", c.tip_position());
+    // 1e-8 m: both solvers' tolerances, 1e-10 L and tighter
+    assert!(d < 1e-8, "{d}");
+    // The tip wrench balances the follower loads at the solution.
+    let e = tdcr::analysis::equilibrium::imbalance(&robot, &c);
+    // 1e-8: the equilibrium check's tolerance for converged solves
+    assert!(e.force < 1e-8 && e.moment < 1e-8, "{e:?}");
 }

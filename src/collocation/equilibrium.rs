@@ -98,7 +98,7 @@ pub(crate) fn stability_of(
     report: &mut SolveReport,
 ) -> Stability {
     if let Some(reason) = stability::non_conservative(&system.model) {
-        return linearized_dynamics(system, ws, x, exact || !ws.has_factors(), reason, report);
+        return linearized_dynamics(system, ws, x, reason, report);
     }
     if (exact || !ws.has_factors()) && !ws.linearize(system, x, report) {
         return Stability::Unknown {
@@ -115,7 +115,7 @@ pub(crate) fn stability_of(
 /// factored: [`Workspace::verdict_at`]).
 pub(crate) fn fresh_stability(system: &System, ws: &mut Workspace, x: &[State], report: &mut SolveReport) -> Stability {
     if let Some(reason) = stability::non_conservative(&system.model) {
-        return linearized_dynamics(system, ws, x, true, reason, report);
+        return linearized_dynamics(system, ws, x, reason, report);
     }
     let s: Vec<f64> = system.mesh.nodes.iter().map(|n| n.s).collect();
     ws.verdict_at(system, x, report, |values| stability::assess(values, &s))
@@ -125,22 +125,22 @@ pub(crate) fn fresh_stability(system: &System, ws: &mut Workspace, x: &[State], 
 }
 
 /// The verdict of the linearized dynamics ([`dynamics::assess`]) for loads that are not
-/// conservative (`why`: which load), with the factors of the Jacobian at `x` (evaluated
-/// and factored first when `refactor`; otherwise Newton's last, one step before `x`).
-/// Tendons with friction keep an `unknown` verdict: their capstan rows border the system
-/// and have no mass.
+/// conservative (`why`: which load), with the Jacobian at `x` evaluated and factored
+/// first: Newton's last Jacobian belongs to the iterate before `x`, which after a single
+/// step is the guess, where the internal forces (and with them the load's geometric
+/// stiffness) are still zero. Tendons with friction keep an `unknown` verdict: their capstan
+/// rows border the system and have no mass.
 fn linearized_dynamics(
     system: &System,
     ws: &mut Workspace,
     x: &[State],
-    refactor: bool,
     why: String,
     report: &mut SolveReport,
 ) -> Stability {
     if system.friction.is_some() {
         return Stability::Unknown { reason: why };
     }
-    if refactor && !ws.linearize(system, x, report) {
+    if !ws.linearize(system, x, report) {
         return Stability::Unknown {
             reason: "the Jacobian at the solution is singular or not finite".into(),
         };
