@@ -46,19 +46,23 @@ pub const DENSITY: f64 = 7850.0;
 /// Young's modulus (Pa) that turns stiffness into cross-section geometry when the rod was
 /// given by stiffnesses alone (steel's, to go with [`DENSITY`]).
 pub const MODULUS: f64 = 200e9;
-/// Krylov dimension: the number of Arnoldi steps (solves with the stored factors). The
-/// decisive modes are the lowest few; 40 resolve the lowest 10-15 to rounding on the robots
-/// of tests/properties.rs.
-const KRYLOV: usize = 40;
+/// Krylov dimension of a solve's verdict: the number of Arnoldi steps (solves with the
+/// stored factors). The decisive modes are the lowest few, which shift-invert at 0 makes
+/// the dominant ones; 16 resolve the lowest 2-4 (12 leave Beck's flutter pair unconverged).
+const KRYLOV: usize = 16;
+/// Krylov dimension of [`vibration`], which reports the lowest modes' eigenvalues: 24
+/// resolve the lowest 6-10 to rounding.
+const KRYLOV_MODES: usize = 24;
 /// A Ritz value counts as converged when its residual estimate is below this fraction of
 /// its magnitude.
 const CONVERGED: f64 = 1e-6;
 /// mu with |Im mu| above this fraction of |mu| is complex (flutter); Arnoldi's rounding on
 /// these non-normal pencils leaves 1e-10 and less on real ones.
 const COMPLEX: f64 = 1e-6;
-/// mu with Re mu below -this fraction of the largest converged |mu| (the stiff axial and
-/// torsional modes, 1e8-1e10 times the lowest bending ones) is negative (divergence);
-/// smaller ones are a neutral direction (a zero of the continuum, moved by rounding).
+/// mu with Re mu below -this fraction of 1e9 times the lowest mode's |mu| (about the
+/// stiffest retained modes, axial and torsional, 1e8-1e10 times the lowest bending ones) is
+/// negative (divergence); smaller ones are a neutral direction (a zero of the continuum,
+/// moved by rounding).
 const NEUTRAL: f64 = 1e-13;
 
 /// The 6 x 12 mass block of each interval (None for a jump): rows (v', u') of the link's
@@ -202,17 +206,18 @@ pub struct Vibration {
 /// does not solve its collocation system, a singular Jacobian; tendons with friction.
 pub fn vibration(robot: &Robot, solution: &Solution) -> crate::Result<Vibration> {
     let (system, states, mut ws) = Sensitivity::new(robot, solution)?.into_parts();
-    Ok(modes(&system, &states, &mut ws))
+    Ok(modes(&system, &states, &mut ws, KRYLOV_MODES, true))
 }
 
 /// The verdict of the linearized dynamics at the equilibrium `x` of `system`, with the
 /// factors of its Jacobian held in `ws` (Newton's at `x`, or at its last iterate).
 pub(crate) fn assess(system: &System, x: &[State], ws: &mut Workspace) -> Stability {
-    modes(system, x, ws).stability
+    modes(system, x, ws, KRYLOV, false).stability
 }
 
-/// [`assess`] with the eigenvalues.
-fn modes(system: &System, x: &[State], ws: &mut Workspace) -> Vibration {
+/// [`assess`] with the eigenvalues, from `krylov` Arnoldi steps; the residual of every Ritz
+/// value when `all`, else only of those the verdict rests on.
+fn modes(system: &System, x: &[State], ws: &mut Workspace, krylov: usize, all: bool) -> Vibration {
     let unknown = |reason: String| Vibration {
         stability: Stability::Unknown { reason },
         eigenvalues: Vec::new(),
@@ -235,7 +240,7 @@ fn modes(system: &System, x: &[State], ws: &mut Workspace) -> Vibration {
             None => false,
         }
     };
-    let Some(ritz) = arnoldi(&mut operator, n) else {
+    let Some(ritz) = arnoldi(&mut operator, n, krylov, all) else {
         return unknown("the Jacobian's factors gave no finite solve for the vibration modes".into());
     };
     classify(&ritz)
@@ -250,7 +255,12 @@ struct Ritz {
 /// Arnoldi on `operator` (y = J^-1 M z) from a generic start purified by two applications
 /// (which removes the components along M's kernel, the infinite mu): the Ritz values and
 /// their residual estimates |h_(m+1,m) y_m|. None if a solve fails.
-fn arnoldi(operator: &mut impl FnMut(&[f64], &mut Vec<f64>) -> bool, n: usize) -> Option<Vec<Ritz>> {
+fn arnoldi(
+    operator: &mut impl FnMut(&[f64], &mut Vec<f64>) -> bool,
+    n: usize,
+    krylov: usize,
+    all: bool,
+) -> Option<Vec<Ritz>> {
     let mut q: Vec<f64> = (0..n)
         .map(|i| (i as f64 * 0.618_033_988_749_895).fract() - 0.5)
         .collect();
@@ -266,7 +276,7 @@ fn arnoldi(operator: &mut impl FnMut(&[f64], &mut Vec<f64>) -> bool, n: usize) -
         return None;
     }
     q.iter_mut().for_each(|v| *v /= norm);
-    let m_max = KRYLOV.min(n);
+    let m_max = krylov.min(n);
     let mut basis = vec![q];
     let mut h = DMatrix::<f64>::zeros(m_max + 1, m_max);
     let mut m = 0;
@@ -297,16 +307,34 @@ fn arnoldi(operator: &mut impl FnMut(&[f64], &mut Vec<f64>) -> bool, n: usize) -
     let hm = h.view((0, 0), (m, m)).into_owned();
     let beta = h[(m, m - 1)];
     let values = hm.complex_eigenvalues();
+    let largest = values.iter().map(|t| t.norm()).fold(0.0f64, f64::max);
     let hc = hm.map(|v| Complex::new(v, 0.0));
+    // Residual estimates cost a complex LU each: unless `all`, only for the Ritz values a
+    // verdict rests on, the lowest mode and any that grows ([`grows`]).
     Some(
         values
             .iter()
             .map(|&theta| Ritz {
                 theta,
-                residual: beta * last_component(&hc, theta),
+                residual: if all || theta.norm() >= (1.0 - 1e-9) * largest || grows(theta, largest) {
+                    beta * last_component(&hc, theta)
+                } else {
+                    f64::INFINITY
+                },
             })
             .collect(),
     )
+}
+
+/// Whether the mode of the Ritz value `theta` (= 1 / mu) grows: mu complex (flutter) or
+/// negative beyond the neutral band (divergence); `largest` is the largest |theta| (the
+/// lowest mode), the stiffest mode's |mu| being at least 1 / the smallest retained.
+fn grows(theta: Complex<f64>, largest: f64) -> bool {
+    if theta.norm() <= 1e-9 * largest {
+        return false;
+    }
+    let mu = theta.inv();
+    mu.im.abs() > COMPLEX * mu.norm() || mu.re < -NEUTRAL * 1e9 / largest
 }
 
 /// |y_m| of the unit eigenvector y of `h` for its eigenvalue `theta`, by two steps of
@@ -352,18 +380,12 @@ fn classify(ritz: &[Ritz]) -> Vibration {
             eigenvalues: Vec::new(),
         };
     }
-    let mu_scale = converged.iter().map(|r| 1.0 / r.theta.norm()).fold(0.0f64, f64::max);
     let mut worst: Option<(Growth, f64)> = None;
-    for r in &converged {
+    for r in converged.iter().filter(|r| grows(r.theta, largest)) {
         let mu = r.theta.inv();
-        let flutter = mu.im.abs() > COMPLEX * mu.norm();
-        let divergence = !flutter && mu.re < -NEUTRAL * mu_scale;
-        if !(flutter || divergence) {
-            continue;
-        }
         let lambda = (-mu).sqrt();
         let rate = lambda.re.abs();
-        let growth = if flutter {
+        let growth = if mu.im.abs() > COMPLEX * mu.norm() {
             Growth::Flutter {
                 frequency: lambda.im.abs() / (2.0 * std::f64::consts::PI),
             }

@@ -191,15 +191,15 @@ fn direct(
     (acceptable(system, &verdict), worst)
 }
 
-/// Whether a state with this verdict may be the answer without a path: only a stable one,
-/// or, where the loads admit no conjugate-point verdict, one of unknown stability.
+/// Whether a state with this verdict may be the answer without a path: only a stable one
+/// (by the conjugate-point test, or for loads that are not conservative by the linearized
+/// dynamics), or, where the loads admit neither verdict (tendons with friction and a
+/// non-conservative load), one of unknown stability.
 fn acceptable(system: &System, verdict: &Stability) -> bool {
     match verdict {
         Stability::Stable => true,
-        Stability::Unstable { .. } => false,
-        // A non-conservative load's verdict: a static path cannot choose among states by
-        // their dynamics (docs/stability.md), so Newton's state stands with its verdict.
-        Stability::Growing { .. } | Stability::Unknown { .. } => stability::non_conservative(&system.model).is_some(),
+        Stability::Unstable { .. } | Stability::Growing { .. } => false,
+        Stability::Unknown { .. } => stability::non_conservative(&system.model).is_some(),
     }
 }
 
