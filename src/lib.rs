@@ -78,7 +78,7 @@ pub use model::routing::{Routing, RoutingPoint};
 pub use model::tendon::{Actuation, Friction, Motion, Tendon};
 pub use nalgebra;
 pub use report::{
-    ErrorEstimate, Evaluations, Iteration, Method, PathTaken, SolveReport, Stability, Termination, Timings,
+    ErrorEstimate, Evaluations, Growth, Iteration, Method, PathTaken, SolveReport, Stability, Termination, Timings,
 };
 pub use solution::{Node, Solution, State, TendonState};
 

@@ -123,6 +123,15 @@ pub enum Stability {
         /// Arc length of the conjugate point nearest the tip (m).
         conjugate_point: f64,
     },
+    /// Loads that are not conservative (a dead moment in 3D, a follower load): the
+    /// linearized dynamics about the state has a growing mode (docs/stability.md, "Loads that
+    /// are not conservative"), a disturbance grows like exp(rate t).
+    Growing {
+        /// How the fastest mode grows: without oscillating, or oscillating.
+        growth: Growth,
+        /// Its growth rate Re(lambda) (1/s), for the mass of [`DENSITY`](crate::collocation::DENSITY).
+        rate: f64,
+    },
     /// The test does not apply or could not be carried out.
     Unknown {
         /// Why.
@@ -130,12 +139,37 @@ pub enum Stability {
     },
 }
 
+/// How the fastest-growing mode of the linearized dynamics grows
+/// ([`Stability::Growing`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Growth {
+    /// A real eigenvalue lambda > 0: the state creeps away without oscillating (it buckles
+    /// or snaps), as a conservative system's unstable state does.
+    Divergence,
+    /// A complex pair with Re lambda > 0: oscillations of growing amplitude, which only
+    /// non-conservative loads (a follower force) cause.
+    Flutter {
+        /// The oscillation's frequency Im(lambda) / (2 pi) (Hz).
+        frequency: f64,
+    },
+}
+
+impl Growth {
+    /// `"divergence"` or `"flutter"`.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Growth::Divergence => "divergence",
+            Growth::Flutter { .. } => "flutter",
+        }
+    }
+}
+
 impl Stability {
     /// `"stable"`, `"unstable"` or `"unknown"`.
     pub fn verdict(&self) -> &'static str {
         match self {
             Stability::Stable => "stable",
-            Stability::Unstable { .. } => "unstable",
+            Stability::Unstable { .. } | Stability::Growing { .. } => "unstable",
             Stability::Unknown { .. } => "unknown",
         }
     }
@@ -159,6 +193,13 @@ impl fmt::Display for Stability {
                 if *directions == 1 { "" } else { "s" },
                 conjugate_point * 1e3
             ),
+            Stability::Growing { growth, rate } => match growth {
+                Growth::Divergence => write!(f, "UNSTABLE (divergence, growth rate {rate:.4e} 1/s)"),
+                Growth::Flutter { frequency } => write!(
+                    f,
+                    "UNSTABLE (flutter, growth rate {rate:.4e} 1/s at {frequency:.4e} Hz)"
+                ),
+            },
             Stability::Unknown { reason } => write!(f, "stability unknown: {reason}"),
         }
     }

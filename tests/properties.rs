@@ -1,6 +1,7 @@
 //! Property tests over random physical robots at default settings: collocation either
 //! returns a solution that is in global equilibrium, has orthonormal rotations and finite
-//! values everywhere, a positive semi-definite tip compliance when it is reported stable, and is within its tolerance of a 4x finer mesh with an error estimate
+//! values everywhere, a positive semi-definite tip compliance when it is reported stable, the
+//! same verdict from the linearized dynamics as from the conjugate-point test, and is within its tolerance of a 4x finer mesh with an error estimate
 //! that is never below a third of the true error, or a typed error. Never a panic.
 //!
 //! CI runs 300 cases (about 20 s). The long run (10 000 cases, about 5 minutes in release;
@@ -85,6 +86,34 @@ struct Accuracy {
     within: bool,
 }
 
+/// Counts of (stable, unstable) states whose two verdicts agreed.
+static AGREED: [AtomicUsize; 2] = [AtomicUsize::new(0), AtomicUsize::new(0)];
+
+/// The verdict of the linearized dynamics agrees with the conjugate-point test's: stable
+/// with stable, divergence with unstable (a conservative system cannot flutter).
+fn agree_with_dynamics(robot: &Robot, solution: &tdcr::Solution) -> Result<(), TestCaseError> {
+    let modes = collocation::vibration(robot, solution).map_err(|e| TestCaseError::fail(format!("vibration: {e}")))?;
+    use tdcr::{Growth, Stability};
+    match (&solution.report.stability, &modes.stability) {
+        (Stability::Stable, Stability::Stable) => AGREED[0].fetch_add(1, Ordering::Relaxed),
+        (
+            Stability::Unstable { .. },
+            Stability::Growing {
+                growth: Growth::Divergence,
+                ..
+            },
+        ) => AGREED[1].fetch_add(1, Ordering::Relaxed),
+        (Stability::Unknown { .. }, _) => 0,
+        (a, b) => {
+            return Err(TestCaseError::fail(format!(
+                "conjugate points say {a}, the linearized dynamics {b} (eigenvalues {:?})",
+                &modes.eigenvalues[..modes.eigenvalues.len().min(4)]
+            )));
+        }
+    };
+    Ok(())
+}
+
 /// Checks the property for one robot; returns its accuracy if it was solved.
 fn check(robot: &Robot) -> Result<Option<Accuracy>, TestCaseError> {
     let length = robot.length();
@@ -142,6 +171,17 @@ fn check(robot: &Robot) -> Result<Option<Accuracy>, TestCaseError> {
             eig.min() >= -1e-6 * eig.amax(),
             "stable but compliance eigenvalues {eig:?}"
         );
+    }
+    // The linearized dynamics (docs/stability.md, "Loads that are not conservative") agrees
+    // with the conjugate-point test on these conservative loads: on the default answer
+    // and on Newton's nearest equilibrium, which is unstable for some robots.
+    agree_with_dynamics(robot, &solution)?;
+    let nearest = collocation::Options {
+        equilibrium: collocation::Equilibrium::Nearest,
+        ..Default::default()
+    };
+    if let Ok(other) = collocation::solve(robot, &nearest) {
+        agree_with_dynamics(robot, &other)?;
     }
     // Agreement with a mesh 4x finer (its error is 256x smaller at order 4): within 3x the
     // tolerance on every robot, and never more than 3x the solver's own estimate where the
@@ -207,6 +247,11 @@ fn run(cases: u32, band: (f64, f64)) {
         .unwrap();
     let solved = solved.load(Ordering::Relaxed);
     eprintln!("{solved} of {cases} random robots solved, the rest returned typed errors");
+    let agreed = AGREED.each_ref().map(|a| a.load(Ordering::Relaxed));
+    eprintln!(
+        "the linearized dynamics agreed with the conjugate-point test on {} stable and {} unstable states",
+        agreed[0], agreed[1]
+    );
     let accuracy = accuracy.into_inner().unwrap();
     let within = accuracy.iter().filter(|a| a.within).count();
     let mut ratios: Vec<f64> = accuracy

@@ -95,11 +95,19 @@ pub fn report_state<'py>(py: Python<'py>, r: &SolveReport) -> PyResult<Bound<'py
             conjugate_point,
         } => (Some(*directions), Some(*conjugate_point), None),
         Stability::Unknown { reason } => (None, None, Some(reason.clone())),
+        Stability::Growing { .. } => (None, None, None),
     };
     d.set_item(
         "stability",
         (r.stability.verdict(), directions, conjugate_point, reason),
     )?;
+    if let Stability::Growing { growth, rate } = &r.stability {
+        let frequency = match growth {
+            tdcr::Growth::Flutter { frequency } => Some(*frequency),
+            tdcr::Growth::Divergence => None,
+        };
+        d.set_item("growth", (growth.name(), *rate, frequency))?;
+    }
     d.set_item(
         "path",
         (r.path.name(), r.path.folds().to_vec(), r.path.bifurcations().to_vec()),
@@ -176,6 +184,15 @@ pub fn report_from(d: &Bound<'_, PyDict>) -> PyResult<SolveReport> {
             conjugate_point,
         },
         ("unknown", _, _, Some(reason)) => Stability::Unknown { reason },
+        ("unstable", None, None, _) => {
+            let (name, rate, frequency): (String, f64, Option<f64>) = field(d, "growth")?;
+            let growth = match (name.as_str(), frequency) {
+                ("divergence", _) => tdcr::Growth::Divergence,
+                ("flutter", Some(frequency)) => tdcr::Growth::Flutter { frequency },
+                _ => return Err(bad("growth")),
+            };
+            Stability::Growing { growth, rate }
+        }
         _ => return Err(bad("stability")),
     };
     let (path, folds, bifurcations): (String, Vec<f64>, Vec<f64>) = field(d, "path")?;

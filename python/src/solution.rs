@@ -273,6 +273,23 @@ fn stability_parts(stability: &Stability) -> (Option<usize>, Option<f64>, Option
             conjugate_point,
         } => (Some(*directions), Some(*conjugate_point), None),
         Stability::Unknown { reason } => (None, None, Some(reason)),
+        Stability::Growing { .. } => (None, None, None),
+    }
+}
+
+/// How an unstable state of non-conservative loads grows: ("divergence" or "flutter", the
+/// growth rate in 1/s, the flutter frequency in Hz or None); None for any other verdict.
+fn growth_parts(stability: &Stability) -> Option<(&'static str, f64, Option<f64>)> {
+    match stability {
+        Stability::Growing { growth, rate } => Some((
+            growth.name(),
+            *rate,
+            match growth {
+                tdcr::Growth::Flutter { frequency } => Some(*frequency),
+                tdcr::Growth::Divergence => None,
+            },
+        )),
+        _ => None,
     }
 }
 
@@ -431,9 +448,12 @@ impl PySolveReport {
     }
 
     /// The verdict with its details: `{"verdict", "unstable_directions",
-    /// "conjugate_point_s", "reason"}`: the number of unstable directions (0 when stable,
-    /// None when unknown), the arc length of the conjugate point nearest the tip (m; None
-    /// unless unstable) and why the verdict is unknown (None otherwise).
+    /// "conjugate_point_s", "reason", "growth", "growth_rate", "flutter_frequency"}`: the
+    /// number of unstable directions (0 when stable, None when unknown or from the
+    /// linearized dynamics), the arc length of the conjugate point nearest the tip (m; None
+    /// unless unstable by the conjugate-point test), why the verdict is unknown (None
+    /// otherwise), and for non-conservative loads' unstable states "divergence" or
+    /// "flutter", the growth rate (1/s) and a flutter's frequency (Hz); else None.
     #[getter]
     fn stability_detail<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let (directions, conjugate_point, reason) = stability_parts(&self.report.stability);
@@ -442,6 +462,10 @@ impl PySolveReport {
         d.set_item("unstable_directions", directions)?;
         d.set_item("conjugate_point_s", conjugate_point)?;
         d.set_item("reason", reason)?;
+        let growth = growth_parts(&self.report.stability);
+        d.set_item("growth", growth.map(|g| g.0))?;
+        d.set_item("growth_rate", growth.map(|g| g.1))?;
+        d.set_item("flutter_frequency", growth.and_then(|g| g.2))?;
         Ok(d)
     }
 

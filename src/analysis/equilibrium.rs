@@ -107,8 +107,11 @@ pub fn imbalance(robot: &Robot, solution: &Solution) -> Equilibrium {
 
     // Tip and point wrenches.
     let tip = solution.tip();
-    let mut force = loads.tip_force;
-    let mut moment = loads.tip_moment + (tip.p - p0).cross(&loads.tip_force);
+    // Follower tip wrench: fixed in the tip body frame.
+    let tip_force = loads.tip_force + tip.R * loads.follower_tip_force;
+    let tip_moment = loads.tip_moment + tip.R * loads.follower_tip_moment;
+    let mut force = tip_force;
+    let mut moment = tip_moment + (tip.p - p0).cross(&tip_force);
     let mut point_force_sum = 0.0;
     let mut point_moment_sum = 0.0;
     for load in &loads.point {
@@ -132,9 +135,10 @@ pub fn imbalance(robot: &Robot, solution: &Solution) -> Equilibrium {
         for (x, w) in GAUSS_X.iter().zip(GAUSS_W) {
             let s = mid + half * x;
             let weight = w * half;
-            let f_e = loads.distributed_force.at(s);
+            let at = solution.at(s);
+            let f_e = loads.distributed_force.at(s) + at.R * loads.follower_distributed_force.at(s);
             let l_e = loads.distributed_moment.at(s);
-            let p = solution.at(s).p;
+            let p = at.p;
             f_int += f_e * weight;
             moment += ((p - p0).cross(&f_e) + l_e) * weight;
             f_abs += f_e.norm() * weight;
@@ -154,10 +158,10 @@ pub fn imbalance(robot: &Robot, solution: &Solution) -> Equilibrium {
         tension_sum += tendon.tension();
     }
 
-    let force_scale = [loads.tip_force.norm(), tension_sum, f_abs, point_force_sum]
+    let force_scale = [tip_force.norm(), tension_sum, f_abs, point_force_sum]
         .into_iter()
         .fold(0.0, f64::max);
-    let moment_scale = force_scale * length + loads.tip_moment.norm() + point_moment_sum + l_abs;
+    let moment_scale = force_scale * length + tip_moment.norm() + point_moment_sum + l_abs;
     let force_scale = if force_scale > 0.0 {
         force_scale
     } else {
@@ -229,6 +233,7 @@ mod tests {
                 tip_force,
                 tip_moment,
                 point: vec![point],
+                ..Loads::none()
             });
         let mut solution = arc(length, kappa, 64);
         // Exact integrals on the arc p(s) = ((1 - cos ks) / k, 0, sin(ks) / k).

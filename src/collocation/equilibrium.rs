@@ -8,8 +8,8 @@ use super::newton::{self, Settings, Workspace};
 use super::options::{Equilibrium, Options};
 use super::path;
 use super::pipeline::not_converged;
-use super::stability;
 use super::system::System;
+use super::{dynamics, stability};
 use crate::error::Result;
 use crate::mesh::guess;
 use crate::report::{PathTaken, SolveReport, Stability, Termination};
@@ -98,7 +98,7 @@ pub(crate) fn stability_of(
     report: &mut SolveReport,
 ) -> Stability {
     if let Some(reason) = stability::non_conservative(&system.model) {
-        return Stability::Unknown { reason };
+        return linearized_dynamics(system, ws, x, reason, report);
     }
     if (exact || !ws.has_factors()) && !ws.linearize(system, x, report) {
         return Stability::Unknown {
@@ -115,13 +115,37 @@ pub(crate) fn stability_of(
 /// factored: [`Workspace::verdict_at`]).
 pub(crate) fn fresh_stability(system: &System, ws: &mut Workspace, x: &[State], report: &mut SolveReport) -> Stability {
     if let Some(reason) = stability::non_conservative(&system.model) {
-        return Stability::Unknown { reason };
+        return linearized_dynamics(system, ws, x, reason, report);
     }
     let s: Vec<f64> = system.mesh.nodes.iter().map(|n| n.s).collect();
     ws.verdict_at(system, x, report, |values| stability::assess(values, &s))
         .unwrap_or_else(|| Stability::Unknown {
             reason: "the Jacobian at the solution is not finite".into(),
         })
+}
+
+/// The verdict of the linearized dynamics ([`dynamics::assess`]) for loads that are not
+/// conservative (`why`: which load), with the Jacobian at `x` evaluated and factored
+/// first: Newton's last Jacobian belongs to the iterate before `x`, which after a single
+/// step is the guess, where the internal forces (and with them the load's geometric
+/// stiffness) are still zero. Tendons with friction keep an `unknown` verdict: their capstan
+/// rows border the system and have no mass.
+fn linearized_dynamics(
+    system: &System,
+    ws: &mut Workspace,
+    x: &[State],
+    why: String,
+    report: &mut SolveReport,
+) -> Stability {
+    if system.friction.is_some() {
+        return Stability::Unknown { reason: why };
+    }
+    if !ws.linearize(system, x, report) {
+        return Stability::Unknown {
+            reason: "the Jacobian at the solution is singular or not finite".into(),
+        };
+    }
+    dynamics::assess(system, x, ws)
 }
 
 /// Newton from `x`, given only the chance to converge cleanly ([`clean`]) unless
@@ -167,12 +191,14 @@ fn direct(
     (acceptable(system, &verdict), worst)
 }
 
-/// Whether a state with this verdict may be the answer without a path: only a stable one,
-/// or, where the loads admit no conjugate-point verdict, one of unknown stability.
+/// Whether a state with this verdict may be the answer without a path: only a stable one
+/// (by the conjugate-point test, or for loads that are not conservative by the linearized
+/// dynamics), or, where the loads admit neither verdict (tendons with friction and a
+/// non-conservative load), one of unknown stability.
 fn acceptable(system: &System, verdict: &Stability) -> bool {
     match verdict {
         Stability::Stable => true,
-        Stability::Unstable { .. } => false,
+        Stability::Unstable { .. } | Stability::Growing { .. } => false,
         Stability::Unknown { .. } => stability::non_conservative(&system.model).is_some(),
     }
 }

@@ -32,6 +32,7 @@
 
 pub(crate) mod actuation;
 mod branch;
+mod dynamics;
 mod equilibrium;
 mod estimate;
 pub(crate) mod friction;
@@ -56,6 +57,7 @@ use crate::error::Result;
 pub use crate::mesh::guess::InitialGuess;
 use crate::mesh::guess::interpolate;
 use crate::solution::Solution;
+pub use dynamics::{DENSITY, MODULUS, Vibration, vibration};
 pub use linear::LinearSolver;
 pub use options::{DEFAULT_TOLERANCE, Equilibrium, MAX_INTERVALS, MAX_ITERATIONS, Options};
 use pipeline::{Level, record_estimate, segment_ends, solve_impl};

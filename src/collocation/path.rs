@@ -89,7 +89,7 @@ pub(super) fn index(system: &System, ws: &mut Workspace, report: &mut SolveRepor
     match verdict {
         Stability::Stable => Some(0),
         Stability::Unstable { directions, .. } => Some(directions),
-        Stability::Unknown { .. } => None,
+        Stability::Growing { .. } | Stability::Unknown { .. } => None,
     }
 }
 

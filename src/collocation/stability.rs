@@ -33,13 +33,18 @@ type M12x6 = SMatrix<f64, 12, 6>;
 /// column) by up to 5e-8 L (measured: 2e-8 to 5e-8 L).
 const NEUTRAL: f64 = 1e-6;
 
-/// Why stability cannot be decided for the loads of `model` (its robot's, with a traced
-/// parameter's value), if it cannot: the test needs conservative loading. Constant tensions
-/// and dead forces are conservative; a dead moment (tip, point or distributed) is not in 3D
-/// in general (its work depends on the path of the rotation).
+/// Why the conjugate-point test cannot decide stability for the loads of `model` (its
+/// robot's, with a traced parameter's value), if it cannot: the test needs conservative
+/// loading. Constant tensions and dead forces are conservative; a dead moment (tip, point or
+/// distributed) is not in 3D in general (its work depends on the path of the rotation), nor
+/// is a follower load (its work depends on the path of the rod). Their verdict comes from
+/// the linearized dynamics instead (collocation/dynamics.rs).
 pub fn non_conservative(model: &Model) -> Option<String> {
     let robot = model.robot;
     let loads = &robot.loads;
+    if loads.has_follower(robot.length()) {
+        return Some("a follower load is not conservative".into());
+    }
     let mut tip_moment = loads.tip_moment;
     if let Some((Parameter::TipMoment(c), value)) = model.parameter {
         tip_moment[c] = value;

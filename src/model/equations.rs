@@ -43,6 +43,9 @@ pub struct Site {
     pub f_e: Vector3<f64>,
     /// l_e: external distributed moment (N m/m), world frame, times the load factor.
     pub l_e: Vector3<f64>,
+    /// Follower force per unit length (N/m), body frame, times the load factor: it adds
+    /// to R^T f_e in eq. 13 and does not turn with a perturbation of R.
+    pub f_follower: Vector3<f64>,
 }
 
 /// Which tendons take part in a sum.
@@ -146,6 +149,7 @@ impl<'a> Model<'a> {
                 f * self.load_factor
             },
             l_e: loads.distributed_moment.at(s) * self.load_factor,
+            f_follower: loads.follower_distributed_force.at(s) * self.load_factor,
         }
     }
 
@@ -294,6 +298,15 @@ impl Model<'_> {
         (f * self.load_factor, l * self.load_factor)
     }
 
+    /// The follower tip force and moment (tip body frame, N and N m), times the load factor.
+    pub fn follower_tip(&self) -> (Vector3<f64>, Vector3<f64>) {
+        let loads = &self.robot.loads;
+        (
+            loads.follower_tip_force * self.load_factor,
+            loads.follower_tip_moment * self.load_factor,
+        )
+    }
+
     /// Imbalance of the point-load condition at s (jump conditions and tip boundary
     /// condition, docs/model.md section 5):
     ///
@@ -321,6 +334,12 @@ impl Model<'_> {
         let (fe, me) = self.tendon_pull(s, Which::EndingAt(s), Ra, va, ua)?;
         dn += fe;
         dm += me;
+        if right.is_none() && s == self.robot.length() {
+            // Follower tip wrench: fixed in the tip body frame, R(L) times it in the world.
+            let (f_b, l_b) = self.follower_tip();
+            dn -= *Ra * lift::<T>(&f_b);
+            dm -= *Ra * lift::<T>(&l_b);
+        }
         if let Some((site_b, Rb, vb, ub)) = right {
             let (nb, mb) = self.internal_wrench(site_b, Rb, vb, ub);
             dn -= nb;

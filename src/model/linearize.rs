@@ -10,10 +10,10 @@
 //! Write the unknown rates as x = (x_v, x_u) = (v', u'). Eq. 13 is the linear system
 //! M x = rhs, or F(x; R, v, u) = M x - rhs = 0 with
 //! ```text
-//! F_v = D x_v + (u^ D + D')(v - v*) - D v*' + R^T f_e + sum_i q_i
+//! F_v = D x_v + (u^ D + D')(v - v*) - D v*' + R^T f_e + f_f + sum_i q_i
 //! F_u = C x_u + (u^ C + C')(u - u*) - C u*' + v^ D (v - v*) + R^T l_e + sum_i r_i x q_i
 //! ```
-//! where, per tendon i (body frame, symbols of docs/model.md section 4),
+//! (f_f the follower force per length, body frame: it does not turn with R), where, per tendon i (body frame, symbols of docs/model.md section 4),
 //! ```text
 //! p_i  = u x r_i + r_i' + v             (p_i^b', the tendon path tangent)
 //! e_i  = p_i + r_i'
@@ -420,7 +420,8 @@ fn assemble(
         count += 1;
     }
 
-    let rhs_v = reference.v_star_s.component_mul(kse) - u.cross(&n_b) - dv.component_mul(kse_s) - f_b - a;
+    let rhs_v =
+        reference.v_star_s.component_mul(kse) - u.cross(&n_b) - dv.component_mul(kse_s) - f_b - site.f_follower - a;
     let rhs_u =
         reference.u_star_s.component_mul(kbt) - u.cross(&m_b) - du.component_mul(kbt_s) - v.cross(&n_b) - l_b - b;
     let mut M = Matrix6::<f64>::zeros();

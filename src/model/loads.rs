@@ -1,5 +1,7 @@
 //! External loads: distributed force and moment per unit length, tip and interior point
-//! wrenches. All in the world frame.
+//! wrenches, all in the world frame (dead loads); and follower loads, fixed in the body
+//! frame, which turn with the rod (a tip force that follows the tip, a pressure-like force
+//! per length), which are not conservative (docs/stability.md).
 
 use nalgebra::Vector3;
 use std::fmt;
@@ -57,6 +59,13 @@ pub struct Loads {
     pub tip_moment: Vector3<f64>,
     /// Point wrenches at interior arc lengths.
     pub point: Vec<PointLoad>,
+    /// Follower force at the tip (N), tip body frame: n(L) gains R(L) times it.
+    pub follower_tip_force: Vector3<f64>,
+    /// Follower moment at the tip (N m), tip body frame: m(L) gains R(L) times it.
+    pub follower_tip_moment: Vector3<f64>,
+    /// Follower force per unit length (N/m), body frame at s: the distributed force
+    /// R(s) times it (a pressure-like load that turns with the cross-section).
+    pub follower_distributed_force: Field,
 }
 
 impl Default for Loads {
@@ -74,6 +83,9 @@ impl Loads {
             tip_force: Vector3::zeros(),
             tip_moment: Vector3::zeros(),
             point: Vec::new(),
+            follower_tip_force: Vector3::zeros(),
+            follower_tip_moment: Vector3::zeros(),
+            follower_distributed_force: Field::Constant(Vector3::zeros()),
         }
     }
 
@@ -89,6 +101,26 @@ impl Loads {
     pub fn with_tip_force(mut self, force: Vector3<f64>) -> Self {
         self.tip_force = force;
         self
+    }
+
+    /// The same loads plus a follower tip force (N, tip body frame).
+    pub fn with_follower_tip_force(mut self, force: Vector3<f64>) -> Self {
+        self.follower_tip_force = force;
+        self
+    }
+
+    /// The same loads plus a follower tip moment (N m, tip body frame).
+    pub fn with_follower_tip_moment(mut self, moment: Vector3<f64>) -> Self {
+        self.follower_tip_moment = moment;
+        self
+    }
+
+    /// Whether any follower load is present (the distributed one sampled at the ends and
+    /// midpoints of every interval of a 64-interval grid over `length`).
+    pub fn has_follower(&self, length: f64) -> bool {
+        self.follower_tip_force != Vector3::zeros()
+            || self.follower_tip_moment != Vector3::zeros()
+            || (0..=128).any(|i| self.follower_distributed_force.at(length * i as f64 / 128.0) != Vector3::zeros())
     }
 
     /// The same loads plus a tip moment (N m, world frame).

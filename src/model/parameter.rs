@@ -293,6 +293,9 @@ fn scale_loads(robot: &mut Robot, factor: f64) {
     };
     loads.distributed_force = scale(&loads.distributed_force);
     loads.distributed_moment = scale(&loads.distributed_moment);
+    loads.follower_distributed_force = scale(&loads.follower_distributed_force);
+    loads.follower_tip_force *= factor;
+    loads.follower_tip_moment *= factor;
     loads.tip_force *= factor;
     loads.tip_moment *= factor;
     for p in &mut loads.point {

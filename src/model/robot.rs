@@ -287,10 +287,16 @@ impl Robot {
         let l = self.rod.length;
         check_vec("loads.tip_force", &self.loads.tip_force)?;
         check_vec("loads.tip_moment", &self.loads.tip_moment)?;
+        check_vec("loads.follower_tip_force", &self.loads.follower_tip_force)?;
+        check_vec("loads.follower_tip_moment", &self.loads.follower_tip_moment)?;
         for k in 0..=32 {
             let s = l * k as f64 / 32.0;
             check_vec("loads.distributed_force", &self.loads.distributed_force.at(s))?;
             check_vec("loads.distributed_moment", &self.loads.distributed_moment.at(s))?;
+            check_vec(
+                "loads.follower_distributed_force",
+                &self.loads.follower_distributed_force.at(s),
+            )?;
         }
         for (i, p) in self.loads.point.iter().enumerate() {
             if !(p.s.is_finite() && p.s > 0.0 && p.s <= l) {

@@ -30,6 +30,14 @@ pub struct SolverArgs {
     /// Tip moment (N m, world frame), replacing the file's.
     #[arg(long, value_name = "X,Y,Z", value_parser = parse_vector, allow_hyphen_values = true)]
     pub tip_moment: Option<[f64; 3]>,
+    /// Follower tip force (N, tip body frame: it turns with the tip), replacing the file's
+    /// `[loads] follower_tip_force`.
+    #[arg(long, value_name = "X,Y,Z", value_parser = parse_vector, allow_hyphen_values = true)]
+    pub follower_tip_force: Option<[f64; 3]>,
+    /// Follower tip moment (N m, tip body frame), replacing the file's
+    /// `[loads] follower_tip_moment`.
+    #[arg(long, value_name = "X,Y,Z", value_parser = parse_vector, allow_hyphen_values = true)]
+    pub follower_tip_moment: Option<[f64; 3]>,
     /// Solver, replacing the file's `[solver] method`.
     #[arg(long, value_enum)]
     pub method: Option<MethodArg>,

@@ -101,7 +101,7 @@ pub fn warn_equilibrium(name: &str, report: &tdcr::SolveReport) {
     for n in &report.notes {
         note(&format!("note: {name}: {n}"));
     }
-    if let tdcr::Stability::Unstable { .. } = report.stability {
+    if let tdcr::Stability::Unstable { .. } | tdcr::Stability::Growing { .. } = report.stability {
         note(&format!(
             "warning: {name}: the equilibrium returned is {}: a real robot would not stay in it",
             report.stability

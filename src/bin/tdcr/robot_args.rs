@@ -93,6 +93,12 @@ pub fn apply(file: &mut RobotFile, args: &SolverArgs) {
     if let Some(m) = args.tip_moment {
         robot.loads.tip_moment = m.into();
     }
+    if let Some(f) = args.follower_tip_force {
+        robot.loads.follower_tip_force = f.into();
+    }
+    if let Some(m) = args.follower_tip_moment {
+        robot.loads.follower_tip_moment = m.into();
+    }
     if let Some(corners) = args.corner_forces {
         robot.corner_forces = corners;
     }

@@ -233,6 +233,12 @@ impl<'a> Sensitivity<'a> {
         })
     }
 
+    /// The system, the solution's node states and the workspace holding the factors of the
+    /// Jacobian there (the linearized dynamics runs on them: collocation/dynamics.rs).
+    pub(crate) fn into_parts(self) -> (System<'a>, Vec<State>, Workspace) {
+        (self.system, self.states, self.workspace)
+    }
+
     /// The robot the system belongs to.
     pub fn robot(&self) -> &'a Robot {
         self.border.system().model.robot

@@ -75,6 +75,9 @@ pub(super) fn build(
                 moment: vector(&p.moment),
             })
             .collect(),
+        follower_tip_force: vector(&loads.follower_tip_force),
+        follower_tip_moment: vector(&loads.follower_tip_moment),
+        follower_distributed_force: Field::Constant(vector(&loads.follower_distributed_force)),
     };
     let mut robot = Robot::new(backbone)
         .with_loads(loads)

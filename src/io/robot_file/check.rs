@@ -178,6 +178,13 @@ impl Checker<'_> {
         self.vector("loads.distributed_moment", &loads.distributed_moment, " N m/m");
         self.vector("loads.tip_force", &loads.tip_force, " N");
         self.vector("loads.tip_moment", &loads.tip_moment, " N m");
+        self.vector("loads.follower_tip_force", &loads.follower_tip_force, " N");
+        self.vector("loads.follower_tip_moment", &loads.follower_tip_moment, " N m");
+        self.vector(
+            "loads.follower_distributed_force",
+            &loads.follower_distributed_force,
+            " N/m",
+        );
         for (i, p) in loads.point.iter().enumerate() {
             let path = format!("loads.point[{}]", i + 1);
             let s = format!("{path}.s");

@@ -142,6 +142,15 @@ pub(super) struct LoadsTable {
     pub(super) tip_force: Option<Vec3>,
     #[serde(default, deserialize_with = "vector")]
     pub(super) tip_moment: Option<Vec3>,
+    /// Follower tip force, tip body frame (N).
+    #[serde(default, deserialize_with = "vector")]
+    pub(super) follower_tip_force: Option<Vec3>,
+    /// Follower tip moment, tip body frame (N m).
+    #[serde(default, deserialize_with = "vector")]
+    pub(super) follower_tip_moment: Option<Vec3>,
+    /// Follower force per length, body frame (N/m).
+    #[serde(default, deserialize_with = "vector")]
+    pub(super) follower_distributed_force: Option<Vec3>,
     #[serde(default)]
     pub(super) point: Vec<PointTable>,
 }

@@ -108,6 +108,17 @@ fn document(file: &RobotFile) -> Result<String> {
     );
     loads.insert("tip_force".into(), vector(&loads_in.tip_force));
     loads.insert("tip_moment".into(), vector(&loads_in.tip_moment));
+    // Follower loads only when present, so files without them read as before.
+    if loads_in.follower_tip_force != Vector3::zeros() {
+        loads.insert("follower_tip_force".into(), vector(&loads_in.follower_tip_force));
+    }
+    if loads_in.follower_tip_moment != Vector3::zeros() {
+        loads.insert("follower_tip_moment".into(), vector(&loads_in.follower_tip_moment));
+    }
+    let follower = constant(&loads_in.follower_distributed_force, "follower_distributed_force")?;
+    if follower != Vector3::zeros() {
+        loads.insert("follower_distributed_force".into(), vector(&follower));
+    }
     let (points, disks) = split_disks(file);
     let points = points
         .iter()

@@ -6,7 +6,7 @@
 #![allow(non_snake_case)] // R, as the paper names it
 
 use crate::analysis::samples::{Sample, bending_angle, node_samples};
-use crate::report::{Stability, Termination};
+use crate::report::{Growth, Stability, Termination};
 use crate::{Solution, TendonState};
 use nalgebra::{Matrix3, Vector3};
 use serde::{Deserialize, Deserializer, Serialize};
@@ -107,6 +107,15 @@ pub(crate) struct StabilityEntry {
     pub conjugate_point_s: Option<Num>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub reason: Option<String>,
+    /// `divergence` or `flutter`: how an unstable state of non-conservative loads grows.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub growth: Option<String>,
+    /// Its growth rate (1/s).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub growth_rate: Option<Num>,
+    /// A flutter's frequency (Hz).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub flutter_frequency: Option<Num>,
     /// `direct`, `from_warm_start` or `load_path`.
     pub path: String,
     pub folds: Vec<Num>,
@@ -233,6 +242,18 @@ impl SolutionFile {
                 conjugate_point,
             } => (Some(*directions), Some(Num(*conjugate_point)), None),
             Stability::Unknown { reason } => (None, None, Some(reason.clone())),
+            Stability::Growing { .. } => (None, None, None),
+        };
+        let (growth, growth_rate, flutter_frequency) = match &report.stability {
+            Stability::Growing { growth, rate } => (
+                Some(growth.name().to_string()),
+                Some(Num(*rate)),
+                match growth {
+                    Growth::Flutter { frequency } => Some(Num(*frequency)),
+                    Growth::Divergence => None,
+                },
+            ),
+            _ => (None, None, None),
         };
         let (path, folds, bifurcations) = (report.path.name(), report.path.folds(), report.path.bifurcations());
         let numbers = |x: &[f64]| x.iter().map(|&x| Num(x)).collect();
@@ -257,6 +278,9 @@ impl SolutionFile {
                 unstable_directions,
                 conjugate_point_s,
                 reason,
+                growth,
+                growth_rate,
+                flutter_frequency,
                 path: path.into(),
                 folds: numbers(folds),
                 bifurcations: numbers(bifurcations),

@@ -324,8 +324,24 @@ impl SolutionFile {
                 conjugate_point,
             }),
             ("unknown", _, _, Some(reason)) => Ok(Stability::Unknown { reason: reason.clone() }),
+            ("unstable", None, None, _) if s.growth.is_some() => {
+                let rate = s.growth_rate.map_or(f64::NAN, |Num(r)| r);
+                match (s.growth.as_deref(), s.flutter_frequency) {
+                    (Some("divergence"), _) => Ok(Stability::Growing {
+                        growth: crate::report::Growth::Divergence,
+                        rate,
+                    }),
+                    (Some("flutter"), Some(Num(frequency))) => Ok(Stability::Growing {
+                        growth: crate::report::Growth::Flutter { frequency },
+                        rate,
+                    }),
+                    (growth, _) => Err(bad(format!(
+                        "has `stability.growth` {growth:?}: expected \"divergence\", or \"flutter\" with `flutter_frequency`"
+                    ))),
+                }
+            }
             (verdict, ..) => Err(bad(format!(
-                "has `stability.verdict` \"{verdict}\" without its details (\"stable\"; \"unstable\" with `unstable_directions` and `conjugate_point_s`; \"unknown\" with `reason`)"
+                "has `stability.verdict` \"{verdict}\" without its details (\"stable\"; \"unstable\" with `unstable_directions` and `conjugate_point_s`, or with `growth` and `growth_rate`; \"unknown\" with `reason`)"
             ))),
         }
     }
