@@ -205,6 +205,13 @@ pub struct Vibration {
 /// As [`crate::collocation::sensitivity::Sensitivity::new`]: an invalid robot, a solution that
 /// does not solve its collocation system, a singular Jacobian; tendons with friction.
 pub fn vibration(robot: &Robot, solution: &Solution) -> crate::Result<Vibration> {
+    if let Some(i) = robot.tendons.iter().position(|t| t.active_friction().is_some()) {
+        return Err(crate::error::invalid(
+            format!("tendon {} friction", i + 1),
+            "is set; the linearized dynamics does not include the capstan rows of tendons with friction",
+            "set the friction to 0 for a verdict of the frictionless robot",
+        ));
+    }
     let (system, states, mut ws) = Sensitivity::new(robot, solution)?.into_parts();
     Ok(modes(&system, &states, &mut ws, KRYLOV_MODES, true))
 }

@@ -58,6 +58,11 @@ impl<'r> Capstan<'r> {
         &mut self.system
     }
 
+    /// The collocation system, giving up the capstan rows.
+    pub(crate) fn into_system(self) -> System<'r> {
+        self.system
+    }
+
     /// Tendon `i`'s input tension (N): at the base entry for a tendon with friction (the
     /// model's own tension there is the delivered one), the model's otherwise.
     pub(crate) fn input_tension(&self, i: usize) -> f64 {

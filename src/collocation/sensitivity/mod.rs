@@ -87,6 +87,7 @@ pub use tip::{
 use crate::collocation::LinearSolver;
 use crate::collocation::friction::Capstan;
 use crate::collocation::newton::Workspace;
+use crate::collocation::system::System;
 use crate::collocation::unknowns::{self, TIP_ROWS, nonzeros, tip_row};
 use crate::error::{Result, invalid};
 use crate::mesh::Mesh;
@@ -235,8 +236,10 @@ impl<'a> Sensitivity<'a> {
 
     /// The system, the solution's node states and the workspace holding the factors of the
     /// Jacobian there (the linearized dynamics runs on them: collocation/dynamics.rs).
+    /// Without friction the factors are those of the whole system; with friction they are the
+    /// backbone block's only (the capstan rows are eliminated per solve).
     pub(crate) fn into_parts(self) -> (System<'a>, Vec<State>, Workspace) {
-        (self.system, self.states, self.workspace)
+        (self.border.into_system(), self.states, self.workspace)
     }
 
     /// The robot the system belongs to.
