@@ -162,6 +162,17 @@ impl Growth {
             Growth::Flutter { .. } => "flutter",
         }
     }
+
+    /// For flutter growing at `rate` (1/s), the modal damping ratio zeta above which
+    /// structural damping, which the model leaves out, outweighs the growth to first order:
+    /// damping moves a mode of angular frequency omega by -zeta omega, so it decays when
+    /// zeta > rate / omega (docs/stability.md). `None` for divergence, which no damping stops.
+    pub fn damping_to_suppress(&self, rate: f64) -> Option<f64> {
+        match self {
+            Growth::Divergence => None,
+            Growth::Flutter { frequency } => Some(rate / (2.0 * std::f64::consts::PI * frequency)),
+        }
+    }
 }
 
 impl Stability {
@@ -197,7 +208,9 @@ impl fmt::Display for Stability {
                 Growth::Divergence => write!(f, "UNSTABLE (divergence, growth rate {rate:.4e} 1/s)"),
                 Growth::Flutter { frequency } => write!(
                     f,
-                    "UNSTABLE (flutter, growth rate {rate:.4e} 1/s at {frequency:.4e} Hz)"
+                    "UNSTABLE (flutter of the undamped model, growth rate {rate:.4e} 1/s at {frequency:.4e} Hz; \
+                     a modal damping ratio above {:.2} % suppresses it)",
+                    100.0 * growth.damping_to_suppress(*rate).unwrap_or(f64::NAN)
                 ),
             },
             Stability::Unknown { reason } => write!(f, "stability unknown: {reason}"),
