@@ -169,23 +169,9 @@ impl Solution {
     /// As [`Solution::at`], choosing the left limit at a jump when `left` is set.
     pub fn at_limit(&self, s: f64, left: bool) -> State {
         let s = s.clamp(0.0, self.length());
-        let inside = |i: usize| {
-            let (a, b) = (self.nodes[i].s, self.nodes[i + 1].s);
-            b > a && if left { a < s && s <= b } else { a <= s && s < b }
-        };
-        let last = self.nodes.len() - 2;
-        let k = (0..=last)
-            .find(|&i| inside(i))
-            .unwrap_or(if left || s > 0.0 { last } else { 0 });
+        let (k, [h00, h10, h01, h11]) = self.hermite(s, left);
         let (a, b) = (&self.nodes[k], &self.nodes[k + 1]);
         let h = b.s - a.s;
-        let t = (s - a.s) / h;
-        let (h00, h10, h01, h11) = (
-            2.0 * t * t * t - 3.0 * t * t + 1.0,
-            t * t * t - 2.0 * t * t + t,
-            -2.0 * t * t * t + 3.0 * t * t,
-            t * t * t - t * t,
-        );
         let herm = |y0: Vector3<f64>, d0: Vector3<f64>, y1: Vector3<f64>, d1: Vector3<f64>| {
             y0 * h00 + d0 * (h10 * h) + y1 * h01 + d1 * (h11 * h)
         };
@@ -198,6 +184,28 @@ impl Solution {
             v: herm(a.v, a.v_s, b.v, b.v_s),
             u: herm(a.u, a.u_s, b.u, b.u_s),
         }
+    }
+
+    /// The interval k (nodes k and k + 1) that [`Solution::at_limit`] evaluates `s` (in
+    /// [0, L]) on, and the cubic Hermite weights there: of the value at node k, its rate
+    /// times the interval's length h, the value at node k + 1 and its rate times h.
+    pub(crate) fn hermite(&self, s: f64, left: bool) -> (usize, [f64; 4]) {
+        let inside = |i: usize| {
+            let (a, b) = (self.nodes[i].s, self.nodes[i + 1].s);
+            b > a && if left { a < s && s <= b } else { a <= s && s < b }
+        };
+        let last = self.nodes.len() - 2;
+        let k = (0..=last)
+            .find(|&i| inside(i))
+            .unwrap_or(if left || s > 0.0 { last } else { 0 });
+        let t = (s - self.nodes[k].s) / (self.nodes[k + 1].s - self.nodes[k].s);
+        let weights = [
+            2.0 * t * t * t - 3.0 * t * t + 1.0,
+            t * t * t - 2.0 * t * t + t,
+            -2.0 * t * t * t + 3.0 * t * t,
+            t * t * t - t * t,
+        ];
+        (k, weights)
     }
 
     /// Largest deviation from orthonormality over all node rotations (0 for exact rotations).

@@ -72,8 +72,11 @@
 //! (three one-sided).
 #![allow(non_snake_case)]
 
+mod control;
 mod tip;
 
+pub(crate) use control::{backbone_columns, tip_columns};
+pub use control::{backbone_jacobian, tip_jacobian};
 pub(crate) use tip::TensionDirections;
 pub use tip::{
     DisplacementSensitivities, ModulusSensitivities, TipSensitivities, backbone_tension_sensitivity,
@@ -172,6 +175,16 @@ impl<'a> Sensitivity<'a> {
     /// Jacobian there is singular (a bifurcation, where no sensitivity exists); a model
     /// breakdown at the solution's states.
     pub fn new(robot: &'a Robot, solution: &Solution) -> Result<Self> {
+        Self::with_workspace(robot, solution, None)
+    }
+
+    /// As [`Sensitivity::new`], factoring in `workspace` when it was built for the
+    /// solution's mesh with the structured solver (a [`crate::Solver`]'s, which keeps its
+    /// buffers and pattern), else in a new one; [`Sensitivity::into_workspace`] gives it back.
+    ///
+    /// # Errors
+    /// As [`Sensitivity::new`].
+    pub(crate) fn with_workspace(robot: &'a Robot, solution: &Solution, workspace: Option<Workspace>) -> Result<Self> {
         robot.validate()?;
         if solution.tendons.len() != robot.tendons.len() {
             return Err(invalid(
@@ -216,7 +229,10 @@ impl<'a> Sensitivity<'a> {
                 "pass a converged collocation solution of this robot (collocation::solve_from polishes a nearby one)",
             ));
         }
-        let mut workspace = Workspace::new(&system, LinearSolver::Blocks)?;
+        let mut workspace = match workspace {
+            Some(w) => w,
+            None => Workspace::new(&system, LinearSolver::Blocks)?,
+        };
         // Factor once; every parameter then costs one solve with the stored factors.
         if !workspace.factor(&values) {
             return Err(singular());
@@ -227,6 +243,11 @@ impl<'a> Sensitivity<'a> {
             workspace,
             scratch: [residual, vec![0.0; n], vec![0.0; n]],
         })
+    }
+
+    /// The linear-solver workspace, holding the factors of the Jacobian at the solution.
+    pub(crate) fn into_workspace(self) -> Workspace {
+        self.workspace
     }
 
     /// The robot the system belongs to.
