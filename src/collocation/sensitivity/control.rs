@@ -24,6 +24,38 @@ use crate::model::robot::Robot;
 use crate::solution::Solution;
 use nalgebra::{DMatrix, Vector3};
 
+/// The parameters named by `names` for a control Jacobian of `robot`, in order: a
+/// parameter's name ([`Parameter`]: `tension.2`, `tip_force.z`, `youngs_modulus`, ...) or a
+/// group, `tension` (every tendon, file order), `tip_force`, `tip_moment` or
+/// `base_position` (x, y, z).
+///
+/// # Errors
+/// [`crate::Error::InvalidInput`] for a name that is neither, or that the robot does not
+/// have (as [`Parameter::parse`]).
+///
+/// # Examples
+/// ```
+/// use tdcr::Parameter;
+/// let robot = tdcr::cases::case_s();
+/// let wrt = tdcr::collocation::sensitivity::columns(&["tension", "tip_force.z"], &robot).unwrap();
+/// assert_eq!(wrt.len(), 6);
+/// assert_eq!(wrt[5], Parameter::TipForce(2));
+/// ```
+pub fn columns<S: AsRef<str>>(names: &[S], robot: &Robot) -> Result<Vec<Parameter>> {
+    let mut out = Vec::new();
+    for name in names {
+        let axes = |p: fn(usize) -> Parameter| (0..3).map(p).collect::<Vec<_>>();
+        match name.as_ref() {
+            "tension" => out.extend((0..robot.tendons.len()).map(Parameter::Tension)),
+            "tip_force" => out.extend(axes(Parameter::TipForce)),
+            "tip_moment" => out.extend(axes(Parameter::TipMoment)),
+            "base_position" => out.extend(axes(Parameter::BasePosition)),
+            other => out.push(Parameter::parse(other, robot)?),
+        }
+    }
+    Ok(out)
+}
+
 /// The columns of d(tip pose)/dq for the parameters `wrt`, 6 x `wrt.len()`, in the layout of
 /// [`super::TipSensitivities`]: tip position x, y, z (m per unit of q), then the tip rotation
 /// as a world-frame rotation vector (rad per unit of q). A tension column is

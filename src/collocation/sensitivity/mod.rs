@@ -76,7 +76,7 @@ mod control;
 mod tip;
 
 pub(crate) use control::{backbone_columns, tip_columns};
-pub use control::{backbone_jacobian, tip_jacobian};
+pub use control::{backbone_jacobian, columns, tip_jacobian};
 pub(crate) use tip::TensionDirections;
 pub use tip::{
     DisplacementSensitivities, ModulusSensitivities, TipSensitivities, backbone_tension_sensitivity,
