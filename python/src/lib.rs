@@ -7,6 +7,7 @@ mod analysis;
 mod boundary;
 mod branch;
 mod compare;
+mod control;
 mod convert;
 mod errors;
 mod options;
@@ -352,6 +353,7 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<analysis::PyCalibration>()?;
     m.add_class::<branch::PySweep>()?;
     m.add_class::<branch::PyTrace>()?;
+    m.add_class::<control::PySolver>()?;
     m.add_function(wrap_pyfunction!(solve, m)?)?;
     m.add_function(wrap_pyfunction!(solve_batch, m)?)?;
     m.add_function(wrap_pyfunction!(solve_parameters, m)?)?;

@@ -9,7 +9,8 @@ The Rust crate tdcr is the one implementation; this package converts types and c
     solution.p, solution.R                 # (N, 3), (N, 3, 3)
 
 Robots: `Robot` (from TOML text, a file, keyword arguments or a dict; the robot file's
-fields and rules). Solving: `solve`, `solve_batch` (all cores, GIL released), `sweep`
+fields and rules). Solving: `solve`, `Solver` (stateful, warm starts and control
+Jacobians for control loops), `solve_batch` (all cores, GIL released), `sweep`
 (warm-started sequence with its events), `trace` (a branch of equilibria through folds),
 `solve_parameters` (arrays in, arrays out). Analyses:
 `tip_sensitivities` (Jacobians, compliance), `solve_tensions` and `solve_displacements` (inverse statics), `calibrate` (E and base angles from measured tips). Cases:
@@ -31,6 +32,7 @@ from ._native import (
     SingularRouting,
     Solution,
     SolveReport,
+    Solver,
     State,
     Sweep,
     TipSensitivities,
@@ -63,6 +65,7 @@ __all__ = [
     "SingularRouting",
     "Solution",
     "SolveReport",
+    "Solver",
     "State",
     "Sweep",
     "TipSensitivities",

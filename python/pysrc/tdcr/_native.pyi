@@ -27,6 +27,7 @@ __all__ = [
     "Sweep",
     "trace",
     "Trace",
+    "Solver",
     "tip_sensitivities",
     "solve_tensions",
     "solve_displacements",
@@ -543,3 +544,45 @@ def prototype() -> Robot:
 
 def example() -> str:
     """The commented example robot file."""
+
+class Solver:
+    """A collocation solver that keeps its workspace between solves (control loops): warm
+    starts on the last solve's factors, and the control Jacobians (only the columns asked
+    for) from the same workspace. Options as `solve`'s (collocation)."""
+
+    def __init__(
+        self,
+        robot: Optional[Robot] = None,
+        *,
+        tol: Optional[float] = None,
+        intervals: Optional[int] = None,
+        max_intervals: Optional[int] = None,
+        residual_tolerance: Optional[float] = None,
+        max_iterations: Optional[int] = None,
+        continuation: Optional[bool] = None,
+        equilibrium: Optional[Literal["load_path", "nearest"]] = None,
+        method: Optional[Literal["collocation"]] = None,
+    ) -> None: ...
+    def solve(
+        self,
+        robot: Union[Robot, Mapping[str, float], None] = None,
+        /,
+        parameters: Optional[Mapping[str, float]] = None,
+        *,
+        tension: Optional[ArrayLike] = None,
+    ) -> Solution:
+        """Solves the current robot (replaced by `robot`, changed by `parameters` and
+        `tension`, which stay set), warm-started from the last solution."""
+    def tip_jacobian(self, wrt: Union[str, Sequence[str], None] = None) -> FloatArray:
+        """(6, n): the columns `wrt` (default "tension") of d(tip pose)/dq at the last
+        solution, in the layout of `TipSensitivities.tension`."""
+    def backbone_jacobian(self, s: ArrayLike, wrt: Union[str, Sequence[str], None] = None) -> FloatArray:
+        """(len(s), 3, n): d p(s_j)/dq at the arc lengths `s` (m) of the last solution."""
+    def reset(self) -> None:
+        """Forgets the workspace, its factors and the last solution (the robot stays)."""
+    @property
+    def robot(self) -> Optional[Robot]:
+        """The current robot, or None."""
+    @property
+    def solution(self) -> Optional[Solution]:
+        """The last solution, or None."""
