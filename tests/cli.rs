@@ -1609,7 +1609,14 @@ fn jacobian_columns_are_the_full_jacobians_columns() {
         .collect();
     assert_eq!(
         columns,
-        ["tension.1", "tension.2", "tension.3", "tension.4", "tension.5", "tip_force.z"]
+        [
+            "tension.1",
+            "tension.2",
+            "tension.3",
+            "tension.4",
+            "tension.5",
+            "tip_force.z"
+        ]
     );
     for row in 0..6 {
         for c in 0..5 {

@@ -4,7 +4,7 @@
 
 use crate::boundary;
 use crate::convert::{numbers, type_name};
-use crate::errors::{invalid, to_py};
+use crate::errors::{self, invalid, to_py};
 use crate::options::{self, Use};
 use crate::robot::PyRobot;
 use crate::solution::PySolution;
@@ -14,6 +14,23 @@ use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyString};
 use tdcr::collocation::sensitivity::columns;
 use tdcr::{Parameter, Solution};
+
+/// Solves `robot` with `solve` (GIL released, panics caught): `tdcr.PlausibilityWarning`s
+/// before for the robot's implausible scales and after for solved tensions past their
+/// limit, and a failure raised with its likely causes ([`errors::explained`]).
+pub fn checked_solve(
+    py: Python<'_>,
+    robot: &tdcr::Robot,
+    solve: impl FnOnce() -> tdcr::Result<Solution> + Send,
+) -> PyResult<Solution> {
+    errors::warn(py, &robot.plausibility())?;
+    let solution = py.detach(|| boundary::caught(solve)).map_err(|failure| match failure {
+        boundary::Failure::Library(e) => errors::explained(e, robot),
+        other => other.into_py(),
+    })?;
+    errors::warn(py, &robot.solved_tensions(&solution.tensions()))?;
+    Ok(solution)
+}
 
 /// Solver(robot=None, **options)
 ///
@@ -162,7 +179,7 @@ impl PySolver {
         r.validate().map_err(to_py)?;
         let (solver, last) = (&mut self.solver, &self.last);
         let robot_ref = &robot;
-        let solution = boundary::detached(py, || match last {
+        let solution = checked_solve(py, robot_ref, || match last {
             Some(w) => solver.solve_from(robot_ref, w),
             None => solver.solve(robot_ref),
         })?;

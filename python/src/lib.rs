@@ -12,6 +12,7 @@ mod convert;
 mod errors;
 mod options;
 mod pickle;
+mod picture;
 mod robot;
 mod solution;
 
@@ -54,7 +55,9 @@ fn run(robot: &tdcr::Robot, s: &SolverSettings, warm: Option<&Solution>) -> tdcr
 ///
 /// Raises `tdcr.InvalidInput` for bad options, `tdcr.NotConverged` (with `.report`),
 /// `tdcr.IntervalCap`, `tdcr.Breakdown`, `tdcr.SingularRouting`, with the command line's
-/// messages.
+/// messages (a failure's `likely_causes`: the robot's implausible scales, also after the
+/// message's first line). Warns `tdcr.PlausibilityWarning` for implausible scales and for
+/// solved tensions past their limit.
 #[pyfunction]
 #[pyo3(signature = (robot, *, warm_start=None, **options))]
 fn solve(
@@ -70,7 +73,7 @@ fn solve(
         ));
     }
     let (r, warm) = (&robot.file.robot, warm_start.map(|w| &w.solution));
-    boundary::detached(py, || run(r, &settings, warm)).map(|solution| PySolution { solution })
+    control::checked_solve(py, r, || run(r, &settings, warm)).map(|solution| PySolution { solution })
 }
 
 /// The robots of a batch: a list, or one robot with parameter columns (built row by row).
@@ -364,6 +367,7 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(analysis::solve_displacements, m)?)?;
     m.add_function(wrap_pyfunction!(analysis::calibrate, m)?)?;
     m.add_function(wrap_pyfunction!(compare::compare, m)?)?;
+    m.add_function(wrap_pyfunction!(picture::figure, m)?)?;
     m.add_function(wrap_pyfunction!(case_s, m)?)?;
     m.add_function(wrap_pyfunction!(case_h, m)?)?;
     m.add_function(wrap_pyfunction!(prototype, m)?)?;

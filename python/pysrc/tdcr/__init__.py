@@ -16,7 +16,9 @@ Jacobians for control loops), `solve_batch` (all cores, GIL released), `sweep`
 `tip_sensitivities` (Jacobians, compliance), `solve_tensions` and `solve_displacements` (inverse statics), `calibrate` (E and base angles from measured tips). Cases:
 `tdcr.cases`. A cluster: `tdcr.distributed` (Dask). Errors: `Error` and its subclasses
 `InvalidInput` (with `FileError`, `SingularRouting`), `NotConverged`, `IntervalCap`,
-`Breakdown`. docs/python.md is the walk-through.
+`Breakdown`; warnings: `PlausibilityWarning`. Pictures: `plot` and `Solution.plot`
+(matplotlib, the `plot` extra), `figure` (the command line's SVG/PNG picture). docs/python.md
+is the walk-through.
 """
 
 from ._native import (
@@ -24,6 +26,7 @@ from ._native import (
     Calibration,
     Error,
     FileError,
+    PlausibilityWarning,
     IntervalCap,
     InvalidInput,
     InverseResult,
@@ -41,6 +44,7 @@ from ._native import (
     calibrate,
     compare,
     example,
+    figure,
     solve,
     solve_batch,
     solve_displacements,
@@ -51,12 +55,14 @@ from ._native import (
     trace,
 )
 from . import cases
+from .plotting import plot
 
 __all__ = [
     "Breakdown",
     "Calibration",
     "Error",
     "FileError",
+    "PlausibilityWarning",
     "IntervalCap",
     "InvalidInput",
     "InverseResult",
@@ -75,6 +81,8 @@ __all__ = [
     "cases",
     "compare",
     "example",
+    "figure",
+    "plot",
     "solve",
     "solve_batch",
     "solve_displacements",

@@ -28,6 +28,8 @@ __all__ = [
     "trace",
     "Trace",
     "Solver",
+    "figure",
+    "PlausibilityWarning",
     "tip_sensitivities",
     "solve_tensions",
     "solve_displacements",
@@ -73,6 +75,7 @@ class NotConverged(Error):
     """A solver stopped without meeting its tolerances."""
 
     report: SolveReport
+    likely_causes: List[str]
 
 class IntervalCap(Error):
     """Adaptive refinement reached `max_intervals` before the tip tolerance was met."""
@@ -230,6 +233,9 @@ class SolveReport:
 @final
 class Solution:
     """A solved shape; arrays are float64, SI units."""
+
+    def plot(self, ax: Optional[Any] = None, *, tendons: bool = True, label: Optional[str] = None) -> Any:
+        """Draws the shape with matplotlib (`tdcr.plot`); returns the axes."""
 
     @property
     def s(self) -> FloatArray:
@@ -586,3 +592,19 @@ class Solver:
     @property
     def solution(self) -> Optional[Solution]:
         """The last solution, or None."""
+
+class PlausibilityWarning(UserWarning):
+    """A robot's scales or loads are far from any tendon robot's (a 200 m rod, ...)."""
+
+def figure(
+    robot: Robot,
+    solution: Solution,
+    path: Union[str, "PathLike[str]"],
+    *,
+    views: Optional[Sequence[Literal["top", "side", "front", "perspective"]]] = None,
+    width: Optional[float] = None,
+    font_size: Optional[float] = None,
+    title: Optional[str] = None,
+    disks: Optional[int] = None,
+) -> None:
+    """Draws `solution` into `path` as `tdcr solve --plot` does (PNG for .png, else SVG)."""
