@@ -551,13 +551,14 @@ def prototype() -> Robot:
 def example() -> str:
     """The commented example robot file."""
 
+@final
 class Solver:
     """A collocation solver that keeps its workspace between solves (control loops): warm
     starts on the last solve's factors, and the control Jacobians (only the columns asked
     for) from the same workspace. Options as `solve`'s (collocation)."""
 
-    def __init__(
-        self,
+    def __new__(
+        cls,
         robot: Optional[Robot] = None,
         *,
         tol: Optional[float] = None,
@@ -568,7 +569,7 @@ class Solver:
         continuation: Optional[bool] = None,
         equilibrium: Optional[Literal["load_path", "nearest"]] = None,
         method: Optional[Literal["collocation"]] = None,
-    ) -> None: ...
+    ) -> Solver: ...
     def solve(
         self,
         robot: Union[Robot, Mapping[str, float], None] = None,
