@@ -1592,3 +1592,48 @@ fn check_names_disks_and_the_model() {
         stdout(&out)
     );
 }
+
+/// `--jacobian=COLUMNS` (issue 26): only the columns asked for, named, in the JSON and as a
+/// table, equal to the full Jacobian's columns; a bad name is bad input (exit 2).
+#[test]
+fn jacobian_columns_are_the_full_jacobians_columns() {
+    let dir = scratch("jacobian_columns");
+    let json = |jacobian: &str| {
+        let out = run(&dir, &["solve", "-", "--format", "json", jacobian], Some(&example()));
+        assert!(out.status.success(), "{}", stderr(&out));
+        serde_json::from_str::<serde_json::Value>(&stdout(&out)).unwrap()
+    };
+    let full = json("--jacobian");
+    let some = json("--jacobian=tension,tip_force.z");
+    let tip = &some["tip_jacobian"];
+    assert!(some.get("jacobian").is_none());
+    let columns: Vec<&str> = tip["columns"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|c| c.as_str().unwrap())
+        .collect();
+    assert_eq!(
+        columns,
+        [
+            "tension.1",
+            "tension.2",
+            "tension.3",
+            "tension.4",
+            "tension.5",
+            "tip_force.z"
+        ]
+    );
+    for row in 0..6 {
+        for c in 0..5 {
+            assert_eq!(tip["rows"][row][c], full["jacobian"]["tension"][row][c]);
+        }
+        assert_eq!(tip["rows"][row][5], full["jacobian"]["tip_force"][row][2]);
+    }
+    let out = run(&dir, &["solve", "-", "--jacobian=tension"], Some(&example()));
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert!(stdout(&out).contains("tip Jacobian"), "{}", stdout(&out));
+    let out = run(&dir, &["solve", "-", "--jacobian=tension.9"], Some(&example()));
+    assert_eq!(out.status.code(), Some(2));
+    assert!(stderr(&out).contains("names tendon 9"), "{}", stderr(&out));
+}

@@ -2,7 +2,7 @@
 //! the library's message (the Display the command line prints).
 
 use crate::solution::PySolveReport;
-use pyo3::exceptions::PyException;
+use pyo3::exceptions::{PyException, PyUserWarning};
 use pyo3::prelude::*;
 use pyo3::{PyErr, create_exception};
 
@@ -49,6 +49,13 @@ create_exception!(
     "Adaptive refinement reached `max_intervals` before the tip tolerance was met."
 );
 
+create_exception!(
+    tdcr,
+    PlausibilityWarning,
+    PyUserWarning,
+    "A robot's scales or loads are far from any tendon robot's (a 200 m rod, a tendon bending the rod past a radian per offset, a solved tension past its limit): the answer may be right but is likely not what was meant."
+);
+
 /// A library error as the matching exception, with the same message.
 pub fn to_py(error: tdcr::Error) -> PyErr {
     to_py_with(error, "")
@@ -58,10 +65,58 @@ pub fn to_py(error: tdcr::Error) -> PyErr {
 /// a batch) when that is not empty.
 pub fn to_py_with(error: tdcr::Error, prefix: &str) -> PyErr {
     let text = if prefix.is_empty() {
-        error.to_string()
+        message(&error)
     } else {
-        format!("{prefix}: {error}")
+        format!("{prefix}: {}", message(&error))
     };
+    with_text(error, text)
+}
+
+/// The library's message, with a field path numbered as in robot files (`tendon[2].tension`
+/// for the library's `tendons[1].tension`: tendons and point loads from 1, the numbering
+/// of robot files, the command line and `tdcr.FileError`).
+fn message(error: &tdcr::Error) -> String {
+    match error {
+        tdcr::Error::InvalidInput { field, problem, hint } => {
+            format!(
+                "invalid input: `{}` {problem}; {hint}",
+                tdcr::io::file_field(field, false)
+            )
+        }
+        other => other.to_string(),
+    }
+}
+
+/// A failure to solve `robot` as its exception, with the robot's implausible scales after
+/// the first line as its likely causes (`tdcr::model::scales::likely_causes`, as the
+/// command line prints them) and in the exception's `likely_causes` (a list of strings,
+/// empty when there are none).
+pub fn explained(error: tdcr::Error, robot: &tdcr::Robot) -> PyErr {
+    let causes = tdcr::model::scales::likely_causes(&error, robot);
+    let text = tdcr::model::scales::with_likely_causes(&message(&error), &causes);
+    let err = with_text(error, text);
+    Python::attach(|py| {
+        let causes: Vec<String> = causes.iter().map(|w| w.to_string()).collect();
+        // Setting an attribute on a fresh exception instance cannot fail.
+        let _ = err.value(py).setattr("likely_causes", causes);
+    });
+    err
+}
+
+/// Raises `tdcr.PlausibilityWarning` (through Python's `warnings`) for each of `warnings`
+/// (the library's plausibility warnings of a robot or its solved tensions).
+pub fn warn(py: Python<'_>, warnings: &[tdcr::model::scales::Warning]) -> PyResult<()> {
+    let category = py.get_type::<PlausibilityWarning>();
+    for w in warnings {
+        let text = std::ffi::CString::new(w.to_string()).unwrap_or_default();
+        // stacklevel 1: the warning points at the caller's line (the native call).
+        PyErr::warn(py, &category, &text, 1)?;
+    }
+    Ok(())
+}
+
+/// The exception of `error`'s class with the message `text`.
+fn with_text(error: tdcr::Error, text: String) -> PyErr {
     match error {
         tdcr::Error::InvalidInput { .. } => InvalidInput::new_err(text),
         tdcr::Error::SingularRouting { .. } => SingularRouting::new_err(text),
@@ -116,5 +171,6 @@ pub fn register(module: &Bound<'_, PyModule>) -> PyResult<()> {
     module.add("Breakdown", py.get_type::<Breakdown>())?;
     module.add("NotConverged", py.get_type::<NotConverged>())?;
     module.add("IntervalCap", py.get_type::<IntervalCap>())?;
+    module.add("PlausibilityWarning", py.get_type::<PlausibilityWarning>())?;
     Ok(())
 }

@@ -7,12 +7,14 @@ mod analysis;
 mod boundary;
 mod branch;
 mod compare;
+mod control;
 mod convert;
 mod dataset;
 mod errors;
 mod gradient;
 mod options;
 mod pickle;
+mod picture;
 mod robot;
 mod solution;
 
@@ -54,7 +56,9 @@ fn run(robot: &tdcr::Robot, s: &SolverSettings, warm: Option<&Solution>) -> tdcr
 ///
 /// Raises `tdcr.InvalidInput` for bad options, `tdcr.NotConverged` (with `.report`),
 /// `tdcr.IntervalCap`, `tdcr.Breakdown`, `tdcr.SingularRouting`, with the command line's
-/// messages.
+/// messages (a failure's `likely_causes`: the robot's implausible scales, also after the
+/// message's first line). Warns `tdcr.PlausibilityWarning` for implausible scales and for
+/// solved tensions past their limit.
 #[pyfunction]
 #[pyo3(signature = (robot, *, warm_start=None, **options))]
 fn solve(
@@ -70,7 +74,7 @@ fn solve(
         ));
     }
     let (r, warm) = (&robot.file.robot, warm_start.map(|w| &w.solution));
-    boundary::detached(py, || run(r, &settings, warm)).map(|solution| PySolution { solution })
+    control::checked_solve(py, r, || run(r, &settings, warm)).map(|solution| PySolution { solution })
 }
 
 /// The robots of a batch: a list, or one robot with parameter columns (built row by row).
@@ -262,6 +266,7 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<branch::PySweep>()?;
     m.add_class::<branch::PyTrace>()?;
     m.add_class::<gradient::PyLinearization>()?;
+    m.add_class::<control::PySolver>()?;
     m.add_function(wrap_pyfunction!(solve, m)?)?;
     m.add_function(wrap_pyfunction!(solve_batch, m)?)?;
     m.add_function(wrap_pyfunction!(dataset::solve_parameters, m)?)?;
@@ -273,6 +278,7 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(analysis::solve_displacements, m)?)?;
     m.add_function(wrap_pyfunction!(analysis::calibrate, m)?)?;
     m.add_function(wrap_pyfunction!(compare::compare, m)?)?;
+    m.add_function(wrap_pyfunction!(picture::figure, m)?)?;
     m.add_function(wrap_pyfunction!(case_s, m)?)?;
     m.add_function(wrap_pyfunction!(case_h, m)?)?;
     m.add_function(wrap_pyfunction!(prototype, m)?)?;

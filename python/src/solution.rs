@@ -192,6 +192,19 @@ impl PySolution {
         })
     }
 
+    /// plot(ax=None, *, tendons=True, label=None) -> Axes
+    ///
+    /// Draws the shape with matplotlib (the `plot` extra): `tdcr.plot(self, ...)`.
+    #[pyo3(signature = (ax=None, **kwargs))]
+    fn plot<'py>(
+        slf: &Bound<'py, Self>,
+        ax: Option<&Bound<'py, PyAny>>,
+        kwargs: Option<&Bound<'py, PyDict>>,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        let plot = slf.py().import("tdcr.plotting")?.getattr("plot")?;
+        plot.call((slf, ax), kwargs)
+    }
+
     /// The whole solution as the solution JSON of `tdcr solve --format json` (every node
     /// with its derivatives, the tendon paths and states, the report; docs/cli.md), without
     /// the keys that need the robot (`end`, `turns`, `jacobian`); `Solution.from_json` reads

@@ -5,10 +5,12 @@ use super::linear::LinearSolver;
 use super::newton::Workspace;
 use super::options::Options;
 use super::pipeline::solve_impl;
-use crate::Robot;
+use super::sensitivity::{Sensitivity, backbone_columns, tip_columns};
 use crate::error::Result;
 use crate::mesh::Mesh;
 use crate::solution::{Solution, State};
+use crate::{Parameter, Robot};
+use nalgebra::DMatrix;
 
 /// The Newton workspace of the last solve, the mesh and linear solver it was built for,
 /// and the states that solve ended at (its factors belong to a Jacobian near them).
@@ -32,6 +34,11 @@ pub(crate) type Cache = Option<Cached>;
 /// evaluating a new Jacobian for the iteration; the stability verdict then evaluates one at
 /// the solution, since the factors belong to the previous state (docs/stability.md, "Which
 /// Jacobian").
+///
+/// [`Solver::tip_jacobian`] and [`Solver::backbone_jacobian`] give the columns a controller
+/// asks for of the derivatives at a solution, factoring the Jacobian at the solution in the
+/// same workspace (no new buffers or pattern); the next warm solve then starts its chord
+/// steps on those factors, the Jacobian at the previous solution.
 pub struct Solver {
     /// The options of every solve.
     pub options: Options,
@@ -60,5 +67,82 @@ impl Solver {
     /// As [`super::solve`].
     pub fn solve_from(&mut self, robot: &Robot, guess: &Solution) -> Result<Solution> {
         solve_impl(robot, &self.options, Some(guess), &mut self.cache)
+    }
+
+    /// The columns `wrt` of d(tip pose)/dq at `solution`, a solution of `robot` (6 x
+    /// `wrt.len()`, the layout of [`crate::TipSensitivities`]): as
+    /// [`crate::collocation::sensitivity::tip_jacobian`], to rounding, factoring the
+    /// Jacobian at the solution in this solver's workspace when the solution is on the mesh
+    /// of its last solve.
+    ///
+    /// # Errors
+    /// As [`crate::collocation::sensitivity::tip_jacobian`].
+    ///
+    /// # Examples
+    /// ```
+    /// use tdcr::{Parameter, Solver};
+    /// let mut robot = tdcr::cases::case_s();
+    /// let mut solver = Solver::new(Default::default());
+    /// let first = solver.solve(&robot).unwrap();
+    /// robot.tendons[0].set_tension(3.0);
+    /// let next = solver.solve_from(&robot, &first).unwrap();
+    /// let j = solver.tip_jacobian(&robot, &next, &[Parameter::Tension(0)]).unwrap();
+    /// assert!(j[(0, 0)].abs() > 0.0);
+    /// ```
+    pub fn tip_jacobian(&mut self, robot: &Robot, solution: &Solution, wrt: &[Parameter]) -> Result<DMatrix<f64>> {
+        self.linearized(robot, solution, |sens| tip_columns(sens, robot, solution, wrt))
+    }
+
+    /// The columns `wrt` of d p(s_j)/dq at the arc lengths `s` (3 `s.len()` x `wrt.len()`):
+    /// as [`crate::collocation::sensitivity::backbone_jacobian`], with this solver's
+    /// workspace as in [`Solver::tip_jacobian`].
+    ///
+    /// # Errors
+    /// As [`crate::collocation::sensitivity::backbone_jacobian`].
+    pub fn backbone_jacobian(
+        &mut self,
+        robot: &Robot,
+        solution: &Solution,
+        wrt: &[Parameter],
+        s: &[f64],
+    ) -> Result<DMatrix<f64>> {
+        self.linearized(robot, solution, |sens| backbone_columns(sens, robot, solution, wrt, s))
+    }
+
+    /// Forgets the cached workspace and factors: the next solve starts as a new solver's.
+    pub fn reset(&mut self) {
+        self.cache = None;
+    }
+
+    /// Runs `f` on the sensitivity of `robot` linearized at `solution`, factored in the
+    /// cached workspace when that was built for the solution's mesh (and put back after).
+    fn linearized<T>(
+        &mut self,
+        robot: &Robot,
+        solution: &Solution,
+        f: impl FnOnce(&mut Sensitivity) -> Result<T>,
+    ) -> Result<T> {
+        // A displacement-controlled tendon's tension is the solved one.
+        let solved = robot.with_tensions(&solution.tensions());
+        let s: Vec<f64> = solution.nodes.iter().map(|n| n.s).collect();
+        let mesh = Mesh::from_points(&solved, &s)?;
+        let (workspace, kept) = match self.cache.take() {
+            Some(c) if c.mesh == mesh => (Some(c.workspace), Some((c.mesh, c.solver, c.last))),
+            other => {
+                self.cache = other;
+                (None, None)
+            }
+        };
+        let mut sens = Sensitivity::with_workspace(&solved, solution, workspace)?;
+        let out = f(&mut sens);
+        if let Some((mesh, solver, last)) = kept {
+            self.cache = Some(Cached {
+                mesh,
+                solver,
+                workspace: sens.into_workspace(),
+                last,
+            });
+        }
+        out
     }
 }

@@ -7,9 +7,9 @@ use crate::collocation::sensitivity::TipSensitivities;
 use crate::io::csv_table::CsvTable;
 pub use crate::io::csv_table::number;
 use crate::io::json_layout::pretty;
-use crate::io::solution_file::format::{Jacobian, Num, SolutionFile, sample_entry};
-use crate::{Robot, Solution};
-use nalgebra::Matrix3;
+use crate::io::solution_file::format::{Jacobian, Num, SolutionFile, TipJacobian, sample_entry};
+use crate::{Parameter, Robot, Solution};
+use nalgebra::{DMatrix, Matrix3};
 
 fn rows(R: &Matrix3<f64>) -> [[f64; 3]; 3] {
     [0, 1, 2].map(|i| [R[(i, 0)], R[(i, 1)], R[(i, 2)]])
@@ -22,16 +22,7 @@ fn rows(R: &Matrix3<f64>) -> [[f64; 3]; 3] {
 /// and every node's full state, which [`crate::io::parse_solution`] reads back bitwise.
 /// Vectors are `[x, y, z]`, matrices lists of rows; one sample per line.
 pub fn json(robot: &Robot, solution: &Solution, count: Option<usize>, jacobian: Option<&TipSensitivities>) -> String {
-    let mut file = SolutionFile::new(solution);
-    if count.is_some() {
-        file.samples = samples(robot, solution, count).iter().map(sample_entry).collect();
-    }
-    let length = robot.length();
-    for (entry, tendon) in file.tendons.iter_mut().zip(&robot.tendons) {
-        entry.end = Some(Num(tendon.end(length)));
-        // The turns the tendon makes over its own length (null: a custom routing).
-        entry.turns = Some(Num(tendon.turns(length)));
-    }
+    let mut file = with_robot(robot, solution, count);
     file.jacobian = jacobian.map(|j| {
         // Rows: tip position (m per unit), then the tip rotation as a world-frame rotation
         // vector (rad per unit); one column per tendon (N of tension, m of pull-in), force
@@ -47,6 +38,43 @@ pub fn json(robot: &Robot, solution: &Solution, count: Option<usize>, jacobian: 
         }
     });
     pretty(&file)
+}
+
+/// As [`json`] without the full tip Jacobians, with the columns `tip` (6 x `wrt.len()`,
+/// [`crate::collocation::sensitivity::tip_jacobian`]) under `tip_jacobian`: `columns` the
+/// parameters' names, `rows` six lists (tip position in m per unit, then the world-frame
+/// tip rotation vector in rad per unit), one entry per column.
+pub fn json_with_tip_jacobian(
+    robot: &Robot,
+    solution: &Solution,
+    count: Option<usize>,
+    wrt: &[Parameter],
+    tip: &DMatrix<f64>,
+) -> String {
+    let mut file = with_robot(robot, solution, count);
+    file.tip_jacobian = Some(TipJacobian {
+        columns: wrt.iter().map(|p| p.to_string()).collect(),
+        rows: (0..tip.nrows())
+            .map(|r| (0..tip.ncols()).map(|c| Num(tip[(r, c)])).collect())
+            .collect(),
+    });
+    pretty(&file)
+}
+
+/// The solution file of `solution` with what needs the robot: the samples for `count`,
+/// each tendon's end and turns.
+fn with_robot(robot: &Robot, solution: &Solution, count: Option<usize>) -> SolutionFile {
+    let mut file = SolutionFile::new(solution);
+    if count.is_some() {
+        file.samples = samples(robot, solution, count).iter().map(sample_entry).collect();
+    }
+    let length = robot.length();
+    for (entry, tendon) in file.tendons.iter_mut().zip(&robot.tendons) {
+        entry.end = Some(Num(tendon.end(length)));
+        // The turns the tendon makes over its own length (null: a custom routing).
+        entry.turns = Some(Num(tendon.turns(length)));
+    }
+    file
 }
 
 /// The solution JSON of a solution alone (Python's `Solution.to_json`): the keys of

@@ -149,6 +149,35 @@ pub enum Warning {
     },
 }
 
+/// The likely causes of `error`, a failure to solve `robot`: its implausible scales
+/// ([`Robot::plausibility`]) when the solver did not converge, reached its interval cap or
+/// broke down (scales far from a robot's are the usual reason); none for bad input, which
+/// says what is wrong itself.
+pub fn likely_causes(error: &crate::Error, robot: &Robot) -> Vec<Warning> {
+    match error {
+        crate::Error::NotConverged { .. } | crate::Error::IntervalCap { .. } | crate::Error::Breakdown { .. } => {
+            robot.plausibility()
+        }
+        _ => Vec::new(),
+    }
+}
+
+/// `message` (a failure's, possibly several lines) with `causes` after its first line, as
+/// an indented list headed `likely cause:` (or `likely causes:`): the form the command line
+/// and the Python package print.
+pub fn with_likely_causes(message: &str, causes: &[Warning]) -> String {
+    if causes.is_empty() {
+        return message.to_string();
+    }
+    let (head, rest) = message.split_once('\n').unwrap_or((message, ""));
+    let mut out = format!("{head}\n  likely cause{}:\n", if causes.len() > 1 { "s" } else { "" });
+    for w in causes {
+        out.push_str(&format!("    {w}\n"));
+    }
+    out.push_str(rest);
+    out
+}
+
 impl Warning {
     /// The dimensionless figure the warning is about (L in m for [`Warning::Length`], E in
     /// Pa for [`Warning::Modulus`]).

@@ -9,7 +9,8 @@ The Rust crate tdcr is the one implementation; this package converts types and c
     solution.p, solution.R                 # (N, 3), (N, 3, 3)
 
 Robots: `Robot` (from TOML text, a file, keyword arguments or a dict; the robot file's
-fields and rules). Solving: `solve`, `solve_batch` (all cores, GIL released), `sweep`
+fields and rules). Solving: `solve`, `Solver` (stateful, warm starts and control
+Jacobians for control loops), `solve_batch` (all cores, GIL released), `sweep`
 (warm-started sequence with its events), `trace` (a branch of equilibria through folds),
 `solve_parameters` (arrays in, arrays out), `dataset` (sampled rows solved in chunks to .npz or
 .parquet, resumable). Analyses:
@@ -17,7 +18,9 @@ fields and rules). Solving: `solve`, `solve_batch` (all cores, GIL released), `s
 and `tdcr.jax` wrap it, with the `torch` and `jax` extras), `solve_tensions` and `solve_displacements` (inverse statics), `calibrate` (E and base angles from measured tips). Cases:
 `tdcr.cases`. A cluster: `tdcr.distributed` (Dask). Errors: `Error` and its subclasses
 `InvalidInput` (with `FileError`, `SingularRouting`), `NotConverged`, `IntervalCap`,
-`Breakdown`. docs/python.md is the walk-through.
+`Breakdown`; warnings: `PlausibilityWarning`. Pictures: `plot` and `Solution.plot`
+(matplotlib, the `plot` extra), `figure` (the command line's SVG/PNG picture). docs/python.md
+is the walk-through.
 """
 
 from ._native import (
@@ -25,6 +28,7 @@ from ._native import (
     Calibration,
     Error,
     FileError,
+    PlausibilityWarning,
     IntervalCap,
     InvalidInput,
     InverseResult,
@@ -34,6 +38,7 @@ from ._native import (
     SingularRouting,
     Solution,
     SolveReport,
+    Solver,
     State,
     Sweep,
     TipSensitivities,
@@ -42,6 +47,7 @@ from ._native import (
     calibrate,
     compare,
     example,
+    figure,
     linearize,
     solve,
     solve_batch,
@@ -54,12 +60,14 @@ from ._native import (
 )
 from . import cases
 from ._dataset import dataset
+from .plotting import plot
 
 __all__ = [
     "Breakdown",
     "Calibration",
     "Error",
     "FileError",
+    "PlausibilityWarning",
     "IntervalCap",
     "InvalidInput",
     "InverseResult",
@@ -69,6 +77,7 @@ __all__ = [
     "SingularRouting",
     "Solution",
     "SolveReport",
+    "Solver",
     "State",
     "Sweep",
     "TipSensitivities",
@@ -79,7 +88,9 @@ __all__ = [
     "compare",
     "dataset",
     "example",
+    "figure",
     "linearize",
+    "plot",
     "solve",
     "solve_batch",
     "solve_displacements",

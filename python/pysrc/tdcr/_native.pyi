@@ -27,6 +27,9 @@ __all__ = [
     "Sweep",
     "trace",
     "Trace",
+    "Solver",
+    "figure",
+    "PlausibilityWarning",
     "tip_sensitivities",
     "linearize",
     "Linearization",
@@ -74,6 +77,7 @@ class NotConverged(Error):
     """A solver stopped without meeting its tolerances."""
 
     report: SolveReport
+    likely_causes: List[str]
 
 class IntervalCap(Error):
     """Adaptive refinement reached `max_intervals` before the tip tolerance was met."""
@@ -232,6 +236,9 @@ class SolveReport:
 @final
 class Solution:
     """A solved shape; arrays are float64, SI units."""
+
+    def plot(self, ax: Optional[Any] = None, *, tendons: bool = True, label: Optional[str] = None) -> Any:
+        """Draws the shape with matplotlib (`tdcr.plot`); returns the axes."""
 
     @property
     def s(self) -> FloatArray:
@@ -587,3 +594,62 @@ def prototype() -> Robot:
 
 def example() -> str:
     """The commented example robot file."""
+
+@final
+class Solver:
+    """A collocation solver that keeps its workspace between solves (control loops): warm
+    starts on the last solve's factors, and the control Jacobians (only the columns asked
+    for) from the same workspace. Options as `solve`'s (collocation)."""
+
+    def __new__(
+        cls,
+        robot: Optional[Robot] = None,
+        *,
+        tol: Optional[float] = None,
+        intervals: Optional[int] = None,
+        max_intervals: Optional[int] = None,
+        residual_tolerance: Optional[float] = None,
+        max_iterations: Optional[int] = None,
+        continuation: Optional[bool] = None,
+        equilibrium: Optional[Literal["load_path", "nearest"]] = None,
+        method: Optional[Literal["collocation"]] = None,
+    ) -> Solver: ...
+    def solve(
+        self,
+        robot: Union[Robot, Mapping[str, float], None] = None,
+        /,
+        parameters: Optional[Mapping[str, float]] = None,
+        *,
+        tension: Optional[ArrayLike] = None,
+    ) -> Solution:
+        """Solves the current robot (replaced by `robot`, changed by `parameters` and
+        `tension`, which stay set), warm-started from the last solution."""
+    def tip_jacobian(self, wrt: Union[str, Sequence[str], None] = None) -> FloatArray:
+        """(6, n): the columns `wrt` (default "tension") of d(tip pose)/dq at the last
+        solution, in the layout of `TipSensitivities.tension`."""
+    def backbone_jacobian(self, s: ArrayLike, wrt: Union[str, Sequence[str], None] = None) -> FloatArray:
+        """(len(s), 3, n): d p(s_j)/dq at the arc lengths `s` (m) of the last solution."""
+    def reset(self) -> None:
+        """Forgets the workspace, its factors and the last solution (the robot stays)."""
+    @property
+    def robot(self) -> Optional[Robot]:
+        """The current robot, or None."""
+    @property
+    def solution(self) -> Optional[Solution]:
+        """The last solution, or None."""
+
+class PlausibilityWarning(UserWarning):
+    """A robot's scales or loads are far from any tendon robot's (a 200 m rod, ...)."""
+
+def figure(
+    robot: Robot,
+    solution: Solution,
+    path: Union[str, "PathLike[str]"],
+    *,
+    views: Optional[Sequence[Literal["top", "side", "front", "perspective"]]] = None,
+    width: Optional[float] = None,
+    font_size: Optional[float] = None,
+    title: Optional[str] = None,
+    disks: Optional[int] = None,
+) -> None:
+    """Draws `solution` into `path` as `tdcr solve --plot` does (PNG for .png, else SVG)."""

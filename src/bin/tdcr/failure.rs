@@ -76,22 +76,13 @@ pub fn solver_failure(e: Error) -> Failure {
 }
 
 /// A solver failure with the robot's implausible scales ([`Robot::plausibility`]) named as
-/// its likely cause, after the failure's first line; other failures unchanged.
+/// its likely cause, after the failure's first line
+/// ([`tdcr::model::scales::with_likely_causes`]); other failures unchanged.
 pub fn with_likely_causes(failure: Failure, robot: &Robot) -> Failure {
     let Failure::NotConverged(text) = failure else {
         return failure;
     };
-    let warnings = robot.plausibility();
-    if warnings.is_empty() {
-        return Failure::NotConverged(text);
-    }
-    let (head, rest) = text.split_once('\n').unwrap_or((&text, ""));
-    let mut out = format!("{head}\n  likely cause{}:\n", if warnings.len() > 1 { "s" } else { "" });
-    for w in &warnings {
-        out.push_str(&format!("    {w}\n"));
-    }
-    out.push_str(rest);
-    Failure::NotConverged(out)
+    Failure::NotConverged(tdcr::model::scales::with_likely_causes(&text, &robot.plausibility()))
 }
 
 /// Says on standard error what a user must not miss about the equilibrium returned: that

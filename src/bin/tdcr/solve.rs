@@ -44,10 +44,13 @@ pub struct SolveArgs {
     /// interpolant) instead of at the solution's nodes.
     #[arg(long, value_name = "K", value_parser = parse_samples)]
     samples: Option<usize>,
-    /// Add the tip Jacobians (d tip pose / d tensions, tip force, tip moment) to the JSON
-    /// output (docs/cli.md).
-    #[arg(long)]
-    jacobian: bool,
+    /// Add the tip Jacobian. Bare `--jacobian`: every tip Jacobian (d tip pose / d tensions,
+    /// pull-ins, tip force, tip moment) in the JSON output. `--jacobian=COLUMNS`: only those
+    /// columns (comma-separated parameter names or the groups `tension`, `tip_force`,
+    /// `tip_moment`, `base_position`), as a 6 x n table or under `tip_jacobian` in the JSON
+    /// (docs/cli.md).
+    #[arg(long, value_name = "COLUMNS", num_args = 0..=1, require_equals = true, default_missing_value = "all")]
+    jacobian: Option<String>,
     /// Output format.
     #[arg(long, value_enum, default_value_t = Format::Table)]
     format: Format,
@@ -118,32 +121,58 @@ pub fn run(args: &SolveArgs) -> Result<(), Failure> {
     let solution = run_solver(&file.robot, &file, start.as_ref())?;
     crate::failure::warn_equilibrium(&name, &solution.report);
     crate::failure::warn_solved_tensions(&name, &file.robot, &solution, |_| false);
-    if args.jacobian && !matches!(args.format, Format::Json) {
-        note("note: --jacobian adds the tip Jacobians to the JSON output only (--format json)");
+    let columns = match args.jacobian.as_deref() {
+        None | Some("all") => None,
+        Some(list) => {
+            let names: Vec<&str> = list.split(',').map(str::trim).collect();
+            let wrt = tdcr::collocation::sensitivity::columns(&names, &file.robot)
+                .map_err(|e| Failure::Input(format!("--jacobian={list}: {e}")))?;
+            let tip = tdcr::collocation::sensitivity::tip_jacobian(&file.robot, &solution, &wrt)
+                .map_err(|e| Failure::Other(e.to_string()))?;
+            Some((wrt, tip))
+        }
+    };
+    let all = args.jacobian.as_deref() == Some("all");
+    if all && !matches!(args.format, Format::Json) {
+        note(
+            "note: --jacobian adds the tip Jacobians to the JSON output only (--format json); --jacobian=tension prints the tension columns as a table",
+        );
+    }
+    if columns.is_some() && matches!(args.format, Format::Csv) {
+        note("note: --jacobian=COLUMNS adds the tip Jacobian to the table and JSON outputs, not to the CSV");
     }
     if args.solver.verbose {
         note(&format!("{name}: {}", summary(&solution.report, file.robot.length())));
         note(diagnostics(&solution.report).trim_end());
     }
     let text = match args.format {
-        Format::Json => {
-            let jacobian = if args.jacobian {
-                Some(
-                    tdcr::collocation::sensitivity::tip_sensitivities(&file.robot, &solution)
-                        .map_err(|e| Failure::Other(e.to_string()))?,
-                )
-            } else {
-                None
-            };
-            output::json(&file.robot, &solution, args.samples, jacobian.as_ref())
-        }
+        Format::Json => match &columns {
+            Some((wrt, tip)) => output::json_with_tip_jacobian(&file.robot, &solution, args.samples, wrt, tip),
+            None => {
+                let jacobian = if all {
+                    Some(
+                        tdcr::collocation::sensitivity::tip_sensitivities(&file.robot, &solution)
+                            .map_err(|e| Failure::Other(e.to_string()))?,
+                    )
+                } else {
+                    None
+                };
+                output::json(&file.robot, &solution, args.samples, jacobian.as_ref())
+            }
+        },
         Format::Csv => output::csv(&output::samples(&file.robot, &solution, args.samples)),
-        Format::Table => solution_table(
-            &name,
-            &file,
-            &solution,
-            &output::samples(&file.robot, &solution, args.samples),
-        ),
+        Format::Table => {
+            let mut text = solution_table(
+                &name,
+                &file,
+                &solution,
+                &output::samples(&file.robot, &solution, args.samples),
+            );
+            if let Some((wrt, tip)) = &columns {
+                text.push_str(&jacobian_table(wrt, tip));
+            }
+            text
+        }
     };
     match &args.out {
         Some(path) => {
@@ -167,4 +196,25 @@ pub fn run(args: &SolveArgs) -> Result<(), Failure> {
         write_picture(path, &figure, "plot")?;
     }
     Ok(())
+}
+
+/// The chosen columns of the tip Jacobian as a table: one row per tip coordinate (position
+/// in m, then the world-frame rotation vector in rad, per unit of each column's parameter).
+fn jacobian_table(wrt: &[tdcr::Parameter], tip: &tdcr::nalgebra::DMatrix<f64>) -> String {
+    let mut text = String::from(
+        "\ntip Jacobian (rows: tip position in m, then tip rotation vector in rad, world frame, per unit of each column)\n",
+    );
+    text.push_str(&format!("{:<6}", ""));
+    for p in wrt {
+        text.push_str(&format!(" {:>14}", p.to_string()));
+    }
+    text.push('\n');
+    for (r, label) in ["p.x", "p.y", "p.z", "rot.x", "rot.y", "rot.z"].iter().enumerate() {
+        text.push_str(&format!("{label:<6}"));
+        for c in 0..tip.ncols() {
+            text.push_str(&format!(" {:>14.6e}", tip[(r, c)]));
+        }
+        text.push('\n');
+    }
+    text
 }

@@ -73,11 +73,13 @@
 #![allow(non_snake_case)]
 
 mod adjoint;
+mod control;
 mod named;
 mod tip;
 
 pub use adjoint::{Adjoint, Cotangent, rotation_cotangent};
-
+pub(crate) use control::{backbone_columns, tip_columns};
+pub use control::{backbone_jacobian, columns, tip_jacobian};
 pub(crate) use tip::TensionDirections;
 pub use tip::{
     DisplacementSensitivities, ModulusSensitivities, TipSensitivities, backbone_tension_sensitivity,
@@ -178,6 +180,16 @@ impl<'a> Sensitivity<'a> {
     /// Jacobian there is singular (a bifurcation, where no sensitivity exists); a model
     /// breakdown at the solution's states.
     pub fn new(robot: &'a Robot, solution: &Solution) -> Result<Self> {
+        Self::with_workspace(robot, solution, None)
+    }
+
+    /// As [`Sensitivity::new`], factoring in `workspace` when it was built for the
+    /// solution's mesh with the structured solver (a [`crate::Solver`]'s, which keeps its
+    /// buffers and pattern), else in a new one; [`Sensitivity::into_workspace`] gives it back.
+    ///
+    /// # Errors
+    /// As [`Sensitivity::new`].
+    pub(crate) fn with_workspace(robot: &'a Robot, solution: &Solution, workspace: Option<Workspace>) -> Result<Self> {
         robot.validate()?;
         if solution.tendons.len() != robot.tendons.len() {
             return Err(invalid(
@@ -221,7 +233,10 @@ impl<'a> Sensitivity<'a> {
                 "pass a converged collocation solution of this robot (collocation::solve_from polishes a nearby one)",
             ));
         }
-        let mut workspace = Workspace::new(border.system(), LinearSolver::Blocks)?;
+        let mut workspace = match workspace {
+            Some(w) => w,
+            None => Workspace::new(border.system(), LinearSolver::Blocks)?,
+        };
         // Factor once; every parameter then costs one solve with the stored factors.
         if !workspace.factor(&values) {
             return Err(singular());
@@ -240,6 +255,11 @@ impl<'a> Sensitivity<'a> {
     /// backbone block's only (the capstan rows are eliminated per solve).
     pub(crate) fn into_parts(self) -> (System<'a>, Vec<State>, Workspace) {
         (self.border.into_system(), self.states, self.workspace)
+    }
+
+    /// The linear-solver workspace, holding the factors of the Jacobian at the solution.
+    pub(crate) fn into_workspace(self) -> Workspace {
+        self.workspace
     }
 
     /// The robot the system belongs to.

@@ -6,7 +6,7 @@ use super::{Difference, NodeDerivative, RELATIVE_STEP, Sensitivity};
 use crate::error::Result;
 use crate::model::length::{NodeQuadrature, speed_gradient};
 use crate::model::robot::Robot;
-use crate::model::rod::{Section, Stiffness, shear_modulus};
+use crate::model::rod::{Geometry, Rod, Section, Stiffness, shear_modulus};
 use crate::model::routing::RoutingPoint;
 use crate::solution::Solution;
 use nalgebra::{DMatrix, DVector, Matrix6, Matrix6x3, Vector3, Vector6};
@@ -139,7 +139,7 @@ pub fn tip_sensitivities(robot: &Robot, solution: &Solution) -> Result<TipSensit
 /// tensions follow to keep the lengths, S dtau = dl with S = C - dl/dtau
 /// ([`TensionDirections`]); the tip moves by its own derivative plus d(tip)/dtau dtau.
 /// Without such tendons it passes the derivatives through.
-struct Held {
+pub(super) struct Held {
     /// The taut displacement-controlled tendons' directions and the LU factors of their
     /// S = C - dl/dtau; `None` without any.
     directions: Option<(TensionDirections, nalgebra::LU<f64, nalgebra::Dyn, nalgebra::Dyn>)>,
@@ -148,7 +148,7 @@ struct Held {
 impl Held {
     /// The held tendons of `robot` at `solution` (`sens` linearized there): taut ones (a
     /// slack tendon stays slack for small changes, also one just taut at 0 N).
-    fn new(sens: &mut Sensitivity, robot: &Robot, solution: &Solution) -> Result<Self> {
+    pub(super) fn new(sens: &mut Sensitivity, robot: &Robot, solution: &Solution) -> Result<Self> {
         let taut: Vec<usize> = (0..robot.tendons.len())
             .filter(|&i| {
                 let state = &solution.tendons[i];
@@ -165,8 +165,13 @@ impl Held {
         Ok(Held { directions })
     }
 
+    /// Whether any tendon's pull-in is held (taut and displacement-controlled).
+    pub(super) fn holds(&self) -> bool {
+        self.directions.is_some()
+    }
+
     /// The tip pose's derivative for the state derivative `d`, the pull-ins held.
-    fn tip(&self, d: &[NodeDerivative]) -> Result<Vector6<f64>> {
+    pub(super) fn tip(&self, d: &[NodeDerivative]) -> Result<Vector6<f64>> {
         let own = d[d.len() - 1].pose();
         let Some((h, schur)) = &self.directions else {
             return Ok(own);
@@ -193,22 +198,12 @@ impl Held {
 
 /// The modulus derivatives when the rod's uniform section is the one its geometry gives.
 fn moduli(sens: &mut Sensitivity, held: &Held) -> Result<Option<ModulusSensitivities>> {
-    let rod = &sens.robot().rod;
-    let (Some(g), Stiffness::Uniform(section)) = (rod.geometry, &rod.stiffness) else {
+    let Some(g) = built_from_geometry(&sens.robot().rod) else {
         return Ok(None);
     };
     let (o, i, e, nu) = (g.outer_radius, g.inner_radius, g.youngs_modulus, g.poisson_ratio);
     let shear = shear_modulus(e, nu);
-    // The section must be the geometry's (to rounding): otherwise E and G are not what
-    // the stiffness was built from.
-    let built = Section::tube(o, i, e, shear);
-    let close = |a: &Vector3<f64>, b: &Vector3<f64>| (a - b).norm() <= 1e-12 * b.norm();
-    if !(close(&section.kse, &built.kse) && close(&section.kbt, &built.kbt)) {
-        return Ok(None);
-    }
-    let youngs_modulus = held.tip(&sens.derivative(RELATIVE_STEP * e, Difference::Central, |r, d| {
-        r.rod.stiffness = Stiffness::Uniform(Section::tube(o, i, e + d, shear_modulus(e + d, nu)));
-    })?)?;
+    let youngs_modulus = held.tip(&youngs_modulus(sens, g)?)?;
     let shear_modulus = held.tip(&sens.derivative(RELATIVE_STEP * shear, Difference::Central, |r, d| {
         r.rod.stiffness = Stiffness::Uniform(Section::tube(o, i, e, shear + d));
     })?)?;
@@ -218,6 +213,36 @@ fn moduli(sens: &mut Sensitivity, held: &Held) -> Result<Option<ModulusSensitivi
         youngs_modulus_fixed_shear: youngs_modulus - shear_modulus * (shear / e),
         shear_modulus,
     }))
+}
+
+/// The geometry of `rod` when its uniform section is the one the geometry gives (to
+/// rounding): only then are E and G what the stiffness was built from.
+pub(super) fn built_from_geometry(rod: &Rod) -> Option<Geometry> {
+    let (Some(g), Stiffness::Uniform(section)) = (rod.geometry, &rod.stiffness) else {
+        return None;
+    };
+    let shear = shear_modulus(g.youngs_modulus, g.poisson_ratio);
+    let built = Section::tube(g.outer_radius, g.inner_radius, g.youngs_modulus, shear);
+    // 1e-12 relative: the same formulas give the section to rounding.
+    let close = |a: &Vector3<f64>, b: &Vector3<f64>| (a - b).norm() <= 1e-12 * b.norm();
+    (close(&section.kse, &built.kse) && close(&section.kbt, &built.kbt)).then_some(g)
+}
+
+/// The derivative of every node state with respect to E at fixed Poisson's ratio, for a rod
+/// built from `geometry` (its uniform section the geometry's).
+///
+/// # Errors
+/// As [`Sensitivity::derivative`].
+pub(super) fn youngs_modulus(sens: &mut Sensitivity, geometry: Geometry) -> Result<Vec<NodeDerivative>> {
+    let (o, i, e, nu) = (
+        geometry.outer_radius,
+        geometry.inner_radius,
+        geometry.youngs_modulus,
+        geometry.poisson_ratio,
+    );
+    sens.derivative(RELATIVE_STEP * e, Difference::Central, |r, d| {
+        r.rod.stiffness = Stiffness::Uniform(Section::tube(o, i, e + d, shear_modulus(e + d, nu)));
+    })
 }
 
 /// Whole-backbone sensitivity: d p(s) / d tau_i (m/N, world frame) at each of `solution`'s

@@ -190,8 +190,8 @@ pub(super) fn settings(solver: &SolverTable) -> SolverSettings {
 }
 
 /// The file path of a field path of the library (`tendons[0].termination` ->
-/// `tendon[1].end`).
-fn file_field(field: &str, euler: bool) -> String {
+/// `tendon[1].end`): tendons and point loads numbered from 1, as in robot files.
+pub fn file_field(field: &str, euler: bool) -> String {
     let renumber = |prefix: &str, to: &str| -> Option<String> {
         let rest = field.strip_prefix(prefix)?;
         let close = rest.find(']')?;

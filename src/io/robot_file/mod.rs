@@ -7,6 +7,7 @@
 //! solver settings are built in `build`.
 
 mod build;
+pub use build::file_field;
 mod check;
 mod segments;
 mod tables;

@@ -76,6 +76,9 @@ pub(crate) struct SolutionFile {
     /// The tip Jacobians (`tdcr solve --jacobian`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub jacobian: Option<Jacobian>,
+    /// Chosen columns of the tip Jacobian (`tdcr solve --jacobian=COLUMNS`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub tip_jacobian: Option<TipJacobian>,
     /// [`FORMAT`].
     pub format: String,
     pub unknowns: usize,
@@ -179,6 +182,14 @@ pub(crate) struct Jacobian {
     pub displacement: Vec<Vec<Num>>,
     pub tip_force: Vec<Vec<Num>>,
     pub tip_moment: Vec<Vec<Num>>,
+}
+
+/// Chosen columns of the tip Jacobian: the parameters' names and six rows (tip position,
+/// tip rotation vector), one column per name.
+#[derive(Serialize, Deserialize)]
+pub(crate) struct TipJacobian {
+    pub columns: Vec<String>,
+    pub rows: Vec<Vec<Num>>,
 }
 
 /// One Newton iteration of the report's history.
@@ -312,6 +323,7 @@ impl SolutionFile {
                 .map(|((state, path), tensions)| tendon_entry(state, path, tensions))
                 .collect(),
             jacobian: None,
+            tip_jacobian: None,
             format: FORMAT.into(),
             unknowns: report.unknowns,
             nonzeros: report.nonzeros,

@@ -1,0 +1,52 @@
+"""Plots with matplotlib (the `plot` extra: pip install "./python[plot]").
+
+`plot(solution)` draws a solved shape in 3-D: the backbone, each tendon's path (slack
+tendons dashed) and the tip. `tdcr.figure` writes the command line's own SVG/PNG picture
+without matplotlib.
+"""
+
+from typing import Any, Optional
+
+
+def _pyplot() -> Any:
+    """matplotlib.pyplot, or an ImportError that says how to install it."""
+    try:
+        import matplotlib.pyplot as plt
+    except ImportError as e:  # pragma: no cover - depends on the environment
+        raise ImportError(
+            'tdcr.plot needs matplotlib: pip install "./python[plot]" (or pip install matplotlib); '
+            "tdcr.figure(robot, solution, 'shape.png') draws without it"
+        ) from e
+    return plt
+
+
+def plot(solution: Any, ax: Optional[Any] = None, *, tendons: bool = True, label: Optional[str] = None) -> Any:
+    """Draws `solution` (a `tdcr.Solution`) into the 3-D axes `ax` (new ones in a new figure
+    when None): the backbone in black (labelled `label`), the tendon paths in the colours of
+    matplotlib's cycle (slack tendons dashed) when `tendons`, and the tip as a dot. Axes in
+    metres with equal scales. Returns the axes."""
+    plt = _pyplot()
+    if ax is None:
+        figure = plt.figure()
+        ax = figure.add_subplot(projection="3d")
+    p = solution.p
+    ax.plot(p[:, 0], p[:, 1], p[:, 2], color="black", linewidth=2.0, label=label or "backbone")
+    if tendons:
+        for i, (path, state) in enumerate(zip(solution.tendon_paths, solution.tendons)):
+            slack = state["tension"] <= 0.0
+            ax.plot(
+                path[:, 0],
+                path[:, 1],
+                path[:, 2],
+                linestyle="--" if slack else "-",
+                linewidth=0.8 if slack else 1.2,
+                label=f"tendon {i + 1}" + (" (slack)" if slack else f" ({state['tension']:.3g} N)"),
+            )
+    tip = solution.tip_position
+    ax.scatter([tip[0]], [tip[1]], [tip[2]], color="black", s=12)
+    ax.set_xlabel("x (m)")
+    ax.set_ylabel("y (m)")
+    ax.set_zlabel("z (m)")
+    # Equal scales on the three axes: a bend looks like a bend.
+    ax.set_aspect("equal")
+    return ax

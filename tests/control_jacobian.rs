@@ -1,0 +1,135 @@
+//! The control Jacobians (issue 26 item 1, issue 29 item 3): the columns a controller asks
+//! for, from a `Solver`'s workspace, equal the stateless `tip_sensitivities` columns; the
+//! backbone Jacobian equals the node derivatives at nodes and the derivative of
+//! `Solution::at` between them.
+
+use tdcr::collocation::Options;
+use tdcr::collocation::sensitivity::{backbone_jacobian, tip_jacobian};
+use tdcr::nalgebra::DMatrix;
+use tdcr::{Parameter, Robot, Solution, Solver, cases};
+
+/// Largest entry of `a - b` relative to the largest of `b`.
+fn relative(a: &DMatrix<f64>, b: &DMatrix<f64>) -> f64 {
+    (a - b).amax() / b.amax()
+}
+
+/// A control step: a solver that solved `robot`, then `robot` with tendon 1 pulled harder,
+/// warm-started (the chord steps run on the first solve's factors).
+fn stepped(robot: &Robot) -> (Solver, Robot, Solution) {
+    let mut solver = Solver::new(Options::default());
+    let first = solver.solve(robot).unwrap();
+    let mut next = robot.clone();
+    let t = next.tendons[0].tension();
+    next.tendons[0].set_tension(t + 0.05);
+    let warm = solver.solve_from(&next, &first).unwrap();
+    (solver, next, warm)
+}
+
+#[test]
+fn solver_jacobian_equals_the_stateless_columns() {
+    for robot in [cases::case_s(), cases::case_h()] {
+        let (mut solver, robot, warm) = stepped(&robot);
+        let tensions: Vec<Parameter> = (0..robot.tendons.len()).map(Parameter::Tension).collect();
+        let j = solver.tip_jacobian(&robot, &warm, &tensions).unwrap();
+        let full = tdcr::tip_sensitivities(&robot, &warm).unwrap();
+        // 1e-12: the same Jacobian, right-hand sides and solves; only the factoring
+        // workspace differs (rounding).
+        assert!(relative(&j, &full.tension) <= 1e-12, "{j} vs {}", full.tension);
+        // Only the columns asked for, in the order asked.
+        let some = [Parameter::TipForce(2), Parameter::Tension(4), Parameter::YoungsModulus];
+        let j = solver.tip_jacobian(&robot, &warm, &some).unwrap();
+        let mut expected = DMatrix::zeros(6, 3);
+        expected.set_column(0, &full.tip_force.column(2));
+        expected.set_column(1, &full.tension.column(4));
+        expected.set_column(2, &full.moduli.unwrap().youngs_modulus);
+        for c in 0..3 {
+            let (a, b) = (j.column(c).into_owned(), expected.column(c).into_owned());
+            // 1e-12 relative per column: as above.
+            assert!((a - &b).amax() <= 1e-12 * b.amax(), "column {c}: {j} vs {expected}");
+        }
+        // The stateless function gives the same.
+        let stateless = tip_jacobian(&robot, &warm, &some).unwrap();
+        assert!(relative(&stateless, &expected) <= 1e-12);
+    }
+}
+
+#[test]
+fn warm_solves_after_a_jacobian_equal_stateless_warm_solves() {
+    let (mut solver, mut robot, warm) = stepped(&cases::case_h());
+    let tensions: Vec<Parameter> = (0..5).map(Parameter::Tension).collect();
+    solver.tip_jacobian(&robot, &warm, &tensions).unwrap();
+    let t = robot.tendons[4].tension();
+    robot.tendons[4].set_tension(t + 0.05);
+    // The next warm solve runs its chord steps on the factors the Jacobian left (at the
+    // previous solution); the stateless one builds its own.
+    let stateful = solver.solve_from(&robot, &warm).unwrap();
+    let stateless = tdcr::solve_from(&robot, &Options::default(), &warm).unwrap();
+    assert_eq!(stateful.nodes.len(), stateless.nodes.len());
+    // 1e-12 m on a 0.24 m rod: both converge on the same mesh to the Newton stop's
+    // rounding-level step (STEP_TOLERANCE), far below the discretization error.
+    let gap = (stateful.tip_position() - stateless.tip_position()).norm();
+    assert!(gap <= 1e-12, "tips {gap:e} m apart");
+    let j = solver.tip_jacobian(&robot, &stateful, &tensions).unwrap();
+    let full = tdcr::tip_sensitivities(&robot, &stateful).unwrap();
+    assert!(relative(&j, &full.tension) <= 1e-12);
+}
+
+#[test]
+fn reset_forgets_the_workspace() {
+    let (mut solver, robot, warm) = stepped(&cases::case_s());
+    solver.reset();
+    let again = solver.solve_from(&robot, &warm).unwrap();
+    let fresh = Solver::new(Options::default()).solve_from(&robot, &warm).unwrap();
+    assert_eq!(again.tip_position(), fresh.tip_position());
+}
+
+#[test]
+fn backbone_jacobian_matches_node_derivatives_and_differences() {
+    let robot = cases::case_h();
+    let options = Options {
+        tolerance: None,
+        intervals: 32,
+        ..Default::default()
+    };
+    let solution = tdcr::solve(&robot, &options).unwrap();
+    let s: Vec<f64> = solution.nodes.iter().map(|n| n.s).collect();
+    let wrt = [Parameter::Tension(4), Parameter::TipForce(0)];
+    let j = backbone_jacobian(&robot, &solution, &wrt, &s).unwrap();
+    let nodes = tdcr::backbone_tension_sensitivity(&robot, &solution, 4).unwrap();
+    for (k, dp) in nodes.iter().enumerate() {
+        let row = j.fixed_view::<3, 1>(3 * k, 0).into_owned();
+        // 1e-12 relative: the node derivative itself (Hermite weights 1 and 0).
+        assert!((row - dp).norm() <= 1e-12 * dp.norm().max(1e-3), "node {k}");
+    }
+    // Between nodes: central differences of solution.at(s).p over full solves on the same
+    // mesh (fixed intervals), step 1e-4 of the tension.
+    let between: Vec<f64> = s.windows(2).step_by(5).map(|w| 0.37 * w[0] + 0.63 * w[1]).collect();
+    let j = backbone_jacobian(&robot, &solution, &wrt, &between).unwrap();
+    let h = 1e-4 * robot.tendons[4].tension();
+    let moved = |dq: f64| {
+        let mut r = robot.clone();
+        let t = r.tendons[4].tension();
+        r.tendons[4].set_tension(t + dq);
+        tdcr::solve(&r, &options).unwrap()
+    };
+    let (plus, minus) = (moved(h), moved(-h));
+    for (i, &si) in between.iter().enumerate() {
+        let fd = (plus.at(si).p - minus.at(si).p) / (2.0 * h);
+        let row = j.fixed_view::<3, 1>(3 * i, 0).into_owned();
+        // 1e-6 relative: the difference's truncation (h_rel^2 = 1e-8) and the solves'
+        // Newton stop (residual 1e-11 over h = 5e-4 N) leave about 1e-7.
+        assert!((row - fd).norm() <= 1e-6 * fd.norm(), "s = {si}: {row} vs {fd}");
+    }
+}
+
+#[test]
+fn control_jacobian_errors_name_the_problem() {
+    let robot = cases::case_s();
+    let solution = tdcr::solve(&robot, &Options::default()).unwrap();
+    let err = tip_jacobian(&robot, &solution, &[Parameter::LoadScale]).unwrap_err();
+    assert!(err.to_string().contains("not a column"), "{err}");
+    let err = tip_jacobian(&robot, &solution, &[Parameter::Tension(7)]).unwrap_err();
+    assert!(err.to_string().contains("tendon 8"), "{err}");
+    let err = backbone_jacobian(&robot, &solution, &[Parameter::Tension(0)], &[0.5]).unwrap_err();
+    assert!(err.to_string().contains("outside the rod"), "{err}");
+}
