@@ -352,6 +352,7 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<analysis::PyCalibration>()?;
     m.add_class::<branch::PySweep>()?;
     m.add_class::<branch::PyTrace>()?;
+    m.add_class::<branch::PyEvent>()?;
     m.add_function(wrap_pyfunction!(solve, m)?)?;
     m.add_function(wrap_pyfunction!(solve_batch, m)?)?;
     m.add_function(wrap_pyfunction!(solve_parameters, m)?)?;
