@@ -145,7 +145,7 @@ impl fmt::Display for Event {
         let located = if self.located {
             ""
         } else {
-            " (from an unstable state, not located)"
+            " (not located: from an unstable state)"
         };
         match &self.kind {
             Kind::Snap { distance } => write!(f, "snap{at}{unit}: the tip jumps by {:.1} mm{located}", distance * 1e3),
