@@ -1019,7 +1019,7 @@ fn sweep_reports_a_jump_and_varies_any_input() {
     let out = run(&dir, &["sweep", "robot.toml", "--tension", "1=0:2:3"], None);
     assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
     assert!(
-        stderr(&out).contains("sweep step 2: the tip jumps by"),
+        stderr(&out).contains("sweep step 2: snap at tension.1 = "),
         "{}",
         stderr(&out)
     );
@@ -1027,7 +1027,11 @@ fn sweep_reports_a_jump_and_varies_any_input() {
     let header: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
     assert_eq!(&header[header.len() - 3..], ["stability", "path", "event"]);
     let rows: Vec<Vec<&str>> = csv.lines().skip(1).map(|l| l.split(',').collect()).collect();
-    assert!(rows[1].last().unwrap().contains("snap-through"), "{csv}");
+    // The events located between steps 1 and 2: the bifurcation out of the plane, then the
+    // snap, each with its tension.
+    let event = rows[1].last().unwrap().trim_matches('"');
+    assert!(event.starts_with("bifurcation at tension.1 = 0.124"), "{event:?}");
+    assert!(event.contains("; snap at tension.1 = "), "{csv}");
     assert!(rows[2].last().unwrap().is_empty(), "{csv}");
     // The picture marks the snap: the shapes either side and the tip's jump, in the legend.
     let args = ["sweep", "robot.toml", "--tension", "1=0:2:3", "--out", "s.csv"];
@@ -1038,7 +1042,7 @@ fn sweep_reports_a_jump_and_varies_any_input() {
     );
     assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
     let svg = std::fs::read_to_string(dir.join("snap.svg")).unwrap();
-    assert!(svg.contains("snap at step 2: the tip jumps by"), "{svg}");
+    assert!(svg.contains("step 2: snap at tension.1 = "), "{svg}");
     assert!(svg.contains("1 shape in between"), "{svg}");
     // --param varies E: a stiffer rod bends less under the same tendon.
     std::fs::write(dir.join("ex.toml"), example()).unwrap();
@@ -1466,14 +1470,19 @@ fn a_sweep_names_the_step_where_a_tendon_goes_taut() {
     std::fs::write(dir.join("robot.toml"), text).unwrap();
     let out = run(&dir, &["sweep", "robot.toml", "--displacement", "1=0:0.01:6"], None);
     assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
-    assert!(!stderr(&out).contains("snap-through"), "{}", stderr(&out));
+    assert!(!stderr(&out).contains("snap"), "{}", stderr(&out));
     let csv = stdout(&out);
     let events: Vec<&str> = csv
         .lines()
         .skip(1)
         .map(|l| l.rsplit(',').next().unwrap_or(""))
         .collect();
-    assert_eq!(events, vec!["", "", "tendon 1 taut", "", "", ""], "{csv}");
+    let taut: Vec<bool> = events
+        .iter()
+        .map(|e| e.starts_with("tendon 1 taut at displacement.1 = 0.00205"))
+        .collect();
+    assert_eq!(taut, [false, false, true, false, false, false], "{csv}");
+    assert!(events.iter().filter(|e| !e.is_empty()).count() == 1, "{csv}");
 }
 
 /// Issue 27: `--corner-forces` and `--tendons` set what the file's `[model]` table sets,

@@ -12,19 +12,60 @@ use numpy::ndarray::Array2;
 use numpy::{IntoPyArray, PyArray1, PyArray2};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
-use tdcr::analysis::sweep::{Event, Step, Sweep, SweepSolver};
+use tdcr::analysis::sweep::{Event, Kind, Step, Sweep, SweepSolver};
 
 /// (n, 3) rows of tip positions.
 fn tip_rows<'py>(py: Python<'py>, tips: &[[f64; 3]]) -> Bound<'py, PyArray2<f64>> {
     Array2::from_shape_fn((tips.len(), 3), |(i, k)| tips[i][k]).into_pyarray(py)
 }
 
-/// The result of `sweep`: every step's solution and what happened since the step before.
+/// An event of a sweep or a trace, located to 1e-6 of the range.
+#[pyclass(module = "tdcr", name = "Event", frozen, get_all)]
+pub struct PyEvent {
+    /// `snap`, `bifurcation`, `taut` or `slack` (a sweep); `fold` or `bifurcation` (a trace).
+    kind: String,
+    /// The swept or traced input's value at the event (None when a sweep holds every input).
+    value: Option<f64>,
+    /// The input, e.g. `tension.5`.
+    parameter: Option<String>,
+    /// A sweep's step (from 0) at which the event is reported, the first step past it; None
+    /// in a trace.
+    step: Option<usize>,
+    /// The event in words, as `tdcr sweep`'s `event` column and `tdcr trace` say it.
+    text: String,
+}
+
+crate::pickle::pickled_fields! {
+    PyEvent { kind, value, parameter, step, text }
+
+    fn __repr__(&self) -> String {
+        format!("Event({})", self.text)
+    }
+
+    fn __str__(&self) -> String {
+        self.text.clone()
+    }
+}
+
+impl PyEvent {
+    /// A sweep's event, reported at `step`.
+    fn of_sweep(e: &Event, step: usize) -> Self {
+        PyEvent {
+            kind: e.kind.name().to_string(),
+            value: e.value.map(|(_, v)| v),
+            parameter: e.value.map(|(p, _)| p.to_string()),
+            step: Some(step),
+            text: e.to_string(),
+        }
+    }
+}
+
+/// The result of `sweep`: every step's solution and the events located between steps.
 /// It is also the sequence of the solutions (`len`, indexing, iteration).
 #[pyclass(module = "tdcr", name = "Sweep", frozen)]
 pub struct PySweep {
     solutions: Py<PyList>,
-    events: Vec<Option<String>>,
+    events: Vec<Py<PyEvent>>,
     jumps: Vec<usize>,
     tips: Vec<[f64; 3]>,
 }
@@ -34,10 +75,12 @@ impl PySweep {
         let solutions = PyList::empty(py);
         let (mut events, mut jumps, mut tips) = (Vec::new(), Vec::new(), Vec::new());
         for (k, step) in steps.into_iter().enumerate() {
-            if matches!(step.event, Some(Event::Jump { .. })) {
+            if step.events.iter().any(|e| matches!(e.kind, Kind::Snap { .. })) {
                 jumps.push(k);
             }
-            events.push(step.event.as_ref().map(ToString::to_string));
+            for e in &step.events {
+                events.push(Py::new(py, PyEvent::of_sweep(e, k))?);
+            }
             let p = step.solution.tip_position();
             tips.push([p.x, p.y, p.z]);
             solutions.append(PySolution {
@@ -62,16 +105,15 @@ crate::pickle::pickled_fields! {
         self.solutions.clone_ref(py)
     }
 
-    /// One entry per step: None, or what happened since the step before, as `tdcr sweep`'s
-    /// `event` column says it: `the tip jumps by 798.2 mm: a snap-through (fold) or another
-    /// branch`, or `tendon 1 taut` / `tendon 2 slack` (displacement-controlled tendons).
+    /// The events located between the steps, in order (`Event`: `kind` `snap`,
+    /// `bifurcation`, `taut` or `slack`, the input's `value` there, the `step` it is
+    /// reported at, the `text` of `tdcr sweep`'s `event` column).
     #[getter]
-    fn events(&self) -> Vec<Option<String>> {
-        self.events.clone()
+    fn events(&self, py: Python<'_>) -> Vec<Py<PyEvent>> {
+        self.events.iter().map(|e| e.clone_ref(py)).collect()
     }
 
-    /// The steps (from 0) where the tip jumped: a snap-through at a fold or a jump to
-    /// another branch of equilibria.
+    /// The steps (from 0) reached by a snap: the tip jumped off the branch it was on.
     #[getter]
     fn jumps(&self) -> Vec<usize> {
         self.jumps.clone()
@@ -108,8 +150,8 @@ crate::pickle::pickled_fields! {
 /// Solves the rows of `parameters` (a dict of 1-D arrays, names as `solve_batch`) in
 /// order with the library's sweep, as `tdcr sweep` does: each step warm-started from the
 /// last (`tdcr::solve_from`, so every step's stability verdict is its own), and the events
-/// between steps (the tip jumping off its branch, displacement-controlled tendons going
-/// taut or slack); collocation. A failure is raised with `index` set to its row and
+/// between steps located to 1e-6 of the range by bisection (a snap off the branch, a
+/// bifurcation, displacement-controlled tendons going taut or slack); collocation. A failure is raised with `index` set to its row and
 /// `partial` to the `Sweep` of the rows before it. Ctrl-C stops it within about 0.1 s
 /// with `KeyboardInterrupt`, whose `completed` and `partial` say the same of the rows
 /// finished.
@@ -123,23 +165,22 @@ pub fn sweep(
 ) -> PyResult<PySweep> {
     let settings = crate::options::apply(&robot.file.solver, options, Use::Collocation("sweep"))?;
     let rows = Rows::new(robot, parameters)?;
-    let mut sweep = Sweep::new(SweepSolver::Collocation(settings.collocation), None);
+    if rows.len() == 0 {
+        return PySweep::new(py, Vec::new());
+    }
+    let ranges = rows.ranges().map_err(to_py)?;
+    let mut sweep = Sweep::new(&ranges, SweepSolver::Collocation(settings.collocation), None);
     let mut steps = Vec::new();
     let mut failure = None;
-    let run = boundary::steps(py, || {
-        let k = steps.len();
-        if k == rows.len() {
-            return false;
+    let run = boundary::steps(py, || match boundary::caught(|| sweep.step().transpose()) {
+        Ok(Some(step)) => {
+            steps.push(step);
+            true
         }
-        match boundary::caught(|| sweep.step(&rows.robot(k)?)) {
-            Ok(step) => {
-                steps.push(step);
-                true
-            }
-            Err(e) => {
-                failure = Some((k, e));
-                false
-            }
+        Ok(None) => false,
+        Err(e) => {
+            failure = Some((steps.len(), e));
+            false
         }
     });
     let done = steps.len();
@@ -173,10 +214,14 @@ pub struct PyTrace {
     stability: Vec<String>,
     /// Whether the branch turns back at each point (a fold).
     fold: Vec<bool>,
-    /// Parameter values of the folds.
+    /// Parameter values of the folds, located to 1e-6 of the range.
     folds: Vec<f64>,
-    /// Parameter values where the number of unstable directions changed without a fold.
+    /// Parameter values where the number of unstable directions changed without a fold,
+    /// located to 1e-6 of the range.
     bifurcations: Vec<f64>,
+    /// The folds and bifurcations in the order the branch passes them (`Event`: `kind`
+    /// `fold` or `bifurcation`, `value` located to 1e-6 of the range).
+    events: Vec<Py<PyEvent>>,
     /// None when the branch reached the last value (or turned back past the first); else
     /// why it stopped (the points up to there are kept).
     stopped: Option<String>,
@@ -187,7 +232,7 @@ pub struct PyTrace {
 crate::pickle::pickled_fields! {
     PyTrace {
         parameter, values, tip_positions, unstable_directions, stability, fold, folds,
-        bifurcations, stopped, iterations,
+        bifurcations, events, stopped, iterations,
     }
 }
 
@@ -220,6 +265,24 @@ pub fn trace(
     let tips: Vec<[f64; 3]> = t.points.iter().map(|q| q.tip_position.into()).collect();
     let values: Vec<f64> = t.points.iter().map(|q| q.value).collect();
     let values_len = values.len();
+    let name = t.parameter.to_string();
+    let events = t
+        .events
+        .iter()
+        .map(|e| {
+            let text = format!("{} at {name} = {}", e.kind(), tdcr::Readable(e.value()));
+            Py::new(
+                py,
+                PyEvent {
+                    kind: e.kind().to_string(),
+                    value: Some(e.value()),
+                    parameter: Some(name.clone()),
+                    step: None,
+                    text,
+                },
+            )
+        })
+        .collect::<PyResult<Vec<_>>>()?;
     let result = PyTrace {
         parameter: t.parameter.to_string(),
         values: PyArray1::from_vec(py, values).unbind(),
@@ -229,6 +292,7 @@ pub fn trace(
         fold: t.points.iter().map(|q| q.fold).collect(),
         folds: t.folds,
         bifurcations: t.bifurcations,
+        events,
         stopped: t.stopped,
         iterations: t.report.iterations,
     };

@@ -267,6 +267,7 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<branch::PyTrace>()?;
     m.add_class::<gradient::PyLinearization>()?;
     m.add_class::<control::PySolver>()?;
+    m.add_class::<branch::PyEvent>()?;
     m.add_function(wrap_pyfunction!(solve, m)?)?;
     m.add_function(wrap_pyfunction!(solve_batch, m)?)?;
     m.add_function(wrap_pyfunction!(dataset::solve_parameters, m)?)?;

@@ -143,6 +143,20 @@ impl Rows {
         self.count
     }
 
+    /// The rows as the library sweep's ranges (the values between rows interpolated
+    /// linearly, where the sweep locates its events).
+    ///
+    /// # Errors
+    /// As `Ranges::new` (not for rows `new` checked).
+    pub fn ranges(&self) -> tdcr::Result<tdcr::analysis::sweep::Ranges> {
+        let inputs = self
+            .columns
+            .iter()
+            .map(|(p, values)| (tdcr::analysis::sweep::Input::Parameter(*p), values.clone()))
+            .collect();
+        tdcr::analysis::sweep::Ranges::new(self.base.clone(), inputs)
+    }
+
     /// The robot of row `row` (< `len()`).
     ///
     /// # Errors

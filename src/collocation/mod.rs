@@ -38,6 +38,7 @@ mod estimate;
 pub(crate) mod friction;
 mod homotopy;
 pub(crate) mod linear;
+mod locate;
 pub(crate) mod newton;
 mod options;
 mod path;
@@ -64,7 +65,7 @@ use pipeline::{Level, record_estimate, segment_ends, solve_impl};
 pub use solver::Solver;
 use solver::{Cache, Cached};
 use start::{cold_start, initial_mesh, resolves};
-pub use trace::{Trace, TracePoint, trace, trace_until};
+pub use trace::{Trace, TraceEvent, TracePoint, trace, trace_until};
 
 /// Solves `robot` by collocation from the rigid-equilibrium initial guess.
 ///

@@ -19,13 +19,13 @@
 
 use super::branch;
 use super::homotopy::{Homotopy, Point, dot, f_lambda, max_norm, residual, tangent};
+use super::locate;
 use super::newton::{self, Settings, Workspace};
 use super::options::Options;
 use super::refine;
 use super::stability;
 use super::system::System;
-use crate::mesh::guess::{interpolate, rigid_estimate};
-use crate::mesh::{Mesh, nodes};
+use crate::mesh::guess::rigid_estimate;
 use crate::model::parameter::Parameter;
 use crate::report::{SolveReport, Stability, Termination};
 use crate::solution::State;
@@ -354,11 +354,18 @@ pub(super) fn follow(
                         factored_at_point = false;
                         continue;
                     }
-                    bifurcations.push(lambda);
+                    // A trace reports the crossing located, not the first point past it.
+                    bifurcations.push(match tracing {
+                        true => locate::bifurcation(system, &homotopy, ws, (&point, unstable), &next, settings, report),
+                        false => lambda,
+                    });
                 }
                 unstable = next_unstable;
                 if fold {
-                    folds.push(lambda);
+                    folds.push(match tracing {
+                        true => locate::fold(system, &homotopy, ws, (&point, &fl, h), &next, settings, report, &mut r),
+                        false => lambda,
+                    });
                 }
                 if next.lambda >= 0.0 {
                     push(&mut record, &next, unstable, fold, report);
@@ -398,13 +405,13 @@ pub(super) fn follow(
                 let floor = system.mesh.intervals();
                 let needed = refine::start_intervals(robot, &point.x, floor).min(options.max_intervals);
                 if matches!(homotopy, Homotopy::Parameter { .. }) && needed as f64 > 1.25 * floor as f64 {
-                    match remesh(system, &homotopy, ws, &point, needed, options, settings, report) {
+                    match refine::remesh(system, &homotopy, ws, &point, needed, options, settings, report) {
                         Some((p, f)) => {
                             point = p;
                             fl = f;
                             r = vec![0.0; system.unknowns()];
                         }
-                        None => return Err((remesh_hint(point.lambda), worst)),
+                        None => return Err((refine::remesh_hint(point.lambda), worst)),
                     }
                 }
             }
@@ -476,13 +483,6 @@ fn polish(
     )
 }
 
-fn remesh_hint(lambda: f64) -> String {
-    format!(
-        "the load path could not move to a finer mesh at {:.1} % of the load",
-        lambda * 100.0
-    )
-}
-
 /// One predictor-corrector step of length `h` from `point`. Returns the converged states,
 /// their lambda and the corrector iterations, or None (the step is to be shortened).
 #[allow(clippy::too_many_arguments)]
@@ -495,6 +495,36 @@ pub(super) fn correct(
     fl: &[f64],
     factored_at_point: bool,
     settings: &Settings,
+    report: &mut SolveReport,
+    r: &mut [f64],
+) -> Option<(Vec<State>, f64, usize)> {
+    let tolerance = PATH_TOLERANCE.max(settings.tolerance);
+    correct_to(
+        system,
+        homotopy,
+        ws,
+        point,
+        h,
+        fl,
+        factored_at_point,
+        tolerance,
+        report,
+        r,
+    )
+}
+
+/// [`correct`], converged to the scaled residual `tolerance` (a located event's point is
+/// converged as tightly as a solve, not as a guide).
+#[allow(clippy::too_many_arguments)]
+pub(super) fn correct_to(
+    system: &mut System,
+    homotopy: &Homotopy,
+    ws: &mut Workspace,
+    point: &Point,
+    h: f64,
+    fl: &[f64],
+    factored_at_point: bool,
+    tolerance: f64,
     report: &mut SolveReport,
     r: &mut [f64],
 ) -> Option<(Vec<State>, f64, usize)> {
@@ -534,7 +564,7 @@ pub(super) fn correct(
             return None;
         }
         let new_norm = max_norm(r);
-        if new_norm <= PATH_TOLERANCE.max(settings.tolerance) && iteration > 1 {
+        if new_norm <= tolerance && iteration > 1 {
             return Some((x, lambda, iteration - 1));
         }
         if iteration > 1 && new_norm > CHORD_RATIO * norm {
@@ -578,33 +608,4 @@ pub(super) fn correct(
         lambda += dl;
     }
     None
-}
-
-/// Moves the path to a uniform mesh of `intervals` intervals at `point`: interpolates the
-/// shape ([`interpolate`]), converges Newton there at the same lambda and takes the tangent.
-#[allow(clippy::too_many_arguments)]
-fn remesh(
-    system: &mut System,
-    homotopy: &Homotopy,
-    ws: &mut Workspace,
-    point: &Point,
-    intervals: usize,
-    options: &Options,
-    settings: &Settings,
-    report: &mut SolveReport,
-) -> Option<(Point, Vec<f64>)> {
-    let model = system.model.clone();
-    let ends: Vec<f64> = system.mesh.nodes.iter().map(|n| n.segment_end).collect();
-    let shape = nodes::solution(&model, &point.x, &ends, None, report.clone()).ok()?;
-    let mesh = Mesh::uniform(model.robot, intervals).ok()?;
-    let mut x = interpolate(&shape, &mesh);
-    *system = System::new(model, mesh);
-    homotopy.set(system, point.lambda);
-    *ws = Workspace::new(system, options.linear_solver).ok()?;
-    report.meshes += 1;
-    let (term, _) = newton::run(system, ws, &mut x, settings, report);
-    if term != Termination::Converged || !ws.linearize(system, &x, report) {
-        return None;
-    }
-    tangent(system, homotopy, ws, x, point.lambda, Some((&[], point.tl)), report)
 }

@@ -3,14 +3,18 @@
 //! deferred-correction estimate ([`super::estimate`]) meets the tip tolerance.
 
 use super::estimate::Correction;
+use super::homotopy::{Homotopy, Point, tangent};
+use super::newton::{self, Settings, Workspace};
 use super::options::Options;
-use super::{Cache, Level, segment_ends};
+use super::system::System;
+use super::{Cache, Level, interpolate, segment_ends};
 use crate::Error;
 use crate::error::Result;
 use crate::mesh::guess::interpolate_nodes;
 use crate::mesh::{Mesh, nodes};
 use crate::model::equations::Model;
 use crate::model::robot::Robot;
+use crate::report::Termination;
 use crate::report::{ErrorEstimate, SolveReport};
 use crate::solution::State;
 
@@ -191,4 +195,41 @@ fn equidistributed(robot: &Robot, mesh: &Mesh, local: &[f64], target: usize) -> 
         k = end;
     }
     Mesh::from_points(robot, &points)
+}
+
+/// The hint of a load path that could not move to a finer mesh at `lambda`.
+pub(super) fn remesh_hint(lambda: f64) -> String {
+    format!(
+        "the load path could not move to a finer mesh at {:.1} % of the load",
+        lambda * 100.0
+    )
+}
+
+/// Moves the path to a uniform mesh of `intervals` intervals at `point`: interpolates the
+/// shape ([`interpolate`]), converges Newton there at the same lambda and takes the tangent.
+#[allow(clippy::too_many_arguments)]
+pub(super) fn remesh(
+    system: &mut System,
+    homotopy: &Homotopy,
+    ws: &mut Workspace,
+    point: &Point,
+    intervals: usize,
+    options: &Options,
+    settings: &Settings,
+    report: &mut SolveReport,
+) -> Option<(Point, Vec<f64>)> {
+    let model = system.model.clone();
+    let ends: Vec<f64> = system.mesh.nodes.iter().map(|n| n.segment_end).collect();
+    let shape = nodes::solution(&model, &point.x, &ends, None, report.clone()).ok()?;
+    let mesh = Mesh::uniform(model.robot, intervals).ok()?;
+    let mut x = interpolate(&shape, &mesh);
+    *system = System::new(model, mesh);
+    homotopy.set(system, point.lambda);
+    *ws = Workspace::new(system, options.linear_solver).ok()?;
+    report.meshes += 1;
+    let (term, _) = newton::run(system, ws, &mut x, settings, report);
+    if term != Termination::Converged || !ws.linearize(system, &x, report) {
+        return None;
+    }
+    tangent(system, homotopy, ws, x, point.lambda, Some((&[], point.tl)), report)
 }

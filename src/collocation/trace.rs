@@ -53,6 +53,55 @@ impl TracePoint {
     }
 }
 
+/// An event of a traced branch, located to 1e-6 of the traced range (module `locate`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum TraceEvent {
+    /// The branch turns back in the parameter at this value (loading past it, the robot
+    /// snaps through).
+    Fold(f64),
+    /// The number of unstable directions changes at this value without a fold: the branch
+    /// crosses another (Euler's column at P_cr).
+    Bifurcation(f64),
+}
+
+impl TraceEvent {
+    /// `fold` or `bifurcation`.
+    pub fn kind(&self) -> &'static str {
+        match self {
+            TraceEvent::Fold(_) => "fold",
+            TraceEvent::Bifurcation(_) => "bifurcation",
+        }
+    }
+
+    /// The parameter's value there.
+    pub fn value(&self) -> f64 {
+        match *self {
+            TraceEvent::Fold(v) | TraceEvent::Bifurcation(v) => v,
+        }
+    }
+}
+
+/// `folds` and `bifurcations` (each in the order the branch passes them) as one list in
+/// that order: the points say which came first (a fold flag, or a change of the unstable
+/// directions).
+fn in_order(points: &[TracePoint], folds: &[f64], bifurcations: &[f64]) -> Vec<TraceEvent> {
+    let (mut f, mut b) = (folds.iter(), bifurcations.iter());
+    let mut out = Vec::with_capacity(folds.len() + bifurcations.len());
+    for w in points.windows(2) {
+        let next = if w[1].fold {
+            f.next().map(|&v| TraceEvent::Fold(v))
+        } else if w[0].unstable_directions != w[1].unstable_directions {
+            b.next().map(|&v| TraceEvent::Bifurcation(v))
+        } else {
+            None
+        };
+        out.extend(next);
+    }
+    out.extend(f.map(|&v| TraceEvent::Fold(v)));
+    out.extend(b.map(|&v| TraceEvent::Bifurcation(v)));
+    out
+}
+
 /// A traced branch.
 #[derive(Clone, Debug)]
 pub struct Trace {
@@ -62,10 +111,13 @@ pub struct Trace {
     pub range: (f64, f64),
     /// The points in the order the branch passes them.
     pub points: Vec<TracePoint>,
-    /// Parameter values of the folds.
+    /// Parameter values of the folds, located to 1e-6 of the range.
     pub folds: Vec<f64>,
-    /// Parameter values where the number of unstable directions changed without a fold.
+    /// Parameter values where the number of unstable directions changed without a fold,
+    /// located to 1e-6 of the range.
     pub bifurcations: Vec<f64>,
+    /// The folds and bifurcations in the order the branch passes them.
+    pub events: Vec<TraceEvent>,
     /// `None` when the branch reached the last value or turned back past the first; else
     /// why it stopped (the points up to there are kept).
     pub stopped: Option<String>,
@@ -190,22 +242,26 @@ pub fn trace_until(
     report.meshes += start_counts.meshes;
     report.intervals = system.mesh.intervals();
     report.timings.total = clock.elapsed();
+    let points: Vec<TracePoint> = recorded
+        .into_iter()
+        .map(|r| TracePoint {
+            value: value(r.lambda),
+            tip_position: r.tip.p,
+            tip_rotation: r.tip.R,
+            unstable_directions: r.unstable,
+            fold: r.fold,
+            iterations: r.iterations + start_counts.iterations,
+        })
+        .collect();
+    let folds: Vec<f64> = folds.into_iter().map(value).collect();
+    let bifurcations: Vec<f64> = bifurcations.into_iter().map(value).collect();
     Ok(Trace {
         parameter,
         range: (from, to),
-        points: recorded
-            .into_iter()
-            .map(|r| TracePoint {
-                value: value(r.lambda),
-                tip_position: r.tip.p,
-                tip_rotation: r.tip.R,
-                unstable_directions: r.unstable,
-                fold: r.fold,
-                iterations: r.iterations + start_counts.iterations,
-            })
-            .collect(),
-        folds: folds.into_iter().map(value).collect(),
-        bifurcations: bifurcations.into_iter().map(value).collect(),
+        events: in_order(&points, &folds, &bifurcations),
+        points,
+        folds,
+        bifurcations,
         stopped,
         report,
     })

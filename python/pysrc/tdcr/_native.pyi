@@ -30,6 +30,7 @@ __all__ = [
     "Solver",
     "figure",
     "PlausibilityWarning",
+    "Event",
     "tip_sensitivities",
     "linearize",
     "Linearization",
@@ -448,6 +449,21 @@ def solve_parameters(
     terminal). Ctrl-C raises KeyboardInterrupt with `completed` and `partial`."""
 
 @final
+class Event:
+    """An event of a sweep or a trace, located to 1e-6 of the range."""
+
+    kind: str
+    """`snap`, `bifurcation`, `taut` or `slack` (a sweep); `fold` or `bifurcation` (a trace)."""
+    value: Optional[float]
+    """The swept or traced input's value at the event."""
+    parameter: Optional[str]
+    """The input, e.g. `tension.5`."""
+    step: Optional[int]
+    """A sweep's step (from 0) the event is reported at (the first past it); None in a trace."""
+    text: str
+    """The event in words."""
+
+@final
 class Sweep:
     """The result of `sweep`: every step's solution and the events between steps; also the
     sequence of the solutions."""
@@ -456,11 +472,12 @@ class Sweep:
     def solutions(self) -> List[Solution]:
         """The solutions, one per step solved, in order."""
     @property
-    def events(self) -> List[Optional[str]]:
-        """Per step: None, or what happened since the step before (`tdcr sweep`'s `event`)."""
+    def events(self) -> List[Event]:
+        """The events between steps, located to 1e-6 of the range (`snap`, `bifurcation`,
+        `taut`, `slack`); `tdcr sweep`'s `event` column holds their `text`."""
     @property
     def jumps(self) -> List[int]:
-        """The steps (from 0) where the tip jumped: a snap-through or another branch."""
+        """The steps (from 0) reached by a snap: the tip jumped off the branch it was on."""
     @property
     def tip_positions(self) -> FloatArray:
         """Tip positions (m, world frame), shape (n, 3)."""
@@ -495,6 +512,7 @@ class Trace:
     fold: List[bool]
     folds: List[float]
     bifurcations: List[float]
+    events: List[Event]
     stopped: Optional[str]
     iterations: int
 

@@ -1,13 +1,13 @@
 //! `tdcr sweep`: a sequence of robots over tension, pull-in or other input ranges, solved by
 //! the library's sweep (`tdcr::analysis::sweep`: each solve warm-started from the last, the
-//! jumps and taut/slack tendons between steps); CSV out, optionally the tip trajectory as a
-//! picture.
+//! snaps, bifurcations and taut/slack tendons between steps located); CSV out, optionally
+//! the tip trajectory as a picture.
 
 use clap::Args;
 use std::io::{IsTerminal, Write};
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
-use tdcr::analysis::sweep::{Event, Sweep, SweepSolver};
+use tdcr::analysis::sweep::{Input, Kind, Ranges, Sweep, SweepSolver};
 use tdcr::io::csv_table::CsvTable;
 use tdcr::io::{number, output};
 use tdcr::{Parameter, Robot, Solution};
@@ -192,6 +192,23 @@ impl<'a> Plan<'a> {
         Ok(Plan { params, steps })
     }
 
+    /// The library's ranges of the sweep on `base`: the tensions, the pull-ins, then the
+    /// `--param` inputs (the order [`Plan::robot`] sets them in).
+    fn ranges(&self, args: &SweepArgs, base: &Robot) -> Result<Ranges, Failure> {
+        let inputs = args
+            .tension
+            .iter()
+            .map(|(i, v)| (Input::Parameter(Parameter::Tension(i - 1)), v.clone()))
+            .chain(
+                args.displacement
+                    .iter()
+                    .map(|(i, v)| (Input::Displacement(i - 1), v.clone())),
+            )
+            .chain(self.params.iter().map(|(p, v)| (Input::Parameter(*p), (*v).clone())))
+            .collect();
+        Ranges::new(base.clone(), inputs).map_err(|e| Failure::Input(e.to_string()))
+    }
+
     /// The robot of step `k` (from 0): `base` with every range at its k-th value.
     fn robot(&self, args: &SweepArgs, base: &Robot, k: usize) -> Result<Robot, Failure> {
         let mut robot = base.clone();
@@ -265,16 +282,19 @@ pub fn run(args: &SweepArgs) -> Result<(), Failure> {
         tdcr::Method::Collocation => SweepSolver::Collocation(file.solver.collocation.clone()),
         tdcr::Method::Shooting => SweepSolver::Shooting(file.solver.shooting),
     };
-    let mut sweep = Sweep::new(solver, start);
+    let inputs = plan.ranges(args, &file.robot)?;
+    let mut sweep = Sweep::new(&inputs, solver, start);
     let mut progress = Progress::new();
     let mut failure = None;
     let mut past_limit = PastLimits::default();
     let chosen = chosen(args.shapes.0, steps);
     let mut drawn = Drawn::default();
     let mut previous: Option<Shape> = None;
-    for k in 0..steps {
-        let robot = plan.robot(args, &file.robot, k)?;
-        let step = match sweep.step(&robot) {
+    while let Some(result) = sweep.step() {
+        // The step just solved (or failed): the steps before it were solved.
+        let k = drawn.tips.len();
+        let robot = inputs.robot(k as f64).map_err(|e| Failure::Input(e.to_string()))?;
+        let step = match result {
             Ok(step) => step,
             Err(e) => {
                 failure = Some(step_failure(
@@ -287,19 +307,16 @@ pub fn run(args: &SweepArgs) -> Result<(), Failure> {
             }
         };
         past_limit.record(&robot, &step.solution, k, &name, &mut progress);
-        let event = match &step.event {
-            Some(e @ Event::Jump { .. }) => {
-                progress.finish();
-                note(&format!("warning: sweep step {}: {e}", k + 1));
-                if let (true, Some(before)) = (args.plot.is_some(), previous.take()) {
-                    let after = (robot.clone(), step.solution.clone());
-                    drawn.snaps.push((k, before, after, e.to_string()));
-                }
-                e.to_string()
+        for e in step.events.iter().filter(|e| matches!(e.kind, Kind::Snap { .. })) {
+            progress.finish();
+            note(&format!("warning: sweep step {}: {e}", k + 1));
+            if let (true, Some(before)) = (args.plot.is_some(), previous.clone()) {
+                let after = (robot.clone(), step.solution.clone());
+                drawn.snaps.push((k, before, after, e.to_string()));
             }
-            Some(e) => e.to_string(),
-            None => String::new(),
-        };
+        }
+        let event: Vec<String> = step.events.iter().map(ToString::to_string).collect();
+        let event = event.join("; ");
         row(&mut csv, args, &plan, k, &step.solution, &event);
         if args.solver.verbose {
             progress.finish();

@@ -134,10 +134,7 @@ pub fn picture(title: &str, ranges: String, disks: Option<usize>, drawn: &Drawn)
     for (k, _, _, what) in &drawn.snaps {
         figure.legend.push(
             LegendEntry::line(
-                &format!(
-                    "snap at step {}: {what}; shapes before (solid) and after (dotted)",
-                    k + 1
-                ),
+                &format!("step {}: {what}; shapes before (solid) and after (dotted)", k + 1),
                 SNAP,
             )
             .dash("6 4"),

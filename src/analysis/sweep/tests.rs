@@ -1,0 +1,216 @@
+//! Sweeps: events located between steps, and the branch independent of the step size.
+
+use super::*;
+use crate::model::parameter::Parameter;
+use crate::{Field, Rod, Routing, Tendon};
+use nalgebra::Vector3;
+
+/// `count` evenly spaced values from `a` to `b`.
+fn linspace(a: f64, b: f64, count: usize) -> Vec<f64> {
+    (0..count)
+        .map(|k| a + (b - a) * k as f64 / (count - 1) as f64)
+        .collect()
+}
+
+fn run(base: Robot, input: Input, values: Vec<f64>, options: collocation::Options) -> Vec<Step> {
+    let ranges = Ranges::new(base, vec![(input, values)]).unwrap();
+    let out = sweep(&ranges, SweepSolver::Collocation(options), None);
+    assert!(out.failure.is_none(), "{:?}", out.failure);
+    out.steps
+}
+
+/// The prototype's tendon 1 driven by its pull-in: under the rod's weight it is slack up
+/// to about 2.06 mm (tests/cli.rs), so the third of 0, 2, 4, 6 mm finds it taut, and the
+/// sweep locates where: the pull-in at which its solved tension leaves zero.
+#[test]
+fn a_tendon_going_taut_is_located() {
+    let mut base = crate::cases::case_s();
+    base.tendons[0].set_displacement(0.0);
+    let steps = run(
+        base.clone(),
+        Input::Displacement(0),
+        vec![0.0, 0.002, 0.004, 0.006],
+        Default::default(),
+    );
+    let counts: Vec<usize> = steps.iter().map(|s| s.events.len()).collect();
+    assert_eq!(counts, [0, 0, 1, 0]);
+    let event = &steps[2].events[0];
+    assert_eq!(event.kind, Kind::Taut(0));
+    let Some((Input::Displacement(0), q)) = event.value else {
+        panic!("{event:?}")
+    };
+    assert!(
+        event.to_string().starts_with("tendon 1 taut at displacement.1 = "),
+        "{event}"
+    );
+    // Either side of the located pull-in (6e-9 m = 1e-6 of the 6 mm range, the bracket's
+    // width, plus its half) the tendon is slack, then taut.
+    for (dq, taut) in [(-6e-9, false), (6e-9, true)] {
+        let mut r = base.clone();
+        r.tendons[0].set_displacement(q + dq);
+        let s = collocation::solve(&r, &Default::default()).unwrap();
+        assert_eq!(s.tendons[0].tension > 0.0, taut, "{q} {dq}");
+    }
+}
+
+/// About twice Euler's load on a 0.5 m rod buckled towards -x by a 10 mN imperfection,
+/// a tendon on the +x side: at 1 N the robot ends bent towards +x (docs/stability.md); the
+/// sweep reports the bifurcation where the buckled state loses stability out of its plane
+/// (0.124 N, at both step sizes) and a snap before 1 N; the steps after it are quiet.
+#[test]
+fn a_snap_through_is_located() {
+    let mut base =
+        Robot::new(Rod::tube(0.5, 0.001, 0.0, 200e9, 0.3)).with_tendon(Tendon::new(Routing::straight(0.015, 0.0), 0.0));
+    base.loads.distributed_force = Field::Constant(Vector3::new(0.0, 0.0, -0.24));
+    base.loads.tip_force = Vector3::new(-0.01, 0.0, -3.0);
+    let mut located = Vec::new();
+    for count in [3, 5] {
+        let steps = run(
+            base.clone(),
+            Input::Parameter(Parameter::Tension(0)),
+            linspace(0.0, 2.0, count),
+            Default::default(),
+        );
+        let events: Vec<&Event> = steps.iter().flat_map(|s| &s.events).collect();
+        let kinds: Vec<&str> = events.iter().map(|e| e.kind.name()).collect();
+        assert_eq!(kinds, ["bifurcation", "snap"], "{events:?}");
+        let Kind::Snap { distance } = events[1].kind else {
+            panic!("{:?}", events[1])
+        };
+        // 0.5 to 1 m: the tip crosses from about -x to +x on a 0.5 m rod.
+        assert!((0.5..1.0).contains(&distance), "{distance}");
+        assert!((0.0..1.0).contains(&events[1].value.unwrap().1), "{events:?}");
+        located.push(events[0].value.unwrap().1);
+        let last = steps.last().unwrap().solution.tip_position();
+        assert!(last.x > 0.0, "{last:?}");
+        assert!(steps.iter().skip(2).all(|s| s.events.is_empty()));
+    }
+    // The same bifurcation from both step sizes: 2e-6 N is 1e-6 of the 2 N range, twice
+    // (each location is within half its bracket of the crossing).
+    assert!((located[0] - located[1]).abs() < 2e-6, "{located:?}");
+}
+
+/// Issue 25's sweep: a two-segment robot standing along +z (0.4 m, radius 0.5 mm, 50 GPa,
+/// six straight tendons at 10 mm, three ending at mid-length) under a 0.3 N payload, about
+/// eight times its Euler load, buckled towards +x by a 0.3 mN imperfection; tendon 5 (at
+/// 180 deg, on the -x side) pulled from 0 to 0.2 N. The buckled state loses stability out
+/// of its plane at 1.795 mN (a bifurcation), and the robot snaps to the -x side at 8.012 mN.
+fn payload_robot() -> Robot {
+    let mut robot = Robot::new(Rod::tube(0.4, 0.0005, 0.0, 50e9, 0.3));
+    for (k, deg) in [0.0f64, 120.0, 240.0, 60.0, 180.0, 300.0].iter().enumerate() {
+        let a = deg.to_radians();
+        let mut tendon = Tendon::new(Routing::straight(0.01 * a.cos(), 0.01 * a.sin()), 0.0);
+        if k < 3 {
+            tendon = tendon.ending_at(0.2);
+        }
+        robot = robot.with_tendon(tendon);
+    }
+    robot.loads.tip_force = Vector3::new(3e-4, 0.0, -0.3);
+    robot
+}
+
+/// The smallest eigenvalue of the symmetric part of the tip's positional compliance
+/// d p(L) / d F_tip (m/N): negative proves the state unstable (pushing the tip moves it
+/// against the push).
+fn least_compliance(robot: &Robot, solution: &Solution) -> f64 {
+    let s = collocation::sensitivity::tip_sensitivities(robot, solution).unwrap();
+    let c = s.compliance().fixed_view::<3, 3>(0, 0).into_owned();
+    (0.5 * (c + c.transpose())).symmetric_eigenvalues().min()
+}
+
+#[test]
+fn the_payload_sweep_is_the_same_at_every_step_size() {
+    let ranges = |count| {
+        Ranges::new(
+            payload_robot(),
+            vec![(Input::Parameter(Parameter::Tension(4)), linspace(0.0, 0.2, count))],
+        )
+        .unwrap()
+    };
+    let mut runs = Vec::new();
+    for count in [11, 21, 41] {
+        let ranges = ranges(count);
+        let out = sweep(&ranges, SweepSolver::Collocation(Default::default()), None);
+        assert!(out.failure.is_none(), "{:?}", out.failure);
+        for (k, step) in out.steps.iter().enumerate() {
+            let robot = ranges.robot(k as f64).unwrap();
+            let least = least_compliance(&robot, &step.solution);
+            if step.solution.report.stability.is_stable() {
+                // -1e-9 m/N: rounding in a compliance of about 1 m/N.
+                assert!(
+                    least > -1e-9,
+                    "step {k} of {count}: stable with compliance {least:e} m/N"
+                );
+            }
+        }
+        runs.push(out.steps);
+    }
+    let events: Vec<Vec<(&str, f64)>> = runs
+        .iter()
+        .map(|steps| {
+            steps
+                .iter()
+                .flat_map(|s| &s.events)
+                .map(|e| (e.kind.name(), e.value.unwrap().1))
+                .collect()
+        })
+        .collect();
+    for run in &events {
+        let kinds: Vec<&str> = run.iter().map(|e| e.0).collect();
+        assert_eq!(kinds, ["bifurcation", "snap"], "{events:?}");
+        // 2e-7 N: 1e-6 of the 0.2 N range, the bifurcation's location (the snap comes from
+        // the unstable state past it, where the robot no longer is: not located).
+        assert!((run[0].1 - events[0][0].1).abs() < 2e-7, "{events:?}");
+        assert!((run[0].1 - 1.795e-3).abs() < 1e-6, "{events:?}");
+    }
+    // The same branch: every 0.02 N the three sweeps agree (2e-9 m: the solves' tolerance,
+    // each state reached from a different warm start) where they are stable.
+    for (k, step) in runs[0]
+        .iter()
+        .enumerate()
+        .filter(|(_, s)| s.solution.report.stability.is_stable())
+    {
+        for (run, stride) in runs[1..].iter().zip([2, 4]) {
+            let other = &run[k * stride].solution;
+            let gap = (other.tip_position() - step.solution.tip_position()).norm();
+            assert!(gap < 2e-9, "step {k}: {gap:e} m");
+            assert_eq!(
+                other.report.stability.verdict(),
+                step.solution.report.stability.verdict()
+            );
+        }
+    }
+}
+
+/// Euler's column (the prototype's rod along +z, P_cr = pi^2 EI / (4 L^2) = 0.177893 N,
+/// docs/stability.md) loaded past P_cr in a sweep: the straight column that every step
+/// ends on is stable below P_cr and unstable (two directions) above, and each step's
+/// verdict says so; the sweep locates the bifurcation at P_cr.
+#[test]
+fn every_step_has_its_own_verdict_and_the_bifurcation_is_located() {
+    let p_cr = 0.177893;
+    let base = Robot::new(Rod::tube(0.242, 0.0004, 0.0, 210e9, 0.3125));
+    let options = collocation::Options {
+        equilibrium: collocation::Equilibrium::Nearest,
+        ..Default::default()
+    };
+    let values: Vec<f64> = [0.9, 0.95, 1.05, 1.1].iter().map(|f| -f * p_cr).collect();
+    let steps = run(base, Input::Parameter(Parameter::TipForce(2)), values, options);
+    let verdicts: Vec<&str> = steps.iter().map(|s| s.solution.report.stability.verdict()).collect();
+    assert_eq!(verdicts, ["stable", "stable", "unstable", "unstable"]);
+    let counts: Vec<usize> = steps.iter().map(|s| s.events.len()).collect();
+    assert_eq!(counts, [0, 0, 1, 0]);
+    let e = &steps[2].events[0];
+    assert_eq!(
+        e.kind,
+        Kind::Bifurcation {
+            before: Some(0),
+            after: Some(2)
+        }
+    );
+    // P_cr of the rod to 5e-4 relative: the discretization's error in the critical load
+    // at the default tolerance (docs/stability.md measures 0.08 % for the trace's coarser
+    // location); the bracket itself is 1e-6 of the range wide.
+    let p = -e.value.unwrap().1;
+    assert!((p / p_cr - 1.0).abs() < 5e-4, "{p} against {p_cr}");
+}
