@@ -31,7 +31,15 @@ def test_a_default_solve_of_the_prototype_is_stable_direct_and_counted_as_the_co
     report = solution.report
     assert report.stability == "stable" and report.path == "direct"
     assert report.folds == [] and report.bifurcations == []
-    assert report.stability_detail == {"verdict": "stable", "unstable_directions": 0, "conjugate_point_s": None, "reason": None}
+    assert report.stability_detail == {
+        "verdict": "stable",
+        "unstable_directions": 0,
+        "conjugate_point_s": None,
+        "reason": None,
+        "growth": None,
+        "growth_rate": None,
+        "flutter_frequency": None,
+    }
     assert report.stability_message == "stable"
     assert report.iterations == report.newton_steps + report.chord_steps
     assert report.newton_steps >= 1 and report.load_steps == 0 and report.meshes >= 1
