@@ -106,39 +106,30 @@ impl SparseLu {
 
     /// Solves in place with the numeric factors of the last successful [`SparseLu::solve`].
     pub(crate) fn solve_again(&mut self, x: &mut [f64]) {
-        let SparseLu {
-            symbolic, numeric, mem, ..
-        } = self;
-        let lu = faer::sparse::linalg::lu::LuRef::new_unchecked(symbolic, numeric);
-        // A panic here would mean no factorization was made: report it as non-finite.
-        let solved = catch_unwind(AssertUnwindSafe(|| {
-            lu.solve_in_place_with_conj(
-                Conj::No,
-                ColMut::from_slice_mut(x).as_mat_mut(),
-                Par::Seq,
-                MemStack::new(mem),
-            );
-        }));
-        if solved.is_err() {
-            x.fill(f64::NAN);
-        }
+        self.solve_factored(x, false);
     }
 
     /// Solves J^T y = c in place (`x` holds c, then y) with the numeric factors of the last
     /// successful [`SparseLu::solve`].
     pub(crate) fn solve_transposed(&mut self, x: &mut [f64]) {
+        self.solve_factored(x, true);
+    }
+
+    /// J x = b, or J^T x = b when `transpose`, in place with the stored factors.
+    fn solve_factored(&mut self, x: &mut [f64], transpose: bool) {
         let SparseLu {
             symbolic, numeric, mem, ..
         } = self;
         let lu = faer::sparse::linalg::lu::LuRef::new_unchecked(symbolic, numeric);
         // A panic here would mean no factorization was made: report it as non-finite.
         let solved = catch_unwind(AssertUnwindSafe(|| {
-            lu.solve_transpose_in_place_with_conj(
-                Conj::No,
-                ColMut::from_slice_mut(x).as_mat_mut(),
-                Par::Seq,
-                MemStack::new(mem),
-            );
+            let rhs = ColMut::from_slice_mut(x).as_mat_mut();
+            let stack = MemStack::new(mem);
+            if transpose {
+                lu.solve_transpose_in_place_with_conj(Conj::No, rhs, Par::Seq, stack);
+            } else {
+                lu.solve_in_place_with_conj(Conj::No, rhs, Par::Seq, stack);
+            }
         }));
         if solved.is_err() {
             x.fill(f64::NAN);
