@@ -23,6 +23,7 @@ use super::locate;
 use super::newton::{self, Settings, Workspace};
 use super::options::Options;
 use super::refine;
+use super::snap;
 use super::stability;
 use super::system::System;
 use crate::mesh::guess::rigid_estimate;
@@ -71,7 +72,7 @@ pub(super) struct End {
     /// side of the Jacobian's kernel (nothing preferred either).
     pub picked: Vec<f64>,
     /// The load factor of the fold from which the states were reached by Newton at
-    /// lambda = 1 after the path itself could not be followed to the end ([`land_from_folds`]).
+    /// lambda = 1 after the path itself could not be followed to the end ([`snap::land_from_folds`]).
     pub snapped_from: Option<f64>,
 }
 
@@ -227,7 +228,7 @@ pub(super) fn follow(
     let mut trial: Vec<State> = Vec::with_capacity(system.mesh.nodes.len());
     let mut r = vec![0.0; n];
     // The states at the folds passed, with their load factors: where the path cannot be
-    // followed to the end, the robot snaps from one of them ([`land_from_folds`]).
+    // followed to the end, the robot snaps from one of them ([`snap::land_from_folds`]).
     let mut fold_states: Vec<(f64, Vec<State>)> = Vec::new();
     for _ in 0..MAX_STEPS {
         if stop() {
@@ -446,7 +447,7 @@ pub(super) fn follow(
         }
     }
     homotopy.set(system, 1.0);
-    if !tracing && let Some((lambda, x)) = land_from_folds(system, ws, &fold_states, settings, report) {
+    if !tracing && let Some((lambda, x)) = snap::land_from_folds(system, ws, &fold_states, settings, report) {
         return Ok(End {
             x,
             folds,
@@ -471,44 +472,6 @@ pub(super) fn follow(
         ),
         worst,
     ))
-}
-
-/// Where a path could not be followed to lambda = 1 (it stalled, or went round a closed
-/// family of equilibria at nearly constant lambda, as the out-of-plane swing of a hanging
-/// robot whose tendon and lateral load nearly balance, until its steps ran out): the robot
-/// snaps from a fold it passed to a stable state. Newton at lambda = 1 from the states at
-/// the folds, the latest first, landing cleanly (no damped step) on a state with no unstable
-/// direction: that state and the fold's load factor, or None. The system is left at
-/// lambda = 1.
-fn land_from_folds(
-    system: &mut System,
-    ws: &mut Workspace,
-    fold_states: &[(f64, Vec<State>)],
-    settings: &Settings,
-    report: &mut SolveReport,
-) -> Option<(f64, Vec<State>)> {
-    let land = Settings {
-        reuse_factors: false,
-        stop_when_damped: false,
-        max_iterations: settings.max_iterations,
-        ..*settings
-    };
-    for (lambda, x) in fold_states.iter().rev() {
-        // A fold passed before the mesh was refined has states on the coarser mesh.
-        if x.len() != system.mesh.nodes.len() {
-            continue;
-        }
-        let mut landed = x.clone();
-        let (term, _) = newton::run(system, ws, &mut landed, &land, report);
-        if term == Termination::Converged
-            && ws.linearize(system, &landed, report)
-            && index(system, ws, report) == Some(0)
-        {
-            report.termination = term;
-            return Some((*lambda, landed));
-        }
-    }
-    None
 }
 
 /// `point` converged to the solve's tolerance at its lambda (a parameter's path only: Newton
