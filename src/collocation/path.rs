@@ -23,7 +23,6 @@ use super::locate;
 use super::newton::{self, Settings, Workspace};
 use super::options::Options;
 use super::refine;
-use super::snap;
 use super::stability;
 use super::system::System;
 use crate::mesh::guess::rigid_estimate;
@@ -71,9 +70,6 @@ pub(super) struct End {
     /// Load factors where the path left a perfectly symmetric bifurcation along a picked
     /// side of the Jacobian's kernel (nothing preferred either).
     pub picked: Vec<f64>,
-    /// The load factor of the fold from which the states were reached by Newton at
-    /// lambda = 1 after the path itself could not be followed to the end ([`snap::land_from_folds`]).
-    pub snapped_from: Option<f64>,
 }
 
 /// A step that changes the number of unstable directions without a fold has jumped to
@@ -227,9 +223,6 @@ pub(super) fn follow(
     let mut worst = 0;
     let mut trial: Vec<State> = Vec::with_capacity(system.mesh.nodes.len());
     let mut r = vec![0.0; n];
-    // The states at the folds passed, with their load factors: where the path cannot be
-    // followed to the end, the robot snaps from one of them ([`snap::land_from_folds`]).
-    let mut fold_states: Vec<(f64, Vec<State>)> = Vec::new();
     for _ in 0..MAX_STEPS {
         if stop() {
             return Err(("stopped on request before the end of the range".into(), 0));
@@ -282,7 +275,6 @@ pub(super) fn follow(
                     folds,
                     bifurcations,
                     picked,
-                    snapped_from: None,
                 });
             }
             if let (true, Some(a), Some(b)) = (switching, unstable, landed_unstable)
@@ -369,9 +361,6 @@ pub(super) fn follow(
                     });
                 }
                 unstable = next_unstable;
-                if fold && !tracing {
-                    fold_states.push((lambda, next.x.clone()));
-                }
                 if fold {
                     folds.push(match tracing {
                         true => locate::fold(system, &homotopy, ws, (&point, &fl, h), &next, settings, report, &mut r),
@@ -389,7 +378,6 @@ pub(super) fn follow(
                         folds,
                         bifurcations,
                         picked,
-                        snapped_from: None,
                     });
                 }
                 // The angle between successive tangents bounds the next step.
@@ -447,15 +435,6 @@ pub(super) fn follow(
         }
     }
     homotopy.set(system, 1.0);
-    if !tracing && let Some((lambda, x)) = snap::land_from_folds(system, ws, &fold_states, settings, report) {
-        return Ok(End {
-            x,
-            folds,
-            bifurcations,
-            picked,
-            snapped_from: Some(lambda),
-        });
-    }
     // The point can lie outside [0, 1] (a Newton homotopy's path may turn back past its
     // start): the share of the way is the furthest point reached, and the point itself is
     // named only when it lies on the way behind it.
