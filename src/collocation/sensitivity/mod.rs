@@ -385,6 +385,17 @@ impl<'a> Sensitivity<'a> {
             .collect())
     }
 
+    /// Tendon `tendon` (0-based) of `robot`: [`crate::Error::InvalidInput`] when out of range.
+    fn tendon_of(robot: &'a Robot, tendon: usize) -> Result<&'a crate::model::tendon::Tendon> {
+        robot.tendons.get(tendon).ok_or_else(|| {
+            invalid(
+                "tendon",
+                format!("is {tendon}, but the robot has {} tendons", robot.tendons.len()),
+                "give a 0-based tendon index",
+            )
+        })
+    }
+
     /// Checks a Cartesian axis index: [`crate::Error::InvalidInput`] unless 0, 1 or 2.
     fn check_axis(axis: usize) -> Result<()> {
         if axis < 3 {
@@ -509,13 +520,7 @@ impl<'a> Sensitivity<'a> {
     /// Writes -dF/dq of [`Sensitivity::tension`] into the right-hand side buffer.
     fn tension_rhs(&mut self, tendon: usize) -> Result<()> {
         let robot = self.robot();
-        let Some(t) = robot.tendons.get(tendon) else {
-            return Err(invalid(
-                "tendon",
-                format!("is {tendon}, but the robot has {} tendons", robot.tendons.len()),
-                "give a 0-based tendon index",
-            ));
-        };
+        let t = Self::tendon_of(robot, tendon)?;
         let offset = t.routing.at(0.0, robot.length()).r.norm();
         let bend = if offset > 0.0 {
             robot.bending_stiffness() / (robot.length() * offset)
@@ -566,13 +571,7 @@ impl<'a> Sensitivity<'a> {
     /// need another system); as [`Sensitivity::derivative`].
     pub fn friction(&mut self, tendon: usize) -> Result<Vec<NodeDerivative>> {
         let robot = self.robot();
-        let Some(t) = robot.tendons.get(tendon) else {
-            return Err(invalid(
-                "tendon",
-                format!("is {tendon}, but the robot has {} tendons", robot.tendons.len()),
-                "give a 0-based tendon index",
-            ));
-        };
+        let t = Self::tendon_of(robot, tendon)?;
         let Some(friction) = t.active_friction() else {
             return Err(invalid(
                 format!("tendons[{tendon}].friction"),
