@@ -30,7 +30,7 @@
 use crate::error::{Result, invalid};
 use crate::model::equations::{Model, Site};
 use crate::model::linearize::{Linearization, Point, TendonPoint};
-use crate::model::robot::{Robot, TendonModel};
+use crate::model::robot::{Robot, RodModel, TendonModel};
 use crate::model::tendon::Tendon;
 use crate::{Error, Readable};
 use nalgebra::{Matrix3, Matrix6, Matrix6x3, SMatrix, Vector3, Vector6};
@@ -76,6 +76,14 @@ pub(crate) fn validate(robot: &Robot, i: usize, t: &Tendon) -> Result<()> {
             field,
             format!("is {} with the point-moment tendon model", Readable(mu)),
             "friction needs the coupled tendon model (distributed tendon loads): use it, or set the friction to 0",
+        ));
+    }
+    if robot.rod_model != RodModel::Cosserat {
+        return Err(invalid(
+            field,
+            format!("is {} on a Kirchhoff rod", Readable(mu)),
+            "friction is solved on the Cosserat rod only for now: use rod = \"cosserat\" (a rod stiff in \
+             shear and extension is within 1/stiffness of the Kirchhoff rod), or set the friction to 0",
         ));
     }
     let end = t.end(robot.length());
@@ -212,7 +220,7 @@ fn solve(
         let (Some(friction), Some(slot)) = (tendons[i].active_friction(), slipping.iter().position(|&j| j == i)) else {
             continue;
         };
-        let tp = TendonPoint::new(i, tension, &rp, site.s, v, u)?;
+        let tp = TendonPoint::new(i, tension, &rp, site, v, u)?;
         let m = tp.r.cross(&tp.t);
         let e = Vector6::new(tp.t[0], tp.t[1], tp.t[2], m[0], m[1], m[2]);
         let mut row = e.transpose();

@@ -120,6 +120,9 @@ pub(crate) struct TendonPoint {
     pub(crate) k: f64,
     /// 1 / |p_i^b'|.
     pub(crate) inv_speed: f64,
+    /// On a Kirchhoff rod ([`Site::inextensible`]) v' = v*' is no unknown: it is part of
+    /// `c`, and q_i does not depend on the translational coordinate.
+    pub(crate) inextensible: bool,
 }
 
 impl TendonPoint {
@@ -130,31 +133,42 @@ impl TendonPoint {
         t: Vector3::new(0.0, 0.0, 0.0),
         k: 0.0,
         inv_speed: 0.0,
+        inextensible: false,
     };
 
-    /// Tendon `i` with tension `tension` (N) at the routing point `rp` of arc length `s`.
+    /// Tendon `i` with tension `tension` (N) at the routing point `rp` of `site`, for the
+    /// node coordinates (v, u) (the strain is [`Site::strain`] of v).
     pub(crate) fn new(
         i: usize,
         tension: f64,
         rp: &RoutingPoint,
-        s: f64,
+        site: &Site,
         v: &Vector3<f64>,
         u: &Vector3<f64>,
     ) -> Result<Self> {
-        let p = u.cross(&rp.r) + rp.r_s + v;
+        let p = u.cross(&rp.r) + rp.r_s + site.strain(v);
         let speed = p.norm();
         if speed < MIN_TENDON_SPEED {
-            return Err(Error::SingularRouting { tendon: i, s, speed });
+            return Err(Error::SingularRouting {
+                tendon: i,
+                s: site.s,
+                speed,
+            });
         }
         let inv_speed = 1.0 / speed;
         let e = p + rp.r_s;
+        let mut c = u.cross(&e) + rp.r_ss;
+        if site.inextensible {
+            c += site.reference.v_star_s; // v' = v*'
+        }
         Ok(TendonPoint {
             r: rp.r,
             e,
-            c: u.cross(&e) + rp.r_ss,
+            c,
             t: p * inv_speed,
             k: tension * inv_speed,
             inv_speed,
+            inextensible: site.inextensible,
         })
     }
 
@@ -192,10 +206,12 @@ impl TendonPoint {
     }
 
     /// [dq_i/dv, dq_i/du] (module docs) at the rates x = (x_v, x_u), with x held fixed: the
-    /// change of the tendon's normal load q_i with the strains.
+    /// change of the tendon's normal load q_i with the node coordinates (on a Kirchhoff rod
+    /// q_i does not depend on v nor x_v, the translational coordinate and its rate).
     pub(crate) fn normal_derivative(&self, x_v: &Vector3<f64>, x_u: &Vector3<f64>, u: &Vector3<f64>) -> Matrix3x6<f64> {
         let A = self.A();
         let t = &self.t;
+        let x_v = if self.inextensible { Vector3::zeros() } else { *x_v };
         let z = x_v - self.r.cross(x_u) + self.c; // p_i^b''
         let alpha = t.dot(&z);
         let z_perp = z - t * alpha;
@@ -215,7 +231,9 @@ impl TendonPoint {
         // dq/du = -Q r^ - A e^: rows r x Q_j + e x A_j
         let dq_du = mul_hat(&Q, &-self.r) + mul_hat(&A, &-self.e);
         let mut QQ = Matrix3x6::zeros();
-        QQ.fixed_columns_mut::<3>(0).copy_from(&Q);
+        if !self.inextensible {
+            QQ.fixed_columns_mut::<3>(0).copy_from(&Q);
+        }
         QQ.fixed_columns_mut::<3>(3).copy_from(&dq_du);
         QQ
     }
@@ -278,10 +296,12 @@ fn spd_inverse3(a: &Matrix3<f64>) -> Option<Matrix3<f64>> {
     Some(Matrix3::new(c00, c01, c02, c01, c11, c12, c02, c12, minor2) * inv)
 }
 
-/// M = [P, G; G^T, Q] (symmetric positive definite, 3x3 blocks) factored by block
-/// elimination: P^-1, W = P^-1 G and the inverse of the Schur complement
-/// S = Q - G^T P^-1 G, each 3x3 inverse by its adjugate. M is SPD exactly when P and S are,
-/// so this succeeds exactly when a Cholesky factorization would (up to rounding). It has
+/// M = [P, G; rho G^T, Q] (3x3 blocks, P and Q symmetric; rho = 1, M symmetric positive
+/// definite, on a Cosserat rod, rho = 0, M block triangular, on a Kirchhoff rod) factored by
+/// block elimination: P^-1, W = P^-1 G and the inverse of the Schur complement
+/// S = Q - rho G^T P^-1 G, each 3x3 inverse by its adjugate. For rho = 1, M is SPD exactly
+/// when P and S are, so this succeeds exactly when a Cholesky factorization would (up to
+/// rounding). It has
 /// two independent divisions and no square roots on its dependency chain; replacing a 6x6
 /// Cholesky written out for the fixed size (six dependent square roots) by it took a warm
 /// solve of case H from 256 to 203 us on the development machine.
@@ -290,27 +310,43 @@ struct Schur6 {
     G: Matrix3<f64>,
     W: Matrix3<f64>,
     S_inv: Matrix3<f64>,
+    /// rho = 1 (true) or 0.
+    coupled: bool,
 }
 
 impl Schur6 {
-    /// Factors M (reads its upper-left, upper-right and lower-right blocks); None when M
-    /// is not SPD.
-    fn new(M: &Matrix6<f64>) -> Option<Self> {
+    /// Factors M (reads its upper-left, upper-right and lower-right blocks; the lower-left
+    /// is G^T when `coupled`, else 0); None when P or S is not SPD.
+    fn new(M: &Matrix6<f64>, coupled: bool) -> Option<Self> {
         let P_inv = spd_inverse3(&M.fixed_view::<3, 3>(0, 0).into_owned())?;
         let G: Matrix3<f64> = M.fixed_view::<3, 3>(0, 3).into_owned();
         let W = P_inv * G;
-        let S = M.fixed_view::<3, 3>(3, 3) - G.tr_mul(&W);
-        // S is symmetric; average out the rounding of the product.
-        let S_inv = spd_inverse3(&((S + S.transpose()) * 0.5))?;
-        Some(Schur6 { P_inv, G, W, S_inv })
+        let S_inv = if coupled {
+            let S = M.fixed_view::<3, 3>(3, 3) - G.tr_mul(&W);
+            // S is symmetric; average out the rounding of the product.
+            spd_inverse3(&((S + S.transpose()) * 0.5))?
+        } else {
+            spd_inverse3(&M.fixed_view::<3, 3>(3, 3).into_owned())?
+        };
+        Some(Schur6 {
+            P_inv,
+            G,
+            W,
+            S_inv,
+            coupled,
+        })
     }
 
-    /// Overwrites the rows of `bt` with those of bt M^-1, i.e. solves M X = B for B = bt^T
-    /// (M and the block inverses are symmetric): with rows (b_v, b_u),
-    /// w = b_v P^-1, x_u = (b_u - w G) S^-1, x_v = w - x_u W^T.
+    /// Overwrites the rows of `bt` with those of bt M^-T, i.e. solves M X = B for B = bt^T
+    /// (P, Q and S are symmetric): with rows (b_v, b_u), w = b_v P^-1,
+    /// x_u = (b_u - rho w G) S^-1, x_v = w - x_u W^T.
     fn solve_transposed_mut<const C: usize>(&self, bt: &mut SMatrix<f64, C, 6>) {
         let w = bt.fixed_columns::<3>(0) * self.P_inv;
-        let x_u = (bt.fixed_columns::<3>(3) - w * self.G) * self.S_inv;
+        let x_u = if self.coupled {
+            (bt.fixed_columns::<3>(3) - w * self.G) * self.S_inv
+        } else {
+            bt.fixed_columns::<3>(3) * self.S_inv
+        };
         let x_v = w - x_u * self.W.transpose();
         bt.fixed_columns_mut::<3>(0).copy_from(&x_v);
         bt.fixed_columns_mut::<3>(3).copy_from(&x_u);
@@ -328,9 +364,9 @@ enum Factor {
 }
 
 impl Factor {
-    /// Factors M.
-    fn new(M: &Matrix6<f64>) -> Self {
-        match Schur6::new(M) {
+    /// Factors M; `coupled` as in [`Schur6::new`].
+    fn new(M: &Matrix6<f64>, coupled: bool) -> Self {
+        match Schur6::new(M, coupled) {
             Some(f) => Factor::Spd(f),
             None => Factor::Lu(M.lu()),
         }
@@ -403,7 +439,7 @@ fn assemble(
     let mut a = Vector3::<f64>::zeros();
     let mut b = Vector3::<f64>::zeros();
     for (i, tension, rp) in model.distributed_tendons(site.s, segment_end) {
-        let tp = TendonPoint::new(i, tension, &rp, site.s, v, u)?;
+        let tp = TendonPoint::new(i, tension, &rp, site, v, u)?;
         let A_i = tp.A();
         let G_i = mul_hat(&A_i, &-tp.r); // -A_i r^
         A += A_i;
@@ -422,12 +458,21 @@ fn assemble(
 
     let rhs_v =
         reference.v_star_s.component_mul(kse) - u.cross(&n_b) - dv.component_mul(kse_s) - f_b - site.f_follower - a;
-    let rhs_u =
-        reference.u_star_s.component_mul(kbt) - u.cross(&m_b) - du.component_mul(kbt_s) - v.cross(&n_b) - l_b - b;
+    let rhs_u = reference.u_star_s.component_mul(kbt)
+        - u.cross(&m_b)
+        - du.component_mul(kbt_s)
+        - site.strain(v).cross(&n_b)
+        - l_b
+        - b;
+    // On a Kirchhoff rod the tendons' loads do not depend on the rate of the translational
+    // coordinate (v' = v*' is in a and b): M = [D, G; 0, C + H] (docs/model.md).
+    let coupled = !site.inextensible;
     let mut M = Matrix6::<f64>::zeros();
-    M.fixed_view_mut::<3, 3>(0, 0).copy_from(&A);
+    if coupled {
+        M.fixed_view_mut::<3, 3>(0, 0).copy_from(&A);
+        M.fixed_view_mut::<3, 3>(3, 0).copy_from(&G.transpose()); // B = G^T
+    }
     M.fixed_view_mut::<3, 3>(0, 3).copy_from(&G);
-    M.fixed_view_mut::<3, 3>(3, 0).copy_from(&G.transpose()); // B = G^T
     M.fixed_view_mut::<3, 3>(3, 3).copy_from(&H);
     for j in 0..3 {
         M[(j, j)] += kse[j];
@@ -436,7 +481,7 @@ fn assemble(
     // The right-hand side as a row, (rhs_v^T, rhs_u^T).
     let mut x = SMatrix::<f64, 1, 6>::new(rhs_v[0], rhs_v[1], rhs_v[2], rhs_u[0], rhs_u[1], rhs_u[2]);
     // M is SPD (docs/model.md section 4): block elimination, LU only if rounding made it fail.
-    let factor = Factor::new(&M);
+    let factor = Factor::new(&M, coupled);
     if !factor.solve_transposed_mut(&mut x) {
         return Err(breakdown(site.s));
     }
@@ -609,10 +654,17 @@ fn derivative(
     }
     if count > CACHED_TENDONS {
         for (i, tension, rp) in model.distributed_tendons(site.s, segment_end).skip(CACHED_TENDONS) {
-            TendonPoint::new(i, tension, &rp, site.s, v, u)?.add_derivatives(&x_v, &x_u, u, &mut top, &mut bottom);
+            TendonPoint::new(i, tension, &rp, site, v, u)?.add_derivatives(&x_v, &x_u, u, &mut top, &mut bottom);
         }
     }
     let n_hat = hat3(&n_b);
+    // d(v x n_b)/dv = v^ D - n_b^ on a Cosserat rod; on a Kirchhoff rod v = v* and only
+    // n_b = D (coordinate - v*) changes.
+    let strain_term = if site.inextensible {
+        hat_diag(&site.strain(v), kse, &Vector3::zeros())
+    } else {
+        hat_diag(v, kse, &Vector3::zeros()) - n_hat
+    };
     let blocks = [
         [
             hat_diag(u, kse, kse_s) + top.fixed_columns::<3>(0),
@@ -620,7 +672,7 @@ fn derivative(
             hat3(&f_b),
         ],
         [
-            hat_diag(v, kse, &Vector3::zeros()) - n_hat + bottom.fixed_columns::<3>(0),
+            strain_term + bottom.fixed_columns::<3>(0),
             hat_diag(u, kbt, kbt_s) - hat3(&m_b) + bottom.fixed_columns::<3>(3),
             hat3(&l_b),
         ],
@@ -970,7 +1022,7 @@ mod tests {
         // symmetric indefinite: the SPD test fails, the LU fallback solves
         let indefinite = N + N.transpose() - Matrix6::from_diagonal_element(0.1);
         for (M, uses_lu) in [(spd, false), (indefinite, true)] {
-            let factor = Factor::new(&M);
+            let factor = Factor::new(&M, true);
             assert_eq!(matches!(factor, Factor::Lu(_)), uses_lu);
             let mut Xt = B.transpose();
             assert!(factor.solve_transposed_mut(&mut Xt));
@@ -979,6 +1031,6 @@ mod tests {
             // diagonal scaling
             assert!(rel(&Xt.transpose(), &reference) < 1e-12);
         }
-        assert!(!Factor::new(&Matrix6::zeros()).solve_transposed_mut(&mut B.transpose()));
+        assert!(!Factor::new(&Matrix6::zeros(), true).solve_transposed_mut(&mut B.transpose()));
     }
 }
