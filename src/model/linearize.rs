@@ -706,7 +706,10 @@ mod tests {
     /// The test oracle: eq. 13 (corrected, docs/model.md) transcribed directly, generic over
     /// the scalar, with nalgebra's Cholesky (LU fallback). Dual numbers through it give the
     /// forward-mode derivatives the hand-derived linearization is checked against; in f64 it
-    /// checks [`rates`], which factors M by 3x3 blocks instead.
+    /// checks [`rates`], which factors M by 3x3 blocks instead. On a Kirchhoff rod's site it
+    /// is the force balance n_b' + u x n_b + ... = 0 with n_b = D (v - v*) for the coordinate
+    /// v, the strain v* in the tendon paths and the moment balance, and v' = v*' in the
+    /// tendons' p_i'' (docs/model.md, "Kirchhoff rods"), solved by LU.
     fn strain_rates<T: Real>(
         model: &Model,
         site: &Site,
@@ -727,6 +730,10 @@ mod tests {
         let du = u - u_star;
         let u_hat = hat(u);
         let Rt = R.transpose();
+        let kirchhoff = site.inextensible;
+        // The strain in the tendon paths and the moment balance.
+        let strain = if kirchhoff { v_star } else { *v };
+        let v_star_s = lift::<T>(&site.reference.v_star_s);
 
         let mut A = Matrix3::<T>::zeros();
         let mut B = Matrix3::<T>::zeros();
@@ -738,7 +745,7 @@ mod tests {
             let r = lift::<T>(&rp.r);
             let r_s = lift::<T>(&rp.r_s);
             let r_ss = lift::<T>(&rp.r_ss);
-            let pb_s = u.cross(&r) + r_s + v; // p_i^b'
+            let pb_s = u.cross(&r) + r_s + strain; // p_i^b'
             let speed = pb_s.norm();
             if speed < T::from_f64(MIN_TENDON_SPEED).unwrap_or_else(T::zero) {
                 return Err(Error::SingularRouting {
@@ -752,7 +759,8 @@ mod tests {
             let A_i = ph * ph * (-tau / (speed * speed * speed));
             let r_hat = hat(&r);
             let B_i = r_hat * A_i;
-            let a_i = A_i * (u_hat * pb_s + u_hat * r_s + r_ss);
+            let known = if kirchhoff { v_star_s } else { Vector3::zeros() }; // v' = v*'
+            let a_i = A_i * (u_hat * pb_s + u_hat * r_s + r_ss + known);
             A += A_i;
             B += B_i;
             G -= A_i * r_hat;
@@ -764,20 +772,25 @@ mod tests {
         let rhs_v = D * lift::<T>(&site.reference.v_star_s) - (u_hat * D + D_s) * dv - Rt * lift::<T>(&site.f_e) - a;
         let rhs_u = C * lift::<T>(&site.reference.u_star_s)
             - (u_hat * C + C_s) * du
-            - hat(v) * D * dv
+            - hat(&strain) * D * dv
             - Rt * lift::<T>(&site.l_e)
             - b;
         let mut M = Matrix6::<T>::zeros();
-        M.fixed_view_mut::<3, 3>(0, 0).copy_from(&(D + A));
+        if kirchhoff {
+            M.fixed_view_mut::<3, 3>(0, 0).copy_from(&D);
+        } else {
+            M.fixed_view_mut::<3, 3>(0, 0).copy_from(&(D + A));
+            M.fixed_view_mut::<3, 3>(3, 0).copy_from(&B);
+        }
         M.fixed_view_mut::<3, 3>(0, 3).copy_from(&G);
-        M.fixed_view_mut::<3, 3>(3, 0).copy_from(&B);
         M.fixed_view_mut::<3, 3>(3, 3).copy_from(&(C + H));
         let mut rhs = Vector6::<T>::zeros();
         rhs.fixed_rows_mut::<3>(0).copy_from(&rhs_v);
         rhs.fixed_rows_mut::<3>(3).copy_from(&rhs_u);
         // M is symmetric positive definite (B = G^T, H symmetric, A_i PSD): Cholesky first;
         // LU only if rounding made the factorization fail.
-        let x = match M.cholesky() {
+        let cholesky = if kirchhoff { None } else { M.clone().cholesky() };
+        let x = match cholesky {
             Some(ch) => ch.solve(&rhs),
             None => M.lu().solve(&rhs).ok_or_else(|| Error::Breakdown {
                 s: site.s,
@@ -996,6 +1009,46 @@ mod tests {
         assert!(matches!(lin, Err(Error::Breakdown { .. })), "{lin:?}");
         assert!(matches!(generic, Err(Error::Breakdown { .. })), "{generic:?}");
         assert!(message.contains("is singular"), "{message}");
+    }
+
+    #[test]
+    fn kirchhoff_rods_match_ad() {
+        // every term: several tendons (one ending mid-rod), loads, varying stiffness and
+        // reference strains (v*' != 0), on the inextensible rod
+        let mut robot = several_tendons();
+        robot.loads.distributed_moment = Field::Constant(Vector3::new(0.03, 0.02, -0.01));
+        robot.loads.distributed_force = Field::Constant(Vector3::new(-0.2, 0.1, -0.4));
+        robot.rod_model = crate::model::robot::RodModel::Kirchhoff;
+        let (v, u) = state();
+        let l = robot.length();
+        for end in [l, 0.5 * l] {
+            check(&robot, 0.07, end, &generic_rotation(), &v, &u);
+        }
+        let e = cases::YOUNGS_MODULUS;
+        let base = Section::solid_circle(cases::RADIUS, e, shear_modulus(e, cases::POISSON_RATIO));
+        let mut rod = Rod::new(cases::LENGTH, base);
+        rod.stiffness = Stiffness::Varying(Arc::new(move |s| {
+            let f = 1.0 + 2.0 * s;
+            SectionPoint {
+                section: Section {
+                    kse: base.kse * f,
+                    kbt: base.kbt * (f * f),
+                },
+                kse_s: base.kse * 2.0,
+                kbt_s: base.kbt * (4.0 * f),
+            }
+        }));
+        rod.reference = ReferenceStrains::Varying(Arc::new(|s| StrainPoint {
+            v_star: Vector3::new(1e-3 * s, -2e-3, 1.0 + 1e-3 * s),
+            u_star: Vector3::new(2.0 + 3.0 * s, -1.0, 4.0 * s * s),
+            v_star_s: Vector3::new(1e-3, 0.0, 1e-3),
+            u_star_s: Vector3::new(3.0, 0.0, 8.0 * s),
+        }));
+        let mut robot = Robot::new(rod)
+            .with_tendon(Tendon::new(Routing::straight(0.006, -0.004), 2.5))
+            .with_tendon(Tendon::new(Routing::helical(0.008, 1.5, 0.2), 1.7));
+        robot.rod_model = crate::model::robot::RodModel::Kirchhoff;
+        check(&robot, 0.19, robot.length(), &generic_rotation(), &v, &u);
     }
 
     #[test]
