@@ -310,3 +310,26 @@ fn kirchhoff_cantilever_matches_the_inextensible_elastica() {
         assert!(off(cosserat.tip_position()) > 1e-7, "Cosserat, alpha {alpha}");
     }
 }
+
+#[test]
+fn friction_on_a_kirchhoff_rod_is_refused_with_what_to_do() {
+    let mut robot = kirchhoff(&cases::case_s());
+    robot.tendons[0].friction = Some(tdcr::Friction {
+        coefficient: 0.1,
+        motion: tdcr::Motion::Pull,
+    });
+    for error in [
+        collocation::solve(&robot, &Default::default()).unwrap_err(),
+        shooting::solve(&robot, &Default::default()).unwrap_err(),
+    ] {
+        let message = error.to_string();
+        assert!(
+            matches!(&error, tdcr::Error::InvalidInput { field, .. } if field == "tendons[0].friction"),
+            "{error:?}"
+        );
+        assert!(
+            message.contains("on a Kirchhoff rod") && message.contains("rod = \"cosserat\""),
+            "{message}"
+        );
+    }
+}

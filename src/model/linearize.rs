@@ -789,7 +789,7 @@ mod tests {
         rhs.fixed_rows_mut::<3>(3).copy_from(&rhs_u);
         // M is symmetric positive definite (B = G^T, H symmetric, A_i PSD): Cholesky first;
         // LU only if rounding made the factorization fail.
-        let cholesky = if kirchhoff { None } else { M.clone().cholesky() };
+        let cholesky = if kirchhoff { None } else { M.cholesky() };
         let x = match cholesky {
             Some(ch) => ch.solve(&rhs),
             None => M.lu().solve(&rhs).ok_or_else(|| Error::Breakdown {
