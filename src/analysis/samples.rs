@@ -27,7 +27,8 @@ pub struct Sample {
 /// limits where the solution jumps), otherwise `count` (>= 2; fewer are raised to 2) evenly
 /// spaced arc lengths from 0 to L, interpolated with the solution's Hermite interpolant
 /// ([`Solution::at`]) and n, m from the constitutive law (eq. 3) at the interpolated strains
-/// (on a Kirchhoff rod n is the reaction, interpolated by [`reaction`]).
+/// (on a Kirchhoff rod n is the reaction, interpolated between the nodes by the cubic
+/// Hermite interpolant with the slopes n' of eq. 13 there).
 pub fn samples(robot: &Robot, solution: &Solution, count: Option<usize>) -> Vec<Sample> {
     let Some(count) = count else {
         return node_samples(solution);

@@ -70,6 +70,12 @@
 //! Products with a hat matrix are written as cross products (m a^ has rows m_j x a, a^ m
 //! has columns a x m_k), which halves their flops against a dense 3x3 product.
 //!
+//! **Kirchhoff rods** ([`Site::inextensible`], docs/model.md section 4b). The node's
+//! translational coordinate v is then v* + D^-1 n_b and the strain is v* ([`Site::strain`]):
+//! the tendon quantities are evaluated at the strain v*, v' = v*' is known and sits in c_i
+//! (so in a, b), and M = [D, G; 0, C + H]. In dF the tendon columns dq_i/dv vanish (q_i sees
+//! only the strain) and dF_u/dv = v*^ D (only n_b = D (v - v*) moves with the coordinate).
+//!
 //! # Cost
 //! Two passes over the tendons (the second needs x); the per-tendon quantities of the first
 //! are kept on the stack for up to 8 tendons, further ones are re-evaluated. M is factored
@@ -86,7 +92,10 @@ use crate::error::Result;
 use crate::model::equations::MIN_TENDON_SPEED;
 use crate::model::equations::{Model, Site};
 use crate::model::routing::RoutingPoint;
-use nalgebra::{LU, Matrix3, Matrix3x6, Matrix6, Matrix6x3, SMatrix, U6, Vector3, Vector6};
+use nalgebra::{Matrix3, Matrix3x6, Matrix6, Matrix6x3, SMatrix, Vector3, Vector6};
+
+mod factor;
+use factor::Factor;
 
 /// Tendons whose per-tendon quantities are kept on the stack between the two passes (solve
 /// for x, then differentiate at x); further tendons are re-evaluated from their routing.
@@ -275,119 +284,6 @@ fn hat_diag(a: &Vector3<f64>, d: &Vector3<f64>, d_s: &Vector3<f64>) -> Matrix3<f
 /// The hat map in f64 (`so3::hat` without the generic scalar).
 fn hat3(a: &Vector3<f64>) -> Matrix3<f64> {
     Matrix3::new(0.0, -a[2], a[1], a[2], 0.0, -a[0], -a[1], a[0], 0.0)
-}
-
-/// The inverse of a symmetric positive definite 3x3 matrix by its adjugate, or None when a
-/// leading principal minor is not positive (not SPD, singular or NaN: by Sylvester's
-/// criterion exactly when a Cholesky factorization would meet a non-positive pivot).
-fn spd_inverse3(a: &Matrix3<f64>) -> Option<Matrix3<f64>> {
-    let c00 = a[(1, 1)] * a[(2, 2)] - a[(1, 2)] * a[(1, 2)];
-    let c01 = a[(0, 2)] * a[(1, 2)] - a[(0, 1)] * a[(2, 2)];
-    let c02 = a[(0, 1)] * a[(1, 2)] - a[(0, 2)] * a[(1, 1)];
-    let minor2 = a[(0, 0)] * a[(1, 1)] - a[(0, 1)] * a[(0, 1)];
-    let det = a[(0, 0)] * c00 + a[(0, 1)] * c01 + a[(0, 2)] * c02;
-    // `!(x > 0)` also rejects NaN.
-    if !(a[(0, 0)] > 0.0 && minor2 > 0.0 && det > 0.0 && det.is_finite()) {
-        return None;
-    }
-    let c11 = a[(0, 0)] * a[(2, 2)] - a[(0, 2)] * a[(0, 2)];
-    let c12 = a[(0, 2)] * a[(0, 1)] - a[(0, 0)] * a[(1, 2)];
-    let inv = 1.0 / det;
-    Some(Matrix3::new(c00, c01, c02, c01, c11, c12, c02, c12, minor2) * inv)
-}
-
-/// M = [P, G; rho G^T, Q] (3x3 blocks, P and Q symmetric; rho = 1, M symmetric positive
-/// definite, on a Cosserat rod, rho = 0, M block triangular, on a Kirchhoff rod) factored by
-/// block elimination: P^-1, W = P^-1 G and the inverse of the Schur complement
-/// S = Q - rho G^T P^-1 G, each 3x3 inverse by its adjugate. For rho = 1, M is SPD exactly
-/// when P and S are, so this succeeds exactly when a Cholesky factorization would (up to
-/// rounding). It has
-/// two independent divisions and no square roots on its dependency chain; replacing a 6x6
-/// Cholesky written out for the fixed size (six dependent square roots) by it took a warm
-/// solve of case H from 256 to 203 us on the development machine.
-struct Schur6 {
-    P_inv: Matrix3<f64>,
-    G: Matrix3<f64>,
-    W: Matrix3<f64>,
-    S_inv: Matrix3<f64>,
-    /// rho = 1 (true) or 0.
-    coupled: bool,
-}
-
-impl Schur6 {
-    /// Factors M (reads its upper-left, upper-right and lower-right blocks; the lower-left
-    /// is G^T when `coupled`, else 0); None when P or S is not SPD.
-    fn new(M: &Matrix6<f64>, coupled: bool) -> Option<Self> {
-        let P_inv = spd_inverse3(&M.fixed_view::<3, 3>(0, 0).into_owned())?;
-        let G: Matrix3<f64> = M.fixed_view::<3, 3>(0, 3).into_owned();
-        let W = P_inv * G;
-        let S_inv = if coupled {
-            let S = M.fixed_view::<3, 3>(3, 3) - G.tr_mul(&W);
-            // S is symmetric; average out the rounding of the product.
-            spd_inverse3(&((S + S.transpose()) * 0.5))?
-        } else {
-            spd_inverse3(&M.fixed_view::<3, 3>(3, 3).into_owned())?
-        };
-        Some(Schur6 {
-            P_inv,
-            G,
-            W,
-            S_inv,
-            coupled,
-        })
-    }
-
-    /// Overwrites the rows of `bt` with those of bt M^-T, i.e. solves M X = B for B = bt^T
-    /// (P, Q and S are symmetric): with rows (b_v, b_u), w = b_v P^-1,
-    /// x_u = (b_u - rho w G) S^-1, x_v = w - x_u W^T.
-    fn solve_transposed_mut<const C: usize>(&self, bt: &mut SMatrix<f64, C, 6>) {
-        let w = bt.fixed_columns::<3>(0) * self.P_inv;
-        let x_u = if self.coupled {
-            (bt.fixed_columns::<3>(3) - w * self.G) * self.S_inv
-        } else {
-            bt.fixed_columns::<3>(3) * self.S_inv
-        };
-        let x_v = w - x_u * self.W.transpose();
-        bt.fixed_columns_mut::<3>(0).copy_from(&x_v);
-        bt.fixed_columns_mut::<3>(3).copy_from(&x_u);
-    }
-}
-
-/// The factorization of M reused for all right-hand sides: block elimination for SPD M, or
-/// LU where rounding made M fail the SPD test. Everything
-/// is solved in place on transposed right-hand sides, so no 6x9 matrix is moved or wrapped
-/// in an `Option`.
-enum Factor {
-    Spd(Schur6),
-    /// The fallback, computed only when M is not numerically SPD.
-    Lu(LU<f64, U6, U6>),
-}
-
-impl Factor {
-    /// Factors M; `coupled` as in [`Schur6::new`].
-    fn new(M: &Matrix6<f64>, coupled: bool) -> Self {
-        match Schur6::new(M, coupled) {
-            Some(f) => Factor::Spd(f),
-            None => Factor::Lu(M.lu()),
-        }
-    }
-
-    /// Overwrites `bt` with (M^-1 bt^T)^T; false when M is singular.
-    #[inline(always)]
-    fn solve_transposed_mut<const C: usize>(&self, bt: &mut SMatrix<f64, C, 6>) -> bool {
-        match self {
-            Factor::Spd(f) => {
-                f.solve_transposed_mut(bt);
-                true
-            }
-            Factor::Lu(lu) => {
-                let mut b = bt.transpose();
-                let solved = lu.solve_mut(&mut b);
-                bt.copy_from(&b.transpose());
-                solved
-            }
-        }
-    }
 }
 
 /// Pass 1 of the linearization at one point: the per-tendon quantities (the first
@@ -1062,28 +958,5 @@ mod tests {
         };
         let (v, u) = state();
         check_model(&model, 0.09, robot.length(), &generic_rotation(), &v, &u);
-    }
-
-    #[test]
-    fn factor_solves_like_nalgebra() {
-        let B = SMatrix::<f64, 6, 9>::from_fn(|i, j| ((i * 7 + j * 3) % 5) as f64 - 1.7);
-        let N = Matrix6::from_fn(|i, j| ((i * 5 + j * 11) % 7) as f64 * 0.3 - 0.8);
-        // SPD with the prototype's spread of scales (GA, EA ~ 1e4-1e5 N, EI ~ 1e-3 N m^2)
-        let scale = Vector6::new(4e4, 4e4, 1e5, 4e-3, 4e-3, 3e-3).map(f64::sqrt);
-        let spd =
-            Matrix6::from_diagonal(&scale) * (N * N.transpose() + Matrix6::identity()) * Matrix6::from_diagonal(&scale);
-        // symmetric indefinite: the SPD test fails, the LU fallback solves
-        let indefinite = N + N.transpose() - Matrix6::from_diagonal_element(0.1);
-        for (M, uses_lu) in [(spd, false), (indefinite, true)] {
-            let factor = Factor::new(&M, true);
-            assert_eq!(matches!(factor, Factor::Lu(_)), uses_lu);
-            let mut Xt = B.transpose();
-            assert!(factor.solve_transposed_mut(&mut Xt));
-            let reference = M.lu().solve(&B).unwrap();
-            // 1e-12: backward-stable solves of a system with condition number below 1e3 after
-            // diagonal scaling
-            assert!(rel(&Xt.transpose(), &reference) < 1e-12);
-        }
-        assert!(!Factor::new(&Matrix6::zeros(), true).solve_transposed_mut(&mut B.transpose()));
     }
 }
