@@ -372,3 +372,38 @@ fn samples_between_nodes_interpolate_the_reaction() {
     assert!(worst < 2.0 * at_nodes, "{worst:e} vs {at_nodes:e}");
     assert!(worst < 0.01 * linear, "{worst:e} vs {linear:e}");
 }
+
+/// Beck's column (a cantilever under a follower tip force P) is the classical problem of an
+/// inextensible, unshearable rod: it loses stability by flutter at P L^2 / EI = 20.051
+/// (Euler-Bernoulli, uniform mass). The linearized dynamics (docs/stability.md) of the
+/// Kirchhoff rod, with its force unknowns, finds it by bisection on the verdict.
+#[test]
+fn becks_column_on_a_kirchhoff_rod_flutters_at_20_05() {
+    use tdcr::{Growth, Stability};
+    let (length, radius, e): (f64, f64, f64) = (0.5, 1e-3, 200e9);
+    let ei = e * std::f64::consts::PI * radius.powi(4) / 4.0;
+    let verdict = |load: f64| {
+        let mut loads = Loads::none();
+        loads.follower_tip_force = Vector3::new(0.0, 0.0, -load * ei / (length * length));
+        let robot = kirchhoff(&Robot::new(Rod::solid_circle(length, radius, e, 0.3)).with_loads(loads));
+        let solution = collocation::solve(&robot, &collocation::Options::fixed(64)).unwrap();
+        collocation::vibration(&robot, &solution).unwrap().stability
+    };
+    let (mut lo, mut hi) = (15.0, 25.0);
+    assert!(verdict(lo).is_stable());
+    for _ in 0..14 {
+        let mid = 0.5 * (lo + hi);
+        match verdict(mid) {
+            Stability::Stable => lo = mid,
+            Stability::Growing {
+                growth: Growth::Flutter { .. },
+                ..
+            } => hi = mid,
+            other => panic!("Beck's column at {mid}: {other}"),
+        }
+    }
+    eprintln!("Beck's Kirchhoff column flutters at P L^2 / EI = {lo:.5}..{hi:.5}");
+    // 1 %: as the Cosserat column's bound (tests/dynamics.rs): the mass's O(h^2)
+    // interpolation and rotary inertia move it far less
+    assert!((0.5 * (lo + hi) / 20.051 - 1.0).abs() < 0.01);
+}
