@@ -311,66 +311,66 @@ fn kirchhoff_cantilever_matches_the_inextensible_elastica() {
     }
 }
 
+/// Tendons with friction (docs/friction.md) on the Kirchhoff rod: the two solvers agree, and
+/// the capstan law holds on a precurved arc whose path friction does not change.
 #[test]
-fn friction_on_a_kirchhoff_rod_is_refused_with_what_to_do() {
-    let mut robot = kirchhoff(&cases::case_s());
-    robot.tendons[0].friction = Some(tdcr::Friction {
-        coefficient: 0.1,
-        motion: tdcr::Motion::Pull,
+fn friction_on_a_kirchhoff_rod() {
+    let mut h = kirchhoff(&loaded_helix());
+    h.tendons[4].friction = Some(tdcr::Friction::pull(0.1));
+    let mut released = kirchhoff(&two_segments());
+    released.tendons[0].friction = Some(tdcr::Friction {
+        coefficient: 0.2,
+        motion: tdcr::Motion::Release,
     });
-    for error in [
-        collocation::solve(&robot, &Default::default()).unwrap_err(),
-        shooting::solve(&robot, &Default::default()).unwrap_err(),
-    ] {
-        let message = error.to_string();
-        assert!(
-            matches!(&error, tdcr::Error::InvalidInput { field, .. } if field == "tendons[0].friction"),
-            "{error:?}"
-        );
-        assert!(
-            message.contains("on a Kirchhoff rod") && message.contains("rod = \"cosserat\""),
-            "{message}"
-        );
-    }
-}
-
-#[test]
-fn samples_between_nodes_interpolate_the_reaction() {
-    let robot = kirchhoff(&loaded_helix());
-    let coarse = collocation::solve(&robot, &collocation::Options::fixed(32)).unwrap();
-    let fine = collocation::solve(&robot, &collocation::Options::fixed(64)).unwrap();
-    let samples = tdcr::analysis::samples::samples(&robot, &coarse, Some(65));
-    let scale = fine.nodes.iter().map(|n| n.n.norm()).fold(0.0, f64::max);
-    let worst = samples
-        .iter()
-        .zip(&fine.nodes)
-        .map(|(a, b)| {
-            assert_eq!(a.s, b.s);
-            (a.n - b.n).norm()
-        })
-        .fold(0.0, f64::max);
-    // at the shared nodes: the discretization error of the coarse mesh itself
-    let at_nodes = coarse
-        .nodes
-        .iter()
-        .zip(fine.nodes.iter().step_by(2))
-        .map(|(a, b)| (a.n - b.n).norm())
-        .fold(0.0, f64::max);
-    let linear = (0..32)
-        .map(|k| ((coarse.nodes[k].n + coarse.nodes[k + 1].n) * 0.5 - fine.nodes[2 * k + 1].n).norm())
-        .fold(0.0, f64::max);
-    eprintln!(
-        "reaction between the nodes of 32 intervals: {:.1e} of |n| = {scale:.3} N; at the nodes {:.1e}, linear {:.1e}",
-        worst / scale,
-        at_nodes / scale,
-        linear / scale
+    // The sensitivities' bordered system with friction (docs/friction.md) on this rod too.
+    let options = collocation::Options::fixed(64);
+    let solved = collocation::solve(&h, &options).unwrap();
+    let exact = tdcr::tip_sensitivities(&h, &solved)
+        .unwrap()
+        .tension
+        .fixed_view::<3, 1>(0, 4)
+        .into_owned();
+    let tip = |tau: f64| {
+        let mut r = h.clone();
+        r.tendons[4].set_tension(tau);
+        collocation::solve(&r, &options).unwrap().tip_position()
+    };
+    let (tau, step) = (h.tendons[4].tension(), 1e-4);
+    let differenced = (tip(tau + step) - tip(tau - step)) / (2.0 * step);
+    // 1e-6 relative: as the frictionless sensitivities above
+    assert!(
+        (exact - differenced).norm() < 1e-6 * differenced.norm(),
+        "{exact} vs {differenced}"
     );
-    // Between the nodes the interpolant adds little to the coarse mesh's own error at its
-    // nodes (measured 4.1e-6 against 3.5e-6 of |n|; the bound 2x leaves room for the
-    // interpolant's own order-4 error); linear interpolation is off by h^2 |n''| / 8
-    // (measured 1.3e-3), so the slopes are what makes it accurate.
-    assert!(worst < 2.0 * at_nodes, "{worst:e} vs {at_nodes:e}");
-    assert!(worst < 0.01 * linear, "{worst:e} vs {linear:e}");
+    for (name, robot) in [("helix, pulled", h), ("two segments, released", released)] {
+        let c = collocation::solve(&robot, &collocation::Options::fixed(128)).unwrap();
+        let s = shooting::solve(&robot, &tight_shooting()).unwrap();
+        let d = tip_distance(&c, &s);
+        let delivered = |x: &Solution| x.tendons.iter().map(|t| t.delivered_tension).collect::<Vec<_>>();
+        eprintln!(
+            "{name}: collocation - shooting {d:.1e} m, delivered {:?} vs {:?} N",
+            delivered(&c),
+            delivered(&s)
+        );
+        // 1e-8 m: as tests/friction.rs on the Cosserat rod (collocation at 128 intervals)
+        assert!(d < 1e-8, "{name}: {d:e}");
+        for (a, b) in c.tendons.iter().zip(&s.tendons) {
+            // 4e-8 relative: as tests/friction.rs
+            assert!((a.delivered_tension - b.delivered_tension).abs() <= 4e-8 * a.tension.max(1.0));
+        }
+    }
+    // A precurved arc of curvature 5 1/m over 0.2 m, stiff in bending (E = 1e22 Pa keeps it
+    // in its reference shape to 1e-11), and inextensible: the straight tendon's path turns
+    // through exactly 1 rad, and the delivered tension is exp(-mu) of the input
+    let rod = Rod::solid_circle(0.2, 0.0004, 1e22, 0.3).with_precurvature(Vector3::new(0.0, 5.0, 0.0));
+    let robot = kirchhoff(
+        &Robot::new(rod)
+            .with_tendon(Tendon::new(Routing::straight(0.008, 0.0), 2.0).with_friction(tdcr::Friction::pull(0.2))),
+    );
+    let s = shooting::solve(&robot, &tight_shooting()).unwrap();
+    let ratio = s.tendons[0].delivered_tension / s.tendons[0].tension;
+    // 1e-8 relative: as tests/friction.rs's capstan law
+    assert!((ratio / (-0.2f64).exp() - 1.0).abs() < 1e-8, "{ratio}");
 }
 
 /// Beck's column (a cantilever under a follower tip force P) is the classical problem of an
