@@ -72,7 +72,7 @@ pub use error::{Error, Readable, Result};
 pub use model::disks::Disks;
 pub use model::loads::{Field, Loads, PointLoad};
 pub use model::parameter::Parameter;
-pub use model::robot::{Robot, TendonModel};
+pub use model::robot::{Robot, RodModel, TendonModel};
 pub use model::rod::{Rod, Section, Segment};
 pub use model::routing::{Routing, RoutingPoint};
 pub use model::tendon::{Actuation, Friction, Motion, Tendon};

@@ -56,7 +56,11 @@ pub struct State {
     pub p: Vector3<f64>,
     /// Orientation, body to world (orthonormal to rounding).
     pub R: Matrix3<f64>,
-    /// Shear/extension strain, body frame.
+    /// Shear/extension strain, body frame. In the solvers' own node states of a Kirchhoff
+    /// rod, whose strain is v* exactly, this slot is the translational unknown
+    /// v* + K_se^-1 n_b, the internal force in strain units
+    /// ([`crate::model::equations::Site::strain`], docs/model.md section 4b); a
+    /// [`Solution`] always holds the strain.
     pub v: Vector3<f64>,
     /// Curvature/twist, body frame (rad/m).
     pub u: Vector3<f64>,

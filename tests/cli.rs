@@ -1517,6 +1517,13 @@ fn model_flags_equal_the_model_table() {
     let out = run(&dir, &["solve", "robot.toml", "--tendons", "pointmoment"], None);
     assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
     assert!(stderr(&out).contains("point_moment"), "{}", stderr(&out));
+    let kirchhoff = tip(&with_table("rod = \"kirchhoff\""), &[]);
+    assert_ne!(kirchhoff, coupled);
+    assert_eq!(tip(&base, &["--rod", "kirchhoff"]), kirchhoff);
+    assert_eq!(tip(&with_table("rod = \"kirchhoff\""), &["--rod", "cosserat"]), coupled);
+    let out = run(&dir, &["solve", "robot.toml", "--rod", "kirchoff"], None);
+    assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
+    assert!(stderr(&out).contains("kirchhoff"), "{}", stderr(&out));
 }
 
 /// Issue 27: `tdcr compare` prints each model's tip and its distance from the first's and
@@ -1534,13 +1541,19 @@ fn compare_prints_and_draws_models_and_methods() {
     let rows: Vec<Vec<&str>> = table
         .lines()
         .skip(1)
-        .take(4)
+        .take(5)
         .map(|l| l.split_whitespace().collect())
         .collect();
     let names: Vec<&str> = rows.iter().map(|r| r[0]).collect();
     assert_eq!(
         names,
-        ["coupled", "point_moment", "constant_curvature", "paper_jumps"],
+        [
+            "coupled",
+            "point_moment",
+            "constant_curvature",
+            "paper_jumps",
+            "kirchhoff"
+        ],
         "{table}"
     );
     assert_eq!(rows[0][4..], ["0.000000", "0.000000"], "{table}");
@@ -1553,6 +1566,7 @@ fn compare_prints_and_draws_models_and_methods() {
         "point_moment: tip",
         "constant_curvature: tip",
         "paper_jumps: tip",
+        "kirchhoff: tip",
     ] {
         assert!(svg.contains(name), "{name}");
     }
@@ -1567,10 +1581,10 @@ fn compare_prints_and_draws_models_and_methods() {
     assert_eq!(shooting[0], "shooting", "{table}");
     // 1e-5 mm: the solvers agree to about 1e-8 m at their default tolerances (cross_check.rs)
     assert!(shooting[4].parse::<f64>().unwrap() < 1e-5, "{table}");
-    let out = run(&dir, &["compare", "robot.toml", "--models", "coupled,kirchhoff"], None);
+    let out = run(&dir, &["compare", "robot.toml", "--models", "coupled,kirchoff"], None);
     assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
     assert!(
-        stderr(&out).contains("`kirchhoff`, which is not a model"),
+        stderr(&out).contains("`kirchoff`, which is not a model"),
         "{}",
         stderr(&out)
     );
@@ -1597,6 +1611,14 @@ fn check_names_disks_and_the_model() {
         stdout(&out).contains(
             "0 point load(s), 12 disk(s) of 0.00981 N; model: the paper's jump conditions (no corner forces); solver"
         ),
+        "{}",
+        stdout(&out)
+    );
+    let text = format!("{}\n[model]\nrod = \"kirchhoff\"\n", example());
+    let out = run(&dir, &["check", "-"], Some(&text));
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    assert!(
+        stdout(&out).contains("point load(s); rod: Kirchhoff (inextensible, unshearable); solver"),
         "{}",
         stdout(&out)
     );

@@ -3,7 +3,7 @@
 
 use tdcr::analysis::comparison::constant_curvature;
 use tdcr::cases::analytic::arc_about_y;
-use tdcr::{Robot, Rod, Routing, Tendon, TendonModel, cases, collocation, shooting};
+use tdcr::{Robot, Rod, RodModel, Routing, Tendon, TendonModel, cases, collocation, shooting};
 
 #[test]
 fn point_moment_model_of_one_tendon_is_an_unstretched_arc() {
@@ -129,6 +129,7 @@ fn model_table_sets_the_library_switches_bitwise() {
     let loaded = ([0.0, 0.3, -0.2], [0.01, 0.0, 0.0]);
     let plain = tdcr::io::parse(&two_segments("", loaded), "plain.toml").unwrap().robot;
     assert!(plain.corner_forces && plain.tendon_model == TendonModel::Coupled);
+    assert_eq!(plain.rod_model, RodModel::Cosserat);
     for (table, set) in [
         (
             "[model]\ncorner_forces = false",
@@ -137,7 +138,11 @@ fn model_table_sets_the_library_switches_bitwise() {
         ("[model]\ntendons = \"point_moment\"", |r| {
             r.tendon_model = TendonModel::PointMoment
         }),
-        ("[model]\ncorner_forces = true\ntendons = \"coupled\"", |_| {}),
+        ("[model]\nrod = \"kirchhoff\"", |r| r.rod_model = RodModel::Kirchhoff),
+        (
+            "[model]\ncorner_forces = true\ntendons = \"coupled\"\nrod = \"cosserat\"",
+            |_| {},
+        ),
     ] {
         let file = tdcr::io::parse(&two_segments(table, loaded), "model.toml")
             .unwrap()
@@ -183,16 +188,28 @@ fn compare_models_solves_each_variant_as_its_switches_say() {
     let options = collocation::Options::default();
     let shapes = compare_models(&robot, &Variant::ALL, |r| collocation::solve(r, &options)).unwrap();
     let names: Vec<&str> = shapes.iter().map(|c| c.name.as_str()).collect();
-    assert_eq!(names, ["coupled", "point_moment", "constant_curvature", "paper_jumps"]);
+    assert_eq!(
+        names,
+        [
+            "coupled",
+            "point_moment",
+            "constant_curvature",
+            "paper_jumps",
+            "kirchhoff"
+        ]
+    );
     let mut coupled = robot.clone();
     coupled.corner_forces = true;
     let mut point_moment = coupled.clone();
     point_moment.tendon_model = TendonModel::PointMoment;
+    let mut kirchhoff = coupled.clone();
+    kirchhoff.rod_model = RodModel::Kirchhoff;
     let cc = constant_curvature(&robot, 1).unwrap().last().unwrap().p;
     // Bitwise: the same robots solved with the same options, the same closed form.
     assert_eq!(shapes[0].tip_position(), tip(&coupled).0);
     assert_eq!(shapes[1].tip_position(), tip(&point_moment).0);
     assert_eq!(shapes[3].tip_position(), tip(&robot).0);
+    assert_eq!(shapes[4].tip_position(), tip(&kirchhoff).0);
     // 1e-12 m: the closed form evaluated in one step or in many, rounding only
     assert!((shapes[2].tip_position() - cc).norm() < 1e-12);
     assert_eq!(shapes[0].states.len(), SHAPE_SAMPLES + 1);

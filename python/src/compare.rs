@@ -14,7 +14,8 @@ use tdcr::analysis::comparison::{Variant, compare as compare_shapes, compare_mod
 /// compare(robot, *, models=None, methods=None, **options) -> list[dict]
 ///
 /// Solves `robot` as each of `models` (names: "coupled", "point_moment",
-/// "constant_curvature", "paper_jumps"; default all four, the first the reference), or, with
+/// "constant_curvature", "paper_jumps", "kirchhoff"; default all five, the first the
+/// reference), or, with
 /// `methods` instead, by each solver ("collocation", "shooting") on the robot's own model.
 /// `options` are `tdcr.solve`'s. One dict per shape: `name`, `s` (m, shape (n,)), `p` (m,
 /// world frame, shape (n, 3)), `tip_position` (3,), `tip_rotation` (3, 3), `tip_distance`

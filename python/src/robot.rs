@@ -29,7 +29,7 @@ use toml::Table;
 /// (the coefficient in its channels) with `motion` (`"pull"` or `"release"`,
 /// docs/friction.md). `model` is the file's `[model]` table: `{"corner_forces": False}`
 /// solves the paper's jump conditions, `{"tendons": "point_moment"}` the point-moment tendon
-/// model.
+/// model, `{"rod": "kirchhoff"}` the inextensible, unshearable rod.
 ///
 /// Or build it with `Robot.from_toml(text)`, `Robot.from_file(path)`, `Robot.from_dict(tables)`,
 /// `tdcr.cases.case_s()`. Bad input raises `tdcr.FileError` with the command line's
@@ -387,8 +387,8 @@ impl PyRobot {
         crate::solution::matrix(py, &self.file.robot.base_rotation)
     }
 
-    /// The model variant, as the file's `[model]` table: `corner_forces` (bool) and
-    /// `tendons` ("coupled" or "point_moment").
+    /// The model variant, as the file's `[model]` table: `corner_forces` (bool), `tendons`
+    /// ("coupled" or "point_moment") and `rod` ("cosserat" or "kirchhoff").
     #[getter]
     fn model<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let r = &self.file.robot;
@@ -399,6 +399,11 @@ impl PyRobot {
         let out = PyDict::new(py);
         out.set_item("corner_forces", r.corner_forces)?;
         out.set_item("tendons", tendons)?;
+        let rod = match r.rod_model {
+            tdcr::RodModel::Cosserat => "cosserat",
+            tdcr::RodModel::Kirchhoff => "kirchhoff",
+        };
+        out.set_item("rod", rod)?;
         Ok(out)
     }
 

@@ -19,11 +19,12 @@ EXAMPLE = (
 
 def test_the_model_keyword_is_the_model_table(cli):
     default = tdcr.Robot.from_toml(EXAMPLE)
-    assert default.model == {"corner_forces": True, "tendons": "coupled"}
+    assert default.model == {"corner_forces": True, "tendons": "coupled", "rod": "cosserat"}
     tables = tdcr.Robot.from_toml(EXAMPLE)
     for model, flags in [
         ({"corner_forces": False}, ["--corner-forces", "false"]),
         ({"tendons": "point_moment"}, ["--tendons", "point_moment"]),
+        ({"rod": "kirchhoff"}, ["--rod", "kirchhoff"]),
     ]:
         table = "\n[model]\n" + "".join(
             f"{k} = {str(v).lower() if isinstance(v, bool) else repr(v).replace(chr(39), chr(34))}\n"
@@ -40,9 +41,9 @@ def test_the_model_keyword_is_the_model_table(cli):
         assert not np.array_equal(tips[0], tdcr.solve(default).tip_position)
     keywords = tdcr.Robot(
         {"length": 0.2, "outer_radius": 0.0005, "youngs_modulus": 50e9, "poisson_ratio": 0.3},
-        model={"corner_forces": False, "tendons": "point_moment"},
+        model={"corner_forces": False, "tendons": "point_moment", "rod": "kirchhoff"},
     )
-    assert keywords.model == {"corner_forces": False, "tendons": "point_moment"}
+    assert keywords.model == {"corner_forces": False, "tendons": "point_moment", "rod": "kirchhoff"}
 
 
 # EXAMPLE as keyword arguments.
@@ -81,7 +82,7 @@ def test_disks_are_point_loads_that_survive_a_pickle():
 def test_compare_solves_each_model_and_measures_the_tips():
     robot = tdcr.Robot.from_toml(EXAMPLE + "\n[model]\ncorner_forces = false\n")
     shapes = tdcr.compare(robot)
-    assert [c["name"] for c in shapes] == ["coupled", "point_moment", "constant_curvature", "paper_jumps"]
+    assert [c["name"] for c in shapes] == ["coupled", "point_moment", "constant_curvature", "paper_jumps", "kirchhoff"]
     coupled = tdcr.Robot.from_toml(EXAMPLE)
     # Bitwise: each model is the robot with its switches set, solved as tdcr.solve does.
     assert np.array_equal(shapes[0]["tip_position"], tdcr.solve(coupled).tip_position)
@@ -94,7 +95,7 @@ def test_compare_solves_each_model_and_measures_the_tips():
     methods = tdcr.compare(coupled, methods=["collocation", "shooting"])
     # 1e-8 m: the solvers' agreement at their default tolerances (tests/cross_check.rs)
     assert [c["name"] for c in methods] == ["collocation", "shooting"] and methods[1]["tip_distance"] < 1e-8
-    for bad in [{"models": ["kirchhoff"]}, {"methods": ["euler"]}, {"models": ["coupled"], "methods": ["shooting"]}]:
+    for bad in [{"models": ["kirchoff"]}, {"methods": ["euler"]}, {"models": ["coupled"], "methods": ["shooting"]}]:
         try:
             tdcr.compare(coupled, **bad)
         except tdcr.InvalidInput:

@@ -2,14 +2,16 @@
 //!
 //! - the point-moment tendon model (Jones et al., cited by the paper) is a switch on the robot,
 //!   [`crate::TendonModel::PointMoment`], solved by the same solvers as the coupled model;
-//! - the constant-curvature model is closed form: [`constant_curvature`].
+//! - the constant-curvature model is closed form: [`constant_curvature`];
+//! - the Kirchhoff rod (inextensible and unshearable) is a switch on the robot too,
+//!   [`crate::RodModel::Kirchhoff`].
 //!
 //! [`compare_models`] solves one robot as several of these [`Variant`]s and [`compare`]
 //! measures how far each shape's tip is from the first's (`tdcr compare`, `tdcr.compare`).
 #![allow(non_snake_case)]
 
 use crate::error::{Result, invalid};
-use crate::model::robot::{Robot, TendonModel};
+use crate::model::robot::{Robot, RodModel, TendonModel};
 use crate::so3;
 use crate::solution::{Solution, State};
 use nalgebra::{Matrix3, Vector3};
@@ -30,15 +32,18 @@ pub enum Variant {
     ConstantCurvature,
     /// The coupled model with the paper's jump conditions (`Robot::corner_forces = false`).
     PaperJumps,
+    /// The coupled model on an inextensible, unshearable rod ([`RodModel::Kirchhoff`]).
+    Kirchhoff,
 }
 
 impl Variant {
     /// Every variant, in the order the docs list them.
-    pub const ALL: [Variant; 4] = [
+    pub const ALL: [Variant; 5] = [
         Variant::Coupled,
         Variant::PointMoment,
         Variant::ConstantCurvature,
         Variant::PaperJumps,
+        Variant::Kirchhoff,
     ];
 
     /// The variant's name, as `tdcr compare --models` and `tdcr.compare` spell it.
@@ -48,6 +53,7 @@ impl Variant {
             Variant::PointMoment => "point_moment",
             Variant::ConstantCurvature => "constant_curvature",
             Variant::PaperJumps => "paper_jumps",
+            Variant::Kirchhoff => "kirchhoff",
         }
     }
 
@@ -66,15 +72,20 @@ impl Variant {
         })
     }
 
-    /// `robot` with this variant's switches set (both, whatever the robot had): the
-    /// coupled tendon model with or without corner forces, or the point-moment model. The
-    /// constant-curvature variant is not solved, so it keeps the robot as the coupled one.
+    /// `robot` with this variant's switches set (all three, whatever the robot had): the
+    /// coupled tendon model with or without corner forces, or the point-moment model, on
+    /// the Cosserat rod, or the coupled model on the Kirchhoff rod. The constant-curvature
+    /// variant is not solved, so it keeps the robot as the coupled one.
     pub fn robot(self, robot: &Robot) -> Robot {
         let mut out = robot.clone();
         out.corner_forces = self != Variant::PaperJumps;
         out.tendon_model = match self {
             Variant::PointMoment => TendonModel::PointMoment,
             _ => TendonModel::Coupled,
+        };
+        out.rod_model = match self {
+            Variant::Kirchhoff => RodModel::Kirchhoff,
+            _ => RodModel::Cosserat,
         };
         out
     }

@@ -61,6 +61,7 @@ use crate::mesh::guess::{self, InitialGuess};
 use crate::mesh::{Mesh, nodes};
 use crate::model::equations::Model;
 use crate::model::length::{self, NodeQuadrature};
+use crate::model::robot::RodModel;
 use crate::model::routing::RoutingPoint;
 use crate::model::tension_guess::starting_tensions;
 use crate::report::{Method, SolveReport, Stability, Termination};
@@ -90,6 +91,9 @@ struct Constraint {
     quadrature: NodeQuadrature,
     /// The routing at each quadrature node, in the quadrature's order.
     routing: Vec<RoutingPoint>,
+    /// On a Kirchhoff rod the strain v* at each quadrature node (the node coordinate v
+    /// carries the internal force there, and the path length does not depend on it).
+    fixed_strain: Option<Vec<Vector3<f64>>>,
 }
 
 impl Constraint {
@@ -103,6 +107,14 @@ impl Constraint {
             .iter()
             .map(|&(k, _)| t.routing.at(s[k], length))
             .collect();
+        let fixed_strain = (robot.rod_model == RodModel::Kirchhoff).then(|| {
+            let nodes = &mesh.nodes;
+            quadrature
+                .weights
+                .iter()
+                .map(|&(k, _)| robot.rod.reference_on(nodes[k].s, nodes[k].segment_end).v_star)
+                .collect()
+        });
         let reference_length = length::reference_length(robot, tendon);
         Constraint {
             tendon,
@@ -112,7 +124,13 @@ impl Constraint {
             tension_scale: robot.tension_scale(tendon),
             quadrature,
             routing,
+            fixed_strain,
         }
+    }
+
+    /// The strain v at quadrature node `j` (node k) of the states `x`.
+    fn strain(&self, x: &[State], j: usize, k: usize) -> Vector3<f64> {
+        self.fixed_strain.as_ref().map_or(x[k].v, |v| v[j])
     }
 
     /// l_j(x) (m).
@@ -121,7 +139,8 @@ impl Constraint {
             .weights
             .iter()
             .zip(&self.routing)
-            .map(|(&(k, w), rp)| w * length::speed(rp, &x[k].v, &x[k].u))
+            .enumerate()
+            .map(|(j, (&(k, w), rp))| w * length::speed(rp, &self.strain(x, j, k), &x[k].u))
             .sum()
     }
 
@@ -161,10 +180,17 @@ impl Constraint {
             .weights
             .iter()
             .zip(&self.routing)
-            .map(|(&(k, w), rp)| {
-                let (dv, du) = length::speed_gradient(rp, &x[k].v, &x[k].u);
+            .enumerate()
+            .map(|(j, (&(k, w), rp))| {
+                let (dv, du) = length::speed_gradient(rp, &self.strain(x, j, k), &x[k].u);
                 let part = |i: usize| Vector3::new(z[k * NODE + i], z[k * NODE + i + 1], z[k * NODE + i + 2]);
-                w * (dv.dot(&part(V)) + du.dot(&part(U)) / length)
+                // On a Kirchhoff rod the length does not change with the coordinate v.
+                let dv = if self.fixed_strain.is_some() {
+                    0.0
+                } else {
+                    dv.dot(&part(V))
+                };
+                w * (dv + du.dot(&part(U)) / length)
             })
             .sum()
     }
@@ -389,7 +415,7 @@ pub(super) fn solve(
         resolves(&work, options, &mesh)?;
     }
     let x = match warm {
-        Some(w) => interpolate(w, &mesh),
+        Some(w) => interpolate(&Model::new(&work), w, &mesh),
         None => {
             // As a tension solve; then estimated tensions are corrected on the guess.
             let mut x0 = cold_start(&work, options, &mut mesh)?;

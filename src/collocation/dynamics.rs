@@ -96,8 +96,8 @@ impl Mass {
             // The Hermite-Simpson midpoint, as the residual's.
             let (y0, y1) = end_points(a, b);
             let theta1: Vector3<f64> = y1.fixed_rows::<3>(THETA).into();
-            let f0 = end_rhs(a, &Vector3::zeros(), &pa.rates());
-            let f1 = end_rhs(b, &theta1, &pb.rates());
+            let f0 = end_rhs(&sites.start, a, &Vector3::zeros(), &pa.rates());
+            let f1 = end_rhs(&sites.end, b, &theta1, &pb.rates());
             let ym = (y0 + y1) * 0.5 + (f0 - f1) * (h / 8.0);
             let Rm = a.R * so3::exp(&ym.fixed_rows::<3>(THETA).into());
             let (vm, um): (Vector3<f64>, Vector3<f64>) = (ym.fixed_rows::<3>(V).into(), ym.fixed_rows::<3>(U).into());

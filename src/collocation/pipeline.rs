@@ -47,7 +47,7 @@ pub(crate) fn solve_impl(
         resolves(robot, options, &mesh)?;
     }
     let warm_stable = warm.is_some_and(|g| g.report.stability.is_stable());
-    let warm = warm.map(|g| interpolate(g, &mesh));
+    let warm = warm.map(|g| interpolate(&model, g, &mesh));
     // The cached factors belong to the guess when it is the cached solver's last solution.
     let mut reuse = match (cache.as_ref(), &warm) {
         (Some(c), Some(w)) => c.mesh == mesh && c.solver == options.linear_solver && c.last.as_ref() == Some(w),

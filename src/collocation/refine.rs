@@ -90,7 +90,7 @@ pub(super) fn to_tolerance<'r>(
             &segment_ends(&level.mesh),
             Some(&correction.node_rates),
         )?;
-        x = interpolate_nodes(&guess, &fine);
+        x = interpolate_nodes(model, &guess, &fine);
         mesh = fine;
     }
 }
@@ -222,7 +222,7 @@ pub(super) fn remesh(
     let ends: Vec<f64> = system.mesh.nodes.iter().map(|n| n.segment_end).collect();
     let shape = nodes::solution(&model, &point.x, &ends, None, report.clone()).ok()?;
     let mesh = Mesh::uniform(model.robot, intervals).ok()?;
-    let mut x = interpolate(&shape, &mesh);
+    let mut x = interpolate(&model, &shape, &mesh);
     *system = System::new(model, mesh);
     homotopy.set(system, point.lambda);
     *ws = Workspace::new(system, options.linear_solver).ok()?;

@@ -124,7 +124,7 @@ fn rhs(model: &Model, site: &Site, segment_end: f64, Rk: &Matrix3<f64>, y: &Bloc
     let R = Rk * so3::exp(&theta);
     let rates = linearize::rates(model, site, segment_end, &R, &v, &u)?;
     let mut f = Block::zeros();
-    f.fixed_rows_mut::<3>(P).copy_from(&(R * v));
+    f.fixed_rows_mut::<3>(P).copy_from(&(R * site.strain(&v)));
     f.fixed_rows_mut::<3>(THETA)
         .copy_from(&(so3::right_jacobian_inv(&theta) * u));
     f.fixed_rows_mut::<6>(V).copy_from(&rates);
@@ -153,11 +153,11 @@ pub(super) fn end_points(a: &State, b: &State) -> (Block<f64>, Block<f64>) {
 }
 
 /// F at an interval's end point y_1 = (p_b, theta_1, v_b, u_b) in the local coordinates of
-/// a frame R_a, given the rates (v', u') at node b: (R_b v_b, J_r^-1(theta_1) u_b, rates),
-/// with R_b = R_a exp(theta_1).
-pub(super) fn end_rhs(b: &State, theta1: &Vector3<f64>, rates: &Vector6<f64>) -> Block<f64> {
+/// a frame R_a, given node b's site and the rates (v', u') there: (R_b v, J_r^-1(theta_1)
+/// u_b, rates), with R_b = R_a exp(theta_1) and v the strain of v_b ([`Site::strain`]).
+pub(super) fn end_rhs(site: &Site, b: &State, theta1: &Vector3<f64>, rates: &Vector6<f64>) -> Block<f64> {
     let mut f = Block::zeros();
-    f.fixed_rows_mut::<3>(P).copy_from(&(b.R * b.v));
+    f.fixed_rows_mut::<3>(P).copy_from(&(b.R * site.strain(&b.v)));
     f.fixed_rows_mut::<3>(THETA)
         .copy_from(&(so3::right_jacobian_inv(theta1) * b.u));
     f.fixed_rows_mut::<6>(V).copy_from(rates);
@@ -188,8 +188,8 @@ pub fn interval(
     };
     let rates1 = linearize::rates(model, &sites.end, segment_end, &b.R, &b.v, &b.u)?;
     let theta1: Vector3<f64> = y1.fixed_rows::<3>(THETA).into();
-    let f0 = end_rhs(a, &Vector3::zeros(), &rates0);
-    let f1 = end_rhs(b, &theta1, &rates1);
+    let f0 = end_rhs(&sites.start, a, &Vector3::zeros(), &rates0);
+    let f1 = end_rhs(&sites.end, b, &theta1, &rates1);
     let ym = (y0 + y1) * 0.5 + (f0 - f1) * (h / 8.0);
     let fm = rhs(model, &sites.mid, segment_end, &a.R, &ym)?;
     Ok((
@@ -237,8 +237,8 @@ pub fn interval_order6(
     let h = sites.end.s - sites.start.s;
     let (y0, y1) = end_points(a, b);
     let theta1: Vector3<f64> = y1.fixed_rows::<3>(THETA).into();
-    let f0 = end_rhs(a, &Vector3::zeros(), start_rates);
-    let f1 = end_rhs(b, &theta1, end_rates);
+    let f0 = end_rhs(&sites.start, a, &Vector3::zeros(), start_rates);
+    let f1 = end_rhs(&sites.end, b, &theta1, end_rates);
     let y_q = (y0 * 27.0 + y1 * 5.0) / 32.0 + (f0 * 9.0 - f1 * 3.0) * (h / 64.0);
     let y_tq = (y0 * 5.0 + y1 * 27.0) / 32.0 + (f0 * 3.0 - f1 * 9.0) * (h / 64.0);
     let f_q = rhs(model, &quarters.quarter, segment_end, &a.R, &y_q)?;
@@ -257,12 +257,18 @@ pub(super) struct PointLinearization {
     pub(super) f_frame: SMatrix<f64, 12, 3>,
 }
 
-/// F(s, y) of an interval with frame `Rk` and its derivatives, assembled from the strain-rate
-/// linearization `lin` at R = R_k exp(theta) and the kinematics p' = R_k exp(theta) v,
-/// theta' = J_r(theta)^-1 u.
-pub(super) fn rhs_linearized(lin: &Linearization, Rk: &Matrix3<f64>, y: &Block<f64>) -> PointLinearization {
+/// F(s, y) of an interval with frame `Rk` and its derivatives at a point of `site`,
+/// assembled from the strain-rate linearization `lin` at R = R_k exp(theta) and the
+/// kinematics p' = R_k exp(theta) v, theta' = J_r(theta)^-1 u (v the strain of the
+/// coordinate, [`Site::strain`]: constant on a Kirchhoff rod).
+pub(super) fn rhs_linearized(
+    site: &Site,
+    lin: &Linearization,
+    Rk: &Matrix3<f64>,
+    y: &Block<f64>,
+) -> PointLinearization {
     let theta: Vector3<f64> = y.fixed_rows::<3>(THETA).into();
-    let v: Vector3<f64> = y.fixed_rows::<3>(V).into();
+    let v = site.strain(&y.fixed_rows::<3>(V).into());
     let u: Vector3<f64> = y.fixed_rows::<3>(U).into();
     let E = so3::exp(&theta);
     let R = Rk * E;
@@ -275,7 +281,9 @@ pub(super) fn rhs_linearized(lin: &Linearization, Rk: &Matrix3<f64>, y: &Block<f
     let mut f_y = SMatrix::<f64, 12, 12>::zeros();
     // p' = R_k exp(theta) v: exp(theta + d) = exp(theta) exp(J_r d)
     f_y.fixed_view_mut::<3, 3>(0, 3).copy_from(&(-R * so3::hat(&v) * Jr));
-    f_y.fixed_view_mut::<3, 3>(0, 6).copy_from(&R);
+    if !site.inextensible {
+        f_y.fixed_view_mut::<3, 3>(0, 6).copy_from(&R);
+    }
     f_y.fixed_view_mut::<3, 3>(3, 3)
         .copy_from(&so3::d_right_jacobian_inv_u(&theta, &u));
     f_y.fixed_view_mut::<3, 3>(3, 9).copy_from(&Jri);
@@ -324,10 +332,11 @@ pub fn interval_jacobian(
         None => linearize(model, &sites.start, segment_end, &a.R, &a.v, &a.u)?,
     };
     let lin1 = linearize(model, &sites.end, segment_end, &b.R, &b.v, &b.u)?;
-    let p0 = rhs_linearized(&lin0, &a.R, &y0);
-    let p1 = rhs_linearized(&lin1, &a.R, &y1);
+    let p0 = rhs_linearized(&sites.start, &lin0, &a.R, &y0);
+    let p1 = rhs_linearized(&sites.end, &lin1, &a.R, &y1);
     let ym = (y0 + y1) * 0.5 + (p0.f - p1.f) * (h / 8.0);
     let pm = rhs_linearized(
+        &sites.mid,
         &linearize(
             model,
             &sites.mid,

@@ -12,10 +12,10 @@ use super::{MAX_ITERATIONS, solve};
 use crate::Robot;
 use crate::error::Result;
 use crate::mesh::Mesh;
+use crate::mesh::guess::interpolate_nodes;
 use crate::model::equations::Model;
 use crate::model::parameter::Parameter;
 use crate::report::{Method, SolveReport};
-use crate::solution::Node;
 use nalgebra::{Matrix3, Vector3};
 use std::time::Instant;
 
@@ -202,8 +202,9 @@ pub fn trace_until(
     let first = solve(&start, options)?;
     let points: Vec<f64> = first.nodes.iter().map(|n| n.s).collect();
     let mesh = Mesh::from_points(robot, &points)?;
-    let x: Vec<_> = first.nodes.iter().map(Node::state).collect();
-    let mut system = System::new(Model::new(robot), mesh);
+    let model = Model::new(robot);
+    let x = interpolate_nodes(&model, &first.nodes, &mesh);
+    let mut system = System::new(model, mesh);
     let mut ws = Workspace::new(&system, options.linear_solver)?;
     let settings = Settings {
         tolerance: options.residual_tolerance,

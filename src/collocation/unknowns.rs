@@ -3,7 +3,9 @@
 //!
 //! Unknowns are ordered node by node, [`NODE`] = 12 per node, as four scaled 3-vectors at
 //! the offsets [`P`], [`THETA`], [`V`], [`U`]: dp / L, the right rotation increment dtheta
-//! (R -> R exp(dtheta)), dv and du L (docs/numerics.md, scaling). Rows are the
+//! (R -> R exp(dtheta)), dv and du L (docs/numerics.md, scaling); dv is the change of the
+//! translational coordinate, the strain on a Cosserat rod and the internal force in strain
+//! units on a Kirchhoff rod (docs/model.md section 4b). Rows are the
 //! [`BASE_ROWS`] = 6 base conditions, then [`NODE`] = 12 per link (an interval's
 //! collocation equations or a breakpoint's jump conditions), then the [`TIP_ROWS`] = 6 tip
 //! conditions (3 force rows, then 3 moment rows), so the Jacobian is almost block diagonal:

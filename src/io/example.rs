@@ -173,6 +173,7 @@ method = "collocation"           # or "shooting" (the independent cross-check)
 # [model]                        # the model variant; every field optional
 # corner_forces = true           # false: the paper's jump conditions (no corner forces)
 # tendons = "coupled"            # or "point_moment": tendons act by their end moments only
+# rod = "cosserat"               # or "kirchhoff": inextensible and unshearable (v = v*)
 "#;
 
 #[cfg(test)]

@@ -10,12 +10,22 @@
 
 use crate::mesh::{Mesh, MeshNode};
 use crate::model::equations::{Model, Which};
+use crate::model::robot::RodModel;
 use crate::so3;
 use crate::solution::{Node, Solution, State};
 use nalgebra::{Matrix3, Vector3};
 
-/// Poses along the mesh integrated from the base with the node strains `v`, `u` (midpoint
-/// rule on the Lie group); left and right limits at a breakpoint share a pose.
+/// The strain v at mesh node `node` whose translational coordinate is `v` (v* on a
+/// Kirchhoff rod, [`crate::model::equations::Site::strain`]).
+fn strain(model: &Model, node: &MeshNode, v: &Vector3<f64>) -> Vector3<f64> {
+    match model.robot.rod_model {
+        RodModel::Cosserat => *v,
+        RodModel::Kirchhoff => model.robot.rod.reference_on(node.s, node.segment_end).v_star,
+    }
+}
+
+/// Poses along the mesh integrated from the base with the node coordinates `v`, `u`
+/// (midpoint rule on the Lie group); left and right limits at a breakpoint share a pose.
 fn integrate_poses(
     model: &Model,
     nodes: &[MeshNode],
@@ -28,7 +38,7 @@ fn integrate_poses(
     for k in 0..nodes.len() - 1 {
         let h = nodes[k + 1].s - nodes[k].s;
         if h > 0.0 {
-            let v = (strains[k].0 + strains[k + 1].0) * 0.5;
+            let v = (strain(model, &nodes[k], &strains[k].0) + strain(model, &nodes[k + 1], &strains[k + 1].0)) * 0.5;
             let u = (strains[k].1 + strains[k + 1].1) * 0.5;
             p += R * so3::exp(&(u * (h / 2.0))) * v * h;
             R *= so3::exp(&(u * h));
@@ -66,26 +76,50 @@ pub fn initial(model: &Model, nodes: &[MeshNode], kind: InitialGuess) -> Vec<Sta
 
 /// Node states of a previous solution on `mesh`, a warm start: its own node states when the
 /// meshes are the same, else its interpolant, with left limits for the left node of a jump.
-pub fn interpolate(guess: &Solution, mesh: &Mesh) -> Vec<State> {
-    interpolate_nodes(&guess.nodes, mesh)
+/// On a Kirchhoff rod the translational coordinate is made from the solution's internal
+/// force (interpolated linearly between nodes).
+pub fn interpolate(model: &Model, guess: &Solution, mesh: &Mesh) -> Vec<State> {
+    interpolate_nodes(model, &guess.nodes, mesh)
 }
 
 /// As [`interpolate`], from a solution's `nodes` alone (what the dense evaluation reads).
-pub(crate) fn interpolate_nodes(nodes: &[Node], mesh: &Mesh) -> Vec<State> {
+pub(crate) fn interpolate_nodes(model: &Model, nodes: &[Node], mesh: &Mesh) -> Vec<State> {
     let same = nodes.len() == mesh.nodes.len() && nodes.iter().zip(&mesh.nodes).all(|(a, b)| a.s == b.s);
-    if same {
-        return nodes.iter().map(Node::state).collect();
+    let mut states: Vec<State> = if same {
+        nodes.iter().map(Node::state).collect()
+    } else {
+        (0..mesh.nodes.len())
+            .map(|k| {
+                let s = mesh.nodes[k].s;
+                State {
+                    s,
+                    ..crate::solution::at_limit(nodes, s, is_left(mesh, k))
+                }
+            })
+            .collect()
+    };
+    if model.robot.rod_model == RodModel::Kirchhoff {
+        for (k, x) in states.iter_mut().enumerate() {
+            let n = if same {
+                nodes[k].n
+            } else {
+                let (i, _) = crate::solution::interval(nodes, x.s, is_left(mesh, k));
+                let (a, b) = (&nodes[i], &nodes[i + 1]);
+                let t = (x.s - a.s) / (b.s - a.s);
+                a.n * (1.0 - t) + b.n * t
+            };
+            let site = model.site_on(x.s, mesh.nodes[k].segment_end);
+            x.v = model
+                .strains_for_wrench(&site, &(x.R.transpose() * n), &Vector3::zeros())
+                .0;
+        }
     }
-    (0..mesh.nodes.len())
-        .map(|k| {
-            let s = mesh.nodes[k].s;
-            let left = k + 1 < mesh.nodes.len() && mesh.is_jump(k);
-            State {
-                s,
-                ..crate::solution::at_limit(nodes, s, left)
-            }
-        })
-        .collect()
+    states
+}
+
+/// Whether mesh node k is the left node of a jump (it takes the left limit).
+fn is_left(mesh: &Mesh, k: usize) -> bool {
+    k + 1 < mesh.nodes.len() && mesh.is_jump(k)
 }
 
 fn reference_strains(model: &Model, nodes: &[MeshNode]) -> Vec<(Vector3<f64>, Vector3<f64>)> {
@@ -200,6 +234,7 @@ fn sweep(
             let (v, u) = strains[k];
             let (mut n, mut m) = wrench[k];
             // The tendons loading this node's segment pull it back along their paths.
+            let v = site.strain(&v);
             if let Ok((f, l)) = model.tendon_pull(node.s, Which::ActiveTo(node.segment_end), &R, &v, &u) {
                 n -= f;
                 m -= l;

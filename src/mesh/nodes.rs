@@ -144,13 +144,19 @@ fn node_list(model: &Model, states: &[State], segment_ends: &[f64], along: &Alon
                 friction::rates(local, &site, segment_ends[k], (&R, &v, &u), turning)?
             }
         };
-        let (v_s, u_s) = (rates.fixed_rows::<3>(0).into(), rates.fixed_rows::<3>(3).into());
         let (n, m) = model.internal_wrench(&site, &R, &v, &u);
+        // The strain and its rate: on a Kirchhoff rod v = v* (the coordinate carries n).
+        let v_s = if site.inextensible {
+            site.reference.v_star_s
+        } else {
+            rates.fixed_rows::<3>(0).into()
+        };
+        let u_s = rates.fixed_rows::<3>(3).into();
         nodes.push(Node {
             s,
             p,
             R,
-            v,
+            v: site.strain(&v),
             u,
             v_s,
             u_s,

@@ -11,7 +11,7 @@
 use crate::error::Result;
 use crate::model::linearize;
 use crate::model::parameter::Parameter;
-use crate::model::robot::{Robot, TendonModel};
+use crate::model::robot::{Robot, RodModel, TendonModel};
 use crate::model::rod::{SectionPoint, StrainPoint};
 use crate::model::routing::RoutingPoint;
 use crate::{Error, Real};
@@ -46,6 +46,24 @@ pub struct Site {
     /// Follower force per unit length (N/m), body frame, times the load factor: it adds
     /// to R^T f_e in eq. 13 and does not turn with a perturbation of R.
     pub f_follower: Vector3<f64>,
+    /// True on a Kirchhoff rod ([`RodModel::Kirchhoff`]): the strain is v = v* exactly and
+    /// a node's translational coordinate carries the internal force ([`Site::strain`]).
+    pub inextensible: bool,
+}
+
+impl Site {
+    /// The shear and extension strain v (body frame) at a node whose translational
+    /// coordinate is `v`. The coordinate is v* + K_se^-1 n_b, the body-frame internal force
+    /// n_b in strain units: for a Cosserat rod that is the strain itself (the constitutive
+    /// law), for a Kirchhoff rod the strain is v* whatever the force (docs/model.md,
+    /// "Kirchhoff rods").
+    pub fn strain<T: Real>(&self, v: &Vector3<T>) -> Vector3<T> {
+        if self.inextensible {
+            lift(&self.reference.v_star)
+        } else {
+            *v
+        }
+    }
 }
 
 /// Which tendons take part in a sum.
@@ -150,6 +168,7 @@ impl<'a> Model<'a> {
             },
             l_e: loads.distributed_moment.at(s) * self.load_factor,
             f_follower: loads.follower_distributed_force.at(s) * self.load_factor,
+            inextensible: self.robot.rod_model == RodModel::Kirchhoff,
         }
     }
 
@@ -179,7 +198,8 @@ impl<'a> Model<'a> {
         self.tendons(s, Which::ActiveTo(segment_end)).filter(move |_| coupled)
     }
 
-    /// Eq. 13 (corrected): the strain rates (v', u') at a site for the state (R, v, u),
+    /// Eq. 13 (corrected): the rates (v', u') of the node coordinates at a site for the
+    /// state (R, v, u) (v' the rate of the translational coordinate, [`Site::strain`]),
     /// with the tendons that reach `segment_end` loading the backbone. This is
     /// [`linearize::rates`] (the one f64 implementation of eq. 13, shared with the exact
     /// linearization), split into its v' and u' parts.
@@ -202,7 +222,7 @@ impl<'a> Model<'a> {
     /// The sum over the selected tendons of their internal tension tau_i t_i (world frame,
     /// N) and its moment about the centreline (R r_i) x tau_i t_i (N m), where
     /// t_i = p_i' / |p_i'| is the unit tangent of the tendon's path (eq. 9) for the state
-    /// (R, v, u).
+    /// (R, v, u), v the strain ([`Site::strain`] of a node's coordinate).
     ///
     /// The point load of tendon i on the backbone where its path ends or bends is
     /// tau_i (t_i(s+) - t_i(s-)) (docs/model.md section 5), so jump and tip conditions are
@@ -239,7 +259,9 @@ impl<'a> Model<'a> {
         Ok((force, moment))
     }
 
-    /// Internal force n = R D (v - v*) (N) and moment m = R C (u - u*) (N m), world frame (eq. 3).
+    /// Internal force n = R D (v - v*) (N) and moment m = R C (u - u*) (N m), world frame
+    /// (eq. 3), for the node coordinates (v, u): on a Kirchhoff rod v is the translational
+    /// coordinate v* + D^-1 n_b ([`Site::strain`]), so this is its force, not eq. 3's.
     pub fn internal_wrench<T: Real>(
         &self,
         site: &Site,
@@ -252,8 +274,8 @@ impl<'a> Model<'a> {
         (R * nb, R * mb)
     }
 
-    /// Body-frame strains (v, u) that carry the body-frame internal wrench (n_b, m_b): the
-    /// inverse of [`Model::internal_wrench`].
+    /// Body-frame node coordinates (v, u) that carry the body-frame internal wrench
+    /// (n_b, m_b): the inverse of [`Model::internal_wrench`] (the strains on a Cosserat rod).
     pub fn strains_for_wrench<T: Real>(
         &self,
         site: &Site,
@@ -331,6 +353,7 @@ impl Model<'_> {
         let (f_ext, l_ext) = self.point_wrench(s);
         dn -= lift::<T>(&f_ext);
         dm -= lift::<T>(&l_ext);
+        let va = &site_a.strain(va);
         let (fe, me) = self.tendon_pull(s, Which::EndingAt(s), Ra, va, ua)?;
         dn += fe;
         dm += me;
@@ -346,7 +369,7 @@ impl Model<'_> {
             dm -= mb;
             if self.robot.corner_forces && self.robot.tendon_model == TendonModel::Coupled {
                 let (fa, ma) = self.tendon_pull(s, Which::Past(s), Ra, va, ua)?;
-                let (fb, mb) = self.tendon_pull(s, Which::Past(s), Rb, vb, ub)?;
+                let (fb, mb) = self.tendon_pull(s, Which::Past(s), Rb, &site_b.strain(vb), ub)?;
                 dn += fa - fb;
                 dm += ma - mb;
             }

@@ -163,9 +163,14 @@ impl Slip {
         self.normal_change(x) + self.project(&self.tp.c)
     }
 
-    /// The part of q_i the rates x drive: k_i (I - t t^T) (x_v - r_i x x_u).
+    /// The part of q_i the rates x drive: k_i (I - t t^T) (x_v - r_i x x_u), without x_v on
+    /// a Kirchhoff rod (its v' = v*' is in c_i, docs/model.md section 4b).
     fn normal_change(&self, x: &Vector6<f64>) -> Vector3<f64> {
-        let x_v = Vector3::new(x[0], x[1], x[2]);
+        let x_v = if self.tp.inextensible {
+            Vector3::zeros()
+        } else {
+            Vector3::new(x[0], x[1], x[2])
+        };
         let x_u = Vector3::new(x[3], x[4], x[5]);
         self.project(&(x_v - self.tp.r.cross(&x_u)))
     }
@@ -177,10 +182,15 @@ impl Slip {
     }
 
     /// dg_i/dx = w_i mu_i k_i (q^, r_i x q^): the gradient of the tangential load in the
-    /// rates (q^ is normal to t_i, so the projection drops out).
+    /// rates (q^ is normal to t_i, so the projection drops out); (0, r_i x q^) on a
+    /// Kirchhoff rod, whose q_i does not depend on x_v.
     fn gradient(&self) -> Vector6<f64> {
         let m = self.tp.r.cross(&self.q_hat);
-        let h = &self.q_hat;
+        let h = if self.tp.inextensible {
+            Vector3::zeros()
+        } else {
+            self.q_hat
+        };
         Vector6::new(h[0], h[1], h[2], m[0], m[1], m[2]) * (self.signed_mu * self.tp.k)
     }
 }
@@ -212,7 +222,7 @@ fn solve(
         let (Some(friction), Some(slot)) = (tendons[i].active_friction(), slipping.iter().position(|&j| j == i)) else {
             continue;
         };
-        let tp = TendonPoint::new(i, tension, &rp, site.s, v, u)?;
+        let tp = TendonPoint::new(i, tension, &rp, site, v, u)?;
         let m = tp.r.cross(&tp.t);
         let e = Vector6::new(tp.t[0], tp.t[1], tp.t[2], m[0], m[1], m[2]);
         let mut row = e.transpose();
@@ -380,9 +390,13 @@ pub(crate) fn linearize(
     for (sl, column) in slips.iter().zip(columns.iter_mut()) {
         let tp = &sl.tp;
         let P = Matrix3::identity() - tp.t * tp.t.transpose();
-        // dt/dv = P / |p|, dt/du = -P r^ / |p|
-        let dt_dv = P * tp.inv_speed;
-        let dt_du = -dt_dv * crate::so3::hat(&tp.r);
+        // dt/dv = P / |p| (0 on a Kirchhoff rod: t sees the strain v*), dt/du = -P r^ / |p|
+        let dt_du = -P * tp.inv_speed * crate::so3::hat(&tp.r);
+        let dt_dv = if tp.inextensible {
+            Matrix3::zeros()
+        } else {
+            P * tp.inv_speed
+        };
         let QQ = tp.normal_derivative(&Vector3::new(x[0], x[1], x[2]), &Vector3::new(x[3], x[4], x[5]), u);
         let dg = (sl.q_hat.transpose() * QQ) * sl.signed_mu; // 1 x 6
         for c in 0..6 {
@@ -499,8 +513,23 @@ mod tests {
     #[test]
     fn linearization_matches_central_differences() {
         let (robot, R, v, u) = setup();
-        let model = Model::new(&robot);
-        let slipping = slipping(&robot);
+        check(&robot, &R, &v, &u);
+    }
+
+    #[test]
+    fn linearization_on_a_kirchhoff_rod_matches_central_differences() {
+        let (mut robot, R, v, u) = setup();
+        robot.rod_model = crate::model::robot::RodModel::Kirchhoff;
+        // v is the force coordinate v* + D^-1 n_b here: a compressive 2e-2 EA of force
+        check(&robot, &R, &v, &u);
+    }
+
+    /// The friction linearization at (R, v, u) against Richardson-extrapolated central
+    /// differences of the rates and turning rates.
+    fn check(robot: &Robot, R: &Matrix3<f64>, v: &Vector3<f64>, u: &Vector3<f64>) {
+        let (R, v, u) = (*R, *v, *u);
+        let model = Model::new(robot);
+        let slipping = slipping(robot);
         let site = model.site(0.07);
         let end = robot.length();
         let lin = linearize(&model, &site, end, (&R, &v, &u), &slipping, true).unwrap();

@@ -70,6 +70,12 @@
 //! Products with a hat matrix are written as cross products (m a^ has rows m_j x a, a^ m
 //! has columns a x m_k), which halves their flops against a dense 3x3 product.
 //!
+//! **Kirchhoff rods** ([`Site::inextensible`], docs/model.md section 4b). The node's
+//! translational coordinate v is then v* + D^-1 n_b and the strain is v* ([`Site::strain`]):
+//! the tendon quantities are evaluated at the strain v*, v' = v*' is known and sits in c_i
+//! (so in a, b), and M = [D, G; 0, C + H]. In dF the tendon columns dq_i/dv vanish (q_i sees
+//! only the strain) and dF_u/dv = v*^ D (only n_b = D (v - v*) moves with the coordinate).
+//!
 //! # Cost
 //! Two passes over the tendons (the second needs x); the per-tendon quantities of the first
 //! are kept on the stack for up to 8 tendons, further ones are re-evaluated. M is factored
@@ -86,7 +92,10 @@ use crate::error::Result;
 use crate::model::equations::MIN_TENDON_SPEED;
 use crate::model::equations::{Model, Site};
 use crate::model::routing::RoutingPoint;
-use nalgebra::{LU, Matrix3, Matrix3x6, Matrix6, Matrix6x3, SMatrix, U6, Vector3, Vector6};
+use nalgebra::{Matrix3, Matrix3x6, Matrix6, Matrix6x3, SMatrix, Vector3, Vector6};
+
+mod factor;
+use factor::Factor;
 
 /// Tendons whose per-tendon quantities are kept on the stack between the two passes (solve
 /// for x, then differentiate at x); further tendons are re-evaluated from their routing.
@@ -120,6 +129,9 @@ pub(crate) struct TendonPoint {
     pub(crate) k: f64,
     /// 1 / |p_i^b'|.
     pub(crate) inv_speed: f64,
+    /// On a Kirchhoff rod ([`Site::inextensible`]) v' = v*' is no unknown: it is part of
+    /// `c`, and q_i does not depend on the translational coordinate.
+    pub(crate) inextensible: bool,
 }
 
 impl TendonPoint {
@@ -130,31 +142,42 @@ impl TendonPoint {
         t: Vector3::new(0.0, 0.0, 0.0),
         k: 0.0,
         inv_speed: 0.0,
+        inextensible: false,
     };
 
-    /// Tendon `i` with tension `tension` (N) at the routing point `rp` of arc length `s`.
+    /// Tendon `i` with tension `tension` (N) at the routing point `rp` of `site`, for the
+    /// node coordinates (v, u) (the strain is [`Site::strain`] of v).
     pub(crate) fn new(
         i: usize,
         tension: f64,
         rp: &RoutingPoint,
-        s: f64,
+        site: &Site,
         v: &Vector3<f64>,
         u: &Vector3<f64>,
     ) -> Result<Self> {
-        let p = u.cross(&rp.r) + rp.r_s + v;
+        let p = u.cross(&rp.r) + rp.r_s + site.strain(v);
         let speed = p.norm();
         if speed < MIN_TENDON_SPEED {
-            return Err(Error::SingularRouting { tendon: i, s, speed });
+            return Err(Error::SingularRouting {
+                tendon: i,
+                s: site.s,
+                speed,
+            });
         }
         let inv_speed = 1.0 / speed;
         let e = p + rp.r_s;
+        let mut c = u.cross(&e) + rp.r_ss;
+        if site.inextensible {
+            c += site.reference.v_star_s; // v' = v*'
+        }
         Ok(TendonPoint {
             r: rp.r,
             e,
-            c: u.cross(&e) + rp.r_ss,
+            c,
             t: p * inv_speed,
             k: tension * inv_speed,
             inv_speed,
+            inextensible: site.inextensible,
         })
     }
 
@@ -192,10 +215,12 @@ impl TendonPoint {
     }
 
     /// [dq_i/dv, dq_i/du] (module docs) at the rates x = (x_v, x_u), with x held fixed: the
-    /// change of the tendon's normal load q_i with the strains.
+    /// change of the tendon's normal load q_i with the node coordinates (on a Kirchhoff rod
+    /// q_i does not depend on v nor x_v, the translational coordinate and its rate).
     pub(crate) fn normal_derivative(&self, x_v: &Vector3<f64>, x_u: &Vector3<f64>, u: &Vector3<f64>) -> Matrix3x6<f64> {
         let A = self.A();
         let t = &self.t;
+        let x_v = if self.inextensible { Vector3::zeros() } else { *x_v };
         let z = x_v - self.r.cross(x_u) + self.c; // p_i^b''
         let alpha = t.dot(&z);
         let z_perp = z - t * alpha;
@@ -215,7 +240,9 @@ impl TendonPoint {
         // dq/du = -Q r^ - A e^: rows r x Q_j + e x A_j
         let dq_du = mul_hat(&Q, &-self.r) + mul_hat(&A, &-self.e);
         let mut QQ = Matrix3x6::zeros();
-        QQ.fixed_columns_mut::<3>(0).copy_from(&Q);
+        if !self.inextensible {
+            QQ.fixed_columns_mut::<3>(0).copy_from(&Q);
+        }
         QQ.fixed_columns_mut::<3>(3).copy_from(&dq_du);
         QQ
     }
@@ -257,101 +284,6 @@ fn hat_diag(a: &Vector3<f64>, d: &Vector3<f64>, d_s: &Vector3<f64>) -> Matrix3<f
 /// The hat map in f64 (`so3::hat` without the generic scalar).
 fn hat3(a: &Vector3<f64>) -> Matrix3<f64> {
     Matrix3::new(0.0, -a[2], a[1], a[2], 0.0, -a[0], -a[1], a[0], 0.0)
-}
-
-/// The inverse of a symmetric positive definite 3x3 matrix by its adjugate, or None when a
-/// leading principal minor is not positive (not SPD, singular or NaN: by Sylvester's
-/// criterion exactly when a Cholesky factorization would meet a non-positive pivot).
-fn spd_inverse3(a: &Matrix3<f64>) -> Option<Matrix3<f64>> {
-    let c00 = a[(1, 1)] * a[(2, 2)] - a[(1, 2)] * a[(1, 2)];
-    let c01 = a[(0, 2)] * a[(1, 2)] - a[(0, 1)] * a[(2, 2)];
-    let c02 = a[(0, 1)] * a[(1, 2)] - a[(0, 2)] * a[(1, 1)];
-    let minor2 = a[(0, 0)] * a[(1, 1)] - a[(0, 1)] * a[(0, 1)];
-    let det = a[(0, 0)] * c00 + a[(0, 1)] * c01 + a[(0, 2)] * c02;
-    // `!(x > 0)` also rejects NaN.
-    if !(a[(0, 0)] > 0.0 && minor2 > 0.0 && det > 0.0 && det.is_finite()) {
-        return None;
-    }
-    let c11 = a[(0, 0)] * a[(2, 2)] - a[(0, 2)] * a[(0, 2)];
-    let c12 = a[(0, 2)] * a[(0, 1)] - a[(0, 0)] * a[(1, 2)];
-    let inv = 1.0 / det;
-    Some(Matrix3::new(c00, c01, c02, c01, c11, c12, c02, c12, minor2) * inv)
-}
-
-/// M = [P, G; G^T, Q] (symmetric positive definite, 3x3 blocks) factored by block
-/// elimination: P^-1, W = P^-1 G and the inverse of the Schur complement
-/// S = Q - G^T P^-1 G, each 3x3 inverse by its adjugate. M is SPD exactly when P and S are,
-/// so this succeeds exactly when a Cholesky factorization would (up to rounding). It has
-/// two independent divisions and no square roots on its dependency chain; replacing a 6x6
-/// Cholesky written out for the fixed size (six dependent square roots) by it took a warm
-/// solve of case H from 256 to 203 us on the development machine.
-struct Schur6 {
-    P_inv: Matrix3<f64>,
-    G: Matrix3<f64>,
-    W: Matrix3<f64>,
-    S_inv: Matrix3<f64>,
-}
-
-impl Schur6 {
-    /// Factors M (reads its upper-left, upper-right and lower-right blocks); None when M
-    /// is not SPD.
-    fn new(M: &Matrix6<f64>) -> Option<Self> {
-        let P_inv = spd_inverse3(&M.fixed_view::<3, 3>(0, 0).into_owned())?;
-        let G: Matrix3<f64> = M.fixed_view::<3, 3>(0, 3).into_owned();
-        let W = P_inv * G;
-        let S = M.fixed_view::<3, 3>(3, 3) - G.tr_mul(&W);
-        // S is symmetric; average out the rounding of the product.
-        let S_inv = spd_inverse3(&((S + S.transpose()) * 0.5))?;
-        Some(Schur6 { P_inv, G, W, S_inv })
-    }
-
-    /// Overwrites the rows of `bt` with those of bt M^-1, i.e. solves M X = B for B = bt^T
-    /// (M and the block inverses are symmetric): with rows (b_v, b_u),
-    /// w = b_v P^-1, x_u = (b_u - w G) S^-1, x_v = w - x_u W^T.
-    fn solve_transposed_mut<const C: usize>(&self, bt: &mut SMatrix<f64, C, 6>) {
-        let w = bt.fixed_columns::<3>(0) * self.P_inv;
-        let x_u = (bt.fixed_columns::<3>(3) - w * self.G) * self.S_inv;
-        let x_v = w - x_u * self.W.transpose();
-        bt.fixed_columns_mut::<3>(0).copy_from(&x_v);
-        bt.fixed_columns_mut::<3>(3).copy_from(&x_u);
-    }
-}
-
-/// The factorization of M reused for all right-hand sides: block elimination for SPD M, or
-/// LU where rounding made M fail the SPD test. Everything
-/// is solved in place on transposed right-hand sides, so no 6x9 matrix is moved or wrapped
-/// in an `Option`.
-enum Factor {
-    Spd(Schur6),
-    /// The fallback, computed only when M is not numerically SPD.
-    Lu(LU<f64, U6, U6>),
-}
-
-impl Factor {
-    /// Factors M.
-    fn new(M: &Matrix6<f64>) -> Self {
-        match Schur6::new(M) {
-            Some(f) => Factor::Spd(f),
-            None => Factor::Lu(M.lu()),
-        }
-    }
-
-    /// Overwrites `bt` with (M^-1 bt^T)^T; false when M is singular.
-    #[inline(always)]
-    fn solve_transposed_mut<const C: usize>(&self, bt: &mut SMatrix<f64, C, 6>) -> bool {
-        match self {
-            Factor::Spd(f) => {
-                f.solve_transposed_mut(bt);
-                true
-            }
-            Factor::Lu(lu) => {
-                let mut b = bt.transpose();
-                let solved = lu.solve_mut(&mut b);
-                bt.copy_from(&b.transpose());
-                solved
-            }
-        }
-    }
 }
 
 /// Pass 1 of the linearization at one point: the per-tendon quantities (the first
@@ -403,7 +335,7 @@ fn assemble(
     let mut a = Vector3::<f64>::zeros();
     let mut b = Vector3::<f64>::zeros();
     for (i, tension, rp) in model.distributed_tendons(site.s, segment_end) {
-        let tp = TendonPoint::new(i, tension, &rp, site.s, v, u)?;
+        let tp = TendonPoint::new(i, tension, &rp, site, v, u)?;
         let A_i = tp.A();
         let G_i = mul_hat(&A_i, &-tp.r); // -A_i r^
         A += A_i;
@@ -422,12 +354,21 @@ fn assemble(
 
     let rhs_v =
         reference.v_star_s.component_mul(kse) - u.cross(&n_b) - dv.component_mul(kse_s) - f_b - site.f_follower - a;
-    let rhs_u =
-        reference.u_star_s.component_mul(kbt) - u.cross(&m_b) - du.component_mul(kbt_s) - v.cross(&n_b) - l_b - b;
+    let rhs_u = reference.u_star_s.component_mul(kbt)
+        - u.cross(&m_b)
+        - du.component_mul(kbt_s)
+        - site.strain(v).cross(&n_b)
+        - l_b
+        - b;
+    // On a Kirchhoff rod the tendons' loads do not depend on the rate of the translational
+    // coordinate (v' = v*' is in a and b): M = [D, G; 0, C + H] (docs/model.md).
+    let coupled = !site.inextensible;
     let mut M = Matrix6::<f64>::zeros();
-    M.fixed_view_mut::<3, 3>(0, 0).copy_from(&A);
+    if coupled {
+        M.fixed_view_mut::<3, 3>(0, 0).copy_from(&A);
+        M.fixed_view_mut::<3, 3>(3, 0).copy_from(&G.transpose()); // B = G^T
+    }
     M.fixed_view_mut::<3, 3>(0, 3).copy_from(&G);
-    M.fixed_view_mut::<3, 3>(3, 0).copy_from(&G.transpose()); // B = G^T
     M.fixed_view_mut::<3, 3>(3, 3).copy_from(&H);
     for j in 0..3 {
         M[(j, j)] += kse[j];
@@ -436,7 +377,7 @@ fn assemble(
     // The right-hand side as a row, (rhs_v^T, rhs_u^T).
     let mut x = SMatrix::<f64, 1, 6>::new(rhs_v[0], rhs_v[1], rhs_v[2], rhs_u[0], rhs_u[1], rhs_u[2]);
     // M is SPD (docs/model.md section 4): block elimination, LU only if rounding made it fail.
-    let factor = Factor::new(&M);
+    let factor = Factor::new(&M, coupled);
     if !factor.solve_transposed_mut(&mut x) {
         return Err(breakdown(site.s));
     }
@@ -609,10 +550,17 @@ fn derivative(
     }
     if count > CACHED_TENDONS {
         for (i, tension, rp) in model.distributed_tendons(site.s, segment_end).skip(CACHED_TENDONS) {
-            TendonPoint::new(i, tension, &rp, site.s, v, u)?.add_derivatives(&x_v, &x_u, u, &mut top, &mut bottom);
+            TendonPoint::new(i, tension, &rp, site, v, u)?.add_derivatives(&x_v, &x_u, u, &mut top, &mut bottom);
         }
     }
     let n_hat = hat3(&n_b);
+    // d(v x n_b)/dv = v^ D - n_b^ on a Cosserat rod; on a Kirchhoff rod v = v* and only
+    // n_b = D (coordinate - v*) changes.
+    let strain_term = if site.inextensible {
+        hat_diag(&site.strain(v), kse, &Vector3::zeros())
+    } else {
+        hat_diag(v, kse, &Vector3::zeros()) - n_hat
+    };
     let blocks = [
         [
             hat_diag(u, kse, kse_s) + top.fixed_columns::<3>(0),
@@ -620,7 +568,7 @@ fn derivative(
             hat3(&f_b),
         ],
         [
-            hat_diag(v, kse, &Vector3::zeros()) - n_hat + bottom.fixed_columns::<3>(0),
+            strain_term + bottom.fixed_columns::<3>(0),
             hat_diag(u, kbt, kbt_s) - hat3(&m_b) + bottom.fixed_columns::<3>(3),
             hat3(&l_b),
         ],
@@ -654,7 +602,10 @@ mod tests {
     /// The test oracle: eq. 13 (corrected, docs/model.md) transcribed directly, generic over
     /// the scalar, with nalgebra's Cholesky (LU fallback). Dual numbers through it give the
     /// forward-mode derivatives the hand-derived linearization is checked against; in f64 it
-    /// checks [`rates`], which factors M by 3x3 blocks instead.
+    /// checks [`rates`], which factors M by 3x3 blocks instead. On a Kirchhoff rod's site it
+    /// is the force balance n_b' + u x n_b + ... = 0 with n_b = D (v - v*) for the coordinate
+    /// v, the strain v* in the tendon paths and the moment balance, and v' = v*' in the
+    /// tendons' p_i'' (docs/model.md, "Kirchhoff rods"), solved by LU.
     fn strain_rates<T: Real>(
         model: &Model,
         site: &Site,
@@ -675,6 +626,10 @@ mod tests {
         let du = u - u_star;
         let u_hat = hat(u);
         let Rt = R.transpose();
+        let kirchhoff = site.inextensible;
+        // The strain in the tendon paths and the moment balance.
+        let strain = if kirchhoff { v_star } else { *v };
+        let v_star_s = lift::<T>(&site.reference.v_star_s);
 
         let mut A = Matrix3::<T>::zeros();
         let mut B = Matrix3::<T>::zeros();
@@ -686,7 +641,7 @@ mod tests {
             let r = lift::<T>(&rp.r);
             let r_s = lift::<T>(&rp.r_s);
             let r_ss = lift::<T>(&rp.r_ss);
-            let pb_s = u.cross(&r) + r_s + v; // p_i^b'
+            let pb_s = u.cross(&r) + r_s + strain; // p_i^b'
             let speed = pb_s.norm();
             if speed < T::from_f64(MIN_TENDON_SPEED).unwrap_or_else(T::zero) {
                 return Err(Error::SingularRouting {
@@ -700,7 +655,8 @@ mod tests {
             let A_i = ph * ph * (-tau / (speed * speed * speed));
             let r_hat = hat(&r);
             let B_i = r_hat * A_i;
-            let a_i = A_i * (u_hat * pb_s + u_hat * r_s + r_ss);
+            let known = if kirchhoff { v_star_s } else { Vector3::zeros() }; // v' = v*'
+            let a_i = A_i * (u_hat * pb_s + u_hat * r_s + r_ss + known);
             A += A_i;
             B += B_i;
             G -= A_i * r_hat;
@@ -712,20 +668,25 @@ mod tests {
         let rhs_v = D * lift::<T>(&site.reference.v_star_s) - (u_hat * D + D_s) * dv - Rt * lift::<T>(&site.f_e) - a;
         let rhs_u = C * lift::<T>(&site.reference.u_star_s)
             - (u_hat * C + C_s) * du
-            - hat(v) * D * dv
+            - hat(&strain) * D * dv
             - Rt * lift::<T>(&site.l_e)
             - b;
         let mut M = Matrix6::<T>::zeros();
-        M.fixed_view_mut::<3, 3>(0, 0).copy_from(&(D + A));
+        if kirchhoff {
+            M.fixed_view_mut::<3, 3>(0, 0).copy_from(&D);
+        } else {
+            M.fixed_view_mut::<3, 3>(0, 0).copy_from(&(D + A));
+            M.fixed_view_mut::<3, 3>(3, 0).copy_from(&B);
+        }
         M.fixed_view_mut::<3, 3>(0, 3).copy_from(&G);
-        M.fixed_view_mut::<3, 3>(3, 0).copy_from(&B);
         M.fixed_view_mut::<3, 3>(3, 3).copy_from(&(C + H));
         let mut rhs = Vector6::<T>::zeros();
         rhs.fixed_rows_mut::<3>(0).copy_from(&rhs_v);
         rhs.fixed_rows_mut::<3>(3).copy_from(&rhs_u);
         // M is symmetric positive definite (B = G^T, H symmetric, A_i PSD): Cholesky first;
         // LU only if rounding made the factorization fail.
-        let x = match M.cholesky() {
+        let cholesky = if kirchhoff { None } else { M.cholesky() };
+        let x = match cholesky {
             Some(ch) => ch.solve(&rhs),
             None => M.lu().solve(&rhs).ok_or_else(|| Error::Breakdown {
                 s: site.s,
@@ -947,6 +908,46 @@ mod tests {
     }
 
     #[test]
+    fn kirchhoff_rods_match_ad() {
+        // every term: several tendons (one ending mid-rod), loads, varying stiffness and
+        // reference strains (v*' != 0), on the inextensible rod
+        let mut robot = several_tendons();
+        robot.loads.distributed_moment = Field::Constant(Vector3::new(0.03, 0.02, -0.01));
+        robot.loads.distributed_force = Field::Constant(Vector3::new(-0.2, 0.1, -0.4));
+        robot.rod_model = crate::model::robot::RodModel::Kirchhoff;
+        let (v, u) = state();
+        let l = robot.length();
+        for end in [l, 0.5 * l] {
+            check(&robot, 0.07, end, &generic_rotation(), &v, &u);
+        }
+        let e = cases::YOUNGS_MODULUS;
+        let base = Section::solid_circle(cases::RADIUS, e, shear_modulus(e, cases::POISSON_RATIO));
+        let mut rod = Rod::new(cases::LENGTH, base);
+        rod.stiffness = Stiffness::Varying(Arc::new(move |s| {
+            let f = 1.0 + 2.0 * s;
+            SectionPoint {
+                section: Section {
+                    kse: base.kse * f,
+                    kbt: base.kbt * (f * f),
+                },
+                kse_s: base.kse * 2.0,
+                kbt_s: base.kbt * (4.0 * f),
+            }
+        }));
+        rod.reference = ReferenceStrains::Varying(Arc::new(|s| StrainPoint {
+            v_star: Vector3::new(1e-3 * s, -2e-3, 1.0 + 1e-3 * s),
+            u_star: Vector3::new(2.0 + 3.0 * s, -1.0, 4.0 * s * s),
+            v_star_s: Vector3::new(1e-3, 0.0, 1e-3),
+            u_star_s: Vector3::new(3.0, 0.0, 8.0 * s),
+        }));
+        let mut robot = Robot::new(rod)
+            .with_tendon(Tendon::new(Routing::straight(0.006, -0.004), 2.5))
+            .with_tendon(Tendon::new(Routing::helical(0.008, 1.5, 0.2), 1.7));
+        robot.rod_model = crate::model::robot::RodModel::Kirchhoff;
+        check(&robot, 0.19, robot.length(), &generic_rotation(), &v, &u);
+    }
+
+    #[test]
     fn scaled_loads_match_ad() {
         let mut robot = several_tendons();
         robot.loads.distributed_moment = Field::Constant(Vector3::new(0.03, 0.02, -0.01));
@@ -957,28 +958,5 @@ mod tests {
         };
         let (v, u) = state();
         check_model(&model, 0.09, robot.length(), &generic_rotation(), &v, &u);
-    }
-
-    #[test]
-    fn factor_solves_like_nalgebra() {
-        let B = SMatrix::<f64, 6, 9>::from_fn(|i, j| ((i * 7 + j * 3) % 5) as f64 - 1.7);
-        let N = Matrix6::from_fn(|i, j| ((i * 5 + j * 11) % 7) as f64 * 0.3 - 0.8);
-        // SPD with the prototype's spread of scales (GA, EA ~ 1e4-1e5 N, EI ~ 1e-3 N m^2)
-        let scale = Vector6::new(4e4, 4e4, 1e5, 4e-3, 4e-3, 3e-3).map(f64::sqrt);
-        let spd =
-            Matrix6::from_diagonal(&scale) * (N * N.transpose() + Matrix6::identity()) * Matrix6::from_diagonal(&scale);
-        // symmetric indefinite: the SPD test fails, the LU fallback solves
-        let indefinite = N + N.transpose() - Matrix6::from_diagonal_element(0.1);
-        for (M, uses_lu) in [(spd, false), (indefinite, true)] {
-            let factor = Factor::new(&M);
-            assert_eq!(matches!(factor, Factor::Lu(_)), uses_lu);
-            let mut Xt = B.transpose();
-            assert!(factor.solve_transposed_mut(&mut Xt));
-            let reference = M.lu().solve(&B).unwrap();
-            // 1e-12: backward-stable solves of a system with condition number below 1e3 after
-            // diagonal scaling
-            assert!(rel(&Xt.transpose(), &reference) < 1e-12);
-        }
-        assert!(!Factor::new(&Matrix6::zeros()).solve_transposed_mut(&mut B.transpose()));
     }
 }

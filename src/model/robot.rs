@@ -35,6 +35,21 @@ pub struct Robot {
     /// How the tendons load the backbone: the full coupled model (default) or, for
     /// comparison, the simpler point-moment model.
     pub tendon_model: TendonModel,
+    /// How the backbone strains: the Cosserat rod of the paper (default, shear and
+    /// extension by the constitutive law) or the inextensible, unshearable Kirchhoff rod.
+    pub rod_model: RodModel,
+}
+
+/// How the backbone strains in shear and extension.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum RodModel {
+    /// The Cosserat rod of the paper: v = v* + K_se^-1 n_b (K_se = diag(GA, GA, EA)).
+    #[default]
+    Cosserat,
+    /// The Kirchhoff rod: inextensible and unshearable, v = v* exactly, the internal force
+    /// n a reaction of the constraint (docs/model.md, "Kirchhoff rods"). The section's GA
+    /// and EA only scale the solvers' force unknown; they do not change the answer.
+    Kirchhoff,
 }
 
 /// How tendons load the backbone.
@@ -65,6 +80,7 @@ impl Robot {
             base_rotation: Matrix3::identity(),
             corner_forces: true,
             tendon_model: TendonModel::Coupled,
+            rod_model: RodModel::Cosserat,
         }
     }
 

@@ -177,7 +177,7 @@ fn local_rhs(
         (x.fixed_rows::<3>(0).into(), x.fixed_rows::<3>(3).into())
     };
     let mut d = Local::zeros();
-    d.fixed_rows_mut::<3>(0).copy_from(&(R * v));
+    d.fixed_rows_mut::<3>(0).copy_from(&(R * site.strain(&v)));
     d.fixed_rows_mut::<3>(3)
         .copy_from(&(so3::right_jacobian_inv(&theta) * u));
     d.fixed_rows_mut::<3>(6).copy_from(&v_s);
@@ -327,7 +327,7 @@ fn integrate(
             let (vi, ui): (Vector3<f64>, Vector3<f64>) = (yi.fixed_rows::<3>(6).into(), yi.fixed_rows::<3>(9).into());
             for &j in paths.slots {
                 let rp = model.robot.tendons[paths.paths[j].0].routing.at(si, length);
-                speeds.push(length::speed(&rp, &vi, &ui));
+                speeds.push(length::speed(&rp, &site.strain(&vi), &ui));
             }
         }
         let tracked = paths.slots.len();

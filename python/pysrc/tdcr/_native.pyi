@@ -149,7 +149,8 @@ class Robot:
         """Base rotation, body to world, shape (3, 3)."""
     @property
     def model(self) -> Dict[str, Any]:
-        """The `[model]` table: `corner_forces` (bool) and `tendons` ("coupled" or "point_moment")."""
+        """The `[model]` table: `corner_forces` (bool), `tendons` ("coupled" or "point_moment") and
+        `rod` ("cosserat" or "kirchhoff")."""
     @property
     def method(self) -> str:
         """The `[solver]` method: "collocation" or "shooting"."""
@@ -394,7 +395,9 @@ def solve(
 def compare(
     robot: Robot,
     *,
-    models: Optional[Sequence[Literal["coupled", "point_moment", "constant_curvature", "paper_jumps"]]] = None,
+    models: Optional[
+        Sequence[Literal["coupled", "point_moment", "constant_curvature", "paper_jumps", "kirchhoff"]]
+    ] = None,
     methods: Optional[Sequence[Literal["collocation", "shooting"]]] = None,
     method: Optional[Literal["collocation", "shooting"]] = None,
     tol: Optional[float] = None,
@@ -406,7 +409,7 @@ def compare(
     equilibrium: Optional[Literal["load_path", "nearest"]] = None,
     integration_tolerance: Optional[float] = None,
 ) -> List[Dict[str, Any]]:
-    """`robot` solved as each of `models` (default all four) or by each of `methods`; one
+    """`robot` solved as each of `models` (default all five) or by each of `methods`; one
     dict per shape: name, s, p, tip_position, tip_rotation, tip_distance (m) and tip_angle
     (rad) from the first shape's tip."""
 

@@ -21,6 +21,15 @@ pub enum TendonsArg {
     PointMoment,
 }
 
+/// Which rod model `--rod` picks (the robot file's `[model] rod`).
+#[derive(Clone, Copy, ValueEnum)]
+pub enum RodArg {
+    /// The Cosserat rod: shear and extension by the constitutive law (the default).
+    Cosserat,
+    /// The Kirchhoff rod: inextensible and unshearable, v = v* exactly.
+    Kirchhoff,
+}
+
 /// Options shared by `solve` and `sweep`.
 #[derive(Args)]
 pub struct SolverArgs {
@@ -57,6 +66,9 @@ pub struct SolverArgs {
     /// How the tendons load the backbone, replacing the file's `[model] tendons`.
     #[arg(long, value_enum)]
     pub tendons: Option<TendonsArg>,
+    /// How the backbone strains in shear and extension, replacing the file's `[model] rod`.
+    #[arg(long, value_enum)]
+    pub rod: Option<RodArg>,
     /// Return the equilibrium Newton reaches from the initial guess, whatever its stability,
     /// instead of the one on the load path from rest (docs/stability.md).
     #[arg(long)]

@@ -43,11 +43,16 @@ pub fn run(file: &str) -> Result<(), Failure> {
         let weight = tdcr::plot::significant(d.weight.norm());
         format!(", {} disk(s) of {weight} N", d.positions.len())
     });
-    let model = match (r.tendon_model, r.corner_forces) {
+    let tendon_model = match (r.tendon_model, r.corner_forces) {
         (tdcr::TendonModel::PointMoment, _) => "; model: point-moment tendons",
         (_, false) => "; model: the paper's jump conditions (no corner forces)",
         _ => "",
     };
+    let rod_model = match r.rod_model {
+        tdcr::RodModel::Kirchhoff => "; rod: Kirchhoff (inextensible, unshearable)",
+        tdcr::RodModel::Cosserat => "",
+    };
+    let model = format!("{tendon_model}{rod_model}");
     let ends = r.rod.segment_ends();
     let segments = match ends.len() {
         0 => String::new(),

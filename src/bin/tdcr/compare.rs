@@ -18,7 +18,7 @@ pub struct CompareArgs {
     /// Robot file (TOML; `-` reads standard input).
     file: String,
     /// The models to solve, comma-separated, the first the reference: coupled, point_moment,
-    /// constant_curvature, paper_jumps. Default: all four, in this order.
+    /// constant_curvature, paper_jumps, kirchhoff. Default: all five, in this order.
     #[arg(long, value_name = "M1,M2,...", value_delimiter = ',', conflicts_with = "methods")]
     models: Vec<String>,
     /// Compare solvers instead, on the file's model: collocation and/or shooting.

@@ -4,7 +4,7 @@ use std::io::Read;
 use tdcr::io::RobotFile;
 use tdcr::{Method, Robot, Solution, collocation, shooting};
 
-use crate::args::{MethodArg, SolverArgs, TendonsArg};
+use crate::args::{MethodArg, RodArg, SolverArgs, TendonsArg};
 use crate::failure::{Failure, note, solver_failure, with_likely_causes};
 
 /// Reads and checks a robot file (`-`: standard input); every problem is one message line.
@@ -105,6 +105,11 @@ pub fn apply(file: &mut RobotFile, args: &SolverArgs) {
     match args.tendons {
         Some(TendonsArg::Coupled) => robot.tendon_model = tdcr::TendonModel::Coupled,
         Some(TendonsArg::PointMoment) => robot.tendon_model = tdcr::TendonModel::PointMoment,
+        None => {}
+    }
+    match args.rod {
+        Some(RodArg::Cosserat) => robot.rod_model = tdcr::RodModel::Cosserat,
+        Some(RodArg::Kirchhoff) => robot.rod_model = tdcr::RodModel::Kirchhoff,
         None => {}
     }
     let settings = &mut file.solver;

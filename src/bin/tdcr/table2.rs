@@ -141,18 +141,19 @@ fn compact(full: &Figure) -> Figure {
     figure
 }
 
-/// The tip distances (m) of the point-moment and constant-curvature models of `robot` from
-/// the coupled model's tip `tip` (`None` where the variant does not solve), and the
-/// largest distance of the paper's jump conditions so far in `paper_jumps` (or the first
-/// failure).
+/// The tip distances (m) of the point-moment and constant-curvature models and of the
+/// Kirchhoff rod of `robot` from the coupled model's tip `tip` (`None` where the variant
+/// does not solve), and the largest distance of the paper's jump conditions so far in
+/// `paper_jumps` (or the first failure).
 fn variant_distances(
     robot: &tdcr::Robot,
     tip: tdcr::nalgebra::Vector3<f64>,
     options: &collocation::Options,
     paper_jumps: &mut Result<f64, String>,
-) -> (Option<f64>, Option<f64>) {
+) -> [Option<f64>; 3] {
     let solved = |v: Variant| collocation::solve(&v.robot(robot), options).map(|s| (s.tip_position() - tip).norm());
     let pm = solved(Variant::PointMoment).ok();
+    let kh = solved(Variant::Kirchhoff).ok();
     let cc = constant_curvature(robot, 1)
         .ok()
         .and_then(|states| states.last().map(|state| (state.p - tip).norm()));
@@ -162,7 +163,7 @@ fn variant_distances(
             Err(e) => *paper_jumps = Err(e.to_string()),
         }
     }
-    (pm, cc)
+    [pm, cc, kh]
 }
 
 /// Solves the 32 experiments, prints their table and writes `table2.svg`, `table2.png` and
@@ -175,14 +176,15 @@ pub fn run(out_dir: &Path) -> Result<(), Failure> {
     emit(&format!(
         "The prototype of Rucker & Webster (2011, section 5) under the {} experiments of Table 2\n\
          collocation at the default settings (tip error estimated and held below {:.0e} L); tip in mm, world frame;\n\
-         pm, cc: how far (mm) the tip of the point-moment tendon model and of the constant-curvature model\n\
-         (which ignores the tip load and self weight) is from the coupled model's (`tdcr compare`, docs/validation.md)\n\n",
+         pm, cc, kh: how far (mm) the tip of the point-moment tendon model, of the constant-curvature model\n\
+         (which ignores the tip load and self weight) and of the Kirchhoff (inextensible, unshearable) rod is\n\
+         from the coupled model's (`tdcr compare`, docs/validation.md)\n\n",
         experiments.len(),
         options.tolerance.unwrap_or(f64::NAN)
     ))?;
     let header = format!(
-        "{:>3}  {:<24} {:<27} {:>7} {:>8} {:>9} {:>9} {:>9} {:>7} {:>6} {:>6} {:>5} {:>7}\n\
-         {:>3}  {:<24} {:<27} {:>7} {:>8} {:>9} {:>9} {:>9} {:>7} {:>6} {:>6} {:>5} {:>7}\n",
+        "{:>3}  {:<24} {:<27} {:>7} {:>8} {:>9} {:>9} {:>9} {:>7} {:>6} {:>6} {:>6} {:>5} {:>7}\n\
+         {:>3}  {:<24} {:<27} {:>7} {:>8} {:>9} {:>9} {:>9} {:>7} {:>6} {:>6} {:>6} {:>5} {:>7}\n",
         "#",
         "configuration",
         "tendon",
@@ -194,6 +196,7 @@ pub fn run(out_dir: &Path) -> Result<(), Failure> {
         "bend",
         "pm",
         "cc",
+        "kh",
         "iters",
         "time",
         "",
@@ -207,12 +210,13 @@ pub fn run(out_dir: &Path) -> Result<(), Failure> {
         "deg",
         "mm",
         "mm",
+        "mm",
         "",
         "ms"
     );
     emit(&header)?;
     let mut csv = CsvTable::new(
-        "experiment,configuration,tendon,tension,tip_load,tip_x,tip_y,tip_z,bending_angle_deg,point_moment_tip_distance,constant_curvature_tip_distance,iterations,intervals,solve_time"
+        "experiment,configuration,tendon,tension,tip_load,tip_x,tip_y,tip_z,bending_angle_deg,point_moment_tip_distance,constant_curvature_tip_distance,kirchhoff_tip_distance,iterations,intervals,solve_time"
             .split(','),
     );
     let mut solved = Vec::new();
@@ -230,7 +234,7 @@ pub fn run(out_dir: &Path) -> Result<(), Failure> {
             Ok(solution) => {
                 let tip = solution.tip_position();
                 let bend = output::bending_angle(&solution).to_degrees();
-                let (pm, cc) = variant_distances(&robot, tip, &options, &mut paper_jumps);
+                let [pm, cc, kh] = variant_distances(&robot, tip, &options, &mut paper_jumps);
                 let report = &solution.report;
                 solver_time += report.timings.total;
                 intervals.push(report.intervals);
@@ -246,12 +250,13 @@ pub fn run(out_dir: &Path) -> Result<(), Failure> {
                     number(bend),
                     pm.map_or(String::new(), number),
                     cc.map_or(String::new(), number),
+                    kh.map_or(String::new(), number),
                     report.iterations.to_string(),
                     report.intervals.to_string(),
                     number(report.timings.total.as_secs_f64()),
                 ]);
                 let line = format!(
-                    "{:>3}  {:<24} {:<27} {:>7.2} {:>8.3} {} {} {} {:>7.2} {} {} {:>5} {:>7.1}\n",
+                    "{:>3}  {:<24} {:<27} {:>7.2} {:>8.3} {} {} {} {:>7.2} {} {} {} {:>5} {:>7.1}\n",
                     k + 1,
                     e.label(),
                     tendon,
@@ -263,6 +268,7 @@ pub fn run(out_dir: &Path) -> Result<(), Failure> {
                     bend,
                     pm.map_or(format!("{:>6}", "-"), |d| fixed(d * 1e3, 6, 2)),
                     cc.map_or(format!("{:>6}", "-"), |d| fixed(d * 1e3, 6, 2)),
+                    kh.map_or(format!("{:>6}", "-"), |d| fixed(d * 1e3, 6, 3)),
                     report.iterations,
                     ms(report.timings.total)
                 );

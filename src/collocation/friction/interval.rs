@@ -195,8 +195,8 @@ pub(crate) fn interval(
     let derivatives = jac.is_some();
     let la = profile.point(&sites.start, segment_end, &a.R, (&a.v, &a.u), &za, derivatives)?;
     let lb = profile.point(&sites.end, segment_end, &b.R, (&b.v, &b.u), &zb, derivatives)?;
-    let p0 = rhs_linearized(&la.lin, &a.R, &y0);
-    let p1 = rhs_linearized(&lb.lin, &a.R, &y1);
+    let p0 = rhs_linearized(&sites.start, &la.lin, &a.R, &y0);
+    let p1 = rhs_linearized(&sites.end, &lb.lin, &a.R, &y1);
     let ym = (y0 + y1) * 0.5 + (p0.f - p1.f) * (h / 8.0);
     let zm: Vec<f64> = (0..count)
         .map(|j| 0.5 * (za[j] + zb[j]) + h / 8.0 * (la.turning[j] - lb.turning[j]))
@@ -205,7 +205,7 @@ pub(crate) fn interval(
     let (vm, um): (Vector3<f64>, Vector3<f64>) = (ym.fixed_rows::<3>(6).into(), ym.fixed_rows::<3>(9).into());
     let Rm = a.R * so3::exp(&theta_m);
     let lm = profile.point(&sites.mid, segment_end, &Rm, (&vm, &um), &zm, derivatives)?;
-    let pm = rhs_linearized(&lm.lin, &a.R, &ym);
+    let pm = rhs_linearized(&sites.mid, &lm.lin, &a.R, &ym);
     let residual = scale_rows(y1 - y0 - (p0.f + pm.f * 4.0 + p1.f) * (h / 6.0), length);
     let on: Vec<bool> = (0..count).map(|j| profile.on_link(j, k)).collect();
     let psi: Vec<f64> = (0..count)

@@ -500,7 +500,7 @@ pub(super) fn solve(robot: &Robot, options: &Options, warm: Option<&Solution>, c
     let first = pipeline::solve_impl(&smooth, options, warm, cache)?;
     let points: Vec<f64> = first.nodes.iter().map(|n| n.s).collect();
     let mut mesh = Mesh::from_points(robot, &points)?;
-    let mut x = interpolate(&first, &mesh);
+    let mut x = interpolate(&Model::new(robot), &first, &mesh);
     // The counts and timings of the frictionless solve are part of this one.
     let mut report = first.report.clone();
     let settings = Settings {
@@ -574,7 +574,7 @@ pub(super) fn solve(robot: &Robot, options: &Options, warm: Option<&Solution>, c
         let guess = nodes::solution_with_tensions(&model, &x, &ends, &tensions, report.clone())?;
         let s: Vec<f64> = system.mesh.nodes.iter().map(|n| n.s).collect();
         previous = Some((s, profile.z.clone()));
-        x = interpolate(&guess, &fine);
+        x = interpolate(&model, &guess, &fine);
         mesh = fine;
     }
 }

@@ -38,7 +38,7 @@ use super::{Sensitivity, singular};
 use crate::collocation::unknowns::{NODE, P, THETA, V};
 use crate::error::{Result, invalid};
 use crate::model::parameter::Parameter;
-use crate::model::robot::Robot;
+use crate::model::robot::{Robot, RodModel};
 use crate::solution::Solution;
 use nalgebra::{Matrix3, Vector3};
 
@@ -172,6 +172,7 @@ impl<'a> Adjoint<'a> {
         g.fill(0.0);
         let nodes = &self.solution.nodes;
         let tip = nodes.len() - 1;
+        let fixed_strain = self.sensitivity.robot().rod_model == RodModel::Kirchhoff;
         add(g, tip, P, &(cotangent.tip_position * length));
         add(g, tip, THETA, &(nodes[tip].R.transpose() * cotangent.tip_rotation));
         for (&s, pbar) in self.samples.iter().zip(&cotangent.points) {
@@ -181,7 +182,10 @@ impl<'a> Adjoint<'a> {
                 let body = nodes[node].R.transpose() * pbar;
                 add(g, node, P, &(pbar * (length * value)));
                 add(g, node, THETA, &(nodes[node].v.cross(&body) * slope));
-                add(g, node, V, &(body * slope));
+                // The slope R v moves with the coordinate v only on a Cosserat rod.
+                if !fixed_strain {
+                    add(g, node, V, &(body * slope));
+                }
             }
         }
         let lambda = self.sensitivity.workspace.solve_transposed(g).ok_or_else(singular)?;

@@ -93,8 +93,9 @@ use crate::collocation::system::System;
 use crate::collocation::unknowns::{self, TIP_ROWS, nonzeros, tip_row};
 use crate::error::{Result, invalid};
 use crate::mesh::Mesh;
+use crate::mesh::guess::interpolate_nodes;
 use crate::model::equations::Model;
-use crate::model::robot::Robot;
+use crate::model::robot::{Robot, RodModel};
 use crate::so3;
 use crate::solution::{Solution, State};
 use nalgebra::{Matrix3, Vector3, Vector6};
@@ -217,8 +218,9 @@ impl<'a> Sensitivity<'a> {
                 "pass a solution of this robot (same tendon terminations and point loads)",
             ));
         }
-        let states: Vec<State> = solution.nodes.iter().map(|n| n.state()).collect();
-        let mut border = Capstan::at_solution(Model::new(robot), mesh, solution);
+        let model = Model::new(robot);
+        let states: Vec<State> = interpolate_nodes(&model, &solution.nodes, &mesh);
+        let mut border = Capstan::at_solution(model, mesh, solution);
         let n = border.system().unknowns() + border.border_rows();
         let mut residual = vec![0.0; n];
         let mut values = vec![0.0; nonzeros(&border.system().mesh)];
@@ -368,6 +370,8 @@ impl<'a> Sensitivity<'a> {
             .respond(&self.scratch[0], &mut self.workspace)
             .ok_or_else(singular)?;
         let length = self.robot().length();
+        // On a Kirchhoff rod v = v* whatever the parameter: the V unknowns are the force's.
+        let fixed_strain = self.robot().rod_model == RodModel::Kirchhoff;
         Ok(self
             .states
             .iter()
@@ -378,7 +382,7 @@ impl<'a> Sensitivity<'a> {
                     s: x.s,
                     p,
                     rotation: x.R * theta,
-                    v,
+                    v: if fixed_strain { Vector3::zeros() } else { v },
                     u,
                 }
             })

@@ -3,8 +3,8 @@
 
 use super::SolverSettings;
 use super::tables::{
-    BaseTable, DisksTable, EquilibriumKey, LoadsTable, MethodName, ModelTable, MotionName, RodTable, RoutingTable,
-    SolverTable, TendonModelKey, TendonTable, Vec3,
+    BaseTable, DisksTable, EquilibriumKey, LoadsTable, MethodName, ModelTable, MotionName, RodModelKey, RodTable,
+    RoutingTable, SolverTable, TendonModelKey, TendonTable, Vec3,
 };
 use crate::io::Problem;
 use crate::io::locate::Locator;
@@ -13,7 +13,7 @@ use crate::model::rod::{Rod, Section};
 use crate::model::routing::Routing;
 use crate::model::tendon::{Actuation, Friction, Motion, Tendon};
 use crate::report::Method;
-use crate::{Disks, Error, Robot, TendonModel, so3};
+use crate::{Disks, Error, Robot, RodModel, TendonModel, so3};
 use nalgebra::{Matrix3, Vector3};
 
 /// The matrix whose rows the file gives as `base.rotation`.
@@ -147,7 +147,7 @@ pub(super) fn disks(table: &DisksTable, length: f64) -> Disks {
 }
 
 /// Sets the model variant of the `[model]` table on `robot`; keys not given keep the
-/// library's defaults (corner forces, the coupled tendon model).
+/// library's defaults (corner forces, the coupled tendon model, the Cosserat rod).
 pub(super) fn model(robot: &mut Robot, model: &ModelTable) {
     if let Some(corners) = model.corner_forces {
         robot.corner_forces = corners;
@@ -155,6 +155,11 @@ pub(super) fn model(robot: &mut Robot, model: &ModelTable) {
     match model.tendons {
         Some(TendonModelKey::Coupled) => robot.tendon_model = TendonModel::Coupled,
         Some(TendonModelKey::PointMoment) => robot.tendon_model = TendonModel::PointMoment,
+        None => {}
+    }
+    match model.rod {
+        Some(RodModelKey::Cosserat) => robot.rod_model = RodModel::Cosserat,
+        Some(RodModelKey::Kirchhoff) => robot.rod_model = RodModel::Kirchhoff,
         None => {}
     }
 }

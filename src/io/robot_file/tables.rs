@@ -276,6 +276,15 @@ pub(super) struct DisksTable {
 pub(super) struct ModelTable {
     pub(super) corner_forces: Option<bool>,
     pub(super) tendons: Option<TendonModelKey>,
+    pub(super) rod: Option<RodModelKey>,
+}
+
+/// The `rod` of `[model]`: `"cosserat"` (the default) or `"kirchhoff"`.
+#[derive(Clone, Copy, Debug, Deserialize, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub(super) enum RodModelKey {
+    Cosserat,
+    Kirchhoff,
 }
 
 /// The `tendons` of `[model]`: `"coupled"` (the default) or `"point_moment"`.

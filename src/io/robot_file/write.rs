@@ -1,7 +1,7 @@
 //! Writing a robot file: the inverse of the reader, for robots built in code or edited
 //! (Python pickles a robot as its file).
 
-use super::tables::{EquilibriumKey, TendonModelKey};
+use super::tables::{EquilibriumKey, RodModelKey, TendonModelKey};
 use super::{RobotFile, SolverSettings};
 use crate::collocation::Equilibrium;
 use crate::error::{Result, invalid};
@@ -266,7 +266,7 @@ fn disks_table(d: &crate::Disks) -> Table {
     t
 }
 
-/// The `[model]` table of `robot`: both keys.
+/// The `[model]` table of `robot`: every key.
 fn model_table(robot: &crate::Robot) -> Table {
     let mut t = Table::new();
     t.insert("corner_forces".into(), Value::Boolean(robot.corner_forces));
@@ -277,6 +277,13 @@ fn model_table(robot: &crate::Robot) -> Table {
     // The key's own name, as the reader spells it (tables.rs).
     if let Ok(name) = Value::try_from(tendons) {
         t.insert("tendons".into(), name);
+    }
+    let rod = match robot.rod_model {
+        crate::RodModel::Cosserat => RodModelKey::Cosserat,
+        crate::RodModel::Kirchhoff => RodModelKey::Kirchhoff,
+    };
+    if let Ok(name) = Value::try_from(rod) {
+        t.insert("rod".into(), name);
     }
     t
 }
@@ -363,6 +370,7 @@ integration_tolerance = 1e-10
 [model]
 corner_forces = false
 tendons = "point_moment"
+rod = "kirchhoff"
 [disks]
 count = 3
 mass = 0.002
