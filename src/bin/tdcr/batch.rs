@@ -182,21 +182,19 @@ pub fn run(args: &BatchArgs) -> Result<(), Failure> {
     let text = std::fs::read_to_string(&args.cases)
         .map_err(|e| Failure::Input(format!("cannot read parameter table {}: {e}", args.cases)))?;
     let table = parameters::read(&args.cases, &text).map_err(|e| Failure::Input(e.to_string()))?;
-    let blocks = table.rows.len().div_ceil(BLOCK);
+    drop(text);
+    let blocks = table.len().div_ceil(BLOCK);
     let (first, end) = match args.shard {
         Some((k, n)) => (k * blocks / n, (k + 1) * blocks / n),
         None => (0, blocks),
     };
-    let rows = &table.rows[(first * BLOCK).min(table.rows.len())..(end * BLOCK).min(table.rows.len())];
-    let robot = |row: &parameters::Row| {
-        table
-            .robot(row, &file.robot)
-            .map_err(|e| Failure::Input(format!("{}:{}:1: row {}: {e}", args.cases, row.line, row.index)))
-    };
+    let rows = (first * BLOCK).min(table.len())..(end * BLOCK).min(table.len());
     // Every row's robot is checked before any solve, so bad input stops the run before it
-    // spends time; each is built again when its wave is solved.
-    for row in rows {
-        robot(row)?;
+    // spends time; each is built again when it is solved.
+    for row in rows.clone().map(|i| table.row(i)) {
+        table
+            .robot(&row, &file.robot)
+            .map_err(|e| Failure::Input(format!("{}:{}:1: row {}: {e}", args.cases, row.line, row.index)))?;
     }
     let mut sink = Sink::open(args.out.as_deref())?;
     let mut header = vec!["row".to_string()];
@@ -213,11 +211,11 @@ pub fn run(args: &BatchArgs) -> Result<(), Failure> {
         total: rows.len(),
     });
     let wave = WAVE_ROWS_PER_THREAD * rayon::current_num_threads();
-    let robot_of = |i: usize| table.robot(&rows[i], &file.robot);
+    let robot_of = |i: usize| table.robot(&table.row(i), &file.robot);
     // A row's CSV line is written by the thread that solved it; the lines of a wave are
     // then written in row order.
     let line = |i: usize, result: tdcr::Result<Solution>| {
-        let row = &rows[i];
+        let row = table.row(i);
         let mut fields = vec![row.index.to_string()];
         fields.extend(row.values.iter().map(|x| x.map_or(String::new(), number)));
         let (rest, failed) = result_fields(result, &outputs, extra_count);
@@ -229,8 +227,8 @@ pub fn run(args: &BatchArgs) -> Result<(), Failure> {
     };
     let settings = &file.solver;
     let mut failed = 0;
-    for start in (0..rows.len()).step_by(wave) {
-        let range = start..rows.len().min(start + wave);
+    for start in rows.clone().step_by(wave) {
+        let range = start..rows.end.min(start + wave);
         let lines: Vec<(String, bool)> = match settings.method {
             Method::Collocation => tdcr::collocation::solve_rows(range, &settings.collocation, robot_of, line),
             Method::Shooting => range
