@@ -25,7 +25,8 @@
 //!    theorem, from one factorization.
 //!
 //! `pipeline.rs` runs these stages for one solve; [`Solver`] (`solver.rs`) keeps the
-//! workspace between solves; [`trace`] follows a branch of equilibria in one input.
+//! workspace between solves; [`solve_batch`] and [`solve_rows`] (`batch.rs`) solve
+//! independent rows on all cores with one `Solver` per worker thread; [`trace`] follows a branch of equilibria in one input.
 //!
 //! docs/numerics.md documents the scheme (order 4), the scaling, the stopping tests and the
 //! load path.
