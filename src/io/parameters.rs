@@ -328,4 +328,18 @@ mod tests {
         assert_eq!(values(&csv), values(&json));
         assert_eq!(csv.row(1).line, 4);
     }
+
+    /// A JSON line that does not name a parameter leaves it unset in its row (stored
+    /// compactly as NaN, given back as `None`), and the robot keeps the base's value.
+    #[test]
+    fn parameters_a_json_line_does_not_name_stay_unset() {
+        let table = read("t.jsonl", "{\"tension.1\": 1.5}\n{\"tip_force.z\": -0.1}\n").unwrap();
+        assert_eq!(table.len(), 2);
+        assert_eq!(table.row(0).values, [Some(1.5), None]);
+        assert_eq!(table.row(1).values, [None, Some(-0.1)]);
+        let base = crate::cases::case_s();
+        let robot = table.robot(&table.row(1), &base).unwrap();
+        assert_eq!(robot.tendons[0].tension(), base.tendons[0].tension());
+        assert_eq!(robot.loads.tip_force.z, -0.1);
+    }
 }

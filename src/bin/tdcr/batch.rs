@@ -1,6 +1,7 @@
 //! `tdcr batch`: one robot file solved for every row of a parameter table (CSV with a header
 //! of parameter names, or JSON lines), every row solved on its own on all cores
-//! (`tdcr::collocation::solve_rows`), one result row per input row; `--shard K/N` takes one contiguous share of the rows for a job array.
+//! (`tdcr::collocation::solve_rows`), one result row per input row; `--shard K/N` takes one
+//! contiguous share of the rows for a job array.
 
 use clap::Args;
 use rayon::prelude::*;
