@@ -60,3 +60,76 @@ fn reusing_a_solver_changes_nothing_but_the_setup() {
         assert_eq!(bits(&solver.solve(robot).unwrap()), fresh);
     }
 }
+
+/// Random inputs from a fixed linear congruential sequence, uniform in [0, 1).
+fn uniform(state: &mut u64) -> f64 {
+    *state = state
+        .wrapping_mul(6364136223846793005)
+        .wrapping_add(1442695040888963407);
+    (*state >> 11) as f64 / (1u64 << 53) as f64
+}
+
+/// 300 rows of the prototype: random tensions on its five tendons (0..3 N), every third
+/// row with a random tip force (up to 0.3 N sideways and down), a few with every tension
+/// zero (where Newton may stop without a step), solved by `solve_rows` on two threads and
+/// on one: every answer (nodes, iterations, stability, estimate) is bitwise the one
+/// `solve` gives the row alone, in row order, whatever the thread count.
+#[test]
+fn solve_rows_gives_each_row_its_own_cold_solve_bitwise() {
+    let mut state = 2026;
+    let robots: Vec<tdcr::Robot> = (0..300)
+        .map(|k| {
+            let mut robot = cases::prototype();
+            for t in 0..5 {
+                let tension = if k % 50 == 7 { 0.0 } else { 3.0 * uniform(&mut state) };
+                robot.tendons[t].set_tension(tension);
+            }
+            if k % 3 == 0 {
+                robot.loads.tip_force.x = 0.4 * uniform(&mut state) - 0.2;
+                robot.loads.tip_force.z = -0.3 * uniform(&mut state);
+            }
+            robot
+        })
+        .collect();
+    let options = collocation::Options::default();
+    let summary = |s: &tdcr::Solution| {
+        (
+            bits(s),
+            s.report.iterations,
+            s.report.stability.verdict(),
+            s.report.error_estimate.map(|e| format!("{e:?}")),
+        )
+    };
+    let alone: Vec<_> = robots
+        .iter()
+        .map(|r| summary(&collocation::solve(r, &options).unwrap()))
+        .collect();
+    let rows = |threads: usize| {
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+        pool.install(|| {
+            collocation::solve_rows(
+                0..robots.len(),
+                &options,
+                |i| Ok(robots[i].clone()),
+                |_, r| summary(&r.unwrap()),
+            )
+        })
+    };
+    assert_eq!(rows(2), alone);
+    assert_eq!(rows(1), alone);
+    // A row whose robot cannot be built keeps its place with its error.
+    let built = collocation::solve_rows(
+        0..3,
+        &options,
+        |i| {
+            let mut robot = robots[i].clone();
+            if i == 1 {
+                robot.tendons[0].set_tension(-1.0);
+                robot.validate()?;
+            }
+            Ok(robot)
+        },
+        |i, r| (i, r.is_ok()),
+    );
+    assert_eq!(built, [(0, true), (1, false), (2, true)]);
+}

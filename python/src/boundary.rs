@@ -138,6 +138,22 @@ pub fn rows<T: Send>(
     py: Python<'_>,
     count: usize,
     job: impl Fn(usize) -> Result<T, Failure> + Sync,
+    sink: impl FnMut(usize, Result<T, Failure>) -> PyResult<()>,
+) -> PyResult<()> {
+    rows_with(py, count, || (), |(), row| job(row), sink)
+}
+
+/// As [`rows`], with a state made by `init` for each piece of work a pool thread takes
+/// (rayon's `map_init`) and lent to `job` for every row of it: a `tdcr::Solver`, whose
+/// workspace is then built once per thread and chunk instead of once per row.
+///
+/// # Errors
+/// As [`rows`].
+pub fn rows_with<S, T: Send>(
+    py: Python<'_>,
+    count: usize,
+    init: impl Fn() -> S + Sync + Send,
+    job: impl Fn(&mut S, usize) -> Result<T, Failure> + Sync,
     mut sink: impl FnMut(usize, Result<T, Failure>) -> PyResult<()>,
 ) -> PyResult<()> {
     use rayon::prelude::*;
@@ -151,9 +167,11 @@ pub fn rows<T: Send>(
             pool.install(|| {
                 (start..end)
                     .into_par_iter()
-                    .map(|row| match catch_unwind(AssertUnwindSafe(|| job(row))) {
-                        Ok(result) => result,
-                        Err(payload) => Err(Failure::Panic(panic_text(payload))),
+                    .map_init(&init, |state, row| {
+                        match catch_unwind(AssertUnwindSafe(|| job(state, row))) {
+                            Ok(result) => result,
+                            Err(payload) => Err(Failure::Panic(panic_text(payload))),
+                        }
                     })
                     .collect()
             })

@@ -8,7 +8,7 @@ use crate::robot::PyRobot;
 use numpy::IntoPyArray;
 use numpy::ndarray::{Array1, Array2, Array3};
 use pyo3::prelude::*;
-use pyo3::types::PyDict;
+use pyo3::types::{PyDict, PyList, PyString};
 use std::time::{Duration, Instant};
 use tdcr::io::row_outputs::{RowOutputs, quaternion, tip_error_estimate};
 
@@ -22,17 +22,25 @@ struct Outcome {
     points: Vec<[f64; 3]>,
 }
 
-/// The columns of `solve_parameters`, filled row by row.
+/// The columns of `solve_parameters`, filled row by row: only the columns asked for, each
+/// a flat array (about 34 bytes per row without the optional columns: 10^6 rows take 34
+/// MB), failed rows' messages apart.
 struct Table {
     outputs: RowOutputs,
-    tips: Vec<[f64; 3]>,
+    /// Row-major (rows, 3).
+    tips: Vec<f64>,
     converged: Vec<bool>,
     iterations: Vec<i64>,
-    stability: Vec<&'static str>,
-    errors: Vec<String>,
-    orientation: Vec<[f64; 4]>,
+    /// Each row's verdict as an index into `verdicts` (`u8::MAX`: failed).
+    stability: Vec<u8>,
+    /// The distinct verdicts met.
+    verdicts: Vec<&'static str>,
+    /// The failed rows and their messages.
+    errors: Vec<(usize, String)>,
+    /// Row-major (rows, 4), when asked.
+    orientation: Vec<f64>,
     error_estimate: Vec<f64>,
-    /// Row-major (rows, K, 3).
+    /// Row-major (rows, K, 3), when asked.
     points: Vec<f64>,
 }
 
@@ -44,6 +52,7 @@ impl Table {
             converged: Vec::new(),
             iterations: Vec::new(),
             stability: Vec::new(),
+            verdicts: Vec::new(),
             errors: Vec::new(),
             orientation: Vec::new(),
             error_estimate: Vec::new(),
@@ -51,45 +60,81 @@ impl Table {
         }
     }
 
+    /// The rows so far.
+    fn len(&self) -> usize {
+        self.converged.len()
+    }
+
     /// Appends a row: the outcome, or NaN and the message of a failed one.
     fn push(&mut self, result: Result<Outcome, String>) {
         let k = self.outputs.points;
         match result {
             Ok(o) => {
-                self.tips.push(o.tip);
+                self.tips.extend(o.tip);
                 self.converged.push(true);
                 self.iterations.push(o.iterations);
-                self.stability.push(o.stability);
-                self.errors.push(String::new());
-                self.orientation.push(o.orientation);
-                self.error_estimate.push(o.error_estimate);
+                let code = match self.verdicts.iter().position(|&v| v == o.stability) {
+                    Some(i) => i,
+                    None => {
+                        self.verdicts.push(o.stability);
+                        self.verdicts.len() - 1
+                    }
+                };
+                self.stability.push(u8::try_from(code).unwrap_or(u8::MAX));
+                if self.outputs.orientation {
+                    self.orientation.extend(o.orientation);
+                }
+                if self.outputs.error_estimate {
+                    self.error_estimate.push(o.error_estimate);
+                }
                 self.points.extend(o.points.iter().flatten());
             }
             Err(message) => {
-                self.tips.push([f64::NAN; 3]);
+                self.errors.push((self.len(), message));
+                self.tips.extend([f64::NAN; 3]);
                 self.converged.push(false);
                 self.iterations.push(-1);
-                self.stability.push("");
-                self.errors.push(message);
-                self.orientation.push([f64::NAN; 4]);
-                self.error_estimate.push(f64::NAN);
+                self.stability.push(u8::MAX);
+                if self.outputs.orientation {
+                    self.orientation.extend([f64::NAN; 4]);
+                }
+                if self.outputs.error_estimate {
+                    self.error_estimate.push(f64::NAN);
+                }
                 self.points.extend(std::iter::repeat_n(f64::NAN, 3 * k));
             }
         }
     }
 
-    /// The table as `solve_parameters` returns it.
+    /// The table as `solve_parameters` returns it (the arrays moved, not copied; the
+    /// string lists hold one string object per distinct value).
     fn into_dict(self, py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
-        let n = self.tips.len();
-        let tips = Array2::from_shape_fn((n, 3), |(i, k)| self.tips[i][k]);
+        let n = self.len();
+        let shape = |e: numpy::ndarray::ShapeError| invalid(e.to_string());
         let d = PyDict::new(py);
         d.set_item("converged", Array1::from(self.converged).into_pyarray(py))?;
-        d.set_item("tip_position", tips.into_pyarray(py))?;
+        d.set_item(
+            "tip_position",
+            Array2::from_shape_vec((n, 3), self.tips)
+                .map_err(shape)?
+                .into_pyarray(py),
+        )?;
         d.set_item("iterations", Array1::from(self.iterations).into_pyarray(py))?;
-        d.set_item("stability", self.stability)?;
-        d.set_item("error", self.errors)?;
+        let empty = PyString::new(py, "");
+        let verdicts: Vec<Bound<'_, PyString>> = self.verdicts.iter().map(|v| PyString::new(py, v)).collect();
+        let stability = self
+            .stability
+            .iter()
+            .map(|&c| verdicts.get(usize::from(c)).unwrap_or(&empty).clone());
+        d.set_item("stability", PyList::new(py, stability)?)?;
+        let mut errors = self.errors.into_iter().peekable();
+        let messages = (0..n).map(|i| match errors.next_if(|(row, _)| *row == i) {
+            Some((_, message)) => PyString::new(py, &message),
+            None => empty.clone(),
+        });
+        d.set_item("error", PyList::new(py, messages.collect::<Vec<_>>())?)?;
         if self.outputs.orientation {
-            let q = Array2::from_shape_fn((n, 4), |(i, k)| self.orientation[i][k]);
+            let q = Array2::from_shape_vec((n, 4), self.orientation).map_err(shape)?;
             d.set_item("tip_orientation", q.into_pyarray(py))?;
         }
         if self.outputs.error_estimate {
@@ -97,7 +142,7 @@ impl Table {
         }
         if self.outputs.points > 0 {
             let k = self.outputs.points;
-            let points = Array3::from_shape_vec((n, k, 3), self.points).map_err(|e| invalid(e.to_string()))?;
+            let points = Array3::from_shape_vec((n, k, 3), self.points).map_err(shape)?;
             d.set_item("points", points.into_pyarray(py))?;
         }
         Ok(d)
@@ -204,11 +249,12 @@ pub fn solve_parameters<'py>(
     let mut table = Table::new(outputs);
     let mut bar = Progress::new(py, progress)?;
     let total = batch.len();
-    let run = boundary::rows(
+    let run = boundary::rows_with(
         py,
         total,
-        |i| {
-            let s = batch.solve(i, &options)?;
+        || tdcr::Solver::new(options.clone()),
+        |solver, i| {
+            let s = batch.solve(solver, i)?;
             let p = s.tip_position();
             Ok(Outcome {
                 tip: [p.x, p.y, p.z],
@@ -231,7 +277,7 @@ pub fn solve_parameters<'py>(
     match run {
         Ok(()) => table.into_dict(py),
         Err(e) => {
-            let done = table.tips.len();
+            let done = table.len();
             Err(boundary::with_partial(py, e, done, table.into_dict(py)?.into_any()))
         }
     }

@@ -94,11 +94,13 @@ impl Batch {
         }
     }
 
-    /// Solves robot `i` by collocation with `options`.
-    fn solve(&self, i: usize, options: &collocation::Options) -> tdcr::Result<Solution> {
+    /// Solves robot `i` by collocation with `solver` (its options; its workspace reused
+    /// from the rows it solved before): bitwise `tdcr::solve`'s answer, as `tdcr batch`
+    /// (`tdcr::collocation::solve_rows`) solves a row.
+    fn solve(&self, solver: &mut tdcr::Solver, i: usize) -> tdcr::Result<Solution> {
         match self {
-            Batch::List(list) => tdcr::solve(&list[i], options),
-            Batch::Rows(rows) => tdcr::solve(&rows.robot(i)?, options),
+            Batch::List(list) => solver.solve(&list[i]),
+            Batch::Rows(rows) => solver.solve(&rows.robot(i)?),
         }
     }
 }
@@ -185,10 +187,11 @@ fn solve_batch(
     let raise = raise_errors("solve_batch", errors)?;
     let (batch, options) = batch_robots("solve_batch", robots, parameters, options)?;
     let mut out: Vec<Py<PyAny>> = Vec::with_capacity(batch.len());
-    let run = boundary::rows(
+    let run = boundary::rows_with(
         py,
         batch.len(),
-        |i| Ok(batch.solve(i, &options)?),
+        || tdcr::Solver::new(options.clone()),
+        |solver, i| Ok(batch.solve(solver, i)?),
         |i, result| {
             match result {
                 Ok(solution) => out.push(Py::new(py, PySolution { solution })?.into_any()),

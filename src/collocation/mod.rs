@@ -25,12 +25,14 @@
 //!    theorem, from one factorization.
 //!
 //! `pipeline.rs` runs these stages for one solve; [`Solver`] (`solver.rs`) keeps the
-//! workspace between solves; [`trace`] follows a branch of equilibria in one input.
+//! workspace between solves; [`solve_batch`] and [`solve_rows`] (`batch.rs`) solve
+//! independent rows on all cores with one `Solver` per worker thread; [`trace`] follows a branch of equilibria in one input.
 //!
 //! docs/numerics.md documents the scheme (order 4), the scaling, the stopping tests and the
 //! load path.
 
 pub(crate) mod actuation;
+mod batch;
 mod branch;
 mod dynamics;
 mod equilibrium;
@@ -58,6 +60,7 @@ use crate::error::Result;
 pub use crate::mesh::guess::InitialGuess;
 use crate::mesh::guess::interpolate;
 use crate::solution::Solution;
+pub use batch::{solve_batch, solve_rows};
 pub use dynamics::{DENSITY, MODULUS, Vibration, vibration};
 pub use linear::LinearSolver;
 pub use options::{DEFAULT_TOLERANCE, Equilibrium, MAX_INTERVALS, MAX_ITERATIONS, Options};
@@ -107,12 +110,4 @@ pub fn check_resolution(robot: &Robot, options: &Options) -> Result<()> {
         return Ok(());
     }
     resolves(robot, options, &initial_mesh(robot, options, None)?)
-}
-
-/// Solves many independent robots in parallel on rayon's global thread pool, one result per
-/// robot in input order. Each solve is the same deterministic computation as [`solve`], so
-/// results are bitwise identical to solving them one by one.
-pub fn solve_batch(robots: &[Robot], options: &Options) -> Vec<Result<Solution>> {
-    use rayon::prelude::*;
-    robots.par_iter().map(|robot| solve(robot, options)).collect()
 }

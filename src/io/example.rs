@@ -206,9 +206,9 @@ mod tests {
     #[test]
     fn the_sample_cases_read_as_a_parameter_table_for_the_example() {
         let table = crate::io::parameters::read("cases.csv", &super::example_cases()).unwrap();
-        assert_eq!(table.rows.len(), 21);
+        assert_eq!(table.len(), 21);
         let base = crate::io::parse(&super::example(), "example").unwrap().robot;
-        let last = table.robot(&table.rows[20], &base).unwrap();
+        let last = table.robot(&table.row(20), &base).unwrap();
         assert_eq!((last.tendons[0].tension(), last.loads.tip_force.z), (6.0, -0.196));
     }
 

@@ -6,7 +6,7 @@
 //!
 //! ```
 //! let table = tdcr::io::parameters::read("rows.csv", "tension.1,tip_force.z\n2.94,-0.1\n").unwrap();
-//! let robot = table.robot(&table.rows[0], &tdcr::cases::prototype()).unwrap();
+//! let robot = table.robot(&table.row(0), &tdcr::cases::prototype()).unwrap();
 //! assert_eq!((robot.tendons[0].tension(), robot.loads.tip_force.z), (2.94, -0.1));
 //! ```
 
@@ -27,16 +27,58 @@ pub struct Row {
     pub values: Vec<Option<f64>>,
 }
 
-/// A parameter table: the parameters in column order and the rows.
+/// A parameter table: the parameters in column order and the rows, kept compact (8 bytes
+/// per value and row, so a table of 10^6 rows of four parameters holds 40 MB); [`Table::row`]
+/// gives a row as a [`Row`].
 #[derive(Clone, Debug, PartialEq)]
 pub struct Table {
     /// The parameters, each once.
     pub parameters: Vec<Parameter>,
-    /// The rows, in file order.
-    pub rows: Vec<Row>,
+    /// The values, row after row, one per parameter; NaN where a JSON line does not name
+    /// the parameter (a value read is always finite).
+    values: Vec<f64>,
+    /// The line of each row in the file, from 1.
+    lines: Vec<usize>,
 }
 
 impl Table {
+    /// The number of rows.
+    pub fn len(&self) -> usize {
+        self.lines.len()
+    }
+
+    /// Whether the table has no rows.
+    pub fn is_empty(&self) -> bool {
+        self.lines.is_empty()
+    }
+
+    /// Row `index` (from 0, in file order).
+    ///
+    /// # Panics
+    /// If `index >= self.len()`.
+    pub fn row(&self, index: usize) -> Row {
+        let n = self.parameters.len();
+        Row {
+            index,
+            line: self.lines[index],
+            values: self.values[index * n..(index + 1) * n]
+                .iter()
+                .map(|&x| (!x.is_nan()).then_some(x))
+                .collect(),
+        }
+    }
+
+    /// The rows, in file order.
+    pub fn rows(&self) -> impl ExactSizeIterator<Item = Row> + '_ {
+        (0..self.len()).map(|i| self.row(i))
+    }
+
+    /// Appends a row (`values`, one per parameter) read at `line`.
+    fn push(&mut self, line: usize, values: impl IntoIterator<Item = Option<f64>>) {
+        self.values.extend(values.into_iter().map(|x| x.unwrap_or(f64::NAN)));
+        self.lines.push(line);
+    }
+
     /// `base` with `row`'s values set ([`Parameter::apply_all`]: `load_scale` last) and
     /// validated.
     ///
@@ -163,7 +205,12 @@ pub fn read_csv(file: &str, text: &str) -> Result<Table, FileError> {
         }
         parameters.push(p);
     }
-    let mut rows = Vec::new();
+    let mut table = Table {
+        parameters,
+        values: Vec::new(),
+        lines: Vec::new(),
+    };
+    let parameters = table.parameters.clone();
     for record in records {
         let (line, cells) = record?;
         if cells.len() != parameters.len() {
@@ -186,13 +233,9 @@ pub fn read_csv(file: &str, text: &str) -> Result<Table, FileError> {
             check_value(p, x).map_err(|e| at(file, line, *column, e))?;
             values.push(Some(x));
         }
-        rows.push(Row {
-            index: rows.len(),
-            line,
-            values,
-        });
+        table.push(line, values);
     }
-    Ok(Table { parameters, rows })
+    Ok(table)
 }
 
 /// Reads JSON lines: one object `{"tension.1": 2.0, ...}` per non-blank line; a row sets
@@ -230,19 +273,18 @@ pub fn read_jsonl(file: &str, text: &str) -> Result<Table, FileError> {
         }
         parsed.push((i + 1, row));
     }
-    let rows = parsed
-        .into_iter()
-        .enumerate()
-        .map(|(index, (line, row))| Row {
-            index,
-            line,
-            values: parameters
-                .iter()
-                .map(|p| row.iter().find(|(q, _)| q == p).map(|(_, x)| *x))
-                .collect(),
-        })
-        .collect();
-    Ok(Table { parameters, rows })
+    let mut table = Table {
+        parameters,
+        values: Vec::new(),
+        lines: Vec::new(),
+    };
+    for (line, row) in parsed {
+        let values: Vec<Option<f64>> = (table.parameters.iter())
+            .map(|p| row.iter().find(|(q, _)| q == p).map(|(_, x)| *x))
+            .collect();
+        table.push(line, values);
+    }
+    Ok(table)
 }
 
 #[cfg(test)]
@@ -266,7 +308,7 @@ mod tests {
         let base = crate::cases::case_s();
         for text in ["tension.1,load_scale\n2,0.5\n", "load_scale,tension.1\n0.5,2\n"] {
             let table = read_csv("t.csv", text).unwrap();
-            let robot = table.robot(&table.rows[0], &base).unwrap();
+            let robot = table.robot(&table.row(0), &base).unwrap();
             assert_eq!(robot.tendons[0].tension(), 1.0, "{text}");
             assert_eq!(robot.tendons[1].tension(), base.tendons[1].tension() * 0.5, "{text}");
         }
@@ -282,8 +324,22 @@ mod tests {
         .unwrap();
         assert_eq!(csv.parameters, json.parameters);
         assert_eq!(csv.parameters, [Parameter::Tension(1), Parameter::TipMoment(0)]);
-        let values = |t: &Table| t.rows.iter().map(|r| r.values.clone()).collect::<Vec<_>>();
+        let values = |t: &Table| t.rows().map(|r| r.values).collect::<Vec<_>>();
         assert_eq!(values(&csv), values(&json));
-        assert_eq!(csv.rows[1].line, 4);
+        assert_eq!(csv.row(1).line, 4);
+    }
+
+    /// A JSON line that does not name a parameter leaves it unset in its row (stored
+    /// compactly as NaN, given back as `None`), and the robot keeps the base's value.
+    #[test]
+    fn parameters_a_json_line_does_not_name_stay_unset() {
+        let table = read("t.jsonl", "{\"tension.1\": 1.5}\n{\"tip_force.z\": -0.1}\n").unwrap();
+        assert_eq!(table.len(), 2);
+        assert_eq!(table.row(0).values, [Some(1.5), None]);
+        assert_eq!(table.row(1).values, [None, Some(-0.1)]);
+        let base = crate::cases::case_s();
+        let robot = table.robot(&table.row(1), &base).unwrap();
+        assert_eq!(robot.tendons[0].tension(), base.tendons[0].tension());
+        assert_eq!(robot.loads.tip_force.z, -0.1);
     }
 }

@@ -1,6 +1,7 @@
 //! `tdcr batch`: one robot file solved for every row of a parameter table (CSV with a header
-//! of parameter names, or JSON lines), rows warm-started in blocks on all cores, one result
-//! row per input row; `--shard K/N` takes one contiguous share of the rows for a job array.
+//! of parameter names, or JSON lines), every row solved on its own on all cores
+//! (`tdcr::collocation::solve_rows`), one result row per input row; `--shard K/N` takes one
+//! contiguous share of the rows for a job array.
 
 use clap::Args;
 use rayon::prelude::*;
@@ -10,19 +11,17 @@ use tdcr::io::csv_table::CsvTable;
 use tdcr::io::number;
 use tdcr::io::parameters;
 use tdcr::io::row_outputs::{RowOutputs, quaternion, tip_error_estimate};
-use tdcr::{Error, Method, Robot, Solution};
+use tdcr::{Error, Method, Solution};
 
 use crate::args::SolverArgs;
 use crate::failure::{Failure, emit, note, write_file};
 use crate::robot_args::{apply, read_robot};
 use crate::sweep::Progress;
 
-/// Rows per warm-started block: each block is solved in row order, every solve starting
-/// from the previous row's solution or the cold guess, whichever has the smaller residual
-/// (`tdcr::solve_from`; chord steps on the previous factors, as `tdcr::Solver` takes them,
-/// cost ten times more on tables of unrelated rows); blocks run in parallel. Shards are made of whole blocks, so a sharded run repeats the unsharded run's
-/// computation exactly. 64 rows keep both cores of a small run busy from a few hundred rows
-/// while most solves still start warm.
+/// Rows per shard unit: `--shard K/N` splits the table into whole blocks of this many
+/// rows. Every row is solved on its own (cold, `tdcr::collocation::solve_rows`), so the
+/// blocks only fix where shards start: a sharded run computes every row exactly as the
+/// unsharded run does.
 pub const BLOCK: usize = 64;
 
 /// The arguments of `tdcr batch`.
@@ -70,18 +69,6 @@ fn parse_shard(text: &str) -> Result<(usize, usize), String> {
     if k < n { Ok((k, n)) } else { Err(bad()) }
 }
 
-/// The result of one row: what its CSV row holds (the solution itself is not kept, so
-/// memory does not grow with the table).
-struct Outcome {
-    /// Tip position (m), if it solved.
-    tip: Option<tdcr::nalgebra::Vector3<f64>>,
-    /// Newton iterations, also of a failed solve when its report says.
-    iterations: Option<usize>,
-    /// The optional columns' fields (empty when the row failed).
-    extra: Vec<String>,
-    error: Option<String>,
-}
-
 /// The optional columns of a solved row, as `outputs` asks.
 fn extra_fields(outputs: &RowOutputs, solution: &Solution) -> Vec<String> {
     let mut out = Vec::new();
@@ -101,51 +88,29 @@ fn extra_fields(outputs: &RowOutputs, solution: &Solution) -> Vec<String> {
     out
 }
 
-/// Solves one block of rows in order, each warm-started from the last solution (when that
-/// is a better start than the cold guess).
-fn solve_block(
-    robots: &[Robot],
-    settings: &tdcr::io::SolverSettings,
-    outputs: &RowOutputs,
-    progress: &Mutex<Counted>,
-) -> Vec<Outcome> {
-    let mut last: Option<Solution> = None;
-    let mut out = Vec::with_capacity(robots.len());
-    for robot in robots {
-        let result = match (settings.method, &last) {
-            (Method::Shooting, _) => tdcr::shooting::solve(robot, &settings.shooting),
-            (Method::Collocation, Some(warm)) => tdcr::solve_from(robot, &settings.collocation, warm),
-            (Method::Collocation, None) => tdcr::solve(robot, &settings.collocation),
-        };
-        let outcome = match result {
-            Ok(solution) => {
-                let outcome = Outcome {
-                    tip: Some(solution.tip_position()),
-                    iterations: Some(solution.report.iterations),
-                    extra: extra_fields(outputs, &solution),
-                    error: None,
-                };
-                last = Some(solution);
-                outcome
-            }
-            Err(e) => Outcome {
-                tip: None,
-                iterations: match &e {
-                    Error::NotConverged { report, .. } => Some(report.iterations),
-                    _ => None,
-                },
-                extra: Vec::new(),
-                error: Some(e.to_string()),
-            },
-        };
-        out.push(outcome);
-        if let Ok(mut p) = progress.lock() {
-            p.done += 1;
-            let (done, total) = (p.done, p.total);
-            p.bar.update(done, total);
+/// The CSV fields of one row's result after its input columns: `converged`, `iterations`,
+/// the tip, the optional columns (`extra` of them) and `error`; and whether it failed.
+fn result_fields(result: tdcr::Result<Solution>, outputs: &RowOutputs, extra: usize) -> (Vec<String>, bool) {
+    match result {
+        Ok(solution) => {
+            let mut fields = vec!["true".to_string(), solution.report.iterations.to_string()];
+            fields.extend(solution.tip_position().iter().map(|&x| number(x)));
+            fields.extend(extra_fields(outputs, &solution));
+            fields.push(String::new());
+            (fields, false)
+        }
+        Err(e) => {
+            let iterations = match &e {
+                Error::NotConverged { report, .. } => report.iterations.to_string(),
+                _ => String::new(),
+            };
+            let mut fields = vec!["false".to_string(), iterations];
+            fields.extend(std::iter::repeat_n(String::new(), 3 + extra));
+            // One line per row: a multi-line message joined with "; ".
+            fields.push(e.to_string().replace('\n', "; "));
+            (fields, true)
         }
     }
-    out
 }
 
 /// The progress bar and the rows done of the total.
@@ -155,9 +120,21 @@ struct Counted {
     total: usize,
 }
 
-/// Rows solved between two writes of results, per thread: 4 blocks, so every core stays
-/// busy while the rows in memory stay a few hundred whatever the table's length.
-const WAVE_BLOCKS_PER_THREAD: usize = 4;
+impl Counted {
+    /// Counts one more row done.
+    fn tick(progress: &Mutex<Counted>) {
+        if let Ok(mut p) = progress.lock() {
+            p.done += 1;
+            let (done, total) = (p.done, p.total);
+            p.bar.update(done, total);
+        }
+    }
+}
+
+/// Rows solved between two writes of results, per thread: enough that the wait for the
+/// slowest row of a wave (while the other thread idles) is rare, few enough that the
+/// result rows in memory stay a few hundred kilobytes whatever the table's length.
+const WAVE_ROWS_PER_THREAD: usize = 1024;
 
 /// Where the result rows go, written as each wave of rows is solved.
 enum Sink {
@@ -206,21 +183,19 @@ pub fn run(args: &BatchArgs) -> Result<(), Failure> {
     let text = std::fs::read_to_string(&args.cases)
         .map_err(|e| Failure::Input(format!("cannot read parameter table {}: {e}", args.cases)))?;
     let table = parameters::read(&args.cases, &text).map_err(|e| Failure::Input(e.to_string()))?;
-    let blocks = table.rows.len().div_ceil(BLOCK);
+    drop(text);
+    let blocks = table.len().div_ceil(BLOCK);
     let (first, end) = match args.shard {
         Some((k, n)) => (k * blocks / n, (k + 1) * blocks / n),
         None => (0, blocks),
     };
-    let rows = &table.rows[(first * BLOCK).min(table.rows.len())..(end * BLOCK).min(table.rows.len())];
-    let robot = |row: &parameters::Row| {
-        table
-            .robot(row, &file.robot)
-            .map_err(|e| Failure::Input(format!("{}:{}:1: row {}: {e}", args.cases, row.line, row.index)))
-    };
+    let rows = (first * BLOCK).min(table.len())..(end * BLOCK).min(table.len());
     // Every row's robot is checked before any solve, so bad input stops the run before it
-    // spends time; each is built again when its wave is solved.
-    for row in rows {
-        robot(row)?;
+    // spends time; each is built again when it is solved.
+    for row in rows.clone().map(|i| table.row(i)) {
+        table
+            .robot(&row, &file.robot)
+            .map_err(|e| Failure::Input(format!("{}:{}:1: row {}: {e}", args.cases, row.line, row.index)))?;
     }
     let mut sink = Sink::open(args.out.as_deref())?;
     let mut header = vec!["row".to_string()];
@@ -236,39 +211,39 @@ pub fn run(args: &BatchArgs) -> Result<(), Failure> {
         done: 0,
         total: rows.len(),
     });
-    let wave = BLOCK * WAVE_BLOCKS_PER_THREAD * rayon::current_num_threads();
-    let mut failed = 0;
-    for rows in rows.chunks(wave) {
-        let robots = rows.iter().map(robot).collect::<Result<Vec<Robot>, Failure>>()?;
-        let outcomes: Vec<Outcome> = robots
-            .par_chunks(BLOCK)
-            .map(|block| solve_block(block, &file.solver, &outputs, &progress))
-            .collect::<Vec<_>>()
-            .into_iter()
-            .flatten()
-            .collect();
+    let wave = WAVE_ROWS_PER_THREAD * rayon::current_num_threads();
+    let robot_of = |i: usize| table.robot(&table.row(i), &file.robot);
+    // A row's CSV line is written by the thread that solved it; the lines of a wave are
+    // then written in row order.
+    let line = |i: usize, result: tdcr::Result<Solution>| {
+        let row = table.row(i);
+        let mut fields = vec![row.index.to_string()];
+        fields.extend(row.values.iter().map(|x| x.map_or(String::new(), number)));
+        let (rest, failed) = result_fields(result, &outputs, extra_count);
+        fields.extend(rest);
         let mut csv = CsvTable::rows_only();
-        for (row, outcome) in rows.iter().zip(&outcomes) {
-            let mut fields = vec![row.index.to_string()];
-            fields.extend(row.values.iter().map(|x| x.map_or(String::new(), number)));
-            fields.push(outcome.tip.is_some().to_string());
-            fields.push(outcome.iterations.map_or(String::new(), |n| n.to_string()));
-            match &outcome.tip {
-                Some(tip) => {
-                    fields.extend(tip.iter().map(|&x| number(x)));
-                    fields.extend(outcome.extra.iter().cloned());
-                    fields.push(String::new());
-                }
-                None => {
-                    failed += 1;
-                    fields.extend(std::iter::repeat_n(String::new(), 3 + extra_count));
-                    // One line per row: a multi-line message joined with "; ".
-                    fields.push(outcome.error.as_deref().unwrap_or_default().replace('\n', "; "));
-                }
-            }
-            csv.row(fields);
-        }
-        sink.write(&csv.finish())?;
+        csv.row(fields);
+        Counted::tick(&progress);
+        (csv.finish(), failed)
+    };
+    let settings = &file.solver;
+    let mut failed = 0;
+    for start in rows.clone().step_by(wave) {
+        let range = start..rows.end.min(start + wave);
+        let lines: Vec<(String, bool)> = match settings.method {
+            Method::Collocation => tdcr::collocation::solve_rows(range, &settings.collocation, robot_of, line),
+            Method::Shooting => range
+                .into_par_iter()
+                .map(|i| {
+                    line(
+                        i,
+                        robot_of(i).and_then(|r| tdcr::shooting::solve(&r, &settings.shooting)),
+                    )
+                })
+                .collect(),
+        };
+        failed += lines.iter().filter(|(_, f)| *f).count();
+        sink.write(&lines.into_iter().map(|(text, _)| text).collect::<String>())?;
     }
     if let Ok(mut p) = progress.lock() {
         p.bar.finish();
