@@ -16,7 +16,7 @@ use crate::mesh::Mesh;
 use crate::model::equations::{Model, Site};
 use crate::model::linearize;
 use crate::solution::State;
-use nalgebra::{SVector, Vector6};
+use nalgebra::{SVector, Vector3, Vector6};
 use num_dual::{Dual64, DualSVec64};
 
 type D12 = DualSVec64<12>;
@@ -310,6 +310,68 @@ impl<'a> System<'a> {
             out[tip_row(x.len()) + r] = d.re;
             values[at..at + TIP_COLUMNS].copy_from_slice(&derivative(&d.eps.0).as_slice()[THETA..]);
             at += TIP_COLUMNS;
+        }
+        Ok(())
+    }
+
+    /// The exact derivative of the residual in every tendon's tension at the states `x`
+    /// (slack tendons: the right derivative), column-major into `out`, one column of
+    /// [`System::unknowns`] rows per tendon of the robot. The residual is linear in each
+    /// tension once the tendon's path terms are formed: interval rows by
+    /// [`residual::interval_tensions`], jump and tip rows by
+    /// [`Model::wrench_balance_tensions`], base rows 0 (docs/sensitivity.md, "Exact tension
+    /// columns"). Without friction: the log tensions of tendons with friction are not
+    /// unknowns here.
+    ///
+    /// # Errors
+    /// A model breakdown at a visited state.
+    pub fn tension_columns(&self, x: &[State], out: &mut [f64]) -> Result<()> {
+        let model = &self.model;
+        let (n, tendons) = (self.unknowns(), model.robot.tendons.len());
+        debug_assert_eq!(out.len(), n * tendons);
+        out.fill(0.0);
+        let length = model.robot.length();
+        let mut rates = [vec![Vector6::zeros(); tendons], vec![Vector6::zeros(); tendons], vec![Vector6::zeros(); tendons]];
+        let mut block = vec![Block::zeros(); tendons];
+        let mut wrench = vec![(Vector3::zeros(), Vector3::zeros()); tendons];
+        let mut write = |rows: usize, i: usize, values: &[f64]| {
+            out[i * n + rows..i * n + rows + values.len()].copy_from_slice(values);
+        };
+        let links = x.len() - 1;
+        let mut node_rates = None;
+        for k in 0..links {
+            let row = link_row(k);
+            if let Some(sites) = &self.interval_sites[k] {
+                let seg = self.mesh.nodes[k].segment_end;
+                if node_rates.is_some() {
+                    // Node k's derivatives are the previous interval's end ones.
+                    rates.swap(0, 1);
+                }
+                let [d0, d1, dm] = &mut rates;
+                let end = residual::interval_tensions(model, sites, seg, &x[k], &x[k + 1], node_rates, [d0, d1, dm], &mut block)?;
+                node_rates = Some(end);
+                for (i, b) in block.iter().enumerate() {
+                    write(row, i, b.as_slice());
+                }
+            } else {
+                node_rates = None;
+                let (left, right) = (&self.node_sites[k], &self.node_sites[k + 1]);
+                let (a, b) = (&x[k], &x[k + 1]);
+                wrench.fill((Vector3::zeros(), Vector3::zeros()));
+                model.wrench_balance_tensions(left.s, (left, &a.R, &a.v, &a.u), Some((right, &b.R, &b.v, &b.u)), &mut wrench)?;
+                for (i, (f, m)) in wrench.iter().enumerate() {
+                    write(row + 6, i, f.as_slice());
+                    write(row + 9, i, (m * length).as_slice());
+                }
+            }
+        }
+        let (site, tip) = (&self.node_sites[links], &x[links]);
+        wrench.fill((Vector3::zeros(), Vector3::zeros()));
+        model.wrench_balance_tensions(site.s, (site, &tip.R, &tip.v, &tip.u), None, &mut wrench)?;
+        let row = tip_row(x.len());
+        for (i, (f, m)) in wrench.iter().enumerate() {
+            write(row, i, f.as_slice());
+            write(row + 3, i, (m * length).as_slice());
         }
         Ok(())
     }

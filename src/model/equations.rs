@@ -155,6 +155,12 @@ impl<'a> Model<'a> {
 
     /// (tension tau_i in N, routing point) for the selected tendons at s.
     pub fn tendons(&self, s: f64, which: Which) -> impl Iterator<Item = (usize, f64, RoutingPoint)> + '_ {
+        self.reaching(s, which).filter(|&(_, tension, _)| tension > 0.0)
+    }
+
+    /// As [`Model::tendons`], slack tendons (tension 0) included: the tendons whose
+    /// tension would act at s, for the derivative in a tension (right derivative at 0).
+    pub(crate) fn reaching(&self, s: f64, which: Which) -> impl Iterator<Item = (usize, f64, RoutingPoint)> + '_ {
         let (l, factor) = (self.robot.length(), self.tension_factor);
         let tendons = self.robot.tendons.iter().zip(&self.tensions);
         tendons.enumerate().filter_map(move |(i, (t, &tension))| {
@@ -164,8 +170,18 @@ impl<'a> Model<'a> {
                 Which::EndingAt(x) => end == x,
                 Which::Past(x) => end > x,
             };
-            (take && tension > 0.0).then(|| (i, tension * factor, t.routing.at(s, l)))
+            take.then(|| (i, tension * factor, t.routing.at(s, l)))
         })
+    }
+
+    /// As [`Model::distributed_tendons`], slack tendons included ([`Model::reaching`]).
+    pub(crate) fn distributed_reaching(
+        &self,
+        s: f64,
+        segment_end: f64,
+    ) -> impl Iterator<Item = (usize, f64, RoutingPoint)> + '_ {
+        let coupled = self.robot.tendon_model == TendonModel::Coupled;
+        self.reaching(s, Which::ActiveTo(segment_end)).filter(move |_| coupled)
     }
 
     /// The tendons whose distributed loads act on the segment ending at `segment_end` (none in
@@ -356,5 +372,62 @@ impl Model<'_> {
             (Rt * dn).component_div(&lift(&site_a.section.section.kse)),
             (Rt * dm).component_div(&lift(&site_a.section.section.kbt)),
         ))
+    }
+
+    /// The derivative of [`Model::wrench_balance`] in each tendon's tension tau_i at fixed
+    /// states, added into `out[i]` (force rows, then moment rows; strain units, left body
+    /// frame). The balance is linear in each tension: tendon i contributes
+    /// tau_i f (t_i, (R r_i) x t_i) (f the tension factor, t_i = p_i' / |p_i'| in the world
+    /// frame) where it ends, and, with corner forces, the difference of that term on the two
+    /// sides where it continues, so its derivative is the same term per unit of tau_i. A
+    /// slack tendon gets the right derivative (the term it would add under a pull).
+    ///
+    /// # Errors
+    /// [`Error::SingularRouting`] where a tendon has no tangent.
+    pub(crate) fn wrench_balance_tensions(
+        &self,
+        s: f64,
+        left: Side<f64>,
+        right: Option<Side<f64>>,
+        out: &mut [(Vector3<f64>, Vector3<f64>)],
+    ) -> Result<()> {
+        let (site_a, Ra, va, ua) = left;
+        let coupled = self.robot.tendon_model == TendonModel::Coupled;
+        let scale = |dn: Vector3<f64>, dm: Vector3<f64>| {
+            (
+                Ra.tr_mul(&dn).component_div(&site_a.section.section.kse),
+                Ra.tr_mul(&dm).component_div(&site_a.section.section.kbt),
+            )
+        };
+        // One tendon's pull per unit of tension at (R, v, u): world force and moment.
+        let unit_pull = |i: usize, rp: &RoutingPoint, R: &Matrix3<f64>, v: &Vector3<f64>, u: &Vector3<f64>| {
+            let pb_s = u.cross(&rp.r) + rp.r_s + v;
+            let speed = pb_s.norm();
+            if speed < MIN_TENDON_SPEED {
+                return Err(Error::SingularRouting { tendon: i, s, speed });
+            }
+            let t = pb_s * (self.tension_factor / speed);
+            let force = if coupled { R * t } else { Vector3::zeros() };
+            Ok((force, R * rp.r.cross(&t)))
+        };
+        for (i, _, rp) in self.reaching(s, Which::EndingAt(s)) {
+            let (f, m) = unit_pull(i, &rp, Ra, va, ua)?;
+            let (f, m) = scale(f, m);
+            out[i].0 += f;
+            out[i].1 += m;
+        }
+        if let Some((_, Rb, vb, ub)) = right
+            && self.robot.corner_forces
+            && coupled
+        {
+            for (i, _, rp) in self.reaching(s, Which::Past(s)) {
+                let (fa, ma) = unit_pull(i, &rp, Ra, va, ua)?;
+                let (fb, mb) = unit_pull(i, &rp, Rb, vb, ub)?;
+                let (f, m) = scale(fa - fb, ma - mb);
+                out[i].0 += f;
+                out[i].1 += m;
+            }
+        }
+        Ok(())
     }
 }

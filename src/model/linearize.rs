@@ -529,6 +529,66 @@ pub fn linearize(
     })
 }
 
+/// Eq. 13 (corrected) at (R, v, u) with the derivatives of its rates in every tendon's
+/// tension: writes d(v', u')/dtau_i into `out[i]` (one entry per tendon of the robot, zero
+/// for a tendon that does not load the backbone here) and returns the rates, with the full
+/// [`Linearization`] when `full` (the collocation midpoint needs it for the chain rule).
+///
+/// Tendon i enters F = M x - rhs only through q_i = A_i z_i (module docs), and
+/// A_i = tau_i f P_i / |p_i| (f the tension factor) is linear in tau_i while p_i, c_i and
+/// z_i do not depend on it, so at fixed x
+///
+/// ```text
+/// dF/dtau_i = (f / |p_i|) [P_i z_i; r_i x P_i z_i],    d(v', u')/dtau_i = -M^-1 dF/dtau_i,
+/// ```
+///
+/// exact, with one solve with the factored M per tendon. A slack tendon (tau_i = 0, not in
+/// M) gets the same formula: the right derivative, the load its first pull adds.
+///
+/// # Errors
+/// As [`rates`]; [`Error::SingularRouting`] also for a slack tendon without a tangent.
+pub(crate) fn tension_rates(
+    model: &Model,
+    site: &Site,
+    segment_end: f64,
+    (R, v, u): (&Matrix3<f64>, &Vector3<f64>, &Vector3<f64>),
+    full: bool,
+    out: &mut [Vector6<f64>],
+) -> Result<(Vector6<f64>, Option<Linearization>)> {
+    let mut cache = [TendonPoint::ZERO; CACHED_TENDONS];
+    let assembled = assemble(model, site, segment_end, (R, v, u), Some(&mut cache))?;
+    let x = &assembled.x;
+    let rates = Vector6::from_fn(|i, _| x[i]);
+    let lin = if full {
+        let mut dFt = derivative(model, site, segment_end, (v, u), x, &assembled, &cache)?;
+        if !assembled.factor.solve_transposed_mut(&mut dFt) {
+            return Err(breakdown(site.s));
+        }
+        Some(Linearization {
+            rates,
+            d_strains: Matrix6::from_fn(|i, k| -dFt[(k, i)]),
+            d_rotation: Matrix6x3::from_fn(|i, k| -dFt[(6 + k, i)]),
+        })
+    } else {
+        None
+    };
+    let x_v = Vector3::new(x[0], x[1], x[2]);
+    let x_u = Vector3::new(x[3], x[4], x[5]);
+    out.fill(Vector6::zeros());
+    for (i, _, rp) in model.distributed_reaching(site.s, segment_end) {
+        // Per unit of tau_i: k_i = f / |p_i|, so A() is (f / |p_i|) P_i.
+        let tp = TendonPoint::new(i, model.tension_factor, &rp, site.s, v, u)?;
+        let q = tp.A() * (x_v - tp.r.cross(&x_u) + tp.c);
+        let rq = tp.r.cross(&q);
+        let mut row = SMatrix::<f64, 1, 6>::new(q[0], q[1], q[2], rq[0], rq[1], rq[2]);
+        if !assembled.factor.solve_transposed_mut(&mut row) {
+            return Err(breakdown(site.s));
+        }
+        out[i] = Vector6::from_fn(|j, _| -row[j]);
+    }
+    Ok((rates, lin))
+}
+
 /// Eq. 13 (corrected) at one point, assembled and factored (pass 1 of [`linearize`]) for
 /// what friction adds (docs/friction.md): the rates, solves with M for further right-hand
 /// sides, and dF (the partial derivative of M x - rhs with x held fixed) at any rates x.
@@ -663,6 +723,19 @@ mod tests {
         v: &Vector3<T>,
         u: &Vector3<T>,
     ) -> Result<(Vector3<T>, Vector3<T>)> {
+        let tension = |_: usize, t: f64| (t > 0.0).then(|| T::from_f64(t).unwrap_or_else(T::zero));
+        strain_rates_with(model, site, segment_end, (R, v, u), &tension)
+    }
+
+    /// [`strain_rates`] with each reaching tendon's tension given by `tension(i, tau_i)`
+    /// (`None` leaves the tendon out): a dual tension seeds the derivative in it.
+    fn strain_rates_with<T: Real>(
+        model: &Model,
+        site: &Site,
+        segment_end: f64,
+        (R, v, u): (&Matrix3<T>, &Vector3<T>, &Vector3<T>),
+        tension: &dyn Fn(usize, f64) -> Option<T>,
+    ) -> Result<(Vector3<T>, Vector3<T>)> {
         let kse = lift::<T>(&site.section.section.kse);
         let kbt = lift::<T>(&site.section.section.kbt);
         let D = Matrix3::from_diagonal(&kse);
@@ -682,7 +755,8 @@ mod tests {
         let mut H = Matrix3::<T>::zeros();
         let mut a = Vector3::<T>::zeros();
         let mut b = Vector3::<T>::zeros();
-        for (i, tension, rp) in model.distributed_tendons(site.s, segment_end) {
+        for (i, tau, rp) in model.distributed_reaching(site.s, segment_end) {
+            let Some(tau) = tension(i, tau) else { continue };
             let r = lift::<T>(&rp.r);
             let r_s = lift::<T>(&rp.r_s);
             let r_ss = lift::<T>(&rp.r_ss);
@@ -696,7 +770,6 @@ mod tests {
                 });
             }
             let ph = hat(&pb_s);
-            let tau = T::from_f64(tension).unwrap_or_else(T::zero);
             let A_i = ph * ph * (-tau / (speed * speed * speed));
             let r_hat = hat(&r);
             let B_i = r_hat * A_i;
@@ -957,6 +1030,51 @@ mod tests {
         };
         let (v, u) = state();
         check_model(&model, 0.09, robot.length(), &generic_rotation(), &v, &u);
+    }
+
+    /// d(v', u')/dtau_i of [`tension_rates`] against dual numbers seeded on tendon i's
+    /// tension in the oracle, for every tendon: taut, slack (the right derivative), ending
+    /// before the segment end (zero), at a tension factor below 1.
+    #[test]
+    fn tension_rates_match_ad() {
+        let robot = several_tendons();
+        let model = Model {
+            tension_factor: 0.4,
+            ..Model::new(&robot)
+        };
+        let (v, u) = state();
+        let R = generic_rotation();
+        let l = robot.length();
+        for (s, end) in [(0.07, l), (0.07, 0.5 * l), (0.2, l)] {
+            let site = model.site(s);
+            let mut out = vec![Vector6::zeros(); robot.tendons.len()];
+            let (rates, lin) = tension_rates(&model, &site, end, (&R, &v, &u), true, &mut out).unwrap();
+            // The rates and the full linearization are those of `linearize`, bit for bit.
+            assert_eq!(lin, Some(linearize(&model, &site, end, &R, &v, &u).unwrap()));
+            assert_eq!(rates, super::rates(&model, &site, end, &R, &v, &u).unwrap());
+            for (j, d) in out.iter().enumerate() {
+                let seeded = |i: usize, t: f64| {
+                    if i == j {
+                        Some(Dual64::new(t, model.tension_factor))
+                    } else {
+                        (t > 0.0).then(|| Dual64::from(t))
+                    }
+                };
+                let lift = |a: &Vector3<f64>| a.map(Dual64::from);
+                let R_d = R.map(Dual64::from);
+                let (v_s, u_s) = strain_rates_with(&model, &site, end, (&R_d, &lift(&v), &lift(&u)), &seeded).unwrap();
+                let ad = Vector6::from_fn(|k, _| if k < 3 { v_s[k].eps } else { u_s[k - 3].eps });
+                let ends_before = robot.tendons[j].end(l) < end;
+                if ends_before {
+                    assert_eq!(*d, Vector6::zeros(), "tendon {j} does not reach {end}");
+                    assert_eq!(ad, Vector6::zeros());
+                } else {
+                    assert!(d.amax() > 0.0, "tendon {j} (slack or taut) loads the rod at {s}");
+                    // 1e-12: both exact derivatives in f64; only rounding in M^-1 differs.
+                    assert!(rel(d, &ad) < 1e-12, "tendon {j} at {s}: {d} vs {ad}");
+                }
+            }
+        }
     }
 
     #[test]

@@ -161,6 +161,9 @@ pub struct Sensitivity<'a> {
     workspace: Workspace,
     /// Scratch: residuals at the stencil points and the right-hand side.
     scratch: [Vec<f64>; 3],
+    /// dF/dtau_i of every tendon, column-major ([`System::tension_columns`]), evaluated at
+    /// the first tension asked for (one pass serves every tendon); frictionless systems only.
+    tension_columns: Option<Vec<f64>>,
 }
 
 impl<'a> Sensitivity<'a> {
@@ -246,6 +249,7 @@ impl<'a> Sensitivity<'a> {
             states,
             workspace,
             scratch: [residual, vec![0.0; n], vec![0.0; n]],
+            tension_columns: None,
         })
     }
 
@@ -506,7 +510,11 @@ impl<'a> Sensitivity<'a> {
     }
 
     /// The derivative of every node state with respect to tendon `tendon`'s tension
-    /// (per N): central differences, or the one-sided right derivative for a slack tendon.
+    /// (per N); for a slack tendon the one-sided (right) derivative, the response to its
+    /// first pull. Exact without friction ([`System::tension_columns`]: the residual is
+    /// linear in each tension at fixed states; one pass over the mesh serves every tendon);
+    /// with tendons with friction, whose tensions also set the capstan rows, central
+    /// differences of the bordered residual (one-sided for a slack tendon).
     ///
     /// # Errors
     /// [`crate::Error::InvalidInput`] for a tendon index out of range or a tendon with
@@ -520,7 +528,32 @@ impl<'a> Sensitivity<'a> {
     /// Writes -dF/dq of [`Sensitivity::tension`] into the right-hand side buffer.
     fn tension_rhs(&mut self, tendon: usize) -> Result<()> {
         let robot = self.robot();
-        let t = Self::tendon_of(robot, tendon)?;
+        Self::tendon_of(robot, tendon)?;
+        if self.border.border_rows() > 0 {
+            return self.friction_tension_rhs(tendon);
+        }
+        let n = self.border.system().unknowns();
+        if self.tension_columns.is_none() {
+            let mut columns = vec![0.0; n * robot.tendons.len()];
+            self.border.system().tension_columns(&self.states, &mut columns)?;
+            self.tension_columns = Some(columns);
+        }
+        let columns = self.tension_columns.as_deref().unwrap_or_default();
+        let column = &columns[tendon * n..(tendon + 1) * n];
+        for (r, d) in self.scratch[0].iter_mut().zip(column) {
+            *r = -d;
+        }
+        Ok(())
+    }
+
+    /// [`Sensitivity::tension_rhs`] with tendons with friction: central differences of the
+    /// bordered residual (the tension also sets the profile's base and the capstan rows, so
+    /// it is moved in a clone of the robot and every row follows), one-sided for a slack
+    /// tendon; steps [`RELATIVE_STEP`] times the tension, but at least the tension that bends
+    /// the rod through about a radian.
+    fn friction_tension_rhs(&mut self, tendon: usize) -> Result<()> {
+        let robot = self.robot();
+        let t = &robot.tendons[tendon];
         let offset = t.routing.at(0.0, robot.length()).r.norm();
         let bend = if offset > 0.0 {
             robot.bending_stiffness() / (robot.length() * offset)
@@ -535,7 +568,7 @@ impl<'a> Sensitivity<'a> {
         } else {
             Difference::Forward
         };
-        if tension == 0.0 && self.robot().tendons[tendon].active_friction().is_some() {
+        if tension == 0.0 && t.active_friction().is_some() {
             return Err(invalid(
                 format!("tendons[{tendon}].tension"),
                 "is 0 N on a tendon with friction, where the tension derivative is not modelled: the capstan \
@@ -543,21 +576,9 @@ impl<'a> Sensitivity<'a> {
                 "give the tendon a small tension (e.g. 1e-3 N) to differentiate there, or set its friction to 0",
             ));
         }
-        if self.border.border_rows() > 0 {
-            // With friction the tension also sets the profile's base and the capstan rows:
-            // moved in a clone of the robot, every row follows.
-            let perturb = |r: &mut Robot, dq: f64| r.tendons[tendon].set_tension(tension + dq);
-            return self.differenced_rhs(step, difference, |border, states, dq, out| {
-                residual_at(border, states, &perturb, dq, out)
-            });
-        }
-        // The tension is an input the model owns: moved in place, no robot to clone.
+        let perturb = |r: &mut Robot, dq: f64| r.tendons[tendon].set_tension(tension + dq);
         self.differenced_rhs(step, difference, |border, states, dq, out| {
-            let system = border.system_mut();
-            system.model.tensions[tendon] = tension + dq;
-            let result = system.residual(states, out);
-            system.model.tensions[tendon] = tension;
-            result
+            residual_at(border, states, &perturb, dq, out)
         })
     }
 
