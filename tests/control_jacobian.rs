@@ -53,6 +53,38 @@ fn solver_jacobian_equals_the_stateless_columns() {
     }
 }
 
+/// After a warm solve that converged by chord steps alone (1 % more tension), the solver's
+/// Jacobian factors the Jacobian its stability verdict evaluated at the solution instead of
+/// assembling it again: the columns equal the stateless ones (which assemble it) to rounding.
+#[test]
+fn jacobian_after_a_chord_only_warm_solve_equals_the_stateless_one() {
+    for robot in [cases::case_s(), cases::case_h()] {
+        let mut solver = Solver::new(Options::default());
+        let mut before = robot.clone();
+        for t in before.tendons.iter_mut() {
+            t.set_tension(t.tension() * 0.99);
+        }
+        let first = solver.solve(&before).unwrap();
+        let warm = solver.solve_from(&robot, &first).unwrap();
+        assert_eq!(warm.report.newton_steps, 0, "chord steps only: the verdict evaluated the Jacobian");
+        let wrt: Vec<Parameter> = (0..robot.tendons.len())
+            .map(Parameter::Tension)
+            .chain([Parameter::TipForce(0), Parameter::YoungsModulus])
+            .collect();
+        let j = solver.tip_jacobian(&robot, &warm, &wrt).unwrap();
+        let stateless = tip_jacobian(&robot, &warm, &wrt).unwrap();
+        for c in 0..wrt.len() {
+            let (a, b) = (j.column(c).into_owned(), stateless.column(c).into_owned());
+            // 1e-12 relative per column: the same Jacobian values and right-hand sides; only
+            // the factoring workspace differs (rounding).
+            assert!((a - &b).amax() <= 1e-12 * b.amax(), "column {c}: {j} vs {stateless}");
+        }
+        // A second call (the values are now factored) gives the same again.
+        let again = solver.tip_jacobian(&robot, &warm, &wrt).unwrap();
+        assert!(relative(&again, &stateless) <= 1e-12);
+    }
+}
+
 #[test]
 fn warm_solves_after_a_jacobian_equal_stateless_warm_solves() {
     let (mut solver, mut robot, warm) = stepped(&cases::case_h());

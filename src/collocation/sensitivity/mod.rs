@@ -183,16 +183,26 @@ impl<'a> Sensitivity<'a> {
     /// Jacobian there is singular (a bifurcation, where no sensitivity exists); a model
     /// breakdown at the solution's states.
     pub fn new(robot: &'a Robot, solution: &Solution) -> Result<Self> {
-        Self::with_workspace(robot, solution, None)
+        Self::with_workspace(robot, solution, None, false)
     }
 
     /// As [`Sensitivity::new`], factoring in `workspace` when it was built for the
     /// solution's mesh with the structured solver (a [`crate::Solver`]'s, which keeps its
     /// buffers and pattern), else in a new one; [`Sensitivity::into_workspace`] gives it back.
+    /// With `evaluated`, the workspace's value buffer already holds the Jacobian of this
+    /// robot's collocation system at the solution's states, from a solve that converged
+    /// there (a [`crate::Solver`]'s stability verdict after a warm solve,
+    /// [`Workspace::evaluated_at_solution`]): those values are factored, without assembling
+    /// the Jacobian again or checking the residual.
     ///
     /// # Errors
     /// As [`Sensitivity::new`].
-    pub(crate) fn with_workspace(robot: &'a Robot, solution: &Solution, workspace: Option<Workspace>) -> Result<Self> {
+    pub(crate) fn with_workspace(
+        robot: &'a Robot,
+        solution: &Solution,
+        workspace: Option<Workspace>,
+        evaluated: bool,
+    ) -> Result<Self> {
         robot.validate()?;
         if solution.tendons.len() != robot.tendons.len() {
             return Err(invalid(
@@ -223,6 +233,19 @@ impl<'a> Sensitivity<'a> {
         let states: Vec<State> = solution.nodes.iter().map(|n| n.state()).collect();
         let mut border = Capstan::at_solution(Model::new(robot), mesh, solution);
         let n = border.system().unknowns() + border.border_rows();
+        let mut workspace = workspace;
+        if let Some(mut workspace) = workspace.take_if(|w| evaluated && w.evaluated_at_solution()) {
+            if !workspace.factor_evaluated() {
+                return Err(singular());
+            }
+            return Ok(Sensitivity {
+                border,
+                states,
+                workspace,
+                scratch: [vec![0.0; n], vec![0.0; n], vec![0.0; n]],
+                tension_columns: None,
+            });
+        }
         let mut residual = vec![0.0; n];
         let mut values = vec![0.0; nonzeros(&border.system().mesh)];
         border.linearize(&states, &mut residual, &mut values)?;
