@@ -97,8 +97,9 @@ impl<'a> Model<'a> {
 
     /// Sets `parameter` to `value` on the model, with the meaning [`Parameter::apply`] gives
     /// it on the robot: a tension in [`Model::tensions`], the load scale as both factors,
-    /// any other input as [`Model::parameter`] (`youngs_modulus` changes the rod's sections,
-    /// which only a new robot has: set it with [`Parameter::apply`]). Returns whether the
+    /// any other input as [`Model::parameter`] (`youngs_modulus`, `displacement.I` and
+    /// `routing.I.x|y` change the robot's sections, actuation or routings, which only a new
+    /// robot has: set them with [`Parameter::apply`]; a trace refuses them). Returns whether the
     /// sites changed (external loads), which a system must then recompute.
     pub fn set(&mut self, parameter: Parameter, value: f64) -> bool {
         match parameter {

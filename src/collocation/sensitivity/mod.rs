@@ -231,7 +231,7 @@ impl<'a> Sensitivity<'a> {
             ));
         }
         let states: Vec<State> = solution.nodes.iter().map(|n| n.state()).collect();
-        let mut border = Capstan::at_solution(Model::new(robot), mesh, solution);
+        let mut border = Capstan::at_solution(solved_model(robot, solution), mesh, solution);
         let n = border.system().unknowns() + border.border_rows();
         let mut workspace = workspace;
         if let Some(mut workspace) = workspace.take_if(|w| evaluated && w.evaluated_at_solution()) {
@@ -651,8 +651,26 @@ fn residual_at(
             "differentiate with respect to parameters that keep the breakpoints",
         ));
     }
-    let system = border.moved(Model::new(&probe));
+    let mut model = Model::new(&probe);
+    for (i, t) in probe.tendons.iter().enumerate() {
+        if t.displacement().is_some() {
+            model.tensions[i] = border.system().model.tensions[i];
+        }
+    }
+    let system = border.moved(model);
     border.residual_of(&system, states, out)
+}
+
+/// The model of `robot` at the tensions of `solution`: a displacement-controlled tendon's
+/// tension is the solved one (its pull-in held fixed), a tension-controlled tendon's its input.
+fn solved_model<'a>(robot: &'a Robot, solution: &Solution) -> Model<'a> {
+    let mut model = Model::new(robot);
+    for (i, t) in robot.tendons.iter().enumerate() {
+        if t.displacement().is_some() {
+            model.tensions[i] = solution.tendons[i].tension;
+        }
+    }
+    model
 }
 
 /// Characteristic force E I / L^2 (N): the step scale of a tendon on the centreline.

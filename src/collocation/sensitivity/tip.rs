@@ -170,6 +170,33 @@ impl Held {
         self.directions.is_some()
     }
 
+    /// Refuses the offset of a held tendon's routing: it moves the tendon's path length
+    /// at fixed states too, a term the held derivatives do not include
+    /// ([`crate::Error::InvalidInput`]); any other parameter passes.
+    pub(super) fn check(&self, parameter: crate::model::parameter::Parameter) -> Result<()> {
+        use crate::model::parameter::Parameter;
+        match (parameter, self.directions()) {
+            (Parameter::RoutingOffset(i, _), Some(h)) if h.tendons.contains(&i) => Err(crate::error::invalid(
+                parameter.to_string(),
+                format!(
+                    "has no derivative here: tendon {} is displacement-controlled and taut, and its offset moves its \
+                     path length, which the pull-in holds (a term these derivatives do not include)",
+                    i + 1
+                ),
+                format!(
+                    "give tendon {} its solved tension (Robot::with_tensions) to differentiate in its routing",
+                    i + 1
+                ),
+            )),
+            _ => Ok(()),
+        }
+    }
+
+    /// The held tendons' tension directions, when there are any (the adjoint's border).
+    pub(super) fn directions(&self) -> Option<&TensionDirections> {
+        self.directions.as_ref().map(|(h, _)| h)
+    }
+
     /// The tip pose's derivative for the state derivative `d`, the pull-ins held.
     pub(super) fn tip(&self, d: &[NodeDerivative]) -> Result<Vector6<f64>> {
         let own = d[d.len() - 1].pose();
@@ -182,7 +209,7 @@ impl Held {
 
     /// d(tip pose)/dq_i for the displacement-controlled tendon `i` (per m): S dtau = e_i
     /// over the held tendons; zero for a slack one.
-    fn pull(&self, i: usize) -> Result<Vector6<f64>> {
+    pub(super) fn pull(&self, i: usize) -> Result<Vector6<f64>> {
         let Some((h, schur)) = &self.directions else {
             return Ok(Vector6::zeros());
         };
@@ -409,6 +436,24 @@ impl TensionDirections {
                     .sum::<f64>()
             }),
         )
+    }
+
+    /// Adds G^T w to the scaled cotangent `g` (12 per node, d = (dp / L, dtheta, dv, du L)):
+    /// the transpose of [`TensionDirections::length_change`], w_j weighting tendon j's path
+    /// length (rod length `length`, m). Node k's dv slot gets sum_j w_j weight dspeed/dv,
+    /// its du slot sum_j w_j weight dspeed/du / L (du = d_u / L).
+    pub(super) fn add_length_cotangent(&self, w: &DVector<f64>, length: f64, g: &mut [f64]) {
+        use crate::collocation::unknowns::{NODE, U, V};
+        for ((quadrature, routing), &w_j) in self.paths.iter().zip(w.iter()) {
+            for (&(node, weight), rp) in quadrature.weights.iter().zip(routing) {
+                let (v, u) = &self.strains[node];
+                let (dv, du) = speed_gradient(rp, v, u);
+                for i in 0..3 {
+                    g[node * NODE + V + i] += w_j * weight * dv[i];
+                    g[node * NODE + U + i] += w_j * weight * du[i] / length;
+                }
+            }
+        }
     }
 
     /// dq/dtau (m/N, k x k): how the pull-ins that hold the tendons just taut change with
