@@ -13,13 +13,24 @@ use super::residual::{self, Block, Delta, IntervalSites, QuarterSites};
 use super::unknowns::{self, BASE_COLUMNS, BASE_ROWS, NODE, THETA, TIP_COLUMNS, link_row, tip_row};
 use crate::error::Result;
 use crate::mesh::Mesh;
-use crate::model::equations::{Model, Site};
+use crate::model::equations::{Model, Side, Site};
 use crate::model::linearize;
 use crate::solution::State;
 use nalgebra::{SVector, Vector3, Vector6};
 use num_dual::{Dual64, DualSVec64};
 
 type D12 = DualSVec64<12>;
+
+/// The parameters whose exact residual columns [`System::parameter_columns`] gives.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Columns {
+    /// Every tendon's tension (N), in the robot's order.
+    Tensions,
+    /// The six diagonal stiffnesses of a uniform section: kse = (GA, GA, EA) (N), then
+    /// kbt = (EIxx, EIyy, GJ) (N m^2).
+    Stiffness,
+}
+
 
 /// The collocation system on one mesh at one load factor.
 pub struct System<'a> {
@@ -314,26 +325,43 @@ impl<'a> System<'a> {
         Ok(())
     }
 
-    /// The exact derivative of the residual in every tendon's tension at the states `x`
-    /// (slack tendons: the right derivative), column-major into `out`, one column of
-    /// [`System::unknowns`] rows per tendon of the robot. The residual is linear in each
-    /// tension once the tendon's path terms are formed: interval rows by
-    /// [`residual::interval_tensions`], jump and tip rows by
-    /// [`Model::wrench_balance_tensions`], base rows 0 (docs/sensitivity.md, "Exact tension
-    /// columns"). Without friction: the log tensions of tendons with friction are not
-    /// unknowns here.
+    /// The exact derivative of the residual in some parameters at the states `x`,
+    /// column-major into `out`, one column of [`System::unknowns`] rows per parameter:
+    /// [`Columns::Tensions`], one per tendon of the robot (slack tendons: the right
+    /// derivative), or [`Columns::Stiffness`], the six diagonal stiffnesses of a section
+    /// that does not vary along the rod (GA, GA, EA, EIxx, EIyy, GJ). The residual is linear
+    /// in each tension once the tendon's path terms are formed, and eq. 13 in each stiffness:
+    /// interval rows by [`residual::interval_derivatives`], jump and tip rows by
+    /// [`Model::wrench_balance_tensions`] or [`Model::wrench_balance_stiffness`], base rows 0
+    /// (docs/sensitivity.md, "Exact tension columns"). Without friction: the log tensions
+    /// of tendons with friction are not unknowns here.
     ///
     /// # Errors
     /// A model breakdown at a visited state.
-    pub fn tension_columns(&self, x: &[State], out: &mut [f64]) -> Result<()> {
+    pub fn parameter_columns(&self, x: &[State], columns: Columns, out: &mut [f64]) -> Result<()> {
         let model = &self.model;
-        let (n, tendons) = (self.unknowns(), model.robot.tendons.len());
-        debug_assert_eq!(out.len(), n * tendons);
+        let n = self.unknowns();
+        let (width, point): (usize, residual::PointDerivatives) = match columns {
+            Columns::Tensions => (model.robot.tendons.len(), linearize::tension_rates),
+            Columns::Stiffness => (6, linearize::stiffness_rates),
+        };
+        // The point-load rows' derivative.
+        let balance = |s: f64, left: Side<f64>, right: Option<Side<f64>>, out: &mut [(Vector3<f64>, Vector3<f64>)]| {
+            match columns {
+                Columns::Tensions => model.wrench_balance_tensions(s, left, right, out),
+                Columns::Stiffness => model.wrench_balance_stiffness(s, left, right, out),
+            }
+        };
+        debug_assert_eq!(out.len(), n * width);
         out.fill(0.0);
         let length = model.robot.length();
-        let mut rates = [vec![Vector6::zeros(); tendons], vec![Vector6::zeros(); tendons], vec![Vector6::zeros(); tendons]];
-        let mut block = vec![Block::zeros(); tendons];
-        let mut wrench = vec![(Vector3::zeros(), Vector3::zeros()); tendons];
+        let mut rates = [
+            vec![Vector6::zeros(); width],
+            vec![Vector6::zeros(); width],
+            vec![Vector6::zeros(); width],
+        ];
+        let mut block = vec![Block::zeros(); width];
+        let mut wrench = vec![(Vector3::zeros(), Vector3::zeros()); width];
         let mut write = |rows: usize, i: usize, values: &[f64]| {
             out[i * n + rows..i * n + rows + values.len()].copy_from_slice(values);
         };
@@ -348,7 +376,8 @@ impl<'a> System<'a> {
                     rates.swap(0, 1);
                 }
                 let [d0, d1, dm] = &mut rates;
-                let end = residual::interval_tensions(model, sites, seg, &x[k], &x[k + 1], node_rates, [d0, d1, dm], &mut block)?;
+                let (a, b) = (&x[k], &x[k + 1]);
+                let end = residual::interval_derivatives(model, sites, seg, a, b, node_rates, point, [d0, d1, dm], &mut block)?;
                 node_rates = Some(end);
                 for (i, b) in block.iter().enumerate() {
                     write(row, i, b.as_slice());
@@ -358,7 +387,7 @@ impl<'a> System<'a> {
                 let (left, right) = (&self.node_sites[k], &self.node_sites[k + 1]);
                 let (a, b) = (&x[k], &x[k + 1]);
                 wrench.fill((Vector3::zeros(), Vector3::zeros()));
-                model.wrench_balance_tensions(left.s, (left, &a.R, &a.v, &a.u), Some((right, &b.R, &b.v, &b.u)), &mut wrench)?;
+                balance(left.s, (left, &a.R, &a.v, &a.u), Some((right, &b.R, &b.v, &b.u)), &mut wrench)?;
                 for (i, (f, m)) in wrench.iter().enumerate() {
                     write(row + 6, i, f.as_slice());
                     write(row + 9, i, (m * length).as_slice());
@@ -367,7 +396,7 @@ impl<'a> System<'a> {
         }
         let (site, tip) = (&self.node_sites[links], &x[links]);
         wrench.fill((Vector3::zeros(), Vector3::zeros()));
-        model.wrench_balance_tensions(site.s, (site, &tip.R, &tip.v, &tip.u), None, &mut wrench)?;
+        balance(site.s, (site, &tip.R, &tip.v, &tip.u), None, &mut wrench)?;
         let row = tip_row(x.len());
         for (i, (f, m)) in wrench.iter().enumerate() {
             write(row, i, f.as_slice());

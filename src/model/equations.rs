@@ -375,6 +375,40 @@ impl Model<'_> {
         ))
     }
 
+    /// The derivative of [`Model::wrench_balance`] in the six diagonal stiffnesses k_j of a
+    /// section that is the same on both sides (kse = (GA, GA, EA), then kbt = (EIxx, EIyy,
+    /// GJ)) at fixed states, into `out[j]` (force rows, then moment rows, strain units). With
+    /// the rows W = (R_a^T dn) / kse, the internal force n = R D (v - v*) enters dn as
+    /// n(s-) - n(s+), so dW/dkse_j = R_a^T (R_a e_j dv_a,j - R_b e_j dv_b,j) / kse
+    /// - e_j W_j / kse_j (no right side at the tip), and the moment rows likewise in kbt.
+    ///
+    /// # Errors
+    /// [`Error::SingularRouting`] where a tendon has no tangent.
+    pub(crate) fn wrench_balance_stiffness(
+        &self,
+        s: f64,
+        left: Side<f64>,
+        right: Option<Side<f64>>,
+        out: &mut [(Vector3<f64>, Vector3<f64>)],
+    ) -> Result<()> {
+        let (f, m) = self.wrench_balance(s, left, right)?;
+        let (site, Ra, va, ua) = left;
+        let section = &site.section.section;
+        let (dv_a, du_a) = (va - site.reference.v_star, ua - site.reference.u_star);
+        let right_strains = right.map(|(site_b, Rb, vb, ub)| (Rb, vb - site_b.reference.v_star, ub - site_b.reference.u_star));
+        for j in 0..3 {
+            let e = Vector3::ith(j, 1.0);
+            let (mut dn, mut dm) = (Ra * e * dv_a[j], Ra * e * du_a[j]);
+            if let Some((Rb, dv_b, du_b)) = &right_strains {
+                dn -= *Rb * e * dv_b[j];
+                dm -= *Rb * e * du_b[j];
+            }
+            out[j].0 += Ra.tr_mul(&dn).component_div(&section.kse) - e * (f[j] / section.kse[j]);
+            out[3 + j].1 += Ra.tr_mul(&dm).component_div(&section.kbt) - e * (m[j] / section.kbt[j]);
+        }
+        Ok(())
+    }
+
     /// The derivative of [`Model::wrench_balance`] in each tendon's tension tau_i at fixed
     /// states, added into `out[i]` (force rows, then moment rows; strain units, left body
     /// frame). The balance is linear in each tension: tendon i contributes

@@ -17,6 +17,25 @@
 //! vectors as the forward sensitivities, `named.rs`). The gradient equals the forward
 //! sensitivities contracted with the cotangent, to rounding (tests/adjoint.rs).
 //!
+//! # Held pull-ins
+//!
+//! A displacement-controlled tendon keeps its pull-in q_m: its tension tau_m follows so
+//! that its length constraint holds. With the state derivatives D_m = dx/dtau_m of the
+//! taut ones, G the path lengths' derivative in the states and S = C - G [D_m] (the
+//! constraints' Schur complement, [`super::displacement_sensitivities`]), the forward
+//! derivative of the outputs in a parameter is Y D_q + Y [D_m] S^-1 G D_q (Y = dy/dx), and
+//! in a pull-in Y [D_m] S^-1 e_m. Contracted with ybar:
+//!
+//! ```text
+//! c_m = ybar . Y D_m = lambda . (-dF/dtau_m),     w = S^-T c,
+//! dloss/dq_m = w_m,    dloss/dq = (lambda + mu) . (-dF/dq),   J^T mu = G^T w,
+//! ```
+//!
+//! so the pull-ins cost one more transposed solve (and the k solves S needs); the tension
+//! of a displacement-controlled tendon has no gradient of its own (its pull-in sets it).
+//! The routing offset of a held tendon also moves its path length at fixed states, a
+//! term this does not include: it is refused with what to do.
+//!
 //! # Outputs and their cotangents
 //!
 //! In the solver's scaled increments (12 per node, d = (dp / L, dtheta, dv, du L), R -> R

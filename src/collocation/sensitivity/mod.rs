@@ -30,7 +30,17 @@
 //! scaled); the base position only the base rows, as -e / L; a base rotation
 //! R0 -> exp(hat(phi)) R0 only the base rotation rows log(R0^T R(0)), as -J_l^-1 R0^T.
 //!
-//! **Differences** elsewhere (tensions, moduli, anything passed to
+//! **Exact for the tensions**: eq. 13 is linear in each tension once the tendon's path terms
+//! are formed (A_i = tau_i P_i / |p_i|), and so are the point loads where a tendon ends or
+//! bends, so dF/dtau_i at fixed states is the tendon's own term per unit of tension
+//! ([`System::tension_columns`], docs/sensitivity.md, "Exact tension columns"), carried
+//! through the collocation scheme's midpoint by the chain rule. One pass over the mesh
+//! gives every tendon's column; a slack tendon (not in the model at 0 N) gets the right
+//! derivative, the load its first pull adds. With tendons with friction the tension also
+//! sets the capstan rows: there it stays differenced (below).
+//!
+//! **Differences** elsewhere (moduli, distributed force components, routing offsets, the
+//! load scale, friction coefficients, tensions with friction, anything passed to
 //! [`Sensitivity::derivative`]): the residual takes its parameters from a [`Robot`], so
 //! dF/dq is differenced at fixed x with the parameter moved in a clone of the robot
 //! (exact derivatives would need the model generic in its parameters, not only in the
@@ -42,15 +52,17 @@
 //! shape goes as 1/E), which balance near h_rel = 1e-4 at about 1e-8. Measured on the
 //! prototype (cases S and H, 64 intervals) against Richardson-extrapolated references:
 //! 1e-8 to 6e-8 relative for tensions and moduli at 1e-4, against up to 7e-7 at
-//! eps^(1/3) = 6e-6 and 5e-5 at 1e-7.
+//! eps^(1/3) = 6e-6 and 5e-5 at 1e-7 (the exact tension columns agree with those
+//! differences to 2e-13 to 1e-7, tests/sensitivity.rs).
 //!
-//! Scales: a tension's is its value, but at least E I / (L |r_i(0)|), the tension that
-//! bends the rod through about a radian (2.2 N on the prototype; E I / L^2 for a tendon on
-//! the centreline); E's and G's are their values.
+//! Scales: a tension's (with friction) is its value, but at least E I / (L |r_i(0)|), the
+//! tension that bends the rod through about a radian (2.2 N on the prototype; E I / L^2 for
+//! a tendon on the centreline); E's and G's are their values.
 //!
 //! A tendon with zero tension is left out of the model, and a string cannot push, so its
-//! derivative is the one-sided (right) derivative, taken by the second-order forward
-//! difference (-3 F(0) + 4 F(h) - F(2h)) / (2h) ([`Difference::Forward`]).
+//! derivative is the one-sided (right) derivative: exact without friction, else the
+//! second-order forward difference (-3 F(0) + 4 F(h) - F(2h)) / (2h)
+//! ([`Difference::Forward`]).
 //!
 //! # Conventions
 //!
@@ -67,9 +79,11 @@
 //! # Cost
 //!
 //! One Jacobian assembly and one factorization (the structured elimination of
-//! `collocation/linear/blocks.rs`), then per parameter one solve with the stored factors
-//! ([`Workspace::solve_again`]), plus two residual evaluations for a differenced parameter
-//! (three one-sided).
+//! `collocation/linear/blocks.rs`; a [`crate::Solver`] after a warm solve factors the
+//! Jacobian its stability verdict evaluated at the solution instead of assembling it),
+//! then per parameter one solve with the stored factors ([`Workspace::solve_again`]), plus
+//! one pass over the mesh for all tension columns together, and two residual evaluations
+//! for a differenced parameter (three one-sided).
 #![allow(non_snake_case)]
 
 mod adjoint;
@@ -89,7 +103,7 @@ pub use tip::{
 use crate::collocation::LinearSolver;
 use crate::collocation::friction::Capstan;
 use crate::collocation::newton::Workspace;
-use crate::collocation::system::System;
+use crate::collocation::system::{Columns, System};
 use crate::collocation::unknowns::{self, TIP_ROWS, nonzeros, tip_row};
 use crate::error::{Result, invalid};
 use crate::mesh::Mesh;
@@ -161,9 +175,12 @@ pub struct Sensitivity<'a> {
     workspace: Workspace,
     /// Scratch: residuals at the stencil points and the right-hand side.
     scratch: [Vec<f64>; 3],
-    /// dF/dtau_i of every tendon, column-major ([`System::tension_columns`]), evaluated at
+    /// dF/dtau_i of every tendon, column-major ([`System::parameter_columns`]), evaluated at
     /// the first tension asked for (one pass serves every tendon); frictionless systems only.
     tension_columns: Option<Vec<f64>>,
+    /// dF/dk_j of the six section stiffnesses, column-major, evaluated at the first modulus
+    /// asked for ([`Sensitivity::stiffness`]).
+    stiffness_columns: Option<Vec<f64>>,
 }
 
 impl<'a> Sensitivity<'a> {
@@ -244,6 +261,7 @@ impl<'a> Sensitivity<'a> {
                 workspace,
                 scratch: [vec![0.0; n], vec![0.0; n], vec![0.0; n]],
                 tension_columns: None,
+                stiffness_columns: None,
             });
         }
         let mut residual = vec![0.0; n];
@@ -273,6 +291,7 @@ impl<'a> Sensitivity<'a> {
             workspace,
             scratch: [residual, vec![0.0; n], vec![0.0; n]],
             tension_columns: None,
+            stiffness_columns: None,
         })
     }
 
@@ -558,13 +577,65 @@ impl<'a> Sensitivity<'a> {
         let n = self.border.system().unknowns();
         if self.tension_columns.is_none() {
             let mut columns = vec![0.0; n * robot.tendons.len()];
-            self.border.system().tension_columns(&self.states, &mut columns)?;
+            self.border
+                .system()
+                .parameter_columns(&self.states, Columns::Tensions, &mut columns)?;
             self.tension_columns = Some(columns);
         }
         let columns = self.tension_columns.as_deref().unwrap_or_default();
         let column = &columns[tendon * n..(tendon + 1) * n];
         for (r, d) in self.scratch[0].iter_mut().zip(column) {
             *r = -d;
+        }
+        Ok(())
+    }
+
+    /// The derivative of every node state along a change `dk` of the section's six diagonal
+    /// stiffnesses (kse = (GA, GA, EA) in N, then kbt = (EIxx, EIyy, GJ) in N m^2, per unit
+    /// of the parameter that moves them): exact, for a rod whose section does not vary along
+    /// it ([`System::parameter_columns`] with [`Columns::Stiffness`]; eq. 13 and the
+    /// point-load rows are linear in each stiffness at fixed states). A modulus moves them in
+    /// proportion: d/dE at fixed Poisson's ratio is `dk = k / E`.
+    ///
+    /// # Errors
+    /// [`crate::Error::InvalidInput`] for a rod whose section varies along it or with
+    /// segments (use [`Sensitivity::derivative`]), or with tendons with friction; a model
+    /// breakdown; a singular Jacobian.
+    pub fn stiffness(&mut self, dk: &[f64; 6]) -> Result<Vec<NodeDerivative>> {
+        self.stiffness_rhs(dk)?;
+        self.respond()
+    }
+
+    /// Whether [`Sensitivity::stiffness`] applies: a uniform section, no friction.
+    pub(super) fn exact_stiffness(&self) -> bool {
+        let uniform = matches!(self.robot().rod.stiffness, crate::model::rod::Stiffness::Uniform(_));
+        uniform && self.border.border_rows() == 0
+    }
+
+    /// Writes -dF/dq of [`Sensitivity::stiffness`] into the right-hand side buffer.
+    pub(super) fn stiffness_rhs(&mut self, dk: &[f64; 6]) -> Result<()> {
+        if !self.exact_stiffness() {
+            return Err(invalid(
+                "rod.stiffness",
+                "has no exact stiffness derivative here: the section varies along the rod, or tendons have friction",
+                "difference the residual instead (Sensitivity::derivative)",
+            ));
+        }
+        let n = self.border.system().unknowns();
+        if self.stiffness_columns.is_none() {
+            let mut columns = vec![0.0; n * 6];
+            self.border
+                .system()
+                .parameter_columns(&self.states, Columns::Stiffness, &mut columns)?;
+            self.stiffness_columns = Some(columns);
+        }
+        let columns = self.stiffness_columns.as_deref().unwrap_or_default();
+        let rhs = &mut self.scratch[0];
+        rhs.fill(0.0);
+        for (j, &w) in dk.iter().enumerate().filter(|(_, w)| **w != 0.0) {
+            for (r, d) in rhs.iter_mut().zip(&columns[j * n..(j + 1) * n]) {
+                *r -= w * d;
+            }
         }
         Ok(())
     }

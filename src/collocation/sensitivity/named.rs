@@ -5,6 +5,7 @@
 //! a central difference of the residual with [`Parameter::apply`] on a clone of the robot
 //! otherwise; a pull-in enters no row (control.rs and adjoint.rs hold the tendon's length).
 
+use super::tip::{built_from_geometry, youngs_modulus_direction};
 use super::{Difference, NodeDerivative, RELATIVE_STEP, Sensitivity, force_scale, residual_at};
 use crate::error::{Result, invalid};
 use crate::model::parameter::Parameter;
@@ -14,9 +15,11 @@ impl Sensitivity<'_> {
     /// (per unit of it), as [`Parameter::apply`] defines it: a tension's is
     /// [`Sensitivity::tension`], a tip-force component's [`Sensitivity::tip_force`], a
     /// tip-moment component's [`Sensitivity::tip_moment`], a base-position component's
-    /// [`Sensitivity::base_position`]; `distributed_force.*`, `youngs_modulus` (at fixed
-    /// Poisson's ratio), `load_scale` and `routing.I.x|y` are differenced centrally with
-    /// steps [`RELATIVE_STEP`] times max(|f|, E I / L^3), E, 1 and max(|r_I|, L / 100).
+    /// [`Sensitivity::base_position`], `youngs_modulus` (at fixed Poisson's ratio) of a rod
+    /// built from its geometry [`Sensitivity::stiffness`] along dk = k / E (exact without
+    /// friction); `distributed_force.*`, `load_scale`, `routing.I.x|y` (and E with friction)
+    /// are differenced centrally with steps [`RELATIVE_STEP`] times max(|f|, E I / L^3), 1,
+    /// max(|r_I|, L / 100) and E.
     /// `displacement.I` has no such derivative (it enters no row: the pull-in holds the
     /// tendon's length) and is an error here.
     ///
@@ -41,7 +44,11 @@ impl Sensitivity<'_> {
             // The residual is linear in f_e: any step is exact but for rounding; the scale
             // is that of the tip force over the rod's length.
             Parameter::DistributedForce(_) => RELATIVE_STEP * value.abs().max(force_scale(robot) / robot.length()),
-            Parameter::YoungsModulus => RELATIVE_STEP * value,
+            Parameter::YoungsModulus => match built_from_geometry(&robot.rod) {
+                // Exact: the section's stiffnesses move in proportion to E.
+                Some(g) if self.exact_stiffness() => return self.stiffness_rhs(&youngs_modulus_direction(g)),
+                _ => RELATIVE_STEP * value,
+            },
             Parameter::LoadScale => RELATIVE_STEP,
             // An offset's scale: the tendon's distance from the centreline, at least L / 100
             // (the size of offsets on continuum robots: 8 mm on the 242 mm prototype).

@@ -184,7 +184,7 @@ impl Held {
                     i + 1
                 ),
                 format!(
-                    "give tendon {} its solved tension (Robot::with_tensions) to differentiate in its routing",
+                    "give tendon {} a tension (its solved one) to differentiate in its routing",
                     i + 1
                 ),
             )),
@@ -231,9 +231,15 @@ fn moduli(sens: &mut Sensitivity, held: &Held) -> Result<Option<ModulusSensitivi
     let (o, i, e, nu) = (g.outer_radius, g.inner_radius, g.youngs_modulus, g.poisson_ratio);
     let shear = shear_modulus(e, nu);
     let youngs_modulus = held.tip(&youngs_modulus(sens, g)?)?;
-    let shear_modulus = held.tip(&sens.derivative(RELATIVE_STEP * shear, Difference::Central, |r, d| {
-        r.rod.stiffness = Stiffness::Uniform(Section::tube(o, i, e, shear + d));
-    })?)?;
+    // The section is linear in (E, G): dk/dG at fixed E is the section of E = 0, G = 1.
+    let shear_modulus = if sens.exact_stiffness() {
+        sens.stiffness(&stiffnesses(&Section::tube(o, i, 0.0, 1.0)))?
+    } else {
+        sens.derivative(RELATIVE_STEP * shear, Difference::Central, |r, d| {
+            r.rod.stiffness = Stiffness::Uniform(Section::tube(o, i, e, shear + d));
+        })?
+    };
+    let shear_modulus = held.tip(&shear_modulus)?;
     Ok(Some(ModulusSensitivities {
         youngs_modulus,
         // d/dE|_nu = d/dE|_G + (dG/dE)|_nu d/dG|_E with dG/dE|_nu = G / E.
@@ -267,9 +273,33 @@ pub(super) fn youngs_modulus(sens: &mut Sensitivity, geometry: Geometry) -> Resu
         geometry.youngs_modulus,
         geometry.poisson_ratio,
     );
+    if sens.exact_stiffness() {
+        return sens.stiffness(&youngs_modulus_direction(geometry));
+    }
     sens.derivative(RELATIVE_STEP * e, Difference::Central, |r, d| {
         r.rod.stiffness = Stiffness::Uniform(Section::tube(o, i, e + d, shear_modulus(e + d, nu)));
     })
+}
+
+/// dk/dE at fixed Poisson's ratio for a rod built from `geometry`: every stiffness is
+/// proportional to E, so dk/dE = k / E.
+pub(super) fn youngs_modulus_direction(geometry: Geometry) -> [f64; 6] {
+    let (o, i, e, nu) = (
+        geometry.outer_radius,
+        geometry.inner_radius,
+        geometry.youngs_modulus,
+        geometry.poisson_ratio,
+    );
+    let mut dk = stiffnesses(&Section::tube(o, i, e, shear_modulus(e, nu)));
+    dk.iter_mut().for_each(|k| *k /= e);
+    dk
+}
+
+/// The six diagonal stiffnesses of a section, kse then kbt, as [`Sensitivity::stiffness`]
+/// takes them.
+fn stiffnesses(section: &Section) -> [f64; 6] {
+    let (a, b) = (section.kse, section.kbt);
+    [a[0], a[1], a[2], b[0], b[1], b[2]]
 }
 
 /// Whole-backbone sensitivity: d p(s) / d tau_i (m/N, world frame) at each of `solution`'s
