@@ -59,6 +59,18 @@ pub enum Which {
     Past(f64),
 }
 
+impl Which {
+    /// Whether a tendon that ends at `end` (m) takes part.
+    #[inline(always)]
+    fn takes(self, end: f64) -> bool {
+        match self {
+            Which::ActiveTo(e) => end >= e,
+            Which::EndingAt(x) => end == x,
+            Which::Past(x) => end > x,
+        }
+    }
+}
+
 /// The robot's equations with its inputs: the tendon tensions, multiplied by
 /// `tension_factor`, the external loads, multiplied by `load_factor` (1 and 1 is the robot as
 /// given; smaller values are used by load continuation), and one input a trace replaces.
@@ -156,7 +168,11 @@ impl<'a> Model<'a> {
 
     /// (tension tau_i in N, routing point) for the selected tendons at s.
     pub fn tendons(&self, s: f64, which: Which) -> impl Iterator<Item = (usize, f64, RoutingPoint)> + '_ {
-        self.reaching(s, which).filter(|&(_, tension, _)| tension > 0.0)
+        let (l, factor) = (self.robot.length(), self.tension_factor);
+        let tendons = self.robot.tendons.iter().zip(&self.tensions);
+        tendons.enumerate().filter_map(move |(i, (t, &tension))| {
+            (which.takes(t.end(l)) && tension > 0.0).then(|| (i, tension * factor, t.routing.at(s, l)))
+        })
     }
 
     /// As [`Model::tendons`], slack tendons (tension 0) included: the tendons whose
@@ -165,13 +181,7 @@ impl<'a> Model<'a> {
         let (l, factor) = (self.robot.length(), self.tension_factor);
         let tendons = self.robot.tendons.iter().zip(&self.tensions);
         tendons.enumerate().filter_map(move |(i, (t, &tension))| {
-            let end = t.end(l);
-            let take = match which {
-                Which::ActiveTo(e) => end >= e,
-                Which::EndingAt(x) => end == x,
-                Which::Past(x) => end > x,
-            };
-            take.then(|| (i, tension * factor, t.routing.at(s, l)))
+            which.takes(t.end(l)).then(|| (i, tension * factor, t.routing.at(s, l)))
         })
     }
 
