@@ -44,12 +44,16 @@ fn solver_jacobian_equals_the_stateless_columns() {
         expected.set_column(2, &full.moduli.unwrap().youngs_modulus);
         for c in 0..3 {
             let (a, b) = (j.column(c).into_owned(), expected.column(c).into_owned());
-            // 1e-12 relative per column: as above.
-            assert!((a - &b).amax() <= 1e-12 * b.amax(), "column {c}: {j} vs {expected}");
+            // 1e-10 relative per column: tip_sensitivities' tip force and E columns contract
+            // the six tip multipliers (transposed solves) with the right-hand sides, which
+            // differs from the forward solve here by rounding amplified by the condition
+            // number (~1e5; tests/adjoint.rs).
+            assert!((a - &b).amax() <= 1e-10 * b.amax(), "column {c}: {j} vs {expected}");
         }
-        // The stateless function gives the same.
+        // The stateless function gives the same (both forward solves: 1e-12, rounding of
+        // the factoring workspace only).
         let stateless = tip_jacobian(&robot, &warm, &some).unwrap();
-        assert!(relative(&stateless, &expected) <= 1e-12);
+        assert!(relative(&stateless, &j) <= 1e-12);
     }
 }
 
@@ -103,6 +107,7 @@ fn warm_solves_after_a_jacobian_equal_stateless_warm_solves() {
     assert!(gap <= 1e-12, "tips {gap:e} m apart");
     let j = solver.tip_jacobian(&robot, &stateful, &tensions).unwrap();
     let full = tdcr::tip_sensitivities(&robot, &stateful).unwrap();
+    // 1e-12: as in solver_jacobian_equals_the_stateless_columns.
     assert!(relative(&j, &full.tension) <= 1e-12);
 }
 

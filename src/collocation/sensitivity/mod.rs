@@ -33,7 +33,7 @@
 //! **Exact for the tensions**: eq. 13 is linear in each tension once the tendon's path terms
 //! are formed (A_i = tau_i P_i / |p_i|), and so are the point loads where a tendon ends or
 //! bends, so dF/dtau_i at fixed states is the tendon's own term per unit of tension
-//! ([`System::tension_columns`], docs/sensitivity.md, "Exact tension columns"), carried
+//! ([`System::parameter_columns`], docs/sensitivity.md, "Exact tension columns"), carried
 //! through the collocation scheme's midpoint by the chain rule. One pass over the mesh
 //! gives every tendon's column; a slack tendon (not in the model at 0 N) gets the right
 //! derivative, the load its first pull adds. With tendons with friction the tension also
@@ -540,6 +540,12 @@ impl<'a> Sensitivity<'a> {
     /// # Errors
     /// [`crate::Error::InvalidInput`] for an axis other than 0, 1, 2 or a singular Jacobian.
     pub fn base_rotation(&mut self, axis: usize) -> Result<Vec<NodeDerivative>> {
+        self.base_rotation_rhs(axis)?;
+        self.respond()
+    }
+
+    /// Writes -dF/dq of [`Sensitivity::base_rotation`] into the right-hand side buffer.
+    fn base_rotation_rhs(&mut self, axis: usize) -> Result<()> {
         Self::check_axis(axis)?;
         let R0 = self.robot().base_rotation;
         let eps = so3::log(&(R0.transpose() * self.states[0].R));
@@ -548,12 +554,51 @@ impl<'a> Sensitivity<'a> {
         for i in 0..3 {
             rhs[3 + i] = column[i];
         }
-        self.respond()
+        Ok(())
+    }
+
+    /// The six tip-pose multipliers of the plain system (no friction): lambda_k = J^-T g_k
+    /// with g_k the tip position's component k (k < 3, L in the tip's d_p slot) or the tip
+    /// rotation's (R_tip^T e in its dtheta slot), so that d(tip pose)_k/dq = lambda_k .
+    /// (-dF/dq) for every parameter (the adjoint form, docs/sensitivity.md "Adjoint
+    /// gradients"): six transposed solves instead of one solve per parameter. None with
+    /// friction (the bordered system).
+    ///
+    /// # Errors
+    /// A singular Jacobian.
+    pub(super) fn tip_multipliers(&mut self) -> Result<Option<Vec<Vec<f64>>>> {
+        if self.border.border_rows() > 0 {
+            return Ok(None);
+        }
+        let tip = self.states.len() - 1;
+        let (length, R) = (self.robot().length(), self.states[tip].R);
+        let mut out = Vec::with_capacity(6);
+        for k in 0..6 {
+            let g = &mut self.scratch[1];
+            g.fill(0.0);
+            if k < 3 {
+                g[tip * unknowns::NODE + unknowns::P + k] = length;
+            } else {
+                let body = R.transpose().column(k - 3).into_owned();
+                for i in 0..3 {
+                    g[tip * unknowns::NODE + unknowns::THETA + i] = body[i];
+                }
+            }
+            out.push(self.workspace.solve_transposed(g).ok_or_else(singular)?.to_vec());
+        }
+        Ok(Some(out))
+    }
+
+    /// The tip pose's derivative for the right-hand side in the buffer, by the multipliers
+    /// of [`Sensitivity::tip_multipliers`].
+    pub(super) fn tip_by(&self, multipliers: &[Vec<f64>]) -> Vector6<f64> {
+        let rhs = &self.scratch[0];
+        Vector6::from_fn(|k, _| multipliers[k].iter().zip(rhs).map(|(l, r)| l * r).sum())
     }
 
     /// The derivative of every node state with respect to tendon `tendon`'s tension
     /// (per N); for a slack tendon the one-sided (right) derivative, the response to its
-    /// first pull. Exact without friction ([`System::tension_columns`]: the residual is
+    /// first pull. Exact without friction ([`System::parameter_columns`]: the residual is
     /// linear in each tension at fixed states; one pass over the mesh serves every tendon);
     /// with tendons with friction, whose tensions also set the capstan rows, central
     /// differences of the bordered residual (one-sided for a slack tendon).

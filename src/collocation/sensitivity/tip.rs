@@ -94,6 +94,14 @@ pub fn tip_sensitivities(robot: &Robot, solution: &Solution) -> Result<TipSensit
     let solved = robot.with_tensions(&solution.tensions());
     let mut sens = Sensitivity::new(&solved, solution)?;
     let held = Held::new(&mut sens, robot, solution)?;
+    // Without friction or held pull-ins, the 16 parameters besides the tensions cost six
+    // transposed solves (the tip pose's multipliers) instead of one solve each.
+    let multipliers = if held.holds() { None } else { sens.tip_multipliers()? };
+    let mut tip = Tip {
+        sens,
+        held: &held,
+        multipliers,
+    };
     let k = robot.tendons.len();
     let mut tension = DMatrix::zeros(6, k);
     let mut displacement = DMatrix::zeros(6, k);
@@ -105,10 +113,11 @@ pub fn tip_sensitivities(robot: &Robot, solution: &Solution) -> Result<TipSensit
             // Not modelled at 0 N with friction (Sensitivity::tension): NaN, not a guess.
             tension.set_column(i, &Vector6::repeat(f64::NAN));
         } else {
-            tension.set_column(i, &held.tip(&sens.tension(i)?)?);
+            // Forward solves: the columns a controller's Solver::tip_jacobian gives, to 1e-12.
+            tension.set_column(i, &held.tip(&tip.sens.tension(i)?)?);
         }
         if robot.tendons[i].active_friction().is_some() {
-            friction.set_column(i, &held.tip(&sens.friction(i)?)?);
+            friction.set_column(i, &held.tip(&tip.sens.friction(i)?)?);
         }
     }
     let mut tip_force = Matrix6x3::zeros();
@@ -116,12 +125,12 @@ pub fn tip_sensitivities(robot: &Robot, solution: &Solution) -> Result<TipSensit
     let mut base_position = Matrix6x3::zeros();
     let mut base_rotation = Matrix6x3::zeros();
     for j in 0..3 {
-        tip_force.set_column(j, &held.tip(&sens.tip_force(j)?)?);
-        tip_moment.set_column(j, &held.tip(&sens.tip_moment(j)?)?);
-        base_position.set_column(j, &held.tip(&sens.base_position(j)?)?);
-        base_rotation.set_column(j, &held.tip(&sens.base_rotation(j)?)?);
+        tip_force.set_column(j, &tip.of(|s| s.tip_force_rhs(j))?);
+        tip_moment.set_column(j, &tip.of(|s| s.tip_moment_rhs(j))?);
+        base_position.set_column(j, &tip.of(|s| s.base_position_rhs(j))?);
+        base_rotation.set_column(j, &tip.of(|s| s.base_rotation_rhs(j))?);
     }
-    let moduli = moduli(&mut sens, &held)?;
+    let moduli = moduli(&mut tip)?;
     Ok(TipSensitivities {
         tension,
         displacement,
@@ -223,23 +232,46 @@ impl Held {
     }
 }
 
+/// The linearization with what gives a right-hand side's tip derivative: the tip
+/// multipliers (plain system), or a solve and the held pull-ins.
+struct Tip<'s, 'a> {
+    sens: Sensitivity<'a>,
+    held: &'s Held,
+    multipliers: Option<Vec<Vec<f64>>>,
+}
+
+impl Tip<'_, '_> {
+    /// d(tip pose)/dq for the right-hand side `rhs` writes into the sensitivity's buffer.
+    fn of(&mut self, rhs: impl FnOnce(&mut Sensitivity) -> Result<()>) -> Result<Vector6<f64>> {
+        rhs(&mut self.sens)?;
+        match &self.multipliers {
+            Some(m) => Ok(self.sens.tip_by(m)),
+            None => self.held.tip(&self.sens.respond()?),
+        }
+    }
+}
+
 /// The modulus derivatives when the rod's uniform section is the one its geometry gives.
-fn moduli(sens: &mut Sensitivity, held: &Held) -> Result<Option<ModulusSensitivities>> {
-    let Some(g) = built_from_geometry(&sens.robot().rod) else {
+fn moduli(tip: &mut Tip) -> Result<Option<ModulusSensitivities>> {
+    let Some(g) = built_from_geometry(&tip.sens.robot().rod) else {
         return Ok(None);
     };
     let (o, i, e, nu) = (g.outer_radius, g.inner_radius, g.youngs_modulus, g.poisson_ratio);
     let shear = shear_modulus(e, nu);
-    let youngs_modulus = held.tip(&youngs_modulus(sens, g)?)?;
-    // The section is linear in (E, G): dk/dG at fixed E is the section of E = 0, G = 1.
-    let shear_modulus = if sens.exact_stiffness() {
-        sens.stiffness(&stiffnesses(&Section::tube(o, i, 0.0, 1.0)))?
+    let (youngs_modulus, shear_modulus) = if tip.sens.exact_stiffness() {
+        // The section is linear in (E, G): dk/dG at fixed E is the section of E = 0, G = 1.
+        let unit_shear = stiffnesses(&Section::tube(o, i, 0.0, 1.0));
+        (
+            tip.of(|s| s.stiffness_rhs(&youngs_modulus_direction(g)))?,
+            tip.of(|s| s.stiffness_rhs(&unit_shear))?,
+        )
     } else {
-        sens.derivative(RELATIVE_STEP * shear, Difference::Central, |r, d| {
+        let by_g = tip.sens.derivative(RELATIVE_STEP * shear, Difference::Central, |r, d| {
             r.rod.stiffness = Stiffness::Uniform(Section::tube(o, i, e, shear + d));
-        })?
+        })?;
+        let by_e = youngs_modulus(&mut tip.sens, g)?;
+        (tip.held.tip(&by_e)?, tip.held.tip(&by_g)?)
     };
-    let shear_modulus = held.tip(&shear_modulus)?;
     Ok(Some(ModulusSensitivities {
         youngs_modulus,
         // d/dE|_nu = d/dE|_G + (dG/dE)|_nu d/dG|_E with dG/dE|_nu = G / E.
