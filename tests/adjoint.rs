@@ -223,7 +223,11 @@ fn pulled_parameters(robot: &Robot) -> Vec<Parameter> {
 fn adjoint_with_pull_ins_equals_the_contracted_tip_jacobian() {
     let robot = pulled();
     let solution = collocation::solve(&robot, &options()).unwrap();
-    assert!(solution.tendons[0].tension > 0.1, "tendon 1 is taut: {}", solution.tendons[0].tension);
+    assert!(
+        solution.tendons[0].tension > 0.1,
+        "tendon 1 is taut: {}",
+        solution.tendons[0].tension
+    );
     assert_eq!(solution.tendons[2].tension, 0.0, "tendon 3 is slack");
     let params = pulled_parameters(&robot);
     let cot = cotangent(0);
@@ -249,7 +253,10 @@ fn adjoint_with_pull_ins_equals_the_contracted_tip_jacobian() {
         .err()
         .unwrap()
         .to_string();
-    assert!(message.contains("tendon 1 is displacement-controlled and taut"), "{message}");
+    assert!(
+        message.contains("tendon 1 is displacement-controlled and taut"),
+        "{message}"
+    );
 }
 
 /// Pull-in and routing-offset gradients against central differences of full solves, with

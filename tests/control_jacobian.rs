@@ -70,7 +70,10 @@ fn jacobian_after_a_chord_only_warm_solve_equals_the_stateless_one() {
         }
         let first = solver.solve(&before).unwrap();
         let warm = solver.solve_from(&robot, &first).unwrap();
-        assert_eq!(warm.report.newton_steps, 0, "chord steps only: the verdict evaluated the Jacobian");
+        assert_eq!(
+            warm.report.newton_steps, 0,
+            "chord steps only: the verdict evaluated the Jacobian"
+        );
         let wrt: Vec<Parameter> = (0..robot.tendons.len())
             .map(Parameter::Tension)
             .chain([Parameter::TipForce(0), Parameter::YoungsModulus])

@@ -376,7 +376,14 @@ fn exact_load_and_base_derivatives_match_differenced_ones() {
 /// Every node derivative of `d` flattened: p, rotation, v, u per node.
 fn flat(d: &[NodeDerivative]) -> Vec<f64> {
     d.iter()
-        .flat_map(|n| n.p.iter().chain(&n.rotation).chain(&n.v).chain(&n.u).copied().collect::<Vec<_>>())
+        .flat_map(|n| {
+            n.p.iter()
+                .chain(&n.rotation)
+                .chain(&n.v)
+                .chain(&n.u)
+                .copied()
+                .collect::<Vec<_>>()
+        })
         .collect()
 }
 
@@ -405,7 +412,11 @@ fn exact_tension_columns_match_differenced_ones() {
             let tension = t.tension();
             let bend = robot.bending_stiffness() / (length * t.routing.at(0.0, length).r.norm());
             let step = RELATIVE_STEP * tension.max(bend);
-            let stencil = if tension > step { Difference::Central } else { Difference::Forward };
+            let stencil = if tension > step {
+                Difference::Central
+            } else {
+                Difference::Forward
+            };
             let differenced = sens
                 .derivative(step, stencil, |r, d| r.tendons[i].set_tension(tension + d))
                 .unwrap();
@@ -456,7 +467,8 @@ fn exact_modulus_derivatives_match_differenced_ones() {
             ("G", &exact_g, &differenced_g, shear),
         ] {
             let (a, b) = (flat(a), flat(b));
-            let err = a.iter().zip(&b).fold(0.0f64, |m, (x, y)| m.max((x - y).abs())) * modulus / scale.max(size(&b, modulus));
+            let err = a.iter().zip(&b).fold(0.0f64, |m, (x, y)| m.max((x - y).abs())) * modulus
+                / scale.max(size(&b, modulus));
             eprintln!("{name}: exact against differenced {err:.2e}");
             worst = worst.max(err);
         }

@@ -259,7 +259,8 @@ pub(super) fn interval_derivatives(
         let dym = (d_start[i] - d_end[i]) * (h / 8.0);
         // dF_0 + 4 dF_m + dF_1.
         let mut dF = Block::zeros();
-        dF.fixed_rows_mut::<3>(P).copy_from(&(R_m * dym.fixed_rows::<3>(0) * 4.0));
+        dF.fixed_rows_mut::<3>(P)
+            .copy_from(&(R_m * dym.fixed_rows::<3>(0) * 4.0));
         dF.fixed_rows_mut::<3>(THETA)
             .copy_from(&(Jri * dym.fixed_rows::<3>(3) * 4.0));
         dF.fixed_rows_mut::<6>(V)

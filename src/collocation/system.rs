@@ -31,7 +31,6 @@ pub enum Columns {
     Stiffness,
 }
 
-
 /// The collocation system on one mesh at one load factor.
 pub struct System<'a> {
     /// The model (robot and its inputs: tensions, factors, a traced parameter). The sites
@@ -331,8 +330,9 @@ impl<'a> System<'a> {
     /// derivative), or [`Columns::Stiffness`], the six diagonal stiffnesses of a section
     /// that does not vary along the rod (GA, GA, EA, EIxx, EIyy, GJ). The residual is linear
     /// in each tension once the tendon's path terms are formed, and eq. 13 in each stiffness:
-    /// interval rows by [`residual::interval_derivatives`], jump and tip rows by
-    /// [`Model::wrench_balance_tensions`] or [`Model::wrench_balance_stiffness`], base rows 0
+    /// interval rows by the chain rule through the scheme (`residual::interval_derivatives`),
+    /// jump and tip rows by `Model::wrench_balance_tensions` or
+    /// `Model::wrench_balance_stiffness`, base rows 0
     /// (docs/sensitivity.md, "Exact tension columns"). Without friction: the log tensions
     /// of tendons with friction are not unknowns here.
     ///
@@ -346,12 +346,12 @@ impl<'a> System<'a> {
             Columns::Stiffness => (6, linearize::stiffness_rates),
         };
         // The point-load rows' derivative.
-        let balance = |s: f64, left: Side<f64>, right: Option<Side<f64>>, out: &mut [(Vector3<f64>, Vector3<f64>)]| {
-            match columns {
+        let balance =
+            |s: f64, left: Side<f64>, right: Option<Side<f64>>, out: &mut [(Vector3<f64>, Vector3<f64>)]| match columns
+            {
                 Columns::Tensions => model.wrench_balance_tensions(s, left, right, out),
                 Columns::Stiffness => model.wrench_balance_stiffness(s, left, right, out),
-            }
-        };
+            };
         debug_assert_eq!(out.len(), n * width);
         out.fill(0.0);
         let length = model.robot.length();
@@ -377,7 +377,17 @@ impl<'a> System<'a> {
                 }
                 let [d0, d1, dm] = &mut rates;
                 let (a, b) = (&x[k], &x[k + 1]);
-                let end = residual::interval_derivatives(model, sites, seg, a, b, node_rates, point, [d0, d1, dm], &mut block)?;
+                let end = residual::interval_derivatives(
+                    model,
+                    sites,
+                    seg,
+                    a,
+                    b,
+                    node_rates,
+                    point,
+                    [d0, d1, dm],
+                    &mut block,
+                )?;
                 node_rates = Some(end);
                 for (i, b) in block.iter().enumerate() {
                     write(row, i, b.as_slice());
@@ -387,7 +397,12 @@ impl<'a> System<'a> {
                 let (left, right) = (&self.node_sites[k], &self.node_sites[k + 1]);
                 let (a, b) = (&x[k], &x[k + 1]);
                 wrench.fill((Vector3::zeros(), Vector3::zeros()));
-                balance(left.s, (left, &a.R, &a.v, &a.u), Some((right, &b.R, &b.v, &b.u)), &mut wrench)?;
+                balance(
+                    left.s,
+                    (left, &a.R, &a.v, &a.u),
+                    Some((right, &b.R, &b.v, &b.u)),
+                    &mut wrench,
+                )?;
                 for (i, (f, m)) in wrench.iter().enumerate() {
                     write(row + 6, i, f.as_slice());
                     write(row + 9, i, (m * length).as_slice());

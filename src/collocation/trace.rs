@@ -164,7 +164,14 @@ pub fn trace_until(
         return Err(crate::error::invalid(
             "parameter",
             format!("`{parameter}` cannot be traced: a trace varies a tension or a load"),
-            format!("sweep it instead (a sweep of `{parameter}` solves each value warm-started from the last)"),
+            format!(
+                "sweep {} instead (a sweep of `{parameter}` solves each value warm-started from the last)",
+                if parameter == Parameter::YoungsModulus {
+                    "E"
+                } else {
+                    "it"
+                }
+            ),
         ));
     }
     let start = parameter.applied(robot, from)?;

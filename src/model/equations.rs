@@ -171,7 +171,8 @@ impl<'a> Model<'a> {
         let (l, factor) = (self.robot.length(), self.tension_factor);
         let tendons = self.robot.tendons.iter().zip(&self.tensions);
         tendons.enumerate().filter_map(move |(i, (t, &tension))| {
-            (which.takes(t.end(l)) && tension > 0.0).then(|| (i, tension * factor, t.routing.at(s, l)))
+            let take = which.takes(t.end(l)) && tension > 0.0;
+            take.then(|| (i, tension * factor, t.routing.at(s, l)))
         })
     }
 
@@ -181,7 +182,8 @@ impl<'a> Model<'a> {
         let (l, factor) = (self.robot.length(), self.tension_factor);
         let tendons = self.robot.tendons.iter().zip(&self.tensions);
         tendons.enumerate().filter_map(move |(i, (t, &tension))| {
-            which.takes(t.end(l)).then(|| (i, tension * factor, t.routing.at(s, l)))
+            let take = which.takes(t.end(l));
+            take.then(|| (i, tension * factor, t.routing.at(s, l)))
         })
     }
 
@@ -405,7 +407,8 @@ impl Model<'_> {
         let (site, Ra, va, ua) = left;
         let section = &site.section.section;
         let (dv_a, du_a) = (va - site.reference.v_star, ua - site.reference.u_star);
-        let right_strains = right.map(|(site_b, Rb, vb, ub)| (Rb, vb - site_b.reference.v_star, ub - site_b.reference.u_star));
+        let right_strains =
+            right.map(|(site_b, Rb, vb, ub)| (Rb, vb - site_b.reference.v_star, ub - site_b.reference.u_star));
         for j in 0..3 {
             let e = Vector3::ith(j, 1.0);
             let (mut dn, mut dm) = (Ra * e * dv_a[j], Ra * e * du_a[j]);

@@ -154,11 +154,13 @@ impl Parameter {
     pub fn check(&self, robot: &Robot) -> Result<()> {
         let count = robot.tendons.len();
         match *self {
-            Parameter::Tension(i) | Parameter::Displacement(i) | Parameter::RoutingOffset(i, _) if i >= count => Err(invalid(
-                self.to_string(),
-                format!("names tendon {}, but the robot has {count} tendon(s)", i + 1),
-                format!("number the tendons from 1 to {count} in file order"),
-            )),
+            Parameter::Tension(i) | Parameter::Displacement(i) | Parameter::RoutingOffset(i, _) if i >= count => {
+                Err(invalid(
+                    self.to_string(),
+                    format!("names tendon {}, but the robot has {count} tendon(s)", i + 1),
+                    format!("number the tendons from 1 to {count} in file order"),
+                ))
+            }
             Parameter::TipForce(k)
             | Parameter::TipMoment(k)
             | Parameter::BasePosition(k)
@@ -444,7 +446,10 @@ mod tests {
         assert!(e.contains("tendon 1 is tension-controlled"), "{e}");
         let mut helix = robot.clone();
         helix.tendons[0].routing = Routing::helical(0.008, 1.0, 0.0);
-        let e = Parameter::RoutingOffset(0, 0).apply(&mut helix, 0.0).unwrap_err().to_string();
+        let e = Parameter::RoutingOffset(0, 0)
+            .apply(&mut helix, 0.0)
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("routing is not straight"), "{e}");
         let mut stiff = robot.clone();
         stiff.rod = Rod::new(robot.length(), robot.rod.section_at(0.0).section);

@@ -266,9 +266,11 @@ fn moduli(tip: &mut Tip) -> Result<Option<ModulusSensitivities>> {
             tip.of(|s| s.stiffness_rhs(&unit_shear))?,
         )
     } else {
-        let by_g = tip.sens.derivative(RELATIVE_STEP * shear, Difference::Central, |r, d| {
-            r.rod.stiffness = Stiffness::Uniform(Section::tube(o, i, e, shear + d));
-        })?;
+        let by_g = tip
+            .sens
+            .derivative(RELATIVE_STEP * shear, Difference::Central, |r, d| {
+                r.rod.stiffness = Stiffness::Uniform(Section::tube(o, i, e, shear + d));
+            })?;
         let by_e = youngs_modulus(&mut tip.sens, g)?;
         (tip.held.tip(&by_e)?, tip.held.tip(&by_g)?)
     };

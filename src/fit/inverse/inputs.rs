@@ -90,7 +90,11 @@ impl Inputs {
             // A step the QP ends on a bound lands there to rounding (tau + (limit - tau));
             // within BOUND_SNAP of the limit it is the limit.
             let (limit, tension) = (self.limits[k], tau[k].clamp(0.0, self.limits[k]));
-            let snapped = if tension >= limit - BOUND_SNAP * limit { limit } else { tension };
+            let snapped = if tension >= limit - BOUND_SNAP * limit {
+                limit
+            } else {
+                tension
+            };
             robot.tendons[i].hold_tension(snapped);
         }
     }
