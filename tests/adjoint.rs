@@ -164,15 +164,18 @@ fn rotation_cotangent_is_the_gradient_on_the_rotation_vector() {
 }
 
 #[test]
-fn adjoint_rejects_bad_samples_and_displacement_control() {
+fn adjoint_rejects_bad_samples_friction_and_pull_ins_of_tension_inputs() {
     let robot = cases::case_s();
     let solution = collocation::solve(&robot, &options()).unwrap();
     let message = Adjoint::new(&robot, &solution, &[0.5]).err().unwrap().to_string();
     assert!(message.contains("outside the rod"), "{message}");
-    let mut held = robot.clone();
-    held.tendons[0].set_displacement(0.001);
-    let message = Adjoint::new(&held, &solution, &[]).err().unwrap().to_string();
-    assert!(message.contains("displacement-controlled"), "{message}");
+    let mut adjoint = Adjoint::new(&robot, &solution, &[]).unwrap();
+    let message = adjoint
+        .gradient(&Cotangent::default(), &[Parameter::Displacement(0)])
+        .err()
+        .unwrap()
+        .to_string();
+    assert!(message.contains("tendon 1 is tension-controlled"), "{message}");
     let mut rough = robot.clone();
     rough.tendons[0].friction = Some(tdcr::Friction::pull(0.1));
     let message = Adjoint::new(&rough, &solution, &[]).err().unwrap().to_string();
@@ -180,4 +183,128 @@ fn adjoint_rejects_bad_samples_and_displacement_control() {
     let mut adjoint = Adjoint::new(&robot, &solution, &[0.1]).unwrap();
     let message = adjoint.gradient(&Cotangent::default(), &[]).err().unwrap().to_string();
     assert!(message.contains("one cotangent per backbone sample"), "{message}");
+}
+
+/// Case S driven by pull-ins: tendon 1 pulled in by 5 mm (taut, its tension solved), tendon
+/// 3 let out by 10 mm (slack, held slack), tendon 2 at a tension, with a distributed force.
+fn pulled() -> Robot {
+    let mut robot = cases::case_s();
+    robot.tendons[0].set_displacement(0.005);
+    robot.tendons[2].set_displacement(-0.01);
+    robot.tendons[1].set_tension(0.4);
+    Parameter::DistributedForce(0).apply(&mut robot, 0.2).unwrap();
+    robot
+}
+
+/// The parameters of [`pulled`]: pull-ins (taut and slack), tensions (of a tension input and
+/// of a pulled tendon, whose column is zero), loads, routing offsets and E.
+fn pulled_parameters(robot: &Robot) -> Vec<Parameter> {
+    [
+        "displacement.1",
+        "displacement.3",
+        "tension.2",
+        "tension.1",
+        "tip_force.x",
+        "tip_moment.y",
+        "distributed_force.z",
+        "routing.2.x",
+        "routing.2.y",
+        "youngs_modulus",
+    ]
+    .iter()
+    .map(|n| Parameter::parse(n, robot).unwrap())
+    .collect()
+}
+
+/// With displacement-controlled tendons the adjoint holds their pull-ins (the bordered
+/// system's adjoint): it equals the tip Jacobian (forward sensitivities with the pull-ins
+/// held) contracted with a tip cotangent, pull-in and routing columns included.
+#[test]
+fn adjoint_with_pull_ins_equals_the_contracted_tip_jacobian() {
+    let robot = pulled();
+    let solution = collocation::solve(&robot, &options()).unwrap();
+    assert!(
+        solution.tendons[0].tension > 0.1,
+        "tendon 1 is taut: {}",
+        solution.tendons[0].tension
+    );
+    assert_eq!(solution.tendons[2].tension, 0.0, "tendon 3 is slack");
+    let params = pulled_parameters(&robot);
+    let cot = cotangent(0);
+    let mut adjoint = Adjoint::new(&robot, &solution, &[]).unwrap();
+    let gradient = adjoint.gradient(&cot, &params).unwrap();
+    let j = tdcr::collocation::sensitivity::tip_jacobian(&robot, &solution, &params).unwrap();
+    for (c, (p, g)) in params.iter().zip(&gradient).enumerate() {
+        let column = j.column(c);
+        let terms = (0..3).map(|k| (cot.tip_position[k] * column[k], cot.tip_rotation[k] * column[3 + k]));
+        let (expected, magnitude) = terms.fold((0.0, 0.0), |(e, m), (a, b)| (e + a + b, m + a.abs() + b.abs()));
+        // 1e-10 of the terms' magnitudes: as adjoint_gradient_equals_contracted_forward_sensitivities
+        // (a zero column must give exactly zero).
+        assert!(
+            (g - expected).abs() <= 1e-10 * magnitude,
+            "{p}: adjoint {g:.15e}, forward {expected:.15e}"
+        );
+    }
+    // The slack pull-in and the pulled tendon's tension have no effect.
+    assert_eq!((gradient[1], gradient[3]), (0.0, 0.0));
+    // The routing of the taut pulled tendon moves its held length at fixed states: refused.
+    let message = adjoint
+        .gradient(&cot, &[Parameter::RoutingOffset(0, 0)])
+        .err()
+        .unwrap()
+        .to_string();
+    assert!(
+        message.contains("tendon 1 is displacement-controlled and taut"),
+        "{message}"
+    );
+}
+
+/// Pull-in and routing-offset gradients against central differences of full solves, with
+/// backbone points in the loss: the held pull-ins' multiplier reaches the points too.
+#[test]
+fn pull_in_and_routing_gradients_match_finite_differences_of_solves() {
+    let robot = pulled();
+    let samples = [0.3 * robot.length(), 0.8 * robot.length()];
+    let cot = cotangent(samples.len());
+    let loss = |robot: &Robot, reference: &Matrix3<f64>| {
+        let s = collocation::solve(robot, &options()).unwrap();
+        let omega = so3::log(&(s.tip().R * reference.transpose()));
+        cot.tip_position.dot(&s.tip_position())
+            + cot.tip_rotation.dot(&omega)
+            + samples
+                .iter()
+                .zip(&cot.points)
+                .map(|(&x, c)| c.dot(&s.at(x).p))
+                .sum::<f64>()
+    };
+    let solution = collocation::solve(&robot, &options()).unwrap();
+    let reference = solution.tip().R;
+    let mut adjoint = Adjoint::new(&robot, &solution, &samples).unwrap();
+    let mut found = Vec::new();
+    for (name, step) in [
+        ("displacement.1", 1e-4 * 0.005),
+        ("routing.2.y", 1e-4 * 0.008),
+        ("routing.2.x", 1e-4 * 0.008),
+        ("tip_force.z", 1e-5),
+    ] {
+        let p = Parameter::parse(name, &robot).unwrap();
+        let value = p.value(&robot).unwrap();
+        let at = |q: f64| loss(&p.applied(&robot, q).unwrap(), &reference);
+        let difference = (at(value + step) - at(value - step)) / (2.0 * step);
+        let g = adjoint.gradient(&cot, &[p]).unwrap()[0];
+        eprintln!("{name}: adjoint {g:.10e}, differences {difference:.10e}");
+        found.push((name, g, difference));
+    }
+    // The routing offset's gradient is a vector: its x component, 1 % of its y component here
+    // (tendon 2 lies on body y), is compared at the vector's size.
+    let offset = found[1].2.hypot(found[2].2);
+    for (k, (name, g, difference)) in found.iter().enumerate() {
+        let size = if (1..3).contains(&k) { offset } else { difference.abs() };
+        // 1e-6: central differences of full solves at a 1e-4 relative step (truncation ~1e-8,
+        // solve noise ~1e-7), as adjoint_gradient_matches_finite_differences_of_solves
+        assert!(
+            (g - difference).abs() <= 1e-6 * size,
+            "{name}: adjoint {g:.10e}, differences {difference:.10e}"
+        );
+    }
 }

@@ -1655,11 +1655,22 @@ fn jacobian_columns_are_the_full_jacobians_columns() {
             "tip_force.z"
         ]
     );
+    let number = |v: &serde_json::Value| v.as_f64().unwrap();
+    let scale = (0..6).fold(0.0f64, |m, row| {
+        m.max(number(&full["jacobian"]["tip_force"][row][2]).abs())
+    });
     for row in 0..6 {
         for c in 0..5 {
             assert_eq!(tip["rows"][row][c], full["jacobian"]["tension"][row][c]);
         }
-        assert_eq!(tip["rows"][row][5], full["jacobian"]["tip_force"][row][2]);
+        // 1e-10 of the column: the full form takes the tip force's column from the six tip
+        // multipliers (transposed solves), the column form from a forward solve; they differ
+        // by rounding times the condition number (tests/control_jacobian.rs).
+        let (a, b) = (
+            number(&tip["rows"][row][5]),
+            number(&full["jacobian"]["tip_force"][row][2]),
+        );
+        assert!((a - b).abs() <= 1e-10 * scale, "row {row}: {a} vs {b}");
     }
     let out = run(&dir, &["solve", "-", "--jacobian=tension"], Some(&example()));
     assert!(out.status.success(), "{}", stderr(&out));

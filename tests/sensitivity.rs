@@ -373,6 +373,111 @@ fn exact_load_and_base_derivatives_match_differenced_ones() {
     }
 }
 
+/// Every node derivative of `d` flattened: p, rotation, v, u per node.
+fn flat(d: &[NodeDerivative]) -> Vec<f64> {
+    d.iter()
+        .flat_map(|n| {
+            n.p.iter()
+                .chain(&n.rotation)
+                .chain(&n.v)
+                .chain(&n.u)
+                .copied()
+                .collect::<Vec<_>>()
+        })
+        .collect()
+}
+
+/// Largest difference of `a` from `b` relative to `b`'s largest entry.
+fn relative_to(a: &[f64], b: &[f64]) -> f64 {
+    let scale = b.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+    a.iter().zip(b).fold(0.0f64, |m, (x, y)| m.max((x - y).abs())) / scale
+}
+
+/// The exact tension columns (dF/dtau from eq. 13's linearity in each tension) against the
+/// differenced residual they replace (central at 1e-4 of the tension, or the second-order
+/// one-sided stencil for a slack tendon, at 1e-4 of E I / (L r)), at every node: taut and
+/// slack tendons, a termination at L/2 (jump rows), the point-moment model and a tension
+/// factor below 1 are covered by case S (four slack tendons), case H, case H with a tendon
+/// ending at L/2, and that robot in the point-moment model.
+#[test]
+fn exact_tension_columns_match_differenced_ones() {
+    let mut point_moment = two_segments();
+    point_moment.tendon_model = tdcr::model::robot::TendonModel::PointMoment;
+    let mut worst: f64 = 0.0;
+    for robot in [cases::case_s(), cases::case_h(), two_segments(), point_moment] {
+        let solution = solve(&robot);
+        let mut sens = Sensitivity::new(&robot, &solution).unwrap();
+        let length = robot.length();
+        for (i, t) in robot.tendons.iter().enumerate() {
+            let tension = t.tension();
+            let bend = robot.bending_stiffness() / (length * t.routing.at(0.0, length).r.norm());
+            let step = RELATIVE_STEP * tension.max(bend);
+            let stencil = if tension > step {
+                Difference::Central
+            } else {
+                Difference::Forward
+            };
+            let differenced = sens
+                .derivative(step, stencil, |r, d| r.tendons[i].set_tension(tension + d))
+                .unwrap();
+            let exact = sens.tension(i).unwrap();
+            let err = relative_to(&flat(&exact), &flat(&differenced));
+            eprintln!("tension {i} ({tension} N): exact against differenced {err:.2e}");
+            worst = worst.max(err);
+        }
+    }
+    // 1e-6 (measured 2e-13 to 1e-7): the differenced residual's own error, about 1e-8 to 1e-7
+    // (the module docs of sensitivity: truncation 1e-8 at this step, rounding 1e-11 / h_rel),
+    // with a margin of 15.
+    assert!(worst < 1e-6, "{worst:.2e}");
+}
+
+/// The exact modulus derivatives (eq. 13 and the point-load rows linear in each section
+/// stiffness) against the differenced residual they replace, at every node: E at fixed
+/// Poisson's ratio and G at fixed E, on case S, case H and case H with a tendon ending at L/2.
+#[test]
+fn exact_modulus_derivatives_match_differenced_ones() {
+    let mut worst: f64 = 0.0;
+    for robot in [cases::case_s(), cases::case_h(), two_segments()] {
+        let solution = solve(&robot);
+        let mut sens = Sensitivity::new(&robot, &solution).unwrap();
+        let g = robot.rod.geometry.unwrap();
+        let (o, i, e, nu) = (g.outer_radius, g.inner_radius, g.youngs_modulus, g.poisson_ratio);
+        let shear = shear_modulus(e, nu);
+        let exact_e = sens.parameter(tdcr::Parameter::YoungsModulus).unwrap();
+        let differenced_e = sens
+            .derivative(RELATIVE_STEP * e, Difference::Central, |r, d| {
+                r.rod.stiffness = Stiffness::Uniform(Section::tube(o, i, e + d, shear_modulus(e + d, nu)));
+            })
+            .unwrap();
+        let unit_g = Section::tube(o, i, 0.0, 1.0);
+        let (a, b) = (unit_g.kse, unit_g.kbt);
+        let exact_g = sens.stiffness(&[a[0], a[1], a[2], b[0], b[1], b[2]]).unwrap();
+        let differenced_g = sens
+            .derivative(RELATIVE_STEP * shear, Difference::Central, |r, d| {
+                r.rod.stiffness = Stiffness::Uniform(Section::tube(o, i, e, shear + d));
+            })
+            .unwrap();
+        // Per relative change of the modulus: G's effect is measured against E's (in case S,
+        // planar bending with no shear or torsion, d/dG is 1e-17 per Pa, rounding on both sides).
+        let size = |d: &[f64], modulus: f64| d.iter().fold(0.0f64, |m, x| m.max(x.abs())) * modulus;
+        let scale = size(&flat(&differenced_e), e);
+        for (name, a, b, modulus) in [
+            ("E", &exact_e, &differenced_e, e),
+            ("G", &exact_g, &differenced_g, shear),
+        ] {
+            let (a, b) = (flat(a), flat(b));
+            let err = a.iter().zip(&b).fold(0.0f64, |m, (x, y)| m.max((x - y).abs())) * modulus
+                / scale.max(size(&b, modulus));
+            eprintln!("{name}: exact against differenced {err:.2e}");
+            worst = worst.max(err);
+        }
+    }
+    // 1e-6: the differenced residual's own error (1e-8 to 6e-8 for moduli, module docs of
+    // sensitivity), with a wide margin; measured 9e-9 to 1.7e-8.
+    assert!(worst < 1e-6, "{worst:.2e}");
+}
+
 #[test]
 fn moduli_are_absent_without_geometry() {
     let mut robot = cases::case_s();

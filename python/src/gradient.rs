@@ -166,11 +166,12 @@ impl PyLinearization {
 /// linearize(robot, parameters, samples=None, **options) -> Linearization
 ///
 /// Solves the rows of `robot` with `parameters` (a dict of 1-D arrays of one length M, named
-/// as `tdcr batch` columns: `tension.1`, `tip_force.z`, `distributed_force.y`,
-/// `youngs_modulus`, ...) on all cores, and keeps the solutions for gradients with respect
-/// to those columns (`Linearization.vjp`). `samples`: arc lengths (m) of backbone points
-/// to output (default none). Options as `solve_batch` (collocation). Every tendon must be
-/// tension-controlled (the gradient holds tensions fixed). Raises the first failed row's
+/// as `tdcr batch` columns: `tension.1`, `displacement.2`, `tip_force.z`,
+/// `distributed_force.y`, `youngs_modulus`, `routing.1.x`, ...) on all cores, and keeps the
+/// solutions for gradients with respect to those columns (`Linearization.vjp`). `samples`:
+/// arc lengths (m) of backbone points to output (default none). Options as `solve_batch`
+/// (collocation). Displacement-controlled tendons keep their pull-ins in the gradient (their
+/// tensions follow); tendons with friction are refused. Raises the first failed row's
 /// error, its message starting with the row.
 #[pyfunction]
 #[pyo3(signature = (robot, parameters, samples=None, **options))]
@@ -205,17 +206,6 @@ pub fn linearize(
         rows.len(),
         |row| -> Result<(Robot, Solution), Failure> {
             let r = rows.robot(row)?;
-            if let Some(i) = r.tendons.iter().position(|t| t.displacement().is_some()) {
-                return Err(Failure::Library(tdcr::Error::InvalidInput {
-                    field: format!("tendon {}", i + 1),
-                    problem: "is displacement-controlled; linearize differentiates with every tension held fixed"
-                        .into(),
-                    hint: format!(
-                        "give it a tension (a `tension.{}` column, or Robot.with_tensions)",
-                        i + 1
-                    ),
-                }));
-            }
             let s = collocation::solve(&r, &settings.collocation)?;
             Ok((r, s))
         },

@@ -37,16 +37,46 @@ def test_vjp_of_the_tip_is_a_row_of_the_tip_sensitivities():
         np.testing.assert_allclose(g[5], sens.tip_force[axis, 1], rtol=1e-10)
 
 
-def test_linearize_refuses_samples_off_the_rod_and_displacement_control():
+def test_linearize_refuses_samples_off_the_rod_and_bad_parameters():
     r = robot()
     with pytest.raises(tdcr.InvalidInput, match="outside the rod"):
         tdcr.linearize(r, {"tension.1": [1.0]}, samples=[1.0])
-    held = r.with_displacements([None, 0.001, None, None, None])
-    with pytest.raises(tdcr.InvalidInput, match="displacement-controlled"):
-        tdcr.linearize(held, {"tension.1": [1.0]})
+    with pytest.raises(tdcr.InvalidInput, match="routing is not straight"):
+        tdcr.linearize(r, {"routing.5.x": [0.0]})
     lin = tdcr.linearize(r, {"tension.1": [1.0, 2.0]}, samples=[0.1])
     with pytest.raises(tdcr.InvalidInput, match=r"shape \(2, 1, 3\)"):
         lin.vjp(points=np.zeros((2, 2, 3)))
+
+
+def pulled():
+    """The prototype with tendon 1 pulled in by 5 mm (its tension solved) and tendon 3 at a
+    tension, gravity and a tip force."""
+    return robot().with_displacements([0.005, None, None, None, None])
+
+
+def test_pull_in_and_routing_gradients_match_differences_of_solves():
+    r = pulled()
+    names = ["displacement.1", "routing.2.y", "routing.3.x", "tension.3"]
+    values = [0.005, 0.008, -0.008, 0.8]
+    samples = [0.12]
+    lin = tdcr.linearize(r, {n: [v] for n, v in zip(names, values)}, samples=samples, **OPTIONS)
+    cot_tip = np.array([[0.7, -0.4, 0.9]])
+    cot_points = np.array([[[0.2, 0.5, -0.3]]])
+    g = lin.vjp(tip_position=cot_tip, points=cot_points)[0]
+
+    def loss(parameters):
+        s = tdcr.solve(r.with_parameters(parameters), **OPTIONS)
+        return cot_tip[0] @ s.tip_position + cot_points[0, 0] @ s.at(samples[0]).p
+
+    for j, (name, value) in enumerate(zip(names, values)):
+        step = 1e-4 * max(abs(value), 0.008)
+        base = dict(zip(names, values))
+        up, down = dict(base), dict(base)
+        up[name], down[name] = value + step, value - step
+        difference = (loss(up) - loss(down)) / (2 * step)
+        # 1e-6 of the largest gradient: central differences of full solves at a 1e-4
+        # relative step (truncation ~1e-8, solve noise ~1e-7; tests/adjoint.rs)
+        assert abs(g[j] - difference) <= 1e-6 * np.abs(g).max(), (name, g[j], difference)
 
 
 def test_torch_gradcheck_on_tensions_loads_and_youngs_modulus():
@@ -113,3 +143,53 @@ def test_jax_check_grads_jit_and_vmap():
     batched = jax.vmap(jax.grad(loss))(ts)
     np.testing.assert_allclose(batched[0], g, rtol=1e-12)
     np.testing.assert_allclose(batched[1], jax.grad(loss)(t * 0.5), rtol=1e-12)
+
+
+def four_straight():
+    """The prototype's four straight tendons alone (every routing straight, as
+    `routing_offset` needs): the prototype's robot file without its last (helical) tendon."""
+    text = tdcr.cases.prototype().to_toml()
+    head, _, last = text.rpartition("[[tendon]]")
+    rest = last.split("\n[", 1)
+    return tdcr.Robot.from_toml(head + ("[" + rest[1] if len(rest) > 1 else ""))
+
+
+def test_torch_gradcheck_on_pull_ins_and_routing_offsets():
+    torch = pytest.importorskip("torch")
+    import tdcr.torch as tt
+
+    r = four_straight()
+    # Pull-ins in mm and offsets in cm, so that gradcheck's step (1e-6) is a relative step.
+    pull = torch.tensor([[5.0, 0.0, -3.0, 0.0], [4.0, -2.0, 0.0, 0.0]], dtype=torch.float64, requires_grad=True)
+    offsets = torch.tensor(
+        [[0.8, 0.0], [0.0, 0.8], [-0.8, 0.0], [0.0, -0.8]], dtype=torch.float64, requires_grad=True
+    )
+
+    def shape(q, o):
+        out = tt.solve(r, displacement=q * 1e-3, routing_offset=o * 1e-2, samples=[0.1], **OPTIONS)
+        return out.tip_position, out.points
+
+    # Tolerances as test_torch_gradcheck_on_tensions_loads_and_youngs_modulus.
+    assert torch.autograd.gradcheck(shape, (pull, offsets), eps=1e-6, atol=1e-6, rtol=1e-4)
+    with pytest.raises(ValueError, match="not both"):
+        tt.solve(r, tension=torch.zeros(4, dtype=torch.float64), displacement=pull[0])
+
+
+def test_jax_check_grads_on_pull_ins_and_routing_offsets():
+    jax = pytest.importorskip("jax")
+    jax.config.update("jax_enable_x64", True)
+    import jax.numpy as jnp
+    from jax.test_util import check_grads
+
+    import tdcr.jax as tj
+
+    r = four_straight()
+
+    def f(q, o):
+        out = tj.solve(r, displacement=q * 1e-3, routing_offset=o * 1e-2, **OPTIONS)
+        return out.tip_position
+
+    q = jnp.array([5.0, 0.0, -3.0, 0.0])
+    o = jnp.array([[0.8, 0.0], [0.0, 0.8], [-0.8, 0.0], [0.0, -0.8]])
+    # Tolerances as the torch test (finite differences of full solves, step 1e-6).
+    check_grads(f, (q, o), order=1, modes=["rev"], eps=1e-6, atol=1e-6, rtol=1e-4)

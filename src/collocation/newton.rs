@@ -225,6 +225,28 @@ impl Workspace {
         Some(self.verdict(assess))
     }
 
+    /// Whether the value buffer holds [`Workspace::verdict_at`]'s Jacobian, evaluated at a
+    /// solution and not factored (nothing has changed the values since).
+    pub fn evaluated_at_solution(&self) -> bool {
+        self.at_solution
+    }
+
+    /// Factors the Jacobian [`Workspace::verdict_at`] left in the value buffer (at a
+    /// solution) for later [`Workspace::solve_again`] calls, as [`Workspace::factor`] does
+    /// for given values; its verdict stays (the values are the same). False for a zero pivot
+    /// or when the buffer does not hold that Jacobian.
+    pub fn factor_evaluated(&mut self) -> bool {
+        if !self.at_solution {
+            return false;
+        }
+        let verdict = self.verdict.take();
+        self.residual.fill(0.0);
+        let mut report = SolveReport::new(crate::report::Method::Collocation);
+        let ok = self.solve(&mut report);
+        self.verdict = verdict;
+        ok
+    }
+
     /// Whether the workspace holds the factors of a successful solve.
     pub fn has_factors(&self) -> bool {
         self.factored

@@ -29,7 +29,7 @@ use crate::model::equations::{Model, Site, lift, lift_m};
 use crate::model::linearize::{self, Linearization, linearize};
 use crate::solution::State;
 use crate::{Real, so3};
-use nalgebra::{Matrix3, SMatrix, SVector, Vector3, Vector6};
+use nalgebra::{Matrix3, Matrix6, SMatrix, SVector, Vector3, Vector6};
 
 /// Scaled perturbation of one node's unknowns.
 pub type Delta<T> = SVector<T, 12>;
@@ -196,6 +196,82 @@ pub fn interval(
         scale_rows(y1 - y0 - (f0 + fm * 4.0 + f1) * (h / 6.0), model.robot.length()),
         rates1,
     ))
+}
+
+/// The derivative of eq. 13's rates at one point in some parameters, with the rates and
+/// (when asked) the full linearization: [`linearize::tension_rates`] (every tendon's
+/// tension) or [`linearize::stiffness_rates`] (the six section stiffnesses).
+pub(super) type PointDerivatives = fn(
+    &Model,
+    &Site,
+    f64,
+    (&Matrix3<f64>, &Vector3<f64>, &Vector3<f64>),
+    bool,
+    &mut [Vector6<f64>],
+) -> Result<(Vector6<f64>, Option<Linearization>)>;
+
+/// The derivative of the interval rows of [`interval`] in some parameters at fixed node
+/// states: `out[i]` gets dF/dq_i (scaled rows) for the parameters `point` differentiates
+/// eq. 13 in. `d_start`, `d_end` and `d_mid` hold d(v', u')/dq_i at node a, node b and the
+/// midpoint; with `start_rates`, `d_start` already holds node a's (the previous interval's
+/// `d_end`), else both are evaluated here. Returns the rates at node b, whose derivatives
+/// stay in `d_end`.
+///
+/// The chain rule through the scheme (docs/sensitivity.md, "Exact tension columns"): only
+/// the rate rows of F_0 and F_1 move with q_i, by dF_0 = (0, 0, d_start[i]) and
+/// dF_1 = (0, 0, d_end[i]), so the midpoint state moves by dy_m = h/8 (dF_0 - dF_1) in its
+/// strains alone, and F_m by its own rate derivative plus the v and u columns of its
+/// linearization times dy_m: (R_m dv_m, J_r^-1(theta_m) du_m, d_mid[i] + d(v', u')/d(v, u)
+/// dy_m). The rows move by -h/6 (dF_0 + 4 dF_m + dF_1), scaled.
+///
+/// # Errors
+/// A model breakdown at a node or at the midpoint.
+#[allow(clippy::too_many_arguments)]
+pub(super) fn interval_derivatives(
+    model: &Model,
+    sites: &IntervalSites,
+    segment_end: f64,
+    a: &State,
+    b: &State,
+    start_rates: Option<Vector6<f64>>,
+    point: PointDerivatives,
+    [d_start, d_end, d_mid]: [&mut [Vector6<f64>]; 3],
+    out: &mut [Block<f64>],
+) -> Result<Vector6<f64>> {
+    let h = sites.end.s - sites.start.s;
+    let (y0, y1) = end_points(a, b);
+    let rates0 = match start_rates {
+        Some(r) => r,
+        None => point(model, &sites.start, segment_end, (&a.R, &a.v, &a.u), false, d_start)?.0,
+    };
+    let (rates1, _) = point(model, &sites.end, segment_end, (&b.R, &b.v, &b.u), false, d_end)?;
+    let theta1: Vector3<f64> = y1.fixed_rows::<3>(THETA).into();
+    let f0 = end_rhs(&sites.start, a, &Vector3::zeros(), &rates0);
+    let f1 = end_rhs(&sites.end, b, &theta1, &rates1);
+    let ym = (y0 + y1) * 0.5 + (f0 - f1) * (h / 8.0);
+    let theta_m: Vector3<f64> = ym.fixed_rows::<3>(THETA).into();
+    let R_m = a.R * so3::exp(&theta_m);
+    let (v_m, u_m) = (ym.fixed_rows::<3>(V).into(), ym.fixed_rows::<3>(U).into());
+    let (_, lin) = point(model, &sites.mid, segment_end, (&R_m, &v_m, &u_m), true, d_mid)?;
+    let d_strains = lin.map_or_else(Matrix6::zeros, |l| l.d_strains);
+    let Jri = so3::right_jacobian_inv(&theta_m);
+    for (i, row) in out.iter_mut().enumerate() {
+        let dym = (d_start[i] - d_end[i]) * (h / 8.0);
+        // dF_0 + 4 dF_m + dF_1.
+        let mut dF = Block::zeros();
+        // The midpoint's position rate is R_m times the strain: on a Kirchhoff rod that is
+        // v*, which no parameter moves through the translational coordinate.
+        if !sites.mid.inextensible {
+            dF.fixed_rows_mut::<3>(P)
+                .copy_from(&(R_m * dym.fixed_rows::<3>(0) * 4.0));
+        }
+        dF.fixed_rows_mut::<3>(THETA)
+            .copy_from(&(Jri * dym.fixed_rows::<3>(3) * 4.0));
+        dF.fixed_rows_mut::<6>(V)
+            .copy_from(&((d_mid[i] + d_strains * dym) * 4.0 + d_start[i] + d_end[i]));
+        *row = scale_rows(dF * (-h / 6.0), model.robot.length());
+    }
+    Ok(rates1)
 }
 
 /// The sites the order-6 residual of an interval needs besides its [`IntervalSites`]: at

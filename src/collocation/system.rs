@@ -13,13 +13,23 @@ use super::residual::{self, Block, Delta, IntervalSites, QuarterSites};
 use super::unknowns::{self, BASE_COLUMNS, BASE_ROWS, NODE, THETA, TIP_COLUMNS, link_row, tip_row};
 use crate::error::Result;
 use crate::mesh::Mesh;
-use crate::model::equations::{Model, Site};
+use crate::model::equations::{Model, Side, Site};
 use crate::model::linearize;
 use crate::solution::State;
-use nalgebra::{SVector, Vector6};
+use nalgebra::{SVector, Vector3, Vector6};
 use num_dual::{Dual64, DualSVec64};
 
 type D12 = DualSVec64<12>;
+
+/// The parameters whose exact residual columns [`System::parameter_columns`] gives.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Columns {
+    /// Every tendon's tension (N), in the robot's order.
+    Tensions,
+    /// The six diagonal stiffnesses of a uniform section: kse = (GA, GA, EA) (N), then
+    /// kbt = (EIxx, EIyy, GJ) (N m^2).
+    Stiffness,
+}
 
 /// The collocation system on one mesh at one load factor.
 pub struct System<'a> {
@@ -310,6 +320,102 @@ impl<'a> System<'a> {
             out[tip_row(x.len()) + r] = d.re;
             values[at..at + TIP_COLUMNS].copy_from_slice(&derivative(&d.eps.0).as_slice()[THETA..]);
             at += TIP_COLUMNS;
+        }
+        Ok(())
+    }
+
+    /// The exact derivative of the residual in some parameters at the states `x`,
+    /// column-major into `out`, one column of [`System::unknowns`] rows per parameter:
+    /// [`Columns::Tensions`], one per tendon of the robot (slack tendons: the right
+    /// derivative), or [`Columns::Stiffness`], the six diagonal stiffnesses of a section
+    /// that does not vary along the rod (GA, GA, EA, EIxx, EIyy, GJ). The residual is linear
+    /// in each tension once the tendon's path terms are formed, and eq. 13 in each stiffness:
+    /// interval rows by the chain rule through the scheme (`residual::interval_derivatives`),
+    /// jump and tip rows by `Model::wrench_balance_tensions` or
+    /// `Model::wrench_balance_stiffness`, base rows 0
+    /// (docs/sensitivity.md, "Exact tension columns"). Without friction: the log tensions
+    /// of tendons with friction are not unknowns here.
+    ///
+    /// # Errors
+    /// A model breakdown at a visited state.
+    pub fn parameter_columns(&self, x: &[State], columns: Columns, out: &mut [f64]) -> Result<()> {
+        let model = &self.model;
+        let n = self.unknowns();
+        let (width, point): (usize, residual::PointDerivatives) = match columns {
+            Columns::Tensions => (model.robot.tendons.len(), linearize::tension_rates),
+            Columns::Stiffness => (6, linearize::stiffness_rates),
+        };
+        // The point-load rows' derivative.
+        let balance =
+            |s: f64, left: Side<f64>, right: Option<Side<f64>>, out: &mut [(Vector3<f64>, Vector3<f64>)]| match columns
+            {
+                Columns::Tensions => model.wrench_balance_tensions(s, left, right, out),
+                Columns::Stiffness => model.wrench_balance_stiffness(s, left, right, out),
+            };
+        debug_assert_eq!(out.len(), n * width);
+        out.fill(0.0);
+        let length = model.robot.length();
+        let mut rates = [
+            vec![Vector6::zeros(); width],
+            vec![Vector6::zeros(); width],
+            vec![Vector6::zeros(); width],
+        ];
+        let mut block = vec![Block::zeros(); width];
+        let mut wrench = vec![(Vector3::zeros(), Vector3::zeros()); width];
+        let mut write = |rows: usize, i: usize, values: &[f64]| {
+            out[i * n + rows..i * n + rows + values.len()].copy_from_slice(values);
+        };
+        let links = x.len() - 1;
+        let mut node_rates = None;
+        for k in 0..links {
+            let row = link_row(k);
+            if let Some(sites) = &self.interval_sites[k] {
+                let seg = self.mesh.nodes[k].segment_end;
+                if node_rates.is_some() {
+                    // Node k's derivatives are the previous interval's end ones.
+                    rates.swap(0, 1);
+                }
+                let [d0, d1, dm] = &mut rates;
+                let (a, b) = (&x[k], &x[k + 1]);
+                let end = residual::interval_derivatives(
+                    model,
+                    sites,
+                    seg,
+                    a,
+                    b,
+                    node_rates,
+                    point,
+                    [d0, d1, dm],
+                    &mut block,
+                )?;
+                node_rates = Some(end);
+                for (i, b) in block.iter().enumerate() {
+                    write(row, i, b.as_slice());
+                }
+            } else {
+                node_rates = None;
+                let (left, right) = (&self.node_sites[k], &self.node_sites[k + 1]);
+                let (a, b) = (&x[k], &x[k + 1]);
+                wrench.fill((Vector3::zeros(), Vector3::zeros()));
+                balance(
+                    left.s,
+                    (left, &a.R, &a.v, &a.u),
+                    Some((right, &b.R, &b.v, &b.u)),
+                    &mut wrench,
+                )?;
+                for (i, (f, m)) in wrench.iter().enumerate() {
+                    write(row + 6, i, f.as_slice());
+                    write(row + 9, i, (m * length).as_slice());
+                }
+            }
+        }
+        let (site, tip) = (&self.node_sites[links], &x[links]);
+        wrench.fill((Vector3::zeros(), Vector3::zeros()));
+        balance(site.s, (site, &tip.R, &tip.v, &tip.u), None, &mut wrench)?;
+        let row = tip_row(x.len());
+        for (i, (f, m)) in wrench.iter().enumerate() {
+            write(row, i, f.as_slice());
+            write(row + 3, i, (m * length).as_slice());
         }
         Ok(())
     }

@@ -157,11 +157,21 @@ pub fn trace_until(
     robot.validate()?;
     options.validate()?;
     crate::model::friction::unsupported(robot, "tracing a branch")?;
-    if parameter == Parameter::YoungsModulus {
+    if matches!(
+        parameter,
+        Parameter::YoungsModulus | Parameter::Displacement(_) | Parameter::RoutingOffset(..)
+    ) {
         return Err(crate::error::invalid(
             "parameter",
-            "`youngs_modulus` cannot be traced: a trace varies a tension or a load",
-            "sweep E instead (a sweep of `youngs_modulus` solves each value warm-started from the last)",
+            format!("`{parameter}` cannot be traced: a trace varies a tension or a load"),
+            format!(
+                "sweep {} instead (a sweep of `{parameter}` solves each value warm-started from the last)",
+                if parameter == Parameter::YoungsModulus {
+                    "E"
+                } else {
+                    "it"
+                }
+            ),
         ));
     }
     let start = parameter.applied(robot, from)?;

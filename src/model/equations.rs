@@ -77,6 +77,18 @@ pub enum Which {
     Past(f64),
 }
 
+impl Which {
+    /// Whether a tendon that ends at `end` (m) takes part.
+    #[inline(always)]
+    fn takes(self, end: f64) -> bool {
+        match self {
+            Which::ActiveTo(e) => end >= e,
+            Which::EndingAt(x) => end == x,
+            Which::Past(x) => end > x,
+        }
+    }
+}
+
 /// The robot's equations with its inputs: the tendon tensions, multiplied by
 /// `tension_factor`, the external loads, multiplied by `load_factor` (1 and 1 is the robot as
 /// given; smaller values are used by load continuation), and one input a trace replaces.
@@ -115,8 +127,9 @@ impl<'a> Model<'a> {
 
     /// Sets `parameter` to `value` on the model, with the meaning [`Parameter::apply`] gives
     /// it on the robot: a tension in [`Model::tensions`], the load scale as both factors,
-    /// any other input as [`Model::parameter`] (`youngs_modulus` changes the rod's sections,
-    /// which only a new robot has: set it with [`Parameter::apply`]). Returns whether the
+    /// any other input as [`Model::parameter`] (`youngs_modulus`, `displacement.I` and
+    /// `routing.I.x|y` change the robot's sections, actuation or routings, which only a new
+    /// robot has: set them with [`Parameter::apply`]; a trace refuses them). Returns whether the
     /// sites changed (external loads), which a system must then recompute.
     pub fn set(&mut self, parameter: Parameter, value: f64) -> bool {
         match parameter {
@@ -177,14 +190,30 @@ impl<'a> Model<'a> {
         let (l, factor) = (self.robot.length(), self.tension_factor);
         let tendons = self.robot.tendons.iter().zip(&self.tensions);
         tendons.enumerate().filter_map(move |(i, (t, &tension))| {
-            let end = t.end(l);
-            let take = match which {
-                Which::ActiveTo(e) => end >= e,
-                Which::EndingAt(x) => end == x,
-                Which::Past(x) => end > x,
-            };
-            (take && tension > 0.0).then(|| (i, tension * factor, t.routing.at(s, l)))
+            let take = which.takes(t.end(l)) && tension > 0.0;
+            take.then(|| (i, tension * factor, t.routing.at(s, l)))
         })
+    }
+
+    /// As [`Model::tendons`], slack tendons (tension 0) included: the tendons whose
+    /// tension would act at s, for the derivative in a tension (right derivative at 0).
+    pub(crate) fn reaching(&self, s: f64, which: Which) -> impl Iterator<Item = (usize, f64, RoutingPoint)> + '_ {
+        let (l, factor) = (self.robot.length(), self.tension_factor);
+        let tendons = self.robot.tendons.iter().zip(&self.tensions);
+        tendons.enumerate().filter_map(move |(i, (t, &tension))| {
+            let take = which.takes(t.end(l));
+            take.then(|| (i, tension * factor, t.routing.at(s, l)))
+        })
+    }
+
+    /// As [`Model::distributed_tendons`], slack tendons included ([`Model::reaching`]).
+    pub(crate) fn distributed_reaching(
+        &self,
+        s: f64,
+        segment_end: f64,
+    ) -> impl Iterator<Item = (usize, f64, RoutingPoint)> + '_ {
+        let coupled = self.robot.tendon_model == TendonModel::Coupled;
+        self.reaching(s, Which::ActiveTo(segment_end)).filter(move |_| coupled)
     }
 
     /// The tendons whose distributed loads act on the segment ending at `segment_end` (none in
@@ -379,5 +408,97 @@ impl Model<'_> {
             (Rt * dn).component_div(&lift(&site_a.section.section.kse)),
             (Rt * dm).component_div(&lift(&site_a.section.section.kbt)),
         ))
+    }
+
+    /// The derivative of [`Model::wrench_balance`] in the six diagonal stiffnesses k_j of a
+    /// section that is the same on both sides (kse = (GA, GA, EA), then kbt = (EIxx, EIyy,
+    /// GJ)) at fixed states, into `out[j]` (force rows, then moment rows, strain units). With
+    /// the rows W = (R_a^T dn) / kse, the internal force n = R D (v - v*) enters dn as
+    /// n(s-) - n(s+), so dW/dkse_j = R_a^T (R_a e_j dv_a,j - R_b e_j dv_b,j) / kse
+    /// - e_j W_j / kse_j (no right side at the tip), and the moment rows likewise in kbt.
+    ///
+    /// # Errors
+    /// [`Error::SingularRouting`] where a tendon has no tangent.
+    pub(crate) fn wrench_balance_stiffness(
+        &self,
+        s: f64,
+        left: Side<f64>,
+        right: Option<Side<f64>>,
+        out: &mut [(Vector3<f64>, Vector3<f64>)],
+    ) -> Result<()> {
+        let (f, m) = self.wrench_balance(s, left, right)?;
+        let (site, Ra, va, ua) = left;
+        let section = &site.section.section;
+        let (dv_a, du_a) = (va - site.reference.v_star, ua - site.reference.u_star);
+        let right_strains =
+            right.map(|(site_b, Rb, vb, ub)| (Rb, vb - site_b.reference.v_star, ub - site_b.reference.u_star));
+        for j in 0..3 {
+            let e = Vector3::ith(j, 1.0);
+            let (mut dn, mut dm) = (Ra * e * dv_a[j], Ra * e * du_a[j]);
+            if let Some((Rb, dv_b, du_b)) = &right_strains {
+                dn -= *Rb * e * dv_b[j];
+                dm -= *Rb * e * du_b[j];
+            }
+            out[j].0 += Ra.tr_mul(&dn).component_div(&section.kse) - e * (f[j] / section.kse[j]);
+            out[3 + j].1 += Ra.tr_mul(&dm).component_div(&section.kbt) - e * (m[j] / section.kbt[j]);
+        }
+        Ok(())
+    }
+
+    /// The derivative of [`Model::wrench_balance`] in each tendon's tension tau_i at fixed
+    /// states, added into `out[i]` (force rows, then moment rows; strain units, left body
+    /// frame). The balance is linear in each tension: tendon i contributes
+    /// tau_i f (t_i, (R r_i) x t_i) (f the tension factor, t_i = p_i' / |p_i'| in the world
+    /// frame) where it ends, and, with corner forces, the difference of that term on the two
+    /// sides where it continues, so its derivative is the same term per unit of tau_i. A
+    /// slack tendon gets the right derivative (the term it would add under a pull).
+    ///
+    /// # Errors
+    /// [`Error::SingularRouting`] where a tendon has no tangent.
+    pub(crate) fn wrench_balance_tensions(
+        &self,
+        s: f64,
+        left: Side<f64>,
+        right: Option<Side<f64>>,
+        out: &mut [(Vector3<f64>, Vector3<f64>)],
+    ) -> Result<()> {
+        let (site_a, Ra, va, ua) = left;
+        let coupled = self.robot.tendon_model == TendonModel::Coupled;
+        let scale = |dn: Vector3<f64>, dm: Vector3<f64>| {
+            (
+                Ra.tr_mul(&dn).component_div(&site_a.section.section.kse),
+                Ra.tr_mul(&dm).component_div(&site_a.section.section.kbt),
+            )
+        };
+        // One tendon's pull per unit of tension at (R, v, u): world force and moment.
+        let unit_pull = |i: usize, rp: &RoutingPoint, R: &Matrix3<f64>, v: &Vector3<f64>, u: &Vector3<f64>| {
+            let pb_s = u.cross(&rp.r) + rp.r_s + v;
+            let speed = pb_s.norm();
+            if speed < MIN_TENDON_SPEED {
+                return Err(Error::SingularRouting { tendon: i, s, speed });
+            }
+            let t = pb_s * (self.tension_factor / speed);
+            let force = if coupled { R * t } else { Vector3::zeros() };
+            Ok((force, R * rp.r.cross(&t)))
+        };
+        for (i, _, rp) in self.reaching(s, Which::EndingAt(s)) {
+            let (f, m) = unit_pull(i, &rp, Ra, va, ua)?;
+            let (f, m) = scale(f, m);
+            out[i].0 += f;
+            out[i].1 += m;
+        }
+        if let Some((_, Rb, vb, ub)) = right
+            && self.robot.corner_forces
+            && coupled
+        {
+            for (i, _, rp) in self.reaching(s, Which::Past(s)) {
+                let (fa, ma) = unit_pull(i, &rp, Ra, va, ua)?;
+                let (fb, mb) = unit_pull(i, &rp, Rb, vb, ub)?;
+                let (f, m) = scale(fa - fb, ma - mb);
+                out[i].0 += f;
+                out[i].1 += m;
+            }
+        }
+        Ok(())
     }
 }

@@ -13,6 +13,8 @@
 //! | `distributed_force.x\|y\|z` | a component of the distributed force, made that constant along the whole rod (the other components keep their profile) | N/m |
 //! | `load_scale` | a factor on every tension, pull-in and external load (1: the robot as given) | - |
 //! | `youngs_modulus` | E of a rod built from its geometry, at fixed Poisson's ratio (G follows) | Pa |
+//! | `displacement.I` | tendon I's actuator pull-in; the tendon becomes displacement-controlled | m |
+//! | `routing.I.x\|y` | the body-frame offset x or y of tendon I's straight routing | m |
 //!
 //! ```
 //! use tdcr::Parameter;
@@ -26,6 +28,7 @@
 use super::loads::Field;
 use super::robot::Robot;
 use super::rod::Rod;
+use super::routing::Routing;
 use super::tendon::Actuation;
 use crate::error::{Result, invalid};
 use nalgebra::Vector3;
@@ -53,11 +56,17 @@ pub enum Parameter {
     /// Young's modulus E (Pa) of a rod built from its geometry, at fixed Poisson's ratio
     /// (G follows).
     YoungsModulus,
+    /// The actuator pull-in q (m) of tendon i (index from 0; named `displacement.{i + 1}`).
+    /// Setting it makes the tendon displacement-controlled (its tension is solved for).
+    Displacement(usize),
+    /// Component 0 or 1 (x, y) of the body-frame offset (m) of tendon i's straight routing
+    /// (named `routing.{i + 1}.x|y`).
+    RoutingOffset(usize, usize),
 }
 
 /// The names [`Parameter`] accepts, for messages.
 pub const NAMES: &str = "tension.I (I = 1, 2, ...), tip_force.x|y|z, tip_moment.x|y|z, base_position.x|y|z, \
-                         distributed_force.x|y|z, load_scale, youngs_modulus";
+                         distributed_force.x|y|z, load_scale, youngs_modulus, displacement.I, routing.I.x|y";
 
 const AXES: [&str; 3] = ["x", "y", "z"];
 
@@ -80,14 +89,21 @@ impl FromStr for Parameter {
         }
         let (head, tail) = name.split_once('.').ok_or_else(unknown)?;
         let axis = || AXES.iter().position(|a| *a == tail).ok_or_else(unknown);
+        // Canonical numbers only (`tension.01` and `tension.+1` are not names).
+        let tendon = |number: &str| match number.parse::<usize>() {
+            Ok(i) if i >= 1 && number == i.to_string() => Ok(i - 1),
+            _ => Err(format!(
+                "parameter `{name}`: the tendon number must be a whole number from 1 (file order)"
+            )),
+        };
         match head {
-            // Canonical numbers only (`tension.01` and `tension.+1` are not names).
-            "tension" => match tail.parse::<usize>() {
-                Ok(i) if i >= 1 && tail == i.to_string() => Ok(Parameter::Tension(i - 1)),
-                _ => Err(format!(
-                    "parameter `{name}`: the tendon number must be a whole number from 1 (file order)"
-                )),
-            },
+            "tension" => Ok(Parameter::Tension(tendon(tail)?)),
+            "displacement" => Ok(Parameter::Displacement(tendon(tail)?)),
+            "routing" => {
+                let (number, component) = tail.split_once('.').ok_or_else(unknown)?;
+                let axis = AXES[..2].iter().position(|a| *a == component).ok_or_else(unknown)?;
+                Ok(Parameter::RoutingOffset(tendon(number)?, axis))
+            }
             "tip_force" => Ok(Parameter::TipForce(axis()?)),
             "tip_moment" => Ok(Parameter::TipMoment(axis()?)),
             "base_position" => Ok(Parameter::BasePosition(axis()?)),
@@ -108,6 +124,8 @@ impl fmt::Display for Parameter {
             Parameter::DistributedForce(k) => write!(f, "distributed_force.{}", axis(k)),
             Parameter::LoadScale => f.write_str("load_scale"),
             Parameter::YoungsModulus => f.write_str("youngs_modulus"),
+            Parameter::Displacement(i) => write!(f, "displacement.{}", i + 1),
+            Parameter::RoutingOffset(i, k) => write!(f, "routing.{}.{}", i + 1, axis(k)),
         }
     }
 }
@@ -136,11 +154,13 @@ impl Parameter {
     pub fn check(&self, robot: &Robot) -> Result<()> {
         let count = robot.tendons.len();
         match *self {
-            Parameter::Tension(i) if i >= count => Err(invalid(
-                self.to_string(),
-                format!("names tendon {}, but the robot has {count} tendon(s)", i + 1),
-                format!("number the tendons from 1 to {count} in file order"),
-            )),
+            Parameter::Tension(i) | Parameter::Displacement(i) | Parameter::RoutingOffset(i, _) if i >= count => {
+                Err(invalid(
+                    self.to_string(),
+                    format!("names tendon {}, but the robot has {count} tendon(s)", i + 1),
+                    format!("number the tendons from 1 to {count} in file order"),
+                ))
+            }
             Parameter::TipForce(k)
             | Parameter::TipMoment(k)
             | Parameter::BasePosition(k)
@@ -151,6 +171,18 @@ impl Parameter {
                     self.to_string(),
                     "names a component past z",
                     "use the components x, y, z (0, 1, 2)",
+                ))
+            }
+            Parameter::RoutingOffset(_, k) if k > 1 => Err(invalid(
+                self.to_string(),
+                "names a component past y (a routing offset lies in the cross-section)",
+                "use the components x, y (0, 1)",
+            )),
+            Parameter::RoutingOffset(i, _) if !matches!(robot.tendons[i].routing, Routing::Straight { .. }) => {
+                Err(invalid(
+                    self.to_string(),
+                    format!("names tendon {}, whose routing is not straight", i + 1),
+                    "give routing offsets of straight routings only (kind = \"straight\")",
                 ))
             }
             Parameter::YoungsModulus if robot.rod.geometry.is_none() => Err(invalid(
@@ -176,6 +208,17 @@ impl Parameter {
             Parameter::DistributedForce(c) => robot.loads.distributed_force.at(0.0)[c],
             Parameter::LoadScale => 1.0,
             Parameter::YoungsModulus => robot.rod.geometry.map_or(f64::NAN, |g| g.youngs_modulus),
+            Parameter::Displacement(i) => robot.tendons[i].displacement().ok_or_else(|| {
+                invalid(
+                    self.to_string(),
+                    format!("has no value: tendon {} is tension-controlled", i + 1),
+                    format!("give tendon {} a displacement (pull-in) first", i + 1),
+                )
+            })?,
+            Parameter::RoutingOffset(i, k) => match robot.tendons[i].routing {
+                Routing::Straight { x, y } => [x, y][k],
+                _ => f64::NAN,
+            },
         })
     }
 
@@ -207,6 +250,12 @@ impl Parameter {
                 };
             }
             Parameter::LoadScale => scale_loads(robot, value),
+            Parameter::Displacement(i) => robot.tendons[i].set_displacement(value),
+            Parameter::RoutingOffset(i, k) => {
+                if let Routing::Straight { x, y } = &mut robot.tendons[i].routing {
+                    *(if k == 0 { x } else { y }) = value;
+                }
+            }
             Parameter::YoungsModulus => {
                 if let Some(g) = robot.rod.geometry {
                     let reference = robot.rod.reference.clone();
@@ -248,7 +297,7 @@ impl Parameter {
         match self {
             Parameter::Tension(_) | Parameter::TipForce(_) => "N",
             Parameter::TipMoment(_) => "N m",
-            Parameter::BasePosition(_) => "m",
+            Parameter::BasePosition(_) | Parameter::Displacement(_) | Parameter::RoutingOffset(..) => "m",
             Parameter::DistributedForce(_) => "N/m",
             Parameter::LoadScale => "",
             Parameter::YoungsModulus => "Pa",
@@ -321,6 +370,8 @@ mod tests {
             "distributed_force.x",
             "load_scale",
             "youngs_modulus",
+            "displacement.3",
+            "routing.2.y",
         ] {
             assert_eq!(name.parse::<Parameter>().unwrap().to_string(), name);
         }
@@ -332,6 +383,9 @@ mod tests {
             "tip_force.w",
             "mass",
             "tip_force",
+            "displacement.0",
+            "routing.1.z",
+            "routing.1",
         ] {
             let e = bad.parse::<Parameter>().unwrap_err();
             assert!(e.contains(bad), "{e}");
@@ -358,6 +412,10 @@ mod tests {
             "base_position.x",
             "distributed_force.x",
             "youngs_modulus",
+            "displacement.2",
+            "displacement.3",
+            "routing.1.x",
+            "routing.4.y",
         ] {
             let p: Parameter = text.parse().unwrap();
             let value = if p == Parameter::YoungsModulus { 105e9 } else { 0.25 };
@@ -382,6 +440,17 @@ mod tests {
         // Payloads no name parses to are errors, not panics.
         let e = Parameter::TipForce(3).apply(&mut robot, 1.0).unwrap_err();
         assert!(e.to_string().contains("`tip_force.?` names a component past z"), "{e}");
+        let pulled = Parameter::Displacement(2).applied(&robot, 0.003).unwrap();
+        assert_eq!(pulled.tendons[2].displacement(), Some(0.003));
+        let e = Parameter::Displacement(0).value(&robot).unwrap_err().to_string();
+        assert!(e.contains("tendon 1 is tension-controlled"), "{e}");
+        let mut helix = robot.clone();
+        helix.tendons[0].routing = Routing::helical(0.008, 1.0, 0.0);
+        let e = Parameter::RoutingOffset(0, 0)
+            .apply(&mut helix, 0.0)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("routing is not straight"), "{e}");
         let mut stiff = robot.clone();
         stiff.rod = Rod::new(robot.length(), robot.rod.section_at(0.0).section);
         assert!(Parameter::YoungsModulus.apply(&mut stiff, 1e9).is_err());

@@ -1,5 +1,5 @@
-"""The numpy layer under `tdcr.torch` and `tdcr.jax`: named inputs (tension vectors, load
-vectors, E) to the parameter columns of `tdcr.linearize`, its outputs back to arrays with
+"""The numpy layer under `tdcr.torch` and `tdcr.jax`: named inputs (tension or pull-in
+vectors, load vectors, E, routing offsets) to the parameter columns of `tdcr.linearize`, its outputs back to arrays with
 the inputs' batch shape, and cotangents through `Linearization.vjp` to gradients shaped
 like the inputs. docs/python.md ("Gradients") describes the interface."""
 
@@ -11,9 +11,9 @@ import numpy as np
 
 from ._native import Linearization, Robot, linearize
 
-#: The inputs a differentiable solve accepts: name -> trailing shape ("k": one per tendon).
+#: The inputs a differentiable solve accepts (their per-row shapes: `trailing`).
 VECTORS = ("tip_force", "tip_moment", "distributed_force", "base_position")
-INPUTS = ("tension",) + VECTORS + ("youngs_modulus",)
+INPUTS = ("tension", "displacement") + VECTORS + ("youngs_modulus", "routing_offset")
 _AXES = ("x", "y", "z")
 
 
@@ -29,9 +29,12 @@ class Shape(NamedTuple):
 
 
 def trailing(robot: Robot, name: str) -> Tuple[int, ...]:
-    """The per-row shape of input `name`: (k,) for `tension`, (3,) for a vector, () for E."""
-    if name == "tension":
+    """The per-row shape of input `name`: (k,) for `tension` and `displacement`, (3,) for a
+    vector, () for E, (k, 2) for `routing_offset` (x, y of each tendon's straight routing)."""
+    if name in ("tension", "displacement"):
         return (robot.tendon_count,)
+    if name == "routing_offset":
+        return (robot.tendon_count, 2)
     if name in VECTORS:
         return (3,)
     if name == "youngs_modulus":
@@ -40,9 +43,12 @@ def trailing(robot: Robot, name: str) -> Tuple[int, ...]:
 
 
 def columns(name: str, shape: Tuple[int, ...]) -> List[str]:
-    """The parameter columns (as `tdcr batch` names them) of input `name`."""
-    if name == "tension":
-        return [f"tension.{i + 1}" for i in range(shape[0])]
+    """The parameter columns (as `tdcr batch` names them) of input `name`, in the row-major
+    order of its per-row shape."""
+    if name in ("tension", "displacement"):
+        return [f"{name}.{i + 1}" for i in range(shape[0])]
+    if name == "routing_offset":
+        return [f"routing.{i + 1}.{a}" for i in range(shape[0]) for a in _AXES[:2]]
     if name in VECTORS:
         return [f"{name}.{a}" for a in _AXES]
     return [name]
@@ -69,6 +75,11 @@ def batch_shape(robot: Robot, shapes: Mapping[str, Tuple[int, ...]]) -> Tuple[in
             )
     if batch is None:
         raise ValueError(f"give at least one input to differentiate: {', '.join(INPUTS)}")
+    if "tension" in shapes and "displacement" in shapes:
+        raise ValueError(
+            "give `tension` or `displacement`, not both: each sets how every tendon is driven "
+            "(a tension input, or a pull-in whose tension is solved for)"
+        )
     return batch
 
 

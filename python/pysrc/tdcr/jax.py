@@ -1,4 +1,5 @@
-"""tdcr in JAX: solves as differentiable functions of tensions, loads and E, with a
+"""tdcr in JAX: solves as differentiable functions of tensions or pull-ins, loads, E and
+routing offsets, with a
 `jax.custom_vjp` whose forward and backward passes call tdcr through `jax.pure_callback`,
 so they work under `jax.jit`; under `jax.vmap` the callback receives the whole batch and
 solves it on all cores.
@@ -81,11 +82,13 @@ def solve(
     robot: Robot,
     *,
     tension: Any = None,
+    displacement: Any = None,
     tip_force: Any = None,
     tip_moment: Any = None,
     distributed_force: Any = None,
     base_position: Any = None,
     youngs_modulus: Any = None,
+    routing_offset: Any = None,
     samples: Optional[Sequence[float]] = None,
     **options: Any,
 ) -> Shape:
@@ -94,11 +97,13 @@ def solve(
     differentiable (reverse mode) with respect to every input. As `tdcr.torch.solve`."""
     given = dict(
         tension=tension,
+        displacement=displacement,
         tip_force=tip_force,
         tip_moment=tip_moment,
         distributed_force=distributed_force,
         base_position=base_position,
         youngs_modulus=youngs_modulus,
+        routing_offset=routing_offset,
     )
     arrays = {n: jnp.asarray(v) for n, v in given.items() if v is not None}
     if not arrays:

@@ -1,4 +1,5 @@
-"""tdcr in PyTorch: solves as differentiable functions of tensions, loads and E.
+"""tdcr in PyTorch: solves as differentiable functions of tensions or pull-ins, loads, E and
+routing offsets.
 
     import torch, tdcr, tdcr.torch
     robot = tdcr.cases.prototype()
@@ -9,9 +10,13 @@
 The forward pass solves every row of the batch (the leading dimensions) on all cores; the
 backward pass gives the gradient by the implicit function theorem: one transposed solve
 with the factors of each row's converged Jacobian (docs/sensitivity.md, "Adjoint gradients"), not finite
-differences. Inputs (each optional, one batch shape B): `tension` (*B, k) N, `tip_force`,
-`tip_moment`, `distributed_force`, `base_position` (*B, 3) world frame, `youngs_modulus`
-(*B,) Pa; inputs left out keep the robot's values. Every tendon must be tension-controlled.
+differences. Inputs (each optional, one batch shape B): `tension` (*B, k) N, or
+`displacement` (*B, k) m (every tendon's actuator pull-in: its tension is solved for, and
+the gradient holds the pull-ins), `tip_force`, `tip_moment`, `distributed_force`,
+`base_position` (*B, 3) world frame, `youngs_modulus` (*B,) Pa, `routing_offset` (*B, k, 2)
+m (body-frame x, y of each tendon's straight routing; every routing must be straight:
+`tdcr.linearize` takes `routing.I.x` columns of single tendons); inputs left out keep the
+robot's values.
 Needs the `torch` extra (`pip install "./python[torch]"`).
 """
 
@@ -56,11 +61,13 @@ def solve(
     robot: Robot,
     *,
     tension: Optional[torch.Tensor] = None,
+    displacement: Optional[torch.Tensor] = None,
     tip_force: Optional[torch.Tensor] = None,
     tip_moment: Optional[torch.Tensor] = None,
     distributed_force: Optional[torch.Tensor] = None,
     base_position: Optional[torch.Tensor] = None,
     youngs_modulus: Optional[torch.Tensor] = None,
+    routing_offset: Optional[torch.Tensor] = None,
     samples: Optional[Sequence[float]] = None,
     **options: Any,
 ) -> Shape:
@@ -71,11 +78,13 @@ def solve(
     for inputs of the wrong shape, the first failed row's `tdcr.Error` otherwise."""
     given = dict(
         tension=tension,
+        displacement=displacement,
         tip_force=tip_force,
         tip_moment=tip_moment,
         distributed_force=distributed_force,
         base_position=base_position,
         youngs_modulus=youngs_modulus,
+        routing_offset=routing_offset,
     )
     tensors = {n: torch.as_tensor(v) for n, v in given.items() if v is not None}
     # Inputs with fewer batch dimensions broadcast against the others (autograd sums back).

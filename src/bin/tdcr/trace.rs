@@ -173,8 +173,14 @@ pub fn run(args: &TraceArgs) -> Result<(), Failure> {
 /// suggests a sweep instead, the `tdcr sweep` arguments that run it.
 fn with_flags(e: tdcr::Error, parameter: Parameter) -> Failure {
     let sweep = match &e {
-        tdcr::Error::InvalidInput { field, .. } if field == "parameter" && parameter == Parameter::YoungsModulus => {
-            Some("tdcr sweep --param youngs_modulus=START:STOP:COUNT".to_string())
+        tdcr::Error::InvalidInput { field, .. }
+            if field == "parameter"
+                && matches!(
+                    parameter,
+                    Parameter::YoungsModulus | Parameter::Displacement(_) | Parameter::RoutingOffset(..)
+                ) =>
+        {
+            Some(format!("tdcr sweep --param {parameter}=START:STOP:COUNT"))
         }
         tdcr::Error::InvalidInput { field, .. } if field.ends_with(".displacement") => {
             Some("tdcr sweep --displacement I=START:STOP:COUNT".to_string())

@@ -53,11 +53,6 @@ impl<'r> Capstan<'r> {
         &self.system
     }
 
-    /// The system, to move a parameter its model owns (a frictionless system's tension).
-    pub(crate) fn system_mut(&mut self) -> &mut System<'r> {
-        &mut self.system
-    }
-
     /// The collocation system, giving up the capstan rows.
     pub(crate) fn into_system(self) -> System<'r> {
         self.system

@@ -17,6 +17,25 @@
 //! vectors as the forward sensitivities, `named.rs`). The gradient equals the forward
 //! sensitivities contracted with the cotangent, to rounding (tests/adjoint.rs).
 //!
+//! # Held pull-ins
+//!
+//! A displacement-controlled tendon keeps its pull-in q_m: its tension tau_m follows so
+//! that its length constraint holds. With the state derivatives D_m = dx/dtau_m of the
+//! taut ones, G the path lengths' derivative in the states and S = C - G [D_m] (the
+//! constraints' Schur complement, [`super::displacement_sensitivities`]), the forward
+//! derivative of the outputs in a parameter is Y D_q + Y [D_m] S^-1 G D_q (Y = dy/dx), and
+//! in a pull-in Y [D_m] S^-1 e_m. Contracted with ybar:
+//!
+//! ```text
+//! c_m = ybar . Y D_m = lambda . (-dF/dtau_m),     w = S^-T c,
+//! dloss/dq_m = w_m,    dloss/dq = (lambda + mu) . (-dF/dq),   J^T mu = G^T w,
+//! ```
+//!
+//! so the pull-ins cost one more transposed solve (and the k solves S needs); the tension
+//! of a displacement-controlled tendon has no gradient of its own (its pull-in sets it).
+//! The routing offset of a held tendon also moves its path length at fixed states, a
+//! term this does not include: it is refused with what to do.
+//!
 //! # Outputs and their cotangents
 //!
 //! In the solver's scaled increments (12 per node, d = (dp / L, dtheta, dv, du L), R -> R
@@ -34,13 +53,15 @@
 //!   (d_p), h10 h v_k x (R_k^T pbar) (dtheta) and h10 h R_k^T pbar (d_v), likewise node k + 1
 //!   with h01 and h11.
 
+use super::control::pulled;
+use super::tip::Held;
 use super::{Sensitivity, singular};
 use crate::collocation::unknowns::{NODE, P, THETA, V};
 use crate::error::{Result, invalid};
 use crate::model::parameter::Parameter;
 use crate::model::robot::{Robot, RodModel};
 use crate::solution::Solution;
-use nalgebra::{Matrix3, Vector3};
+use nalgebra::{DVector, Matrix3, Vector3};
 
 /// A cotangent (the gradient of a scalar loss) on the outputs of a solved robot.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -69,6 +90,9 @@ pub fn rotation_cotangent(R: &Matrix3<f64>, R_bar: &Matrix3<f64>) -> Vector3<f64
 pub struct Adjoint<'a> {
     /// The linearization and the -dF/dq of every parameter.
     sensitivity: Sensitivity<'a>,
+    /// The taut displacement-controlled tendons, whose pull-ins are held (module docs,
+    /// "Held pull-ins").
+    held: Held,
     /// Arc lengths s_j of the sampled backbone points (m), in [0, L].
     samples: Vec<f64>,
     /// The solution (for the Hermite interpolant's intervals and node states).
@@ -81,19 +105,14 @@ impl<'a> Adjoint<'a> {
     /// Linearizes `robot`'s collocation system at `solution` (as [`Sensitivity::new`]) for
     /// outputs that include the backbone points at arc lengths `samples` (m).
     ///
+    /// Displacement-controlled tendons keep their pull-ins: the gradients are those of the
+    /// robot as it is driven (module docs, "Held pull-ins"), and `displacement.I` is a
+    /// parameter.
+    ///
     /// # Errors
     /// [`crate::Error::InvalidInput`] for a sample outside [0, L] or not finite, for a robot
-    /// with a displacement-controlled tendon (its tension is solved, not a parameter held
-    /// fixed: give the tensions, e.g. `robot.with_tensions(&solution.tensions())`); as
-    /// [`Sensitivity::new`].
+    /// with friction; as [`Sensitivity::new`].
     pub fn new(robot: &'a Robot, solution: &Solution, samples: &[f64]) -> Result<Self> {
-        if let Some(i) = robot.tendons.iter().position(|t| t.displacement().is_some()) {
-            return Err(invalid(
-                format!("tendon {}", i + 1),
-                "is displacement-controlled; the adjoint gradients hold every tension fixed",
-                "give the tendons tensions (Robot::with_tensions with the solution's tensions)",
-            ));
-        }
         if let Some(i) = robot.tendons.iter().position(|t| t.active_friction().is_some()) {
             return Err(invalid(
                 format!("tendon {}", i + 1),
@@ -110,10 +129,12 @@ impl<'a> Adjoint<'a> {
                 "give backbone sample points between 0 and the rod length",
             ));
         }
-        let sensitivity = Sensitivity::new(robot, solution)?;
+        let mut sensitivity = Sensitivity::new(robot, solution)?;
+        let held = Held::new(&mut sensitivity, robot, solution)?;
         let unknowns = sensitivity.border.system().unknowns();
         Ok(Adjoint {
             sensitivity,
+            held,
             samples: samples.to_vec(),
             solution: solution.clone(),
             multiplier: vec![0.0; unknowns],
@@ -140,18 +161,61 @@ impl<'a> Adjoint<'a> {
     /// [`Sensitivity::parameter`].
     pub fn gradient(&mut self, cotangent: &Cotangent, parameters: &[Parameter]) -> Result<Vec<f64>> {
         self.multiplier_for(cotangent)?;
+        let pulls = self.hold_pull_ins()?;
+        let robot = self.sensitivity.robot();
+        parameters.iter().try_for_each(|&p| self.held.check(p))?;
         parameters
             .iter()
-            .map(|&p| {
-                self.sensitivity.parameter_rhs(p)?;
-                Ok(self
-                    .multiplier
-                    .iter()
-                    .zip(&self.sensitivity.scratch[0])
-                    .map(|(l, r)| l * r)
-                    .sum())
+            .map(|&p| match p {
+                Parameter::Displacement(i) => {
+                    pulled(robot, i)?;
+                    Ok(pulls.iter().find(|(j, _)| *j == i).map_or(0.0, |(_, w)| *w))
+                }
+                // Its pull-in sets it (a zero column, as in the tip Jacobian).
+                Parameter::Tension(i) if robot.tendons.get(i).is_some_and(|t| t.displacement().is_some()) => Ok(0.0),
+                _ => {
+                    self.sensitivity.parameter_rhs(p)?;
+                    Ok(self.dot_rhs())
+                }
             })
             .collect()
+    }
+
+    /// lambda . (-dF/dq) for the right-hand side in the sensitivity's buffer.
+    fn dot_rhs(&self) -> f64 {
+        self.multiplier
+            .iter()
+            .zip(&self.sensitivity.scratch[0])
+            .map(|(l, r)| l * r)
+            .sum()
+    }
+
+    /// With held pull-ins, turns the multiplier lambda = J^-T (dy/dx)^T ybar into
+    /// J^-T ((dy/dx)^T ybar + G^T w) with w = S^-T c, c_m = lambda . (-dF/dtau_m) (module
+    /// docs, "Held pull-ins"), and returns w per held tendon: (tendon, dloss/dq_tendon).
+    fn hold_pull_ins(&mut self) -> Result<Vec<(usize, f64)>> {
+        let Some(h) = self.held.directions() else {
+            return Ok(Vec::new());
+        };
+        let mut c = DVector::zeros(h.tendons.len());
+        for (m, &i) in h.tendons.iter().enumerate() {
+            self.sensitivity.tension_rhs(i)?;
+            c[m] = self.dot_rhs();
+        }
+        let w = h
+            .displacement_by_tension()
+            .transpose()
+            .lu()
+            .solve(&c)
+            .ok_or_else(singular)?;
+        let g = &mut self.sensitivity.scratch[1];
+        g.fill(0.0);
+        h.add_length_cotangent(&w, self.solution.length(), g);
+        let mu = self.sensitivity.workspace.solve_transposed(g).ok_or_else(singular)?;
+        for (l, m) in self.multiplier.iter_mut().zip(mu) {
+            *l += m;
+        }
+        Ok(h.tendons.iter().copied().zip(w.iter().copied()).collect())
     }
 
     /// Solves J^T lambda = (dy/dx)^T ybar into `multiplier`.

@@ -63,12 +63,15 @@ pub fn columns<S: AsRef<str>>(names: &[S], robot: &Robot) -> Result<Vec<Paramete
 /// displacement-controlled tendons every column holds their pull-ins).
 ///
 /// Costs one Jacobian assembly and factorization, then per column one solve with the
-/// stored factors (plus two or three residual evaluations for a tension or E).
+/// stored factors, plus one pass over the mesh for all tension columns together (exact) and
+/// two residual evaluations for E, a distributed force or a routing offset (differenced).
+/// A `displacement.I` column holds the other pull-ins (docs/actuation.md, "Sensitivities").
 ///
 /// # Errors
 /// [`crate::Error::InvalidInput`] for a parameter the robot does not have or that is not a
-/// column ([`Parameter::DistributedForce`], [`Parameter::LoadScale`]), and as
-/// [`Sensitivity::new`].
+/// column ([`Parameter::LoadScale`]), the pull-in of a tension-controlled tendon, the
+/// routing offset of a taut displacement-controlled tendon (its held length moves with
+/// it), and as [`Sensitivity::new`].
 ///
 /// # Examples
 /// ```
@@ -125,7 +128,10 @@ pub(crate) fn tip_columns(
     let held = Held::new(sens, robot, solution)?;
     let mut out = DMatrix::zeros(6, wrt.len());
     for (j, p) in wrt.iter().enumerate() {
-        if let Some(d) = column(sens, robot, *p)? {
+        held.check(*p)?;
+        if let Parameter::Displacement(i) = *p {
+            out.set_column(j, &held.pull(pulled(robot, i)?)?);
+        } else if let Some(d) = column(sens, robot, *p)? {
             out.set_column(j, &held.tip(&d)?);
         }
     }
@@ -176,6 +182,20 @@ pub(crate) fn backbone_columns(
     Ok(out)
 }
 
+/// Tendon `i` when it is displacement-controlled (its pull-in a column), else
+/// [`crate::Error::InvalidInput`].
+pub(super) fn pulled(robot: &Robot, i: usize) -> Result<usize> {
+    if robot.tendons[i].displacement().is_some() {
+        Ok(i)
+    } else {
+        Err(invalid(
+            format!("displacement.{}", i + 1),
+            format!("has no derivative: tendon {} is tension-controlled", i + 1),
+            format!("give tendon {} a displacement (pull-in) to differentiate in it", i + 1),
+        ))
+    }
+}
+
 /// Checks every parameter against `robot` ([`Parameter::check`]).
 fn check(robot: &Robot, wrt: &[Parameter]) -> Result<()> {
     wrt.iter().try_for_each(|p| p.check(robot))
@@ -200,11 +220,21 @@ fn column(sens: &mut Sensitivity, robot: &Robot, p: Parameter) -> Result<Option<
             };
             youngs_modulus(sens, geometry)?
         }
-        Parameter::DistributedForce(_) | Parameter::LoadScale => {
+        Parameter::RoutingOffset(..) | Parameter::DistributedForce(_) => sens.parameter(p)?,
+        Parameter::Displacement(_) => {
+            return Err(invalid(
+                p.to_string(),
+                "is not a column of the backbone Jacobian (its pull-in holds the tendon's length, which only the \
+                 tip Jacobian includes)",
+                "use the tip Jacobian for pull-in columns",
+            ));
+        }
+        Parameter::LoadScale => {
             return Err(invalid(
                 p.to_string(),
                 "is not a column of the control Jacobian",
-                "ask for tension.I, tip_force.x|y|z, tip_moment.x|y|z, base_position.x|y|z or youngs_modulus",
+                "ask for tension.I, displacement.I, tip_force.x|y|z, tip_moment.x|y|z, base_position.x|y|z, \
+                 distributed_force.x|y|z, routing.I.x|y or youngs_modulus",
             ));
         }
     };

@@ -30,7 +30,17 @@
 //! scaled); the base position only the base rows, as -e / L; a base rotation
 //! R0 -> exp(hat(phi)) R0 only the base rotation rows log(R0^T R(0)), as -J_l^-1 R0^T.
 //!
-//! **Differences** elsewhere (tensions, moduli, anything passed to
+//! **Exact for the tensions**: eq. 13 is linear in each tension once the tendon's path terms
+//! are formed (A_i = tau_i P_i / |p_i|), and so are the point loads where a tendon ends or
+//! bends, so dF/dtau_i at fixed states is the tendon's own term per unit of tension
+//! ([`System::parameter_columns`], docs/sensitivity.md, "Exact tension columns"), carried
+//! through the collocation scheme's midpoint by the chain rule. One pass over the mesh
+//! gives every tendon's column; a slack tendon (not in the model at 0 N) gets the right
+//! derivative, the load its first pull adds. With tendons with friction the tension also
+//! sets the capstan rows: there it stays differenced (below).
+//!
+//! **Differences** elsewhere (moduli, distributed force components, routing offsets, the
+//! load scale, friction coefficients, tensions with friction, anything passed to
 //! [`Sensitivity::derivative`]): the residual takes its parameters from a [`Robot`], so
 //! dF/dq is differenced at fixed x with the parameter moved in a clone of the robot
 //! (exact derivatives would need the model generic in its parameters, not only in the
@@ -42,15 +52,17 @@
 //! shape goes as 1/E), which balance near h_rel = 1e-4 at about 1e-8. Measured on the
 //! prototype (cases S and H, 64 intervals) against Richardson-extrapolated references:
 //! 1e-8 to 6e-8 relative for tensions and moduli at 1e-4, against up to 7e-7 at
-//! eps^(1/3) = 6e-6 and 5e-5 at 1e-7.
+//! eps^(1/3) = 6e-6 and 5e-5 at 1e-7 (the exact tension columns agree with those
+//! differences to 2e-13 to 1e-7, tests/sensitivity.rs).
 //!
-//! Scales: a tension's is its value, but at least E I / (L |r_i(0)|), the tension that
-//! bends the rod through about a radian (2.2 N on the prototype; E I / L^2 for a tendon on
-//! the centreline); E's and G's are their values.
+//! Scales: a tension's (with friction) is its value, but at least E I / (L |r_i(0)|), the
+//! tension that bends the rod through about a radian (2.2 N on the prototype; E I / L^2 for
+//! a tendon on the centreline); E's and G's are their values.
 //!
 //! A tendon with zero tension is left out of the model, and a string cannot push, so its
-//! derivative is the one-sided (right) derivative, taken by the second-order forward
-//! difference (-3 F(0) + 4 F(h) - F(2h)) / (2h) ([`Difference::Forward`]).
+//! derivative is the one-sided (right) derivative: exact without friction, else the
+//! second-order forward difference (-3 F(0) + 4 F(h) - F(2h)) / (2h)
+//! ([`Difference::Forward`]).
 //!
 //! # Conventions
 //!
@@ -67,13 +79,16 @@
 //! # Cost
 //!
 //! One Jacobian assembly and one factorization (the structured elimination of
-//! `collocation/linear/blocks.rs`), then per parameter one solve with the stored factors
-//! ([`Workspace::solve_again`]), plus two residual evaluations for a differenced parameter
-//! (three one-sided).
+//! `collocation/linear/blocks.rs`; a [`crate::Solver`] after a warm solve factors the
+//! Jacobian its stability verdict evaluated at the solution instead of assembling it),
+//! then per parameter one solve with the stored factors ([`Workspace::solve_again`]), plus
+//! one pass over the mesh for all tension columns together, and two residual evaluations
+//! for a differenced parameter (three one-sided).
 #![allow(non_snake_case)]
 
 mod adjoint;
 mod control;
+mod exact;
 mod named;
 mod tip;
 
@@ -162,6 +177,12 @@ pub struct Sensitivity<'a> {
     workspace: Workspace,
     /// Scratch: residuals at the stencil points and the right-hand side.
     scratch: [Vec<f64>; 3],
+    /// dF/dtau_i of every tendon, column-major ([`System::parameter_columns`]), evaluated at
+    /// the first tension asked for (one pass serves every tendon); frictionless systems only.
+    tension_columns: Option<Vec<f64>>,
+    /// dF/dk_j of the six section stiffnesses, column-major, evaluated at the first modulus
+    /// asked for ([`Sensitivity::stiffness`]).
+    stiffness_columns: Option<Vec<f64>>,
 }
 
 impl<'a> Sensitivity<'a> {
@@ -181,16 +202,26 @@ impl<'a> Sensitivity<'a> {
     /// Jacobian there is singular (a bifurcation, where no sensitivity exists); a model
     /// breakdown at the solution's states.
     pub fn new(robot: &'a Robot, solution: &Solution) -> Result<Self> {
-        Self::with_workspace(robot, solution, None)
+        Self::with_workspace(robot, solution, None, false)
     }
 
     /// As [`Sensitivity::new`], factoring in `workspace` when it was built for the
     /// solution's mesh with the structured solver (a [`crate::Solver`]'s, which keeps its
     /// buffers and pattern), else in a new one; [`Sensitivity::into_workspace`] gives it back.
+    /// With `evaluated`, the workspace's value buffer already holds the Jacobian of this
+    /// robot's collocation system at the solution's states, from a solve that converged
+    /// there (a [`crate::Solver`]'s stability verdict after a warm solve,
+    /// [`Workspace::evaluated_at_solution`]): those values are factored, without assembling
+    /// the Jacobian again or checking the residual.
     ///
     /// # Errors
     /// As [`Sensitivity::new`].
-    pub(crate) fn with_workspace(robot: &'a Robot, solution: &Solution, workspace: Option<Workspace>) -> Result<Self> {
+    pub(crate) fn with_workspace(
+        robot: &'a Robot,
+        solution: &Solution,
+        workspace: Option<Workspace>,
+        evaluated: bool,
+    ) -> Result<Self> {
         robot.validate()?;
         if solution.tendons.len() != robot.tendons.len() {
             return Err(invalid(
@@ -218,10 +249,24 @@ impl<'a> Sensitivity<'a> {
                 "pass a solution of this robot (same tendon terminations and point loads)",
             ));
         }
-        let model = Model::new(robot);
+        let model = solved_model(robot, solution);
         let states: Vec<State> = interpolate_nodes(&model, &solution.nodes, &mesh);
         let mut border = Capstan::at_solution(model, mesh, solution);
         let n = border.system().unknowns() + border.border_rows();
+        let mut workspace = workspace;
+        if let Some(mut workspace) = workspace.take_if(|w| evaluated && w.evaluated_at_solution()) {
+            if !workspace.factor_evaluated() {
+                return Err(singular());
+            }
+            return Ok(Sensitivity {
+                border,
+                states,
+                workspace,
+                scratch: [vec![0.0; n], vec![0.0; n], vec![0.0; n]],
+                tension_columns: None,
+                stiffness_columns: None,
+            });
+        }
         let mut residual = vec![0.0; n];
         let mut values = vec![0.0; nonzeros(&border.system().mesh)];
         border.linearize(&states, &mut residual, &mut values)?;
@@ -248,6 +293,8 @@ impl<'a> Sensitivity<'a> {
             states,
             workspace,
             scratch: [residual, vec![0.0; n], vec![0.0; n]],
+            tension_columns: None,
+            stiffness_columns: None,
         })
     }
 
@@ -498,6 +545,12 @@ impl<'a> Sensitivity<'a> {
     /// # Errors
     /// [`crate::Error::InvalidInput`] for an axis other than 0, 1, 2 or a singular Jacobian.
     pub fn base_rotation(&mut self, axis: usize) -> Result<Vec<NodeDerivative>> {
+        self.base_rotation_rhs(axis)?;
+        self.respond()
+    }
+
+    /// Writes -dF/dq of [`Sensitivity::base_rotation`] into the right-hand side buffer.
+    fn base_rotation_rhs(&mut self, axis: usize) -> Result<()> {
         Self::check_axis(axis)?;
         let R0 = self.robot().base_rotation;
         let eps = so3::log(&(R0.transpose() * self.states[0].R));
@@ -506,63 +559,7 @@ impl<'a> Sensitivity<'a> {
         for i in 0..3 {
             rhs[3 + i] = column[i];
         }
-        self.respond()
-    }
-
-    /// The derivative of every node state with respect to tendon `tendon`'s tension
-    /// (per N): central differences, or the one-sided right derivative for a slack tendon.
-    ///
-    /// # Errors
-    /// [`crate::Error::InvalidInput`] for a tendon index out of range or a tendon with
-    /// friction at 0 N (not modelled: its log tensions jump under the first pull); as
-    /// [`Sensitivity::derivative`].
-    pub fn tension(&mut self, tendon: usize) -> Result<Vec<NodeDerivative>> {
-        self.tension_rhs(tendon)?;
-        self.respond()
-    }
-
-    /// Writes -dF/dq of [`Sensitivity::tension`] into the right-hand side buffer.
-    fn tension_rhs(&mut self, tendon: usize) -> Result<()> {
-        let robot = self.robot();
-        let t = Self::tendon_of(robot, tendon)?;
-        let offset = t.routing.at(0.0, robot.length()).r.norm();
-        let bend = if offset > 0.0 {
-            robot.bending_stiffness() / (robot.length() * offset)
-        } else {
-            force_scale(robot)
-        };
-        let tension = self.border.input_tension(tendon);
-        let step = RELATIVE_STEP * tension.max(bend);
-        // Central needs q - h inside the model's domain (tension > 0 keeps the tendon in it).
-        let difference = if tension > step {
-            Difference::Central
-        } else {
-            Difference::Forward
-        };
-        if tension == 0.0 && self.robot().tendons[tendon].active_friction().is_some() {
-            return Err(invalid(
-                format!("tendons[{tendon}].tension"),
-                "is 0 N on a tendon with friction, where the tension derivative is not modelled: the capstan \
-                 law leaves the log tension of an unloaded tendon at 0, and its limit under the first pull differs",
-                "give the tendon a small tension (e.g. 1e-3 N) to differentiate there, or set its friction to 0",
-            ));
-        }
-        if self.border.border_rows() > 0 {
-            // With friction the tension also sets the profile's base and the capstan rows:
-            // moved in a clone of the robot, every row follows.
-            let perturb = |r: &mut Robot, dq: f64| r.tendons[tendon].set_tension(tension + dq);
-            return self.differenced_rhs(step, difference, |border, states, dq, out| {
-                residual_at(border, states, &perturb, dq, out)
-            });
-        }
-        // The tension is an input the model owns: moved in place, no robot to clone.
-        self.differenced_rhs(step, difference, |border, states, dq, out| {
-            let system = border.system_mut();
-            system.model.tensions[tendon] = tension + dq;
-            let result = system.residual(states, out);
-            system.model.tensions[tendon] = tension;
-            result
-        })
+        Ok(())
     }
 
     /// The derivative of every node state with respect to tendon `tendon`'s friction
@@ -611,8 +608,26 @@ fn residual_at(
             "differentiate with respect to parameters that keep the breakpoints",
         ));
     }
-    let system = border.moved(Model::new(&probe));
+    let mut model = Model::new(&probe);
+    for (i, t) in probe.tendons.iter().enumerate() {
+        if t.displacement().is_some() {
+            model.tensions[i] = border.system().model.tensions[i];
+        }
+    }
+    let system = border.moved(model);
     border.residual_of(&system, states, out)
+}
+
+/// The model of `robot` at the tensions of `solution`: a displacement-controlled tendon's
+/// tension is the solved one (its pull-in held fixed), a tension-controlled tendon's its input.
+fn solved_model<'a>(robot: &'a Robot, solution: &Solution) -> Model<'a> {
+    let mut model = Model::new(robot);
+    for (i, t) in robot.tendons.iter().enumerate() {
+        if t.displacement().is_some() {
+            model.tensions[i] = solution.tendons[i].tension;
+        }
+    }
+    model
 }
 
 /// Characteristic force E I / L^2 (N): the step scale of a tendon on the centreline.

@@ -94,6 +94,14 @@ pub fn tip_sensitivities(robot: &Robot, solution: &Solution) -> Result<TipSensit
     let solved = robot.with_tensions(&solution.tensions());
     let mut sens = Sensitivity::new(&solved, solution)?;
     let held = Held::new(&mut sens, robot, solution)?;
+    // Without friction or held pull-ins, the 16 parameters besides the tensions cost six
+    // transposed solves (the tip pose's multipliers) instead of one solve each.
+    let multipliers = if held.holds() { None } else { sens.tip_multipliers()? };
+    let mut tip = Tip {
+        sens,
+        held: &held,
+        multipliers,
+    };
     let k = robot.tendons.len();
     let mut tension = DMatrix::zeros(6, k);
     let mut displacement = DMatrix::zeros(6, k);
@@ -105,10 +113,11 @@ pub fn tip_sensitivities(robot: &Robot, solution: &Solution) -> Result<TipSensit
             // Not modelled at 0 N with friction (Sensitivity::tension): NaN, not a guess.
             tension.set_column(i, &Vector6::repeat(f64::NAN));
         } else {
-            tension.set_column(i, &held.tip(&sens.tension(i)?)?);
+            // Forward solves: the columns a controller's Solver::tip_jacobian gives, to 1e-12.
+            tension.set_column(i, &held.tip(&tip.sens.tension(i)?)?);
         }
         if robot.tendons[i].active_friction().is_some() {
-            friction.set_column(i, &held.tip(&sens.friction(i)?)?);
+            friction.set_column(i, &held.tip(&tip.sens.friction(i)?)?);
         }
     }
     let mut tip_force = Matrix6x3::zeros();
@@ -116,12 +125,12 @@ pub fn tip_sensitivities(robot: &Robot, solution: &Solution) -> Result<TipSensit
     let mut base_position = Matrix6x3::zeros();
     let mut base_rotation = Matrix6x3::zeros();
     for j in 0..3 {
-        tip_force.set_column(j, &held.tip(&sens.tip_force(j)?)?);
-        tip_moment.set_column(j, &held.tip(&sens.tip_moment(j)?)?);
-        base_position.set_column(j, &held.tip(&sens.base_position(j)?)?);
-        base_rotation.set_column(j, &held.tip(&sens.base_rotation(j)?)?);
+        tip_force.set_column(j, &tip.of(|s| s.tip_force_rhs(j))?);
+        tip_moment.set_column(j, &tip.of(|s| s.tip_moment_rhs(j))?);
+        base_position.set_column(j, &tip.of(|s| s.base_position_rhs(j))?);
+        base_rotation.set_column(j, &tip.of(|s| s.base_rotation_rhs(j))?);
     }
-    let moduli = moduli(&mut sens, &held)?;
+    let moduli = moduli(&mut tip)?;
     Ok(TipSensitivities {
         tension,
         displacement,
@@ -170,6 +179,33 @@ impl Held {
         self.directions.is_some()
     }
 
+    /// Refuses the offset of a held tendon's routing: it moves the tendon's path length
+    /// at fixed states too, a term the held derivatives do not include
+    /// ([`crate::Error::InvalidInput`]); any other parameter passes.
+    pub(super) fn check(&self, parameter: crate::model::parameter::Parameter) -> Result<()> {
+        use crate::model::parameter::Parameter;
+        match (parameter, self.directions()) {
+            (Parameter::RoutingOffset(i, _), Some(h)) if h.tendons.contains(&i) => Err(crate::error::invalid(
+                parameter.to_string(),
+                format!(
+                    "has no derivative here: tendon {} is displacement-controlled and taut, and its offset moves its \
+                     path length, which the pull-in holds (a term these derivatives do not include)",
+                    i + 1
+                ),
+                format!(
+                    "give tendon {} a tension (its solved one) to differentiate in its routing",
+                    i + 1
+                ),
+            )),
+            _ => Ok(()),
+        }
+    }
+
+    /// The held tendons' tension directions, when there are any (the adjoint's border).
+    pub(super) fn directions(&self) -> Option<&TensionDirections> {
+        self.directions.as_ref().map(|(h, _)| h)
+    }
+
     /// The tip pose's derivative for the state derivative `d`, the pull-ins held.
     pub(super) fn tip(&self, d: &[NodeDerivative]) -> Result<Vector6<f64>> {
         let own = d[d.len() - 1].pose();
@@ -182,7 +218,7 @@ impl Held {
 
     /// d(tip pose)/dq_i for the displacement-controlled tendon `i` (per m): S dtau = e_i
     /// over the held tendons; zero for a slack one.
-    fn pull(&self, i: usize) -> Result<Vector6<f64>> {
+    pub(super) fn pull(&self, i: usize) -> Result<Vector6<f64>> {
         let Some((h, schur)) = &self.directions else {
             return Ok(Vector6::zeros());
         };
@@ -196,17 +232,48 @@ impl Held {
     }
 }
 
+/// The linearization with what gives a right-hand side's tip derivative: the tip
+/// multipliers (plain system), or a solve and the held pull-ins.
+struct Tip<'s, 'a> {
+    sens: Sensitivity<'a>,
+    held: &'s Held,
+    multipliers: Option<Vec<Vec<f64>>>,
+}
+
+impl Tip<'_, '_> {
+    /// d(tip pose)/dq for the right-hand side `rhs` writes into the sensitivity's buffer.
+    fn of(&mut self, rhs: impl FnOnce(&mut Sensitivity) -> Result<()>) -> Result<Vector6<f64>> {
+        rhs(&mut self.sens)?;
+        match &self.multipliers {
+            Some(m) => Ok(self.sens.tip_by(m)),
+            None => self.held.tip(&self.sens.respond()?),
+        }
+    }
+}
+
 /// The modulus derivatives when the rod's uniform section is the one its geometry gives.
-fn moduli(sens: &mut Sensitivity, held: &Held) -> Result<Option<ModulusSensitivities>> {
-    let Some(g) = built_from_geometry(&sens.robot().rod) else {
+fn moduli(tip: &mut Tip) -> Result<Option<ModulusSensitivities>> {
+    let Some(g) = built_from_geometry(&tip.sens.robot().rod) else {
         return Ok(None);
     };
     let (o, i, e, nu) = (g.outer_radius, g.inner_radius, g.youngs_modulus, g.poisson_ratio);
     let shear = shear_modulus(e, nu);
-    let youngs_modulus = held.tip(&youngs_modulus(sens, g)?)?;
-    let shear_modulus = held.tip(&sens.derivative(RELATIVE_STEP * shear, Difference::Central, |r, d| {
-        r.rod.stiffness = Stiffness::Uniform(Section::tube(o, i, e, shear + d));
-    })?)?;
+    let (youngs_modulus, shear_modulus) = if tip.sens.exact_stiffness() {
+        // The section is linear in (E, G): dk/dG at fixed E is the section of E = 0, G = 1.
+        let unit_shear = stiffnesses(&Section::tube(o, i, 0.0, 1.0));
+        (
+            tip.of(|s| s.stiffness_rhs(&youngs_modulus_direction(g)))?,
+            tip.of(|s| s.stiffness_rhs(&unit_shear))?,
+        )
+    } else {
+        let by_g = tip
+            .sens
+            .derivative(RELATIVE_STEP * shear, Difference::Central, |r, d| {
+                r.rod.stiffness = Stiffness::Uniform(Section::tube(o, i, e, shear + d));
+            })?;
+        let by_e = youngs_modulus(&mut tip.sens, g)?;
+        (tip.held.tip(&by_e)?, tip.held.tip(&by_g)?)
+    };
     Ok(Some(ModulusSensitivities {
         youngs_modulus,
         // d/dE|_nu = d/dE|_G + (dG/dE)|_nu d/dG|_E with dG/dE|_nu = G / E.
@@ -240,9 +307,33 @@ pub(super) fn youngs_modulus(sens: &mut Sensitivity, geometry: Geometry) -> Resu
         geometry.youngs_modulus,
         geometry.poisson_ratio,
     );
+    if sens.exact_stiffness() {
+        return sens.stiffness(&youngs_modulus_direction(geometry));
+    }
     sens.derivative(RELATIVE_STEP * e, Difference::Central, |r, d| {
         r.rod.stiffness = Stiffness::Uniform(Section::tube(o, i, e + d, shear_modulus(e + d, nu)));
     })
+}
+
+/// dk/dE at fixed Poisson's ratio for a rod built from `geometry`: every stiffness is
+/// proportional to E, so dk/dE = k / E.
+pub(super) fn youngs_modulus_direction(geometry: Geometry) -> [f64; 6] {
+    let (o, i, e, nu) = (
+        geometry.outer_radius,
+        geometry.inner_radius,
+        geometry.youngs_modulus,
+        geometry.poisson_ratio,
+    );
+    let mut dk = stiffnesses(&Section::tube(o, i, e, shear_modulus(e, nu)));
+    dk.iter_mut().for_each(|k| *k /= e);
+    dk
+}
+
+/// The six diagonal stiffnesses of a section, kse then kbt, as [`Sensitivity::stiffness`]
+/// takes them.
+fn stiffnesses(section: &Section) -> [f64; 6] {
+    let (a, b) = (section.kse, section.kbt);
+    [a[0], a[1], a[2], b[0], b[1], b[2]]
 }
 
 /// Whole-backbone sensitivity: d p(s) / d tau_i (m/N, world frame) at each of `solution`'s
@@ -409,6 +500,24 @@ impl TensionDirections {
                     .sum::<f64>()
             }),
         )
+    }
+
+    /// Adds G^T w to the scaled cotangent `g` (12 per node, d = (dp / L, dtheta, dv, du L)):
+    /// the transpose of [`TensionDirections::length_change`], w_j weighting tendon j's path
+    /// length (rod length `length`, m). Node k's dv slot gets sum_j w_j weight dspeed/dv,
+    /// its du slot sum_j w_j weight dspeed/du / L (du = d_u / L).
+    pub(super) fn add_length_cotangent(&self, w: &DVector<f64>, length: f64, g: &mut [f64]) {
+        use crate::collocation::unknowns::{NODE, U, V};
+        for ((quadrature, routing), &w_j) in self.paths.iter().zip(w.iter()) {
+            for (&(node, weight), rp) in quadrature.weights.iter().zip(routing) {
+                let (v, u) = &self.strains[node];
+                let (dv, du) = speed_gradient(rp, v, u);
+                for i in 0..3 {
+                    g[node * NODE + V + i] += w_j * weight * dv[i];
+                    g[node * NODE + U + i] += w_j * weight * du[i] / length;
+                }
+            }
+        }
     }
 
     /// dq/dtau (m/N, k x k): how the pull-ins that hold the tendons just taut change with

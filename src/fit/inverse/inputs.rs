@@ -83,10 +83,19 @@ impl Inputs {
         DVector::from_iterator(self.free.len(), self.free.iter().map(|&i| robot.tendons[i].tension()))
     }
 
-    /// Sets the free tendons' tensions in `robot` to `tau`, within [0, their limit].
+    /// Sets the free tendons' tensions in `robot` to `tau`, within [0, their limit] (a value
+    /// within [`BOUND_SNAP`] of the limit on it).
     pub(super) fn set(&self, robot: &mut Robot, tau: &DVector<f64>) {
         for (k, &i) in self.free.iter().enumerate() {
-            robot.tendons[i].hold_tension(tau[k].clamp(0.0, self.limits[k]));
+            // A step the QP ends on a bound lands there to rounding (tau + (limit - tau));
+            // within BOUND_SNAP of the limit it is the limit.
+            let (limit, tension) = (self.limits[k], tau[k].clamp(0.0, self.limits[k]));
+            let snapped = if tension >= limit - BOUND_SNAP * limit {
+                limit
+            } else {
+                tension
+            };
+            robot.tendons[i].hold_tension(snapped);
         }
     }
 

@@ -97,6 +97,9 @@ use nalgebra::{Matrix3, Matrix3x6, Matrix6, Matrix6x3, SMatrix, Vector3, Vector6
 mod factor;
 use factor::Factor;
 
+mod parameters;
+pub(crate) use parameters::{stiffness_rates, tension_rates};
+
 /// Tendons whose per-tendon quantities are kept on the stack between the two passes (solve
 /// for x, then differentiate at x); further tendons are re-evaluated from their routing.
 /// 8 covers the usual 3-6 tendon robots (the prototype has 5) at 0.9 kB of stack.
@@ -614,6 +617,19 @@ mod tests {
         v: &Vector3<T>,
         u: &Vector3<T>,
     ) -> Result<(Vector3<T>, Vector3<T>)> {
+        let tension = |_: usize, t: f64| (t > 0.0).then(|| T::from_f64(t).unwrap_or_else(T::zero));
+        strain_rates_with(model, site, segment_end, (R, v, u), &tension)
+    }
+
+    /// [`strain_rates`] with each reaching tendon's tension given by `tension(i, tau_i)`
+    /// (`None` leaves the tendon out): a dual tension seeds the derivative in it.
+    fn strain_rates_with<T: Real>(
+        model: &Model,
+        site: &Site,
+        segment_end: f64,
+        (R, v, u): (&Matrix3<T>, &Vector3<T>, &Vector3<T>),
+        tension: &dyn Fn(usize, f64) -> Option<T>,
+    ) -> Result<(Vector3<T>, Vector3<T>)> {
         let kse = lift::<T>(&site.section.section.kse);
         let kbt = lift::<T>(&site.section.section.kbt);
         let D = Matrix3::from_diagonal(&kse);
@@ -637,7 +653,8 @@ mod tests {
         let mut H = Matrix3::<T>::zeros();
         let mut a = Vector3::<T>::zeros();
         let mut b = Vector3::<T>::zeros();
-        for (i, tension, rp) in model.distributed_tendons(site.s, segment_end) {
+        for (i, tau, rp) in model.distributed_reaching(site.s, segment_end) {
+            let Some(tau) = tension(i, tau) else { continue };
             let r = lift::<T>(&rp.r);
             let r_s = lift::<T>(&rp.r_s);
             let r_ss = lift::<T>(&rp.r_ss);
@@ -651,7 +668,6 @@ mod tests {
                 });
             }
             let ph = hat(&pb_s);
-            let tau = T::from_f64(tension).unwrap_or_else(T::zero);
             let A_i = ph * ph * (-tau / (speed * speed * speed));
             let r_hat = hat(&r);
             let B_i = r_hat * A_i;
@@ -958,5 +974,62 @@ mod tests {
         };
         let (v, u) = state();
         check_model(&model, 0.09, robot.length(), &generic_rotation(), &v, &u);
+    }
+
+    /// d(v', u')/dtau_i of [`tension_rates`] against dual numbers seeded on tendon i's
+    /// tension in the oracle, for every tendon: taut, slack (the right derivative), ending
+    /// before the segment end (zero), at a tension factor below 1.
+    #[test]
+    fn tension_rates_match_ad() {
+        check_tension_rates(&several_tendons());
+    }
+
+    /// The same on a Kirchhoff rod, whose tendon loads see the strain v* and not the
+    /// translational coordinate.
+    #[test]
+    fn tension_rates_of_a_kirchhoff_rod_match_ad() {
+        let mut robot = several_tendons();
+        robot.rod_model = crate::model::robot::RodModel::Kirchhoff;
+        check_tension_rates(&robot);
+    }
+
+    fn check_tension_rates(robot: &Robot) {
+        let model = Model {
+            tension_factor: 0.4,
+            ..Model::new(robot)
+        };
+        let (v, u) = state();
+        let R = generic_rotation();
+        let l = robot.length();
+        for (s, end) in [(0.07, l), (0.07, 0.5 * l), (0.2, l)] {
+            let site = model.site(s);
+            let mut out = vec![Vector6::zeros(); robot.tendons.len()];
+            let (rates, lin) = tension_rates(&model, &site, end, (&R, &v, &u), true, &mut out).unwrap();
+            // The rates and the full linearization are those of `linearize`, bit for bit.
+            assert_eq!(lin, Some(linearize(&model, &site, end, &R, &v, &u).unwrap()));
+            assert_eq!(rates, super::rates(&model, &site, end, &R, &v, &u).unwrap());
+            for (j, d) in out.iter().enumerate() {
+                let seeded = |i: usize, t: f64| {
+                    if i == j {
+                        Some(Dual64::new(t, model.tension_factor))
+                    } else {
+                        (t > 0.0).then(|| Dual64::from(t))
+                    }
+                };
+                let lift = |a: &Vector3<f64>| a.map(Dual64::from);
+                let R_d = R.map(Dual64::from);
+                let (v_s, u_s) = strain_rates_with(&model, &site, end, (&R_d, &lift(&v), &lift(&u)), &seeded).unwrap();
+                let ad = Vector6::from_fn(|k, _| if k < 3 { v_s[k].eps } else { u_s[k - 3].eps });
+                let ends_before = robot.tendons[j].end(l) < end;
+                if ends_before {
+                    assert_eq!(*d, Vector6::zeros(), "tendon {j} does not reach {end}");
+                    assert_eq!(ad, Vector6::zeros());
+                } else {
+                    assert!(d.amax() > 0.0, "tendon {j} (slack or taut) loads the rod at {s}");
+                    // 1e-12: both exact derivatives in f64; only rounding in M^-1 differs.
+                    assert!(rel(d, &ad) < 1e-12, "tendon {j} at {s}: {d} vs {ad}");
+                }
+            }
+        }
     }
 }

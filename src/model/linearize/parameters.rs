@@ -1,0 +1,139 @@
+//! Eq. 13's rates differentiated in parameters rather than in the state: every tendon's
+//! tension ([`tension_rates`]) and the section's six stiffnesses ([`stiffness_rates`]), at
+//! fixed (R, v, u), from the same assembly and factors as [`super::linearize`] (its module
+//! docs name the symbols). Checked against dual numbers seeded on the tension (the tests of
+//! `linearize`) and, through the collocation system, against differenced residuals
+//! (tests/sensitivity.rs).
+#![allow(non_snake_case)]
+
+use super::{CACHED_TENDONS, Linearization, TendonPoint, assemble, breakdown, derivative};
+use crate::error::Result;
+use crate::model::equations::{Model, Site};
+use nalgebra::{Matrix3, Matrix6, Matrix6x3, Vector3, Vector6};
+
+/// Eq. 13 (corrected) at (R, v, u) with the derivatives of its rates in every tendon's
+/// tension: writes d(v', u')/dtau_i into `out[i]` (one entry per tendon of the robot, zero
+/// for a tendon that does not load the backbone here) and returns the rates, with the full
+/// [`Linearization`] when `full` (the collocation midpoint needs it for the chain rule).
+///
+/// Tendon i enters F = M x - rhs only through q_i = A_i z_i (module docs), and
+/// A_i = tau_i f P_i / |p_i| (f the tension factor) is linear in tau_i while p_i, c_i and
+/// z_i do not depend on it, so at fixed x
+///
+/// ```text
+/// dF/dtau_i = (f / |p_i|) [P_i z_i; r_i x P_i z_i],    d(v', u')/dtau_i = -M^-1 dF/dtau_i,
+/// ```
+///
+/// exact, with one solve with the factored M per tendon. A slack tendon (tau_i = 0, not in
+/// M) gets the same formula: the right derivative, the load its first pull adds.
+///
+/// # Errors
+/// As [`rates`]; [`Error::SingularRouting`] also for a slack tendon without a tangent.
+pub(crate) fn tension_rates(
+    model: &Model,
+    site: &Site,
+    segment_end: f64,
+    state: (&Matrix3<f64>, &Vector3<f64>, &Vector3<f64>),
+    full: bool,
+    out: &mut [Vector6<f64>],
+) -> Result<(Vector6<f64>, Option<Linearization>)> {
+    let (v, u) = (state.1, state.2);
+    point_derivatives(model, site, segment_end, state, full, out, |x_v, x_u, out| {
+        for (i, _, rp) in model.distributed_reaching(site.s, segment_end) {
+            // Per unit of tau_i: k_i = f / |p_i|, so A() is (f / |p_i|) P_i.
+            let tp = TendonPoint::new(i, model.tension_factor, &rp, site, v, u)?;
+            // On a Kirchhoff rod q_i does not see the translational coordinate's rate.
+            let x_v = if tp.inextensible { Vector3::zeros() } else { *x_v };
+            let q = tp.A() * (x_v - tp.r.cross(x_u) + tp.c);
+            let rq = tp.r.cross(&q);
+            out[i] = Vector6::new(q[0], q[1], q[2], rq[0], rq[1], rq[2]);
+        }
+        Ok(())
+    })
+}
+
+/// Eq. 13 (corrected) at (R, v, u) with the derivatives of its rates in the six diagonal
+/// stiffnesses of the section, kse = (GA, GA, EA) then kbt = (EIxx, EIyy, GJ): writes
+/// d(v', u')/dk_j into `out[j]` (six entries) and returns the rates, with the full
+/// [`Linearization`] when `full`. For a section that does not vary along s (D' = C' = 0,
+/// and they stay 0), at fixed x, with n_b = D (v - v*) and m_b = C (u - u*) (module docs):
+///
+/// ```text
+/// dF/dkse_j = (e_j (x_v - v*')_j + u x e_j (v - v*)_j,  v x e_j (v - v*)_j)
+/// dF/dkbt_j = (0,                                      e_j (x_u - u*')_j + u x e_j (u - u*)_j)
+/// ```
+///
+/// and d(v', u')/dk_j = -M^-1 dF/dk_j: exact, one solve with the factored M each.
+///
+/// # Errors
+/// As [`rates`].
+pub(crate) fn stiffness_rates(
+    model: &Model,
+    site: &Site,
+    segment_end: f64,
+    state: (&Matrix3<f64>, &Vector3<f64>, &Vector3<f64>),
+    full: bool,
+    out: &mut [Vector6<f64>],
+) -> Result<(Vector6<f64>, Option<Linearization>)> {
+    let (v, u) = (state.1, state.2);
+    let reference = &site.reference;
+    let dv = v - reference.v_star;
+    let du = u - reference.u_star;
+    // v x n_b sees the strain: v* on a Kirchhoff rod, whose coordinate v carries n_b.
+    let strain = site.strain(v);
+    point_derivatives(model, site, segment_end, state, full, out, |x_v, x_u, out| {
+        for j in 0..3 {
+            let e = Vector3::ith(j, 1.0);
+            let top = e * (x_v[j] - reference.v_star_s[j]) + u.cross(&e) * dv[j];
+            let bottom = strain.cross(&e) * dv[j];
+            out[j] = Vector6::new(top[0], top[1], top[2], bottom[0], bottom[1], bottom[2]);
+            let bottom = e * (x_u[j] - reference.u_star_s[j]) + u.cross(&e) * du[j];
+            out[3 + j] = Vector6::new(0.0, 0.0, 0.0, bottom[0], bottom[1], bottom[2]);
+        }
+        Ok(())
+    })
+}
+
+/// The rates at (R, v, u) (with the full [`Linearization`] when `full`) and their
+/// derivatives in some parameters: `partial(x_v, x_u, out)` writes each parameter's dF/dq at
+/// fixed rates x = (x_v, x_u) (F = M x - rhs, module docs) into `out` (zeroed first), and
+/// each becomes d(v', u')/dq = -M^-1 dF/dq with the factors of M.
+fn point_derivatives(
+    model: &Model,
+    site: &Site,
+    segment_end: f64,
+    (R, v, u): (&Matrix3<f64>, &Vector3<f64>, &Vector3<f64>),
+    full: bool,
+    out: &mut [Vector6<f64>],
+    partial: impl FnOnce(&Vector3<f64>, &Vector3<f64>, &mut [Vector6<f64>]) -> Result<()>,
+) -> Result<(Vector6<f64>, Option<Linearization>)> {
+    let mut cache = [TendonPoint::ZERO; CACHED_TENDONS];
+    let assembled = assemble(model, site, segment_end, (R, v, u), Some(&mut cache))?;
+    let x = &assembled.x;
+    let rates = Vector6::from_fn(|i, _| x[i]);
+    let lin = if full {
+        let mut dFt = derivative(model, site, segment_end, (v, u), x, &assembled, &cache)?;
+        if !assembled.factor.solve_transposed_mut(&mut dFt) {
+            return Err(breakdown(site.s));
+        }
+        Some(Linearization {
+            rates,
+            d_strains: Matrix6::from_fn(|i, k| -dFt[(k, i)]),
+            d_rotation: Matrix6x3::from_fn(|i, k| -dFt[(6 + k, i)]),
+        })
+    } else {
+        None
+    };
+    let x_v = Vector3::new(x[0], x[1], x[2]);
+    let x_u = Vector3::new(x[3], x[4], x[5]);
+    out.fill(Vector6::zeros());
+    partial(&x_v, &x_u, out)?;
+    for d in out.iter_mut().filter(|d| **d != Vector6::zeros()) {
+        let mut row = d.transpose();
+        if !assembled.factor.solve_transposed_mut(&mut row) {
+            return Err(breakdown(site.s));
+        }
+        *d = -row.transpose();
+    }
+    Ok((rates, lin))
+}
