@@ -221,7 +221,20 @@ fn pulled_parameters(robot: &Robot) -> Vec<Parameter> {
 /// held) contracted with a tip cotangent, pull-in and routing columns included.
 #[test]
 fn adjoint_with_pull_ins_equals_the_contracted_tip_jacobian() {
-    let robot = pulled();
+    check_adjoint_with_pull_ins(&pulled());
+}
+
+/// The same on a Kirchhoff rod, whose path lengths do not move with the node coordinate v
+/// (the internal force's): the adjoint's length cotangent must leave those slots alone.
+#[test]
+fn adjoint_with_pull_ins_of_a_kirchhoff_rod_equals_the_contracted_tip_jacobian() {
+    let mut robot = pulled();
+    robot.rod_model = tdcr::RodModel::Kirchhoff;
+    check_adjoint_with_pull_ins(&robot);
+}
+
+fn check_adjoint_with_pull_ins(robot: &Robot) {
+    let robot = robot.clone();
     let solution = collocation::solve(&robot, &options()).unwrap();
     assert!(
         solution.tendons[0].tension > 0.1,

@@ -481,16 +481,19 @@ impl Model<'_> {
             let force = if coupled { R * t } else { Vector3::zeros() };
             Ok((force, R * rp.r.cross(&t)))
         };
+        // The tendons' tangents see the strain (v* on a Kirchhoff rod), as in the balance.
+        let va = &site_a.strain(va);
         for (i, _, rp) in self.reaching(s, Which::EndingAt(s)) {
             let (f, m) = unit_pull(i, &rp, Ra, va, ua)?;
             let (f, m) = scale(f, m);
             out[i].0 += f;
             out[i].1 += m;
         }
-        if let Some((_, Rb, vb, ub)) = right
+        if let Some((site_b, Rb, vb, ub)) = right
             && self.robot.corner_forces
             && coupled
         {
+            let vb = &site_b.strain(vb);
             for (i, _, rp) in self.reaching(s, Which::Past(s)) {
                 let (fa, ma) = unit_pull(i, &rp, Ra, va, ua)?;
                 let (fb, mb) = unit_pull(i, &rp, Rb, vb, ub)?;

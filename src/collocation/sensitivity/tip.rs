@@ -5,7 +5,7 @@
 use super::{Difference, NodeDerivative, RELATIVE_STEP, Sensitivity};
 use crate::error::Result;
 use crate::model::length::{NodeQuadrature, speed_gradient};
-use crate::model::robot::Robot;
+use crate::model::robot::{Robot, RodModel};
 use crate::model::rod::{Geometry, Rod, Section, Stiffness, shear_modulus};
 use crate::model::routing::RoutingPoint;
 use crate::solution::Solution;
@@ -423,6 +423,8 @@ pub(crate) struct TensionDirections {
     paths: Vec<(NodeQuadrature, Vec<RoutingPoint>)>,
     /// The solution's node strains (v, u), where the path speeds are linearized.
     strains: Vec<(Vector3<f64>, Vector3<f64>)>,
+    /// A Kirchhoff rod's: the paths do not change with the node coordinate v (the force's).
+    fixed_strain: bool,
 }
 
 impl TensionDirections {
@@ -472,6 +474,7 @@ impl TensionDirections {
             compliance,
             paths,
             strains,
+            fixed_strain: robot.rod_model == RodModel::Kirchhoff,
         };
         for m in 0..k {
             let d = sens.tension(directions.tendons[m])?;
@@ -513,7 +516,9 @@ impl TensionDirections {
                 let (v, u) = &self.strains[node];
                 let (dv, du) = speed_gradient(rp, v, u);
                 for i in 0..3 {
-                    g[node * NODE + V + i] += w_j * weight * dv[i];
+                    if !self.fixed_strain {
+                        g[node * NODE + V + i] += w_j * weight * dv[i];
+                    }
                     g[node * NODE + U + i] += w_j * weight * du[i] / length;
                 }
             }
