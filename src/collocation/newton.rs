@@ -77,8 +77,10 @@ pub struct Workspace {
     /// The stability verdict of the Jacobian in `values`, once assessed (cleared whenever
     /// `values` change).
     verdict: Option<Stability>,
-    /// Whether `values` hold the Jacobian [`Workspace::verdict_at`] evaluated (not factored).
-    at_solution: bool,
+    /// How far the last iterate has moved from the point where the Jacobian in `values` was
+    /// evaluated: the sum of the max-norms of the (scaled) steps accepted since, infinite
+    /// when that point is not known ([`Workspace::factor`], [`Workspace::solve_linear`]).
+    drift: f64,
 }
 
 impl Workspace {
@@ -100,7 +102,7 @@ impl Workspace {
             trial: Vec::with_capacity(system.mesh.nodes.len()),
             factored: false,
             verdict: None,
-            at_solution: false,
+            drift: f64::INFINITY,
         })
     }
 
@@ -113,7 +115,6 @@ impl Workspace {
     /// Returns false for a zero pivot or a non-finite step.
     fn solve(&mut self, report: &mut SolveReport) -> bool {
         self.verdict = None;
-        self.at_solution = false;
         for (r, f) in self.rhs.iter_mut().zip(&self.residual) {
             *r = -f;
         }
@@ -133,8 +134,6 @@ impl Workspace {
         if !self.factored {
             return false;
         }
-        // The iterate moves on from the solution a verdict_at Jacobian belonged to.
-        self.at_solution = false;
         for (r, f) in self.rhs.iter_mut().zip(&self.residual) {
             *r = -f;
         }
@@ -153,6 +152,7 @@ impl Workspace {
             *r = -f;
         }
         let mut report = SolveReport::new(crate::report::Method::Collocation);
+        self.drift = f64::INFINITY;
         self.solve(&mut report).then_some(&self.step[..])
     }
 
@@ -167,6 +167,7 @@ impl Workspace {
         report.timings.assembly += t.elapsed();
         report.evaluations.jacobian += 1;
         report.evaluations.equations += system.rate_evaluations();
+        self.drift = 0.0;
         ok && self.values.iter().chain(&self.residual).all(|v| v.is_finite()) && self.solve(report)
     }
 
@@ -179,12 +180,6 @@ impl Workspace {
     /// [`pattern`](super::unknowns::pattern) order.
     pub fn jacobian(&self) -> &[f64] {
         &self.values
-    }
-
-    /// Whether the verdict held is [`Workspace::verdict_at`]'s, of the Jacobian at a solution
-    /// (the stored factors belonging to an earlier state).
-    pub fn assessed_at_solution(&self) -> bool {
-        self.at_solution && self.verdict.is_some()
     }
 
     /// The stability verdict of the Jacobian last factored (docs/stability.md), assessed
@@ -218,11 +213,20 @@ impl Workspace {
         report.evaluations.jacobian += 1;
         report.evaluations.equations += system.rate_evaluations();
         self.verdict = None;
-        self.at_solution = true;
+        self.drift = 0.0;
         if !ok || !self.values.iter().all(|v| v.is_finite()) {
             return None;
         }
         Some(self.verdict(assess))
+    }
+
+    /// Whether the Jacobian in the value buffer belongs to the last iterate: it was evaluated
+    /// there, or within Newton's own stopping distance of it ([`STEP_TOLERANCE`], the
+    /// iteration error a converged state is allowed), so that a verdict of those values is the
+    /// iterate's. Newton's last Jacobian is evaluated one step before its answer (after a
+    /// single Newton step followed by chord steps, at the guess), which it does not belong to.
+    pub fn jacobian_at_iterate(&self) -> bool {
+        self.drift <= STEP_TOLERANCE
     }
 
     /// Whether the workspace holds the factors of a successful solve.
@@ -238,6 +242,7 @@ impl Workspace {
         self.values.copy_from_slice(values);
         self.residual.fill(0.0);
         let mut report = SolveReport::new(crate::report::Method::Collocation);
+        self.drift = f64::INFINITY;
         self.solve(&mut report)
     }
 
@@ -451,6 +456,9 @@ pub(crate) fn run_bordered<B: Border>(
         return (Termination::NonFinite, worst(ws, border));
     }
     let mut chord = settings.reuse_factors;
+    // The Jacobian held belongs to an earlier run's point (or system): not to this run's
+    // iterates until this run evaluates one.
+    ws.drift = f64::INFINITY;
     // Norms of the last two steps taken (full steps only: a damped one says nothing of the
     // remaining error).
     let (mut last_step, mut before_last) = (f64::INFINITY, f64::INFINITY);
@@ -512,6 +520,7 @@ pub(crate) fn run_bordered<B: Border>(
                 }
                 (before_last, last_step) = (last_step, step_norm);
                 last_fresh = false;
+                ws.drift += step_norm;
                 std::mem::swap(x, &mut ws.trial);
                 std::mem::swap(&mut ws.residual, &mut ws.trial_residual);
                 border.accept();
@@ -527,6 +536,7 @@ pub(crate) fn run_bordered<B: Border>(
         });
         report.timings.assembly += t.elapsed();
         report.evaluations.jacobian += 1;
+        ws.drift = 0.0;
         if !ok || !ws.values.iter().all(|v| v.is_finite()) {
             return (Termination::NonFinite, worst(ws, border));
         }
@@ -599,6 +609,7 @@ pub(crate) fn run_bordered<B: Border>(
         std::mem::swap(x, &mut ws.trial);
         std::mem::swap(&mut ws.residual, &mut ws.trial_residual);
         border.accept();
+        ws.drift = alpha * step_norm;
         last_fresh = true;
         (before_last, last_step) = if alpha == 1.0 {
             (last_step, step_norm)
