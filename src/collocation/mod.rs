@@ -32,6 +32,7 @@
 
 pub(crate) mod actuation;
 mod branch;
+mod constrained;
 mod dynamics;
 mod equilibrium;
 mod estimate;
