@@ -46,7 +46,6 @@
 //! each mesh's solve warm-started from the last one's states and tensions.
 #![allow(non_snake_case)]
 
-use super::{constrained, estimate};
 use super::newton::{self, Border, Linearization, Point, Settings, Workspace};
 use super::system::System;
 use super::unknowns::{self, NODE, U, V};
@@ -54,6 +53,7 @@ use super::{
     Cache, Cached, Level, Options, cold_start, initial_mesh, interpolate, record_estimate, refine, resolves,
     segment_ends,
 };
+use super::{constrained, estimate};
 use crate::Robot;
 use crate::dense::solve_dense;
 use crate::error;

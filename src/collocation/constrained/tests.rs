@@ -24,7 +24,10 @@ const OFFSET: f64 = 0.005;
 fn column(tendon: Tendon) -> Robot {
     let (r, e, g) = (0.5e-3, 200e9, 200e9 / 2.6);
     let (a, i) = (PI * r * r, PI * r.powi(4) / 4.0);
-    let rod = Rod::new(LENGTH, Section::explicit(e * a, g * a, 20.0 * e * i, e * i, 2.0 * g * i));
+    let rod = Rod::new(
+        LENGTH,
+        Section::explicit(e * a, g * a, 20.0 * e * i, e * i, 2.0 * g * i),
+    );
     let p = 1.5 * PI * PI * e * i / (4.0 * LENGTH * LENGTH);
     Robot::new(rod)
         .with_loads(Loads::none().with_tip_force(Vector3::new(-0.01 * p, 0.0, -p)))
@@ -60,7 +63,11 @@ fn verdicts(robot: &Robot, solution: &Solution) -> (Stability, Stability, Stabil
 fn a_pull_in_holds_the_states_a_tension_would_snap_through() {
     let options = Options::default();
     let free = collocation::solve(&column(Tendon::new(Routing::straight(OFFSET, 0.0), 0.0)), &options).unwrap();
-    assert!(free.tip_position().x < -0.02 * LENGTH, "buckled towards -x: {}", free.tip_position());
+    assert!(
+        free.tip_position().x < -0.02 * LENGTH,
+        "buckled towards -x: {}",
+        free.tip_position()
+    );
     let start = free.tendons[0].displacement;
     let mut previous = free.clone();
     let (mut held, mut peak, mut past_peak) = (0, 0.0f64, 0);
@@ -78,7 +85,13 @@ fn a_pull_in_holds_the_states_a_tension_would_snap_through() {
                 Stability::Stable => assert_eq!(plain, Stability::Stable, "q = {q} m"),
                 Stability::Unstable { directions: 1, .. } => {
                     assert!(
-                        matches!(plain, Stability::Growing { growth: Growth::Divergence, .. }),
+                        matches!(
+                            plain,
+                            Stability::Growing {
+                                growth: Growth::Divergence,
+                                ..
+                            }
+                        ),
                         "q = {q} m: {plain:?}"
                     );
                     held += 1;
@@ -93,9 +106,19 @@ fn a_pull_in_holds_the_states_a_tension_would_snap_through() {
         previous = solution;
     }
     // 0.01 L: nearly straight at zero pull-in (0.5 % of L measured).
-    assert!(previous.tip_position().x.abs() < 0.01 * LENGTH, "{}", previous.tip_position());
+    assert!(
+        previous.tip_position().x.abs() < 0.01 * LENGTH,
+        "{}",
+        previous.tip_position()
+    );
     // The states the pull-in holds and a tension would not: those past the tension's maximum.
-    // Unstable at constant tension exactly past the tension's maximum (a fold of the tension).
+    // Unstable at constant tension exactly past the tension's maximum (a fold of the tension):
+    // the states sampled after the largest tension (10 of 20), and possibly the sample of the
+    // largest tension itself, which the fold can precede between two samples (measured: it
+    // does, 11 unstable).
     assert!(past_peak >= 5, "past the peak {past_peak}");
-    assert_eq!(held, past_peak);
+    assert!(
+        held == past_peak || held == past_peak + 1,
+        "held {held}, past the peak {past_peak}"
+    );
 }
