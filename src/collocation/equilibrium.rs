@@ -204,6 +204,18 @@ fn picked_note(lambda: f64) -> String {
     )
 }
 
+/// The note of a path that could not be followed to the end and was completed by Newton at
+/// the full load from the fold at load factor `lambda` (the robot snaps there).
+fn snapped_note(lambda: f64) -> String {
+    format!(
+        "the path could not be followed to the full load (it stalled, or went round a family of \
+         equilibria at nearly constant load): the robot snaps at the fold at {:.1} % of the way, and \
+         this stable state was reached by Newton at the full load from the state there, not by \
+         continuation",
+        100.0 * lambda
+    )
+}
+
 /// Newton from `x0`, and the equilibrium choice of docs/stability.md. Newton's answer
 /// stands when it converged cleanly to a stable state ([`acceptable`]; or the caller asked
 /// for the nearest equilibrium). Otherwise, from a warm start (`warm`), the Newton homotopy
@@ -244,6 +256,7 @@ pub(crate) fn choose_equilibrium(
             let verdict = stability_of(system, ws, &end.x, exact, report);
             if acceptable(system, &verdict) {
                 report.notes.extend(end.picked.iter().map(|&l| picked_note(l)));
+                report.notes.extend(end.snapped_from.map(snapped_note));
                 report.path = PathTaken::FromWarmStart {
                     folds: end.folds,
                     bifurcations: end.bifurcations,
@@ -258,9 +271,18 @@ pub(crate) fn choose_equilibrium(
         }
     }
     let mesh = system.mesh.clone();
-    match path::follow(system, ws, path::Start::Rest, options, settings, report, None) {
+    match path::follow(
+        system,
+        ws,
+        path::Start::Rest { land: !warm },
+        options,
+        settings,
+        report,
+        None,
+    ) {
         Ok(end) => {
             report.notes.extend(end.picked.iter().map(|&l| picked_note(l)));
+            report.notes.extend(end.snapped_from.map(snapped_note));
             report.path = PathTaken::LoadPath {
                 folds: end.folds,
                 bifurcations: end.bifurcations,

@@ -47,6 +47,7 @@ mod pipeline;
 pub(crate) mod refine;
 pub(crate) mod residual;
 pub mod sensitivity;
+mod snap;
 mod solver;
 pub(crate) mod stability;
 mod start;

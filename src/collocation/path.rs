@@ -23,6 +23,7 @@ use super::locate;
 use super::newton::{self, Settings, Workspace};
 use super::options::Options;
 use super::refine;
+use super::snap;
 use super::stability;
 use super::system::System;
 use crate::mesh::guess::rigid_estimate;
@@ -70,6 +71,9 @@ pub(super) struct End {
     /// Load factors where the path left a perfectly symmetric bifurcation along a picked
     /// side of the Jacobian's kernel (nothing preferred either).
     pub picked: Vec<f64>,
+    /// The load factor of the fold from which the states were reached by Newton at
+    /// lambda = 1 after the path itself could not be followed to the end ([`snap::land_from_folds`]).
+    pub snapped_from: Option<f64>,
 }
 
 /// A step that changes the number of unstable directions without a fold has jumped to
@@ -95,8 +99,14 @@ pub(super) fn index(system: &System, ws: &mut Workspace, report: &mut SolveRepor
 
 /// Where a path starts and what it connects.
 pub(super) enum Start<'x> {
-    /// The load path from the unloaded robot.
-    Rest,
+    /// The load path from the unloaded robot; when it cannot be followed to the end, it
+    /// lands from its folds ([`snap::land_from_folds`]) if `land` (a cold solve's path; a
+    /// warm-started solve keeps to the branch it was started on, so that a sweep's bisection
+    /// sees where that branch ends).
+    Rest {
+        /// Whether a path that stalls lands from its folds.
+        land: bool,
+    },
     /// The Newton homotopy from a warm start (not a solution of the system).
     Warm(&'x [State]),
     /// A trace of `parameter` from `from` (where `x` is the converged solution) towards
@@ -148,8 +158,10 @@ pub(super) fn follow(
     let robot = system.model.robot;
     let mut max_step = MAX_STEP;
     let mut stop: &dyn Fn() -> bool = &|| false;
+    let mut landing = false;
     let (x, homotopy) = match start {
-        Start::Rest => {
+        Start::Rest { land } => {
+            landing = land;
             system.set_factors(0.0, 0.0);
             let mut x = rigid_estimate(&system.model, &system.mesh.nodes);
             let (start, row) = newton::run(system, ws, &mut x, settings, report);
@@ -223,6 +235,9 @@ pub(super) fn follow(
     let mut worst = 0;
     let mut trial: Vec<State> = Vec::with_capacity(system.mesh.nodes.len());
     let mut r = vec![0.0; n];
+    // The states at the folds passed, with their load factors: where the path cannot be
+    // followed to the end, the robot snaps from one of them ([`snap::land_from_folds`]).
+    let mut fold_states: Vec<(f64, Vec<State>)> = Vec::new();
     for _ in 0..MAX_STEPS {
         if stop() {
             return Err(("stopped on request before the end of the range".into(), 0));
@@ -275,6 +290,7 @@ pub(super) fn follow(
                     folds,
                     bifurcations,
                     picked,
+                    snapped_from: None,
                 });
             }
             if let (true, Some(a), Some(b)) = (switching, unstable, landed_unstable)
@@ -361,6 +377,9 @@ pub(super) fn follow(
                     });
                 }
                 unstable = next_unstable;
+                if fold && landing {
+                    fold_states.push((lambda, next.x.clone()));
+                }
                 if fold {
                     folds.push(match tracing {
                         true => locate::fold(system, &homotopy, ws, (&point, &fl, h), &next, settings, report, &mut r),
@@ -378,6 +397,7 @@ pub(super) fn follow(
                         folds,
                         bifurcations,
                         picked,
+                        snapped_from: None,
                     });
                 }
                 // The angle between successive tangents bounds the next step.
@@ -435,6 +455,15 @@ pub(super) fn follow(
         }
     }
     homotopy.set(system, 1.0);
+    if landing && let Some((lambda, x)) = snap::land_from_folds(system, ws, &fold_states, settings, report) {
+        return Ok(End {
+            x,
+            folds,
+            bifurcations,
+            picked,
+            snapped_from: Some(lambda),
+        });
+    }
     // The point can lie outside [0, 1] (a Newton homotopy's path may turn back past its
     // start): the share of the way is the furthest point reached, and the point itself is
     // named only when it lies on the way behind it.
