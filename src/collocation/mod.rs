@@ -33,6 +33,7 @@
 pub(crate) mod actuation;
 mod branch;
 mod constrained;
+mod corrector;
 mod dynamics;
 mod equilibrium;
 mod estimate;
@@ -54,6 +55,7 @@ mod start;
 pub(crate) mod system;
 mod trace;
 pub(crate) mod unknowns;
+mod workspace;
 
 use crate::Robot;
 use crate::error::Result;
