@@ -114,6 +114,54 @@ fn agree_with_dynamics(robot: &Robot, solution: &tdcr::Solution) -> Result<(), T
     Ok(())
 }
 
+/// States solved, and stable, with every tendon held at the pull-in of the tension solve.
+static HELD: [AtomicUsize; 2] = [AtomicUsize::new(0), AtomicUsize::new(0)];
+
+/// The same state with every tendon held at its solved pull-in (displacement control) is an
+/// equilibrium whose verdict (docs/stability.md, "Displacement-controlled tendons") has at
+/// most the constant-tension state's unstable directions (a length constraint can only
+/// stabilize): stable where the tension solve is stable.
+fn held_at_pull_ins(robot: &Robot, solution: &tdcr::Solution) -> Result<(), TestCaseError> {
+    let mut held = robot.clone();
+    for (t, state) in held.tendons.iter_mut().zip(&solution.tendons) {
+        t.set_displacement(state.displacement);
+    }
+    let Ok(other) = collocation::solve_from(&held, &Default::default(), solution) else {
+        return Ok(());
+    };
+    // 1e-6 L: the same state, to the two solves' tolerances (1e-7 L each) with room.
+    if (other.tip_position() - solution.tip_position()).norm() > 1e-6 * robot.length() {
+        return Ok(());
+    }
+    use tdcr::Stability;
+    let directions = |s: &Stability| match s {
+        Stability::Stable => Some(0),
+        Stability::Unstable { directions, .. } => Some(*directions),
+        _ => None,
+    };
+    HELD[0].fetch_add(1, Ordering::Relaxed);
+    if let (Some(tension), Some(pulled)) = (
+        directions(&solution.report.stability),
+        directions(&other.report.stability),
+    ) {
+        prop_assert!(
+            pulled <= tension,
+            "held at the pull-ins {}, at constant tensions {}",
+            other.report.stability,
+            solution.report.stability
+        );
+        if pulled == 0 {
+            HELD[1].fetch_add(1, Ordering::Relaxed);
+        }
+    } else if directions(&solution.report.stability).is_some() {
+        return Err(TestCaseError::fail(format!(
+            "no verdict held at the pull-ins: {}",
+            other.report.stability
+        )));
+    }
+    Ok(())
+}
+
 /// Checks the property for one robot; returns its accuracy if it was solved.
 fn check(robot: &Robot) -> Result<Option<Accuracy>, TestCaseError> {
     let length = robot.length();
@@ -183,6 +231,7 @@ fn check(robot: &Robot) -> Result<Option<Accuracy>, TestCaseError> {
     if let Ok(other) = collocation::solve(robot, &nearest) {
         agree_with_dynamics(robot, &other)?;
     }
+    held_at_pull_ins(robot, &solution)?;
     // Agreement with a mesh 4x finer (its error is 256x smaller at order 4): within 3x the
     // tolerance on every robot, and never more than 3x the solver's own estimate where the
     // error is above rounding (1e-12 m); `run` asserts the tolerance itself on 99 %.
@@ -251,6 +300,11 @@ fn run(cases: u32, band: (f64, f64)) {
     eprintln!(
         "the linearized dynamics agreed with the conjugate-point test on {} stable and {} unstable states",
         agreed[0], agreed[1]
+    );
+    let held = HELD.each_ref().map(|a| a.load(Ordering::Relaxed));
+    eprintln!(
+        "held at their pull-ins, {} states solved again, {} of them stable",
+        held[0], held[1]
     );
     let accuracy = accuracy.into_inner().unwrap();
     let within = accuracy.iter().filter(|a| a.within).count();

@@ -192,11 +192,10 @@ def test_displacement_control_round_trips_to_the_same_tension(elastic):
     # 1e-10 m: a 1e-9 relative tension error moves the tip about 1e-10 m.
     assert np.abs(second.tip_position - first.tip_position).max() < 1e-10
     assert second.tendons[0]["displacement"] == q and second.tendons[0]["slack"] == 0.0
-    # The stability test covers constant tensions only: displacement control leaves the
-    # verdict unknown, and the report says why.
-    assert second.report.stability == "unknown" and first.report.stability == "stable"
-    assert "displacement" in second.report.stability_detail["reason"]
-    assert second.report.stability_detail["unstable_directions"] is None
+    # Held at its pull-in the same state is stable too (docs/stability.md,
+    # "Displacement-controlled tendons": a length constraint can only stabilize).
+    assert second.report.stability == "stable" and first.report.stability == "stable"
+    assert second.report.stability_detail["unstable_directions"] == 0
     # The robot file keeps the displacement, the stiffness and the free length.
     again = tdcr.Robot.from_toml(pulled.to_toml())
     assert again.displacements == pulled.displacements and again.to_toml() == pulled.to_toml()

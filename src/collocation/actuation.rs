@@ -46,7 +46,6 @@
 //! each mesh's solve warm-started from the last one's states and tensions.
 #![allow(non_snake_case)]
 
-use super::estimate;
 use super::newton::{self, Border, Linearization, Point, Settings, Workspace};
 use super::system::System;
 use super::unknowns::{self, NODE, U, V};
@@ -54,6 +53,7 @@ use super::{
     Cache, Cached, Level, Options, cold_start, initial_mesh, interpolate, record_estimate, refine, resolves,
     segment_ends,
 };
+use super::{constrained, estimate};
 use crate::Robot;
 use crate::dense::solve_dense;
 use crate::error;
@@ -73,20 +73,20 @@ use std::time::Instant;
 /// effect to about 1e-11 relative (collocation::sensitivity), so the error of a forward
 /// difference, about h + 1e-11 / h, is smallest near h = sqrt(1e-11) = 3e-6. Newton then
 /// contracts by at least that factor per step near the solution.
-const TENSION_STEP: f64 = 3e-6;
+pub(super) const TENSION_STEP: f64 = 3e-6;
 
 /// One displacement-controlled tendon's length constraint on one mesh.
-struct Constraint {
+pub(super) struct Constraint {
     /// Index of the tendon in the robot.
-    tendon: usize,
+    pub(super) tendon: usize,
     /// Pull-in q_j (m).
     displacement: f64,
     /// l_ref_j (m).
     reference_length: f64,
     /// c_j (m/N).
-    compliance: f64,
+    pub(super) compliance: f64,
     /// T_j (N), [`Robot::tension_scale`]: the scale of a in psi_j.
-    tension_scale: f64,
+    pub(super) tension_scale: f64,
     /// The path-length quadrature on the mesh's nodes.
     quadrature: NodeQuadrature,
     /// The routing at each quadrature node, in the quadrature's order.
@@ -97,7 +97,8 @@ struct Constraint {
 }
 
 impl Constraint {
-    fn new(robot: &Robot, tendon: usize, mesh: &Mesh) -> Self {
+    /// The constraint of the robot's tendon `tendon` (displacement-controlled) on `mesh`.
+    pub(super) fn new(robot: &Robot, tendon: usize, mesh: &Mesh) -> Self {
         let t = &robot.tendons[tendon];
         let length = robot.length();
         let s: Vec<f64> = mesh.nodes.iter().map(|n| n.s).collect();
@@ -175,7 +176,7 @@ impl Constraint {
     }
 
     /// G_j . z: the change of l_j along the scaled step z (12 per node, du = z_U / L).
-    fn length_change(&self, x: &[State], z: &[f64], length: f64) -> f64 {
+    pub(super) fn length_change(&self, x: &[State], z: &[f64], length: f64) -> f64 {
         self.quadrature
             .weights
             .iter()
@@ -425,11 +426,6 @@ pub(super) fn solve(
             x0
         }
     };
-    // The conjugate-point test is for constant tensions; with a length constraint the
-    // tendon is not a dead load.
-    report.stability = Stability::Unknown {
-        reason: "displacement-controlled tendons: the stability test covers constant tensions only".into(),
-    };
     let settings = Settings {
         tolerance: options.residual_tolerance,
         max_iterations: options.max_iterations,
@@ -447,6 +443,15 @@ pub(super) fn solve(
         |model, mesh, x, report, cache| solve_on_mesh(model, mesh, x, &settings, options, start, report, cache),
     )?;
     record_estimate(&mut report, level.correction.as_ref(), options, work.length());
+    let t = Instant::now();
+    let system = System::new(model.clone(), level.mesh.clone());
+    report.stability = match cache.as_mut() {
+        Some(c) => constrained::stability(&system, &level.x, &mut c.workspace, &mut report),
+        None => Stability::Unknown {
+            reason: "no workspace was kept for the verdict".into(),
+        },
+    };
+    report.timings.stability += t.elapsed();
     report.timings.total = start.elapsed();
     let rates = level.correction.as_ref().map(|c| c.node_rates.as_slice());
     nodes::solution(&model, &level.x, &segment_ends(&level.mesh), rates, report)

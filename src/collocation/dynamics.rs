@@ -213,18 +213,39 @@ pub fn vibration(robot: &Robot, solution: &Solution) -> crate::Result<Vibration>
         ));
     }
     let (system, states, mut ws) = Sensitivity::new(robot, solution)?.into_parts();
-    Ok(modes(&system, &states, &mut ws, KRYLOV_MODES, true))
+    Ok(modes(&system, &states, &mut ws, KRYLOV_MODES, true, &mut |_| true))
 }
 
 /// The verdict of the linearized dynamics at the equilibrium `x` of `system`, with the
 /// factors of its Jacobian held in `ws` (Newton's at `x`, or at its last iterate).
 pub(crate) fn assess(system: &System, x: &[State], ws: &mut Workspace) -> Stability {
-    modes(system, x, ws, KRYLOV, false).stability
+    modes(system, x, ws, KRYLOV, false, &mut |_| true).stability
+}
+
+/// [`assess`] for a system bordered by massless unknowns (the tensions of
+/// displacement-controlled tendons, `collocation/constrained.rs`): `border` turns each solve
+/// a = J^-1 M z into the bordered solve's x part (for the tendons, a - X A^-1 G a), false
+/// when it cannot.
+pub(crate) fn assess_bordered(
+    system: &System,
+    x: &[State],
+    ws: &mut Workspace,
+    border: &mut dyn FnMut(&mut [f64]) -> bool,
+) -> Stability {
+    modes(system, x, ws, KRYLOV, false, border).stability
 }
 
 /// [`assess`] with the eigenvalues, from `krylov` Arnoldi steps; the residual of every Ritz
-/// value when `all`, else only of those the verdict rests on.
-fn modes(system: &System, x: &[State], ws: &mut Workspace, krylov: usize, all: bool) -> Vibration {
+/// value when `all`, else only of those the verdict rests on; `border` as in
+/// [`assess_bordered`].
+fn modes(
+    system: &System,
+    x: &[State],
+    ws: &mut Workspace,
+    krylov: usize,
+    all: bool,
+    border: &mut dyn FnMut(&mut [f64]) -> bool,
+) -> Vibration {
     let unknown = |reason: String| Vibration {
         stability: Stability::Unknown { reason },
         eigenvalues: Vec::new(),
@@ -242,7 +263,7 @@ fn modes(system: &System, x: &[State], ws: &mut Workspace, krylov: usize, all: b
             Some(y) => {
                 out.clear();
                 out.extend_from_slice(y);
-                true
+                border(out)
             }
             None => false,
         }

@@ -85,11 +85,15 @@ fn clean(history: &[crate::report::Iteration]) -> bool {
     history.len() <= CLEAN_ITERATIONS && history.iter().all(|i| i.damping == 1.0)
 }
 
-/// The stability of the equilibrium `x` of `system` ([`stability`]), from the Jacobian
-/// last factored in `ws`: Newton's last (evaluated one step before `x`). A new Jacobian at
-/// `x` is evaluated and factored when `exact` (at the end of a load path, whose last
-/// Jacobian may belong to a point before the end); after a solve that converged by chord
-/// steps on a cached solve's factors, [`fresh_stability`].
+/// The stability of the equilibrium `x` of `system` ([`stability`]), from the Jacobian at
+/// `x`: the one in `ws` when it belongs to `x` ([`Workspace::jacobian_at_iterate`]: `x` is
+/// the last iterate, and the Jacobian was evaluated there or within Newton's stopping
+/// distance of it), else one evaluated at `x` for the verdict ([`Workspace::verdict_at`]:
+/// assembled, not factored). Newton's last Jacobian is evaluated one step before its answer;
+/// after one Newton step and chord steps (or chord steps alone, on a cached solve's
+/// factors) that is the guess, whose verdict a change of inputs can have made wrong. When
+/// `exact` (the end of a load path, whose factors may belong to a point before the end) the
+/// Jacobian at `x` is evaluated and factored, so that the error estimate's solve uses it too.
 pub(crate) fn stability_of(
     system: &System,
     ws: &mut Workspace,
@@ -100,28 +104,21 @@ pub(crate) fn stability_of(
     if let Some(reason) = stability::non_conservative(&system.model) {
         return linearized_dynamics(system, ws, x, reason, report);
     }
-    if (exact || !ws.has_factors()) && !ws.linearize(system, x, report) {
-        return Stability::Unknown {
-            reason: "the Jacobian at the solution is singular or not finite".into(),
-        };
-    }
     let s: Vec<f64> = system.mesh.nodes.iter().map(|n| n.s).collect();
+    if exact || !ws.has_factors() {
+        if !ws.linearize(system, x, report) {
+            return Stability::Unknown {
+                reason: "the Jacobian at the solution is singular or not finite".into(),
+            };
+        }
+    } else if !ws.jacobian_at_iterate() {
+        return ws
+            .verdict_at(system, x, report, |values| stability::assess(values, &s))
+            .unwrap_or_else(|| Stability::Unknown {
+                reason: "the Jacobian at the solution is not finite".into(),
+            });
+    }
     ws.verdict(|values| stability::assess(values, &s))
-}
-
-/// The stability of the equilibrium `x` of `system` after a solve that converged by chord
-/// steps on a cached solve's factors alone: those belong to an earlier state, whose verdict a
-/// change of inputs can have made wrong, so the Jacobian at `x` is evaluated for it (not
-/// factored: [`Workspace::verdict_at`]).
-pub(crate) fn fresh_stability(system: &System, ws: &mut Workspace, x: &[State], report: &mut SolveReport) -> Stability {
-    if let Some(reason) = stability::non_conservative(&system.model) {
-        return linearized_dynamics(system, ws, x, reason, report);
-    }
-    let s: Vec<f64> = system.mesh.nodes.iter().map(|n| n.s).collect();
-    ws.verdict_at(system, x, report, |values| stability::assess(values, &s))
-        .unwrap_or_else(|| Stability::Unknown {
-            reason: "the Jacobian at the solution is not finite".into(),
-        })
 }
 
 /// The verdict of the linearized dynamics ([`dynamics::assess`]) for loads that are not
@@ -179,14 +176,7 @@ fn direct(
         return (false, worst);
     }
     let t = Instant::now();
-    // Converged by chord steps alone (on a cached solve's factors, or a warm start's): the
-    // Jacobian they belong to is an earlier state's, whose verdict a change of inputs can
-    // have made wrong.
-    let verdict = if report.newton_steps == 0 {
-        fresh_stability(system, ws, x, report)
-    } else {
-        stability_of(system, ws, x, false, report)
-    };
+    let verdict = stability_of(system, ws, x, false, report);
     report.timings.stability += t.elapsed();
     (acceptable(system, &verdict), worst)
 }
@@ -210,6 +200,18 @@ fn picked_note(lambda: f64) -> String {
          prefers a side: it took the branch along the Jacobian's kernel direction; its mirror state \
          (bent the opposite way, along the reversed kernel direction) is equally valid, and an \
          imperfection of the other sign selects it",
+        100.0 * lambda
+    )
+}
+
+/// The note of a path that could not be followed to the end and was completed by Newton at
+/// the full load from the fold at load factor `lambda` (the robot snaps there).
+fn snapped_note(lambda: f64) -> String {
+    format!(
+        "the path could not be followed to the full load (it stalled, or went round a family of \
+         equilibria at nearly constant load): the robot snaps at the fold at {:.1} % of the way, and \
+         this stable state was reached by Newton at the full load from the state there, not by \
+         continuation",
         100.0 * lambda
     )
 }
@@ -254,6 +256,7 @@ pub(crate) fn choose_equilibrium(
             let verdict = stability_of(system, ws, &end.x, exact, report);
             if acceptable(system, &verdict) {
                 report.notes.extend(end.picked.iter().map(|&l| picked_note(l)));
+                report.notes.extend(end.snapped_from.map(snapped_note));
                 report.path = PathTaken::FromWarmStart {
                     folds: end.folds,
                     bifurcations: end.bifurcations,
@@ -268,9 +271,18 @@ pub(crate) fn choose_equilibrium(
         }
     }
     let mesh = system.mesh.clone();
-    match path::follow(system, ws, path::Start::Rest, options, settings, report, None) {
+    match path::follow(
+        system,
+        ws,
+        path::Start::Rest { land: !warm },
+        options,
+        settings,
+        report,
+        None,
+    ) {
         Ok(end) => {
             report.notes.extend(end.picked.iter().map(|&l| picked_note(l)));
+            report.notes.extend(end.snapped_from.map(snapped_note));
             report.path = PathTaken::LoadPath {
                 folds: end.folds,
                 bifurcations: end.bifurcations,
@@ -311,3 +323,6 @@ pub(crate) fn choose_equilibrium(
         }
     }
 }
+
+#[cfg(test)]
+mod tests;

@@ -34,6 +34,8 @@
 pub(crate) mod actuation;
 mod batch;
 mod branch;
+mod constrained;
+mod corrector;
 mod dynamics;
 mod equilibrium;
 mod estimate;
@@ -48,12 +50,14 @@ mod pipeline;
 pub(crate) mod refine;
 pub(crate) mod residual;
 pub mod sensitivity;
+mod snap;
 mod solver;
 pub(crate) mod stability;
 mod start;
 pub(crate) mod system;
 mod trace;
 pub(crate) mod unknowns;
+mod workspace;
 
 use crate::Robot;
 use crate::error::Result;

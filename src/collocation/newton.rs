@@ -13,10 +13,11 @@
 //! the stopping tests are the same code for both.
 
 use super::MAX_ITERATIONS;
-use super::linear::{Linear, LinearSolver};
+use super::linear::Linear;
 use super::system::System;
-use super::unknowns::{self, nonzeros};
-use crate::report::{Iteration, SolveReport, Stability, Termination};
+use super::unknowns;
+pub use super::workspace::Workspace;
+use crate::report::{Iteration, SolveReport, Termination};
 use crate::solution::State;
 use std::time::Instant;
 
@@ -37,7 +38,7 @@ pub const CHORD_CONTRACTION: f64 = 0.25;
 /// only linearly. The remaining error is estimated from the last step and the contraction
 /// theta of the last two (Deuflhard's error-oriented test): theta / (1 - theta) |dx| after a
 /// chord step (linear convergence), theta^2 |dx| after a Newton step (quadratic).
-const STEP_TOLERANCE: f64 = 1e-10;
+pub(super) const STEP_TOLERANCE: f64 = 1e-10;
 
 /// Chord steps go on while each shrinks the step at least this much (tenfold): slower
 /// linear convergence costs more chord steps than one new Jacobian.
@@ -58,233 +59,6 @@ pub struct Settings {
     /// Stop at the first damped step (returning [`Termination::MaxIterations`]): a caller
     /// that only wants a root Newton reaches directly, and has a better way otherwise.
     pub stop_when_damped: bool,
-}
-
-/// Everything Newton needs for one mesh, built once and reused across iterations, load
-/// steps and solves on the same mesh.
-pub struct Workspace {
-    linear: Linear,
-    values: Vec<f64>,
-    residual: Vec<f64>,
-    trial_residual: Vec<f64>,
-    /// The simplified Newton correction -J^-1 F(trial) of the monotonicity test.
-    simplified: Vec<f64>,
-    rhs: Vec<f64>,
-    step: Vec<f64>,
-    trial: Vec<State>,
-    /// Whether the linear solver holds the factors of a successful solve.
-    factored: bool,
-    /// The stability verdict of the Jacobian in `values`, once assessed (cleared whenever
-    /// `values` change).
-    verdict: Option<Stability>,
-    /// Whether `values` hold the Jacobian [`Workspace::verdict_at`] evaluated (not factored).
-    at_solution: bool,
-}
-
-impl Workspace {
-    /// Builds the buffers and, for the sparse path, the pattern and symbolic LU of
-    /// `system`'s mesh.
-    ///
-    /// # Errors
-    /// [`crate::Error::InvalidInput`] if faer rejects the pattern (cannot happen for a valid mesh).
-    pub fn new(system: &System, solver: LinearSolver) -> crate::error::Result<Self> {
-        let n = system.unknowns();
-        Ok(Workspace {
-            linear: Linear::new(&system.mesh, solver)?,
-            values: vec![0.0; nonzeros(&system.mesh)],
-            residual: vec![0.0; n],
-            trial_residual: vec![0.0; n],
-            simplified: vec![0.0; n],
-            rhs: vec![0.0; n],
-            step: vec![0.0; n],
-            trial: Vec::with_capacity(system.mesh.nodes.len()),
-            factored: false,
-            verdict: None,
-            at_solution: false,
-        })
-    }
-
-    /// Non-zeros stored in the Jacobian.
-    pub fn nonzeros(&self) -> usize {
-        self.values.len()
-    }
-
-    /// Factorizes the current matrix and solves J step = -residual.
-    /// Returns false for a zero pivot or a non-finite step.
-    fn solve(&mut self, report: &mut SolveReport) -> bool {
-        self.verdict = None;
-        self.at_solution = false;
-        for (r, f) in self.rhs.iter_mut().zip(&self.residual) {
-            *r = -f;
-        }
-        let times = self.linear.solve(&self.values, &self.rhs, &mut self.step);
-        let Some((factor_time, solve_time)) = times else {
-            return false;
-        };
-        report.timings.factorization += factor_time;
-        report.timings.solve += solve_time;
-        self.factored = true;
-        self.step.iter().all(|x| x.is_finite())
-    }
-
-    /// Solves J step = -residual with the stored factors of an earlier Jacobian (a chord
-    /// step). Returns false when there are none or the step is not finite.
-    fn chord(&mut self, report: &mut SolveReport) -> bool {
-        if !self.factored {
-            return false;
-        }
-        // The iterate moves on from the solution a verdict_at Jacobian belonged to.
-        self.at_solution = false;
-        for (r, f) in self.rhs.iter_mut().zip(&self.residual) {
-            *r = -f;
-        }
-        let t = Instant::now();
-        self.linear.solve_again(&self.rhs, &mut self.step);
-        report.timings.solve += t.elapsed();
-        self.step.iter().all(|x| x.is_finite())
-    }
-
-    /// Solves J x = rhs for Jacobian `values` in [`pattern`](super::unknowns::pattern) order with this workspace's
-    /// linear solver: the hook tests use to cross-check the solvers and to force a singular
-    /// matrix. None for a zero pivot or a non-finite result.
-    pub fn solve_linear(&mut self, values: &[f64], rhs: &[f64]) -> Option<&[f64]> {
-        self.values.copy_from_slice(values);
-        for (r, f) in self.residual.iter_mut().zip(rhs) {
-            *r = -f;
-        }
-        let mut report = SolveReport::new(crate::report::Method::Collocation);
-        self.solve(&mut report).then_some(&self.step[..])
-    }
-
-    /// Evaluates the residual and the Jacobian of `system` at `x`, factors the Jacobian and
-    /// solves for the Newton step (a Newton step's work, without moving `x`); counted in
-    /// `report` as a Jacobian evaluation. False for a non-finite residual or Jacobian or a
-    /// zero pivot. The residual is then [`Workspace::residual`], the Jacobian
-    /// [`Workspace::jacobian`], and [`Workspace::solve_again`] solves with its factors.
-    pub fn linearize(&mut self, system: &System, x: &[State], report: &mut SolveReport) -> bool {
-        let t = Instant::now();
-        let ok = system.jacobian(x, &mut self.residual, &mut self.values).is_ok();
-        report.timings.assembly += t.elapsed();
-        report.evaluations.jacobian += 1;
-        report.evaluations.equations += system.rate_evaluations();
-        ok && self.values.iter().chain(&self.residual).all(|v| v.is_finite()) && self.solve(report)
-    }
-
-    /// The residual of the last [`Workspace::linearize`] or Newton run (its final iterate).
-    pub fn residual(&self) -> &[f64] {
-        &self.residual
-    }
-
-    /// The Jacobian values of the last evaluation, in
-    /// [`pattern`](super::unknowns::pattern) order.
-    pub fn jacobian(&self) -> &[f64] {
-        &self.values
-    }
-
-    /// Whether the verdict held is [`Workspace::verdict_at`]'s, of the Jacobian at a solution
-    /// (the stored factors belonging to an earlier state).
-    pub fn assessed_at_solution(&self) -> bool {
-        self.at_solution && self.verdict.is_some()
-    }
-
-    /// The stability verdict of the Jacobian last factored (docs/stability.md), assessed
-    /// by `assess` once per Jacobian: warm-started solves that converge by chord steps on
-    /// an earlier, nearby Jacobian reuse its verdict at no cost.
-    pub fn verdict(&mut self, assess: impl FnOnce(&[f64]) -> Stability) -> Stability {
-        if self.verdict.is_none() {
-            self.verdict = Some(assess(&self.values));
-        }
-        self.verdict.clone().unwrap_or(Stability::Unknown {
-            reason: "not assessed".into(),
-        })
-    }
-
-    /// The stability verdict of the Jacobian of `system` at `x`, assessed by `assess`, for a
-    /// state the stored factors do not belong to (a solve that converged by chord steps on an
-    /// earlier state's factors). The Jacobian is evaluated into the value buffer but not
-    /// factored: the factors, and the residual of the last iterate, stay as they were (the
-    /// error estimate and later chord steps use them); counted as a Jacobian evaluation.
-    /// None for a non-finite Jacobian.
-    pub fn verdict_at(
-        &mut self,
-        system: &System,
-        x: &[State],
-        report: &mut SolveReport,
-        assess: impl FnOnce(&[f64]) -> Stability,
-    ) -> Option<Stability> {
-        let t = Instant::now();
-        let ok = system.jacobian(x, &mut self.trial_residual, &mut self.values).is_ok();
-        report.timings.assembly += t.elapsed();
-        report.evaluations.jacobian += 1;
-        report.evaluations.equations += system.rate_evaluations();
-        self.verdict = None;
-        self.at_solution = true;
-        if !ok || !self.values.iter().all(|v| v.is_finite()) {
-            return None;
-        }
-        Some(self.verdict(assess))
-    }
-
-    /// Whether the value buffer holds [`Workspace::verdict_at`]'s Jacobian, evaluated at a
-    /// solution and not factored (nothing has changed the values since).
-    pub fn evaluated_at_solution(&self) -> bool {
-        self.at_solution
-    }
-
-    /// Factors the Jacobian [`Workspace::verdict_at`] left in the value buffer (at a
-    /// solution) for later [`Workspace::solve_again`] calls, as [`Workspace::factor`] does
-    /// for given values; its verdict stays (the values are the same). False for a zero pivot
-    /// or when the buffer does not hold that Jacobian.
-    pub fn factor_evaluated(&mut self) -> bool {
-        if !self.at_solution {
-            return false;
-        }
-        let verdict = self.verdict.take();
-        self.residual.fill(0.0);
-        let mut report = SolveReport::new(crate::report::Method::Collocation);
-        let ok = self.solve(&mut report);
-        self.verdict = verdict;
-        ok
-    }
-
-    /// Whether the workspace holds the factors of a successful solve.
-    pub fn has_factors(&self) -> bool {
-        self.factored
-    }
-
-    /// Factors the Jacobian with these `values` (in [`crate::collocation::unknowns::pattern`]
-    /// order) for later [`Workspace::solve_again`] calls, as the sensitivities need. The
-    /// structured elimination carries the right-hand side through its panels, so factoring
-    /// is a solve with a zero right-hand side at the same cost. False for a zero pivot.
-    pub fn factor(&mut self, values: &[f64]) -> bool {
-        self.values.copy_from_slice(values);
-        self.residual.fill(0.0);
-        let mut report = SolveReport::new(crate::report::Method::Collocation);
-        self.solve(&mut report)
-    }
-
-    /// Solves J x = rhs with the factorization of the last successful solve (a Newton step or
-    /// [`Workspace::solve_linear`]) for another right-hand side: no refactorization, so many
-    /// right-hand sides (sensitivities, one per parameter) cost one factorization. None for
-    /// a non-finite result.
-    pub fn solve_again(&mut self, rhs: &[f64]) -> Option<&[f64]> {
-        if !self.factored {
-            return None;
-        }
-        self.linear.solve_again(rhs, &mut self.step);
-        self.step.iter().all(|x| x.is_finite()).then_some(&self.step[..])
-    }
-
-    /// Solves J^T y = c with the same factorization as [`Workspace::solve_again`]: the
-    /// adjoint solve behind gradients of outputs (`collocation/sensitivity/adjoint.rs`).
-    /// None without factors or for a non-finite result.
-    pub fn solve_transposed(&mut self, c: &[f64]) -> Option<&[f64]> {
-        if !self.factored {
-            return None;
-        }
-        self.linear.solve_transposed(c, &mut self.step);
-        self.step.iter().all(|x| x.is_finite()).then_some(&self.step[..])
-    }
 }
 
 /// Which point of a Newton step an evaluation belongs to.
@@ -473,6 +247,9 @@ pub(crate) fn run_bordered<B: Border>(
         return (Termination::NonFinite, worst(ws, border));
     }
     let mut chord = settings.reuse_factors;
+    // The Jacobian held belongs to an earlier run's point (or system): not to this run's
+    // iterates until this run evaluates one.
+    ws.drift = f64::INFINITY;
     // Norms of the last two steps taken (full steps only: a damped one says nothing of the
     // remaining error).
     let (mut last_step, mut before_last) = (f64::INFINITY, f64::INFINITY);
@@ -534,6 +311,7 @@ pub(crate) fn run_bordered<B: Border>(
                 }
                 (before_last, last_step) = (last_step, step_norm);
                 last_fresh = false;
+                ws.drift += step_norm;
                 std::mem::swap(x, &mut ws.trial);
                 std::mem::swap(&mut ws.residual, &mut ws.trial_residual);
                 border.accept();
@@ -549,6 +327,7 @@ pub(crate) fn run_bordered<B: Border>(
         });
         report.timings.assembly += t.elapsed();
         report.evaluations.jacobian += 1;
+        ws.drift = 0.0;
         if !ok || !ws.values.iter().all(|v| v.is_finite()) {
             return (Termination::NonFinite, worst(ws, border));
         }
@@ -621,6 +400,7 @@ pub(crate) fn run_bordered<B: Border>(
         std::mem::swap(x, &mut ws.trial);
         std::mem::swap(&mut ws.residual, &mut ws.trial_residual);
         border.accept();
+        ws.drift = alpha * step_norm;
         last_fresh = true;
         (before_last, last_step) = if alpha == 1.0 {
             (last_step, step_norm)

@@ -18,11 +18,13 @@
 //! mesh. Near lambda = 1 the last point is predicted onto lambda = 1 and Newton lands there.
 
 use super::branch;
-use super::homotopy::{Homotopy, Point, dot, f_lambda, max_norm, residual, tangent};
+pub(super) use super::corrector::{correct, correct_to};
+use super::homotopy::{Homotopy, Point, dot, tangent};
 use super::locate;
 use super::newton::{self, Settings, Workspace};
 use super::options::Options;
 use super::refine;
+use super::snap;
 use super::stability;
 use super::system::System;
 use crate::mesh::guess::rigid_estimate;
@@ -32,9 +34,9 @@ use crate::solution::State;
 
 /// The most Newton iterations of the landing at lambda = 1 from the predicted point.
 const LANDING_ITERATIONS: usize = 12;
-/// Step control: the corrector iterations of an easy step, and the most it may take.
+/// Step control: the corrector iterations of an easy step (the most it may take is the
+/// corrector's, module `corrector`).
 const EASY: usize = 2;
-const MAX_CORRECTOR: usize = 8;
 /// The first step and the bounds of the step, in units of the normalized arclength.
 const FIRST_STEP: f64 = 0.3;
 const MAX_STEP: f64 = 1.0;
@@ -42,14 +44,9 @@ const MAX_STEP: f64 = 1.0;
 const MIN_STEP: f64 = 1e-5;
 /// The most steps along one path (a path of this many steps does not converge in practice).
 const MAX_STEPS: usize = 400;
-/// A chord corrector step must at least halve the residual, or the Jacobian is refreshed.
-const CHORD_RATIO: f64 = 0.5;
-/// Points on the way to lambda = 1 are guides, not answers: they are corrected to this
-/// scaled residual (a relative state error of about 1e-6), and only the landing at
-/// lambda = 1 is converged to the solve's tolerance.
-const PATH_TOLERANCE: f64 = 1e-6;
 /// Steps from a point fail below this length: the point (a guide corrected to
-/// [`PATH_TOLERANCE`]) is converged to the solve's tolerance and its tangent taken again.
+/// [`PATH_TOLERANCE`](super::corrector::PATH_TOLERANCE)) is converged to the solve's
+/// tolerance and its tangent taken again.
 /// Near the sharp turn of a slightly imperfect column a guide's state error, amplified by
 /// the nearly singular Jacobian, tilts the tangent so that no step from it converges.
 const POLISH_BELOW: f64 = 1e-3;
@@ -70,6 +67,9 @@ pub(super) struct End {
     /// Load factors where the path left a perfectly symmetric bifurcation along a picked
     /// side of the Jacobian's kernel (nothing preferred either).
     pub picked: Vec<f64>,
+    /// The load factor of the fold from which the states were reached by Newton at
+    /// lambda = 1 after the path itself could not be followed to the end ([`snap::land_from_folds`]).
+    pub snapped_from: Option<f64>,
 }
 
 /// A step that changes the number of unstable directions without a fold has jumped to
@@ -95,8 +95,14 @@ pub(super) fn index(system: &System, ws: &mut Workspace, report: &mut SolveRepor
 
 /// Where a path starts and what it connects.
 pub(super) enum Start<'x> {
-    /// The load path from the unloaded robot.
-    Rest,
+    /// The load path from the unloaded robot; when it cannot be followed to the end, it
+    /// lands from its folds ([`snap::land_from_folds`]) if `land` (a cold solve's path; a
+    /// warm-started solve keeps to the branch it was started on, so that a sweep's bisection
+    /// sees where that branch ends).
+    Rest {
+        /// Whether a path that stalls lands from its folds.
+        land: bool,
+    },
     /// The Newton homotopy from a warm start (not a solution of the system).
     Warm(&'x [State]),
     /// A trace of `parameter` from `from` (where `x` is the converged solution) towards
@@ -148,8 +154,10 @@ pub(super) fn follow(
     let robot = system.model.robot;
     let mut max_step = MAX_STEP;
     let mut stop: &dyn Fn() -> bool = &|| false;
+    let mut landing = false;
     let (x, homotopy) = match start {
-        Start::Rest => {
+        Start::Rest { land } => {
+            landing = land;
             system.set_factors(0.0, 0.0);
             let mut x = rigid_estimate(&system.model, &system.mesh.nodes);
             let (start, row) = newton::run(system, ws, &mut x, settings, report);
@@ -223,6 +231,9 @@ pub(super) fn follow(
     let mut worst = 0;
     let mut trial: Vec<State> = Vec::with_capacity(system.mesh.nodes.len());
     let mut r = vec![0.0; n];
+    // The states at the folds passed, with their load factors: where the path cannot be
+    // followed to the end, the robot snaps from one of them ([`snap::land_from_folds`]).
+    let mut fold_states: Vec<(f64, Vec<State>)> = Vec::new();
     for _ in 0..MAX_STEPS {
         if stop() {
             return Err(("stopped on request before the end of the range".into(), 0));
@@ -275,6 +286,7 @@ pub(super) fn follow(
                     folds,
                     bifurcations,
                     picked,
+                    snapped_from: None,
                 });
             }
             if let (true, Some(a), Some(b)) = (switching, unstable, landed_unstable)
@@ -361,6 +373,9 @@ pub(super) fn follow(
                     });
                 }
                 unstable = next_unstable;
+                if fold && landing {
+                    fold_states.push((lambda, next.x.clone()));
+                }
                 if fold {
                     folds.push(match tracing {
                         true => locate::fold(system, &homotopy, ws, (&point, &fl, h), &next, settings, report, &mut r),
@@ -378,6 +393,7 @@ pub(super) fn follow(
                         folds,
                         bifurcations,
                         picked,
+                        snapped_from: None,
                     });
                 }
                 // The angle between successive tangents bounds the next step.
@@ -435,6 +451,15 @@ pub(super) fn follow(
         }
     }
     homotopy.set(system, 1.0);
+    if landing && let Some((lambda, x)) = snap::land_from_folds(system, ws, &fold_states, settings, report) {
+        return Ok(End {
+            x,
+            folds,
+            bifurcations,
+            picked,
+            snapped_from: Some(lambda),
+        });
+    }
     // The point can lie outside [0, 1] (a Newton homotopy's path may turn back past its
     // start): the share of the way is the furthest point reached, and the point itself is
     // named only when it lies on the way behind it.
@@ -481,131 +506,4 @@ fn polish(
         Some((&point.tx, point.tl)),
         report,
     )
-}
-
-/// One predictor-corrector step of length `h` from `point`. Returns the converged states,
-/// their lambda and the corrector iterations, or None (the step is to be shortened).
-#[allow(clippy::too_many_arguments)]
-pub(super) fn correct(
-    system: &mut System,
-    homotopy: &Homotopy,
-    ws: &mut Workspace,
-    point: &Point,
-    h: f64,
-    fl: &[f64],
-    factored_at_point: bool,
-    settings: &Settings,
-    report: &mut SolveReport,
-    r: &mut [f64],
-) -> Option<(Vec<State>, f64, usize)> {
-    let tolerance = PATH_TOLERANCE.max(settings.tolerance);
-    correct_to(
-        system,
-        homotopy,
-        ws,
-        point,
-        h,
-        fl,
-        factored_at_point,
-        tolerance,
-        report,
-        r,
-    )
-}
-
-/// [`correct`], converged to the scaled residual `tolerance` (a located event's point is
-/// converged as tightly as a solve, not as a guide).
-#[allow(clippy::too_many_arguments)]
-pub(super) fn correct_to(
-    system: &mut System,
-    homotopy: &Homotopy,
-    ws: &mut Workspace,
-    point: &Point,
-    h: f64,
-    fl: &[f64],
-    factored_at_point: bool,
-    tolerance: f64,
-    report: &mut SolveReport,
-    r: &mut [f64],
-) -> Option<(Vec<State>, f64, usize)> {
-    let n = point.tx.len();
-    let nf = n as f64;
-    let step: Vec<f64> = point.tx.iter().map(|v| v * h).collect();
-    let mut x = Vec::with_capacity(point.x.len());
-    system.retract(&point.x, &step, 1.0, &mut x);
-    let lambda_pred = point.lambda + h * point.tl;
-    let mut lambda = lambda_pred;
-    // Displacement from the predicted point, in the scaled unknowns.
-    let mut d = vec![0.0; n];
-    let mut fl = fl.to_vec();
-    let mut fresh = !factored_at_point;
-    if fresh {
-        homotopy.set(system, lambda);
-        if !ws.linearize(system, &x, report) {
-            return None;
-        }
-        fl = f_lambda(system, homotopy, &x, lambda, report)?;
-    }
-    let mut norm = f64::INFINITY;
-    let mut next = Vec::with_capacity(x.len());
-    // b = -J^-1 F_lambda belongs to the factors: solved once per factorization, not per
-    // corrector step. The other buffers are allocated once per step.
-    let solve_b = |ws: &mut Workspace, fl: &[f64], b: &mut Vec<f64>| -> Option<()> {
-        let rhs: Vec<f64> = fl.iter().map(|v| -v).collect();
-        b.clear();
-        b.extend_from_slice(ws.solve_again(&rhs)?);
-        Some(())
-    };
-    let mut b = Vec::with_capacity(n);
-    solve_b(ws, &fl, &mut b)?;
-    let (mut rhs, mut delta) = (vec![0.0; n], vec![0.0; n]);
-    for iteration in 1..=MAX_CORRECTOR {
-        if !residual(system, homotopy, &x, lambda, r, report) {
-            return None;
-        }
-        let new_norm = max_norm(r);
-        if new_norm <= tolerance && iteration > 1 {
-            return Some((x, lambda, iteration - 1));
-        }
-        if iteration > 1 && new_norm > CHORD_RATIO * norm {
-            // The chord contracts too slowly: refresh the Jacobian here.
-            if !ws.linearize(system, &x, report) {
-                return None;
-            }
-            fl = f_lambda(system, homotopy, &x, lambda, report)?;
-            solve_b(ws, &fl, &mut b)?;
-            fresh = true;
-            if new_norm > 2.0 * norm {
-                return None;
-            }
-        }
-        norm = new_norm;
-        report.iterations += 1;
-        if fresh {
-            report.newton_steps += 1;
-        } else {
-            report.chord_steps += 1;
-        }
-        fresh = false;
-        rhs.iter_mut().zip(r.iter()).for_each(|(q, v)| *q = -v);
-        let a = ws.solve_again(&rhs)?;
-        let g = (dot(&point.tx, &d) + dot(&point.tx, a)) / nf + point.tl * (lambda - lambda_pred);
-        let denominator = dot(&point.tx, &b) / nf + point.tl;
-        if denominator.abs() < 1e-14 {
-            return None;
-        }
-        let dl = -g / denominator;
-        delta
-            .iter_mut()
-            .zip(a.iter().zip(&b))
-            .for_each(|(s, (a, b))| *s = a + dl * b);
-        if !delta.iter().all(|v| v.is_finite()) {
-            return None;
-        }
-        system.retract(&x, &delta, 1.0, &mut next);
-        std::mem::swap(&mut x, &mut next);
-        d.iter_mut().zip(&delta).for_each(|(d, s)| *d += s);
-        lambda += dl;
-    }
-    None
 }

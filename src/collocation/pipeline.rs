@@ -2,7 +2,7 @@
 //! equilibrium choice on the first mesh, refinement to the tolerance, the error estimate and
 //! the stability verdict, and the [`Solution`] built from the node states.
 
-use super::equilibrium::{Choose, better_start, choose_equilibrium, fresh_stability, near_start, stability_of};
+use super::equilibrium::{Choose, better_start, choose_equilibrium, near_start, stability_of};
 use super::estimate;
 use super::newton::{self, Settings, Workspace};
 use super::options::Options;
@@ -103,17 +103,11 @@ pub(crate) fn solve_impl(
     record_estimate(&mut report, correction.as_ref(), options, robot.length());
     if let Some(c) = cache.as_mut() {
         let system = System::new(model.clone(), mesh.clone());
-        // The verdict belongs to this solve's state: a solve that took no Newton step (chord
-        // steps on a cached solve's or a warm start's factors) would otherwise read the verdict of an
-        // earlier state, which the change of inputs can have crossed.
-        let stale = report.newton_steps == 0 && !c.workspace.assessed_at_solution();
+        // The verdict belongs to this solve's state: `stability_of` evaluates the Jacobian at
+        // it unless the workspace's is already there.
         let exact = report.path != PathTaken::Direct && !report.history.iter().any(|i| i.fresh_jacobian);
         let t = Instant::now();
-        report.stability = if stale {
-            fresh_stability(&system, &mut c.workspace, &x, &mut report)
-        } else {
-            stability_of(&system, &mut c.workspace, &x, exact, &mut report)
-        };
+        report.stability = stability_of(&system, &mut c.workspace, &x, exact, &mut report);
         report.timings.stability += t.elapsed();
     }
     report.timings.total = start.elapsed();

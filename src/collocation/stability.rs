@@ -98,7 +98,7 @@ pub fn assess(values: &[f64], s: &[f64]) -> Stability {
     for k in (0..links).rev() {
         let at = BASE_ROWS * BASE_COLUMNS + k * link_block;
         let block = &values[at..at + link_block];
-        let Some(next) = carry(block, &y) else {
+        let Some(next) = carry(block, &y, identity) else {
             return Stability::Unknown {
                 reason: format!(
                     "the linearized equations of the link at s = {:.4} m cannot be carried across it",
@@ -137,7 +137,10 @@ pub fn assess(values: &[f64], s: &[f64]) -> Stability {
         });
         match inverse {
             Some(inv) => {
-                y = next * inv;
+                // next Q1^-1: its (dp, dtheta) block is the identity, set exactly.
+                y.fixed_view_mut::<6, 6>(0, 0).copy_from(&Matrix6::identity());
+                let lower: Matrix6<f64> = next.fixed_view::<6, 6>(6, 0) * inv;
+                y.fixed_view_mut::<6, 6>(6, 0).copy_from(&lower);
                 identity = true;
             }
             None => {
@@ -158,19 +161,34 @@ pub fn assess(values: &[f64], s: &[f64]) -> Stability {
 /// The fields at node k from those at node k + 1 through one link's rows
 /// [A | B] (12 x 24, row major in `block`): A next = -B y, by Gaussian elimination with
 /// partial pivoting on the 12 x 18 augmented matrix (a hand-written kernel: the verdict
-/// runs it once per link, and a generic LU costs twice as much). None for a zero pivot.
-fn carry(block: &[f64], y: &M12x6) -> Option<M12x6> {
+/// runs it once per link, and a generic LU costs twice as much). When `identity`, the
+/// (dp, dtheta) block of y is exactly the identity, and B y = B_(p, theta) + B_(v, u) y_(v, u)
+/// takes half the products. None for a zero pivot.
+fn carry(block: &[f64], y: &M12x6, identity: bool) -> Option<M12x6> {
     const W: usize = 2 * NODE;
     let mut m = [[0.0f64; NODE + 6]; NODE];
     for (r, row) in m.iter_mut().enumerate() {
         let line = &block[r * W..(r + 1) * W];
         row[..NODE].copy_from_slice(&line[..NODE]);
-        for j in 0..6 {
-            let mut acc = 0.0;
-            for (c, b) in line[NODE..].iter().enumerate() {
-                acc += b * y[(c, j)];
+        let b: &[f64; NODE] = line[NODE..].try_into().ok()?;
+        let product = &mut row[NODE..];
+        if identity {
+            product.copy_from_slice(&b[..6]);
+            for (c, bc) in b.iter().enumerate().skip(6) {
+                for (p, yc) in product.iter_mut().zip(y.fixed_view::<1, 6>(c, 0).iter()) {
+                    *p += bc * yc;
+                }
             }
-            row[NODE + j] = -acc;
+        } else {
+            product.fill(0.0);
+            for (c, bc) in b.iter().enumerate() {
+                for (p, yc) in product.iter_mut().zip(y.fixed_view::<1, 6>(c, 0).iter()) {
+                    *p += bc * yc;
+                }
+            }
+        }
+        for p in product.iter_mut() {
+            *p = -*p;
         }
     }
     for c in 0..NODE {

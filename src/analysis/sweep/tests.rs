@@ -118,6 +118,44 @@ fn least_compliance(robot: &Robot, solution: &Solution) -> f64 {
     (0.5 * (c + c.transpose())).symmetric_eigenvalues().min()
 }
 
+/// The payload robot past its out-of-plane bifurcation (tendon 5 at 1.795 mN): the default
+/// solve from rest returns the stable state, hanging on the tendon's side (tip at x < 0),
+/// not the unstable planar state bent towards the lateral load. Just past the bifurcation
+/// (1.8 mN) the load path reaches a family of states swinging round the vertical at nearly
+/// constant load and cannot be followed to the end; the robot snaps from the fold on the
+/// tendon's side, and the report says so.
+#[test]
+fn the_payload_robot_past_its_bifurcation_is_stable() {
+    let values = vec![0.0018, 0.02, 0.1];
+    let ranges = Ranges::new(payload_robot(), vec![(Input::Parameter(Parameter::Tension(4)), values)]).unwrap();
+    for k in 0..3 {
+        let robot = ranges.robot(k as f64).unwrap();
+        let solution = collocation::solve(&robot, &Default::default()).unwrap();
+        let report = &solution.report;
+        assert_eq!(report.stability.verdict(), "stable", "step {k}: {report:?}");
+        // -1e-9 m/N: rounding in a compliance of about 1 m/N.
+        assert!(least_compliance(&robot, &solution) > -1e-9, "step {k}");
+        let tip = solution.tip_position();
+        // The stable state hangs on the tendon's side (x = -0.18 m, z = -0.22 m), in the
+        // plane of the tendon and the lateral load (1e-6 m: the swing mode is nearly neutral).
+        assert!(tip.x < -0.17 && tip.y.abs() < 1e-6 && tip.z < -0.2, "step {k}: {tip:?}");
+        assert!(
+            matches!(report.path, crate::report::PathTaken::LoadPath { .. }),
+            "step {k}: {:?}",
+            report.path
+        );
+        // 600: the 1.8 mN solve takes about 460 iterations (400 load steps, most of them
+        // round the swinging family), the others below 100.
+        assert!(report.iterations < 600, "step {k}: {} iterations", report.iterations);
+        assert_eq!(
+            report.notes.iter().any(|n| n.contains("snaps at the fold")),
+            k == 0,
+            "step {k}: {:?}",
+            report.notes
+        );
+    }
+}
+
 #[test]
 fn the_payload_sweep_is_the_same_at_every_step_size() {
     let ranges = |count| {

@@ -1,0 +1,146 @@
+//! The corrector of the pseudo-arclength continuation (`collocation/path.rs`): one
+//! predictor-corrector step along a path's tangent, converged on the hyperplane normal to
+//! it by chord steps with the stored factors, refreshing the Jacobian when they contract too
+//! slowly.
+
+use super::homotopy::{Homotopy, Point, dot, f_lambda, max_norm, residual};
+use super::newton::{Settings, Workspace};
+use super::system::System;
+use crate::report::SolveReport;
+use crate::solution::State;
+
+/// The most corrector iterations of one step.
+const MAX_CORRECTOR: usize = 8;
+/// A chord corrector step must at least halve the residual, or the Jacobian is refreshed.
+const CHORD_RATIO: f64 = 0.5;
+/// Points on the way to lambda = 1 are guides, not answers: they are corrected to this
+/// scaled residual (a relative state error of about 1e-6), and only the landing at
+/// lambda = 1 is converged to the solve's tolerance.
+pub(super) const PATH_TOLERANCE: f64 = 1e-6;
+
+/// One predictor-corrector step of length `h` from `point`. Returns the converged states,
+/// their lambda and the corrector iterations, or None (the step is to be shortened).
+#[allow(clippy::too_many_arguments)]
+pub(super) fn correct(
+    system: &mut System,
+    homotopy: &Homotopy,
+    ws: &mut Workspace,
+    point: &Point,
+    h: f64,
+    fl: &[f64],
+    factored_at_point: bool,
+    settings: &Settings,
+    report: &mut SolveReport,
+    r: &mut [f64],
+) -> Option<(Vec<State>, f64, usize)> {
+    let tolerance = PATH_TOLERANCE.max(settings.tolerance);
+    correct_to(
+        system,
+        homotopy,
+        ws,
+        point,
+        h,
+        fl,
+        factored_at_point,
+        tolerance,
+        report,
+        r,
+    )
+}
+
+/// [`correct`], converged to the scaled residual `tolerance` (a located event's point is
+/// converged as tightly as a solve, not as a guide).
+#[allow(clippy::too_many_arguments)]
+pub(super) fn correct_to(
+    system: &mut System,
+    homotopy: &Homotopy,
+    ws: &mut Workspace,
+    point: &Point,
+    h: f64,
+    fl: &[f64],
+    factored_at_point: bool,
+    tolerance: f64,
+    report: &mut SolveReport,
+    r: &mut [f64],
+) -> Option<(Vec<State>, f64, usize)> {
+    let n = point.tx.len();
+    let nf = n as f64;
+    let step: Vec<f64> = point.tx.iter().map(|v| v * h).collect();
+    let mut x = Vec::with_capacity(point.x.len());
+    system.retract(&point.x, &step, 1.0, &mut x);
+    let lambda_pred = point.lambda + h * point.tl;
+    let mut lambda = lambda_pred;
+    // Displacement from the predicted point, in the scaled unknowns.
+    let mut d = vec![0.0; n];
+    let mut fl = fl.to_vec();
+    let mut fresh = !factored_at_point;
+    if fresh {
+        homotopy.set(system, lambda);
+        if !ws.linearize(system, &x, report) {
+            return None;
+        }
+        fl = f_lambda(system, homotopy, &x, lambda, report)?;
+    }
+    let mut norm = f64::INFINITY;
+    let mut next = Vec::with_capacity(x.len());
+    // b = -J^-1 F_lambda belongs to the factors: solved once per factorization, not per
+    // corrector step. The other buffers are allocated once per step.
+    let solve_b = |ws: &mut Workspace, fl: &[f64], b: &mut Vec<f64>| -> Option<()> {
+        let rhs: Vec<f64> = fl.iter().map(|v| -v).collect();
+        b.clear();
+        b.extend_from_slice(ws.solve_again(&rhs)?);
+        Some(())
+    };
+    let mut b = Vec::with_capacity(n);
+    solve_b(ws, &fl, &mut b)?;
+    let (mut rhs, mut delta) = (vec![0.0; n], vec![0.0; n]);
+    for iteration in 1..=MAX_CORRECTOR {
+        if !residual(system, homotopy, &x, lambda, r, report) {
+            return None;
+        }
+        let new_norm = max_norm(r);
+        if new_norm <= tolerance && iteration > 1 {
+            return Some((x, lambda, iteration - 1));
+        }
+        if iteration > 1 && new_norm > CHORD_RATIO * norm {
+            // The chord contracts too slowly: refresh the Jacobian here.
+            if !ws.linearize(system, &x, report) {
+                return None;
+            }
+            fl = f_lambda(system, homotopy, &x, lambda, report)?;
+            solve_b(ws, &fl, &mut b)?;
+            fresh = true;
+            if new_norm > 2.0 * norm {
+                return None;
+            }
+        }
+        norm = new_norm;
+        report.iterations += 1;
+        if fresh {
+            report.newton_steps += 1;
+        } else {
+            report.chord_steps += 1;
+        }
+        fresh = false;
+        rhs.iter_mut().zip(r.iter()).for_each(|(q, v)| *q = -v);
+        let a = ws.solve_again(&rhs)?;
+        let g = (dot(&point.tx, &d) + dot(&point.tx, a)) / nf + point.tl * (lambda - lambda_pred);
+        let denominator = dot(&point.tx, &b) / nf + point.tl;
+        if denominator.abs() < 1e-14 {
+            return None;
+        }
+        let dl = -g / denominator;
+        delta
+            .iter_mut()
+            .zip(a.iter().zip(&b))
+            .for_each(|(s, (a, b))| *s = a + dl * b);
+        if !delta.iter().all(|v| v.is_finite()) {
+            return None;
+        }
+        system.retract(&x, &delta, 1.0, &mut next);
+        std::mem::swap(&mut x, &mut next);
+        d.iter_mut().zip(&delta).for_each(|(d, s)| *d += s);
+        lambda += dl;
+    }
+    None
+}

@@ -1,0 +1,254 @@
+//! The buffers and factors Newton keeps for one mesh ([`Workspace`]): the Jacobian values,
+//! residuals, steps and the linear solver's factors, reused across iterations, load steps
+//! and solves on the same mesh, with the stability verdict of the Jacobian held and how far
+//! the iterate has moved from it.
+
+use super::linear::{Linear, LinearSolver};
+use super::newton::STEP_TOLERANCE;
+use super::system::System;
+use super::unknowns::nonzeros;
+use crate::report::{SolveReport, Stability};
+use crate::solution::State;
+use std::time::Instant;
+
+/// Everything Newton needs for one mesh, built once and reused across iterations, load
+/// steps and solves on the same mesh.
+pub struct Workspace {
+    pub(super) linear: Linear,
+    pub(super) values: Vec<f64>,
+    pub(super) residual: Vec<f64>,
+    pub(super) trial_residual: Vec<f64>,
+    /// The simplified Newton correction -J^-1 F(trial) of the monotonicity test.
+    pub(super) simplified: Vec<f64>,
+    pub(super) rhs: Vec<f64>,
+    pub(super) step: Vec<f64>,
+    pub(super) trial: Vec<State>,
+    /// Whether the linear solver holds the factors of a successful solve.
+    pub(super) factored: bool,
+    /// The stability verdict of the Jacobian in `values`, once assessed (cleared whenever
+    /// `values` change).
+    pub(super) verdict: Option<Stability>,
+    /// How far the last iterate has moved from the point where the Jacobian in `values` was
+    /// evaluated: the sum of the max-norms of the (scaled) steps accepted since, infinite
+    /// when that point is not known ([`Workspace::factor`], [`Workspace::solve_linear`]).
+    pub(super) drift: f64,
+    /// Whether `values` hold a Jacobian [`Workspace::verdict_at`] evaluated but did not
+    /// factor (the factors are an earlier Jacobian's).
+    pub(super) unfactored: bool,
+}
+
+impl Workspace {
+    /// Builds the buffers and, for the sparse path, the pattern and symbolic LU of
+    /// `system`'s mesh.
+    ///
+    /// # Errors
+    /// [`crate::Error::InvalidInput`] if faer rejects the pattern (cannot happen for a valid mesh).
+    pub fn new(system: &System, solver: LinearSolver) -> crate::error::Result<Self> {
+        let n = system.unknowns();
+        Ok(Workspace {
+            linear: Linear::new(&system.mesh, solver)?,
+            values: vec![0.0; nonzeros(&system.mesh)],
+            residual: vec![0.0; n],
+            trial_residual: vec![0.0; n],
+            simplified: vec![0.0; n],
+            rhs: vec![0.0; n],
+            step: vec![0.0; n],
+            trial: Vec::with_capacity(system.mesh.nodes.len()),
+            factored: false,
+            verdict: None,
+            drift: f64::INFINITY,
+            unfactored: false,
+        })
+    }
+
+    /// Non-zeros stored in the Jacobian.
+    pub fn nonzeros(&self) -> usize {
+        self.values.len()
+    }
+
+    /// Factorizes the current matrix and solves J step = -residual.
+    /// Returns false for a zero pivot or a non-finite step.
+    pub(super) fn solve(&mut self, report: &mut SolveReport) -> bool {
+        self.verdict = None;
+        self.unfactored = false;
+        for (r, f) in self.rhs.iter_mut().zip(&self.residual) {
+            *r = -f;
+        }
+        let times = self.linear.solve(&self.values, &self.rhs, &mut self.step);
+        let Some((factor_time, solve_time)) = times else {
+            return false;
+        };
+        report.timings.factorization += factor_time;
+        report.timings.solve += solve_time;
+        self.factored = true;
+        self.step.iter().all(|x| x.is_finite())
+    }
+
+    /// Solves J step = -residual with the stored factors of an earlier Jacobian (a chord
+    /// step). Returns false when there are none or the step is not finite.
+    pub(super) fn chord(&mut self, report: &mut SolveReport) -> bool {
+        if !self.factored {
+            return false;
+        }
+        for (r, f) in self.rhs.iter_mut().zip(&self.residual) {
+            *r = -f;
+        }
+        let t = Instant::now();
+        self.linear.solve_again(&self.rhs, &mut self.step);
+        report.timings.solve += t.elapsed();
+        self.step.iter().all(|x| x.is_finite())
+    }
+
+    /// Solves J x = rhs for Jacobian `values` in [`pattern`](super::unknowns::pattern) order with this workspace's
+    /// linear solver: the hook tests use to cross-check the solvers and to force a singular
+    /// matrix. None for a zero pivot or a non-finite result.
+    pub fn solve_linear(&mut self, values: &[f64], rhs: &[f64]) -> Option<&[f64]> {
+        self.values.copy_from_slice(values);
+        for (r, f) in self.residual.iter_mut().zip(rhs) {
+            *r = -f;
+        }
+        let mut report = SolveReport::new(crate::report::Method::Collocation);
+        self.drift = f64::INFINITY;
+        self.solve(&mut report).then_some(&self.step[..])
+    }
+
+    /// Evaluates the residual and the Jacobian of `system` at `x`, factors the Jacobian and
+    /// solves for the Newton step (a Newton step's work, without moving `x`); counted in
+    /// `report` as a Jacobian evaluation. False for a non-finite residual or Jacobian or a
+    /// zero pivot. The residual is then [`Workspace::residual`], the Jacobian
+    /// [`Workspace::jacobian`], and [`Workspace::solve_again`] solves with its factors.
+    pub fn linearize(&mut self, system: &System, x: &[State], report: &mut SolveReport) -> bool {
+        let t = Instant::now();
+        let ok = system.jacobian(x, &mut self.residual, &mut self.values).is_ok();
+        report.timings.assembly += t.elapsed();
+        report.evaluations.jacobian += 1;
+        report.evaluations.equations += system.rate_evaluations();
+        self.drift = 0.0;
+        ok && self.values.iter().chain(&self.residual).all(|v| v.is_finite()) && self.solve(report)
+    }
+
+    /// The residual of the last [`Workspace::linearize`] or Newton run (its final iterate).
+    pub fn residual(&self) -> &[f64] {
+        &self.residual
+    }
+
+    /// The Jacobian values of the last evaluation, in
+    /// [`pattern`](super::unknowns::pattern) order.
+    pub fn jacobian(&self) -> &[f64] {
+        &self.values
+    }
+
+    /// The stability verdict of the Jacobian last factored (docs/stability.md), assessed
+    /// by `assess` once per Jacobian: warm-started solves that converge by chord steps on
+    /// an earlier, nearby Jacobian reuse its verdict at no cost.
+    pub fn verdict(&mut self, assess: impl FnOnce(&[f64]) -> Stability) -> Stability {
+        if self.verdict.is_none() {
+            self.verdict = Some(assess(&self.values));
+        }
+        self.verdict.clone().unwrap_or(Stability::Unknown {
+            reason: "not assessed".into(),
+        })
+    }
+
+    /// The stability verdict of the Jacobian of `system` at `x`, assessed by `assess`, for a
+    /// state the stored factors do not belong to (a solve that converged by chord steps on an
+    /// earlier state's factors). The Jacobian is evaluated into the value buffer but not
+    /// factored: the factors, and the residual of the last iterate, stay as they were (the
+    /// error estimate and later chord steps use them); counted as a Jacobian evaluation.
+    /// None for a non-finite Jacobian.
+    pub fn verdict_at(
+        &mut self,
+        system: &System,
+        x: &[State],
+        report: &mut SolveReport,
+        assess: impl FnOnce(&[f64]) -> Stability,
+    ) -> Option<Stability> {
+        let t = Instant::now();
+        let ok = system.jacobian(x, &mut self.trial_residual, &mut self.values).is_ok();
+        report.timings.assembly += t.elapsed();
+        report.evaluations.jacobian += 1;
+        report.evaluations.equations += system.rate_evaluations();
+        self.verdict = None;
+        self.drift = 0.0;
+        self.unfactored = true;
+        if !ok || !self.values.iter().all(|v| v.is_finite()) {
+            return None;
+        }
+        Some(self.verdict(assess))
+    }
+
+    /// Whether the Jacobian in the value buffer belongs to the last iterate: it was evaluated
+    /// there, or within Newton's own stopping distance of it (1e-10 in the scaled unknowns,
+    /// the iteration error a converged state is allowed), so that a verdict of those values is the
+    /// iterate's. Newton's last Jacobian is evaluated one step before its answer (after a
+    /// single Newton step followed by chord steps, at the guess), which it does not belong to.
+    pub fn jacobian_at_iterate(&self) -> bool {
+        self.drift <= STEP_TOLERANCE
+    }
+
+    /// Whether the value buffer holds the Jacobian evaluated exactly at the last iterate
+    /// (by Newton's last step there or by [`Workspace::verdict_at`]), so that factoring it
+    /// gives the sensitivities of that state.
+    pub fn evaluated_at_solution(&self) -> bool {
+        self.drift == 0.0
+    }
+
+    /// Makes the stored factors those of the Jacobian in the value buffer when that was
+    /// evaluated at the last iterate ([`Workspace::evaluated_at_solution`]): factors it
+    /// when [`Workspace::verdict_at`] left it unfactored, and keeps its verdict (the values
+    /// are the same). False for a zero pivot, or when the buffer holds no such Jacobian.
+    pub fn factor_evaluated(&mut self) -> bool {
+        if !self.evaluated_at_solution() {
+            return false;
+        }
+        if !self.unfactored {
+            return self.factored;
+        }
+        let verdict = self.verdict.take();
+        self.residual.fill(0.0);
+        let mut report = SolveReport::new(crate::report::Method::Collocation);
+        let ok = self.solve(&mut report);
+        self.verdict = verdict;
+        ok
+    }
+
+    /// Whether the workspace holds the factors of a successful solve.
+    pub fn has_factors(&self) -> bool {
+        self.factored
+    }
+
+    /// Factors the Jacobian with these `values` (in [`crate::collocation::unknowns::pattern`]
+    /// order) for later [`Workspace::solve_again`] calls, as the sensitivities need. The
+    /// structured elimination carries the right-hand side through its panels, so factoring
+    /// is a solve with a zero right-hand side at the same cost. False for a zero pivot.
+    pub fn factor(&mut self, values: &[f64]) -> bool {
+        self.values.copy_from_slice(values);
+        self.residual.fill(0.0);
+        let mut report = SolveReport::new(crate::report::Method::Collocation);
+        self.drift = f64::INFINITY;
+        self.solve(&mut report)
+    }
+
+    /// Solves J x = rhs with the factorization of the last successful solve (a Newton step or
+    /// [`Workspace::solve_linear`]) for another right-hand side: no refactorization, so many
+    /// right-hand sides (sensitivities, one per parameter) cost one factorization. None for
+    /// a non-finite result.
+    pub fn solve_again(&mut self, rhs: &[f64]) -> Option<&[f64]> {
+        if !self.factored {
+            return None;
+        }
+        self.linear.solve_again(rhs, &mut self.step);
+        self.step.iter().all(|x| x.is_finite()).then_some(&self.step[..])
+    }
+
+    /// Solves J^T y = c with the same factorization as [`Workspace::solve_again`]: the
+    /// adjoint solve behind gradients of outputs (`collocation/sensitivity/adjoint.rs`).
+    /// None without factors or for a non-finite result.
+    pub fn solve_transposed(&mut self, c: &[f64]) -> Option<&[f64]> {
+        if !self.factored {
+            return None;
+        }
+        self.linear.solve_transposed(c, &mut self.step);
+        self.step.iter().all(|x| x.is_finite()).then_some(&self.step[..])
+    }
+}
