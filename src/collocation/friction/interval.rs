@@ -39,6 +39,8 @@ pub(crate) struct Profile<'a> {
     pub(crate) spans: Vec<usize>,
     /// z_j at every node (0 at node 0; past the span, the span's last value).
     pub(crate) z: Vec<Vec<f64>>,
+    /// In a stick/slip history, each slip's [`Grip`] on this mesh; None in full slip.
+    pub(crate) grips: Option<Vec<Grip>>,
     /// The model with the tensions of one point, for eq. 13 with friction.
     scratch: RefCell<Model<'a>>,
     /// Each link's last evaluation ([`interval`] through the system's residual or
@@ -64,6 +66,7 @@ impl<'a> Profile<'a> {
             .collect();
         Profile {
             z: vec![vec![0.0; mesh.nodes.len()]; slipping.len()],
+            grips: None,
             slipping,
             base,
             spans,
@@ -80,9 +83,16 @@ impl<'a> Profile<'a> {
             base: self.base.clone(),
             spans: self.spans.clone(),
             z: self.z.clone(),
+            grips: self.grips.clone(),
             scratch: RefCell::new(self.scratch.borrow().clone()),
             cache: RefCell::new(self.cache.borrow().iter().map(|_| None).collect()),
         }
+    }
+
+    /// The friction coefficient mu_j of slip j.
+    pub(crate) fn coefficient(&self, j: usize) -> f64 {
+        let robot = self.scratch.borrow().robot;
+        robot.tendons[self.slipping[j]].active_friction().map_or(0.0, |f| f.coefficient)
     }
 
     /// Number of tendons with friction.
@@ -132,8 +142,34 @@ impl<'a> Profile<'a> {
         f(self.cache.borrow()[k].as_ref())
     }
 
-    /// Eq. 13 with friction at a site and state, the slips at log tensions `z` (with its
-    /// derivatives when `derivatives`).
+    /// The friction multipliers w_j of the slips on link k in a history (None in full
+    /// slip: the motions' signs): -1 or +1 where a slip slides; where it sticks,
+    /// w = (z_b - z_a) / C with C its capacity on the link from the last march, so that
+    /// the tangential load follows the log tensions the stick rows set (a step behind, only
+    /// C, which the shape changes slowly, lags).
+    pub(crate) fn multipliers(&self, k: usize) -> Option<Vec<f64>> {
+        self.grips.as_ref().map(|g| {
+            g.iter()
+                .enumerate()
+                .map(|(j, g)| match g.contacts.get(k) {
+                    Some(Contact::Stick) => stuck_multiplier(self.z[j][k], self.z[j][k + 1], g.capacities[k]),
+                    _ => g.multipliers.get(k).copied().unwrap_or(1.0),
+                })
+                .collect()
+        })
+    }
+
+    /// Whether slip j sticks on link k (a history's stick row replaces its capstan row).
+    pub(crate) fn sticks(&self, j: usize, k: usize) -> bool {
+        self.grips
+            .as_ref()
+            .is_some_and(|g| g[j].contacts.get(k) == Some(&Contact::Stick))
+    }
+
+    /// Eq. 13 with friction at a site and state, the slips at log tensions `z` and
+    /// multipliers `w` (the motions' signs when None), with its derivatives when
+    /// `derivatives`.
+    #[allow(clippy::too_many_arguments)]
     fn point(
         &self,
         site: &Site,
@@ -141,14 +177,129 @@ impl<'a> Profile<'a> {
         R: &nalgebra::Matrix3<f64>,
         y: (&Vector3<f64>, &Vector3<f64>),
         z: &[f64],
+        w: Option<&[f64]>,
         derivatives: bool,
     ) -> Result<FrictionLinearization> {
         let mut model = self.scratch.borrow_mut();
         for (j, &i) in self.slipping.iter().enumerate() {
             model.tensions[i] = self.tension(j, z[j]);
         }
-        friction::linearize(&model, site, segment_end, (R, y.0, y.1), &self.slipping, derivatives)
+        friction::linearize(&model, site, segment_end, (R, y.0, y.1), &self.slipping, w, derivatives)
     }
+
+    /// Slip j's tension (N) at node state `b` (arc length b.s) if the material there had
+    /// not moved since the last step of a history: E_t A_t (|p_j'| / lambda - 1) with
+    /// lambda the carried unstretched length per unit s at node `node` (docs/friction.md
+    /// section 8), and its derivative in (v, u). A rigid tendon has +-infinity (its
+    /// stuck material cannot stretch) and no derivative.
+    pub(crate) fn stuck_tension(&self, j: usize, node: usize, b: &State, length: f64) -> (f64, Vector3<f64>, Vector3<f64>) {
+        let robot = self.scratch.borrow().robot;
+        let tendon = &robot.tendons[self.slipping[j]];
+        let Some(grip) = self.grips.as_ref().map(|g| &g[j]) else {
+            return (f64::NAN, Vector3::zeros(), Vector3::zeros());
+        };
+        let rp = tendon.routing.at(b.s, length);
+        let p = b.u.cross(&rp.r) + rp.r_s + b.v;
+        let speed = p.norm();
+        let lambda = grip.reference[node];
+        let Some(stiffness) = tendon.stiffness else {
+            let sign = (speed - lambda).signum();
+            return (sign * f64::INFINITY, Vector3::zeros(), Vector3::zeros());
+        };
+        let t = p / speed;
+        let scale = stiffness / lambda;
+        (stiffness * (speed / lambda - 1.0), t * scale, rp.r.cross(&t) * scale)
+    }
+}
+
+/// How the tension of a tendon with friction evolves on a stretch of it during a step of a
+/// load history (docs/friction.md section 8).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Contact {
+    /// Sliding toward the actuator, as while pulled in: the tension falls toward the
+    /// termination at the full friction rate (multiplier w = -1).
+    Pull,
+    /// Sliding toward the termination, as while let out: the tension rises toward the
+    /// termination at the full friction rate (w = +1).
+    Release,
+    /// Stuck to its channel: the material has not moved since the last step, and the
+    /// tension follows from its elastic stretch (|w| <= 1).
+    Stick,
+}
+
+impl Contact {
+    /// The name the command line and files use: `pull`, `release` or `stick`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Contact::Pull => "pull",
+            Contact::Release => "release",
+            Contact::Stick => "stick",
+        }
+    }
+}
+
+/// The stick/slip choice on one link of a history (docs/friction.md section 8).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Choice {
+    /// Slide in, slide out or stick.
+    pub(crate) contact: Contact,
+    /// zeta_b = ln(tau_stuck / tau(0)), the stuck material's log tension at the link's end
+    /// (-infinity where it would be slack, +infinity for a rigid tendon stretched).
+    pub(crate) zeta: f64,
+    /// The multiplier w this choice gives the link: -1, +1, or where it sticks
+    /// (zeta_b - z_a) / C, the stuck profile's share of the friction it can hold.
+    pub(crate) multiplier: f64,
+}
+
+/// The Coulomb choice on a link: with base tension `base`, log tension `za` at its start,
+/// capacity `capacity` (C) and the stuck material's tension `stuck` at its end, the tension
+/// there is `z_b = z_a + clamp(zeta_b - z_a, -C, C)`: it sticks where friction can hold the
+/// stuck profile, else slides the way the stuck tension lies (above: out, below: in). An
+/// unloaded tendon (base 0) slides out, slack.
+pub(crate) fn choose(base: f64, za: f64, capacity: f64, stuck: f64) -> Choice {
+    if base == 0.0 {
+        return Choice {
+            contact: Contact::Release,
+            zeta: f64::NEG_INFINITY,
+            multiplier: 1.0,
+        };
+    }
+    let zeta = if stuck > 0.0 { (stuck / base).ln() } else { f64::NEG_INFINITY };
+    let t = zeta - za;
+    let (contact, multiplier) = if t <= -capacity {
+        (Contact::Pull, -1.0)
+    } else if t >= capacity {
+        (Contact::Release, 1.0)
+    } else {
+        (Contact::Stick, if capacity > 0.0 { t / capacity } else { 0.0 })
+    };
+    Choice {
+        contact,
+        zeta,
+        multiplier,
+    }
+}
+
+/// The multiplier of a stuck link with log tensions `za`, `zb` at its ends and capacity
+/// `capacity`: the share of the friction it can hold that the stuck profile uses.
+pub(crate) fn stuck_multiplier(za: f64, zb: f64, capacity: f64) -> f64 {
+    if capacity > 0.0 { (zb - za) / capacity } else { 0.0 }
+}
+
+/// The stick/slip state of one tendon with friction on a mesh during a history step.
+#[derive(Clone, Debug)]
+pub(crate) struct Grip {
+    /// Per link of its span, how its tension evolves there.
+    pub(crate) contacts: Vec<Contact>,
+    /// Per link, the friction multiplier w of the backbone's tangential load: -1 or +1
+    /// where it slides, the stick profile's tau' / (mu tau kappa) where it sticks.
+    pub(crate) multipliers: Vec<f64>,
+    /// Per link, its capacity C (the most friction can change the log tension across it)
+    /// at the last march.
+    pub(crate) capacities: Vec<f64>,
+    /// Per node, lambda: the unstretched length of tendon per unit s of the material there
+    /// at the end of the last step (docs/friction.md section 8).
+    pub(crate) reference: Vec<f64>,
 }
 
 /// The linearization of an interval with friction: its backbone rows, capstan rows and
@@ -157,8 +308,15 @@ impl<'a> Profile<'a> {
 pub(crate) struct IntervalLinearization {
     /// The 12 backbone rows (scaled).
     pub(crate) residual: Block<f64>,
-    /// psi_j, one per slip (0 for slips not on this link).
+    /// psi_j, one per slip (0 for slips not on this link): the capstan row, or in a
+    /// history the stick row where the slip sticks.
     pub(crate) psi: Vec<f64>,
+    /// C_j = h/6 mu_j (kappa_a + 4 kappa_m + kappa_b): the most the log tension of slip j
+    /// can change across the link (the capstan row's increment at |w| = 1).
+    pub(crate) capacity: Vec<f64>,
+    /// In a history, slip j's tension at node b if its material there had not moved
+    /// ([`Profile::stuck_tension`]); NaN in full slip.
+    pub(crate) stuck_tension: Vec<f64>,
     /// d(backbone rows)/dz: 12 x 2k, columns z_a of every slip, then z_b.
     pub(crate) rows_z: DMatrix<f64>,
     /// d psi / d(node unknowns): k x 24, the block's column layout.
@@ -186,6 +344,49 @@ pub(crate) fn interval(
     b: &State,
     jac: Option<&mut [f64]>,
 ) -> Result<IntervalLinearization> {
+    let w = profile.multipliers(k);
+    let derivatives = jac.is_some();
+    let mut out = interval_at(profile, length, k, sites, segment_end, a, b, w.as_deref(), jac)?;
+    let (Some(w), true) = (w, derivatives) else {
+        return Ok(out);
+    };
+    // A stuck link's multiplier w = (z_b - z_a) / C moves its backbone rows with its log
+    // tensions: d(rows)/dw by a central difference (the rows are smooth in w; a step of
+    // 1e-6 leaves a truncation of 1e-12 and rounding of 1e-10 of the rows' scale).
+    let count = profile.count();
+    for j in (0..count).filter(|&j| profile.on_link(j, k) && profile.sticks(j, k)) {
+        let Some(capacity) = profile.grips.as_ref().map(|g| g[j].capacities[k]).filter(|c| *c > 0.0) else {
+            continue;
+        };
+        let step = 1e-6;
+        let moved = |d: f64| -> Result<Block<f64>> {
+            let mut w = w.clone();
+            w[j] += d;
+            Ok(interval_at(profile, length, k, sites, segment_end, a, b, Some(&w), None)?.residual)
+        };
+        let d_rows = (moved(step)? - moved(-step)?) / (2.0 * step);
+        for r in 0..12 {
+            out.rows_z[(r, j)] -= d_rows[r] / capacity;
+            out.rows_z[(r, count + j)] += d_rows[r] / capacity;
+        }
+    }
+    Ok(out)
+}
+
+/// [`interval`] with the slips' multipliers `w` (None in full slip: the motions' signs),
+/// the backbone rows' derivatives at fixed `w`.
+#[allow(clippy::too_many_arguments)]
+fn interval_at(
+    profile: &Profile,
+    length: f64,
+    k: usize,
+    sites: &IntervalSites,
+    segment_end: f64,
+    a: &State,
+    b: &State,
+    w: Option<&[f64]>,
+    jac: Option<&mut [f64]>,
+) -> Result<IntervalLinearization> {
     let count = profile.count();
     let h = sites.end.s - sites.start.s;
     let za: Vec<f64> = profile.z.iter().map(|z| z[k]).collect();
@@ -193,8 +394,8 @@ pub(crate) fn interval(
     let (y0, y1) = end_points(a, b);
     let theta1: Vector3<f64> = y1.fixed_rows::<3>(THETA).into();
     let derivatives = jac.is_some();
-    let la = profile.point(&sites.start, segment_end, &a.R, (&a.v, &a.u), &za, derivatives)?;
-    let lb = profile.point(&sites.end, segment_end, &b.R, (&b.v, &b.u), &zb, derivatives)?;
+    let la = profile.point(&sites.start, segment_end, &a.R, (&a.v, &a.u), &za, w, derivatives)?;
+    let lb = profile.point(&sites.end, segment_end, &b.R, (&b.v, &b.u), &zb, w, derivatives)?;
     let p0 = rhs_linearized(&la.lin, &a.R, &y0);
     let p1 = rhs_linearized(&lb.lin, &a.R, &y1);
     let ym = (y0 + y1) * 0.5 + (p0.f - p1.f) * (h / 8.0);
@@ -204,11 +405,18 @@ pub(crate) fn interval(
     let theta_m: Vector3<f64> = ym.fixed_rows::<3>(THETA).into();
     let (vm, um): (Vector3<f64>, Vector3<f64>) = (ym.fixed_rows::<3>(6).into(), ym.fixed_rows::<3>(9).into());
     let Rm = a.R * so3::exp(&theta_m);
-    let lm = profile.point(&sites.mid, segment_end, &Rm, (&vm, &um), &zm, derivatives)?;
+    let lm = profile.point(&sites.mid, segment_end, &Rm, (&vm, &um), &zm, w, derivatives)?;
     let pm = rhs_linearized(&lm.lin, &a.R, &ym);
     let residual = scale_rows(y1 - y0 - (p0.f + pm.f * 4.0 + p1.f) * (h / 6.0), length);
     let on: Vec<bool> = (0..count).map(|j| profile.on_link(j, k)).collect();
-    let psi: Vec<f64> = (0..count)
+    // In a history, the stuck material's tension at node b, for the stick/slip choice.
+    let stuck: Vec<Option<(f64, Vector3<f64>, Vector3<f64>)>> = (0..count)
+        .map(|j| (profile.grips.is_some() && on[j]).then(|| profile.stuck_tension(j, k + 1, b, length)))
+        .collect();
+    let capacity: Vec<f64> = (0..count)
+        .map(|j| h / 6.0 * profile.coefficient(j) * (la.kappa[j] + 4.0 * lm.kappa[j] + lb.kappa[j]))
+        .collect();
+    let mut psi: Vec<f64> = (0..count)
         .map(|j| {
             if on[j] {
                 zb[j] - za[j] - h / 6.0 * (la.turning[j] + 4.0 * lm.turning[j] + lb.turning[j])
@@ -217,9 +425,19 @@ pub(crate) fn interval(
             }
         })
         .collect();
+    // In a history, a stuck link's row is its stick row z_b - zeta_b, zeta_b the stuck
+    // material's log tension (section 8); a sliding link keeps its capstan row at w = -1
+    // or +1.
+    for j in 0..count {
+        if let (Some((tension, _, _)), true) = (stuck[j], profile.sticks(j, k)) {
+            psi[j] = zb[j] - (tension / profile.base[j]).ln();
+        }
+    }
     let mut out = IntervalLinearization {
         residual,
         psi,
+        capacity,
+        stuck_tension: stuck.iter().map(|t| t.map_or(f64::NAN, |t| t.0)).collect(),
         rows_z: DMatrix::zeros(12, 2 * count),
         psi_x: DMatrix::zeros(count, 24),
         psi_z: DMatrix::zeros(count, 2 * count),
@@ -326,6 +544,19 @@ pub(crate) fn interval(
             }
         }
     }
+    // Stick rows: d(z_b - zeta_b) in z_b and in node b's v and (scaled) u.
+    for j in (0..count).filter(|&j| profile.sticks(j, k)) {
+        let Some((tension, d_v, d_u)) = stuck[j] else {
+            continue;
+        };
+        out.psi_x.row_mut(j).fill(0.0);
+        out.psi_z.row_mut(j).fill(0.0);
+        for i in 0..3 {
+            out.psi_x[(j, 18 + i)] = -d_v[i] / tension;
+            out.psi_x[(j, 21 + i)] = -d_u[i] / (tension * length);
+        }
+        out.psi_z[(j, count + j)] = 1.0;
+    }
     Ok(out)
 }
 
@@ -356,12 +587,14 @@ pub(crate) fn interval_order6(
     let za: Vec<f64> = profile.z.iter().map(|z| z[k]).collect();
     let zb: Vec<f64> = profile.z.iter().map(|z| z[k + 1]).collect();
     let (y0, y1) = end_points(a, b);
+    let w = profile.multipliers(k);
+    let w = w.as_deref();
     // F and kappa~ at a local state (y, z) of the interval.
     let stage = |site: &Site, y: &Block<f64>, z: &[f64]| -> Result<(Block<f64>, Vec<f64>)> {
         let theta: Vector3<f64> = y.fixed_rows::<3>(THETA).into();
         let (v, u): (Vector3<f64>, Vector3<f64>) = (y.fixed_rows::<3>(6).into(), y.fixed_rows::<3>(9).into());
         let R = a.R * so3::exp(&theta);
-        let lin = profile.point(site, segment_end, &R, (&v, &u), z, false)?;
+        let lin = profile.point(site, segment_end, &R, (&v, &u), z, w, false)?;
         let mut f = Block::zeros();
         f.fixed_rows_mut::<3>(0).copy_from(&(R * v));
         f.fixed_rows_mut::<3>(THETA)
@@ -390,7 +623,10 @@ pub(crate) fn interval_order6(
     let quadrature = ((f0 + f1) * 7.0 + (f_q + f_tq) * 32.0 + f_m * 12.0) * (h / 90.0);
     let psi: Vec<f64> = (0..count)
         .map(|j| {
-            if profile.on_link(j, k) {
+            if profile.on_link(j, k) && profile.sticks(j, k) {
+                // The stick row is algebraic: the same at any order.
+                zb[j] - (profile.stuck_tension(j, k + 1, b, length).0 / profile.base[j]).ln()
+            } else if profile.on_link(j, k) {
                 zb[j] - za[j] - (7.0 * (k0[j] + k1[j]) + 32.0 * (k_q[j] + k_tq[j]) + 12.0 * k_m[j]) * (h / 90.0)
             } else {
                 0.0
