@@ -45,13 +45,22 @@ fn tip(step: &HistoryStep) -> Vector3<f64> {
 #[test]
 fn one_step_from_rest_is_the_full_slip_pull_solve() {
     let robot = prototype(0.1).with_tensions(&[TOP, 0.0, 0.0, 0.0, 0.0]);
-    let ranges = Ranges::new(robot.clone(), vec![(Input::Parameter(Parameter::Tension(0)), vec![TOP])]).unwrap();
+    let ranges = Ranges::new(
+        robot.clone(),
+        vec![(Input::Parameter(Parameter::Tension(0)), vec![TOP])],
+    )
+    .unwrap();
     let steps = solved(history(&ranges, &Default::default()).unwrap());
     let pulled = tdcr::solve(&robot, &Default::default()).unwrap();
     let distance = (tip(&steps[0]) - pulled.tip_position()).norm();
     // 1e-10 m: the same equations on the same mesh; only the log tensions' round trip
     // through the tensions differs, at rounding
-    assert!(distance < 1e-10, "history {:?} vs pull {:?}", tip(&steps[0]), pulled.tip_position());
+    assert!(
+        distance < 1e-10,
+        "history {:?} vs pull {:?}",
+        tip(&steps[0]),
+        pulled.tip_position()
+    );
     assert_eq!(steps[0].zones[0].zones.len(), 1);
     assert_eq!(steps[0].zones[0].zones[0].contact, Contact::Pull);
     let delivered = steps[0].solution.tendons[0].delivered_tension;
@@ -81,17 +90,26 @@ fn pulling_and_releasing_draws_a_closed_loop() {
     assert_eq!(back.first().map(|z| z.contact), Some(Contact::Release));
     assert_eq!(back.last().map(|z| z.contact), Some(Contact::Stick));
     // Loading from rest slides the tendon in all along.
-    assert!(steps[1..=10].iter().all(|s| s.zones[0].zones.iter().all(|z| z.contact == Contact::Pull)));
+    assert!(
+        steps[1..=10]
+            .iter()
+            .all(|s| s.zones[0].zones.iter().all(|z| z.contact == Contact::Pull))
+    );
 }
 
 #[test]
 fn the_loop_widens_with_friction() {
     let width = |mu: f64| -> f64 {
         let steps = solved(history(&ranges(prototype(mu), TOP, 6), &Default::default()).unwrap());
-        (1..6).map(|k| (tip(&steps[k]) - tip(&steps[12 - k])).norm()).fold(0.0, f64::max)
+        (1..6)
+            .map(|k| (tip(&steps[k]) - tip(&steps[12 - k])).norm())
+            .fold(0.0, f64::max)
     };
     let widths = [width(0.05), width(0.1), width(0.2)];
-    assert!(widths[0] > 0.0 && widths[0] < widths[1] && widths[1] < widths[2], "widths {widths:?}");
+    assert!(
+        widths[0] > 0.0 && widths[0] < widths[1] && widths[1] < widths[2],
+        "widths {widths:?}"
+    );
 }
 
 #[test]
@@ -108,7 +126,10 @@ fn a_stuck_step_moves_the_tip_less_than_without_friction() {
     };
     let frictionless = (at(back.solution.tendons[0].tension) - at(TOP)).norm();
     let stuck = (tip(back) - tip(peak)).norm();
-    assert!(stuck < frictionless, "stuck step {stuck} m, frictionless {frictionless} m");
+    assert!(
+        stuck < frictionless,
+        "stuck step {stuck} m, frictionless {frictionless} m"
+    );
 }
 
 #[test]

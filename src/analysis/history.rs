@@ -82,7 +82,11 @@ pub struct HistoryResult {
 /// mesh-choosing solve failing.
 pub fn history(ranges: &Ranges, options: &collocation::Options) -> Result<HistoryResult> {
     options.validate()?;
-    if let Some((input, _)) = ranges.inputs().iter().find(|(i, _)| matches!(i, Input::Displacement(_))) {
+    if let Some((input, _)) = ranges
+        .inputs()
+        .iter()
+        .find(|(i, _)| matches!(i, Input::Displacement(_)))
+    {
         return Err(invalid(
             format!("{input}"),
             "a history drives the tendons by their tensions, not by pull-ins",

@@ -39,7 +39,13 @@ pub(crate) fn solution_with_tensions(
     multipliers: Option<&[Vec<f64>]>,
     report: SolveReport,
 ) -> Result<Solution> {
-    build(model, states, segment_ends, Along::Varying(profile, multipliers), report)
+    build(
+        model,
+        states,
+        segment_ends,
+        Along::Varying(profile, multipliers),
+        report,
+    )
 }
 
 /// The tensions along the tendons: constant (the model's), with the node rates when known,

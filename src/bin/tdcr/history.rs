@@ -82,7 +82,10 @@ pub fn run(
         .unwrap_or_default();
     let mut csv = header(count, *input, &slipping);
     for (k, step) in result.steps.iter().enumerate() {
-        let direction = match k.checked_sub(1).map(|p| values[k.min(values.len() - 1)] - values[p.min(values.len() - 1)]) {
+        let direction = match k
+            .checked_sub(1)
+            .map(|p| values[k.min(values.len() - 1)] - values[p.min(values.len() - 1)])
+        {
             Some(d) if d > 0.0 => "up",
             Some(d) if d < 0.0 => "down",
             _ => "held",

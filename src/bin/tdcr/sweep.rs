@@ -298,7 +298,13 @@ pub fn run(args: &SweepArgs) -> Result<(), Failure> {
             ));
         }
         let ranges = crate::history::steps(&inputs, &file.robot, h)?;
-        return crate::history::run(&name, &ranges, &file.solver.collocation, args.out.as_deref(), args.plot.as_deref());
+        return crate::history::run(
+            &name,
+            &ranges,
+            &file.solver.collocation,
+            args.out.as_deref(),
+            args.plot.as_deref(),
+        );
     }
     let mut sweep = Sweep::new(&inputs, solver, start);
     let mut progress = Progress::new();

@@ -14,7 +14,7 @@
 //! the backbone with the links' rows and multipliers held; the march is repeated on the new
 //! shape until it changes nothing.
 
-use super::interval::choose;
+use super::grip::choose;
 use super::*;
 use crate::model::length;
 use crate::solution::Solution;
@@ -151,7 +151,11 @@ fn march(border: &mut Capstan, x: &[State]) -> Result<bool> {
             let first = *sliding[j].get_or_insert(choice.contact);
             if base > 0.0 && (stuck_from[j].is_some() || choice.contact != first) {
                 choice.contact = Contact::Stick;
-                choice.multiplier = if capacity > 0.0 { (choice.zeta - za) / capacity } else { 0.0 };
+                choice.multiplier = if capacity > 0.0 {
+                    (choice.zeta - za) / capacity
+                } else {
+                    0.0
+                };
             }
             let zb = match choice.contact {
                 Contact::Stick => {
@@ -243,7 +247,12 @@ pub(crate) fn step(robot: &Robot, options: &Options, carried: &mut Carried) -> R
     let mut border = Capstan::new(system);
     let mut x = carried.x.clone();
     let mut report = carried.report.clone();
-    (report.iterations, report.newton_steps, report.chord_steps, report.load_steps) = (0, 0, 0, 0);
+    (
+        report.iterations,
+        report.newton_steps,
+        report.chord_steps,
+        report.load_steps,
+    ) = (0, 0, 0, 0);
     let settings = Settings {
         tolerance: options.residual_tolerance,
         max_iterations: options.max_iterations,
@@ -287,16 +296,18 @@ pub(crate) fn step(robot: &Robot, options: &Options, carried: &mut Carried) -> R
             method: Method::Collocation,
             report: Box::new(report),
             worst_s: 0.0,
-            hint: format!(
-                "the stick/slip zones did not settle in {PASSES} passes: take smaller steps of the history"
-            ),
+            hint: format!("the stick/slip zones did not settle in {PASSES} passes: take smaller steps of the history"),
         });
     }
     let estimated = estimate_with_friction(&mut border, &mut ws, &x).ok().flatten();
     border.load(Point::Current);
     let system = &border.system;
     let Some(profile) = system.friction.as_ref() else {
-        return Err(error::invalid("tendons", "have no friction", "solve a history of a robot with friction"));
+        return Err(error::invalid(
+            "tendons",
+            "have no friction",
+            "solve a history of a robot with friction",
+        ));
     };
     let grips = profile.grips.clone().unwrap_or_default();
     let tensions = profile.node_tensions(&model);
@@ -304,7 +315,12 @@ pub(crate) fn step(robot: &Robot, options: &Options, carried: &mut Carried) -> R
         .map(|n| {
             grips
                 .iter()
-                .map(|g| g.multipliers.get(n.saturating_sub(1).min(g.multipliers.len().saturating_sub(1))).copied().unwrap_or(-1.0))
+                .map(|g| {
+                    g.multipliers
+                        .get(n.saturating_sub(1).min(g.multipliers.len().saturating_sub(1)))
+                        .copied()
+                        .unwrap_or(-1.0)
+                })
                 .collect()
         })
         .collect();

@@ -16,12 +16,14 @@
 #![allow(non_snake_case)]
 
 mod border;
+mod grip;
 pub(crate) mod history;
 mod interval;
 mod linearized;
 
-pub use interval::Contact;
-pub(crate) use interval::{Grip, Profile, interval, interval_order6};
+pub use grip::Contact;
+pub(crate) use grip::Grip;
+pub(crate) use interval::{Profile, interval, interval_order6};
 
 use super::newton::{self, Border, Linearization, Point, Settings, Workspace};
 use super::residual::QuarterSites;
