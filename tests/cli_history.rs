@@ -38,7 +38,7 @@ fn robot(dir: &Path, rigid: bool) {
     .unwrap();
 }
 
-fn column<'a>(header: &'a str, name: &str) -> usize {
+fn column(header: &str, name: &str) -> usize {
     header
         .split(',')
         .position(|c| c == name)

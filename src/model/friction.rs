@@ -528,7 +528,7 @@ mod tests {
         let lin = linearize(&model, &site, end, (&R, &v, &u), &slipping, None, true).unwrap();
         let eval = |model: &Model, R: &Matrix3<f64>, v: &Vector3<f64>, u: &Vector3<f64>| {
             let mut turning = vec![0.0; robot.tendons.len()];
-            let x = rates(model, &site, end, (R, v, u), &mut turning).unwrap();
+            let x = rates(model, &site, end, (R, v, u), None, &mut turning).unwrap();
             let t: Vec<f64> = slipping.iter().map(|&i| turning[i]).collect();
             (x, t)
         };

@@ -101,6 +101,9 @@ pub(crate) struct Grip {
     pub(crate) reference: Vec<f64>,
 }
 
+/// A stuck material's tension (N) and its derivatives in a node's v and u.
+pub(crate) type Stuck = (f64, Vector3<f64>, Vector3<f64>);
+
 impl Profile<'_> {
     /// Slip j's tension (N) at node state `b` (arc length b.s) if the material there had
     /// not moved since the last step of a history: E_t A_t (|p_j'| / lambda - 1) with

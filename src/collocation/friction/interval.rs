@@ -18,7 +18,7 @@
 
 use super::super::residual::{Block, EndColumns, IntervalSites, QuarterSites, end_points, rhs_linearized, scale_rows};
 use super::super::unknowns::THETA;
-pub(crate) use super::grip::{Contact, Grip, stuck_multiplier};
+pub(crate) use super::grip::{Contact, Grip, Stuck, stuck_multiplier};
 use crate::error::Result;
 use crate::mesh::Mesh;
 use crate::model::equations::{Model, Site};
@@ -303,7 +303,7 @@ fn interval_at(
     let residual = scale_rows(y1 - y0 - (p0.f + pm.f * 4.0 + p1.f) * (h / 6.0), length);
     let on: Vec<bool> = (0..count).map(|j| profile.on_link(j, k)).collect();
     // In a history, the stuck material's tension at node b, for the stick/slip choice.
-    let stuck: Vec<Option<(f64, Vector3<f64>, Vector3<f64>)>> = (0..count)
+    let stuck: Vec<Option<Stuck>> = (0..count)
         .map(|j| (profile.grips.is_some() && on[j]).then(|| profile.stuck_tension(j, k + 1, b, length)))
         .collect();
     let capacity: Vec<f64> = (0..count)
