@@ -17,11 +17,11 @@
 //! let mut robot = tdcr::cases::case_s();
 //! robot.tendons[0].friction = Some(Friction::pull(0.1));
 //! robot.tendons[0].stiffness = Some(2000.0);
-//! let up = Ranges::new(robot, vec![(Input::Parameter(Parameter::Tension(0)), vec![0.0, 2.0, 4.0])]).unwrap();
+//! let up = Ranges::new(robot, vec![(Input::Parameter(Parameter::Tension(0)), vec![0.0, 1.0, 2.0, 3.0, 4.0])]).unwrap();
 //! let result = history(&up.up_down(), &Default::default()).unwrap();
 //! assert!(result.failure.is_none());
-//! // Letting the tendon out from 4 N to 2 N leaves part of it stuck.
-//! let back = &result.steps[3];
+//! // Letting the tendon out from 4 N to 3 N leaves part of it stuck.
+//! let back = &result.steps[5];
 //! assert!(back.zones[0].zones.iter().any(|z| z.contact == Contact::Stick));
 //! ```
 

@@ -219,8 +219,8 @@ fn rigid(i: usize, s: f64) -> Error {
     error::invalid(
         format!("tendons[{i}].stiffness"),
         format!(
-            "tendon {} sticks in its channel near s = {s:.4} m during this step, but it is rigid: the tension \
-             of a stuck rigid tendon can be anything friction allows (statically indeterminate)",
+            "tendon {} sticks in its channel near s = {s:.4} m during this step, but it is rigid: the tension of \
+             a stuck rigid tendon can be anything friction allows (statically indeterminate)",
             i + 1
         ),
         "set the tendon's axial stiffness E_t A_t (`stiffness` in N) so that its stuck part stretches",
@@ -261,11 +261,16 @@ pub(crate) fn step(robot: &Robot, options: &Options, carried: &mut Carried) -> R
     };
     let solved = std::mem::replace(&mut carried.solved, false);
     let mut settled = !march(&mut border, &x)? && solved;
-    let rigid = |border: &Capstan| -> Option<Error> {
-        let p = border.system.friction.as_ref()?;
-        let i = *p.slipping.iter().find(|&&i| robot.tendons[i].stiffness.is_none())?;
-        Some(rigid(i, 0.0))
-    };
+    // A rigid tendon that would stick is refused by the march; one that is near sticking
+    // may keep Newton or the passes from settling, which the hint names.
+    let rigid_hint = robot
+        .tendons
+        .iter()
+        .enumerate()
+        .find(|(_, t)| t.active_friction().is_some() && t.stiffness.is_none())
+        .map_or(String::new(), |(i, _)| {
+            format!("; tendon {} is rigid: set its `stiffness` if it sticks", i + 1)
+        });
     for _ in 0..PASSES {
         if settled {
             break;
@@ -273,15 +278,12 @@ pub(crate) fn step(robot: &Robot, options: &Options, carried: &mut Carried) -> R
         let (termination, worst) = newton::run_bordered(&mut border, &mut ws, &mut x, &settings, &mut report);
         report.termination = termination;
         if termination != Termination::Converged {
-            if let Some(e) = rigid(&border) {
-                return Err(e);
-            }
             let system = &border.system;
             return Err(Error::NotConverged {
                 method: Method::Collocation,
                 report: Box::new(report),
                 worst_s: system.row_position(worst.min(system.unknowns() - 1)),
-                hint: "a history step is solved from the last step's state: take smaller steps".into(),
+                hint: format!("a history step is solved from the last step's state: take smaller steps{rigid_hint}"),
             });
         }
         // The contacts and multipliers on the converged shape: settled when Newton's were.
@@ -289,14 +291,13 @@ pub(crate) fn step(robot: &Robot, options: &Options, carried: &mut Carried) -> R
         settled = !march(&mut border, &x)?;
     }
     if !settled {
-        if let Some(e) = rigid(&border) {
-            return Err(e);
-        }
         return Err(Error::NotConverged {
             method: Method::Collocation,
             report: Box::new(report),
             worst_s: 0.0,
-            hint: format!("the stick/slip zones did not settle in {PASSES} passes: take smaller steps of the history"),
+            hint: format!(
+                "the stick/slip zones did not settle in {PASSES} passes: take smaller steps of the history{rigid_hint}"
+            ),
         });
     }
     let estimated = estimate_with_friction(&mut border, &mut ws, &x).ok().flatten();
