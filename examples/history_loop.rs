@@ -55,5 +55,11 @@ fn main() {
             .fold(0.0, f64::max);
         let intervals = steps[0].solution.report.intervals;
         println!("tolerance {tolerance:e}: {intervals} intervals, largest tip difference to 1e-11: {worst:.3e} m");
+        let each: Vec<String> = steps
+            .iter()
+            .zip(&reference)
+            .map(|(a, b)| format!("{:.1e}", (a.solution.tip_position() - b.solution.tip_position()).norm()))
+            .collect();
+        println!("  by step: {}", each.join(" "));
     }
 }
