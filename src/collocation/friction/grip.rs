@@ -70,7 +70,7 @@ pub(crate) fn choose(base: f64, za: f64, capacity: f64, stuck: f64) -> Choice {
     } else if t >= capacity {
         (Contact::Release, 1.0)
     } else {
-        (Contact::Stick, if capacity > 0.0 { t / capacity } else { 0.0 })
+        (Contact::Stick, stuck_multiplier(za, zeta, capacity))
     };
     Choice {
         contact,

@@ -14,7 +14,7 @@
 //! the backbone with the links' rows and multipliers held; the march is repeated on the new
 //! shape until it changes nothing.
 
-use super::grip::choose;
+use super::grip::{choose, stuck_multiplier};
 use super::*;
 use crate::model::length;
 use crate::solution::Solution;
@@ -137,7 +137,7 @@ fn march(border: &mut Capstan, x: &[State]) -> Result<bool> {
     // A tendon slides from its base entry one way (the first link's) and, from the first
     // link that does not (stick, or the other way), sticks to its termination: a stretch
     // that slid beyond a stuck one would carry material past it (section 8).
-    let mut stuck_from: Vec<Option<usize>> = vec![None; count];
+    let mut stuck = vec![false; count];
     let mut sliding: Vec<Option<Contact>> = vec![None; count];
     for k in 0..last {
         let Some(sites) = system.interval_sites(k) else {
@@ -149,13 +149,9 @@ fn march(border: &mut Capstan, x: &[State]) -> Result<bool> {
             let (base, za, capacity) = (profile.base[j], z[j][k], lin.capacity[j]);
             let mut choice = choose(base, za, capacity, lin.stuck_tension[j]);
             let first = *sliding[j].get_or_insert(choice.contact);
-            if base > 0.0 && (stuck_from[j].is_some() || choice.contact != first) {
+            if base > 0.0 && (stuck[j] || choice.contact != first) {
                 choice.contact = Contact::Stick;
-                choice.multiplier = if capacity > 0.0 {
-                    (choice.zeta - za) / capacity
-                } else {
-                    0.0
-                };
+                choice.multiplier = stuck_multiplier(za, choice.zeta, capacity);
             }
             let zb = match choice.contact {
                 Contact::Stick => {
@@ -166,7 +162,7 @@ fn march(border: &mut Capstan, x: &[State]) -> Result<bool> {
                     if !choice.zeta.is_finite() {
                         return Err(slack(i, x[k + 1].s));
                     }
-                    stuck_from[j].get_or_insert(k);
+                    stuck[j] = true;
                     choice.zeta
                 }
                 _ if base == 0.0 => 0.0,
@@ -179,13 +175,6 @@ fn march(border: &mut Capstan, x: &[State]) -> Result<bool> {
             grip.multipliers[k] = choice.multiplier;
             grip.capacities[k] = capacity;
             z[j][k + 1] = zb;
-        }
-    }
-    for zj in &mut z {
-        for n in 1..zj.len() {
-            if !zj[n].is_finite() {
-                zj[n] = zj[n - 1];
-            }
         }
     }
     if let Some(p) = border.system.friction.as_mut() {
