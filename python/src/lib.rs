@@ -12,6 +12,7 @@ mod convert;
 mod dataset;
 mod errors;
 mod gradient;
+mod history;
 mod options;
 mod pickle;
 mod picture;
@@ -268,6 +269,7 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<analysis::PyCalibration>()?;
     m.add_class::<branch::PySweep>()?;
     m.add_class::<branch::PyTrace>()?;
+    m.add_class::<history::PyHistory>()?;
     m.add_class::<gradient::PyLinearization>()?;
     m.add_class::<control::PySolver>()?;
     m.add_class::<branch::PyEvent>()?;
@@ -275,6 +277,7 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(solve_batch, m)?)?;
     m.add_function(wrap_pyfunction!(dataset::solve_parameters, m)?)?;
     m.add_function(wrap_pyfunction!(branch::sweep, m)?)?;
+    m.add_function(wrap_pyfunction!(history::history, m)?)?;
     m.add_function(wrap_pyfunction!(branch::trace, m)?)?;
     m.add_function(wrap_pyfunction!(analysis::tip_sensitivities, m)?)?;
     m.add_function(wrap_pyfunction!(gradient::linearize, m)?)?;

@@ -206,13 +206,16 @@ struct Solved {
 
 /// Solves eq. 13 with friction at a site (module docs): every tendon at the tension the
 /// model holds for it here ([`Model::tensions`]; for a tendon with friction, its tension at
-/// this s).
+/// this s), with the friction multiplier w_j of each tendon of `slipping` from
+/// `multipliers` when given (a stick/slip history, docs/friction.md section 8), else its
+/// motion's sign.
 fn solve(
     model: &Model,
     site: &Site,
     segment_end: f64,
     (R, v, u): (&Matrix3<f64>, &Vector3<f64>, &Vector3<f64>),
     slipping: &[usize],
+    multipliers: Option<&[f64]>,
 ) -> Result<Solved> {
     let point = Point::new(model, site, segment_end, (R, v, u))?;
     let x0 = point.rates();
@@ -231,7 +234,7 @@ fn solve(
         }
         slips.push(Slip {
             slot,
-            signed_mu: friction.motion.sign() * friction.coefficient,
+            signed_mu: multipliers.map_or(friction.motion.sign(), |w| w[slot]) * friction.coefficient,
             tp,
             e,
             y: row.transpose(),
@@ -302,7 +305,8 @@ fn breakdown(s: f64) -> Error {
 /// tendon at the tension the model holds for it here ([`Model::tensions`]: for a tendon
 /// with friction its tension at this s), and in `turning` (one entry per tendon) the
 /// relative rate of each tension, tau_i' / tau_i = w_i mu_i kappa_i (1/m; 0 for tendons
-/// without friction, at zero tension or not loading this segment).
+/// without friction, at zero tension or not loading this segment). The multiplier w_i is
+/// the motion's sign, or `multipliers[j]` for the j-th tendon of [`slipping`] when given.
 ///
 /// # Errors
 /// As [`crate::model::linearize::rates`], and [`Error::Breakdown`] when the tangential
@@ -312,15 +316,22 @@ pub(crate) fn rates(
     site: &Site,
     segment_end: f64,
     state: (&Matrix3<f64>, &Vector3<f64>, &Vector3<f64>),
+    multipliers: Option<&[f64]>,
     turning: &mut [f64],
 ) -> Result<Vector6<f64>> {
     turning.fill(0.0);
     let slipping = slipping(model.robot);
-    let solved = solve(model, site, segment_end, state, &slipping)?;
+    let solved = solve(model, site, segment_end, state, &slipping, multipliers)?;
     for sl in &solved.slips {
         turning[slipping[sl.slot]] = relative(sl);
     }
     Ok(solved.x)
+}
+
+/// kappa_i = |q_i| / tau_i = |t_i'| (1/m), whatever the multiplier.
+fn path_turning(sl: &Slip) -> f64 {
+    // k_i = tau_i / |p_i^b'| > 0 for a loading tendon
+    sl.q.norm() * sl.tp.inv_speed / sl.tp.k
 }
 
 /// tau_i' / tau_i = w_i mu_i |q_i| / tau_i (1/m).
@@ -341,6 +352,9 @@ pub(crate) struct FrictionLinearization {
     pub d_log_tension: Vec<Vector6<f64>>,
     /// tau_j' / tau_j = w_j mu_j kappa_j (1/m), one per tendon of [`slipping`].
     pub turning: Vec<f64>,
+    /// kappa_j = |t_j'|, the turning rate of the path (1/m), one per tendon of
+    /// [`slipping`] (0 for those not loading here).
+    pub kappa: Vec<f64>,
     /// d(turning_j)/d(v, u, phi), as a row of 9.
     pub d_turning: Vec<SMatrix<f64, 1, 9>>,
     /// d(turning_j)/dz_l, row-major k x k.
@@ -349,7 +363,8 @@ pub(crate) struct FrictionLinearization {
 
 /// [`FrictionLinearization`] at a site for the state (R, v, u), the tendons of `slipping`
 /// at the tensions the model holds for them here (module docs, "Linearization" in
-/// docs/friction.md); without `derivatives` only the rates and the turning rates (the
+/// docs/friction.md), each with its friction multiplier from `multipliers` if given (else
+/// its motion's sign); without `derivatives` only the rates and the turning rates (the
 /// derivative fields zero or empty), for residuals.
 ///
 /// # Errors
@@ -360,11 +375,16 @@ pub(crate) fn linearize(
     segment_end: f64,
     (R, v, u): (&Matrix3<f64>, &Vector3<f64>, &Vector3<f64>),
     slipping: &[usize],
+    multipliers: Option<&[f64]>,
     derivatives: bool,
 ) -> Result<FrictionLinearization> {
-    let solved = solve(model, site, segment_end, (R, v, u), slipping)?;
+    let solved = solve(model, site, segment_end, (R, v, u), slipping, multipliers)?;
     let Solved { point, slips, x } = solved;
     let k = slipping.len();
+    let mut kappa = vec![0.0; k];
+    for sl in &slips {
+        kappa[sl.slot] = path_turning(sl);
+    }
     if !derivatives {
         let mut turning = vec![0.0; k];
         for sl in &slips {
@@ -378,6 +398,7 @@ pub(crate) fn linearize(
             },
             d_log_tension: Vec::new(),
             turning,
+            kappa,
             d_turning: Vec::new(),
             d_turning_log_tension: Vec::new(),
         });
@@ -484,6 +505,7 @@ pub(crate) fn linearize(
         },
         d_log_tension,
         turning,
+        kappa,
         d_turning,
         d_turning_log_tension,
     })
@@ -532,10 +554,10 @@ mod tests {
         let slipping = slipping(robot);
         let site = model.site(0.07);
         let end = robot.length();
-        let lin = linearize(&model, &site, end, (&R, &v, &u), &slipping, true).unwrap();
+        let lin = linearize(&model, &site, end, (&R, &v, &u), &slipping, None, true).unwrap();
         let eval = |model: &Model, R: &Matrix3<f64>, v: &Vector3<f64>, u: &Vector3<f64>| {
             let mut turning = vec![0.0; robot.tendons.len()];
-            let x = rates(model, &site, end, (R, v, u), &mut turning).unwrap();
+            let x = rates(model, &site, end, (R, v, u), None, &mut turning).unwrap();
             let t: Vec<f64> = slipping.iter().map(|&i| turning[i]).collect();
             (x, t)
         };

@@ -173,7 +173,7 @@ fn local_rhs(
     let (v_s, u_s) = if turning.is_empty() {
         model.strain_rates(site, seg_end, &R, &v, &u)?
     } else {
-        let x = friction::rates(model, site, seg_end, (&R, &v, &u), turning)?;
+        let x = friction::rates(model, site, seg_end, (&R, &v, &u), None, turning)?;
         (x.fixed_rows::<3>(0).into(), x.fixed_rows::<3>(3).into())
     };
     let mut d = Local::zeros();

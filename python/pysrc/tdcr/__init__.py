@@ -11,7 +11,8 @@ The Rust crate tdcr is the one implementation; this package converts types and c
 Robots: `Robot` (from TOML text, a file, keyword arguments or a dict; the robot file's
 fields and rules). Solving: `solve`, `Solver` (stateful, warm starts and control
 Jacobians for control loops), `solve_batch` (all cores, GIL released), `sweep`
-(warm-started sequence with its events), `trace` (a branch of equilibria through folds),
+(warm-started sequence with its events), `trace` (a branch of equilibria through folds), `history` (a load history with
+stick/slip friction: the hysteresis loop),
 `solve_parameters` (arrays in, arrays out), `dataset` (sampled rows solved in chunks to .npz or
 .parquet, resumable). Analyses:
 `tip_sensitivities` (Jacobians, compliance), `linearize` (gradients by the adjoint; `tdcr.torch`
@@ -41,6 +42,7 @@ from ._native import (
     SolveReport,
     Solver,
     State,
+    History,
     Sweep,
     TipSensitivities,
     Trace,
@@ -49,6 +51,7 @@ from ._native import (
     compare,
     example,
     figure,
+    history,
     linearize,
     solve,
     solve_batch,
@@ -69,6 +72,7 @@ __all__ = [
     "Error",
     "Event",
     "FileError",
+    "History",
     "PlausibilityWarning",
     "IntervalCap",
     "InvalidInput",
@@ -91,6 +95,7 @@ __all__ = [
     "dataset",
     "example",
     "figure",
+    "history",
     "linearize",
     "plot",
     "solve",

@@ -25,6 +25,8 @@ __all__ = [
     "solve_parameters",
     "sweep",
     "Sweep",
+    "history",
+    "History",
     "trace",
     "Trace",
     "Solver",
@@ -502,6 +504,42 @@ def sweep(
 ) -> Sweep:
     """Solves parameter rows in order, each warm-started from the last, with the events;
     Ctrl-C raises KeyboardInterrupt with `completed` and `partial` (the Sweep so far)."""
+
+@final
+class History:
+    """The result of `history`: every step's solution and the stick/slip zones of each
+    tendon with friction; also the sequence of the solutions."""
+
+    @property
+    def solutions(self) -> List[Solution]:
+        """The solutions, one per step solved, in order."""
+    @property
+    def zones(self) -> List[List[Tuple[int, List[Tuple[float, float, str]]]]]:
+        """Per step, per tendon with friction: (tendon index from 0, [(start, end, contact),
+        ...]) from its base entry to its termination (m), contact `pull`, `release` or `stick`."""
+    @property
+    def tip_positions(self) -> FloatArray:
+        """Tip positions (m, world frame), shape (n, 3)."""
+    def __len__(self) -> int: ...
+    def __getitem__(self, index: int, /) -> Solution: ...
+    def __iter__(self) -> Iterator[Solution]: ...
+
+def history(
+    robot: Robot,
+    parameters: Mapping[str, ArrayLike],
+    up_down: bool = False,
+    *,
+    tol: Optional[float] = None,
+    intervals: Optional[int] = None,
+    max_intervals: Optional[int] = None,
+    residual_tolerance: Optional[float] = None,
+    max_iterations: Optional[int] = None,
+    continuation: Optional[bool] = None,
+    equilibrium: Optional[Literal["load_path", "nearest"]] = None,
+) -> History:
+    """Solves parameter rows in order as a load history with stick/slip friction (each step
+    from the tendon state the last left); with `up_down`, up and then back down. A failed
+    step raises with `index` and `partial` (the History before it)."""
 
 @final
 class Trace:

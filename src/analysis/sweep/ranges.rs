@@ -106,6 +106,29 @@ impl Ranges {
         Ok(Ranges { base, inputs, steps })
     }
 
+    /// The same inputs up, then back down: the steps in order and then in reverse without
+    /// the last one again (values a, b, c become a, b, c, b, a), the loading and unloading
+    /// branches of a history ([`crate::analysis::history`]).
+    pub fn up_down(&self) -> Ranges {
+        let inputs = self
+            .inputs
+            .iter()
+            .map(|(input, values)| {
+                let mut all = values.clone();
+                if values.len() > 1 {
+                    all.extend(values.iter().rev().skip(1));
+                }
+                (*input, all)
+            })
+            .collect();
+        let steps = if self.steps > 1 { 2 * self.steps - 1 } else { 1 };
+        Ranges {
+            base: self.base.clone(),
+            inputs,
+            steps,
+        }
+    }
+
     /// The number of steps.
     pub fn steps(&self) -> usize {
         self.steps

@@ -13,6 +13,7 @@ mod calibrate;
 mod check;
 mod compare;
 mod failure;
+mod history;
 mod picture;
 mod robot_args;
 mod solve;

@@ -45,8 +45,15 @@ pub struct SweepArgs {
     solver: SolverArgs,
     /// Warm-start the first step from a saved solution: the JSON of `tdcr solve --format
     /// json` for this robot.
-    #[arg(long, value_name = "SOLUTION.json")]
+    #[arg(long, value_name = "SOLUTION.json", conflicts_with = "history")]
     start: Option<PathBuf>,
+    /// Solve the steps as a load history with stick/slip friction, each from the tendon
+    /// state the last left (docs/friction.md): `up-down` (every range up, then back down)
+    /// or the swept input's values in order, `V1,V2,...`. The CSV gets the direction of
+    /// each step and each tendon with friction's delivered tension and zones; `--plot`
+    /// draws the hysteresis loop.
+    #[arg(long, value_name = "up-down|V1,V2,...", value_parser = crate::history::parse_history)]
+    history: Option<crate::history::History>,
     /// Write the CSV to FILE instead of standard output.
     #[arg(long, value_name = "FILE")]
     out: Option<PathBuf>,
@@ -146,7 +153,8 @@ impl<'a> Plan<'a> {
             .chain(args.displacement.iter().map(|(_, v)| v.len()))
             .chain(params.iter().map(|(_, v)| v.len()));
         let steps = lengths.clone().max().unwrap_or(0);
-        if steps < 2 {
+        let listed = matches!(args.history, Some(crate::history::History::Values(_)));
+        if steps < 2 && !listed {
             return Err(Failure::Input(
                 "sweep needs at least one range with COUNT >= 2, e.g. --tension 1=0:6:61, --displacement 1=0:0.004:41 \
                  or --param tip_force.z=0:-1:11"
@@ -283,6 +291,21 @@ pub fn run(args: &SweepArgs) -> Result<(), Failure> {
         tdcr::Method::Shooting => SweepSolver::Shooting(file.solver.shooting),
     };
     let inputs = plan.ranges(args, &file.robot)?;
+    if let Some(h) = &args.history {
+        if file.solver.method != tdcr::Method::Collocation {
+            return Err(Failure::Input(
+                "--history solves by collocation: leave out --method shooting (or the robot file's method)".into(),
+            ));
+        }
+        let ranges = crate::history::steps(&inputs, &file.robot, h)?;
+        return crate::history::run(
+            &name,
+            &ranges,
+            &file.solver.collocation,
+            args.out.as_deref(),
+            args.plot.as_deref(),
+        );
+    }
     let mut sweep = Sweep::new(&inputs, solver, start);
     let mut progress = Progress::new();
     let mut failure = None;

@@ -18,6 +18,7 @@
 
 use super::super::residual::{Block, EndColumns, IntervalSites, QuarterSites, end_points, rhs_linearized, scale_rows};
 use super::super::unknowns::THETA;
+pub(crate) use super::grip::{Contact, Grip, Stuck, stuck_multiplier};
 use crate::error::Result;
 use crate::mesh::Mesh;
 use crate::model::equations::{Model, Site};
@@ -39,6 +40,8 @@ pub(crate) struct Profile<'a> {
     pub(crate) spans: Vec<usize>,
     /// z_j at every node (0 at node 0; past the span, the span's last value).
     pub(crate) z: Vec<Vec<f64>>,
+    /// In a stick/slip history, each slip's [`Grip`] on this mesh; None in full slip.
+    pub(crate) grips: Option<Vec<Grip>>,
     /// The model with the tensions of one point, for eq. 13 with friction.
     scratch: RefCell<Model<'a>>,
     /// Each link's last evaluation ([`interval`] through the system's residual or
@@ -64,6 +67,7 @@ impl<'a> Profile<'a> {
             .collect();
         Profile {
             z: vec![vec![0.0; mesh.nodes.len()]; slipping.len()],
+            grips: None,
             slipping,
             base,
             spans,
@@ -80,9 +84,17 @@ impl<'a> Profile<'a> {
             base: self.base.clone(),
             spans: self.spans.clone(),
             z: self.z.clone(),
+            grips: self.grips.clone(),
             scratch: RefCell::new(self.scratch.borrow().clone()),
             cache: RefCell::new(self.cache.borrow().iter().map(|_| None).collect()),
         }
+    }
+
+    /// The friction coefficient mu_j of slip j.
+    pub(crate) fn coefficient(&self, j: usize) -> f64 {
+        self.robot().tendons[self.slipping[j]]
+            .active_friction()
+            .map_or(0.0, |f| f.coefficient)
     }
 
     /// Number of tendons with friction.
@@ -132,8 +144,34 @@ impl<'a> Profile<'a> {
         f(self.cache.borrow()[k].as_ref())
     }
 
-    /// Eq. 13 with friction at a site and state, the slips at log tensions `z` (with its
-    /// derivatives when `derivatives`).
+    /// The friction multipliers w_j of the slips on link k in a history (None in full
+    /// slip: the motions' signs): -1 or +1 where a slip slides; where it sticks,
+    /// w = (z_b - z_a) / C with C its capacity on the link from the last march, so that
+    /// the tangential load follows the log tensions the stick rows set (a step behind, only
+    /// C, which the shape changes slowly, lags).
+    pub(crate) fn multipliers(&self, k: usize) -> Option<Vec<f64>> {
+        self.grips.as_ref().map(|g| {
+            g.iter()
+                .enumerate()
+                .map(|(j, g)| match g.contacts.get(k) {
+                    Some(Contact::Stick) => stuck_multiplier(self.z[j][k], self.z[j][k + 1], g.capacities[k]),
+                    _ => g.multipliers.get(k).copied().unwrap_or(1.0),
+                })
+                .collect()
+        })
+    }
+
+    /// Whether slip j sticks on link k (a history's stick row replaces its capstan row).
+    pub(crate) fn sticks(&self, j: usize, k: usize) -> bool {
+        self.grips
+            .as_ref()
+            .is_some_and(|g| g[j].contacts.get(k) == Some(&Contact::Stick))
+    }
+
+    /// Eq. 13 with friction at a site and state, the slips at log tensions `z` and
+    /// multipliers `w` (the motions' signs when None), with its derivatives when
+    /// `derivatives`.
+    #[allow(clippy::too_many_arguments)]
     fn point(
         &self,
         site: &Site,
@@ -141,13 +179,19 @@ impl<'a> Profile<'a> {
         R: &nalgebra::Matrix3<f64>,
         y: (&Vector3<f64>, &Vector3<f64>),
         z: &[f64],
+        w: Option<&[f64]>,
         derivatives: bool,
     ) -> Result<FrictionLinearization> {
         let mut model = self.scratch.borrow_mut();
         for (j, &i) in self.slipping.iter().enumerate() {
             model.tensions[i] = self.tension(j, z[j]);
         }
-        friction::linearize(&model, site, segment_end, (R, y.0, y.1), &self.slipping, derivatives)
+        friction::linearize(&model, site, segment_end, (R, y.0, y.1), &self.slipping, w, derivatives)
+    }
+
+    /// The robot.
+    pub(crate) fn robot(&self) -> &'a crate::Robot {
+        self.scratch.borrow().robot
     }
 }
 
@@ -157,8 +201,15 @@ impl<'a> Profile<'a> {
 pub(crate) struct IntervalLinearization {
     /// The 12 backbone rows (scaled).
     pub(crate) residual: Block<f64>,
-    /// psi_j, one per slip (0 for slips not on this link).
+    /// psi_j, one per slip (0 for slips not on this link): the capstan row, or in a
+    /// history the stick row where the slip sticks.
     pub(crate) psi: Vec<f64>,
+    /// C_j = h/6 mu_j (kappa_a + 4 kappa_m + kappa_b): the most the log tension of slip j
+    /// can change across the link (the capstan row's increment at |w| = 1).
+    pub(crate) capacity: Vec<f64>,
+    /// In a history, slip j's tension at node b if its material there had not moved
+    /// ([`Profile::stuck_tension`]); NaN in full slip.
+    pub(crate) stuck_tension: Vec<f64>,
     /// d(backbone rows)/dz: 12 x 2k, columns z_a of every slip, then z_b.
     pub(crate) rows_z: DMatrix<f64>,
     /// d psi / d(node unknowns): k x 24, the block's column layout.
@@ -186,6 +237,49 @@ pub(crate) fn interval(
     b: &State,
     jac: Option<&mut [f64]>,
 ) -> Result<IntervalLinearization> {
+    let w = profile.multipliers(k);
+    let derivatives = jac.is_some();
+    let mut out = interval_at(profile, length, k, sites, segment_end, a, b, w.as_deref(), jac)?;
+    let (Some(w), true) = (w, derivatives) else {
+        return Ok(out);
+    };
+    // A stuck link's multiplier w = (z_b - z_a) / C moves its backbone rows with its log
+    // tensions: d(rows)/dw by a central difference (the rows are smooth in w; a step of
+    // 1e-6 leaves a truncation of 1e-12 and rounding of 1e-10 of the rows' scale).
+    let count = profile.count();
+    for j in (0..count).filter(|&j| profile.on_link(j, k) && profile.sticks(j, k)) {
+        let Some(capacity) = profile.grips.as_ref().map(|g| g[j].capacities[k]).filter(|c| *c > 0.0) else {
+            continue;
+        };
+        let step = 1e-6;
+        let moved = |d: f64| -> Result<Block<f64>> {
+            let mut w = w.clone();
+            w[j] += d;
+            Ok(interval_at(profile, length, k, sites, segment_end, a, b, Some(&w), None)?.residual)
+        };
+        let d_rows = (moved(step)? - moved(-step)?) / (2.0 * step);
+        for r in 0..12 {
+            out.rows_z[(r, j)] -= d_rows[r] / capacity;
+            out.rows_z[(r, count + j)] += d_rows[r] / capacity;
+        }
+    }
+    Ok(out)
+}
+
+/// [`interval`] with the slips' multipliers `w` (None in full slip: the motions' signs),
+/// the backbone rows' derivatives at fixed `w`.
+#[allow(clippy::too_many_arguments)]
+fn interval_at(
+    profile: &Profile,
+    length: f64,
+    k: usize,
+    sites: &IntervalSites,
+    segment_end: f64,
+    a: &State,
+    b: &State,
+    w: Option<&[f64]>,
+    jac: Option<&mut [f64]>,
+) -> Result<IntervalLinearization> {
     let count = profile.count();
     let h = sites.end.s - sites.start.s;
     let za: Vec<f64> = profile.z.iter().map(|z| z[k]).collect();
@@ -193,8 +287,8 @@ pub(crate) fn interval(
     let (y0, y1) = end_points(a, b);
     let theta1: Vector3<f64> = y1.fixed_rows::<3>(THETA).into();
     let derivatives = jac.is_some();
-    let la = profile.point(&sites.start, segment_end, &a.R, (&a.v, &a.u), &za, derivatives)?;
-    let lb = profile.point(&sites.end, segment_end, &b.R, (&b.v, &b.u), &zb, derivatives)?;
+    let la = profile.point(&sites.start, segment_end, &a.R, (&a.v, &a.u), &za, w, derivatives)?;
+    let lb = profile.point(&sites.end, segment_end, &b.R, (&b.v, &b.u), &zb, w, derivatives)?;
     let p0 = rhs_linearized(&sites.start, &la.lin, &a.R, &y0);
     let p1 = rhs_linearized(&sites.end, &lb.lin, &a.R, &y1);
     let ym = (y0 + y1) * 0.5 + (p0.f - p1.f) * (h / 8.0);
@@ -204,11 +298,18 @@ pub(crate) fn interval(
     let theta_m: Vector3<f64> = ym.fixed_rows::<3>(THETA).into();
     let (vm, um): (Vector3<f64>, Vector3<f64>) = (ym.fixed_rows::<3>(6).into(), ym.fixed_rows::<3>(9).into());
     let Rm = a.R * so3::exp(&theta_m);
-    let lm = profile.point(&sites.mid, segment_end, &Rm, (&vm, &um), &zm, derivatives)?;
+    let lm = profile.point(&sites.mid, segment_end, &Rm, (&vm, &um), &zm, w, derivatives)?;
     let pm = rhs_linearized(&sites.mid, &lm.lin, &a.R, &ym);
     let residual = scale_rows(y1 - y0 - (p0.f + pm.f * 4.0 + p1.f) * (h / 6.0), length);
     let on: Vec<bool> = (0..count).map(|j| profile.on_link(j, k)).collect();
-    let psi: Vec<f64> = (0..count)
+    // In a history, the stuck material's tension at node b, for the stick/slip choice.
+    let stuck: Vec<Option<Stuck>> = (0..count)
+        .map(|j| (profile.grips.is_some() && on[j]).then(|| profile.stuck_tension(j, k + 1, &sites.end, b, length)))
+        .collect();
+    let capacity: Vec<f64> = (0..count)
+        .map(|j| h / 6.0 * profile.coefficient(j) * (la.kappa[j] + 4.0 * lm.kappa[j] + lb.kappa[j]))
+        .collect();
+    let mut psi: Vec<f64> = (0..count)
         .map(|j| {
             if on[j] {
                 zb[j] - za[j] - h / 6.0 * (la.turning[j] + 4.0 * lm.turning[j] + lb.turning[j])
@@ -217,9 +318,19 @@ pub(crate) fn interval(
             }
         })
         .collect();
+    // In a history, a stuck link's row is its stick row z_b - zeta_b, zeta_b the stuck
+    // material's log tension (section 8); a sliding link keeps its capstan row at w = -1
+    // or +1.
+    for j in 0..count {
+        if let (Some((tension, _, _)), true) = (stuck[j], profile.sticks(j, k)) {
+            psi[j] = zb[j] - (tension / profile.base[j]).ln();
+        }
+    }
     let mut out = IntervalLinearization {
         residual,
         psi,
+        capacity,
+        stuck_tension: stuck.iter().map(|t| t.map_or(f64::NAN, |t| t.0)).collect(),
         rows_z: DMatrix::zeros(12, 2 * count),
         psi_x: DMatrix::zeros(count, 24),
         psi_z: DMatrix::zeros(count, 2 * count),
@@ -326,6 +437,19 @@ pub(crate) fn interval(
             }
         }
     }
+    // Stick rows: d(z_b - zeta_b) in z_b and in node b's v and (scaled) u.
+    for j in (0..count).filter(|&j| profile.sticks(j, k)) {
+        let Some((tension, d_v, d_u)) = stuck[j] else {
+            continue;
+        };
+        out.psi_x.row_mut(j).fill(0.0);
+        out.psi_z.row_mut(j).fill(0.0);
+        for i in 0..3 {
+            out.psi_x[(j, 18 + i)] = -d_v[i] / tension;
+            out.psi_x[(j, 21 + i)] = -d_u[i] / (tension * length);
+        }
+        out.psi_z[(j, count + j)] = 1.0;
+    }
     Ok(out)
 }
 
@@ -356,12 +480,14 @@ pub(crate) fn interval_order6(
     let za: Vec<f64> = profile.z.iter().map(|z| z[k]).collect();
     let zb: Vec<f64> = profile.z.iter().map(|z| z[k + 1]).collect();
     let (y0, y1) = end_points(a, b);
+    let w = profile.multipliers(k);
+    let w = w.as_deref();
     // F and kappa~ at a local state (y, z) of the interval.
     let stage = |site: &Site, y: &Block<f64>, z: &[f64]| -> Result<(Block<f64>, Vec<f64>)> {
         let theta: Vector3<f64> = y.fixed_rows::<3>(THETA).into();
         let (v, u): (Vector3<f64>, Vector3<f64>) = (y.fixed_rows::<3>(6).into(), y.fixed_rows::<3>(9).into());
         let R = a.R * so3::exp(&theta);
-        let lin = profile.point(site, segment_end, &R, (&v, &u), z, false)?;
+        let lin = profile.point(site, segment_end, &R, (&v, &u), z, w, false)?;
         let mut f = Block::zeros();
         f.fixed_rows_mut::<3>(0).copy_from(&(R * v));
         f.fixed_rows_mut::<3>(THETA)
@@ -390,7 +516,10 @@ pub(crate) fn interval_order6(
     let quadrature = ((f0 + f1) * 7.0 + (f_q + f_tq) * 32.0 + f_m * 12.0) * (h / 90.0);
     let psi: Vec<f64> = (0..count)
         .map(|j| {
-            if profile.on_link(j, k) {
+            if profile.on_link(j, k) && profile.sticks(j, k) {
+                // The stick row is algebraic: the same at any order.
+                zb[j] - (profile.stuck_tension(j, k + 1, &sites.end, b, length).0 / profile.base[j]).ln()
+            } else if profile.on_link(j, k) {
                 zb[j] - za[j] - (7.0 * (k0[j] + k1[j]) + 32.0 * (k_q[j] + k_tq[j]) + 12.0 * k_m[j]) * (h / 90.0)
             } else {
                 0.0

@@ -16,9 +16,13 @@
 #![allow(non_snake_case)]
 
 mod border;
+mod grip;
+pub(crate) mod history;
 mod interval;
 mod linearized;
 
+pub use grip::Contact;
+pub(crate) use grip::Grip;
 pub(crate) use interval::{Profile, interval, interval_order6};
 
 use super::newton::{self, Border, Linearization, Point, Settings, Workspace};
@@ -148,15 +152,21 @@ impl<'r> Capstan<'r> {
             schur_rhs: vec![0.0; m],
             rows_in: vec![0.0; m],
         };
-        if let Some(p) = &border.system.friction {
-            for (j, &o) in border.offsets.iter().enumerate() {
+        border.reload();
+        border
+    }
+
+    /// Reads the unknowns z (current and trial) from the system's profile again, after it
+    /// was changed outside Newton (a history's march).
+    fn reload(&mut self) {
+        if let Some(p) = &self.system.friction {
+            for (j, &o) in self.offsets.iter().enumerate() {
                 for n in 1..=p.spans[j] {
-                    border.z[o + n - 1] = p.z[j][n];
+                    self.z[o + n - 1] = p.z[j][n];
                 }
             }
         }
-        border.trial_z.copy_from_slice(&border.z);
-        border
+        self.trial_z.copy_from_slice(&self.z);
     }
 
     /// Writes the unknowns `z` into the system's profile and the delivered tensions into
@@ -569,9 +579,9 @@ pub(super) fn solve(robot: &Robot, options: &Options, warm: Option<&Solution>, c
                 reason: "friction is not conservative".into(),
             };
             report.timings.total = start.elapsed();
-            return nodes::solution_with_tensions(&model, &x, &ends, &tensions, report);
+            return nodes::solution_with_tensions(&model, &x, &ends, &tensions, None, report);
         };
-        let guess = nodes::solution_with_tensions(&model, &x, &ends, &tensions, report.clone())?;
+        let guess = nodes::solution_with_tensions(&model, &x, &ends, &tensions, None, report.clone())?;
         let s: Vec<f64> = system.mesh.nodes.iter().map(|n| n.s).collect();
         previous = Some((s, profile.z.clone()));
         x = interpolate(&model, &guess, &fine);

@@ -1,0 +1,141 @@
+//! Load histories with stick/slip friction: `tdcr::analysis::history::history` (each step
+//! from the tendon state the last left), with numpy out.
+
+use crate::boundary;
+use crate::errors::to_py;
+use crate::options::Use;
+use crate::robot::{PyRobot, Rows};
+use crate::solution::PySolution;
+use numpy::ndarray::Array2;
+use numpy::{IntoPyArray, PyArray2};
+use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyList};
+use tdcr::analysis::history::{HistoryStep, history as solve_history};
+
+/// One tendon's stick/slip zones at one step: (tendon index from 0, [(start, end,
+/// contact), ...]) with the contact `pull`, `release` or `stick`.
+type Zones = (usize, Vec<(f64, f64, String)>);
+
+/// The result of `history`: every step's solution and the stick/slip zones of each tendon
+/// with friction. It is also the sequence of the solutions (`len`, indexing, iteration).
+#[pyclass(module = "tdcr", name = "History", frozen)]
+pub struct PyHistory {
+    solutions: Py<PyList>,
+    zones: Vec<Vec<Zones>>,
+    tips: Vec<[f64; 3]>,
+}
+
+impl PyHistory {
+    fn new(py: Python<'_>, steps: Vec<HistoryStep>) -> PyResult<Self> {
+        let solutions = PyList::empty(py);
+        let (mut zones, mut tips) = (Vec::new(), Vec::new());
+        for step in steps {
+            zones.push(
+                step.zones
+                    .iter()
+                    .map(|t| {
+                        let list = t
+                            .zones
+                            .iter()
+                            .map(|z| (z.start, z.end, z.contact.name().to_string()))
+                            .collect();
+                        (t.tendon, list)
+                    })
+                    .collect(),
+            );
+            let p = step.solution.tip_position();
+            tips.push([p.x, p.y, p.z]);
+            solutions.append(PySolution {
+                solution: step.solution,
+            })?;
+        }
+        Ok(PyHistory {
+            solutions: solutions.unbind(),
+            zones,
+            tips,
+        })
+    }
+}
+
+crate::pickle::pickled_fields! {
+    PyHistory { solutions, zones, tips }
+
+    /// The solutions, one per step solved, in order.
+    #[getter]
+    fn solutions(&self, py: Python<'_>) -> Py<PyList> {
+        self.solutions.clone_ref(py)
+    }
+
+    /// Per step, per tendon with friction, `(tendon, [(start, end, contact), ...])`: the
+    /// tendon's index (from 0) and its zones from the base entry to its termination (arc
+    /// lengths in m), `contact` one of `pull` (sliding in), `release` (sliding out) or
+    /// `stick`.
+    #[getter]
+    fn zones(&self) -> Vec<Vec<Zones>> {
+        self.zones.clone()
+    }
+
+    /// Tip positions (m, world frame), shape (n, 3).
+    #[getter]
+    fn tip_positions<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
+        Array2::from_shape_fn((self.tips.len(), 3), |(i, k)| self.tips[i][k]).into_pyarray(py)
+    }
+
+    fn __len__(&self) -> usize {
+        self.tips.len()
+    }
+
+    fn __getitem__<'py>(&self, py: Python<'py>, index: isize) -> PyResult<Bound<'py, PyAny>> {
+        let n = self.tips.len() as isize;
+        let k = if index < 0 { index + n } else { index };
+        if !(0..n).contains(&k) {
+            return Err(pyo3::exceptions::PyIndexError::new_err(format!(
+                "history step {index} out of range: the history has {n} steps"
+            )));
+        }
+        self.solutions.bind(py).get_item(k as usize)
+    }
+
+    fn __iter__<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, pyo3::types::PyIterator>> {
+        self.solutions.bind(py).try_iter()
+    }
+}
+
+/// history(robot, parameters, up_down=False, **options) -> History
+///
+/// Solves the rows of `parameters` (a dict of 1-D arrays, names as `sweep`) in order as a
+/// load history with stick/slip friction, as `tdcr sweep --history` does: each step from
+/// the tendon state the last left, so a tendon let back out sticks where friction holds it
+/// (docs/friction.md). With `up_down`, the rows are solved up and then back down (the last
+/// row once). Collocation; options as `solve`. A failed step is raised with `index` set to
+/// its row and `partial` to the `History` of the rows before it.
+#[pyfunction]
+#[pyo3(signature = (robot, parameters, up_down = false, **options))]
+pub fn history(
+    py: Python<'_>,
+    robot: &PyRobot,
+    parameters: &Bound<'_, PyDict>,
+    up_down: bool,
+    options: Option<&Bound<'_, PyDict>>,
+) -> PyResult<PyHistory> {
+    let settings = crate::options::apply(&robot.file.solver, options, Use::Collocation("history"))?;
+    let rows = Rows::new(robot, parameters)?;
+    if rows.len() == 0 {
+        return PyHistory::new(py, Vec::new());
+    }
+    let mut ranges = rows.ranges().map_err(to_py)?;
+    if up_down {
+        ranges = ranges.up_down();
+    }
+    let options = settings.collocation;
+    let result = boundary::detached(py, || solve_history(&ranges, &options))?;
+    let partial = PyHistory::new(py, result.steps)?;
+    match result.failure {
+        None => Ok(partial),
+        Some((i, e)) => {
+            let err = boundary::Failure::Library(e).into_py_at(py, "", i);
+            err.value(py).setattr("partial", Py::new(py, partial)?)?;
+            Err(err)
+        }
+    }
+}

@@ -1,0 +1,59 @@
+"""`tdcr.history`: a load history with stick/slip friction (docs/friction.md section 8),
+the same library call as `tdcr sweep --history`: the loop closes, the way back lies on the
+other side, the zones, a failed step's `partial`, and pickling."""
+
+import pickle
+
+import numpy as np
+import pytest
+
+import tdcr
+
+ROD = {"length": 0.242, "outer_radius": 0.0004, "youngs_modulus": 210e9, "poisson_ratio": 0.3}
+ROUTING = {"kind": "straight", "x": 0.008, "y": 0.0}
+
+
+def robot(stiffness=2000.0, tension=0.0):
+    tendon = {"routing": ROUTING, "tension": tension, "friction": 0.1}
+    if stiffness is not None:
+        tendon["stiffness"] = stiffness
+    return tdcr.Robot(rod=ROD, tendons=[tendon])
+
+
+def test_up_down_closes_a_loop_whose_way_back_is_on_the_other_side():
+    tensions = np.linspace(0.0, 2.0, 11)
+    h = tdcr.history(robot(), {"tension.1": tensions}, up_down=True)
+    assert len(h) == 21
+    tips = h.tip_positions
+    rest = tips[0]
+    # Back at 0 N the tendon is slack and the rod where it started (1e-9 m: two solves of
+    # the same robot to the residual tolerance).
+    assert np.linalg.norm(tips[20] - rest) < 1e-9
+    for k in range(1, 10):
+        assert np.linalg.norm(tips[20 - k] - rest) > np.linalg.norm(tips[k] - rest)
+    # The first step back slides out near the base and sticks beyond, holding the
+    # delivered tension of the top.
+    tendon, zones = h.zones[11][0]
+    assert tendon == 0
+    assert zones[0][2] == "release" and zones[-1][2] == "stick"
+    top = h[10].tendons[0]["delivered_tension"]
+    # 1e-9 N: the stuck tip keeps its material, so its tension, to the solver's tolerance
+    assert abs(h[11].tendons[0]["delivered_tension"] - top) < 1e-9
+    again = pickle.loads(pickle.dumps(h))
+    assert np.array_equal(again.tip_positions, h.tip_positions)
+    assert again.zones == h.zones
+
+
+def test_one_step_from_rest_is_the_pull_solve():
+    h = tdcr.history(robot(), {"tension.1": [2.0]})
+    direct = tdcr.solve(robot(tension=2.0))
+    # 1e-10 m: the same equations on the same mesh
+    assert np.linalg.norm(h[0].tip_position - direct.tip_position) < 1e-10
+
+
+def test_a_rigid_tendon_that_sticks_raises_with_the_steps_before():
+    with pytest.raises(tdcr.InvalidInput, match="stiffness") as caught:
+        tdcr.history(robot(stiffness=None), {"tension.1": np.linspace(0.0, 2.0, 11)}, up_down=True)
+    # Loading from rest slides all along; the first step back would stick.
+    assert caught.value.index == 11
+    assert len(caught.value.partial) == 11

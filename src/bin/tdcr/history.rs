@@ -1,0 +1,223 @@
+//! `tdcr sweep --history`: the sweep's steps solved as a load history with stick/slip
+//! friction (`tdcr::analysis::history`): each step starts from the tendon state the last
+//! one left. CSV out, one row per step in order, with the stick/slip zones; optionally the
+//! hysteresis loop (the tip's displacement against the swept input) as a picture.
+
+use std::path::Path;
+use tdcr::analysis::history::{HistoryStep, history};
+use tdcr::analysis::sweep::{Input, Ranges};
+use tdcr::io::csv_table::CsvTable;
+use tdcr::io::{number, output};
+use tdcr::plot::{Chart, Segment, significant};
+
+use crate::failure::{Failure, emit, note, picture_format, solver_failure, write_file};
+
+/// What `--history` asks for: the ranges up and back down, or the swept input's values in
+/// the order given.
+#[derive(Clone, Debug, PartialEq)]
+pub enum History {
+    /// `up-down`: every range from its START to its STOP and back.
+    UpDown,
+    /// `V1,V2,...`: the values of the swept input, in order.
+    Values(Vec<f64>),
+}
+
+/// Parses `--history`: `up-down` or a comma-separated list of finite numbers.
+pub fn parse_history(text: &str) -> Result<History, String> {
+    if text == "up-down" {
+        return Ok(History::UpDown);
+    }
+    let values = text
+        .split(',')
+        .map(|v| match v.trim().parse::<f64>() {
+            Ok(x) if x.is_finite() => Ok(x),
+            _ => Err(format!(
+                "`{v}` in --history {text} is not a finite number: give `up-down` or the input's values in order, e.g. \
+                 0,2,4.91,2,0"
+            )),
+        })
+        .collect::<Result<Vec<f64>, String>>()?;
+    Ok(History::Values(values))
+}
+
+/// The history's steps from the sweep's `ranges`: up and down, or the swept input (the
+/// first that changes, else the first given) at the listed values with every other input
+/// at its first value.
+pub fn steps(ranges: &Ranges, base: &tdcr::Robot, history: &History) -> Result<Ranges, Failure> {
+    match history {
+        History::UpDown => Ok(ranges.up_down()),
+        History::Values(values) => {
+            let swept = ranges.swept().map_or(0, |(i, _)| i);
+            let inputs = ranges
+                .inputs()
+                .iter()
+                .enumerate()
+                .map(|(i, (input, v))| (*input, if i == swept { values.clone() } else { vec![v[0]] }))
+                .collect();
+            Ranges::new(base.clone(), inputs).map_err(|e| Failure::Input(format!("--history: {e}")))
+        }
+    }
+}
+
+/// Solves the history of `ranges` with `options`, writes the CSV (to `out` or standard
+/// output; the steps before a failure too) and the loop's picture (to `plot`).
+pub fn run(
+    name: &str,
+    ranges: &Ranges,
+    options: &tdcr::collocation::Options,
+    out: Option<&Path>,
+    plot: Option<&Path>,
+) -> Result<(), Failure> {
+    if let Some(path) = plot {
+        picture_format(path)?;
+    }
+    let result = history(ranges, options).map_err(|e| Failure::Input(format!("--history: {e}")))?;
+    let swept = ranges.swept().map_or(0, |(i, _)| i);
+    let (input, values) = &ranges.inputs()[swept];
+    let count = ranges.robot(0.0).map_or(0, |r| r.tendons.len());
+    let slipping: Vec<usize> = result
+        .steps
+        .first()
+        .map(|s| s.zones.iter().map(|z| z.tendon).collect())
+        .unwrap_or_default();
+    let mut csv = header(count, *input, &slipping);
+    for (k, step) in result.steps.iter().enumerate() {
+        let direction = match k
+            .checked_sub(1)
+            .map(|p| values[k.min(values.len() - 1)] - values[p.min(values.len() - 1)])
+        {
+            Some(d) if d > 0.0 => "up",
+            Some(d) if d < 0.0 => "down",
+            _ => "held",
+        };
+        row(&mut csv, k, direction, values[k.min(values.len() - 1)], step);
+    }
+    let text = csv.finish();
+    match out {
+        Some(path) => {
+            write_file(path, &text, "CSV")?;
+            note(&format!("wrote {}", path.display()));
+        }
+        None => emit(&text)?,
+    }
+    if let Some(path) = plot
+        && !result.steps.is_empty()
+    {
+        let chart = picture(name, *input, values, &result.steps);
+        let bytes = match picture_format(path)? {
+            tdcr::plot::Format::Svg => chart.to_svg().into_bytes(),
+            tdcr::plot::Format::Png => {
+                chart
+                    .to_png(tdcr::plot::PNG_SCALE)
+                    .map_err(|e| Failure::Other(format!("cannot draw the hysteresis loop: {e}")))?
+                    .data
+            }
+        };
+        write_file(path, bytes, "picture")?;
+        note(&format!("wrote {}", path.display()));
+    }
+    match result.failure {
+        Some((k, e)) => {
+            let head = format!("history step {} of {}", k + 1, ranges.steps());
+            Err(match solver_failure(e) {
+                Failure::Input(t) => Failure::Input(format!("{head}: {t}")),
+                Failure::NotConverged(t) => {
+                    Failure::NotConverged(format!("{head} failed; the CSV holds the steps before it\n{t}"))
+                }
+                Failure::Other(t) => Failure::Other(format!("{head} failed; the CSV holds the steps before it\n{t}")),
+                Failure::BrokenPipe => Failure::BrokenPipe,
+            })
+        }
+        None => Ok(()),
+    }
+}
+
+/// The CSV header: the step, its direction, the tensions, the swept input, the tip, and
+/// per tendon with friction its delivered tension and zones.
+fn header(count: usize, input: Input, slipping: &[usize]) -> CsvTable {
+    let mut names = vec!["step".to_string(), "direction".to_string()];
+    names.extend((1..=count).map(|i| format!("tension_{i}")));
+    names.push(input.to_string());
+    names.extend(["tip_x", "tip_y", "tip_z", "bending_angle_deg"].map(String::from));
+    for &i in slipping {
+        names.push(format!("delivered_{}", i + 1));
+        names.push(format!("zones_{}", i + 1));
+    }
+    names.extend(["iterations", "intervals", "tip_error_estimate"].map(String::from));
+    CsvTable::new(names)
+}
+
+/// Appends the row of step `k` (from 0).
+fn row(csv: &mut CsvTable, k: usize, direction: &str, value: f64, step: &HistoryStep) {
+    let solution = &step.solution;
+    let tip = solution.tip_position();
+    let mut fields = vec![(k + 1).to_string(), direction.to_string()];
+    fields.extend(solution.tendons.iter().map(|t| number(t.tension)));
+    fields.push(number(value));
+    fields.extend([
+        number(tip.x),
+        number(tip.y),
+        number(tip.z),
+        number(output::bending_angle(solution).to_degrees()),
+    ]);
+    for zones in &step.zones {
+        fields.push(number(solution.tendons[zones.tendon].delivered_tension));
+        let list: Vec<String> = zones
+            .zones
+            .iter()
+            .map(|z| format!("{} {}-{}", z.contact.name(), number(z.start), number(z.end)))
+            .collect();
+        fields.push(list.join(" "));
+    }
+    let report = &solution.report;
+    fields.extend([
+        report.iterations.to_string(),
+        report.intervals.to_string(),
+        report.error_estimate.map_or(String::new(), |e| number(e.tip_position)),
+    ]);
+    csv.row(fields);
+}
+
+/// The hysteresis loop: the tip's displacement from its place at the first step (mm)
+/// against the swept input, rising steps in one colour, falling ones in another.
+fn picture(name: &str, input: Input, values: &[f64], steps: &[HistoryStep]) -> Chart {
+    let (up, down) = ("#1f5fa8", "#e07b00");
+    let first = steps[0].solution.tip_position();
+    let value = |k: usize| values[k.min(values.len() - 1)];
+    let moved = |k: usize| (steps[k].solution.tip_position() - first).norm() * 1e3;
+    let unit = input.unit();
+    let mut chart = Chart {
+        title: format!("{name}: hysteresis over a load history of {} steps", steps.len()),
+        subtitle: vec![format!(
+            "each step from the tendon state the last left (stick/slip friction); {input} from {} to {} {unit}",
+            significant(values.iter().copied().fold(f64::INFINITY, f64::min)),
+            significant(values.iter().copied().fold(f64::NEG_INFINITY, f64::max)),
+        )],
+        x_label: if unit.is_empty() {
+            input.to_string()
+        } else {
+            format!("{input} ({unit})")
+        },
+        y_label: "tip displacement from the first step (mm)".into(),
+        ..Default::default()
+    };
+    for k in 1..steps.len() {
+        let rising = value(k) >= value(k - 1);
+        chart.segments.push(Segment {
+            ends: [(value(k - 1), moved(k - 1)), (value(k), moved(k))],
+            dashed: !rising,
+            color: if rising { up } else { down }.into(),
+        });
+    }
+    if chart.segments.iter().any(|s| !s.dashed) {
+        chart
+            .legend
+            .push(("loading: the input rises".into(), up.into(), Some(false)));
+    }
+    if chart.segments.iter().any(|s| s.dashed) {
+        chart
+            .legend
+            .push(("unloading: the input falls".into(), down.into(), Some(true)));
+    }
+    chart
+}

@@ -1,0 +1,141 @@
+//! The stick/slip state of the tendons with friction during a step of a load history
+//! (docs/friction.md section 8): each link's contact (sliding in, sliding out or stuck), the
+//! friction multiplier of the backbone's tangential load, the carried material (lambda),
+//! the stuck material's tension on a shape, and the Coulomb choice on one link.
+
+use super::interval::Profile;
+use crate::model::equations::Site;
+use crate::solution::State;
+use nalgebra::Vector3;
+
+/// How the tension of a tendon with friction evolves on a stretch of it during a step of a
+/// load history (docs/friction.md section 8).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Contact {
+    /// Sliding toward the actuator, as while pulled in: the tension falls toward the
+    /// termination at the full friction rate (multiplier w = -1).
+    Pull,
+    /// Sliding toward the termination, as while let out: the tension rises toward the
+    /// termination at the full friction rate (w = +1).
+    Release,
+    /// Stuck to its channel: the material has not moved since the last step, and the
+    /// tension follows from its elastic stretch (|w| <= 1).
+    Stick,
+}
+
+impl Contact {
+    /// The name the command line and files use: `pull`, `release` or `stick`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Contact::Pull => "pull",
+            Contact::Release => "release",
+            Contact::Stick => "stick",
+        }
+    }
+}
+
+/// The stick/slip choice on one link of a history (docs/friction.md section 8).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Choice {
+    /// Slide in, slide out or stick.
+    pub(crate) contact: Contact,
+    /// zeta_b = ln(tau_stuck / tau(0)), the stuck material's log tension at the link's end
+    /// (-infinity where it would be slack, +infinity for a rigid tendon stretched).
+    pub(crate) zeta: f64,
+    /// The multiplier w this choice gives the link: -1, +1, or where it sticks
+    /// (zeta_b - z_a) / C, the stuck profile's share of the friction it can hold.
+    pub(crate) multiplier: f64,
+}
+
+/// The Coulomb choice on a link: with base tension `base`, log tension `za` at its start,
+/// capacity `capacity` (C) and the stuck material's tension `stuck` at its end, the tension
+/// there is `z_b = z_a + clamp(zeta_b - z_a, -C, C)`: it sticks where friction can hold the
+/// stuck profile, else slides the way the stuck tension lies (above: out, below: in). An
+/// unloaded tendon (base 0) slides out, slack.
+pub(crate) fn choose(base: f64, za: f64, capacity: f64, stuck: f64) -> Choice {
+    if base == 0.0 {
+        return Choice {
+            contact: Contact::Release,
+            zeta: f64::NEG_INFINITY,
+            multiplier: 1.0,
+        };
+    }
+    let zeta = if stuck > 0.0 {
+        (stuck / base).ln()
+    } else {
+        f64::NEG_INFINITY
+    };
+    let t = zeta - za;
+    let (contact, multiplier) = if t <= -capacity {
+        (Contact::Pull, -1.0)
+    } else if t >= capacity {
+        (Contact::Release, 1.0)
+    } else {
+        (Contact::Stick, stuck_multiplier(za, zeta, capacity))
+    };
+    Choice {
+        contact,
+        zeta,
+        multiplier,
+    }
+}
+
+/// The multiplier of a stuck link with log tensions `za`, `zb` at its ends and capacity
+/// `capacity`: the share of the friction it can hold that the stuck profile uses.
+pub(crate) fn stuck_multiplier(za: f64, zb: f64, capacity: f64) -> f64 {
+    if capacity > 0.0 { (zb - za) / capacity } else { 0.0 }
+}
+
+/// The stick/slip state of one tendon with friction on a mesh during a history step.
+#[derive(Clone, Debug)]
+pub(crate) struct Grip {
+    /// Per link of its span, how its tension evolves there.
+    pub(crate) contacts: Vec<Contact>,
+    /// Per link, the friction multiplier w of the backbone's tangential load: -1 or +1
+    /// where it slides, the stick profile's tau' / (mu tau kappa) where it sticks.
+    pub(crate) multipliers: Vec<f64>,
+    /// Per link, its capacity C (the most friction can change the log tension across it)
+    /// at the last march.
+    pub(crate) capacities: Vec<f64>,
+    /// Per node, lambda: the unstretched length of tendon per unit s of the material there
+    /// at the end of the last step (docs/friction.md section 8).
+    pub(crate) reference: Vec<f64>,
+}
+
+/// A stuck material's tension (N) and its derivatives in a node's v and u.
+pub(crate) type Stuck = (f64, Vector3<f64>, Vector3<f64>);
+
+impl Profile<'_> {
+    /// Slip j's tension (N) at node state `b` (arc length b.s) if the material there had
+    /// not moved since the last step of a history: E_t A_t (|p_j'| / lambda - 1) with
+    /// lambda the carried unstretched length per unit s at node `node` (docs/friction.md
+    /// section 8), and its derivative in (v, u) (none in v on a Kirchhoff rod of `site`). A rigid tendon has +-infinity (its
+    /// stuck material cannot stretch) and no derivative.
+    pub(crate) fn stuck_tension(
+        &self,
+        j: usize,
+        node: usize,
+        site: &Site,
+        b: &State,
+        length: f64,
+    ) -> (f64, Vector3<f64>, Vector3<f64>) {
+        let robot = self.robot();
+        let tendon = &robot.tendons[self.slipping[j]];
+        let Some(grip) = self.grips.as_ref().map(|g| &g[j]) else {
+            return (f64::NAN, Vector3::zeros(), Vector3::zeros());
+        };
+        let rp = tendon.routing.at(b.s, length);
+        // The path sees the strain: v* on a Kirchhoff rod, whose coordinate v is the force's.
+        let p = b.u.cross(&rp.r) + rp.r_s + site.strain(&b.v);
+        let speed = p.norm();
+        let lambda = grip.reference[node];
+        let Some(stiffness) = tendon.stiffness else {
+            let sign = (speed - lambda).signum();
+            return (sign * f64::INFINITY, Vector3::zeros(), Vector3::zeros());
+        };
+        let t = p / speed;
+        let scale = stiffness / lambda;
+        let d_v = if site.inextensible { Vector3::zeros() } else { t * scale };
+        (stiffness * (speed / lambda - 1.0), d_v, rp.r.cross(&t) * scale)
+    }
+}

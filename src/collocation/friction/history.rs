@@ -1,0 +1,407 @@
+//! Stick/slip over a quasi-static load history (docs/friction.md section 8): each step is
+//! solved on the history's one mesh from the tendon state the last step left, the material
+//! of every tendon with friction at every node (its unstretched length per unit s there,
+//! lambda).
+//!
+//! On each link of a tendon's span the tension either slides at the full friction rate
+//! (the capstan row of full slip with w = -1 or +1) or sticks: the material at the link's
+//! end node b has not moved, so its tension is the stuck material's,
+//! `tau(b) = E_t A_t (|p'(b)| / lambda(b) - 1)`, a stick row in place of the capstan row.
+//! Which links slide and which stick is the exact solution of the tendon's 1-D Coulomb
+//! problem on the current shape, marched from the base entry ([`march`]): the tension may
+//! change across a link by at most the capstan increment C either way, so
+//! `z_b = z_a + clamp(zeta_b - z_a, -C, C)` with zeta_b the stuck log tension. Newton solves
+//! the backbone with the links' rows and multipliers held; the march is repeated on the new
+//! shape until it changes nothing.
+
+use super::grip::{choose, stuck_multiplier};
+use super::*;
+use crate::model::length;
+use crate::solution::Solution;
+
+/// Passes of march and Newton per step: each pass moves a stick/slip boundary to where the
+/// last shape puts it and updates the stuck links' multipliers, whose effect on the shape
+/// is about mu tau r^2 / (E I) (1e-3 on the prototype) per pass; 40 covers any settling
+/// history many times over.
+const PASSES: usize = 40;
+/// A stuck link's multiplier has settled when it changes by less than this between passes:
+/// the tangential load it scales is mu tau kappa w, and 1e-10 of it moves the tip far below
+/// the residual tolerance.
+const SETTLED: f64 = 1e-10;
+
+/// What a history carries from one step to the next on its mesh.
+pub(crate) struct Carried {
+    /// The history's mesh.
+    pub(crate) mesh: Mesh,
+    /// The last step's node states (the first step's starting guess before it).
+    pub(crate) x: Vec<State>,
+    /// The last step's log tensions of each tendon with friction at every node.
+    pub(crate) z: Vec<Vec<f64>>,
+    /// Each tendon with friction's contacts, multipliers and material (lambda).
+    pub(crate) grips: Vec<Grip>,
+    /// Whether (x, z) already solve the next step with the contacts held (the first step
+    /// when the mesh was chosen on it).
+    pub(crate) solved: bool,
+    /// The report of the solve that chose the mesh: the template of every step's report.
+    pub(crate) report: SolveReport,
+}
+
+/// One step's answer: the solution and, per tendon with friction (robot index), its zones
+/// as (start s, end s, contact), base to termination.
+pub(crate) type StepAnswer = (Solution, Vec<(usize, Vec<(f64, f64, Contact)>)>);
+
+/// The start of a history of `robots` (validated, same geometry) from rest: the mesh the
+/// default full-slip `pull` solve picks for the step with the most tension on the tendons
+/// with friction, its solution as the first guess, and every tendon with friction
+/// unstretched on the unloaded rod (lambda = the rest path's speed |p'|), sliding in.
+///
+/// # Errors
+/// As [`super::super::solve`] on that step.
+pub(crate) fn start(robots: &[Robot], options: &Options) -> Result<Carried> {
+    let load = |r: &Robot| -> f64 {
+        let active = crate::model::friction::slipping(r);
+        active.iter().map(|&i| r.tendons[i].tension()).sum()
+    };
+    let mut most = 0;
+    for (n, r) in robots.iter().enumerate() {
+        if load(r) > load(&robots[most]) {
+            most = n;
+        }
+    }
+    let mut pulled = robots[most].clone();
+    for t in &mut pulled.tendons {
+        if let Some(f) = t.friction.as_mut() {
+            f.motion = crate::model::tendon::Motion::Pull;
+        }
+    }
+    let first = super::super::solve(&pulled, options)?;
+    let points: Vec<f64> = first.nodes.iter().map(|n| n.s).collect();
+    let mesh = Mesh::from_points(&pulled, &points)?;
+    let x: Vec<State> = first.nodes.iter().map(|n| n.state()).collect();
+    let model = Model::new(&pulled);
+    let profile = Profile::new(&model, &mesh);
+    let length = pulled.length();
+    let mut z = profile.z.clone();
+    let mut grips = Vec::with_capacity(profile.count());
+    for (j, &i) in profile.slipping.iter().enumerate() {
+        let tendon = &pulled.tendons[i];
+        let span = profile.spans[j];
+        let base = profile.base[j];
+        for (n, value) in z[j].iter_mut().enumerate() {
+            let tension = first.tendon_tensions[i][n.min(span)];
+            *value = if base > 0.0 { (tension / base).ln() } else { 0.0 };
+        }
+        let reference = mesh
+            .nodes
+            .iter()
+            .map(|node| {
+                let rest = pulled.rod.reference_on(node.s, node.segment_end);
+                length::speed(&tendon.routing.at(node.s, length), &rest.v_star, &rest.u_star)
+            })
+            .collect();
+        grips.push(Grip {
+            contacts: vec![Contact::Pull; span],
+            multipliers: vec![-1.0; span],
+            capacities: vec![0.0; span],
+            reference,
+        });
+    }
+    Ok(Carried {
+        mesh,
+        x,
+        z,
+        grips,
+        solved: most == 0,
+        report: first.report,
+    })
+}
+
+/// The march of every tendon with friction along the shape `x` (module docs): new contacts,
+/// multipliers and predicted log tensions written into `border`'s profile and unknowns.
+/// Returns whether anything changed.
+///
+/// # Errors
+/// A model breakdown on a link; a rigid tendon that would stick (statically
+/// indeterminate).
+fn march(border: &mut Capstan, x: &[State]) -> Result<bool> {
+    let system = &border.system;
+    let length = system.model.robot.length();
+    let Some(profile) = system.friction.as_ref() else {
+        return Ok(false);
+    };
+    let count = profile.count();
+    let last = profile.spans.iter().copied().max().unwrap_or(0);
+    let mut grips = profile.grips.clone().unwrap_or_default();
+    let mut z = profile.z.clone();
+    let mut changed = false;
+    // A tendon slides from its base entry one way (the first link's) and, from the first
+    // link that does not (stick, or the other way), sticks to its termination: a stretch
+    // that slid beyond a stuck one would carry material past it (section 8).
+    let mut stuck = vec![false; count];
+    let mut sliding: Vec<Option<Contact>> = vec![None; count];
+    for k in 0..last {
+        let Some(sites) = system.interval_sites(k) else {
+            continue;
+        };
+        let seg = system.mesh.nodes[k].segment_end;
+        let lin = interval(profile, length, k, sites, seg, &x[k], &x[k + 1], None)?;
+        for j in (0..count).filter(|&j| profile.on_link(j, k)) {
+            let (base, za, capacity) = (profile.base[j], z[j][k], lin.capacity[j]);
+            let mut choice = choose(base, za, capacity, lin.stuck_tension[j]);
+            let first = *sliding[j].get_or_insert(choice.contact);
+            if base > 0.0 && (stuck[j] || choice.contact != first) {
+                choice.contact = Contact::Stick;
+                choice.multiplier = stuck_multiplier(za, choice.zeta, capacity);
+            }
+            let zb = match choice.contact {
+                Contact::Stick => {
+                    let i = profile.slipping[j];
+                    if system.model.robot.tendons[i].stiffness.is_none() {
+                        return Err(rigid(i, x[k + 1].s));
+                    }
+                    if !choice.zeta.is_finite() {
+                        return Err(slack(i, x[k + 1].s));
+                    }
+                    stuck[j] = true;
+                    choice.zeta
+                }
+                _ if base == 0.0 => 0.0,
+                _ => za + choice.multiplier * capacity,
+            };
+            let grip = &mut grips[j];
+            changed |= grip.contacts[k] != choice.contact
+                || (choice.contact == Contact::Stick && (grip.capacities[k] - capacity).abs() > SETTLED * capacity);
+            grip.contacts[k] = choice.contact;
+            grip.multipliers[k] = choice.multiplier;
+            grip.capacities[k] = capacity;
+            z[j][k + 1] = zb;
+        }
+    }
+    if let Some(p) = border.system.friction.as_mut() {
+        for (j, &span) in p.spans.iter().enumerate() {
+            for n in span + 1..z[j].len() {
+                z[j][n] = z[j][span];
+            }
+        }
+        p.z = z;
+        p.grips = Some(grips);
+    }
+    border.reload();
+    Ok(changed)
+}
+
+/// The error for tendon `i` whose stuck part would go slack near `s`.
+fn slack(i: usize, s: f64) -> Error {
+    error::invalid(
+        format!("tendons[{i}]"),
+        format!(
+            "tendon {} would go slack near s = {s:.4} m while stuck in its channel, which the stick/slip history does \
+             not model",
+            i + 1
+        ),
+        "take the history in smaller steps",
+    )
+}
+
+/// The error for rigid tendon `i` that sticks near `s`.
+fn rigid(i: usize, s: f64) -> Error {
+    error::invalid(
+        format!("tendons[{i}].stiffness"),
+        format!(
+            "tendon {} sticks in its channel near s = {s:.4} m during this step, but it is rigid: the tension of \
+             a stuck rigid tendon can be anything friction allows (statically indeterminate)",
+            i + 1
+        ),
+        "set the tendon's axial stiffness E_t A_t (`stiffness` in N) so that its stuck part stretches",
+    )
+}
+
+/// Solves one step of a history: `robot` (validated, the history's geometry) from the state
+/// `carried` holds, which it then holds for the next step. Returns the solution and the
+/// zones of the tendons with friction.
+///
+/// # Errors
+/// Newton not converging on a pass, a stick/slip pattern that does not settle, a rigid
+/// tendon that sticks ([`rigid`]), or a pattern outside what the march resolves (a stretch
+/// sliding against its slip, section 8 of docs/friction.md).
+pub(crate) fn step(robot: &Robot, options: &Options, carried: &mut Carried) -> Result<StepAnswer> {
+    let start = Instant::now();
+    let model = Model::new(robot);
+    let mut system = System::new(model.clone(), carried.mesh.clone());
+    let mut profile = Profile::new(&model, &system.mesh);
+    profile.z.clone_from(&carried.z);
+    profile.grips = Some(carried.grips.clone());
+    system.friction = Some(profile);
+    let mut ws = Workspace::new(&system, options.linear_solver)?;
+    let mut border = Capstan::new(system);
+    let mut x = carried.x.clone();
+    let mut report = carried.report.clone();
+    (
+        report.iterations,
+        report.newton_steps,
+        report.chord_steps,
+        report.load_steps,
+    ) = (0, 0, 0, 0);
+    let settings = Settings {
+        tolerance: options.residual_tolerance,
+        max_iterations: options.max_iterations,
+        reuse_factors: false,
+        stop_when_damped: false,
+    };
+    let solved = std::mem::replace(&mut carried.solved, false);
+    let mut settled = !march(&mut border, &x)? && solved;
+    // A rigid tendon that would stick is refused by the march; one that is near sticking
+    // may keep Newton or the passes from settling, which the hint names.
+    let rigid_hint = robot
+        .tendons
+        .iter()
+        .enumerate()
+        .find(|(_, t)| t.active_friction().is_some() && t.stiffness.is_none())
+        .map_or(String::new(), |(i, _)| {
+            format!("; tendon {} is rigid: set its `stiffness` if it sticks", i + 1)
+        });
+    for _ in 0..PASSES {
+        if settled {
+            break;
+        }
+        let (termination, worst) = newton::run_bordered(&mut border, &mut ws, &mut x, &settings, &mut report);
+        report.termination = termination;
+        if termination != Termination::Converged {
+            let system = &border.system;
+            return Err(Error::NotConverged {
+                method: Method::Collocation,
+                report: Box::new(report),
+                worst_s: system.row_position(worst.min(system.unknowns() - 1)),
+                hint: format!("a history step is solved from the last step's state: take smaller steps{rigid_hint}"),
+            });
+        }
+        // The contacts and multipliers on the converged shape: settled when Newton's were.
+        border.load(Point::Current);
+        settled = !march(&mut border, &x)?;
+    }
+    if !settled {
+        return Err(Error::NotConverged {
+            method: Method::Collocation,
+            report: Box::new(report),
+            worst_s: 0.0,
+            hint: format!(
+                "the stick/slip zones did not settle in {PASSES} passes: take smaller steps of the history{rigid_hint}"
+            ),
+        });
+    }
+    let estimated = estimate_with_friction(&mut border, &mut ws, &x).ok().flatten();
+    border.load(Point::Current);
+    let system = &border.system;
+    let Some(profile) = system.friction.as_ref() else {
+        return Err(error::invalid(
+            "tendons",
+            "have no friction",
+            "solve a history of a robot with friction",
+        ));
+    };
+    let grips = profile.grips.clone().unwrap_or_default();
+    let tensions = profile.node_tensions(&model);
+    let multipliers: Vec<Vec<f64>> = (0..x.len())
+        .map(|n| {
+            grips
+                .iter()
+                .map(|g| {
+                    g.multipliers
+                        .get(n.saturating_sub(1).min(g.multipliers.len().saturating_sub(1)))
+                        .copied()
+                        .unwrap_or(-1.0)
+                })
+                .collect()
+        })
+        .collect();
+    pipeline::record_estimate(&mut report, estimated.as_ref().map(|(c, _)| c), options, robot.length());
+    // The estimate does not see a stuck stretch's error (its multiplier is constant per
+    // link and its boundary falls inside one: about 1e3 times the estimate on the
+    // prototype, docs/friction.md section 8), so a step with one reports none.
+    if grips.iter().any(|g| g.contacts.contains(&Contact::Stick)) {
+        report.error_estimate = None;
+        report.tolerance_met = None;
+    }
+    report.stability = Stability::Unknown {
+        reason: "friction is not conservative".into(),
+    };
+    report.intervals = system.mesh.intervals();
+    report.unknowns = unknowns::unknowns(system.mesh.nodes.len()) + border.z.len();
+    report.nonzeros = unknowns::nonzeros(&system.mesh);
+    report.timings.total = start.elapsed();
+    let ends = pipeline::segment_ends(&system.mesh);
+    let solution = nodes::solution_with_tensions(&model, &x, &ends, &tensions, Some(&multipliers), report)?;
+    let mut zones = Vec::with_capacity(grips.len());
+    let mut next = grips.clone();
+    let length = robot.length();
+    for (j, &i) in profile.slipping.iter().enumerate() {
+        let tendon = &robot.tendons[i];
+        let span = profile.spans[j];
+        // The material now at each node: lambda = |p'| / (1 + tau / (E_t A_t)).
+        let lambda: Vec<f64> = (0..=span)
+            .map(|n| {
+                let speed = length::speed(&tendon.routing.at(x[n].s, length), &x[n].v, &x[n].u);
+                tendon.stiffness.map_or(speed, |e| speed / (1.0 + tensions[n][i] / e))
+            })
+            .collect();
+        // An unloaded tendon is slack: no normal force, so friction holds nothing back.
+        if profile.base[j] > 0.0 {
+            check_slip(i, &grips[j], &lambda, &x, span)?;
+        }
+        next[j].reference[..=span].copy_from_slice(&lambda);
+        let mut list: Vec<(f64, f64, Contact)> = Vec::new();
+        for (k, &c) in grips[j].contacts.iter().enumerate() {
+            match list.last_mut() {
+                Some(last) if last.2 == c => last.1 = x[k + 1].s,
+                _ => list.push((x[k].s, x[k + 1].s, c)),
+            }
+        }
+        zones.push((i, list));
+    }
+    carried.z.clone_from(&profile.z);
+    carried.grips = next;
+    carried.x = x;
+    Ok((solution, zones))
+}
+
+/// Checks that every stretch of tendon `i` slides the way its friction acts (Coulomb's
+/// direction): the slip since the last step, d(s) = xi_new(s) - xi_old(s) with xi the
+/// unstretched length from s to the termination (trapezoidal rule on the nodes), is <= 0
+/// on links sliding in and >= 0 on links sliding out. A stretch that slides against its
+/// friction would need a slip zone that starts away from the base entry, which the march
+/// does not resolve.
+///
+/// # Errors
+/// The direction violated beyond rounding.
+fn check_slip(i: usize, grip: &Grip, lambda: &[f64], x: &[State], span: usize) -> Result<()> {
+    let mut d = vec![0.0; span + 1];
+    let mut size = 0.0_f64;
+    for k in (0..span).rev() {
+        let h = x[k + 1].s - x[k].s;
+        let change = |n: usize| lambda[n] - grip.reference[n];
+        d[k] = d[k + 1] + 0.5 * h * (change(k) + change(k + 1));
+        size = size.max(d[k].abs());
+    }
+    // Rounding of the sums: 1e-12 of the largest slip, and of the span's length at 1e-15.
+    let tolerance = 1e-12 * size + 1e-15 * x[span].s;
+    for (k, &c) in grip.contacts.iter().enumerate() {
+        let wrong = match c {
+            Contact::Pull => d[k].max(d[k + 1]) > tolerance,
+            Contact::Release => d[k].min(d[k + 1]) < -tolerance,
+            Contact::Stick => false,
+        };
+        if wrong {
+            return Err(error::invalid(
+                format!("tendons[{i}].friction"),
+                format!(
+                    "tendon {} would slide against its friction near s = {:.4} m in this step (a slip zone that \
+                     does not start at the base entry), which the stick/slip history does not model",
+                    i + 1,
+                    x[k].s
+                ),
+                "take the history in smaller steps, or hold the loads while the tendons move",
+            ));
+        }
+    }
+    Ok(())
+}

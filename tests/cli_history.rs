@@ -1,0 +1,140 @@
+//! `tdcr sweep --history` (docs/cli.md): one CSV row per step in order with the direction,
+//! delivered tension and stick/slip zones, the hysteresis loop's picture, and bad input.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+const TDCR: &str = env!("CARGO_BIN_EXE_tdcr");
+
+fn scratch(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("tdcr-cli-history-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+fn run(dir: &Path, args: &[&str]) -> Output {
+    let out = Command::new(TDCR).args(args).current_dir(dir).output().unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    out
+}
+
+/// The example robot with friction 0.1 on tendon 1, and its stiffness unless `rigid`.
+fn robot(dir: &Path, rigid: bool) {
+    let out = run(dir, &["example"]);
+    let text = String::from_utf8_lossy(&out.stdout).into_owned();
+    let from = "tension = 2.94                   # N, >= 0\n";
+    assert!(text.contains(from));
+    let added = if rigid {
+        "friction = 0.1\n"
+    } else {
+        "friction = 0.1\nstiffness = 2000.0\n"
+    };
+    std::fs::write(
+        dir.join("robot.toml"),
+        text.replacen(from, &format!("{from}{added}"), 1),
+    )
+    .unwrap();
+}
+
+fn column(header: &str, name: &str) -> usize {
+    header
+        .split(',')
+        .position(|c| c == name)
+        .unwrap_or_else(|| panic!("no {name} in {header}"))
+}
+
+#[test]
+fn up_down_writes_one_row_per_step_and_the_loop() {
+    let dir = scratch("up-down");
+    robot(&dir, false);
+    let args = [
+        "sweep",
+        "robot.toml",
+        "--tension",
+        "1=0:4.91:5",
+        "--history",
+        "up-down",
+        "--plot",
+        "loop.svg",
+    ];
+    let out = run(&dir, &args);
+    assert_eq!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stderr));
+    let csv = String::from_utf8_lossy(&out.stdout).into_owned();
+    let lines: Vec<&str> = csv.lines().collect();
+    assert_eq!(lines.len(), 10, "{csv}");
+    let header = lines[0];
+    let (direction, tension, zones) = (
+        column(header, "direction"),
+        column(header, "tension_1"),
+        column(header, "zones_1"),
+    );
+    column(header, "delivered_1");
+    let field = |k: usize, c: usize| lines[k].split(',').nth(c).unwrap().to_string();
+    let tensions: Vec<String> = (1..10).map(|k| field(k, tension)).collect();
+    assert_eq!(
+        tensions,
+        [
+            "0", "1.2275", "2.455", "3.6825", "4.91", "3.6825", "2.455", "1.2275", "0"
+        ]
+    );
+    assert_eq!(field(2, direction), "up");
+    assert_eq!(field(6, direction), "down");
+    assert!(field(3, zones).starts_with("pull 0-"), "{}", field(3, zones));
+    // The first step back slides out near the base and sticks beyond.
+    assert!(
+        field(6, zones).starts_with("release 0-") && field(6, zones).contains("stick"),
+        "{}",
+        field(6, zones)
+    );
+    let svg = std::fs::read_to_string(dir.join("loop.svg")).unwrap();
+    assert!(svg.contains("hysteresis") && svg.contains("unloading"));
+}
+
+#[test]
+fn an_explicit_list_is_solved_in_order() {
+    let dir = scratch("list");
+    robot(&dir, false);
+    let out = run(
+        &dir,
+        &["sweep", "robot.toml", "--tension", "1=0", "--history", "0,3,1,2"],
+    );
+    assert_eq!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stderr));
+    let csv = String::from_utf8_lossy(&out.stdout).into_owned();
+    let lines: Vec<&str> = csv.lines().collect();
+    let c = column(lines[0], "tension_1");
+    let tensions: Vec<&str> = lines[1..].iter().map(|l| l.split(',').nth(c).unwrap()).collect();
+    assert_eq!(tensions, ["0", "3", "1", "2"]);
+}
+
+#[test]
+fn a_history_value_that_is_not_a_number_is_bad_input() {
+    let dir = scratch("nan");
+    robot(&dir, false);
+    let out = run(
+        &dir,
+        &["sweep", "robot.toml", "--tension", "1=0", "--history", "0,inf,1"],
+    );
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("`inf`") && err.contains("finite"), "{err}");
+}
+
+#[test]
+fn a_rigid_tendon_that_sticks_says_to_set_its_stiffness() {
+    let dir = scratch("rigid");
+    robot(&dir, true);
+    let out = run(
+        &dir,
+        &["sweep", "robot.toml", "--tension", "1=0:4.91:5", "--history", "up-down"],
+    );
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("history step 6 of 9") && err.contains("stiffness"),
+        "{err}"
+    );
+    // The steps before it are in the CSV.
+    assert_eq!(String::from_utf8_lossy(&out.stdout).lines().count(), 6);
+}

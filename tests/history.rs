@@ -1,0 +1,208 @@
+//! Stick/slip friction over load histories (docs/friction.md section 8): a history of one
+//! step from rest is the full-slip pull solve; pulling the prototype's tendon 1 up to
+//! 4.91 N and letting it back out draws a closed hysteresis loop whose unloading branch
+//! lies on the other side of the loading one, wider with more friction; a step that leaves
+//! the tendon stuck moves the tip less than without friction; every step is in global
+//! equilibrium; bad histories are refused with what to change.
+
+use nalgebra::Vector3;
+use tdcr::analysis::equilibrium::imbalance;
+use tdcr::analysis::history::{Contact, HistoryResult, HistoryStep, history};
+use tdcr::analysis::sweep::{Input, Ranges};
+use tdcr::{Error, Friction, Parameter, Robot, cases};
+
+/// The paper's top tension (N).
+const TOP: f64 = 4.91;
+
+/// The prototype with friction `mu` on tendon 1, whose axial stiffness E_t A_t is 2000 N
+/// (a 0.5 mm polymer line).
+fn prototype(mu: f64) -> Robot {
+    let mut robot = cases::prototype();
+    robot.tendons[0].friction = Some(Friction::pull(mu));
+    robot.tendons[0].stiffness = Some(2000.0);
+    robot
+}
+
+/// Tendon 1's tension from 0 to `top` in `steps` equal steps and back.
+fn ranges(robot: Robot, top: f64, steps: usize) -> Ranges {
+    let values: Vec<f64> = (0..=steps).map(|k| top * k as f64 / steps as f64).collect();
+    Ranges::new(robot, vec![(Input::Parameter(Parameter::Tension(0)), values)])
+        .unwrap()
+        .up_down()
+}
+
+fn solved(result: HistoryResult) -> Vec<HistoryStep> {
+    if let Some((k, e)) = &result.failure {
+        panic!("step {k}: {e}");
+    }
+    result.steps
+}
+
+fn tip(step: &HistoryStep) -> Vector3<f64> {
+    step.solution.tip_position()
+}
+
+#[test]
+fn one_step_from_rest_is_the_full_slip_pull_solve() {
+    let robot = prototype(0.1).with_tensions(&[TOP, 0.0, 0.0, 0.0, 0.0]);
+    let ranges = Ranges::new(
+        robot.clone(),
+        vec![(Input::Parameter(Parameter::Tension(0)), vec![TOP])],
+    )
+    .unwrap();
+    let steps = solved(history(&ranges, &Default::default()).unwrap());
+    let pulled = tdcr::solve(&robot, &Default::default()).unwrap();
+    let distance = (tip(&steps[0]) - pulled.tip_position()).norm();
+    // 1e-10 m: the same equations on the same mesh; only the log tensions' round trip
+    // through the tensions differs, at rounding
+    assert!(
+        distance < 1e-10,
+        "history {:?} vs pull {:?}",
+        tip(&steps[0]),
+        pulled.tip_position()
+    );
+    assert_eq!(steps[0].zones[0].zones.len(), 1);
+    assert_eq!(steps[0].zones[0].zones[0].contact, Contact::Pull);
+    let delivered = steps[0].solution.tendons[0].delivered_tension;
+    // 1e-12 N: the same profile to rounding
+    assert!((delivered - pulled.tendons[0].delivered_tension).abs() < 1e-12);
+}
+
+#[test]
+fn pulling_and_releasing_draws_a_closed_loop() {
+    let steps = solved(history(&ranges(prototype(0.1), TOP, 10), &Default::default()).unwrap());
+    assert_eq!(steps.len(), 21);
+    let rest = tip(&steps[0]);
+    // Closed: back at 0 N the tendon is slack all along and the robot is where it started
+    // (1e-9 m: two Newton solves of the same robot, each to its residual tolerance).
+    let closing = (tip(&steps[20]) - rest).norm();
+    assert!(closing < 1e-9, "the loop is open by {closing} m");
+    // The unloading branch lies on the other side: at every tension between, the tip is
+    // further from rest on the way back (the stuck tendon keeps more of its tension).
+    for k in 1..10 {
+        let (up, down) = (&steps[k], &steps[20 - k]);
+        assert_eq!(up.solution.tendons[0].tension, down.solution.tendons[0].tension);
+        let (bent_up, bent_down) = ((tip(up) - rest).norm(), (tip(down) - rest).norm());
+        assert!(bent_down > bent_up, "step {k}: {bent_down} <= {bent_up}");
+    }
+    // The first step back leaves the tendon stuck beyond a stretch that slides out.
+    let back = &steps[11].zones[0].zones;
+    assert_eq!(back.first().map(|z| z.contact), Some(Contact::Release));
+    assert_eq!(back.last().map(|z| z.contact), Some(Contact::Stick));
+    // Loading from rest slides the tendon in all along.
+    assert!(
+        steps[1..=10]
+            .iter()
+            .all(|s| s.zones[0].zones.iter().all(|z| z.contact == Contact::Pull))
+    );
+    // A step with a stuck stretch reports no error estimate (the estimate does not see
+    // it); a step that slides all along does.
+    assert!(back.len() > 1 && steps[11].solution.report.error_estimate.is_none());
+    assert!(steps[10].solution.report.error_estimate.is_some());
+}
+
+#[test]
+fn a_stuck_step_converges_under_refinement() {
+    let tip_back = |tolerance: f64| {
+        let options = tdcr::collocation::Options {
+            tolerance: Some(tolerance),
+            ..Default::default()
+        };
+        tip(&solved(history(&ranges(prototype(0.1), TOP, 10), &options).unwrap())[11])
+    };
+    let reference = tip_back(1e-11);
+    let (coarse, fine) = ((tip_back(1e-7) - reference).norm(), (tip_back(1e-9) - reference).norm());
+    // 32 -> 88 intervals: more than 4x means an order above 1.4 (measured 2.3, 9.9x)
+    assert!(fine < coarse / 4.0, "error {coarse} m at 1e-7, {fine} m at 1e-9");
+}
+
+#[test]
+fn the_loop_widens_with_friction() {
+    let width = |mu: f64| -> f64 {
+        let steps = solved(history(&ranges(prototype(mu), TOP, 6), &Default::default()).unwrap());
+        (1..6)
+            .map(|k| (tip(&steps[k]) - tip(&steps[12 - k])).norm())
+            .fold(0.0, f64::max)
+    };
+    let widths = [width(0.05), width(0.1), width(0.2)];
+    assert!(
+        widths[0] > 0.0 && widths[0] < widths[1] && widths[1] < widths[2],
+        "widths {widths:?}"
+    );
+}
+
+#[test]
+fn a_stuck_step_moves_the_tip_less_than_without_friction() {
+    let steps = solved(history(&ranges(prototype(0.1), TOP, 10), &Default::default()).unwrap());
+    let (peak, back) = (&steps[10], &steps[11]);
+    assert!(back.zones[0].zones.iter().any(|z| z.contact == Contact::Stick));
+    let mut smooth = prototype(0.0);
+    smooth.tendons[0].friction = None;
+    let at = |t: f64| {
+        tdcr::solve(&smooth.with_tensions(&[t, 0.0, 0.0, 0.0, 0.0]), &Default::default())
+            .unwrap()
+            .tip_position()
+    };
+    let frictionless = (at(back.solution.tendons[0].tension) - at(TOP)).norm();
+    let stuck = (tip(back) - tip(peak)).norm();
+    assert!(
+        stuck < frictionless,
+        "stuck step {stuck} m, frictionless {frictionless} m"
+    );
+}
+
+#[test]
+fn every_step_is_in_global_equilibrium() {
+    let ranges = ranges(prototype(0.1), TOP, 5);
+    let steps = solved(history(&ranges, &Default::default()).unwrap());
+    for (k, step) in steps.iter().enumerate() {
+        let robot = ranges.robot(k as f64).unwrap();
+        let e = imbalance(&robot, &step.solution);
+        // 1e-8: the solver's tolerance in the wrenches relative to the tension, as for the
+        // full-slip solves
+        assert!(e.max() < 1e-8, "step {k}: imbalance {e:?}");
+    }
+}
+
+#[test]
+fn a_history_step_that_is_not_finite_is_refused() {
+    let values = vec![0.0, f64::NAN, 1.0];
+    let Err(Error::InvalidInput { field, problem, .. }) =
+        Ranges::new(prototype(0.1), vec![(Input::Parameter(Parameter::Tension(0)), values)])
+    else {
+        panic!("a NaN step was accepted");
+    };
+    assert_eq!(field, "tension.1");
+    assert!(problem.contains("NaN"), "{problem}");
+}
+
+#[test]
+fn a_rigid_tendon_that_sticks_is_refused_with_what_to_set() {
+    let mut robot = prototype(0.1);
+    robot.tendons[0].stiffness = None;
+    let result = history(&ranges(robot, TOP, 4), &Default::default()).unwrap();
+    let Some((k, Error::InvalidInput { field, hint, .. })) = result.failure else {
+        panic!("a rigid tendon was let out without an error: {:?}", result.failure);
+    };
+    // Loading from rest slides all along (no stick zone): the first step back sticks.
+    assert_eq!(k, 5);
+    assert_eq!(field, "tendons[0].stiffness");
+    assert!(hint.contains("stiffness"), "{hint}");
+}
+
+#[test]
+fn a_history_without_friction_is_refused() {
+    let ranges = ranges(cases::prototype(), TOP, 2);
+    let Err(Error::InvalidInput { problem, .. }) = history(&ranges, &Default::default()) else {
+        panic!("a history without friction was solved");
+    };
+    assert!(problem.contains("no tendon has friction"), "{problem}");
+}
+
+#[test]
+fn up_down_goes_back_without_repeating_the_top() {
+    let ranges = ranges(prototype(0.1), 2.0, 2);
+    let values = &ranges.inputs()[0].1;
+    assert_eq!(values, &vec![0.0, 1.0, 2.0, 1.0, 0.0]);
+    assert_eq!(ranges.steps(), 5);
+}
