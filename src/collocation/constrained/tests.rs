@@ -38,9 +38,9 @@ fn column(tendon: Tendon) -> Robot {
 fn verdicts(robot: &Robot, solution: &Solution) -> (Stability, Stability, Stability) {
     let points: Vec<f64> = solution.nodes.iter().map(|n| n.s).collect();
     let mesh = Mesh::from_points(robot, &points).unwrap();
-    let x = interpolate(solution, &mesh);
     let mut model = Model::new(robot);
     model.tensions = solution.tensions();
+    let x = interpolate(&model, solution, &mesh);
     let system = System::new(model, mesh);
     let mut report = SolveReport::new(Method::Collocation);
     let mut ws = Workspace::new(&system, LinearSolver::Blocks).unwrap();
