@@ -15,8 +15,27 @@ use pyo3::types::{PyDict, PyList};
 use tdcr::analysis::sweep::{Event, Kind, Step, Sweep, SweepSolver};
 
 /// (n, 3) rows of tip positions.
-fn tip_rows<'py>(py: Python<'py>, tips: &[[f64; 3]]) -> Bound<'py, PyArray2<f64>> {
+pub(crate) fn tip_rows<'py>(py: Python<'py>, tips: &[[f64; 3]]) -> Bound<'py, PyArray2<f64>> {
     Array2::from_shape_fn((tips.len(), 3), |(i, k)| tips[i][k]).into_pyarray(py)
+}
+
+/// Step `index` (negative from the end, as Python's) of the `n` solutions of a sweep or a
+/// history (`what`), or `IndexError` naming the range.
+pub(crate) fn step_item<'py>(
+    py: Python<'py>,
+    solutions: &Py<PyList>,
+    n: usize,
+    index: isize,
+    what: &str,
+) -> PyResult<Bound<'py, PyAny>> {
+    let n = n as isize;
+    let k = if index < 0 { index + n } else { index };
+    if !(0..n).contains(&k) {
+        return Err(pyo3::exceptions::PyIndexError::new_err(format!(
+            "{what} step {index} out of range: the {what} has {n} steps"
+        )));
+    }
+    solutions.bind(py).get_item(k as usize)
 }
 
 /// An event of a sweep or a trace, located to 1e-6 of the range.
@@ -130,14 +149,7 @@ crate::pickle::pickled_fields! {
     }
 
     fn __getitem__<'py>(&self, py: Python<'py>, index: isize) -> PyResult<Bound<'py, PyAny>> {
-        let n = self.tips.len() as isize;
-        let k = if index < 0 { index + n } else { index };
-        if !(0..n).contains(&k) {
-            return Err(pyo3::exceptions::PyIndexError::new_err(format!(
-                "sweep step {index} out of range: the sweep has {n} steps"
-            )));
-        }
-        self.solutions.bind(py).get_item(k as usize)
+        step_item(py, &self.solutions, self.tips.len(), index, "sweep")
     }
 
     fn __iter__<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, pyo3::types::PyIterator>> {

@@ -2,12 +2,12 @@
 //! from the tendon state the last left), with numpy out.
 
 use crate::boundary;
+use crate::branch::{step_item, tip_rows};
 use crate::errors::to_py;
 use crate::options::Use;
 use crate::robot::{PyRobot, Rows};
 use crate::solution::PySolution;
-use numpy::ndarray::Array2;
-use numpy::{IntoPyArray, PyArray2};
+use numpy::PyArray2;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 use tdcr::analysis::history::{HistoryStep, history as solve_history};
@@ -78,7 +78,7 @@ crate::pickle::pickled_fields! {
     /// Tip positions (m, world frame), shape (n, 3).
     #[getter]
     fn tip_positions<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
-        Array2::from_shape_fn((self.tips.len(), 3), |(i, k)| self.tips[i][k]).into_pyarray(py)
+        tip_rows(py, &self.tips)
     }
 
     fn __len__(&self) -> usize {
@@ -86,14 +86,7 @@ crate::pickle::pickled_fields! {
     }
 
     fn __getitem__<'py>(&self, py: Python<'py>, index: isize) -> PyResult<Bound<'py, PyAny>> {
-        let n = self.tips.len() as isize;
-        let k = if index < 0 { index + n } else { index };
-        if !(0..n).contains(&k) {
-            return Err(pyo3::exceptions::PyIndexError::new_err(format!(
-                "history step {index} out of range: the history has {n} steps"
-            )));
-        }
-        self.solutions.bind(py).get_item(k as usize)
+        step_item(py, &self.solutions, self.tips.len(), index, "history")
     }
 
     fn __iter__<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, pyo3::types::PyIterator>> {
