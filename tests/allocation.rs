@@ -138,6 +138,13 @@ fn whole_solve_allocations_do_not_grow_with_the_mesh() {
         }
         let (cold, solution) = allocations_of(|| tdcr::collocation::solve(&robot, &options).unwrap());
         assert!(solution.report.error_estimate.is_some() && solution.report.stability.is_stable());
+        // The same solve again takes the workspace the first left on this thread.
+        let (again, _) = allocations_of(|| tdcr::collocation::solve(&robot, &options).unwrap());
+        assert!(
+            again < cold,
+            "a repeated solve must skip the workspace setup: {again} >= {cold}"
+        );
+        println!("cold solve on {intervals} intervals: {cold} allocations, repeated {again}");
         let mut solver = tdcr::collocation::Solver::new(options);
         let guess = solver.solve(&previous).unwrap();
         let (warm, solution) = allocations_of(|| solver.solve_from(&robot, &guess).unwrap());

@@ -133,3 +133,35 @@ fn solve_rows_gives_each_row_its_own_cold_solve_bitwise() {
     );
     assert_eq!(built, [(0, true), (1, false), (2, true)]);
 }
+
+/// A stateless solve takes the workspace an earlier solve on its thread left behind (the
+/// kept workspaces of `collocation::solve`): its answer and verdict are bitwise those of a
+/// thread that never solved, on both linear solvers, on a one-mesh (S) and a two-mesh (H)
+/// error-controlled solve, after solves of the same and of other robots.
+#[test]
+fn kept_workspaces_change_nothing_but_the_setup() {
+    let robots = [cases::case_s(), cases::case_h(), robots().swap_remove(7)];
+    for linear_solver in [collocation::LinearSolver::Blocks, collocation::LinearSolver::SparseLu] {
+        let options = collocation::Options {
+            linear_solver,
+            ..Default::default()
+        };
+        for robot in &robots {
+            let (r, o) = (robot.clone(), options.clone());
+            // A new thread has no kept workspaces.
+            let fresh = std::thread::spawn(move || {
+                let s = collocation::solve(&r, &o).unwrap();
+                (bits(&s), format!("{:?}", s.report.stability))
+            })
+            .join()
+            .unwrap();
+            for other in &robots {
+                collocation::solve(other, &options).unwrap();
+            }
+            for _ in 0..2 {
+                let s = collocation::solve(robot, &options).unwrap();
+                assert_eq!((bits(&s), format!("{:?}", s.report.stability)), fresh);
+            }
+        }
+    }
+}

@@ -68,7 +68,7 @@ pub use batch::{solve_batch, solve_rows};
 pub use dynamics::{DENSITY, MODULUS, Vibration, vibration};
 pub use linear::LinearSolver;
 pub use options::{DEFAULT_TOLERANCE, Equilibrium, MAX_INTERVALS, MAX_ITERATIONS, Options};
-use pipeline::{Level, record_estimate, segment_ends, solve_impl};
+use pipeline::{Level, record_estimate, segment_ends, solve_stateless};
 pub use solver::Solver;
 use solver::{Cache, Cached};
 use start::{cold_start, initial_mesh, resolves};
@@ -88,7 +88,7 @@ pub use trace::{Trace, TraceEvent, TracePoint, trace, trace_until};
 /// assert!((tip.x - 0.151823122).abs() < 1e-6);
 /// ```
 pub fn solve(robot: &Robot, options: &Options) -> Result<Solution> {
-    solve_impl(robot, options, None, &mut None)
+    solve_stateless(robot, options, None)
 }
 
 /// Solves `robot` starting from a previous solution (of this or a nearby robot), which is
@@ -97,7 +97,7 @@ pub fn solve(robot: &Robot, options: &Options) -> Result<Solution> {
 /// # Errors
 /// As [`solve`].
 pub fn solve_from(robot: &Robot, options: &Options, guess: &Solution) -> Result<Solution> {
-    solve_impl(robot, options, Some(guess), &mut None)
+    solve_stateless(robot, options, Some(guess))
 }
 
 /// Checks that the mesh `options` fix resolves `robot` (validated) by the resolution rule

@@ -11,6 +11,7 @@ use super::solver::{Cache, Cached};
 use super::start::{cold_start, initial_mesh, resolves};
 use super::system::System;
 use super::unknowns;
+use super::workspace;
 use crate::error::Result;
 use crate::mesh::guess::{self, interpolate};
 use crate::mesh::{Mesh, nodes};
@@ -19,6 +20,22 @@ use crate::report::{Method, PathTaken, SolveReport, Termination};
 use crate::solution::{Solution, State};
 use crate::{Error, Robot};
 use std::time::Instant;
+
+/// [`solve_impl`] without a cache of its own (what [`super::solve`] and
+/// [`super::solve_from`] run): the workspaces come from and go back to this thread's kept
+/// ones ([`workspace::spare`]), so that repeated solves skip the setup; nothing else of an
+/// earlier solve (its factors, its state) is reused.
+///
+/// # Errors
+/// As [`super::solve`].
+pub(crate) fn solve_stateless(robot: &Robot, options: &Options, warm: Option<&Solution>) -> Result<Solution> {
+    let mut cache = None;
+    let result = solve_impl(robot, options, warm, &mut cache);
+    if let Some(c) = cache {
+        workspace::keep(c.mesh, c.solver, c.workspace);
+    }
+    result
+}
 
 /// Solves `robot` from `warm` (or cold), reusing what `cache` holds: what [`super::solve`],
 /// [`super::solve_from`] and [`super::Solver`] run.
@@ -167,7 +184,15 @@ pub(crate) fn solve_on_mesh(
     let mut system = System::new(model.clone(), mesh);
     let mut workspace = match cache.take() {
         Some(c) if c.mesh == system.mesh && c.solver == options.linear_solver => c.workspace,
-        _ => Workspace::new(&system, options.linear_solver)?,
+        other => {
+            if let Some(c) = other {
+                workspace::keep(c.mesh, c.solver, c.workspace);
+            }
+            match workspace::spare(&system.mesh, options.linear_solver) {
+                Some(ws) => ws,
+                None => Workspace::new(&system, options.linear_solver)?,
+            }
+        }
     };
     let result = match choose {
         Choose::No => newton_only(&system, &mut workspace, x0, &settings, report),

@@ -7,9 +7,53 @@ use super::linear::{Linear, LinearSolver};
 use super::newton::STEP_TOLERANCE;
 use super::system::System;
 use super::unknowns::nonzeros;
+use crate::mesh::Mesh;
 use crate::report::{SolveReport, Stability};
 use crate::solution::State;
+use std::cell::RefCell;
 use std::time::Instant;
+
+/// How many finished workspaces a thread keeps for later solves ([`keep`], [`spare`]): the
+/// meshes of one error-controlled solve (H takes two) and of a neighbouring robot's, so
+/// that a batch of stateless solves skips the setup; the memory stays bounded (each is
+/// about 3 kB per interval).
+const SPARE: usize = 4;
+
+thread_local! {
+    /// Workspaces that solves finished with, least recently kept first, with their mesh and
+    /// linear solver.
+    static KEPT: RefCell<Vec<(Mesh, LinearSolver, Workspace)>> = const { RefCell::new(Vec::new()) };
+}
+
+/// Keeps `workspace` (built for `mesh` and `solver`) on this thread for a later solve on
+/// the same mesh ([`spare`]); the least recently kept goes when there are more than
+/// [`SPARE`].
+pub(crate) fn keep(mesh: Mesh, solver: LinearSolver, workspace: Workspace) {
+    KEPT.with(|kept| {
+        let mut kept = kept.borrow_mut();
+        kept.push((mesh, solver, workspace));
+        if kept.len() > SPARE {
+            kept.remove(0);
+        }
+    });
+}
+
+/// A workspace this thread kept for `mesh` and `solver`, in the state of a new one (no
+/// factors, no verdict; its buffers' old contents are overwritten before they are read, as
+/// between Newton iterations), or None.
+pub(crate) fn spare(mesh: &Mesh, solver: LinearSolver) -> Option<Workspace> {
+    KEPT.with(|kept| {
+        let mut kept = kept.borrow_mut();
+        let at = kept.iter().position(|(m, s, _)| *s == solver && m == mesh)?;
+        let (_, _, mut workspace) = kept.remove(at);
+        workspace.factored = false;
+        workspace.verdict = None;
+        workspace.drift = f64::INFINITY;
+        workspace.unfactored = false;
+        workspace.trial.clear();
+        Some(workspace)
+    })
+}
 
 /// Everything Newton needs for one mesh, built once and reused across iterations, load
 /// steps and solves on the same mesh.
