@@ -249,9 +249,10 @@ fn carry(block: &[f64; NODE * 2 * NODE], y: &Fields, identity: bool) -> Option<F
         } else {
             0
         };
-        for (bc, yc) in b.iter().zip(y).skip(from) {
-            for (p, v) in product.iter_mut().zip(yc) {
-                *p += bc * v;
+        for c in from..NODE {
+            let (bc, yc) = (b[c], &y[c]);
+            for j in 0..6 {
+                product[j] += bc * yc[j];
             }
         }
         for (x, p) in row[NODE..].iter_mut().zip(&product) {
@@ -270,16 +271,15 @@ fn carry(block: &[f64; NODE * 2 * NODE], y: &Fields, identity: bool) -> Option<F
         }
         m.swap(c, best);
         let inv = 1.0 / m[c][c];
-        let (upper, lower) = m.split_at_mut(c + 1);
-        let pivot_row = &upper[c];
-        for row in lower.iter_mut() {
+        let pivot_row = m[c];
+        for row in m.iter_mut().skip(c + 1) {
             let f = row[c] * inv;
             if f != 0.0 {
                 // The whole row, for a fixed trip count: the columns before c + 1 become
                 // garbage that no later step reads (the pivot search reads column c + 1 on,
                 // the back substitution the upper triangle).
-                for (x, p) in row.iter_mut().zip(pivot_row) {
-                    *x -= f * p;
+                for j in 0..NODE + 6 {
+                    row[j] -= f * pivot_row[j];
                 }
             }
         }
