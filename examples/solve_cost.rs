@@ -52,7 +52,7 @@ fn uncounted(solver: &mut collocation::Solver, previous: &Robot) -> Result<Solut
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().collect();
-    let usage = "usage: solve_cost S|H cold|warm COUNT [TOL]";
+    let usage = "usage: solve_cost S|H|SM cold|warm COUNT [TOL]";
     let (case, start, count) = match args.as_slice() {
         [_, c, s, n, ..] => (c.as_str(), s.as_str(), n.parse::<usize>()?.max(1)),
         _ => return Err(usage.into()),
@@ -60,6 +60,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let robot = match case {
         "S" => cases::case_s(),
         "H" => cases::case_h(),
+        // Case S with a dead tip moment (2, 1, 0) mN m: not conservative, so its verdict
+        // comes from the linearized dynamics (docs/stability.md).
+        "SM" => {
+            let mut robot = cases::case_s();
+            robot.loads.tip_moment = nalgebra::Vector3::new(2e-3, 1e-3, 0.0);
+            robot
+        }
         _ => return Err(usage.into()),
     };
     let mut options = collocation::Options::default();

@@ -277,3 +277,36 @@ fn a_dead_tip_moment_gets_the_verdict_of_the_tip_compliance_and_of_continuity() 
         }
     }
 }
+
+/// The dynamics verdict of a direct solve is computed once: the equilibrium choice asks for
+/// the verdict of Newton's answer and the end of the solve asks again for the same state,
+/// which gets the kept verdict (one linearization at the answer, not two). It is the
+/// verdict `vibration` finds at the returned state from scratch (its kind: the rate comes
+/// from a longer Arnoldi run there), default settings, case S under a dead tip moment,
+/// cold and warm.
+#[test]
+fn a_dead_moment_verdict_is_computed_once_per_state() {
+    let mut robot = tdcr::cases::case_s();
+    robot.loads.tip_moment = Vector3::new(2e-3, 1e-3, 0.0);
+    let cold = collocation::solve(&robot, &Options::default()).unwrap();
+    let mut warm_robot = robot.clone();
+    warm_robot.loads.tip_moment *= 1.01;
+    let warm = collocation::solve_from(&warm_robot, &Options::default(), &cold).unwrap();
+    // The warm start's test of the predicted step linearizes at the start once more.
+    for (robot, solution, start) in [(&robot, &cold, 0), (&warm_robot, &warm, 1)] {
+        let report = &solution.report;
+        assert_eq!(report.path, tdcr::PathTaken::Direct, "{:?}", report.path);
+        assert_eq!(
+            report.evaluations.jacobian,
+            start + report.newton_steps + 1,
+            "Newton's Jacobians and one at the answer ({start} at the start)"
+        );
+        let fresh = vibration(robot, solution).unwrap().stability;
+        assert_eq!(
+            std::mem::discriminant(&report.stability),
+            std::mem::discriminant(&fresh),
+            "{:?} against {fresh:?}",
+            report.stability
+        );
+    }
+}

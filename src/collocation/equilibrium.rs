@@ -137,12 +137,19 @@ fn linearized_dynamics(
     if system.friction.is_some() {
         return Stability::Unknown { reason: why };
     }
+    // The verdict of this state already computed (the equilibrium choice's, asked again at
+    // the end of the solve), if nothing moved since.
+    if let Some(verdict) = ws.dynamics_verdict() {
+        return verdict;
+    }
     if !ws.linearize(system, x, report) {
         return Stability::Unknown {
             reason: "the Jacobian at the solution is singular or not finite".into(),
         };
     }
-    dynamics::assess(system, x, ws)
+    let verdict = dynamics::assess(system, x, ws);
+    ws.keep_dynamics(verdict.clone());
+    verdict
 }
 
 /// Newton from `x`, given only the chance to converge cleanly ([`clean`]) unless

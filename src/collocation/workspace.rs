@@ -50,6 +50,7 @@ pub(crate) fn spare(mesh: &Mesh, solver: LinearSolver) -> Option<Workspace> {
         workspace.verdict = None;
         workspace.drift = f64::INFINITY;
         workspace.unfactored = false;
+        workspace.dynamics = None;
         workspace.trial.clear();
         Some(workspace)
     })
@@ -79,6 +80,9 @@ pub struct Workspace {
     /// Whether `values` hold a Jacobian [`Workspace::verdict_at`] evaluated but did not
     /// factor (the factors are an earlier Jacobian's).
     pub(super) unfactored: bool,
+    /// The verdict of the linearized dynamics computed with the factors held
+    /// ([`Workspace::keep_dynamics`]; cleared whenever they change).
+    dynamics: Option<Stability>,
 }
 
 impl Workspace {
@@ -102,6 +106,7 @@ impl Workspace {
             verdict: None,
             drift: f64::INFINITY,
             unfactored: false,
+            dynamics: None,
         })
     }
 
@@ -114,6 +119,7 @@ impl Workspace {
     /// Returns false for a zero pivot or a non-finite step.
     pub(super) fn solve(&mut self, report: &mut SolveReport) -> bool {
         self.verdict = None;
+        self.dynamics = None;
         self.unfactored = false;
         for (r, f) in self.rhs.iter_mut().zip(&self.residual) {
             *r = -f;
@@ -254,6 +260,27 @@ impl Workspace {
         let ok = self.solve(&mut report);
         self.verdict = verdict;
         ok
+    }
+
+    /// Keeps `verdict`, the linearized dynamics' verdict computed with the factors held
+    /// (those of the Jacobian [`Workspace::linearize`] evaluated at the last iterate), for
+    /// [`Workspace::dynamics_verdict`].
+    pub(crate) fn keep_dynamics(&mut self, verdict: Stability) {
+        self.dynamics = Some(verdict);
+    }
+
+    /// The verdict [`Workspace::keep_dynamics`] kept, while it still belongs to the last
+    /// iterate: the factors are still those of the Jacobian evaluated there (a new
+    /// factorization clears it) and no step has been taken since (the drift is zero; any
+    /// step or a new Newton run makes it positive or infinite). The equilibrium choice and
+    /// the end of a solve ask for the verdict of the same state; the second gets it here
+    /// instead of a second linearization and Arnoldi run.
+    pub(crate) fn dynamics_verdict(&self) -> Option<Stability> {
+        if self.drift == 0.0 && self.factored && !self.unfactored {
+            self.dynamics.clone()
+        } else {
+            None
+        }
     }
 
     /// Whether the workspace holds the factors of a successful solve.
