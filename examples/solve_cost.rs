@@ -1,5 +1,6 @@
 //! Instructions per default solve, for callgrind (docs/benchmarks.md, "Where a solve's
-//! instructions go"): solves case S or H cold, or warm (a solver that has just solved the
+//! instructions go"): solves case S or H (or SM: S with a dead tip moment, whose verdict
+//! comes from the linearized dynamics) cold, or warm (a solver that has just solved the
 //! case at 0.99 times the tension solves it at full tension from that solution, as `tdcr
 //! bench` does), `count` times inside [`measured`], after one untimed solve of the same kind.
 //!
