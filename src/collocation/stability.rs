@@ -32,6 +32,10 @@ type Fields = [[f64; 6]; NODE];
 /// A 6 x 6 block, row major.
 type Block6 = [[f64; 6]; 6];
 
+// The fields' rows 0..6 are (dp, dtheta) and 6..12 (dv, du): the sweep's blocks Q and the
+// tip rows' columns are taken by these offsets.
+const _: () = assert!(P == 0 && THETA == 3 && V == 6 && U == 9);
+
 /// A root of det Q within this fraction of the rod length from the base counts as at the
 /// base (a singular second variation, not an unstable direction): in a converged state,
 /// rounding moves an exact zero (the neutral direction of a perfectly round buckled
@@ -96,7 +100,6 @@ pub fn assess(values: &[f64], s: &[f64]) -> Stability {
             *value = vu[(r, j)];
         }
     }
-    debug_assert!(P == 0 && THETA == 3 && V == 6 && U == 9);
 
     let mut count = 0;
     let mut first = None;
