@@ -328,7 +328,7 @@ pub(crate) fn run_bordered<B: Border>(
         report.timings.assembly += t.elapsed();
         report.evaluations.jacobian += 1;
         ws.drift = 0.0;
-        if !ok || !ws.values.iter().all(|v| v.is_finite()) {
+        if !ok || !super::workspace::all_finite(&ws.values) {
             return (Termination::NonFinite, worst(ws, border));
         }
         if !ws.solve(report) {

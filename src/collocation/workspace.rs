@@ -25,6 +25,20 @@ thread_local! {
     static KEPT: RefCell<Vec<(Mesh, LinearSolver, Workspace)>> = const { RefCell::new(Vec::new()) };
 }
 
+/// Whether every entry of `values` is finite, checked in fixed-width chunks that the
+/// compiler vectorizes (the Jacobian's check after each assembly): 0 x is (signed) zero for
+/// a finite x and NaN for an infinite or NaN one, and a sum with a NaN stays NaN.
+pub(crate) fn all_finite(values: &[f64]) -> bool {
+    let mut chunks = values.chunks_exact(8);
+    let mut sums = [0.0f64; 8];
+    for chunk in &mut chunks {
+        for (sum, x) in sums.iter_mut().zip(chunk) {
+            *sum += x * 0.0;
+        }
+    }
+    sums.iter().all(|&sum| sum == 0.0) && chunks.remainder().iter().all(|x| x.is_finite())
+}
+
 /// Keeps `workspace` (built for `mesh` and `solver`) on this thread for a later solve on
 /// the same mesh ([`spare`]); the least recently kept goes when there are more than
 /// [`SPARE`].
@@ -174,7 +188,7 @@ impl Workspace {
         report.evaluations.jacobian += 1;
         report.evaluations.equations += system.rate_evaluations();
         self.drift = 0.0;
-        ok && self.values.iter().chain(&self.residual).all(|v| v.is_finite()) && self.solve(report)
+        ok && all_finite(&self.values) && all_finite(&self.residual) && self.solve(report)
     }
 
     /// The residual of the last [`Workspace::linearize`] or Newton run (its final iterate).
@@ -221,7 +235,7 @@ impl Workspace {
         self.verdict = None;
         self.drift = 0.0;
         self.unfactored = true;
-        if !ok || !self.values.iter().all(|v| v.is_finite()) {
+        if !ok || !all_finite(&self.values) {
             return None;
         }
         Some(self.verdict(assess))
@@ -321,5 +335,25 @@ impl Workspace {
         }
         self.linear.solve_transposed(c, &mut self.step);
         self.step.iter().all(|x| x.is_finite()).then_some(&self.step[..])
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::all_finite;
+
+    /// Every position of an infinity or a NaN is seen, inside the 8-wide chunks and in the
+    /// remainder; finite values, huge ones included, pass.
+    #[test]
+    fn all_finite_sees_every_non_finite_entry() {
+        let finite: Vec<f64> = (0..21).map(|i| (i as f64 - 10.0) * 1e300).collect();
+        assert!(all_finite(&finite) && all_finite(&[]));
+        for bad in [f64::INFINITY, f64::NEG_INFINITY, f64::NAN] {
+            for at in 0..finite.len() {
+                let mut v = finite.clone();
+                v[at] = bad;
+                assert!(!all_finite(&v), "{bad} at {at}");
+            }
+        }
     }
 }
