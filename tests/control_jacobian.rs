@@ -60,6 +60,27 @@ fn solver_jacobian_equals_the_stateless_columns() {
 /// After a warm solve that converged by chord steps alone (1 % more tension), the solver's
 /// Jacobian factors the Jacobian its stability verdict evaluated at the solution instead of
 /// assembling it again: the columns equal the stateless ones (which assemble it) to rounding.
+/// The tension columns are solved for the tip alone (no back substitution through the
+/// other nodes); they are bitwise the tip of the full solve for every node state.
+#[test]
+fn tension_columns_are_the_tip_of_the_full_solve() {
+    for robot in [cases::case_s(), cases::case_h()] {
+        let solution = tdcr::solve(&robot, &Options::default()).unwrap();
+        let wrt: Vec<Parameter> = (0..robot.tendons.len()).map(Parameter::Tension).collect();
+        let j = tip_jacobian(&robot, &solution, &wrt).unwrap();
+        let mut sens = tdcr::collocation::sensitivity::Sensitivity::new(&robot, &solution).unwrap();
+        for (i, _) in wrt.iter().enumerate() {
+            let full = sens.tension(i).unwrap();
+            let tip = full.last().unwrap().pose();
+            // Bitwise: the same factors, the same replay, the same last-node substitution.
+            assert_eq!(
+                j.column(i).clone_owned(),
+                tdcr::nalgebra::DMatrix::from_column_slice(6, 1, tip.as_slice())
+            );
+        }
+    }
+}
+
 #[test]
 fn jacobian_after_a_chord_only_warm_solve_equals_the_stateless_one() {
     for robot in [cases::case_s(), cases::case_h()] {
