@@ -81,6 +81,26 @@ fn tension_columns_are_the_tip_of_the_full_solve() {
     }
 }
 
+/// With the sparse LU as the solver's linear solver, the tip-only solve of the tension
+/// columns takes the last node of a full sparse solve: the same columns as the structured
+/// elimination's.
+#[test]
+fn tension_columns_from_the_sparse_lu_equal_the_structured_ones() {
+    let robot = cases::case_h();
+    let options = Options {
+        linear_solver: tdcr::collocation::LinearSolver::SparseLu,
+        ..Options::default()
+    };
+    let mut solver = Solver::new(options);
+    let solution = solver.solve(&robot).unwrap();
+    let wrt: Vec<Parameter> = (0..robot.tendons.len()).map(Parameter::Tension).collect();
+    let sparse = solver.tip_jacobian(&robot, &solution, &wrt).unwrap();
+    let blocks = tip_jacobian(&robot, &solution, &wrt).unwrap();
+    // 1e-9: two factorizations of one matrix with other pivots, rounding times the
+    // condition number (~1e5, tests/adjoint.rs).
+    assert!(relative(&sparse, &blocks) <= 1e-9, "{sparse} vs {blocks}");
+}
+
 #[test]
 fn jacobian_after_a_chord_only_warm_solve_equals_the_stateless_one() {
     for robot in [cases::case_s(), cases::case_h()] {
