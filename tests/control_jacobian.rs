@@ -60,6 +60,47 @@ fn solver_jacobian_equals_the_stateless_columns() {
 /// After a warm solve that converged by chord steps alone (1 % more tension), the solver's
 /// Jacobian factors the Jacobian its stability verdict evaluated at the solution instead of
 /// assembling it again: the columns equal the stateless ones (which assemble it) to rounding.
+/// The tension columns are solved for the tip alone (no back substitution through the
+/// other nodes); they are bitwise the tip of the full solve for every node state.
+#[test]
+fn tension_columns_are_the_tip_of_the_full_solve() {
+    for robot in [cases::case_s(), cases::case_h()] {
+        let solution = tdcr::solve(&robot, &Options::default()).unwrap();
+        let wrt: Vec<Parameter> = (0..robot.tendons.len()).map(Parameter::Tension).collect();
+        let j = tip_jacobian(&robot, &solution, &wrt).unwrap();
+        let mut sens = tdcr::collocation::sensitivity::Sensitivity::new(&robot, &solution).unwrap();
+        for (i, _) in wrt.iter().enumerate() {
+            let full = sens.tension(i).unwrap();
+            let tip = full.last().unwrap().pose();
+            // Bitwise: the same factors, the same replay, the same last-node substitution.
+            assert_eq!(
+                j.column(i).clone_owned(),
+                tdcr::nalgebra::DMatrix::from_column_slice(6, 1, tip.as_slice())
+            );
+        }
+    }
+}
+
+/// With the sparse LU as the solver's linear solver, the tip-only solve of the tension
+/// columns takes the last node of a full sparse solve: the same columns as the structured
+/// elimination's.
+#[test]
+fn tension_columns_from_the_sparse_lu_equal_the_structured_ones() {
+    let robot = cases::case_h();
+    let options = Options {
+        linear_solver: tdcr::collocation::LinearSolver::SparseLu,
+        ..Options::default()
+    };
+    let mut solver = Solver::new(options);
+    let solution = solver.solve(&robot).unwrap();
+    let wrt: Vec<Parameter> = (0..robot.tendons.len()).map(Parameter::Tension).collect();
+    let sparse = solver.tip_jacobian(&robot, &solution, &wrt).unwrap();
+    let blocks = tip_jacobian(&robot, &solution, &wrt).unwrap();
+    // 1e-9: two factorizations of one matrix with other pivots, rounding times the
+    // condition number (~1e5, tests/adjoint.rs).
+    assert!(relative(&sparse, &blocks) <= 1e-9, "{sparse} vs {blocks}");
+}
+
 #[test]
 fn jacobian_after_a_chord_only_warm_solve_equals_the_stateless_one() {
     for robot in [cases::case_s(), cases::case_h()] {

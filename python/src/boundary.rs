@@ -140,20 +140,23 @@ pub fn rows<T: Send>(
     job: impl Fn(usize) -> Result<T, Failure> + Sync,
     sink: impl FnMut(usize, Result<T, Failure>) -> PyResult<()>,
 ) -> PyResult<()> {
-    rows_with(py, count, || (), |(), row| job(row), sink)
+    rows_with(py, count, |_| (), || (), |(), (), row| job(row), sink)
 }
 
 /// As [`rows`], with a state made by `init` for each piece of work a pool thread takes
 /// (rayon's `map_init`) and lent to `job` for every row of it: a `tdcr::Solver`, whose
-/// workspace is then built once per thread and chunk instead of once per row.
+/// workspace is then built once per thread and chunk instead of once per row; and with
+/// `prepare(rows)` run with the GIL held before each chunk of rows, its value lent to
+/// `job` for the chunk's rows (the chunk's inputs read from Python objects: `Rows::chunk`).
 ///
 /// # Errors
 /// As [`rows`].
-pub fn rows_with<S, T: Send>(
+pub fn rows_with<S, C: Sync, T: Send>(
     py: Python<'_>,
     count: usize,
+    mut prepare: impl FnMut(std::ops::Range<usize>) -> C,
     init: impl Fn() -> S + Sync + Send,
-    job: impl Fn(&mut S, usize) -> Result<T, Failure> + Sync,
+    job: impl Fn(&mut S, &C, usize) -> Result<T, Failure> + Sync,
     mut sink: impl FnMut(usize, Result<T, Failure>) -> PyResult<()>,
 ) -> PyResult<()> {
     use rayon::prelude::*;
@@ -162,13 +165,14 @@ pub fn rows_with<S, T: Send>(
     let (mut start, mut size) = (0, threads);
     while start < count {
         let end = count.min(start + size);
+        let chunk = prepare(start..end);
         let began = Instant::now();
         let results: Vec<Result<T, Failure>> = py.detach(|| {
             pool.install(|| {
                 (start..end)
                     .into_par_iter()
                     .map_init(&init, |state, row| {
-                        match catch_unwind(AssertUnwindSafe(|| job(state, row))) {
+                        match catch_unwind(AssertUnwindSafe(|| job(state, &chunk, row))) {
                             Ok(result) => result,
                             Err(payload) => Err(Failure::Panic(panic_text(payload))),
                         }
@@ -177,6 +181,7 @@ pub fn rows_with<S, T: Send>(
             })
         });
         let took = began.elapsed().as_secs_f64();
+        drop(chunk);
         for (row, result) in (start..end).zip(results) {
             sink(row, result)?;
         }

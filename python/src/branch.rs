@@ -180,7 +180,7 @@ pub fn sweep(
     if rows.len() == 0 {
         return PySweep::new(py, Vec::new());
     }
-    let ranges = rows.ranges().map_err(to_py)?;
+    let ranges = rows.ranges(py)?;
     let mut sweep = Sweep::new(&ranges, SweepSolver::Collocation(settings.collocation), None);
     let mut steps = Vec::new();
     let mut failure = None;

@@ -3,6 +3,7 @@
 //! number is meant, and names the field it was reading in its `tdcr.InvalidInput`.
 
 use crate::errors::invalid;
+use numpy::PyArrayMethods;
 use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyDict, PyFloat, PyInt, PyList, PyString, PyTuple};
 use toml::{Table, Value};
@@ -205,9 +206,13 @@ fn float_array<'py>(value: &Bound<'py, PyAny>, ndim: usize, shape: &str, what: &
 /// A 1-D sequence of numbers (list, tuple, numpy array; no booleans) as f64 values; `what`
 /// names it.
 pub fn numbers(value: &Bound<'_, PyAny>, what: &str) -> PyResult<Vec<f64>> {
-    let array = float_array(value, 1, "a 1-D sequence", what)?;
-    let view: numpy::PyReadonlyArray1<f64> = array.extract()?;
-    Ok(view.as_array().to_vec())
+    Ok(number_array(value, what)?.readonly().as_array().to_vec())
+}
+
+/// As [`numbers`], as a float64 array: the value itself when it is one (not copied), else
+/// its conversion.
+pub fn number_array<'py>(value: &Bound<'py, PyAny>, what: &str) -> PyResult<Bound<'py, numpy::PyArray1<f64>>> {
+    Ok(float_array(value, 1, "a 1-D sequence", what)?.cast_into::<numpy::PyArray1<f64>>()?)
 }
 
 /// [`number`] of an optional value (None stays None).

@@ -5,10 +5,9 @@
 use crate::boundary;
 use crate::errors::invalid;
 use crate::robot::PyRobot;
-use numpy::IntoPyArray;
-use numpy::ndarray::{Array1, Array2, Array3};
+use numpy::{PyArray1, PyArray2, PyArray3, PyArrayMethods, PyUntypedArrayMethods};
 use pyo3::prelude::*;
-use pyo3::types::{PyDict, PyList, PyString};
+use pyo3::types::{PyDict, PyList, PySlice, PyString};
 use std::time::{Duration, Instant};
 use tdcr::io::row_outputs::{RowOutputs, quaternion, tip_error_estimate};
 
@@ -22,104 +21,117 @@ struct Outcome {
     points: Vec<[f64; 3]>,
 }
 
-/// The columns of `solve_parameters`, filled row by row: only the columns asked for, each
-/// a flat array (about 34 bytes per row without the optional columns: 10^6 rows take 34
-/// MB), failed rows' messages apart.
-struct Table {
+/// The columns of `solve_parameters`: only the columns asked for, each a numpy array of
+/// all the rows allocated before the first row is solved (zeroed pages, which take memory
+/// as they are written) and filled as the rows finish, so that nothing is copied or grown
+/// on the way (about 34 bytes a row without the optional columns: 10^6 rows take 34 MB,
+/// and 16 MB more for the two string lists built at the end).
+struct Table<'py> {
     outputs: RowOutputs,
-    /// Row-major (rows, 3).
-    tips: Vec<f64>,
-    converged: Vec<bool>,
-    iterations: Vec<i64>,
+    /// The rows written so far.
+    done: usize,
+    converged: Bound<'py, PyArray1<bool>>,
+    /// (rows, 3).
+    tips: Bound<'py, PyArray2<f64>>,
+    iterations: Bound<'py, PyArray1<i64>>,
     /// Each row's verdict as an index into `verdicts` (`u8::MAX`: failed).
     stability: Vec<u8>,
     /// The distinct verdicts met.
     verdicts: Vec<&'static str>,
     /// The failed rows and their messages.
     errors: Vec<(usize, String)>,
-    /// Row-major (rows, 4), when asked.
-    orientation: Vec<f64>,
-    error_estimate: Vec<f64>,
-    /// Row-major (rows, K, 3), when asked.
-    points: Vec<f64>,
+    /// (rows, 4), when asked.
+    orientation: Option<Bound<'py, PyArray2<f64>>>,
+    /// (rows,), when asked.
+    error_estimate: Option<Bound<'py, PyArray1<f64>>>,
+    /// (rows, K, 3), when asked.
+    points: Option<Bound<'py, PyArray3<f64>>>,
 }
 
-impl Table {
-    fn new(outputs: RowOutputs) -> Self {
+impl<'py> Table<'py> {
+    /// The columns of `rows` rows.
+    fn new(py: Python<'py>, outputs: RowOutputs, rows: usize) -> Self {
+        let k = outputs.points;
         Table {
             outputs,
-            tips: Vec::new(),
-            converged: Vec::new(),
-            iterations: Vec::new(),
-            stability: Vec::new(),
+            done: 0,
+            converged: PyArray1::zeros(py, rows, false),
+            tips: PyArray2::zeros(py, [rows, 3], false),
+            iterations: PyArray1::zeros(py, rows, false),
+            stability: Vec::with_capacity(rows),
             verdicts: Vec::new(),
             errors: Vec::new(),
-            orientation: Vec::new(),
-            error_estimate: Vec::new(),
-            points: Vec::new(),
+            orientation: outputs.orientation.then(|| PyArray2::zeros(py, [rows, 4], false)),
+            error_estimate: outputs.error_estimate.then(|| PyArray1::zeros(py, rows, false)),
+            points: (k > 0).then(|| PyArray3::zeros(py, [rows, k, 3], false)),
         }
     }
 
-    /// The rows so far.
-    fn len(&self) -> usize {
-        self.converged.len()
-    }
-
-    /// Appends a row: the outcome, or NaN and the message of a failed one.
-    fn push(&mut self, result: Result<Outcome, String>) {
-        let k = self.outputs.points;
-        match result {
-            Ok(o) => {
-                self.tips.extend(o.tip);
-                self.converged.push(true);
-                self.iterations.push(o.iterations);
-                let code = match self.verdicts.iter().position(|&v| v == o.stability) {
-                    Some(i) => i,
-                    None => {
-                        self.verdicts.push(o.stability);
-                        self.verdicts.len() - 1
-                    }
-                };
-                self.stability.push(u8::try_from(code).unwrap_or(u8::MAX));
-                if self.outputs.orientation {
-                    self.orientation.extend(o.orientation);
-                }
-                if self.outputs.error_estimate {
-                    self.error_estimate.push(o.error_estimate);
-                }
-                self.points.extend(o.points.iter().flatten());
+    /// Writes the next row: the outcome, or NaN and the message of a failed one.
+    fn push(&mut self, result: Result<Outcome, String>) -> PyResult<()> {
+        let (i, k) = (self.done, self.outputs.points);
+        let o = result.unwrap_or_else(|message| {
+            self.errors.push((i, message));
+            Outcome {
+                tip: [f64::NAN; 3],
+                iterations: -1,
+                stability: "",
+                orientation: [f64::NAN; 4],
+                error_estimate: f64::NAN,
+                points: vec![[f64::NAN; 3]; k],
             }
-            Err(message) => {
-                self.errors.push((self.len(), message));
-                self.tips.extend([f64::NAN; 3]);
-                self.converged.push(false);
-                self.iterations.push(-1);
-                self.stability.push(u8::MAX);
-                if self.outputs.orientation {
-                    self.orientation.extend([f64::NAN; 4]);
+        });
+        let solved = o.iterations >= 0;
+        self.converged.readwrite().as_slice_mut()?[i] = solved;
+        self.tips.readwrite().as_slice_mut()?[3 * i..3 * i + 3].copy_from_slice(&o.tip);
+        self.iterations.readwrite().as_slice_mut()?[i] = o.iterations;
+        let code = if solved {
+            match self.verdicts.iter().position(|&v| v == o.stability) {
+                Some(c) => c,
+                None => {
+                    self.verdicts.push(o.stability);
+                    self.verdicts.len() - 1
                 }
-                if self.outputs.error_estimate {
-                    self.error_estimate.push(f64::NAN);
-                }
-                self.points.extend(std::iter::repeat_n(f64::NAN, 3 * k));
+            }
+        } else {
+            usize::from(u8::MAX)
+        };
+        self.stability.push(u8::try_from(code).unwrap_or(u8::MAX));
+        if let Some(q) = &self.orientation {
+            q.readwrite().as_slice_mut()?[4 * i..4 * i + 4].copy_from_slice(&o.orientation);
+        }
+        if let Some(e) = &self.error_estimate {
+            e.readwrite().as_slice_mut()?[i] = o.error_estimate;
+        }
+        if let Some(p) = &self.points {
+            let mut p = p.readwrite();
+            let row = &mut p.as_slice_mut()?[3 * k * i..3 * k * (i + 1)];
+            for (out, point) in row.chunks_exact_mut(3).zip(&o.points) {
+                out.copy_from_slice(point);
             }
         }
+        self.done += 1;
+        Ok(())
     }
 
-    /// The table as `solve_parameters` returns it (the arrays moved, not copied; the
-    /// string lists hold one string object per distinct value).
-    fn into_dict(self, py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
-        let n = self.len();
-        let shape = |e: numpy::ndarray::ShapeError| invalid(e.to_string());
+    /// The table as `solve_parameters` returns it: the arrays themselves (their first
+    /// `done` rows, a view, when the run stopped early); the string lists hold one string
+    /// object per distinct value.
+    fn into_dict(self) -> PyResult<Bound<'py, PyDict>> {
+        let py = self.tips.py();
+        let n = self.done;
+        let full = self.tips.shape()[0] == n;
+        let rows = |array: Bound<'py, PyAny>| -> PyResult<Bound<'py, PyAny>> {
+            if full {
+                Ok(array)
+            } else {
+                array.get_item(PySlice::new(py, 0, isize::try_from(n).unwrap_or(isize::MAX), 1))
+            }
+        };
         let d = PyDict::new(py);
-        d.set_item("converged", Array1::from(self.converged).into_pyarray(py))?;
-        d.set_item(
-            "tip_position",
-            Array2::from_shape_vec((n, 3), self.tips)
-                .map_err(shape)?
-                .into_pyarray(py),
-        )?;
-        d.set_item("iterations", Array1::from(self.iterations).into_pyarray(py))?;
+        d.set_item("converged", rows(self.converged.into_any())?)?;
+        d.set_item("tip_position", rows(self.tips.into_any())?)?;
+        d.set_item("iterations", rows(self.iterations.into_any())?)?;
         let empty = PyString::new(py, "");
         let verdicts: Vec<Bound<'_, PyString>> = self.verdicts.iter().map(|v| PyString::new(py, v)).collect();
         let stability = self
@@ -132,18 +144,15 @@ impl Table {
             Some((_, message)) => PyString::new(py, &message),
             None => empty.clone(),
         });
-        d.set_item("error", PyList::new(py, messages.collect::<Vec<_>>())?)?;
-        if self.outputs.orientation {
-            let q = Array2::from_shape_vec((n, 4), self.orientation).map_err(shape)?;
-            d.set_item("tip_orientation", q.into_pyarray(py))?;
+        d.set_item("error", PyList::new(py, messages)?)?;
+        if let Some(q) = self.orientation {
+            d.set_item("tip_orientation", rows(q.into_any())?)?;
         }
-        if self.outputs.error_estimate {
-            d.set_item("error_estimate", Array1::from(self.error_estimate).into_pyarray(py))?;
+        if let Some(e) = self.error_estimate {
+            d.set_item("error_estimate", rows(e.into_any())?)?;
         }
-        if self.outputs.points > 0 {
-            let k = self.outputs.points;
-            let points = Array3::from_shape_vec((n, k, 3), self.points).map_err(shape)?;
-            d.set_item("points", points.into_pyarray(py))?;
+        if let Some(p) = self.points {
+            d.set_item("points", rows(p.into_any())?)?;
         }
         Ok(d)
     }
@@ -246,15 +255,16 @@ pub fn solve_parameters<'py>(
         .check()
         .map_err(|e| invalid(format!("solve_parameters: points={points}: {e}")))?;
     let (batch, options) = crate::batch_robots("solve_parameters", robot.as_any(), Some(parameters), options)?;
-    let mut table = Table::new(outputs);
-    let mut bar = Progress::new(py, progress)?;
     let total = batch.len();
+    let mut table = Table::new(py, outputs, total);
+    let mut bar = Progress::new(py, progress)?;
     let run = boundary::rows_with(
         py,
         total,
+        |range| batch.chunk(py, range),
         || tdcr::Solver::new(options.clone()),
-        |solver, i| {
-            let s = batch.solve(solver, i)?;
+        |solver, chunk, i| {
+            let s = batch.solve(solver, chunk, i)?;
             let p = s.tip_position();
             Ok(Outcome {
                 tip: [p.x, p.y, p.z],
@@ -270,15 +280,15 @@ pub fn solve_parameters<'py>(
             })
         },
         |i, result| {
-            table.push(result.map_err(|failure| failure.to_string()));
+            table.push(result.map_err(|failure| failure.to_string()))?;
             bar.update(py, i + 1, total, i + 1 == total)
         },
     );
     match run {
-        Ok(()) => table.into_dict(py),
+        Ok(()) => table.into_dict(),
         Err(e) => {
-            let done = table.len();
-            Err(boundary::with_partial(py, e, done, table.into_dict(py)?.into_any()))
+            let done = table.done;
+            Err(boundary::with_partial(py, e, done, table.into_dict()?.into_any()))
         }
     }
 }

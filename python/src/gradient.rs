@@ -201,11 +201,13 @@ pub fn linearize(
     }
     let mut robots = Vec::with_capacity(rows.len());
     let mut solutions = Vec::with_capacity(rows.len());
-    boundary::rows(
+    boundary::rows_with(
         py,
         rows.len(),
-        |row| -> Result<(Robot, Solution), Failure> {
-            let r = rows.robot(row)?;
+        |range| rows.chunk(py, range),
+        || (),
+        |(), chunk, row| -> Result<(Robot, Solution), Failure> {
+            let r = rows.robot(chunk, row)?;
             let s = collocation::solve(&r, &settings.collocation)?;
             Ok((r, s))
         },

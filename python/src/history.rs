@@ -3,7 +3,6 @@
 
 use crate::boundary;
 use crate::branch::{step_item, tip_rows};
-use crate::errors::to_py;
 use crate::options::Use;
 use crate::robot::{PyRobot, Rows};
 use crate::solution::PySolution;
@@ -116,7 +115,7 @@ pub fn history(
     if rows.len() == 0 {
         return PyHistory::new(py, Vec::new());
     }
-    let mut ranges = rows.ranges().map_err(to_py)?;
+    let mut ranges = rows.ranges(py)?;
     if up_down {
         ranges = ranges.up_down();
     }

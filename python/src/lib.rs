@@ -95,13 +95,22 @@ impl Batch {
         }
     }
 
-    /// Solves robot `i` by collocation with `solver` (its options; its workspace reused
-    /// from the rows it solved before): bitwise `tdcr::solve`'s answer, as `tdcr batch`
-    /// (`tdcr::collocation::solve_rows`) solves a row.
-    fn solve(&self, solver: &mut tdcr::Solver, i: usize) -> tdcr::Result<Solution> {
+    /// The inputs of the rows `range` for [`Batch::solve`] without the GIL (parameter
+    /// columns: their values copied; a list: nothing).
+    fn chunk(&self, py: Python<'_>, range: std::ops::Range<usize>) -> robot::Chunk {
+        match self {
+            Batch::List(_) => robot::Chunk::default(),
+            Batch::Rows(rows) => rows.chunk(py, range),
+        }
+    }
+
+    /// Solves robot `i` (one of `chunk`'s rows) by collocation with `solver` (its options;
+    /// its workspace reused from the rows it solved before): bitwise `tdcr::solve`'s answer,
+    /// as `tdcr batch` (`tdcr::collocation::solve_rows`) solves a row.
+    fn solve(&self, solver: &mut tdcr::Solver, chunk: &robot::Chunk, i: usize) -> tdcr::Result<Solution> {
         match self {
             Batch::List(list) => solver.solve(&list[i]),
-            Batch::Rows(rows) => solver.solve(&rows.robot(i)?),
+            Batch::Rows(rows) => solver.solve(&rows.robot(chunk, i)?),
         }
     }
 }
@@ -191,8 +200,9 @@ fn solve_batch(
     let run = boundary::rows_with(
         py,
         batch.len(),
+        |range| batch.chunk(py, range),
         || tdcr::Solver::new(options.clone()),
-        |solver, i| Ok(batch.solve(solver, i)?),
+        |solver, chunk, i| Ok(batch.solve(solver, chunk, i)?),
         |i, result| {
             match result {
                 Ok(solution) => out.push(Py::new(py, PySolution { solution })?.into_any()),

@@ -4,7 +4,7 @@
 
 use crate::convert::Walk;
 use crate::errors::{file_error, invalid, to_py};
-use numpy::{PyArray1, PyArray2};
+use numpy::{PyArray1, PyArray2, PyArrayMethods, PyUntypedArrayMethods};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use tdcr::Parameter;
@@ -103,11 +103,25 @@ pub fn from_library(robot: tdcr::Robot) -> PyResult<PyRobot> {
 /// The robots of a batch or sweep given as one robot and parameter columns (`{name:
 /// array}`, names as in `tdcr batch` headers, every array 1-D of one length): row k is the
 /// base robot with row k's values set. Rows are built when asked for, so a long batch does
-/// not hold all its robots at once.
+/// not hold all its robots at once; the columns are the caller's float64 arrays themselves
+/// (converted only when given as another type), read a chunk of rows at a time with the
+/// GIL held ([`Rows::chunk`]), so that a batch holds no copy of its inputs.
 pub struct Rows {
     base: tdcr::Robot,
-    columns: Vec<(Parameter, Vec<f64>)>,
+    columns: Vec<(Parameter, Py<PyArray1<f64>>)>,
     count: usize,
+}
+
+/// The parameter values of a run of consecutive rows, copied from a batch's columns
+/// ([`Rows::chunk`]) for worker threads that run without the GIL.
+#[derive(Default)]
+pub struct Chunk {
+    /// The first row.
+    start: usize,
+    /// The number of rows.
+    len: usize,
+    /// Column-major: column c's value of row `start + i` at `c * len + i`.
+    values: Vec<f64>,
 }
 
 impl Rows {
@@ -119,17 +133,17 @@ impl Rows {
             let name: String = key.extract().map_err(|_| invalid("parameter names must be strings"))?;
             let parameter: Parameter = name.parse().map_err(invalid)?;
             parameter.check(&base.file.robot).map_err(to_py)?;
-            let values = crate::convert::numbers(&value, &format!("parameter `{name}`"))?;
+            let values = crate::convert::number_array(&value, &format!("parameter `{name}`"))?;
+            let len = values.shape()[0];
             match count {
-                Some(n) if n != values.len() => {
+                Some(n) if n != len => {
                     return Err(invalid(format!(
-                        "parameter `{name}` has {} values but another has {n}: give every parameter one value per row",
-                        values.len()
+                        "parameter `{name}` has {len} values but another has {n}: give every parameter one value per row"
                     )));
                 }
-                _ => count = Some(values.len()),
+                _ => count = Some(len),
             }
-            columns.push((parameter, values));
+            columns.push((parameter, values.unbind()));
         }
         Ok(Rows {
             base: base.file.robot.clone(),
@@ -148,22 +162,44 @@ impl Rows {
     ///
     /// # Errors
     /// As `Ranges::new` (not for rows `new` checked).
-    pub fn ranges(&self) -> tdcr::Result<tdcr::analysis::sweep::Ranges> {
-        let inputs = self
-            .columns
-            .iter()
-            .map(|(p, values)| (tdcr::analysis::sweep::Input::Parameter(*p), values.clone()))
-            .collect();
-        tdcr::analysis::sweep::Ranges::new(self.base.clone(), inputs)
+    pub fn ranges(&self, py: Python<'_>) -> PyResult<tdcr::analysis::sweep::Ranges> {
+        let mut inputs = Vec::with_capacity(self.columns.len());
+        for (p, values) in &self.columns {
+            let values = values.bind(py).readonly().as_array().to_vec();
+            inputs.push((tdcr::analysis::sweep::Input::Parameter(*p), values));
+        }
+        tdcr::analysis::sweep::Ranges::new(self.base.clone(), inputs).map_err(to_py)
     }
 
-    /// The robot of row `row` (< `len()`).
+    /// The values of rows `range` (within `0..len()`), copied for [`Rows::robot`].
+    pub fn chunk(&self, py: Python<'_>, range: std::ops::Range<usize>) -> Chunk {
+        let mut values = Vec::with_capacity(self.columns.len() * range.len());
+        for (_, column) in &self.columns {
+            let column = column.bind(py).readonly();
+            let view = column.as_array();
+            values.extend(range.clone().map(|row| view[row]));
+        }
+        Chunk {
+            start: range.start,
+            len: range.len(),
+            values,
+        }
+    }
+
+    /// The robot of row `row`, one of `chunk`'s rows.
     ///
     /// # Errors
     /// As `Parameter::apply_all` (not for parameters `new` checked).
-    pub fn robot(&self, row: usize) -> tdcr::Result<tdcr::Robot> {
+    pub fn robot(&self, chunk: &Chunk, row: usize) -> tdcr::Result<tdcr::Robot> {
+        debug_assert!((chunk.start..chunk.start + chunk.len).contains(&row));
+        let i = row - chunk.start;
         let mut robot = self.base.clone();
-        Parameter::apply_all(&mut robot, self.columns.iter().map(|(p, values)| (*p, values[row])))?;
+        let values = self
+            .columns
+            .iter()
+            .enumerate()
+            .map(|(c, (p, _))| (*p, chunk.values[c * chunk.len + i]));
+        Parameter::apply_all(&mut robot, values)?;
         Ok(robot)
     }
 }

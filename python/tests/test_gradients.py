@@ -3,6 +3,8 @@ sensitivities, and against finite differences of full solves (torch.autograd.gra
 jax.test_util.check_grads) in double precision. The torch and jax tests are skipped
 without those extras (.ci/extras runs them)."""
 
+import re
+
 import numpy as np
 import pytest
 
@@ -150,8 +152,11 @@ def four_straight():
     `routing_offset` needs): the prototype's robot file without its last (helical) tendon."""
     text = tdcr.cases.prototype().to_toml()
     head, _, last = text.rpartition("[[tendon]]")
-    rest = last.split("\n[", 1)
-    return tdcr.Robot.from_toml(head + ("[" + rest[1] if len(rest) > 1 else ""))
+    # The tables after the last tendon's own ([tendon.routing] is part of it).
+    after = re.search(r"\n\[(?!tendon\.)", last)
+    robot = tdcr.Robot.from_toml(head + (last[after.start() :] if after else ""))
+    assert robot.tendon_count == 4 and "helical" not in robot.to_toml()
+    return robot
 
 
 def test_torch_gradcheck_on_pull_ins_and_routing_offsets():
@@ -160,17 +165,26 @@ def test_torch_gradcheck_on_pull_ins_and_routing_offsets():
 
     r = four_straight()
     # Pull-ins in mm and offsets in cm, so that gradcheck's step (1e-6) is a relative step.
+    # The two apart: a taut displacement-controlled tendon's offset has no derivative (its
+    # pull-in holds its path length, which the offset moves), so the offsets are taken
+    # under tensions.
     pull = torch.tensor([[5.0, 0.0, -3.0, 0.0], [4.0, -2.0, 0.0, 0.0]], dtype=torch.float64, requires_grad=True)
     offsets = torch.tensor(
         [[0.8, 0.0], [0.0, 0.8], [-0.8, 0.0], [0.0, -0.8]], dtype=torch.float64, requires_grad=True
     )
+    tension = torch.tensor([1.5, 0.0, 0.7, 0.3], dtype=torch.float64)
 
-    def shape(q, o):
-        out = tt.solve(r, displacement=q * 1e-3, routing_offset=o * 1e-2, samples=[0.1], **OPTIONS)
+    def pulled(q):
+        out = tt.solve(r, displacement=q * 1e-3, samples=[0.1], **OPTIONS)
+        return out.tip_position, out.points
+
+    def routed(o):
+        out = tt.solve(r, tension=tension, routing_offset=o * 1e-2, samples=[0.1], **OPTIONS)
         return out.tip_position, out.points
 
     # Tolerances as test_torch_gradcheck_on_tensions_loads_and_youngs_modulus.
-    assert torch.autograd.gradcheck(shape, (pull, offsets), eps=1e-6, atol=1e-6, rtol=1e-4)
+    assert torch.autograd.gradcheck(pulled, (pull,), eps=1e-6, atol=1e-6, rtol=1e-4)
+    assert torch.autograd.gradcheck(routed, (offsets,), eps=1e-6, atol=1e-6, rtol=1e-4)
     with pytest.raises(ValueError, match="not both"):
         tt.solve(r, tension=torch.zeros(4, dtype=torch.float64), displacement=pull[0])
 
@@ -184,12 +198,17 @@ def test_jax_check_grads_on_pull_ins_and_routing_offsets():
     import tdcr.jax as tj
 
     r = four_straight()
+    tension = jnp.array([1.5, 0.0, 0.7, 0.3])
 
-    def f(q, o):
-        out = tj.solve(r, displacement=q * 1e-3, routing_offset=o * 1e-2, **OPTIONS)
-        return out.tip_position
+    def pulled(q):
+        return tj.solve(r, displacement=q * 1e-3, **OPTIONS).tip_position
+
+    def routed(o):
+        return tj.solve(r, tension=tension, routing_offset=o * 1e-2, **OPTIONS).tip_position
 
     q = jnp.array([5.0, 0.0, -3.0, 0.0])
     o = jnp.array([[0.8, 0.0], [0.0, 0.8], [-0.8, 0.0], [0.0, -0.8]])
-    # Tolerances as the torch test (finite differences of full solves, step 1e-6).
-    check_grads(f, (q, o), order=1, modes=["rev"], eps=1e-6, atol=1e-6, rtol=1e-4)
+    # Tolerances as the torch test (finite differences of full solves, step 1e-6); the
+    # pull-ins and the offsets apart, as there.
+    check_grads(pulled, (q,), order=1, modes=["rev"], eps=1e-6, atol=1e-6, rtol=1e-4)
+    check_grads(routed, (o,), order=1, modes=["rev"], eps=1e-6, atol=1e-6, rtol=1e-4)

@@ -326,6 +326,17 @@ impl Workspace {
         self.step.iter().all(|x| x.is_finite()).then_some(&self.step[..])
     }
 
+    /// The last node's 12 unknowns of [`Workspace::solve_again`]'s solution, without
+    /// solving for the other nodes' (the tip's derivatives alone). None without factors or
+    /// for a non-finite result.
+    pub fn solve_again_last(&mut self, rhs: &[f64]) -> Option<[f64; crate::collocation::unknowns::NODE]> {
+        if !self.factored {
+            return None;
+        }
+        let x = self.linear.solve_again_last(rhs, &mut self.step);
+        x.iter().all(|x| x.is_finite()).then_some(x)
+    }
+
     /// Solves J^T y = c with the same factorization as [`Workspace::solve_again`]: the
     /// adjoint solve behind gradients of outputs (`collocation/sensitivity/adjoint.rs`).
     /// None without factors or for a non-finite result.

@@ -164,6 +164,31 @@ impl BlockElimination {
     fn solve_again_kernel(&self, rhs: &[f64], x: &mut [f64]) {
         let n = self.links;
         // Transformed right-hand sides of each step's pivot rows, stored in x until used.
+        let last = self.replay_all(rhs, |k, pivot_rows| {
+            x[k * NODE..(k + 1) * NODE].copy_from_slice(pivot_rows)
+        });
+        back_substitute(&self.last, &last, &mut x[n * NODE..(n + 1) * NODE], None);
+        for k in (0..n).rev() {
+            let (head, tail) = x.split_at_mut((k + 1) * NODE);
+            let step_rhs: [f64; NODE] = std::array::from_fn(|i| head[k * NODE + i]);
+            back_substitute(&self.pivots[k], &step_rhs, &mut head[k * NODE..], Some(&tail[..NODE]));
+        }
+    }
+
+    /// The last node's 12 unknowns of J x = rhs with the stored factors: as
+    /// [`BlockElimination::solve_again`] without the back substitution through the other
+    /// nodes (the last node is the first it solves), for the derivatives of the tip alone.
+    pub fn solve_again_last(&self, rhs: &[f64]) -> [f64; NODE] {
+        let last = self.replay_all(rhs, |_, _| {});
+        let mut x = [0.0; NODE];
+        back_substitute(&self.last, &last, &mut x, None);
+        x
+    }
+
+    /// The recorded row operations of every step on `rhs`: gives each step's transformed
+    /// pivot rows to `pivot_rows(k, rows)` and returns the last node's transformed rows.
+    fn replay_all(&self, rhs: &[f64], mut pivot_rows: impl FnMut(usize, &[f64])) -> [f64; NODE] {
+        let n = self.links;
         let mut carry = [0.0; CARRY];
         carry.copy_from_slice(&rhs[..CARRY]);
         let mut transformed = [0.0; ROWS];
@@ -171,19 +196,14 @@ impl BlockElimination {
             transformed[..CARRY].copy_from_slice(&carry);
             transformed[CARRY..].copy_from_slice(&rhs[link_row(k)..link_row(k + 1)]);
             replay(&self.records[k], &mut transformed);
-            x[k * NODE..(k + 1) * NODE].copy_from_slice(&transformed[..NODE]);
+            pivot_rows(k, &transformed[..NODE]);
             carry.copy_from_slice(&transformed[NODE..]);
         }
         let mut last = [0.0; NODE];
         last[..CARRY].copy_from_slice(&carry);
         last[CARRY..].copy_from_slice(&rhs[tip_row(n + 1)..]);
         replay(&self.last_record, &mut last);
-        back_substitute(&self.last, &last, &mut x[n * NODE..(n + 1) * NODE], None);
-        for k in (0..n).rev() {
-            let (head, tail) = x.split_at_mut((k + 1) * NODE);
-            let step_rhs: [f64; NODE] = std::array::from_fn(|i| head[k * NODE + i]);
-            back_substitute(&self.pivots[k], &step_rhs, &mut head[k * NODE..], Some(&tail[..NODE]));
-        }
+        last
     }
 }
 

@@ -8,6 +8,7 @@ pub mod blocks;
 #[cfg(feature = "sparse-lu")]
 pub mod sparse;
 
+use crate::collocation::unknowns::NODE;
 use crate::error::Result;
 use crate::mesh::Mesh;
 use blocks::BlockElimination;
@@ -71,6 +72,23 @@ impl Linear {
             Linear::Sparse(lu) => {
                 x.copy_from_slice(rhs);
                 lu.solve_again(x);
+            }
+        }
+    }
+
+    /// The last node's 12 unknowns of J x = rhs with the factors of the last successful
+    /// [`Linear::solve`] (the structured elimination skips the back substitution through
+    /// the other nodes); the caller checks them for finiteness. `x` is scratch for the
+    /// sparse LU, which solves for every unknown.
+    #[cfg_attr(not(feature = "sparse-lu"), allow(unused_variables))]
+    pub(crate) fn solve_again_last(&mut self, rhs: &[f64], x: &mut [f64]) -> [f64; NODE] {
+        match self {
+            Linear::Blocks(blocks) => blocks.solve_again_last(rhs),
+            #[cfg(feature = "sparse-lu")]
+            Linear::Sparse(lu) => {
+                x.copy_from_slice(rhs);
+                lu.solve_again(x);
+                std::array::from_fn(|i| x[x.len() - NODE + i])
             }
         }
     }

@@ -131,6 +131,10 @@ pub(crate) fn tip_columns(
         held.check(*p)?;
         if let Parameter::Displacement(i) = *p {
             out.set_column(j, &held.pull(pulled(robot, i)?)?);
+        } else if let Parameter::Tension(i) = *p
+            && robot.tendons[i].displacement().is_none()
+        {
+            out.set_column(j, &sens.tension_tip(&held, i)?);
         } else if let Some(d) = column(sens, robot, *p)? {
             out.set_column(j, &held.tip(&d)?);
         }

@@ -88,6 +88,7 @@
 
 mod adjoint;
 mod control;
+mod ends;
 mod exact;
 mod named;
 mod tip;
@@ -105,15 +106,14 @@ use crate::collocation::LinearSolver;
 use crate::collocation::friction::Capstan;
 use crate::collocation::newton::Workspace;
 use crate::collocation::system::System;
-use crate::collocation::unknowns::{self, TIP_ROWS, nonzeros, tip_row};
+use crate::collocation::unknowns::{self, nonzeros};
 use crate::error::{Result, invalid};
 use crate::mesh::Mesh;
 use crate::mesh::guess::interpolate_nodes;
 use crate::model::equations::Model;
 use crate::model::robot::{Robot, RodModel};
-use crate::so3;
 use crate::solution::{Solution, State};
-use nalgebra::{Matrix3, Vector3, Vector6};
+use nalgebra::{Vector3, Vector6};
 
 /// Relative finite-difference step for dF/dq, 1e-4: it balances the truncation (about
 /// h_rel^2) against the rounding (about 1e-11 / h_rel) of differencing the residual in a
@@ -436,6 +436,50 @@ impl<'a> Sensitivity<'a> {
             .collect())
     }
 
+    /// The tip pose's derivative (position, then the world-frame rotation vector) for the
+    /// right-hand side in `scratch[0]`, from the last node of the solve alone
+    /// ([`Workspace::solve_again_last`]: no back substitution through the other nodes);
+    /// bitwise the last entry of [`Sensitivity::respond`]'s. None with friction, whose
+    /// bordered solve needs every node.
+    fn tip_response(&mut self) -> Result<Option<Vector6<f64>>> {
+        if self.border.border_rows() > 0 {
+            return Ok(None);
+        }
+        let n = self.border.system().unknowns();
+        let dx = self
+            .workspace
+            .solve_again_last(&self.scratch[0][..n])
+            .ok_or_else(singular)?;
+        let tip = &self.states[self.states.len() - 1];
+        let length = self.robot().length();
+        let [p, theta, ..] = unknowns::node_increments(&dx, 0, length);
+        let rotation = tip.R * theta;
+        Ok(Some(Vector6::new(
+            p[0],
+            p[1],
+            p[2],
+            rotation[0],
+            rotation[1],
+            rotation[2],
+        )))
+    }
+
+    /// The tip pose's derivative in tendon `tendon`'s tension (per N), the pull-ins `held`:
+    /// [`Sensitivity::tension`]'s last node, solved for the tip alone where nothing needs
+    /// the other nodes (no friction, no held pull-ins).
+    ///
+    /// # Errors
+    /// As [`Sensitivity::tension`].
+    fn tension_tip(&mut self, held: &tip::Held, tendon: usize) -> Result<Vector6<f64>> {
+        if !held.holds() {
+            self.tension_rhs(tendon)?;
+            if let Some(pose) = self.tip_response()? {
+                return Ok(pose);
+            }
+        }
+        held.tip(&self.tension(tendon)?)
+    }
+
     /// Tendon `tendon` (0-based) of `robot`: [`crate::Error::InvalidInput`] when out of range.
     fn tendon_of(robot: &'a Robot, tendon: usize) -> Result<&'a crate::model::tendon::Tendon> {
         robot.tendons.get(tendon).ok_or_else(|| {
@@ -445,121 +489,6 @@ impl<'a> Sensitivity<'a> {
                 "give a 0-based tendon index",
             )
         })
-    }
-
-    /// Checks a Cartesian axis index: [`crate::Error::InvalidInput`] unless 0, 1 or 2.
-    fn check_axis(axis: usize) -> Result<()> {
-        if axis < 3 {
-            Ok(())
-        } else {
-            Err(invalid("axis", format!("is {axis}"), "give 0, 1 or 2 for x, y or z"))
-        }
-    }
-
-    /// The right-hand side buffer, zeroed.
-    fn zeroed_rhs(&mut self) -> &mut [f64] {
-        let rhs = &mut self.scratch[0];
-        rhs.fill(0.0);
-        rhs
-    }
-
-    /// The derivative of every node state with respect to component `axis` (0, 1, 2 for
-    /// x, y, z) of the tip force (per N, world frame). Exact: the residual is linear in the
-    /// tip force, which enters only the tip rows, as -D^-1 R^T e_axis (strain units).
-    ///
-    /// # Errors
-    /// [`crate::Error::InvalidInput`] for an axis other than 0, 1, 2 or a singular Jacobian.
-    pub fn tip_force(&mut self, axis: usize) -> Result<Vec<NodeDerivative>> {
-        self.tip_force_rhs(axis)?;
-        self.respond()
-    }
-
-    /// Writes -dF/dq of [`Sensitivity::tip_force`] into the right-hand side buffer.
-    fn tip_force_rhs(&mut self, axis: usize) -> Result<()> {
-        Self::check_axis(axis)?;
-        let (R, kse, _) = self.tip_frame();
-        let column = R.transpose().column(axis).component_div(&kse);
-        let force_rows = tip_row(self.states.len());
-        let rhs = self.zeroed_rhs();
-        for i in 0..3 {
-            rhs[force_rows + i] = column[i];
-        }
-        Ok(())
-    }
-
-    /// As [`Sensitivity::tip_force`] for the tip moment (per N m, world frame): the tip's
-    /// moment rows carry -L C^-1 R^T e_axis.
-    ///
-    /// # Errors
-    /// [`crate::Error::InvalidInput`] for an axis other than 0, 1, 2 or a singular Jacobian.
-    pub fn tip_moment(&mut self, axis: usize) -> Result<Vec<NodeDerivative>> {
-        self.tip_moment_rhs(axis)?;
-        self.respond()
-    }
-
-    /// Writes -dF/dq of [`Sensitivity::tip_moment`] into the right-hand side buffer.
-    fn tip_moment_rhs(&mut self, axis: usize) -> Result<()> {
-        Self::check_axis(axis)?;
-        let (R, _, kbt) = self.tip_frame();
-        let column = R.transpose().column(axis).component_div(&kbt) * self.robot().length();
-        let moment_rows = tip_row(self.states.len()) + TIP_ROWS / 2;
-        let rhs = self.zeroed_rhs();
-        for i in 0..3 {
-            rhs[moment_rows + i] = column[i];
-        }
-        Ok(())
-    }
-
-    /// Tip orientation and section stiffness (kse, kbt) there.
-    fn tip_frame(&self) -> (Matrix3<f64>, Vector3<f64>, Vector3<f64>) {
-        let tip = &self.states[self.states.len() - 1];
-        let section = self.robot().rod.section_at(tip.s).section;
-        (tip.R, section.kse, section.kbt)
-    }
-
-    /// The derivative of every node state with respect to component `axis` of the base
-    /// position p0 (per m, world frame). Exact: the base rows (p(0) - p0) / L give
-    /// dF/dp0 = -e_axis / L.
-    ///
-    /// # Errors
-    /// [`crate::Error::InvalidInput`] for an axis other than 0, 1, 2 or a singular Jacobian.
-    pub fn base_position(&mut self, axis: usize) -> Result<Vec<NodeDerivative>> {
-        self.base_position_rhs(axis)?;
-        self.respond()
-    }
-
-    /// Writes -dF/dq of [`Sensitivity::base_position`] into the right-hand side buffer.
-    fn base_position_rhs(&mut self, axis: usize) -> Result<()> {
-        Self::check_axis(axis)?;
-        let length = self.robot().length();
-        self.zeroed_rhs()[axis] = 1.0 / length;
-        Ok(())
-    }
-
-    /// The derivative of every node state with respect to component `axis` of a world-frame
-    /// rotation vector phi turning the base, R0 -> exp(hat(phi)) R0 (per rad). Exact: the
-    /// base rows log(R0^T R(0)) = eps become log(exp(-hat(R0^T phi)) exp(hat(eps))), whose
-    /// derivative is -J_l(eps)^-1 R0^T, with J_l(eps)^-1 = J_r(-eps)^-1 (eps is the
-    /// residual, about 0).
-    ///
-    /// # Errors
-    /// [`crate::Error::InvalidInput`] for an axis other than 0, 1, 2 or a singular Jacobian.
-    pub fn base_rotation(&mut self, axis: usize) -> Result<Vec<NodeDerivative>> {
-        self.base_rotation_rhs(axis)?;
-        self.respond()
-    }
-
-    /// Writes -dF/dq of [`Sensitivity::base_rotation`] into the right-hand side buffer.
-    fn base_rotation_rhs(&mut self, axis: usize) -> Result<()> {
-        Self::check_axis(axis)?;
-        let R0 = self.robot().base_rotation;
-        let eps = so3::log(&(R0.transpose() * self.states[0].R));
-        let column = so3::right_jacobian_inv(&(-eps)) * R0.transpose().column(axis);
-        let rhs = self.zeroed_rhs();
-        for i in 0..3 {
-            rhs[3 + i] = column[i];
-        }
-        Ok(())
     }
 
     /// The derivative of every node state with respect to tendon `tendon`'s friction

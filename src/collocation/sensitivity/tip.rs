@@ -114,7 +114,7 @@ pub fn tip_sensitivities(robot: &Robot, solution: &Solution) -> Result<TipSensit
             tension.set_column(i, &Vector6::repeat(f64::NAN));
         } else {
             // Forward solves: the columns a controller's Solver::tip_jacobian gives, to 1e-12.
-            tension.set_column(i, &held.tip(&tip.sens.tension(i)?)?);
+            tension.set_column(i, &tip.sens.tension_tip(&held, i)?);
         }
         if robot.tendons[i].active_friction().is_some() {
             friction.set_column(i, &held.tip(&tip.sens.friction(i)?)?);
