@@ -73,7 +73,9 @@ fn solve(ratio: f64, eps: f64) -> Solution {
 
 #[test]
 fn the_imperfect_column_returns_the_stable_state_on_the_imperfections_side() {
-    let mut worst = 0;
+    /// Issue 25's goal for the Newton + chord steps of one solve.
+    const GOAL: usize = 50;
+    let (mut worst, mut total, mut over) = (0, 0, Vec::new());
     for ratio in RATIOS {
         for eps in IMPERFECTIONS {
             let s = solve(ratio, eps);
@@ -91,12 +93,20 @@ fn the_imperfect_column_returns_the_stable_state_on_the_imperfections_side() {
                 assert!(tip.x > 0.1 * LENGTH, "{case}");
             }
             worst = worst.max(report.iterations);
-            // Measured at most 73 (1.5 P_cr, eps 1e-5): a regression bound, not issue 25's
-            // target of 50, which the load path misses on 13 of these 60 cases (51-73).
-            assert!(report.iterations <= 80, "{case}: {} iterations", report.iterations);
+            total += report.iterations;
+            if report.iterations > GOAL {
+                over.push(case.clone());
+            }
+            // Measured at most 67 (1.5 P_cr at eps 1e-5, 3 P_cr at 1e-2; 73 before the
+            // confirmed counts): a regression bound
+            assert!(report.iterations <= 70, "{case}: {} iterations", report.iterations);
         }
     }
-    eprintln!("most iterations: {worst}");
+    eprintln!("most iterations: {worst}, all 60: {total}, over {GOAL}: {over:#?}");
+    // Issue 25's goal is at most 50 Newton + chord steps in every case: 49 of the 60 meet it
+    // (measured: 11 cases at 1.5-5 P_cr need 53-67; 13 needed 51-73 before); this bound
+    // catches a regression without claiming the goal for those eleven
+    assert!(over.len() <= 11, "{over:#?}");
 }
 
 #[test]

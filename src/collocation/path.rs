@@ -337,11 +337,25 @@ pub(super) fn follow(
                     continue;
                 }
                 let previous = (point.tx.as_slice(), point.tl);
-                let Some((next, next_fl)) = tangent(system, &homotopy, ws, xc, lambda, Some(previous), report) else {
+                let Some((mut next, mut next_fl)) = tangent(system, &homotopy, ws, xc, lambda, Some(previous), report)
+                else {
                     break;
                 };
                 let fold = (next.tl > 0.0) != (point.tl > 0.0);
-                let next_unstable = index(system, ws, report);
+                let mut next_unstable = index(system, ws, report);
+                // A guide is converged to PATH_TOLERANCE only, and its error can tip a nearly
+                // neutral direction (the plane of a slightly imperfect round column's bend,
+                // held by the imperfection alone): a change of the count is confirmed at the
+                // point converged to the solve's tolerance before it counts as a jump.
+                if !fold
+                    && unstable.is_some()
+                    && next_unstable.is_some()
+                    && next_unstable != unstable
+                    && let Some((p, f)) = polish(system, &homotopy, ws, &next, settings, report)
+                {
+                    (next, next_fl) = (p, f);
+                    next_unstable = index(system, ws, report);
+                }
                 if let (Some(a), Some(b)) = (unstable, next_unstable)
                     && a != b
                     && !fold
@@ -403,7 +417,7 @@ pub(super) fn follow(
                 }
                 let grow = match iterations {
                     i if i <= EASY => 2.0,
-                    3 => 1.3,
+                    i if i == EASY + 1 => 1.3,
                     _ => 0.8,
                 };
                 h = (h * grow).min(max_step);
