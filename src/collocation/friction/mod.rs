@@ -9,10 +9,10 @@
 //!
 //! Every block is exact: J by the chain rule through eq. 13 with friction, F_z, psi_x and
 //! psi_z from the same interval linearization, the termination's force by its linearity in
-//! the tension. One factorization of J gives a = J^-1 (-F) and the columns X = J^-1 F_z
-//! (one per unknown z), then dz from the Schur complement S = psi_z - psi_x X and
-//! dx = a - X dz, in the Newton loop of displacement-controlled tendons
-//! ([`newton::run_bordered`]). The solve starts from the frictionless solution on its mesh.
+//! the tension. The whole matrix, reordered node by node, is factored as one staircase
+//! ([`staircase`]; the blocks handed to it in `border.rs`), in the Newton loop of
+//! displacement-controlled tendons ([`newton::run_bordered`]). The solve starts from the
+//! frictionless solution on its mesh.
 #![allow(non_snake_case)]
 
 mod border;
