@@ -208,7 +208,9 @@ struct Solved {
 /// model holds for it here ([`Model::tensions`]; for a tendon with friction, its tension at
 /// this s), with the friction multiplier w_j of each tendon of `slipping` from
 /// `multipliers` when given (a stick/slip history, docs/friction.md section 8), else its
-/// motion's sign.
+/// motion's sign. Inlined into its two callers, so that the large [`Point`] it builds is not
+/// copied on return.
+#[inline(always)]
 fn solve(
     model: &Model,
     site: &Site,
@@ -378,8 +380,7 @@ pub(crate) fn linearize(
     multipliers: Option<&[f64]>,
     derivatives: bool,
 ) -> Result<FrictionLinearization> {
-    let solved = solve(model, site, segment_end, (R, v, u), slipping, multipliers)?;
-    let Solved { point, slips, x } = solved;
+    let Solved { point, slips, x } = solve(model, site, segment_end, (R, v, u), slipping, multipliers)?;
     let k = slipping.len();
     let mut kappa = vec![0.0; k];
     for sl in &slips {

@@ -44,6 +44,9 @@ pub(crate) struct Carried {
     pub(crate) solved: bool,
     /// The report of the solve that chose the mesh: the template of every step's report.
     pub(crate) report: SolveReport,
+    /// The last step's Newton workspace and bordered factors on this mesh, which the next
+    /// step's first iterations reuse as chord steps (None before the first step).
+    factors: Option<(Workspace, Staircase)>,
 }
 
 /// One step's answer: the solution and, per tendon with friction (robot index), its zones
@@ -113,6 +116,7 @@ pub(crate) fn start(robots: &[Robot], options: &Options) -> Result<Carried> {
         grips,
         solved: most == 0,
         report: first.report,
+        factors: None,
     })
 }
 
@@ -232,8 +236,14 @@ pub(crate) fn step(robot: &Robot, options: &Options, carried: &mut Carried) -> R
     profile.z.clone_from(&carried.z);
     profile.grips = Some(carried.grips.clone());
     system.friction = Some(profile);
-    let mut ws = Workspace::new(&system, options.linear_solver)?;
     let mut border = Capstan::new(system);
+    let mut ws = match carried.factors.take() {
+        Some((ws, stairs)) => {
+            border.stairs = stairs;
+            ws
+        }
+        None => Workspace::new(&border.system, options.linear_solver)?,
+    };
     let mut x = carried.x.clone();
     let mut report = carried.report.clone();
     (
@@ -242,10 +252,13 @@ pub(crate) fn step(robot: &Robot, options: &Options, carried: &mut Carried) -> R
         report.chord_steps,
         report.load_steps,
     ) = (0, 0, 0, 0);
+    // Each pass after the first starts with chord steps on the last pass's factors (its
+    // pattern a march ago): Newton takes a fresh Jacobian as soon as they do not contract.
+    // The first pass has no factors and starts with a Newton step.
     let settings = Settings {
         tolerance: options.residual_tolerance,
         max_iterations: options.max_iterations,
-        reuse_factors: false,
+        reuse_factors: true,
         stop_when_damped: false,
     };
     let solved = std::mem::replace(&mut carried.solved, false);
@@ -289,7 +302,20 @@ pub(crate) fn step(robot: &Robot, options: &Options, carried: &mut Carried) -> R
             ),
         });
     }
-    let estimated = estimate_with_friction(&mut border, &mut ws, &x).ok().flatten();
+    // The estimate does not see a stuck stretch's error (its multiplier is constant per
+    // link and its boundary falls inside one: about 1e3 times the estimate on the
+    // prototype, docs/friction.md section 8), so a step with one reports none and skips it.
+    let stuck = border
+        .system
+        .friction
+        .as_ref()
+        .and_then(|p| p.grips.as_ref())
+        .is_some_and(|g| g.iter().any(|g| g.contacts.contains(&Contact::Stick)));
+    let estimated = if stuck {
+        None
+    } else {
+        estimate_with_friction(&mut border, &mut ws, &x).ok().flatten()
+    };
     border.load(Point::Current);
     let system = &border.system;
     let Some(profile) = system.friction.as_ref() else {
@@ -315,10 +341,7 @@ pub(crate) fn step(robot: &Robot, options: &Options, carried: &mut Carried) -> R
         })
         .collect();
     pipeline::record_estimate(&mut report, estimated.as_ref().map(|(c, _)| c), options, robot.length());
-    // The estimate does not see a stuck stretch's error (its multiplier is constant per
-    // link and its boundary falls inside one: about 1e3 times the estimate on the
-    // prototype, docs/friction.md section 8), so a step with one reports none.
-    if grips.iter().any(|g| g.contacts.contains(&Contact::Stick)) {
+    if stuck {
         report.error_estimate = None;
         report.tolerance_met = None;
     }
@@ -361,6 +384,7 @@ pub(crate) fn step(robot: &Robot, options: &Options, carried: &mut Carried) -> R
     carried.z.clone_from(&profile.z);
     carried.grips = next;
     carried.x = x;
+    carried.factors = Some((ws, border.stairs));
     Ok((solution, zones))
 }
 

@@ -216,7 +216,7 @@ pub(crate) struct IntervalLinearization {
     pub(crate) psi_x: DMatrix<f64>,
     /// d psi / dz: k x 2k, columns as `rows_z`.
     pub(crate) psi_z: DMatrix<f64>,
-    /// Whether the derivatives were evaluated (else they are zero).
+    /// Whether the derivatives were evaluated (else the three blocks above have no rows).
     pub(crate) derivatives: bool,
 }
 
@@ -331,9 +331,10 @@ fn interval_at(
         psi,
         capacity,
         stuck_tension: stuck.iter().map(|t| t.map_or(f64::NAN, |t| t.0)).collect(),
-        rows_z: DMatrix::zeros(12, 2 * count),
-        psi_x: DMatrix::zeros(count, 24),
-        psi_z: DMatrix::zeros(count, 2 * count),
+        // Without derivatives the blocks stay empty (nothing reads them then).
+        rows_z: DMatrix::zeros(if derivatives { 12 } else { 0 }, 2 * count),
+        psi_x: DMatrix::zeros(if derivatives { count } else { 0 }, 24),
+        psi_z: DMatrix::zeros(if derivatives { count } else { 0 }, 2 * count),
         derivatives,
     };
     let Some(jac) = jac else {
