@@ -15,6 +15,7 @@
 //! shape until it changes nothing.
 
 use super::grip::{choose, stuck_multiplier};
+use super::staircase::Staircase;
 use super::*;
 use crate::model::length;
 use crate::solution::Solution;
@@ -122,12 +123,15 @@ pub(crate) fn start(robots: &[Robot], options: &Options) -> Result<Carried> {
 
 /// The march of every tendon with friction along the shape `x` (module docs): new contacts,
 /// multipliers and predicted log tensions written into `border`'s profile and unknowns.
+/// Each link's capacity and stuck tension are those of its evaluation at `x`, the profile's
+/// log tensions and contacts: when Newton has just `converged` to `x`, its last evaluation
+/// of every link (kept by the profile) is that one and is read, else the link is evaluated.
 /// Returns whether anything changed.
 ///
 /// # Errors
 /// A model breakdown on a link; a rigid tendon that would stick (statically
 /// indeterminate).
-fn march(border: &mut Capstan, x: &[State]) -> Result<bool> {
+fn march(border: &mut Capstan, x: &[State], converged: bool) -> Result<bool> {
     let system = &border.system;
     let length = system.model.robot.length();
     let Some(profile) = system.friction.as_ref() else {
@@ -148,10 +152,21 @@ fn march(border: &mut Capstan, x: &[State]) -> Result<bool> {
             continue;
         };
         let seg = system.mesh.nodes[k].segment_end;
-        let lin = interval(profile, length, k, sites, seg, &x[k], &x[k + 1], None)?;
+        let kept = if converged {
+            profile.cached(k, |lin| lin.map(|l| (l.capacity.clone(), l.stuck_tension.clone())))
+        } else {
+            None
+        };
+        let (capacities, stuck_tensions) = match kept {
+            Some(kept) => kept,
+            None => {
+                let lin = interval(profile, length, k, sites, seg, &x[k], &x[k + 1], None)?;
+                (lin.capacity, lin.stuck_tension)
+            }
+        };
         for j in (0..count).filter(|&j| profile.on_link(j, k)) {
-            let (base, za, capacity) = (profile.base[j], z[j][k], lin.capacity[j]);
-            let mut choice = choose(base, za, capacity, lin.stuck_tension[j]);
+            let (base, za, capacity) = (profile.base[j], z[j][k], capacities[j]);
+            let mut choice = choose(base, za, capacity, stuck_tensions[j]);
             let first = *sliding[j].get_or_insert(choice.contact);
             if base > 0.0 && (stuck[j] || choice.contact != first) {
                 choice.contact = Contact::Stick;
@@ -262,7 +277,7 @@ pub(crate) fn step(robot: &Robot, options: &Options, carried: &mut Carried) -> R
         stop_when_damped: false,
     };
     let solved = std::mem::replace(&mut carried.solved, false);
-    let mut settled = !march(&mut border, &x)? && solved;
+    let mut settled = !march(&mut border, &x, false)? && solved;
     // A rigid tendon that would stick is refused by the march; one that is near sticking
     // may keep Newton or the passes from settling, which the hint names.
     let rigid_hint = robot
@@ -273,11 +288,13 @@ pub(crate) fn step(robot: &Robot, options: &Options, carried: &mut Carried) -> R
         .map_or(String::new(), |(i, _)| {
             format!("; tendon {} is rigid: set its `stiffness` if it sticks", i + 1)
         });
+    let mut ran = false;
     for _ in 0..PASSES {
         if settled {
             break;
         }
         let (termination, worst) = newton::run_bordered(&mut border, &mut ws, &mut x, &settings, &mut report);
+        ran = true;
         report.termination = termination;
         if termination != Termination::Converged {
             let system = &border.system;
@@ -290,7 +307,7 @@ pub(crate) fn step(robot: &Robot, options: &Options, carried: &mut Carried) -> R
         }
         // The contacts and multipliers on the converged shape: settled when Newton's were.
         border.load(Point::Current);
-        settled = !march(&mut border, &x)?;
+        settled = !march(&mut border, &x, true)?;
     }
     if !settled {
         return Err(Error::NotConverged {
@@ -314,7 +331,11 @@ pub(crate) fn step(robot: &Robot, options: &Options, carried: &mut Carried) -> R
     let estimated = if stuck {
         None
     } else {
-        estimate_with_friction(&mut border, &mut ws, &x).ok().flatten()
+        // Newton's last residual is the backbone rows' at x when a pass ran.
+        let converged = ran.then(|| ws.residual.clone());
+        estimate_with_friction(&mut border, &mut ws, &x, converged)
+            .ok()
+            .flatten()
     };
     border.load(Point::Current);
     let system = &border.system;

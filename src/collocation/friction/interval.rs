@@ -47,6 +47,9 @@ pub(crate) struct Profile<'a> {
     /// Each link's last evaluation ([`interval`] through the system's residual or
     /// Jacobian), which the border reads instead of evaluating the link again.
     cache: RefCell<Vec<Option<IntervalLinearization>>>,
+    /// Each link's capstan rows of the order-6 scheme from its last [`interval_order6`]
+    /// (empty before one), for the error estimate.
+    pub(crate) order6: RefCell<Vec<Vec<f64>>>,
 }
 
 impl<'a> Profile<'a> {
@@ -73,6 +76,7 @@ impl<'a> Profile<'a> {
             spans,
             scratch: RefCell::new(model.clone()),
             cache: RefCell::new((1..mesh.nodes.len()).map(|_| None).collect()),
+            order6: RefCell::new(vec![Vec::new(); mesh.nodes.len() - 1]),
         }
     }
 
@@ -87,6 +91,7 @@ impl<'a> Profile<'a> {
             grips: self.grips.clone(),
             scratch: RefCell::new(self.scratch.borrow().clone()),
             cache: RefCell::new(self.cache.borrow().iter().map(|_| None).collect()),
+            order6: RefCell::new(vec![Vec::new(); self.z[0].len() - 1]),
         }
     }
 
@@ -528,6 +533,7 @@ pub(crate) fn interval_order6(
         })
         .collect();
     let rates = |f: &Block<f64>| f.fixed_rows::<6>(6).into_owned();
+    profile.order6.borrow_mut()[k].clone_from(&psi);
     Ok((scale_rows(y1 - y0 - quadrature, length), psi, rates(&f0), rates(&f1)))
 }
 

@@ -27,7 +27,6 @@ pub(crate) use grip::Grip;
 pub(crate) use interval::{Profile, interval, interval_order6};
 
 use super::newton::{self, Border, Linearization, Point, Settings, Workspace};
-use super::residual::QuarterSites;
 use super::system::System;
 use super::unknowns::{self, NODE, link_row, tip_row};
 use super::{Cache, Options, estimate, pipeline, refine};
@@ -254,7 +253,8 @@ impl<'r> Capstan<'r> {
 
 /// The error estimate with friction, by deferred correction as in [`estimate`] on the
 /// bordered system: the order-6 residuals of the backbone and capstan rows at the
-/// converged `x`, and one bordered solve with Newton's factors and columns, so that the
+/// converged `x` (against the order-4 residual `converged` when the caller has it, else
+/// evaluated), and one bordered solve with Newton's factors and columns, so that the
 /// estimate carries the tension profile's error into the shape's. Returns the correction
 /// and the largest correction of a log tension (the relative error of the tension
 /// profile); `None` without factors or with a singular border.
@@ -265,16 +265,24 @@ fn estimate_with_friction(
     border: &mut Capstan,
     ws: &mut Workspace,
     x: &[State],
+    converged: Option<Vec<f64>>,
 ) -> Result<Option<(estimate::Correction, f64)>> {
     border.load(Point::Current);
     let n = border.system.unknowns();
-    let mut phi4 = vec![0.0; n];
-    border.system.residual(x, &mut phi4)?;
+    let phi4 = match converged {
+        Some(phi4) => phi4,
+        None => {
+            let mut phi4 = vec![0.0; n];
+            border.system.residual(x, &mut phi4)?;
+            phi4
+        }
+    };
     border.rows(Point::Current, x);
     let system = &border.system;
     let mut rhs = vec![0.0; n];
     let mut local = vec![0.0; x.len() - 1];
     let mut node_rates = vec![nalgebra::Vector6::zeros(); x.len()];
+    // The order-6 rows of every link; those with friction keep their capstan rows psi6.
     system.order6_residual(x, &mut rhs, &mut local, &mut node_rates)?;
     for (r, f) in rhs.iter_mut().zip(&phi4) {
         *r = f - *r;
@@ -282,27 +290,15 @@ fn estimate_with_friction(
     let length = system.model.robot.length();
     let mut difference = border.psi.clone();
     if let Some(profile) = system.friction.as_ref() {
-        let last = profile.spans.iter().copied().max().unwrap_or(0);
-        for k in 0..last {
-            let Some(sites) = system.interval_sites(k) else {
-                continue;
-            };
-            let h = sites.end.s - sites.start.s;
-            let quarters = QuarterSites {
-                quarter: system.model.site(sites.start.s + 0.25 * h),
-                three_quarters: system.model.site(sites.start.s + 0.75 * h),
-            };
-            let seg = system.mesh.nodes[k].segment_end;
-            let (_, psi6, _, _) = interval_order6(profile, length, k, sites, &quarters, seg, &x[k], &x[k + 1])?;
-            for (j, &o) in border.offsets.iter().enumerate() {
-                if profile.on_link(j, k) {
-                    difference[o + k] -= psi6[j];
+        let kept = profile.order6.borrow();
+        for (j, &o) in border.offsets.iter().enumerate() {
+            for k in 0..profile.spans[j] {
+                if let Some(psi6) = kept.get(k).and_then(|p| p.get(j)) {
+                    difference[o + k] -= psi6;
                 }
             }
         }
     }
-    // One bordered solve with Newton's last factors (the staircase's, factored with the
-    // workspace's Jacobian): [J F_z; psi_x psi_z] (dx, dz) = (phi4 - phi6, psi4 - psi6).
     if !ws.has_factors() {
         return Ok(None);
     }
@@ -382,7 +378,11 @@ pub(super) fn solve(robot: &Robot, options: &Options, warm: Option<&Solution>, c
             });
         }
         let t = Instant::now();
-        let estimated = estimate_with_friction(&mut border, &mut ws, &x).ok().flatten();
+        // Newton's last residual is the backbone rows' at x.
+        let converged = Some(ws.residual.clone());
+        let estimated = estimate_with_friction(&mut border, &mut ws, &x, converged)
+            .ok()
+            .flatten();
         report.timings.estimate += t.elapsed();
         border.load(Point::Current);
         let system = border.system;
