@@ -50,6 +50,22 @@ pub(crate) struct Profile<'a> {
     /// Each link's capstan rows of the order-6 scheme from its last [`interval_order6`]
     /// (empty before one), for the error estimate.
     pub(crate) order6: RefCell<Vec<Vec<f64>>>,
+    /// The last link's evaluation at its end node, which the next link's start takes
+    /// instead of evaluating the same point again.
+    end: RefCell<Option<KeptEnd>>,
+}
+
+/// Eq. 13 with friction at a link's end node and everything it was evaluated from: a
+/// link whose start has the same inputs, bit for bit, has the same evaluation.
+#[derive(Debug)]
+struct KeptEnd {
+    node: usize,
+    segment_end: f64,
+    state: State,
+    z: Vec<f64>,
+    w: Option<Vec<f64>>,
+    derivatives: bool,
+    lin: FrictionLinearization,
 }
 
 impl<'a> Profile<'a> {
@@ -77,6 +93,7 @@ impl<'a> Profile<'a> {
             scratch: RefCell::new(model.clone()),
             cache: RefCell::new((1..mesh.nodes.len()).map(|_| None).collect()),
             order6: RefCell::new(vec![Vec::new(); mesh.nodes.len() - 1]),
+            end: RefCell::new(None),
         }
     }
 
@@ -92,6 +109,7 @@ impl<'a> Profile<'a> {
             scratch: RefCell::new(self.scratch.borrow().clone()),
             cache: RefCell::new(self.cache.borrow().iter().map(|_| None).collect()),
             order6: RefCell::new(vec![Vec::new(); self.z[0].len() - 1]),
+            end: RefCell::new(None),
         }
     }
 
@@ -194,6 +212,57 @@ impl<'a> Profile<'a> {
         friction::linearize(&model, site, segment_end, (R, y.0, y.1), &self.slipping, w, derivatives)
     }
 
+    /// [`Profile::point`] at node k (state `a`, log tensions `z`, multipliers `w`), taken
+    /// from the last link's end when that was evaluated from the same inputs (with
+    /// derivatives if these need them).
+    #[allow(clippy::too_many_arguments)]
+    fn start_point(
+        &self,
+        k: usize,
+        site: &Site,
+        segment_end: f64,
+        a: &State,
+        z: &[f64],
+        w: Option<&[f64]>,
+        derivatives: bool,
+    ) -> Result<FrictionLinearization> {
+        let kept = self.end.borrow_mut().take();
+        if let Some(kept) = kept
+            && kept.node == k
+            && kept.segment_end == segment_end
+            && kept.state == *a
+            && kept.z == z
+            && kept.w.as_deref() == w
+            && (kept.derivatives || !derivatives)
+        {
+            return Ok(kept.lin);
+        }
+        self.point(site, segment_end, &a.R, (&a.v, &a.u), z, w, derivatives)
+    }
+
+    /// Keeps link k's evaluation `lin` at its end node (state `b`) for the next link.
+    #[allow(clippy::too_many_arguments)]
+    fn keep_end(
+        &self,
+        k: usize,
+        segment_end: f64,
+        b: &State,
+        z: Vec<f64>,
+        w: Option<&[f64]>,
+        derivatives: bool,
+        lin: FrictionLinearization,
+    ) {
+        *self.end.borrow_mut() = Some(KeptEnd {
+            node: k + 1,
+            segment_end,
+            state: *b,
+            z,
+            w: w.map(<[f64]>::to_vec),
+            derivatives,
+            lin,
+        });
+    }
+
     /// The robot.
     pub(crate) fn robot(&self) -> &'a crate::Robot {
         self.scratch.borrow().robot
@@ -292,7 +361,7 @@ fn interval_at(
     let (y0, y1) = end_points(a, b);
     let theta1: Vector3<f64> = y1.fixed_rows::<3>(THETA).into();
     let derivatives = jac.is_some();
-    let la = profile.point(&sites.start, segment_end, &a.R, (&a.v, &a.u), &za, w, derivatives)?;
+    let la = profile.start_point(k, &sites.start, segment_end, a, &za, w, derivatives)?;
     let lb = profile.point(&sites.end, segment_end, &b.R, (&b.v, &b.u), &zb, w, derivatives)?;
     let p0 = rhs_linearized(&sites.start, &la.lin, &a.R, &y0);
     let p1 = rhs_linearized(&sites.end, &lb.lin, &a.R, &y1);
@@ -343,6 +412,7 @@ fn interval_at(
         derivatives,
     };
     let Some(jac) = jac else {
+        profile.keep_end(k, segment_end, b, zb, w, derivatives, lb);
         return Ok(out);
     };
 
@@ -456,6 +526,7 @@ fn interval_at(
         }
         out.psi_z[(j, count + j)] = 1.0;
     }
+    profile.keep_end(k, segment_end, b, zb, w, derivatives, lb);
     Ok(out)
 }
 

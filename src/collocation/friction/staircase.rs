@@ -141,7 +141,7 @@ impl Staircase {
             step.rows = rows;
             step.width = width;
             step.pivots = ck;
-            if !eliminate(panel, rows, width, ck, step) {
+            if !eliminate_fast(panel, rows, width, ck, step) {
                 return false;
             }
             step.upper.clear();
@@ -189,16 +189,12 @@ impl Staircase {
             let step = &self.steps[k];
             let ck = step.pivots;
             let (current, next) = (&mut self.current, &self.next);
+            let next = &next[..step.width - ck];
             for i in (0..ck).rev() {
                 let row = &step.upper[i * step.width..(i + 1) * step.width];
-                let mut sum = self.transformed[self.first[k] + i];
-                for j in i + 1..ck {
-                    sum -= row[j] * current[j];
-                }
-                for (j, x) in next[..step.width - ck].iter().enumerate() {
-                    sum -= row[ck + j] * x;
-                }
-                current[i] = sum / row[i];
+                let coupled: f64 = row[ck..].iter().zip(next).map(|(a, b)| a * b).sum();
+                let own: f64 = row[i + 1..ck].iter().zip(&current[i + 1..ck]).map(|(a, b)| a * b).sum();
+                current[i] = (self.transformed[self.first[k] + i] - coupled - own) / row[i];
             }
             finite &= current[..ck].iter().all(|v| v.is_finite());
             out(k, &current[..ck]);
@@ -208,9 +204,28 @@ impl Staircase {
     }
 }
 
+/// [`eliminate`] compiled for AVX2 and FMA when the processor has them (checked at run
+/// time), as the frictionless elimination does, else for the baseline target.
+fn eliminate_fast(panel: &mut [f64], rows: usize, width: usize, pivots: usize, step: &mut Step) -> bool {
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma") {
+        // SAFETY: the processor supports the features the function is compiled for.
+        return unsafe { eliminate_avx2(panel, rows, width, pivots, step) };
+    }
+    eliminate(panel, rows, width, pivots, step)
+}
+
+/// [`eliminate`] with AVX2 and FMA enabled.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+unsafe fn eliminate_avx2(panel: &mut [f64], rows: usize, width: usize, pivots: usize, step: &mut Step) -> bool {
+    eliminate(panel, rows, width, pivots, step)
+}
+
 /// Gaussian elimination with partial pivoting of the first `pivots` columns of the
 /// `rows` x `width` row-major `panel`, recording the swaps and multipliers in `step`.
 /// False on a zero or non-finite pivot.
+#[inline(always)]
 fn eliminate(panel: &mut [f64], rows: usize, width: usize, pivots: usize, step: &mut Step) -> bool {
     step.swaps.clear();
     step.factors.clear();
