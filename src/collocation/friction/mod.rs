@@ -20,6 +20,7 @@ mod grip;
 pub(crate) mod history;
 mod interval;
 mod linearized;
+mod profile;
 mod staircase;
 
 pub use grip::Contact;
