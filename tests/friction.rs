@@ -191,6 +191,39 @@ fn collocation_agrees_with_shooting_with_friction() {
     }
 }
 
+/// A tendon with friction that ends inside the rod: its termination's jump rows carry the
+/// delivered tension, whose log tension is then an unknown of an interior node (the
+/// staircase's termination columns in link rows); collocation against shooting, and the
+/// default solve's global equilibrium.
+#[test]
+fn a_tendon_with_friction_that_ends_inside_the_rod_agrees_with_shooting() {
+    let mut robot = cases::case_s();
+    let length = robot.length();
+    robot.tendons[0] = robot.tendons[0].clone().ending_at(0.6 * length);
+    robot.tendons[0].set_tension(4.0);
+    robot.tendons[0].friction = Some(Friction::pull(0.2));
+    let c = tdcr::collocation::solve(&robot, &tdcr::collocation::Options::fixed(128)).unwrap();
+    let sh = shooting::solve(&robot, &tight()).unwrap();
+    let d = (c.tip_position() - sh.tip_position()).norm();
+    // 1e-8 m: as for the tendons ending at the tip above (collocation at 128 intervals,
+    // shooting at 1e-12)
+    assert!(d < 1e-8, "tips differ by {d:.3e} m");
+    let (a, b) = (&c.tendons[0], &sh.tendons[0]);
+    // 4e-8 relative, as above
+    assert!(
+        (a.delivered_tension - b.delivered_tension).abs() <= 4e-8 * a.tension,
+        "delivered {} vs {}",
+        a.delivered_tension,
+        b.delivered_tension
+    );
+    assert!(a.delivered_tension < 0.99 * a.tension, "friction holds back tension");
+    let solved = tdcr::solve(&robot, &Default::default()).unwrap();
+    let e = tdcr::analysis::equilibrium::imbalance(&robot, &solved);
+    // 1e-8: the bound of global_equilibrium_holds_with_friction (the solver's tolerance in
+    // the wrenches relative to the tension)
+    assert!(e.max() < 1e-8, "imbalance {e:?}");
+}
+
 /// Case S with friction on its tendon and case H with friction on its helix (mu = 0.1).
 fn rough_cases() -> [Robot; 2] {
     let mut s = cases::case_s();

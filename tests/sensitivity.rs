@@ -270,6 +270,19 @@ fn tip_sensitivities_match_finite_differences_with_friction() {
     check_tip("case H, mu = 0.2, release", &h);
 }
 
+/// A tendon with friction ending inside the rod (0.6 L, mu = 0.2): the delivered tension's
+/// log tension is an unknown of an interior node and enters the termination's jump rows,
+/// which the staircase factors take from link rows; every column against differences.
+#[test]
+fn tip_sensitivities_with_friction_on_a_tendon_ending_inside_the_rod() {
+    let mut s = cases::case_s();
+    let length = s.length();
+    s.tendons[0] = s.tendons[0].clone().ending_at(0.6 * length);
+    s.tendons[0].set_tension(4.0);
+    s.tendons[0].friction = Some(Friction::pull(0.2));
+    check_tip("case S, tendon 1 ending at 0.6 L, mu = 0.2", &s);
+}
+
 /// d p(s)/d tau at every node against differences of full solves, node by node.
 fn check_backbone(robot: &Robot, tendon: usize) {
     let reference = solve(robot);

@@ -150,12 +150,18 @@ impl Border for NoBorder<'_, '_> {
 pub(crate) struct Linearization<'w> {
     linear: &'w mut Linear,
     residual: &'w [f64],
+    values: &'w [f64],
 }
 
 impl Linearization<'_> {
     /// The collocation residual F at the current point.
     pub(crate) fn residual(&self) -> &[f64] {
         self.residual
+    }
+
+    /// The Jacobian J whose factors these are, in [`unknowns::pattern`] order.
+    pub(crate) fn values(&self) -> &[f64] {
+        self.values
     }
 
     /// Solves J out = rhs with the factors (timed into `report`); false for a non-finite
@@ -287,6 +293,7 @@ pub(crate) fn run_bordered<B: Border>(
                 &mut Linearization {
                     linear: &mut ws.linear,
                     residual: &ws.residual,
+                    values: &ws.values,
                 },
                 report,
             )
@@ -337,6 +344,7 @@ pub(crate) fn run_bordered<B: Border>(
         let mut at = Linearization {
             linear: &mut ws.linear,
             residual: &ws.residual,
+            values: &ws.values,
         };
         if let Err(termination) = border.factored(x, &mut at, report) {
             return (termination, worst(ws, border));
@@ -374,6 +382,7 @@ pub(crate) fn run_bordered<B: Border>(
                 let mut at = Linearization {
                     linear: &mut ws.linear,
                     residual: &ws.residual,
+                    values: &ws.values,
                 };
                 if let Some(border_step) = border.step(Trial, &ws.trial, &mut ws.simplified, &mut at, report)
                     && max_norm(&ws.simplified).max(border_step) <= (1.0 - alpha / 4.0) * step_norm

@@ -208,7 +208,9 @@ struct Solved {
 /// model holds for it here ([`Model::tensions`]; for a tendon with friction, its tension at
 /// this s), with the friction multiplier w_j of each tendon of `slipping` from
 /// `multipliers` when given (a stick/slip history, docs/friction.md section 8), else its
-/// motion's sign.
+/// motion's sign. Inlined into its two callers, so that the large [`Point`] it builds is not
+/// copied on return.
+#[inline(always)]
 fn solve(
     model: &Model,
     site: &Site,
@@ -378,8 +380,7 @@ pub(crate) fn linearize(
     multipliers: Option<&[f64]>,
     derivatives: bool,
 ) -> Result<FrictionLinearization> {
-    let solved = solve(model, site, segment_end, (R, v, u), slipping, multipliers)?;
-    let Solved { point, slips, x } = solved;
+    let Solved { point, slips, x } = solve(model, site, segment_end, (R, v, u), slipping, multipliers)?;
     let k = slipping.len();
     let mut kappa = vec![0.0; k];
     for sl in &slips {
@@ -446,30 +447,43 @@ pub(crate) fn linearize(
             schur[j * m_count + l] = f64::from(u8::from(j == l)) + gj.dot(&sl.y);
         }
     }
+    // S^-1 once, column by column (S is m x m for the m tendons with friction here).
+    let mut inverse = vec![0.0; m_count * m_count];
+    let mut column = vec![0.0; m_count];
+    for l in 0..m_count {
+        let mut a = schur.clone();
+        column.fill(0.0);
+        column[l] = 1.0;
+        if !crate::dense::solve_dense(&mut a, &mut column, m_count) {
+            return Err(breakdown(site.s));
+        }
+        for (j, c) in column.iter().enumerate() {
+            inverse[j * m_count + l] = *c;
+        }
+    }
+    // J^-1 applied to M^-1 b: subtract Y S^-1 G^T (M^-1 b).
+    let woodbury = |mb: Vector6<f64>| -> Vector6<f64> {
+        let mut out = mb;
+        for (j, sl) in slips.iter().enumerate() {
+            let wj: f64 = (0..m_count)
+                .map(|l| inverse[j * m_count + l] * gradients[l].dot(&mb))
+                .sum();
+            out -= sl.y * wj;
+        }
+        out
+    };
     let solve_j = |b: &Vector6<f64>| -> Option<Vector6<f64>> {
         let mut row = b.transpose();
-        if !point.solve_rows(&mut row) {
-            return None;
-        }
-        let mb = row.transpose();
-        if m_count == 0 {
-            return Some(mb);
-        }
-        let mut a = schur.clone();
-        let mut w: Vec<f64> = gradients.iter().map(|g| g.dot(&mb)).collect();
-        if !crate::dense::solve_dense(&mut a, &mut w, m_count) {
-            return None;
-        }
-        let mut out = mb;
-        for (sl, wj) in slips.iter().zip(&w) {
-            out -= sl.y * *wj;
-        }
-        Some(out)
+        point.solve_rows(&mut row).then(|| woodbury(row.transpose()))
     };
+    // The 9 columns of dPhi/d(v, u, phi) through M^-1 at once.
+    let mut rows = rhs.transpose();
+    if !point.solve_rows(&mut rows) {
+        return Err(breakdown(site.s));
+    }
     let mut dx = SMatrix::<f64, 6, 9>::zeros();
     for c in 0..9 {
-        let col = solve_j(&rhs.column(c).into_owned()).ok_or_else(|| breakdown(site.s))?;
-        dx.set_column(c, &-col);
+        dx.set_column(c, &-woodbury(rows.row(c).transpose()));
     }
     let mut d_log_tension = vec![Vector6::zeros(); k];
     for (sl, column) in slips.iter().zip(&columns) {

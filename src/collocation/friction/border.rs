@@ -1,8 +1,16 @@
 //! The border rows of tendons with friction in Newton's loop ([`Border`] for [`Capstan`]):
 //! the capstan rows and their linearization at the current and trial points, and the
-//! bordered step through the Schur complement (module docs of [`super`]).
+//! bordered matrix's blocks handed to the [`Staircase`] node by node (module docs of
+//! [`super`]).
 
+use super::staircase::Block;
 use super::*;
+use crate::collocation::unknowns::{BASE_COLUMNS, BASE_ROWS, THETA, TIP_COLUMNS, TIP_ROWS};
+
+/// Entries of the Jacobian's base block, then of each link's block, in
+/// [`crate::collocation::unknowns::pattern`] order.
+const BASE_ENTRIES: usize = BASE_ROWS * BASE_COLUMNS;
+const LINK_ENTRIES: usize = NODE * 2 * NODE;
 
 impl Capstan<'_> {
     /// Reads psi_x, psi_z and F_z from the links' evaluations by the system's Jacobian at
@@ -12,7 +20,7 @@ impl Capstan<'_> {
         let m = self.z.len();
         let count = self.offsets.len();
         self.psi_z.fill(0.0);
-        self.columns_ready = false;
+        self.stairs.ready = false;
         let Some(profile) = self.system.friction.as_ref() else {
             return Ok(());
         };
@@ -49,6 +57,166 @@ impl Capstan<'_> {
     }
 }
 
+impl Capstan<'_> {
+    /// Node n's local column of slip l's log tension, if it has one there.
+    fn z_column(&self, n: usize, l: usize) -> Option<usize> {
+        self.node_slips[n].iter().position(|&j| j == l).map(|p| NODE + p)
+    }
+
+    /// Factors the bordered matrix: the backbone Jacobian `values` (pattern order) with the
+    /// border's blocks read by [`Capstan::read_border`]. False on a zero pivot.
+    pub(super) fn factor(&mut self, values: &[f64]) -> bool {
+        let Some(profile) = self.system.friction.as_ref() else {
+            return false;
+        };
+        let nodes = self.system.mesh.nodes.len();
+        let links = nodes - 1;
+        let count = self.offsets.len();
+        let m = self.z.len();
+        let tip_start = BASE_ENTRIES + links * LINK_ENTRIES;
+        let mut stairs = std::mem::replace(&mut self.stairs, Staircase::new(&[0]));
+        let ok = stairs.factor(|block, out| match block {
+            Block::Base => {
+                let width = NODE;
+                for r in 0..BASE_ROWS {
+                    out[r * width..r * width + BASE_COLUMNS]
+                        .copy_from_slice(&values[r * BASE_COLUMNS..(r + 1) * BASE_COLUMNS]);
+                }
+            }
+            Block::Link(k) => {
+                let (ck, width) = (
+                    NODE + self.node_slips[k].len(),
+                    NODE + self.node_slips[k].len() + NODE + self.node_slips[k + 1].len(),
+                );
+                // The 24 columns of a link block: node k's 12, then node k + 1's.
+                let column = |c: usize| if c < NODE { c } else { ck + c - NODE };
+                let z_column =
+                    |side: usize, l: usize| self.z_column(k + side, l).map(|c| if side == 0 { c } else { ck + c });
+                let block = &values[BASE_ENTRIES + k * LINK_ENTRIES..BASE_ENTRIES + (k + 1) * LINK_ENTRIES];
+                for r in 0..NODE {
+                    let row = &mut out[r * width..(r + 1) * width];
+                    for c in 0..2 * NODE {
+                        row[column(c)] = block[r * 2 * NODE + c];
+                    }
+                    if let Some(rz) = &self.link_z[k] {
+                        for l in 0..count {
+                            for side in 0..2 {
+                                if let Some(c) = z_column(side, l) {
+                                    row[c] += rz[(r, side * count + l)];
+                                }
+                            }
+                        }
+                    }
+                }
+                for (j, term) in self.terminations.iter().enumerate() {
+                    if let (Some((first, vals)), Some(c)) = (term, self.z_column(k, j))
+                        && profile.spans[j] == k
+                        && (link_row(k)..link_row(k + 1)).contains(first)
+                    {
+                        for (i, v) in vals.iter().enumerate() {
+                            out[(first - link_row(k) + i) * width + c] += v;
+                        }
+                    }
+                }
+                for (a, &j) in self.node_slips[k + 1].iter().enumerate() {
+                    let global = self.offsets[j] + k;
+                    let row = &mut out[(NODE + a) * width..(NODE + a + 1) * width];
+                    for (c, v) in self.psi_x[global].iter().enumerate() {
+                        row[column(c)] = *v;
+                    }
+                    for l in 0..count {
+                        for side in 0..2 {
+                            if let (Some(c), Some(u)) =
+                                (z_column(side, l), unknown(&self.offsets, &profile.spans, l, k + side))
+                            {
+                                row[c] += self.psi_z[global * m + u];
+                            }
+                        }
+                    }
+                }
+            }
+            Block::Tip => {
+                let width = NODE + self.node_slips[links].len();
+                for r in 0..TIP_ROWS {
+                    out[r * width + THETA..r * width + NODE]
+                        .copy_from_slice(&values[tip_start + r * TIP_COLUMNS..tip_start + (r + 1) * TIP_COLUMNS]);
+                }
+                for (j, term) in self.terminations.iter().enumerate() {
+                    if let (Some((first, vals)), Some(c)) = (term, self.z_column(links, j))
+                        && *first == tip_row(nodes)
+                    {
+                        for (i, v) in vals.iter().enumerate() {
+                            out[i * width + c] += v;
+                        }
+                    }
+                }
+            }
+        });
+        self.stairs = stairs;
+        ok
+    }
+
+    /// Solves the factored bordered system for the right-hand side (`rhs_x` on the backbone
+    /// rows, `rhs_z` on the border's): dx into `dx` (scaled node unknowns), dz into
+    /// `border_step`. Returns max |dz|, None without factors or for a value that is not
+    /// finite.
+    pub(super) fn solve_factored(&mut self, rhs_x: &[f64], rhs_z: &[f64], dx: &mut [f64]) -> Option<f64> {
+        let nodes = self.system.mesh.nodes.len();
+        let links = nodes - 1;
+        let (offsets, node_slips) = (&self.offsets, &self.node_slips);
+        let dz = &mut self.border_step;
+        let ok = self.stairs.solve(
+            |block, out| match block {
+                Block::Base => out.copy_from_slice(&rhs_x[..BASE_ROWS]),
+                Block::Link(k) => {
+                    out[..NODE].copy_from_slice(&rhs_x[link_row(k)..link_row(k + 1)]);
+                    for (a, &j) in node_slips[k + 1].iter().enumerate() {
+                        out[NODE + a] = rhs_z[offsets[j] + k];
+                    }
+                }
+                Block::Tip => out.copy_from_slice(&rhs_x[tip_row(links + 1)..]),
+            },
+            |n, values| {
+                dx[n * NODE..(n + 1) * NODE].copy_from_slice(&values[..NODE]);
+                for (a, &j) in node_slips[n].iter().enumerate() {
+                    dz[offsets[j] + n - 1] = values[NODE + a];
+                }
+            },
+        );
+        let norm = dz.iter().fold(0.0, |acc: f64, d| acc.max(d.abs()));
+        ok.then_some(norm)
+    }
+}
+
+/// `out` = J v for the backbone Jacobian `values` in pattern order on a mesh of `nodes`
+/// nodes.
+fn jacobian_times(values: &[f64], nodes: usize, v: &[f64], out: &mut [f64]) {
+    let links = nodes - 1;
+    for r in 0..BASE_ROWS {
+        out[r] = (0..BASE_COLUMNS).map(|c| values[r * BASE_COLUMNS + c] * v[c]).sum();
+    }
+    for k in 0..links {
+        let block = &values[BASE_ENTRIES + k * LINK_ENTRIES..BASE_ENTRIES + (k + 1) * LINK_ENTRIES];
+        let x = &v[k * NODE..(k + 2) * NODE];
+        for r in 0..NODE {
+            out[link_row(k) + r] = block[r * 2 * NODE..(r + 1) * 2 * NODE]
+                .iter()
+                .zip(x)
+                .map(|(a, b)| a * b)
+                .sum();
+        }
+    }
+    let (tip_start, row0) = (BASE_ENTRIES + links * LINK_ENTRIES, tip_row(nodes));
+    let x = &v[links * NODE + THETA..(links + 1) * NODE];
+    for r in 0..TIP_ROWS {
+        out[row0 + r] = values[tip_start + r * TIP_COLUMNS..tip_start + (r + 1) * TIP_COLUMNS]
+            .iter()
+            .zip(x)
+            .map(|(a, b)| a * b)
+            .sum();
+    }
+}
+
 impl Border for Capstan<'_> {
     fn on<R>(&mut self, point: Point, f: impl FnOnce(&System) -> R) -> R {
         self.load(point);
@@ -76,11 +244,18 @@ impl Border for Capstan<'_> {
     }
 
     /// Reads the border's blocks ([`Capstan::read_border`]) at `x`, which Newton has just
-    /// factored.
-    fn factored(&mut self, x: &[State], _: &mut Linearization, _: &mut SolveReport) -> Result<(), Termination> {
-        self.read_border(x)
+    /// factored, and factors the bordered matrix with them.
+    fn factored(&mut self, x: &[State], at: &mut Linearization, report: &mut SolveReport) -> Result<(), Termination> {
+        self.read_border(x)?;
+        let t = Instant::now();
+        let ok = self.factor(at.values());
+        report.timings.factorization += t.elapsed();
+        if ok { Ok(()) } else { Err(Termination::SingularJacobian) }
     }
 
+    /// The bordered step from the staircase's factors: the backbone rows' right-hand side
+    /// is -F, which `a` = J^-1 (-F) gives back as J a (at the trial point Newton hands only
+    /// a; at the current one F itself).
     fn step(
         &mut self,
         point: Point,
@@ -89,12 +264,28 @@ impl Border for Capstan<'_> {
         at: &mut Linearization,
         report: &mut SolveReport,
     ) -> Option<f64> {
+        let t = Instant::now();
+        let mut rhs_x = std::mem::take(&mut self.rhs_x);
+        match point {
+            Point::Current => {
+                for (r, f) in rhs_x.iter_mut().zip(at.residual()) {
+                    *r = -f;
+                }
+            }
+            Point::Trial => jacobian_times(at.values(), self.system.mesh.nodes.len(), a, &mut rhs_x),
+        }
         let psi = match point {
             Point::Current => &self.psi,
             Point::Trial => &self.trial_psi,
         };
-        self.rows_in.copy_from_slice(psi);
-        let norm = self.bordered(a, &mut |rhs, out| at.solve(rhs, out, report))?;
+        for (r, p) in self.rows_in.iter_mut().zip(psi) {
+            *r = -p;
+        }
+        let rows_in = std::mem::take(&mut self.rows_in);
+        let norm = self.solve_factored(&rhs_x, &rows_in, a);
+        (self.rhs_x, self.rows_in) = (rhs_x, rows_in);
+        report.timings.solve += t.elapsed();
+        let norm = norm?;
         match point {
             Point::Current => self.dz.copy_from_slice(&self.border_step),
             Point::Trial => self.simplified.copy_from_slice(&self.border_step),

@@ -15,6 +15,7 @@
 //! shape until it changes nothing.
 
 use super::grip::{choose, stuck_multiplier};
+use super::staircase::Staircase;
 use super::*;
 use crate::model::length;
 use crate::solution::Solution;
@@ -44,6 +45,9 @@ pub(crate) struct Carried {
     pub(crate) solved: bool,
     /// The report of the solve that chose the mesh: the template of every step's report.
     pub(crate) report: SolveReport,
+    /// The last step's Newton workspace and bordered factors on this mesh, which the next
+    /// step's first iterations reuse as chord steps (None before the first step).
+    factors: Option<(Workspace, Staircase)>,
 }
 
 /// One step's answer: the solution and, per tendon with friction (robot index), its zones
@@ -113,17 +117,21 @@ pub(crate) fn start(robots: &[Robot], options: &Options) -> Result<Carried> {
         grips,
         solved: most == 0,
         report: first.report,
+        factors: None,
     })
 }
 
 /// The march of every tendon with friction along the shape `x` (module docs): new contacts,
 /// multipliers and predicted log tensions written into `border`'s profile and unknowns.
+/// Each link's capacity and stuck tension are those of its evaluation at `x`, the profile's
+/// log tensions and contacts: when Newton has just `converged` to `x`, its last evaluation
+/// of every link (kept by the profile) is that one and is read, else the link is evaluated.
 /// Returns whether anything changed.
 ///
 /// # Errors
 /// A model breakdown on a link; a rigid tendon that would stick (statically
 /// indeterminate).
-fn march(border: &mut Capstan, x: &[State]) -> Result<bool> {
+fn march(border: &mut Capstan, x: &[State], converged: bool) -> Result<bool> {
     let system = &border.system;
     let length = system.model.robot.length();
     let Some(profile) = system.friction.as_ref() else {
@@ -144,10 +152,21 @@ fn march(border: &mut Capstan, x: &[State]) -> Result<bool> {
             continue;
         };
         let seg = system.mesh.nodes[k].segment_end;
-        let lin = interval(profile, length, k, sites, seg, &x[k], &x[k + 1], None)?;
+        let kept = if converged {
+            profile.cached(k, |lin| lin.map(|l| (l.capacity.clone(), l.stuck_tension.clone())))
+        } else {
+            None
+        };
+        let (capacities, stuck_tensions) = match kept {
+            Some(kept) => kept,
+            None => {
+                let lin = interval(profile, length, k, sites, seg, &x[k], &x[k + 1], None)?;
+                (lin.capacity, lin.stuck_tension)
+            }
+        };
         for j in (0..count).filter(|&j| profile.on_link(j, k)) {
-            let (base, za, capacity) = (profile.base[j], z[j][k], lin.capacity[j]);
-            let mut choice = choose(base, za, capacity, lin.stuck_tension[j]);
+            let (base, za, capacity) = (profile.base[j], z[j][k], capacities[j]);
+            let mut choice = choose(base, za, capacity, stuck_tensions[j]);
             let first = *sliding[j].get_or_insert(choice.contact);
             if base > 0.0 && (stuck[j] || choice.contact != first) {
                 choice.contact = Contact::Stick;
@@ -232,8 +251,14 @@ pub(crate) fn step(robot: &Robot, options: &Options, carried: &mut Carried) -> R
     profile.z.clone_from(&carried.z);
     profile.grips = Some(carried.grips.clone());
     system.friction = Some(profile);
-    let mut ws = Workspace::new(&system, options.linear_solver)?;
     let mut border = Capstan::new(system);
+    let mut ws = match carried.factors.take() {
+        Some((ws, stairs)) => {
+            border.stairs = stairs;
+            ws
+        }
+        None => Workspace::new(&border.system, options.linear_solver)?,
+    };
     let mut x = carried.x.clone();
     let mut report = carried.report.clone();
     (
@@ -242,14 +267,17 @@ pub(crate) fn step(robot: &Robot, options: &Options, carried: &mut Carried) -> R
         report.chord_steps,
         report.load_steps,
     ) = (0, 0, 0, 0);
+    // Each pass after the first starts with chord steps on the last pass's factors (its
+    // pattern a march ago): Newton takes a fresh Jacobian as soon as they do not contract.
+    // The first pass has no factors and starts with a Newton step.
     let settings = Settings {
         tolerance: options.residual_tolerance,
         max_iterations: options.max_iterations,
-        reuse_factors: false,
+        reuse_factors: true,
         stop_when_damped: false,
     };
     let solved = std::mem::replace(&mut carried.solved, false);
-    let mut settled = !march(&mut border, &x)? && solved;
+    let mut settled = !march(&mut border, &x, false)? && solved;
     // A rigid tendon that would stick is refused by the march; one that is near sticking
     // may keep Newton or the passes from settling, which the hint names.
     let rigid_hint = robot
@@ -260,11 +288,13 @@ pub(crate) fn step(robot: &Robot, options: &Options, carried: &mut Carried) -> R
         .map_or(String::new(), |(i, _)| {
             format!("; tendon {} is rigid: set its `stiffness` if it sticks", i + 1)
         });
+    let mut ran = false;
     for _ in 0..PASSES {
         if settled {
             break;
         }
         let (termination, worst) = newton::run_bordered(&mut border, &mut ws, &mut x, &settings, &mut report);
+        ran = true;
         report.termination = termination;
         if termination != Termination::Converged {
             let system = &border.system;
@@ -277,7 +307,7 @@ pub(crate) fn step(robot: &Robot, options: &Options, carried: &mut Carried) -> R
         }
         // The contacts and multipliers on the converged shape: settled when Newton's were.
         border.load(Point::Current);
-        settled = !march(&mut border, &x)?;
+        settled = !march(&mut border, &x, true)?;
     }
     if !settled {
         return Err(Error::NotConverged {
@@ -289,7 +319,24 @@ pub(crate) fn step(robot: &Robot, options: &Options, carried: &mut Carried) -> R
             ),
         });
     }
-    let estimated = estimate_with_friction(&mut border, &mut ws, &x).ok().flatten();
+    // The estimate does not see a stuck stretch's error (its multiplier is constant per
+    // link and its boundary falls inside one: about 1e3 times the estimate on the
+    // prototype, docs/friction.md section 8), so a step with one reports none and skips it.
+    let stuck = border
+        .system
+        .friction
+        .as_ref()
+        .and_then(|p| p.grips.as_ref())
+        .is_some_and(|g| g.iter().any(|g| g.contacts.contains(&Contact::Stick)));
+    let estimated = if stuck {
+        None
+    } else {
+        // Newton's last residual is the backbone rows' at x when a pass ran.
+        let converged = ran.then(|| ws.residual.clone());
+        estimate_with_friction(&mut border, &mut ws, &x, converged)
+            .ok()
+            .flatten()
+    };
     border.load(Point::Current);
     let system = &border.system;
     let Some(profile) = system.friction.as_ref() else {
@@ -315,10 +362,7 @@ pub(crate) fn step(robot: &Robot, options: &Options, carried: &mut Carried) -> R
         })
         .collect();
     pipeline::record_estimate(&mut report, estimated.as_ref().map(|(c, _)| c), options, robot.length());
-    // The estimate does not see a stuck stretch's error (its multiplier is constant per
-    // link and its boundary falls inside one: about 1e3 times the estimate on the
-    // prototype, docs/friction.md section 8), so a step with one reports none.
-    if grips.iter().any(|g| g.contacts.contains(&Contact::Stick)) {
+    if stuck {
         report.error_estimate = None;
         report.tolerance_met = None;
     }
@@ -361,6 +405,7 @@ pub(crate) fn step(robot: &Robot, options: &Options, carried: &mut Carried) -> R
     carried.z.clone_from(&profile.z);
     carried.grips = next;
     carried.x = x;
+    carried.factors = Some((ws, border.stairs));
     Ok((solution, zones))
 }
 

@@ -1,5 +1,5 @@
-//! The tension profile of the tendons with friction on a mesh ([`Profile`]) and the
-//! collocation of an interval with friction: the 12 rows of the backbone and one capstan row
+//! The collocation of an interval with friction (the log tensions on the mesh are the
+//! [`Profile`]): the 12 rows of the backbone and one capstan row
 //! per tendon with friction, with their exact Jacobian (docs/friction.md, "Collocation").
 //!
 //! Each tendon j with friction carries the log tension z_j = ln(tau_j / tau_j(0)) at the
@@ -13,187 +13,19 @@
 //!
 //! where kappa~ at the midpoint is evaluated at (y_m, z_m): y and z are one collocation
 //! state, so the scheme keeps order 4. The backbone rows see z through the tensions of eq.
-//! 13 with friction at the nodes and the midpoint ([`friction::linearize`]).
+//! 13 with friction at the nodes and the midpoint ([`crate::model::friction::linearize`]).
 #![allow(non_snake_case)]
 
 use super::super::residual::{Block, EndColumns, IntervalSites, QuarterSites, end_points, rhs_linearized, scale_rows};
 use super::super::unknowns::THETA;
-pub(crate) use super::grip::{Contact, Grip, Stuck, stuck_multiplier};
+use super::grip::Stuck;
+pub(crate) use super::profile::Profile;
 use crate::error::Result;
-use crate::mesh::Mesh;
-use crate::model::equations::{Model, Site};
-use crate::model::friction::{self, FrictionLinearization};
+use crate::model::equations::Site;
+use crate::model::friction::FrictionLinearization;
 use crate::so3;
 use crate::solution::State;
 use nalgebra::{DMatrix, SMatrix, Vector3, Vector6};
-use std::cell::RefCell;
-
-/// The log tensions of the tendons with friction on a mesh, and a model to evaluate eq. 13
-/// with them.
-#[derive(Debug)]
-pub(crate) struct Profile<'a> {
-    /// Indices of the tendons with friction ([`friction::slipping`]).
-    pub(crate) slipping: Vec<usize>,
-    /// Their tensions at the base entry tau_j(0) (N), the input.
-    pub(crate) base: Vec<f64>,
-    /// The last node of each one's span (its left limit at the termination).
-    pub(crate) spans: Vec<usize>,
-    /// z_j at every node (0 at node 0; past the span, the span's last value).
-    pub(crate) z: Vec<Vec<f64>>,
-    /// In a stick/slip history, each slip's [`Grip`] on this mesh; None in full slip.
-    pub(crate) grips: Option<Vec<Grip>>,
-    /// The model with the tensions of one point, for eq. 13 with friction.
-    scratch: RefCell<Model<'a>>,
-    /// Each link's last evaluation ([`interval`] through the system's residual or
-    /// Jacobian), which the border reads instead of evaluating the link again.
-    cache: RefCell<Vec<Option<IntervalLinearization>>>,
-}
-
-impl<'a> Profile<'a> {
-    /// The profile of `model`'s tendons with friction on `mesh`, constant (z = 0).
-    pub(crate) fn new(model: &Model<'a>, mesh: &Mesh) -> Self {
-        let robot = model.robot;
-        let slipping = friction::slipping(robot);
-        let base = slipping.iter().map(|&i| model.tensions[i]).collect();
-        let spans = slipping
-            .iter()
-            .map(|&i| {
-                let end = robot.tendons[i].end(robot.length());
-                mesh.nodes
-                    .iter()
-                    .position(|n| n.s >= end)
-                    .unwrap_or(mesh.nodes.len() - 1)
-            })
-            .collect();
-        Profile {
-            z: vec![vec![0.0; mesh.nodes.len()]; slipping.len()],
-            grips: None,
-            slipping,
-            base,
-            spans,
-            scratch: RefCell::new(model.clone()),
-            cache: RefCell::new((1..mesh.nodes.len()).map(|_| None).collect()),
-        }
-    }
-
-    /// A copy with the same log tensions and a fresh scratch model and cache (tests).
-    #[cfg(test)]
-    fn clone_z(&self) -> Self {
-        Profile {
-            slipping: self.slipping.clone(),
-            base: self.base.clone(),
-            spans: self.spans.clone(),
-            z: self.z.clone(),
-            grips: self.grips.clone(),
-            scratch: RefCell::new(self.scratch.borrow().clone()),
-            cache: RefCell::new(self.cache.borrow().iter().map(|_| None).collect()),
-        }
-    }
-
-    /// The friction coefficient mu_j of slip j.
-    pub(crate) fn coefficient(&self, j: usize) -> f64 {
-        self.robot().tendons[self.slipping[j]]
-            .active_friction()
-            .map_or(0.0, |f| f.coefficient)
-    }
-
-    /// Number of tendons with friction.
-    pub(crate) fn count(&self) -> usize {
-        self.slipping.len()
-    }
-
-    /// The tension (N) of slip j where its log tension is `z`.
-    pub(crate) fn tension(&self, j: usize, z: f64) -> f64 {
-        self.base[j] * z.exp()
-    }
-
-    /// Whether slip j loads link k (its span reaches node k + 1).
-    pub(crate) fn on_link(&self, j: usize, k: usize) -> bool {
-        k < self.spans[j]
-    }
-
-    /// Sets `model`'s tension of each tendon with friction to the one it delivers at its
-    /// termination, which the jump and tip conditions use.
-    pub(crate) fn deliver(&self, model: &mut Model) {
-        for (j, &i) in self.slipping.iter().enumerate() {
-            model.tensions[i] = self.tension(j, self.z[j][self.spans[j]]);
-        }
-    }
-
-    /// Every tendon's tension (N) at every node: the profile for the slips, the model's
-    /// tension for the others.
-    pub(crate) fn node_tensions(&self, model: &Model) -> Vec<Vec<f64>> {
-        (0..self.z.first().map_or(0, Vec::len))
-            .map(|n| {
-                let mut t = model.tensions.clone();
-                for (j, &i) in self.slipping.iter().enumerate() {
-                    t[i] = self.tension(j, self.z[j][n.min(self.spans[j])]);
-                }
-                t
-            })
-            .collect()
-    }
-
-    /// Keeps link k's evaluation `lin` for the border.
-    pub(crate) fn keep(&self, k: usize, lin: IntervalLinearization) {
-        self.cache.borrow_mut()[k] = Some(lin);
-    }
-
-    /// Runs `f` on link k's last evaluation (None when it has none).
-    pub(crate) fn cached<R>(&self, k: usize, f: impl FnOnce(Option<&IntervalLinearization>) -> R) -> R {
-        f(self.cache.borrow()[k].as_ref())
-    }
-
-    /// The friction multipliers w_j of the slips on link k in a history (None in full
-    /// slip: the motions' signs): -1 or +1 where a slip slides; where it sticks,
-    /// w = (z_b - z_a) / C with C its capacity on the link from the last march, so that
-    /// the tangential load follows the log tensions the stick rows set (a step behind, only
-    /// C, which the shape changes slowly, lags).
-    pub(crate) fn multipliers(&self, k: usize) -> Option<Vec<f64>> {
-        self.grips.as_ref().map(|g| {
-            g.iter()
-                .enumerate()
-                .map(|(j, g)| match g.contacts.get(k) {
-                    Some(Contact::Stick) => stuck_multiplier(self.z[j][k], self.z[j][k + 1], g.capacities[k]),
-                    _ => g.multipliers.get(k).copied().unwrap_or(1.0),
-                })
-                .collect()
-        })
-    }
-
-    /// Whether slip j sticks on link k (a history's stick row replaces its capstan row).
-    pub(crate) fn sticks(&self, j: usize, k: usize) -> bool {
-        self.grips
-            .as_ref()
-            .is_some_and(|g| g[j].contacts.get(k) == Some(&Contact::Stick))
-    }
-
-    /// Eq. 13 with friction at a site and state, the slips at log tensions `z` and
-    /// multipliers `w` (the motions' signs when None), with its derivatives when
-    /// `derivatives`.
-    #[allow(clippy::too_many_arguments)]
-    fn point(
-        &self,
-        site: &Site,
-        segment_end: f64,
-        R: &nalgebra::Matrix3<f64>,
-        y: (&Vector3<f64>, &Vector3<f64>),
-        z: &[f64],
-        w: Option<&[f64]>,
-        derivatives: bool,
-    ) -> Result<FrictionLinearization> {
-        let mut model = self.scratch.borrow_mut();
-        for (j, &i) in self.slipping.iter().enumerate() {
-            model.tensions[i] = self.tension(j, z[j]);
-        }
-        friction::linearize(&model, site, segment_end, (R, y.0, y.1), &self.slipping, w, derivatives)
-    }
-
-    /// The robot.
-    pub(crate) fn robot(&self) -> &'a crate::Robot {
-        self.scratch.borrow().robot
-    }
-}
 
 /// The linearization of an interval with friction: its backbone rows, capstan rows and
 /// their derivatives.
@@ -216,7 +48,7 @@ pub(crate) struct IntervalLinearization {
     pub(crate) psi_x: DMatrix<f64>,
     /// d psi / dz: k x 2k, columns as `rows_z`.
     pub(crate) psi_z: DMatrix<f64>,
-    /// Whether the derivatives were evaluated (else they are zero).
+    /// Whether the derivatives were evaluated (else the three blocks above have no rows).
     pub(crate) derivatives: bool,
 }
 
@@ -287,7 +119,7 @@ fn interval_at(
     let (y0, y1) = end_points(a, b);
     let theta1: Vector3<f64> = y1.fixed_rows::<3>(THETA).into();
     let derivatives = jac.is_some();
-    let la = profile.point(&sites.start, segment_end, &a.R, (&a.v, &a.u), &za, w, derivatives)?;
+    let la = profile.start_point(k, &sites.start, segment_end, a, &za, w, derivatives)?;
     let lb = profile.point(&sites.end, segment_end, &b.R, (&b.v, &b.u), &zb, w, derivatives)?;
     let p0 = rhs_linearized(&sites.start, &la.lin, &a.R, &y0);
     let p1 = rhs_linearized(&sites.end, &lb.lin, &a.R, &y1);
@@ -331,12 +163,14 @@ fn interval_at(
         psi,
         capacity,
         stuck_tension: stuck.iter().map(|t| t.map_or(f64::NAN, |t| t.0)).collect(),
-        rows_z: DMatrix::zeros(12, 2 * count),
-        psi_x: DMatrix::zeros(count, 24),
-        psi_z: DMatrix::zeros(count, 2 * count),
+        // Without derivatives the blocks stay empty (nothing reads them then).
+        rows_z: DMatrix::zeros(if derivatives { 12 } else { 0 }, 2 * count),
+        psi_x: DMatrix::zeros(if derivatives { count } else { 0 }, 24),
+        psi_z: DMatrix::zeros(if derivatives { count } else { 0 }, 2 * count),
         derivatives,
     };
     let Some(jac) = jac else {
+        profile.keep_end(k, segment_end, b, zb, w, derivatives, lb);
         return Ok(out);
     };
 
@@ -450,6 +284,7 @@ fn interval_at(
         }
         out.psi_z[(j, count + j)] = 1.0;
     }
+    profile.keep_end(k, segment_end, b, zb, w, derivatives, lb);
     Ok(out)
 }
 
@@ -527,6 +362,7 @@ pub(crate) fn interval_order6(
         })
         .collect();
     let rates = |f: &Block<f64>| f.fixed_rows::<6>(6).into_owned();
+    profile.order6.borrow_mut()[k].clone_from(&psi);
     Ok((scale_rows(y1 - y0 - quadrature, length), psi, rates(&f0), rates(&f1)))
 }
 
@@ -535,6 +371,8 @@ mod tests {
     use super::*;
     use crate::cases;
     use crate::collocation::residual::IntervalSites;
+    use crate::mesh::Mesh;
+    use crate::model::equations::Model;
     use crate::model::tendon::{Friction, Motion};
 
     /// The interval's backbone rows and capstan rows against central differences in the

@@ -149,22 +149,15 @@ impl<'r> Capstan<'r> {
     /// system or a value that is not finite.
     pub(crate) fn respond(&mut self, rhs: &[f64], ws: &mut Workspace) -> Option<Vec<f64>> {
         let n = self.system.unknowns();
-        let mut dx = ws.solve_again(&rhs[..n])?.to_vec();
         if self.z.is_empty() {
-            return Some(dx);
+            return ws.solve_again(&rhs[..n]).map(<[f64]>::to_vec);
         }
-        // The border's rows enter as psi in S dz = -psi - psi_x a: here psi = dpsi/dq.
-        for (r, d) in self.rows_in.iter_mut().zip(&rhs[n..]) {
-            *r = -d;
+        // The bordered matrix, factored once per linearization with the workspace's Jacobian.
+        if !ws.has_factors() || (!self.stairs.ready && !self.factor(&ws.values)) {
+            return None;
         }
-        let mut solve = |rhs: &[f64], out: &mut [f64]| match ws.solve_again(rhs) {
-            Some(x) => {
-                out.copy_from_slice(x);
-                true
-            }
-            None => false,
-        };
-        self.bordered(&mut dx, &mut solve)?;
+        let mut dx = vec![0.0; n];
+        self.solve_factored(&rhs[..n], &rhs[n..], &mut dx)?;
         Some(dx)
     }
 }

@@ -9,10 +9,10 @@
 //!
 //! Every block is exact: J by the chain rule through eq. 13 with friction, F_z, psi_x and
 //! psi_z from the same interval linearization, the termination's force by its linearity in
-//! the tension. One factorization of J gives a = J^-1 (-F) and the columns X = J^-1 F_z
-//! (one per unknown z), then dz from the Schur complement S = psi_z - psi_x X and
-//! dx = a - X dz, in the Newton loop of displacement-controlled tendons
-//! ([`newton::run_bordered`]). The solve starts from the frictionless solution on its mesh.
+//! the tension. The whole matrix, reordered node by node, is factored as one staircase
+//! ([`staircase`]; the blocks handed to it in `border.rs`), in the Newton loop of
+//! displacement-controlled tendons ([`newton::run_bordered`]). The solve starts from the
+//! frictionless solution on its mesh.
 #![allow(non_snake_case)]
 
 mod border;
@@ -20,13 +20,14 @@ mod grip;
 pub(crate) mod history;
 mod interval;
 mod linearized;
+mod profile;
+mod staircase;
 
 pub use grip::Contact;
 pub(crate) use grip::Grip;
 pub(crate) use interval::{Profile, interval, interval_order6};
 
 use super::newton::{self, Border, Linearization, Point, Settings, Workspace};
-use super::residual::QuarterSites;
 use super::system::System;
 use super::unknowns::{self, NODE, link_row, tip_row};
 use super::{Cache, Options, estimate, pipeline, refine};
@@ -38,11 +39,8 @@ use crate::model::equations::Model;
 use crate::report::{Method, SolveReport, Stability, Termination};
 use crate::solution::{Solution, State};
 use crate::{Error, Robot};
+use staircase::Staircase;
 use std::time::Instant;
-
-/// Passes of the iterative bordered solve before it falls back to the dense Schur
-/// complement: at a contraction of 0.1 per pass, 16 reach rounding.
-const ITERATIONS: usize = 30;
 
 /// The unknown of slip j at node n given the slips' first unknowns and spans, if it is one
 /// (n in 1..=span).
@@ -81,10 +79,6 @@ pub(crate) struct Capstan<'r> {
     /// psi at the current and trial point.
     psi: Vec<f64>,
     trial_psi: Vec<f64>,
-    /// X = J^-1 F_z, one column per unknown, formed only when the iterative solve does not
-    /// contract (`columns_ready` once formed for the current J).
-    columns: Vec<Vec<f64>>,
-    columns_ready: bool,
     /// F_z by link: the 12 x 2k derivative of its backbone rows in the log tensions of its
     /// two nodes (None for jumps and links past every span).
     link_z: Vec<Option<nalgebra::DMatrix<f64>>>,
@@ -93,38 +87,39 @@ pub(crate) struct Capstan<'r> {
     terminations: Vec<Option<(usize, [f64; 6])>>,
     /// The step dz of the last bordered solve.
     border_step: Vec<f64>,
-    /// Work vectors: n-long w = F_z dz and y = J^-1 w, m-long right-hand sides, and a small
-    /// system per link.
-    w: Vec<f64>,
-    y: Vec<f64>,
-    r0: Vec<f64>,
-    rr: Vec<f64>,
+    /// Work vectors: the backbone rows' right-hand side, a small system per link (the
+    /// forward substitution of psi_z).
+    rhs_x: Vec<f64>,
     small_matrix: Vec<f64>,
     small_rhs: Vec<f64>,
     /// psi_x: each row's 24 entries over the unknowns of its link's two nodes.
     psi_x: Vec<[f64; 2 * NODE]>,
-    /// The link of each row.
-    row_link: Vec<usize>,
     /// psi_z, dense, row major.
     psi_z: Vec<f64>,
-    schur: Vec<f64>,
-    schur_rhs: Vec<f64>,
-    /// The border rows of the elimination in hand (psi, or the estimate's difference).
+    /// The border rows of the solve in hand (psi, or the estimate's difference).
     rows_in: Vec<f64>,
+    /// The slips with a log-tension unknown at each node, in order.
+    node_slips: Vec<Vec<usize>>,
+    /// The factors of the bordered matrix reordered node by node ([`Staircase`]).
+    stairs: Staircase,
 }
 
 impl<'r> Capstan<'r> {
     fn new(system: System<'r>) -> Self {
         let profile = system.friction.as_ref().map_or_else(Vec::new, |p| p.spans.clone());
         let mut offsets = Vec::with_capacity(profile.len());
-        let mut row_link = Vec::new();
+        let mut m = 0;
         for &span in &profile {
-            offsets.push(row_link.len());
-            row_link.extend(0..span);
+            offsets.push(m);
+            m += span;
         }
-        let m = row_link.len();
         let n = system.unknowns();
-        let links = system.mesh.nodes.len() - 1;
+        let nodes = system.mesh.nodes.len();
+        let links = nodes - 1;
+        let node_slips: Vec<Vec<usize>> = (0..nodes)
+            .map(|n| (0..profile.len()).filter(|&j| (1..=profile[j]).contains(&n)).collect())
+            .collect();
+        let extra: Vec<usize> = node_slips.iter().map(Vec::len).collect();
         let mut border = Capstan {
             system,
             offsets,
@@ -134,23 +129,17 @@ impl<'r> Capstan<'r> {
             simplified: vec![0.0; m],
             psi: vec![0.0; m],
             trial_psi: vec![0.0; m],
-            columns: vec![vec![0.0; n]; m],
-            columns_ready: false,
             link_z: vec![None; links],
             terminations: vec![None; profile.len()],
             border_step: vec![0.0; m],
-            w: vec![0.0; n],
-            y: vec![0.0; n],
-            r0: vec![0.0; m],
-            rr: vec![0.0; m],
+            rhs_x: vec![0.0; n],
             small_matrix: vec![0.0; profile.len() * profile.len()],
             small_rhs: vec![0.0; profile.len()],
             psi_x: vec![[0.0; 2 * NODE]; m],
-            row_link,
             psi_z: vec![0.0; m * m],
-            schur: vec![0.0; m * m],
-            schur_rhs: vec![0.0; m],
             rows_in: vec![0.0; m],
+            stairs: Staircase::new(&extra),
+            node_slips,
         };
         border.reload();
         border
@@ -190,37 +179,6 @@ impl<'r> Capstan<'r> {
         profile.deliver(&mut self.system.model);
     }
 
-    /// The bordered solve by the dense Schur complement S = psi_z - psi_x X with the columns
-    /// X = J^-1 F_z: dz from S dz = -psi - psi_x a (psi: `rows_in`), left in `border_step`,
-    /// and a becomes dx = a - X dz. Returns max |dz|, None when S is singular or a value is
-    /// not finite.
-    fn eliminate(&mut self, a: &mut [f64]) -> Option<f64> {
-        let m = self.z.len();
-        for r in 0..m {
-            let first = self.row_link[r] * NODE;
-            let row = &self.psi_x[r];
-            let dot = |v: &[f64]| -> f64 { row.iter().zip(&v[first..first + 2 * NODE]).map(|(p, q)| p * q).sum() };
-            for (c, column) in self.columns.iter().enumerate() {
-                self.schur[r * m + c] = self.psi_z[r * m + c] - dot(column);
-            }
-            self.schur_rhs[r] = -self.rows_in[r] - dot(a);
-        }
-        if !solve_dense(&mut self.schur, &mut self.schur_rhs, m) {
-            return None;
-        }
-        for (column, &d) in self.columns.iter().zip(&self.schur_rhs) {
-            if d != 0.0 {
-                for (s, c) in a.iter_mut().zip(column) {
-                    *s -= c * d;
-                }
-            }
-        }
-        self.border_step.copy_from_slice(&self.schur_rhs);
-        let finite = a.iter().chain(&self.schur_rhs).all(|v| v.is_finite());
-        let norm = self.schur_rhs.iter().fold(0.0, |acc: f64, d| acc.max(d.abs()));
-        finite.then_some(norm)
-    }
-
     /// The derivative of the jump or tip rows at slip j's termination with respect to its
     /// log tension at its last node: the termination force is linear in the tension, so it
     /// is the rows' tendon part, the rows with the tension minus the rows without it. The
@@ -253,40 +211,6 @@ impl<'r> Capstan<'r> {
         without_model.tensions[tendon] = 0.0;
         let without = rows(&without_model)?;
         Ok(Some((first, std::array::from_fn(|r| with[r] - without[r]))))
-    }
-
-    /// `out` = F_z v: the backbone rows' change along the log-tension change `v`.
-    fn apply_columns(&self, v: &[f64], out: &mut [f64]) {
-        out.fill(0.0);
-        let Some(profile) = self.system.friction.as_ref() else {
-            return;
-        };
-        let count = self.offsets.len();
-        for (k, rz) in self.link_z.iter().enumerate() {
-            let Some(rz) = rz else {
-                continue;
-            };
-            for l in 0..count {
-                for (side, node) in [(0, k), (1, k + 1)] {
-                    if let Some(u) = unknown(&self.offsets, &profile.spans, l, node)
-                        && v[u] != 0.0
-                    {
-                        for r in 0..NODE {
-                            out[link_row(k) + r] += rz[(r, side * count + l)] * v[u];
-                        }
-                    }
-                }
-            }
-        }
-        for (j, term) in self.terminations.iter().enumerate() {
-            if let (Some((first, values)), Some(u)) =
-                (term, unknown(&self.offsets, &profile.spans, j, profile.spans[j]))
-            {
-                for (r, value) in values.iter().enumerate() {
-                    out[first + r] += value * v[u];
-                }
-            }
-        }
     }
 
     /// Solves psi_z dz = r by forward substitution link by link (psi_z couples the log
@@ -326,99 +250,12 @@ impl<'r> Capstan<'r> {
         }
         true
     }
-
-    /// The bordered solve for the border rows `rows_in` (psi) and `a` = J^-1 (-F), with
-    /// `solve` applying J^-1: dz from (psi_z - psi_x J^-1 F_z) dz = -psi - psi_x a, left in
-    /// `border_step`, and a becomes dx = a - J^-1 F_z dz. Returns max |dz|, None for a
-    /// singular system or a value that is not finite.
-    ///
-    /// The log tensions move the shape only a little (the iteration below contracts by
-    /// about mu times the path's turning per pass, 0.01 to 0.1 on the prototype), so the Schur
-    /// system is solved by the iteration dz <- psi_z^-1 (-psi - psi_x (a - J^-1 F_z dz)),
-    /// one solve with J per pass, to rounding; where it does not contract (strong friction)
-    /// the dense Schur complement is formed from one solve per unknown.
-    fn bordered(&mut self, a: &mut [f64], solve: &mut dyn FnMut(&[f64], &mut [f64]) -> bool) -> Option<f64> {
-        let m = self.z.len();
-        let dot = |row: &[f64; 2 * NODE], first: usize, v: &[f64]| -> f64 {
-            row.iter().zip(&v[first..first + 2 * NODE]).map(|(p, q)| p * q).sum()
-        };
-        for r in 0..m {
-            self.r0[r] = -self.rows_in[r] - dot(&self.psi_x[r], self.row_link[r] * NODE, a);
-        }
-        let mut dz = std::mem::take(&mut self.border_step);
-        let (r0, mut rr) = (std::mem::take(&mut self.r0), std::mem::take(&mut self.rr));
-        let mut ok = self.forward(&r0, &mut dz);
-        let mut converged = false;
-        let mut last_change = f64::INFINITY;
-        for _ in 0..ITERATIONS {
-            if !ok {
-                break;
-            }
-            let (mut w, mut y) = (std::mem::take(&mut self.w), std::mem::take(&mut self.y));
-            self.apply_columns(&dz, &mut w);
-            ok = solve(&w, &mut y);
-            for r in 0..m {
-                rr[r] = r0[r] + dot(&self.psi_x[r], self.row_link[r] * NODE, &y);
-            }
-            (self.w, self.y) = (w, y);
-            let previous = dz.clone();
-            ok = ok && self.forward(&rr, &mut dz);
-            let size = dz.iter().fold(0.0_f64, |acc, d| acc.max(d.abs()));
-            let change = dz
-                .iter()
-                .zip(&previous)
-                .fold(0.0_f64, |acc, (p, q)| acc.max((p - q).abs()));
-            // Converged to 1e-12 relative, far below what a Newton step needs to keep its
-            // quadratic convergence; a change that does not halve means no contraction.
-            if change <= 1e-12 * size || size == 0.0 {
-                converged = true;
-                break;
-            }
-            if change > 0.5 * last_change {
-                break;
-            }
-            last_change = change;
-        }
-        (self.r0, self.rr) = (r0, rr);
-        if converged {
-            let mut y = std::mem::take(&mut self.y);
-            let mut w = std::mem::take(&mut self.w);
-            self.apply_columns(&dz, &mut w);
-            let solved = solve(&w, &mut y);
-            for (s, c) in a.iter_mut().zip(&y) {
-                *s -= c;
-            }
-            (self.w, self.y) = (w, y);
-            self.border_step = dz;
-            let finite = solved && a.iter().chain(&self.border_step).all(|v| v.is_finite());
-            let norm = self.border_step.iter().fold(0.0, |acc: f64, d| acc.max(d.abs()));
-            return finite.then_some(norm);
-        }
-        self.border_step = dz;
-        // The dense Schur complement: one column J^-1 F_z e_u per unknown.
-        if !self.columns_ready {
-            let mut unit = vec![0.0; m];
-            let mut w = std::mem::take(&mut self.w);
-            let mut columns = std::mem::take(&mut self.columns);
-            for (u, column) in columns.iter_mut().enumerate() {
-                unit[u] = 1.0;
-                self.apply_columns(&unit, &mut w);
-                unit[u] = 0.0;
-                if !solve(&w, column) {
-                    (self.w, self.columns) = (w, columns);
-                    return None;
-                }
-            }
-            (self.w, self.columns) = (w, columns);
-            self.columns_ready = true;
-        }
-        self.eliminate(a)
-    }
 }
 
 /// The error estimate with friction, by deferred correction as in [`estimate`] on the
 /// bordered system: the order-6 residuals of the backbone and capstan rows at the
-/// converged `x`, and one bordered solve with Newton's factors and columns, so that the
+/// converged `x` (against the order-4 residual `converged` when the caller has it, else
+/// evaluated), and one bordered solve with Newton's factors and columns, so that the
 /// estimate carries the tension profile's error into the shape's. Returns the correction
 /// and the largest correction of a log tension (the relative error of the tension
 /// profile); `None` without factors or with a singular border.
@@ -429,16 +266,24 @@ fn estimate_with_friction(
     border: &mut Capstan,
     ws: &mut Workspace,
     x: &[State],
+    converged: Option<Vec<f64>>,
 ) -> Result<Option<(estimate::Correction, f64)>> {
     border.load(Point::Current);
     let n = border.system.unknowns();
-    let mut phi4 = vec![0.0; n];
-    border.system.residual(x, &mut phi4)?;
+    let phi4 = match converged {
+        Some(phi4) => phi4,
+        None => {
+            let mut phi4 = vec![0.0; n];
+            border.system.residual(x, &mut phi4)?;
+            phi4
+        }
+    };
     border.rows(Point::Current, x);
     let system = &border.system;
     let mut rhs = vec![0.0; n];
     let mut local = vec![0.0; x.len() - 1];
     let mut node_rates = vec![nalgebra::Vector6::zeros(); x.len()];
+    // The order-6 rows of every link; those with friction keep their capstan rows psi6.
     system.order6_residual(x, &mut rhs, &mut local, &mut node_rates)?;
     for (r, f) in rhs.iter_mut().zip(&phi4) {
         *r = f - *r;
@@ -446,21 +291,11 @@ fn estimate_with_friction(
     let length = system.model.robot.length();
     let mut difference = border.psi.clone();
     if let Some(profile) = system.friction.as_ref() {
-        let last = profile.spans.iter().copied().max().unwrap_or(0);
-        for k in 0..last {
-            let Some(sites) = system.interval_sites(k) else {
-                continue;
-            };
-            let h = sites.end.s - sites.start.s;
-            let quarters = QuarterSites {
-                quarter: system.model.site(sites.start.s + 0.25 * h),
-                three_quarters: system.model.site(sites.start.s + 0.75 * h),
-            };
-            let seg = system.mesh.nodes[k].segment_end;
-            let (_, psi6, _, _) = interval_order6(profile, length, k, sites, &quarters, seg, &x[k], &x[k + 1])?;
-            for (j, &o) in border.offsets.iter().enumerate() {
-                if profile.on_link(j, k) {
-                    difference[o + k] -= psi6[j];
+        let kept = profile.order6.borrow();
+        for (j, &o) in border.offsets.iter().enumerate() {
+            for k in 0..profile.spans[j] {
+                if let Some(psi6) = kept.get(k).and_then(|p| p.get(j)) {
+                    difference[o + k] -= psi6;
                 }
             }
         }
@@ -468,22 +303,11 @@ fn estimate_with_friction(
     if !ws.has_factors() {
         return Ok(None);
     }
-    let Some(a) = ws.solve_again(&rhs) else {
+    if !border.stairs.ready && !border.factor(&ws.values) {
         return Ok(None);
-    };
-    let mut dx = a.to_vec();
-    // S dz = -rows_in - psi_x a with rows_in = -(psi4 - psi6)
-    for (r, d) in border.rows_in.iter_mut().zip(&difference) {
-        *r = -d;
     }
-    let mut solve = |rhs: &[f64], out: &mut [f64]| match ws.solve_again(rhs) {
-        Some(x) => {
-            out.copy_from_slice(x);
-            true
-        }
-        None => false,
-    };
-    let Some(tension_error) = border.bordered(&mut dx, &mut solve) else {
+    let mut dx = vec![0.0; n];
+    let Some(tension_error) = border.solve_factored(&rhs, &difference, &mut dx) else {
         return Ok(None);
     };
     Ok(Some((
@@ -555,7 +379,11 @@ pub(super) fn solve(robot: &Robot, options: &Options, warm: Option<&Solution>, c
             });
         }
         let t = Instant::now();
-        let estimated = estimate_with_friction(&mut border, &mut ws, &x).ok().flatten();
+        // Newton's last residual is the backbone rows' at x.
+        let converged = Some(ws.residual.clone());
+        let estimated = estimate_with_friction(&mut border, &mut ws, &x, converged)
+            .ok()
+            .flatten();
         report.timings.estimate += t.elapsed();
         border.load(Point::Current);
         let system = border.system;

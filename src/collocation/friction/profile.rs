@@ -1,0 +1,256 @@
+//! The tension profile of the tendons with friction on a mesh ([`Profile`]): the log
+//! tensions z_j = ln(tau_j / tau_j(0)) at the nodes of each tendon's span (z_j = 0 at the
+//! base), a model to evaluate eq. 13 with friction at them, and the links' last
+//! evaluations that the border and the next link reuse.
+#![allow(non_snake_case)]
+
+use super::grip::{Contact, Grip, stuck_multiplier};
+use super::interval::IntervalLinearization;
+use crate::error::Result;
+use crate::mesh::Mesh;
+use crate::model::equations::{Model, Site};
+use crate::model::friction::{self, FrictionLinearization};
+use crate::solution::State;
+use nalgebra::Vector3;
+use std::cell::RefCell;
+
+/// The log tensions of the tendons with friction on a mesh, and a model to evaluate eq. 13
+/// with them.
+#[derive(Debug)]
+pub(crate) struct Profile<'a> {
+    /// Indices of the tendons with friction ([`friction::slipping`]).
+    pub(crate) slipping: Vec<usize>,
+    /// Their tensions at the base entry tau_j(0) (N), the input.
+    pub(crate) base: Vec<f64>,
+    /// The last node of each one's span (its left limit at the termination).
+    pub(crate) spans: Vec<usize>,
+    /// z_j at every node (0 at node 0; past the span, the span's last value).
+    pub(crate) z: Vec<Vec<f64>>,
+    /// In a stick/slip history, each slip's [`Grip`] on this mesh; None in full slip.
+    pub(crate) grips: Option<Vec<Grip>>,
+    /// The model with the tensions of one point, for eq. 13 with friction.
+    scratch: RefCell<Model<'a>>,
+    /// Each link's last evaluation ([`interval`] through the system's residual or
+    /// Jacobian), which the border reads instead of evaluating the link again.
+    cache: RefCell<Vec<Option<IntervalLinearization>>>,
+    /// Each link's capstan rows of the order-6 scheme from its last [`interval_order6`]
+    /// (empty before one), for the error estimate.
+    pub(crate) order6: RefCell<Vec<Vec<f64>>>,
+    /// The last link's evaluation at its end node, which the next link's start takes
+    /// instead of evaluating the same point again.
+    end: RefCell<Option<KeptEnd>>,
+}
+
+/// Eq. 13 with friction at a link's end node and everything it was evaluated from: a
+/// link whose start has the same inputs, bit for bit, has the same evaluation.
+#[derive(Debug)]
+struct KeptEnd {
+    node: usize,
+    segment_end: f64,
+    state: State,
+    z: Vec<f64>,
+    w: Option<Vec<f64>>,
+    derivatives: bool,
+    lin: FrictionLinearization,
+}
+
+impl<'a> Profile<'a> {
+    /// The profile of `model`'s tendons with friction on `mesh`, constant (z = 0).
+    pub(crate) fn new(model: &Model<'a>, mesh: &Mesh) -> Self {
+        let robot = model.robot;
+        let slipping = friction::slipping(robot);
+        let base = slipping.iter().map(|&i| model.tensions[i]).collect();
+        let spans = slipping
+            .iter()
+            .map(|&i| {
+                let end = robot.tendons[i].end(robot.length());
+                mesh.nodes
+                    .iter()
+                    .position(|n| n.s >= end)
+                    .unwrap_or(mesh.nodes.len() - 1)
+            })
+            .collect();
+        Profile {
+            z: vec![vec![0.0; mesh.nodes.len()]; slipping.len()],
+            grips: None,
+            slipping,
+            base,
+            spans,
+            scratch: RefCell::new(model.clone()),
+            cache: RefCell::new((1..mesh.nodes.len()).map(|_| None).collect()),
+            order6: RefCell::new(vec![Vec::new(); mesh.nodes.len() - 1]),
+            end: RefCell::new(None),
+        }
+    }
+
+    /// A copy with the same log tensions and a fresh scratch model and cache (tests).
+    #[cfg(test)]
+    pub(super) fn clone_z(&self) -> Self {
+        Profile {
+            slipping: self.slipping.clone(),
+            base: self.base.clone(),
+            spans: self.spans.clone(),
+            z: self.z.clone(),
+            grips: self.grips.clone(),
+            scratch: RefCell::new(self.scratch.borrow().clone()),
+            cache: RefCell::new(self.cache.borrow().iter().map(|_| None).collect()),
+            order6: RefCell::new(vec![Vec::new(); self.z[0].len() - 1]),
+            end: RefCell::new(None),
+        }
+    }
+
+    /// The friction coefficient mu_j of slip j.
+    pub(crate) fn coefficient(&self, j: usize) -> f64 {
+        self.robot().tendons[self.slipping[j]]
+            .active_friction()
+            .map_or(0.0, |f| f.coefficient)
+    }
+
+    /// Number of tendons with friction.
+    pub(crate) fn count(&self) -> usize {
+        self.slipping.len()
+    }
+
+    /// The tension (N) of slip j where its log tension is `z`.
+    pub(crate) fn tension(&self, j: usize, z: f64) -> f64 {
+        self.base[j] * z.exp()
+    }
+
+    /// Whether slip j loads link k (its span reaches node k + 1).
+    pub(crate) fn on_link(&self, j: usize, k: usize) -> bool {
+        k < self.spans[j]
+    }
+
+    /// Sets `model`'s tension of each tendon with friction to the one it delivers at its
+    /// termination, which the jump and tip conditions use.
+    pub(crate) fn deliver(&self, model: &mut Model) {
+        for (j, &i) in self.slipping.iter().enumerate() {
+            model.tensions[i] = self.tension(j, self.z[j][self.spans[j]]);
+        }
+    }
+
+    /// Every tendon's tension (N) at every node: the profile for the slips, the model's
+    /// tension for the others.
+    pub(crate) fn node_tensions(&self, model: &Model) -> Vec<Vec<f64>> {
+        (0..self.z.first().map_or(0, Vec::len))
+            .map(|n| {
+                let mut t = model.tensions.clone();
+                for (j, &i) in self.slipping.iter().enumerate() {
+                    t[i] = self.tension(j, self.z[j][n.min(self.spans[j])]);
+                }
+                t
+            })
+            .collect()
+    }
+
+    /// Keeps link k's evaluation `lin` for the border.
+    pub(crate) fn keep(&self, k: usize, lin: IntervalLinearization) {
+        self.cache.borrow_mut()[k] = Some(lin);
+    }
+
+    /// Runs `f` on link k's last evaluation (None when it has none).
+    pub(crate) fn cached<R>(&self, k: usize, f: impl FnOnce(Option<&IntervalLinearization>) -> R) -> R {
+        f(self.cache.borrow()[k].as_ref())
+    }
+
+    /// The friction multipliers w_j of the slips on link k in a history (None in full
+    /// slip: the motions' signs): -1 or +1 where a slip slides; where it sticks,
+    /// w = (z_b - z_a) / C with C its capacity on the link from the last march, so that
+    /// the tangential load follows the log tensions the stick rows set (a step behind, only
+    /// C, which the shape changes slowly, lags).
+    pub(crate) fn multipliers(&self, k: usize) -> Option<Vec<f64>> {
+        self.grips.as_ref().map(|g| {
+            g.iter()
+                .enumerate()
+                .map(|(j, g)| match g.contacts.get(k) {
+                    Some(Contact::Stick) => stuck_multiplier(self.z[j][k], self.z[j][k + 1], g.capacities[k]),
+                    _ => g.multipliers.get(k).copied().unwrap_or(1.0),
+                })
+                .collect()
+        })
+    }
+
+    /// Whether slip j sticks on link k (a history's stick row replaces its capstan row).
+    pub(crate) fn sticks(&self, j: usize, k: usize) -> bool {
+        self.grips
+            .as_ref()
+            .is_some_and(|g| g[j].contacts.get(k) == Some(&Contact::Stick))
+    }
+
+    /// Eq. 13 with friction at a site and state, the slips at log tensions `z` and
+    /// multipliers `w` (the motions' signs when None), with its derivatives when
+    /// `derivatives`.
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn point(
+        &self,
+        site: &Site,
+        segment_end: f64,
+        R: &nalgebra::Matrix3<f64>,
+        y: (&Vector3<f64>, &Vector3<f64>),
+        z: &[f64],
+        w: Option<&[f64]>,
+        derivatives: bool,
+    ) -> Result<FrictionLinearization> {
+        let mut model = self.scratch.borrow_mut();
+        for (j, &i) in self.slipping.iter().enumerate() {
+            model.tensions[i] = self.tension(j, z[j]);
+        }
+        friction::linearize(&model, site, segment_end, (R, y.0, y.1), &self.slipping, w, derivatives)
+    }
+
+    /// [`Profile::point`] at node k (state `a`, log tensions `z`, multipliers `w`), taken
+    /// from the last link's end when that was evaluated from the same inputs (with
+    /// derivatives if these need them).
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn start_point(
+        &self,
+        k: usize,
+        site: &Site,
+        segment_end: f64,
+        a: &State,
+        z: &[f64],
+        w: Option<&[f64]>,
+        derivatives: bool,
+    ) -> Result<FrictionLinearization> {
+        let kept = self.end.borrow_mut().take();
+        if let Some(kept) = kept
+            && kept.node == k
+            && kept.segment_end == segment_end
+            && kept.state == *a
+            && kept.z == z
+            && kept.w.as_deref() == w
+            && (kept.derivatives || !derivatives)
+        {
+            return Ok(kept.lin);
+        }
+        self.point(site, segment_end, &a.R, (&a.v, &a.u), z, w, derivatives)
+    }
+
+    /// Keeps link k's evaluation `lin` at its end node (state `b`) for the next link.
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn keep_end(
+        &self,
+        k: usize,
+        segment_end: f64,
+        b: &State,
+        z: Vec<f64>,
+        w: Option<&[f64]>,
+        derivatives: bool,
+        lin: FrictionLinearization,
+    ) {
+        *self.end.borrow_mut() = Some(KeptEnd {
+            node: k + 1,
+            segment_end,
+            state: *b,
+            z,
+            w: w.map(<[f64]>::to_vec),
+            derivatives,
+            lin,
+        });
+    }
+
+    /// The robot.
+    pub(crate) fn robot(&self) -> &'a crate::Robot {
+        self.scratch.borrow().robot
+    }
+}
