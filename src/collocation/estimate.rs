@@ -28,6 +28,10 @@ pub(crate) struct Correction {
     /// The rates (v', u') of eq. 13 at every node, evaluated on the way (the solution's
     /// nodes reuse them).
     pub node_rates: Vec<Vector6<f64>>,
+    /// The order of the solution estimated: 4 (the collocation solution), or 6 (the
+    /// deferred-corrected one, [`super::deferred`]), whose error falls like h^order and whose
+    /// `local` errors like h^(order + 1).
+    pub order: u32,
 }
 
 /// Estimates the error of `x`, converged on `system`, with the factors in `ws` (factoring
@@ -51,6 +55,21 @@ pub(crate) fn estimate_with(
     x: &[State],
     phi4: Option<&[f64]>,
 ) -> Result<Option<Correction>> {
+    Ok(estimate_with_defect(system, ws, x, phi4)?.map(|(c, _)| c))
+}
+
+/// [`estimate_with`], also returning the right-hand side of the deferred correction,
+/// phi4(x) - phi6(x) (scaled rows), which the order-6 answer solves for
+/// ([`super::deferred`]).
+///
+/// # Errors
+/// As [`estimate`].
+pub(crate) fn estimate_with_defect(
+    system: &System,
+    ws: &mut Workspace,
+    x: &[State],
+    phi4: Option<&[f64]>,
+) -> Result<Option<(Correction, Vec<f64>)>> {
     let n = system.unknowns();
     let mut rhs = vec![0.0; n];
     let mut local = vec![0.0; x.len() - 1];
@@ -83,13 +102,8 @@ pub(crate) fn estimate_with(
     let Some(dx) = ws.solve_again(&rhs) else {
         return Ok(None);
     };
-    Ok(Some(correction(
-        dx,
-        x.len(),
-        system.model.robot.length(),
-        local,
-        node_rates,
-    )))
+    let c = correction(dx, x.len(), system.model.robot.length(), local, node_rates);
+    Ok(Some((c, rhs)))
 }
 
 /// The correction dx of `nodes` node states on a rod of `length` (m) as the error estimate:
@@ -114,5 +128,6 @@ pub(super) fn correction(
         },
         local,
         node_rates,
+        order: 4,
     }
 }
