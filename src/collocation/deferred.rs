@@ -22,8 +22,10 @@ use crate::solution::State;
 use nalgebra::Vector6;
 
 /// Tolerances (relative to L) at or below which an order-4 solution that misses the
-/// tolerance is replaced by the order-6 one. Above it a re-mesh at order 4 costs less than
-/// the order-6 answer's extra passes (docs/benchmarks.md, "Tight tolerances").
+/// tolerance is replaced by the order-6 one: where the order-4 mesh grows past a few
+/// hundred intervals (S and H at 1e-9 L and below need 2 to 10 times fewer intervals and
+/// 1.7 to 5 times fewer instructions; docs/benchmarks.md, "Tight tolerances"). The default
+/// 1e-7 keeps the order-4 answer (docs/numerics.md, "The order-6 answer", says why).
 pub(crate) const ORDER6_BELOW: f64 = 1e-8;
 
 /// The factor on the order-8 estimate of the order-6 error. That estimate is
@@ -51,9 +53,10 @@ const CORRECTIONS: usize = 2;
 /// `phi4`, the factors in `ws`), and, when `tolerance` (relative to L) is at most
 /// [`ORDER6_BELOW`] and that estimate misses it, `x` replaced by the order-6 solution with
 /// its order-8 estimate. `None` when no estimate exists (a singular Jacobian, a model
-/// breakdown at a stage). A failed order-6 attempt keeps the order-4 answer; a successful
-/// one moves the workspace's drift by the steps taken (its Jacobian is then not the
-/// answer's).
+/// breakdown at a stage). A failed order-6 attempt, or one whose estimate misses the
+/// tolerance by more than the order-4 one, keeps the order-4 answer; a returned one adds
+/// the steps taken to the workspace's drift (its Jacobian is then not the answer's, and
+/// the stability verdict evaluates one at x6).
 pub(crate) fn estimate(
     system: &System,
     ws: &mut Workspace,
@@ -66,15 +69,19 @@ pub(crate) fn estimate(
         .ok()
         .flatten()?;
     let length = system.model.robot.length();
-    let tight = tolerance.filter(|&tol| {
+    let Some(tol) = tolerance.filter(|&tol| {
         tol <= ORDER6_BELOW && system.friction.is_none() && !refine::meets(&order4.estimate, tol, length)
-    });
-    if tight.is_none() {
+    }) else {
         return Some(order4);
-    }
+    };
+    // The order-6 answer where its estimate is the smaller (on a mesh too coarse for the
+    // expansion the correction rests on, it need not be).
+    let miss = |e: &ErrorEstimate| (e.tip_position / (tol * length)).max(e.tip_rotation / tol);
     match order6(system, ws, x, phi4, &defect, report) {
-        Ok(Some((x6, order6))) => {
+        Ok(Some((x6, order6, moved))) if miss(&order6.estimate) < miss(&order4.estimate) => {
             *x = x6;
+            // The Jacobian the workspace holds is now that far from the answer.
+            ws.drift += moved;
             Some(order6)
         }
         _ => Some(order4),
@@ -103,12 +110,15 @@ pub fn corrected(
     let Some((_, defect)) = estimate::estimate_with_defect(system, ws, x, Some(&phi4))? else {
         return Ok(None);
     };
-    Ok(order6(system, ws, x, &phi4, &defect, report)?.map(|(x6, c)| (x6, c.estimate)))
+    Ok(order6(system, ws, x, &phi4, &defect, report)?.map(|(x6, c, moved)| {
+        ws.drift += moved;
+        (x6, c.estimate)
+    }))
 }
 
 /// The order-6 solution from the order-4 one `x4` (residual `phi4`, defect
-/// phi4(x4) - phi6(x4) `defect`) and its order-8 estimate; `None` when a solve is not
-/// finite.
+/// phi4(x4) - phi6(x4) `defect`), its order-8 estimate and the sum of the max-norms of the
+/// steps from x4 (scaled unknowns); `None` when a solve is not finite.
 ///
 /// # Errors
 /// A model breakdown at a visited state.
@@ -119,7 +129,7 @@ fn order6(
     phi4: &[f64],
     defect: &[f64],
     report: &mut SolveReport,
-) -> Result<Option<(Vec<State>, Correction)>> {
+) -> Result<Option<(Vec<State>, Correction, f64)>> {
     let n = system.unknowns();
     let length = system.model.robot.length();
     let mut x = x4.to_vec();
@@ -141,7 +151,6 @@ fn order6(
         unknowns::retract(&x, dx, 1.0, length, &mut next);
         std::mem::swap(&mut x, &mut next);
     }
-    ws.drift += moved;
     let mut local = vec![0.0; x.len() - 1];
     let mut rates = vec![Vector6::zeros(); x.len()];
     order8::residual(system, &x, &mut rhs, &mut local, &mut rates)?;
@@ -157,5 +166,5 @@ fn order6(
     estimate.tip_position = SAFETY * estimate.tip_position + ROUNDING * length;
     estimate.tip_rotation = SAFETY * estimate.tip_rotation + ROUNDING;
     estimate.backbone_max = SAFETY * estimate.backbone_max + ROUNDING * length;
-    Ok(Some((x, correction)))
+    Ok(Some((x, correction, moved)))
 }

@@ -23,7 +23,8 @@ pub(crate) struct Correction {
     /// Tip and backbone error estimates.
     pub estimate: ErrorEstimate,
     /// Local error of each link: the max-norm of its order-6 residual (dimensionless, about
-    /// C h^5 on an interval; 0 for jumps).
+    /// C h^5 on an interval; 0 for jumps), or of its order-8 residual for the order-6
+    /// answer (about C h^7).
     pub local: Vec<f64>,
     /// The rates (v', u') of eq. 13 at every node, evaluated on the way (the solution's
     /// nodes reuse them).

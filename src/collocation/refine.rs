@@ -1,6 +1,8 @@
 //! Error control: a starting mesh that resolves the initial guess, and the mesh sequence of
 //! every solve ([`to_tolerance`], for tension and pull-in inputs alike): re-meshing until the
-//! deferred-correction estimate ([`super::estimate`]) meets the tip tolerance.
+//! deferred-correction estimate ([`super::estimate`]) meets the tip tolerance, refining at
+//! the order of the solution estimated (4, or 6 for the order-6 answer of tight tolerances,
+//! [`super::deferred`]).
 
 use super::estimate::Correction;
 use super::homotopy::{Homotopy, Point, tangent};
