@@ -65,9 +65,7 @@ pub(crate) fn estimate(
     tolerance: Option<f64>,
     report: &mut SolveReport,
 ) -> Option<Correction> {
-    let (order4, defect) = estimate::estimate_with_defect(system, ws, x, Some(phi4))
-        .ok()
-        .flatten()?;
+    let (order4, defect) = estimate::estimate_with(system, ws, x, Some(phi4)).ok().flatten()?;
     let length = system.model.robot.length();
     let Some(tol) = tolerance.filter(|&tol| {
         tol <= ORDER6_BELOW && system.friction.is_none() && !refine::meets(&order4.estimate, tol, length)
@@ -107,7 +105,7 @@ pub fn corrected(
     }
     let mut phi4 = vec![0.0; system.unknowns()];
     system.residual(x, &mut phi4)?;
-    let Some((_, defect)) = estimate::estimate_with_defect(system, ws, x, Some(&phi4))? else {
+    let Some((_, defect)) = estimate::estimate_with(system, ws, x, Some(&phi4))? else {
         return Ok(None);
     };
     Ok(order6(system, ws, x, &phi4, &defect, report)?.map(|(x6, c, moved)| {

@@ -42,30 +42,17 @@ pub(crate) struct Correction {
 /// # Errors
 /// A model breakdown at a stage of the order-6 scheme.
 pub(crate) fn estimate(system: &System, ws: &mut Workspace, x: &[State]) -> Result<Option<Correction>> {
-    estimate_with(system, ws, x, None)
+    Ok(estimate_with(system, ws, x, None)?.map(|(c, _)| c))
 }
 
 /// [`estimate`] with the order-4 residual at `x` when the caller has it (Newton's last
-/// residual), saving its evaluation.
-///
-/// # Errors
-/// As [`estimate`].
-pub(crate) fn estimate_with(
-    system: &System,
-    ws: &mut Workspace,
-    x: &[State],
-    phi4: Option<&[f64]>,
-) -> Result<Option<Correction>> {
-    Ok(estimate_with_defect(system, ws, x, phi4)?.map(|(c, _)| c))
-}
-
-/// [`estimate_with`], also returning the right-hand side of the deferred correction,
-/// phi4(x) - phi6(x) (scaled rows), which the order-6 answer solves for
+/// residual), saving its evaluation; also returns the right-hand side of the deferred
+/// correction, phi4(x) - phi6(x) (scaled rows), which the order-6 answer solves for
 /// ([`super::deferred`]).
 ///
 /// # Errors
 /// As [`estimate`].
-pub(crate) fn estimate_with_defect(
+pub(crate) fn estimate_with(
     system: &System,
     ws: &mut Workspace,
     x: &[State],
