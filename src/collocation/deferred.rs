@@ -87,8 +87,8 @@ pub(crate) fn estimate(
 }
 
 /// The order-6 solution on `system`'s mesh from the converged order-4 solution `x` and its
-/// estimated error (the reported one: [`SAFETY`] times the order-8 estimate plus
-/// [`ROUNDING`]), whatever the tolerance: what the answer at a tight tolerance is made of,
+/// estimated error (the reported one: 1.25 times the order-8 estimate plus 4e-13 L of
+/// rounding, docs/numerics.md "The order-6 answer"), whatever the tolerance: what the answer at a tight tolerance is made of,
 /// for tests and convergence studies. Uses the factors in `ws` when it holds some (Newton's,
 /// as a solve does), else factors the Jacobian at `x`. `None` when a linear solve fails.
 ///
