@@ -202,3 +202,31 @@ fn the_default_tolerance_keeps_the_order_4_answer() {
         );
     }
 }
+
+#[test]
+fn warm_solves_at_a_tight_tolerance_report_honest_estimates() {
+    // A Solver that has just solved the robot at 0.99 times the tension starts chord steps on
+    // that solve's factors: the order-6 answer and its estimate use them too.
+    for (name, robot) in [("S", cases::case_s()), ("H", cases::case_h())] {
+        let exact = reference(&robot);
+        for tol in [1e-9, 1e-11] {
+            let options = collocation::Options {
+                tolerance: Some(tol),
+                ..Default::default()
+            };
+            let mut previous = robot.clone();
+            for t in previous.tendons.iter_mut() {
+                t.set_tension(0.99 * t.tension());
+            }
+            let mut solver = collocation::Solver::new(options);
+            let guess = solver.solve(&previous).unwrap();
+            let solution = solver.solve_from(&robot, &guess).unwrap();
+            honest(
+                &format!("{name} warm at {tol:.0e}"),
+                &solution,
+                (exact.tip_position(), exact.tip().R),
+                0.0,
+            );
+        }
+    }
+}
