@@ -432,7 +432,7 @@ fn tight_tolerances_get_an_estimate_never_below_the_true_error() {
 
 /// The long run of the order-6 answer: `cargo test --release --test properties -- --ignored`.
 #[test]
-#[ignore = "long: 600 random robots at 1e-10 L, about 3 minutes in release"]
+#[ignore = "long (600 random robots at 1e-10 L, 1 to 4 minutes); fails today: 5 robots have true / estimate up to 1.43 (docs/numerics.md, \"The order-6 answer\")"]
 fn tight_tolerances_on_six_hundred_random_robots() {
     tight(600);
 }
