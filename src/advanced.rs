@@ -53,6 +53,12 @@ pub mod system {
     pub use crate::collocation::system::*;
 }
 
+/// The order-6 answer of tight tolerances: the deferred-corrected solution on one mesh with
+/// its estimate (docs/numerics.md, "The order-6 answer").
+pub mod deferred {
+    pub use crate::collocation::deferred::corrected;
+}
+
 /// The residual blocks (base, intervals, jumps, tip).
 pub mod residual {
     pub use crate::collocation::residual::*;

@@ -106,8 +106,10 @@ fn a_tolerance_the_cap_cannot_meet_is_an_error_with_the_estimate() {
         panic!("{err}");
     };
     assert_eq!(cap, 64);
-    // The estimate of the last mesh solved (at most 64 intervals: 1.7e-8 m or more).
-    assert!(estimate.is_finite() && estimate > 1e-9, "{estimate}");
+    // The estimate of the last mesh solved, above the tolerance: at 1e-13 L it is the order-6
+    // answer's, which carries 4e-13 L of rounding (docs/numerics.md, "The order-6 answer").
+    let tolerance = 1e-13 * cases::case_h().length();
+    assert!(estimate.is_finite() && estimate > tolerance, "{estimate}");
 }
 
 #[test]

@@ -23,11 +23,16 @@ pub(crate) struct Correction {
     /// Tip and backbone error estimates.
     pub estimate: ErrorEstimate,
     /// Local error of each link: the max-norm of its order-6 residual (dimensionless, about
-    /// C h^5 on an interval; 0 for jumps).
+    /// C h^5 on an interval; 0 for jumps), or of its order-8 residual for the order-6
+    /// answer (about C h^7).
     pub local: Vec<f64>,
     /// The rates (v', u') of eq. 13 at every node, evaluated on the way (the solution's
     /// nodes reuse them).
     pub node_rates: Vec<Vector6<f64>>,
+    /// The order of the solution estimated: 4 (the collocation solution), or 6 (the
+    /// deferred-corrected one, [`super::deferred`]), whose error falls like h^order and whose
+    /// `local` errors like h^(order + 1).
+    pub order: u32,
 }
 
 /// Estimates the error of `x`, converged on `system`, with the factors in `ws` (factoring
@@ -37,11 +42,13 @@ pub(crate) struct Correction {
 /// # Errors
 /// A model breakdown at a stage of the order-6 scheme.
 pub(crate) fn estimate(system: &System, ws: &mut Workspace, x: &[State]) -> Result<Option<Correction>> {
-    estimate_with(system, ws, x, None)
+    Ok(estimate_with(system, ws, x, None)?.map(|(c, _)| c))
 }
 
 /// [`estimate`] with the order-4 residual at `x` when the caller has it (Newton's last
-/// residual), saving its evaluation.
+/// residual), saving its evaluation; also returns the right-hand side of the deferred
+/// correction, phi4(x) - phi6(x) (scaled rows), which the order-6 answer solves for
+/// ([`super::deferred`]).
 ///
 /// # Errors
 /// As [`estimate`].
@@ -50,7 +57,7 @@ pub(crate) fn estimate_with(
     ws: &mut Workspace,
     x: &[State],
     phi4: Option<&[f64]>,
-) -> Result<Option<Correction>> {
+) -> Result<Option<(Correction, Vec<f64>)>> {
     let n = system.unknowns();
     let mut rhs = vec![0.0; n];
     let mut local = vec![0.0; x.len() - 1];
@@ -83,13 +90,8 @@ pub(crate) fn estimate_with(
     let Some(dx) = ws.solve_again(&rhs) else {
         return Ok(None);
     };
-    Ok(Some(correction(
-        dx,
-        x.len(),
-        system.model.robot.length(),
-        local,
-        node_rates,
-    )))
+    let c = correction(dx, x.len(), system.model.robot.length(), local, node_rates);
+    Ok(Some((c, rhs)))
 }
 
 /// The correction dx of `nodes` node states on a rod of `length` (m) as the error estimate:
@@ -114,5 +116,6 @@ pub(super) fn correction(
         },
         local,
         node_rates,
+        order: 4,
     }
 }

@@ -2,6 +2,7 @@
 //! equilibrium choice on the first mesh, refinement to the tolerance, the error estimate and
 //! the stability verdict, and the [`Solution`] built from the node states.
 
+use super::deferred;
 use super::equilibrium::{Choose, better_start, choose_equilibrium, near_start, stability_of};
 use super::estimate;
 use super::newton::{self, Settings, Workspace};
@@ -194,22 +195,21 @@ pub(crate) fn solve_on_mesh(
             }
         }
     };
-    let result = match choose {
+    let mut result = match choose {
         Choose::No => newton_only(&system, &mut workspace, x0, &settings, report),
         _ => {
             let warm = choose == Choose::FromWarm;
             choose_equilibrium(&mut system, &mut workspace, x0, warm, options, &settings, report)
         }
     };
-    let correction = result.as_ref().ok().and_then(|x| {
+    let correction = result.as_mut().ok().and_then(|x| {
         let t = Instant::now();
         // A breakdown at a stage of the order-6 scheme leaves the solution without an estimate.
         // The workspace's residual is the one at x: Newton's last, or a linearization's
-        // there (the stability verdict, a path's landing).
+        // there (the stability verdict, a path's landing). At a tight tolerance x may become
+        // the order-6 solution.
         let phi4 = workspace.residual().to_vec();
-        let c = estimate::estimate_with(&system, &mut workspace, x, Some(&phi4))
-            .ok()
-            .flatten();
+        let c = deferred::estimate(&system, &mut workspace, x, &phi4, options.tolerance, report);
         report.timings.estimate += t.elapsed();
         c
     });

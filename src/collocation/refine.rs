@@ -1,6 +1,8 @@
 //! Error control: a starting mesh that resolves the initial guess, and the mesh sequence of
 //! every solve ([`to_tolerance`], for tension and pull-in inputs alike): re-meshing until the
-//! deferred-correction estimate ([`super::estimate`]) meets the tip tolerance.
+//! deferred-correction estimate ([`super::estimate`]) meets the tip tolerance, refining at
+//! the order of the solution estimated (4, or 6 for the order-6 answer of tight tolerances,
+//! [`super::deferred`]).
 
 use super::estimate::Correction;
 use super::homotopy::{Homotopy, Point, tangent};
@@ -97,8 +99,8 @@ pub(super) fn to_tolerance<'r>(
 
 /// The next mesh of refinement after a converged solve on `mesh` with the error estimate
 /// `correction`, or `None` when the estimate meets `tol` (relative to L): enough intervals for the error to fall below
-/// [`TARGET_FRACTION`] of the tolerance if it falls like h^4, distributed so that every
-/// interval's local error is about equal.
+/// [`TARGET_FRACTION`] of the tolerance if it falls like h^q (q the estimated solution's
+/// order, 4 or 6), distributed so that every interval's local error is about equal.
 ///
 /// # Errors
 /// [`Error::IntervalCap`] when no mesh within `options.max_intervals` finer than `mesh` is
@@ -111,14 +113,17 @@ pub(super) fn next_mesh(
     options: &Options,
 ) -> Result<Option<Mesh>> {
     let Correction { estimate, local, .. } = correction;
+    let exponent = 1.0 / f64::from(correction.order + 1);
     let length = robot.length();
     if meets(estimate, tol, length) {
         return Ok(None);
     }
     let intervals = mesh.intervals();
     let ratio = (estimate.tip_position / (tol * length)).max(estimate.tip_rotation / tol);
-    // Order 4: the error falls like N^-4.
-    let wanted = (intervals as f64 * (ratio / TARGET_FRACTION).powf(0.25)).max(intervals as f64 * MIN_GROWTH);
+    // The error of the estimated solution falls like N^-order (4, or 6 for the order-6
+    // answer).
+    let order = f64::from(correction.order);
+    let wanted = (intervals as f64 * (ratio / TARGET_FRACTION).powf(1.0 / order)).max(intervals as f64 * MIN_GROWTH);
     let cap = options.max_intervals;
     let refused = || Error::IntervalCap {
         cap,
@@ -135,7 +140,7 @@ pub(super) fn next_mesh(
     }
     // Rounding each segment's share can overshoot the target by a few intervals.
     for _ in 0..4 {
-        let fine = equidistributed(robot, mesh, local, target)?;
+        let fine = equidistributed(robot, mesh, local, exponent, target)?;
         if fine.intervals() <= cap {
             return if fine.intervals() > intervals {
                 Ok(Some(fine))
@@ -149,12 +154,13 @@ pub(super) fn next_mesh(
 }
 
 /// A mesh of about `target` intervals whose intervals share the local error equally: with
-/// local errors e_k ~ C_k h_k^5 on the current mesh, the density of intervals is
-/// proportional to e_k^(1/5) / h_k, so each current interval receives a share of the new
-/// intervals proportional to e_k^(1/5), spread evenly over it. Segments between breakpoints
-/// keep their end points and get at least one interval.
-fn equidistributed(robot: &Robot, mesh: &Mesh, local: &[f64], target: usize) -> Result<Mesh> {
-    let weights: Vec<f64> = local.iter().map(|e| e.powf(0.2)).collect();
+/// local errors e_k ~ C_k h_k^(q + 1) on the current mesh (q the order, `exponent` =
+/// 1 / (q + 1): h^5 at order 4, h^7 at order 6), the density of intervals is proportional
+/// to e_k^exponent / h_k, so each current interval receives a share of the new intervals
+/// proportional to e_k^exponent, spread evenly over it. Segments between breakpoints keep
+/// their end points and get at least one interval.
+fn equidistributed(robot: &Robot, mesh: &Mesh, local: &[f64], exponent: f64, target: usize) -> Result<Mesh> {
+    let weights: Vec<f64> = local.iter().map(|e| e.powf(exponent)).collect();
     // No interval starves: at least 1e-3 of the largest weight (an interval whose error is
     // 1e-15 of the worst one still gets a share).
     let floor = 1e-3 * weights.iter().copied().fold(0.0, f64::max);

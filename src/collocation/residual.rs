@@ -117,7 +117,13 @@ pub fn jump<T: Real>(
 }
 
 /// The right-hand side F(s, y) in the local coordinates of an interval starting at `Rk`.
-fn rhs(model: &Model, site: &Site, segment_end: f64, Rk: &Matrix3<f64>, y: &Block<f64>) -> Result<Block<f64>> {
+pub(super) fn rhs(
+    model: &Model,
+    site: &Site,
+    segment_end: f64,
+    Rk: &Matrix3<f64>,
+    y: &Block<f64>,
+) -> Result<Block<f64>> {
     let theta: Vector3<f64> = y.fixed_rows::<3>(THETA).into();
     let v: Vector3<f64> = y.fixed_rows::<3>(V).into();
     let u: Vector3<f64> = y.fixed_rows::<3>(U).into();

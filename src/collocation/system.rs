@@ -204,7 +204,7 @@ impl<'a> System<'a> {
     /// sites, segment end, node k, node k + 1, rates at node k)`, which returns them with the
     /// rates at node k + 1 (shared with the next interval, so each node's rates are evaluated
     /// once).
-    fn rows<F>(&self, x: &[State], out: &mut [f64], mut interval: F) -> Result<()>
+    pub(super) fn rows<F>(&self, x: &[State], out: &mut [f64], mut interval: F) -> Result<()>
     where
         F: FnMut(
             usize,
