@@ -105,6 +105,11 @@ pub struct ErrorEstimate {
     pub tip_rotation: f64,
     /// Largest estimated position error over the nodes (m).
     pub backbone_max: f64,
+    /// The order of accuracy of the answer this estimate belongs to: 4, the collocation
+    /// solution (estimated from the order-6 residual), or 6, the deferred-corrected solution
+    /// returned at tolerances of 1e-8 L and below (estimated from the order-8 residual;
+    /// docs/numerics.md, "The order-6 answer").
+    pub order: u32,
 }
 
 /// Whether an equilibrium is stable: the second variation of the potential energy is

@@ -1680,3 +1680,26 @@ fn jacobian_columns_are_the_full_jacobians_columns() {
     assert_eq!(out.status.code(), Some(2));
     assert!(stderr(&out).contains("names tendon 9"), "{}", stderr(&out));
 }
+
+/// A tight tolerance returns the order-6 answer, and both the summary line and the JSON say
+/// which order the estimate belongs to (docs/cli.md, `error_estimate.order`).
+#[test]
+fn the_order_of_the_answer_is_reported() {
+    let dir = scratch("order6");
+    std::fs::write(dir.join("robot.toml"), example()).unwrap();
+    let out = run(&dir, &["solve", "robot.toml", "--tol", "1e-10"], None);
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    let text = stdout(&out);
+    assert!(
+        text.lines()
+            .next()
+            .unwrap()
+            .contains("order-6 answer, estimated tip error"),
+        "{text}"
+    );
+    for (tol, order) in [("1e-10", 6), ("1e-7", 4)] {
+        let out = run(&dir, &["solve", "robot.toml", "--tol", tol, "--format", "json"], None);
+        let json: serde_json::Value = serde_json::from_str(&stdout(&out)).unwrap();
+        assert_eq!(json["error_estimate"]["order"], order, "--tol {tol}");
+    }
+}

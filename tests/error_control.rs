@@ -159,3 +159,22 @@ fn a_mesh_of_the_cap_is_tried_before_the_cap_refuses() {
         "{message}"
     );
 }
+
+/// The report names the order of the answer its estimate belongs to: 4 at the default
+/// tolerance, 6 at a tight one (S meets 1e-10 L on its first mesh with the order-6 answer,
+/// docs/benchmarks.md "Tight tolerances"), and a solution file keeps it.
+#[test]
+fn the_estimate_names_the_order_of_its_answer() {
+    let robot = cases::case_s();
+    let default = collocation::solve(&robot, &collocation::Options::default()).unwrap();
+    assert_eq!(default.report.error_estimate.unwrap().order, 4);
+    let tight = collocation::Options {
+        tolerance: Some(1e-10),
+        ..Default::default()
+    };
+    let solution = collocation::solve(&robot, &tight).unwrap();
+    let estimate = solution.report.error_estimate.unwrap();
+    assert_eq!(estimate.order, 6);
+    let read = tdcr::io::parse_solution(&tdcr::io::output::solution_json(&solution)).unwrap();
+    assert_eq!(read.report.error_estimate, Some(estimate));
+}

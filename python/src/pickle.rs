@@ -86,6 +86,7 @@ pub fn report_state<'py>(py: Python<'py>, r: &SolveReport) -> PyResult<Bound<'py
         .error_estimate
         .map(|e| [e.tip_position, e.tip_rotation, e.backbone_max]);
     d.set_item("error_estimate", estimate)?;
+    d.set_item("error_estimate_order", r.error_estimate.map(|e| e.order))?;
     d.set_item("tolerance", r.tolerance)?;
     d.set_item("tolerance_met", r.tolerance_met)?;
     let (directions, conjugate_point, reason) = match &r.stability {
@@ -165,12 +166,14 @@ pub fn report_from(d: &Bound<'_, PyDict>) -> PyResult<SolveReport> {
         total,
     };
     [r.unknowns, r.nonzeros, r.intervals] = field(d, "sizes")?;
+    let order: Option<u32> = field(d, "error_estimate_order")?;
     r.error_estimate =
         field::<Option<[f64; 3]>>(d, "error_estimate")?.map(|[tip_position, tip_rotation, backbone_max]| {
             ErrorEstimate {
                 tip_position,
                 tip_rotation,
                 backbone_max,
+                order: order.unwrap_or(4),
             }
         });
     r.tolerance = field(d, "tolerance")?;

@@ -417,7 +417,8 @@ impl PySolveReport {
     }
 
     /// The error estimate as a dict `{"tip_position_m", "tip_rotation_rad",
-    /// "backbone_max_m"}`, or None for shooting.
+    /// "backbone_max_m", "order"}` (`order`: 4, or 6 for the deferred-corrected answer of
+    /// tolerances at or below 1e-8), or None for shooting.
     #[getter]
     fn error_estimate<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyDict>>> {
         self.report
@@ -427,6 +428,7 @@ impl PySolveReport {
                 d.set_item("tip_position_m", e.tip_position)?;
                 d.set_item("tip_rotation_rad", e.tip_rotation)?;
                 d.set_item("backbone_max_m", e.backbone_max)?;
+                d.set_item("order", e.order)?;
                 Ok(d)
             })
             .transpose()

@@ -87,6 +87,10 @@ def test_options_reach_the_solver():
     assert refined.report.tolerance == 1e-9 and refined.report.tolerance_met is True
     assert refined.report.tip_error_estimate <= 1e-9 * robot.length
     assert refined.report.tip_error_estimate < 1e-2 * tdcr.solve(robot).report.tip_error_estimate
+    # The estimate says which answer it belongs to, and a pickle keeps it.
+    assert refined.report.error_estimate["order"] == 6
+    assert tdcr.solve(robot).report.error_estimate["order"] == 4
+    assert pickle.loads(pickle.dumps(refined)).report.error_estimate == refined.report.error_estimate
     shot = tdcr.solve(robot, method="shooting")
     assert shot.report.method == "shooting"
     # 1e-6 m: shooting's integration error and collocation's 32-interval mesh error.

@@ -161,7 +161,7 @@ fn order6(
         return Ok(None);
     };
     let mut correction = estimate::correction(e, x.len(), length, local, rates);
-    correction.order = 6;
+    correction.estimate.order = 6;
     let estimate = &mut correction.estimate;
     estimate.tip_position = SAFETY * estimate.tip_position + ROUNDING * length;
     estimate.tip_rotation = SAFETY * estimate.tip_rotation + ROUNDING;

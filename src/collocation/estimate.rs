@@ -20,7 +20,9 @@ use nalgebra::Vector6;
 /// The estimate and what re-meshing needs from it.
 #[derive(Clone, Debug)]
 pub(crate) struct Correction {
-    /// Tip and backbone error estimates.
+    /// Tip and backbone error estimates, and the order of the solution estimated
+    /// (`estimate.order`: 4, or 6 for the deferred-corrected one of [`super::deferred`]),
+    /// whose error falls like h^order and whose `local` errors like h^(order + 1).
     pub estimate: ErrorEstimate,
     /// Local error of each link: the max-norm of its order-6 residual (dimensionless, about
     /// C h^5 on an interval; 0 for jumps), or of its order-8 residual for the order-6
@@ -29,10 +31,6 @@ pub(crate) struct Correction {
     /// The rates (v', u') of eq. 13 at every node, evaluated on the way (the solution's
     /// nodes reuse them).
     pub node_rates: Vec<Vector6<f64>>,
-    /// The order of the solution estimated: 4 (the collocation solution), or 6 (the
-    /// deferred-corrected one, [`super::deferred`]), whose error falls like h^order and whose
-    /// `local` errors like h^(order + 1).
-    pub order: u32,
 }
 
 /// Estimates the error of `x`, converged on `system`, with the factors in `ws` (factoring
@@ -113,9 +111,9 @@ pub(super) fn correction(
             tip_position: dp.norm(),
             tip_rotation: dtheta.norm(),
             backbone_max,
+            order: 4,
         },
         local,
         node_rates,
-        order: 4,
     }
 }

@@ -113,7 +113,7 @@ pub(super) fn next_mesh(
     options: &Options,
 ) -> Result<Option<Mesh>> {
     let Correction { estimate, local, .. } = correction;
-    let exponent = 1.0 / f64::from(correction.order + 1);
+    let exponent = 1.0 / f64::from(correction.estimate.order + 1);
     let length = robot.length();
     if meets(estimate, tol, length) {
         return Ok(None);
@@ -122,7 +122,7 @@ pub(super) fn next_mesh(
     let ratio = (estimate.tip_position / (tol * length)).max(estimate.tip_rotation / tol);
     // The error of the estimated solution falls like N^-order (4, or 6 for the order-6
     // answer).
-    let order = f64::from(correction.order);
+    let order = f64::from(correction.estimate.order);
     let wanted = (intervals as f64 * (ratio / TARGET_FRACTION).powf(1.0 / order)).max(intervals as f64 * MIN_GROWTH);
     let cap = options.max_intervals;
     let refused = || Error::IntervalCap {

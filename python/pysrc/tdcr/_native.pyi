@@ -208,7 +208,8 @@ class SolveReport:
         """Estimated tip position error (m); None for shooting."""
     @property
     def error_estimate(self) -> Optional[Dict[str, float]]:
-        """{"tip_position_m", "tip_rotation_rad", "backbone_max_m"}; None for shooting."""
+        """{"tip_position_m", "tip_rotation_rad", "backbone_max_m", "order"} (order: 4, or 6 for
+        the deferred-corrected answer at tolerances of 1e-8 and below); None for shooting."""
     @property
     def tolerance(self) -> Optional[float]:
         """The tip tolerance relative to the rod length; None on a fixed mesh."""

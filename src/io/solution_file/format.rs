@@ -130,6 +130,15 @@ pub(crate) struct Estimate {
     pub tip_position_m: Num,
     pub tip_rotation_rad: Num,
     pub backbone_max_m: Num,
+    /// The order of the answer estimated (4, or 6 at tight tolerances); files written
+    /// before it existed hold order-4 answers.
+    #[serde(default = "order_four")]
+    pub order: u32,
+}
+
+/// The order of an estimate read from a file that does not name it.
+fn order_four() -> u32 {
+    4
 }
 
 #[derive(Serialize, Deserialize)]
@@ -303,6 +312,7 @@ impl SolutionFile {
                 tip_position_m: Num(e.tip_position),
                 tip_rotation_rad: Num(e.tip_rotation),
                 backbone_max_m: Num(e.backbone_max),
+                order: e.order,
             }),
             tolerance: report.tolerance,
             tolerance_met: report.tolerance_met,

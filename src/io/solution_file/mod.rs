@@ -301,6 +301,7 @@ impl SolutionFile {
             tip_position: e.tip_position_m.0,
             tip_rotation: e.tip_rotation_rad.0,
             backbone_max: e.backbone_max_m.0,
+            order: e.order,
         });
         report.tolerance = self.tolerance;
         report.tolerance_met = self.tolerance_met;
