@@ -277,3 +277,42 @@ fn every_step_has_its_own_verdict_and_the_bifurcation_is_located() {
     let p = -e.value.unwrap().1;
     assert!((p / p_cr - 1.0).abs() < 5e-4, "{p} against {p_cr}");
 }
+
+/// Euler's column of the test above, swept with `equilibrium = "nearest"` from 1.1 to 10
+/// P_cr: every step is the straight column, unstable, and its second buckling load (9 P_cr
+/// for a clamped-free column, where two more directions become unstable) is crossed from an
+/// unstable state; the sweep locates it along that unstable branch, and its text says so.
+#[test]
+fn a_bifurcation_on_an_unstable_branch_is_located_along_it() {
+    let p_cr = 0.177893;
+    let base = Robot::new(Rod::tube(0.242, 0.0004, 0.0, 210e9, 0.3125));
+    let options = collocation::Options {
+        equilibrium: collocation::Equilibrium::Nearest,
+        ..Default::default()
+    };
+    let values: Vec<f64> = [1.1, 5.0, 10.0].iter().map(|f| -f * p_cr).collect();
+    let steps = run(base, Input::Parameter(Parameter::TipForce(2)), values, options);
+    let verdicts: Vec<&str> = steps.iter().map(|s| s.solution.report.stability.verdict()).collect();
+    assert_eq!(verdicts, ["unstable", "unstable", "unstable"]);
+    let counts: Vec<usize> = steps.iter().map(|s| s.events.len()).collect();
+    assert_eq!(counts, [0, 0, 1]);
+    let e = &steps[2].events[0];
+    assert_eq!(
+        e.kind,
+        Kind::Bifurcation {
+            before: Some(2),
+            after: Some(4)
+        }
+    );
+    assert!(e.from_unstable, "{e:?}");
+    assert!(
+        e.to_string()
+            .ends_with("(on an unstable branch the robot had already left)"),
+        "{e}"
+    );
+    // 9 P_cr to 1e-3 relative: the discretization's error in the second mode's critical
+    // load at the default tolerance (the first mode's is 5e-4, and the second mode has
+    // three times its curvature's wavenumber); the bracket is 1e-6 of the range wide.
+    let p = -e.value.unwrap().1;
+    assert!((p / (9.0 * p_cr) - 1.0).abs() < 1e-3, "{p} against {}", 9.0 * p_cr);
+}
