@@ -325,18 +325,20 @@ impl<'r> Sweep<'r> {
                 // A stable state reached by a jump from an unstable branch is where the
                 // robot went when the states it was on lost their stability: the snap is
                 // at that (located) loss, not where the sweep happened to find the state.
-                if jump && left.unstable.is_some_and(|n| n > 0) && right.unstable == Some(0) {
-                    if let Some((at, tip)) = self.lost {
-                        let landed = self.landing(at, &right);
-                        events.push(self.event(
-                            Kind::Snap {
-                                distance: (landed - tip).norm(),
-                            },
-                            at,
-                            false,
-                        ));
-                        break;
-                    }
+                if jump
+                    && left.unstable.is_some_and(|n| n > 0)
+                    && right.unstable == Some(0)
+                    && let Some((at, tip)) = self.lost
+                {
+                    let landed = self.landing(at, &right);
+                    events.push(self.event(
+                        Kind::Snap {
+                            distance: (landed - tip).norm(),
+                        },
+                        at,
+                        false,
+                    ));
+                    break;
                 }
                 let Some((before, after)) = self.locate(left.clone(), right.clone(), jump) else {
                     break;
