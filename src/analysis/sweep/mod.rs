@@ -99,6 +99,8 @@ pub struct Event {
     /// What happened.
     pub kind: Kind,
     /// Where, in steps from 0 (fractional: between the steps, to [`LOCATED`] of the range).
+    /// A snap to a stable state from an unstable branch is at the loss of stability before
+    /// it, which may lie before the step before the one that lists it.
     pub at: f64,
     /// The swept input ([`Ranges::swept`]) and its value at `at`; `None` when every input
     /// is held.
