@@ -310,9 +310,9 @@ fn a_bifurcation_on_an_unstable_branch_is_located_along_it() {
             .ends_with("(on an unstable branch the robot had already left)"),
         "{e}"
     );
-    // 9 P_cr to 1e-3 relative: the discretization's error in the second mode's critical
-    // load at the default tolerance (the first mode's is 5e-4, and the second mode has
-    // three times its curvature's wavenumber); the bracket is 1e-6 of the range wide.
+    // 9 P_cr to 2e-4 relative: the discretization's error in the second mode's critical
+    // load at the default tolerance (measured 2.2e-5; the first mode's bound above is 5e-4),
+    // with p_cr rounded to 6 digits; the bracket itself is 1e-6 of the range wide.
     let p = -e.value.unwrap().1;
-    assert!((p / (9.0 * p_cr) - 1.0).abs() < 1e-3, "{p} against {}", 9.0 * p_cr);
+    assert!((p / (9.0 * p_cr) - 1.0).abs() < 2e-4, "{p} against {}", 9.0 * p_cr);
 }
