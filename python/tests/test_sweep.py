@@ -35,7 +35,8 @@ def test_a_sweep_reports_the_command_lines_events_verdicts_and_tips(cli_text):
     assert swept.jumps == [1]
     assert [e.kind for e in swept.events] == ["bifurcation", "snap"]
     assert all(e.step == 1 and e.parameter == "tension.1" for e in swept.events)
-    assert 0.0 < swept.events[0].value < swept.events[1].value < 1.0
+    # The robot snaps where its buckled state loses stability: both events at one tension.
+    assert 0.0 < swept.events[0].value == swept.events[1].value < 1.0
     # The CSV's event column holds the events of each step, in words.
     by_step = ["; ".join(e.text for e in swept.events if e.step == k) for k in range(3)]
     assert by_step == [r["event"] for r in table]
@@ -70,7 +71,7 @@ def payload_robot():
 
 def test_the_payload_sweep_is_the_same_in_python_and_the_command_line_at_every_step_size(cli_text):
     robot = payload_robot()
-    bifurcations = []
+    bifurcations, snaps = [], []
     for count in [11, 21, 41]:
         swept = tdcr.sweep(robot, {"tension.5": np.linspace(0.0, 0.2, count)})
         table = rows(cli_text(["sweep", "-", "--tension", f"5=0:0.2:{count}"], robot.to_toml()))
@@ -82,8 +83,11 @@ def test_the_payload_sweep_is_the_same_in_python_and_the_command_line_at_every_s
         assert by_step == [r["event"] for r in table]
         assert [e.kind for e in swept.events] == ["bifurcation", "snap"]
         bifurcations.append(swept.events[0].value)
-    # 2e-7 N: 1e-6 of the 0.2 N range, the location of the bifurcation, at every step size.
+        snaps.append(swept.events[1].value)
+    # 2e-7 N: 1e-6 of the 0.2 N range, the location of the bifurcation and of the snap
+    # (where the robot leaves the state that lost stability), at every step size.
     assert max(bifurcations) - min(bifurcations) < 2e-7
+    assert max(snaps) - min(snaps) < 2e-7 and abs(snaps[0] - bifurcations[0]) < 2e-7
 
 
 def test_trace_finds_eulers_load():

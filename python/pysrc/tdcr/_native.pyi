@@ -465,7 +465,7 @@ class Event:
     parameter: Optional[str]
     """The input, e.g. `tension.5`."""
     step: Optional[int]
-    """A sweep's step (from 0) the event is reported at (the first past it); None in a trace."""
+    """A sweep's step (from 0) the event is reported at (the first past it; for a snap from an unstable branch to a stable state, the step that found that state); None in a trace."""
     text: str
     """The event in words."""
 

@@ -6,6 +6,12 @@
 //! does not survive (a fast but smooth stretch taken for a jump) is none.
 
 use super::{Event, JUMP_SHARE, Kind, LOCATED, Mark, Sweep};
+use crate::solution::Solution;
+
+/// The most sub-steps [`Sweep::reach`] splits a bisection step into when following an
+/// unstable branch: eight equal pieces of the step before a failure counts as the branch's end
+/// (the bisection then narrows on the end itself).
+const FOLLOW_STEPS: usize = 8;
 
 impl Sweep<'_> {
     /// Narrows the bracket from `left` (before the change) to `right` (after it) to
@@ -16,6 +22,11 @@ impl Sweep<'_> {
     pub(super) fn locate(&self, mut left: Mark, mut right: Mark, jump: bool) -> Option<(Mark, Mark)> {
         let width = LOCATED * (self.ranges.steps().max(2) - 1) as f64;
         let length = right.solution.nodes.last().map_or(0.0, |n| n.s);
+        // From an unstable state (the robot left it at an earlier bifurcation, and the solve
+        // found no stable state near it) the middle points follow its branch by Newton,
+        // whatever their stability: where that branch ends (its fold) or changes is where
+        // the sweep leaves it, a point of the branch and not of the step size.
+        let unstable = left.unstable.is_some_and(|n| n > 0);
         // Bisection halves the bracket: 60 halvings take any step below 1e-18 of it, so
         // the width is reached first.
         for _ in 0..60 {
@@ -24,7 +35,12 @@ impl Sweep<'_> {
             }
             let t = 0.5 * (left.t + right.t);
             let robot = self.ranges.robot(t).ok()?;
-            let Ok(solution) = self.solve(&robot, Some(&left.solution)) else {
+            let reached = if unstable {
+                self.reach(&left, t)
+            } else {
+                self.solve(&robot, Some(&left.solution)).ok()
+            };
+            let Some(solution) = reached else {
                 // No state reached from the left one: the branch it was on has ended.
                 right.t = t;
                 continue;
@@ -41,18 +57,65 @@ impl Sweep<'_> {
         Some((left, right))
     }
 
+    /// The state at `t` on the branch of `from`, reached by Newton ([`Sweep::follow`]) in
+    /// [`FOLLOW_STEPS`] equal sub-steps at most: first in one, then, if Newton fails, in
+    /// 2, 4, ... (a branch that exists at `t` but is too far from `from` for one Newton run); `None` when
+    /// no sub-division reaches it: the branch has ended (or turned back) before `t`.
+    fn reach(&self, from: &Mark, t: f64) -> Option<Solution> {
+        let mut pieces = 1;
+        while pieces <= FOLLOW_STEPS {
+            let mut state = Some(from.solution.clone());
+            for k in 1..=pieces {
+                let at = from.t + (t - from.t) * k as f64 / pieces as f64;
+                state = state.and_then(|last| {
+                    let robot = self.ranges.robot(at).ok()?;
+                    let next = self.follow(&robot, &last).ok()?;
+                    // A Newton run that moved the tip more than JUMP_SHARE of L in one
+                    // sub-step left the branch for another state.
+                    let moved = (next.tip_position() - last.tip_position()).norm();
+                    let length = next.nodes.last().map_or(0.0, |n| n.s);
+                    (moved <= JUMP_SHARE * length).then_some(next)
+                });
+            }
+            if state.is_some() {
+                return state;
+            }
+            pieces *= 2;
+        }
+        None
+    }
+
+    /// The tip (m) of the stable state at `at` (in steps) reached from `stable` (a later
+    /// step's stable state): where the robot lands when it snaps at `at`; `stable`'s own tip
+    /// when that state cannot be reached stable.
+    pub(super) fn landing(&self, at: f64, stable: &Mark) -> nalgebra::Vector3<f64> {
+        let landed = self
+            .ranges
+            .robot(at)
+            .ok()
+            .and_then(|robot| self.solve(&robot, Some(&stable.solution)).ok());
+        match landed {
+            Some(s) if s.report.stability.is_stable() => s.tip_position(),
+            _ => stable.tip(),
+        }
+    }
+
+    /// An event of `kind` at `at` (in steps), with the swept input's value there.
+    pub(super) fn event(&self, kind: Kind, at: f64, from_unstable: bool) -> Event {
+        Event {
+            kind,
+            at,
+            value: self.ranges.swept().map(|(i, input)| (input, self.ranges.value(i, at))),
+            from_unstable,
+        }
+    }
+
     /// The events across a located bracket `before` to `after`: tendons going taut or
     /// slack, a snap (the tip moved more than [`JUMP_SHARE`] of L across it), else a change
     /// of the unstable directions (a bifurcation). Each is at the bracket's middle.
     pub(super) fn events(&self, before: &Mark, after: &Mark) -> Vec<Event> {
         let at = 0.5 * (before.t + after.t);
-        let value = self.ranges.swept().map(|(i, input)| (input, self.ranges.value(i, at)));
-        let event = |kind| Event {
-            kind,
-            at,
-            value,
-            located: true,
-        };
+        let event = |kind| self.event(kind, at, before.unstable.is_some_and(|n| n > 0));
         let mut out: Vec<Event> = after
             .taut
             .iter()

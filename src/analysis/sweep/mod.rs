@@ -99,13 +99,16 @@ pub struct Event {
     /// What happened.
     pub kind: Kind,
     /// Where, in steps from 0 (fractional: between the steps, to [`LOCATED`] of the range).
+    /// A snap to a stable state from an unstable branch is at the loss of stability before
+    /// it, which may lie before the step before the one that lists it.
     pub at: f64,
     /// The swept input ([`Ranges::swept`]) and its value at `at`; `None` when every input
     /// is held.
     pub value: Option<(Input, f64)>,
-    /// Whether `at` is located between the steps; false for a change seen from an unstable
-    /// state (reported at the step that shows it: the robot had left that state already).
-    pub located: bool,
+    /// Whether the state before the event was already unstable: the robot had left that
+    /// branch at an earlier bifurcation, and the event is where the unstable branch the sweep
+    /// followed ends or changes (located by following that branch, whatever its stability).
+    pub from_unstable: bool,
 }
 
 /// `v` to 7 significant digits (an event is located to 1e-6 of the range), as
@@ -142,13 +145,18 @@ impl fmt::Display for Event {
             Some((input, _)) if !input.unit().is_empty() => format!(" {}", input.unit()),
             _ => String::new(),
         };
-        let located = if self.located {
-            ""
+        let located = if self.from_unstable {
+            " (on an unstable branch the robot had already left)"
         } else {
-            " (not located: from an unstable state)"
+            ""
         };
         match &self.kind {
-            Kind::Snap { distance } => write!(f, "snap{at}{unit}: the tip jumps by {:.1} mm{located}", distance * 1e3),
+            Kind::Snap { distance } if self.from_unstable => write!(
+                f,
+                "snap{at}{unit}: the sweep leaves the unstable branch it followed (the robot had already left it), the tip jumps by {:.1} mm",
+                distance * 1e3
+            ),
+            Kind::Snap { distance } => write!(f, "snap{at}{unit}: the tip jumps by {:.1} mm", distance * 1e3),
             Kind::Bifurcation { before, after } => write!(
                 f,
                 "bifurcation{at}{unit}: {} to {}{located}",
@@ -236,6 +244,10 @@ pub struct Sweep<'r> {
     last: Option<Mark>,
     /// How far the tip moved per step over the last stretch without an event (m).
     pace: Option<f64>,
+    /// Where (in steps) the states the sweep followed last lost their stability, and the
+    /// tip just before (m): while the sweep is on an unstable branch, a stable state it
+    /// lands on again is where the robot went from there.
+    lost: Option<(f64, Vector3<f64>)>,
 }
 
 impl<'r> Sweep<'r> {
@@ -249,12 +261,30 @@ impl<'r> Sweep<'r> {
             start,
             last: None,
             pace: None,
+            lost: None,
         }
     }
 
     /// The number of steps solved so far.
     pub fn solved(&self) -> usize {
         self.next
+    }
+
+    /// Solves `robot` by Newton from `warm` alone, whatever the stability of the state it
+    /// reaches (collocation; shooting solves as [`Sweep::solve`]): the state on the branch
+    /// of `warm`, when Newton reaches it.
+    fn follow(&self, robot: &Robot, warm: &Solution) -> Result<Solution> {
+        match &self.solver {
+            SweepSolver::Collocation(options) => {
+                let options = collocation::Options {
+                    equilibrium: collocation::Equilibrium::Nearest,
+                    continuation: false,
+                    ..options.clone()
+                };
+                collocation::solve_from(robot, &options, warm)
+            }
+            SweepSolver::Shooting(options) => shooting::solve(robot, options),
+        }
     }
 
     /// Solves `robot` from `warm` (if any) with the sweep's solver.
@@ -294,14 +324,22 @@ impl<'r> Sweep<'r> {
                 if !jump && left.taut == right.taut && left.unstable == right.unstable {
                     break;
                 }
-                // From an unstable state the robot has already left (at the bifurcation
-                // reported before), the change is reported at the step, not located: the
-                // states between are not ones the robot passes, and solves from them fall
-                // back to the load path.
-                if left.unstable.is_some_and(|n| n > 0) {
-                    let mut found = self.events(&left, &right);
-                    found.iter_mut().for_each(|e| e.located = false);
-                    events.extend(found);
+                // A stable state reached by a jump from an unstable branch is where the
+                // robot went when the states it was on lost their stability: the snap is
+                // at that (located) loss, not where the sweep happened to find the state.
+                if jump
+                    && left.unstable.is_some_and(|n| n > 0)
+                    && right.unstable == Some(0)
+                    && let Some((at, tip)) = self.lost
+                {
+                    let landed = self.landing(at, &right);
+                    events.push(self.event(
+                        Kind::Snap {
+                            distance: (landed - tip).norm(),
+                        },
+                        at,
+                        false,
+                    ));
                     break;
                 }
                 let Some((before, after)) = self.locate(left.clone(), right.clone(), jump) else {
@@ -320,6 +358,9 @@ impl<'r> Sweep<'r> {
                     })
                 };
                 let found: Vec<Event> = found.into_iter().filter(|e| !again(e)).collect();
+                if before.unstable == Some(0) && after.unstable.is_some_and(|n| n > 0) {
+                    self.lost = Some((0.5 * (before.t + after.t), before.tip()));
+                }
                 events.extend(found);
                 // The step again from just past the event: the branch it reaches does not
                 // depend on where the step before was.
@@ -335,6 +376,9 @@ impl<'r> Sweep<'r> {
             if span > 0.0 {
                 self.pace = Some((right.tip() - left.tip()).norm() / span);
             }
+        }
+        if right.unstable == Some(0) {
+            self.lost = None;
         }
         self.last = Some(right.clone());
         self.next += 1;
