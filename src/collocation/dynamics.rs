@@ -28,7 +28,7 @@
 #![allow(non_snake_case)]
 
 use super::newton::Workspace;
-use super::residual::{end_points, end_rhs};
+use super::residual::end_values;
 use super::sensitivity::Sensitivity;
 use super::system::System;
 use super::unknowns::{NODE, P, THETA, U, V, link_row, unknowns};
@@ -94,10 +94,7 @@ impl Mass {
             let pa = Point::new(model, &sites.start, seg, (&a.R, &a.v, &a.u))?;
             let pb = Point::new(model, &sites.end, seg, (&b.R, &b.v, &b.u))?;
             // The Hermite-Simpson midpoint, as the residual's.
-            let (y0, y1) = end_points(a, b);
-            let theta1: Vector3<f64> = y1.fixed_rows::<3>(THETA).into();
-            let f0 = end_rhs(&sites.start, a, &Vector3::zeros(), &pa.rates());
-            let f1 = end_rhs(&sites.end, b, &theta1, &pb.rates());
+            let [y0, y1, f0, f1] = end_values(sites, a, b, &pa.rates(), &pb.rates());
             let ym = (y0 + y1) * 0.5 + (f0 - f1) * (h / 8.0);
             let Rm = a.R * so3::exp(&ym.fixed_rows::<3>(THETA).into());
             let (vm, um): (Vector3<f64>, Vector3<f64>) = (ym.fixed_rows::<3>(V).into(), ym.fixed_rows::<3>(U).into());

@@ -25,14 +25,12 @@
 //! the 7-point Newton-Cotes rule (exact to degree 7) on those stages: a local error
 //! O(h^9), a global order 8, at 19 evaluations of eq. 13 per interval (2 + 3 + 4 + 5 + 5).
 
-use super::residual::{Block, IntervalSites, end_points, end_rhs, rhs, scale_rows};
+use super::residual::{Block, IntervalSites, end_values, rhs, scale_rows};
 use super::system::System;
-use super::unknowns::THETA;
 use crate::error::Result;
 use crate::model::equations::{Model, Site};
-use crate::model::linearize;
 use crate::solution::State;
-use nalgebra::{Vector3, Vector6};
+use nalgebra::Vector6;
 use std::sync::OnceLock;
 
 /// The interior grid points of an interval, in sixths of h: t_i = GRID[i] / 6.
@@ -197,10 +195,7 @@ fn interval(
     end_rates: &Vector6<f64>,
 ) -> Result<Block<f64>> {
     let h = sites.end.s - sites.start.s;
-    let (y0, y1) = end_points(a, b);
-    let theta1: Vector3<f64> = y1.fixed_rows::<3>(THETA).into();
-    let f0 = end_rhs(&sites.start, a, &Vector3::zeros(), start_rates);
-    let f1 = end_rhs(&sites.end, b, &theta1, end_rates);
+    let [y0, y1, f0, f1] = end_values(sites, a, b, start_rates, end_rates);
     let r = rows(&y0, &y1, &f0, &f1, h, |i, y| rhs(model, &grid[i], segment_end, &a.R, y))?;
     Ok(scale_rows(r, model.robot.length()))
 }
@@ -222,11 +217,7 @@ pub(super) fn residual(
     local.fill(0.0);
     let model = &system.model;
     system.rows(x, out, |k, sites, seg, a, b, start| {
-        let start = match start {
-            Some(r) => r,
-            None => linearize::rates(model, &sites.start, seg, &a.R, &a.v, &a.u)?,
-        };
-        let end = linearize::rates(model, &sites.end, seg, &b.R, &b.v, &b.u)?;
+        let (start, end) = system.end_rates(sites, seg, a, b, start)?;
         (rates[k], rates[k + 1]) = (start, end);
         let h = sites.end.s - sites.start.s;
         let grid: [Site; 5] = std::array::from_fn(|i| {

@@ -158,6 +158,24 @@ pub(super) fn end_points(a: &State, b: &State) -> (Block<f64>, Block<f64>) {
     )
 }
 
+/// The interval's end points [`end_points`] and F there ([`end_rhs`]), given the rates
+/// (v', u') at both nodes: [y_0, y_1, F_0, F_1], what every scheme on an interval (orders 4,
+/// 6 and 8, the dynamics' midpoint) starts from.
+#[inline]
+pub(super) fn end_values(
+    sites: &IntervalSites,
+    a: &State,
+    b: &State,
+    start_rates: &Vector6<f64>,
+    end_rates: &Vector6<f64>,
+) -> [Block<f64>; 4] {
+    let (y0, y1) = end_points(a, b);
+    let theta1: Vector3<f64> = y1.fixed_rows::<3>(THETA).into();
+    let f0 = end_rhs(&sites.start, a, &Vector3::zeros(), start_rates);
+    let f1 = end_rhs(&sites.end, b, &theta1, end_rates);
+    [y0, y1, f0, f1]
+}
+
 /// F at an interval's end point y_1 = (p_b, theta_1, v_b, u_b) in the local coordinates of
 /// a frame R_a, given node b's site and the rates (v', u') there: (R_b v, J_r^-1(theta_1)
 /// u_b, rates), with R_b = R_a exp(theta_1) and v the strain of v_b ([`Site::strain`]).
@@ -187,15 +205,12 @@ pub fn interval(
     start_rates: Option<Vector6<f64>>,
 ) -> Result<(Block<f64>, Vector6<f64>)> {
     let h = sites.end.s - sites.start.s;
-    let (y0, y1) = end_points(a, b);
     let rates0 = match start_rates {
         Some(r) => r,
         None => linearize::rates(model, &sites.start, segment_end, &a.R, &a.v, &a.u)?,
     };
     let rates1 = linearize::rates(model, &sites.end, segment_end, &b.R, &b.v, &b.u)?;
-    let theta1: Vector3<f64> = y1.fixed_rows::<3>(THETA).into();
-    let f0 = end_rhs(&sites.start, a, &Vector3::zeros(), &rates0);
-    let f1 = end_rhs(&sites.end, b, &theta1, &rates1);
+    let [y0, y1, f0, f1] = end_values(sites, a, b, &rates0, &rates1);
     let ym = (y0 + y1) * 0.5 + (f0 - f1) * (h / 8.0);
     let fm = rhs(model, &sites.mid, segment_end, &a.R, &ym)?;
     Ok((
@@ -245,15 +260,12 @@ pub(super) fn interval_derivatives(
     out: &mut [Block<f64>],
 ) -> Result<Vector6<f64>> {
     let h = sites.end.s - sites.start.s;
-    let (y0, y1) = end_points(a, b);
     let rates0 = match start_rates {
         Some(r) => r,
         None => point(model, &sites.start, segment_end, (&a.R, &a.v, &a.u), false, d_start)?.0,
     };
     let (rates1, _) = point(model, &sites.end, segment_end, (&b.R, &b.v, &b.u), false, d_end)?;
-    let theta1: Vector3<f64> = y1.fixed_rows::<3>(THETA).into();
-    let f0 = end_rhs(&sites.start, a, &Vector3::zeros(), &rates0);
-    let f1 = end_rhs(&sites.end, b, &theta1, &rates1);
+    let [y0, y1, f0, f1] = end_values(sites, a, b, &rates0, &rates1);
     let ym = (y0 + y1) * 0.5 + (f0 - f1) * (h / 8.0);
     let theta_m: Vector3<f64> = ym.fixed_rows::<3>(THETA).into();
     let R_m = a.R * so3::exp(&theta_m);
@@ -317,10 +329,7 @@ pub fn interval_order6(
     end_rates: &Vector6<f64>,
 ) -> Result<Block<f64>> {
     let h = sites.end.s - sites.start.s;
-    let (y0, y1) = end_points(a, b);
-    let theta1: Vector3<f64> = y1.fixed_rows::<3>(THETA).into();
-    let f0 = end_rhs(&sites.start, a, &Vector3::zeros(), start_rates);
-    let f1 = end_rhs(&sites.end, b, &theta1, end_rates);
+    let [y0, y1, f0, f1] = end_values(sites, a, b, start_rates, end_rates);
     let y_q = (y0 * 27.0 + y1 * 5.0) / 32.0 + (f0 * 9.0 - f1 * 3.0) * (h / 64.0);
     let y_tq = (y0 * 5.0 + y1 * 27.0) / 32.0 + (f0 * 3.0 - f1 * 9.0) * (h / 64.0);
     let f_q = rhs(model, &quarters.quarter, segment_end, &a.R, &y_q)?;

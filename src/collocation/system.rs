@@ -178,17 +178,33 @@ impl<'a> System<'a> {
             });
         }
         self.rows(x, out, |k, sites, seg, a, b, start| {
-            let start = match start {
-                Some(r) => r,
-                None => linearize::rates(&self.model, &sites.start, seg, &a.R, &a.v, &a.u)?,
-            };
-            let end = linearize::rates(&self.model, &sites.end, seg, &b.R, &b.v, &b.u)?;
+            let (start, end) = self.end_rates(sites, seg, a, b, start)?;
             (rates[k], rates[k + 1]) = (start, end);
             let quarters = self.quarters(sites);
             let r = residual::interval_order6(&self.model, sites, &quarters, seg, a, b, &start, &end)?;
             local[k] = r.amax();
             Ok((r, end))
         })
+    }
+
+    /// The rates (v', u') of eq. 13 at an interval's two nodes `a` and `b` (segment end
+    /// `seg`): the start's given by the link before (`start`) or evaluated here.
+    ///
+    /// # Errors
+    /// A model breakdown at either node.
+    pub(super) fn end_rates(
+        &self,
+        sites: &IntervalSites,
+        seg: f64,
+        a: &State,
+        b: &State,
+        start: Option<Vector6<f64>>,
+    ) -> Result<(Vector6<f64>, Vector6<f64>)> {
+        let start = match start {
+            Some(r) => r,
+            None => linearize::rates(&self.model, &sites.start, seg, &a.R, &a.v, &a.u)?,
+        };
+        Ok((start, linearize::rates(&self.model, &sites.end, seg, &b.R, &b.v, &b.u)?))
     }
 
     /// The sites at a quarter and three quarters of an interval.
