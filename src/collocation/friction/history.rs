@@ -14,6 +14,8 @@
 //! the backbone with the links' rows and multipliers held; the march is repeated on the new
 //! shape until it changes nothing.
 
+mod split;
+
 use super::grip::{choose, stuck_multiplier};
 use super::staircase::Staircase;
 use super::*;
@@ -48,6 +50,21 @@ pub(crate) struct Carried {
     /// The last step's Newton workspace and bordered factors on this mesh, which the next
     /// step's first iterations reuse as chord steps (None before the first step).
     factors: Option<(Workspace, Staircase)>,
+}
+
+impl Carried {
+    /// A copy of everything but the factors: the state a step starts from.
+    fn material(&self) -> Carried {
+        Carried {
+            mesh: self.mesh.clone(),
+            x: self.x.clone(),
+            z: self.z.clone(),
+            grips: self.grips.clone(),
+            solved: self.solved,
+            report: self.report.clone(),
+            factors: None,
+        }
+    }
 }
 
 /// One step's answer: the solution and, per tendon with friction (robot index), its zones
@@ -244,6 +261,20 @@ fn rigid(i: usize, s: f64) -> Error {
 /// tendon that sticks ([`rigid`]), or a pattern outside what the march resolves (a stretch
 /// sliding against its slip, section 8 of docs/friction.md).
 pub(crate) fn step(robot: &Robot, options: &Options, carried: &mut Carried) -> Result<StepAnswer> {
+    let before = carried.material();
+    let (answer, stuck) = solve_on(robot, options, carried)?;
+    if !stuck {
+        return Ok(answer);
+    }
+    split::refine(robot, options, carried, &before, answer)
+}
+
+/// [`step`] on `carried`'s own mesh, and whether a tendon has a stuck stretch (then the
+/// answer has no error estimate: [`split::refine`] gives it one).
+///
+/// # Errors
+/// As [`step`].
+fn solve_on(robot: &Robot, options: &Options, carried: &mut Carried) -> Result<(StepAnswer, bool)> {
     let start = Instant::now();
     let model = Model::new(robot);
     let mut system = System::new(model.clone(), carried.mesh.clone());
@@ -406,7 +437,7 @@ pub(crate) fn step(robot: &Robot, options: &Options, carried: &mut Carried) -> R
     carried.grips = next;
     carried.x = x;
     carried.factors = Some((ws, border.stairs));
-    Ok((solution, zones))
+    Ok(((solution, zones), stuck))
 }
 
 /// Checks that every stretch of tendon `i` slides the way its friction acts (Coulomb's
