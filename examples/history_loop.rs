@@ -8,6 +8,9 @@ use tdcr::analysis::history::history;
 use tdcr::analysis::sweep::{Input, Ranges};
 use tdcr::{Friction, Parameter, cases, collocation};
 
+/// The reference history's tolerance (relative to L).
+const REFERENCE: f64 = 1e-11;
+
 fn main() {
     let mut robot = cases::prototype();
     robot.tendons[0].friction = Some(Friction::pull(0.1));
@@ -27,7 +30,7 @@ fn main() {
         }
         result.steps
     };
-    let reference = solve(1e-11);
+    let reference = solve(REFERENCE);
     for step in &reference {
         let t = &step.solution.tendons[0];
         let zones: Vec<String> = step.zones[0]
@@ -36,9 +39,11 @@ fn main() {
             .map(|z| format!("{} {:.4}-{:.4}", z.contact.name(), z.start, z.end))
             .collect();
         let tip = step.solution.tip_position();
+        let estimate = step.solution.report.error_estimate.map_or(f64::NAN, |e| e.tip_position);
         println!(
-            "{:6.3} N  tip ({:+.6}, {:+.6}, {:+.6}) m  delivered {:.5} N  {}",
+            "{:6.3} N  est {estimate:.1e} m on {:4} intervals  tip ({:+.6}, {:+.6}, {:+.6}) m  delivered {:.5} N  {}",
             t.tension,
+            step.solution.report.intervals,
             tip.x,
             tip.y,
             tip.z,
@@ -61,5 +66,19 @@ fn main() {
             .map(|(a, b)| format!("{:.1e}", (a.solution.tip_position() - b.solution.tip_position()).norm()))
             .collect();
         println!("  by step: {}", each.join(" "));
+        // Each step's true error over its estimate, and its intervals.
+        let ratios: Vec<String> = steps
+            .iter()
+            .zip(&reference)
+            .map(|(a, b)| {
+                let error = (a.solution.tip_position() - b.solution.tip_position()).norm();
+                let report = &a.solution.report;
+                match report.error_estimate {
+                    Some(e) => format!("{:.3}/{}", error / e.tip_position, report.intervals),
+                    None => format!("none/{}", report.intervals),
+                }
+            })
+            .collect();
+        println!("  true / estimate, intervals: {}", ratios.join(" "));
     }
 }
