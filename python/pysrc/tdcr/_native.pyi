@@ -209,7 +209,8 @@ class SolveReport:
     @property
     def error_estimate(self) -> Optional[Dict[str, float]]:
         """{"tip_position_m", "tip_rotation_rad", "backbone_max_m", "order"} (order: 4, or 6 for
-        the deferred-corrected answer at tolerances of 1e-8 and below); None for shooting."""
+        the deferred-corrected answer at tolerances of 1e-8 and below, or 2 for a history
+        step with a stuck stretch, solved on split meshes); None for shooting."""
     @property
     def tolerance(self) -> Optional[float]:
         """The tip tolerance relative to the rod length; None on a fixed mesh."""
@@ -539,8 +540,10 @@ def history(
     equilibrium: Optional[Literal["load_path", "nearest"]] = None,
 ) -> History:
     """Solves parameter rows in order as a load history with stick/slip friction (each step
-    from the tendon state the last left); with `up_down`, up and then back down. A failed
-    step raises with `index` and `partial` (the History before it)."""
+    from the tendon state the last left); with `up_down`, up and then back down. Every step
+    has an error estimate; a step with a stuck stretch is solved on its mesh split in 2, 4,
+    ... parts until two answers agree to `tol` (estimate order 2). A failed step raises with
+    `index` and `partial` (the History before it)."""
 
 @final
 class Trace:

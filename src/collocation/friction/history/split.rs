@@ -15,11 +15,13 @@ use crate::solution::Solution;
 
 /// Most splits of a stuck step's links: 2^6 = 64 parts per link. A stuck stretch's error
 /// falls about as h^2.3 (docs/friction.md), so 64 parts take a step from 1e-4 L to about
-/// 1e-8 L; a step that still misses its tolerance reports so.
+/// 1e-8 L; a step that still misses its tolerance (or would need more than
+/// `max_intervals`) reports so.
 const LEVELS: u32 = 6;
 
 /// Solves the step again on split meshes (module docs) after `answer`, its solution on
-/// the history's mesh from the material `before`; leaves in `carried` (which holds that
+/// the history's mesh from the material `before`, within `options.max_intervals` (one split
+/// at least); leaves in `carried` (which holds that
 /// solve's end state and factors) the finest answer's material at the history's nodes.
 ///
 /// # Errors
@@ -34,7 +36,11 @@ pub(super) fn refine(
     let length = robot.length();
     let mut best = answer;
     let mut finest = None;
+    let intervals = before.mesh.intervals();
     for level in 1..=LEVELS {
+        if intervals << level > options.max_intervals.max(2 * intervals) {
+            break;
+        }
         let mut fine = split(robot, before, 1 << level, &best.0)?;
         let (next, _) = solve_on(robot, options, &mut fine)?;
         let estimate = difference(&best.0, &next.0);
@@ -101,7 +107,11 @@ fn split(robot: &Robot, before: &Carried, parts: usize, guess: &Solution) -> Res
         let (i, span, base) = (profile.slipping[j], profile.spans[j], profile.base[j]);
         for (n, value) in z[j].iter_mut().enumerate() {
             let tension = guess.tension_at(i, mesh.nodes[n.min(span)].s).unwrap_or(0.0);
-            *value = if base > 0.0 && tension > 0.0 { (tension / base).ln() } else { 0.0 };
+            *value = if base > 0.0 && tension > 0.0 {
+                (tension / base).ln()
+            } else {
+                0.0
+            };
         }
         let links = old.contacts.len();
         let parent = |l: usize| (l / parts).min(links.saturating_sub(1));
