@@ -26,7 +26,7 @@ use nalgebra::Vector6;
 /// hundred intervals (S and H at 1e-9 L and below need 2 to 10 times fewer intervals and
 /// 1.7 to 5 times fewer instructions; docs/benchmarks.md, "Tight tolerances"). The default
 /// 1e-7 keeps the order-4 answer (docs/numerics.md, "The order-6 answer", says why).
-pub(crate) const ORDER6_BELOW: f64 = 1e-7;
+pub(crate) const ORDER6_BELOW: f64 = 1e-8;
 
 /// The factor on the order-8 estimate of the order-6 error. That estimate is
 /// asymptotically exact, but its own error (the order-8 scheme's truncation, O(h^2)
