@@ -235,7 +235,7 @@ fn warm_solves_at_a_tight_tolerance_report_honest_estimates() {
 /// order-4 system at x6). Case H at 1e-9 L: its order-6 answer leaves an order-4 residual
 /// of 6.7e-7, which the sensitivities' guard (1e-8) refused before it checked an order-6
 /// answer's order-6 residual (5e-11). Its tension columns against central differences of
-/// order-6 answers on the same mesh (the taut tendons).
+/// order-6 answers on the same mesh (the taut tendons), and a Solver's tension Jacobian.
 #[test]
 fn sensitivities_of_an_order_6_answer_match_differences_of_order_6_answers() {
     let robot = cases::case_h();
@@ -246,6 +246,14 @@ fn sensitivities_of_an_order_6_answer_match_differences_of_order_6_answers() {
     let solution = collocation::solve(&robot, &options).unwrap();
     assert_eq!(solution.report.error_estimate.unwrap().order, 6);
     let sensitivities = collocation::sensitivity::tip_sensitivities(&robot, &solution).unwrap();
+    // A Solver's Jacobian of its own order-6 answer (its workspace holds factors that the
+    // order-6 chord steps have left behind) is the same.
+    let mut solver = collocation::Solver::new(options.clone());
+    let answer = solver.solve(&robot).unwrap();
+    let tensions: Vec<tdcr::Parameter> = (0..robot.tendons.len()).map(tdcr::Parameter::Tension).collect();
+    let j = solver.tip_jacobian(&robot, &answer, &tensions).unwrap();
+    // 1e-12: the same Jacobian and solves; only the factoring workspace differs (rounding).
+    assert!((&j - &sensitivities.tension).amax() <= 1e-12 * sensitivities.tension.amax());
     let on_mesh = collocation::Options {
         mesh: Some(solution.nodes.iter().map(|n| n.s).collect()),
         ..options
