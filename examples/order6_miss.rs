@@ -1,13 +1,16 @@
 //! Diagnosis of an order-6 estimate below the true error (docs/numerics.md, "The order-6
 //! answer", "Why the estimate is low on some random robots"): for the robot file given, the
-//! 1e-10 L solve, then the order-4 and order-6 answers (with the unreported order-8
+//! 1e-10 L solve (or `TOL`), then the order-4 and order-6 answers (with the unreported order-8
 //! estimate, before its factor and rounding term) on the mesh that solve ends on and on that
 //! mesh with every interval split into k, against order-4 references on 32x and 64x that
 //! mesh (warm, from the solve, and cold, from the default guess).
 //!
 //! `cargo run --release --example order6_miss -- [ROBOT.toml]` (default
 //! tests/data/order6-miss-slender.toml, a robot of the 600-robot property run);
-//! `SPLITS=1,2,4` chooses k, `NODES=1` prints the error node by node on the solve's mesh.
+//! `SPLITS=1,2,4` chooses k, `NODES=1` prints the error node by node on the solve's mesh,
+//! `INTERVALS=32` solves on that fixed uniform mesh instead, `TOL=1e-7` at that tolerance (relative to L; at the default 1e-7 the solve
+//! is the order-4 answer, and split 1 shows the order-6 answer the default would return,
+//! tests/data/order6-default-miss.toml: docs/numerics.md, "Why the default keeps order 4").
 
 use tdcr::advanced::{deferred, equations::Model, guess, mesh::Mesh, newton, system::System};
 use tdcr::collocation::{self, LinearSolver};
@@ -56,9 +59,13 @@ fn main() {
     let robot = tdcr::io::parse(&text, &path).unwrap().robot;
     let length = robot.length();
     println!("breakpoints {:?}, L {length}", robot.breakpoints());
-    let options = collocation::Options {
-        tolerance: Some(1e-10),
-        ..Default::default()
+    let tolerance = std::env::var("TOL").map_or(1e-10, |t| t.parse().unwrap());
+    let options = match std::env::var("INTERVALS") {
+        Ok(n) => collocation::Options::fixed(n.parse().unwrap()),
+        Err(_) => collocation::Options {
+            tolerance: Some(tolerance),
+            ..Default::default()
+        },
     };
     let solution = collocation::solve(&robot, &options).unwrap();
     let nodes: Vec<f64> = solution.nodes.iter().map(|n| n.s).collect();
@@ -134,6 +141,11 @@ fn main() {
             tr,
             raw_r,
             tr / raw_r
+        );
+        println!(
+            "split {k}: true / reported estimate: position {:.3}, rotation {:.3}",
+            tp / est.tip_position,
+            tr / est.tip_rotation
         );
         if k == 1 && std::env::var("NODES").is_ok() {
             // Node by node: the position error of x6 against the reference.

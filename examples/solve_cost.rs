@@ -9,7 +9,8 @@
 //! valgrind --tool=callgrind --toggle-collect='solve_cost::measured' \
 //!     target/release/examples/solve_cost S cold 20
 //! ```
-//! Instructions per solve = the collected total / `count`.
+//! Instructions per solve = the collected total / `count`. `TOL` (relative to L) and
+//! `INTERVALS` (the starting mesh's fewest intervals) replace the defaults.
 
 use tdcr::{Robot, Solution, cases, collocation};
 
@@ -53,7 +54,7 @@ fn uncounted(solver: &mut collocation::Solver, previous: &Robot) -> Result<Solut
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().collect();
-    let usage = "usage: solve_cost S|H|SM cold|warm COUNT [TOL]";
+    let usage = "usage: solve_cost S|H|SM cold|warm COUNT [TOL [INTERVALS]]";
     let (case, start, count) = match args.as_slice() {
         [_, c, s, n, ..] => (c.as_str(), s.as_str(), n.parse::<usize>()?.max(1)),
         _ => return Err(usage.into()),
@@ -73,6 +74,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut options = collocation::Options::default();
     if let Some(tol) = args.get(4) {
         options.tolerance = Some(tol.parse()?);
+    }
+    // The fewest intervals of the starting mesh, for studies of the first mesh.
+    if let Some(intervals) = args.get(5) {
+        options.intervals = intervals.parse()?;
     }
     let solution = match start {
         "cold" => {

@@ -230,3 +230,57 @@ fn warm_solves_at_a_tight_tolerance_report_honest_estimates() {
         }
     }
 }
+
+/// An order-6 answer has sensitivities (docs/numerics.md, "The order-6 answer": those of the
+/// order-4 system at x6). Case H at 1e-9 L: its order-6 answer leaves an order-4 residual
+/// of 6.7e-7, which the sensitivities' guard (1e-8) refused before it checked an order-6
+/// answer's order-6 residual (5e-11). Its tension columns against central differences of
+/// order-6 answers on the same mesh (the taut tendons), and a Solver's tension Jacobian.
+#[test]
+fn sensitivities_of_an_order_6_answer_match_differences_of_order_6_answers() {
+    let robot = cases::case_h();
+    let options = collocation::Options {
+        tolerance: Some(1e-9),
+        ..Default::default()
+    };
+    let solution = collocation::solve(&robot, &options).unwrap();
+    assert_eq!(solution.report.error_estimate.unwrap().order, 6);
+    let sensitivities = collocation::sensitivity::tip_sensitivities(&robot, &solution).unwrap();
+    // A Solver's Jacobian of its own order-6 answer (its workspace holds factors that the
+    // order-6 chord steps have left behind) is the same.
+    let mut solver = collocation::Solver::new(options.clone());
+    let answer = solver.solve(&robot).unwrap();
+    let tensions: Vec<tdcr::Parameter> = (0..robot.tendons.len()).map(tdcr::Parameter::Tension).collect();
+    let j = solver.tip_jacobian(&robot, &answer, &tensions).unwrap();
+    // 1e-12: the same Jacobian and solves; only the factoring workspace differs (rounding).
+    assert!((&j - &sensitivities.tension).amax() <= 1e-12 * sensitivities.tension.amax());
+    let on_mesh = collocation::Options {
+        mesh: Some(solution.nodes.iter().map(|n| n.s).collect()),
+        ..options
+    };
+    // The taut tendons (a slack one's derivative is one-sided).
+    for i in (0..robot.tendons.len()).filter(|&i| robot.tendons[i].tension() > 0.0) {
+        let t = robot.tendons[i].tension();
+        let h = 1e-4 * t;
+        let tip = |dt: f64| {
+            let mut r = robot.clone();
+            r.tendons[i].set_tension(t + dt);
+            let s = collocation::solve(&r, &on_mesh).unwrap();
+            // The same mesh and the same kind of answer, or the difference means nothing.
+            assert_eq!(s.report.intervals, solution.report.intervals);
+            assert_eq!(s.report.error_estimate.unwrap().order, 6);
+            s.tip_position()
+        };
+        let difference = (tip(h) - tip(-h)) / (2.0 * h);
+        let column = sensitivities.tension.fixed_view::<3, 1>(0, i).into_owned();
+        let error = (difference - column).norm() / column.norm();
+        eprintln!(
+            "tendon {i}: |d tip/d tension| {:.4e} m/N, relative difference {error:.2e}",
+            column.norm()
+        );
+        // 1e-5: the sensitivities are the order-4 system's, which differ from the derivative
+        // of the order-6 answers by the order-4 discretization error: measured 1.7e-6 to
+        // 2.4e-6 for steps of 1e-5 to 1e-3 of the tension (so not the differencing's).
+        assert!(error <= 1e-5, "tendon {i}: relative difference {error:.2e}");
+    }
+}
