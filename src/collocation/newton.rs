@@ -193,6 +193,21 @@ fn evaluate<B: Border>(border: &mut B, point: Point, x: &[State], out: &mut [f64
     ok
 }
 
+/// The Jacobian at the states `x` into the workspace's values and the residual there into
+/// its residual (the border's rows are not evaluated), counted and timed in `report`; false
+/// on a model breakdown or a value that is not finite.
+fn jacobian<B: Border>(border: &mut B, x: &[State], ws: &mut Workspace, report: &mut SolveReport) -> bool {
+    let t = Instant::now();
+    let ok = border.on(Point::Current, |system| {
+        report.evaluations.equations += system.rate_evaluations();
+        system.jacobian(x, &mut ws.residual, &mut ws.values).is_ok()
+    });
+    report.timings.assembly += t.elapsed();
+    report.evaluations.jacobian += 1;
+    ws.drift = 0.0;
+    ok && super::workspace::all_finite(&ws.values)
+}
+
 fn max_norm(v: &[f64]) -> f64 {
     v.iter()
         .fold(0.0, |m, x| if x.is_nan() { f64::NAN } else { m.max(x.abs()) })
@@ -247,15 +262,24 @@ pub(crate) fn run_bordered<B: Border>(
     report.history.reserve(settings.max_iterations.min(MAX_ITERATIONS));
     let length = border.on(Current, |system| system.model.robot.length());
     let worst = |ws: &Workspace, border: &B| worst_row(&ws.residual, border.residual(Current));
-    if !evaluate(border, Current, x, &mut ws.residual, report)
-        || !norm(&ws.residual, border.residual(Current)).is_finite()
-    {
-        return (Termination::NonFinite, worst(ws, border));
-    }
-    let mut chord = settings.reuse_factors;
     // The Jacobian held belongs to an earlier run's point (or system): not to this run's
     // iterates until this run evaluates one.
     ws.drift = f64::INFINITY;
+    // A run that starts with a Newton step takes the residual at the start from the
+    // Jacobian's evaluation there (`System::jacobian` writes both), not from one more
+    // residual evaluation before it.
+    let mut assembled = !settings.reuse_factors && settings.max_iterations > 0;
+    let ok = if assembled {
+        let ok = jacobian(border, x, ws, report);
+        border.rows(Current, x);
+        ok
+    } else {
+        evaluate(border, Current, x, &mut ws.residual, report)
+    };
+    if !ok || !norm(&ws.residual, border.residual(Current)).is_finite() {
+        return (Termination::NonFinite, worst(ws, border));
+    }
+    let mut chord = settings.reuse_factors;
     // Norms of the last two steps taken (full steps only: a damped one says nothing of the
     // remaining error).
     let (mut last_step, mut before_last) = (f64::INFINITY, f64::INFINITY);
@@ -325,17 +349,10 @@ pub(crate) fn run_bordered<B: Border>(
                 continue;
             }
         }
-        // A Newton step: the Jacobian at x.
+        // A Newton step: the Jacobian at x (already there on the first step of a run that
+        // starts with one).
         report.newton_steps += 1;
-        let t = Instant::now();
-        let ok = border.on(Current, |system| {
-            report.evaluations.equations += system.rate_evaluations();
-            system.jacobian(x, &mut ws.residual, &mut ws.values).is_ok()
-        });
-        report.timings.assembly += t.elapsed();
-        report.evaluations.jacobian += 1;
-        ws.drift = 0.0;
-        if !ok || !super::workspace::all_finite(&ws.values) {
+        if !std::mem::take(&mut assembled) && !jacobian(border, x, ws, report) {
             return (Termination::NonFinite, worst(ws, border));
         }
         if !ws.solve(report) {

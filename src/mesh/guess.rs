@@ -9,7 +9,7 @@
 #![allow(non_snake_case)]
 
 use crate::mesh::{Mesh, MeshNode};
-use crate::model::equations::{Model, Which};
+use crate::model::equations::{Model, Site, Which};
 use crate::model::robot::RodModel;
 use crate::so3;
 use crate::solution::{Node, Solution, State};
@@ -147,8 +147,10 @@ pub fn rigid_estimate(model: &Model, nodes: &[MeshNode]) -> Vec<State> {
     let mut last_change = f64::INFINITY;
     let mut relaxation = RELAXATION;
     let mut last_step: Option<Vec<f64>> = None;
+    // The nodes' sites do not depend on the shape: evaluated once, not three times a sweep.
+    let sites: Vec<Site> = nodes.iter().map(|n| model.site_on(n.s, n.segment_end)).collect();
     for _ in 0..MAX_SWEEPS {
-        let next = sweep(model, nodes, &shape, &strains);
+        let next = sweep(model, nodes, &sites, &shape, &strains);
         // The fixed-point step, flattened (v then u L per node, so all are comparable).
         let step: Vec<f64> = next
             .iter()
@@ -196,10 +198,12 @@ pub fn rigid_estimate(model: &Model, nodes: &[MeshNode]) -> Vec<State> {
         .collect()
 }
 
-/// One sweep: node strains carrying the loads distal to each node, summed on `shape`.
+/// One sweep: node strains carrying the loads distal to each node, summed on `shape`
+/// (`sites`: the nodes' sites).
 fn sweep(
     model: &Model,
     nodes: &[MeshNode],
+    sites: &[Site],
     shape: &[(Vector3<f64>, Matrix3<f64>)],
     strains: &[(Vector3<f64>, Vector3<f64>)],
 ) -> Vec<(Vector3<f64>, Vector3<f64>)> {
@@ -214,10 +218,7 @@ fn sweep(
             let (f, l) = model.point_wrench(nodes[k].s);
             (N + f, M + l)
         } else {
-            let (a, b) = (
-                model.site_on(nodes[k].s, nodes[k].segment_end),
-                model.site_on(nodes[k + 1].s, nodes[k + 1].segment_end),
-            );
+            let (a, b) = (&sites[k], &sites[k + 1]);
             let d = shape[k + 1].0 - shape[k].0;
             (
                 N + (a.f_e + b.f_e) * (h / 2.0),
@@ -229,7 +230,7 @@ fn sweep(
         .iter()
         .enumerate()
         .map(|(k, node)| {
-            let site = model.site_on(node.s, node.segment_end);
+            let site = &sites[k];
             let R = shape[k].1;
             let (v, u) = strains[k];
             let (mut n, mut m) = wrench[k];
@@ -239,7 +240,7 @@ fn sweep(
                 n -= f;
                 m -= l;
             }
-            model.strains_for_wrench(&site, &(R.transpose() * n), &(R.transpose() * m))
+            model.strains_for_wrench(site, &(R.transpose() * n), &(R.transpose() * m))
         })
         .collect()
 }

@@ -91,6 +91,7 @@ use crate::Error;
 use crate::error::Result;
 use crate::model::equations::{Model, Site};
 use nalgebra::{Matrix3, Matrix3x6, Matrix6, Matrix6x3, SMatrix, Vector3, Vector6};
+use std::mem::MaybeUninit;
 
 mod factor;
 use factor::Factor;
@@ -106,6 +107,40 @@ use tendon::{hat_mul, mul_hat};
 /// for x, then differentiate at x); further tendons are re-evaluated from their routing.
 /// 8 covers the usual 3-6 tendon robots (the prototype has 5) at 0.9 kB of stack.
 const CACHED_TENDONS: usize = 8;
+
+/// The first [`CACHED_TENDONS`] tendon points of one linearization, kept on the stack
+/// between its two passes. The slots past `len` stay uninitialized: zeroing all 0.9 kB
+/// (`[TendonPoint::ZERO; 8]`) cost a memset of about 450 instructions per linearization,
+/// 4 % of a default prototype solve, for slots a 5-tendon robot never reads.
+struct TendonCache {
+    points: [MaybeUninit<TendonPoint>; CACHED_TENDONS],
+    len: usize,
+}
+
+impl TendonCache {
+    /// An empty cache.
+    fn new() -> Self {
+        TendonCache {
+            points: [const { MaybeUninit::uninit() }; CACHED_TENDONS],
+            len: 0,
+        }
+    }
+
+    /// Keeps `tp` if a slot is free (the tendons beyond are evaluated again in pass 2).
+    fn push(&mut self, tp: TendonPoint) {
+        if let Some(slot) = self.points.get_mut(self.len) {
+            slot.write(tp);
+            self.len += 1;
+        }
+    }
+
+    /// The points kept, in the order pushed.
+    fn points(&self) -> &[TendonPoint] {
+        // SAFETY: the first `len` slots were written by `push` (MaybeUninit<T> has T's
+        // layout), and TendonPoint is Copy, so nothing is dropped.
+        unsafe { std::slice::from_raw_parts(self.points.as_ptr().cast::<TendonPoint>(), self.len) }
+    }
+}
 
 /// Strain rates and their exact derivatives at one point.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -167,7 +202,7 @@ fn assemble(
     site: &Site,
     segment_end: f64,
     (R, v, u): (&Matrix3<f64>, &Vector3<f64>, &Vector3<f64>),
-    mut cache: Option<&mut [TendonPoint; CACHED_TENDONS]>,
+    mut cache: Option<&mut TendonCache>,
 ) -> Result<Assembled> {
     let kse = &site.section.section.kse;
     let kbt = &site.section.section.kbt;
@@ -197,10 +232,8 @@ fn assemble(
         let a_i = A_i * tp.c;
         b += tp.r.cross(&a_i);
         a += a_i;
-        if let Some(cache) = cache.as_deref_mut()
-            && count < CACHED_TENDONS
-        {
-            cache[count] = tp;
+        if let Some(cache) = cache.as_deref_mut() {
+            cache.push(tp);
         }
         count += 1;
     }
@@ -308,7 +341,7 @@ pub fn linearize(
     u: &Vector3<f64>,
 ) -> Result<Linearization> {
     // Locals, not a Point: the frictionless path moves nothing between the passes.
-    let mut cache = [TendonPoint::ZERO; CACHED_TENDONS];
+    let mut cache = TendonCache::new();
     let assembled = assemble(model, site, segment_end, (R, v, u), Some(&mut cache))?;
     let x = &assembled.x;
     let mut dFt = derivative(model, site, segment_end, (v, u), x, &assembled, &cache)?;
@@ -328,7 +361,7 @@ pub fn linearize(
 /// sides, and dF (the partial derivative of M x - rhs with x held fixed) at any rates x.
 pub(crate) struct Point {
     assembled: Assembled,
-    cache: [TendonPoint; CACHED_TENDONS],
+    cache: TendonCache,
 }
 
 impl Point {
@@ -342,7 +375,7 @@ impl Point {
         segment_end: f64,
         (R, v, u): (&Matrix3<f64>, &Vector3<f64>, &Vector3<f64>),
     ) -> Result<Self> {
-        let mut cache = [TendonPoint::ZERO; CACHED_TENDONS];
+        let mut cache = TendonCache::new();
         let assembled = assemble(model, site, segment_end, (R, v, u), Some(&mut cache))?;
         Ok(Point { assembled, cache })
     }
@@ -386,7 +419,7 @@ fn derivative(
     (v, u): (&Vector3<f64>, &Vector3<f64>),
     x: &SMatrix<f64, 1, 6>,
     assembled: &Assembled,
-    cache: &[TendonPoint; CACHED_TENDONS],
+    cache: &TendonCache,
 ) -> Result<SMatrix<f64, 9, 6>> {
     let count = assembled.count;
     let (n_b, m_b, f_b, l_b) = (assembled.n_b, assembled.m_b, assembled.f_b, assembled.l_b);
@@ -398,7 +431,7 @@ fn derivative(
     // Pass 2: dF (module docs), the partial derivative of M x - rhs at this x.
     let mut top = Matrix3x6::<f64>::zeros();
     let mut bottom = Matrix3x6::<f64>::zeros();
-    for tp in &cache[..count.min(CACHED_TENDONS)] {
+    for tp in cache.points() {
         tp.add_derivatives(&x_v, &x_u, u, &mut top, &mut bottom);
     }
     if count > CACHED_TENDONS {

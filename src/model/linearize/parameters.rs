@@ -6,7 +6,7 @@
 //! (tests/sensitivity.rs).
 #![allow(non_snake_case)]
 
-use super::{CACHED_TENDONS, Linearization, TendonPoint, assemble, breakdown, derivative};
+use super::{Linearization, TendonCache, TendonPoint, assemble, breakdown, derivative};
 use crate::error::Result;
 use crate::model::equations::{Model, Site};
 use nalgebra::{Matrix3, Matrix6, Matrix6x3, Vector3, Vector6};
@@ -107,7 +107,7 @@ fn point_derivatives(
     out: &mut [Vector6<f64>],
     partial: impl FnOnce(&Vector3<f64>, &Vector3<f64>, &mut [Vector6<f64>]) -> Result<()>,
 ) -> Result<(Vector6<f64>, Option<Linearization>)> {
-    let mut cache = [TendonPoint::ZERO; CACHED_TENDONS];
+    let mut cache = TendonCache::new();
     let assembled = assemble(model, site, segment_end, (R, v, u), Some(&mut cache))?;
     let x = &assembled.x;
     let rates = Vector6::from_fn(|i, _| x[i]);

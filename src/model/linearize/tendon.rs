@@ -31,16 +31,6 @@ pub(crate) struct TendonPoint {
 }
 
 impl TendonPoint {
-    pub(super) const ZERO: TendonPoint = TendonPoint {
-        r: Vector3::new(0.0, 0.0, 0.0),
-        e: Vector3::new(0.0, 0.0, 0.0),
-        c: Vector3::new(0.0, 0.0, 0.0),
-        t: Vector3::new(0.0, 0.0, 0.0),
-        k: 0.0,
-        inv_speed: 0.0,
-        inextensible: false,
-    };
-
     /// Tendon `i` with tension `tension` (N) at the routing point `rp` of `site`, for the
     /// node coordinates (v, u) (the strain is [`Site::strain`] of v).
     pub(crate) fn new(
