@@ -200,3 +200,43 @@ fn a_warm_start_from_a_buckled_column_is_kept_after_a_small_tension_change() {
     let gap = (next.tip_position() - cold.tip_position()).norm();
     assert!(gap < 1e-9, "{gap:e}");
 }
+
+#[test]
+fn a_perfect_column_with_two_bending_stiffnesses_buckles_in_its_weak_plane() {
+    // The column's section with E Iyy 1.5 times E Ixx: Euler's load of the weak plane is the
+    // round column's, the other 1.5 times it. The bifurcation at the first is simple (a
+    // one-dimensional kernel), so the path picks a side but holds no family: bending about
+    // body x, the tip moves along y only, and the note names the mirror state (the other
+    // sign), not a family of rotations.
+    let round = column(0.0, 0.0).rod.section_at(0.0).section;
+    let (kse, kbt) = (round.kse, round.kbt);
+    let section = tdcr::Section::explicit(kse[2], kse[0], kbt[0], 1.5 * kbt[1], kbt[2]);
+    for ratio in [1.2, 2.0, 3.0] {
+        let p = ratio * euler_load();
+        let robot =
+            Robot::new(Rod::new(LENGTH, section)).with_loads(Loads::none().with_tip_force(Vector3::new(0.0, 0.0, -p)));
+        let s = collocation::solve(&robot, &Options::default()).unwrap_or_else(|e| panic!("P/Pcr {ratio}: {e}"));
+        let (tip, report) = (s.tip_position(), &s.report);
+        let case = format!(
+            "P/Pcr {ratio}: tip {tip:?}, {} {:?}: {:?}",
+            report.stability, report.path, report.notes
+        );
+        eprintln!("{case}: {} iterations", report.iterations);
+        assert!(report.stability.is_stable(), "{case}");
+        assert!(
+            report.notes.len() == 1
+                && report.notes[0].contains("mirror state")
+                && !report.notes[0].contains("every rotation"),
+            "{case}"
+        );
+        // In the weak plane: 1e-9 L across it (rounding of a symmetric solve; the strong
+        // plane's Euler load, 1.5 P_cr, is passed at 2 and 3 P_cr on the straight branch only)
+        assert!(tip.x.abs() < 1e-9 * LENGTH, "{case}");
+        let (x, z) = elastica(ratio);
+        // 1e-3 L as for the round column
+        assert!(
+            (tip.y.abs() / LENGTH - x).abs() < 1e-3 && (tip.z / LENGTH - z).abs() < 1e-3,
+            "{case}"
+        );
+    }
+}
