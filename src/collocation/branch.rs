@@ -16,14 +16,10 @@
 use super::homotopy::{Homotopy, Point, dot, f_lambda, tangent};
 use super::newton::{Settings, Workspace};
 use super::path::{correct, index};
+use super::phase::{Phase, generic, kernel};
 use super::system::System;
 use crate::report::SolveReport;
 
-/// The most inverse-iteration solves for the kernel direction; near a bifurcation the
-/// small eigenvalue is orders of magnitude below the next, so a few suffice.
-const INVERSE_ITERATIONS: usize = 8;
-/// Inverse iteration stops when successive directions agree to this cosine.
-const CONVERGED_COS: f64 = 1.0 - 1e-10;
 /// Below this |cos| between the path's tangent and the kernel direction the path has no
 /// side: a perfect symmetry (the tangent's component along the kernel is rounding, 1e-16
 /// relative in a symmetric problem; the smallest imperfection of issue 25's column, 1e-5 of
@@ -43,6 +39,11 @@ pub(super) struct Switched {
     pub unstable: Option<usize>,
     /// Whether the side was picked (a perfect symmetry: nothing preferred one).
     pub picked: bool,
+    /// Where the bifurcation's kernel is two-dimensional (the branch taken is one member of
+    /// a family of equilibria, module `phase`): the family's direction there, the phase
+    /// condition's start, and the direction the branch left along (which orients its
+    /// first tangent). None for a simple bifurcation.
+    pub family: Option<(Vec<f64>, Vec<f64>)>,
 }
 
 impl Switched {
@@ -54,44 +55,6 @@ impl Switched {
             picked.push(lambda);
         }
     }
-}
-
-/// A deterministic generic vector (entries spread over [-0.5, 0.5) by the golden ratio),
-/// with a component along any given direction.
-fn generic(n: usize) -> Vec<f64> {
-    (0..n)
-        .map(|i| (i as f64 * 0.618_033_988_749_895).fract() - 0.5)
-        .collect()
-}
-
-/// `v` scaled to |v|^2 / n = 1 (the tangent's normalization); None if zero or not finite.
-fn normalized(mut v: Vec<f64>) -> Option<Vec<f64>> {
-    let norm = (dot(&v, &v) / v.len() as f64).sqrt();
-    if !(norm.is_finite() && norm > 0.0) {
-        return None;
-    }
-    v.iter_mut().for_each(|x| *x /= norm);
-    Some(v)
-}
-
-/// Inverse iteration with the factors in `ws` from `start`: the eigenvector of J's
-/// eigenvalue of least magnitude in the span `start` reaches, normalized, and the growth
-/// |J^-1 z| / |z| of its last solve (the inverse of that eigenvalue's magnitude).
-fn kernel(ws: &mut Workspace, start: Vec<f64>) -> Option<(Vec<f64>, f64)> {
-    let n = start.len() as f64;
-    let mut z = normalized(start)?;
-    let mut growth = 0.0;
-    for _ in 0..INVERSE_ITERATIONS {
-        let next = ws.solve_again(&z)?.to_vec();
-        growth = (dot(&next, &next) / n).sqrt();
-        let next = normalized(next)?;
-        let cos = dot(&next, &z) / n;
-        z = next;
-        if cos.abs() >= CONVERGED_COS {
-            break;
-        }
-    }
-    Some((z, growth))
 }
 
 /// Leaves `point` (on the path of `homotopy`, tangent `point.tx`) along the kernel direction
@@ -118,7 +81,7 @@ pub(super) fn switch(
     let nf = n as f64;
     // The generic start reaches the whole (near-)kernel; the tangent's start stays in the
     // subspace the path moves in (for an imperfect round column, the imperfection's plane).
-    let (any, any_growth) = kernel(ws, generic(n))?;
+    let (any, any_growth) = kernel(ws, generic(n), false, None)?;
     let symmetric = (dot(&any, &point.tx) / nf).abs() < SYMMETRIC_COS;
     let phi = if symmetric {
         any
@@ -126,12 +89,18 @@ pub(super) fn switch(
         // The tangent's span must hold a direction nearly as soft as the softest: else the
         // path is not at the turn its tangent leans into (the soft direction is one it does
         // not move in, as the plane of a buckled round column), and it does not switch.
-        match kernel(ws, point.tx.clone()) {
+        match kernel(ws, point.tx.clone(), false, None) {
             Some((phi, growth)) if growth >= 0.5 * any_growth => phi,
             _ => return None,
         }
     };
     let side = if symmetric { 1.0 } else { dot(&phi, &point.tx).signum() };
+    // A perfect symmetry whose kernel is two-dimensional: the branch along phi is one
+    // member of a family, whose direction there starts from the second kernel direction.
+    let family = match symmetric {
+        true => Phase::second_kernel(ws, &phi, any_growth).map(|c| (c, phi.clone())),
+        false => None,
+    };
     let phi: Vec<f64> = phi.iter().map(|v| v * side).collect();
     let fl = f_lambda(system, homotopy, &point.x, point.lambda, report)?;
     let along = Point {
@@ -141,7 +110,8 @@ pub(super) fn switch(
         tl: 0.0,
     };
     for h in SWITCH_STEPS {
-        let Some((x, lambda, _)) = correct(system, homotopy, ws, &along, h, &fl, false, settings, report, r) else {
+        let Some((x, lambda, _)) = correct(system, homotopy, ws, &along, h, &fl, false, settings, report, r, None)
+        else {
             continue;
         };
         if !ws.linearize(system, &x, report) {
@@ -158,6 +128,7 @@ pub(super) fn switch(
                 fl: next_fl,
                 unstable,
                 picked: symmetric,
+                family,
             });
         }
     }

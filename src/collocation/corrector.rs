@@ -1,10 +1,11 @@
 //! The corrector of the pseudo-arclength continuation (`collocation/path.rs`): one
 //! predictor-corrector step along a path's tangent, converged on the hyperplane normal to
 //! it by chord steps with the stored factors, refreshing the Jacobian when they contract too
-//! slowly.
+//! slowly; on a family's branch with its phase condition as well (module `phase`).
 
 use super::homotopy::{Homotopy, Point, dot, f_lambda, max_norm, residual};
 use super::newton::{Settings, Workspace};
+use super::phase::Phase;
 use super::system::System;
 use crate::report::SolveReport;
 use crate::solution::State;
@@ -19,7 +20,8 @@ const CHORD_RATIO: f64 = 0.5;
 pub(super) const PATH_TOLERANCE: f64 = 1e-6;
 
 /// One predictor-corrector step of length `h` from `point`. Returns the converged states,
-/// their lambda and the corrector iterations, or None (the step is to be shortened).
+/// their lambda and the corrector iterations, or None (the step is to be shortened). With
+/// a `phase`, the step also keeps the phase condition relative to `point` (module `phase`).
 #[allow(clippy::too_many_arguments)]
 pub(super) fn correct(
     system: &mut System,
@@ -32,6 +34,7 @@ pub(super) fn correct(
     settings: &Settings,
     report: &mut SolveReport,
     r: &mut [f64],
+    phase: Option<&Phase>,
 ) -> Option<(Vec<State>, f64, usize)> {
     let tolerance = PATH_TOLERANCE.max(settings.tolerance);
     correct_to(
@@ -45,6 +48,7 @@ pub(super) fn correct(
         tolerance,
         report,
         r,
+        phase,
     )
 }
 
@@ -62,6 +66,7 @@ pub(super) fn correct_to(
     tolerance: f64,
     report: &mut SolveReport,
     r: &mut [f64],
+    phase: Option<&Phase>,
 ) -> Option<(Vec<State>, f64, usize)> {
     let n = point.tx.len();
     let nf = n as f64;
@@ -93,10 +98,21 @@ pub(super) fn correct_to(
     };
     let mut b = Vec::with_capacity(n);
     solve_b(ws, &fl, &mut b)?;
+    // With a phase condition: e = J^-1 (-psi) for the same factors, the unknown mu, and the
+    // phase row's value at the prediction, <c, h t_x> / n.
+    let mut e = match phase {
+        Some(p) => p.e(ws)?,
+        None => Vec::new(),
+    };
+    let mut mu = 0.0;
+    let c_step = phase.map_or(0.0, |p| h * dot(&p.c, &point.tx) / nf);
     let (mut rhs, mut delta) = (vec![0.0; n], vec![0.0; n]);
     for iteration in 1..=MAX_CORRECTOR {
         if !residual(system, homotopy, &x, lambda, r, report) {
             return None;
+        }
+        if let Some(p) = phase {
+            r.iter_mut().zip(&p.psi).for_each(|(r, s)| *r += mu * s);
         }
         let new_norm = max_norm(r);
         if new_norm <= tolerance && iteration > 1 {
@@ -109,6 +125,9 @@ pub(super) fn correct_to(
             }
             fl = f_lambda(system, homotopy, &x, lambda, report)?;
             solve_b(ws, &fl, &mut b)?;
+            if let Some(p) = phase {
+                e = p.e(ws)?;
+            }
             fresh = true;
             if new_norm > 2.0 * norm {
                 return None;
@@ -126,14 +145,33 @@ pub(super) fn correct_to(
         let a = ws.solve_again(&rhs)?;
         let g = (dot(&point.tx, &d) + dot(&point.tx, a)) / nf + point.tl * (lambda - lambda_pred);
         let denominator = dot(&point.tx, &b) / nf + point.tl;
-        if denominator.abs() < 1e-14 {
-            return None;
-        }
-        let dl = -g / denominator;
+        let (dl, dm) = match phase {
+            None => {
+                if denominator.abs() < 1e-14 {
+                    return None;
+                }
+                (-g / denominator, 0.0)
+            }
+            // The two border rows: [<t, b>/n + t_l, <t, e>/n; <c, b>/n, <c, e>/n] (dl, dmu) =
+            // -(g, <c, d + a>/n + <c, h t_x>/n), by Cramer's rule.
+            Some(p) => {
+                let (te, cb, ce) = (dot(&point.tx, &e) / nf, dot(&p.c, &b) / nf, dot(&p.c, &e) / nf);
+                let q = (dot(&p.c, &d) + dot(&p.c, a)) / nf + c_step;
+                let det = denominator * ce - te * cb;
+                if !det.is_finite() || det == 0.0 {
+                    return None;
+                }
+                ((-g * ce + q * te) / det, (-q * denominator + g * cb) / det)
+            }
+        };
         delta
             .iter_mut()
             .zip(a.iter().zip(&b))
             .for_each(|(s, (a, b))| *s = a + dl * b);
+        if dm != 0.0 {
+            delta.iter_mut().zip(&e).for_each(|(s, e)| *s += dm * e);
+        }
+        mu += dm;
         if !delta.iter().all(|v| v.is_finite()) {
             return None;
         }

@@ -200,8 +200,31 @@ fn acceptable(system: &System, verdict: &Stability) -> bool {
     }
 }
 
-/// The note of a side picked at a perfectly symmetric bifurcation at load factor `lambda`.
-fn picked_note(lambda: f64) -> String {
+/// The note of a side picked at a perfectly symmetric bifurcation at load factor `lambda`;
+/// `family`: the states returned, when the branch taken was one member of a family of
+/// equilibria (a round column's buckled states in every plane, collocation/phase.rs).
+fn picked_note(lambda: f64, family: Option<&[State]>) -> String {
+    if let Some(x) = family {
+        // The bending plane: the tip's displacement across the base axis, in the base frame.
+        let (base, tip) = (&x[0], &x[x.len() - 1]);
+        let d = base.R.transpose() * (tip.p - base.p);
+        let azimuth = d.y.atan2(d.x).to_degrees();
+        return format!(
+            "the loads are symmetric about the base axis, and the path crossed a bifurcation at {:.1} % of \
+             the way where the robot can bend in every plane alike: it took the plane at azimuth {azimuth:.1} \
+             deg in the base frame (tip {:.1} mm, {:.1} mm across the base axis along base x, y) and held \
+             it; every rotation of this state about the base axis is an equally valid equilibrium, among \
+             them its mirror image at azimuth {:.1} deg, and an imperfection selects one",
+            100.0 * lambda,
+            1e3 * d.x,
+            1e3 * d.y,
+            if azimuth > 0.0 {
+                azimuth - 180.0
+            } else {
+                azimuth + 180.0
+            }
+        );
+    }
     format!(
         "the path crossed a perfectly symmetric bifurcation at {:.1} % of the way, where nothing \
          prefers a side: it took the branch along the Jacobian's kernel direction; its mirror state \
@@ -262,7 +285,11 @@ pub(crate) fn choose_equilibrium(
             let exact = !report.history.iter().any(|i| i.fresh_jacobian);
             let verdict = stability_of(system, ws, &end.x, exact, report);
             if acceptable(system, &verdict) {
-                report.notes.extend(end.picked.iter().map(|&l| picked_note(l)));
+                report.notes.extend(
+                    end.picked
+                        .iter()
+                        .map(|&l| picked_note(l, end.family.then_some(&end.x[..]))),
+                );
                 report.notes.extend(end.snapped_from.map(snapped_note));
                 report.path = PathTaken::FromWarmStart {
                     folds: end.folds,
@@ -288,7 +315,11 @@ pub(crate) fn choose_equilibrium(
         None,
     ) {
         Ok(end) => {
-            report.notes.extend(end.picked.iter().map(|&l| picked_note(l)));
+            report.notes.extend(
+                end.picked
+                    .iter()
+                    .map(|&l| picked_note(l, end.family.then_some(&end.x[..]))),
+            );
             report.notes.extend(end.snapped_from.map(snapped_note));
             report.path = PathTaken::LoadPath {
                 folds: end.folds,

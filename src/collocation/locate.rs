@@ -57,7 +57,19 @@ pub(super) fn fold(
             break;
         }
         let m = 0.5 * (lo + hi);
-        let located = correct_to(system, homotopy, ws, point, m, fl, false, settings.tolerance, report, r);
+        let located = correct_to(
+            system,
+            homotopy,
+            ws,
+            point,
+            m,
+            fl,
+            false,
+            settings.tolerance,
+            report,
+            r,
+            None,
+        );
         let Some((x, l, _)) = located else { break };
         homotopy.set(system, l);
         if !ws.linearize(system, &x, report) {

@@ -48,6 +48,7 @@ pub(crate) mod newton;
 mod options;
 mod order8;
 mod path;
+mod phase;
 mod pipeline;
 pub(crate) mod refine;
 pub(crate) mod residual;

@@ -19,10 +19,11 @@
 
 use super::branch;
 pub(super) use super::corrector::{correct, correct_to};
-use super::homotopy::{Homotopy, Point, dot, tangent};
+use super::homotopy::{Homotopy, Point, dot, f_lambda, tangent};
 use super::locate;
 use super::newton::{self, Settings, Workspace};
 use super::options::Options;
+use super::phase::{Phase, generic};
 use super::refine;
 use super::snap;
 use super::stability;
@@ -70,6 +71,9 @@ pub(super) struct End {
     /// The load factor of the fold from which the states were reached by Newton at
     /// lambda = 1 after the path itself could not be followed to the end ([`snap::land_from_folds`]).
     pub snapped_from: Option<f64>,
+    /// Whether the side picked led onto a family of equilibria (module `phase`): the states
+    /// are one member, every other member equally valid.
+    pub family: bool,
 }
 
 /// A step that changes the number of unstable directions without a fold has jumped to
@@ -194,6 +198,9 @@ pub(super) fn follow(
     // one where the branch it is on loses stability (module `branch`).
     let mut switching = !tracing;
     let mut picked = Vec::new();
+    // The phase condition of a family's branch, once the path has taken one (module `phase`).
+    let mut phase: Option<Phase> = None;
+    let mut family = false;
     if !ws.linearize(system, &x, report) {
         return Err(("the Jacobian at the start of the path is singular".into(), 0));
     }
@@ -260,6 +267,33 @@ pub(super) fn follow(
                 max_iterations: settings.max_iterations.min(LANDING_ITERATIONS),
                 ..*settings
             };
+            // On a family's branch the landing keeps the phase condition (at lambda = 1: the
+            // hyperplane of the tangent (0, 1)); Newton on the free problem then starts
+            // from an equilibrium of it (mu = 0 on the family) and only confirms it.
+            if let Some(p) = phase.as_ref() {
+                let at_one = Point {
+                    x: trial.clone(),
+                    lambda: 1.0,
+                    tx: vec![0.0; n],
+                    tl: 1.0,
+                };
+                let held = super::corrector::correct_to(
+                    system,
+                    &homotopy,
+                    ws,
+                    &at_one,
+                    0.0,
+                    &fl,
+                    false,
+                    settings.tolerance,
+                    report,
+                    &mut r,
+                    Some(p),
+                );
+                if let Some((x, _, _)) = held {
+                    landed = x;
+                }
+            }
             let (term, row) = newton::run(system, ws, &mut landed, &land, report);
             report.termination = term;
             // The landing is a step like any other: if it changes the number of unstable
@@ -287,14 +321,16 @@ pub(super) fn follow(
                     bifurcations,
                     picked,
                     snapped_from: None,
+                    family,
                 });
             }
             if let (true, Some(a), Some(b)) = (switching, unstable, landed_unstable)
                 && b > a
-                && let Some(s) = branch::switch(system, &homotopy, ws, &point, a, settings, report, &mut r)
+                && let Some(mut s) = branch::switch(system, &homotopy, ws, &point, a, settings, report, &mut r)
             {
                 s.record_at(point.lambda, &mut bifurcations, &mut picked);
                 push(&mut record, &s.point, s.unstable, false, report);
+                (phase, family) = hold(system, &homotopy, ws, &mut s, report);
                 (point, fl, unstable) = (s.point, s.fl, s.unstable);
                 (switching, polished, factored_at_point) = (false, false, true);
                 h = h1.abs().min(max_step);
@@ -325,6 +361,7 @@ pub(super) fn follow(
             settings,
             report,
             &mut r,
+            phase.as_ref(),
         );
         match res {
             Some((xc, lambda, iterations)) => {
@@ -337,8 +374,12 @@ pub(super) fn follow(
                     continue;
                 }
                 let previous = (point.tx.as_slice(), point.tl);
-                let Some((mut next, mut next_fl)) = tangent(system, &homotopy, ws, xc, lambda, Some(previous), report)
-                else {
+                phase = phase.take().and_then(|p| p.refreshed(ws));
+                let next = match phase.as_ref() {
+                    Some(p) => p.tangent(system, &homotopy, ws, xc, lambda, Some(previous), report),
+                    None => tangent(system, &homotopy, ws, xc, lambda, Some(previous), report),
+                };
+                let Some((mut next, mut next_fl)) = next else {
                     break;
                 };
                 let fold = (next.tl > 0.0) != (point.tl > 0.0);
@@ -351,7 +392,7 @@ pub(super) fn follow(
                     && unstable.is_some()
                     && next_unstable.is_some()
                     && next_unstable != unstable
-                    && let Some((p, f)) = polish(system, &homotopy, ws, &next, settings, report)
+                    && let Some((p, f)) = polish(system, &homotopy, ws, &next, settings, report, &mut phase)
                 {
                     (next, next_fl) = (p, f);
                     next_unstable = index(system, ws, report);
@@ -362,10 +403,11 @@ pub(super) fn follow(
                 {
                     if switching
                         && b > a
-                        && let Some(s) = branch::switch(system, &homotopy, ws, &point, a, settings, report, &mut r)
+                        && let Some(mut s) = branch::switch(system, &homotopy, ws, &point, a, settings, report, &mut r)
                     {
                         s.record_at(point.lambda, &mut bifurcations, &mut picked);
                         push(&mut record, &s.point, s.unstable, false, report);
+                        (phase, family) = hold(system, &homotopy, ws, &mut s, report);
                         (point, fl, unstable) = (s.point, s.fl, s.unstable);
                         // One switch per path: the branch taken can keep a nearly neutral
                         // direction (the plane of a round column's bend), whose count rounding
@@ -408,6 +450,7 @@ pub(super) fn follow(
                         bifurcations,
                         picked,
                         snapped_from: None,
+                        family,
                     });
                 }
                 // The angle between successive tangents bounds the next step.
@@ -437,9 +480,27 @@ pub(super) fn follow(
                 if matches!(homotopy, Homotopy::Parameter { .. }) && needed as f64 > 1.25 * floor as f64 {
                     match refine::remesh(system, &homotopy, ws, &point, needed, options, settings, report) {
                         Some((p, f)) => {
-                            point = p;
-                            fl = f;
+                            (point, fl) = (p, f);
                             r = vec![0.0; system.unknowns()];
+                            // The family's directions on the new mesh, from a generic start.
+                            if phase.is_some() {
+                                phase = Phase::at(ws, generic(system.unknowns()), None);
+                                let previous = (point.tx.as_slice(), point.tl);
+                                let Some(held) = phase.as_ref().and_then(|p| {
+                                    p.tangent(
+                                        system,
+                                        &homotopy,
+                                        ws,
+                                        point.x.clone(),
+                                        point.lambda,
+                                        Some(previous),
+                                        report,
+                                    )
+                                }) else {
+                                    return Err((refine::remesh_hint(point.lambda), worst));
+                                };
+                                (point, fl) = held;
+                            }
                         }
                         None => return Err((refine::remesh_hint(point.lambda), worst)),
                     }
@@ -450,7 +511,7 @@ pub(super) fn follow(
                 factored_at_point = false;
                 if !polished
                     && h < POLISH_BELOW
-                    && let Some((p, f)) = polish(system, &homotopy, ws, &point, settings, report)
+                    && let Some((p, f)) = polish(system, &homotopy, ws, &point, settings, report, &mut phase)
                 {
                     (point, fl) = (p, f);
                     factored_at_point = true;
@@ -472,6 +533,7 @@ pub(super) fn follow(
             bifurcations,
             picked,
             snapped_from: Some(lambda),
+            family,
         });
     }
     // The point can lie outside [0, 1] (a Newton homotopy's path may turn back past its
@@ -492,6 +554,41 @@ pub(super) fn follow(
     ))
 }
 
+/// After a switch onto the branch `s`: the phase condition that holds it on its family's
+/// member when it is one (module `phase`), with the tangent there taken again with it, and
+/// whether it is. (None, false) for a simple bifurcation or when the directions are not
+/// found (the path then goes on free).
+fn hold(
+    system: &mut System,
+    homotopy: &Homotopy,
+    ws: &mut Workspace,
+    s: &mut branch::Switched,
+    report: &mut SolveReport,
+) -> (Option<Phase>, bool) {
+    let Some((c, along)) = s.family.take() else {
+        return (None, false);
+    };
+    let Some(phase) = Phase::at(ws, c, None) else {
+        return (None, false);
+    };
+    // Oriented along the switch (the free tangent there is the family's direction,
+    // amplified by the singular Jacobian, and orients nothing).
+    let previous = (along.as_slice(), 0.0);
+    let Some((point, fl)) = phase.tangent(
+        system,
+        homotopy,
+        ws,
+        s.point.x.clone(),
+        s.point.lambda,
+        Some(previous),
+        report,
+    ) else {
+        return (None, false);
+    };
+    (s.point, s.fl) = (point, fl);
+    (Some(phase), true)
+}
+
 /// `point` converged to the solve's tolerance at its lambda (a parameter's path only: Newton
 /// solves F = 0, not a Newton homotopy's residual), with its tangent oriented as before.
 fn polish(
@@ -501,23 +598,61 @@ fn polish(
     point: &Point,
     settings: &Settings,
     report: &mut SolveReport,
+    phase: &mut Option<Phase>,
 ) -> Option<(Point, Vec<f64>)> {
     if !matches!(homotopy, Homotopy::Parameter { .. }) {
         return None;
     }
     homotopy.set(system, point.lambda);
-    let mut x = point.x.clone();
-    let (term, _) = newton::run(system, ws, &mut x, settings, report);
-    if term != Termination::Converged || !ws.linearize(system, &x, report) {
+    let x = match phase.as_ref() {
+        // On a family's branch, with its phase condition at fixed lambda (the hyperplane of
+        // the tangent (0, 1) through the point): Newton alone has the family's singular
+        // Jacobian.
+        Some(p) => {
+            let at = Point {
+                x: point.x.clone(),
+                lambda: point.lambda,
+                tx: vec![0.0; point.tx.len()],
+                tl: 1.0,
+            };
+            let fl = f_lambda(system, homotopy, &point.x, point.lambda, report)?;
+            let mut r = vec![0.0; system.unknowns()];
+            let tolerance = settings.tolerance;
+            let (x, _, _) = correct_to(
+                system,
+                homotopy,
+                ws,
+                &at,
+                0.0,
+                &fl,
+                false,
+                tolerance,
+                report,
+                &mut r,
+                Some(p),
+            )?;
+            x
+        }
+        None => {
+            let mut x = point.x.clone();
+            let (term, _) = newton::run(system, ws, &mut x, settings, report);
+            if term != Termination::Converged {
+                return None;
+            }
+            x
+        }
+    };
+    if !ws.linearize(system, &x, report) {
         return None;
     }
-    tangent(
-        system,
-        homotopy,
-        ws,
-        x,
-        point.lambda,
-        Some((&point.tx, point.tl)),
-        report,
-    )
+    let previous = Some((point.tx.as_slice(), point.tl));
+    match phase.take() {
+        Some(p) => {
+            *phase = Some(p.refreshed(ws)?);
+            phase
+                .as_ref()?
+                .tangent(system, homotopy, ws, x, point.lambda, previous, report)
+        }
+        None => tangent(system, homotopy, ws, x, point.lambda, previous, report),
+    }
 }
