@@ -164,6 +164,13 @@ impl Held {
                 robot.tendons[i].displacement().is_some() && state.slack == 0.0 && state.tension > 0.0
             })
             .collect();
+        if let Some(&i) = taut.iter().find(|&&i| robot.tendons[i].active_friction().is_some()) {
+            return Err(crate::error::invalid(
+                format!("tendons[{i}].displacement"),
+                "is a pull-in on a tendon with friction, and derivatives at held pull-ins do not model friction yet",
+                "differentiate in the tension: give the tendon the tension its solve reports instead of the pull-in",
+            ));
+        }
         let directions = if taut.is_empty() {
             None
         } else {
