@@ -46,17 +46,19 @@ const NOISE: f64 = 1e-10;
 const TENSION_TOLERANCE: f64 = 1e-12;
 
 /// Solves `robot` (validated; some displacement-controlled tendons) by `solve`, a solver of
-/// robots whose tendons are all tension-controlled (with friction), from the base-entry
-/// `start` tensions of every tendon (the frictionless displacement solve's). Returns the
-/// solution at the tensions that hold the pull-ins, its tendons reporting their pull-in
-/// input and slack.
+/// robots whose tendons are all tension-controlled (with friction) from a warm start, from
+/// the base-entry `start` tensions of every tendon (a frictionless displacement solve's, or
+/// a history's last step's) and the `warm` shape. Returns the solution at the tensions that
+/// hold the pull-ins, its tendons reporting their pull-in input and slack; the last call of
+/// `solve` is the one at those tensions (a history keeps the state it left).
 ///
 /// # Errors
 /// What `solve` returns, or [`Error::NotConverged`] when Newton on the tensions does not
 /// meet its tolerance in [`MAX_ITERATIONS`] steps.
 pub(crate) fn hold(
     robot: &Robot,
-    start: &Solution,
+    start: &[f64],
+    warm: Option<&Solution>,
     mut solve: impl FnMut(&Robot, Option<&Solution>) -> Result<Solution>,
 ) -> Result<Solution> {
     let held: Vec<usize> = (0..robot.tendons.len())
@@ -69,24 +71,24 @@ pub(crate) fn hold(
         .iter()
         .map(|&j| robot.tendons[j].displacement().unwrap_or(0.0))
         .collect();
-    let mut tensions = start.tensions();
-    let mut warm = start.clone();
+    let mut tensions = start.to_vec();
     // One solve at the held tendons' tensions `tau` (clamped at 0: a tendon cannot push)
     // and its gaps phi.
-    let mut evaluate = |tau: &[f64], tensions: &mut Vec<f64>, warm: &Solution| -> Result<(Solution, Vec<f64>)> {
-        for (&j, &t) in held.iter().zip(tau) {
-            tensions[j] = t.max(0.0);
-        }
-        let solution = solve(&robot.with_tensions(tensions), Some(warm))?;
-        let gaps = held
-            .iter()
-            .zip(&target)
-            .map(|(&j, &q)| solution.tendons[j].displacement - q)
-            .collect();
-        Ok((solution, gaps))
-    };
+    let mut evaluate =
+        |tau: &[f64], tensions: &mut Vec<f64>, warm: Option<&Solution>| -> Result<(Solution, Vec<f64>)> {
+            for (&j, &t) in held.iter().zip(tau) {
+                tensions[j] = t.max(0.0);
+            }
+            let solution = solve(&robot.with_tensions(tensions), warm)?;
+            let gaps = held
+                .iter()
+                .zip(&target)
+                .map(|(&j, &q)| solution.tendons[j].displacement - q)
+                .collect();
+            Ok((solution, gaps))
+        };
     let mut tau: Vec<f64> = held.iter().map(|&j| tensions[j]).collect();
-    let (mut solution, mut gaps) = evaluate(&tau, &mut tensions, &warm)?;
+    let (mut solution, mut gaps) = evaluate(&tau, &mut tensions, warm)?;
     let mut iterations = 0;
     let mut last = f64::INFINITY;
     loop {
@@ -118,7 +120,7 @@ pub(crate) fn hold(
             let h = STEP * tau[m].max(scale[m]);
             let mut shifted = tau.clone();
             shifted[m] = tau[m].max(0.0) + h;
-            let (_, moved) = evaluate(&shifted, &mut tensions, &solution)?;
+            let (_, moved) = evaluate(&shifted, &mut tensions, Some(&solution))?;
             for j in 0..k {
                 dphi[j * k + m] = (moved[j] - gaps[j]) / (shifted[m] - tau[m].max(0.0));
             }
@@ -154,8 +156,7 @@ pub(crate) fn hold(
         for j in 0..k {
             tau[j] += step[j];
         }
-        warm = solution;
-        (solution, gaps) = evaluate(&tau, &mut tensions, &warm)?;
+        (solution, gaps) = evaluate(&tau, &mut tensions, Some(&solution))?;
         if small {
             break;
         }
@@ -170,8 +171,7 @@ pub(crate) fn hold(
                 tau[j] = 0.0;
             }
         }
-        warm = solution;
-        (solution, gaps) = evaluate(&tau, &mut tensions, &warm)?;
+        (solution, gaps) = evaluate(&tau, &mut tensions, Some(&solution))?;
     }
     for (j, (&i, &q)) in held.iter().zip(&target).enumerate() {
         let state = &mut solution.tendons[i];

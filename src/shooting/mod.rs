@@ -145,7 +145,7 @@ pub fn solve(robot: &Robot, options: &Options) -> Result<Solution> {
             t.friction = None;
         }
         let first = solve(&smooth, options)?;
-        let mut solution = crate::model::pull_in::hold(robot, &first, |r, _| solve(r, options))?;
+        let mut solution = crate::model::pull_in::hold(robot, &first.tensions(), None, |r, _| solve(r, options))?;
         solution.report.timings.total = start.elapsed();
         return Ok(solution);
     }

@@ -437,7 +437,9 @@ pub(super) fn solve_pull_ins(
         t.friction = None;
     }
     let first = pipeline::solve_impl(&smooth, options, warm, cache)?;
-    let mut solution = crate::model::pull_in::hold(robot, &first, |r, warm| solve(r, options, warm, cache))?;
+    let mut solution = crate::model::pull_in::hold(robot, &first.tensions(), Some(&first), |r, warm| {
+        solve(r, options, warm, cache)
+    })?;
     solution.report.timings.total = start.elapsed();
     Ok(solution)
 }
