@@ -79,7 +79,7 @@ pub struct HistoryResult {
 /// # Errors
 /// Before any step: invalid options or robots, no tendon with friction; the first step's
 /// mesh-choosing solve failing. A step whose pull-ins' tensions are not found (Newton on
-/// the tensions, [`crate::model::pull_in`]) is that step's failure.
+/// the tensions, docs/friction.md section 3b) is that step's failure.
 pub fn history(ranges: &Ranges, options: &collocation::Options) -> Result<HistoryResult> {
     options.validate()?;
     let robots = (0..ranges.steps())
