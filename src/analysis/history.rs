@@ -25,7 +25,7 @@
 //! assert!(back.zones[0].zones.iter().any(|z| z.contact == Contact::Stick));
 //! ```
 
-use super::sweep::{Input, Ranges};
+use super::sweep::Ranges;
 use crate::collocation::{self, friction};
 use crate::error::{Error, Result, invalid};
 use crate::solution::Solution;
@@ -77,34 +77,16 @@ pub struct HistoryResult {
 /// `motion` is not used (the history decides where each tendon slides, and which way).
 ///
 /// # Errors
-/// Before any step: invalid options or robots, no tendon with friction, or a pull-in input
-/// (a history drives the tendons with friction by their tensions); the first step's
-/// mesh-choosing solve failing.
+/// Before any step: invalid options or robots, no tendon with friction; the first step's
+/// mesh-choosing solve failing. A step whose pull-ins' tensions are not found (Newton on
+/// the tensions, docs/friction.md section 3b) is that step's failure.
 pub fn history(ranges: &Ranges, options: &collocation::Options) -> Result<HistoryResult> {
     options.validate()?;
-    if let Some((input, _)) = ranges
-        .inputs()
-        .iter()
-        .find(|(i, _)| matches!(i, Input::Displacement(_)))
-    {
-        return Err(invalid(
-            format!("{input}"),
-            "a history drives the tendons by their tensions, not by pull-ins",
-            "vary the tension of the tendon (tension.N) instead",
-        ));
-    }
     let robots = (0..ranges.steps())
         .map(|k| ranges.robot(k as f64))
         .collect::<Result<Vec<_>>>()?;
     for robot in &robots {
         robot.validate()?;
-        if robot.has_displacement_inputs() {
-            return Err(invalid(
-                "tendons",
-                "a history drives the tendons by their tensions, and this robot has a displacement-controlled tendon",
-                "give every tendon a tension",
-            ));
-        }
     }
     if !crate::model::friction::any(&robots[0]) {
         return Err(invalid(
@@ -114,9 +96,14 @@ pub fn history(ranges: &Ranges, options: &collocation::Options) -> Result<Histor
         ));
     }
     let mut carried = friction::history::start(&robots, options)?;
-    let mut steps = Vec::with_capacity(robots.len());
+    let mut steps: Vec<HistoryStep> = Vec::with_capacity(robots.len());
     for (k, robot) in robots.iter().enumerate() {
-        match friction::history::step(robot, options, &mut carried) {
+        let answer = if robot.has_displacement_inputs() {
+            pulled_step(robot, options, &mut carried, steps.last().map(|s| &s.solution))
+        } else {
+            friction::history::step(robot, options, &mut carried)
+        };
+        match answer {
             Ok((solution, zones)) => steps.push(HistoryStep {
                 solution,
                 zones: zones
@@ -139,4 +126,30 @@ pub fn history(ranges: &Ranges, options: &collocation::Options) -> Result<Histor
         }
     }
     Ok(HistoryResult { steps, failure: None })
+}
+
+/// One step of a history whose `robot` has displacement-controlled tendons: their pull-ins
+/// fix the base tensions ([`crate::model::pull_in::hold`]), each trial tension a step from
+/// the `carried` state, which then holds the last trial's (the one at the tensions found).
+/// Newton starts from the `last` step's tensions, or the full-slip solve's on the first.
+fn pulled_step(
+    robot: &crate::Robot,
+    options: &collocation::Options,
+    carried: &mut friction::history::Carried,
+    last: Option<&Solution>,
+) -> Result<friction::history::StepAnswer> {
+    let start = match last {
+        Some(w) => w.tensions(),
+        None => collocation::solve(robot, options)?.tensions(),
+    };
+    let mut kept = None;
+    let solution = crate::model::pull_in::hold(robot, &start, last, |r, _| {
+        let mut trial = carried.snapshot();
+        let (solution, zones) = friction::history::step(r, options, &mut trial)?;
+        kept = Some((trial, zones));
+        Ok(solution)
+    })?;
+    let (trial, zones) = kept.ok_or_else(|| invalid("tendons", "have no solved step", "report this as a bug"))?;
+    *carried = trial;
+    Ok((solution, zones))
 }

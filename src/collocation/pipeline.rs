@@ -51,6 +51,9 @@ pub(crate) fn solve_impl(
 ) -> Result<Solution> {
     robot.validate()?;
     options.validate()?;
+    if robot.has_displacement_inputs() && crate::model::friction::any(robot) {
+        return super::friction::solve_pull_ins(robot, options, warm, cache);
+    }
     if robot.has_displacement_inputs() {
         return super::actuation::solve(robot, options, warm, cache);
     }

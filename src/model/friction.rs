@@ -41,8 +41,7 @@ use nalgebra::{Matrix3, Matrix6, Matrix6x3, SMatrix, Vector3, Vector6};
 const MAX_ITERATIONS: usize = 30;
 
 /// Checks the friction of tendon `i`: a finite coefficient >= 0, and for a coefficient > 0
-/// what the full-slip model needs: a tension input (the tension at the base entry), the
-/// coupled tendon model, and no breakpoint (point load or another tendon's termination)
+/// what the full-slip model needs: the coupled tendon model, and no breakpoint (point load or another tendon's termination)
 /// inside the tendon's span, where its path would have a corner.
 ///
 /// # Errors
@@ -62,14 +61,6 @@ pub(crate) fn validate(robot: &Robot, i: usize, t: &Tendon) -> Result<()> {
     }
     if mu == 0.0 {
         return Ok(());
-    }
-    if t.displacement().is_some() {
-        return Err(invalid(
-            field,
-            format!("is {} on a displacement-controlled tendon", Readable(mu)),
-            "friction needs tension control for now: give the tendon a tension (the tension at its base \
-             entry) instead of a pull-in, or set its friction to 0",
-        ));
     }
     if robot.tendon_model != TendonModel::Coupled {
         return Err(invalid(

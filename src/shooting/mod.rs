@@ -136,6 +136,19 @@ fn visited(error: crate::Error) -> crate::Error {
 pub fn solve(robot: &Robot, options: &Options) -> Result<Solution> {
     robot.validate()?;
     options.validate()?;
+    if friction::any(robot) && robot.has_displacement_inputs() {
+        // The pull-ins fix the base-entry tensions of solves with friction at given
+        // tensions (docs/friction.md section 3b), from the frictionless robot's.
+        let start = Instant::now();
+        let mut smooth = robot.clone();
+        for t in &mut smooth.tendons {
+            t.friction = None;
+        }
+        let first = solve(&smooth, options)?;
+        let mut solution = crate::model::pull_in::hold(robot, &first.tensions(), None, |r, _| solve(r, options))?;
+        solution.report.timings.total = start.elapsed();
+        return Ok(solution);
+    }
     let start = Instant::now();
     let mut problem = Problem::new(robot);
     let mut report = SolveReport::new(Method::Shooting);

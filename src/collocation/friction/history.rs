@@ -56,11 +56,20 @@ impl Carried {
     /// A copy of everything but the factors: the state a step starts from.
     fn material(&self) -> Carried {
         Carried {
+            solved: self.solved,
+            ..self.snapshot()
+        }
+    }
+
+    /// A copy of the state without the factors (and not marked solved), for the trial
+    /// steps of a pull-in's tension (`analysis::history`): each trial starts from this.
+    pub(crate) fn snapshot(&self) -> Carried {
+        Carried {
             mesh: self.mesh.clone(),
             x: self.x.clone(),
             z: self.z.clone(),
             grips: self.grips.clone(),
-            solved: self.solved,
+            solved: false,
             report: self.report.clone(),
             factors: None,
         }
@@ -79,13 +88,16 @@ pub(crate) type StepAnswer = (Solution, Vec<(usize, Vec<(f64, f64, Contact)>)>);
 /// # Errors
 /// As [`super::super::solve`] on that step.
 pub(crate) fn start(robots: &[Robot], options: &Options) -> Result<Carried> {
-    let load = |r: &Robot| -> f64 {
+    // The most pull-in on the tendons with friction first (their tension is solved), then
+    // the most tension.
+    let load = |r: &Robot| -> (f64, f64) {
         let active = crate::model::friction::slipping(r);
-        active.iter().map(|&i| r.tendons[i].tension()).sum()
+        let pulled = active.iter().filter_map(|&i| r.tendons[i].displacement()).sum();
+        (pulled, active.iter().map(|&i| r.tendons[i].tension()).sum())
     };
     let mut most = 0;
     for (n, r) in robots.iter().enumerate() {
-        if load(r) > load(&robots[most]) {
+        if load(r).partial_cmp(&load(&robots[most])) == Some(std::cmp::Ordering::Greater) {
             most = n;
         }
     }
@@ -96,6 +108,8 @@ pub(crate) fn start(robots: &[Robot], options: &Options) -> Result<Carried> {
         }
     }
     let first = super::super::solve(&pulled, options)?;
+    // A pull-in's base tension is the solved one.
+    let pulled = pulled.with_tensions(&first.tensions());
     let points: Vec<f64> = first.nodes.iter().map(|n| n.s).collect();
     let mesh = Mesh::from_points(&pulled, &points)?;
     let x: Vec<State> = first.nodes.iter().map(|n| n.state()).collect();

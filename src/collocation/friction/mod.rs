@@ -417,6 +417,33 @@ pub(super) fn solve(robot: &Robot, options: &Options, warm: Option<&Solution>, c
     }
 }
 
+/// Solves a robot with friction and displacement-controlled tendons (validated, with
+/// `options` validated): the frictionless robot at its pull-ins first (the tensions to
+/// start from), then Newton on the held tendons' base-entry tensions around solves with
+/// friction at given tensions ([`crate::model::pull_in::hold`], docs/friction.md
+/// section 3b).
+///
+/// # Errors
+/// As [`super::solve`].
+pub(super) fn solve_pull_ins(
+    robot: &Robot,
+    options: &Options,
+    warm: Option<&Solution>,
+    cache: &mut Cache,
+) -> Result<Solution> {
+    let start = Instant::now();
+    let mut smooth = robot.clone();
+    for t in &mut smooth.tendons {
+        t.friction = None;
+    }
+    let first = pipeline::solve_impl(&smooth, options, warm, cache)?;
+    let mut solution = crate::model::pull_in::hold(robot, &first.tensions(), Some(&first), |r, warm| {
+        solve(r, options, warm, cache)
+    })?;
+    solution.report.timings.total = start.elapsed();
+    Ok(solution)
+}
+
 /// The value at `s` of the piecewise-linear interpolant through (`points`, `values`)
 /// (clamped at the ends; at a repeated point, the first).
 fn linear(points: &[f64], values: &[f64], s: f64) -> f64 {

@@ -164,6 +164,7 @@ impl Held {
                 robot.tendons[i].displacement().is_some() && state.slack == 0.0 && state.tension > 0.0
             })
             .collect();
+        unheld_friction(robot, &taut)?;
         let directions = if taut.is_empty() {
             None
         } else {
@@ -393,6 +394,7 @@ pub fn displacement_sensitivities(robot: &Robot, solution: &Solution) -> Result<
             "give a tendon a displacement (pull-in) or use tip_sensitivities for tensions",
         ));
     }
+    unheld_friction(robot, &tendons)?;
     let directions = TensionDirections::new(robot, solution, tendons)?;
     let taut: Vec<bool> = directions
         .tendons
@@ -405,6 +407,20 @@ pub fn displacement_sensitivities(robot: &Robot, solution: &Solution) -> Result<
         tendons: directions.tendons,
         tension,
     })
+}
+
+/// An error naming the first of the displacement-controlled `tendons` with friction: their
+/// pull-ins' derivatives would need the stretch of the varying tension's derivative, not
+/// modelled yet (docs/friction.md section 3b).
+fn unheld_friction(robot: &Robot, tendons: &[usize]) -> Result<()> {
+    match tendons.iter().find(|&&i| robot.tendons[i].active_friction().is_some()) {
+        None => Ok(()),
+        Some(&i) => Err(crate::error::invalid(
+            format!("tendons[{i}].displacement"),
+            "is a pull-in on a tendon with friction, and derivatives at held pull-ins do not model friction yet",
+            "differentiate in the tension: give the tendon the tension its solve reports instead of the pull-in",
+        )),
+    }
 }
 
 /// What every pull-in derivative is made of: the tip's and the path lengths' derivatives

@@ -1,0 +1,110 @@
+//! Stick/slip histories over pull-ins (docs/friction.md section 8): the prototype's tendon 1
+//! pulled in and let back out with mu = 0.1 on an elastic tendon draws a closed loop whose
+//! unloading branch lies on the other side, every step in global equilibrium, and each
+//! step's pull-in is the one a tension history at its solved tension reports.
+
+use nalgebra::Vector3;
+use tdcr::analysis::equilibrium::imbalance;
+use tdcr::analysis::history::{Contact, HistoryStep, history};
+use tdcr::analysis::sweep::{Input, Ranges};
+use tdcr::{Friction, Robot, cases};
+
+/// The prototype with friction 0.1 on tendon 1, E_t A_t = 2000 N (as tests/history.rs).
+fn prototype() -> Robot {
+    let mut robot = cases::prototype();
+    robot.tendons[0].friction = Some(Friction::pull(0.1));
+    robot.tendons[0].stiffness = Some(2000.0);
+    robot
+}
+
+/// Tendon 1 pulled in from 0 to `top` (m) in `steps` equal steps and let back out.
+fn pull_ins(top: f64, steps: usize) -> Ranges {
+    let values: Vec<f64> = (0..=steps).map(|k| top * k as f64 / steps as f64).collect();
+    Ranges::new(prototype(), vec![(Input::Displacement(0), values)])
+        .unwrap()
+        .up_down()
+}
+
+fn tip(step: &HistoryStep) -> Vector3<f64> {
+    step.solution.tip_position()
+}
+
+#[test]
+fn pulling_in_and_letting_out_draws_a_closed_loop() {
+    // 20 mm of pull-in: about 4.9 N in full slip, the paper's top tension (the rod's weight
+    // shortens tendon 1's path by 2.06 mm, so it is slack up to there).
+    let ranges = pull_ins(0.02, 6);
+    let result = history(&ranges, &Default::default()).unwrap();
+    if let Some((k, e)) = &result.failure {
+        panic!("step {k}: {e}");
+    }
+    let steps = result.steps;
+    assert_eq!(steps.len(), 13);
+    let rest = tip(&steps[0]);
+    // Closed: back at 0 the tendon is slack and the robot
+    // where it started (1e-9 m: two Newton solves of the same robot, as for tensions).
+    let closing = (tip(&steps[12]) - rest).norm();
+    assert!(closing < 1e-9, "the loop is open by {closing} m");
+    for (k, step) in steps.iter().enumerate() {
+        let t = &step.solution.tendons[0];
+        let want = ranges.robot(k as f64).unwrap().tendons[0].displacement().unwrap();
+        assert_eq!(t.displacement, want, "step {k}");
+        // The balance at the solved tension (the input is the pull-in).
+        let robot = ranges.robot(k as f64).unwrap().with_tensions(&step.solution.tensions());
+        let e = imbalance(&robot, &step.solution);
+        // 1e-8: the solver's tolerance in the wrenches relative to the tension, as for the
+        // tension histories
+        assert!(e.max() < 1e-8, "step {k}: imbalance {e:?}");
+    }
+    // Unloading on the other side. At the same pull-in the tendon holds about the same
+    // integral of tension (the pull-in is the path's shortening plus the stretch, both
+    // about proportional to it), but on the way back the tension rises toward the
+    // termination instead of falling (measured at 3.3 mm: 0.358 N -> 0.343 N delivered up,
+    // 0.339 N -> 0.353 N down). The base's curvature swings the whole rod, so the tip is
+    // closer to rest on the way back (182.3 mm against 194.9 mm from rest at 16.7 mm).
+    for k in 1..6 {
+        let (up, down) = (&steps[k], &steps[12 - k]);
+        let (bent_up, bent_down) = ((tip(up) - rest).norm(), (tip(down) - rest).norm());
+        assert!(bent_down < bent_up, "step {k}: {bent_down} >= {bent_up}");
+        let (a, b) = (&up.solution.tendons[0], &down.solution.tendons[0]);
+        assert!(b.tension < a.tension && b.delivered_tension > a.delivered_tension);
+        assert!(a.delivered_tension < a.tension && b.delivered_tension > b.tension);
+    }
+    // Loading slides in all along; the first step back (3.3 mm, a fifth of the pull-in)
+    // slides out from the base entry and nowhere in.
+    assert!(
+        steps[1..=6]
+            .iter()
+            .all(|s| s.zones[0].zones.iter().all(|z| z.contact == Contact::Pull))
+    );
+    let back = &steps[7].zones[0].zones;
+    assert_eq!(back.first().map(|z| z.contact), Some(Contact::Release));
+    assert!(back.iter().all(|z| z.contact != Contact::Pull), "{back:?}");
+}
+
+#[test]
+fn a_pull_in_history_step_reports_the_tension_a_tension_history_needs() {
+    // The same loop driven by the tensions the pull-in history solved: the same tips.
+    let ranges = pull_ins(0.02, 4);
+    let by_pull_in = history(&ranges, &Default::default()).unwrap().steps;
+    let tensions: Vec<f64> = by_pull_in.iter().map(|s| s.solution.tendons[0].tension).collect();
+    let driven = Ranges::new(
+        prototype(),
+        vec![(Input::Parameter(tdcr::Parameter::Tension(0)), tensions)],
+    )
+    .unwrap();
+    let by_tension = history(&driven, &Default::default()).unwrap().steps;
+    assert_eq!(by_tension.len(), by_pull_in.len());
+    for (k, (a, b)) in by_pull_in.iter().zip(&by_tension).enumerate() {
+        let d = (tip(a) - tip(b)).norm();
+        // 1e-9 m: the same tensions on the same mesh; the pull-in's Newton stops at 1e-12
+        // of the tension scale, and each history's steps at the residual tolerance
+        assert!(d < 1e-9, "step {k}: tips differ by {d:.2e} m");
+        if a.solution.tendons[0].tension > 0.0 {
+            let q = (a.solution.tendons[0].displacement - b.solution.tendons[0].displacement).abs();
+            // 1e-12 m: the pull-in the tension history reports is the one the other held
+            // (slack steps report their input, the tension history the slack's end)
+            assert!(q < 1e-12, "step {k}: pull-ins differ by {q:.2e} m");
+        }
+    }
+}
