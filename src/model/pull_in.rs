@@ -11,8 +11,8 @@
 //!            + tau_j(0) L_free / (E_t A_t).
 //! ```
 //!
-//! A pull-in q_j then leaves the gap phi_j = Q_j(tau) - q_j: 0 when the tendon is taut,
-//! > 0 when it is slack at tau_j = 0. The complementarity tau_j >= 0, phi_j >= 0,
+//! A pull-in q_j then leaves the gap phi_j = Q_j(tau) - q_j: zero when the tendon is
+//! taut, positive when it is slack at tau_j = 0. The complementarity tau_j >= 0, phi_j >= 0,
 //! tau_j phi_j = 0 is solved as the collocation solver's displacement control solves it, in
 //! the Fischer-Burmeister form psi_j = sqrt(a^2 + b^2) - a - b = 0 with a = tau_j / T_j and
 //! b = phi_j / L, here by Newton on the k base-entry tensions around full solves with
