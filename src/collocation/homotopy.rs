@@ -128,8 +128,16 @@ pub(super) fn tangent(
     let fl = f_lambda(system, homotopy, &x, lambda, report)?;
     let rhs: Vec<f64> = fl.iter().map(|v| -v).collect();
     let z = ws.solve_again(&rhs)?.to_vec();
+    let (tx, tl) = oriented(&z, previous);
+    Some((Point { x, lambda, tx, tl }, fl))
+}
+
+/// The unit tangent (tx, tl) of the direction (z, 1) in the scaled norm (mean square over
+/// the unknowns plus lambda's square), turned to point the way `previous` did (forward in
+/// lambda without one).
+pub(super) fn oriented(z: &[f64], previous: Option<(&[f64], f64)>) -> (Vec<f64>, f64) {
     let n = z.len() as f64;
-    let norm = (dot(&z, &z) / n + 1.0).sqrt();
+    let norm = (dot(z, z) / n + 1.0).sqrt();
     let mut tx: Vec<f64> = z.iter().map(|v| v / norm).collect();
     let mut tl = 1.0 / norm;
     let forward = match previous {
@@ -141,5 +149,5 @@ pub(super) fn tangent(
         tx.iter_mut().for_each(|v| *v = -*v);
         tl = -tl;
     }
-    Some((Point { x, lambda, tx, tl }, fl))
+    (tx, tl)
 }

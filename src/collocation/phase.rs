@@ -18,7 +18,7 @@
 //! step starts from. The bordered solves use the factors of J by block elimination: with
 //! e = J^-1 (-psi), a step is a + dlambda b + dmu e, the two scalars from the two border rows.
 
-use super::homotopy::{Homotopy, Point, dot, f_lambda};
+use super::homotopy::{Homotopy, Point, dot, f_lambda, oriented};
 use super::newton::Workspace;
 use super::system::System;
 use crate::report::SolveReport;
@@ -162,19 +162,7 @@ impl Phase {
         }
         let m = -dot(&self.c, &b) / ce;
         let z: Vec<f64> = b.iter().zip(&e).map(|(b, e)| b + m * e).collect();
-        let n = z.len() as f64;
-        let norm = (dot(&z, &z) / n + 1.0).sqrt();
-        let mut tx: Vec<f64> = z.iter().map(|v| v / norm).collect();
-        let mut tl = 1.0 / norm;
-        let forward = match previous {
-            Some((ptx, ptl)) if ptx.len() == tx.len() => dot(ptx, &tx) / n + ptl * tl >= 0.0,
-            Some((_, ptl)) => ptl >= 0.0,
-            None => true,
-        };
-        if !forward {
-            tx.iter_mut().for_each(|v| *v = -*v);
-            tl = -tl;
-        }
+        let (tx, tl) = oriented(&z, previous);
         tx.iter()
             .all(|v| v.is_finite())
             .then_some((Point { x, lambda, tx, tl }, fl))
