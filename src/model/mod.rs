@@ -9,6 +9,7 @@ pub mod length;
 pub(crate) mod linearize;
 pub mod loads;
 pub mod parameter;
+mod plausibility;
 pub(crate) mod pull_in;
 pub mod robot;
 pub mod rod;
