@@ -62,3 +62,45 @@ def test_a_rigid_tendon_that_sticks_raises_with_the_steps_before():
     # Loading from rest slides all along; the first step back would stick.
     assert caught.value.index == 11
     assert len(caught.value.partial) == 11
+
+
+def prototype_with_friction(tmp_path, actuation):
+    """The prototype (self weight, tendon 1 loaded) with mu = 0.1 and E_t A_t = 2000 N on
+    tendon 1, driven by `actuation` (a robot-file line), as tests/history_pull_in.rs."""
+    tendon = f"{actuation}\nfriction = 0.1\nstiffness = 2000.0"
+    text = tdcr.example().replace("tension = 2.94", tendon, 1)
+    path = tmp_path / "robot.toml"
+    path.write_text(text)
+    return tdcr.Robot.from_file(path)
+
+
+def test_a_pull_in_history_closes_a_loop_whose_way_back_is_on_the_other_side(tmp_path):
+    pull_ins = np.linspace(0.0, 0.02, 4)
+    robot = prototype_with_friction(tmp_path, "displacement = 0.0")
+    h = tdcr.history(robot, {"displacement.1": pull_ins}, up_down=True)
+    assert len(h) == 7
+    tips = h.tip_positions
+    rest = tips[0]
+    # Back at 0 m the tendon is slack and the rod where it started (1e-9 m: two solves of
+    # the same robot to the residual tolerance, as for tensions).
+    assert np.linalg.norm(tips[6] - rest) < 1e-9
+    inputs = np.concatenate([pull_ins, pull_ins[-2::-1]])
+    for k, step in enumerate(h):
+        # The input is the pull-in each step holds (the same float the row gave).
+        assert step.tendons[0]["displacement"] == inputs[k]
+    for k in range(1, 3):
+        up, down = h[k].tendons[0], h[6 - k].tendons[0]
+        # Loading slides in all along, unloading out: the tension falls toward the
+        # termination on the way up and rises on the way back.
+        assert h.zones[k][0][1] == [(0.0, 0.242, "pull")]
+        assert all(zone[2] == "release" for zone in h.zones[6 - k][0][1])
+        assert up["delivered_tension"] < up["tension"] and down["delivered_tension"] > down["tension"]
+        # The way back holds about the same integral of tension with less of it near the
+        # base, so a lower base tension and a tip closer to rest (docs/friction.md section 8).
+        assert down["tension"] < up["tension"]
+        assert np.linalg.norm(tips[6 - k] - rest) < np.linalg.norm(tips[k] - rest)
+    # A tension history driven by the solved base tensions gives the same tips (1e-9 m: the
+    # pull-in loop stops at 1e-12 of the tension, each step solved to the residual tolerance).
+    tensions = [step.tendons[0]["tension"] for step in h]
+    again = tdcr.history(prototype_with_friction(tmp_path, "tension = 0.0"), {"tension.1": tensions})
+    assert np.max(np.linalg.norm(again.tip_positions - tips, axis=1)) < 1e-9

@@ -129,12 +129,22 @@ pub(super) fn rhs(
     let u: Vector3<f64> = y.fixed_rows::<3>(U).into();
     let R = Rk * so3::exp(&theta);
     let rates = linearize::rates(model, site, segment_end, &R, &v, &u)?;
+    Ok(rhs_from_rates(site, &R, y, &rates))
+}
+
+/// F(s, y) in the local coordinates of an interval, given the frame R = R_k exp(theta) of
+/// y's theta and the strain rates (v', u') there: p' = R v (v the strain of the coordinate,
+/// [`Site::strain`]), theta' = J_r(theta)^-1 u, and the rates.
+pub(super) fn rhs_from_rates(site: &Site, R: &Matrix3<f64>, y: &Block<f64>, rates: &Vector6<f64>) -> Block<f64> {
+    let theta: Vector3<f64> = y.fixed_rows::<3>(THETA).into();
+    let v: Vector3<f64> = y.fixed_rows::<3>(V).into();
+    let u: Vector3<f64> = y.fixed_rows::<3>(U).into();
     let mut f = Block::zeros();
     f.fixed_rows_mut::<3>(P).copy_from(&(R * site.strain(&v)));
     f.fixed_rows_mut::<3>(THETA)
         .copy_from(&(so3::right_jacobian_inv(&theta) * u));
-    f.fixed_rows_mut::<6>(V).copy_from(&rates);
-    Ok(f)
+    f.fixed_rows_mut::<6>(V).copy_from(rates);
+    f
 }
 
 /// The sites an interval needs: at its start, midpoint and end.

@@ -540,7 +540,9 @@ def history(
     equilibrium: Optional[Literal["load_path", "nearest"]] = None,
 ) -> History:
     """Solves parameter rows in order as a load history with stick/slip friction (each step
-    from the tendon state the last left); with `up_down`, up and then back down. Every step
+    from the tendon state the last left); with `up_down`, up and then back down. The rows may
+    be tensions ("tension.I"), pull-ins ("displacement.I": each step finds the base tension
+    that holds its pull-in, docs/friction.md section 8) or any other parameter. Every step
     has an error estimate; a step with a stuck stretch is solved on its mesh split in 2, 4,
     ... parts until two answers agree to `tol` (estimate order 2). A failed step raises with
     `index` and `partial` (the History before it)."""

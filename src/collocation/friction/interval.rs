@@ -16,7 +16,9 @@
 //! 13 with friction at the nodes and the midpoint ([`crate::model::friction::linearize`]).
 #![allow(non_snake_case)]
 
-use super::super::residual::{Block, EndColumns, IntervalSites, QuarterSites, end_points, rhs_linearized, scale_rows};
+use super::super::residual::{
+    Block, EndColumns, IntervalSites, QuarterSites, end_points, rhs_from_rates, rhs_linearized, scale_rows,
+};
 use super::super::unknowns::THETA;
 use super::grip::Stuck;
 pub(crate) use super::profile::Profile;
@@ -121,9 +123,23 @@ fn interval_at(
     let derivatives = jac.is_some();
     let la = profile.start_point(k, &sites.start, segment_end, a, &za, w, derivatives)?;
     let lb = profile.point(&sites.end, segment_end, &b.R, (&b.v, &b.u), &zb, w, derivatives)?;
-    let p0 = rhs_linearized(&sites.start, &la.lin, &a.R, &y0);
-    let p1 = rhs_linearized(&sites.end, &lb.lin, &a.R, &y1);
-    let ym = (y0 + y1) * 0.5 + (p0.f - p1.f) * (h / 8.0);
+    // F at a point from its rates; with derivatives also its linearization (a residual
+    // needs only the value, the same arithmetic as the linearization's).
+    let value = |site: &Site, lin: &FrictionLinearization, y: &Block<f64>| {
+        let theta: Vector3<f64> = y.fixed_rows::<3>(THETA).into();
+        rhs_from_rates(site, &(a.R * so3::exp(&theta)), y, &lin.lin.rates)
+    };
+    let ends = derivatives.then(|| {
+        (
+            rhs_linearized(&sites.start, &la.lin, &a.R, &y0),
+            rhs_linearized(&sites.end, &lb.lin, &a.R, &y1),
+        )
+    });
+    let (f0, f1) = match &ends {
+        Some((p0, p1)) => (p0.f, p1.f),
+        None => (value(&sites.start, &la, &y0), value(&sites.end, &lb, &y1)),
+    };
+    let ym = (y0 + y1) * 0.5 + (f0 - f1) * (h / 8.0);
     let zm: Vec<f64> = (0..count)
         .map(|j| 0.5 * (za[j] + zb[j]) + h / 8.0 * (la.turning[j] - lb.turning[j]))
         .collect();
@@ -131,8 +147,11 @@ fn interval_at(
     let (vm, um): (Vector3<f64>, Vector3<f64>) = (ym.fixed_rows::<3>(6).into(), ym.fixed_rows::<3>(9).into());
     let Rm = a.R * so3::exp(&theta_m);
     let lm = profile.point(&sites.mid, segment_end, &Rm, (&vm, &um), &zm, w, derivatives)?;
-    let pm = rhs_linearized(&sites.mid, &lm.lin, &a.R, &ym);
-    let residual = scale_rows(y1 - y0 - (p0.f + pm.f * 4.0 + p1.f) * (h / 6.0), length);
+    let pm = derivatives.then(|| rhs_linearized(&sites.mid, &lm.lin, &a.R, &ym));
+    let fm = pm
+        .as_ref()
+        .map_or_else(|| rhs_from_rates(&sites.mid, &Rm, &ym, &lm.lin.rates), |pm| pm.f);
+    let residual = scale_rows(y1 - y0 - (f0 + fm * 4.0 + f1) * (h / 6.0), length);
     let on: Vec<bool> = (0..count).map(|j| profile.on_link(j, k)).collect();
     // In a history, the stuck material's tension at node b, for the stick/slip choice.
     let stuck: Vec<Option<Stuck>> = (0..count)
@@ -169,7 +188,7 @@ fn interval_at(
         psi_z: DMatrix::zeros(if derivatives { count } else { 0 }, 2 * count),
         derivatives,
     };
-    let Some(jac) = jac else {
+    let (Some(jac), Some((p0, p1)), Some(pm)) = (jac, ends, pm) else {
         profile.keep_end(k, segment_end, b, zb, w, derivatives, lb);
         return Ok(out);
     };

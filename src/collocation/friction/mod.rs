@@ -318,10 +318,7 @@ fn estimate_with_friction(
 
 /// Solves a robot with tendons with friction (validated, with `options` validated): the
 /// frictionless robot first (the standard pipeline, which also picks the first mesh), then
-/// on each mesh Newton bordered by the log tensions ([`Capstan`]) from the last mesh's
-/// solution (the frictionless one and constant tensions on the first), its error estimate
-/// ([`estimate_with_friction`]) and, with a tolerance, re-meshing until the tip's estimate
-/// and the tension profile's (relative, against the same tolerance as the rotation) meet it.
+/// [`refine_with_friction`] from its solution and constant tensions.
 ///
 /// # Errors
 /// As [`super::solve`].
@@ -332,11 +329,61 @@ pub(super) fn solve(robot: &Robot, options: &Options, warm: Option<&Solution>, c
         t.friction = None;
     }
     let first = pipeline::solve_impl(&smooth, options, warm, cache)?;
-    let points: Vec<f64> = first.nodes.iter().map(|n| n.s).collect();
-    let mut mesh = Mesh::from_points(robot, &points)?;
-    let mut x = interpolate(&Model::new(robot), &first, &mesh);
     // The counts and timings of the frictionless solve are part of this one.
-    let mut report = first.report.clone();
+    let report = first.report.clone();
+    refine_with_friction(robot, options, &first, None, report, start)
+}
+
+/// Solves a robot with friction (validated, with `options` validated) from `near`, the
+/// solution with friction of the same robot at nearby base-entry tensions (the last step
+/// of [`solve_pull_ins`]' Newton on the tensions): Newton with friction starts from its
+/// shape, mesh and log tensions instead of a new frictionless solve. The branch is the one
+/// `near` is on (the frictionless start of the loop's first solve chose it); the path and
+/// notes of its report carry over, the counts are this solve's.
+///
+/// # Errors
+/// As [`super::solve`].
+fn solve_near(robot: &Robot, options: &Options, near: &Solution) -> Result<Solution> {
+    let start = Instant::now();
+    let s: Vec<f64> = near.nodes.iter().map(|n| n.s).collect();
+    let mut z = Vec::new();
+    for i in crate::model::friction::slipping(robot) {
+        let base = near.tension_at(i, 0.0).filter(|t| *t > 0.0);
+        z.push(
+            s.iter()
+                .map(|&x| match (base, near.tension_at(i, x)) {
+                    (Some(b), Some(t)) if t > 0.0 => (t / b).ln(),
+                    _ => 0.0,
+                })
+                .collect(),
+        );
+    }
+    let mut report = SolveReport::new(Method::Collocation);
+    report.path = near.report.path.clone();
+    report.notes = near.report.notes.clone();
+    refine_with_friction(robot, options, near, Some((s, z)), report, start)
+}
+
+/// On the mesh of `from`'s nodes and from its shape, Newton bordered by the log tensions
+/// ([`Capstan`]) from `previous` (node arc lengths and log tensions per slip, interpolated;
+/// constant tensions when None), its error estimate ([`estimate_with_friction`]) and, with a
+/// tolerance, re-meshing until the tip's estimate and the tension profile's (relative,
+/// against the same tolerance as the rotation) meet it. `report` holds what came before
+/// (the frictionless solve's counts, or none); `start` is when the solve began.
+///
+/// # Errors
+/// As [`super::solve`].
+fn refine_with_friction(
+    robot: &Robot,
+    options: &Options,
+    from: &Solution,
+    mut previous: Option<(Vec<f64>, Vec<Vec<f64>>)>,
+    mut report: SolveReport,
+    start: Instant,
+) -> Result<Solution> {
+    let points: Vec<f64> = from.nodes.iter().map(|n| n.s).collect();
+    let mut mesh = Mesh::from_points(robot, &points)?;
+    let mut x = interpolate(&Model::new(robot), from, &mesh);
     let settings = Settings {
         tolerance: options.residual_tolerance,
         max_iterations: options.max_iterations,
@@ -346,7 +393,6 @@ pub(super) fn solve(robot: &Robot, options: &Options, warm: Option<&Solution>, c
     let model = Model::new(robot);
     let length = robot.length();
     // The last mesh's node arc lengths and log tensions, interpolated onto the next.
-    let mut previous: Option<(Vec<f64>, Vec<Vec<f64>>)> = None;
     loop {
         report.meshes += 1;
         let mut system = System::new(model.clone(), mesh);
@@ -437,8 +483,15 @@ pub(super) fn solve_pull_ins(
         t.friction = None;
     }
     let first = pipeline::solve_impl(&smooth, options, warm, cache)?;
+    // The loop's first solve starts from the frictionless one (which chose the branch), the
+    // others from the last solve with friction, at tensions a Newton step or a difference
+    // step away.
+    let mut near = false;
     let mut solution = crate::model::pull_in::hold(robot, &first.tensions(), Some(&first), |r, warm| {
-        solve(r, options, warm, cache)
+        match (std::mem::replace(&mut near, true), warm) {
+            (true, Some(last)) => solve_near(r, options, last),
+            _ => solve(r, options, warm, cache),
+        }
     })?;
     solution.report.timings.total = start.elapsed();
     Ok(solution)
