@@ -524,21 +524,25 @@ impl EndColumns {
         let (Y0, Y1, dF0, dF1) = (&self.Y0, &self.Y1, &self.dF0, &self.dF1);
         debug_assert_eq!(jac.len(), 12 * 24);
         let c = h / 6.0;
+        let scale = |i: usize| match i {
+            0..3 => 1.0 / length,
+            9.. => length,
+            _ => 1.0,
+        };
         for (i, row) in jac.chunks_exact_mut(24).enumerate() {
-            let scale = match i {
-                0..3 => 1.0 / length,
-                9.. => length,
-                _ => 1.0,
-            };
             row[..3].fill(0.0);
             row[12..15].fill(0.0);
             if i < 3 {
                 row[i] = -1.0;
                 row[12 + i] = 1.0;
             }
-            for j in 0..18 {
-                let column = if j < 9 { 3 + j } else { 6 + j };
-                row[column] = scale * (Y1[(i, j)] - Y0[(i, j)] - c * (dF0[(i, j)] + 4.0 * dFm[(i, j)] + dF1[(i, j)]));
+        }
+        // Column by column: the inputs are column-major, so each column is read contiguously.
+        for j in 0..18 {
+            let column = if j < 9 { 3 + j } else { 6 + j };
+            let (y1, y0, f0, fm, f1) = (Y1.column(j), Y0.column(j), dF0.column(j), dFm.column(j), dF1.column(j));
+            for i in 0..12 {
+                jac[24 * i + column] = scale(i) * (y1[i] - y0[i] - c * (f0[i] + 4.0 * fm[i] + f1[i]));
             }
         }
     }
