@@ -52,10 +52,16 @@ const GAUSS5: [(f64, f64); 5] = [
 /// helical routings, whose speed is constant on a straight rod, and about 1e-12 relative
 /// for a precurved rod turning a radian per panel).
 pub fn reference_length(robot: &Robot, i: usize) -> f64 {
+    reference_length_on(robot, &robot.breakpoints(), i)
+}
+
+/// [`reference_length`] with the robot's breakpoints ([`Robot::breakpoints`]) given, for a
+/// caller that needs the reference lengths of several tendons (computed once for all).
+pub(crate) fn reference_length_on(robot: &Robot, breakpoints: &[f64], i: usize) -> f64 {
     let length = robot.length();
     let tendon = &robot.tendons[i];
     let end = tendon.end(length);
-    gauss_points(robot, end, REFERENCE_PANELS)
+    gauss_points(breakpoints, end, REFERENCE_PANELS)
         .map(|(s, weight)| {
             let reference = robot.rod.reference_at(s);
             let rp = tendon.routing.at(s, length);
@@ -65,13 +71,13 @@ pub fn reference_length(robot: &Robot, i: usize) -> f64 {
 }
 
 /// The points s and weights of composite 5-point Gauss-Legendre on `panels` equal panels
-/// between consecutive breakpoints of `robot` in [0, `end`] (integrands may jump there).
-fn gauss_points(robot: &Robot, end: f64, panels: usize) -> impl Iterator<Item = (f64, f64)> {
-    let mut cuts = vec![0.0];
-    cuts.extend(robot.breakpoints().into_iter().filter(|&b| b < end));
-    cuts.push(end);
-    let pieces: Vec<(f64, f64)> = cuts.windows(2).map(|w| (w[0], w[1])).collect();
-    pieces.into_iter().flat_map(move |(a, b)| {
+/// between consecutive points of 0, the `breakpoints` (increasing, [`Robot::breakpoints`])
+/// before `end`, and `end` (integrands may jump at breakpoints). Allocates nothing.
+fn gauss_points(breakpoints: &[f64], end: f64, panels: usize) -> impl Iterator<Item = (f64, f64)> + '_ {
+    let inner = breakpoints.iter().copied().filter(move |&b| b < end);
+    let starts = std::iter::once(0.0).chain(inner.clone());
+    let ends = inner.chain(std::iter::once(end));
+    starts.zip(ends).flat_map(move |(a, b)| {
         let h = (b - a) / panels as f64;
         (0..panels).flat_map(move |k| {
             let mid = a + (k as f64 + 0.5) * h;
@@ -100,7 +106,7 @@ pub fn pull_in_compliance(robot: &Robot) -> Vec<f64> {
     let mut out = vec![0.0; k * k];
     let mut tangents = vec![(Vector3::zeros(), Vector3::zeros()); k];
     // A starting estimate: a few panels per piece resolve these smooth integrands well enough.
-    for (s, weight) in gauss_points(robot, length, 8) {
+    for (s, weight) in gauss_points(&robot.breakpoints(), length, 8) {
         let reference = robot.rod.reference_at(s);
         let section = robot.rod.section_at(s).section;
         for (i, t) in robot.tendons.iter().enumerate() {
