@@ -421,19 +421,23 @@ pub fn interval_jacobian(
     segment_end: f64,
     a: &State,
     b: &State,
-    start: Option<Linearization>,
+    start: Option<&Linearization>,
     jac: &mut [f64],
 ) -> Result<(Block<f64>, Linearization)> {
     let length = model.robot.length();
     let h = sites.end.s - sites.start.s;
     let (y0, y1) = end_points(a, b);
     let theta1: Vector3<f64> = y1.fixed_rows::<3>(THETA).into();
+    let computed;
     let lin0 = match start {
         Some(l) => l,
-        None => linearize(model, &sites.start, segment_end, &a.R, &a.v, &a.u)?,
+        None => {
+            computed = linearize(model, &sites.start, segment_end, &a.R, &a.v, &a.u)?;
+            &computed
+        }
     };
     let lin1 = linearize(model, &sites.end, segment_end, &b.R, &b.v, &b.u)?;
-    let p0 = rhs_linearized(&sites.start, &lin0, &a.R, &y0);
+    let p0 = rhs_linearized(&sites.start, lin0, &a.R, &y0);
     let p1 = rhs_linearized(&sites.end, &lin1, &a.R, &y1);
     let ym = (y0 + y1) * 0.5 + (p0.f - p1.f) * (h / 8.0);
     let pm = rhs_linearized(
@@ -453,7 +457,7 @@ pub fn interval_jacobian(
 
     let ends = EndColumns::new(&p0, &p1, &theta1, length);
     let dYm = ends.midpoint(h);
-    let mut dFm = pm.f_y.fixed_columns::<9>(3) * dYm.fixed_rows::<9>(3);
+    let mut dFm = pm.f_y.fixed_columns::<9>(3) * dYm;
     let mut frame = dFm.fixed_columns_mut::<3>(0);
     frame += pm.f_frame;
     ends.write(&dFm, h, length, jac);
@@ -475,26 +479,32 @@ impl EndColumns {
     /// The columns from the end points' linearizations `p0`, `p1` and theta_1.
     #[inline(always)]
     pub(super) fn new(p0: &PointLinearization, p1: &PointLinearization, theta1: &Vector3<f64>, length: f64) -> Self {
-        let mut Y0 = SMatrix::<f64, 12, 18>::zeros();
-        let mut Y1 = SMatrix::<f64, 12, 18>::zeros();
+        // Built in place, field by field (separate locals moved into the struct cost four
+        // copies of 1.7 kB per interval).
+        let mut ends = EndColumns {
+            Y0: SMatrix::zeros(),
+            Y1: SMatrix::zeros(),
+            dF0: SMatrix::zeros(),
+            dF1: SMatrix::zeros(),
+        };
         for i in 0..3 {
-            Y0[(6 + i, 3 + i)] = 1.0;
-            Y0[(9 + i, 6 + i)] = 1.0 / length;
-            Y1[(6 + i, 12 + i)] = 1.0;
-            Y1[(9 + i, 15 + i)] = 1.0 / length;
+            ends.Y0[(6 + i, 3 + i)] = 1.0;
+            ends.Y0[(9 + i, 6 + i)] = 1.0 / length;
+            ends.Y1[(6 + i, 12 + i)] = 1.0;
+            ends.Y1[(9 + i, 15 + i)] = 1.0 / length;
         }
         // theta_1 = log(exp(-d_a) Q exp(d_b)): d/d d_b = J_r^-1, d/d d_a = -J_r^-1 exp(theta_1)^T
         let Jri1 = so3::right_jacobian_inv(theta1);
         let dtheta1_da = -Jri1 * so3::exp(theta1).transpose();
-        Y1.fixed_view_mut::<3, 3>(3, 0).copy_from(&dtheta1_da);
-        Y1.fixed_view_mut::<3, 3>(3, 9).copy_from(&Jri1);
+        ends.Y1.fixed_view_mut::<3, 3>(3, 0).copy_from(&dtheta1_da);
+        ends.Y1.fixed_view_mut::<3, 3>(3, 9).copy_from(&Jri1);
         // The frame R_k = R_a exp(d_a) enters every F through the theta_a columns.
-        let mut dF0 = SMatrix::<f64, 12, 18>::zeros();
+        let dF0 = &mut ends.dF0;
         dF0.fixed_columns_mut::<3>(0).copy_from(&p0.f_frame);
         dF0.fixed_columns_mut::<3>(3).copy_from(&p0.f_y.fixed_columns::<3>(6));
         dF0.fixed_columns_mut::<3>(6).copy_from(&p0.f_y.fixed_columns::<3>(9));
         dF0.fixed_columns_mut::<3>(6).scale_mut(1.0 / length);
-        let mut dF1 = SMatrix::<f64, 12, 18>::zeros();
+        let dF1 = &mut ends.dF1;
         let f1_theta = p1.f_y.fixed_columns::<3>(3);
         dF1.fixed_columns_mut::<3>(0)
             .copy_from(&(f1_theta * dtheta1_da + p1.f_frame));
@@ -502,13 +512,17 @@ impl EndColumns {
         dF1.fixed_columns_mut::<3>(12).copy_from(&p1.f_y.fixed_columns::<3>(6));
         dF1.fixed_columns_mut::<3>(15).copy_from(&p1.f_y.fixed_columns::<3>(9));
         dF1.fixed_columns_mut::<3>(15).scale_mut(1.0 / length);
-        EndColumns { Y0, Y1, dF0, dF1 }
+        ends
     }
 
-    /// The columns of the midpoint y_m = (y_0 + y_1) / 2 + h/8 (F_0 - F_1).
+    /// The columns of the midpoint y_m = (y_0 + y_1) / 2 + h/8 (F_0 - F_1), rows theta, v, u
+    /// (the p rows are not needed: F does not depend on p). Entry by entry, without the
+    /// temporaries of matrix expressions.
     #[inline(always)]
-    pub(super) fn midpoint(&self, h: f64) -> SMatrix<f64, 12, 18> {
-        (self.Y0 + self.Y1) * 0.5 + (self.dF0 - self.dF1) * (h / 8.0)
+    pub(super) fn midpoint(&self, h: f64) -> SMatrix<f64, 9, 18> {
+        let (Y0, Y1, dF0, dF1) = (&self.Y0, &self.Y1, &self.dF0, &self.dF1);
+        let c = h / 8.0;
+        SMatrix::from_fn(|i, j| (Y0[(3 + i, j)] + Y1[(3 + i, j)]) * 0.5 + (dF0[(3 + i, j)] - dF1[(3 + i, j)]) * c)
     }
 
     /// Writes J = Y1 - Y0 - (dF0 + 4 dFm + dF1) h / 6 on the 18 columns, given the
@@ -520,21 +534,25 @@ impl EndColumns {
         let (Y0, Y1, dF0, dF1) = (&self.Y0, &self.Y1, &self.dF0, &self.dF1);
         debug_assert_eq!(jac.len(), 12 * 24);
         let c = h / 6.0;
+        let scale = |i: usize| match i {
+            0..3 => 1.0 / length,
+            9.. => length,
+            _ => 1.0,
+        };
         for (i, row) in jac.chunks_exact_mut(24).enumerate() {
-            let scale = match i {
-                0..3 => 1.0 / length,
-                9.. => length,
-                _ => 1.0,
-            };
             row[..3].fill(0.0);
             row[12..15].fill(0.0);
             if i < 3 {
                 row[i] = -1.0;
                 row[12 + i] = 1.0;
             }
-            for j in 0..18 {
-                let column = if j < 9 { 3 + j } else { 6 + j };
-                row[column] = scale * (Y1[(i, j)] - Y0[(i, j)] - c * (dF0[(i, j)] + 4.0 * dFm[(i, j)] + dF1[(i, j)]));
+        }
+        // Column by column: the inputs are column-major, so each column is read contiguously.
+        for j in 0..18 {
+            let column = if j < 9 { 3 + j } else { 6 + j };
+            let (y1, y0, f0, fm, f1) = (Y1.column(j), Y0.column(j), dF0.column(j), dFm.column(j), dF1.column(j));
+            for i in 0..12 {
+                jac[24 * i + column] = scale(i) * (y1[i] - y0[i] - c * (f0[i] + 4.0 * fm[i] + f1[i]));
             }
         }
     }

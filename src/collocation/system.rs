@@ -292,8 +292,15 @@ impl<'a> System<'a> {
                     out[rows].copy_from_slice(lin.residual.as_slice());
                     profile.keep(k, lin);
                 } else {
-                    let (r, end) =
-                        residual::interval_jacobian(&self.model, sites, seg, &x[k], &x[k + 1], node_lin, block)?;
+                    let (r, end) = residual::interval_jacobian(
+                        &self.model,
+                        sites,
+                        seg,
+                        &x[k],
+                        &x[k + 1],
+                        node_lin.as_ref(),
+                        block,
+                    )?;
                     node_lin = Some(end);
                     out[rows].copy_from_slice(r.as_slice());
                 }

@@ -189,6 +189,7 @@ fn tendon_states(model: &Model, nodes: &[Node]) -> Vec<TendonState> {
     // The quadrature depends only on the nodes and the tendon's end: built once for the
     // tendons that end at the same place (usually all at the tip).
     let mut quadratures: Vec<(f64, length::NodeQuadrature)> = Vec::new();
+    let breakpoints = robot.breakpoints();
     robot
         .tendons
         .iter()
@@ -203,7 +204,7 @@ fn tendon_states(model: &Model, nodes: &[Node]) -> Vec<TendonState> {
                 }
             };
             let length = tendon_length(robot, i, &quadratures[at].1, &s, nodes);
-            let reference_length = length::reference_length(robot, i);
+            let reference_length = length::reference_length_on(robot, &breakpoints, i);
             let tension = model.tensions[i];
             let taken_up = reference_length - length + t.compliance(reference_length) * tension;
             match t.displacement() {

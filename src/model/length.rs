@@ -18,8 +18,10 @@
 //! (v, u) of each node ([`speed_gradient`]).
 
 use crate::model::robot::Robot;
-use crate::model::routing::RoutingPoint;
+use crate::model::rod::ReferenceStrains;
+use crate::model::routing::{Routing, RoutingPoint};
 use nalgebra::Vector3;
+use std::cell::RefCell;
 
 /// The speed |w| of a tendon path, w = v + u x r + r' (body frame, dimensionless).
 pub fn speed(rp: &RoutingPoint, v: &Vector3<f64>, u: &Vector3<f64>) -> f64 {
@@ -52,26 +54,101 @@ const GAUSS5: [(f64, f64); 5] = [
 /// helical routings, whose speed is constant on a straight rod, and about 1e-12 relative
 /// for a precurved rod turning a radian per panel).
 pub fn reference_length(robot: &Robot, i: usize) -> f64 {
+    reference_length_on(robot, &robot.breakpoints(), i)
+}
+
+/// [`reference_length`] with the robot's breakpoints ([`Robot::breakpoints`]) given, for a
+/// caller that needs the reference lengths of several tendons (computed once for all).
+///
+/// The value depends only on the geometry, not on the loads or tensions, so the last few are
+/// kept per thread for geometries given by data alone (not by a user function) and
+/// returned again for a geometry that is bit for bit the same (a batch of rows that change
+/// tensions computes each once).
+pub(crate) fn reference_length_on(robot: &Robot, breakpoints: &[f64], i: usize) -> f64 {
     let length = robot.length();
     let tendon = &robot.tendons[i];
     let end = tendon.end(length);
-    gauss_points(robot, end, REFERENCE_PANELS)
+    let key = Geometry::of(robot, breakpoints, i);
+    if let Some(key) = &key
+        && let Some(value) = KNOWN.with_borrow(|known| known.iter().find(|(k, _)| k.matches(key)).map(|(_, v)| *v))
+    {
+        return value;
+    }
+    let value = gauss_points(breakpoints, end, REFERENCE_PANELS)
         .map(|(s, weight)| {
             let reference = robot.rod.reference_at(s);
             let rp = tendon.routing.at(s, length);
             weight * speed(&rp, &reference.v_star, &reference.u_star)
         })
-        .sum()
+        .sum();
+    if let Some(key) = key {
+        KNOWN.with_borrow_mut(|known| {
+            if known.len() == KEPT_LENGTHS {
+                known.remove(0);
+            }
+            known.push((key, value));
+        });
+    }
+    value
+}
+
+/// How many reference lengths a thread keeps ([`reference_length_on`]).
+const KEPT_LENGTHS: usize = 16;
+
+thread_local! {
+    /// Reference lengths computed on this thread, oldest first, with their geometry.
+    static KNOWN: RefCell<Vec<(Geometry, f64)>> = const { RefCell::new(Vec::new()) };
+}
+
+/// Everything a reference length depends on, as bits: the rod length, the tendon's end, the
+/// breakpoints, its routing and the reference strains. None where the routing or the
+/// strains are a user function (two such functions cannot be compared).
+struct Geometry {
+    numbers: Vec<u64>,
+}
+
+impl Geometry {
+    fn of(robot: &Robot, breakpoints: &[f64], i: usize) -> Option<Self> {
+        let length = robot.length();
+        let tendon = &robot.tendons[i];
+        let mut numbers = vec![length.to_bits(), tendon.end(length).to_bits(), breakpoints.len() as u64];
+        numbers.extend(breakpoints.iter().map(|b| b.to_bits()));
+        match tendon.routing {
+            Routing::Straight { x, y } => numbers.extend([0, x.to_bits(), y.to_bits()]),
+            Routing::Helical { radius, turns, phase } => {
+                numbers.extend([1, radius.to_bits(), turns.to_bits(), phase.to_bits()])
+            }
+            Routing::Custom(_) => return None,
+        }
+        match &robot.rod.reference {
+            ReferenceStrains::Straight => numbers.push(0),
+            ReferenceStrains::Constant { v_star, u_star } => {
+                numbers.push(1);
+                numbers.extend(v_star.iter().chain(u_star.iter()).map(|x| x.to_bits()));
+            }
+            ReferenceStrains::Segments { ends, u_star } => {
+                numbers.extend([2, ends.len() as u64]);
+                numbers.extend(ends.iter().map(|x| x.to_bits()));
+                numbers.extend(u_star.iter().flat_map(|u| u.iter()).map(|x| x.to_bits()));
+            }
+            ReferenceStrains::Varying(_) => return None,
+        }
+        Some(Geometry { numbers })
+    }
+
+    fn matches(&self, other: &Geometry) -> bool {
+        self.numbers == other.numbers
+    }
 }
 
 /// The points s and weights of composite 5-point Gauss-Legendre on `panels` equal panels
-/// between consecutive breakpoints of `robot` in [0, `end`] (integrands may jump there).
-fn gauss_points(robot: &Robot, end: f64, panels: usize) -> impl Iterator<Item = (f64, f64)> {
-    let mut cuts = vec![0.0];
-    cuts.extend(robot.breakpoints().into_iter().filter(|&b| b < end));
-    cuts.push(end);
-    let pieces: Vec<(f64, f64)> = cuts.windows(2).map(|w| (w[0], w[1])).collect();
-    pieces.into_iter().flat_map(move |(a, b)| {
+/// between consecutive points of 0, the `breakpoints` (increasing, [`Robot::breakpoints`])
+/// before `end`, and `end` (integrands may jump at breakpoints). Allocates nothing.
+fn gauss_points(breakpoints: &[f64], end: f64, panels: usize) -> impl Iterator<Item = (f64, f64)> + '_ {
+    let inner = breakpoints.iter().copied().filter(move |&b| b < end);
+    let starts = std::iter::once(0.0).chain(inner.clone());
+    let ends = inner.chain(std::iter::once(end));
+    starts.zip(ends).flat_map(move |(a, b)| {
         let h = (b - a) / panels as f64;
         (0..panels).flat_map(move |k| {
             let mid = a + (k as f64 + 0.5) * h;
@@ -100,7 +177,7 @@ pub fn pull_in_compliance(robot: &Robot) -> Vec<f64> {
     let mut out = vec![0.0; k * k];
     let mut tangents = vec![(Vector3::zeros(), Vector3::zeros()); k];
     // A starting estimate: a few panels per piece resolve these smooth integrands well enough.
-    for (s, weight) in gauss_points(robot, length, 8) {
+    for (s, weight) in gauss_points(&robot.breakpoints(), length, 8) {
         let reference = robot.rod.reference_at(s);
         let section = robot.rod.section_at(s).section;
         for (i, t) in robot.tendons.iter().enumerate() {
@@ -183,6 +260,50 @@ impl NodeQuadrature {
 mod tests {
     use super::*;
     use approx::assert_relative_eq;
+
+    /// A reference length computed on a new thread, whose kept lengths are empty.
+    fn fresh(robot: &Robot, i: usize) -> f64 {
+        let robot = robot.clone();
+        std::thread::spawn(move || reference_length(&robot, i)).join().unwrap()
+    }
+
+    #[test]
+    fn kept_reference_lengths_are_those_of_the_same_geometry_only() {
+        let mut robot = crate::cases::prototype();
+        robot.rod.reference = ReferenceStrains::Constant {
+            v_star: Vector3::z(),
+            u_star: Vector3::new(0.0, 2.0, 0.0),
+        };
+        // Curved about y, so that tendon 0 (offset along x) is shorter than the rod.
+        let first = reference_length(&robot, 0);
+        // Kept: bit for bit what a thread without kept lengths computes.
+        assert_eq!(reference_length(&robot, 0).to_bits(), first.to_bits());
+        assert_eq!(fresh(&robot, 0).to_bits(), first.to_bits());
+        // Tensions are not part of the geometry.
+        let tension = robot.tendons[0].tension();
+        robot.tendons[0].set_tension(tension + 1.0);
+        assert_eq!(reference_length(&robot, 0).to_bits(), first.to_bits());
+        // Each change of the geometry gives its own length, never a kept one.
+        let mut changed = Vec::new();
+        let mut offset = robot.clone();
+        offset.tendons[0].routing = Routing::straight(0.01, 0.0);
+        changed.push(offset);
+        let mut curved = robot.clone();
+        curved.rod.reference = ReferenceStrains::Constant {
+            v_star: Vector3::z(),
+            u_star: Vector3::new(0.0, 3.0, 0.0),
+        };
+        changed.push(curved);
+        let mut longer = robot.clone();
+        longer.rod.length *= 1.1;
+        changed.push(longer);
+        for other in &changed {
+            let kept_first = reference_length(other, 0);
+            assert_ne!(kept_first.to_bits(), first.to_bits());
+            assert_eq!(kept_first.to_bits(), fresh(other, 0).to_bits());
+        }
+        assert_eq!(reference_length(&robot, 0).to_bits(), first.to_bits());
+    }
 
     #[test]
     fn node_quadrature_is_order_four_and_splits_at_jumps() {

@@ -223,7 +223,7 @@ fn interval_at(
             .copy_from(&lm.d_turning[j].fixed_columns::<3>(3));
         (row, d_phi * Em.transpose())
     };
-    let mut dFm = pm.f_y.fixed_columns::<9>(3) * dYm.fixed_rows::<9>(3);
+    let mut dFm = pm.f_y.fixed_columns::<9>(3) * dYm;
     {
         let mut frame = dFm.fixed_columns_mut::<3>(0);
         frame += pm.f_frame;
@@ -242,7 +242,7 @@ fn interval_at(
     let mut dturn_m: Vec<SMatrix<f64, 1, 18>> = Vec::with_capacity(count);
     for j in 0..count {
         let (row_y, row_frame) = turning_y(j);
-        let mut row = row_y.fixed_columns::<9>(3) * dYm.fixed_rows::<9>(3);
+        let mut row = row_y.fixed_columns::<9>(3) * dYm;
         for c in 0..3 {
             row[c] += row_frame[c];
         }
