@@ -13,8 +13,11 @@ const RATIOS: [f64; 12] = [0.5, 0.9, 0.99, 1.01, 1.05, 1.1, 1.2, 1.3, 1.5, 2.0, 
 const IMPERFECTIONS: [f64; 6] = [0.0, 1e-5, 1e-4, 1e-3, 1e-2, 1e-1];
 
 fn column(p: f64, eps: f64) -> Robot {
-    Robot::new(Rod::solid_circle(LENGTH, 0.001, 200e9, 0.3))
-        .with_loads(Loads::none().with_tip_force(Vector3::new(eps * p, 0.0, -p)))
+    Robot::new(Rod::solid_circle(LENGTH, 0.001, 200e9, 0.3)).with_loads(Loads::none().with_tip_force(Vector3::new(
+        eps * p,
+        0.0,
+        -p,
+    )))
 }
 
 fn main() {

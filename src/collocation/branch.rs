@@ -14,8 +14,8 @@
 //! the branch whose amplitude along phi is h; the path then goes on from there.
 
 use super::homotopy::{Homotopy, Point, dot, f_lambda, tangent};
-use super::newton::{self, Settings, Workspace};
 use super::locate;
+use super::newton::{self, Settings, Workspace};
 use super::path::{correct, index};
 use super::phase::{Phase, generic, kernel};
 use super::system::System;
@@ -107,22 +107,22 @@ pub(super) fn switch(
     // bifurcation is recorded there.
     let mut at = point.lambda;
     let mut from = point.x.clone();
-    let (phi, any_growth) = match symmetric.then(|| locate::critical(system, homotopy, ws, point, beyond, settings, report)) {
-        Some(Some((xc, lc))) => {
-            ptrace!("  located {:.9} it {}", lc, report.iterations);
-            let (kc, growth) = kernel(ws, generic(n), false, None)?;
-            (at, from) = (lc, xc);
-            (kc, growth)
-        }
-        Some(None) => {
-            homotopy.set(system, point.lambda);
-            if !ws.linearize(system, &point.x, report) {
-                return None;
+    let (phi, any_growth) =
+        match symmetric.then(|| locate::critical(system, homotopy, ws, point, beyond, settings, report)) {
+            Some(Some((xc, lc))) => {
+                let (kc, growth) = kernel(ws, generic(n), false, None)?;
+                (at, from) = (lc, xc);
+                (kc, growth)
             }
-            (phi, any_growth)
-        }
-        None => (phi, any_growth),
-    };
+            Some(None) => {
+                homotopy.set(system, point.lambda);
+                if !ws.linearize(system, &point.x, report) {
+                    return None;
+                }
+                (phi, any_growth)
+            }
+            None => (phi, any_growth),
+        };
     // A perfect symmetry whose kernel is two-dimensional: the branch along phi is one
     // member of a family, whose direction there starts from the second kernel direction.
     let family = match symmetric {
@@ -151,7 +151,6 @@ pub(super) fn switch(
             continue;
         };
         let mut unstable = index(system, ws, report);
-        ptrace!("  switch h {} landed lambda {:.6} unst {:?} it {}", h, lambda, unstable, report.iterations);
         let mut next = Some((next, next_fl));
         if unstable.is_some_and(|k| k > unstable_before) {
             match family {
@@ -167,7 +166,6 @@ pub(super) fn switch(
                     let (p, _) = next.take()?;
                     next = converged(system, homotopy, ws, p, settings, report);
                     unstable = next.as_ref().and_then(|_| index(system, ws, report));
-                    ptrace!("  switch polished unst {:?} it {}", unstable, report.iterations);
                 }
             }
         }

@@ -268,7 +268,6 @@ pub(crate) fn choose_equilibrium(
     let mut x = x0.clone();
     let (accept, worst) = direct(system, ws, &mut x, nearest, settings, report);
     let converged = report.termination == Termination::Converged;
-    ptrace!("direct: accept {} converged {} it {}", accept, converged, report.iterations);
     if accept {
         return Ok(x);
     }

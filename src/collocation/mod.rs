@@ -31,9 +31,6 @@
 //! docs/numerics.md documents the scheme (order 4), the scaling, the stopping tests and the
 //! load path.
 
-#[allow(unused_macros)]
-macro_rules! ptrace { ($($t:tt)*) => { if std::env::var_os("TDCR_PATH_TRACE").is_some() { eprintln!($($t)*); } } }
-
 pub(crate) mod actuation;
 mod batch;
 mod branch;

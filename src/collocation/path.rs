@@ -258,7 +258,6 @@ pub(super) fn follow(
             return Err(("stopped on request before the end of the range".into(), 0));
         }
         report.load_steps += 1;
-        ptrace!("step {} lambda {:.6} tl {:.3e} h {:.3e} it {} unst {:?} phase {}", report.load_steps, point.lambda, point.tl, h, report.iterations, unstable, phase.is_some());
         if h <= POLISH_BELOW {
             crawl += 1;
             if crawl > CRAWL_STEPS {
@@ -320,7 +319,6 @@ pub(super) fn follow(
                 landed_unstable = neutral(unstable, landed_unstable);
             }
             let jumped = matches!((unstable, landed_unstable), (Some(a), Some(b)) if a != b);
-            ptrace!("  landing h1 {:.3e} term {:?} unst {:?} it {}", h1, term, landed_unstable, report.iterations);
             if term == Termination::Converged && !(jumped && h1 > BIFURCATION_STEP) {
                 if jumped {
                     bifurcations.push(1.0);
@@ -343,7 +341,17 @@ pub(super) fn follow(
             }
             if let (true, Some(a), Some(b)) = (switching, unstable, landed_unstable)
                 && b > a
-                && let Some(mut s) = branch::switch(system, &homotopy, ws, &point, (&landed, 1.0), a, settings, report, &mut r)
+                && let Some(mut s) = branch::switch(
+                    system,
+                    &homotopy,
+                    ws,
+                    &point,
+                    (&landed, 1.0),
+                    a,
+                    settings,
+                    report,
+                    &mut r,
+                )
             {
                 s.record(&mut bifurcations, &mut picked);
                 push(&mut record, &s.point, s.unstable, false, report);
@@ -382,7 +390,6 @@ pub(super) fn follow(
         );
         match res {
             Some((xc, lambda, iterations)) => {
-                ptrace!("  corrected lambda {:.6} in {} it {}", lambda, iterations, report.iterations);
                 if !ws.linearize(system, &xc, report) {
                     h *= 0.5;
                     factored_at_point = false;
@@ -418,15 +425,23 @@ pub(super) fn follow(
                     (next, next_fl) = (p, f);
                     next_unstable = index(system, ws, report);
                 }
-                if fold { ptrace!("  FOLD at {:.6} tl {:.3e} -> {:.3e}", lambda, point.tl, next.tl); }
                 if let (Some(a), Some(b)) = (unstable, next_unstable)
                     && a != b
                     && !fold
                 {
-                    ptrace!("  count {} -> {} at {:.6} switching {} it {}", a, b, lambda, switching, report.iterations);
                     if switching
                         && b > a
-                        && let Some(mut s) = branch::switch(system, &homotopy, ws, &point, (&next.x, lambda), a, settings, report, &mut r)
+                        && let Some(mut s) = branch::switch(
+                            system,
+                            &homotopy,
+                            ws,
+                            &point,
+                            (&next.x, lambda),
+                            a,
+                            settings,
+                            report,
+                            &mut r,
+                        )
                     {
                         s.record(&mut bifurcations, &mut picked);
                         push(&mut record, &s.point, s.unstable, false, report);
@@ -530,7 +545,6 @@ pub(super) fn follow(
                 }
             }
             None => {
-                ptrace!("  corrector failed it {}", report.iterations);
                 h *= 0.5;
                 factored_at_point = false;
                 if !polished

@@ -118,7 +118,6 @@ pub(crate) fn solve_impl(
     )
     .map_err(|e| timed(e, start))?;
     let Level { mesh, x, correction } = level;
-    ptrace!("end: it {} meshes {} load_steps {}", report.iterations, report.meshes, report.load_steps);
     report.intervals = mesh.intervals();
     report.unknowns = unknowns::unknowns(mesh.nodes.len());
     report.nonzeros = unknowns::nonzeros(&mesh);
@@ -199,7 +198,6 @@ pub(crate) fn solve_on_mesh(
             }
         }
     };
-    ptrace!("mesh {} intervals, it {}", system.mesh.intervals(), report.iterations);
     let mut result = match choose {
         Choose::No => newton_only(&system, &mut workspace, x0, &settings, report),
         _ => {

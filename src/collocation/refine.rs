@@ -233,7 +233,6 @@ pub(super) fn remesh(
     homotopy.set(system, point.lambda);
     *ws = Workspace::new(system, options.linear_solver).ok()?;
     report.meshes += 1;
-    ptrace!("  remesh to {} at {:.6} it {}", intervals, point.lambda, report.iterations);
     let (term, _) = newton::run(system, ws, &mut x, settings, report);
     if term != Termination::Converged || !ws.linearize(system, &x, report) {
         return None;
