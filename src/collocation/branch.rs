@@ -14,11 +14,13 @@
 //! the branch whose amplitude along phi is h; the path then goes on from there.
 
 use super::homotopy::{Homotopy, Point, dot, f_lambda, tangent};
-use super::newton::{Settings, Workspace};
+use super::locate;
+use super::newton::{self, Settings, Workspace};
 use super::path::{correct, index};
 use super::phase::{Phase, generic, kernel};
 use super::system::System;
-use crate::report::SolveReport;
+use crate::report::{SolveReport, Termination};
+use crate::solution::State;
 
 /// Below this |cos| between the path's tangent and the kernel direction the path has no
 /// side: a perfect symmetry (the tangent's component along the kernel is rounding, 1e-16
@@ -44,15 +46,18 @@ pub(super) struct Switched {
     /// condition's start, and the direction the branch left along (which orients its
     /// first tangent). None for a simple bifurcation.
     pub family: Option<(Vec<f64>, Vec<f64>)>,
+    /// The load factor the switch left from: the located bifurcation when the side was
+    /// picked, else the path's point.
+    pub at: f64,
 }
 
 impl Switched {
-    /// Records the switch made at the path's `lambda`: a side picked by symmetry is a
-    /// bifurcation of the path, and says so in `picked`.
-    pub fn record_at(&self, lambda: f64, bifurcations: &mut Vec<f64>, picked: &mut Vec<f64>) {
+    /// Records the switch: a side picked by symmetry is a bifurcation of the path, at the
+    /// load factor where it was located, and says so in `picked`.
+    pub fn record(&self, bifurcations: &mut Vec<f64>, picked: &mut Vec<f64>) {
         if self.picked {
-            bifurcations.push(lambda);
-            picked.push(lambda);
+            bifurcations.push(self.at);
+            picked.push(self.at);
         }
     }
 }
@@ -68,6 +73,7 @@ pub(super) fn switch(
     homotopy: &Homotopy,
     ws: &mut Workspace,
     point: &Point,
+    beyond: (&[State], f64),
     unstable_before: usize,
     settings: &Settings,
     report: &mut SolveReport,
@@ -95,6 +101,28 @@ pub(super) fn switch(
         }
     };
     let side = if symmetric { 1.0 } else { dot(&phi, &point.tx).signum() };
+    // A perfect symmetry: the switch starts from the bifurcation itself, located on the
+    // branch between `point` and `beyond`, where the kernel is the buckling mode (far before
+    // it inverse iteration converges slowly and to a direction that is only near it); the
+    // bifurcation is recorded there.
+    let mut at = point.lambda;
+    let mut from = point.x.clone();
+    let (phi, any_growth) =
+        match symmetric.then(|| locate::critical(system, homotopy, ws, point, beyond, settings, report)) {
+            Some(Some((xc, lc))) => {
+                let (kc, growth) = kernel(ws, generic(n), false, None)?;
+                (at, from) = (lc, xc);
+                (kc, growth)
+            }
+            Some(None) => {
+                homotopy.set(system, point.lambda);
+                if !ws.linearize(system, &point.x, report) {
+                    return None;
+                }
+                (phi, any_growth)
+            }
+            None => (phi, any_growth),
+        };
     // A perfect symmetry whose kernel is two-dimensional: the branch along phi is one
     // member of a family, whose direction there starts from the second kernel direction.
     let family = match symmetric {
@@ -102,10 +130,11 @@ pub(super) fn switch(
         false => None,
     };
     let phi: Vec<f64> = phi.iter().map(|v| v * side).collect();
-    let fl = f_lambda(system, homotopy, &point.x, point.lambda, report)?;
+    homotopy.set(system, at);
+    let fl = f_lambda(system, homotopy, &from, at, report)?;
     let along = Point {
-        x: point.x.clone(),
-        lambda: point.lambda,
+        x: from,
+        lambda: at,
         tx: phi,
         tl: 0.0,
     };
@@ -121,16 +150,61 @@ pub(super) fn switch(
         let Some((next, next_fl)) = tangent(system, homotopy, ws, x, lambda, Some(previous), report) else {
             continue;
         };
-        let unstable = index(system, ws, report);
-        if unstable.is_some_and(|k| k <= unstable_before) {
+        let mut unstable = index(system, ws, report);
+        let mut next = Some((next, next_fl));
+        if unstable.is_some_and(|k| k > unstable_before) {
+            match family {
+                // On a family's member the family's own direction is neutral (an exact zero
+                // of the second variation, at the base), and the guide's error tips it either
+                // way: one direction more is that one.
+                Some(_) if unstable == Some(unstable_before + 1) => unstable = Some(unstable_before),
+                // A guide's error can tip a nearly neutral direction (the plane of a slightly
+                // imperfect round column's bend): the count is confirmed at the point
+                // converged to the solve's tolerance.
+                Some(_) => {}
+                None => {
+                    let (p, _) = next.take()?;
+                    next = converged(system, homotopy, ws, p, settings, report);
+                    unstable = next.as_ref().and_then(|_| index(system, ws, report));
+                }
+            }
+        }
+        if let Some((next, next_fl)) = next
+            && unstable.is_some_and(|k| k <= unstable_before)
+        {
             return Some(Switched {
                 point: next,
                 fl: next_fl,
                 unstable,
                 picked: symmetric,
                 family,
+                at,
             });
         }
     }
     None
+}
+
+/// `point` converged by Newton at its lambda to the solve's tolerance, with its Jacobian
+/// factored and its tangent oriented as before (a parameter's path only: Newton solves
+/// F = 0, not a Newton homotopy's residual). None if Newton does not converge.
+fn converged(
+    system: &mut System,
+    homotopy: &Homotopy,
+    ws: &mut Workspace,
+    point: Point,
+    settings: &Settings,
+    report: &mut SolveReport,
+) -> Option<(Point, Vec<f64>)> {
+    if !matches!(homotopy, Homotopy::Parameter { .. }) {
+        return None;
+    }
+    homotopy.set(system, point.lambda);
+    let mut x = point.x;
+    let (term, _) = newton::run(system, ws, &mut x, settings, report);
+    if term != Termination::Converged || !ws.linearize(system, &x, report) {
+        return None;
+    }
+    let previous = Some((point.tx.as_slice(), point.tl));
+    tangent(system, homotopy, ws, x, point.lambda, previous, report)
 }

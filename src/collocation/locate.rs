@@ -16,9 +16,10 @@
 //! Both leave the Jacobian of `next` (the point past the event) factored, as the path
 //! expects after an accepted step.
 
-use super::homotopy::{Homotopy, Point, tangent};
+use super::homotopy::{Homotopy, Point, dot, tangent};
 use super::newton::{self, Settings, Workspace};
 use super::path::{correct_to, index};
+use super::phase::{generic, kernel};
 use super::system::System;
 use crate::report::{SolveReport, Termination};
 use crate::solution::State;
@@ -123,4 +124,84 @@ pub(super) fn bifurcation(
     }
     restore(system, homotopy, ws, next, report);
     0.5 * (lo + hi)
+}
+
+/// The most secant steps of [`critical`]; each is one Newton solve on the branch, which near
+/// a straight column's bifurcation is linear in lambda and converges in one or two steps.
+const SECANT_STEPS: usize = 8;
+
+/// The signed eigenvalue of least magnitude of the Jacobian of `system` at `x` (factored
+/// there on return): inverse iteration from a generic start gives its eigenvector z and
+/// |J^-1 z| = 1 / |sigma|, the sign that of <z, J^-1 z>. None if a solve fails.
+fn least_eigenvalue(system: &System, ws: &mut Workspace, x: &[State], report: &mut SolveReport) -> Option<f64> {
+    if !ws.linearize(system, x, report) {
+        return None;
+    }
+    let (z, growth) = kernel(ws, generic(ws.residual().len()), false, None)?;
+    let w = ws.solve_again(&z)?;
+    let sign = dot(&z, w).signum();
+    (growth.is_finite() && growth > 0.0).then(|| sign / growth)
+}
+
+/// The bifurcation point crossed between `point` (on the branch before it) and the state
+/// `beyond` at load factor `upper` past it, on `point`'s branch (a symmetric column's
+/// straight states): the root of the least eigenvalue of the Jacobian along the branch, by
+/// the Illinois variant of regula falsi on lambda, each point predicted along `point`'s
+/// tangent and converged by Newton at fixed lambda. Stops when the bracket is [`LOCATED`]
+/// wide or after [`SECANT_STEPS`]: the converged states at the last point and its lambda, or
+/// None if the eigenvalue does not change sign or a Newton solve fails. The factors in `ws`
+/// are those of the returned point.
+pub(super) fn critical(
+    system: &mut System,
+    homotopy: &Homotopy,
+    ws: &mut Workspace,
+    point: &Point,
+    (beyond, upper): (&[State], f64),
+    settings: &Settings,
+    report: &mut SolveReport,
+) -> Option<(Vec<State>, f64)> {
+    if point.tl == 0.0 {
+        return None;
+    }
+    homotopy.set(system, upper);
+    let s_hi = least_eigenvalue(system, ws, beyond, report)?;
+    homotopy.set(system, point.lambda);
+    let s_lo = least_eigenvalue(system, ws, &point.x, report)?;
+    if s_lo.signum() == s_hi.signum() {
+        return None;
+    }
+    let ((mut lo, mut f_lo), (mut hi, mut f_hi)) = ((point.lambda, s_lo), (upper, s_hi));
+    let mut best = None;
+    let mut last_side = 0;
+    let mut x = Vec::with_capacity(point.x.len());
+    for _ in 0..SECANT_STEPS {
+        let m = (lo * f_hi - hi * f_lo) / (f_hi - f_lo);
+        let step: Vec<f64> = point.tx.iter().map(|v| v * (m - point.lambda) / point.tl).collect();
+        system.retract(&point.x, &step, 1.0, &mut x);
+        homotopy.set(system, m);
+        let (term, _) = newton::run(system, ws, &mut x, settings, report);
+        if term != Termination::Converged {
+            return None;
+        }
+        let f = least_eigenvalue(system, ws, &x, report)?;
+        best = Some((x.clone(), m));
+        // Illinois: the end kept twice running has its value halved.
+        if f.signum() == f_lo.signum() {
+            (lo, f_lo) = (m, f);
+            if last_side == -1 {
+                f_hi *= 0.5;
+            }
+            last_side = -1;
+        } else {
+            (hi, f_hi) = (m, f);
+            if last_side == 1 {
+                f_lo *= 0.5;
+            }
+            last_side = 1;
+        }
+        if (hi - lo).abs() <= LOCATED {
+            break;
+        }
+    }
+    best
 }

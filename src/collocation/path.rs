@@ -81,6 +81,18 @@ pub(super) struct End {
 /// then the path crosses a bifurcation point itself.
 const BIFURCATION_STEP: f64 = 1e-3;
 
+/// The count of unstable directions `next` at a point of a family's branch (module
+/// `phase`), given the count `before` at the last point: the family's own direction is
+/// neutral there (an exact zero of the second variation, whose conjugate point lies at the
+/// base), and the error of a guide (converged to 1e-6 only) tips it to either side of the
+/// base, so a change by one is that direction, not a change of stability.
+fn neutral(before: Option<usize>, next: Option<usize>) -> Option<usize> {
+    match (before, next) {
+        (Some(a), Some(b)) if a.abs_diff(b) == 1 => before,
+        _ => next,
+    }
+}
+
 /// Unstable directions at the point whose Jacobian `ws` holds: None when unknown.
 pub(super) fn index(system: &System, ws: &mut Workspace, report: &mut SolveReport) -> Option<usize> {
     if stability::non_conservative(&system.model).is_some() {
@@ -298,11 +310,14 @@ pub(super) fn follow(
             report.termination = term;
             // The landing is a step like any other: if it changes the number of unstable
             // directions it jumped to another branch near a bifurcation (unless it is short).
-            let landed_unstable = if term == Termination::Converged && ws.linearize(system, &landed, report) {
+            let mut landed_unstable = if term == Termination::Converged && ws.linearize(system, &landed, report) {
                 index(system, ws, report)
             } else {
                 None
             };
+            if phase.is_some() {
+                landed_unstable = neutral(unstable, landed_unstable);
+            }
             let jumped = matches!((unstable, landed_unstable), (Some(a), Some(b)) if a != b);
             if term == Termination::Converged && !(jumped && h1 > BIFURCATION_STEP) {
                 if jumped {
@@ -326,9 +341,19 @@ pub(super) fn follow(
             }
             if let (true, Some(a), Some(b)) = (switching, unstable, landed_unstable)
                 && b > a
-                && let Some(mut s) = branch::switch(system, &homotopy, ws, &point, a, settings, report, &mut r)
+                && let Some(mut s) = branch::switch(
+                    system,
+                    &homotopy,
+                    ws,
+                    &point,
+                    (&landed, 1.0),
+                    a,
+                    settings,
+                    report,
+                    &mut r,
+                )
             {
-                s.record_at(point.lambda, &mut bifurcations, &mut picked);
+                s.record(&mut bifurcations, &mut picked);
                 push(&mut record, &s.point, s.unstable, false, report);
                 (phase, family) = hold(system, &homotopy, ws, &mut s, report);
                 (point, fl, unstable) = (s.point, s.fl, s.unstable);
@@ -384,6 +409,9 @@ pub(super) fn follow(
                 };
                 let fold = (next.tl > 0.0) != (point.tl > 0.0);
                 let mut next_unstable = index(system, ws, report);
+                if phase.is_some() {
+                    next_unstable = neutral(unstable, next_unstable);
+                }
                 // A guide is converged to PATH_TOLERANCE only, and its error can tip a nearly
                 // neutral direction (the plane of a slightly imperfect round column's bend,
                 // held by the imperfection alone): a change of the count is confirmed at the
@@ -403,9 +431,19 @@ pub(super) fn follow(
                 {
                     if switching
                         && b > a
-                        && let Some(mut s) = branch::switch(system, &homotopy, ws, &point, a, settings, report, &mut r)
+                        && let Some(mut s) = branch::switch(
+                            system,
+                            &homotopy,
+                            ws,
+                            &point,
+                            (&next.x, lambda),
+                            a,
+                            settings,
+                            report,
+                            &mut r,
+                        )
                     {
-                        s.record_at(point.lambda, &mut bifurcations, &mut picked);
+                        s.record(&mut bifurcations, &mut picked);
                         push(&mut record, &s.point, s.unstable, false, report);
                         (phase, family) = hold(system, &homotopy, ws, &mut s, report);
                         (point, fl, unstable) = (s.point, s.fl, s.unstable);
