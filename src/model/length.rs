@@ -70,7 +70,7 @@ pub(crate) fn reference_length_on(robot: &Robot, breakpoints: &[f64], i: usize) 
     let end = tendon.end(length);
     let key = Geometry::of(robot, breakpoints, i);
     if let Some(key) = &key
-        && let Some(value) = KNOWN.with_borrow(|known| known.iter().find(|(k, _)| k.matches(key)).map(|(_, v)| *v))
+        && let Some(value) = KNOWN.with_borrow(|known| known.iter().find(|(k, _)| k == key).map(|(_, v)| *v))
     {
         return value;
     }
@@ -103,6 +103,7 @@ thread_local! {
 /// Everything a reference length depends on, as bits: the rod length, the tendon's end, the
 /// breakpoints, its routing and the reference strains. None where the routing or the
 /// strains are a user function (two such functions cannot be compared).
+#[derive(PartialEq)]
 struct Geometry {
     numbers: Vec<u64>,
 }
@@ -134,10 +135,6 @@ impl Geometry {
             ReferenceStrains::Varying(_) => return None,
         }
         Some(Geometry { numbers })
-    }
-
-    fn matches(&self, other: &Geometry) -> bool {
-        self.numbers == other.numbers
     }
 }
 
