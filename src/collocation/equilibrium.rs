@@ -356,6 +356,7 @@ pub(crate) fn choose_equilibrium(
                 "the load path could not be followed ({hint}): this is Newton's root from the guess, \
                  not the state the robot reaches when loaded from rest"
             ));
+            report.path = PathTaken::Fallback;
             report.termination = Termination::Converged;
             Ok(x)
         }

@@ -574,22 +574,7 @@ pub(super) fn follow(
             family,
         });
     }
-    // The point can lie outside [0, 1] (a Newton homotopy's path may turn back past its
-    // start): the share of the way is the furthest point reached, and the point itself is
-    // named only when it lies on the way behind it.
-    let back = if (0.0..furthest).contains(&point.lambda) {
-        format!(", turned back to {:.1} %", point.lambda * 100.0)
-    } else {
-        String::new()
-    };
-    Err((
-        format!(
-            "the path stalled after reaching {:.1} % of the way{back}: no equilibrium nearby is continuous \
-             in the parameter there",
-            furthest * 100.0
-        ),
-        worst,
-    ))
+    Err((refine::stalled_hint(furthest, point.lambda), worst))
 }
 
 /// After a switch onto the branch `s`: the phase condition that holds it on its family's

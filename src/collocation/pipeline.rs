@@ -126,7 +126,8 @@ pub(crate) fn solve_impl(
         let system = System::new(model.clone(), mesh.clone());
         // The verdict belongs to this solve's state: `stability_of` evaluates the Jacobian at
         // it unless the workspace's is already there.
-        let exact = report.path != PathTaken::Direct && !report.history.iter().any(|i| i.fresh_jacobian);
+        let direct = matches!(report.path, PathTaken::Direct | PathTaken::Fallback);
+        let exact = !direct && !report.history.iter().any(|i| i.fresh_jacobian);
         let t = Instant::now();
         report.stability = stability_of(&system, &mut c.workspace, &x, exact, &mut report);
         report.timings.stability += t.elapsed();
