@@ -241,6 +241,18 @@ impl Workspace {
         Some(self.verdict(assess))
     }
 
+    /// The verdict already assessed of the Jacobian in the value buffer, when that Jacobian
+    /// belongs to the last iterate ([`Workspace::jacobian_at_iterate`]) and the workspace holds
+    /// factors (as [`super::equilibrium::stability_of`] requires before it reuses a verdict);
+    /// None otherwise.
+    pub(crate) fn held_verdict(&self) -> Option<Stability> {
+        if self.factored && self.jacobian_at_iterate() {
+            self.verdict.clone()
+        } else {
+            None
+        }
+    }
+
     /// Whether the Jacobian in the value buffer belongs to the last iterate: it was evaluated
     /// there, or within Newton's own stopping distance of it (1e-10 in the scaled unknowns,
     /// the iteration error a converged state is allowed), so that a verdict of those values is the
