@@ -218,7 +218,10 @@ pub(crate) fn solve_on_mesh(
         // there (the stability verdict, a path's landing). At a tight tolerance x may become
         // the order-6 solution.
         let phi4 = workspace.residual().to_vec();
-        let c = deferred::estimate(&system, &mut workspace, x, &phi4, options.tolerance, report);
+        // The node rates that residual's evaluation gave, when it was Newton's (not a
+        // Jacobian's): the same values the estimate would evaluate at x.
+        let rates = workspace.residual_rates().map(<[_]>::to_vec);
+        let c = deferred::estimate(&system, &mut workspace, x, &phi4, rates, options.tolerance, report);
         report.timings.estimate += t.elapsed();
         c
     });

@@ -199,10 +199,10 @@ pub(super) fn end_rhs(site: &Site, b: &State, theta1: &Vector3<f64>, rates: &Vec
 }
 
 /// Interval rows: Hermite-Simpson collocation in local coordinates (12 rows) between the
-/// node states `a` and `b`, and the rates (v', u') of eq. 13 at node b, which the next
-/// interval takes as `start_rates` (node rates do not depend on the interval: eq. 13 sees R
-/// only through R^T f_e and R^T l_e, and R_a exp(theta_1) is R_b). Without `start_rates` the
-/// rates at node a are evaluated here.
+/// node states `a` and `b`, and the rates (v', u') of eq. 13 at node a and at node b; the
+/// next interval takes node b's as `start_rates` (node rates do not depend on the interval:
+/// eq. 13 sees R only through R^T f_e and R^T l_e, and R_a exp(theta_1) is R_b). Without
+/// `start_rates` the rates at node a are evaluated here.
 ///
 /// # Errors
 /// A model breakdown at a node or at the midpoint.
@@ -213,7 +213,7 @@ pub fn interval(
     a: &State,
     b: &State,
     start_rates: Option<Vector6<f64>>,
-) -> Result<(Block<f64>, Vector6<f64>)> {
+) -> Result<(Block<f64>, Vector6<f64>, Vector6<f64>)> {
     let h = sites.end.s - sites.start.s;
     let rates0 = match start_rates {
         Some(r) => r,
@@ -225,6 +225,7 @@ pub fn interval(
     let fm = rhs(model, &sites.mid, segment_end, &a.R, &ym)?;
     Ok((
         scale_rows(y1 - y0 - (f0 + fm * 4.0 + f1) * (h / 6.0), model.robot.length()),
+        rates0,
         rates1,
     ))
 }
