@@ -92,6 +92,16 @@ pub(crate) fn reference_length_on(robot: &Robot, breakpoints: &[f64], i: usize) 
     value
 }
 
+/// How many node quadratures a thread keeps ([`NodeQuadrature::kept`]): the meshes of a
+/// solve and of its neighbours, with a few tendon ends each.
+const KEPT_QUADRATURES: usize = 8;
+
+thread_local! {
+    /// Node quadratures built on this thread, oldest first, with their nodes' arc lengths
+    /// and end.
+    static KNOWN_QUADRATURES: RefCell<Vec<(Vec<f64>, f64, NodeQuadrature)>> = const { RefCell::new(Vec::new()) };
+}
+
 /// How many reference lengths a thread keeps ([`reference_length_on`]).
 const KEPT_LENGTHS: usize = 16;
 
@@ -247,6 +257,31 @@ impl NodeQuadrature {
         }
     }
 
+    /// [`NodeQuadrature::new`], kept per thread: the weights depend only on the nodes' arc
+    /// lengths and `end`, so the last few are kept and returned again for bit for bit the
+    /// same `s` and `end` (the solutions of one mesh: a batch of rows, a sweep, repeated
+    /// solves), a copy of the weights instead of the Lagrange weights' divisions.
+    pub(crate) fn kept(s: &[f64], end: f64) -> Self {
+        let same = |(ks, kend, _): &(Vec<f64>, f64, NodeQuadrature)| {
+            kend.to_bits() == end.to_bits()
+                && ks.len() == s.len()
+                && ks.iter().zip(s).all(|(a, b)| a.to_bits() == b.to_bits())
+        };
+        let known = KNOWN_QUADRATURES.with(|known| known.borrow().iter().find(|k| same(k)).map(|(_, _, q)| q.clone()));
+        if let Some(q) = known {
+            return q;
+        }
+        let q = NodeQuadrature::new(s, end);
+        KNOWN_QUADRATURES.with(|known| {
+            let mut known = known.borrow_mut();
+            if known.len() == KEPT_QUADRATURES {
+                known.remove(0);
+            }
+            known.push((s.to_vec(), end, q.clone()));
+        });
+        q
+    }
+
     /// The integral of the node values `f(k)`.
     pub fn integrate(&self, f: impl Fn(usize) -> f64) -> f64 {
         self.weights.iter().map(|&(k, w)| w * f(k)).sum()
@@ -262,6 +297,22 @@ mod tests {
     fn fresh(robot: &Robot, i: usize) -> f64 {
         let robot = robot.clone();
         std::thread::spawn(move || reference_length(&robot, i)).join().unwrap()
+    }
+
+    /// Kept node quadratures are bit for bit the ones built afresh, and a change of a node's
+    /// arc length (by one unit in the last place) or of the end gets its own.
+    #[test]
+    fn kept_node_quadratures_are_those_of_the_same_nodes_only() {
+        let s: Vec<f64> = (0..=16).map(|k| 0.2 * (k as f64 / 16.0).powf(1.3)).collect();
+        let built = NodeQuadrature::new(&s, 0.15);
+        assert_eq!(NodeQuadrature::kept(&s, 0.15), built);
+        assert_eq!(NodeQuadrature::kept(&s, 0.15), built);
+        let mut moved = s.clone();
+        moved[5] = f64::from_bits(moved[5].to_bits() + 1);
+        assert_eq!(NodeQuadrature::kept(&moved, 0.15), NodeQuadrature::new(&moved, 0.15));
+        assert_ne!(NodeQuadrature::kept(&moved, 0.15), built);
+        assert_eq!(NodeQuadrature::kept(&s, 0.2), NodeQuadrature::new(&s, 0.2));
+        assert_ne!(NodeQuadrature::kept(&s, 0.2), built);
     }
 
     #[test]
