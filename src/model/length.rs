@@ -68,10 +68,15 @@ pub(crate) fn reference_length_on(robot: &Robot, breakpoints: &[f64], i: usize) 
     let length = robot.length();
     let tendon = &robot.tendons[i];
     let end = tendon.end(length);
-    let key = Geometry::of(robot, breakpoints, i);
-    if let Some(key) = &key
-        && let Some(value) = KNOWN.with_borrow(|known| known.iter().find(|(k, _)| k == key).map(|(_, v)| *v))
-    {
+    // The key is built in the thread's scratch buffer: a Vec is allocated only for a new
+    // geometry's kept key.
+    let (keyed, known) = KNOWN.with_borrow_mut(|(known, scratch)| {
+        if !Geometry::fill(robot, breakpoints, i, scratch) {
+            return (false, None);
+        }
+        (true, known.iter().find(|(k, _)| k.numbers == *scratch).map(|(_, v)| *v))
+    });
+    if let Some(value) = known {
         return value;
     }
     let value = gauss_points(breakpoints, end, REFERENCE_PANELS)
@@ -81,12 +86,17 @@ pub(crate) fn reference_length_on(robot: &Robot, breakpoints: &[f64], i: usize) 
             weight * speed(&rp, &reference.v_star, &reference.u_star)
         })
         .sum();
-    if let Some(key) = key {
-        KNOWN.with_borrow_mut(|known| {
+    if keyed {
+        KNOWN.with_borrow_mut(|(known, scratch)| {
             if known.len() == KEPT_LENGTHS {
                 known.remove(0);
             }
-            known.push((key, value));
+            known.push((
+                Geometry {
+                    numbers: scratch.clone(),
+                },
+                value,
+            ));
         });
     }
     value
@@ -106,8 +116,9 @@ thread_local! {
 const KEPT_LENGTHS: usize = 16;
 
 thread_local! {
-    /// Reference lengths computed on this thread, oldest first, with their geometry.
-    static KNOWN: RefCell<Vec<(Geometry, f64)>> = const { RefCell::new(Vec::new()) };
+    /// Reference lengths computed on this thread, oldest first, with their geometry; and
+    /// the scratch buffer the key of a lookup is built in.
+    static KNOWN: RefCell<(Vec<(Geometry, f64)>, Vec<u64>)> = const { RefCell::new((Vec::new(), Vec::new())) };
 }
 
 /// Everything a reference length depends on, as bits: the rod length, the tendon's end, the
@@ -119,17 +130,20 @@ struct Geometry {
 }
 
 impl Geometry {
-    fn of(robot: &Robot, breakpoints: &[f64], i: usize) -> Option<Self> {
+    /// Writes the numbers of tendon `i`'s geometry into `numbers` (cleared first); false
+    /// where the routing or the reference strains are a user function.
+    fn fill(robot: &Robot, breakpoints: &[f64], i: usize, numbers: &mut Vec<u64>) -> bool {
         let length = robot.length();
         let tendon = &robot.tendons[i];
-        let mut numbers = vec![length.to_bits(), tendon.end(length).to_bits(), breakpoints.len() as u64];
+        numbers.clear();
+        numbers.extend([length.to_bits(), tendon.end(length).to_bits(), breakpoints.len() as u64]);
         numbers.extend(breakpoints.iter().map(|b| b.to_bits()));
         match tendon.routing {
             Routing::Straight { x, y } => numbers.extend([0, x.to_bits(), y.to_bits()]),
             Routing::Helical { radius, turns, phase } => {
                 numbers.extend([1, radius.to_bits(), turns.to_bits(), phase.to_bits()])
             }
-            Routing::Custom(_) => return None,
+            Routing::Custom(_) => return false,
         }
         match &robot.rod.reference {
             ReferenceStrains::Straight => numbers.push(0),
@@ -142,9 +156,9 @@ impl Geometry {
                 numbers.extend(ends.iter().map(|x| x.to_bits()));
                 numbers.extend(u_star.iter().flat_map(|u| u.iter()).map(|x| x.to_bits()));
             }
-            ReferenceStrains::Varying(_) => return None,
+            ReferenceStrains::Varying(_) => return false,
         }
-        Some(Geometry { numbers })
+        true
     }
 }
 
