@@ -70,11 +70,11 @@ pub(crate) fn reference_length_on(robot: &Robot, breakpoints: &[f64], i: usize) 
     let end = tendon.end(length);
     // The key is built in the thread's scratch buffer: a Vec is allocated only for a new
     // geometry's kept key.
-    let (keyed, known) = KNOWN.with_borrow_mut(|(known, scratch)| {
+    let (keyed, known) = KNOWN.with_borrow_mut(|KnownLengths { kept, scratch }| {
         if !Geometry::fill(robot, breakpoints, i, scratch) {
             return (false, None);
         }
-        (true, known.iter().find(|(k, _)| k.numbers == *scratch).map(|(_, v)| *v))
+        (true, kept.iter().find(|(k, _)| k.numbers == *scratch).map(|(_, v)| *v))
     });
     if let Some(value) = known {
         return value;
@@ -87,11 +87,11 @@ pub(crate) fn reference_length_on(robot: &Robot, breakpoints: &[f64], i: usize) 
         })
         .sum();
     if keyed {
-        KNOWN.with_borrow_mut(|(known, scratch)| {
-            if known.len() == KEPT_LENGTHS {
-                known.remove(0);
+        KNOWN.with_borrow_mut(|KnownLengths { kept, scratch }| {
+            if kept.len() == KEPT_LENGTHS {
+                kept.remove(0);
             }
-            known.push((
+            kept.push((
                 Geometry {
                     numbers: scratch.clone(),
                 },
@@ -116,9 +116,21 @@ thread_local! {
 const KEPT_LENGTHS: usize = 16;
 
 thread_local! {
-    /// Reference lengths computed on this thread, oldest first, with their geometry; and
-    /// the scratch buffer the key of a lookup is built in.
-    static KNOWN: RefCell<(Vec<(Geometry, f64)>, Vec<u64>)> = const { RefCell::new((Vec::new(), Vec::new())) };
+    /// Reference lengths computed on this thread, and the buffer a lookup's key is built in.
+    static KNOWN: RefCell<KnownLengths> = const {
+        RefCell::new(KnownLengths {
+            kept: Vec::new(),
+            scratch: Vec::new(),
+        })
+    };
+}
+
+/// The reference lengths a thread keeps ([`reference_length_on`]).
+struct KnownLengths {
+    /// Reference lengths computed on this thread, oldest first, with their geometry.
+    kept: Vec<(Geometry, f64)>,
+    /// The key of the current lookup ([`Geometry::fill`]), kept to spare an allocation.
+    scratch: Vec<u64>,
 }
 
 /// Everything a reference length depends on, as bits: the rod length, the tendon's end, the
