@@ -56,6 +56,9 @@ const POLISH_BELOW: f64 = 1e-3;
 /// column, whose Jacobian is singular all along it): it has stalled. Healthy paths recover
 /// their step length within a few steps after a turn.
 const CRAWL_STEPS: usize = 40;
+/// Why a Newton homotopy from a warm start was given up when it turned back past lambda = 0.
+const WARM_TURNED_BACK: &str = "the path from the warm start turned back at a fold and returned past the warm start: \
+     the warm start is not on a branch that reaches this robot; solve from rest";
 /// The end of a load path.
 pub(super) struct End {
     /// The converged states at lambda = 1.
@@ -490,6 +493,12 @@ pub(super) fn follow(
                         snapped_from: None,
                         family,
                     });
+                }
+                // A Newton homotopy back past its warm start has turned at a fold: its branch
+                // does not carry the warm start to the robot (docs/stability.md, "Warm starts
+                // that turn back"), and followed further it wanders below lambda = 0.
+                if matches!(homotopy, Homotopy::Newton(_)) && next.lambda < 0.0 {
+                    return Err((WARM_TURNED_BACK.into(), worst));
                 }
                 // The angle between successive tangents bounds the next step.
                 let cos = (dot(&next.tx, &point.tx) / n as f64 + next.tl * point.tl).clamp(-1.0, 1.0);
