@@ -224,9 +224,10 @@ pub(super) fn share(lambda: f64) -> String {
 }
 
 /// The hint of a path that stalled: the furthest share of the way it reached, `furthest`
-/// (in [0, 1]: the path starts at 0), and, if it stopped behind that on the way, the point
-/// `lambda` it turned back to. A Newton homotopy's path may turn back past its start
-/// (lambda < 0, once printed as "-3199.5 % of the way"); such a point is not named.
+/// (the path starts at 0 and ends at 1; a corrector step can carry it past 1 without a
+/// landing there), and, if it stopped behind that on the way, the point `lambda` it turned
+/// back to. A Newton homotopy's path may turn back past its start (lambda < 0, once printed
+/// as "-3199.5 % of the way"); such a point is not named.
 pub(super) fn stalled_hint(furthest: f64, lambda: f64) -> String {
     let reached = share(furthest);
     let back = if (0.0..furthest).contains(&lambda) && share(lambda) != reached {
@@ -234,6 +235,13 @@ pub(super) fn stalled_hint(furthest: f64, lambda: f64) -> String {
     } else {
         String::new()
     };
+    if furthest > 1.0 {
+        // Past the end, a share over 100 % is not progress: say that the end was passed.
+        return format!(
+            "the path went past the end of the way (to {reached}){back} without landing on it: Newton at \
+             the end did not converge cleanly from the path's points"
+        );
+    }
     format!(
         "the path stalled after reaching {reached} of the way{back}: no equilibrium nearby is continuous in the parameter there"
     )
@@ -290,5 +298,12 @@ mod tests {
              is continuous in the parameter there"
         );
         assert!(!stalled_hint(0.506, 0.5059).contains("turned back"));
+        // The payload robot from rest at 1.78 mN went to 101.9 % and was told "stalled after
+        // reaching 101.9 % of the way".
+        let past = stalled_hint(1.019, 0.95);
+        assert!(
+            past.starts_with("the path went past the end of the way (to 101.9 %), turned back to 95.0 % without"),
+            "{past}"
+        );
     }
 }
