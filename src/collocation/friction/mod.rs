@@ -255,7 +255,7 @@ impl<'r> Capstan<'r> {
 /// The error estimate with friction, by deferred correction as in [`estimate`] on the
 /// bordered system: the order-6 residuals of the backbone and capstan rows at the
 /// converged `x` (against the order-4 residual `converged` when the caller has it, else
-/// evaluated), and one bordered solve with Newton's factors and columns, so that the
+/// evaluated), and one bordered solve with Newton's staircase factors, so that the
 /// estimate carries the tension profile's error into the shape's. Returns the correction
 /// and the largest correction of a log tension (the relative error of the tension
 /// profile); `None` without factors or with a singular border.
@@ -264,7 +264,6 @@ impl<'r> Capstan<'r> {
 /// A model breakdown at a stage of the order-6 scheme.
 fn estimate_with_friction(
     border: &mut Capstan,
-    ws: &mut Workspace,
     x: &[State],
     converged: Option<Vec<f64>>,
 ) -> Result<Option<(estimate::Correction, f64)>> {
@@ -300,10 +299,8 @@ fn estimate_with_friction(
             }
         }
     }
-    if !ws.has_factors() {
-        return Ok(None);
-    }
-    if !border.stairs.ready && !border.factor(&ws.values) {
+    // The staircase holds the factors of Newton's last bordered Jacobian.
+    if !border.stairs.ready {
         return Ok(None);
     }
     let mut dx = vec![0.0; n];
@@ -427,7 +424,7 @@ fn refine_with_friction(
         let t = Instant::now();
         // Newton's last residual is the backbone rows' at x.
         let converged = Some(ws.residual.clone());
-        let estimated = estimate_with_friction(&mut border, &mut ws, &x, converged)
+        let estimated = estimate_with_friction(&mut border, &x, converged)
             .ok()
             .flatten();
         report.timings.estimate += t.elapsed();
