@@ -325,7 +325,8 @@ pub(super) fn solve(robot: &Robot, options: &Options, warm: Option<&Solution>, c
     for t in &mut smooth.tendons {
         t.friction = None;
     }
-    let first = pipeline::solve_impl(&smooth, options, warm, cache)?;
+    // Without the final mesh's verdict: the answer with friction reports `unknown`.
+    let first = pipeline::solve_start(&smooth, options, warm, cache)?;
     // The counts and timings of the frictionless solve are part of this one.
     let report = first.report.clone();
     refine_with_friction(robot, options, &first, None, report, start)
