@@ -95,9 +95,9 @@ impl Capstan<'_> {
                 let block = &values[BASE_ENTRIES + k * LINK_ENTRIES..BASE_ENTRIES + (k + 1) * LINK_ENTRIES];
                 for r in 0..NODE {
                     let row = &mut out[r * width..(r + 1) * width];
-                    for c in 0..2 * NODE {
-                        row[column(c)] = block[r * 2 * NODE + c];
-                    }
+                    let (a, b) = block[r * 2 * NODE..(r + 1) * 2 * NODE].split_at(NODE);
+                    row[..NODE].copy_from_slice(a);
+                    row[ck..ck + NODE].copy_from_slice(b);
                     if let Some(rz) = &self.link_z[k] {
                         for l in 0..count {
                             for side in 0..2 {
