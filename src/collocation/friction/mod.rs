@@ -30,7 +30,7 @@ pub(crate) use interval::{Profile, interval, interval_order6};
 use super::newton::{self, Border, Linearization, Point, Settings, Workspace};
 use super::system::System;
 use super::unknowns::{self, NODE, link_row, tip_row};
-use super::{Cache, Options, estimate, pipeline, refine};
+use super::{Cache, Options, estimate, pipeline, refine, workspace};
 use crate::dense::solve_dense;
 use crate::error::{self, Result};
 use crate::mesh::guess::interpolate;
@@ -327,6 +327,11 @@ pub(super) fn solve(robot: &Robot, options: &Options, warm: Option<&Solution>, c
     }
     // Without the final mesh's verdict: the answer with friction reports `unknown`.
     let first = pipeline::solve_start(&smooth, options, warm, cache)?;
+    // Its Newton workspace, on the mesh Newton with friction starts on, serves that Newton
+    // (through the thread's spare workspaces, where it goes back afterwards).
+    if let Some(c) = cache.take() {
+        workspace::keep(c.mesh, c.solver, c.workspace);
+    }
     // The counts and timings of the frictionless solve are part of this one.
     let report = first.report.clone();
     refine_with_friction(robot, options, &first, None, report, start)
@@ -403,7 +408,10 @@ fn refine_with_friction(
             }
         }
         system.friction = Some(profile);
-        let mut ws = Workspace::new(&system, options.linear_solver)?;
+        let mut ws = match workspace::spare(&system.mesh, options.linear_solver) {
+            Some(ws) => ws,
+            None => Workspace::new(&system, options.linear_solver)?,
+        };
         let mut border = Capstan::new(system);
         let (termination, worst) = newton::run_bordered(&mut border, &mut ws, &mut x, &settings, &mut report);
         report.termination = termination;
@@ -431,6 +439,7 @@ fn refine_with_friction(
         report.timings.estimate += t.elapsed();
         border.load(Point::Current);
         let system = border.system;
+        workspace::keep(system.mesh.clone(), options.linear_solver, ws);
         let Some(profile) = system.friction.as_ref() else {
             return Err(error::invalid("tendons", "have no friction", "solve without friction"));
         };

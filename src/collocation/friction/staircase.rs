@@ -243,7 +243,7 @@ fn eliminate(panel: &mut [f64], rows: usize, width: usize, pivots: usize, step: 
 fn eliminate_rows<const W: usize>(panel: &mut [f64], rows: usize, pivots: usize, step: &mut Step) -> bool {
     let (panel, _) = panel[..rows * W].as_chunks_mut::<W>();
     step.swaps.clear();
-    step.factors.clear();
+    // Every multiplier [`replay`] reads is written below: the buffer is only sized.
     step.factors.resize(pivots * rows, 0.0);
     for c in 0..pivots {
         let mut best = c;
@@ -282,7 +282,6 @@ fn eliminate_rows<const W: usize>(panel: &mut [f64], rows: usize, pivots: usize,
 #[inline(always)]
 fn eliminate_any(panel: &mut [f64], rows: usize, width: usize, pivots: usize, step: &mut Step) -> bool {
     step.swaps.clear();
-    step.factors.clear();
     step.factors.resize(pivots * rows, 0.0);
     for c in 0..pivots {
         let mut best = c;
