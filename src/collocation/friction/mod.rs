@@ -433,9 +433,7 @@ fn refine_with_friction(
         let t = Instant::now();
         // Newton's last residual is the backbone rows' at x.
         let converged = Some(ws.residual.clone());
-        let estimated = estimate_with_friction(&mut border, &x, converged)
-            .ok()
-            .flatten();
+        let estimated = estimate_with_friction(&mut border, &x, converged).ok().flatten();
         report.timings.estimate += t.elapsed();
         border.load(Point::Current);
         let system = border.system;
