@@ -252,45 +252,52 @@ pub enum PathTaken {
         /// Euler's load.
         bifurcations: Vec<f64>,
     },
+    /// The load path could not be followed (it stalled, or could not move to a finer mesh),
+    /// and the answer is Newton's root from the guess or warm start, stable or not: not
+    /// necessarily the state the robot reaches when loaded from rest. `SolveReport::notes`
+    /// says where the path stopped.
+    Fallback,
 }
 
 impl PathTaken {
     /// The names of the kinds, as every file and front end writes them.
-    pub const NAMES: [&'static str; 3] = ["direct", "from_warm_start", "load_path"];
+    pub const NAMES: [&'static str; 4] = ["direct", "from_warm_start", "load_path", "fallback"];
 
-    /// The kind's name: `direct`, `from_warm_start` or `load_path`.
+    /// The kind's name: `direct`, `from_warm_start`, `load_path` or `fallback`.
     pub fn name(&self) -> &'static str {
         match self {
             PathTaken::Direct => Self::NAMES[0],
             PathTaken::FromWarmStart { .. } => Self::NAMES[1],
             PathTaken::LoadPath { .. } => Self::NAMES[2],
+            PathTaken::Fallback => Self::NAMES[3],
         }
     }
 
     /// Where the path turned back (load factors, or homotopy parameters from a warm start);
-    /// empty for `Direct`.
+    /// empty for `Direct` and `Fallback`.
     pub fn folds(&self) -> &[f64] {
         match self {
-            PathTaken::Direct => &[],
+            PathTaken::Direct | PathTaken::Fallback => &[],
             PathTaken::FromWarmStart { folds, .. } | PathTaken::LoadPath { folds, .. } => folds,
         }
     }
 
-    /// Where the path crossed a bifurcation; empty for `Direct`.
+    /// Where the path crossed a bifurcation; empty for `Direct` and `Fallback`.
     pub fn bifurcations(&self) -> &[f64] {
         match self {
-            PathTaken::Direct => &[],
+            PathTaken::Direct | PathTaken::Fallback => &[],
             PathTaken::FromWarmStart { bifurcations, .. } | PathTaken::LoadPath { bifurcations, .. } => bifurcations,
         }
     }
 
     /// The path of kind `name` (one of [`PathTaken::NAMES`]) with these folds and
-    /// bifurcations (ignored for `direct`); `None` for another name.
+    /// bifurcations (ignored for `direct` and `fallback`); `None` for another name.
     pub fn from_name(name: &str, folds: Vec<f64>, bifurcations: Vec<f64>) -> Option<PathTaken> {
         match name {
             "direct" => Some(PathTaken::Direct),
             "from_warm_start" => Some(PathTaken::FromWarmStart { folds, bifurcations }),
             "load_path" => Some(PathTaken::LoadPath { folds, bifurcations }),
+            "fallback" => Some(PathTaken::Fallback),
             _ => None,
         }
     }

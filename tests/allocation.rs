@@ -124,7 +124,9 @@ fn whole_solve_allocations_do_not_grow_with_the_mesh() {
     // cold and warm (a Solver's stored factors): the number of allocations is a property of
     // the stages, not of the mesh. Each buffer is allocated whole (its size grows with the
     // mesh, its count does not); an allocation per node or interval would add 96 or more.
-    // Measured: cold 139 -> 151, warm 91 -> 103 allocations.
+    // Measured (2026-12-06): cold 103 -> 104, repeated 73 -> 83, warm 65 -> 75 allocations
+    // (cold 143 -> 152, repeated 130 -> 142, warm 91 -> 103 before the sweeps of the cold
+    // guess reused their buffers and the end of a solve reused the verdict it held).
     let counts = |intervals: usize| {
         let options = tdcr::collocation::Options {
             intervals,

@@ -447,11 +447,12 @@ fn sensitivities_of_a_solution_with_other_tendons_are_bad_input() {
 }
 
 /// Issue 25: shooting exited as bad input ("tendon 0", blaming the routing) on a valid robot
-/// whose straight tendon pulls at 99.9 % of the geometric limit EI / r^2: a trial state of
-/// its iteration folded the tendon's path. The robot is valid (collocation solves it); what
-/// shooting meets there is a breakdown at a visited state, named with the tendon's number.
+/// whose straight tendon pulls at 99.9 % of the geometric limit EI / r^2, then as a breakdown:
+/// its Newton converged, and the optional last step's difference Jacobian perturbed the base
+/// strains far enough to fold tendon 1's path, an error that threw the converged answer away.
+/// It now solves, and agrees with a tight collocation solve.
 #[test]
-fn a_tendon_folding_at_a_visited_state_is_a_breakdown_not_bad_input() {
+fn shooting_solves_a_straight_tendon_at_99_9_percent_of_the_geometric_limit() {
     let mut robot = tdcr::cases::prototype();
     robot.loads = tdcr::Loads::none();
     for t in robot.tendons.iter_mut() {
@@ -461,13 +462,36 @@ fn a_tendon_folding_at_a_visited_state_is_a_breakdown_not_bad_input() {
     // The prototype's tendons run at 8 mm from the backbone.
     robot.tendons[0].set_tension(0.999 * ei / (0.008 * 0.008));
     assert!(robot.validate().is_ok());
+    let shot = tdcr::shooting::solve(&robot, &Default::default()).unwrap_or_else(|e| panic!("{e}"));
+    let options = collocation::Options {
+        tolerance: Some(1e-10),
+        ..Default::default()
+    };
+    let reference = collocation::solve(&robot, &options).unwrap();
+    let gap = (shot.tip_position() - reference.tip_position()).norm();
+    // 1e-9 m: 40 times the reference's tolerance 1e-10 L, room for shooting's integration
+    // error (1e-10 on the scaled state) amplified near the limit; measured 1.7e-11 m.
+    assert!(gap < 1e-9, "shooting's tip is {gap:e} m from collocation's");
+}
+
+/// Issue 25: past where shooting's Newton reaches (99.95 % of the geometric limit) a valid
+/// robot is a solver failure, never bad input: exit 3 in the CLI, and any tendon named
+/// counts from 1.
+#[test]
+fn shooting_that_cannot_reach_the_limit_is_a_solver_failure_not_bad_input() {
+    let mut robot = tdcr::cases::prototype();
+    robot.loads = tdcr::Loads::none();
+    for t in robot.tendons.iter_mut() {
+        t.set_tension(0.0);
+    }
+    let ei = robot.rod.section_at(0.0).section.kbt[0];
+    robot.tendons[0].set_tension(0.9995 * ei / (0.008 * 0.008));
+    assert!(robot.validate().is_ok());
     match tdcr::shooting::solve(&robot, &Default::default()) {
         Ok(_) => {}
-        Err(e @ Error::Breakdown { .. }) => {
-            let message = e.to_string();
-            assert!(message.contains("tendon 1's path tangent vanished"), "{message}");
+        Err(e @ (Error::NotConverged { .. } | Error::Breakdown { .. })) => {
+            assert!(!e.to_string().contains("tendon 0"), "{e}");
         }
         Err(other) => panic!("{other:?}"),
     }
-    assert!(tdcr::collocation::solve(&robot, &Default::default()).is_ok());
 }

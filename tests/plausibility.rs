@@ -241,3 +241,64 @@ fn a_tendon_ending_half_way_reports_half_a_turn() {
     assert_eq!(json["tendons"][4]["turns"], 0.5);
     assert_eq!(json["tendons"][0]["turns"], 0.0);
 }
+
+/// Issue 25: the bend warning said "no equilibrium exists past 1" on robots that then
+/// converge. The prototype's one-turn helix at 1.01 times its limit EI / r^2 solves (its path
+/// winds around the rod, so it keeps a tangent across the backbone), and so does a straight
+/// tendon at 1.2 times its limit on a rod precurved against its bend (u* = -60 1/m: the bend
+/// left is 90 1/m, kappa r = 0.72). The warning stays (the figure is past 1) and says what is
+/// true of each.
+#[test]
+fn the_bend_warning_does_not_deny_equilibria_that_exist() {
+    let mut robot = cases::prototype();
+    robot.loads = tdcr::Loads::none();
+    let ei = robot.rod.section_at(0.0).section.kbt[0];
+    let limit = ei / cases::TENDON_OFFSET.powi(2);
+    robot.tendons[4].set_tension(1.01 * limit);
+    let w = robot.plausibility();
+    assert!(
+        matches!(
+            w[..],
+            [Warning::TendonBend {
+                tendon: 4,
+                winds: true,
+                ..
+            }]
+        ),
+        "{w:?}"
+    );
+    let text = w[0].to_string();
+    assert!(!text.contains("no equilibrium exists"), "{text}");
+    assert!(
+        text.contains("it winds around the rod, so the path need not fold"),
+        "{text}"
+    );
+    assert!(collocation::solve(&robot, &Default::default()).is_ok());
+
+    let mut robot = cases::prototype();
+    robot.loads = tdcr::Loads::none();
+    robot.rod = robot
+        .rod
+        .clone()
+        .with_precurvature(nalgebra::Vector3::new(0.0, -60.0, 0.0));
+    robot.tendons[0].set_tension(1.2 * limit);
+    let w = robot.plausibility();
+    assert!(
+        matches!(
+            w[..],
+            [Warning::TendonBend {
+                tendon: 0,
+                precurved: true,
+                winds: false,
+                ..
+            }]
+        ),
+        "{w:?}"
+    );
+    let text = w[0].to_string();
+    assert!(
+        text.contains("unless loads or the rod's precurvature hold the bend back"),
+        "{text}"
+    );
+    assert!(collocation::solve(&robot, &Default::default()).is_ok());
+}

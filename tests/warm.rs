@@ -195,3 +195,53 @@ fn a_solver_that_converges_by_chord_steps_gives_each_state_its_own_verdict() {
     }
     assert_eq!(verdicts, ["stable", "stable", "unstable", "unstable"]);
 }
+
+/// A property robot (tests/properties.rs's generator, case 57 of its fixed seed) whose
+/// `load_scale` sweep steps from 30/32 to 31/32. Newton from the warm start is damped at
+/// once, and the Newton homotopy from it turns back at a fold (at lambda 0.41) and returns
+/// past the warm start: followed on, it wandered to lambda = -25 for the whole 400-step
+/// budget (1 162 iterations over 408 load steps) before the load path from rest, where a
+/// cold solve takes 43 iterations over 10 load steps. It is now given up below lambda = 0
+/// (docs/stability.md, "Warm starts that turn back").
+#[test]
+fn a_warm_start_whose_homotopy_turns_back_costs_a_few_cold_solves() {
+    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data/warm-homotopy-fold.toml");
+    let text = std::fs::read_to_string(path).unwrap();
+    let robot = tdcr::io::parse(&text, path).unwrap().robot;
+    let options = Options::default();
+    let at = |scale: f64| tdcr::Parameter::LoadScale.applied(&robot, scale).unwrap();
+    let warm = collocation::solve(&at(30.0 / 32.0), &options).unwrap();
+    let cold = collocation::solve(&at(31.0 / 32.0), &options).unwrap();
+    let from = collocation::solve_from(&at(31.0 / 32.0), &options, &warm).unwrap();
+    eprintln!(
+        "cold: {} iterations, {} load steps; warm: {} iterations, {} load steps ({:?})",
+        cold.report.iterations,
+        cold.report.load_steps,
+        from.report.iterations,
+        from.report.load_steps,
+        from.report.path
+    );
+    // The same state: both are the load path's, each within its tolerance (1e-7 L by
+    // default) of the exact one.
+    assert!(
+        tip_gap(&cold, &from) <= 2e-7 * robot.length(),
+        "tips {:?} and {:?}",
+        cold.tip_position(),
+        from.tip_position()
+    );
+    // The warm attempt (to its fold and back to lambda = 0: about 30 short steps, 110
+    // iterations) and then the cold solve's own work (152 iterations over 42 load steps,
+    // measured): a few cold solves, where following the turned-back path took 28 and 41.
+    assert!(
+        from.report.iterations <= 4 * cold.report.iterations,
+        "{} iterations against {} cold",
+        from.report.iterations,
+        cold.report.iterations
+    );
+    assert!(
+        from.report.load_steps <= 5 * cold.report.load_steps,
+        "{} load steps against {} cold",
+        from.report.load_steps,
+        cold.report.load_steps
+    );
+}

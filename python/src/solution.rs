@@ -485,15 +485,17 @@ impl PySolveReport {
     }
 
     /// How the equilibrium was reached: "direct" (Newton from the guess or warm start),
-    /// "from_warm_start" (Newton's residual at the warm start followed to zero) or
-    /// "load_path" (the loads followed from the unloaded robot).
+    /// "from_warm_start" (Newton's residual at the warm start followed to zero),
+    /// "load_path" (the loads followed from the unloaded robot) or "fallback" (the load path
+    /// could not be followed: Newton's root from the guess, stable or not; `notes` says why).
     #[getter]
     fn path(&self) -> &'static str {
         self.report.path.name()
     }
 
     /// Where the path turned back (load factors for "load_path", homotopy parameters for
-    /// "from_warm_start"; empty for "direct"); past a fold the robot snaps through.
+    /// "from_warm_start"; empty for "direct" and "fallback"); past a fold the robot snaps
+    /// through.
     #[getter]
     fn folds(&self) -> Vec<f64> {
         self.report.path.folds().to_vec()

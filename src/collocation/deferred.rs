@@ -56,7 +56,7 @@ const ROUNDING: f64 = 4e-13;
 const CORRECTIONS: usize = 2;
 
 /// The error estimate of the converged order-4 solution `x` on `system` (its residual
-/// `phi4`, the factors in `ws`), and, when `tolerance` (relative to L) is at most
+/// `phi4`, the node rates of eq. 13 there when known, the factors in `ws`), and, when `tolerance` (relative to L) is at most
 /// [`ORDER6_BELOW`] and that estimate misses it, `x` replaced by the order-6 solution with
 /// its order-8 estimate. `None` when no estimate exists (a singular Jacobian, a model
 /// breakdown at a stage). A failed order-6 attempt, or one whose estimate misses the
@@ -68,10 +68,13 @@ pub(crate) fn estimate(
     ws: &mut Workspace,
     x: &mut Vec<State>,
     phi4: &[f64],
+    node_rates: Option<Vec<nalgebra::Vector6<f64>>>,
     tolerance: Option<f64>,
     report: &mut SolveReport,
 ) -> Option<Correction> {
-    let (order4, defect) = estimate::estimate_with(system, ws, x, Some(phi4)).ok().flatten()?;
+    let (order4, defect) = estimate::estimate_with(system, ws, x, Some(phi4), node_rates)
+        .ok()
+        .flatten()?;
     let length = system.model.robot.length();
     let Some(tol) = tolerance.filter(|&tol| {
         tol <= ORDER6_BELOW && system.friction.is_none() && !refine::meets(&order4.estimate, tol, length)
@@ -111,7 +114,7 @@ pub fn corrected(
     }
     let mut phi4 = vec![0.0; system.unknowns()];
     system.residual(x, &mut phi4)?;
-    let Some((_, defect)) = estimate::estimate_with(system, ws, x, Some(&phi4))? else {
+    let Some((_, defect)) = estimate::estimate_with(system, ws, x, Some(&phi4), None)? else {
         return Ok(None);
     };
     Ok(order6(system, ws, x, &phi4, &defect, report)?.map(|(x6, c, moved)| {

@@ -104,6 +104,9 @@ pub(crate) fn stability_of(
     if let Some(reason) = stability::non_conservative(&system.model) {
         return linearized_dynamics(system, ws, x, reason, report);
     }
+    if !exact && let Some(verdict) = ws.held_verdict() {
+        return verdict;
+    }
     let s: Vec<f64> = system.mesh.nodes.iter().map(|n| n.s).collect();
     if exact || !ws.has_factors() {
         if !ws.linearize(system, x, report) {
@@ -119,6 +122,18 @@ pub(crate) fn stability_of(
             });
     }
     ws.verdict(|values| stability::assess(values, &s))
+}
+
+/// The verdict [`stability_of`] would return for the last iterate of `ws` without evaluating
+/// anything, when it is already held: conservative loads (`model`), not `exact`, and the
+/// workspace's verdict belongs to its Jacobian and that Jacobian to the iterate
+/// ([`Workspace::held_verdict`]). The end of a solve asks for the verdict the equilibrium
+/// choice has just computed; this spares it building the mesh's [`System`] again.
+pub(crate) fn held_stability(model: &crate::model::equations::Model, ws: &Workspace, exact: bool) -> Option<Stability> {
+    if exact || stability::non_conservative(model).is_some() {
+        return None;
+    }
+    ws.held_verdict()
 }
 
 /// The verdict of the linearized dynamics ([`dynamics::assess`]) for loads that are not
@@ -356,6 +371,7 @@ pub(crate) fn choose_equilibrium(
                 "the load path could not be followed ({hint}): this is Newton's root from the guess, \
                  not the state the robot reaches when loaded from rest"
             ));
+            report.path = PathTaken::Fallback;
             report.termination = Termination::Converged;
             Ok(x)
         }

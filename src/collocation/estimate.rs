@@ -40,12 +40,14 @@ pub(crate) struct Correction {
 /// # Errors
 /// A model breakdown at a stage of the order-6 scheme.
 pub(crate) fn estimate(system: &System, ws: &mut Workspace, x: &[State]) -> Result<Option<Correction>> {
-    Ok(estimate_with(system, ws, x, None)?.map(|(c, _)| c))
+    Ok(estimate_with(system, ws, x, None, None)?.map(|(c, _)| c))
 }
 
 /// [`estimate`] with the order-4 residual at `x` when the caller has it (Newton's last
-/// residual), saving its evaluation; also returns the right-hand side of the deferred
-/// correction, phi4(x) - phi6(x) (scaled rows), which the order-6 answer solves for
+/// residual), saving its evaluation, and the node rates of eq. 13 at `x` when that residual's
+/// evaluation gave them (`node_rates`: [`System::residual_rates`] at `x`, one per node),
+/// saving theirs; also returns the right-hand side of the deferred correction,
+/// phi4(x) - phi6(x) (scaled rows), which the order-6 answer solves for
 /// ([`super::deferred`]).
 ///
 /// # Errors
@@ -55,12 +57,17 @@ pub(crate) fn estimate_with(
     ws: &mut Workspace,
     x: &[State],
     phi4: Option<&[f64]>,
+    node_rates: Option<Vec<Vector6<f64>>>,
 ) -> Result<Option<(Correction, Vec<f64>)>> {
     let n = system.unknowns();
     let mut rhs = vec![0.0; n];
     let mut local = vec![0.0; x.len() - 1];
-    let mut node_rates = vec![Vector6::zeros(); x.len()];
-    system.order6_residual(x, &mut rhs, &mut local, &mut node_rates)?;
+    let known = node_rates.as_ref().is_some_and(|r| r.len() == x.len());
+    let mut node_rates = match node_rates {
+        Some(r) if known => r,
+        _ => vec![Vector6::zeros(); x.len()],
+    };
+    system.order6_residual_with(x, &mut rhs, &mut local, &mut node_rates, known)?;
     // The difference phi4(x) - phi6(x), not -phi6(x) alone: Newton stops at a small but
     // non-zero phi4(x), whose part J^-1 phi4 is the iteration's error, not the mesh's; it
     // must not make the mesh finer.

@@ -38,6 +38,7 @@ mod constrained;
 mod corrector;
 pub(crate) mod deferred;
 mod dynamics;
+mod ends;
 mod equilibrium;
 mod estimate;
 pub(crate) mod friction;

@@ -195,10 +195,25 @@ pub(crate) fn residual(system: &System, x: &[State], out: &mut [f64], report: &m
     ok
 }
 
-/// The collocation residual at the states `x` and `point`'s border unknowns into `out`, and
-/// the border's rows there; false on a model breakdown.
-fn evaluate<B: Border>(border: &mut B, point: Point, x: &[State], out: &mut [f64], report: &mut SolveReport) -> bool {
-    let ok = border.on(point, |system| residual(system, x, out, report));
+/// The collocation residual at the states `x` and `point`'s border unknowns into `out`, the
+/// node rates of eq. 13 on the way into `rates` ([`System::residual_rates`]; `filled` says
+/// whether they were written), and the border's rows there; false on a model breakdown.
+fn evaluate<B: Border>(
+    border: &mut B,
+    point: Point,
+    x: &[State],
+    (out, rates, filled): (&mut [f64], &mut [nalgebra::Vector6<f64>], &mut bool),
+    report: &mut SolveReport,
+) -> bool {
+    let ok = border.on(point, |system| {
+        let t = Instant::now();
+        let result = system.residual_rates(x, out, rates);
+        report.timings.assembly += t.elapsed();
+        report.evaluations.residual += 1;
+        report.evaluations.equations += system.rate_evaluations();
+        *filled = matches!(result, Ok(true));
+        result.is_ok()
+    });
     border.rows(point, x);
     ok
 }
@@ -208,6 +223,7 @@ fn evaluate<B: Border>(border: &mut B, point: Point, x: &[State], out: &mut [f64
 /// on a model breakdown or a value that is not finite.
 fn jacobian<B: Border>(border: &mut B, x: &[State], ws: &mut Workspace, report: &mut SolveReport) -> bool {
     let t = Instant::now();
+    ws.rates_valid = false;
     let ok = border.on(Point::Current, |system| {
         report.evaluations.equations += system.rate_evaluations();
         system.jacobian(x, &mut ws.residual, &mut ws.values).is_ok()
@@ -284,7 +300,13 @@ pub(crate) fn run_bordered<B: Border>(
         border.rows(Current, x);
         ok
     } else {
-        evaluate(border, Current, x, &mut ws.residual, report)
+        evaluate(
+            border,
+            Current,
+            x,
+            (&mut ws.residual, &mut ws.rates, &mut ws.rates_valid),
+            report,
+        )
     };
     if !ok || !norm(&ws.residual, border.residual(Current)).is_finite() {
         return (Termination::NonFinite, worst(ws, border));
@@ -341,7 +363,13 @@ pub(crate) fn run_bordered<B: Border>(
             let step_norm = max_norm(&ws.step).max(border_step);
             unknowns::retract(x, &ws.step, 1.0, length, &mut ws.trial);
             border.trial(1.0);
-            let ok = evaluate(border, Trial, &ws.trial, &mut ws.trial_residual, report);
+            let ok = evaluate(
+                border,
+                Trial,
+                &ws.trial,
+                (&mut ws.trial_residual, &mut ws.trial_rates, &mut ws.trial_rates_valid),
+                report,
+            );
             let trial_norm = norm(&ws.trial_residual, border.residual(Trial));
             if ok && (trial_norm <= settings.tolerance || trial_norm <= CHORD_CONTRACTION * norm_x) {
                 report.history.push(Iteration {
@@ -361,6 +389,7 @@ pub(crate) fn run_bordered<B: Border>(
                 ws.drift += step_norm;
                 std::mem::swap(x, &mut ws.trial);
                 std::mem::swap(&mut ws.residual, &mut ws.trial_residual);
+                ws.swap_rates();
                 border.accept();
                 continue;
             }
@@ -393,7 +422,13 @@ pub(crate) fn run_bordered<B: Border>(
         loop {
             unknowns::retract(x, &ws.step, alpha, length, &mut ws.trial);
             border.trial(alpha);
-            let ok = evaluate(border, Trial, &ws.trial, &mut ws.trial_residual, report);
+            let ok = evaluate(
+                border,
+                Trial,
+                &ws.trial,
+                (&mut ws.trial_residual, &mut ws.trial_rates, &mut ws.trial_rates_valid),
+                report,
+            );
             let phi_trial = merit(&ws.trial_residual, border.residual(Trial));
             // Armijo on 0.5|F|^2, whose slope along the Newton step is -|F|^2 = -2 phi; a
             // trial already within tolerance is accepted (at rounding level phi cannot fall).
@@ -449,6 +484,7 @@ pub(crate) fn run_bordered<B: Border>(
         }
         std::mem::swap(x, &mut ws.trial);
         std::mem::swap(&mut ws.residual, &mut ws.trial_residual);
+        ws.swap_rates();
         border.accept();
         ws.drift = alpha * step_norm;
         last_fresh = true;

@@ -56,6 +56,9 @@ const POLISH_BELOW: f64 = 1e-3;
 /// column, whose Jacobian is singular all along it): it has stalled. Healthy paths recover
 /// their step length within a few steps after a turn.
 const CRAWL_STEPS: usize = 40;
+/// Why a Newton homotopy from a warm start was given up when it turned back past lambda = 0.
+const WARM_TURNED_BACK: &str = "the path from the warm start turned back at a fold and returned past the warm start: \
+     the warm start is not on a branch that reaches this robot; solve from rest";
 /// The end of a load path.
 pub(super) struct End {
     /// The converged states at lambda = 1.
@@ -491,6 +494,12 @@ pub(super) fn follow(
                         family,
                     });
                 }
+                // A Newton homotopy back past its warm start has turned at a fold: its branch
+                // does not carry the warm start to the robot (docs/stability.md, "Warm starts
+                // that turn back"), and followed further it wanders below lambda = 0.
+                if matches!(homotopy, Homotopy::Newton(_)) && next.lambda < 0.0 {
+                    return Err((WARM_TURNED_BACK.into(), worst));
+                }
                 // The angle between successive tangents bounds the next step.
                 let cos = (dot(&next.tx, &point.tx) / n as f64 + next.tl * point.tl).clamp(-1.0, 1.0);
                 if h > POLISH_BELOW {
@@ -574,22 +583,7 @@ pub(super) fn follow(
             family,
         });
     }
-    // The point can lie outside [0, 1] (a Newton homotopy's path may turn back past its
-    // start): the share of the way is the furthest point reached, and the point itself is
-    // named only when it lies on the way behind it.
-    let back = if (0.0..furthest).contains(&point.lambda) {
-        format!(", turned back to {:.1} %", point.lambda * 100.0)
-    } else {
-        String::new()
-    };
-    Err((
-        format!(
-            "the path stalled after reaching {:.1} % of the way{back}: no equilibrium nearby is continuous \
-             in the parameter there",
-            furthest * 100.0
-        ),
-        worst,
-    ))
+    Err((refine::stalled_hint(furthest, point.lambda), worst))
 }
 
 /// After a switch onto the branch `s`: the phase condition that holds it on its family's

@@ -3,7 +3,7 @@
 //! the stability verdict, and the [`Solution`] built from the node states.
 
 use super::deferred;
-use super::equilibrium::{Choose, better_start, choose_equilibrium, near_start, stability_of};
+use super::equilibrium::{Choose, better_start, choose_equilibrium, held_stability, near_start, stability_of};
 use super::estimate;
 use super::newton::{self, Settings, Workspace};
 use super::options::Options;
@@ -159,12 +159,19 @@ fn solve_tensions(
     report.nonzeros = unknowns::nonzeros(&mesh);
     record_estimate(&mut report, correction.as_ref(), options, robot.length());
     if let Some(c) = cache.as_mut().filter(|_| verdict) {
-        let system = System::new(model.clone(), mesh.clone());
         // The verdict belongs to this solve's state: `stability_of` evaluates the Jacobian at
-        // it unless the workspace's is already there.
-        let exact = report.path != PathTaken::Direct && !report.history.iter().any(|i| i.fresh_jacobian);
+        // it unless the workspace's is already there (and its verdict, when assessed, is
+        // taken without building the system again).
+        let direct = matches!(report.path, PathTaken::Direct | PathTaken::Fallback);
+        let exact = !direct && !report.history.iter().any(|i| i.fresh_jacobian);
         let t = Instant::now();
-        report.stability = stability_of(&system, &mut c.workspace, &x, exact, &mut report);
+        report.stability = match held_stability(&model, &c.workspace, exact) {
+            Some(verdict) => verdict,
+            None => {
+                let system = System::new(model.clone(), mesh.clone());
+                stability_of(&system, &mut c.workspace, &x, exact, &mut report)
+            }
+        };
         report.timings.stability += t.elapsed();
     }
     report.timings.total = start.elapsed();
@@ -248,7 +255,10 @@ pub(crate) fn solve_on_mesh(
         // there (the stability verdict, a path's landing). At a tight tolerance x may become
         // the order-6 solution.
         let phi4 = workspace.residual().to_vec();
-        let c = deferred::estimate(&system, &mut workspace, x, &phi4, options.tolerance, report);
+        // The node rates that residual's evaluation gave, when it was Newton's (not a
+        // Jacobian's): the same values the estimate would evaluate at x.
+        let rates = workspace.residual_rates().map(<[_]>::to_vec);
+        let c = deferred::estimate(&system, &mut workspace, x, &phi4, rates, options.tolerance, report);
         report.timings.estimate += t.elapsed();
         c
     });

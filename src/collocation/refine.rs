@@ -206,8 +206,36 @@ fn equidistributed(robot: &Robot, mesh: &Mesh, local: &[f64], exponent: f64, tar
 /// The hint of a load path that could not move to a finer mesh at `lambda`.
 pub(super) fn remesh_hint(lambda: f64) -> String {
     format!(
-        "the load path could not move to a finer mesh at {:.1} % of the load",
-        lambda * 100.0
+        "the load path could not move to a finer mesh at {} of the load",
+        share(lambda)
+    )
+}
+
+/// A share `lambda` of a path's way as a percentage with one decimal, or with as many more
+/// (up to 6) as it takes not to round a point short of the end up to `100.0 %` (the solve
+/// at 99.95 % of the geometric limit stalls at 99.96 % of the way).
+pub(super) fn share(lambda: f64) -> String {
+    let percent = 100.0 * lambda;
+    let mut decimals = 1;
+    while decimals < 6 && percent < 100.0 && format!("{percent:.decimals$}") == format!("{:.decimals$}", 100.0) {
+        decimals += 1;
+    }
+    format!("{percent:.decimals$} %")
+}
+
+/// The hint of a path that stalled: the furthest share of the way it reached, `furthest`
+/// (in [0, 1]: the path starts at 0), and, if it stopped behind that on the way, the point
+/// `lambda` it turned back to. A Newton homotopy's path may turn back past its start
+/// (lambda < 0, once printed as "-3199.5 % of the way"); such a point is not named.
+pub(super) fn stalled_hint(furthest: f64, lambda: f64) -> String {
+    let reached = share(furthest);
+    let back = if (0.0..furthest).contains(&lambda) && share(lambda) != reached {
+        format!(", turned back to {}", share(lambda))
+    } else {
+        String::new()
+    };
+    format!(
+        "the path stalled after reaching {reached} of the way{back}: no equilibrium nearby is continuous in the parameter there"
     )
 }
 
@@ -238,4 +266,29 @@ pub(super) fn remesh(
         return None;
     }
     tangent(system, homotopy, ws, x, point.lambda, Some((&[], point.tl)), report)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Issue 25: a stalled path's percentages lie in [0, 100] and never round a point short
+    /// of the end up to 100.0 %, nor name a turning point equal to the furthest.
+    #[test]
+    fn a_stalled_path_says_shares_of_its_way() {
+        assert_eq!(share(0.5), "50.0 %");
+        assert_eq!(share(0.9996), "99.96 %");
+        assert_eq!(share(1.0), "100.0 %");
+        let text = stalled_hint(0.9996, -31.995);
+        assert!(
+            text.starts_with("the path stalled after reaching 99.96 % of the way:"),
+            "{text}"
+        );
+        assert_eq!(
+            stalled_hint(0.8, 0.5),
+            "the path stalled after reaching 80.0 % of the way, turned back to 50.0 %: no equilibrium nearby \
+             is continuous in the parameter there"
+        );
+        assert!(!stalled_hint(0.506, 0.5059).contains("turned back"));
+    }
 }

@@ -23,6 +23,7 @@
 //! ```
 #![allow(non_snake_case)]
 
+pub(super) use super::ends::EndColumns;
 use super::unknowns::{P, THETA, U, V};
 use crate::error::Result;
 use crate::model::equations::{Model, Site, lift, lift_m};
@@ -199,10 +200,10 @@ pub(super) fn end_rhs(site: &Site, b: &State, theta1: &Vector3<f64>, rates: &Vec
 }
 
 /// Interval rows: Hermite-Simpson collocation in local coordinates (12 rows) between the
-/// node states `a` and `b`, and the rates (v', u') of eq. 13 at node b, which the next
-/// interval takes as `start_rates` (node rates do not depend on the interval: eq. 13 sees R
-/// only through R^T f_e and R^T l_e, and R_a exp(theta_1) is R_b). Without `start_rates` the
-/// rates at node a are evaluated here.
+/// node states `a` and `b`, and the rates (v', u') of eq. 13 at node a and at node b; the
+/// next interval takes node b's as `start_rates` (node rates do not depend on the interval:
+/// eq. 13 sees R only through R^T f_e and R^T l_e, and R_a exp(theta_1) is R_b). Without
+/// `start_rates` the rates at node a are evaluated here.
 ///
 /// # Errors
 /// A model breakdown at a node or at the midpoint.
@@ -213,7 +214,7 @@ pub fn interval(
     a: &State,
     b: &State,
     start_rates: Option<Vector6<f64>>,
-) -> Result<(Block<f64>, Vector6<f64>)> {
+) -> Result<(Block<f64>, Vector6<f64>, Vector6<f64>)> {
     let h = sites.end.s - sites.start.s;
     let rates0 = match start_rates {
         Some(r) => r,
@@ -225,6 +226,7 @@ pub fn interval(
     let fm = rhs(model, &sites.mid, segment_end, &a.R, &ym)?;
     Ok((
         scale_rows(y1 - y0 - (f0 + fm * 4.0 + f1) * (h / 6.0), model.robot.length()),
+        rates0,
         rates1,
     ))
 }
@@ -462,98 +464,4 @@ pub fn interval_jacobian(
     frame += pm.f_frame;
     ends.write(&dFm, h, length, jac);
     Ok((residual, lin1))
-}
-
-/// The columns (theta_a, v_a, u_a, theta_b, v_b, u_b) of the scaled unknowns (p + L dp,
-/// R exp(dtheta), v + dv, u + du / L) in an interval's end points y_0, y_1 and in F_0, F_1,
-/// from the end points' linearizations: the chain rule of [`interval_jacobian`], shared
-/// with the friction intervals (collocation/friction).
-pub(super) struct EndColumns {
-    pub(super) Y0: SMatrix<f64, 12, 18>,
-    pub(super) Y1: SMatrix<f64, 12, 18>,
-    pub(super) dF0: SMatrix<f64, 12, 18>,
-    pub(super) dF1: SMatrix<f64, 12, 18>,
-}
-
-impl EndColumns {
-    /// The columns from the end points' linearizations `p0`, `p1` and theta_1.
-    #[inline(always)]
-    pub(super) fn new(p0: &PointLinearization, p1: &PointLinearization, theta1: &Vector3<f64>, length: f64) -> Self {
-        // Built in place, field by field (separate locals moved into the struct cost four
-        // copies of 1.7 kB per interval).
-        let mut ends = EndColumns {
-            Y0: SMatrix::zeros(),
-            Y1: SMatrix::zeros(),
-            dF0: SMatrix::zeros(),
-            dF1: SMatrix::zeros(),
-        };
-        for i in 0..3 {
-            ends.Y0[(6 + i, 3 + i)] = 1.0;
-            ends.Y0[(9 + i, 6 + i)] = 1.0 / length;
-            ends.Y1[(6 + i, 12 + i)] = 1.0;
-            ends.Y1[(9 + i, 15 + i)] = 1.0 / length;
-        }
-        // theta_1 = log(exp(-d_a) Q exp(d_b)): d/d d_b = J_r^-1, d/d d_a = -J_r^-1 exp(theta_1)^T
-        let Jri1 = so3::right_jacobian_inv(theta1);
-        let dtheta1_da = -Jri1 * so3::exp(theta1).transpose();
-        ends.Y1.fixed_view_mut::<3, 3>(3, 0).copy_from(&dtheta1_da);
-        ends.Y1.fixed_view_mut::<3, 3>(3, 9).copy_from(&Jri1);
-        // The frame R_k = R_a exp(d_a) enters every F through the theta_a columns.
-        let dF0 = &mut ends.dF0;
-        dF0.fixed_columns_mut::<3>(0).copy_from(&p0.f_frame);
-        dF0.fixed_columns_mut::<3>(3).copy_from(&p0.f_y.fixed_columns::<3>(6));
-        dF0.fixed_columns_mut::<3>(6).copy_from(&p0.f_y.fixed_columns::<3>(9));
-        dF0.fixed_columns_mut::<3>(6).scale_mut(1.0 / length);
-        let dF1 = &mut ends.dF1;
-        let f1_theta = p1.f_y.fixed_columns::<3>(3);
-        dF1.fixed_columns_mut::<3>(0)
-            .copy_from(&(f1_theta * dtheta1_da + p1.f_frame));
-        dF1.fixed_columns_mut::<3>(9).copy_from(&(f1_theta * Jri1));
-        dF1.fixed_columns_mut::<3>(12).copy_from(&p1.f_y.fixed_columns::<3>(6));
-        dF1.fixed_columns_mut::<3>(15).copy_from(&p1.f_y.fixed_columns::<3>(9));
-        dF1.fixed_columns_mut::<3>(15).scale_mut(1.0 / length);
-        ends
-    }
-
-    /// The columns of the midpoint y_m = (y_0 + y_1) / 2 + h/8 (F_0 - F_1), rows theta, v, u
-    /// (the p rows are not needed: F does not depend on p). Entry by entry, without the
-    /// temporaries of matrix expressions.
-    #[inline(always)]
-    pub(super) fn midpoint(&self, h: f64) -> SMatrix<f64, 9, 18> {
-        let (Y0, Y1, dF0, dF1) = (&self.Y0, &self.Y1, &self.dF0, &self.dF1);
-        let c = h / 8.0;
-        SMatrix::from_fn(|i, j| (Y0[(3 + i, j)] + Y1[(3 + i, j)]) * 0.5 + (dF0[(3 + i, j)] - dF1[(3 + i, j)]) * c)
-    }
-
-    /// Writes J = Y1 - Y0 - (dF0 + 4 dFm + dF1) h / 6 on the 18 columns, given the
-    /// midpoint's columns `dFm`, straight into the row-major 12 x 24 block `jac` with the
-    /// row scaling of the residual (p rows / L, u' rows * L); the p columns hold
-    /// L (dp_b - dp_a) / L.
-    #[inline(always)]
-    pub(super) fn write(&self, dFm: &SMatrix<f64, 12, 18>, h: f64, length: f64, jac: &mut [f64]) {
-        let (Y0, Y1, dF0, dF1) = (&self.Y0, &self.Y1, &self.dF0, &self.dF1);
-        debug_assert_eq!(jac.len(), 12 * 24);
-        let c = h / 6.0;
-        let scale = |i: usize| match i {
-            0..3 => 1.0 / length,
-            9.. => length,
-            _ => 1.0,
-        };
-        for (i, row) in jac.chunks_exact_mut(24).enumerate() {
-            row[..3].fill(0.0);
-            row[12..15].fill(0.0);
-            if i < 3 {
-                row[i] = -1.0;
-                row[12 + i] = 1.0;
-            }
-        }
-        // Column by column: the inputs are column-major, so each column is read contiguously.
-        for j in 0..18 {
-            let column = if j < 9 { 3 + j } else { 6 + j };
-            let (y1, y0, f0, fm, f1) = (Y1.column(j), Y0.column(j), dF0.column(j), dFm.column(j), dF1.column(j));
-            for i in 0..12 {
-                jac[24 * i + column] = scale(i) * (y1[i] - y0[i] - c * (f0[i] + 4.0 * fm[i] + f1[i]));
-            }
-        }
-    }
 }

@@ -66,8 +66,7 @@ pub fn non_conservative(model: &Model) -> Option<String> {
     }
     // The distributed moment is sampled: a field that vanishes at the ends and midpoints of
     // every interval of a 64-interval grid is taken as absent.
-    let l = robot.length();
-    if (0..=128).any(|i| loads.distributed_moment.at(l * i as f64 / 128.0) != nalgebra::Vector3::zeros()) {
+    if !loads.distributed_moment.vanishes_on(robot.length()) {
         return Some("the distributed moment is a dead moment, which is not conservative in 3D".into());
     }
     None

@@ -147,8 +147,28 @@ impl<'a> System<'a> {
             });
         }
         self.rows(x, out, |_, sites, seg, a, b, start| {
-            residual::interval(&self.model, sites, seg, a, b, start)
+            residual::interval(&self.model, sites, seg, a, b, start).map(|(r, _, end)| (r, end))
         })
+    }
+
+    /// [`System::residual`], and the rates (v', u') of eq. 13 its intervals evaluated at
+    /// their nodes into `rates` (one per node; a node between two jumps is left as it was):
+    /// the values [`System::order6_residual_with`] evaluates at the same states, kept so that
+    /// the error estimate at a converged state need not evaluate them again. Returns whether
+    /// `rates` were written: not for tendons with friction, whose intervals do not give them.
+    ///
+    /// # Errors
+    /// A model breakdown at a visited state.
+    pub(crate) fn residual_rates(&self, x: &[State], out: &mut [f64], rates: &mut [Vector6<f64>]) -> Result<bool> {
+        if self.friction.is_some() {
+            return self.residual(x, out).map(|()| false);
+        }
+        self.rows(x, out, |k, sites, seg, a, b, start| {
+            let (r, start, end) = residual::interval(&self.model, sites, seg, a, b, start)?;
+            (rates[k], rates[k + 1]) = (start, end);
+            Ok((r, end))
+        })?;
+        Ok(true)
     }
 
     /// The residual of the order-6 scheme at the states `x` (converged for the order-4
@@ -166,6 +186,23 @@ impl<'a> System<'a> {
         local: &mut [f64],
         rates: &mut [Vector6<f64>],
     ) -> Result<()> {
+        self.order6_residual_with(x, out, local, rates, false)
+    }
+
+    /// [`System::order6_residual`]; when `known`, `rates` already hold the node rates at `x`
+    /// ([`System::residual_rates`] at the same states and inputs, bit for bit the values this
+    /// would evaluate) and intervals read them instead of evaluating eq. 13 at their nodes.
+    ///
+    /// # Errors
+    /// A model breakdown at a visited state.
+    pub(crate) fn order6_residual_with(
+        &self,
+        x: &[State],
+        out: &mut [f64],
+        local: &mut [f64],
+        rates: &mut [Vector6<f64>],
+        known: bool,
+    ) -> Result<()> {
         local.fill(0.0);
         if let Some(profile) = &self.friction {
             let length = self.model.robot.length();
@@ -178,7 +215,11 @@ impl<'a> System<'a> {
             });
         }
         self.rows(x, out, |k, sites, seg, a, b, start| {
-            let (start, end) = self.end_rates(sites, seg, a, b, start)?;
+            let (start, end) = if known {
+                (rates[k], rates[k + 1])
+            } else {
+                self.end_rates(sites, seg, a, b, start)?
+            };
             (rates[k], rates[k + 1]) = (start, end);
             let quarters = self.quarters(sites);
             let r = residual::interval_order6(&self.model, sites, &quarters, seg, a, b, &start, &end)?;

@@ -10,6 +10,7 @@ use super::unknowns::nonzeros;
 use crate::mesh::Mesh;
 use crate::report::{SolveReport, Stability};
 use crate::solution::State;
+use nalgebra::Vector6;
 use std::cell::RefCell;
 use std::time::Instant;
 
@@ -65,6 +66,8 @@ pub(crate) fn spare(mesh: &Mesh, solver: LinearSolver) -> Option<Workspace> {
         workspace.drift = f64::INFINITY;
         workspace.unfactored = false;
         workspace.dynamics = None;
+        workspace.rates_valid = false;
+        workspace.trial_rates_valid = false;
         workspace.trial.clear();
         Some(workspace)
     })
@@ -82,6 +85,15 @@ pub struct Workspace {
     pub(super) rhs: Vec<f64>,
     pub(super) step: Vec<f64>,
     pub(super) trial: Vec<State>,
+    /// The rates (v', u') of eq. 13 at the nodes, evaluated with `residual` when
+    /// `rates_valid` ([`System::residual_rates`]); `trial_rates` go with `trial_residual`.
+    pub(super) rates: Vec<Vector6<f64>>,
+    pub(super) trial_rates: Vec<Vector6<f64>>,
+    /// Whether `rates` belong to `residual` (written with it by the same evaluation); every
+    /// other write of `residual` clears it.
+    pub(super) rates_valid: bool,
+    /// Whether `trial_rates` belong to `trial_residual`.
+    pub(super) trial_rates_valid: bool,
     /// Whether the linear solver holds the factors of a successful solve.
     pub(super) factored: bool,
     /// The stability verdict of the Jacobian in `values`, once assessed (cleared whenever
@@ -116,6 +128,10 @@ impl Workspace {
             rhs: vec![0.0; n],
             step: vec![0.0; n],
             trial: Vec::with_capacity(system.mesh.nodes.len()),
+            rates: vec![Vector6::zeros(); system.mesh.nodes.len()],
+            trial_rates: vec![Vector6::zeros(); system.mesh.nodes.len()],
+            rates_valid: false,
+            trial_rates_valid: false,
             factored: false,
             verdict: None,
             drift: f64::INFINITY,
@@ -178,6 +194,7 @@ impl Workspace {
     /// matrix. None for a zero pivot or a non-finite result.
     pub fn solve_linear(&mut self, values: &[f64], rhs: &[f64]) -> Option<&[f64]> {
         self.values.copy_from_slice(values);
+        self.rates_valid = false;
         for (r, f) in self.residual.iter_mut().zip(rhs) {
             *r = -f;
         }
@@ -193,6 +210,7 @@ impl Workspace {
     /// [`Workspace::jacobian`], and [`Workspace::solve_again`] solves with its factors.
     pub fn linearize(&mut self, system: &System, x: &[State], report: &mut SolveReport) -> bool {
         let t = Instant::now();
+        self.rates_valid = false;
         let ok = system.jacobian(x, &mut self.residual, &mut self.values).is_ok();
         report.timings.assembly += t.elapsed();
         report.evaluations.jacobian += 1;
@@ -204,6 +222,20 @@ impl Workspace {
     /// The residual of the last [`Workspace::linearize`] or Newton run (its final iterate).
     pub fn residual(&self) -> &[f64] {
         &self.residual
+    }
+
+    /// Makes the trial point's node rates (and whether they are valid) the current ones,
+    /// with the residuals they belong to (Newton accepting a step).
+    pub(super) fn swap_rates(&mut self) {
+        std::mem::swap(&mut self.rates, &mut self.trial_rates);
+        std::mem::swap(&mut self.rates_valid, &mut self.trial_rates_valid);
+    }
+
+    /// The rates (v', u') of eq. 13 at the nodes that the evaluation of
+    /// [`Workspace::residual`] gave ([`System::residual_rates`]), when it was such an
+    /// evaluation (Newton's residual at its iterate; not a Jacobian's), else None.
+    pub(crate) fn residual_rates(&self) -> Option<&[Vector6<f64>]> {
+        self.rates_valid.then_some(&self.rates[..])
     }
 
     /// The Jacobian values of the last evaluation, in
@@ -251,6 +283,18 @@ impl Workspace {
         Some(self.verdict(assess))
     }
 
+    /// The verdict already assessed of the Jacobian in the value buffer, when that Jacobian
+    /// belongs to the last iterate ([`Workspace::jacobian_at_iterate`]) and the workspace holds
+    /// factors (as [`super::equilibrium::stability_of`] requires before it reuses a verdict);
+    /// None otherwise.
+    pub(crate) fn held_verdict(&self) -> Option<Stability> {
+        if self.factored && self.jacobian_at_iterate() {
+            self.verdict.clone()
+        } else {
+            None
+        }
+    }
+
     /// Whether the Jacobian in the value buffer belongs to the last iterate: it was evaluated
     /// there, or within Newton's own stopping distance of it (1e-10 in the scaled unknowns,
     /// the iteration error a converged state is allowed), so that a verdict of those values is the
@@ -280,6 +324,7 @@ impl Workspace {
         }
         let verdict = self.verdict.take();
         self.residual.fill(0.0);
+        self.rates_valid = false;
         let mut report = SolveReport::new(crate::report::Method::Collocation);
         let ok = self.solve(&mut report);
         self.verdict = verdict;
@@ -319,6 +364,7 @@ impl Workspace {
     pub fn factor(&mut self, values: &[f64]) -> bool {
         self.values.copy_from_slice(values);
         self.residual.fill(0.0);
+        self.rates_valid = false;
         let mut report = SolveReport::new(crate::report::Method::Collocation);
         self.drift = f64::INFINITY;
         self.solve(&mut report)

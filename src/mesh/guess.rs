@@ -31,9 +31,21 @@ fn integrate_poses(
     nodes: &[MeshNode],
     strains: &[(Vector3<f64>, Vector3<f64>)],
 ) -> Vec<(Vector3<f64>, Matrix3<f64>)> {
+    let mut out = Vec::with_capacity(nodes.len());
+    integrate_poses_into(model, nodes, strains, &mut out);
+    out
+}
+
+/// [`integrate_poses`] into `out` (cleared first), whose buffer a caller reuses.
+fn integrate_poses_into(
+    model: &Model,
+    nodes: &[MeshNode],
+    strains: &[(Vector3<f64>, Vector3<f64>)],
+    out: &mut Vec<(Vector3<f64>, Matrix3<f64>)>,
+) {
     let mut p = model.base_position();
     let mut R = model.robot.base_rotation;
-    let mut out = Vec::with_capacity(nodes.len());
+    out.clear();
     out.push((p, R));
     for k in 0..nodes.len() - 1 {
         let h = nodes[k + 1].s - nodes[k].s;
@@ -45,7 +57,6 @@ fn integrate_poses(
         }
         out.push((p, R));
     }
-    out
 }
 
 /// Where Newton starts when no previous solution is given.
@@ -146,20 +157,22 @@ pub fn rigid_estimate(model: &Model, nodes: &[MeshNode]) -> Vec<State> {
     let mut shape = integrate_poses(model, nodes, &strains);
     let mut last_change = f64::INFINITY;
     let mut relaxation = RELAXATION;
-    let mut last_step: Option<Vec<f64>> = None;
+    // The sweeps' buffers, allocated once: the next strains, the distal wrenches, the step
+    // and the one before it (valid after the first sweep).
+    let mut next = Vec::with_capacity(nodes.len());
+    let mut wrench = Vec::with_capacity(nodes.len());
+    let (mut step, mut last_step) = (Vec::with_capacity(6 * nodes.len()), Vec::with_capacity(6 * nodes.len()));
+    let mut stepped = false;
     // The nodes' sites do not depend on the shape: evaluated once, not three times a sweep.
     let sites: Vec<Site> = nodes.iter().map(|n| model.site_on(n.s, n.segment_end)).collect();
     for _ in 0..MAX_SWEEPS {
-        let next = sweep(model, nodes, &sites, &shape, &strains);
+        sweep(model, nodes, &sites, &shape, &strains, &mut wrench, &mut next);
         // The fixed-point step, flattened (v then u L per node, so all are comparable).
-        let step: Vec<f64> = next
-            .iter()
-            .zip(&strains)
-            .flat_map(|(a, b)| {
-                let (dv, du) = (a.0 - b.0, (a.1 - b.1) * length);
-                [dv[0], dv[1], dv[2], du[0], du[1], du[2]]
-            })
-            .collect();
+        step.clear();
+        step.extend(next.iter().zip(&strains).flat_map(|(a, b)| {
+            let (dv, du) = (a.0 - b.0, (a.1 - b.1) * length);
+            [dv[0], dv[1], dv[2], du[0], du[1], du[2]]
+        }));
         let change = step.iter().fold(0.0f64, |m, x| m.max(x.abs()));
         if !(change < last_change || last_change.is_infinite()) || !change.is_finite() {
             break;
@@ -167,7 +180,8 @@ pub fn rigid_estimate(model: &Model, nodes: &[MeshNode]) -> Vec<State> {
         // Aitken's dynamic relaxation (Irons & Tuck): the plain fixed point can cycle when
         // a load's moment arm swings with the shape it bends (a tendon and a tip load
         // pulling the same way); the factor adapts to the observed contraction.
-        if let Some(prev) = &last_step {
+        if stepped {
+            let prev = &last_step;
             let (mut num, mut den) = (0.0, 0.0);
             for (a, b) in prev.iter().zip(&step) {
                 num += a * (b - a);
@@ -183,9 +197,10 @@ pub fn rigid_estimate(model: &Model, nodes: &[MeshNode]) -> Vec<State> {
                 s.1[i] += relaxation * step[6 * k + 3 + i] / length;
             }
         }
-        shape = integrate_poses(model, nodes, &strains);
+        integrate_poses_into(model, nodes, &strains, &mut shape);
         last_change = change;
-        last_step = Some(step);
+        std::mem::swap(&mut step, &mut last_step);
+        stepped = true;
         // 1e-6 of a radian over the rod: far below what Newton needs from a guess
         if change < 1e-6 {
             break;
@@ -199,17 +214,20 @@ pub fn rigid_estimate(model: &Model, nodes: &[MeshNode]) -> Vec<State> {
 }
 
 /// One sweep: node strains carrying the loads distal to each node, summed on `shape`
-/// (`sites`: the nodes' sites).
+/// (`sites`: the nodes' sites), into `out`; `wrench` is the buffer of the distal wrenches.
 fn sweep(
     model: &Model,
     nodes: &[MeshNode],
     sites: &[Site],
     shape: &[(Vector3<f64>, Matrix3<f64>)],
     strains: &[(Vector3<f64>, Vector3<f64>)],
-) -> Vec<(Vector3<f64>, Vector3<f64>)> {
+    wrench: &mut Vec<(Vector3<f64>, Vector3<f64>)>,
+    out: &mut Vec<(Vector3<f64>, Vector3<f64>)>,
+) {
     let last = nodes.len() - 1;
     // Distal load sums (N, M about p_k) by a backward sweep with the trapezoid rule.
-    let mut wrench = vec![(Vector3::zeros(), Vector3::zeros()); nodes.len()];
+    wrench.clear();
+    wrench.resize(nodes.len(), (Vector3::zeros(), Vector3::zeros()));
     wrench[last] = model.point_wrench(nodes[last].s);
     for k in (0..last).rev() {
         let (N, M) = wrench[k + 1];
@@ -226,21 +244,18 @@ fn sweep(
             )
         };
     }
-    nodes
-        .iter()
-        .enumerate()
-        .map(|(k, node)| {
-            let site = &sites[k];
-            let R = shape[k].1;
-            let (v, u) = strains[k];
-            let (mut n, mut m) = wrench[k];
-            // The tendons loading this node's segment pull it back along their paths.
-            let v = site.strain(&v);
-            if let Ok((f, l)) = model.tendon_pull(node.s, Which::ActiveTo(node.segment_end), &R, &v, &u) {
-                n -= f;
-                m -= l;
-            }
-            model.strains_for_wrench(site, &(R.transpose() * n), &(R.transpose() * m))
-        })
-        .collect()
+    out.clear();
+    out.extend(nodes.iter().enumerate().map(|(k, node)| {
+        let site = &sites[k];
+        let R = shape[k].1;
+        let (v, u) = strains[k];
+        let (mut n, mut m) = wrench[k];
+        // The tendons loading this node's segment pull it back along their paths.
+        let v = site.strain(&v);
+        if let Ok((f, l)) = model.tendon_pull(node.s, Which::ActiveTo(node.segment_end), &R, &v, &u) {
+            n -= f;
+            m -= l;
+        }
+        model.strains_for_wrench(site, &(R.transpose() * n), &(R.transpose() * m))
+    }));
 }

@@ -199,7 +199,7 @@ fn tendon_states(model: &Model, nodes: &[Node]) -> Vec<TendonState> {
             let at = match quadratures.iter().position(|(e, _)| *e == end) {
                 Some(at) => at,
                 None => {
-                    quadratures.push((end, length::NodeQuadrature::new(&s, end)));
+                    quadratures.push((end, length::NodeQuadrature::kept(&s, end)));
                     quadratures.len() - 1
                 }
             };

@@ -68,10 +68,15 @@ pub(crate) fn reference_length_on(robot: &Robot, breakpoints: &[f64], i: usize) 
     let length = robot.length();
     let tendon = &robot.tendons[i];
     let end = tendon.end(length);
-    let key = Geometry::of(robot, breakpoints, i);
-    if let Some(key) = &key
-        && let Some(value) = KNOWN.with_borrow(|known| known.iter().find(|(k, _)| k == key).map(|(_, v)| *v))
-    {
+    // The key is built in the thread's scratch buffer: a Vec is allocated only for a new
+    // geometry's kept key.
+    let (keyed, known) = KNOWN.with_borrow_mut(|KnownLengths { kept, scratch }| {
+        if !Geometry::fill(robot, breakpoints, i, scratch) {
+            return (false, None);
+        }
+        (true, kept.iter().find(|(k, _)| k.numbers == *scratch).map(|(_, v)| *v))
+    });
+    if let Some(value) = known {
         return value;
     }
     let value = gauss_points(breakpoints, end, REFERENCE_PANELS)
@@ -81,23 +86,51 @@ pub(crate) fn reference_length_on(robot: &Robot, breakpoints: &[f64], i: usize) 
             weight * speed(&rp, &reference.v_star, &reference.u_star)
         })
         .sum();
-    if let Some(key) = key {
-        KNOWN.with_borrow_mut(|known| {
-            if known.len() == KEPT_LENGTHS {
-                known.remove(0);
+    if keyed {
+        KNOWN.with_borrow_mut(|KnownLengths { kept, scratch }| {
+            if kept.len() == KEPT_LENGTHS {
+                kept.remove(0);
             }
-            known.push((key, value));
+            kept.push((
+                Geometry {
+                    numbers: scratch.clone(),
+                },
+                value,
+            ));
         });
     }
     value
+}
+
+/// How many node quadratures a thread keeps ([`NodeQuadrature::kept`]): the meshes of a
+/// solve and of its neighbours, with a few tendon ends each.
+const KEPT_QUADRATURES: usize = 8;
+
+thread_local! {
+    /// Node quadratures built on this thread, oldest first, with their nodes' arc lengths
+    /// and end.
+    static KNOWN_QUADRATURES: RefCell<Vec<(Vec<f64>, f64, NodeQuadrature)>> = const { RefCell::new(Vec::new()) };
 }
 
 /// How many reference lengths a thread keeps ([`reference_length_on`]).
 const KEPT_LENGTHS: usize = 16;
 
 thread_local! {
+    /// Reference lengths computed on this thread, and the buffer a lookup's key is built in.
+    static KNOWN: RefCell<KnownLengths> = const {
+        RefCell::new(KnownLengths {
+            kept: Vec::new(),
+            scratch: Vec::new(),
+        })
+    };
+}
+
+/// The reference lengths a thread keeps ([`reference_length_on`]).
+struct KnownLengths {
     /// Reference lengths computed on this thread, oldest first, with their geometry.
-    static KNOWN: RefCell<Vec<(Geometry, f64)>> = const { RefCell::new(Vec::new()) };
+    kept: Vec<(Geometry, f64)>,
+    /// The key of the current lookup ([`Geometry::fill`]), kept to spare an allocation.
+    scratch: Vec<u64>,
 }
 
 /// Everything a reference length depends on, as bits: the rod length, the tendon's end, the
@@ -109,17 +142,20 @@ struct Geometry {
 }
 
 impl Geometry {
-    fn of(robot: &Robot, breakpoints: &[f64], i: usize) -> Option<Self> {
+    /// Writes the numbers of tendon `i`'s geometry into `numbers` (cleared first); false
+    /// where the routing or the reference strains are a user function.
+    fn fill(robot: &Robot, breakpoints: &[f64], i: usize, numbers: &mut Vec<u64>) -> bool {
         let length = robot.length();
         let tendon = &robot.tendons[i];
-        let mut numbers = vec![length.to_bits(), tendon.end(length).to_bits(), breakpoints.len() as u64];
+        numbers.clear();
+        numbers.extend([length.to_bits(), tendon.end(length).to_bits(), breakpoints.len() as u64]);
         numbers.extend(breakpoints.iter().map(|b| b.to_bits()));
         match tendon.routing {
             Routing::Straight { x, y } => numbers.extend([0, x.to_bits(), y.to_bits()]),
             Routing::Helical { radius, turns, phase } => {
                 numbers.extend([1, radius.to_bits(), turns.to_bits(), phase.to_bits()])
             }
-            Routing::Custom(_) => return None,
+            Routing::Custom(_) => return false,
         }
         match &robot.rod.reference {
             ReferenceStrains::Straight => numbers.push(0),
@@ -132,9 +168,9 @@ impl Geometry {
                 numbers.extend(ends.iter().map(|x| x.to_bits()));
                 numbers.extend(u_star.iter().flat_map(|u| u.iter()).map(|x| x.to_bits()));
             }
-            ReferenceStrains::Varying(_) => return None,
+            ReferenceStrains::Varying(_) => return false,
         }
-        Some(Geometry { numbers })
+        true
     }
 }
 
@@ -247,6 +283,31 @@ impl NodeQuadrature {
         }
     }
 
+    /// [`NodeQuadrature::new`], kept per thread: the weights depend only on the nodes' arc
+    /// lengths and `end`, so the last few are kept and returned again for bit for bit the
+    /// same `s` and `end` (the solutions of one mesh: a batch of rows, a sweep, repeated
+    /// solves), a copy of the weights instead of the Lagrange weights' divisions.
+    pub(crate) fn kept(s: &[f64], end: f64) -> Self {
+        let same = |(ks, kend, _): &(Vec<f64>, f64, NodeQuadrature)| {
+            kend.to_bits() == end.to_bits()
+                && ks.len() == s.len()
+                && ks.iter().zip(s).all(|(a, b)| a.to_bits() == b.to_bits())
+        };
+        let known = KNOWN_QUADRATURES.with(|known| known.borrow().iter().find(|k| same(k)).map(|(_, _, q)| q.clone()));
+        if let Some(q) = known {
+            return q;
+        }
+        let q = NodeQuadrature::new(s, end);
+        KNOWN_QUADRATURES.with(|known| {
+            let mut known = known.borrow_mut();
+            if known.len() == KEPT_QUADRATURES {
+                known.remove(0);
+            }
+            known.push((s.to_vec(), end, q.clone()));
+        });
+        q
+    }
+
     /// The integral of the node values `f(k)`.
     pub fn integrate(&self, f: impl Fn(usize) -> f64) -> f64 {
         self.weights.iter().map(|&(k, w)| w * f(k)).sum()
@@ -262,6 +323,22 @@ mod tests {
     fn fresh(robot: &Robot, i: usize) -> f64 {
         let robot = robot.clone();
         std::thread::spawn(move || reference_length(&robot, i)).join().unwrap()
+    }
+
+    /// Kept node quadratures are bit for bit the ones built afresh, and a change of a node's
+    /// arc length (by one unit in the last place) or of the end gets its own.
+    #[test]
+    fn kept_node_quadratures_are_those_of_the_same_nodes_only() {
+        let s: Vec<f64> = (0..=16).map(|k| 0.2 * (k as f64 / 16.0).powf(1.3)).collect();
+        let built = NodeQuadrature::new(&s, 0.15);
+        assert_eq!(NodeQuadrature::kept(&s, 0.15), built);
+        assert_eq!(NodeQuadrature::kept(&s, 0.15), built);
+        let mut moved = s.clone();
+        moved[5] = f64::from_bits(moved[5].to_bits() + 1);
+        assert_eq!(NodeQuadrature::kept(&moved, 0.15), NodeQuadrature::new(&moved, 0.15));
+        assert_ne!(NodeQuadrature::kept(&moved, 0.15), built);
+        assert_eq!(NodeQuadrature::kept(&s, 0.2), NodeQuadrature::new(&s, 0.2));
+        assert_ne!(NodeQuadrature::kept(&s, 0.2), built);
     }
 
     #[test]

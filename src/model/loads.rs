@@ -24,6 +24,16 @@ impl Field {
             Field::Varying(f) => f(s),
         }
     }
+
+    /// Whether the field is taken as absent on [0, `length`]: a constant one when it is
+    /// zero, a varying one when it vanishes at the ends and midpoints of every interval of a
+    /// 64-interval grid (129 samples).
+    pub(crate) fn vanishes_on(&self, length: f64) -> bool {
+        match self {
+            Field::Constant(v) => *v == Vector3::zeros(),
+            Field::Varying(_) => (0..=128).all(|i| self.at(length * i as f64 / 128.0) == Vector3::zeros()),
+        }
+    }
 }
 
 impl fmt::Debug for Field {
@@ -120,7 +130,7 @@ impl Loads {
     pub fn has_follower(&self, length: f64) -> bool {
         self.follower_tip_force != Vector3::zeros()
             || self.follower_tip_moment != Vector3::zeros()
-            || (0..=128).any(|i| self.follower_distributed_force.at(length * i as f64 / 128.0) != Vector3::zeros())
+            || !self.follower_distributed_force.vanishes_on(length)
     }
 
     /// The same loads plus a tip moment (N m, world frame).

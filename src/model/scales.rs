@@ -15,7 +15,7 @@
 //! | L / r | slenderness (r the outer radius) | outside [5, 2e4]: rod theory needs a slender rod; beyond 2e4 a thread |
 //! | E | Young's modulus | outside [1e4, 1e12] Pa: from soft silicones (about 5e4 Pa) to diamond (1.2e12 Pa) |
 //! | w L^3 / EI | self weight (w the distributed force, N/m) against stiffness | above 1e3: the rod hangs like a string, bending only within (EI/w)^(1/3) < L/10 of its base |
-//! | kappa r | the bend the tendons cause: the curvature kappa = \|sum tau_i r_i\| / EI of their net moment on a straight rod, times the offset r of the tendon furthest inside that bend (along it) | at or above 1 somewhere along the rod: the bend radius 1 / kappa would fall below that tendon's offset, its path would fold and no equilibrium exists past it; for one tendon kappa r = tau r^2 / EI, the geometric limit EI / r^2; tendons pulled against each other (co-contraction) cause no bend and no warning |
+//! | kappa r | the bend the tendons cause: the curvature kappa = \|sum tau_i r_i\| / EI of their net moment on a straight rod, times the offset r of the tendon furthest inside that bend (along it) | at or above 1 somewhere along the rod: the bend radius 1 / kappa would fall below that tendon's offset, the path of a tendon running along the backbone would fold, and no equilibrium exists past it unless loads or a precurvature (not counted) hold the bend back; a tendon winding around the rod (a helix) keeps a tangent across the backbone and can have equilibria past it (a one-turn helix at 1.01 does); for one tendon kappa r = tau r^2 / EI, the geometric limit EI / r^2; tendons pulled against each other (co-contraction) cause no bend and no warning |
 //! | F a^2 / EI | a tip force (a = L) or point force (a = its s) against stiffness | above 100: the rod bends only within (EI/F)^(1/2) < a/10 of the load |
 //! | M a / EI | the bending angle a tip or point moment alone causes (rad) | above 20 pi (ten turns) |
 //!
@@ -108,6 +108,12 @@ pub enum Warning {
         bending_stiffness: f64,
         /// The tension alone that would bring that tendon to the limit, EI / r^2 (N).
         limit: f64,
+        /// Whether that tendon's routing winds around the rod there (r'(s) != 0, a helix):
+        /// its path then keeps a tangent across the backbone and need not fold at the limit.
+        winds: bool,
+        /// Whether the rod is precurved there (a bending u*(s) != 0), which the figure leaves
+        /// out and which can hold the bend back.
+        precurved: bool,
     },
     /// The solved tension of a displacement-controlled tendon ([`crate::Robot::solved_tensions`])
     /// times its offset^2 against EI is at or above [`TENDON_LIMIT`]: the solve converged,
@@ -261,6 +267,8 @@ pub(crate) fn tendon_bend(robot: &Robot) -> Option<Warning> {
             offset: along,
             bending_stiffness,
             limit: bending_stiffness / (radius * radius),
+            winds: robot.tendons[tendon].routing.at(s, length).r_s.norm() > 0.0,
+            precurved: robot.rod.reference_at(s).u_star.xy().norm() > 0.0,
         };
         if worst.as_ref().is_none_or(|o| w.figure() > o.figure()) {
             worst = Some(w);
@@ -357,25 +365,48 @@ impl fmt::Display for Warning {
                 offset,
                 bending_stiffness,
                 limit,
-            } => write!(
-                f,
-                "the tendons bend the rod at s = {} m with a moment of {} N m, a curvature of {} 1/m over \
-                 EI = {} N m^2 (bend radius {} m); tendon {} runs {} m inside that bend, so curvature x \
-                 offset = {} is {} 1: the bend would be tighter than the tendon's offset, its path would \
-                 fold, and no equilibrium exists past 1 unless loads hold the bend back (they are not \
-                 counted here); check the tensions' units (N) and the offsets (m), or lower the tensions (tendon {} alone reaches the limit at EI/r^2 = {} N)",
-                fig(s),
-                fig(moment),
-                fig(moment / bending_stiffness),
-                fig(bending_stiffness),
-                fig(bending_stiffness / moment),
-                tendon + 1,
-                fig(offset),
-                fig(x),
-                if x > TENDON_LIMIT { "past" } else { "at" },
-                tendon + 1,
-                fig(limit)
-            ),
+                winds,
+                precurved,
+            } => {
+                let held = if precurved {
+                    "loads or the rod's precurvature hold the bend back (neither is counted here)"
+                } else {
+                    "loads hold the bend back (they are not counted here)"
+                };
+                // A path running along the backbone folds where the bend radius reaches its
+                // offset; one winding around the rod keeps its tangent across the backbone.
+                let consequence = if winds {
+                    format!(
+                        "the bend would be tighter than the tendon's offset, so its path would run backwards \
+                         along the backbone there; it winds around the rod, so the path need not fold and an \
+                         equilibrium past 1 can exist (a one-turn helix at 1.01 has one), but a solve this \
+                         near or past the limit may fail unless {held}"
+                    )
+                } else {
+                    format!(
+                        "the bend would be tighter than the tendon's offset, its path would fold, and no \
+                         equilibrium exists past 1 unless {held}"
+                    )
+                };
+                write!(
+                    f,
+                    "the tendons bend the rod at s = {} m with a moment of {} N m, a curvature of {} 1/m over \
+                     EI = {} N m^2 (bend radius {} m); tendon {} runs {} m inside that bend, so curvature x \
+                     offset = {} is {} 1: {consequence}; check the tensions' units (N) and the offsets (m), or \
+                     lower the tensions (tendon {} alone reaches the limit at EI/r^2 = {} N)",
+                    fig(s),
+                    fig(moment),
+                    fig(moment / bending_stiffness),
+                    fig(bending_stiffness),
+                    fig(bending_stiffness / moment),
+                    tendon + 1,
+                    fig(offset),
+                    fig(x),
+                    if x > TENDON_LIMIT { "past" } else { "at" },
+                    tendon + 1,
+                    fig(limit)
+                )
+            }
             Warning::SolvedTension {
                 tendon,
                 tension,
@@ -467,6 +498,8 @@ mod tests {
             offset: 0.008,
             bending_stiffness: 0.004_223,
             limit: 66.0,
+            winds: false,
+            precurved: false,
         }
         .to_string();
         assert!(

@@ -156,6 +156,32 @@ fn the_payload_robot_past_its_bifurcation_is_stable() {
     }
 }
 
+/// Issue 25: a warm solve whose load path cannot be followed returns Newton's root from its
+/// guess, and says so in its label too, not only in a note: the payload robot warm-started at
+/// 1.7 mN and solved at 1.8 mN (as a sweep's step does) stalls on the swinging family and
+/// falls back to the unstable planar state, which was labelled `direct`.
+#[test]
+fn a_fallback_root_is_labelled_as_one() {
+    let ranges = Ranges::new(
+        payload_robot(),
+        vec![(Input::Parameter(Parameter::Tension(4)), vec![0.0017, 0.0018])],
+    )
+    .unwrap();
+    let start = collocation::solve(&ranges.robot(0.0).unwrap(), &Default::default()).unwrap();
+    let solution = collocation::solve_from(&ranges.robot(1.0).unwrap(), &Default::default(), &start).unwrap();
+    let report = &solution.report;
+    assert_eq!(report.path, crate::report::PathTaken::Fallback, "{report:?}");
+    assert_eq!(report.path.name(), "fallback");
+    assert!(
+        report
+            .notes
+            .iter()
+            .any(|n| n.contains("the load path could not be followed")),
+        "{:?}",
+        report.notes
+    );
+}
+
 #[test]
 fn the_payload_sweep_is_the_same_at_every_step_size() {
     let ranges = |count| {

@@ -58,6 +58,9 @@ pub fn counts(report: &SolveReport) -> String {
 fn path_note(report: &SolveReport) -> String {
     match &report.path {
         PathTaken::Direct => String::new(),
+        PathTaken::Fallback => " (the load path could not be followed: Newton's root from the guess, not \
+                                necessarily the state reached from rest)"
+            .into(),
         PathTaken::LoadPath { folds, bifurcations } | PathTaken::FromWarmStart { folds, bifurcations } => {
             let at = |v: &[f64]| {
                 v.iter()

@@ -119,7 +119,7 @@ pub(crate) struct StabilityEntry {
     /// A flutter's frequency (Hz).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub flutter_frequency: Option<Num>,
-    /// `direct`, `from_warm_start` or `load_path`.
+    /// `direct`, `from_warm_start`, `load_path` or `fallback`.
     pub path: String,
     pub folds: Vec<Num>,
     pub bifurcations: Vec<Num>,

@@ -353,7 +353,7 @@ impl SolutionFile {
         let numbers = |x: &[Num]| x.iter().map(|x| x.0).collect();
         PathTaken::from_name(&s.path, numbers(&s.folds), numbers(&s.bifurcations)).ok_or_else(|| {
             bad(format!(
-                "has `stability.path` \"{}\", not \"direct\", \"from_warm_start\" or \"load_path\"",
+                "has `stability.path` \"{}\", not \"direct\", \"from_warm_start\", \"load_path\" or \"fallback\"",
                 s.path
             ))
         })
