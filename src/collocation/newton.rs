@@ -95,8 +95,18 @@ pub(crate) trait Border {
     /// The [`Termination`] to stop with (a model breakdown, a singular solve).
     fn factored(&mut self, x: &[State], at: &mut Linearization, report: &mut SolveReport) -> Result<(), Termination>;
 
+    /// Whether the border factors and solves the whole bordered system itself, from the
+    /// Jacobian J Newton assembles and its own blocks: `None` when Newton factors J and
+    /// hands the border J^-1 (-F) (the default); `Some(held)` when Newton skips J's own
+    /// factorization, `held` saying whether the border holds factors for a chord step.
+    fn own_factors(&self) -> Option<bool> {
+        None
+    }
+
     /// The bordered step at `point` (states `x`): `a` holds J^-1 (-F) for the factored J and
-    /// the residual F at `point`, and becomes dx. The border's step dy goes with it: for
+    /// the residual F at `point` (with [`Border::own_factors`], nothing at
+    /// [`Point::Current`], whose F the border reads from `at`, and -F at [`Point::Trial`]),
+    /// and becomes dx. The border's step dy goes with it: for
     /// [`Point::Current`] it is kept for [`Border::trial`]; for [`Point::Trial`] (a simplified
     /// correction, measured only) it is not. Returns the max-norm of the scaled dy, None when
     /// the border's own system is singular. `at` lends the factors of J for further
@@ -302,6 +312,8 @@ pub(crate) fn run_bordered<B: Border>(
         return (Termination::NonFinite, worst(ws, border));
     }
     let mut chord = settings.reuse_factors;
+    // A border that factors the bordered system itself (no factorization of J alone).
+    let own = border.own_factors().is_some();
     // Norms of the last two steps taken (full steps only: a damped one says nothing of the
     // remaining error).
     let (mut last_step, mut before_last) = (f64::INFINITY, f64::INFINITY);
@@ -330,8 +342,12 @@ pub(crate) fn run_bordered<B: Border>(
             return (Termination::Converged, worst(ws, border));
         }
         report.iterations += 1;
+        let held = match border.own_factors() {
+            Some(held) => held,
+            None => chord && ws.chord(report),
+        };
         if chord
-            && ws.chord(report)
+            && held
             && let Some(border_step) = border.step(
                 Current,
                 x,
@@ -384,7 +400,9 @@ pub(crate) fn run_bordered<B: Border>(
         if !std::mem::take(&mut assembled) && !jacobian(border, x, ws, report) {
             return (Termination::NonFinite, worst(ws, border));
         }
-        if !ws.solve(report) {
+        if own {
+            ws.assembled();
+        } else if !ws.solve(report) {
             return (Termination::SingularJacobian, worst(ws, border));
         }
         let mut at = Linearization {
@@ -425,12 +443,18 @@ pub(crate) fn run_bordered<B: Border>(
             // and so does not depend on how the rows are scaled: a tiny tip force in rows
             // scaled by EA can make the residual grow along a step that halves the error.
             if finite {
-                for (r, f) in ws.rhs.iter_mut().zip(&ws.trial_residual) {
-                    *r = -f;
+                if own {
+                    for (r, f) in ws.simplified.iter_mut().zip(&ws.trial_residual) {
+                        *r = -f;
+                    }
+                } else {
+                    for (r, f) in ws.rhs.iter_mut().zip(&ws.trial_residual) {
+                        *r = -f;
+                    }
+                    let t = Instant::now();
+                    ws.linear.solve_again(&ws.rhs, &mut ws.simplified);
+                    report.timings.solve += t.elapsed();
                 }
-                let t = Instant::now();
-                ws.linear.solve_again(&ws.rhs, &mut ws.simplified);
-                report.timings.solve += t.elapsed();
                 let mut at = Linearization {
                     linear: &mut ws.linear,
                     residual: &ws.residual,

@@ -60,6 +60,42 @@ pub(crate) fn solve_impl(
     if crate::model::friction::any(robot) {
         return super::friction::solve(robot, options, warm, cache);
     }
+    solve_tensions(robot, options, warm, cache, true)
+}
+
+/// The frictionless start of a solve with friction (`robot` validated, without friction):
+/// for tension inputs, [`solve_impl`] without the stability verdict of the final mesh,
+/// which only the report would carry and the answer with friction replaces (`unknown`).
+/// The equilibrium is still chosen on the first mesh with its verdict, so the start is on
+/// the branch the frictionless solve would return.
+///
+/// # Errors
+/// As [`super::solve`].
+pub(crate) fn solve_start(
+    robot: &Robot,
+    options: &Options,
+    warm: Option<&Solution>,
+    cache: &mut Cache,
+) -> Result<Solution> {
+    if robot.has_displacement_inputs() {
+        return solve_impl(robot, options, warm, cache);
+    }
+    solve_tensions(robot, options, warm, cache, false)
+}
+
+/// [`solve_impl`] for a robot (validated, with `options` validated) whose tendons are all
+/// tension-controlled and without friction; with `verdict`, the final mesh's stability
+/// verdict in the report.
+///
+/// # Errors
+/// As [`super::solve`].
+fn solve_tensions(
+    robot: &Robot,
+    options: &Options,
+    warm: Option<&Solution>,
+    cache: &mut Cache,
+    verdict: bool,
+) -> Result<Solution> {
     let start = Instant::now();
     let mut model = Model::new(robot);
     let mut report = SolveReport::new(Method::Collocation);
@@ -122,7 +158,7 @@ pub(crate) fn solve_impl(
     report.unknowns = unknowns::unknowns(mesh.nodes.len());
     report.nonzeros = unknowns::nonzeros(&mesh);
     record_estimate(&mut report, correction.as_ref(), options, robot.length());
-    if let Some(c) = cache.as_mut() {
+    if let Some(c) = cache.as_mut().filter(|_| verdict) {
         // The verdict belongs to this solve's state: `stability_of` evaluates the Jacobian at
         // it unless the workspace's is already there (and its verdict, when assessed, is
         // taken without building the system again).

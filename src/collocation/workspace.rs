@@ -164,6 +164,16 @@ impl Workspace {
         self.step.iter().all(|x| x.is_finite())
     }
 
+    /// Marks `values` as a Jacobian just assembled that the linear solver will not factor
+    /// (a border that factors the bordered system itself, [`super::newton::Border::own_factors`]):
+    /// the factors held and the verdicts belong to no Jacobian now.
+    pub(super) fn assembled(&mut self) {
+        self.verdict = None;
+        self.dynamics = None;
+        self.unfactored = false;
+        self.factored = false;
+    }
+
     /// Solves J step = -residual with the stored factors of an earlier Jacobian (a chord
     /// step). Returns false when there are none or the step is not finite.
     pub(super) fn chord(&mut self, report: &mut SolveReport) -> bool {

@@ -186,31 +186,22 @@ impl Slip {
     }
 }
 
-/// Eq. 13 with friction solved at one point: the tendons with friction that load the
-/// backbone here, with their tangential loads, and the rates.
-struct Solved {
-    point: Point,
-    slips: Vec<Slip>,
-    /// The rates (v', u') with the tangential loads.
-    x: Vector6<f64>,
-}
-
-/// Solves eq. 13 with friction at a site (module docs): every tendon at the tension the
-/// model holds for it here ([`Model::tensions`]; for a tendon with friction, its tension at
-/// this s), with the friction multiplier w_j of each tendon of `slipping` from
+/// Eq. 13 with friction solved at one point, with the frictionless eq. 13 there
+/// assembled in `point`: the tendons with friction that load the backbone here, with their
+/// tangential loads, and the rates (v', u') with the tangential loads. Every tendon is at the
+/// tension the model holds for it here ([`Model::tensions`]; for a tendon with friction, its
+/// tension at this s), with the friction multiplier w_j of each tendon of `slipping` from
 /// `multipliers` when given (a stick/slip history, docs/friction.md section 8), else its
-/// motion's sign. Inlined into its two callers, so that the large [`Point`] it builds is not
-/// copied on return.
-#[inline(always)]
+/// motion's sign. The large [`Point`] stays with the caller, so that it is not copied.
 fn solve(
     model: &Model,
+    point: &Point,
     site: &Site,
     segment_end: f64,
-    (R, v, u): (&Matrix3<f64>, &Vector3<f64>, &Vector3<f64>),
+    (v, u): (&Vector3<f64>, &Vector3<f64>),
     slipping: &[usize],
     multipliers: Option<&[f64]>,
-) -> Result<Solved> {
-    let point = Point::new(model, site, segment_end, (R, v, u))?;
+) -> Result<(Vec<Slip>, Vector6<f64>)> {
     let x0 = point.rates();
     let tendons = &model.robot.tendons;
     let mut slips = Vec::with_capacity(slipping.len());
@@ -238,8 +229,16 @@ fn solve(
     }
     let k = slips.len();
     let mut x = x0;
-    let mut matrix = vec![0.0; k * k];
-    let mut step = vec![0.0; k];
+    // The k x k Newton matrix and the step, on the stack for up to 4 tendons here.
+    let mut stack = [0.0; 20];
+    let mut heap = Vec::new();
+    let buffer: &mut [f64] = if k * (k + 1) <= stack.len() {
+        &mut stack[..k * (k + 1)]
+    } else {
+        heap.resize(k * (k + 1), 0.0);
+        &mut heap
+    };
+    let (matrix, step) = buffer.split_at_mut(k * k);
     for iteration in 0..=MAX_ITERATIONS {
         // h_j(g) = g_j - w_j mu_j |q_j(x(g))|, x(g) = x0 - sum_l g_l y_l, and its Jacobian
         // dh_j/dg_l = delta_jl + dg_j/dx . y_l.
@@ -257,11 +256,11 @@ fn solve(
                 matrix[j * k + l] = f64::from(u8::from(j == l)) + gradient.dot(&other.y);
             }
         }
-        if !crate::dense::solve_dense(&mut matrix, &mut step, k) {
+        if !crate::dense::solve_dense(matrix, step, k) {
             return Err(breakdown(site.s));
         }
         let mut change = 0.0_f64;
-        for (sl, d) in slips.iter_mut().zip(&step) {
+        for (sl, d) in slips.iter_mut().zip(step.iter()) {
             sl.g += d;
             change = change.max(d.abs());
         }
@@ -284,7 +283,7 @@ fn solve(
             });
         }
     }
-    Ok(Solved { point, slips, x })
+    Ok((slips, x))
 }
 
 fn breakdown(s: f64) -> Error {
@@ -314,11 +313,13 @@ pub(crate) fn rates(
 ) -> Result<Vector6<f64>> {
     turning.fill(0.0);
     let slipping = slipping(model.robot);
-    let solved = solve(model, site, segment_end, state, &slipping, multipliers)?;
-    for sl in &solved.slips {
+    let (R, v, u) = state;
+    let point = Point::new(model, site, segment_end, (R, v, u))?;
+    let (slips, x) = solve(model, &point, site, segment_end, (v, u), &slipping, multipliers)?;
+    for sl in &slips {
         turning[slipping[sl.slot]] = relative(sl);
     }
-    Ok(solved.x)
+    Ok(x)
 }
 
 /// kappa_i = |q_i| / tau_i = |t_i'| (1/m), whatever the multiplier.
@@ -371,7 +372,8 @@ pub(crate) fn linearize(
     multipliers: Option<&[f64]>,
     derivatives: bool,
 ) -> Result<FrictionLinearization> {
-    let Solved { point, slips, x } = solve(model, site, segment_end, (R, v, u), slipping, multipliers)?;
+    let point = Point::new(model, site, segment_end, (R, v, u))?;
+    let (slips, x) = solve(model, &point, site, segment_end, (v, u), slipping, multipliers)?;
     let k = slipping.len();
     let mut kappa = vec![0.0; k];
     for sl in &slips {
@@ -432,20 +434,30 @@ pub(crate) fn linearize(
     // J^-1 B = M^-1 B - Y S^-1 G^T M^-1 B, Y = [y_i], G = [dg_i/dx], S = I + G^T Y.
     let m_count = slips.len();
     let gradients: Vec<Vector6<f64>> = slips.iter().map(Slip::gradient).collect();
-    let mut schur = vec![0.0; m_count * m_count];
+    // S, S^-1, a copy of S to factor and a column: on the stack for up to 3 tendons here.
+    let square = m_count * m_count;
+    let mut stack = [0.0; 30];
+    let mut heap = Vec::new();
+    let buffer: &mut [f64] = if 3 * square + m_count <= stack.len() {
+        &mut stack[..3 * square + m_count]
+    } else {
+        heap.resize(3 * square + m_count, 0.0);
+        &mut heap
+    };
+    let (schur, rest) = buffer.split_at_mut(square);
+    let (inverse, rest) = rest.split_at_mut(square);
+    let (a, column) = rest.split_at_mut(square);
     for (j, gj) in gradients.iter().enumerate() {
         for (l, sl) in slips.iter().enumerate() {
             schur[j * m_count + l] = f64::from(u8::from(j == l)) + gj.dot(&sl.y);
         }
     }
     // S^-1 once, column by column (S is m x m for the m tendons with friction here).
-    let mut inverse = vec![0.0; m_count * m_count];
-    let mut column = vec![0.0; m_count];
     for l in 0..m_count {
-        let mut a = schur.clone();
+        a.copy_from_slice(schur);
         column.fill(0.0);
         column[l] = 1.0;
-        if !crate::dense::solve_dense(&mut a, &mut column, m_count) {
+        if !crate::dense::solve_dense(a, column, m_count) {
             return Err(breakdown(site.s));
         }
         for (j, c) in column.iter().enumerate() {

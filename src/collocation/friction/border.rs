@@ -95,9 +95,9 @@ impl Capstan<'_> {
                 let block = &values[BASE_ENTRIES + k * LINK_ENTRIES..BASE_ENTRIES + (k + 1) * LINK_ENTRIES];
                 for r in 0..NODE {
                     let row = &mut out[r * width..(r + 1) * width];
-                    for c in 0..2 * NODE {
-                        row[column(c)] = block[r * 2 * NODE + c];
-                    }
+                    let (a, b) = block[r * 2 * NODE..(r + 1) * 2 * NODE].split_at(NODE);
+                    row[..NODE].copy_from_slice(a);
+                    row[ck..ck + NODE].copy_from_slice(b);
                     if let Some(rz) = &self.link_z[k] {
                         for l in 0..count {
                             for side in 0..2 {
@@ -188,35 +188,6 @@ impl Capstan<'_> {
     }
 }
 
-/// `out` = J v for the backbone Jacobian `values` in pattern order on a mesh of `nodes`
-/// nodes.
-fn jacobian_times(values: &[f64], nodes: usize, v: &[f64], out: &mut [f64]) {
-    let links = nodes - 1;
-    for r in 0..BASE_ROWS {
-        out[r] = (0..BASE_COLUMNS).map(|c| values[r * BASE_COLUMNS + c] * v[c]).sum();
-    }
-    for k in 0..links {
-        let block = &values[BASE_ENTRIES + k * LINK_ENTRIES..BASE_ENTRIES + (k + 1) * LINK_ENTRIES];
-        let x = &v[k * NODE..(k + 2) * NODE];
-        for r in 0..NODE {
-            out[link_row(k) + r] = block[r * 2 * NODE..(r + 1) * 2 * NODE]
-                .iter()
-                .zip(x)
-                .map(|(a, b)| a * b)
-                .sum();
-        }
-    }
-    let (tip_start, row0) = (BASE_ENTRIES + links * LINK_ENTRIES, tip_row(nodes));
-    let x = &v[links * NODE + THETA..(links + 1) * NODE];
-    for r in 0..TIP_ROWS {
-        out[row0 + r] = values[tip_start + r * TIP_COLUMNS..tip_start + (r + 1) * TIP_COLUMNS]
-            .iter()
-            .zip(x)
-            .map(|(a, b)| a * b)
-            .sum();
-    }
-}
-
 impl Border for Capstan<'_> {
     fn on<R>(&mut self, point: Point, f: impl FnOnce(&System) -> R) -> R {
         self.load(point);
@@ -253,9 +224,13 @@ impl Border for Capstan<'_> {
         if ok { Ok(()) } else { Err(Termination::SingularJacobian) }
     }
 
+    /// The staircase factors the whole bordered matrix: Newton never factors J alone.
+    fn own_factors(&self) -> Option<bool> {
+        Some(self.stairs.ready)
+    }
+
     /// The bordered step from the staircase's factors: the backbone rows' right-hand side
-    /// is -F, which `a` = J^-1 (-F) gives back as J a (at the trial point Newton hands only
-    /// a; at the current one F itself).
+    /// is -F (at the current point Newton's residual, at the trial point handed in `a`).
     fn step(
         &mut self,
         point: Point,
@@ -272,7 +247,7 @@ impl Border for Capstan<'_> {
                     *r = -f;
                 }
             }
-            Point::Trial => jacobian_times(at.values(), self.system.mesh.nodes.len(), a, &mut rhs_x),
+            Point::Trial => rhs_x.copy_from_slice(a),
         }
         let psi = match point {
             Point::Current => &self.psi,

@@ -378,9 +378,7 @@ fn solve_on(robot: &Robot, options: &Options, carried: &mut Carried) -> Result<(
     } else {
         // Newton's last residual is the backbone rows' at x when a pass ran.
         let converged = ran.then(|| ws.residual.clone());
-        estimate_with_friction(&mut border, &mut ws, &x, converged)
-            .ok()
-            .flatten()
+        estimate_with_friction(&mut border, &x, converged).ok().flatten()
     };
     border.load(Point::Current);
     let system = &border.system;

@@ -30,7 +30,7 @@ pub(crate) use interval::{Profile, interval, interval_order6};
 use super::newton::{self, Border, Linearization, Point, Settings, Workspace};
 use super::system::System;
 use super::unknowns::{self, NODE, link_row, tip_row};
-use super::{Cache, Options, estimate, pipeline, refine};
+use super::{Cache, Options, estimate, pipeline, refine, workspace};
 use crate::dense::solve_dense;
 use crate::error::{self, Result};
 use crate::mesh::guess::interpolate;
@@ -255,7 +255,7 @@ impl<'r> Capstan<'r> {
 /// The error estimate with friction, by deferred correction as in [`estimate`] on the
 /// bordered system: the order-6 residuals of the backbone and capstan rows at the
 /// converged `x` (against the order-4 residual `converged` when the caller has it, else
-/// evaluated), and one bordered solve with Newton's factors and columns, so that the
+/// evaluated), and one bordered solve with Newton's staircase factors, so that the
 /// estimate carries the tension profile's error into the shape's. Returns the correction
 /// and the largest correction of a log tension (the relative error of the tension
 /// profile); `None` without factors or with a singular border.
@@ -264,7 +264,6 @@ impl<'r> Capstan<'r> {
 /// A model breakdown at a stage of the order-6 scheme.
 fn estimate_with_friction(
     border: &mut Capstan,
-    ws: &mut Workspace,
     x: &[State],
     converged: Option<Vec<f64>>,
 ) -> Result<Option<(estimate::Correction, f64)>> {
@@ -300,10 +299,8 @@ fn estimate_with_friction(
             }
         }
     }
-    if !ws.has_factors() {
-        return Ok(None);
-    }
-    if !border.stairs.ready && !border.factor(&ws.values) {
+    // The staircase holds the factors of Newton's last bordered Jacobian.
+    if !border.stairs.ready {
         return Ok(None);
     }
     let mut dx = vec![0.0; n];
@@ -328,7 +325,13 @@ pub(super) fn solve(robot: &Robot, options: &Options, warm: Option<&Solution>, c
     for t in &mut smooth.tendons {
         t.friction = None;
     }
-    let first = pipeline::solve_impl(&smooth, options, warm, cache)?;
+    // Without the final mesh's verdict: the answer with friction reports `unknown`.
+    let first = pipeline::solve_start(&smooth, options, warm, cache)?;
+    // Its Newton workspace, on the mesh Newton with friction starts on, serves that Newton
+    // (through the thread's spare workspaces, where it goes back afterwards).
+    if let Some(c) = cache.take() {
+        workspace::keep(c.mesh, c.solver, c.workspace);
+    }
     // The counts and timings of the frictionless solve are part of this one.
     let report = first.report.clone();
     refine_with_friction(robot, options, &first, None, report, start)
@@ -405,7 +408,10 @@ fn refine_with_friction(
             }
         }
         system.friction = Some(profile);
-        let mut ws = Workspace::new(&system, options.linear_solver)?;
+        let mut ws = match workspace::spare(&system.mesh, options.linear_solver) {
+            Some(ws) => ws,
+            None => Workspace::new(&system, options.linear_solver)?,
+        };
         let mut border = Capstan::new(system);
         let (termination, worst) = newton::run_bordered(&mut border, &mut ws, &mut x, &settings, &mut report);
         report.termination = termination;
@@ -427,12 +433,11 @@ fn refine_with_friction(
         let t = Instant::now();
         // Newton's last residual is the backbone rows' at x.
         let converged = Some(ws.residual.clone());
-        let estimated = estimate_with_friction(&mut border, &mut ws, &x, converged)
-            .ok()
-            .flatten();
+        let estimated = estimate_with_friction(&mut border, &x, converged).ok().flatten();
         report.timings.estimate += t.elapsed();
         border.load(Point::Current);
         let system = border.system;
+        workspace::keep(system.mesh.clone(), options.linear_solver, ws);
         let Some(profile) = system.friction.as_ref() else {
             return Err(error::invalid("tendons", "have no friction", "solve without friction"));
         };

@@ -222,13 +222,66 @@ unsafe fn eliminate_avx2(panel: &mut [f64], rows: usize, width: usize, pivots: u
     eliminate(panel, rows, width, pivots, step)
 }
 
+/// [`eliminate_rows`] with the width known at compile time for the panels of links whose
+/// two nodes carry up to 4 log tensions together (24 to 28 columns), so that the row
+/// updates are unrolled and vectorized as in the frictionless elimination; other widths run
+/// the same loops with the width at run time. The arithmetic is the same either way.
+#[inline(always)]
+fn eliminate(panel: &mut [f64], rows: usize, width: usize, pivots: usize, step: &mut Step) -> bool {
+    match width {
+        24 => eliminate_rows::<24>(panel, rows, pivots, step),
+        25 => eliminate_rows::<25>(panel, rows, pivots, step),
+        26 => eliminate_rows::<26>(panel, rows, pivots, step),
+        27 => eliminate_rows::<27>(panel, rows, pivots, step),
+        28 => eliminate_rows::<28>(panel, rows, pivots, step),
+        _ => eliminate_any(panel, rows, width, pivots, step),
+    }
+}
+
+/// [`eliminate_any`] on rows of the compile-time width `W`.
+#[inline(always)]
+fn eliminate_rows<const W: usize>(panel: &mut [f64], rows: usize, pivots: usize, step: &mut Step) -> bool {
+    let (panel, _) = panel[..rows * W].as_chunks_mut::<W>();
+    step.swaps.clear();
+    // Every multiplier [`replay`] reads is written below: the buffer is only sized.
+    step.factors.resize(pivots * rows, 0.0);
+    for c in 0..pivots {
+        let mut best = c;
+        for r in c + 1..rows {
+            if panel[r][c].abs() > panel[best][c].abs() {
+                best = r;
+            }
+        }
+        let pivot = panel[best][c];
+        if pivot == 0.0 || !pivot.is_finite() {
+            return false;
+        }
+        panel.swap(c, best);
+        step.swaps.push(best);
+        let inverse = 1.0 / pivot;
+        let (top, below) = panel.split_at_mut(c + 1);
+        let prow = &top[c][c + 1..];
+        let factors = &mut step.factors[c * rows + c + 1..(c + 1) * rows];
+        for (row, factor) in below.iter_mut().zip(factors) {
+            let f = row[c] * inverse;
+            *factor = f;
+            if f != 0.0 {
+                row[c] = 0.0;
+                for (x, p) in row[c + 1..].iter_mut().zip(prow) {
+                    *x -= f * p;
+                }
+            }
+        }
+    }
+    true
+}
+
 /// Gaussian elimination with partial pivoting of the first `pivots` columns of the
 /// `rows` x `width` row-major `panel`, recording the swaps and multipliers in `step`.
 /// False on a zero or non-finite pivot.
 #[inline(always)]
-fn eliminate(panel: &mut [f64], rows: usize, width: usize, pivots: usize, step: &mut Step) -> bool {
+fn eliminate_any(panel: &mut [f64], rows: usize, width: usize, pivots: usize, step: &mut Step) -> bool {
     step.swaps.clear();
-    step.factors.clear();
     step.factors.resize(pivots * rows, 0.0);
     for c in 0..pivots {
         let mut best = c;
