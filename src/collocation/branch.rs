@@ -60,6 +60,41 @@ impl Switched {
             picked.push(self.at);
         }
     }
+
+    /// After a switch onto this branch: the phase condition that holds it on its family's
+    /// member when it is one (module `phase`), with the tangent there taken again with it, and
+    /// whether it is. (None, false) for a simple bifurcation or when the directions are not
+    /// found (the path then goes on free).
+    pub(super) fn hold(
+        &mut self,
+        system: &mut System,
+        homotopy: &Homotopy,
+        ws: &mut Workspace,
+        report: &mut SolveReport,
+    ) -> (Option<Phase>, bool) {
+        let Some((c, along)) = self.family.take() else {
+            return (None, false);
+        };
+        let Some(phase) = Phase::at(ws, c, None) else {
+            return (None, false);
+        };
+        // Oriented along the switch (the free tangent there is the family's direction,
+        // amplified by the singular Jacobian, and orients nothing).
+        let previous = (along.as_slice(), 0.0);
+        let Some((point, fl)) = phase.tangent(
+            system,
+            homotopy,
+            ws,
+            self.point.x.clone(),
+            self.point.lambda,
+            Some(previous),
+            report,
+        ) else {
+            return (None, false);
+        };
+        (self.point, self.fl) = (point, fl);
+        (Some(phase), true)
+    }
 }
 
 /// Leaves `point` (on the path of `homotopy`, tangent `point.tx`) along the kernel direction

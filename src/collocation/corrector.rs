@@ -1,13 +1,14 @@
 //! The corrector of the pseudo-arclength continuation (`collocation/path.rs`): one
 //! predictor-corrector step along a path's tangent, converged on the hyperplane normal to
 //! it by chord steps with the stored factors, refreshing the Jacobian when they contract too
-//! slowly; on a family's branch with its phase condition as well (module `phase`).
+//! slowly; on a family's branch with its phase condition as well (module `phase`); and the
+//! polish of a point at its own lambda to the solve's tolerance.
 
-use super::homotopy::{Homotopy, Point, dot, f_lambda, max_norm, residual};
-use super::newton::{Settings, Workspace};
+use super::homotopy::{Homotopy, Point, dot, f_lambda, max_norm, residual, tangent};
+use super::newton::{self, Settings, Workspace};
 use super::phase::Phase;
 use super::system::System;
-use crate::report::SolveReport;
+use crate::report::{SolveReport, Termination};
 use crate::solution::State;
 
 /// The most corrector iterations of one step.
@@ -190,4 +191,72 @@ pub(super) fn correct_to(
         lambda += dl;
     }
     None
+}
+
+/// `point` converged to the solve's tolerance at its lambda (a parameter's path only: Newton
+/// solves F = 0, not a Newton homotopy's residual), with its tangent oriented as before.
+pub(super) fn polish(
+    system: &mut System,
+    homotopy: &Homotopy,
+    ws: &mut Workspace,
+    point: &Point,
+    settings: &Settings,
+    report: &mut SolveReport,
+    phase: &mut Option<Phase>,
+) -> Option<(Point, Vec<f64>)> {
+    if !matches!(homotopy, Homotopy::Parameter { .. }) {
+        return None;
+    }
+    homotopy.set(system, point.lambda);
+    let x = match phase.as_ref() {
+        // On a family's branch, with its phase condition at fixed lambda (the hyperplane of
+        // the tangent (0, 1) through the point): Newton alone has the family's singular
+        // Jacobian.
+        Some(p) => {
+            let at = Point {
+                x: point.x.clone(),
+                lambda: point.lambda,
+                tx: vec![0.0; point.tx.len()],
+                tl: 1.0,
+            };
+            let fl = f_lambda(system, homotopy, &point.x, point.lambda, report)?;
+            let mut r = vec![0.0; system.unknowns()];
+            let tolerance = settings.tolerance;
+            let (x, _, _) = correct_to(
+                system,
+                homotopy,
+                ws,
+                &at,
+                0.0,
+                &fl,
+                false,
+                tolerance,
+                report,
+                &mut r,
+                Some(p),
+            )?;
+            x
+        }
+        None => {
+            let mut x = point.x.clone();
+            let (term, _) = newton::run(system, ws, &mut x, settings, report);
+            if term != Termination::Converged {
+                return None;
+            }
+            x
+        }
+    };
+    if !ws.linearize(system, &x, report) {
+        return None;
+    }
+    let previous = Some((point.tx.as_slice(), point.tl));
+    match phase.take() {
+        Some(p) => {
+            *phase = Some(p.refreshed(ws)?);
+            phase
+                .as_ref()?
+                .tangent(system, homotopy, ws, x, point.lambda, previous, report)
+        }
+        None => tangent(system, homotopy, ws, x, point.lambda, previous, report),
+    }
 }

@@ -19,7 +19,7 @@
 
 use super::branch;
 pub(super) use super::corrector::{correct, correct_to};
-use super::homotopy::{Homotopy, Point, dot, f_lambda, tangent};
+use super::homotopy::{Homotopy, Point, dot, tangent};
 use super::locate;
 use super::newton::{self, Settings, Workspace};
 use super::options::Options;
@@ -358,7 +358,7 @@ pub(super) fn follow(
             {
                 s.record(&mut bifurcations, &mut picked);
                 push(&mut record, &s.point, s.unstable, false, report);
-                (phase, family) = hold(system, &homotopy, ws, &mut s, report);
+                (phase, family) = s.hold(system, &homotopy, ws, report);
                 (point, fl, unstable) = (s.point, s.fl, s.unstable);
                 (switching, polished, factored_at_point) = (false, false, true);
                 h = h1.abs().min(max_step);
@@ -423,7 +423,8 @@ pub(super) fn follow(
                     && unstable.is_some()
                     && next_unstable.is_some()
                     && next_unstable != unstable
-                    && let Some((p, f)) = polish(system, &homotopy, ws, &next, settings, report, &mut phase)
+                    && let Some((p, f)) =
+                        super::corrector::polish(system, &homotopy, ws, &next, settings, report, &mut phase)
                 {
                     (next, next_fl) = (p, f);
                     next_unstable = index(system, ws, report);
@@ -448,7 +449,7 @@ pub(super) fn follow(
                     {
                         s.record(&mut bifurcations, &mut picked);
                         push(&mut record, &s.point, s.unstable, false, report);
-                        (phase, family) = hold(system, &homotopy, ws, &mut s, report);
+                        (phase, family) = s.hold(system, &homotopy, ws, report);
                         (point, fl, unstable) = (s.point, s.fl, s.unstable);
                         // One switch per path: the branch taken can keep a nearly neutral
                         // direction (the plane of a round column's bend), whose count rounding
@@ -558,7 +559,8 @@ pub(super) fn follow(
                 factored_at_point = false;
                 if !polished
                     && h < POLISH_BELOW
-                    && let Some((p, f)) = polish(system, &homotopy, ws, &point, settings, report, &mut phase)
+                    && let Some((p, f)) =
+                        super::corrector::polish(system, &homotopy, ws, &point, settings, report, &mut phase)
                 {
                     (point, fl) = (p, f);
                     factored_at_point = true;
@@ -584,107 +586,4 @@ pub(super) fn follow(
         });
     }
     Err((refine::stalled_hint(furthest, point.lambda), worst))
-}
-
-/// After a switch onto the branch `s`: the phase condition that holds it on its family's
-/// member when it is one (module `phase`), with the tangent there taken again with it, and
-/// whether it is. (None, false) for a simple bifurcation or when the directions are not
-/// found (the path then goes on free).
-fn hold(
-    system: &mut System,
-    homotopy: &Homotopy,
-    ws: &mut Workspace,
-    s: &mut branch::Switched,
-    report: &mut SolveReport,
-) -> (Option<Phase>, bool) {
-    let Some((c, along)) = s.family.take() else {
-        return (None, false);
-    };
-    let Some(phase) = Phase::at(ws, c, None) else {
-        return (None, false);
-    };
-    // Oriented along the switch (the free tangent there is the family's direction,
-    // amplified by the singular Jacobian, and orients nothing).
-    let previous = (along.as_slice(), 0.0);
-    let Some((point, fl)) = phase.tangent(
-        system,
-        homotopy,
-        ws,
-        s.point.x.clone(),
-        s.point.lambda,
-        Some(previous),
-        report,
-    ) else {
-        return (None, false);
-    };
-    (s.point, s.fl) = (point, fl);
-    (Some(phase), true)
-}
-
-/// `point` converged to the solve's tolerance at its lambda (a parameter's path only: Newton
-/// solves F = 0, not a Newton homotopy's residual), with its tangent oriented as before.
-fn polish(
-    system: &mut System,
-    homotopy: &Homotopy,
-    ws: &mut Workspace,
-    point: &Point,
-    settings: &Settings,
-    report: &mut SolveReport,
-    phase: &mut Option<Phase>,
-) -> Option<(Point, Vec<f64>)> {
-    if !matches!(homotopy, Homotopy::Parameter { .. }) {
-        return None;
-    }
-    homotopy.set(system, point.lambda);
-    let x = match phase.as_ref() {
-        // On a family's branch, with its phase condition at fixed lambda (the hyperplane of
-        // the tangent (0, 1) through the point): Newton alone has the family's singular
-        // Jacobian.
-        Some(p) => {
-            let at = Point {
-                x: point.x.clone(),
-                lambda: point.lambda,
-                tx: vec![0.0; point.tx.len()],
-                tl: 1.0,
-            };
-            let fl = f_lambda(system, homotopy, &point.x, point.lambda, report)?;
-            let mut r = vec![0.0; system.unknowns()];
-            let tolerance = settings.tolerance;
-            let (x, _, _) = correct_to(
-                system,
-                homotopy,
-                ws,
-                &at,
-                0.0,
-                &fl,
-                false,
-                tolerance,
-                report,
-                &mut r,
-                Some(p),
-            )?;
-            x
-        }
-        None => {
-            let mut x = point.x.clone();
-            let (term, _) = newton::run(system, ws, &mut x, settings, report);
-            if term != Termination::Converged {
-                return None;
-            }
-            x
-        }
-    };
-    if !ws.linearize(system, &x, report) {
-        return None;
-    }
-    let previous = Some((point.tx.as_slice(), point.tl));
-    match phase.take() {
-        Some(p) => {
-            *phase = Some(p.refreshed(ws)?);
-            phase
-                .as_ref()?
-                .tangent(system, homotopy, ws, x, point.lambda, previous, report)
-        }
-        None => tangent(system, homotopy, ws, x, point.lambda, previous, report),
-    }
 }
