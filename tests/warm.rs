@@ -201,7 +201,7 @@ fn a_solver_that_converges_by_chord_steps_gives_each_state_its_own_verdict() {
 /// once, and the Newton homotopy from it turns back at a fold (at lambda 0.41) and returns
 /// past the warm start: followed on, it wandered to lambda = -25 for the whole 400-step
 /// budget (1 162 iterations over 408 load steps) before the load path from rest, where a
-/// cold solve takes 22 iterations over 4 load steps (43 over 10 before the corrector's refresh rule). It is now given up below lambda = 0
+/// cold solve takes 43 iterations over 10 load steps. It is now given up below lambda = 0
 /// (docs/stability.md, "Warm starts that turn back").
 #[test]
 fn a_warm_start_whose_homotopy_turns_back_costs_a_few_cold_solves() {
@@ -229,19 +229,18 @@ fn a_warm_start_whose_homotopy_turns_back_costs_a_few_cold_solves() {
         cold.tip_position(),
         from.tip_position()
     );
-    // The warm attempt (to its fold and back to lambda = 0: 27 short steps and 91 iterations
-    // measured) on top of the cold solve's own work (22 iterations over 4 load steps since the
-    // corrector refreshes its Jacobian; 43 over 10 before): bounded by that attempt with a
-    // third to spare, where following the turned-back path took 1 210 iterations over 409
-    // load steps.
+    // The warm attempt (to its fold and back to lambda = 0: 109 iterations over 32 load
+    // steps measured) on top of the cold solve's own work (43 over 10): bounded by that
+    // attempt with a third to spare, where following the turned-back path took 1 210
+    // iterations over 409 load steps.
     assert!(
-        from.report.iterations <= cold.report.iterations + 120,
+        from.report.iterations <= cold.report.iterations + 150,
         "{} iterations against {} cold",
         from.report.iterations,
         cold.report.iterations
     );
     assert!(
-        from.report.load_steps <= cold.report.load_steps + 40,
+        from.report.load_steps <= cold.report.load_steps + 45,
         "{} load steps against {} cold",
         from.report.load_steps,
         cold.report.load_steps
