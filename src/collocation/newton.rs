@@ -218,6 +218,18 @@ fn evaluate<B: Border>(
     ok
 }
 
+/// [`evaluate`] at the trial point `ws.trial` (a chord or Newton step's end) into the
+/// workspace's trial residual and rates.
+fn evaluate_trial<B: Border>(border: &mut B, ws: &mut Workspace, report: &mut SolveReport) -> bool {
+    evaluate(
+        border,
+        Point::Trial,
+        &ws.trial,
+        (&mut ws.trial_residual, &mut ws.trial_rates, &mut ws.trial_rates_valid),
+        report,
+    )
+}
+
 /// The Jacobian at the states `x` into the workspace's values and the residual there into
 /// its residual (the border's rows are not evaluated), counted and timed in `report`; false
 /// on a model breakdown or a value that is not finite.
@@ -363,13 +375,7 @@ pub(crate) fn run_bordered<B: Border>(
             let step_norm = max_norm(&ws.step).max(border_step);
             unknowns::retract(x, &ws.step, 1.0, length, &mut ws.trial);
             border.trial(1.0);
-            let ok = evaluate(
-                border,
-                Trial,
-                &ws.trial,
-                (&mut ws.trial_residual, &mut ws.trial_rates, &mut ws.trial_rates_valid),
-                report,
-            );
+            let ok = evaluate_trial(border, ws, report);
             let trial_norm = norm(&ws.trial_residual, border.residual(Trial));
             if ok && (trial_norm <= settings.tolerance || trial_norm <= CHORD_CONTRACTION * norm_x) {
                 report.history.push(Iteration {
@@ -422,13 +428,7 @@ pub(crate) fn run_bordered<B: Border>(
         loop {
             unknowns::retract(x, &ws.step, alpha, length, &mut ws.trial);
             border.trial(alpha);
-            let ok = evaluate(
-                border,
-                Trial,
-                &ws.trial,
-                (&mut ws.trial_residual, &mut ws.trial_rates, &mut ws.trial_rates_valid),
-                report,
-            );
+            let ok = evaluate_trial(border, ws, report);
             let phi_trial = merit(&ws.trial_residual, border.residual(Trial));
             // Armijo on 0.5|F|^2, whose slope along the Newton step is -|F|^2 = -2 phi; a
             // trial already within tolerance is accepted (at rounding level phi cannot fall).
