@@ -133,14 +133,20 @@ fn is_left(mesh: &Mesh, k: usize) -> bool {
     k + 1 < mesh.nodes.len() && mesh.is_jump(k)
 }
 
+/// The reference strains (v*, u*) at every mesh node.
 fn reference_strains(model: &Model, nodes: &[MeshNode]) -> Vec<(Vector3<f64>, Vector3<f64>)> {
-    nodes
-        .iter()
-        .map(|n| {
-            let r = model.robot.rod.reference_on(n.s, n.segment_end);
-            (r.v_star, r.u_star)
-        })
-        .collect()
+    let mut out = Vec::with_capacity(nodes.len());
+    reference_strains_into(model, nodes, &mut out);
+    out
+}
+
+/// [`reference_strains`] into `out` (cleared first), whose buffer a caller reuses.
+fn reference_strains_into(model: &Model, nodes: &[MeshNode], out: &mut Vec<(Vector3<f64>, Vector3<f64>)>) {
+    out.clear();
+    out.extend(nodes.iter().map(|n| {
+        let r = model.robot.rod.reference_on(n.s, n.segment_end);
+        (r.v_star, r.u_star)
+    }));
 }
 
 /// Most shape sweeps of the rigid-equilibrium estimate (each costs one pass over the mesh).
@@ -152,24 +158,61 @@ const RELAXATION: f64 = 0.5;
 /// the loads on the shape it predicts (moment arms and body frames from the previous sweep)
 /// until the curvature stops changing, or grows (then the previous sweep is kept).
 pub fn rigid_estimate(model: &Model, nodes: &[MeshNode]) -> Vec<State> {
+    // The sweeps' buffers come from this thread's last estimate (taken out, so that an
+    // estimate nested in a user function's call finds none and allocates its own).
+    let mut buffers = SWEEP_BUFFERS.with(|b| std::mem::take(&mut *b.borrow_mut()));
+    let x = rigid_estimate_in(model, nodes, &mut buffers);
+    SWEEP_BUFFERS.with(|b| *b.borrow_mut() = buffers);
+    x
+}
+
+/// The buffers of [`rigid_estimate`]'s sweeps, kept per thread between estimates.
+#[derive(Default)]
+struct SweepBuffers {
+    /// The node strains (v, u) of the current sweep and of the next.
+    strains: Vec<(Vector3<f64>, Vector3<f64>)>,
+    next: Vec<(Vector3<f64>, Vector3<f64>)>,
+    /// The poses integrated from `strains`.
+    shape: Vec<(Vector3<f64>, Matrix3<f64>)>,
+    /// The distal wrenches of a sweep.
+    wrench: Vec<(Vector3<f64>, Vector3<f64>)>,
+    /// The fixed-point step and the one before it, flattened.
+    step: Vec<f64>,
+    last_step: Vec<f64>,
+    /// The nodes' sites.
+    sites: Vec<Site>,
+}
+
+thread_local! {
+    /// The sweep buffers of this thread's last [`rigid_estimate`].
+    static SWEEP_BUFFERS: std::cell::RefCell<SweepBuffers> = std::cell::RefCell::new(SweepBuffers::default());
+}
+
+/// [`rigid_estimate`] in the buffers `b` (their contents on entry are not read).
+fn rigid_estimate_in(model: &Model, nodes: &[MeshNode], b: &mut SweepBuffers) -> Vec<State> {
     let length = model.robot.length();
-    let mut strains = reference_strains(model, nodes);
-    let mut shape = integrate_poses(model, nodes, &strains);
+    let SweepBuffers {
+        strains,
+        next,
+        shape,
+        wrench,
+        step,
+        last_step,
+        sites,
+    } = b;
+    reference_strains_into(model, nodes, strains);
+    integrate_poses_into(model, nodes, strains, shape);
     let mut last_change = f64::INFINITY;
     let mut relaxation = RELAXATION;
-    // The sweeps' buffers, allocated once: the next strains, the distal wrenches, the step
-    // and the one before it (valid after the first sweep).
-    let mut next = Vec::with_capacity(nodes.len());
-    let mut wrench = Vec::with_capacity(nodes.len());
-    let (mut step, mut last_step) = (Vec::with_capacity(6 * nodes.len()), Vec::with_capacity(6 * nodes.len()));
     let mut stepped = false;
     // The nodes' sites do not depend on the shape: evaluated once, not three times a sweep.
-    let sites: Vec<Site> = nodes.iter().map(|n| model.site_on(n.s, n.segment_end)).collect();
+    sites.clear();
+    sites.extend(nodes.iter().map(|n| model.site_on(n.s, n.segment_end)));
     for _ in 0..MAX_SWEEPS {
-        sweep(model, nodes, &sites, &shape, &strains, &mut wrench, &mut next);
+        sweep(model, nodes, sites, shape, strains, wrench, next);
         // The fixed-point step, flattened (v then u L per node, so all are comparable).
         step.clear();
-        step.extend(next.iter().zip(&strains).flat_map(|(a, b)| {
+        step.extend(next.iter().zip(strains.iter()).flat_map(|(a, b)| {
             let (dv, du) = (a.0 - b.0, (a.1 - b.1) * length);
             [dv[0], dv[1], dv[2], du[0], du[1], du[2]]
         }));
@@ -181,9 +224,8 @@ pub fn rigid_estimate(model: &Model, nodes: &[MeshNode]) -> Vec<State> {
         // a load's moment arm swings with the shape it bends (a tendon and a tip load
         // pulling the same way); the factor adapts to the observed contraction.
         if stepped {
-            let prev = &last_step;
             let (mut num, mut den) = (0.0, 0.0);
-            for (a, b) in prev.iter().zip(&step) {
+            for (a, b) in last_step.iter().zip(step.iter()) {
                 num += a * (b - a);
                 den += (b - a) * (b - a);
             }
@@ -197,9 +239,9 @@ pub fn rigid_estimate(model: &Model, nodes: &[MeshNode]) -> Vec<State> {
                 s.1[i] += relaxation * step[6 * k + 3 + i] / length;
             }
         }
-        integrate_poses_into(model, nodes, &strains, &mut shape);
+        integrate_poses_into(model, nodes, strains, shape);
         last_change = change;
-        std::mem::swap(&mut step, &mut last_step);
+        std::mem::swap(step, last_step);
         stepped = true;
         // 1e-6 of a radian over the rod: far below what Newton needs from a guess
         if change < 1e-6 {
@@ -207,9 +249,9 @@ pub fn rigid_estimate(model: &Model, nodes: &[MeshNode]) -> Vec<State> {
         }
     }
     shape
-        .into_iter()
-        .zip(nodes.iter().zip(strains))
-        .map(|((p, R), (node, (v, u)))| State { s: node.s, p, R, v, u })
+        .iter()
+        .zip(nodes.iter().zip(strains.iter()))
+        .map(|(&(p, R), (node, &(v, u)))| State { s: node.s, p, R, v, u })
         .collect()
 }
 

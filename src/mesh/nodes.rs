@@ -72,40 +72,36 @@ fn build(model: &Model, states: &[State], segment_ends: &[f64], along: Along, re
     let length = robot.length();
     let nodes = node_list(model, states, segment_ends, &along)?;
     // The nodes on each tendon's path: up to its end, one per arc length (the left limit at
-    // a breakpoint).
-    let on_path: Vec<Vec<usize>> = robot
-        .tendons
-        .iter()
-        .map(|t| {
-            let end = t.end(length);
-            let mut last_s = f64::NEG_INFINITY;
-            (0..nodes.len())
-                .filter(|&k| nodes[k].s <= end && std::mem::replace(&mut last_s, nodes[k].s) < nodes[k].s)
-                .collect()
-        })
-        .collect();
-    let tendon_paths = robot
-        .tendons
-        .iter()
-        .zip(&on_path)
-        .map(|(t, path)| {
-            path.iter()
+    // a breakpoint), gathered in one buffer for all tendons; the paths and tensions are then
+    // allocated once each at their final length.
+    let mut on_path = Vec::with_capacity(nodes.len());
+    let (mut tendon_paths, mut tendon_tensions) = (
+        Vec::with_capacity(robot.tendons.len()),
+        Vec::with_capacity(robot.tendons.len()),
+    );
+    for (i, t) in robot.tendons.iter().enumerate() {
+        let end = t.end(length);
+        let mut last_s = f64::NEG_INFINITY;
+        on_path.clear();
+        on_path.extend(
+            (0..nodes.len()).filter(|&k| nodes[k].s <= end && std::mem::replace(&mut last_s, nodes[k].s) < nodes[k].s),
+        );
+        tendon_paths.push(
+            on_path
+                .iter()
                 .map(|&k| nodes[k].p + nodes[k].R * t.routing.at(nodes[k].s, length).r)
-                .collect()
-        })
-        .collect();
-    let tendon_tensions: Vec<Vec<f64>> = on_path
-        .iter()
-        .enumerate()
-        .map(|(i, path)| {
-            path.iter()
+                .collect(),
+        );
+        tendon_tensions.push(
+            on_path
+                .iter()
                 .map(|&k| match along {
                     Along::Constant(_) => model.tensions[i],
                     Along::Varying(profile, _) => profile[k][i],
                 })
-                .collect()
-        })
-        .collect();
+                .collect::<Vec<f64>>(),
+        );
+    }
     let mut tendons = tendon_states(model, &nodes);
     for (state, tensions) in tendons.iter_mut().zip(&tendon_tensions) {
         state.delivered_tension = tensions.last().copied().unwrap_or(state.tension);
