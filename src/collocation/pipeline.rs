@@ -229,8 +229,13 @@ pub(crate) fn solve_on_mesh(
         stop_when_damped: false,
     };
     let mut system = System::new(model.clone(), mesh);
+    // The cached mesh and last states' buffers are kept for the cache this solve leaves.
+    let mut kept = None;
     let mut workspace = match cache.take() {
-        Some(c) if c.mesh == system.mesh && c.solver == options.linear_solver => c.workspace,
+        Some(c) if c.mesh == system.mesh && c.solver == options.linear_solver => {
+            kept = Some((c.mesh, c.last));
+            c.workspace
+        }
         other => {
             if let Some(c) = other {
                 workspace::keep(c.mesh, c.solver, c.workspace);
@@ -262,11 +267,17 @@ pub(crate) fn solve_on_mesh(
         report.timings.estimate += t.elapsed();
         c
     });
+    let (mesh, mut last) = kept.unwrap_or_else(|| (system.mesh.clone(), None));
+    match (result.as_ref(), last.as_mut()) {
+        (Ok(x), Some(last)) => last.clone_from(x),
+        (Ok(x), None) => last = Some(x.clone()),
+        (Err(_), _) => last = None,
+    }
     *cache = Some(Cached {
-        mesh: system.mesh.clone(),
+        mesh,
         solver: options.linear_solver,
         workspace,
-        last: result.as_ref().ok().cloned(),
+        last,
     });
     result.map(|x| Level {
         mesh: system.mesh,
