@@ -185,7 +185,17 @@ struct SweepBuffers {
 
 thread_local! {
     /// The sweep buffers of this thread's last [`rigid_estimate`].
-    static SWEEP_BUFFERS: std::cell::RefCell<SweepBuffers> = std::cell::RefCell::new(SweepBuffers::default());
+    static SWEEP_BUFFERS: std::cell::RefCell<SweepBuffers> = const {
+        std::cell::RefCell::new(SweepBuffers {
+            strains: Vec::new(),
+            next: Vec::new(),
+            shape: Vec::new(),
+            wrench: Vec::new(),
+            step: Vec::new(),
+            last_step: Vec::new(),
+            sites: Vec::new(),
+        })
+    };
 }
 
 /// [`rigid_estimate`] in the buffers `b` (their contents on entry are not read).
