@@ -90,17 +90,16 @@ mod adjoint;
 mod control;
 mod ends;
 mod exact;
+mod held;
 mod named;
 mod tip;
 
 pub use adjoint::{Adjoint, Cotangent, rotation_cotangent};
 pub(crate) use control::{backbone_columns, tip_columns};
 pub use control::{backbone_jacobian, columns, tip_jacobian};
-pub(crate) use tip::TensionDirections;
-pub use tip::{
-    DisplacementSensitivities, ModulusSensitivities, TipSensitivities, backbone_tension_sensitivity,
-    displacement_sensitivities, tip_sensitivities,
-};
+pub(crate) use held::TensionDirections;
+pub use held::{DisplacementSensitivities, displacement_sensitivities};
+pub use tip::{ModulusSensitivities, TipSensitivities, backbone_tension_sensitivity, tip_sensitivities};
 
 use crate::collocation::LinearSolver;
 use crate::collocation::friction::Capstan;
@@ -343,6 +342,18 @@ impl<'a> Sensitivity<'a> {
         self.border.system().model.robot
     }
 
+    /// Tendon `tendon`'s log tensions z = ln(tau / tau(0)) at the nodes of its span and
+    /// their derivative in the last solve with these factors (the bordered solve's dz/dq);
+    /// None for a tendon without friction, whose tension is constant.
+    pub(super) fn log_tensions(&self, tendon: usize) -> Option<(Vec<f64>, Vec<f64>)> {
+        self.border.log_tensions(tendon)
+    }
+
+    /// The mesh the system is collocated on (the solution's nodes).
+    pub(super) fn mesh(&self) -> &Mesh {
+        &self.border.system().mesh
+    }
+
     /// Number of nodes (the solution's).
     pub fn nodes(&self) -> usize {
         self.states.len()
@@ -497,14 +508,15 @@ impl<'a> Sensitivity<'a> {
     ///
     /// # Errors
     /// As [`Sensitivity::tension`].
-    fn tension_tip(&mut self, held: &tip::Held, tendon: usize) -> Result<Vector6<f64>> {
+    fn tension_tip(&mut self, held: &held::Held, tendon: usize) -> Result<Vector6<f64>> {
         if !held.holds() {
             self.tension_rhs(tendon)?;
             if let Some(pose) = self.tip_response()? {
                 return Ok(pose);
             }
         }
-        held.tip(&self.tension(tendon)?)
+        let d = self.tension(tendon)?;
+        held.tip(&d, self)
     }
 
     /// Tendon `tendon` (0-based) of `robot`: [`crate::Error::InvalidInput`] when out of range.
