@@ -3,7 +3,7 @@
 //! against tension solves, both solvers, global equilibrium, order, slack, mu -> 0.
 
 use nalgebra::Vector6;
-use tdcr::{Friction, Motion, Robot, cases, collocation, shooting};
+use tdcr::{Friction, Motion, Parameter, Robot, cases, collocation, shooting};
 
 fn tight() -> shooting::Options {
     shooting::Options {
@@ -216,9 +216,8 @@ fn check_column(
     // tension step below 1e-12 of its scale and Newton at 1e-12, about 1e-12 m of tip: over
     // the steps used (4 um of pull-in, 2e-4 of mu, 1e-4 of a force) 1e-8 relative or less,
     // and h^2 truncation as small (the differences agree to 1e-7 over 5e-5..1e-3 in mu).
-    // Measured 5e-9 to 1.1e-7, except d tip / d mu: 1e-7 to 5e-7, the residual's own
-    // difference in mu at 1e-4 mu (rounding over a step that shrinks with mu, as with
-    // tension control), not the held part (the pull-in columns are within 4e-8).
+    // Measured 5e-9 to 1.1e-7 (the largest: d tip / d mu of the rigid tendon, whose held
+    // path length leaves mu a small effect).
     assert!(err <= 1e-6, "{what}: {ift:?} vs finite differences {fd:?} ({err:.2e})");
     err
 }
@@ -252,6 +251,22 @@ fn check_held(name: &str, robot: &Robot, i: usize, other: usize) {
     check_column("tension", robot, &reference, by_tension, 1e-4 * tension, |r, d| {
         r.tendons[other].set_tension(tension + d)
     });
+    // The control Jacobian's columns are tip_sensitivities' (the same right-hand sides).
+    let wrt = [
+        Parameter::Displacement(i),
+        Parameter::TipForce(2),
+        Parameter::Tension(other),
+    ];
+    let j = collocation::sensitivity::tip_jacobian(robot, &reference, &wrt).unwrap();
+    let columns: [Vector6<f64>; 3] = [
+        sens.displacement.fixed_view::<6, 1>(0, i).into_owned(),
+        sens.tip_force.fixed_view::<6, 1>(0, 2).into_owned(),
+        sens.tension.fixed_view::<6, 1>(0, other).into_owned(),
+    ];
+    for (c, want) in columns.iter().enumerate() {
+        // 1e-12 relative: the same solves, bit for bit but for the order of sums
+        assert!((j.column(c) - want).norm() <= 1e-12 * want.norm(), "column {c}");
+    }
     // The pull-in columns of displacement_sensitivities are the same solves.
     let by_pull_in = collocation::sensitivity::displacement_sensitivities(robot, &reference).unwrap();
     let c = by_pull_in.tendons.iter().position(|&t| t == i).unwrap();
@@ -273,6 +288,10 @@ fn held_pull_in_derivatives_with_friction_match_central_differences() {
             check_held(&format!("case S, mu = {mu}, {motion:?}"), &robot, 0, 1);
         }
     }
+    // A rigid tendon: the pull-in is the path length alone (no stretch), 6 mm.
+    let mut robot = pulled(&rough_s(0.1, Motion::Pull, false), 0, 0.006);
+    robot.tendons[1].set_tension(1.0);
+    check_held("case S, mu = 0.1, rigid", &robot, 0, 1);
 }
 
 /// As above on case H's helical tendon (tendon 5, elastic, with friction) held at 15 mm,
