@@ -110,7 +110,7 @@ pub struct DisplacementSensitivities {
     /// The displacement-controlled tendons (0-based indices), the columns' order.
     pub tendons: Vec<usize>,
     /// d(tip pose)/dq, 6 x k: tip position (m/m), then the world-frame tip rotation vector
-    /// (rad/m), as in [`TipSensitivities`].
+    /// (rad/m), as in [`super::TipSensitivities`].
     pub tip: DMatrix<f64>,
     /// d(tau)/dq, k x k (N/m): row i the tension of `tendons[i]`. A slack tendon's row is
     /// 0 (it stays slack for small changes), also one just taut at 0 N.
