@@ -474,51 +474,6 @@ impl<'a> Sensitivity<'a> {
             .collect())
     }
 
-    /// The tip pose's derivative (position, then the world-frame rotation vector) for the
-    /// right-hand side in `scratch[0]`, from the last node of the solve alone
-    /// ([`Workspace::solve_again_last`]: no back substitution through the other nodes);
-    /// bitwise the last entry of [`Sensitivity::respond`]'s. None with friction, whose
-    /// bordered solve needs every node.
-    fn tip_response(&mut self) -> Result<Option<Vector6<f64>>> {
-        if self.border.border_rows() > 0 {
-            return Ok(None);
-        }
-        let n = self.border.system().unknowns();
-        let dx = self
-            .workspace
-            .solve_again_last(&self.scratch[0][..n])
-            .ok_or_else(singular)?;
-        let tip = &self.states[self.states.len() - 1];
-        let length = self.robot().length();
-        let [p, theta, ..] = unknowns::node_increments(&dx, 0, length);
-        let rotation = tip.R * theta;
-        Ok(Some(Vector6::new(
-            p[0],
-            p[1],
-            p[2],
-            rotation[0],
-            rotation[1],
-            rotation[2],
-        )))
-    }
-
-    /// The tip pose's derivative in tendon `tendon`'s tension (per N), the pull-ins `held`:
-    /// [`Sensitivity::tension`]'s last node, solved for the tip alone where nothing needs
-    /// the other nodes (no friction, no held pull-ins).
-    ///
-    /// # Errors
-    /// As [`Sensitivity::tension`].
-    fn tension_tip(&mut self, held: &held::Held, tendon: usize) -> Result<Vector6<f64>> {
-        if !held.holds() {
-            self.tension_rhs(tendon)?;
-            if let Some(pose) = self.tip_response()? {
-                return Ok(pose);
-            }
-        }
-        let d = self.tension(tendon)?;
-        held.tip(&d, self)
-    }
-
     /// Tendon `tendon` (0-based) of `robot`: [`crate::Error::InvalidInput`] when out of range.
     fn tendon_of(robot: &'a Robot, tendon: usize) -> Result<&'a crate::model::tendon::Tendon> {
         robot.tendons.get(tendon).ok_or_else(|| {

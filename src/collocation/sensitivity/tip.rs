@@ -1,9 +1,10 @@
 //! Tip sensitivities in one call ([`tip_sensitivities`]: tensions, tip wrench, moduli,
 //! base pose) and the whole-backbone position derivative with respect to one tension, both
-//! from one [`Sensitivity`] (one factorization).
+//! from one [`Sensitivity`] (one factorization), and the solves for the tip alone.
 
 use super::held::Held;
-use super::{Difference, NodeDerivative, RELATIVE_STEP, Sensitivity};
+use super::{Difference, NodeDerivative, RELATIVE_STEP, Sensitivity, singular};
+use crate::collocation::unknowns;
 use crate::error::Result;
 use crate::model::robot::Robot;
 use crate::model::rod::{Geometry, Rod, Section, Stiffness, shear_modulus};
@@ -141,6 +142,53 @@ pub fn tip_sensitivities(robot: &Robot, solution: &Solution) -> Result<TipSensit
         base_position,
         base_rotation,
     })
+}
+
+impl Sensitivity<'_> {
+    /// The tip pose's derivative (position, then the world-frame rotation vector) for the
+    /// right-hand side in `scratch[0]`, from the last node of the solve alone
+    /// ([`Workspace::solve_again_last`]: no back substitution through the other nodes);
+    /// bitwise the last entry of [`Sensitivity::respond`]'s. None with friction, whose
+    /// bordered solve needs every node.
+    fn tip_response(&mut self) -> Result<Option<Vector6<f64>>> {
+        if self.border.border_rows() > 0 {
+            return Ok(None);
+        }
+        let n = self.border.system().unknowns();
+        let dx = self
+            .workspace
+            .solve_again_last(&self.scratch[0][..n])
+            .ok_or_else(singular)?;
+        let tip = &self.states[self.states.len() - 1];
+        let length = self.robot().length();
+        let [p, theta, ..] = unknowns::node_increments(&dx, 0, length);
+        let rotation = tip.R * theta;
+        Ok(Some(Vector6::new(
+            p[0],
+            p[1],
+            p[2],
+            rotation[0],
+            rotation[1],
+            rotation[2],
+        )))
+    }
+
+    /// The tip pose's derivative in tendon `tendon`'s tension (per N), the pull-ins `held`:
+    /// [`Sensitivity::tension`]'s last node, solved for the tip alone where nothing needs
+    /// the other nodes (no friction, no held pull-ins).
+    ///
+    /// # Errors
+    /// As [`Sensitivity::tension`].
+    pub(super) fn tension_tip(&mut self, held: &Held, tendon: usize) -> Result<Vector6<f64>> {
+        if !held.holds() {
+            self.tension_rhs(tendon)?;
+            if let Some(pose) = self.tip_response()? {
+                return Ok(pose);
+            }
+        }
+        let d = self.tension(tendon)?;
+        held.tip(&d, self)
+    }
 }
 
 /// The linearization with what gives a right-hand side's tip derivative: the tip
