@@ -171,6 +171,20 @@ fn a_pull_in_short_of_the_slack_leaves_the_tendon_slack() {
     let d = (solution.tip_position() - want.tip_position()).norm();
     // 1e-9 m: the two solves meet the default tolerance on different meshes
     assert!(d < 1e-9, "tips differ by {d:.2e} m");
+    // The pull-in derivatives hold tendon 1 and leave the slack tendon 3 slack (its tension
+    // at 0 N with friction has no direction, and needs none): zeros for it.
+    let by_pull_in = collocation::sensitivity::displacement_sensitivities(&robot, &solution).unwrap();
+    assert_eq!(by_pull_in.tendons, vec![0, 2]);
+    assert_eq!(by_pull_in.tip.column(1).norm(), 0.0);
+    assert_eq!(
+        by_pull_in.tension.row(1).norm() + by_pull_in.tension.column(1).norm(),
+        0.0
+    );
+    let sens = tdcr::tip_sensitivities(&robot, &solution).unwrap();
+    let (a, b) = (sens.displacement.column(0), by_pull_in.tip.column(0));
+    // 1e-9 relative: the same solves combined in another order
+    assert!((a - b).norm() <= 1e-9 * b.norm(), "{a:?} vs {b:?}");
+    assert!(b.norm() > 0.0 && by_pull_in.tension[(0, 0)] > 0.0);
 }
 
 /// Mesh and Newton settings of the derivative checks: 64 fixed intervals (differences of

@@ -142,18 +142,31 @@ pub fn displacement_sensitivities(robot: &Robot, solution: &Solution) -> Result<
             "give a tendon a displacement (pull-in) or use tip_sensitivities for tensions",
         ));
     }
-    let directions = TensionDirections::new(robot, solution, tendons)?;
+    // A tendon with friction at 0 N has no tension direction (Sensitivity::tension); it is
+    // slack and stays so (dtau = 0), so it is left out of the solves and keeps zeros.
+    let solved: Vec<usize> = tendons
+        .iter()
+        .copied()
+        .filter(|&i| !(robot.tendons[i].active_friction().is_some() && solution.tendons[i].tension == 0.0))
+        .collect();
+    let directions = TensionDirections::new(robot, solution, solved)?;
     let taut: Vec<bool> = directions
         .tendons
         .iter()
         .map(|&i| solution.tendons[i].slack == 0.0 && solution.tendons[i].tension > 0.0)
         .collect();
-    let tension = directions.tension_by_displacement(&taut)?;
-    Ok(DisplacementSensitivities {
-        tip: &directions.tip * &tension,
-        tendons: directions.tendons,
-        tension,
-    })
+    let part = directions.tension_by_displacement(&taut)?;
+    let part_tip = &directions.tip * &part;
+    let k = tendons.len();
+    let (mut tip, mut tension) = (DMatrix::zeros(6, k), DMatrix::zeros(k, k));
+    let at = |i: usize| tendons.iter().position(|&j| j == i).unwrap_or(0);
+    for (a, &i) in directions.tendons.iter().enumerate() {
+        tip.set_column(at(i), &part_tip.column(a));
+        for (b, &j) in directions.tendons.iter().enumerate() {
+            tension[(at(i), at(j))] = part[(a, b)];
+        }
+    }
+    Ok(DisplacementSensitivities { tip, tendons, tension })
 }
 
 /// What every pull-in derivative is made of: the tip's and the pull-ins' derivatives along
