@@ -306,6 +306,11 @@ fn held_pull_in_derivatives_with_friction_match_central_differences() {
     let mut robot = pulled(&rough_s(0.1, Motion::Pull, false), 0, 0.006);
     robot.tendons[1].set_tension(1.0);
     check_held("case S, mu = 0.1, rigid", &robot, 0, 1);
+    // The Kirchhoff rod: the paths do not move with the node coordinate v (the force's).
+    let mut robot = pulled(&rough_s(0.1, Motion::Pull, true), 0, 0.012);
+    robot.tendons[1].set_tension(1.0);
+    robot.rod_model = tdcr::RodModel::Kirchhoff;
+    check_held("case S, mu = 0.1, Kirchhoff rod", &robot, 0, 1);
 }
 
 /// As above on case H's helical tendon (tendon 5, elastic, with friction) held at 15 mm,
