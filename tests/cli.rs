@@ -1703,3 +1703,45 @@ fn the_order_of_the_answer_is_reported() {
         assert_eq!(json["error_estimate"]["order"], order, "--tol {tol}");
     }
 }
+
+/// `--jacobian=displacement.1` at a pull-in held with friction (docs/friction.md section
+/// 3b, "Derivatives at a held pull-in"): the library's column, through the command.
+#[test]
+fn the_jacobian_holds_a_pull_in_with_friction() {
+    let dir = scratch("jacobian_friction");
+    std::fs::write(dir.join("robot.toml"), example()).unwrap();
+    let args = [
+        "solve",
+        "robot.toml",
+        "--displacement",
+        "1=0.0114",
+        "--friction",
+        "1=0.1",
+        "--intervals",
+        "48",
+        "--format",
+        "json",
+        "--jacobian=displacement.1,tip_force.z",
+    ];
+    let out = run(&dir, &args, None);
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    let json: serde_json::Value = serde_json::from_str(&stdout(&out)).unwrap();
+    let mut robot = tdcr::cases::case_s();
+    robot.tendons[0].set_displacement(0.0114);
+    robot.tendons[0].friction = Some(tdcr::Friction::pull(0.1));
+    let solution = tdcr::collocation::solve(&robot, &tdcr::collocation::Options::fixed(48)).unwrap();
+    let wrt = [tdcr::Parameter::Displacement(0), tdcr::Parameter::TipForce(2)];
+    let want = tdcr::collocation::sensitivity::tip_jacobian(&robot, &solution, &wrt).unwrap();
+    for c in 0..2 {
+        for row in 0..6 {
+            let got = json["tip_jacobian"]["rows"][row][c].as_f64().unwrap();
+            // 1e-12 of the column: the same robot, mesh and solves (the JSON prints in full)
+            let scale = want.column(c).norm();
+            assert!(
+                (got - want[(row, c)]).abs() <= 1e-12 * scale,
+                "row {row} column {c}: {got} vs {}",
+                want[(row, c)]
+            );
+        }
+    }
+}

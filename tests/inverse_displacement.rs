@@ -214,3 +214,41 @@ fn a_stroke_that_cannot_let_out_is_an_error_that_says_so() {
         other => panic!("expected an error, got {:?}", other.map(|s| s.explain())),
     }
 }
+
+/// With friction (tendon 2 elastic, mu = 0.1, pull) the pull-in rows of the linearization
+/// are dQ/dtau of the varying tension's stretch (docs/friction.md section 3b): a pull-in is
+/// recovered, and a stroke too short saturates at its bound.
+#[test]
+fn recovers_a_pull_in_with_friction_and_saturates_a_short_stroke() {
+    let mut rough = cases::prototype();
+    let t = &mut rough.tendons[1];
+    t.friction = Some(tdcr::Friction::pull(0.1));
+    t.stiffness = Some(2000.0);
+    t.free_length = 0.1;
+    let options = InverseOptions {
+        free_tendons: Some(vec![1]),
+        ..InverseOptions::displacements(0.0, STROKE)
+    };
+    let truth = 0.006;
+    let mut pulled = rough.clone();
+    pulled.tendons[1].set_displacement(truth);
+    let goal = forward(&pulled, &options).tip_position();
+    let found = run(&rough, &Target::position(goal), &options, "one pull-in with friction");
+    assert!(found.reachable, "{}", found.explain());
+    assert!((found.tip_position() - goal).norm() <= options.tolerance);
+    // 1e-6 m: the 1e-6 m tip tolerance over a tip sensitivity above 1 m/m, as without friction
+    assert!(
+        (found.displacements[1] - truth).abs() <= 1e-6,
+        "pull-in {} m against {truth} m",
+        found.displacements[1]
+    );
+    let short = InverseOptions {
+        free_tendons: Some(vec![1]),
+        ..InverseOptions::displacements(0.0, 0.004)
+    };
+    let found = run(&rough, &Target::position(goal), &short, "short stroke with friction");
+    assert!(!found.reachable);
+    assert_eq!(found.termination, FitTermination::Stationary, "{}", found.explain());
+    assert_eq!(found.displacements[1], 0.004);
+    assert_eq!(found.bounds[1], Bound::Saturated);
+}

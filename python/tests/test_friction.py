@@ -36,3 +36,28 @@ def test_calibrate_fits_the_friction_coefficient():
     # Noise-free data on the solver's own meshes: mu back to 1e-9 (measured 3e-12).
     (line,) = [x for x in fit.robot.to_toml().splitlines() if x.startswith("friction")]
     assert abs(float(line.split("=")[1]) - 0.1) < 1e-9
+
+
+def held(mu, pull_in):
+    """Tendon 1 elastic (E_t A_t = 2000 N, 0.1 m free) with friction, held at `pull_in` (m)."""
+    tendon = {"routing": ROUTING, "displacement": pull_in, "friction": mu, "stiffness": 2000.0, "free_length": 0.1}
+    return tdcr.Robot(rod=ROD, tendons=[tendon])
+
+
+def test_tip_sensitivity_to_a_pull_in_held_with_friction_matches_a_central_difference():
+    # docs/friction.md section 3b, "Derivatives at a held pull-in": the base tension follows
+    # the pull-in through the stretch of the varying tension. 64 fixed intervals on both
+    # sides, so the differences see the same discretization.
+    solution = tdcr.solve(held(0.1, 0.012), intervals=64, residual_tolerance=1e-12)
+    sens = tdcr.tip_sensitivities(held(0.1, 0.012), solution)
+    h = 4e-6  # m of pull-in: truncation about (h / q)^2 = 1e-7 relative
+    up = tdcr.solve(held(0.1, 0.012 + h), intervals=64, residual_tolerance=1e-12).tip_position
+    down = tdcr.solve(held(0.1, 0.012 - h), intervals=64, residual_tolerance=1e-12).tip_position
+    fd = (up - down) / (2 * h)
+    # 1e-6 relative, as tests/friction_pull_in.rs (measured here: 1.9e-8, and 1.2e-9 for mu)
+    assert np.linalg.norm(sens.displacement[:3, 0] - fd) <= 1e-6 * np.linalg.norm(fd)
+    h = 2e-4  # of mu, as tests/friction_pull_in.rs
+    up = tdcr.solve(held(0.1 + h, 0.012), intervals=64, residual_tolerance=1e-12).tip_position
+    down = tdcr.solve(held(0.1 - h, 0.012), intervals=64, residual_tolerance=1e-12).tip_position
+    fd = (up - down) / (2 * h)
+    assert np.linalg.norm(sens.friction[:3, 0] - fd) <= 1e-6 * np.linalg.norm(fd)

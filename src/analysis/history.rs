@@ -143,12 +143,20 @@ fn pulled_step(
         None => collocation::solve(robot, options)?.tensions(),
     };
     let mut kept = None;
-    let solution = crate::model::pull_in::hold(robot, &start, last, |r, _| {
-        let mut trial = carried.snapshot();
-        let (solution, zones) = friction::history::step(r, options, &mut trial)?;
-        kept = Some((trial, zones));
-        Ok(solution)
-    })?;
+    let solution = crate::model::pull_in::hold(
+        robot,
+        &start,
+        last,
+        |r, _| {
+            let mut trial = carried.snapshot();
+            let (solution, zones) = friction::history::step(r, options, &mut trial)?;
+            kept = Some((trial, zones));
+            Ok(solution)
+        },
+        // Differences for dphi/dtau: a step with stuck stretches is not the full-slip system
+        // whose linearization the sensitivities solve.
+        |_, _, _| None,
+    )?;
     let (trial, zones) = kept.ok_or_else(|| invalid("tendons", "have no solved step", "report this as a bug"))?;
     *carried = trial;
     Ok((solution, zones))

@@ -69,6 +69,7 @@ pub(crate) fn hold(
     start: &[f64],
     warm: Option<&Solution>,
     mut solve: impl FnMut(&Robot, Option<&Solution>) -> Result<Solution>,
+    mut slope: impl FnMut(&Robot, &Solution, &[usize]) -> Option<Vec<f64>>,
 ) -> Result<Solution> {
     let held: Vec<usize> = (0..robot.tendons.len())
         .filter(|&j| robot.tendons[j].displacement().is_some())
@@ -124,19 +125,30 @@ pub(crate) fn hold(
             });
         }
         iterations += 1;
-        // dphi/dtau by forward differences, each from the current shape; below KEEP the
-        // last one is kept (a chord step).
+        // dphi/dtau from the solver's own linearization when it gives one, else by forward
+        // differences, each from the current shape; below KEEP the last one is kept (a
+        // chord step).
         if size >= KEEP || dphi.is_empty() {
-            dphi = vec![0.0; k * k];
-            for m in 0..k {
-                let h = STEP * tau[m].max(scale[m]);
-                let mut shifted = tau.clone();
-                shifted[m] = tau[m].max(0.0) + h;
-                let (_, moved) = evaluate(&shifted, &mut tensions, Some(&solution))?;
-                for j in 0..k {
-                    dphi[j * k + m] = (moved[j] - gaps[j]) / (shifted[m] - tau[m].max(0.0));
-                }
+            let mut at = tensions.clone();
+            for (&j, &t) in held.iter().zip(&tau) {
+                at[j] = t.max(0.0);
             }
+            dphi = match slope(&robot.with_tensions(&at), &solution, &held) {
+                Some(exact) => exact,
+                None => {
+                    let mut differences = vec![0.0; k * k];
+                    for m in 0..k {
+                        let h = STEP * tau[m].max(scale[m]);
+                        let mut shifted = tau.clone();
+                        shifted[m] = tau[m].max(0.0) + h;
+                        let (_, moved) = evaluate(&shifted, &mut tensions, Some(&solution))?;
+                        for j in 0..k {
+                            differences[j * k + m] = (moved[j] - gaps[j]) / (shifted[m] - tau[m].max(0.0));
+                        }
+                    }
+                    differences
+                }
+            };
         }
         // The generalized gradient of psi (its element (1/sqrt 2 - 1)(1, 1) at a = b = 0),
         // and the Newton step on the tensions.

@@ -145,7 +145,9 @@ pub fn solve(robot: &Robot, options: &Options) -> Result<Solution> {
             t.friction = None;
         }
         let first = solve(&smooth, options)?;
-        let mut solution = crate::model::pull_in::hold(robot, &first.tensions(), None, |r, _| solve(r, options))?;
+        // Differences for dphi/dtau: shooting imports nothing from collocation's linearization.
+        let mut solution =
+            crate::model::pull_in::hold(robot, &first.tensions(), None, |r, _| solve(r, options), |_, _, _| None)?;
         solution.report.timings.total = start.elapsed();
         return Ok(solution);
     }

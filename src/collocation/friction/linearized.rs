@@ -43,6 +43,20 @@ impl<'r> Capstan<'r> {
         Capstan::new(system)
     }
 
+    /// Tendon `i`'s log tensions z at the nodes 0..=span of its span (0 at the base) and their
+    /// derivative in the last bordered solve ([`Capstan::respond`]; 0 at the base, where z is
+    /// 0 by definition); None for a tendon without log tensions (no friction).
+    pub(crate) fn log_tensions(&self, i: usize) -> Option<(Vec<f64>, Vec<f64>)> {
+        let profile = self.system.friction.as_ref()?;
+        let j = profile.slipping.iter().position(|&t| t == i)?;
+        let span = profile.spans[j];
+        let z = profile.z[j][..=span].to_vec();
+        let dz = (0..=span)
+            .map(|n| unknown(&self.offsets, &profile.spans, j, n).map_or(0.0, |u| self.border_step[u]))
+            .collect();
+        Some((z, dz))
+    }
+
     /// Number of border rows (= log-tension unknowns); 0 without friction.
     pub(crate) fn border_rows(&self) -> usize {
         self.z.len()

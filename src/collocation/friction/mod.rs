@@ -492,14 +492,35 @@ pub(super) fn solve_pull_ins(
     // others from the last solve with friction, at tensions a Newton step or a difference
     // step away.
     let mut near = false;
-    let mut solution = crate::model::pull_in::hold(robot, &first.tensions(), Some(&first), |r, warm| {
-        match (std::mem::replace(&mut near, true), warm) {
+    let mut solution = crate::model::pull_in::hold(
+        robot,
+        &first.tensions(),
+        Some(&first),
+        |r, warm| match (std::mem::replace(&mut near, true), warm) {
             (true, Some(last)) => solve_near(r, options, last),
             _ => solve(r, options, warm, cache),
-        }
-    })?;
+        },
+        slope,
+    )?;
     solution.report.timings.total = start.elapsed();
     Ok(solution)
+}
+
+/// dQ/dtau of the `held` tendons at `solution` of `robot` (tension-controlled), row major:
+/// the Schur complement S of the derivatives at held pull-ins (docs/friction.md section 3b,
+/// "Derivatives at a held pull-in"), from one linearization of the bordered system and one
+/// bordered solve per held tendon, in place of one full solve per tendon for a forward
+/// difference. None, and the loop differences, where it does not apply: a held tendon at
+/// 0 N (its tension derivative with friction is not modelled) or a linearization that
+/// fails (a singular Jacobian, a solution that is not converged to its limit).
+fn slope(robot: &Robot, solution: &Solution, held: &[usize]) -> Option<Vec<f64>> {
+    if held.iter().any(|&j| solution.tendons[j].tension <= 0.0) {
+        return None;
+    }
+    let directions = crate::collocation::sensitivity::TensionDirections::new(robot, solution, held.to_vec()).ok()?;
+    let s = directions.displacement_by_tension();
+    let k = held.len();
+    Some((0..k * k).map(|i| s[(i / k, i % k)]).collect())
 }
 
 /// The value at `s` of the piecewise-linear interpolant through (`points`, `values`)

@@ -54,7 +54,7 @@
 //!   with h01 and h11.
 
 use super::control::pulled;
-use super::tip::Held;
+use super::held::Held;
 use super::{Sensitivity, singular};
 use crate::collocation::unknowns::{NODE, P, THETA, V};
 use crate::error::{Result, invalid};

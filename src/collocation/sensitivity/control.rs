@@ -16,7 +16,8 @@
 //! (R -> exp(hat(omega dq)) R, [`NodeDerivative`]): the exact derivative of what
 //! `solution.at(s).p` returns on the solution's mesh.
 
-use super::tip::{Held, built_from_geometry, youngs_modulus};
+use super::held::Held;
+use super::tip::{built_from_geometry, youngs_modulus};
 use super::{NodeDerivative, Sensitivity};
 use crate::error::{Result, invalid};
 use crate::model::parameter::Parameter;
@@ -136,7 +137,7 @@ pub(crate) fn tip_columns(
         {
             out.set_column(j, &sens.tension_tip(&held, i)?);
         } else if let Some(d) = column(sens, robot, *p)? {
-            out.set_column(j, &held.tip(&d)?);
+            out.set_column(j, &held.tip(&d, sens)?);
         }
     }
     Ok(out)

@@ -90,17 +90,16 @@ mod adjoint;
 mod control;
 mod ends;
 mod exact;
+mod held;
 mod named;
 mod tip;
 
 pub use adjoint::{Adjoint, Cotangent, rotation_cotangent};
 pub(crate) use control::{backbone_columns, tip_columns};
 pub use control::{backbone_jacobian, columns, tip_jacobian};
-pub(crate) use tip::TensionDirections;
-pub use tip::{
-    DisplacementSensitivities, ModulusSensitivities, TipSensitivities, backbone_tension_sensitivity,
-    displacement_sensitivities, tip_sensitivities,
-};
+pub(crate) use held::TensionDirections;
+pub use held::{DisplacementSensitivities, displacement_sensitivities};
+pub use tip::{ModulusSensitivities, TipSensitivities, backbone_tension_sensitivity, tip_sensitivities};
 
 use crate::collocation::LinearSolver;
 use crate::collocation::friction::Capstan;
@@ -343,6 +342,18 @@ impl<'a> Sensitivity<'a> {
         self.border.system().model.robot
     }
 
+    /// Tendon `tendon`'s log tensions z = ln(tau / tau(0)) at the nodes of its span and
+    /// their derivative in the last solve with these factors (the bordered solve's dz/dq);
+    /// None for a tendon without friction, whose tension is constant.
+    pub(super) fn log_tensions(&self, tendon: usize) -> Option<(Vec<f64>, Vec<f64>)> {
+        self.border.log_tensions(tendon)
+    }
+
+    /// The mesh the system is collocated on (the solution's nodes).
+    pub(super) fn mesh(&self) -> &Mesh {
+        &self.border.system().mesh
+    }
+
     /// Number of nodes (the solution's).
     pub fn nodes(&self) -> usize {
         self.states.len()
@@ -463,50 +474,6 @@ impl<'a> Sensitivity<'a> {
             .collect())
     }
 
-    /// The tip pose's derivative (position, then the world-frame rotation vector) for the
-    /// right-hand side in `scratch[0]`, from the last node of the solve alone
-    /// ([`Workspace::solve_again_last`]: no back substitution through the other nodes);
-    /// bitwise the last entry of [`Sensitivity::respond`]'s. None with friction, whose
-    /// bordered solve needs every node.
-    fn tip_response(&mut self) -> Result<Option<Vector6<f64>>> {
-        if self.border.border_rows() > 0 {
-            return Ok(None);
-        }
-        let n = self.border.system().unknowns();
-        let dx = self
-            .workspace
-            .solve_again_last(&self.scratch[0][..n])
-            .ok_or_else(singular)?;
-        let tip = &self.states[self.states.len() - 1];
-        let length = self.robot().length();
-        let [p, theta, ..] = unknowns::node_increments(&dx, 0, length);
-        let rotation = tip.R * theta;
-        Ok(Some(Vector6::new(
-            p[0],
-            p[1],
-            p[2],
-            rotation[0],
-            rotation[1],
-            rotation[2],
-        )))
-    }
-
-    /// The tip pose's derivative in tendon `tendon`'s tension (per N), the pull-ins `held`:
-    /// [`Sensitivity::tension`]'s last node, solved for the tip alone where nothing needs
-    /// the other nodes (no friction, no held pull-ins).
-    ///
-    /// # Errors
-    /// As [`Sensitivity::tension`].
-    fn tension_tip(&mut self, held: &tip::Held, tendon: usize) -> Result<Vector6<f64>> {
-        if !held.holds() {
-            self.tension_rhs(tendon)?;
-            if let Some(pose) = self.tip_response()? {
-                return Ok(pose);
-            }
-        }
-        held.tip(&self.tension(tendon)?)
-    }
-
     /// Tendon `tendon` (0-based) of `robot`: [`crate::Error::InvalidInput`] when out of range.
     fn tendon_of(robot: &'a Robot, tendon: usize) -> Result<&'a crate::model::tendon::Tendon> {
         robot.tendons.get(tendon).ok_or_else(|| {
@@ -520,7 +487,8 @@ impl<'a> Sensitivity<'a> {
 
     /// The derivative of every node state with respect to tendon `tendon`'s friction
     /// coefficient mu (per unit of mu), by central differences of the residual (backbone and
-    /// capstan rows) at [`RELATIVE_STEP`] of mu and the bordered solve (docs/friction.md).
+    /// capstan rows) with the step [`RELATIVE_STEP`] (mu's scale is 1; forward differences
+    /// for mu below the step) and the bordered solve (docs/friction.md).
     ///
     /// # Errors
     /// [`crate::Error::InvalidInput`] for a tendon index out of range or a tendon without
@@ -537,7 +505,17 @@ impl<'a> Sensitivity<'a> {
             ));
         };
         let mu = friction.coefficient;
-        self.derivative(RELATIVE_STEP * mu, Difference::Central, |r, dq| {
+        // mu's scale is 1, not mu: it acts through exp(mu Theta) with turning angles Theta
+        // of about a radian, so a step of 1e-4 truncates at about 1e-8 as for the other
+        // parameters, and rounds 1 / mu times less than 1e-4 mu would (d tip / d mu within
+        // 5e-7 of differences of solves at mu = 0.05 with 1e-4 mu, measured; tests/
+        // friction_pull_in.rs). Below the step the stencil stays on mu's side of 0.
+        let difference = if mu > RELATIVE_STEP {
+            Difference::Central
+        } else {
+            Difference::Forward
+        };
+        self.derivative(RELATIVE_STEP, difference, |r, dq| {
             if let Some(f) = &mut r.tendons[tendon].friction {
                 f.coefficient = mu + dq;
             }

@@ -1,15 +1,15 @@
 //! Tip sensitivities in one call ([`tip_sensitivities`]: tensions, tip wrench, moduli,
 //! base pose) and the whole-backbone position derivative with respect to one tension, both
-//! from one [`Sensitivity`] (one factorization).
+//! from one [`Sensitivity`] (one factorization), and the solves for the tip alone.
 
-use super::{Difference, NodeDerivative, RELATIVE_STEP, Sensitivity};
+use super::held::Held;
+use super::{Difference, NodeDerivative, RELATIVE_STEP, Sensitivity, singular};
+use crate::collocation::unknowns;
 use crate::error::Result;
-use crate::model::length::{NodeQuadrature, speed_gradient};
-use crate::model::robot::{Robot, RodModel};
+use crate::model::robot::Robot;
 use crate::model::rod::{Geometry, Rod, Section, Stiffness, shear_modulus};
-use crate::model::routing::RoutingPoint;
 use crate::solution::Solution;
-use nalgebra::{DMatrix, DVector, Matrix6, Matrix6x3, Vector3, Vector6};
+use nalgebra::{DMatrix, Matrix6, Matrix6x3, Vector3, Vector6};
 
 /// Tip pose derivatives with respect to the moduli of a rod built from geometry. Each is a
 /// 6-vector: tip position (m/Pa), then tip rotation vector, world frame (rad/Pa).
@@ -117,7 +117,8 @@ pub fn tip_sensitivities(robot: &Robot, solution: &Solution) -> Result<TipSensit
             tension.set_column(i, &tip.sens.tension_tip(&held, i)?);
         }
         if robot.tendons[i].active_friction().is_some() {
-            friction.set_column(i, &held.tip(&tip.sens.friction(i)?)?);
+            let d = tip.sens.friction(i)?;
+            friction.set_column(i, &held.tip(&d, &tip.sens)?);
         }
     }
     let mut tip_force = Matrix6x3::zeros();
@@ -143,93 +144,50 @@ pub fn tip_sensitivities(robot: &Robot, solution: &Solution) -> Result<TipSensit
     })
 }
 
-/// Derivatives with the pull-ins of the taut displacement-controlled tendons held: a
-/// parameter's state derivative D_p changes their path lengths by dl = G D_p, and their
-/// tensions follow to keep the lengths, S dtau = dl with S = C - dl/dtau
-/// ([`TensionDirections`]); the tip moves by its own derivative plus d(tip)/dtau dtau.
-/// Without such tendons it passes the derivatives through.
-pub(super) struct Held {
-    /// The taut displacement-controlled tendons' directions and the LU factors of their
-    /// S = C - dl/dtau; `None` without any.
-    directions: Option<(TensionDirections, nalgebra::LU<f64, nalgebra::Dyn, nalgebra::Dyn>)>,
-}
-
-impl Held {
-    /// The held tendons of `robot` at `solution` (`sens` linearized there): taut ones (a
-    /// slack tendon stays slack for small changes, also one just taut at 0 N).
-    pub(super) fn new(sens: &mut Sensitivity, robot: &Robot, solution: &Solution) -> Result<Self> {
-        let taut: Vec<usize> = (0..robot.tendons.len())
-            .filter(|&i| {
-                let state = &solution.tendons[i];
-                robot.tendons[i].displacement().is_some() && state.slack == 0.0 && state.tension > 0.0
-            })
-            .collect();
-        unheld_friction(robot, &taut)?;
-        let directions = if taut.is_empty() {
-            None
-        } else {
-            let h = TensionDirections::from(sens, solution, taut)?;
-            let schur = h.displacement_by_tension().lu();
-            Some((h, schur))
-        };
-        Ok(Held { directions })
-    }
-
-    /// Whether any tendon's pull-in is held (taut and displacement-controlled).
-    pub(super) fn holds(&self) -> bool {
-        self.directions.is_some()
-    }
-
-    /// Refuses the offset of a held tendon's routing: it moves the tendon's path length
-    /// at fixed states too, a term the held derivatives do not include
-    /// ([`crate::Error::InvalidInput`]); any other parameter passes.
-    pub(super) fn check(&self, parameter: crate::model::parameter::Parameter) -> Result<()> {
-        use crate::model::parameter::Parameter;
-        match (parameter, self.directions()) {
-            (Parameter::RoutingOffset(i, _), Some(h)) if h.tendons.contains(&i) => Err(crate::error::invalid(
-                parameter.to_string(),
-                format!(
-                    "has no derivative here: tendon {} is displacement-controlled and taut, and its offset moves its \
-                     path length, which the pull-in holds (a term these derivatives do not include)",
-                    i + 1
-                ),
-                format!(
-                    "give tendon {} a tension (its solved one) to differentiate in its routing",
-                    i + 1
-                ),
-            )),
-            _ => Ok(()),
+impl Sensitivity<'_> {
+    /// The tip pose's derivative (position, then the world-frame rotation vector) for the
+    /// right-hand side in `scratch[0]`, from the last node of the solve alone
+    /// ([`Workspace::solve_again_last`]: no back substitution through the other nodes);
+    /// bitwise the last entry of [`Sensitivity::respond`]'s. None with friction, whose
+    /// bordered solve needs every node.
+    fn tip_response(&mut self) -> Result<Option<Vector6<f64>>> {
+        if self.border.border_rows() > 0 {
+            return Ok(None);
         }
+        let n = self.border.system().unknowns();
+        let dx = self
+            .workspace
+            .solve_again_last(&self.scratch[0][..n])
+            .ok_or_else(singular)?;
+        let tip = &self.states[self.states.len() - 1];
+        let length = self.robot().length();
+        let [p, theta, ..] = unknowns::node_increments(&dx, 0, length);
+        let rotation = tip.R * theta;
+        Ok(Some(Vector6::new(
+            p[0],
+            p[1],
+            p[2],
+            rotation[0],
+            rotation[1],
+            rotation[2],
+        )))
     }
 
-    /// The held tendons' tension directions, when there are any (the adjoint's border).
-    pub(super) fn directions(&self) -> Option<&TensionDirections> {
-        self.directions.as_ref().map(|(h, _)| h)
-    }
-
-    /// The tip pose's derivative for the state derivative `d`, the pull-ins held.
-    pub(super) fn tip(&self, d: &[NodeDerivative]) -> Result<Vector6<f64>> {
-        let own = d[d.len() - 1].pose();
-        let Some((h, schur)) = &self.directions else {
-            return Ok(own);
-        };
-        let dtau = schur.solve(&h.length_change(d)).ok_or_else(super::singular)?;
-        Ok(own + Vector6::from_iterator((&h.tip * dtau).iter().copied()))
-    }
-
-    /// d(tip pose)/dq_i for the displacement-controlled tendon `i` (per m): S dtau = e_i
-    /// over the held tendons; zero for a slack one.
-    pub(super) fn pull(&self, i: usize) -> Result<Vector6<f64>> {
-        let Some((h, schur)) = &self.directions else {
-            return Ok(Vector6::zeros());
-        };
-        let Some(m) = h.tendons.iter().position(|&j| j == i) else {
-            return Ok(Vector6::zeros());
-        };
-        let mut unit = DVector::zeros(h.tendons.len());
-        unit[m] = 1.0;
-        let dtau = schur.solve(&unit).ok_or_else(super::singular)?;
-        Ok(Vector6::from_iterator((&h.tip * dtau).iter().copied()))
+    /// The tip pose's derivative in tendon `tendon`'s tension (per N), the pull-ins `held`:
+    /// [`Sensitivity::tension`]'s last node, solved for the tip alone where nothing needs
+    /// the other nodes (no friction, no held pull-ins).
+    ///
+    /// # Errors
+    /// As [`Sensitivity::tension`].
+    pub(super) fn tension_tip(&mut self, held: &Held, tendon: usize) -> Result<Vector6<f64>> {
+        if !held.holds() {
+            self.tension_rhs(tendon)?;
+            if let Some(pose) = self.tip_response()? {
+                return Ok(pose);
+            }
+        }
+        let d = self.tension(tendon)?;
+        held.tip(&d, self)
     }
 }
 
@@ -247,7 +205,10 @@ impl Tip<'_, '_> {
         rhs(&mut self.sens)?;
         match &self.multipliers {
             Some(m) => Ok(self.sens.tip_by(m)),
-            None => self.held.tip(&self.sens.respond()?),
+            None => {
+                let d = self.sens.respond()?;
+                self.held.tip(&d, &self.sens)
+            }
         }
     }
 }
@@ -267,13 +228,15 @@ fn moduli(tip: &mut Tip) -> Result<Option<ModulusSensitivities>> {
             tip.of(|s| s.stiffness_rhs(&unit_shear))?,
         )
     } else {
+        // Each held right after its own solve (the log tensions' derivative is the last one's).
         let by_g = tip
             .sens
             .derivative(RELATIVE_STEP * shear, Difference::Central, |r, d| {
                 r.rod.stiffness = Stiffness::Uniform(Section::tube(o, i, e, shear + d));
             })?;
+        let by_g = tip.held.tip(&by_g, &tip.sens)?;
         let by_e = youngs_modulus(&mut tip.sens, g)?;
-        (tip.held.tip(&by_e)?, tip.held.tip(&by_g)?)
+        (tip.held.tip(&by_e, &tip.sens)?, by_g)
     };
     Ok(Some(ModulusSensitivities {
         youngs_modulus,
@@ -355,218 +318,4 @@ fn stiffnesses(section: &Section) -> [f64; 6] {
 pub fn backbone_tension_sensitivity(robot: &Robot, solution: &Solution, tendon: usize) -> Result<Vec<Vector3<f64>>> {
     let mut sens = Sensitivity::new(robot, solution)?;
     Ok(sens.tension(tendon)?.iter().map(|d| d.p).collect())
-}
-
-/// Derivatives of a solution with respect to the pull-ins of its displacement-controlled
-/// tendons (docs/actuation.md): what a resolved-rate controller needs.
-#[derive(Clone, Debug, PartialEq)]
-pub struct DisplacementSensitivities {
-    /// The displacement-controlled tendons (0-based indices), the columns' order.
-    pub tendons: Vec<usize>,
-    /// d(tip pose)/dq, 6 x k: tip position (m/m), then the world-frame tip rotation vector
-    /// (rad/m), as in [`TipSensitivities`].
-    pub tip: DMatrix<f64>,
-    /// d(tau)/dq, k x k (N/m): row i the tension of `tendons[i]`. A slack tendon's row is
-    /// 0 (it stays slack for small changes), also one just taut at 0 N.
-    pub tension: DMatrix<f64>,
-}
-
-/// The derivatives of `solution`'s tip pose and tensions with respect to the pull-ins q of
-/// `robot`'s displacement-controlled tendons, by the implicit function theorem on the
-/// bordered system: with D_m = dx/dtau_m (one solve each with the factors of
-/// [`Sensitivity`]), the taut tendons' constraints phi_j = l_ref_j - l_j - q_j + c_j tau_j = 0
-/// give S dtau/dq = I with S_jm = c_j delta_jm - dl_j/dtau_m, where dl_j/dtau_m is
-/// the length quadrature's derivative along D_m; slack tendons (at 0 N) keep dtau = 0.
-/// Then d(tip)/dq = d(tip)/dtau dtau/dq.
-///
-/// # Errors
-/// [`crate::Error::InvalidInput`] when the robot has no displacement-controlled tendon or
-/// the Schur complement is singular (a tendon that cannot change its length); as
-/// [`Sensitivity::new`] (the solution must be `robot`'s).
-pub fn displacement_sensitivities(robot: &Robot, solution: &Solution) -> Result<DisplacementSensitivities> {
-    let tendons: Vec<usize> = (0..robot.tendons.len())
-        .filter(|&i| robot.tendons[i].displacement().is_some())
-        .collect();
-    if tendons.is_empty() {
-        return Err(crate::error::invalid(
-            "robot.tendons",
-            "has no displacement-controlled tendon",
-            "give a tendon a displacement (pull-in) or use tip_sensitivities for tensions",
-        ));
-    }
-    unheld_friction(robot, &tendons)?;
-    let directions = TensionDirections::new(robot, solution, tendons)?;
-    let taut: Vec<bool> = directions
-        .tendons
-        .iter()
-        .map(|&i| solution.tendons[i].slack == 0.0 && solution.tendons[i].tension > 0.0)
-        .collect();
-    let tension = directions.tension_by_displacement(&taut)?;
-    Ok(DisplacementSensitivities {
-        tip: &directions.tip * &tension,
-        tendons: directions.tendons,
-        tension,
-    })
-}
-
-/// An error naming the first of the displacement-controlled `tendons` with friction: their
-/// pull-ins' derivatives would need the stretch of the varying tension's derivative, not
-/// modelled yet (docs/friction.md section 3b).
-fn unheld_friction(robot: &Robot, tendons: &[usize]) -> Result<()> {
-    match tendons.iter().find(|&&i| robot.tendons[i].active_friction().is_some()) {
-        None => Ok(()),
-        Some(&i) => Err(crate::error::invalid(
-            format!("tendons[{i}].displacement"),
-            "is a pull-in on a tendon with friction, and derivatives at held pull-ins do not model friction yet",
-            "differentiate in the tension: give the tendon the tension its solve reports instead of the pull-in",
-        )),
-    }
-}
-
-/// What every pull-in derivative is made of: the tip's and the path lengths' derivatives
-/// along each of k tendons' tensions (the k solves of [`displacement_sensitivities`]);
-/// combining them for a set of taut tendons is a k x k solve.
-pub(crate) struct TensionDirections {
-    /// The tendons (0-based), the columns' order.
-    pub(crate) tendons: Vec<usize>,
-    /// d(tip pose)/dtau_m, 6 x k.
-    pub(crate) tip: DMatrix<f64>,
-    /// dl_j/dtau_m (m/N), k x k.
-    length: DMatrix<f64>,
-    /// c_j (m/N): each tendon's compliance at its reference length.
-    compliance: Vec<f64>,
-    /// Each tendon's path-length quadrature and routing along it: dl_j along any derivative.
-    paths: Vec<(NodeQuadrature, Vec<RoutingPoint>)>,
-    /// The solution's node strains (v, u), where the path speeds are linearized.
-    strains: Vec<(Vector3<f64>, Vector3<f64>)>,
-    /// A Kirchhoff rod's: the paths do not change with the node coordinate v (the force's).
-    fixed_strain: bool,
-}
-
-impl TensionDirections {
-    /// The tension directions of `tendons` (0-based) at `solution`, a solution of `robot`,
-    /// whatever their inputs.
-    ///
-    /// # Errors
-    /// As [`Sensitivity::new`] and [`Sensitivity::tension`].
-    pub(crate) fn new(robot: &Robot, solution: &Solution, tendons: Vec<usize>) -> Result<Self> {
-        let solved = robot.with_tensions(&solution.tensions());
-        let mut sens = Sensitivity::new(&solved, solution)?;
-        Self::from(&mut sens, solution, tendons)
-    }
-
-    /// As [`TensionDirections::new`], with the factors of `sens` (linearized at `solution`
-    /// with its solved tensions).
-    ///
-    /// # Errors
-    /// As [`Sensitivity::tension`].
-    fn from(sens: &mut Sensitivity, solution: &Solution, tendons: Vec<usize>) -> Result<Self> {
-        let robot = sens.robot();
-        let k = tendons.len();
-        let rod_length = robot.length();
-        let s: Vec<f64> = solution.nodes.iter().map(|n| n.s).collect();
-        let paths = tendons
-            .iter()
-            .map(|&i| {
-                let t = &robot.tendons[i];
-                let quadrature = NodeQuadrature::new(&s, t.end(rod_length));
-                let routing = quadrature
-                    .weights
-                    .iter()
-                    .map(|&(node, _)| t.routing.at(s[node], rod_length))
-                    .collect();
-                (quadrature, routing)
-            })
-            .collect();
-        let strains = solution.nodes.iter().map(|n| (n.v, n.u)).collect();
-        let compliance = tendons
-            .iter()
-            .map(|&i| robot.tendons[i].compliance(solution.tendons[i].reference_length))
-            .collect();
-        let mut directions = TensionDirections {
-            tip: DMatrix::zeros(6, k),
-            length: DMatrix::zeros(k, k),
-            tendons,
-            compliance,
-            paths,
-            strains,
-            fixed_strain: robot.rod_model == RodModel::Kirchhoff,
-        };
-        for m in 0..k {
-            let d = sens.tension(directions.tendons[m])?;
-            directions.tip.set_column(m, &d[d.len() - 1].pose());
-            let change = directions.length_change(&d);
-            directions.length.set_column(m, &change);
-        }
-        Ok(directions)
-    }
-
-    /// dl_j (m per unit of the parameter) of every tendon along the derivative `d` of the
-    /// node states: the quadrature of the path speed's gradient (docs/actuation.md).
-    fn length_change(&self, d: &[NodeDerivative]) -> DVector<f64> {
-        DVector::from_iterator(
-            self.tendons.len(),
-            self.paths.iter().map(|(quadrature, routing)| {
-                quadrature
-                    .weights
-                    .iter()
-                    .zip(routing)
-                    .map(|(&(node, w), rp)| {
-                        let (v, u) = &self.strains[node];
-                        let (dv, du) = speed_gradient(rp, v, u);
-                        w * (dv.dot(&d[node].v) + du.dot(&d[node].u))
-                    })
-                    .sum::<f64>()
-            }),
-        )
-    }
-
-    /// Adds G^T w to the scaled cotangent `g` (12 per node, d = (dp / L, dtheta, dv, du L)):
-    /// the transpose of [`TensionDirections::length_change`], w_j weighting tendon j's path
-    /// length (rod length `length`, m). Node k's dv slot gets sum_j w_j weight dspeed/dv,
-    /// its du slot sum_j w_j weight dspeed/du / L (du = d_u / L).
-    pub(super) fn add_length_cotangent(&self, w: &DVector<f64>, length: f64, g: &mut [f64]) {
-        use crate::collocation::unknowns::{NODE, U, V};
-        for ((quadrature, routing), &w_j) in self.paths.iter().zip(w.iter()) {
-            for (&(node, weight), rp) in quadrature.weights.iter().zip(routing) {
-                let (v, u) = &self.strains[node];
-                let (dv, du) = speed_gradient(rp, v, u);
-                for i in 0..3 {
-                    if !self.fixed_strain {
-                        g[node * NODE + V + i] += w_j * weight * dv[i];
-                    }
-                    g[node * NODE + U + i] += w_j * weight * du[i] / length;
-                }
-            }
-        }
-    }
-
-    /// dq/dtau (m/N, k x k): how the pull-ins that hold the tendons just taut change with
-    /// the tensions, C - dl/dtau (q_j = l_ref_j - l_j + c_j tau_j).
-    pub(crate) fn displacement_by_tension(&self) -> DMatrix<f64> {
-        let mut q = -&self.length;
-        for (j, c) in self.compliance.iter().enumerate() {
-            q[(j, j)] += c;
-        }
-        q
-    }
-
-    /// dtau/dq (N/m, k x k) with the tendons flagged in `taut` taut (their constraints
-    /// hold: S dtau = dq, S = C - dl/dtau) and the others slack (dtau = 0).
-    ///
-    /// # Errors
-    /// [`crate::Error::InvalidInput`] when the Schur complement is singular.
-    pub(crate) fn tension_by_displacement(&self, taut: &[bool]) -> Result<DMatrix<f64>> {
-        let k = self.tendons.len();
-        let mut schur = self.displacement_by_tension();
-        let mut rhs = DMatrix::<f64>::identity(k, k);
-        for j in 0..k {
-            if !taut[j] {
-                schur.row_mut(j).fill(0.0);
-                schur[(j, j)] = 1.0;
-                rhs[(j, j)] = 0.0;
-            }
-        }
-        schur.lu().solve(&rhs).ok_or_else(super::singular)
-    }
 }
