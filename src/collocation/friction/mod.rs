@@ -22,6 +22,7 @@ mod interval;
 mod linearized;
 mod profile;
 mod staircase;
+mod start;
 
 pub use grip::Contact;
 pub(crate) use grip::Grip;
@@ -406,6 +407,9 @@ fn refine_with_friction(
                     *value = linear(s, old, node.s);
                 }
             }
+        } else {
+            // From the frictionless shape: its tension profile and the shape it bends.
+            start::capstan_start(&model, &system.mesh, &mut x, &mut profile);
         }
         system.friction = Some(profile);
         let mut ws = match workspace::spare(&system.mesh, options.linear_solver) {
