@@ -37,7 +37,7 @@ pub(crate) fn integrate_poses(
 }
 
 /// [`integrate_poses`] into `out` (cleared first), whose buffer a caller reuses.
-fn integrate_poses_into(
+pub(crate) fn integrate_poses_into(
     model: &Model,
     nodes: &[MeshNode],
     strains: &[(Vector3<f64>, Vector3<f64>)],
@@ -214,28 +214,24 @@ pub fn rigid_estimate(model: &Model, nodes: &[MeshNode]) -> Vec<State> {
 }
 
 /// The node strains that carry the loads distal to each node on the shape of the states
-/// `x` (the sweep of [`rigid_estimate`]), with every tendon's tension at node k taken from
-/// `tensions[k]` instead of the model's: a tension that varies along a tendon (friction,
-/// docs/friction.md section 3) pulls each cross-section with its local value.
+/// `x` (the sweep of [`rigid_estimate`]; `sites`: the nodes' sites), with every tendon's
+/// tension at node k taken from `tensions[k]` instead of the model's: a tension that varies
+/// along a tendon (friction, docs/friction.md section 3) pulls each cross-section with its
+/// local value. Into `out`; `wrench` is the buffer of the distal wrenches.
+#[allow(clippy::type_complexity)]
 pub(crate) fn distal_strains(
     model: &Model,
-    nodes: &[MeshNode],
+    (nodes, sites): (&[MeshNode], &[Site]),
     x: &[State],
     tensions: &[Vec<f64>],
-) -> Vec<(Vector3<f64>, Vector3<f64>)> {
-    let sites: Vec<Site> = nodes.iter().map(|n| model.site_on(n.s, n.segment_end)).collect();
+    (wrench, out): (
+        &mut Vec<(Vector3<f64>, Vector3<f64>)>,
+        &mut Vec<(Vector3<f64>, Vector3<f64>)>,
+    ),
+) {
     let shape: Vec<_> = x.iter().map(|s| (s.p, s.R)).collect();
     let strains: Vec<_> = x.iter().map(|s| (s.v, s.u)).collect();
-    let (mut wrench, mut out) = (Vec::new(), Vec::new());
-    sweep(
-        model,
-        nodes,
-        &sites,
-        (&shape, &strains),
-        Some(tensions),
-        (&mut wrench, &mut out),
-    );
-    out
+    sweep(model, nodes, sites, (&shape, &strains), Some(tensions), (wrench, out));
 }
 
 /// One sweep: node strains carrying the loads distal to each node, summed on `shape`

@@ -15,48 +15,46 @@
 
 use super::Profile;
 use crate::mesh::Mesh;
-use crate::mesh::guess::{distal_strains, integrate_poses};
-use crate::model::equations::Model;
+use crate::mesh::guess::{distal_strains, integrate_poses, integrate_poses_into};
+use crate::model::equations::{Model, Site};
+use crate::model::routing::RoutingPoint;
 use crate::solution::State;
 use nalgebra::Vector3;
 
 /// Most passes of the start. Each pass's shape change moves the turning, hence the log
 /// tensions, by about mu times the change of the bending angle, and the tip load's moment
-/// arm with it; relaxed, the passes settle in 5 to 8 (S and H at mu = 0.1, docs/friction.md
-/// section 3), each costing about what one frictionless sweep of the rigid-equilibrium
-/// estimate does.
+/// arm with it; relaxed, the passes settle in 4 (S) to 8 (H) at mu = 0.1 (docs/friction.md
+/// section 3), each costing about a tenth of a residual evaluation with friction.
 const PASSES: usize = 10;
 
-/// A pass that changes the strains by less than this (scaled: v, and u L) is the last: the
-/// start's own error (the turning between nodes as the angle between their tangents, the
-/// sweep's midpoint rule) is about 1e-5 there, and Newton removes it in one step.
-const SETTLED: f64 = 1e-7;
+/// A pass that changes the strains by less than this (scaled: v, and u L) is the last: a
+/// start that far from the solution leaves Newton's first step about 3e-8 (its quadratic
+/// constant is about 3 in these units), which chord steps finish, and the start's own error
+/// (the turning between nodes as the angle between their tangents, the sweep's midpoint
+/// rule) is 1e-5 to 1e-4 anyway.
+const SETTLED: f64 = 1e-4;
 
 /// Log tensions of `profile` marched along the states `x` by the capstan law
 /// `z' = w mu |t'|`: the turning of tendon j's path between two nodes is the angle between
 /// its unit tangents there (second order in the node spacing; the solve's capstan rows
 /// then correct it to order 4). An unloaded tendon keeps z = 0, as its capstan rows do.
-pub(super) fn march(model: &Model, mesh: &Mesh, x: &[State], profile: &mut Profile) {
-    let robot = model.robot;
-    let length = robot.length();
-    for j in 0..profile.count() {
-        let tendon = &robot.tendons[profile.slipping[j]];
+/// `sites` are the nodes' sites, `routes[j]` slip j's routing at the nodes of its span.
+fn march(model: &Model, (sites, routes): (&[Site], &[Vec<RoutingPoint>]), x: &[State], profile: &mut Profile) {
+    for (j, route) in routes.iter().enumerate() {
+        let tendon = &model.robot.tendons[profile.slipping[j]];
         let slope = tendon
             .active_friction()
             .map_or(0.0, |f| f.motion.sign() * f.coefficient);
         let loaded = profile.base[j] > 0.0;
         let tangent = |k: usize| {
-            let site = model.site_on(x[k].s, mesh.nodes[k].segment_end);
-            let rp = tendon.routing.at(x[k].s, length);
-            let v = site.strain(&x[k].v);
-            (x[k].R * (x[k].u.cross(&rp.r) + rp.r_s + v)).normalize()
+            let rp = &route[k];
+            (x[k].R * (x[k].u.cross(&rp.r) + rp.r_s + sites[k].strain(&x[k].v))).normalize()
         };
-        let span = profile.spans[j];
         let mut z = 0.0;
         let mut last = tangent(0);
         profile.z[j][0] = 0.0;
         for k in 1..profile.z[j].len() {
-            if k <= span {
+            if k < route.len() {
                 let next = tangent(k);
                 if loaded {
                     z += slope * last.cross(&next).norm().atan2(last.dot(&next));
@@ -68,42 +66,65 @@ pub(super) fn march(model: &Model, mesh: &Mesh, x: &[State], profile: &mut Profi
     }
 }
 
+/// Every tendon's tension at every node from `profile` into `out` (the profile for the
+/// slips, the model's tension for the others).
+fn node_tensions(model: &Model, profile: &Profile, out: &mut [Vec<f64>]) {
+    for (n, t) in out.iter_mut().enumerate() {
+        t.copy_from_slice(&model.tensions);
+        for (j, &i) in profile.slipping.iter().enumerate() {
+            t[i] = profile.tension(j, profile.z[j][n.min(profile.spans[j])]);
+        }
+    }
+}
+
 /// Moves the frictionless solution `x` (on `mesh`) to the start of Newton with friction and
 /// writes the log tensions marched along it into `profile` (module docs). The passes are
-/// relaxed as the rigid-equilibrium estimate's sweeps are (Aitken's factor, the tip load's
-/// moment arm swings with the shape as the tension profile bends it) and stop when a pass
-/// changes the strains less than the one before did not (then the shape before it is kept).
+/// relaxed as the rigid-equilibrium estimate's sweeps are (Aitken's factor: the tip load's
+/// moment arm swings with the shape the tension profile bends) and stop when a pass changes
+/// the strains less than [`SETTLED`], or not less than the one before did (then the shape
+/// before it is kept).
 pub(super) fn capstan_start(model: &Model, mesh: &Mesh, x: &mut [State], profile: &mut Profile) {
     let nodes = &mesh.nodes;
     let length = model.robot.length();
+    let sites: Vec<Site> = nodes.iter().map(|n| model.site_on(n.s, n.segment_end)).collect();
+    let routes: Vec<Vec<RoutingPoint>> = (0..profile.count())
+        .map(|j| {
+            let routing = &model.robot.tendons[profile.slipping[j]].routing;
+            nodes[..=profile.spans[j]]
+                .iter()
+                .map(|n| routing.at(n.s, length))
+                .collect()
+        })
+        .collect();
     let x0 = x.to_vec();
-    let constant: Vec<Vec<f64>> = vec![model.tensions.clone(); nodes.len()];
-    let plain = distal_strains(model, nodes, &x0, &constant);
+    let mut tensions: Vec<Vec<f64>> = vec![model.tensions.clone(); nodes.len()];
+    let (mut wrench, mut plain, mut rough) = (Vec::new(), Vec::new(), Vec::new());
+    distal_strains(model, (nodes, &sites), &x0, &tensions, (&mut wrench, &mut plain));
     let strains0: Vec<(Vector3<f64>, Vector3<f64>)> = x0.iter().map(|s| (s.v, s.u)).collect();
     let poses0 = integrate_poses(model, nodes, &strains0);
     let mut strains = strains0.clone();
-    let (mut last_change, mut relaxation) = (f64::INFINITY, 1.0);
-    let mut last_step: Vec<f64> = Vec::new();
+    let mut poses = Vec::with_capacity(nodes.len());
+    let (mut last_change, mut relaxation) = (f64::INFINITY, 1.0f64);
+    let (mut step, mut last_step) = (Vec::with_capacity(6 * nodes.len()), Vec::with_capacity(6 * nodes.len()));
     let mut kept = x.to_vec();
     for _ in 0..PASSES {
-        march(model, mesh, x, profile);
-        let tensions = profile.node_tensions(model);
-        let rough = distal_strains(model, nodes, x, &tensions);
+        march(model, (&sites, &routes), x, profile);
+        node_tensions(model, profile, &mut tensions);
+        distal_strains(model, (nodes, &sites), x, &tensions, (&mut wrench, &mut rough));
         // The fixed-point step, flattened (v then u L per node, so all are comparable).
-        let step: Vec<f64> = strains
-            .iter()
-            .zip(strains0.iter().zip(rough.iter().zip(&plain)))
-            .flat_map(|(s, (s0, (a, b)))| {
-                let (dv, du) = (s0.0 + (a.0 - b.0) - s.0, (s0.1 + (a.1 - b.1) - s.1) * length);
-                [dv[0], dv[1], dv[2], du[0], du[1], du[2]]
-            })
-            .collect();
+        step.clear();
+        step.extend(
+            strains
+                .iter()
+                .zip(strains0.iter().zip(rough.iter().zip(&plain)))
+                .flat_map(|(s, (s0, (a, b)))| {
+                    let (dv, du) = (s0.0 + (a.0 - b.0) - s.0, (s0.1 + (a.1 - b.1) - s.1) * length);
+                    [dv[0], dv[1], dv[2], du[0], du[1], du[2]]
+                }),
+        );
         let change = step.iter().fold(0.0f64, |m, v| m.max(v.abs()));
         if !change.is_finite() || change >= last_change {
             x.copy_from_slice(&kept);
-            break;
-        }
-        if change < SETTLED {
             break;
         }
         if !last_step.is_empty() {
@@ -123,7 +144,7 @@ pub(super) fn capstan_start(model: &Model, mesh: &Mesh, x: &mut [State], profile
             }
         }
         kept.copy_from_slice(x);
-        let poses = integrate_poses(model, nodes, &strains);
+        integrate_poses_into(model, nodes, &strains, &mut poses);
         for (k, state) in x.iter_mut().enumerate() {
             let (a, b) = (&poses0[k], &poses[k]);
             *state = State {
@@ -134,10 +155,13 @@ pub(super) fn capstan_start(model: &Model, mesh: &Mesh, x: &mut [State], profile
                 u: strains[k].1,
             };
         }
+        if change < SETTLED {
+            break;
+        }
         last_change = change;
-        last_step = step;
+        std::mem::swap(&mut step, &mut last_step);
     }
-    march(model, mesh, x, profile);
+    march(model, (&sites, &routes), x, profile);
 }
 
 #[cfg(test)]
