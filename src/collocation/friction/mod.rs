@@ -12,7 +12,7 @@
 //! the tension. The whole matrix, reordered node by node, is factored as one staircase
 //! ([`staircase`]; the blocks handed to it in `border.rs`), in the Newton loop of
 //! displacement-controlled tendons ([`newton::run_bordered`]). The solve starts from the
-//! frictionless solution on its mesh.
+//! frictionless solution on its mesh, moved to the capstan start ([`start`]).
 #![allow(non_snake_case)]
 
 mod border;
@@ -370,7 +370,7 @@ fn solve_near(robot: &Robot, options: &Options, near: &Solution) -> Result<Solut
 
 /// On the mesh of `from`'s nodes and from its shape, Newton bordered by the log tensions
 /// ([`Capstan`]) from `previous` (node arc lengths and log tensions per slip, interpolated;
-/// constant tensions when None), its error estimate ([`estimate_with_friction`]) and, with a
+/// the capstan start of [`start`] when None), its error estimate ([`estimate_with_friction`]) and, with a
 /// tolerance, re-meshing until the tip's estimate and the tension profile's (relative,
 /// against the same tolerance as the rotation) meet it. `report` holds what came before
 /// (the frictionless solve's counts, or none); `start` is when the solve began.
