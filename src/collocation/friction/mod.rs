@@ -396,6 +396,8 @@ fn refine_with_friction(
     };
     let model = Model::new(robot);
     let length = robot.length();
+    // Whether the first mesh starts from the capstan start (until Newton fails from it).
+    let mut capstan = previous.is_none();
     // The last mesh's node arc lengths and log tensions, interpolated onto the next.
     loop {
         report.meshes += 1;
@@ -407,7 +409,7 @@ fn refine_with_friction(
                     *value = linear(s, old, node.s);
                 }
             }
-        } else {
+        } else if capstan {
             // From the frictionless shape: its tension profile and the shape it bends.
             start::capstan_start(&model, &system.mesh, &mut x, &mut profile);
         }
@@ -418,6 +420,14 @@ fn refine_with_friction(
         };
         let mut border = Capstan::new(system);
         let (termination, worst) = newton::run_bordered(&mut border, &mut ws, &mut x, &settings, &mut report);
+        if termination != Termination::Converged && std::mem::take(&mut capstan) {
+            // Newton failed from the capstan start: once more from the frictionless solution
+            // with constant tensions, the start of earlier versions (its counts add up).
+            report.meshes -= 1;
+            mesh = Mesh::from_points(robot, &points)?;
+            x = interpolate(&model, from, &mesh);
+            continue;
+        }
         report.termination = termination;
         report.intervals = border.system.mesh.intervals();
         report.unknowns = unknowns::unknowns(border.system.mesh.nodes.len()) + border.z.len();
