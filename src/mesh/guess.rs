@@ -26,7 +26,7 @@ fn strain(model: &Model, node: &MeshNode, v: &Vector3<f64>) -> Vector3<f64> {
 
 /// Poses along the mesh integrated from the base with the node coordinates `v`, `u`
 /// (midpoint rule on the Lie group); left and right limits at a breakpoint share a pose.
-fn integrate_poses(
+pub(crate) fn integrate_poses(
     model: &Model,
     nodes: &[MeshNode],
     strains: &[(Vector3<f64>, Vector3<f64>)],
@@ -37,7 +37,7 @@ fn integrate_poses(
 }
 
 /// [`integrate_poses`] into `out` (cleared first), whose buffer a caller reuses.
-fn integrate_poses_into(
+pub(crate) fn integrate_poses_into(
     model: &Model,
     nodes: &[MeshNode],
     strains: &[(Vector3<f64>, Vector3<f64>)],
@@ -219,7 +219,7 @@ fn rigid_estimate_in(model: &Model, nodes: &[MeshNode], b: &mut SweepBuffers) ->
     sites.clear();
     sites.extend(nodes.iter().map(|n| model.site_on(n.s, n.segment_end)));
     for _ in 0..MAX_SWEEPS {
-        sweep(model, nodes, sites, shape, strains, wrench, next);
+        sweep(model, nodes, sites, (shape, strains), None, (wrench, next));
         // The fixed-point step, flattened (v then u L per node, so all are comparable).
         step.clear();
         step.extend(next.iter().zip(strains.iter()).flat_map(|(a, b)| {
@@ -265,16 +265,42 @@ fn rigid_estimate_in(model: &Model, nodes: &[MeshNode], b: &mut SweepBuffers) ->
         .collect()
 }
 
+/// The node strains that carry the loads distal to each node on the shape of the states
+/// `x` (the sweep of [`rigid_estimate`]; `sites`: the nodes' sites), with every tendon's
+/// tension at node k taken from `tensions[k]` instead of the model's: a tension that varies
+/// along a tendon (friction, docs/friction.md section 3) pulls each cross-section with its
+/// local value. Into `out`; `wrench` is the buffer of the distal wrenches.
+#[allow(clippy::type_complexity)]
+pub(crate) fn distal_strains(
+    model: &Model,
+    (nodes, sites): (&[MeshNode], &[Site]),
+    x: &[State],
+    tensions: &[Vec<f64>],
+    (wrench, out): (
+        &mut Vec<(Vector3<f64>, Vector3<f64>)>,
+        &mut Vec<(Vector3<f64>, Vector3<f64>)>,
+    ),
+) {
+    let shape: Vec<_> = x.iter().map(|s| (s.p, s.R)).collect();
+    let strains: Vec<_> = x.iter().map(|s| (s.v, s.u)).collect();
+    sweep(model, nodes, sites, (&shape, &strains), Some(tensions), (wrench, out));
+}
+
 /// One sweep: node strains carrying the loads distal to each node, summed on `shape`
-/// (`sites`: the nodes' sites), into `out`; `wrench` is the buffer of the distal wrenches.
+/// (`sites`: the nodes' sites; `strains`: the node coordinates the tendons' paths are
+/// taken from), into `out`, with the tensions of node k `tensions[k]` when given, else
+/// the model's; `wrench` is the buffer of the distal wrenches.
+#[allow(clippy::type_complexity)]
 fn sweep(
     model: &Model,
     nodes: &[MeshNode],
     sites: &[Site],
-    shape: &[(Vector3<f64>, Matrix3<f64>)],
-    strains: &[(Vector3<f64>, Vector3<f64>)],
-    wrench: &mut Vec<(Vector3<f64>, Vector3<f64>)>,
-    out: &mut Vec<(Vector3<f64>, Vector3<f64>)>,
+    (shape, strains): (&[(Vector3<f64>, Matrix3<f64>)], &[(Vector3<f64>, Vector3<f64>)]),
+    tensions: Option<&[Vec<f64>]>,
+    (wrench, out): (
+        &mut Vec<(Vector3<f64>, Vector3<f64>)>,
+        &mut Vec<(Vector3<f64>, Vector3<f64>)>,
+    ),
 ) {
     let last = nodes.len() - 1;
     // Distal load sums (N, M about p_k) by a backward sweep with the trapezoid rule.
@@ -297,17 +323,26 @@ fn sweep(
         };
     }
     out.clear();
-    out.extend(nodes.iter().enumerate().map(|(k, node)| {
+    // The model with node k's tensions, when they vary along the tendons.
+    let mut local = tensions.map(|_| model.clone());
+    for (k, node) in nodes.iter().enumerate() {
         let site = &sites[k];
         let R = shape[k].1;
         let (v, u) = strains[k];
         let (mut n, mut m) = wrench[k];
+        let pulling = match (&mut local, tensions) {
+            (Some(local), Some(t)) => {
+                local.tensions.copy_from_slice(&t[k]);
+                &*local
+            }
+            _ => model,
+        };
         // The tendons loading this node's segment pull it back along their paths.
         let v = site.strain(&v);
-        if let Ok((f, l)) = model.tendon_pull(node.s, Which::ActiveTo(node.segment_end), &R, &v, &u) {
+        if let Ok((f, l)) = pulling.tendon_pull(node.s, Which::ActiveTo(node.segment_end), &R, &v, &u) {
             n -= f;
             m -= l;
         }
-        model.strains_for_wrench(site, &(R.transpose() * n), &(R.transpose() * m))
-    }));
+        out.push(model.strains_for_wrench(site, &(R.transpose() * n), &(R.transpose() * m)));
+    }
 }

@@ -12,7 +12,7 @@
 //! the tension. The whole matrix, reordered node by node, is factored as one staircase
 //! ([`staircase`]; the blocks handed to it in `border.rs`), in the Newton loop of
 //! displacement-controlled tendons ([`newton::run_bordered`]). The solve starts from the
-//! frictionless solution on its mesh.
+//! frictionless solution on its mesh, moved to the capstan start ([`start`]).
 #![allow(non_snake_case)]
 
 mod border;
@@ -22,6 +22,7 @@ mod interval;
 mod linearized;
 mod profile;
 mod staircase;
+mod start;
 
 pub use grip::Contact;
 pub(crate) use grip::Grip;
@@ -369,7 +370,7 @@ fn solve_near(robot: &Robot, options: &Options, near: &Solution) -> Result<Solut
 
 /// On the mesh of `from`'s nodes and from its shape, Newton bordered by the log tensions
 /// ([`Capstan`]) from `previous` (node arc lengths and log tensions per slip, interpolated;
-/// constant tensions when None), its error estimate ([`estimate_with_friction`]) and, with a
+/// the capstan start of [`start`] when None), its error estimate ([`estimate_with_friction`]) and, with a
 /// tolerance, re-meshing until the tip's estimate and the tension profile's (relative,
 /// against the same tolerance as the rotation) meet it. `report` holds what came before
 /// (the frictionless solve's counts, or none); `start` is when the solve began.
@@ -395,6 +396,8 @@ fn refine_with_friction(
     };
     let model = Model::new(robot);
     let length = robot.length();
+    // Whether the first mesh starts from the capstan start (until Newton fails from it).
+    let mut capstan = previous.is_none();
     // The last mesh's node arc lengths and log tensions, interpolated onto the next.
     loop {
         report.meshes += 1;
@@ -406,6 +409,9 @@ fn refine_with_friction(
                     *value = linear(s, old, node.s);
                 }
             }
+        } else if capstan {
+            // From the frictionless shape: its tension profile and the shape it bends.
+            start::capstan_start(&model, &system.mesh, &mut x, &mut profile);
         }
         system.friction = Some(profile);
         let mut ws = match workspace::spare(&system.mesh, options.linear_solver) {
@@ -414,6 +420,14 @@ fn refine_with_friction(
         };
         let mut border = Capstan::new(system);
         let (termination, worst) = newton::run_bordered(&mut border, &mut ws, &mut x, &settings, &mut report);
+        if termination != Termination::Converged && std::mem::take(&mut capstan) {
+            // Newton failed from the capstan start: once more from the frictionless solution
+            // with constant tensions, the start of earlier versions (its counts add up).
+            report.meshes -= 1;
+            mesh = Mesh::from_points(robot, &points)?;
+            x = interpolate(&model, from, &mesh);
+            continue;
+        }
         report.termination = termination;
         report.intervals = border.system.mesh.intervals();
         report.unknowns = unknowns::unknowns(border.system.mesh.nodes.len()) + border.z.len();

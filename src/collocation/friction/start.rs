@@ -1,0 +1,252 @@
+//! Where Newton with friction starts (docs/friction.md section 3, "The start"): the
+//! frictionless solution corrected for the tension profile by the rigid-equilibrium sweep.
+//!
+//! A cut through the backbone and its tendons at s leaves on the distal part only the
+//! external loads and the tendons' tensions at the cut, whatever the friction in the
+//! channels beyond it; so the backbone's internal wrench at s is the distal external
+//! wrench minus the tendons' pull `tau_i(s) t_i(s)` at s with their local tensions. The
+//! start takes the frictionless solution, marches the capstan law along its shape for the
+//! log tensions ([`march`]), and moves its strains by the change of that wrench (the sweep
+//! of [`crate::mesh::guess`] with the local tensions, minus the same sweep with the
+//! constant ones, both on the frictionless shape), its poses by the change of their
+//! integral; then repeats on the new shape, since the turning the tension falls over
+//! depends on the shape.
+#![allow(non_snake_case)]
+
+use super::Profile;
+use crate::mesh::Mesh;
+use crate::mesh::guess::{distal_strains, integrate_poses, integrate_poses_into};
+use crate::model::equations::{Model, Site};
+use crate::model::routing::RoutingPoint;
+use crate::solution::State;
+use nalgebra::Vector3;
+
+/// Most passes of the start. Each pass's shape change moves the turning, hence the log
+/// tensions, by about mu times the change of the bending angle, and the tip load's moment
+/// arm with it; relaxed, the passes settle in 4 (S) to 8 (H) at mu = 0.1 (docs/friction.md
+/// section 3), each costing about a tenth of a residual evaluation with friction.
+const PASSES: usize = 10;
+
+/// A pass that changes the strains by less than this (scaled: v, and u L) is the last: a
+/// start that far from the solution leaves Newton's first step about 3e-8 (its quadratic
+/// constant is about 3 in these units), which chord steps finish, and the start's own error
+/// (the turning between nodes as the angle between their tangents, the sweep's midpoint
+/// rule) is 1e-5 to 1e-4 anyway.
+const SETTLED: f64 = 1e-4;
+
+/// Log tensions of `profile` marched along the states `x` by the capstan law
+/// `z' = w mu |t'|`: the turning of tendon j's path between two nodes is the angle between
+/// its unit tangents there (second order in the node spacing; the solve's capstan rows
+/// then correct it to order 4). An unloaded tendon keeps z = 0, as its capstan rows do.
+/// `sites` are the nodes' sites, `routes[j]` slip j's routing at the nodes of its span.
+fn march(model: &Model, (sites, routes): (&[Site], &[Vec<RoutingPoint>]), x: &[State], profile: &mut Profile) {
+    for (j, route) in routes.iter().enumerate() {
+        let tendon = &model.robot.tendons[profile.slipping[j]];
+        let slope = tendon
+            .active_friction()
+            .map_or(0.0, |f| f.motion.sign() * f.coefficient);
+        let loaded = profile.base[j] > 0.0;
+        let tangent = |k: usize| {
+            let rp = &route[k];
+            (x[k].R * (x[k].u.cross(&rp.r) + rp.r_s + sites[k].strain(&x[k].v))).normalize()
+        };
+        let mut z = 0.0;
+        let mut last = tangent(0);
+        profile.z[j][0] = 0.0;
+        for k in 1..profile.z[j].len() {
+            if k < route.len() {
+                let next = tangent(k);
+                if loaded {
+                    z += slope * last.cross(&next).norm().atan2(last.dot(&next));
+                }
+                last = next;
+            }
+            profile.z[j][k] = z;
+        }
+    }
+}
+
+/// Every tendon's tension at every node from `profile` into `out` (the profile for the
+/// slips, the model's tension for the others).
+fn node_tensions(model: &Model, profile: &Profile, out: &mut [Vec<f64>]) {
+    for (n, t) in out.iter_mut().enumerate() {
+        t.copy_from_slice(&model.tensions);
+        for (j, &i) in profile.slipping.iter().enumerate() {
+            t[i] = profile.tension(j, profile.z[j][n.min(profile.spans[j])]);
+        }
+    }
+}
+
+/// Moves the frictionless solution `x` (on `mesh`) to the start of Newton with friction and
+/// writes the log tensions marched along it into `profile` (module docs). The passes are
+/// relaxed as the rigid-equilibrium estimate's sweeps are (Aitken's factor: the tip load's
+/// moment arm swings with the shape the tension profile bends) and stop when a pass changes
+/// the strains less than [`SETTLED`], or not less than the one before did (then the shape
+/// before it is kept).
+pub(super) fn capstan_start(model: &Model, mesh: &Mesh, x: &mut [State], profile: &mut Profile) {
+    let nodes = &mesh.nodes;
+    let length = model.robot.length();
+    let sites: Vec<Site> = nodes.iter().map(|n| model.site_on(n.s, n.segment_end)).collect();
+    let routes: Vec<Vec<RoutingPoint>> = (0..profile.count())
+        .map(|j| {
+            let routing = &model.robot.tendons[profile.slipping[j]].routing;
+            nodes[..=profile.spans[j]]
+                .iter()
+                .map(|n| routing.at(n.s, length))
+                .collect()
+        })
+        .collect();
+    let x0 = x.to_vec();
+    let mut tensions: Vec<Vec<f64>> = vec![model.tensions.clone(); nodes.len()];
+    let (mut wrench, mut plain, mut rough) = (Vec::new(), Vec::new(), Vec::new());
+    distal_strains(model, (nodes, &sites), &x0, &tensions, (&mut wrench, &mut plain));
+    let strains0: Vec<(Vector3<f64>, Vector3<f64>)> = x0.iter().map(|s| (s.v, s.u)).collect();
+    let poses0 = integrate_poses(model, nodes, &strains0);
+    let mut strains = strains0.clone();
+    let mut poses = Vec::with_capacity(nodes.len());
+    let (mut last_change, mut relaxation) = (f64::INFINITY, 1.0f64);
+    let (mut step, mut last_step) = (Vec::with_capacity(6 * nodes.len()), Vec::with_capacity(6 * nodes.len()));
+    let mut kept = x.to_vec();
+    for _ in 0..PASSES {
+        march(model, (&sites, &routes), x, profile);
+        node_tensions(model, profile, &mut tensions);
+        distal_strains(model, (nodes, &sites), x, &tensions, (&mut wrench, &mut rough));
+        // The fixed-point step, flattened (v then u L per node, so all are comparable).
+        step.clear();
+        step.extend(
+            strains
+                .iter()
+                .zip(strains0.iter().zip(rough.iter().zip(&plain)))
+                .flat_map(|(s, (s0, (a, b)))| {
+                    let (dv, du) = (s0.0 + (a.0 - b.0) - s.0, (s0.1 + (a.1 - b.1) - s.1) * length);
+                    [dv[0], dv[1], dv[2], du[0], du[1], du[2]]
+                }),
+        );
+        let change = step.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        if !change.is_finite() || change >= last_change {
+            x.copy_from_slice(&kept);
+            break;
+        }
+        if !last_step.is_empty() {
+            let (mut num, mut den) = (0.0, 0.0);
+            for (a, b) in last_step.iter().zip(&step) {
+                num += a * (b - a);
+                den += (b - a) * (b - a);
+            }
+            if den > 0.0 {
+                relaxation = (-relaxation * num / den).clamp(0.1, 1.0);
+            }
+        }
+        for (k, s) in strains.iter_mut().enumerate() {
+            for i in 0..3 {
+                s.0[i] += relaxation * step[6 * k + i];
+                s.1[i] += relaxation * step[6 * k + 3 + i] / length;
+            }
+        }
+        kept.copy_from_slice(x);
+        integrate_poses_into(model, nodes, &strains, &mut poses);
+        for (k, state) in x.iter_mut().enumerate() {
+            let (a, b) = (&poses0[k], &poses[k]);
+            *state = State {
+                s: state.s,
+                p: x0[k].p + (b.0 - a.0),
+                R: x0[k].R * a.1.transpose() * b.1,
+                v: strains[k].0,
+                u: strains[k].1,
+            };
+        }
+        if change < SETTLED {
+            break;
+        }
+        last_change = change;
+        std::mem::swap(&mut step, &mut last_step);
+    }
+    march(model, (&sites, &routes), x, profile);
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::{Capstan, Method, Options, Settings, SolveReport, System, Workspace, newton};
+    use super::*;
+    use crate::mesh::guess::interpolate;
+    use crate::{Friction, Motion, Robot, cases};
+
+    /// The largest scaled difference (p / L, v, u L, z) between the start and the converged
+    /// solution with friction on the frictionless mesh, and the same for the frictionless
+    /// solution with constant tensions (the start before this module).
+    fn distances(robot: &Robot) -> (f64, f64) {
+        let mut smooth = robot.clone();
+        for t in &mut smooth.tendons {
+            t.friction = None;
+        }
+        let first = crate::collocation::solve(&smooth, &Options::default()).expect("frictionless solve");
+        let points: Vec<f64> = first.nodes.iter().map(|n| n.s).collect();
+        let mesh = Mesh::from_points(robot, &points).expect("mesh");
+        let model = Model::new(robot);
+        let length = robot.length();
+        let plain = interpolate(&model, &first, &mesh);
+        let mut start = plain.clone();
+        let mut profile = Profile::new(&model, &mesh);
+        capstan_start(&model, &mesh, &mut start, &mut profile);
+        let started = profile.z.clone();
+        // Converged from the start, to rounding.
+        let mut system = System::new(model.clone(), mesh.clone());
+        system.friction = Some(profile);
+        let mut ws = Workspace::new(&system, Default::default()).expect("workspace");
+        let mut border = Capstan::new(system);
+        let settings = Settings {
+            tolerance: 1e-13,
+            max_iterations: 20,
+            reuse_factors: false,
+            stop_when_damped: false,
+        };
+        let mut x = start.clone();
+        let mut report = SolveReport::new(Method::Collocation);
+        let (termination, _) = newton::run_bordered(&mut border, &mut ws, &mut x, &settings, &mut report);
+        assert_eq!(termination, crate::report::Termination::Converged);
+        border.load(super::super::Point::Current);
+        let z = border.system.friction.as_ref().expect("profile").z.clone();
+        let distance = |y: &[State], zy: &[Vec<f64>]| {
+            let states = y.iter().zip(&x).flat_map(|(a, b)| {
+                let (dp, dv, du) = ((a.p - b.p) / length, a.v - b.v, (a.u - b.u) * length);
+                [dp.amax(), dv.amax(), du.amax()]
+            });
+            let logs = zy
+                .iter()
+                .zip(&z)
+                .flat_map(|(a, b)| a.iter().zip(b).map(|(p, q)| (p - q).abs()));
+            states.chain(logs).fold(0.0f64, f64::max)
+        };
+        let constant: Vec<Vec<f64>> = z.iter().map(|zj| vec![0.0; zj.len()]).collect();
+        (distance(&start, &started), distance(&plain, &constant))
+    }
+
+    /// The start lies within Newton's one-step reach of the solution with friction, where the
+    /// frictionless solution with constant tensions does not: S and H at mu = 0.1 in pull,
+    /// and H in release.
+    #[test]
+    fn start_is_near_the_solution_with_friction() {
+        for (robot, tendon, motion) in [
+            (cases::case_s(), 0, Motion::Pull),
+            (cases::case_h(), 4, Motion::Pull),
+            (cases::case_h(), 4, Motion::Release),
+        ] {
+            let mut rough = robot.clone();
+            rough.tendons[tendon].friction = Some(Friction {
+                coefficient: 0.1,
+                motion,
+            });
+            let (start, plain) = distances(&rough);
+            // Measured 1.1e-5 (S), 5.6e-5 (H pull), 9.7e-5 (H release): the start's own
+            // error (turning between node tangents, midpoint poses); 1e-3 still leaves
+            // Newton's first step about 3e-6 (quadratic constant about 3 in these units).
+            assert!(start < 1e-3, "start {start:e} from the solution with friction");
+            // The frictionless start is 0.18 (S) to 0.35 (H release) away: the start must
+            // be far closer, or it has not moved.
+            assert!(
+                start < 0.05 * plain,
+                "start {start:e} against the frictionless {plain:e}"
+            );
+        }
+    }
+}
