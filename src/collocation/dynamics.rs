@@ -56,6 +56,19 @@ const KRYLOV_MODES: usize = 24;
 /// A Ritz value counts as converged when its residual estimate is below this fraction of
 /// its magnitude.
 const CONVERGED: f64 = 1e-6;
+/// The Arnoldi steps after which a solve's verdict tests whether it may stop ([`settled`]):
+/// the lowest modes of the robots measured settle after 8-12 steps (docs/stability.md,
+/// "Cost"); a test costs an eigenvalue problem of that size, a few percent of a step.
+const CHECKS: [usize; 4] = [8, 10, 12, 14];
+/// The band of modes an early stop waits for: Ritz values theta = 1 / mu with |theta| at
+/// least this fraction of the largest (|mu| within 100 times the lowest mode's, frequencies
+/// within 10 times), the modes a divergence (a frequency through zero) or a flutter (two
+/// low frequencies coalescing) comes from first.
+const WANTED: f64 = 1e-2;
+/// An early stop waits until the Ritz values of [`WANTED`] and every growing one have a
+/// residual estimate below this fraction of their magnitude: far inside [`CONVERGED`], so
+/// that a growth rate is the one more steps give to 1e-8 and better.
+const SETTLED: f64 = 1e-10;
 /// mu with |Im mu| above this fraction of |mu| is complex (flutter); Arnoldi's rounding on
 /// these non-normal pencils leaves 1e-10 and less on real ones.
 const COMPLEX: f64 = 1e-6;
@@ -279,7 +292,9 @@ struct Ritz {
 
 /// Arnoldi on `operator` (y = J^-1 M z) from a generic start purified by two applications
 /// (which removes the components along M's kernel, the infinite mu): the Ritz values and
-/// their residual estimates |h_(m+1,m) y_m|. None if a solve fails.
+/// their residual estimates |h_(m+1,m) y_m|. Unless `all`, the run stops at the first of
+/// [`CHECKS`] where the Ritz values the verdict rests on have settled ([`settled`]), and
+/// goes on to `krylov` steps otherwise. None if a solve fails.
 fn arnoldi(
     operator: &mut impl FnMut(&[f64], &mut Vec<f64>) -> bool,
     n: usize,
@@ -310,15 +325,7 @@ fn arnoldi(
             return None;
         }
         let scale = dot(&next, &next).sqrt();
-        // Modified Gram-Schmidt, twice (the second pass restores orthogonality lost to
-        // rounding when the new vector is nearly in the span).
-        for _ in 0..2 {
-            for (j, b) in basis.iter().enumerate() {
-                let c = dot(&next, b);
-                h[(j, m)] += c;
-                next.iter_mut().zip(b).for_each(|(x, y)| *x -= c * y);
-            }
-        }
+        orthogonalize(&basis, &mut next, &mut h.as_mut_slice()[m * (m_max + 1)..]);
         let beta = dot(&next, &next).sqrt();
         h[(m + 1, m)] = beta;
         m += 1;
@@ -327,28 +334,81 @@ fn arnoldi(
         if beta <= 1e-13 * scale || !beta.is_finite() {
             break;
         }
+        if !all && m < m_max && CHECKS.contains(&m) {
+            if let Some(ritz) = settled(&h, m) {
+                return Some(ritz);
+            }
+        }
         basis.push(next.iter().map(|x| x / beta).collect());
     }
-    let hm = h.view((0, 0), (m, m)).into_owned();
-    let beta = h[(m, m - 1)];
-    let values = hm.complex_eigenvalues();
-    let largest = values.iter().map(|t| t.norm()).fold(0.0f64, f64::max);
-    let hc = hm.map(|v| Complex::new(v, 0.0));
+    let (values, largest) = ritz_values(&h, m);
     // Residual estimates cost a complex LU each: unless `all`, only for the Ritz values a
     // verdict rests on, the lowest mode and any that grows ([`grows`]).
+    let wanted = |theta: Complex<f64>| all || theta.norm() >= (1.0 - 1e-9) * largest || grows(theta, largest);
     Some(
         values
             .iter()
             .map(|&theta| Ritz {
                 theta,
-                residual: if all || theta.norm() >= (1.0 - 1e-9) * largest || grows(theta, largest) {
-                    beta * last_component(&hc, theta)
+                residual: if wanted(theta) {
+                    residual(&h, m, theta)
                 } else {
                     f64::INFINITY
                 },
             })
             .collect(),
     )
+}
+
+/// The Ritz values of the first `m` Arnoldi steps (the eigenvalues of the leading m x m
+/// block of `h`) and the largest of their magnitudes (the lowest mode's 1 / |mu|).
+fn ritz_values(h: &DMatrix<f64>, m: usize) -> (Vec<Complex<f64>>, f64) {
+    let values: Vec<Complex<f64>> = h
+        .view((0, 0), (m, m))
+        .into_owned()
+        .complex_eigenvalues()
+        .iter()
+        .copied()
+        .collect();
+    let largest = values.iter().map(|t| t.norm()).fold(0.0f64, f64::max);
+    (values, largest)
+}
+
+/// The residual estimate |h_(m+1,m) y_m| of the Ritz value `theta` of the first `m` steps.
+fn residual(h: &DMatrix<f64>, m: usize, theta: Complex<f64>) -> f64 {
+    let hc = h.view((0, 0), (m, m)).map(|v| Complex::new(v, 0.0));
+    h[(m, m - 1)] * last_component(&hc, theta)
+}
+
+/// The Ritz values after `m` steps if the run may stop there: every finite one within
+/// [`WANTED`] of the lowest mode (largest |theta|) and every one that grows has a residual
+/// estimate below [`SETTLED`] of its magnitude, so that further steps add modes above the
+/// band and refine these below the rounding of a growth rate, but change no verdict. The
+/// others get an infinite residual; None at the first one that has not settled (tested
+/// from the lowest mode up, which settles first).
+fn settled(h: &DMatrix<f64>, m: usize) -> Option<Vec<Ritz>> {
+    let (values, largest) = ritz_values(h, m);
+    if largest == 0.0 {
+        return None;
+    }
+    let mut ritz: Vec<Ritz> = values
+        .iter()
+        .map(|&theta| Ritz {
+            theta,
+            residual: f64::INFINITY,
+        })
+        .collect();
+    ritz.sort_by(|a, b| b.theta.norm().total_cmp(&a.theta.norm()));
+    for r in ritz.iter_mut() {
+        let size = r.theta.norm();
+        if size > 1e-9 * largest && (size >= WANTED * largest || grows(r.theta, largest)) {
+            r.residual = residual(h, m, r.theta);
+            if r.residual > SETTLED * size {
+                return None;
+            }
+        }
+    }
+    Some(ritz)
 }
 
 /// Whether the mode of the Ritz value `theta` (= 1 / mu) grows: mu complex (flutter) or
@@ -432,6 +492,60 @@ fn classify(ritz: &[Ritz]) -> Vibration {
     }
 }
 
+/// Modified Gram-Schmidt of `next` against the orthonormal `basis`, twice (the second pass
+/// restores orthogonality lost to rounding when the new vector is nearly in the span),
+/// adding the coefficients to `column`. On x86-64 with AVX2 and FMA (checked at run time)
+/// compiled for them: the same operations in the same order (Rust does not fuse a product
+/// and a sum into an FMA), so the same bits, in wider registers.
+fn orthogonalize(basis: &[Vec<f64>], next: &mut [f64], column: &mut [f64]) {
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma") {
+        // SAFETY: the processor supports the features the function is compiled for.
+        return unsafe { orthogonalize_avx2(basis, next, column) };
+    }
+    orthogonalize_kernel(basis, next, column);
+}
+
+/// [`orthogonalize_kernel`] with AVX2 and FMA enabled.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+unsafe fn orthogonalize_avx2(basis: &[Vec<f64>], next: &mut [f64], column: &mut [f64]) {
+    orthogonalize_kernel(basis, next, column);
+}
+
+/// [`orthogonalize`]'s operations.
+#[inline(always)]
+fn orthogonalize_kernel(basis: &[Vec<f64>], next: &mut [f64], column: &mut [f64]) {
+    for _ in 0..2 {
+        for (b, h) in basis.iter().zip(column.iter_mut()) {
+            let c = dot(next, b);
+            *h += c;
+            next.iter_mut().zip(b).for_each(|(x, y)| *x -= c * y);
+        }
+    }
+}
+
+/// The dot product of `a` and `b` in eight interleaved partial sums (element i goes to sum
+/// i mod 8, the sums added pairwise at the end), which the compiler turns into vector
+/// instructions; the order is fixed, so the result is the same with and without AVX2.
+#[inline(always)]
 fn dot(a: &[f64], b: &[f64]) -> f64 {
-    a.iter().zip(b).map(|(x, y)| x * y).sum()
+    let mut sums = [0.0; 8];
+    let (ca, cb) = (a.chunks_exact(8), b.chunks_exact(8));
+    let (ra, rb) = (ca.remainder(), cb.remainder());
+    for (x, y) in ca.zip(cb) {
+        for i in 0..8 {
+            sums[i] += x[i] * y[i];
+        }
+    }
+    for (i, (x, y)) in ra.iter().zip(rb).enumerate() {
+        sums[i] += x * y;
+    }
+    let quads = [
+        sums[0] + sums[4],
+        sums[1] + sums[5],
+        sums[2] + sums[6],
+        sums[3] + sums[7],
+    ];
+    (quads[0] + quads[2]) + (quads[1] + quads[3])
 }
