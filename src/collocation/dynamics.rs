@@ -39,6 +39,7 @@ use crate::so3;
 use crate::solution::State;
 use crate::{Robot, Solution};
 use nalgebra::{Complex, DMatrix, Matrix3, SMatrix, Vector3};
+use std::ops::AddAssign;
 
 /// The density the mass is taken from (kg/m^3): stainless steel, the usual backbone. Only
 /// the growth rate depends on it.
@@ -59,7 +60,7 @@ const CONVERGED: f64 = 1e-6;
 /// The Arnoldi steps after which a solve's verdict tests whether it may stop ([`settled`]):
 /// the lowest modes of the robots measured settle after 8-12 steps (docs/stability.md,
 /// "Cost"); a test costs an eigenvalue problem of that size, a few percent of a step.
-const CHECKS: [usize; 4] = [8, 10, 12, 14];
+const CHECKS: [usize; 3] = [10, 12, 14];
 /// The band of modes an early stop waits for: Ritz values theta = 1 / mu with |theta| at
 /// least this fraction of the largest (|mu| within 100 times the lowest mode's, frequencies
 /// within 10 times), the modes a divergence (a frequency through zero) or a flutter (two
@@ -121,17 +122,26 @@ impl Mass {
                 (&pb, &sites.end, &b.R, 1.0, (0.0, 1.0)),
             ];
             for (point, site, Rc, weight, (wa, wb)) in points {
-                let load = inertia_load(site, Rc, (&a.R, &b.R), (wa, wb), ratio, length);
                 // d(v', u') / d(body load) = -M^-1 (eq. 13: F = M x - rhs with + R^T f_e,
                 // + R^T l_e in F); the residual is y1 - y0 - h/6 sum w F: + h/6 w M^-1 load.
-                let mut t = load.transpose();
+                // The load is linear in the accelerations: M^-1 of the load per unit
+                // acceleration at the point (6 columns), then each node's columns from it.
+                let mut t = inertia_load(site, Rc, ratio, length).transpose();
                 if !point.solve_rows(&mut t) {
                     return Err(crate::Error::Breakdown {
                         s: site.s,
                         what: "the 6x6 matrix of eq. 13 is singular".into(),
                     });
                 }
-                block += t.transpose() * (h / 6.0 * weight);
+                let z = t.transpose() * (h / 6.0 * weight);
+                let (force, moment) = (z.fixed_columns::<3>(0), z.fixed_columns::<3>(3));
+                for (column, w, R) in [(0, wa, a.R), (6, wb, b.R)] {
+                    if w != 0.0 {
+                        let mut node = block.fixed_columns_mut::<6>(column);
+                        node.fixed_columns_mut::<3>(0).add_assign(force * w);
+                        node.fixed_columns_mut::<3>(3).add_assign(moment * R * w);
+                    }
+                }
             }
             for r in 3..6 {
                 for c in 0..12 {
@@ -162,18 +172,12 @@ impl Mass {
     }
 }
 
-/// The body-frame distributed load (force, moment; N/m and N m/m) per unit scaled
-/// acceleration of the (p, theta) columns of nodes a and b at a collocation point with
-/// orientation `Rc`: -(rho A Rc^T p_tt, rho J_b w_t) with the accelerations interpolated
-/// with weights `(wa, wb)`; w_t of a node is its rotation increment's, in its body frame.
-fn inertia_load(
-    site: &Site,
-    Rc: &Matrix3<f64>,
-    (Ra, Rb): (&Matrix3<f64>, &Matrix3<f64>),
-    (wa, wb): (f64, f64),
-    ratio: f64,
-    length: f64,
-) -> SMatrix<f64, 6, 12> {
+/// The body-frame distributed load (force, moment; N/m and N m/m) per unit acceleration
+/// at a collocation point with orientation `Rc`: -(rho A Rc^T p_tt, rho J_b Rc^T w_t) for
+/// p_tt in the p columns' scaled units (dp / L) and w_t in the world frame; a node's
+/// rotation increment's w_t is its R times the body-frame one, with the accelerations
+/// interpolated linearly between the nodes ([`Mass::new`]).
+fn inertia_load(site: &Site, Rc: &Matrix3<f64>, ratio: f64, length: f64) -> SMatrix<f64, 6, 6> {
     let section = &site.section.section;
     let rho_a = ratio * section.kse[2];
     let rho_j = Matrix3::from_diagonal(&Vector3::new(
@@ -181,16 +185,10 @@ fn inertia_load(
         ratio * section.kbt[1],
         ratio * (section.kbt[0] + section.kbt[1]),
     ));
-    let mut w = SMatrix::<f64, 6, 12>::zeros();
-    // p columns hold dp / L.
+    let mut w = SMatrix::<f64, 6, 6>::zeros();
     w.fixed_view_mut::<3, 3>(0, 0)
-        .copy_from(&(Rc.transpose() * (-rho_a * wa * length)));
-    w.fixed_view_mut::<3, 3>(0, 6)
-        .copy_from(&(Rc.transpose() * (-rho_a * wb * length)));
-    w.fixed_view_mut::<3, 3>(3, 3)
-        .copy_from(&(-rho_j * Rc.transpose() * Ra * wa));
-    w.fixed_view_mut::<3, 3>(3, 9)
-        .copy_from(&(-rho_j * Rc.transpose() * Rb * wb));
+        .copy_from(&(Rc.transpose() * (-rho_a * length)));
+    w.fixed_view_mut::<3, 3>(3, 3).copy_from(&(-rho_j * Rc.transpose()));
     w
 }
 
@@ -376,8 +374,7 @@ fn ritz_values(h: &DMatrix<f64>, m: usize) -> (Vec<Complex<f64>>, f64) {
 
 /// The residual estimate |h_(m+1,m) y_m| of the Ritz value `theta` of the first `m` steps.
 fn residual(h: &DMatrix<f64>, m: usize, theta: Complex<f64>) -> f64 {
-    let hc = h.view((0, 0), (m, m)).map(|v| Complex::new(v, 0.0));
-    h[(m, m - 1)] * last_component(&hc, theta)
+    h[(m, m - 1)] * last_component(h, m, theta)
 }
 
 /// The Ritz values after `m` steps if the run may stop there: every finite one within
@@ -422,28 +419,75 @@ fn grows(theta: Complex<f64>, largest: f64) -> bool {
     mu.im.abs() > COMPLEX * mu.norm() || mu.re < -NEUTRAL * 1e9 / largest
 }
 
-/// |y_m| of the unit eigenvector y of `h` for its eigenvalue `theta`, by two steps of
-/// inverse iteration with a shift moved off theta by rounding's size.
-fn last_component(h: &DMatrix<Complex<f64>>, theta: Complex<f64>) -> f64 {
-    let m = h.nrows();
-    let scale = h.iter().fold(0.0f64, |a, v| a.max(v.norm()));
-    let shift = theta + Complex::new(1e-12 * scale.max(f64::MIN_POSITIVE), 0.0);
-    let a = h - DMatrix::<Complex<f64>>::identity(m, m) * shift;
-    let lu = a.lu();
-    let mut y = DMatrix::<Complex<f64>>::from_fn(m, 1, |i, _| Complex::new(1.0 + 0.1 * i as f64, 0.0));
-    for _ in 0..2 {
-        match lu.solve(&y) {
-            Some(z) => {
-                let norm = z.iter().map(|v| v.norm_sqr()).sum::<f64>().sqrt();
-                if !(norm.is_finite() && norm > 0.0) {
-                    return f64::INFINITY;
-                }
-                y = z / Complex::new(norm, 0.0);
-            }
-            None => return 0.0,
+/// |y_m| of the unit eigenvector y of the leading m x m block of the upper Hessenberg `h`
+/// for its eigenvalue `theta`, by two steps of inverse iteration with a shift moved off
+/// theta by rounding's size. The LU with partial pivoting uses the Hessenberg form: below
+/// the diagonal, column k has a nonzero only in row k + 1, so the pivot is row k or k + 1
+/// and each elimination updates one row (O(m^2), where a dense LU costs O(m^3)).
+fn last_component(h: &DMatrix<f64>, m: usize, theta: Complex<f64>) -> f64 {
+    let mut scale = 0.0f64;
+    for j in 0..m {
+        for i in 0..m.min(j + 2) {
+            scale = scale.max(h[(i, j)].abs());
         }
     }
-    y[(m - 1, 0)].norm()
+    let shift = theta + Complex::new(1e-12 * scale.max(f64::MIN_POSITIVE), 0.0);
+    // a = h - shift I, row-major, factored in place into U (and the multipliers).
+    let mut a: Vec<Complex<f64>> = (0..m * m)
+        .map(|k| {
+            let (i, j) = (k / m, k % m);
+            let v = Complex::new(if i <= j + 1 { h[(i, j)] } else { 0.0 }, 0.0);
+            if i == j { v - shift } else { v }
+        })
+        .collect();
+    let mut multipliers = vec![Complex::new(0.0, 0.0); m];
+    let mut swapped = vec![false; m];
+    for k in 0..m - 1 {
+        let (top, below) = (k * m + k, (k + 1) * m + k);
+        if a[below].l1_norm() > a[top].l1_norm() {
+            // Rows k and k + 1 have no nonzeros left of column k.
+            for j in k..m {
+                a.swap(k * m + j, (k + 1) * m + j);
+            }
+            swapped[k] = true;
+        }
+        if a[top] == Complex::new(0.0, 0.0) {
+            return 0.0;
+        }
+        let f = a[below] / a[top];
+        multipliers[k] = f;
+        a[below] = Complex::new(0.0, 0.0);
+        for j in k + 1..m {
+            let u = a[k * m + j];
+            a[(k + 1) * m + j] -= f * u;
+        }
+    }
+    if a[m * m - 1] == Complex::new(0.0, 0.0) {
+        return 0.0;
+    }
+    let mut y: Vec<Complex<f64>> = (0..m).map(|i| Complex::new(1.0 + 0.1 * i as f64, 0.0)).collect();
+    for _ in 0..2 {
+        for k in 0..m - 1 {
+            if swapped[k] {
+                y.swap(k, k + 1);
+            }
+            let v = y[k];
+            y[k + 1] -= multipliers[k] * v;
+        }
+        for i in (0..m).rev() {
+            let mut v = y[i];
+            for j in i + 1..m {
+                v -= a[i * m + j] * y[j];
+            }
+            y[i] = v / a[i * m + i];
+        }
+        let norm = y.iter().map(|v| v.norm_sqr()).sum::<f64>().sqrt();
+        if !(norm.is_finite() && norm > 0.0) {
+            return f64::INFINITY;
+        }
+        y.iter_mut().for_each(|v| *v /= norm);
+    }
+    y[m - 1].norm()
 }
 
 /// The verdict from the Ritz values: the fastest-growing converged mode.
