@@ -97,43 +97,41 @@ impl Mass {
         let ratio = DENSITY / model.robot.rod.geometry.map_or(MODULUS, |g| g.youngs_modulus);
         let links = x.len() - 1;
         let mut blocks = Vec::with_capacity(links);
+        // The end node's point and response of the last interval: the next interval's start
+        // when the two share the node's site and segment (the same inputs, the same values).
+        let mut carried: Option<(usize, f64, Point, SMatrix<f64, 6, 6>)> = None;
         for k in 0..links {
             let Some(sites) = system.interval_sites(k) else {
+                carried = None;
                 blocks.push(None);
                 continue;
             };
             let seg = system.mesh.nodes[k].segment_end;
             let (a, b) = (&x[k], &x[k + 1]);
             let h = sites.end.s - sites.start.s;
-            let pa = Point::new(model, &sites.start, seg, (&a.R, &a.v, &a.u))?;
+            let (pa, za) = match carried.take() {
+                Some((node, s, point, z)) if node == k && s == seg => (point, z),
+                _ => {
+                    let point = Point::new(model, &sites.start, seg, (&a.R, &a.v, &a.u))?;
+                    let z = response(&point, &sites.start, &a.R, ratio, length)?;
+                    (point, z)
+                }
+            };
             let pb = Point::new(model, &sites.end, seg, (&b.R, &b.v, &b.u))?;
+            let zb = response(&pb, &sites.end, &b.R, ratio, length)?;
             // The Hermite-Simpson midpoint, as the residual's.
             let [y0, y1, f0, f1] = end_values(sites, a, b, &pa.rates(), &pb.rates());
             let ym = (y0 + y1) * 0.5 + (f0 - f1) * (h / 8.0);
             let Rm = a.R * so3::exp(&ym.fixed_rows::<3>(THETA).into());
             let (vm, um): (Vector3<f64>, Vector3<f64>) = (ym.fixed_rows::<3>(V).into(), ym.fixed_rows::<3>(U).into());
             let pm = Point::new(model, &sites.mid, seg, (&Rm, &vm, &um))?;
+            let zm = response(&pm, &sites.mid, &Rm, ratio, length)?;
             let mut block = SMatrix::<f64, 6, 12>::zeros();
             // Simpson's weights h/6 (1, 4, 1) at the start, midpoint and end, with the
-            // accelerations interpolated linearly (weights of node a, node b).
-            let points = [
-                (&pa, &sites.start, &a.R, 1.0, (1.0, 0.0)),
-                (&pm, &sites.mid, &Rm, 4.0, (0.5, 0.5)),
-                (&pb, &sites.end, &b.R, 1.0, (0.0, 1.0)),
-            ];
-            for (point, site, Rc, weight, (wa, wb)) in points {
-                // d(v', u') / d(body load) = -M^-1 (eq. 13: F = M x - rhs with + R^T f_e,
-                // + R^T l_e in F); the residual is y1 - y0 - h/6 sum w F: + h/6 w M^-1 load.
-                // The load is linear in the accelerations: M^-1 of the load per unit
-                // acceleration at the point (6 columns), then each node's columns from it.
-                let mut t = inertia_load(site, Rc, ratio, length).transpose();
-                if !point.solve_rows(&mut t) {
-                    return Err(crate::Error::Breakdown {
-                        s: site.s,
-                        what: "the 6x6 matrix of eq. 13 is singular".into(),
-                    });
-                }
-                let z = t.transpose() * (h / 6.0 * weight);
+            // accelerations interpolated linearly (weights of node a, node b): each node's
+            // columns from the point's response to a unit acceleration ([`response`]).
+            for (z, weight, (wa, wb)) in [(&za, 1.0, (1.0, 0.0)), (&zm, 4.0, (0.5, 0.5)), (&zb, 1.0, (0.0, 1.0))] {
+                let z = z * (h / 6.0 * weight);
                 let (force, moment) = (z.fixed_columns::<3>(0), z.fixed_columns::<3>(3));
                 for (column, w, R) in [(0, wa, a.R), (6, wb, b.R)] {
                     if w != 0.0 {
@@ -149,6 +147,7 @@ impl Mass {
                 }
             }
             blocks.push(Some(block));
+            carried = Some((k + 1, seg, pb, zb));
         }
         Ok(Mass { blocks })
     }
@@ -170,6 +169,30 @@ impl Mass {
             y[row..row + 6].copy_from_slice(r.as_slice());
         }
     }
+}
+
+/// d(v', u') / d(acceleration) at a collocation point with orientation `Rc`, up to the
+/// quadrature weight: M^-1 of the [`inertia_load`] per unit acceleration (eq. 13: F = M x -
+/// rhs with + R^T f_e, + R^T l_e in F, so d(v', u') / d(body load) = -M^-1, and the
+/// residual y1 - y0 - h/6 sum w F gains + h/6 w M^-1 load).
+///
+/// # Errors
+/// [`crate::Error::Breakdown`] when the 6 x 6 matrix of eq. 13 is singular there.
+fn response(
+    point: &Point,
+    site: &Site,
+    Rc: &Matrix3<f64>,
+    ratio: f64,
+    length: f64,
+) -> crate::Result<SMatrix<f64, 6, 6>> {
+    let mut t = inertia_load(site, Rc, ratio, length).transpose();
+    if !point.solve_rows(&mut t) {
+        return Err(crate::Error::Breakdown {
+            s: site.s,
+            what: "the 6x6 matrix of eq. 13 is singular".into(),
+        });
+    }
+    Ok(t.transpose())
 }
 
 /// The body-frame distributed load (force, moment; N/m and N m/m) per unit acceleration
