@@ -355,10 +355,12 @@ fn arnoldi(
         if beta <= 1e-13 * scale || !beta.is_finite() {
             break;
         }
-        if !all && m < m_max && CHECKS.contains(&m) {
-            if let Some(ritz) = settled(&h, m) {
-                return Some(ritz);
-            }
+        if !all
+            && m < m_max
+            && CHECKS.contains(&m)
+            && let Some(ritz) = settled(&h, m)
+        {
+            return Some(ritz);
         }
         basis.push(next.iter().map(|x| x / beta).collect());
     }
