@@ -256,9 +256,9 @@ pub(crate) fn assess_bordered(
     modes(system, x, ws, KRYLOV, false, border).stability
 }
 
-/// [`assess`] with the eigenvalues, from `krylov` Arnoldi steps; the residual of every Ritz
-/// value when `all`, else only of those the verdict rests on; `border` as in
-/// [`assess_bordered`].
+/// [`assess`] with the eigenvalues, from `krylov` Arnoldi steps when `all` (with the
+/// residual of every Ritz value), else from at most `krylov`, stopped once the modes the
+/// verdict rests on have settled ([`arnoldi`]); `border` as in [`assess_bordered`].
 fn modes(
     system: &System,
     x: &[State],
