@@ -27,6 +27,8 @@
 
 #![allow(non_snake_case)]
 
+mod arnoldi;
+
 use super::newton::Workspace;
 use super::residual::end_values;
 use super::sensitivity::Sensitivity;
@@ -38,7 +40,9 @@ use crate::report::{Growth, Stability};
 use crate::so3;
 use crate::solution::State;
 use crate::{Robot, Solution};
-use nalgebra::{Complex, DMatrix, Matrix3, SMatrix, Vector3};
+use arnoldi::{Ritz, arnoldi};
+use nalgebra::{Complex, Matrix3, SMatrix, Vector3};
+use std::ops::AddAssign;
 
 /// The density the mass is taken from (kg/m^3): stainless steel, the usual backbone. Only
 /// the growth rate depends on it.
@@ -46,8 +50,8 @@ pub const DENSITY: f64 = 7850.0;
 /// Young's modulus (Pa) that turns stiffness into cross-section geometry when the rod was
 /// given by stiffnesses alone (steel's, to go with [`DENSITY`]).
 pub const MODULUS: f64 = 200e9;
-/// Krylov dimension of a solve's verdict: the number of Arnoldi steps (solves with the
-/// stored factors). The decisive modes are the lowest few, which shift-invert at 0 makes
+/// Krylov dimension of a solve's verdict: the most Arnoldi steps (solves with the stored
+/// factors) it takes, unless its modes settle sooner ([`arnoldi`]). The decisive modes are the lowest few, which shift-invert at 0 makes
 /// the dominant ones; 16 resolve the lowest 2-4 (12 leave Beck's flutter pair unconverged).
 const KRYLOV: usize = 16;
 /// Krylov dimension of [`vibration`], which reports the lowest modes' eigenvalues: 24
@@ -83,42 +87,49 @@ impl Mass {
         let ratio = DENSITY / model.robot.rod.geometry.map_or(MODULUS, |g| g.youngs_modulus);
         let links = x.len() - 1;
         let mut blocks = Vec::with_capacity(links);
+        // The end node's point and response of the last interval: the next interval's start
+        // when the two share the node's site and segment (the same inputs, the same values).
+        let mut carried: Option<(usize, f64, Point, SMatrix<f64, 6, 6>)> = None;
         for k in 0..links {
             let Some(sites) = system.interval_sites(k) else {
+                carried = None;
                 blocks.push(None);
                 continue;
             };
             let seg = system.mesh.nodes[k].segment_end;
             let (a, b) = (&x[k], &x[k + 1]);
             let h = sites.end.s - sites.start.s;
-            let pa = Point::new(model, &sites.start, seg, (&a.R, &a.v, &a.u))?;
+            let (pa, za) = match carried.take() {
+                Some((node, s, point, z)) if node == k && s == seg => (point, z),
+                _ => {
+                    let point = Point::new(model, &sites.start, seg, (&a.R, &a.v, &a.u))?;
+                    let z = response(&point, &sites.start, &a.R, ratio, length)?;
+                    (point, z)
+                }
+            };
             let pb = Point::new(model, &sites.end, seg, (&b.R, &b.v, &b.u))?;
+            let zb = response(&pb, &sites.end, &b.R, ratio, length)?;
             // The Hermite-Simpson midpoint, as the residual's.
             let [y0, y1, f0, f1] = end_values(sites, a, b, &pa.rates(), &pb.rates());
             let ym = (y0 + y1) * 0.5 + (f0 - f1) * (h / 8.0);
             let Rm = a.R * so3::exp(&ym.fixed_rows::<3>(THETA).into());
             let (vm, um): (Vector3<f64>, Vector3<f64>) = (ym.fixed_rows::<3>(V).into(), ym.fixed_rows::<3>(U).into());
             let pm = Point::new(model, &sites.mid, seg, (&Rm, &vm, &um))?;
+            let zm = response(&pm, &sites.mid, &Rm, ratio, length)?;
             let mut block = SMatrix::<f64, 6, 12>::zeros();
             // Simpson's weights h/6 (1, 4, 1) at the start, midpoint and end, with the
-            // accelerations interpolated linearly (weights of node a, node b).
-            let points = [
-                (&pa, &sites.start, &a.R, 1.0, (1.0, 0.0)),
-                (&pm, &sites.mid, &Rm, 4.0, (0.5, 0.5)),
-                (&pb, &sites.end, &b.R, 1.0, (0.0, 1.0)),
-            ];
-            for (point, site, Rc, weight, (wa, wb)) in points {
-                let load = inertia_load(site, Rc, (&a.R, &b.R), (wa, wb), ratio, length);
-                // d(v', u') / d(body load) = -M^-1 (eq. 13: F = M x - rhs with + R^T f_e,
-                // + R^T l_e in F); the residual is y1 - y0 - h/6 sum w F: + h/6 w M^-1 load.
-                let mut t = load.transpose();
-                if !point.solve_rows(&mut t) {
-                    return Err(crate::Error::Breakdown {
-                        s: site.s,
-                        what: "the 6x6 matrix of eq. 13 is singular".into(),
-                    });
+            // accelerations interpolated linearly (weights of node a, node b): each node's
+            // columns from the point's response to a unit acceleration ([`response`]).
+            for (z, weight, (wa, wb)) in [(&za, 1.0, (1.0, 0.0)), (&zm, 4.0, (0.5, 0.5)), (&zb, 1.0, (0.0, 1.0))] {
+                let z = z * (h / 6.0 * weight);
+                let (force, moment) = (z.fixed_columns::<3>(0), z.fixed_columns::<3>(3));
+                for (column, w, R) in [(0, wa, a.R), (6, wb, b.R)] {
+                    if w != 0.0 {
+                        let mut node = block.fixed_columns_mut::<6>(column);
+                        node.fixed_columns_mut::<3>(0).add_assign(force * w);
+                        node.fixed_columns_mut::<3>(3).add_assign(moment * R * w);
+                    }
                 }
-                block += t.transpose() * (h / 6.0 * weight);
             }
             for r in 3..6 {
                 for c in 0..12 {
@@ -126,6 +137,7 @@ impl Mass {
                 }
             }
             blocks.push(Some(block));
+            carried = Some((k + 1, seg, pb, zb));
         }
         Ok(Mass { blocks })
     }
@@ -149,18 +161,36 @@ impl Mass {
     }
 }
 
-/// The body-frame distributed load (force, moment; N/m and N m/m) per unit scaled
-/// acceleration of the (p, theta) columns of nodes a and b at a collocation point with
-/// orientation `Rc`: -(rho A Rc^T p_tt, rho J_b w_t) with the accelerations interpolated
-/// with weights `(wa, wb)`; w_t of a node is its rotation increment's, in its body frame.
-fn inertia_load(
+/// d(v', u') / d(acceleration) at a collocation point with orientation `Rc`, up to the
+/// quadrature weight: M^-1 of the [`inertia_load`] per unit acceleration (eq. 13: F = M x -
+/// rhs with + R^T f_e, + R^T l_e in F, so d(v', u') / d(body load) = -M^-1, and the
+/// residual y1 - y0 - h/6 sum w F gains + h/6 w M^-1 load).
+///
+/// # Errors
+/// [`crate::Error::Breakdown`] when the 6 x 6 matrix of eq. 13 is singular there.
+fn response(
+    point: &Point,
     site: &Site,
     Rc: &Matrix3<f64>,
-    (Ra, Rb): (&Matrix3<f64>, &Matrix3<f64>),
-    (wa, wb): (f64, f64),
     ratio: f64,
     length: f64,
-) -> SMatrix<f64, 6, 12> {
+) -> crate::Result<SMatrix<f64, 6, 6>> {
+    let mut t = inertia_load(site, Rc, ratio, length).transpose();
+    if !point.solve_rows(&mut t) {
+        return Err(crate::Error::Breakdown {
+            s: site.s,
+            what: "the 6x6 matrix of eq. 13 is singular".into(),
+        });
+    }
+    Ok(t.transpose())
+}
+
+/// The body-frame distributed load (force, moment; N/m and N m/m) per unit acceleration
+/// at a collocation point with orientation `Rc`: -(rho A Rc^T p_tt, rho J_b Rc^T w_t) for
+/// p_tt in the p columns' scaled units (dp / L) and w_t in the world frame; a node's
+/// rotation increment's w_t is its R times the body-frame one, with the accelerations
+/// interpolated linearly between the nodes ([`Mass::new`]).
+fn inertia_load(site: &Site, Rc: &Matrix3<f64>, ratio: f64, length: f64) -> SMatrix<f64, 6, 6> {
     let section = &site.section.section;
     let rho_a = ratio * section.kse[2];
     let rho_j = Matrix3::from_diagonal(&Vector3::new(
@@ -168,16 +198,10 @@ fn inertia_load(
         ratio * section.kbt[1],
         ratio * (section.kbt[0] + section.kbt[1]),
     ));
-    let mut w = SMatrix::<f64, 6, 12>::zeros();
-    // p columns hold dp / L.
+    let mut w = SMatrix::<f64, 6, 6>::zeros();
     w.fixed_view_mut::<3, 3>(0, 0)
-        .copy_from(&(Rc.transpose() * (-rho_a * wa * length)));
-    w.fixed_view_mut::<3, 3>(0, 6)
-        .copy_from(&(Rc.transpose() * (-rho_a * wb * length)));
-    w.fixed_view_mut::<3, 3>(3, 3)
-        .copy_from(&(-rho_j * Rc.transpose() * Ra * wa));
-    w.fixed_view_mut::<3, 3>(3, 9)
-        .copy_from(&(-rho_j * Rc.transpose() * Rb * wb));
+        .copy_from(&(Rc.transpose() * (-rho_a * length)));
+    w.fixed_view_mut::<3, 3>(3, 3).copy_from(&(-rho_j * Rc.transpose()));
     w
 }
 
@@ -232,9 +256,9 @@ pub(crate) fn assess_bordered(
     modes(system, x, ws, KRYLOV, false, border).stability
 }
 
-/// [`assess`] with the eigenvalues, from `krylov` Arnoldi steps; the residual of every Ritz
-/// value when `all`, else only of those the verdict rests on; `border` as in
-/// [`assess_bordered`].
+/// [`assess`] with the eigenvalues, from `krylov` Arnoldi steps when `all` (with the
+/// residual of every Ritz value), else from at most `krylov`, stopped once the modes the
+/// verdict rests on have settled ([`arnoldi`]); `border` as in [`assess_bordered`].
 fn modes(
     system: &System,
     x: &[State],
@@ -271,86 +295,6 @@ fn modes(
     classify(&ritz)
 }
 
-/// A Ritz value theta of J^-1 M (theta = 1 / mu) and its residual estimate.
-struct Ritz {
-    theta: Complex<f64>,
-    residual: f64,
-}
-
-/// Arnoldi on `operator` (y = J^-1 M z) from a generic start purified by two applications
-/// (which removes the components along M's kernel, the infinite mu): the Ritz values and
-/// their residual estimates |h_(m+1,m) y_m|. None if a solve fails.
-fn arnoldi(
-    operator: &mut impl FnMut(&[f64], &mut Vec<f64>) -> bool,
-    n: usize,
-    krylov: usize,
-    all: bool,
-) -> Option<Vec<Ritz>> {
-    let mut q: Vec<f64> = (0..n)
-        .map(|i| (i as f64 * 0.618_033_988_749_895).fract() - 0.5)
-        .collect();
-    let mut next = Vec::with_capacity(n);
-    for _ in 0..2 {
-        if !operator(&q, &mut next) {
-            return None;
-        }
-        std::mem::swap(&mut q, &mut next);
-    }
-    let norm = dot(&q, &q).sqrt();
-    if !(norm.is_finite() && norm > 0.0) {
-        return None;
-    }
-    q.iter_mut().for_each(|v| *v /= norm);
-    let m_max = krylov.min(n);
-    let mut basis = vec![q];
-    let mut h = DMatrix::<f64>::zeros(m_max + 1, m_max);
-    let mut m = 0;
-    while m < m_max {
-        if !operator(&basis[m], &mut next) {
-            return None;
-        }
-        let scale = dot(&next, &next).sqrt();
-        // Modified Gram-Schmidt, twice (the second pass restores orthogonality lost to
-        // rounding when the new vector is nearly in the span).
-        for _ in 0..2 {
-            for (j, b) in basis.iter().enumerate() {
-                let c = dot(&next, b);
-                h[(j, m)] += c;
-                next.iter_mut().zip(b).for_each(|(x, y)| *x -= c * y);
-            }
-        }
-        let beta = dot(&next, &next).sqrt();
-        h[(m + 1, m)] = beta;
-        m += 1;
-        // An invariant subspace (breakdown at rounding of the step's size): its Ritz
-        // values are exact.
-        if beta <= 1e-13 * scale || !beta.is_finite() {
-            break;
-        }
-        basis.push(next.iter().map(|x| x / beta).collect());
-    }
-    let hm = h.view((0, 0), (m, m)).into_owned();
-    let beta = h[(m, m - 1)];
-    let values = hm.complex_eigenvalues();
-    let largest = values.iter().map(|t| t.norm()).fold(0.0f64, f64::max);
-    let hc = hm.map(|v| Complex::new(v, 0.0));
-    // Residual estimates cost a complex LU each: unless `all`, only for the Ritz values a
-    // verdict rests on, the lowest mode and any that grows ([`grows`]).
-    Some(
-        values
-            .iter()
-            .map(|&theta| Ritz {
-                theta,
-                residual: if all || theta.norm() >= (1.0 - 1e-9) * largest || grows(theta, largest) {
-                    beta * last_component(&hc, theta)
-                } else {
-                    f64::INFINITY
-                },
-            })
-            .collect(),
-    )
-}
-
 /// Whether the mode of the Ritz value `theta` (= 1 / mu) grows: mu complex (flutter) or
 /// negative beyond the neutral band (divergence); `largest` is the largest |theta| (the
 /// lowest mode), the stiffest mode's |mu| being at least 1 / the smallest retained.
@@ -360,30 +304,6 @@ fn grows(theta: Complex<f64>, largest: f64) -> bool {
     }
     let mu = theta.inv();
     mu.im.abs() > COMPLEX * mu.norm() || mu.re < -NEUTRAL * 1e9 / largest
-}
-
-/// |y_m| of the unit eigenvector y of `h` for its eigenvalue `theta`, by two steps of
-/// inverse iteration with a shift moved off theta by rounding's size.
-fn last_component(h: &DMatrix<Complex<f64>>, theta: Complex<f64>) -> f64 {
-    let m = h.nrows();
-    let scale = h.iter().fold(0.0f64, |a, v| a.max(v.norm()));
-    let shift = theta + Complex::new(1e-12 * scale.max(f64::MIN_POSITIVE), 0.0);
-    let a = h - DMatrix::<Complex<f64>>::identity(m, m) * shift;
-    let lu = a.lu();
-    let mut y = DMatrix::<Complex<f64>>::from_fn(m, 1, |i, _| Complex::new(1.0 + 0.1 * i as f64, 0.0));
-    for _ in 0..2 {
-        match lu.solve(&y) {
-            Some(z) => {
-                let norm = z.iter().map(|v| v.norm_sqr()).sum::<f64>().sqrt();
-                if !(norm.is_finite() && norm > 0.0) {
-                    return f64::INFINITY;
-                }
-                y = z / Complex::new(norm, 0.0);
-            }
-            None => return 0.0,
-        }
-    }
-    y[(m - 1, 0)].norm()
 }
 
 /// The verdict from the Ritz values: the fastest-growing converged mode.
@@ -430,8 +350,4 @@ fn classify(ritz: &[Ritz]) -> Vibration {
         },
         eigenvalues,
     }
-}
-
-fn dot(a: &[f64], b: &[f64]) -> f64 {
-    a.iter().zip(b).map(|(x, y)| x * y).sum()
 }

@@ -157,7 +157,9 @@ fn linearized_dynamics(
     if let Some(verdict) = ws.dynamics_verdict() {
         return verdict;
     }
-    if !ws.linearize(system, x, report) {
+    // The factors of the Jacobian at `x` may be held already (the path's last corrector
+    // step evaluated and factored it there, and no step was taken since).
+    if !ws.factors_at_iterate() && !ws.linearize(system, x, report) {
         return Stability::Unknown {
             reason: "the Jacobian at the solution is singular or not finite".into(),
         };

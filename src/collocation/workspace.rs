@@ -345,11 +345,18 @@ impl Workspace {
     /// the end of a solve ask for the verdict of the same state; the second gets it here
     /// instead of a second linearization and Arnoldi run.
     pub(crate) fn dynamics_verdict(&self) -> Option<Stability> {
-        if self.drift == 0.0 && self.factored && !self.unfactored {
+        if self.factors_at_iterate() {
             self.dynamics.clone()
         } else {
             None
         }
+    }
+
+    /// Whether the stored factors are those of the Jacobian evaluated at the last iterate,
+    /// with no step taken since (the drift is zero and [`Workspace::verdict_at`] has not
+    /// replaced the values): what [`Workspace::linearize`] there would give again.
+    pub(crate) fn factors_at_iterate(&self) -> bool {
+        self.drift == 0.0 && self.factored && !self.unfactored
     }
 
     /// Whether the workspace holds the factors of a successful solve.
