@@ -415,9 +415,48 @@ pub(super) fn rhs_linearized(
 /// v_a, u_a only and y_1 on theta_a, theta_b, v_b, u_b, so F_0 and F_1 need no products
 /// and only the midpoint needs a 12 x 9 by 9 x 18 one.
 ///
+/// On x86-64 with AVX2 and FMA (checked at run time) the block's own arithmetic (the chain
+/// rule, its 12 x 9 by 9 x 18 product and the writes) is compiled for them: the same
+/// operations in the same order (Rust does not fuse a product and a sum into an FMA), so the
+/// same bits in wider registers (docs/benchmarks.md, "A batch row").
+///
 /// # Errors
 /// A model breakdown at a node or at the midpoint.
 pub fn interval_jacobian(
+    model: &Model,
+    sites: &IntervalSites,
+    segment_end: f64,
+    a: &State,
+    b: &State,
+    start: Option<&Linearization>,
+    jac: &mut [f64],
+) -> Result<(Block<f64>, Linearization)> {
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma") {
+        // SAFETY: the processor supports the features the function is compiled for.
+        return unsafe { interval_jacobian_avx2(model, sites, segment_end, a, b, start, jac) };
+    }
+    interval_jacobian_kernel(model, sites, segment_end, a, b, start, jac)
+}
+
+/// [`interval_jacobian_kernel`] with AVX2 and FMA enabled.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+unsafe fn interval_jacobian_avx2(
+    model: &Model,
+    sites: &IntervalSites,
+    segment_end: f64,
+    a: &State,
+    b: &State,
+    start: Option<&Linearization>,
+    jac: &mut [f64],
+) -> Result<(Block<f64>, Linearization)> {
+    interval_jacobian_kernel(model, sites, segment_end, a, b, start, jac)
+}
+
+/// [`interval_jacobian`]'s operations.
+#[inline(always)]
+fn interval_jacobian_kernel(
     model: &Model,
     sites: &IntervalSites,
     segment_end: f64,
@@ -458,10 +497,42 @@ pub fn interval_jacobian(
     let residual = scale_rows(y1 - y0 - (p0.f + pm.f * 4.0 + p1.f) * (h / 6.0), length);
 
     let ends = EndColumns::new(&p0, &p1, &theta1, length);
-    let dYm = ends.midpoint(h);
-    let mut dFm = pm.f_y.fixed_columns::<9>(3) * dYm;
-    let mut frame = dFm.fixed_columns_mut::<3>(0);
-    frame += pm.f_frame;
+    let dFm = midpoint_product(&pm, &ends.midpoint(h));
     ends.write(&dFm, h, length, jac);
     Ok((residual, lin1))
+}
+
+/// The midpoint's F on the 18 columns: its (theta, v, u) columns of dF/dy times the
+/// midpoint's columns `dYm`, plus dF/dphi on the theta_a columns. Written out so that it
+/// inlines into [`interval_jacobian_avx2`] (nalgebra's product is a call compiled for the
+/// baseline there), with each entry's sum in the order of nalgebra's product (the k = 0
+/// term, then each further term added to it), so the same bits.
+#[inline(always)]
+fn midpoint_product(pm: &PointLinearization, dYm: &SMatrix<f64, 9, 18>) -> SMatrix<f64, 12, 18> {
+    let f_y = pm.f_y.as_slice(); // column-major, 12 x 12
+    let mut dFm = SMatrix::<f64, 12, 18>::zeros();
+    for (j, (col, dy)) in dFm
+        .as_mut_slice()
+        .chunks_exact_mut(12)
+        .zip(dYm.as_slice().chunks_exact(9))
+        .enumerate()
+    {
+        let col: &mut [f64; 12] = col.try_into().expect("a column of 12 rows");
+        let first: &[f64; 12] = f_y[36..48].try_into().expect("a column of 12 rows");
+        for (c, f) in col.iter_mut().zip(first) {
+            *c = f * dy[0];
+        }
+        for (k, dy_k) in dy.iter().enumerate().skip(1) {
+            let f: &[f64; 12] = f_y[12 * (3 + k)..12 * (4 + k)].try_into().expect("a column of 12 rows");
+            for (c, f) in col.iter_mut().zip(f) {
+                *c += f * dy_k;
+            }
+        }
+        if j < 3 {
+            for (c, f) in col.iter_mut().zip(pm.f_frame.column(j).iter()) {
+                *c += f;
+            }
+        }
+    }
+    dFm
 }
