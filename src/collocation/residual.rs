@@ -27,7 +27,7 @@ pub(super) use super::ends::EndColumns;
 use super::unknowns::{P, THETA, U, V};
 use crate::error::Result;
 use crate::model::equations::{Model, Site, lift, lift_m};
-use crate::model::linearize::{self, Linearization, linearize};
+use crate::model::linearize::{self, Linearization, linearize, linearize_inline};
 use crate::solution::State;
 use crate::{Real, so3};
 use nalgebra::{Matrix3, Matrix6, SMatrix, SVector, Vector3, Vector6};
@@ -370,6 +370,13 @@ pub(super) fn rhs_linearized(
     Rk: &Matrix3<f64>,
     y: &Block<f64>,
 ) -> PointLinearization {
+    rhs_linearized_inline(site, lin, Rk, y)
+}
+
+/// [`rhs_linearized`] always inlined, so that in [`interval_jacobian_avx2`] it is compiled
+/// for AVX2 too (the same operations in the same order).
+#[inline(always)]
+fn rhs_linearized_inline(site: &Site, lin: &Linearization, Rk: &Matrix3<f64>, y: &Block<f64>) -> PointLinearization {
     let theta: Vector3<f64> = y.fixed_rows::<3>(THETA).into();
     let v = site.strain(&y.fixed_rows::<3>(V).into());
     let u: Vector3<f64> = y.fixed_rows::<3>(U).into();
@@ -477,13 +484,13 @@ fn interval_jacobian_kernel(
             &computed
         }
     };
-    let lin1 = linearize(model, &sites.end, segment_end, &b.R, &b.v, &b.u)?;
-    let p0 = rhs_linearized(&sites.start, lin0, &a.R, &y0);
-    let p1 = rhs_linearized(&sites.end, &lin1, &a.R, &y1);
+    let lin1 = linearize_inline(model, &sites.end, segment_end, &b.R, &b.v, &b.u)?;
+    let p0 = rhs_linearized_inline(&sites.start, lin0, &a.R, &y0);
+    let p1 = rhs_linearized_inline(&sites.end, &lin1, &a.R, &y1);
     let ym = (y0 + y1) * 0.5 + (p0.f - p1.f) * (h / 8.0);
-    let pm = rhs_linearized(
+    let pm = rhs_linearized_inline(
         &sites.mid,
-        &linearize(
+        &linearize_inline(
             model,
             &sites.mid,
             segment_end,
