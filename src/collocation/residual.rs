@@ -543,3 +543,50 @@ fn midpoint_product(pm: &PointLinearization, dYm: &SMatrix<f64, 9, 18>) -> SMatr
     }
     dFm
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mesh::{Mesh, guess::rigid_estimate};
+
+    /// The AVX2 build of `interval_jacobian` gives the baseline build's bits (residual,
+    /// 12 x 24 block and the end node's linearization) on every interval of the prototype
+    /// with four tendons pulled: the same operations in the same order (on a processor
+    /// without AVX2 both are the baseline).
+    #[test]
+    fn interval_jacobian_gives_the_baseline_bits() {
+        let mut robot = crate::cases::prototype();
+        for (i, tendon) in robot.tendons.iter_mut().enumerate().take(4) {
+            tendon.set_tension(0.4 + 0.7 * i as f64);
+        }
+        let model = Model::new(&robot);
+        let mesh = Mesh::uniform(&robot, 16).unwrap();
+        let x = rigid_estimate(&model, &mesh.nodes);
+        let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+        let mut compared = 0;
+        for k in 0..mesh.nodes.len() - 1 {
+            if mesh.is_jump(k) {
+                continue;
+            }
+            let (s0, s1) = (x[k].s, x[k + 1].s);
+            let sites = IntervalSites {
+                start: model.site(s0),
+                mid: model.site(0.5 * (s0 + s1)),
+                end: model.site(s1),
+            };
+            let seg = mesh.nodes[k].segment_end;
+            let (mut fast, mut baseline) = ([0.0; 12 * 24], [0.0; 12 * 24]);
+            let (r_fast, l_fast) = interval_jacobian(&model, &sites, seg, &x[k], &x[k + 1], None, &mut fast).unwrap();
+            let (r_base, l_base) =
+                interval_jacobian_kernel(&model, &sites, seg, &x[k], &x[k + 1], None, &mut baseline).unwrap();
+            assert!(fast.iter().all(|v| v.is_finite()));
+            assert_eq!(bits(&fast), bits(&baseline), "interval {k}");
+            assert_eq!(bits(r_fast.as_slice()), bits(r_base.as_slice()), "interval {k}");
+            assert_eq!(bits(l_fast.d_strains.as_slice()), bits(l_base.d_strains.as_slice()));
+            assert_eq!(bits(l_fast.d_rotation.as_slice()), bits(l_base.d_rotation.as_slice()));
+            assert_eq!(bits(l_fast.rates.as_slice()), bits(l_base.rates.as_slice()));
+            compared += 1;
+        }
+        assert_eq!(compared, 16);
+    }
+}
