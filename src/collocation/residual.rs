@@ -27,7 +27,7 @@ pub(super) use super::ends::EndColumns;
 use super::unknowns::{P, THETA, U, V};
 use crate::error::Result;
 use crate::model::equations::{Model, Site, lift, lift_m};
-use crate::model::linearize::{self, Linearization, linearize};
+use crate::model::linearize::{self, Linearization, linearize, linearize_inline};
 use crate::solution::State;
 use crate::{Real, so3};
 use nalgebra::{Matrix3, Matrix6, SMatrix, SVector, Vector3, Vector6};
@@ -370,6 +370,13 @@ pub(super) fn rhs_linearized(
     Rk: &Matrix3<f64>,
     y: &Block<f64>,
 ) -> PointLinearization {
+    rhs_linearized_inline(site, lin, Rk, y)
+}
+
+/// [`rhs_linearized`] always inlined, so that in [`interval_jacobian_avx2`] it is compiled
+/// for AVX2 too (the same operations in the same order).
+#[inline(always)]
+fn rhs_linearized_inline(site: &Site, lin: &Linearization, Rk: &Matrix3<f64>, y: &Block<f64>) -> PointLinearization {
     let theta: Vector3<f64> = y.fixed_rows::<3>(THETA).into();
     let v = site.strain(&y.fixed_rows::<3>(V).into());
     let u: Vector3<f64> = y.fixed_rows::<3>(U).into();
@@ -415,9 +422,48 @@ pub(super) fn rhs_linearized(
 /// v_a, u_a only and y_1 on theta_a, theta_b, v_b, u_b, so F_0 and F_1 need no products
 /// and only the midpoint needs a 12 x 9 by 9 x 18 one.
 ///
+/// On x86-64 with AVX2 and FMA (checked at run time) the block's own arithmetic (the chain
+/// rule, its 12 x 9 by 9 x 18 product and the writes) is compiled for them: the same
+/// operations in the same order (Rust does not fuse a product and a sum into an FMA), so the
+/// same bits in wider registers (docs/benchmarks.md, "A batch row").
+///
 /// # Errors
 /// A model breakdown at a node or at the midpoint.
 pub fn interval_jacobian(
+    model: &Model,
+    sites: &IntervalSites,
+    segment_end: f64,
+    a: &State,
+    b: &State,
+    start: Option<&Linearization>,
+    jac: &mut [f64],
+) -> Result<(Block<f64>, Linearization)> {
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma") {
+        // SAFETY: the processor supports the features the function is compiled for.
+        return unsafe { interval_jacobian_avx2(model, sites, segment_end, a, b, start, jac) };
+    }
+    interval_jacobian_kernel(model, sites, segment_end, a, b, start, jac)
+}
+
+/// [`interval_jacobian_kernel`] with AVX2 and FMA enabled.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+unsafe fn interval_jacobian_avx2(
+    model: &Model,
+    sites: &IntervalSites,
+    segment_end: f64,
+    a: &State,
+    b: &State,
+    start: Option<&Linearization>,
+    jac: &mut [f64],
+) -> Result<(Block<f64>, Linearization)> {
+    interval_jacobian_kernel(model, sites, segment_end, a, b, start, jac)
+}
+
+/// [`interval_jacobian`]'s operations.
+#[inline(always)]
+fn interval_jacobian_kernel(
     model: &Model,
     sites: &IntervalSites,
     segment_end: f64,
@@ -438,13 +484,13 @@ pub fn interval_jacobian(
             &computed
         }
     };
-    let lin1 = linearize(model, &sites.end, segment_end, &b.R, &b.v, &b.u)?;
-    let p0 = rhs_linearized(&sites.start, lin0, &a.R, &y0);
-    let p1 = rhs_linearized(&sites.end, &lin1, &a.R, &y1);
+    let lin1 = linearize_inline(model, &sites.end, segment_end, &b.R, &b.v, &b.u)?;
+    let p0 = rhs_linearized_inline(&sites.start, lin0, &a.R, &y0);
+    let p1 = rhs_linearized_inline(&sites.end, &lin1, &a.R, &y1);
     let ym = (y0 + y1) * 0.5 + (p0.f - p1.f) * (h / 8.0);
-    let pm = rhs_linearized(
+    let pm = rhs_linearized_inline(
         &sites.mid,
-        &linearize(
+        &linearize_inline(
             model,
             &sites.mid,
             segment_end,
@@ -458,10 +504,89 @@ pub fn interval_jacobian(
     let residual = scale_rows(y1 - y0 - (p0.f + pm.f * 4.0 + p1.f) * (h / 6.0), length);
 
     let ends = EndColumns::new(&p0, &p1, &theta1, length);
-    let dYm = ends.midpoint(h);
-    let mut dFm = pm.f_y.fixed_columns::<9>(3) * dYm;
-    let mut frame = dFm.fixed_columns_mut::<3>(0);
-    frame += pm.f_frame;
+    let dFm = midpoint_product(&pm, &ends.midpoint(h));
     ends.write(&dFm, h, length, jac);
     Ok((residual, lin1))
+}
+
+/// The midpoint's F on the 18 columns: its (theta, v, u) columns of dF/dy times the
+/// midpoint's columns `dYm`, plus dF/dphi on the theta_a columns. Written out so that it
+/// inlines into [`interval_jacobian_avx2`] (nalgebra's product is a call compiled for the
+/// baseline there), with each entry's sum in the order of nalgebra's product (the k = 0
+/// term, then each further term added to it), so the same bits.
+#[inline(always)]
+fn midpoint_product(pm: &PointLinearization, dYm: &SMatrix<f64, 9, 18>) -> SMatrix<f64, 12, 18> {
+    let f_y = pm.f_y.as_slice(); // column-major, 12 x 12
+    let mut dFm = SMatrix::<f64, 12, 18>::zeros();
+    for (j, (col, dy)) in dFm
+        .as_mut_slice()
+        .chunks_exact_mut(12)
+        .zip(dYm.as_slice().chunks_exact(9))
+        .enumerate()
+    {
+        let col: &mut [f64; 12] = col.try_into().expect("a column of 12 rows");
+        let first: &[f64; 12] = f_y[36..48].try_into().expect("a column of 12 rows");
+        for (c, f) in col.iter_mut().zip(first) {
+            *c = f * dy[0];
+        }
+        for (k, dy_k) in dy.iter().enumerate().skip(1) {
+            let f: &[f64; 12] = f_y[12 * (3 + k)..12 * (4 + k)].try_into().expect("a column of 12 rows");
+            for (c, f) in col.iter_mut().zip(f) {
+                *c += f * dy_k;
+            }
+        }
+        if j < 3 {
+            for (c, f) in col.iter_mut().zip(pm.f_frame.column(j).iter()) {
+                *c += f;
+            }
+        }
+    }
+    dFm
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mesh::{Mesh, guess::rigid_estimate};
+
+    /// The AVX2 build of `interval_jacobian` gives the baseline build's bits (residual,
+    /// 12 x 24 block and the end node's linearization) on every interval of the prototype
+    /// with four tendons pulled: the same operations in the same order (on a processor
+    /// without AVX2 both are the baseline).
+    #[test]
+    fn interval_jacobian_gives_the_baseline_bits() {
+        let mut robot = crate::cases::prototype();
+        for (i, tendon) in robot.tendons.iter_mut().enumerate().take(4) {
+            tendon.set_tension(0.4 + 0.7 * i as f64);
+        }
+        let model = Model::new(&robot);
+        let mesh = Mesh::uniform(&robot, 16).unwrap();
+        let x = rigid_estimate(&model, &mesh.nodes);
+        let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+        let mut compared = 0;
+        for k in 0..mesh.nodes.len() - 1 {
+            if mesh.is_jump(k) {
+                continue;
+            }
+            let (s0, s1) = (x[k].s, x[k + 1].s);
+            let sites = IntervalSites {
+                start: model.site(s0),
+                mid: model.site(0.5 * (s0 + s1)),
+                end: model.site(s1),
+            };
+            let seg = mesh.nodes[k].segment_end;
+            let (mut fast, mut baseline) = ([0.0; 12 * 24], [0.0; 12 * 24]);
+            let (r_fast, l_fast) = interval_jacobian(&model, &sites, seg, &x[k], &x[k + 1], None, &mut fast).unwrap();
+            let (r_base, l_base) =
+                interval_jacobian_kernel(&model, &sites, seg, &x[k], &x[k + 1], None, &mut baseline).unwrap();
+            assert!(fast.iter().all(|v| v.is_finite()));
+            assert_eq!(bits(&fast), bits(&baseline), "interval {k}");
+            assert_eq!(bits(r_fast.as_slice()), bits(r_base.as_slice()), "interval {k}");
+            assert_eq!(bits(l_fast.d_strains.as_slice()), bits(l_base.d_strains.as_slice()));
+            assert_eq!(bits(l_fast.d_rotation.as_slice()), bits(l_base.d_rotation.as_slice()));
+            assert_eq!(bits(l_fast.rates.as_slice()), bits(l_base.rates.as_slice()));
+            compared += 1;
+        }
+        assert_eq!(compared, 16);
+    }
 }

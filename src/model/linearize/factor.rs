@@ -24,6 +24,15 @@ fn spd_inverse3(a: &Matrix3<f64>) -> Option<Matrix3<f64>> {
     Some(Matrix3::new(c00, c01, c02, c01, c11, c12, c02, c12, minor2) * inv)
 }
 
+/// a b for a C x 3 matrix `a`, each entry summed as nalgebra's product sums it (the k = 0
+/// term, then the k = 1 and k = 2 terms added in turn), so the same bits; written out so
+/// that it inlines where the caller is compiled for AVX2 (nalgebra's product is a call
+/// compiled for the baseline there).
+#[inline(always)]
+fn mul3<const C: usize>(a: &SMatrix<f64, C, 3>, b: &Matrix3<f64>) -> SMatrix<f64, C, 3> {
+    SMatrix::<f64, C, 3>::from_fn(|i, j| a[(i, 0)] * b[(0, j)] + a[(i, 1)] * b[(1, j)] + a[(i, 2)] * b[(2, j)])
+}
+
 /// M = [P, G; rho G^T, Q] (3x3 blocks, P and Q symmetric; rho = 1, M symmetric positive
 /// definite, on a Cosserat rod, rho = 0, M block triangular, on a Kirchhoff rod) factored by
 /// block elimination: P^-1, W = P^-1 G and the inverse of the Schur complement
@@ -45,6 +54,7 @@ pub(super) struct Schur6 {
 impl Schur6 {
     /// Factors M (reads its upper-left, upper-right and lower-right blocks; the lower-left
     /// is G^T when `coupled`, else 0); None when P or S is not SPD.
+    #[inline(always)]
     fn new(M: &Matrix6<f64>, coupled: bool) -> Option<Self> {
         let P_inv = spd_inverse3(&M.fixed_view::<3, 3>(0, 0).into_owned())?;
         let G: Matrix3<f64> = M.fixed_view::<3, 3>(0, 3).into_owned();
@@ -68,14 +78,15 @@ impl Schur6 {
     /// Overwrites the rows of `bt` with those of bt M^-T, i.e. solves M X = B for B = bt^T
     /// (P, Q and S are symmetric): with rows (b_v, b_u), w = b_v P^-1,
     /// x_u = (b_u - rho w G) S^-1, x_v = w - x_u W^T.
+    #[inline(always)]
     fn solve_transposed_mut<const C: usize>(&self, bt: &mut SMatrix<f64, C, 6>) {
-        let w = bt.fixed_columns::<3>(0) * self.P_inv;
+        let w = mul3(&bt.fixed_columns::<3>(0).into_owned(), &self.P_inv);
         let x_u = if self.coupled {
-            (bt.fixed_columns::<3>(3) - w * self.G) * self.S_inv
+            mul3(&(bt.fixed_columns::<3>(3) - mul3(&w, &self.G)), &self.S_inv)
         } else {
-            bt.fixed_columns::<3>(3) * self.S_inv
+            mul3(&bt.fixed_columns::<3>(3).into_owned(), &self.S_inv)
         };
-        let x_v = w - x_u * self.W.transpose();
+        let x_v = w - mul3(&x_u, &self.W.transpose());
         bt.fixed_columns_mut::<3>(0).copy_from(&x_v);
         bt.fixed_columns_mut::<3>(3).copy_from(&x_u);
     }
@@ -93,6 +104,7 @@ pub(super) enum Factor {
 
 impl Factor {
     /// Factors M; `coupled` as in [`Schur6::new`].
+    #[inline(always)]
     pub(super) fn new(M: &Matrix6<f64>, coupled: bool) -> Self {
         match Schur6::new(M, coupled) {
             Some(f) => Factor::Spd(f),

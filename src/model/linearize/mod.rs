@@ -340,6 +340,24 @@ pub fn linearize(
     v: &Vector3<f64>,
     u: &Vector3<f64>,
 ) -> Result<Linearization> {
+    linearize_inline(model, site, segment_end, R, v, u)
+}
+
+/// [`linearize`] always inlined, for a caller compiled for AVX2 (the interval Jacobian,
+/// `collocation::residual`): its arithmetic is then compiled for AVX2 too, with the same
+/// operations in the same order.
+///
+/// # Errors
+/// As [`linearize`].
+#[inline(always)]
+pub(crate) fn linearize_inline(
+    model: &Model,
+    site: &Site,
+    segment_end: f64,
+    R: &Matrix3<f64>,
+    v: &Vector3<f64>,
+    u: &Vector3<f64>,
+) -> Result<Linearization> {
     // Locals, not a Point: the frictionless path moves nothing between the passes.
     let mut cache = TendonCache::new();
     let assembled = assemble(model, site, segment_end, (R, v, u), Some(&mut cache))?;

@@ -33,6 +33,7 @@ pub(crate) struct TendonPoint {
 impl TendonPoint {
     /// Tendon `i` with tension `tension` (N) at the routing point `rp` of `site`, for the
     /// node coordinates (v, u) (the strain is [`Site::strain`] of v).
+    #[inline(always)]
     pub(crate) fn new(
         i: usize,
         tension: f64,
@@ -68,6 +69,7 @@ impl TendonPoint {
     }
 
     /// A_i = k_i (I - t_i t_i^T) (N), symmetric.
+    #[inline(always)]
     pub(super) fn A(&self) -> Matrix3<f64> {
         let (t, k) = (&self.t, self.k);
         let kt = t * k;
@@ -87,6 +89,7 @@ impl TendonPoint {
 
     /// Adds [dq_i/dv, dq_i/du] to `top` and r_i^ [dq_i/dv, dq_i/du] to `bottom` (module docs),
     /// at the rates x = (x_v, x_u).
+    #[inline(always)]
     pub(super) fn add_derivatives(
         &self,
         x_v: &Vector3<f64>,
@@ -103,6 +106,7 @@ impl TendonPoint {
     /// [dq_i/dv, dq_i/du] (module docs) at the rates x = (x_v, x_u), with x held fixed: the
     /// change of the tendon's normal load q_i with the node coordinates (on a Kirchhoff rod
     /// q_i does not depend on v nor x_v, the translational coordinate and its rate).
+    #[inline(always)]
     pub(crate) fn normal_derivative(&self, x_v: &Vector3<f64>, x_u: &Vector3<f64>, u: &Vector3<f64>) -> Matrix3x6<f64> {
         let A = self.A();
         let t = &self.t;
@@ -135,6 +139,7 @@ impl TendonPoint {
 }
 
 /// m a^: row j is (m_j x a)^T.
+#[inline(always)]
 pub(super) fn mul_hat(m: &Matrix3<f64>, a: &Vector3<f64>) -> Matrix3<f64> {
     Matrix3::from_fn(|j, l| match l {
         0 => m[(j, 1)] * a[2] - m[(j, 2)] * a[1],
@@ -144,6 +149,7 @@ pub(super) fn mul_hat(m: &Matrix3<f64>, a: &Vector3<f64>) -> Matrix3<f64> {
 }
 
 /// a^ m: column l is a x m_l.
+#[inline(always)]
 pub(super) fn hat_mul<const C: usize>(a: &Vector3<f64>, m: &SMatrix<f64, 3, C>) -> SMatrix<f64, 3, C> {
     SMatrix::<f64, 3, C>::from_fn(|j, l| match j {
         0 => a[1] * m[(2, l)] - a[2] * m[(1, l)],
