@@ -52,6 +52,7 @@ mod path;
 mod phase;
 mod pipeline;
 pub(crate) mod refine;
+mod relax;
 pub(crate) mod residual;
 pub mod sensitivity;
 mod snap;

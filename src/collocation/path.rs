@@ -74,6 +74,10 @@ pub(super) struct End {
     /// The load factor of the fold from which the states were reached by Newton at
     /// lambda = 1 after the path itself could not be followed to the end ([`snap::land_from_folds`]).
     pub snapped_from: Option<f64>,
+    /// The load factor of the bifurcation at which the path lost stability with no stable
+    /// branch to continue on, from which the states were reached by the robot's damped motion
+    /// under the full load ([`snap::from_bifurcation`]).
+    pub relaxed_from: Option<f64>,
     /// Whether the side picked led onto a family of equilibria (module `phase`): the states
     /// are one member, every other member equally valid.
     pub family: bool,
@@ -339,6 +343,24 @@ pub(super) fn follow(
                     bifurcations,
                     picked,
                     snapped_from: None,
+                    relaxed_from: None,
+                    family,
+                });
+            }
+            if let (true, Some(a), Some(b)) = (landing, unstable, landed_unstable)
+                && b > a
+                && phase.is_none()
+                && let Some((at, x)) =
+                    snap::from_bifurcation(system, &homotopy, ws, &point, (&landed, 1.0), settings, report)
+            {
+                bifurcations.push(at);
+                return Ok(End {
+                    x,
+                    folds,
+                    bifurcations,
+                    picked,
+                    snapped_from: None,
+                    relaxed_from: Some(at),
                     family,
                 });
             }
@@ -433,6 +455,32 @@ pub(super) fn follow(
                     && a != b
                     && !fold
                 {
+                    // A symmetric, simple bifurcation on a cold solve's load path: the robot
+                    // snaps there (docs/stability.md, "Snapping from a bifurcation").
+                    if landing
+                        && b > a
+                        && phase.is_none()
+                        && let Some((at, x)) = snap::from_bifurcation(
+                            system,
+                            &homotopy,
+                            ws,
+                            &point,
+                            (&next.x, lambda),
+                            settings,
+                            report,
+                        )
+                    {
+                        bifurcations.push(at);
+                        return Ok(End {
+                            x,
+                            folds,
+                            bifurcations,
+                            picked,
+                            snapped_from: None,
+                            relaxed_from: Some(at),
+                            family,
+                        });
+                    }
                     if switching
                         && b > a
                         && let Some(mut s) = branch::switch(
@@ -492,6 +540,7 @@ pub(super) fn follow(
                         bifurcations,
                         picked,
                         snapped_from: None,
+                    relaxed_from: None,
                         family,
                     });
                 }
@@ -582,6 +631,7 @@ pub(super) fn follow(
             bifurcations,
             picked,
             snapped_from: Some(lambda),
+            relaxed_from: None,
             family,
         });
     }

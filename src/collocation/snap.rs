@@ -2,10 +2,17 @@
 //! family of equilibria at nearly constant lambda, as the swing round the vertical of a
 //! hanging robot whose tendon and lateral load nearly balance, until its steps ran out): the
 //! robot snaps at a fold it passed, to a stable state (docs/stability.md, "A path that
-//! cannot be followed to the end lands from its folds").
+//! cannot be followed to the end lands from its folds"); and the snap at a bifurcation
+//! where no stable branch continues the path (docs/stability.md, "Snapping from a
+//! bifurcation").
 
+use super::branch::SYMMETRIC_COS;
+use super::homotopy::{Homotopy, Point, dot};
+use super::locate;
 use super::newton::{self, Settings, Workspace};
 use super::path::index;
+use super::phase::{Phase, generic, kernel};
+use super::relax::relax;
 use super::system::System;
 use crate::report::{SolveReport, Termination};
 use crate::solution::State;
@@ -45,4 +52,60 @@ pub(super) fn land_from_folds(
         }
     }
     None
+}
+
+/// The amplitude of the start of the damped motion along the unstable direction at the
+/// bifurcation, in the path's normalized arclength: the first switching step's (module
+/// `branch`), large enough that the motion leaves the critical state at once.
+const AMPLITUDE: f64 = 0.1;
+
+/// Above this |cos| between the tangent before the crossing and the kernel direction there the
+/// path leans along the kernel (an imperfect turn, module `branch`): measured 1e-6 and more
+/// on issue 25's column with the smallest imperfection, 1e-5 of the load; 2e-8 to 5e-7 at
+/// the last point before the out-of-plane bifurcation of the gallery's column, where the
+/// located kernel gives 1e-16.
+const LEANS: f64 = 1e-7;
+
+/// Where the load path of `homotopy` from `point` (tangent `point.tx`) crosses a perfectly
+/// symmetric, simple bifurcation on its way to `beyond` (states and load factor past it,
+/// with more unstable directions): the bifurcation located on the branch
+/// ([`locate::critical`]), and the stable state where the robot's damped motion comes to rest
+/// under the full load (module `relax`), started from the critical state moved along the
+/// kernel direction there. Returns the bifurcation's load factor and that state (with `system`
+/// at lambda = 1), or None when the crossing is not such a bifurcation (the tangent leans
+/// along the kernel, an imperfect turn the path switches across, or the kernel is
+/// two-dimensional, a family the path holds, module `phase`), or the motion does not come to
+/// rest at a stable state.
+pub(super) fn from_bifurcation(
+    system: &mut System,
+    homotopy: &Homotopy,
+    ws: &mut Workspace,
+    point: &Point,
+    beyond: (&[State], f64),
+    settings: &Settings,
+    report: &mut SolveReport,
+) -> Option<(f64, Vec<State>)> {
+    homotopy.set(system, point.lambda);
+    if !ws.linearize(system, &point.x, report) {
+        return None;
+    }
+    let n = point.tx.len();
+    let (any, _) = kernel(ws, generic(n), false, None)?;
+    // Far from the bifurcation inverse iteration leaves a little of the other directions in
+    // the kernel's estimate: a first, looser test here, the strict one at the located point.
+    if (dot(&any, &point.tx) / n as f64).abs() >= LEANS {
+        return None;
+    }
+    let (xc, lc) = locate::critical(system, homotopy, ws, point, beyond, settings, report)?;
+    let (phi, growth) = kernel(ws, generic(n), false, None)?;
+    if (dot(&phi, &point.tx) / n as f64).abs() >= SYMMETRIC_COS || Phase::second_kernel(ws, &phi, growth).is_some() {
+        return None;
+    }
+    let step: Vec<f64> = phi.iter().map(|v| v * AMPLITUDE).collect();
+    let mut start = Vec::with_capacity(xc.len());
+    system.retract(&xc, &step, 1.0, &mut start);
+    homotopy.set(system, 1.0);
+    let x = relax(system, ws, start, settings, report)?;
+    report.termination = Termination::Converged;
+    Some((lc, x))
 }
