@@ -260,6 +260,10 @@ pub(super) fn follow(
     // The states at the folds passed, with their load factors: where the path cannot be
     // followed to the end, the robot snaps from one of them ([`snap::land_from_folds`]).
     let mut fold_states: Vec<(f64, Vec<State>)> = Vec::new();
+    // A side picked at a simple symmetric bifurcation (load factor, first state past it), and
+    // the path's progress in lambda since (module `snap`, [`snap::Stall`]).
+    let mut switched: Option<(f64, Vec<State>)> = None;
+    let mut stall = snap::Stall::default();
     for _ in 0..MAX_STEPS {
         if stop() {
             return Err(("stopped on request before the end of the range".into(), 0));
@@ -347,23 +351,6 @@ pub(super) fn follow(
                     family,
                 });
             }
-            if let (true, Some(a), Some(b)) = (landing, unstable, landed_unstable)
-                && b > a
-                && phase.is_none()
-                && let Some((at, x)) =
-                    snap::from_bifurcation(system, &homotopy, ws, &point, (&landed, 1.0), settings, report)
-            {
-                bifurcations.push(at);
-                return Ok(End {
-                    x,
-                    folds,
-                    bifurcations,
-                    picked,
-                    snapped_from: None,
-                    relaxed_from: Some(at),
-                    family,
-                });
-            }
             if let (true, Some(a), Some(b)) = (switching, unstable, landed_unstable)
                 && b > a
                 && let Some(mut s) = branch::switch(
@@ -380,11 +367,30 @@ pub(super) fn follow(
             {
                 s.record(&mut bifurcations, &mut picked);
                 push(&mut record, &s.point, s.unstable, false, report);
+                switched = (s.picked && s.family.is_none()).then(|| (s.at, s.point.x.clone()));
                 (phase, family) = s.hold(system, &homotopy, ws, report);
                 (point, fl, unstable) = (s.point, s.fl, s.unstable);
                 (switching, polished, factored_at_point) = (false, false, true);
                 h = h1.abs().min(max_step);
                 continue;
+            }
+            if let (true, Some(a), Some(b)) = (landing, unstable, landed_unstable)
+                && b > a
+                && (!switching || h1 <= BIFURCATION_STEP)
+                && phase.is_none()
+                && let Some((at, x)) =
+                    snap::from_bifurcation(system, &homotopy, ws, &point, (&landed, 1.0), settings, report)
+            {
+                bifurcations.push(at);
+                return Ok(End {
+                    x,
+                    folds,
+                    bifurcations,
+                    picked,
+                    snapped_from: None,
+                    relaxed_from: Some(at),
+                    family,
+                });
             }
             if jumped {
                 // Retry shorter from the last point, whose factors are gone.
@@ -455,32 +461,6 @@ pub(super) fn follow(
                     && a != b
                     && !fold
                 {
-                    // A symmetric, simple bifurcation on a cold solve's load path: the robot
-                    // snaps there (docs/stability.md, "Snapping from a bifurcation").
-                    if landing
-                        && b > a
-                        && phase.is_none()
-                        && let Some((at, x)) = snap::from_bifurcation(
-                            system,
-                            &homotopy,
-                            ws,
-                            &point,
-                            (&next.x, lambda),
-                            settings,
-                            report,
-                        )
-                    {
-                        bifurcations.push(at);
-                        return Ok(End {
-                            x,
-                            folds,
-                            bifurcations,
-                            picked,
-                            snapped_from: None,
-                            relaxed_from: Some(at),
-                            family,
-                        });
-                    }
                     if switching
                         && b > a
                         && let Some(mut s) = branch::switch(
@@ -497,6 +477,7 @@ pub(super) fn follow(
                     {
                         s.record(&mut bifurcations, &mut picked);
                         push(&mut record, &s.point, s.unstable, false, report);
+                        switched = (s.picked && s.family.is_none()).then(|| (s.at, s.point.x.clone()));
                         (phase, family) = s.hold(system, &homotopy, ws, report);
                         (point, fl, unstable) = (s.point, s.fl, s.unstable);
                         // One switch per path: the branch taken can keep a nearly neutral
@@ -505,6 +486,28 @@ pub(super) fn follow(
                         (switching, polished, factored_at_point) = (false, false, true);
                         furthest = furthest.max(point.lambda);
                         continue;
+                    }
+                    // A symmetric, simple bifurcation on a cold solve's load path where the
+                    // path may not switch (it did once) or a step short enough to cross it
+                    // found no stable branch: the robot snaps (docs/stability.md, "Snapping
+                    // from a bifurcation").
+                    if landing
+                        && b > a
+                        && (!switching || h <= BIFURCATION_STEP)
+                        && phase.is_none()
+                        && let Some((at, x)) =
+                            snap::from_bifurcation(system, &homotopy, ws, &point, (&next.x, lambda), settings, report)
+                    {
+                        bifurcations.push(at);
+                        return Ok(End {
+                            x,
+                            folds,
+                            bifurcations,
+                            picked,
+                            snapped_from: None,
+                            relaxed_from: Some(at),
+                            family,
+                        });
                     }
                     if h > BIFURCATION_STEP {
                         // Jumped to another branch: retry shorter.
@@ -540,7 +543,7 @@ pub(super) fn follow(
                         bifurcations,
                         picked,
                         snapped_from: None,
-                    relaxed_from: None,
+                        relaxed_from: None,
                         family,
                     });
                 }
@@ -563,6 +566,9 @@ pub(super) fn follow(
                 h = (h * grow).min(max_step);
                 if cos < 0.9 {
                     h *= 0.5;
+                }
+                if landing && switched.is_some() && stall.crawls(lambda) {
+                    break;
                 }
                 point = next;
                 polished = false;
@@ -624,6 +630,21 @@ pub(super) fn follow(
         }
     }
     homotopy.set(system, 1.0);
+    if landing
+        && let Some((at, x)) = switched
+        && let Some(x) = snap::relax_from(system, ws, x, settings, report)
+    {
+        picked.retain(|&l| l != at);
+        return Ok(End {
+            x,
+            folds,
+            bifurcations,
+            picked,
+            snapped_from: None,
+            relaxed_from: Some(at),
+            family,
+        });
+    }
     if landing && let Some((lambda, x)) = snap::land_from_folds(system, ws, &fold_states, settings, report) {
         return Ok(End {
             x,

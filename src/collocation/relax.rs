@@ -28,7 +28,9 @@ use super::dynamics::Mass;
 use super::homotopy::{dot, max_norm};
 use super::newton::{self, Settings, Workspace};
 use super::path::index;
+use super::phase::{generic, kernel};
 use super::system::System;
+use super::unknowns::{NODE, P, THETA};
 use crate::report::{SolveReport, Termination};
 use crate::solution::State;
 
@@ -46,6 +48,13 @@ const MAX_STEPS: usize = 150;
 /// A residual (scaled max-norm) at which the state is near rest and Newton finishes; tried
 /// again only after the residual has fallen tenfold since the last try.
 const NEAR_REST: f64 = 1e-3;
+/// A time step this short moves nothing the mass carries (the massless rows alone decide the
+/// step): the motion is lost.
+const SHORTEST_DT: f64 = 1e-8;
+/// The most restarts from an unstable state at rest, and the amplitude of the start along its
+/// softest direction (the path's normalized arclength, as the snap's first start).
+const MAX_RESTARTS: usize = 3;
+const AMPLITUDE: f64 = 0.1;
 /// Newton's iterations to finish from near rest (it converges in 2 to 5 from there).
 const FINISH_ITERATIONS: usize = 12;
 
@@ -66,6 +75,7 @@ pub(super) fn relax(
     let mut rhs = vec![0.0; n];
     let mut next = Vec::with_capacity(x.len());
     let mut tried = f64::INFINITY;
+    let mut restarts = 0;
     let finish = Settings {
         reuse_factors: false,
         stop_when_damped: true,
@@ -73,6 +83,9 @@ pub(super) fn relax(
         ..*settings
     };
     for _ in 0..MAX_STEPS {
+        if dt < SHORTEST_DT {
+            return None;
+        }
         let mass = Mass::new(system, &x).ok()?;
         if !ws.linearize_shifted(system, &x, report, |values| mass.add_to(values, 1.0 / dt)) {
             // A zero pivot: 1 / dt is an eigenvalue of the pencil, take a shorter step.
@@ -84,18 +97,30 @@ pub(super) fn relax(
             tried = r;
             let mut y = x.clone();
             let (term, _) = newton::run(system, ws, &mut y, &finish, report);
-            if term == Termination::Converged && ws.linearize(system, &y, report) && index(system, ws, report) == Some(0)
-            {
-                return Some(y);
+            if term == Termination::Converged && ws.linearize(system, &y, report) {
+                match index(system, ws, report) {
+                    Some(0) => return Some(y),
+                    // At rest on an unstable state (a large dt lets the implicit step stop
+                    // where the motion would not): the motion goes on from it along its
+                    // softest direction, the way it was moving.
+                    Some(_) if restarts < MAX_RESTARTS && !previous.is_empty() => {
+                        let (phi, _) = kernel(ws, generic(n), false, None)?;
+                        let side = AMPLITUDE * configuration_dot(&phi, &previous).signum();
+                        let step: Vec<f64> = phi.iter().map(|v| v * side).collect();
+                        system.retract(&y, &step, 1.0, &mut x);
+                        (dt, tried, restarts) = (FIRST_DT, f64::INFINITY, restarts + 1);
+                        previous.clear();
+                    }
+                    _ => {}
+                }
             }
             continue;
         }
         rhs.iter_mut().zip(ws.residual()).for_each(|(q, f)| *q = -f);
         let step = ws.solve_again(&rhs)?.to_vec();
         let size = (dot(&step, &step) / nf).sqrt();
-        let reversed = !previous.is_empty() && dot(&step, &previous) < 0.0;
-        if !size.is_finite() || size > MOVE || reversed {
-            dt *= match size.is_finite() && size > MOVE && !reversed {
+        if !size.is_finite() || size > MOVE {
+            dt *= match size.is_finite() {
                 true => (0.5 * MOVE / size).max(0.1),
                 false => 0.5,
             };
@@ -109,4 +134,13 @@ pub(super) fn relax(
         previous = step;
     }
     None
+}
+
+/// The dot product of two scaled steps over the nodes' positions and rotations alone (the
+/// configuration, which the motion moves; the strains follow it).
+fn configuration_dot(a: &[f64], b: &[f64]) -> f64 {
+    a.chunks_exact(NODE)
+        .zip(b.chunks_exact(NODE))
+        .map(|(a, b)| dot(&a[P..THETA + 3], &b[P..THETA + 3]))
+        .sum()
 }

@@ -109,3 +109,51 @@ pub(super) fn from_bifurcation(
     report.termination = Termination::Converged;
     Some((lc, x))
 }
+
+/// A path after a side picked at a simple symmetric bifurcation crawls when its load factor
+/// stays within [`STALL_LAMBDA`] for more than [`STALL_STEPS`] accepted steps: it goes round
+/// a family of states at nearly constant load (the bending plane of the gallery's column
+/// turning from the imperfection's side to the tendon's, 380 steps within 0.002 of the way
+/// at 0.13 N of tension), which the robot swings through, and the path gives up for
+/// [`relax_from`].
+const STALL_LAMBDA: f64 = 1e-2;
+/// See [`STALL_LAMBDA`]: healthy branches gain a percent of the way in a few steps.
+const STALL_STEPS: usize = 20;
+
+/// The progress of a path in lambda: the load factor of the last step that moved it more
+/// than [`STALL_LAMBDA`] and the steps since.
+#[derive(Default)]
+pub(super) struct Stall {
+    anchor: Option<f64>,
+    steps: usize,
+}
+
+impl Stall {
+    /// Counts an accepted step to load factor `lambda`: whether the path crawls.
+    pub(super) fn crawls(&mut self, lambda: f64) -> bool {
+        match self.anchor {
+            Some(a) if (lambda - a).abs() <= STALL_LAMBDA => self.steps += 1,
+            _ => (self.anchor, self.steps) = (Some(lambda), 0),
+        }
+        self.steps > STALL_STEPS
+    }
+}
+
+/// The stable state where the robot's damped motion from `x` (the first state past a
+/// bifurcation where the path picked a side and then could not reach the full load) comes to
+/// rest under the full load (`system` at lambda = 1, module `relax`); None on another mesh
+/// than `x`'s or when it does not come to rest at a stable state.
+pub(super) fn relax_from(
+    system: &System,
+    ws: &mut Workspace,
+    x: Vec<State>,
+    settings: &Settings,
+    report: &mut SolveReport,
+) -> Option<Vec<State>> {
+    if x.len() != system.mesh.nodes.len() {
+        return None;
+    }
+    let x = relax(system, ws, x, settings, report)?;
+    report.termination = Termination::Converged;
+    Some(x)
+}
