@@ -262,13 +262,18 @@ fn snapped_note(lambda: f64) -> String {
 }
 
 /// The note of a path that lost stability at the bifurcation at load factor `lambda` with no
-/// stable branch to continue on, completed by the robot's damped motion from there.
-fn relaxed_note(lambda: f64) -> String {
+/// stable branch it could follow, completed by the robot's damped motion from there;
+/// `picked`: the motion started on a side picked (a perfect symmetry).
+fn relaxed_note((lambda, picked): (f64, bool)) -> String {
+    let side = match picked {
+        true => "on a side picked, since the loads prefer neither",
+        false => "on the side the load path leaned to",
+    };
     format!(
-        "the robot loses its stability at the bifurcation at {:.1} % of the way, where no stable \
-         branch continues the path: it snaps, and this stable state is where its damped motion from \
-         there (started along the unstable direction, on a side picked: the loads prefer neither) \
-         comes to rest under the full load, not a state reached by continuation",
+        "the robot loses its stability at the bifurcation at {:.1} % of the way, where the load path \
+         finds no stable branch to follow: it snaps there, and this stable state is where its damped \
+         motion from there (started along the unstable direction, {side}) comes to rest under the \
+         full load, not a state reached by continuation",
         100.0 * lambda
     )
 }

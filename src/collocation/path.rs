@@ -75,9 +75,11 @@ pub(super) struct End {
     /// lambda = 1 after the path itself could not be followed to the end ([`snap::land_from_folds`]).
     pub snapped_from: Option<f64>,
     /// The load factor of the bifurcation at which the path lost stability with no stable
-    /// branch to continue on, from which the states were reached by the robot's damped motion
-    /// under the full load ([`snap::from_bifurcation`]).
-    pub relaxed_from: Option<f64>,
+    /// branch to continue on (or one it could not follow), from which the states were reached
+    /// by the robot's damped motion under the full load ([`snap::from_bifurcation`],
+    /// [`snap::relax_from`]), and whether the side it started on was picked (a perfect
+    /// symmetry).
+    pub relaxed_from: Option<(f64, bool)>,
     /// Whether the side picked led onto a family of equilibria (module `phase`): the states
     /// are one member, every other member equally valid.
     pub family: bool,
@@ -378,8 +380,15 @@ pub(super) fn follow(
                 && b > a
                 && (!switching || h1 <= BIFURCATION_STEP)
                 && phase.is_none()
-                && let Some((at, x)) =
-                    snap::from_bifurcation(system, &homotopy, ws, &point, (&landed, 1.0), settings, report)
+                && let Some((at, picked_side, x)) = snap::from_bifurcation(
+                    system,
+                    &homotopy,
+                    ws,
+                    (&point, unstable),
+                    (&landed, 1.0),
+                    settings,
+                    report,
+                )
             {
                 bifurcations.push(at);
                 return Ok(End {
@@ -388,7 +397,7 @@ pub(super) fn follow(
                     bifurcations,
                     picked,
                     snapped_from: None,
-                    relaxed_from: Some(at),
+                    relaxed_from: Some((at, picked_side)),
                     family,
                 });
             }
@@ -495,8 +504,15 @@ pub(super) fn follow(
                         && b > a
                         && (!switching || h <= BIFURCATION_STEP)
                         && phase.is_none()
-                        && let Some((at, x)) =
-                            snap::from_bifurcation(system, &homotopy, ws, &point, (&next.x, lambda), settings, report)
+                        && let Some((at, picked_side, x)) = snap::from_bifurcation(
+                            system,
+                            &homotopy,
+                            ws,
+                            (&point, unstable),
+                            (&next.x, lambda),
+                            settings,
+                            report,
+                        )
                     {
                         bifurcations.push(at);
                         return Ok(End {
@@ -505,7 +521,7 @@ pub(super) fn follow(
                             bifurcations,
                             picked,
                             snapped_from: None,
-                            relaxed_from: Some(at),
+                            relaxed_from: Some((at, picked_side)),
                             family,
                         });
                     }
@@ -641,7 +657,7 @@ pub(super) fn follow(
             bifurcations,
             picked,
             snapped_from: None,
-            relaxed_from: Some(at),
+            relaxed_from: Some((at, true)),
             family,
         });
     }

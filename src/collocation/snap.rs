@@ -59,55 +59,47 @@ pub(super) fn land_from_folds(
 /// `branch`), large enough that the motion leaves the critical state at once.
 const AMPLITUDE: f64 = 0.1;
 
-/// Above this |cos| between the tangent before the crossing and the kernel direction there the
-/// path leans along the kernel (an imperfect turn, module `branch`): measured 1e-6 and more
-/// on issue 25's column with the smallest imperfection, 1e-5 of the load; 2e-8 to 5e-7 at
-/// the last point before the out-of-plane bifurcation of the gallery's column, where the
-/// located kernel gives 1e-16.
-const LEANS: f64 = 1e-7;
-
-/// Where the load path of `homotopy` from `point` (tangent `point.tx`) crosses a perfectly
-/// symmetric, simple bifurcation on its way to `beyond` (states and load factor past it,
-/// with more unstable directions): the bifurcation located on the branch
-/// ([`locate::critical`]), and the stable state where the robot's damped motion comes to rest
-/// under the full load (module `relax`), started from the critical state moved along the
-/// kernel direction there. Returns the bifurcation's load factor and that state (with `system`
-/// at lambda = 1), or None when the crossing is not such a bifurcation (the tangent leans
-/// along the kernel, an imperfect turn the path switches across, or the kernel is
-/// two-dimensional, a family the path holds, module `phase`), or the motion does not come to
-/// rest at a stable state.
+/// Where the load path of `homotopy` from `point` (tangent `point.tx`, `before` unstable
+/// directions) crosses a bifurcation on its way to `beyond` (states and load factor past it,
+/// with more unstable directions) and goes on on an unstable branch: the bifurcation located
+/// on the branch ([`locate::critical`], else [`locate::past_bifurcation`]), and the stable
+/// state where the robot's damped motion comes to rest under the full load (module
+/// `relax`), started from the critical state moved along the kernel direction there, on the
+/// side the path's tangent leans to, or a picked side when it leans to none (a perfect
+/// symmetry). Returns the bifurcation's load factor, whether the side was picked, and that
+/// state (with `system` at lambda = 1); None when the kernel is two-dimensional at a perfect
+/// symmetry (a family the path holds, module `phase`), a location fails, or the motion does
+/// not come to rest at a stable state.
 pub(super) fn from_bifurcation(
     system: &mut System,
     homotopy: &Homotopy,
     ws: &mut Workspace,
-    point: &Point,
+    (point, before): (&Point, Option<usize>),
     beyond: (&[State], f64),
     settings: &Settings,
     report: &mut SolveReport,
-) -> Option<(f64, Vec<State>)> {
-    homotopy.set(system, point.lambda);
-    if !ws.linearize(system, &point.x, report) {
-        return None;
-    }
+) -> Option<(f64, bool, Vec<State>)> {
     let n = point.tx.len();
-    let (any, _) = kernel(ws, generic(n), false, None)?;
-    // Far from the bifurcation inverse iteration leaves a little of the other directions in
-    // the kernel's estimate: a first, looser test here, the strict one at the located point.
-    if (dot(&any, &point.tx) / n as f64).abs() >= LEANS {
-        return None;
-    }
-    let (xc, lc) = locate::critical(system, homotopy, ws, point, beyond, settings, report)?;
+    // The root of the least eigenvalue; where that is not one eigenvalue on both sides (a
+    // nearly neutral direction is softer past the crossing), the count's bisection.
+    let (xc, lc) = match locate::critical(system, homotopy, ws, point, beyond, settings, report) {
+        Some(c) => c,
+        None => locate::past_bifurcation(system, homotopy, ws, (point, before), beyond.1, settings, report)?,
+    };
     let (phi, growth) = kernel(ws, generic(n), false, None)?;
-    if (dot(&phi, &point.tx) / n as f64).abs() >= SYMMETRIC_COS || Phase::second_kernel(ws, &phi, growth).is_some() {
+    let lean = dot(&phi, &point.tx) / n as f64;
+    let picked = lean.abs() < SYMMETRIC_COS;
+    if picked && Phase::second_kernel(ws, &phi, growth).is_some() {
         return None;
     }
-    let step: Vec<f64> = phi.iter().map(|v| v * AMPLITUDE).collect();
+    let side = if picked { AMPLITUDE } else { AMPLITUDE * lean.signum() };
+    let step: Vec<f64> = phi.iter().map(|v| v * side).collect();
     let mut start = Vec::with_capacity(xc.len());
     system.retract(&xc, &step, 1.0, &mut start);
     homotopy.set(system, 1.0);
     let x = relax(system, ws, start, settings, report)?;
     report.termination = Termination::Converged;
-    Some((lc, x))
+    Some((lc, picked, x))
 }
 
 /// A path after a side picked at a simple symmetric bifurcation crawls when its load factor
