@@ -49,6 +49,7 @@ pub(crate) mod newton;
 mod options;
 mod order8;
 mod path;
+mod path_types;
 mod phase;
 mod pipeline;
 pub(crate) mod refine;
