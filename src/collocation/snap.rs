@@ -70,7 +70,29 @@ const AMPLITUDE: f64 = 0.1;
 /// state (with `system` at lambda = 1); None when the kernel is two-dimensional at a perfect
 /// symmetry (a family the path holds, module `phase`), a location fails, or the motion does
 /// not come to rest at a stable state.
+///
+/// On None the Jacobian at `beyond` is factored in `ws` again, as the path holds it after
+/// the step there (the location and the motion factored others).
 pub(super) fn from_bifurcation(
+    system: &mut System,
+    homotopy: &Homotopy,
+    ws: &mut Workspace,
+    (point, before): (&Point, Option<usize>),
+    beyond: (&[State], f64),
+    settings: &Settings,
+    report: &mut SolveReport,
+) -> Option<(f64, bool, Vec<State>)> {
+    let snapped = snap_at(system, homotopy, ws, (point, before), beyond, settings, report);
+    if snapped.is_none() {
+        homotopy.set(system, beyond.1);
+        // The path checks the factors at its next step: a failure here is a failed step there.
+        let _ = ws.linearize(system, beyond.0, report);
+    }
+    snapped
+}
+
+/// [`from_bifurcation`] but the restored factors.
+fn snap_at(
     system: &mut System,
     homotopy: &Homotopy,
     ws: &mut Workspace,
