@@ -26,7 +26,7 @@ use crate::solution::State;
 /// side: a perfect symmetry (the tangent's component along the kernel is rounding, 1e-16
 /// relative in a symmetric problem; the smallest imperfection of issue 25's column, 1e-5 of
 /// the load, gives 1e-6 and more).
-const SYMMETRIC_COS: f64 = 1e-9;
+pub(super) const SYMMETRIC_COS: f64 = 1e-9;
 /// The switching step's amplitudes along the kernel direction (normalized arclength, as the
 /// path's steps): the first, and the shorter retries when its corrector fails.
 const SWITCH_STEPS: [f64; 3] = [0.1, 0.03, 0.01];

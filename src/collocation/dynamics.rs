@@ -33,7 +33,7 @@ use super::newton::Workspace;
 use super::residual::end_values;
 use super::sensitivity::Sensitivity;
 use super::system::System;
-use super::unknowns::{NODE, P, THETA, U, V, link_row, unknowns};
+use super::unknowns::{BASE_COLUMNS, BASE_ROWS, NODE, P, THETA, U, V, link_row, unknowns};
 use crate::model::equations::Site;
 use crate::model::linearize::Point;
 use crate::report::{Growth, Stability};
@@ -140,6 +140,28 @@ impl Mass {
             carried = Some((k + 1, seg, pb, zb));
         }
         Ok(Mass { blocks })
+    }
+
+    /// Adds `scale` times M to the Jacobian `values`, stored in
+    /// [`pattern`](super::unknowns::pattern) order: each block lies in its link's (v', u') rows and
+    /// the (p, theta) columns of the link's two nodes (the matrix J + M / dt of an implicit step
+    /// of the damped motion, module `relax`).
+    pub(crate) fn add_to(&self, values: &mut [f64], scale: f64) {
+        // The link blocks follow the base block, each 12 rows of 24 columns, row major.
+        let first = BASE_ROWS * BASE_COLUMNS;
+        for (k, block) in self.blocks.iter().enumerate() {
+            let Some(block) = block else { continue };
+            let link = first + k * NODE * 2 * NODE;
+            for r in 0..6 {
+                let row = link + (V + r) * 2 * NODE;
+                for j in 0..3 {
+                    values[row + P + j] += scale * block[(r, j)];
+                    values[row + THETA + j] += scale * block[(r, 3 + j)];
+                    values[row + NODE + P + j] += scale * block[(r, 6 + j)];
+                    values[row + NODE + THETA + j] += scale * block[(r, 9 + j)];
+                }
+            }
+        }
     }
 
     /// y = M x for scaled unknowns `x`.

@@ -263,6 +263,23 @@ fn snapped_note(lambda: f64) -> String {
     )
 }
 
+/// The note of a path that lost stability at the bifurcation at load factor `lambda` with no
+/// stable branch it could follow, completed by the robot's damped motion from there;
+/// `picked`: the motion started on a side picked (a perfect symmetry).
+fn relaxed_note((lambda, picked): (f64, bool)) -> String {
+    let side = match picked {
+        true => "on a side picked, since the loads prefer neither",
+        false => "on the side the load path leaned to",
+    };
+    format!(
+        "the robot loses its stability at the bifurcation at {:.1} % of the way, where the load path \
+         finds no stable branch to follow: it snaps there, and this stable state is where its damped \
+         motion from there (started along the unstable direction, {side}) comes to rest under the \
+         full load, not a state reached by continuation",
+        100.0 * lambda
+    )
+}
+
 /// Newton from `x0`, and the equilibrium choice of docs/stability.md. Newton's answer
 /// stands when it converged cleanly to a stable state ([`acceptable`]; or the caller asked
 /// for the nearest equilibrium). Otherwise, from a warm start (`warm`), the Newton homotopy
@@ -308,6 +325,7 @@ pub(crate) fn choose_equilibrium(
                         .map(|&l| picked_note(l, end.family.then_some(&end.x[..]))),
                 );
                 report.notes.extend(end.snapped_from.map(snapped_note));
+                report.notes.extend(end.relaxed_from.map(relaxed_note));
                 report.path = PathTaken::FromWarmStart {
                     folds: end.folds,
                     bifurcations: end.bifurcations,
@@ -338,6 +356,7 @@ pub(crate) fn choose_equilibrium(
                     .map(|&l| picked_note(l, end.family.then_some(&end.x[..]))),
             );
             report.notes.extend(end.snapped_from.map(snapped_note));
+            report.notes.extend(end.relaxed_from.map(relaxed_note));
             report.path = PathTaken::LoadPath {
                 folds: end.folds,
                 bifurcations: end.bifurcations,

@@ -126,6 +126,40 @@ pub(super) fn bifurcation(
     0.5 * (lo + hi)
 }
 
+/// [`bifurcation`]'s bisection on the count, for the state: the states at the end of the
+/// last bracket past the change (converged by Newton at its lambda) and that lambda, or None
+/// when no middle point past it converged. The factors in `ws` are then those of the last
+/// middle point.
+pub(super) fn past_bifurcation(
+    system: &mut System,
+    homotopy: &Homotopy,
+    ws: &mut Workspace,
+    (point, before): (&Point, Option<usize>),
+    upper: f64,
+    settings: &Settings,
+    report: &mut SolveReport,
+) -> Option<(Vec<State>, f64)> {
+    let (mut lo, mut hi) = (point.lambda, upper);
+    let mut past = None;
+    let mut x: Vec<State> = Vec::with_capacity(point.x.len());
+    while (hi - lo).abs() > LOCATED && point.tl != 0.0 {
+        let m = 0.5 * (lo + hi);
+        let step: Vec<f64> = point.tx.iter().map(|v| v * (m - point.lambda) / point.tl).collect();
+        system.retract(&point.x, &step, 1.0, &mut x);
+        homotopy.set(system, m);
+        let (term, _) = newton::run(system, ws, &mut x, settings, report);
+        if term != Termination::Converged || !ws.linearize(system, &x, report) {
+            break;
+        }
+        if index(system, ws, report) == before {
+            lo = m;
+        } else {
+            (hi, past) = (m, Some(x.clone()));
+        }
+    }
+    past.map(|x| (x, hi))
+}
+
 /// The most secant steps of [`critical`]; each is one Newton solve on the branch, which near
 /// a straight column's bifurcation is linear in lambda and converges in one or two steps.
 const SECANT_STEPS: usize = 8;

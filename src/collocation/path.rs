@@ -23,13 +23,13 @@ use super::homotopy::{Homotopy, Point, dot, tangent};
 use super::locate;
 use super::newton::{self, Settings, Workspace};
 use super::options::Options;
+pub(super) use super::path_types::{End, Recorded, Start};
 use super::phase::{Phase, generic};
 use super::refine;
 use super::snap;
 use super::stability;
 use super::system::System;
 use crate::mesh::guess::rigid_estimate;
-use crate::model::parameter::Parameter;
 use crate::report::{SolveReport, Stability, Termination};
 use crate::solution::State;
 
@@ -59,26 +59,6 @@ const CRAWL_STEPS: usize = 40;
 /// Why a Newton homotopy from a warm start was given up when it turned back past lambda = 0.
 const WARM_TURNED_BACK: &str = "the path from the warm start turned back at a fold and returned past the warm start: \
      the warm start is not on a branch that reaches this robot; solve from rest";
-/// The end of a load path.
-pub(super) struct End {
-    /// The converged states at lambda = 1.
-    pub x: Vec<State>,
-    /// Load factors where the path turned back.
-    pub folds: Vec<f64>,
-    /// Load factors where the number of unstable directions changed without a fold: the
-    /// path crossed a bifurcation (the symmetric column at Euler's load).
-    pub bifurcations: Vec<f64>,
-    /// Load factors where the path left a perfectly symmetric bifurcation along a picked
-    /// side of the Jacobian's kernel (nothing preferred either).
-    pub picked: Vec<f64>,
-    /// The load factor of the fold from which the states were reached by Newton at
-    /// lambda = 1 after the path itself could not be followed to the end ([`snap::land_from_folds`]).
-    pub snapped_from: Option<f64>,
-    /// Whether the side picked led onto a family of equilibria (module `phase`): the states
-    /// are one member, every other member equally valid.
-    pub family: bool,
-}
-
 /// A step that changes the number of unstable directions without a fold has jumped to
 /// another branch near a bifurcation, unless it is this short (in normalized arclength):
 /// then the path crosses a bifurcation point itself.
@@ -110,51 +90,6 @@ pub(super) fn index(system: &System, ws: &mut Workspace, report: &mut SolveRepor
         Stability::Unstable { directions, .. } => Some(directions),
         Stability::Growing { .. } | Stability::Unknown { .. } => None,
     }
-}
-
-/// Where a path starts and what it connects.
-pub(super) enum Start<'x> {
-    /// The load path from the unloaded robot; when it cannot be followed to the end, it
-    /// lands from its folds ([`snap::land_from_folds`]) if `land` (a cold solve's path; a
-    /// warm-started solve keeps to the branch it was started on, so that a sweep's bisection
-    /// sees where that branch ends).
-    Rest {
-        /// Whether a path that stalls lands from its folds.
-        land: bool,
-    },
-    /// The Newton homotopy from a warm start (not a solution of the system).
-    Warm(&'x [State]),
-    /// A trace of `parameter` from `from` (where `x` is the converged solution) towards
-    /// `to`, recording every point; it ends where lambda leaves [0, 1].
-    Trace {
-        /// The states at `from`.
-        x: &'x [State],
-        /// The input traced.
-        parameter: Parameter,
-        /// Its first value.
-        from: f64,
-        /// Its last value.
-        to: f64,
-        /// The longest step (normalized arclength), for a resolved picture of the branch.
-        max_step: f64,
-        /// Asked before every step whether to give up (a front end's Ctrl-C).
-        stop: &'x dyn Fn() -> bool,
-    },
-}
-
-/// A point of a traced branch.
-#[derive(Clone, Debug)]
-pub(super) struct Recorded {
-    /// The path parameter.
-    pub lambda: f64,
-    /// The tip state.
-    pub tip: State,
-    /// Unstable directions (None: unknown).
-    pub unstable: Option<usize>,
-    /// Whether the branch turned back at this point.
-    pub fold: bool,
-    /// Iterations (Newton and chord) spent on the path so far.
-    pub iterations: usize,
 }
 
 /// Follows a path on `system` (whose mesh it may refine, replacing `system` and `ws`) from
@@ -256,6 +191,10 @@ pub(super) fn follow(
     // The states at the folds passed, with their load factors: where the path cannot be
     // followed to the end, the robot snaps from one of them ([`snap::land_from_folds`]).
     let mut fold_states: Vec<(f64, Vec<State>)> = Vec::new();
+    // A side picked at a simple symmetric bifurcation (load factor, first state past it), and
+    // the path's progress in lambda since (module `snap`, [`snap::Stall`]).
+    let mut switched: Option<(f64, Vec<State>)> = None;
+    let mut stall = snap::Stall::default();
     for _ in 0..MAX_STEPS {
         if stop() {
             return Err(("stopped on request before the end of the range".into(), 0));
@@ -339,6 +278,7 @@ pub(super) fn follow(
                     bifurcations,
                     picked,
                     snapped_from: None,
+                    relaxed_from: None,
                     family,
                 });
             }
@@ -358,11 +298,37 @@ pub(super) fn follow(
             {
                 s.record(&mut bifurcations, &mut picked);
                 push(&mut record, &s.point, s.unstable, false, report);
+                switched = (s.picked && s.family.is_none()).then(|| (s.at, s.point.x.clone()));
                 (phase, family) = s.hold(system, &homotopy, ws, report);
                 (point, fl, unstable) = (s.point, s.fl, s.unstable);
                 (switching, polished, factored_at_point) = (false, false, true);
                 h = h1.abs().min(max_step);
                 continue;
+            }
+            if let (true, Some(a), Some(b)) = (landing, unstable, landed_unstable)
+                && b > a
+                && (!switching || h1 <= BIFURCATION_STEP)
+                && phase.is_none()
+                && let Some((at, picked_side, x)) = snap::from_bifurcation(
+                    system,
+                    &homotopy,
+                    ws,
+                    (&point, unstable),
+                    (&landed, 1.0),
+                    settings,
+                    report,
+                )
+            {
+                bifurcations.push(at);
+                return Ok(End {
+                    x,
+                    folds,
+                    bifurcations,
+                    picked,
+                    snapped_from: None,
+                    relaxed_from: Some((at, picked_side)),
+                    family,
+                });
             }
             if jumped {
                 // Retry shorter from the last point, whose factors are gone.
@@ -449,6 +415,7 @@ pub(super) fn follow(
                     {
                         s.record(&mut bifurcations, &mut picked);
                         push(&mut record, &s.point, s.unstable, false, report);
+                        switched = (s.picked && s.family.is_none()).then(|| (s.at, s.point.x.clone()));
                         (phase, family) = s.hold(system, &homotopy, ws, report);
                         (point, fl, unstable) = (s.point, s.fl, s.unstable);
                         // One switch per path: the branch taken can keep a nearly neutral
@@ -457,6 +424,35 @@ pub(super) fn follow(
                         (switching, polished, factored_at_point) = (false, false, true);
                         furthest = furthest.max(point.lambda);
                         continue;
+                    }
+                    // A symmetric, simple bifurcation on a cold solve's load path where the
+                    // path may not switch (it did once) or a step short enough to cross it
+                    // found no stable branch: the robot snaps (docs/stability.md, "Snapping
+                    // from a bifurcation").
+                    if landing
+                        && b > a
+                        && (!switching || h <= BIFURCATION_STEP)
+                        && phase.is_none()
+                        && let Some((at, picked_side, x)) = snap::from_bifurcation(
+                            system,
+                            &homotopy,
+                            ws,
+                            (&point, unstable),
+                            (&next.x, lambda),
+                            settings,
+                            report,
+                        )
+                    {
+                        bifurcations.push(at);
+                        return Ok(End {
+                            x,
+                            folds,
+                            bifurcations,
+                            picked,
+                            snapped_from: None,
+                            relaxed_from: Some((at, picked_side)),
+                            family,
+                        });
                     }
                     if h > BIFURCATION_STEP {
                         // Jumped to another branch: retry shorter.
@@ -492,6 +488,7 @@ pub(super) fn follow(
                         bifurcations,
                         picked,
                         snapped_from: None,
+                        relaxed_from: None,
                         family,
                     });
                 }
@@ -514,6 +511,9 @@ pub(super) fn follow(
                 h = (h * grow).min(max_step);
                 if cos < 0.9 {
                     h *= 0.5;
+                }
+                if landing && switched.is_some() && stall.crawls(lambda) {
+                    break;
                 }
                 point = next;
                 polished = false;
@@ -575,6 +575,21 @@ pub(super) fn follow(
         }
     }
     homotopy.set(system, 1.0);
+    if landing
+        && let Some((at, x)) = switched
+        && let Some(x) = snap::relax_from(system, ws, x, settings, report)
+    {
+        picked.retain(|&l| l != at);
+        return Ok(End {
+            x,
+            folds,
+            bifurcations,
+            picked,
+            snapped_from: None,
+            relaxed_from: Some((at, true)),
+            family,
+        });
+    }
     if landing && let Some((lambda, x)) = snap::land_from_folds(system, ws, &fold_states, settings, report) {
         return Ok(End {
             x,
@@ -582,6 +597,7 @@ pub(super) fn follow(
             bifurcations,
             picked,
             snapped_from: Some(lambda),
+            relaxed_from: None,
             family,
         });
     }

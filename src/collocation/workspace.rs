@@ -219,6 +219,29 @@ impl Workspace {
         ok && all_finite(&self.values) && all_finite(&self.residual) && self.solve(report)
     }
 
+    /// [`Workspace::linearize`] with `shift` applied to the Jacobian's values before they are
+    /// factored (J + M / dt, the matrix of an implicit step of the damped motion, module
+    /// `relax`): the factors and values are then not the Jacobian's, and no verdict, chord
+    /// step or sensitivity takes them for it (the drift is infinite).
+    pub(super) fn linearize_shifted(
+        &mut self,
+        system: &System,
+        x: &[State],
+        report: &mut SolveReport,
+        shift: impl FnOnce(&mut [f64]),
+    ) -> bool {
+        let t = Instant::now();
+        self.rates_valid = false;
+        let ok = system.jacobian(x, &mut self.residual, &mut self.values).is_ok();
+        report.timings.assembly += t.elapsed();
+        report.evaluations.jacobian += 1;
+        report.evaluations.equations += system.rate_evaluations();
+        shift(&mut self.values);
+        let solved = ok && all_finite(&self.values) && all_finite(&self.residual) && self.solve(report);
+        self.drift = f64::INFINITY;
+        solved
+    }
+
     /// The residual of the last [`Workspace::linearize`] or Newton run (its final iterate).
     pub fn residual(&self) -> &[f64] {
         &self.residual

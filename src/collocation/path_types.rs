@@ -1,0 +1,77 @@
+//! What a path (module `path`) starts from, records and ends with: where it starts and what
+//! it connects ([`Start`]), the points of a traced branch ([`Recorded`]) and the end of a
+//! path ([`End`]), with the folds, bifurcations and snaps met on the way.
+
+use crate::model::parameter::Parameter;
+use crate::solution::State;
+
+/// The end of a load path.
+pub(super) struct End {
+    /// The converged states at lambda = 1.
+    pub x: Vec<State>,
+    /// Load factors where the path turned back.
+    pub folds: Vec<f64>,
+    /// Load factors where the number of unstable directions changed without a fold: the
+    /// path crossed a bifurcation (the symmetric column at Euler's load).
+    pub bifurcations: Vec<f64>,
+    /// Load factors where the path left a perfectly symmetric bifurcation along a picked
+    /// side of the Jacobian's kernel (nothing preferred either).
+    pub picked: Vec<f64>,
+    /// The load factor of the fold from which the states were reached by Newton at
+    /// lambda = 1 after the path itself could not be followed to the end ([`super::snap::land_from_folds`]).
+    pub snapped_from: Option<f64>,
+    /// The load factor of the bifurcation at which the path lost stability with no stable
+    /// branch to continue on (or one it could not follow), from which the states were reached
+    /// by the robot's damped motion under the full load ([`super::snap::from_bifurcation`],
+    /// [`super::snap::relax_from`]), and whether the side it started on was picked (a perfect
+    /// symmetry).
+    pub relaxed_from: Option<(f64, bool)>,
+    /// Whether the side picked led onto a family of equilibria (module `phase`): the states
+    /// are one member, every other member equally valid.
+    pub family: bool,
+}
+
+/// Where a path starts and what it connects.
+pub(super) enum Start<'x> {
+    /// The load path from the unloaded robot; when it cannot be followed to the end, it
+    /// lands from its folds ([`super::snap::land_from_folds`]) if `land` (a cold solve's path; a
+    /// warm-started solve keeps to the branch it was started on, so that a sweep's bisection
+    /// sees where that branch ends).
+    Rest {
+        /// Whether a path that stalls lands from its folds.
+        land: bool,
+    },
+    /// The Newton homotopy from a warm start (not a solution of the system).
+    Warm(&'x [State]),
+    /// A trace of `parameter` from `from` (where `x` is the converged solution) towards
+    /// `to`, recording every point; it ends where lambda leaves [0, 1].
+    Trace {
+        /// The states at `from`.
+        x: &'x [State],
+        /// The input traced.
+        parameter: Parameter,
+        /// Its first value.
+        from: f64,
+        /// Its last value.
+        to: f64,
+        /// The longest step (normalized arclength), for a resolved picture of the branch.
+        max_step: f64,
+        /// Asked before every step whether to give up (a front end's Ctrl-C).
+        stop: &'x dyn Fn() -> bool,
+    },
+}
+
+/// A point of a traced branch.
+#[derive(Clone, Debug)]
+pub(super) struct Recorded {
+    /// The path parameter.
+    pub lambda: f64,
+    /// The tip state.
+    pub tip: State,
+    /// Unstable directions (None: unknown).
+    pub unstable: Option<usize>,
+    /// Whether the branch turned back at this point.
+    pub fold: bool,
+    /// Iterations (Newton and chord) spent on the path so far.
+    pub iterations: usize,
+}
