@@ -102,26 +102,7 @@ pub(super) fn bifurcation(
     settings: &Settings,
     report: &mut SolveReport,
 ) -> f64 {
-    let (mut lo, mut hi) = (point.lambda, next.lambda);
-    let mut x: Vec<State> = Vec::with_capacity(point.x.len());
-    for _ in 0..MAX_BISECTIONS {
-        if (hi - lo).abs() <= LOCATED || point.tl == 0.0 {
-            break;
-        }
-        let m = 0.5 * (lo + hi);
-        let step: Vec<f64> = point.tx.iter().map(|v| v * (m - point.lambda) / point.tl).collect();
-        system.retract(&point.x, &step, 1.0, &mut x);
-        homotopy.set(system, m);
-        let (term, _) = newton::run(system, ws, &mut x, settings, report);
-        if term != Termination::Converged || !ws.linearize(system, &x, report) {
-            break;
-        }
-        if index(system, ws, report) == before {
-            lo = m;
-        } else {
-            hi = m;
-        }
-    }
+    let (lo, hi, _) = bisect_count(system, homotopy, ws, (point, before), next.lambda, settings, report);
     restore(system, homotopy, ws, next, report);
     0.5 * (lo + hi)
 }
@@ -139,10 +120,30 @@ pub(super) fn past_bifurcation(
     settings: &Settings,
     report: &mut SolveReport,
 ) -> Option<(Vec<State>, f64)> {
+    let (_, hi, past) = bisect_count(system, homotopy, ws, (point, before), upper, settings, report);
+    past.map(|x| (x, hi))
+}
+
+/// Bisection between `point.lambda` and `upper` on the number of unstable directions, each
+/// middle point converged by Newton from the tangent's prediction, until the bracket is
+/// [`LOCATED`] wide or a middle point fails: the last bracket (lo, hi) and the states of
+/// the last middle point found past the change, if any.
+fn bisect_count(
+    system: &mut System,
+    homotopy: &Homotopy,
+    ws: &mut Workspace,
+    (point, before): (&Point, Option<usize>),
+    upper: f64,
+    settings: &Settings,
+    report: &mut SolveReport,
+) -> (f64, f64, Option<Vec<State>>) {
     let (mut lo, mut hi) = (point.lambda, upper);
     let mut past = None;
     let mut x: Vec<State> = Vec::with_capacity(point.x.len());
-    while (hi - lo).abs() > LOCATED && point.tl != 0.0 {
+    for _ in 0..MAX_BISECTIONS {
+        if (hi - lo).abs() <= LOCATED || point.tl == 0.0 {
+            break;
+        }
         let m = 0.5 * (lo + hi);
         let step: Vec<f64> = point.tx.iter().map(|v| v * (m - point.lambda) / point.tl).collect();
         system.retract(&point.x, &step, 1.0, &mut x);
@@ -157,7 +158,7 @@ pub(super) fn past_bifurcation(
             (hi, past) = (m, Some(x.clone()));
         }
     }
-    past.map(|x| (x, hi))
+    (lo, hi, past)
 }
 
 /// The most secant steps of [`critical`]; each is one Newton solve on the branch, which near

@@ -234,21 +234,9 @@ fn rigid_estimate_in(model: &Model, nodes: &[MeshNode], b: &mut SweepBuffers) ->
         // a load's moment arm swings with the shape it bends (a tendon and a tip load
         // pulling the same way); the factor adapts to the observed contraction.
         if stepped {
-            let (mut num, mut den) = (0.0, 0.0);
-            for (a, b) in last_step.iter().zip(step.iter()) {
-                num += a * (b - a);
-                den += (b - a) * (b - a);
-            }
-            if den > 0.0 {
-                relaxation = (-relaxation * num / den).clamp(0.1, 1.0);
-            }
+            relaxation = aitken(relaxation, last_step, step);
         }
-        for (k, s) in strains.iter_mut().enumerate() {
-            for i in 0..3 {
-                s.0[i] += relaxation * step[6 * k + i];
-                s.1[i] += relaxation * step[6 * k + 3 + i] / length;
-            }
-        }
+        relax_strains(strains, step, relaxation, length);
         integrate_poses_into(model, nodes, strains, shape);
         last_change = change;
         std::mem::swap(step, last_step);
@@ -284,6 +272,33 @@ pub(crate) fn distal_strains(
     let shape: Vec<_> = x.iter().map(|s| (s.p, s.R)).collect();
     let strains: Vec<_> = x.iter().map(|s| (s.v, s.u)).collect();
     sweep(model, nodes, sites, (&shape, &strains), Some(tensions), (wrench, out));
+}
+
+/// Aitken's dynamic relaxation factor (Irons & Tuck) after the fixed-point steps
+/// `last_step` and `step`: the factor that would have cancelled the change between them
+/// along `last_step`, kept in [0.1, 1]; `relaxation` (the last factor) when they are equal.
+pub(crate) fn aitken(relaxation: f64, last_step: &[f64], step: &[f64]) -> f64 {
+    let (mut num, mut den) = (0.0, 0.0);
+    for (a, b) in last_step.iter().zip(step) {
+        num += a * (b - a);
+        den += (b - a) * (b - a);
+    }
+    if den > 0.0 {
+        (-relaxation * num / den).clamp(0.1, 1.0)
+    } else {
+        relaxation
+    }
+}
+
+/// Moves the node strains (v, u) by `relaxation` times the flattened fixed-point `step`
+/// (v, then u L per node; `length` is L).
+pub(crate) fn relax_strains(strains: &mut [(Vector3<f64>, Vector3<f64>)], step: &[f64], relaxation: f64, length: f64) {
+    for (k, s) in strains.iter_mut().enumerate() {
+        for i in 0..3 {
+            s.0[i] += relaxation * step[6 * k + i];
+            s.1[i] += relaxation * step[6 * k + 3 + i] / length;
+        }
+    }
 }
 
 /// One sweep: node strains carrying the loads distal to each node, summed on `shape`

@@ -15,7 +15,7 @@
 
 use super::Profile;
 use crate::mesh::Mesh;
-use crate::mesh::guess::{distal_strains, integrate_poses, integrate_poses_into};
+use crate::mesh::guess::{aitken, distal_strains, integrate_poses, integrate_poses_into, relax_strains};
 use crate::model::equations::{Model, Site};
 use crate::model::routing::RoutingPoint;
 use crate::solution::State;
@@ -128,21 +128,9 @@ pub(super) fn capstan_start(model: &Model, mesh: &Mesh, x: &mut [State], profile
             break;
         }
         if !last_step.is_empty() {
-            let (mut num, mut den) = (0.0, 0.0);
-            for (a, b) in last_step.iter().zip(&step) {
-                num += a * (b - a);
-                den += (b - a) * (b - a);
-            }
-            if den > 0.0 {
-                relaxation = (-relaxation * num / den).clamp(0.1, 1.0);
-            }
+            relaxation = aitken(relaxation, &last_step, &step);
         }
-        for (k, s) in strains.iter_mut().enumerate() {
-            for i in 0..3 {
-                s.0[i] += relaxation * step[6 * k + i];
-                s.1[i] += relaxation * step[6 * k + 3 + i] / length;
-            }
-        }
+        relax_strains(&mut strains, &step, relaxation, length);
         kept.copy_from_slice(x);
         integrate_poses_into(model, nodes, &strains, &mut poses);
         for (k, state) in x.iter_mut().enumerate() {
