@@ -209,14 +209,7 @@ impl Workspace {
     /// zero pivot. The residual is then [`Workspace::residual`], the Jacobian
     /// [`Workspace::jacobian`], and [`Workspace::solve_again`] solves with its factors.
     pub fn linearize(&mut self, system: &System, x: &[State], report: &mut SolveReport) -> bool {
-        let t = Instant::now();
-        self.rates_valid = false;
-        let ok = system.jacobian(x, &mut self.residual, &mut self.values).is_ok();
-        report.timings.assembly += t.elapsed();
-        report.evaluations.jacobian += 1;
-        report.evaluations.equations += system.rate_evaluations();
-        self.drift = 0.0;
-        ok && all_finite(&self.values) && all_finite(&self.residual) && self.solve(report)
+        self.linearize_with(system, x, report, |_| {}, 0.0)
     }
 
     /// [`Workspace::linearize`] with `shift` applied to the Jacobian's values before they are
@@ -230,6 +223,19 @@ impl Workspace {
         report: &mut SolveReport,
         shift: impl FnOnce(&mut [f64]),
     ) -> bool {
+        self.linearize_with(system, x, report, shift, f64::INFINITY)
+    }
+
+    /// [`Workspace::linearize`] with `shift` applied to the values before they are factored,
+    /// the drift set to `drift` (0: the factors are the Jacobian's at `x`).
+    fn linearize_with(
+        &mut self,
+        system: &System,
+        x: &[State],
+        report: &mut SolveReport,
+        shift: impl FnOnce(&mut [f64]),
+        drift: f64,
+    ) -> bool {
         let t = Instant::now();
         self.rates_valid = false;
         let ok = system.jacobian(x, &mut self.residual, &mut self.values).is_ok();
@@ -237,9 +243,8 @@ impl Workspace {
         report.evaluations.jacobian += 1;
         report.evaluations.equations += system.rate_evaluations();
         shift(&mut self.values);
-        let solved = ok && all_finite(&self.values) && all_finite(&self.residual) && self.solve(report);
-        self.drift = f64::INFINITY;
-        solved
+        self.drift = drift;
+        ok && all_finite(&self.values) && all_finite(&self.residual) && self.solve(report)
     }
 
     /// The residual of the last [`Workspace::linearize`] or Newton run (its final iterate).
