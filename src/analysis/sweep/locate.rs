@@ -15,11 +15,12 @@ const FOLLOW_STEPS: usize = 8;
 
 impl Sweep<'_> {
     /// Narrows the bracket from `left` (before the change) to `right` (after it) to
-    /// [`LOCATED`] of the range, returning its ends; `jump` tells that the tip may have
-    /// jumped (a point then belongs to the left unless it moved the tip more than half as
-    /// far as the right end did, and more than [`JUMP_SHARE`] of L). None when no robot
-    /// can be built between them.
-    pub(super) fn locate(&self, mut left: Mark, mut right: Mark, jump: bool) -> Option<(Mark, Mark)> {
+    /// [`LOCATED`] of the range, returning its ends. A middle point belongs to the right when
+    /// its tendons' tautness or its unstable directions differ from the left end's, or when
+    /// it moved the tip from the left end's more than half as far as the right end did and
+    /// more than [`JUMP_SHARE`] of L (it left the left end's branch, whether or not the
+    /// step's ends told of a jump). None when no robot can be built between them.
+    pub(super) fn locate(&self, mut left: Mark, mut right: Mark) -> Option<(Mark, Mark)> {
         let width = LOCATED * (self.ranges.steps().max(2) - 1) as f64;
         let length = right.solution.nodes.last().map_or(0.0, |n| n.s);
         // From an unstable state (the robot left it at an earlier bifurcation, and the solve
@@ -47,7 +48,11 @@ impl Sweep<'_> {
             };
             let middle = Mark::new(t, &robot, solution);
             let moved = (middle.tip() - left.tip()).norm();
-            let far = jump && moved > 0.5 * (right.tip() - left.tip()).norm() && moved > JUMP_SHARE * length;
+            // A middle point far from the left one left its branch (its warm solve found the
+            // state the robot snaps to, by the load path from rest): the change is before
+            // it, also when the step's ends are near each other (a loss of stability whose
+            // step ended on the unstable branch).
+            let far = moved > 0.5 * (right.tip() - left.tip()).norm() && moved > JUMP_SHARE * length;
             if far || middle.taut != left.taut || middle.unstable != left.unstable {
                 right = middle;
             } else {

@@ -342,7 +342,7 @@ impl<'r> Sweep<'r> {
                     ));
                     break;
                 }
-                let Some((before, after)) = self.locate(left.clone(), right.clone(), jump) else {
+                let Some((before, after)) = self.locate(left.clone(), right.clone()) else {
                     break;
                 };
                 let found = self.events(&before, &after);

@@ -344,3 +344,38 @@ fn a_bifurcation_on_an_unstable_branch_is_located_along_it() {
     let p = -e.value.unwrap().1;
     assert!((p / (9.0 * p_cr) - 1.0).abs() < 2e-4, "{p} against {}", 9.0 * p_cr);
 }
+
+/// The gallery's snapping column (docs/gallery/column.toml) swept from 0 to 0.2 N of its
+/// tendon in one step: the state buckled towards the imperfection (-x) loses stability at
+/// 0.1241737 N, and the bisection's warm solve at 0.125 N may reach the state the robot snaps
+/// to (+x, 0.8 m away) by the load path from rest. That point left the -x branch and belongs
+/// to the right end of the bracket; taken for the left one (the corrector's refresh rule,
+/// docs/numerics.md "Corrector"), the sweep narrowed on the step's end and reported a snap at
+/// 0.1499992 N and a second one of 0.0 mm.
+#[test]
+fn a_bisection_point_that_snapped_belongs_past_the_change() {
+    let text = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/docs/gallery/column.toml")).unwrap();
+    let base = crate::io::parse(&text, "column.toml").unwrap().robot;
+    let steps = run(
+        base,
+        Input::Parameter(Parameter::Tension(0)),
+        vec![0.0, 0.2],
+        Default::default(),
+    );
+    let events = &steps[1].events;
+    let kinds: Vec<&str> = events.iter().map(|e| e.kind.name()).collect();
+    assert_eq!(kinds, ["bifurcation", "snap"], "{events:?}");
+    for e in events {
+        // Both at the located loss of stability, 0.1241737 N (.ci/gallery's sweep); the
+        // bracket is 1e-6 of the 0.2 N range wide, and 1e-6 N more allows for the guides'
+        // error in where the count changes
+        let tension = e.value.as_ref().unwrap().1;
+        assert!((tension - 0.1241737).abs() < 1.2e-6, "{events:?}");
+    }
+    // The snap lands on the tendon's side: measured 799.9 mm
+    assert!(
+        matches!(events[1].kind, Kind::Snap { distance } if distance > 0.79),
+        "{events:?}"
+    );
+    assert!(steps[1].solution.report.stability.is_stable());
+}
