@@ -319,16 +319,7 @@ pub(super) fn follow(
                     report,
                 )
             {
-                bifurcations.push(at);
-                return Ok(End {
-                    x,
-                    folds,
-                    bifurcations,
-                    picked,
-                    snapped_from: None,
-                    relaxed_from: Some((at, picked_side)),
-                    family,
-                });
+                return Ok(End::relaxed(x, folds, bifurcations, picked, family, (at, picked_side)));
             }
             if jumped {
                 // Retry shorter from the last point, whose factors are gone.
@@ -443,16 +434,7 @@ pub(super) fn follow(
                             report,
                         )
                     {
-                        bifurcations.push(at);
-                        return Ok(End {
-                            x,
-                            folds,
-                            bifurcations,
-                            picked,
-                            snapped_from: None,
-                            relaxed_from: Some((at, picked_side)),
-                            family,
-                        });
+                        return Ok(End::relaxed(x, folds, bifurcations, picked, family, (at, picked_side)));
                     }
                     if h > BIFURCATION_STEP {
                         // Jumped to another branch: retry shorter.

@@ -31,6 +31,31 @@ pub(super) struct End {
     pub family: bool,
 }
 
+impl End {
+    /// The end of a path that lost stability at the bifurcation at load factor `from.0`
+    /// with no stable branch to follow (`from.1`: its side was picked) and reached `x` by
+    /// the robot's damped motion: the bifurcation joins `bifurcations`.
+    pub(super) fn relaxed(
+        x: Vec<State>,
+        folds: Vec<f64>,
+        mut bifurcations: Vec<f64>,
+        picked: Vec<f64>,
+        family: bool,
+        from: (f64, bool),
+    ) -> End {
+        bifurcations.push(from.0);
+        End {
+            x,
+            folds,
+            bifurcations,
+            picked,
+            snapped_from: None,
+            relaxed_from: Some(from),
+            family,
+        }
+    }
+}
+
 /// Where a path starts and what it connects.
 pub(super) enum Start<'x> {
     /// The load path from the unloaded robot; when it cannot be followed to the end, it
