@@ -64,6 +64,24 @@ const WARM_TURNED_BACK: &str = "the path from the warm start turned back at a fo
 /// then the path crosses a bifurcation point itself.
 const BIFURCATION_STEP: f64 = 1e-3;
 
+/// Whether a path whose count of unstable directions went from `counts.0` to `counts.1` over
+/// a step `h` (as the path signs it) snaps there (docs/stability.md, "Snapping from a bifurcation"): on a
+/// cold solve's path (`landing`), with the count risen, no family held, and either no
+/// switch left (`switching` false) or a step short enough to cross the bifurcation that
+/// found no stable branch.
+fn snaps_here(
+    landing: bool,
+    counts: (Option<usize>, Option<usize>),
+    switching: bool,
+    h: f64,
+    holds_family: bool,
+) -> bool {
+    matches!(counts, (Some(a), Some(b)) if b > a)
+        && landing
+        && !holds_family
+        && (!switching || h <= BIFURCATION_STEP)
+}
+
 /// The count of unstable directions `next` at a point of a family's branch (module
 /// `phase`), given the count `before` at the last point: the family's own direction is
 /// neutral there (an exact zero of the second variation, whose conjugate point lies at the
@@ -305,10 +323,7 @@ pub(super) fn follow(
                 h = h1.abs().min(max_step);
                 continue;
             }
-            if let (true, Some(a), Some(b)) = (landing, unstable, landed_unstable)
-                && b > a
-                && (!switching || h1 <= BIFURCATION_STEP)
-                && phase.is_none()
+            if snaps_here(landing, (unstable, landed_unstable), switching, h1, phase.is_some())
                 && let Some((at, picked_side, x)) = snap::from_bifurcation(
                     system,
                     &homotopy,
@@ -420,10 +435,7 @@ pub(super) fn follow(
                     // path may not switch (it did once) or a step short enough to cross it
                     // found no stable branch: the robot snaps (docs/stability.md, "Snapping
                     // from a bifurcation").
-                    if landing
-                        && b > a
-                        && (!switching || h <= BIFURCATION_STEP)
-                        && phase.is_none()
+                    if snaps_here(landing, (Some(a), Some(b)), switching, h, phase.is_some())
                         && let Some((at, picked_side, x)) = snap::from_bifurcation(
                             system,
                             &homotopy,
