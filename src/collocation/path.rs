@@ -76,10 +76,7 @@ fn snaps_here(
     h: f64,
     holds_family: bool,
 ) -> bool {
-    matches!(counts, (Some(a), Some(b)) if b > a)
-        && landing
-        && !holds_family
-        && (!switching || h <= BIFURCATION_STEP)
+    matches!(counts, (Some(a), Some(b)) if b > a) && landing && !holds_family && (!switching || h <= BIFURCATION_STEP)
 }
 
 /// The count of unstable directions `next` at a point of a family's branch (module
