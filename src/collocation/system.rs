@@ -19,7 +19,21 @@ use crate::solution::State;
 use nalgebra::{SVector, Vector3, Vector6};
 use num_dual::{Dual64, DualSVec64};
 
-type D12 = DualSVec64<12>;
+/// A node's unknowns as dual numbers that carry the derivatives in `N` of them, from
+/// `first` on; the others are constants. The base rows read only (p, theta) and the tip
+/// rows only (theta, v, u): seeding just those makes no derivative lane that nothing reads,
+/// and every carried lane gets the operations, so the bits, it got when all 12 were seeded
+/// (a dual number's lanes never mix, and an unseeded unknown never meets the rows' code).
+fn seeded<const N: usize>(first: usize) -> Delta<DualSVec64<N>> {
+    Delta::<DualSVec64<N>>::from_fn(|i, _| {
+        let x = DualSVec64::<N>::from(0.0);
+        if (first..first + N).contains(&i) {
+            x.derivative(i - first)
+        } else {
+            x
+        }
+    })
+}
 
 /// The parameters whose exact residual columns [`System::parameter_columns`] gives.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -309,13 +323,11 @@ impl<'a> System<'a> {
     /// # Errors
     /// A model breakdown at a visited state.
     pub fn jacobian(&self, x: &[State], out: &mut [f64], values: &mut [f64]) -> Result<()> {
-        let seed12 = || Delta::<D12>::from_fn(|i, _| D12::from(0.0).derivative(i));
         let mut at = 0;
-        let base = residual::base(&self.model, &x[0], &seed12());
+        let base = residual::base(&self.model, &x[0], &seeded::<BASE_COLUMNS>(0));
         for (r, d) in base.iter().enumerate() {
             out[r] = d.re;
-            let eps = derivative(&d.eps.0);
-            values[at..at + BASE_COLUMNS].copy_from_slice(&eps.as_slice()[..BASE_COLUMNS]);
+            values[at..at + BASE_COLUMNS].copy_from_slice(derivative(&d.eps.0).as_slice());
             at += BASE_COLUMNS;
         }
         let links = x.len() - 1;
@@ -379,10 +391,15 @@ impl<'a> System<'a> {
             }
             at += NODE * width;
         }
-        let tip = residual::tip(&self.model, &self.node_sites[links], &x[links], &seed12())?;
+        let tip = residual::tip(
+            &self.model,
+            &self.node_sites[links],
+            &x[links],
+            &seeded::<TIP_COLUMNS>(THETA),
+        )?;
         for (r, d) in tip.iter().enumerate() {
             out[tip_row(x.len()) + r] = d.re;
-            values[at..at + TIP_COLUMNS].copy_from_slice(&derivative(&d.eps.0).as_slice()[THETA..]);
+            values[at..at + TIP_COLUMNS].copy_from_slice(derivative(&d.eps.0).as_slice());
             at += TIP_COLUMNS;
         }
         Ok(())
