@@ -241,10 +241,8 @@ fn rigid_estimate_in(model: &Model, nodes: &[MeshNode], b: &mut SweepBuffers) ->
         last_change = change;
         std::mem::swap(step, last_step);
         stepped = true;
-        // 1e-4 of a radian over the rod: far below what Newton needs from a guess (1e-6
-        // took 2.2 more sweeps a prototype row and gave the same Newton and chord steps and
-        // meshes; docs/benchmarks.md, "Issue 29 row6")
-        if change < 1e-4 {
+        // 1e-6 of a radian over the rod: far below what Newton needs from a guess
+        if change < 1e-6 {
             break;
         }
     }
