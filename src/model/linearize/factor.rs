@@ -24,15 +24,6 @@ fn spd_inverse3(a: &Matrix3<f64>) -> Option<Matrix3<f64>> {
     Some(Matrix3::new(c00, c01, c02, c01, c11, c12, c02, c12, minor2) * inv)
 }
 
-/// a b for a C x 3 matrix `a`, each entry summed as nalgebra's product sums it (the k = 0
-/// term, then the k = 1 and k = 2 terms added in turn), so the same bits; written out so
-/// that it inlines where the caller is compiled for AVX2 (nalgebra's product is a call
-/// compiled for the baseline there).
-#[inline(always)]
-fn mul3<const C: usize>(a: &SMatrix<f64, C, 3>, b: &Matrix3<f64>) -> SMatrix<f64, C, 3> {
-    SMatrix::<f64, C, 3>::from_fn(|i, j| a[(i, 0)] * b[(0, j)] + a[(i, 1)] * b[(1, j)] + a[(i, 2)] * b[(2, j)])
-}
-
 /// M = [P, G; rho G^T, Q] (3x3 blocks, P and Q symmetric; rho = 1, M symmetric positive
 /// definite, on a Cosserat rod, rho = 0, M block triangular, on a Kirchhoff rod) factored by
 /// block elimination: P^-1, W = P^-1 G and the inverse of the Schur complement
@@ -78,17 +69,47 @@ impl Schur6 {
     /// Overwrites the rows of `bt` with those of bt M^-T, i.e. solves M X = B for B = bt^T
     /// (P, Q and S are symmetric): with rows (b_v, b_u), w = b_v P^-1,
     /// x_u = (b_u - rho w G) S^-1, x_v = w - x_u W^T.
+    ///
+    /// Written out on the columns of `bt`, each product entry summed as nalgebra's C x 3 by
+    /// 3 x 3 product sums it (the k = 0 term, then the k = 1 and k = 2 terms added in turn)
+    /// and each difference taken entry by entry, so the bits of the nalgebra expressions it
+    /// replaces; so that it inlines where the caller is compiled for AVX2 (the interval
+    /// Jacobian), where nalgebra's `from_fn` and subtraction stayed calls compiled for the
+    /// baseline (docs/benchmarks.md, "A batch row: dual lanes, guess sweeps, eq. 13's solve").
     #[inline(always)]
     fn solve_transposed_mut<const C: usize>(&self, bt: &mut SMatrix<f64, C, 6>) {
-        let w = mul3(&bt.fixed_columns::<3>(0).into_owned(), &self.P_inv);
-        let x_u = if self.coupled {
-            mul3(&(bt.fixed_columns::<3>(3) - mul3(&w, &self.G)), &self.S_inv)
-        } else {
-            mul3(&bt.fixed_columns::<3>(3).into_owned(), &self.S_inv)
-        };
-        let x_v = w - mul3(&x_u, &self.W.transpose());
-        bt.fixed_columns_mut::<3>(0).copy_from(&x_v);
-        bt.fixed_columns_mut::<3>(3).copy_from(&x_u);
+        let b = bt.as_mut_slice(); // column-major: column c is b[c * C..(c + 1) * C]
+        let (P, G, S, W) = (&self.P_inv, &self.G, &self.S_inv, &self.W);
+        let mut w = [[0.0; C]; 3];
+        for (j, wj) in w.iter_mut().enumerate() {
+            for (i, x) in wj.iter_mut().enumerate() {
+                *x = b[i] * P[(0, j)] + b[C + i] * P[(1, j)] + b[2 * C + i] * P[(2, j)];
+            }
+        }
+        // y = b_u - rho w G
+        let mut y = [[0.0; C]; 3];
+        for (j, yj) in y.iter_mut().enumerate() {
+            for (i, x) in yj.iter_mut().enumerate() {
+                *x = if self.coupled {
+                    b[(3 + j) * C + i] - (w[0][i] * G[(0, j)] + w[1][i] * G[(1, j)] + w[2][i] * G[(2, j)])
+                } else {
+                    b[(3 + j) * C + i]
+                };
+            }
+        }
+        let mut x_u = [[0.0; C]; 3];
+        for (j, xj) in x_u.iter_mut().enumerate() {
+            for (i, x) in xj.iter_mut().enumerate() {
+                *x = y[0][i] * S[(0, j)] + y[1][i] * S[(1, j)] + y[2][i] * S[(2, j)];
+            }
+        }
+        for (j, (wj, xj)) in w.iter().zip(&x_u).enumerate() {
+            for (i, (wji, xji)) in wj.iter().zip(xj).enumerate() {
+                // x_v = w - x_u W^T, (W^T)[(k, j)] = W[(j, k)]
+                b[j * C + i] = wji - (x_u[0][i] * W[(j, 0)] + x_u[1][i] * W[(j, 1)] + x_u[2][i] * W[(j, 2)]);
+                b[(3 + j) * C + i] = *xji;
+            }
+        }
     }
 }
 
