@@ -164,23 +164,41 @@ impl Mass {
         }
     }
 
-    /// y = M x for scaled unknowns `x`.
-    fn apply(&self, x: &[f64], y: &mut [f64]) {
+    /// y = M x for scaled unknowns x given by their (p, theta) part `z` alone (M reads no
+    /// other column): [`MOVING`] per node, p then theta, as [`restrict`] gives them.
+    fn apply(&self, z: &[f64], y: &mut [f64]) {
         y.fill(0.0);
         for (k, block) in self.blocks.iter().enumerate() {
             let Some(block) = block else { continue };
-            let mut z = SMatrix::<f64, 12, 1>::zeros();
+            let mut column = SMatrix::<f64, 12, 1>::zeros();
             for j in 0..3 {
-                z[j] = x[k * NODE + P + j];
-                z[3 + j] = x[k * NODE + THETA + j];
-                z[6 + j] = x[(k + 1) * NODE + P + j];
-                z[9 + j] = x[(k + 1) * NODE + THETA + j];
+                column[j] = z[k * MOVING + P + j];
+                column[3 + j] = z[k * MOVING + THETA + j];
+                column[6 + j] = z[(k + 1) * MOVING + P + j];
+                column[9 + j] = z[(k + 1) * MOVING + THETA + j];
             }
-            let r = block * z;
+            let r = block * column;
             let row = link_row(k) + V;
             y[row..row + 6].copy_from_slice(r.as_slice());
         }
     }
+}
+
+/// Unknowns per node that carry mass: p and theta (the inertia loads depend on their
+/// accelerations alone).
+const MOVING: usize = 6;
+
+/// E a in place: the (p, theta) part of every node of the scaled unknowns `a`, [`MOVING`]
+/// per node, moved to the front and the rest dropped. The nonzero eigenvalues of J^-1 M
+/// (= J^-1 M_r E, M_r the columns M reads) are those of E J^-1 M_r, whose vectors are half
+/// as long (docs/stability.md, "How it is computed").
+fn restrict(a: &mut Vec<f64>) {
+    const _: () = assert!(P == 0 && THETA == 3 && MOVING == 6);
+    let nodes = a.len() / NODE;
+    for k in 0..nodes {
+        a.copy_within(k * NODE..k * NODE + MOVING, k * MOVING);
+    }
+    a.truncate(nodes * MOVING);
 }
 
 /// d(v', u') / d(acceleration) at a collocation point with orientation `Rc`, up to the
@@ -299,19 +317,21 @@ fn modes(
     };
     let n = unknowns(x.len());
     let mut w = vec![0.0; n];
-    // y = J^-1 M z
+    // z -> E J^-1 M z on the (p, theta) parts z ([`restrict`]; M reads nothing else).
     let mut operator = |z: &[f64], out: &mut Vec<f64>| -> bool {
         mass.apply(z, &mut w);
         match ws.solve_again(&w) {
             Some(y) => {
                 out.clear();
                 out.extend_from_slice(y);
-                border(out)
+                let bordered = border(out);
+                restrict(out);
+                bordered
             }
             None => false,
         }
     };
-    let Some(ritz) = arnoldi(&mut operator, n, krylov, all) else {
+    let Some(ritz) = arnoldi(&mut operator, x.len() * MOVING, krylov, all) else {
         return unknown("the Jacobian's factors gave no finite solve for the vibration modes".into());
     };
     classify(&ritz)
