@@ -28,6 +28,7 @@
 #![allow(non_snake_case)]
 
 mod arnoldi;
+mod hessenberg;
 
 use super::newton::Workspace;
 use super::residual::end_values;
@@ -268,7 +269,8 @@ pub struct Vibration {
     /// lowest modes did not converge.
     pub stability: Stability,
     /// The converged eigenvalues mu = -lambda^2 (1/s^2) of the lowest modes, by increasing
-    /// |mu|: omega^2 of a vibration at omega rad/s when real and positive.
+    /// |mu| (of a complex pair, the one with the negative imaginary part first): omega^2 of
+    /// a vibration at omega rad/s when real and positive.
     pub eigenvalues: Vec<Complex<f64>>,
 }
 
@@ -400,7 +402,7 @@ fn classify(ritz: &[Ritz]) -> Vibration {
         }
     }
     let mut eigenvalues: Vec<Complex<f64>> = converged.iter().map(|r| r.theta.inv()).collect();
-    eigenvalues.sort_by(|a, b| a.norm().total_cmp(&b.norm()));
+    eigenvalues.sort_by(|a, b| a.norm().total_cmp(&b.norm()).then(a.im.total_cmp(&b.im)));
     Vibration {
         stability: match worst {
             None => Stability::Stable,
