@@ -28,6 +28,7 @@
 #![allow(non_snake_case)]
 
 mod arnoldi;
+mod hessenberg;
 
 use super::newton::Workspace;
 use super::residual::end_values;
@@ -41,7 +42,7 @@ use crate::so3;
 use crate::solution::State;
 use crate::{Robot, Solution};
 use arnoldi::{Ritz, arnoldi};
-use nalgebra::{Complex, Matrix3, SMatrix, Vector3};
+use nalgebra::{Complex, Matrix3, SMatrix, Vector3, Vector6};
 use std::ops::AddAssign;
 
 /// The density the mass is taken from (kg/m^3): stainless steel, the usual backbone. Only
@@ -87,9 +88,9 @@ impl Mass {
         let ratio = DENSITY / model.robot.rod.geometry.map_or(MODULUS, |g| g.youngs_modulus);
         let links = x.len() - 1;
         let mut blocks = Vec::with_capacity(links);
-        // The end node's point and response of the last interval: the next interval's start
+        // The end node's rates and response of the last interval: the next interval's start
         // when the two share the node's site and segment (the same inputs, the same values).
-        let mut carried: Option<(usize, f64, Point, SMatrix<f64, 6, 6>)> = None;
+        let mut carried: Option<(usize, f64, Vector6<f64>, SMatrix<f64, 6, 6>)> = None;
         for k in 0..links {
             let Some(sites) = system.interval_sites(k) else {
                 carried = None;
@@ -99,21 +100,23 @@ impl Mass {
             let seg = system.mesh.nodes[k].segment_end;
             let (a, b) = (&x[k], &x[k + 1]);
             let h = sites.end.s - sites.start.s;
-            let (pa, za) = match carried.take() {
-                Some((node, s, point, z)) if node == k && s == seg => (point, z),
+            let (ra, za) = match carried.take() {
+                Some((node, s, rates, z)) if node == k && s == seg => (rates, z),
                 _ => {
                     let point = Point::new(model, &sites.start, seg, (&a.R, &a.v, &a.u))?;
-                    let z = response(&point, &sites.start, &a.R, ratio, length)?;
-                    (point, z)
+                    (point.rates(), response(&point, &sites.start, &a.R, ratio, length)?)
                 }
             };
-            let pb = Point::new(model, &sites.end, seg, (&b.R, &b.v, &b.u))?;
-            let zb = response(&pb, &sites.end, &b.R, ratio, length)?;
+            let (rb, zb) = {
+                let point = Point::new(model, &sites.end, seg, (&b.R, &b.v, &b.u))?;
+                (point.rates(), response(&point, &sites.end, &b.R, ratio, length)?)
+            };
             // The Hermite-Simpson midpoint, as the residual's.
-            let [y0, y1, f0, f1] = end_values(sites, a, b, &pa.rates(), &pb.rates());
+            let [y0, y1, f0, f1] = end_values(sites, a, b, &ra, &rb);
             let ym = (y0 + y1) * 0.5 + (f0 - f1) * (h / 8.0);
-            let Rm = a.R * so3::exp(&ym.fixed_rows::<3>(THETA).into());
-            let (vm, um): (Vector3<f64>, Vector3<f64>) = (ym.fixed_rows::<3>(V).into(), ym.fixed_rows::<3>(U).into());
+            let part = |at: usize| Vector3::new(ym[at], ym[at + 1], ym[at + 2]);
+            let Rm = a.R * so3::exp(&part(THETA));
+            let (vm, um) = (part(V), part(U));
             let pm = Point::new(model, &sites.mid, seg, (&Rm, &vm, &um))?;
             let zm = response(&pm, &sites.mid, &Rm, ratio, length)?;
             let mut block = SMatrix::<f64, 6, 12>::zeros();
@@ -137,7 +140,7 @@ impl Mass {
                 }
             }
             blocks.push(Some(block));
-            carried = Some((k + 1, seg, pb, zb));
+            carried = Some((k + 1, seg, rb, zb));
         }
         Ok(Mass { blocks })
     }
@@ -164,27 +167,46 @@ impl Mass {
         }
     }
 
-    /// y = M x for scaled unknowns `x`.
-    fn apply(&self, x: &[f64], y: &mut [f64]) {
-        y.fill(0.0);
+    /// y = M x for scaled unknowns x given by their (p, theta) part `z` alone (M reads no
+    /// other column): [`MOVING`] per node, p then theta, as [`restrict`] gives them. Writes
+    /// only the rows M has, the (v', u') rows of each interval; `y` must be zero elsewhere
+    /// (as [`modes`]'s buffer, zeroed once, stays).
+    fn apply(&self, z: &[f64], y: &mut [f64]) {
         for (k, block) in self.blocks.iter().enumerate() {
             let Some(block) = block else { continue };
-            let mut z = SMatrix::<f64, 12, 1>::zeros();
-            for j in 0..3 {
-                z[j] = x[k * NODE + P + j];
-                z[3 + j] = x[k * NODE + THETA + j];
-                z[6 + j] = x[(k + 1) * NODE + P + j];
-                z[9 + j] = x[(k + 1) * NODE + THETA + j];
+            // Node k's and node k + 1's (p, theta): the block's 12 columns, in order.
+            let z = &z[k * MOVING..(k + 2) * MOVING];
+            let mut sums = [0.0; 6];
+            for (c, zc) in z.iter().enumerate() {
+                for (r, sum) in sums.iter_mut().enumerate() {
+                    *sum += block[(r, c)] * zc;
+                }
             }
-            let r = block * z;
             let row = link_row(k) + V;
-            y[row..row + 6].copy_from_slice(r.as_slice());
+            y[row..row + 6].copy_from_slice(&sums);
         }
     }
 }
 
+/// Unknowns per node that carry mass: p and theta (the inertia loads depend on their
+/// accelerations alone).
+const MOVING: usize = 6;
+
+/// E a in place: the (p, theta) part of every node of the scaled unknowns `a`, [`MOVING`]
+/// per node, moved to the front and the rest dropped. The nonzero eigenvalues of J^-1 M
+/// (= J^-1 M_r E, M_r the columns M reads) are those of E J^-1 M_r, whose vectors are half
+/// as long (docs/stability.md, "How it is computed").
+fn restrict(a: &mut Vec<f64>) {
+    const _: () = assert!(P == 0 && THETA == 3 && MOVING == 6);
+    let nodes = a.len() / NODE;
+    for k in 0..nodes {
+        a.copy_within(k * NODE..k * NODE + MOVING, k * MOVING);
+    }
+    a.truncate(nodes * MOVING);
+}
+
 /// d(v', u') / d(acceleration) at a collocation point with orientation `Rc`, up to the
-/// quadrature weight: M^-1 of the [`inertia_load`] per unit acceleration (eq. 13: F = M x -
+/// quadrature weight: M^-1 of the load per unit acceleration ([`inertia_load_transposed`]) (eq. 13: F = M x -
 /// rhs with + R^T f_e, + R^T l_e in F, so d(v', u') / d(body load) = -M^-1, and the
 /// residual y1 - y0 - h/6 sum w F gains + h/6 w M^-1 load).
 ///
@@ -197,34 +219,46 @@ fn response(
     ratio: f64,
     length: f64,
 ) -> crate::Result<SMatrix<f64, 6, 6>> {
-    let mut t = inertia_load(site, Rc, ratio, length).transpose();
+    let mut t = inertia_load_transposed(site, Rc, ratio, length);
     if !point.solve_rows(&mut t) {
         return Err(crate::Error::Breakdown {
             s: site.s,
             what: "the 6x6 matrix of eq. 13 is singular".into(),
         });
     }
-    Ok(t.transpose())
+    // Transposed back entry by entry: nalgebra's transpose goes through an iterator
+    // constructor that the build does not always inline (docs/stability.md, "Cost").
+    let mut z = SMatrix::<f64, 6, 6>::zeros();
+    for i in 0..6 {
+        for j in 0..6 {
+            z[(i, j)] = t[(j, i)];
+        }
+    }
+    Ok(z)
 }
 
-/// The body-frame distributed load (force, moment; N/m and N m/m) per unit acceleration
-/// at a collocation point with orientation `Rc`: -(rho A Rc^T p_tt, rho J_b Rc^T w_t) for
-/// p_tt in the p columns' scaled units (dp / L) and w_t in the world frame; a node's
-/// rotation increment's w_t is its R times the body-frame one, with the accelerations
-/// interpolated linearly between the nodes ([`Mass::new`]).
-fn inertia_load(site: &Site, Rc: &Matrix3<f64>, ratio: f64, length: f64) -> SMatrix<f64, 6, 6> {
+/// The transpose of the body-frame distributed load (force, moment; N/m and N m/m) per
+/// unit acceleration at a collocation point with orientation `Rc`: -(rho A Rc^T p_tt,
+/// rho J_b Rc^T w_t) for p_tt in the p columns' scaled units (dp / L) and w_t in the world
+/// frame; a node's rotation increment's w_t is its R times the body-frame one, with the
+/// accelerations interpolated linearly between the nodes ([`Mass::new`]). Row i of the
+/// result is the load of acceleration component i.
+fn inertia_load_transposed(site: &Site, Rc: &Matrix3<f64>, ratio: f64, length: f64) -> SMatrix<f64, 6, 6> {
     let section = &site.section.section;
     let rho_a = ratio * section.kse[2];
-    let rho_j = Matrix3::from_diagonal(&Vector3::new(
+    let rho_j = [
         ratio * section.kbt[0],
         ratio * section.kbt[1],
         ratio * (section.kbt[0] + section.kbt[1]),
-    ));
-    let mut w = SMatrix::<f64, 6, 6>::zeros();
-    w.fixed_view_mut::<3, 3>(0, 0)
-        .copy_from(&(Rc.transpose() * (-rho_a * length)));
-    w.fixed_view_mut::<3, 3>(3, 3).copy_from(&(-rho_j * Rc.transpose()));
-    w
+    ];
+    let mut t = SMatrix::<f64, 6, 6>::zeros();
+    for i in 0..3 {
+        for j in 0..3 {
+            t[(i, j)] = Rc[(i, j)] * (-rho_a * length);
+            t[(3 + i, 3 + j)] = -rho_j[j] * Rc[(i, j)];
+        }
+    }
+    t
 }
 
 /// The vibration modes of an equilibrium: the verdict of its linearized dynamics and the
@@ -235,7 +269,8 @@ pub struct Vibration {
     /// lowest modes did not converge.
     pub stability: Stability,
     /// The converged eigenvalues mu = -lambda^2 (1/s^2) of the lowest modes, by increasing
-    /// |mu|: omega^2 of a vibration at omega rad/s when real and positive.
+    /// |mu| (of a complex pair, the one with the negative imaginary part first): omega^2 of
+    /// a vibration at omega rad/s when real and positive.
     pub eigenvalues: Vec<Complex<f64>>,
 }
 
@@ -298,20 +333,23 @@ fn modes(
         Err(e) => return unknown(format!("the mass matrix could not be formed: {e}")),
     };
     let n = unknowns(x.len());
+    // Zero outside the rows [`Mass::apply`] writes, which it leaves as they are.
     let mut w = vec![0.0; n];
-    // y = J^-1 M z
+    // z -> E J^-1 M z on the (p, theta) parts z ([`restrict`]; M reads nothing else).
     let mut operator = |z: &[f64], out: &mut Vec<f64>| -> bool {
         mass.apply(z, &mut w);
         match ws.solve_again(&w) {
             Some(y) => {
                 out.clear();
                 out.extend_from_slice(y);
-                border(out)
+                let bordered = border(out);
+                restrict(out);
+                bordered
             }
             None => false,
         }
     };
-    let Some(ritz) = arnoldi(&mut operator, n, krylov, all) else {
+    let Some(ritz) = arnoldi(&mut operator, x.len() * MOVING, krylov, all) else {
         return unknown("the Jacobian's factors gave no finite solve for the vibration modes".into());
     };
     classify(&ritz)
@@ -364,7 +402,7 @@ fn classify(ritz: &[Ritz]) -> Vibration {
         }
     }
     let mut eigenvalues: Vec<Complex<f64>> = converged.iter().map(|r| r.theta.inv()).collect();
-    eigenvalues.sort_by(|a, b| a.norm().total_cmp(&b.norm()));
+    eigenvalues.sort_by(|a, b| a.norm().total_cmp(&b.norm()).then(a.im.total_cmp(&b.im)));
     Vibration {
         stability: match worst {
             None => Stability::Stable,

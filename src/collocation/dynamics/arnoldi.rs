@@ -4,6 +4,7 @@
 //! have settled.
 
 use super::grows;
+use super::hessenberg;
 use nalgebra::{Complex, DMatrix};
 
 /// The Arnoldi steps after which a solve's verdict tests whether it may stop ([`settled`]):
@@ -104,14 +105,17 @@ pub(super) fn arnoldi(
 
 /// The Ritz values of the first `m` Arnoldi steps (the eigenvalues of the leading m x m
 /// block of `h`) and the largest of their magnitudes (the lowest mode's 1 / |mu|).
+/// By the double-shift QR iteration on the Hessenberg block ([`hessenberg::eigenvalues`]),
+/// or, should it not converge, nalgebra's general Schur form.
 fn ritz_values(h: &DMatrix<f64>, m: usize) -> (Vec<Complex<f64>>, f64) {
-    let values: Vec<Complex<f64>> = h
-        .view((0, 0), (m, m))
-        .into_owned()
-        .complex_eigenvalues()
-        .iter()
-        .copied()
-        .collect();
+    let values: Vec<Complex<f64>> = hessenberg::eigenvalues(h, m).unwrap_or_else(|| {
+        h.view((0, 0), (m, m))
+            .into_owned()
+            .complex_eigenvalues()
+            .iter()
+            .copied()
+            .collect()
+    });
     let largest = values.iter().map(|t| t.norm()).fold(0.0f64, f64::max);
     (values, largest)
 }

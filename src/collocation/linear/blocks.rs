@@ -280,15 +280,37 @@ fn forward_substitute<const W: usize>(rows: &[[f64; W]], sums: &mut [f64; NODE],
     }
 }
 
-/// Applies a step's recorded row swaps and eliminations to a right-hand side.
+/// Applies a step's recorded row swaps and eliminations to a right-hand side: column c's
+/// swap, then row r -= factor * pivot for every row r below c, column after column. Each
+/// column is its own instance of [`replay_column`], so that its loop has constant bounds
+/// and compiles to straight-line vector code (the shift-invert solves of the linearized
+/// dynamics are mostly this; docs/stability.md, "Cost"): the same operations in the same
+/// order as a loop over the columns, so the same bits.
 #[inline(always)]
 fn replay<const N: usize>(record: &Record, v: &mut [f64; N]) {
-    for c in 0..NODE {
-        v.swap(c, record.swaps[c]);
-        let pivot = v[c];
-        for (x, f) in v[c + 1..].iter_mut().zip(&record.factors[c][c + 1..]) {
-            *x -= f * pivot;
-        }
+    const _: () = assert!(NODE == 12);
+    replay_column::<0, N>(record, v);
+    replay_column::<1, N>(record, v);
+    replay_column::<2, N>(record, v);
+    replay_column::<3, N>(record, v);
+    replay_column::<4, N>(record, v);
+    replay_column::<5, N>(record, v);
+    replay_column::<6, N>(record, v);
+    replay_column::<7, N>(record, v);
+    replay_column::<8, N>(record, v);
+    replay_column::<9, N>(record, v);
+    replay_column::<10, N>(record, v);
+    replay_column::<11, N>(record, v);
+}
+
+/// Column `C` of [`replay`]: its swap, then its multipliers on the `N - C - 1` rows below.
+#[inline(always)]
+fn replay_column<const C: usize, const N: usize>(record: &Record, v: &mut [f64; N]) {
+    v.swap(C, record.swaps[C]);
+    let pivot = v[C];
+    let factors = &record.factors[C];
+    for r in C + 1..N {
+        v[r] -= factors[r] * pivot;
     }
 }
 
