@@ -123,6 +123,8 @@ fn interval_at(
     let derivatives = jac.is_some();
     let la = profile.start_point(k, &sites.start, segment_end, a, &za, w, derivatives)?;
     let lb = profile.point(&sites.end, segment_end, &b.R, (&b.v, &b.u), &zb, w, derivatives)?;
+    profile.keep_node(k, segment_end, a, (&za, w), &la);
+    profile.keep_node(k + 1, segment_end, b, (&zb, w), &lb);
     // F at a point from its rates; with derivatives also its linearization (a residual
     // needs only the value, the same arithmetic as the linearization's).
     let value = |site: &Site, lin: &FrictionLinearization, y: &Block<f64>| {
@@ -336,21 +338,38 @@ pub(crate) fn interval_order6(
     let (y0, y1) = end_points(a, b);
     let w = profile.multipliers(k);
     let w = w.as_deref();
-    // F and kappa~ at a local state (y, z) of the interval.
-    let stage = |site: &Site, y: &Block<f64>, z: &[f64]| -> Result<(Block<f64>, Vec<f64>)> {
+    // F and kappa~ at a local state (y, z) of the interval; at a node (`node`: its index
+    // and state), eq. 13 with friction at the node's own state, taken from the last pass
+    // that evaluated it there when it has the same inputs.
+    let stage = |site: &Site, y: &Block<f64>, z: &[f64], node: Option<(usize, &State)>| {
         let theta: Vector3<f64> = y.fixed_rows::<3>(THETA).into();
         let (v, u): (Vector3<f64>, Vector3<f64>) = (y.fixed_rows::<3>(6).into(), y.fixed_rows::<3>(9).into());
         let R = a.R * so3::exp(&theta);
-        let lin = profile.point(site, segment_end, &R, (&v, &u), z, w, false)?;
+        let mut turning = Vec::new();
+        let rates = match node {
+            Some((n, state)) => match profile.node_rates(n, segment_end, state, (z, w), &mut turning) {
+                Some(rates) => rates,
+                None => {
+                    let lin = profile.point(site, segment_end, &state.R, (&state.v, &state.u), z, w, false)?;
+                    turning = lin.turning;
+                    lin.lin.rates
+                }
+            },
+            None => {
+                let lin = profile.point(site, segment_end, &R, (&v, &u), z, w, false)?;
+                turning = lin.turning;
+                lin.lin.rates
+            }
+        };
         let mut f = Block::zeros();
         f.fixed_rows_mut::<3>(0).copy_from(&(R * v));
         f.fixed_rows_mut::<3>(THETA)
             .copy_from(&(so3::right_jacobian_inv(&theta) * u));
-        f.fixed_rows_mut::<6>(6).copy_from(&lin.lin.rates);
-        Ok((f, lin.turning))
+        f.fixed_rows_mut::<6>(6).copy_from(&rates);
+        Ok::<_, crate::Error>((f, turning))
     };
-    let (f0, k0) = stage(&sites.start, &y0, &za)?;
-    let (f1, k1) = stage(&sites.end, &y1, &zb)?;
+    let (f0, k0) = stage(&sites.start, &y0, &za, Some((k, a)))?;
+    let (f1, k1) = stage(&sites.end, &y1, &zb, Some((k + 1, b)))?;
     let combine = |c0: f64, c1: f64, d0: f64, d1: f64| {
         let y = (y0 * c0 + y1 * c1) / 32.0 + (f0 * d0 + f1 * d1) * (h / 64.0);
         let z: Vec<f64> = (0..count)
@@ -360,13 +379,13 @@ pub(crate) fn interval_order6(
     };
     let (y_q, z_q) = combine(27.0, 5.0, 9.0, -3.0);
     let (y_tq, z_tq) = combine(5.0, 27.0, 3.0, -9.0);
-    let (f_q, k_q) = stage(&quarters.quarter, &y_q, &z_q)?;
-    let (f_tq, k_tq) = stage(&quarters.three_quarters, &y_tq, &z_tq)?;
+    let (f_q, k_q) = stage(&quarters.quarter, &y_q, &z_q, None)?;
+    let (f_tq, k_tq) = stage(&quarters.three_quarters, &y_tq, &z_tq, None)?;
     let y_m = (y0 + y1) * 0.5 + ((f1 - f0) * (5.0 / 24.0) + (f_q - f_tq) * (2.0 / 3.0)) * h;
     let z_m: Vec<f64> = (0..count)
         .map(|j| 0.5 * (za[j] + zb[j]) + ((k1[j] - k0[j]) * (5.0 / 24.0) + (k_q[j] - k_tq[j]) * (2.0 / 3.0)) * h)
         .collect();
-    let (f_m, k_m) = stage(&sites.mid, &y_m, &z_m)?;
+    let (f_m, k_m) = stage(&sites.mid, &y_m, &z_m, None)?;
     let quadrature = ((f0 + f1) * 7.0 + (f_q + f_tq) * 32.0 + f_m * 12.0) * (h / 90.0);
     let psi: Vec<f64> = (0..count)
         .map(|j| {

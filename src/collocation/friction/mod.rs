@@ -476,9 +476,12 @@ fn refine_with_friction(
                 reason: "friction is not conservative".into(),
             };
             report.timings.total = start.elapsed();
-            return nodes::solution_with_tensions(&model, &x, &ends, &tensions, None, report);
+            // The estimate's node rates are eq. 13 with friction at the same states and tensions.
+            let rates = estimated.as_ref().map(|(c, _)| c.node_rates.as_slice());
+            return nodes::solution_with_tensions(&model, &x, &ends, (&tensions, None), rates, report);
         };
-        let guess = nodes::solution_with_tensions(&model, &x, &ends, &tensions, None, report.clone())?;
+        let rates = estimated.as_ref().map(|(c, _)| c.node_rates.as_slice());
+        let guess = nodes::solution_with_tensions(&model, &x, &ends, (&tensions, None), rates, report.clone())?;
         let s: Vec<f64> = system.mesh.nodes.iter().map(|n| n.s).collect();
         previous = Some((s, profile.z.clone()));
         x = interpolate(&model, &guess, &fine);
