@@ -17,7 +17,8 @@
 #![allow(non_snake_case)]
 
 use super::super::residual::{
-    Block, EndColumns, IntervalSites, QuarterSites, end_points, rhs_from_rates, rhs_linearized, scale_rows,
+    Block, EndColumns, IntervalSites, QuarterSites, end_points, midpoint_product, rhs_from_rates,
+    rhs_linearized_inline, scale_rows,
 };
 use super::super::unknowns::THETA;
 use super::grip::Stuck;
@@ -133,8 +134,8 @@ fn interval_at(
     };
     let ends = derivatives.then(|| {
         (
-            rhs_linearized(&sites.start, &la.lin, &a.R, &y0),
-            rhs_linearized(&sites.end, &lb.lin, &a.R, &y1),
+            rhs_linearized_inline(&sites.start, &la.lin, &a.R, &y0),
+            rhs_linearized_inline(&sites.end, &lb.lin, &a.R, &y1),
         )
     });
     let (f0, f1) = match &ends {
@@ -149,7 +150,7 @@ fn interval_at(
     let (vm, um): (Vector3<f64>, Vector3<f64>) = (ym.fixed_rows::<3>(6).into(), ym.fixed_rows::<3>(9).into());
     let Rm = a.R * so3::exp(&theta_m);
     let lm = profile.point(&sites.mid, segment_end, &Rm, (&vm, &um), &zm, w, derivatives)?;
-    let pm = derivatives.then(|| rhs_linearized(&sites.mid, &lm.lin, &a.R, &ym));
+    let pm = derivatives.then(|| rhs_linearized_inline(&sites.mid, &lm.lin, &a.R, &ym));
     let fm = pm
         .as_ref()
         .map_or_else(|| rhs_from_rates(&sites.mid, &Rm, &ym, &lm.lin.rates), |pm| pm.f);
@@ -225,11 +226,8 @@ fn interval_at(
             .copy_from(&lm.d_turning[j].fixed_columns::<3>(3));
         (row, d_phi * Em.transpose())
     };
-    let mut dFm = pm.f_y.fixed_columns::<9>(3) * dYm;
-    {
-        let mut frame = dFm.fixed_columns_mut::<3>(0);
-        frame += pm.f_frame;
-    }
+    // The frictionless midpoint's product (the same sums in the same order as nalgebra's).
+    let mut dFm = midpoint_product(&pm, &dYm);
     let rates_z = |l: &FrictionLinearization, j: usize| {
         let mut col = Block::<f64>::zeros();
         col.fixed_rows_mut::<6>(6).copy_from(&l.d_log_tension[j]);
