@@ -95,7 +95,9 @@ pub(crate) struct Capstan<'r> {
     small_rhs: Vec<f64>,
     /// psi_x: each row's 24 entries over the unknowns of its link's two nodes.
     psi_x: Vec<[f64; 2 * NODE]>,
-    /// psi_z, dense, row major.
+    /// psi_z by row: row r's derivatives in the log tensions of its link's two nodes, slip
+    /// l's at node k at `r * 2c + l` and at node k + 1 at `r * 2c + c + l` (c slips; psi_z
+    /// has no other entries). 0 where that log tension is no unknown (the base).
     psi_z: Vec<f64>,
     /// The border rows of the solve in hand (psi, or the estimate's difference).
     rows_in: Vec<f64>,
@@ -137,7 +139,7 @@ impl<'r> Capstan<'r> {
             small_matrix: vec![0.0; profile.len() * profile.len()],
             small_rhs: vec![0.0; profile.len()],
             psi_x: vec![[0.0; 2 * NODE]; m],
-            psi_z: vec![0.0; m * m],
+            psi_z: vec![0.0; m * 2 * profile.len()],
             rows_in: vec![0.0; m],
             stairs: Staircase::new(&extra),
             node_slips,
@@ -221,7 +223,6 @@ impl<'r> Capstan<'r> {
         let Some(profile) = self.system.friction.as_ref() else {
             return true;
         };
-        let m = self.z.len();
         let count = self.offsets.len();
         let last = profile.spans.iter().copied().max().unwrap_or(0);
         for k in 0..last {
@@ -230,16 +231,17 @@ impl<'r> Capstan<'r> {
             let (matrix, rhs) = (&mut self.small_matrix, &mut self.small_rhs);
             for (a, &j) in on.iter().enumerate() {
                 let row = self.offsets[j] + k;
+                let psi_z = &self.psi_z[row * 2 * count..(row + 1) * 2 * count];
                 let mut value = r[row];
-                for l in 0..count {
+                for (l, d) in psi_z[..count].iter().enumerate() {
                     if let Some(u) = unknown(&self.offsets, &profile.spans, l, k) {
-                        value -= self.psi_z[row * m + u] * dz[u];
+                        value -= d * dz[u];
                     }
                 }
                 rhs[a] = value;
+                // Node k + 1's log tension of slip l (on link k: an unknown).
                 for (b, &l) in on.iter().enumerate() {
-                    let u = self.offsets[l] + k;
-                    matrix[a * size + b] = self.psi_z[row * m + u];
+                    matrix[a * size + b] = psi_z[count + l];
                 }
             }
             if !solve_dense(&mut matrix[..size * size], &mut rhs[..size], size) {

@@ -132,9 +132,15 @@ impl Staircase {
             };
             let rows = carried + new_rows;
             let panel = &mut self.panel[..rows * width];
-            panel.fill(0.0);
-            for r in 0..carried {
-                panel[r * width..r * width + ck].copy_from_slice(&self.carry[r * ck..(r + 1) * ck]);
+            // Zeroed row by row with the carried rows' copy: a few short stores each, where
+            // one memset of the panel (kilobytes) runs as `rep stosb`, byte by byte.
+            for (r, row) in panel.chunks_exact_mut(width).enumerate() {
+                if r < carried {
+                    row[..ck].copy_from_slice(&self.carry[r * ck..(r + 1) * ck]);
+                    row[ck..].fill(0.0);
+                } else {
+                    row.fill(0.0);
+                }
             }
             fill(block, &mut panel[carried * width..]);
             let step = &mut self.steps[k];
