@@ -367,7 +367,12 @@ pub(super) struct PointLinearization {
 /// [`interval_jacobian_avx2`] and the friction interval's AVX2 build it is compiled for
 /// AVX2 too (the same operations in the same order).
 #[inline(always)]
-pub(super) fn rhs_linearized_inline(site: &Site, lin: &Linearization, Rk: &Matrix3<f64>, y: &Block<f64>) -> PointLinearization {
+pub(super) fn rhs_linearized_inline(
+    site: &Site,
+    lin: &Linearization,
+    Rk: &Matrix3<f64>,
+    y: &Block<f64>,
+) -> PointLinearization {
     let theta: Vector3<f64> = y.fixed_rows::<3>(THETA).into();
     let v = site.strain(&y.fixed_rows::<3>(V).into());
     let u: Vector3<f64> = y.fixed_rows::<3>(U).into();
