@@ -364,8 +364,8 @@ pub(super) struct PointLinearization {
 /// assembled from the strain-rate linearization `lin` at R = R_k exp(theta) and the
 /// kinematics p' = R_k exp(theta) v, theta' = J_r(theta)^-1 u (v the strain of the
 /// coordinate, [`Site::strain`]: constant on a Kirchhoff rod). Always inlined, so that in
-/// [`interval_jacobian_avx2`] and the friction interval's AVX2 build it is compiled for
-/// AVX2 too (the same operations in the same order).
+/// [`interval_jacobian_avx2`] it is compiled for AVX2 too (the same operations in the same
+/// order).
 #[inline(always)]
 pub(super) fn rhs_linearized_inline(
     site: &Site,
