@@ -522,4 +522,54 @@ mod tests {
             }
         }
     }
+
+    /// The order-6 rows at a node take eq. 13 with friction from the last link evaluation
+    /// there only when its inputs are the same: after a residual pass they are bitwise the
+    /// rows of a profile that kept nothing, and after the log tensions moved they are those
+    /// of the moved profile, not the kept values (case H with friction on its helix).
+    #[test]
+    fn order6_rows_reuse_node_evaluations_only_at_the_same_inputs() {
+        let mut robot = cases::case_h();
+        robot.tendons[4].friction = Some(Friction::pull(0.3));
+        let solution = crate::solve(&robot, &crate::collocation::Options::fixed(8)).unwrap();
+        let model = Model::new(&robot);
+        let mesh = Mesh::from_points(&robot, &solution.nodes.iter().map(|n| n.s).collect::<Vec<_>>()).unwrap();
+        let mut profile = Profile::new(&model, &mesh);
+        let x: Vec<State> = solution.nodes.iter().map(|n| n.state()).collect();
+        for z in &mut profile.z {
+            for (n, value) in z.iter_mut().enumerate() {
+                *value = -0.02 * n as f64;
+            }
+        }
+        let length = robot.length();
+        let k = 3;
+        let (s0, s1) = (x[k].s, x[k + 1].s);
+        let h = s1 - s0;
+        let sites = IntervalSites {
+            start: model.site(s0),
+            mid: model.site(0.5 * (s0 + s1)),
+            end: model.site(s1),
+        };
+        let quarters = QuarterSites {
+            quarter: model.site(s0 + 0.25 * h),
+            three_quarters: model.site(s0 + 0.75 * h),
+        };
+        let seg = mesh.nodes[k].segment_end;
+        let order6 = |p: &Profile| interval_order6(p, length, k, &sites, &quarters, seg, &x[k], &x[k + 1]).unwrap();
+        // The residual pass keeps both nodes' evaluations.
+        interval(&profile, length, k, &sites, seg, &x[k], &x[k + 1], None).unwrap();
+        let (kept, kept_psi, kept_a, kept_b) = order6(&profile);
+        let (fresh, fresh_psi, fresh_a, fresh_b) = order6(&profile.clone_z());
+        // Bit for bit: the kept values are the evaluation at the same inputs.
+        assert_eq!((kept, kept_psi, kept_a, kept_b), (fresh, fresh_psi, fresh_a, fresh_b));
+        // Moved log tensions at node b: its kept evaluation no longer applies.
+        for z in &mut profile.z {
+            z[k + 1] -= 0.05;
+        }
+        let (moved, moved_psi, _, moved_b) = order6(&profile);
+        let (exact, exact_psi, _, exact_b) = order6(&profile.clone_z());
+        assert_eq!((moved, moved_psi, moved_b), (exact, exact_psi, exact_b));
+        // And the move matters: the kept node-b rates would have given other rows.
+        assert_ne!(moved_b, kept_b);
+    }
 }
