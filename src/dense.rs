@@ -7,6 +7,15 @@
 /// Gaussian elimination with partial pivoting on the row-major `n x n` matrix `a`, solving
 /// in place into `b`. False for a zero pivot or a non-finite result.
 pub(crate) fn solve_dense(a: &mut [f64], b: &mut [f64], n: usize) -> bool {
+    if n == 1 {
+        // The loops below for one unknown (the usual single tendon with friction at a
+        // point, solved twice per point): the same division, without their bookkeeping.
+        if a[0] == 0.0 || !a[0].is_finite() {
+            return false;
+        }
+        b[0] /= a[0];
+        return b[0].is_finite();
+    }
     for col in 0..n {
         let Some(pivot) = (col..n).max_by(|&i, &j| a[i * n + col].abs().total_cmp(&a[j * n + col].abs())) else {
             return false;

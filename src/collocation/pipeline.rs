@@ -60,14 +60,29 @@ pub(crate) fn solve_impl(
     if crate::model::friction::any(robot) {
         return super::friction::solve(robot, options, warm, cache);
     }
-    solve_tensions(robot, options, warm, cache, true)
+    solve_tensions(robot, options, warm, cache)
+}
+
+/// Where Newton with friction starts (docs/friction.md section 3): a mesh and node states on
+/// it, and the report of the frictionless solve that gave them.
+pub(crate) struct Start {
+    /// The mesh Newton with friction starts on.
+    pub(crate) mesh: Mesh,
+    /// The frictionless node states on it.
+    pub(crate) x: Vec<State>,
+    /// The frictionless solve's report (its counts, timings, path and notes).
+    pub(crate) report: SolveReport,
 }
 
 /// The frictionless start of a solve with friction (`robot` validated, without friction):
-/// for tension inputs, [`solve_impl`] without the stability verdict of the final mesh,
-/// which only the report would carry and the answer with friction replaces (`unknown`).
-/// The equilibrium is still chosen on the first mesh with its verdict, so the start is on
-/// the branch the frictionless solve would return.
+/// for tension inputs, Newton and the equilibrium choice with its verdict on the first mesh
+/// and that mesh's error estimate, as [`solve_impl`] begins. Where the estimate wants a
+/// finer mesh, the start is the first mesh's states interpolated onto it: Newton with
+/// friction solves on it, and its own estimate refines further, so the frictionless solve
+/// is not repeated there, nor its final mesh's verdict (which only its report would carry;
+/// the answer with friction reports `unknown`). The equilibrium is still chosen on the
+/// first mesh with its verdict, so the start is on the branch the frictionless solve would
+/// return. Displacement inputs: the frictionless solve on its final mesh.
 ///
 /// # Errors
 /// As [`super::solve`].
@@ -76,68 +91,54 @@ pub(crate) fn solve_start(
     options: &Options,
     warm: Option<&Solution>,
     cache: &mut Cache,
-) -> Result<Solution> {
+) -> Result<Start> {
     if robot.has_displacement_inputs() {
-        return solve_impl(robot, options, warm, cache);
+        let solution = solve_impl(robot, options, warm, cache)?;
+        let points: Vec<f64> = solution.nodes.iter().map(|n| n.s).collect();
+        let mesh = Mesh::from_points(robot, &points)?;
+        let x = interpolate(&Model::new(robot), &solution, &mesh);
+        return Ok(Start {
+            mesh,
+            x,
+            report: solution.report,
+        });
     }
-    solve_tensions(robot, options, warm, cache, false)
+    let start = Instant::now();
+    let model = Model::new(robot);
+    let mut report = SolveReport::new(Method::Collocation);
+    let (mesh, x0, reuse, choose) = begin(robot, options, warm, cache, &model, &mut report)?;
+    report.meshes += 1;
+    let level =
+        solve_on_mesh(&model, mesh, x0, reuse, choose, options, &mut report, cache).map_err(|e| timed(e, start))?;
+    let fine = match (options.tolerance, &level.correction) {
+        (Some(tol), Some(correction)) => refine::next_mesh(robot, &level.mesh, correction, tol, options)?,
+        _ => None,
+    };
+    let Level { mesh, x, correction } = level;
+    let start_here = |mesh, x, mut report: SolveReport| {
+        report.timings.total = start.elapsed();
+        Ok(Start { mesh, x, report })
+    };
+    let (Some(fine), Some(correction)) = (fine, correction) else {
+        return start_here(mesh, x, report);
+    };
+    // As refine::to_tolerance interpolates a level onto the next mesh.
+    let guess = nodes::nodes(&model, &x, &segment_ends(&mesh), Some(&correction.node_rates))?;
+    let x = guess::interpolate_nodes(&model, &guess, &fine);
+    start_here(fine, x, report)
 }
 
 /// [`solve_impl`] for a robot (validated, with `options` validated) whose tendons are all
-/// tension-controlled and without friction; with `verdict`, the final mesh's stability
-/// verdict in the report.
+/// tension-controlled and without friction, with the final mesh's stability verdict in the
+/// report.
 ///
 /// # Errors
 /// As [`super::solve`].
-fn solve_tensions(
-    robot: &Robot,
-    options: &Options,
-    warm: Option<&Solution>,
-    cache: &mut Cache,
-    verdict: bool,
-) -> Result<Solution> {
+fn solve_tensions(robot: &Robot, options: &Options, warm: Option<&Solution>, cache: &mut Cache) -> Result<Solution> {
     let start = Instant::now();
     let mut model = Model::new(robot);
     let mut report = SolveReport::new(Method::Collocation);
-    let mut mesh = initial_mesh(robot, options, warm)?;
-    if options.tolerance.is_none() {
-        resolves(robot, options, &mesh)?;
-    }
-    let warm_stable = warm.is_some_and(|g| g.report.stability.is_stable());
-    let warm = warm.map(|g| interpolate(&model, g, &mesh));
-    // The cached factors belong to the guess when it is the cached solver's last solution.
-    let mut reuse = match (cache.as_ref(), &warm) {
-        (Some(c), Some(w)) => c.mesh == mesh && c.solver == options.linear_solver && c.last.as_ref() == Some(w),
-        _ => false,
-    };
-    let (x0, choose) = match warm {
-        Some(w) if reuse => (w, Choose::FromWarm),
-        Some(w) => {
-            let system = System::new(model.clone(), mesh.clone());
-            // A stable warm start near the answer (by the predicted step) is kept; else the
-            // start with the smaller residual.
-            let near = warm_stable
-                .then(|| near_start(&system, &w, options.linear_solver, &mut report))
-                .flatten();
-            match near {
-                Some(workspace) => {
-                    *cache = Some(Cached {
-                        mesh: mesh.clone(),
-                        solver: options.linear_solver,
-                        workspace,
-                        last: Some(w.clone()),
-                    });
-                    reuse = true;
-                    (w, Choose::FromWarm)
-                }
-                None => {
-                    let cold = guess::initial(&model, &mesh.nodes, options.initial_guess);
-                    better_start(&system, w, cold)
-                }
-            }
-        }
-        None => (cold_start(robot, options, &mut mesh)?, Choose::FromCold),
-    };
+    let (mesh, x0, reuse, choose) = begin(robot, options, warm, cache, &model, &mut report)?;
     // The first mesh reuses the factors and chooses the equilibrium; finer ones start from it.
     let mut first = Some((reuse, choose));
     let level = refine::to_tolerance(
@@ -158,7 +159,7 @@ fn solve_tensions(
     report.unknowns = unknowns::unknowns(mesh.nodes.len());
     report.nonzeros = unknowns::nonzeros(&mesh);
     record_estimate(&mut report, correction.as_ref(), options, robot.length());
-    if let Some(c) = cache.as_mut().filter(|_| verdict) {
+    if let Some(c) = cache.as_mut() {
         // The verdict belongs to this solve's state: `stability_of` evaluates the Jacobian at
         // it unless the workspace's is already there (and its verdict, when assessed, is
         // taken without building the system again).
@@ -177,6 +178,63 @@ fn solve_tensions(
     report.timings.total = start.elapsed();
     let rates = correction.as_ref().map(|c| c.node_rates.as_slice());
     nodes::solution(&model, &x, &segment_ends(&mesh), rates, report)
+}
+
+/// The first mesh of a tension solve and the states Newton starts from on it: the warm
+/// start interpolated (kept when it is the cached solver's last solution, or a stable one
+/// near the answer), or the cold start; whether the cached factors are reused, and how the
+/// equilibrium is chosen there.
+///
+/// # Errors
+/// As [`super::solve`].
+fn begin(
+    robot: &Robot,
+    options: &Options,
+    warm: Option<&Solution>,
+    cache: &mut Cache,
+    model: &Model,
+    report: &mut SolveReport,
+) -> Result<(Mesh, Vec<State>, bool, Choose)> {
+    let mut mesh = initial_mesh(robot, options, warm)?;
+    if options.tolerance.is_none() {
+        resolves(robot, options, &mesh)?;
+    }
+    let warm_stable = warm.is_some_and(|g| g.report.stability.is_stable());
+    let warm = warm.map(|g| interpolate(model, g, &mesh));
+    // The cached factors belong to the guess when it is the cached solver's last solution.
+    let mut reuse = match (cache.as_ref(), &warm) {
+        (Some(c), Some(w)) => c.mesh == mesh && c.solver == options.linear_solver && c.last.as_ref() == Some(w),
+        _ => false,
+    };
+    let (x0, choose) = match warm {
+        Some(w) if reuse => (w, Choose::FromWarm),
+        Some(w) => {
+            let system = System::new(model.clone(), mesh.clone());
+            // A stable warm start near the answer (by the predicted step) is kept; else the
+            // start with the smaller residual.
+            let near = warm_stable
+                .then(|| near_start(&system, &w, options.linear_solver, report))
+                .flatten();
+            match near {
+                Some(workspace) => {
+                    *cache = Some(Cached {
+                        mesh: mesh.clone(),
+                        solver: options.linear_solver,
+                        workspace,
+                        last: Some(w.clone()),
+                    });
+                    reuse = true;
+                    (w, Choose::FromWarm)
+                }
+                None => {
+                    let cold = guess::initial(model, &mesh.nodes, options.initial_guess);
+                    better_start(&system, w, cold)
+                }
+            }
+        }
+        None => (cold_start(robot, options, &mut mesh)?, Choose::FromCold),
+    };
+    Ok((mesh, x0, reuse, choose))
 }
 
 /// Records the final mesh's error estimate in `report`, with the tolerance it was tested

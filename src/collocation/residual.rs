@@ -363,20 +363,16 @@ pub(super) struct PointLinearization {
 /// F(s, y) of an interval with frame `Rk` and its derivatives at a point of `site`,
 /// assembled from the strain-rate linearization `lin` at R = R_k exp(theta) and the
 /// kinematics p' = R_k exp(theta) v, theta' = J_r(theta)^-1 u (v the strain of the
-/// coordinate, [`Site::strain`]: constant on a Kirchhoff rod).
-pub(super) fn rhs_linearized(
+/// coordinate, [`Site::strain`]: constant on a Kirchhoff rod). Always inlined, so that in
+/// [`interval_jacobian_avx2`] it is compiled for AVX2 too (the same operations in the same
+/// order).
+#[inline(always)]
+pub(super) fn rhs_linearized_inline(
     site: &Site,
     lin: &Linearization,
     Rk: &Matrix3<f64>,
     y: &Block<f64>,
 ) -> PointLinearization {
-    rhs_linearized_inline(site, lin, Rk, y)
-}
-
-/// [`rhs_linearized`] always inlined, so that in [`interval_jacobian_avx2`] it is compiled
-/// for AVX2 too (the same operations in the same order).
-#[inline(always)]
-fn rhs_linearized_inline(site: &Site, lin: &Linearization, Rk: &Matrix3<f64>, y: &Block<f64>) -> PointLinearization {
     let theta: Vector3<f64> = y.fixed_rows::<3>(THETA).into();
     let v = site.strain(&y.fixed_rows::<3>(V).into());
     let u: Vector3<f64> = y.fixed_rows::<3>(U).into();
@@ -515,7 +511,7 @@ fn interval_jacobian_kernel(
 /// baseline there), with each entry's sum in the order of nalgebra's product (the k = 0
 /// term, then each further term added to it), so the same bits.
 #[inline(always)]
-fn midpoint_product(pm: &PointLinearization, dYm: &SMatrix<f64, 9, 18>) -> SMatrix<f64, 12, 18> {
+pub(super) fn midpoint_product(pm: &PointLinearization, dYm: &SMatrix<f64, 9, 18>) -> SMatrix<f64, 12, 18> {
     let f_y = pm.f_y.as_slice(); // column-major, 12 x 12
     let mut dFm = SMatrix::<f64, 12, 18>::zeros();
     for (j, (col, dy)) in dFm

@@ -30,30 +30,31 @@ pub(crate) fn solution(
 /// (N) at node k, and the node rates are those of eq. 13 with friction there
 /// ([`friction::rates`]), each tendon with friction at its motion's sign, or, when
 /// `multipliers` is given, at the friction multiplier `multipliers[k][j]` of the j-th
-/// tendon with friction at node k (a stick/slip history).
+/// tendon with friction at node k (a stick/slip history); `rates`, when given, are those
+/// node rates evaluated already (the error estimate's, at the same states and tensions).
 pub(crate) fn solution_with_tensions(
     model: &Model,
     states: &[State],
     segment_ends: &[f64],
-    profile: &[Vec<f64>],
-    multipliers: Option<&[Vec<f64>]>,
+    (profile, multipliers): (&[Vec<f64>], Option<&[Vec<f64>]>),
+    rates: Option<&[Vector6<f64>]>,
     report: SolveReport,
 ) -> Result<Solution> {
     build(
         model,
         states,
         segment_ends,
-        Along::Varying(profile, multipliers),
+        Along::Varying(profile, multipliers, rates),
         report,
     )
 }
 
 /// The tensions along the tendons: constant (the model's), with the node rates when known,
 /// or given at every node (with the friction multipliers at every node, if not the
-/// motions' signs).
+/// motions' signs, and the node rates when known).
 enum Along<'a> {
     Constant(Option<&'a [Vector6<f64>]>),
-    Varying(&'a [Vec<f64>], Option<&'a [Vec<f64>]>),
+    Varying(&'a [Vec<f64>], Option<&'a [Vec<f64>]>, Option<&'a [Vector6<f64>]>),
 }
 
 /// The nodes of a solution with constant tensions (what [`solution`] builds before the
@@ -97,7 +98,7 @@ fn build(model: &Model, states: &[State], segment_ends: &[f64], along: Along, re
                 .iter()
                 .map(|&k| match along {
                     Along::Constant(_) => model.tensions[i],
-                    Along::Varying(profile, _) => profile[k][i],
+                    Along::Varying(profile, _, _) => profile[k][i],
                 })
                 .collect::<Vec<f64>>(),
         );
@@ -106,7 +107,7 @@ fn build(model: &Model, states: &[State], segment_ends: &[f64], along: Along, re
     for (state, tensions) in tendons.iter_mut().zip(&tendon_tensions) {
         state.delivered_tension = tensions.last().copied().unwrap_or(state.tension);
     }
-    if let Along::Varying(profile, _) = along {
+    if let Along::Varying(profile, _, _) = along {
         // An elastic tendon with friction stretches by its varying tension: the integral of
         // tau(s) / (E_t A_t) over its reference path, plus its free length at the base
         // tension (docs/friction.md); constant tension gives the compliance of tendon_states.
@@ -144,7 +145,8 @@ fn node_list(model: &Model, states: &[State], segment_ends: &[f64], along: &Alon
         let rates = match along {
             Along::Constant(Some(r)) => r[k],
             Along::Constant(None) => linearize::rates(model, &site, segment_ends[k], &R, &v, &u)?,
-            Along::Varying(profile, multipliers) => {
+            Along::Varying(_, _, Some(r)) => r[k],
+            Along::Varying(profile, multipliers, None) => {
                 let (local, turning) = local.get_or_insert_with(|| (model.clone(), vec![0.0; robot.tendons.len()]));
                 local.tensions.copy_from_slice(&profile[k]);
                 let w = multipliers.map(|m| m[k].as_slice());

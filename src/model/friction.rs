@@ -205,11 +205,15 @@ fn solve(
     let x0 = point.rates();
     let tendons = &model.robot.tendons;
     let mut slips = Vec::with_capacity(slipping.len());
-    for (i, tension, rp) in model.distributed_tendons(site.s, segment_end) {
+    for (c, (i, tension, rp)) in model.distributed_tendons(site.s, segment_end).enumerate() {
         let (Some(friction), Some(slot)) = (tendons[i].active_friction(), slipping.iter().position(|&j| j == i)) else {
             continue;
         };
-        let tp = TendonPoint::new(i, tension, &rp, site, v, u)?;
+        // The tendon as assembling M evaluated it (the same inputs), else evaluated here.
+        let tp = match point.tendon(c) {
+            Some(tp) => *tp,
+            None => TendonPoint::new(i, tension, &rp, site, v, u)?,
+        };
         let m = tp.r.cross(&tp.t);
         let e = Vector6::new(tp.t[0], tp.t[1], tp.t[2], m[0], m[1], m[2]);
         let mut row = e.transpose();

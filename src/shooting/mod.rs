@@ -200,7 +200,7 @@ pub fn solve(robot: &Robot, options: &Options) -> Result<Solution> {
             &mut report,
         )?;
         report.timings.total = start.elapsed();
-        return nodes::solution_with_tensions(&model, &traj, &ends, &profile, None, report);
+        return nodes::solution_with_tensions(&model, &traj, &ends, (&profile, None), None, report);
     }
     report.timings.total = start.elapsed();
     nodes::solution(&model, &trajectory, &ends, None, report)

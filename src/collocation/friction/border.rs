@@ -17,7 +17,6 @@ impl Capstan<'_> {
     /// `x` (its last evaluation), and the termination rows' columns.
     pub(super) fn read_border(&mut self, x: &[State]) -> Result<(), Termination> {
         self.load(Point::Current);
-        let m = self.z.len();
         let count = self.offsets.len();
         self.psi_z.fill(0.0);
         self.stairs.ready = false;
@@ -37,8 +36,8 @@ impl Capstan<'_> {
                     }
                     for l in 0..count {
                         for (side, node) in [(0, k), (1, k + 1)] {
-                            if let Some(u) = unknown(&self.offsets, &profile.spans, l, node) {
-                                self.psi_z[row * m + u] += lin.psi_z[(j, side * count + l)];
+                            if unknown(&self.offsets, &profile.spans, l, node).is_some() {
+                                self.psi_z[(row * 2 + side) * count + l] += lin.psi_z[(j, side * count + l)];
                             }
                         }
                     }
@@ -72,7 +71,6 @@ impl Capstan<'_> {
         let nodes = self.system.mesh.nodes.len();
         let links = nodes - 1;
         let count = self.offsets.len();
-        let m = self.z.len();
         let tip_start = BASE_ENTRIES + links * LINK_ENTRIES;
         let mut stairs = std::mem::replace(&mut self.stairs, Staircase::new(&[0]));
         let ok = stairs.factor(|block, out| match block {
@@ -126,10 +124,10 @@ impl Capstan<'_> {
                     }
                     for l in 0..count {
                         for side in 0..2 {
-                            if let (Some(c), Some(u)) =
+                            if let (Some(c), Some(_)) =
                                 (z_column(side, l), unknown(&self.offsets, &profile.spans, l, k + side))
                             {
-                                row[c] += self.psi_z[global * m + u];
+                                row[c] += self.psi_z[(global * 2 + side) * count + l];
                             }
                         }
                     }

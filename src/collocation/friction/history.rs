@@ -417,7 +417,7 @@ fn solve_on(robot: &Robot, options: &Options, carried: &mut Carried) -> Result<(
     report.nonzeros = unknowns::nonzeros(&system.mesh);
     report.timings.total = start.elapsed();
     let ends = pipeline::segment_ends(&system.mesh);
-    let solution = nodes::solution_with_tensions(&model, &x, &ends, &tensions, Some(&multipliers), report)?;
+    let solution = nodes::solution_with_tensions(&model, &x, &ends, (&tensions, Some(&multipliers)), None, report)?;
     let mut zones = Vec::with_capacity(grips.len());
     let mut next = grips.clone();
     let length = robot.length();

@@ -17,7 +17,8 @@
 #![allow(non_snake_case)]
 
 use super::super::residual::{
-    Block, EndColumns, IntervalSites, QuarterSites, end_points, rhs_from_rates, rhs_linearized, scale_rows,
+    Block, EndColumns, IntervalSites, QuarterSites, end_points, midpoint_product, rhs_from_rates,
+    rhs_linearized_inline, scale_rows,
 };
 use super::super::unknowns::THETA;
 use super::grip::Stuck;
@@ -123,6 +124,8 @@ fn interval_at(
     let derivatives = jac.is_some();
     let la = profile.start_point(k, &sites.start, segment_end, a, &za, w, derivatives)?;
     let lb = profile.point(&sites.end, segment_end, &b.R, (&b.v, &b.u), &zb, w, derivatives)?;
+    profile.keep_node(k, segment_end, a, (&za, w), &la);
+    profile.keep_node(k + 1, segment_end, b, (&zb, w), &lb);
     // F at a point from its rates; with derivatives also its linearization (a residual
     // needs only the value, the same arithmetic as the linearization's).
     let value = |site: &Site, lin: &FrictionLinearization, y: &Block<f64>| {
@@ -131,8 +134,8 @@ fn interval_at(
     };
     let ends = derivatives.then(|| {
         (
-            rhs_linearized(&sites.start, &la.lin, &a.R, &y0),
-            rhs_linearized(&sites.end, &lb.lin, &a.R, &y1),
+            rhs_linearized_inline(&sites.start, &la.lin, &a.R, &y0),
+            rhs_linearized_inline(&sites.end, &lb.lin, &a.R, &y1),
         )
     });
     let (f0, f1) = match &ends {
@@ -147,7 +150,7 @@ fn interval_at(
     let (vm, um): (Vector3<f64>, Vector3<f64>) = (ym.fixed_rows::<3>(6).into(), ym.fixed_rows::<3>(9).into());
     let Rm = a.R * so3::exp(&theta_m);
     let lm = profile.point(&sites.mid, segment_end, &Rm, (&vm, &um), &zm, w, derivatives)?;
-    let pm = derivatives.then(|| rhs_linearized(&sites.mid, &lm.lin, &a.R, &ym));
+    let pm = derivatives.then(|| rhs_linearized_inline(&sites.mid, &lm.lin, &a.R, &ym));
     let fm = pm
         .as_ref()
         .map_or_else(|| rhs_from_rates(&sites.mid, &Rm, &ym, &lm.lin.rates), |pm| pm.f);
@@ -223,11 +226,8 @@ fn interval_at(
             .copy_from(&lm.d_turning[j].fixed_columns::<3>(3));
         (row, d_phi * Em.transpose())
     };
-    let mut dFm = pm.f_y.fixed_columns::<9>(3) * dYm;
-    {
-        let mut frame = dFm.fixed_columns_mut::<3>(0);
-        frame += pm.f_frame;
-    }
+    // The frictionless midpoint's product (the same sums in the same order as nalgebra's).
+    let mut dFm = midpoint_product(&pm, &dYm);
     let rates_z = |l: &FrictionLinearization, j: usize| {
         let mut col = Block::<f64>::zeros();
         col.fixed_rows_mut::<6>(6).copy_from(&l.d_log_tension[j]);
@@ -336,21 +336,38 @@ pub(crate) fn interval_order6(
     let (y0, y1) = end_points(a, b);
     let w = profile.multipliers(k);
     let w = w.as_deref();
-    // F and kappa~ at a local state (y, z) of the interval.
-    let stage = |site: &Site, y: &Block<f64>, z: &[f64]| -> Result<(Block<f64>, Vec<f64>)> {
+    // F and kappa~ at a local state (y, z) of the interval; at a node (`node`: its index
+    // and state), eq. 13 with friction at the node's own state, taken from the last pass
+    // that evaluated it there when it has the same inputs.
+    let stage = |site: &Site, y: &Block<f64>, z: &[f64], node: Option<(usize, &State)>| {
         let theta: Vector3<f64> = y.fixed_rows::<3>(THETA).into();
         let (v, u): (Vector3<f64>, Vector3<f64>) = (y.fixed_rows::<3>(6).into(), y.fixed_rows::<3>(9).into());
         let R = a.R * so3::exp(&theta);
-        let lin = profile.point(site, segment_end, &R, (&v, &u), z, w, false)?;
+        let mut turning = Vec::new();
+        let rates = match node {
+            Some((n, state)) => match profile.node_rates(n, segment_end, state, (z, w), &mut turning) {
+                Some(rates) => rates,
+                None => {
+                    let lin = profile.point(site, segment_end, &state.R, (&state.v, &state.u), z, w, false)?;
+                    turning = lin.turning;
+                    lin.lin.rates
+                }
+            },
+            None => {
+                let lin = profile.point(site, segment_end, &R, (&v, &u), z, w, false)?;
+                turning = lin.turning;
+                lin.lin.rates
+            }
+        };
         let mut f = Block::zeros();
         f.fixed_rows_mut::<3>(0).copy_from(&(R * v));
         f.fixed_rows_mut::<3>(THETA)
             .copy_from(&(so3::right_jacobian_inv(&theta) * u));
-        f.fixed_rows_mut::<6>(6).copy_from(&lin.lin.rates);
-        Ok((f, lin.turning))
+        f.fixed_rows_mut::<6>(6).copy_from(&rates);
+        Ok::<_, crate::Error>((f, turning))
     };
-    let (f0, k0) = stage(&sites.start, &y0, &za)?;
-    let (f1, k1) = stage(&sites.end, &y1, &zb)?;
+    let (f0, k0) = stage(&sites.start, &y0, &za, Some((k, a)))?;
+    let (f1, k1) = stage(&sites.end, &y1, &zb, Some((k + 1, b)))?;
     let combine = |c0: f64, c1: f64, d0: f64, d1: f64| {
         let y = (y0 * c0 + y1 * c1) / 32.0 + (f0 * d0 + f1 * d1) * (h / 64.0);
         let z: Vec<f64> = (0..count)
@@ -360,13 +377,13 @@ pub(crate) fn interval_order6(
     };
     let (y_q, z_q) = combine(27.0, 5.0, 9.0, -3.0);
     let (y_tq, z_tq) = combine(5.0, 27.0, 3.0, -9.0);
-    let (f_q, k_q) = stage(&quarters.quarter, &y_q, &z_q)?;
-    let (f_tq, k_tq) = stage(&quarters.three_quarters, &y_tq, &z_tq)?;
+    let (f_q, k_q) = stage(&quarters.quarter, &y_q, &z_q, None)?;
+    let (f_tq, k_tq) = stage(&quarters.three_quarters, &y_tq, &z_tq, None)?;
     let y_m = (y0 + y1) * 0.5 + ((f1 - f0) * (5.0 / 24.0) + (f_q - f_tq) * (2.0 / 3.0)) * h;
     let z_m: Vec<f64> = (0..count)
         .map(|j| 0.5 * (za[j] + zb[j]) + ((k1[j] - k0[j]) * (5.0 / 24.0) + (k_q[j] - k_tq[j]) * (2.0 / 3.0)) * h)
         .collect();
-    let (f_m, k_m) = stage(&sites.mid, &y_m, &z_m)?;
+    let (f_m, k_m) = stage(&sites.mid, &y_m, &z_m, None)?;
     let quadrature = ((f0 + f1) * 7.0 + (f_q + f_tq) * 32.0 + f_m * 12.0) * (h / 90.0);
     let psi: Vec<f64> = (0..count)
         .map(|j| {
@@ -504,5 +521,55 @@ mod tests {
                 }
             }
         }
+    }
+
+    /// The order-6 rows at a node take eq. 13 with friction from the last link evaluation
+    /// there only when its inputs are the same: after a residual pass they are bitwise the
+    /// rows of a profile that kept nothing, and after the log tensions moved they are those
+    /// of the moved profile, not the kept values (case H with friction on its helix).
+    #[test]
+    fn order6_rows_reuse_node_evaluations_only_at_the_same_inputs() {
+        let mut robot = cases::case_h();
+        robot.tendons[4].friction = Some(Friction::pull(0.3));
+        let solution = crate::solve(&robot, &crate::collocation::Options::fixed(8)).unwrap();
+        let model = Model::new(&robot);
+        let mesh = Mesh::from_points(&robot, &solution.nodes.iter().map(|n| n.s).collect::<Vec<_>>()).unwrap();
+        let mut profile = Profile::new(&model, &mesh);
+        let x: Vec<State> = solution.nodes.iter().map(|n| n.state()).collect();
+        for z in &mut profile.z {
+            for (n, value) in z.iter_mut().enumerate() {
+                *value = -0.02 * n as f64;
+            }
+        }
+        let length = robot.length();
+        let k = 3;
+        let (s0, s1) = (x[k].s, x[k + 1].s);
+        let h = s1 - s0;
+        let sites = IntervalSites {
+            start: model.site(s0),
+            mid: model.site(0.5 * (s0 + s1)),
+            end: model.site(s1),
+        };
+        let quarters = QuarterSites {
+            quarter: model.site(s0 + 0.25 * h),
+            three_quarters: model.site(s0 + 0.75 * h),
+        };
+        let seg = mesh.nodes[k].segment_end;
+        let order6 = |p: &Profile| interval_order6(p, length, k, &sites, &quarters, seg, &x[k], &x[k + 1]).unwrap();
+        // The residual pass keeps both nodes' evaluations.
+        interval(&profile, length, k, &sites, seg, &x[k], &x[k + 1], None).unwrap();
+        let (kept, kept_psi, kept_a, kept_b) = order6(&profile);
+        let (fresh, fresh_psi, fresh_a, fresh_b) = order6(&profile.clone_z());
+        // Bit for bit: the kept values are the evaluation at the same inputs.
+        assert_eq!((kept, kept_psi, kept_a, kept_b), (fresh, fresh_psi, fresh_a, fresh_b));
+        // Moved log tensions at node b: its kept evaluation no longer applies.
+        for z in &mut profile.z {
+            z[k + 1] -= 0.05;
+        }
+        let (moved, moved_psi, _, moved_b) = order6(&profile);
+        let (exact, exact_psi, _, exact_b) = order6(&profile.clone_z());
+        assert_eq!((moved, moved_psi, moved_b), (exact, exact_psi, exact_b));
+        // And the move matters: the kept node-b rates would have given other rows.
+        assert_ne!(moved_b, kept_b);
     }
 }

@@ -95,7 +95,9 @@ pub(crate) struct Capstan<'r> {
     small_rhs: Vec<f64>,
     /// psi_x: each row's 24 entries over the unknowns of its link's two nodes.
     psi_x: Vec<[f64; 2 * NODE]>,
-    /// psi_z, dense, row major.
+    /// psi_z by row: row r's derivatives in the log tensions of its link's two nodes, slip
+    /// l's at node k at `r * 2c + l` and at node k + 1 at `r * 2c + c + l` (c slips; psi_z
+    /// has no other entries). 0 where that log tension is no unknown (the base).
     psi_z: Vec<f64>,
     /// The border rows of the solve in hand (psi, or the estimate's difference).
     rows_in: Vec<f64>,
@@ -137,7 +139,7 @@ impl<'r> Capstan<'r> {
             small_matrix: vec![0.0; profile.len() * profile.len()],
             small_rhs: vec![0.0; profile.len()],
             psi_x: vec![[0.0; 2 * NODE]; m],
-            psi_z: vec![0.0; m * m],
+            psi_z: vec![0.0; m * 2 * profile.len()],
             rows_in: vec![0.0; m],
             stairs: Staircase::new(&extra),
             node_slips,
@@ -221,7 +223,6 @@ impl<'r> Capstan<'r> {
         let Some(profile) = self.system.friction.as_ref() else {
             return true;
         };
-        let m = self.z.len();
         let count = self.offsets.len();
         let last = profile.spans.iter().copied().max().unwrap_or(0);
         for k in 0..last {
@@ -230,16 +231,17 @@ impl<'r> Capstan<'r> {
             let (matrix, rhs) = (&mut self.small_matrix, &mut self.small_rhs);
             for (a, &j) in on.iter().enumerate() {
                 let row = self.offsets[j] + k;
+                let psi_z = &self.psi_z[row * 2 * count..(row + 1) * 2 * count];
                 let mut value = r[row];
-                for l in 0..count {
+                for (l, d) in psi_z[..count].iter().enumerate() {
                     if let Some(u) = unknown(&self.offsets, &profile.spans, l, k) {
-                        value -= self.psi_z[row * m + u] * dz[u];
+                        value -= d * dz[u];
                     }
                 }
                 rhs[a] = value;
+                // Node k + 1's log tension of slip l (on link k: an unknown).
                 for (b, &l) in on.iter().enumerate() {
-                    let u = self.offsets[l] + k;
-                    matrix[a * size + b] = self.psi_z[row * m + u];
+                    matrix[a * size + b] = psi_z[count + l];
                 }
             }
             if !solve_dense(&mut matrix[..size * size], &mut rhs[..size], size) {
@@ -315,8 +317,9 @@ fn estimate_with_friction(
 }
 
 /// Solves a robot with tendons with friction (validated, with `options` validated): the
-/// frictionless robot first (the standard pipeline, which also picks the first mesh), then
-/// [`refine_with_friction`] from its solution and constant tensions.
+/// frictionless robot first ([`pipeline::solve_start`]: its equilibrium choice on the first
+/// mesh, which also picks the mesh to start on), then [`refine_with_friction`] from its
+/// states and constant tensions.
 ///
 /// # Errors
 /// As [`super::solve`].
@@ -326,16 +329,15 @@ pub(super) fn solve(robot: &Robot, options: &Options, warm: Option<&Solution>, c
     for t in &mut smooth.tendons {
         t.friction = None;
     }
-    // Without the final mesh's verdict: the answer with friction reports `unknown`.
     let first = pipeline::solve_start(&smooth, options, warm, cache)?;
-    // Its Newton workspace, on the mesh Newton with friction starts on, serves that Newton
-    // (through the thread's spare workspaces, where it goes back afterwards).
+    // Its Newton workspace, on the mesh Newton with friction starts on when the first mesh
+    // is kept, serves that Newton (through the thread's spare workspaces, where it goes back
+    // afterwards).
     if let Some(c) = cache.take() {
         workspace::keep(c.mesh, c.solver, c.workspace);
     }
     // The counts and timings of the frictionless solve are part of this one.
-    let report = first.report.clone();
-    refine_with_friction(robot, options, &first, None, report, start)
+    refine_with_friction(robot, options, (first.mesh, first.x), None, first.report, start)
 }
 
 /// Solves a robot with friction (validated, with `options` validated) from `near`, the
@@ -365,10 +367,12 @@ fn solve_near(robot: &Robot, options: &Options, near: &Solution) -> Result<Solut
     let mut report = SolveReport::new(Method::Collocation);
     report.path = near.report.path.clone();
     report.notes = near.report.notes.clone();
-    refine_with_friction(robot, options, near, Some((s, z)), report, start)
+    let mesh = Mesh::from_points(robot, &s)?;
+    let x = interpolate(&Model::new(robot), near, &mesh);
+    refine_with_friction(robot, options, (mesh, x), Some((s, z)), report, start)
 }
 
-/// On the mesh of `from`'s nodes and from its shape, Newton bordered by the log tensions
+/// On the mesh and from the node states of `from`, Newton bordered by the log tensions
 /// ([`Capstan`]) from `previous` (node arc lengths and log tensions per slip, interpolated;
 /// the capstan start of [`start`] when None), its error estimate ([`estimate_with_friction`]) and, with a
 /// tolerance, re-meshing until the tip's estimate and the tension profile's (relative,
@@ -380,14 +384,12 @@ fn solve_near(robot: &Robot, options: &Options, near: &Solution) -> Result<Solut
 fn refine_with_friction(
     robot: &Robot,
     options: &Options,
-    from: &Solution,
+    from: (Mesh, Vec<State>),
     mut previous: Option<(Vec<f64>, Vec<Vec<f64>>)>,
     mut report: SolveReport,
     start: Instant,
 ) -> Result<Solution> {
-    let points: Vec<f64> = from.nodes.iter().map(|n| n.s).collect();
-    let mut mesh = Mesh::from_points(robot, &points)?;
-    let mut x = interpolate(&Model::new(robot), from, &mesh);
+    let (mut mesh, mut x) = from;
     let settings = Settings {
         tolerance: options.residual_tolerance,
         max_iterations: options.max_iterations,
@@ -396,8 +398,10 @@ fn refine_with_friction(
     };
     let model = Model::new(robot);
     let length = robot.length();
-    // Whether the first mesh starts from the capstan start (until Newton fails from it).
+    // Whether the first mesh starts from the capstan start (until Newton fails from it),
+    // and the states it moves, for that case.
     let mut capstan = previous.is_none();
+    let plain = capstan.then(|| (mesh.clone(), x.clone()));
     // The last mesh's node arc lengths and log tensions, interpolated onto the next.
     loop {
         report.meshes += 1;
@@ -420,12 +424,14 @@ fn refine_with_friction(
         };
         let mut border = Capstan::new(system);
         let (termination, worst) = newton::run_bordered(&mut border, &mut ws, &mut x, &settings, &mut report);
-        if termination != Termination::Converged && std::mem::take(&mut capstan) {
+        if termination != Termination::Converged
+            && std::mem::take(&mut capstan)
+            && let Some((m, states)) = &plain
+        {
             // Newton failed from the capstan start: once more from the frictionless solution
             // with constant tensions, the start of earlier versions (its counts add up).
             report.meshes -= 1;
-            mesh = Mesh::from_points(robot, &points)?;
-            x = interpolate(&model, from, &mesh);
+            (mesh, x) = (m.clone(), states.clone());
             continue;
         }
         report.termination = termination;
@@ -472,9 +478,12 @@ fn refine_with_friction(
                 reason: "friction is not conservative".into(),
             };
             report.timings.total = start.elapsed();
-            return nodes::solution_with_tensions(&model, &x, &ends, &tensions, None, report);
+            // The estimate's node rates are eq. 13 with friction at the same states and tensions.
+            let rates = estimated.as_ref().map(|(c, _)| c.node_rates.as_slice());
+            return nodes::solution_with_tensions(&model, &x, &ends, (&tensions, None), rates, report);
         };
-        let guess = nodes::solution_with_tensions(&model, &x, &ends, &tensions, None, report.clone())?;
+        let rates = estimated.as_ref().map(|(c, _)| c.node_rates.as_slice());
+        let guess = nodes::solution_with_tensions(&model, &x, &ends, (&tensions, None), rates, report.clone())?;
         let s: Vec<f64> = system.mesh.nodes.iter().map(|n| n.s).collect();
         previous = Some((s, profile.z.clone()));
         x = interpolate(&model, &guess, &fine);

@@ -39,6 +39,21 @@ pub(crate) struct Profile<'a> {
     /// The last link's evaluation at its end node, which the next link's start takes
     /// instead of evaluating the same point again.
     end: RefCell<Option<KeptEnd>>,
+    /// Each node's rates and turning rates from the last link that evaluated it, which the
+    /// order-6 stages at the same node take instead of evaluating it again.
+    nodes: RefCell<Vec<NodeRates>>,
+}
+
+/// Eq. 13 with friction at a node (its rates and turning rates) and everything it was
+/// evaluated from, as [`KeptEnd`]; `state` None before the first evaluation.
+#[derive(Debug, Default)]
+struct NodeRates {
+    state: Option<State>,
+    segment_end: f64,
+    z: Vec<f64>,
+    w: Option<Vec<f64>>,
+    rates: nalgebra::Vector6<f64>,
+    turning: Vec<f64>,
 }
 
 /// Eq. 13 with friction at a link's end node and everything it was evaluated from: a
@@ -80,6 +95,7 @@ impl<'a> Profile<'a> {
             cache: RefCell::new((1..mesh.nodes.len()).map(|_| None).collect()),
             order6: RefCell::new(vec![Vec::new(); mesh.nodes.len() - 1]),
             end: RefCell::new(None),
+            nodes: RefCell::new((0..mesh.nodes.len()).map(|_| NodeRates::default()).collect()),
         }
     }
 
@@ -96,6 +112,7 @@ impl<'a> Profile<'a> {
             cache: RefCell::new(self.cache.borrow().iter().map(|_| None).collect()),
             order6: RefCell::new(vec![Vec::new(); self.z[0].len() - 1]),
             end: RefCell::new(None),
+            nodes: RefCell::new((0..self.z[0].len()).map(|_| NodeRates::default()).collect()),
         }
     }
 
@@ -247,6 +264,60 @@ impl<'a> Profile<'a> {
             derivatives,
             lin,
         });
+    }
+
+    /// Keeps the rates and turning rates of `lin`, eq. 13 with friction at node n (state
+    /// `state`, log tensions `z`, multipliers `w`, segment end `segment_end`).
+    pub(super) fn keep_node(
+        &self,
+        n: usize,
+        segment_end: f64,
+        state: &State,
+        (z, w): (&[f64], Option<&[f64]>),
+        lin: &FrictionLinearization,
+    ) {
+        let mut nodes = self.nodes.borrow_mut();
+        let Some(kept) = nodes.get_mut(n) else {
+            return;
+        };
+        kept.state = Some(*state);
+        kept.segment_end = segment_end;
+        kept.z.clear();
+        kept.z.extend_from_slice(z);
+        match (&mut kept.w, w) {
+            (Some(old), Some(w)) => {
+                old.clear();
+                old.extend_from_slice(w);
+            }
+            (old, w) => *old = w.map(<[f64]>::to_vec),
+        }
+        kept.rates = lin.lin.rates;
+        kept.turning.clear();
+        kept.turning.extend_from_slice(&lin.turning);
+    }
+
+    /// The rates (v', u') and turning rates of eq. 13 with friction at node n kept by
+    /// [`Profile::keep_node`] when it was evaluated from the same inputs, bit for bit (the
+    /// values an evaluation would give again), into `turning`; None otherwise.
+    pub(super) fn node_rates(
+        &self,
+        n: usize,
+        segment_end: f64,
+        state: &State,
+        (z, w): (&[f64], Option<&[f64]>),
+        turning: &mut Vec<f64>,
+    ) -> Option<nalgebra::Vector6<f64>> {
+        let nodes = self.nodes.borrow();
+        let kept = nodes.get(n)?;
+        let same = kept.state.as_ref() == Some(state)
+            && kept.segment_end == segment_end
+            && kept.z == z
+            && kept.w.as_deref() == w;
+        if !same {
+            return None;
+        }
+        turning.clone_from(&kept.turning);
+        Some(kept.rates)
     }
 
     /// The robot.

@@ -132,9 +132,15 @@ impl Staircase {
             };
             let rows = carried + new_rows;
             let panel = &mut self.panel[..rows * width];
-            panel.fill(0.0);
-            for r in 0..carried {
-                panel[r * width..r * width + ck].copy_from_slice(&self.carry[r * ck..(r + 1) * ck]);
+            // Zeroed row by row with the carried rows' copy: a few short stores each, where
+            // one memset of the panel (kilobytes) runs as `rep stosb`, byte by byte.
+            for (r, row) in panel.chunks_exact_mut(width).enumerate() {
+                if r < carried {
+                    row[..ck].copy_from_slice(&self.carry[r * ck..(r + 1) * ck]);
+                    row[ck..].fill(0.0);
+                } else {
+                    row.fill(0.0);
+                }
             }
             fill(block, &mut panel[carried * width..]);
             let step = &mut self.steps[k];
@@ -260,16 +266,20 @@ fn eliminate_rows<const W: usize>(panel: &mut [f64], rows: usize, pivots: usize,
         step.swaps.push(best);
         let inverse = 1.0 / pivot;
         let (top, below) = panel.split_at_mut(c + 1);
-        let prow = &top[c][c + 1..];
+        let prow = &top[c];
         let factors = &mut step.factors[c * rows + c + 1..(c + 1) * rows];
         for (row, factor) in below.iter_mut().zip(factors) {
             let f = row[c] * inverse;
             *factor = f;
             if f != 0.0 {
-                row[c] = 0.0;
-                for (x, p) in row[c + 1..].iter_mut().zip(prow) {
+                // The whole row at the compile-time width (unrolled, no remainder loop): the
+                // pivot row is 0 left of column c, so the columns left of c keep their
+                // values (0), and column c is set to 0 after; columns right of c get the
+                // same operations as a loop over them alone.
+                for (x, p) in row.iter_mut().zip(prow) {
                     *x -= f * p;
                 }
+                row[c] = 0.0;
             }
         }
     }

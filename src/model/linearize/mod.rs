@@ -398,6 +398,12 @@ impl Point {
         Ok(Point { assembled, cache })
     }
 
+    /// The c-th tendon loading the backbone here (in [`Model::distributed_tendons`]' order),
+    /// as assembling M evaluated it, if it was kept.
+    pub(crate) fn tendon(&self, c: usize) -> Option<&TendonPoint> {
+        self.cache.points().get(c)
+    }
+
     /// The rates (v', u') of eq. 13.
     pub(crate) fn rates(&self) -> Vector6<f64> {
         let x = &self.assembled.x;
