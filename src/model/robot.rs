@@ -155,8 +155,7 @@ impl Robot {
             validate_geometry(g)?;
         }
         self.rod.validate_segments()?;
-        let samples: Vec<f64> = (0..=32).map(|k| l * k as f64 / 32.0).collect();
-        for &s in &samples {
+        for s in (0..=32).map(|k| l * k as f64 / 32.0) {
             let sp = self.rod.section_at(s);
             for (name, v) in [
                 ("kse (GA, GA, EA)", sp.section.kse),
