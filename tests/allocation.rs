@@ -234,7 +234,10 @@ fn default_solves_allocate_only_their_solution() {
         }
         let guess = solver.solve(&previous).unwrap();
         let (warm, solution) = allocations_of(|| solver.solve_from(&robot, &guess).unwrap());
-        assert_eq!(solution.report.newton_steps, 0, "{name}: the warm solve takes chord steps only");
+        assert_eq!(
+            solution.report.newton_steps, 0,
+            "{name}: the warm solve takes chord steps only"
+        );
         assert_eq!(warm, solution_buffers(&solution), "{name}: a Solver's warm solve");
         println!("{name}: repeated {repeated}, Solver cold {cold}, warm {warm}; the Solution owns {owned}");
     }
@@ -258,5 +261,9 @@ fn batch_row_allocations() {
     let (count, solution) = allocations_of(|| solver.solve(&robot).unwrap());
     assert!(solution.report.error_estimate.is_some() && solution.report.stability.is_stable());
     println!("allocations of a batch row: {count}");
-    assert_eq!(count, solution_buffers(&solution), "a batch row allocates beyond its Solution");
+    assert_eq!(
+        count,
+        solution_buffers(&solution),
+        "a batch row allocates beyond its Solution"
+    );
 }

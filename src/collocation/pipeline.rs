@@ -35,7 +35,9 @@ pub(crate) fn solve_stateless(robot: &Robot, options: &Options, warm: Option<&So
     let result = solve_impl(robot, options, warm, &mut cache);
     if let Some(c) = cache {
         workspace::keep(c.mesh, c.solver, c.workspace);
-        c.last.map(spare::give);
+        if let Some(last) = c.last {
+            spare::give(last);
+        }
     }
     result
 }
@@ -273,7 +275,9 @@ pub(crate) fn solve_on_mesh(
         other => {
             if let Some(c) = other {
                 workspace::keep(c.mesh, c.solver, c.workspace);
-                c.last.map(spare::give);
+                if let Some(last) = c.last {
+                    spare::give(last);
+                }
             }
             workspace::spare(&mesh, options.linear_solver).map(|(kept, ws)| (ws, kept, None))
         }

@@ -58,7 +58,8 @@ enum Along<'a> {
 }
 
 /// The nodes of a solution with constant tensions (what [`solution`] builds before the
-/// tendon paths and lengths): enough for a dense evaluation, as the next mesh's guess needs.
+/// tendon paths and lengths): enough for a dense evaluation, as the next mesh's guess needs;
+/// in a buffer the thread kept ([`spare`]), for the caller to give back.
 pub(crate) fn nodes(
     model: &Model,
     states: &[State],
