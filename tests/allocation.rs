@@ -205,10 +205,17 @@ fn default_solves_allocate_only_their_solution() {
     // same thread, a Solver's cold solve after others (a batch row), and a Solver's warm
     // solve from its last solution each allocate exactly the buffers the returned
     // Solution owns (15 for these five-tendon robots; 41 to 64 before 2026-12-06's cuts).
+    // The last robot has breakpoints: two tendons end at 0.6 L (two segments, a jump).
+    let mut two_sections = tdcr::cases::prototype();
+    let length = two_sections.length();
+    for i in [0, 2] {
+        two_sections.tendons[i].termination = Some(0.6 * length);
+    }
     for (name, robot) in [
         ("S", tdcr::cases::case_s()),
         ("H", tdcr::cases::case_h()),
         ("prototype", tdcr::cases::prototype()),
+        ("two sections", two_sections),
     ] {
         let options = tdcr::collocation::Options::default();
         for _ in 0..WARM_UP {

@@ -43,8 +43,10 @@ impl Mesh {
         }
         let length = robot.length();
         let mut points = spare::take(intervals + 1);
+        let mut breaks = spare::take(robot.tendons.len());
+        robot.breakpoints_into(&mut breaks);
         let mut start = 0.0;
-        for end in robot.breakpoints().into_iter().chain(std::iter::once(length)) {
+        for &end in breaks.iter().chain(std::iter::once(&length)) {
             // The share of the intervals between two breakpoints; on a rod so long that
             // `intervals * length` overflows, the same share computed the other way round
             // (which would change the last bit of ordinary meshes, so only then).
@@ -61,6 +63,7 @@ impl Mesh {
         points.push(length);
         let mesh = Self::from_points(robot, &points);
         spare::give(points);
+        spare::give(breaks);
         mesh
     }
 
@@ -81,7 +84,8 @@ impl Mesh {
                 "give mesh points on the rod",
             ));
         }
-        let breaks = robot.breakpoints();
+        let mut breaks = spare::take(robot.tendons.len());
+        robot.breakpoints_into(&mut breaks);
         let mut s = spare::take(points.len() + 2 + breaks.len());
         s.extend(
             points
@@ -106,6 +110,7 @@ impl Mesh {
             }
         }
         spare::give(s);
+        spare::give(breaks);
         Ok(Mesh { nodes })
     }
 

@@ -194,7 +194,8 @@ fn tendon_states(model: &Model, nodes: &[Node]) -> Vec<TendonState> {
     let mut s = spare::take(nodes.len());
     s.extend(nodes.iter().map(|n| n.s));
     let l = robot.length();
-    let breakpoints = robot.breakpoints();
+    let mut breakpoints = spare::take(robot.tendons.len());
+    robot.breakpoints_into(&mut breakpoints);
     // The quadrature depends only on the nodes and the tendon's end: kept by the thread.
     let states = robot
         .tendons
@@ -226,6 +227,7 @@ fn tendon_states(model: &Model, nodes: &[Node]) -> Vec<TendonState> {
         })
         .collect();
     spare::give(s);
+    spare::give(breakpoints);
     states
 }
 
