@@ -312,7 +312,20 @@ pub(crate) fn solve_on_mesh(
         report.timings.estimate += t.elapsed();
         c
     });
-    let (cached_mesh, mut last) = kept.unwrap_or_else(|| (system.mesh.clone(), None));
+    // A load path that re-meshed left a system and workspace of another mesh: then the
+    // cache gets that mesh, not the kept one.
+    let (cached_mesh, mut last) = match kept {
+        Some((kept_mesh, last)) if kept_mesh == system.mesh => (kept_mesh, last),
+        other => {
+            if let Some((kept_mesh, last)) = other {
+                kept_mesh.release();
+                if let Some(last) = last {
+                    spare::give(last);
+                }
+            }
+            (system.mesh.clone(), None)
+        }
+    };
     match (result.as_ref(), last.as_mut()) {
         (Ok(x), Some(last)) => last.clone_from(x),
         (Ok(x), None) => last = Some(spare::copy(x)),
