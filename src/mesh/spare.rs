@@ -14,9 +14,10 @@ use crate::solution::{Node, State};
 use nalgebra::Vector6;
 use std::cell::RefCell;
 
-/// Buffers of one kind a thread keeps: more than a solve holds at once (a mesh's states,
-/// the equilibrium choice's copy and the next mesh's guess; five kinds of per-node scalars
-/// at most).
+/// Buffers of one kind a thread keeps: more than a solve holds at once (three of node
+/// states: a `Solver`'s last states, Newton's iterate and the equilibrium choice's start or
+/// the next mesh's guess; about six of scalars: the model's tensions, the segment ends, the
+/// breakpoints, a residual's copy, the estimate's defect and interval errors).
 const SHELF: usize = 8;
 
 /// The kept buffers of every kind, each list at most [`SHELF`] long.
