@@ -303,6 +303,9 @@ impl PathTaken {
     }
 }
 
+/// The reason of a report's stability before a verdict is assessed ([`SolveReport::new`]).
+pub(crate) const NOT_ASSESSED: &str = "not assessed";
+
 /// What a solve did. Filled by both solvers.
 #[derive(Clone, Debug, PartialEq)]
 pub struct SolveReport {
@@ -357,6 +360,12 @@ pub struct SolveReport {
 impl SolveReport {
     /// An empty report for `method`.
     pub fn new(method: Method) -> Self {
+        Self::new_in(method, NOT_ASSESSED.into())
+    }
+
+    /// [`SolveReport::new`] with the stability's reason [`NOT_ASSESSED`] in `not_assessed`
+    /// (a kept buffer that holds that text), so that no string is allocated.
+    pub(crate) fn new_in(method: Method, not_assessed: String) -> Self {
         SolveReport {
             method,
             termination: Termination::MaxIterations,
@@ -375,9 +384,7 @@ impl SolveReport {
             error_estimate: None,
             tolerance: None,
             tolerance_met: None,
-            stability: Stability::Unknown {
-                reason: "not assessed".into(),
-            },
+            stability: Stability::Unknown { reason: not_assessed },
             path: PathTaken::Direct,
             notes: Vec::new(),
         }

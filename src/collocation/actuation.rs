@@ -419,7 +419,7 @@ pub(super) fn solve(
         Some(w) => interpolate(&Model::new(&work), w, &mesh),
         None => {
             // As a tension solve; then estimated tensions are corrected on the guess.
-            let mut x0 = cold_start(&work, options, &mut mesh)?;
+            let mut x0 = cold_start(&Model::new(&work), options, &mut mesh)?;
             if estimated && options.initial_guess == InitialGuess::RigidEquilibrium {
                 correct_on_guess(&mut work, &mesh, &mut x0);
             }

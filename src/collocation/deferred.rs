@@ -17,6 +17,7 @@ use super::refine;
 use super::system::System;
 use super::unknowns;
 use crate::error::Result;
+use crate::mesh::spare;
 use crate::report::{ErrorEstimate, SolveReport};
 use crate::solution::State;
 use nalgebra::Vector6;
@@ -79,6 +80,7 @@ pub(crate) fn estimate(
     let Some(tol) = tolerance.filter(|&tol| {
         tol <= ORDER6_BELOW && system.friction.is_none() && !refine::meets(&order4.estimate, tol, length)
     }) else {
+        spare::give(defect);
         return Some(order4);
     };
     // The order-6 answer where its estimate is the smaller (on a mesh too coarse for the

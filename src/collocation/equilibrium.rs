@@ -11,7 +11,7 @@ use super::pipeline::not_converged;
 use super::system::System;
 use super::{dynamics, stability};
 use crate::error::Result;
-use crate::mesh::guess;
+use crate::mesh::{guess, spare};
 use crate::report::{PathTaken, SolveReport, Stability, Termination};
 use crate::solution::State;
 use std::time::Instant;
@@ -107,7 +107,6 @@ pub(crate) fn stability_of(
     if !exact && let Some(verdict) = ws.held_verdict() {
         return verdict;
     }
-    let s: Vec<f64> = system.mesh.nodes.iter().map(|n| n.s).collect();
     if exact || !ws.has_factors() {
         if !ws.linearize(system, x, report) {
             return Stability::Unknown {
@@ -116,12 +115,22 @@ pub(crate) fn stability_of(
         }
     } else if !ws.jacobian_at_iterate() {
         return ws
-            .verdict_at(system, x, report, |values| stability::assess(values, &s))
+            .verdict_at(system, x, report, |values| assess(values, system))
             .unwrap_or_else(|| Stability::Unknown {
                 reason: "the Jacobian at the solution is not finite".into(),
             });
     }
-    ws.verdict(|values| stability::assess(values, &s))
+    ws.verdict(|values| assess(values, system))
+}
+
+/// [`stability::assess`] of the Jacobian `values` of `system`, with the nodes' arc lengths
+/// in a buffer kept by the thread ([`spare`]).
+fn assess(values: &[f64], system: &System) -> Stability {
+    let mut s = spare::take(system.mesh.nodes.len());
+    s.extend(system.mesh.nodes.iter().map(|n| n.s));
+    let verdict = stability::assess(values, &s);
+    spare::give(s);
+    verdict
 }
 
 /// The verdict [`stability_of`] would return for the last iterate of `ws` without evaluating
@@ -295,11 +304,27 @@ pub(crate) fn choose_equilibrium(
     settings: &Settings,
     report: &mut SolveReport,
 ) -> Result<Vec<State>> {
+    let chosen = choose_from(system, ws, &x0, warm, options, settings, report);
+    // The start's buffer goes back to the thread's kept ones (Newton iterated on a copy).
+    spare::give(x0);
+    chosen
+}
+
+/// [`choose_equilibrium`] from the start `x0`.
+fn choose_from(
+    system: &mut System,
+    ws: &mut Workspace,
+    x0: &[State],
+    warm: bool,
+    options: &Options,
+    settings: &Settings,
+    report: &mut SolveReport,
+) -> Result<Vec<State>> {
     report.unknowns = system.unknowns();
     report.nonzeros = ws.nonzeros();
     report.intervals = system.mesh.intervals();
     let nearest = options.equilibrium == Equilibrium::Nearest || !options.continuation;
-    let mut x = x0.clone();
+    let mut x = spare::copy(x0);
     let (accept, worst) = direct(system, ws, &mut x, nearest, settings, report);
     let converged = report.termination == Termination::Converged;
     if accept {
@@ -315,7 +340,7 @@ pub(crate) fn choose_equilibrium(
     }
     let fallback = converged.then_some(x);
     if warm {
-        if let Ok(end) = path::follow(system, ws, path::Start::Warm(&x0), options, settings, report, None) {
+        if let Ok(end) = path::follow(system, ws, path::Start::Warm(x0), options, settings, report, None) {
             let exact = !report.history.iter().any(|i| i.fresh_jacobian);
             let verdict = stability_of(system, ws, &end.x, exact, report);
             if acceptable(system, &verdict) {
@@ -376,7 +401,7 @@ pub(crate) fn choose_equilibrium(
             let x = match fallback {
                 Some(x) => x,
                 None => {
-                    let mut x = x0;
+                    let mut x = x0.to_vec();
                     let (termination, _) = newton::run(system, ws, &mut x, settings, report);
                     report.termination = termination;
                     if termination != Termination::Converged {

@@ -13,6 +13,7 @@ use super::newton::Workspace;
 use super::system::System;
 use super::unknowns::{self, nonzeros};
 use crate::error::Result;
+use crate::mesh::spare;
 use crate::report::ErrorEstimate;
 use crate::solution::State;
 use nalgebra::Vector6;
@@ -60,12 +61,22 @@ pub(crate) fn estimate_with(
     node_rates: Option<Vec<Vector6<f64>>>,
 ) -> Result<Option<(Correction, Vec<f64>)>> {
     let n = system.unknowns();
-    let mut rhs = vec![0.0; n];
-    let mut local = vec![0.0; x.len() - 1];
+    // The buffers come from the thread's kept ones ([`spare`]; [`Correction::release`]).
+    let zeros = |len: usize| {
+        let mut buffer = spare::take(len);
+        buffer.resize(len, 0.0);
+        buffer
+    };
+    let mut rhs = zeros(n);
+    let mut local = zeros(x.len() - 1);
     let known = node_rates.as_ref().is_some_and(|r| r.len() == x.len());
     let mut node_rates = match node_rates {
         Some(r) if known => r,
-        _ => vec![Vector6::zeros(); x.len()],
+        _ => {
+            let mut rates = spare::take(x.len());
+            rates.resize(x.len(), Vector6::zeros());
+            rates
+        }
     };
     system.order6_residual_with(x, &mut rhs, &mut local, &mut node_rates, known)?;
     // The difference phi4(x) - phi6(x), not -phi6(x) alone: Newton stops at a small but
@@ -97,6 +108,15 @@ pub(crate) fn estimate_with(
     };
     let c = correction(dx, x.len(), system.model.robot.length(), local, node_rates);
     Ok(Some((c, rhs)))
+}
+
+impl Correction {
+    /// Gives the buffers of the interval errors and node rates back to the thread's kept
+    /// ones ([`spare`]) when the solve is done with them.
+    pub(crate) fn release(self) {
+        spare::give(self.local);
+        spare::give(self.node_rates);
+    }
 }
 
 /// The correction dx of `nodes` node states on a rod of `length` (m) as the error estimate:

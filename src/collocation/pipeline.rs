@@ -2,6 +2,7 @@
 //! equilibrium choice on the first mesh, refinement to the tolerance, the error estimate and
 //! the stability verdict, and the [`Solution`] built from the node states.
 
+use super::MAX_ITERATIONS;
 use super::deferred;
 use super::equilibrium::{Choose, better_start, choose_equilibrium, held_stability, near_start, stability_of};
 use super::estimate;
@@ -15,9 +16,9 @@ use super::unknowns;
 use super::workspace;
 use crate::error::Result;
 use crate::mesh::guess::{self, interpolate};
-use crate::mesh::{Mesh, nodes};
+use crate::mesh::{Mesh, nodes, spare};
 use crate::model::equations::Model;
-use crate::report::{Method, PathTaken, SolveReport, Termination};
+use crate::report::{Method, NOT_ASSESSED, PathTaken, SolveReport, Stability, Termination};
 use crate::solution::{Solution, State};
 use crate::{Error, Robot};
 use std::time::Instant;
@@ -34,6 +35,9 @@ pub(crate) fn solve_stateless(robot: &Robot, options: &Options, warm: Option<&So
     let result = solve_impl(robot, options, warm, &mut cache);
     if let Some(c) = cache {
         workspace::keep(c.mesh, c.solver, c.workspace);
+        if let Some(last) = c.last {
+            spare::give(last);
+        }
     }
     result
 }
@@ -136,8 +140,14 @@ pub(crate) fn solve_start(
 /// As [`super::solve`].
 fn solve_tensions(robot: &Robot, options: &Options, warm: Option<&Solution>, cache: &mut Cache) -> Result<Solution> {
     let start = Instant::now();
-    let mut model = Model::new(robot);
-    let mut report = SolveReport::new(Method::Collocation);
+    // The model's tensions, the report's "not assessed" and every stage's buffers come from
+    // the thread's kept ones (mesh::spare) and go back there, the workspaces from the
+    // cache or the thread's kept ones: a repeated solve allocates only what the Solution
+    // owns (tests/allocation.rs).
+    let mut model = Model::new_in(robot, spare::take(robot.tendons.len()));
+    let mut report = SolveReport::new_in(Method::Collocation, spare::note(NOT_ASSESSED));
+    // Newton's iterations are recorded without growing the history after this.
+    report.history.reserve(options.max_iterations.min(MAX_ITERATIONS));
     let (mesh, x0, reuse, choose) = begin(robot, options, warm, cache, &model, &mut report)?;
     // The first mesh reuses the factors and chooses the equilibrium; finer ones start from it.
     let mut first = Some((reuse, choose));
@@ -154,7 +164,11 @@ fn solve_tensions(robot: &Robot, options: &Options, warm: Option<&Solution>, cac
         },
     )
     .map_err(|e| timed(e, start))?;
-    let Level { mesh, x, correction } = level;
+    let Level {
+        mut mesh,
+        x,
+        correction,
+    } = level;
     report.intervals = mesh.intervals();
     report.unknowns = unknowns::unknowns(mesh.nodes.len());
     report.nonzeros = unknowns::nonzeros(&mesh);
@@ -166,18 +180,29 @@ fn solve_tensions(robot: &Robot, options: &Options, warm: Option<&Solution>, cac
         let direct = matches!(report.path, PathTaken::Direct | PathTaken::Fallback);
         let exact = !direct && !report.history.iter().any(|i| i.fresh_jacobian);
         let t = Instant::now();
-        report.stability = match held_stability(&model, &c.workspace, exact) {
+        let verdict = match held_stability(&model, &c.workspace, exact) {
             Some(verdict) => verdict,
             None => {
-                let system = System::new(model.clone(), mesh.clone());
-                stability_of(&system, &mut c.workspace, &x, exact, &mut report)
+                // The workspace is the final mesh's: its system's buffers are this one's.
+                let system = c.workspace.system(&model, mesh);
+                let verdict = stability_of(&system, &mut c.workspace, &x, exact, &mut report);
+                mesh = c.workspace.keep_system(system);
+                verdict
             }
         };
+        if let Stability::Unknown { reason } = std::mem::replace(&mut report.stability, verdict) {
+            spare::give_note(reason);
+        }
         report.timings.stability += t.elapsed();
     }
     report.timings.total = start.elapsed();
     let rates = correction.as_ref().map(|c| c.node_rates.as_slice());
-    nodes::solution(&model, &x, &segment_ends(&mesh), rates, report)
+    let ends = segment_ends(&mesh);
+    let solution = nodes::solution(&model, &x, &ends, rates, report);
+    spare::give(ends);
+    spare::give(model.tensions);
+    Level { mesh, x, correction }.release();
+    solution
 }
 
 /// The first mesh of a tension solve and the states Newton starts from on it: the warm
@@ -232,7 +257,7 @@ fn begin(
                 }
             }
         }
-        None => (cold_start(robot, options, &mut mesh)?, Choose::FromCold),
+        None => (cold_start(model, options, &mut mesh)?, Choose::FromCold),
     };
     Ok((mesh, x0, reuse, choose))
 }
@@ -261,9 +286,24 @@ pub(crate) struct Level {
     pub(crate) correction: Option<estimate::Correction>,
 }
 
-/// The end of the segment (between breakpoints) of every node, as [`nodes::solution`] wants.
+impl Level {
+    /// Gives the level's buffers (mesh, states, the estimate's) back to the thread's kept
+    /// ones ([`spare`]) when the solve is done with them.
+    pub(crate) fn release(self) {
+        self.mesh.release();
+        spare::give(self.x);
+        if let Some(c) = self.correction {
+            c.release();
+        }
+    }
+}
+
+/// The end of the segment (between breakpoints) of every node, as [`nodes::solution`] wants,
+/// in a buffer the thread kept ([`spare`]).
 pub(crate) fn segment_ends(mesh: &Mesh) -> Vec<f64> {
-    mesh.nodes.iter().map(|n| n.segment_end).collect()
+    let mut ends = spare::take(mesh.nodes.len());
+    ends.extend(mesh.nodes.iter().map(|n| n.segment_end));
+    ends
 }
 
 /// Newton on one mesh (starting with chord steps on the cached factors when
@@ -286,22 +326,26 @@ pub(crate) fn solve_on_mesh(
         reuse_factors,
         stop_when_damped: false,
     };
-    let mut system = System::new(model.clone(), mesh);
-    // The cached mesh and last states' buffers are kept for the cache this solve leaves.
-    let mut kept = None;
-    let mut workspace = match cache.take() {
-        Some(c) if c.mesh == system.mesh && c.solver == options.linear_solver => {
-            kept = Some((c.mesh, c.last));
-            c.workspace
-        }
+    // The cached mesh and last states' buffers are kept for the cache this solve leaves,
+    // and the system is built in the workspace's buffers.
+    let found = match cache.take() {
+        Some(c) if c.mesh == mesh && c.solver == options.linear_solver => Some((c.workspace, c.mesh, c.last)),
         other => {
             if let Some(c) = other {
                 workspace::keep(c.mesh, c.solver, c.workspace);
+                if let Some(last) = c.last {
+                    spare::give(last);
+                }
             }
-            match workspace::spare(&system.mesh, options.linear_solver) {
-                Some(ws) => ws,
-                None => Workspace::new(&system, options.linear_solver)?,
-            }
+            workspace::spare(&mesh, options.linear_solver).map(|(kept, ws)| (ws, kept, None))
+        }
+    };
+    let (mut system, mut workspace, kept) = match found {
+        Some((mut ws, kept_mesh, last)) => (ws.system(model, mesh), ws, Some((kept_mesh, last))),
+        None => {
+            let system = System::new(model.clone(), mesh);
+            let ws = Workspace::new(&system, options.linear_solver)?;
+            (system, ws, None)
         }
     };
     let mut result = match choose {
@@ -317,31 +361,42 @@ pub(crate) fn solve_on_mesh(
         // The workspace's residual is the one at x: Newton's last, or a linearization's
         // there (the stability verdict, a path's landing). At a tight tolerance x may become
         // the order-6 solution.
-        let phi4 = workspace.residual().to_vec();
+        let phi4 = spare::copy(workspace.residual());
         // The node rates that residual's evaluation gave, when it was Newton's (not a
         // Jacobian's): the same values the estimate would evaluate at x.
-        let rates = workspace.residual_rates().map(<[_]>::to_vec);
+        let rates = workspace.residual_rates().map(spare::copy);
         let c = deferred::estimate(&system, &mut workspace, x, &phi4, rates, options.tolerance, report);
+        spare::give(phi4);
         report.timings.estimate += t.elapsed();
         c
     });
-    let (mesh, mut last) = kept.unwrap_or_else(|| (system.mesh.clone(), None));
+    // A load path that re-meshed left a system and workspace of another mesh: then the
+    // cache gets that mesh, not the kept one.
+    let (cached_mesh, mut last) = match kept {
+        Some((kept_mesh, last)) if kept_mesh == system.mesh => (kept_mesh, last),
+        other => {
+            if let Some((kept_mesh, last)) = other {
+                kept_mesh.release();
+                if let Some(last) = last {
+                    spare::give(last);
+                }
+            }
+            (system.mesh.clone(), None)
+        }
+    };
     match (result.as_ref(), last.as_mut()) {
         (Ok(x), Some(last)) => last.clone_from(x),
-        (Ok(x), None) => last = Some(x.clone()),
+        (Ok(x), None) => last = Some(spare::copy(x)),
         (Err(_), _) => last = None,
     }
+    let mesh = workspace.keep_system(system);
     *cache = Some(Cached {
-        mesh,
+        mesh: cached_mesh,
         solver: options.linear_solver,
         workspace,
         last,
     });
-    result.map(|x| Level {
-        mesh: system.mesh,
-        x,
-        correction,
-    })
+    result.map(|x| Level { mesh, x, correction })
 }
 
 /// Newton from `x0` on a mesh after the first, warm-started from the previous level: the

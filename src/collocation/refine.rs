@@ -13,7 +13,7 @@ use super::{Cache, Level, interpolate, segment_ends};
 use crate::Error;
 use crate::error::Result;
 use crate::mesh::guess::interpolate_nodes;
-use crate::mesh::{Mesh, nodes};
+use crate::mesh::{Mesh, nodes, spare};
 use crate::model::equations::Model;
 use crate::model::robot::Robot;
 use crate::report::Termination;
@@ -86,14 +86,14 @@ pub(super) fn to_tolerance<'r>(
             return Ok(level);
         };
         // The guess needs the nodes' dense interpolant only, not tendon paths and lengths.
-        let guess = nodes::nodes(
-            model,
-            &level.x,
-            &segment_ends(&level.mesh),
-            Some(&correction.node_rates),
-        )?;
+        let ends = segment_ends(&level.mesh);
+        let guess = nodes::nodes(model, &level.x, &ends, Some(&correction.node_rates))?;
         x = interpolate_nodes(model, &guess, &fine);
         mesh = fine;
+        // The coarser level's buffers go back to the thread's kept ones.
+        spare::give(guess);
+        spare::give(ends);
+        level.release();
     }
 }
 
@@ -160,13 +160,14 @@ pub(super) fn next_mesh(
 /// proportional to e_k^exponent, spread evenly over it. Segments between breakpoints keep
 /// their end points and get at least one interval.
 fn equidistributed(robot: &Robot, mesh: &Mesh, local: &[f64], exponent: f64, target: usize) -> Result<Mesh> {
-    let weights: Vec<f64> = local.iter().map(|e| e.powf(exponent)).collect();
+    let mut weights = spare::take(local.len());
+    weights.extend(local.iter().map(|e| e.powf(exponent)));
     // No interval starves: at least 1e-3 of the largest weight (an interval whose error is
     // 1e-15 of the worst one still gets a share).
     let floor = 1e-3 * weights.iter().copied().fold(0.0, f64::max);
     let weight = |k: usize| if mesh.is_jump(k) { 0.0 } else { weights[k].max(floor) };
     let total: f64 = (0..local.len()).map(weight).sum();
-    let mut points = Vec::with_capacity(target + 1);
+    let mut points = spare::take(target + 1);
     let mut k = 0;
     while k < local.len() {
         if mesh.is_jump(k) {
@@ -200,7 +201,10 @@ fn equidistributed(robot: &Robot, mesh: &Mesh, local: &[f64], exponent: f64, tar
         }
         k = end;
     }
-    Mesh::from_points(robot, &points)
+    let fine = Mesh::from_points(robot, &points);
+    spare::give(points);
+    spare::give(weights);
+    fine
 }
 
 /// The hint of a load path that could not move to a finer mesh at `lambda`.

@@ -5,7 +5,7 @@ use super::options::Options;
 use super::refine;
 use crate::Robot;
 use crate::error::{Result, invalid};
-use crate::mesh::{Mesh, guess, resolution};
+use crate::mesh::{Mesh, guess, resolution, spare};
 use crate::model::equations::Model;
 use crate::solution::{Solution, State};
 
@@ -15,8 +15,11 @@ pub(crate) fn initial_mesh(robot: &Robot, options: &Options, warm: Option<&Solut
     match (&options.mesh, warm) {
         (Some(points), _) => Mesh::from_points(robot, points),
         (None, Some(guess)) if options.tolerance.is_some() && guess.length() == robot.length() => {
-            let points: Vec<f64> = guess.nodes.iter().map(|n| n.s).collect();
-            Mesh::from_points(robot, &points)
+            let mut points = spare::take(guess.nodes.len());
+            points.extend(guess.nodes.iter().map(|n| n.s));
+            let mesh = Mesh::from_points(robot, &points);
+            spare::give(points);
+            mesh
         }
         (None, _) => Mesh::uniform(robot, options.intervals),
     }
@@ -67,15 +70,16 @@ pub(crate) fn resolves(robot: &Robot, options: &Options, mesh: &Mesh) -> Result<
     ))
 }
 
-/// The initial guess of a cold start on `mesh`. With error control and no fixed mesh, the
-/// start moves first to a mesh that resolves the initial guess and the routings (the
-/// resolution rule), when `mesh` does not.
+/// The initial guess of a cold start on `mesh` for `model` (a robot's model as
+/// [`Model::new`] makes it: the given tensions, full load). With error control and no
+/// fixed mesh, the start moves first to a mesh that resolves the initial guess and the
+/// routings (the resolution rule), when `mesh` does not.
 ///
 /// # Errors
 /// [`crate::Error::InvalidInput`] if the finer mesh cannot be built.
-pub(crate) fn cold_start(robot: &Robot, options: &Options, mesh: &mut Mesh) -> Result<Vec<State>> {
-    let model = Model::new(robot);
-    let x0 = guess::initial(&model, &mesh.nodes, options.initial_guess);
+pub(crate) fn cold_start(model: &Model, options: &Options, mesh: &mut Mesh) -> Result<Vec<State>> {
+    let robot = model.robot;
+    let x0 = guess::initial(model, &mesh.nodes, options.initial_guess);
     if options.tolerance.is_none() || options.mesh.is_some() {
         return Ok(x0);
     }
@@ -84,6 +88,7 @@ pub(crate) fn cold_start(robot: &Robot, options: &Options, mesh: &mut Mesh) -> R
     if needed <= mesh.intervals() {
         return Ok(x0);
     }
-    *mesh = Mesh::uniform(robot, needed)?;
-    Ok(guess::initial(&model, &mesh.nodes, options.initial_guess))
+    spare::give(x0);
+    std::mem::replace(mesh, Mesh::uniform(robot, needed)?).release();
+    Ok(guess::initial(model, &mesh.nodes, options.initial_guess))
 }

@@ -64,19 +64,56 @@ pub struct System<'a> {
     pub(crate) friction: Option<Profile<'a>>,
 }
 
+/// The buffers a [`System`] fills for its mesh (the sites) and its model's tensions, which
+/// a workspace keeps between the systems of the solves on its mesh
+/// ([`System::with_buffers`], [`System::into_parts`]).
+#[derive(Default)]
+pub(crate) struct SystemBuffers {
+    tensions: Vec<f64>,
+    interval_sites: Vec<Option<IntervalSites>>,
+    node_sites: Vec<Site>,
+}
+
 impl<'a> System<'a> {
     /// The system of `model` on `mesh`.
     pub fn new(model: Model<'a>, mesh: Mesh) -> Self {
+        Self::assembled(model, mesh, SystemBuffers::default())
+    }
+
+    /// The system of a copy of `model` on `mesh`, its sites and the copy's tensions written
+    /// into `buffers` (a workspace's, [`System::into_parts`]) instead of new ones.
+    pub(crate) fn with_buffers(model: &Model<'a>, mesh: Mesh, buffers: SystemBuffers) -> Self {
+        let model = model.clone_in(buffers.tensions);
+        let buffers = SystemBuffers {
+            tensions: Vec::new(),
+            ..buffers
+        };
+        Self::assembled(model, mesh, buffers)
+    }
+
+    /// The system of `model` on `mesh`, its sites computed into `buffers`.
+    fn assembled(model: Model<'a>, mesh: Mesh, buffers: SystemBuffers) -> Self {
         let mut sys = System {
             model,
             mesh,
-            interval_sites: Vec::new(),
-            node_sites: Vec::new(),
+            interval_sites: buffers.interval_sites,
+            node_sites: buffers.node_sites,
             rate_evaluations: 0,
             friction: None,
         };
         sys.set_factors(sys.model.tension_factor, sys.model.load_factor);
         sys
+    }
+
+    /// The mesh, and the buffers of the sites and the model's tensions for a later
+    /// [`System::with_buffers`].
+    pub(crate) fn into_parts(self) -> (Mesh, SystemBuffers) {
+        let buffers = SystemBuffers {
+            tensions: self.model.tensions,
+            interval_sites: self.interval_sites,
+            node_sites: self.node_sites,
+        };
+        (self.mesh, buffers)
     }
 
     /// Changes the tension and external-load factors of the model (recomputes the sites,
@@ -98,21 +135,18 @@ impl<'a> System<'a> {
     /// Recomputes the sites from the model.
     fn refresh(&mut self) {
         let model = &self.model;
-        self.node_sites = self
-            .mesh
-            .nodes
-            .iter()
-            .map(|n| model.site_on(n.s, n.segment_end))
-            .collect();
-        self.interval_sites = (0..self.mesh.nodes.len() - 1)
-            .map(|k| {
-                (!self.mesh.is_jump(k)).then(|| IntervalSites {
-                    start: self.node_sites[k],
-                    mid: model.site(0.5 * (self.mesh.nodes[k].s + self.mesh.nodes[k + 1].s)),
-                    end: self.node_sites[k + 1],
-                })
+        self.node_sites.clear();
+        self.node_sites
+            .extend(self.mesh.nodes.iter().map(|n| model.site_on(n.s, n.segment_end)));
+        self.interval_sites.clear();
+        let node_sites = &self.node_sites;
+        self.interval_sites.extend((0..self.mesh.nodes.len() - 1).map(|k| {
+            (!self.mesh.is_jump(k)).then(|| IntervalSites {
+                start: node_sites[k],
+                mid: model.site(0.5 * (self.mesh.nodes[k].s + self.mesh.nodes[k + 1].s)),
+                end: node_sites[k + 1],
             })
-            .collect();
+        }));
         // Each interval evaluates eq. 13 at its midpoint and end, and at its start unless
         // the interval before it already did (the shared node is evaluated once).
         let mut shared = false;

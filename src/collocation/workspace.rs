@@ -5,9 +5,10 @@
 
 use super::linear::{Linear, LinearSolver};
 use super::newton::STEP_TOLERANCE;
-use super::system::System;
+use super::system::{System, SystemBuffers};
 use super::unknowns::nonzeros;
 use crate::mesh::Mesh;
+use crate::model::equations::Model;
 use crate::report::{SolveReport, Stability};
 use crate::solution::State;
 use nalgebra::Vector6;
@@ -55,12 +56,12 @@ pub(crate) fn keep(mesh: Mesh, solver: LinearSolver, workspace: Workspace) {
 
 /// A workspace this thread kept for `mesh` and `solver`, in the state of a new one (no
 /// factors, no verdict; its buffers' old contents are overwritten before they are read, as
-/// between Newton iterations), or None.
-pub(crate) fn spare(mesh: &Mesh, solver: LinearSolver) -> Option<Workspace> {
+/// between Newton iterations), with the kept copy of the mesh (equal to `mesh`), or None.
+pub(crate) fn spare(mesh: &Mesh, solver: LinearSolver) -> Option<(Mesh, Workspace)> {
     KEPT.with(|kept| {
         let mut kept = kept.borrow_mut();
         let at = kept.iter().position(|(m, s, _)| *s == solver && m == mesh)?;
-        let (_, _, mut workspace) = kept.remove(at);
+        let (mesh, _, mut workspace) = kept.remove(at);
         workspace.factored = false;
         workspace.verdict = None;
         workspace.drift = f64::INFINITY;
@@ -69,7 +70,7 @@ pub(crate) fn spare(mesh: &Mesh, solver: LinearSolver) -> Option<Workspace> {
         workspace.rates_valid = false;
         workspace.trial_rates_valid = false;
         workspace.trial.clear();
-        Some(workspace)
+        Some((mesh, workspace))
     })
 }
 
@@ -109,6 +110,9 @@ pub struct Workspace {
     /// The verdict of the linearized dynamics computed with the factors held
     /// ([`Workspace::keep_dynamics`]; cleared whenever they change).
     dynamics: Option<Stability>,
+    /// The buffers of the systems built on this mesh, kept between them
+    /// ([`Workspace::system`], [`Workspace::keep_system`]).
+    system: SystemBuffers,
 }
 
 impl Workspace {
@@ -137,7 +141,22 @@ impl Workspace {
             drift: f64::INFINITY,
             unfactored: false,
             dynamics: None,
+            system: SystemBuffers::default(),
         })
+    }
+
+    /// The system of a copy of `model` on `mesh` (this workspace's mesh), built in the
+    /// buffers the last system on it left ([`Workspace::keep_system`]).
+    pub(crate) fn system<'a>(&mut self, model: &Model<'a>, mesh: Mesh) -> System<'a> {
+        System::with_buffers(model, mesh, std::mem::take(&mut self.system))
+    }
+
+    /// Keeps the buffers of `system` (built on this workspace's mesh) for the next
+    /// [`Workspace::system`]; returns its mesh.
+    pub(crate) fn keep_system(&mut self, system: System) -> Mesh {
+        let (mesh, buffers) = system.into_parts();
+        self.system = buffers;
+        mesh
     }
 
     /// Non-zeros stored in the Jacobian.
@@ -279,8 +298,8 @@ impl Workspace {
         if self.verdict.is_none() {
             self.verdict = Some(assess(&self.values));
         }
-        self.verdict.clone().unwrap_or(Stability::Unknown {
-            reason: "not assessed".into(),
+        self.verdict.clone().unwrap_or_else(|| Stability::Unknown {
+            reason: crate::report::NOT_ASSESSED.into(),
         })
     }
 

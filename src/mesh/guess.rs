@@ -8,7 +8,7 @@
 //! linear beam theory; with no load it is the reference shape itself.
 #![allow(non_snake_case)]
 
-use crate::mesh::{Mesh, MeshNode};
+use crate::mesh::{Mesh, MeshNode, spare};
 use crate::model::equations::{Model, Site, Which};
 use crate::model::robot::RodModel;
 use crate::so3;
@@ -96,19 +96,20 @@ pub fn interpolate(model: &Model, guess: &Solution, mesh: &Mesh) -> Vec<State> {
 /// As [`interpolate`], from a solution's `nodes` alone (what the dense evaluation reads).
 pub(crate) fn interpolate_nodes(model: &Model, nodes: &[Node], mesh: &Mesh) -> Vec<State> {
     let same = nodes.len() == mesh.nodes.len() && nodes.iter().zip(&mesh.nodes).all(|(a, b)| a.s == b.s);
-    let mut states: Vec<State> = if same {
-        nodes.iter().map(Node::state).collect()
+    // In a buffer the thread kept ([`spare`]): the states of a warm start or of the next
+    // mesh's guess go back there when the solve is done with them.
+    let mut states = spare::take(mesh.nodes.len());
+    if same {
+        states.extend(nodes.iter().map(Node::state));
     } else {
-        (0..mesh.nodes.len())
-            .map(|k| {
-                let s = mesh.nodes[k].s;
-                State {
-                    s,
-                    ..crate::solution::at_limit(nodes, s, is_left(mesh, k))
-                }
-            })
-            .collect()
-    };
+        states.extend((0..mesh.nodes.len()).map(|k| {
+            let s = mesh.nodes[k].s;
+            State {
+                s,
+                ..crate::solution::at_limit(nodes, s, is_left(mesh, k))
+            }
+        }));
+    }
     if model.robot.rod_model == RodModel::Kirchhoff {
         for (k, x) in states.iter_mut().enumerate() {
             let n = if same {
@@ -246,11 +247,14 @@ fn rigid_estimate_in(model: &Model, nodes: &[MeshNode], b: &mut SweepBuffers) ->
             break;
         }
     }
-    shape
-        .iter()
-        .zip(nodes.iter().zip(strains.iter()))
-        .map(|(&(p, R), (node, &(v, u)))| State { s: node.s, p, R, v, u })
-        .collect()
+    let mut x = spare::take(nodes.len());
+    x.extend(
+        shape
+            .iter()
+            .zip(nodes.iter().zip(strains.iter()))
+            .map(|(&(p, R), (node, &(v, u)))| State { s: node.s, p, R, v, u }),
+    );
+    x
 }
 
 /// The node strains that carry the loads distal to each node on the shape of the states

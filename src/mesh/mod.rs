@@ -4,6 +4,7 @@
 pub mod guess;
 pub mod nodes;
 pub mod resolution;
+pub(crate) mod spare;
 
 use crate::Readable;
 use crate::error::{Result, invalid};
@@ -41,9 +42,11 @@ impl Mesh {
             ));
         }
         let length = robot.length();
-        let mut points = Vec::new();
+        let mut points = spare::take(intervals + 1);
+        let mut breaks = spare::take(robot.tendons.len());
+        robot.breakpoints_into(&mut breaks);
         let mut start = 0.0;
-        for end in robot.breakpoints().into_iter().chain(std::iter::once(length)) {
+        for &end in breaks.iter().chain(std::iter::once(&length)) {
             // The share of the intervals between two breakpoints; on a rod so long that
             // `intervals * length` overflows, the same share computed the other way round
             // (which would change the last bit of ordinary meshes, so only then).
@@ -58,7 +61,10 @@ impl Mesh {
             start = end;
         }
         points.push(length);
-        Self::from_points(robot, &points)
+        let mesh = Self::from_points(robot, &points);
+        spare::give(points);
+        spare::give(breaks);
+        mesh
     }
 
     /// A mesh through the given arc lengths (m), plus 0, L and every breakpoint.
@@ -78,16 +84,19 @@ impl Mesh {
                 "give mesh points on the rod",
             ));
         }
-        let breaks = robot.breakpoints();
-        let mut s: Vec<f64> = points
-            .iter()
-            .copied()
-            .chain([0.0, length])
-            .chain(breaks.iter().copied())
-            .collect();
+        let mut breaks = spare::take(robot.tendons.len());
+        robot.breakpoints_into(&mut breaks);
+        let mut s = spare::take(points.len() + 2 + breaks.len());
+        s.extend(
+            points
+                .iter()
+                .copied()
+                .chain([0.0, length])
+                .chain(breaks.iter().copied()),
+        );
         s.sort_by(f64::total_cmp);
         s.dedup();
-        let mut nodes = Vec::with_capacity(s.len() + breaks.len());
+        let mut nodes = spare::take(s.len() + breaks.len());
         let mut seg = 0;
         for &x in &s {
             let end = breaks.get(seg).copied().unwrap_or(length);
@@ -100,7 +109,15 @@ impl Mesh {
                 });
             }
         }
+        spare::give(s);
+        spare::give(breaks);
         Ok(Mesh { nodes })
+    }
+
+    /// Gives the node buffer back to this thread's kept buffers ([`spare`]), for the next
+    /// mesh built: what a solve does with a mesh it is done with.
+    pub(crate) fn release(self) {
+        spare::give(self.nodes);
     }
 
     /// Number of intervals (neighbour pairs of positive length).

@@ -4,6 +4,7 @@
 
 use crate::Robot;
 use crate::error::Result;
+use crate::mesh::spare;
 use crate::model::equations::Model;
 use crate::model::friction;
 use crate::model::length;
@@ -58,50 +59,41 @@ enum Along<'a> {
 }
 
 /// The nodes of a solution with constant tensions (what [`solution`] builds before the
-/// tendon paths and lengths): enough for a dense evaluation, as the next mesh's guess needs.
+/// tendon paths and lengths): enough for a dense evaluation, as the next mesh's guess needs;
+/// in a buffer the thread kept ([`spare`]), for the caller to give back.
 pub(crate) fn nodes(
     model: &Model,
     states: &[State],
     segment_ends: &[f64],
     rates: Option<&[Vector6<f64>]>,
 ) -> Result<Vec<Node>> {
-    node_list(model, states, segment_ends, &Along::Constant(rates))
+    let mut nodes = spare::take(states.len());
+    fill_nodes(model, states, segment_ends, &Along::Constant(rates), &mut nodes)?;
+    Ok(nodes)
 }
 
 fn build(model: &Model, states: &[State], segment_ends: &[f64], along: Along, report: SolveReport) -> Result<Solution> {
     let robot = model.robot;
     let length = robot.length();
     let nodes = node_list(model, states, segment_ends, &along)?;
-    // The nodes on each tendon's path: up to its end, one per arc length (the left limit at
-    // a breakpoint), gathered in one buffer for all tendons; the paths and tensions are then
-    // allocated once each at their final length.
-    let mut on_path = Vec::with_capacity(nodes.len());
+    // Each tendon's path and tensions are allocated once at their final length (counted
+    // first), and nothing else is.
     let (mut tendon_paths, mut tendon_tensions) = (
         Vec::with_capacity(robot.tendons.len()),
         Vec::with_capacity(robot.tendons.len()),
     );
     for (i, t) in robot.tendons.iter().enumerate() {
         let end = t.end(length);
-        let mut last_s = f64::NEG_INFINITY;
-        on_path.clear();
-        on_path.extend(
-            (0..nodes.len()).filter(|&k| nodes[k].s <= end && std::mem::replace(&mut last_s, nodes[k].s) < nodes[k].s),
-        );
-        tendon_paths.push(
-            on_path
-                .iter()
-                .map(|&k| nodes[k].p + nodes[k].R * t.routing.at(nodes[k].s, length).r)
-                .collect(),
-        );
-        tendon_tensions.push(
-            on_path
-                .iter()
-                .map(|&k| match along {
-                    Along::Constant(_) => model.tensions[i],
-                    Along::Varying(profile, _, _) => profile[k][i],
-                })
-                .collect::<Vec<f64>>(),
-        );
+        let count = on_path(&nodes, end).count();
+        let mut path = Vec::with_capacity(count);
+        path.extend(on_path(&nodes, end).map(|k| nodes[k].p + nodes[k].R * t.routing.at(nodes[k].s, length).r));
+        tendon_paths.push(path);
+        let mut tensions = Vec::with_capacity(count);
+        tensions.extend(on_path(&nodes, end).map(|k| match along {
+            Along::Constant(_) => model.tensions[i],
+            Along::Varying(profile, _, _) => profile[k][i],
+        }));
+        tendon_tensions.push(tensions);
     }
     let mut tendons = tendon_states(model, &nodes);
     for (state, tensions) in tendons.iter_mut().zip(&tendon_tensions) {
@@ -134,10 +126,29 @@ fn build(model: &Model, states: &[State], segment_ends: &[f64], along: Along, re
     })
 }
 
+/// The indices of the `nodes` on the path of a tendon that ends at `end`: up to its end, one
+/// per arc length (the left limit at a breakpoint).
+fn on_path(nodes: &[Node], end: f64) -> impl Iterator<Item = usize> + '_ {
+    let mut last_s = f64::NEG_INFINITY;
+    (0..nodes.len()).filter(move |&k| nodes[k].s <= end && std::mem::replace(&mut last_s, nodes[k].s) < nodes[k].s)
+}
+
 /// Node states with their rates (v', u') of eq. 13 and internal wrenches (n, m).
 fn node_list(model: &Model, states: &[State], segment_ends: &[f64], along: &Along) -> Result<Vec<Node>> {
-    let robot = model.robot;
     let mut nodes = Vec::with_capacity(states.len());
+    fill_nodes(model, states, segment_ends, along, &mut nodes)?;
+    Ok(nodes)
+}
+
+/// [`node_list`] appended to `nodes`.
+fn fill_nodes(
+    model: &Model,
+    states: &[State],
+    segment_ends: &[f64],
+    along: &Along,
+    nodes: &mut Vec<Node>,
+) -> Result<()> {
+    let robot = model.robot;
     // A model holding each node's tensions, made when they vary.
     let mut local: Option<(Model, Vec<f64>)> = None;
     for (k, &State { s, p, R, v, u }) in states.iter().enumerate() {
@@ -173,7 +184,7 @@ fn node_list(model: &Model, states: &[State], segment_ends: &[f64], along: &Alon
             m,
         });
     }
-    Ok(nodes)
+    Ok(())
 }
 
 /// Each tendon's tension, pull-in, lengths and slack at the solved `nodes` (docs/actuation.md):
@@ -182,26 +193,18 @@ fn node_list(model: &Model, states: &[State], segment_ends: &[f64], along: &Alon
 /// when taut).
 fn tendon_states(model: &Model, nodes: &[Node]) -> Vec<TendonState> {
     let robot = model.robot;
-    let s: Vec<f64> = nodes.iter().map(|n| n.s).collect();
+    let mut s = spare::take(nodes.len());
+    s.extend(nodes.iter().map(|n| n.s));
     let l = robot.length();
-    // The quadrature depends only on the nodes and the tendon's end: built once for the
-    // tendons that end at the same place (usually all at the tip).
-    let mut quadratures: Vec<(f64, length::NodeQuadrature)> = Vec::new();
-    let breakpoints = robot.breakpoints();
-    robot
+    let mut breakpoints = spare::take(robot.tendons.len());
+    robot.breakpoints_into(&mut breakpoints);
+    // The quadrature depends only on the nodes and the tendon's end: kept by the thread.
+    let states = robot
         .tendons
         .iter()
         .enumerate()
         .map(|(i, t)| {
-            let end = t.end(l);
-            let at = match quadratures.iter().position(|(e, _)| *e == end) {
-                Some(at) => at,
-                None => {
-                    quadratures.push((end, length::NodeQuadrature::kept(&s, end)));
-                    quadratures.len() - 1
-                }
-            };
-            let length = tendon_length(robot, i, &quadratures[at].1, &s, nodes);
+            let length = length::NodeQuadrature::with_kept(&s, t.end(l), |q| tendon_length(robot, i, q, &s, nodes));
             let reference_length = length::reference_length_on(robot, &breakpoints, i);
             let tension = model.tensions[i];
             let taken_up = reference_length - length + t.compliance(reference_length) * tension;
@@ -224,7 +227,10 @@ fn tendon_states(model: &Model, nodes: &[Node]) -> Vec<TendonState> {
                 },
             }
         })
-        .collect()
+        .collect();
+    spare::give(s);
+    spare::give(breakpoints);
+    states
 }
 
 /// The path length of tendon `i` over solved `nodes` at arc lengths `s`, by `quadrature`

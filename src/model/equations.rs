@@ -125,6 +125,33 @@ impl<'a> Model<'a> {
         }
     }
 
+    /// [`Model::new`] with the tensions written into `buffer` (its contents replaced), which
+    /// a caller that keeps buffers passes so that no new one is allocated.
+    pub(crate) fn new_in(robot: &'a Robot, mut buffer: Vec<f64>) -> Self {
+        buffer.clear();
+        buffer.extend(robot.tendons.iter().map(|t| t.tension()));
+        Model {
+            robot,
+            tensions: buffer,
+            tension_factor: 1.0,
+            load_factor: 1.0,
+            parameter: None,
+        }
+    }
+
+    /// A clone of this model with its tensions copied into `buffer` (its contents
+    /// replaced), as [`Model::new_in`].
+    pub(crate) fn clone_in(&self, mut buffer: Vec<f64>) -> Self {
+        buffer.clone_from(&self.tensions);
+        Model {
+            robot: self.robot,
+            tensions: buffer,
+            tension_factor: self.tension_factor,
+            load_factor: self.load_factor,
+            parameter: self.parameter,
+        }
+    }
+
     /// Sets `parameter` to `value` on the model, with the meaning [`Parameter::apply`] gives
     /// it on the robot: a tension in [`Model::tensions`], the load scale as both factors,
     /// any other input as [`Model::parameter`] (`youngs_modulus`, `displacement.I` and

@@ -102,13 +102,13 @@ pub(crate) fn reference_length_on(robot: &Robot, breakpoints: &[f64], i: usize) 
     value
 }
 
-/// How many node quadratures a thread keeps ([`NodeQuadrature::kept`]): the meshes of a
+/// How many node quadratures a thread keeps ([`NodeQuadrature::with_kept`]): the meshes of a
 /// solve and of its neighbours, with a few tendon ends each.
 const KEPT_QUADRATURES: usize = 8;
 
 thread_local! {
-    /// Node quadratures built on this thread, oldest first, with their nodes' arc lengths
-    /// and end.
+    /// Node quadratures built on this thread, least recently used first, with their nodes'
+    /// arc lengths and end.
     static KNOWN_QUADRATURES: RefCell<Vec<(Vec<f64>, f64, NodeQuadrature)>> = const { RefCell::new(Vec::new()) };
 }
 
@@ -283,29 +283,33 @@ impl NodeQuadrature {
         }
     }
 
-    /// [`NodeQuadrature::new`], kept per thread: the weights depend only on the nodes' arc
-    /// lengths and `end`, so the last few are kept and returned again for bit for bit the
-    /// same `s` and `end` (the solutions of one mesh: a batch of rows, a sweep, repeated
-    /// solves), a copy of the weights instead of the Lagrange weights' divisions.
-    pub(crate) fn kept(s: &[f64], end: f64) -> Self {
+    /// `f` of [`NodeQuadrature::new`], kept per thread: the weights depend only on the
+    /// nodes' arc lengths and `end`, so the last few are kept and lent again for bit for bit
+    /// the same `s` and `end` (the solutions of one mesh: a batch of rows, a sweep, repeated
+    /// solves) instead of the Lagrange weights' divisions. The kept one is taken out of the
+    /// thread's list while `f` runs (so that `f` may build others) and kept again as the most
+    /// recently used.
+    pub(crate) fn with_kept<T>(s: &[f64], end: f64, f: impl FnOnce(&NodeQuadrature) -> T) -> T {
         let same = |(ks, kend, _): &(Vec<f64>, f64, NodeQuadrature)| {
             kend.to_bits() == end.to_bits()
                 && ks.len() == s.len()
                 && ks.iter().zip(s).all(|(a, b)| a.to_bits() == b.to_bits())
         };
-        let known = KNOWN_QUADRATURES.with(|known| known.borrow().iter().find(|k| same(k)).map(|(_, _, q)| q.clone()));
-        if let Some(q) = known {
-            return q;
-        }
-        let q = NodeQuadrature::new(s, end);
+        let known = KNOWN_QUADRATURES.with(|known| {
+            let mut known = known.borrow_mut();
+            let at = known.iter().position(same)?;
+            Some(known.remove(at))
+        });
+        let entry = known.unwrap_or_else(|| (s.to_vec(), end, NodeQuadrature::new(s, end)));
+        let value = f(&entry.2);
         KNOWN_QUADRATURES.with(|known| {
             let mut known = known.borrow_mut();
-            if known.len() == KEPT_QUADRATURES {
+            if known.len() >= KEPT_QUADRATURES {
                 known.remove(0);
             }
-            known.push((s.to_vec(), end, q.clone()));
+            known.push(entry);
         });
-        q
+        value
     }
 
     /// The integral of the node values `f(k)`.
@@ -331,14 +335,20 @@ mod tests {
     fn kept_node_quadratures_are_those_of_the_same_nodes_only() {
         let s: Vec<f64> = (0..=16).map(|k| 0.2 * (k as f64 / 16.0).powf(1.3)).collect();
         let built = NodeQuadrature::new(&s, 0.15);
-        assert_eq!(NodeQuadrature::kept(&s, 0.15), built);
-        assert_eq!(NodeQuadrature::kept(&s, 0.15), built);
+        assert_eq!(NodeQuadrature::with_kept(&s, 0.15, Clone::clone), built);
+        assert_eq!(NodeQuadrature::with_kept(&s, 0.15, Clone::clone), built);
         let mut moved = s.clone();
         moved[5] = f64::from_bits(moved[5].to_bits() + 1);
-        assert_eq!(NodeQuadrature::kept(&moved, 0.15), NodeQuadrature::new(&moved, 0.15));
-        assert_ne!(NodeQuadrature::kept(&moved, 0.15), built);
-        assert_eq!(NodeQuadrature::kept(&s, 0.2), NodeQuadrature::new(&s, 0.2));
-        assert_ne!(NodeQuadrature::kept(&s, 0.2), built);
+        assert_eq!(
+            NodeQuadrature::with_kept(&moved, 0.15, Clone::clone),
+            NodeQuadrature::new(&moved, 0.15)
+        );
+        assert_ne!(NodeQuadrature::with_kept(&moved, 0.15, Clone::clone), built);
+        assert_eq!(
+            NodeQuadrature::with_kept(&s, 0.2, Clone::clone),
+            NodeQuadrature::new(&s, 0.2)
+        );
+        assert_ne!(NodeQuadrature::with_kept(&s, 0.2, Clone::clone), built);
     }
 
     #[test]

@@ -107,18 +107,26 @@ impl Robot {
     /// Interior arc lengths in (0, L) where the solution may jump (tendon terminations,
     /// point loads and the ends of the rod's segments), sorted and without repeats.
     pub fn breakpoints(&self) -> Vec<f64> {
-        let l = self.length();
-        let mut b: Vec<f64> = self
-            .tendons
-            .iter()
-            .map(|t| t.end(l))
-            .chain(self.loads.point.iter().map(|p| p.s))
-            .chain(self.rod.segment_ends())
-            .filter(|&s| s < l)
-            .collect();
-        b.sort_by(f64::total_cmp);
-        b.dedup();
+        let mut b = Vec::new();
+        self.breakpoints_into(&mut b);
         b
+    }
+
+    /// [`Robot::breakpoints`] written into `out` (its contents replaced), for a caller that
+    /// keeps the buffer.
+    pub(crate) fn breakpoints_into(&self, out: &mut Vec<f64>) {
+        let l = self.length();
+        out.clear();
+        out.extend(
+            self.tendons
+                .iter()
+                .map(|t| t.end(l))
+                .chain(self.loads.point.iter().map(|p| p.s))
+                .chain(self.rod.segment_end_points())
+                .filter(|&s| s < l),
+        );
+        out.sort_by(f64::total_cmp);
+        out.dedup();
     }
 
     /// Characteristic bending stiffness E I (N m^2) at the base, used for scaling.
@@ -155,8 +163,7 @@ impl Robot {
             validate_geometry(g)?;
         }
         self.rod.validate_segments()?;
-        let samples: Vec<f64> = (0..=32).map(|k| l * k as f64 / 32.0).collect();
-        for &s in &samples {
+        for s in (0..=32).map(|k| l * k as f64 / 32.0) {
             let sp = self.rod.section_at(s);
             for (name, v) in [
                 ("kse (GA, GA, EA)", sp.section.kse),

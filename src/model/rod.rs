@@ -220,17 +220,28 @@ impl Rod {
     /// Where the segments of a [`Rod::segmented`] rod meet (m, inside (0, L), increasing):
     /// the arc lengths where its section or precurvature may jump. Empty for other rods.
     pub fn segment_ends(&self) -> Vec<f64> {
-        let mut out: Vec<f64> = Vec::new();
-        if let Stiffness::Segments { ends, .. } = &self.stiffness {
-            out.extend(ends);
-        }
-        if let ReferenceStrains::Segments { ends, .. } = &self.reference {
-            out.extend(ends);
-        }
-        out.retain(|&s| s > 0.0 && s < self.length);
+        let mut out: Vec<f64> = self.segment_end_points().collect();
         out.sort_by(f64::total_cmp);
         out.dedup();
         out
+    }
+
+    /// The segment ends of [`Rod::segment_ends`] as the stiffness and the precurvature give
+    /// them (inside (0, L), neither sorted nor deduplicated), without a buffer.
+    pub(crate) fn segment_end_points(&self) -> impl Iterator<Item = f64> + '_ {
+        let stiffness = match &self.stiffness {
+            Stiffness::Segments { ends, .. } => &ends[..],
+            _ => &[],
+        };
+        let reference = match &self.reference {
+            ReferenceStrains::Segments { ends, .. } => &ends[..],
+            _ => &[],
+        };
+        stiffness
+            .iter()
+            .chain(reference)
+            .copied()
+            .filter(|&s| s > 0.0 && s < self.length)
     }
 
     /// Checks the segments of a rod of segments: as many sections and precurvatures as

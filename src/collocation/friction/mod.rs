@@ -419,7 +419,7 @@ fn refine_with_friction(
         }
         system.friction = Some(profile);
         let mut ws = match workspace::spare(&system.mesh, options.linear_solver) {
-            Some(ws) => ws,
+            Some((_, ws)) => ws,
             None => Workspace::new(&system, options.linear_solver)?,
         };
         let mut border = Capstan::new(system);
