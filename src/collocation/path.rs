@@ -66,9 +66,10 @@ const BIFURCATION_STEP: f64 = 1e-3;
 
 /// Whether a path whose count of unstable directions went from `counts.0` to `counts.1` over
 /// a step `h` (as the path signs it) snaps there (docs/stability.md, "Snapping from a bifurcation"): on a
-/// cold solve's path (`landing`), with the count risen, no family held, and either no
-/// switch left (`switching` false) or a step short enough to cross the bifurcation that
-/// found no stable branch.
+/// load path from rest that may leave its branch (`landing`: a cold or warm solve's, not one
+/// that keeps to its warm start's branch, [`Start::Rest`]), with the count risen, no family
+/// held, and either no switch left (`switching` false) or a step short enough to cross the
+/// bifurcation that found no stable branch.
 fn snaps_here(
     landing: bool,
     counts: (Option<usize>, Option<usize>),
@@ -172,7 +173,6 @@ pub(super) fn follow(
     let Some((mut point, mut fl)) = tangent(system, &homotopy, ws, x, 0.0, None, report) else {
         return Err(("the path's first tangent is not finite".into(), 0));
     };
-    let n = system.unknowns();
     let mut unstable = index(system, ws, report);
     let mut folds = Vec::new();
     let mut bifurcations = Vec::new();
@@ -202,7 +202,7 @@ pub(super) fn follow(
     let mut furthest = 0.0f64;
     let mut worst = 0;
     let mut trial: Vec<State> = Vec::with_capacity(system.mesh.nodes.len());
-    let mut r = vec![0.0; n];
+    let mut r = vec![0.0; system.unknowns()];
     // The states at the folds passed, with their load factors: where the path cannot be
     // followed to the end, the robot snaps from one of them ([`snap::land_from_folds`]).
     let mut fold_states: Vec<(f64, Vec<State>)> = Vec::new();
@@ -243,7 +243,8 @@ pub(super) fn follow(
                 let at_one = Point {
                     x: trial.clone(),
                     lambda: 1.0,
-                    tx: vec![0.0; n],
+                    // The unknowns of the mesh now (the path may have moved to a finer one).
+                    tx: vec![0.0; system.unknowns()],
                     tl: 1.0,
                 };
                 let held = super::corrector::correct_to(
@@ -354,7 +355,7 @@ pub(super) fn follow(
             &point,
             h,
             &fl,
-            factored_at_point,
+            false,
             settings,
             report,
             &mut r,
@@ -428,7 +429,7 @@ pub(super) fn follow(
                         furthest = furthest.max(point.lambda);
                         continue;
                     }
-                    // A symmetric, simple bifurcation on a cold solve's load path where the
+                    // A symmetric, simple bifurcation on a load path that may leave its branch where the
                     // path may not switch (it did once) or a step short enough to cross it
                     // found no stable branch: the robot snaps (docs/stability.md, "Snapping
                     // from a bifurcation").
@@ -490,7 +491,7 @@ pub(super) fn follow(
                     return Err((WARM_TURNED_BACK.into(), worst));
                 }
                 // The angle between successive tangents bounds the next step.
-                let cos = (dot(&next.tx, &point.tx) / n as f64 + next.tl * point.tl).clamp(-1.0, 1.0);
+                let cos = (dot(&next.tx, &point.tx) / point.tx.len() as f64 + next.tl * point.tl).clamp(-1.0, 1.0);
                 if h > POLISH_BELOW {
                     crawl = 0;
                 }

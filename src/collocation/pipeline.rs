@@ -60,7 +60,27 @@ pub(crate) fn solve_impl(
     if crate::model::friction::any(robot) {
         return super::friction::solve(robot, options, warm, cache);
     }
-    solve_tensions(robot, options, warm, cache, true)
+    solve_tensions(robot, options, warm, cache, true, false)
+}
+
+/// [`solve_stateless`] from `warm`, keeping to the warm start's branch
+/// ([`Choose::OnBranch`]): what a sweep's bisection solves ([`super::solve_on_branch`]).
+/// Robots with displacement inputs or friction solve as [`super::solve_from`] solves them.
+///
+/// # Errors
+/// As [`super::solve`].
+pub(crate) fn solve_on_branch(robot: &Robot, options: &Options, warm: &Solution) -> Result<Solution> {
+    if robot.has_displacement_inputs() || crate::model::friction::any(robot) {
+        return solve_stateless(robot, options, Some(warm));
+    }
+    robot.validate()?;
+    options.validate()?;
+    let mut cache = None;
+    let result = solve_tensions(robot, options, Some(warm), &mut cache, true, true);
+    if let Some(c) = cache {
+        workspace::keep(c.mesh, c.solver, c.workspace);
+    }
+    result
 }
 
 /// The frictionless start of a solve with friction (`robot` validated, without friction):
@@ -80,12 +100,13 @@ pub(crate) fn solve_start(
     if robot.has_displacement_inputs() {
         return solve_impl(robot, options, warm, cache);
     }
-    solve_tensions(robot, options, warm, cache, false)
+    solve_tensions(robot, options, warm, cache, false, false)
 }
 
 /// [`solve_impl`] for a robot (validated, with `options` validated) whose tendons are all
 /// tension-controlled and without friction; with `verdict`, the final mesh's stability
-/// verdict in the report.
+/// verdict in the report; with `on_branch`, keeping to the branch of `warm` when the solve
+/// starts from it ([`Choose::OnBranch`]).
 ///
 /// # Errors
 /// As [`super::solve`].
@@ -95,6 +116,7 @@ fn solve_tensions(
     warm: Option<&Solution>,
     cache: &mut Cache,
     verdict: bool,
+    on_branch: bool,
 ) -> Result<Solution> {
     let start = Instant::now();
     let mut model = Model::new(robot);
@@ -137,6 +159,12 @@ fn solve_tensions(
             }
         }
         None => (cold_start(robot, options, &mut mesh)?, Choose::FromCold),
+    };
+    // A solve started from the cold guess (its residual was the smaller) has no branch to
+    // keep to.
+    let choose = match choose {
+        Choose::FromWarm if on_branch => Choose::OnBranch,
+        other => other,
     };
     // The first mesh reuses the factors and chooses the equilibrium; finer ones start from it.
     let mut first = Some((reuse, choose));
@@ -248,10 +276,7 @@ pub(crate) fn solve_on_mesh(
     };
     let mut result = match choose {
         Choose::No => newton_only(&system, &mut workspace, x0, &settings, report),
-        _ => {
-            let warm = choose == Choose::FromWarm;
-            choose_equilibrium(&mut system, &mut workspace, x0, warm, options, &settings, report)
-        }
+        _ => choose_equilibrium(&mut system, &mut workspace, x0, choose, options, &settings, report),
     };
     let correction = result.as_mut().ok().and_then(|x| {
         let t = Instant::now();

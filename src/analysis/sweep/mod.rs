@@ -287,6 +287,17 @@ impl<'r> Sweep<'r> {
         }
     }
 
+    /// Solves `robot` from `warm` keeping to its branch (collocation: a load path from rest
+    /// that loses stability or cannot be followed does not snap, [`collocation::solve_on_branch`];
+    /// shooting solves as [`Sweep::solve`]): a bisection point's state on the branch of the
+    /// last point before the change.
+    fn on_branch(&self, robot: &Robot, warm: &Solution) -> Result<Solution> {
+        match &self.solver {
+            SweepSolver::Collocation(options) => collocation::solve_on_branch(robot, options, warm),
+            SweepSolver::Shooting(options) => shooting::solve(robot, options),
+        }
+    }
+
     /// Solves `robot` from `warm` (if any) with the sweep's solver.
     fn solve(&self, robot: &Robot, warm: Option<&Solution>) -> Result<Solution> {
         match (&self.solver, warm) {
