@@ -1,7 +1,8 @@
 //! The corrector of the pseudo-arclength continuation (`collocation/path.rs`): one
 //! predictor-corrector step along a path's tangent, converged on the hyperplane normal to
-//! it by chord steps with the stored factors, refreshing the Jacobian when they contract too
-//! slowly; on a family's branch with its phase condition as well (module `phase`); and the
+//! it by chord steps with the stored factors (a path's steps start from the factors at the
+//! predicted point, docs/numerics.md "Corrector"), refreshing the Jacobian when they contract
+//! too slowly; on a family's branch with its phase condition as well (module `phase`); and the
 //! polish of a point at its own lambda to the solve's tolerance.
 
 use super::homotopy::{Homotopy, Point, dot, f_lambda, max_norm, residual, tangent};

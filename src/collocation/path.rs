@@ -4,7 +4,8 @@
 //!
 //! Each step predicts along the tangent of the branch, (dx, dlambda) with
 //! J dx + F_lambda dlambda = 0, from the factors of the Jacobian at the last point, and
-//! corrects with chord steps on those factors on the bordered system
+//! corrects on the bordered system, with a Newton step at the predicted point and chord steps
+//! on its factors (module `corrector`)
 //!
 //! ```text
 //! F(x, lambda) = 0,    <t_x, x - x_pred> / n + t_lambda (lambda - lambda_pred) = 0,
