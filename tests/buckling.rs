@@ -340,9 +340,9 @@ fn a_fallback_root_is_labelled_as_one() {
         report.stability
     );
     // With two iterations the path moves to the finer mesh and reaches the buckled state
-    // (this solve panicked when the corrector's Newton step at the predicted point was first
-    // tried, 2026-12-06: the landing on the family's branch built its point with the unknowns
-    // of the path's first mesh).
+    // (this solve panicked before 2026-12-06, with either corrector, as did 4 and 8 intervals
+    // with 2 or 3 iterations at 5 and 50 P_cr: the landing on the family's branch built its
+    // point with the unknowns of the path's first mesh).
     let two = collocation::solve(
         &robot,
         &Options {
