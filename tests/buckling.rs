@@ -339,18 +339,20 @@ fn a_fallback_root_is_labelled_as_one() {
         "{}",
         report.stability
     );
-    // With two iterations the path moves to the finer mesh and reaches the buckled state
-    // (this solve panicked before 2026-12-06, with either corrector, as did 4 and 8 intervals
-    // with 2 or 3 iterations at 5 and 50 P_cr: the landing on the family's branch built its
-    // point with the unknowns of the path's first mesh).
-    let two = collocation::solve(
-        &robot,
-        &Options {
-            max_iterations: 2,
-            ..options
-        },
-    )
-    .unwrap();
-    assert!(two.report.stability.is_stable(), "{}", two.report.stability);
-    assert!(matches!(two.report.path, tdcr::PathTaken::LoadPath { .. }));
+    // With two or three iterations the path moves to the finer mesh and reaches a buckled
+    // state. These solves panicked before 2026-12-06, with either corrector (index out of
+    // bounds): the landing on the family's branch built its point with the unknowns of the
+    // path's first mesh.
+    for (ratio, intervals, max_iterations) in [(5.0, 4, 2), (5.0, 4, 3), (5.0, 8, 2), (50.0, 4, 2), (50.0, 8, 2)] {
+        let robot = column(ratio * euler_load(), 0.0);
+        let options = Options {
+            intervals,
+            max_iterations,
+            ..Default::default()
+        };
+        let s = collocation::solve(&robot, &options).unwrap();
+        let case = format!("{ratio} P_cr, {intervals} intervals, {max_iterations} iterations");
+        assert!(s.report.stability.is_stable(), "{case}: {}", s.report.stability);
+        assert!(matches!(s.report.path, tdcr::PathTaken::LoadPath { .. }), "{case}");
+    }
 }
