@@ -171,7 +171,7 @@ pub(super) fn follow(
     if !ws.linearize(system, &x, report) {
         return Err(("the Jacobian at the start of the path is singular".into(), 0));
     }
-    let Some((mut point, mut fl)) = tangent(system, &homotopy, ws, x, 0.0, None, report) else {
+    let Some((mut point, _)) = tangent(system, &homotopy, ws, x, 0.0, None, report) else {
         return Err(("the path's first tangent is not finite".into(), 0));
     };
     let mut unstable = index(system, ws, report);
@@ -254,8 +254,6 @@ pub(super) fn follow(
                     ws,
                     &at_one,
                     0.0,
-                    &fl,
-                    false,
                     settings.tolerance,
                     report,
                     &mut r,
@@ -317,7 +315,7 @@ pub(super) fn follow(
                 push(&mut record, &s.point, s.unstable, false, report);
                 switched = (s.picked && s.family.is_none()).then(|| (s.at, s.point.x.clone()));
                 (phase, family) = s.hold(system, &homotopy, ws, report);
-                (point, fl, unstable) = (s.point, s.fl, s.unstable);
+                (point, unstable) = (s.point, s.unstable);
                 (switching, polished, factored_at_point) = (false, false, true);
                 h = h1.abs().min(max_step);
                 continue;
@@ -355,8 +353,6 @@ pub(super) fn follow(
             ws,
             &point,
             h,
-            &fl,
-            false,
             settings,
             report,
             &mut r,
@@ -378,7 +374,7 @@ pub(super) fn follow(
                     Some(p) => p.tangent(system, &homotopy, ws, xc, lambda, Some(previous), report),
                     None => tangent(system, &homotopy, ws, xc, lambda, Some(previous), report),
                 };
-                let Some((mut next, mut next_fl)) = next else {
+                let Some((mut next, _)) = next else {
                     break;
                 };
                 let fold = (next.tl > 0.0) != (point.tl > 0.0);
@@ -394,10 +390,10 @@ pub(super) fn follow(
                     && unstable.is_some()
                     && next_unstable.is_some()
                     && next_unstable != unstable
-                    && let Some((p, f)) =
+                    && let Some((p, _)) =
                         super::corrector::polish(system, &homotopy, ws, &next, settings, report, &mut phase)
                 {
-                    (next, next_fl) = (p, f);
+                    next = p;
                     next_unstable = index(system, ws, report);
                 }
                 if let (Some(a), Some(b)) = (unstable, next_unstable)
@@ -422,7 +418,7 @@ pub(super) fn follow(
                         push(&mut record, &s.point, s.unstable, false, report);
                         switched = (s.picked && s.family.is_none()).then(|| (s.at, s.point.x.clone()));
                         (phase, family) = s.hold(system, &homotopy, ws, report);
-                        (point, fl, unstable) = (s.point, s.fl, s.unstable);
+                        (point, unstable) = (s.point, s.unstable);
                         // One switch per path: the branch taken can keep a nearly neutral
                         // direction (the plane of a round column's bend), whose count rounding
                         // decides, and the path does not leave it along that direction.
@@ -465,7 +461,7 @@ pub(super) fn follow(
                 }
                 if fold {
                     folds.push(match tracing {
-                        true => locate::fold(system, &homotopy, ws, (&point, &fl, h), &next, settings, report, &mut r),
+                        true => locate::fold(system, &homotopy, ws, (&point, h), &next, settings, report, &mut r),
                         false => lambda,
                     });
                 }
@@ -512,7 +508,6 @@ pub(super) fn follow(
                 polished = false;
                 furthest = furthest.max(point.lambda);
 
-                fl = next_fl;
                 factored_at_point = true;
                 // A shape the mesh no longer resolves: continue on a finer one (the load
                 // path only: a Newton homotopy's F(x0) belongs to its mesh).
@@ -520,8 +515,8 @@ pub(super) fn follow(
                 let needed = refine::start_intervals(robot, &point.x, floor).min(options.max_intervals);
                 if matches!(homotopy, Homotopy::Parameter { .. }) && needed as f64 > 1.25 * floor as f64 {
                     match refine::remesh(system, &homotopy, ws, &point, needed, options, settings, report) {
-                        Some((p, f)) => {
-                            (point, fl) = (p, f);
+                        Some((p, _)) => {
+                            point = p;
                             r = vec![0.0; system.unknowns()];
                             // The family's directions on the new mesh, from a generic start.
                             if phase.is_some() {
@@ -540,7 +535,7 @@ pub(super) fn follow(
                                 }) else {
                                     return Err((refine::remesh_hint(point.lambda), worst));
                                 };
-                                (point, fl) = held;
+                                point = held.0;
                             }
                         }
                         None => return Err((refine::remesh_hint(point.lambda), worst)),
@@ -552,10 +547,10 @@ pub(super) fn follow(
                 factored_at_point = false;
                 if !polished
                     && h < POLISH_BELOW
-                    && let Some((p, f)) =
+                    && let Some((p, _)) =
                         super::corrector::polish(system, &homotopy, ws, &point, settings, report, &mut phase)
                 {
-                    (point, fl) = (p, f);
+                    point = p;
                     factored_at_point = true;
                     polished = true;
                     h = POLISH_BELOW;
