@@ -13,7 +13,7 @@
 //! hyperplane through the prediction normal to (phi, 0) with the load free, which lands on
 //! the branch whose amplitude along phi is h; the path then goes on from there.
 
-use super::homotopy::{Homotopy, Point, dot, f_lambda, tangent};
+use super::homotopy::{Homotopy, Point, dot, tangent};
 use super::locate;
 use super::newton::{self, Settings, Workspace};
 use super::path::{correct, index};
@@ -35,8 +35,6 @@ const SWITCH_STEPS: [f64; 3] = [0.1, 0.03, 0.01];
 pub(super) struct Switched {
     /// The first point on the new branch, with its tangent.
     pub point: Point,
-    /// dF/dlambda there.
-    pub fl: Vec<f64>,
     /// Unstable directions there (None: unknown).
     pub unstable: Option<usize>,
     /// Whether the side was picked (a perfect symmetry: nothing preferred one).
@@ -81,7 +79,7 @@ impl Switched {
         // Oriented along the switch (the free tangent there is the family's direction,
         // amplified by the singular Jacobian, and orients nothing).
         let previous = (along.as_slice(), 0.0);
-        let Some((point, fl)) = phase.tangent(
+        let Some((point, _)) = phase.tangent(
             system,
             homotopy,
             ws,
@@ -92,7 +90,7 @@ impl Switched {
         ) else {
             return (None, false);
         };
-        (self.point, self.fl) = (point, fl);
+        self.point = point;
         (Some(phase), true)
     }
 }
@@ -166,7 +164,6 @@ pub(super) fn switch(
     };
     let phi: Vec<f64> = phi.iter().map(|v| v * side).collect();
     homotopy.set(system, at);
-    let fl = f_lambda(system, homotopy, &from, at, report)?;
     let along = Point {
         x: from,
         lambda: at,
@@ -174,8 +171,7 @@ pub(super) fn switch(
         tl: 0.0,
     };
     for h in SWITCH_STEPS {
-        let Some((x, lambda, _)) = correct(system, homotopy, ws, &along, h, &fl, false, settings, report, r, None)
-        else {
+        let Some((x, lambda, _)) = correct(system, homotopy, ws, &along, h, settings, report, r, None) else {
             continue;
         };
         if !ws.linearize(system, &x, report) {
@@ -204,12 +200,11 @@ pub(super) fn switch(
                 }
             }
         }
-        if let Some((next, next_fl)) = next
+        if let Some((next, _)) = next
             && unstable.is_some_and(|k| k <= unstable_before)
         {
             return Some(Switched {
                 point: next,
-                fl: next_fl,
                 unstable,
                 picked: symmetric,
                 family,

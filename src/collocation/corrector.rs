@@ -1,7 +1,7 @@
 //! The corrector of the pseudo-arclength continuation (`collocation/path.rs`): one
 //! predictor-corrector step along a path's tangent, converged on the hyperplane normal to
-//! it by chord steps with the stored factors, refreshing the Jacobian when they contract too
-//! slowly; on a family's branch with its phase condition as well (module `phase`); and the
+//! it by a Newton step at the predicted point and chord steps on its factors (docs/numerics.md,
+//! "Corrector"), refreshing the Jacobian when they contract too slowly; on a family's branch with its phase condition as well (module `phase`); and the
 //! polish of a point at its own lambda to the solve's tolerance.
 
 use super::homotopy::{Homotopy, Point, dot, f_lambda, max_norm, residual, tangent};
@@ -26,7 +26,9 @@ const CHORD_STEPS_LEFT: i32 = 3;
 /// lambda = 1 is converged to the solve's tolerance.
 pub(super) const PATH_TOLERANCE: f64 = 1e-6;
 
-/// One predictor-corrector step of length `h` from `point`. Returns the converged states,
+/// One predictor-corrector step of length `h` from `point`, its first corrector step a Newton
+/// step at the predicted point (the Jacobian and dF/dlambda evaluated there; the chord on the
+/// factors at `point` contracts as O(h), on these as O(h^2)). Returns the converged states,
 /// their lambda and the corrector iterations, or None (the step is to be shortened). With
 /// a `phase`, the step also keeps the phase condition relative to `point` (module `phase`).
 #[allow(clippy::too_many_arguments)]
@@ -36,27 +38,13 @@ pub(super) fn correct(
     ws: &mut Workspace,
     point: &Point,
     h: f64,
-    fl: &[f64],
-    factored_at_point: bool,
     settings: &Settings,
     report: &mut SolveReport,
     r: &mut [f64],
     phase: Option<&Phase>,
 ) -> Option<(Vec<State>, f64, usize)> {
     let tolerance = PATH_TOLERANCE.max(settings.tolerance);
-    correct_to(
-        system,
-        homotopy,
-        ws,
-        point,
-        h,
-        fl,
-        factored_at_point,
-        tolerance,
-        report,
-        r,
-        phase,
-    )
+    correct_to(system, homotopy, ws, point, h, tolerance, report, r, phase)
 }
 
 /// [`correct`], converged to the scaled residual `tolerance` (a located event's point is
@@ -68,8 +56,6 @@ pub(super) fn correct_to(
     ws: &mut Workspace,
     point: &Point,
     h: f64,
-    fl: &[f64],
-    factored_at_point: bool,
     tolerance: f64,
     report: &mut SolveReport,
     r: &mut [f64],
@@ -84,15 +70,14 @@ pub(super) fn correct_to(
     let mut lambda = lambda_pred;
     // Displacement from the predicted point, in the scaled unknowns.
     let mut d = vec![0.0; n];
-    let mut fl = fl.to_vec();
-    let mut fresh = !factored_at_point;
-    if fresh {
-        homotopy.set(system, lambda);
-        if !ws.linearize(system, &x, report) {
-            return None;
-        }
-        fl = f_lambda(system, homotopy, &x, lambda, report)?;
+    // The first step is a Newton step at the predicted point: the chord on the last point's
+    // factors contracts as O(h), on the prediction's as O(h^2) (docs/numerics.md, "Corrector").
+    homotopy.set(system, lambda);
+    if !ws.linearize(system, &x, report) {
+        return None;
     }
+    let mut fl = f_lambda(system, homotopy, &x, lambda, report)?;
+    let mut fresh = true;
     let mut norm = f64::INFINITY;
     let mut next = Vec::with_capacity(x.len());
     // b = -J^-1 F_lambda belongs to the factors: solved once per factorization, not per
@@ -219,22 +204,9 @@ pub(super) fn polish(
                 tx: vec![0.0; point.tx.len()],
                 tl: 1.0,
             };
-            let fl = f_lambda(system, homotopy, &point.x, point.lambda, report)?;
             let mut r = vec![0.0; system.unknowns()];
             let tolerance = settings.tolerance;
-            let (x, _, _) = correct_to(
-                system,
-                homotopy,
-                ws,
-                &at,
-                0.0,
-                &fl,
-                false,
-                tolerance,
-                report,
-                &mut r,
-                Some(p),
-            )?;
+            let (x, _, _) = correct_to(system, homotopy, ws, &at, 0.0, tolerance, report, &mut r, Some(p))?;
             x
         }
         None => {

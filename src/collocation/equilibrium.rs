@@ -70,6 +70,10 @@ pub(crate) enum Choose {
     FromCold,
     /// A warm start (a solution of a nearby robot).
     FromWarm,
+    /// A warm start whose branch the solve keeps to (what a sweep's bisection solves,
+    /// [`super::solve_on_branch`]): its load path neither snaps from a bifurcation nor lands
+    /// from its folds, so that the bisection sees where that branch ends or loses stability.
+    OnBranch,
     /// No choice: a finer mesh warm-started from the chosen equilibrium on the last one.
     No,
 }
@@ -291,20 +295,22 @@ fn relaxed_note((lambda, picked): (f64, bool)) -> String {
 
 /// Newton from `x0`, and the equilibrium choice of docs/stability.md. Newton's answer
 /// stands when it converged cleanly to a stable state ([`acceptable`]; or the caller asked
-/// for the nearest equilibrium). Otherwise, from a warm start (`warm`), the Newton homotopy
-/// from it ([`path::follow`]), whose end stands if it is stable; then Newton from the
-/// cold guess, as above; then the load path from the unloaded robot. Newton's answer from
-/// `x0`, if it converged at all, is the fallback when no path can be followed.
+/// for the nearest equilibrium). Otherwise, from a warm start (`choose`: [`Choose::FromWarm`]
+/// or [`Choose::OnBranch`]), the Newton homotopy from it ([`path::follow`]), whose end stands
+/// if it is stable; then Newton from the cold guess, as above; then the load path from the
+/// unloaded robot, which snaps from a bifurcation or lands from a fold unless the solve keeps
+/// to its warm start's branch ([`Choose::OnBranch`]). Newton's answer from `x0`, if it
+/// converged at all, is the fallback when no path can be followed.
 pub(crate) fn choose_equilibrium(
     system: &mut System,
     ws: &mut Workspace,
     x0: Vec<State>,
-    warm: bool,
+    choose: Choose,
     options: &Options,
     settings: &Settings,
     report: &mut SolveReport,
 ) -> Result<Vec<State>> {
-    let chosen = choose_from(system, ws, &x0, warm, options, settings, report);
+    let chosen = choose_from(system, ws, &x0, choose, options, settings, report);
     // The start's buffer goes back to the thread's kept ones (Newton iterated on a copy).
     spare::give(x0);
     chosen
@@ -315,7 +321,7 @@ fn choose_from(
     system: &mut System,
     ws: &mut Workspace,
     x0: &[State],
-    warm: bool,
+    choose: Choose,
     options: &Options,
     settings: &Settings,
     report: &mut SolveReport,
@@ -323,6 +329,7 @@ fn choose_from(
     report.unknowns = system.unknowns();
     report.nonzeros = ws.nonzeros();
     report.intervals = system.mesh.intervals();
+    let warm = matches!(choose, Choose::FromWarm | Choose::OnBranch);
     let nearest = options.equilibrium == Equilibrium::Nearest || !options.continuation;
     let mut x = spare::copy(x0);
     let (accept, worst) = direct(system, ws, &mut x, nearest, settings, report);
@@ -368,7 +375,9 @@ fn choose_from(
     match path::follow(
         system,
         ws,
-        path::Start::Rest { land: !warm },
+        path::Start::Rest {
+            land: choose != Choose::OnBranch,
+        },
         options,
         settings,
         report,

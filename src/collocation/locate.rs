@@ -36,15 +36,14 @@ fn restore(system: &mut System, homotopy: &Homotopy, ws: &mut Workspace, next: &
     let _ = ws.linearize(system, &next.x, report);
 }
 
-/// The lambda of the fold crossed by the step of arclength `h` from `point` (`fl` its
-/// dF/dlambda) to `next`: within [`LOCATED`] of the fold, or `next.lambda` when a middle
+/// The lambda of the fold crossed by the step of arclength `h` from `point` to `next`: within [`LOCATED`] of the fold, or `next.lambda` when a middle
 /// point fails to converge.
 #[allow(clippy::too_many_arguments)]
 pub(super) fn fold(
     system: &mut System,
     homotopy: &Homotopy,
     ws: &mut Workspace,
-    (point, fl, h): (&Point, &[f64], f64),
+    (point, h): (&Point, f64),
     next: &Point,
     settings: &Settings,
     report: &mut SolveReport,
@@ -58,19 +57,7 @@ pub(super) fn fold(
             break;
         }
         let m = 0.5 * (lo + hi);
-        let located = correct_to(
-            system,
-            homotopy,
-            ws,
-            point,
-            m,
-            fl,
-            false,
-            settings.tolerance,
-            report,
-            r,
-            None,
-        );
+        let located = correct_to(system, homotopy, ws, point, m, settings.tolerance, report, r, None);
         let Some((x, l, _)) = located else { break };
         homotopy.set(system, l);
         if !ws.linearize(system, &x, report) {

@@ -106,6 +106,19 @@ pub fn solve_from(robot: &Robot, options: &Options, guess: &Solution) -> Result<
     solve_stateless(robot, options, Some(guess))
 }
 
+/// [`solve_from`], but a solve that starts from `guess` keeps to its branch: where the load
+/// path it falls back to loses stability at a bifurcation or cannot be followed to the end,
+/// it neither snaps nor lands from a fold, and returns the state on that branch (unstable)
+/// or Newton's root (`fallback`). What a sweep's bisection solves (`analysis::sweep`), so that
+/// it sees where the branch of the last point before a change ends or loses stability
+/// (docs/stability.md, "Snapping from a bifurcation").
+///
+/// # Errors
+/// As [`solve`].
+pub(crate) fn solve_on_branch(robot: &Robot, options: &Options, guess: &Solution) -> Result<Solution> {
+    pipeline::solve_on_branch(robot, options, guess)
+}
+
 /// Checks that the mesh `options` fix resolves `robot` (validated) by the resolution rule
 /// (at most pi/2 rad of a routing's turn or of the precurvature per interval, docs/numerics.md
 /// "Resolution"): what [`solve`] checks before it iterates, for a caller (such as `tdcr

@@ -4,7 +4,8 @@
 //!
 //! Each step predicts along the tangent of the branch, (dx, dlambda) with
 //! J dx + F_lambda dlambda = 0, from the factors of the Jacobian at the last point, and
-//! corrects with chord steps on those factors on the bordered system
+//! corrects on the bordered system, with a Newton step at the predicted point and chord steps
+//! on its factors (module `corrector`)
 //!
 //! ```text
 //! F(x, lambda) = 0,    <t_x, x - x_pred> / n + t_lambda (lambda - lambda_pred) = 0,
@@ -66,9 +67,10 @@ const BIFURCATION_STEP: f64 = 1e-3;
 
 /// Whether a path whose count of unstable directions went from `counts.0` to `counts.1` over
 /// a step `h` (as the path signs it) snaps there (docs/stability.md, "Snapping from a bifurcation"): on a
-/// cold solve's path (`landing`), with the count risen, no family held, and either no
-/// switch left (`switching` false) or a step short enough to cross the bifurcation that
-/// found no stable branch.
+/// load path from rest that may leave its branch (`landing`: a cold or warm solve's, not one
+/// that keeps to its warm start's branch, [`Start::Rest`]), with the count risen, no family
+/// held, and either no switch left (`switching` false) or a step short enough to cross the
+/// bifurcation that found no stable branch.
 fn snaps_here(
     landing: bool,
     counts: (Option<usize>, Option<usize>),
@@ -169,10 +171,9 @@ pub(super) fn follow(
     if !ws.linearize(system, &x, report) {
         return Err(("the Jacobian at the start of the path is singular".into(), 0));
     }
-    let Some((mut point, mut fl)) = tangent(system, &homotopy, ws, x, 0.0, None, report) else {
+    let Some((mut point, _)) = tangent(system, &homotopy, ws, x, 0.0, None, report) else {
         return Err(("the path's first tangent is not finite".into(), 0));
     };
-    let n = system.unknowns();
     let mut unstable = index(system, ws, report);
     let mut folds = Vec::new();
     let mut bifurcations = Vec::new();
@@ -202,7 +203,7 @@ pub(super) fn follow(
     let mut furthest = 0.0f64;
     let mut worst = 0;
     let mut trial: Vec<State> = Vec::with_capacity(system.mesh.nodes.len());
-    let mut r = vec![0.0; n];
+    let mut r = vec![0.0; system.unknowns()];
     // The states at the folds passed, with their load factors: where the path cannot be
     // followed to the end, the robot snaps from one of them ([`snap::land_from_folds`]).
     let mut fold_states: Vec<(f64, Vec<State>)> = Vec::new();
@@ -243,7 +244,8 @@ pub(super) fn follow(
                 let at_one = Point {
                     x: trial.clone(),
                     lambda: 1.0,
-                    tx: vec![0.0; n],
+                    // The unknowns of the mesh now (the path may have moved to a finer one).
+                    tx: vec![0.0; system.unknowns()],
                     tl: 1.0,
                 };
                 let held = super::corrector::correct_to(
@@ -252,8 +254,6 @@ pub(super) fn follow(
                     ws,
                     &at_one,
                     0.0,
-                    &fl,
-                    false,
                     settings.tolerance,
                     report,
                     &mut r,
@@ -315,7 +315,7 @@ pub(super) fn follow(
                 push(&mut record, &s.point, s.unstable, false, report);
                 switched = (s.picked && s.family.is_none()).then(|| (s.at, s.point.x.clone()));
                 (phase, family) = s.hold(system, &homotopy, ws, report);
-                (point, fl, unstable) = (s.point, s.fl, s.unstable);
+                (point, unstable) = (s.point, s.unstable);
                 (switching, polished, factored_at_point) = (false, false, true);
                 h = h1.abs().min(max_step);
                 continue;
@@ -353,8 +353,6 @@ pub(super) fn follow(
             ws,
             &point,
             h,
-            &fl,
-            factored_at_point,
             settings,
             report,
             &mut r,
@@ -376,7 +374,7 @@ pub(super) fn follow(
                     Some(p) => p.tangent(system, &homotopy, ws, xc, lambda, Some(previous), report),
                     None => tangent(system, &homotopy, ws, xc, lambda, Some(previous), report),
                 };
-                let Some((mut next, mut next_fl)) = next else {
+                let Some((mut next, _)) = next else {
                     break;
                 };
                 let fold = (next.tl > 0.0) != (point.tl > 0.0);
@@ -392,10 +390,10 @@ pub(super) fn follow(
                     && unstable.is_some()
                     && next_unstable.is_some()
                     && next_unstable != unstable
-                    && let Some((p, f)) =
+                    && let Some((p, _)) =
                         super::corrector::polish(system, &homotopy, ws, &next, settings, report, &mut phase)
                 {
-                    (next, next_fl) = (p, f);
+                    next = p;
                     next_unstable = index(system, ws, report);
                 }
                 if let (Some(a), Some(b)) = (unstable, next_unstable)
@@ -420,7 +418,7 @@ pub(super) fn follow(
                         push(&mut record, &s.point, s.unstable, false, report);
                         switched = (s.picked && s.family.is_none()).then(|| (s.at, s.point.x.clone()));
                         (phase, family) = s.hold(system, &homotopy, ws, report);
-                        (point, fl, unstable) = (s.point, s.fl, s.unstable);
+                        (point, unstable) = (s.point, s.unstable);
                         // One switch per path: the branch taken can keep a nearly neutral
                         // direction (the plane of a round column's bend), whose count rounding
                         // decides, and the path does not leave it along that direction.
@@ -428,7 +426,7 @@ pub(super) fn follow(
                         furthest = furthest.max(point.lambda);
                         continue;
                     }
-                    // A symmetric, simple bifurcation on a cold solve's load path where the
+                    // A symmetric, simple bifurcation on a load path that may leave its branch where the
                     // path may not switch (it did once) or a step short enough to cross it
                     // found no stable branch: the robot snaps (docs/stability.md, "Snapping
                     // from a bifurcation").
@@ -463,7 +461,7 @@ pub(super) fn follow(
                 }
                 if fold {
                     folds.push(match tracing {
-                        true => locate::fold(system, &homotopy, ws, (&point, &fl, h), &next, settings, report, &mut r),
+                        true => locate::fold(system, &homotopy, ws, (&point, h), &next, settings, report, &mut r),
                         false => lambda,
                     });
                 }
@@ -490,7 +488,7 @@ pub(super) fn follow(
                     return Err((WARM_TURNED_BACK.into(), worst));
                 }
                 // The angle between successive tangents bounds the next step.
-                let cos = (dot(&next.tx, &point.tx) / n as f64 + next.tl * point.tl).clamp(-1.0, 1.0);
+                let cos = (dot(&next.tx, &point.tx) / point.tx.len() as f64 + next.tl * point.tl).clamp(-1.0, 1.0);
                 if h > POLISH_BELOW {
                     crawl = 0;
                 }
@@ -510,7 +508,6 @@ pub(super) fn follow(
                 polished = false;
                 furthest = furthest.max(point.lambda);
 
-                fl = next_fl;
                 factored_at_point = true;
                 // A shape the mesh no longer resolves: continue on a finer one (the load
                 // path only: a Newton homotopy's F(x0) belongs to its mesh).
@@ -518,8 +515,8 @@ pub(super) fn follow(
                 let needed = refine::start_intervals(robot, &point.x, floor).min(options.max_intervals);
                 if matches!(homotopy, Homotopy::Parameter { .. }) && needed as f64 > 1.25 * floor as f64 {
                     match refine::remesh(system, &homotopy, ws, &point, needed, options, settings, report) {
-                        Some((p, f)) => {
-                            (point, fl) = (p, f);
+                        Some((p, _)) => {
+                            point = p;
                             r = vec![0.0; system.unknowns()];
                             // The family's directions on the new mesh, from a generic start.
                             if phase.is_some() {
@@ -538,7 +535,7 @@ pub(super) fn follow(
                                 }) else {
                                     return Err((refine::remesh_hint(point.lambda), worst));
                                 };
-                                (point, fl) = held;
+                                point = held.0;
                             }
                         }
                         None => return Err((refine::remesh_hint(point.lambda), worst)),
@@ -550,10 +547,10 @@ pub(super) fn follow(
                 factored_at_point = false;
                 if !polished
                     && h < POLISH_BELOW
-                    && let Some((p, f)) =
+                    && let Some((p, _)) =
                         super::corrector::polish(system, &homotopy, ws, &point, settings, report, &mut phase)
                 {
-                    (point, fl) = (p, f);
+                    point = p;
                     factored_at_point = true;
                     polished = true;
                     h = POLISH_BELOW;

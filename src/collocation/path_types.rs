@@ -58,12 +58,14 @@ impl End {
 
 /// Where a path starts and what it connects.
 pub(super) enum Start<'x> {
-    /// The load path from the unloaded robot; when it cannot be followed to the end, it
-    /// lands from its folds ([`super::snap::land_from_folds`]) if `land` (a cold solve's path; a
-    /// warm-started solve keeps to the branch it was started on, so that a sweep's bisection
-    /// sees where that branch ends).
+    /// The load path from the unloaded robot; if `land`, a path that loses stability at a
+    /// bifurcation with no stable branch to follow snaps there ([`super::snap::from_bifurcation`]),
+    /// and one that cannot be followed to the end lands from its folds
+    /// ([`super::snap::land_from_folds`]): every solve's path but one that keeps to the branch
+    /// of its warm start (a sweep's bisection, [`super::solve_on_branch`]), so that the
+    /// bisection sees where that branch ends or loses stability.
     Rest {
-        /// Whether a path that stalls lands from its folds.
+        /// Whether the path may leave its branch: snap from a bifurcation, land from a fold.
         land: bool,
     },
     /// The Newton homotopy from a warm start (not a solution of the system).

@@ -33,13 +33,18 @@ use std::time::Instant;
 pub(crate) fn solve_stateless(robot: &Robot, options: &Options, warm: Option<&Solution>) -> Result<Solution> {
     let mut cache = None;
     let result = solve_impl(robot, options, warm, &mut cache);
+    keep_thread(cache);
+    result
+}
+
+/// Gives a stateless solve's `cache` back to the thread's kept workspaces and buffers.
+fn keep_thread(cache: Cache) {
     if let Some(c) = cache {
         workspace::keep(c.mesh, c.solver, c.workspace);
         if let Some(last) = c.last {
             spare::give(last);
         }
     }
-    result
 }
 
 /// Solves `robot` from `warm` (or cold), reusing what `cache` holds: what [`super::solve`],
@@ -64,7 +69,25 @@ pub(crate) fn solve_impl(
     if crate::model::friction::any(robot) {
         return super::friction::solve(robot, options, warm, cache);
     }
-    solve_tensions(robot, options, warm, cache)
+    solve_tensions(robot, options, warm, cache, false)
+}
+
+/// [`solve_stateless`] from `warm`, keeping to the warm start's branch
+/// ([`Choose::OnBranch`]): what a sweep's bisection solves ([`super::solve_on_branch`]).
+/// Robots with displacement inputs or friction solve as [`super::solve_from`] solves them.
+///
+/// # Errors
+/// As [`super::solve`].
+pub(crate) fn solve_on_branch(robot: &Robot, options: &Options, warm: &Solution) -> Result<Solution> {
+    if robot.has_displacement_inputs() || crate::model::friction::any(robot) {
+        return solve_stateless(robot, options, Some(warm));
+    }
+    robot.validate()?;
+    options.validate()?;
+    let mut cache = None;
+    let result = solve_tensions(robot, options, Some(warm), &mut cache, true);
+    keep_thread(cache);
+    result
 }
 
 /// Where Newton with friction starts (docs/friction.md section 3): a mesh and node states on
@@ -134,11 +157,18 @@ pub(crate) fn solve_start(
 
 /// [`solve_impl`] for a robot (validated, with `options` validated) whose tendons are all
 /// tension-controlled and without friction, with the final mesh's stability verdict in the
-/// report.
+/// report; with `on_branch`, keeping to the branch of `warm` when the solve starts from it
+/// ([`Choose::OnBranch`]).
 ///
 /// # Errors
 /// As [`super::solve`].
-fn solve_tensions(robot: &Robot, options: &Options, warm: Option<&Solution>, cache: &mut Cache) -> Result<Solution> {
+fn solve_tensions(
+    robot: &Robot,
+    options: &Options,
+    warm: Option<&Solution>,
+    cache: &mut Cache,
+    on_branch: bool,
+) -> Result<Solution> {
     let start = Instant::now();
     // The model's tensions, the report's "not assessed" and every stage's buffers come from
     // the thread's kept ones (mesh::spare) and go back there, the workspaces from the
@@ -149,6 +179,18 @@ fn solve_tensions(robot: &Robot, options: &Options, warm: Option<&Solution>, cac
     // Newton's iterations are recorded without growing the history after this.
     report.history.reserve(options.max_iterations.min(MAX_ITERATIONS));
     let (mesh, x0, reuse, choose) = begin(robot, options, warm, cache, &model, &mut report)?;
+    // A solve started from the cold guess (its residual was the smaller) has no branch to
+    // keep to.
+    let choose = match choose {
+        Choose::FromWarm if on_branch => Choose::OnBranch,
+        other => other,
+    };
+    // A solve started from the cold guess (its residual was the smaller) has no branch to
+    // keep to.
+    let choose = match choose {
+        Choose::FromWarm if on_branch => Choose::OnBranch,
+        other => other,
+    };
     // The first mesh reuses the factors and chooses the equilibrium; finer ones start from it.
     let mut first = Some((reuse, choose));
     let level = refine::to_tolerance(
@@ -350,10 +392,7 @@ pub(crate) fn solve_on_mesh(
     };
     let mut result = match choose {
         Choose::No => newton_only(&system, &mut workspace, x0, &settings, report),
-        _ => {
-            let warm = choose == Choose::FromWarm;
-            choose_equilibrium(&mut system, &mut workspace, x0, warm, options, &settings, report)
-        }
+        _ => choose_equilibrium(&mut system, &mut workspace, x0, choose, options, &settings, report),
     };
     let correction = result.as_mut().ok().and_then(|x| {
         let t = Instant::now();

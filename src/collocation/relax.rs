@@ -44,7 +44,7 @@ const MOVE: f64 = 0.1;
 /// The most a time step may grow dt, per step.
 const GROWTH: f64 = 4.0;
 /// The most time steps (each one Jacobian and one factorization).
-const MAX_STEPS: usize = 150;
+const MAX_STEPS: usize = 600;
 /// A residual (scaled max-norm) at which the state is near rest and Newton finishes; tried
 /// again only after the residual has fallen tenfold since the last try.
 const NEAR_REST: f64 = 1e-3;

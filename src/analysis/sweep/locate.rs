@@ -39,7 +39,7 @@ impl Sweep<'_> {
             let reached = if unstable {
                 self.reach(&left, t)
             } else {
-                self.solve(&robot, Some(&left.solution)).ok()
+                self.on_branch(&robot, &left.solution).ok()
             };
             let Some(solution) = reached else {
                 // No state reached from the left one: the branch it was on has ended.

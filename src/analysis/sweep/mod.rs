@@ -9,7 +9,9 @@
 //! so its stability verdict is its own. When a step changes what the last step was (a
 //! tendon's engagement, the number of unstable directions, or the tip jumped), the change
 //! is located by bisection on the inputs between the two steps (module `locate`): each
-//! bisection point is solved from the last point before the change, until the bracket is
+//! bisection point is solved from the last point before the change, keeping to its branch
+//! (`collocation::solve_on_branch`: no snap from a bifurcation, no landing from a fold),
+//! until the bracket is
 //! [`LOCATED`] of the sweep's range wide; the event is reported at the bracket's middle.
 //! The step is then solved again from the state just past the event, so the branch a sweep
 //! follows does not depend on its step size. Shooting steps start cold (shooting takes no
@@ -283,6 +285,17 @@ impl<'r> Sweep<'r> {
                 };
                 collocation::solve_from(robot, &options, warm)
             }
+            SweepSolver::Shooting(options) => shooting::solve(robot, options),
+        }
+    }
+
+    /// Solves `robot` from `warm` keeping to its branch (collocation: a load path from rest
+    /// that loses stability or cannot be followed does not snap, `collocation::solve_on_branch`;
+    /// shooting solves as [`Sweep::solve`]): a bisection point's state on the branch of the
+    /// last point before the change.
+    fn on_branch(&self, robot: &Robot, warm: &Solution) -> Result<Solution> {
+        match &self.solver {
+            SweepSolver::Collocation(options) => collocation::solve_on_branch(robot, options, warm),
             SweepSolver::Shooting(options) => shooting::solve(robot, options),
         }
     }

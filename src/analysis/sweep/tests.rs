@@ -121,9 +121,14 @@ fn least_compliance(robot: &Robot, solution: &Solution) -> f64 {
 /// The payload robot past its out-of-plane bifurcation (tendon 5 at 1.795 mN): the default
 /// solve from rest returns the stable state, hanging on the tendon's side (tip at x < 0),
 /// not the unstable planar state bent towards the lateral load. Just past the bifurcation
-/// (1.8 mN) the load path reaches a family of states swinging round the vertical at nearly
-/// constant load and cannot be followed to the end; the robot snaps from the fold on the
-/// tendon's side, and the report says so.
+/// (1.8 mN) the load path crosses it near the full load (98 % of the way): the planar state
+/// loses stability out of its plane, no stable branch leaves it, and the robot swings round
+/// the vertical to the tendon's side. The path snaps there, and the report says so
+/// (docs/stability.md, "Snapping from a bifurcation"). Before the corrector's Newton step at
+/// the predicted point (2026-12-06) the path wandered off the planar branch into the
+/// swinging family, went round it for 400 steps and landed from a fold ("snaps at the
+/// fold", 460 iterations): the same state, reached by a less physical route. The sweep
+/// tests below still locate the bifurcation at 1.795 mN to 1e-6 of the range.
 #[test]
 fn the_payload_robot_past_its_bifurcation_is_stable() {
     let values = vec![0.0018, 0.02, 0.1];
@@ -139,49 +144,91 @@ fn the_payload_robot_past_its_bifurcation_is_stable() {
         // The stable state hangs on the tendon's side (x = -0.18 m, z = -0.22 m), in the
         // plane of the tendon and the lateral load (1e-6 m: the swing mode is nearly neutral).
         assert!(tip.x < -0.17 && tip.y.abs() < 1e-6 && tip.z < -0.2, "step {k}: {tip:?}");
-        assert!(
-            matches!(report.path, crate::report::PathTaken::LoadPath { .. }),
-            "step {k}: {:?}",
-            report.path
-        );
-        // 600: the 1.8 mN solve takes about 460 iterations (400 load steps, most of them
-        // round the swinging family), the others below 100.
-        assert!(report.iterations < 600, "step {k}: {} iterations", report.iterations);
-        assert_eq!(
-            report.notes.iter().any(|n| n.contains("snaps at the fold")),
-            k == 0,
-            "step {k}: {:?}",
-            report.notes
-        );
+        let crate::report::PathTaken::LoadPath { bifurcations, .. } = &report.path else {
+            panic!("step {k}: {:?}", report.path)
+        };
+        // 300: the 1.8 mN solve takes about 190 iterations (most of them the damped motion's
+        // time steps), the others below 40.
+        assert!(report.iterations < 300, "step {k}: {} iterations", report.iterations);
+        // At 1.8 mN the snap from the bifurcation, recorded on the path, with its note; the
+        // larger tensions pull the robot to the tendon's side before any bifurcation.
+        let snapped = report
+            .notes
+            .iter()
+            .any(|n| n.contains("loses its stability at the bifurcation") && n.contains("it snaps there"));
+        assert_eq!(snapped, k == 0, "step {k}: {:?}", report.notes);
+        assert_eq!(bifurcations.len(), usize::from(k == 0), "step {k}: {bifurcations:?}");
     }
 }
 
-/// Issue 25: a warm solve whose load path cannot be followed returns Newton's root from its
-/// guess, and says so in its label too, not only in a note: the payload robot warm-started at
-/// 1.7 mN and solved at 1.9 mN (as a sweep's step does) stalls on the swinging family (at
-/// about 90 % of the way) and falls back to the unstable planar state, which was labelled
-/// `direct`. The case was 1.7 -> 1.8 mN until the corrector refreshed its Jacobian
-/// (2026-12-06): that path is now followed to the end (stable, 258 iterations).
+/// The payload robot warm-started at 1.7 mN (stable, bent towards the lateral load, +x) and
+/// solved at 1.8, 1.9 and 5 mN, as a sweep's step does: the warm start is unstable past the
+/// bifurcation at 1.795 mN, its Newton homotopy ends on the unstable planar state, and the
+/// load path from rest crosses the bifurcation with no stable branch beyond. A warm solve's
+/// path snaps there as a cold one's does (it ended on the unstable planar state, labelled
+/// `load_path`, before 2026-12-06), to the stable state on the tendon's side.
 #[test]
-fn a_fallback_root_is_labelled_as_one() {
-    let ranges = Ranges::new(
-        payload_robot(),
-        vec![(Input::Parameter(Parameter::Tension(4)), vec![0.0017, 0.0019])],
-    )
-    .unwrap();
-    let start = collocation::solve(&ranges.robot(0.0).unwrap(), &Default::default()).unwrap();
-    let solution = collocation::solve_from(&ranges.robot(1.0).unwrap(), &Default::default(), &start).unwrap();
-    let report = &solution.report;
-    assert_eq!(report.path, crate::report::PathTaken::Fallback, "{report:?}");
-    assert_eq!(report.path.name(), "fallback");
+fn a_warm_solve_past_the_bifurcation_snaps_to_the_stable_state() {
+    let robot = |t: f64| {
+        let mut r = payload_robot();
+        r.tendons[4].set_tension(t);
+        r
+    };
+    let start = collocation::solve(&robot(0.0017), &Default::default()).unwrap();
+    assert!(start.report.stability.is_stable() && start.tip_position().x > 0.17);
+    for t in [0.0018, 0.0019, 0.005] {
+        let solution = collocation::solve_from(&robot(t), &Default::default(), &start).unwrap();
+        let (tip, report) = (solution.tip_position(), &solution.report);
+        let case = format!(
+            "{t} N: tip {tip:?}, {} {:?} {:?}",
+            report.stability, report.path, report.notes
+        );
+        assert!(report.stability.is_stable(), "{case}");
+        // -1e-9 m/N: rounding in a compliance of about 1 m/N.
+        assert!(least_compliance(&robot(t), &solution) > -1e-9, "{case}");
+        // The tendon's side, as cold (1e-6 m: the swing mode is nearly neutral).
+        assert!(tip.x < -0.17 && tip.y.abs() < 1e-6 && tip.z < -0.2, "{case}");
+        assert!(
+            report.notes.iter().any(|n| n.contains("it snaps there")) && report.path.bifurcations().len() == 1,
+            "{case}"
+        );
+        // 300: measured 143-204 iterations (most of them the damped motion's time steps).
+        assert!(report.iterations < 300, "{case}: {} iterations", report.iterations);
+    }
+    // A sweep's bisection keeps to the warm start's branch instead (crate-internal
+    // `solve_on_branch`): the planar state, unstable, where the branch loses stability.
+    let on_branch = collocation::solve_on_branch(&robot(0.0019), &Default::default(), &start).unwrap();
+    assert!(on_branch.tip_position().x > 0.17, "{:?}", on_branch.tip_position());
+    assert_eq!(on_branch.report.stability.verdict(), "unstable");
+}
+
+/// The payload robot from rest at 1.78 mN: the load path reaches the full load, on the planar
+/// state bent towards the lateral load (+x). Before the corrector's Newton step at the
+/// predicted point (2026-12-06) it went past the full load without landing, and the answer
+/// was the fallback root, the straight column, unstable in two directions.
+///
+/// Its verdict is not asserted: the conjugate-point test says `stable`, but the linearized
+/// dynamics (`collocation::vibration`) finds a divergence at 0.022 1/s and the tip
+/// compliance has an eigenvalue of -1.5e6 m/N (out of the plane). The swing's conjugate point
+/// leaves the base at about 1.779 mN and stays within the test's neutral zone at the base
+/// (1e-6 L, for the family of a round column) up to 1.795 mN, where the count changes
+/// (docs/stability.md, "Snapping from a bifurcation"). Measured 2026-12-06; not fixed here.
+#[test]
+fn the_payload_robot_at_1_78_mn_reaches_the_full_load_on_the_planar_state() {
+    let mut robot = payload_robot();
+    robot.tendons[4].set_tension(0.00178);
+    let solution = collocation::solve(&robot, &Default::default()).unwrap();
+    let (tip, report) = (solution.tip_position(), &solution.report);
+    // Hanging on the lateral load's side, in the plane of the loads (1e-6 m as above), not the
+    // straight column of the old fallback (x = 0).
+    assert!(tip.x > 0.17 && tip.y.abs() < 1e-6 && tip.z < -0.2, "{tip:?}");
     assert!(
-        report
-            .notes
-            .iter()
-            .any(|n| n.contains("the load path could not be followed")),
+        matches!(&report.path, crate::report::PathTaken::LoadPath { folds, bifurcations } if folds.is_empty() && bifurcations.is_empty()),
         "{:?}",
-        report.notes
+        report.path
     );
+    // 60: measured 31 iterations over 6 load steps.
+    assert!(report.iterations < 60, "{} iterations", report.iterations);
 }
 
 #[test]
