@@ -168,12 +168,7 @@ fn whole_solve_allocations_do_not_grow_with_the_mesh() {
         );
         println!("cold solve on {intervals} intervals: {cold} allocations, repeated {again}");
         let mut solver = tdcr::collocation::Solver::new(options);
-        for _ in 0..WARM_UP {
-            let guess = solver.solve(&previous).unwrap();
-            solver.solve_from(&robot, &guess).unwrap();
-        }
-        let guess = solver.solve(&previous).unwrap();
-        let (warm, solution) = allocations_of(|| solver.solve_from(&robot, &guess).unwrap());
+        let (warm, solution) = warm_allocations(&mut solver, &previous, &robot);
         assert_eq!(
             solution.report.newton_steps, 0,
             "the warm solve must take chord steps only"
@@ -196,6 +191,21 @@ fn whole_solve_allocations_do_not_grow_with_the_mesh() {
         assert_eq!(repeated, owned, "repeated: {coarse:?} -> {fine:?}");
         assert_eq!(warm, owned, "warm: {coarse:?} -> {fine:?}");
     }
+}
+
+/// The allocations of `solver`'s warm solve of `robot` from its solution of `previous`,
+/// after `WARM_UP` such pairs (so that the thread's kept buffers have grown to size).
+fn warm_allocations(
+    solver: &mut tdcr::collocation::Solver,
+    previous: &tdcr::Robot,
+    robot: &tdcr::Robot,
+) -> (usize, tdcr::Solution) {
+    for _ in 0..WARM_UP {
+        let guess = solver.solve(previous).unwrap();
+        solver.solve_from(robot, &guess).unwrap();
+    }
+    let guess = solver.solve(previous).unwrap();
+    allocations_of(|| solver.solve_from(robot, &guess).unwrap())
 }
 
 #[test]
@@ -235,12 +245,7 @@ fn default_solves_allocate_only_their_solution() {
         }
         let (cold, solution) = allocations_of(|| solver.solve(&robot).unwrap());
         assert_eq!(cold, solution_buffers(&solution), "{name}: a Solver's cold solve");
-        for _ in 0..WARM_UP {
-            let guess = solver.solve(&previous).unwrap();
-            solver.solve_from(&robot, &guess).unwrap();
-        }
-        let guess = solver.solve(&previous).unwrap();
-        let (warm, solution) = allocations_of(|| solver.solve_from(&robot, &guess).unwrap());
+        let (warm, solution) = warm_allocations(&mut solver, &previous, &robot);
         assert_eq!(
             solution.report.newton_steps, 0,
             "{name}: the warm solve takes chord steps only"
