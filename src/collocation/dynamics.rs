@@ -36,7 +36,7 @@ use super::sensitivity::Sensitivity;
 use super::system::System;
 use super::unknowns::{BASE_COLUMNS, BASE_ROWS, NODE, P, THETA, U, V, link_row, unknowns};
 use crate::model::equations::Site;
-use crate::model::linearize::Point;
+use crate::model::linearize::Factored;
 use crate::report::{Growth, Stability};
 use crate::so3;
 use crate::solution::State;
@@ -103,12 +103,12 @@ impl Mass {
             let (ra, za) = match carried.take() {
                 Some((node, s, rates, z)) if node == k && s == seg => (rates, z),
                 _ => {
-                    let point = Point::new(model, &sites.start, seg, (&a.R, &a.v, &a.u))?;
+                    let point = Factored::new(model, &sites.start, seg, (&a.R, &a.v, &a.u))?;
                     (point.rates(), response(&point, &sites.start, &a.R, ratio, length)?)
                 }
             };
             let (rb, zb) = {
-                let point = Point::new(model, &sites.end, seg, (&b.R, &b.v, &b.u))?;
+                let point = Factored::new(model, &sites.end, seg, (&b.R, &b.v, &b.u))?;
                 (point.rates(), response(&point, &sites.end, &b.R, ratio, length)?)
             };
             // The Hermite-Simpson midpoint, as the residual's.
@@ -117,7 +117,7 @@ impl Mass {
             let part = |at: usize| Vector3::new(ym[at], ym[at + 1], ym[at + 2]);
             let Rm = a.R * so3::exp(&part(THETA));
             let (vm, um) = (part(V), part(U));
-            let pm = Point::new(model, &sites.mid, seg, (&Rm, &vm, &um))?;
+            let pm = Factored::new(model, &sites.mid, seg, (&Rm, &vm, &um))?;
             let zm = response(&pm, &sites.mid, &Rm, ratio, length)?;
             let mut block = SMatrix::<f64, 6, 12>::zeros();
             // Simpson's weights h/6 (1, 4, 1) at the start, midpoint and end, with the
@@ -213,7 +213,7 @@ fn restrict(a: &mut Vec<f64>) {
 /// # Errors
 /// [`crate::Error::Breakdown`] when the 6 x 6 matrix of eq. 13 is singular there.
 fn response(
-    point: &Point,
+    point: &Factored,
     site: &Site,
     Rc: &Matrix3<f64>,
     ratio: f64,
