@@ -433,41 +433,28 @@ impl Point {
     }
 }
 
-/// Eq. 13 (corrected) at one point, assembled and factored without the tendons' quantities
-/// that [`Point`] keeps for dF: the rates and solves with M for further right-hand sides
-/// (the mass of the linearized dynamics, `collocation/dynamics.rs`). The same M, factors
-/// and rates as [`Point::new`]'s, bit for bit (the kept quantities are copies); a value of
-/// it moves a third of a [`Point`]'s bytes.
-pub(crate) struct Factored {
-    assembled: Assembled,
-}
-
-impl Factored {
-    /// Assembles and factors eq. 13 at (R, v, u).
-    ///
-    /// # Errors
-    /// As [`rates`].
-    pub(crate) fn new(
-        model: &Model,
-        site: &Site,
-        segment_end: f64,
-        (R, v, u): (&Matrix3<f64>, &Vector3<f64>, &Vector3<f64>),
-    ) -> Result<Self> {
-        let assembled = assemble(model, site, segment_end, (R, v, u), None)?;
-        Ok(Factored { assembled })
+/// Eq. 13 (corrected) at (R, v, u), assembled and factored without the tendons' quantities
+/// that [`Point`] keeps for dF, and the rows of `bt` (a right-hand side of M, transposed)
+/// overwritten with those of the solution: the rates (v', u') and M^-1 bt^T with the
+/// operations of [`Point::new`], [`Point::rates`] and [`Point::solve_rows`] (the same
+/// bits), the factors never moved out of the call (the mass of the linearized dynamics,
+/// `collocation/dynamics.rs`).
+///
+/// # Errors
+/// As [`rates`].
+pub(crate) fn rates_and_solve<const C: usize>(
+    model: &Model,
+    site: &Site,
+    segment_end: f64,
+    (R, v, u): (&Matrix3<f64>, &Vector3<f64>, &Vector3<f64>),
+    bt: &mut SMatrix<f64, C, 6>,
+) -> Result<Vector6<f64>> {
+    let assembled = assemble(model, site, segment_end, (R, v, u), None)?;
+    if !assembled.factor.solve_transposed_mut(bt) {
+        return Err(breakdown(site.s));
     }
-
-    /// The rates (v', u') of eq. 13.
-    pub(crate) fn rates(&self) -> Vector6<f64> {
-        let x = &self.assembled.x;
-        Vector6::from_fn(|i, _| x[i])
-    }
-
-    /// Overwrites each row of `bt` (a right-hand side of M, transposed) with the row of
-    /// the solution; false when M is singular.
-    pub(crate) fn solve_rows<const C: usize>(&self, bt: &mut SMatrix<f64, C, 6>) -> bool {
-        self.assembled.factor.solve_transposed_mut(bt)
-    }
+    let x = &assembled.x;
+    Ok(Vector6::from_fn(|i, _| x[i]))
 }
 
 /// Pass 2 of [`linearize`]: dF^T at the rates `x` (a row), x held fixed, from pass 1's
