@@ -209,11 +209,11 @@ fn restrict(a: &mut Vec<f64>) {
     a.truncate(nodes * MOVING);
 }
 
-/// The rates (v', u') of eq. 13 at a collocation point with state (Rc, v, u), and d(v', u')
-/// / d(acceleration) there into `z`, up to the quadrature weight: M^-1 of the load per unit
-/// acceleration ([`inertia_load_transposed`]) (eq. 13: F = M x - rhs with + R^T f_e,
-/// + R^T l_e in F, so d(v', u') / d(body load) = -M^-1, and the residual y1 - y0 - h/6 sum
-/// w F gains + h/6 w M^-1 load).
+/// The rates (v', u') of eq. 13 at a collocation point with state (Rc, v, u), and
+/// d(v', u') / d(acceleration) there into `z`, up to the quadrature weight: M^-1 of the
+/// load per unit acceleration ([`inertia_load_transposed`]) (eq. 13: F = M x - rhs with
+/// the terms R^T f_e and R^T l_e in F, so d(v', u') / d(body load) = -M^-1, and the
+/// residual y1 - y0 - h/6 sum w F gains h/6 w M^-1 load).
 ///
 /// # Errors
 /// A model breakdown at the point (the 6 x 6 matrix of eq. 13 singular there).
