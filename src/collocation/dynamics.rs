@@ -35,8 +35,8 @@ use super::residual::end_values;
 use super::sensitivity::Sensitivity;
 use super::system::System;
 use super::unknowns::{BASE_COLUMNS, BASE_ROWS, NODE, P, THETA, U, V, link_row, unknowns};
-use crate::model::equations::Site;
-use crate::model::linearize::Point;
+use crate::model::equations::{Model, Site};
+use crate::model::linearize;
 use crate::report::{Growth, Stability};
 use crate::so3;
 use crate::solution::State;
@@ -87,10 +87,18 @@ impl Mass {
         let length = model.robot.length();
         let ratio = DENSITY / model.robot.rod.geometry.map_or(MODULUS, |g| g.youngs_modulus);
         let links = x.len() - 1;
-        let mut blocks = Vec::with_capacity(links);
-        // The end node's rates and response of the last interval: the next interval's start
-        // when the two share the node's site and segment (the same inputs, the same values).
-        let mut carried: Option<(usize, f64, Vector6<f64>, SMatrix<f64, 6, 6>)> = None;
+        let mut blocks: Vec<Option<SMatrix<f64, 6, 12>>> = Vec::with_capacity(links);
+        // Eq. 13's rates at a point and its response to a unit acceleration ([`response`]),
+        // written in place: at the start, midpoint and end of the interval.
+        let point = |site: &Site, seg: f64, state: (&Matrix3<f64>, &Vector3<f64>, &Vector3<f64>), z: &mut _| {
+            response(model, site, seg, state, ratio, length, z)
+        };
+        let (mut za, mut zm, mut zb) = (SMatrix::<f64, 6, 6>::zeros(), SMatrix::zeros(), SMatrix::zeros());
+        let (mut ra, mut rb) = (Vector6::zeros(), Vector6::zeros());
+        // The node whose rates and response the last interval left in (rb, zb), with its
+        // segment: the next interval's start when the two share the node's site and segment
+        // (the same inputs, the same values).
+        let mut carried: Option<(usize, f64)> = None;
         for k in 0..links {
             let Some(sites) = system.interval_sites(k) else {
                 carried = None;
@@ -100,25 +108,21 @@ impl Mass {
             let seg = system.mesh.nodes[k].segment_end;
             let (a, b) = (&x[k], &x[k + 1]);
             let h = sites.end.s - sites.start.s;
-            let (ra, za) = match carried.take() {
-                Some((node, s, rates, z)) if node == k && s == seg => (rates, z),
-                _ => {
-                    let point = Point::new(model, &sites.start, seg, (&a.R, &a.v, &a.u))?;
-                    (point.rates(), response(&point, &sites.start, &a.R, ratio, length)?)
+            match carried.take() {
+                Some((node, s)) if node == k && s == seg => {
+                    std::mem::swap(&mut za, &mut zb);
+                    std::mem::swap(&mut ra, &mut rb);
                 }
-            };
-            let (rb, zb) = {
-                let point = Point::new(model, &sites.end, seg, (&b.R, &b.v, &b.u))?;
-                (point.rates(), response(&point, &sites.end, &b.R, ratio, length)?)
-            };
+                _ => ra = point(&sites.start, seg, (&a.R, &a.v, &a.u), &mut za)?,
+            }
+            rb = point(&sites.end, seg, (&b.R, &b.v, &b.u), &mut zb)?;
             // The Hermite-Simpson midpoint, as the residual's.
             let [y0, y1, f0, f1] = end_values(sites, a, b, &ra, &rb);
             let ym = (y0 + y1) * 0.5 + (f0 - f1) * (h / 8.0);
             let part = |at: usize| Vector3::new(ym[at], ym[at + 1], ym[at + 2]);
             let Rm = a.R * so3::exp(&part(THETA));
             let (vm, um) = (part(V), part(U));
-            let pm = Point::new(model, &sites.mid, seg, (&Rm, &vm, &um))?;
-            let zm = response(&pm, &sites.mid, &Rm, ratio, length)?;
+            point(&sites.mid, seg, (&Rm, &vm, &um), &mut zm)?;
             let mut block = SMatrix::<f64, 6, 12>::zeros();
             // Simpson's weights h/6 (1, 4, 1) at the start, midpoint and end, with the
             // accelerations interpolated linearly (weights of node a, node b): each node's
@@ -140,7 +144,7 @@ impl Mass {
                 }
             }
             blocks.push(Some(block));
-            carried = Some((k + 1, seg, rb, zb));
+            carried = Some((k + 1, seg));
         }
         Ok(Mass { blocks })
     }
@@ -205,36 +209,33 @@ fn restrict(a: &mut Vec<f64>) {
     a.truncate(nodes * MOVING);
 }
 
-/// d(v', u') / d(acceleration) at a collocation point with orientation `Rc`, up to the
-/// quadrature weight: M^-1 of the load per unit acceleration ([`inertia_load_transposed`]) (eq. 13: F = M x -
-/// rhs with + R^T f_e, + R^T l_e in F, so d(v', u') / d(body load) = -M^-1, and the
-/// residual y1 - y0 - h/6 sum w F gains + h/6 w M^-1 load).
+/// The rates (v', u') of eq. 13 at a collocation point with state (Rc, v, u), and
+/// d(v', u') / d(acceleration) there into `z`, up to the quadrature weight: M^-1 of the
+/// load per unit acceleration ([`inertia_load_transposed`]) (eq. 13: F = M x - rhs with
+/// the terms R^T f_e and R^T l_e in F, so d(v', u') / d(body load) = -M^-1, and the
+/// residual y1 - y0 - h/6 sum w F gains h/6 w M^-1 load).
 ///
 /// # Errors
-/// [`crate::Error::Breakdown`] when the 6 x 6 matrix of eq. 13 is singular there.
+/// A model breakdown at the point (the 6 x 6 matrix of eq. 13 singular there).
 fn response(
-    point: &Point,
+    model: &Model,
     site: &Site,
-    Rc: &Matrix3<f64>,
+    segment_end: f64,
+    (Rc, v, u): (&Matrix3<f64>, &Vector3<f64>, &Vector3<f64>),
     ratio: f64,
     length: f64,
-) -> crate::Result<SMatrix<f64, 6, 6>> {
+    z: &mut SMatrix<f64, 6, 6>,
+) -> crate::Result<Vector6<f64>> {
     let mut t = inertia_load_transposed(site, Rc, ratio, length);
-    if !point.solve_rows(&mut t) {
-        return Err(crate::Error::Breakdown {
-            s: site.s,
-            what: "the 6x6 matrix of eq. 13 is singular".into(),
-        });
-    }
+    let rates = linearize::rates_and_solve(model, site, segment_end, (Rc, v, u), &mut t)?;
     // Transposed back entry by entry: nalgebra's transpose goes through an iterator
     // constructor that the build does not always inline (docs/stability.md, "Cost").
-    let mut z = SMatrix::<f64, 6, 6>::zeros();
     for i in 0..6 {
         for j in 0..6 {
             z[(i, j)] = t[(j, i)];
         }
     }
-    Ok(z)
+    Ok(rates)
 }
 
 /// The transpose of the body-frame distributed load (force, moment; N/m and N m/m) per

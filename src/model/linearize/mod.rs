@@ -433,6 +433,30 @@ impl Point {
     }
 }
 
+/// Eq. 13 (corrected) at (R, v, u), assembled and factored without the tendons' quantities
+/// that [`Point`] keeps for dF, and the rows of `bt` (a right-hand side of M, transposed)
+/// overwritten with those of the solution: the rates (v', u') and M^-1 bt^T with the
+/// operations of [`Point::new`], [`Point::rates`] and [`Point::solve_rows`] (the same
+/// bits), the factors never moved out of the call (the mass of the linearized dynamics,
+/// `collocation/dynamics.rs`).
+///
+/// # Errors
+/// As [`rates`].
+pub(crate) fn rates_and_solve<const C: usize>(
+    model: &Model,
+    site: &Site,
+    segment_end: f64,
+    (R, v, u): (&Matrix3<f64>, &Vector3<f64>, &Vector3<f64>),
+    bt: &mut SMatrix<f64, C, 6>,
+) -> Result<Vector6<f64>> {
+    let assembled = assemble(model, site, segment_end, (R, v, u), None)?;
+    if !assembled.factor.solve_transposed_mut(bt) {
+        return Err(breakdown(site.s));
+    }
+    let x = &assembled.x;
+    Ok(Vector6::from_fn(|i, _| x[i]))
+}
+
 /// Pass 2 of [`linearize`]: dF^T at the rates `x` (a row), x held fixed, from pass 1's
 /// `assembled` and `cache` ([`Point::derivative`]).
 #[inline(always)]
