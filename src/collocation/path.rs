@@ -280,6 +280,24 @@ pub(super) fn follow(
                 if jumped {
                     bifurcations.push(1.0);
                 }
+                // A path that reaches the full load on an unstable state after folds: the
+                // robot snapped at one of them (docs/stability.md, "A path that ends unstable
+                // after its folds lands from them").
+                if landing
+                    && landed_unstable.is_some_and(|b| b > 0)
+                    && let Some((lambda, x)) = snap::land_from_folds(system, ws, &fold_states, settings, report)
+                {
+                    return Ok(End {
+                        x,
+                        folds,
+                        bifurcations,
+                        picked,
+                        snapped_from: Some((lambda, true)),
+                        relaxed_from: None,
+                        family,
+                    });
+                }
+                report.termination = term;
                 let end = Point {
                     x: landed.clone(),
                     lambda: 1.0,
@@ -584,7 +602,7 @@ pub(super) fn follow(
             folds,
             bifurcations,
             picked,
-            snapped_from: Some(lambda),
+            snapped_from: Some((lambda, false)),
             relaxed_from: None,
             family,
         });
