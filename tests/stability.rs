@@ -204,3 +204,52 @@ fn stable_states_have_a_positive_tip_compliance_and_the_unstable_s_shape_does_no
         "S-shape compliance eigenvalues: min {min:e}, max {max:e}"
     );
 }
+
+/// Case 2766 of the long property run (an upright 0.87 m rod of radius 0.4 mm under its
+/// self weight, six tendons): its load path loses stability at a fold at 79.6 % of the way,
+/// folds again at 38.9 % and reaches the full load unstable in 2 directions, which was the
+/// default answer. The robot snaps at the first fold, onto a stable branch that continues to
+/// the full load (docs/stability.md, "A path that ends unstable after its folds").
+#[test]
+fn a_load_path_that_ends_unstable_after_its_folds_lands_from_them() {
+    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data/unstable-after-folds.toml");
+    let text = std::fs::read_to_string(path).unwrap();
+    let robot = tdcr::io::parse(&text, path).unwrap().robot;
+    let s = collocation::solve(&robot, &Options::default()).unwrap();
+    assert!(s.report.stability.is_stable(), "{:?}", s.report.stability);
+    match &s.report.path {
+        PathTaken::LoadPath { folds, .. } => assert_eq!(folds.len(), 2, "{folds:?}"),
+        other => panic!("path {other:?}"),
+    }
+    assert!(
+        s.report
+            .notes
+            .iter()
+            .any(|n| n.contains("reached the full load on an unstable state")),
+        "{:?}",
+        s.report.notes
+    );
+    // It hangs (tip 437 mm below the base, measured) where the unstable state stood upright
+    // (787 mm above).
+    assert!(s.tip_position().z < -0.4, "tip {:?}", s.tip_position());
+    // Measured 55 Newton + 70 chord steps (102 before, ending unstable): the landing's
+    // Newton runs from the two folds on top of the path; a fifth to spare.
+    assert!(s.report.iterations <= 150, "{} iterations", s.report.iterations);
+    let (min, max) = smallest_compliance_eigenvalue(&robot, &s);
+    // 1e-9 of the largest: rounding of the differenced sensitivities
+    assert!(min > -1e-9 * max, "{min:e} of {max:e}");
+    // The state the robot lands in when it snaps: its branch, traced back from the full
+    // load, stays stable past the fold where the load path lost stability (0.7957).
+    let branch = collocation::trace(&robot, tdcr::Parameter::LoadScale, 1.0, 0.78, &Options::default()).unwrap();
+    assert!(
+        branch.folds.is_empty() && branch.bifurcations.is_empty(),
+        "{:?}",
+        branch.events
+    );
+    assert!(
+        branch.points.last().unwrap().value <= 0.79,
+        "{:?}",
+        branch.points.last().unwrap().value
+    );
+    assert!(branch.points.iter().all(|p| p.unstable_directions == Some(0)));
+}

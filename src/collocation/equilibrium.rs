@@ -264,14 +264,20 @@ fn picked_note(lambda: f64, family: Option<&[State]>) -> String {
     )
 }
 
-/// The note of a path that could not be followed to the end and was completed by Newton at
-/// the full load from the fold at load factor `lambda` (the robot snaps there).
-fn snapped_note(lambda: f64) -> String {
+/// The note of a path completed by Newton at the full load from the fold at load factor
+/// `lambda` (the robot snaps there): `reached`, the path reached the full load on an unstable
+/// state after its folds; else it could not be followed to the end.
+fn snapped_note((lambda, reached): (f64, bool)) -> String {
+    let why = match reached {
+        true => "the path reached the full load on an unstable state after its folds",
+        false => {
+            "the path could not be followed to the full load (it stalled, or went round a family of \
+             equilibria at nearly constant load)"
+        }
+    };
     format!(
-        "the path could not be followed to the full load (it stalled, or went round a family of \
-         equilibria at nearly constant load): the robot snaps at the fold at {:.1} % of the way, and \
-         this stable state was reached by Newton at the full load from the state there, not by \
-         continuation",
+        "{why}: the robot snaps at the fold at {:.1} % of the way, and this stable state was reached \
+         by Newton at the full load from the state there, not by continuation",
         100.0 * lambda
     )
 }

@@ -280,6 +280,26 @@ pub(super) fn follow(
                 if jumped {
                     bifurcations.push(1.0);
                 }
+                // A path that reaches the full load on an unstable state after folds: the
+                // robot snapped at one of them (docs/stability.md, "A path that ends unstable
+                // after its folds lands from them").
+                if landing && landed_unstable.is_some_and(|b| b > 0) && !fold_states.is_empty() {
+                    if let Some((lambda, x)) = snap::land_from_folds(system, ws, &fold_states, settings, report) {
+                        return Ok(End {
+                            x,
+                            folds,
+                            bifurcations,
+                            picked,
+                            snapped_from: Some((lambda, true)),
+                            relaxed_from: None,
+                            family,
+                        });
+                    }
+                    // The landings factored other states: factor this one's again, so that the
+                    // verdict read later is its own (it was factored above, so this succeeds).
+                    report.termination = term;
+                    let _ = ws.linearize(system, &landed, report);
+                }
                 let end = Point {
                     x: landed.clone(),
                     lambda: 1.0,
@@ -584,7 +604,7 @@ pub(super) fn follow(
             folds,
             bifurcations,
             picked,
-            snapped_from: Some(lambda),
+            snapped_from: Some((lambda, false)),
             relaxed_from: None,
             family,
         });

@@ -18,8 +18,10 @@ pub(super) struct End {
     /// side of the Jacobian's kernel (nothing preferred either).
     pub picked: Vec<f64>,
     /// The load factor of the fold from which the states were reached by Newton at
-    /// lambda = 1 after the path itself could not be followed to the end ([`super::snap::land_from_folds`]).
-    pub snapped_from: Option<f64>,
+    /// lambda = 1 ([`super::snap::land_from_folds`]), and why: the path reached lambda = 1
+    /// on an unstable state after its folds (true), or could not be followed to the end
+    /// (false).
+    pub snapped_from: Option<(f64, bool)>,
     /// The load factor of the bifurcation at which the path lost stability with no stable
     /// branch to continue on (or one it could not follow), from which the states were reached
     /// by the robot's damped motion under the full load ([`super::snap::from_bifurcation`],
