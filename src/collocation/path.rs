@@ -285,15 +285,7 @@ pub(super) fn follow(
                 // after its folds lands from them").
                 if landing && landed_unstable.is_some_and(|b| b > 0) && !fold_states.is_empty() {
                     if let Some((lambda, x)) = snap::land_from_folds(system, ws, &fold_states, settings, report) {
-                        return Ok(End {
-                            x,
-                            folds,
-                            bifurcations,
-                            picked,
-                            snapped_from: Some((lambda, true)),
-                            relaxed_from: None,
-                            family,
-                        });
+                        return Ok(End::landed(x, folds, bifurcations, picked, family, (lambda, true)));
                     }
                     // The landings factored other states: factor this one's again, so that the
                     // verdict read later is its own (it was factored above, so this succeeds).
@@ -599,15 +591,7 @@ pub(super) fn follow(
         });
     }
     if landing && let Some((lambda, x)) = snap::land_from_folds(system, ws, &fold_states, settings, report) {
-        return Ok(End {
-            x,
-            folds,
-            bifurcations,
-            picked,
-            snapped_from: Some((lambda, false)),
-            relaxed_from: None,
-            family,
-        });
+        return Ok(End::landed(x, folds, bifurcations, picked, family, (lambda, false)));
     }
     Err((refine::stalled_hint(furthest, point.lambda), worst))
 }

@@ -56,6 +56,29 @@ impl End {
             family,
         }
     }
+
+    /// The end of a path whose states `x` were reached by Newton at lambda = 1 from its fold
+    /// at load factor `from.0` ([`super::snap::land_from_folds`]); `from.1`: the path had
+    /// reached lambda = 1 on an unstable state after its folds (else it could not be
+    /// followed to the end).
+    pub(super) fn landed(
+        x: Vec<State>,
+        folds: Vec<f64>,
+        bifurcations: Vec<f64>,
+        picked: Vec<f64>,
+        family: bool,
+        from: (f64, bool),
+    ) -> End {
+        End {
+            x,
+            folds,
+            bifurcations,
+            picked,
+            snapped_from: Some(from),
+            relaxed_from: None,
+            family,
+        }
+    }
 }
 
 /// Where a path starts and what it connects.
