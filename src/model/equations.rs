@@ -116,13 +116,7 @@ pub struct Model<'a> {
 impl<'a> Model<'a> {
     /// The model of a validated robot at full load.
     pub fn new(robot: &'a Robot) -> Self {
-        Model {
-            robot,
-            tensions: robot.tendons.iter().map(|t| t.tension()).collect(),
-            tension_factor: 1.0,
-            load_factor: 1.0,
-            parameter: None,
-        }
+        Self::new_in(robot, Vec::with_capacity(robot.tendons.len()))
     }
 
     /// [`Model::new`] with the tensions written into `buffer` (its contents replaced), which
