@@ -181,7 +181,7 @@ pub(super) fn switch(
         let Some((next, next_fl)) = tangent(system, homotopy, ws, x, lambda, Some(previous), report) else {
             continue;
         };
-        let mut unstable = index(system, ws, report);
+        let mut unstable = index(system, ws, &next.x, family.is_some(), report);
         let mut next = Some((next, next_fl));
         if unstable.is_some_and(|k| k > unstable_before) {
             match family {
@@ -196,7 +196,7 @@ pub(super) fn switch(
                 None => {
                     let (p, _) = next.take()?;
                     next = converged(system, homotopy, ws, p, settings, report);
-                    unstable = next.as_ref().and_then(|_| index(system, ws, report));
+                    unstable = next.as_ref().and_then(|(p, _)| index(system, ws, &p.x, false, report));
                 }
             }
         }

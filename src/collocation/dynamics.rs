@@ -301,6 +301,27 @@ pub(crate) fn assess(system: &System, x: &[State], ws: &mut Workspace) -> Stabil
     modes(system, x, ws, KRYLOV, false, &mut |_| true).stability
 }
 
+/// The mu (1/s^2) of the lowest vibration mode at the equilibrium `x` of `system` (the
+/// converged one of least |mu|), with the factors of its Jacobian at `x` held in `ws`; None
+/// when that mode did not converge or a solve failed. `equilibrium::stability_of` reads its
+/// sign where the conjugate-point test finds a root at the base.
+pub(crate) fn lowest(system: &System, x: &[State], ws: &mut Workspace) -> Option<Complex<f64>> {
+    modes(system, x, ws, KRYLOV, false, &mut |_| true)
+        .eigenvalues
+        .first()
+        .copied()
+}
+
+/// The rod's bending scale EI / (rho A L^4) (1/s^2) at its base, with the mass of [`Mass`]:
+/// omega^2 of its lowest bending modes is of this order (a clamped-free rod's first is 12.4
+/// times it), and a uniform change of the density scales it as every mu.
+pub(crate) fn bending_scale(system: &System) -> f64 {
+    let robot = system.model.robot;
+    let section = robot.rod.section_at(0.0).section;
+    let ratio = DENSITY / robot.rod.geometry.map_or(MODULUS, |g| g.youngs_modulus);
+    section.kbt[0].min(section.kbt[1]) / (ratio * section.kse[2] * robot.length().powi(4))
+}
+
 /// [`assess`] for a system bordered by massless unknowns (the tensions of
 /// displacement-controlled tendons, `collocation/constrained.rs`): `border` turns each solve
 /// a = J^-1 M z into the bordered solve's x part (for the tendons, a - X A^-1 G a), false

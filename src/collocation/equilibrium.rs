@@ -9,7 +9,7 @@ use super::options::{Equilibrium, Options};
 use super::path;
 use super::pipeline::not_converged;
 use super::system::System;
-use super::{dynamics, stability};
+use super::{dynamics, neutral, stability};
 use crate::error::Result;
 use crate::mesh::{guess, spare};
 use crate::report::{PathTaken, SolveReport, Stability, Termination};
@@ -98,6 +98,8 @@ fn clean(history: &[crate::report::Iteration]) -> bool {
 /// factors) that is the guess, whose verdict a change of inputs can have made wrong. When
 /// `exact` (the end of a load path, whose factors may belong to a point before the end) the
 /// Jacobian at `x` is evaluated and factored, so that the error estimate's solve uses it too.
+/// A root the conjugate-point test leaves in the neutral zone at the base is decided by
+/// module `neutral`'s rule, the one the load path's count follows.
 pub(crate) fn stability_of(
     system: &System,
     ws: &mut Workspace,
@@ -118,23 +120,14 @@ pub(crate) fn stability_of(
             };
         }
     } else if !ws.jacobian_at_iterate() {
-        return ws
-            .verdict_at(system, x, report, |values| assess(values, system))
-            .unwrap_or_else(|| Stability::Unknown {
+        let Some(verdict) = ws.verdict_at(system, x, report, |values| neutral::count(values, system)) else {
+            return Stability::Unknown {
                 reason: "the Jacobian at the solution is not finite".into(),
-            });
+            };
+        };
+        return neutral::settle(system, ws, x, verdict, report);
     }
-    ws.verdict(|values| assess(values, system))
-}
-
-/// [`stability::assess`] of the Jacobian `values` of `system`, with the nodes' arc lengths
-/// in a buffer kept by the thread ([`spare`]).
-fn assess(values: &[f64], system: &System) -> Stability {
-    let mut s = spare::take(system.mesh.nodes.len());
-    s.extend(system.mesh.nodes.iter().map(|n| n.s));
-    let verdict = stability::assess(values, &s);
-    spare::give(s);
-    verdict
+    neutral::verdict(system, ws, x, report)
 }
 
 /// The verdict [`stability_of`] would return for the last iterate of `ws` without evaluating

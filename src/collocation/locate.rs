@@ -139,7 +139,7 @@ fn bisect_count(
         if term != Termination::Converged || !ws.linearize(system, &x, report) {
             break;
         }
-        if index(system, ws, report) == before {
+        if index(system, ws, &x, false, report) == before {
             lo = m;
         } else {
             (hi, past) = (m, Some(x.clone()));

@@ -45,6 +45,7 @@ pub(crate) mod friction;
 mod homotopy;
 pub(crate) mod linear;
 mod locate;
+mod neutral;
 pub(crate) mod newton;
 mod options;
 mod order8;

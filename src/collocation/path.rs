@@ -93,15 +93,28 @@ fn neutral(before: Option<usize>, next: Option<usize>) -> Option<usize> {
     }
 }
 
-/// Unstable directions at the point whose Jacobian `ws` holds: None when unknown.
-pub(super) fn index(system: &System, ws: &mut Workspace, report: &mut SolveReport) -> Option<usize> {
+/// Unstable directions at `x`, whose Jacobian `ws` holds (evaluated at `x`): None when
+/// unknown. A root of the conjugate-point test in the neutral zone at the base is decided by
+/// the rule an answer's verdict follows (module `neutral`), so that a path loses stability
+/// where the answer's verdict says it does; on a family's branch (`family`, module `phase`)
+/// such a root is the family's own direction and is left out undecided (the count there is
+/// guarded by [`neutral`]; the end state's verdict decides it).
+pub(super) fn index(
+    system: &System,
+    ws: &mut Workspace,
+    x: &[State],
+    family: bool,
+    report: &mut SolveReport,
+) -> Option<usize> {
     if stability::non_conservative(&system.model).is_some() {
         return None;
     }
     let t = std::time::Instant::now();
-    let s: Vec<f64> = system.mesh.nodes.iter().map(|n| n.s).collect();
-    let verdict = ws.verdict(|values| stability::assess(values, &s));
+    let mut verdict = ws.verdict_counted(|values| super::neutral::count(values, system));
     report.timings.stability += t.elapsed();
+    if !family {
+        verdict = super::neutral::settle(system, ws, x, verdict, report);
+    }
     match verdict {
         Stability::Stable => Some(0),
         Stability::Unstable { directions, .. } => Some(directions),
@@ -174,7 +187,7 @@ pub(super) fn follow(
     let Some((mut point, _)) = tangent(system, &homotopy, ws, x, 0.0, None, report) else {
         return Err(("the path's first tangent is not finite".into(), 0));
     };
-    let mut unstable = index(system, ws, report);
+    let mut unstable = index(system, ws, &point.x, false, report);
     let mut folds = Vec::new();
     let mut bifurcations = Vec::new();
     // From a warm start the first try is the whole way: predict with the sensitivities
@@ -268,7 +281,7 @@ pub(super) fn follow(
             // The landing is a step like any other: if it changes the number of unstable
             // directions it jumped to another branch near a bifurcation (unless it is short).
             let mut landed_unstable = if term == Termination::Converged && ws.linearize(system, &landed, report) {
-                index(system, ws, report)
+                index(system, ws, &landed, phase.is_some(), report)
             } else {
                 None
             };
@@ -390,7 +403,7 @@ pub(super) fn follow(
                     break;
                 };
                 let fold = (next.tl > 0.0) != (point.tl > 0.0);
-                let mut next_unstable = index(system, ws, report);
+                let mut next_unstable = index(system, ws, &next.x, phase.is_some(), report);
                 if phase.is_some() {
                     next_unstable = neutral(unstable, next_unstable);
                 }
@@ -406,7 +419,7 @@ pub(super) fn follow(
                         super::corrector::polish(system, &homotopy, ws, &next, settings, report, &mut phase)
                 {
                     next = p;
-                    next_unstable = index(system, ws, report);
+                    next_unstable = index(system, ws, &next.x, phase.is_some(), report);
                 }
                 if let (Some(a), Some(b)) = (unstable, next_unstable)
                     && a != b

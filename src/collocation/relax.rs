@@ -98,7 +98,7 @@ pub(super) fn relax(
             let mut y = x.clone();
             let (term, _) = newton::run(system, ws, &mut y, &finish, report);
             if term == Termination::Converged && ws.linearize(system, &y, report) {
-                match index(system, ws, report) {
+                match index(system, ws, &y, false, report) {
                     Some(0) => return Some(y),
                     // At rest on an unstable state (a large dt lets the implicit step stop
                     // where the motion would not): the motion goes on from it along its

@@ -45,7 +45,7 @@ pub(super) fn land_from_folds(
         let (term, _) = newton::run(system, ws, &mut landed, &land, report);
         if term == Termination::Converged
             && ws.linearize(system, &landed, report)
-            && index(system, ws, report) == Some(0)
+            && index(system, ws, &landed, false, report) == Some(0)
         {
             report.termination = term;
             return Some((*lambda, landed));

@@ -73,8 +73,18 @@ pub fn non_conservative(model: &Model) -> Option<String> {
 }
 
 /// The verdict for the Jacobian `values` (in [`pattern`](super::unknowns::pattern) order)
-/// at an equilibrium on a mesh with node arc lengths `s` (m).
+/// at an equilibrium on a mesh with node arc lengths `s` (m): the conjugate points alone, a
+/// root within [`NEUTRAL`] of the base not counted ([`count`] says whether there was one).
 pub fn assess(values: &[f64], s: &[f64]) -> Stability {
+    count(values, s).0
+}
+
+/// [`assess`], with the conjugate points it left out as within [`NEUTRAL`] of the base, if
+/// there were any (how many, counted with multiplicity, and the arc length of the first, m): a root there is either a neutral direction
+/// (rounding of an exact zero) or an unstable direction that has just appeared, which the
+/// position alone cannot tell apart (docs/stability.md, "A root at the base");
+/// `equilibrium::stability_of` decides by the linearized dynamics.
+pub(crate) fn count(values: &[f64], s: &[f64]) -> (Stability, Option<(usize, f64)>) {
     let nodes = s.len();
     let links = nodes - 1;
     let link_block = NODE * 2 * NODE;
@@ -84,9 +94,12 @@ pub fn assess(values: &[f64], s: &[f64]) -> Stability {
     let t_theta = tip.fixed_view::<6, 3>(0, 0).into_owned();
     let t_vu: Matrix6<f64> = tip.fixed_view::<6, 6>(0, 3).into_owned();
     let Some(t_vu_lu) = t_vu.try_inverse() else {
-        return Stability::Unknown {
-            reason: "the linearized tip conditions do not fix the tip strains (singular tip block)".into(),
-        };
+        return (
+            Stability::Unknown {
+                reason: "the linearized tip conditions do not fix the tip strains (singular tip block)".into(),
+            },
+            None,
+        );
     };
     // Identity in (dp, dtheta); (dv, du) = -T_vu^-1 T_theta dtheta.
     let vu = -t_vu_lu * t_theta;
@@ -102,6 +115,7 @@ pub fn assess(values: &[f64], s: &[f64]) -> Stability {
 
     let mut count = 0;
     let mut first = None;
+    let mut neutral = None;
     // The fields are kept normalized so that their (dp, dtheta) block is the identity (a
     // change of basis, which moves no root): then Q0 = I, and most links need only the
     // bound on Q1 - I to exclude a root. Near a conjugate point, where Q1 is nearly
@@ -114,18 +128,24 @@ pub fn assess(values: &[f64], s: &[f64]) -> Stability {
             .ok()
             .and_then(|b| advance(b, &y, identity))
         else {
-            return Stability::Unknown {
-                reason: format!(
-                    "the linearized equations of the link at s = {:.4} m cannot be carried across it",
-                    s[k]
-                ),
-            };
+            return (
+                Stability::Unknown {
+                    reason: format!(
+                        "the linearized equations of the link at s = {:.4} m cannot be carried across it",
+                        s[k]
+                    ),
+                },
+                None,
+            );
         };
         let next = &link.next;
         if !next.iter().flatten().all(|v| v.is_finite()) {
-            return Stability::Unknown {
-                reason: format!("the Jacobi fields became non-finite at s = {:.4} m", s[k]),
-            };
+            return (
+                Stability::Unknown {
+                    reason: format!("the Jacobi fields became non-finite at s = {:.4} m", s[k]),
+                },
+                None,
+            );
         }
         // Every eigenvalue mu of Q1 - I has |mu| <= its max row sum; a root needs mu <= -1.
         let mut roots = match identity {
@@ -141,6 +161,15 @@ pub fn assess(values: &[f64], s: &[f64]) -> Stability {
             // negative one: the state is on the verge (exactly at a fold or bifurcation), or
             // it has a neutral direction along a continuous symmetry (a perfectly round
             // column buckles in any plane, and turning the plane costs no energy).
+            let arc = |t: f64| s[1] + t * (s[0] - s[1]);
+            let dropped: Vec<f64> = roots
+                .iter()
+                .copied()
+                .filter(|&t| (1.0 - t) * s[1] < NEUTRAL * s[links])
+                .collect();
+            if let Some(&t) = dropped.first() {
+                neutral = Some((dropped.len(), arc(t)));
+            }
             roots.retain(|&t| (1.0 - t) * s[1] >= NEUTRAL * s[links]);
         }
         if let Some(&t) = roots.first() {
@@ -159,13 +188,14 @@ pub fn assess(values: &[f64], s: &[f64]) -> Stability {
             }
         }
     }
-    match first {
+    let verdict = match first {
         None => Stability::Stable,
         Some(s) => Stability::Unstable {
             directions: count,
             conjugate_point: s,
         },
-    }
+    };
+    (verdict, neutral)
 }
 
 /// The (dp, dtheta) block Q of `fields`, as a matrix.

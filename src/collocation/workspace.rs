@@ -64,6 +64,7 @@ pub(crate) fn spare(mesh: &Mesh, solver: LinearSolver) -> Option<(Mesh, Workspac
         let (mesh, _, mut workspace) = kept.remove(at);
         workspace.factored = false;
         workspace.verdict = None;
+        workspace.neutral = None;
         workspace.drift = f64::INFINITY;
         workspace.unfactored = false;
         workspace.dynamics = None;
@@ -100,6 +101,10 @@ pub struct Workspace {
     /// The stability verdict of the Jacobian in `values`, once assessed (cleared whenever
     /// `values` change).
     pub(super) verdict: Option<Stability>,
+    /// The conjugate points the verdict in `verdict` left out as within the neutral zone at
+    /// the base (how many, and the arc length of the first, m) ([`super::stability::count`]), for
+    /// `equilibrium::stability_of` to decide by the linearized dynamics.
+    neutral: Option<(usize, f64)>,
     /// How far the last iterate has moved from the point where the Jacobian in `values` was
     /// evaluated: the sum of the max-norms of the (scaled) steps accepted since, infinite
     /// when that point is not known ([`Workspace::factor`], [`Workspace::solve_linear`]).
@@ -138,6 +143,7 @@ impl Workspace {
             trial_rates_valid: false,
             factored: false,
             verdict: None,
+            neutral: None,
             drift: f64::INFINITY,
             unfactored: false,
             dynamics: None,
@@ -168,6 +174,7 @@ impl Workspace {
     /// Returns false for a zero pivot or a non-finite step.
     pub(super) fn solve(&mut self, report: &mut SolveReport) -> bool {
         self.verdict = None;
+        self.neutral = None;
         self.dynamics = None;
         self.unfactored = false;
         for (r, f) in self.rhs.iter_mut().zip(&self.residual) {
@@ -188,6 +195,7 @@ impl Workspace {
     /// the factors held and the verdicts belong to no Jacobian now.
     pub(super) fn assembled(&mut self) {
         self.verdict = None;
+        self.neutral = None;
         self.dynamics = None;
         self.unfactored = false;
         self.factored = false;
@@ -295,12 +303,37 @@ impl Workspace {
     /// by `assess` once per Jacobian: warm-started solves that converge by chord steps on
     /// an earlier, nearby Jacobian reuse its verdict at no cost.
     pub fn verdict(&mut self, assess: impl FnOnce(&[f64]) -> Stability) -> Stability {
+        self.verdict_counted(|values| (assess(values), None))
+    }
+
+    /// [`Workspace::verdict`] for the conjugate-point test [`super::stability::count`], which
+    /// also says where it left out a root in the neutral zone at the base, kept with the
+    /// verdict ([`Workspace::neutral_root`]).
+    pub(crate) fn verdict_counted(
+        &mut self,
+        assess: impl FnOnce(&[f64]) -> (Stability, Option<(usize, f64)>),
+    ) -> Stability {
         if self.verdict.is_none() {
-            self.verdict = Some(assess(&self.values));
+            let (verdict, neutral) = assess(&self.values);
+            self.verdict = Some(verdict);
+            self.neutral = neutral;
         }
         self.verdict.clone().unwrap_or_else(|| Stability::Unknown {
             reason: crate::report::NOT_ASSESSED.into(),
         })
+    }
+
+    /// The roots in the neutral zone that the verdict held left out (how many, and the arc
+    /// length of the first, m), if it did and nothing has decided it since ([`Workspace::settle_verdict`]).
+    pub(crate) fn neutral_root(&self) -> Option<(usize, f64)> {
+        self.verdict.as_ref().and(self.neutral)
+    }
+
+    /// Replaces the verdict held (of the Jacobian in the value buffer) by `verdict`, the
+    /// decision on its neutral root.
+    pub(crate) fn settle_verdict(&mut self, verdict: Stability) {
+        self.verdict = Some(verdict);
+        self.neutral = None;
     }
 
     /// The stability verdict of the Jacobian of `system` at `x`, assessed by `assess`, for a
@@ -314,7 +347,7 @@ impl Workspace {
         system: &System,
         x: &[State],
         report: &mut SolveReport,
-        assess: impl FnOnce(&[f64]) -> Stability,
+        assess: impl FnOnce(&[f64]) -> (Stability, Option<(usize, f64)>),
     ) -> Option<Stability> {
         let t = Instant::now();
         let ok = system.jacobian(x, &mut self.trial_residual, &mut self.values).is_ok();
@@ -322,20 +355,22 @@ impl Workspace {
         report.evaluations.jacobian += 1;
         report.evaluations.equations += system.rate_evaluations();
         self.verdict = None;
+        self.neutral = None;
         self.drift = 0.0;
         self.unfactored = true;
         if !ok || !all_finite(&self.values) {
             return None;
         }
-        Some(self.verdict(assess))
+        Some(self.verdict_counted(assess))
     }
 
     /// The verdict already assessed of the Jacobian in the value buffer, when that Jacobian
     /// belongs to the last iterate ([`Workspace::jacobian_at_iterate`]) and the workspace holds
-    /// factors (as [`super::equilibrium::stability_of`] requires before it reuses a verdict);
+    /// factors (as [`super::equilibrium::stability_of`] requires before it reuses a verdict),
+    /// and it left no root in the neutral zone at the base undecided ([`Workspace::neutral_root`]);
     /// None otherwise.
     pub(crate) fn held_verdict(&self) -> Option<Stability> {
-        if self.factored && self.jacobian_at_iterate() {
+        if self.factored && self.jacobian_at_iterate() && self.neutral.is_none() {
             self.verdict.clone()
         } else {
             None
@@ -369,12 +404,12 @@ impl Workspace {
         if !self.unfactored {
             return self.factored;
         }
-        let verdict = self.verdict.take();
+        let (verdict, neutral) = (self.verdict.take(), self.neutral);
         self.residual.fill(0.0);
         self.rates_valid = false;
         let mut report = SolveReport::new(crate::report::Method::Collocation);
         let ok = self.solve(&mut report);
-        self.verdict = verdict;
+        (self.verdict, self.neutral) = (verdict, neutral);
         ok
     }
 

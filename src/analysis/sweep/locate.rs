@@ -7,6 +7,7 @@
 
 use super::{Event, JUMP_SHARE, Kind, LOCATED, Mark, Sweep};
 use crate::solution::Solution;
+use nalgebra::Vector3;
 
 /// The most sub-steps [`Sweep::reach`] splits a bisection step into when following an
 /// unstable branch: eight equal pieces of the step before a failure counts as the branch's end
@@ -90,17 +91,30 @@ impl Sweep<'_> {
         None
     }
 
-    /// The tip (m) of the stable state at `at` (in steps) reached from `stable` (a later
-    /// step's stable state): where the robot lands when it snaps at `at`; `stable`'s own tip
-    /// when that state cannot be reached stable.
-    pub(super) fn landing(&self, at: f64, stable: &Mark) -> nalgebra::Vector3<f64> {
-        let landed = self
-            .ranges
-            .robot(at)
-            .ok()
-            .and_then(|robot| self.solve(&robot, Some(&stable.solution)).ok());
-        match landed {
-            Some(s) if s.report.stability.is_stable() => s.tip_position(),
+    /// The tip (m) where the robot lands when it snaps at `at` (in steps) from the state
+    /// whose tip was `lost` (m): the state at `at` on the branch of `stable` (a later step's
+    /// stable state), reached by Newton from it ([`Sweep::follow`]); where Newton does not
+    /// reach that branch (it ends before `at`, or Newton falls back onto the lost state), the
+    /// stable state the sweep's solve from `stable` reaches; `stable`'s own tip when neither
+    /// leaves the lost state. The branch, not the stable state nearest the loss: where the
+    /// lost state swings round the vertical to that branch through a family of stable states
+    /// (the payload robot and the gallery's column, whose two planar states lose and gain
+    /// their stability a few millionths of the range apart, docs/stability.md "A root at the
+    /// base"), the member the robot is on just past the loss depends on where the bracket
+    /// ends, the branch it comes to does not.
+    pub(super) fn landing(&self, at: f64, stable: &Mark, lost: Vector3<f64>) -> Vector3<f64> {
+        let Ok(robot) = self.ranges.robot(at) else {
+            return stable.tip();
+        };
+        let length = stable.solution.nodes.last().map_or(0.0, |n| n.s);
+        let left = |s: &Solution| (s.tip_position() - lost).norm() > JUMP_SHARE * length;
+        if let Ok(s) = self.follow(&robot, &stable.solution)
+            && left(&s)
+        {
+            return s.tip_position();
+        }
+        match self.solve(&robot, Some(&stable.solution)) {
+            Ok(s) if s.report.stability.is_stable() && left(&s) => s.tip_position(),
             _ => stable.tip(),
         }
     }

@@ -345,7 +345,7 @@ impl<'r> Sweep<'r> {
                     && right.unstable == Some(0)
                     && let Some((at, tip)) = self.lost
                 {
-                    let landed = self.landing(at, &right);
+                    let landed = self.landing(at, &right, tip);
                     events.push(self.event(
                         Kind::Snap {
                             distance: (landed - tip).norm(),

@@ -1,0 +1,89 @@
+//! A conjugate point in the neutral zone at the base (docs/stability.md, "A root at the
+//! base"): the one rule that decides it, for the verdict of an answer
+//! (`equilibrium::stability_of`) and for the count a path follows (`path::index`) alike.
+//!
+//! The conjugate-point test ([`stability::count`]) leaves out a root of det Q within
+//! `stability::NEUTRAL` of the base. Such a root is either the rounding of an exact zero of
+//! the second variation (the neutral direction of a perfectly round buckled column, which
+//! turns its plane at no cost) or an unstable direction that has just appeared (the payload
+//! robot's swing round the vertical, whose conjugate point leaves the base slowly); its
+//! position cannot tell the two apart, the lowest mode of the linearized dynamics can. Only
+//! a state with such a root pays for the modes.
+
+use super::dynamics;
+use super::newton::Workspace;
+use super::stability;
+use super::system::System;
+use crate::mesh::spare;
+use crate::report::{SolveReport, Stability};
+use crate::solution::State;
+
+/// The lowest vibration mode's mu (1/s^2) that counts as negative, as a fraction of the
+/// rod's bending scale EI / (rho A L^4) ([`dynamics::bending_scale`]): the exact zero of a
+/// round buckled column comes out within 1.4e-11 of it (rounding, either sign), the payload
+/// robot's swing at 1.78 mN, 1e-3 mN past its loss of stability, at -3.2e-5
+/// (docs/stability.md).
+const NEUTRAL_MODE: f64 = 1e-8;
+
+/// The conjugate-point verdict of the Jacobian of `system` at `x` that `ws` holds (its
+/// values evaluated at `x`), a root in the neutral zone decided ([`settle`]). Assessed once
+/// per Jacobian: a verdict already held is returned as it is.
+pub(super) fn verdict(system: &System, ws: &mut Workspace, x: &[State], report: &mut SolveReport) -> Stability {
+    let verdict = ws.verdict_counted(|values| count(values, system));
+    settle(system, ws, x, verdict, report)
+}
+
+/// [`stability::count`] of the Jacobian `values` of `system`, with the nodes' arc lengths
+/// in a buffer kept by the thread ([`spare`]).
+pub(super) fn count(values: &[f64], system: &System) -> (Stability, Option<(usize, f64)>) {
+    let mut s = spare::take(system.mesh.nodes.len());
+    s.extend(system.mesh.nodes.iter().map(|n| n.s));
+    let verdict = stability::count(values, &s);
+    spare::give(s);
+    verdict
+}
+
+/// The conjugate-point `verdict` of `x` (the one `ws` holds), decided where it left out a
+/// root in the neutral zone at the base ([`Workspace::neutral_root`]): the lowest mode of the
+/// linearized dynamics ([`dynamics::lowest`]) with mu below -[`NEUTRAL_MODE`] times the
+/// rod's bending scale makes the roots left out unstable directions (all of them: a straight
+/// round column's come in pairs), added to the verdict's count; otherwise they are neutral
+/// directions and the verdict stands. The decision replaces the verdict held.
+///
+/// Only such a state pays for the modes (the Jacobian factored at `x` when its factors are
+/// not there, and Arnoldi's solves with them); a state whose modes cannot be computed keeps
+/// `verdict`, as before the rule.
+pub(super) fn settle(
+    system: &System,
+    ws: &mut Workspace,
+    x: &[State],
+    verdict: Stability,
+    report: &mut SolveReport,
+) -> Stability {
+    let Some((dropped, root)) = ws.neutral_root() else {
+        return verdict;
+    };
+    if !ws.factors_at_iterate() && !ws.linearize(system, x, report) {
+        return verdict;
+    }
+    let t = std::time::Instant::now();
+    let lowest = dynamics::lowest(system, x, ws);
+    report.timings.stability += t.elapsed();
+    let negative = lowest.is_some_and(|mu| mu.re < -NEUTRAL_MODE * dynamics::bending_scale(system));
+    let settled = match verdict {
+        Stability::Stable if negative => Stability::Unstable {
+            directions: dropped,
+            conjugate_point: root,
+        },
+        Stability::Unstable {
+            directions,
+            conjugate_point,
+        } if negative => Stability::Unstable {
+            directions: directions + dropped,
+            conjugate_point,
+        },
+        other => other,
+    };
+    ws.settle_verdict(settled.clone());
+    settled
+}
