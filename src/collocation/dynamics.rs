@@ -303,8 +303,8 @@ pub(crate) fn assess(system: &System, x: &[State], ws: &mut Workspace) -> Stabil
 
 /// The mu (1/s^2) of the lowest vibration mode at the equilibrium `x` of `system` (the
 /// converged one of least |mu|), with the factors of its Jacobian at `x` held in `ws`; None
-/// when that mode did not converge or a solve failed. `equilibrium::stability_of` reads its
-/// sign where the conjugate-point test finds a root at the base.
+/// when that mode did not converge or a solve failed. Module `neutral` reads its sign where
+/// the conjugate-point test leaves a root in the neutral zone at the base.
 pub(crate) fn lowest(system: &System, x: &[State], ws: &mut Workspace) -> Option<Complex<f64>> {
     modes(system, x, ws, KRYLOV, false, &mut |_| true)
         .eigenvalues

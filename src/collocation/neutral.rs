@@ -12,7 +12,7 @@
 
 use super::dynamics;
 use super::newton::Workspace;
-use super::stability;
+use super::stability::{self, NeutralRoots};
 use super::system::System;
 use crate::mesh::spare;
 use crate::report::{SolveReport, Stability};
@@ -35,7 +35,7 @@ pub(super) fn verdict(system: &System, ws: &mut Workspace, x: &[State], report: 
 
 /// [`stability::count`] of the Jacobian `values` of `system`, with the nodes' arc lengths
 /// in a buffer kept by the thread ([`spare`]).
-pub(super) fn count(values: &[f64], system: &System) -> (Stability, Option<(usize, f64)>) {
+pub(super) fn count(values: &[f64], system: &System) -> (Stability, Option<NeutralRoots>) {
     let mut s = spare::take(system.mesh.nodes.len());
     s.extend(system.mesh.nodes.iter().map(|n| n.s));
     let verdict = stability::count(values, &s);

@@ -39,7 +39,8 @@ const _: () = assert!(P == 0 && THETA == 3 && V == 6 && U == 9);
 /// A root of det Q within this fraction of the rod length from the base counts as at the
 /// base (a singular second variation, not an unstable direction): in a converged state,
 /// rounding moves an exact zero (the neutral direction of a perfectly round buckled
-/// column) by up to 5e-8 L (measured: 2e-8 to 5e-8 L).
+/// column) by up to 5e-8 L (measured: 2e-8 to 5e-8 L). Such a root is reported with the
+/// verdict ([`count`]) and decided by module `neutral`.
 const NEUTRAL: f64 = 1e-6;
 
 /// Why the conjugate-point test cannot decide stability for the loads of `model` (its
@@ -79,12 +80,16 @@ pub fn assess(values: &[f64], s: &[f64]) -> Stability {
     count(values, s).0
 }
 
-/// [`assess`], with the conjugate points it left out as within [`NEUTRAL`] of the base, if
-/// there were any (how many, counted with multiplicity, and the arc length of the first, m): a root there is either a neutral direction
-/// (rounding of an exact zero) or an unstable direction that has just appeared, which the
-/// position alone cannot tell apart (docs/stability.md, "A root at the base");
-/// `equilibrium::stability_of` decides by the linearized dynamics.
-pub(crate) fn count(values: &[f64], s: &[f64]) -> (Stability, Option<(usize, f64)>) {
+/// The conjugate points [`count`] left out as within [`NEUTRAL`] of the base: how many
+/// (counted with multiplicity) and the arc length of the first (m).
+pub(crate) type NeutralRoots = (usize, f64);
+
+/// [`assess`], with the roots it left out as within [`NEUTRAL`] of the base, if there were
+/// any. A root there is either a neutral direction (rounding of an exact zero) or an unstable
+/// direction that has just appeared, which the position alone cannot tell apart; module
+/// `neutral` decides it by the lowest vibration mode (docs/stability.md, "A root at the
+/// base").
+pub(crate) fn count(values: &[f64], s: &[f64]) -> (Stability, Option<NeutralRoots>) {
     let nodes = s.len();
     let links = nodes - 1;
     let link_block = NODE * 2 * NODE;
@@ -161,16 +166,14 @@ pub(crate) fn count(values: &[f64], s: &[f64]) -> (Stability, Option<(usize, f64
             // negative one: the state is on the verge (exactly at a fold or bifurcation), or
             // it has a neutral direction along a continuous symmetry (a perfectly round
             // column buckles in any plane, and turning the plane costs no energy).
-            let arc = |t: f64| s[1] + t * (s[0] - s[1]);
-            let dropped: Vec<f64> = roots
-                .iter()
-                .copied()
-                .filter(|&t| (1.0 - t) * s[1] < NEUTRAL * s[links])
-                .collect();
+            // A root there may also be an unstable direction that has just appeared: the
+            // roots left out are kept for module `neutral` to decide.
+            let (kept, dropped): (Vec<f64>, Vec<f64>) =
+                roots.iter().partition(|&&t| (1.0 - t) * s[1] >= NEUTRAL * s[links]);
             if let Some(&t) = dropped.first() {
-                neutral = Some((dropped.len(), arc(t)));
+                neutral = Some((dropped.len(), s[1] + t * (s[0] - s[1])));
             }
-            roots.retain(|&t| (1.0 - t) * s[1] >= NEUTRAL * s[links]);
+            roots = kept;
         }
         if let Some(&t) = roots.first() {
             first.get_or_insert(s[k + 1] + t * (s[k] - s[k + 1]));

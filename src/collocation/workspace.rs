@@ -5,6 +5,7 @@
 
 use super::linear::{Linear, LinearSolver};
 use super::newton::STEP_TOLERANCE;
+use super::stability::NeutralRoots;
 use super::system::{System, SystemBuffers};
 use super::unknowns::nonzeros;
 use crate::mesh::Mesh;
@@ -102,9 +103,9 @@ pub struct Workspace {
     /// `values` change).
     pub(super) verdict: Option<Stability>,
     /// The conjugate points the verdict in `verdict` left out as within the neutral zone at
-    /// the base (how many, and the arc length of the first, m) ([`super::stability::count`]), for
-    /// `equilibrium::stability_of` to decide by the linearized dynamics.
-    neutral: Option<(usize, f64)>,
+    /// the base ([`super::stability::count`]) and nothing has decided yet (module `neutral`
+    /// decides them by the linearized dynamics, [`Workspace::settle_verdict`]).
+    neutral: Option<NeutralRoots>,
     /// How far the last iterate has moved from the point where the Jacobian in `values` was
     /// evaluated: the sum of the max-norms of the (scaled) steps accepted since, infinite
     /// when that point is not known ([`Workspace::factor`], [`Workspace::solve_linear`]).
@@ -311,7 +312,7 @@ impl Workspace {
     /// verdict ([`Workspace::neutral_root`]).
     pub(crate) fn verdict_counted(
         &mut self,
-        assess: impl FnOnce(&[f64]) -> (Stability, Option<(usize, f64)>),
+        assess: impl FnOnce(&[f64]) -> (Stability, Option<NeutralRoots>),
     ) -> Stability {
         if self.verdict.is_none() {
             let (verdict, neutral) = assess(&self.values);
@@ -323,14 +324,14 @@ impl Workspace {
         })
     }
 
-    /// The roots in the neutral zone that the verdict held left out (how many, and the arc
-    /// length of the first, m), if it did and nothing has decided it since ([`Workspace::settle_verdict`]).
-    pub(crate) fn neutral_root(&self) -> Option<(usize, f64)> {
+    /// The roots in the neutral zone at the base that the verdict held left out, if it did and
+    /// nothing has decided them since ([`Workspace::settle_verdict`]).
+    pub(crate) fn neutral_root(&self) -> Option<NeutralRoots> {
         self.verdict.as_ref().and(self.neutral)
     }
 
     /// Replaces the verdict held (of the Jacobian in the value buffer) by `verdict`, the
-    /// decision on its neutral root.
+    /// decision on its roots in the neutral zone (module `neutral`).
     pub(crate) fn settle_verdict(&mut self, verdict: Stability) {
         self.verdict = Some(verdict);
         self.neutral = None;
@@ -347,7 +348,7 @@ impl Workspace {
         system: &System,
         x: &[State],
         report: &mut SolveReport,
-        assess: impl FnOnce(&[f64]) -> (Stability, Option<(usize, f64)>),
+        assess: impl FnOnce(&[f64]) -> (Stability, Option<NeutralRoots>),
     ) -> Option<Stability> {
         let t = Instant::now();
         let ok = system.jacobian(x, &mut self.trial_residual, &mut self.values).is_ok();
