@@ -15,8 +15,9 @@
 
 use super::homotopy::{Homotopy, Point, dot, tangent};
 use super::locate;
+use super::neutral::index;
 use super::newton::{self, Settings, Workspace};
-use super::path::{correct, index};
+use super::path::correct;
 use super::phase::{Phase, generic, kernel};
 use super::system::System;
 use crate::report::{SolveReport, Termination};

@@ -17,8 +17,9 @@
 //! expects after an accepted step.
 
 use super::homotopy::{Homotopy, Point, dot, tangent};
+use super::neutral::index;
 use super::newton::{self, Settings, Workspace};
-use super::path::{correct_to, index};
+use super::path::correct_to;
 use super::phase::{generic, kernel};
 use super::system::System;
 use crate::report::{SolveReport, Termination};

@@ -1,6 +1,7 @@
 //! A conjugate point in the neutral zone at the base (docs/stability.md, "A root at the
 //! base"): the one rule that decides it, for the verdict of an answer
-//! (`equilibrium::stability_of`) and for the count a path follows (`path::index`) alike.
+//! (`equilibrium::stability_of`, through [`verdict`] and [`settle`]) and for the count a path
+//! follows ([`index`]) alike.
 //!
 //! The conjugate-point test ([`stability::count`]) leaves out a root of det Q within
 //! `stability::NEUTRAL` of the base. Such a root is either the rounding of an exact zero of
@@ -24,6 +25,35 @@ use crate::solution::State;
 /// robot's swing at 1.78 mN, 1e-3 mN past its loss of stability, at -3.2e-5
 /// (docs/stability.md).
 const NEUTRAL_MODE: f64 = 1e-8;
+
+/// Unstable directions at `x`, whose Jacobian `ws` holds (evaluated at `x`), the count the
+/// paths follow (`path`, `branch`, `locate`, `snap`, `relax`): None when unknown. A root in
+/// the neutral zone is decided as in an answer's [`verdict`], so that a path loses stability
+/// where the verdict says it does; on a family's branch (`family`, module `phase`) such a
+/// root is the family's own direction and is left out undecided (the count there is guarded
+/// by `path::neutral`; the verdict of the path's end decides it).
+pub(super) fn index(
+    system: &System,
+    ws: &mut Workspace,
+    x: &[State],
+    family: bool,
+    report: &mut SolveReport,
+) -> Option<usize> {
+    if stability::non_conservative(&system.model).is_some() {
+        return None;
+    }
+    let t = std::time::Instant::now();
+    let mut verdict = ws.verdict_counted(|values| count(values, system));
+    report.timings.stability += t.elapsed();
+    if !family {
+        verdict = settle(system, ws, x, verdict, report);
+    }
+    match verdict {
+        Stability::Stable => Some(0),
+        Stability::Unstable { directions, .. } => Some(directions),
+        Stability::Growing { .. } | Stability::Unknown { .. } => None,
+    }
+}
 
 /// The conjugate-point verdict of the Jacobian of `system` at `x` that `ws` holds (its
 /// values evaluated at `x`), a root in the neutral zone decided ([`settle`]). Assessed once

@@ -22,16 +22,16 @@ use super::branch;
 pub(super) use super::corrector::{correct, correct_to};
 use super::homotopy::{Homotopy, Point, dot, tangent};
 use super::locate;
+use super::neutral::index;
 use super::newton::{self, Settings, Workspace};
 use super::options::Options;
 pub(super) use super::path_types::{End, Recorded, Start};
 use super::phase::{Phase, generic};
 use super::refine;
 use super::snap;
-use super::stability;
 use super::system::System;
 use crate::mesh::guess::rigid_estimate;
-use crate::report::{SolveReport, Stability, Termination};
+use crate::report::{SolveReport, Termination};
 use crate::solution::State;
 
 /// The most Newton iterations of the landing at lambda = 1 from the predicted point.
@@ -90,35 +90,6 @@ fn neutral(before: Option<usize>, next: Option<usize>) -> Option<usize> {
     match (before, next) {
         (Some(a), Some(b)) if a.abs_diff(b) == 1 => before,
         _ => next,
-    }
-}
-
-/// Unstable directions at `x`, whose Jacobian `ws` holds (evaluated at `x`): None when
-/// unknown. A root of the conjugate-point test in the neutral zone at the base is decided by
-/// the rule an answer's verdict follows (module `neutral`), so that a path loses stability
-/// where the answer's verdict says it does; on a family's branch (`family`, module `phase`)
-/// such a root is the family's own direction and is left out undecided (the count there is
-/// guarded by [`neutral`]; the end state's verdict decides it).
-pub(super) fn index(
-    system: &System,
-    ws: &mut Workspace,
-    x: &[State],
-    family: bool,
-    report: &mut SolveReport,
-) -> Option<usize> {
-    if stability::non_conservative(&system.model).is_some() {
-        return None;
-    }
-    let t = std::time::Instant::now();
-    let mut verdict = ws.verdict_counted(|values| super::neutral::count(values, system));
-    report.timings.stability += t.elapsed();
-    if !family {
-        verdict = super::neutral::settle(system, ws, x, verdict, report);
-    }
-    match verdict {
-        Stability::Stable => Some(0),
-        Stability::Unstable { directions, .. } => Some(directions),
-        Stability::Growing { .. } | Stability::Unknown { .. } => None,
     }
 }
 

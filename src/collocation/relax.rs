@@ -26,8 +26,8 @@
 
 use super::dynamics::Mass;
 use super::homotopy::{dot, max_norm};
+use super::neutral::index;
 use super::newton::{self, Settings, Workspace};
-use super::path::index;
 use super::phase::{generic, kernel};
 use super::system::System;
 use super::unknowns::{NODE, P, THETA};

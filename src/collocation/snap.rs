@@ -9,8 +9,8 @@
 use super::branch::SYMMETRIC_COS;
 use super::homotopy::{Homotopy, Point, dot};
 use super::locate;
+use super::neutral::index;
 use super::newton::{self, Settings, Workspace};
-use super::path::index;
 use super::phase::{Phase, generic, kernel};
 use super::relax::relax;
 use super::system::System;
