@@ -118,6 +118,7 @@ pub(crate) fn slipping(robot: &Robot) -> Vec<usize> {
 }
 
 /// One tendon with friction loading the backbone at one point (body frame).
+#[derive(Clone, Debug)]
 struct Slip {
     /// Its place in [`slipping`]'s list.
     slot: usize,
@@ -192,7 +193,9 @@ impl Slip {
 /// tension the model holds for it here ([`Model::tensions`]; for a tendon with friction, its
 /// tension at this s), with the friction multiplier w_j of each tendon of `slipping` from
 /// `multipliers` when given (a stick/slip history, docs/friction.md section 8), else its
-/// motion's sign. The large [`Point`] stays with the caller, so that it is not copied.
+/// motion's sign. The large [`Point`] stays with the caller, so that it is not copied; the
+/// slips go into `slips` (cleared first, its capacity kept).
+#[allow(clippy::too_many_arguments)]
 fn solve(
     model: &Model,
     point: &Point,
@@ -201,10 +204,11 @@ fn solve(
     (v, u): (&Vector3<f64>, &Vector3<f64>),
     slipping: &[usize],
     multipliers: Option<&[f64]>,
-) -> Result<(Vec<Slip>, Vector6<f64>)> {
+    slips: &mut Vec<Slip>,
+) -> Result<Vector6<f64>> {
     let x0 = point.rates();
     let tendons = &model.robot.tendons;
-    let mut slips = Vec::with_capacity(slipping.len());
+    slips.clear();
     for (c, (i, tension, rp)) in model.distributed_tendons(site.s, segment_end).enumerate() {
         let (Some(friction), Some(slot)) = (tendons[i].active_friction(), slipping.iter().position(|&j| j == i)) else {
             continue;
@@ -269,7 +273,7 @@ fn solve(
             change = change.max(d.abs());
         }
         x = x0;
-        for sl in &slips {
+        for sl in slips.iter() {
             x -= sl.y * sl.g;
         }
         // Converged to rounding: the last change below 1e-15 of the normal loads' size.
@@ -287,7 +291,7 @@ fn solve(
             });
         }
     }
-    Ok((slips, x))
+    Ok(x)
 }
 
 fn breakdown(s: f64) -> Error {
@@ -319,7 +323,8 @@ pub(crate) fn rates(
     let slipping = slipping(model.robot);
     let (R, v, u) = state;
     let point = Point::new(model, site, segment_end, (R, v, u))?;
-    let (slips, x) = solve(model, &point, site, segment_end, (v, u), &slipping, multipliers)?;
+    let mut slips = Vec::with_capacity(slipping.len());
+    let x = solve(model, &point, site, segment_end, (v, u), &slipping, multipliers, &mut slips)?;
     for sl in &slips {
         turning[slipping[sl.slot]] = relative(sl);
     }
@@ -341,7 +346,9 @@ fn relative(sl: &Slip) -> f64 {
 /// Eq. 13 with friction and its exact first derivatives at one point, for the collocation
 /// solve: at fixed tensions, the rates' [`Linearization`]; the rates' change with the log
 /// tension z_j = ln(tau_j / tau_j(0)) of each tendon with friction; the relative tension
-/// rates (turning) and their derivatives.
+/// rates (turning) and their derivatives. Refilled in place by [`linearize_into`], which
+/// keeps every buffer's capacity (with the scratch of its last evaluation), so that a
+/// linearization used again allocates nothing.
 #[derive(Clone, Debug)]
 pub(crate) struct FrictionLinearization {
     /// The rates and their derivatives in the strains and the rotation, tensions fixed.
@@ -357,6 +364,32 @@ pub(crate) struct FrictionLinearization {
     pub d_turning: Vec<SMatrix<f64, 1, 9>>,
     /// d(turning_j)/dz_l, row-major k x k.
     pub d_turning_log_tension: Vec<f64>,
+    /// Scratch of the evaluation: the slips loading the point, their gradients dg_i/dx and
+    /// their columns dPhi/dz_i.
+    slips: Vec<Slip>,
+    gradients: Vec<Vector6<f64>>,
+    columns: Vec<Vector6<f64>>,
+}
+
+impl Default for FrictionLinearization {
+    /// An empty linearization (zero rates, no tendons), to be filled by [`linearize_into`].
+    fn default() -> Self {
+        FrictionLinearization {
+            lin: Linearization {
+                rates: Vector6::zeros(),
+                d_strains: Matrix6::zeros(),
+                d_rotation: Matrix6x3::zeros(),
+            },
+            d_log_tension: Vec::new(),
+            turning: Vec::new(),
+            kappa: Vec::new(),
+            d_turning: Vec::new(),
+            d_turning_log_tension: Vec::new(),
+            slips: Vec::new(),
+            gradients: Vec::new(),
+            columns: Vec::new(),
+        }
+    }
 }
 
 /// [`FrictionLinearization`] at a site for the state (R, v, u), the tendons of `slipping`
@@ -367,7 +400,29 @@ pub(crate) struct FrictionLinearization {
 ///
 /// # Errors
 /// As [`rates`].
+#[cfg(test)]
 pub(crate) fn linearize(
+    model: &Model,
+    site: &Site,
+    segment_end: f64,
+    state: (&Matrix3<f64>, &Vector3<f64>, &Vector3<f64>),
+    slipping: &[usize],
+    multipliers: Option<&[f64]>,
+    derivatives: bool,
+) -> Result<FrictionLinearization> {
+    let mut out = FrictionLinearization::default();
+    linearize_into(model, site, segment_end, state, slipping, multipliers, derivatives, &mut out)?;
+    Ok(out)
+}
+
+/// [`linearize`] into `out`, whose buffers are cleared and refilled (their capacity kept):
+/// the same arithmetic, without allocating once `out` has held an evaluation of as many
+/// tendons. On an error `out` holds no valid linearization.
+///
+/// # Errors
+/// As [`rates`].
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn linearize_into(
     model: &Model,
     site: &Site,
     segment_end: f64,
@@ -375,37 +430,42 @@ pub(crate) fn linearize(
     slipping: &[usize],
     multipliers: Option<&[f64]>,
     derivatives: bool,
-) -> Result<FrictionLinearization> {
+    out: &mut FrictionLinearization,
+) -> Result<()> {
     let point = Point::new(model, site, segment_end, (R, v, u))?;
-    let (slips, x) = solve(model, &point, site, segment_end, (v, u), slipping, multipliers)?;
+    let x = solve(model, &point, site, segment_end, (v, u), slipping, multipliers, &mut out.slips)?;
+    let slips = &out.slips;
     let k = slipping.len();
-    let mut kappa = vec![0.0; k];
-    for sl in &slips {
+    let kappa = &mut out.kappa;
+    kappa.clear();
+    kappa.resize(k, 0.0);
+    for sl in slips {
         kappa[sl.slot] = path_turning(sl);
     }
+    let turning = &mut out.turning;
+    turning.clear();
+    turning.resize(k, 0.0);
+    for sl in slips {
+        turning[sl.slot] = relative(sl);
+    }
+    out.d_log_tension.clear();
+    out.d_turning.clear();
+    out.d_turning_log_tension.clear();
     if !derivatives {
-        let mut turning = vec![0.0; k];
-        for sl in &slips {
-            turning[sl.slot] = relative(sl);
-        }
-        return Ok(FrictionLinearization {
-            lin: Linearization {
-                rates: x,
-                d_strains: Matrix6::zeros(),
-                d_rotation: Matrix6x3::zeros(),
-            },
-            d_log_tension: Vec::new(),
-            turning,
-            kappa,
-            d_turning: Vec::new(),
-            d_turning_log_tension: Vec::new(),
-        });
+        out.lin = Linearization {
+            rates: x,
+            d_strains: Matrix6::zeros(),
+            d_rotation: Matrix6x3::zeros(),
+        };
+        return Ok(());
     }
     // dPhi/d(v, u, phi) at fixed x: eq. 13's dF plus the tangential loads' change,
     // sum_i (g_i de_i + e_i dg_i|x); then the columns dPhi/dz_i = (q_i, r_i x q_i) + e_i g_i.
     let dFt = point.derivative(model, site, segment_end, (v, u), &x.transpose())?;
     let mut rhs = SMatrix::<f64, 6, 9>::from_fn(|i, j| dFt[(j, i)]);
-    let mut columns = vec![Vector6::<f64>::zeros(); slips.len()];
+    let columns = &mut out.columns;
+    columns.clear();
+    columns.resize(slips.len(), Vector6::<f64>::zeros());
     for (sl, column) in slips.iter().zip(columns.iter_mut()) {
         let tp = &sl.tp;
         let P = Matrix3::identity() - tp.t * tp.t.transpose();
@@ -437,7 +497,9 @@ pub(crate) fn linearize(
     // dx = -J^-1 dPhi with J = M + sum_i e_i (dg_i/dx)^T, by Woodbury on M's factor:
     // J^-1 B = M^-1 B - Y S^-1 G^T M^-1 B, Y = [y_i], G = [dg_i/dx], S = I + G^T Y.
     let m_count = slips.len();
-    let gradients: Vec<Vector6<f64>> = slips.iter().map(Slip::gradient).collect();
+    let gradients = &mut out.gradients;
+    gradients.clear();
+    gradients.extend(slips.iter().map(Slip::gradient));
     // S, S^-1, a copy of S to factor and a column: on the stack for up to 3 tendons here.
     let square = m_count * m_count;
     let mut stack = [0.0; 30];
@@ -492,17 +554,18 @@ pub(crate) fn linearize(
     for c in 0..9 {
         dx.set_column(c, &-woodbury(rows.row(c).transpose()));
     }
-    let mut d_log_tension = vec![Vector6::zeros(); k];
-    for (sl, column) in slips.iter().zip(&columns) {
+    let d_log_tension = &mut out.d_log_tension;
+    d_log_tension.resize(k, Vector6::zeros());
+    for (sl, column) in slips.iter().zip(columns.iter()) {
         d_log_tension[sl.slot] = -solve_j(column).ok_or_else(|| breakdown(site.s))?;
     }
     // turning_j = w_j mu_j |q_j| / tau_j: d = (w_j mu_j / tau_j) q^_j . (dq_j|x + k P W dx).
-    let mut turning = vec![0.0; k];
-    let mut d_turning = vec![SMatrix::<f64, 1, 9>::zeros(); k];
-    let mut d_turning_log_tension = vec![0.0; k * k];
-    for sl in &slips {
+    let d_turning = &mut out.d_turning;
+    d_turning.resize(k, SMatrix::<f64, 1, 9>::zeros());
+    let d_turning_log_tension = &mut out.d_turning_log_tension;
+    d_turning_log_tension.resize(k * k, 0.0);
+    for sl in slips {
         let tp = &sl.tp;
-        turning[sl.slot] = relative(sl);
         // w mu / tau = w mu inv_speed / k
         let factor = sl.signed_mu * tp.inv_speed / tp.k;
         let QQ = tp.normal_derivative(&Vector3::new(x[0], x[1], x[2]), &Vector3::new(x[3], x[4], x[5]), u);
@@ -518,18 +581,12 @@ pub(crate) fn linearize(
             d_turning_log_tension[sl.slot * k + l] = factor * sl.q_hat.dot(&sl.normal_change(&d_log_tension[l]));
         }
     }
-    Ok(FrictionLinearization {
-        lin: Linearization {
-            rates: x,
-            d_strains: Matrix6::from_fn(|i, c| dx[(i, c)]),
-            d_rotation: Matrix6x3::from_fn(|i, c| dx[(i, 6 + c)]),
-        },
-        d_log_tension,
-        turning,
-        kappa,
-        d_turning,
-        d_turning_log_tension,
-    })
+    out.lin = Linearization {
+        rates: x,
+        d_strains: Matrix6::from_fn(|i, c| dx[(i, c)]),
+        d_rotation: Matrix6x3::from_fn(|i, c| dx[(i, 6 + c)]),
+    };
+    Ok(())
 }
 
 #[cfg(test)]

@@ -193,6 +193,8 @@ fn interval_at(
     };
     let (Some(jac), Some((p0, p1)), Some(pm)) = (jac, ends, pm) else {
         profile.keep_end(k, segment_end, b, zb, w, derivatives, lb);
+        profile.give(la);
+        profile.give(lm);
         return Ok(out);
     };
 
@@ -304,6 +306,8 @@ fn interval_at(
         out.psi_z[(j, count + j)] = 1.0;
     }
     profile.keep_end(k, segment_end, b, zb, w, derivatives, lb);
+    profile.give(la);
+    profile.give(lm);
     Ok(out)
 }
 
@@ -349,14 +353,18 @@ pub(crate) fn interval_order6(
                 Some(rates) => rates,
                 None => {
                     let lin = profile.point(site, segment_end, &state.R, (&state.v, &state.u), z, w, false)?;
-                    turning = lin.turning;
-                    lin.lin.rates
+                    turning.clone_from(&lin.turning);
+                    let rates = lin.lin.rates;
+                    profile.give(lin);
+                    rates
                 }
             },
             None => {
                 let lin = profile.point(site, segment_end, &R, (&v, &u), z, w, false)?;
-                turning = lin.turning;
-                lin.lin.rates
+                turning.clone_from(&lin.turning);
+                let rates = lin.lin.rates;
+                profile.give(lin);
+                rates
             }
         };
         let mut f = Block::zeros();

@@ -42,6 +42,9 @@ pub(crate) struct Profile<'a> {
     /// Each node's rates and turning rates from the last link that evaluated it, which the
     /// order-6 stages at the same node take instead of evaluating it again.
     nodes: RefCell<Vec<NodeRates>>,
+    /// Linearizations done with ([`Profile::give`]), refilled by the next points so that
+    /// evaluating eq. 13 with friction allocates nothing after the first links.
+    spare: RefCell<Vec<FrictionLinearization>>,
 }
 
 /// Eq. 13 with friction at a node (its rates and turning rates) and everything it was
@@ -96,6 +99,7 @@ impl<'a> Profile<'a> {
             order6: RefCell::new(vec![Vec::new(); mesh.nodes.len() - 1]),
             end: RefCell::new(None),
             nodes: RefCell::new((0..mesh.nodes.len()).map(|_| NodeRates::default()).collect()),
+            spare: RefCell::new(Vec::new()),
         }
     }
 
@@ -113,6 +117,7 @@ impl<'a> Profile<'a> {
             order6: RefCell::new(vec![Vec::new(); self.z[0].len() - 1]),
             end: RefCell::new(None),
             nodes: RefCell::new((0..self.z[0].len()).map(|_| NodeRates::default()).collect()),
+            spare: RefCell::new(Vec::new()),
         }
     }
 
@@ -212,7 +217,15 @@ impl<'a> Profile<'a> {
         for (j, &i) in self.slipping.iter().enumerate() {
             model.tensions[i] = self.tension(j, z[j]);
         }
-        friction::linearize(&model, site, segment_end, (R, y.0, y.1), &self.slipping, w, derivatives)
+        let mut lin = self.spare.borrow_mut().pop().unwrap_or_default();
+        friction::linearize_into(&model, site, segment_end, (R, y.0, y.1), &self.slipping, w, derivatives, &mut lin)?;
+        Ok(lin)
+    }
+
+    /// Takes back a linearization of [`Profile::point`] that its caller is done with, for
+    /// the next point to refill.
+    pub(super) fn give(&self, lin: FrictionLinearization) {
+        self.spare.borrow_mut().push(lin);
     }
 
     /// [`Profile::point`] at node k (state `a`, log tensions `z`, multipliers `w`), taken
@@ -229,16 +242,17 @@ impl<'a> Profile<'a> {
         w: Option<&[f64]>,
         derivatives: bool,
     ) -> Result<FrictionLinearization> {
-        let kept = self.end.borrow_mut().take();
-        if let Some(kept) = kept
-            && kept.node == k
-            && kept.segment_end == segment_end
-            && kept.state == *a
-            && kept.z == z
-            && kept.w.as_deref() == w
-            && (kept.derivatives || !derivatives)
-        {
-            return Ok(kept.lin);
+        if let Some(kept) = self.end.borrow_mut().take() {
+            if kept.node == k
+                && kept.segment_end == segment_end
+                && kept.state == *a
+                && kept.z == z
+                && kept.w.as_deref() == w
+                && (kept.derivatives || !derivatives)
+            {
+                return Ok(kept.lin);
+            }
+            self.give(kept.lin);
         }
         self.point(site, segment_end, &a.R, (&a.v, &a.u), z, w, derivatives)
     }
@@ -255,7 +269,7 @@ impl<'a> Profile<'a> {
         derivatives: bool,
         lin: FrictionLinearization,
     ) {
-        *self.end.borrow_mut() = Some(KeptEnd {
+        let old = self.end.borrow_mut().replace(KeptEnd {
             node: k + 1,
             segment_end,
             state: *b,
@@ -264,6 +278,9 @@ impl<'a> Profile<'a> {
             derivatives,
             lin,
         });
+        if let Some(old) = old {
+            self.give(old.lin);
+        }
     }
 
     /// Keeps the rates and turning rates of `lin`, eq. 13 with friction at node n (state
