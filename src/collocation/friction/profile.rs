@@ -44,7 +44,7 @@ pub(crate) struct Profile<'a> {
     nodes: RefCell<Vec<NodeRates>>,
     /// Linearizations done with ([`Profile::give`]), refilled by the next points so that
     /// evaluating eq. 13 with friction allocates nothing after the first links.
-    spare: RefCell<Vec<FrictionLinearization>>,
+    spare: RefCell<Vec<Box<FrictionLinearization>>>,
 }
 
 /// Eq. 13 with friction at a node (its rates and turning rates) and everything it was
@@ -69,7 +69,7 @@ struct KeptEnd {
     z: Vec<f64>,
     w: Option<Vec<f64>>,
     derivatives: bool,
-    lin: FrictionLinearization,
+    lin: Box<FrictionLinearization>,
 }
 
 impl<'a> Profile<'a> {
@@ -212,7 +212,7 @@ impl<'a> Profile<'a> {
         z: &[f64],
         w: Option<&[f64]>,
         derivatives: bool,
-    ) -> Result<FrictionLinearization> {
+    ) -> Result<Box<FrictionLinearization>> {
         let mut model = self.scratch.borrow_mut();
         for (j, &i) in self.slipping.iter().enumerate() {
             model.tensions[i] = self.tension(j, z[j]);
@@ -224,7 +224,7 @@ impl<'a> Profile<'a> {
 
     /// Takes back a linearization of [`Profile::point`] that its caller is done with, for
     /// the next point to refill.
-    pub(super) fn give(&self, lin: FrictionLinearization) {
+    pub(super) fn give(&self, lin: Box<FrictionLinearization>) {
         self.spare.borrow_mut().push(lin);
     }
 
@@ -241,7 +241,7 @@ impl<'a> Profile<'a> {
         z: &[f64],
         w: Option<&[f64]>,
         derivatives: bool,
-    ) -> Result<FrictionLinearization> {
+    ) -> Result<Box<FrictionLinearization>> {
         if let Some(kept) = self.end.borrow_mut().take() {
             if kept.node == k
                 && kept.segment_end == segment_end
@@ -267,7 +267,7 @@ impl<'a> Profile<'a> {
         z: Vec<f64>,
         w: Option<&[f64]>,
         derivatives: bool,
-        lin: FrictionLinearization,
+        lin: Box<FrictionLinearization>,
     ) {
         let old = self.end.borrow_mut().replace(KeptEnd {
             node: k + 1,
