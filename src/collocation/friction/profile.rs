@@ -4,14 +4,14 @@
 //! evaluations that the border and the next link reuse.
 #![allow(non_snake_case)]
 
-use super::grip::{Contact, Grip, stuck_multiplier};
+use super::grip::{Contact, Grip, Stuck, stuck_multiplier};
 use super::interval::IntervalLinearization;
 use crate::error::Result;
 use crate::mesh::Mesh;
 use crate::model::equations::{Model, Site};
 use crate::model::friction::{self, FrictionLinearization};
 use crate::solution::State;
-use nalgebra::Vector3;
+use nalgebra::{SMatrix, Vector3};
 use std::cell::RefCell;
 
 /// The log tensions of the tendons with friction on a mesh, and a model to evaluate eq. 13
@@ -45,6 +45,26 @@ pub(crate) struct Profile<'a> {
     /// Linearizations done with ([`Profile::give`]), refilled by the next points so that
     /// evaluating eq. 13 with friction allocates nothing after the first links.
     spare: RefCell<Vec<Box<FrictionLinearization>>>,
+    /// Links' evaluations the cache no longer holds and the links' scratch buffers, for the
+    /// next links to refill.
+    spare_links: RefCell<Vec<IntervalLinearization>>,
+    scratch_links: RefCell<Vec<Box<LinkScratch>>>,
+}
+
+/// The buffers of one link's evaluation ([`super::interval::interval`]): the log tensions
+/// at its nodes and midpoint, which slips load it, their stuck tensions in a history, and
+/// the rows of the Jacobian's chain rule in z_m and kappa~_m. The profile keeps them, so
+/// that evaluating a link allocates nothing after the first.
+#[derive(Debug, Default)]
+pub(super) struct LinkScratch {
+    pub(super) za: Vec<f64>,
+    pub(super) zb: Vec<f64>,
+    pub(super) zm: Vec<f64>,
+    pub(super) on: Vec<bool>,
+    pub(super) stuck: Vec<Option<Stuck>>,
+    pub(super) dzm: Vec<SMatrix<f64, 1, 18>>,
+    pub(super) dturn_m: Vec<SMatrix<f64, 1, 18>>,
+    pub(super) dzm_l: Vec<f64>,
 }
 
 /// Eq. 13 with friction at a node (its rates and turning rates) and everything it was
@@ -60,7 +80,8 @@ struct NodeRates {
 }
 
 /// Eq. 13 with friction at a link's end node and everything it was evaluated from: a
-/// link whose start has the same inputs, bit for bit, has the same evaluation.
+/// link whose start has the same inputs, bit for bit, has the same evaluation (`lin`, None
+/// once a link has taken it).
 #[derive(Debug)]
 struct KeptEnd {
     node: usize,
@@ -69,7 +90,7 @@ struct KeptEnd {
     z: Vec<f64>,
     w: Option<Vec<f64>>,
     derivatives: bool,
-    lin: Box<FrictionLinearization>,
+    lin: Option<Box<FrictionLinearization>>,
 }
 
 impl<'a> Profile<'a> {
@@ -100,6 +121,8 @@ impl<'a> Profile<'a> {
             end: RefCell::new(None),
             nodes: RefCell::new((0..mesh.nodes.len()).map(|_| NodeRates::default()).collect()),
             spare: RefCell::new(Vec::new()),
+            spare_links: RefCell::new(Vec::new()),
+            scratch_links: RefCell::new(Vec::new()),
         }
     }
 
@@ -118,6 +141,8 @@ impl<'a> Profile<'a> {
             end: RefCell::new(None),
             nodes: RefCell::new((0..self.z[0].len()).map(|_| NodeRates::default()).collect()),
             spare: RefCell::new(Vec::new()),
+            spare_links: RefCell::new(Vec::new()),
+            scratch_links: RefCell::new(Vec::new()),
         }
     }
 
@@ -165,9 +190,31 @@ impl<'a> Profile<'a> {
             .collect()
     }
 
-    /// Keeps link k's evaluation `lin` for the border.
+    /// Keeps link k's evaluation `lin` for the border (the one it replaces goes to the
+    /// spare evaluations, [`Profile::take_link`]).
     pub(crate) fn keep(&self, k: usize, lin: IntervalLinearization) {
-        self.cache.borrow_mut()[k] = Some(lin);
+        let old = self.cache.borrow_mut()[k].replace(lin);
+        if let Some(old) = old {
+            self.spare_links.borrow_mut().push(old);
+        }
+    }
+
+    /// A link evaluation to refill: a spare one, else a new empty one.
+    pub(super) fn take_link(&self) -> IntervalLinearization {
+        self.spare_links
+            .borrow_mut()
+            .pop()
+            .unwrap_or_else(IntervalLinearization::empty)
+    }
+
+    /// A link's scratch buffers: spare ones, else new ones ([`Profile::give_scratch`]).
+    pub(super) fn take_scratch(&self) -> Box<LinkScratch> {
+        self.scratch_links.borrow_mut().pop().unwrap_or_default()
+    }
+
+    /// Takes back a link's scratch buffers.
+    pub(super) fn give_scratch(&self, scratch: Box<LinkScratch>) {
+        self.scratch_links.borrow_mut().push(scratch);
     }
 
     /// Runs `f` on link k's last evaluation (None when it has none).
@@ -242,44 +289,64 @@ impl<'a> Profile<'a> {
         w: Option<&[f64]>,
         derivatives: bool,
     ) -> Result<Box<FrictionLinearization>> {
-        if let Some(kept) = self.end.borrow_mut().take() {
-            if kept.node == k
+        let taken = self.end.borrow_mut().as_mut().and_then(|kept| {
+            let lin = kept.lin.take()?;
+            let same = kept.node == k
                 && kept.segment_end == segment_end
                 && kept.state == *a
                 && kept.z == z
                 && kept.w.as_deref() == w
-                && (kept.derivatives || !derivatives)
-            {
-                return Ok(kept.lin);
-            }
-            self.give(kept.lin);
+                && (kept.derivatives || !derivatives);
+            Some((same, lin))
+        });
+        match taken {
+            Some((true, lin)) => return Ok(lin),
+            Some((false, lin)) => self.give(lin),
+            None => {}
         }
         self.point(site, segment_end, &a.R, (&a.v, &a.u), z, w, derivatives)
     }
 
-    /// Keeps link k's evaluation `lin` at its end node (state `b`) for the next link.
+    /// Keeps link k's evaluation `lin` at its end node (state `b`, log tensions `z`) for the
+    /// next link, in the buffers of the last one kept.
     #[allow(clippy::too_many_arguments)]
     pub(super) fn keep_end(
         &self,
         k: usize,
         segment_end: f64,
         b: &State,
-        z: Vec<f64>,
+        z: &[f64],
         w: Option<&[f64]>,
         derivatives: bool,
         lin: Box<FrictionLinearization>,
     ) {
-        let old = self.end.borrow_mut().replace(KeptEnd {
-            node: k + 1,
+        let mut end = self.end.borrow_mut();
+        let kept = end.get_or_insert_with(|| KeptEnd {
+            node: 0,
             segment_end,
             state: *b,
-            z,
-            w: w.map(<[f64]>::to_vec),
+            z: Vec::new(),
+            w: None,
             derivatives,
-            lin,
+            lin: None,
         });
+        kept.node = k + 1;
+        kept.segment_end = segment_end;
+        kept.state = *b;
+        kept.z.clear();
+        kept.z.extend_from_slice(z);
+        match (&mut kept.w, w) {
+            (Some(old), Some(w)) => {
+                old.clear();
+                old.extend_from_slice(w);
+            }
+            (old, w) => *old = w.map(<[f64]>::to_vec),
+        }
+        kept.derivatives = derivatives;
+        let old = kept.lin.replace(lin);
+        drop(end);
         if let Some(old) = old {
-            self.give(old.lin);
+            self.give(old);
         }
     }
 
