@@ -51,7 +51,8 @@ pub(crate) struct IntervalLinearization {
     pub(crate) psi_x: DMatrix<f64>,
     /// d psi / dz: k x 2k, columns as `rows_z`.
     pub(crate) psi_z: DMatrix<f64>,
-    /// Whether the derivatives were evaluated (else the three blocks above have no rows).
+    /// Whether the derivatives were evaluated (else the three blocks above hold no values of
+    /// this evaluation: they keep their shape, and nothing reads them).
     pub(crate) derivatives: bool,
 }
 
@@ -218,17 +219,18 @@ fn interval_at(
     out.stuck_tension.clear();
     out.stuck_tension
         .extend(stuck.iter().map(|t| t.map_or(f64::NAN, |t| t.0)));
-    // Without derivatives the blocks stay empty (nothing reads them then).
-    let rows = |n: usize| if derivatives { n } else { 0 };
+    // The blocks keep their shape (sized once per recycled evaluation); without
+    // derivatives they are not written, and nothing reads them then.
     for (block, shape) in [
-        (&mut out.rows_z, (rows(12), 2 * count)),
-        (&mut out.psi_x, (rows(count), 24)),
-        (&mut out.psi_z, (rows(count), 2 * count)),
+        (&mut out.rows_z, (12, 2 * count)),
+        (&mut out.psi_x, (count, 24)),
+        (&mut out.psi_z, (count, 2 * count)),
     ] {
         if block.shape() != shape {
-            block.resize_mut(shape.0, shape.1, 0.0);
+            *block = DMatrix::zeros(shape.0, shape.1);
+        } else if derivatives {
+            block.fill(0.0);
         }
-        block.fill(0.0);
     }
     out.derivatives = derivatives;
     let (Some(jac), Some((p0, p1)), Some(pm)) = (jac, ends, pm) else {
