@@ -349,7 +349,7 @@ fn relative(sl: &Slip) -> f64 {
 /// rates (turning) and their derivatives. Refilled in place by [`linearize_into`], which
 /// keeps every buffer's capacity (with the scratch of its last evaluation), so that a
 /// linearization used again allocates nothing.
-#[derive(Clone, Debug)]
+#[derive(Debug)]
 pub(crate) struct FrictionLinearization {
     /// The rates and their derivatives in the strains and the rotation, tensions fixed.
     pub lin: Linearization,
@@ -364,8 +364,9 @@ pub(crate) struct FrictionLinearization {
     pub d_turning: Vec<SMatrix<f64, 1, 9>>,
     /// d(turning_j)/dz_l, row-major k x k.
     pub d_turning_log_tension: Vec<f64>,
-    /// Scratch of the evaluation: the slips loading the point, their gradients dg_i/dx and
-    /// their columns dPhi/dz_i.
+    /// Scratch of the evaluation: eq. 13 assembled at the point, the slips loading it, their
+    /// gradients dg_i/dx and their columns dPhi/dz_i.
+    point: Option<Point>,
     slips: Vec<Slip>,
     gradients: Vec<Vector6<f64>>,
     columns: Vec<Vector6<f64>>,
@@ -385,6 +386,7 @@ impl Default for FrictionLinearization {
             kappa: Vec::new(),
             d_turning: Vec::new(),
             d_turning_log_tension: Vec::new(),
+            point: None,
             slips: Vec::new(),
             gradients: Vec::new(),
             columns: Vec::new(),
@@ -432,8 +434,16 @@ pub(crate) fn linearize_into(
     derivatives: bool,
     out: &mut FrictionLinearization,
 ) -> Result<()> {
-    let point = Point::new(model, site, segment_end, (R, v, u))?;
-    let x = solve(model, &point, site, segment_end, (v, u), slipping, multipliers, &mut out.slips)?;
+    // Eq. 13 assembled in the point this linearization kept (in place, not moved).
+    let point = match &mut out.point {
+        Some(point) => {
+            point.refill(model, site, segment_end, (R, v, u))?;
+            point
+        }
+        None => out.point.insert(Point::new(model, site, segment_end, (R, v, u))?),
+    };
+    let point = &*point;
+    let x = solve(model, point, site, segment_end, (v, u), slipping, multipliers, &mut out.slips)?;
     let slips = &out.slips;
     let k = slipping.len();
     let kappa = &mut out.kappa;
