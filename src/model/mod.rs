@@ -16,4 +16,5 @@ pub mod rod;
 pub mod routing;
 pub mod scales;
 pub mod tendon;
+mod tangential;
 pub(crate) mod tension_guess;
