@@ -145,6 +145,7 @@ fn interval_at(
         dzm,
         dturn_m,
         dzm_l,
+        ..
     } = &mut *scratch;
     za.clear();
     za.extend(profile.z.iter().map(|z| z[k]));
@@ -377,21 +378,33 @@ pub(crate) fn interval_order6(
 ) -> Result<Order6> {
     let count = profile.count();
     let h = sites.end.s - sites.start.s;
-    let za: Vec<f64> = profile.z.iter().map(|z| z[k]).collect();
-    let zb: Vec<f64> = profile.z.iter().map(|z| z[k + 1]).collect();
+    // The link's buffers, the profile's spare ones (given back at the end).
+    let mut scratch = profile.take_scratch();
+    let LinkScratch {
+        za,
+        zb,
+        zm: z_m,
+        z_q,
+        z_tq,
+        turnings: [k0, k1, k_q, k_tq, k_m],
+        ..
+    } = &mut *scratch;
+    za.clear();
+    za.extend(profile.z.iter().map(|z| z[k]));
+    zb.clear();
+    zb.extend(profile.z.iter().map(|z| z[k + 1]));
     let (y0, y1) = end_points(a, b);
     let w = profile.multipliers(k);
     let w = w.as_deref();
-    // F and kappa~ at a local state (y, z) of the interval; at a node (`node`: its index
-    // and state), eq. 13 with friction at the node's own state, taken from the last pass
-    // that evaluated it there when it has the same inputs.
-    let stage = |site: &Site, y: &Block<f64>, z: &[f64], node: Option<(usize, &State)>| {
+    // F and kappa~ (into `turning`) at a local state (y, z) of the interval; at a node
+    // (`node`: its index and state), eq. 13 with friction at the node's own state, taken
+    // from the last pass that evaluated it there when it has the same inputs.
+    let stage = |site: &Site, y: &Block<f64>, z: &[f64], node: Option<(usize, &State)>, turning: &mut Vec<f64>| {
         let theta: Vector3<f64> = y.fixed_rows::<3>(THETA).into();
         let (v, u): (Vector3<f64>, Vector3<f64>) = (y.fixed_rows::<3>(6).into(), y.fixed_rows::<3>(9).into());
         let R = a.R * so3::exp(&theta);
-        let mut turning = Vec::new();
         let rates = match node {
-            Some((n, state)) => match profile.node_rates(n, segment_end, state, (z, w), &mut turning) {
+            Some((n, state)) => match profile.node_rates(n, segment_end, state, (z, w), turning) {
                 Some(rates) => rates,
                 None => {
                     let lin = profile.point(site, segment_end, &state.R, (&state.v, &state.u), z, w, false)?;
@@ -414,26 +427,28 @@ pub(crate) fn interval_order6(
         f.fixed_rows_mut::<3>(THETA)
             .copy_from(&(so3::right_jacobian_inv(&theta) * u));
         f.fixed_rows_mut::<6>(6).copy_from(&rates);
-        Ok::<_, crate::Error>((f, turning))
+        Ok::<_, crate::Error>(f)
     };
-    let (f0, k0) = stage(&sites.start, &y0, &za, Some((k, a)))?;
-    let (f1, k1) = stage(&sites.end, &y1, &zb, Some((k + 1, b)))?;
-    let combine = |c0: f64, c1: f64, d0: f64, d1: f64| {
+    let f0 = stage(&sites.start, &y0, za, Some((k, a)), k0)?;
+    let f1 = stage(&sites.end, &y1, zb, Some((k + 1, b)), k1)?;
+    let (k0, k1) = (&*k0, &*k1);
+    let combine = |c0: f64, c1: f64, d0: f64, d1: f64, z: &mut Vec<f64>| {
         let y = (y0 * c0 + y1 * c1) / 32.0 + (f0 * d0 + f1 * d1) * (h / 64.0);
-        let z: Vec<f64> = (0..count)
-            .map(|j| (za[j] * c0 + zb[j] * c1) / 32.0 + (k0[j] * d0 + k1[j] * d1) * (h / 64.0))
-            .collect();
-        (y, z)
+        z.clear();
+        z.extend((0..count).map(|j| (za[j] * c0 + zb[j] * c1) / 32.0 + (k0[j] * d0 + k1[j] * d1) * (h / 64.0)));
+        y
     };
-    let (y_q, z_q) = combine(27.0, 5.0, 9.0, -3.0);
-    let (y_tq, z_tq) = combine(5.0, 27.0, 3.0, -9.0);
-    let (f_q, k_q) = stage(&quarters.quarter, &y_q, &z_q, None)?;
-    let (f_tq, k_tq) = stage(&quarters.three_quarters, &y_tq, &z_tq, None)?;
+    let y_q = combine(27.0, 5.0, 9.0, -3.0, z_q);
+    let y_tq = combine(5.0, 27.0, 3.0, -9.0, z_tq);
+    let f_q = stage(&quarters.quarter, &y_q, z_q, None, k_q)?;
+    let f_tq = stage(&quarters.three_quarters, &y_tq, z_tq, None, k_tq)?;
     let y_m = (y0 + y1) * 0.5 + ((f1 - f0) * (5.0 / 24.0) + (f_q - f_tq) * (2.0 / 3.0)) * h;
-    let z_m: Vec<f64> = (0..count)
-        .map(|j| 0.5 * (za[j] + zb[j]) + ((k1[j] - k0[j]) * (5.0 / 24.0) + (k_q[j] - k_tq[j]) * (2.0 / 3.0)) * h)
-        .collect();
-    let (f_m, k_m) = stage(&sites.mid, &y_m, &z_m, None)?;
+    z_m.clear();
+    z_m.extend(
+        (0..count)
+            .map(|j| 0.5 * (za[j] + zb[j]) + ((k1[j] - k0[j]) * (5.0 / 24.0) + (k_q[j] - k_tq[j]) * (2.0 / 3.0)) * h),
+    );
+    let f_m = stage(&sites.mid, &y_m, z_m, None, k_m)?;
     let quadrature = ((f0 + f1) * 7.0 + (f_q + f_tq) * 32.0 + f_m * 12.0) * (h / 90.0);
     let psi: Vec<f64> = (0..count)
         .map(|j| {
@@ -449,6 +464,7 @@ pub(crate) fn interval_order6(
         .collect();
     let rates = |f: &Block<f64>| f.fixed_rows::<6>(6).into_owned();
     profile.order6.borrow_mut()[k].clone_from(&psi);
+    profile.give_scratch(scratch);
     Ok((scale_rows(y1 - y0 - quadrature, length), psi, rates(&f0), rates(&f1)))
 }
 

@@ -51,10 +51,10 @@ pub(crate) struct Profile<'a> {
     scratch_links: RefCell<Vec<Box<LinkScratch>>>,
 }
 
-/// The buffers of one link's evaluation ([`super::interval::interval`]): the log tensions
-/// at its nodes and midpoint, which slips load it, their stuck tensions in a history, and
-/// the rows of the Jacobian's chain rule in z_m and kappa~_m. The profile keeps them, so
-/// that evaluating a link allocates nothing after the first.
+/// The buffers of one link's evaluation ([`super::interval::interval`], and its order-6
+/// rows): the log tensions at its nodes and midpoint, which slips load it, their stuck
+/// tensions in a history, and the rows of the Jacobian's chain rule in z_m and kappa~_m.
+/// The profile keeps them, so that evaluating a link allocates nothing after the first.
 #[derive(Debug, Default)]
 pub(super) struct LinkScratch {
     pub(super) za: Vec<f64>,
@@ -65,6 +65,11 @@ pub(super) struct LinkScratch {
     pub(super) dzm: Vec<SMatrix<f64, 1, 18>>,
     pub(super) dturn_m: Vec<SMatrix<f64, 1, 18>>,
     pub(super) dzm_l: Vec<f64>,
+    /// The order-6 rows' log tensions at the quarter stages and their five stages'
+    /// turning rates ([`super::interval::interval_order6`]; its midpoint's in `zm`).
+    pub(super) z_q: Vec<f64>,
+    pub(super) z_tq: Vec<f64>,
+    pub(super) turnings: [Vec<f64>; 5],
 }
 
 /// Eq. 13 with friction at a node (its rates and turning rates) and everything it was
