@@ -32,8 +32,8 @@
 use crate::error::{Result, invalid};
 use crate::model::equations::{Model, Site};
 use crate::model::linearize::{Linearization, Point};
-use crate::model::tangential::{Slip, solve};
 use crate::model::robot::{Robot, TendonModel};
+use crate::model::tangential::{Slip, solve};
 use crate::model::tendon::Tendon;
 use crate::{Error, Readable};
 use nalgebra::{Matrix3, Matrix6, Matrix6x3, SMatrix, Vector3, Vector6};
@@ -146,7 +146,16 @@ pub(crate) fn rates(
     let (R, v, u) = state;
     let point = Point::new(model, site, segment_end, (R, v, u))?;
     let mut slips = Vec::with_capacity(slipping.len());
-    let x = solve(model, &point, site, segment_end, (v, u), &slipping, multipliers, &mut slips)?;
+    let x = solve(
+        model,
+        &point,
+        site,
+        segment_end,
+        (v, u),
+        &slipping,
+        multipliers,
+        &mut slips,
+    )?;
     for sl in &slips {
         turning[slipping[sl.slot]] = relative(sl);
     }
@@ -235,7 +244,16 @@ pub(crate) fn linearize(
     derivatives: bool,
 ) -> Result<FrictionLinearization> {
     let mut out = FrictionLinearization::default();
-    linearize_into(model, site, segment_end, state, slipping, multipliers, derivatives, &mut out)?;
+    linearize_into(
+        model,
+        site,
+        segment_end,
+        state,
+        slipping,
+        multipliers,
+        derivatives,
+        &mut out,
+    )?;
     Ok(out)
 }
 
@@ -265,7 +283,16 @@ pub(crate) fn linearize_into(
         None => out.point.insert(Point::new(model, site, segment_end, (R, v, u))?),
     };
     let point = &*point;
-    let x = solve(model, point, site, segment_end, (v, u), slipping, multipliers, &mut out.slips)?;
+    let x = solve(
+        model,
+        point,
+        site,
+        segment_end,
+        (v, u),
+        slipping,
+        multipliers,
+        &mut out.slips,
+    )?;
     let slips = &out.slips;
     let k = slipping.len();
     let kappa = &mut out.kappa;

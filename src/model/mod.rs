@@ -15,6 +15,6 @@ pub mod robot;
 pub mod rod;
 pub mod routing;
 pub mod scales;
-pub mod tendon;
 mod tangential;
+pub mod tendon;
 pub(crate) mod tension_guess;

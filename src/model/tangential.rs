@@ -278,7 +278,10 @@ mod tests {
     fn closed_form_is_newtons_fixed_point() {
         for (mu, motion) in [(0.1, Motion::Pull), (0.3, Motion::Release), (0.05, Motion::Pull)] {
             let mut robot = cases::case_h();
-            robot.tendons[4].friction = Some(Friction { coefficient: mu, motion });
+            robot.tendons[4].friction = Some(Friction {
+                coefficient: mu,
+                motion,
+            });
             let model = Model::new(&robot);
             let site = model.site(0.07);
             let (R, v, u) = (
@@ -288,7 +291,17 @@ mod tests {
             );
             let point = Point::new(&model, &site, robot.length(), (&R, &v, &u)).unwrap();
             let mut slips = Vec::new();
-            solve(&model, &point, &site, robot.length(), (&v, &u), &slipping(&robot), None, &mut slips).unwrap();
+            solve(
+                &model,
+                &point,
+                &site,
+                robot.length(),
+                (&v, &u),
+                &slipping(&robot),
+                None,
+                &mut slips,
+            )
+            .unwrap();
             assert_eq!(slips.len(), 1);
             let (mut closed, mut iterated) = (slips[0].clone(), slips.clone());
             closed.g = 0.0;
@@ -299,7 +312,11 @@ mod tests {
             assert!(g != 0.0 && g.signum() == closed.signed_mu.signum(), "g = {g}");
             // 1e-14 relative: both solve the same scalar equation to rounding (Newton stops
             // below 1e-15 of |q|; the closed form's root carries a few ulps).
-            assert!((g - iterated[0].g).abs() <= 1e-14 * g.abs(), "{g} against {}", iterated[0].g);
+            assert!(
+                (g - iterated[0].g).abs() <= 1e-14 * g.abs(),
+                "{g} against {}",
+                iterated[0].g
+            );
             assert!((x - x_newton).amax() <= 1e-14 * x.amax());
             // The fixed point itself, at the rates the closed form returned.
             assert!((g - closed.signed_mu * closed.q.norm()).abs() <= 1e-14 * g.abs());

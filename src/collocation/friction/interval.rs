@@ -21,8 +21,8 @@ use super::super::residual::{
     rhs_linearized_inline, scale_rows,
 };
 use super::super::unknowns::THETA;
-pub(crate) use super::profile::Profile;
 use super::profile::LinkScratch;
+pub(crate) use super::profile::Profile;
 use crate::error::Result;
 use crate::model::equations::Site;
 use crate::model::friction::FrictionLinearization;
@@ -191,16 +191,16 @@ fn interval_at(
     // In a history, the stuck material's tension at node b, for the stick/slip choice.
     stuck.clear();
     stuck.extend(
-        (0..count)
-            .map(|j| (profile.grips.is_some() && on[j]).then(|| profile.stuck_tension(j, k + 1, &sites.end, b, length))),
+        (0..count).map(|j| {
+            (profile.grips.is_some() && on[j]).then(|| profile.stuck_tension(j, k + 1, &sites.end, b, length))
+        }),
     );
     // The link's evaluation in the buffers of one the profile no longer keeps.
     let mut out = profile.take_link();
     out.residual = residual;
     out.capacity.clear();
-    out.capacity.extend(
-        (0..count).map(|j| h / 6.0 * profile.coefficient(j) * (la.kappa[j] + 4.0 * lm.kappa[j] + lb.kappa[j])),
-    );
+    out.capacity
+        .extend((0..count).map(|j| h / 6.0 * profile.coefficient(j) * (la.kappa[j] + 4.0 * lm.kappa[j] + lb.kappa[j])));
     out.psi.clear();
     out.psi.extend((0..count).map(|j| {
         if on[j] {

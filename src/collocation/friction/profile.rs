@@ -270,7 +270,16 @@ impl<'a> Profile<'a> {
             model.tensions[i] = self.tension(j, z[j]);
         }
         let mut lin = self.spare.borrow_mut().pop().unwrap_or_default();
-        friction::linearize_into(&model, site, segment_end, (R, y.0, y.1), &self.slipping, w, derivatives, &mut lin)?;
+        friction::linearize_into(
+            &model,
+            site,
+            segment_end,
+            (R, y.0, y.1),
+            &self.slipping,
+            w,
+            derivatives,
+            &mut lin,
+        )?;
         Ok(lin)
     }
 
