@@ -233,7 +233,7 @@ fn single(slip: &mut Slip, x0: &Vector6<f64>) -> Option<Vector6<f64>> {
     let a = slip.normal_change(&slip.y);
     let s2 = s * s;
     let leading = 1.0 - s2 * a.norm_squared();
-    if !(leading > 0.0) {
+    if leading.is_nan() || leading <= 0.0 {
         return None;
     }
     let linear = 2.0 * s2 * q0.dot(&a);
