@@ -22,23 +22,21 @@
 //! ```
 //!
 //! (x0 the rates without the tangential loads, M the matrix of eq. 13, t_j the body-frame
-//! unit tangent), solved for the tangential loads g_j (N/m) by Newton on these k scalars.
-//! The tangential loads change the normal forces only through the small moment r_j x t_j,
-//! so the iteration contracts by about mu tau r^2 / (E I) per step (1e-3 for the prototype).
+//! unit tangent), solved for the tangential loads g_j (N/m) in `model/tangential.rs`: in
+//! closed form where one tendon with friction loads the point (a quadratic in g), else by
+//! Newton on these k scalars. The tangential loads change the normal forces only through
+//! the small moment r_j x t_j, so the iteration contracts by about mu tau r^2 / (E I) per
+//! step (1e-3 for the prototype).
 #![allow(non_snake_case)]
 
 use crate::error::{Result, invalid};
 use crate::model::equations::{Model, Site};
-use crate::model::linearize::{Linearization, Point, TendonPoint};
+use crate::model::linearize::{Linearization, Point};
 use crate::model::robot::{Robot, TendonModel};
+use crate::model::tangential::{Slip, solve};
 use crate::model::tendon::Tendon;
 use crate::{Error, Readable};
 use nalgebra::{Matrix3, Matrix6, Matrix6x3, SMatrix, Vector3, Vector6};
-
-/// Newton iterations of the tangential loads at one point: each step contracts by the
-/// square of the last (the iteration is smooth away from kappa = 0), and 1e-3 per step is
-/// the linear rate from the module docs, so 30 covers any convergent case many times over.
-const MAX_ITERATIONS: usize = 30;
 
 /// Checks the friction of tendon `i`: a finite coefficient >= 0, and for a coefficient > 0
 /// what the full-slip model needs: the coupled tendon model, and no breakpoint (point load or another tendon's termination)
@@ -117,179 +115,7 @@ pub(crate) fn slipping(robot: &Robot) -> Vec<usize> {
         .collect()
 }
 
-/// One tendon with friction loading the backbone at one point (body frame).
-struct Slip {
-    /// Its place in [`slipping`]'s list.
-    slot: usize,
-    /// w_i mu_i: the signed friction coefficient.
-    signed_mu: f64,
-    /// The tendon's point quantities (r_i, t_i, k_i = tau_i / |p_i^b'|, ...).
-    tp: TendonPoint,
-    /// e_i = (t_i, r_i x t_i): the direction of its tangential load in eq. 13's rows.
-    e: Vector6<f64>,
-    /// y_i = M^-1 e_i: the rates' change per unit tangential load (m/N).
-    y: Vector6<f64>,
-    /// The tangential load g_i = tau_i' (N/m) at the solution.
-    g: f64,
-    /// q_i, the normal load (N/m), and its direction q_i / |q_i| (0 where q_i = 0).
-    q: Vector3<f64>,
-    q_hat: Vector3<f64>,
-}
-
-impl Slip {
-    /// Sets the normal load q_i and its direction at the rates x; returns |q_i| (N/m).
-    fn refresh(&mut self, x: &Vector6<f64>) -> f64 {
-        self.q = self.normal(x);
-        let magnitude = self.q.norm();
-        self.q_hat = if magnitude > 0.0 {
-            self.q / magnitude
-        } else {
-            Vector3::zeros()
-        };
-        magnitude
-    }
-
-    /// The normal load q_i = k_i (I - t t^T) p_i^b'' at the rates x (N/m).
-    fn normal(&self, x: &Vector6<f64>) -> Vector3<f64> {
-        self.normal_change(x) + self.project(&self.tp.c)
-    }
-
-    /// The part of q_i the rates x drive: k_i (I - t t^T) (x_v - r_i x x_u), without x_v on
-    /// a Kirchhoff rod (its v' = v*' is in c_i, docs/model.md section 4b).
-    fn normal_change(&self, x: &Vector6<f64>) -> Vector3<f64> {
-        let x_v = if self.tp.inextensible {
-            Vector3::zeros()
-        } else {
-            Vector3::new(x[0], x[1], x[2])
-        };
-        let x_u = Vector3::new(x[3], x[4], x[5]);
-        self.project(&(x_v - self.tp.r.cross(&x_u)))
-    }
-
-    /// k_i (I - t t^T) a.
-    fn project(&self, a: &Vector3<f64>) -> Vector3<f64> {
-        let t = &self.tp.t;
-        (a - t * t.dot(a)) * self.tp.k
-    }
-
-    /// dg_i/dx = w_i mu_i k_i (q^, r_i x q^): the gradient of the tangential load in the
-    /// rates (q^ is normal to t_i, so the projection drops out); (0, r_i x q^) on a
-    /// Kirchhoff rod, whose q_i does not depend on x_v.
-    fn gradient(&self) -> Vector6<f64> {
-        let m = self.tp.r.cross(&self.q_hat);
-        let h = if self.tp.inextensible {
-            Vector3::zeros()
-        } else {
-            self.q_hat
-        };
-        Vector6::new(h[0], h[1], h[2], m[0], m[1], m[2]) * (self.signed_mu * self.tp.k)
-    }
-}
-
-/// Eq. 13 with friction solved at one point, with the frictionless eq. 13 there
-/// assembled in `point`: the tendons with friction that load the backbone here, with their
-/// tangential loads, and the rates (v', u') with the tangential loads. Every tendon is at the
-/// tension the model holds for it here ([`Model::tensions`]; for a tendon with friction, its
-/// tension at this s), with the friction multiplier w_j of each tendon of `slipping` from
-/// `multipliers` when given (a stick/slip history, docs/friction.md section 8), else its
-/// motion's sign. The large [`Point`] stays with the caller, so that it is not copied.
-fn solve(
-    model: &Model,
-    point: &Point,
-    site: &Site,
-    segment_end: f64,
-    (v, u): (&Vector3<f64>, &Vector3<f64>),
-    slipping: &[usize],
-    multipliers: Option<&[f64]>,
-) -> Result<(Vec<Slip>, Vector6<f64>)> {
-    let x0 = point.rates();
-    let tendons = &model.robot.tendons;
-    let mut slips = Vec::with_capacity(slipping.len());
-    for (c, (i, tension, rp)) in model.distributed_tendons(site.s, segment_end).enumerate() {
-        let (Some(friction), Some(slot)) = (tendons[i].active_friction(), slipping.iter().position(|&j| j == i)) else {
-            continue;
-        };
-        // The tendon as assembling M evaluated it (the same inputs), else evaluated here.
-        let tp = match point.tendon(c) {
-            Some(tp) => *tp,
-            None => TendonPoint::new(i, tension, &rp, site, v, u)?,
-        };
-        let m = tp.r.cross(&tp.t);
-        let e = Vector6::new(tp.t[0], tp.t[1], tp.t[2], m[0], m[1], m[2]);
-        let mut row = e.transpose();
-        if !point.solve_rows(&mut row) {
-            return Err(breakdown(site.s));
-        }
-        slips.push(Slip {
-            slot,
-            signed_mu: multipliers.map_or(friction.motion.sign(), |w| w[slot]) * friction.coefficient,
-            tp,
-            e,
-            y: row.transpose(),
-            g: 0.0,
-            q: Vector3::zeros(),
-            q_hat: Vector3::zeros(),
-        });
-    }
-    let k = slips.len();
-    let mut x = x0;
-    // The k x k Newton matrix and the step, on the stack for up to 4 tendons here.
-    let mut stack = [0.0; 20];
-    let mut heap = Vec::new();
-    let buffer: &mut [f64] = if k * (k + 1) <= stack.len() {
-        &mut stack[..k * (k + 1)]
-    } else {
-        heap.resize(k * (k + 1), 0.0);
-        &mut heap
-    };
-    let (matrix, step) = buffer.split_at_mut(k * k);
-    for iteration in 0..=MAX_ITERATIONS {
-        // h_j(g) = g_j - w_j mu_j |q_j(x(g))|, x(g) = x0 - sum_l g_l y_l, and its Jacobian
-        // dh_j/dg_l = delta_jl + dg_j/dx . y_l.
-        let mut size = 0.0_f64;
-        for sl in slips.iter_mut() {
-            size = size.max(sl.refresh(&x));
-        }
-        if k == 0 || size == 0.0 {
-            break;
-        }
-        for (j, sl) in slips.iter().enumerate() {
-            step[j] = sl.signed_mu * sl.q.norm() - sl.g;
-            let gradient = sl.gradient();
-            for (l, other) in slips.iter().enumerate() {
-                matrix[j * k + l] = f64::from(u8::from(j == l)) + gradient.dot(&other.y);
-            }
-        }
-        if !crate::dense::solve_dense(matrix, step, k) {
-            return Err(breakdown(site.s));
-        }
-        let mut change = 0.0_f64;
-        for (sl, d) in slips.iter_mut().zip(step.iter()) {
-            sl.g += d;
-            change = change.max(d.abs());
-        }
-        x = x0;
-        for sl in &slips {
-            x -= sl.y * sl.g;
-        }
-        // Converged to rounding: the last change below 1e-15 of the normal loads' size.
-        // (One more pass refreshes q at the final x.)
-        if change <= 1e-15 * size {
-            for sl in slips.iter_mut() {
-                sl.refresh(&x);
-            }
-            break;
-        }
-        if iteration == MAX_ITERATIONS || !change.is_finite() {
-            return Err(Error::Breakdown {
-                s: site.s,
-                what: "the tangential friction loads did not converge".into(),
-            });
-        }
-    }
-    Ok((slips, x))
-}
-
+/// The error of eq. 13 with friction singular at arc length `s`.
 fn breakdown(s: f64) -> Error {
     Error::Breakdown {
         s,
@@ -319,7 +145,17 @@ pub(crate) fn rates(
     let slipping = slipping(model.robot);
     let (R, v, u) = state;
     let point = Point::new(model, site, segment_end, (R, v, u))?;
-    let (slips, x) = solve(model, &point, site, segment_end, (v, u), &slipping, multipliers)?;
+    let mut slips = Vec::with_capacity(slipping.len());
+    let x = solve(
+        model,
+        &point,
+        site,
+        segment_end,
+        (v, u),
+        &slipping,
+        multipliers,
+        &mut slips,
+    )?;
     for sl in &slips {
         turning[slipping[sl.slot]] = relative(sl);
     }
@@ -341,8 +177,10 @@ fn relative(sl: &Slip) -> f64 {
 /// Eq. 13 with friction and its exact first derivatives at one point, for the collocation
 /// solve: at fixed tensions, the rates' [`Linearization`]; the rates' change with the log
 /// tension z_j = ln(tau_j / tau_j(0)) of each tendon with friction; the relative tension
-/// rates (turning) and their derivatives.
-#[derive(Clone, Debug)]
+/// rates (turning) and their derivatives. Refilled in place by [`linearize_into`], which
+/// keeps every buffer's capacity (with the scratch of its last evaluation), so that a
+/// linearization used again allocates nothing.
+#[derive(Debug)]
 pub(crate) struct FrictionLinearization {
     /// The rates and their derivatives in the strains and the rotation, tensions fixed.
     pub lin: Linearization,
@@ -357,6 +195,34 @@ pub(crate) struct FrictionLinearization {
     pub d_turning: Vec<SMatrix<f64, 1, 9>>,
     /// d(turning_j)/dz_l, row-major k x k.
     pub d_turning_log_tension: Vec<f64>,
+    /// Scratch of the evaluation: eq. 13 assembled at the point, the slips loading it, their
+    /// gradients dg_i/dx and their columns dPhi/dz_i.
+    point: Option<Point>,
+    slips: Vec<Slip>,
+    gradients: Vec<Vector6<f64>>,
+    columns: Vec<Vector6<f64>>,
+}
+
+impl Default for FrictionLinearization {
+    /// An empty linearization (zero rates, no tendons), to be filled by [`linearize_into`].
+    fn default() -> Self {
+        FrictionLinearization {
+            lin: Linearization {
+                rates: Vector6::zeros(),
+                d_strains: Matrix6::zeros(),
+                d_rotation: Matrix6x3::zeros(),
+            },
+            d_log_tension: Vec::new(),
+            turning: Vec::new(),
+            kappa: Vec::new(),
+            d_turning: Vec::new(),
+            d_turning_log_tension: Vec::new(),
+            point: None,
+            slips: Vec::new(),
+            gradients: Vec::new(),
+            columns: Vec::new(),
+        }
+    }
 }
 
 /// [`FrictionLinearization`] at a site for the state (R, v, u), the tendons of `slipping`
@@ -367,7 +233,38 @@ pub(crate) struct FrictionLinearization {
 ///
 /// # Errors
 /// As [`rates`].
+#[cfg(test)]
 pub(crate) fn linearize(
+    model: &Model,
+    site: &Site,
+    segment_end: f64,
+    state: (&Matrix3<f64>, &Vector3<f64>, &Vector3<f64>),
+    slipping: &[usize],
+    multipliers: Option<&[f64]>,
+    derivatives: bool,
+) -> Result<FrictionLinearization> {
+    let mut out = FrictionLinearization::default();
+    linearize_into(
+        model,
+        site,
+        segment_end,
+        state,
+        slipping,
+        multipliers,
+        derivatives,
+        &mut out,
+    )?;
+    Ok(out)
+}
+
+/// [`linearize`] into `out`, whose buffers are cleared and refilled (their capacity kept):
+/// the same arithmetic, without allocating once `out` has held an evaluation of as many
+/// tendons. On an error `out` holds no valid linearization.
+///
+/// # Errors
+/// As [`rates`].
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn linearize_into(
     model: &Model,
     site: &Site,
     segment_end: f64,
@@ -375,37 +272,59 @@ pub(crate) fn linearize(
     slipping: &[usize],
     multipliers: Option<&[f64]>,
     derivatives: bool,
-) -> Result<FrictionLinearization> {
-    let point = Point::new(model, site, segment_end, (R, v, u))?;
-    let (slips, x) = solve(model, &point, site, segment_end, (v, u), slipping, multipliers)?;
+    out: &mut FrictionLinearization,
+) -> Result<()> {
+    // Eq. 13 assembled in the point this linearization kept (in place, not moved).
+    let point = match &mut out.point {
+        Some(point) => {
+            point.refill(model, site, segment_end, (R, v, u))?;
+            point
+        }
+        None => out.point.insert(Point::new(model, site, segment_end, (R, v, u))?),
+    };
+    let point = &*point;
+    let x = solve(
+        model,
+        point,
+        site,
+        segment_end,
+        (v, u),
+        slipping,
+        multipliers,
+        &mut out.slips,
+    )?;
+    let slips = &out.slips;
     let k = slipping.len();
-    let mut kappa = vec![0.0; k];
-    for sl in &slips {
+    let kappa = &mut out.kappa;
+    kappa.clear();
+    kappa.resize(k, 0.0);
+    for sl in slips {
         kappa[sl.slot] = path_turning(sl);
     }
+    let turning = &mut out.turning;
+    turning.clear();
+    turning.resize(k, 0.0);
+    for sl in slips {
+        turning[sl.slot] = relative(sl);
+    }
+    out.d_log_tension.clear();
+    out.d_turning.clear();
+    out.d_turning_log_tension.clear();
     if !derivatives {
-        let mut turning = vec![0.0; k];
-        for sl in &slips {
-            turning[sl.slot] = relative(sl);
-        }
-        return Ok(FrictionLinearization {
-            lin: Linearization {
-                rates: x,
-                d_strains: Matrix6::zeros(),
-                d_rotation: Matrix6x3::zeros(),
-            },
-            d_log_tension: Vec::new(),
-            turning,
-            kappa,
-            d_turning: Vec::new(),
-            d_turning_log_tension: Vec::new(),
-        });
+        out.lin = Linearization {
+            rates: x,
+            d_strains: Matrix6::zeros(),
+            d_rotation: Matrix6x3::zeros(),
+        };
+        return Ok(());
     }
     // dPhi/d(v, u, phi) at fixed x: eq. 13's dF plus the tangential loads' change,
     // sum_i (g_i de_i + e_i dg_i|x); then the columns dPhi/dz_i = (q_i, r_i x q_i) + e_i g_i.
     let dFt = point.derivative(model, site, segment_end, (v, u), &x.transpose())?;
     let mut rhs = SMatrix::<f64, 6, 9>::from_fn(|i, j| dFt[(j, i)]);
-    let mut columns = vec![Vector6::<f64>::zeros(); slips.len()];
+    let columns = &mut out.columns;
+    columns.clear();
+    columns.resize(slips.len(), Vector6::<f64>::zeros());
     for (sl, column) in slips.iter().zip(columns.iter_mut()) {
         let tp = &sl.tp;
         let P = Matrix3::identity() - tp.t * tp.t.transpose();
@@ -437,7 +356,9 @@ pub(crate) fn linearize(
     // dx = -J^-1 dPhi with J = M + sum_i e_i (dg_i/dx)^T, by Woodbury on M's factor:
     // J^-1 B = M^-1 B - Y S^-1 G^T M^-1 B, Y = [y_i], G = [dg_i/dx], S = I + G^T Y.
     let m_count = slips.len();
-    let gradients: Vec<Vector6<f64>> = slips.iter().map(Slip::gradient).collect();
+    let gradients = &mut out.gradients;
+    gradients.clear();
+    gradients.extend(slips.iter().map(Slip::gradient));
     // S, S^-1, a copy of S to factor and a column: on the stack for up to 3 tendons here.
     let square = m_count * m_count;
     let mut stack = [0.0; 30];
@@ -492,17 +413,18 @@ pub(crate) fn linearize(
     for c in 0..9 {
         dx.set_column(c, &-woodbury(rows.row(c).transpose()));
     }
-    let mut d_log_tension = vec![Vector6::zeros(); k];
-    for (sl, column) in slips.iter().zip(&columns) {
+    let d_log_tension = &mut out.d_log_tension;
+    d_log_tension.resize(k, Vector6::zeros());
+    for (sl, column) in slips.iter().zip(columns.iter()) {
         d_log_tension[sl.slot] = -solve_j(column).ok_or_else(|| breakdown(site.s))?;
     }
     // turning_j = w_j mu_j |q_j| / tau_j: d = (w_j mu_j / tau_j) q^_j . (dq_j|x + k P W dx).
-    let mut turning = vec![0.0; k];
-    let mut d_turning = vec![SMatrix::<f64, 1, 9>::zeros(); k];
-    let mut d_turning_log_tension = vec![0.0; k * k];
-    for sl in &slips {
+    let d_turning = &mut out.d_turning;
+    d_turning.resize(k, SMatrix::<f64, 1, 9>::zeros());
+    let d_turning_log_tension = &mut out.d_turning_log_tension;
+    d_turning_log_tension.resize(k * k, 0.0);
+    for sl in slips {
         let tp = &sl.tp;
-        turning[sl.slot] = relative(sl);
         // w mu / tau = w mu inv_speed / k
         let factor = sl.signed_mu * tp.inv_speed / tp.k;
         let QQ = tp.normal_derivative(&Vector3::new(x[0], x[1], x[2]), &Vector3::new(x[3], x[4], x[5]), u);
@@ -518,18 +440,12 @@ pub(crate) fn linearize(
             d_turning_log_tension[sl.slot * k + l] = factor * sl.q_hat.dot(&sl.normal_change(&d_log_tension[l]));
         }
     }
-    Ok(FrictionLinearization {
-        lin: Linearization {
-            rates: x,
-            d_strains: Matrix6::from_fn(|i, c| dx[(i, c)]),
-            d_rotation: Matrix6x3::from_fn(|i, c| dx[(i, 6 + c)]),
-        },
-        d_log_tension,
-        turning,
-        kappa,
-        d_turning,
-        d_turning_log_tension,
-    })
+    out.lin = Linearization {
+        rates: x,
+        d_strains: Matrix6::from_fn(|i, c| dx[(i, c)]),
+        d_rotation: Matrix6x3::from_fn(|i, c| dx[(i, 6 + c)]),
+    };
+    Ok(())
 }
 
 #[cfg(test)]
@@ -556,6 +472,15 @@ mod tests {
     #[test]
     fn linearization_matches_central_differences() {
         let (robot, R, v, u) = setup();
+        check(&robot, &R, &v, &u);
+    }
+
+    /// One tendon with friction at the point: its tangential load in closed form
+    /// (`model/tangential.rs`), the linearization the same implicit-function one.
+    #[test]
+    fn linearization_with_one_tendon_matches_central_differences() {
+        let (mut robot, R, v, u) = setup();
+        robot.tendons[0].friction = None;
         check(&robot, &R, &v, &u);
     }
 

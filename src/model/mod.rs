@@ -15,5 +15,6 @@ pub mod robot;
 pub mod rod;
 pub mod routing;
 pub mod scales;
+mod tangential;
 pub mod tendon;
 pub(crate) mod tension_guess;

@@ -21,7 +21,7 @@ use super::super::residual::{
     rhs_linearized_inline, scale_rows,
 };
 use super::super::unknowns::THETA;
-use super::grip::Stuck;
+use super::profile::LinkScratch;
 pub(crate) use super::profile::Profile;
 use crate::error::Result;
 use crate::model::equations::Site;
@@ -51,8 +51,25 @@ pub(crate) struct IntervalLinearization {
     pub(crate) psi_x: DMatrix<f64>,
     /// d psi / dz: k x 2k, columns as `rows_z`.
     pub(crate) psi_z: DMatrix<f64>,
-    /// Whether the derivatives were evaluated (else the three blocks above have no rows).
+    /// Whether the derivatives were evaluated (else the three blocks above hold no values of
+    /// this evaluation: they keep their shape, and nothing reads them).
     pub(crate) derivatives: bool,
+}
+
+impl IntervalLinearization {
+    /// An evaluation with no rows yet, whose buffers a link's evaluation fills.
+    pub(super) fn empty() -> Self {
+        IntervalLinearization {
+            residual: Block::zeros(),
+            psi: Vec::new(),
+            capacity: Vec::new(),
+            stuck_tension: Vec::new(),
+            rows_z: DMatrix::zeros(0, 0),
+            psi_x: DMatrix::zeros(0, 0),
+            psi_z: DMatrix::zeros(0, 0),
+            derivatives: false,
+        }
+    }
 }
 
 /// Collocation of link k with friction: residual rows and capstan rows, and when `jac` is
@@ -117,15 +134,30 @@ fn interval_at(
 ) -> Result<IntervalLinearization> {
     let count = profile.count();
     let h = sites.end.s - sites.start.s;
-    let za: Vec<f64> = profile.z.iter().map(|z| z[k]).collect();
-    let zb: Vec<f64> = profile.z.iter().map(|z| z[k + 1]).collect();
+    // The link's buffers, the profile's spare ones (given back at the end).
+    let mut scratch = profile.take_scratch();
+    let LinkScratch {
+        za,
+        zb,
+        zm,
+        on,
+        stuck,
+        dzm,
+        dturn_m,
+        dzm_l,
+        ..
+    } = &mut *scratch;
+    za.clear();
+    za.extend(profile.z.iter().map(|z| z[k]));
+    zb.clear();
+    zb.extend(profile.z.iter().map(|z| z[k + 1]));
     let (y0, y1) = end_points(a, b);
     let theta1: Vector3<f64> = y1.fixed_rows::<3>(THETA).into();
     let derivatives = jac.is_some();
-    let la = profile.start_point(k, &sites.start, segment_end, a, &za, w, derivatives)?;
-    let lb = profile.point(&sites.end, segment_end, &b.R, (&b.v, &b.u), &zb, w, derivatives)?;
-    profile.keep_node(k, segment_end, a, (&za, w), &la);
-    profile.keep_node(k + 1, segment_end, b, (&zb, w), &lb);
+    let la = profile.start_point(k, &sites.start, segment_end, a, za, w, derivatives)?;
+    let lb = profile.point(&sites.end, segment_end, &b.R, (&b.v, &b.u), zb, w, derivatives)?;
+    profile.keep_node(k, segment_end, a, (za, w), &la);
+    profile.keep_node(k + 1, segment_end, b, (zb, w), &lb);
     // F at a point from its rates; with derivatives also its linearization (a residual
     // needs only the value, the same arithmetic as the linearization's).
     let value = |site: &Site, lin: &FrictionLinearization, y: &Block<f64>| {
@@ -143,56 +175,70 @@ fn interval_at(
         None => (value(&sites.start, &la, &y0), value(&sites.end, &lb, &y1)),
     };
     let ym = (y0 + y1) * 0.5 + (f0 - f1) * (h / 8.0);
-    let zm: Vec<f64> = (0..count)
-        .map(|j| 0.5 * (za[j] + zb[j]) + h / 8.0 * (la.turning[j] - lb.turning[j]))
-        .collect();
+    zm.clear();
+    zm.extend((0..count).map(|j| 0.5 * (za[j] + zb[j]) + h / 8.0 * (la.turning[j] - lb.turning[j])));
     let theta_m: Vector3<f64> = ym.fixed_rows::<3>(THETA).into();
     let (vm, um): (Vector3<f64>, Vector3<f64>) = (ym.fixed_rows::<3>(6).into(), ym.fixed_rows::<3>(9).into());
     let Rm = a.R * so3::exp(&theta_m);
-    let lm = profile.point(&sites.mid, segment_end, &Rm, (&vm, &um), &zm, w, derivatives)?;
+    let lm = profile.point(&sites.mid, segment_end, &Rm, (&vm, &um), zm, w, derivatives)?;
     let pm = derivatives.then(|| rhs_linearized_inline(&sites.mid, &lm.lin, &a.R, &ym));
     let fm = pm
         .as_ref()
         .map_or_else(|| rhs_from_rates(&sites.mid, &Rm, &ym, &lm.lin.rates), |pm| pm.f);
     let residual = scale_rows(y1 - y0 - (f0 + fm * 4.0 + f1) * (h / 6.0), length);
-    let on: Vec<bool> = (0..count).map(|j| profile.on_link(j, k)).collect();
+    on.clear();
+    on.extend((0..count).map(|j| profile.on_link(j, k)));
     // In a history, the stuck material's tension at node b, for the stick/slip choice.
-    let stuck: Vec<Option<Stuck>> = (0..count)
-        .map(|j| (profile.grips.is_some() && on[j]).then(|| profile.stuck_tension(j, k + 1, &sites.end, b, length)))
-        .collect();
-    let capacity: Vec<f64> = (0..count)
-        .map(|j| h / 6.0 * profile.coefficient(j) * (la.kappa[j] + 4.0 * lm.kappa[j] + lb.kappa[j]))
-        .collect();
-    let mut psi: Vec<f64> = (0..count)
-        .map(|j| {
-            if on[j] {
-                zb[j] - za[j] - h / 6.0 * (la.turning[j] + 4.0 * lm.turning[j] + lb.turning[j])
-            } else {
-                0.0
-            }
-        })
-        .collect();
+    stuck.clear();
+    stuck.extend(
+        (0..count).map(|j| {
+            (profile.grips.is_some() && on[j]).then(|| profile.stuck_tension(j, k + 1, &sites.end, b, length))
+        }),
+    );
+    // The link's evaluation in the buffers of one the profile no longer keeps.
+    let mut out = profile.take_link();
+    out.residual = residual;
+    out.capacity.clear();
+    out.capacity
+        .extend((0..count).map(|j| h / 6.0 * profile.coefficient(j) * (la.kappa[j] + 4.0 * lm.kappa[j] + lb.kappa[j])));
+    out.psi.clear();
+    out.psi.extend((0..count).map(|j| {
+        if on[j] {
+            zb[j] - za[j] - h / 6.0 * (la.turning[j] + 4.0 * lm.turning[j] + lb.turning[j])
+        } else {
+            0.0
+        }
+    }));
     // In a history, a stuck link's row is its stick row z_b - zeta_b, zeta_b the stuck
     // material's log tension (section 8); a sliding link keeps its capstan row at w = -1
     // or +1.
     for j in 0..count {
         if let (Some((tension, _, _)), true) = (stuck[j], profile.sticks(j, k)) {
-            psi[j] = zb[j] - (tension / profile.base[j]).ln();
+            out.psi[j] = zb[j] - (tension / profile.base[j]).ln();
         }
     }
-    let mut out = IntervalLinearization {
-        residual,
-        psi,
-        capacity,
-        stuck_tension: stuck.iter().map(|t| t.map_or(f64::NAN, |t| t.0)).collect(),
-        // Without derivatives the blocks stay empty (nothing reads them then).
-        rows_z: DMatrix::zeros(if derivatives { 12 } else { 0 }, 2 * count),
-        psi_x: DMatrix::zeros(if derivatives { count } else { 0 }, 24),
-        psi_z: DMatrix::zeros(if derivatives { count } else { 0 }, 2 * count),
-        derivatives,
-    };
+    out.stuck_tension.clear();
+    out.stuck_tension
+        .extend(stuck.iter().map(|t| t.map_or(f64::NAN, |t| t.0)));
+    // The blocks keep their shape (sized once per recycled evaluation); without
+    // derivatives they are not written, and nothing reads them then.
+    for (block, shape) in [
+        (&mut out.rows_z, (12, 2 * count)),
+        (&mut out.psi_x, (count, 24)),
+        (&mut out.psi_z, (count, 2 * count)),
+    ] {
+        if block.shape() != shape {
+            *block = DMatrix::zeros(shape.0, shape.1);
+        } else if derivatives {
+            block.fill(0.0);
+        }
+    }
+    out.derivatives = derivatives;
     let (Some(jac), Some((p0, p1)), Some(pm)) = (jac, ends, pm) else {
         profile.keep_end(k, segment_end, b, zb, w, derivatives, lb);
+        profile.give(la);
+        profile.give(lm);
+        profile.give_scratch(scratch);
         return Ok(out);
     };
 
@@ -210,9 +256,8 @@ fn interval_at(
         }
         row
     };
-    let dzm: Vec<SMatrix<f64, 1, 18>> = (0..count)
-        .map(|j| (node_turning(&la, j, 0) - node_turning(&lb, j, 9)) * (h / 8.0))
-        .collect();
+    dzm.clear();
+    dzm.extend((0..count).map(|j| (node_turning(&la, j, 0) - node_turning(&lb, j, 9)) * (h / 8.0)));
     // F_m and kappa~_m in the midpoint's local coordinates (theta, v, u) and the frame.
     let Jr_m = so3::right_jacobian(&theta_m);
     let Em = so3::exp(&theta_m);
@@ -239,7 +284,7 @@ fn interval_at(
     ends.write(&dFm, h, length, jac);
 
     // d kappa~_m / d(18 columns), including z_m's dependence.
-    let mut dturn_m: Vec<SMatrix<f64, 1, 18>> = Vec::with_capacity(count);
+    dturn_m.clear();
     for j in 0..count {
         let (row_y, row_frame) = turning_y(j);
         let mut row = row_y.fixed_columns::<9>(3) * dYm;
@@ -266,12 +311,11 @@ fn interval_at(
             let dF_end = rates_z(lin, l); // dF_a or dF_b / dz
             // y_m moves by +-h/8 dF_end; z_m by delta/2 +- h/8 d kappa~_end / dz.
             let dym = dF_end * (sign * h / 8.0);
-            let dzm_l: Vec<f64> = (0..count)
-                .map(|j| {
-                    let own = if j == l { 0.5 } else { 0.0 };
-                    own + sign * h / 8.0 * lin.d_turning_log_tension[j * count + l]
-                })
-                .collect();
+            dzm_l.clear();
+            dzm_l.extend((0..count).map(|j| {
+                let own = if j == l { 0.5 } else { 0.0 };
+                own + sign * h / 8.0 * lin.d_turning_log_tension[j * count + l]
+            }));
             let mut dFm_z = pm.f_y * dym;
             for (j, d) in dzm_l.iter().enumerate() {
                 dFm_z += rates_z(&lm, j) * *d;
@@ -304,6 +348,9 @@ fn interval_at(
         out.psi_z[(j, count + j)] = 1.0;
     }
     profile.keep_end(k, segment_end, b, zb, w, derivatives, lb);
+    profile.give(la);
+    profile.give(lm);
+    profile.give_scratch(scratch);
     Ok(out)
 }
 
@@ -331,32 +378,48 @@ pub(crate) fn interval_order6(
 ) -> Result<Order6> {
     let count = profile.count();
     let h = sites.end.s - sites.start.s;
-    let za: Vec<f64> = profile.z.iter().map(|z| z[k]).collect();
-    let zb: Vec<f64> = profile.z.iter().map(|z| z[k + 1]).collect();
+    // The link's buffers, the profile's spare ones (given back at the end).
+    let mut scratch = profile.take_scratch();
+    let LinkScratch {
+        za,
+        zb,
+        zm: z_m,
+        z_q,
+        z_tq,
+        turnings: [k0, k1, k_q, k_tq, k_m],
+        ..
+    } = &mut *scratch;
+    za.clear();
+    za.extend(profile.z.iter().map(|z| z[k]));
+    zb.clear();
+    zb.extend(profile.z.iter().map(|z| z[k + 1]));
     let (y0, y1) = end_points(a, b);
     let w = profile.multipliers(k);
     let w = w.as_deref();
-    // F and kappa~ at a local state (y, z) of the interval; at a node (`node`: its index
-    // and state), eq. 13 with friction at the node's own state, taken from the last pass
-    // that evaluated it there when it has the same inputs.
-    let stage = |site: &Site, y: &Block<f64>, z: &[f64], node: Option<(usize, &State)>| {
+    // F and kappa~ (into `turning`) at a local state (y, z) of the interval; at a node
+    // (`node`: its index and state), eq. 13 with friction at the node's own state, taken
+    // from the last pass that evaluated it there when it has the same inputs.
+    let stage = |site: &Site, y: &Block<f64>, z: &[f64], node: Option<(usize, &State)>, turning: &mut Vec<f64>| {
         let theta: Vector3<f64> = y.fixed_rows::<3>(THETA).into();
         let (v, u): (Vector3<f64>, Vector3<f64>) = (y.fixed_rows::<3>(6).into(), y.fixed_rows::<3>(9).into());
         let R = a.R * so3::exp(&theta);
-        let mut turning = Vec::new();
         let rates = match node {
-            Some((n, state)) => match profile.node_rates(n, segment_end, state, (z, w), &mut turning) {
+            Some((n, state)) => match profile.node_rates(n, segment_end, state, (z, w), turning) {
                 Some(rates) => rates,
                 None => {
                     let lin = profile.point(site, segment_end, &state.R, (&state.v, &state.u), z, w, false)?;
-                    turning = lin.turning;
-                    lin.lin.rates
+                    turning.clone_from(&lin.turning);
+                    let rates = lin.lin.rates;
+                    profile.give(lin);
+                    rates
                 }
             },
             None => {
                 let lin = profile.point(site, segment_end, &R, (&v, &u), z, w, false)?;
-                turning = lin.turning;
-                lin.lin.rates
+                turning.clone_from(&lin.turning);
+                let rates = lin.lin.rates;
+                profile.give(lin);
+                rates
             }
         };
         let mut f = Block::zeros();
@@ -364,26 +427,28 @@ pub(crate) fn interval_order6(
         f.fixed_rows_mut::<3>(THETA)
             .copy_from(&(so3::right_jacobian_inv(&theta) * u));
         f.fixed_rows_mut::<6>(6).copy_from(&rates);
-        Ok::<_, crate::Error>((f, turning))
+        Ok::<_, crate::Error>(f)
     };
-    let (f0, k0) = stage(&sites.start, &y0, &za, Some((k, a)))?;
-    let (f1, k1) = stage(&sites.end, &y1, &zb, Some((k + 1, b)))?;
-    let combine = |c0: f64, c1: f64, d0: f64, d1: f64| {
+    let f0 = stage(&sites.start, &y0, za, Some((k, a)), k0)?;
+    let f1 = stage(&sites.end, &y1, zb, Some((k + 1, b)), k1)?;
+    let (k0, k1) = (&*k0, &*k1);
+    let combine = |c0: f64, c1: f64, d0: f64, d1: f64, z: &mut Vec<f64>| {
         let y = (y0 * c0 + y1 * c1) / 32.0 + (f0 * d0 + f1 * d1) * (h / 64.0);
-        let z: Vec<f64> = (0..count)
-            .map(|j| (za[j] * c0 + zb[j] * c1) / 32.0 + (k0[j] * d0 + k1[j] * d1) * (h / 64.0))
-            .collect();
-        (y, z)
+        z.clear();
+        z.extend((0..count).map(|j| (za[j] * c0 + zb[j] * c1) / 32.0 + (k0[j] * d0 + k1[j] * d1) * (h / 64.0)));
+        y
     };
-    let (y_q, z_q) = combine(27.0, 5.0, 9.0, -3.0);
-    let (y_tq, z_tq) = combine(5.0, 27.0, 3.0, -9.0);
-    let (f_q, k_q) = stage(&quarters.quarter, &y_q, &z_q, None)?;
-    let (f_tq, k_tq) = stage(&quarters.three_quarters, &y_tq, &z_tq, None)?;
+    let y_q = combine(27.0, 5.0, 9.0, -3.0, z_q);
+    let y_tq = combine(5.0, 27.0, 3.0, -9.0, z_tq);
+    let f_q = stage(&quarters.quarter, &y_q, z_q, None, k_q)?;
+    let f_tq = stage(&quarters.three_quarters, &y_tq, z_tq, None, k_tq)?;
     let y_m = (y0 + y1) * 0.5 + ((f1 - f0) * (5.0 / 24.0) + (f_q - f_tq) * (2.0 / 3.0)) * h;
-    let z_m: Vec<f64> = (0..count)
-        .map(|j| 0.5 * (za[j] + zb[j]) + ((k1[j] - k0[j]) * (5.0 / 24.0) + (k_q[j] - k_tq[j]) * (2.0 / 3.0)) * h)
-        .collect();
-    let (f_m, k_m) = stage(&sites.mid, &y_m, &z_m, None)?;
+    z_m.clear();
+    z_m.extend(
+        (0..count)
+            .map(|j| 0.5 * (za[j] + zb[j]) + ((k1[j] - k0[j]) * (5.0 / 24.0) + (k_q[j] - k_tq[j]) * (2.0 / 3.0)) * h),
+    );
+    let f_m = stage(&sites.mid, &y_m, z_m, None, k_m)?;
     let quadrature = ((f0 + f1) * 7.0 + (f_q + f_tq) * 32.0 + f_m * 12.0) * (h / 90.0);
     let psi: Vec<f64> = (0..count)
         .map(|j| {
@@ -399,6 +464,7 @@ pub(crate) fn interval_order6(
         .collect();
     let rates = |f: &Block<f64>| f.fixed_rows::<6>(6).into_owned();
     profile.order6.borrow_mut()[k].clone_from(&psi);
+    profile.give_scratch(scratch);
     Ok((scale_rows(y1 - y0 - quadrature, length), psi, rates(&f0), rates(&f1)))
 }
 

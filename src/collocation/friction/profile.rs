@@ -4,14 +4,14 @@
 //! evaluations that the border and the next link reuse.
 #![allow(non_snake_case)]
 
-use super::grip::{Contact, Grip, stuck_multiplier};
+use super::grip::{Contact, Grip, Stuck, stuck_multiplier};
 use super::interval::IntervalLinearization;
 use crate::error::Result;
 use crate::mesh::Mesh;
 use crate::model::equations::{Model, Site};
 use crate::model::friction::{self, FrictionLinearization};
 use crate::solution::State;
-use nalgebra::Vector3;
+use nalgebra::{SMatrix, Vector3};
 use std::cell::RefCell;
 
 /// The log tensions of the tendons with friction on a mesh, and a model to evaluate eq. 13
@@ -42,6 +42,38 @@ pub(crate) struct Profile<'a> {
     /// Each node's rates and turning rates from the last link that evaluated it, which the
     /// order-6 stages at the same node take instead of evaluating it again.
     nodes: RefCell<Vec<NodeRates>>,
+    /// Linearizations done with ([`Profile::give`]), refilled by the next points so that
+    /// evaluating eq. 13 with friction allocates nothing after the first links.
+    // Boxed so that taking and giving one moves a pointer, not its 700 bytes (measured:
+    // the moves' memcpy cost S's friction solve 0.18 M instructions).
+    #[allow(clippy::vec_box)]
+    spare: RefCell<Vec<Box<FrictionLinearization>>>,
+    /// Links' evaluations the cache no longer holds and the links' scratch buffers, for the
+    /// next links to refill.
+    spare_links: RefCell<Vec<IntervalLinearization>>,
+    #[allow(clippy::vec_box)]
+    scratch_links: RefCell<Vec<Box<LinkScratch>>>,
+}
+
+/// The buffers of one link's evaluation ([`super::interval::interval`], and its order-6
+/// rows): the log tensions at its nodes and midpoint, which slips load it, their stuck
+/// tensions in a history, and the rows of the Jacobian's chain rule in z_m and kappa~_m.
+/// The profile keeps them, so that evaluating a link allocates nothing after the first.
+#[derive(Debug, Default)]
+pub(super) struct LinkScratch {
+    pub(super) za: Vec<f64>,
+    pub(super) zb: Vec<f64>,
+    pub(super) zm: Vec<f64>,
+    pub(super) on: Vec<bool>,
+    pub(super) stuck: Vec<Option<Stuck>>,
+    pub(super) dzm: Vec<SMatrix<f64, 1, 18>>,
+    pub(super) dturn_m: Vec<SMatrix<f64, 1, 18>>,
+    pub(super) dzm_l: Vec<f64>,
+    /// The order-6 rows' log tensions at the quarter stages and their five stages'
+    /// turning rates ([`super::interval::interval_order6`]; its midpoint's in `zm`).
+    pub(super) z_q: Vec<f64>,
+    pub(super) z_tq: Vec<f64>,
+    pub(super) turnings: [Vec<f64>; 5],
 }
 
 /// Eq. 13 with friction at a node (its rates and turning rates) and everything it was
@@ -57,7 +89,8 @@ struct NodeRates {
 }
 
 /// Eq. 13 with friction at a link's end node and everything it was evaluated from: a
-/// link whose start has the same inputs, bit for bit, has the same evaluation.
+/// link whose start has the same inputs, bit for bit, has the same evaluation (`lin`, None
+/// once a link has taken it).
 #[derive(Debug)]
 struct KeptEnd {
     node: usize,
@@ -66,7 +99,7 @@ struct KeptEnd {
     z: Vec<f64>,
     w: Option<Vec<f64>>,
     derivatives: bool,
-    lin: FrictionLinearization,
+    lin: Option<Box<FrictionLinearization>>,
 }
 
 impl<'a> Profile<'a> {
@@ -96,6 +129,9 @@ impl<'a> Profile<'a> {
             order6: RefCell::new(vec![Vec::new(); mesh.nodes.len() - 1]),
             end: RefCell::new(None),
             nodes: RefCell::new((0..mesh.nodes.len()).map(|_| NodeRates::default()).collect()),
+            spare: RefCell::new(Vec::new()),
+            spare_links: RefCell::new(Vec::new()),
+            scratch_links: RefCell::new(Vec::new()),
         }
     }
 
@@ -113,6 +149,9 @@ impl<'a> Profile<'a> {
             order6: RefCell::new(vec![Vec::new(); self.z[0].len() - 1]),
             end: RefCell::new(None),
             nodes: RefCell::new((0..self.z[0].len()).map(|_| NodeRates::default()).collect()),
+            spare: RefCell::new(Vec::new()),
+            spare_links: RefCell::new(Vec::new()),
+            scratch_links: RefCell::new(Vec::new()),
         }
     }
 
@@ -160,9 +199,31 @@ impl<'a> Profile<'a> {
             .collect()
     }
 
-    /// Keeps link k's evaluation `lin` for the border.
+    /// Keeps link k's evaluation `lin` for the border (the one it replaces goes to the
+    /// spare evaluations, [`Profile::take_link`]).
     pub(crate) fn keep(&self, k: usize, lin: IntervalLinearization) {
-        self.cache.borrow_mut()[k] = Some(lin);
+        let old = self.cache.borrow_mut()[k].replace(lin);
+        if let Some(old) = old {
+            self.spare_links.borrow_mut().push(old);
+        }
+    }
+
+    /// A link evaluation to refill: a spare one, else a new empty one.
+    pub(super) fn take_link(&self) -> IntervalLinearization {
+        self.spare_links
+            .borrow_mut()
+            .pop()
+            .unwrap_or_else(IntervalLinearization::empty)
+    }
+
+    /// A link's scratch buffers: spare ones, else new ones ([`Profile::give_scratch`]).
+    pub(super) fn take_scratch(&self) -> Box<LinkScratch> {
+        self.scratch_links.borrow_mut().pop().unwrap_or_default()
+    }
+
+    /// Takes back a link's scratch buffers.
+    pub(super) fn give_scratch(&self, scratch: Box<LinkScratch>) {
+        self.scratch_links.borrow_mut().push(scratch);
     }
 
     /// Runs `f` on link k's last evaluation (None when it has none).
@@ -207,12 +268,29 @@ impl<'a> Profile<'a> {
         z: &[f64],
         w: Option<&[f64]>,
         derivatives: bool,
-    ) -> Result<FrictionLinearization> {
+    ) -> Result<Box<FrictionLinearization>> {
         let mut model = self.scratch.borrow_mut();
         for (j, &i) in self.slipping.iter().enumerate() {
             model.tensions[i] = self.tension(j, z[j]);
         }
-        friction::linearize(&model, site, segment_end, (R, y.0, y.1), &self.slipping, w, derivatives)
+        let mut lin = self.spare.borrow_mut().pop().unwrap_or_default();
+        friction::linearize_into(
+            &model,
+            site,
+            segment_end,
+            (R, y.0, y.1),
+            &self.slipping,
+            w,
+            derivatives,
+            &mut lin,
+        )?;
+        Ok(lin)
+    }
+
+    /// Takes back a linearization of [`Profile::point`] that its caller is done with, for
+    /// the next point to refill.
+    pub(super) fn give(&self, lin: Box<FrictionLinearization>) {
+        self.spare.borrow_mut().push(lin);
     }
 
     /// [`Profile::point`] at node k (state `a`, log tensions `z`, multipliers `w`), taken
@@ -228,42 +306,66 @@ impl<'a> Profile<'a> {
         z: &[f64],
         w: Option<&[f64]>,
         derivatives: bool,
-    ) -> Result<FrictionLinearization> {
-        let kept = self.end.borrow_mut().take();
-        if let Some(kept) = kept
-            && kept.node == k
-            && kept.segment_end == segment_end
-            && kept.state == *a
-            && kept.z == z
-            && kept.w.as_deref() == w
-            && (kept.derivatives || !derivatives)
-        {
-            return Ok(kept.lin);
+    ) -> Result<Box<FrictionLinearization>> {
+        let taken = self.end.borrow_mut().as_mut().and_then(|kept| {
+            let lin = kept.lin.take()?;
+            let same = kept.node == k
+                && kept.segment_end == segment_end
+                && kept.state == *a
+                && kept.z == z
+                && kept.w.as_deref() == w
+                && (kept.derivatives || !derivatives);
+            Some((same, lin))
+        });
+        match taken {
+            Some((true, lin)) => return Ok(lin),
+            Some((false, lin)) => self.give(lin),
+            None => {}
         }
         self.point(site, segment_end, &a.R, (&a.v, &a.u), z, w, derivatives)
     }
 
-    /// Keeps link k's evaluation `lin` at its end node (state `b`) for the next link.
+    /// Keeps link k's evaluation `lin` at its end node (state `b`, log tensions `z`) for the
+    /// next link, in the buffers of the last one kept.
     #[allow(clippy::too_many_arguments)]
     pub(super) fn keep_end(
         &self,
         k: usize,
         segment_end: f64,
         b: &State,
-        z: Vec<f64>,
+        z: &[f64],
         w: Option<&[f64]>,
         derivatives: bool,
-        lin: FrictionLinearization,
+        lin: Box<FrictionLinearization>,
     ) {
-        *self.end.borrow_mut() = Some(KeptEnd {
-            node: k + 1,
+        let mut end = self.end.borrow_mut();
+        let kept = end.get_or_insert_with(|| KeptEnd {
+            node: 0,
             segment_end,
             state: *b,
-            z,
-            w: w.map(<[f64]>::to_vec),
+            z: Vec::new(),
+            w: None,
             derivatives,
-            lin,
+            lin: None,
         });
+        kept.node = k + 1;
+        kept.segment_end = segment_end;
+        kept.state = *b;
+        kept.z.clear();
+        kept.z.extend_from_slice(z);
+        match (&mut kept.w, w) {
+            (Some(old), Some(w)) => {
+                old.clear();
+                old.extend_from_slice(w);
+            }
+            (old, w) => *old = w.map(<[f64]>::to_vec),
+        }
+        kept.derivatives = derivatives;
+        let old = kept.lin.replace(lin);
+        drop(end);
+        if let Some(old) = old {
+            self.give(old);
+        }
     }
 
     /// Keeps the rates and turning rates of `lin`, eq. 13 with friction at node n (state

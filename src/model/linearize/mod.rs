@@ -126,6 +126,11 @@ impl TendonCache {
         }
     }
 
+    /// Forgets the kept points (their slots are overwritten by the next pushes).
+    fn clear(&mut self) {
+        self.len = 0;
+    }
+
     /// Keeps `tp` if a slot is free (the tendons beyond are evaluated again in pass 2).
     fn push(&mut self, tp: TendonPoint) {
         if let Some(slot) = self.points.get_mut(self.len) {
@@ -382,6 +387,14 @@ pub(crate) struct Point {
     cache: TendonCache,
 }
 
+impl std::fmt::Debug for Point {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Point")
+            .field("tendons", &self.assembled.count)
+            .finish_non_exhaustive()
+    }
+}
+
 impl Point {
     /// Assembles and factors eq. 13 at (R, v, u).
     ///
@@ -396,6 +409,24 @@ impl Point {
         let mut cache = TendonCache::new();
         let assembled = assemble(model, site, segment_end, (R, v, u), Some(&mut cache))?;
         Ok(Point { assembled, cache })
+    }
+
+    /// [`Point::new`] in place: the tendon points kept in this point's own cache instead of
+    /// one moved in (a point is about 1.3 kB), for a caller that evaluates many points. On
+    /// an error the point holds no valid evaluation (the next refill starts over).
+    ///
+    /// # Errors
+    /// As [`Point::new`].
+    pub(crate) fn refill(
+        &mut self,
+        model: &Model,
+        site: &Site,
+        segment_end: f64,
+        (R, v, u): (&Matrix3<f64>, &Vector3<f64>, &Vector3<f64>),
+    ) -> Result<()> {
+        self.cache.clear();
+        self.assembled = assemble(model, site, segment_end, (R, v, u), Some(&mut self.cache))?;
+        Ok(())
     }
 
     /// The c-th tendon loading the backbone here (in [`Model::distributed_tendons`]' order),
