@@ -33,21 +33,21 @@ pub(crate) const ORDER6_BELOW: f64 = 1e-8;
 /// relative) is not negligible on the coarse meshes order 6 runs on: the true tip errors
 /// measured up to 1.11 times it on case S's 32 intervals (case H 1.00, the elastica 1.03,
 /// 60 random robots at 1e-10 L at most 1.02 where a 32x finer reference resolves the
-/// error); 1.25 keeps those below the reported estimate. Not all: on 600 random robots
-/// five have ratios of the reported estimate up to 1.43, and a factor of 2 does not remove
-/// them (1.48 then, the meshes move): their excess is a floor of the order-6 answer, 10
-/// to 50 times [`ROUNDING`], that 2 to 8 times finer meshes do not remove, which no factor
-/// on the truncation estimate covers (docs/numerics.md, "Why the estimate is low on some
-/// random robots").
+/// error); 1.25 keeps those below the reported estimate. On 600 random robots the true
+/// error beyond the reference's uncertainty is at most 0.86 of the reported estimate,
+/// since the stages keep their strains' low part (up to 1.97 before, which no factor
+/// covered: a rounding floor of the order-6 answer, docs/numerics.md, "Why the estimate was
+/// low on some random robots").
 const SAFETY: f64 = 1.25;
 
 /// Rounding, relative to L (and in rad): added to the order-6 estimate, which sees
 /// truncation only. Solutions of cases S and H on 2048 and 4096 intervals agree to
 /// 1.7e-13 L, so true errors below that are not resolved by any reference; 4e-13 (about
 /// 1800 eps) covers it with the same room as [`SAFETY`]. Tolerances below it cannot be
-/// met. Some random robots (L / r of 670 to 4700) have floors of 3e-12 to 2e-11 L in the
-/// order-6 answer: what sets them, and an estimate of them, is open (docs/numerics.md,
-/// "Why the estimate is low on some random robots").
+/// met. The floors of 3e-12 to 2e-11 L some random robots (L / r of 670 to 4700) had in the
+/// order-6 answer were the stages' strains rounded near 1 (a force of EA eps), which the
+/// order-6 answer and its estimate now keep ([`super::stage`]; docs/numerics.md, "Why the
+/// estimate was low on some random robots").
 const ROUNDING: f64 = 4e-13;
 
 /// Chord steps on phi4(x) = phi4(x4) - phi6(x4) from x4 with Newton's factors: with

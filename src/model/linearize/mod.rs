@@ -313,9 +313,9 @@ pub fn rates(
 /// [`rates`] for the strain v + `low`, where `low` is below v's last place: the deviation
 /// v - v* that carries the internal force, D (v - v*), is then (v - v*) + low, not v - v*
 /// rounded to v's last place. A strain near v* = e3 holds the force of a stiff rod only to
-/// EA eps (1e-11 N at EA = 6.6e4 N); the stages of the order-6 and order-8 schemes, which
+/// EA eps (7e-12 N at EA = 6.6e4 N); the stages of the order-6 and order-8 schemes, which
 /// know their deviation more precisely than their strain, keep it (docs/numerics.md, "Why
-/// the estimate is low on some random robots").
+/// the estimate was low on some random robots").
 ///
 /// # Errors
 /// As [`rates`].
