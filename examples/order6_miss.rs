@@ -1,5 +1,5 @@
 //! Diagnosis of an order-6 estimate below the true error (docs/numerics.md, "The order-6
-//! answer", "Why the estimate is low on some random robots"): for the robot file given, the
+//! answer", "Why the estimate was low on some random robots"): for the robot file given, the
 //! 1e-10 L solve (or `TOL`), then the order-4 and order-6 answers (with the unreported order-8
 //! estimate, before its factor and rounding term) on the mesh that solve ends on and on that
 //! mesh with every interval split into k, against order-4 references on 32x and 64x that

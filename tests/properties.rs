@@ -453,7 +453,7 @@ fn tight_tolerances_get_an_estimate_never_below_the_true_error() {
 /// With `TDCR_DUMP_MISSES=DIR` every robot whose estimate is below its error is written to DIR
 /// as a robot file, for `cargo run --release --example order6_miss -- FILE`.
 #[test]
-#[ignore = "long (600 random robots at 1e-10 L, about 30 s in release); fails today: a few robots have true / estimate up to 1.97 (1.29 before the corrector's Newton step at the predicted point moved robot 550's load path), errors of the size of a floor of their order-6 answers that finer meshes do not remove, 10 to 50x the fixed rounding term (docs/numerics.md, \"Why the estimate is low on some random robots\")"]
+#[ignore = "long: 600 random robots at 1e-10 L, about 60 s in release"]
 fn tight_tolerances_on_six_hundred_random_robots() {
     tight(600);
 }

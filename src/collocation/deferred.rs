@@ -11,13 +11,12 @@
 //! C h^7, are the local errors the next mesh equidistributes.
 
 use super::estimate::{self, Correction};
-use super::newton::{self, Workspace};
+use super::newton::Workspace;
 use super::order8;
 use super::refine;
 use super::system::System;
 use super::unknowns;
 use crate::error::Result;
-use crate::mesh::spare;
 use crate::report::{ErrorEstimate, SolveReport};
 use crate::solution::State;
 use nalgebra::Vector6;
@@ -34,21 +33,21 @@ pub(crate) const ORDER6_BELOW: f64 = 1e-8;
 /// relative) is not negligible on the coarse meshes order 6 runs on: the true tip errors
 /// measured up to 1.11 times it on case S's 32 intervals (case H 1.00, the elastica 1.03,
 /// 60 random robots at 1e-10 L at most 1.02 where a 32x finer reference resolves the
-/// error); 1.25 keeps those below the reported estimate. Not all: on 600 random robots
-/// five have ratios of the reported estimate up to 1.43, and a factor of 2 does not remove
-/// them (1.48 then, the meshes move): their excess is a floor of the order-6 answer, 10
-/// to 50 times [`ROUNDING`], that 2 to 8 times finer meshes do not remove, which no factor
-/// on the truncation estimate covers (docs/numerics.md, "Why the estimate is low on some
-/// random robots").
+/// error); 1.25 keeps those below the reported estimate. On 600 random robots the true
+/// error beyond the reference's uncertainty is at most 0.86 of the reported estimate,
+/// since the stages keep their strains' low part (up to 1.97 before, which no factor
+/// covered: a rounding floor of the order-6 answer, docs/numerics.md, "Why the estimate was
+/// low on some random robots").
 const SAFETY: f64 = 1.25;
 
 /// Rounding, relative to L (and in rad): added to the order-6 estimate, which sees
 /// truncation only. Solutions of cases S and H on 2048 and 4096 intervals agree to
 /// 1.7e-13 L, so true errors below that are not resolved by any reference; 4e-13 (about
 /// 1800 eps) covers it with the same room as [`SAFETY`]. Tolerances below it cannot be
-/// met. Some random robots (L / r of 670 to 4700) have floors of 3e-12 to 2e-11 L in the
-/// order-6 answer: what sets them, and an estimate of them, is open (docs/numerics.md,
-/// "Why the estimate is low on some random robots").
+/// met. The floors of 3e-12 to 2e-11 L some random robots (L / r of 670 to 4700) had in the
+/// order-6 answer were the stages' strains rounded near 1 (a force of EA eps), which the
+/// order-6 answer and its estimate now keep ([`super::stage`]; docs/numerics.md, "Why the
+/// estimate was low on some random robots").
 const ROUNDING: f64 = 4e-13;
 
 /// Chord steps on phi4(x) = phi4(x4) - phi6(x4) from x4 with Newton's factors: with
@@ -73,20 +72,21 @@ pub(crate) fn estimate(
     tolerance: Option<f64>,
     report: &mut SolveReport,
 ) -> Option<Correction> {
-    let (order4, defect) = estimate::estimate_with(system, ws, x, Some(phi4), node_rates)
+    let order4 = estimate::estimate_with(system, ws, x, Some(phi4), node_rates)
         .ok()
         .flatten()?;
     let length = system.model.robot.length();
     let Some(tol) = tolerance.filter(|&tol| {
         tol <= ORDER6_BELOW && system.friction.is_none() && !refine::meets(&order4.estimate, tol, length)
     }) else {
-        spare::give(defect);
         return Some(order4);
     };
     // The order-6 answer where its estimate is the smaller (on a mesh too coarse for the
     // expansion the correction rests on, it need not be).
     let miss = |e: &ErrorEstimate| (e.tip_position / (tol * length)).max(e.tip_rotation / tol);
-    match order6(system, ws, x, phi4, &defect, report) {
+    // The order-6 answer's defect is evaluated again with the stages' strains kept below
+    // their last place (super::stage), not taken from the estimate's.
+    match order6(system, ws, x, &order4.node_rates, report) {
         Ok(Some((x6, order6, moved))) if miss(&order6.estimate) < miss(&order4.estimate) => {
             *x = x6;
             // The Jacobian the workspace holds is now that far from the answer.
@@ -115,19 +115,22 @@ pub fn corrected(
         return Ok(None);
     }
     let mut phi4 = vec![0.0; system.unknowns()];
-    system.residual(x, &mut phi4)?;
-    let Some((_, defect)) = estimate::estimate_with(system, ws, x, Some(&phi4), None)? else {
+    let mut rates = vec![Vector6::zeros(); x.len()];
+    if !system.residual_rates(x, &mut phi4, &mut rates)? {
         return Ok(None);
-    };
-    Ok(order6(system, ws, x, &phi4, &defect, report)?.map(|(x6, c, moved)| {
+    }
+    Ok(order6(system, ws, x, &rates, report)?.map(|(x6, c, moved)| {
         ws.drift += moved;
         (x6, c.estimate)
     }))
 }
 
-/// The order-6 solution from the order-4 one `x4` (residual `phi4`, defect
-/// phi4(x4) - phi6(x4) `defect`), its order-8 estimate and the sum of the max-norms of the
-/// steps from x4 (scaled unknowns); `None` when a solve is not finite.
+/// The order-6 solution from the order-4 one `x4` (node rates of eq. 13 there `rates`), its
+/// order-8 estimate and the sum of the max-norms of the steps from x4 (scaled unknowns);
+/// `None` when a solve is not finite. The defect phi4(x4) - phi6(x4) and the chord steps'
+/// order-4 residuals are evaluated with the stages' strains kept below their last place
+/// ([`System::residual_split`], [`System::order6_residual_split`]; docs/numerics.md, "Why
+/// the estimate was low on some random robots").
 ///
 /// # Errors
 /// A model breakdown at a visited state.
@@ -135,22 +138,29 @@ fn order6(
     system: &System,
     ws: &mut Workspace,
     x4: &[State],
-    phi4: &[f64],
-    defect: &[f64],
+    rates: &[Vector6<f64>],
     report: &mut SolveReport,
 ) -> Result<Option<(Vec<State>, Correction, f64)>> {
     let n = system.unknowns();
     let length = system.model.robot.length();
     let mut x = x4.to_vec();
     let mut next = Vec::with_capacity(x.len());
-    let mut residual = phi4.to_vec();
+    let mut residual = vec![0.0; n];
+    let mut defect = vec![0.0; n];
+    system.residual_split(x4, &mut residual)?;
+    system.order6_residual_split(x4, &mut defect, rates)?;
+    count(system, report);
+    for (d, r) in defect.iter_mut().zip(&residual) {
+        *d = r - *d;
+    }
     let mut rhs = vec![0.0; n];
     let mut moved = 0.0;
     for step in 0..CORRECTIONS {
-        if step > 0 && !newton::residual(system, &x, &mut residual, report) {
-            return Ok(None);
+        if step > 0 {
+            system.residual_split(&x, &mut residual)?;
+            count(system, report);
         }
-        for ((r, d), f) in rhs.iter_mut().zip(defect).zip(&residual) {
+        for ((r, d), f) in rhs.iter_mut().zip(&defect).zip(&residual) {
             *r = d - f;
         }
         let Some(dx) = ws.solve_again(&rhs) else {
@@ -176,4 +186,10 @@ fn order6(
     estimate.tip_rotation = SAFETY * estimate.tip_rotation + ROUNDING;
     estimate.backbone_max = SAFETY * estimate.backbone_max + ROUNDING * length;
     Ok(Some((x, correction, moved)))
+}
+
+/// Counts one residual evaluation of `system` in `report`.
+fn count(system: &System, report: &mut SolveReport) {
+    report.evaluations.residual += 1;
+    report.evaluations.equations += system.rate_evaluations();
 }

@@ -41,15 +41,13 @@ pub(crate) struct Correction {
 /// # Errors
 /// A model breakdown at a stage of the order-6 scheme.
 pub(crate) fn estimate(system: &System, ws: &mut Workspace, x: &[State]) -> Result<Option<Correction>> {
-    Ok(estimate_with(system, ws, x, None, None)?.map(|(c, _)| c))
+    estimate_with(system, ws, x, None, None)
 }
 
 /// [`estimate`] with the order-4 residual at `x` when the caller has it (Newton's last
 /// residual), saving its evaluation, and the node rates of eq. 13 at `x` when that residual's
 /// evaluation gave them (`node_rates`: [`System::residual_rates`] at `x`, one per node),
-/// saving theirs; also returns the right-hand side of the deferred correction,
-/// phi4(x) - phi6(x) (scaled rows), which the order-6 answer solves for
-/// ([`super::deferred`]).
+/// saving theirs.
 ///
 /// # Errors
 /// As [`estimate`].
@@ -59,7 +57,7 @@ pub(crate) fn estimate_with(
     x: &[State],
     phi4: Option<&[f64]>,
     node_rates: Option<Vec<Vector6<f64>>>,
-) -> Result<Option<(Correction, Vec<f64>)>> {
+) -> Result<Option<Correction>> {
     let n = system.unknowns();
     // The buffers come from the thread's kept ones ([`spare`]; [`Correction::release`]).
     let zeros = |len: usize| {
@@ -104,10 +102,12 @@ pub(crate) fn estimate_with(
         }
     }
     let Some(dx) = ws.solve_again(&rhs) else {
+        spare::give(rhs);
         return Ok(None);
     };
     let c = correction(dx, x.len(), system.model.robot.length(), local, node_rates);
-    Ok(Some((c, rhs)))
+    spare::give(rhs);
+    Ok(Some(c))
 }
 
 impl Correction {

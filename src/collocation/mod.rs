@@ -60,6 +60,7 @@ pub mod sensitivity;
 mod snap;
 mod solver;
 pub(crate) mod stability;
+mod stage;
 mod start;
 pub(crate) mod system;
 mod trace;

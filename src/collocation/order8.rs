@@ -25,7 +25,8 @@
 //! the 7-point Newton-Cotes rule (exact to degree 7) on those stages: a local error
 //! O(h^9), a global order 8, at 19 evaluations of eq. 13 per interval (2 + 3 + 4 + 5 + 5).
 
-use super::residual::{Block, IntervalSites, end_values, rhs, scale_rows};
+use super::residual::{Block, IntervalSites, end_values, scale_rows};
+use super::stage::{rhs_stage, stage};
 use super::system::System;
 use crate::error::Result;
 use crate::model::equations::{Model, Site};
@@ -136,8 +137,9 @@ fn integrals(nodes: &[i64], s: i64) -> Vec<f64> {
 }
 
 /// The order-8 residual of one interval of length `h` with end points `y0`, `y1` and their
-/// rates `f0`, `f1` (local coordinates), where `eval(i, y)` is F at grid point i ([`at`])
-/// with stage y. Unscaled rows.
+/// rates `f0`, `f1` (local coordinates), where `eval(i, inc)` is F at grid point i ([`at`])
+/// with the stage y0 + inc (given as its increment from y0, so that the caller keeps what
+/// y0 + inc rounds away, [`super::residual::stage`]). Unscaled rows.
 ///
 /// # Errors
 /// The errors of `eval`.
@@ -150,15 +152,15 @@ pub(super) fn rows(
     mut eval: impl FnMut(usize, &Block<f64>) -> Result<Block<f64>>,
 ) -> Result<Block<f64>> {
     let tables = tables();
+    // Each stage as its increment from y0 (the stage is y0 + increment).
     let mut stages = [Block::<f64>::zeros(); 5];
-    // The cubic Hermite interpolant of the end points at the first sweep's inputs.
+    // The cubic Hermite interpolant of the end points at the first sweep's inputs
+    // (2 t^3 - 3 t^2 + 1 = 1 - (3 t^2 - 2 t^3)).
+    let d = y1 - y0;
     for &i in SWEEPS[0].0 {
         let t = at(i);
         let (t2, t3) = (t * t, t * t * t);
-        stages[i] = y0 * (2.0 * t3 - 3.0 * t2 + 1.0)
-            + f0 * (h * (t3 - 2.0 * t2 + t))
-            + y1 * (3.0 * t2 - 2.0 * t3)
-            + f1 * (h * (t3 - t2));
+        stages[i] = d * (3.0 * t2 - 2.0 * t3) + f0 * (h * (t3 - 2.0 * t2 + t)) + f1 * (h * (t3 - t2));
     }
     let mut rates = [Block::<f64>::zeros(); 5];
     for ((input, output), weights) in SWEEPS.iter().zip(&tables.sweeps) {
@@ -170,7 +172,7 @@ pub(super) fn rows(
             for (&i, wi) in input.iter().zip(&w[1..]) {
                 integral += rates[i] * *wi;
             }
-            stages[o] = y0 + integral * h;
+            stages[o] = integral * h;
         }
     }
     let w = &tables.quadrature;
@@ -178,7 +180,7 @@ pub(super) fn rows(
     for i in 0..5 {
         integral += eval(i, &stages[i])? * w[i + 1];
     }
-    Ok(y1 - y0 - integral * h)
+    Ok(d - integral * h)
 }
 
 /// The order-8 rows of interval k between node states `a`, `b` (scaled as the order-4 rows),
@@ -196,7 +198,10 @@ fn interval(
 ) -> Result<Block<f64>> {
     let h = sites.end.s - sites.start.s;
     let [y0, y1, f0, f1] = end_values(sites, a, b, start_rates, end_rates);
-    let r = rows(&y0, &y1, &f0, &f1, h, |i, y| rhs(model, &grid[i], segment_end, &a.R, y))?;
+    let r = rows(&y0, &y1, &f0, &f1, h, |i, inc| {
+        let (y, low) = stage(&grid[i], &y0, inc);
+        rhs_stage(model, &grid[i], segment_end, &a.R, (&y, &low))
+    })?;
     Ok(scale_rows(r, model.robot.length()))
 }
 
@@ -276,8 +281,8 @@ mod tests {
         let t0 = 0.3;
         let local = |h: f64| {
             let y1 = exact(t0, &y0, h);
-            let r = rows(&y0, &y1, &f(t0, &y0), &f(t0 + h, &y1), h, |i, y| {
-                Ok(f(t0 + at(i) * h, y))
+            let r = rows(&y0, &y1, &f(t0, &y0), &f(t0 + h, &y1), h, |i, inc| {
+                Ok(f(t0 + at(i) * h, &(y0 + inc)))
             })
             .unwrap();
             r.amax()

@@ -10,6 +10,7 @@
 
 use super::friction::{self, Profile};
 use super::residual::{self, Block, Delta, IntervalSites, QuarterSites};
+use super::stage;
 use super::unknowns::{self, BASE_COLUMNS, BASE_ROWS, NODE, THETA, TIP_COLUMNS, link_row, tip_row};
 use crate::error::Result;
 use crate::mesh::Mesh;
@@ -196,6 +197,33 @@ impl<'a> System<'a> {
         }
         self.rows(x, out, |_, sites, seg, a, b, start| {
             residual::interval(&self.model, sites, seg, a, b, start).map(|(r, _, end)| (r, end))
+        })
+    }
+
+    /// [`System::residual`] with every midpoint's strain kept below its last place
+    /// ([`stage::interval_split`]): the order-4 rows of the order-6 answer's correction.
+    /// Not for friction (whose order-6 answer is not built).
+    ///
+    /// # Errors
+    /// A model breakdown at a visited state.
+    pub(crate) fn residual_split(&self, x: &[State], out: &mut [f64]) -> Result<()> {
+        self.rows(x, out, |_, sites, seg, a, b, start| {
+            stage::interval_split(&self.model, sites, seg, a, b, start)
+        })
+    }
+
+    /// [`System::order6_residual`] with every stage's strain kept below its last place
+    /// ([`stage::interval_order6_split`]), given the node rates at `x` (`rates`, one per
+    /// node, as [`System::residual_rates`] gives them): the order-6 rows of the order-6
+    /// answer's defect. Not for friction.
+    ///
+    /// # Errors
+    /// A model breakdown at a visited state.
+    pub(crate) fn order6_residual_split(&self, x: &[State], out: &mut [f64], rates: &[Vector6<f64>]) -> Result<()> {
+        self.rows(x, out, |k, sites, seg, a, b, _| {
+            let quarters = self.quarters(sites);
+            let r = stage::interval_order6_split(&self.model, sites, &quarters, seg, a, b, &rates[k], &rates[k + 1])?;
+            Ok((r, rates[k + 1]))
         })
     }
 

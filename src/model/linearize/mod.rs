@@ -208,12 +208,18 @@ fn assemble(
     segment_end: f64,
     (R, v, u): (&Matrix3<f64>, &Vector3<f64>, &Vector3<f64>),
     mut cache: Option<&mut TendonCache>,
+    low: Option<&Vector3<f64>>,
 ) -> Result<Assembled> {
     let kse = &site.section.section.kse;
     let kbt = &site.section.section.kbt;
     let (kse_s, kbt_s) = (&site.section.kse_s, &site.section.kbt_s);
     let reference = &site.reference;
-    let dv = v - reference.v_star;
+    // v - v* is exact where v is near v* (Sterbenz); the low part, when given, is the
+    // strain's part below v's last place ([`rates_split`]).
+    let dv = match low {
+        Some(low) => (v - reference.v_star) + low,
+        None => v - reference.v_star,
+    };
     let du = u - reference.u_star;
     let n_b = dv.component_mul(kse); // D (v - v*)
     let m_b = du.component_mul(kbt); // C (u - u*)
@@ -305,7 +311,28 @@ pub fn rates(
     v: &Vector3<f64>,
     u: &Vector3<f64>,
 ) -> Result<Vector6<f64>> {
-    let x = assemble(model, site, segment_end, (R, v, u), None)?.x;
+    let x = assemble(model, site, segment_end, (R, v, u), None, None)?.x;
+    Ok(Vector6::from_fn(|i, _| x[i]))
+}
+
+/// [`rates`] for the strain v + `low`, where `low` is below v's last place: the deviation
+/// v - v* that carries the internal force, D (v - v*), is then (v - v*) + low, not v - v*
+/// rounded to v's last place. A strain near v* = e3 holds the force of a stiff rod only to
+/// EA eps (7e-12 N at EA = 6.6e4 N); the stages of the order-6 and order-8 schemes, which
+/// know their deviation more precisely than their strain, keep it (docs/numerics.md, "Why
+/// the estimate was low on some random robots").
+///
+/// # Errors
+/// As [`rates`].
+pub(crate) fn rates_split(
+    model: &Model,
+    site: &Site,
+    segment_end: f64,
+    R: &Matrix3<f64>,
+    (v, low): (&Vector3<f64>, &Vector3<f64>),
+    u: &Vector3<f64>,
+) -> Result<Vector6<f64>> {
+    let x = assemble(model, site, segment_end, (R, v, u), None, Some(low))?.x;
     Ok(Vector6::from_fn(|i, _| x[i]))
 }
 
@@ -365,7 +392,7 @@ pub(crate) fn linearize_inline(
 ) -> Result<Linearization> {
     // Locals, not a Point: the frictionless path moves nothing between the passes.
     let mut cache = TendonCache::new();
-    let assembled = assemble(model, site, segment_end, (R, v, u), Some(&mut cache))?;
+    let assembled = assemble(model, site, segment_end, (R, v, u), Some(&mut cache), None)?;
     let x = &assembled.x;
     let mut dFt = derivative(model, site, segment_end, (v, u), x, &assembled, &cache)?;
     if !assembled.factor.solve_transposed_mut(&mut dFt) {
@@ -407,7 +434,7 @@ impl Point {
         (R, v, u): (&Matrix3<f64>, &Vector3<f64>, &Vector3<f64>),
     ) -> Result<Self> {
         let mut cache = TendonCache::new();
-        let assembled = assemble(model, site, segment_end, (R, v, u), Some(&mut cache))?;
+        let assembled = assemble(model, site, segment_end, (R, v, u), Some(&mut cache), None)?;
         Ok(Point { assembled, cache })
     }
 
@@ -480,7 +507,7 @@ pub(crate) fn rates_and_solve<const C: usize>(
     (R, v, u): (&Matrix3<f64>, &Vector3<f64>, &Vector3<f64>),
     bt: &mut SMatrix<f64, C, 6>,
 ) -> Result<Vector6<f64>> {
-    let assembled = assemble(model, site, segment_end, (R, v, u), None)?;
+    let assembled = assemble(model, site, segment_end, (R, v, u), None, None)?;
     if !assembled.factor.solve_transposed_mut(bt) {
         return Err(breakdown(site.s));
     }

@@ -108,7 +108,7 @@ fn point_derivatives(
     partial: impl FnOnce(&Vector3<f64>, &Vector3<f64>, &mut [Vector6<f64>]) -> Result<()>,
 ) -> Result<(Vector6<f64>, Option<Linearization>)> {
     let mut cache = TendonCache::new();
-    let assembled = assemble(model, site, segment_end, (R, v, u), Some(&mut cache))?;
+    let assembled = assemble(model, site, segment_end, (R, v, u), Some(&mut cache), None)?;
     let x = &assembled.x;
     let rates = Vector6::from_fn(|i, _| x[i]);
     let lin = if full {
