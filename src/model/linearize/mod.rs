@@ -452,7 +452,7 @@ impl Point {
         (R, v, u): (&Matrix3<f64>, &Vector3<f64>, &Vector3<f64>),
     ) -> Result<()> {
         self.cache.clear();
-        self.assembled = assemble(model, site, segment_end, (R, v, u), Some(&mut self.cache))?;
+        self.assembled = assemble(model, site, segment_end, (R, v, u), Some(&mut self.cache), None)?;
         Ok(())
     }
 
