@@ -79,6 +79,11 @@ pub(super) fn rhs_linearized_inline(
     let v = site.strain(&y.fixed_rows::<3>(V).into());
     let u: Vector3<f64> = y.fixed_rows::<3>(U).into();
     let PointFrame { E, R, Jri, start } = frame;
+    // Products with a hat matrix are taken as cross products (`linearize::mul_hat`): the
+    // same values as the 3 x 3 product, whose terms with hat's zeros add signed zeros, and
+    // no vectors with zero lanes, which the AVX2 build moved with the `vmovq` encoding
+    // valgrind 3.19 cannot decode (docs/benchmarks.md).
+
     let mut f = Block::zeros();
     f.fixed_rows_mut::<3>(P).copy_from(&(R * v));
     let mut f_y = SMatrix::<f64, 12, 12>::zeros();
@@ -90,14 +95,11 @@ pub(super) fn rhs_linearized_inline(
     if *start {
         // theta = 0: J_r = J_r^-1 = exp(theta) = I, R = R_k, and d(J_r^-1 u)/dtheta =
         // -hat(u) / 2 (so3::d_right_jacobian_inv_u at theta = 0, every other term a
-        // signed zero). (-R_k) hat(v) as cross products, the same values as the product
-        // (whose terms with hat's zeros add signed zeros).
+        // signed zero).
         f.fixed_rows_mut::<3>(THETA).copy_from(&u);
         let p_theta = linearize::mul_hat(&-Rk, &v);
         f_y.fixed_view_mut::<3, 3>(0, 3).copy_from(&p_theta);
-        // -hat(u) / 2 and I entry by entry (only their non-zero entries: matrices with
-        // zeros built in AVX2 registers gave the `vmovq` encoding valgrind 3.19 cannot
-        // decode, docs/benchmarks.md).
+        // -hat(u) / 2 and I entry by entry (their non-zero entries, for the same reason).
         for (r, c, value) in [
             (0, 1, u[2]),
             (0, 2, -u[1]),
@@ -118,7 +120,8 @@ pub(super) fn rhs_linearized_inline(
         let Jr = so3::right_jacobian(&theta);
         f.fixed_rows_mut::<3>(THETA).copy_from(&(Jri * u));
         // p' = R_k exp(theta) v: exp(theta + d) = exp(theta) exp(J_r d)
-        f_y.fixed_view_mut::<3, 3>(0, 3).copy_from(&(-R * so3::hat(&v) * Jr));
+        f_y.fixed_view_mut::<3, 3>(0, 3)
+            .copy_from(&(linearize::mul_hat(&-R, &v) * Jr));
         f_y.fixed_view_mut::<3, 3>(3, 3)
             .copy_from(&so3::d_right_jacobian_inv_u(&theta, &u));
         f_y.fixed_view_mut::<3, 3>(3, 9).copy_from(Jri);
@@ -127,7 +130,7 @@ pub(super) fn rhs_linearized_inline(
         // R_k exp(phi) w = R_k w - R_k hat(w) phi;  R_k exp(phi) E = R_k E exp(E^T phi)
         f_frame
             .fixed_view_mut::<3, 3>(0, 0)
-            .copy_from(&(-Rk * so3::hat(&(E * v))));
+            .copy_from(&linearize::mul_hat(&-Rk, &(E * v)));
         f_frame
             .fixed_view_mut::<6, 3>(6, 0)
             .copy_from(&(lin.d_rotation * E.transpose()));
