@@ -172,8 +172,10 @@ pub(super) fn end_points(a: &State, b: &State) -> (Block<f64>, Block<f64>) {
 
 /// The interval's end points [`end_points`] and F there ([`end_rhs`]), given the rates
 /// (v', u') at both nodes: [y_0, y_1, F_0, F_1], what every scheme on an interval (orders 4,
-/// 6 and 8, the dynamics' midpoint) starts from.
-#[inline]
+/// 6 and 8, the dynamics' midpoint) starts from. Always inlined: returned from a call it
+/// is copied (48 values), and whether the compiler inlines it otherwise changes between
+/// builds of unchanged code (docs/benchmarks.md, "Batch row (branch row8)").
+#[inline(always)]
 pub(super) fn end_values(
     sites: &IntervalSites,
     a: &State,
