@@ -65,8 +65,9 @@ impl PointFrame {
 /// assembled from the strain-rate linearization `lin` at R = R_k exp(theta) and the
 /// kinematics p' = R_k exp(theta) v, theta' = J_r(theta)^-1 u (v the strain of the
 /// coordinate, [`Site::strain`]: constant on a Kirchhoff rod), with the point's `frame`
-/// ([`PointFrame`] at y's theta). Always inlined, so that in `residual::interval_jacobian_avx2` it
-/// is compiled for AVX2 too (the same operations in the same order).
+/// ([`PointFrame`] at y's theta; [`PointFrame::start`] only where that is exactly 0).
+/// Always inlined, so that in `residual::interval_jacobian_avx2` it is compiled for AVX2
+/// too (the same operations in the same order).
 #[inline(always)]
 pub(super) fn rhs_linearized_inline(
     site: &Site,
@@ -79,6 +80,7 @@ pub(super) fn rhs_linearized_inline(
     let v = site.strain(&y.fixed_rows::<3>(V).into());
     let u: Vector3<f64> = y.fixed_rows::<3>(U).into();
     let PointFrame { E, R, Jri, start } = frame;
+    debug_assert!(!start || theta == Vector3::zeros(), "the start frame is for theta = 0");
     // Products with a hat matrix are taken as cross products (`linearize::mul_hat`): the
     // same values as the 3 x 3 product, whose terms with hat's zeros add signed zeros, and
     // no vectors with zero lanes, which the AVX2 build moved with the `vmovq` encoding

@@ -165,10 +165,27 @@ const RELAXATION: f64 = 0.5;
 /// the loads on the shape it predicts (moment arms and body frames from the previous sweep)
 /// until the curvature stops changing, or grows (then the previous sweep is kept).
 pub fn rigid_estimate(model: &Model, nodes: &[MeshNode]) -> Vec<State> {
+    rigid_estimate_to(model, nodes, RELATIVE_CHANGE)
+}
+
+/// [`initial`], with the rigid-equilibrium sweeps held to the absolute stopping test
+/// alone (each strain group's change below 1e-6, [`settled`] without its relative part):
+/// the shooting cross-check starts from this guess's base strains, and its Newton did not
+/// converge on a pull-in of two antagonistic pairs (tests/shooting_displacement.rs) from
+/// the guess that stops at 1e-5 of the deformation.
+pub(crate) fn initial_absolute(model: &Model, nodes: &[MeshNode], kind: InitialGuess) -> Vec<State> {
+    match kind {
+        InitialGuess::RigidEquilibrium => rigid_estimate_to(model, nodes, 0.0),
+        InitialGuess::Unloaded => initial(model, nodes, kind),
+    }
+}
+
+/// [`rigid_estimate`] with the relative part `relative` of the stopping test ([`settled`]).
+fn rigid_estimate_to(model: &Model, nodes: &[MeshNode], relative: f64) -> Vec<State> {
     // The sweeps' buffers come from this thread's last estimate (taken out, so that an
     // estimate nested in a user function's call finds none and allocates its own).
     let mut buffers = SWEEP_BUFFERS.with(|b| std::mem::take(&mut *b.borrow_mut()));
-    let x = rigid_estimate_in(model, nodes, &mut buffers);
+    let x = rigid_estimate_in(model, nodes, &mut buffers, relative);
     SWEEP_BUFFERS.with(|b| *b.borrow_mut() = buffers);
     x
 }
@@ -205,8 +222,8 @@ thread_local! {
     };
 }
 
-/// [`rigid_estimate`] in the buffers `b` (their contents on entry are not read).
-fn rigid_estimate_in(model: &Model, nodes: &[MeshNode], b: &mut SweepBuffers) -> Vec<State> {
+/// [`rigid_estimate_to`] in the buffers `b` (their contents on entry are not read).
+fn rigid_estimate_in(model: &Model, nodes: &[MeshNode], b: &mut SweepBuffers, relative: f64) -> Vec<State> {
     let length = model.robot.length();
     let SweepBuffers {
         strains,
@@ -259,7 +276,7 @@ fn rigid_estimate_in(model: &Model, nodes: &[MeshNode], b: &mut SweepBuffers) ->
         last_change = change;
         std::mem::swap(step, last_step);
         stepped = true;
-        if settled(groups, deformation) {
+        if settled(groups, deformation, relative) {
             break;
         }
     }
@@ -275,15 +292,15 @@ fn rigid_estimate_in(model: &Model, nodes: &[MeshNode], b: &mut SweepBuffers) ->
 
 /// Whether the rigid-equilibrium sweeps have settled after a fixed-point step whose
 /// largest change in each strain group, v and u L, is `change`: each group's is below
-/// [`ABSOLUTE_CHANGE`] or below [`RELATIVE_CHANGE`] times the group's `deformation` (the
-/// first sweep's change from the reference strains). Per group, so that the small axial and
-/// shear strains of a stiff rod are held to the absolute floor, not to the curvature's
-/// scale (docs/numerics.md, "Initial guess").
-fn settled(change: [f64; 2], deformation: [f64; 2]) -> bool {
+/// [`ABSOLUTE_CHANGE`] or below `relative` ([`RELATIVE_CHANGE`] by default) times the
+/// group's `deformation` (the first sweep's change from the reference strains). Per group,
+/// so that the small axial and shear strains of a stiff rod are held to the absolute floor,
+/// not to the curvature's scale (docs/numerics.md, "Initial guess").
+fn settled(change: [f64; 2], deformation: [f64; 2], relative: f64) -> bool {
     change
         .iter()
         .zip(deformation)
-        .all(|(c, d)| *c < ABSOLUTE_CHANGE.max(RELATIVE_CHANGE * d))
+        .all(|(c, d)| *c < ABSOLUTE_CHANGE.max(relative * d))
 }
 
 /// The node strains that carry the loads distal to each node on the shape of the states
@@ -407,13 +424,16 @@ mod tests {
     fn the_guess_stops_per_strain_group() {
         let bent = [1e-5, 1.0];
         // u L: 5e-6 < 1e-5 x 1 (relative); v: 5e-7 < 1e-6 (absolute).
-        assert!(settled([5e-7, 5e-6], bent));
+        assert!(settled([5e-7, 5e-6], bent, RELATIVE_CHANGE));
         // v: 2e-6 is neither below 1e-6 nor below 1e-5 x 1e-5.
-        assert!(!settled([2e-6, 5e-6], bent));
+        assert!(!settled([2e-6, 5e-6], bent, RELATIVE_CHANGE));
         // u L: 2e-5 is above 1e-5 of the curvature's deformation.
-        assert!(!settled([5e-7, 2e-5], bent));
+        assert!(!settled([5e-7, 2e-5], bent, RELATIVE_CHANGE));
         // An unbent rod is held to the absolute floor in both groups, as before.
-        assert!(!settled([5e-7, 5e-6], [0.0, 0.0]));
-        assert!(settled([5e-7, 5e-7], [0.0, 0.0]));
+        assert!(!settled([5e-7, 5e-6], [0.0, 0.0], RELATIVE_CHANGE));
+        assert!(settled([5e-7, 5e-7], [0.0, 0.0], RELATIVE_CHANGE));
+        // Without the relative part (shooting's guess) only the absolute floor stops.
+        assert!(!settled([5e-7, 5e-6], bent, 0.0));
+        assert!(settled([5e-7, 5e-7], bent, 0.0));
     }
 }
