@@ -12,9 +12,8 @@
 //! for bit those of the dense formulation, signed zeros included.
 #![allow(non_snake_case)]
 
-use super::residual::PointLinearization;
-use crate::so3;
-use nalgebra::{Matrix3, SMatrix, Vector3};
+use super::residual::{PointFrame, PointLinearization};
+use nalgebra::{Matrix3, SMatrix};
 
 /// Column blocks of the 18 columns (theta, v, u of node a, then of node b) and row blocks of
 /// the 12 rows (p, theta, v, u), three each.
@@ -49,12 +48,13 @@ pub(super) struct EndColumns {
 }
 
 impl EndColumns {
-    /// The columns from the end points' linearizations `p0`, `p1` and theta_1.
+    /// The columns from the end points' linearizations `p0`, `p1` and the end point's
+    /// frame (at theta_1).
     #[inline(always)]
-    pub(super) fn new(p0: &PointLinearization, p1: &PointLinearization, theta1: &Vector3<f64>, length: f64) -> Self {
+    pub(super) fn new(p0: &PointLinearization, p1: &PointLinearization, frame1: &PointFrame, length: f64) -> Self {
         // theta_1 = log(exp(-d_a) Q exp(d_b)): d/d d_b = J_r^-1, d/d d_a = -J_r^-1 exp(theta_1)^T
-        let jri1 = so3::right_jacobian_inv(theta1);
-        let dtheta1_da = -jri1 * so3::exp(theta1).transpose();
+        let jri1 = frame1.Jri;
+        let dtheta1_da = -jri1 * frame1.E.transpose();
         let mut ends = EndColumns {
             dtheta1_da,
             jri1,

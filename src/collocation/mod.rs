@@ -53,6 +53,7 @@ mod path;
 mod path_types;
 mod phase;
 mod pipeline;
+mod point;
 pub(crate) mod refine;
 mod relax;
 pub(crate) mod residual;

@@ -24,6 +24,7 @@
 #![allow(non_snake_case)]
 
 pub(super) use super::ends::EndColumns;
+pub(super) use super::point::{PointFrame, PointLinearization, rhs_linearized_inline};
 use super::unknowns::{P, THETA, U, V};
 use crate::error::Result;
 use crate::model::equations::{Model, Site, lift, lift_m};
@@ -171,8 +172,10 @@ pub(super) fn end_points(a: &State, b: &State) -> (Block<f64>, Block<f64>) {
 
 /// The interval's end points [`end_points`] and F there ([`end_rhs`]), given the rates
 /// (v', u') at both nodes: [y_0, y_1, F_0, F_1], what every scheme on an interval (orders 4,
-/// 6 and 8, the dynamics' midpoint) starts from.
-#[inline]
+/// 6 and 8, the dynamics' midpoint) starts from. Always inlined: returned from a call it
+/// is copied (48 values), and whether the compiler inlines it otherwise changes between
+/// builds of unchanged code (docs/benchmarks.md, "Batch row (branch row8)").
+#[inline(always)]
 pub(super) fn end_values(
     sites: &IntervalSites,
     a: &State,
@@ -352,61 +355,6 @@ pub fn interval_order6(
     Ok(scale_rows(y1 - y0 - quadrature, model.robot.length()))
 }
 
-/// F, dF/dy (12 x 12) and dF/dphi (12 x 3, for a right perturbation of the interval's frame
-/// R_k -> R_k exp(hat(phi))) at one point of an interval.
-pub(super) struct PointLinearization {
-    pub(super) f: Block<f64>,
-    pub(super) f_y: SMatrix<f64, 12, 12>,
-    pub(super) f_frame: SMatrix<f64, 12, 3>,
-}
-
-/// F(s, y) of an interval with frame `Rk` and its derivatives at a point of `site`,
-/// assembled from the strain-rate linearization `lin` at R = R_k exp(theta) and the
-/// kinematics p' = R_k exp(theta) v, theta' = J_r(theta)^-1 u (v the strain of the
-/// coordinate, [`Site::strain`]: constant on a Kirchhoff rod). Always inlined, so that in
-/// [`interval_jacobian_avx2`] it is compiled for AVX2 too (the same operations in the same
-/// order).
-#[inline(always)]
-pub(super) fn rhs_linearized_inline(
-    site: &Site,
-    lin: &Linearization,
-    Rk: &Matrix3<f64>,
-    y: &Block<f64>,
-) -> PointLinearization {
-    let theta: Vector3<f64> = y.fixed_rows::<3>(THETA).into();
-    let v = site.strain(&y.fixed_rows::<3>(V).into());
-    let u: Vector3<f64> = y.fixed_rows::<3>(U).into();
-    let E = so3::exp(&theta);
-    let R = Rk * E;
-    let Jr = so3::right_jacobian(&theta);
-    let Jri = so3::right_jacobian_inv(&theta);
-    let mut f = Block::zeros();
-    f.fixed_rows_mut::<3>(P).copy_from(&(R * v));
-    f.fixed_rows_mut::<3>(THETA).copy_from(&(Jri * u));
-    f.fixed_rows_mut::<6>(V).copy_from(&lin.rates);
-    let mut f_y = SMatrix::<f64, 12, 12>::zeros();
-    // p' = R_k exp(theta) v: exp(theta + d) = exp(theta) exp(J_r d)
-    f_y.fixed_view_mut::<3, 3>(0, 3).copy_from(&(-R * so3::hat(&v) * Jr));
-    if !site.inextensible {
-        f_y.fixed_view_mut::<3, 3>(0, 6).copy_from(&R);
-    }
-    f_y.fixed_view_mut::<3, 3>(3, 3)
-        .copy_from(&so3::d_right_jacobian_inv_u(&theta, &u));
-    f_y.fixed_view_mut::<3, 3>(3, 9).copy_from(&Jri);
-    // (v', u') depend on theta through R = R_k exp(theta): a right perturbation J_r d
-    f_y.fixed_view_mut::<6, 3>(6, 3).copy_from(&(lin.d_rotation * Jr));
-    f_y.fixed_view_mut::<6, 6>(6, 6).copy_from(&lin.d_strains);
-    let mut f_frame = SMatrix::<f64, 12, 3>::zeros();
-    // R_k exp(phi) w = R_k w - R_k hat(w) phi;  R_k exp(phi) E = R_k E exp(E^T phi)
-    f_frame
-        .fixed_view_mut::<3, 3>(0, 0)
-        .copy_from(&(-Rk * so3::hat(&(E * v))));
-    f_frame
-        .fixed_view_mut::<6, 3>(6, 0)
-        .copy_from(&(lin.d_rotation * E.transpose()));
-    PointLinearization { f, f_y, f_frame }
-}
-
 /// Interval rows, their exact Jacobian with respect to the scaled unknowns of both nodes
 /// (12 x 24, written row by row into `jac`), and the linearization of eq. 13 at node b (the
 /// next interval's `start`, shared as in [`interval`]), by the chain rule through the
@@ -481,25 +429,28 @@ fn interval_jacobian_kernel(
         }
     };
     let lin1 = linearize_inline(model, &sites.end, segment_end, &b.R, &b.v, &b.u)?;
-    let p0 = rhs_linearized_inline(&sites.start, lin0, &a.R, &y0);
-    let p1 = rhs_linearized_inline(&sites.end, &lin1, &a.R, &y1);
+    let frame1 = PointFrame::new(&a.R, &theta1);
+    let p0 = rhs_linearized_inline(&sites.start, lin0, &a.R, &y0, &PointFrame::start(&a.R));
+    let p1 = rhs_linearized_inline(&sites.end, &lin1, &a.R, &y1, &frame1);
     let ym = (y0 + y1) * 0.5 + (p0.f - p1.f) * (h / 8.0);
+    let frame_m = PointFrame::new(&a.R, &ym.fixed_rows::<3>(THETA).into());
     let pm = rhs_linearized_inline(
         &sites.mid,
         &linearize_inline(
             model,
             &sites.mid,
             segment_end,
-            &(a.R * so3::exp(&ym.fixed_rows::<3>(THETA).into())),
+            &frame_m.R,
             &ym.fixed_rows::<3>(V).into(),
             &ym.fixed_rows::<3>(U).into(),
         )?,
         &a.R,
         &ym,
+        &frame_m,
     );
     let residual = scale_rows(y1 - y0 - (p0.f + pm.f * 4.0 + p1.f) * (h / 6.0), length);
 
-    let ends = EndColumns::new(&p0, &p1, &theta1, length);
+    let ends = EndColumns::new(&p0, &p1, &frame1, length);
     let dFm = midpoint_product(&pm, &ends.midpoint(h));
     ends.write(&dFm, h, length, jac);
     Ok((residual, lin1))

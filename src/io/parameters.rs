@@ -85,10 +85,21 @@ impl Table {
     /// # Errors
     /// As [`Parameter::apply`] and [`Robot::validate`].
     pub fn robot(&self, row: &Row, base: &Robot) -> Result<Robot> {
+        let robot = self.robot_unchecked(row, base)?;
+        robot.validate()?;
+        Ok(robot)
+    }
+
+    /// [`Table::robot`] without [`Robot::validate`], for a row whose robot `Table::robot`
+    /// has already accepted (`tdcr batch` checks every row before its first solve, and a
+    /// solve validates its robot again).
+    ///
+    /// # Errors
+    /// As [`Parameter::apply`].
+    pub fn robot_unchecked(&self, row: &Row, base: &Robot) -> Result<Robot> {
         let mut robot = base.clone();
         let values = self.parameters.iter().zip(&row.values);
         Parameter::apply_all(&mut robot, values.filter_map(|(&p, x)| x.map(|x| (p, x))))?;
-        robot.validate()?;
         Ok(robot)
     }
 }

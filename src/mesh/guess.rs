@@ -152,6 +152,12 @@ fn reference_strains_into(model: &Model, nodes: &[MeshNode], out: &mut Vec<(Vect
 
 /// Most shape sweeps of the rigid-equilibrium estimate (each costs one pass over the mesh).
 const MAX_SWEEPS: usize = 40;
+/// The sweeps stop when each strain group's change (v; u L) is below this absolute floor
+/// or below [`RELATIVE_CHANGE`] of that group's deformation ([`settled`]): 1e-6 of a
+/// radian over the rod is far below what Newton needs from a guess.
+const ABSOLUTE_CHANGE: f64 = 1e-6;
+/// The relative part of the stopping test ([`settled`]).
+const RELATIVE_CHANGE: f64 = 1e-5;
 /// Weight of the first sweep's step in the relaxed update (Aitken adapts it afterwards).
 const RELAXATION: f64 = 0.5;
 
@@ -159,10 +165,27 @@ const RELAXATION: f64 = 0.5;
 /// the loads on the shape it predicts (moment arms and body frames from the previous sweep)
 /// until the curvature stops changing, or grows (then the previous sweep is kept).
 pub fn rigid_estimate(model: &Model, nodes: &[MeshNode]) -> Vec<State> {
+    rigid_estimate_to(model, nodes, RELATIVE_CHANGE)
+}
+
+/// [`initial`], with the rigid-equilibrium sweeps held to the absolute stopping test
+/// alone (each strain group's change below 1e-6, [`settled`] without its relative part):
+/// the shooting cross-check starts from this guess's base strains, and its Newton did not
+/// converge on a pull-in of two antagonistic pairs (tests/shooting_displacement.rs) from
+/// the guess that stops at 1e-5 of the deformation.
+pub(crate) fn initial_absolute(model: &Model, nodes: &[MeshNode], kind: InitialGuess) -> Vec<State> {
+    match kind {
+        InitialGuess::RigidEquilibrium => rigid_estimate_to(model, nodes, 0.0),
+        InitialGuess::Unloaded => initial(model, nodes, kind),
+    }
+}
+
+/// [`rigid_estimate`] with the relative part `relative` of the stopping test ([`settled`]).
+fn rigid_estimate_to(model: &Model, nodes: &[MeshNode], relative: f64) -> Vec<State> {
     // The sweeps' buffers come from this thread's last estimate (taken out, so that an
     // estimate nested in a user function's call finds none and allocates its own).
     let mut buffers = SWEEP_BUFFERS.with(|b| std::mem::take(&mut *b.borrow_mut()));
-    let x = rigid_estimate_in(model, nodes, &mut buffers);
+    let x = rigid_estimate_in(model, nodes, &mut buffers, relative);
     SWEEP_BUFFERS.with(|b| *b.borrow_mut() = buffers);
     x
 }
@@ -199,8 +222,8 @@ thread_local! {
     };
 }
 
-/// [`rigid_estimate`] in the buffers `b` (their contents on entry are not read).
-fn rigid_estimate_in(model: &Model, nodes: &[MeshNode], b: &mut SweepBuffers) -> Vec<State> {
+/// [`rigid_estimate_to`] in the buffers `b` (their contents on entry are not read).
+fn rigid_estimate_in(model: &Model, nodes: &[MeshNode], b: &mut SweepBuffers, relative: f64) -> Vec<State> {
     let length = model.robot.length();
     let SweepBuffers {
         strains,
@@ -219,6 +242,9 @@ fn rigid_estimate_in(model: &Model, nodes: &[MeshNode], b: &mut SweepBuffers) ->
     // The nodes' sites do not depend on the shape: evaluated once, not three times a sweep.
     sites.clear();
     sites.extend(nodes.iter().map(|n| model.site_on(n.s, n.segment_end)));
+    // The deformation of each strain group, v and u L: the first sweep's step (from the
+    // reference strains).
+    let mut deformation = [0.0; 2];
     for _ in 0..MAX_SWEEPS {
         sweep(model, nodes, sites, (shape, strains), None, (wrench, next));
         // The fixed-point step, flattened (v then u L per node, so all are comparable).
@@ -227,9 +253,17 @@ fn rigid_estimate_in(model: &Model, nodes: &[MeshNode], b: &mut SweepBuffers) ->
             let (dv, du) = (a.0 - b.0, (a.1 - b.1) * length);
             [dv[0], dv[1], dv[2], du[0], du[1], du[2]]
         }));
-        let change = step.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+        // The largest change of each group (v, u L).
+        let groups = step.chunks_exact(3).enumerate().fold([0.0f64; 2], |mut m, (i, x)| {
+            m[i % 2] = x.iter().fold(m[i % 2], |m, x| m.max(x.abs()));
+            m
+        });
+        let change = groups[0].max(groups[1]);
         if !(change < last_change || last_change.is_infinite()) || !change.is_finite() {
             break;
+        }
+        if !stepped {
+            deformation = groups;
         }
         // Aitken's dynamic relaxation (Irons & Tuck): the plain fixed point can cycle when
         // a load's moment arm swings with the shape it bends (a tendon and a tip load
@@ -242,8 +276,7 @@ fn rigid_estimate_in(model: &Model, nodes: &[MeshNode], b: &mut SweepBuffers) ->
         last_change = change;
         std::mem::swap(step, last_step);
         stepped = true;
-        // 1e-6 of a radian over the rod: far below what Newton needs from a guess
-        if change < 1e-6 {
+        if settled(groups, deformation, relative) {
             break;
         }
     }
@@ -255,6 +288,19 @@ fn rigid_estimate_in(model: &Model, nodes: &[MeshNode], b: &mut SweepBuffers) ->
             .map(|(&(p, R), (node, &(v, u)))| State { s: node.s, p, R, v, u }),
     );
     x
+}
+
+/// Whether the rigid-equilibrium sweeps have settled after a fixed-point step whose
+/// largest change in each strain group, v and u L, is `change`: each group's is below
+/// [`ABSOLUTE_CHANGE`] or below `relative` ([`RELATIVE_CHANGE`] by default) times the
+/// group's `deformation` (the first sweep's change from the reference strains). Per group,
+/// so that the small axial and shear strains of a stiff rod are held to the absolute floor,
+/// not to the curvature's scale (docs/numerics.md, "Initial guess").
+fn settled(change: [f64; 2], deformation: [f64; 2], relative: f64) -> bool {
+    change
+        .iter()
+        .zip(deformation)
+        .all(|(c, d)| *c < ABSOLUTE_CHANGE.max(relative * d))
 }
 
 /// The node strains that carry the loads distal to each node on the shape of the states
@@ -363,5 +409,31 @@ fn sweep(
             m -= l;
         }
         out.push(model.strains_for_wrench(site, &(R.transpose() * n), &(R.transpose() * m)));
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The stopping test of the rigid-equilibrium sweeps holds each strain group to its own
+    /// scale: a change of 5e-6 in u L is small against a curvature deformation of 1 rad
+    /// over the rod (below 1e-5 of it), but a change of 2e-6 in v is not small against the
+    /// axial strain 1e-5 of a stiff rod, which stays held to the absolute floor of 1e-6.
+    #[test]
+    fn the_guess_stops_per_strain_group() {
+        let bent = [1e-5, 1.0];
+        // u L: 5e-6 < 1e-5 x 1 (relative); v: 5e-7 < 1e-6 (absolute).
+        assert!(settled([5e-7, 5e-6], bent, RELATIVE_CHANGE));
+        // v: 2e-6 is neither below 1e-6 nor below 1e-5 x 1e-5.
+        assert!(!settled([2e-6, 5e-6], bent, RELATIVE_CHANGE));
+        // u L: 2e-5 is above 1e-5 of the curvature's deformation.
+        assert!(!settled([5e-7, 2e-5], bent, RELATIVE_CHANGE));
+        // An unbent rod is held to the absolute floor in both groups, as before.
+        assert!(!settled([5e-7, 5e-6], [0.0, 0.0], RELATIVE_CHANGE));
+        assert!(settled([5e-7, 5e-7], [0.0, 0.0], RELATIVE_CHANGE));
+        // Without the relative part (shooting's guess) only the absolute floor stops.
+        assert!(!settled([5e-7, 5e-6], bent, 0.0));
+        assert!(settled([5e-7, 5e-7], bent, 0.0));
     }
 }

@@ -158,7 +158,7 @@ pub fn solve(robot: &Robot, options: &Options) -> Result<Solution> {
     report.load_steps = 1;
 
     // Initial guess: base strains of the rigid-equilibrium estimate at the starting tensions.
-    let base = guess::initial(
+    let base = guess::initial_absolute(
         &Model::new(&problem.robot),
         &Mesh::uniform(robot, 64)?.nodes,
         options.initial_guess,

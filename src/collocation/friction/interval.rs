@@ -17,7 +17,7 @@
 #![allow(non_snake_case)]
 
 use super::super::residual::{
-    Block, EndColumns, IntervalSites, QuarterSites, end_points, midpoint_product, rhs_from_rates,
+    Block, EndColumns, IntervalSites, PointFrame, QuarterSites, end_points, midpoint_product, rhs_from_rates,
     rhs_linearized_inline, scale_rows,
 };
 use super::super::unknowns::THETA;
@@ -164,10 +164,11 @@ fn interval_at(
         let theta: Vector3<f64> = y.fixed_rows::<3>(THETA).into();
         rhs_from_rates(site, &(a.R * so3::exp(&theta)), y, &lin.lin.rates)
     };
-    let ends = derivatives.then(|| {
+    let frame1 = derivatives.then(|| PointFrame::new(&a.R, &theta1));
+    let ends = frame1.as_ref().map(|frame1| {
         (
-            rhs_linearized_inline(&sites.start, &la.lin, &a.R, &y0),
-            rhs_linearized_inline(&sites.end, &lb.lin, &a.R, &y1),
+            rhs_linearized_inline(&sites.start, &la.lin, &a.R, &y0, &PointFrame::start(&a.R)),
+            rhs_linearized_inline(&sites.end, &lb.lin, &a.R, &y1, frame1),
         )
     });
     let (f0, f1) = match &ends {
@@ -181,7 +182,8 @@ fn interval_at(
     let (vm, um): (Vector3<f64>, Vector3<f64>) = (ym.fixed_rows::<3>(6).into(), ym.fixed_rows::<3>(9).into());
     let Rm = a.R * so3::exp(&theta_m);
     let lm = profile.point(&sites.mid, segment_end, &Rm, (&vm, &um), zm, w, derivatives)?;
-    let pm = derivatives.then(|| rhs_linearized_inline(&sites.mid, &lm.lin, &a.R, &ym));
+    let pm =
+        derivatives.then(|| rhs_linearized_inline(&sites.mid, &lm.lin, &a.R, &ym, &PointFrame::new(&a.R, &theta_m)));
     let fm = pm
         .as_ref()
         .map_or_else(|| rhs_from_rates(&sites.mid, &Rm, &ym, &lm.lin.rates), |pm| pm.f);
@@ -234,7 +236,7 @@ fn interval_at(
         }
     }
     out.derivatives = derivatives;
-    let (Some(jac), Some((p0, p1)), Some(pm)) = (jac, ends, pm) else {
+    let (Some(jac), Some((p0, p1)), Some(pm), Some(frame1)) = (jac, ends, pm, frame1) else {
         profile.keep_end(k, segment_end, b, zb, w, derivatives, lb);
         profile.give(la);
         profile.give(lm);
@@ -244,7 +246,7 @@ fn interval_at(
 
     // The backbone rows: the chain rule of residual::interval_jacobian, with the midpoint's
     // log tensions z_m depending on the node states through kappa~_a, kappa~_b.
-    let ends = EndColumns::new(&p0, &p1, &theta1, length);
+    let ends = EndColumns::new(&p0, &p1, &frame1, length);
     let dYm = ends.midpoint(h);
     // d kappa~ / d(18 columns) at the nodes: (theta, v, u / L) of their own node.
     let node_turning = |l: &FrictionLinearization, j: usize, first: usize| {

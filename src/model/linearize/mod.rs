@@ -101,7 +101,8 @@ pub(crate) use parameters::{stiffness_rates, tension_rates};
 
 mod tendon;
 pub(crate) use tendon::TendonPoint;
-use tendon::{hat_mul, mul_hat};
+use tendon::hat_mul;
+pub(crate) use tendon::mul_hat;
 
 /// Tendons whose per-tendon quantities are kept on the stack between the two passes (solve
 /// for x, then differentiate at x); further tendons are re-evaluated from their routing.

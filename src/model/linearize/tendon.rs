@@ -140,7 +140,7 @@ impl TendonPoint {
 
 /// m a^: row j is (m_j x a)^T.
 #[inline(always)]
-pub(super) fn mul_hat(m: &Matrix3<f64>, a: &Vector3<f64>) -> Matrix3<f64> {
+pub(crate) fn mul_hat(m: &Matrix3<f64>, a: &Vector3<f64>) -> Matrix3<f64> {
     Matrix3::from_fn(|j, l| match l {
         0 => m[(j, 1)] * a[2] - m[(j, 2)] * a[1],
         1 => m[(j, 2)] * a[0] - m[(j, 0)] * a[2],
