@@ -23,8 +23,12 @@ const CARRY: usize = BASE_ROWS;
 const _: () = assert!(CARRY + TIP_ROWS == NODE && BASE_COLUMNS == CARRY);
 /// Rows of a panel: carried rows plus one link.
 const ROWS: usize = CARRY + NODE;
-/// Columns of a panel (two nodes) plus the right-hand side.
-const COLS: usize = 2 * NODE + 1;
+/// Columns of a panel: two nodes, the right-hand side in column 2 NODE, and padding to a
+/// multiple of four, so that every row update of [`eliminate`] runs in whole 4-lane vectors.
+const COLS: usize = 2 * NODE + 4;
+/// Columns of the last node's rows: its unknowns, the right-hand side, padding as [`COLS`].
+const LAST_COLS: usize = NODE + 4;
+const _: () = assert!(COLS % 4 == 0 && LAST_COLS % 4 == 0);
 
 /// The row operations of one elimination step, kept so that further right-hand sides can
 /// be solved with the same factors.
@@ -47,8 +51,9 @@ pub struct BlockElimination {
     pivots: Vec<[[f64; COLS]; NODE]>,
     /// Row operations of each step.
     records: Vec<Record>,
-    /// The last node's 12 x 13 upper-triangular rows and their row operations.
-    last: [[f64; NODE + 1]; NODE],
+    /// The last node's 12 x 12 upper-triangular rows (right-hand side in column 12, then
+    /// padding) and their row operations.
+    last: [[f64; LAST_COLS]; NODE],
     last_record: Record,
     /// Number of links.
     links: usize,
@@ -60,7 +65,7 @@ impl BlockElimination {
         BlockElimination {
             pivots: vec![[[0.0; COLS]; NODE]; nodes - 1],
             records: vec![EMPTY; nodes - 1],
-            last: [[0.0; NODE + 1]; NODE],
+            last: [[0.0; LAST_COLS]; NODE],
             last_record: EMPTY,
             links: nodes - 1,
         }
@@ -93,7 +98,7 @@ impl BlockElimination {
                 row[2 * NODE] = rhs[link_row(k) + r];
             }
             at += NODE * 2 * NODE;
-            if !eliminate_fast(&mut panel, NODE, &mut self.records[k]) {
+            if !eliminate_fast(&mut panel, &mut self.records[k]) {
                 return None;
             }
             self.pivots[k].copy_from_slice(&panel[..NODE]);
@@ -105,7 +110,7 @@ impl BlockElimination {
             }
         }
         // Last node: carried rows and the tip rows (columns 3..12).
-        let mut last = [[0.0; NODE + 1]; NODE];
+        let mut last = [[0.0; LAST_COLS]; NODE];
         for (r, row) in carry.iter().enumerate() {
             last[r][..NODE].copy_from_slice(&row[..NODE]);
             last[r][NODE] = row[2 * NODE];
@@ -116,7 +121,7 @@ impl BlockElimination {
             last[CARRY + r][..THETA].fill(0.0);
             last[CARRY + r][NODE] = rhs[tip_row0 + r];
         }
-        if !eliminate_fast(&mut last, NODE, &mut self.last_record) {
+        if !eliminate_fast(&mut last, &mut self.last_record) {
             return None;
         }
         self.last = last;
@@ -316,54 +321,81 @@ fn replay_column<const C: usize, const N: usize>(record: &Record, v: &mut [f64; 
 
 /// [`eliminate`] compiled for AVX2 and FMA when the processor has them (checked at run
 /// time, the result cached by std), else for the baseline x86-64 or other target.
-fn eliminate_fast<const W: usize>(rows: &mut [[f64; W]], pivots: usize, record: &mut Record) -> bool {
+fn eliminate_fast<const R: usize, const W: usize>(rows: &mut [[f64; W]; R], record: &mut Record) -> bool {
     #[cfg(target_arch = "x86_64")]
     if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma") {
         // SAFETY: the processor supports the features the function is compiled for.
-        return unsafe { eliminate_avx2(rows, pivots, record) };
+        return unsafe { eliminate_avx2(rows, record) };
     }
-    eliminate(rows, pivots, record)
+    eliminate(rows, record)
 }
 
 /// [`eliminate`] with AVX2 and FMA enabled.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,fma")]
-unsafe fn eliminate_avx2<const W: usize>(rows: &mut [[f64; W]], pivots: usize, record: &mut Record) -> bool {
-    eliminate(rows, pivots, record)
+unsafe fn eliminate_avx2<const R: usize, const W: usize>(rows: &mut [[f64; W]; R], record: &mut Record) -> bool {
+    eliminate(rows, record)
 }
 
-/// Gaussian elimination with partial pivoting of the first `pivots` columns of `rows`
-/// (each `W` wide, the last entry the right-hand side): afterwards rows 0..pivots are
-/// upper triangular in those columns and the remaining rows are zero there. The
-/// multipliers use the pivot's reciprocal (one division per column, as LAPACK's dgetf2).
-/// Returns false on a zero pivot.
+/// Gaussian elimination with partial pivoting of the first [`NODE`] columns of `rows` (each
+/// `W` wide: the columns to eliminate, further columns, right-hand sides, padding):
+/// afterwards rows 0..NODE are upper triangular in those columns and the remaining rows are
+/// zero there. The multipliers use the pivot's reciprocal (one division per column, as
+/// LAPACK's dgetf2). Returns false on a zero pivot. Each column is its own instance of
+/// [`eliminate_column`], so that its loops have constant bounds and compile to
+/// straight-line vector code.
 #[inline(always)]
-fn eliminate<const W: usize>(rows: &mut [[f64; W]], pivots: usize, record: &mut Record) -> bool {
-    for c in 0..pivots {
-        let mut best = c;
-        for r in c + 1..rows.len() {
-            if rows[r][c].abs() > rows[best][c].abs() {
-                best = r;
-            }
+fn eliminate<const R: usize, const W: usize>(rows: &mut [[f64; W]; R], record: &mut Record) -> bool {
+    const _: () = assert!(NODE == 12);
+    eliminate_column::<0, R, W>(rows, record)
+        && eliminate_column::<1, R, W>(rows, record)
+        && eliminate_column::<2, R, W>(rows, record)
+        && eliminate_column::<3, R, W>(rows, record)
+        && eliminate_column::<4, R, W>(rows, record)
+        && eliminate_column::<5, R, W>(rows, record)
+        && eliminate_column::<6, R, W>(rows, record)
+        && eliminate_column::<7, R, W>(rows, record)
+        && eliminate_column::<8, R, W>(rows, record)
+        && eliminate_column::<9, R, W>(rows, record)
+        && eliminate_column::<10, R, W>(rows, record)
+        && eliminate_column::<11, R, W>(rows, record)
+}
+
+/// Column `C` of [`eliminate`]: the pivot search among rows C.., the swap, and row r -=
+/// f_r * (pivot row) for every row r below C, f_r = rows[r][C] / pivot.
+///
+/// The update of a row runs over the columns from C + 1 rounded down to a multiple of four
+/// (whole 4-lane vectors; `W` is a multiple of four) to the end. Columns before C + 1 are
+/// dead in every row below the pivot: they lie left of the diagonal of any row that
+/// becomes a pivot row later, and the rows carried on are read from column [`NODE`] on.
+/// Column C itself is set to zero, as without the extra columns, and every live column
+/// sees the same operations in the same order, so the same bits.
+#[inline(always)]
+fn eliminate_column<const C: usize, const R: usize, const W: usize>(rows: &mut [[f64; W]; R], record: &mut Record) -> bool {
+    let mut best = C;
+    for r in C + 1..R {
+        if rows[r][C].abs() > rows[best][C].abs() {
+            best = r;
         }
-        let pivot = rows[best][c];
-        if pivot == 0.0 || !pivot.is_finite() {
-            return false;
-        }
-        rows.swap(c, best);
-        record.swaps[c] = best;
-        let inverse = 1.0 / pivot;
-        let (top, below) = rows.split_at_mut(c + 1);
-        let prow = &top[c][c + 1..];
-        for (i, row) in below.iter_mut().enumerate() {
-            let f = row[c] * inverse;
-            record.factors[c][c + 1 + i] = f;
-            if f != 0.0 {
-                row[c] = 0.0;
-                for (x, p) in row[c + 1..].iter_mut().zip(prow) {
-                    *x -= f * p;
-                }
+    }
+    let pivot = rows[best][C];
+    if pivot == 0.0 || !pivot.is_finite() {
+        return false;
+    }
+    rows.swap(C, best);
+    record.swaps[C] = best;
+    let inverse = 1.0 / pivot;
+    let start = (C + 1) & !3;
+    let prow = rows[C];
+    for r in C + 1..R {
+        let row = &mut rows[r];
+        let f = row[C] * inverse;
+        record.factors[C][r] = f;
+        if f != 0.0 {
+            for j in start..W {
+                row[j] -= f * prow[j];
             }
+            row[C] = 0.0;
         }
     }
     true
