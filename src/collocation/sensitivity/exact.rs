@@ -3,7 +3,9 @@
 //! multipliers of the adjoint form that `tip_sensitivities` contracts its other columns with
 //! (module docs of `sensitivity`, docs/sensitivity.md "Exact tension columns").
 
-use super::{Difference, NodeDerivative, RELATIVE_STEP, Sensitivity, force_scale, residual_at, singular};
+use super::{
+    Difference, NodeDerivative, RELATIVE_STEP, Sensitivity, force_scale, residual_at, singular, tension_rhs_columns,
+};
 use crate::collocation::system::Columns;
 use crate::collocation::unknowns;
 use crate::error::{Result, invalid};
@@ -37,16 +39,11 @@ impl Sensitivity<'_> {
         let n = self.border.system().unknowns();
         if self.tension_columns.is_none() {
             let mut columns = vec![0.0; n * robot.tendons.len()];
-            self.border
-                .system()
-                .parameter_columns(&self.states, Columns::Tensions, &mut columns)?;
+            tension_rhs_columns(self.border.system(), &self.states, &mut columns)?;
             self.tension_columns = Some(columns);
         }
         let columns = self.tension_columns.as_deref().unwrap_or_default();
-        let column = &columns[tendon * n..(tendon + 1) * n];
-        for (r, d) in self.scratch[0].iter_mut().zip(column) {
-            *r = -d;
-        }
+        self.scratch[0][..n].copy_from_slice(&columns[tendon * n..(tendon + 1) * n]);
         Ok(())
     }
 

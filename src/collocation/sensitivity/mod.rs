@@ -95,7 +95,7 @@ mod named;
 mod tip;
 
 pub use adjoint::{Adjoint, Cotangent, rotation_cotangent};
-pub(crate) use control::{backbone_columns, tip_columns};
+pub(crate) use control::{backbone_columns, tension_tips, tip_columns};
 pub use control::{backbone_jacobian, columns, tip_jacobian};
 pub(crate) use held::TensionDirections;
 pub use held::{DisplacementSensitivities, displacement_sensitivities};
@@ -199,9 +199,13 @@ pub struct Sensitivity<'a> {
     workspace: Workspace,
     /// Scratch: residuals at the stencil points and the right-hand side.
     scratch: [Vec<f64>; 3],
-    /// dF/dtau_i of every tendon, column-major ([`System::parameter_columns`]), evaluated at
-    /// the first tension asked for (one pass serves every tendon); frictionless systems only.
+    /// -dF/dtau_i of every tendon (the right-hand sides), column-major
+    /// ([`System::parameter_columns`]), evaluated at the first tension asked for or before
+    /// factoring (one pass serves every tendon); frictionless systems only.
     tension_columns: Option<Vec<f64>>,
+    /// The last node's unknowns of J x = -dF/dtau_i for every tendon, solved while
+    /// factoring ([`Sensitivity::with_workspace`] with `tips`).
+    tension_tips: Option<Vec<[f64; unknowns::NODE]>>,
     /// dF/dk_j of the six section stiffnesses, column-major, evaluated at the first modulus
     /// asked for ([`Sensitivity::stiffness`]).
     stiffness_columns: Option<Vec<f64>>,
@@ -225,7 +229,7 @@ impl<'a> Sensitivity<'a> {
     /// Jacobian there is singular (a bifurcation, where no sensitivity exists); a model
     /// breakdown at the solution's states.
     pub fn new(robot: &'a Robot, solution: &Solution) -> Result<Self> {
-        Self::with_workspace(robot, solution, None, false)
+        Self::with_workspace(robot, solution, None, false, false)
     }
 
     /// As [`Sensitivity::new`], factoring in `workspace` when it was built for the
@@ -235,7 +239,10 @@ impl<'a> Sensitivity<'a> {
     /// robot's collocation system at the solution's states, from a solve that converged
     /// there (a [`crate::Solver`]'s stability verdict after a warm solve,
     /// [`Workspace::evaluated_at_solution`]): those values are factored, without assembling
-    /// the Jacobian again or checking the residual.
+    /// the Jacobian again or checking the residual. With `tips` and no friction, every
+    /// tendon's tension column is formed first and carried through the factoring, which
+    /// gives the tip's unknowns of each ([`Workspace::factor_with_last`]; what
+    /// [`Sensitivity::tension_tip`] returns, bitwise as solving with the factors would).
     ///
     /// # Errors
     /// As [`Sensitivity::new`].
@@ -244,6 +251,7 @@ impl<'a> Sensitivity<'a> {
         solution: &Solution,
         workspace: Option<Workspace>,
         evaluated: bool,
+        tips: bool,
     ) -> Result<Self> {
         robot.validate()?;
         if solution.tendons.len() != robot.tendons.len() {
@@ -276,9 +284,23 @@ impl<'a> Sensitivity<'a> {
         let states: Vec<State> = interpolate_nodes(&model, &solution.nodes, &mesh);
         let mut border = Capstan::at_solution(model, mesh, solution);
         let n = border.system().unknowns() + border.border_rows();
+        // The tension right-hand sides to carry through the factoring.
+        let carried = if tips && border.border_rows() == 0 {
+            let mut columns = vec![0.0; n * robot.tendons.len()];
+            tension_rhs_columns(border.system(), &states, &mut columns)?;
+            Some(columns)
+        } else {
+            None
+        };
+        let count = robot.tendons.len();
+        let mut last = vec![[0.0; unknowns::NODE]; if carried.is_some() { count } else { 0 }];
         let mut workspace = workspace;
         if let Some(mut workspace) = workspace.take_if(|w| evaluated && w.evaluated_at_solution()) {
-            if !workspace.factor_evaluated() {
+            let ok = match &carried {
+                Some(columns) => workspace.factor_evaluated_with_last(columns, count, &mut last),
+                None => workspace.factor_evaluated(),
+            };
+            if !ok {
                 return Err(singular());
             }
             return Ok(Sensitivity {
@@ -286,7 +308,8 @@ impl<'a> Sensitivity<'a> {
                 states,
                 workspace,
                 scratch: [vec![0.0; n], vec![0.0; n], vec![0.0; n]],
-                tension_columns: None,
+                tension_tips: carried.is_some().then_some(last),
+                tension_columns: carried,
                 stiffness_columns: None,
             });
         }
@@ -311,7 +334,11 @@ impl<'a> Sensitivity<'a> {
             None => Workspace::new(border.system(), LinearSolver::Blocks)?,
         };
         // Factor once; every parameter then costs one solve with the stored factors.
-        if !workspace.factor(&values) {
+        let ok = match &carried {
+            Some(columns) => workspace.factor_with_last(&values, columns, count, &mut last),
+            None => workspace.factor(&values),
+        };
+        if !ok {
             return Err(singular());
         }
         Ok(Sensitivity {
@@ -319,7 +346,8 @@ impl<'a> Sensitivity<'a> {
             states,
             workspace,
             scratch: [residual, vec![0.0; n], vec![0.0; n]],
-            tension_columns: None,
+            tension_tips: carried.is_some().then_some(last),
+            tension_columns: carried,
             stiffness_columns: None,
         })
     }
@@ -550,6 +578,17 @@ fn residual_at(
     }
     let system = border.moved(model);
     border.residual_of(&system, states, out)
+}
+
+/// -dF/dtau_i of every tendon of `system` (no friction) at `states`, column-major into
+/// `out` ([`System::parameter_columns`], negated): the tension columns' right-hand sides.
+///
+/// # Errors
+/// A model breakdown at a visited state.
+fn tension_rhs_columns(system: &System, states: &[State], out: &mut [f64]) -> Result<()> {
+    system.parameter_columns(states, crate::collocation::system::Columns::Tensions, out)?;
+    out.iter_mut().for_each(|d| *d = -*d);
+    Ok(())
 }
 
 /// The model of `robot` at the tensions of `solution`: a displacement-controlled tendon's
