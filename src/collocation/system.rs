@@ -468,7 +468,15 @@ impl<'a> System<'a> {
                 Columns::Stiffness => model.wrench_balance_stiffness(s, left, right, out),
             };
         debug_assert_eq!(out.len(), n * width);
-        out.fill(0.0);
+        // Every row is written below but the base rows (no parameter moves them) and the
+        // first six rows of a jump (its position and rotation continuity): those are zeroed
+        // here, not the whole buffer.
+        for column in out.chunks_exact_mut(n) {
+            column[..BASE_ROWS].fill(0.0);
+            for k in (0..x.len() - 1).filter(|&k| self.interval_sites[k].is_none()) {
+                column[link_row(k)..link_row(k) + 6].fill(0.0);
+            }
+        }
         let length = model.robot.length();
         let mut rates = [
             vec![Vector6::zeros(); width],

@@ -113,6 +113,9 @@ pub struct Workspace {
     /// The buffers of the systems built on this mesh, kept between them
     /// ([`Workspace::system`], [`Workspace::keep_system`]).
     system: SystemBuffers,
+    /// Buffers a linearization for sensitivities handed back for the next one
+    /// ([`Workspace::take_buffer`], [`Workspace::give_buffer`]).
+    buffers: Vec<Vec<f64>>,
 }
 
 impl Workspace {
@@ -142,7 +145,24 @@ impl Workspace {
             unfactored: false,
             dynamics: None,
             system: SystemBuffers::default(),
+            buffers: Vec::new(),
         })
+    }
+
+    /// A buffer of `len` values: one [`Workspace::give_buffer`] kept, its contents as they
+    /// were (the caller writes every entry it reads), else a new zeroed one.
+    pub(crate) fn take_buffer(&mut self, len: usize) -> Vec<f64> {
+        match self.buffers.iter().position(|b| b.len() == len) {
+            Some(at) => self.buffers.swap_remove(at),
+            None => vec![0.0; len],
+        }
+    }
+
+    /// Keeps `buffer` for a later [`Workspace::take_buffer`] (at most eight are kept).
+    pub(crate) fn give_buffer(&mut self, buffer: Vec<f64>) {
+        if self.buffers.len() < 8 {
+            self.buffers.push(buffer);
+        }
     }
 
     /// The system of a copy of `model` on `mesh` (this workspace's mesh), built in the
@@ -427,7 +447,6 @@ impl Workspace {
         self.dynamics = None;
         self.unfactored = false;
         self.residual.fill(0.0);
-        self.step.fill(0.0);
         self.rates_valid = false;
         self.factored = ok;
     }

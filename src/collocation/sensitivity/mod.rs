@@ -285,8 +285,15 @@ impl<'a> Sensitivity<'a> {
         let mut border = Capstan::at_solution(model, mesh, solution);
         let n = border.system().unknowns() + border.border_rows();
         // The tension right-hand sides to carry through the factoring.
+        let mut workspace = workspace;
+        let mut buffer = |len: usize| {
+            workspace
+                .as_mut()
+                .map_or_else(|| vec![0.0; len], |w| w.take_buffer(len))
+        };
+        let scratch = [buffer(n), buffer(n), buffer(n)];
         let carried = if tips && border.border_rows() == 0 {
-            let mut columns = vec![0.0; n * robot.tendons.len()];
+            let mut columns = buffer(n * robot.tendons.len());
             tension_rhs_columns(border.system(), &states, &mut columns)?;
             Some(columns)
         } else {
@@ -294,7 +301,6 @@ impl<'a> Sensitivity<'a> {
         };
         let count = robot.tendons.len();
         let mut last = vec![[0.0; unknowns::NODE]; if carried.is_some() { count } else { 0 }];
-        let mut workspace = workspace;
         if let Some(mut workspace) = workspace.take_if(|w| evaluated && w.evaluated_at_solution()) {
             let ok = match &carried {
                 Some(columns) => workspace.factor_evaluated_with_last(columns, count, &mut last),
@@ -307,13 +313,13 @@ impl<'a> Sensitivity<'a> {
                 border,
                 states,
                 workspace,
-                scratch: [vec![0.0; n], vec![0.0; n], vec![0.0; n]],
+                scratch,
                 tension_tips: carried.is_some().then_some(last),
                 tension_columns: carried,
                 stiffness_columns: None,
             });
         }
-        let mut residual = vec![0.0; n];
+        let [mut residual, second, third] = scratch;
         let mut values = vec![0.0; nonzeros(&border.system().mesh)];
         border.linearize(&states, &mut residual, &mut values)?;
         let mut norm = residual.iter().fold(0.0f64, |m, r| m.max(r.abs()));
@@ -345,7 +351,7 @@ impl<'a> Sensitivity<'a> {
             border,
             states,
             workspace,
-            scratch: [residual, vec![0.0; n], vec![0.0; n]],
+            scratch: [residual, second, third],
             tension_tips: carried.is_some().then_some(last),
             tension_columns: carried,
             stiffness_columns: None,
@@ -360,9 +366,16 @@ impl<'a> Sensitivity<'a> {
         (self.border.into_system(), self.states, self.workspace)
     }
 
-    /// The linear-solver workspace, holding the factors of the Jacobian at the solution.
+    /// The linear-solver workspace, holding the factors of the Jacobian at the solution,
+    /// with this linearization's buffers for the next one's ([`Workspace::take_buffer`]).
     pub(crate) fn into_workspace(self) -> Workspace {
-        self.workspace
+        let mut workspace = self.workspace;
+        let columns = [self.tension_columns, self.stiffness_columns];
+        self.scratch
+            .into_iter()
+            .chain(columns.into_iter().flatten())
+            .for_each(|b| workspace.give_buffer(b));
+        workspace
     }
 
     /// The robot the system belongs to.

@@ -38,10 +38,25 @@ pub(crate) fn tension_rates(
     out: &mut [Vector6<f64>],
 ) -> Result<(Vector6<f64>, Option<Linearization>)> {
     let (v, u) = (state.1, state.2);
-    point_derivatives(model, site, segment_end, state, full, out, |x_v, x_u, out| {
-        for (i, _, rp) in model.distributed_reaching(site.s, segment_end) {
-            // Per unit of tau_i: k_i = f / |p_i|, so A() is (f / |p_i|) P_i.
-            let tp = TendonPoint::new(i, model.tension_factor, &rp, site, v, u)?;
+    let length = model.robot.length();
+    point_derivatives(model, site, segment_end, state, full, out, |x_v, x_u, cached, out| {
+        // The taut tendons come in the order eq. 13's assembly kept their points.
+        let mut kept = cached.iter();
+        for (i, taut, tendon) in model.distributed_reaching_tendons(segment_end) {
+            // Per unit of tau_i: k_i = f / |p_i|, so A() is (f / |p_i|) P_i; a kept point
+            // differs only in k_i = tau_i f / |p_i|, and f * (1 / |p_i|) is what
+            // TendonPoint::new computes for the tension f.
+            let kept_point = if taut { kept.next() } else { None };
+            let tp = match kept_point {
+                Some(&tp) => TendonPoint {
+                    k: model.tension_factor * tp.inv_speed,
+                    ..tp
+                },
+                None => {
+                    let rp = tendon.routing.at(site.s, length);
+                    TendonPoint::new(i, model.tension_factor, &rp, site, v, u)?
+                }
+            };
             // On a Kirchhoff rod q_i does not see the translational coordinate's rate.
             let x_v = if tp.inextensible { Vector3::zeros() } else { *x_v };
             let q = tp.A() * (x_v - tp.r.cross(x_u) + tp.c);
@@ -81,7 +96,7 @@ pub(crate) fn stiffness_rates(
     let du = u - reference.u_star;
     // v x n_b sees the strain: v* on a Kirchhoff rod, whose coordinate v carries n_b.
     let strain = site.strain(v);
-    point_derivatives(model, site, segment_end, state, full, out, |x_v, x_u, out| {
+    point_derivatives(model, site, segment_end, state, full, out, |x_v, x_u, _, out| {
         for j in 0..3 {
             let e = Vector3::ith(j, 1.0);
             let top = e * (x_v[j] - reference.v_star_s[j]) + u.cross(&e) * dv[j];
@@ -95,9 +110,10 @@ pub(crate) fn stiffness_rates(
 }
 
 /// The rates at (R, v, u) (with the full [`Linearization`] when `full`) and their
-/// derivatives in some parameters: `partial(x_v, x_u, out)` writes each parameter's dF/dq at
-/// fixed rates x = (x_v, x_u) (F = M x - rhs, module docs) into `out` (zeroed first), and
-/// each becomes d(v', u')/dq = -M^-1 dF/dq with the factors of M.
+/// derivatives in some parameters: `partial(x_v, x_u, points, out)` writes each parameter's
+/// dF/dq at fixed rates x = (x_v, x_u) (F = M x - rhs, module docs) into `out` (zeroed
+/// first), given the points of the first taut tendons the assembly kept, and each becomes
+/// d(v', u')/dq = -M^-1 dF/dq with the factors of M.
 fn point_derivatives(
     model: &Model,
     site: &Site,
@@ -105,7 +121,7 @@ fn point_derivatives(
     (R, v, u): (&Matrix3<f64>, &Vector3<f64>, &Vector3<f64>),
     full: bool,
     out: &mut [Vector6<f64>],
-    partial: impl FnOnce(&Vector3<f64>, &Vector3<f64>, &mut [Vector6<f64>]) -> Result<()>,
+    partial: impl FnOnce(&Vector3<f64>, &Vector3<f64>, &[TendonPoint], &mut [Vector6<f64>]) -> Result<()>,
 ) -> Result<(Vector6<f64>, Option<Linearization>)> {
     let mut cache = TendonCache::new();
     let assembled = assemble(model, site, segment_end, (R, v, u), Some(&mut cache))?;
@@ -127,7 +143,7 @@ fn point_derivatives(
     let x_v = Vector3::new(x[0], x[1], x[2]);
     let x_u = Vector3::new(x[3], x[4], x[5]);
     out.fill(Vector6::zeros());
-    partial(&x_v, &x_u, out)?;
+    partial(&x_v, &x_u, cache.points(), out)?;
     for d in out.iter_mut().filter(|d| **d != Vector6::zeros()) {
         let mut row = d.transpose();
         if !assembled.factor.solve_transposed_mut(&mut row) {
