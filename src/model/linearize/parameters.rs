@@ -29,7 +29,43 @@ use nalgebra::{Matrix3, Matrix6, Matrix6x3, Vector3, Vector6};
 ///
 /// # Errors
 /// As [`rates`]; [`Error::SingularRouting`] also for a slack tendon without a tangent.
+///
+/// Without `full`, on x86-64 with AVX2 and FMA (checked at run time) compiled for them: the
+/// same operations in the same order (Rust does not fuse a product and a sum into an FMA),
+/// so the same bits. (The full linearization's AVX2 build emits a `vmovq xmm, xmm` that
+/// valgrind 3.19 cannot decode, docs/benchmarks.md "Control Jacobian".)
 pub(crate) fn tension_rates(
+    model: &Model,
+    site: &Site,
+    segment_end: f64,
+    state: (&Matrix3<f64>, &Vector3<f64>, &Vector3<f64>),
+    full: bool,
+    out: &mut [Vector6<f64>],
+) -> Result<(Vector6<f64>, Option<Linearization>)> {
+    #[cfg(target_arch = "x86_64")]
+    if !full && std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma") {
+        // SAFETY: the processor supports the features the function is compiled for.
+        return unsafe { tension_rates_avx2(model, site, segment_end, state, out) };
+    }
+    tension_rates_kernel(model, site, segment_end, state, full, out)
+}
+
+/// [`tension_rates_kernel`] without the full linearization, with AVX2 and FMA enabled.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+unsafe fn tension_rates_avx2(
+    model: &Model,
+    site: &Site,
+    segment_end: f64,
+    state: (&Matrix3<f64>, &Vector3<f64>, &Vector3<f64>),
+    out: &mut [Vector6<f64>],
+) -> Result<(Vector6<f64>, Option<Linearization>)> {
+    tension_rates_kernel(model, site, segment_end, state, false, out)
+}
+
+/// [`tension_rates`]' operations.
+#[inline(always)]
+fn tension_rates_kernel(
     model: &Model,
     site: &Site,
     segment_end: f64,
@@ -114,6 +150,7 @@ pub(crate) fn stiffness_rates(
 /// dF/dq at fixed rates x = (x_v, x_u) (F = M x - rhs, module docs) into `out` (zeroed
 /// first), given the points of the first taut tendons the assembly kept, and each becomes
 /// d(v', u')/dq = -M^-1 dF/dq with the factors of M.
+#[inline(always)]
 fn point_derivatives(
     model: &Model,
     site: &Site,
