@@ -441,8 +441,10 @@ impl Workspace {
         self.factor(values) && self.solve_again_last_each(rhs, count, last)
     }
 
-    /// The state a factoring with a zero right-hand side ([`Workspace::solve`]) leaves,
-    /// after a factoring that solved for no step: `ok` whether it succeeded.
+    /// The state a factoring with a zero right-hand side ([`Workspace::solve`]) leaves (a
+    /// zero residual, the verdicts cleared), after a factoring that solved for no step (the
+    /// step buffer is not written: Newton writes it before reading it): `ok` whether it
+    /// succeeded.
     fn factored_without_solve(&mut self, ok: bool) {
         self.dynamics = None;
         self.unfactored = false;

@@ -34,7 +34,9 @@ pub const CARRIED: usize = 8;
 const WIDE: usize = 2 * NODE + CARRIED;
 /// Columns of its last node's rows.
 const LAST_WIDE: usize = NODE + CARRIED;
-const _: () = assert!(COLS % 4 == 0 && LAST_COLS % 4 == 0 && WIDE % 4 == 0 && LAST_WIDE % 4 == 0);
+const _: () = assert!(
+    COLS.is_multiple_of(4) && LAST_COLS.is_multiple_of(4) && WIDE.is_multiple_of(4) && LAST_WIDE.is_multiple_of(4)
+);
 
 /// The row operations of one elimination step, kept so that further right-hand sides can
 /// be solved with the same factors.
@@ -111,7 +113,7 @@ impl BlockElimination {
     /// [`BlockElimination::solve_again_last`] would replay, in the same order (also the
     /// multipliers that are zero), so the same bits. False on a zero pivot.
     pub fn factor_with_last(&mut self, values: &[f64], rhs: &[f64], count: usize, last: &mut [[f64; NODE]]) -> bool {
-        assert!(count <= CARRIED && last.len() == count && rhs.len() % count.max(1) == 0);
+        assert!(count <= CARRIED && last.len() == count && rhs.len().is_multiple_of(count.max(1)));
         let n = rhs.len() / count.max(1);
         let eliminated = self.eliminate_all::<WIDE, LAST_WIDE, { 2 * NODE }, NODE>(values, |row, slots| {
             for (j, slot) in slots.iter_mut().take(count).enumerate() {
@@ -453,6 +455,9 @@ fn eliminate_column<const C: usize, const R: usize, const W: usize, const ALWAYS
     let inverse = 1.0 / pivot;
     let start = (C + 1) & !3;
     let prow = rows[C];
+    // Indexed, not `iter_mut().enumerate().skip(..)`: that form's AVX2 build emits a
+    // `vmovq xmm, xmm` valgrind 3.19 cannot decode (docs/benchmarks.md, "Control Jacobian").
+    #[allow(clippy::needless_range_loop)]
     for r in C + 1..R {
         let row = &mut rows[r];
         let f = row[C] * inverse;

@@ -83,7 +83,9 @@
 //! Jacobian its stability verdict evaluated at the solution instead of assembling it),
 //! then per parameter one solve with the stored factors ([`Workspace::solve_again`]), plus
 //! one pass over the mesh for all tension columns together, and two residual evaluations
-//! for a differenced parameter (three one-sided).
+//! for a differenced parameter (three one-sided). The tip's tension columns, where nothing
+//! needs the other nodes, are formed before the factoring and carried through it, which
+//! gives their tip unknowns without a solve ([`Workspace::factor_with_last`]).
 #![allow(non_snake_case)]
 
 mod adjoint;
@@ -294,7 +296,7 @@ impl<'a> Sensitivity<'a> {
         let scratch = [buffer(n), buffer(n), buffer(n)];
         let carried = if tips && border.border_rows() == 0 {
             let mut columns = buffer(n * robot.tendons.len());
-            tension_rhs_columns(border.system(), &states, &mut columns)?;
+            exact::tension_rhs_columns(border.system(), &states, &mut columns)?;
             Some(columns)
         } else {
             None
@@ -525,43 +527,6 @@ impl<'a> Sensitivity<'a> {
             )
         })
     }
-
-    /// The derivative of every node state with respect to tendon `tendon`'s friction
-    /// coefficient mu (per unit of mu), by central differences of the residual (backbone and
-    /// capstan rows) with the step [`RELATIVE_STEP`] (mu's scale is 1; forward differences
-    /// for mu below the step) and the bordered solve (docs/friction.md).
-    ///
-    /// # Errors
-    /// [`crate::Error::InvalidInput`] for a tendon index out of range or a tendon without
-    /// friction (mu = 0: the log tensions are not unknowns there, so the derivative would
-    /// need another system); as [`Sensitivity::derivative`].
-    pub fn friction(&mut self, tendon: usize) -> Result<Vec<NodeDerivative>> {
-        let robot = self.robot();
-        let t = Self::tendon_of(robot, tendon)?;
-        let Some(friction) = t.active_friction() else {
-            return Err(invalid(
-                format!("tendons[{tendon}].friction"),
-                "is 0 or not set, and the derivative in the friction coefficient is taken where it is > 0",
-                "give the tendon a positive friction coefficient (e.g. 1e-3) to differentiate there",
-            ));
-        };
-        let mu = friction.coefficient;
-        // mu's scale is 1, not mu: it acts through exp(mu Theta) with turning angles Theta
-        // of about a radian, so a step of 1e-4 truncates at about 1e-8 as for the other
-        // parameters, and rounds 1 / mu times less than 1e-4 mu would (d tip / d mu within
-        // 5e-7 of differences of solves at mu = 0.05 with 1e-4 mu, measured; tests/
-        // friction_pull_in.rs). Below the step the stencil stays on mu's side of 0.
-        let difference = if mu > RELATIVE_STEP {
-            Difference::Central
-        } else {
-            Difference::Forward
-        };
-        self.derivative(RELATIVE_STEP, difference, |r, dq| {
-            if let Some(f) = &mut r.tendons[tendon].friction {
-                f.coefficient = mu + dq;
-            }
-        })
-    }
 }
 
 /// The residual (backbone rows, then capstan rows) of `border`'s system at `states` and
@@ -591,17 +556,6 @@ fn residual_at(
     }
     let system = border.moved(model);
     border.residual_of(&system, states, out)
-}
-
-/// -dF/dtau_i of every tendon of `system` (no friction) at `states`, column-major into
-/// `out` ([`System::parameter_columns`], negated): the tension columns' right-hand sides.
-///
-/// # Errors
-/// A model breakdown at a visited state.
-fn tension_rhs_columns(system: &System, states: &[State], out: &mut [f64]) -> Result<()> {
-    system.parameter_columns(states, crate::collocation::system::Columns::Tensions, out)?;
-    out.iter_mut().for_each(|d| *d = -*d);
-    Ok(())
 }
 
 /// The model of `robot` at the tensions of `solution`: a displacement-controlled tendon's
