@@ -85,7 +85,7 @@
 //! one pass over the mesh for all tension columns together, and two residual evaluations
 //! for a differenced parameter (three one-sided). The tip's tension columns, where nothing
 //! needs the other nodes, are formed before the factoring and carried through it, which
-//! gives their tip unknowns without a solve ([`Workspace::factor_with_last`]).
+//! gives their tip unknowns without a solve (`Workspace::factor_with_last`).
 #![allow(non_snake_case)]
 
 mod adjoint;
