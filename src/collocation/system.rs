@@ -482,6 +482,7 @@ impl<'a> System<'a> {
             vec![Vector6::zeros(); width],
             vec![Vector6::zeros(); width],
             vec![Vector6::zeros(); width],
+            vec![Vector6::zeros(); width],
         ];
         let mut block = vec![Block::zeros(); width];
         let mut wrench = vec![(Vector3::zeros(), Vector3::zeros()); width];
@@ -498,7 +499,7 @@ impl<'a> System<'a> {
                     // Node k's derivatives are the previous interval's end ones.
                     rates.swap(0, 1);
                 }
-                let [d0, d1, dm] = &mut rates;
+                let [d0, d1, dm, dy] = &mut rates;
                 let (a, b) = (&x[k], &x[k + 1]);
                 let end = residual::interval_derivatives(
                     model,
@@ -508,7 +509,7 @@ impl<'a> System<'a> {
                     b,
                     node_rates,
                     point,
-                    [d0, d1, dm],
+                    [d0, d1, dm, dy],
                     &mut block,
                 )?;
                 node_rates = Some(end);
