@@ -32,10 +32,10 @@ use nalgebra::{Matrix3, Vector3, Vector6};
 /// # Errors
 /// As [`rates`]; [`Error::SingularRouting`] also for a slack tendon without a tangent.
 ///
-/// Without `full`, on x86-64 with AVX2 and FMA (checked at run time) compiled for them: the
-/// same operations in the same order (Rust does not fuse a product and a sum into an FMA),
-/// so the same bits. (The full linearization's AVX2 build emits a `vmovq xmm, xmm` that
-/// valgrind 3.19 cannot decode, docs/benchmarks.md "Control Jacobian".)
+/// On x86-64 with AVX2 and FMA (checked at run time) compiled for them: the same operations
+/// in the same order (Rust does not fuse a product and a sum into an FMA), so the same bits.
+/// (Built with the full linearization it emitted a `vmovq xmm, xmm` that valgrind 3.19
+/// cannot decode, docs/benchmarks.md "Control Jacobian"; `objdump` of the build is the check.)
 pub(crate) fn tension_rates(
     model: &Model,
     site: &Site,
@@ -45,14 +45,14 @@ pub(crate) fn tension_rates(
     out: &mut [Vector6<f64>],
 ) -> Result<Vector6<f64>> {
     #[cfg(target_arch = "x86_64")]
-    if along.is_none() && std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma") {
+    if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma") {
         // SAFETY: the processor supports the features the function is compiled for.
-        return unsafe { tension_rates_avx2(model, site, segment_end, state, out) };
+        return unsafe { tension_rates_avx2(model, site, segment_end, state, along, out) };
     }
     tension_rates_kernel(model, site, segment_end, state, along, out)
 }
 
-/// [`tension_rates_kernel`] without `along`, with AVX2 and FMA enabled.
+/// [`tension_rates_kernel`] with AVX2 and FMA enabled.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,fma")]
 unsafe fn tension_rates_avx2(
@@ -60,9 +60,10 @@ unsafe fn tension_rates_avx2(
     site: &Site,
     segment_end: f64,
     state: (&Matrix3<f64>, &Vector3<f64>, &Vector3<f64>),
+    along: Option<&[Vector6<f64>]>,
     out: &mut [Vector6<f64>],
 ) -> Result<Vector6<f64>> {
-    tension_rates_kernel(model, site, segment_end, state, None, out)
+    tension_rates_kernel(model, site, segment_end, state, along, out)
 }
 
 /// [`tension_rates`]' operations.
