@@ -37,9 +37,8 @@ impl Sensitivity<'_> {
         }
         let n = self.border.system().unknowns();
         if self.tension_columns.is_none() {
-            let mut columns = vec![0.0; n * robot.tendons.len()];
-            tension_rhs_columns(self.border.system(), &self.states, &mut columns)?;
-            self.tension_columns = Some(columns);
+            let columns = vec![0.0; n * robot.tendons.len()];
+            self.tension_columns = Some(tension_rhs_columns(self.border.system(), &self.states, columns)?);
         }
         let columns = self.tension_columns.as_deref().unwrap_or_default();
         self.scratch[0][..n].copy_from_slice(&columns[tendon * n..(tendon + 1) * n]);
@@ -209,13 +208,14 @@ impl Sensitivity<'_> {
     }
 }
 
-/// -dF/dtau_i of every tendon of `system` (no friction) at `states`, column-major into
-/// `out` ([`System::parameter_columns`], negated): the tension columns' right-hand sides.
+/// -dF/dtau_i of every tendon of `system` (no friction) at `states`, column-major in
+/// `out` (its length the unknowns times the tendons; [`System::parameter_columns`],
+/// negated): the tension columns' right-hand sides.
 ///
 /// # Errors
 /// A model breakdown at a visited state.
-pub(super) fn tension_rhs_columns(system: &System, states: &[State], out: &mut [f64]) -> Result<()> {
-    system.parameter_columns(states, Columns::Tensions, out)?;
+pub(super) fn tension_rhs_columns(system: &System, states: &[State], mut out: Vec<f64>) -> Result<Vec<f64>> {
+    system.parameter_columns(states, Columns::Tensions, &mut out)?;
     out.iter_mut().for_each(|d| *d = -*d);
-    Ok(())
+    Ok(out)
 }

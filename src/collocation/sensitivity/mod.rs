@@ -286,7 +286,6 @@ impl<'a> Sensitivity<'a> {
         let states: Vec<State> = interpolate_nodes(&model, &solution.nodes, &mesh);
         let mut border = Capstan::at_solution(model, mesh, solution);
         let n = border.system().unknowns() + border.border_rows();
-        // The tension right-hand sides to carry through the factoring.
         let mut workspace = workspace;
         let mut buffer = |len: usize| {
             workspace
@@ -294,16 +293,15 @@ impl<'a> Sensitivity<'a> {
                 .map_or_else(|| vec![0.0; len], |w| w.take_buffer(len))
         };
         let scratch = [buffer(n), buffer(n), buffer(n)];
-        let carried = if tips && border.border_rows() == 0 {
-            let mut columns = buffer(n * robot.tendons.len());
-            exact::tension_rhs_columns(border.system(), &states, &mut columns)?;
-            Some(columns)
-        } else {
-            None
-        };
+        // The tension right-hand sides to carry through the factoring, formed once the
+        // solution is known to solve the system.
         let count = robot.tendons.len();
-        let mut last = vec![[0.0; unknowns::NODE]; if carried.is_some() { count } else { 0 }];
+        let carry = tips && border.border_rows() == 0;
+        let mut last = vec![[0.0; unknowns::NODE]; if carry { count } else { 0 }];
         if let Some(mut workspace) = workspace.take_if(|w| evaluated && w.evaluated_at_solution()) {
+            let carried = carry
+                .then(|| exact::tension_rhs_columns(border.system(), &states, workspace.take_buffer(n * count)))
+                .transpose()?;
             let ok = match &carried {
                 Some(columns) => workspace.factor_evaluated_with_last(columns, count, &mut last),
                 None => workspace.factor_evaluated(),
@@ -341,6 +339,9 @@ impl<'a> Sensitivity<'a> {
             Some(w) => w,
             None => Workspace::new(border.system(), LinearSolver::Blocks)?,
         };
+        let carried = carry
+            .then(|| exact::tension_rhs_columns(border.system(), &states, workspace.take_buffer(n * count)))
+            .transpose()?;
         // Factor once; every parameter then costs one solve with the stored factors.
         let ok = match &carried {
             Some(columns) => workspace.factor_with_last(&values, columns, count, &mut last),
