@@ -31,7 +31,7 @@ use crate::model::equations::{Model, Site, lift, lift_m};
 use crate::model::linearize::{self, Linearization, linearize, linearize_inline};
 use crate::solution::State;
 use crate::{Real, so3};
-use nalgebra::{Matrix3, Matrix6, SMatrix, SVector, Vector3, Vector6};
+use nalgebra::{Matrix3, SMatrix, SVector, Vector3, Vector6};
 
 /// Scaled perturbation of one node's unknowns.
 pub type Delta<T> = SVector<T, 12>;
@@ -234,31 +234,32 @@ pub fn interval(
     ))
 }
 
-/// The derivative of eq. 13's rates at one point in some parameters, with the rates and
-/// (when asked) the full linearization: [`linearize::tension_rates`] (every tendon's
-/// tension) or [`linearize::stiffness_rates`] (the six section stiffnesses).
+/// The derivative of eq. 13's rates at one point in some parameters (with the strains
+/// moving along the given directions, when given), and the rates:
+/// [`linearize::tension_rates`] (every tendon's tension) or [`linearize::stiffness_rates`]
+/// (the six section stiffnesses).
 pub(super) type PointDerivatives = fn(
     &Model,
     &Site,
     f64,
     (&Matrix3<f64>, &Vector3<f64>, &Vector3<f64>),
-    bool,
+    Option<&[Vector6<f64>]>,
     &mut [Vector6<f64>],
-) -> Result<(Vector6<f64>, Option<Linearization>)>;
+) -> Result<Vector6<f64>>;
 
 /// The derivative of the interval rows of [`interval`] in some parameters at fixed node
 /// states: `out[i]` gets dF/dq_i (scaled rows) for the parameters `point` differentiates
 /// eq. 13 in. `d_start`, `d_end` and `d_mid` hold d(v', u')/dq_i at node a, node b and the
-/// midpoint; with `start_rates`, `d_start` already holds node a's (the previous interval's
-/// `d_end`), else both are evaluated here. Returns the rates at node b, whose derivatives
-/// stay in `d_end`.
+/// midpoint (the midpoint's total derivative, its strains moving by `dy_mid`); with
+/// `start_rates`, `d_start` already holds node a's (the previous interval's `d_end`), else
+/// both are evaluated here. Returns the rates at node b, whose derivatives stay in `d_end`.
 ///
 /// The chain rule through the scheme (docs/sensitivity.md, "Exact tension columns"): only
 /// the rate rows of F_0 and F_1 move with q_i, by dF_0 = (0, 0, d_start[i]) and
 /// dF_1 = (0, 0, d_end[i]), so the midpoint state moves by dy_m = h/8 (dF_0 - dF_1) in its
-/// strains alone, and F_m by its own rate derivative plus the v and u columns of its
-/// linearization times dy_m: (R_m dv_m, J_r^-1(theta_m) du_m, d_mid[i] + d(v', u')/d(v, u)
-/// dy_m). The rows move by -h/6 (dF_0 + 4 dF_m + dF_1), scaled.
+/// strains alone, and F_m by (R_m dv_m, J_r^-1(theta_m) du_m, the rates' total derivative
+/// -M^-1 (dF/dq_i + dF/d(v, u) dy_m) at the midpoint, one solve with its M). The rows move
+/// by -h/6 (dF_0 + 4 dF_m + dF_1), scaled.
 ///
 /// # Errors
 /// A model breakdown at a node or at the midpoint.
@@ -271,25 +272,27 @@ pub(super) fn interval_derivatives(
     b: &State,
     start_rates: Option<Vector6<f64>>,
     point: PointDerivatives,
-    [d_start, d_end, d_mid]: [&mut [Vector6<f64>]; 3],
+    [d_start, d_end, d_mid, dy_mid]: [&mut [Vector6<f64>]; 4],
     out: &mut [Block<f64>],
 ) -> Result<Vector6<f64>> {
     let h = sites.end.s - sites.start.s;
     let rates0 = match start_rates {
         Some(r) => r,
-        None => point(model, &sites.start, segment_end, (&a.R, &a.v, &a.u), false, d_start)?.0,
+        None => point(model, &sites.start, segment_end, (&a.R, &a.v, &a.u), None, d_start)?,
     };
-    let (rates1, _) = point(model, &sites.end, segment_end, (&b.R, &b.v, &b.u), false, d_end)?;
+    let rates1 = point(model, &sites.end, segment_end, (&b.R, &b.v, &b.u), None, d_end)?;
     let [y0, y1, f0, f1] = end_values(sites, a, b, &rates0, &rates1);
     let ym = (y0 + y1) * 0.5 + (f0 - f1) * (h / 8.0);
     let theta_m: Vector3<f64> = ym.fixed_rows::<3>(THETA).into();
     let R_m = a.R * so3::exp(&theta_m);
     let (v_m, u_m) = (ym.fixed_rows::<3>(V).into(), ym.fixed_rows::<3>(U).into());
-    let (_, lin) = point(model, &sites.mid, segment_end, (&R_m, &v_m, &u_m), true, d_mid)?;
-    let d_strains = lin.map_or_else(Matrix6::zeros, |l| l.d_strains);
+    for ((dy, s), e) in dy_mid.iter_mut().zip(d_start.iter()).zip(d_end.iter()) {
+        *dy = (s - e) * (h / 8.0);
+    }
+    point(model, &sites.mid, segment_end, (&R_m, &v_m, &u_m), Some(dy_mid), d_mid)?;
     let Jri = so3::right_jacobian_inv(&theta_m);
     for (i, row) in out.iter_mut().enumerate() {
-        let dym = (d_start[i] - d_end[i]) * (h / 8.0);
+        let dym = dy_mid[i];
         // dF_0 + 4 dF_m + dF_1.
         let mut dF = Block::zeros();
         // The midpoint's position rate is R_m times the strain: on a Kirchhoff rod that is
@@ -301,7 +304,7 @@ pub(super) fn interval_derivatives(
         dF.fixed_rows_mut::<3>(THETA)
             .copy_from(&(Jri * dym.fixed_rows::<3>(3) * 4.0));
         dF.fixed_rows_mut::<6>(V)
-            .copy_from(&((d_mid[i] + d_strains * dym) * 4.0 + d_start[i] + d_end[i]));
+            .copy_from(&(d_mid[i] * 4.0 + d_start[i] + d_end[i]));
         *row = scale_rows(dF * (-h / 6.0), model.robot.length());
     }
     Ok(rates1)

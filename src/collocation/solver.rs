@@ -5,7 +5,7 @@ use super::linear::LinearSolver;
 use super::newton::Workspace;
 use super::options::Options;
 use super::pipeline::solve_impl;
-use super::sensitivity::{Sensitivity, backbone_columns, tip_columns};
+use super::sensitivity::{Sensitivity, backbone_columns, tension_tips, tip_columns};
 use crate::error::Result;
 use crate::mesh::Mesh;
 use crate::solution::{Solution, State};
@@ -90,7 +90,8 @@ impl Solver {
     /// assert!(j[(0, 0)].abs() > 0.0);
     /// ```
     pub fn tip_jacobian(&mut self, robot: &Robot, solution: &Solution, wrt: &[Parameter]) -> Result<DMatrix<f64>> {
-        self.linearized(robot, solution, |sens| tip_columns(sens, robot, solution, wrt))
+        let tips = tension_tips(robot, wrt);
+        self.linearized(robot, solution, tips, |sens| tip_columns(sens, robot, solution, wrt))
     }
 
     /// The columns `wrt` of d p(s_j)/dq at the arc lengths `s` (3 `s.len()` x `wrt.len()`):
@@ -106,7 +107,9 @@ impl Solver {
         wrt: &[Parameter],
         s: &[f64],
     ) -> Result<DMatrix<f64>> {
-        self.linearized(robot, solution, |sens| backbone_columns(sens, robot, solution, wrt, s))
+        self.linearized(robot, solution, false, |sens| {
+            backbone_columns(sens, robot, solution, wrt, s)
+        })
     }
 
     /// Forgets the cached workspace and factors: the next solve starts as a new solver's.
@@ -115,11 +118,13 @@ impl Solver {
     }
 
     /// Runs `f` on the sensitivity of `robot` linearized at `solution`, factored in the
-    /// cached workspace when that was built for the solution's mesh (and put back after).
+    /// cached workspace when that was built for the solution's mesh (and put back after);
+    /// `tips` as [`Sensitivity::with_workspace`] takes it.
     fn linearized<T>(
         &mut self,
         robot: &Robot,
         solution: &Solution,
+        tips: bool,
         f: impl FnOnce(&mut Sensitivity) -> Result<T>,
     ) -> Result<T> {
         // A displacement-controlled tendon's tension is the solved one.
@@ -143,7 +148,7 @@ impl Solver {
                 (None, None, false)
             }
         };
-        let mut sens = Sensitivity::with_workspace(&solved, solution, workspace, evaluated)?;
+        let mut sens = Sensitivity::with_workspace(&solved, solution, workspace, evaluated, tips)?;
         let out = f(&mut sens);
         if let Some((mesh, solver, last)) = kept {
             self.cache = Some(Cached {

@@ -496,9 +496,18 @@ impl<'a> System<'a> {
                 Columns::Stiffness => model.wrench_balance_stiffness(s, left, right, out),
             };
         debug_assert_eq!(out.len(), n * width);
-        out.fill(0.0);
+        // Every row is written below but the base rows (no parameter moves them) and the
+        // first six rows of a jump (its position and rotation continuity): those are zeroed
+        // here, not the whole buffer.
+        for column in out.chunks_exact_mut(n) {
+            column[..BASE_ROWS].fill(0.0);
+            for k in (0..x.len() - 1).filter(|&k| self.interval_sites[k].is_none()) {
+                column[link_row(k)..link_row(k) + 6].fill(0.0);
+            }
+        }
         let length = model.robot.length();
         let mut rates = [
+            vec![Vector6::zeros(); width],
             vec![Vector6::zeros(); width],
             vec![Vector6::zeros(); width],
             vec![Vector6::zeros(); width],
@@ -518,7 +527,7 @@ impl<'a> System<'a> {
                     // Node k's derivatives are the previous interval's end ones.
                     rates.swap(0, 1);
                 }
-                let [d0, d1, dm] = &mut rates;
+                let [d0, d1, dm, dy] = &mut rates;
                 let (a, b) = (&x[k], &x[k + 1]);
                 let end = residual::interval_derivatives(
                     model,
@@ -528,7 +537,7 @@ impl<'a> System<'a> {
                     b,
                     node_rates,
                     point,
-                    [d0, d1, dm],
+                    [d0, d1, dm, dy],
                     &mut block,
                 )?;
                 node_rates = Some(end);

@@ -119,6 +119,9 @@ pub struct Workspace {
     /// The buffers of the systems built on this mesh, kept between them
     /// ([`Workspace::system`], [`Workspace::keep_system`]).
     system: SystemBuffers,
+    /// Buffers a linearization for sensitivities handed back for the next one
+    /// ([`Workspace::take_buffer`], [`Workspace::give_buffer`]).
+    buffers: Vec<Vec<f64>>,
 }
 
 impl Workspace {
@@ -149,7 +152,24 @@ impl Workspace {
             unfactored: false,
             dynamics: None,
             system: SystemBuffers::default(),
+            buffers: Vec::new(),
         })
+    }
+
+    /// A buffer of `len` values: one [`Workspace::give_buffer`] kept, its contents as they
+    /// were (the caller writes every entry it reads), else a new zeroed one.
+    pub(crate) fn take_buffer(&mut self, len: usize) -> Vec<f64> {
+        match self.buffers.iter().position(|b| b.len() == len) {
+            Some(at) => self.buffers.swap_remove(at),
+            None => vec![0.0; len],
+        }
+    }
+
+    /// Keeps `buffer` for a later [`Workspace::take_buffer`] (at most eight are kept).
+    pub(crate) fn give_buffer(&mut self, buffer: Vec<f64>) {
+        if self.buffers.len() < 8 {
+            self.buffers.push(buffer);
+        }
     }
 
     /// The system of a copy of `model` on `mesh` (this workspace's mesh), built in the
@@ -412,6 +432,78 @@ impl Workspace {
         let ok = self.solve(&mut report);
         (self.verdict, self.neutral) = (verdict, neutral);
         ok
+    }
+
+    /// [`Workspace::factor_evaluated`], also giving the last node's 12 unknowns of
+    /// J x = rhs_j for the `count` right-hand sides in `rhs` (column-major, each of the
+    /// unknowns' length) into `last`: carried through the factoring where the values are
+    /// still unfactored ([`crate::collocation::linear`]'s `factor_with_last`, the same bits
+    /// as [`Workspace::solve_again_last`] after it), else solved with the factors.
+    /// False as [`Workspace::factor_evaluated`], or for a non-finite result.
+    pub(crate) fn factor_evaluated_with_last(
+        &mut self,
+        rhs: &[f64],
+        count: usize,
+        last: &mut [[f64; crate::collocation::unknowns::NODE]],
+    ) -> bool {
+        if self.evaluated_at_solution() && self.unfactored {
+            let verdict = self.verdict.take();
+            if let Some(ok) = self.linear.factor_with_last(&self.values, rhs, count, last) {
+                self.factored_without_solve(ok);
+                self.verdict = verdict;
+                return ok && last.iter().flatten().all(|x| x.is_finite());
+            }
+            self.verdict = verdict;
+        }
+        self.factor_evaluated() && self.solve_again_last_each(rhs, count, last)
+    }
+
+    /// [`Workspace::factor`], also giving the last node's unknowns for `rhs` as
+    /// [`Workspace::factor_evaluated_with_last`] does.
+    pub(crate) fn factor_with_last(
+        &mut self,
+        values: &[f64],
+        rhs: &[f64],
+        count: usize,
+        last: &mut [[f64; crate::collocation::unknowns::NODE]],
+    ) -> bool {
+        if let Some(ok) = self.linear.factor_with_last(values, rhs, count, last) {
+            self.values.copy_from_slice(values);
+            self.drift = f64::INFINITY;
+            self.verdict = None;
+            self.factored_without_solve(ok);
+            return ok && last.iter().flatten().all(|x| x.is_finite());
+        }
+        self.factor(values) && self.solve_again_last_each(rhs, count, last)
+    }
+
+    /// The state a factoring with a zero right-hand side ([`Workspace::solve`]) leaves (a
+    /// zero residual, the verdicts cleared), after a factoring that solved for no step (the
+    /// step buffer is not written: Newton writes it before reading it): `ok` whether it
+    /// succeeded.
+    fn factored_without_solve(&mut self, ok: bool) {
+        self.dynamics = None;
+        self.unfactored = false;
+        self.residual.fill(0.0);
+        self.rates_valid = false;
+        self.factored = ok;
+    }
+
+    /// [`Workspace::solve_again_last`] for each of the `count` right-hand sides in `rhs`.
+    fn solve_again_last_each(
+        &mut self,
+        rhs: &[f64],
+        count: usize,
+        last: &mut [[f64; crate::collocation::unknowns::NODE]],
+    ) -> bool {
+        let n = rhs.len() / count.max(1);
+        for (j, x) in last.iter_mut().enumerate() {
+            match self.solve_again_last(&rhs[j * n..(j + 1) * n]) {
+                Some(v) => *x = v,
+                None => return false,
+            }
+        }
+        true
     }
 
     /// Keeps `verdict`, the linearized dynamics' verdict computed with the factors held

@@ -228,6 +228,7 @@ impl<'a> Model<'a> {
     }
 
     /// As [`Model::distributed_tendons`], slack tendons included ([`Model::reaching`]).
+    #[cfg(test)]
     pub(crate) fn distributed_reaching(
         &self,
         s: f64,
@@ -235,6 +236,22 @@ impl<'a> Model<'a> {
     ) -> impl Iterator<Item = (usize, f64, RoutingPoint)> + '_ {
         let coupled = self.robot.tendon_model == TendonModel::Coupled;
         self.reaching(s, Which::ActiveTo(segment_end)).filter(move |_| coupled)
+    }
+
+    /// The tendons of [`Model::distributed_reaching`] without their routing points: (index,
+    /// whether the tendon is taut, the tendon), so that a caller that has a taut tendon's
+    /// point already evaluates only the others'.
+    pub(crate) fn distributed_reaching_tendons(
+        &self,
+        segment_end: f64,
+    ) -> impl Iterator<Item = (usize, bool, &crate::model::tendon::Tendon)> + '_ {
+        let coupled = self.robot.tendon_model == TendonModel::Coupled;
+        let l = self.robot.length();
+        let which = Which::ActiveTo(segment_end);
+        let tendons = self.robot.tendons.iter().zip(&self.tensions).enumerate();
+        tendons
+            .filter(move |(_, (t, _))| coupled && which.takes(t.end(l)))
+            .map(|(i, (t, &tension))| (i, tension > 0.0, t))
     }
 
     /// The tendons whose distributed loads act on the segment ending at `segment_end` (none in

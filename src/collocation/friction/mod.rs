@@ -123,6 +123,7 @@ impl<'r> Capstan<'r> {
             .map(|n| (0..profile.len()).filter(|&j| (1..=profile[j]).contains(&n)).collect())
             .collect();
         let extra: Vec<usize> = node_slips.iter().map(Vec::len).collect();
+        let frictionless = system.friction.is_none();
         let mut border = Capstan {
             system,
             offsets,
@@ -141,7 +142,9 @@ impl<'r> Capstan<'r> {
             psi_x: vec![[0.0; 2 * NODE]; m],
             psi_z: vec![0.0; m * 2 * profile.len()],
             rows_in: vec![0.0; m],
-            stairs: Staircase::new(&extra),
+            // Without friction nothing factors the bordered matrix (`Capstan::factor` returns
+            // at once without a profile): a one-node placeholder, not one step per node.
+            stairs: Staircase::new(if frictionless { &[0] } else { &extra }),
             node_slips,
         };
         border.reload();

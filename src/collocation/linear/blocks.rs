@@ -23,8 +23,20 @@ const CARRY: usize = BASE_ROWS;
 const _: () = assert!(CARRY + TIP_ROWS == NODE && BASE_COLUMNS == CARRY);
 /// Rows of a panel: carried rows plus one link.
 const ROWS: usize = CARRY + NODE;
-/// Columns of a panel (two nodes) plus the right-hand side.
-const COLS: usize = 2 * NODE + 1;
+/// Columns of a panel: two nodes, the right-hand side in column 2 NODE, and padding to a
+/// multiple of four, so that every row update of [`eliminate`] runs in whole 4-lane vectors.
+const COLS: usize = 2 * NODE + 4;
+/// Columns of the last node's rows: its unknowns, the right-hand side, padding as [`COLS`].
+const LAST_COLS: usize = NODE + 4;
+/// Right-hand sides [`BlockElimination::factor_with_last`] carries through one elimination.
+pub const CARRIED: usize = 8;
+/// Columns of its panels: two nodes and [`CARRIED`] right-hand sides.
+const WIDE: usize = 2 * NODE + CARRIED;
+/// Columns of its last node's rows.
+const LAST_WIDE: usize = NODE + CARRIED;
+const _: () = assert!(
+    COLS.is_multiple_of(4) && LAST_COLS.is_multiple_of(4) && WIDE.is_multiple_of(4) && LAST_WIDE.is_multiple_of(4)
+);
 
 /// The row operations of one elimination step, kept so that further right-hand sides can
 /// be solved with the same factors.
@@ -47,8 +59,9 @@ pub struct BlockElimination {
     pivots: Vec<[[f64; COLS]; NODE]>,
     /// Row operations of each step.
     records: Vec<Record>,
-    /// The last node's 12 x 13 upper-triangular rows and their row operations.
-    last: [[f64; NODE + 1]; NODE],
+    /// The last node's 12 x 12 upper-triangular rows (right-hand side in column 12, then
+    /// padding) and their row operations.
+    last: [[f64; LAST_COLS]; NODE],
     last_record: Record,
     /// Number of links.
     links: usize,
@@ -60,7 +73,7 @@ impl BlockElimination {
         BlockElimination {
             pivots: vec![[[0.0; COLS]; NODE]; nodes - 1],
             records: vec![EMPTY; nodes - 1],
-            last: [[0.0; NODE + 1]; NODE],
+            last: [[0.0; LAST_COLS]; NODE],
             last_record: EMPTY,
             links: nodes - 1,
         }
@@ -72,54 +85,7 @@ impl BlockElimination {
     /// pivot, else the times of the elimination and of the back substitution.
     pub fn solve(&mut self, values: &[f64], rhs: &[f64], x: &mut [f64]) -> Option<(Duration, Duration)> {
         let start = Instant::now();
-        let mut panel = [[0.0; COLS]; ROWS];
-        // Carried rows start as the base rows: columns 0..6 of block 0.
-        let mut carry = [[0.0; COLS]; CARRY];
-        for (r, row) in carry.iter_mut().enumerate() {
-            row[..BASE_COLUMNS].copy_from_slice(&values[r * BASE_COLUMNS..(r + 1) * BASE_COLUMNS]);
-            row[2 * NODE] = rhs[r];
-        }
-        let mut at = BASE_ROWS * BASE_COLUMNS;
-        for k in 0..self.links {
-            // Panel: carried rows (block k only) over link k's rows (blocks k and k + 1).
-            for (r, row) in carry.iter().enumerate() {
-                panel[r][..NODE].copy_from_slice(&row[..NODE]);
-                panel[r][NODE..2 * NODE].fill(0.0);
-                panel[r][2 * NODE] = row[2 * NODE];
-            }
-            for r in 0..NODE {
-                let row = &mut panel[CARRY + r];
-                row[..2 * NODE].copy_from_slice(&values[at + r * 2 * NODE..at + (r + 1) * 2 * NODE]);
-                row[2 * NODE] = rhs[link_row(k) + r];
-            }
-            at += NODE * 2 * NODE;
-            if !eliminate_fast(&mut panel, NODE, &mut self.records[k]) {
-                return None;
-            }
-            self.pivots[k].copy_from_slice(&panel[..NODE]);
-            // The rows not chosen as pivots carry block k + 1 forward (shifted to block k).
-            for (r, row) in carry.iter_mut().enumerate() {
-                let src = &panel[NODE + r];
-                row[..NODE].copy_from_slice(&src[NODE..2 * NODE]);
-                row[2 * NODE] = src[2 * NODE];
-            }
-        }
-        // Last node: carried rows and the tip rows (columns 3..12).
-        let mut last = [[0.0; NODE + 1]; NODE];
-        for (r, row) in carry.iter().enumerate() {
-            last[r][..NODE].copy_from_slice(&row[..NODE]);
-            last[r][NODE] = row[2 * NODE];
-        }
-        let tip_row0 = tip_row(self.links + 1);
-        for r in 0..TIP_ROWS {
-            last[CARRY + r][THETA..NODE].copy_from_slice(&values[at + r * TIP_COLUMNS..at + (r + 1) * TIP_COLUMNS]);
-            last[CARRY + r][..THETA].fill(0.0);
-            last[CARRY + r][NODE] = rhs[tip_row0 + r];
-        }
-        if !eliminate_fast(&mut last, NODE, &mut self.last_record) {
-            return None;
-        }
-        self.last = last;
+        let last = self.eliminate_all::<COLS, LAST_COLS, COLS, LAST_COLS>(values, |row, slots| slots[0] = rhs[row])?;
         let eliminated = start.elapsed();
         let start = Instant::now();
         let n = self.links;
@@ -136,6 +102,99 @@ impl BlockElimination {
             );
         }
         Some((eliminated, start.elapsed()))
+    }
+
+    /// Factors J (`values` as [`BlockElimination::solve`] takes them) for later solves, and
+    /// gives the last node's 12 unknowns of J x = rhs_j for up to [`CARRIED`] right-hand
+    /// sides at once: `rhs` holds them column-major (`count` columns of the unknowns' length)
+    /// and `last[j]` gets column j's. The right-hand sides ride in the panels' spare columns
+    /// through the elimination, so no zero right-hand side is back-substituted and no row
+    /// operation is replayed; every right-hand side sees the operations
+    /// [`BlockElimination::solve_again_last`] would replay, in the same order (also the
+    /// multipliers that are zero), so the same bits. False on a zero pivot.
+    pub fn factor_with_last(&mut self, values: &[f64], rhs: &[f64], count: usize, last: &mut [[f64; NODE]]) -> bool {
+        assert!(count <= CARRIED && last.len() == count && rhs.len().is_multiple_of(count.max(1)));
+        let n = rhs.len() / count.max(1);
+        let eliminated = self.eliminate_all::<WIDE, LAST_WIDE, { 2 * NODE }, NODE>(values, |row, slots| {
+            for (j, slot) in slots.iter_mut().take(count).enumerate() {
+                *slot = rhs[j * n + row];
+            }
+        });
+        let Some(rows) = eliminated else {
+            return false;
+        };
+        for (j, x) in last.iter_mut().enumerate() {
+            let column = std::array::from_fn::<f64, NODE, _>(|i| rows[i][NODE + j]);
+            back_substitute(&self.last, &column, x, None);
+        }
+        true
+    }
+
+    /// The elimination of [`BlockElimination::solve`] on panels `W` columns wide (the last
+    /// node's `LW`), the right-hand sides in columns 2 NODE.. (NODE.. of the last node's
+    /// rows) as `slots(row, out)` writes them for each row of J; columns from `ALWAYS`
+    /// (`LAST_ALWAYS` in the last node's rows) on take every row operation, also those whose
+    /// multiplier is zero. Keeps the pivot rows and row operations, and returns the last
+    /// node's eliminated rows; None on a zero pivot.
+    #[inline(always)]
+    fn eliminate_all<const W: usize, const LW: usize, const ALWAYS: usize, const LAST_ALWAYS: usize>(
+        &mut self,
+        values: &[f64],
+        mut slots: impl FnMut(usize, &mut [f64]),
+    ) -> Option<[[f64; LW]; NODE]> {
+        let mut panel = [[0.0; W]; ROWS];
+        // Carried rows start as the base rows: columns 0..6 of block 0.
+        let mut carry = [[0.0; W]; CARRY];
+        for (r, row) in carry.iter_mut().enumerate() {
+            row[..BASE_COLUMNS].copy_from_slice(&values[r * BASE_COLUMNS..(r + 1) * BASE_COLUMNS]);
+            slots(r, &mut row[2 * NODE..]);
+        }
+        let mut at = BASE_ROWS * BASE_COLUMNS;
+        for k in 0..self.links {
+            // Panel: carried rows (block k only) over link k's rows (blocks k and k + 1).
+            for (r, row) in carry.iter().enumerate() {
+                panel[r][..NODE].copy_from_slice(&row[..NODE]);
+                panel[r][NODE..2 * NODE].fill(0.0);
+                panel[r][2 * NODE..].copy_from_slice(&row[2 * NODE..]);
+            }
+            for r in 0..NODE {
+                let row = &mut panel[CARRY + r];
+                row[..2 * NODE].copy_from_slice(&values[at + r * 2 * NODE..at + (r + 1) * 2 * NODE]);
+                slots(link_row(k) + r, &mut row[2 * NODE..]);
+            }
+            at += NODE * 2 * NODE;
+            if !eliminate_fast::<ROWS, W, ALWAYS>(&mut panel, &mut self.records[k]) {
+                return None;
+            }
+            for (kept, row) in self.pivots[k].iter_mut().zip(&panel) {
+                kept.copy_from_slice(&row[..COLS]);
+            }
+            // The rows not chosen as pivots carry block k + 1 forward (shifted to block k).
+            for (r, row) in carry.iter_mut().enumerate() {
+                let src = &panel[NODE + r];
+                row[..NODE].copy_from_slice(&src[NODE..2 * NODE]);
+                row[2 * NODE..].copy_from_slice(&src[2 * NODE..]);
+            }
+        }
+        // Last node: carried rows and the tip rows (columns 3..12).
+        let mut last = [[0.0; LW]; NODE];
+        for (r, row) in carry.iter().enumerate() {
+            last[r][..NODE].copy_from_slice(&row[..NODE]);
+            last[r][NODE..NODE + W - 2 * NODE].copy_from_slice(&row[2 * NODE..]);
+        }
+        let tip_row0 = tip_row(self.links + 1);
+        for r in 0..TIP_ROWS {
+            last[CARRY + r][THETA..NODE].copy_from_slice(&values[at + r * TIP_COLUMNS..at + (r + 1) * TIP_COLUMNS]);
+            last[CARRY + r][..THETA].fill(0.0);
+            slots(tip_row0 + r, &mut last[CARRY + r][NODE..]);
+        }
+        if !eliminate_fast::<NODE, LW, LAST_ALWAYS>(&mut last, &mut self.last_record) {
+            return None;
+        }
+        for (kept, row) in self.last.iter_mut().zip(&last) {
+            kept.copy_from_slice(&row[..LAST_COLS]);
+        }
+        Some(last)
     }
 
     /// Solves J x = rhs with the factors of the last successful [`BlockElimination::solve`]:
@@ -316,53 +375,101 @@ fn replay_column<const C: usize, const N: usize>(record: &Record, v: &mut [f64; 
 
 /// [`eliminate`] compiled for AVX2 and FMA when the processor has them (checked at run
 /// time, the result cached by std), else for the baseline x86-64 or other target.
-fn eliminate_fast<const W: usize>(rows: &mut [[f64; W]], pivots: usize, record: &mut Record) -> bool {
+fn eliminate_fast<const R: usize, const W: usize, const ALWAYS: usize>(
+    rows: &mut [[f64; W]; R],
+    record: &mut Record,
+) -> bool {
     #[cfg(target_arch = "x86_64")]
     if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma") {
         // SAFETY: the processor supports the features the function is compiled for.
-        return unsafe { eliminate_avx2(rows, pivots, record) };
+        return unsafe { eliminate_avx2::<R, W, ALWAYS>(rows, record) };
     }
-    eliminate(rows, pivots, record)
+    eliminate::<R, W, ALWAYS>(rows, record)
 }
 
 /// [`eliminate`] with AVX2 and FMA enabled.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,fma")]
-unsafe fn eliminate_avx2<const W: usize>(rows: &mut [[f64; W]], pivots: usize, record: &mut Record) -> bool {
-    eliminate(rows, pivots, record)
+unsafe fn eliminate_avx2<const R: usize, const W: usize, const ALWAYS: usize>(
+    rows: &mut [[f64; W]; R],
+    record: &mut Record,
+) -> bool {
+    eliminate::<R, W, ALWAYS>(rows, record)
 }
 
-/// Gaussian elimination with partial pivoting of the first `pivots` columns of `rows`
-/// (each `W` wide, the last entry the right-hand side): afterwards rows 0..pivots are
-/// upper triangular in those columns and the remaining rows are zero there. The
-/// multipliers use the pivot's reciprocal (one division per column, as LAPACK's dgetf2).
-/// Returns false on a zero pivot.
+/// Gaussian elimination with partial pivoting of the first [`NODE`] columns of `rows` (each
+/// `W` wide: the columns to eliminate, further columns, right-hand sides, padding):
+/// afterwards rows 0..NODE are upper triangular in those columns and the remaining rows are
+/// zero there. The multipliers use the pivot's reciprocal (one division per column, as
+/// LAPACK's dgetf2). Columns from `ALWAYS` on (right-hand sides that must see every
+/// operation [`replay`] would apply) are updated also by a zero multiplier; `ALWAYS = W`
+/// for none. Returns false on a zero pivot. Each column is its own instance of
+/// [`eliminate_column`], so that its loops have constant bounds and compile to
+/// straight-line vector code.
 #[inline(always)]
-fn eliminate<const W: usize>(rows: &mut [[f64; W]], pivots: usize, record: &mut Record) -> bool {
-    for c in 0..pivots {
-        let mut best = c;
-        for r in c + 1..rows.len() {
-            if rows[r][c].abs() > rows[best][c].abs() {
-                best = r;
+fn eliminate<const R: usize, const W: usize, const ALWAYS: usize>(
+    rows: &mut [[f64; W]; R],
+    record: &mut Record,
+) -> bool {
+    const _: () = assert!(NODE == 12);
+    eliminate_column::<0, R, W, ALWAYS>(rows, record)
+        && eliminate_column::<1, R, W, ALWAYS>(rows, record)
+        && eliminate_column::<2, R, W, ALWAYS>(rows, record)
+        && eliminate_column::<3, R, W, ALWAYS>(rows, record)
+        && eliminate_column::<4, R, W, ALWAYS>(rows, record)
+        && eliminate_column::<5, R, W, ALWAYS>(rows, record)
+        && eliminate_column::<6, R, W, ALWAYS>(rows, record)
+        && eliminate_column::<7, R, W, ALWAYS>(rows, record)
+        && eliminate_column::<8, R, W, ALWAYS>(rows, record)
+        && eliminate_column::<9, R, W, ALWAYS>(rows, record)
+        && eliminate_column::<10, R, W, ALWAYS>(rows, record)
+        && eliminate_column::<11, R, W, ALWAYS>(rows, record)
+}
+
+/// Column `C` of [`eliminate`]: the pivot search among rows C.., the swap, and row r -=
+/// f_r * (pivot row) for every row r below C, f_r = rows[r][C] / pivot.
+///
+/// The update of a row runs over the columns from C + 1 rounded down to a multiple of four
+/// (whole 4-lane vectors; `W` is a multiple of four) to the end. Columns before C + 1 are
+/// dead in every row below the pivot: they lie left of the diagonal of any row that
+/// becomes a pivot row later, and the rows carried on are read from column [`NODE`] on.
+/// Column C itself is set to zero, as without the extra columns, and every live column
+/// sees the same operations in the same order, so the same bits.
+#[inline(always)]
+fn eliminate_column<const C: usize, const R: usize, const W: usize, const ALWAYS: usize>(
+    rows: &mut [[f64; W]; R],
+    record: &mut Record,
+) -> bool {
+    let mut best = C;
+    for r in C + 1..R {
+        if rows[r][C].abs() > rows[best][C].abs() {
+            best = r;
+        }
+    }
+    let pivot = rows[best][C];
+    if pivot == 0.0 || !pivot.is_finite() {
+        return false;
+    }
+    rows.swap(C, best);
+    record.swaps[C] = best;
+    let inverse = 1.0 / pivot;
+    let start = (C + 1) & !3;
+    let prow = rows[C];
+    // Indexed, not `iter_mut().enumerate().skip(..)`: that form's AVX2 build emits a
+    // `vmovq xmm, xmm` valgrind 3.19 cannot decode (docs/benchmarks.md, "Control Jacobian").
+    #[allow(clippy::needless_range_loop)]
+    for r in C + 1..R {
+        let row = &mut rows[r];
+        let f = row[C] * inverse;
+        record.factors[C][r] = f;
+        if f != 0.0 {
+            for j in start..W {
+                row[j] -= f * prow[j];
             }
-        }
-        let pivot = rows[best][c];
-        if pivot == 0.0 || !pivot.is_finite() {
-            return false;
-        }
-        rows.swap(c, best);
-        record.swaps[c] = best;
-        let inverse = 1.0 / pivot;
-        let (top, below) = rows.split_at_mut(c + 1);
-        let prow = &top[c][c + 1..];
-        for (i, row) in below.iter_mut().enumerate() {
-            let f = row[c] * inverse;
-            record.factors[c][c + 1 + i] = f;
-            if f != 0.0 {
-                row[c] = 0.0;
-                for (x, p) in row[c + 1..].iter_mut().zip(prow) {
-                    *x -= f * p;
-                }
+            row[C] = 0.0;
+        } else {
+            for j in ALWAYS..W {
+                row[j] -= f * prow[j];
             }
         }
     }
@@ -422,5 +529,40 @@ mod tests {
         assert!(fast.iter().all(|v| v.is_finite()));
         let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
         assert_eq!(bits(&fast), bits(&baseline));
+    }
+
+    /// Right-hand sides carried through the factoring give the bits of
+    /// `solve_again_last` after a plain factoring (signed zeros included: half of each
+    /// right-hand side is -0.0, as negated tension columns are where a row does not move),
+    /// and leave the same factors.
+    #[test]
+    fn carried_right_hand_sides_give_the_replayed_bits() {
+        let robot = crate::cases::case_h();
+        let model = Model::new(&robot);
+        let system = System::new(model.clone(), Mesh::uniform(&robot, 16).unwrap());
+        let x = rigid_estimate(&model, &system.mesh.nodes);
+        let n = system.unknowns();
+        let mut values = vec![0.0; crate::collocation::unknowns::nonzeros(&system.mesh)];
+        let mut residual = vec![0.0; n];
+        system.jacobian(&x, &mut residual, &mut values).unwrap();
+        let count = CARRIED - 1;
+        let rhs: Vec<f64> = (0..n * count)
+            .map(|i| if i % 2 == 0 { -0.0 } else { (i as f64 * 0.37).sin() })
+            .collect();
+        let mut plain = BlockElimination::new(system.mesh.nodes.len());
+        let mut step = vec![0.0; n];
+        assert!(plain.solve(&values, &vec![0.0; n], &mut step).is_some());
+        let mut carried = BlockElimination::new(system.mesh.nodes.len());
+        let mut last = vec![[0.0; NODE]; count];
+        assert!(carried.factor_with_last(&values, &rhs, count, &mut last));
+        let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+        for (j, tip) in last.iter().enumerate() {
+            let column = &rhs[j * n..(j + 1) * n];
+            assert_eq!(bits(tip), bits(&plain.solve_again_last(column)));
+            let (mut a, mut b) = (vec![0.0; n], vec![0.0; n]);
+            plain.solve_again(column, &mut a);
+            carried.solve_again(column, &mut b);
+            assert_eq!(bits(&a), bits(&b));
+        }
     }
 }

@@ -63,6 +63,25 @@ impl Linear {
         }
     }
 
+    /// Factors the matrix with these `values` and gives the last node's unknowns of
+    /// J x = rhs_j for the `count` right-hand sides in `rhs` (column-major) into `last`, as
+    /// [`BlockElimination::factor_with_last`]: Some(false) on a zero pivot; None (nothing
+    /// done) for the sparse LU or more than [`blocks::CARRIED`] right-hand sides.
+    pub(crate) fn factor_with_last(
+        &mut self,
+        values: &[f64],
+        rhs: &[f64],
+        count: usize,
+        last: &mut [[f64; NODE]],
+    ) -> Option<bool> {
+        match self {
+            Linear::Blocks(blocks) if count <= blocks::CARRIED => {
+                Some(blocks.factor_with_last(values, rhs, count, last))
+            }
+            _ => None,
+        }
+    }
+
     /// Solves J x = rhs with the factors of the last successful [`Linear::solve`]; the
     /// caller checks x for finiteness.
     pub(crate) fn solve_again(&mut self, rhs: &[f64], x: &mut [f64]) {

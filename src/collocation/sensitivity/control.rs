@@ -86,8 +86,19 @@ pub fn columns<S: AsRef<str>>(names: &[S], robot: &Robot) -> Result<Vec<Paramete
 pub fn tip_jacobian(robot: &Robot, solution: &Solution, wrt: &[Parameter]) -> Result<DMatrix<f64>> {
     // A displacement-controlled tendon's tension is the solved one.
     let solved = robot.with_tensions(&solution.tensions());
-    let mut sens = Sensitivity::new(&solved, solution)?;
+    let tips = tension_tips(robot, wrt);
+    let mut sens = Sensitivity::with_workspace(&solved, solution, None, false, tips)?;
     tip_columns(&mut sens, robot, solution, wrt)
+}
+
+/// Whether the tip Jacobian of `robot` in `wrt` takes the tension columns' tips out of the
+/// factoring ([`Sensitivity::with_workspace`]'s `tips`): it asks for a tension, and no
+/// tendon is displacement-controlled (no pull-ins to hold, no tension that is an unknown).
+pub(crate) fn tension_tips(robot: &Robot, wrt: &[Parameter]) -> bool {
+    !robot.has_displacement_inputs()
+        && wrt
+            .iter()
+            .any(|p| matches!(p, Parameter::Tension(i) if *i < robot.tendons.len()))
 }
 
 /// The positions' columns at the arc lengths `s` (m, each in [0, L]): a 3 `s.len()` x

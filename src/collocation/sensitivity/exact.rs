@@ -1,13 +1,14 @@
-//! The derivatives with their own exact right-hand sides: the tension columns (one pass over
-//! the mesh for every tendon), the section stiffnesses (E and G), and the six tip-pose
-//! multipliers of the adjoint form that `tip_sensitivities` contracts its other columns with
+//! The derivatives with their own right-hand sides: the tension columns (exact, one pass
+//! over the mesh for every tendon; differenced with friction), the friction coefficients
+//! (differenced), the section stiffnesses (E and G), and the six tip-pose multipliers of the adjoint form that `tip_sensitivities` contracts its other columns with
 //! (module docs of `sensitivity`, docs/sensitivity.md "Exact tension columns").
 
 use super::{Difference, NodeDerivative, RELATIVE_STEP, Sensitivity, force_scale, residual_at, singular};
-use crate::collocation::system::Columns;
+use crate::collocation::system::{Columns, System};
 use crate::collocation::unknowns;
 use crate::error::{Result, invalid};
 use crate::model::robot::Robot;
+use crate::solution::State;
 use nalgebra::Vector6;
 
 impl Sensitivity<'_> {
@@ -36,17 +37,11 @@ impl Sensitivity<'_> {
         }
         let n = self.border.system().unknowns();
         if self.tension_columns.is_none() {
-            let mut columns = vec![0.0; n * robot.tendons.len()];
-            self.border
-                .system()
-                .parameter_columns(&self.states, Columns::Tensions, &mut columns)?;
-            self.tension_columns = Some(columns);
+            let columns = vec![0.0; n * robot.tendons.len()];
+            self.tension_columns = Some(tension_rhs_columns(self.border.system(), &self.states, columns)?);
         }
         let columns = self.tension_columns.as_deref().unwrap_or_default();
-        let column = &columns[tendon * n..(tendon + 1) * n];
-        for (r, d) in self.scratch[0].iter_mut().zip(column) {
-            *r = -d;
-        }
+        self.scratch[0][..n].copy_from_slice(&columns[tendon * n..(tendon + 1) * n]);
         Ok(())
     }
 
@@ -168,10 +163,59 @@ impl Sensitivity<'_> {
         Ok(Some(out))
     }
 
+    /// The derivative of every node state with respect to tendon `tendon`'s friction
+    /// coefficient mu (per unit of mu), by central differences of the residual (backbone and
+    /// capstan rows) with the step [`RELATIVE_STEP`] (mu's scale is 1; forward differences
+    /// for mu below the step) and the bordered solve (docs/friction.md).
+    ///
+    /// # Errors
+    /// [`crate::Error::InvalidInput`] for a tendon index out of range or a tendon without
+    /// friction (mu = 0: the log tensions are not unknowns there, so the derivative would
+    /// need another system); as [`Sensitivity::derivative`].
+    pub fn friction(&mut self, tendon: usize) -> Result<Vec<NodeDerivative>> {
+        let robot = self.robot();
+        let t = Self::tendon_of(robot, tendon)?;
+        let Some(friction) = t.active_friction() else {
+            return Err(invalid(
+                format!("tendons[{tendon}].friction"),
+                "is 0 or not set, and the derivative in the friction coefficient is taken where it is > 0",
+                "give the tendon a positive friction coefficient (e.g. 1e-3) to differentiate there",
+            ));
+        };
+        let mu = friction.coefficient;
+        // mu's scale is 1, not mu: it acts through exp(mu Theta) with turning angles Theta
+        // of about a radian, so a step of 1e-4 truncates at about 1e-8 as for the other
+        // parameters, and rounds 1 / mu times less than 1e-4 mu would (d tip / d mu within
+        // 5e-7 of differences of solves at mu = 0.05 with 1e-4 mu, measured; tests/
+        // friction_pull_in.rs). Below the step the stencil stays on mu's side of 0.
+        let difference = if mu > RELATIVE_STEP {
+            Difference::Central
+        } else {
+            Difference::Forward
+        };
+        self.derivative(RELATIVE_STEP, difference, |r, dq| {
+            if let Some(f) = &mut r.tendons[tendon].friction {
+                f.coefficient = mu + dq;
+            }
+        })
+    }
+
     /// The tip pose's derivative for the right-hand side in the buffer, by the multipliers
     /// of [`Sensitivity::tip_multipliers`].
     pub(super) fn tip_by(&self, multipliers: &[Vec<f64>]) -> Vector6<f64> {
         let rhs = &self.scratch[0];
         Vector6::from_fn(|k, _| multipliers[k].iter().zip(rhs).map(|(l, r)| l * r).sum())
     }
+}
+
+/// -dF/dtau_i of every tendon of `system` (no friction) at `states`, column-major in
+/// `out` (its length the unknowns times the tendons; [`System::parameter_columns`],
+/// negated): the tension columns' right-hand sides.
+///
+/// # Errors
+/// A model breakdown at a visited state.
+pub(super) fn tension_rhs_columns(system: &System, states: &[State], mut out: Vec<f64>) -> Result<Vec<f64>> {
+    system.parameter_columns(states, Columns::Tensions, &mut out)?;
+    out.iter_mut().for_each(|d| *d = -*d);
+    Ok(out)
 }

@@ -83,7 +83,9 @@
 //! Jacobian its stability verdict evaluated at the solution instead of assembling it),
 //! then per parameter one solve with the stored factors ([`Workspace::solve_again`]), plus
 //! one pass over the mesh for all tension columns together, and two residual evaluations
-//! for a differenced parameter (three one-sided).
+//! for a differenced parameter (three one-sided). The tip's tension columns, where nothing
+//! needs the other nodes, are formed before the factoring and carried through it, which
+//! gives their tip unknowns without a solve (`Workspace::factor_with_last`).
 #![allow(non_snake_case)]
 
 mod adjoint;
@@ -95,7 +97,7 @@ mod named;
 mod tip;
 
 pub use adjoint::{Adjoint, Cotangent, rotation_cotangent};
-pub(crate) use control::{backbone_columns, tip_columns};
+pub(crate) use control::{backbone_columns, tension_tips, tip_columns};
 pub use control::{backbone_jacobian, columns, tip_jacobian};
 pub(crate) use held::TensionDirections;
 pub use held::{DisplacementSensitivities, displacement_sensitivities};
@@ -199,9 +201,13 @@ pub struct Sensitivity<'a> {
     workspace: Workspace,
     /// Scratch: residuals at the stencil points and the right-hand side.
     scratch: [Vec<f64>; 3],
-    /// dF/dtau_i of every tendon, column-major ([`System::parameter_columns`]), evaluated at
-    /// the first tension asked for (one pass serves every tendon); frictionless systems only.
+    /// -dF/dtau_i of every tendon (the right-hand sides), column-major
+    /// ([`System::parameter_columns`]), evaluated at the first tension asked for or before
+    /// factoring (one pass serves every tendon); frictionless systems only.
     tension_columns: Option<Vec<f64>>,
+    /// The last node's unknowns of J x = -dF/dtau_i for every tendon, solved while
+    /// factoring ([`Sensitivity::with_workspace`] with `tips`).
+    tension_tips: Option<Vec<[f64; unknowns::NODE]>>,
     /// dF/dk_j of the six section stiffnesses, column-major, evaluated at the first modulus
     /// asked for ([`Sensitivity::stiffness`]).
     stiffness_columns: Option<Vec<f64>>,
@@ -225,7 +231,7 @@ impl<'a> Sensitivity<'a> {
     /// Jacobian there is singular (a bifurcation, where no sensitivity exists); a model
     /// breakdown at the solution's states.
     pub fn new(robot: &'a Robot, solution: &Solution) -> Result<Self> {
-        Self::with_workspace(robot, solution, None, false)
+        Self::with_workspace(robot, solution, None, false, false)
     }
 
     /// As [`Sensitivity::new`], factoring in `workspace` when it was built for the
@@ -235,7 +241,10 @@ impl<'a> Sensitivity<'a> {
     /// robot's collocation system at the solution's states, from a solve that converged
     /// there (a [`crate::Solver`]'s stability verdict after a warm solve,
     /// [`Workspace::evaluated_at_solution`]): those values are factored, without assembling
-    /// the Jacobian again or checking the residual.
+    /// the Jacobian again or checking the residual. With `tips` and no friction, every
+    /// tendon's tension column is formed first and carried through the factoring, which
+    /// gives the tip's unknowns of each ([`Workspace::factor_with_last`]; what
+    /// [`Sensitivity::tension_tip`] returns, bitwise as solving with the factors would).
     ///
     /// # Errors
     /// As [`Sensitivity::new`].
@@ -244,6 +253,7 @@ impl<'a> Sensitivity<'a> {
         solution: &Solution,
         workspace: Option<Workspace>,
         evaluated: bool,
+        tips: bool,
     ) -> Result<Self> {
         robot.validate()?;
         if solution.tendons.len() != robot.tendons.len() {
@@ -277,20 +287,39 @@ impl<'a> Sensitivity<'a> {
         let mut border = Capstan::at_solution(model, mesh, solution);
         let n = border.system().unknowns() + border.border_rows();
         let mut workspace = workspace;
+        let mut buffer = |len: usize| {
+            workspace
+                .as_mut()
+                .map_or_else(|| vec![0.0; len], |w| w.take_buffer(len))
+        };
+        let scratch = [buffer(n), buffer(n), buffer(n)];
+        // The tension right-hand sides to carry through the factoring, formed once the
+        // solution is known to solve the system.
+        let count = robot.tendons.len();
+        let carry = tips && border.border_rows() == 0;
+        let mut last = vec![[0.0; unknowns::NODE]; if carry { count } else { 0 }];
         if let Some(mut workspace) = workspace.take_if(|w| evaluated && w.evaluated_at_solution()) {
-            if !workspace.factor_evaluated() {
+            let carried = carry
+                .then(|| exact::tension_rhs_columns(border.system(), &states, workspace.take_buffer(n * count)))
+                .transpose()?;
+            let ok = match &carried {
+                Some(columns) => workspace.factor_evaluated_with_last(columns, count, &mut last),
+                None => workspace.factor_evaluated(),
+            };
+            if !ok {
                 return Err(singular());
             }
             return Ok(Sensitivity {
                 border,
                 states,
                 workspace,
-                scratch: [vec![0.0; n], vec![0.0; n], vec![0.0; n]],
-                tension_columns: None,
+                scratch,
+                tension_tips: carried.is_some().then_some(last),
+                tension_columns: carried,
                 stiffness_columns: None,
             });
         }
-        let mut residual = vec![0.0; n];
+        let [mut residual, second, third] = scratch;
         let mut values = vec![0.0; nonzeros(&border.system().mesh)];
         border.linearize(&states, &mut residual, &mut values)?;
         let mut norm = residual.iter().fold(0.0f64, |m, r| m.max(r.abs()));
@@ -310,16 +339,24 @@ impl<'a> Sensitivity<'a> {
             Some(w) => w,
             None => Workspace::new(border.system(), LinearSolver::Blocks)?,
         };
+        let carried = carry
+            .then(|| exact::tension_rhs_columns(border.system(), &states, workspace.take_buffer(n * count)))
+            .transpose()?;
         // Factor once; every parameter then costs one solve with the stored factors.
-        if !workspace.factor(&values) {
+        let ok = match &carried {
+            Some(columns) => workspace.factor_with_last(&values, columns, count, &mut last),
+            None => workspace.factor(&values),
+        };
+        if !ok {
             return Err(singular());
         }
         Ok(Sensitivity {
             border,
             states,
             workspace,
-            scratch: [residual, vec![0.0; n], vec![0.0; n]],
-            tension_columns: None,
+            scratch: [residual, second, third],
+            tension_tips: carried.is_some().then_some(last),
+            tension_columns: carried,
             stiffness_columns: None,
         })
     }
@@ -332,9 +369,16 @@ impl<'a> Sensitivity<'a> {
         (self.border.into_system(), self.states, self.workspace)
     }
 
-    /// The linear-solver workspace, holding the factors of the Jacobian at the solution.
+    /// The linear-solver workspace, holding the factors of the Jacobian at the solution,
+    /// with this linearization's buffers for the next one's ([`Workspace::take_buffer`]).
     pub(crate) fn into_workspace(self) -> Workspace {
-        self.workspace
+        let mut workspace = self.workspace;
+        let columns = [self.tension_columns, self.stiffness_columns];
+        self.scratch
+            .into_iter()
+            .chain(columns.into_iter().flatten())
+            .for_each(|b| workspace.give_buffer(b));
+        workspace
     }
 
     /// The robot the system belongs to.
@@ -482,43 +526,6 @@ impl<'a> Sensitivity<'a> {
                 format!("is {tendon}, but the robot has {} tendons", robot.tendons.len()),
                 "give a 0-based tendon index",
             )
-        })
-    }
-
-    /// The derivative of every node state with respect to tendon `tendon`'s friction
-    /// coefficient mu (per unit of mu), by central differences of the residual (backbone and
-    /// capstan rows) with the step [`RELATIVE_STEP`] (mu's scale is 1; forward differences
-    /// for mu below the step) and the bordered solve (docs/friction.md).
-    ///
-    /// # Errors
-    /// [`crate::Error::InvalidInput`] for a tendon index out of range or a tendon without
-    /// friction (mu = 0: the log tensions are not unknowns there, so the derivative would
-    /// need another system); as [`Sensitivity::derivative`].
-    pub fn friction(&mut self, tendon: usize) -> Result<Vec<NodeDerivative>> {
-        let robot = self.robot();
-        let t = Self::tendon_of(robot, tendon)?;
-        let Some(friction) = t.active_friction() else {
-            return Err(invalid(
-                format!("tendons[{tendon}].friction"),
-                "is 0 or not set, and the derivative in the friction coefficient is taken where it is > 0",
-                "give the tendon a positive friction coefficient (e.g. 1e-3) to differentiate there",
-            ));
-        };
-        let mu = friction.coefficient;
-        // mu's scale is 1, not mu: it acts through exp(mu Theta) with turning angles Theta
-        // of about a radian, so a step of 1e-4 truncates at about 1e-8 as for the other
-        // parameters, and rounds 1 / mu times less than 1e-4 mu would (d tip / d mu within
-        // 5e-7 of differences of solves at mu = 0.05 with 1e-4 mu, measured; tests/
-        // friction_pull_in.rs). Below the step the stencil stays on mu's side of 0.
-        let difference = if mu > RELATIVE_STEP {
-            Difference::Central
-        } else {
-            Difference::Forward
-        };
-        self.derivative(RELATIVE_STEP, difference, |r, dq| {
-            if let Some(f) = &mut r.tendons[tendon].friction {
-                f.coefficient = mu + dq;
-            }
         })
     }
 }

@@ -92,7 +92,9 @@ impl TipSensitivities {
 pub fn tip_sensitivities(robot: &Robot, solution: &Solution) -> Result<TipSensitivities> {
     // A displacement-controlled tendon's tension is the solved one.
     let solved = robot.with_tensions(&solution.tensions());
-    let mut sens = Sensitivity::new(&solved, solution)?;
+    // Without pull-ins to hold, the tension columns' tips come out of the factoring.
+    let tips = !robot.has_displacement_inputs();
+    let mut sens = Sensitivity::with_workspace(&solved, solution, None, false, tips)?;
     let held = Held::new(&mut sens, robot, solution)?;
     // Without friction or held pull-ins, the 16 parameters besides the tensions cost six
     // transposed solves (the tip pose's multipliers) instead of one solve each.
@@ -159,18 +161,17 @@ impl Sensitivity<'_> {
             .workspace
             .solve_again_last(&self.scratch[0][..n])
             .ok_or_else(singular)?;
+        Ok(Some(self.tip_pose(&dx)))
+    }
+
+    /// The tip pose's derivative (position, then the world-frame rotation vector) from the
+    /// last node's scaled unknowns `dx`.
+    fn tip_pose(&self, dx: &[f64; unknowns::NODE]) -> Vector6<f64> {
         let tip = &self.states[self.states.len() - 1];
         let length = self.robot().length();
-        let [p, theta, ..] = unknowns::node_increments(&dx, 0, length);
+        let [p, theta, ..] = unknowns::node_increments(dx, 0, length);
         let rotation = tip.R * theta;
-        Ok(Some(Vector6::new(
-            p[0],
-            p[1],
-            p[2],
-            rotation[0],
-            rotation[1],
-            rotation[2],
-        )))
+        Vector6::new(p[0], p[1], p[2], rotation[0], rotation[1], rotation[2])
     }
 
     /// The tip pose's derivative in tendon `tendon`'s tension (per N), the pull-ins `held`:
@@ -181,6 +182,9 @@ impl Sensitivity<'_> {
     /// As [`Sensitivity::tension`].
     pub(super) fn tension_tip(&mut self, held: &Held, tendon: usize) -> Result<Vector6<f64>> {
         if !held.holds() {
+            if let Some(dx) = self.tension_tips.as_ref().and_then(|t| t.get(tendon)) {
+                return Ok(self.tip_pose(dx));
+            }
             self.tension_rhs(tendon)?;
             if let Some(pose) = self.tip_response()? {
                 return Ok(pose);

@@ -994,10 +994,23 @@ mod tests {
         for (s, end) in [(0.07, l), (0.07, 0.5 * l), (0.2, l)] {
             let site = model.site(s);
             let mut out = vec![Vector6::zeros(); robot.tendons.len()];
-            let (rates, lin) = tension_rates(&model, &site, end, (&R, &v, &u), true, &mut out).unwrap();
-            // The rates and the full linearization are those of `linearize`, bit for bit.
-            assert_eq!(lin, Some(linearize(&model, &site, end, &R, &v, &u).unwrap()));
+            let rates = tension_rates(&model, &site, end, (&R, &v, &u), None, &mut out).unwrap();
+            // The rates are those of `rates`, bit for bit.
             assert_eq!(rates, super::rates(&model, &site, end, &R, &v, &u).unwrap());
+            // With the strains moving along dy_i, the total derivative is the partial one
+            // plus the full linearization's d(v', u')/d(v, u) dy_i.
+            let along: Vec<Vector6<f64>> = (0..out.len())
+                .map(|i| Vector6::from_fn(|k, _| ((i * 6 + k) as f64 * 0.7).sin() * 1e-2))
+                .collect();
+            let mut total = vec![Vector6::zeros(); robot.tendons.len()];
+            let moved = tension_rates(&model, &site, end, (&R, &v, &u), Some(&along), &mut total).unwrap();
+            assert_eq!(moved, rates);
+            let lin = linearize(&model, &site, end, &R, &v, &u).unwrap();
+            for ((t, d), dy) in total.iter().zip(&out).zip(&along) {
+                let expected = d + lin.d_strains * dy;
+                // 1e-12: the same exact derivatives, summed before or after the solve with M.
+                assert!(rel(t, &expected) < 1e-12, "at {s}: {t} vs {expected}");
+            }
             for (j, d) in out.iter().enumerate() {
                 let seeded = |i: usize, t: f64| {
                     if i == j {

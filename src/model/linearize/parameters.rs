@@ -6,15 +6,17 @@
 //! (tests/sensitivity.rs).
 #![allow(non_snake_case)]
 
-use super::{Linearization, TendonCache, TendonPoint, assemble, breakdown, derivative};
+use super::{TendonCache, TendonPoint, assemble, breakdown, derivative};
 use crate::error::Result;
 use crate::model::equations::{Model, Site};
-use nalgebra::{Matrix3, Matrix6, Matrix6x3, Vector3, Vector6};
+use nalgebra::{Matrix3, Vector3, Vector6};
 
 /// Eq. 13 (corrected) at (R, v, u) with the derivatives of its rates in every tendon's
 /// tension: writes d(v', u')/dtau_i into `out[i]` (one entry per tendon of the robot, zero
-/// for a tendon that does not load the backbone here) and returns the rates, with the full
-/// [`Linearization`] when `full` (the collocation midpoint needs it for the chain rule).
+/// for a tendon that does not load the backbone here) and returns the rates. With `along`,
+/// the state's strains move with each tension too, by `along[i]` (d(v, u)/dtau_i: the
+/// collocation midpoint's chain rule), and `out[i]` is the total derivative
+/// -M^-1 (dF/dtau_i + dF/d(v, u) along[i]) ([`point_derivatives`]).
 ///
 /// Tendon i enters F = M x - rhs only through q_i = A_i z_i (module docs), and
 /// A_i = tau_i f P_i / |p_i| (f the tension factor) is linear in tau_i while p_i, c_i and
@@ -29,19 +31,71 @@ use nalgebra::{Matrix3, Matrix6, Matrix6x3, Vector3, Vector6};
 ///
 /// # Errors
 /// As [`rates`]; [`Error::SingularRouting`] also for a slack tendon without a tangent.
+///
+/// On x86-64 with AVX2 and FMA (checked at run time) compiled for them: the same operations
+/// in the same order (Rust does not fuse a product and a sum into an FMA), so the same bits.
+/// (Built with the full linearization it emitted a `vmovq xmm, xmm` that valgrind 3.19
+/// cannot decode, docs/benchmarks.md "Control Jacobian"; `objdump` of the build is the check.)
 pub(crate) fn tension_rates(
     model: &Model,
     site: &Site,
     segment_end: f64,
     state: (&Matrix3<f64>, &Vector3<f64>, &Vector3<f64>),
-    full: bool,
+    along: Option<&[Vector6<f64>]>,
     out: &mut [Vector6<f64>],
-) -> Result<(Vector6<f64>, Option<Linearization>)> {
+) -> Result<Vector6<f64>> {
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma") {
+        // SAFETY: the processor supports the features the function is compiled for.
+        return unsafe { tension_rates_avx2(model, site, segment_end, state, along, out) };
+    }
+    tension_rates_kernel(model, site, segment_end, state, along, out)
+}
+
+/// [`tension_rates_kernel`] with AVX2 and FMA enabled.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+unsafe fn tension_rates_avx2(
+    model: &Model,
+    site: &Site,
+    segment_end: f64,
+    state: (&Matrix3<f64>, &Vector3<f64>, &Vector3<f64>),
+    along: Option<&[Vector6<f64>]>,
+    out: &mut [Vector6<f64>],
+) -> Result<Vector6<f64>> {
+    tension_rates_kernel(model, site, segment_end, state, along, out)
+}
+
+/// [`tension_rates`]' operations.
+#[inline(always)]
+fn tension_rates_kernel(
+    model: &Model,
+    site: &Site,
+    segment_end: f64,
+    state: (&Matrix3<f64>, &Vector3<f64>, &Vector3<f64>),
+    along: Option<&[Vector6<f64>]>,
+    out: &mut [Vector6<f64>],
+) -> Result<Vector6<f64>> {
     let (v, u) = (state.1, state.2);
-    point_derivatives(model, site, segment_end, state, full, out, |x_v, x_u, out| {
-        for (i, _, rp) in model.distributed_reaching(site.s, segment_end) {
-            // Per unit of tau_i: k_i = f / |p_i|, so A() is (f / |p_i|) P_i.
-            let tp = TendonPoint::new(i, model.tension_factor, &rp, site, v, u)?;
+    let length = model.robot.length();
+    point_derivatives(model, site, segment_end, state, along, out, |x_v, x_u, cached, out| {
+        // The taut tendons come in the order eq. 13's assembly kept their points.
+        let mut kept = cached.iter();
+        for (i, taut, tendon) in model.distributed_reaching_tendons(segment_end) {
+            // Per unit of tau_i: k_i = f / |p_i|, so A() is (f / |p_i|) P_i; a kept point
+            // differs only in k_i = tau_i f / |p_i|, and f * (1 / |p_i|) is what
+            // TendonPoint::new computes for the tension f.
+            let kept_point = if taut { kept.next() } else { None };
+            let tp = match kept_point {
+                Some(&tp) => TendonPoint {
+                    k: model.tension_factor * tp.inv_speed,
+                    ..tp
+                },
+                None => {
+                    let rp = tendon.routing.at(site.s, length);
+                    TendonPoint::new(i, model.tension_factor, &rp, site, v, u)?
+                }
+            };
             // On a Kirchhoff rod q_i does not see the translational coordinate's rate.
             let x_v = if tp.inextensible { Vector3::zeros() } else { *x_v };
             let q = tp.A() * (x_v - tp.r.cross(x_u) + tp.c);
@@ -54,8 +108,8 @@ pub(crate) fn tension_rates(
 
 /// Eq. 13 (corrected) at (R, v, u) with the derivatives of its rates in the six diagonal
 /// stiffnesses of the section, kse = (GA, GA, EA) then kbt = (EIxx, EIyy, GJ): writes
-/// d(v', u')/dk_j into `out[j]` (six entries) and returns the rates, with the full
-/// [`Linearization`] when `full`. For a section that does not vary along s (D' = C' = 0,
+/// d(v', u')/dk_j into `out[j]` (six entries) and returns the rates; `along` as in
+/// [`tension_rates`]. For a section that does not vary along s (D' = C' = 0,
 /// and they stay 0), at fixed x, with n_b = D (v - v*) and m_b = C (u - u*) (module docs):
 ///
 /// ```text
@@ -72,16 +126,16 @@ pub(crate) fn stiffness_rates(
     site: &Site,
     segment_end: f64,
     state: (&Matrix3<f64>, &Vector3<f64>, &Vector3<f64>),
-    full: bool,
+    along: Option<&[Vector6<f64>]>,
     out: &mut [Vector6<f64>],
-) -> Result<(Vector6<f64>, Option<Linearization>)> {
+) -> Result<Vector6<f64>> {
     let (v, u) = (state.1, state.2);
     let reference = &site.reference;
     let dv = v - reference.v_star;
     let du = u - reference.u_star;
     // v x n_b sees the strain: v* on a Kirchhoff rod, whose coordinate v carries n_b.
     let strain = site.strain(v);
-    point_derivatives(model, site, segment_end, state, full, out, |x_v, x_u, out| {
+    point_derivatives(model, site, segment_end, state, along, out, |x_v, x_u, _, out| {
         for j in 0..3 {
             let e = Vector3::ith(j, 1.0);
             let top = e * (x_v[j] - reference.v_star_s[j]) + u.cross(&e) * dv[j];
@@ -94,40 +148,39 @@ pub(crate) fn stiffness_rates(
     })
 }
 
-/// The rates at (R, v, u) (with the full [`Linearization`] when `full`) and their
-/// derivatives in some parameters: `partial(x_v, x_u, out)` writes each parameter's dF/dq at
-/// fixed rates x = (x_v, x_u) (F = M x - rhs, module docs) into `out` (zeroed first), and
-/// each becomes d(v', u')/dq = -M^-1 dF/dq with the factors of M.
+/// The rates at (R, v, u) and their derivatives in some parameters: `partial(x_v, x_u,
+/// points, out)` writes each parameter's dF/dq at fixed rates x = (x_v, x_u) and state
+/// (F = M x - rhs, module docs) into `out` (zeroed first), given the points of the first
+/// taut tendons the assembly kept. With `along`, the strains move with parameter i by
+/// `along[i]` = d(v, u)/dq_i, which adds dF/d(v, u) along[i] (pass 2 of the linearization,
+/// its v and u rows, without solving for them); each then becomes d(v', u')/dq =
+/// -M^-1 dF/dq, one solve with the factors of M (instead of solving for the full
+/// linearization's nine directions and multiplying).
+#[inline(always)]
 fn point_derivatives(
     model: &Model,
     site: &Site,
     segment_end: f64,
     (R, v, u): (&Matrix3<f64>, &Vector3<f64>, &Vector3<f64>),
-    full: bool,
+    along: Option<&[Vector6<f64>]>,
     out: &mut [Vector6<f64>],
-    partial: impl FnOnce(&Vector3<f64>, &Vector3<f64>, &mut [Vector6<f64>]) -> Result<()>,
-) -> Result<(Vector6<f64>, Option<Linearization>)> {
+    partial: impl FnOnce(&Vector3<f64>, &Vector3<f64>, &[TendonPoint], &mut [Vector6<f64>]) -> Result<()>,
+) -> Result<Vector6<f64>> {
     let mut cache = TendonCache::new();
     let assembled = assemble(model, site, segment_end, (R, v, u), Some(&mut cache), None)?;
     let x = &assembled.x;
     let rates = Vector6::from_fn(|i, _| x[i]);
-    let lin = if full {
-        let mut dFt = derivative(model, site, segment_end, (v, u), x, &assembled, &cache)?;
-        if !assembled.factor.solve_transposed_mut(&mut dFt) {
-            return Err(breakdown(site.s));
-        }
-        Some(Linearization {
-            rates,
-            d_strains: Matrix6::from_fn(|i, k| -dFt[(k, i)]),
-            d_rotation: Matrix6x3::from_fn(|i, k| -dFt[(6 + k, i)]),
-        })
-    } else {
-        None
-    };
     let x_v = Vector3::new(x[0], x[1], x[2]);
     let x_u = Vector3::new(x[3], x[4], x[5]);
     out.fill(Vector6::zeros());
-    partial(&x_v, &x_u, out)?;
+    partial(&x_v, &x_u, cache.points(), out)?;
+    if let Some(along) = along {
+        // dF^T: rows v (3), u (3), then the rotation's (3), columns F's six components.
+        let dFt = derivative(model, site, segment_end, (v, u), x, &assembled, &cache)?;
+        for (d, dy) in out.iter_mut().zip(along) {
+            *d += Vector6::from_fn(|j, _| (0..6).map(|k| dFt[(k, j)] * dy[k]).sum::<f64>());
+        }
+    }
     for d in out.iter_mut().filter(|d| **d != Vector6::zeros()) {
         let mut row = d.transpose();
         if !assembled.factor.solve_transposed_mut(&mut row) {
@@ -135,5 +188,5 @@ fn point_derivatives(
         }
         *d = -row.transpose();
     }
-    Ok((rates, lin))
+    Ok(rates)
 }
