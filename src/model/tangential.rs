@@ -93,6 +93,7 @@ impl Slip {
 /// `multipliers` when given (a stick/slip history, docs/friction.md section 8), else its
 /// motion's sign. The large [`Point`] stays with the caller, so that it is not copied; the
 /// slips go into `slips` (cleared first, its capacity kept).
+#[inline(always)]
 #[allow(clippy::too_many_arguments)]
 pub(super) fn solve(
     model: &Model,

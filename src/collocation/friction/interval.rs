@@ -120,8 +120,54 @@ pub(crate) fn interval(
 
 /// [`interval`] with the slips' multipliers `w` (None in full slip: the motions' signs),
 /// the backbone rows' derivatives at fixed `w`.
+///
+/// On x86-64 with AVX2 and FMA (checked at run time) the link's own arithmetic (the chain
+/// rule with the log tensions' columns, the capstan rows and the writes) is compiled for
+/// them, as [`super::super::residual::interval_jacobian`] is: the same operations in the
+/// same order (Rust does not fuse a product and a sum into an FMA), so the same bits in
+/// wider registers.
 #[allow(clippy::too_many_arguments)]
 fn interval_at(
+    profile: &Profile,
+    length: f64,
+    k: usize,
+    sites: &IntervalSites,
+    segment_end: f64,
+    a: &State,
+    b: &State,
+    w: Option<&[f64]>,
+    jac: Option<&mut [f64]>,
+) -> Result<IntervalLinearization> {
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma") {
+        // SAFETY: the processor supports the features the function is compiled for.
+        return unsafe { interval_at_avx2(profile, length, k, sites, segment_end, a, b, w, jac) };
+    }
+    interval_at_kernel(profile, length, k, sites, segment_end, a, b, w, jac)
+}
+
+/// [`interval_at_kernel`] with AVX2 and FMA enabled.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+#[allow(clippy::too_many_arguments)]
+unsafe fn interval_at_avx2(
+    profile: &Profile,
+    length: f64,
+    k: usize,
+    sites: &IntervalSites,
+    segment_end: f64,
+    a: &State,
+    b: &State,
+    w: Option<&[f64]>,
+    jac: Option<&mut [f64]>,
+) -> Result<IntervalLinearization> {
+    interval_at_kernel(profile, length, k, sites, segment_end, a, b, w, jac)
+}
+
+/// [`interval_at`]'s operations.
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+fn interval_at_kernel(
     profile: &Profile,
     length: f64,
     k: usize,

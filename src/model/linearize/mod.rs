@@ -445,6 +445,7 @@ impl Point {
     ///
     /// # Errors
     /// As [`Point::new`].
+    #[inline(always)]
     pub(crate) fn refill(
         &mut self,
         model: &Model,
@@ -471,6 +472,7 @@ impl Point {
 
     /// Overwrites each row of `bt` (a right-hand side of M, transposed) with the row of
     /// the solution; false when M is singular.
+    #[inline(always)]
     pub(crate) fn solve_rows<const C: usize>(&self, bt: &mut SMatrix<f64, C, 6>) -> bool {
         self.assembled.factor.solve_transposed_mut(bt)
     }
@@ -480,6 +482,7 @@ impl Point {
     ///
     /// # Errors
     /// [`Error::SingularRouting`] for a tendon beyond the cached ones without a tangent.
+    #[inline(always)]
     pub(crate) fn derivative(
         &self,
         model: &Model,
