@@ -22,7 +22,9 @@
 //! with half the dt: an implicit step longer than 1 / |mu| of the unstable mode turns it back
 //! towards the state the motion left, which the motion itself never does. When the residual
 //! is small the state is near rest, and Newton (undamped) finishes; its answer counts only
-//! if it has no unstable direction, else the motion goes on from where it was.
+//! if it has no unstable direction, else the motion goes on from where it was. A state at
+//! rest (residual within the solve's tolerance, last step at the rounding floor) is tested
+//! as it is: in a nearly neutral valley Newton's line search cannot finish there.
 
 use super::dynamics::Mass;
 use super::homotopy::{dot, max_norm};
