@@ -7,8 +7,9 @@ use super::deferred;
 use super::equilibrium::{Choose, better_start, choose_equilibrium, held_stability, near_start, stability_of};
 use super::estimate;
 use super::newton::{self, Settings, Workspace};
-use super::options::Options;
+use super::options::{Equilibrium, Options};
 use super::refine;
+use super::relax;
 use super::solver::{Cache, Cached};
 use super::start::{cold_start, initial_mesh, resolves};
 use super::system::System;
@@ -391,7 +392,7 @@ pub(crate) fn solve_on_mesh(
         }
     };
     let mut result = match choose {
-        Choose::No => newton_only(&system, &mut workspace, x0, &settings, report),
+        Choose::No => newton_only(&system, &mut workspace, x0, options, &settings, report),
         _ => choose_equilibrium(&mut system, &mut workspace, x0, choose, options, &settings, report),
     };
     let correction = result.as_mut().ok().and_then(|x| {
@@ -444,6 +445,7 @@ fn newton_only(
     system: &System,
     ws: &mut Workspace,
     x0: Vec<State>,
+    options: &Options,
     settings: &Settings,
     report: &mut SolveReport,
 ) -> Result<Vec<State>> {
@@ -451,6 +453,18 @@ fn newton_only(
     let (termination, worst) = newton::run(system, ws, &mut x, settings, report);
     report.termination = termination;
     if termination == Termination::Converged {
+        return Ok(x);
+    }
+    // The load path's answer on a finer mesh, where Newton from the coarser one's does not
+    // converge (a stable state in a nearly neutral valley, whose place along it the finer
+    // mesh moves): the state where the damped motion from Newton's last iterate comes to
+    // rest, stable (docs/stability.md, "A root at the base").
+    let relaxed = match options.equilibrium {
+        Equilibrium::LoadPath => relax::relax(system, ws, x, settings, report),
+        Equilibrium::Nearest => None,
+    };
+    if let Some(x) = relaxed {
+        report.termination = Termination::Converged;
         Ok(x)
     } else {
         Err(not_converged(

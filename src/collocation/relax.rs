@@ -22,7 +22,9 @@
 //! with half the dt: an implicit step longer than 1 / |mu| of the unstable mode turns it back
 //! towards the state the motion left, which the motion itself never does. When the residual
 //! is small the state is near rest, and Newton (undamped) finishes; its answer counts only
-//! if it has no unstable direction, else the motion goes on from where it was.
+//! if it has no unstable direction, else the motion goes on from where it was. A state at
+//! rest (residual within the solve's tolerance, last step at the rounding floor) is tested
+//! as it is: in a nearly neutral valley Newton's line search cannot finish there.
 
 use super::dynamics::Mass;
 use super::homotopy::{dot, max_norm};
@@ -46,7 +48,8 @@ const GROWTH: f64 = 4.0;
 /// The most time steps (each one Jacobian and one factorization).
 const MAX_STEPS: usize = 600;
 /// A residual (scaled max-norm) at which the state is near rest and Newton finishes; tried
-/// again only after the residual has fallen tenfold since the last try.
+/// again only after the residual has fallen tenfold since the last try, or at rest
+/// ([`REST_STEP`]).
 const NEAR_REST: f64 = 1e-3;
 /// A time step this short moves nothing the mass carries (the massless rows alone decide the
 /// step): the motion is lost.
@@ -55,6 +58,11 @@ const SHORTEST_DT: f64 = 1e-8;
 /// softest direction (the path's normalized arclength, as the snap's first start).
 const MAX_RESTARTS: usize = 3;
 const AMPLITUDE: f64 = 0.1;
+/// The length of a time step (normalized norm) at rest: the rounding floor of the motion's
+/// steps in a nearly neutral valley, where the Jacobian's least singular value amplifies
+/// the residual's rounding (measured 1e-11 to 5e-9 on the payload robot of
+/// docs/stability.md, "A root at the base"), and far below what the tolerances resolve.
+const REST_STEP: f64 = 1e-8;
 /// Newton's iterations to finish from near rest (it converges in 2 to 5 from there).
 const FINISH_ITERATIONS: usize = 12;
 
@@ -76,6 +84,8 @@ pub(super) fn relax(
     let mut next = Vec::with_capacity(x.len());
     let mut tried = f64::INFINITY;
     let mut restarts = 0;
+    // The length of the motion's last step, and whether the state at rest has been tried.
+    let (mut last_size, mut rest_tried) = (f64::INFINITY, false);
     let finish = Settings {
         reuse_factors: false,
         stop_when_damped: true,
@@ -93,10 +103,19 @@ pub(super) fn relax(
             continue;
         }
         let r = max_norm(ws.residual());
-        if r <= NEAR_REST && r < 0.1 * tried {
+        // At rest: the state meets the solve's residual tolerance and the motion's last step
+        // is at the rounding floor. Newton's own test can fail there in a nearly neutral
+        // valley (its line search finds no decrease of a residual at rounding), so the state
+        // itself is the answer.
+        let rest = r <= settings.tolerance && last_size <= REST_STEP;
+        if r <= NEAR_REST && (r < 0.1 * tried || (rest && !rest_tried)) {
             tried = r;
+            rest_tried = rest;
             let mut y = x.clone();
-            let (term, _) = newton::run(system, ws, &mut y, &finish, report);
+            let term = match rest {
+                true => Termination::Converged,
+                false => newton::run(system, ws, &mut y, &finish, report).0,
+            };
             if term == Termination::Converged && ws.linearize(system, &y, report) {
                 match index(system, ws, &y, false, report) {
                     Some(0) => return Some(y),
@@ -109,6 +128,7 @@ pub(super) fn relax(
                         let step: Vec<f64> = phi.iter().map(|v| v * side).collect();
                         system.retract(&y, &step, 1.0, &mut x);
                         (dt, tried, restarts) = (FIRST_DT, f64::INFINITY, restarts + 1);
+                        last_size = f64::INFINITY;
                         previous.clear();
                     }
                     _ => {}
@@ -131,6 +151,7 @@ pub(super) fn relax(
         report.iterations += 1;
         report.newton_steps += 1;
         dt *= (MOVE / size).min(GROWTH);
+        last_size = size;
         previous = step;
     }
     None
