@@ -18,9 +18,10 @@
 //! pseudo-transient continuation (Kelley and Keyes 1998; for the singular M of a
 //! differential-algebraic system, Coffey, Kelley and Keyes 2003). The step dt is controlled
 //! so that each step moves the state by at most [`MOVE`] in the normalized norm of the path's
-//! steps, and a step that reverses the direction of the one before is refused and taken again
-//! with half the dt: an implicit step longer than 1 / |mu| of the unstable mode turns it back
-//! towards the state the motion left, which the motion itself never does. When the residual
+//! steps; a longer step is refused and taken again with a shorter dt. An implicit step longer
+//! than 1 / |mu| of the unstable mode can stop on the unstable state, where the motion itself
+//! would not: a motion at rest there starts again from it, displaced along its softest
+//! direction the way it was moving, with the first, short dt. When the residual
 //! is small the state is near rest, and Newton (undamped) finishes; its answer counts only
 //! if it has no unstable direction, else the motion goes on from where it was. A state at
 //! rest (residual within the solve's tolerance, last step at the rounding floor) is tested
