@@ -4,6 +4,8 @@
 //! tolerances need far fewer intervals than order 4, and the default tolerance keeps the
 //! order-4 answer.
 
+mod common;
+
 use tdcr::advanced::{deferred, equations::Model, guess, mesh::Mesh, newton, system::System};
 use tdcr::cases::analytic::elastica_tip;
 use tdcr::collocation::{self, LinearSolver};
@@ -359,20 +361,7 @@ fn the_load_path_robot_gets_an_estimate_not_below_its_error() {
         ..Default::default()
     };
     let solution = collocation::solve(&robot, &options).unwrap();
-    let refined = |k: usize| {
-        let finer: Vec<f64> = solution
-            .nodes
-            .windows(2)
-            .flat_map(|w| (0..k).map(move |i| w[0].s + i as f64 / k as f64 * (w[1].s - w[0].s)))
-            .collect();
-        let fine = collocation::Options {
-            mesh: Some(finer),
-            tolerance: None,
-            residual_tolerance: 1e-13,
-            ..Default::default()
-        };
-        collocation::solve_from(&robot, &fine, &solution).unwrap()
-    };
+    let refined = |k: usize| common::on_split_mesh(&robot, &solution, k).unwrap();
     let (reference, check) = (refined(32), refined(16));
     let e = solution.report.error_estimate.unwrap();
     let position = |a: &Solution| (a.tip_position() - reference.tip_position()).norm();

@@ -10,6 +10,8 @@
 //! positive semi-definite tip compliance, no failure):
 //! `cargo test --release --test properties -- --ignored`.
 
+mod common;
+
 use nalgebra::Vector3;
 use proptest::prelude::*;
 use proptest::test_runner::{Config, FileFailurePersistence, TestRunner};
@@ -385,20 +387,7 @@ fn tight_errors(cases: u32, tolerance: f64) -> (Vec<[f64; 3]>, Vec<usize>) {
             let Ok(solution) = collocation::solve(&robot, &options) else {
                 return Ok(());
             };
-            let refined = |k: usize| {
-                let finer: Vec<f64> = solution
-                    .nodes
-                    .windows(2)
-                    .flat_map(|w| (0..k).map(move |i| w[0].s + i as f64 / k as f64 * (w[1].s - w[0].s)))
-                    .collect();
-                let fine = collocation::Options {
-                    mesh: Some(finer),
-                    tolerance: None,
-                    residual_tolerance: 1e-13,
-                    ..Default::default()
-                };
-                collocation::solve_from(&robot, &fine, &solution).ok()
-            };
+            let refined = |k: usize| common::on_split_mesh(&robot, &solution, k).ok();
             let (Some(reference), Some(check)) = (refined(32), refined(16)) else {
                 return Ok(());
             };
