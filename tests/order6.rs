@@ -288,9 +288,9 @@ fn sensitivities_of_an_order_6_answer_match_differences_of_order_6_answers() {
 }
 
 /// Robot 550 of the 600-robot property run at 1e-10 L (tests/properties.rs,
-/// `tight_tolerances_on_six_hundred_random_robots`): its solve follows the load path, and its
-/// tip error is about twice its reported estimate (docs/numerics.md, "Why the estimate is low
-/// on some random robots").
+/// `tight_tolerances_on_six_hundred_random_robots`): its solve follows the load path; its tip
+/// error was about twice its reported estimate until the stages kept their strain's last
+/// place (docs/numerics.md, "Why the estimate was low on some random robots").
 fn path_robot() -> Robot {
     let path = "tests/data/order6-miss-path.toml";
     tdcr::io::parse(&std::fs::read_to_string(path).unwrap(), path)

@@ -399,7 +399,7 @@ fn tight_errors(cases: u32, tolerance: f64) -> (Vec<[f64; 3]>, Vec<usize>) {
             let mut out = errors.lock().unwrap();
             let length = robot.length();
             // The robots whose estimate is below their error, as robot files for the
-            // order6_miss example (docs/numerics.md, "Why the estimate is low ...").
+            // order6_miss example (docs/numerics.md, "Why the estimate was low ...").
             if let Ok(dir) = std::env::var("TDCR_DUMP_MISSES") {
                 let pe = (position(&reference, &solution) - position(&reference, &check)) / e.tip_position;
                 let re = (rotation(&reference, &solution) - rotation(&reference, &check)) / e.tip_rotation;

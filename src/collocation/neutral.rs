@@ -22,7 +22,7 @@ use crate::solution::State;
 /// The lowest vibration mode's mu (1/s^2) that counts as negative, as a fraction of the
 /// rod's bending scale EI / (rho A L^4) ([`dynamics::bending_scale`]): the exact zero of a
 /// round buckled column comes out within 1.4e-11 of it (rounding, either sign), the payload
-/// robot's swing at 1.78 mN, 1e-3 mN past its loss of stability, at -3.2e-5
+/// robot's swing at 1.7794 mN, 0.1 uN past its loss of stability at 1.7793 mN, at -4.3e-6
 /// (docs/stability.md).
 const NEUTRAL_MODE: f64 = 1e-8;
 
@@ -76,9 +76,11 @@ pub(super) fn count(values: &[f64], system: &System) -> (Stability, Option<Neutr
 /// The conjugate-point `verdict` of `x` (the one `ws` holds), decided where it left out a
 /// root in the neutral zone at the base ([`Workspace::neutral_root`]): the lowest mode of the
 /// linearized dynamics ([`dynamics::lowest`]) with mu below -[`NEUTRAL_MODE`] times the
-/// rod's bending scale makes the roots left out unstable directions (all of them: a straight
-/// round column's come in pairs), added to the verdict's count; otherwise they are neutral
-/// directions and the verdict stands. The decision replaces the verdict held.
+/// rod's bending scale makes the roots left out of a `stable` verdict unstable directions
+/// (all of them: a straight round column's come in pairs); otherwise they are neutral
+/// directions and the verdict stands. An `unstable` verdict stands as it is: the lowest mode
+/// alone cannot tell a root left out from a direction already counted. The decision
+/// replaces the verdict held.
 ///
 /// Only such a state pays for the modes (the Jacobian factored at `x` when its factors are
 /// not there, and Arnoldi's solves with them); a state whose modes cannot be computed keeps
@@ -105,13 +107,7 @@ pub(super) fn settle(
             directions: dropped,
             conjugate_point: root,
         },
-        Stability::Unstable {
-            directions,
-            conjugate_point,
-        } if negative => Stability::Unstable {
-            directions: directions + dropped,
-            conjugate_point,
-        },
+        // An unstable verdict stands: its negative mode may be a direction it already counts.
         other => other,
     };
     ws.settle_verdict(settled.clone());

@@ -139,7 +139,7 @@ fn integrals(nodes: &[i64], s: i64) -> Vec<f64> {
 /// The order-8 residual of one interval of length `h` with end points `y0`, `y1` and their
 /// rates `f0`, `f1` (local coordinates), where `eval(i, inc)` is F at grid point i ([`at`])
 /// with the stage y0 + inc (given as its increment from y0, so that the caller keeps what
-/// y0 + inc rounds away, [`super::residual::stage`]). Unscaled rows.
+/// y0 + inc rounds away, [`super::stage::stage`]). Unscaled rows.
 ///
 /// # Errors
 /// The errors of `eval`.

@@ -455,16 +455,23 @@ fn newton_only(
     if termination == Termination::Converged {
         return Ok(x);
     }
-    // The load path's answer on a finer mesh, where Newton from the coarser one's does not
-    // converge (a stable state in a nearly neutral valley, whose place along it the finer
-    // mesh moves): the state where the damped motion from Newton's last iterate comes to
-    // rest, stable (docs/stability.md, "A root at the base").
+    // The load path's answer (from rest) on a finer mesh, where Newton from the coarser
+    // one's does not converge (a stable state in a nearly neutral valley, whose place along
+    // it the finer mesh moves): the state where the damped motion from Newton's last
+    // iterate comes to rest, stable (docs/stability.md, "A root at the base"). Direct and
+    // warm-started answers, and a sweep's bisection on its branch, keep Newton's verdict.
+    let from_rest = matches!(report.path, PathTaken::LoadPath { .. });
     let relaxed = match options.equilibrium {
-        Equilibrium::LoadPath => relax::relax(system, ws, x, settings, report),
-        Equilibrium::Nearest => None,
+        Equilibrium::LoadPath if from_rest => relax::relax(system, ws, x, settings, report),
+        _ => None,
     };
     if let Some(x) = relaxed {
         report.termination = Termination::Converged;
+        report.notes.push(format!(
+            "Newton on the {}-interval mesh did not converge from the coarser mesh's answer; \
+             the answer is the stable state the damped motion from its last iterate came to rest in",
+            system.mesh.intervals()
+        ));
         Ok(x)
     } else {
         Err(not_converged(

@@ -69,7 +69,9 @@ const FINISH_ITERATIONS: usize = 12;
 
 /// The state where the damped motion of `system` (at its current load) from `x` comes to
 /// rest, stable (no unstable direction), with its Jacobian factored in `ws`; None when it
-/// does not within [`MAX_STEPS`] time steps, or the model breaks down.
+/// does not within [`MAX_STEPS`] time steps, or the model breaks down. Under loads that are
+/// not conservative the states have no conjugate-point count to accept a rest by, so the
+/// motion is not run.
 pub(super) fn relax(
     system: &System,
     ws: &mut Workspace,
@@ -77,6 +79,9 @@ pub(super) fn relax(
     settings: &Settings,
     report: &mut SolveReport,
 ) -> Option<Vec<State>> {
+    if super::stability::non_conservative(&system.model).is_some() {
+        return None;
+    }
     let n = system.unknowns();
     let nf = n as f64;
     let mut dt = FIRST_DT;
@@ -114,7 +119,10 @@ pub(super) fn relax(
             rest_tried = rest;
             let mut y = x.clone();
             let term = match rest {
-                true => Termination::Converged,
+                true => {
+                    report.residual = r;
+                    Termination::Converged
+                }
                 false => newton::run(system, ws, &mut y, &finish, report).0,
             };
             if term == Termination::Converged && ws.linearize(system, &y, report) {

@@ -9,9 +9,10 @@
 //! error of 1e-12 to 1e-11 L on stiff, slender rods. Formed as y0 + an increment, a stage
 //! knows its deviation v_0 - v* + inc_v far more precisely than its strain; [`stage`] keeps
 //! what rounding the strain drops and [`rhs_stage`] hands it to eq. 13
-//! ([`linearize::rates_split`]). The order-6 and order-8 residuals and the order-4 rows of
-//! the order-6 answer's correction ([`interval_split`]) evaluate their stages so; the
-//! default order-4 solve does not (its answers and cost are unchanged).
+//! ([`linearize::rates_split`]). The order-6 answer's defect ([`interval_order6_split`]),
+//! the order-8 residual and the order-4 rows of the order-6 answer's correction
+//! ([`interval_split`]) evaluate their stages so; the default order-4 solve and its error
+//! estimate do not (their answers and cost are unchanged).
 
 // R for rotation matrices, as in the paper and residual.rs.
 #![allow(non_snake_case)]
@@ -29,8 +30,9 @@ use nalgebra::{Matrix3, Vector3, Vector6};
 /// increment from the interval's start `y0`), with its strain's part below the last place:
 /// the strain v = v* + (v_0 - v* + inc_v) rounds the deviation in parentheses, which carries
 /// the internal force, to v's last place (about 1e-16 of a strain near 1: a force of EA eps);
-/// the low part returned is what that rounding dropped (exact: Fast2Sum, |v*| >= the
-/// deviation; v_0 - v* is exact where v_0 is near v*). [`rhs_stage`] takes both.
+/// the low part returned is what that rounding dropped (exact: Fast2Sum, componentwise
+/// where |v*_i| >= the deviation, and nothing to drop where v*_i = 0; v_0 - v* is exact
+/// where v_0 is near v*). [`rhs_stage`] takes both.
 pub(super) fn stage(site: &Site, y0: &Block<f64>, inc: &Block<f64>) -> (Block<f64>, Vector3<f64>) {
     let mut y = y0 + inc;
     let v_star = site.reference.v_star;

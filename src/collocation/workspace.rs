@@ -471,6 +471,7 @@ impl Workspace {
             self.values.copy_from_slice(values);
             self.drift = f64::INFINITY;
             self.verdict = None;
+            self.neutral = None;
             self.factored_without_solve(ok);
             return ok && last.iter().flatten().all(|x| x.is_finite());
         }
@@ -497,7 +498,7 @@ impl Workspace {
         last: &mut [[f64; crate::collocation::unknowns::NODE]],
     ) -> bool {
         let n = rhs.len() / count.max(1);
-        for (j, x) in last.iter_mut().enumerate() {
+        for (j, x) in last.iter_mut().take(count).enumerate() {
             match self.solve_again_last(&rhs[j * n..(j + 1) * n]) {
                 Some(v) => *x = v,
                 None => return false,
