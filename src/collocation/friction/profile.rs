@@ -353,13 +353,7 @@ impl<'a> Profile<'a> {
         kept.state = *b;
         kept.z.clear();
         kept.z.extend_from_slice(z);
-        match (&mut kept.w, w) {
-            (Some(old), Some(w)) => {
-                old.clear();
-                old.extend_from_slice(w);
-            }
-            (old, w) => *old = w.map(<[f64]>::to_vec),
-        }
+        copy_multipliers(&mut kept.w, w);
         kept.derivatives = derivatives;
         let old = kept.lin.replace(lin);
         drop(end);
@@ -386,13 +380,7 @@ impl<'a> Profile<'a> {
         kept.segment_end = segment_end;
         kept.z.clear();
         kept.z.extend_from_slice(z);
-        match (&mut kept.w, w) {
-            (Some(old), Some(w)) => {
-                old.clear();
-                old.extend_from_slice(w);
-            }
-            (old, w) => *old = w.map(<[f64]>::to_vec),
-        }
+        copy_multipliers(&mut kept.w, w);
         kept.rates = lin.lin.rates;
         kept.turning.clear();
         kept.turning.extend_from_slice(&lin.turning);
@@ -425,5 +413,16 @@ impl<'a> Profile<'a> {
     /// The robot.
     pub(crate) fn robot(&self) -> &'a crate::Robot {
         self.scratch.borrow().robot
+    }
+}
+
+/// `w` copied into `kept`, reusing its buffer where both are there.
+fn copy_multipliers(kept: &mut Option<Vec<f64>>, w: Option<&[f64]>) {
+    match (kept, w) {
+        (Some(old), Some(w)) => {
+            old.clear();
+            old.extend_from_slice(w);
+        }
+        (old, w) => *old = w.map(<[f64]>::to_vec),
     }
 }
