@@ -298,6 +298,17 @@ fn path_robot() -> Robot {
         .robot
 }
 
+/// [`path_robot`] and its default solve at 1e-10 L (the 600-robot run's tolerance).
+fn path_answer() -> (Robot, Solution) {
+    let robot = path_robot();
+    let options = collocation::Options {
+        tolerance: Some(1e-10),
+        ..Default::default()
+    };
+    let solution = collocation::solve(&robot, &options).unwrap();
+    (robot, solution)
+}
+
 /// The load path's answer at a tight tolerance is the order-6 answer of its mesh, not a state
 /// the path left short of it: Newton from the answer on the same mesh to 1e-12, one more full
 /// Newton step and the deferred correction give the same tip. So robot 550's excess error
@@ -305,13 +316,8 @@ fn path_robot() -> Robot {
 /// its chord steps.
 #[test]
 fn a_load_path_answer_is_the_order_6_answer_of_its_mesh() {
-    let robot = path_robot();
+    let (robot, solution) = path_answer();
     let length = robot.length();
-    let options = collocation::Options {
-        tolerance: Some(1e-10),
-        ..Default::default()
-    };
-    let solution = collocation::solve(&robot, &options).unwrap();
     // The case this test is for: an answer of the load path.
     assert!(solution.report.load_steps > 0, "{:?}", solution.report.path);
     let mut points: Vec<f64> = solution.nodes.iter().map(|n| n.s).collect();
@@ -354,13 +360,8 @@ fn a_load_path_answer_is_the_order_6_answer_of_its_mesh() {
 /// (docs/numerics.md, "Why the estimate was low on some random robots").
 #[test]
 fn the_load_path_robot_gets_an_estimate_not_below_its_error() {
-    let robot = path_robot();
+    let (robot, solution) = path_answer();
     let length = robot.length();
-    let options = collocation::Options {
-        tolerance: Some(1e-10),
-        ..Default::default()
-    };
-    let solution = collocation::solve(&robot, &options).unwrap();
     let refined = |k: usize| common::on_split_mesh(&robot, &solution, k).unwrap();
     let (reference, check) = (refined(32), refined(16));
     let e = solution.report.error_estimate.unwrap();

@@ -507,19 +507,26 @@ mod tests {
     use crate::mesh::{Mesh, guess::rigid_estimate};
     use crate::model::equations::Model;
 
-    /// The AVX2 build of `solve_again` gives the baseline build's bits: the same operations
-    /// in the same order (on a processor without AVX2 both are the baseline).
-    #[test]
-    fn solve_again_gives_the_baseline_bits() {
+    /// Case H's Jacobian and residual at the rigid estimate on 16 intervals, with its node
+    /// count: a Jacobian with every block the elimination meets.
+    fn case_h_jacobian() -> (usize, Vec<f64>, Vec<f64>) {
         let robot = crate::cases::case_h();
         let model = Model::new(&robot);
         let system = System::new(model.clone(), Mesh::uniform(&robot, 16).unwrap());
         let x = rigid_estimate(&model, &system.mesh.nodes);
-        let n = system.unknowns();
         let mut values = vec![0.0; crate::collocation::unknowns::nonzeros(&system.mesh)];
-        let mut residual = vec![0.0; n];
+        let mut residual = vec![0.0; system.unknowns()];
         system.jacobian(&x, &mut residual, &mut values).unwrap();
-        let mut lu = BlockElimination::new(system.mesh.nodes.len());
+        (system.mesh.nodes.len(), values, residual)
+    }
+
+    /// The AVX2 build of `solve_again` gives the baseline build's bits: the same operations
+    /// in the same order (on a processor without AVX2 both are the baseline).
+    #[test]
+    fn solve_again_gives_the_baseline_bits() {
+        let (nodes, values, residual) = case_h_jacobian();
+        let n = residual.len();
+        let mut lu = BlockElimination::new(nodes);
         let mut step = vec![0.0; n];
         assert!(lu.solve(&values, &residual, &mut step).is_some());
         let rhs: Vec<f64> = (0..n).map(|i| (i as f64 * 0.37).sin()).collect();
@@ -537,15 +544,9 @@ mod tests {
     /// and leave the same factors.
     #[test]
     fn carried_right_hand_sides_give_the_replayed_bits() {
-        let robot = crate::cases::case_h();
-        let model = Model::new(&robot);
-        let system = System::new(model.clone(), Mesh::uniform(&robot, 16).unwrap());
-        let x = rigid_estimate(&model, &system.mesh.nodes);
-        let n = system.unknowns();
-        let mut values = vec![0.0; crate::collocation::unknowns::nonzeros(&system.mesh)];
-        let mut residual = vec![0.0; n];
-        system.jacobian(&x, &mut residual, &mut values).unwrap();
-        let mut plain = BlockElimination::new(system.mesh.nodes.len());
+        let (nodes, values, residual) = case_h_jacobian();
+        let n = residual.len();
+        let mut plain = BlockElimination::new(nodes);
         let mut step = vec![0.0; n];
         assert!(plain.solve(&values, &vec![0.0; n], &mut step).is_some());
         let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
@@ -554,7 +555,7 @@ mod tests {
             let rhs: Vec<f64> = (0..n * count)
                 .map(|i| if i % 2 == 0 { -0.0 } else { (i as f64 * 0.37).sin() })
                 .collect();
-            let mut carried = BlockElimination::new(system.mesh.nodes.len());
+            let mut carried = BlockElimination::new(nodes);
             let mut last = vec![[0.0; NODE]; count];
             assert!(carried.factor_with_last(&values, &rhs, count, &mut last));
             for (j, tip) in last.iter().enumerate() {
