@@ -31,7 +31,7 @@ mod arnoldi;
 mod hessenberg;
 
 use super::newton::Workspace;
-use super::residual::end_values;
+use super::residual::{IntervalFactors, end_values};
 use super::sensitivity::Sensitivity;
 use super::system::System;
 use super::unknowns::{BASE_COLUMNS, BASE_ROWS, NODE, P, THETA, U, V, link_row, unknowns};
@@ -78,11 +78,13 @@ pub(crate) struct Mass {
 }
 
 impl Mass {
-    /// The mass of `system` linearized at the equilibrium `x` (node states).
+    /// The mass of `system` linearized at the equilibrium `x` (node states); `kept`, when
+    /// given, holds eq. 13's factored matrices at every interval's points of the Jacobian at
+    /// `x` ([`linearize_keeping`]), which spare evaluating eq. 13 there again.
     ///
     /// # Errors
     /// A model breakdown at a collocation point.
-    pub(crate) fn new(system: &System, x: &[State]) -> crate::Result<Self> {
+    pub(crate) fn new(system: &System, x: &[State], kept: Option<&[IntervalFactors]>) -> crate::Result<Self> {
         let model = &system.model;
         let length = model.robot.length();
         let ratio = DENSITY / model.robot.rod.geometry.map_or(MODULUS, |g| g.youngs_modulus);
@@ -92,6 +94,10 @@ impl Mass {
         // written in place: at the start, midpoint and end of the interval.
         let point = |site: &Site, seg: f64, state: (&Matrix3<f64>, &Vector3<f64>, &Vector3<f64>), z: &mut _| {
             response(model, site, seg, state, ratio, length, z)
+        };
+        // The response from M factored at the point by the Jacobian ([`response_kept`]).
+        let from = |site: &Site, factored: &linearize::Factored, Rc: &Matrix3<f64>, z: &mut _| {
+            response_kept(site, factored, Rc, ratio, length, z)
         };
         let (mut za, mut zm, mut zb) = (SMatrix::<f64, 6, 6>::zeros(), SMatrix::zeros(), SMatrix::zeros());
         let (mut ra, mut rb) = (Vector6::zeros(), Vector6::zeros());
@@ -108,21 +114,31 @@ impl Mass {
             let seg = system.mesh.nodes[k].segment_end;
             let (a, b) = (&x[k], &x[k + 1]);
             let h = sites.end.s - sites.start.s;
-            match carried.take() {
-                Some((node, s)) if node == k && s == seg => {
-                    std::mem::swap(&mut za, &mut zb);
-                    std::mem::swap(&mut ra, &mut rb);
-                }
-                _ => ra = point(&sites.start, seg, (&a.R, &a.v, &a.u), &mut za)?,
+            let shared = matches!(carried.take(), Some((node, s)) if node == k && s == seg);
+            if shared {
+                std::mem::swap(&mut za, &mut zb);
+                std::mem::swap(&mut ra, &mut rb);
             }
-            rb = point(&sites.end, seg, (&b.R, &b.v, &b.u), &mut zb)?;
-            // The Hermite-Simpson midpoint, as the residual's.
-            let [y0, y1, f0, f1] = end_values(sites, a, b, &ra, &rb);
-            let ym = (y0 + y1) * 0.5 + (f0 - f1) * (h / 8.0);
-            let part = |at: usize| Vector3::new(ym[at], ym[at + 1], ym[at + 2]);
-            let Rm = a.R * so3::exp(&part(THETA));
-            let (vm, um) = (part(V), part(U));
-            point(&sites.mid, seg, (&Rm, &vm, &um), &mut zm)?;
+            if let Some(kept) = kept {
+                let kept = &kept[k];
+                if !shared {
+                    from(&sites.start, &kept.start, &a.R, &mut za)?;
+                }
+                from(&sites.end, &kept.end, &b.R, &mut zb)?;
+                from(&sites.mid, &kept.mid, &kept.mid_R, &mut zm)?;
+            } else {
+                if !shared {
+                    ra = point(&sites.start, seg, (&a.R, &a.v, &a.u), &mut za)?;
+                }
+                rb = point(&sites.end, seg, (&b.R, &b.v, &b.u), &mut zb)?;
+                // The Hermite-Simpson midpoint, as the residual's.
+                let [y0, y1, f0, f1] = end_values(sites, a, b, &ra, &rb);
+                let ym = (y0 + y1) * 0.5 + (f0 - f1) * (h / 8.0);
+                let part = |at: usize| Vector3::new(ym[at], ym[at + 1], ym[at + 2]);
+                let Rm = a.R * so3::exp(&part(THETA));
+                let (vm, um) = (part(V), part(U));
+                point(&sites.mid, seg, (&Rm, &vm, &um), &mut zm)?;
+            }
             let mut block = SMatrix::<f64, 6, 12>::zeros();
             // Simpson's weights h/6 (1, 4, 1) at the start, midpoint and end, with the
             // accelerations interpolated linearly (weights of node a, node b): each node's
@@ -228,14 +244,43 @@ fn response(
 ) -> crate::Result<Vector6<f64>> {
     let mut t = inertia_load_transposed(site, Rc, ratio, length);
     let rates = linearize::rates_and_solve(model, site, segment_end, (Rc, v, u), &mut t)?;
-    // Transposed back entry by entry: nalgebra's transpose goes through an iterator
-    // constructor that the build does not always inline (docs/stability.md, "Cost").
+    transpose_into(&t, z);
+    Ok(rates)
+}
+
+/// [`response`] without the rates, from M factored at the point already (by the Jacobian at
+/// the same state, [`linearize_keeping`](crate::model::linearize::linearize_keeping)): the
+/// same solve of the same load, the same bits.
+///
+/// # Errors
+/// M singular at the point.
+fn response_kept(
+    site: &Site,
+    factored: &linearize::Factored,
+    Rc: &Matrix3<f64>,
+    ratio: f64,
+    length: f64,
+    z: &mut SMatrix<f64, 6, 6>,
+) -> crate::Result<()> {
+    let mut t = inertia_load_transposed(site, Rc, ratio, length);
+    if !factored.solve_rows(&mut t) {
+        return Err(crate::Error::Breakdown {
+            s: site.s,
+            what: "the 6x6 matrix [D + A, G; B, C + H] of eq. 13 is singular".into(),
+        });
+    }
+    transpose_into(&t, z);
+    Ok(())
+}
+
+/// `z` = `t` transposed, entry by entry: nalgebra's transpose goes through an iterator
+/// constructor that the build does not always inline (docs/stability.md, "Cost").
+fn transpose_into(t: &SMatrix<f64, 6, 6>, z: &mut SMatrix<f64, 6, 6>) {
     for i in 0..6 {
         for j in 0..6 {
             z[(i, j)] = t[(j, i)];
         }
     }
-    Ok(rates)
 }
 
 /// The transpose of the body-frame distributed load (force, moment; N/m and N m/m) per
@@ -292,13 +337,22 @@ pub fn vibration(robot: &Robot, solution: &Solution) -> crate::Result<Vibration>
         ));
     }
     let (system, states, mut ws) = Sensitivity::new(robot, solution)?.into_parts();
-    Ok(modes(&system, &states, &mut ws, KRYLOV_MODES, true, &mut |_| true))
+    Ok(modes(
+        &system,
+        &states,
+        &mut ws,
+        KRYLOV_MODES,
+        true,
+        &mut |_| true,
+        false,
+    ))
 }
 
 /// The verdict of the linearized dynamics at the equilibrium `x` of `system`, with the
-/// factors of its Jacobian held in `ws` (Newton's at `x`, or at its last iterate).
-pub(crate) fn assess(system: &System, x: &[State], ws: &mut Workspace) -> Stability {
-    modes(system, x, ws, KRYLOV, false, &mut |_| true).stability
+/// factors of its Jacobian at `x` held in `ws`; `kept` when they come from
+/// [`Workspace::linearize_keeping`] at `x`, whose factored matrices of eq. 13 the mass takes.
+pub(crate) fn assess(system: &System, x: &[State], ws: &mut Workspace, kept: bool) -> Stability {
+    modes(system, x, ws, KRYLOV, false, &mut |_| true, kept).stability
 }
 
 /// The mu (1/s^2) of the lowest vibration mode at the equilibrium `x` of `system` (the
@@ -306,7 +360,7 @@ pub(crate) fn assess(system: &System, x: &[State], ws: &mut Workspace) -> Stabil
 /// when that mode did not converge or a solve failed. Module `neutral` reads its sign where
 /// the conjugate-point test leaves a root in the neutral zone at the base.
 pub(crate) fn lowest(system: &System, x: &[State], ws: &mut Workspace) -> Option<Complex<f64>> {
-    modes(system, x, ws, KRYLOV, false, &mut |_| true)
+    modes(system, x, ws, KRYLOV, false, &mut |_| true, false)
         .eigenvalues
         .first()
         .copied()
@@ -332,12 +386,13 @@ pub(crate) fn assess_bordered(
     ws: &mut Workspace,
     border: &mut dyn FnMut(&mut [f64]) -> bool,
 ) -> Stability {
-    modes(system, x, ws, KRYLOV, false, border).stability
+    modes(system, x, ws, KRYLOV, false, border, false).stability
 }
 
 /// [`assess`] with the eigenvalues, from `krylov` Arnoldi steps when `all` (with the
 /// residual of every Ritz value), else from at most `krylov`, stopped once the modes the
-/// verdict rests on have settled ([`arnoldi`]); `border` as in [`assess_bordered`].
+/// verdict rests on have settled ([`arnoldi`]); `border` as in [`assess_bordered`], `kept`
+/// as in [`assess`].
 fn modes(
     system: &System,
     x: &[State],
@@ -345,12 +400,13 @@ fn modes(
     krylov: usize,
     all: bool,
     border: &mut dyn FnMut(&mut [f64]) -> bool,
+    kept: bool,
 ) -> Vibration {
     let unknown = |reason: String| Vibration {
         stability: Stability::Unknown { reason },
         eigenvalues: Vec::new(),
     };
-    let mass = match Mass::new(system, x) {
+    let mass = match Mass::new(system, x, kept.then(|| ws.kept())) {
         Ok(m) => m,
         Err(e) => return unknown(format!("the mass matrix could not be formed: {e}")),
     };

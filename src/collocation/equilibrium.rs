@@ -164,13 +164,15 @@ fn linearized_dynamics(
         return verdict;
     }
     // The factors of the Jacobian at `x` may be held already (the path's last corrector
-    // step evaluated and factored it there, and no step was taken since).
-    if !ws.factors_at_iterate() && !ws.linearize(system, x, report) {
+    // step evaluated and factored it there, and no step was taken since); else it is
+    // evaluated keeping eq. 13's factored matrices, which the mass solves with.
+    let kept = !ws.factors_at_iterate();
+    if kept && !ws.linearize_keeping(system, x, report) {
         return Stability::Unknown {
             reason: "the Jacobian at the solution is singular or not finite".into(),
         };
     }
-    let verdict = dynamics::assess(system, x, ws);
+    let verdict = dynamics::assess(system, x, ws, kept);
     ws.keep_dynamics(verdict.clone());
     verdict
 }

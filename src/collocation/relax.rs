@@ -102,7 +102,7 @@ pub(super) fn relax(
         if dt < SHORTEST_DT {
             return None;
         }
-        let mass = Mass::new(system, &x).ok()?;
+        let mass = Mass::new(system, &x, None).ok()?;
         if !ws.linearize_shifted(system, &x, report, |values| mass.add_to(values, 1.0 / dt)) {
             // A zero pivot: 1 / dt is an eigenvalue of the pencil, take a shorter step.
             dt *= 0.5;

@@ -28,7 +28,7 @@ pub(super) use super::point::{PointFrame, PointLinearization, rhs_linearized_inl
 use super::unknowns::{P, THETA, U, V};
 use crate::error::Result;
 use crate::model::equations::{Model, Site, lift, lift_m};
-use crate::model::linearize::{self, Linearization, linearize, linearize_inline};
+use crate::model::linearize::{self, Linearization, linearize_keeping};
 use crate::solution::State;
 use crate::{Real, so3};
 use nalgebra::{Matrix3, SMatrix, SVector, Vector3, Vector6};
@@ -390,7 +390,58 @@ pub fn interval_jacobian(
         // SAFETY: the processor supports the features the function is compiled for.
         return unsafe { interval_jacobian_avx2(model, sites, segment_end, a, b, start, jac) };
     }
-    interval_jacobian_kernel(model, sites, segment_end, a, b, start, jac)
+    interval_jacobian_kernel(model, sites, segment_end, a, b, start, jac, None)
+}
+
+/// [`interval_jacobian`] that keeps eq. 13's factored matrix at its points in `kept` (the
+/// start's only when it evaluates it, not given `start`): the Jacobian at an answer whose
+/// verdict comes from the linearized dynamics, whose mass solves with them
+/// (`collocation/dynamics.rs`).
+///
+/// # Errors
+/// As [`interval_jacobian`].
+#[allow(clippy::too_many_arguments)]
+pub(super) fn interval_jacobian_keeping(
+    model: &Model,
+    sites: &IntervalSites,
+    segment_end: f64,
+    (a, b): (&State, &State),
+    start: Option<&Linearization>,
+    jac: &mut [f64],
+    kept: &mut IntervalFactors,
+) -> Result<(Block<f64>, Linearization)> {
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma") {
+        // SAFETY: the processor supports the features the function is compiled for.
+        return unsafe { interval_jacobian_keeping_avx2(model, sites, segment_end, a, b, start, jac, kept) };
+    }
+    interval_jacobian_kernel(model, sites, segment_end, a, b, start, jac, Some(kept))
+}
+
+/// Eq. 13's factored matrix at an interval's three points and the midpoint's orientation,
+/// as [`interval_jacobian_keeping`] evaluated them.
+#[derive(Clone)]
+pub(crate) struct IntervalFactors {
+    /// At the start node (valid when the interval Jacobian evaluated it).
+    pub(crate) start: linearize::Factored,
+    /// At the Hermite-Simpson midpoint.
+    pub(crate) mid: linearize::Factored,
+    /// At the end node.
+    pub(crate) end: linearize::Factored,
+    /// R at the midpoint, R_k exp(theta_m).
+    pub(crate) mid_R: Matrix3<f64>,
+}
+
+impl IntervalFactors {
+    /// Placeholders for a buffer [`interval_jacobian_keeping`] fills.
+    pub(crate) fn identity() -> Self {
+        IntervalFactors {
+            start: linearize::Factored::identity(),
+            mid: linearize::Factored::identity(),
+            end: linearize::Factored::identity(),
+            mid_R: Matrix3::identity(),
+        }
+    }
 }
 
 /// [`interval_jacobian_kernel`] with AVX2 and FMA enabled.
@@ -405,11 +456,29 @@ unsafe fn interval_jacobian_avx2(
     start: Option<&Linearization>,
     jac: &mut [f64],
 ) -> Result<(Block<f64>, Linearization)> {
-    interval_jacobian_kernel(model, sites, segment_end, a, b, start, jac)
+    interval_jacobian_kernel(model, sites, segment_end, a, b, start, jac, None)
 }
 
-/// [`interval_jacobian`]'s operations.
+/// [`interval_jacobian_kernel`] keeping the points' factors, with AVX2 and FMA enabled.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+#[allow(clippy::too_many_arguments)]
+unsafe fn interval_jacobian_keeping_avx2(
+    model: &Model,
+    sites: &IntervalSites,
+    segment_end: f64,
+    a: &State,
+    b: &State,
+    start: Option<&Linearization>,
+    jac: &mut [f64],
+    kept: &mut IntervalFactors,
+) -> Result<(Block<f64>, Linearization)> {
+    interval_jacobian_kernel(model, sites, segment_end, a, b, start, jac, Some(kept))
+}
+
+/// [`interval_jacobian`]'s operations; `kept` as in [`interval_jacobian_keeping`].
 #[inline(always)]
+#[allow(clippy::too_many_arguments)]
 fn interval_jacobian_kernel(
     model: &Model,
     sites: &IntervalSites,
@@ -418,6 +487,7 @@ fn interval_jacobian_kernel(
     b: &State,
     start: Option<&Linearization>,
     jac: &mut [f64],
+    mut kept: Option<&mut IntervalFactors>,
 ) -> Result<(Block<f64>, Linearization)> {
     let length = model.robot.length();
     let h = sites.end.s - sites.start.s;
@@ -427,25 +497,32 @@ fn interval_jacobian_kernel(
     let lin0 = match start {
         Some(l) => l,
         None => {
-            computed = linearize(model, &sites.start, segment_end, &a.R, &a.v, &a.u)?;
+            let keep = kept.as_deref_mut().map(|k| &mut k.start);
+            computed = linearize_keeping(model, &sites.start, segment_end, &a.R, &a.v, &a.u, keep)?;
             &computed
         }
     };
-    let lin1 = linearize_inline(model, &sites.end, segment_end, &b.R, &b.v, &b.u)?;
+    let keep = kept.as_deref_mut().map(|k| &mut k.end);
+    let lin1 = linearize_keeping(model, &sites.end, segment_end, &b.R, &b.v, &b.u, keep)?;
     let frame1 = PointFrame::new(&a.R, &theta1);
     let p0 = rhs_linearized_inline(&sites.start, lin0, &a.R, &y0, &PointFrame::start(&a.R));
     let p1 = rhs_linearized_inline(&sites.end, &lin1, &a.R, &y1, &frame1);
     let ym = (y0 + y1) * 0.5 + (p0.f - p1.f) * (h / 8.0);
     let frame_m = PointFrame::new(&a.R, &ym.fixed_rows::<3>(THETA).into());
+    let keep = kept.map(|k| {
+        k.mid_R = frame_m.R;
+        &mut k.mid
+    });
     let pm = rhs_linearized_inline(
         &sites.mid,
-        &linearize_inline(
+        &linearize_keeping(
             model,
             &sites.mid,
             segment_end,
             &frame_m.R,
             &ym.fixed_rows::<3>(V).into(),
             &ym.fixed_rows::<3>(U).into(),
+            keep,
         )?,
         &a.R,
         &ym,
@@ -528,7 +605,7 @@ mod tests {
             let (mut fast, mut baseline) = ([0.0; 12 * 24], [0.0; 12 * 24]);
             let (r_fast, l_fast) = interval_jacobian(&model, &sites, seg, &x[k], &x[k + 1], None, &mut fast).unwrap();
             let (r_base, l_base) =
-                interval_jacobian_kernel(&model, &sites, seg, &x[k], &x[k + 1], None, &mut baseline).unwrap();
+                interval_jacobian_kernel(&model, &sites, seg, &x[k], &x[k + 1], None, &mut baseline, None).unwrap();
             assert!(fast.iter().all(|v| v.is_finite()));
             assert_eq!(bits(&fast), bits(&baseline), "interval {k}");
             assert_eq!(bits(r_fast.as_slice()), bits(r_base.as_slice()), "interval {k}");

@@ -9,7 +9,7 @@
 //! num-dual dual numbers run through the same generic residual code.
 
 use super::friction::{self, Profile};
-use super::residual::{self, Block, Delta, IntervalSites, QuarterSites};
+use super::residual::{self, Block, Delta, IntervalFactors, IntervalSites, QuarterSites};
 use super::stage;
 use super::unknowns::{self, BASE_COLUMNS, BASE_ROWS, NODE, THETA, TIP_COLUMNS, link_row, tip_row};
 use crate::error::Result;
@@ -385,6 +385,22 @@ impl<'a> System<'a> {
     /// # Errors
     /// A model breakdown at a visited state.
     pub fn jacobian(&self, x: &[State], out: &mut [f64], values: &mut [f64]) -> Result<()> {
+        self.jacobian_keeping(x, out, values, None)
+    }
+
+    /// [`System::jacobian`] that keeps, when given `kept` (one per link, friction aside),
+    /// eq. 13's factored matrix at each interval's points ([`residual::interval_jacobian_keeping`];
+    /// a start shared with the interval before copied from its end) for the mass.
+    ///
+    /// # Errors
+    /// As [`System::jacobian`].
+    pub(crate) fn jacobian_keeping(
+        &self,
+        x: &[State],
+        out: &mut [f64],
+        values: &mut [f64],
+        mut kept: Option<&mut [IntervalFactors]>,
+    ) -> Result<()> {
         let mut at = 0;
         let base = residual::base(&self.model, &x[0], &seeded::<BASE_COLUMNS>(0));
         for (r, d) in base.iter().enumerate() {
@@ -407,15 +423,25 @@ impl<'a> System<'a> {
                     out[rows].copy_from_slice(lin.residual.as_slice());
                     profile.keep(k, lin);
                 } else {
-                    let (r, end) = residual::interval_jacobian(
-                        &self.model,
-                        sites,
-                        seg,
-                        &x[k],
-                        &x[k + 1],
-                        node_lin.as_ref(),
-                        block,
-                    )?;
+                    let start = node_lin.as_ref();
+                    let (r, end) = match kept.as_deref_mut() {
+                        None => residual::interval_jacobian(&self.model, sites, seg, &x[k], &x[k + 1], start, block)?,
+                        Some(kept) => {
+                            if start.is_some() {
+                                kept[k].start = kept[k - 1].end.clone();
+                            }
+                            let ends = (&x[k], &x[k + 1]);
+                            residual::interval_jacobian_keeping(
+                                &self.model,
+                                sites,
+                                seg,
+                                ends,
+                                start,
+                                block,
+                                &mut kept[k],
+                            )?
+                        }
+                    };
                     node_lin = Some(end);
                     out[rows].copy_from_slice(r.as_slice());
                 }

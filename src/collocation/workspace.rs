@@ -5,6 +5,7 @@
 
 use super::linear::{Linear, LinearSolver};
 use super::newton::STEP_TOLERANCE;
+use super::residual::IntervalFactors;
 use super::stability::NeutralRoots;
 use super::system::{System, SystemBuffers};
 use super::unknowns::nonzeros;
@@ -119,6 +120,9 @@ pub struct Workspace {
     /// The buffers of the systems built on this mesh, kept between them
     /// ([`Workspace::system`], [`Workspace::keep_system`]).
     system: SystemBuffers,
+    /// Eq. 13's factored matrices at each interval's points, as the last
+    /// [`Workspace::linearize_keeping`] evaluated them.
+    kept: Vec<IntervalFactors>,
     /// Buffers a linearization for sensitivities handed back for the next one
     /// ([`Workspace::take_buffer`], [`Workspace::give_buffer`]).
     buffers: Vec<Vec<f64>>,
@@ -152,6 +156,7 @@ impl Workspace {
             unfactored: false,
             dynamics: None,
             system: SystemBuffers::default(),
+            kept: Vec::new(),
             buffers: Vec::new(),
         })
     }
@@ -257,7 +262,26 @@ impl Workspace {
     /// zero pivot. The residual is then [`Workspace::residual`], the Jacobian
     /// [`Workspace::jacobian`], and [`Workspace::solve_again`] solves with its factors.
     pub fn linearize(&mut self, system: &System, x: &[State], report: &mut SolveReport) -> bool {
-        self.linearize_with(system, x, report, |_| {}, 0.0)
+        self.linearize_with(system, x, report, |_| {}, 0.0, None)
+    }
+
+    /// [`Workspace::linearize`] that also keeps eq. 13's factored matrix at every
+    /// interval's points ([`System::jacobian_keeping`]) in [`Workspace::kept`], for the mass
+    /// of the linearized dynamics at `x`.
+    pub(crate) fn linearize_keeping(&mut self, system: &System, x: &[State], report: &mut SolveReport) -> bool {
+        let links = x.len() - 1;
+        if self.kept.len() != links {
+            self.kept = vec![IntervalFactors::identity(); links];
+        }
+        let mut kept = std::mem::take(&mut self.kept);
+        let ok = self.linearize_with(system, x, report, |_| {}, 0.0, Some(&mut kept));
+        self.kept = kept;
+        ok
+    }
+
+    /// The factored matrices the last [`Workspace::linearize_keeping`] kept, one per link.
+    pub(crate) fn kept(&self) -> &[IntervalFactors] {
+        &self.kept
     }
 
     /// [`Workspace::linearize`] with `shift` applied to the Jacobian's values before they are
@@ -271,11 +295,12 @@ impl Workspace {
         report: &mut SolveReport,
         shift: impl FnOnce(&mut [f64]),
     ) -> bool {
-        self.linearize_with(system, x, report, shift, f64::INFINITY)
+        self.linearize_with(system, x, report, shift, f64::INFINITY, None)
     }
 
     /// [`Workspace::linearize`] with `shift` applied to the values before they are factored,
-    /// the drift set to `drift` (0: the factors are the Jacobian's at `x`).
+    /// the drift set to `drift` (0: the factors are the Jacobian's at `x`), eq. 13's
+    /// factored matrices kept in `kept` when given.
     fn linearize_with(
         &mut self,
         system: &System,
@@ -283,10 +308,13 @@ impl Workspace {
         report: &mut SolveReport,
         shift: impl FnOnce(&mut [f64]),
         drift: f64,
+        kept: Option<&mut [IntervalFactors]>,
     ) -> bool {
         let t = Instant::now();
         self.rates_valid = false;
-        let ok = system.jacobian(x, &mut self.residual, &mut self.values).is_ok();
+        let ok = system
+            .jacobian_keeping(x, &mut self.residual, &mut self.values, kept)
+            .is_ok();
         report.timings.assembly += t.elapsed();
         report.evaluations.jacobian += 1;
         report.evaluations.equations += system.rate_evaluations();

@@ -47,7 +47,7 @@ fn verdicts(robot: &Robot, solution: &Solution) -> (Stability, Stability, Stabil
     assert!(ws.linearize(&system, &x, &mut report));
     let s: Vec<f64> = system.mesh.nodes.iter().map(|n| n.s).collect();
     let counted = ws.verdict(|v| stability::assess(v, &s));
-    let plain = dynamics::assess(&system, &x, &mut ws);
+    let plain = dynamics::assess(&system, &x, &mut ws, false);
     let border = Border::new(&system, &x, &mut ws, &mut report).unwrap();
     let bordered = dynamics::assess_bordered(&system, &x, &mut ws, &mut |a| border.project(&x, a));
     (counted, plain, bordered)

@@ -33,6 +33,7 @@ fn spd_inverse3(a: &Matrix3<f64>) -> Option<Matrix3<f64>> {
 /// two independent divisions and no square roots on its dependency chain; replacing a 6x6
 /// Cholesky written out for the fixed size (six dependent square roots) by it took a warm
 /// solve of case H from 256 to 203 us on the development machine.
+#[derive(Clone)]
 pub(super) struct Schur6 {
     P_inv: Matrix3<f64>,
     G: Matrix3<f64>,
@@ -117,6 +118,7 @@ impl Schur6 {
 /// LU where rounding made M fail the SPD test. Everything
 /// is solved in place on transposed right-hand sides, so no 6x9 matrix is moved or wrapped
 /// in an `Option`.
+#[derive(Clone)]
 pub(super) enum Factor {
     Spd(Schur6),
     /// The fallback, computed only when M is not numerically SPD.

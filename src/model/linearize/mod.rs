@@ -391,6 +391,25 @@ pub(crate) fn linearize_inline(
     v: &Vector3<f64>,
     u: &Vector3<f64>,
 ) -> Result<Linearization> {
+    linearize_keeping(model, site, segment_end, R, v, u, None)
+}
+
+/// [`linearize_inline`] that also moves eq. 13's factored matrix M into `keep` when given
+/// (the interval Jacobian at an answer whose verdict comes from the linearized dynamics:
+/// the mass solves with M at the same points, `collocation/dynamics.rs`).
+///
+/// # Errors
+/// As [`linearize`].
+#[inline(always)]
+pub(crate) fn linearize_keeping(
+    model: &Model,
+    site: &Site,
+    segment_end: f64,
+    R: &Matrix3<f64>,
+    v: &Vector3<f64>,
+    u: &Vector3<f64>,
+    keep: Option<&mut Factored>,
+) -> Result<Linearization> {
     // Locals, not a Point: the frictionless path moves nothing between the passes.
     let mut cache = TendonCache::new();
     let assembled = assemble(model, site, segment_end, (R, v, u), Some(&mut cache), None)?;
@@ -400,11 +419,36 @@ pub(crate) fn linearize_inline(
         return Err(breakdown(site.s));
     }
     // d(v', u') = -M^-1 dF
-    Ok(Linearization {
+    let linearization = Linearization {
         rates: Vector6::from_fn(|i, _| x[i]),
         d_strains: Matrix6::from_fn(|i, k| -dFt[(k, i)]),
         d_rotation: Matrix6x3::from_fn(|i, k| -dFt[(6 + k, i)]),
-    })
+    };
+    if let Some(keep) = keep {
+        keep.0 = assembled.factor;
+    }
+    Ok(linearization)
+}
+
+/// Eq. 13's 6x6 matrix M at one point, factored ([`linearize_keeping`] keeps it): solves
+/// with it give the bits [`rates_and_solve`] gives at the same site and strains (M does not
+/// depend on the orientation).
+#[derive(Clone)]
+pub(crate) struct Factored(Factor);
+
+impl Factored {
+    /// A placeholder (the factors of the identity) for a buffer that
+    /// [`linearize_keeping`] fills.
+    pub(crate) fn identity() -> Self {
+        Factored(Factor::new(&Matrix6::identity(), true))
+    }
+
+    /// Overwrites each row of `bt` (a right-hand side of M, transposed) with the row of
+    /// the solution, as [`rates_and_solve`] does; false when M is singular.
+    #[inline(always)]
+    pub(crate) fn solve_rows<const C: usize>(&self, bt: &mut SMatrix<f64, C, 6>) -> bool {
+        self.0.solve_transposed_mut(bt)
+    }
 }
 
 /// Eq. 13 (corrected) at one point, assembled and factored (pass 1 of [`linearize`]) for
