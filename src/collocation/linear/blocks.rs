@@ -246,6 +246,9 @@ impl BlockElimination {
 
     /// The recorded row operations of every step on `rhs`: gives each step's transformed
     /// pivot rows to `pivot_rows(k, rows)` and returns the last node's transformed rows.
+    /// Always inlined, so that [`BlockElimination::solve_again_avx2`] runs it compiled for
+    /// AVX2 too (as a call it was compiled for the baseline).
+    #[inline(always)]
     fn replay_all(&self, rhs: &[f64], mut pivot_rows: impl FnMut(usize, &[f64])) -> [f64; NODE] {
         let n = self.links;
         let mut carry = [0.0; CARRY];
