@@ -590,7 +590,7 @@ impl Workspace {
             return None;
         }
         self.linear.solve_again(rhs, &mut self.step);
-        self.step.iter().all(|x| x.is_finite()).then_some(&self.step[..])
+        all_finite(&self.step).then_some(&self.step[..])
     }
 
     /// The last node's 12 unknowns of [`Workspace::solve_again`]'s solution, without
