@@ -489,3 +489,52 @@ fn classify(ritz: &[Ritz]) -> Vibration {
         eigenvalues,
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::report::{Method, SolveReport};
+
+    /// The Jacobian that keeps eq. 13's factored matrices is the plain one, and the mass
+    /// from those matrices is the mass evaluated afresh, bit for bit, on every interval
+    /// (the same points, the same solves): case S with a dead tip moment, and case H with
+    /// one and a point load halfway (a breakpoint: a jump between two intervals, after which
+    /// no node is shared), at their answers.
+    #[test]
+    fn the_kept_factors_give_the_jacobian_and_the_mass_bit_for_bit() {
+        let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+        let mut s = crate::cases::case_s();
+        s.loads.tip_moment = Vector3::new(2e-3, 1e-3, 0.0);
+        let mut h = crate::cases::case_h();
+        h.loads.tip_moment = Vector3::new(2e-3, 1e-3, 0.0);
+        h.loads.point.push(crate::model::loads::PointLoad {
+            s: 0.5 * h.length(),
+            force: Vector3::new(0.05, 0.0, 0.0),
+            moment: Vector3::zeros(),
+        });
+        for (robot, jumps) in [(s, 0), (h, 1)] {
+            let solution = crate::collocation::solve(&robot, &Default::default()).unwrap();
+            let (system, x, mut ws) = Sensitivity::new(&robot, &solution).unwrap().into_parts();
+            let mut report = SolveReport::new(Method::Collocation);
+            assert!(ws.linearize(&system, &x, &mut report));
+            let plain = ws.jacobian().to_vec();
+            assert!(ws.linearize_keeping(&system, &x, &mut report));
+            assert_eq!(bits(ws.jacobian()), bits(&plain));
+            let fresh = Mass::new(&system, &x, None).unwrap();
+            let kept = Mass::new(&system, &x, Some(ws.kept())).unwrap();
+            let mut compared = 0;
+            for (k, (a, b)) in fresh.blocks.iter().zip(&kept.blocks).enumerate() {
+                match (a, b) {
+                    (Some(a), Some(b)) => {
+                        assert_eq!(bits(a.as_slice()), bits(b.as_slice()), "interval {k}");
+                        compared += 1;
+                    }
+                    (None, None) => {}
+                    _ => panic!("interval {k}: a jump in one mass only"),
+                }
+            }
+            assert_eq!(fresh.blocks.len() - compared, jumps);
+            assert!(compared >= 16, "{compared} intervals");
+        }
+    }
+}
