@@ -373,30 +373,14 @@ pub fn linearize(
     v: &Vector3<f64>,
     u: &Vector3<f64>,
 ) -> Result<Linearization> {
-    linearize_inline(model, site, segment_end, R, v, u)
+    linearize_keeping(model, site, segment_end, R, v, u, None)
 }
 
 /// [`linearize`] always inlined, for a caller compiled for AVX2 (the interval Jacobian,
 /// `collocation::residual`): its arithmetic is then compiled for AVX2 too, with the same
-/// operations in the same order.
-///
-/// # Errors
-/// As [`linearize`].
-#[inline(always)]
-pub(crate) fn linearize_inline(
-    model: &Model,
-    site: &Site,
-    segment_end: f64,
-    R: &Matrix3<f64>,
-    v: &Vector3<f64>,
-    u: &Vector3<f64>,
-) -> Result<Linearization> {
-    linearize_keeping(model, site, segment_end, R, v, u, None)
-}
-
-/// [`linearize_inline`] that also moves eq. 13's factored matrix M into `keep` when given
-/// (the interval Jacobian at an answer whose verdict comes from the linearized dynamics:
-/// the mass solves with M at the same points, `collocation/dynamics.rs`).
+/// operations in the same order. It also moves eq. 13's factored matrix M into `keep` when
+/// given (the interval Jacobian at an answer whose verdict comes from the linearized
+/// dynamics: the mass solves with M at the same points, `collocation/dynamics.rs`).
 ///
 /// # Errors
 /// As [`linearize`].
