@@ -267,8 +267,10 @@ impl Workspace {
 
     /// [`Workspace::linearize`] that also keeps eq. 13's factored matrix at every
     /// interval's points ([`System::jacobian_keeping`]) in [`Workspace::kept`], for the mass
-    /// of the linearized dynamics at `x`.
+    /// of the linearized dynamics at `x`. Frictionless systems only (with friction the
+    /// interval Jacobian is friction's, which keeps nothing here).
     pub(crate) fn linearize_keeping(&mut self, system: &System, x: &[State], report: &mut SolveReport) -> bool {
+        debug_assert!(system.friction.is_none(), "no factored matrices kept with friction");
         let links = x.len() - 1;
         if self.kept.len() != links {
             self.kept = vec![IntervalFactors::identity(); links];
