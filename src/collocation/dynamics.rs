@@ -80,7 +80,7 @@ pub(crate) struct Mass {
 impl Mass {
     /// The mass of `system` linearized at the equilibrium `x` (node states); `kept`, when
     /// given, holds eq. 13's factored matrices at every interval's points of the Jacobian at
-    /// `x` ([`linearize_keeping`]), which spare evaluating eq. 13 there again.
+    /// `x` ([`Workspace::linearize_keeping`]), which spare evaluating eq. 13 there again.
     ///
     /// # Errors
     /// A model breakdown at a collocation point.
