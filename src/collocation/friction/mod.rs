@@ -459,7 +459,7 @@ fn refine_with_friction(
         let estimated = estimate_with_friction(&mut border, &x, converged).ok().flatten();
         report.timings.estimate += t.elapsed();
         border.load(Point::Current);
-        let system = border.system;
+        let system = &border.system;
         workspace::keep(system.mesh.clone(), options.linear_solver, ws);
         let Some(profile) = system.friction.as_ref() else {
             return Err(error::invalid("tendons", "have no friction", "solve without friction"));
@@ -477,9 +477,9 @@ fn refine_with_friction(
         };
         let Some(fine) = next else {
             pipeline::record_estimate(&mut report, estimated.as_ref().map(|(c, _)| c), options, length);
-            report.stability = Stability::Unknown {
-                reason: "friction is not conservative".into(),
-            };
+            let t = Instant::now();
+            report.stability = super::dynamics::friction::assess(&mut border, &x);
+            report.timings.stability += t.elapsed();
             report.timings.total = start.elapsed();
             // The estimate's node rates are eq. 13 with friction at the same states and tensions.
             let rates = estimated.as_ref().map(|(c, _)| c.node_rates.as_slice());
