@@ -528,6 +528,13 @@ pub(super) fn solve_pull_ins(
         },
         slope,
     )?;
+    // The last solve's verdict is the one of its base-entry tensions held; the pull-ins'
+    // length constraints are not in the border of its linearized dynamics.
+    solution.report.stability = Stability::Unknown {
+        reason: "tendons with friction and displacement control: the linearized dynamics with friction holds \
+                 tensions, not pull-ins"
+            .into(),
+    };
     solution.report.timings.total = start.elapsed();
     Ok(solution)
 }
