@@ -51,7 +51,10 @@ fn vanishing_friction_gives_the_frictionless_verdict() {
             for (got, want) in lowest(&rough, &solution, 4).iter().zip(&want) {
                 // 1e-7 relative: mu = 1e-9 moves the lowest modes by about 1e-10 relative
                 // (measured), and the two solves' meshes and rounding by less
-                assert!((got - want).norm() <= 1e-7 * want.norm(), "{motion:?}: {got} against {want}");
+                assert!(
+                    (got - want).norm() <= 1e-7 * want.norm(),
+                    "{motion:?}: {got} against {want}"
+                );
             }
         }
     }

@@ -190,7 +190,11 @@ fn quadrature<const ROWS: usize>(
     z: [&SMatrix<f64, ROWS, 6>; 3],
 ) -> SMatrix<f64, ROWS, 12> {
     let mut block = SMatrix::<f64, ROWS, 12>::zeros();
-    for (z, weight, (wa, wb)) in [(z[0], 1.0, (1.0, 0.0)), (z[1], 4.0, (0.5, 0.5)), (z[2], 1.0, (0.0, 1.0))] {
+    for (z, weight, (wa, wb)) in [
+        (z[0], 1.0, (1.0, 0.0)),
+        (z[1], 4.0, (0.5, 0.5)),
+        (z[2], 1.0, (0.0, 1.0)),
+    ] {
         let z = z * (h / 6.0 * weight);
         let (force, moment) = (z.fixed_columns::<3>(0), z.fixed_columns::<3>(3));
         for (column, w, R) in [(0, wa, Ra), (6, wb, Rb)] {

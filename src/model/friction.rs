@@ -516,9 +516,8 @@ impl FrictionLinearization {
         if m > 0 {
             // J^-1 b = M^-1 b - Y S^-1 G^T M^-1 b (Woodbury, as `linearize_into`), S = I + G^T Y.
             let gradients: Vec<Vector6<f64>> = slips.iter().map(Slip::gradient).collect();
-            let schur = nalgebra::DMatrix::from_fn(m, m, |j, l| {
-                f64::from(u8::from(j == l)) + gradients[j].dot(&slips[l].y)
-            });
+            let schur =
+                nalgebra::DMatrix::from_fn(m, m, |j, l| f64::from(u8::from(j == l)) + gradients[j].dot(&slips[l].y));
             let lu = schur.lu();
             for r in 0..6 {
                 let mb: Vector6<f64> = loads.row(r).transpose();

@@ -80,19 +80,31 @@ impl CapstanMass {
         let mut rows = Vec::new();
         let (mut za, mut zm, mut zb) = (SMatrix::<f64, 6, 6>::zeros(), SMatrix::zeros(), SMatrix::zeros());
         let (mut ta, mut tm, mut tb) = (Vec::new(), Vec::new(), Vec::new());
+        // The node whose evaluation the last interval left in (zb, tb, end), with its
+        // segment and multipliers: the next interval's start when it has the same inputs.
+        let mut carried: Option<(usize, f64, Option<Vec<f64>>)> = None;
+        let mut end = None;
         for k in 0..links {
             let Some(sites) = system.interval_sites(k) else {
+                carried = None;
                 blocks.push(None);
                 continue;
             };
             let seg = system.mesh.nodes[k].segment_end;
             let (a, b) = (&x[k], &x[k + 1]);
             let h = sites.end.s - sites.start.s;
-            let w = profile.multipliers(k);
-            let w = w.as_deref();
+            let multipliers = profile.multipliers(k);
+            let w = multipliers.as_deref();
             let z_a: Vec<f64> = profile.z.iter().map(|z| z[k]).collect();
             let z_b: Vec<f64> = profile.z.iter().map(|z| z[k + 1]).collect();
-            let (ra, kappa_a) = point(&sites.start, seg, (&a.R, &a.v, &a.u), &z_a, w, &mut za, &mut ta)?;
+            let (ra, kappa_a) = match (carried.take(), end.take()) {
+                (Some((node, s, kept)), Some(start)) if node == k && s == seg && kept.as_deref() == w => {
+                    std::mem::swap(&mut za, &mut zb);
+                    std::mem::swap(&mut ta, &mut tb);
+                    start
+                }
+                _ => point(&sites.start, seg, (&a.R, &a.v, &a.u), &z_a, w, &mut za, &mut ta)?,
+            };
             let (rb, kappa_b) = point(&sites.end, seg, (&b.R, &b.v, &b.u), &z_b, w, &mut zb, &mut tb)?;
             // The Hermite-Simpson midpoint of (y, z), as the interval's rows take it.
             let [y0, y1, f0, f1] = end_values(sites, a, b, &ra, &rb);
@@ -111,6 +123,8 @@ impl CapstanMass {
                 }
             }
             blocks.push(Some(block));
+            end = Some((rb, kappa_b.clone()));
+            carried = Some((k + 1, seg, multipliers.clone()));
             // The capstan row psi = z_b - z_a - h/6 (kappa~_a + 4 kappa~_m + kappa~_b)
             // gains the same quadrature of the turning rates' response, with the sign the
             // backbone rows' rates have in theirs (module docs of `dynamics`).
