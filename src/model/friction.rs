@@ -537,9 +537,9 @@ impl FrictionLinearization {
             // d turning_j = (w_j mu_j / tau_j) q^_j . dq_j, dq_j through the rates alone
             // (the state is fixed), as `linearize_into`'s d_turning.
             let factor = sl.signed_mu * sl.tp.inv_speed / sl.tp.k;
-            for r in 0..6 {
+            for (r, t) in turning[sl.slot].iter_mut().enumerate() {
                 let change = sl.normal_change(&loads.row(r).transpose());
-                turning[sl.slot][r] = factor * sl.q_hat.dot(&change);
+                *t = factor * sl.q_hat.dot(&change);
             }
         }
         loads.iter().all(|v| v.is_finite())
