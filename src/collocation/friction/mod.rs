@@ -322,11 +322,26 @@ fn estimate_with_friction(
 /// Solves a robot with tendons with friction (validated, with `options` validated): the
 /// frictionless robot first ([`pipeline::solve_start`]: its equilibrium choice on the first
 /// mesh, which also picks the mesh to start on), then [`refine_with_friction`] from its
-/// states and constant tensions.
+/// states and constant tensions, with the verdict of its linearized dynamics.
 ///
 /// # Errors
 /// As [`super::solve`].
 pub(super) fn solve(robot: &Robot, options: &Options, warm: Option<&Solution>, cache: &mut Cache) -> Result<Solution> {
+    solve_assessed(robot, options, warm, cache, true)
+}
+
+/// [`solve`], with the verdict of the linearized dynamics when `assess` (else `unknown`:
+/// the held pull-ins' loop, whose verdict is not this solve's).
+///
+/// # Errors
+/// As [`super::solve`].
+fn solve_assessed(
+    robot: &Robot,
+    options: &Options,
+    warm: Option<&Solution>,
+    cache: &mut Cache,
+    assess: bool,
+) -> Result<Solution> {
     let start = Instant::now();
     let mut smooth = robot.clone();
     for t in &mut smooth.tendons {
@@ -340,7 +355,7 @@ pub(super) fn solve(robot: &Robot, options: &Options, warm: Option<&Solution>, c
         workspace::keep(c.mesh, c.solver, c.workspace);
     }
     // The counts and timings of the frictionless solve are part of this one.
-    refine_with_friction(robot, options, (first.mesh, first.x), None, first.report, start)
+    refine_with_friction(robot, options, (first.mesh, first.x), None, (first.report, assess), start)
 }
 
 /// Solves a robot with friction (validated, with `options` validated) from `near`, the
@@ -372,7 +387,7 @@ fn solve_near(robot: &Robot, options: &Options, near: &Solution) -> Result<Solut
     report.notes = near.report.notes.clone();
     let mesh = Mesh::from_points(robot, &s)?;
     let x = interpolate(&Model::new(robot), near, &mesh);
-    refine_with_friction(robot, options, (mesh, x), Some((s, z)), report, start)
+    refine_with_friction(robot, options, (mesh, x), Some((s, z)), (report, false), start)
 }
 
 /// On the mesh and from the node states of `from`, Newton bordered by the log tensions
@@ -380,7 +395,9 @@ fn solve_near(robot: &Robot, options: &Options, near: &Solution) -> Result<Solut
 /// the capstan start of [`start`] when None), its error estimate ([`estimate_with_friction`]) and, with a
 /// tolerance, re-meshing until the tip's estimate and the tension profile's (relative,
 /// against the same tolerance as the rotation) meet it. `report` holds what came before
-/// (the frictionless solve's counts, or none); `start` is when the solve began.
+/// (the frictionless solve's counts, or none), with whether to assess the answer's
+/// stability (the linearized dynamics with the capstan rows; else `unknown`); `start` is
+/// when the solve began.
 ///
 /// # Errors
 /// As [`super::solve`].
@@ -389,7 +406,7 @@ fn refine_with_friction(
     options: &Options,
     from: (Mesh, Vec<State>),
     mut previous: Option<(Vec<f64>, Vec<Vec<f64>>)>,
-    mut report: SolveReport,
+    (mut report, assess): (SolveReport, bool),
     start: Instant,
 ) -> Result<Solution> {
     let (mut mesh, mut x) = from;
@@ -478,7 +495,11 @@ fn refine_with_friction(
         let Some(fine) = next else {
             pipeline::record_estimate(&mut report, estimated.as_ref().map(|(c, _)| c), options, length);
             let t = Instant::now();
-            report.stability = super::dynamics::friction::assess(&mut border, &x);
+            report.stability = if assess {
+                super::dynamics::friction::assess(&mut border, &x)
+            } else {
+                held_unknown()
+            };
             report.timings.stability += t.elapsed();
             report.timings.total = start.elapsed();
             // The estimate's node rates are eq. 13 with friction at the same states and tensions.
@@ -524,19 +545,23 @@ pub(super) fn solve_pull_ins(
         Some(&first),
         |r, warm| match (std::mem::replace(&mut near, true), warm) {
             (true, Some(last)) => solve_near(r, options, last),
-            _ => solve(r, options, warm, cache),
+            _ => solve_assessed(r, options, warm, cache, false),
         },
         slope,
     )?;
-    // The last solve's verdict is the one of its base-entry tensions held; the pull-ins'
-    // length constraints are not in the border of its linearized dynamics.
-    solution.report.stability = Stability::Unknown {
+    solution.report.timings.total = start.elapsed();
+    Ok(solution)
+}
+
+/// The verdict of a solve with friction and displacement control: the pull-ins' length
+/// constraints are not in the border of the linearized dynamics with friction (its solves
+/// hold the base-entry tensions), so none.
+fn held_unknown() -> Stability {
+    Stability::Unknown {
         reason: "tendons with friction and displacement control: the linearized dynamics with friction holds \
                  tensions, not pull-ins"
             .into(),
-    };
-    solution.report.timings.total = start.elapsed();
-    Ok(solution)
+    }
 }
 
 /// dQ/dtau of the `held` tendons at `solution` of `robot` (tension-controlled), row major:
