@@ -355,7 +355,14 @@ fn solve_assessed(
         workspace::keep(c.mesh, c.solver, c.workspace);
     }
     // The counts and timings of the frictionless solve are part of this one.
-    refine_with_friction(robot, options, (first.mesh, first.x), None, (first.report, assess), start)
+    refine_with_friction(
+        robot,
+        options,
+        (first.mesh, first.x),
+        None,
+        (first.report, assess),
+        start,
+    )
 }
 
 /// Solves a robot with friction (validated, with `options` validated) from `near`, the
