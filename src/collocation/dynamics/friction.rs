@@ -15,9 +15,10 @@
 //! inertia load taken from eq. 13 with friction (the tangential loads follow the normal loads
 //! the accelerated rates press: [`FrictionLinearization::load_response`]); M_psi is the same
 //! quadrature of the capstan rows' turning rates, which depend on the rates (0 on a stick
-//! row, which depends on node states alone). Shift-invert at 0 with the factors of Newton's
-//! last bordered Jacobian (the staircase) gives the lowest modes, classified as
-//! [`super::classify`] classifies the frictionless ones.
+//! row, which depends on node states alone). Shift-invert at 0 with the factors of the
+//! bordered Jacobian at the answer (the staircase: Newton's last, when it was evaluated
+//! there) gives the lowest modes, classified as [`super::classify`] classifies the
+//! frictionless ones.
 
 #![allow(non_snake_case)]
 
@@ -27,7 +28,7 @@ use crate::collocation::residual::end_values;
 use crate::collocation::unknowns::{THETA, U, V, unknowns};
 use crate::model::equations::{Model, Site};
 use crate::model::friction::{FrictionLinearization, linearize_into};
-use crate::report::Stability;
+use crate::report::{SolveReport, Stability};
 use crate::so3;
 use crate::solution::State;
 use nalgebra::{Matrix3, SMatrix, Vector3};
@@ -153,8 +154,25 @@ impl CapstanMass {
 
 /// The verdict of the linearized dynamics at the equilibrium `x` of `border`'s system (its
 /// profile loaded at the solved log tensions), with the factors of Newton's last bordered
-/// Jacobian held in its staircase.
-pub(crate) fn assess(border: &mut Capstan, x: &[State]) -> Stability {
+/// Jacobian held in its staircase when `fresh` (that Jacobian belongs to `x`: evaluated
+/// within Newton's stopping distance of it, docs/stability.md "Which Jacobian"), else with
+/// the bordered Jacobian evaluated and factored at `x` for it (counted in `report`).
+pub(crate) fn assess(border: &mut Capstan, x: &[State], fresh: bool, report: &mut SolveReport) -> Stability {
+    if !fresh {
+        match border.factor_at(x, report) {
+            Ok(true) => {}
+            Ok(false) => {
+                return Stability::Unknown {
+                    reason: "the bordered Jacobian at the solution is singular".into(),
+                };
+            }
+            Err(e) => {
+                return Stability::Unknown {
+                    reason: format!("the bordered Jacobian at the solution could not be evaluated: {e}"),
+                };
+            }
+        }
+    }
     modes(border, x, KRYLOV, false).stability
 }
 

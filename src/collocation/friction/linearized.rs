@@ -77,6 +77,26 @@ impl<'r> Capstan<'r> {
         self.stairs.ready && self.solve_factored(rhs_x, rhs_z, dx).is_some_and(f64::is_finite)
     }
 
+    /// Evaluates the bordered Jacobian at `x` (the profile's current log tensions) and
+    /// factors it into the staircase, for a verdict that belongs to `x` when Newton's last
+    /// factors belong to an earlier iterate; counted in `report`. False for a singular
+    /// matrix.
+    ///
+    /// # Errors
+    /// A model breakdown at a visited state or a border block that is not finite.
+    pub(crate) fn factor_at(&mut self, x: &[State], report: &mut SolveReport) -> Result<bool> {
+        let t = Instant::now();
+        let mut residual = vec![0.0; self.system.unknowns() + self.z.len()];
+        let mut values = vec![0.0; unknowns::nonzeros(&self.system.mesh)];
+        self.evaluate(x, &mut residual, &mut values)?;
+        report.evaluations.jacobian += 1;
+        report.timings.assembly += t.elapsed();
+        let t = Instant::now();
+        let ok = self.factor(&values);
+        report.timings.factorization += t.elapsed();
+        Ok(ok)
+    }
+
     /// Factors the bordered matrix (its staircase) from the Jacobian values `ws` holds and
     /// has factored ([`Capstan::linearize`] then the workspace's factoring), unless it is
     /// factored already; false for a singular matrix or a workspace without factors.

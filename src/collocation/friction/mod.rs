@@ -483,6 +483,8 @@ fn refine_with_friction(
         let estimated = estimate_with_friction(&mut border, &x, converged).ok().flatten();
         report.timings.estimate += t.elapsed();
         border.load(Point::Current);
+        // Whether the staircase's factors are the Jacobian's at x, for the verdict.
+        let fresh = ws.jacobian_at_iterate();
         let system = &border.system;
         workspace::keep(system.mesh.clone(), options.linear_solver, ws);
         let Some(profile) = system.friction.as_ref() else {
@@ -503,7 +505,7 @@ fn refine_with_friction(
             pipeline::record_estimate(&mut report, estimated.as_ref().map(|(c, _)| c), options, length);
             let t = Instant::now();
             report.stability = if assess {
-                super::dynamics::friction::assess(&mut border, &x)
+                super::dynamics::friction::assess(&mut border, &x, fresh, &mut report)
             } else {
                 held_unknown()
             };
