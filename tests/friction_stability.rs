@@ -161,3 +161,37 @@ fn a_column_with_a_friction_tendon_diverges_past_eulers_load() {
         assert!((with - without).abs() < 1e-4 * mu, "{with} against {without}");
     }
 }
+
+/// What the verdict does not cover says so: a load-history step (its Newton ends on chord
+/// steps with an earlier step's factors and stick rows) and friction with displacement
+/// control (the pull-ins' constraints are not in the border).
+#[test]
+fn history_steps_and_held_pull_ins_keep_unknown_with_the_reason() {
+    use tdcr::Parameter;
+    use tdcr::analysis::history::history;
+    use tdcr::analysis::sweep::{Input, Ranges};
+    let mut robot = cases::prototype();
+    robot.tendons[0].friction = Some(Friction::pull(0.1));
+    robot.tendons[0].stiffness = Some(2000.0);
+    let ranges = Ranges::new(
+        robot.clone(),
+        vec![(Input::Parameter(Parameter::Tension(0)), vec![1.0, 2.0, 1.5])],
+    )
+    .unwrap();
+    let result = history(&ranges, &Default::default()).unwrap();
+    assert!(result.failure.is_none());
+    for step in &result.steps {
+        match &step.solution.report.stability {
+            Stability::Unknown { reason } => assert!(reason.contains("load-history step"), "{reason}"),
+            other => panic!("a history step: {other}"),
+        }
+    }
+    let mut held = cases::case_s();
+    held.tendons[0].friction = Some(Friction::pull(0.1));
+    held.tendons[0].set_displacement(0.005);
+    let solution = tdcr::solve(&held, &Default::default()).unwrap();
+    match &solution.report.stability {
+        Stability::Unknown { reason } => assert!(reason.contains("displacement control"), "{reason}"),
+        other => panic!("friction with a held pull-in: {other}"),
+    }
+}
