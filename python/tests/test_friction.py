@@ -61,3 +61,15 @@ def test_tip_sensitivity_to_a_pull_in_held_with_friction_matches_a_central_diffe
     down = tdcr.solve(held(0.1 - h, 0.012), intervals=64, residual_tolerance=1e-12).tip_position
     fd = (up - down) / (2 * h)
     assert np.linalg.norm(sens.friction[:3, 0] - fd) <= 1e-6 * np.linalg.norm(fd)
+
+
+def test_a_solve_with_friction_has_the_verdict_of_its_linearized_dynamics():
+    # Pulled and released, the prototype's tendon at 2.94 N with mu = 0.1 is stable
+    # (docs/stability.md, "Tendons with friction"), no longer "unknown".
+    for motion in ["pull", "release"]:
+        robot = tdcr.Robot(
+            rod=ROD, tendons=[{"routing": ROUTING, "tension": 2.94, "friction": 0.1, "motion": motion}]
+        )
+        report = tdcr.solve(robot).report
+        assert report.stability == "stable", report.stability_detail
+        assert report.stability_detail["reason"] is None

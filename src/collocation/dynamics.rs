@@ -28,6 +28,7 @@
 #![allow(non_snake_case)]
 
 mod arnoldi;
+pub(crate) mod friction;
 mod hessenberg;
 
 use super::newton::Workspace;
@@ -139,21 +140,7 @@ impl Mass {
                 let (vm, um) = (part(V), part(U));
                 point(&sites.mid, seg, (&Rm, &vm, &um), &mut zm)?;
             }
-            let mut block = SMatrix::<f64, 6, 12>::zeros();
-            // Simpson's weights h/6 (1, 4, 1) at the start, midpoint and end, with the
-            // accelerations interpolated linearly (weights of node a, node b): each node's
-            // columns from the point's response to a unit acceleration ([`response`]).
-            for (z, weight, (wa, wb)) in [(&za, 1.0, (1.0, 0.0)), (&zm, 4.0, (0.5, 0.5)), (&zb, 1.0, (0.0, 1.0))] {
-                let z = z * (h / 6.0 * weight);
-                let (force, moment) = (z.fixed_columns::<3>(0), z.fixed_columns::<3>(3));
-                for (column, w, R) in [(0, wa, a.R), (6, wb, b.R)] {
-                    if w != 0.0 {
-                        let mut node = block.fixed_columns_mut::<6>(column);
-                        node.fixed_columns_mut::<3>(0).add_assign(force * w);
-                        node.fixed_columns_mut::<3>(3).add_assign(moment * R * w);
-                    }
-                }
-            }
+            let mut block = quadrature(h, (&a.R, &b.R), [&za, &zm, &zb]);
             for r in 3..6 {
                 for c in 0..12 {
                     block[(r, c)] *= length;
@@ -206,6 +193,35 @@ impl Mass {
             y[row..row + 6].copy_from_slice(&sums);
         }
     }
+}
+
+/// The mass of an interval's rows from their responses `z` (ROWS rows, one column per
+/// acceleration component at a point) at its start, midpoint and end ([`response`]):
+/// Simpson's weights h/6 (1, 4, 1), with the accelerations interpolated linearly between the
+/// nodes (weights of node a, node b) and a node's rotation increment acting through its `R`;
+/// columns (p, theta) of node a then node b.
+fn quadrature<const ROWS: usize>(
+    h: f64,
+    (Ra, Rb): (&Matrix3<f64>, &Matrix3<f64>),
+    z: [&SMatrix<f64, ROWS, 6>; 3],
+) -> SMatrix<f64, ROWS, 12> {
+    let mut block = SMatrix::<f64, ROWS, 12>::zeros();
+    for (z, weight, (wa, wb)) in [
+        (z[0], 1.0, (1.0, 0.0)),
+        (z[1], 4.0, (0.5, 0.5)),
+        (z[2], 1.0, (0.0, 1.0)),
+    ] {
+        let z = z * (h / 6.0 * weight);
+        let (force, moment) = (z.fixed_columns::<3>(0), z.fixed_columns::<3>(3));
+        for (column, w, R) in [(0, wa, Ra), (6, wb, Rb)] {
+            if w != 0.0 {
+                let mut node = block.fixed_columns_mut::<6>(column);
+                node.fixed_columns_mut::<3>(0).add_assign(force * w);
+                node.fixed_columns_mut::<3>(3).add_assign(moment * *R * w);
+            }
+        }
+    }
+    block
 }
 
 /// Unknowns per node that carry mass: p and theta (the inertia loads depend on their
@@ -327,14 +343,19 @@ pub struct Vibration {
 ///
 /// # Errors
 /// As [`crate::collocation::sensitivity::Sensitivity::new`]: an invalid robot, a solution that
-/// does not solve its collocation system, a singular Jacobian; tendons with friction.
+/// does not solve its collocation system, a singular Jacobian. With tendons with friction,
+/// the dynamics of full slip in each tendon's motion about the solution's tension profile
+/// (docs/stability.md, "Tendons with friction"; a load-history step's stuck stretches are
+/// not read from a solution, its report carries the step's verdict).
 pub fn vibration(robot: &Robot, solution: &Solution) -> crate::Result<Vibration> {
-    if let Some(i) = robot.tendons.iter().position(|t| t.active_friction().is_some()) {
-        return Err(crate::error::invalid(
-            format!("tendon {} friction", i + 1),
-            "is set; the linearized dynamics does not include the capstan rows of tendons with friction",
-            "set the friction to 0 for a verdict of the frictionless robot",
-        ));
+    if crate::model::friction::any(robot) {
+        // The bordered dynamics of full slip in each tendon's motion ([`friction`]), on the
+        // solution's tension profile.
+        let (mut border, states, ws) = Sensitivity::new(robot, solution)?.into_border();
+        if !border.factor_from(&ws) {
+            return Err(super::sensitivity::singular());
+        }
+        return Ok(friction::modes(&mut border, &states, KRYLOV_MODES, true));
     }
     let (system, states, mut ws) = Sensitivity::new(robot, solution)?.into_parts();
     Ok(modes(
@@ -427,8 +448,24 @@ fn modes(
             None => false,
         }
     };
-    let Some(ritz) = arnoldi(&mut operator, x.len() * MOVING, krylov, all) else {
-        return unknown("the Jacobian's factors gave no finite solve for the vibration modes".into());
+    spectrum(&mut operator, x.len(), krylov, all)
+}
+
+/// The verdict and eigenvalues from `krylov` Arnoldi steps (at most, unless `all`) on
+/// `operator`, z -> E J^-1 M z on the (p, theta) parts of the unknowns of `nodes` nodes.
+fn spectrum(
+    operator: &mut impl FnMut(&[f64], &mut Vec<f64>) -> bool,
+    nodes: usize,
+    krylov: usize,
+    all: bool,
+) -> Vibration {
+    let Some(ritz) = arnoldi(operator, nodes * MOVING, krylov, all) else {
+        return Vibration {
+            stability: Stability::Unknown {
+                reason: "the Jacobian's factors gave no finite solve for the vibration modes".into(),
+            },
+            eigenvalues: Vec::new(),
+        };
     };
     classify(&ritz)
 }

@@ -146,8 +146,10 @@ pub(crate) fn held_stability(model: &crate::model::equations::Model, ws: &Worksp
 /// conservative (`why`: which load), with the Jacobian at `x` evaluated and factored
 /// first: Newton's last Jacobian belongs to the iterate before `x`, which after a single
 /// step is the guess, where the internal forces (and with them the load's geometric
-/// stiffness) are still zero. Tendons with friction keep an `unknown` verdict: their capstan
-/// rows border the system and have no mass.
+/// stiffness) are still zero. A system with tendons with friction keeps an `unknown`
+/// verdict here: its capstan rows border the system, and its answer's verdict is
+/// `dynamics::friction`'s, on the bordered factors (the equilibrium choice runs on the
+/// frictionless robot).
 fn linearized_dynamics(
     system: &System,
     ws: &mut Workspace,

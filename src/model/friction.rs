@@ -492,6 +492,60 @@ fn linearize_into_kernel(
     Ok(())
 }
 
+impl FrictionLinearization {
+    /// The response of this point's rates and turning rates to body loads (distributed
+    /// force and moment, body frame, N/m and N m/m), for the mass of the linearized dynamics
+    /// with friction (docs/stability.md, "Tendons with friction"): at fixed state, tensions
+    /// and multipliers a load b changes the rates by -J^-1 b, J = M + sum_i e_i (dg_i/dx)^T
+    /// the matrix of eq. 13 with the tangential loads (module docs: the frictionless -M^-1 b,
+    /// and the tangential loads following the normal loads the new rates press), and each
+    /// turning rate w_j mu_j kappa_j by -T_j b. `loads` holds one load per row (transposed,
+    /// as [`crate::model::linearize::rates_and_solve`] takes them) and becomes row by row
+    /// (J^-1 b)^T; `turning[j]` (one per tendon of [`slipping`], 0 for those not loading
+    /// here) gets T_j b, one column per load. False for a point without an evaluation
+    /// ([`linearize_into`]) or a singular J.
+    pub(crate) fn load_response(&self, loads: &mut SMatrix<f64, 6, 6>, turning: &mut [SMatrix<f64, 1, 6>]) -> bool {
+        let Some(point) = &self.point else {
+            return false;
+        };
+        if !point.solve_rows(loads) {
+            return false;
+        }
+        let slips = &self.slips;
+        let m = slips.len();
+        if m > 0 {
+            // J^-1 b = M^-1 b - Y S^-1 G^T M^-1 b (Woodbury, as `linearize_into`), S = I + G^T Y.
+            let gradients: Vec<Vector6<f64>> = slips.iter().map(Slip::gradient).collect();
+            let schur =
+                nalgebra::DMatrix::from_fn(m, m, |j, l| f64::from(u8::from(j == l)) + gradients[j].dot(&slips[l].y));
+            let lu = schur.lu();
+            for r in 0..6 {
+                let mb: Vector6<f64> = loads.row(r).transpose();
+                let g = nalgebra::DVector::from_fn(m, |l, _| gradients[l].dot(&mb));
+                let Some(w) = lu.solve(&g) else {
+                    return false;
+                };
+                let mut out = mb;
+                for (sl, wj) in slips.iter().zip(w.iter()) {
+                    out -= sl.y * *wj;
+                }
+                loads.set_row(r, &out.transpose());
+            }
+        }
+        turning.iter_mut().for_each(|t| t.fill(0.0));
+        for sl in slips {
+            // d turning_j = (w_j mu_j / tau_j) q^_j . dq_j, dq_j through the rates alone
+            // (the state is fixed), as `linearize_into`'s d_turning.
+            let factor = sl.signed_mu * sl.tp.inv_speed / sl.tp.k;
+            for (r, t) in turning[sl.slot].iter_mut().enumerate() {
+                let change = sl.normal_change(&loads.row(r).transpose());
+                *t = factor * sl.q_hat.dot(&change);
+            }
+        }
+        loads.iter().all(|v| v.is_finite())
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -410,7 +410,9 @@ fn solve_on(robot: &Robot, options: &Options, carried: &mut Carried) -> Result<(
         report.tolerance_met = None;
     }
     report.stability = Stability::Unknown {
-        reason: "friction is not conservative".into(),
+        reason: "a load-history step: its verdict would need the Jacobian at the step's answer with its stick \
+                 rows, which its chord steps do not keep (full-slip solves have one)"
+            .into(),
     };
     report.intervals = system.mesh.intervals();
     report.unknowns = unknowns::unknowns(system.mesh.nodes.len()) + border.z.len();

@@ -62,6 +62,48 @@ impl<'r> Capstan<'r> {
         self.z.len()
     }
 
+    /// The border row of slip j's capstan (or stick) row on link k (j in the order of
+    /// [`crate::model::friction::slipping`], k within its span).
+    pub(crate) fn capstan_row(&self, j: usize, k: usize) -> usize {
+        self.offsets[j] + k
+    }
+
+    /// The backbone part dx (scaled node unknowns) of the bordered solve with the factors
+    /// of Newton's last bordered Jacobian (its staircase) for the right-hand side `rhs_x` on
+    /// the backbone rows and `rhs_z` on the border's, for the linearized dynamics
+    /// (`collocation/dynamics/friction.rs`); false without factors or for a value that is not
+    /// finite.
+    pub(crate) fn solve_with_factors(&mut self, rhs_x: &[f64], rhs_z: &[f64], dx: &mut [f64]) -> bool {
+        self.stairs.ready && self.solve_factored(rhs_x, rhs_z, dx).is_some_and(f64::is_finite)
+    }
+
+    /// Evaluates the bordered Jacobian at `x` (the profile's current log tensions) and
+    /// factors it into the staircase, for a verdict that belongs to `x` when Newton's last
+    /// factors belong to an earlier iterate; counted in `report`. False for a singular
+    /// matrix.
+    ///
+    /// # Errors
+    /// A model breakdown at a visited state or a border block that is not finite.
+    pub(crate) fn factor_at(&mut self, x: &[State], report: &mut SolveReport) -> Result<bool> {
+        let t = Instant::now();
+        let mut residual = vec![0.0; self.system.unknowns() + self.z.len()];
+        let mut values = vec![0.0; unknowns::nonzeros(&self.system.mesh)];
+        self.evaluate(x, &mut residual, &mut values)?;
+        report.evaluations.jacobian += 1;
+        report.timings.assembly += t.elapsed();
+        let t = Instant::now();
+        let ok = self.factor(&values);
+        report.timings.factorization += t.elapsed();
+        Ok(ok)
+    }
+
+    /// Factors the bordered matrix (its staircase) from the Jacobian values `ws` holds and
+    /// has factored ([`Capstan::linearize`] then the workspace's factoring), unless it is
+    /// factored already; false for a singular matrix or a workspace without factors.
+    pub(crate) fn factor_from(&mut self, ws: &Workspace) -> bool {
+        ws.has_factors() && (self.stairs.ready || self.factor(&ws.values))
+    }
+
     /// The system whose backbone rows the border borders.
     pub(crate) fn system(&self) -> &System<'r> {
         &self.system

@@ -322,11 +322,26 @@ fn estimate_with_friction(
 /// Solves a robot with tendons with friction (validated, with `options` validated): the
 /// frictionless robot first ([`pipeline::solve_start`]: its equilibrium choice on the first
 /// mesh, which also picks the mesh to start on), then [`refine_with_friction`] from its
-/// states and constant tensions.
+/// states and constant tensions, with the verdict of its linearized dynamics.
 ///
 /// # Errors
 /// As [`super::solve`].
 pub(super) fn solve(robot: &Robot, options: &Options, warm: Option<&Solution>, cache: &mut Cache) -> Result<Solution> {
+    solve_assessed(robot, options, warm, cache, true)
+}
+
+/// [`solve`], with the verdict of the linearized dynamics when `assess` (else `unknown`:
+/// the held pull-ins' loop, whose verdict is not this solve's).
+///
+/// # Errors
+/// As [`super::solve`].
+fn solve_assessed(
+    robot: &Robot,
+    options: &Options,
+    warm: Option<&Solution>,
+    cache: &mut Cache,
+    assess: bool,
+) -> Result<Solution> {
     let start = Instant::now();
     let mut smooth = robot.clone();
     for t in &mut smooth.tendons {
@@ -340,7 +355,14 @@ pub(super) fn solve(robot: &Robot, options: &Options, warm: Option<&Solution>, c
         workspace::keep(c.mesh, c.solver, c.workspace);
     }
     // The counts and timings of the frictionless solve are part of this one.
-    refine_with_friction(robot, options, (first.mesh, first.x), None, first.report, start)
+    refine_with_friction(
+        robot,
+        options,
+        (first.mesh, first.x),
+        None,
+        (first.report, assess),
+        start,
+    )
 }
 
 /// Solves a robot with friction (validated, with `options` validated) from `near`, the
@@ -372,7 +394,7 @@ fn solve_near(robot: &Robot, options: &Options, near: &Solution) -> Result<Solut
     report.notes = near.report.notes.clone();
     let mesh = Mesh::from_points(robot, &s)?;
     let x = interpolate(&Model::new(robot), near, &mesh);
-    refine_with_friction(robot, options, (mesh, x), Some((s, z)), report, start)
+    refine_with_friction(robot, options, (mesh, x), Some((s, z)), (report, false), start)
 }
 
 /// On the mesh and from the node states of `from`, Newton bordered by the log tensions
@@ -380,7 +402,9 @@ fn solve_near(robot: &Robot, options: &Options, near: &Solution) -> Result<Solut
 /// the capstan start of [`start`] when None), its error estimate ([`estimate_with_friction`]) and, with a
 /// tolerance, re-meshing until the tip's estimate and the tension profile's (relative,
 /// against the same tolerance as the rotation) meet it. `report` holds what came before
-/// (the frictionless solve's counts, or none); `start` is when the solve began.
+/// (the frictionless solve's counts, or none), with whether to assess the answer's
+/// stability (the linearized dynamics with the capstan rows; else `unknown`); `start` is
+/// when the solve began.
 ///
 /// # Errors
 /// As [`super::solve`].
@@ -389,7 +413,7 @@ fn refine_with_friction(
     options: &Options,
     from: (Mesh, Vec<State>),
     mut previous: Option<(Vec<f64>, Vec<Vec<f64>>)>,
-    mut report: SolveReport,
+    (mut report, assess): (SolveReport, bool),
     start: Instant,
 ) -> Result<Solution> {
     let (mut mesh, mut x) = from;
@@ -459,7 +483,9 @@ fn refine_with_friction(
         let estimated = estimate_with_friction(&mut border, &x, converged).ok().flatten();
         report.timings.estimate += t.elapsed();
         border.load(Point::Current);
-        let system = border.system;
+        // Whether the staircase's factors are the Jacobian's at x, for the verdict.
+        let fresh = ws.jacobian_at_iterate();
+        let system = &border.system;
         workspace::keep(system.mesh.clone(), options.linear_solver, ws);
         let Some(profile) = system.friction.as_ref() else {
             return Err(error::invalid("tendons", "have no friction", "solve without friction"));
@@ -477,9 +503,13 @@ fn refine_with_friction(
         };
         let Some(fine) = next else {
             pipeline::record_estimate(&mut report, estimated.as_ref().map(|(c, _)| c), options, length);
-            report.stability = Stability::Unknown {
-                reason: "friction is not conservative".into(),
+            let t = Instant::now();
+            report.stability = if assess {
+                super::dynamics::friction::assess(&mut border, &x, fresh, &mut report)
+            } else {
+                held_unknown()
             };
+            report.timings.stability += t.elapsed();
             report.timings.total = start.elapsed();
             // The estimate's node rates are eq. 13 with friction at the same states and tensions.
             let rates = estimated.as_ref().map(|(c, _)| c.node_rates.as_slice());
@@ -524,12 +554,23 @@ pub(super) fn solve_pull_ins(
         Some(&first),
         |r, warm| match (std::mem::replace(&mut near, true), warm) {
             (true, Some(last)) => solve_near(r, options, last),
-            _ => solve(r, options, warm, cache),
+            _ => solve_assessed(r, options, warm, cache, false),
         },
         slope,
     )?;
     solution.report.timings.total = start.elapsed();
     Ok(solution)
+}
+
+/// The verdict of a solve with friction and displacement control: the pull-ins' length
+/// constraints are not in the border of the linearized dynamics with friction (its solves
+/// hold the base-entry tensions), so none.
+fn held_unknown() -> Stability {
+    Stability::Unknown {
+        reason: "tendons with friction and displacement control: the linearized dynamics with friction holds \
+                 tensions, not pull-ins"
+            .into(),
+    }
 }
 
 /// dQ/dtau of the `held` tendons at `solution` of `robot` (tension-controlled), row major:

@@ -369,6 +369,14 @@ impl<'a> Sensitivity<'a> {
         (self.border.into_system(), self.states, self.workspace)
     }
 
+    /// The border (the system with its capstan rows), the solution's node states and the
+    /// workspace holding the factors of the backbone block's Jacobian there, for the
+    /// linearized dynamics with friction (collocation/dynamics/friction.rs), which factors
+    /// the bordered matrix from them.
+    pub(crate) fn into_border(self) -> (Capstan<'a>, Vec<State>, Workspace) {
+        (self.border, self.states, self.workspace)
+    }
+
     /// The linear-solver workspace, holding the factors of the Jacobian at the solution,
     /// with this linearization's buffers for the next one's ([`Workspace::take_buffer`]).
     pub(crate) fn into_workspace(self) -> Workspace {

@@ -1,0 +1,206 @@
+//! The linearized dynamics of an equilibrium with tendons with friction (docs/stability.md,
+//! "Tendons with friction"): the collocation system bordered by the log tensions z and
+//! their capstan rows (`collocation/friction`), each link's slip pattern held as the solve
+//! used it (full slip: w = -1 or +1; in a history, stuck links keep their stick rows).
+//!
+//! The tendons are massless, so the log tensions are algebraic unknowns like the tensions of
+//! displacement-controlled tendons, and the modes solve
+//!
+//! ```text
+//! [ J      F_z   ] [phi]        [ M_x ] [phi]
+//! [ psi_x  psi_z ] [ zeta ] = mu [ M_psi ]
+//! ```
+//!
+//! M_x is the backbone's mass of [`Mass`] with each collocation point's response to the
+//! inertia load taken from eq. 13 with friction (the tangential loads follow the normal loads
+//! the accelerated rates press: [`FrictionLinearization::load_response`]); M_psi is the same
+//! quadrature of the capstan rows' turning rates, which depend on the rates (0 on a stick
+//! row, which depends on node states alone). Shift-invert at 0 with the factors of the
+//! bordered Jacobian at the answer (the staircase: Newton's last, when it was evaluated
+//! there) gives the lowest modes, classified as [`super::classify`] classifies the
+//! frictionless ones.
+
+#![allow(non_snake_case)]
+
+use super::{KRYLOV, MOVING, Mass, Vibration, inertia_load_transposed, quadrature, restrict, spectrum};
+use crate::collocation::friction::Capstan;
+use crate::collocation::residual::end_values;
+use crate::collocation::unknowns::{THETA, U, V, unknowns};
+use crate::model::equations::{Model, Site};
+use crate::model::friction::{FrictionLinearization, linearize_into};
+use crate::report::{SolveReport, Stability};
+use crate::so3;
+use crate::solution::State;
+use nalgebra::{Matrix3, SMatrix, Vector3};
+
+/// The mass of the bordered system: the backbone's blocks and, per capstan row that has
+/// mass, its border row and its 1 x 12 block over the (p, theta) of its link's two nodes.
+struct CapstanMass {
+    backbone: Mass,
+    rows: Vec<(usize, usize, SMatrix<f64, 1, 12>)>,
+}
+
+impl CapstanMass {
+    /// The mass of `border`'s system (its profile at the current log tensions) at the
+    /// equilibrium `x`; None when eq. 13 with friction or its load response breaks down.
+    fn new(border: &Capstan, x: &[State]) -> Option<Self> {
+        let system = border.system();
+        let profile = system.friction.as_ref()?;
+        let robot = system.model.robot;
+        let length = robot.length();
+        let ratio = super::DENSITY / robot.rod.geometry.map_or(super::MODULUS, |g| g.youngs_modulus);
+        let count = profile.count();
+        let mut model: Model = system.model.clone();
+        let mut lin = FrictionLinearization::default();
+        let mut turning_at = vec![SMatrix::<f64, 1, 6>::zeros(); count];
+        // Eq. 13 with friction at a point with the slips at log tensions `z`: its rates,
+        // turning rates, response to a unit acceleration (`z6`) and the turning rates'
+        // response (`turn`, one per slip).
+        let mut point = |site: &Site,
+                         seg: f64,
+                         (Rc, v, u): (&Matrix3<f64>, &Vector3<f64>, &Vector3<f64>),
+                         z: &[f64],
+                         w: Option<&[f64]>,
+                         z6: &mut SMatrix<f64, 6, 6>,
+                         turn: &mut Vec<SMatrix<f64, 1, 6>>|
+         -> Option<(nalgebra::Vector6<f64>, Vec<f64>)> {
+            for (j, &i) in profile.slipping.iter().enumerate() {
+                model.tensions[i] = profile.tension(j, z[j]);
+            }
+            linearize_into(&model, site, seg, (Rc, v, u), &profile.slipping, w, false, &mut lin).ok()?;
+            let mut t = inertia_load_transposed(site, Rc, ratio, length);
+            if !lin.load_response(&mut t, &mut turning_at) {
+                return None;
+            }
+            *z6 = t.transpose();
+            turn.clone_from(&turning_at);
+            Some((lin.lin.rates, lin.turning.clone()))
+        };
+        let links = x.len() - 1;
+        let mut blocks = Vec::with_capacity(links);
+        let mut rows = Vec::new();
+        let (mut za, mut zm, mut zb) = (SMatrix::<f64, 6, 6>::zeros(), SMatrix::zeros(), SMatrix::zeros());
+        let (mut ta, mut tm, mut tb) = (Vec::new(), Vec::new(), Vec::new());
+        // The node whose evaluation the last interval left in (zb, tb, end), with its
+        // segment and multipliers: the next interval's start when it has the same inputs.
+        let mut carried: Option<(usize, f64, Option<Vec<f64>>)> = None;
+        let mut end = None;
+        for k in 0..links {
+            let Some(sites) = system.interval_sites(k) else {
+                carried = None;
+                blocks.push(None);
+                continue;
+            };
+            let seg = system.mesh.nodes[k].segment_end;
+            let (a, b) = (&x[k], &x[k + 1]);
+            let h = sites.end.s - sites.start.s;
+            let multipliers = profile.multipliers(k);
+            let w = multipliers.as_deref();
+            let z_a: Vec<f64> = profile.z.iter().map(|z| z[k]).collect();
+            let z_b: Vec<f64> = profile.z.iter().map(|z| z[k + 1]).collect();
+            let (ra, kappa_a) = match (carried.take(), end.take()) {
+                (Some((node, s, kept)), Some(start)) if node == k && s == seg && kept.as_deref() == w => {
+                    std::mem::swap(&mut za, &mut zb);
+                    std::mem::swap(&mut ta, &mut tb);
+                    start
+                }
+                _ => point(&sites.start, seg, (&a.R, &a.v, &a.u), &z_a, w, &mut za, &mut ta)?,
+            };
+            let (rb, kappa_b) = point(&sites.end, seg, (&b.R, &b.v, &b.u), &z_b, w, &mut zb, &mut tb)?;
+            // The Hermite-Simpson midpoint of (y, z), as the interval's rows take it.
+            let [y0, y1, f0, f1] = end_values(sites, a, b, &ra, &rb);
+            let ym = (y0 + y1) * 0.5 + (f0 - f1) * (h / 8.0);
+            let z_m: Vec<f64> = (0..count)
+                .map(|j| 0.5 * (z_a[j] + z_b[j]) + h / 8.0 * (kappa_a[j] - kappa_b[j]))
+                .collect();
+            let part = |at: usize| Vector3::new(ym[at], ym[at + 1], ym[at + 2]);
+            let Rm = a.R * so3::exp(&part(THETA));
+            let (vm, um) = (part(V), part(U));
+            point(&sites.mid, seg, (&Rm, &vm, &um), &z_m, w, &mut zm, &mut tm)?;
+            let mut block = quadrature(h, (&a.R, &b.R), [&za, &zm, &zb]);
+            for r in 3..6 {
+                for c in 0..12 {
+                    block[(r, c)] *= length;
+                }
+            }
+            blocks.push(Some(block));
+            end = Some((rb, kappa_b.clone()));
+            carried = Some((k + 1, seg, multipliers.clone()));
+            // The capstan row psi = z_b - z_a - h/6 (kappa~_a + 4 kappa~_m + kappa~_b)
+            // gains the same quadrature of the turning rates' response, with the sign the
+            // backbone rows' rates have in theirs (module docs of `dynamics`).
+            for j in (0..count).filter(|&j| profile.on_link(j, k) && !profile.sticks(j, k)) {
+                let row = quadrature(h, (&a.R, &b.R), [&ta[j], &tm[j], &tb[j]]);
+                rows.push((border.capstan_row(j, k), k, row));
+            }
+        }
+        Some(CapstanMass {
+            backbone: Mass { blocks },
+            rows,
+        })
+    }
+
+    /// (y_x, y_psi) = M z for the (p, theta) parts `z` ([`restrict`]'s layout); `y_x` must be
+    /// zero outside the rows [`Mass::apply`] writes, `y_psi` is written whole.
+    fn apply(&self, z: &[f64], y_x: &mut [f64], y_psi: &mut [f64]) {
+        self.backbone.apply(z, y_x);
+        y_psi.fill(0.0);
+        for (row, k, block) in &self.rows {
+            let z = &z[k * MOVING..(k + 2) * MOVING];
+            y_psi[*row] = block.iter().zip(z).map(|(m, z)| m * z).sum();
+        }
+    }
+}
+
+/// The verdict of the linearized dynamics at the equilibrium `x` of `border`'s system (its
+/// profile loaded at the solved log tensions), with the factors of Newton's last bordered
+/// Jacobian held in its staircase when `fresh` (that Jacobian belongs to `x`: evaluated
+/// within Newton's stopping distance of it, docs/stability.md "Which Jacobian"), else with
+/// the bordered Jacobian evaluated and factored at `x` for it (counted in `report`).
+pub(crate) fn assess(border: &mut Capstan, x: &[State], fresh: bool, report: &mut SolveReport) -> Stability {
+    if !fresh {
+        match border.factor_at(x, report) {
+            Ok(true) => {}
+            Ok(false) => {
+                return Stability::Unknown {
+                    reason: "the bordered Jacobian at the solution is singular".into(),
+                };
+            }
+            Err(e) => {
+                return Stability::Unknown {
+                    reason: format!("the bordered Jacobian at the solution could not be evaluated: {e}"),
+                };
+            }
+        }
+    }
+    modes(border, x, KRYLOV, false).stability
+}
+
+/// [`assess`] with the eigenvalues, from `krylov` Arnoldi steps as [`super::modes`] takes
+/// them.
+pub(super) fn modes(border: &mut Capstan, x: &[State], krylov: usize, all: bool) -> Vibration {
+    let Some(mass) = CapstanMass::new(border, x) else {
+        return Vibration {
+            stability: Stability::Unknown {
+                reason: "the mass matrix with friction could not be formed (eq. 13 with friction singular at a point)"
+                    .into(),
+            },
+            eigenvalues: Vec::new(),
+        };
+    };
+    let n = unknowns(x.len());
+    let mut y_x = vec![0.0; n];
+    let mut y_psi = vec![0.0; border.border_rows()];
+    let mut dx = vec![0.0; n];
+    let mut operator = |z: &[f64], out: &mut Vec<f64>| -> bool {
+        mass.apply(z, &mut y_x, &mut y_psi);
+        if !border.solve_with_factors(&y_x, &y_psi, &mut dx) || !dx.iter().all(|v| v.is_finite()) {
+            return false;
+        }
+        out.clear();
+        out.extend_from_slice(&dx);
+        restrict(out);
+        true
+    };
+    spectrum(&mut operator, x.len(), krylov, all)
+}

@@ -1,0 +1,197 @@
+//! The stability verdict of equilibria with tendons with friction (docs/stability.md,
+//! "Tendons with friction"): the linearized dynamics of the system bordered by the capstan
+//! rows, each stretch's slip held. Vanishing friction gives the frictionless verdict, the
+//! prototype is stable pulled and released, and a column carrying a friction tendon
+//! diverges past Euler's load.
+
+use nalgebra::{Complex, Vector3};
+use std::f64::consts::PI;
+use tdcr::collocation::{self, Equilibrium, Options, vibration};
+use tdcr::{Friction, Growth, Loads, Motion, Robot, Rod, Routing, Solution, Stability, Tendon, cases};
+
+fn friction(mu: f64, motion: Motion) -> Option<Friction> {
+    Some(Friction {
+        coefficient: mu,
+        motion,
+    })
+}
+
+/// The growth rate of a `Growing` verdict (panics on any other).
+fn divergence_rate(stability: &Stability) -> f64 {
+    match stability {
+        Stability::Growing {
+            growth: Growth::Divergence,
+            rate,
+        } => *rate,
+        other => panic!("expected divergence, got {other}"),
+    }
+}
+
+/// The lowest modes' eigenvalues mu (1/s^2) of a solution of `robot`.
+fn lowest(robot: &Robot, solution: &Solution, count: usize) -> Vec<Complex<f64>> {
+    let modes = vibration(robot, solution).unwrap();
+    assert!(modes.eigenvalues.len() >= count, "{modes:?}");
+    modes.eigenvalues[..count].to_vec()
+}
+
+#[test]
+fn vanishing_friction_gives_the_frictionless_verdict() {
+    // The prototype's cases S (tendon 1) and H (tendon 5): tension control is conservative,
+    // so the frictionless verdict is the conjugate-point test's, and its vibration modes are
+    // those `vibration` gives the frictionless robot.
+    for (robot, tendon) in [(cases::case_s(), 0), (cases::case_h(), 4)] {
+        let frictionless = tdcr::solve(&robot, &Default::default()).unwrap();
+        assert_eq!(frictionless.report.stability, Stability::Stable);
+        let want = lowest(&robot, &frictionless, 4);
+        for motion in [Motion::Pull, Motion::Release] {
+            let mut rough = robot.clone();
+            rough.tendons[tendon].friction = friction(1e-9, motion);
+            let solution = tdcr::solve(&rough, &Default::default()).unwrap();
+            assert_eq!(solution.report.stability, Stability::Stable, "{motion:?}");
+            for (got, want) in lowest(&rough, &solution, 4).iter().zip(&want) {
+                // 1e-7 relative: mu = 1e-9 moves the lowest modes by at most 6e-10 relative
+                // (measured), and the two solves' meshes and rounding by less
+                assert!(
+                    (got - want).norm() <= 1e-7 * want.norm(),
+                    "{motion:?}: {got} against {want}"
+                );
+            }
+        }
+    }
+    // Past Euler's load the frictionless state is unstable by the conjugate-point test; its
+    // growth rate is the linearized dynamics' of the frictionless robot.
+    let robot = column(1.05, 0.0, TENSION);
+    let frictionless = collocation::solve(&robot, &nearest()).unwrap();
+    assert!(matches!(frictionless.report.stability, Stability::Unstable { .. }));
+    let want = divergence_rate(&vibration(&robot, &frictionless).unwrap().stability);
+    let rough = column(1.05, 1e-9, TENSION);
+    let solution = collocation::solve(&rough, &nearest()).unwrap();
+    let got = divergence_rate(&solution.report.stability);
+    eprintln!("growth rate {got} 1/s with mu = 1e-9, {want} 1/s without friction");
+    // 1e-6 relative: the solve's verdict uses Newton's last bordered factors, at an iterate
+    // one converged step from the answer, and mu = 1e-9 moves the rate (1.3e-13 measured)
+    assert!((got / want - 1.0).abs() < 1e-6, "{got} against {want}");
+}
+
+#[test]
+fn the_prototype_with_friction_pulled_and_released_is_stable() {
+    for (robot, tendon) in [(cases::case_s(), 0), (cases::case_h(), 4)] {
+        for motion in [Motion::Pull, Motion::Release] {
+            let mut rough = robot.clone();
+            rough.tendons[tendon].friction = friction(0.1, motion);
+            let solution = tdcr::solve(&rough, &Default::default()).unwrap();
+            assert_eq!(solution.report.stability, Stability::Stable, "{motion:?}");
+            // The same verdict from a linearization of its own at the answer.
+            assert_eq!(vibration(&rough, &solution).unwrap().stability, Stability::Stable);
+        }
+    }
+}
+
+/// Issue 25's column: 0.5 m steel rod of radius 1 mm along +z, no gravity.
+const LENGTH: f64 = 0.5;
+const RADIUS: f64 = 1e-3;
+const E: f64 = 200e9;
+/// The friction tendon's tension (N): light, its moment at 0.8 mm about 1e-5 of P L.
+const TENSION: f64 = 0.05;
+
+/// Euler's load of the clamped-free column (N).
+fn p_cr() -> f64 {
+    PI * PI * E * PI * RADIUS.powi(4) / 4.0 / (4.0 * LENGTH * LENGTH)
+}
+
+/// The column under a dead compressive tip force `factor` P_cr with an imperfection of 1e-6
+/// of it along x, carrying a straight tendon at 0.8 mm off the axis at `tension` N with
+/// friction `mu` (pulled).
+fn column(factor: f64, mu: f64, tension: f64) -> Robot {
+    let p = factor * p_cr();
+    let mut tendon = Tendon::new(Routing::straight(0.8e-3, 0.0), tension);
+    if mu > 0.0 {
+        tendon = tendon.with_friction(Friction::pull(mu));
+    }
+    Robot::new(Rod::solid_circle(LENGTH, RADIUS, E, 0.3))
+        .with_loads(Loads::none().with_tip_force(Vector3::new(1e-6 * p, 0.0, -p)))
+        .with_tendon(tendon)
+}
+
+/// The state nearest the straight guess: below Euler's load the one state, above it the
+/// nearly straight unstable one (the load path would take the stable buckled branch).
+fn nearest() -> Options {
+    Options {
+        equilibrium: Equilibrium::Nearest,
+        ..Default::default()
+    }
+}
+
+#[test]
+fn a_column_with_a_friction_tendon_diverges_past_eulers_load() {
+    // The load at which the lowest mode's mu crosses zero, interpolated linearly between
+    // the nearly straight states at 0.99 and 1.01 P_cr.
+    let critical = |mu: f64| {
+        let at = |factor: f64| {
+            let robot = column(factor, mu, TENSION);
+            let solution = collocation::solve(&robot, &nearest()).unwrap();
+            lowest(&robot, &solution, 1)[0].re
+        };
+        let (below, above) = (at(0.99), at(1.01));
+        0.99 + 0.02 * below / (below - above)
+    };
+    for mu in [0.1, 0.3] {
+        for (factor, stable) in [(0.95, true), (0.99, true), (1.01, false), (1.05, false), (1.2, false)] {
+            let robot = column(factor, mu, TENSION);
+            let solution = collocation::solve(&robot, &nearest()).unwrap();
+            let verdict = &solution.report.stability;
+            if stable {
+                assert_eq!(*verdict, Stability::Stable, "mu {mu}, {factor} P_cr");
+            } else {
+                divergence_rate(verdict);
+                // The frictionless robot at the same load: unstable by the conjugate points.
+                let smooth = column(factor, 0.0, TENSION);
+                let state = collocation::solve(&smooth, &nearest()).unwrap();
+                assert!(matches!(state.report.stability, Stability::Unstable { .. }), "{factor}");
+            }
+        }
+        let (with, without) = (critical(mu), critical(0.0));
+        eprintln!("critical load: {with} P_cr with mu = {mu}, {without} P_cr without friction");
+        // 1e-4 P_cr: the linear interpolation over 0.02 P_cr and the mesh (Euler's load of
+        // the discretized column, an imperfection of 1e-5)
+        assert!((without - 1.0).abs() < 1e-4, "{without}");
+        // 1e-4 mu P_cr: the light tendon on a nearly straight path barely loads its channel,
+        // so friction moves the critical load by about 2.5e-5 mu P_cr (measured: -2.6e-6 at
+        // mu = 0.1, -7.5e-6 at 0.3)
+        assert!((with - without).abs() < 1e-4 * mu, "{with} against {without}");
+    }
+}
+
+/// What the verdict does not cover says so: a load-history step (its Newton ends on chord
+/// steps with an earlier step's factors and stick rows) and friction with displacement
+/// control (the pull-ins' constraints are not in the border).
+#[test]
+fn history_steps_and_held_pull_ins_keep_unknown_with_the_reason() {
+    use tdcr::Parameter;
+    use tdcr::analysis::history::history;
+    use tdcr::analysis::sweep::{Input, Ranges};
+    let mut robot = cases::prototype();
+    robot.tendons[0].friction = Some(Friction::pull(0.1));
+    robot.tendons[0].stiffness = Some(2000.0);
+    let ranges = Ranges::new(
+        robot.clone(),
+        vec![(Input::Parameter(Parameter::Tension(0)), vec![1.0, 2.0, 1.5])],
+    )
+    .unwrap();
+    let result = history(&ranges, &Default::default()).unwrap();
+    assert!(result.failure.is_none());
+    for step in &result.steps {
+        match &step.solution.report.stability {
+            Stability::Unknown { reason } => assert!(reason.contains("load-history step"), "{reason}"),
+            other => panic!("a history step: {other}"),
+        }
+    }
+    let mut held = cases::case_s();
+    held.tendons[0].friction = Some(Friction::pull(0.1));
+    held.tendons[0].set_displacement(0.005);
+    let solution = tdcr::solve(&held, &Default::default()).unwrap();
+    match &solution.report.stability {
+        Stability::Unknown { reason } => assert!(reason.contains("displacement control"), "{reason}"),
+        other => panic!("friction with a held pull-in: {other}"),
+    }
+}
