@@ -254,9 +254,17 @@ unsafe fn eliminate_avx2(panel: &mut [f64], rows: usize, width: usize, pivots: u
 /// [`eliminate_rows`] with the width known at compile time for the panels of links whose
 /// two nodes carry up to 4 log tensions together (24 to 28 columns), so that the row
 /// updates are unrolled and vectorized as in the frictionless elimination; other widths run
-/// the same loops with the width at run time. The arithmetic is the same either way.
+/// the same loops with the width at run time. The panel of a link between two nodes with
+/// one or two log tensions each (every link inside a span of one or two tendons with
+/// friction) is eliminated with all of its shape known at compile time
+/// ([`eliminate_fixed`]). The arithmetic is the same either way.
 #[inline(always)]
 fn eliminate(panel: &mut [f64], rows: usize, width: usize, pivots: usize, step: &mut Step) -> bool {
+    match (rows, width, pivots) {
+        (20, 26, 13) => return eliminate_fixed::<20, 26, 13>(panel, step),
+        (22, 28, 14) => return eliminate_fixed::<22, 28, 14>(panel, step),
+        _ => {}
+    }
     match width {
         24 => eliminate_rows::<24>(panel, rows, pivots, step),
         25 => eliminate_rows::<25>(panel, rows, pivots, step),
@@ -303,6 +311,74 @@ fn eliminate_rows<const W: usize>(panel: &mut [f64], rows: usize, pivots: usize,
                 }
                 row[c] = 0.0;
             }
+        }
+    }
+    true
+}
+
+/// `true && eliminate_column::<c, R, W>(..) && ...` over the listed columns c: one instance
+/// per column, so that every loop in it has constant bounds (as the frictionless
+/// elimination's `eliminate_column`).
+macro_rules! eliminate_columns {
+    ($panel:ident, $swaps:ident, $factors:ident, $R:ident, $W:ident; $($c:literal)*) => {
+        true $(&& eliminate_column::<$c, $R, $W>($panel, $swaps, $factors))*
+    };
+}
+
+/// [`eliminate_rows`] on a panel of `R` rows, `W` columns and `P` pivots (12 to 14), all
+/// known at compile time, one instance of [`eliminate_column`] per pivot column.
+#[inline(always)]
+fn eliminate_fixed<const R: usize, const W: usize, const P: usize>(panel: &mut [f64], step: &mut Step) -> bool {
+    const { assert!(P >= 12 && P <= 14 && R > P) };
+    let (chunks, _) = panel[..R * W].as_chunks_mut::<W>();
+    let panel: &mut [[f64; W]; R] = chunks.try_into().expect("R rows of the panel");
+    step.swaps.clear();
+    step.swaps.resize(P, 0);
+    size_factors(step, P * R, R);
+    let (swaps, factors) = (&mut step.swaps[..], &mut step.factors[..]);
+    eliminate_columns!(panel, swaps, factors, R, W; 0 1 2 3 4 5 6 7 8 9 10 11)
+        && (P < 13 || eliminate_column::<12, R, W>(panel, swaps, factors))
+        && (P < 14 || eliminate_column::<13, R, W>(panel, swaps, factors))
+}
+
+/// Column `C` of [`eliminate_fixed`]: the pivot search among rows C.., the swap, and row
+/// r -= f_r * (pivot row) for every row r below C, f_r = rows[r][C] / pivot, recorded as
+/// [`eliminate_rows`] records them. The update of a row runs from column C + 1 rounded
+/// down to a multiple of four to the end: the columns left of C are dead (zero in the
+/// pivot row, never read in the rows below), so every live column sees the operations of
+/// [`eliminate_rows`] in the same order, and column C is set to zero as there.
+#[inline(always)]
+fn eliminate_column<const C: usize, const R: usize, const W: usize>(
+    panel: &mut [[f64; W]; R],
+    swaps: &mut [usize],
+    factors: &mut [f64],
+) -> bool {
+    let mut best = C;
+    for r in C + 1..R {
+        if panel[r][C].abs() > panel[best][C].abs() {
+            best = r;
+        }
+    }
+    let pivot = panel[best][C];
+    if pivot == 0.0 || !pivot.is_finite() {
+        return false;
+    }
+    panel.swap(C, best);
+    swaps[C] = best;
+    let inverse = 1.0 / pivot;
+    let start = (C + 1) & !3;
+    let prow = panel[C];
+    let factors: &mut [f64; R] = (&mut factors[C * R..(C + 1) * R]).try_into().expect("R multipliers");
+    #[allow(clippy::needless_range_loop)]
+    for r in C + 1..R {
+        let row = &mut panel[r];
+        let f = row[C] * inverse;
+        factors[r] = f;
+        if f != 0.0 {
+            for j in start..W {
+                row[j] -= f * prow[j];
+            }
+            row[C] = 0.0;
         }
     }
     true
@@ -395,9 +471,56 @@ fn back_substitute_any(step: &Step, transformed: &[f64], current: &mut [f64], ne
     }
 }
 
-/// Applies a step's recorded swaps and eliminations to a right-hand side of its rows.
+/// Applies a step's recorded swaps and eliminations to a right-hand side of its rows: for
+/// the panels [`eliminate_fixed`] eliminates, with their shape known at compile time
+/// ([`replay_column`]), else [`replay_any`]; the same operations either way.
 #[inline(always)]
 fn replay(step: &Step, v: &mut [f64]) {
+    match (step.rows, step.pivots) {
+        (20, 13) => replay_fixed::<20, 13>(step, v),
+        (22, 14) => replay_fixed::<22, 14>(step, v),
+        _ => replay_any(step, v),
+    }
+}
+
+/// [`replay`] on `R` rows with `P` pivots (12 to 14), one instance of [`replay_column`]
+/// per pivot column.
+#[inline(always)]
+fn replay_fixed<const R: usize, const P: usize>(step: &Step, v: &mut [f64]) {
+    const { assert!(P >= 12 && P <= 14 && R > P) };
+    let v: &mut [f64; R] = (&mut v[..R]).try_into().expect("R rows");
+    let (swaps, factors) = (&step.swaps[..P], &step.factors[..P * R]);
+    macro_rules! replay_columns {
+        ($($c:literal)*) => {
+            $(replay_column::<$c, R>(swaps, factors, v);)*
+        };
+    }
+    replay_columns!(0 1 2 3 4 5 6 7 8 9 10 11);
+    if P > 12 {
+        replay_column::<12, R>(swaps, factors, v);
+    }
+    if P > 13 {
+        replay_column::<13, R>(swaps, factors, v);
+    }
+}
+
+/// Column `C` of [`replay_fixed`]: the swap, then row r -= f_r * (pivot row's value) for
+/// the rows below C, as [`replay_any`] does.
+#[inline(always)]
+fn replay_column<const C: usize, const R: usize>(swaps: &[usize], factors: &[f64], v: &mut [f64; R]) {
+    v.swap(C, swaps[C]);
+    let pivot = v[C];
+    if pivot != 0.0 {
+        let factors: &[f64; R] = factors[C * R..(C + 1) * R].try_into().expect("R multipliers");
+        for r in C + 1..R {
+            v[r] -= factors[r] * pivot;
+        }
+    }
+}
+
+/// [`replay`] for any shape.
+#[inline(always)]
+fn replay_any(step: &Step, v: &mut [f64]) {
     for c in 0..step.pivots {
         v.swap(c, step.swaps[c]);
         let pivot = v[c];
