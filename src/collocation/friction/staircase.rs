@@ -52,8 +52,8 @@ pub(crate) enum Block {
 }
 
 /// The factors of one bordered matrix on a mesh whose node n carries `extra[n]` log
-/// tensions.
-#[derive(Clone, Debug)]
+/// tensions (`Default`: an empty one, for no mesh, which allocates nothing).
+#[derive(Clone, Debug, Default)]
 pub(crate) struct Staircase {
     /// Columns of each node: 12 plus its log tensions.
     columns: Vec<usize>,
@@ -88,9 +88,29 @@ impl Staircase {
             })
             .collect();
         let total = columns.iter().sum();
+        // Each step's buffers at their size (sized once, not grown on the first
+        // factorization): step k has columns[k] - 6 carried rows (6 at the base) over the
+        // next node's rows, and columns[k] pivots.
+        let links = columns.len() - 1;
+        let steps = (0..=links)
+            .map(|k| {
+                let (pivots, width, new_rows) = if k < links {
+                    (columns[k], columns[k] + columns[k + 1], columns[k + 1])
+                } else {
+                    (columns[k], columns[k], BASE_ROWS)
+                };
+                let rows = columns[k] - NODE + BASE_ROWS + new_rows;
+                Step {
+                    swaps: Vec::with_capacity(pivots),
+                    factors: Vec::with_capacity(pivots * rows),
+                    upper: Vec::with_capacity(pivots * width),
+                    ..Step::default()
+                }
+            })
+            .collect();
         // A panel has at most 2 widest rows (carried and new) and 2 widest columns.
         Staircase {
-            steps: vec![Step::default(); columns.len()],
+            steps,
             columns,
             ready: false,
             first,
@@ -133,13 +153,21 @@ impl Staircase {
             let rows = carried + new_rows;
             let panel = &mut self.panel[..rows * width];
             // Zeroed row by row with the carried rows' copy: a few short stores each, where
-            // one memset of the panel (kilobytes) runs as `rep stosb`, byte by byte.
-            for (r, row) in panel.chunks_exact_mut(width).enumerate() {
-                if r < carried {
-                    row[..ck].copy_from_slice(&self.carry[r * ck..(r + 1) * ck]);
-                    row[ck..].fill(0.0);
-                } else {
-                    row.fill(0.0);
+            // one memset of the panel (kilobytes) runs as `rep stosb`, byte by byte; at the
+            // widths of links inside a span of one or two tendons with friction, rows of a
+            // compile-time width (stores in line, not a call to memset per row).
+            match width {
+                26 => prepare::<26>(panel, carried, ck, &self.carry),
+                28 => prepare::<28>(panel, carried, ck, &self.carry),
+                _ => {
+                    for (r, row) in panel.chunks_exact_mut(width).enumerate() {
+                        if r < carried {
+                            row[..ck].copy_from_slice(&self.carry[r * ck..(r + 1) * ck]);
+                            row[ck..].fill(0.0);
+                        } else {
+                            row.fill(0.0);
+                        }
+                    }
                 }
             }
             fill(block, &mut panel[carried * width..]);
@@ -230,6 +258,19 @@ impl Staircase {
             std::mem::swap(&mut self.current, &mut self.next);
         }
         finite
+    }
+}
+
+/// The panel of a step, rows of `W` columns: the `carried` rows' first `ck` columns from
+/// `carry` (row r at `r * ck`), every other entry zero.
+#[inline(always)]
+fn prepare<const W: usize>(panel: &mut [f64], carried: usize, ck: usize, carry: &[f64]) {
+    let (rows, _) = panel.as_chunks_mut::<W>();
+    for (r, row) in rows.iter_mut().enumerate() {
+        *row = [0.0; W];
+        if r < carried {
+            row[..ck].copy_from_slice(&carry[r * ck..(r + 1) * ck]);
+        }
     }
 }
 
