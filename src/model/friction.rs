@@ -201,6 +201,8 @@ pub(crate) struct FrictionLinearization {
     slips: Vec<Slip>,
     gradients: Vec<Vector6<f64>>,
     columns: Vec<Vector6<f64>>,
+    /// Each slip's q^_i^T dq_i/d(v, u) at fixed rates, for dg_i and d(turning_i).
+    explicit: Vec<SMatrix<f64, 1, 6>>,
 }
 
 impl Default for FrictionLinearization {
@@ -221,6 +223,7 @@ impl Default for FrictionLinearization {
             slips: Vec::new(),
             gradients: Vec::new(),
             columns: Vec::new(),
+            explicit: Vec::new(),
         }
     }
 }
@@ -369,7 +372,10 @@ fn linearize_into_kernel(
     let columns = &mut out.columns;
     columns.clear();
     columns.resize(slips.len(), Vector6::<f64>::zeros());
-    for (sl, column) in slips.iter().zip(columns.iter_mut()) {
+    let explicits = &mut out.explicit;
+    explicits.clear();
+    explicits.resize(slips.len(), SMatrix::<f64, 1, 6>::zeros());
+    for ((sl, column), kept) in slips.iter().zip(columns.iter_mut()).zip(explicits.iter_mut()) {
         let tp = &sl.tp;
         let P = Matrix3::identity() - tp.t * tp.t.transpose();
         // dt/dv = P / |p| (0 on a Kirchhoff rod: t sees the strain v*), dt/du = -P r^ / |p|
@@ -380,7 +386,9 @@ fn linearize_into_kernel(
             P * tp.inv_speed
         };
         let QQ = tp.normal_derivative(&Vector3::new(x[0], x[1], x[2]), &Vector3::new(x[3], x[4], x[5]), u);
-        let dg = (sl.q_hat.transpose() * QQ) * sl.signed_mu; // 1 x 6
+        let explicit = sl.q_hat.transpose() * QQ; // 1 x 6
+        *kept = explicit;
+        let dg = explicit * sl.signed_mu;
         for c in 0..6 {
             let dt = if c < 3 {
                 dt_dv.column(c).into_owned()
@@ -467,12 +475,10 @@ fn linearize_into_kernel(
     d_turning.resize(k, SMatrix::<f64, 1, 9>::zeros());
     let d_turning_log_tension = &mut out.d_turning_log_tension;
     d_turning_log_tension.resize(k * k, 0.0);
-    for sl in slips {
+    for (sl, explicit) in slips.iter().zip(out.explicit.iter()) {
         let tp = &sl.tp;
         // w mu / tau = w mu inv_speed / k
         let factor = sl.signed_mu * tp.inv_speed / tp.k;
-        let QQ = tp.normal_derivative(&Vector3::new(x[0], x[1], x[2]), &Vector3::new(x[3], x[4], x[5]), u);
-        let explicit = sl.q_hat.transpose() * QQ; // 1 x 6
         let mut row = SMatrix::<f64, 1, 9>::zeros();
         for c in 0..9 {
             let through_rates = sl.q_hat.dot(&sl.normal_change(&dx.column(c).into_owned()));
