@@ -368,7 +368,8 @@ fn linearize_into_kernel(
     // dPhi/d(v, u, phi) at fixed x: eq. 13's dF plus the tangential loads' change,
     // sum_i (g_i de_i + e_i dg_i|x); then the columns dPhi/dz_i = (q_i, r_i x q_i) + e_i g_i.
     let dFt = point.derivative(model, site, segment_end, (v, u), &x.transpose())?;
-    let mut rhs = SMatrix::<f64, 6, 9>::from_fn(|i, j| dFt[(j, i)]);
+    // Kept as rows (direction c of (v, u, phi) in row c), the layout M^-1 is applied in.
+    let mut rows = dFt;
     let columns = &mut out.columns;
     columns.clear();
     columns.resize(slips.len(), Vector6::<f64>::zeros());
@@ -398,8 +399,8 @@ fn linearize_into_kernel(
             let de_top = dt * sl.g;
             let de_bottom = tp.r.cross(&dt) * sl.g;
             for r in 0..3 {
-                rhs[(r, c)] += de_top[r] + sl.e[r] * dg[c];
-                rhs[(r + 3, c)] += de_bottom[r] + sl.e[r + 3] * dg[c];
+                rows[(c, r)] += de_top[r] + sl.e[r] * dg[c];
+                rows[(c, r + 3)] += de_bottom[r] + sl.e[r + 3] * dg[c];
             }
         }
         let m = tp.r.cross(&sl.q);
@@ -457,7 +458,6 @@ fn linearize_into_kernel(
         point.solve_rows(&mut row).then(|| woodbury(row.transpose()))
     };
     // The 9 columns of dPhi/d(v, u, phi) through M^-1 at once.
-    let mut rows = rhs.transpose();
     if !point.solve_rows(&mut rows) {
         return Err(breakdown(site.s));
     }
