@@ -230,8 +230,15 @@ fn interval_at_kernel(
     let Em = so3::exp(&theta_m);
     let Rm = a.R * Em;
     let lm = profile.point(&sites.mid, segment_end, &Rm, (&vm, &um), zm, w, derivatives)?;
-    let pm = derivatives
-        .then(|| rhs_linearized_inline(&sites.mid, &lm.lin, &a.R, &ym, &PointFrame::with_rotation(Em, Rm, &theta_m)));
+    let pm = derivatives.then(|| {
+        rhs_linearized_inline(
+            &sites.mid,
+            &lm.lin,
+            &a.R,
+            &ym,
+            &PointFrame::with_rotation(Em, Rm, &theta_m),
+        )
+    });
     let fm = pm
         .as_ref()
         .map_or_else(|| rhs_from_rates(&sites.mid, &Rm, &ym, &lm.lin.rates), |pm| pm.f);

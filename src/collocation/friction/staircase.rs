@@ -578,12 +578,72 @@ fn replay_any(step: &Step, v: &mut [f64]) {
 mod tests {
     use super::*;
 
+    /// A deterministic pseudo-random generator (no dependency): values in [-1, 1].
+    fn generator(mut seed: u64) -> impl FnMut() -> f64 {
+        move || {
+            seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            ((seed >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
+        }
+    }
+
     /// A random staircase (node 0 plain, nodes 1..=3 with one log tension, node 4 with
     /// none: a span ending before the tip) solved against a dense LU of the same matrix.
     #[test]
     fn staircase_matches_a_dense_solve() {
-        let extra = [0, 1, 2, 1, 0];
-        let mut stairs = Staircase::new(&extra);
+        dense_check(&[0, 1, 2, 1, 0]);
+    }
+
+    /// Spans of one and of two tendons with friction, whose inner links' panels (20 x 26 and
+    /// 22 x 28) the compile-time kernels eliminate and replay, against a dense LU.
+    #[test]
+    fn fixed_panels_match_a_dense_solve() {
+        dense_check(&[0, 1, 1, 1, 1]);
+        dense_check(&[0, 2, 2, 2, 2, 0]);
+    }
+
+    /// The compile-time kernels give the bits of the run-time ones: the multipliers, swaps
+    /// and live panel entries (pivot rows from their diagonal on, carried rows right of the
+    /// pivots) of one elimination, and a replayed right-hand side, on random panels of both
+    /// shapes.
+    #[test]
+    fn fixed_kernels_give_the_run_time_bits() {
+        let mut random = generator(777);
+        for (rows, width, pivots) in [(20, 26, 13), (22, 28, 14)] {
+            let panel: Vec<f64> = (0..rows * width).map(|_| random()).collect();
+            let (mut fixed, mut any) = (panel.clone(), panel);
+            let (mut a, mut b) = (Step::default(), Step::default());
+            for step in [&mut a, &mut b] {
+                (step.rows, step.width, step.pivots) = (rows, width, pivots);
+            }
+            assert!(eliminate(&mut fixed, rows, width, pivots, &mut a));
+            assert!(eliminate_any(&mut any, rows, width, pivots, &mut b));
+            assert_eq!(a.swaps, b.swaps);
+            assert_eq!(a.factors, b.factors);
+            for r in 0..rows {
+                let live = if r < pivots { r } else { pivots };
+                let bits = |p: &[f64]| {
+                    p[r * width + live..(r + 1) * width]
+                        .iter()
+                        .map(|x| x.to_bits())
+                        .collect::<Vec<_>>()
+                };
+                assert_eq!(bits(&fixed), bits(&any), "row {r}");
+            }
+            let v: Vec<f64> = (0..rows).map(|_| random()).collect();
+            let (mut u, mut w) = (v.clone(), v);
+            replay(&a, &mut u);
+            replay_any(&b, &mut w);
+            assert_eq!(
+                u.iter().map(|x| x.to_bits()).collect::<Vec<_>>(),
+                w.iter().map(|x| x.to_bits()).collect::<Vec<_>>()
+            );
+        }
+    }
+
+    /// A random staircase whose node n carries `extra[n]` log tensions, factored and solved
+    /// against a dense LU of the same matrix.
+    fn dense_check(extra: &[usize]) {
+        let mut stairs = Staircase::new(extra);
         let columns: Vec<usize> = extra.iter().map(|e| NODE + e).collect();
         let first: Vec<usize> = columns
             .iter()
@@ -594,12 +654,7 @@ mod tests {
             })
             .collect();
         let n: usize = columns.iter().sum();
-        // A deterministic pseudo-random generator (no dependency): values in [-1, 1].
-        let mut seed = 12345_u64;
-        let mut random = move || {
-            seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-            ((seed >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
-        };
+        let mut random = generator(12345);
         let mut dense = vec![0.0; n * n];
         let links = extra.len() - 1;
         let mut row = 0;
@@ -641,8 +696,8 @@ mod tests {
         let mut expected = rhs.clone();
         assert!(crate::dense::solve_dense(&mut a, &mut expected, n));
         for (got, want) in x.iter().zip(&expected) {
-            // Two pivoted eliminations of a well-conditioned random matrix of size 66
-            // agree to rounding times its condition number (a few hundred).
+            // Two pivoted eliminations of a random matrix of 66 to 80 unknowns (condition
+            // numbers of a few hundred) agree to rounding times the condition number.
             assert!((got - want).abs() < 1e-10 * (1.0 + want.abs()), "{got} vs {want}");
         }
     }
