@@ -22,8 +22,9 @@
 
 use crate::collocation::unknowns::{BASE_ROWS, NODE};
 
-/// The row operations and pivot rows of one elimination step.
-#[derive(Clone, Debug, Default)]
+/// The shape of one elimination step and where its row operations and pivot rows are kept
+/// in the staircase's buffers ([`Staircase`]: `swaps`, `factors`, `upper`).
+#[derive(Clone, Copy, Debug, Default)]
 struct Step {
     /// Rows of the panel (carried and new) and its width (this node's columns and the
     /// next node's; for the last step, this node's only).
@@ -31,13 +32,14 @@ struct Step {
     width: usize,
     /// Columns eliminated: this node's unknowns.
     pivots: usize,
-    /// Row swapped with row c at column c.
-    swaps: Vec<usize>,
-    /// Multiplier of pivot row c subtracted from row r, at c * rows + r (r > c).
-    factors: Vec<f64>,
-    /// The pivot rows, `pivots` x `width`, row major (upper triangular in the first
-    /// `pivots` columns).
-    upper: Vec<f64>,
+    /// First of its `pivots` swaps: the row swapped with row c at column c.
+    swaps_at: usize,
+    /// First of its `pivots * rows` multipliers: that of pivot row c subtracted from row
+    /// r at c * rows + r (r > c).
+    factors_at: usize,
+    /// First of its pivot rows, `pivots` x `width`, row major (upper triangular in the
+    /// first `pivots` columns).
+    upper_at: usize,
 }
 
 /// Which block of the staircase a caller fills.
@@ -59,6 +61,11 @@ pub(crate) struct Staircase {
     columns: Vec<usize>,
     /// Each link's elimination step, then the last node's.
     steps: Vec<Step>,
+    /// Every step's swaps, multipliers and pivot rows, one buffer each (at the step's
+    /// offsets): three allocations per staircase, not three per node.
+    swaps: Vec<usize>,
+    factors: Vec<f64>,
+    upper: Vec<f64>,
     /// Whether the steps hold the factors of a successful [`Staircase::factor`].
     pub(crate) ready: bool,
     /// First unknown of each node in the node-by-node order.
@@ -88,10 +95,11 @@ impl Staircase {
             })
             .collect();
         let total = columns.iter().sum();
-        // Each step's buffers at their size (sized once, not grown on the first
-        // factorization): step k has columns[k] - 6 carried rows (6 at the base) over the
-        // next node's rows, and columns[k] pivots.
+        // Each step's shape and offsets (the same for every factorization on this mesh):
+        // step k has columns[k] - 6 carried rows (6 at the base) over the next node's rows,
+        // and columns[k] pivots.
         let links = columns.len() - 1;
+        let (mut swaps_at, mut factors_at, mut upper_at) = (0, 0, 0);
         let steps = (0..=links)
             .map(|k| {
                 let (pivots, width, new_rows) = if k < links {
@@ -100,17 +108,26 @@ impl Staircase {
                     (columns[k], columns[k], BASE_ROWS)
                 };
                 let rows = columns[k] - NODE + BASE_ROWS + new_rows;
-                Step {
-                    swaps: Vec::with_capacity(pivots),
-                    factors: Vec::with_capacity(pivots * rows),
-                    upper: Vec::with_capacity(pivots * width),
-                    ..Step::default()
-                }
+                let step = Step {
+                    rows,
+                    width,
+                    pivots,
+                    swaps_at,
+                    factors_at,
+                    upper_at,
+                };
+                swaps_at += pivots;
+                factors_at += pivots * rows;
+                upper_at += pivots * width;
+                step
             })
             .collect();
         // A panel has at most 2 widest rows (carried and new) and 2 widest columns.
         Staircase {
             steps,
+            swaps: zeroed(swaps_at),
+            factors: zeroed(factors_at),
+            upper: zeroed(upper_at),
             columns,
             ready: false,
             first,
@@ -171,15 +188,14 @@ impl Staircase {
                 }
             }
             fill(block, &mut panel[carried * width..]);
-            let step = &mut self.steps[k];
-            step.rows = rows;
-            step.width = width;
-            step.pivots = ck;
-            if !eliminate_fast(panel, rows, width, ck, step) {
+            let step = self.steps[k];
+            debug_assert_eq!((step.rows, step.width, step.pivots), (rows, width, ck));
+            let swaps = &mut self.swaps[step.swaps_at..step.swaps_at + ck];
+            let factors = &mut self.factors[step.factors_at..step.factors_at + ck * rows];
+            if !eliminate_fast(panel, rows, width, ck, (swaps, factors)) {
                 return false;
             }
-            step.upper.clear();
-            step.upper.extend_from_slice(&panel[..ck * width]);
+            self.upper[step.upper_at..step.upper_at + ck * width].copy_from_slice(&panel[..ck * width]);
             // The rows not chosen carry node k + 1's columns on.
             carried = rows - ck;
             if k < links {
@@ -231,7 +247,9 @@ impl Staircase {
             v[..carried].copy_from_slice(&self.carry[..carried]);
             let block = if k < links { Block::Link(k) } else { Block::Tip };
             rhs(block, &mut v[carried..]);
-            replay(step, v);
+            let swaps = &self.swaps[step.swaps_at..step.swaps_at + step.pivots];
+            let factors = &self.factors[step.factors_at..step.factors_at + step.pivots * step.rows];
+            replay(step, (swaps, factors), v);
             let at = self.first[k];
             self.transformed[at..at + step.pivots].copy_from_slice(&v[..step.pivots]);
             carried = step.rows - step.pivots;
@@ -246,12 +264,13 @@ impl Staircase {
             let ck = step.pivots;
             let (current, next) = (&mut self.current, &self.next);
             let transformed = &self.transformed[self.first[k]..self.first[k] + ck];
+            let upper = &self.upper[step.upper_at..step.upper_at + ck * step.width];
             match step.width - ck {
-                0 => back_substitute::<0>(step, transformed, current, next),
-                12 => back_substitute::<12>(step, transformed, current, next),
-                13 => back_substitute::<13>(step, transformed, current, next),
-                14 => back_substitute::<14>(step, transformed, current, next),
-                _ => back_substitute_any(step, transformed, current, next),
+                0 => back_substitute::<0>(step, upper, transformed, current, next),
+                12 => back_substitute::<12>(step, upper, transformed, current, next),
+                13 => back_substitute::<13>(step, upper, transformed, current, next),
+                14 => back_substitute::<14>(step, upper, transformed, current, next),
+                _ => back_substitute_any(step, upper, transformed, current, next),
             }
             finite &= current[..ck].iter().all(|v| v.is_finite());
             out(k, &current[..ck]);
@@ -276,20 +295,20 @@ fn prepare<const W: usize>(panel: &mut [f64], carried: usize, ck: usize, carry: 
 
 /// [`eliminate`] compiled for AVX2 and FMA when the processor has them (checked at run
 /// time), as the frictionless elimination does, else for the baseline target.
-fn eliminate_fast(panel: &mut [f64], rows: usize, width: usize, pivots: usize, step: &mut Step) -> bool {
+fn eliminate_fast(panel: &mut [f64], rows: usize, width: usize, pivots: usize, record: Record) -> bool {
     #[cfg(target_arch = "x86_64")]
     if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma") {
         // SAFETY: the processor supports the features the function is compiled for.
-        return unsafe { eliminate_avx2(panel, rows, width, pivots, step) };
+        return unsafe { eliminate_avx2(panel, rows, width, pivots, record) };
     }
-    eliminate(panel, rows, width, pivots, step)
+    eliminate(panel, rows, width, pivots, record)
 }
 
 /// [`eliminate`] with AVX2 and FMA enabled.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,fma")]
-unsafe fn eliminate_avx2(panel: &mut [f64], rows: usize, width: usize, pivots: usize, step: &mut Step) -> bool {
-    eliminate(panel, rows, width, pivots, step)
+unsafe fn eliminate_avx2(panel: &mut [f64], rows: usize, width: usize, pivots: usize, record: Record) -> bool {
+    eliminate(panel, rows, width, pivots, record)
 }
 
 /// [`eliminate_rows`] with the width known at compile time for the panels of links whose
@@ -300,28 +319,26 @@ unsafe fn eliminate_avx2(panel: &mut [f64], rows: usize, width: usize, pivots: u
 /// friction) is eliminated with all of its shape known at compile time
 /// ([`eliminate_fixed`]). The arithmetic is the same either way.
 #[inline(always)]
-fn eliminate(panel: &mut [f64], rows: usize, width: usize, pivots: usize, step: &mut Step) -> bool {
+fn eliminate(panel: &mut [f64], rows: usize, width: usize, pivots: usize, record: Record) -> bool {
     match (rows, width, pivots) {
-        (20, 26, 13) => return eliminate_fixed::<20, 26, 13>(panel, step),
-        (22, 28, 14) => return eliminate_fixed::<22, 28, 14>(panel, step),
+        (20, 26, 13) => return eliminate_fixed::<20, 26, 13>(panel, record),
+        (22, 28, 14) => return eliminate_fixed::<22, 28, 14>(panel, record),
         _ => {}
     }
     match width {
-        24 => eliminate_rows::<24>(panel, rows, pivots, step),
-        25 => eliminate_rows::<25>(panel, rows, pivots, step),
-        26 => eliminate_rows::<26>(panel, rows, pivots, step),
-        27 => eliminate_rows::<27>(panel, rows, pivots, step),
-        28 => eliminate_rows::<28>(panel, rows, pivots, step),
-        _ => eliminate_any(panel, rows, width, pivots, step),
+        24 => eliminate_rows::<24>(panel, rows, pivots, record),
+        25 => eliminate_rows::<25>(panel, rows, pivots, record),
+        26 => eliminate_rows::<26>(panel, rows, pivots, record),
+        27 => eliminate_rows::<27>(panel, rows, pivots, record),
+        28 => eliminate_rows::<28>(panel, rows, pivots, record),
+        _ => eliminate_any(panel, rows, width, pivots, record),
     }
 }
 
 /// [`eliminate_any`] on rows of the compile-time width `W`.
 #[inline(always)]
-fn eliminate_rows<const W: usize>(panel: &mut [f64], rows: usize, pivots: usize, step: &mut Step) -> bool {
+fn eliminate_rows<const W: usize>(panel: &mut [f64], rows: usize, pivots: usize, (swaps, factors): Record) -> bool {
     let (panel, _) = panel[..rows * W].as_chunks_mut::<W>();
-    step.swaps.clear();
-    size_factors(step, pivots * rows, rows);
     for c in 0..pivots {
         let mut best = c;
         for r in c + 1..rows {
@@ -334,11 +351,11 @@ fn eliminate_rows<const W: usize>(panel: &mut [f64], rows: usize, pivots: usize,
             return false;
         }
         panel.swap(c, best);
-        step.swaps.push(best);
+        swaps[c] = best;
         let inverse = 1.0 / pivot;
         let (top, below) = panel.split_at_mut(c + 1);
         let prow = &top[c];
-        let factors = &mut step.factors[c * rows + c + 1..(c + 1) * rows];
+        let factors = &mut factors[c * rows + c + 1..(c + 1) * rows];
         for (row, factor) in below.iter_mut().zip(factors) {
             let f = row[c] * inverse;
             *factor = f;
@@ -369,14 +386,13 @@ macro_rules! eliminate_columns {
 /// [`eliminate_rows`] on a panel of `R` rows, `W` columns and `P` pivots (12 to 14), all
 /// known at compile time, one instance of [`eliminate_column`] per pivot column.
 #[inline(always)]
-fn eliminate_fixed<const R: usize, const W: usize, const P: usize>(panel: &mut [f64], step: &mut Step) -> bool {
+fn eliminate_fixed<const R: usize, const W: usize, const P: usize>(
+    panel: &mut [f64],
+    (swaps, factors): Record,
+) -> bool {
     const { assert!(P >= 12 && P <= 14 && R > P) };
     let (chunks, _) = panel[..R * W].as_chunks_mut::<W>();
     let panel: &mut [[f64; W]; R] = chunks.try_into().expect("R rows of the panel");
-    step.swaps.clear();
-    step.swaps.resize(P, 0);
-    size_factors(step, P * R, R);
-    let (swaps, factors) = (&mut step.swaps[..], &mut step.factors[..]);
     eliminate_columns!(panel, swaps, factors, R, W; 0 1 2 3 4 5 6 7 8 9 10 11)
         && (P < 13 || eliminate_column::<12, R, W>(panel, swaps, factors))
         && (P < 14 || eliminate_column::<13, R, W>(panel, swaps, factors))
@@ -429,9 +445,7 @@ fn eliminate_column<const C: usize, const R: usize, const W: usize>(
 /// `rows` x `width` row-major `panel`, recording the swaps and multipliers in `step`.
 /// False on a zero or non-finite pivot.
 #[inline(always)]
-fn eliminate_any(panel: &mut [f64], rows: usize, width: usize, pivots: usize, step: &mut Step) -> bool {
-    step.swaps.clear();
-    size_factors(step, pivots * rows, rows);
+fn eliminate_any(panel: &mut [f64], rows: usize, width: usize, pivots: usize, (swaps, factors): Record) -> bool {
     for c in 0..pivots {
         let mut best = c;
         for r in c + 1..rows {
@@ -448,13 +462,13 @@ fn eliminate_any(panel: &mut [f64], rows: usize, width: usize, pivots: usize, st
                 panel.swap(c * width + j, best * width + j);
             }
         }
-        step.swaps.push(best);
+        swaps[c] = best;
         let inverse = 1.0 / pivot;
         let (top, below) = panel.split_at_mut((c + 1) * width);
         let prow = &top[c * width + c + 1..(c + 1) * width];
         for (i, row) in below.chunks_exact_mut(width).enumerate() {
             let f = row[c] * inverse;
-            step.factors[c * rows + c + 1 + i] = f;
+            factors[c * rows + c + 1 + i] = f;
             if f != 0.0 {
                 row[c] = 0.0;
                 for (x, p) in row[c + 1..].iter_mut().zip(prow) {
@@ -466,32 +480,29 @@ fn eliminate_any(panel: &mut [f64], rows: usize, width: usize, pivots: usize, st
     true
 }
 
-/// Sizes `step`'s multipliers to `len` (every multiplier [`replay`] reads is written by the
-/// elimination, so the values are not reset), growing a new buffer by `chunk` zeros at a
-/// time: one memset of kilobytes runs as `rep stosb`, which callgrind counts byte by byte,
-/// where short ones are a few vector stores.
-#[inline(always)]
-fn size_factors(step: &mut Step, len: usize, chunk: usize) {
-    if step.factors.len() >= len {
-        step.factors.truncate(len);
-        return;
+/// A step's swaps and multipliers, the slices of the staircase's buffers it writes.
+type Record<'a> = (&'a mut [usize], &'a mut [f64]);
+
+/// `len` zeros, grown 256 at a time: one memset of kilobytes runs as `rep stosb`, which
+/// callgrind counts byte by byte, where short ones are a few vector stores.
+fn zeroed<T: Copy + Default>(len: usize) -> Vec<T> {
+    let mut out = Vec::with_capacity(len);
+    while out.len() < len {
+        let next = (out.len() + 256).min(len);
+        out.resize(next, T::default());
     }
-    step.factors.reserve(len - step.factors.len());
-    while step.factors.len() < len {
-        let next = (step.factors.len() + chunk).min(len);
-        step.factors.resize(next, 0.0);
-    }
+    out
 }
 
 /// The unknowns of a step's node from its pivot rows (`transformed`: their right-hand
 /// sides) and the next node's unknowns `next`, whose count `N` (the step's width less its
 /// pivots) is known at compile time.
 #[inline(always)]
-fn back_substitute<const N: usize>(step: &Step, transformed: &[f64], current: &mut [f64], next: &[f64]) {
+fn back_substitute<const N: usize>(step: &Step, upper: &[f64], transformed: &[f64], current: &mut [f64], next: &[f64]) {
     let ck = step.pivots;
     let next: &[f64; N] = next[..N].try_into().expect("N unknowns of the next node");
     for i in (0..ck).rev() {
-        let row = &step.upper[i * step.width..(i + 1) * step.width];
+        let row = &upper[i * step.width..(i + 1) * step.width];
         let far: &[f64; N] = row[ck..].try_into().expect("N columns of the next node");
         let coupled: f64 = far.iter().zip(next).map(|(a, b)| a * b).sum();
         let own: f64 = row[i + 1..ck].iter().zip(&current[i + 1..ck]).map(|(a, b)| a * b).sum();
@@ -501,11 +512,11 @@ fn back_substitute<const N: usize>(step: &Step, transformed: &[f64], current: &m
 
 /// [`back_substitute`] for any count of the next node's unknowns.
 #[inline(always)]
-fn back_substitute_any(step: &Step, transformed: &[f64], current: &mut [f64], next: &[f64]) {
+fn back_substitute_any(step: &Step, upper: &[f64], transformed: &[f64], current: &mut [f64], next: &[f64]) {
     let ck = step.pivots;
     let next = &next[..step.width - ck];
     for i in (0..ck).rev() {
-        let row = &step.upper[i * step.width..(i + 1) * step.width];
+        let row = &upper[i * step.width..(i + 1) * step.width];
         let coupled: f64 = row[ck..].iter().zip(next).map(|(a, b)| a * b).sum();
         let own: f64 = row[i + 1..ck].iter().zip(&current[i + 1..ck]).map(|(a, b)| a * b).sum();
         current[i] = (transformed[i] - coupled - own) / row[i];
@@ -516,21 +527,21 @@ fn back_substitute_any(step: &Step, transformed: &[f64], current: &mut [f64], ne
 /// the panels [`eliminate_fixed`] eliminates, with their shape known at compile time
 /// ([`replay_column`]), else [`replay_any`]; the same operations either way.
 #[inline(always)]
-fn replay(step: &Step, v: &mut [f64]) {
+fn replay(step: &Step, record: (&[usize], &[f64]), v: &mut [f64]) {
     match (step.rows, step.pivots) {
-        (20, 13) => replay_fixed::<20, 13>(step, v),
-        (22, 14) => replay_fixed::<22, 14>(step, v),
-        _ => replay_any(step, v),
+        (20, 13) => replay_fixed::<20, 13>(record, v),
+        (22, 14) => replay_fixed::<22, 14>(record, v),
+        _ => replay_any(step, record, v),
     }
 }
 
 /// [`replay`] on `R` rows with `P` pivots (12 to 14), one instance of [`replay_column`]
 /// per pivot column.
 #[inline(always)]
-fn replay_fixed<const R: usize, const P: usize>(step: &Step, v: &mut [f64]) {
+fn replay_fixed<const R: usize, const P: usize>((swaps, factors): (&[usize], &[f64]), v: &mut [f64]) {
     const { assert!(P >= 12 && P <= 14 && R > P) };
     let v: &mut [f64; R] = (&mut v[..R]).try_into().expect("R rows");
-    let (swaps, factors) = (&step.swaps[..P], &step.factors[..P * R]);
+    let (swaps, factors) = (&swaps[..P], &factors[..P * R]);
     macro_rules! replay_columns {
         ($($c:literal)*) => {
             $(replay_column::<$c, R>(swaps, factors, v);)*
@@ -561,12 +572,12 @@ fn replay_column<const C: usize, const R: usize>(swaps: &[usize], factors: &[f64
 
 /// [`replay`] for any shape.
 #[inline(always)]
-fn replay_any(step: &Step, v: &mut [f64]) {
+fn replay_any(step: &Step, (swaps, factors): (&[usize], &[f64]), v: &mut [f64]) {
     for c in 0..step.pivots {
-        v.swap(c, step.swaps[c]);
+        v.swap(c, swaps[c]);
         let pivot = v[c];
         if pivot != 0.0 {
-            let factors = &step.factors[c * step.rows + c + 1..(c + 1) * step.rows];
+            let factors = &factors[c * step.rows + c + 1..(c + 1) * step.rows];
             for (x, f) in v[c + 1..].iter_mut().zip(factors) {
                 *x -= f * pivot;
             }
@@ -611,14 +622,30 @@ mod tests {
         for (rows, width, pivots) in [(20, 26, 13), (22, 28, 14)] {
             let panel: Vec<f64> = (0..rows * width).map(|_| random()).collect();
             let (mut fixed, mut any) = (panel.clone(), panel);
-            let (mut a, mut b) = (Step::default(), Step::default());
-            for step in [&mut a, &mut b] {
-                (step.rows, step.width, step.pivots) = (rows, width, pivots);
-            }
-            assert!(eliminate(&mut fixed, rows, width, pivots, &mut a));
-            assert!(eliminate_any(&mut any, rows, width, pivots, &mut b));
-            assert_eq!(a.swaps, b.swaps);
-            assert_eq!(a.factors, b.factors);
+            let step = Step {
+                rows,
+                width,
+                pivots,
+                ..Step::default()
+            };
+            let (mut swaps_a, mut swaps_b) = (vec![0; pivots], vec![0; pivots]);
+            let (mut factors_a, mut factors_b) = (vec![0.0; pivots * rows], vec![0.0; pivots * rows]);
+            assert!(eliminate(
+                &mut fixed,
+                rows,
+                width,
+                pivots,
+                (&mut swaps_a, &mut factors_a)
+            ));
+            assert!(eliminate_any(
+                &mut any,
+                rows,
+                width,
+                pivots,
+                (&mut swaps_b, &mut factors_b)
+            ));
+            assert_eq!(swaps_a, swaps_b);
+            assert_eq!(factors_a, factors_b);
             for r in 0..rows {
                 let live = if r < pivots { r } else { pivots };
                 let bits = |p: &[f64]| {
@@ -631,8 +658,8 @@ mod tests {
             }
             let v: Vec<f64> = (0..rows).map(|_| random()).collect();
             let (mut u, mut w) = (v.clone(), v);
-            replay(&a, &mut u);
-            replay_any(&b, &mut w);
+            replay(&step, (&swaps_a, &factors_a), &mut u);
+            replay_any(&step, (&swaps_b, &factors_b), &mut w);
             assert_eq!(
                 u.iter().map(|x| x.to_bits()).collect::<Vec<_>>(),
                 w.iter().map(|x| x.to_bits()).collect::<Vec<_>>()
