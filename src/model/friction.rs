@@ -201,6 +201,8 @@ pub(crate) struct FrictionLinearization {
     slips: Vec<Slip>,
     gradients: Vec<Vector6<f64>>,
     columns: Vec<Vector6<f64>>,
+    /// Each slip's q^_i^T dq_i/d(v, u) at fixed rates, for dg_i and d(turning_i).
+    explicit: Vec<SMatrix<f64, 1, 6>>,
 }
 
 impl Default for FrictionLinearization {
@@ -221,6 +223,7 @@ impl Default for FrictionLinearization {
             slips: Vec::new(),
             gradients: Vec::new(),
             columns: Vec::new(),
+            explicit: Vec::new(),
         }
     }
 }
@@ -365,11 +368,15 @@ fn linearize_into_kernel(
     // dPhi/d(v, u, phi) at fixed x: eq. 13's dF plus the tangential loads' change,
     // sum_i (g_i de_i + e_i dg_i|x); then the columns dPhi/dz_i = (q_i, r_i x q_i) + e_i g_i.
     let dFt = point.derivative(model, site, segment_end, (v, u), &x.transpose())?;
-    let mut rhs = SMatrix::<f64, 6, 9>::from_fn(|i, j| dFt[(j, i)]);
+    // Kept as rows (direction c of (v, u, phi) in row c), the layout M^-1 is applied in.
+    let mut rows = dFt;
     let columns = &mut out.columns;
     columns.clear();
     columns.resize(slips.len(), Vector6::<f64>::zeros());
-    for (sl, column) in slips.iter().zip(columns.iter_mut()) {
+    let explicits = &mut out.explicit;
+    explicits.clear();
+    explicits.resize(slips.len(), SMatrix::<f64, 1, 6>::zeros());
+    for ((sl, column), kept) in slips.iter().zip(columns.iter_mut()).zip(explicits.iter_mut()) {
         let tp = &sl.tp;
         let P = Matrix3::identity() - tp.t * tp.t.transpose();
         // dt/dv = P / |p| (0 on a Kirchhoff rod: t sees the strain v*), dt/du = -P r^ / |p|
@@ -380,7 +387,9 @@ fn linearize_into_kernel(
             P * tp.inv_speed
         };
         let QQ = tp.normal_derivative(&Vector3::new(x[0], x[1], x[2]), &Vector3::new(x[3], x[4], x[5]), u);
-        let dg = (sl.q_hat.transpose() * QQ) * sl.signed_mu; // 1 x 6
+        let explicit = sl.q_hat.transpose() * QQ; // 1 x 6
+        *kept = explicit;
+        let dg = explicit * sl.signed_mu;
         for c in 0..6 {
             let dt = if c < 3 {
                 dt_dv.column(c).into_owned()
@@ -390,8 +399,8 @@ fn linearize_into_kernel(
             let de_top = dt * sl.g;
             let de_bottom = tp.r.cross(&dt) * sl.g;
             for r in 0..3 {
-                rhs[(r, c)] += de_top[r] + sl.e[r] * dg[c];
-                rhs[(r + 3, c)] += de_bottom[r] + sl.e[r + 3] * dg[c];
+                rows[(c, r)] += de_top[r] + sl.e[r] * dg[c];
+                rows[(c, r + 3)] += de_bottom[r] + sl.e[r + 3] * dg[c];
             }
         }
         let m = tp.r.cross(&sl.q);
@@ -449,7 +458,6 @@ fn linearize_into_kernel(
         point.solve_rows(&mut row).then(|| woodbury(row.transpose()))
     };
     // The 9 columns of dPhi/d(v, u, phi) through M^-1 at once.
-    let mut rows = rhs.transpose();
     if !point.solve_rows(&mut rows) {
         return Err(breakdown(site.s));
     }
@@ -467,12 +475,10 @@ fn linearize_into_kernel(
     d_turning.resize(k, SMatrix::<f64, 1, 9>::zeros());
     let d_turning_log_tension = &mut out.d_turning_log_tension;
     d_turning_log_tension.resize(k * k, 0.0);
-    for sl in slips {
+    for (sl, explicit) in slips.iter().zip(out.explicit.iter()) {
         let tp = &sl.tp;
         // w mu / tau = w mu inv_speed / k
         let factor = sl.signed_mu * tp.inv_speed / tp.k;
-        let QQ = tp.normal_derivative(&Vector3::new(x[0], x[1], x[2]), &Vector3::new(x[3], x[4], x[5]), u);
-        let explicit = sl.q_hat.transpose() * QQ; // 1 x 6
         let mut row = SMatrix::<f64, 1, 9>::zeros();
         for c in 0..9 {
             let through_rates = sl.q_hat.dot(&sl.normal_change(&dx.column(c).into_owned()));

@@ -72,7 +72,7 @@ impl Capstan<'_> {
         let links = nodes - 1;
         let count = self.offsets.len();
         let tip_start = BASE_ENTRIES + links * LINK_ENTRIES;
-        let mut stairs = std::mem::replace(&mut self.stairs, Staircase::new(&[0]));
+        let mut stairs = std::mem::take(&mut self.stairs);
         let ok = stairs.factor(|block, out| match block {
             Block::Base => {
                 let width = NODE;

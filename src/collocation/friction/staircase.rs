@@ -22,8 +22,9 @@
 
 use crate::collocation::unknowns::{BASE_ROWS, NODE};
 
-/// The row operations and pivot rows of one elimination step.
-#[derive(Clone, Debug, Default)]
+/// The shape of one elimination step and where its row operations and pivot rows are kept
+/// in the staircase's buffers ([`Staircase`]: `swaps`, `factors`, `upper`).
+#[derive(Clone, Copy, Debug, Default)]
 struct Step {
     /// Rows of the panel (carried and new) and its width (this node's columns and the
     /// next node's; for the last step, this node's only).
@@ -31,13 +32,14 @@ struct Step {
     width: usize,
     /// Columns eliminated: this node's unknowns.
     pivots: usize,
-    /// Row swapped with row c at column c.
-    swaps: Vec<usize>,
-    /// Multiplier of pivot row c subtracted from row r, at c * rows + r (r > c).
-    factors: Vec<f64>,
-    /// The pivot rows, `pivots` x `width`, row major (upper triangular in the first
-    /// `pivots` columns).
-    upper: Vec<f64>,
+    /// First of its `pivots` swaps: the row swapped with row c at column c.
+    swaps_at: usize,
+    /// First of its `pivots * rows` multipliers: that of pivot row c subtracted from row
+    /// r at c * rows + r (r > c).
+    factors_at: usize,
+    /// First of its pivot rows, `pivots` x `width`, row major (upper triangular in the
+    /// first `pivots` columns).
+    upper_at: usize,
 }
 
 /// Which block of the staircase a caller fills.
@@ -52,13 +54,18 @@ pub(crate) enum Block {
 }
 
 /// The factors of one bordered matrix on a mesh whose node n carries `extra[n]` log
-/// tensions.
-#[derive(Clone, Debug)]
+/// tensions (`Default`: an empty one, for no mesh, which allocates nothing).
+#[derive(Clone, Debug, Default)]
 pub(crate) struct Staircase {
     /// Columns of each node: 12 plus its log tensions.
     columns: Vec<usize>,
     /// Each link's elimination step, then the last node's.
     steps: Vec<Step>,
+    /// Every step's swaps, multipliers and pivot rows, one buffer each (at the step's
+    /// offsets): three allocations per staircase, not three per node.
+    swaps: Vec<usize>,
+    factors: Vec<f64>,
+    upper: Vec<f64>,
     /// Whether the steps hold the factors of a successful [`Staircase::factor`].
     pub(crate) ready: bool,
     /// First unknown of each node in the node-by-node order.
@@ -88,9 +95,39 @@ impl Staircase {
             })
             .collect();
         let total = columns.iter().sum();
+        // Each step's shape and offsets (the same for every factorization on this mesh):
+        // step k has columns[k] - 6 carried rows (6 at the base) over the next node's rows,
+        // and columns[k] pivots.
+        let links = columns.len() - 1;
+        let (mut swaps_at, mut factors_at, mut upper_at) = (0, 0, 0);
+        let steps = (0..=links)
+            .map(|k| {
+                let (pivots, width, new_rows) = if k < links {
+                    (columns[k], columns[k] + columns[k + 1], columns[k + 1])
+                } else {
+                    (columns[k], columns[k], BASE_ROWS)
+                };
+                let rows = columns[k] - NODE + BASE_ROWS + new_rows;
+                let step = Step {
+                    rows,
+                    width,
+                    pivots,
+                    swaps_at,
+                    factors_at,
+                    upper_at,
+                };
+                swaps_at += pivots;
+                factors_at += pivots * rows;
+                upper_at += pivots * width;
+                step
+            })
+            .collect();
         // A panel has at most 2 widest rows (carried and new) and 2 widest columns.
         Staircase {
-            steps: vec![Step::default(); columns.len()],
+            steps,
+            swaps: zeroed(swaps_at),
+            factors: zeroed(factors_at),
+            upper: zeroed(upper_at),
             columns,
             ready: false,
             first,
@@ -133,25 +170,32 @@ impl Staircase {
             let rows = carried + new_rows;
             let panel = &mut self.panel[..rows * width];
             // Zeroed row by row with the carried rows' copy: a few short stores each, where
-            // one memset of the panel (kilobytes) runs as `rep stosb`, byte by byte.
-            for (r, row) in panel.chunks_exact_mut(width).enumerate() {
-                if r < carried {
-                    row[..ck].copy_from_slice(&self.carry[r * ck..(r + 1) * ck]);
-                    row[ck..].fill(0.0);
-                } else {
-                    row.fill(0.0);
+            // one memset of the panel (kilobytes) runs as `rep stosb`, byte by byte; at the
+            // widths of links inside a span of one or two tendons with friction, rows of a
+            // compile-time width (stores in line, not a call to memset per row).
+            match width {
+                26 => prepare::<26>(panel, carried, ck, &self.carry),
+                28 => prepare::<28>(panel, carried, ck, &self.carry),
+                _ => {
+                    for (r, row) in panel.chunks_exact_mut(width).enumerate() {
+                        if r < carried {
+                            row[..ck].copy_from_slice(&self.carry[r * ck..(r + 1) * ck]);
+                            row[ck..].fill(0.0);
+                        } else {
+                            row.fill(0.0);
+                        }
+                    }
                 }
             }
             fill(block, &mut panel[carried * width..]);
-            let step = &mut self.steps[k];
-            step.rows = rows;
-            step.width = width;
-            step.pivots = ck;
-            if !eliminate_fast(panel, rows, width, ck, step) {
+            let step = self.steps[k];
+            debug_assert_eq!((step.rows, step.width, step.pivots), (rows, width, ck));
+            let swaps = &mut self.swaps[step.swaps_at..step.swaps_at + ck];
+            let factors = &mut self.factors[step.factors_at..step.factors_at + ck * rows];
+            if !eliminate_fast(panel, rows, width, ck, (swaps, factors)) {
                 return false;
             }
-            step.upper.clear();
-            step.upper.extend_from_slice(&panel[..ck * width]);
+            self.upper[step.upper_at..step.upper_at + ck * width].copy_from_slice(&panel[..ck * width]);
             // The rows not chosen carry node k + 1's columns on.
             carried = rows - ck;
             if k < links {
@@ -203,7 +247,9 @@ impl Staircase {
             v[..carried].copy_from_slice(&self.carry[..carried]);
             let block = if k < links { Block::Link(k) } else { Block::Tip };
             rhs(block, &mut v[carried..]);
-            replay(step, v);
+            let swaps = &self.swaps[step.swaps_at..step.swaps_at + step.pivots];
+            let factors = &self.factors[step.factors_at..step.factors_at + step.pivots * step.rows];
+            replay(step, (swaps, factors), v);
             let at = self.first[k];
             self.transformed[at..at + step.pivots].copy_from_slice(&v[..step.pivots]);
             carried = step.rows - step.pivots;
@@ -218,12 +264,13 @@ impl Staircase {
             let ck = step.pivots;
             let (current, next) = (&mut self.current, &self.next);
             let transformed = &self.transformed[self.first[k]..self.first[k] + ck];
+            let upper = &self.upper[step.upper_at..step.upper_at + ck * step.width];
             match step.width - ck {
-                0 => back_substitute::<0>(step, transformed, current, next),
-                12 => back_substitute::<12>(step, transformed, current, next),
-                13 => back_substitute::<13>(step, transformed, current, next),
-                14 => back_substitute::<14>(step, transformed, current, next),
-                _ => back_substitute_any(step, transformed, current, next),
+                0 => back_substitute::<0>(step, upper, transformed, current, next),
+                12 => back_substitute::<12>(step, upper, transformed, current, next),
+                13 => back_substitute::<13>(step, upper, transformed, current, next),
+                14 => back_substitute::<14>(step, upper, transformed, current, next),
+                _ => back_substitute_any(step, upper, transformed, current, next),
             }
             finite &= current[..ck].iter().all(|v| v.is_finite());
             out(k, &current[..ck]);
@@ -233,46 +280,65 @@ impl Staircase {
     }
 }
 
+/// The panel of a step, rows of `W` columns: the `carried` rows' first `ck` columns from
+/// `carry` (row r at `r * ck`), every other entry zero.
+#[inline(always)]
+fn prepare<const W: usize>(panel: &mut [f64], carried: usize, ck: usize, carry: &[f64]) {
+    let (rows, _) = panel.as_chunks_mut::<W>();
+    for (r, row) in rows.iter_mut().enumerate() {
+        *row = [0.0; W];
+        if r < carried {
+            row[..ck].copy_from_slice(&carry[r * ck..(r + 1) * ck]);
+        }
+    }
+}
+
 /// [`eliminate`] compiled for AVX2 and FMA when the processor has them (checked at run
 /// time), as the frictionless elimination does, else for the baseline target.
-fn eliminate_fast(panel: &mut [f64], rows: usize, width: usize, pivots: usize, step: &mut Step) -> bool {
+fn eliminate_fast(panel: &mut [f64], rows: usize, width: usize, pivots: usize, record: Record) -> bool {
     #[cfg(target_arch = "x86_64")]
     if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma") {
         // SAFETY: the processor supports the features the function is compiled for.
-        return unsafe { eliminate_avx2(panel, rows, width, pivots, step) };
+        return unsafe { eliminate_avx2(panel, rows, width, pivots, record) };
     }
-    eliminate(panel, rows, width, pivots, step)
+    eliminate(panel, rows, width, pivots, record)
 }
 
 /// [`eliminate`] with AVX2 and FMA enabled.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,fma")]
-unsafe fn eliminate_avx2(panel: &mut [f64], rows: usize, width: usize, pivots: usize, step: &mut Step) -> bool {
-    eliminate(panel, rows, width, pivots, step)
+unsafe fn eliminate_avx2(panel: &mut [f64], rows: usize, width: usize, pivots: usize, record: Record) -> bool {
+    eliminate(panel, rows, width, pivots, record)
 }
 
 /// [`eliminate_rows`] with the width known at compile time for the panels of links whose
 /// two nodes carry up to 4 log tensions together (24 to 28 columns), so that the row
 /// updates are unrolled and vectorized as in the frictionless elimination; other widths run
-/// the same loops with the width at run time. The arithmetic is the same either way.
+/// the same loops with the width at run time. The panel of a link between two nodes with
+/// one or two log tensions each (every link inside a span of one or two tendons with
+/// friction) is eliminated with all of its shape known at compile time
+/// ([`eliminate_fixed`]). The arithmetic is the same either way.
 #[inline(always)]
-fn eliminate(panel: &mut [f64], rows: usize, width: usize, pivots: usize, step: &mut Step) -> bool {
+fn eliminate(panel: &mut [f64], rows: usize, width: usize, pivots: usize, record: Record) -> bool {
+    match (rows, width, pivots) {
+        (20, 26, 13) => return eliminate_fixed::<20, 26, 13>(panel, record),
+        (22, 28, 14) => return eliminate_fixed::<22, 28, 14>(panel, record),
+        _ => {}
+    }
     match width {
-        24 => eliminate_rows::<24>(panel, rows, pivots, step),
-        25 => eliminate_rows::<25>(panel, rows, pivots, step),
-        26 => eliminate_rows::<26>(panel, rows, pivots, step),
-        27 => eliminate_rows::<27>(panel, rows, pivots, step),
-        28 => eliminate_rows::<28>(panel, rows, pivots, step),
-        _ => eliminate_any(panel, rows, width, pivots, step),
+        24 => eliminate_rows::<24>(panel, rows, pivots, record),
+        25 => eliminate_rows::<25>(panel, rows, pivots, record),
+        26 => eliminate_rows::<26>(panel, rows, pivots, record),
+        27 => eliminate_rows::<27>(panel, rows, pivots, record),
+        28 => eliminate_rows::<28>(panel, rows, pivots, record),
+        _ => eliminate_any(panel, rows, width, pivots, record),
     }
 }
 
 /// [`eliminate_any`] on rows of the compile-time width `W`.
 #[inline(always)]
-fn eliminate_rows<const W: usize>(panel: &mut [f64], rows: usize, pivots: usize, step: &mut Step) -> bool {
+fn eliminate_rows<const W: usize>(panel: &mut [f64], rows: usize, pivots: usize, (swaps, factors): Record) -> bool {
     let (panel, _) = panel[..rows * W].as_chunks_mut::<W>();
-    step.swaps.clear();
-    size_factors(step, pivots * rows, rows);
     for c in 0..pivots {
         let mut best = c;
         for r in c + 1..rows {
@@ -285,11 +351,11 @@ fn eliminate_rows<const W: usize>(panel: &mut [f64], rows: usize, pivots: usize,
             return false;
         }
         panel.swap(c, best);
-        step.swaps.push(best);
+        swaps[c] = best;
         let inverse = 1.0 / pivot;
         let (top, below) = panel.split_at_mut(c + 1);
         let prow = &top[c];
-        let factors = &mut step.factors[c * rows + c + 1..(c + 1) * rows];
+        let factors = &mut factors[c * rows + c + 1..(c + 1) * rows];
         for (row, factor) in below.iter_mut().zip(factors) {
             let f = row[c] * inverse;
             *factor = f;
@@ -308,13 +374,78 @@ fn eliminate_rows<const W: usize>(panel: &mut [f64], rows: usize, pivots: usize,
     true
 }
 
+/// `true && eliminate_column::<c, R, W>(..) && ...` over the listed columns c: one instance
+/// per column, so that every loop in it has constant bounds (as the frictionless
+/// elimination's `eliminate_column`).
+macro_rules! eliminate_columns {
+    ($panel:ident, $swaps:ident, $factors:ident, $R:ident, $W:ident; $($c:literal)*) => {
+        true $(&& eliminate_column::<$c, $R, $W>($panel, $swaps, $factors))*
+    };
+}
+
+/// [`eliminate_rows`] on a panel of `R` rows, `W` columns and `P` pivots (12 to 14), all
+/// known at compile time, one instance of [`eliminate_column`] per pivot column.
+#[inline(always)]
+fn eliminate_fixed<const R: usize, const W: usize, const P: usize>(
+    panel: &mut [f64],
+    (swaps, factors): Record,
+) -> bool {
+    const { assert!(P >= 12 && P <= 14 && R > P) };
+    let (chunks, _) = panel[..R * W].as_chunks_mut::<W>();
+    let panel: &mut [[f64; W]; R] = chunks.try_into().expect("R rows of the panel");
+    eliminate_columns!(panel, swaps, factors, R, W; 0 1 2 3 4 5 6 7 8 9 10 11)
+        && (P < 13 || eliminate_column::<12, R, W>(panel, swaps, factors))
+        && (P < 14 || eliminate_column::<13, R, W>(panel, swaps, factors))
+}
+
+/// Column `C` of [`eliminate_fixed`]: the pivot search among rows C.., the swap, and row
+/// r -= f_r * (pivot row) for every row r below C, f_r = rows[r][C] / pivot, recorded as
+/// [`eliminate_rows`] records them. The update of a row runs from column C + 1 rounded
+/// down to a multiple of four to the end: the columns left of C are dead (zero in the
+/// pivot row, never read in the rows below), so every live column sees the operations of
+/// [`eliminate_rows`] in the same order, and column C is set to zero as there.
+#[inline(always)]
+fn eliminate_column<const C: usize, const R: usize, const W: usize>(
+    panel: &mut [[f64; W]; R],
+    swaps: &mut [usize],
+    factors: &mut [f64],
+) -> bool {
+    let mut best = C;
+    for r in C + 1..R {
+        if panel[r][C].abs() > panel[best][C].abs() {
+            best = r;
+        }
+    }
+    let pivot = panel[best][C];
+    if pivot == 0.0 || !pivot.is_finite() {
+        return false;
+    }
+    panel.swap(C, best);
+    swaps[C] = best;
+    let inverse = 1.0 / pivot;
+    let start = (C + 1) & !3;
+    let prow = panel[C];
+    let factors: &mut [f64; R] = (&mut factors[C * R..(C + 1) * R]).try_into().expect("R multipliers");
+    #[allow(clippy::needless_range_loop)]
+    for r in C + 1..R {
+        let row = &mut panel[r];
+        let f = row[C] * inverse;
+        factors[r] = f;
+        if f != 0.0 {
+            for j in start..W {
+                row[j] -= f * prow[j];
+            }
+            row[C] = 0.0;
+        }
+    }
+    true
+}
+
 /// Gaussian elimination with partial pivoting of the first `pivots` columns of the
 /// `rows` x `width` row-major `panel`, recording the swaps and multipliers in `step`.
 /// False on a zero or non-finite pivot.
 #[inline(always)]
-fn eliminate_any(panel: &mut [f64], rows: usize, width: usize, pivots: usize, step: &mut Step) -> bool {
-    step.swaps.clear();
-    size_factors(step, pivots * rows, rows);
+fn eliminate_any(panel: &mut [f64], rows: usize, width: usize, pivots: usize, (swaps, factors): Record) -> bool {
     for c in 0..pivots {
         let mut best = c;
         for r in c + 1..rows {
@@ -331,13 +462,13 @@ fn eliminate_any(panel: &mut [f64], rows: usize, width: usize, pivots: usize, st
                 panel.swap(c * width + j, best * width + j);
             }
         }
-        step.swaps.push(best);
+        swaps[c] = best;
         let inverse = 1.0 / pivot;
         let (top, below) = panel.split_at_mut((c + 1) * width);
         let prow = &top[c * width + c + 1..(c + 1) * width];
         for (i, row) in below.chunks_exact_mut(width).enumerate() {
             let f = row[c] * inverse;
-            step.factors[c * rows + c + 1 + i] = f;
+            factors[c * rows + c + 1 + i] = f;
             if f != 0.0 {
                 row[c] = 0.0;
                 for (x, p) in row[c + 1..].iter_mut().zip(prow) {
@@ -349,32 +480,29 @@ fn eliminate_any(panel: &mut [f64], rows: usize, width: usize, pivots: usize, st
     true
 }
 
-/// Sizes `step`'s multipliers to `len` (every multiplier [`replay`] reads is written by the
-/// elimination, so the values are not reset), growing a new buffer by `chunk` zeros at a
-/// time: one memset of kilobytes runs as `rep stosb`, which callgrind counts byte by byte,
-/// where short ones are a few vector stores.
-#[inline(always)]
-fn size_factors(step: &mut Step, len: usize, chunk: usize) {
-    if step.factors.len() >= len {
-        step.factors.truncate(len);
-        return;
+/// A step's swaps and multipliers, the slices of the staircase's buffers it writes.
+type Record<'a> = (&'a mut [usize], &'a mut [f64]);
+
+/// `len` zeros, grown 256 at a time: one memset of kilobytes runs as `rep stosb`, which
+/// callgrind counts byte by byte, where short ones are a few vector stores.
+fn zeroed<T: Copy + Default>(len: usize) -> Vec<T> {
+    let mut out = Vec::with_capacity(len);
+    while out.len() < len {
+        let next = (out.len() + 256).min(len);
+        out.resize(next, T::default());
     }
-    step.factors.reserve(len - step.factors.len());
-    while step.factors.len() < len {
-        let next = (step.factors.len() + chunk).min(len);
-        step.factors.resize(next, 0.0);
-    }
+    out
 }
 
 /// The unknowns of a step's node from its pivot rows (`transformed`: their right-hand
 /// sides) and the next node's unknowns `next`, whose count `N` (the step's width less its
 /// pivots) is known at compile time.
 #[inline(always)]
-fn back_substitute<const N: usize>(step: &Step, transformed: &[f64], current: &mut [f64], next: &[f64]) {
+fn back_substitute<const N: usize>(step: &Step, upper: &[f64], transformed: &[f64], current: &mut [f64], next: &[f64]) {
     let ck = step.pivots;
     let next: &[f64; N] = next[..N].try_into().expect("N unknowns of the next node");
     for i in (0..ck).rev() {
-        let row = &step.upper[i * step.width..(i + 1) * step.width];
+        let row = &upper[i * step.width..(i + 1) * step.width];
         let far: &[f64; N] = row[ck..].try_into().expect("N columns of the next node");
         let coupled: f64 = far.iter().zip(next).map(|(a, b)| a * b).sum();
         let own: f64 = row[i + 1..ck].iter().zip(&current[i + 1..ck]).map(|(a, b)| a * b).sum();
@@ -384,25 +512,72 @@ fn back_substitute<const N: usize>(step: &Step, transformed: &[f64], current: &m
 
 /// [`back_substitute`] for any count of the next node's unknowns.
 #[inline(always)]
-fn back_substitute_any(step: &Step, transformed: &[f64], current: &mut [f64], next: &[f64]) {
+fn back_substitute_any(step: &Step, upper: &[f64], transformed: &[f64], current: &mut [f64], next: &[f64]) {
     let ck = step.pivots;
     let next = &next[..step.width - ck];
     for i in (0..ck).rev() {
-        let row = &step.upper[i * step.width..(i + 1) * step.width];
+        let row = &upper[i * step.width..(i + 1) * step.width];
         let coupled: f64 = row[ck..].iter().zip(next).map(|(a, b)| a * b).sum();
         let own: f64 = row[i + 1..ck].iter().zip(&current[i + 1..ck]).map(|(a, b)| a * b).sum();
         current[i] = (transformed[i] - coupled - own) / row[i];
     }
 }
 
-/// Applies a step's recorded swaps and eliminations to a right-hand side of its rows.
+/// Applies a step's recorded swaps and eliminations to a right-hand side of its rows: for
+/// the panels [`eliminate_fixed`] eliminates, with their shape known at compile time
+/// ([`replay_column`]), else [`replay_any`]; the same operations either way.
 #[inline(always)]
-fn replay(step: &Step, v: &mut [f64]) {
+fn replay(step: &Step, record: (&[usize], &[f64]), v: &mut [f64]) {
+    match (step.rows, step.pivots) {
+        (20, 13) => replay_fixed::<20, 13>(record, v),
+        (22, 14) => replay_fixed::<22, 14>(record, v),
+        _ => replay_any(step, record, v),
+    }
+}
+
+/// [`replay`] on `R` rows with `P` pivots (12 to 14), one instance of [`replay_column`]
+/// per pivot column.
+#[inline(always)]
+fn replay_fixed<const R: usize, const P: usize>((swaps, factors): (&[usize], &[f64]), v: &mut [f64]) {
+    const { assert!(P >= 12 && P <= 14 && R > P) };
+    let v: &mut [f64; R] = (&mut v[..R]).try_into().expect("R rows");
+    let (swaps, factors) = (&swaps[..P], &factors[..P * R]);
+    macro_rules! replay_columns {
+        ($($c:literal)*) => {
+            $(replay_column::<$c, R>(swaps, factors, v);)*
+        };
+    }
+    replay_columns!(0 1 2 3 4 5 6 7 8 9 10 11);
+    if P > 12 {
+        replay_column::<12, R>(swaps, factors, v);
+    }
+    if P > 13 {
+        replay_column::<13, R>(swaps, factors, v);
+    }
+}
+
+/// Column `C` of [`replay_fixed`]: the swap, then row r -= f_r * (pivot row's value) for
+/// the rows below C, as [`replay_any`] does.
+#[inline(always)]
+fn replay_column<const C: usize, const R: usize>(swaps: &[usize], factors: &[f64], v: &mut [f64; R]) {
+    v.swap(C, swaps[C]);
+    let pivot = v[C];
+    if pivot != 0.0 {
+        let factors: &[f64; R] = factors[C * R..(C + 1) * R].try_into().expect("R multipliers");
+        for r in C + 1..R {
+            v[r] -= factors[r] * pivot;
+        }
+    }
+}
+
+/// [`replay`] for any shape.
+#[inline(always)]
+fn replay_any(step: &Step, (swaps, factors): (&[usize], &[f64]), v: &mut [f64]) {
     for c in 0..step.pivots {
-        v.swap(c, step.swaps[c]);
+        v.swap(c, swaps[c]);
         let pivot = v[c];
         if pivot != 0.0 {
-            let factors = &step.factors[c * step.rows + c + 1..(c + 1) * step.rows];
+            let factors = &factors[c * step.rows + c + 1..(c + 1) * step.rows];
             for (x, f) in v[c + 1..].iter_mut().zip(factors) {
                 *x -= f * pivot;
             }
@@ -414,12 +589,88 @@ fn replay(step: &Step, v: &mut [f64]) {
 mod tests {
     use super::*;
 
+    /// A deterministic pseudo-random generator (no dependency): values in [-1, 1].
+    fn generator(mut seed: u64) -> impl FnMut() -> f64 {
+        move || {
+            seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            ((seed >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
+        }
+    }
+
     /// A random staircase (node 0 plain, nodes 1..=3 with one log tension, node 4 with
     /// none: a span ending before the tip) solved against a dense LU of the same matrix.
     #[test]
     fn staircase_matches_a_dense_solve() {
-        let extra = [0, 1, 2, 1, 0];
-        let mut stairs = Staircase::new(&extra);
+        dense_check(&[0, 1, 2, 1, 0]);
+    }
+
+    /// Spans of one and of two tendons with friction, whose inner links' panels (20 x 26 and
+    /// 22 x 28) the compile-time kernels eliminate and replay, against a dense LU.
+    #[test]
+    fn fixed_panels_match_a_dense_solve() {
+        dense_check(&[0, 1, 1, 1, 1]);
+        dense_check(&[0, 2, 2, 2, 2, 0]);
+    }
+
+    /// The compile-time kernels give the bits of the run-time ones: the multipliers, swaps
+    /// and live panel entries (pivot rows from their diagonal on, carried rows right of the
+    /// pivots) of one elimination, and a replayed right-hand side, on random panels of both
+    /// shapes.
+    #[test]
+    fn fixed_kernels_give_the_run_time_bits() {
+        let mut random = generator(777);
+        for (rows, width, pivots) in [(20, 26, 13), (22, 28, 14)] {
+            let panel: Vec<f64> = (0..rows * width).map(|_| random()).collect();
+            let (mut fixed, mut any) = (panel.clone(), panel);
+            let step = Step {
+                rows,
+                width,
+                pivots,
+                ..Step::default()
+            };
+            let (mut swaps_a, mut swaps_b) = (vec![0; pivots], vec![0; pivots]);
+            let (mut factors_a, mut factors_b) = (vec![0.0; pivots * rows], vec![0.0; pivots * rows]);
+            assert!(eliminate(
+                &mut fixed,
+                rows,
+                width,
+                pivots,
+                (&mut swaps_a, &mut factors_a)
+            ));
+            assert!(eliminate_any(
+                &mut any,
+                rows,
+                width,
+                pivots,
+                (&mut swaps_b, &mut factors_b)
+            ));
+            assert_eq!(swaps_a, swaps_b);
+            assert_eq!(factors_a, factors_b);
+            for r in 0..rows {
+                let live = if r < pivots { r } else { pivots };
+                let bits = |p: &[f64]| {
+                    p[r * width + live..(r + 1) * width]
+                        .iter()
+                        .map(|x| x.to_bits())
+                        .collect::<Vec<_>>()
+                };
+                assert_eq!(bits(&fixed), bits(&any), "row {r}");
+            }
+            let v: Vec<f64> = (0..rows).map(|_| random()).collect();
+            let (mut u, mut w) = (v.clone(), v);
+            replay(&step, (&swaps_a, &factors_a), &mut u);
+            replay_any(&step, (&swaps_b, &factors_b), &mut w);
+            assert_eq!(
+                u.iter().map(|x| x.to_bits()).collect::<Vec<_>>(),
+                w.iter().map(|x| x.to_bits()).collect::<Vec<_>>()
+            );
+        }
+    }
+
+    /// A random staircase whose node n carries `extra[n]` log tensions, factored and solved
+    /// against a dense LU of the same matrix.
+    fn dense_check(extra: &[usize]) {
+        let mut stairs = Staircase::new(extra);
         let columns: Vec<usize> = extra.iter().map(|e| NODE + e).collect();
         let first: Vec<usize> = columns
             .iter()
@@ -430,12 +681,7 @@ mod tests {
             })
             .collect();
         let n: usize = columns.iter().sum();
-        // A deterministic pseudo-random generator (no dependency): values in [-1, 1].
-        let mut seed = 12345_u64;
-        let mut random = move || {
-            seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-            ((seed >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
-        };
+        let mut random = generator(12345);
         let mut dense = vec![0.0; n * n];
         let links = extra.len() - 1;
         let mut row = 0;
@@ -477,8 +723,8 @@ mod tests {
         let mut expected = rhs.clone();
         assert!(crate::dense::solve_dense(&mut a, &mut expected, n));
         for (got, want) in x.iter().zip(&expected) {
-            // Two pivoted eliminations of a well-conditioned random matrix of size 66
-            // agree to rounding times its condition number (a few hundred).
+            // Two pivoted eliminations of a random matrix of 66 to 80 unknowns (condition
+            // numbers of a few hundred) agree to rounding times the condition number.
             assert!((got - want).abs() < 1e-10 * (1.0 + want.abs()), "{got} vs {want}");
         }
     }
