@@ -23,6 +23,7 @@ mod linearized;
 mod profile;
 mod staircase;
 mod start;
+mod stuck;
 
 pub use grip::Contact;
 pub(crate) use grip::Grip;
