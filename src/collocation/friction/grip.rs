@@ -119,29 +119,16 @@ impl Profile<'_> {
         b: &State,
         length: f64,
     ) -> (f64, Vector3<f64>, Vector3<f64>) {
+        let robot = self.robot();
+        let tendon = &robot.tendons[self.slipping[j]];
         let Some(grip) = self.grips.as_ref().map(|g| &g[j]) else {
             return (f64::NAN, Vector3::zeros(), Vector3::zeros());
         };
-        self.stuck_tension_with(j, grip.reference[node], site, (b.s, &b.v, &b.u), length)
-    }
-
-    /// [`Profile::stuck_tension`] of material `lambda` (unstretched length per unit s) at
-    /// arc length s with strains (v, u): E_t A_t (|p_j'| / lambda - 1) and its derivative in
-    /// (v, u).
-    pub(crate) fn stuck_tension_with(
-        &self,
-        j: usize,
-        lambda: f64,
-        site: &Site,
-        (s, v, u): (f64, &Vector3<f64>, &Vector3<f64>),
-        length: f64,
-    ) -> Stuck {
-        let robot = self.robot();
-        let tendon = &robot.tendons[self.slipping[j]];
-        let rp = tendon.routing.at(s, length);
+        let rp = tendon.routing.at(b.s, length);
         // The path sees the strain: v* on a Kirchhoff rod, whose coordinate v is the force's.
-        let p = u.cross(&rp.r) + rp.r_s + site.strain(v);
+        let p = b.u.cross(&rp.r) + rp.r_s + site.strain(&b.v);
         let speed = p.norm();
+        let lambda = grip.reference[node];
         let Some(stiffness) = tendon.stiffness else {
             let sign = (speed - lambda).signum();
             return (sign * f64::INFINITY, Vector3::zeros(), Vector3::zeros());

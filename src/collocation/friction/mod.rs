@@ -23,7 +23,6 @@ mod linearized;
 mod profile;
 mod staircase;
 mod start;
-mod stuck;
 
 pub use grip::Contact;
 pub(crate) use grip::Grip;

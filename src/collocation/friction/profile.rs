@@ -28,8 +28,6 @@ pub(crate) struct Profile<'a> {
     pub(crate) z: Vec<Vec<f64>>,
     /// In a stick/slip history, each slip's [`Grip`] on this mesh; None in full slip.
     pub(crate) grips: Option<Vec<Grip>>,
-    /// The mesh's node positions s (m), where the grips' material is carried.
-    points: Vec<f64>,
     /// The model with the tensions of one point, for eq. 13 with friction.
     scratch: RefCell<Model<'a>>,
     /// Each link's last evaluation ([`interval`] through the system's residual or
@@ -123,7 +121,6 @@ impl<'a> Profile<'a> {
         Profile {
             z: vec![vec![0.0; mesh.nodes.len()]; slipping.len()],
             grips: None,
-            points: mesh.nodes.iter().map(|n| n.s).collect(),
             slipping,
             base,
             spans,
@@ -147,7 +144,6 @@ impl<'a> Profile<'a> {
             spans: self.spans.clone(),
             z: self.z.clone(),
             grips: self.grips.clone(),
-            points: self.points.clone(),
             scratch: RefCell::new(self.scratch.borrow().clone()),
             cache: RefCell::new(self.cache.borrow().iter().map(|_| None).collect()),
             order6: RefCell::new(vec![Vec::new(); self.z[0].len() - 1]),
@@ -250,43 +246,6 @@ impl<'a> Profile<'a> {
                 })
                 .collect()
         })
-    }
-
-    /// Whether a loaded slip sticks on link k ([`super::stuck`] evaluates the link).
-    pub(crate) fn stuck_on(&self, k: usize) -> bool {
-        let inner = std::env::var("TDCR_HIST_INNER").is_ok();
-        if std::env::var("TDCR_HIST_OLD").is_ok() {
-            return false;
-        }
-        (0..self.count()).any(|j| self.on_link(j, k) && self.sticks(j, k) && self.base[j] > 0.0)
-            && (!inner || (k > 0 && (0..self.count()).all(|j| !self.sticks(j, k) || self.sticks(j, k - 1))))
-    }
-
-    /// Slip j's carried material (lambda) at arc length `s` inside link k: the cubic
-    /// through the nodes k - 1 to k + 2 (the nearest four within its span), O(h^4) where
-    /// the material is smooth (docs/friction.md section 8).
-    pub(crate) fn material_at(&self, j: usize, k: usize, s: f64) -> f64 {
-        let Some(grip) = self.grips.as_ref().map(|g| &g[j]) else {
-            return f64::NAN;
-        };
-        let span = self.spans[j];
-        let (s_nodes, values) = (&self.points[..=span], &grip.reference[..=span]);
-        let lo = k.saturating_sub(1).min(span.saturating_sub(3));
-        // A breakpoint's two nodes share their s: no cubic across them.
-        let distinct = span >= 3 && s_nodes[lo..lo + 4].windows(2).all(|p| p[1] > p[0]);
-        if !distinct {
-            let t = (s - s_nodes[k]) / (s_nodes[k + 1] - s_nodes[k]);
-            return values[k] + t * (values[k + 1] - values[k]);
-        }
-        (lo..lo + 4)
-            .map(|a| {
-                let weight: f64 = (lo..lo + 4)
-                    .filter(|&b| b != a)
-                    .map(|b| (s - s_nodes[b]) / (s_nodes[a] - s_nodes[b]))
-                    .product();
-                weight * values[a]
-            })
-            .sum()
     }
 
     /// Whether slip j sticks on link k (a history's stick row replaces its capstan row).

@@ -37,13 +37,8 @@ pub(super) fn refine(
     let mut best = answer;
     let mut finest = None;
     let intervals = before.mesh.intervals();
-    // EXPERIMENT (hist10, not to be committed): a fixed number of levels.
-    let forced: Option<u32> = std::env::var("TDCR_HIST_LEVELS").ok().and_then(|v| v.parse().ok());
-    if forced == Some(0) {
-        return Ok(best);
-    }
-    for level in 1..=forced.unwrap_or(LEVELS) {
-        if forced.is_none() && intervals << level > options.max_intervals.max(2 * intervals) {
+    for level in 1..=LEVELS {
+        if intervals << level > options.max_intervals.max(2 * intervals) {
             break;
         }
         let mut fine = split(robot, before, 1 << level, &best.0)?;
@@ -55,7 +50,7 @@ pub(super) fn refine(
         report.tolerance = options.tolerance;
         report.tolerance_met = options.tolerance.map(|tol| refine::meets(&estimate, tol, length));
         finest = Some(fine);
-        if forced.is_none() && report.tolerance_met != Some(false) {
+        if report.tolerance_met != Some(false) {
             break;
         }
     }
@@ -125,15 +120,11 @@ fn split(robot: &Robot, before: &Carried, parts: usize, guess: &Solution) -> Res
             contacts: (0..span).map(|l| old.contacts[parent(l)]).collect(),
             multipliers: (0..span).map(|l| old.multipliers[parent(l)]).collect(),
             capacities: (0..span).map(|l| old.capacities[parent(l)] / parts as f64).collect(),
-            reference: if std::env::var("TDCR_HIST_SPLINE").is_ok() {
-                let sp = spline(&coarse[..=old_span], &old.reference[..=old_span]);
-                mesh.nodes.iter().map(|node| sp(node.s)).collect()
-            } else {
-                mesh.nodes
-                    .iter()
-                    .map(|node| cubic(&coarse[..=old_span], &old.reference[..=old_span], node.s))
-                    .collect()
-            },
+            reference: mesh
+                .nodes
+                .iter()
+                .map(|node| cubic(&coarse[..=old_span], &old.reference[..=old_span], node.s))
+                .collect(),
         });
     }
     Ok(Carried {
@@ -201,46 +192,5 @@ fn hand_back(carried: &mut Carried, fine: &Carried) {
     }
     for (grip, f) in carried.grips.iter_mut().zip(&fine.grips) {
         grip.reference = index.iter().map(|&n| f.reference[n]).collect();
-    }
-}
-
-/// EXPERIMENT: the not-a-knot... natural cubic spline through (s, values).
-fn spline(s: &[f64], values: &[f64]) -> impl Fn(f64) -> f64 {
-    let n = s.len();
-    let s = s.to_vec();
-    let y = values.to_vec();
-    let mut m = vec![0.0; n];
-    if n >= 3 {
-        // Tridiagonal system for second derivatives, natural ends.
-        let mut a = vec![0.0; n];
-        let mut b = vec![1.0; n];
-        let mut c = vec![0.0; n];
-        let mut d = vec![0.0; n];
-        for i in 1..n - 1 {
-            let h0 = s[i] - s[i - 1];
-            let h1 = s[i + 1] - s[i];
-            a[i] = h0 / 6.0;
-            b[i] = (h0 + h1) / 3.0;
-            c[i] = h1 / 6.0;
-            d[i] = (y[i + 1] - y[i]) / h1 - (y[i] - y[i - 1]) / h0;
-        }
-        for i in 1..n {
-            let w = a[i] / b[i - 1];
-            b[i] -= w * c[i - 1];
-            d[i] -= w * d[i - 1];
-        }
-        m[n - 1] = d[n - 1] / b[n - 1];
-        for i in (0..n - 1).rev() {
-            m[i] = (d[i] - c[i] * m[i + 1]) / b[i];
-        }
-    }
-    move |x: f64| {
-        if let Some(k) = s.iter().position(|&v| v == x) {
-            return y[k];
-        }
-        let k = s.iter().rposition(|&v| v <= x).unwrap_or(0).min(n - 2);
-        let h = s[k + 1] - s[k];
-        let (t0, t1) = ((s[k + 1] - x) / h, (x - s[k]) / h);
-        t0 * y[k] + t1 * y[k + 1] + ((t0 * t0 * t0 - t0) * m[k] + (t1 * t1 * t1 - t1) * m[k + 1]) * h * h / 6.0
     }
 }
