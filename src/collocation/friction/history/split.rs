@@ -38,25 +38,11 @@ pub(super) fn refine(
     let mut best = answer;
     let mut finest = None;
     let intervals = before.mesh.intervals();
-    // EXPERIMENT (hist10, not to be committed): a fixed number of levels.
-    let forced: Option<u32> = std::env::var("TDCR_HIST_LEVELS").ok().and_then(|v| v.parse().ok());
-    if forced == Some(0) {
-        return Ok(best);
-    }
-    for level in 1..=forced.unwrap_or(LEVELS) {
-        if forced.is_none() && intervals << level > options.max_intervals.max(2 * intervals) {
+    for level in 1..=LEVELS {
+        if intervals << level > options.max_intervals.max(2 * intervals) {
             break;
         }
-        // EXPERIMENT (hist10): a node at each tendon's stick/slip boundary.
-        let extra = if std::env::var("TDCR_HIST_NONODE").is_err() {
-            boundaries(&best)
-        } else {
-            Vec::new()
-        };
-        if std::env::var("TDCR_HIST_DEBUG").is_ok() {
-            eprintln!("level {level}: boundary nodes {extra:?}");
-        }
-        let mut fine = split(robot, before, 1 << level, &best.0, &extra)?;
+        let mut fine = split(robot, before, 1 << level, &best.0)?;
         let (next, _) = solve_on(robot, options, &mut fine)?;
         let estimate = difference(&best.0, &next.0);
         best = next;
@@ -65,7 +51,7 @@ pub(super) fn refine(
         report.tolerance = options.tolerance;
         report.tolerance_met = options.tolerance.map(|tol| refine::meets(&estimate, tol, length));
         finest = Some(fine);
-        if forced.is_none() && report.tolerance_met != Some(false) {
+        if report.tolerance_met != Some(false) {
             break;
         }
     }
@@ -100,29 +86,14 @@ fn difference(coarse: &Solution, fine: &Solution) -> ErrorEstimate {
 ///
 /// # Errors
 /// An invalid mesh (none: the points lie on the rod).
-fn split(robot: &Robot, before: &Carried, parts: usize, guess: &Solution, extra: &[f64]) -> Result<Carried> {
+fn split(robot: &Robot, before: &Carried, parts: usize, guess: &Solution) -> Result<Carried> {
     let nodes = &before.mesh.nodes;
     let mut points = Vec::with_capacity(nodes.len() * parts);
     for pair in nodes.windows(2) {
         let (a, b) = (pair[0].s, pair[1].s);
         points.push(a);
         if b > a {
-            let mut inner: Vec<f64> = (1..parts).map(|q| a + (b - a) * q as f64 / parts as f64).collect();
-            let gap = (b - a) / parts as f64;
-            // The split node nearest a stick/slip boundary inside the link moves onto it
-            // (the mesh keeps its intervals); one within 1e-6 of the link of a node stays.
-            for &e in extra
-                .iter()
-                .filter(|&&e| e > a + 1e-3 * (b - a) && e < b - 1e-3 * (b - a))
-            {
-                let nearest = (0..inner.len()).min_by(|&p, &q| (inner[p] - e).abs().total_cmp(&(inner[q] - e).abs()));
-                if let Some(q) = nearest {
-                    inner[q] = e;
-                }
-            }
-            let _ = gap;
-            inner.sort_by(f64::total_cmp);
-            points.extend(inner);
+            points.extend((1..parts).map(|q| a + (b - a) * q as f64 / parts as f64));
         }
     }
     points.push(robot.length());
@@ -144,28 +115,12 @@ fn split(robot: &Robot, before: &Carried, parts: usize, guess: &Solution, extra:
             };
         }
         let links = old.contacts.len();
-        let parent = |l: usize| {
-            let mid = 0.5 * (mesh.nodes[l].s + mesh.nodes[l + 1].s);
-            coarse
-                .iter()
-                .rposition(|&c| c <= mid)
-                .unwrap_or(0)
-                .min(links.saturating_sub(1))
-        };
-        let share = |l: usize| {
-            let p = parent(l);
-            let whole = coarse[p + 1] - coarse[p];
-            if whole > 0.0 {
-                (mesh.nodes[l + 1].s - mesh.nodes[l].s) / whole
-            } else {
-                0.0
-            }
-        };
+        let parent = |l: usize| (l / parts).min(links.saturating_sub(1));
         let old_span = links;
         grips.push(Grip {
             contacts: (0..span).map(|l| old.contacts[parent(l)]).collect(),
             multipliers: (0..span).map(|l| old.multipliers[parent(l)]).collect(),
-            capacities: (0..span).map(|l| old.capacities[parent(l)] * share(l)).collect(),
+            capacities: (0..span).map(|l| old.capacities[parent(l)] / parts as f64).collect(),
             reference: mesh
                 .nodes
                 .iter()
@@ -201,14 +156,8 @@ fn cubic(s: &[f64], values: &[f64], at: f64) -> f64 {
         return values[k] + t * (values[k + 1] - values[k]);
     }
     let k = s.iter().rposition(|&x| x <= at).unwrap_or(0);
-    let (lo, stencil) = if n >= 6 && std::env::var("TDCR_HIST_CUBIC").is_err() {
-        let lo = k.saturating_sub(2).min(n - 6);
-        (lo, lo..lo + 6)
-    } else {
-        let lo = k.saturating_sub(1).min(n - 4);
-        (lo, lo..lo + 4)
-    };
-    let _ = lo;
+    let lo = k.saturating_sub(1).min(n - 4);
+    let stencil = lo..lo + 4;
     stencil
         .clone()
         .map(|a| {
@@ -245,55 +194,4 @@ fn hand_back(carried: &mut Carried, fine: &Carried) {
     for (grip, f) in carried.grips.iter_mut().zip(&fine.grips) {
         grip.reference = index.iter().map(|&n| f.reference[n]).collect();
     }
-}
-
-/// EXPERIMENT (hist10): where each tendon's sliding profile meets its stuck one, from the
-/// answer's node tensions: the quadratic through the last three sliding nodes and the one
-/// through the first three stuck nodes (after the boundary node), extrapolated, and the
-/// root of their difference between the boundary node's neighbours.
-fn boundaries(answer: &StepAnswer) -> Vec<f64> {
-    use crate::collocation::friction::Contact;
-    let (solution, zones) = answer;
-    let s: Vec<f64> = solution.nodes.iter().map(|n| n.s).collect();
-    let mut out = Vec::new();
-    for (i, list) in zones {
-        let Some(w) = list
-            .windows(2)
-            .find(|w| w[0].2 != Contact::Stick && w[1].2 == Contact::Stick)
-        else {
-            continue;
-        };
-        let start = w[1].0;
-        let Some(a) = s.iter().position(|&x| x == start) else {
-            continue;
-        };
-        if a < 2 || a + 3 >= s.len() {
-            continue;
-        }
-        let t = &solution.tendon_tensions[*i];
-        let quad = |n: [usize; 3], x: f64| -> f64 {
-            (0..3)
-                .map(|p| {
-                    let w: f64 = (0..3)
-                        .filter(|&q| q != p)
-                        .map(|q| (x - s[n[q]]) / (s[n[p]] - s[n[q]]))
-                        .product();
-                    w * t[n[p]]
-                })
-                .sum()
-        };
-        let slide = |x: f64| quad([a - 2, a - 1, a], x);
-        let stick = |x: f64| quad([a + 1, a + 2, a + 3], x);
-        let d = |x: f64| slide(x) - stick(x);
-        let (mut lo, mut hi) = (s[a - 1], s[a + 1]);
-        if d(lo) * d(hi) > 0.0 {
-            continue;
-        }
-        for _ in 0..200 {
-            let mid = 0.5 * (lo + hi);
-            if d(lo) * d(mid) <= 0.0 { hi = mid } else { lo = mid }
-        }
-        out.push(0.5 * (lo + hi));
-    }
-    out
 }
