@@ -14,9 +14,10 @@ use crate::report::ErrorEstimate;
 use crate::solution::Solution;
 
 /// Most splits of a stuck step's links: 2^6 = 64 parts per link. A stuck stretch's error
-/// falls about as h^2.3 (docs/friction.md), so 64 parts take a step from 1e-4 L to about
-/// 1e-8 L; a step that still misses its tolerance (or would need more than
-/// `max_intervals`) reports so.
+/// falls about as h^3 from 32 to 128 intervals and as h beyond, while its stick/slip
+/// boundary stays in the link after a node of the history's mesh (docs/friction.md section
+/// 8), so 64 parts take a step from 1e-4 L to about 1e-8 L; a step that still misses its
+/// tolerance (or would need more than `max_intervals`) reports so.
 const LEVELS: u32 = 6;
 
 /// Solves the step again on split meshes (module docs) after `answer`, its solution on
@@ -62,7 +63,7 @@ pub(super) fn refine(
 
 /// The error estimate of the finer of two answers of a step: their difference. With an
 /// order p >= 1 the finer one's error is the difference / (2^p - 1), so this bounds it
-/// (about 4 times over at the observed p of about 2.3).
+/// (at the order 1 observed on fine split levels, about equals it).
 fn difference(coarse: &Solution, fine: &Solution) -> ErrorEstimate {
     let (a, b) = (coarse.tip(), fine.tip());
     let cos = (((a.R.transpose() * b.R).trace() - 1.0) / 2.0).clamp(-1.0, 1.0);
