@@ -81,6 +81,9 @@ fn the_prototype_with_friction_pulled_and_released_is_stable() {
             rough.tendons[tendon].friction = friction(0.1, motion);
             let solution = tdcr::solve(&rough, &Default::default()).unwrap();
             assert_eq!(solution.report.stability, Stability::Stable, "{motion:?}");
+            // The verdict says what it covers: motions that keep the slip direction.
+            let notes = &solution.report.notes;
+            assert!(notes.iter().any(|n| n.contains("slip direction held")), "{notes:?}");
             // The same verdict from a linearization of its own at the answer.
             assert_eq!(vibration(&rough, &solution).unwrap().stability, Stability::Stable);
         }

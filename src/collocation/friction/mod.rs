@@ -43,6 +43,13 @@ use crate::{Error, Robot};
 use staircase::Staircase;
 use std::time::Instant;
 
+/// The scope of a verdict with friction, noted on every full-slip solve that has one
+/// (docs/stability.md, "Tendons with friction"): the linearized dynamics holds each
+/// stretch's slip direction, and a disturbance that reverses it meets the stuck system.
+const SLIP_HELD: &str = "with friction the stability verdict is that of the linearized dynamics with each \
+     stretch's slip direction held (the tendon keeps sliding the way the solve assumed, as while its actuator \
+     moves); a disturbance that reverses the slip somewhere makes that stretch stick, which the verdict does not cover";
+
 /// The unknown of slip j at node n given the slips' first unknowns and spans, if it is one
 /// (n in 1..=span).
 fn unknown(offsets: &[usize], spans: &[usize], j: usize, n: usize) -> Option<usize> {
@@ -505,6 +512,7 @@ fn refine_with_friction(
             pipeline::record_estimate(&mut report, estimated.as_ref().map(|(c, _)| c), options, length);
             let t = Instant::now();
             report.stability = if assess {
+                report.notes.push(SLIP_HELD.into());
                 super::dynamics::friction::assess(&mut border, &x, fresh, &mut report)
             } else {
                 held_unknown()
