@@ -72,6 +72,8 @@ pub(crate) fn spare(mesh: &Mesh, solver: LinearSolver) -> Option<(Mesh, Workspac
         workspace.rates_valid = false;
         workspace.trial_rates_valid = false;
         workspace.trial.clear();
+        workspace.keep_tensions = false;
+        workspace.forget_tension_rhs();
         Some((mesh, workspace))
     })
 }
@@ -122,6 +124,12 @@ pub struct Workspace {
     /// Buffers a linearization for sensitivities handed back for the next one
     /// ([`Workspace::take_buffer`], [`Workspace::give_buffer`]).
     buffers: Vec<Vec<f64>>,
+    /// Whether [`Workspace::verdict_at`] also forms the tension columns' right-hand sides
+    /// ([`Workspace::keep_tension_columns`]).
+    keep_tensions: bool,
+    /// -dF/dtau_i of every tendon (column-major) that the last [`Workspace::verdict_at`]
+    /// formed with the Jacobian in `values`; taken by [`Workspace::take_tension_rhs`].
+    tension_rhs: Option<Vec<f64>>,
 }
 
 impl Workspace {
@@ -153,6 +161,8 @@ impl Workspace {
             dynamics: None,
             system: SystemBuffers::default(),
             buffers: Vec::new(),
+            keep_tensions: false,
+            tension_rhs: None,
         })
     }
 
@@ -172,10 +182,52 @@ impl Workspace {
         }
     }
 
+    /// Makes [`Workspace::verdict_at`] form the tension columns' right-hand sides with the
+    /// Jacobian (`on`) or not: what [`crate::Solver::keep_tension_columns`] asks for.
+    pub(crate) fn keep_tension_columns(&mut self, on: bool) {
+        self.keep_tensions = on;
+    }
+
+    /// Whether [`Workspace::verdict_at`] forms the tension columns' right-hand sides.
+    pub(crate) fn keeps_tension_columns(&self) -> bool {
+        self.keep_tensions
+    }
+
+    /// -dF/dtau_i of every tendon at the last iterate (column-major, `len` values), when
+    /// the last [`Workspace::verdict_at`] formed them with the Jacobian still in the value
+    /// buffer, unfactored, and no step was taken since; else None.
+    pub(crate) fn take_tension_rhs(&mut self, len: usize) -> Option<Vec<f64>> {
+        let columns = self.tension_rhs.take()?;
+        if self.unfactored && self.drift == 0.0 && columns.len() == len {
+            Some(columns)
+        } else {
+            self.give_buffer(columns);
+            None
+        }
+    }
+
+    /// Drops the tension columns' right-hand sides the last verdict formed (the value
+    /// buffer gets another Jacobian), keeping their buffer.
+    pub(crate) fn forget_tension_rhs(&mut self) {
+        if let Some(columns) = self.tension_rhs.take() {
+            self.give_buffer(columns);
+        }
+    }
+
     /// The system of a copy of `model` on `mesh` (this workspace's mesh), built in the
     /// buffers the last system on it left ([`Workspace::keep_system`]).
     pub(crate) fn system<'a>(&mut self, model: &Model<'a>, mesh: Mesh) -> System<'a> {
         System::with_buffers(model, mesh, std::mem::take(&mut self.system))
+    }
+
+    /// The system of `model` on `mesh` (this workspace's mesh) with the sites the last
+    /// system on it left, when they are `model`'s ([`System::with_kept_sites`]: the caller
+    /// vouches that its robot is that system's); else `model` and `mesh` back.
+    pub(crate) fn kept_system<'a>(&mut self, model: Model<'a>, mesh: Mesh) -> Result<System<'a>, (Model<'a>, Mesh)> {
+        System::with_kept_sites(model, mesh, std::mem::take(&mut self.system)).map_err(|(model, mesh, buffers)| {
+            self.system = buffers;
+            (model, mesh)
+        })
     }
 
     /// Keeps the buffers of `system` (built on this workspace's mesh) for the next
@@ -371,7 +423,21 @@ impl Workspace {
         assess: impl FnOnce(&[f64]) -> (Stability, Option<NeutralRoots>),
     ) -> Option<Stability> {
         let t = Instant::now();
-        let ok = system.jacobian(x, &mut self.trial_residual, &mut self.values).is_ok();
+        self.forget_tension_rhs();
+        // The tension columns only where a Jacobian in the tensions reads them: no friction,
+        // no displacement-controlled tendon (`Sensitivity::with_workspace`).
+        let plain = system.friction.is_none() && !system.model.robot.has_displacement_inputs();
+        let ok = if self.keep_tensions && plain {
+            let mut columns = self.take_buffer(system.unknowns() * system.model.robot.tendons.len());
+            let ok = system
+                .jacobian_and_tensions(x, &mut self.trial_residual, &mut self.values, &mut columns)
+                .is_ok();
+            columns.iter_mut().for_each(|d| *d = -*d);
+            self.tension_rhs = Some(columns);
+            ok
+        } else {
+            system.jacobian(x, &mut self.trial_residual, &mut self.values).is_ok()
+        };
         report.timings.assembly += t.elapsed();
         report.evaluations.jacobian += 1;
         report.evaluations.equations += system.rate_evaluations();

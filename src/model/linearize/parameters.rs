@@ -77,33 +77,54 @@ fn tension_rates_kernel(
     out: &mut [Vector6<f64>],
 ) -> Result<Vector6<f64>> {
     let (v, u) = (state.1, state.2);
-    let length = model.robot.length();
     point_derivatives(model, site, segment_end, state, along, out, |x_v, x_u, cached, out| {
-        // The taut tendons come in the order eq. 13's assembly kept their points.
-        let mut kept = cached.iter();
-        for (i, taut, tendon) in model.distributed_reaching_tendons(segment_end) {
-            // Per unit of tau_i: k_i = f / |p_i|, so A() is (f / |p_i|) P_i; a kept point
-            // differs only in k_i = tau_i f / |p_i|, and f * (1 / |p_i|) is what
-            // TendonPoint::new computes for the tension f.
-            let kept_point = if taut { kept.next() } else { None };
-            let tp = match kept_point {
-                Some(&tp) => TendonPoint {
-                    k: model.tension_factor * tp.inv_speed,
-                    ..tp
-                },
-                None => {
-                    let rp = tendon.routing.at(site.s, length);
-                    TendonPoint::new(i, model.tension_factor, &rp, site, v, u)?
-                }
-            };
-            // On a Kirchhoff rod q_i does not see the translational coordinate's rate.
-            let x_v = if tp.inextensible { Vector3::zeros() } else { *x_v };
-            let q = tp.A() * (x_v - tp.r.cross(x_u) + tp.c);
-            let rq = tp.r.cross(&q);
-            out[i] = Vector6::new(q[0], q[1], q[2], rq[0], rq[1], rq[2]);
-        }
-        Ok(())
+        tension_partials(model, site, segment_end, (v, u), (x_v, x_u), cached, out)
     })
+}
+
+/// dF/dtau_i at fixed rates x = (x_v, x_u) and state (v, u) for every tendon that reaches
+/// `segment_end` (F = M x - rhs, [`tension_rates`]), into `out[i]` (the other entries left
+/// as they are), given the points of the first taut tendons eq. 13's assembly kept, in the
+/// order it kept them (`cached`). Always inlined, so that it is compiled with its caller's
+/// target features (the interval Jacobian's AVX2 build, [`super::linearize_tensions_inline`]).
+///
+/// # Errors
+/// [`crate::Error::SingularRouting`] for a slack tendon without a tangent.
+#[inline(always)]
+pub(super) fn tension_partials(
+    model: &Model,
+    site: &Site,
+    segment_end: f64,
+    (v, u): (&Vector3<f64>, &Vector3<f64>),
+    (x_v, x_u): (&Vector3<f64>, &Vector3<f64>),
+    cached: &[TendonPoint],
+    out: &mut [Vector6<f64>],
+) -> Result<()> {
+    let length = model.robot.length();
+    // The taut tendons come in the order eq. 13's assembly kept their points.
+    let mut kept = cached.iter();
+    for (i, taut, tendon) in model.distributed_reaching_tendons(segment_end) {
+        // Per unit of tau_i: k_i = f / |p_i|, so A() is (f / |p_i|) P_i; a kept point
+        // differs only in k_i = tau_i f / |p_i|, and f * (1 / |p_i|) is what
+        // TendonPoint::new computes for the tension f.
+        let kept_point = if taut { kept.next() } else { None };
+        let tp = match kept_point {
+            Some(&tp) => TendonPoint {
+                k: model.tension_factor * tp.inv_speed,
+                ..tp
+            },
+            None => {
+                let rp = tendon.routing.at(site.s, length);
+                TendonPoint::new(i, model.tension_factor, &rp, site, v, u)?
+            }
+        };
+        // On a Kirchhoff rod q_i does not see the translational coordinate's rate.
+        let x_v = if tp.inextensible { Vector3::zeros() } else { *x_v };
+        let q = tp.A() * (x_v - tp.r.cross(x_u) + tp.c);
+        let rq = tp.r.cross(&q);
+        out[i] = Vector6::new(q[0], q[1], q[2], rq[0], rq[1], rq[2]);
+    }
+    Ok(())
 }
 
 /// Eq. 13 (corrected) at (R, v, u) with the derivatives of its rates in the six diagonal
