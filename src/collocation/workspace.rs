@@ -220,14 +220,17 @@ impl Workspace {
         System::with_buffers(model, mesh, std::mem::take(&mut self.system))
     }
 
+    /// Whether the sites the last system on this workspace's mesh left can be `model`'s on
+    /// `mesh` ([`SystemBuffers::has_sites_of`]).
+    pub(crate) fn has_sites_of(&self, model: &Model, mesh: &Mesh) -> bool {
+        self.system.has_sites_of(model, mesh)
+    }
+
     /// The system of `model` on `mesh` (this workspace's mesh) with the sites the last
-    /// system on it left, when they are `model`'s ([`System::with_kept_sites`]: the caller
-    /// vouches that its robot is that system's); else `model` and `mesh` back.
-    pub(crate) fn kept_system<'a>(&mut self, model: Model<'a>, mesh: Mesh) -> Result<System<'a>, (Model<'a>, Mesh)> {
-        System::with_kept_sites(model, mesh, std::mem::take(&mut self.system)).map_err(|(model, mesh, buffers)| {
-            self.system = buffers;
-            (model, mesh)
-        })
+    /// system on it left, which must be `model`'s ([`Workspace::has_sites_of`]; the caller
+    /// vouches that its robot is that system's).
+    pub(crate) fn kept_system<'a>(&mut self, model: Model<'a>, mesh: Mesh) -> System<'a> {
+        System::with_kept_sites(model, mesh, std::mem::take(&mut self.system))
     }
 
     /// Keeps the buffers of `system` (built on this workspace's mesh) for the next

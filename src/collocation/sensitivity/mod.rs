@@ -289,12 +289,11 @@ impl<'a> Sensitivity<'a> {
         // left there are this robot's (the caller vouches for it, as for the values).
         let kept = evaluated
             && !crate::model::friction::any(robot)
-            && workspace.as_ref().is_some_and(|w| w.evaluated_at_solution());
+            && workspace
+                .as_ref()
+                .is_some_and(|w| w.evaluated_at_solution() && w.has_sites_of(&model, &mesh));
         let mut border = if kept && let Some(w) = workspace.as_mut() {
-            match w.kept_system(model, mesh) {
-                Ok(system) => Capstan::plain(system),
-                Err((model, mesh)) => Capstan::at_solution(model, mesh, solution),
-            }
+            Capstan::plain(w.kept_system(model, mesh))
         } else {
             Capstan::at_solution(model, mesh, solution)
         };

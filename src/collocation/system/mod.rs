@@ -68,9 +68,6 @@ pub struct System<'a> {
     pub(crate) friction: Option<Profile<'a>>,
 }
 
-/// What [`System::with_kept_sites`] gives back when the buffers hold other sites.
-pub(crate) type Refused<'a> = (Model<'a>, Mesh, SystemBuffers);
-
 /// The buffers a [`System`] fills for its mesh (the sites) and its model's tensions, which
 /// a workspace keeps between the systems of the solves on its mesh
 /// ([`System::with_buffers`], [`System::into_parts`]).
@@ -80,9 +77,21 @@ pub(crate) struct SystemBuffers {
     interval_sites: Vec<Option<IntervalSites>>,
     node_sites: Vec<Site>,
     /// The load factor and traced parameter of the model whose sites the buffers hold
-    /// (the system that gave them back), None before any: what [`System::with_kept_sites`]
-    /// checks.
+    /// (the system that gave them back), None before any: what
+    /// [`SystemBuffers::has_sites_of`] checks.
     sites_of: Option<(f64, Option<(crate::model::parameter::Parameter, f64)>)>,
+}
+
+impl SystemBuffers {
+    /// Whether the sites held can be those of `model` on `mesh` (the robot aside, which the
+    /// caller vouches for): a system with its load factor and traced parameter left them,
+    /// one per node and link of `mesh` (the only inputs besides the robot and the mesh that
+    /// the sites depend on).
+    pub(crate) fn has_sites_of(&self, model: &Model, mesh: &Mesh) -> bool {
+        self.sites_of == Some((model.load_factor, model.parameter))
+            && self.node_sites.len() == mesh.nodes.len()
+            && self.interval_sites.len() + 1 == mesh.nodes.len()
+    }
 }
 
 impl<'a> System<'a> {
@@ -117,19 +126,12 @@ impl<'a> System<'a> {
     }
 
     /// The system of `model` on `mesh` with the sites `buffers` hold, without computing
-    /// them again, when they are those of a system of the same robot on this mesh
-    /// (`buffers` a workspace's, [`System::into_parts`]) with `model`'s load factor and
-    /// traced parameter (the only inputs besides the robot and the mesh that the sites
-    /// depend on); else the buffers back. The caller vouches for the robot: the
-    /// sensitivities of a [`crate::Solver`]'s last answer, whose Jacobian that system's
-    /// verdict evaluated.
-    pub(crate) fn with_kept_sites(model: Model<'a>, mesh: Mesh, buffers: SystemBuffers) -> Result<Self, Refused<'a>> {
-        let same = buffers.sites_of == Some((model.load_factor, model.parameter))
-            && buffers.node_sites.len() == mesh.nodes.len()
-            && buffers.interval_sites.len() + 1 == mesh.nodes.len();
-        if !same {
-            return Err((model, mesh, buffers));
-        }
+    /// them again: `buffers` must hold those of a system of the same robot on this mesh
+    /// with `model`'s load factor and traced parameter ([`SystemBuffers::has_sites_of`]; the
+    /// caller vouches for the robot: the sensitivities of a [`crate::Solver`]'s last answer,
+    /// whose Jacobian that system's verdict evaluated).
+    pub(crate) fn with_kept_sites(model: Model<'a>, mesh: Mesh, buffers: SystemBuffers) -> Self {
+        debug_assert!(buffers.has_sites_of(&model, &mesh));
         let mut sys = System {
             model,
             mesh,
@@ -139,7 +141,7 @@ impl<'a> System<'a> {
             friction: None,
         };
         sys.count_rate_evaluations();
-        Ok(sys)
+        sys
     }
 
     /// The mesh, and the buffers of the sites and the model's tensions for a later
