@@ -190,7 +190,9 @@ fn point_derivatives(
     let mut cache = TendonCache::new();
     let assembled = assemble(model, site, segment_end, (R, v, u), Some(&mut cache), None)?;
     let x = &assembled.x;
-    let rates = Vector6::from_fn(|i, _| x[i]);
+    // Written out, not `from_fn`: nalgebra's iterator constructor, shared with more
+    // callers, is not inlined into the AVX2 build and costs a call per use.
+    let rates = Vector6::new(x[0], x[1], x[2], x[3], x[4], x[5]);
     let x_v = Vector3::new(x[0], x[1], x[2]);
     let x_u = Vector3::new(x[3], x[4], x[5]);
     out.fill(Vector6::zeros());
@@ -199,7 +201,11 @@ fn point_derivatives(
         // dF^T: rows v (3), u (3), then the rotation's (3), columns F's six components.
         let dFt = derivative(model, site, segment_end, (v, u), x, &assembled, &cache)?;
         for (d, dy) in out.iter_mut().zip(along) {
-            *d += Vector6::from_fn(|j, _| (0..6).map(|k| dFt[(k, j)] * dy[k]).sum::<f64>());
+            let mut add = Vector6::zeros();
+            for (j, a) in add.iter_mut().enumerate() {
+                *a = (0..6).map(|k| dFt[(k, j)] * dy[k]).sum::<f64>();
+            }
+            *d += add;
         }
     }
     for d in out.iter_mut().filter(|d| **d != Vector6::zeros()) {
