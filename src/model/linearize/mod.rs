@@ -97,7 +97,7 @@ mod factor;
 use factor::Factor;
 
 mod parameters;
-pub(crate) use parameters::{stiffness_rates, tension_rates};
+pub(crate) use parameters::{linearize_tensions, linearize_tensions_inline, stiffness_rates, tension_rates};
 
 mod tendon;
 pub(crate) use tendon::TendonPoint;
@@ -405,63 +405,6 @@ pub(crate) fn linearize_inline(
         d_strains: Matrix6::from_fn(|i, k| -dFt[(k, i)]),
         d_rotation: Matrix6x3::from_fn(|i, k| -dFt[(6 + k, i)]),
     })
-}
-
-/// [`linearize_inline`], also writing d(v', u')/dtau_i at the fixed state (R, v, u) for
-/// every tendon of the robot into `tensions[i]` (one entry per tendon, zero for a tendon
-/// that does not load the backbone here): [`tension_rates`] without `along`, from the same
-/// assembly and factors of M as the linearization, one solve with them per tendon
-/// (docs/sensitivity.md, "Tension columns formed with the verdict's Jacobian"). Always
-/// inlined, for the interval Jacobian's AVX2 build.
-///
-/// # Errors
-/// As [`linearize`]; [`Error::SingularRouting`] also for a slack tendon without a tangent.
-#[inline(always)]
-pub(crate) fn linearize_tensions_inline(
-    model: &Model,
-    site: &Site,
-    segment_end: f64,
-    (R, v, u): (&Matrix3<f64>, &Vector3<f64>, &Vector3<f64>),
-    tensions: &mut [Vector6<f64>],
-) -> Result<Linearization> {
-    let mut cache = TendonCache::new();
-    let assembled = assemble(model, site, segment_end, (R, v, u), Some(&mut cache), None)?;
-    let x = &assembled.x;
-    let mut dFt = derivative(model, site, segment_end, (v, u), x, &assembled, &cache)?;
-    if !assembled.factor.solve_transposed_mut(&mut dFt) {
-        return Err(breakdown(site.s));
-    }
-    let x_v = Vector3::new(x[0], x[1], x[2]);
-    let x_u = Vector3::new(x[3], x[4], x[5]);
-    tensions.fill(Vector6::zeros());
-    parameters::tension_partials(model, site, segment_end, (v, u), (&x_v, &x_u), cache.points(), tensions)?;
-    for d in tensions.iter_mut().filter(|d| **d != Vector6::zeros()) {
-        let mut row = d.transpose();
-        if !assembled.factor.solve_transposed_mut(&mut row) {
-            return Err(breakdown(site.s));
-        }
-        *d = -row.transpose();
-    }
-    Ok(Linearization {
-        rates: Vector6::from_fn(|i, _| x[i]),
-        d_strains: Matrix6::from_fn(|i, k| -dFt[(k, i)]),
-        d_rotation: Matrix6x3::from_fn(|i, k| -dFt[(6 + k, i)]),
-    })
-}
-
-/// [`linearize_tensions_inline`] as a call (an interval's start node, linearized once per
-/// run of intervals).
-///
-/// # Errors
-/// As [`linearize_tensions_inline`].
-pub(crate) fn linearize_tensions(
-    model: &Model,
-    site: &Site,
-    segment_end: f64,
-    state: (&Matrix3<f64>, &Vector3<f64>, &Vector3<f64>),
-    tensions: &mut [Vector6<f64>],
-) -> Result<Linearization> {
-    linearize_tensions_inline(model, site, segment_end, state, tensions)
 }
 
 /// Eq. 13 (corrected) at one point, assembled and factored (pass 1 of [`linearize`]) for

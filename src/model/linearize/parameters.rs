@@ -1,15 +1,16 @@
 //! Eq. 13's rates differentiated in parameters rather than in the state: every tendon's
-//! tension ([`tension_rates`]) and the section's six stiffnesses ([`stiffness_rates`]), at
+//! tension ([`tension_rates`]; with the linearization at the same point,
+//! [`linearize_tensions_inline`]) and the section's six stiffnesses ([`stiffness_rates`]), at
 //! fixed (R, v, u), from the same assembly and factors as [`super::linearize`] (its module
 //! docs name the symbols). Checked against dual numbers seeded on the tension (the tests of
 //! `linearize`) and, through the collocation system, against differenced residuals
 //! (tests/sensitivity.rs).
 #![allow(non_snake_case)]
 
-use super::{TendonCache, TendonPoint, assemble, breakdown, derivative};
+use super::{Linearization, TendonCache, TendonPoint, assemble, breakdown, derivative};
 use crate::error::Result;
 use crate::model::equations::{Model, Site};
-use nalgebra::{Matrix3, Vector3, Vector6};
+use nalgebra::{Matrix3, Matrix6, Matrix6x3, Vector3, Vector6};
 
 /// Eq. 13 (corrected) at (R, v, u) with the derivatives of its rates in every tendon's
 /// tension: writes d(v', u')/dtau_i into `out[i]` (one entry per tendon of the robot, zero
@@ -86,7 +87,7 @@ fn tension_rates_kernel(
 /// `segment_end` (F = M x - rhs, [`tension_rates`]), into `out[i]` (the other entries left
 /// as they are), given the points of the first taut tendons eq. 13's assembly kept, in the
 /// order it kept them (`cached`). Always inlined, so that it is compiled with its caller's
-/// target features (the interval Jacobian's AVX2 build, [`super::linearize_tensions_inline`]).
+/// target features (the interval Jacobian's AVX2 build, [`linearize_tensions_inline`]).
 ///
 /// # Errors
 /// [`crate::Error::SingularRouting`] for a slack tendon without a tangent.
@@ -125,6 +126,63 @@ pub(super) fn tension_partials(
         out[i] = Vector6::new(q[0], q[1], q[2], rq[0], rq[1], rq[2]);
     }
     Ok(())
+}
+
+/// [`super::linearize_inline`], also writing d(v', u')/dtau_i at the fixed state (R, v, u) for
+/// every tendon of the robot into `tensions[i]` (one entry per tendon, zero for a tendon
+/// that does not load the backbone here): [`tension_rates`] without `along`, from the same
+/// assembly and factors of M as the linearization, one solve with them per tendon
+/// (docs/sensitivity.md, "Tension columns formed with the verdict's Jacobian"). Always
+/// inlined, for the interval Jacobian's AVX2 build.
+///
+/// # Errors
+/// As [`super::linearize`]; [`Error::SingularRouting`] also for a slack tendon without a tangent.
+#[inline(always)]
+pub(crate) fn linearize_tensions_inline(
+    model: &Model,
+    site: &Site,
+    segment_end: f64,
+    (R, v, u): (&Matrix3<f64>, &Vector3<f64>, &Vector3<f64>),
+    tensions: &mut [Vector6<f64>],
+) -> Result<Linearization> {
+    let mut cache = TendonCache::new();
+    let assembled = assemble(model, site, segment_end, (R, v, u), Some(&mut cache), None)?;
+    let x = &assembled.x;
+    let mut dFt = derivative(model, site, segment_end, (v, u), x, &assembled, &cache)?;
+    if !assembled.factor.solve_transposed_mut(&mut dFt) {
+        return Err(breakdown(site.s));
+    }
+    let x_v = Vector3::new(x[0], x[1], x[2]);
+    let x_u = Vector3::new(x[3], x[4], x[5]);
+    tensions.fill(Vector6::zeros());
+    tension_partials(model, site, segment_end, (v, u), (&x_v, &x_u), cache.points(), tensions)?;
+    for d in tensions.iter_mut().filter(|d| **d != Vector6::zeros()) {
+        let mut row = d.transpose();
+        if !assembled.factor.solve_transposed_mut(&mut row) {
+            return Err(breakdown(site.s));
+        }
+        *d = -row.transpose();
+    }
+    Ok(Linearization {
+        rates: Vector6::from_fn(|i, _| x[i]),
+        d_strains: Matrix6::from_fn(|i, k| -dFt[(k, i)]),
+        d_rotation: Matrix6x3::from_fn(|i, k| -dFt[(6 + k, i)]),
+    })
+}
+
+/// [`linearize_tensions_inline`] as a call (an interval's start node, linearized once per
+/// run of intervals).
+///
+/// # Errors
+/// As [`linearize_tensions_inline`].
+pub(crate) fn linearize_tensions(
+    model: &Model,
+    site: &Site,
+    segment_end: f64,
+    state: (&Matrix3<f64>, &Vector3<f64>, &Vector3<f64>),
+    tensions: &mut [Vector6<f64>],
+) -> Result<Linearization> {
+    linearize_tensions_inline(model, site, segment_end, state, tensions)
 }
 
 /// Eq. 13 (corrected) at (R, v, u) with the derivatives of its rates in the six diagonal
