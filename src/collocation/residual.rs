@@ -332,7 +332,7 @@ fn derivative_rows(
 /// when the start node's linearization is given, as the previous interval's `end`, else
 /// written), at the end node and at the midpoint (its total derivative), the midpoint's
 /// strain motion, and the interval rows' derivatives dF/dtau_i (scaled), as
-/// [`interval_derivatives`] gives them with [`linearize::tension_rates`].
+/// `interval_derivatives` gives them with `linearize::tension_rates`.
 pub struct IntervalTensions<'t> {
     pub(crate) start: &'t mut [Vector6<f64>],
     pub(crate) end: &'t mut [Vector6<f64>],
