@@ -6,7 +6,10 @@
 //!   tension solves it at full tension from that solution, as `tdcr bench` does);
 //! - `tensions`: the tension columns of the tip Jacobian from that solver
 //!   ([`Solver::tip_jacobian`], after the warm solve);
-//! - `all`: every tip sensitivity ([`tdcr::tip_sensitivities`], 21 parameters on the prototype).
+//! - `all`: every tip sensitivity ([`tdcr::tip_sensitivities`], 21 parameters on the prototype);
+//! - `kept-warm`, `kept-tensions`: `warm` and `tensions` with the solver's
+//!   [`Solver::keep_tension_columns`] on (the verdict of the warm solve forms the tension
+//!   columns' right-hand sides; their cost is the difference of the two warm rows).
 //!
 //! ```text
 //! cargo build --release --example jacobian_cost
@@ -37,7 +40,7 @@ fn measured(
     warm: &Solution,
 ) -> Result<f64, tdcr::Error> {
     let tensions: Vec<Parameter> = (0..robot.tendons.len()).map(Parameter::Tension).collect();
-    Ok(match what {
+    Ok(match what.trim_start_matches("kept-") {
         "cold" => collocation::solve(robot, &solver.options)?.tip().p[0],
         "warm" => solver.solve_from(robot, previous)?.tip().p[0],
         "tensions" => solver.tip_jacobian(robot, warm, &tensions)?[(0, 0)],
@@ -47,7 +50,7 @@ fn measured(
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().collect();
-    let usage = "usage: jacobian_cost S|H cold|warm|tensions|all COUNT";
+    let usage = "usage: jacobian_cost S|H cold|warm|tensions|all|kept-warm|kept-tensions COUNT";
     let (case, what, count) = match args.as_slice() {
         [_, c, w, n] => (c.as_str(), w.as_str(), n.parse::<usize>()?.max(1)),
         _ => return Err(usage.into()),
@@ -57,17 +60,19 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         "H" => cases::case_h(),
         _ => return Err(usage.into()),
     };
-    if !["cold", "warm", "tensions", "all"].contains(&what) {
+    let modes = ["cold", "warm", "tensions", "all", "kept-warm", "kept-tensions"];
+    if !modes.contains(&what) {
         return Err(usage.into());
     }
     let before = scaled(&robot, 0.99);
     let mut solver = Solver::new(Default::default());
+    solver.keep_tension_columns(what.starts_with("kept-"));
     let mut sum = 0.0;
     // Round 0 runs uncounted work only (lazily built tables, caches).
     for round in 0..=count {
         // Uncounted: the previous solve, and the warm solve a Jacobian is taken at.
         let previous = solver.solve(&before)?;
-        let warm = if what == "warm" {
+        let warm = if what.ends_with("warm") {
             previous.clone()
         } else {
             solver.solve_from(&robot, &previous)?

@@ -214,3 +214,53 @@ fn control_jacobian_errors_name_the_problem() {
     let err = backbone_jacobian(&robot, &solution, &[Parameter::Tension(0)], &[0.5]).unwrap_err();
     assert!(err.to_string().contains("outside the rod"), "{err}");
 }
+
+/// With `keep_tension_columns`, a warm solve that converged by chord steps forms the
+/// tension columns' right-hand sides with its verdict's Jacobian, and the solver's tension
+/// Jacobian takes them: the solve's answer is the same bits as without, the columns equal
+/// the stateless ones to rounding, on S and H, in a loop of control steps and for columns
+/// asked for with others.
+#[test]
+fn tension_columns_formed_by_the_verdict_equal_the_stateless_ones() {
+    for robot in [cases::case_s(), cases::case_h()] {
+        let mut kept = Solver::new(Options::default());
+        kept.keep_tension_columns(true);
+        let mut plain = Solver::new(Options::default());
+        let mut before = robot.clone();
+        for t in before.tendons.iter_mut() {
+            t.set_tension(t.tension() * 0.99);
+        }
+        let (mut a, mut b) = (kept.solve(&before).unwrap(), plain.solve(&before).unwrap());
+        let tensions: Vec<Parameter> = (0..robot.tendons.len()).map(Parameter::Tension).collect();
+        let mut next = robot.clone();
+        for step in 0..3 {
+            if step > 0 {
+                let t = next.tendons[step].tension();
+                next.tendons[step].set_tension(t + 0.02);
+            }
+            (a, b) = (
+                kept.solve_from(&next, &a).unwrap(),
+                plain.solve_from(&next, &b).unwrap(),
+            );
+            // The same answer, bit for bit: the columns are formed beside the Jacobian.
+            assert_eq!(a.nodes, b.nodes, "step {step}");
+            let j = kept.tip_jacobian(&next, &a, &tensions).unwrap();
+            // The same factors for both solvers' next warm solves (the Jacobian at this
+            // answer).
+            plain.tip_jacobian(&next, &b, &tensions).unwrap();
+            let stateless = tip_jacobian(&next, &a, &tensions).unwrap();
+            // 1e-12: the same Jacobian and factoring; the right-hand sides differ in
+            // rounding (the midpoints' chain rule, docs/sensitivity.md).
+            assert!(relative(&j, &stateless) <= 1e-12, "step {step}: {j} vs {stateless}");
+            let some = [Parameter::TipForce(1), Parameter::Tension(2)];
+            let j = kept.tip_jacobian(&next, &a, &some).unwrap();
+            let stateless = tip_jacobian(&next, &a, &some).unwrap();
+            // 1e-12: as above.
+            assert!(relative(&j, &stateless) <= 1e-12, "step {step}: {j} vs {stateless}");
+        }
+        assert_eq!(
+            a.report.newton_steps, 0,
+            "chord steps only: the verdict evaluated the Jacobian"
+        );
+    }
+}

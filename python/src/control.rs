@@ -246,6 +246,18 @@ impl PySolver {
         Ok(Array3::from_shape_fn((s.len(), 3, m.ncols()), |(j, k, c)| m[(3 * j + k, c)]).into_pyarray(py))
     }
 
+    /// keep_tension_columns(on) -> None
+    ///
+    /// For a control loop that asks for `tip_jacobian()` in the tensions after every solve
+    /// (`on`): a solve whose stability verdict evaluates the Jacobian at its answer (a warm
+    /// solve that converged by chord steps) also forms the tension columns' right-hand
+    /// sides, which `tip_jacobian` then takes instead of a pass over the mesh of its own.
+    /// Such a solve costs a few per cent more, the answers are the same bits. Off by
+    /// default (docs/sensitivity.md).
+    fn keep_tension_columns(&mut self, on: bool) {
+        self.solver.keep_tension_columns(on);
+    }
+
     /// reset() -> None
     ///
     /// Forgets the workspace, its factors and the last solution (the robot stays): the

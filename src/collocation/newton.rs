@@ -236,6 +236,7 @@ fn evaluate_trial<B: Border>(border: &mut B, ws: &mut Workspace, report: &mut So
 fn jacobian<B: Border>(border: &mut B, x: &[State], ws: &mut Workspace, report: &mut SolveReport) -> bool {
     let t = Instant::now();
     ws.rates_valid = false;
+    ws.forget_tension_rhs();
     let ok = border.on(Point::Current, |system| {
         report.evaluations.equations += system.rate_evaluations();
         system.jacobian(x, &mut ws.residual, &mut ws.values).is_ok()

@@ -370,7 +370,9 @@ pub(crate) fn solve_on_mesh(
         stop_when_damped: false,
     };
     // The cached mesh and last states' buffers are kept for the cache this solve leaves,
-    // and the system is built in the workspace's buffers.
+    // and the system is built in the workspace's buffers; a new mesh's workspace keeps the
+    // tension columns if the cached one did (a Solver's `keep_tension_columns`).
+    let tension_columns = cache.as_ref().is_some_and(|c| c.workspace.keeps_tension_columns());
     let found = match cache.take() {
         Some(c) if c.mesh == mesh && c.solver == options.linear_solver => Some((c.workspace, c.mesh, c.last)),
         other => {
@@ -391,6 +393,7 @@ pub(crate) fn solve_on_mesh(
             (system, ws, None)
         }
     };
+    workspace.keep_tension_columns(tension_columns);
     let mut result = match choose {
         Choose::No => newton_only(&system, &mut workspace, x0, options, &settings, report),
         _ => choose_equilibrium(&mut system, &mut workspace, x0, choose, options, &settings, report),

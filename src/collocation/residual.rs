@@ -291,13 +291,31 @@ pub(super) fn interval_derivatives(
     }
     point(model, &sites.mid, segment_end, (&R_m, &v_m, &u_m), Some(dy_mid), d_mid)?;
     let Jri = so3::right_jacobian_inv(&theta_m);
+    let mid = (sites.mid.inextensible, &R_m, &Jri);
+    derivative_rows(mid, h, model.robot.length(), [d_start, d_end, d_mid, dy_mid], out);
+    Ok(rates1)
+}
+
+/// The interval rows' derivatives of [`interval_derivatives`] from the rates' derivatives
+/// at node a, node b and the midpoint (its total derivative) and the midpoint's strain
+/// motion `dy_mid`, for an interval of length `h` whose midpoint has the rotation R_m and
+/// J_r(theta_m)^-1 (`mid`, with whether its rod is inextensible): out[i] = -h/6 (dF_0 +
+/// 4 dF_m + dF_1), scaled.
+#[inline(always)]
+fn derivative_rows(
+    (inextensible, R_m, Jri): (bool, &Matrix3<f64>, &Matrix3<f64>),
+    h: f64,
+    length: f64,
+    [d_start, d_end, d_mid, dy_mid]: [&[Vector6<f64>]; 4],
+    out: &mut [Block<f64>],
+) {
     for (i, row) in out.iter_mut().enumerate() {
         let dym = dy_mid[i];
         // dF_0 + 4 dF_m + dF_1.
         let mut dF = Block::zeros();
         // The midpoint's position rate is R_m times the strain: on a Kirchhoff rod that is
         // v*, which no parameter moves through the translational coordinate.
-        if !sites.mid.inextensible {
+        if !inextensible {
             dF.fixed_rows_mut::<3>(P)
                 .copy_from(&(R_m * dym.fixed_rows::<3>(0) * 4.0));
         }
@@ -305,9 +323,22 @@ pub(super) fn interval_derivatives(
             .copy_from(&(Jri * dym.fixed_rows::<3>(3) * 4.0));
         dF.fixed_rows_mut::<6>(V)
             .copy_from(&(d_mid[i] * 4.0 + d_start[i] + d_end[i]));
-        *row = scale_rows(dF * (-h / 6.0), model.robot.length());
+        *row = scale_rows(dF * (-h / 6.0), length);
     }
-    Ok(rates1)
+}
+
+/// The buffers of one interval's tension columns that [`interval_jacobian`] fills besides
+/// the Jacobian (one entry per tendon in each): d(v', u')/dtau_i at the start node (read
+/// when the start node's linearization is given, as the previous interval's `end`, else
+/// written), at the end node and at the midpoint (its total derivative), the midpoint's
+/// strain motion, and the interval rows' derivatives dF/dtau_i (scaled), as
+/// `interval_derivatives` gives them with `linearize::tension_rates`.
+pub struct IntervalTensions<'t> {
+    pub(crate) start: &'t mut [Vector6<f64>],
+    pub(crate) end: &'t mut [Vector6<f64>],
+    pub(crate) mid: &'t mut [Vector6<f64>],
+    pub(crate) dy_mid: &'t mut [Vector6<f64>],
+    pub(crate) rows: &'t mut [Block<f64>],
 }
 
 /// The sites the order-6 residual of an interval needs besides its [`IntervalSites`]: at
@@ -376,6 +407,7 @@ pub fn interval_order6(
 ///
 /// # Errors
 /// A model breakdown at a node or at the midpoint.
+#[allow(clippy::too_many_arguments)]
 pub fn interval_jacobian(
     model: &Model,
     sites: &IntervalSites,
@@ -384,13 +416,14 @@ pub fn interval_jacobian(
     b: &State,
     start: Option<&Linearization>,
     jac: &mut [f64],
+    tensions: Option<IntervalTensions>,
 ) -> Result<(Block<f64>, Linearization)> {
     #[cfg(target_arch = "x86_64")]
     if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma") {
         // SAFETY: the processor supports the features the function is compiled for.
-        return unsafe { interval_jacobian_avx2(model, sites, segment_end, a, b, start, jac) };
+        return unsafe { interval_jacobian_avx2(model, sites, segment_end, a, b, start, jac, tensions) };
     }
-    interval_jacobian_kernel(model, sites, segment_end, a, b, start, jac, None)
+    interval_jacobian_kernel(model, sites, segment_end, a, b, start, jac, None, tensions)
 }
 
 /// [`interval_jacobian`] that keeps eq. 13's factored matrix at its points in `kept` (the
@@ -415,7 +448,7 @@ pub(super) fn interval_jacobian_keeping(
         // SAFETY: the processor supports the features the function is compiled for.
         return unsafe { interval_jacobian_keeping_avx2(model, sites, segment_end, a, b, start, jac, kept) };
     }
-    interval_jacobian_kernel(model, sites, segment_end, a, b, start, jac, Some(kept))
+    interval_jacobian_kernel(model, sites, segment_end, a, b, start, jac, Some(kept), None)
 }
 
 /// Eq. 13's factored matrix at an interval's three points and the midpoint's orientation,
@@ -447,6 +480,7 @@ impl IntervalFactors {
 /// [`interval_jacobian_kernel`] with AVX2 and FMA enabled.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,fma")]
+#[allow(clippy::too_many_arguments)]
 unsafe fn interval_jacobian_avx2(
     model: &Model,
     sites: &IntervalSites,
@@ -455,8 +489,9 @@ unsafe fn interval_jacobian_avx2(
     b: &State,
     start: Option<&Linearization>,
     jac: &mut [f64],
+    tensions: Option<IntervalTensions>,
 ) -> Result<(Block<f64>, Linearization)> {
-    interval_jacobian_kernel(model, sites, segment_end, a, b, start, jac, None)
+    interval_jacobian_kernel(model, sites, segment_end, a, b, start, jac, None, tensions)
 }
 
 /// [`interval_jacobian_kernel`] keeping the points' factors, with AVX2 and FMA enabled.
@@ -473,10 +508,12 @@ unsafe fn interval_jacobian_keeping_avx2(
     jac: &mut [f64],
     kept: &mut IntervalFactors,
 ) -> Result<(Block<f64>, Linearization)> {
-    interval_jacobian_kernel(model, sites, segment_end, a, b, start, jac, Some(kept))
+    interval_jacobian_kernel(model, sites, segment_end, a, b, start, jac, Some(kept), None)
 }
 
-/// [`interval_jacobian`]'s operations; `kept` as in [`interval_jacobian_keeping`].
+/// [`interval_jacobian`]'s operations; `kept` as in [`interval_jacobian_keeping`], `tensions`
+/// as in [`interval_jacobian`] (one of the two at most: a point keeps its factors or forms
+/// its tension rows).
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
 fn interval_jacobian_kernel(
@@ -488,6 +525,7 @@ fn interval_jacobian_kernel(
     start: Option<&Linearization>,
     jac: &mut [f64],
     mut kept: Option<&mut IntervalFactors>,
+    mut tensions: Option<IntervalTensions>,
 ) -> Result<(Block<f64>, Linearization)> {
     let length = model.robot.length();
     let h = sites.end.s - sites.start.s;
@@ -498,41 +536,59 @@ fn interval_jacobian_kernel(
         Some(l) => l,
         None => {
             let keep = kept.as_deref_mut().map(|k| &mut k.start);
-            computed = linearize_keeping(model, &sites.start, segment_end, &a.R, &a.v, &a.u, keep)?;
+            computed = match tensions.as_mut() {
+                Some(t) => {
+                    linearize::linearize_tensions(model, &sites.start, segment_end, (&a.R, &a.v, &a.u), t.start)?
+                }
+                None => linearize_keeping(model, &sites.start, segment_end, &a.R, &a.v, &a.u, keep)?,
+            };
             &computed
         }
     };
-    let keep = kept.as_deref_mut().map(|k| &mut k.end);
-    let lin1 = linearize_keeping(model, &sites.end, segment_end, &b.R, &b.v, &b.u, keep)?;
+    let lin1 = match tensions.as_mut() {
+        Some(t) => linearize::linearize_tensions_inline(model, &sites.end, segment_end, (&b.R, &b.v, &b.u), t.end)?,
+        None => {
+            let keep = kept.as_deref_mut().map(|k| &mut k.end);
+            linearize_keeping(model, &sites.end, segment_end, &b.R, &b.v, &b.u, keep)?
+        }
+    };
     let frame1 = PointFrame::new(&a.R, &theta1);
     let p0 = rhs_linearized_inline(&sites.start, lin0, &a.R, &y0, &PointFrame::start(&a.R));
     let p1 = rhs_linearized_inline(&sites.end, &lin1, &a.R, &y1, &frame1);
     let ym = (y0 + y1) * 0.5 + (p0.f - p1.f) * (h / 8.0);
     let frame_m = PointFrame::new(&a.R, &ym.fixed_rows::<3>(THETA).into());
-    let keep = kept.map(|k| {
-        k.mid_R = frame_m.R;
-        &mut k.mid
-    });
-    let pm = rhs_linearized_inline(
-        &sites.mid,
-        &linearize_keeping(
-            model,
-            &sites.mid,
-            segment_end,
-            &frame_m.R,
-            &ym.fixed_rows::<3>(V).into(),
-            &ym.fixed_rows::<3>(U).into(),
-            keep,
-        )?,
-        &a.R,
-        &ym,
-        &frame_m,
-    );
+    let (v_m, u_m): (Vector3<f64>, Vector3<f64>) = (ym.fixed_rows::<3>(V).into(), ym.fixed_rows::<3>(U).into());
+    let lin_m = match tensions.as_mut() {
+        Some(t) => {
+            linearize::linearize_tensions_inline(model, &sites.mid, segment_end, (&frame_m.R, &v_m, &u_m), t.mid)?
+        }
+        None => {
+            let keep = kept.map(|k| {
+                k.mid_R = frame_m.R;
+                &mut k.mid
+            });
+            linearize_keeping(model, &sites.mid, segment_end, &frame_m.R, &v_m, &u_m, keep)?
+        }
+    };
+    let pm = rhs_linearized_inline(&sites.mid, &lin_m, &a.R, &ym, &frame_m);
     let residual = scale_rows(y1 - y0 - (p0.f + pm.f * 4.0 + p1.f) * (h / 6.0), length);
 
     let ends = EndColumns::new(&p0, &p1, &frame1, length);
     let dFm = midpoint_product(&pm, &ends.midpoint(h));
     ends.write(&dFm, h, length, jac);
+    if let Some(t) = tensions {
+        // The chain rule of `interval_derivatives`: the midpoint's strains move by
+        // dy_m = h/8 (dF_0 - dF_1) with each tension, which adds d(v', u')/d(v, u) dy_m
+        // to its derivative at the fixed state.
+        for ((dy, s), e) in t.dy_mid.iter_mut().zip(t.start.iter()).zip(t.end.iter()) {
+            *dy = (s - e) * (h / 8.0);
+        }
+        for (d, dy) in t.mid.iter_mut().zip(t.dy_mid.iter()) {
+            *d += lin_m.d_strains * dy;
+        }
+        let mid = (sites.mid.inextensible, &frame_m.R, &frame_m.Jri);
+        derivative_rows(mid, h, length, [t.start, t.end, t.mid, t.dy_mid], t.rows);
+    }
     Ok((residual, lin1))
 }
 
@@ -603,9 +659,10 @@ mod tests {
             };
             let seg = mesh.nodes[k].segment_end;
             let (mut fast, mut baseline) = ([0.0; 12 * 24], [0.0; 12 * 24]);
-            let (r_fast, l_fast) = interval_jacobian(&model, &sites, seg, &x[k], &x[k + 1], None, &mut fast).unwrap();
+            let (r_fast, l_fast) =
+                interval_jacobian(&model, &sites, seg, &x[k], &x[k + 1], None, &mut fast, None).unwrap();
             let (r_base, l_base) =
-                interval_jacobian_kernel(&model, &sites, seg, &x[k], &x[k + 1], None, &mut baseline, None).unwrap();
+                interval_jacobian_kernel(&model, &sites, seg, &x[k], &x[k + 1], None, &mut baseline, None, None).unwrap();
             assert!(fast.iter().all(|v| v.is_finite()));
             assert_eq!(bits(&fast), bits(&baseline), "interval {k}");
             assert_eq!(bits(r_fast.as_slice()), bits(r_base.as_slice()), "interval {k}");

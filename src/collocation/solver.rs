@@ -43,12 +43,19 @@ pub struct Solver {
     /// The options of every solve.
     pub options: Options,
     cache: Cache,
+    /// Whether the stability verdict forms the tension columns' right-hand sides
+    /// ([`Solver::keep_tension_columns`]).
+    tension_columns: bool,
 }
 
 impl Solver {
     /// A solver with these options and an empty cache.
     pub fn new(options: Options) -> Self {
-        Solver { options, cache: None }
+        Solver {
+            options,
+            cache: None,
+            tension_columns: false,
+        }
     }
 
     /// As [`super::solve`], reusing the workspace of the previous solve when the mesh is
@@ -57,7 +64,7 @@ impl Solver {
     /// # Errors
     /// As [`super::solve`].
     pub fn solve(&mut self, robot: &Robot) -> Result<Solution> {
-        solve_impl(robot, &self.options, None, &mut self.cache)
+        self.solved(robot, None)
     }
 
     /// As [`super::solve_from`], reusing the workspace of the previous solve when the mesh
@@ -66,7 +73,31 @@ impl Solver {
     /// # Errors
     /// As [`super::solve`].
     pub fn solve_from(&mut self, robot: &Robot, guess: &Solution) -> Result<Solution> {
-        solve_impl(robot, &self.options, Some(guess), &mut self.cache)
+        self.solved(robot, Some(guess))
+    }
+
+    /// For a control loop that asks for the tension columns after every solve (`on`): a
+    /// solve whose stability verdict evaluates the Jacobian at its answer (a warm solve
+    /// that converged by chord steps) then also forms the tension columns' right-hand sides
+    /// -dF/dtau_i from the same evaluation of eq. 13 at every node and midpoint, and
+    /// [`Solver::tip_jacobian`] in the tensions takes them instead of a pass over the mesh
+    /// of its own (docs/sensitivity.md, "Tension columns formed with the verdict's
+    /// Jacobian"). Such a solve costs a few per cent more; the answers are the same bits.
+    /// Off by default. It applies from the next solve on, on the mesh it runs on.
+    pub fn keep_tension_columns(&mut self, on: bool) {
+        self.tension_columns = on;
+        if let Some(c) = self.cache.as_mut() {
+            c.workspace.keep_tension_columns(on);
+        }
+    }
+
+    /// Solves `robot` from `guess` (or cold) with the cache, whose workspace keeps this
+    /// solver's [`Solver::keep_tension_columns`] before and after.
+    fn solved(&mut self, robot: &Robot, guess: Option<&Solution>) -> Result<Solution> {
+        self.keep_tension_columns(self.tension_columns);
+        let out = solve_impl(robot, &self.options, guess, &mut self.cache);
+        self.keep_tension_columns(self.tension_columns);
+        out
     }
 
     /// The columns `wrt` of d(tip pose)/dq at `solution`, a solution of `robot` (6 x

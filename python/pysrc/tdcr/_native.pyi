@@ -694,6 +694,10 @@ class Solver:
         solution, in the layout of `TipSensitivities.tension`."""
     def backbone_jacobian(self, s: ArrayLike, wrt: Union[str, Sequence[str], None] = None) -> FloatArray:
         """(len(s), 3, n): d p(s_j)/dq at the arc lengths `s` (m) of the last solution."""
+    def keep_tension_columns(self, on: bool) -> None:
+        """Whether a warm solve's stability verdict also forms the tension columns'
+        right-hand sides for the next `tip_jacobian()` (a few per cent more per solve,
+        the same answers; off by default)."""
     def reset(self) -> None:
         """Forgets the workspace, its factors and the last solution (the robot stays)."""
     @property

@@ -14,6 +14,13 @@
 use super::*;
 
 impl<'r> Capstan<'r> {
+    /// The border without rows of `system`, a system without friction built elsewhere
+    /// (what [`Capstan::at_solution`] gives for a model without friction).
+    pub(crate) fn plain(system: System<'r>) -> Self {
+        debug_assert!(system.friction.is_none());
+        Capstan::new(system)
+    }
+
     /// The system of `model` on `mesh`, bordered by the log tensions of `solution`'s tendons
     /// with friction (from their tensions at the nodes of their spans); a border without
     /// rows when the model has no friction.

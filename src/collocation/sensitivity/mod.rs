@@ -284,9 +284,20 @@ impl<'a> Sensitivity<'a> {
         }
         let model = solved_model(robot, solution);
         let states: Vec<State> = interpolate_nodes(&model, &solution.nodes, &mesh);
-        let mut border = Capstan::at_solution(model, mesh, solution);
-        let n = border.system().unknowns() + border.border_rows();
         let mut workspace = workspace;
+        // With the verdict's Jacobian at the solution in the workspace, the sites its system
+        // left there are this robot's (the caller vouches for it, as for the values).
+        let kept = evaluated
+            && !crate::model::friction::any(robot)
+            && workspace
+                .as_ref()
+                .is_some_and(|w| w.evaluated_at_solution() && w.has_sites_of(&model, &mesh));
+        let mut border = if kept && let Some(w) = workspace.as_mut() {
+            Capstan::plain(w.kept_system(model, mesh))
+        } else {
+            Capstan::at_solution(model, mesh, solution)
+        };
+        let n = border.system().unknowns() + border.border_rows();
         let mut buffer = |len: usize| {
             workspace
                 .as_mut()
@@ -299,8 +310,13 @@ impl<'a> Sensitivity<'a> {
         let carry = tips && border.border_rows() == 0;
         let mut last = vec![[0.0; unknowns::NODE]; if carry { count } else { 0 }];
         if let Some(mut workspace) = workspace.take_if(|w| evaluated && w.evaluated_at_solution()) {
+            // The right-hand sides the verdict formed with these values, if it did
+            // ([`crate::Solver::keep_tension_columns`]), else one pass over the mesh.
             let carried = carry
-                .then(|| exact::tension_rhs_columns(border.system(), &states, workspace.take_buffer(n * count)))
+                .then(|| match workspace.take_tension_rhs(n * count) {
+                    Some(columns) => Ok(columns),
+                    None => exact::tension_rhs_columns(border.system(), &states, workspace.take_buffer(n * count)),
+                })
                 .transpose()?;
             let ok = match &carried {
                 Some(columns) => workspace.factor_evaluated_with_last(columns, count, &mut last),
@@ -381,6 +397,8 @@ impl<'a> Sensitivity<'a> {
     /// with this linearization's buffers for the next one's ([`Workspace::take_buffer`]).
     pub(crate) fn into_workspace(self) -> Workspace {
         let mut workspace = self.workspace;
+        // The system's buffers (its sites among them) for the next system on the mesh.
+        workspace.keep_system(self.border.into_system());
         let columns = [self.tension_columns, self.stiffness_columns];
         self.scratch
             .into_iter()

@@ -97,7 +97,7 @@ mod factor;
 use factor::Factor;
 
 mod parameters;
-pub(crate) use parameters::{stiffness_rates, tension_rates};
+pub(crate) use parameters::{linearize_tensions, linearize_tensions_inline, stiffness_rates, tension_rates};
 
 mod tendon;
 pub(crate) use tendon::TendonPoint;

@@ -1,15 +1,16 @@
 //! Eq. 13's rates differentiated in parameters rather than in the state: every tendon's
-//! tension ([`tension_rates`]) and the section's six stiffnesses ([`stiffness_rates`]), at
+//! tension ([`tension_rates`]; with the linearization at the same point,
+//! [`linearize_tensions_inline`]) and the section's six stiffnesses ([`stiffness_rates`]), at
 //! fixed (R, v, u), from the same assembly and factors as [`super::linearize`] (its module
 //! docs name the symbols). Checked against dual numbers seeded on the tension (the tests of
 //! `linearize`) and, through the collocation system, against differenced residuals
 //! (tests/sensitivity.rs).
 #![allow(non_snake_case)]
 
-use super::{TendonCache, TendonPoint, assemble, breakdown, derivative};
+use super::{Linearization, TendonCache, TendonPoint, assemble, breakdown, derivative};
 use crate::error::Result;
 use crate::model::equations::{Model, Site};
-use nalgebra::{Matrix3, Vector3, Vector6};
+use nalgebra::{Matrix3, Matrix6, Matrix6x3, Vector3, Vector6};
 
 /// Eq. 13 (corrected) at (R, v, u) with the derivatives of its rates in every tendon's
 /// tension: writes d(v', u')/dtau_i into `out[i]` (one entry per tendon of the robot, zero
@@ -77,33 +78,111 @@ fn tension_rates_kernel(
     out: &mut [Vector6<f64>],
 ) -> Result<Vector6<f64>> {
     let (v, u) = (state.1, state.2);
-    let length = model.robot.length();
     point_derivatives(model, site, segment_end, state, along, out, |x_v, x_u, cached, out| {
-        // The taut tendons come in the order eq. 13's assembly kept their points.
-        let mut kept = cached.iter();
-        for (i, taut, tendon) in model.distributed_reaching_tendons(segment_end) {
-            // Per unit of tau_i: k_i = f / |p_i|, so A() is (f / |p_i|) P_i; a kept point
-            // differs only in k_i = tau_i f / |p_i|, and f * (1 / |p_i|) is what
-            // TendonPoint::new computes for the tension f.
-            let kept_point = if taut { kept.next() } else { None };
-            let tp = match kept_point {
-                Some(&tp) => TendonPoint {
-                    k: model.tension_factor * tp.inv_speed,
-                    ..tp
-                },
-                None => {
-                    let rp = tendon.routing.at(site.s, length);
-                    TendonPoint::new(i, model.tension_factor, &rp, site, v, u)?
-                }
-            };
-            // On a Kirchhoff rod q_i does not see the translational coordinate's rate.
-            let x_v = if tp.inextensible { Vector3::zeros() } else { *x_v };
-            let q = tp.A() * (x_v - tp.r.cross(x_u) + tp.c);
-            let rq = tp.r.cross(&q);
-            out[i] = Vector6::new(q[0], q[1], q[2], rq[0], rq[1], rq[2]);
-        }
-        Ok(())
+        tension_partials(model, site, segment_end, (v, u), (x_v, x_u), cached, out)
     })
+}
+
+/// dF/dtau_i at fixed rates x = (x_v, x_u) and state (v, u) for every tendon that reaches
+/// `segment_end` (F = M x - rhs, [`tension_rates`]), into `out[i]` (the other entries left
+/// as they are), given the points of the first taut tendons eq. 13's assembly kept, in the
+/// order it kept them (`cached`). Always inlined, so that it is compiled with its caller's
+/// target features (the interval Jacobian's AVX2 build, [`linearize_tensions_inline`]).
+///
+/// # Errors
+/// [`crate::Error::SingularRouting`] for a slack tendon without a tangent.
+#[inline(always)]
+pub(super) fn tension_partials(
+    model: &Model,
+    site: &Site,
+    segment_end: f64,
+    (v, u): (&Vector3<f64>, &Vector3<f64>),
+    (x_v, x_u): (&Vector3<f64>, &Vector3<f64>),
+    cached: &[TendonPoint],
+    out: &mut [Vector6<f64>],
+) -> Result<()> {
+    let length = model.robot.length();
+    // The taut tendons come in the order eq. 13's assembly kept their points.
+    let mut kept = cached.iter();
+    for (i, taut, tendon) in model.distributed_reaching_tendons(segment_end) {
+        // Per unit of tau_i: k_i = f / |p_i|, so A() is (f / |p_i|) P_i; a kept point
+        // differs only in k_i = tau_i f / |p_i|, and f * (1 / |p_i|) is what
+        // TendonPoint::new computes for the tension f.
+        let kept_point = if taut { kept.next() } else { None };
+        let tp = match kept_point {
+            Some(&tp) => TendonPoint {
+                k: model.tension_factor * tp.inv_speed,
+                ..tp
+            },
+            None => {
+                let rp = tendon.routing.at(site.s, length);
+                TendonPoint::new(i, model.tension_factor, &rp, site, v, u)?
+            }
+        };
+        // On a Kirchhoff rod q_i does not see the translational coordinate's rate.
+        let x_v = if tp.inextensible { Vector3::zeros() } else { *x_v };
+        let q = tp.A() * (x_v - tp.r.cross(x_u) + tp.c);
+        let rq = tp.r.cross(&q);
+        out[i] = Vector6::new(q[0], q[1], q[2], rq[0], rq[1], rq[2]);
+    }
+    Ok(())
+}
+
+/// [`super::linearize_keeping`] without keeping, also writing d(v', u')/dtau_i at the fixed state (R, v, u) for
+/// every tendon of the robot into `tensions[i]` (one entry per tendon, zero for a tendon
+/// that does not load the backbone here): [`tension_rates`] without `along`, from the same
+/// assembly and factors of M as the linearization, one solve with them per tendon
+/// (docs/sensitivity.md, "Tension columns formed with the verdict's Jacobian"). Always
+/// inlined, for the interval Jacobian's AVX2 build.
+///
+/// # Errors
+/// As [`super::linearize`]; [`Error::SingularRouting`] also for a slack tendon without a tangent.
+#[inline(always)]
+pub(crate) fn linearize_tensions_inline(
+    model: &Model,
+    site: &Site,
+    segment_end: f64,
+    (R, v, u): (&Matrix3<f64>, &Vector3<f64>, &Vector3<f64>),
+    tensions: &mut [Vector6<f64>],
+) -> Result<Linearization> {
+    let mut cache = TendonCache::new();
+    let assembled = assemble(model, site, segment_end, (R, v, u), Some(&mut cache), None)?;
+    let x = &assembled.x;
+    let mut dFt = derivative(model, site, segment_end, (v, u), x, &assembled, &cache)?;
+    if !assembled.factor.solve_transposed_mut(&mut dFt) {
+        return Err(breakdown(site.s));
+    }
+    let x_v = Vector3::new(x[0], x[1], x[2]);
+    let x_u = Vector3::new(x[3], x[4], x[5]);
+    tensions.fill(Vector6::zeros());
+    tension_partials(model, site, segment_end, (v, u), (&x_v, &x_u), cache.points(), tensions)?;
+    for d in tensions.iter_mut().filter(|d| **d != Vector6::zeros()) {
+        let mut row = d.transpose();
+        if !assembled.factor.solve_transposed_mut(&mut row) {
+            return Err(breakdown(site.s));
+        }
+        *d = -row.transpose();
+    }
+    Ok(Linearization {
+        rates: Vector6::from_fn(|i, _| x[i]),
+        d_strains: Matrix6::from_fn(|i, k| -dFt[(k, i)]),
+        d_rotation: Matrix6x3::from_fn(|i, k| -dFt[(6 + k, i)]),
+    })
+}
+
+/// [`linearize_tensions_inline`] as a call (an interval's start node, linearized once per
+/// run of intervals).
+///
+/// # Errors
+/// As [`linearize_tensions_inline`].
+pub(crate) fn linearize_tensions(
+    model: &Model,
+    site: &Site,
+    segment_end: f64,
+    state: (&Matrix3<f64>, &Vector3<f64>, &Vector3<f64>),
+    tensions: &mut [Vector6<f64>],
+) -> Result<Linearization> {
+    linearize_tensions_inline(model, site, segment_end, state, tensions)
 }
 
 /// Eq. 13 (corrected) at (R, v, u) with the derivatives of its rates in the six diagonal
@@ -169,7 +248,9 @@ fn point_derivatives(
     let mut cache = TendonCache::new();
     let assembled = assemble(model, site, segment_end, (R, v, u), Some(&mut cache), None)?;
     let x = &assembled.x;
-    let rates = Vector6::from_fn(|i, _| x[i]);
+    // Written out, not `from_fn`: nalgebra's iterator constructor, shared with more
+    // callers, is not inlined into the AVX2 build and costs a call per use.
+    let rates = Vector6::new(x[0], x[1], x[2], x[3], x[4], x[5]);
     let x_v = Vector3::new(x[0], x[1], x[2]);
     let x_u = Vector3::new(x[3], x[4], x[5]);
     out.fill(Vector6::zeros());
@@ -178,7 +259,11 @@ fn point_derivatives(
         // dF^T: rows v (3), u (3), then the rotation's (3), columns F's six components.
         let dFt = derivative(model, site, segment_end, (v, u), x, &assembled, &cache)?;
         for (d, dy) in out.iter_mut().zip(along) {
-            *d += Vector6::from_fn(|j, _| (0..6).map(|k| dFt[(k, j)] * dy[k]).sum::<f64>());
+            let mut add = Vector6::zeros();
+            for (j, a) in add.iter_mut().enumerate() {
+                *a = (0..6).map(|k| dFt[(k, j)] * dy[k]).sum::<f64>();
+            }
+            *d += add;
         }
     }
     for d in out.iter_mut().filter(|d| **d != Vector6::zeros()) {

@@ -8,16 +8,19 @@
 //! the chain rule of [`residual::interval_jacobian`], the base, jump and tip blocks by
 //! num-dual dual numbers run through the same generic residual code.
 
+mod columns;
+
 use super::friction::{self, Profile};
 use super::residual::{self, Block, Delta, IntervalFactors, IntervalSites, QuarterSites};
 use super::stage;
 use super::unknowns::{self, BASE_COLUMNS, BASE_ROWS, NODE, THETA, TIP_COLUMNS, link_row, tip_row};
 use crate::error::Result;
 use crate::mesh::Mesh;
-use crate::model::equations::{Model, Side, Site};
+use crate::model::equations::{Model, Site};
 use crate::model::linearize;
 use crate::solution::State;
-use nalgebra::{SVector, Vector3, Vector6};
+use columns::TensionSink;
+use nalgebra::{SVector, Vector6};
 use num_dual::{Dual64, DualSVec64};
 
 /// A node's unknowns as dual numbers that carry the derivatives in `N` of them, from
@@ -73,6 +76,22 @@ pub(crate) struct SystemBuffers {
     tensions: Vec<f64>,
     interval_sites: Vec<Option<IntervalSites>>,
     node_sites: Vec<Site>,
+    /// The load factor and traced parameter of the model whose sites the buffers hold
+    /// (the system that gave them back), None before any: what
+    /// [`SystemBuffers::has_sites_of`] checks.
+    sites_of: Option<(f64, Option<(crate::model::parameter::Parameter, f64)>)>,
+}
+
+impl SystemBuffers {
+    /// Whether the sites held can be those of `model` on `mesh` (the robot aside, which the
+    /// caller vouches for): a system with its load factor and traced parameter left them,
+    /// one per node and link of `mesh` (the only inputs besides the robot and the mesh that
+    /// the sites depend on).
+    pub(crate) fn has_sites_of(&self, model: &Model, mesh: &Mesh) -> bool {
+        self.sites_of == Some((model.load_factor, model.parameter))
+            && self.node_sites.len() == mesh.nodes.len()
+            && self.interval_sites.len() + 1 == mesh.nodes.len()
+    }
 }
 
 impl<'a> System<'a> {
@@ -106,6 +125,25 @@ impl<'a> System<'a> {
         sys
     }
 
+    /// The system of `model` on `mesh` with the sites `buffers` hold, without computing
+    /// them again: `buffers` must hold those of a system of the same robot on this mesh
+    /// with `model`'s load factor and traced parameter ([`SystemBuffers::has_sites_of`]; the
+    /// caller vouches for the robot: the sensitivities of a [`crate::Solver`]'s last answer,
+    /// whose Jacobian that system's verdict evaluated).
+    pub(crate) fn with_kept_sites(model: Model<'a>, mesh: Mesh, buffers: SystemBuffers) -> Self {
+        debug_assert!(buffers.has_sites_of(&model, &mesh));
+        let mut sys = System {
+            model,
+            mesh,
+            interval_sites: buffers.interval_sites,
+            node_sites: buffers.node_sites,
+            rate_evaluations: 0,
+            friction: None,
+        };
+        sys.count_rate_evaluations();
+        sys
+    }
+
     /// The mesh, and the buffers of the sites and the model's tensions for a later
     /// [`System::with_buffers`].
     pub(crate) fn into_parts(self) -> (Mesh, SystemBuffers) {
@@ -113,6 +151,7 @@ impl<'a> System<'a> {
             tensions: self.model.tensions,
             interval_sites: self.interval_sites,
             node_sites: self.node_sites,
+            sites_of: Some((self.model.load_factor, self.model.parameter)),
         };
         (self.mesh, buffers)
     }
@@ -148,6 +187,11 @@ impl<'a> System<'a> {
                 end: node_sites[k + 1],
             })
         }));
+        self.count_rate_evaluations();
+    }
+
+    /// Counts the evaluations of eq. 13 in one pass over the sites.
+    fn count_rate_evaluations(&mut self) {
         // Each interval evaluates eq. 13 at its midpoint and end, and at its start unless
         // the interval before it already did (the shared node is evaluated once).
         let mut shared = false;
@@ -385,7 +429,7 @@ impl<'a> System<'a> {
     /// # Errors
     /// A model breakdown at a visited state.
     pub fn jacobian(&self, x: &[State], out: &mut [f64], values: &mut [f64]) -> Result<()> {
-        self.jacobian_keeping(x, out, values, None)
+        self.jacobian_with(x, out, values, None, None)
     }
 
     /// [`System::jacobian`] that keeps, when given `kept` (one per link, friction aside),
@@ -399,8 +443,28 @@ impl<'a> System<'a> {
         x: &[State],
         out: &mut [f64],
         values: &mut [f64],
-        mut kept: Option<&mut [IntervalFactors]>,
+        kept: Option<&mut [IntervalFactors]>,
     ) -> Result<()> {
+        self.jacobian_with(x, out, values, kept, None)
+    }
+
+    /// [`System::jacobian`], keeping each interval's factors in `kept` as
+    /// [`System::jacobian_keeping`] does, or writing each interval's tension rows into the
+    /// columns `tensions` gives, with its buffers ([`System::jacobian_and_tensions`]); not
+    /// both (a point keeps its factors or forms its tension rows).
+    ///
+    /// # Errors
+    /// A model breakdown at a visited state.
+    fn jacobian_with(
+        &self,
+        x: &[State],
+        out: &mut [f64],
+        values: &mut [f64],
+        mut kept: Option<&mut [IntervalFactors]>,
+        mut tensions: Option<(&mut TensionSink, &mut [f64])>,
+    ) -> Result<()> {
+        debug_assert!(kept.is_none() || tensions.is_none(), "kept factors or tension rows, not both");
+        let n = self.unknowns();
         let mut at = 0;
         let base = residual::base(&self.model, &x[0], &seeded::<BASE_COLUMNS>(0));
         for (r, d) in base.iter().enumerate() {
@@ -425,7 +489,16 @@ impl<'a> System<'a> {
                 } else {
                     let start = node_lin.as_ref();
                     let (r, end) = match kept.as_deref_mut() {
-                        None => residual::interval_jacobian(&self.model, sites, seg, &x[k], &x[k + 1], start, block)?,
+                        None => residual::interval_jacobian(
+                            &self.model,
+                            sites,
+                            seg,
+                            &x[k],
+                            &x[k + 1],
+                            start,
+                            block,
+                            tensions.as_mut().map(|(sink, _)| sink.interval(start.is_some())),
+                        )?,
                         Some(kept) => {
                             if start.is_some() {
                                 kept[k].start = kept[k - 1].end.clone();
@@ -442,6 +515,9 @@ impl<'a> System<'a> {
                             )?
                         }
                     };
+                    if let Some((sink, columns)) = tensions.as_mut() {
+                        sink.write(k, n, columns);
+                    }
                     node_lin = Some(end);
                     out[rows].copy_from_slice(r.as_slice());
                 }
@@ -489,111 +565,6 @@ impl<'a> System<'a> {
             out[tip_row(x.len()) + r] = d.re;
             values[at..at + TIP_COLUMNS].copy_from_slice(derivative(&d.eps.0).as_slice());
             at += TIP_COLUMNS;
-        }
-        Ok(())
-    }
-
-    /// The exact derivative of the residual in some parameters at the states `x`,
-    /// column-major into `out`, one column of [`System::unknowns`] rows per parameter:
-    /// [`Columns::Tensions`], one per tendon of the robot (slack tendons: the right
-    /// derivative), or [`Columns::Stiffness`], the six diagonal stiffnesses of a section
-    /// that does not vary along the rod (GA, GA, EA, EIxx, EIyy, GJ). The residual is linear
-    /// in each tension once the tendon's path terms are formed, and eq. 13 in each stiffness:
-    /// interval rows by the chain rule through the scheme (`residual::interval_derivatives`),
-    /// jump and tip rows by `Model::wrench_balance_tensions` or
-    /// `Model::wrench_balance_stiffness`, base rows 0
-    /// (docs/sensitivity.md, "Exact tension columns"). Without friction: the log tensions
-    /// of tendons with friction are not unknowns here.
-    ///
-    /// # Errors
-    /// A model breakdown at a visited state.
-    pub fn parameter_columns(&self, x: &[State], columns: Columns, out: &mut [f64]) -> Result<()> {
-        let model = &self.model;
-        let n = self.unknowns();
-        let (width, point): (usize, residual::PointDerivatives) = match columns {
-            Columns::Tensions => (model.robot.tendons.len(), linearize::tension_rates),
-            Columns::Stiffness => (6, linearize::stiffness_rates),
-        };
-        // The point-load rows' derivative.
-        let balance =
-            |s: f64, left: Side<f64>, right: Option<Side<f64>>, out: &mut [(Vector3<f64>, Vector3<f64>)]| match columns
-            {
-                Columns::Tensions => model.wrench_balance_tensions(s, left, right, out),
-                Columns::Stiffness => model.wrench_balance_stiffness(s, left, right, out),
-            };
-        debug_assert_eq!(out.len(), n * width);
-        // Every row is written below but the base rows (no parameter moves them) and the
-        // first six rows of a jump (its position and rotation continuity): those are zeroed
-        // here, not the whole buffer.
-        for column in out.chunks_exact_mut(n) {
-            column[..BASE_ROWS].fill(0.0);
-            for k in (0..x.len() - 1).filter(|&k| self.interval_sites[k].is_none()) {
-                column[link_row(k)..link_row(k) + 6].fill(0.0);
-            }
-        }
-        let length = model.robot.length();
-        let mut rates = [
-            vec![Vector6::zeros(); width],
-            vec![Vector6::zeros(); width],
-            vec![Vector6::zeros(); width],
-            vec![Vector6::zeros(); width],
-        ];
-        let mut block = vec![Block::zeros(); width];
-        let mut wrench = vec![(Vector3::zeros(), Vector3::zeros()); width];
-        let mut write = |rows: usize, i: usize, values: &[f64]| {
-            out[i * n + rows..i * n + rows + values.len()].copy_from_slice(values);
-        };
-        let links = x.len() - 1;
-        let mut node_rates = None;
-        for k in 0..links {
-            let row = link_row(k);
-            if let Some(sites) = &self.interval_sites[k] {
-                let seg = self.mesh.nodes[k].segment_end;
-                if node_rates.is_some() {
-                    // Node k's derivatives are the previous interval's end ones.
-                    rates.swap(0, 1);
-                }
-                let [d0, d1, dm, dy] = &mut rates;
-                let (a, b) = (&x[k], &x[k + 1]);
-                let end = residual::interval_derivatives(
-                    model,
-                    sites,
-                    seg,
-                    a,
-                    b,
-                    node_rates,
-                    point,
-                    [d0, d1, dm, dy],
-                    &mut block,
-                )?;
-                node_rates = Some(end);
-                for (i, b) in block.iter().enumerate() {
-                    write(row, i, b.as_slice());
-                }
-            } else {
-                node_rates = None;
-                let (left, right) = (&self.node_sites[k], &self.node_sites[k + 1]);
-                let (a, b) = (&x[k], &x[k + 1]);
-                wrench.fill((Vector3::zeros(), Vector3::zeros()));
-                balance(
-                    left.s,
-                    (left, &a.R, &a.v, &a.u),
-                    Some((right, &b.R, &b.v, &b.u)),
-                    &mut wrench,
-                )?;
-                for (i, (f, m)) in wrench.iter().enumerate() {
-                    write(row + 6, i, f.as_slice());
-                    write(row + 9, i, (m * length).as_slice());
-                }
-            }
-        }
-        let (site, tip) = (&self.node_sites[links], &x[links]);
-        wrench.fill((Vector3::zeros(), Vector3::zeros()));
-        balance(site.s, (site, &tip.R, &tip.v, &tip.u), None, &mut wrench)?;
-        let row = tip_row(x.len());
-        for (i, (f, m)) in wrench.iter().enumerate() {
-            write(row, i, f.as_slice());
-            write(row + 3, i, (m * length).as_slice());
         }
         Ok(())
     }

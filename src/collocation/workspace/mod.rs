@@ -10,12 +10,13 @@ use super::stability::NeutralRoots;
 use super::system::{System, SystemBuffers};
 use super::unknowns::nonzeros;
 use crate::mesh::Mesh;
-use crate::model::equations::Model;
 use crate::report::{SolveReport, Stability};
 use crate::solution::State;
 use nalgebra::Vector6;
 use std::cell::RefCell;
 use std::time::Instant;
+
+mod kept;
 
 /// How many finished workspaces a thread keeps for later solves ([`keep`], [`spare`]): the
 /// meshes of one error-controlled solve (H takes two) and of a neighbouring robot's, so
@@ -73,6 +74,8 @@ pub(crate) fn spare(mesh: &Mesh, solver: LinearSolver) -> Option<(Mesh, Workspac
         workspace.rates_valid = false;
         workspace.trial_rates_valid = false;
         workspace.trial.clear();
+        workspace.keep_tensions = false;
+        workspace.forget_tension_rhs();
         Some((mesh, workspace))
     })
 }
@@ -126,6 +129,12 @@ pub struct Workspace {
     /// Buffers a linearization for sensitivities handed back for the next one
     /// ([`Workspace::take_buffer`], [`Workspace::give_buffer`]).
     buffers: Vec<Vec<f64>>,
+    /// Whether [`Workspace::verdict_at`] also forms the tension columns' right-hand sides
+    /// ([`Workspace::keep_tension_columns`]).
+    keep_tensions: bool,
+    /// -dF/dtau_i of every tendon (column-major) that the last [`Workspace::verdict_at`]
+    /// formed with the Jacobian in `values`; taken by [`Workspace::take_tension_rhs`].
+    tension_rhs: Option<Vec<f64>>,
 }
 
 impl Workspace {
@@ -158,37 +167,9 @@ impl Workspace {
             system: SystemBuffers::default(),
             kept: Vec::new(),
             buffers: Vec::new(),
+            keep_tensions: false,
+            tension_rhs: None,
         })
-    }
-
-    /// A buffer of `len` values: one [`Workspace::give_buffer`] kept, its contents as they
-    /// were (the caller writes every entry it reads), else a new zeroed one.
-    pub(crate) fn take_buffer(&mut self, len: usize) -> Vec<f64> {
-        match self.buffers.iter().position(|b| b.len() == len) {
-            Some(at) => self.buffers.swap_remove(at),
-            None => vec![0.0; len],
-        }
-    }
-
-    /// Keeps `buffer` for a later [`Workspace::take_buffer`] (at most eight are kept).
-    pub(crate) fn give_buffer(&mut self, buffer: Vec<f64>) {
-        if self.buffers.len() < 8 {
-            self.buffers.push(buffer);
-        }
-    }
-
-    /// The system of a copy of `model` on `mesh` (this workspace's mesh), built in the
-    /// buffers the last system on it left ([`Workspace::keep_system`]).
-    pub(crate) fn system<'a>(&mut self, model: &Model<'a>, mesh: Mesh) -> System<'a> {
-        System::with_buffers(model, mesh, std::mem::take(&mut self.system))
-    }
-
-    /// Keeps the buffers of `system` (built on this workspace's mesh) for the next
-    /// [`Workspace::system`]; returns its mesh.
-    pub(crate) fn keep_system(&mut self, system: System) -> Mesh {
-        let (mesh, buffers) = system.into_parts();
-        self.system = buffers;
-        mesh
     }
 
     /// Non-zeros stored in the Jacobian.
@@ -401,7 +382,7 @@ impl Workspace {
         assess: impl FnOnce(&[f64]) -> (Stability, Option<NeutralRoots>),
     ) -> Option<Stability> {
         let t = Instant::now();
-        let ok = system.jacobian(x, &mut self.trial_residual, &mut self.values).is_ok();
+        let ok = self.verdict_jacobian(system, x);
         report.timings.assembly += t.elapsed();
         report.evaluations.jacobian += 1;
         report.evaluations.equations += system.rate_evaluations();

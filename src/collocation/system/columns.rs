@@ -1,0 +1,254 @@
+//! The residual's exact columns in parameters at fixed states ([`System::parameter_columns`]:
+//! every tension, or the section's stiffnesses), and the tension columns formed with the
+//! Jacobian in one pass over the mesh ([`System::jacobian_and_tensions`]): the right-hand
+//! sides of the sensitivities (docs/sensitivity.md, "Exact tension columns").
+
+use super::{Columns, System};
+use crate::collocation::residual::{self, Block, IntervalTensions};
+use crate::collocation::unknowns::{BASE_ROWS, link_row, tip_row};
+use crate::error::Result;
+use crate::model::equations::Side;
+use crate::model::linearize;
+use crate::solution::State;
+use nalgebra::{Vector3, Vector6};
+
+/// The buffers of the tension columns formed with the Jacobian ([`System::jacobian_and_tensions`]):
+/// the rates' derivatives at an interval's start node, end node and midpoint, the
+/// midpoint's strain motion (one entry per tendon in each), and one interval's rows.
+pub(super) struct TensionSink {
+    rates: [Vec<Vector6<f64>>; 4],
+    block: Vec<Block<f64>>,
+}
+
+impl TensionSink {
+    /// Buffers for `width` tendons.
+    pub(super) fn new(width: usize) -> Self {
+        TensionSink {
+            rates: std::array::from_fn(|_| vec![Vector6::zeros(); width]),
+            block: vec![Block::zeros(); width],
+        }
+    }
+
+    /// The buffers of the next interval for [`residual::interval_jacobian`]; with
+    /// `carried`, the start node's derivatives are the last interval's end ones.
+    pub(super) fn interval(&mut self, carried: bool) -> IntervalTensions<'_> {
+        if carried {
+            self.rates.swap(0, 1);
+        }
+        let [start, end, mid, dy_mid] = &mut self.rates;
+        IntervalTensions {
+            start,
+            end,
+            mid,
+            dy_mid,
+            rows: &mut self.block,
+        }
+    }
+
+    /// Writes the last interval's rows, those of link `k`, into the columns `out` (column
+    /// i the i-th tendon's, `n` rows each).
+    pub(super) fn write(&self, k: usize, n: usize, out: &mut [f64]) {
+        for (i, b) in self.block.iter().enumerate() {
+            out[i * n + link_row(k)..i * n + link_row(k + 1)].copy_from_slice(b.as_slice());
+        }
+    }
+}
+
+impl System<'_> {
+    /// The exact derivative of the residual in some parameters at the states `x`,
+    /// column-major into `out`, one column of [`System::unknowns`] rows per parameter:
+    /// [`Columns::Tensions`], one per tendon of the robot (slack tendons: the right
+    /// derivative), or [`Columns::Stiffness`], the six diagonal stiffnesses of a section
+    /// that does not vary along the rod (GA, GA, EA, EIxx, EIyy, GJ). The residual is linear
+    /// in each tension once the tendon's path terms are formed, and eq. 13 in each stiffness:
+    /// interval rows by the chain rule through the scheme (`residual::interval_derivatives`),
+    /// jump and tip rows by `Model::wrench_balance_tensions` or
+    /// `Model::wrench_balance_stiffness`, base rows 0
+    /// (docs/sensitivity.md, "Exact tension columns"). Without friction: the log tensions
+    /// of tendons with friction are not unknowns here.
+    ///
+    /// # Errors
+    /// A model breakdown at a visited state.
+    pub fn parameter_columns(&self, x: &[State], columns: Columns, out: &mut [f64]) -> Result<()> {
+        let model = &self.model;
+        let n = self.unknowns();
+        let (width, point): (usize, residual::PointDerivatives) = match columns {
+            Columns::Tensions => (model.robot.tendons.len(), linearize::tension_rates),
+            Columns::Stiffness => (6, linearize::stiffness_rates),
+        };
+        debug_assert_eq!(out.len(), n * width);
+        let mut rates = [
+            vec![Vector6::zeros(); width],
+            vec![Vector6::zeros(); width],
+            vec![Vector6::zeros(); width],
+            vec![Vector6::zeros(); width],
+        ];
+        let mut block = vec![Block::zeros(); width];
+        let links = x.len() - 1;
+        let mut node_rates = None;
+        for k in 0..links {
+            let row = link_row(k);
+            let Some(sites) = &self.interval_sites[k] else {
+                node_rates = None;
+                continue;
+            };
+            let seg = self.mesh.nodes[k].segment_end;
+            if node_rates.is_some() {
+                // Node k's derivatives are the previous interval's end ones.
+                rates.swap(0, 1);
+            }
+            let [d0, d1, dm, dy] = &mut rates;
+            let (a, b) = (&x[k], &x[k + 1]);
+            let end = residual::interval_derivatives(
+                model,
+                sites,
+                seg,
+                a,
+                b,
+                node_rates,
+                point,
+                [d0, d1, dm, dy],
+                &mut block,
+            )?;
+            node_rates = Some(end);
+            for (i, b) in block.iter().enumerate() {
+                out[i * n + row..i * n + row + b.len()].copy_from_slice(b.as_slice());
+            }
+        }
+        self.point_load_columns(x, columns, out)
+    }
+
+    /// The residual into `out`, the Jacobian values into `values` (as [`System::jacobian`],
+    /// the same bits), and dF/dtau_i of every tendon into `tensions` (column-major, as
+    /// [`System::parameter_columns`] with [`Columns::Tensions`], to rounding): each interval's
+    /// tension rows from the same assembly and factors of eq. 13 at its nodes and midpoint
+    /// as its Jacobian block, the midpoint's chain rule through the linearization's
+    /// d(v', u')/d(v, u) (docs/sensitivity.md, "Tension columns formed with the verdict's
+    /// Jacobian"). Without friction.
+    ///
+    /// # Errors
+    /// A model breakdown at a visited state.
+    pub(crate) fn jacobian_and_tensions(
+        &self,
+        x: &[State],
+        out: &mut [f64],
+        values: &mut [f64],
+        tensions: &mut [f64],
+    ) -> Result<()> {
+        debug_assert!(self.friction.is_none());
+        let mut sink = TensionSink::new(self.model.robot.tendons.len());
+        self.jacobian_with(x, out, values, None, Some((&mut sink, &mut *tensions)))?;
+        self.point_load_columns(x, Columns::Tensions, tensions)
+    }
+
+    /// The rows of [`System::parameter_columns`] outside the intervals: base rows 0, a
+    /// jump's continuity rows 0 and its balance rows, the tip rows (the point loads'
+    /// derivatives); the intervals' rows are left as they are.
+    ///
+    /// # Errors
+    /// A model breakdown at a visited state.
+    fn point_load_columns(&self, x: &[State], columns: Columns, out: &mut [f64]) -> Result<()> {
+        let model = &self.model;
+        let n = self.unknowns();
+        let width = out.len() / n;
+        // The point-load rows' derivative.
+        let balance =
+            |s: f64, left: Side<f64>, right: Option<Side<f64>>, out: &mut [(Vector3<f64>, Vector3<f64>)]| match columns
+            {
+                Columns::Tensions => model.wrench_balance_tensions(s, left, right, out),
+                Columns::Stiffness => model.wrench_balance_stiffness(s, left, right, out),
+            };
+        // Every row is written but the base rows (no parameter moves them) and the first
+        // six rows of a jump (its position and rotation continuity): those are zeroed here,
+        // not the whole buffer.
+        for column in out.chunks_exact_mut(n) {
+            column[..BASE_ROWS].fill(0.0);
+            for k in (0..x.len() - 1).filter(|&k| self.interval_sites[k].is_none()) {
+                column[link_row(k)..link_row(k) + 6].fill(0.0);
+            }
+        }
+        let length = model.robot.length();
+        let mut wrench = vec![(Vector3::zeros(), Vector3::zeros()); width];
+        let mut write = |rows: usize, i: usize, values: &[f64]| {
+            out[i * n + rows..i * n + rows + values.len()].copy_from_slice(values);
+        };
+        let links = x.len() - 1;
+        for k in (0..links).filter(|&k| self.interval_sites[k].is_none()) {
+            let row = link_row(k);
+            let (left, right) = (&self.node_sites[k], &self.node_sites[k + 1]);
+            let (a, b) = (&x[k], &x[k + 1]);
+            wrench.fill((Vector3::zeros(), Vector3::zeros()));
+            balance(
+                left.s,
+                (left, &a.R, &a.v, &a.u),
+                Some((right, &b.R, &b.v, &b.u)),
+                &mut wrench,
+            )?;
+            for (i, (f, m)) in wrench.iter().enumerate() {
+                write(row + 6, i, f.as_slice());
+                write(row + 9, i, (m * length).as_slice());
+            }
+        }
+        let (site, tip) = (&self.node_sites[links], &x[links]);
+        wrench.fill((Vector3::zeros(), Vector3::zeros()));
+        balance(site.s, (site, &tip.R, &tip.v, &tip.u), None, &mut wrench)?;
+        let row = tip_row(x.len());
+        for (i, (f, m)) in wrench.iter().enumerate() {
+            write(row, i, f.as_slice());
+            write(row + 3, i, (m * length).as_slice());
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::collocation::{Options, unknowns::nonzeros};
+    use crate::mesh::Mesh;
+    use crate::model::equations::Model;
+    use crate::model::robot::RodModel;
+
+    /// The Jacobian formed with the tension columns is the plain Jacobian's bits (residual
+    /// and values), and its tension columns are `parameter_columns`' to rounding, at the
+    /// solutions of case H with three tendons pulled (two taut, slack ones, tendon
+    /// terminations as jumps), as a Cosserat and as a Kirchhoff rod.
+    #[test]
+    fn tension_columns_with_the_jacobian_equal_the_pass_over_the_mesh() {
+        for rod_model in [RodModel::Cosserat, RodModel::Kirchhoff] {
+            let mut robot = crate::cases::case_h();
+            robot.rod_model = rod_model;
+            robot.tendons[1].set_tension(0.7);
+            robot.tendons[3].set_tension(1.3);
+            let solution = crate::collocation::solve(&robot, &Options::default()).unwrap();
+            let s: Vec<f64> = solution.nodes.iter().map(|n| n.s).collect();
+            let x: Vec<State> = solution.nodes.iter().map(|n| n.state()).collect();
+            let system = System::new(Model::new(&robot), Mesh::from_points(&robot, &s).unwrap());
+            let (n, width) = (system.unknowns(), robot.tendons.len());
+            let (mut plain, mut values) = (vec![0.0; n], vec![0.0; nonzeros(&system.mesh)]);
+            system.jacobian(&x, &mut plain, &mut values).unwrap();
+            let (mut residual, mut with) = (vec![0.0; n], vec![0.0; values.len()]);
+            let mut columns = vec![f64::NAN; n * width];
+            system
+                .jacobian_and_tensions(&x, &mut residual, &mut with, &mut columns)
+                .unwrap();
+            let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+            assert_eq!(bits(&plain), bits(&residual));
+            assert_eq!(bits(&values), bits(&with));
+            let mut pass = vec![f64::NAN; n * width];
+            system.parameter_columns(&x, Columns::Tensions, &mut pass).unwrap();
+            for i in 0..width {
+                let (a, b) = (&columns[i * n..(i + 1) * n], &pass[i * n..(i + 1) * n]);
+                let scale = b.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+                let gap = a.iter().zip(b).fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
+                // 1e-13 of the column: the same derivative through the midpoint's chain rule
+                // as -M^-1 dF/dtau + (d(v', u')/d(v, u)) dy instead of -M^-1 (dF/dtau +
+                // dF/d(v, u) dy), which differ in rounding only.
+                assert!(
+                    scale > 0.0 && gap <= 1e-13 * scale,
+                    "{rod_model:?} tendon {i}: {gap:e} of {scale:e}"
+                );
+            }
+        }
+    }
+}

@@ -1,0 +1,108 @@
+//! What a workspace keeps besides Newton's buffers: the buffers of the systems built on its
+//! mesh (sites among them) and of the linearizations for sensitivities, and the tension
+//! columns' right-hand sides its stability verdict forms with the Jacobian for a
+//! [`crate::Solver`] that keeps them (docs/sensitivity.md, "Tension columns formed with the
+//! verdict's Jacobian").
+
+use super::Workspace;
+use crate::collocation::system::System;
+use crate::mesh::Mesh;
+use crate::model::equations::Model;
+use crate::solution::State;
+
+impl Workspace {
+    /// A buffer of `len` values: one [`Workspace::give_buffer`] kept, its contents as they
+    /// were (the caller writes every entry it reads), else a new zeroed one.
+    pub(crate) fn take_buffer(&mut self, len: usize) -> Vec<f64> {
+        match self.buffers.iter().position(|b| b.len() == len) {
+            Some(at) => self.buffers.swap_remove(at),
+            None => vec![0.0; len],
+        }
+    }
+
+    /// Keeps `buffer` for a later [`Workspace::take_buffer`] (at most eight are kept).
+    pub(crate) fn give_buffer(&mut self, buffer: Vec<f64>) {
+        if self.buffers.len() < 8 {
+            self.buffers.push(buffer);
+        }
+    }
+
+    /// Makes [`Workspace::verdict_at`] form the tension columns' right-hand sides with the
+    /// Jacobian (`on`) or not: what [`crate::Solver::keep_tension_columns`] asks for.
+    pub(crate) fn keep_tension_columns(&mut self, on: bool) {
+        self.keep_tensions = on;
+    }
+
+    /// Whether [`Workspace::verdict_at`] forms the tension columns' right-hand sides.
+    pub(crate) fn keeps_tension_columns(&self) -> bool {
+        self.keep_tensions
+    }
+
+    /// -dF/dtau_i of every tendon at the last iterate (column-major, `len` values), when
+    /// the last [`Workspace::verdict_at`] formed them with the Jacobian still in the value
+    /// buffer, unfactored, and no step was taken since; else None.
+    pub(crate) fn take_tension_rhs(&mut self, len: usize) -> Option<Vec<f64>> {
+        let columns = self.tension_rhs.take()?;
+        if self.unfactored && self.drift == 0.0 && columns.len() == len {
+            Some(columns)
+        } else {
+            self.give_buffer(columns);
+            None
+        }
+    }
+
+    /// Drops the tension columns' right-hand sides the last verdict formed (the value
+    /// buffer gets another Jacobian), keeping their buffer.
+    pub(crate) fn forget_tension_rhs(&mut self) {
+        if let Some(columns) = self.tension_rhs.take() {
+            self.give_buffer(columns);
+        }
+    }
+
+    /// The system of a copy of `model` on `mesh` (this workspace's mesh), built in the
+    /// buffers the last system on it left ([`Workspace::keep_system`]).
+    pub(crate) fn system<'a>(&mut self, model: &Model<'a>, mesh: Mesh) -> System<'a> {
+        System::with_buffers(model, mesh, std::mem::take(&mut self.system))
+    }
+
+    /// Whether the sites the last system on this workspace's mesh left can be `model`'s on
+    /// `mesh` ([`SystemBuffers::has_sites_of`]).
+    pub(crate) fn has_sites_of(&self, model: &Model, mesh: &Mesh) -> bool {
+        self.system.has_sites_of(model, mesh)
+    }
+
+    /// The system of `model` on `mesh` (this workspace's mesh) with the sites the last
+    /// system on it left, which must be `model`'s ([`Workspace::has_sites_of`]; the caller
+    /// vouches that its robot is that system's).
+    pub(crate) fn kept_system<'a>(&mut self, model: Model<'a>, mesh: Mesh) -> System<'a> {
+        System::with_kept_sites(model, mesh, std::mem::take(&mut self.system))
+    }
+
+    /// Keeps the buffers of `system` (built on this workspace's mesh) for the next
+    /// [`Workspace::system`]; returns its mesh.
+    pub(crate) fn keep_system(&mut self, system: System) -> Mesh {
+        let (mesh, buffers) = system.into_parts();
+        self.system = buffers;
+        mesh
+    }
+
+    /// The Jacobian of `system` at `x` into the value buffer and the residual there into
+    /// the trial residual, for [`Workspace::verdict_at`], with the tension columns'
+    /// right-hand sides when this workspace keeps them and a Jacobian in the tensions would
+    /// read them (no friction, no displacement-controlled tendon:
+    /// `Sensitivity::with_workspace`); false on a model breakdown.
+    pub(super) fn verdict_jacobian(&mut self, system: &System, x: &[State]) -> bool {
+        self.forget_tension_rhs();
+        let plain = system.friction.is_none() && !system.model.robot.has_displacement_inputs();
+        if !(self.keep_tensions && plain) {
+            return system.jacobian(x, &mut self.trial_residual, &mut self.values).is_ok();
+        }
+        let mut columns = self.take_buffer(system.unknowns() * system.model.robot.tendons.len());
+        let ok = system
+            .jacobian_and_tensions(x, &mut self.trial_residual, &mut self.values, &mut columns)
+            .is_ok();
+        columns.iter_mut().for_each(|d| *d = -*d);
+        self.tension_rhs = Some(columns);
+        ok
+    }
+}
