@@ -24,6 +24,8 @@
 #![allow(non_snake_case)]
 
 pub(super) use super::ends::EndColumns;
+pub(crate) use super::interval_kept::IntervalFactors;
+pub use super::interval_kept::IntervalTensions;
 pub(super) use super::point::{PointFrame, PointLinearization, rhs_linearized_inline};
 use super::unknowns::{P, THETA, U, V};
 use crate::error::Result;
@@ -327,20 +329,6 @@ fn derivative_rows(
     }
 }
 
-/// The buffers of one interval's tension columns that [`interval_jacobian`] fills besides
-/// the Jacobian (one entry per tendon in each): d(v', u')/dtau_i at the start node (read
-/// when the start node's linearization is given, as the previous interval's `end`, else
-/// written), at the end node and at the midpoint (its total derivative), the midpoint's
-/// strain motion, and the interval rows' derivatives dF/dtau_i (scaled), as
-/// `interval_derivatives` gives them with `linearize::tension_rates`.
-pub struct IntervalTensions<'t> {
-    pub(crate) start: &'t mut [Vector6<f64>],
-    pub(crate) end: &'t mut [Vector6<f64>],
-    pub(crate) mid: &'t mut [Vector6<f64>],
-    pub(crate) dy_mid: &'t mut [Vector6<f64>],
-    pub(crate) rows: &'t mut [Block<f64>],
-}
-
 /// The sites the order-6 residual of an interval needs besides its [`IntervalSites`]: at
 /// a quarter and three quarters of the interval.
 #[derive(Clone, Copy, Debug)]
@@ -449,32 +437,6 @@ pub(super) fn interval_jacobian_keeping(
         return unsafe { interval_jacobian_keeping_avx2(model, sites, segment_end, a, b, start, jac, kept) };
     }
     interval_jacobian_kernel(model, sites, segment_end, a, b, start, jac, Some(kept), None)
-}
-
-/// Eq. 13's factored matrix at an interval's three points and the midpoint's orientation,
-/// as [`interval_jacobian_keeping`] evaluated them.
-#[derive(Clone)]
-pub(crate) struct IntervalFactors {
-    /// At the start node (valid when the interval Jacobian evaluated it).
-    pub(crate) start: linearize::Factored,
-    /// At the Hermite-Simpson midpoint.
-    pub(crate) mid: linearize::Factored,
-    /// At the end node.
-    pub(crate) end: linearize::Factored,
-    /// R at the midpoint, R_k exp(theta_m).
-    pub(crate) mid_R: Matrix3<f64>,
-}
-
-impl IntervalFactors {
-    /// Placeholders for a buffer [`interval_jacobian_keeping`] fills.
-    pub(crate) fn identity() -> Self {
-        IntervalFactors {
-            start: linearize::Factored::identity(),
-            mid: linearize::Factored::identity(),
-            end: linearize::Factored::identity(),
-            mid_R: Matrix3::identity(),
-        }
-    }
 }
 
 /// [`interval_jacobian_kernel`] with AVX2 and FMA enabled.
@@ -662,7 +624,8 @@ mod tests {
             let (r_fast, l_fast) =
                 interval_jacobian(&model, &sites, seg, &x[k], &x[k + 1], None, &mut fast, None).unwrap();
             let (r_base, l_base) =
-                interval_jacobian_kernel(&model, &sites, seg, &x[k], &x[k + 1], None, &mut baseline, None, None).unwrap();
+                interval_jacobian_kernel(&model, &sites, seg, &x[k], &x[k + 1], None, &mut baseline, None, None)
+                    .unwrap();
             assert!(fast.iter().all(|v| v.is_finite()));
             assert_eq!(bits(&fast), bits(&baseline), "interval {k}");
             assert_eq!(bits(r_fast.as_slice()), bits(r_base.as_slice()), "interval {k}");

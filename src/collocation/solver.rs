@@ -83,7 +83,7 @@ impl Solver {
     /// [`Solver::tip_jacobian`] in the tensions takes them instead of a pass over the mesh
     /// of its own (docs/sensitivity.md, "Tension columns formed with the verdict's
     /// Jacobian"). Such a solve costs a few per cent more; the answers are the same bits.
-    /// Off by default. It applies from the next solve on, on the mesh it runs on.
+    /// Off by default. It applies from the next solve on, on every mesh it runs on.
     pub fn keep_tension_columns(&mut self, on: bool) {
         self.tension_columns = on;
         if let Some(c) = self.cache.as_mut() {

@@ -152,6 +152,24 @@ impl CapstanMass {
     }
 }
 
+/// The scope of a verdict with friction, noted on every full-slip solve that has one
+/// (docs/stability.md, "Tendons with friction"): the linearized dynamics holds each
+/// stretch's slip direction, and a disturbance that reverses it meets the stuck system.
+pub(crate) const SLIP_HELD: &str = "with friction the stability verdict is that of the linearized dynamics with each \
+     stretch's slip direction held (the tendon keeps sliding the way the solve assumed, as while its actuator \
+     moves); a disturbance that reverses the slip somewhere makes that stretch stick, which the verdict does not cover";
+
+/// The verdict of a solve with friction and displacement control: the pull-ins' length
+/// constraints are not in the border of the linearized dynamics with friction (its solves
+/// hold the base-entry tensions), so none.
+pub(crate) fn held_unknown() -> Stability {
+    Stability::Unknown {
+        reason: "tendons with friction and displacement control: the linearized dynamics with friction holds \
+                 tensions, not pull-ins"
+            .into(),
+    }
+}
+
 /// The verdict of the linearized dynamics at the equilibrium `x` of `border`'s system (its
 /// profile loaded at the solved log tensions), with the factors of Newton's last bordered
 /// Jacobian held in its staircase when `fresh` (that Jacobian belongs to `x`: evaluated

@@ -107,7 +107,12 @@ pub(crate) fn start(robots: &[Robot], options: &Options) -> Result<Carried> {
             f.motion = crate::model::tendon::Motion::Pull;
         }
     }
-    let first = super::super::solve(&pulled, options)?;
+    let mut first = super::super::solve(&pulled, options)?;
+    // The steps report their own verdicts: the full-slip verdict's note is not theirs.
+    first
+        .report
+        .notes
+        .retain(|n| n != crate::collocation::dynamics::friction::SLIP_HELD);
     // A pull-in's base tension is the solved one.
     let pulled = pulled.with_tensions(&first.tensions());
     let points: Vec<f64> = first.nodes.iter().map(|n| n.s).collect();
@@ -410,8 +415,9 @@ fn solve_on(robot: &Robot, options: &Options, carried: &mut Carried) -> Result<(
         report.tolerance_met = None;
     }
     report.stability = Stability::Unknown {
-        reason: "a load-history step: its verdict would need the Jacobian at the step's answer with its stick \
-                 rows, which its chord steps do not keep (full-slip solves have one)"
+        reason: "a load-history step: its verdict would need the bordered Jacobian evaluated and factored at \
+                 the step's answer with its stick rows, and the stuck stretches' response in the mass; neither is \
+                 built"
             .into(),
     };
     report.intervals = system.mesh.intervals();

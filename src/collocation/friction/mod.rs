@@ -43,13 +43,6 @@ use crate::{Error, Robot};
 use staircase::Staircase;
 use std::time::Instant;
 
-/// The scope of a verdict with friction, noted on every full-slip solve that has one
-/// (docs/stability.md, "Tendons with friction"): the linearized dynamics holds each
-/// stretch's slip direction, and a disturbance that reverses it meets the stuck system.
-const SLIP_HELD: &str = "with friction the stability verdict is that of the linearized dynamics with each \
-     stretch's slip direction held (the tendon keeps sliding the way the solve assumed, as while its actuator \
-     moves); a disturbance that reverses the slip somewhere makes that stretch stick, which the verdict does not cover";
-
 /// The unknown of slip j at node n given the slips' first unknowns and spans, if it is one
 /// (n in 1..=span).
 fn unknown(offsets: &[usize], spans: &[usize], j: usize, n: usize) -> Option<usize> {
@@ -512,11 +505,13 @@ fn refine_with_friction(
             pipeline::record_estimate(&mut report, estimated.as_ref().map(|(c, _)| c), options, length);
             let t = Instant::now();
             report.stability = if assess {
-                report.notes.push(SLIP_HELD.into());
                 super::dynamics::friction::assess(&mut border, &x, fresh, &mut report)
             } else {
-                held_unknown()
+                super::dynamics::friction::held_unknown()
             };
+            if !matches!(report.stability, Stability::Unknown { .. }) {
+                report.notes.push(super::dynamics::friction::SLIP_HELD.into());
+            }
             report.timings.stability += t.elapsed();
             report.timings.total = start.elapsed();
             // The estimate's node rates are eq. 13 with friction at the same states and tensions.
@@ -568,17 +563,6 @@ pub(super) fn solve_pull_ins(
     )?;
     solution.report.timings.total = start.elapsed();
     Ok(solution)
-}
-
-/// The verdict of a solve with friction and displacement control: the pull-ins' length
-/// constraints are not in the border of the linearized dynamics with friction (its solves
-/// hold the base-entry tensions), so none.
-fn held_unknown() -> Stability {
-    Stability::Unknown {
-        reason: "tendons with friction and displacement control: the linearized dynamics with friction holds \
-                 tensions, not pull-ins"
-            .into(),
-    }
 }
 
 /// dQ/dtau of the `held` tendons at `solution` of `robot` (tension-controlled), row major:

@@ -463,7 +463,10 @@ impl<'a> System<'a> {
         mut kept: Option<&mut [IntervalFactors]>,
         mut tensions: Option<(&mut TensionSink, &mut [f64])>,
     ) -> Result<()> {
-        debug_assert!(kept.is_none() || tensions.is_none(), "kept factors or tension rows, not both");
+        debug_assert!(
+            kept.is_none() || tensions.is_none(),
+            "kept factors or tension rows, not both"
+        );
         let n = self.unknowns();
         let mut at = 0;
         let base = residual::base(&self.model, &x[0], &seeded::<BASE_COLUMNS>(0));

@@ -101,8 +101,12 @@ impl Workspace {
         let ok = system
             .jacobian_and_tensions(x, &mut self.trial_residual, &mut self.values, &mut columns)
             .is_ok();
-        columns.iter_mut().for_each(|d| *d = -*d);
-        self.tension_rhs = Some(columns);
+        if ok {
+            columns.iter_mut().for_each(|d| *d = -*d);
+            self.tension_rhs = Some(columns);
+        } else {
+            self.give_buffer(columns);
+        }
         ok
     }
 }

@@ -388,11 +388,14 @@ impl Workspace {
         report.evaluations.equations += system.rate_evaluations();
         self.verdict = None;
         self.neutral = None;
-        self.drift = 0.0;
         self.unfactored = true;
         if !ok || !all_finite(&self.values) {
+            // The values belong to no state: nothing may take them (or columns) for one.
+            self.drift = f64::INFINITY;
+            self.forget_tension_rhs();
             return None;
         }
+        self.drift = 0.0;
         Some(self.verdict_counted(assess))
     }
 

@@ -16,7 +16,7 @@ use crate::solution::Solution;
 /// Most splits of a stuck step's links: 2^6 = 64 parts per link. A stuck stretch's error
 /// falls about as h^3 from 32 to 128 intervals and as h beyond, while its stick/slip
 /// boundary stays in the link after a node of the history's mesh (docs/friction.md section
-/// 8), so 64 parts take a step from 1e-4 L to about 1e-8 L; a step that still misses its
+/// 8), so 64 parts take a step from 1e-4 L to about 1e-7 L (64 x 16, about 1 000 times); a step that still misses its
 /// tolerance (or would need more than `max_intervals`) reports so.
 const LEVELS: u32 = 6;
 

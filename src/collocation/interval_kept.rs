@@ -1,0 +1,50 @@
+//! What an interval's Jacobian (module `residual`) keeps or forms besides its block, for
+//! work that reads the same evaluation of eq. 13: eq. 13's factored matrices at its points
+//! (the mass of the linearized dynamics, `collocation/dynamics.rs`) or its tension rows (the
+//! tension columns of the control Jacobian, docs/sensitivity.md).
+
+#![allow(non_snake_case)] // R for rotation matrices, as the paper writes them
+
+use super::residual::Block;
+use crate::model::linearize;
+use nalgebra::{Matrix3, Vector6};
+
+/// The buffers of one interval's tension columns that [`interval_jacobian`](super::residual::interval_jacobian) fills besides
+/// the Jacobian (one entry per tendon in each): d(v', u')/dtau_i at the start node (read
+/// when the start node's linearization is given, as the previous interval's `end`, else
+/// written), at the end node and at the midpoint (its total derivative), the midpoint's
+/// strain motion, and the interval rows' derivatives dF/dtau_i (scaled), as
+/// `residual::interval_derivatives` gives them with `linearize::tension_rates`.
+pub struct IntervalTensions<'t> {
+    pub(crate) start: &'t mut [Vector6<f64>],
+    pub(crate) end: &'t mut [Vector6<f64>],
+    pub(crate) mid: &'t mut [Vector6<f64>],
+    pub(crate) dy_mid: &'t mut [Vector6<f64>],
+    pub(crate) rows: &'t mut [Block<f64>],
+}
+
+/// Eq. 13's factored matrix at an interval's three points and the midpoint's orientation,
+/// as [`interval_jacobian_keeping`](super::residual::interval_jacobian_keeping) evaluated them.
+#[derive(Clone)]
+pub(crate) struct IntervalFactors {
+    /// At the start node (valid when the interval Jacobian evaluated it).
+    pub(crate) start: linearize::Factored,
+    /// At the Hermite-Simpson midpoint.
+    pub(crate) mid: linearize::Factored,
+    /// At the end node.
+    pub(crate) end: linearize::Factored,
+    /// R at the midpoint, R_k exp(theta_m).
+    pub(crate) mid_R: Matrix3<f64>,
+}
+
+impl IntervalFactors {
+    /// Placeholders for a buffer [`interval_jacobian_keeping`](super::residual::interval_jacobian_keeping) fills.
+    pub(crate) fn identity() -> Self {
+        IntervalFactors {
+            start: linearize::Factored::identity(),
+            mid: linearize::Factored::identity(),
+            end: linearize::Factored::identity(),
+            mid_R: Matrix3::identity(),
+        }
+    }
+}
