@@ -192,3 +192,29 @@ impl Solver {
         out
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::cases;
+
+    /// With [`Solver::keep_tension_columns`], a warm solve that ends on chord steps leaves the
+    /// tension columns its verdict formed with the Jacobian at the answer, for
+    /// [`Solver::tip_jacobian`] to take; without the flag it leaves none. (The pass over the
+    /// mesh gives the same columns to 1e-12, so the answers alone cannot tell which path ran.)
+    #[test]
+    fn a_warm_solve_leaves_the_tension_columns_its_verdict_formed_only_when_asked() {
+        for keep in [true, false] {
+            let mut solver = Solver::new(Default::default());
+            solver.keep_tension_columns(keep);
+            let mut robot = cases::case_s();
+            let first = solver.solve(&robot).unwrap();
+            let tension = robot.tendons[0].tension();
+            robot.tendons[0].set_tension(tension + 0.01);
+            let second = solver.solve_from(&robot, &first).unwrap();
+            let len = second.report.unknowns * robot.tendons.len();
+            let cached = solver.cache.as_mut().unwrap();
+            assert_eq!(cached.workspace.take_tension_rhs(len).is_some(), keep, "keep {keep}");
+        }
+    }
+}
