@@ -678,4 +678,76 @@ mod tests {
             }
         }
     }
+
+    /// The response to body loads (the mass of the linearized dynamics with friction)
+    /// against Richardson-extrapolated central differences of the rates and turning rates
+    /// in a distributed force and moment added at the point: eq. 13's right-hand side gains
+    /// -R^T f_e and -R^T l_e, so the rows (-R^T e_k, 0) and (0, -R^T e_k) are the loads whose
+    /// responses are the rates' and turning rates' derivatives in f_e and l_e.
+    #[test]
+    fn load_response_matches_central_differences_in_a_distributed_load() {
+        let (robot, R, v, u) = setup();
+        let model = Model::new(&robot);
+        let slipping = slipping(&robot);
+        let site = model.site(0.07);
+        let end = robot.length();
+        let lin = linearize(&model, &site, end, (&R, &v, &u), &slipping, None, false).unwrap();
+        let mut loads = SMatrix::<f64, 6, 6>::zeros();
+        for k in 0..3 {
+            let row: Vector3<f64> = -R.transpose().column(k);
+            for (j, value) in row.iter().enumerate() {
+                loads[(k, j)] = *value;
+                loads[(3 + k, 3 + j)] = *value;
+            }
+        }
+        let mut turning = vec![SMatrix::<f64, 1, 6>::zeros(); slipping.len()];
+        assert!(lin.load_response(&mut loads, &mut turning));
+        let eval = |site: &Site| {
+            let mut t = vec![0.0; robot.tendons.len()];
+            let x = rates(&model, site, end, (&R, &v, &u), None, &mut t).unwrap();
+            (x, slipping.iter().map(|&i| t[i]).collect::<Vec<f64>>())
+        };
+        // 0.05 N/m and N m/m: the rates are linear in the loads but for the tangential loads'
+        // dependence on them (Richardson's O(h^4) takes care of that), and a longer step
+        // keeps the rates' rounding (about 5e-11 in u') from dominating the small responses.
+        let h = 0.05;
+        for c in 0..6 {
+            let at = |step: f64| {
+                let mut moved = site.clone();
+                let mut d = Vector3::zeros();
+                d[c % 3] = step;
+                if c < 3 {
+                    moved.f_e += d;
+                } else {
+                    moved.l_e += d;
+                }
+                eval(&moved)
+            };
+            let central = |h: f64| {
+                let ((xp, tp), (xm, tm)) = (at(h), at(-h));
+                let t: Vec<f64> = tp.iter().zip(&tm).map(|(a, b)| (a - b) / (2.0 * h)).collect();
+                ((xp - xm) / (2.0 * h), t)
+            };
+            let ((x1, t1), (x2, t2)) = (central(h), central(h / 2.0));
+            let fd = (x2 * 4.0 - x1) / 3.0;
+            let exact: Vector6<f64> = loads.row(c).transpose();
+            // 1e-7 relative and 5e-9 absolute: the rates' rounding (about 5e-11 in u') over the
+            // step leaves about 1e-9 of noise in the differences (measured 1e-10 to 1e-9), and a
+            // force's u' response is only about 1e-4.
+            assert!(
+                (fd - exact).norm() <= 1e-7 * exact.norm() + 5e-9,
+                "load {c}: {fd} vs {exact}"
+            );
+            for (j, (a, b)) in t1.iter().zip(&t2).enumerate() {
+                let fd = (4.0 * b - a) / 3.0;
+                let exact = turning[j][c];
+                // 1e-7 of the largest turning response of that tendon (measured 1e-12 absolute).
+                let scale = turning[j].iter().fold(0.0f64, |m, t| m.max(t.abs()));
+                assert!(
+                    (fd - exact).abs() <= 1e-7 * scale,
+                    "turning {j} load {c}: {fd} vs {exact}"
+                );
+            }
+        }
+    }
 }
