@@ -713,7 +713,7 @@ mod tests {
         let h = 0.05;
         for c in 0..6 {
             let at = |step: f64| {
-                let mut moved = site.clone();
+                let mut moved = site;
                 let mut d = Vector3::zeros();
                 d[c % 3] = step;
                 if c < 3 {
