@@ -333,6 +333,13 @@ pub(super) fn solve(robot: &Robot, options: &Options, warm: Option<&Solution>, c
 /// [`solve`], with the verdict of the linearized dynamics when `assess` (else `unknown`:
 /// the held pull-ins' loop, whose verdict is not this solve's).
 ///
+/// With a verdict, the frictionless start's equilibrium choice accepts a direct answer
+/// without its own verdict ([`pipeline::solve_start`] `unassessed`): the answer with
+/// friction built on it stands when its verdict is `stable`, the criterion the choice
+/// applies to every direct answer (docs/friction.md section 3, "Which start"). Otherwise
+/// (not `stable`, or the solve with friction failed) the whole solve runs again from the
+/// full choice on the frictionless robot, and the report counts both.
+///
 /// # Errors
 /// As [`super::solve`].
 fn solve_assessed(
@@ -347,10 +354,40 @@ fn solve_assessed(
     for t in &mut smooth.tendons {
         t.friction = None;
     }
-    let first = pipeline::solve_start(&smooth, options, warm, cache)?;
-    // Its Newton workspace, on the mesh Newton with friction starts on when the first mesh
-    // is kept, serves that Newton (through the thread's spare workspaces, where it goes back
-    // afterwards).
+    let first = pipeline::solve_start(&smooth, options, warm, cache, assess)?;
+    let provisional = first.provisional;
+    let answer = from_start(robot, options, first, cache, assess, start);
+    if !provisional {
+        return answer;
+    }
+    // The work of the provisional route, which the report of the full one counts.
+    let tried = match answer {
+        Ok(solution) if solution.report.stability.is_stable() => return Ok(solution),
+        Ok(solution) => Some(solution.report),
+        Err(Error::NotConverged { report, .. }) => Some(*report),
+        Err(_) => None,
+    };
+    let mut first = pipeline::solve_start(&smooth, options, warm, cache, false)?;
+    if let Some(tried) = tried {
+        add_work(&mut first.report, &tried);
+    }
+    from_start(robot, options, first, cache, assess, start)
+}
+
+/// [`refine_with_friction`] from the frictionless start `first`, whose cached Newton
+/// workspace (on the mesh Newton with friction starts on when the first mesh is kept) goes
+/// to the thread's spare workspaces, where that Newton takes it.
+///
+/// # Errors
+/// As [`super::solve`].
+fn from_start(
+    robot: &Robot,
+    options: &Options,
+    first: pipeline::Start,
+    cache: &mut Cache,
+    assess: bool,
+    start: Instant,
+) -> Result<Solution> {
     if let Some(c) = cache.take() {
         workspace::keep(c.mesh, c.solver, c.workspace);
     }
@@ -363,6 +400,25 @@ fn solve_assessed(
         (first.report, assess),
         start,
     )
+}
+
+/// Adds the counts of the work `tried` did (iterations, steps, meshes, evaluations and
+/// the timings by stage) to `report`.
+fn add_work(report: &mut SolveReport, tried: &SolveReport) {
+    report.iterations += tried.iterations;
+    report.newton_steps += tried.newton_steps;
+    report.chord_steps += tried.chord_steps;
+    report.load_steps += tried.load_steps;
+    report.meshes += tried.meshes;
+    report.evaluations.residual += tried.evaluations.residual;
+    report.evaluations.jacobian += tried.evaluations.jacobian;
+    report.evaluations.equations += tried.evaluations.equations;
+    let (t, u) = (&mut report.timings, &tried.timings);
+    t.assembly += u.assembly;
+    t.factorization += u.factorization;
+    t.solve += u.solve;
+    t.estimate += u.estimate;
+    t.stability += u.stability;
 }
 
 /// Solves a robot with friction (validated, with `options` validated) from `near`, the
