@@ -197,19 +197,22 @@ fn a_column_past_eulers_load_with_friction_reaches_the_load_paths_state() {
     // The frictionless robot's load path reaches the buckled state the answer with friction
     // starts from; the light tendon barely moves it.
     let smooth = collocation::solve(&column(1.2, 0.0, TENSION), &options).unwrap();
-    assert!(matches!(smooth.report.path, tdcr::PathTaken::LoadPath { .. }), "{:?}", smooth.report);
-    let (tip, buckled, nearly_straight) = (
-        solution.tip_position(),
-        smooth.tip_position(),
-        straight.tip_position(),
+    assert!(
+        matches!(smooth.report.path, tdcr::PathTaken::LoadPath { .. }),
+        "{:?}",
+        smooth.report
     );
+    let (tip, buckled, nearly_straight) = (solution.tip_position(), smooth.tip_position(), straight.tip_position());
     // Buckled at 1.2 P_cr the tip is 0.32 m off the axis of the 0.5 m column (measured),
     // the nearly straight state's 0.17 mm: 50 mm and 1 mm separate them by far.
     assert!(buckled.x.abs() > 0.05, "{buckled}");
     assert!(nearly_straight.x.abs() < 1e-3, "{nearly_straight}");
     // 1e-4 of the deflection: friction moves the buckled tip by 4.4e-6 m (measured), the
     // tangential loads of a 0.05 N tendon at mu = 0.1 against the tip force's bending.
-    assert!((tip - buckled).norm() < 1e-4 * buckled.x.abs(), "{tip} against {buckled}");
+    assert!(
+        (tip - buckled).norm() < 1e-4 * buckled.x.abs(),
+        "{tip} against {buckled}"
+    );
 }
 
 /// What the verdict does not cover says so: a load-history step (its Newton ends on chord

@@ -67,4 +67,3 @@ pub(super) fn estimate_with_friction(
         tension_error,
     )))
 }
-

@@ -33,7 +33,6 @@ use super::newton::{self, Border, Linearization, Point, Settings, Workspace};
 use super::system::System;
 use super::unknowns::{self, NODE, link_row, tip_row};
 use super::{Cache, Options, pipeline, refine, workspace};
-use correction::estimate_with_friction;
 use crate::dense::solve_dense;
 use crate::error::{self, Result};
 use crate::mesh::guess::interpolate;
@@ -42,6 +41,7 @@ use crate::model::equations::Model;
 use crate::report::{Method, SolveReport, Stability, Termination};
 use crate::solution::{Solution, State};
 use crate::{Error, Robot};
+use correction::estimate_with_friction;
 use staircase::Staircase;
 use std::time::Instant;
 
