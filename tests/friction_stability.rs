@@ -177,6 +177,44 @@ fn a_column_with_a_friction_tendon_diverges_past_eulers_load() {
     }
 }
 
+/// A column past Euler's load with a friction tendon at default settings (the load path's
+/// choice). Newton from the straight guess lands on the nearly straight state, unstable;
+/// the frictionless start accepts that direct answer without its own verdict, the answer
+/// with friction built on it diverges, and the solve falls back to the full choice on the
+/// frictionless robot: the load path to the buckled state, stable (docs/friction.md
+/// section 3, "Which start"). Without the fallback the answer would be the straight state.
+#[test]
+fn a_column_past_eulers_load_with_friction_reaches_the_load_paths_state() {
+    let options = Options::default();
+    let robot = column(1.2, 0.1, TENSION);
+    let solution = collocation::solve(&robot, &options).unwrap();
+    let report = &solution.report;
+    assert!(matches!(report.path, tdcr::PathTaken::LoadPath { .. }), "{report:?}");
+    assert_eq!(report.stability, Stability::Stable, "{report:?}");
+    // The state Newton lands on from the straight guess, unstable with friction as without.
+    let straight = collocation::solve(&robot, &nearest()).unwrap();
+    divergence_rate(&straight.report.stability);
+    // The frictionless robot's load path reaches the buckled state the answer with friction
+    // starts from; the light tendon barely moves it.
+    let smooth = collocation::solve(&column(1.2, 0.0, TENSION), &options).unwrap();
+    assert!(
+        matches!(smooth.report.path, tdcr::PathTaken::LoadPath { .. }),
+        "{:?}",
+        smooth.report
+    );
+    let (tip, buckled, nearly_straight) = (solution.tip_position(), smooth.tip_position(), straight.tip_position());
+    // Buckled at 1.2 P_cr the tip is 0.32 m off the axis of the 0.5 m column (measured),
+    // the nearly straight state's 0.17 mm: 50 mm and 1 mm separate them by far.
+    assert!(buckled.x.abs() > 0.05, "{buckled}");
+    assert!(nearly_straight.x.abs() < 1e-3, "{nearly_straight}");
+    // 1e-4 of the deflection: friction moves the buckled tip by 4.4e-6 m (measured), the
+    // tangential loads of a 0.05 N tendon at mu = 0.1 against the tip force's bending.
+    assert!(
+        (tip - buckled).norm() < 1e-4 * buckled.x.abs(),
+        "{tip} against {buckled}"
+    );
+}
+
 /// What the verdict does not cover says so: a load-history step (its Newton ends on chord
 /// steps with an earlier step's factors and stick rows) and friction with displacement
 /// control (the pull-ins' constraints are not in the border).

@@ -76,6 +76,29 @@ pub(crate) enum Choose {
     OnBranch,
     /// No choice: a finer mesh warm-started from the chosen equilibrium on the last one.
     No,
+    /// As [`Choose::FromCold`] or [`Choose::FromWarm`] (`warm`), except that a direct answer
+    /// (step 1 or 3 of docs/stability.md, "Which equilibrium a solve returns": Newton from
+    /// the start, cleanly) is accepted without its verdict: the start of a solve with
+    /// friction, whose answer's own verdict decides instead and which falls back to the full
+    /// choice when that verdict is not `stable` (collocation/friction/mod.rs, docs/friction.md
+    /// section 3). Every other step of the choice is unchanged.
+    Unassessed {
+        /// Whether the start is a warm start.
+        warm: bool,
+    },
+}
+
+impl Choose {
+    /// The choice with direct answers accepted without their verdict
+    /// ([`Choose::Unassessed`]), from the same start; `self` for [`Choose::No`] and
+    /// [`Choose::OnBranch`] (which no solve with friction starts with).
+    pub(crate) fn unassessed(self) -> Choose {
+        match self {
+            Choose::FromCold => Choose::Unassessed { warm: false },
+            Choose::FromWarm => Choose::Unassessed { warm: true },
+            other => other,
+        }
+    }
 }
 
 /// The most Newton iterations of a direct solve that counts as clean: from a guess on the
@@ -180,12 +203,13 @@ fn linearized_dynamics(
 }
 
 /// Newton from `x`, given only the chance to converge cleanly ([`clean`]) unless
-/// `nearest`: the converged states, if they are stable ([`acceptable`]) or `nearest`.
+/// `nearest`: the converged states, if they are stable ([`acceptable`]) or `nearest`; with
+/// `unassessed` ([`Choose::Unassessed`]) a clean answer without its verdict.
 fn direct(
     system: &System,
     ws: &mut Workspace,
     x: &mut Vec<State>,
-    nearest: bool,
+    (nearest, unassessed): (bool, bool),
     settings: &Settings,
     report: &mut SolveReport,
 ) -> (bool, usize) {
@@ -208,6 +232,9 @@ fn direct(
     }
     if !clean(&report.history) {
         return (false, worst);
+    }
+    if unassessed {
+        return (true, worst);
     }
     let t = Instant::now();
     let verdict = stability_of(system, ws, x, false, report);
@@ -332,10 +359,13 @@ fn choose_from(
     report.unknowns = system.unknowns();
     report.nonzeros = ws.nonzeros();
     report.intervals = system.mesh.intervals();
-    let warm = matches!(choose, Choose::FromWarm | Choose::OnBranch);
+    let (warm, unassessed) = match choose {
+        Choose::Unassessed { warm } => (warm, true),
+        _ => (matches!(choose, Choose::FromWarm | Choose::OnBranch), false),
+    };
     let nearest = options.equilibrium == Equilibrium::Nearest || !options.continuation;
     let mut x = spare::copy(x0);
-    let (accept, worst) = direct(system, ws, &mut x, nearest, settings, report);
+    let (accept, worst) = direct(system, ws, &mut x, (nearest, unassessed), settings, report);
     let converged = report.termination == Termination::Converged;
     if accept {
         return Ok(x);
@@ -370,7 +400,7 @@ fn choose_from(
         }
         system.set_factors(1.0, 1.0);
         let mut cold = guess::initial(&system.model, &system.mesh.nodes, options.initial_guess);
-        if direct(system, ws, &mut cold, false, settings, report).0 {
+        if direct(system, ws, &mut cold, (false, unassessed), settings, report).0 {
             return Ok(cold);
         }
     }

@@ -100,11 +100,18 @@ pub(crate) struct Start {
     pub(crate) x: Vec<State>,
     /// The frictionless solve's report (its counts, timings, path and notes).
     pub(crate) report: SolveReport,
+    /// Whether the equilibrium was chosen without a verdict: the direct answer accepted
+    /// unassessed ([`Choose::Unassessed`]), which stands only if the answer with friction
+    /// built on it is `stable`.
+    pub(crate) provisional: bool,
 }
 
 /// The frictionless start of a solve with friction (`robot` validated, without friction):
 /// for tension inputs, Newton and the equilibrium choice with its verdict on the first mesh
-/// and that mesh's error estimate, as [`solve_impl`] begins. Where the estimate wants a
+/// and that mesh's error estimate, as [`solve_impl`] begins; with `unassessed`, a direct
+/// answer is accepted without its verdict ([`Choose::Unassessed`]: the answer with friction's
+/// verdict decides, and [`Start::provisional`] says the caller must fall back to this
+/// function without `unassessed` when it is not `stable`). Where the estimate wants a
 /// finer mesh, the start is the first mesh's states interpolated onto it: Newton with
 /// friction solves on it, and its own estimate refines further, so the frictionless solve
 /// is not repeated there, nor its final mesh's verdict (which only its report would carry;
@@ -119,6 +126,7 @@ pub(crate) fn solve_start(
     options: &Options,
     warm: Option<&Solution>,
     cache: &mut Cache,
+    unassessed: bool,
 ) -> Result<Start> {
     if robot.has_displacement_inputs() {
         let solution = solve_impl(robot, options, warm, cache)?;
@@ -129,15 +137,24 @@ pub(crate) fn solve_start(
             mesh,
             x,
             report: solution.report,
+            provisional: false,
         });
     }
     let start = Instant::now();
     let model = Model::new(robot);
     let mut report = SolveReport::new(Method::Collocation);
     let (mesh, x0, reuse, choose) = begin(robot, options, warm, cache, &model, &mut report)?;
+    let choose = if unassessed { choose.unassessed() } else { choose };
     report.meshes += 1;
     let level =
         solve_on_mesh(&model, mesh, x0, reuse, choose, options, &mut report, cache).map_err(|e| timed(e, start))?;
+    // A direct answer is the only one the choice accepts without a verdict, and only when
+    // the verdict would decide (the load path's choice; `nearest` takes Newton's answer
+    // whatever its verdict).
+    let provisional = unassessed
+        && report.path == PathTaken::Direct
+        && options.equilibrium == Equilibrium::LoadPath
+        && options.continuation;
     let fine = match (options.tolerance, &level.correction) {
         (Some(tol), Some(correction)) => refine::next_mesh(robot, &level.mesh, correction, tol, options)?,
         _ => None,
@@ -145,7 +162,12 @@ pub(crate) fn solve_start(
     let Level { mesh, x, correction } = level;
     let start_here = |mesh, x, mut report: SolveReport| {
         report.timings.total = start.elapsed();
-        Ok(Start { mesh, x, report })
+        Ok(Start {
+            mesh,
+            x,
+            report,
+            provisional,
+        })
     };
     let (Some(fine), Some(correction)) = (fine, correction) else {
         return start_here(mesh, x, report);

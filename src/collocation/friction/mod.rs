@@ -16,6 +16,7 @@
 #![allow(non_snake_case)]
 
 mod border;
+mod correction;
 mod grip;
 pub(crate) mod history;
 mod interval;
@@ -31,7 +32,7 @@ pub(crate) use interval::{Profile, interval, interval_order6};
 use super::newton::{self, Border, Linearization, Point, Settings, Workspace};
 use super::system::System;
 use super::unknowns::{self, NODE, link_row, tip_row};
-use super::{Cache, Options, estimate, pipeline, refine, workspace};
+use super::{Cache, Options, pipeline, refine, workspace};
 use crate::dense::solve_dense;
 use crate::error::{self, Result};
 use crate::mesh::guess::interpolate;
@@ -40,6 +41,7 @@ use crate::model::equations::Model;
 use crate::report::{Method, SolveReport, Stability, Termination};
 use crate::solution::{Solution, State};
 use crate::{Error, Robot};
+use correction::estimate_with_friction;
 use staircase::Staircase;
 use std::time::Instant;
 
@@ -258,67 +260,6 @@ impl<'r> Capstan<'r> {
     }
 }
 
-/// The error estimate with friction, by deferred correction as in [`estimate`] on the
-/// bordered system: the order-6 residuals of the backbone and capstan rows at the
-/// converged `x` (against the order-4 residual `converged` when the caller has it, else
-/// evaluated), and one bordered solve with Newton's staircase factors, so that the
-/// estimate carries the tension profile's error into the shape's. Returns the correction
-/// and the largest correction of a log tension (the relative error of the tension
-/// profile); `None` without factors or with a singular border.
-///
-/// # Errors
-/// A model breakdown at a stage of the order-6 scheme.
-fn estimate_with_friction(
-    border: &mut Capstan,
-    x: &[State],
-    converged: Option<Vec<f64>>,
-) -> Result<Option<(estimate::Correction, f64)>> {
-    border.load(Point::Current);
-    let n = border.system.unknowns();
-    let phi4 = match converged {
-        Some(phi4) => phi4,
-        None => {
-            let mut phi4 = vec![0.0; n];
-            border.system.residual(x, &mut phi4)?;
-            phi4
-        }
-    };
-    border.rows(Point::Current, x);
-    let system = &border.system;
-    let mut rhs = vec![0.0; n];
-    let mut local = vec![0.0; x.len() - 1];
-    let mut node_rates = vec![nalgebra::Vector6::zeros(); x.len()];
-    // The order-6 rows of every link; those with friction keep their capstan rows psi6.
-    system.order6_residual(x, &mut rhs, &mut local, &mut node_rates)?;
-    for (r, f) in rhs.iter_mut().zip(&phi4) {
-        *r = f - *r;
-    }
-    let length = system.model.robot.length();
-    let mut difference = border.psi.clone();
-    if let Some(profile) = system.friction.as_ref() {
-        let kept = profile.order6.borrow();
-        for (j, &o) in border.offsets.iter().enumerate() {
-            for k in 0..profile.spans[j] {
-                if let Some(psi6) = kept.get(k).and_then(|p| p.get(j)) {
-                    difference[o + k] -= psi6;
-                }
-            }
-        }
-    }
-    // The staircase holds the factors of Newton's last bordered Jacobian.
-    if !border.stairs.ready {
-        return Ok(None);
-    }
-    let mut dx = vec![0.0; n];
-    let Some(tension_error) = border.solve_factored(&rhs, &difference, &mut dx) else {
-        return Ok(None);
-    };
-    Ok(Some((
-        estimate::correction(&dx, x.len(), length, local, node_rates),
-        tension_error,
-    )))
-}
-
 /// Solves a robot with tendons with friction (validated, with `options` validated): the
 /// frictionless robot first ([`pipeline::solve_start`]: its equilibrium choice on the first
 /// mesh, which also picks the mesh to start on), then [`refine_with_friction`] from its
@@ -332,6 +273,13 @@ pub(super) fn solve(robot: &Robot, options: &Options, warm: Option<&Solution>, c
 
 /// [`solve`], with the verdict of the linearized dynamics when `assess` (else `unknown`:
 /// the held pull-ins' loop, whose verdict is not this solve's).
+///
+/// With a verdict, the frictionless start's equilibrium choice accepts a direct answer
+/// without its own verdict ([`pipeline::solve_start`] `unassessed`): the answer with
+/// friction built on it stands when its verdict is `stable`, the criterion the choice
+/// applies to every direct answer (docs/friction.md section 3, "Which start"). Otherwise
+/// (not `stable`, or the solve with friction failed) the whole solve runs again from the
+/// full choice on the frictionless robot, and the report counts both.
 ///
 /// # Errors
 /// As [`super::solve`].
@@ -347,10 +295,40 @@ fn solve_assessed(
     for t in &mut smooth.tendons {
         t.friction = None;
     }
-    let first = pipeline::solve_start(&smooth, options, warm, cache)?;
-    // Its Newton workspace, on the mesh Newton with friction starts on when the first mesh
-    // is kept, serves that Newton (through the thread's spare workspaces, where it goes back
-    // afterwards).
+    let first = pipeline::solve_start(&smooth, options, warm, cache, assess)?;
+    let provisional = first.provisional;
+    let answer = from_start(robot, options, first, cache, assess, start);
+    if !provisional {
+        return answer;
+    }
+    // The work of the provisional route, which the report of the full one counts.
+    let tried = match answer {
+        Ok(solution) if solution.report.stability.is_stable() => return Ok(solution),
+        Ok(solution) => Some(solution.report),
+        Err(Error::NotConverged { report, .. }) => Some(*report),
+        Err(_) => None,
+    };
+    let mut first = pipeline::solve_start(&smooth, options, warm, cache, false)?;
+    if let Some(tried) = tried {
+        add_work(&mut first.report, &tried);
+    }
+    from_start(robot, options, first, cache, assess, start)
+}
+
+/// [`refine_with_friction`] from the frictionless start `first`, whose cached Newton
+/// workspace (on the mesh Newton with friction starts on when the first mesh is kept) goes
+/// to the thread's spare workspaces, where that Newton takes it.
+///
+/// # Errors
+/// As [`super::solve`].
+fn from_start(
+    robot: &Robot,
+    options: &Options,
+    first: pipeline::Start,
+    cache: &mut Cache,
+    assess: bool,
+    start: Instant,
+) -> Result<Solution> {
     if let Some(c) = cache.take() {
         workspace::keep(c.mesh, c.solver, c.workspace);
     }
@@ -363,6 +341,25 @@ fn solve_assessed(
         (first.report, assess),
         start,
     )
+}
+
+/// Adds the counts of the work `tried` did (iterations, steps, meshes, evaluations and
+/// the timings by stage) to `report`.
+fn add_work(report: &mut SolveReport, tried: &SolveReport) {
+    report.iterations += tried.iterations;
+    report.newton_steps += tried.newton_steps;
+    report.chord_steps += tried.chord_steps;
+    report.load_steps += tried.load_steps;
+    report.meshes += tried.meshes;
+    report.evaluations.residual += tried.evaluations.residual;
+    report.evaluations.jacobian += tried.evaluations.jacobian;
+    report.evaluations.equations += tried.evaluations.equations;
+    let (t, u) = (&mut report.timings, &tried.timings);
+    t.assembly += u.assembly;
+    t.factorization += u.factorization;
+    t.solve += u.solve;
+    t.estimate += u.estimate;
+    t.stability += u.stability;
 }
 
 /// Solves a robot with friction (validated, with `options` validated) from `near`, the
