@@ -218,8 +218,12 @@ fn settled(h: &DMatrix<f64>, m: usize) -> Result<Vec<Ritz>, usize> {
         } else {
             (SETTLED * size).max(SEPARATED * size.min(gap(&ritz, i)))
         };
-        if !(residual <= bound) {
-            return Err(if any_growing { next_growing } else { next_test(m, residual / bound) });
+        if residual > bound || residual.is_nan() {
+            return Err(if any_growing {
+                next_growing
+            } else {
+                next_test(m, residual / bound)
+            });
         }
     }
     Ok(ritz)
@@ -230,7 +234,11 @@ fn settled(h: &DMatrix<f64>, m: usize) -> Result<Vec<Ritz>, usize> {
 /// shift-invert's ratio of |mu| at the band's edge, [`WANTED`]), so it needs log10(far) / 2
 /// more steps at least, and no test is made before then.
 fn next_test(m: usize, far: f64) -> usize {
-    let steps = if far.is_finite() { (far.log10() / 2.0).floor() } else { 1.0 };
+    let steps = if far.is_finite() {
+        (far.log10() / 2.0).floor()
+    } else {
+        1.0
+    };
     m + (steps as usize).max(1)
 }
 
