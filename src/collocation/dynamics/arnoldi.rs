@@ -8,10 +8,10 @@ use super::hessenberg;
 use nalgebra::{Complex, DMatrix};
 
 /// The Arnoldi steps after which a solve's verdict tests whether it may stop ([`settled`]):
-/// the lowest modes of the robots measured settle after 10-12 steps (docs/stability.md,
-/// "How it is computed"); a test costs an eigenvalue problem of that size, a fraction of a
-/// step.
-const CHECKS: [usize; 3] = [10, 12, 14];
+/// the verdicts measured settle after 8-12 steps, most after 8 or 9 (docs/stability.md,
+/// "How it is computed"); a test costs an eigenvalue problem of that size and the residual
+/// estimates of the band, about one and a half steps.
+const CHECKS: [usize; 6] = [8, 9, 10, 11, 12, 14];
 /// The band of modes an early stop waits for: Ritz values theta = 1 / mu with |theta| at
 /// least this fraction of the largest (|mu| within 100 times the lowest mode's, frequencies
 /// within 10 times), the modes a divergence (a frequency through zero) or a flutter (two
@@ -22,6 +22,18 @@ const WANTED: f64 = 1e-2;
 /// [`super::CONVERGED`], so that a growth rate is the one more steps give, to 1e-8 and
 /// better (8e-11 measured).
 const SETTLED: f64 = 1e-10;
+/// A Ritz value that does not grow also settles when its residual estimate is below this
+/// fraction of its magnitude and of its distance to every other Ritz value ([`gap`]):
+/// no perturbation of the residual's size then makes its mode grow, unless the eigenvalue's
+/// condition number is 5e5 or more (its value is not reported by a solve's verdict). Equal
+/// to [`super::CONVERGED`], so that such a value counts as converged.
+const SEPARATED: f64 = 1e-6;
+/// The steps at which a run with a growing Ritz value in the band may stop ([`settled`]):
+/// those of the rule before 2026-12-06 (branch dyn11), which waits for every Ritz value of
+/// the band at [`SETTLED`], so that growing verdicts and their rates are that rule's (a
+/// flutter near its onset has a rate that is a small difference, which an earlier stop at
+/// the same residual estimates leaves to 2e-8 only).
+const GROWING_CHECKS: [usize; 3] = [10, 12, 14];
 
 /// A Ritz value theta of J^-1 M (theta = 1 / mu) and its residual estimate.
 pub(super) struct Ritz {
@@ -61,6 +73,8 @@ pub(super) fn arnoldi(
     let mut basis = vec![q];
     let mut h = DMatrix::<f64>::zeros(m_max + 1, m_max);
     let mut m = 0;
+    // The first step at which a test may stop the run ([`settled`]).
+    let mut next_check = 0;
     while m < m_max {
         if !operator(&basis[m], &mut next) {
             return None;
@@ -75,12 +89,11 @@ pub(super) fn arnoldi(
         if beta <= 1e-13 * scale || !beta.is_finite() {
             break;
         }
-        if !all
-            && m < m_max
-            && CHECKS.contains(&m)
-            && let Some(ritz) = settled(&h, m)
-        {
-            return Some(ritz);
+        if !all && m < m_max && m >= next_check && CHECKS.contains(&m) {
+            match settled(&h, m) {
+                Ok(ritz) => return Some(ritz),
+                Err(next) => next_check = next,
+            }
         }
         basis.push(next.iter().map(|x| x / beta).collect());
     }
@@ -88,13 +101,14 @@ pub(super) fn arnoldi(
     // Residual estimates cost a complex LU each: unless `all`, only for the Ritz values a
     // verdict rests on, the lowest mode and any that grows ([`grows`]).
     let wanted = |theta: Complex<f64>| all || theta.norm() >= (1.0 - 1e-9) * largest || grows(theta, largest);
+    let mut work = Work::new(m);
     Some(
         values
             .iter()
             .map(|&theta| Ritz {
                 theta,
                 residual: if wanted(theta) {
-                    residual(&h, m, theta)
+                    residual(&h, m, theta, &mut work)
                 } else {
                     f64::INFINITY
                 },
@@ -120,21 +134,66 @@ fn ritz_values(h: &DMatrix<f64>, m: usize) -> (Vec<Complex<f64>>, f64) {
     (values, largest)
 }
 
-/// The residual estimate |h_(m+1,m) y_m| of the Ritz value `theta` of the first `m` steps.
-fn residual(h: &DMatrix<f64>, m: usize, theta: Complex<f64>) -> f64 {
-    h[(m, m - 1)] * last_component(h, m, theta)
+/// The residual estimate |h_(m+1,m) y_m| of the Ritz value `theta` of the first `m` steps,
+/// with `work` for its buffers.
+fn residual(h: &DMatrix<f64>, m: usize, theta: Complex<f64>, work: &mut Work) -> f64 {
+    h[(m, m - 1)] * last_component(h, m, theta, work)
+}
+
+/// The buffers of [`last_component`] for an m x m Hessenberg block, allocated once for the
+/// residual estimates of one set of Ritz values.
+struct Work {
+    /// h - shift I, row major, factored in place.
+    a: Vec<Complex<f64>>,
+    /// The elimination's multipliers, one per column.
+    multipliers: Vec<Complex<f64>>,
+    /// Whether rows k and k + 1 were swapped at column k.
+    swapped: Vec<bool>,
+    /// The inverse iteration's vector.
+    y: Vec<Complex<f64>>,
+}
+
+impl Work {
+    /// Buffers for an m x m block.
+    fn new(m: usize) -> Self {
+        let zero = Complex::new(0.0, 0.0);
+        Work {
+            a: vec![zero; m * m],
+            multipliers: vec![zero; m],
+            swapped: vec![false; m],
+            y: vec![zero; m],
+        }
+    }
 }
 
 /// The Ritz values after `m` steps if the run may stop there: every finite one within
-/// [`WANTED`] of the lowest mode (largest |theta|) and every one that grows has a residual
-/// estimate below [`SETTLED`] of its magnitude, so that further steps add modes above the
-/// band and refine these below the rounding of a growth rate, but change no verdict. The
-/// others get an infinite residual; None at the first one that has not settled (tested
-/// from the lowest mode up, which settles first).
-fn settled(h: &DMatrix<f64>, m: usize) -> Option<Vec<Ritz>> {
+/// [`WANTED`] of the lowest mode (largest |theta|) and every one that grows has settled, and
+/// the run has reached past the band (a finite Ritz value below it: the band's modes, which
+/// shift-invert makes dominant, are in the Krylov space before any below them). When one of
+/// them grows, the run stops only at [`GROWING_CHECKS`] and when every one of the band and
+/// every growing one has a residual estimate below [`SETTLED`] of its magnitude (its rate is
+/// then the one more steps give, to 1e-8 and better). When none grows, a value settles when
+/// its residual estimate is below [`SEPARATED`] of both its magnitude and its distance to
+/// the nearest other Ritz value ([`gap`]), or below [`SETTLED`] of its magnitude. Further steps then add modes above the band and refine
+/// these, but change no verdict. The others get an infinite residual. Err at the first one that has not settled (tested from
+/// the lowest mode up, which settles first), with the step of the next test ([`next_test`]).
+fn settled(h: &DMatrix<f64>, m: usize) -> Result<Vec<Ritz>, usize> {
     let (values, largest) = ritz_values(h, m);
     if largest == 0.0 {
-        return None;
+        return Err(m + 1);
+    }
+    let finite = |theta: Complex<f64>| theta.norm() > 1e-9 * largest;
+    if !values
+        .iter()
+        .any(|&theta| finite(theta) && theta.norm() < WANTED * largest)
+    {
+        return Err(m + 1);
+    }
+    // With a growing value, the rule of [`GROWING_CHECKS`].
+    let any_growing = values.iter().any(|&theta| finite(theta) && grows(theta, largest));
+    let next_growing = GROWING_CHECKS.into_iter().find(|&c| c > m).unwrap_or(usize::MAX);
+    if any_growing && !GROWING_CHECKS.contains(&m) {
+        return Err(next_growing);
     }
     let mut ritz: Vec<Ritz> = values
         .iter()
@@ -144,16 +203,59 @@ fn settled(h: &DMatrix<f64>, m: usize) -> Option<Vec<Ritz>> {
         })
         .collect();
     ritz.sort_by(|a, b| b.theta.norm().total_cmp(&a.theta.norm()));
-    for r in ritz.iter_mut() {
-        let size = r.theta.norm();
-        if size > 1e-9 * largest && (size >= WANTED * largest || grows(r.theta, largest)) {
-            r.residual = residual(h, m, r.theta);
-            if r.residual > SETTLED * size {
-                return None;
-            }
+    let mut work = Work::new(m);
+    for i in 0..ritz.len() {
+        let theta = ritz[i].theta;
+        let size = theta.norm();
+        let growing = grows(theta, largest);
+        if !finite(theta) || !(size >= WANTED * largest || growing) {
+            continue;
+        }
+        let residual = residual(h, m, theta, &mut work);
+        ritz[i].residual = residual;
+        let bound = if any_growing {
+            SETTLED * size
+        } else {
+            (SETTLED * size).max(SEPARATED * size.min(gap(&ritz, i)))
+        };
+        if residual > bound || residual.is_nan() {
+            return Err(if any_growing {
+                next_growing
+            } else {
+                next_test(m, residual / bound)
+            });
         }
     }
-    Some(ritz)
+    Ok(ritz)
+}
+
+/// The step of the next early-stop test after one at step `m` that found a residual estimate
+/// `far` times its bound: a residual estimate falls by a hundredfold per step at most (about
+/// shift-invert's ratio of |mu| at the band's edge, [`WANTED`]), so it needs log10(far) / 2
+/// more steps at least, and no test is made before then.
+fn next_test(m: usize, far: f64) -> usize {
+    let steps = if far.is_finite() {
+        (far.log10() / 2.0).floor()
+    } else {
+        1.0
+    };
+    m + (steps as usize).max(1)
+}
+
+/// The distance of the Ritz value `ritz[i]` to the nearest other one. A value that does not
+/// grow settles when its residual estimate is below [`SEPARATED`] of both its magnitude and
+/// this distance: theta is an exact eigenvalue of J^-1 M perturbed by a matrix of norm the
+/// residual, and its mode stops being a vibration only if the eigenvalue moves through
+/// infinity (mu through zero: a distance of |theta| at least) or meets another one to leave
+/// the real axis as a pair (half their distance at least): a movement of at least
+/// 1 / (2 [`SEPARATED`]) times the perturbation (docs/stability.md, "How it is computed").
+fn gap(ritz: &[Ritz], i: usize) -> f64 {
+    let theta = ritz[i].theta;
+    ritz.iter()
+        .enumerate()
+        .filter(|&(j, _)| j != i)
+        .map(|(_, r)| (r.theta - theta).norm())
+        .fold(f64::INFINITY, f64::min)
 }
 
 /// |y_m| of the unit eigenvector y of the leading m x m block of the upper Hessenberg `h`
@@ -161,7 +263,7 @@ fn settled(h: &DMatrix<f64>, m: usize) -> Option<Vec<Ritz>> {
 /// theta by rounding's size. The LU with partial pivoting uses the Hessenberg form: below
 /// the diagonal, column k has a nonzero only in row k + 1, so the pivot is row k or k + 1
 /// and each elimination updates one row (O(m^2), where a dense LU costs O(m^3)).
-fn last_component(h: &DMatrix<f64>, m: usize, theta: Complex<f64>) -> f64 {
+fn last_component(h: &DMatrix<f64>, m: usize, theta: Complex<f64>, work: &mut Work) -> f64 {
     let mut scale = 0.0f64;
     for j in 0..m {
         for i in 0..m.min(j + 2) {
@@ -169,16 +271,22 @@ fn last_component(h: &DMatrix<f64>, m: usize, theta: Complex<f64>) -> f64 {
         }
     }
     let shift = theta + Complex::new(1e-12 * scale.max(f64::MIN_POSITIVE), 0.0);
+    let zero = Complex::new(0.0, 0.0);
+    let Work {
+        a,
+        multipliers,
+        swapped,
+        y,
+    } = work;
     // a = h - shift I, row-major, factored in place into U (and the multipliers).
-    let mut a: Vec<Complex<f64>> = (0..m * m)
-        .map(|k| {
-            let (i, j) = (k / m, k % m);
+    for i in 0..m {
+        for j in 0..m {
             let v = Complex::new(if i <= j + 1 { h[(i, j)] } else { 0.0 }, 0.0);
-            if i == j { v - shift } else { v }
-        })
-        .collect();
-    let mut multipliers = vec![Complex::new(0.0, 0.0); m];
-    let mut swapped = vec![false; m];
+            a[i * m + j] = if i == j { v - shift } else { v };
+        }
+    }
+    multipliers.fill(zero);
+    swapped.fill(false);
     for k in 0..m - 1 {
         let (top, below) = (k * m + k, (k + 1) * m + k);
         if a[below].l1_norm() > a[top].l1_norm() {
@@ -188,21 +296,23 @@ fn last_component(h: &DMatrix<f64>, m: usize, theta: Complex<f64>) -> f64 {
             }
             swapped[k] = true;
         }
-        if a[top] == Complex::new(0.0, 0.0) {
+        if a[top] == zero {
             return 0.0;
         }
         let f = a[below] / a[top];
         multipliers[k] = f;
-        a[below] = Complex::new(0.0, 0.0);
+        a[below] = zero;
         for j in k + 1..m {
             let u = a[k * m + j];
             a[(k + 1) * m + j] -= f * u;
         }
     }
-    if a[m * m - 1] == Complex::new(0.0, 0.0) {
+    if a[m * m - 1] == zero {
         return 0.0;
     }
-    let mut y: Vec<Complex<f64>> = (0..m).map(|i| Complex::new(1.0 + 0.1 * i as f64, 0.0)).collect();
+    for (i, v) in y.iter_mut().enumerate() {
+        *v = Complex::new(1.0 + 0.1 * i as f64, 0.0);
+    }
     for _ in 0..2 {
         for k in 0..m - 1 {
             if swapped[k] {
