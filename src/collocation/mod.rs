@@ -37,7 +37,7 @@ mod branch;
 mod constrained;
 mod corrector;
 pub(crate) mod deferred;
-mod dynamics;
+pub(crate) mod dynamics;
 mod ends;
 mod equilibrium;
 mod estimate;
