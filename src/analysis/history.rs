@@ -164,5 +164,8 @@ fn pulled_step(
     )?;
     let (trial, zones) = kept.ok_or_else(|| invalid("tendons", "have no solved step", "report this as a bug"))?;
     *carried = trial;
+    let mut solution = solution;
+    // The step's answer is final: its verdict, with the step's pattern and the pull-ins held.
+    stuck::assess_pulled(robot, carried, &mut solution);
     Ok((solution, zones))
 }

@@ -30,6 +30,7 @@
 mod arnoldi;
 pub(crate) mod friction;
 mod hessenberg;
+pub(crate) mod pulled;
 pub(crate) mod stuck;
 
 use super::newton::Workspace;

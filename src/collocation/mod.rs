@@ -34,7 +34,7 @@
 pub(crate) mod actuation;
 mod batch;
 mod branch;
-mod constrained;
+pub(crate) mod constrained;
 mod corrector;
 pub(crate) mod deferred;
 pub(crate) mod dynamics;

@@ -197,6 +197,19 @@ pub(crate) fn assess(border: &mut Capstan, x: &[State], fresh: bool, report: &mu
 /// [`assess`] with the eigenvalues, from `krylov` Arnoldi steps as [`super::modes`] takes
 /// them.
 pub(super) fn modes(border: &mut Capstan, x: &[State], krylov: usize, all: bool) -> Vibration {
+    modes_held(border, x, krylov, all, &mut |_, _| true)
+}
+
+/// [`modes`] with `held` applied to each bordered solve's backbone part (scaled node
+/// unknowns, the border's log tensions still its last solve's) before the restriction:
+/// the held pull-ins' projection of `pulled.rs` (false when it cannot be applied).
+pub(super) fn modes_held(
+    border: &mut Capstan,
+    x: &[State],
+    krylov: usize,
+    all: bool,
+    held: &mut dyn FnMut(&Capstan, &mut [f64]) -> bool,
+) -> Vibration {
     let Some(mass) = CapstanMass::new(border, x) else {
         return Vibration {
             stability: Stability::Unknown {
@@ -212,7 +225,10 @@ pub(super) fn modes(border: &mut Capstan, x: &[State], krylov: usize, all: bool)
     let mut dx = vec![0.0; n];
     let mut operator = |z: &[f64], out: &mut Vec<f64>| -> bool {
         mass.apply(z, &mut y_x, &mut y_psi);
-        if !border.solve_with_factors(&y_x, &y_psi, &mut dx) || !dx.iter().all(|v| v.is_finite()) {
+        if !border.solve_with_factors(&y_x, &y_psi, &mut dx)
+            || !held(border, &mut dx)
+            || !dx.iter().all(|v| v.is_finite())
+        {
             return false;
         }
         out.clear();

@@ -19,6 +19,7 @@ use crate::collocation::friction::{Capstan, Profile};
 use crate::collocation::system::System;
 use crate::model::equations::Model;
 use crate::report::{SolveReport, Stability};
+use crate::solution::Solution;
 use std::time::Instant;
 
 /// The scope of a history step's verdict, noted on every step that has one
@@ -63,6 +64,31 @@ pub(crate) fn assess_step(robot: &Robot, carried: &Carried, report: &mut SolveRe
     let spent = t.elapsed();
     report.timings.stability += spent;
     report.timings.total += spent;
+}
+
+/// [`assess_step`] for a history step of `robot` with displacement-controlled tendons, its
+/// answer `solution` (at the tensions its pull-ins found): the step's pattern held and the
+/// taut pull-ins held ([`super::pulled`]).
+pub(crate) fn assess_pulled(robot: &Robot, carried: &Carried, solution: &mut Solution) {
+    let t = Instant::now();
+    let solved = robot.with_tensions(&solution.tensions());
+    let mut report = solution.report.clone();
+    report.stability = match carried.settled.as_ref() {
+        Some(settled) => {
+            let mut border = border(&solved, settled);
+            super::pulled::assess(robot, solution, &mut border, &settled.x, &mut report)
+        }
+        None => Stability::Unknown {
+            reason: "a load-history step without an answer to assess".into(),
+        },
+    };
+    if !matches!(report.stability, Stability::Unknown { .. }) {
+        report.notes.push(STICK_HELD.into());
+    }
+    let spent = t.elapsed();
+    report.timings.stability += spent;
+    report.timings.total += spent;
+    solution.report = report;
 }
 
 #[cfg(test)]

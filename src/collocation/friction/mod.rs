@@ -564,6 +564,8 @@ pub(super) fn solve_pull_ins(
         slope,
     )?;
     solution.report.timings.total = start.elapsed();
+    // The verdict with the pull-ins held (the loop's solves hold tensions and have none).
+    super::dynamics::pulled::assess_solution(robot, &mut solution);
     Ok(solution)
 }
 
