@@ -269,3 +269,34 @@ fn held_pull_ins_with_friction_get_a_verdict() {
         assert!(notes.iter().any(|n| n.contains("slip direction held")), "{notes:?}");
     }
 }
+
+/// A pull-in history's steps get the verdict with their stick/slip pattern and their pull-ins
+/// held: the prototype's tendon 1 pulled in to 20 mm and let out in small steps (stuck
+/// stretches on the way out) is stable on every step.
+#[test]
+fn a_pull_in_history_is_stable_on_every_step() {
+    use tdcr::analysis::history::{Contact, history};
+    use tdcr::analysis::sweep::{Input, Ranges};
+    let mut robot = cases::prototype();
+    robot.tendons[0].friction = Some(Friction::pull(0.1));
+    robot.tendons[0].stiffness = Some(2000.0);
+    let values = vec![0.0, 0.01, 0.02, 0.0195, 0.019];
+    let ranges = Ranges::new(robot, vec![(Input::Displacement(0), values)]).unwrap();
+    let result = history(&ranges, &Default::default()).unwrap();
+    assert!(result.failure.is_none(), "{:?}", result.failure);
+    let stuck = result
+        .steps
+        .iter()
+        .filter(|s| s.zones[0].zones.iter().any(|z| z.contact == Contact::Stick))
+        .count();
+    assert!(stuck > 0, "no stuck step");
+    for (k, step) in result.steps.iter().enumerate() {
+        let report = &step.solution.report;
+        assert_eq!(report.stability, Stability::Stable, "step {k}");
+        let notes = &report.notes;
+        assert!(
+            notes.iter().any(|n| n.contains("each stuck stretch held stuck")),
+            "step {k}: {notes:?}"
+        );
+    }
+}

@@ -260,4 +260,60 @@ mod tests {
             );
         }
     }
+
+    /// The held tension directions' Schur complement S = dQ/dtau from this module's
+    /// differenced tension columns (one bordered solve each, at the answer's own factors)
+    /// is the one [`TensionDirections::new`] forms through [`crate::collocation::sensitivity`]
+    /// (checked there against central differences of held pull-in solves,
+    /// tests/friction_pull_in.rs): case S held at 12 mm with tendon 2 at 1 N, mu 0.1 pull and
+    /// release, elastic.
+    #[test]
+    fn the_held_directions_are_the_sensitivities_ones() {
+        for motion in [
+            crate::model::tendon::Motion::Pull,
+            crate::model::tendon::Motion::Release,
+        ] {
+            let mut robot = crate::cases::case_s();
+            robot.tendons[0].friction = Some(Friction {
+                coefficient: 0.1,
+                motion,
+            });
+            robot.tendons[0].stiffness = Some(2000.0);
+            robot.tendons[0].set_displacement(0.012);
+            robot.tendons[1].set_tension(1.0);
+            let solution = crate::collocation::solve(&robot, &Default::default()).unwrap();
+            let solved = robot.with_tensions(&solution.tensions());
+            let s: Vec<f64> = solution.nodes.iter().map(|n| n.s).collect();
+            let mesh = Mesh::from_points(&solved, &s).unwrap();
+            let mut border = Capstan::at_solution(Model::new(&solved), mesh, &solution);
+            let x: Vec<State> = solution.nodes.iter().map(|n| n.state()).collect();
+            let mut report = SolveReport::new(Method::Collocation);
+            assert!(border.factor_at(&x, &mut report).unwrap());
+            let tendons = held(&robot, &solution);
+            assert_eq!(tendons, vec![0]);
+            let mut ours = TensionDirections::layout(&solution, &border, tendons.clone());
+            let n = border.system().unknowns();
+            let (mut plus, mut minus) = (vec![0.0; n + border.border_rows()], vec![0.0; n + border.border_rows()]);
+            let tension = solution.tendons[0].tension;
+            let h = STEP * tension;
+            moved_residual(&border, &x, 0, tension + h, &mut plus).unwrap();
+            moved_residual(&border, &x, 0, tension - h, &mut minus).unwrap();
+            let rhs: Vec<f64> = plus.iter().zip(&minus).map(|(p, q)| -(p - q) / (2.0 * h)).collect();
+            let mut dx = vec![0.0; n];
+            assert!(border.solve_with_factors(&rhs[..n], &rhs[n..], &mut dx));
+            ours.set_direction(0, &dx, &x, &border);
+            let theirs = TensionDirections::new(&robot, &solution, tendons).unwrap();
+            let (a, b) = (ours.displacement_by_tension(), theirs.displacement_by_tension());
+            let tip = (&ours.tip - &theirs.tip).norm() / theirs.tip.norm();
+            eprintln!(
+                "{motion:?}: S {} against {}, tip column {tip:e} relative",
+                a[(0, 0)],
+                b[(0, 0)]
+            );
+            // 1e-6 relative (measured 5e-8 and 3e-8): both tension columns are differenced
+            // residuals (this one central with step 1e-5 tau, the sensitivities' their own)
+            assert!(((a[(0, 0)] - b[(0, 0)]) / b[(0, 0)]).abs() < 1e-6, "{a} against {b}");
+            assert!(tip < 1e-6, "{tip}");
+        }
+    }
 }
