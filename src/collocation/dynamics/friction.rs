@@ -159,13 +159,13 @@ pub(crate) const SLIP_HELD: &str = "with friction the stability verdict is that 
      stretch's slip direction held (the tendon keeps sliding the way the solve assumed, as while its actuator \
      moves); a disturbance that reverses the slip somewhere makes that stretch stick, which the verdict does not cover";
 
-/// The verdict of a solve with friction and displacement control: the pull-ins' length
-/// constraints are not in the border of the linearized dynamics with friction (its solves
-/// hold the base-entry tensions), so none.
+/// The verdict of an inner solve of the pull-in loop with friction (at given base-entry
+/// tensions): none, since the loop's answer gets the verdict with its pull-ins held
+/// ([`super::pulled`]).
 pub(crate) fn held_unknown() -> Stability {
     Stability::Unknown {
-        reason: "tendons with friction and displacement control: the linearized dynamics with friction holds \
-                 tensions, not pull-ins"
+        reason: "tendons with friction and displacement control: an inner solve at given tensions of the pull-in \
+                 loop, whose answer gets the verdict with the pull-ins held"
             .into(),
     }
 }
