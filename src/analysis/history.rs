@@ -26,6 +26,7 @@
 //! ```
 
 use super::sweep::Ranges;
+use crate::collocation::dynamics::stuck;
 use crate::collocation::{self, friction};
 use crate::error::{Error, Result, invalid};
 use crate::solution::Solution;
@@ -101,7 +102,11 @@ pub fn history(ranges: &Ranges, options: &collocation::Options) -> Result<Histor
         let answer = if robot.has_displacement_inputs() {
             pulled_step(robot, options, &mut carried, steps.last().map(|s| &s.solution))
         } else {
-            friction::history::step(robot, options, &mut carried)
+            friction::history::step(robot, options, &mut carried).map(|(mut solution, zones)| {
+                // The step's answer is final: its verdict, with the step's pattern held.
+                stuck::assess_step(robot, &carried, &mut solution.report);
+                (solution, zones)
+            })
         };
         match answer {
             Ok((solution, zones)) => steps.push(HistoryStep {
@@ -159,5 +164,8 @@ fn pulled_step(
     )?;
     let (trial, zones) = kept.ok_or_else(|| invalid("tendons", "have no solved step", "report this as a bug"))?;
     *carried = trial;
+    let mut solution = solution;
+    // The step's answer is final: its verdict, with the step's pattern and the pull-ins held.
+    stuck::assess_pulled(robot, carried, &mut solution);
     Ok((solution, zones))
 }

@@ -42,7 +42,7 @@ const NEUTRAL_COMPLIANCE: f64 = 1e-4;
 
 /// The taut displacement-controlled tendons at an equilibrium: their constraints, the
 /// columns X_m = J^-1 dF/dtau_m and the length compliance A.
-struct Border {
+pub(crate) struct Border {
     constraints: Vec<Constraint>,
     columns: Vec<Vec<f64>>,
     /// A (k x k, m/N).
@@ -55,7 +55,7 @@ impl Border {
     /// The border of the taut displacement-controlled tendons of `system` at its
     /// equilibrium `x`, with `ws` holding the factors of the Jacobian at `x` and its residual
     /// there; None when a residual or a solve is not finite.
-    fn new(system: &System, x: &[State], ws: &mut Workspace, report: &mut SolveReport) -> Option<Self> {
+    pub(crate) fn new(system: &System, x: &[State], ws: &mut Workspace, report: &mut SolveReport) -> Option<Self> {
         let model = &system.model;
         let robot = model.robot;
         let constraints: Vec<Constraint> = (0..robot.tendons.len())
@@ -109,7 +109,7 @@ impl Border {
 
     /// a -> a - X A^-1 G a: the x part of the bordered solve whose plain solve is a (the
     /// tensions' rows ask for no change of length). False for a singular A.
-    fn project(&self, x: &[State], a: &mut [f64]) -> bool {
+    pub(crate) fn project(&self, x: &[State], a: &mut [f64]) -> bool {
         if self.constraints.is_empty() {
             return true;
         }

@@ -30,6 +30,8 @@
 mod arnoldi;
 pub(crate) mod friction;
 mod hessenberg;
+pub(crate) mod pulled;
+pub(crate) mod stuck;
 
 use super::newton::Workspace;
 use super::residual::{IntervalFactors, end_values};
@@ -58,7 +60,7 @@ pub const MODULUS: f64 = 200e9;
 const KRYLOV: usize = 16;
 /// Krylov dimension of [`vibration`], which reports the lowest modes' eigenvalues: 24
 /// resolve the lowest 6-10 to rounding.
-const KRYLOV_MODES: usize = 24;
+pub(super) const KRYLOV_MODES: usize = 24;
 /// A Ritz value counts as converged when its residual estimate is below this fraction of
 /// its magnitude.
 const CONVERGED: f64 = 1e-6;

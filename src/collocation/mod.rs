@@ -34,10 +34,10 @@
 pub(crate) mod actuation;
 mod batch;
 mod branch;
-mod constrained;
+pub(crate) mod constrained;
 mod corrector;
 pub(crate) mod deferred;
-mod dynamics;
+pub(crate) mod dynamics;
 mod ends;
 mod equilibrium;
 mod estimate;

@@ -159,13 +159,13 @@ pub(crate) const SLIP_HELD: &str = "with friction the stability verdict is that 
      stretch's slip direction held (the tendon keeps sliding the way the solve assumed, as while its actuator \
      moves); a disturbance that reverses the slip somewhere makes that stretch stick, which the verdict does not cover";
 
-/// The verdict of a solve with friction and displacement control: the pull-ins' length
-/// constraints are not in the border of the linearized dynamics with friction (its solves
-/// hold the base-entry tensions), so none.
+/// The verdict of an inner solve of the pull-in loop with friction (at given base-entry
+/// tensions): none, since the loop's answer gets the verdict with its pull-ins held
+/// ([`super::pulled`]).
 pub(crate) fn held_unknown() -> Stability {
     Stability::Unknown {
-        reason: "tendons with friction and displacement control: the linearized dynamics with friction holds \
-                 tensions, not pull-ins"
+        reason: "tendons with friction and displacement control: an inner solve at given tensions of the pull-in \
+                 loop, whose answer gets the verdict with the pull-ins held"
             .into(),
     }
 }
@@ -197,6 +197,19 @@ pub(crate) fn assess(border: &mut Capstan, x: &[State], fresh: bool, report: &mu
 /// [`assess`] with the eigenvalues, from `krylov` Arnoldi steps as [`super::modes`] takes
 /// them.
 pub(super) fn modes(border: &mut Capstan, x: &[State], krylov: usize, all: bool) -> Vibration {
+    modes_held(border, x, krylov, all, &mut |_, _| true)
+}
+
+/// [`modes`] with `held` applied to each bordered solve's backbone part (scaled node
+/// unknowns, the border's log tensions still its last solve's) before the restriction:
+/// the held pull-ins' projection of `pulled.rs` (false when it cannot be applied).
+pub(super) fn modes_held(
+    border: &mut Capstan,
+    x: &[State],
+    krylov: usize,
+    all: bool,
+    held: &mut dyn FnMut(&Capstan, &mut [f64]) -> bool,
+) -> Vibration {
     let Some(mass) = CapstanMass::new(border, x) else {
         return Vibration {
             stability: Stability::Unknown {
@@ -212,7 +225,10 @@ pub(super) fn modes(border: &mut Capstan, x: &[State], krylov: usize, all: bool)
     let mut dx = vec![0.0; n];
     let mut operator = |z: &[f64], out: &mut Vec<f64>| -> bool {
         mass.apply(z, &mut y_x, &mut y_psi);
-        if !border.solve_with_factors(&y_x, &y_psi, &mut dx) || !dx.iter().all(|v| v.is_finite()) {
+        if !border.solve_with_factors(&y_x, &y_psi, &mut dx)
+            || !held(border, &mut dx)
+            || !dx.iter().all(|v| v.is_finite())
+        {
             return false;
         }
         out.clear();

@@ -50,6 +50,24 @@ pub(crate) struct Carried {
     /// The last step's Newton workspace and bordered factors on this mesh, which the next
     /// step's first iterations reuse as chord steps (None before the first step).
     factors: Option<(Workspace, Staircase)>,
+    /// The last step's answer as its stability verdict reads it (on the mesh it was solved
+    /// on, split levels included); None before the first step.
+    pub(crate) settled: Option<Settled>,
+}
+
+/// A step's answer with its pattern, on the mesh the step returns: what its verdict
+/// (`collocation/dynamics/stuck.rs`) rebuilds the step's bordered system from.
+#[derive(Clone)]
+pub(crate) struct Settled {
+    /// The mesh of the answer.
+    pub(crate) mesh: Mesh,
+    /// The node states.
+    pub(crate) x: Vec<State>,
+    /// The log tensions of each tendon with friction at every node.
+    pub(crate) z: Vec<Vec<f64>>,
+    /// The contacts, multipliers and capacities the answer solved with, and the material
+    /// the step started from (its stick rows' lambda).
+    pub(crate) grips: Vec<Grip>,
 }
 
 impl Carried {
@@ -72,6 +90,7 @@ impl Carried {
             solved: false,
             report: self.report.clone(),
             factors: None,
+            settled: None,
         }
     }
 }
@@ -154,6 +173,7 @@ pub(crate) fn start(robots: &[Robot], options: &Options) -> Result<Carried> {
         solved: most == 0,
         report: first.report,
         factors: None,
+        settled: None,
     })
 }
 
@@ -414,11 +434,9 @@ fn solve_on(robot: &Robot, options: &Options, carried: &mut Carried) -> Result<(
         report.error_estimate = None;
         report.tolerance_met = None;
     }
+    // The verdict is the caller's, once the step's answer is final (`analysis::history`).
     report.stability = Stability::Unknown {
-        reason: "a load-history step: its verdict would need the bordered Jacobian evaluated and factored at \
-                 the step's answer with its stick rows, and the stuck stretches' response in the mass; neither is \
-                 built"
-            .into(),
+        reason: crate::report::NOT_ASSESSED.into(),
     };
     report.intervals = system.mesh.intervals();
     report.unknowns = unknowns::unknowns(system.mesh.nodes.len()) + border.z.len();
@@ -453,6 +471,12 @@ fn solve_on(robot: &Robot, options: &Options, carried: &mut Carried) -> Result<(
         }
         zones.push((i, list));
     }
+    carried.settled = Some(Settled {
+        mesh: system.mesh.clone(),
+        x: x.clone(),
+        z: profile.z.clone(),
+        grips,
+    });
     carried.z.clone_from(&profile.z);
     carried.grips = next;
     carried.x = x;

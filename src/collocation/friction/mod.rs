@@ -110,7 +110,9 @@ pub(crate) struct Capstan<'r> {
 }
 
 impl<'r> Capstan<'r> {
-    fn new(system: System<'r>) -> Self {
+    /// The border of `system`'s tendons with friction (its profile's log tensions and, in a
+    /// history, contacts), unfactored.
+    pub(crate) fn new(system: System<'r>) -> Self {
         let profile = system.friction.as_ref().map_or_else(Vec::new, |p| p.spans.clone());
         let mut offsets = Vec::with_capacity(profile.len());
         let mut m = 0;
@@ -559,6 +561,8 @@ pub(super) fn solve_pull_ins(
         slope,
     )?;
     solution.report.timings.total = start.elapsed();
+    // The verdict with the pull-ins held (the loop's solves hold tensions and have none).
+    super::dynamics::pulled::assess_solution(robot, &mut solution);
     Ok(solution)
 }
 

@@ -4,12 +4,34 @@
 //! (docs/actuation.md, "Sensitivities"; with friction docs/friction.md, section 3b).
 
 use super::{NodeDerivative, Sensitivity};
+use crate::collocation::friction::Capstan;
+use crate::collocation::unknowns::node_increments;
 use crate::error::Result;
 use crate::model::length::{self, NodeQuadrature, speed_gradient};
 use crate::model::robot::{Robot, RodModel};
 use crate::model::routing::RoutingPoint;
 use crate::solution::Solution;
+use crate::solution::State;
 use nalgebra::{DMatrix, DVector, Vector3, Vector6};
+
+/// The node derivatives of the scaled unknowns `dx` at the node states `states` (rod length
+/// `length`; on a Kirchhoff rod, `fixed_strain`, v does not move).
+fn node_derivatives(dx: &[f64], states: &[State], fixed_strain: bool, length: f64) -> Vec<NodeDerivative> {
+    states
+        .iter()
+        .enumerate()
+        .map(|(k, x)| {
+            let [p, theta, v, u] = node_increments(dx, k, length);
+            NodeDerivative {
+                s: x.s,
+                p,
+                rotation: x.R * theta,
+                v: if fixed_strain { Vector3::zeros() } else { v },
+                u,
+            }
+        })
+        .collect()
+}
 
 /// Derivatives with the pull-ins of the taut displacement-controlled tendons held: a
 /// parameter's derivative (D_p of the node states, dz of the log tensions with friction)
@@ -222,7 +244,23 @@ impl TensionDirections {
     /// # Errors
     /// As [`Sensitivity::tension`].
     pub(super) fn from(sens: &mut Sensitivity, solution: &Solution, tendons: Vec<usize>) -> Result<Self> {
-        let robot = sens.robot();
+        let mut directions = Self::layout(solution, &sens.border, tendons);
+        for m in 0..directions.tendons.len() {
+            let d = sens.tension(directions.tendons[m])?;
+            directions.tip.set_column(m, &d[d.len() - 1].pose());
+            let change = directions.length_change(&d, sens);
+            directions.length.set_column(m, &change);
+        }
+        Ok(directions)
+    }
+
+    /// The quadratures, compliances and stretch weights of `tendons` (0-based) at
+    /// `solution`, whose system (on its mesh, with its log tensions) `border` holds, without
+    /// the directions: `tip` and the length changes are zero until
+    /// [`TensionDirections::set_direction`] fills them.
+    pub(crate) fn layout(solution: &Solution, border: &Capstan, tendons: Vec<usize>) -> Self {
+        let robot = border.system().model.robot;
+        let mesh = &border.system().mesh;
         let k = tendons.len();
         let rod_length = robot.length();
         let s: Vec<f64> = solution.nodes.iter().map(|n| n.s).collect();
@@ -245,7 +283,7 @@ impl TensionDirections {
         for (&i, (quadrature, routing)) in tendons.iter().zip(&paths) {
             let t = &robot.tendons[i];
             let reference_length = solution.tendons[i].reference_length;
-            match (t.stiffness, sens.log_tensions(i)) {
+            match (t.stiffness, border.log_tensions(i)) {
                 (Some(stiffness), Some((z, _))) => {
                     // Per unit base tension, the stretch of the profile exp(z) on the node
                     // quadrature of its reference path (as TendonState::displacement).
@@ -254,7 +292,7 @@ impl TensionDirections {
                         .iter()
                         .zip(routing)
                         .map(|(&(node, w), rp)| {
-                            let reference = robot.rod.reference_on(s[node], sens.mesh().nodes[node].segment_end);
+                            let reference = robot.rod.reference_on(s[node], mesh.nodes[node].segment_end);
                             let speed = length::speed(rp, &reference.v_star, &reference.u_star);
                             (node, w * z[node].exp() * speed / stiffness)
                         })
@@ -269,7 +307,7 @@ impl TensionDirections {
                 }
             }
         }
-        let mut directions = TensionDirections {
+        TensionDirections {
             tip: DMatrix::zeros(6, k),
             length: DMatrix::zeros(k, k),
             tendons,
@@ -278,14 +316,24 @@ impl TensionDirections {
             stretch,
             strains,
             fixed_strain: robot.rod_model == RodModel::Kirchhoff,
-        };
-        for m in 0..k {
-            let d = sens.tension(directions.tendons[m])?;
-            directions.tip.set_column(m, &d[d.len() - 1].pose());
-            let change = directions.length_change(&d, sens);
-            directions.length.set_column(m, &change);
         }
-        Ok(directions)
+    }
+
+    /// Sets tendon m's direction from the bordered solve of `border` that gave the scaled
+    /// node derivative `dx` (its log tensions' derivative still in the border) at the
+    /// states `states`: its length changes and, from the last node, its tip column.
+    pub(crate) fn set_direction(&mut self, m: usize, dx: &[f64], states: &[State], border: &Capstan) {
+        let d = node_derivatives(dx, states, self.fixed_strain, border.system().model.robot.length());
+        let change = self.length_change_in(&d, border);
+        self.length.set_column(m, &change);
+        self.tip.set_column(m, &d[d.len() - 1].pose());
+    }
+
+    /// -dQ_j of every tendon at fixed base tensions along the bordered solve of `border`
+    /// that gave the scaled node derivative `dx` at `states` ([`Self::length_change`]).
+    pub(crate) fn change_along(&self, dx: &[f64], states: &[State], border: &Capstan) -> DVector<f64> {
+        let d = node_derivatives(dx, states, self.fixed_strain, border.system().model.robot.length());
+        self.length_change_in(&d, border)
     }
 
     /// -dQ_j (m per unit of the parameter) of every tendon at fixed base tensions along the
@@ -293,6 +341,12 @@ impl TensionDirections {
     /// of `sens` ([`Sensitivity::log_tensions`]): the quadrature of the path speed's gradient
     /// (docs/actuation.md), less the change of the stretch with friction (type docs).
     fn length_change(&self, d: &[NodeDerivative], sens: &Sensitivity) -> DVector<f64> {
+        self.length_change_in(d, &sens.border)
+    }
+
+    /// [`Self::length_change`] with the log tensions' derivative of the last bordered solve
+    /// of `border`.
+    fn length_change_in(&self, d: &[NodeDerivative], border: &Capstan) -> DVector<f64> {
         DVector::from_iterator(
             self.tendons.len(),
             self.paths
@@ -310,7 +364,7 @@ impl TensionDirections {
                             w * (dv.dot(&d[node].v) + du.dot(&d[node].u))
                         })
                         .sum::<f64>();
-                    let stretched = match (stretch, sens.log_tensions(i)) {
+                    let stretched = match (stretch, border.log_tensions(i)) {
                         (Some(weights), Some((_, dz))) => weights.iter().map(|&(node, c)| c * dz[node]).sum(),
                         _ => 0.0,
                     };

@@ -412,18 +412,6 @@ impl<'a> Sensitivity<'a> {
         self.border.system().model.robot
     }
 
-    /// Tendon `tendon`'s log tensions z = ln(tau / tau(0)) at the nodes of its span and
-    /// their derivative in the last solve with these factors (the bordered solve's dz/dq);
-    /// None for a tendon without friction, whose tension is constant.
-    pub(super) fn log_tensions(&self, tendon: usize) -> Option<(Vec<f64>, Vec<f64>)> {
-        self.border.log_tensions(tendon)
-    }
-
-    /// The mesh the system is collocated on (the solution's nodes).
-    pub(super) fn mesh(&self) -> &Mesh {
-        &self.border.system().mesh
-    }
-
     /// Number of nodes (the solution's).
     pub fn nodes(&self) -> usize {
         self.states.len()

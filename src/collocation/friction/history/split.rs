@@ -136,6 +136,7 @@ fn split(robot: &Robot, before: &Carried, parts: usize, guess: &Solution) -> Res
         solved: false,
         report: before.report.clone(),
         factors: None,
+        settled: None,
     })
 }
 
@@ -187,6 +188,7 @@ fn hand_back(carried: &mut Carried, fine: &Carried) {
                 .expect("the history's nodes are nodes of every split mesh")
         })
         .collect();
+    carried.settled.clone_from(&fine.settled);
     carried.x = index.iter().map(|&n| fine.x[n]).collect();
     for (j, z) in carried.z.iter_mut().enumerate() {
         *z = index.iter().map(|&n| fine.z[j][n]).collect();
