@@ -273,6 +273,22 @@ fn estimate_with_friction(
     x: &[State],
     converged: Option<Vec<f64>>,
 ) -> Result<Option<(estimate::Correction, f64)>> {
+    let mut dx = Vec::new();
+    estimate_keeping(border, x, converged, &mut dx)
+}
+
+/// [`estimate_with_friction`], leaving the correction of the node states in `dx` (scaled
+/// as Newton's steps, [`unknowns::node_increments`]) and that of the log tensions in the
+/// border's last step (a load history carries its material from the corrected nodes).
+///
+/// # Errors
+/// As [`estimate_with_friction`].
+fn estimate_keeping(
+    border: &mut Capstan,
+    x: &[State],
+    converged: Option<Vec<f64>>,
+    dx: &mut Vec<f64>,
+) -> Result<Option<(estimate::Correction, f64)>> {
     border.load(Point::Current);
     let n = border.system.unknowns();
     let phi4 = match converged {
@@ -309,12 +325,13 @@ fn estimate_with_friction(
     if !border.stairs.ready {
         return Ok(None);
     }
-    let mut dx = vec![0.0; n];
-    let Some(tension_error) = border.solve_factored(&rhs, &difference, &mut dx) else {
+    dx.clear();
+    dx.resize(n, 0.0);
+    let Some(tension_error) = border.solve_factored(&rhs, &difference, dx) else {
         return Ok(None);
     };
     Ok(Some((
-        estimate::correction(&dx, x.len(), length, local, node_rates),
+        estimate::correction(dx, x.len(), length, local, node_rates),
         tension_error,
     )))
 }

@@ -16,6 +16,7 @@ use crate::mesh::guess::interpolate;
 use crate::model::equations::Model;
 use crate::report::ErrorEstimate;
 use crate::solution::Solution;
+use nalgebra::Vector3;
 
 /// Most splits of a stuck step's links: 2^6 = 64 parts per link. With a node at the
 /// stick/slip boundary a stuck step's split differences fall about 4 times per level
@@ -41,7 +42,10 @@ pub(super) fn refine(
 ) -> Result<StepAnswer> {
     let length = robot.length();
     let mut best = answer;
-    let mut finest = None;
+    let mut finest: Option<Carried> = None;
+    // The material's error, measured once (on the first level whose split difference meets
+    // the tolerance, or the last): every level reads the same material.
+    let mut material = None;
     let intervals = before.mesh.intervals();
     for level in 1..=LEVELS {
         if intervals << level > options.max_intervals.max(2 * intervals) {
@@ -53,22 +57,29 @@ pub(super) fn refine(
         let estimate = difference(&best.0, &next.0);
         best = next;
         best.0.report.error_estimate = Some(estimate);
-        finest = Some(fine);
-        if options
-            .tolerance
-            .is_none_or(|tol| refine::meets(&estimate, tol, length))
-        {
+        let fine = finest.insert(fine);
+        let Some(tol) = options.tolerance else {
+            break;
+        };
+        if !refine::meets(&estimate, tol, length) {
+            continue;
+        }
+        let material = match material {
+            Some(m) => m,
+            None => *material.insert(material_error(robot, options, before, fine, &best.0)?),
+        };
+        // Met with the material's error, or never: the levels do not change it.
+        if refine::meets(&sum(&estimate, &material), tol, length) || !refine::meets(&material, tol, length) {
             break;
         }
     }
     if let Some(mut fine) = finest {
-        let material = material_error(robot, options, before, &mut fine, &best.0)?;
+        let material = match material {
+            Some(m) => m,
+            None => material_error(robot, options, before, &mut fine, &best.0)?,
+        };
         let report = &mut best.0.report;
-        if let Some(estimate) = report.error_estimate.as_mut() {
-            estimate.tip_position += material.tip_position;
-            estimate.tip_rotation += material.tip_rotation;
-            estimate.backbone_max += material.backbone_max;
-        }
+        report.error_estimate = report.error_estimate.map(|e| sum(&e, &material));
         report.tolerance = options.tolerance;
         report.tolerance_met = options
             .tolerance
@@ -79,13 +90,25 @@ pub(super) fn refine(
     Ok(best)
 }
 
-/// The error of the answer `cubic` (solved on `fine`'s mesh from `before`'s material
-/// interpolated by [`lagrange`] through four nodes, `fine` holding its end state) that the
-/// carried material's interpolation leaves, which every split level shares and so no
-/// difference of levels sees (docs/friction.md section 8, "The carried material's error"):
-/// the change of the answer when the step is solved again on the same mesh from the
-/// quintic through six nodes, started from `cubic`'s state and factors. The quintic's own
-/// error is of higher order, so this is the cubic's to leading order.
+/// A split difference with the material's error added: the estimate of a stuck step.
+fn sum(split: &ErrorEstimate, material: &ErrorEstimate) -> ErrorEstimate {
+    ErrorEstimate {
+        tip_position: split.tip_position + material.tip_position,
+        tip_rotation: split.tip_rotation + material.tip_rotation,
+        backbone_max: split.backbone_max + material.backbone_max,
+        ..*split
+    }
+}
+
+/// The error of the answer `cubic` (solved on `fine`'s mesh from `before`'s order-4
+/// material interpolated by [`lagrange`] through four nodes, `fine` holding its end state)
+/// that the carried material leaves, which every split level shares and so no difference
+/// of levels sees (docs/friction.md section 8, "Error control of stuck steps"): the change
+/// of the answer when the step is solved again on the same mesh from the material of the
+/// last step's deferred-corrected nodes (order 6) and the quintic through six of them,
+/// started from `cubic`'s state and factors. Both the node values' error (the last step's
+/// discretization error, inherited) and the interpolation's are of higher order there, so
+/// this is the cubic's material error to leading order.
 ///
 /// # Errors
 /// As [`super::step`], on `fine`'s mesh.
@@ -102,14 +125,15 @@ fn material_error(
         x: fine.x.clone(),
         z: fine.z.clone(),
         grips: fine.grips.clone(),
+        corrected: Vec::new(),
         solved: false,
         report: fine.report.clone(),
         factors: fine.factors.take(),
     };
-    for (grip, old) in quintic.grips.iter_mut().zip(&before.grips) {
+    for ((grip, old), corrected) in quintic.grips.iter_mut().zip(&before.grips).zip(&before.corrected) {
         let span = old.contacts.len();
         for (value, node) in grip.reference.iter_mut().zip(&fine.mesh.nodes) {
-            *value = lagrange(&coarse[..=span], &old.reference[..=span], node.s, 6);
+            *value = lagrange(&coarse[..=span], &corrected[..=span], node.s, 6);
         }
     }
     let ((answer, _), _) = solve_on(robot, options, &mut quintic)?;
@@ -123,7 +147,13 @@ fn material_error(
 /// [`material_error`] measures the material's error with it too.
 fn difference(coarse: &Solution, fine: &Solution) -> ErrorEstimate {
     let (a, b) = (coarse.tip(), fine.tip());
-    let cos = (((a.R.transpose() * b.R).trace() - 1.0) / 2.0).clamp(-1.0, 1.0);
+    // The angle of R_a^T R_b from its cosine and sine together: the cosine alone resolves
+    // no angle below sqrt(2 eps) = 1.5e-8 rad, which would read differences of 1e-9 rad as
+    // 0 or 1.5e-8 rad and miss a tolerance of 1e-8 rad.
+    let relative = a.R.transpose() * b.R;
+    let skew = relative - relative.transpose();
+    let sin = 0.5 * Vector3::new(skew[(2, 1)], skew[(0, 2)], skew[(1, 0)]).norm();
+    let cos = (relative.trace() - 1.0) / 2.0;
     let backbone_max = fine
         .nodes
         .iter()
@@ -131,7 +161,7 @@ fn difference(coarse: &Solution, fine: &Solution) -> ErrorEstimate {
         .fold(0.0, f64::max);
     ErrorEstimate {
         tip_position: (a.p - b.p).norm(),
-        tip_rotation: cos.acos(),
+        tip_rotation: sin.atan2(cos),
         backbone_max,
         order: 2,
     }
@@ -218,6 +248,7 @@ fn split(robot: &Robot, before: &Carried, parts: usize, guess: &Solution, bounda
         x,
         z,
         grips,
+        corrected: Vec::new(),
         solved: false,
         report: before.report.clone(),
         factors: None,
@@ -333,7 +364,8 @@ fn hand_back(carried: &mut Carried, fine: &Carried) {
     for (j, z) in carried.z.iter_mut().enumerate() {
         *z = index.iter().map(|&n| fine.z[j][n]).collect();
     }
-    for (grip, f) in carried.grips.iter_mut().zip(&fine.grips) {
+    for ((grip, corrected), f) in carried.grips.iter_mut().zip(&mut carried.corrected).zip(&fine.grips) {
         grip.reference = index.iter().map(|&n| f.reference[n]).collect();
+        corrected.clone_from(&grip.reference);
     }
 }
