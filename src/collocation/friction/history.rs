@@ -395,7 +395,7 @@ fn solve_on(robot: &Robot, options: &Options, carried: &mut Carried) -> Result<(
     } else {
         // Newton's last residual is the backbone rows' at x when a pass ran.
         let converged = ran.then(|| ws.residual.clone());
-        estimate_keeping(&mut border, &x, converged, &mut correction)
+        estimate_with_friction(&mut border, &x, converged, &mut correction)
             .ok()
             .flatten()
     };

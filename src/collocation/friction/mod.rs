@@ -266,24 +266,13 @@ impl<'r> Capstan<'r> {
 /// and the largest correction of a log tension (the relative error of the tension
 /// profile); `None` without factors or with a singular border.
 ///
+/// The correction of the node states is left in `dx` (scaled as Newton's steps,
+/// [`unknowns::node_increments`]) and that of the log tensions in the border's last step
+/// (a load history reads its order-6 material from them).
+///
 /// # Errors
 /// A model breakdown at a stage of the order-6 scheme.
 fn estimate_with_friction(
-    border: &mut Capstan,
-    x: &[State],
-    converged: Option<Vec<f64>>,
-) -> Result<Option<(estimate::Correction, f64)>> {
-    let mut dx = Vec::new();
-    estimate_keeping(border, x, converged, &mut dx)
-}
-
-/// [`estimate_with_friction`], leaving the correction of the node states in `dx` (scaled
-/// as Newton's steps, [`unknowns::node_increments`]) and that of the log tensions in the
-/// border's last step (a load history carries its material from the corrected nodes).
-///
-/// # Errors
-/// As [`estimate_with_friction`].
-fn estimate_keeping(
     border: &mut Capstan,
     x: &[State],
     converged: Option<Vec<f64>>,
@@ -497,7 +486,9 @@ fn refine_with_friction(
         let t = Instant::now();
         // Newton's last residual is the backbone rows' at x.
         let converged = Some(ws.residual.clone());
-        let estimated = estimate_with_friction(&mut border, &x, converged).ok().flatten();
+        let estimated = estimate_with_friction(&mut border, &x, converged, &mut Vec::new())
+            .ok()
+            .flatten();
         report.timings.estimate += t.elapsed();
         border.load(Point::Current);
         // Whether the staircase's factors are the Jacobian's at x, for the verdict.
