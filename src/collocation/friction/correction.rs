@@ -15,12 +15,18 @@ use crate::solution::State;
 /// and the largest correction of a log tension (the relative error of the tension
 /// profile); `None` without factors or with a singular border.
 ///
+/// The correction of the node states is left in `dx` (scaled as Newton's steps,
+/// [`unknowns::node_increments`](crate::collocation::unknowns::node_increments)) and that of
+/// the log tensions in the border's last step (a load history reads its order-6 material
+/// from them).
+///
 /// # Errors
 /// A model breakdown at a stage of the order-6 scheme.
 pub(super) fn estimate_with_friction(
     border: &mut Capstan,
     x: &[State],
     converged: Option<Vec<f64>>,
+    dx: &mut Vec<f64>,
 ) -> Result<Option<(estimate::Correction, f64)>> {
     border.load(Point::Current);
     let n = border.system.unknowns();
@@ -58,12 +64,13 @@ pub(super) fn estimate_with_friction(
     if !border.stairs.ready {
         return Ok(None);
     }
-    let mut dx = vec![0.0; n];
-    let Some(tension_error) = border.solve_factored(&rhs, &difference, &mut dx) else {
+    dx.clear();
+    dx.resize(n, 0.0);
+    let Some(tension_error) = border.solve_factored(&rhs, &difference, dx) else {
         return Ok(None);
     };
     Ok(Some((
-        estimate::correction(&dx, x.len(), length, local, node_rates),
+        estimate::correction(dx, x.len(), length, local, node_rates),
         tension_error,
     )))
 }

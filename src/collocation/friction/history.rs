@@ -42,6 +42,12 @@ pub(crate) struct Carried {
     pub(crate) z: Vec<Vec<f64>>,
     /// Each tendon with friction's contacts, multipliers and material (lambda).
     pub(crate) grips: Vec<Grip>,
+    /// Each tendon with friction's material at the nodes read from the last step's
+    /// deferred-corrected node states and log tensions (order 6; the order-4 one in `grips`
+    /// where the step has no correction): only the estimate of a stuck step's material
+    /// error reads it ([`split`]); the steps are solved from the order-4 material, whose
+    /// stuck tensions match the last step's answer exactly where nothing moves.
+    pub(crate) corrected: Vec<Vec<f64>>,
     /// Whether (x, z) already solve the next step with the contacts held (the first step
     /// when the mesh was chosen on it).
     pub(crate) solved: bool,
@@ -87,6 +93,7 @@ impl Carried {
             x: self.x.clone(),
             z: self.z.clone(),
             grips: self.grips.clone(),
+            corrected: self.corrected.clone(),
             solved: false,
             report: self.report.clone(),
             factors: None,
@@ -165,11 +172,13 @@ pub(crate) fn start(robots: &[Robot], options: &Options) -> Result<Carried> {
             reference,
         });
     }
+    let corrected = grips.iter().map(|g| g.reference.clone()).collect();
     Ok(Carried {
         mesh,
         x,
         z,
         grips,
+        corrected,
         solved: most == 0,
         report: first.report,
         factors: None,
@@ -398,13 +407,19 @@ fn solve_on(robot: &Robot, options: &Options, carried: &mut Carried) -> Result<(
         .as_ref()
         .and_then(|p| p.grips.as_ref())
         .is_some_and(|g| g.iter().any(|g| g.contacts.contains(&Contact::Stick)));
+    // The deferred correction of the node states and log tensions (scaled as Newton's
+    // steps): the order-6 material the step leaves for the next stuck step's estimate.
+    let mut correction = Vec::new();
     let estimated = if stuck {
         None
     } else {
         // Newton's last residual is the backbone rows' at x when a pass ran.
         let converged = ran.then(|| ws.residual.clone());
-        estimate_with_friction(&mut border, &x, converged).ok().flatten()
+        estimate_with_friction(&mut border, &x, converged, &mut correction)
+            .ok()
+            .flatten()
     };
+    let corrected = estimated.is_some();
     border.load(Point::Current);
     let system = &border.system;
     let Some(profile) = system.friction.as_ref() else {
@@ -450,13 +465,33 @@ fn solve_on(robot: &Robot, options: &Options, carried: &mut Carried) -> Result<(
     for (j, &i) in profile.slipping.iter().enumerate() {
         let tendon = &robot.tendons[i];
         let span = profile.spans[j];
-        // The material now at each node: lambda = |p'| / (1 + tau / (E_t A_t)).
-        let lambda: Vec<f64> = (0..=span)
-            .map(|n| {
-                let speed = length::speed(&tendon.routing.at(x[n].s, length), &x[n].v, &x[n].u);
-                tendon.stiffness.map_or(speed, |e| speed / (1.0 + tensions[n][i] / e))
-            })
-            .collect();
+        // The material now at each node: lambda = |p'| / (1 + tau / (E_t A_t)), and the
+        // same from the deferred-corrected node states and log tensions where the step has
+        // them (order 6 at the nodes: docs/friction.md section 8, "Error control of stuck
+        // steps").
+        let material = |corrected: bool| -> Vec<f64> {
+            (0..=span)
+                .map(|n| {
+                    let (mut v, mut u, mut tension) = (x[n].v, x[n].u, tensions[n][i]);
+                    if corrected {
+                        let [_, _, dv, du] = unknowns::node_increments(&correction, n, length);
+                        v += dv;
+                        u += du;
+                        if let Some(dz) = unknown(&border.offsets, &profile.spans, j, n).map(|u| border.border_step[u])
+                        {
+                            tension *= dz.exp();
+                        }
+                    }
+                    let speed = length::speed(&tendon.routing.at(x[n].s, length), &v, &u);
+                    tendon.stiffness.map_or(speed, |e| speed / (1.0 + tension / e))
+                })
+                .collect()
+        };
+        let lambda = material(false);
+        // (A split mesh carries none: its step's material goes back to the history's mesh.)
+        if let Some(order6) = carried.corrected.get_mut(j) {
+            order6[..=span].copy_from_slice(&if corrected { material(true) } else { lambda.clone() });
+        }
         // An unloaded tendon is slack: no normal force, so friction holds nothing back.
         if profile.base[j] > 0.0 {
             check_slip(i, &grips[j], &lambda, &x, span)?;

@@ -479,7 +479,9 @@ fn refine_with_friction(
         let t = Instant::now();
         // Newton's last residual is the backbone rows' at x.
         let converged = Some(ws.residual.clone());
-        let estimated = estimate_with_friction(&mut border, &x, converged).ok().flatten();
+        let estimated = estimate_with_friction(&mut border, &x, converged, &mut Vec::new())
+            .ok()
+            .flatten();
         report.timings.estimate += t.elapsed();
         border.load(Point::Current);
         // Whether the staircase's factors are the Jacobian's at x, for the verdict.

@@ -1,29 +1,35 @@
 //! Error control of a history step with a stuck stretch (docs/friction.md section 8, "Error
 //! control of stuck steps"): the step is solved again on its mesh with every link split in
 //! two, four, ... parts, from the same carried material, until two successive answers agree
-//! to the tolerance; the finer one is returned, with their difference as its error estimate.
-//! The history's own mesh is a subset of every split mesh, so the material the step leaves
-//! is handed back to it at its nodes exactly.
+//! to the tolerance; the finer one is returned, with their difference as its error estimate
+//! plus the error the carried material's interpolation leaves ([`material_error`]), which
+//! every level shares. On each level the split node nearest each tendon's stick/slip
+//! boundary (estimated from the last level's tensions, [`boundaries`]) is moved onto it, so
+//! the kink of the tension lies at a node and the step is of order 2 over the levels. The
+//! history's own mesh is a subset of every split mesh, so the material the step leaves is
+//! handed back to it at its nodes exactly.
 
-use super::{Carried, Grip, Options, Profile, Result, Robot, StepAnswer, solve_on};
+use super::{Carried, Contact, Grip, Options, Profile, Result, Robot, StepAnswer, solve_on};
 use crate::collocation::refine;
 use crate::mesh::Mesh;
 use crate::mesh::guess::interpolate;
 use crate::model::equations::Model;
 use crate::report::ErrorEstimate;
 use crate::solution::Solution;
+use nalgebra::Vector3;
 
-/// Most splits of a stuck step's links: 2^6 = 64 parts per link. A stuck stretch's error
-/// falls about as h^3 from 32 to 128 intervals and as h beyond, while its stick/slip
-/// boundary stays in the link after a node of the history's mesh (docs/friction.md section
-/// 8), so 64 parts take a step from 1e-4 L to about 1e-7 L (64 x 16, about 1 000 times); a step that still misses its
-/// tolerance (or would need more than `max_intervals`) reports so.
+/// Most splits of a stuck step's links: 2^6 = 64 parts per link. With a node at the
+/// stick/slip boundary a stuck step's split differences fall about 4 times per level
+/// (order 2, docs/friction.md section 8), so 64 parts cut a step's error about 4 000
+/// times; a step that still misses its tolerance (or would need more than
+/// `max_intervals`) reports so.
 const LEVELS: u32 = 6;
 
 /// Solves the step again on split meshes (module docs) after `answer`, its solution on
 /// the history's mesh from the material `before`, within `options.max_intervals` (one split
-/// at least); leaves in `carried` (which holds that
-/// solve's end state and factors) the finest answer's material at the history's nodes.
+/// at least), and adds the material's error to the finest answer's estimate; leaves in
+/// `carried` (which holds that solve's end state and factors) the finest answer's material
+/// at the history's nodes.
 ///
 /// # Errors
 /// As [`super::step`], on a split mesh.
@@ -36,37 +42,118 @@ pub(super) fn refine(
 ) -> Result<StepAnswer> {
     let length = robot.length();
     let mut best = answer;
-    let mut finest = None;
+    let mut finest: Option<Carried> = None;
+    // The material's error, measured once (on the first level whose split difference meets
+    // the tolerance, or the last): every level reads the same material.
+    let mut material = None;
     let intervals = before.mesh.intervals();
     for level in 1..=LEVELS {
         if intervals << level > options.max_intervals.max(2 * intervals) {
             break;
         }
-        let mut fine = split(robot, before, 1 << level, &best.0)?;
+        let boundaries = boundaries(&best);
+        let mut fine = split(robot, before, 1 << level, &best.0, &boundaries)?;
         let (next, _) = solve_on(robot, options, &mut fine)?;
         let estimate = difference(&best.0, &next.0);
         best = next;
-        let report = &mut best.0.report;
-        report.error_estimate = Some(estimate);
-        report.tolerance = options.tolerance;
-        report.tolerance_met = options.tolerance.map(|tol| refine::meets(&estimate, tol, length));
-        finest = Some(fine);
-        if report.tolerance_met != Some(false) {
+        best.0.report.error_estimate = Some(estimate);
+        let fine = finest.insert(fine);
+        let Some(tol) = options.tolerance else {
+            break;
+        };
+        if !refine::meets(&estimate, tol, length) {
+            continue;
+        }
+        let material = match material {
+            Some(m) => m,
+            None => *material.insert(material_error(robot, options, before, fine, &best.0)?),
+        };
+        // Met with the material's error, or never: the levels do not change it.
+        if refine::meets(&sum(&estimate, &material), tol, length) || !refine::meets(&material, tol, length) {
             break;
         }
     }
-    if let Some(fine) = finest {
+    if let Some(mut fine) = finest {
+        let material = match material {
+            Some(m) => m,
+            None => material_error(robot, options, before, &mut fine, &best.0)?,
+        };
+        let report = &mut best.0.report;
+        report.error_estimate = report.error_estimate.map(|e| sum(&e, &material));
+        report.tolerance = options.tolerance;
+        report.tolerance_met = options
+            .tolerance
+            .zip(report.error_estimate)
+            .map(|(tol, estimate)| refine::meets(&estimate, tol, length));
         hand_back(carried, &fine);
     }
     Ok(best)
 }
 
+/// A split difference with the material's error added: the estimate of a stuck step.
+fn sum(split: &ErrorEstimate, material: &ErrorEstimate) -> ErrorEstimate {
+    ErrorEstimate {
+        tip_position: split.tip_position + material.tip_position,
+        tip_rotation: split.tip_rotation + material.tip_rotation,
+        backbone_max: split.backbone_max + material.backbone_max,
+        ..*split
+    }
+}
+
+/// The error of the answer `cubic` (solved on `fine`'s mesh from `before`'s order-4
+/// material interpolated by [`lagrange`] through four nodes, `fine` holding its end state)
+/// that the carried material leaves, which every split level shares and so no difference
+/// of levels sees (docs/friction.md section 8, "Error control of stuck steps"): the change
+/// of the answer when the step is solved again on the same mesh from the material of the
+/// last step's deferred-corrected nodes (order 6) and the quintic through six of them,
+/// started from `cubic`'s state and factors. Both the node values' error (the last step's
+/// discretization error, inherited) and the interpolation's are of higher order there, so
+/// this is the cubic's material error to leading order.
+///
+/// # Errors
+/// As [`super::step`], on `fine`'s mesh.
+fn material_error(
+    robot: &Robot,
+    options: &Options,
+    before: &Carried,
+    fine: &mut Carried,
+    cubic: &Solution,
+) -> Result<ErrorEstimate> {
+    let coarse: Vec<f64> = before.mesh.nodes.iter().map(|n| n.s).collect();
+    let mut quintic = Carried {
+        mesh: fine.mesh.clone(),
+        x: fine.x.clone(),
+        z: fine.z.clone(),
+        grips: fine.grips.clone(),
+        corrected: Vec::new(),
+        solved: false,
+        report: fine.report.clone(),
+        factors: fine.factors.take(),
+    };
+    for ((grip, old), corrected) in quintic.grips.iter_mut().zip(&before.grips).zip(&before.corrected) {
+        let span = old.contacts.len();
+        for (value, node) in grip.reference.iter_mut().zip(&fine.mesh.nodes) {
+            *value = lagrange(&coarse[..=span], &corrected[..=span], node.s, 6);
+        }
+    }
+    let ((answer, _), _) = solve_on(robot, options, &mut quintic)?;
+    Ok(difference(cubic, &answer))
+}
+
 /// The error estimate of the finer of two answers of a step: their difference. With an
 /// order p >= 1 the finer one's error is the difference / (2^p - 1), so this bounds it
-/// (at the order 1 observed on fine split levels, about equals it).
+/// (at the order 2 the boundary node gives, by about 3 times; where the boundary moves
+/// between levels the order is irregular, and at order 1 the difference about equals it).
+/// [`material_error`] measures the material's error with it too.
 fn difference(coarse: &Solution, fine: &Solution) -> ErrorEstimate {
     let (a, b) = (coarse.tip(), fine.tip());
-    let cos = (((a.R.transpose() * b.R).trace() - 1.0) / 2.0).clamp(-1.0, 1.0);
+    // The angle of R_a^T R_b from its cosine and sine together: the cosine alone resolves
+    // no angle below sqrt(2 eps) = 1.5e-8 rad, which would read differences of 1e-9 rad as
+    // 0 or 1.5e-8 rad and miss a tolerance of 1e-8 rad.
+    let relative = a.R.transpose() * b.R;
+    let skew = relative - relative.transpose();
+    let sin = 0.5 * Vector3::new(skew[(2, 1)], skew[(0, 2)], skew[(1, 0)]).norm();
+    let cos = (relative.trace() - 1.0) / 2.0;
     let backbone_max = fine
         .nodes
         .iter()
@@ -74,26 +161,38 @@ fn difference(coarse: &Solution, fine: &Solution) -> ErrorEstimate {
         .fold(0.0, f64::max);
     ErrorEstimate {
         tip_position: (a.p - b.p).norm(),
-        tip_rotation: cos.acos(),
+        tip_rotation: sin.atan2(cos),
         backbone_max,
         order: 2,
     }
 }
 
-/// The start of a step on `before`'s mesh with every link cut into `parts` equal links:
-/// the carried material (lambda) interpolated at the new nodes ([`cubic`]), each new link
-/// with its parent's contact and multiplier, and the states and log tensions of `guess`.
+/// The start of a step on `before`'s mesh with every link cut into `parts` equal links,
+/// the one of them nearest each point of `boundaries` inside a link moved onto it (the
+/// mesh keeps its intervals): the carried material (lambda) interpolated at the new nodes
+/// by the cubic through the four nearest ([`lagrange`]), each new link with its parent's
+/// contact and multiplier, and the states and log tensions of `guess`.
 ///
 /// # Errors
 /// An invalid mesh (none: the points lie on the rod).
-fn split(robot: &Robot, before: &Carried, parts: usize, guess: &Solution) -> Result<Carried> {
+fn split(robot: &Robot, before: &Carried, parts: usize, guess: &Solution, boundaries: &[f64]) -> Result<Carried> {
     let nodes = &before.mesh.nodes;
     let mut points = Vec::with_capacity(nodes.len() * parts);
     for pair in nodes.windows(2) {
         let (a, b) = (pair[0].s, pair[1].s);
         points.push(a);
         if b > a {
-            points.extend((1..parts).map(|q| a + (b - a) * q as f64 / parts as f64));
+            let mut inner: Vec<f64> = (1..parts).map(|q| a + (b - a) * q as f64 / parts as f64).collect();
+            // A boundary within 1e-3 of the link from one of its ends is left to that node.
+            let margin = 1e-3 * (b - a);
+            for &e in boundaries.iter().filter(|&&e| e > a + margin && e < b - margin) {
+                let nearest = (0..inner.len()).min_by(|&p, &q| (inner[p] - e).abs().total_cmp(&(inner[q] - e).abs()));
+                if let Some(q) = nearest {
+                    inner[q] = e;
+                }
+            }
+            inner.sort_by(f64::total_cmp);
+            points.extend(inner);
         }
     }
     points.push(robot.length());
@@ -115,16 +214,32 @@ fn split(robot: &Robot, before: &Carried, parts: usize, guess: &Solution) -> Res
             };
         }
         let links = old.contacts.len();
-        let parent = |l: usize| (l / parts).min(links.saturating_sub(1));
-        let old_span = links;
+        // The history's link that holds new link l, and l's share of its length.
+        let parent = |l: usize| {
+            let mid = 0.5 * (mesh.nodes[l].s + mesh.nodes[l + 1].s);
+            coarse
+                .iter()
+                .rposition(|&c| c <= mid)
+                .unwrap_or(0)
+                .min(links.saturating_sub(1))
+        };
+        let share = |l: usize| {
+            let p = parent(l);
+            let whole = coarse[p + 1] - coarse[p];
+            if whole > 0.0 {
+                (mesh.nodes[l + 1].s - mesh.nodes[l].s) / whole
+            } else {
+                0.0
+            }
+        };
         grips.push(Grip {
             contacts: (0..span).map(|l| old.contacts[parent(l)]).collect(),
             multipliers: (0..span).map(|l| old.multipliers[parent(l)]).collect(),
-            capacities: (0..span).map(|l| old.capacities[parent(l)] / parts as f64).collect(),
+            capacities: (0..span).map(|l| old.capacities[parent(l)] * share(l)).collect(),
             reference: mesh
                 .nodes
                 .iter()
-                .map(|node| cubic(&coarse[..=old_span], &old.reference[..=old_span], node.s))
+                .map(|node| lagrange(&coarse[..=links], &old.reference[..=links], node.s, 4))
                 .collect(),
         });
     }
@@ -133,6 +248,7 @@ fn split(robot: &Robot, before: &Carried, parts: usize, guess: &Solution) -> Res
         x,
         z,
         grips,
+        corrected: Vec::new(),
         solved: false,
         report: before.report.clone(),
         factors: None,
@@ -140,25 +256,82 @@ fn split(robot: &Robot, before: &Carried, parts: usize, guess: &Solution) -> Res
     })
 }
 
-/// The cubic through the four nodes of `s` (increasing, within a tendon's span) nearest
-/// to `at`, evaluated there: the carried material between the nodes, to O(h^4) where it
-/// is smooth. At a node it is that node's value exactly.
-fn cubic(s: &[f64], values: &[f64], at: f64) -> f64 {
+/// Where each tendon of `answer` with a stuck stretch meets it: the root, between the
+/// neighbours of the first stuck link's start node, of the difference of the quadratic
+/// through the last three sliding nodes' tensions and the one through the first three
+/// stuck nodes' (beyond that start node), each extrapolated into the link
+/// (docs/friction.md section 8, "A node at the boundary"). A tendon whose stuck stretch
+/// starts within two nodes of its base or three of its termination, or whose two profiles
+/// do not cross there, gives none.
+fn boundaries(answer: &StepAnswer) -> Vec<f64> {
+    let (solution, zones) = answer;
+    let s: Vec<f64> = solution.nodes.iter().map(|n| n.s).collect();
+    let mut out = Vec::new();
+    for (i, list) in zones {
+        let Some(pair) = list
+            .windows(2)
+            .find(|w| w[0].2 != Contact::Stick && w[1].2 == Contact::Stick)
+        else {
+            continue;
+        };
+        let Some(a) = s.iter().position(|&x| x == pair[1].0) else {
+            continue;
+        };
+        if a < 2 || a + 3 >= s.len() {
+            continue;
+        }
+        let tension = &solution.tendon_tensions[*i];
+        let quadratic = |n: [usize; 3], at: f64| -> f64 {
+            (0..3)
+                .map(|p| {
+                    let weight: f64 = (0..3)
+                        .filter(|&q| q != p)
+                        .map(|q| (at - s[n[q]]) / (s[n[p]] - s[n[q]]))
+                        .product();
+                    weight * tension[n[p]]
+                })
+                .sum()
+        };
+        let gap = |at: f64| quadratic([a - 2, a - 1, a], at) - quadratic([a + 1, a + 2, a + 3], at);
+        let (mut lo, mut hi) = (s[a - 1], s[a + 1]);
+        if gap(lo) * gap(hi) > 0.0 {
+            continue;
+        }
+        // Bisection to the resolution of s.
+        while hi - lo > 4.0 * f64::EPSILON * hi {
+            let mid = 0.5 * (lo + hi);
+            if gap(lo) * gap(mid) <= 0.0 {
+                hi = mid;
+            } else {
+                lo = mid;
+            }
+        }
+        out.push(0.5 * (lo + hi));
+    }
+    out
+}
+
+/// The polynomial through the `points` nodes of `s` (increasing, within a tendon's span)
+/// nearest to `at`, evaluated there: the carried material between the nodes, to
+/// O(h^points) where it is smooth (4: the cubic the step is solved with; 6: the quintic
+/// that estimates the cubic's error). At a node it is that node's value exactly; with
+/// fewer nodes than `points`, the line through the link's two.
+fn lagrange(s: &[f64], values: &[f64], at: f64, points: usize) -> f64 {
     let n = s.len();
     if let Some(k) = s.iter().position(|&x| x == at) {
         return values[k];
     }
-    if n < 4 {
-        let k = s.iter().rposition(|&x| x <= at).unwrap_or(0).min(n.saturating_sub(2));
-        if n < 2 {
-            return values[0];
-        }
+    if n < 2 {
+        return values[0];
+    }
+    let k = s.iter().rposition(|&x| x <= at).unwrap_or(0);
+    if n < points {
+        let k = k.min(n - 2);
         let t = (at - s[k]) / (s[k + 1] - s[k]);
         return values[k] + t * (values[k + 1] - values[k]);
     }
-    let k = s.iter().rposition(|&x| x <= at).unwrap_or(0);
-    let lo = k.saturating_sub(1).min(n - 4);
-    let stencil = lo..lo + 4;
+    let lo = (k + 1).saturating_sub(points / 2).min(n - points);
+    let stencil = lo..lo + points;
     stencil
         .clone()
         .map(|a| {
@@ -193,7 +366,8 @@ fn hand_back(carried: &mut Carried, fine: &Carried) {
     for (j, z) in carried.z.iter_mut().enumerate() {
         *z = index.iter().map(|&n| fine.z[j][n]).collect();
     }
-    for (grip, f) in carried.grips.iter_mut().zip(&fine.grips) {
+    for ((grip, corrected), f) in carried.grips.iter_mut().zip(&mut carried.corrected).zip(&fine.grips) {
         grip.reference = index.iter().map(|&n| f.reference[n]).collect();
+        corrected.clone_from(&grip.reference);
     }
 }
