@@ -198,7 +198,17 @@ fn direct(
         stop_when_damped: !nearest,
         ..*settings
     };
-    let (termination, worst) = newton::run(system, ws, x, &direct, report);
+    // The verdict below evaluates the plain Jacobian at the answer (`Workspace::verdict_at`):
+    // Newton evaluates it at its last trial point instead of the residual there.
+    let (termination, worst) = if !nearest
+        && system.friction.is_none()
+        && stability::non_conservative(&system.model).is_none()
+        && !ws.keeps_tension_columns()
+    {
+        newton::run_ahead(system, ws, x, &direct, report)
+    } else {
+        newton::run(system, ws, x, &direct, report)
+    };
     report.termination = termination;
     if termination != Termination::Converged {
         return (false, worst);

@@ -429,7 +429,41 @@ impl<'a> System<'a> {
     /// # Errors
     /// A model breakdown at a visited state.
     pub fn jacobian(&self, x: &[State], out: &mut [f64], values: &mut [f64]) -> Result<()> {
-        self.jacobian_with(x, out, values, None, None)
+        self.jacobian_with(x, out, values, None, None, None)
+    }
+
+    /// [`System::jacobian`] whose residual is bit for bit [`System::residual_rates`]'s, with
+    /// the node rates written as that writes them ([`residual::interval_jacobian_as_residual`];
+    /// the base, jump and tip rows evaluated again in f64):
+    /// a Jacobian evaluated where Newton would evaluate the residual. Returns whether `rates`
+    /// were written (not for tendons with friction, whose residual is evaluated alone).
+    ///
+    /// # Errors
+    /// A model breakdown at a visited state.
+    pub(crate) fn jacobian_rates(
+        &self,
+        x: &[State],
+        out: &mut [f64],
+        values: &mut [f64],
+        rates: &mut [Vector6<f64>],
+    ) -> Result<bool> {
+        if self.friction.is_some() {
+            return self.residual(x, out).map(|()| false);
+        }
+        self.jacobian_with(x, out, values, None, None, Some(rates))?;
+        // The rows outside the intervals as `rows` writes them: their dual numbers' values
+        // can differ from the f64 evaluation in the last bits (the tip's wrench balance).
+        let z = Delta::<f64>::zeros();
+        out[..BASE_ROWS].copy_from_slice(residual::base(&self.model, &x[0], &z).as_slice());
+        let links = x.len() - 1;
+        for k in (0..links).filter(|&k| self.interval_sites[k].is_none()) {
+            let sites = (&self.node_sites[k], &self.node_sites[k + 1]);
+            let r = residual::jump(&self.model, sites, &x[k], &x[k + 1], &z, &z)?;
+            out[link_row(k)..link_row(k + 1)].copy_from_slice(r.as_slice());
+        }
+        let tip = residual::tip(&self.model, &self.node_sites[links], &x[links], &z)?;
+        out[tip_row(x.len())..].copy_from_slice(tip.as_slice());
+        Ok(true)
     }
 
     /// [`System::jacobian`] that keeps, when given `kept` (one per link, friction aside),
@@ -445,13 +479,14 @@ impl<'a> System<'a> {
         values: &mut [f64],
         kept: Option<&mut [IntervalFactors]>,
     ) -> Result<()> {
-        self.jacobian_with(x, out, values, kept, None)
+        self.jacobian_with(x, out, values, kept, None, None)
     }
 
     /// [`System::jacobian`], keeping each interval's factors in `kept` as
     /// [`System::jacobian_keeping`] does, or writing each interval's tension rows into the
     /// columns `tensions` gives, with its buffers ([`System::jacobian_and_tensions`]); not
-    /// both (a point keeps its factors or forms its tension rows).
+    /// both (a point keeps its factors or forms its tension rows); with `rates`, neither, as
+    /// [`System::jacobian_rates`].
     ///
     /// # Errors
     /// A model breakdown at a visited state.
@@ -462,10 +497,15 @@ impl<'a> System<'a> {
         values: &mut [f64],
         mut kept: Option<&mut [IntervalFactors]>,
         mut tensions: Option<(&mut TensionSink, &mut [f64])>,
+        mut rates: Option<&mut [Vector6<f64>]>,
     ) -> Result<()> {
         debug_assert!(
-            kept.is_none() || tensions.is_none(),
-            "kept factors or tension rows, not both"
+            [kept.is_some(), tensions.is_some(), rates.is_some()]
+                .iter()
+                .filter(|&&b| b)
+                .count()
+                <= 1,
+            "kept factors, tension rows or node rates, one at most"
         );
         let n = self.unknowns();
         let mut at = 0;
@@ -491,8 +531,15 @@ impl<'a> System<'a> {
                     profile.keep(k, lin);
                 } else {
                     let start = node_lin.as_ref();
-                    let (r, end) = match kept.as_deref_mut() {
-                        None => residual::interval_jacobian(
+                    let (r, end) = match (kept.as_deref_mut(), rates.as_deref_mut()) {
+                        (None, Some(rates)) => {
+                            let ends = (&x[k], &x[k + 1]);
+                            let (r, end, at_start) =
+                                residual::interval_jacobian_as_residual(&self.model, sites, seg, ends, start, block)?;
+                            (rates[k], rates[k + 1]) = (at_start, end.rates);
+                            (r, end)
+                        }
+                        (None, None) => residual::interval_jacobian(
                             &self.model,
                             sites,
                             seg,
@@ -502,7 +549,7 @@ impl<'a> System<'a> {
                             block,
                             tensions.as_mut().map(|(sink, _)| sink.interval(start.is_some())),
                         )?,
-                        Some(kept) => {
+                        (Some(kept), _) => {
                             if start.is_some() {
                                 kept[k].start = kept[k - 1].end.clone();
                             }
