@@ -222,7 +222,13 @@ fn direct(
         stop_when_damped: !nearest,
         ..*settings
     };
-    let (termination, worst) = newton::run(system, ws, x, &direct, report);
+    // The verdict below evaluates the plain Jacobian at the answer (`Workspace::verdict_at`):
+    // Newton evaluates it at its last trial point instead of the residual there.
+    let (termination, worst) = if !nearest && plain_verdict(system, ws) {
+        newton::run_ahead(system, ws, x, &direct, report)
+    } else {
+        newton::run(system, ws, x, &direct, report)
+    };
     report.termination = termination;
     if termination != Termination::Converged {
         return (false, worst);
@@ -240,6 +246,14 @@ fn direct(
     let verdict = stability_of(system, ws, x, false, report);
     report.timings.stability += t.elapsed();
     (acceptable(system, &verdict), worst)
+}
+
+/// Whether [`stability_of`] (not `exact`) of a state Newton reached on `system` with `ws`
+/// evaluates the plain Jacobian there when the one held is too far ([`Workspace::verdict_at`]:
+/// conservative loads, no friction, no tension columns kept): then Newton may evaluate it
+/// at its last trial point instead of the residual ([`newton::run_ahead`]).
+pub(crate) fn plain_verdict(system: &System, ws: &Workspace) -> bool {
+    system.friction.is_none() && stability::non_conservative(&system.model).is_none() && !ws.keeps_tension_columns()
 }
 
 /// Whether a state with this verdict may be the answer without a path: only a stable one

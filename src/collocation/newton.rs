@@ -247,6 +247,49 @@ fn jacobian<B: Border>(border: &mut B, x: &[State], ws: &mut Workspace, report: 
     ok && super::workspace::all_finite(&ws.values)
 }
 
+/// Whether the error left after the last step is below [`STEP_TOLERANCE`], from the norms
+/// of the last two full steps and whether the last was a Newton step (`fresh`).
+fn stops(before_last: f64, last_step: f64, fresh: bool) -> bool {
+    let theta = last_step / before_last;
+    // One step: its length bounds the error; two: the contraction extrapolates it; steps
+    // that no longer contract have reached the rounding floor.
+    if before_last.is_infinite() {
+        last_step <= STEP_TOLERANCE
+    } else if theta >= 1.0 {
+        true
+    } else if fresh {
+        // Quadratic: e_k+1 = C e_k^2 with theta = C e_k-1 gives e_k+1 = theta^2 |dx_k|.
+        theta * theta * last_step <= STEP_TOLERANCE
+    } else {
+        // Linear: e_k+1 = theta e_k and |dx_k| = (1 - theta) e_k.
+        theta / (1.0 - theta) * last_step <= STEP_TOLERANCE
+    }
+}
+
+/// [`evaluate_trial`] by a Jacobian evaluation at the trial point into the value buffer
+/// ([`System::jacobian_rates`]: the residual and node rates bit for bit those of the
+/// residual evaluation), counted as a Jacobian evaluation, not factored
+/// ([`Workspace::evaluated_ahead`]). Returns whether it succeeded and whether the values
+/// are finite; a breakdown of the Jacobian alone falls back to [`evaluate_trial`].
+fn evaluate_trial_ahead<B: Border>(border: &mut B, ws: &mut Workspace, report: &mut SolveReport) -> (bool, bool) {
+    let t = Instant::now();
+    let result = border.on(Point::Trial, |system| {
+        report.evaluations.equations += system.rate_evaluations();
+        system.jacobian_rates(&ws.trial, &mut ws.trial_residual, &mut ws.values, &mut ws.trial_rates)
+    });
+    report.timings.assembly += t.elapsed();
+    report.evaluations.jacobian += 1;
+    ws.evaluated_ahead();
+    match result {
+        Ok(filled) => {
+            ws.trial_rates_valid = filled;
+            border.rows(Point::Trial, &ws.trial);
+            (true, super::workspace::all_finite(&ws.values))
+        }
+        Err(_) => (evaluate_trial(border, ws, report), false),
+    }
+}
+
 fn max_norm(v: &[f64]) -> f64 {
     v.iter()
         .fold(0.0, |m, x| if x.is_nan() { f64::NAN } else { m.max(x.abs()) })
@@ -282,6 +325,24 @@ pub fn run(
     run_bordered(&mut NoBorder(system), ws, x, settings, report)
 }
 
+/// [`run`] for a state whose stability verdict follows from the Jacobian at the answer
+/// ([`super::equilibrium`]'s direct solve: conservative loads, no friction, no tension
+/// columns kept): a trial point that the step-based stopping test already predicts to be
+/// the last (the error left after its step below [`STEP_TOLERANCE`], and the Jacobian held
+/// too far from it for the verdict to take) gets the Jacobian evaluated there instead of
+/// the residual, which gives the same residual and node rates bit for bit; the verdict then
+/// takes that Jacobian instead of evaluating it again (docs/numerics.md, "The Jacobian at
+/// the answer, evaluated by Newton"). Every decision and iterate is [`run`]'s.
+pub(crate) fn run_ahead(
+    system: &System,
+    ws: &mut Workspace,
+    x: &mut Vec<State>,
+    settings: &Settings,
+    report: &mut SolveReport,
+) -> (Termination, usize) {
+    run_with(&mut NoBorder(system), ws, x, settings, report, true)
+}
+
 /// [`run`] on the collocation system bordered by `border`'s unknowns and rows (docs/actuation.md
 /// for the tensions of displacement-controlled tendons): the same steps and tests, with the
 /// border's rows in the residual norm and the merit and its scaled step in the step norm.
@@ -292,6 +353,19 @@ pub(crate) fn run_bordered<B: Border>(
     x: &mut Vec<State>,
     settings: &Settings,
     report: &mut SolveReport,
+) -> (Termination, usize) {
+    run_with(border, ws, x, settings, report, false)
+}
+
+/// [`run_bordered`], evaluating the Jacobian at a trial point predicted to be the last when
+/// `ahead` ([`run_ahead`]).
+fn run_with<B: Border>(
+    border: &mut B,
+    ws: &mut Workspace,
+    x: &mut Vec<State>,
+    settings: &Settings,
+    report: &mut SolveReport,
+    ahead: bool,
 ) -> (Termination, usize) {
     use Point::{Current, Trial};
     report.history.clear();
@@ -334,20 +408,7 @@ pub(crate) fn run_bordered<B: Border>(
     let mut last_fresh = false;
     for iteration in 0..settings.max_iterations {
         let norm_x = norm(&ws.residual, border.residual(Current));
-        let theta = last_step / before_last;
-        // One step: its length bounds the error; two: the contraction extrapolates it; steps
-        // that no longer contract have reached the rounding floor.
-        let settled = if before_last.is_infinite() {
-            last_step <= STEP_TOLERANCE
-        } else if theta >= 1.0 {
-            true
-        } else if last_fresh {
-            // Quadratic: e_k+1 = C e_k^2 with theta = C e_k-1 gives e_k+1 = theta^2 |dx_k|.
-            theta * theta * last_step <= STEP_TOLERANCE
-        } else {
-            // Linear: e_k+1 = theta e_k and |dx_k| = (1 - theta) e_k.
-            theta / (1.0 - theta) * last_step <= STEP_TOLERANCE
-        };
+        let settled = stops(before_last, last_step, last_fresh);
         // At least one step: a guess (the rigid estimate of a lightly loaded rod, say) can
         // meet an absolute tolerance without being the discrete solution.
         if norm_x <= settings.tolerance && iteration > 0 && (settled || norm_x == 0.0) {
@@ -376,7 +437,13 @@ pub(crate) fn run_bordered<B: Border>(
             let step_norm = max_norm(&ws.step).max(border_step);
             unknowns::retract(x, &ws.step, 1.0, length, &mut ws.trial);
             border.trial(1.0);
-            let ok = evaluate_trial(border, ws, report);
+            // The Jacobian there when the step would end the run and leave the one held
+            // too far for the verdict (drift beyond STEP_TOLERANCE).
+            let (ok, finite) = if ahead && ws.drift + step_norm > STEP_TOLERANCE && stops(last_step, step_norm, false) {
+                evaluate_trial_ahead(border, ws, report)
+            } else {
+                (evaluate_trial(border, ws, report), false)
+            };
             let trial_norm = norm(&ws.trial_residual, border.residual(Trial));
             if ok && (trial_norm <= settings.tolerance || trial_norm <= CHORD_CONTRACTION * norm_x) {
                 report.history.push(Iteration {
@@ -393,7 +460,7 @@ pub(crate) fn run_bordered<B: Border>(
                 }
                 (before_last, last_step) = (last_step, step_norm);
                 last_fresh = false;
-                ws.drift += step_norm;
+                ws.drift = if finite { 0.0 } else { ws.drift + step_norm };
                 std::mem::swap(x, &mut ws.trial);
                 std::mem::swap(&mut ws.residual, &mut ws.trial_residual);
                 ws.swap_rates();
@@ -426,10 +493,18 @@ pub(crate) fn run_bordered<B: Border>(
         let step_norm = max_norm(&ws.step).max(border_step);
         let phi = merit(&ws.residual, border.residual(Current));
         let mut alpha = 1.0;
+        // Whether the value buffer holds the finite Jacobian at the full step's end.
+        let mut finite_ahead = false;
         loop {
             unknowns::retract(x, &ws.step, alpha, length, &mut ws.trial);
             border.trial(alpha);
-            let ok = evaluate_trial(border, ws, report);
+            let ok = if ahead && alpha == 1.0 && step_norm > STEP_TOLERANCE && stops(last_step, step_norm, true) {
+                let (ok, finite) = evaluate_trial_ahead(border, ws, report);
+                finite_ahead = finite;
+                ok
+            } else {
+                evaluate_trial(border, ws, report)
+            };
             let phi_trial = merit(&ws.trial_residual, border.residual(Trial));
             // Armijo on 0.5|F|^2, whose slope along the Newton step is -|F|^2 = -2 phi; a
             // trial already within tolerance is accepted (at rounding level phi cannot fall).
@@ -487,7 +562,14 @@ pub(crate) fn run_bordered<B: Border>(
         std::mem::swap(&mut ws.residual, &mut ws.trial_residual);
         ws.swap_rates();
         border.accept();
-        ws.drift = alpha * step_norm;
+        ws.drift = if finite_ahead && alpha == 1.0 {
+            0.0
+        } else if ws.unfactored {
+            // The values are the full step's end's, or not finite.
+            f64::INFINITY
+        } else {
+            alpha * step_norm
+        };
         last_fresh = true;
         (before_last, last_step) = if alpha == 1.0 {
             (last_step, step_norm)

@@ -4,7 +4,9 @@
 
 use super::MAX_ITERATIONS;
 use super::deferred;
-use super::equilibrium::{Choose, better_start, choose_equilibrium, held_stability, near_start, stability_of};
+use super::equilibrium::{
+    Choose, better_start, choose_equilibrium, held_stability, near_start, plain_verdict, stability_of,
+};
 use super::estimate;
 use super::newton::{self, Settings, Workspace};
 use super::options::{Equilibrium, Options};
@@ -475,7 +477,15 @@ fn newton_only(
     report: &mut SolveReport,
 ) -> Result<Vec<State>> {
     let mut x = x0;
-    let (termination, worst) = newton::run(system, ws, &mut x, settings, report);
+    // A direct solve's verdict is the plain Jacobian's at the answer (not `exact`, at the end
+    // of `solve_tensions`): Newton evaluates it at its last trial point, as a direct
+    // solve's equilibrium choice does (wasted only when this mesh is refined further).
+    let direct = matches!(report.path, PathTaken::Direct | PathTaken::Fallback);
+    let (termination, worst) = if direct && plain_verdict(system, ws) {
+        newton::run_ahead(system, ws, &mut x, settings, report)
+    } else {
+        newton::run(system, ws, &mut x, settings, report)
+    };
     report.termination = termination;
     if termination == Termination::Converged {
         return Ok(x);

@@ -409,9 +409,34 @@ pub fn interval_jacobian(
     #[cfg(target_arch = "x86_64")]
     if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma") {
         // SAFETY: the processor supports the features the function is compiled for.
-        return unsafe { interval_jacobian_avx2(model, sites, segment_end, a, b, start, jac, tensions) };
+        return unsafe { interval_jacobian_avx2(model, sites, segment_end, (a, b), start, jac, tensions, false) }
+            .map(|(r, end, _)| (r, end));
     }
-    interval_jacobian_kernel(model, sites, segment_end, a, b, start, jac, None, tensions)
+    interval_jacobian_kernel(model, sites, segment_end, a, b, start, jac, None, tensions, false)
+        .map(|(r, end, _)| (r, end))
+}
+
+/// [`interval_jacobian`] whose residual is bit for bit [`interval`]'s, with the rates at
+/// node a: F_1's position row is R_b v_b, as [`interval`] forms it, not R_a exp(theta_1) v_b
+/// (which differ by rounding; no derivative reads that row). For a Jacobian evaluated in
+/// place of a residual evaluation (Newton's trial point, `System::jacobian_rates`).
+///
+/// # Errors
+/// As [`interval_jacobian`].
+pub(super) fn interval_jacobian_as_residual(
+    model: &Model,
+    sites: &IntervalSites,
+    segment_end: f64,
+    (a, b): (&State, &State),
+    start: Option<&Linearization>,
+    jac: &mut [f64],
+) -> Result<(Block<f64>, Linearization, Vector6<f64>)> {
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma") {
+        // SAFETY: the processor supports the features the function is compiled for.
+        return unsafe { interval_jacobian_avx2(model, sites, segment_end, (a, b), start, jac, None, true) };
+    }
+    interval_jacobian_kernel(model, sites, segment_end, a, b, start, jac, None, None, true)
 }
 
 /// [`interval_jacobian`] that keeps eq. 13's factored matrix at its points in `kept` (the
@@ -436,7 +461,8 @@ pub(super) fn interval_jacobian_keeping(
         // SAFETY: the processor supports the features the function is compiled for.
         return unsafe { interval_jacobian_keeping_avx2(model, sites, segment_end, a, b, start, jac, kept) };
     }
-    interval_jacobian_kernel(model, sites, segment_end, a, b, start, jac, Some(kept), None)
+    interval_jacobian_kernel(model, sites, segment_end, a, b, start, jac, Some(kept), None, false)
+        .map(|(r, end, _)| (r, end))
 }
 
 /// [`interval_jacobian_kernel`] with AVX2 and FMA enabled.
@@ -447,13 +473,13 @@ unsafe fn interval_jacobian_avx2(
     model: &Model,
     sites: &IntervalSites,
     segment_end: f64,
-    a: &State,
-    b: &State,
+    (a, b): (&State, &State),
     start: Option<&Linearization>,
     jac: &mut [f64],
     tensions: Option<IntervalTensions>,
-) -> Result<(Block<f64>, Linearization)> {
-    interval_jacobian_kernel(model, sites, segment_end, a, b, start, jac, None, tensions)
+    as_residual: bool,
+) -> Result<(Block<f64>, Linearization, Vector6<f64>)> {
+    interval_jacobian_kernel(model, sites, segment_end, a, b, start, jac, None, tensions, as_residual)
 }
 
 /// [`interval_jacobian_kernel`] keeping the points' factors, with AVX2 and FMA enabled.
@@ -470,12 +496,14 @@ unsafe fn interval_jacobian_keeping_avx2(
     jac: &mut [f64],
     kept: &mut IntervalFactors,
 ) -> Result<(Block<f64>, Linearization)> {
-    interval_jacobian_kernel(model, sites, segment_end, a, b, start, jac, Some(kept), None)
+    interval_jacobian_kernel(model, sites, segment_end, a, b, start, jac, Some(kept), None, false)
+        .map(|(r, end, _)| (r, end))
 }
 
 /// [`interval_jacobian`]'s operations; `kept` as in [`interval_jacobian_keeping`], `tensions`
 /// as in [`interval_jacobian`] (one of the two at most: a point keeps its factors or forms
-/// its tension rows).
+/// its tension rows), `as_residual` as in [`interval_jacobian_as_residual`]; also returns
+/// the rates at node a.
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
 fn interval_jacobian_kernel(
@@ -488,7 +516,8 @@ fn interval_jacobian_kernel(
     jac: &mut [f64],
     mut kept: Option<&mut IntervalFactors>,
     mut tensions: Option<IntervalTensions>,
-) -> Result<(Block<f64>, Linearization)> {
+    as_residual: bool,
+) -> Result<(Block<f64>, Linearization, Vector6<f64>)> {
     let length = model.robot.length();
     let h = sites.end.s - sites.start.s;
     let (y0, y1) = end_points(a, b);
@@ -516,7 +545,11 @@ fn interval_jacobian_kernel(
     };
     let frame1 = PointFrame::new(&a.R, &theta1);
     let p0 = rhs_linearized_inline(&sites.start, lin0, &a.R, &y0, &PointFrame::start(&a.R));
-    let p1 = rhs_linearized_inline(&sites.end, &lin1, &a.R, &y1, &frame1);
+    let mut p1 = rhs_linearized_inline(&sites.end, &lin1, &a.R, &y1, &frame1);
+    if as_residual {
+        // `end_rhs`'s position row (the midpoint reads only the theta, v and u rows).
+        p1.f.fixed_rows_mut::<3>(P).copy_from(&(b.R * sites.end.strain(&b.v)));
+    }
     let ym = (y0 + y1) * 0.5 + (p0.f - p1.f) * (h / 8.0);
     let frame_m = PointFrame::new(&a.R, &ym.fixed_rows::<3>(THETA).into());
     let (v_m, u_m): (Vector3<f64>, Vector3<f64>) = (ym.fixed_rows::<3>(V).into(), ym.fixed_rows::<3>(U).into());
@@ -551,7 +584,7 @@ fn interval_jacobian_kernel(
         let mid = (sites.mid.inextensible, &frame_m.R, &frame_m.Jri);
         derivative_rows(mid, h, length, [t.start, t.end, t.mid, t.dy_mid], t.rows);
     }
-    Ok((residual, lin1))
+    Ok((residual, lin1, lin0.rates))
 }
 
 /// The midpoint's F on the 18 columns: its (theta, v, u) columns of dF/dy times the
@@ -623,9 +656,19 @@ mod tests {
             let (mut fast, mut baseline) = ([0.0; 12 * 24], [0.0; 12 * 24]);
             let (r_fast, l_fast) =
                 interval_jacobian(&model, &sites, seg, &x[k], &x[k + 1], None, &mut fast, None).unwrap();
-            let (r_base, l_base) =
-                interval_jacobian_kernel(&model, &sites, seg, &x[k], &x[k + 1], None, &mut baseline, None, None)
-                    .unwrap();
+            let (r_base, l_base, _) = interval_jacobian_kernel(
+                &model,
+                &sites,
+                seg,
+                &x[k],
+                &x[k + 1],
+                None,
+                &mut baseline,
+                None,
+                None,
+                false,
+            )
+            .unwrap();
             assert!(fast.iter().all(|v| v.is_finite()));
             assert_eq!(bits(&fast), bits(&baseline), "interval {k}");
             assert_eq!(bits(r_fast.as_slice()), bits(r_base.as_slice()), "interval {k}");

@@ -137,7 +137,7 @@ impl System<'_> {
     ) -> Result<()> {
         debug_assert!(self.friction.is_none());
         let mut sink = TensionSink::new(self.model.robot.tendons.len());
-        self.jacobian_with(x, out, values, None, Some((&mut sink, &mut *tensions)))?;
+        self.jacobian_with(x, out, values, None, Some((&mut sink, &mut *tensions)), None)?;
         self.point_load_columns(x, Columns::Tensions, tensions)
     }
 
@@ -248,6 +248,53 @@ mod tests {
                     scale > 0.0 && gap <= 1e-13 * scale,
                     "{rod_model:?} tendon {i}: {gap:e} of {scale:e}"
                 );
+            }
+        }
+    }
+
+    /// `jacobian_rates` gives `residual_rates`' residual and node rates bit for bit, and
+    /// `jacobian`'s values, at the solutions of case H with three tendons pulled (tendon
+    /// terminations as jumps) and of the prototype with four, each as a Cosserat and as a
+    /// Kirchhoff rod, and at their rigid-equilibrium guesses (states far from a root).
+    #[test]
+    fn the_jacobian_at_a_trial_point_gives_the_residual_evaluation_bits() {
+        // The first entry whose bits differ, if any.
+        let bits = |a: &[f64], b: &[f64]| a.iter().zip(b).position(|(a, b)| a.to_bits() != b.to_bits());
+        for (case, rod_model) in [0, 1]
+            .into_iter()
+            .flat_map(|c| [(c, RodModel::Cosserat), (c, RodModel::Kirchhoff)])
+        {
+            let mut robot = if case == 0 {
+                crate::cases::case_h()
+            } else {
+                crate::cases::prototype()
+            };
+            robot.rod_model = rod_model;
+            for (i, tendon) in robot.tendons.iter_mut().enumerate().take(4).skip(1) {
+                tendon.set_tension(0.3 + 0.5 * i as f64);
+            }
+            let solution = crate::collocation::solve(&robot, &Options::default()).unwrap();
+            let s: Vec<f64> = solution.nodes.iter().map(|n| n.s).collect();
+            let answer: Vec<State> = solution.nodes.iter().map(|n| n.state()).collect();
+            let system = System::new(Model::new(&robot), Mesh::from_points(&robot, &s).unwrap());
+            let guess = crate::mesh::guess::rigid_estimate(&system.model, &system.mesh.nodes);
+            for x in [answer, guess] {
+                let n = system.unknowns();
+                let (mut residual, mut rates) = (vec![0.0; n], vec![Vector6::zeros(); x.len()]);
+                assert!(system.residual_rates(&x, &mut residual, &mut rates).unwrap());
+                let (mut plain, mut values) = (vec![0.0; n], vec![0.0; nonzeros(&system.mesh)]);
+                system.jacobian(&x, &mut plain, &mut values).unwrap();
+                let (mut with, mut with_values) = (vec![0.0; n], vec![0.0; values.len()]);
+                let mut with_rates = vec![Vector6::zeros(); x.len()];
+                assert!(
+                    system
+                        .jacobian_rates(&x, &mut with, &mut with_values, &mut with_rates)
+                        .unwrap()
+                );
+                assert_eq!(bits(&residual, &with), None, "{case} {rod_model:?}");
+                assert_eq!(bits(&values, &with_values), None, "{case} {rod_model:?}");
+                let flat = |r: &[Vector6<f64>]| r.iter().flat_map(|v| v.iter().copied()).collect::<Vec<_>>();
+                assert_eq!(bits(&flat(&rates), &flat(&with_rates)), None, "{case} {rod_model:?}");
             }
         }
     }

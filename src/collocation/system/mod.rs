@@ -8,6 +8,7 @@
 //! the chain rule of [`residual::interval_jacobian`], the base, jump and tip blocks by
 //! num-dual dual numbers run through the same generic residual code.
 
+mod ahead;
 mod columns;
 
 use super::friction::{self, Profile};
@@ -429,7 +430,7 @@ impl<'a> System<'a> {
     /// # Errors
     /// A model breakdown at a visited state.
     pub fn jacobian(&self, x: &[State], out: &mut [f64], values: &mut [f64]) -> Result<()> {
-        self.jacobian_with(x, out, values, None, None)
+        self.jacobian_with(x, out, values, None, None, None)
     }
 
     /// [`System::jacobian`] that keeps, when given `kept` (one per link, friction aside),
@@ -445,13 +446,14 @@ impl<'a> System<'a> {
         values: &mut [f64],
         kept: Option<&mut [IntervalFactors]>,
     ) -> Result<()> {
-        self.jacobian_with(x, out, values, kept, None)
+        self.jacobian_with(x, out, values, kept, None, None)
     }
 
     /// [`System::jacobian`], keeping each interval's factors in `kept` as
     /// [`System::jacobian_keeping`] does, or writing each interval's tension rows into the
     /// columns `tensions` gives, with its buffers ([`System::jacobian_and_tensions`]); not
-    /// both (a point keeps its factors or forms its tension rows).
+    /// both (a point keeps its factors or forms its tension rows); with `rates`, neither, as
+    /// [`System::jacobian_rates`].
     ///
     /// # Errors
     /// A model breakdown at a visited state.
@@ -462,10 +464,15 @@ impl<'a> System<'a> {
         values: &mut [f64],
         mut kept: Option<&mut [IntervalFactors]>,
         mut tensions: Option<(&mut TensionSink, &mut [f64])>,
+        mut rates: Option<&mut [Vector6<f64>]>,
     ) -> Result<()> {
         debug_assert!(
-            kept.is_none() || tensions.is_none(),
-            "kept factors or tension rows, not both"
+            [kept.is_some(), tensions.is_some(), rates.is_some()]
+                .iter()
+                .filter(|&&b| b)
+                .count()
+                <= 1,
+            "kept factors, tension rows or node rates, one at most"
         );
         let n = self.unknowns();
         let mut at = 0;
@@ -491,8 +498,15 @@ impl<'a> System<'a> {
                     profile.keep(k, lin);
                 } else {
                     let start = node_lin.as_ref();
-                    let (r, end) = match kept.as_deref_mut() {
-                        None => residual::interval_jacobian(
+                    let (r, end) = match (kept.as_deref_mut(), rates.as_deref_mut()) {
+                        (None, Some(rates)) => {
+                            let ends = (&x[k], &x[k + 1]);
+                            let (r, end, at_start) =
+                                residual::interval_jacobian_as_residual(&self.model, sites, seg, ends, start, block)?;
+                            (rates[k], rates[k + 1]) = (at_start, end.rates);
+                            (r, end)
+                        }
+                        (None, None) => residual::interval_jacobian(
                             &self.model,
                             sites,
                             seg,
@@ -502,7 +516,7 @@ impl<'a> System<'a> {
                             block,
                             tensions.as_mut().map(|(sink, _)| sink.interval(start.is_some())),
                         )?,
-                        Some(kept) => {
+                        (Some(kept), _) => {
                             if start.is_some() {
                                 kept[k].start = kept[k - 1].end.clone();
                             }

@@ -86,6 +86,19 @@ impl Workspace {
         mesh
     }
 
+    /// Marks the value buffer as holding a Jacobian Newton evaluated at a trial point in
+    /// place of its residual (`newton::run_ahead`), not factored (the factors stay an
+    /// earlier Jacobian's), as [`Workspace::verdict_at`] leaves it: its verdict not yet
+    /// assessed, and belonging to no iterate until Newton accepts that point (which sets
+    /// the drift to zero when `finite`).
+    pub(crate) fn evaluated_ahead(&mut self) {
+        self.forget_tension_rhs();
+        self.verdict = None;
+        self.neutral = None;
+        self.unfactored = true;
+        self.drift = f64::INFINITY;
+    }
+
     /// The Jacobian of `system` at `x` into the value buffer and the residual there into
     /// the trial residual, for [`Workspace::verdict_at`], with the tension columns'
     /// right-hand sides when this workspace keeps them and a Jacobian in the tensions would

@@ -1,0 +1,46 @@
+//! The Jacobian evaluated where Newton would evaluate the residual ([`System::jacobian_rates`]):
+//! the same residual and node rates bit for bit, for the Jacobian at a direct solve's answer
+//! (docs/numerics.md, "The Jacobian at the answer, evaluated by Newton").
+
+use super::System;
+use crate::collocation::residual::{self, Delta};
+use crate::collocation::unknowns::{BASE_ROWS, link_row, tip_row};
+use crate::error::Result;
+use crate::solution::State;
+use nalgebra::Vector6;
+
+impl System<'_> {
+    /// [`System::jacobian`] whose residual is bit for bit [`System::residual_rates`]'s, with
+    /// the node rates written as that writes them ([`residual::interval_jacobian_as_residual`];
+    /// the base, jump and tip rows evaluated again in f64):
+    /// a Jacobian evaluated where Newton would evaluate the residual. Returns whether `rates`
+    /// were written (not for tendons with friction, whose residual is evaluated alone).
+    ///
+    /// # Errors
+    /// A model breakdown at a visited state.
+    pub(crate) fn jacobian_rates(
+        &self,
+        x: &[State],
+        out: &mut [f64],
+        values: &mut [f64],
+        rates: &mut [Vector6<f64>],
+    ) -> Result<bool> {
+        if self.friction.is_some() {
+            return self.residual(x, out).map(|()| false);
+        }
+        self.jacobian_with(x, out, values, None, None, Some(rates))?;
+        // The rows outside the intervals as `rows` writes them: their dual numbers' values
+        // can differ from the f64 evaluation in the last bits (the tip's wrench balance).
+        let z = Delta::<f64>::zeros();
+        out[..BASE_ROWS].copy_from_slice(residual::base(&self.model, &x[0], &z).as_slice());
+        let links = x.len() - 1;
+        for k in (0..links).filter(|&k| self.interval_sites[k].is_none()) {
+            let sites = (&self.node_sites[k], &self.node_sites[k + 1]);
+            let r = residual::jump(&self.model, sites, &x[k], &x[k + 1], &z, &z)?;
+            out[link_row(k)..link_row(k + 1)].copy_from_slice(r.as_slice());
+        }
+        let tip = residual::tip(&self.model, &self.node_sites[links], &x[links], &z)?;
+        out[tip_row(x.len())..].copy_from_slice(tip.as_slice());
+        Ok(true)
+    }
+}
