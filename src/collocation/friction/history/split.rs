@@ -129,6 +129,7 @@ fn material_error(
         solved: false,
         report: fine.report.clone(),
         factors: fine.factors.take(),
+        settled: None,
     };
     for ((grip, old), corrected) in quintic.grips.iter_mut().zip(&before.grips).zip(&before.corrected) {
         let span = old.contacts.len();
