@@ -223,8 +223,10 @@ fn direct(
         ..*settings
     };
     // The verdict below evaluates the plain Jacobian at the answer (`Workspace::verdict_at`):
-    // Newton evaluates it at its last trial point instead of the residual there.
-    let (termination, worst) = if !nearest && plain_verdict(system, ws) {
+    // Newton evaluates it at its last trial point instead of the residual there. An
+    // unassessed answer takes no verdict here (its friction verdict is the bordered
+    // system's), so it keeps the plain residual.
+    let (termination, worst) = if !nearest && !unassessed && plain_verdict(system, ws) {
         newton::run_ahead(system, ws, x, &direct, report)
     } else {
         newton::run(system, ws, x, &direct, report)
