@@ -90,6 +90,10 @@ fn up_down_writes_one_row_per_step_and_the_loop() {
     );
     let svg = std::fs::read_to_string(dir.join("loop.svg")).unwrap();
     assert!(svg.contains("hysteresis") && svg.contains("unloading"));
+    // Every step of the prototype's loop carries its verdict (docs/stability.md,
+    // "Load-history steps"): stable, stuck steps included.
+    let stability = column(header, "stability");
+    assert!((1..10).all(|k| field(k, stability) == "stable"), "{csv}");
 }
 
 #[test]

@@ -136,7 +136,9 @@ impl Border {
 pub(super) fn stability(system: &System, x: &[State], ws: &mut Workspace, report: &mut SolveReport) -> Stability {
     let unknown = |reason: &str| Stability::Unknown { reason: reason.into() };
     if crate::model::friction::any(system.model.robot) {
-        return unknown("tendons with friction and displacement control: no stability test covers both");
+        // Not reached from a solve: displacement control with friction is assessed by
+        // `dynamics::pulled` on the bordered capstan system (pipeline routes it there).
+        return unknown("tendons with friction and displacement control are assessed on the capstan system, not here");
     }
     if !ws.linearize(system, x, report) {
         return unknown("the Jacobian at the solution is singular or not finite");

@@ -49,6 +49,7 @@ mod locate;
 mod neutral;
 pub(crate) mod newton;
 mod options;
+mod order6;
 mod order8;
 mod path;
 mod path_types;

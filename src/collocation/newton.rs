@@ -169,7 +169,10 @@ impl Linearization<'_> {
         self.residual
     }
 
-    /// The Jacobian J whose factors these are, in [`unknowns::pattern`] order.
+    /// The Jacobian J whose factors these are, in [`unknowns::pattern`] order. (After a
+    /// Jacobian evaluated ahead at a trial point that did not end the run, the values are
+    /// that point's and the factors an earlier Jacobian's; only the plain run evaluates
+    /// ahead, and only a border with its own factors reads the values.)
     pub(crate) fn values(&self) -> &[f64] {
         self.values
     }

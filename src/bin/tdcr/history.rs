@@ -143,7 +143,7 @@ fn header(count: usize, input: Input, slipping: &[usize]) -> CsvTable {
         names.push(format!("delivered_{}", i + 1));
         names.push(format!("zones_{}", i + 1));
     }
-    names.extend(["iterations", "intervals", "tip_error_estimate"].map(String::from));
+    names.extend(["iterations", "intervals", "tip_error_estimate", "stability"].map(String::from));
     CsvTable::new(names)
 }
 
@@ -174,6 +174,7 @@ fn row(csv: &mut CsvTable, k: usize, direction: &str, value: f64, step: &History
         report.iterations.to_string(),
         report.intervals.to_string(),
         report.error_estimate.map_or(String::new(), |e| number(e.tip_position)),
+        report.stability.verdict().to_string(),
     ]);
     csv.row(fields);
 }

@@ -169,7 +169,8 @@ impl Work {
 /// The Ritz values after `m` steps if the run may stop there: every finite one within
 /// [`WANTED`] of the lowest mode (largest |theta|) and every one that grows has settled, and
 /// the run has reached past the band (a finite Ritz value below it: the band's modes, which
-/// shift-invert makes dominant, are in the Krylov space before any below them). When one of
+/// shift-invert makes dominant, normally enter the Krylov space before any below them:
+/// observed on every verdict measured, not a bound; docs/stability.md). When one of
 /// them grows, the run stops only at [`GROWING_CHECKS`] and when every one of the band and
 /// every growing one has a residual estimate below [`SETTLED`] of its magnitude (its rate is
 /// then the one more steps give, to 1e-8 and better). When none grows, a value settles when
@@ -230,9 +231,10 @@ fn settled(h: &DMatrix<f64>, m: usize) -> Result<Vec<Ritz>, usize> {
 }
 
 /// The step of the next early-stop test after one at step `m` that found a residual estimate
-/// `far` times its bound: a residual estimate falls by a hundredfold per step at most (about
-/// shift-invert's ratio of |mu| at the band's edge, [`WANTED`]), so it needs log10(far) / 2
-/// more steps at least, and no test is made before then.
+/// `far` times its bound: a residual estimate was observed to fall by a hundredfold per step
+/// at most (about shift-invert's ratio of |mu| at the band's edge, [`WANTED`]), so it is
+/// expected to need log10(far) / 2 more steps, and no test is made before then (a faster
+/// fall costs only the steps skipped, not the verdict).
 fn next_test(m: usize, far: f64) -> usize {
     let steps = if far.is_finite() {
         (far.log10() / 2.0).floor()

@@ -281,7 +281,8 @@ pub(super) fn solve(robot: &Robot, options: &Options, warm: Option<&Solution>, c
 /// friction built on it stands when its verdict is `stable`, the criterion the choice
 /// applies to every direct answer (docs/friction.md section 3, "Which start"). Otherwise
 /// (not `stable`, or the solve with friction failed) the whole solve runs again from the
-/// full choice on the frictionless robot, and the report counts both.
+/// full choice on the frictionless robot, and the report counts both (but for a failed
+/// first run whose error carries no report, whose work is then not counted).
 ///
 /// # Errors
 /// As [`super::solve`].
