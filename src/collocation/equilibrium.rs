@@ -226,7 +226,7 @@ fn direct(
     // Newton evaluates it at its last trial point instead of the residual there. An
     // unassessed answer takes no verdict here (its friction verdict is the bordered
     // system's), so it keeps the plain residual.
-    let (termination, worst) = if !nearest && !unassessed && plain_verdict(system, ws) {
+    let (termination, worst) = if !nearest && !unassessed && plain_verdict(system) {
         newton::run_ahead(system, ws, x, &direct, report)
     } else {
         newton::run(system, ws, x, &direct, report)
@@ -252,10 +252,11 @@ fn direct(
 
 /// Whether [`stability_of`] (not `exact`) of a state Newton reached on `system` with `ws`
 /// evaluates the plain Jacobian there when the one held is too far ([`Workspace::verdict_at`]:
-/// conservative loads, no friction, no tension columns kept): then Newton may evaluate it
-/// at its last trial point instead of the residual ([`newton::run_ahead`]).
-pub(crate) fn plain_verdict(system: &System, ws: &Workspace) -> bool {
-    system.friction.is_none() && stability::non_conservative(&system.model).is_none() && !ws.keeps_tension_columns()
+/// conservative loads, no friction; with the tension columns when the workspace keeps them):
+/// then Newton may evaluate it at its last trial point instead of the residual
+/// ([`newton::run_ahead`], [`Workspace::jacobian_ahead`]).
+pub(crate) fn plain_verdict(system: &System) -> bool {
+    system.friction.is_none() && stability::non_conservative(&system.model).is_none()
 }
 
 /// Whether a state with this verdict may be the answer without a path: only a stable one

@@ -278,7 +278,7 @@ fn evaluate_trial_ahead<B: Border>(border: &mut B, ws: &mut Workspace, report: &
     let t = Instant::now();
     let result = border.on(Point::Trial, |system| {
         report.evaluations.equations += system.rate_evaluations();
-        system.jacobian_rates(&ws.trial, &mut ws.trial_residual, &mut ws.values, &mut ws.trial_rates)
+        ws.jacobian_ahead(system)
     });
     report.timings.assembly += t.elapsed();
     report.evaluations.jacobian += 1;

@@ -481,7 +481,7 @@ fn newton_only(
     // of `solve_tensions`): Newton evaluates it at its last trial point, as a direct
     // solve's equilibrium choice does (wasted only when this mesh is refined further).
     let direct = matches!(report.path, PathTaken::Direct | PathTaken::Fallback);
-    let (termination, worst) = if direct && plain_verdict(system, ws) {
+    let (termination, worst) = if direct && plain_verdict(system) {
         newton::run_ahead(system, ws, &mut x, settings, report)
     } else {
         newton::run(system, ws, &mut x, settings, report)

@@ -372,7 +372,8 @@ pub fn interval_jacobian(
 /// [`interval_jacobian`] whose residual is bit for bit [`interval`]'s, with the rates at
 /// node a: F_1's position row is R_b v_b, as [`interval`] forms it, not R_a exp(theta_1) v_b
 /// (which differ by rounding; no derivative reads that row). For a Jacobian evaluated in
-/// place of a residual evaluation (Newton's trial point, `System::jacobian_rates`).
+/// place of a residual evaluation (Newton's trial point, `System::jacobian_rates`);
+/// `tensions` as in [`interval_jacobian`].
 ///
 /// # Errors
 /// As [`interval_jacobian`].
@@ -383,13 +384,14 @@ pub(super) fn interval_jacobian_as_residual(
     (a, b): (&State, &State),
     start: Option<&Linearization>,
     jac: &mut [f64],
+    tensions: Option<IntervalTensions>,
 ) -> Result<(Block<f64>, Linearization, Vector6<f64>)> {
     #[cfg(target_arch = "x86_64")]
     if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma") {
         // SAFETY: the processor supports the features the function is compiled for.
-        return unsafe { interval_jacobian_avx2(model, sites, segment_end, (a, b), start, jac, None, true) };
+        return unsafe { interval_jacobian_avx2(model, sites, segment_end, (a, b), start, jac, tensions, true) };
     }
-    interval_jacobian_kernel(model, sites, segment_end, a, b, start, jac, None, None, true)
+    interval_jacobian_kernel(model, sites, segment_end, a, b, start, jac, None, tensions, true)
 }
 
 /// [`interval_jacobian`] that keeps eq. 13's factored matrix at its points in `kept` (the

@@ -29,8 +29,17 @@ impl System<'_> {
             return self.residual(x, out).map(|()| false);
         }
         self.jacobian_with(x, out, values, None, None, Some(rates))?;
-        // The rows outside the intervals as `rows` writes them: their dual numbers' values
-        // can differ from the f64 evaluation in the last bits (the tip's wrench balance).
+        self.outer_rows(x, out)?;
+        Ok(true)
+    }
+
+    /// The rows outside the intervals (base, jumps, tip) of the residual at `x` into `out`,
+    /// as [`System::residual_rates`] writes them: their dual numbers' values in a Jacobian
+    /// can differ from the f64 evaluation in the last bits (the tip's wrench balance).
+    ///
+    /// # Errors
+    /// A model breakdown at a visited state.
+    pub(super) fn outer_rows(&self, x: &[State], out: &mut [f64]) -> Result<()> {
         let z = Delta::<f64>::zeros();
         out[..BASE_ROWS].copy_from_slice(residual::base(&self.model, &x[0], &z).as_slice());
         let links = x.len() - 1;
@@ -41,6 +50,6 @@ impl System<'_> {
         }
         let tip = residual::tip(&self.model, &self.node_sites[links], &x[links], &z)?;
         out[tip_row(x.len())..].copy_from_slice(tip.as_slice());
-        Ok(true)
+        Ok(())
     }
 }

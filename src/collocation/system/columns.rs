@@ -141,6 +141,28 @@ impl System<'_> {
         self.point_load_columns(x, Columns::Tensions, tensions)
     }
 
+    /// [`System::jacobian_rates`] with the tension columns dF/dtau_i of
+    /// [`System::jacobian_and_tensions`] from the same evaluations (tendons without
+    /// friction): the Jacobian at a trial point of Newton's for a verdict that keeps the
+    /// tension columns.
+    ///
+    /// # Errors
+    /// A model breakdown at a visited state.
+    pub(crate) fn jacobian_rates_and_tensions(
+        &self,
+        x: &[State],
+        out: &mut [f64],
+        values: &mut [f64],
+        rates: &mut [Vector6<f64>],
+        tensions: &mut [f64],
+    ) -> Result<()> {
+        debug_assert!(self.friction.is_none());
+        let mut sink = TensionSink::new(self.model.robot.tendons.len());
+        self.jacobian_with(x, out, values, None, Some((&mut sink, &mut *tensions)), Some(rates))?;
+        self.outer_rows(x, out)?;
+        self.point_load_columns(x, Columns::Tensions, tensions)
+    }
+
     /// The rows of [`System::parameter_columns`] outside the intervals: base rows 0, a
     /// jump's continuity rows 0 and its balance rows, the tip rows (the point loads'
     /// derivatives); the intervals' rows are left as they are.
@@ -252,8 +274,9 @@ mod tests {
         }
     }
 
-    /// `jacobian_rates` gives `residual_rates`' residual and node rates bit for bit, and
-    /// `jacobian`'s values, at the solutions of case H with three tendons pulled (tendon
+    /// `jacobian_rates` (and `jacobian_rates_and_tensions`) gives `residual_rates`' residual
+    /// and node rates bit for bit, and `jacobian`'s values (and `jacobian_and_tensions`'
+    /// columns), at the solutions of case H with three tendons pulled (tendon
     /// terminations as jumps) and of the prototype with four, each as a Cosserat and as a
     /// Kirchhoff rod, and at their rigid-equilibrium guesses (states far from a root).
     #[test]
@@ -295,6 +318,23 @@ mod tests {
                 assert_eq!(bits(&values, &with_values), None, "{case} {rod_model:?}");
                 let flat = |r: &[Vector6<f64>]| r.iter().flat_map(|v| v.iter().copied()).collect::<Vec<_>>();
                 assert_eq!(bits(&flat(&rates), &flat(&with_rates)), None, "{case} {rod_model:?}");
+                // With the tension columns (a `Solver` that keeps them): the same bits again,
+                // and the columns `jacobian_and_tensions` forms, bit for bit (the same
+                // operations on the same evaluations).
+                let width = robot.tendons.len();
+                let (mut both, mut both_values) = (vec![0.0; n], vec![0.0; values.len()]);
+                let mut both_rates = vec![Vector6::zeros(); x.len()];
+                let mut columns = vec![f64::NAN; n * width];
+                system
+                    .jacobian_rates_and_tensions(&x, &mut both, &mut both_values, &mut both_rates, &mut columns)
+                    .unwrap();
+                assert_eq!(bits(&residual, &both), None, "{case} {rod_model:?}");
+                assert_eq!(bits(&values, &both_values), None, "{case} {rod_model:?}");
+                assert_eq!(bits(&flat(&rates), &flat(&both_rates)), None, "{case} {rod_model:?}");
+                let (mut r, mut v) = (vec![0.0; n], vec![0.0; values.len()]);
+                let mut want = vec![f64::NAN; n * width];
+                system.jacobian_and_tensions(&x, &mut r, &mut v, &mut want).unwrap();
+                assert_eq!(bits(&want, &columns), None, "{case} {rod_model:?}");
             }
         }
     }

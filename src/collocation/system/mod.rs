@@ -452,8 +452,8 @@ impl<'a> System<'a> {
     /// [`System::jacobian`], keeping each interval's factors in `kept` as
     /// [`System::jacobian_keeping`] does, or writing each interval's tension rows into the
     /// columns `tensions` gives, with its buffers ([`System::jacobian_and_tensions`]); not
-    /// both (a point keeps its factors or forms its tension rows); with `rates`, neither, as
-    /// [`System::jacobian_rates`].
+    /// both (a point keeps its factors or forms its tension rows); `rates` (as
+    /// [`System::jacobian_rates`]) with the tension rows or alone, not with kept factors.
     ///
     /// # Errors
     /// A model breakdown at a visited state.
@@ -467,12 +467,8 @@ impl<'a> System<'a> {
         mut rates: Option<&mut [Vector6<f64>]>,
     ) -> Result<()> {
         debug_assert!(
-            [kept.is_some(), tensions.is_some(), rates.is_some()]
-                .iter()
-                .filter(|&&b| b)
-                .count()
-                <= 1,
-            "kept factors, tension rows or node rates, one at most"
+            !(kept.is_some() && (tensions.is_some() || rates.is_some())),
+            "kept factors exclude tension rows and node rates"
         );
         let n = self.unknowns();
         let mut at = 0;
@@ -501,8 +497,16 @@ impl<'a> System<'a> {
                     let (r, end) = match (kept.as_deref_mut(), rates.as_deref_mut()) {
                         (None, Some(rates)) => {
                             let ends = (&x[k], &x[k + 1]);
-                            let (r, end, at_start) =
-                                residual::interval_jacobian_as_residual(&self.model, sites, seg, ends, start, block)?;
+                            let sink = tensions.as_mut().map(|(sink, _)| sink.interval(start.is_some()));
+                            let (r, end, at_start) = residual::interval_jacobian_as_residual(
+                                &self.model,
+                                sites,
+                                seg,
+                                ends,
+                                start,
+                                block,
+                                sink,
+                            )?;
                             (rates[k], rates[k + 1]) = (at_start, end.rates);
                             (r, end)
                         }

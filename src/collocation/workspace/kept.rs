@@ -92,11 +92,50 @@ impl Workspace {
     /// assessed, and belonging to no iterate until Newton accepts that point (which sets
     /// the drift to zero when `finite`).
     pub(crate) fn evaluated_ahead(&mut self) {
-        self.forget_tension_rhs();
         self.verdict = None;
         self.neutral = None;
         self.unfactored = true;
         self.drift = f64::INFINITY;
+    }
+
+    /// The Jacobian of `system` at the trial point into the value buffer, the residual and
+    /// node rates there as a residual evaluation writes them ([`System::jacobian_rates`]),
+    /// with the tension columns' right-hand sides when this workspace keeps them (as
+    /// [`Workspace::verdict_jacobian`]): Newton's evaluation ahead of a verdict. Returns
+    /// whether the rates were written.
+    ///
+    /// # Errors
+    /// A model breakdown at a visited state.
+    pub(crate) fn jacobian_ahead(&mut self, system: &System) -> crate::error::Result<bool> {
+        self.forget_tension_rhs();
+        let plain = system.friction.is_none() && !system.model.robot.has_displacement_inputs();
+        if !(self.keep_tensions && plain) {
+            return system.jacobian_rates(
+                &self.trial,
+                &mut self.trial_residual,
+                &mut self.values,
+                &mut self.trial_rates,
+            );
+        }
+        let mut columns = self.take_buffer(system.unknowns() * system.model.robot.tendons.len());
+        let result = system.jacobian_rates_and_tensions(
+            &self.trial,
+            &mut self.trial_residual,
+            &mut self.values,
+            &mut self.trial_rates,
+            &mut columns,
+        );
+        match result {
+            Ok(()) => {
+                columns.iter_mut().for_each(|d| *d = -*d);
+                self.tension_rhs = Some(columns);
+                Ok(true)
+            }
+            Err(e) => {
+                self.give_buffer(columns);
+                Err(e)
+            }
+        }
     }
 
     /// The Jacobian of `system` at `x` into the value buffer and the residual there into
