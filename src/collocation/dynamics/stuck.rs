@@ -54,16 +54,9 @@ pub(crate) fn assess_step(robot: &Robot, carried: &Carried, report: &mut SolveRe
             let mut border = border(robot, settled);
             super::friction::assess(&mut border, &settled.x, false, report)
         }
-        None => Stability::Unknown {
-            reason: "a load-history step without an answer to assess".into(),
-        },
+        None => unassessed(),
     };
-    if !matches!(report.stability, Stability::Unknown { .. }) {
-        report.notes.push(STICK_HELD.into());
-    }
-    let spent = t.elapsed();
-    report.timings.stability += spent;
-    report.timings.total += spent;
+    close(report, t);
 }
 
 /// [`assess_step`] for a history step of `robot` with displacement-controlled tendons, its
@@ -78,17 +71,28 @@ pub(crate) fn assess_pulled(robot: &Robot, carried: &Carried, solution: &mut Sol
             let mut border = border(&solved, settled);
             super::pulled::assess(robot, solution, &mut border, &settled.x, &mut report)
         }
-        None => Stability::Unknown {
-            reason: "a load-history step without an answer to assess".into(),
-        },
+        None => unassessed(),
     };
+    close(&mut report, t);
+    solution.report = report;
+}
+
+/// The verdict of a step whose answer was not kept for it.
+fn unassessed() -> Stability {
+    Stability::Unknown {
+        reason: "a load-history step without an answer to assess".into(),
+    }
+}
+
+/// Closes a step's verdict begun at `started`: the note of its scope on a verdict that is
+/// not `unknown`, and its time in the report.
+fn close(report: &mut SolveReport, started: Instant) {
     if !matches!(report.stability, Stability::Unknown { .. }) {
         report.notes.push(STICK_HELD.into());
     }
-    let spent = t.elapsed();
+    let spent = started.elapsed();
     report.timings.stability += spent;
     report.timings.total += spent;
-    solution.report = report;
 }
 
 #[cfg(test)]
