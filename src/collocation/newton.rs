@@ -329,8 +329,8 @@ pub fn run(
 }
 
 /// [`run`] for a state whose stability verdict follows from the Jacobian at the answer
-/// ([`super::equilibrium`]'s direct solve: conservative loads, no friction, no tension
-/// columns kept): a trial point that the step-based stopping test already predicts to be
+/// ([`super::equilibrium`]'s direct solve: conservative loads, no friction; with the tension
+/// columns when the workspace keeps them, [`Workspace::jacobian_ahead`]): a trial point that the step-based stopping test already predicts to be
 /// the last (the error left after its step below [`STEP_TOLERANCE`], and the Jacobian held
 /// too far from it for the verdict to take) gets the Jacobian evaluated there instead of
 /// the residual, which gives the same residual and node rates bit for bit; the verdict then
