@@ -231,7 +231,7 @@ impl<'a> Sensitivity<'a> {
     /// Jacobian there is singular (a bifurcation, where no sensitivity exists); a model
     /// breakdown at the solution's states.
     pub fn new(robot: &'a Robot, solution: &Solution) -> Result<Self> {
-        Self::with_workspace(robot, solution, None, false, false)
+        Self::with_workspace(robot, solution, None, None, false, false)
     }
 
     /// As [`Sensitivity::new`], factoring in `workspace` when it was built for the
@@ -245,6 +245,8 @@ impl<'a> Sensitivity<'a> {
     /// tendon's tension column is formed first and carried through the factoring, which
     /// gives the tip's unknowns of each ([`Workspace::factor_with_last`]; what
     /// [`Sensitivity::tension_tip`] returns, bitwise as solving with the factors would).
+    /// `mesh`, when the caller built it already, is `Mesh::from_points(robot, s)` for the
+    /// solution's node arc lengths s (not built again).
     ///
     /// # Errors
     /// As [`Sensitivity::new`].
@@ -252,6 +254,7 @@ impl<'a> Sensitivity<'a> {
         robot: &'a Robot,
         solution: &Solution,
         workspace: Option<Workspace>,
+        mesh: Option<Mesh>,
         evaluated: bool,
         tips: bool,
     ) -> Result<Self> {
@@ -267,15 +270,21 @@ impl<'a> Sensitivity<'a> {
                 "pass a solution of this robot (same tendons in file order)",
             ));
         }
-        let s: Vec<f64> = solution.nodes.iter().map(|n| n.s).collect();
-        let mesh = Mesh::from_points(robot, &s)?;
-        let same = mesh.nodes.len() == s.len() && mesh.nodes.iter().zip(&s).all(|(m, s)| m.s == *s);
+        let mesh = match mesh {
+            Some(mesh) => mesh,
+            None => {
+                let s: Vec<f64> = solution.nodes.iter().map(|n| n.s).collect();
+                Mesh::from_points(robot, &s)?
+            }
+        };
+        let same = mesh.nodes.len() == solution.nodes.len()
+            && mesh.nodes.iter().zip(&solution.nodes).all(|(m, n)| m.s == n.s);
         if !same {
             return Err(invalid(
                 "solution",
                 format!(
                     "has {} nodes, but the mesh through their arc lengths and the robot's {} breakpoints has {}",
-                    s.len(),
+                    solution.nodes.len(),
                     robot.breakpoints().len(),
                     mesh.nodes.len()
                 ),

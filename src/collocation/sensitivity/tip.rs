@@ -94,7 +94,7 @@ pub fn tip_sensitivities(robot: &Robot, solution: &Solution) -> Result<TipSensit
     let solved = robot.with_tensions(&solution.tensions());
     // Without pull-ins to hold, the tension columns' tips come out of the factoring.
     let tips = !robot.has_displacement_inputs();
-    let mut sens = Sensitivity::with_workspace(&solved, solution, None, false, tips)?;
+    let mut sens = Sensitivity::with_workspace(&solved, solution, None, None, false, tips)?;
     let held = Held::new(&mut sens, robot, solution)?;
     // Without friction or held pull-ins, the 16 parameters besides the tensions cost six
     // transposed solves (the tip pose's multipliers) instead of one solve each.
