@@ -345,7 +345,11 @@ impl<'a> Sensitivity<'a> {
             });
         }
         let [mut residual, second, third] = scratch;
-        let mut values = vec![0.0; nonzeros(&border.system().mesh)];
+        // Every value is written by the assembly: a kept buffer serves.
+        let len = nonzeros(&border.system().mesh);
+        let mut values = workspace
+            .as_mut()
+            .map_or_else(|| vec![0.0; len], |w| w.take_buffer(len));
         border.linearize(&states, &mut residual, &mut values)?;
         let mut norm = residual.iter().fold(0.0f64, |m, r| m.max(r.abs()));
         if norm > RESIDUAL_LIMIT && border.border_rows() == 0 && residual.iter().all(|r| r.is_finite()) {
@@ -375,6 +379,7 @@ impl<'a> Sensitivity<'a> {
         if !ok {
             return Err(singular());
         }
+        workspace.give_buffer(values);
         Ok(Sensitivity {
             border,
             states,
