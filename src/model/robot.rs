@@ -166,7 +166,10 @@ impl Robot {
         // A uniform section and constant reference strains give the same values at every
         // sample: the first (s = 0, the one the loop would report) checks them all.
         let uniform = matches!(self.rod.stiffness, Stiffness::Uniform(_))
-            && matches!(self.rod.reference, ReferenceStrains::Straight | ReferenceStrains::Constant { .. });
+            && matches!(
+                self.rod.reference,
+                ReferenceStrains::Straight | ReferenceStrains::Constant { .. }
+            );
         for s in (0..=if uniform { 0 } else { 32 }).map(|k| l * k as f64 / 32.0) {
             let sp = self.rod.section_at(s);
             for (name, v) in [
@@ -314,7 +317,11 @@ impl Robot {
         check_vec("loads.follower_tip_moment", &self.loads.follower_tip_moment)?;
         // Constant fields give the same values at every sample: the first checks them all.
         let loads = &self.loads;
-        let fields = [&loads.distributed_force, &loads.distributed_moment, &loads.follower_distributed_force];
+        let fields = [
+            &loads.distributed_force,
+            &loads.distributed_moment,
+            &loads.follower_distributed_force,
+        ];
         let constant = fields.iter().all(|f| matches!(f, Field::Constant(_)));
         for k in 0..=if constant { 0 } else { 32 } {
             let s = l * k as f64 / 32.0;

@@ -150,7 +150,11 @@ impl<'r> Capstan<'r> {
             // Without friction nothing factors the bordered matrix (`Capstan::factor` returns
             // at once without a profile, and a staircase never factored solves nothing): an
             // empty one, which allocates nothing, not one step per node.
-            stairs: if frictionless { Staircase::default() } else { Staircase::new(&extra) },
+            stairs: if frictionless {
+                Staircase::default()
+            } else {
+                Staircase::new(&extra)
+            },
             node_slips,
         };
         border.reload();

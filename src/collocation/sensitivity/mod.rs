@@ -270,15 +270,10 @@ impl<'a> Sensitivity<'a> {
                 "pass a solution of this robot (same tendons in file order)",
             ));
         }
-        let mesh = match mesh {
-            Some(mesh) => mesh,
-            None => {
-                let s: Vec<f64> = solution.nodes.iter().map(|n| n.s).collect();
-                Mesh::from_points(robot, &s)?
-            }
-        };
-        let same = mesh.nodes.len() == solution.nodes.len()
-            && mesh.nodes.iter().zip(&solution.nodes).all(|(m, n)| m.s == n.s);
+        let points = || solution.nodes.iter().map(|n| n.s).collect::<Vec<_>>();
+        let mesh = mesh.map_or_else(|| Mesh::from_points(robot, &points()), Ok)?;
+        let same =
+            mesh.nodes.len() == solution.nodes.len() && mesh.nodes.iter().zip(&solution.nodes).all(|(m, n)| m.s == n.s);
         if !same {
             return Err(invalid(
                 "solution",
@@ -345,7 +340,7 @@ impl<'a> Sensitivity<'a> {
             });
         }
         let [mut residual, second, third] = scratch;
-        // Every value is written by the assembly: a kept buffer serves.
+        // The assembly writes every value: a kept buffer serves.
         let len = nonzeros(&border.system().mesh);
         let mut values = workspace
             .as_mut()
@@ -466,7 +461,7 @@ impl<'a> Sensitivity<'a> {
         perturb: impl Fn(&mut Robot, f64),
     ) -> Result<Vec<NodeDerivative>> {
         self.differenced(step, difference, |border, states, dq, out| {
-            residual_at(border, states, &perturb, dq, out)
+            exact::residual_at(border, states, &perturb, dq, out)
         })
     }
 
@@ -556,35 +551,6 @@ impl<'a> Sensitivity<'a> {
             )
         })
     }
-}
-
-/// The residual (backbone rows, then capstan rows) of `border`'s system at `states` and
-/// its log tensions for the robot with its parameter moved by dq.
-fn residual_at(
-    border: &Capstan,
-    states: &[State],
-    perturb: &impl Fn(&mut Robot, f64),
-    dq: f64,
-    out: &mut [f64],
-) -> Result<()> {
-    let robot = border.system().model.robot;
-    let mut probe = robot.clone();
-    perturb(&mut probe, dq);
-    if probe.breakpoints() != robot.breakpoints() {
-        return Err(invalid(
-            "perturbation",
-            "moves a breakpoint (tendon termination or point load), which changes the mesh",
-            "differentiate with respect to parameters that keep the breakpoints",
-        ));
-    }
-    let mut model = Model::new(&probe);
-    for (i, t) in probe.tendons.iter().enumerate() {
-        if t.displacement().is_some() {
-            model.tensions[i] = border.system().model.tensions[i];
-        }
-    }
-    let system = border.moved(model);
-    border.residual_of(&system, states, out)
 }
 
 /// The model of `robot` at the tensions of `solution`: a displacement-controlled tendon's

@@ -5,8 +5,8 @@
 use super::held::Held;
 use super::{Difference, NodeDerivative, RELATIVE_STEP, Sensitivity, singular};
 use crate::collocation::{LinearSolver, unknowns, workspace};
-use crate::mesh::Mesh;
 use crate::error::Result;
+use crate::mesh::Mesh;
 use crate::model::robot::Robot;
 use crate::model::rod::{Geometry, Rod, Section, Stiffness, shear_modulus};
 use crate::solution::Solution;
