@@ -76,7 +76,9 @@ impl TipSensitivities {
 /// (tip wrench, base pose) and each of the k + 2 differenced ones (tensions, E, G; k
 /// without geometry) and the friction coefficients, which also take two or three residual
 /// evaluations each. With friction each solve is the bordered one of
-/// `collocation/friction` (the log tensions are unknowns too).
+/// `collocation/friction` (the log tensions are unknowns too). The linear-solver workspace
+/// is the one this thread kept for the mesh, as a stateless solve takes one, and is kept
+/// for the next call.
 ///
 /// # Errors
 /// As [`Sensitivity::new`] and [`Sensitivity::derivative`].
