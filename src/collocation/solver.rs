@@ -179,7 +179,7 @@ impl Solver {
                 (None, None, false)
             }
         };
-        let mut sens = Sensitivity::with_workspace(&solved, solution, workspace, evaluated, tips)?;
+        let mut sens = Sensitivity::with_workspace(&solved, solution, workspace, Some(mesh), evaluated, tips)?;
         let out = f(&mut sens);
         if let Some((mesh, solver, last)) = kept {
             self.cache = Some(Cached {

@@ -3,8 +3,8 @@
 use crate::Readable;
 use crate::error::{Result, invalid};
 use crate::model::length;
-use crate::model::loads::Loads;
-use crate::model::rod::{Geometry, ReferenceStrains, Rod};
+use crate::model::loads::{Field, Loads};
+use crate::model::rod::{Geometry, ReferenceStrains, Rod, Stiffness};
 use crate::model::routing::Routing;
 use crate::model::tendon::Tendon;
 use crate::{Error, so3};
@@ -163,7 +163,14 @@ impl Robot {
             validate_geometry(g)?;
         }
         self.rod.validate_segments()?;
-        for s in (0..=32).map(|k| l * k as f64 / 32.0) {
+        // A uniform section and constant reference strains give the same values at every
+        // sample: the first (s = 0, the one the loop would report) checks them all.
+        let uniform = matches!(self.rod.stiffness, Stiffness::Uniform(_))
+            && matches!(
+                self.rod.reference,
+                ReferenceStrains::Straight | ReferenceStrains::Constant { .. }
+            );
+        for s in (0..=if uniform { 0 } else { 32 }).map(|k| l * k as f64 / 32.0) {
             let sp = self.rod.section_at(s);
             for (name, v) in [
                 ("kse (GA, GA, EA)", sp.section.kse),
@@ -308,7 +315,15 @@ impl Robot {
         check_vec("loads.tip_moment", &self.loads.tip_moment)?;
         check_vec("loads.follower_tip_force", &self.loads.follower_tip_force)?;
         check_vec("loads.follower_tip_moment", &self.loads.follower_tip_moment)?;
-        for k in 0..=32 {
+        // Constant fields give the same values at every sample: the first checks them all.
+        let loads = &self.loads;
+        let fields = [
+            &loads.distributed_force,
+            &loads.distributed_moment,
+            &loads.follower_distributed_force,
+        ];
+        let constant = fields.iter().all(|f| matches!(f, Field::Constant(_)));
+        for k in 0..=if constant { 0 } else { 32 } {
             let s = l * k as f64 / 32.0;
             check_vec("loads.distributed_force", &self.loads.distributed_force.at(s))?;
             check_vec("loads.distributed_moment", &self.loads.distributed_moment.at(s))?;

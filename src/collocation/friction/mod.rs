@@ -140,15 +140,21 @@ impl<'r> Capstan<'r> {
             link_z: vec![None; links],
             terminations: vec![None; profile.len()],
             border_step: vec![0.0; m],
-            rhs_x: vec![0.0; n],
+            // Only the bordered Newton step reads it, which runs on systems with a profile.
+            rhs_x: vec![0.0; if frictionless { 0 } else { n }],
             small_matrix: vec![0.0; profile.len() * profile.len()],
             small_rhs: vec![0.0; profile.len()],
             psi_x: vec![[0.0; 2 * NODE]; m],
             psi_z: vec![0.0; m * 2 * profile.len()],
             rows_in: vec![0.0; m],
             // Without friction nothing factors the bordered matrix (`Capstan::factor` returns
-            // at once without a profile): a one-node placeholder, not one step per node.
-            stairs: Staircase::new(if frictionless { &[0] } else { &extra }),
+            // at once without a profile, and a staircase never factored solves nothing): an
+            // empty one, which allocates nothing, not one step per node.
+            stairs: if frictionless {
+                Staircase::default()
+            } else {
+                Staircase::new(&extra)
+            },
             node_slips,
         };
         border.reload();

@@ -87,7 +87,7 @@ pub fn tip_jacobian(robot: &Robot, solution: &Solution, wrt: &[Parameter]) -> Re
     // A displacement-controlled tendon's tension is the solved one.
     let solved = robot.with_tensions(&solution.tensions());
     let tips = tension_tips(robot, wrt);
-    let mut sens = Sensitivity::with_workspace(&solved, solution, None, false, tips)?;
+    let mut sens = Sensitivity::with_workspace(&solved, solution, None, None, false, tips)?;
     tip_columns(&mut sens, robot, solution, wrt)
 }
 

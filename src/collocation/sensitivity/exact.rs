@@ -1,12 +1,15 @@
 //! The derivatives with their own right-hand sides: the tension columns (exact, one pass
 //! over the mesh for every tendon; differenced with friction), the friction coefficients
 //! (differenced), the section stiffnesses (E and G), and the six tip-pose multipliers of the adjoint form that `tip_sensitivities` contracts its other columns with
-//! (module docs of `sensitivity`, docs/sensitivity.md "Exact tension columns").
+//! (module docs of `sensitivity`, docs/sensitivity.md "Exact tension columns"); and the
+//! residual at the solution with a parameter moved, which every differenced one takes.
 
-use super::{Difference, NodeDerivative, RELATIVE_STEP, Sensitivity, force_scale, residual_at, singular};
+use super::{Difference, NodeDerivative, RELATIVE_STEP, Sensitivity, force_scale, singular};
+use crate::collocation::friction::Capstan;
 use crate::collocation::system::{Columns, System};
 use crate::collocation::unknowns;
 use crate::error::{Result, invalid};
+use crate::model::equations::Model;
 use crate::model::robot::Robot;
 use crate::solution::State;
 use nalgebra::Vector6;
@@ -218,4 +221,33 @@ pub(super) fn tension_rhs_columns(system: &System, states: &[State], mut out: Ve
     system.parameter_columns(states, Columns::Tensions, &mut out)?;
     out.iter_mut().for_each(|d| *d = -*d);
     Ok(out)
+}
+
+/// The residual (backbone rows, then capstan rows) of `border`'s system at `states` and
+/// its log tensions for the robot with its parameter moved by dq.
+pub(super) fn residual_at(
+    border: &Capstan,
+    states: &[State],
+    perturb: &impl Fn(&mut Robot, f64),
+    dq: f64,
+    out: &mut [f64],
+) -> Result<()> {
+    let robot = border.system().model.robot;
+    let mut probe = robot.clone();
+    perturb(&mut probe, dq);
+    if probe.breakpoints() != robot.breakpoints() {
+        return Err(invalid(
+            "perturbation",
+            "moves a breakpoint (tendon termination or point load), which changes the mesh",
+            "differentiate with respect to parameters that keep the breakpoints",
+        ));
+    }
+    let mut model = Model::new(&probe);
+    for (i, t) in probe.tendons.iter().enumerate() {
+        if t.displacement().is_some() {
+            model.tensions[i] = border.system().model.tensions[i];
+        }
+    }
+    let system = border.moved(model);
+    border.residual_of(&system, states, out)
 }

@@ -231,7 +231,7 @@ impl<'a> Sensitivity<'a> {
     /// Jacobian there is singular (a bifurcation, where no sensitivity exists); a model
     /// breakdown at the solution's states.
     pub fn new(robot: &'a Robot, solution: &Solution) -> Result<Self> {
-        Self::with_workspace(robot, solution, None, false, false)
+        Self::with_workspace(robot, solution, None, None, false, false)
     }
 
     /// As [`Sensitivity::new`], factoring in `workspace` when it was built for the
@@ -245,6 +245,8 @@ impl<'a> Sensitivity<'a> {
     /// tendon's tension column is formed first and carried through the factoring, which
     /// gives the tip's unknowns of each ([`Workspace::factor_with_last`]; what
     /// [`Sensitivity::tension_tip`] returns, bitwise as solving with the factors would).
+    /// `mesh`, when the caller built it already, is `Mesh::from_points(robot, s)` for the
+    /// solution's node arc lengths s (not built again).
     ///
     /// # Errors
     /// As [`Sensitivity::new`].
@@ -252,6 +254,7 @@ impl<'a> Sensitivity<'a> {
         robot: &'a Robot,
         solution: &Solution,
         workspace: Option<Workspace>,
+        mesh: Option<Mesh>,
         evaluated: bool,
         tips: bool,
     ) -> Result<Self> {
@@ -267,15 +270,16 @@ impl<'a> Sensitivity<'a> {
                 "pass a solution of this robot (same tendons in file order)",
             ));
         }
-        let s: Vec<f64> = solution.nodes.iter().map(|n| n.s).collect();
-        let mesh = Mesh::from_points(robot, &s)?;
-        let same = mesh.nodes.len() == s.len() && mesh.nodes.iter().zip(&s).all(|(m, s)| m.s == *s);
+        let points = || solution.nodes.iter().map(|n| n.s).collect::<Vec<_>>();
+        let mesh = mesh.map_or_else(|| Mesh::from_points(robot, &points()), Ok)?;
+        let same =
+            mesh.nodes.len() == solution.nodes.len() && mesh.nodes.iter().zip(&solution.nodes).all(|(m, n)| m.s == n.s);
         if !same {
             return Err(invalid(
                 "solution",
                 format!(
                     "has {} nodes, but the mesh through their arc lengths and the robot's {} breakpoints has {}",
-                    s.len(),
+                    solution.nodes.len(),
                     robot.breakpoints().len(),
                     mesh.nodes.len()
                 ),
@@ -336,7 +340,11 @@ impl<'a> Sensitivity<'a> {
             });
         }
         let [mut residual, second, third] = scratch;
-        let mut values = vec![0.0; nonzeros(&border.system().mesh)];
+        // The assembly writes every value: a kept buffer serves.
+        let len = nonzeros(&border.system().mesh);
+        let mut values = workspace
+            .as_mut()
+            .map_or_else(|| vec![0.0; len], |w| w.take_buffer(len));
         border.linearize(&states, &mut residual, &mut values)?;
         let mut norm = residual.iter().fold(0.0f64, |m, r| m.max(r.abs()));
         if norm > RESIDUAL_LIMIT && border.border_rows() == 0 && residual.iter().all(|r| r.is_finite()) {
@@ -366,6 +374,7 @@ impl<'a> Sensitivity<'a> {
         if !ok {
             return Err(singular());
         }
+        workspace.give_buffer(values);
         Ok(Sensitivity {
             border,
             states,
@@ -452,7 +461,7 @@ impl<'a> Sensitivity<'a> {
         perturb: impl Fn(&mut Robot, f64),
     ) -> Result<Vec<NodeDerivative>> {
         self.differenced(step, difference, |border, states, dq, out| {
-            residual_at(border, states, &perturb, dq, out)
+            exact::residual_at(border, states, &perturb, dq, out)
         })
     }
 
@@ -542,35 +551,6 @@ impl<'a> Sensitivity<'a> {
             )
         })
     }
-}
-
-/// The residual (backbone rows, then capstan rows) of `border`'s system at `states` and
-/// its log tensions for the robot with its parameter moved by dq.
-fn residual_at(
-    border: &Capstan,
-    states: &[State],
-    perturb: &impl Fn(&mut Robot, f64),
-    dq: f64,
-    out: &mut [f64],
-) -> Result<()> {
-    let robot = border.system().model.robot;
-    let mut probe = robot.clone();
-    perturb(&mut probe, dq);
-    if probe.breakpoints() != robot.breakpoints() {
-        return Err(invalid(
-            "perturbation",
-            "moves a breakpoint (tendon termination or point load), which changes the mesh",
-            "differentiate with respect to parameters that keep the breakpoints",
-        ));
-    }
-    let mut model = Model::new(&probe);
-    for (i, t) in probe.tendons.iter().enumerate() {
-        if t.displacement().is_some() {
-            model.tensions[i] = border.system().model.tensions[i];
-        }
-    }
-    let system = border.moved(model);
-    border.residual_of(&system, states, out)
 }
 
 /// The model of `robot` at the tensions of `solution`: a displacement-controlled tendon's

@@ -5,8 +5,9 @@
 //! a central difference of the residual with [`Parameter::apply`] on a clone of the robot
 //! otherwise; a pull-in enters no row (control.rs and adjoint.rs hold the tendon's length).
 
+use super::exact::residual_at;
 use super::tip::{built_from_geometry, youngs_modulus_direction};
-use super::{Difference, NodeDerivative, RELATIVE_STEP, Sensitivity, force_scale, residual_at};
+use super::{Difference, NodeDerivative, RELATIVE_STEP, Sensitivity, force_scale};
 use crate::error::{Result, invalid};
 use crate::model::parameter::Parameter;
 

@@ -4,8 +4,9 @@
 
 use super::held::Held;
 use super::{Difference, NodeDerivative, RELATIVE_STEP, Sensitivity, singular};
-use crate::collocation::unknowns;
+use crate::collocation::{LinearSolver, unknowns, workspace};
 use crate::error::Result;
+use crate::mesh::Mesh;
 use crate::model::robot::Robot;
 use crate::model::rod::{Geometry, Rod, Section, Stiffness, shear_modulus};
 use crate::solution::Solution;
@@ -75,7 +76,9 @@ impl TipSensitivities {
 /// (tip wrench, base pose) and each of the k + 2 differenced ones (tensions, E, G; k
 /// without geometry) and the friction coefficients, which also take two or three residual
 /// evaluations each. With friction each solve is the bordered one of
-/// `collocation/friction` (the log tensions are unknowns too).
+/// `collocation/friction` (the log tensions are unknowns too). The linear-solver workspace
+/// is the one this thread kept for the mesh, as a stateless solve takes one, and is kept
+/// for the next call.
 ///
 /// # Errors
 /// As [`Sensitivity::new`] and [`Sensitivity::derivative`].
@@ -94,7 +97,17 @@ pub fn tip_sensitivities(robot: &Robot, solution: &Solution) -> Result<TipSensit
     let solved = robot.with_tensions(&solution.tensions());
     // Without pull-ins to hold, the tension columns' tips come out of the factoring.
     let tips = !robot.has_displacement_inputs();
-    let mut sens = Sensitivity::with_workspace(&solved, solution, None, false, tips)?;
+    // The workspace this thread kept for the mesh (the last call's on it, as a stateless
+    // solve takes one), given back at the end; None when the points make no mesh (the
+    // linearization then reports what is wrong, robot first).
+    let s: Vec<f64> = solution.nodes.iter().map(|n| n.s).collect();
+    let mesh = Mesh::from_points(&solved, &s).ok();
+    let (kept, workspace) = match mesh.as_ref().map(|m| (m, workspace::spare(m, LinearSolver::Blocks))) {
+        Some((_, Some((kept, w)))) => (Some(kept), Some(w)),
+        Some((m, None)) => (Some(m.clone()), None),
+        None => (None, None),
+    };
+    let mut sens = Sensitivity::with_workspace(&solved, solution, workspace, mesh, false, tips)?;
     let held = Held::new(&mut sens, robot, solution)?;
     // Without friction or held pull-ins, the 16 parameters besides the tensions cost six
     // transposed solves (the tip pose's multipliers) instead of one solve each.
@@ -134,6 +147,9 @@ pub fn tip_sensitivities(robot: &Robot, solution: &Solution) -> Result<TipSensit
         base_rotation.set_column(j, &tip.of(|s| s.base_rotation_rhs(j))?);
     }
     let moduli = moduli(&mut tip)?;
+    if let Some(mesh) = kept {
+        workspace::keep(mesh, LinearSolver::Blocks, tip.sens.into_workspace());
+    }
     Ok(TipSensitivities {
         tension,
         displacement,
