@@ -9,7 +9,7 @@
 //! history's own mesh is a subset of every split mesh, so the material the step leaves is
 //! handed back to it at its nodes exactly.
 
-use super::{Carried, Contact, Grip, Options, Profile, Result, Robot, StepAnswer, solve_on};
+use super::{Carried, Contact, Grip, Kink, Options, Profile, Result, Robot, StepAnswer, solve_on};
 use crate::collocation::refine;
 use crate::mesh::Mesh;
 use crate::mesh::guess::interpolate;
@@ -85,7 +85,7 @@ pub(super) fn refine(
             .tolerance
             .zip(report.error_estimate)
             .map(|(tol, estimate)| refine::meets(&estimate, tol, length));
-        hand_back(carried, &fine);
+        hand_back(carried, &fine, before);
     }
     Ok(best)
 }
@@ -134,7 +134,13 @@ fn material_error(
     for ((grip, old), corrected) in quintic.grips.iter_mut().zip(&before.grips).zip(&before.corrected) {
         let span = old.contacts.len();
         for (value, node) in grip.reference.iter_mut().zip(&fine.mesh.nodes) {
-            *value = lagrange(&coarse[..=span], &corrected[..=span], node.s, 6);
+            *value = lagrange(
+                &coarse[..=span],
+                &corrected.values[..=span],
+                &corrected.kinks,
+                node.s,
+                6,
+            );
         }
     }
     let ((answer, _), _) = solve_on(robot, options, &mut quintic)?;
@@ -240,8 +246,9 @@ fn split(robot: &Robot, before: &Carried, parts: usize, guess: &Solution, bounda
             reference: mesh
                 .nodes
                 .iter()
-                .map(|node| lagrange(&coarse[..=links], &old.reference[..=links], node.s, 4))
+                .map(|node| lagrange(&coarse[..=links], &old.reference[..=links], &old.kinks, node.s, 4))
                 .collect(),
+            kinks: old.kinks.clone(),
         });
     }
     Ok(Carried {
@@ -312,44 +319,65 @@ fn boundaries(answer: &StepAnswer) -> Vec<f64> {
     out
 }
 
-/// The polynomial through the `points` nodes of `s` (increasing, within a tendon's span)
-/// nearest to `at`, evaluated there: the carried material between the nodes, to
-/// O(h^points) where it is smooth (4: the cubic the step is solved with; 6: the quintic
-/// that estimates the cubic's error). At a node it is that node's value exactly; with
-/// fewer nodes than `points`, the line through the link's two.
-fn lagrange(s: &[f64], values: &[f64], at: f64, points: usize) -> f64 {
-    let n = s.len();
+/// The carried material at `at` (docs/friction.md section 8, "The material's kinks"): the
+/// polynomial through the `points` points nearest to `at` of the smooth piece that holds
+/// it, evaluated there. A piece runs between two successive `kinks` (or a kink and an end
+/// of the span); its points are the nodes of `s` (increasing, within a tendon's span, with
+/// the material `values`) inside it and the kinks that bound it, with the piece's own
+/// lambda there, so no stencil straddles a kink and `at` always lies between a stencil's
+/// first and last point. `points` is 4 for the cubic the step is solved with (O(h^4) where
+/// the material is smooth), 6 for the quintic that estimates the cubic's error; a piece
+/// with fewer points gives the polynomial through all of them. At a node it is the value
+/// there exactly, so the material handed back at the history's nodes is the last step's;
+/// at a kink, the value after it.
+fn lagrange(s: &[f64], values: &[f64], kinks: &[Kink], at: f64, points: usize) -> f64 {
     if let Some(k) = s.iter().position(|&x| x == at) {
         return values[k];
     }
-    if n < 2 {
-        return values[0];
-    }
-    let k = s.iter().rposition(|&x| x <= at).unwrap_or(0);
-    if n < points {
-        let k = k.min(n - 2);
-        let t = (at - s[k]) / (s[k + 1] - s[k]);
-        return values[k] + t * (values[k + 1] - values[k]);
-    }
-    let lo = (k + 1).saturating_sub(points / 2).min(n - points);
-    let stencil = lo..lo + points;
+    let below = kinks.iter().rfind(|k| k.0 <= at);
+    let above = kinks.iter().find(|k| k.0 > at);
+    let (lo, hi) = (
+        below.map_or(f64::NEG_INFINITY, |k| k.0),
+        above.map_or(f64::INFINITY, |k| k.0),
+    );
+    let piece: Vec<(f64, f64)> = below
+        .map(|&(e, _, after)| (e, after))
+        .into_iter()
+        .chain(
+            s.iter()
+                .copied()
+                .zip(values.iter().copied())
+                .filter(|&(x, _)| x > lo && x < hi),
+        )
+        .chain(above.map(|&(e, before, _)| (e, before)))
+        .collect();
+    let n = piece.len();
+    let points = points.min(n);
+    let k = piece.iter().rposition(|p| p.0 <= at).unwrap_or(0);
+    let first = (k + 1).saturating_sub(points / 2).min(n - points);
+    let stencil = &piece[first..first + points];
     stencil
-        .clone()
-        .map(|a| {
+        .iter()
+        .enumerate()
+        .map(|(a, &(sa, value))| {
             let weight: f64 = stencil
-                .clone()
-                .filter(|&b| b != a)
-                .map(|b| (at - s[b]) / (s[a] - s[b]))
+                .iter()
+                .enumerate()
+                .filter(|&(b, _)| b != a)
+                .map(|(_, &(sb, _))| (at - sb) / (sa - sb))
                 .product();
-            weight * values[a]
+            weight * value
         })
         .sum()
 }
 
 /// Hands the material `fine` holds after its step back to the history's mesh in
 /// `carried`: the node states, log tensions and carried material at the history's nodes,
-/// which are nodes of the split mesh (matched by arc length and segment), so exactly.
-fn hand_back(carried: &mut Carried, fine: &Carried) {
+/// which are nodes of the split mesh (matched by arc length and segment), so exactly. The
+/// material at its best (`corrected`) is the one `before` the step where the step stuck
+/// (its material has not moved), and the step's own where it slid, with the kink at the
+/// boundary between them (docs/friction.md section 8, "The material's kinks").
+fn hand_back(carried: &mut Carried, fine: &Carried, before: &Carried) {
     let index: Vec<usize> = carried
         .mesh
         .nodes
@@ -367,8 +395,36 @@ fn hand_back(carried: &mut Carried, fine: &Carried) {
     for (j, z) in carried.z.iter_mut().enumerate() {
         *z = index.iter().map(|&n| fine.z[j][n]).collect();
     }
-    for ((grip, corrected), f) in carried.grips.iter_mut().zip(&mut carried.corrected).zip(&fine.grips) {
+    let coarse: Vec<f64> = carried.mesh.nodes.iter().map(|n| n.s).collect();
+    for (((grip, corrected), f), (old, was)) in carried
+        .grips
+        .iter_mut()
+        .zip(&mut carried.corrected)
+        .zip(&fine.grips)
+        .zip(before.corrected.iter().zip(&before.grips))
+    {
         grip.reference = index.iter().map(|&n| f.reference[n]).collect();
-        corrected.clone_from(&grip.reference);
+        grip.kinks.clone_from(&f.kinks);
+        // The step's stick/slip boundary, where its first stuck link starts (none: it slid
+        // all along).
+        let first = f.contacts.iter().position(|&c| c == Contact::Stick);
+        let boundary = first.map_or(f64::INFINITY, |k| fine.mesh.nodes[k].s);
+        corrected.values = coarse
+            .iter()
+            .zip(&grip.reference)
+            .zip(&old.values)
+            .map(|((&s, &slid), &kept)| if s > boundary { kept } else { slid })
+            .collect();
+        let span = was.contacts.len();
+        corrected.kinks = match first {
+            None => Vec::new(),
+            Some(k) => {
+                let stuck = lagrange(&coarse[..=span], &old.values[..=span], &old.kinks, boundary, 6);
+                let new = (k > 0).then_some((boundary, f.reference[k], stuck));
+                new.into_iter()
+                    .chain(old.kinks.iter().copied().filter(|&(e, _, _)| e > boundary))
+                    .collect()
+            }
+        };
     }
 }
