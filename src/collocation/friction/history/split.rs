@@ -101,14 +101,15 @@ fn sum(split: &ErrorEstimate, material: &ErrorEstimate) -> ErrorEstimate {
 }
 
 /// The error of the answer `cubic` (solved on `fine`'s mesh from `before`'s order-4
-/// material interpolated by [`lagrange`] through four nodes, `fine` holding its end state)
+/// material interpolated by [`lagrange`] through four points, `fine` holding its end state)
 /// that the carried material leaves, which every split level shares and so no difference
 /// of levels sees (docs/friction.md section 8, "Error control of stuck steps"): the change
-/// of the answer when the step is solved again on the same mesh from the material of the
-/// last step's deferred-corrected nodes (order 6) and the quintic through six of them,
-/// started from `cubic`'s state and factors. Both the node values' error (the last step's
-/// discretization error, inherited) and the interpolation's are of higher order there, so
-/// this is the cubic's material error to leading order.
+/// of the answer when the step is solved again on the same mesh from the material at its
+/// best (`before.corrected`: the deferred-corrected nodes, order 6, of the step that last
+/// slid there) and the quintic through six points of its smooth piece, started from
+/// `cubic`'s state and factors. Both the node values' error (the discretization error of
+/// the step that left them, inherited) and the interpolation's are of higher order there,
+/// so this is the cubic's material error to leading order.
 ///
 /// # Errors
 /// As [`super::step`], on `fine`'s mesh.
@@ -177,7 +178,7 @@ fn difference(coarse: &Solution, fine: &Solution) -> ErrorEstimate {
 /// The start of a step on `before`'s mesh with every link cut into `parts` equal links,
 /// the one of them nearest each point of `boundaries` inside a link moved onto it (the
 /// mesh keeps its intervals): the carried material (lambda) interpolated at the new nodes
-/// by the cubic through the four nearest ([`lagrange`]), each new link with its parent's
+/// by the cubic through the four nearest points of their smooth piece ([`lagrange`]), each new link with its parent's
 /// contact and multiplier, and the states and log tensions of `guess`.
 ///
 /// # Errors
