@@ -100,6 +100,39 @@ pub(crate) struct Grip {
     /// Per node, lambda: the unstretched length of tendon per unit s of the material there
     /// at the end of the last step (docs/friction.md section 8).
     pub(crate) reference: Vec<f64>,
+    /// The kinks of that material, in increasing s: each where an earlier step's stick/slip
+    /// boundary left one, still inside the stretch that has stuck since, as (s in m, lambda
+    /// just before it, lambda just after it). Between them lambda is smooth, so it is
+    /// interpolated from one piece's nodes and bounding kinks only (docs/friction.md
+    /// section 8, "The material's kinks").
+    pub(crate) kinks: Vec<Kink>,
+}
+
+/// A kink of the carried material: its arc length (m), and lambda at it as the smooth
+/// piece before it and the one after it have it. The two agree where the step placed its
+/// stick/slip boundary exactly; a boundary misplaced by delta leaves a jump of order delta
+/// between the sliding side's material and the stuck side's (docs/friction.md section 8).
+pub(crate) type Kink = (f64, f64, f64);
+
+impl Grip {
+    /// The kinks of the material a step leaves, whose solved `contacts` on the nodes `s`
+    /// of its mesh give `lambda` at those nodes, started from this grip's material
+    /// (`reference` on the same nodes, the stuck stretch's material): the step's stick/slip
+    /// boundary (the start node of its first stuck link after a sliding one), with the
+    /// material the sliding stretch leaves there before it and the stuck material after it,
+    /// then this material's kinks beyond it (its stuck stretch kept them; the sliding
+    /// stretch replaced the material, smooth, and with it the kinks). A tendon that slides
+    /// all along leaves none; one stuck all along keeps them all.
+    pub(crate) fn kinks_after(&self, contacts: &[Contact], s: &[f64], lambda: &[f64]) -> Vec<Kink> {
+        let Some(first) = contacts.iter().position(|&c| c == Contact::Stick) else {
+            return Vec::new();
+        };
+        let boundary = s[first];
+        let new = (first > 0).then_some((boundary, lambda[first], self.reference[first]));
+        new.into_iter()
+            .chain(self.kinks.iter().copied().filter(|&(e, _, _)| e > boundary))
+            .collect()
+    }
 }
 
 /// A stuck material's tension (N) and its derivatives in a node's v and u.

@@ -16,7 +16,7 @@
 
 mod split;
 
-use super::grip::{choose, stuck_multiplier};
+use super::grip::{Kink, choose, stuck_multiplier};
 use super::staircase::Staircase;
 use super::*;
 use crate::model::length;
@@ -42,12 +42,13 @@ pub(crate) struct Carried {
     pub(crate) z: Vec<Vec<f64>>,
     /// Each tendon with friction's contacts, multipliers and material (lambda).
     pub(crate) grips: Vec<Grip>,
-    /// Each tendon with friction's material at the nodes read from the last step's
-    /// deferred-corrected node states and log tensions (order 6; the order-4 one in `grips`
-    /// where the step has no correction): only the estimate of a stuck step's material
-    /// error reads it ([`split`]); the steps are solved from the order-4 material, whose
-    /// stuck tensions match the last step's answer exactly where nothing moves.
-    pub(crate) corrected: Vec<Vec<f64>>,
+    /// Each tendon with friction's material at its best: at the nodes read from the
+    /// deferred-corrected node states and log tensions of the step that last slid there
+    /// (order 6; the order-4 one in `grips` where that step had no correction), with its
+    /// kinks: only the estimate of a stuck step's material error reads it ([`split`]); the
+    /// steps are solved from the order-4 material, whose stuck tensions match the last
+    /// step's answer exactly where nothing moves.
+    pub(crate) corrected: Vec<Material>,
     /// Whether (x, z) already solve the next step with the contacts held (the first step
     /// when the mesh was chosen on it).
     pub(crate) solved: bool,
@@ -59,6 +60,15 @@ pub(crate) struct Carried {
     /// The last step's answer as its stability verdict reads it (on the mesh it was solved
     /// on, split levels included); None before the first step.
     pub(crate) settled: Option<Settled>,
+}
+
+/// A tendon's carried material on the history's mesh (docs/friction.md section 8).
+#[derive(Clone)]
+pub(crate) struct Material {
+    /// lambda at the nodes.
+    pub(crate) values: Vec<f64>,
+    /// Its kinks, as [`Grip::kinks`].
+    pub(crate) kinks: Vec<Kink>,
 }
 
 /// A step's answer with its pattern, on the mesh the step returns: what its verdict
@@ -170,9 +180,16 @@ pub(crate) fn start(robots: &[Robot], options: &Options) -> Result<Carried> {
             multipliers: vec![-1.0; span],
             capacities: vec![0.0; span],
             reference,
+            kinks: Vec::new(),
         });
     }
-    let corrected = grips.iter().map(|g| g.reference.clone()).collect();
+    let corrected = grips
+        .iter()
+        .map(|g| Material {
+            values: g.reference.clone(),
+            kinks: Vec::new(),
+        })
+        .collect();
     Ok(Carried {
         mesh,
         x,
@@ -489,13 +506,17 @@ fn solve_on(robot: &Robot, options: &Options, carried: &mut Carried) -> Result<(
         };
         let lambda = material(false);
         // (A split mesh carries none: its step's material goes back to the history's mesh.)
+        // (A stuck step's is replaced by its split meshes' hand-back.)
         if let Some(order6) = carried.corrected.get_mut(j) {
-            order6[..=span].copy_from_slice(&if corrected { material(true) } else { lambda.clone() });
+            order6.values[..=span].copy_from_slice(&if corrected { material(true) } else { lambda.clone() });
+            order6.kinks.clear();
         }
         // An unloaded tendon is slack: no normal force, so friction holds nothing back.
         if profile.base[j] > 0.0 {
             check_slip(i, &grips[j], &lambda, &x, span)?;
         }
+        let nodes: Vec<f64> = x[..=span].iter().map(|n| n.s).collect();
+        next[j].kinks = grips[j].kinks_after(&grips[j].contacts, &nodes, &lambda);
         next[j].reference[..=span].copy_from_slice(&lambda);
         let mut list: Vec<(f64, f64, Contact)> = Vec::new();
         for (k, &c) in grips[j].contacts.iter().enumerate() {

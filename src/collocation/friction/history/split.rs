@@ -9,7 +9,7 @@
 //! history's own mesh is a subset of every split mesh, so the material the step leaves is
 //! handed back to it at its nodes exactly.
 
-use super::{Carried, Contact, Grip, Options, Profile, Result, Robot, StepAnswer, solve_on};
+use super::{Carried, Contact, Grip, Kink, Options, Profile, Result, Robot, StepAnswer, solve_on};
 use crate::collocation::refine;
 use crate::mesh::Mesh;
 use crate::mesh::guess::interpolate;
@@ -85,7 +85,7 @@ pub(super) fn refine(
             .tolerance
             .zip(report.error_estimate)
             .map(|(tol, estimate)| refine::meets(&estimate, tol, length));
-        hand_back(carried, &fine);
+        hand_back(carried, &fine, before);
     }
     Ok(best)
 }
@@ -101,14 +101,15 @@ fn sum(split: &ErrorEstimate, material: &ErrorEstimate) -> ErrorEstimate {
 }
 
 /// The error of the answer `cubic` (solved on `fine`'s mesh from `before`'s order-4
-/// material interpolated by [`lagrange`] through four nodes, `fine` holding its end state)
+/// material interpolated by [`lagrange`] through four points, `fine` holding its end state)
 /// that the carried material leaves, which every split level shares and so no difference
 /// of levels sees (docs/friction.md section 8, "Error control of stuck steps"): the change
-/// of the answer when the step is solved again on the same mesh from the material of the
-/// last step's deferred-corrected nodes (order 6) and the quintic through six of them,
-/// started from `cubic`'s state and factors. Both the node values' error (the last step's
-/// discretization error, inherited) and the interpolation's are of higher order there, so
-/// this is the cubic's material error to leading order.
+/// of the answer when the step is solved again on the same mesh from the material at its
+/// best (`before.corrected`: the deferred-corrected nodes, order 6, of the step that last
+/// slid there) and the quintic through six points of its smooth piece, started from
+/// `cubic`'s state and factors. Both the node values' error (the discretization error of
+/// the step that left them, inherited) and the interpolation's are of higher order there,
+/// so this is the cubic's material error to leading order.
 ///
 /// # Errors
 /// As [`super::step`], on `fine`'s mesh.
@@ -134,7 +135,13 @@ fn material_error(
     for ((grip, old), corrected) in quintic.grips.iter_mut().zip(&before.grips).zip(&before.corrected) {
         let span = old.contacts.len();
         for (value, node) in grip.reference.iter_mut().zip(&fine.mesh.nodes) {
-            *value = lagrange(&coarse[..=span], &corrected[..=span], node.s, 6);
+            *value = lagrange(
+                &coarse[..=span],
+                &corrected.values[..=span],
+                &corrected.kinks,
+                node.s,
+                6,
+            );
         }
     }
     let ((answer, _), _) = solve_on(robot, options, &mut quintic)?;
@@ -171,7 +178,7 @@ fn difference(coarse: &Solution, fine: &Solution) -> ErrorEstimate {
 /// The start of a step on `before`'s mesh with every link cut into `parts` equal links,
 /// the one of them nearest each point of `boundaries` inside a link moved onto it (the
 /// mesh keeps its intervals): the carried material (lambda) interpolated at the new nodes
-/// by the cubic through the four nearest ([`lagrange`]), each new link with its parent's
+/// by the cubic through the four nearest points of their smooth piece ([`lagrange`]), each new link with its parent's
 /// contact and multiplier, and the states and log tensions of `guess`.
 ///
 /// # Errors
@@ -240,8 +247,9 @@ fn split(robot: &Robot, before: &Carried, parts: usize, guess: &Solution, bounda
             reference: mesh
                 .nodes
                 .iter()
-                .map(|node| lagrange(&coarse[..=links], &old.reference[..=links], node.s, 4))
+                .map(|node| lagrange(&coarse[..=links], &old.reference[..=links], &old.kinks, node.s, 4))
                 .collect(),
+            kinks: old.kinks.clone(),
         });
     }
     Ok(Carried {
@@ -312,44 +320,65 @@ fn boundaries(answer: &StepAnswer) -> Vec<f64> {
     out
 }
 
-/// The polynomial through the `points` nodes of `s` (increasing, within a tendon's span)
-/// nearest to `at`, evaluated there: the carried material between the nodes, to
-/// O(h^points) where it is smooth (4: the cubic the step is solved with; 6: the quintic
-/// that estimates the cubic's error). At a node it is that node's value exactly; with
-/// fewer nodes than `points`, the line through the link's two.
-fn lagrange(s: &[f64], values: &[f64], at: f64, points: usize) -> f64 {
-    let n = s.len();
+/// The carried material at `at` (docs/friction.md section 8, "The material's kinks"): the
+/// polynomial through the `points` points nearest to `at` of the smooth piece that holds
+/// it, evaluated there. A piece runs between two successive `kinks` (or a kink and an end
+/// of the span); its points are the nodes of `s` (increasing, within a tendon's span, with
+/// the material `values`) inside it and the kinks that bound it, with the piece's own
+/// lambda there, so no stencil straddles a kink and `at` always lies between a stencil's
+/// first and last point. `points` is 4 for the cubic the step is solved with (O(h^4) where
+/// the material is smooth), 6 for the quintic that estimates the cubic's error; a piece
+/// with fewer points gives the polynomial through all of them. At a node it is the value
+/// there exactly, so the material handed back at the history's nodes is the last step's;
+/// at a kink, the value after it.
+fn lagrange(s: &[f64], values: &[f64], kinks: &[Kink], at: f64, points: usize) -> f64 {
     if let Some(k) = s.iter().position(|&x| x == at) {
         return values[k];
     }
-    if n < 2 {
-        return values[0];
-    }
-    let k = s.iter().rposition(|&x| x <= at).unwrap_or(0);
-    if n < points {
-        let k = k.min(n - 2);
-        let t = (at - s[k]) / (s[k + 1] - s[k]);
-        return values[k] + t * (values[k + 1] - values[k]);
-    }
-    let lo = (k + 1).saturating_sub(points / 2).min(n - points);
-    let stencil = lo..lo + points;
+    let below = kinks.iter().rfind(|k| k.0 <= at);
+    let above = kinks.iter().find(|k| k.0 > at);
+    let (lo, hi) = (
+        below.map_or(f64::NEG_INFINITY, |k| k.0),
+        above.map_or(f64::INFINITY, |k| k.0),
+    );
+    let piece: Vec<(f64, f64)> = below
+        .map(|&(e, _, after)| (e, after))
+        .into_iter()
+        .chain(
+            s.iter()
+                .copied()
+                .zip(values.iter().copied())
+                .filter(|&(x, _)| x > lo && x < hi),
+        )
+        .chain(above.map(|&(e, before, _)| (e, before)))
+        .collect();
+    let n = piece.len();
+    let points = points.min(n);
+    let k = piece.iter().rposition(|p| p.0 <= at).unwrap_or(0);
+    let first = (k + 1).saturating_sub(points / 2).min(n - points);
+    let stencil = &piece[first..first + points];
     stencil
-        .clone()
-        .map(|a| {
+        .iter()
+        .enumerate()
+        .map(|(a, &(sa, value))| {
             let weight: f64 = stencil
-                .clone()
-                .filter(|&b| b != a)
-                .map(|b| (at - s[b]) / (s[a] - s[b]))
+                .iter()
+                .enumerate()
+                .filter(|&(b, _)| b != a)
+                .map(|(_, &(sb, _))| (at - sb) / (sa - sb))
                 .product();
-            weight * values[a]
+            weight * value
         })
         .sum()
 }
 
 /// Hands the material `fine` holds after its step back to the history's mesh in
 /// `carried`: the node states, log tensions and carried material at the history's nodes,
-/// which are nodes of the split mesh (matched by arc length and segment), so exactly.
-fn hand_back(carried: &mut Carried, fine: &Carried) {
+/// which are nodes of the split mesh (matched by arc length and segment), so exactly. The
+/// material at its best (`corrected`) is the one `before` the step where the step stuck
+/// (its material has not moved), and the step's own where it slid, with the kink at the
+/// boundary between them (docs/friction.md section 8, "The material's kinks").
+fn hand_back(carried: &mut Carried, fine: &Carried, before: &Carried) {
     let index: Vec<usize> = carried
         .mesh
         .nodes
@@ -367,8 +396,36 @@ fn hand_back(carried: &mut Carried, fine: &Carried) {
     for (j, z) in carried.z.iter_mut().enumerate() {
         *z = index.iter().map(|&n| fine.z[j][n]).collect();
     }
-    for ((grip, corrected), f) in carried.grips.iter_mut().zip(&mut carried.corrected).zip(&fine.grips) {
+    let coarse: Vec<f64> = carried.mesh.nodes.iter().map(|n| n.s).collect();
+    for (((grip, corrected), f), (old, was)) in carried
+        .grips
+        .iter_mut()
+        .zip(&mut carried.corrected)
+        .zip(&fine.grips)
+        .zip(before.corrected.iter().zip(&before.grips))
+    {
         grip.reference = index.iter().map(|&n| f.reference[n]).collect();
-        corrected.clone_from(&grip.reference);
+        grip.kinks.clone_from(&f.kinks);
+        // The step's stick/slip boundary, where its first stuck link starts (none: it slid
+        // all along).
+        let first = f.contacts.iter().position(|&c| c == Contact::Stick);
+        let boundary = first.map_or(f64::INFINITY, |k| fine.mesh.nodes[k].s);
+        corrected.values = coarse
+            .iter()
+            .zip(&grip.reference)
+            .zip(&old.values)
+            .map(|((&s, &slid), &kept)| if s > boundary { kept } else { slid })
+            .collect();
+        let span = was.contacts.len();
+        corrected.kinks = match first {
+            None => Vec::new(),
+            Some(k) => {
+                let stuck = lagrange(&coarse[..=span], &old.values[..=span], &old.kinks, boundary, 6);
+                let new = (k > 0).then_some((boundary, f.reference[k], stuck));
+                new.into_iter()
+                    .chain(old.kinks.iter().copied().filter(|&(e, _, _)| e > boundary))
+                    .collect()
+            }
+        };
     }
 }
