@@ -171,8 +171,8 @@ impl Linearization<'_> {
 
     /// The Jacobian J whose factors these are, in [`unknowns::pattern`] order. (After a
     /// Jacobian evaluated ahead at a trial point that did not end the run, the values are
-    /// that point's and the factors an earlier Jacobian's; only the plain run evaluates
-    /// ahead, and only a border with its own factors reads the values.)
+    /// that point's and the factors an earlier Jacobian's; a border with its own factors
+    /// reads the values only in [`Border::factored`], right after Newton evaluated them.)
     pub(crate) fn values(&self) -> &[f64] {
         self.values
     }
@@ -271,14 +271,20 @@ fn stops(before_last: f64, last_step: f64, fresh: bool) -> bool {
 
 /// [`evaluate_trial`] by a Jacobian evaluation at the trial point into the value buffer
 /// ([`System::jacobian_rates`]: the residual and node rates bit for bit those of the
-/// residual evaluation), counted as a Jacobian evaluation, not factored
+/// residual evaluation; with `keep`, eq. 13's factored matrices kept for the mass of the
+/// linearized dynamics), counted as a Jacobian evaluation, not factored
 /// ([`Workspace::evaluated_ahead`]). Returns whether it succeeded and whether the values
 /// are finite; a breakdown of the Jacobian alone falls back to [`evaluate_trial`].
-fn evaluate_trial_ahead<B: Border>(border: &mut B, ws: &mut Workspace, report: &mut SolveReport) -> (bool, bool) {
+fn evaluate_trial_ahead<B: Border>(
+    border: &mut B,
+    ws: &mut Workspace,
+    keep: bool,
+    report: &mut SolveReport,
+) -> (bool, bool) {
     let t = Instant::now();
     let result = border.on(Point::Trial, |system| {
         report.evaluations.equations += system.rate_evaluations();
-        ws.jacobian_ahead(system)
+        ws.jacobian_ahead(system, keep)
     });
     report.timings.assembly += t.elapsed();
     report.evaluations.jacobian += 1;
@@ -329,13 +335,15 @@ pub fn run(
 }
 
 /// [`run`] for a state whose stability verdict follows from the Jacobian at the answer
-/// ([`super::equilibrium`]'s direct solve: conservative loads, no friction; with the tension
-/// columns when the workspace keeps them, [`Workspace::jacobian_ahead`]): a trial point that the step-based stopping test already predicts to be
-/// the last (the error left after its step below [`STEP_TOLERANCE`], and the Jacobian held
-/// too far from it for the verdict to take) gets the Jacobian evaluated there instead of
-/// the residual, which gives the same residual and node rates bit for bit; the verdict then
-/// takes that Jacobian instead of evaluating it again (docs/numerics.md, "The Jacobian at
-/// the answer, evaluated by Newton"). Every decision and iterate is [`run`]'s.
+/// ([`super::equilibrium`]'s direct solve, no friction: conservative loads, with the tension
+/// columns when the workspace keeps them, or loads that are not conservative, whose
+/// linearized dynamics also read eq. 13's factored matrices there, which it keeps;
+/// [`Workspace::jacobian_ahead`]): a trial point that the step-based stopping test already
+/// predicts to be the last (the error left after its step below [`STEP_TOLERANCE`], and the
+/// Jacobian held too far from it for the verdict to take) gets the Jacobian evaluated there
+/// instead of the residual, which gives the same residual and node rates bit for bit; the
+/// verdict then takes that Jacobian instead of evaluating it again (docs/numerics.md, "The
+/// Jacobian at the answer, evaluated by Newton"). Every decision and iterate is [`run`]'s.
 pub(crate) fn run_ahead(
     system: &System,
     ws: &mut Workspace,
@@ -343,7 +351,8 @@ pub(crate) fn run_ahead(
     settings: &Settings,
     report: &mut SolveReport,
 ) -> (Termination, usize) {
-    run_with(&mut NoBorder(system), ws, x, settings, report, true)
+    let keep = super::stability::non_conservative(&system.model).is_some();
+    run_with(&mut NoBorder(system), ws, x, settings, report, Some(keep))
 }
 
 /// [`run`] on the collocation system bordered by `border`'s unknowns and rows (docs/actuation.md
@@ -357,18 +366,35 @@ pub(crate) fn run_bordered<B: Border>(
     settings: &Settings,
     report: &mut SolveReport,
 ) -> (Termination, usize) {
-    run_with(border, ws, x, settings, report, false)
+    run_with(border, ws, x, settings, report, None)
+}
+
+/// [`run_bordered`] for a state whose stability verdict factors the bordered Jacobian at the
+/// answer (a full-slip solve with friction, `collocation/friction`): a trial point predicted
+/// to be the last gets the collocation Jacobian evaluated there in place of the residual, as
+/// in [`run_ahead`] (the same residual bits, and the links' evaluations the border reads its
+/// rows and blocks from), left unfactored for the verdict ([`Workspace::evaluated_at_solution`]
+/// with the values unfactored; the border's factors stay those of Newton's last Jacobian).
+/// Every decision and iterate is [`run_bordered`]'s.
+pub(crate) fn run_bordered_ahead<B: Border>(
+    border: &mut B,
+    ws: &mut Workspace,
+    x: &mut Vec<State>,
+    settings: &Settings,
+    report: &mut SolveReport,
+) -> (Termination, usize) {
+    run_with(border, ws, x, settings, report, Some(false))
 }
 
 /// [`run_bordered`], evaluating the Jacobian at a trial point predicted to be the last when
-/// `ahead` ([`run_ahead`]).
+/// `ahead` is given ([`run_ahead`]; `Some(keep)`: keeping eq. 13's factored matrices).
 fn run_with<B: Border>(
     border: &mut B,
     ws: &mut Workspace,
     x: &mut Vec<State>,
     settings: &Settings,
     report: &mut SolveReport,
-    ahead: bool,
+    ahead: Option<bool>,
 ) -> (Termination, usize) {
     use Point::{Current, Trial};
     report.history.clear();
@@ -442,10 +468,11 @@ fn run_with<B: Border>(
             border.trial(1.0);
             // The Jacobian there when the step would end the run and leave the one held
             // too far for the verdict (drift beyond STEP_TOLERANCE).
-            let (ok, finite) = if ahead && ws.drift + step_norm > STEP_TOLERANCE && stops(last_step, step_norm, false) {
-                evaluate_trial_ahead(border, ws, report)
-            } else {
-                (evaluate_trial(border, ws, report), false)
+            let (ok, finite) = match ahead {
+                Some(keep) if ws.drift + step_norm > STEP_TOLERANCE && stops(last_step, step_norm, false) => {
+                    evaluate_trial_ahead(border, ws, keep, report)
+                }
+                _ => (evaluate_trial(border, ws, report), false),
             };
             let trial_norm = norm(&ws.trial_residual, border.residual(Trial));
             if ok && (trial_norm <= settings.tolerance || trial_norm <= CHORD_CONTRACTION * norm_x) {
@@ -501,12 +528,13 @@ fn run_with<B: Border>(
         loop {
             unknowns::retract(x, &ws.step, alpha, length, &mut ws.trial);
             border.trial(alpha);
-            let ok = if ahead && alpha == 1.0 && step_norm > STEP_TOLERANCE && stops(last_step, step_norm, true) {
-                let (ok, finite) = evaluate_trial_ahead(border, ws, report);
-                finite_ahead = finite;
-                ok
-            } else {
-                evaluate_trial(border, ws, report)
+            let ok = match ahead {
+                Some(keep) if alpha == 1.0 && step_norm > STEP_TOLERANCE && stops(last_step, step_norm, true) => {
+                    let (ok, finite) = evaluate_trial_ahead(border, ws, keep, report);
+                    finite_ahead = finite;
+                    ok
+                }
+                _ => evaluate_trial(border, ws, report),
             };
             let phi_trial = merit(&ws.trial_residual, border.residual(Trial));
             // Armijo on 0.5|F|^2, whose slope along the Newton step is -|F|^2 = -2 phi; a
