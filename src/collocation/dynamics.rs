@@ -538,7 +538,9 @@ mod tests {
     /// from those matrices is the mass evaluated afresh, bit for bit, on every interval
     /// (the same points, the same solves): case S with a dead tip moment, and case H with
     /// one and a point load halfway (a breakpoint: a jump between two intervals, after which
-    /// no node is shared), at their answers.
+    /// no node is shared), at their answers. The same holds for the Jacobian Newton
+    /// evaluates ahead in place of its last residual (`System::jacobian_rates_keeping`),
+    /// whose residual and node rates are also `residual_rates`' bit for bit.
     #[test]
     fn the_kept_factors_give_the_jacobian_and_the_mass_bit_for_bit() {
         let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
@@ -561,14 +563,30 @@ mod tests {
             assert_eq!(bits(ws.jacobian()), bits(&plain));
             let fresh = Mass::new(&system, &x, None).unwrap();
             let kept = Mass::new(&system, &x, Some(ws.kept())).unwrap();
+            // Newton's Jacobian ahead, keeping the matrices.
+            let n = system.unknowns();
+            let (mut residual, mut rates) = (vec![0.0; n], vec![Vector6::zeros(); x.len()]);
+            assert!(system.residual_rates(&x, &mut residual, &mut rates).unwrap());
+            let (mut with, mut values) = (vec![f64::NAN; n], vec![f64::NAN; plain.len()]);
+            let mut with_rates = vec![Vector6::zeros(); x.len()];
+            let mut factors = vec![IntervalFactors::identity(); x.len() - 1];
+            system
+                .jacobian_rates_keeping(&x, &mut with, &mut values, &mut with_rates, &mut factors)
+                .unwrap();
+            assert_eq!(bits(&with), bits(&residual));
+            assert_eq!(bits(&values), bits(&plain));
+            let flat = |r: &[Vector6<f64>]| r.iter().flat_map(|v| v.iter().copied()).collect::<Vec<_>>();
+            assert_eq!(bits(&flat(&with_rates)), bits(&flat(&rates)));
+            let ahead = Mass::new(&system, &x, Some(&factors)).unwrap();
             let mut compared = 0;
-            for (k, (a, b)) in fresh.blocks.iter().zip(&kept.blocks).enumerate() {
-                match (a, b) {
-                    (Some(a), Some(b)) => {
+            for (k, ((a, b), c)) in fresh.blocks.iter().zip(&kept.blocks).zip(&ahead.blocks).enumerate() {
+                match (a, b, c) {
+                    (Some(a), Some(b), Some(c)) => {
                         assert_eq!(bits(a.as_slice()), bits(b.as_slice()), "interval {k}");
+                        assert_eq!(bits(a.as_slice()), bits(c.as_slice()), "interval {k}, ahead");
                         compared += 1;
                     }
-                    (None, None) => {}
+                    (None, None, None) => {}
                     _ => panic!("interval {k}: a jump in one mass only"),
                 }
             }

@@ -189,14 +189,26 @@ fn linearized_dynamics(
         return verdict;
     }
     // The factors of the Jacobian at `x` may be held already (the path's last corrector
-    // step evaluated and factored it there, and no step was taken since); else it is
-    // evaluated keeping eq. 13's factored matrices, which the mass solves with.
-    let kept = !ws.factors_at_iterate();
-    if kept && !ws.linearize_keeping(system, x, report) {
-        return Stability::Unknown {
-            reason: "the Jacobian at the solution is singular or not finite".into(),
-        };
-    }
+    // step evaluated and factored it there, and no step was taken since); or Newton
+    // evaluated it at `x` in place of its last residual, keeping eq. 13's factored
+    // matrices, and it is only factored here (`newton::run_ahead`); else it is evaluated
+    // keeping those matrices, which the mass solves with.
+    let kept = if ws.kept_at_iterate() {
+        if !ws.factor_kept(report) {
+            return Stability::Unknown {
+                reason: "the Jacobian at the solution is singular".into(),
+            };
+        }
+        true
+    } else {
+        let kept = !ws.factors_at_iterate();
+        if kept && !ws.linearize_keeping(system, x, report) {
+            return Stability::Unknown {
+                reason: "the Jacobian at the solution is singular or not finite".into(),
+            };
+        }
+        kept
+    };
     let verdict = dynamics::assess(system, x, ws, kept);
     ws.keep_dynamics(verdict.clone());
     verdict
@@ -222,10 +234,11 @@ fn direct(
         stop_when_damped: !nearest,
         ..*settings
     };
-    // The verdict below evaluates the plain Jacobian at the answer (`Workspace::verdict_at`):
-    // Newton evaluates it at its last trial point instead of the residual there. An
-    // unassessed answer takes no verdict here (its friction verdict is the bordered
-    // system's), so it keeps the plain residual.
+    // The verdict below evaluates the plain Jacobian at the answer (`Workspace::verdict_at`,
+    // or keeping eq. 13's factored matrices for the linearized dynamics): Newton evaluates
+    // it at its last trial point instead of the residual there. An unassessed answer takes
+    // no verdict here (its friction verdict is the bordered system's), so it keeps the
+    // plain residual.
     let (termination, worst) = if !nearest && !unassessed && plain_verdict(system) {
         newton::run_ahead(system, ws, x, &direct, report)
     } else {
@@ -251,12 +264,13 @@ fn direct(
 }
 
 /// Whether [`stability_of`] (not `exact`) of a state Newton reached on `system` with `ws`
-/// evaluates the plain Jacobian there when the one held is too far ([`Workspace::verdict_at`]:
-/// conservative loads, no friction; with the tension columns when the workspace keeps them):
-/// then Newton may evaluate it at its last trial point instead of the residual
-/// ([`newton::run_ahead`], [`Workspace::jacobian_ahead`]).
+/// evaluates the plain Jacobian there when the one held is too far (no friction:
+/// [`Workspace::verdict_at`] for conservative loads, with the tension columns when the
+/// workspace keeps them; [`Workspace::linearize_keeping`] for loads that are not
+/// conservative): then Newton may evaluate it at its last trial point instead of the
+/// residual ([`newton::run_ahead`], [`Workspace::jacobian_ahead`]).
 pub(crate) fn plain_verdict(system: &System) -> bool {
-    system.friction.is_none() && stability::non_conservative(&system.model).is_none()
+    system.friction.is_none()
 }
 
 /// Whether a state with this verdict may be the answer without a path: only a stable one

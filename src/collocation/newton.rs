@@ -12,6 +12,8 @@
 //! bordered step and adds its rows to the residual, so that chord steps, the line search and
 //! the stopping tests are the same code for both.
 
+mod ahead;
+
 use super::MAX_ITERATIONS;
 use super::linear::Linear;
 use super::system::System;
@@ -19,6 +21,8 @@ use super::unknowns;
 pub use super::workspace::Workspace;
 use crate::report::{Iteration, SolveReport, Termination};
 use crate::solution::State;
+use ahead::evaluate_trial_ahead;
+pub(crate) use ahead::{run_ahead, run_bordered_ahead};
 use std::time::Instant;
 
 /// Armijo sufficient-decrease constant (Dennis & Schnabel's customary 1e-4).
@@ -171,8 +175,8 @@ impl Linearization<'_> {
 
     /// The Jacobian J whose factors these are, in [`unknowns::pattern`] order. (After a
     /// Jacobian evaluated ahead at a trial point that did not end the run, the values are
-    /// that point's and the factors an earlier Jacobian's; only the plain run evaluates
-    /// ahead, and only a border with its own factors reads the values.)
+    /// that point's and the factors an earlier Jacobian's; a border with its own factors
+    /// reads the values only in [`Border::factored`], right after Newton evaluated them.)
     pub(crate) fn values(&self) -> &[f64] {
         self.values
     }
@@ -269,30 +273,6 @@ fn stops(before_last: f64, last_step: f64, fresh: bool) -> bool {
     }
 }
 
-/// [`evaluate_trial`] by a Jacobian evaluation at the trial point into the value buffer
-/// ([`System::jacobian_rates`]: the residual and node rates bit for bit those of the
-/// residual evaluation), counted as a Jacobian evaluation, not factored
-/// ([`Workspace::evaluated_ahead`]). Returns whether it succeeded and whether the values
-/// are finite; a breakdown of the Jacobian alone falls back to [`evaluate_trial`].
-fn evaluate_trial_ahead<B: Border>(border: &mut B, ws: &mut Workspace, report: &mut SolveReport) -> (bool, bool) {
-    let t = Instant::now();
-    let result = border.on(Point::Trial, |system| {
-        report.evaluations.equations += system.rate_evaluations();
-        ws.jacobian_ahead(system)
-    });
-    report.timings.assembly += t.elapsed();
-    report.evaluations.jacobian += 1;
-    ws.evaluated_ahead();
-    match result {
-        Ok(filled) => {
-            ws.trial_rates_valid = filled;
-            border.rows(Point::Trial, &ws.trial);
-            (true, super::workspace::all_finite(&ws.values))
-        }
-        Err(_) => (evaluate_trial(border, ws, report), false),
-    }
-}
-
 fn max_norm(v: &[f64]) -> f64 {
     v.iter()
         .fold(0.0, |m, x| if x.is_nan() { f64::NAN } else { m.max(x.abs()) })
@@ -328,24 +308,6 @@ pub fn run(
     run_bordered(&mut NoBorder(system), ws, x, settings, report)
 }
 
-/// [`run`] for a state whose stability verdict follows from the Jacobian at the answer
-/// ([`super::equilibrium`]'s direct solve: conservative loads, no friction; with the tension
-/// columns when the workspace keeps them, [`Workspace::jacobian_ahead`]): a trial point that the step-based stopping test already predicts to be
-/// the last (the error left after its step below [`STEP_TOLERANCE`], and the Jacobian held
-/// too far from it for the verdict to take) gets the Jacobian evaluated there instead of
-/// the residual, which gives the same residual and node rates bit for bit; the verdict then
-/// takes that Jacobian instead of evaluating it again (docs/numerics.md, "The Jacobian at
-/// the answer, evaluated by Newton"). Every decision and iterate is [`run`]'s.
-pub(crate) fn run_ahead(
-    system: &System,
-    ws: &mut Workspace,
-    x: &mut Vec<State>,
-    settings: &Settings,
-    report: &mut SolveReport,
-) -> (Termination, usize) {
-    run_with(&mut NoBorder(system), ws, x, settings, report, true)
-}
-
 /// [`run`] on the collocation system bordered by `border`'s unknowns and rows (docs/actuation.md
 /// for the tensions of displacement-controlled tendons): the same steps and tests, with the
 /// border's rows in the residual norm and the merit and its scaled step in the step norm.
@@ -357,18 +319,18 @@ pub(crate) fn run_bordered<B: Border>(
     settings: &Settings,
     report: &mut SolveReport,
 ) -> (Termination, usize) {
-    run_with(border, ws, x, settings, report, false)
+    run_with(border, ws, x, settings, report, None)
 }
 
 /// [`run_bordered`], evaluating the Jacobian at a trial point predicted to be the last when
-/// `ahead` ([`run_ahead`]).
+/// `ahead` is given ([`run_ahead`]; `Some(keep)`: keeping eq. 13's factored matrices).
 fn run_with<B: Border>(
     border: &mut B,
     ws: &mut Workspace,
     x: &mut Vec<State>,
     settings: &Settings,
     report: &mut SolveReport,
-    ahead: bool,
+    ahead: Option<bool>,
 ) -> (Termination, usize) {
     use Point::{Current, Trial};
     report.history.clear();
@@ -442,10 +404,11 @@ fn run_with<B: Border>(
             border.trial(1.0);
             // The Jacobian there when the step would end the run and leave the one held
             // too far for the verdict (drift beyond STEP_TOLERANCE).
-            let (ok, finite) = if ahead && ws.drift + step_norm > STEP_TOLERANCE && stops(last_step, step_norm, false) {
-                evaluate_trial_ahead(border, ws, report)
-            } else {
-                (evaluate_trial(border, ws, report), false)
+            let (ok, finite) = match ahead {
+                Some(keep) if ws.drift + step_norm > STEP_TOLERANCE && stops(last_step, step_norm, false) => {
+                    evaluate_trial_ahead(border, ws, keep, report)
+                }
+                _ => (evaluate_trial(border, ws, report), false),
             };
             let trial_norm = norm(&ws.trial_residual, border.residual(Trial));
             if ok && (trial_norm <= settings.tolerance || trial_norm <= CHORD_CONTRACTION * norm_x) {
@@ -501,12 +464,13 @@ fn run_with<B: Border>(
         loop {
             unknowns::retract(x, &ws.step, alpha, length, &mut ws.trial);
             border.trial(alpha);
-            let ok = if ahead && alpha == 1.0 && step_norm > STEP_TOLERANCE && stops(last_step, step_norm, true) {
-                let (ok, finite) = evaluate_trial_ahead(border, ws, report);
-                finite_ahead = finite;
-                ok
-            } else {
-                evaluate_trial(border, ws, report)
+            let ok = match ahead {
+                Some(keep) if alpha == 1.0 && step_norm > STEP_TOLERANCE && stops(last_step, step_norm, true) => {
+                    let (ok, finite) = evaluate_trial_ahead(border, ws, keep, report);
+                    finite_ahead = finite;
+                    ok
+                }
+                _ => evaluate_trial(border, ws, report),
             };
             let phi_trial = merit(&ws.trial_residual, border.residual(Trial));
             // Armijo on 0.5|F|^2, whose slope along the Newton step is -|F|^2 = -2 phi; a

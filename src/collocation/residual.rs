@@ -397,7 +397,8 @@ pub(super) fn interval_jacobian_as_residual(
 /// [`interval_jacobian`] that keeps eq. 13's factored matrix at its points in `kept` (the
 /// start's only when it evaluates it, not given `start`): the Jacobian at an answer whose
 /// verdict comes from the linearized dynamics, whose mass solves with them
-/// (`collocation/dynamics.rs`).
+/// (`collocation/dynamics.rs`); `as_residual` as in [`interval_jacobian_as_residual`] (that
+/// Jacobian evaluated by Newton in place of its last residual), with the rates at node a.
 ///
 /// # Errors
 /// As [`interval_jacobian`].
@@ -410,14 +411,27 @@ pub(super) fn interval_jacobian_keeping(
     start: Option<&Linearization>,
     jac: &mut [f64],
     kept: &mut IntervalFactors,
-) -> Result<(Block<f64>, Linearization)> {
+    as_residual: bool,
+) -> Result<(Block<f64>, Linearization, Vector6<f64>)> {
     #[cfg(target_arch = "x86_64")]
     if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma") {
         // SAFETY: the processor supports the features the function is compiled for.
-        return unsafe { interval_jacobian_keeping_avx2(model, sites, segment_end, a, b, start, jac, kept) };
+        return unsafe {
+            interval_jacobian_keeping_avx2(model, sites, segment_end, (a, b), start, jac, kept, as_residual)
+        };
     }
-    interval_jacobian_kernel(model, sites, segment_end, a, b, start, jac, Some(kept), None, false)
-        .map(|(r, end, _)| (r, end))
+    interval_jacobian_kernel(
+        model,
+        sites,
+        segment_end,
+        a,
+        b,
+        start,
+        jac,
+        Some(kept),
+        None,
+        as_residual,
+    )
 }
 
 /// [`interval_jacobian_kernel`] with AVX2 and FMA enabled.
@@ -445,14 +459,24 @@ unsafe fn interval_jacobian_keeping_avx2(
     model: &Model,
     sites: &IntervalSites,
     segment_end: f64,
-    a: &State,
-    b: &State,
+    (a, b): (&State, &State),
     start: Option<&Linearization>,
     jac: &mut [f64],
     kept: &mut IntervalFactors,
-) -> Result<(Block<f64>, Linearization)> {
-    interval_jacobian_kernel(model, sites, segment_end, a, b, start, jac, Some(kept), None, false)
-        .map(|(r, end, _)| (r, end))
+    as_residual: bool,
+) -> Result<(Block<f64>, Linearization, Vector6<f64>)> {
+    interval_jacobian_kernel(
+        model,
+        sites,
+        segment_end,
+        a,
+        b,
+        start,
+        jac,
+        Some(kept),
+        None,
+        as_residual,
+    )
 }
 
 /// [`interval_jacobian`]'s operations; `kept` as in [`interval_jacobian_keeping`], `tensions`

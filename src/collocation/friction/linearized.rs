@@ -104,6 +104,22 @@ impl<'r> Capstan<'r> {
         Ok(ok)
     }
 
+    /// Factors the bordered Jacobian at `x` into the staircase from the backbone Jacobian
+    /// `values` Newton evaluated there in place of its last residual
+    /// ([`newton::run_bordered_ahead`]), with the border's blocks read from the links'
+    /// evaluations that Jacobian left ([`Capstan::read_border`]): what [`Capstan::factor_at`]
+    /// factors, without evaluating it again. False when a link's last evaluation is not a
+    /// Jacobian's (then [`Capstan::factor_at`] is the way) or for a singular matrix.
+    pub(crate) fn factor_evaluated(&mut self, x: &[State], values: &[f64], report: &mut SolveReport) -> bool {
+        if self.read_border(x).is_err() {
+            return false;
+        }
+        let t = Instant::now();
+        let ok = self.factor(values);
+        report.timings.factorization += t.elapsed();
+        ok
+    }
+
     /// Factors the bordered matrix (its staircase) from the Jacobian values `ws` holds and
     /// has factored ([`Capstan::linearize`] then the workspace's factoring), unless it is
     /// factored already; false for a singular matrix or a workspace without factors.
@@ -222,5 +238,87 @@ impl<'r> Capstan<'r> {
         let mut dx = vec![0.0; n];
         self.solve_factored(&rhs[..n], &rhs[n..], &mut dx)?;
         Some(dx)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::collocation::unknowns::nonzeros;
+    use crate::{Friction, Motion};
+    use nalgebra::{Vector3, Vector6};
+
+    /// `System::jacobian_rates` on a system with friction (what `newton::run_bordered_ahead`
+    /// evaluates in place of the residual at its predicted last trial point) gives
+    /// `System::residual`'s backbone rows and the capstan rows read from the links'
+    /// evaluations bit for bit, and `System::jacobian`'s values, at the solutions with
+    /// friction of case S (tendon 1 pulled and released, and with tendon 2 also rough), of
+    /// case H (the helical tendon 5) and of S with a dead tip moment, and at states moved off
+    /// them (a trial point that is not a root).
+    #[test]
+    fn the_bordered_jacobian_at_a_trial_point_gives_the_residual_evaluation_bits() {
+        // The first entry whose bits differ, if any.
+        let bits = |a: &[f64], b: &[f64]| a.iter().zip(b).position(|(a, b)| a.to_bits() != b.to_bits());
+        let mut robots = Vec::new();
+        for motion in [Motion::Pull, Motion::Release] {
+            let mut s = crate::cases::case_s();
+            s.tendons[0].friction = Some(Friction {
+                coefficient: 0.1,
+                motion,
+            });
+            robots.push(s);
+        }
+        let mut two = crate::cases::case_s();
+        two.tendons[1].set_tension(1.0);
+        two.tendons[0].friction = Some(Friction::pull(0.1));
+        two.tendons[1].friction = Some(Friction::pull(0.2));
+        robots.push(two);
+        let mut h = crate::cases::case_h();
+        h.tendons[4].friction = Some(Friction::pull(0.3));
+        robots.push(h);
+        let mut moment = crate::cases::case_s();
+        moment.loads.tip_moment = Vector3::new(2e-3, 1e-3, 0.0);
+        moment.tendons[0].friction = Some(Friction::pull(0.1));
+        robots.push(moment);
+        for (case, robot) in robots.iter().enumerate() {
+            let solution = crate::collocation::solve(robot, &crate::collocation::Options::default()).unwrap();
+            let s: Vec<f64> = solution.nodes.iter().map(|n| n.s).collect();
+            let mesh = Mesh::from_points(robot, &s).unwrap();
+            let border = Capstan::at_solution(Model::new(robot), mesh, &solution);
+            let system = border.system();
+            assert!(system.friction.is_some(), "{case}");
+            let answer: Vec<State> = solution.nodes.iter().map(|n| n.state()).collect();
+            // Every node's strains moved by 1e-4 (and its position by 1e-4 L): far from the
+            // root in the residual's last bits, so that no coincidence of small rows hides a
+            // difference.
+            let length = robot.length();
+            let moved: Vec<State> = answer
+                .iter()
+                .map(|x| State {
+                    p: x.p + Vector3::new(1e-4, -2e-4, 1e-4) * length,
+                    v: x.v + Vector3::new(1e-4, 0.0, -1e-4),
+                    u: x.u + Vector3::new(0.0, 1e-1, 2e-1),
+                    ..*x
+                })
+                .collect();
+            for (at, x) in [answer, moved].iter().enumerate() {
+                let (n, m) = (system.unknowns(), border.border_rows());
+                let mut residual = vec![0.0; n + m];
+                border.residual_of(system, x, &mut residual).unwrap();
+                let (mut plain, mut values) = (vec![0.0; n], vec![0.0; nonzeros(&system.mesh)]);
+                system.jacobian(x, &mut plain, &mut values).unwrap();
+                let mut with = vec![f64::NAN; n + m];
+                let mut with_values = vec![f64::NAN; values.len()];
+                let mut rates = vec![Vector6::zeros(); x.len()];
+                let written = system
+                    .jacobian_rates(x, &mut with[..n], &mut with_values, &mut rates)
+                    .unwrap();
+                assert!(!written, "{case}: no node rates with friction");
+                border.psi_of(system, &mut with[n..]);
+                assert!(m > 0 && residual.iter().all(|r| r.is_finite()), "{case} {at}");
+                assert_eq!(bits(&residual, &with), None, "{case} {at}");
+                assert_eq!(bits(&values, &with_values), None, "{case} {at}");
+            }
+        }
     }
 }

@@ -456,7 +456,13 @@ fn refine_with_friction(
             None => Workspace::new(&system, options.linear_solver)?,
         };
         let mut border = Capstan::new(system);
-        let (termination, worst) = newton::run_bordered(&mut border, &mut ws, &mut x, &settings, &mut report);
+        // With a verdict, Newton evaluates the Jacobian at its predicted last trial point in
+        // place of the residual there, which the verdict factors (below).
+        let (termination, worst) = if assess {
+            newton::run_bordered_ahead(&mut border, &mut ws, &mut x, &settings, &mut report)
+        } else {
+            newton::run_bordered(&mut border, &mut ws, &mut x, &settings, &mut report)
+        };
         if termination != Termination::Converged
             && std::mem::take(&mut capstan)
             && let Some((m, states)) = &plain
@@ -491,10 +497,12 @@ fn refine_with_friction(
             .flatten();
         report.timings.estimate += t.elapsed();
         border.load(Point::Current);
-        // Whether the staircase's factors are the Jacobian's at x, for the verdict.
-        let fresh = ws.jacobian_at_iterate();
+        // Whether the staircase's factors are the Jacobian's at x, for the verdict (Newton's
+        // last Jacobian, factored: not one it evaluated ahead, left unfactored); whether the
+        // workspace's values are the Jacobian at x itself, unfactored (evaluated ahead).
+        let fresh = ws.jacobian_at_iterate() && !ws.unfactored;
+        let ahead = ws.evaluated_at_solution() && ws.unfactored;
         let system = &border.system;
-        workspace::keep(system.mesh.clone(), options.linear_solver, ws);
         let Some(profile) = system.friction.as_ref() else {
             return Err(error::invalid("tendons", "have no friction", "solve without friction"));
         };
@@ -513,8 +521,14 @@ fn refine_with_friction(
             pipeline::record_estimate(&mut report, estimated.as_ref().map(|(c, _)| c), options, length);
             let t = Instant::now();
             report.stability = if assess {
+                // The Jacobian Newton evaluated at x, factored with the border's blocks from
+                // the same evaluation; else the verdict evaluates and factors it (or takes
+                // Newton's factors when they are x's).
+                let fresh = fresh || (ahead && border.factor_evaluated(&x, &ws.values, &mut report));
+                workspace::keep(border.system.mesh.clone(), options.linear_solver, ws);
                 super::dynamics::friction::assess(&mut border, &x, fresh, &mut report)
             } else {
+                workspace::keep(border.system.mesh.clone(), options.linear_solver, ws);
                 super::dynamics::friction::held_unknown()
             };
             if !matches!(report.stability, Stability::Unknown { .. }) {
@@ -526,6 +540,7 @@ fn refine_with_friction(
             let rates = estimated.as_ref().map(|(c, _)| c.node_rates.as_slice());
             return nodes::solution_with_tensions(&model, &x, &ends, (&tensions, None), rates, report);
         };
+        workspace::keep(system.mesh.clone(), options.linear_solver, ws);
         let rates = estimated.as_ref().map(|(c, _)| c.node_rates.as_slice());
         let guess = nodes::solution_with_tensions(&model, &x, &ends, (&tensions, None), rates, report.clone())?;
         let s: Vec<f64> = system.mesh.nodes.iter().map(|n| n.s).collect();

@@ -3,7 +3,7 @@
 //! (docs/numerics.md, "The Jacobian at the answer, evaluated by Newton").
 
 use super::System;
-use crate::collocation::residual::{self, Delta};
+use crate::collocation::residual::{self, Delta, IntervalFactors};
 use crate::collocation::unknowns::{BASE_ROWS, link_row, tip_row};
 use crate::error::Result;
 use crate::solution::State;
@@ -14,7 +14,10 @@ impl System<'_> {
     /// the node rates written as that writes them ([`residual::interval_jacobian_as_residual`];
     /// the base, jump and tip rows evaluated again in f64):
     /// a Jacobian evaluated where Newton would evaluate the residual. Returns whether `rates`
-    /// were written (not for tendons with friction, whose residual is evaluated alone).
+    /// were written: not for tendons with friction, whose residual gives none (its interval
+    /// rows and the links' evaluations the capstan rows are read from are the residual's
+    /// bit for bit: `friction::interval` forms them with the same arithmetic with or
+    /// without derivatives).
     ///
     /// # Errors
     /// A model breakdown at a visited state.
@@ -26,11 +29,33 @@ impl System<'_> {
         rates: &mut [Vector6<f64>],
     ) -> Result<bool> {
         if self.friction.is_some() {
-            return self.residual(x, out).map(|()| false);
+            self.jacobian(x, out, values)?;
+            self.outer_rows(x, out)?;
+            return Ok(false);
         }
         self.jacobian_with(x, out, values, None, None, Some(rates))?;
         self.outer_rows(x, out)?;
         Ok(true)
+    }
+
+    /// [`System::jacobian_rates`] that also keeps eq. 13's factored matrix at every
+    /// interval's points in `kept` (one per link), as [`System::jacobian_keeping`] does: the
+    /// Jacobian at a direct solve's answer whose verdict is the linearized dynamics', whose
+    /// mass solves with those matrices. Frictionless systems only.
+    ///
+    /// # Errors
+    /// A model breakdown at a visited state.
+    pub(crate) fn jacobian_rates_keeping(
+        &self,
+        x: &[State],
+        out: &mut [f64],
+        values: &mut [f64],
+        rates: &mut [Vector6<f64>],
+        kept: &mut [IntervalFactors],
+    ) -> Result<()> {
+        debug_assert!(self.friction.is_none(), "no factored matrices kept with friction");
+        self.jacobian_with(x, out, values, Some(kept), None, Some(rates))?;
+        self.outer_rows(x, out)
     }
 
     /// The rows outside the intervals (base, jumps, tip) of the residual at `x` into `out`,

@@ -453,7 +453,7 @@ impl<'a> System<'a> {
     /// [`System::jacobian_keeping`] does, or writing each interval's tension rows into the
     /// columns `tensions` gives, with its buffers ([`System::jacobian_and_tensions`]); not
     /// both (a point keeps its factors or forms its tension rows); `rates` (as
-    /// [`System::jacobian_rates`]) with the tension rows or alone, not with kept factors.
+    /// [`System::jacobian_rates`]) with either or alone.
     ///
     /// # Errors
     /// A model breakdown at a visited state.
@@ -467,8 +467,8 @@ impl<'a> System<'a> {
         mut rates: Option<&mut [Vector6<f64>]>,
     ) -> Result<()> {
         debug_assert!(
-            !(kept.is_some() && (tensions.is_some() || rates.is_some())),
-            "kept factors exclude tension rows and node rates"
+            !(kept.is_some() && tensions.is_some()),
+            "kept factors exclude tension rows"
         );
         let n = self.unknowns();
         let mut at = 0;
@@ -520,12 +520,12 @@ impl<'a> System<'a> {
                             block,
                             tensions.as_mut().map(|(sink, _)| sink.interval(start.is_some())),
                         )?,
-                        (Some(kept), _) => {
+                        (Some(kept), rates) => {
                             if start.is_some() {
                                 kept[k].start = kept[k - 1].end.clone();
                             }
                             let ends = (&x[k], &x[k + 1]);
-                            residual::interval_jacobian_keeping(
+                            let (r, end, at_start) = residual::interval_jacobian_keeping(
                                 &self.model,
                                 sites,
                                 seg,
@@ -533,7 +533,12 @@ impl<'a> System<'a> {
                                 start,
                                 block,
                                 &mut kept[k],
-                            )?
+                                rates.is_some(),
+                            )?;
+                            if let Some(rates) = rates {
+                                (rates[k], rates[k + 1]) = (at_start, end.rates);
+                            }
+                            (r, end)
                         }
                     };
                     if let Some((sink, columns)) = tensions.as_mut() {

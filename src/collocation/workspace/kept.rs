@@ -5,9 +5,11 @@
 //! verdict's Jacobian").
 
 use super::Workspace;
+use crate::collocation::residual::IntervalFactors;
 use crate::collocation::system::System;
 use crate::mesh::Mesh;
 use crate::model::equations::Model;
+use crate::report::SolveReport;
 use crate::solution::State;
 
 impl Workspace {
@@ -99,15 +101,35 @@ impl Workspace {
     }
 
     /// The Jacobian of `system` at the trial point into the value buffer, the residual and
-    /// node rates there as a residual evaluation writes them ([`System::jacobian_rates`]),
-    /// with the tension columns' right-hand sides when this workspace keeps them (as
-    /// [`Workspace::verdict_jacobian`]): Newton's evaluation ahead of a verdict. Returns
-    /// whether the rates were written.
+    /// node rates there as a residual evaluation writes them ([`System::jacobian_rates`]):
+    /// Newton's evaluation ahead of a verdict. With `keep` (a verdict of the linearized
+    /// dynamics, frictionless) it keeps eq. 13's factored matrices at every interval's
+    /// points for the mass, as [`Workspace::linearize_keeping`] does
+    /// ([`System::jacobian_rates_keeping`], [`Workspace::kept_at_iterate`]); else it forms the
+    /// tension columns' right-hand sides when this workspace keeps them (as
+    /// [`Workspace::verdict_jacobian`]; with friction, the backbone rows' Jacobian alone,
+    /// whose links' evaluations the border reads). Returns whether the rates were written.
     ///
     /// # Errors
     /// A model breakdown at a visited state.
-    pub(crate) fn jacobian_ahead(&mut self, system: &System) -> crate::error::Result<bool> {
+    pub(crate) fn jacobian_ahead(&mut self, system: &System, keep: bool) -> crate::error::Result<bool> {
         self.forget_tension_rhs();
+        self.kept_ahead = false;
+        if keep {
+            let links = self.trial.len() - 1;
+            if self.kept.len() != links {
+                self.kept = vec![IntervalFactors::identity(); links];
+            }
+            system.jacobian_rates_keeping(
+                &self.trial,
+                &mut self.trial_residual,
+                &mut self.values,
+                &mut self.trial_rates,
+                &mut self.kept,
+            )?;
+            self.kept_ahead = true;
+            return Ok(true);
+        }
         let plain = system.friction.is_none() && !system.model.robot.has_displacement_inputs();
         if !(self.keep_tensions && plain) {
             return system.jacobian_rates(
@@ -136,6 +158,26 @@ impl Workspace {
                 Err(e)
             }
         }
+    }
+
+    /// Whether the value buffer holds the Jacobian Newton evaluated at the last iterate in
+    /// place of its residual there, keeping eq. 13's factored matrices
+    /// ([`Workspace::jacobian_ahead`] with `keep`, then [`Workspace::kept`]), not yet
+    /// factored: what the linearized dynamics' verdict needs there but the factors.
+    pub(crate) fn kept_at_iterate(&self) -> bool {
+        self.kept_ahead && self.unfactored && self.drift == 0.0
+    }
+
+    /// Factors the Jacobian in the value buffer ([`Workspace::kept_at_iterate`]), keeping
+    /// the residual of the iterate and its node rates (the step solved on the way is not
+    /// read): then [`Workspace::factors_at_iterate`] holds, as after
+    /// [`Workspace::linearize_keeping`] there. False for a zero pivot, or without such a
+    /// Jacobian.
+    pub(crate) fn factor_kept(&mut self, report: &mut SolveReport) -> bool {
+        if !self.kept_at_iterate() {
+            return false;
+        }
+        self.solve(report)
     }
 
     /// The Jacobian of `system` at `x` into the value buffer and the residual there into

@@ -71,6 +71,7 @@ pub(crate) fn spare(mesh: &Mesh, solver: LinearSolver) -> Option<(Mesh, Workspac
         workspace.drift = f64::INFINITY;
         workspace.unfactored = false;
         workspace.dynamics = None;
+        workspace.kept_ahead = false;
         workspace.rates_valid = false;
         workspace.trial_rates_valid = false;
         workspace.trial.clear();
@@ -126,6 +127,10 @@ pub struct Workspace {
     /// Eq. 13's factored matrices at each interval's points, as the last
     /// [`Workspace::linearize_keeping`] evaluated them.
     kept: Vec<IntervalFactors>,
+    /// Whether `kept` belongs to the Jacobian Newton evaluated ahead into `values`
+    /// ([`Workspace::jacobian_ahead`] with `keep`; read while `values` are unfactored and
+    /// the iterate's, [`Workspace::kept_at_iterate`]).
+    kept_ahead: bool,
     /// Buffers a linearization for sensitivities handed back for the next one
     /// ([`Workspace::take_buffer`], [`Workspace::give_buffer`]).
     buffers: Vec<Vec<f64>>,
@@ -166,6 +171,7 @@ impl Workspace {
             dynamics: None,
             system: SystemBuffers::default(),
             kept: Vec::new(),
+            kept_ahead: false,
             buffers: Vec::new(),
             keep_tensions: false,
             tension_rhs: None,
@@ -389,6 +395,7 @@ impl Workspace {
         self.verdict = None;
         self.neutral = None;
         self.unfactored = true;
+        self.kept_ahead = false;
         if !ok || !all_finite(&self.values) {
             // The values belong to no state: nothing may take them (or columns) for one.
             self.drift = f64::INFINITY;
