@@ -37,8 +37,9 @@ struct Step {
     /// First of its `pivots * rows` multipliers: that of pivot row c subtracted from row
     /// r at c * rows + r (r > c).
     factors_at: usize,
-    /// First of its pivot rows, `pivots` x `width`, row major (upper triangular in the
-    /// first `pivots` columns).
+    /// First of its pivot rows, `pivots` x `width`: the upper triangle in the first
+    /// `pivots` columns row major, then the other columns (the next node's) transposed,
+    /// column by column ([`keep_pivot_rows`]).
     upper_at: usize,
 }
 
@@ -70,14 +71,11 @@ pub(crate) struct Staircase {
     pub(crate) ready: bool,
     /// First unknown of each node in the node-by-node order.
     first: Vec<usize>,
-    /// Scratch: the panel of the step in hand, the carried rows, a step's right-hand side,
-    /// the transformed right-hand sides of every pivot row, two nodes' solutions.
+    /// Scratch: the panel of the step in hand, the carried rows, and a solve's right-hand
+    /// side, transformed in place into its solution (node by node, as `first`).
     panel: Vec<f64>,
     carry: Vec<f64>,
-    values: Vec<f64>,
     transformed: Vec<f64>,
-    current: Vec<f64>,
-    next: Vec<f64>,
 }
 
 impl Staircase {
@@ -133,10 +131,7 @@ impl Staircase {
             first,
             panel: vec![0.0; 4 * widest * widest],
             carry: vec![0.0; widest * widest],
-            values: vec![0.0; 2 * widest],
             transformed: vec![0.0; total],
-            current: vec![0.0; widest],
-            next: vec![0.0; widest],
         }
     }
 
@@ -195,7 +190,7 @@ impl Staircase {
             if !eliminate_fast(panel, rows, width, ck, (swaps, factors)) {
                 return false;
             }
-            self.upper[step.upper_at..step.upper_at + ck * width].copy_from_slice(&panel[..ck * width]);
+            keep_pivot_rows(panel, width, ck, &mut self.upper[step.upper_at..step.upper_at + ck * width]);
             // The rows not chosen carry node k + 1's columns on.
             carried = rows - ck;
             if k < links {
@@ -232,51 +227,61 @@ impl Staircase {
         self.solve_kernel(rhs, out)
     }
 
-    /// [`Staircase::solve`]'s operations.
+    /// [`Staircase::solve`]'s operations, in place in one buffer of the unknowns' length:
+    /// step k's rows occupy its positions `first[k]..` (the rows it carries on are where
+    /// step k + 1's rows begin, so nothing is copied between steps); after the replay its
+    /// pivot rows' values stay there, and the back substitution overwrites them with node
+    /// k's unknowns.
     #[inline(always)]
     fn solve_kernel(&mut self, mut rhs: impl FnMut(Block, &mut [f64]), mut out: impl FnMut(usize, &[f64])) -> bool {
         if !self.ready {
             return false;
         }
         let links = self.columns.len() - 1;
-        let mut carried = BASE_ROWS;
-        rhs(Block::Base, &mut self.carry[..carried]);
-        for k in 0..=links {
-            let step = &self.steps[k];
-            let v = &mut self.values[..step.rows];
-            v[..carried].copy_from_slice(&self.carry[..carried]);
+        let w = &mut self.transformed[..];
+        rhs(Block::Base, &mut w[..BASE_ROWS]);
+        for (k, step) in self.steps.iter().enumerate() {
+            let at = self.first[k];
+            let rows = &mut w[at..at + step.rows];
+            let carried = step.rows - if k < links { self.columns[k + 1] } else { BASE_ROWS };
             let block = if k < links { Block::Link(k) } else { Block::Tip };
-            rhs(block, &mut v[carried..]);
+            rhs(block, &mut rows[carried..]);
             let swaps = &self.swaps[step.swaps_at..step.swaps_at + step.pivots];
             let factors = &self.factors[step.factors_at..step.factors_at + step.pivots * step.rows];
-            replay(step, (swaps, factors), v);
-            let at = self.first[k];
-            self.transformed[at..at + step.pivots].copy_from_slice(&v[..step.pivots]);
-            carried = step.rows - step.pivots;
-            self.carry[..carried].copy_from_slice(&v[step.pivots..]);
+            replay(step, (swaps, factors), rows);
         }
         // Back substitution from the last node: x_k from step k's pivot rows given x_k+1,
-        // with the next node's column count known at compile time for nodes of 12 to 14
-        // columns (the same sums in the same order).
-        let mut finite = true;
-        for k in (0..=links).rev() {
-            let step = &self.steps[k];
-            let ck = step.pivots;
-            let (current, next) = (&mut self.current, &self.next);
-            let transformed = &self.transformed[self.first[k]..self.first[k] + ck];
-            let upper = &self.upper[step.upper_at..step.upper_at + ck * step.width];
-            match step.width - ck {
-                0 => back_substitute::<0>(step, upper, transformed, current, next),
-                12 => back_substitute::<12>(step, upper, transformed, current, next),
-                13 => back_substitute::<13>(step, upper, transformed, current, next),
-                14 => back_substitute::<14>(step, upper, transformed, current, next),
-                _ => back_substitute_any(step, upper, transformed, current, next),
+        // with the shapes of the steps inside a span known at compile time (the same sums
+        // in the same order).
+        for (k, step) in self.steps.iter().enumerate().rev() {
+            let (head, tail) = w.split_at_mut(self.first[k] + step.pivots);
+            let x = &mut head[self.first[k]..];
+            let next = &tail[..step.width - step.pivots];
+            let upper = &self.upper[step.upper_at..step.upper_at + step.pivots * step.width];
+            match (step.pivots, next.len()) {
+                (12, 12) => back_substitute::<12, 12>(upper, x, next),
+                (13, 13) => back_substitute::<13, 13>(upper, x, next),
+                (14, 14) => back_substitute::<14, 14>(upper, x, next),
+                _ => back_substitute_any(upper, x, next),
             }
-            finite &= current[..ck].iter().all(|v| v.is_finite());
-            out(k, &current[..ck]);
-            std::mem::swap(&mut self.current, &mut self.next);
+            out(k, x);
         }
-        finite
+        w.iter().all(|v| v.is_finite())
+    }
+}
+
+/// Keeps the `pivots` pivot rows of an eliminated `width`-column `panel` in `upper`: their
+/// first `pivots` columns (the upper triangle) row major, then each further column (the
+/// next node's) as a run of `pivots` values, so that the back substitution's coupling
+/// sums read whole vectors across the rows.
+#[inline(always)]
+fn keep_pivot_rows(panel: &[f64], width: usize, pivots: usize, upper: &mut [f64]) {
+    let (triangle, far) = upper.split_at_mut(pivots * pivots);
+    for (i, row) in panel.chunks_exact(width).take(pivots).enumerate() {
+        triangle[i * pivots..(i + 1) * pivots].copy_from_slice(&row[..pivots]);
+        for (j, &v) in row[pivots..].iter().enumerate() {
+            far[j * pivots + i] = v;
+        }
     }
 }
 
@@ -494,32 +499,47 @@ fn zeroed<T: Copy + Default>(len: usize) -> Vec<T> {
     out
 }
 
-/// The unknowns of a step's node from its pivot rows (`transformed`: their right-hand
-/// sides) and the next node's unknowns `next`, whose count `N` (the step's width less its
-/// pivots) is known at compile time.
+/// The unknowns x of a step's node, `CK` of them, from its pivot rows `upper` (the
+/// triangle row major, then the next node's columns transposed: [`Staircase::factor`]),
+/// whose right-hand sides `x` holds on entry, and the next node's `N` unknowns `next`:
+/// x_i = (rhs_i - sum_j U_i,CK+j next_j - sum_j>i U_ij x_j) / U_ii, each sum in ascending
+/// j from -0.0 as [`back_substitute_any`]'s. The coupling sums of all rows run at once
+/// over the transposed columns (whole vectors across the rows, each lane the same
+/// additions in the same order), the rest row by row.
 #[inline(always)]
-fn back_substitute<const N: usize>(step: &Step, upper: &[f64], transformed: &[f64], current: &mut [f64], next: &[f64]) {
-    let ck = step.pivots;
-    let next: &[f64; N] = next[..N].try_into().expect("N unknowns of the next node");
-    for i in (0..ck).rev() {
-        let row = &upper[i * step.width..(i + 1) * step.width];
-        let far: &[f64; N] = row[ck..].try_into().expect("N columns of the next node");
-        let coupled: f64 = far.iter().zip(next).map(|(a, b)| a * b).sum();
-        let own: f64 = row[i + 1..ck].iter().zip(&current[i + 1..ck]).map(|(a, b)| a * b).sum();
-        current[i] = (transformed[i] - coupled - own) / row[i];
+fn back_substitute<const CK: usize, const N: usize>(upper: &[f64], x: &mut [f64], next: &[f64]) {
+    let (triangle, far) = upper[..CK * (CK + N)].split_at(CK * CK);
+    let (triangle, _) = triangle.as_chunks::<CK>();
+    let (far, _) = far.as_chunks::<CK>();
+    let far: &[[f64; CK]; N] = far.try_into().expect("N transposed columns");
+    let next: &[f64; N] = next.try_into().expect("N unknowns of the next node");
+    let x: &mut [f64; CK] = x.try_into().expect("CK unknowns");
+    let mut coupled = [-0.0; CK];
+    for (column, b) in far.iter().zip(next) {
+        for (sum, a) in coupled.iter_mut().zip(column) {
+            *sum += a * b;
+        }
+    }
+    for i in (0..CK).rev() {
+        let row = &triangle[i];
+        let mut own = -0.0;
+        for j in i + 1..CK {
+            own += row[j] * x[j];
+        }
+        x[i] = (x[i] - coupled[i] - own) / row[i];
     }
 }
 
-/// [`back_substitute`] for any count of the next node's unknowns.
+/// [`back_substitute`] for any shape (`x.len()` unknowns, `next.len()` of the next node).
 #[inline(always)]
-fn back_substitute_any(step: &Step, upper: &[f64], transformed: &[f64], current: &mut [f64], next: &[f64]) {
-    let ck = step.pivots;
-    let next = &next[..step.width - ck];
+fn back_substitute_any(upper: &[f64], x: &mut [f64], next: &[f64]) {
+    let ck = x.len();
+    let (triangle, far) = upper.split_at(ck * ck);
     for i in (0..ck).rev() {
-        let row = &upper[i * step.width..(i + 1) * step.width];
-        let coupled: f64 = row[ck..].iter().zip(next).map(|(a, b)| a * b).sum();
-        let own: f64 = row[i + 1..ck].iter().zip(&current[i + 1..ck]).map(|(a, b)| a * b).sum();
-        current[i] = (transformed[i] - coupled - own) / row[i];
+        let row = &triangle[i * ck..(i + 1) * ck];
+        let coupled: f64 = far.chunks_exact(ck).zip(next).map(|(column, b)| column[i] * b).sum();
+        let own: f64 = row[i + 1..].iter().zip(&x[i + 1..]).map(|(a, b)| a * b).sum();
+        x[i] = (x[i] - coupled - own) / row[i];
     }
 }
 
@@ -664,6 +684,37 @@ mod tests {
                 u.iter().map(|x| x.to_bits()).collect::<Vec<_>>(),
                 w.iter().map(|x| x.to_bits()).collect::<Vec<_>>()
             );
+        }
+    }
+
+    /// The compile-time back substitution gives the bits of the run-time one, on random
+    /// pivot rows of the shapes inside a span (a quarter of their entries and right-hand
+    /// sides signed zeros, whose sums' signs depend on the additions' order and start).
+    #[test]
+    fn fixed_back_substitution_gives_the_run_time_bits() {
+        let mut random = generator(4242);
+        let mut value = |i: usize| match i % 8 {
+            0 => 0.0,
+            4 => -0.0,
+            _ => random(),
+        };
+        for (ck, n) in [(12, 12), (13, 13), (14, 14)] {
+            let mut upper: Vec<f64> = (0..ck * (ck + n)).map(&mut value).collect();
+            // Pivots away from zero, as the elimination leaves them.
+            for i in 0..ck {
+                upper[i * ck + i] = 1.0 + (i as f64) / 7.0;
+            }
+            let next: Vec<f64> = (0..n).map(&mut value).collect();
+            let rhs: Vec<f64> = (0..ck).map(|i| value(i + 3)).collect();
+            let (mut fixed, mut any) = (rhs.clone(), rhs);
+            match ck {
+                12 => back_substitute::<12, 12>(&upper, &mut fixed, &next),
+                13 => back_substitute::<13, 13>(&upper, &mut fixed, &next),
+                _ => back_substitute::<14, 14>(&upper, &mut fixed, &next),
+            }
+            back_substitute_any(&upper, &mut any, &next);
+            let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+            assert_eq!(bits(&fixed), bits(&any), "{ck} x {n}");
         }
     }
 
