@@ -146,59 +146,59 @@ impl Staircase {
     }
 
     /// Factors the matrix whose blocks `fill` writes (row major into a zeroed slice of the
-    /// block's [`Staircase::shape`]). False on a zero or non-finite pivot.
-    pub(crate) fn factor(&mut self, mut fill: impl FnMut(Block, &mut [f64])) -> bool {
+    /// block's [`Staircase::shape`]). False on a zero or non-finite pivot. On x86-64 with
+    /// AVX2 and FMA (checked at run time) compiled for them, as the solve: the same
+    /// operations in the same order, so the same bits.
+    pub(crate) fn factor(&mut self, fill: impl FnMut(Block, &mut [f64])) -> bool {
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma") {
+            // SAFETY: the processor supports the features the function is compiled for.
+            return unsafe { self.factor_avx2(fill) };
+        }
+        self.factor_kernel(fill)
+    }
+
+    /// [`Staircase::factor_kernel`] with AVX2 and FMA enabled.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,fma")]
+    unsafe fn factor_avx2(&mut self, fill: impl FnMut(Block, &mut [f64])) -> bool {
+        self.factor_kernel(fill)
+    }
+
+    /// [`Staircase::factor`]'s operations: step by step, the panel of the carried rows over
+    /// the new ones, eliminated ([`factor_step`]), with the shapes of the links inside a
+    /// span of no, one or two tendons with friction known at compile time.
+    #[inline(always)]
+    fn factor_kernel(&mut self, mut fill: impl FnMut(Block, &mut [f64])) -> bool {
         self.ready = false;
         let links = self.columns.len() - 1;
         // The carried rows start as the base rows over node 0.
-        let mut carried = BASE_ROWS;
         let c0 = self.columns[0];
-        self.carry[..carried * c0].fill(0.0);
-        fill(Block::Base, &mut self.carry[..carried * c0]);
-        for k in 0..=links {
-            let ck = self.columns[k];
-            let (block, new_rows, width) = if k < links {
-                (Block::Link(k), self.columns[k + 1], ck + self.columns[k + 1])
+        self.carry[..BASE_ROWS * c0].fill(0.0);
+        fill(Block::Base, &mut self.carry[..BASE_ROWS * c0]);
+        for (k, step) in self.steps.iter().enumerate() {
+            let (block, new_rows) = if k < links {
+                (Block::Link(k), self.columns[k + 1])
             } else {
-                (Block::Tip, BASE_ROWS, ck)
+                (Block::Tip, BASE_ROWS)
             };
-            let rows = carried + new_rows;
-            let panel = &mut self.panel[..rows * width];
-            // Zeroed row by row with the carried rows' copy: a few short stores each, where
-            // one memset of the panel (kilobytes) runs as `rep stosb`, byte by byte; at the
-            // widths of links inside a span of one or two tendons with friction, rows of a
-            // compile-time width (stores in line, not a call to memset per row).
-            match width {
-                26 => prepare::<26>(panel, carried, ck, &self.carry),
-                28 => prepare::<28>(panel, carried, ck, &self.carry),
-                _ => {
-                    for (r, row) in panel.chunks_exact_mut(width).enumerate() {
-                        if r < carried {
-                            row[..ck].copy_from_slice(&self.carry[r * ck..(r + 1) * ck]);
-                            row[ck..].fill(0.0);
-                        } else {
-                            row.fill(0.0);
-                        }
-                    }
-                }
-            }
-            fill(block, &mut panel[carried * width..]);
-            let step = self.steps[k];
-            debug_assert_eq!((step.rows, step.width, step.pivots), (rows, width, ck));
-            let swaps = &mut self.swaps[step.swaps_at..step.swaps_at + ck];
-            let factors = &mut self.factors[step.factors_at..step.factors_at + ck * rows];
-            if !eliminate_fast(panel, rows, width, ck, (swaps, factors)) {
+            let this = Panel {
+                panel: &mut self.panel[..step.rows * step.width],
+                carry: &mut self.carry,
+                carried: step.rows - new_rows,
+                swaps: &mut self.swaps[step.swaps_at..step.swaps_at + step.pivots],
+                factors: &mut self.factors[step.factors_at..step.factors_at + step.pivots * step.rows],
+                upper: &mut self.upper[step.upper_at..step.upper_at + step.pivots * step.width],
+            };
+            let fill = |rows: &mut [f64]| fill(block, rows);
+            let ok = match (step.rows, step.width, step.pivots) {
+                (18, 24, 12) => factor_step::<18, 24, 12>(this, fill),
+                (20, 26, 13) => factor_step::<20, 26, 13>(this, fill),
+                (22, 28, 14) => factor_step::<22, 28, 14>(this, fill),
+                _ => factor_step_any(this, step, fill),
+            };
+            if !ok {
                 return false;
-            }
-            keep_pivot_rows(panel, width, ck, &mut self.upper[step.upper_at..step.upper_at + ck * width]);
-            // The rows not chosen carry node k + 1's columns on.
-            carried = rows - ck;
-            if k < links {
-                let next = width - ck;
-                for r in 0..carried {
-                    let from = (ck + r) * width + ck;
-                    self.carry[r * next..(r + 1) * next].copy_from_slice(&panel[from..from + next]);
-                }
             }
         }
         self.ready = true;
@@ -270,13 +270,89 @@ impl Staircase {
     }
 }
 
+/// One elimination step's buffers: its panel, the carried rows (in: this node's columns of
+/// the rows carried from the step before, `carried` of them; out: the next node's columns
+/// of the rows this step carries on, row by row), and where its swaps, multipliers and
+/// pivot rows are kept.
+struct Panel<'a> {
+    panel: &'a mut [f64],
+    carry: &'a mut [f64],
+    carried: usize,
+    swaps: &'a mut [usize],
+    factors: &'a mut [f64],
+    upper: &'a mut [f64],
+}
+
+/// A step on a panel of `R` rows, `W` columns and `P` pivots, all known at compile time
+/// (a link's: W - P new rows, R + P - W carried): the panel zeroed with the carried rows'
+/// columns copied in, the new rows filled by `fill` (row major, `W` wide), eliminated
+/// ([`eliminate_fixed`]), the pivot rows kept ([`keep_pivot_rows`]) and the other rows'
+/// next-node columns carried on. The operations of [`factor_step_any`].
+#[inline(always)]
+fn factor_step<const R: usize, const W: usize, const P: usize>(step: Panel, fill: impl FnOnce(&mut [f64])) -> bool {
+    let carried = const { R + P - W };
+    debug_assert_eq!(step.carried, carried);
+    let (rows, _) = step.panel[..R * W].as_chunks_mut::<W>();
+    let rows: &mut [[f64; W]; R] = rows.try_into().expect("R rows of the panel");
+    // In: `carried` rows of P columns; out: R - P rows of W - P.
+    let carry = &mut step.carry[..(carried * P).max((R - P) * (W - P))];
+    // Zeroed with a zero the compiler cannot see: a literal one turns these stores into one
+    // memset of the panel (kilobytes), which runs as `rep stosb`, counted byte by byte.
+    let zero = std::hint::black_box(0.0);
+    for (r, row) in rows.iter_mut().enumerate() {
+        *row = [zero; W];
+        if r < carried {
+            row[..P].copy_from_slice(&carry[r * P..(r + 1) * P]);
+        }
+    }
+    fill(rows[carried..].as_flattened_mut());
+    if !eliminate_fixed::<R, W, P>(rows.as_flattened_mut(), (step.swaps, step.factors)) {
+        return false;
+    }
+    keep_pivot_rows(rows.as_flattened(), W, P, step.upper);
+    for (r, row) in rows[P..].iter().enumerate() {
+        carry[r * (W - P)..(r + 1) * (W - P)].copy_from_slice(&row[P..]);
+    }
+    true
+}
+
+/// [`factor_step`] for any shape (the first link's, the last node's, and links next to
+/// where a span begins or ends).
+#[inline(always)]
+fn factor_step_any(step: Panel, shape: &Step, fill: impl FnOnce(&mut [f64])) -> bool {
+    let (rows, width, ck) = (shape.rows, shape.width, shape.pivots);
+    let panel = &mut step.panel[..rows * width];
+    // Zeroed row by row with the carried rows' copy: a few short stores each, where one
+    // memset of the panel (kilobytes) runs as `rep stosb`, byte by byte.
+    for (r, row) in panel.chunks_exact_mut(width).enumerate() {
+        if r < step.carried {
+            row[..ck].copy_from_slice(&step.carry[r * ck..(r + 1) * ck]);
+            row[ck..].fill(0.0);
+        } else {
+            row.fill(0.0);
+        }
+    }
+    fill(&mut panel[step.carried * width..]);
+    if !eliminate(panel, rows, width, ck, (step.swaps, step.factors)) {
+        return false;
+    }
+    keep_pivot_rows(panel, width, ck, step.upper);
+    let next = width - ck;
+    for r in 0..rows - ck {
+        let from = (ck + r) * width + ck;
+        step.carry[r * next..(r + 1) * next].copy_from_slice(&panel[from..from + next]);
+    }
+    true
+}
+
 /// Keeps the `pivots` pivot rows of an eliminated `width`-column `panel` in `upper`: their
 /// first `pivots` columns (the upper triangle) row major, then each further column (the
 /// next node's) as a run of `pivots` values, so that the back substitution's coupling
-/// sums read whole vectors across the rows.
+/// sums read whole vectors across the rows. Always inlined: with the shape known at
+/// compile time ([`factor_step`]) its loops have constant bounds.
 #[inline(always)]
 fn keep_pivot_rows(panel: &[f64], width: usize, pivots: usize, upper: &mut [f64]) {
-    let (triangle, far) = upper.split_at_mut(pivots * pivots);
+    let (triangle, far) = upper[..pivots * width].split_at_mut(pivots * pivots);
     for (i, row) in panel.chunks_exact(width).take(pivots).enumerate() {
         triangle[i * pivots..(i + 1) * pivots].copy_from_slice(&row[..pivots]);
         for (j, &v) in row[pivots..].iter().enumerate() {
@@ -285,51 +361,14 @@ fn keep_pivot_rows(panel: &[f64], width: usize, pivots: usize, upper: &mut [f64]
     }
 }
 
-/// The panel of a step, rows of `W` columns: the `carried` rows' first `ck` columns from
-/// `carry` (row r at `r * ck`), every other entry zero.
-#[inline(always)]
-fn prepare<const W: usize>(panel: &mut [f64], carried: usize, ck: usize, carry: &[f64]) {
-    let (rows, _) = panel.as_chunks_mut::<W>();
-    for (r, row) in rows.iter_mut().enumerate() {
-        *row = [0.0; W];
-        if r < carried {
-            row[..ck].copy_from_slice(&carry[r * ck..(r + 1) * ck]);
-        }
-    }
-}
-
-/// [`eliminate`] compiled for AVX2 and FMA when the processor has them (checked at run
-/// time), as the frictionless elimination does, else for the baseline target.
-fn eliminate_fast(panel: &mut [f64], rows: usize, width: usize, pivots: usize, record: Record) -> bool {
-    #[cfg(target_arch = "x86_64")]
-    if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma") {
-        // SAFETY: the processor supports the features the function is compiled for.
-        return unsafe { eliminate_avx2(panel, rows, width, pivots, record) };
-    }
-    eliminate(panel, rows, width, pivots, record)
-}
-
-/// [`eliminate`] with AVX2 and FMA enabled.
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2,fma")]
-unsafe fn eliminate_avx2(panel: &mut [f64], rows: usize, width: usize, pivots: usize, record: Record) -> bool {
-    eliminate(panel, rows, width, pivots, record)
-}
-
 /// [`eliminate_rows`] with the width known at compile time for the panels of links whose
 /// two nodes carry up to 4 log tensions together (24 to 28 columns), so that the row
 /// updates are unrolled and vectorized as in the frictionless elimination; other widths run
-/// the same loops with the width at run time. The panel of a link between two nodes with
-/// one or two log tensions each (every link inside a span of one or two tendons with
-/// friction) is eliminated with all of its shape known at compile time
-/// ([`eliminate_fixed`]). The arithmetic is the same either way.
+/// the same loops with the width at run time. (The panels of links inside a span of no,
+/// one or two tendons with friction have all of their shape known at compile time:
+/// [`factor_step`], [`eliminate_fixed`].) The arithmetic is the same either way.
 #[inline(always)]
 fn eliminate(panel: &mut [f64], rows: usize, width: usize, pivots: usize, record: Record) -> bool {
-    match (rows, width, pivots) {
-        (20, 26, 13) => return eliminate_fixed::<20, 26, 13>(panel, record),
-        (22, 28, 14) => return eliminate_fixed::<22, 28, 14>(panel, record),
-        _ => {}
-    }
     match width {
         24 => eliminate_rows::<24>(panel, rows, pivots, record),
         25 => eliminate_rows::<25>(panel, rows, pivots, record),
@@ -549,6 +588,7 @@ fn back_substitute_any(upper: &[f64], x: &mut [f64], next: &[f64]) {
 #[inline(always)]
 fn replay(step: &Step, record: (&[usize], &[f64]), v: &mut [f64]) {
     match (step.rows, step.pivots) {
+        (18, 12) => replay_fixed::<18, 12>(record, v),
         (20, 13) => replay_fixed::<20, 13>(record, v),
         (22, 14) => replay_fixed::<22, 14>(record, v),
         _ => replay_any(step, record, v),
@@ -625,21 +665,24 @@ mod tests {
     }
 
     /// Spans of one and of two tendons with friction, whose inner links' panels (20 x 26 and
-    /// 22 x 28) the compile-time kernels eliminate and replay, against a dense LU.
+    /// 22 x 28) the compile-time kernels eliminate and replay, and links past a span's end
+    /// (18 x 24), against a dense LU.
     #[test]
     fn fixed_panels_match_a_dense_solve() {
         dense_check(&[0, 1, 1, 1, 1]);
         dense_check(&[0, 2, 2, 2, 2, 0]);
+        // A span ending halfway: links without log tensions (18 x 24) after it.
+        dense_check(&[0, 1, 1, 0, 0, 0]);
     }
 
     /// The compile-time kernels give the bits of the run-time ones: the multipliers, swaps
     /// and live panel entries (pivot rows from their diagonal on, carried rows right of the
-    /// pivots) of one elimination, and a replayed right-hand side, on random panels of both
-    /// shapes.
+    /// pivots) of one elimination, and a replayed right-hand side, on random panels of the
+    /// three shapes.
     #[test]
     fn fixed_kernels_give_the_run_time_bits() {
         let mut random = generator(777);
-        for (rows, width, pivots) in [(20, 26, 13), (22, 28, 14)] {
+        for (rows, width, pivots) in [(18, 24, 12), (20, 26, 13), (22, 28, 14)] {
             let panel: Vec<f64> = (0..rows * width).map(|_| random()).collect();
             let (mut fixed, mut any) = (panel.clone(), panel);
             let step = Step {
@@ -650,13 +693,12 @@ mod tests {
             };
             let (mut swaps_a, mut swaps_b) = (vec![0; pivots], vec![0; pivots]);
             let (mut factors_a, mut factors_b) = (vec![0.0; pivots * rows], vec![0.0; pivots * rows]);
-            assert!(eliminate(
-                &mut fixed,
-                rows,
-                width,
-                pivots,
-                (&mut swaps_a, &mut factors_a)
-            ));
+            let record = (&mut swaps_a[..], &mut factors_a[..]);
+            assert!(match pivots {
+                12 => eliminate_fixed::<18, 24, 12>(&mut fixed, record),
+                13 => eliminate_fixed::<20, 26, 13>(&mut fixed, record),
+                _ => eliminate_fixed::<22, 28, 14>(&mut fixed, record),
+            });
             assert!(eliminate_any(
                 &mut any,
                 rows,
