@@ -105,8 +105,9 @@ impl Capstan<'_> {
                 if let Some(rz) = &self.link_z[k] {
                     for (side, (slips, first)) in sides.iter().enumerate() {
                         for (p, &l) in slips.iter().enumerate() {
-                            let column = rz.column(side * count + l);
-                            for (row, v) in rows.chunks_exact_mut(width).zip(column.iter()) {
+                            // Column-major storage: the column is a run of the slice.
+                            let column = &rz.as_slice()[(side * count + l) * NODE..(side * count + l + 1) * NODE];
+                            for (row, v) in rows.chunks_exact_mut(width).zip(column) {
                                 row[first + p] += v;
                             }
                         }
