@@ -333,7 +333,7 @@ fn factor_step_any(step: Panel, shape: &Step, fill: impl FnOnce(&mut [f64])) -> 
         }
     }
     fill(&mut panel[step.carried * width..]);
-    if !eliminate(panel, rows, width, ck, (step.swaps, step.factors)) {
+    if !eliminate_any(panel, rows, width, ck, (step.swaps, step.factors)) {
         return false;
     }
     keep_pivot_rows(panel, width, ck, step.upper);
@@ -361,63 +361,6 @@ fn keep_pivot_rows(panel: &[f64], width: usize, pivots: usize, upper: &mut [f64]
     }
 }
 
-/// [`eliminate_rows`] with the width known at compile time for the panels of links whose
-/// two nodes carry up to 4 log tensions together (24 to 28 columns), so that the row
-/// updates are unrolled and vectorized as in the frictionless elimination; other widths run
-/// the same loops with the width at run time. (The panels of links inside a span of no,
-/// one or two tendons with friction have all of their shape known at compile time:
-/// [`factor_step`], [`eliminate_fixed`].) The arithmetic is the same either way.
-#[inline(always)]
-fn eliminate(panel: &mut [f64], rows: usize, width: usize, pivots: usize, record: Record) -> bool {
-    match width {
-        24 => eliminate_rows::<24>(panel, rows, pivots, record),
-        25 => eliminate_rows::<25>(panel, rows, pivots, record),
-        26 => eliminate_rows::<26>(panel, rows, pivots, record),
-        27 => eliminate_rows::<27>(panel, rows, pivots, record),
-        28 => eliminate_rows::<28>(panel, rows, pivots, record),
-        _ => eliminate_any(panel, rows, width, pivots, record),
-    }
-}
-
-/// [`eliminate_any`] on rows of the compile-time width `W`.
-#[inline(always)]
-fn eliminate_rows<const W: usize>(panel: &mut [f64], rows: usize, pivots: usize, (swaps, factors): Record) -> bool {
-    let (panel, _) = panel[..rows * W].as_chunks_mut::<W>();
-    for c in 0..pivots {
-        let mut best = c;
-        for r in c + 1..rows {
-            if panel[r][c].abs() > panel[best][c].abs() {
-                best = r;
-            }
-        }
-        let pivot = panel[best][c];
-        if pivot == 0.0 || !pivot.is_finite() {
-            return false;
-        }
-        panel.swap(c, best);
-        swaps[c] = best;
-        let inverse = 1.0 / pivot;
-        let (top, below) = panel.split_at_mut(c + 1);
-        let prow = &top[c];
-        let factors = &mut factors[c * rows + c + 1..(c + 1) * rows];
-        for (row, factor) in below.iter_mut().zip(factors) {
-            let f = row[c] * inverse;
-            *factor = f;
-            if f != 0.0 {
-                // The whole row at the compile-time width (unrolled, no remainder loop): the
-                // pivot row is 0 left of column c, so the columns left of c keep their
-                // values (0), and column c is set to 0 after; columns right of c get the
-                // same operations as a loop over them alone.
-                for (x, p) in row.iter_mut().zip(prow) {
-                    *x -= f * p;
-                }
-                row[c] = 0.0;
-            }
-        }
-    }
-    true
-}
-
 /// `true && eliminate_column::<c, R, W>(..) && ...` over the listed columns c: one instance
 /// per column, so that every loop in it has constant bounds (as the frictionless
 /// elimination's `eliminate_column`).
@@ -427,7 +370,7 @@ macro_rules! eliminate_columns {
     };
 }
 
-/// [`eliminate_rows`] on a panel of `R` rows, `W` columns and `P` pivots (12 to 14), all
+/// [`eliminate_any`] on a panel of `R` rows, `W` columns and `P` pivots (12 to 14), all
 /// known at compile time, one instance of [`eliminate_column`] per pivot column.
 #[inline(always)]
 fn eliminate_fixed<const R: usize, const W: usize, const P: usize>(
@@ -444,10 +387,10 @@ fn eliminate_fixed<const R: usize, const W: usize, const P: usize>(
 
 /// Column `C` of [`eliminate_fixed`]: the pivot search among rows C.., the swap, and row
 /// r -= f_r * (pivot row) for every row r below C, f_r = rows[r][C] / pivot, recorded as
-/// [`eliminate_rows`] records them. The update of a row runs from column C + 1 rounded
+/// [`eliminate_any`] records them. The update of a row runs from column C + 1 rounded
 /// down to a multiple of four to the end: the columns left of C are dead (zero in the
 /// pivot row, never read in the rows below), so every live column sees the operations of
-/// [`eliminate_rows`] in the same order, and column C is set to zero as there.
+/// [`eliminate_any`] in the same order, and column C is set to zero as there.
 #[inline(always)]
 fn eliminate_column<const C: usize, const R: usize, const W: usize>(
     panel: &mut [[f64; W]; R],
