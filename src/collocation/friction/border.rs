@@ -42,7 +42,12 @@ impl Capstan<'_> {
                         }
                     }
                 }
-                self.link_z[k] = Some(lin.rows_z.clone());
+                // Kept where the shape is the same (every Jacobian after the first on this
+                // mesh): no allocation per link.
+                match &mut self.link_z[k] {
+                    Some(kept) if kept.shape() == lin.rows_z.shape() => kept.copy_from(&lin.rows_z),
+                    slot => *slot = Some(lin.rows_z.clone()),
+                }
                 true
             });
             if !done {
@@ -82,26 +87,28 @@ impl Capstan<'_> {
                 }
             }
             Block::Link(k) => {
-                let (ck, width) = (
-                    NODE + self.node_slips[k].len(),
-                    NODE + self.node_slips[k].len() + NODE + self.node_slips[k + 1].len(),
-                );
-                // The 24 columns of a link block: node k's 12, then node k + 1's.
-                let column = |c: usize| if c < NODE { c } else { ck + c - NODE };
-                let z_column =
-                    |side: usize, l: usize| self.z_column(k + side, l).map(|c| if side == 0 { c } else { ck + c });
+                let (left, right) = (&self.node_slips[k], &self.node_slips[k + 1]);
+                let ck = NODE + left.len();
+                let width = ck + NODE + right.len();
+                // Node k's log tensions are columns NODE.. of the block, node k + 1's ck + NODE..:
+                // a node's columns in the order of its slips.
+                let sides = [(left, NODE), (right, ck + NODE)];
                 let block = &values[BASE_ENTRIES + k * LINK_ENTRIES..BASE_ENTRIES + (k + 1) * LINK_ENTRIES];
-                for r in 0..NODE {
-                    let row = &mut out[r * width..(r + 1) * width];
-                    let (a, b) = block[r * 2 * NODE..(r + 1) * 2 * NODE].split_at(NODE);
+                let (rows, border_rows) = out.split_at_mut(NODE * width);
+                for (row, values) in rows.chunks_exact_mut(width).zip(block.chunks_exact(2 * NODE)) {
+                    let (a, b) = values.split_at(NODE);
                     row[..NODE].copy_from_slice(a);
                     row[ck..ck + NODE].copy_from_slice(b);
-                    if let Some(rz) = &self.link_z[k] {
-                        for l in 0..count {
-                            for side in 0..2 {
-                                if let Some(c) = z_column(side, l) {
-                                    row[c] += rz[(r, side * count + l)];
-                                }
+                }
+                // F_z: column (side, slip l) of the link's rows (one entry per cell, so in
+                // any order).
+                if let Some(rz) = &self.link_z[k] {
+                    for (side, (slips, first)) in sides.iter().enumerate() {
+                        for (p, &l) in slips.iter().enumerate() {
+                            // Column-major storage: the column is a run of the slice.
+                            let column = &rz.as_slice()[(side * count + l) * NODE..(side * count + l + 1) * NODE];
+                            for (row, v) in rows.chunks_exact_mut(width).zip(column) {
+                                row[first + p] += v;
                             }
                         }
                     }
@@ -112,23 +119,21 @@ impl Capstan<'_> {
                         && (link_row(k)..link_row(k + 1)).contains(first)
                     {
                         for (i, v) in vals.iter().enumerate() {
-                            out[(first - link_row(k) + i) * width + c] += v;
+                            rows[(first - link_row(k) + i) * width + c] += v;
                         }
                     }
                 }
-                for (a, &j) in self.node_slips[k + 1].iter().enumerate() {
+                // The capstan rows of the slips on link k (node k + 1's): psi_x over the
+                // two nodes' backbone columns, psi_z over their log tensions (a slip has a
+                // log tension at a node exactly when the node is in its span: `unknown`).
+                for (&j, row) in right.iter().zip(border_rows.chunks_exact_mut(width)) {
                     let global = self.offsets[j] + k;
-                    let row = &mut out[(NODE + a) * width..(NODE + a + 1) * width];
-                    for (c, v) in self.psi_x[global].iter().enumerate() {
-                        row[column(c)] = *v;
-                    }
-                    for l in 0..count {
-                        for side in 0..2 {
-                            if let (Some(c), Some(_)) =
-                                (z_column(side, l), unknown(&self.offsets, &profile.spans, l, k + side))
-                            {
-                                row[c] += self.psi_z[(global * 2 + side) * count + l];
-                            }
+                    let (a, b) = self.psi_x[global].split_at(NODE);
+                    row[..NODE].copy_from_slice(a);
+                    row[ck..ck + NODE].copy_from_slice(b);
+                    for (side, (slips, first)) in sides.iter().enumerate() {
+                        for (p, &l) in slips.iter().enumerate() {
+                            row[first + p] += self.psi_z[(global * 2 + side) * count + l];
                         }
                     }
                 }

@@ -37,8 +37,9 @@ struct Step {
     /// First of its `pivots * rows` multipliers: that of pivot row c subtracted from row
     /// r at c * rows + r (r > c).
     factors_at: usize,
-    /// First of its pivot rows, `pivots` x `width`, row major (upper triangular in the
-    /// first `pivots` columns).
+    /// First of its pivot rows, `pivots` x `width`: the upper triangle in the first
+    /// `pivots` columns row major, then the other columns (the next node's) transposed,
+    /// column by column ([`keep_pivot_rows`]).
     upper_at: usize,
 }
 
@@ -70,14 +71,11 @@ pub(crate) struct Staircase {
     pub(crate) ready: bool,
     /// First unknown of each node in the node-by-node order.
     first: Vec<usize>,
-    /// Scratch: the panel of the step in hand, the carried rows, a step's right-hand side,
-    /// the transformed right-hand sides of every pivot row, two nodes' solutions.
+    /// Scratch: the panel of the step in hand, the carried rows, and a solve's right-hand
+    /// side, transformed in place into its solution (node by node, as `first`).
     panel: Vec<f64>,
     carry: Vec<f64>,
-    values: Vec<f64>,
     transformed: Vec<f64>,
-    current: Vec<f64>,
-    next: Vec<f64>,
 }
 
 impl Staircase {
@@ -133,10 +131,7 @@ impl Staircase {
             first,
             panel: vec![0.0; 4 * widest * widest],
             carry: vec![0.0; widest * widest],
-            values: vec![0.0; 2 * widest],
             transformed: vec![0.0; total],
-            current: vec![0.0; widest],
-            next: vec![0.0; widest],
         }
     }
 
@@ -151,59 +146,59 @@ impl Staircase {
     }
 
     /// Factors the matrix whose blocks `fill` writes (row major into a zeroed slice of the
-    /// block's [`Staircase::shape`]). False on a zero or non-finite pivot.
-    pub(crate) fn factor(&mut self, mut fill: impl FnMut(Block, &mut [f64])) -> bool {
+    /// block's [`Staircase::shape`]). False on a zero or non-finite pivot. On x86-64 with
+    /// AVX2 and FMA (checked at run time) compiled for them, as the solve: the same
+    /// operations in the same order, so the same bits.
+    pub(crate) fn factor(&mut self, fill: impl FnMut(Block, &mut [f64])) -> bool {
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma") {
+            // SAFETY: the processor supports the features the function is compiled for.
+            return unsafe { self.factor_avx2(fill) };
+        }
+        self.factor_kernel(fill)
+    }
+
+    /// [`Staircase::factor_kernel`] with AVX2 and FMA enabled.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,fma")]
+    unsafe fn factor_avx2(&mut self, fill: impl FnMut(Block, &mut [f64])) -> bool {
+        self.factor_kernel(fill)
+    }
+
+    /// [`Staircase::factor`]'s operations: step by step, the panel of the carried rows over
+    /// the new ones, eliminated ([`factor_step`]), with the shapes of the links inside a
+    /// span of no, one or two tendons with friction known at compile time.
+    #[inline(always)]
+    fn factor_kernel(&mut self, mut fill: impl FnMut(Block, &mut [f64])) -> bool {
         self.ready = false;
         let links = self.columns.len() - 1;
         // The carried rows start as the base rows over node 0.
-        let mut carried = BASE_ROWS;
         let c0 = self.columns[0];
-        self.carry[..carried * c0].fill(0.0);
-        fill(Block::Base, &mut self.carry[..carried * c0]);
-        for k in 0..=links {
-            let ck = self.columns[k];
-            let (block, new_rows, width) = if k < links {
-                (Block::Link(k), self.columns[k + 1], ck + self.columns[k + 1])
+        self.carry[..BASE_ROWS * c0].fill(0.0);
+        fill(Block::Base, &mut self.carry[..BASE_ROWS * c0]);
+        for (k, step) in self.steps.iter().enumerate() {
+            let (block, new_rows) = if k < links {
+                (Block::Link(k), self.columns[k + 1])
             } else {
-                (Block::Tip, BASE_ROWS, ck)
+                (Block::Tip, BASE_ROWS)
             };
-            let rows = carried + new_rows;
-            let panel = &mut self.panel[..rows * width];
-            // Zeroed row by row with the carried rows' copy: a few short stores each, where
-            // one memset of the panel (kilobytes) runs as `rep stosb`, byte by byte; at the
-            // widths of links inside a span of one or two tendons with friction, rows of a
-            // compile-time width (stores in line, not a call to memset per row).
-            match width {
-                26 => prepare::<26>(panel, carried, ck, &self.carry),
-                28 => prepare::<28>(panel, carried, ck, &self.carry),
-                _ => {
-                    for (r, row) in panel.chunks_exact_mut(width).enumerate() {
-                        if r < carried {
-                            row[..ck].copy_from_slice(&self.carry[r * ck..(r + 1) * ck]);
-                            row[ck..].fill(0.0);
-                        } else {
-                            row.fill(0.0);
-                        }
-                    }
-                }
-            }
-            fill(block, &mut panel[carried * width..]);
-            let step = self.steps[k];
-            debug_assert_eq!((step.rows, step.width, step.pivots), (rows, width, ck));
-            let swaps = &mut self.swaps[step.swaps_at..step.swaps_at + ck];
-            let factors = &mut self.factors[step.factors_at..step.factors_at + ck * rows];
-            if !eliminate_fast(panel, rows, width, ck, (swaps, factors)) {
+            let this = Panel {
+                panel: &mut self.panel[..step.rows * step.width],
+                carry: &mut self.carry,
+                carried: step.rows - new_rows,
+                swaps: &mut self.swaps[step.swaps_at..step.swaps_at + step.pivots],
+                factors: &mut self.factors[step.factors_at..step.factors_at + step.pivots * step.rows],
+                upper: &mut self.upper[step.upper_at..step.upper_at + step.pivots * step.width],
+            };
+            let fill = |rows: &mut [f64]| fill(block, rows);
+            let ok = match (step.rows, step.width, step.pivots) {
+                (18, 24, 12) => factor_step::<18, 24, 12>(this, fill),
+                (20, 26, 13) => factor_step::<20, 26, 13>(this, fill),
+                (22, 28, 14) => factor_step::<22, 28, 14>(this, fill),
+                _ => factor_step_any(this, step, fill),
+            };
+            if !ok {
                 return false;
-            }
-            self.upper[step.upper_at..step.upper_at + ck * width].copy_from_slice(&panel[..ck * width]);
-            // The rows not chosen carry node k + 1's columns on.
-            carried = rows - ck;
-            if k < links {
-                let next = width - ck;
-                for r in 0..carried {
-                    let from = (ck + r) * width + ck;
-                    self.carry[r * next..(r + 1) * next].copy_from_slice(&panel[from..from + next]);
-                }
             }
         }
         self.ready = true;
@@ -232,146 +227,138 @@ impl Staircase {
         self.solve_kernel(rhs, out)
     }
 
-    /// [`Staircase::solve`]'s operations.
+    /// [`Staircase::solve`]'s operations, in place in one buffer of the unknowns' length:
+    /// step k's rows occupy its positions `first[k]..` (the rows it carries on are where
+    /// step k + 1's rows begin, so nothing is copied between steps); after the replay its
+    /// pivot rows' values stay there, and the back substitution overwrites them with node
+    /// k's unknowns.
     #[inline(always)]
     fn solve_kernel(&mut self, mut rhs: impl FnMut(Block, &mut [f64]), mut out: impl FnMut(usize, &[f64])) -> bool {
         if !self.ready {
             return false;
         }
         let links = self.columns.len() - 1;
-        let mut carried = BASE_ROWS;
-        rhs(Block::Base, &mut self.carry[..carried]);
-        for k in 0..=links {
-            let step = &self.steps[k];
-            let v = &mut self.values[..step.rows];
-            v[..carried].copy_from_slice(&self.carry[..carried]);
+        let w = &mut self.transformed[..];
+        rhs(Block::Base, &mut w[..BASE_ROWS]);
+        for (k, step) in self.steps.iter().enumerate() {
+            let at = self.first[k];
+            let rows = &mut w[at..at + step.rows];
+            let carried = step.rows - if k < links { self.columns[k + 1] } else { BASE_ROWS };
             let block = if k < links { Block::Link(k) } else { Block::Tip };
-            rhs(block, &mut v[carried..]);
+            rhs(block, &mut rows[carried..]);
             let swaps = &self.swaps[step.swaps_at..step.swaps_at + step.pivots];
             let factors = &self.factors[step.factors_at..step.factors_at + step.pivots * step.rows];
-            replay(step, (swaps, factors), v);
-            let at = self.first[k];
-            self.transformed[at..at + step.pivots].copy_from_slice(&v[..step.pivots]);
-            carried = step.rows - step.pivots;
-            self.carry[..carried].copy_from_slice(&v[step.pivots..]);
+            replay(step, (swaps, factors), rows);
         }
         // Back substitution from the last node: x_k from step k's pivot rows given x_k+1,
-        // with the next node's column count known at compile time for nodes of 12 to 14
-        // columns (the same sums in the same order).
-        let mut finite = true;
-        for k in (0..=links).rev() {
-            let step = &self.steps[k];
-            let ck = step.pivots;
-            let (current, next) = (&mut self.current, &self.next);
-            let transformed = &self.transformed[self.first[k]..self.first[k] + ck];
-            let upper = &self.upper[step.upper_at..step.upper_at + ck * step.width];
-            match step.width - ck {
-                0 => back_substitute::<0>(step, upper, transformed, current, next),
-                12 => back_substitute::<12>(step, upper, transformed, current, next),
-                13 => back_substitute::<13>(step, upper, transformed, current, next),
-                14 => back_substitute::<14>(step, upper, transformed, current, next),
-                _ => back_substitute_any(step, upper, transformed, current, next),
+        // with the shapes of the steps inside a span known at compile time (the same sums
+        // in the same order).
+        for (k, step) in self.steps.iter().enumerate().rev() {
+            let (head, tail) = w.split_at_mut(self.first[k] + step.pivots);
+            let x = &mut head[self.first[k]..];
+            let next = &tail[..step.width - step.pivots];
+            let upper = &self.upper[step.upper_at..step.upper_at + step.pivots * step.width];
+            match (step.pivots, next.len()) {
+                (12, 12) => back_substitute::<12, 12>(upper, x, next),
+                (13, 13) => back_substitute::<13, 13>(upper, x, next),
+                (14, 14) => back_substitute::<14, 14>(upper, x, next),
+                _ => back_substitute_any(upper, x, next),
             }
-            finite &= current[..ck].iter().all(|v| v.is_finite());
-            out(k, &current[..ck]);
-            std::mem::swap(&mut self.current, &mut self.next);
+            out(k, x);
         }
-        finite
+        w.iter().all(|v| v.is_finite())
     }
 }
 
-/// The panel of a step, rows of `W` columns: the `carried` rows' first `ck` columns from
-/// `carry` (row r at `r * ck`), every other entry zero.
+/// One elimination step's buffers: its panel, the carried rows (in: this node's columns of
+/// the rows carried from the step before, `carried` of them; out: the next node's columns
+/// of the rows this step carries on, row by row), and where its swaps, multipliers and
+/// pivot rows are kept.
+struct Panel<'a> {
+    panel: &'a mut [f64],
+    carry: &'a mut [f64],
+    carried: usize,
+    swaps: &'a mut [usize],
+    factors: &'a mut [f64],
+    upper: &'a mut [f64],
+}
+
+/// A step on a panel of `R` rows, `W` columns and `P` pivots, all known at compile time
+/// (a link's: W - P new rows, R + P - W carried): the panel zeroed with the carried rows'
+/// columns copied in, the new rows filled by `fill` (row major, `W` wide), eliminated
+/// ([`eliminate_fixed`]), the pivot rows kept ([`keep_pivot_rows`]) and the other rows'
+/// next-node columns carried on. The operations of [`factor_step_any`].
 #[inline(always)]
-fn prepare<const W: usize>(panel: &mut [f64], carried: usize, ck: usize, carry: &[f64]) {
-    let (rows, _) = panel.as_chunks_mut::<W>();
+fn factor_step<const R: usize, const W: usize, const P: usize>(step: Panel, fill: impl FnOnce(&mut [f64])) -> bool {
+    let carried = const { R + P - W };
+    debug_assert_eq!(step.carried, carried);
+    let (rows, _) = step.panel[..R * W].as_chunks_mut::<W>();
+    let rows: &mut [[f64; W]; R] = rows.try_into().expect("R rows of the panel");
+    // In: `carried` rows of P columns; out: R - P rows of W - P.
+    let carry = &mut step.carry[..(carried * P).max((R - P) * (W - P))];
+    // Zeroed with a zero the compiler cannot see: a literal one turns these stores into one
+    // memset of the panel (kilobytes), which runs as `rep stosb`, counted byte by byte.
+    let zero = std::hint::black_box(0.0);
     for (r, row) in rows.iter_mut().enumerate() {
-        *row = [0.0; W];
+        *row = [zero; W];
         if r < carried {
-            row[..ck].copy_from_slice(&carry[r * ck..(r + 1) * ck]);
+            row[..P].copy_from_slice(&carry[r * P..(r + 1) * P]);
         }
     }
-}
-
-/// [`eliminate`] compiled for AVX2 and FMA when the processor has them (checked at run
-/// time), as the frictionless elimination does, else for the baseline target.
-fn eliminate_fast(panel: &mut [f64], rows: usize, width: usize, pivots: usize, record: Record) -> bool {
-    #[cfg(target_arch = "x86_64")]
-    if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma") {
-        // SAFETY: the processor supports the features the function is compiled for.
-        return unsafe { eliminate_avx2(panel, rows, width, pivots, record) };
+    fill(rows[carried..].as_flattened_mut());
+    if !eliminate_fixed::<R, W, P>(rows.as_flattened_mut(), (step.swaps, step.factors)) {
+        return false;
     }
-    eliminate(panel, rows, width, pivots, record)
-}
-
-/// [`eliminate`] with AVX2 and FMA enabled.
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2,fma")]
-unsafe fn eliminate_avx2(panel: &mut [f64], rows: usize, width: usize, pivots: usize, record: Record) -> bool {
-    eliminate(panel, rows, width, pivots, record)
-}
-
-/// [`eliminate_rows`] with the width known at compile time for the panels of links whose
-/// two nodes carry up to 4 log tensions together (24 to 28 columns), so that the row
-/// updates are unrolled and vectorized as in the frictionless elimination; other widths run
-/// the same loops with the width at run time. The panel of a link between two nodes with
-/// one or two log tensions each (every link inside a span of one or two tendons with
-/// friction) is eliminated with all of its shape known at compile time
-/// ([`eliminate_fixed`]). The arithmetic is the same either way.
-#[inline(always)]
-fn eliminate(panel: &mut [f64], rows: usize, width: usize, pivots: usize, record: Record) -> bool {
-    match (rows, width, pivots) {
-        (20, 26, 13) => return eliminate_fixed::<20, 26, 13>(panel, record),
-        (22, 28, 14) => return eliminate_fixed::<22, 28, 14>(panel, record),
-        _ => {}
-    }
-    match width {
-        24 => eliminate_rows::<24>(panel, rows, pivots, record),
-        25 => eliminate_rows::<25>(panel, rows, pivots, record),
-        26 => eliminate_rows::<26>(panel, rows, pivots, record),
-        27 => eliminate_rows::<27>(panel, rows, pivots, record),
-        28 => eliminate_rows::<28>(panel, rows, pivots, record),
-        _ => eliminate_any(panel, rows, width, pivots, record),
-    }
-}
-
-/// [`eliminate_any`] on rows of the compile-time width `W`.
-#[inline(always)]
-fn eliminate_rows<const W: usize>(panel: &mut [f64], rows: usize, pivots: usize, (swaps, factors): Record) -> bool {
-    let (panel, _) = panel[..rows * W].as_chunks_mut::<W>();
-    for c in 0..pivots {
-        let mut best = c;
-        for r in c + 1..rows {
-            if panel[r][c].abs() > panel[best][c].abs() {
-                best = r;
-            }
-        }
-        let pivot = panel[best][c];
-        if pivot == 0.0 || !pivot.is_finite() {
-            return false;
-        }
-        panel.swap(c, best);
-        swaps[c] = best;
-        let inverse = 1.0 / pivot;
-        let (top, below) = panel.split_at_mut(c + 1);
-        let prow = &top[c];
-        let factors = &mut factors[c * rows + c + 1..(c + 1) * rows];
-        for (row, factor) in below.iter_mut().zip(factors) {
-            let f = row[c] * inverse;
-            *factor = f;
-            if f != 0.0 {
-                // The whole row at the compile-time width (unrolled, no remainder loop): the
-                // pivot row is 0 left of column c, so the columns left of c keep their
-                // values (0), and column c is set to 0 after; columns right of c get the
-                // same operations as a loop over them alone.
-                for (x, p) in row.iter_mut().zip(prow) {
-                    *x -= f * p;
-                }
-                row[c] = 0.0;
-            }
-        }
+    keep_pivot_rows(rows.as_flattened(), W, P, step.upper);
+    for (r, row) in rows[P..].iter().enumerate() {
+        carry[r * (W - P)..(r + 1) * (W - P)].copy_from_slice(&row[P..]);
     }
     true
+}
+
+/// [`factor_step`] for any shape (the first link's, the last node's, and links next to
+/// where a span begins or ends).
+#[inline(always)]
+fn factor_step_any(step: Panel, shape: &Step, fill: impl FnOnce(&mut [f64])) -> bool {
+    let (rows, width, ck) = (shape.rows, shape.width, shape.pivots);
+    let panel = &mut step.panel[..rows * width];
+    // Zeroed row by row with the carried rows' copy: a few short stores each, where one
+    // memset of the panel (kilobytes) runs as `rep stosb`, byte by byte.
+    for (r, row) in panel.chunks_exact_mut(width).enumerate() {
+        if r < step.carried {
+            row[..ck].copy_from_slice(&step.carry[r * ck..(r + 1) * ck]);
+            row[ck..].fill(0.0);
+        } else {
+            row.fill(0.0);
+        }
+    }
+    fill(&mut panel[step.carried * width..]);
+    if !eliminate_any(panel, rows, width, ck, (step.swaps, step.factors)) {
+        return false;
+    }
+    keep_pivot_rows(panel, width, ck, step.upper);
+    let next = width - ck;
+    for r in 0..rows - ck {
+        let from = (ck + r) * width + ck;
+        step.carry[r * next..(r + 1) * next].copy_from_slice(&panel[from..from + next]);
+    }
+    true
+}
+
+/// Keeps the `pivots` pivot rows of an eliminated `width`-column `panel` in `upper`: their
+/// first `pivots` columns (the upper triangle) row major, then each further column (the
+/// next node's) as a run of `pivots` values, so that the back substitution's coupling
+/// sums read whole vectors across the rows. Always inlined: with the shape known at
+/// compile time ([`factor_step`]) its loops have constant bounds.
+#[inline(always)]
+fn keep_pivot_rows(panel: &[f64], width: usize, pivots: usize, upper: &mut [f64]) {
+    let (triangle, far) = upper[..pivots * width].split_at_mut(pivots * pivots);
+    for (i, row) in panel.chunks_exact(width).take(pivots).enumerate() {
+        triangle[i * pivots..(i + 1) * pivots].copy_from_slice(&row[..pivots]);
+        for (j, &v) in row[pivots..].iter().enumerate() {
+            far[j * pivots + i] = v;
+        }
+    }
 }
 
 /// `true && eliminate_column::<c, R, W>(..) && ...` over the listed columns c: one instance
@@ -383,7 +370,7 @@ macro_rules! eliminate_columns {
     };
 }
 
-/// [`eliminate_rows`] on a panel of `R` rows, `W` columns and `P` pivots (12 to 14), all
+/// [`eliminate_any`] on a panel of `R` rows, `W` columns and `P` pivots (12 to 14), all
 /// known at compile time, one instance of [`eliminate_column`] per pivot column.
 #[inline(always)]
 fn eliminate_fixed<const R: usize, const W: usize, const P: usize>(
@@ -400,10 +387,10 @@ fn eliminate_fixed<const R: usize, const W: usize, const P: usize>(
 
 /// Column `C` of [`eliminate_fixed`]: the pivot search among rows C.., the swap, and row
 /// r -= f_r * (pivot row) for every row r below C, f_r = rows[r][C] / pivot, recorded as
-/// [`eliminate_rows`] records them. The update of a row runs from column C + 1 rounded
+/// [`eliminate_any`] records them. The update of a row runs from column C + 1 rounded
 /// down to a multiple of four to the end: the columns left of C are dead (zero in the
 /// pivot row, never read in the rows below), so every live column sees the operations of
-/// [`eliminate_rows`] in the same order, and column C is set to zero as there.
+/// [`eliminate_any`] in the same order, and column C is set to zero as there.
 #[inline(always)]
 fn eliminate_column<const C: usize, const R: usize, const W: usize>(
     panel: &mut [[f64; W]; R],
@@ -494,32 +481,47 @@ fn zeroed<T: Copy + Default>(len: usize) -> Vec<T> {
     out
 }
 
-/// The unknowns of a step's node from its pivot rows (`transformed`: their right-hand
-/// sides) and the next node's unknowns `next`, whose count `N` (the step's width less its
-/// pivots) is known at compile time.
+/// The unknowns x of a step's node, `CK` of them, from its pivot rows `upper` (the
+/// triangle row major, then the next node's columns transposed: [`Staircase::factor`]),
+/// whose right-hand sides `x` holds on entry, and the next node's `N` unknowns `next`:
+/// x_i = (rhs_i - sum_j U_i,CK+j next_j - sum_j>i U_ij x_j) / U_ii, each sum in ascending
+/// j from -0.0 as [`back_substitute_any`]'s. The coupling sums of all rows run at once
+/// over the transposed columns (whole vectors across the rows, each lane the same
+/// additions in the same order), the rest row by row.
 #[inline(always)]
-fn back_substitute<const N: usize>(step: &Step, upper: &[f64], transformed: &[f64], current: &mut [f64], next: &[f64]) {
-    let ck = step.pivots;
-    let next: &[f64; N] = next[..N].try_into().expect("N unknowns of the next node");
-    for i in (0..ck).rev() {
-        let row = &upper[i * step.width..(i + 1) * step.width];
-        let far: &[f64; N] = row[ck..].try_into().expect("N columns of the next node");
-        let coupled: f64 = far.iter().zip(next).map(|(a, b)| a * b).sum();
-        let own: f64 = row[i + 1..ck].iter().zip(&current[i + 1..ck]).map(|(a, b)| a * b).sum();
-        current[i] = (transformed[i] - coupled - own) / row[i];
+fn back_substitute<const CK: usize, const N: usize>(upper: &[f64], x: &mut [f64], next: &[f64]) {
+    let (triangle, far) = upper[..CK * (CK + N)].split_at(CK * CK);
+    let (triangle, _) = triangle.as_chunks::<CK>();
+    let (far, _) = far.as_chunks::<CK>();
+    let far: &[[f64; CK]; N] = far.try_into().expect("N transposed columns");
+    let next: &[f64; N] = next.try_into().expect("N unknowns of the next node");
+    let x: &mut [f64; CK] = x.try_into().expect("CK unknowns");
+    let mut coupled = [-0.0; CK];
+    for (column, b) in far.iter().zip(next) {
+        for (sum, a) in coupled.iter_mut().zip(column) {
+            *sum += a * b;
+        }
+    }
+    for i in (0..CK).rev() {
+        let row = &triangle[i];
+        let mut own = -0.0;
+        for j in i + 1..CK {
+            own += row[j] * x[j];
+        }
+        x[i] = (x[i] - coupled[i] - own) / row[i];
     }
 }
 
-/// [`back_substitute`] for any count of the next node's unknowns.
+/// [`back_substitute`] for any shape (`x.len()` unknowns, `next.len()` of the next node).
 #[inline(always)]
-fn back_substitute_any(step: &Step, upper: &[f64], transformed: &[f64], current: &mut [f64], next: &[f64]) {
-    let ck = step.pivots;
-    let next = &next[..step.width - ck];
+fn back_substitute_any(upper: &[f64], x: &mut [f64], next: &[f64]) {
+    let ck = x.len();
+    let (triangle, far) = upper.split_at(ck * ck);
     for i in (0..ck).rev() {
-        let row = &upper[i * step.width..(i + 1) * step.width];
-        let coupled: f64 = row[ck..].iter().zip(next).map(|(a, b)| a * b).sum();
-        let own: f64 = row[i + 1..ck].iter().zip(&current[i + 1..ck]).map(|(a, b)| a * b).sum();
-        current[i] = (transformed[i] - coupled - own) / row[i];
+        let row = &triangle[i * ck..(i + 1) * ck];
+        let coupled: f64 = far.chunks_exact(ck).zip(next).map(|(column, b)| column[i] * b).sum();
+        let own: f64 = row[i + 1..].iter().zip(&x[i + 1..]).map(|(a, b)| a * b).sum();
+        x[i] = (x[i] - coupled - own) / row[i];
     }
 }
 
@@ -529,6 +531,7 @@ fn back_substitute_any(step: &Step, upper: &[f64], transformed: &[f64], current:
 #[inline(always)]
 fn replay(step: &Step, record: (&[usize], &[f64]), v: &mut [f64]) {
     match (step.rows, step.pivots) {
+        (18, 12) => replay_fixed::<18, 12>(record, v),
         (20, 13) => replay_fixed::<20, 13>(record, v),
         (22, 14) => replay_fixed::<22, 14>(record, v),
         _ => replay_any(step, record, v),
@@ -605,21 +608,24 @@ mod tests {
     }
 
     /// Spans of one and of two tendons with friction, whose inner links' panels (20 x 26 and
-    /// 22 x 28) the compile-time kernels eliminate and replay, against a dense LU.
+    /// 22 x 28) the compile-time kernels eliminate and replay, and links past a span's end
+    /// (18 x 24), against a dense LU.
     #[test]
     fn fixed_panels_match_a_dense_solve() {
         dense_check(&[0, 1, 1, 1, 1]);
         dense_check(&[0, 2, 2, 2, 2, 0]);
+        // A span ending halfway: links without log tensions (18 x 24) after it.
+        dense_check(&[0, 1, 1, 0, 0, 0]);
     }
 
     /// The compile-time kernels give the bits of the run-time ones: the multipliers, swaps
     /// and live panel entries (pivot rows from their diagonal on, carried rows right of the
-    /// pivots) of one elimination, and a replayed right-hand side, on random panels of both
-    /// shapes.
+    /// pivots) of one elimination, and a replayed right-hand side, on random panels of the
+    /// three shapes.
     #[test]
     fn fixed_kernels_give_the_run_time_bits() {
         let mut random = generator(777);
-        for (rows, width, pivots) in [(20, 26, 13), (22, 28, 14)] {
+        for (rows, width, pivots) in [(18, 24, 12), (20, 26, 13), (22, 28, 14)] {
             let panel: Vec<f64> = (0..rows * width).map(|_| random()).collect();
             let (mut fixed, mut any) = (panel.clone(), panel);
             let step = Step {
@@ -630,13 +636,12 @@ mod tests {
             };
             let (mut swaps_a, mut swaps_b) = (vec![0; pivots], vec![0; pivots]);
             let (mut factors_a, mut factors_b) = (vec![0.0; pivots * rows], vec![0.0; pivots * rows]);
-            assert!(eliminate(
-                &mut fixed,
-                rows,
-                width,
-                pivots,
-                (&mut swaps_a, &mut factors_a)
-            ));
+            let record = (&mut swaps_a[..], &mut factors_a[..]);
+            assert!(match pivots {
+                12 => eliminate_fixed::<18, 24, 12>(&mut fixed, record),
+                13 => eliminate_fixed::<20, 26, 13>(&mut fixed, record),
+                _ => eliminate_fixed::<22, 28, 14>(&mut fixed, record),
+            });
             assert!(eliminate_any(
                 &mut any,
                 rows,
@@ -664,6 +669,37 @@ mod tests {
                 u.iter().map(|x| x.to_bits()).collect::<Vec<_>>(),
                 w.iter().map(|x| x.to_bits()).collect::<Vec<_>>()
             );
+        }
+    }
+
+    /// The compile-time back substitution gives the bits of the run-time one, on random
+    /// pivot rows of the shapes inside a span (a quarter of their entries and right-hand
+    /// sides signed zeros, whose sums' signs depend on the additions' order and start).
+    #[test]
+    fn fixed_back_substitution_gives_the_run_time_bits() {
+        let mut random = generator(4242);
+        let mut value = |i: usize| match i % 8 {
+            0 => 0.0,
+            4 => -0.0,
+            _ => random(),
+        };
+        for (ck, n) in [(12, 12), (13, 13), (14, 14)] {
+            let mut upper: Vec<f64> = (0..ck * (ck + n)).map(&mut value).collect();
+            // Pivots away from zero, as the elimination leaves them.
+            for i in 0..ck {
+                upper[i * ck + i] = 1.0 + (i as f64) / 7.0;
+            }
+            let next: Vec<f64> = (0..n).map(&mut value).collect();
+            let rhs: Vec<f64> = (0..ck).map(|i| value(i + 3)).collect();
+            let (mut fixed, mut any) = (rhs.clone(), rhs);
+            match ck {
+                12 => back_substitute::<12, 12>(&upper, &mut fixed, &next),
+                13 => back_substitute::<13, 13>(&upper, &mut fixed, &next),
+                _ => back_substitute::<14, 14>(&upper, &mut fixed, &next),
+            }
+            back_substitute_any(&upper, &mut any, &next);
+            let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+            assert_eq!(bits(&fixed), bits(&any), "{ck} x {n}");
         }
     }
 
