@@ -61,7 +61,7 @@ pub(super) fn solve_tensions(
                 if let Some(last) = cache.as_mut().and_then(|c| c.last.take()) {
                     spare::give(last);
                 }
-                tried = Some(*report);
+                tried = Some(report);
                 provisional = false;
             }
         }
@@ -74,7 +74,7 @@ enum Attempt {
     /// The solve's answer (or its error).
     Answer(Result<Solution>),
     /// The report of the provisional route, whose work the full run's report counts.
-    Again(Box<SolveReport>),
+    Again(SolveReport),
 }
 
 /// One run of [`solve_tensions`] from its `start`: with `provisional`, a direct answer on a
@@ -142,7 +142,7 @@ fn attempt(
     let provisional = provisional && report.path == PathTaken::Direct;
     let level = match level {
         Ok(level) => level,
-        Err(_) if provisional => return Attempt::Again(Box::new(report)),
+        Err(_) if provisional => return Attempt::Again(report),
         Err(e) => return Attempt::Answer(Err(timed(e, start))),
     };
     let Level {
@@ -179,7 +179,7 @@ fn attempt(
     if provisional && !report.stability.is_stable() {
         spare::give(model.tensions);
         Level { mesh, x, correction }.release();
-        return Attempt::Again(Box::new(report));
+        return Attempt::Again(report);
     }
     report.timings.total = start.elapsed();
     let rates = correction.as_ref().map(|c| c.node_rates.as_slice());
