@@ -252,7 +252,10 @@ fn rigid_estimate_in(model: &Model, nodes: &[MeshNode], b: &mut SweepBuffers, re
     sites.clear();
     sites.extend(nodes.iter().map(|n| model.site_on(n.s, n.segment_end)));
     // So do the tendons' routing points at the nodes: evaluated once, not once a sweep.
+    // Room for every tendon at every node, so that a kept buffer does not grow when a later
+    // solve has more taut tendons (a batch row allocates only its Solution).
     routes.clear();
+    routes.reserve(nodes.len() * model.robot.tendons.len());
     route_ends.clear();
     for n in nodes {
         routes.extend(model.tendons(n.s, Which::ActiveTo(n.segment_end)));
