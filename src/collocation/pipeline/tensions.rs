@@ -20,7 +20,7 @@ use crate::solution::Solution;
 use crate::{Error, Robot};
 use std::time::Instant;
 
-/// [`solve_impl`] for a robot (validated, with `options` validated) whose tendons are all
+/// [`super::solve_impl`] for a robot (validated, with `options` validated) whose tendons are all
 /// tension-controlled and without friction, with the final mesh's stability verdict in the
 /// report; with `on_branch`, keeping to the branch of `warm` when the solve starts from it
 /// ([`Choose::OnBranch`]).
@@ -32,7 +32,7 @@ use std::time::Instant;
 /// equilibrium a solve returns").
 ///
 /// # Errors
-/// As [`super::solve`].
+/// As [`crate::collocation::solve`].
 pub(super) fn solve_tensions(
     robot: &Robot,
     options: &Options,
