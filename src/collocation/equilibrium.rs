@@ -85,6 +85,12 @@ pub(crate) enum Choose {
     Unassessed {
         /// Whether the start is a warm start.
         warm: bool,
+        /// Whether Newton still evaluates the Jacobian at a direct answer
+        /// ([`newton::run_ahead`]): the verdict is deferred, not dropped (a tension solve's
+        /// first mesh under error control takes it after its error estimate when that mesh
+        /// is the last, `pipeline::solve_on_mesh`; docs/stability.md "Which equilibrium a
+        /// solve returns").
+        ahead: bool,
     },
 }
 
@@ -93,9 +99,15 @@ impl Choose {
     /// ([`Choose::Unassessed`]), from the same start; `self` for [`Choose::No`] and
     /// [`Choose::OnBranch`] (which no solve with friction starts with).
     pub(crate) fn unassessed(self) -> Choose {
+        self.unassessed_with(false)
+    }
+
+    /// [`Choose::unassessed`] with Newton's Jacobian at a direct answer still evaluated
+    /// when `ahead` ([`Choose::Unassessed`]).
+    pub(crate) fn unassessed_with(self, ahead: bool) -> Choose {
         match self {
-            Choose::FromCold => Choose::Unassessed { warm: false },
-            Choose::FromWarm => Choose::Unassessed { warm: true },
+            Choose::FromCold => Choose::Unassessed { warm: false, ahead },
+            Choose::FromWarm => Choose::Unassessed { warm: true, ahead },
             other => other,
         }
     }
@@ -216,12 +228,13 @@ fn linearized_dynamics(
 
 /// Newton from `x`, given only the chance to converge cleanly ([`clean`]) unless
 /// `nearest`: the converged states, if they are stable ([`acceptable`]) or `nearest`; with
-/// `unassessed` ([`Choose::Unassessed`]) a clean answer without its verdict.
+/// `unassessed` ([`Choose::Unassessed`]) a clean answer without its verdict (with Newton's
+/// Jacobian at it when `ahead`).
 fn direct(
     system: &System,
     ws: &mut Workspace,
     x: &mut Vec<State>,
-    (nearest, unassessed): (bool, bool),
+    (nearest, unassessed, ahead): (bool, bool, bool),
     settings: &Settings,
     report: &mut SolveReport,
 ) -> (bool, usize) {
@@ -238,8 +251,8 @@ fn direct(
     // or keeping eq. 13's factored matrices for the linearized dynamics): Newton evaluates
     // it at its last trial point instead of the residual there. An unassessed answer takes
     // no verdict here (its friction verdict is the bordered system's), so it keeps the
-    // plain residual.
-    let (termination, worst) = if !nearest && !unassessed && plain_verdict(system) {
+    // plain residual, unless its verdict is only deferred (`ahead`).
+    let (termination, worst) = if !nearest && (!unassessed || ahead) && plain_verdict(system) {
         newton::run_ahead(system, ws, x, &direct, report)
     } else {
         newton::run(system, ws, x, &direct, report)
@@ -390,13 +403,13 @@ fn choose_from(
     report.unknowns = system.unknowns();
     report.nonzeros = ws.nonzeros();
     report.intervals = system.mesh.intervals();
-    let (warm, unassessed) = match choose {
-        Choose::Unassessed { warm } => (warm, true),
-        _ => (matches!(choose, Choose::FromWarm | Choose::OnBranch), false),
+    let (warm, unassessed, ahead) = match choose {
+        Choose::Unassessed { warm, ahead } => (warm, true, ahead),
+        _ => (matches!(choose, Choose::FromWarm | Choose::OnBranch), false, false),
     };
     let nearest = options.equilibrium == Equilibrium::Nearest || !options.continuation;
     let mut x = spare::copy(x0);
-    let (accept, worst) = direct(system, ws, &mut x, (nearest, unassessed), settings, report);
+    let (accept, worst) = direct(system, ws, &mut x, (nearest, unassessed, ahead), settings, report);
     let converged = report.termination == Termination::Converged;
     if accept {
         return Ok(x);
@@ -431,7 +444,7 @@ fn choose_from(
         }
         system.set_factors(1.0, 1.0);
         let mut cold = guess::initial(&system.model, &system.mesh.nodes, options.initial_guess);
-        if direct(system, ws, &mut cold, (false, unassessed), settings, report).0 {
+        if direct(system, ws, &mut cold, (false, unassessed, ahead), settings, report).0 {
             return Ok(cold);
         }
     }

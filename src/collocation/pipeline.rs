@@ -2,11 +2,8 @@
 //! equilibrium choice on the first mesh, refinement to the tolerance, the error estimate and
 //! the stability verdict, and the [`Solution`] built from the node states.
 
-use super::MAX_ITERATIONS;
 use super::deferred;
-use super::equilibrium::{
-    Choose, better_start, choose_equilibrium, held_stability, near_start, plain_verdict, stability_of,
-};
+use super::equilibrium::{Choose, better_start, choose_equilibrium, near_start, plain_verdict, stability_of};
 use super::estimate;
 use super::newton::{self, Settings, Workspace};
 use super::options::{Equilibrium, Options};
@@ -15,16 +12,18 @@ use super::relax;
 use super::solver::{Cache, Cached};
 use super::start::{cold_start, initial_mesh, resolves};
 use super::system::System;
-use super::unknowns;
 use super::workspace;
 use crate::error::Result;
 use crate::mesh::guess::{self, interpolate};
 use crate::mesh::{Mesh, nodes, spare};
 use crate::model::equations::Model;
-use crate::report::{Method, NOT_ASSESSED, PathTaken, SolveReport, Stability, Termination};
+use crate::report::{Method, PathTaken, SolveReport, Termination};
 use crate::solution::{Solution, State};
 use crate::{Error, Robot};
 use std::time::Instant;
+use tensions::solve_tensions;
+
+mod tensions;
 
 /// [`solve_impl`] without a cache of its own (what [`super::solve`] and
 /// [`super::solve_from`] run): the workspaces come from and go back to this thread's kept
@@ -180,98 +179,6 @@ pub(crate) fn solve_start(
     start_here(fine, x, report)
 }
 
-/// [`solve_impl`] for a robot (validated, with `options` validated) whose tendons are all
-/// tension-controlled and without friction, with the final mesh's stability verdict in the
-/// report; with `on_branch`, keeping to the branch of `warm` when the solve starts from it
-/// ([`Choose::OnBranch`]).
-///
-/// # Errors
-/// As [`super::solve`].
-fn solve_tensions(
-    robot: &Robot,
-    options: &Options,
-    warm: Option<&Solution>,
-    cache: &mut Cache,
-    on_branch: bool,
-) -> Result<Solution> {
-    let start = Instant::now();
-    // The model's tensions, the report's "not assessed" and every stage's buffers come from
-    // the thread's kept ones (mesh::spare) and go back there, the workspaces from the
-    // cache or the thread's kept ones: a repeated solve allocates only what the Solution
-    // owns (tests/allocation.rs).
-    let mut model = Model::new_in(robot, spare::take(robot.tendons.len()));
-    let mut report = SolveReport::new_in(Method::Collocation, spare::note(NOT_ASSESSED));
-    // Newton's iterations are recorded without growing the history after this.
-    report.history.reserve(options.max_iterations.min(MAX_ITERATIONS));
-    let (mesh, x0, reuse, choose) = begin(robot, options, warm, cache, &model, &mut report)?;
-    // A solve started from the cold guess (its residual was the smaller) has no branch to
-    // keep to.
-    let choose = match choose {
-        Choose::FromWarm if on_branch => Choose::OnBranch,
-        other => other,
-    };
-    // A solve started from the cold guess (its residual was the smaller) has no branch to
-    // keep to.
-    let choose = match choose {
-        Choose::FromWarm if on_branch => Choose::OnBranch,
-        other => other,
-    };
-    // The first mesh reuses the factors and chooses the equilibrium; finer ones start from it.
-    let mut first = Some((reuse, choose));
-    let level = refine::to_tolerance(
-        &mut model,
-        mesh,
-        x0,
-        options,
-        &mut report,
-        cache,
-        |model, mesh, x0, report, cache| {
-            let (reuse, choose) = first.take().unwrap_or((false, Choose::No));
-            solve_on_mesh(model, mesh, x0, reuse, choose, options, report, cache)
-        },
-    )
-    .map_err(|e| timed(e, start))?;
-    let Level {
-        mut mesh,
-        x,
-        correction,
-    } = level;
-    report.intervals = mesh.intervals();
-    report.unknowns = unknowns::unknowns(mesh.nodes.len());
-    report.nonzeros = unknowns::nonzeros(&mesh);
-    record_estimate(&mut report, correction.as_ref(), options, robot.length());
-    if let Some(c) = cache.as_mut() {
-        // The verdict belongs to this solve's state: `stability_of` evaluates the Jacobian at
-        // it unless the workspace's is already there (and its verdict, when assessed, is
-        // taken without building the system again).
-        let direct = matches!(report.path, PathTaken::Direct | PathTaken::Fallback);
-        let exact = !direct && !report.history.iter().any(|i| i.fresh_jacobian);
-        let t = Instant::now();
-        let verdict = match held_stability(&model, &c.workspace, exact) {
-            Some(verdict) => verdict,
-            None => {
-                // The workspace is the final mesh's: its system's buffers are this one's.
-                let system = c.workspace.system(&model, mesh);
-                let verdict = stability_of(&system, &mut c.workspace, &x, exact, &mut report);
-                mesh = c.workspace.keep_system(system);
-                verdict
-            }
-        };
-        if let Stability::Unknown { reason } = std::mem::replace(&mut report.stability, verdict) {
-            spare::give_note(reason);
-        }
-        report.timings.stability += t.elapsed();
-    }
-    report.timings.total = start.elapsed();
-    let rates = correction.as_ref().map(|c| c.node_rates.as_slice());
-    let ends = segment_ends(&mesh);
-    let solution = nodes::solution(&model, &x, &ends, rates, report);
-    spare::give(ends);
-    spare::give(model.tensions);
-    Level { mesh, x, correction }.release();
-    solution
-}
-
 /// The first mesh of a tension solve and the states Newton starts from on it: the warm
 /// start interpolated (kept when it is the cached solver's last solution, or a stable one
 /// near the answer), or the cold start; whether the cached factors are reused, and how the
@@ -422,21 +329,33 @@ pub(crate) fn solve_on_mesh(
         Choose::No => newton_only(&system, &mut workspace, x0, options, &settings, report),
         _ => choose_equilibrium(&mut system, &mut workspace, x0, choose, options, &settings, report),
     };
-    let correction = result.as_mut().ok().and_then(|x| {
+    let mut correction = result
+        .as_mut()
+        .ok()
+        .and_then(|x| estimate_at(&system, &mut workspace, x, options, report));
+    // A direct answer whose verdict was deferred ([`Choose::Unassessed`] with Newton's
+    // Jacobian at it) takes it here when this mesh is the last (the estimate meets the
+    // tolerance, or there is none), from that Jacobian as the choice would have; on a mesh
+    // that is not the last it is never taken (the final mesh's decides, `attempt`).
+    if let (Choose::Unassessed { ahead: true, .. }, Ok(x)) = (choose, result.as_mut())
+        && report.path == PathTaken::Direct
+        && last_mesh(options, correction.as_ref(), system.model.robot.length())
+    {
+        let factors_held = workspace.factors_at_iterate();
         let t = Instant::now();
-        // A breakdown at a stage of the order-6 scheme leaves the solution without an estimate.
-        // The workspace's residual is the one at x: Newton's last, or a linearization's
-        // there (the stability verdict, a path's landing). At a tight tolerance x may become
-        // the order-6 solution.
-        let phi4 = spare::copy(workspace.residual());
-        // The node rates that residual's evaluation gave, when it was Newton's (not a
-        // Jacobian's): the same values the estimate would evaluate at x.
-        let rates = workspace.residual_rates().map(spare::copy);
-        let c = deferred::estimate(&system, &mut workspace, x, &phi4, rates, options.tolerance, report);
-        spare::give(phi4);
-        report.timings.estimate += t.elapsed();
-        c
-    });
+        stability_of(&system, &mut workspace, x, false, report);
+        report.timings.stability += t.elapsed();
+        // A root in the neutral zone settled by linearizing at x (`neutral::settle`)
+        // replaced the factors and the residual the estimate read; the choice takes the
+        // verdict before the estimate, whose estimate reads those: estimated again, so the
+        // bits are the choice's.
+        if !factors_held && workspace.factors_at_iterate() {
+            if let Some(c) = correction.take() {
+                c.release();
+            }
+            correction = estimate_at(&system, &mut workspace, x, options, report);
+        }
+    }
     // A load path that re-meshed left a system and workspace of another mesh: then the
     // cache gets that mesh, not the kept one.
     let (cached_mesh, mut last) = match kept {
@@ -464,6 +383,40 @@ pub(crate) fn solve_on_mesh(
         last,
     });
     result.map(|x| Level { mesh, x, correction })
+}
+
+/// The error estimate of `x`, converged on `system`, with the factors and Newton's last
+/// residual (and its node rates, when a residual evaluation gave them) that `workspace`
+/// holds ([`deferred::estimate`]: at a tight tolerance `x` may become the order-6
+/// solution). None where a stage of the order-6 scheme breaks down.
+fn estimate_at(
+    system: &System,
+    workspace: &mut Workspace,
+    x: &mut Vec<State>,
+    options: &Options,
+    report: &mut SolveReport,
+) -> Option<estimate::Correction> {
+    let t = Instant::now();
+    // The workspace's residual is the one at x: Newton's last, or a linearization's there
+    // (the stability verdict, a path's landing).
+    let phi4 = spare::copy(workspace.residual());
+    // The node rates that residual's evaluation gave, when it was Newton's (not a
+    // Jacobian's): the same values the estimate would evaluate at x.
+    let rates = workspace.residual_rates().map(spare::copy);
+    let c = deferred::estimate(system, workspace, x, &phi4, rates, options.tolerance, report);
+    spare::give(phi4);
+    report.timings.estimate += t.elapsed();
+    c
+}
+
+/// Whether a mesh with the error estimate `correction` is the last of the solve's mesh
+/// sequence ([`refine::to_tolerance`]): no tolerance, no estimate, or one that meets it (rod
+/// length `length`).
+fn last_mesh(options: &Options, correction: Option<&estimate::Correction>, length: f64) -> bool {
+    match (options.tolerance, correction) {
+        (Some(tol), Some(c)) => refine::meets(&c.estimate, tol, length),
+        _ => true,
+    }
 }
 
 /// Newton from `x0` on a mesh after the first, warm-started from the previous level: the

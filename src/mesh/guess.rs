@@ -11,6 +11,7 @@
 use crate::mesh::{Mesh, MeshNode, spare};
 use crate::model::equations::{Model, Site, Which};
 use crate::model::robot::RodModel;
+use crate::model::routing::RoutingPoint;
 use crate::so3;
 use crate::solution::{Node, Solution, State};
 use nalgebra::{Matrix3, Vector3};
@@ -205,6 +206,10 @@ struct SweepBuffers {
     last_step: Vec<f64>,
     /// The nodes' sites.
     sites: Vec<Site>,
+    /// The taut tendons of every node's segment with their routing points there, as
+    /// [`Model::tendons`] yields them, node after node, and where each node's end.
+    routes: Vec<(usize, f64, RoutingPoint)>,
+    route_ends: Vec<usize>,
 }
 
 thread_local! {
@@ -218,6 +223,8 @@ thread_local! {
             step: Vec::new(),
             last_step: Vec::new(),
             sites: Vec::new(),
+            routes: Vec::new(),
+            route_ends: Vec::new(),
         })
     };
 }
@@ -233,6 +240,8 @@ fn rigid_estimate_in(model: &Model, nodes: &[MeshNode], b: &mut SweepBuffers, re
         step,
         last_step,
         sites,
+        routes,
+        route_ends,
     } = b;
     reference_strains_into(model, nodes, strains);
     integrate_poses_into(model, nodes, strains, shape);
@@ -242,11 +251,22 @@ fn rigid_estimate_in(model: &Model, nodes: &[MeshNode], b: &mut SweepBuffers, re
     // The nodes' sites do not depend on the shape: evaluated once, not three times a sweep.
     sites.clear();
     sites.extend(nodes.iter().map(|n| model.site_on(n.s, n.segment_end)));
+    // So do the tendons' routing points at the nodes: evaluated once, not once a sweep.
+    // Room for every tendon at every node, so that a kept buffer does not grow when a later
+    // solve has more taut tendons (a batch row allocates only its Solution).
+    routes.clear();
+    routes.reserve(nodes.len() * model.robot.tendons.len());
+    route_ends.clear();
+    for n in nodes {
+        routes.extend(model.tendons(n.s, Which::ActiveTo(n.segment_end)));
+        route_ends.push(routes.len());
+    }
     // The deformation of each strain group, v and u L: the first sweep's step (from the
     // reference strains).
     let mut deformation = [0.0; 2];
     for _ in 0..MAX_SWEEPS {
-        sweep(model, nodes, sites, (shape, strains), None, (wrench, next));
+        let pulls = Pulls::Kept(routes, route_ends);
+        sweep(model, (nodes, sites), (shape, strains), pulls, (wrench, next));
         // The fixed-point step, flattened (v then u L per node, so all are comparable).
         step.clear();
         step.extend(next.iter().zip(strains.iter()).flat_map(|(a, b)| {
@@ -321,7 +341,13 @@ pub(crate) fn distal_strains(
 ) {
     let shape: Vec<_> = x.iter().map(|s| (s.p, s.R)).collect();
     let strains: Vec<_> = x.iter().map(|s| (s.v, s.u)).collect();
-    sweep(model, nodes, sites, (&shape, &strains), Some(tensions), (wrench, out));
+    sweep(
+        model,
+        (nodes, sites),
+        (&shape, &strains),
+        Pulls::Local(tensions),
+        (wrench, out),
+    );
 }
 
 /// Aitken's dynamic relaxation factor (Irons & Tuck) after the fixed-point steps
@@ -351,17 +377,26 @@ pub(crate) fn relax_strains(strains: &mut [(Vector3<f64>, Vector3<f64>)], step: 
     }
 }
 
+/// The tendons a sweep pulls each node with.
+#[derive(Clone, Copy)]
+enum Pulls<'a> {
+    /// The model's tensions, with the taut tendons and their routing points at every node
+    /// kept (`routes`, node after node; `ends[k]` ends node k's).
+    Kept(&'a [(usize, f64, RoutingPoint)], &'a [usize]),
+    /// Every tendon's tension at node k from `tensions[k]` (friction).
+    Local(&'a [Vec<f64>]),
+}
+
 /// One sweep: node strains carrying the loads distal to each node, summed on `shape`
 /// (`sites`: the nodes' sites; `strains`: the node coordinates the tendons' paths are
-/// taken from), into `out`, with the tensions of node k `tensions[k]` when given, else
-/// the model's; `wrench` is the buffer of the distal wrenches.
+/// taken from), into `out`, with the tendons of `pulls`; `wrench` is the buffer of the
+/// distal wrenches.
 #[allow(clippy::type_complexity)]
 fn sweep(
     model: &Model,
-    nodes: &[MeshNode],
-    sites: &[Site],
+    (nodes, sites): (&[MeshNode], &[Site]),
     (shape, strains): (&[(Vector3<f64>, Matrix3<f64>)], &[(Vector3<f64>, Vector3<f64>)]),
-    tensions: Option<&[Vec<f64>]>,
+    pulls: Pulls,
     (wrench, out): (
         &mut Vec<(Vector3<f64>, Vector3<f64>)>,
         &mut Vec<(Vector3<f64>, Vector3<f64>)>,
@@ -389,22 +424,26 @@ fn sweep(
     }
     out.clear();
     // The model with node k's tensions, when they vary along the tendons.
-    let mut local = tensions.map(|_| model.clone());
+    let mut local: Option<Model> = None;
     for (k, node) in nodes.iter().enumerate() {
         let site = &sites[k];
         let R = shape[k].1;
         let (v, u) = strains[k];
         let (mut n, mut m) = wrench[k];
-        let pulling = match (&mut local, tensions) {
-            (Some(local), Some(t)) => {
-                local.tensions.copy_from_slice(&t[k]);
-                &*local
-            }
-            _ => model,
-        };
         // The tendons loading this node's segment pull it back along their paths.
         let v = site.strain(&v);
-        if let Ok((f, l)) = pulling.tendon_pull(node.s, Which::ActiveTo(node.segment_end), &R, &v, &u) {
+        let pull = match pulls {
+            Pulls::Kept(routes, ends) => {
+                let from = if k == 0 { 0 } else { ends[k - 1] };
+                model.tendon_pull_of(routes[from..ends[k]].iter().copied(), node.s, &R, &v, &u)
+            }
+            Pulls::Local(t) => {
+                let local = local.get_or_insert_with(|| model.clone());
+                local.tensions.copy_from_slice(&t[k]);
+                local.tendon_pull(node.s, Which::ActiveTo(node.segment_end), &R, &v, &u)
+            }
+        };
+        if let Ok((f, l)) = pull {
             n -= f;
             m -= l;
         }

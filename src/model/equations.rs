@@ -302,10 +302,25 @@ impl<'a> Model<'a> {
         v: &Vector3<T>,
         u: &Vector3<T>,
     ) -> Result<(Vector3<T>, Vector3<T>)> {
+        self.tendon_pull_of(self.tendons(s, which), s, R, v, u)
+    }
+
+    /// [`Model::tendon_pull`] of the tendons `tendons` at s, given as [`Model::tendons`]
+    /// yields them (index, tension, routing point at s): for a caller that sums the same
+    /// tendons at s on many shapes (the initial guess's sweeps) and keeps their routing
+    /// points instead of evaluating them on every sweep.
+    pub(crate) fn tendon_pull_of<T: Real>(
+        &self,
+        tendons: impl Iterator<Item = (usize, f64, RoutingPoint)>,
+        s: f64,
+        R: &Matrix3<T>,
+        v: &Vector3<T>,
+        u: &Vector3<T>,
+    ) -> Result<(Vector3<T>, Vector3<T>)> {
         let mut force = Vector3::<T>::zeros();
         let mut moment = Vector3::<T>::zeros();
         let coupled = self.robot.tendon_model == TendonModel::Coupled;
-        for (i, tension, rp) in self.tendons(s, which) {
+        for (i, tension, rp) in tendons {
             let r = lift::<T>(&rp.r);
             let pb_s = u.cross(&r) + lift::<T>(&rp.r_s) + v;
             let speed = pb_s.norm();
