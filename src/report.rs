@@ -363,6 +363,26 @@ impl SolveReport {
         Self::new_in(method, NOT_ASSESSED.into())
     }
 
+    /// Adds the counts of the work `tried` did (iterations, steps, meshes, evaluations and
+    /// the timings by stage) to this report: a solve run again after a provisional route
+    /// counts both runs.
+    pub(crate) fn add_work(&mut self, tried: &SolveReport) {
+        self.iterations += tried.iterations;
+        self.newton_steps += tried.newton_steps;
+        self.chord_steps += tried.chord_steps;
+        self.load_steps += tried.load_steps;
+        self.meshes += tried.meshes;
+        self.evaluations.residual += tried.evaluations.residual;
+        self.evaluations.jacobian += tried.evaluations.jacobian;
+        self.evaluations.equations += tried.evaluations.equations;
+        let (t, u) = (&mut self.timings, &tried.timings);
+        t.assembly += u.assembly;
+        t.factorization += u.factorization;
+        t.solve += u.solve;
+        t.estimate += u.estimate;
+        t.stability += u.stability;
+    }
+
     /// [`SolveReport::new`] with the stability's reason [`NOT_ASSESSED`] in `not_assessed`
     /// (a kept buffer that holds that text), so that no string is allocated.
     pub(crate) fn new_in(method: Method, not_assessed: String) -> Self {

@@ -22,12 +22,14 @@ pub(crate) mod history;
 mod interval;
 mod linearized;
 mod profile;
+mod pull_ins;
 mod staircase;
 mod start;
 
 pub use grip::Contact;
 pub(crate) use grip::Grip;
 pub(crate) use interval::{Profile, interval, interval_order6};
+pub(in crate::collocation) use pull_ins::solve_pull_ins;
 
 use super::newton::{self, Border, Linearization, Point, Settings, Workspace};
 use super::system::System;
@@ -319,7 +321,7 @@ fn solve_assessed(
     };
     let mut first = pipeline::solve_start(&smooth, options, warm, cache, false)?;
     if let Some(tried) = tried {
-        add_work(&mut first.report, &tried);
+        first.report.add_work(&tried);
     }
     from_start(robot, options, first, cache, assess, start)
 }
@@ -350,57 +352,6 @@ fn from_start(
         (first.report, assess),
         start,
     )
-}
-
-/// Adds the counts of the work `tried` did (iterations, steps, meshes, evaluations and
-/// the timings by stage) to `report`.
-fn add_work(report: &mut SolveReport, tried: &SolveReport) {
-    report.iterations += tried.iterations;
-    report.newton_steps += tried.newton_steps;
-    report.chord_steps += tried.chord_steps;
-    report.load_steps += tried.load_steps;
-    report.meshes += tried.meshes;
-    report.evaluations.residual += tried.evaluations.residual;
-    report.evaluations.jacobian += tried.evaluations.jacobian;
-    report.evaluations.equations += tried.evaluations.equations;
-    let (t, u) = (&mut report.timings, &tried.timings);
-    t.assembly += u.assembly;
-    t.factorization += u.factorization;
-    t.solve += u.solve;
-    t.estimate += u.estimate;
-    t.stability += u.stability;
-}
-
-/// Solves a robot with friction (validated, with `options` validated) from `near`, the
-/// solution with friction of the same robot at nearby base-entry tensions (the last step
-/// of [`solve_pull_ins`]' Newton on the tensions): Newton with friction starts from its
-/// shape, mesh and log tensions instead of a new frictionless solve. The branch is the one
-/// `near` is on (the frictionless start of the loop's first solve chose it); the path and
-/// notes of its report carry over, the counts are this solve's.
-///
-/// # Errors
-/// As [`super::solve`].
-fn solve_near(robot: &Robot, options: &Options, near: &Solution) -> Result<Solution> {
-    let start = Instant::now();
-    let s: Vec<f64> = near.nodes.iter().map(|n| n.s).collect();
-    let mut z = Vec::new();
-    for i in crate::model::friction::slipping(robot) {
-        let base = near.tension_at(i, 0.0).filter(|t| *t > 0.0);
-        z.push(
-            s.iter()
-                .map(|&x| match (base, near.tension_at(i, x)) {
-                    (Some(b), Some(t)) if t > 0.0 => (t / b).ln(),
-                    _ => 0.0,
-                })
-                .collect(),
-        );
-    }
-    let mut report = SolveReport::new(Method::Collocation);
-    report.path = near.report.path.clone();
-    report.notes = near.report.notes.clone();
-    let mesh = Mesh::from_points(robot, &s)?;
-    let x = interpolate(&Model::new(robot), near, &mesh);
-    refine_with_friction(robot, options, (mesh, x), Some((s, z)), (report, false), start)
 }
 
 /// On the mesh and from the node states of `from`, Newton bordered by the log tensions
@@ -548,63 +499,6 @@ fn refine_with_friction(
         x = interpolate(&model, &guess, &fine);
         mesh = fine;
     }
-}
-
-/// Solves a robot with friction and displacement-controlled tendons (validated, with
-/// `options` validated): the frictionless robot at its pull-ins first (the tensions to
-/// start from), then Newton on the held tendons' base-entry tensions around solves with
-/// friction at given tensions ([`crate::model::pull_in::hold`], docs/friction.md
-/// section 3b).
-///
-/// # Errors
-/// As [`super::solve`].
-pub(super) fn solve_pull_ins(
-    robot: &Robot,
-    options: &Options,
-    warm: Option<&Solution>,
-    cache: &mut Cache,
-) -> Result<Solution> {
-    let start = Instant::now();
-    let mut smooth = robot.clone();
-    for t in &mut smooth.tendons {
-        t.friction = None;
-    }
-    let first = pipeline::solve_impl(&smooth, options, warm, cache)?;
-    // The loop's first solve starts from the frictionless one (which chose the branch), the
-    // others from the last solve with friction, at tensions a Newton step or a difference
-    // step away.
-    let mut near = false;
-    let mut solution = crate::model::pull_in::hold(
-        robot,
-        &first.tensions(),
-        Some(&first),
-        |r, warm| match (std::mem::replace(&mut near, true), warm) {
-            (true, Some(last)) => solve_near(r, options, last),
-            _ => solve_assessed(r, options, warm, cache, false),
-        },
-        slope,
-    )?;
-    solution.report.timings.total = start.elapsed();
-    // The verdict with the pull-ins held (the loop's solves hold tensions and have none).
-    super::dynamics::pulled::assess_solution(robot, &mut solution);
-    Ok(solution)
-}
-
-/// dQ/dtau of the `held` tendons at `solution` of `robot` (tension-controlled), row major:
-/// the Schur complement S of the derivatives at held pull-ins (docs/friction.md section 3b,
-/// "Derivatives at a held pull-in"), from one linearization of the bordered system and one
-/// bordered solve per held tendon, in place of one full solve per tendon for a forward
-/// difference. None, and the loop differences, where it does not apply: a held tendon at
-/// 0 N (its tension derivative with friction is not modelled) or a linearization that
-/// fails (a singular Jacobian, a solution that is not converged to its limit).
-fn slope(robot: &Robot, solution: &Solution, held: &[usize]) -> Option<Vec<f64>> {
-    if held.iter().any(|&j| solution.tendons[j].tension <= 0.0) {
-        return None;
-    }
-    let directions = crate::collocation::sensitivity::TensionDirections::new(robot, solution, held.to_vec()).ok()?;
-    let s = directions.displacement_by_tension();
-    let k = held.len();
-    Some((0..k * k).map(|i| s[(i / k, i % k)]).collect())
 }
 
 /// The value at `s` of the piecewise-linear interpolant through (`points`, `values`)

@@ -48,8 +48,8 @@ pub(super) fn solve_tensions(
             Attempt::Answer(mut answer) => {
                 if let Some(tried) = &tried {
                     match &mut answer {
-                        Ok(solution) => add_work(&mut solution.report, tried),
-                        Err(Error::NotConverged { report, .. }) => add_work(report, tried),
+                        Ok(solution) => solution.report.add_work(tried),
+                        Err(Error::NotConverged { report, .. }) => report.add_work(tried),
                         Err(_) => {}
                     }
                 }
@@ -189,25 +189,6 @@ fn attempt(
     spare::give(model.tensions);
     Level { mesh, x, correction }.release();
     Attempt::Answer(solution)
-}
-
-/// Adds the counts of the work `tried` did (iterations, steps, meshes, evaluations and the
-/// timings by stage) to `report`: a provisional run's, to the full run's that replaced it.
-fn add_work(report: &mut SolveReport, tried: &SolveReport) {
-    report.iterations += tried.iterations;
-    report.newton_steps += tried.newton_steps;
-    report.chord_steps += tried.chord_steps;
-    report.load_steps += tried.load_steps;
-    report.meshes += tried.meshes;
-    report.evaluations.residual += tried.evaluations.residual;
-    report.evaluations.jacobian += tried.evaluations.jacobian;
-    report.evaluations.equations += tried.evaluations.equations;
-    let (t, u) = (&mut report.timings, &tried.timings);
-    t.assembly += u.assembly;
-    t.factorization += u.factorization;
-    t.solve += u.solve;
-    t.estimate += u.estimate;
-    t.stability += u.stability;
 }
 
 #[cfg(test)]
