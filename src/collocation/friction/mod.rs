@@ -474,7 +474,11 @@ fn refine_with_friction(
             report.stability = if assess {
                 // The Jacobian Newton evaluated at x, factored with the border's blocks from
                 // the same evaluation; else the verdict evaluates and factors it (or takes
-                // Newton's factors when they are x's).
+                // Newton's factors when they are x's). `factor_evaluated` reads the links'
+                // cached evaluations without checking their state: it relies on nothing
+                // between Newton's accepted trial (`ahead`: the Jacobian held is x's) and
+                // here evaluating a link with derivatives (the estimate evaluates residuals
+                // only), which any change on this way must keep.
                 let fresh = fresh || (ahead && border.factor_evaluated(&x, &ws.values, &mut report));
                 workspace::keep(border.system.mesh.clone(), options.linear_solver, ws);
                 super::dynamics::friction::assess(&mut border, &x, fresh, &mut report)

@@ -146,7 +146,7 @@ impl Staircase {
     }
 
     /// Factors the matrix whose blocks `fill` writes (row major into a zeroed slice of the
-    /// block's [`Staircase::shape`]). False on a zero or non-finite pivot. On x86-64 with
+    /// block's `Staircase::shape`). False on a zero or non-finite pivot. On x86-64 with
     /// AVX2 and FMA (checked at run time) compiled for them, as the solve: the same
     /// operations in the same order, so the same bits.
     pub(crate) fn factor(&mut self, fill: impl FnMut(Block, &mut [f64])) -> bool {

@@ -39,16 +39,16 @@ pub(super) fn evaluate_trial_ahead<B: Border>(
     }
 }
 
-/// [`run`] for a state whose stability verdict follows from the Jacobian at the answer
-/// ([`super::equilibrium`]'s direct solve, no friction: conservative loads, with the tension
+/// [`run`](super::run) for a state whose stability verdict follows from the Jacobian at the answer
+/// ([`crate::collocation::equilibrium`]'s direct solve, no friction: conservative loads, with the tension
 /// columns when the workspace keeps them, or loads that are not conservative, whose
 /// linearized dynamics also read eq. 13's factored matrices there, which it keeps;
 /// [`Workspace::jacobian_ahead`]): a trial point that the step-based stopping test already
-/// predicts to be the last (the error left after its step below [`STEP_TOLERANCE`], and the
+/// predicts to be the last (the error left after its step below [`STEP_TOLERANCE`](super::STEP_TOLERANCE), and the
 /// Jacobian held too far from it for the verdict to take) gets the Jacobian evaluated there
 /// instead of the residual, which gives the same residual and node rates bit for bit; the
 /// verdict then takes that Jacobian instead of evaluating it again (docs/numerics.md, "The
-/// Jacobian at the answer, evaluated by Newton"). Every decision and iterate is [`run`]'s.
+/// Jacobian at the answer, evaluated by Newton"). Every decision and iterate is [`run`](super::run)'s.
 pub(crate) fn run_ahead(
     system: &System,
     ws: &mut Workspace,
@@ -60,13 +60,13 @@ pub(crate) fn run_ahead(
     run_with(&mut NoBorder(system), ws, x, settings, report, Some(keep))
 }
 
-/// [`run_bordered`] for a state whose stability verdict factors the bordered Jacobian at the
+/// [`run_bordered`](super::run_bordered) for a state whose stability verdict factors the bordered Jacobian at the
 /// answer (a full-slip solve with friction, `collocation/friction`): a trial point predicted
 /// to be the last gets the collocation Jacobian evaluated there in place of the residual, as
 /// in [`run_ahead`] (the same residual bits, and the links' evaluations the border reads its
 /// rows and blocks from), left unfactored for the verdict ([`Workspace::evaluated_at_solution`]
 /// with the values unfactored; the border's factors stay those of Newton's last Jacobian).
-/// Every decision and iterate is [`run_bordered`]'s.
+/// Every decision and iterate is [`run_bordered`](super::run_bordered)'s.
 pub(crate) fn run_bordered_ahead<B: Border>(
     border: &mut B,
     ws: &mut Workspace,

@@ -125,6 +125,10 @@ fn attempt(
     };
     // The first mesh reuses the factors and chooses the equilibrium; finer ones start from it.
     let mut first = Some((reuse, choose));
+    // Whether the first mesh accepted a direct answer without its verdict: only then can
+    // the full choice end elsewhere (a first mesh that fails, or takes the load path, does
+    // what the full choice would, and running it again would repeat the same work).
+    let mut unassessed = false;
     let level = refine::to_tolerance(
         &mut model,
         mesh,
@@ -132,17 +136,29 @@ fn attempt(
         options,
         &mut report,
         cache,
-        |model, mesh, x0, report, cache| {
-            let (reuse, choose) = first.take().unwrap_or((false, Choose::No));
-            solve_on_mesh(model, mesh, x0, reuse, choose, options, report, cache)
+        |model, mesh, x0, report, cache| match first.take() {
+            Some((reuse, choose)) => {
+                let level = solve_on_mesh(model, mesh, x0, reuse, choose, options, report, cache);
+                unassessed = provisional && level.is_ok() && report.path == PathTaken::Direct;
+                level
+            }
+            None => solve_on_mesh(model, mesh, x0, false, Choose::No, options, report, cache),
         },
     );
     // A direct answer was accepted without its verdict: it stands only if the final
     // mesh's verdict is `stable`.
-    let provisional = provisional && report.path == PathTaken::Direct;
+    let provisional = unassessed;
     let level = match level {
         Ok(level) => level,
-        Err(_) if provisional => return Attempt::Again(report),
+        Err(_) if provisional => {
+            // The model's tensions and the report's "not assessed" go back to the thread's
+            // kept ones, as on the unstable verdict's way below.
+            spare::give(model.tensions);
+            if let Stability::Unknown { reason } = &mut report.stability {
+                spare::give_note(std::mem::take(reason));
+            }
+            return Attempt::Again(report);
+        }
         Err(e) => return Attempt::Answer(Err(timed(e, start))),
     };
     let Level {
@@ -276,5 +292,36 @@ mod tests {
         assert_eq!(solved.report.error_estimate, full.report.error_estimate);
         assert_eq!(solved.report.iterations, full.report.iterations + tried.iterations);
         assert_eq!(solved.report.meshes, full.report.meshes + tried.meshes);
+    }
+
+    /// A solve whose first mesh fails (case S at 200 N, far past its tendon's geometric
+    /// limit, with two Newton iterations a step: neither the direct answer nor the load
+    /// path converges) accepted no answer without its verdict, so it does not run again:
+    /// its report counts one run's work, as with the route off.
+    #[test]
+    fn a_first_mesh_that_fails_is_not_run_again() {
+        let robot = cases::case_s().with_tensions(&[0.0, 200.0, 0.0, 0.0, 0.0]);
+        let options = Options {
+            max_iterations: 2,
+            ..Options::default()
+        };
+        let run = |provisional| attempt(&robot, &options, None, &mut None, false, provisional, Instant::now());
+        let iterations = |attempt: Attempt| match attempt {
+            Attempt::Answer(Err(Error::NotConverged { report, .. })) => (report.iterations, report.meshes),
+            Attempt::Answer(other) => panic!(
+                "two iterations a step cannot solve case S at 200 N: {:?}",
+                other.map(|s| s.report.path)
+            ),
+            Attempt::Again(_) => panic!("a first mesh that fails must not be run again"),
+        };
+        let full = iterations(run(false));
+        assert_eq!(iterations(run(true)), full);
+        match solve_tensions(&robot, &options, None, &mut None, false) {
+            Err(Error::NotConverged { report, .. }) => assert_eq!((report.iterations, report.meshes), full),
+            other => panic!(
+                "two iterations a step cannot solve case S at 200 N: {:?}",
+                other.map(|s| s.report.path)
+            ),
+        }
     }
 }

@@ -10,6 +10,7 @@
 
 mod ahead;
 mod columns;
+mod jump;
 
 use super::friction::{self, Profile};
 use super::residual::{self, Block, Delta, IntervalFactors, IntervalSites, QuarterSites};
@@ -22,7 +23,7 @@ use crate::model::linearize;
 use crate::solution::State;
 use columns::TensionSink;
 use nalgebra::{SVector, Vector6};
-use num_dual::{Dual64, DualSVec64};
+use num_dual::DualSVec64;
 
 /// A node's unknowns as dual numbers that carry the derivatives in `N` of them, from
 /// `first` on; the others are constants. The base rows read only (p, theta) and the tip
@@ -549,35 +550,7 @@ impl<'a> System<'a> {
                 }
             } else {
                 node_lin = None;
-                // Jumps: one dual pass per unknown (they are few).
-                for j in 0..width {
-                    let da = Delta::<Dual64>::from_fn(|i, _| {
-                        if i == j {
-                            Dual64::from(0.0).derivative()
-                        } else {
-                            Dual64::from(0.0)
-                        }
-                    });
-                    let db = Delta::<Dual64>::from_fn(|i, _| {
-                        if i + NODE == j {
-                            Dual64::from(0.0).derivative()
-                        } else {
-                            Dual64::from(0.0)
-                        }
-                    });
-                    let r = residual::jump(
-                        &self.model,
-                        (&self.node_sites[k], &self.node_sites[k + 1]),
-                        &x[k],
-                        &x[k + 1],
-                        &da,
-                        &db,
-                    )?;
-                    for (i, d) in r.iter().enumerate() {
-                        out[link_row(k) + i] = d.re;
-                        values[at + i * width + j] = d.eps;
-                    }
-                }
+                self.jump_rows(k, x, out, &mut values[at..at + NODE * width])?;
             }
             at += NODE * width;
         }

@@ -330,7 +330,7 @@ fn boundaries(answer: &StepAnswer) -> Vec<f64> {
 /// the material is smooth), 6 for the quintic that estimates the cubic's error; a piece
 /// with fewer points gives the polynomial through all of them. At a node it is the value
 /// there exactly, so the material handed back at the history's nodes is the last step's;
-/// at a kink, the value after it.
+/// at a kink that is not a node, the value after it.
 fn lagrange(s: &[f64], values: &[f64], kinks: &[Kink], at: f64, points: usize) -> f64 {
     if let Some(k) = s.iter().position(|&x| x == at) {
         return values[k];
