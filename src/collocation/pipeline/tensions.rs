@@ -27,7 +27,7 @@ use std::time::Instant;
 ///
 /// Where the first mesh is not the last, its direct answer goes on to the next mesh without
 /// its verdict ([`attempt`], `provisional`): the final mesh's verdict decides, and when it is
-/// not `stable` (or the provisional route fails) the whole solve runs again with the full
+/// not `stable` (or a later mesh fails) the whole solve runs again with the full
 /// choice on the first mesh, whose report then counts both runs (docs/stability.md, "Which
 /// equilibrium a solve returns").
 ///
