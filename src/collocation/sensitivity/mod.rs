@@ -102,6 +102,7 @@ pub use control::{backbone_jacobian, columns, tip_jacobian};
 pub(crate) use held::TensionDirections;
 pub use held::{DisplacementSensitivities, displacement_sensitivities};
 pub use tip::{ModulusSensitivities, TipSensitivities, backbone_tension_sensitivity, tip_sensitivities};
+pub(crate) use tip::tip_sensitivities_from;
 
 use crate::collocation::LinearSolver;
 use crate::collocation::friction::Capstan;

@@ -108,7 +108,21 @@ pub fn tip_sensitivities(robot: &Robot, solution: &Solution) -> Result<TipSensit
         None => (None, None),
     };
     let mut sens = Sensitivity::with_workspace(&solved, solution, workspace, mesh, false, tips)?;
-    let held = Held::new(&mut sens, robot, solution)?;
+    let out = tip_sensitivities_from(&mut sens, robot, solution)?;
+    if let Some(mesh) = kept {
+        workspace::keep(mesh, LinearSolver::Blocks, sens.into_workspace());
+    }
+    Ok(out)
+}
+
+/// Every tip sensitivity of [`tip_sensitivities`] from `sens`, the linearization of `robot`
+/// (its tensions the solved ones) at `solution`, however it was factored: the stateless
+/// function's workspace, or a [`crate::Solver`]'s ([`crate::Solver::tip_sensitivities`]).
+///
+/// # Errors
+/// As [`tip_sensitivities`].
+pub(crate) fn tip_sensitivities_from(sens: &mut Sensitivity, robot: &Robot, solution: &Solution) -> Result<TipSensitivities> {
+    let held = Held::new(sens, robot, solution)?;
     // Without friction or held pull-ins, the 16 parameters besides the tensions cost six
     // transposed solves (the tip pose's multipliers) instead of one solve each.
     let multipliers = if held.holds() { None } else { sens.tip_multipliers()? };
@@ -147,9 +161,6 @@ pub fn tip_sensitivities(robot: &Robot, solution: &Solution) -> Result<TipSensit
         base_rotation.set_column(j, &tip.of(|s| s.base_rotation_rhs(j))?);
     }
     let moduli = moduli(&mut tip)?;
-    if let Some(mesh) = kept {
-        workspace::keep(mesh, LinearSolver::Blocks, tip.sens.into_workspace());
-    }
     Ok(TipSensitivities {
         tension,
         displacement,
@@ -214,7 +225,7 @@ impl Sensitivity<'_> {
 /// The linearization with what gives a right-hand side's tip derivative: the tip
 /// multipliers (plain system), or a solve and the held pull-ins.
 struct Tip<'s, 'a> {
-    sens: Sensitivity<'a>,
+    sens: &'s mut Sensitivity<'a>,
     held: &'s Held,
     multipliers: Option<Vec<Vec<f64>>>,
 }
