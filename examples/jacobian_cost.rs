@@ -63,7 +63,15 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         "H" => cases::case_h(),
         _ => return Err(usage.into()),
     };
-    let modes = ["cold", "warm", "tensions", "all", "solver-all", "kept-warm", "kept-tensions"];
+    let modes = [
+        "cold",
+        "warm",
+        "tensions",
+        "all",
+        "solver-all",
+        "kept-warm",
+        "kept-tensions",
+    ];
     if !modes.contains(&what) {
         return Err(usage.into());
     }

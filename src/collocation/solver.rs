@@ -5,7 +5,9 @@ use super::linear::LinearSolver;
 use super::newton::Workspace;
 use super::options::Options;
 use super::pipeline::solve_impl;
-use super::sensitivity::{Sensitivity, TipSensitivities, backbone_columns, tension_tips, tip_columns, tip_sensitivities_from};
+use super::sensitivity::{
+    Sensitivity, TipSensitivities, backbone_columns, tension_tips, tip_columns, tip_sensitivities_from,
+};
 use crate::error::Result;
 use crate::mesh::Mesh;
 use crate::solution::{Solution, State};
@@ -149,7 +151,9 @@ impl Solver {
     pub fn tip_sensitivities(&mut self, robot: &Robot, solution: &Solution) -> Result<TipSensitivities> {
         // Without pull-ins to hold, the tension columns' tips come out of the factoring.
         let tips = !robot.has_displacement_inputs();
-        self.linearized(robot, solution, tips, |sens| tip_sensitivities_from(sens, robot, solution))
+        self.linearized(robot, solution, tips, |sens| {
+            tip_sensitivities_from(sens, robot, solution)
+        })
     }
 
     /// The columns `wrt` of d p(s_j)/dq at the arc lengths `s` (3 `s.len()` x `wrt.len()`):

@@ -121,7 +121,11 @@ pub fn tip_sensitivities(robot: &Robot, solution: &Solution) -> Result<TipSensit
 ///
 /// # Errors
 /// As [`tip_sensitivities`].
-pub(crate) fn tip_sensitivities_from(sens: &mut Sensitivity, robot: &Robot, solution: &Solution) -> Result<TipSensitivities> {
+pub(crate) fn tip_sensitivities_from(
+    sens: &mut Sensitivity,
+    robot: &Robot,
+    solution: &Solution,
+) -> Result<TipSensitivities> {
     let held = Held::new(sens, robot, solution)?;
     // Without friction or held pull-ins, the 16 parameters besides the tensions cost six
     // transposed solves (the tip pose's multipliers) instead of one solve each.
