@@ -151,7 +151,7 @@ pub(crate) fn tip_sensitivities_from(
         }
         if robot.tendons[i].active_friction().is_some() {
             let d = tip.sens.friction(i)?;
-            friction.set_column(i, &held.tip(&d, &tip.sens)?);
+            friction.set_column(i, &held.tip(&d, tip.sens)?);
         }
     }
     let mut tip_force = Matrix6x3::zeros();
@@ -237,12 +237,12 @@ struct Tip<'s, 'a> {
 impl Tip<'_, '_> {
     /// d(tip pose)/dq for the right-hand side `rhs` writes into the sensitivity's buffer.
     fn of(&mut self, rhs: impl FnOnce(&mut Sensitivity) -> Result<()>) -> Result<Vector6<f64>> {
-        rhs(&mut self.sens)?;
+        rhs(self.sens)?;
         match &self.multipliers {
             Some(m) => Ok(self.sens.tip_by(m)),
             None => {
                 let d = self.sens.respond()?;
-                self.held.tip(&d, &self.sens)
+                self.held.tip(&d, self.sens)
             }
         }
     }
@@ -269,9 +269,9 @@ fn moduli(tip: &mut Tip) -> Result<Option<ModulusSensitivities>> {
             .derivative(RELATIVE_STEP * shear, Difference::Central, |r, d| {
                 r.rod.stiffness = Stiffness::Uniform(Section::tube(o, i, e, shear + d));
             })?;
-        let by_g = tip.held.tip(&by_g, &tip.sens)?;
-        let by_e = youngs_modulus(&mut tip.sens, g)?;
-        (tip.held.tip(&by_e, &tip.sens)?, by_g)
+        let by_g = tip.held.tip(&by_g, tip.sens)?;
+        let by_e = youngs_modulus(tip.sens, g)?;
+        (tip.held.tip(&by_e, tip.sens)?, by_g)
     };
     Ok(Some(ModulusSensitivities {
         youngs_modulus,
