@@ -7,6 +7,8 @@
 //! - `tensions`: the tension columns of the tip Jacobian from that solver
 //!   ([`Solver::tip_jacobian`], after the warm solve);
 //! - `all`: every tip sensitivity ([`tdcr::tip_sensitivities`], 21 parameters on the prototype);
+//! - `solver-all`: every tip sensitivity from that solver ([`Solver::tip_sensitivities`],
+//!   after the warm solve: the Jacobian its verdict evaluated at the solution, not assembled);
 //! - `kept-warm`, `kept-tensions`: `warm` and `tensions` with the solver's
 //!   [`Solver::keep_tension_columns`] on (the verdict of the warm solve forms the tension
 //!   columns' right-hand sides; their cost is the difference of the two warm rows).
@@ -44,13 +46,14 @@ fn measured(
         "cold" => collocation::solve(robot, &solver.options)?.tip().p[0],
         "warm" => solver.solve_from(robot, previous)?.tip().p[0],
         "tensions" => solver.tip_jacobian(robot, warm, &tensions)?[(0, 0)],
+        "solver-all" => solver.tip_sensitivities(robot, warm)?.tension[(0, 0)],
         _ => tdcr::tip_sensitivities(robot, warm)?.tension[(0, 0)],
     })
 }
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().collect();
-    let usage = "usage: jacobian_cost S|H cold|warm|tensions|all|kept-warm|kept-tensions COUNT";
+    let usage = "usage: jacobian_cost S|H cold|warm|tensions|all|solver-all|kept-warm|kept-tensions COUNT";
     let (case, what, count) = match args.as_slice() {
         [_, c, w, n] => (c.as_str(), w.as_str(), n.parse::<usize>()?.max(1)),
         _ => return Err(usage.into()),
@@ -60,7 +63,15 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         "H" => cases::case_h(),
         _ => return Err(usage.into()),
     };
-    let modes = ["cold", "warm", "tensions", "all", "kept-warm", "kept-tensions"];
+    let modes = [
+        "cold",
+        "warm",
+        "tensions",
+        "all",
+        "solver-all",
+        "kept-warm",
+        "kept-tensions",
+    ];
     if !modes.contains(&what) {
         return Err(usage.into());
     }

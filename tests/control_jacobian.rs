@@ -6,7 +6,7 @@
 use tdcr::collocation::Options;
 use tdcr::collocation::sensitivity::{backbone_jacobian, tip_jacobian};
 use tdcr::nalgebra::DMatrix;
-use tdcr::{Parameter, Robot, Solution, Solver, cases};
+use tdcr::{Parameter, Robot, Solution, Solver, TipSensitivities, cases};
 
 /// Largest entry of `a - b` relative to the largest of `b`.
 fn relative(a: &DMatrix<f64>, b: &DMatrix<f64>) -> f64 {
@@ -130,6 +130,70 @@ fn jacobian_after_a_chord_only_warm_solve_equals_the_stateless_one() {
         // A second call (the values are now factored) gives the same again.
         let again = solver.tip_jacobian(&robot, &warm, &wrt).unwrap();
         assert!(relative(&again, &stateless) <= 1e-12);
+    }
+}
+
+/// Every matrix of a [`TipSensitivities`], named, as 6-row matrices.
+fn fields(t: &TipSensitivities) -> Vec<(&'static str, DMatrix<f64>)> {
+    let m = |x: &[f64]| DMatrix::from_column_slice(6, 3, x);
+    let mut out = vec![
+        ("tension", t.tension.clone()),
+        ("displacement", t.displacement.clone()),
+        ("friction", t.friction.clone()),
+        ("tip_force", m(t.tip_force.as_slice())),
+        ("tip_moment", m(t.tip_moment.as_slice())),
+        ("base_position", m(t.base_position.as_slice())),
+        ("base_rotation", m(t.base_rotation.as_slice())),
+    ];
+    let moduli = t.moduli.expect("S and H are built from geometry");
+    for (name, v) in [
+        ("youngs_modulus", moduli.youngs_modulus),
+        ("youngs_modulus_fixed_shear", moduli.youngs_modulus_fixed_shear),
+        ("shear_modulus", moduli.shear_modulus),
+    ] {
+        out.push((name, DMatrix::from_column_slice(6, 1, v.as_slice())));
+    }
+    out
+}
+
+/// `Solver::tip_sensitivities` after a warm solve that converged by chord steps factors the
+/// Jacobian the verdict evaluated at the solution (no assembly) and equals the stateless
+/// `tip_sensitivities`, which assembles it, to rounding; for a solution that is not the
+/// solver's last it assembles the Jacobian, as the stateless function does: the same bits.
+#[test]
+fn solver_tip_sensitivities_equal_the_stateless_ones() {
+    for robot in [cases::case_s(), cases::case_h()] {
+        let mut solver = Solver::new(Options::default());
+        let mut before = robot.clone();
+        for t in before.tendons.iter_mut() {
+            t.set_tension(t.tension() * 0.99);
+        }
+        let first = solver.solve(&before).unwrap();
+        let warm = solver.solve_from(&robot, &first).unwrap();
+        assert_eq!(
+            warm.report.newton_steps, 0,
+            "chord steps only: the verdict evaluated the Jacobian"
+        );
+        let ours = solver.tip_sensitivities(&robot, &warm).unwrap();
+        let stateless = tdcr::tip_sensitivities(&robot, &warm).unwrap();
+        for ((name, a), (_, b)) in fields(&ours).into_iter().zip(fields(&stateless)) {
+            // 1e-12 relative per matrix: the same Jacobian values, right-hand sides and
+            // solves; only the factored values' origin (the verdict's evaluation, not an
+            // assembly) and the workspace differ (rounding).
+            let scale = b.amax();
+            assert!((&a - &b).amax() <= 1e-12 * scale, "{name}: {a} vs {b}");
+            if name != "displacement" && name != "friction" {
+                assert!(scale > 0.0, "{name} is not all zero");
+            }
+        }
+        // A second call (the values are now factored) gives the same bits as the first.
+        assert_eq!(solver.tip_sensitivities(&robot, &warm).unwrap(), ours);
+        // The first solution, on the same mesh but not the one the last solve ended at:
+        // the Jacobian is assembled in the solver's workspace, as the stateless function
+        // assembles it in its own: the same code path, the same bits.
+        let other = solver.tip_sensitivities(&before, &first).unwrap();
+        assert_eq!(other, tdcr::tip_sensitivities(&before, &first).unwrap());
+        assert_ne!(other.tension, ours.tension, "a different solution");
     }
 }
 

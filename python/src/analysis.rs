@@ -24,7 +24,8 @@ fn rows<'py>(py: Python<'py>, m: &DMatrix<f64>) -> Bound<'py, PyArray2<f64>> {
 /// (rad per unit).
 #[pyclass(module = "tdcr", name = "TipSensitivities", frozen)]
 pub struct PyTipSensitivities {
-    inner: tdcr::TipSensitivities,
+    /// The library's sensitivities.
+    pub(crate) inner: tdcr::TipSensitivities,
 }
 
 #[pymethods]

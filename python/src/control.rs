@@ -2,6 +2,7 @@
 //! the factors of the last solve, and the control Jacobians (only the columns asked for)
 //! from the same workspace.
 
+use crate::analysis::PyTipSensitivities;
 use crate::boundary;
 use crate::convert::{numbers, type_name};
 use crate::errors::{self, invalid, to_py};
@@ -217,6 +218,39 @@ impl PySolver {
         let robot = &robot.file.robot;
         let m = boundary::detached(py, || solver.tip_jacobian(robot, solution, &wrt))?;
         Ok(Array2::from_shape_fn((6, m.ncols()), |(i, j)| m[(i, j)]).into_pyarray(py))
+    }
+
+    /// tip_sensitivities(robot=None, solution=None) -> TipSensitivities
+    ///
+    /// Every tip sensitivity at the last solution of the current robot (or at `solution`, a
+    /// solution of `robot`, given both): what `tdcr.tip_sensitivities(robot, solution)`
+    /// returns, equal to rounding, from one factorization in the solver's workspace. After a
+    /// warm solve that converged by chord steps that is the Jacobian its stability verdict
+    /// evaluated at the solution, not assembled again. Raises as `tip_sensitivities`.
+    #[pyo3(signature = (robot=None, solution=None))]
+    fn tip_sensitivities(
+        &mut self,
+        py: Python<'_>,
+        robot: Option<&PyRobot>,
+        solution: Option<&PySolution>,
+    ) -> PyResult<PyTipSensitivities> {
+        let (robot, solution) = match (robot, solution) {
+            (Some(r), Some(s)) => (&r.file.robot, &s.solution),
+            (None, None) => {
+                self.solved("tip_sensitivities")?;
+                let (Some(r), Some(s)) = (&self.robot, &self.last) else {
+                    return Err(invalid("Solver: no solution"));
+                };
+                (&r.file.robot, s)
+            }
+            _ => {
+                return Err(invalid(
+                    "Solver.tip_sensitivities: give both `robot` and `solution` (a solution of that robot), or neither for the last solution",
+                ));
+            }
+        };
+        let solver = &mut self.solver;
+        boundary::detached(py, || solver.tip_sensitivities(robot, solution)).map(|inner| PyTipSensitivities { inner })
     }
 
     /// backbone_jacobian(s, wrt=("tension",)) -> ndarray

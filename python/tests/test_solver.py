@@ -97,3 +97,28 @@ def test_warm_solves_without_a_jacobian_agree_to_the_newton_stop():
     # first solve, not on the Jacobian at its solution, and both stop when the estimated
     # remaining scaled error is below the Newton stop's 1e-10 (collocation/newton.rs).
     np.testing.assert_allclose(warm.p, stateless.p, rtol=0, atol=1e-10 * 0.242)
+
+
+@pytest.mark.parametrize("case", [tdcr.cases.case_s, tdcr.cases.case_h])
+def test_solver_tip_sensitivities_equal_the_stateless_ones(case):
+    robot = case()
+    solver = tdcr.Solver(robot)
+    first = solver.solve(tension=0.99 * np.array(robot.tensions, dtype=float))
+    warm = solver.solve(tension=np.array(robot.tensions, dtype=float))
+    ours = solver.tip_sensitivities()
+    theirs = tdcr.tip_sensitivities(solver.robot, warm)
+    assert type(ours) is type(theirs)
+    for name in ["tension", "displacement", "friction", "tip_force", "tip_moment", "base_position", "base_rotation", "youngs_modulus"]:
+        a, b = getattr(ours, name), getattr(theirs, name)
+        assert a.shape == b.shape
+        # 1e-12 relative: the same Jacobian values, right-hand sides and solves (the
+        # solver factors the one its verdict evaluated at the solution); rounding only.
+        np.testing.assert_allclose(a, b, rtol=0, atol=1e-12 * np.abs(b).max(), err_msg=name)
+    # Given a solution that is not the last (the first one, of the robot at 0.99 times the
+    # tensions), the Jacobian is assembled as the stateless function assembles it.
+    before = robot.with_parameters({f"tension.{i + 1}": 0.99 * t for i, t in enumerate(robot.tensions)})
+    other = solver.tip_sensitivities(before, first)
+    np.testing.assert_array_equal(other.tension, tdcr.tip_sensitivities(before, first).tension)
+    assert not np.array_equal(other.tension, ours.tension)
+    with pytest.raises(tdcr.InvalidInput, match="give both"):
+        solver.tip_sensitivities(robot)

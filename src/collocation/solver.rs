@@ -5,7 +5,9 @@ use super::linear::LinearSolver;
 use super::newton::Workspace;
 use super::options::Options;
 use super::pipeline::solve_impl;
-use super::sensitivity::{Sensitivity, backbone_columns, tension_tips, tip_columns};
+use super::sensitivity::{
+    Sensitivity, TipSensitivities, backbone_columns, tension_tips, tip_columns, tip_sensitivities_from,
+};
 use crate::error::Result;
 use crate::mesh::Mesh;
 use crate::solution::{Solution, State};
@@ -123,6 +125,35 @@ impl Solver {
     pub fn tip_jacobian(&mut self, robot: &Robot, solution: &Solution, wrt: &[Parameter]) -> Result<DMatrix<f64>> {
         let tips = tension_tips(robot, wrt);
         self.linearized(robot, solution, tips, |sens| tip_columns(sens, robot, solution, wrt))
+    }
+
+    /// Every tip sensitivity at `solution`, a solution of `robot`: as
+    /// [`crate::tip_sensitivities`] (the same [`TipSensitivities`], to rounding), with this
+    /// solver's workspace as in [`Solver::tip_jacobian`]: after a warm solve that converged
+    /// by chord steps, the Jacobian its stability verdict evaluated at the solution is
+    /// factored instead of assembled again; for a solution on another mesh the Jacobian is
+    /// assembled in a new workspace and the cached one is kept.
+    ///
+    /// # Errors
+    /// As [`crate::tip_sensitivities`].
+    ///
+    /// # Examples
+    /// ```
+    /// use tdcr::Solver;
+    /// let mut robot = tdcr::cases::case_s();
+    /// let mut solver = Solver::new(Default::default());
+    /// let first = solver.solve(&robot).unwrap();
+    /// robot.tendons[0].set_tension(3.0);
+    /// let next = solver.solve_from(&robot, &first).unwrap();
+    /// let sens = solver.tip_sensitivities(&robot, &next).unwrap();
+    /// assert_eq!(sens.tension.shape(), (6, robot.tendons.len()));
+    /// ```
+    pub fn tip_sensitivities(&mut self, robot: &Robot, solution: &Solution) -> Result<TipSensitivities> {
+        // Without pull-ins to hold, the tension columns' tips come out of the factoring.
+        let tips = !robot.has_displacement_inputs();
+        self.linearized(robot, solution, tips, |sens| {
+            tip_sensitivities_from(sens, robot, solution)
+        })
     }
 
     /// The columns `wrt` of d p(s_j)/dq at the arc lengths `s` (3 `s.len()` x `wrt.len()`):

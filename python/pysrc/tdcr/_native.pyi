@@ -692,6 +692,9 @@ class Solver:
     def tip_jacobian(self, wrt: Union[str, Sequence[str], None] = None) -> FloatArray:
         """(6, n): the columns `wrt` (default "tension") of d(tip pose)/dq at the last
         solution, in the layout of `TipSensitivities.tension`."""
+    def tip_sensitivities(self, robot: Optional[Robot] = None, solution: Optional[Solution] = None) -> TipSensitivities:
+        """Every tip sensitivity at the last solution (or at `solution` of `robot`, given
+        both), as `tip_sensitivities(robot, solution)`, from the solver's workspace."""
     def backbone_jacobian(self, s: ArrayLike, wrt: Union[str, Sequence[str], None] = None) -> FloatArray:
         """(len(s), 3, n): d p(s_j)/dq at the arc lengths `s` (m) of the last solution."""
     def keep_tension_columns(self, on: bool) -> None:

@@ -101,6 +101,7 @@ pub(crate) use control::{backbone_columns, tension_tips, tip_columns};
 pub use control::{backbone_jacobian, columns, tip_jacobian};
 pub(crate) use held::TensionDirections;
 pub use held::{DisplacementSensitivities, displacement_sensitivities};
+pub(crate) use tip::tip_sensitivities_from;
 pub use tip::{ModulusSensitivities, TipSensitivities, backbone_tension_sensitivity, tip_sensitivities};
 
 use crate::collocation::LinearSolver;

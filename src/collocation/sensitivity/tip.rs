@@ -108,7 +108,25 @@ pub fn tip_sensitivities(robot: &Robot, solution: &Solution) -> Result<TipSensit
         None => (None, None),
     };
     let mut sens = Sensitivity::with_workspace(&solved, solution, workspace, mesh, false, tips)?;
-    let held = Held::new(&mut sens, robot, solution)?;
+    let out = tip_sensitivities_from(&mut sens, robot, solution)?;
+    if let Some(mesh) = kept {
+        workspace::keep(mesh, LinearSolver::Blocks, sens.into_workspace());
+    }
+    Ok(out)
+}
+
+/// Every tip sensitivity of [`tip_sensitivities`] from `sens`, the linearization of `robot`
+/// (its tensions the solved ones) at `solution`, however it was factored: the stateless
+/// function's workspace, or a [`crate::Solver`]'s ([`crate::Solver::tip_sensitivities`]).
+///
+/// # Errors
+/// As [`tip_sensitivities`].
+pub(crate) fn tip_sensitivities_from(
+    sens: &mut Sensitivity,
+    robot: &Robot,
+    solution: &Solution,
+) -> Result<TipSensitivities> {
+    let held = Held::new(sens, robot, solution)?;
     // Without friction or held pull-ins, the 16 parameters besides the tensions cost six
     // transposed solves (the tip pose's multipliers) instead of one solve each.
     let multipliers = if held.holds() { None } else { sens.tip_multipliers()? };
@@ -133,7 +151,7 @@ pub fn tip_sensitivities(robot: &Robot, solution: &Solution) -> Result<TipSensit
         }
         if robot.tendons[i].active_friction().is_some() {
             let d = tip.sens.friction(i)?;
-            friction.set_column(i, &held.tip(&d, &tip.sens)?);
+            friction.set_column(i, &held.tip(&d, tip.sens)?);
         }
     }
     let mut tip_force = Matrix6x3::zeros();
@@ -147,9 +165,6 @@ pub fn tip_sensitivities(robot: &Robot, solution: &Solution) -> Result<TipSensit
         base_rotation.set_column(j, &tip.of(|s| s.base_rotation_rhs(j))?);
     }
     let moduli = moduli(&mut tip)?;
-    if let Some(mesh) = kept {
-        workspace::keep(mesh, LinearSolver::Blocks, tip.sens.into_workspace());
-    }
     Ok(TipSensitivities {
         tension,
         displacement,
@@ -214,7 +229,7 @@ impl Sensitivity<'_> {
 /// The linearization with what gives a right-hand side's tip derivative: the tip
 /// multipliers (plain system), or a solve and the held pull-ins.
 struct Tip<'s, 'a> {
-    sens: Sensitivity<'a>,
+    sens: &'s mut Sensitivity<'a>,
     held: &'s Held,
     multipliers: Option<Vec<Vec<f64>>>,
 }
@@ -222,12 +237,12 @@ struct Tip<'s, 'a> {
 impl Tip<'_, '_> {
     /// d(tip pose)/dq for the right-hand side `rhs` writes into the sensitivity's buffer.
     fn of(&mut self, rhs: impl FnOnce(&mut Sensitivity) -> Result<()>) -> Result<Vector6<f64>> {
-        rhs(&mut self.sens)?;
+        rhs(self.sens)?;
         match &self.multipliers {
             Some(m) => Ok(self.sens.tip_by(m)),
             None => {
                 let d = self.sens.respond()?;
-                self.held.tip(&d, &self.sens)
+                self.held.tip(&d, self.sens)
             }
         }
     }
@@ -254,9 +269,9 @@ fn moduli(tip: &mut Tip) -> Result<Option<ModulusSensitivities>> {
             .derivative(RELATIVE_STEP * shear, Difference::Central, |r, d| {
                 r.rod.stiffness = Stiffness::Uniform(Section::tube(o, i, e, shear + d));
             })?;
-        let by_g = tip.held.tip(&by_g, &tip.sens)?;
-        let by_e = youngs_modulus(&mut tip.sens, g)?;
-        (tip.held.tip(&by_e, &tip.sens)?, by_g)
+        let by_g = tip.held.tip(&by_g, tip.sens)?;
+        let by_e = youngs_modulus(tip.sens, g)?;
+        (tip.held.tip(&by_e, tip.sens)?, by_g)
     };
     Ok(Some(ModulusSensitivities {
         youngs_modulus,
