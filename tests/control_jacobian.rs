@@ -101,20 +101,28 @@ fn tension_columns_from_the_sparse_lu_equal_the_structured_ones() {
     assert!(relative(&sparse, &blocks) <= 1e-9, "{sparse} vs {blocks}");
 }
 
+/// A solver that solved `robot` at 0.99 times its tensions (`before`, solution `first`) and
+/// then `robot` from there (`warm`), which converges by chord steps, so its verdict evaluated
+/// the Jacobian at the solution (checked): (solver, before, first, warm).
+fn chord_only_warm(robot: &Robot) -> (Solver, Robot, Solution, Solution) {
+    let mut solver = Solver::new(Options::default());
+    let mut before = robot.clone();
+    for t in before.tendons.iter_mut() {
+        t.set_tension(t.tension() * 0.99);
+    }
+    let first = solver.solve(&before).unwrap();
+    let warm = solver.solve_from(robot, &first).unwrap();
+    assert_eq!(
+        warm.report.newton_steps, 0,
+        "chord steps only: the verdict evaluated the Jacobian"
+    );
+    (solver, before, first, warm)
+}
+
 #[test]
 fn jacobian_after_a_chord_only_warm_solve_equals_the_stateless_one() {
     for robot in [cases::case_s(), cases::case_h()] {
-        let mut solver = Solver::new(Options::default());
-        let mut before = robot.clone();
-        for t in before.tendons.iter_mut() {
-            t.set_tension(t.tension() * 0.99);
-        }
-        let first = solver.solve(&before).unwrap();
-        let warm = solver.solve_from(&robot, &first).unwrap();
-        assert_eq!(
-            warm.report.newton_steps, 0,
-            "chord steps only: the verdict evaluated the Jacobian"
-        );
+        let (mut solver, _, _, warm) = chord_only_warm(&robot);
         let wrt: Vec<Parameter> = (0..robot.tendons.len())
             .map(Parameter::Tension)
             .chain([Parameter::TipForce(0), Parameter::YoungsModulus])
@@ -163,17 +171,7 @@ fn fields(t: &TipSensitivities) -> Vec<(&'static str, DMatrix<f64>)> {
 #[test]
 fn solver_tip_sensitivities_equal_the_stateless_ones() {
     for robot in [cases::case_s(), cases::case_h()] {
-        let mut solver = Solver::new(Options::default());
-        let mut before = robot.clone();
-        for t in before.tendons.iter_mut() {
-            t.set_tension(t.tension() * 0.99);
-        }
-        let first = solver.solve(&before).unwrap();
-        let warm = solver.solve_from(&robot, &first).unwrap();
-        assert_eq!(
-            warm.report.newton_steps, 0,
-            "chord steps only: the verdict evaluated the Jacobian"
-        );
+        let (mut solver, before, first, warm) = chord_only_warm(&robot);
         let ours = solver.tip_sensitivities(&robot, &warm).unwrap();
         let stateless = tdcr::tip_sensitivities(&robot, &warm).unwrap();
         for ((name, a), (_, b)) in fields(&ours).into_iter().zip(fields(&stateless)) {
