@@ -66,6 +66,8 @@ pub(crate) mod stability;
 mod stage;
 mod start;
 pub(crate) mod system;
+#[cfg(test)]
+mod test_support;
 mod trace;
 pub(crate) mod unknowns;
 mod workspace;

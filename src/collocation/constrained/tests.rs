@@ -2,15 +2,9 @@
 //! bordered system (an eigenvalue computation independent of the count).
 
 use super::Border;
-use crate::collocation::linear::LinearSolver;
-use crate::collocation::newton::Workspace;
-use crate::collocation::system::System;
 use crate::collocation::{self, Options, dynamics, stability};
-use crate::mesh::Mesh;
-use crate::mesh::guess::interpolate;
-use crate::model::equations::Model;
 use crate::model::rod::Section;
-use crate::report::{Growth, Method, SolveReport, Stability};
+use crate::report::{Growth, Stability};
 use crate::{Loads, Robot, Rod, Routing, Solution, Tendon};
 use nalgebra::Vector3;
 use std::f64::consts::PI;
@@ -36,15 +30,7 @@ fn column(tendon: Tendon) -> Robot {
 
 /// (constant-tension verdict, plain dynamics, bordered dynamics) at the solved state.
 fn verdicts(robot: &Robot, solution: &Solution) -> (Stability, Stability, Stability) {
-    let points: Vec<f64> = solution.nodes.iter().map(|n| n.s).collect();
-    let mesh = Mesh::from_points(robot, &points).unwrap();
-    let mut model = Model::new(robot);
-    model.tensions = solution.tensions();
-    let x = interpolate(&model, solution, &mesh);
-    let system = System::new(model, mesh);
-    let mut report = SolveReport::new(Method::Collocation);
-    let mut ws = Workspace::new(&system, LinearSolver::Blocks).unwrap();
-    assert!(ws.linearize(&system, &x, &mut report));
+    let (system, x, mut ws, mut report) = crate::collocation::test_support::linearized_at(robot, solution);
     let s: Vec<f64> = system.mesh.nodes.iter().map(|n| n.s).collect();
     let counted = ws.verdict(|v| stability::assess(v, &s));
     let plain = dynamics::assess(&system, &x, &mut ws, false);

@@ -176,24 +176,13 @@ mod tests {
     use super::*;
     use crate::collocation::constrained::Border;
     use crate::collocation::dynamics::{KRYLOV_MODES, modes, vibration};
-    use crate::collocation::linear::LinearSolver;
-    use crate::collocation::newton::Workspace;
-    use crate::mesh::guess::interpolate;
     use crate::model::tendon::Friction;
     use crate::report::Method;
 
     /// The lowest modes of the frictionless `robot`'s `solution` with its taut pull-ins held
     /// (`collocation/constrained.rs`'s border in the linearized dynamics).
     fn constrained_modes(robot: &Robot, solution: &Solution) -> Vibration {
-        let points: Vec<f64> = solution.nodes.iter().map(|n| n.s).collect();
-        let mesh = Mesh::from_points(robot, &points).unwrap();
-        let mut model = Model::new(robot);
-        model.tensions = solution.tensions();
-        let x = interpolate(&model, solution, &mesh);
-        let system = System::new(model, mesh);
-        let mut report = SolveReport::new(Method::Collocation);
-        let mut ws = Workspace::new(&system, LinearSolver::Blocks).unwrap();
-        assert!(ws.linearize(&system, &x, &mut report));
+        let (system, x, mut ws, mut report) = crate::collocation::test_support::linearized_at(robot, solution);
         let border = Border::new(&system, &x, &mut ws, &mut report).unwrap();
         modes(
             &system,
