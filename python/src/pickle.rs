@@ -113,6 +113,7 @@ pub fn report_state<'py>(py: Python<'py>, r: &SolveReport) -> PyResult<Bound<'py
         "path",
         (r.path.name(), r.path.folds().to_vec(), r.path.bifurcations().to_vec()),
     )?;
+    d.set_item("notes", r.notes.clone())?;
     Ok(d)
 }
 
@@ -200,5 +201,6 @@ pub fn report_from(d: &Bound<'_, PyDict>) -> PyResult<SolveReport> {
     };
     let (path, folds, bifurcations): (String, Vec<f64>, Vec<f64>) = field(d, "path")?;
     r.path = PathTaken::from_name(&path, folds, bifurcations).ok_or_else(|| bad("path"))?;
+    r.notes = field(d, "notes")?;
     Ok(r)
 }

@@ -508,6 +508,14 @@ impl PySolveReport {
         self.report.path.bifurcations().to_vec()
     }
 
+    /// What a user should know about the choice of the answer, one sentence each (the
+    /// command line's `note:` lines): a side picked at a symmetric bifurcation and the
+    /// mirror state left out, or where the load path stopped before a "fallback".
+    #[getter]
+    fn notes(&self) -> Vec<String> {
+        self.report.notes.clone()
+    }
+
     /// Wall-clock seconds by stage: `assembly`, `factorization`, `solve`, `estimate` (the
     /// error estimate), `stability` (the stability verdict), `total`.
     #[getter]

@@ -231,6 +231,10 @@ class SolveReport:
     @property
     def bifurcations(self) -> List[float]: ...
     @property
+    def notes(self) -> List[str]:
+        """What to know about the choice of the answer, one sentence each (a side picked at a
+        symmetric bifurcation, a fallback's stalled path); the command line's `note:` lines."""
+    @property
     def timings(self) -> Dict[str, float]:
         """Seconds: assembly, factorization, solve, estimate, stability, total."""
     @property
