@@ -1,7 +1,7 @@
 //! The exceptions: one class per kind of `tdcr::Error`, all under `tdcr.Error`, each carrying
 //! the library's message (the Display the command line prints).
 
-use crate::solution::PySolveReport;
+use crate::report::PySolveReport;
 use pyo3::exceptions::{PyException, PyUserWarning};
 use pyo3::prelude::*;
 use pyo3::{PyErr, create_exception};

@@ -16,6 +16,7 @@ mod history;
 mod options;
 mod pickle;
 mod picture;
+mod report;
 mod robot;
 mod solution;
 
@@ -272,7 +273,7 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("TIP_H", tdcr::cases::TIP_H)?;
     m.add_class::<PyRobot>()?;
     m.add_class::<PySolution>()?;
-    m.add_class::<solution::PySolveReport>()?;
+    m.add_class::<report::PySolveReport>()?;
     m.add_class::<solution::PyState>()?;
     m.add_class::<analysis::PyTipSensitivities>()?;
     m.add_class::<analysis::PyInverseResult>()?;

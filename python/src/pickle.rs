@@ -3,7 +3,7 @@
 //! itself: numbers, strings, numpy arrays, robots, solutions); a solve report as a dict
 //! of its fields in plain values, bitwise.
 
-use crate::solution::termination_name;
+use crate::report::termination_name;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use std::time::Duration;
