@@ -110,7 +110,14 @@ pub(super) fn follow(
     let mut max_step = MAX_STEP;
     let mut stop: &dyn Fn() -> bool = &|| false;
     let mut landing = false;
+    let (mut lambda0, mut chain) = (0.0, 0);
     let (x, homotopy) = match start {
+        Start::Resting { x, lambda, chain: c } => {
+            (landing, lambda0, chain) = (true, lambda, c);
+            let homotopy = Homotopy::load();
+            homotopy.set(system, lambda);
+            (x.to_vec(), homotopy)
+        }
         Start::Rest { land } => {
             landing = land;
             system.set_factors(0.0, 0.0);
@@ -155,7 +162,7 @@ pub(super) fn follow(
     if !ws.linearize(system, &x, report) {
         return Err(("the Jacobian at the start of the path is singular".into(), 0));
     }
-    let Some((mut point, _)) = tangent(system, &homotopy, ws, x, 0.0, None, report) else {
+    let Some((mut point, _)) = tangent(system, &homotopy, ws, x, lambda0, None, report) else {
         return Err(("the path's first tangent is not finite".into(), 0));
     };
     let mut unstable = index(system, ws, &point.x, false, report);
@@ -450,6 +457,37 @@ pub(super) fn follow(
                         true => locate::bifurcation(system, &homotopy, ws, (&point, unstable), &next, settings, report),
                         false => lambda,
                     });
+                }
+                // EXPERIMENT (fold14): the robot snaps at the first fold it meets on a stable
+                // branch; its damped motion there, then the load path on (module `fold_motion`).
+                if fold
+                    && landing
+                    && unstable == Some(0)
+                    && point.tl > 0.0
+                    && chain < super::fold_motion::MAX_CHAIN
+                    && let Some(delta) = super::fold_motion::delta()
+                    && let Some((lf, load, x)) = super::fold_motion::at_fold(
+                        system,
+                        &homotopy,
+                        ws,
+                        (&point, h),
+                        &next,
+                        delta,
+                        settings,
+                        report,
+                        &mut r,
+                    )
+                {
+                    folds.push(lambda);
+                    return super::fold_motion::onwards(
+                        system,
+                        ws,
+                        (x, lf, load, chain + 1),
+                        options,
+                        settings,
+                        report,
+                        (folds, bifurcations, picked, family),
+                    );
                 }
                 unstable = next_unstable;
                 if fold && landing {

@@ -95,6 +95,16 @@ pub(super) enum Start<'x> {
     },
     /// The Newton homotopy from a warm start (not a solution of the system).
     Warm(&'x [State]),
+    /// EXPERIMENT (issue 25, fold14): the load path from a stable state `x` at rest at load
+    /// factor `lambda` (where the motion from a fold came to rest, module `fold_motion`) to 1.
+    Resting {
+        /// The states at `lambda`.
+        x: &'x [State],
+        /// Its load factor.
+        lambda: f64,
+        /// How many motions from folds this solve has chained.
+        chain: usize,
+    },
     /// A trace of `parameter` from `from` (where `x` is the converged solution) towards
     /// `to`, recording every point; it ends where lambda leaves [0, 1].
     Trace {

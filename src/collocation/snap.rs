@@ -48,6 +48,14 @@ pub(super) fn land_from_folds(
             && index(system, ws, &landed, false, report) == Some(0)
         {
             report.termination = term;
+            // EXPERIMENT (fold14): which solves land from their folds.
+            if std::env::var_os("TDCR_FOLD_TRACE").is_some() {
+                let t = landed[landed.len() - 1].p * 1e3;
+                eprintln!(
+                    "fold14: main landed from the fold at {lambda:.6}: tip ({:.3}, {:.3}, {:.3}) mm",
+                    t.x, t.y, t.z
+                );
+            }
             return Some((*lambda, landed));
         }
     }
