@@ -41,7 +41,6 @@ pub(crate) mod dynamics;
 mod ends;
 mod equilibrium;
 mod estimate;
-mod fold_motion;
 pub(crate) mod friction;
 mod homotopy;
 mod interval_kept;
