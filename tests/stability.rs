@@ -253,3 +253,64 @@ fn a_load_path_that_ends_unstable_after_its_folds_lands_from_them() {
     );
     assert!(branch.points.iter().all(|p| p.unstable_directions == Some(0)));
 }
+
+/// Case 34258 of the property generator (a 0.80 m rod of radius 0.21 mm standing upright
+/// under its self weight, tendons pulling it over): its load path loses stability at a fold at
+/// 34.7 % of the way, folds again at 22.6 % and reaches the full load standing, unstable in 2
+/// directions, and Newton at the full load from either fold's state finds no stable state, so
+/// that unstable state was the default answer. The robot's own route from the first fold (its
+/// damped motion just past it, then the load path on from where it comes to rest) ends on a
+/// stable, hanging state (docs/stability.md, "A path that ends unstable after its folds lands
+/// from them").
+#[test]
+fn a_path_whose_folds_land_nowhere_stable_goes_on_from_the_motion_past_its_first_fold() {
+    let path = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/tests/data/folds-without-stable-landing.toml"
+    );
+    let text = std::fs::read_to_string(path).unwrap();
+    let robot = tdcr::io::parse(&text, path).unwrap().robot;
+    let s = collocation::solve(&robot, &Options::default()).unwrap();
+    assert!(s.report.stability.is_stable(), "{:?}", s.report.stability);
+    // The robot's route: the first fold, where it snaps; the path on from the rest state has
+    // none (the second fold, at 22.6 %, is on the branch the robot never sees).
+    match &s.report.path {
+        PathTaken::LoadPath { folds, .. } => {
+            assert_eq!(folds.len(), 1, "{folds:?}");
+            // 0.01: the fold is at 0.3467, reported as the first point past it (0.3464)
+            assert!((folds[0] - 0.3467).abs() < 0.01, "{folds:?}");
+        }
+        other => panic!("path {other:?}"),
+    }
+    assert!(
+        s.report
+            .notes
+            .iter()
+            .any(|n| n.contains("found no stable state") && n.contains("damped motion just past the fold")),
+        "{:?}",
+        s.report.notes
+    );
+    // It hangs (tip 498 mm below the base, measured) where the unstable state stood upright
+    // (670 mm above).
+    assert!(s.tip_position().z < -0.45, "tip {:?}", s.tip_position());
+    // Measured 247 Newton + chord steps (174 before, ending unstable): the path to the full
+    // load, the landings tried, the motion's time steps and the path on; a fifth to spare.
+    assert!(s.report.iterations <= 300, "{} iterations", s.report.iterations);
+    let (min, max) = smallest_compliance_eigenvalue(&robot, &s);
+    // 1e-9 of the largest: rounding of the differenced sensitivities
+    assert!(min > -1e-9 * max, "{min:e} of {max:e}");
+    // The state's branch, traced back from the full load, stays stable past the fold where
+    // the load path lost stability (0.3467): the branch the robot snaps onto there.
+    let branch = collocation::trace(&robot, tdcr::Parameter::LoadScale, 1.0, 0.33, &Options::default()).unwrap();
+    assert!(
+        branch.folds.is_empty() && branch.bifurcations.is_empty(),
+        "{:?}",
+        branch.events
+    );
+    assert!(
+        branch.points.last().unwrap().value <= 0.34,
+        "{:?}",
+        branch.points.last().unwrap().value
+    );
+    assert!(branch.points.iter().all(|p| p.unstable_directions == Some(0)));
+}

@@ -350,6 +350,22 @@ fn snapped_note((lambda, reached): (f64, bool)) -> String {
     )
 }
 
+/// The note of a path that snapped at the fold at load factor `lambda`, where the landing
+/// from its folds found no stable state (`reached`: as [`snapped_note`]), completed by the
+/// robot's damped motion just past the fold and the load path on from where it came to rest.
+fn moved_note((lambda, reached): (f64, bool)) -> String {
+    let why = match reached {
+        true => "the path reached the full load on an unstable state after its folds",
+        false => "the path could not be followed to the full load",
+    };
+    format!(
+        "{why}, and Newton at the full load from its folds found no stable state: the robot snaps at \
+         the fold at {:.1} % of the way, and this stable state is where the load path goes on from \
+         the state its damped motion just past the fold comes to rest in",
+        100.0 * lambda
+    )
+}
+
 /// The note of a path that lost stability at the bifurcation at load factor `lambda` with no
 /// stable branch it could follow, completed by the robot's damped motion from there;
 /// `picked`: the motion started on a side picked (a perfect symmetry).
@@ -433,6 +449,8 @@ fn choose_from(
                         .iter()
                         .map(|&l| picked_note(l, end.family.then_some(&end.x[..]))),
                 );
+                report.notes.extend(end.moved_from.iter().map(|&m| moved_note(m)));
+                report.notes.extend(end.moved_from.iter().map(|&m| moved_note(m)));
                 report.notes.extend(end.snapped_from.map(snapped_note));
                 report.notes.extend(end.relaxed_from.map(relaxed_note));
                 report.path = PathTaken::FromWarmStart {
@@ -466,6 +484,7 @@ fn choose_from(
                     .iter()
                     .map(|&l| picked_note(l, end.family.then_some(&end.x[..]))),
             );
+            report.notes.extend(end.moved_from.iter().map(|&m| moved_note(m)));
             report.notes.extend(end.snapped_from.map(snapped_note));
             report.notes.extend(end.relaxed_from.map(relaxed_note));
             report.path = PathTaken::LoadPath {

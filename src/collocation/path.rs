@@ -81,18 +81,6 @@ fn snaps_here(
     matches!(counts, (Some(a), Some(b)) if b > a) && landing && !holds_family && (!switching || h <= BIFURCATION_STEP)
 }
 
-/// The count of unstable directions `next` at a point of a family's branch (module
-/// `phase`), given the count `before` at the last point: the family's own direction is
-/// neutral there (an exact zero of the second variation, whose conjugate point lies at the
-/// base), and the error of a guide (converged to 1e-6 only) tips it to either side of the
-/// base, so a change by one is that direction, not a change of stability.
-fn neutral(before: Option<usize>, next: Option<usize>) -> Option<usize> {
-    match (before, next) {
-        (Some(a), Some(b)) if a.abs_diff(b) == 1 => before,
-        _ => next,
-    }
-}
-
 /// Follows a path on `system` (whose mesh it may refine, replacing `system` and `ws`) from
 /// lambda = 0 to 1 ([`Start`]): the load path from rest, the Newton homotopy from a warm
 /// start (on its mesh), or a trace, whose points go to `record`. Returns the end, or a
@@ -110,7 +98,14 @@ pub(super) fn follow(
     let mut max_step = MAX_STEP;
     let mut stop: &dyn Fn() -> bool = &|| false;
     let mut landing = false;
+    let (mut lambda0, mut chain) = (0.0, 0);
     let (x, homotopy) = match start {
+        Start::Resting { x, lambda, chain: c } => {
+            (landing, lambda0, chain) = (true, lambda, c);
+            let homotopy = Homotopy::load();
+            homotopy.set(system, lambda);
+            (x.to_vec(), homotopy)
+        }
         Start::Rest { land } => {
             landing = land;
             system.set_factors(0.0, 0.0);
@@ -155,7 +150,7 @@ pub(super) fn follow(
     if !ws.linearize(system, &x, report) {
         return Err(("the Jacobian at the start of the path is singular".into(), 0));
     }
-    let Some((mut point, _)) = tangent(system, &homotopy, ws, x, 0.0, None, report) else {
+    let Some((mut point, _)) = tangent(system, &homotopy, ws, x, lambda0, None, report) else {
         return Err(("the path's first tangent is not finite".into(), 0));
     };
     let mut unstable = index(system, ws, &point.x, false, report);
@@ -191,6 +186,9 @@ pub(super) fn follow(
     // The states at the folds passed, with their load factors: where the path cannot be
     // followed to the end, the robot snaps from one of them ([`snap::land_from_folds`]).
     let mut fold_states: Vec<(f64, Vec<State>)> = Vec::new();
+    // The first fold met on a stable branch, where the robot snaps: where the landing from
+    // the folds finds no stable state, its own route from there ([`snap::from_fold`]).
+    let mut first_fold: Option<snap::Fold> = None;
     // A side picked at a simple symmetric bifurcation (load factor, first state past it), and
     // the path's progress in lambda since (module `snap`, [`snap::Stall`]).
     let mut switched: Option<(f64, Vec<State>)> = None;
@@ -257,7 +255,7 @@ pub(super) fn follow(
                 None
             };
             if phase.is_some() {
-                landed_unstable = neutral(unstable, landed_unstable);
+                landed_unstable = Phase::neutral(unstable, landed_unstable);
             }
             let jumped = matches!((unstable, landed_unstable), (Some(a), Some(b)) if a != b);
             if term == Termination::Converged && !(jumped && h1 > BIFURCATION_STEP) {
@@ -271,6 +269,19 @@ pub(super) fn follow(
                     if let Some((lambda, x)) = snap::land_from_folds(system, ws, &fold_states, settings, report) {
                         return Ok(End::landed(x, folds, bifurcations, picked, family, (lambda, true)));
                     }
+                    let path = (
+                        folds.as_slice(),
+                        bifurcations.as_slice(),
+                        picked.as_slice(),
+                        family,
+                        true,
+                    );
+                    let fold = first_fold.as_ref();
+                    if let Some(end) =
+                        snap::from_fold(system, &homotopy, ws, fold, path, chain, options, settings, report)
+                    {
+                        return end;
+                    }
                     // The landings factored other states: factor this one's again, so that the
                     // verdict read later is its own (it was factored above, so this succeeds).
                     report.termination = term;
@@ -283,15 +294,7 @@ pub(super) fn follow(
                     tl: 1.0,
                 };
                 push(&mut record, &end, landed_unstable, false, report);
-                return Ok(End {
-                    x: landed,
-                    folds,
-                    bifurcations,
-                    picked,
-                    snapped_from: None,
-                    relaxed_from: None,
-                    family,
-                });
+                return Ok(End::reached(landed, folds, bifurcations, picked, family));
             }
             if let (true, Some(a), Some(b)) = (switching, unstable, landed_unstable)
                 && b > a
@@ -376,7 +379,7 @@ pub(super) fn follow(
                 let fold = (next.tl > 0.0) != (point.tl > 0.0);
                 let mut next_unstable = index(system, ws, &next.x, phase.is_some(), report);
                 if phase.is_some() {
-                    next_unstable = neutral(unstable, next_unstable);
+                    next_unstable = Phase::neutral(unstable, next_unstable);
                 }
                 // A guide is converged to PATH_TOLERANCE only, and its error can tip a nearly
                 // neutral direction (the plane of a slightly imperfect round column's bend,
@@ -451,6 +454,10 @@ pub(super) fn follow(
                         false => lambda,
                     });
                 }
+                if fold && landing && first_fold.is_none() && unstable == Some(0) && point.tl > 0.0 {
+                    let recorded = (folds.len(), bifurcations.len(), picked.len());
+                    first_fold = Some(snap::Fold::new(&point, h, next.tl, recorded));
+                }
                 unstable = next_unstable;
                 if fold && landing {
                     fold_states.push((lambda, next.x.clone()));
@@ -467,15 +474,7 @@ pub(super) fn follow(
                 // A trace ends where its branch leaves the range back past the start (that
                 // point lies outside the range and is not recorded).
                 if tracing && next.lambda < 0.0 {
-                    return Ok(End {
-                        x: next.x,
-                        folds,
-                        bifurcations,
-                        picked,
-                        snapped_from: None,
-                        relaxed_from: None,
-                        family,
-                    });
+                    return Ok(End::reached(next.x, folds, bifurcations, picked, family));
                 }
                 // A Newton homotopy back past its warm start has turned at a fold: its branch
                 // does not carry the warm start to the robot (docs/stability.md, "Warm starts
@@ -565,17 +564,34 @@ pub(super) fn follow(
     {
         picked.retain(|&l| l != at);
         return Ok(End {
-            x,
-            folds,
-            bifurcations,
-            picked,
-            snapped_from: None,
             relaxed_from: Some((at, true)),
-            family,
+            ..End::reached(x, folds, bifurcations, picked, family)
         });
     }
     if landing && let Some((lambda, x)) = snap::land_from_folds(system, ws, &fold_states, settings, report) {
         return Ok(End::landed(x, folds, bifurcations, picked, family, (lambda, false)));
+    }
+    let path = (
+        folds.as_slice(),
+        bifurcations.as_slice(),
+        picked.as_slice(),
+        family,
+        false,
+    );
+    if landing
+        && let Some(end) = snap::from_fold(
+            system,
+            &homotopy,
+            ws,
+            first_fold.as_ref(),
+            path,
+            chain,
+            options,
+            settings,
+            report,
+        )
+    {
+        return end;
     }
     Err((refine::stalled_hint(furthest, point.lambda), worst))
 }

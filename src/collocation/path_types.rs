@@ -28,12 +28,37 @@ pub(super) struct End {
     /// [`super::snap::relax_from`]), and whether the side it started on was picked (a perfect
     /// symmetry).
     pub relaxed_from: Option<(f64, bool)>,
+    /// The load factors of the folds at which the robot snapped and from which its states were
+    /// reached by its damped motion just past the fold and the load path on from where that
+    /// came to rest ([`super::snap::from_fold`]), the first fold first, and why (as in
+    /// `snapped_from`).
+    pub moved_from: Vec<(f64, bool)>,
     /// Whether the side picked led onto a family of equilibria (module `phase`): the states
     /// are one member, every other member equally valid.
     pub family: bool,
 }
 
 impl End {
+    /// The end of a path that reached lambda = 1 by continuation (or a trace's end) at `x`.
+    pub(super) fn reached(
+        x: Vec<State>,
+        folds: Vec<f64>,
+        bifurcations: Vec<f64>,
+        picked: Vec<f64>,
+        family: bool,
+    ) -> End {
+        End {
+            x,
+            folds,
+            bifurcations,
+            picked,
+            snapped_from: None,
+            relaxed_from: None,
+            moved_from: Vec::new(),
+            family,
+        }
+    }
+
     /// The end of a path that lost stability at the bifurcation at load factor `from.0`
     /// with no stable branch to follow (`from.1`: its side was picked) and reached `x` by
     /// the robot's damped motion: the bifurcation joins `bifurcations`.
@@ -53,6 +78,7 @@ impl End {
             picked,
             snapped_from: None,
             relaxed_from: Some(from),
+            moved_from: Vec::new(),
             family,
         }
     }
@@ -76,6 +102,7 @@ impl End {
             picked,
             snapped_from: Some(from),
             relaxed_from: None,
+            moved_from: Vec::new(),
             family,
         }
     }
@@ -95,6 +122,17 @@ pub(super) enum Start<'x> {
     },
     /// The Newton homotopy from a warm start (not a solution of the system).
     Warm(&'x [State]),
+    /// The load path from `x`, a stable state at rest under the load factor `lambda` (where
+    /// the robot's damped motion past a fold came to rest, [`super::snap::from_fold`]), to 1;
+    /// it snaps and lands as [`Start::Rest`] with `land`.
+    Resting {
+        /// The states at `lambda`.
+        x: &'x [State],
+        /// Its load factor.
+        lambda: f64,
+        /// How many motions from folds the solve ran before this path.
+        chain: usize,
+    },
     /// A trace of `parameter` from `from` (where `x` is the converged solution) towards
     /// `to`, recording every point; it ends where lambda leaves [0, 1].
     Trace {

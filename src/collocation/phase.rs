@@ -104,6 +104,18 @@ pub(super) struct Phase {
 }
 
 impl Phase {
+    /// The count of unstable directions `next` at a point of a family's branch, given the
+    /// count `before` at the last point: the family's own direction is neutral there (an exact
+    /// zero of the second variation, whose conjugate point lies at the base), and the error of
+    /// a guide (converged to 1e-6 only) tips it to either side of the base, so a change by one
+    /// is that direction, not a change of stability.
+    pub(super) fn neutral(before: Option<usize>, next: Option<usize>) -> Option<usize> {
+        match (before, next) {
+            (Some(a), Some(b)) if a.abs_diff(b) == 1 => before,
+            _ => next,
+        }
+    }
+
     /// At a bifurcation point whose factored Jacobian has the kernel direction `phi` (grown
     /// by `growth` in its inverse iteration): a direction for the family when the kernel is
     /// two-dimensional ([`DOUBLE_KERNEL`]), the second kernel direction, orthogonal to

@@ -4,13 +4,17 @@
 //! robot snaps at a fold it passed, to a stable state (docs/stability.md, "A path that
 //! cannot be followed to the end lands from its folds"); and the snap at a bifurcation
 //! where no stable branch continues the path (docs/stability.md, "Snapping from a
-//! bifurcation").
+//! bifurcation"); and, where that landing finds no stable state, the robot's own route from
+//! the first fold it meets: its damped motion just past the fold, then the load path on
+//! (docs/stability.md, "A path that ends unstable after its folds lands from them").
 
 use super::branch::SYMMETRIC_COS;
-use super::homotopy::{Homotopy, Point, dot};
+use super::homotopy::{Homotopy, Point, dot, tangent};
 use super::locate;
 use super::neutral::index;
 use super::newton::{self, Settings, Workspace};
+use super::options::Options;
+use super::path::{End, Start, correct_to, follow};
 use super::phase::{Phase, generic, kernel};
 use super::relax::relax;
 use super::system::System;
@@ -170,4 +174,164 @@ pub(super) fn relax_from(
     let x = relax(system, ws, x, settings, report)?;
     report.termination = Termination::Converged;
     Some(x)
+}
+
+/// How far past a fold (in load factor) the robot's motion from it runs: the fold's state is
+/// an equilibrium at the fold's own load, with a zero eigenvalue, so a motion there does not
+/// leave it; a little more load drives it off (measured: 0.001, 0.01 and 0.03 come to rest on
+/// branches whose load paths end on the same state, docs/stability.md).
+const PAST_FOLD: f64 = 0.01;
+/// The most motions from folds one solve chains (each followed by a path on that may snap at
+/// a fold again): a bound, so that a solve always ends.
+const MAX_CHAIN: usize = 8;
+/// The most bisections locating the fold (as [`locate::fold`]'s: any step below 1e-18 of
+/// itself).
+const MAX_BISECTIONS: usize = 60;
+
+/// The first fold a load path met on a stable branch going forward, where the robot loaded
+/// from rest snaps: the point before it, the step `h` that crossed it, the tangent's
+/// t_lambda past it, and how many folds, bifurcations and picked sides the path had recorded
+/// before it.
+pub(super) struct Fold {
+    point: Point,
+    h: f64,
+    next_tl: f64,
+    recorded: (usize, usize, usize),
+}
+
+impl Fold {
+    /// The fold crossed by the step `h` from `point` to a point with tangent t_lambda
+    /// `next_tl`, after `recorded` folds, bifurcations and picked sides.
+    pub(super) fn new(point: &Point, h: f64, next_tl: f64, recorded: (usize, usize, usize)) -> Fold {
+        Fold {
+            point: Point {
+                x: point.x.clone(),
+                lambda: point.lambda,
+                tx: point.tx.clone(),
+                tl: point.tl,
+            },
+            h,
+            next_tl,
+            recorded,
+        }
+    }
+}
+
+/// The robot's route from the first fold of a load path whose landing at the full load
+/// found no stable state: the fold located (bisection on the step's arclength as
+/// [`locate::fold`], keeping the last state before the turn), the damped motion (module
+/// `relax`) from the fold's state under the load [`PAST_FOLD`] past it, and the load path on
+/// from where it comes to rest to lambda = 1 ([`Start::Resting`]), which may snap again
+/// (at most [`MAX_CHAIN`] motions). `path`: the folds, bifurcations and picked sides recorded
+/// before, the family flag, and why the path landed (as [`End::snapped_from`]); `chain`: the
+/// motions this solve ran before. Returns the end, the path before the fold joined to it;
+/// None (with `system` at lambda = 1) when the fold's states are on another mesh, the motion
+/// does not come to rest at a stable state, or the path on fails on this mesh; the path on's
+/// failure after it refined the mesh is returned as it is (the states of the path before
+/// belong to the old mesh).
+#[allow(clippy::too_many_arguments)]
+pub(super) fn from_fold(
+    system: &mut System,
+    homotopy: &Homotopy,
+    ws: &mut Workspace,
+    fold: Option<&Fold>,
+    path: (&[f64], &[f64], &[f64], bool, bool),
+    chain: usize,
+    options: &Options,
+    settings: &Settings,
+    report: &mut SolveReport,
+) -> Option<std::result::Result<End, (String, usize)>> {
+    let fold = fold.filter(|f| chain < MAX_CHAIN && f.point.x.len() == system.mesh.nodes.len())?;
+    let nodes = system.mesh.nodes.len();
+    let rested = motion_past(system, homotopy, ws, fold, settings, report);
+    let Some((lf, load, x)) = rested else {
+        homotopy.set(system, 1.0);
+        return None;
+    };
+    let (folds, bifurcations, picked, family, reached) = path;
+    let (f, b, p) = fold.recorded;
+    let mut end = match load >= 1.0 {
+        true => End::reached(x, Vec::new(), Vec::new(), Vec::new(), false),
+        false => match follow(
+            system,
+            ws,
+            Start::Resting {
+                x: &x,
+                lambda: load,
+                chain: chain + 1,
+            },
+            options,
+            settings,
+            report,
+            None,
+        ) {
+            Ok(end) => end,
+            Err(e) if system.mesh.nodes.len() != nodes => return Some(Err(e)),
+            Err(_) => {
+                homotopy.set(system, 1.0);
+                return None;
+            }
+        },
+    };
+    // The robot's route: the path up to the fold it snapped at, then the path on.
+    let join = |before: &[f64], n: usize, after: &mut Vec<f64>| {
+        let mut all = before[..n.min(before.len())].to_vec();
+        all.append(after);
+        all
+    };
+    end.folds = join(folds, f + 1, &mut end.folds);
+    end.bifurcations = join(bifurcations, b, &mut end.bifurcations);
+    end.picked = join(picked, p, &mut end.picked);
+    end.family |= family;
+    end.moved_from.insert(0, (lf, reached));
+    Some(Ok(end))
+}
+
+/// The fold of `fold` located, and the stable state where the damped motion from its state
+/// comes to rest under the load [`PAST_FOLD`] past it (at most 1): (the fold's load factor,
+/// the motion's, the state), with `system` at the motion's load; None when it does not come
+/// to rest at a stable state.
+fn motion_past(
+    system: &mut System,
+    homotopy: &Homotopy,
+    ws: &mut Workspace,
+    fold: &Fold,
+    settings: &Settings,
+    report: &mut SolveReport,
+) -> Option<(f64, f64, Vec<State>)> {
+    let point = &fold.point;
+    let mut r = vec![0.0; system.unknowns()];
+    let (mut lo, mut hi) = (0.0, fold.h);
+    let mut slope = fold.next_tl.abs().max(point.tl.abs());
+    // The last state located on the path's side of the fold (before the turn, stable).
+    let (mut lf, mut xf) = (point.lambda, point.x.clone());
+    for _ in 0..MAX_BISECTIONS {
+        if (hi - lo) * slope <= 0.5 * locate::LOCATED {
+            break;
+        }
+        let m = 0.5 * (lo + hi);
+        let Some((x, l, _)) = correct_to(system, homotopy, ws, point, m, settings.tolerance, report, &mut r, None)
+        else {
+            break;
+        };
+        homotopy.set(system, l);
+        if !ws.linearize(system, &x, report) {
+            break;
+        }
+        let Some((p, _)) = tangent(system, homotopy, ws, x, l, Some((&point.tx, point.tl)), report) else {
+            break;
+        };
+        slope = p.tl.abs();
+        if p.tl > 0.0 {
+            lo = m;
+            (lf, xf) = (l, p.x);
+        } else {
+            hi = m;
+        }
+    }
+    let load = (lf + PAST_FOLD).min(1.0);
+    homotopy.set(system, load);
+    let x = relax(system, ws, xf, settings, report)?;
+    report.termination = Termination::Converged;
+    Some((lf, load, x))
 }
