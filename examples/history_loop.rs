@@ -19,7 +19,9 @@ const REFERENCE: f64 = 1e-11;
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let count: usize = args.first().map_or(10, |a| a.parse().expect("STEPS is a count"));
-    let reference_tolerance: f64 = args.get(1).map_or(REFERENCE, |a| a.parse().expect("REFERENCE is a number"));
+    let reference_tolerance: f64 = args
+        .get(1)
+        .map_or(REFERENCE, |a| a.parse().expect("REFERENCE is a number"));
     let tolerances: &[f64] = if args.is_empty() { &[1e-7, 1e-8, 1e-9] } else { &[1e-7] };
     let mut robot = cases::prototype();
     robot.tendons[0].friction = Some(Friction::pull(0.1));

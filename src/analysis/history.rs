@@ -100,7 +100,8 @@ pub fn history(ranges: &Ranges, options: &collocation::Options) -> Result<Histor
     let mut steps: Vec<HistoryStep> = Vec::with_capacity(robots.len());
     for (k, robot) in robots.iter().enumerate() {
         let answer = if robot.has_displacement_inputs() {
-            pulled_step(robot, options, &mut carried, steps.last().map(|s| &s.solution))
+            let mut back = steps.iter().rev().map(|s| &s.solution);
+            pulled_step(robot, options, &mut carried, (back.next(), back.next()))
         } else {
             friction::history::step(robot, options, &mut carried).map(|(mut solution, zones)| {
                 // The step's answer is final: its verdict, with the step's pattern held.
@@ -136,15 +137,16 @@ pub fn history(ranges: &Ranges, options: &collocation::Options) -> Result<Histor
 /// One step of a history whose `robot` has displacement-controlled tendons: their pull-ins
 /// fix the base tensions ([`crate::model::pull_in::hold`]), each trial tension a step from
 /// the `carried` state, which then holds the last trial's (the one at the tensions found).
-/// Newton starts from the `last` step's tensions, or the full-slip solve's on the first.
+/// Newton starts from the tensions [`predicted`] from the `last` step and the one `before`
+/// it, or the full-slip solve's on the first.
 fn pulled_step(
     robot: &crate::Robot,
     options: &collocation::Options,
     carried: &mut friction::history::Carried,
-    last: Option<&Solution>,
+    (last, before): (Option<&Solution>, Option<&Solution>),
 ) -> Result<friction::history::StepAnswer> {
     let start = match last {
-        Some(w) => w.tensions(),
+        Some(w) => predicted(robot, w, before),
         None => collocation::solve(robot, options)?.tensions(),
     };
     let mut kept = None;
@@ -166,6 +168,31 @@ fn pulled_step(
     // The step's answer is final: its verdict, with the step's pattern and the pull-ins held.
     stuck::assess_pulled(robot, carried, &mut solution);
     Ok((solution, zones))
+}
+
+/// The base tensions a pull-in step of `robot` starts its Newton from: the `last` step's,
+/// each held tendon's moved along the secant of its pull-in against its tension over the
+/// last two steps (`before`, `last`) to its new pull-in (not below 0 N). The last step's
+/// tension itself is a kink of the step's pull-in (see [`toward_root`]) and a tie for every
+/// link of the march, whose stuck profile there is the last answer's; the secant's tension
+/// lies off it, on the side of the root. Where the secant is missing (the second step, a
+/// slack or unmoved tendon) or not increasing, the last step's tension.
+fn predicted(robot: &crate::Robot, last: &Solution, before: Option<&Solution>) -> Vec<f64> {
+    let mut tensions = last.tensions();
+    let Some(before) = before else {
+        return tensions;
+    };
+    for (i, tendon) in robot.tendons.iter().enumerate() {
+        let Some(q) = tendon.displacement() else {
+            continue;
+        };
+        let (a, b) = (&before.tendons[i], &last.tendons[i]);
+        let slope = (b.displacement - a.displacement) / (b.tension - a.tension);
+        if a.tension > 0.0 && b.tension > 0.0 && slope.is_finite() && slope > 0.0 {
+            tensions[i] = (b.tension + (q - b.displacement) / slope).max(0.0);
+        }
+    }
+    tensions
 }
 
 /// Relative size of the one-sided difference of a pull-in in its base tension, of
