@@ -100,7 +100,8 @@ pub fn history(ranges: &Ranges, options: &collocation::Options) -> Result<Histor
     let mut steps: Vec<HistoryStep> = Vec::with_capacity(robots.len());
     for (k, robot) in robots.iter().enumerate() {
         let answer = if robot.has_displacement_inputs() {
-            pulled_step(robot, options, &mut carried, steps.last().map(|s| &s.solution))
+            let mut back = steps.iter().rev().map(|s| &s.solution);
+            pulled_step(robot, options, &mut carried, (back.next(), back.next()))
         } else {
             friction::history::step(robot, options, &mut carried).map(|(mut solution, zones)| {
                 // The step's answer is final: its verdict, with the step's pattern held.
@@ -136,15 +137,16 @@ pub fn history(ranges: &Ranges, options: &collocation::Options) -> Result<Histor
 /// One step of a history whose `robot` has displacement-controlled tendons: their pull-ins
 /// fix the base tensions ([`crate::model::pull_in::hold`]), each trial tension a step from
 /// the `carried` state, which then holds the last trial's (the one at the tensions found).
-/// Newton starts from the `last` step's tensions, or the full-slip solve's on the first.
+/// Newton starts from the tensions [`predicted`] from the `last` step and the one `before`
+/// it, or the full-slip solve's on the first.
 fn pulled_step(
     robot: &crate::Robot,
     options: &collocation::Options,
     carried: &mut friction::history::Carried,
-    last: Option<&Solution>,
+    (last, before): (Option<&Solution>, Option<&Solution>),
 ) -> Result<friction::history::StepAnswer> {
     let start = match last {
-        Some(w) => w.tensions(),
+        Some(w) => predicted(robot, w, before),
         None => collocation::solve(robot, options)?.tensions(),
     };
     let mut kept = None;
@@ -158,9 +160,7 @@ fn pulled_step(
             kept = Some((trial, zones));
             Ok(solution)
         },
-        // Differences for dphi/dtau: a step with stuck stretches is not the full-slip system
-        // whose linearization the sensitivities solve.
-        |_, _, _| None,
+        |at, solution, held| toward_root(robot, options, carried, (at, solution), held),
     )?;
     let (trial, zones) = kept.ok_or_else(|| invalid("tendons", "have no solved step", "report this as a bug"))?;
     *carried = trial;
@@ -168,4 +168,76 @@ fn pulled_step(
     // The step's answer is final: its verdict, with the step's pattern and the pull-ins held.
     stuck::assess_pulled(robot, carried, &mut solution);
     Ok((solution, zones))
+}
+
+/// The base tensions a pull-in step of `robot` starts its Newton from: the `last` step's,
+/// each held tendon's moved along the secant of its pull-in against its tension over the
+/// last two steps (`before`, `last`) to its new pull-in (not below 0 N). The last step's
+/// tension itself is a kink of the step's pull-in (see [`toward_root`]) and a tie for every
+/// link of the march, whose stuck profile there is the last answer's; the secant's tension
+/// lies off it, on the side of the root. Where the secant is missing (the second step, a
+/// slack or unmoved tendon) or not increasing, the last step's tension.
+fn predicted(robot: &crate::Robot, last: &Solution, before: Option<&Solution>) -> Vec<f64> {
+    let mut tensions = last.tensions();
+    let Some(before) = before else {
+        return tensions;
+    };
+    for (i, tendon) in robot.tendons.iter().enumerate() {
+        let Some(q) = tendon.displacement() else {
+            continue;
+        };
+        let (a, b) = (&before.tendons[i], &last.tendons[i]);
+        let slope = (b.displacement - a.displacement) / (b.tension - a.tension);
+        if a.tension > 0.0 && b.tension > 0.0 && slope.is_finite() && slope > 0.0 {
+            tensions[i] = (b.tension + (q - b.displacement) / slope).max(0.0);
+        }
+    }
+    tensions
+}
+
+/// Relative size of the one-sided difference of a pull-in in its base tension, of
+/// max(tau, T) (T the tendon's tension scale), as the full solve's forward difference
+/// (`model::pull_in`): the steps resolve the pull-in to about 1e-13 m, so the difference is
+/// accurate to about 1e-4 relative, which only slows Newton's contraction.
+const STEP: f64 = 1e-5;
+
+/// dphi/dtau of the `held` tendons of a history step (`robot`, displacement-controlled) at
+/// `solution`, solved at the tensions of `at` from the `carried` state, row major: one
+/// one-sided difference per held tendon, each a step from `carried` at a tension moved
+/// toward the pull-in's root (down where the tendon holds too much pull-in, else up).
+///
+/// The pull-in of a history step is not differentiable at the last step's tension, where
+/// Newton on the tensions starts (docs/friction.md section 8, "Pull-in histories"): moved
+/// the way the tendon last slid, it slides at once; moved the other way it first sticks
+/// all along, and its pull-in barely changes (by the free length's stretch and the shape's
+/// change, 1e-5 of the sliding slope on the prototype) until the base tension has changed
+/// by what the friction of the first links holds. A difference taken across that kink
+/// reads the stuck slope, whose size and even sign are set by 1e-9 m changes of the
+/// material, and sends Newton orders of magnitude past the root. The slope on the root's
+/// side is the one Newton's step needs. None (and `model::pull_in` differences forward)
+/// where a difference's step fails.
+fn toward_root(
+    robot: &crate::Robot,
+    options: &collocation::Options,
+    carried: &friction::history::Carried,
+    (at, solution): (&crate::Robot, &Solution),
+    held: &[usize],
+) -> Option<Vec<f64>> {
+    let k = held.len();
+    let mut slope = vec![0.0; k * k];
+    for (m, &i) in held.iter().enumerate() {
+        let tau = at.tendons[i].tension();
+        let gap = solution.tendons[i].displacement - robot.tendons[i].displacement()?;
+        let size = STEP * tau.max(robot.tension_scale(i));
+        // Down toward a smaller pull-in, not below 0 N (the slack side has no slope).
+        let h = if gap > 0.0 && tau > 0.0 { -size.min(tau) } else { size };
+        let mut tensions: Vec<f64> = at.tendons.iter().map(|t| t.tension()).collect();
+        tensions[i] = tau + h;
+        let mut trial = carried.snapshot();
+        let (moved, _) = friction::history::step(&at.with_tensions(&tensions), options, &mut trial).ok()?;
+        for (n, &j) in held.iter().enumerate() {
+            slope[n * k + m] = (moved.tendons[j].displacement - solution.tendons[j].displacement) / h;
+        }
+    }
+    Some(slope)
 }

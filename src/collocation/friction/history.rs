@@ -46,8 +46,9 @@ pub(crate) struct Carried {
     /// deferred-corrected node states and log tensions of the step that last slid there
     /// (order 6; the order-4 one in `grips` where that step had no correction), with its
     /// kinks: only the estimate of a stuck step's material error reads it ([`split`]); the
-    /// steps are solved from the order-4 material, whose stuck tensions match the last
-    /// step's answer exactly where nothing moves.
+    /// steps are solved from the order-4 node values (between nodes, on split meshes, the
+    /// quintic through them), whose stuck tensions match the last step's answer exactly at
+    /// the nodes where nothing moves.
     pub(crate) corrected: Vec<Material>,
     /// Whether (x, z) already solve the next step with the contacts held (the first step
     /// when the mesh was chosen on it).

@@ -100,16 +100,16 @@ fn sum(split: &ErrorEstimate, material: &ErrorEstimate) -> ErrorEstimate {
     }
 }
 
-/// The error of the answer `cubic` (solved on `fine`'s mesh from `before`'s order-4
-/// material interpolated by [`lagrange`] through four points, `fine` holding its end state)
+/// The error of `answer` (solved on `fine`'s mesh from `before`'s order-4 node
+/// material interpolated by [`lagrange`] through six points, `fine` holding its end state)
 /// that the carried material leaves, which every split level shares and so no difference
 /// of levels sees (docs/friction.md section 8, "Error control of stuck steps"): the change
 /// of the answer when the step is solved again on the same mesh from the material at its
 /// best (`before.corrected`: the deferred-corrected nodes, order 6, of the step that last
-/// slid there) and the quintic through six points of its smooth piece, started from
-/// `cubic`'s state and factors. Both the node values' error (the discretization error of
+/// slid there) and the polynomial through eight points of its smooth piece, started from
+/// `answer`'s state and factors. Both the node values' error (the discretization error of
 /// the step that left them, inherited) and the interpolation's are of higher order there,
-/// so this is the cubic's material error to leading order.
+/// so this is the material error of the answer to leading order.
 ///
 /// # Errors
 /// As [`super::step`], on `fine`'s mesh.
@@ -118,10 +118,10 @@ fn material_error(
     options: &Options,
     before: &Carried,
     fine: &mut Carried,
-    cubic: &Solution,
+    answer: &Solution,
 ) -> Result<ErrorEstimate> {
     let coarse: Vec<f64> = before.mesh.nodes.iter().map(|n| n.s).collect();
-    let mut quintic = Carried {
+    let mut better = Carried {
         mesh: fine.mesh.clone(),
         x: fine.x.clone(),
         z: fine.z.clone(),
@@ -132,7 +132,7 @@ fn material_error(
         factors: fine.factors.take(),
         settled: None,
     };
-    for ((grip, old), corrected) in quintic.grips.iter_mut().zip(&before.grips).zip(&before.corrected) {
+    for ((grip, old), corrected) in better.grips.iter_mut().zip(&before.grips).zip(&before.corrected) {
         let span = old.contacts.len();
         for (value, node) in grip.reference.iter_mut().zip(&fine.mesh.nodes) {
             *value = lagrange(
@@ -140,12 +140,12 @@ fn material_error(
                 &corrected.values[..=span],
                 &corrected.kinks,
                 node.s,
-                6,
+                8,
             );
         }
     }
-    let ((answer, _), _) = solve_on(robot, options, &mut quintic)?;
-    Ok(difference(cubic, &answer))
+    let ((again, _), _) = solve_on(robot, options, &mut better)?;
+    Ok(difference(answer, &again))
 }
 
 /// The error estimate of the finer of two answers of a step: their difference. With an
@@ -178,7 +178,9 @@ fn difference(coarse: &Solution, fine: &Solution) -> ErrorEstimate {
 /// The start of a step on `before`'s mesh with every link cut into `parts` equal links,
 /// the one of them nearest each point of `boundaries` inside a link moved onto it (the
 /// mesh keeps its intervals): the carried material (lambda) interpolated at the new nodes
-/// by the cubic through the four nearest points of their smooth piece ([`lagrange`]), each new link with its parent's
+/// by the quintic through the six nearest points of their smooth piece ([`lagrange`]:
+/// O(h^6), below the step's own error; the cubic's O(h^4) was what the 101-step history's
+/// first stuck steps missed their tolerance by, docs/friction.md section 8), each new link with its parent's
 /// contact and multiplier, and the states and log tensions of `guess`.
 ///
 /// # Errors
@@ -247,7 +249,7 @@ fn split(robot: &Robot, before: &Carried, parts: usize, guess: &Solution, bounda
             reference: mesh
                 .nodes
                 .iter()
-                .map(|node| lagrange(&coarse[..=links], &old.reference[..=links], &old.kinks, node.s, 4))
+                .map(|node| lagrange(&coarse[..=links], &old.reference[..=links], &old.kinks, node.s, 6))
                 .collect(),
             kinks: old.kinks.clone(),
         });
@@ -326,8 +328,8 @@ fn boundaries(answer: &StepAnswer) -> Vec<f64> {
 /// of the span); its points are the nodes of `s` (increasing, within a tendon's span, with
 /// the material `values`) inside it and the kinks that bound it, with the piece's own
 /// lambda there, so no stencil straddles a kink and `at` always lies between a stencil's
-/// first and last point. `points` is 4 for the cubic the step is solved with (O(h^4) where
-/// the material is smooth), 6 for the quintic that estimates the cubic's error; a piece
+/// first and last point. `points` is 6 for the quintic the step is solved with (O(h^6) where
+/// the material is smooth), 8 for the degree-7 polynomial that estimates its error; a piece
 /// with fewer points gives the polynomial through all of them. At a node it is the value
 /// there exactly, so the material handed back at the history's nodes is the last step's;
 /// at a kink that is not a node, the value after it.
@@ -420,7 +422,7 @@ fn hand_back(carried: &mut Carried, fine: &Carried, before: &Carried) {
         corrected.kinks = match first {
             None => Vec::new(),
             Some(k) => {
-                let stuck = lagrange(&coarse[..=span], &old.values[..=span], &old.kinks, boundary, 6);
+                let stuck = lagrange(&coarse[..=span], &old.values[..=span], &old.kinks, boundary, 8);
                 let new = (k > 0).then_some((boundary, f.reference[k], stuck));
                 new.into_iter()
                     .chain(old.kinks.iter().copied().filter(|&(e, _, _)| e > boundary))
