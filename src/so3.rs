@@ -350,11 +350,11 @@ mod tests {
             Vector3::new(0.4, 0.3, -0.1),
             Vector3::new(1.3, -0.7, 2.1),
         ] {
-            let [E, Jr, Jri] = exp_and_jacobians(&theta);
+            let [e, jr, jri] = exp_and_jacobians(&theta);
             let bits = |m: &Matrix3<f64>| m.map(f64::to_bits);
-            assert_eq!(bits(&E), bits(&exp(&theta)), "{theta}");
-            assert_eq!(bits(&Jr), bits(&right_jacobian(&theta)), "{theta}");
-            assert_eq!(bits(&Jri), bits(&right_jacobian_inv(&theta)), "{theta}");
+            assert_eq!(bits(&e), bits(&exp(&theta)), "{theta}");
+            assert_eq!(bits(&jr), bits(&right_jacobian(&theta)), "{theta}");
+            assert_eq!(bits(&jri), bits(&right_jacobian_inv(&theta)), "{theta}");
         }
     }
 
