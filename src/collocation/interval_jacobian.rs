@@ -19,7 +19,7 @@ use nalgebra::{SMatrix, Vector3, Vector6};
 
 /// Interval rows, their exact Jacobian with respect to the scaled unknowns of both nodes
 /// (12 x 24, written row by row into `jac`), and the linearization of eq. 13 at node b (the
-/// next interval's `start`, shared as in [`interval`]), by the chain rule through the
+/// next interval's `start`, shared as in [`interval`](super::residual::interval)), by the chain rule through the
 /// Hermite-Simpson formula: pointwise linearizations instead of differentiating the whole
 /// block.
 ///
@@ -56,8 +56,8 @@ pub fn interval_jacobian(
         .map(|(r, end, _)| (r, end))
 }
 
-/// [`interval_jacobian`] whose residual is bit for bit [`interval`]'s, with the rates at
-/// node a: F_1's position row is R_b v_b, as [`interval`] forms it, not R_a exp(theta_1) v_b
+/// [`interval_jacobian`] whose residual is bit for bit [`interval`](super::residual::interval)'s, with the rates at
+/// node a: F_1's position row is R_b v_b, as [`interval`](super::residual::interval) forms it, not R_a exp(theta_1) v_b
 /// (which differ by rounding; no derivative reads that row). For a Jacobian evaluated in
 /// place of a residual evaluation (Newton's trial point, `System::jacobian_rates`);
 /// `tensions` as in [`interval_jacobian`].
