@@ -135,6 +135,58 @@ pub fn right_jacobian_inv<T: Real>(theta: &Vector3<T>) -> Matrix3<T> {
     Matrix3::identity() + k * c::<T>(0.5) + k * k * e
 }
 
+/// [`exp`], [`right_jacobian`] and [`right_jacobian_inv`] of one rotation vector (f64),
+/// with theta^2, hat(theta) and its square evaluated once for the three: the same
+/// operations as the three functions (hat(theta)^2 written out, each entry summed as
+/// nalgebra's product sums it), so the same bits. Always inlined, so that it is compiled
+/// with its caller's target features (the interval Jacobian's AVX2 build,
+/// `collocation/point.rs`), where the three functions were calls.
+#[inline(always)]
+pub(crate) fn exp_and_jacobians(theta: &Vector3<f64>) -> [Matrix3<f64>; 3] {
+    let t2 = theta.norm_squared();
+    // (sin t / t, (1 - cos t) / t^2, (t - sin t) / t^3, e(t^2)) as the three functions
+    // form them.
+    let (a, b, d, e) = if t2 < SERIES_THETA_SQ {
+        (
+            series(t2, &SIN_RATIO),
+            series(t2, &COS_RATIO),
+            series(t2, &SIN_DEFECT_RATIO),
+            series(t2, &JR_INV_RATIO),
+        )
+    } else {
+        let t = t2.sqrt();
+        let (sin, cos) = (t.sin(), t.cos());
+        (
+            sin / t,
+            (1.0 - cos) / t2,
+            (t - sin) / (t2 * t),
+            1.0 / t2 - (1.0 + cos) / (2.0 * t * sin),
+        )
+    };
+    let k = hat(theta);
+    let kk = Matrix3::new(
+        k[(0, 0)] * k[(0, 0)] + k[(0, 1)] * k[(1, 0)] + k[(0, 2)] * k[(2, 0)],
+        k[(0, 0)] * k[(0, 1)] + k[(0, 1)] * k[(1, 1)] + k[(0, 2)] * k[(2, 1)],
+        k[(0, 0)] * k[(0, 2)] + k[(0, 1)] * k[(1, 2)] + k[(0, 2)] * k[(2, 2)],
+        k[(1, 0)] * k[(0, 0)] + k[(1, 1)] * k[(1, 0)] + k[(1, 2)] * k[(2, 0)],
+        k[(1, 0)] * k[(0, 1)] + k[(1, 1)] * k[(1, 1)] + k[(1, 2)] * k[(2, 1)],
+        k[(1, 0)] * k[(0, 2)] + k[(1, 1)] * k[(1, 2)] + k[(1, 2)] * k[(2, 2)],
+        k[(2, 0)] * k[(0, 0)] + k[(2, 1)] * k[(1, 0)] + k[(2, 2)] * k[(2, 0)],
+        k[(2, 0)] * k[(0, 1)] + k[(2, 1)] * k[(1, 1)] + k[(2, 2)] * k[(2, 1)],
+        k[(2, 0)] * k[(0, 2)] + k[(2, 1)] * k[(1, 2)] + k[(2, 2)] * k[(2, 2)],
+    );
+    // I + k c1 + k^2 c2 entry by entry (J_r's I - k b as I + k (-b): the same bits).
+    // Slice iterators: nalgebra's matrix iterators stayed unrolled loops of pointer steps.
+    let combine = |c1: f64, c2: f64| {
+        let mut m = Matrix3::identity();
+        for ((m, kn), kkn) in m.as_mut_slice().iter_mut().zip(k.as_slice()).zip(kk.as_slice()) {
+            *m = *m + kn * c1 + kkn * c2;
+        }
+        m
+    };
+    [combine(a, b), combine(-b, d), combine(0.5, e)]
+}
+
 /// d(J_r^-1(theta) u)/d(theta) (3 x 3), f64 only: the Jacobian evaluation's derivative of
 /// theta' = J_r^-1(theta) u. With K = hat(theta), t = |theta| and
 /// J_r^-1 = I + K / 2 + e K^2, e(t^2) = 1/t^2 - (1 + cos t) / (2 t sin t) (as in
@@ -285,6 +337,26 @@ mod tests {
     use super::*;
     use approx::assert_relative_eq;
     use num_dual::Dual64;
+
+    /// The three maps evaluated together give the bits of each evaluated alone, below and
+    /// above the series switch (|theta| = 1/2) and at theta = 0.
+    #[test]
+    fn exp_and_jacobians_gives_the_three_functions_bits() {
+        for theta in [
+            Vector3::zeros(),
+            Vector3::new(1e-9, -2e-9, 3e-10),
+            Vector3::new(0.01, -0.03, 0.002),
+            Vector3::new(0.3, -0.2, 0.25),
+            Vector3::new(0.4, 0.3, -0.1),
+            Vector3::new(1.3, -0.7, 2.1),
+        ] {
+            let [e, jr, jri] = exp_and_jacobians(&theta);
+            let bits = |m: &Matrix3<f64>| m.map(f64::to_bits);
+            assert_eq!(bits(&e), bits(&exp(&theta)), "{theta}");
+            assert_eq!(bits(&jr), bits(&right_jacobian(&theta)), "{theta}");
+            assert_eq!(bits(&jri), bits(&right_jacobian_inv(&theta)), "{theta}");
+        }
+    }
 
     #[test]
     fn series_match_closed_forms_below_the_switch() {

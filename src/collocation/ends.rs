@@ -62,20 +62,32 @@ impl EndColumns {
             dF0: SMatrix::zeros(),
             dF1: SMatrix::zeros(),
         };
-        // The frame R_k = R_a exp(d_a) enters every F through the theta_a columns.
+        // The frame R_k = R_a exp(d_a) enters every F through the theta_a columns. Written
+        // entry by entry (nalgebra's products and `scale_mut` stayed calls in the AVX2
+        // build): each product entry summed as nalgebra's sums it (the k = 0 term, then
+        // the k = 1 and k = 2 terms added in turn), each scaled entry the copy times 1 / L,
+        // so the same bits.
+        let inv_length = 1.0 / length;
         let dF0 = &mut ends.dF0;
-        dF0.fixed_columns_mut::<3>(0).copy_from(&p0.f_frame);
-        dF0.fixed_columns_mut::<3>(3).copy_from(&p0.f_y.fixed_columns::<3>(6));
-        dF0.fixed_columns_mut::<3>(6).copy_from(&p0.f_y.fixed_columns::<3>(9));
-        dF0.fixed_columns_mut::<3>(6).scale_mut(1.0 / length);
+        for i in 0..12 {
+            for c in 0..3 {
+                dF0[(i, c)] = p0.f_frame[(i, c)];
+                dF0[(i, 3 + c)] = p0.f_y[(i, 6 + c)];
+                dF0[(i, 6 + c)] = p0.f_y[(i, 9 + c)] * inv_length;
+            }
+        }
         let dF1 = &mut ends.dF1;
-        let f1_theta = p1.f_y.fixed_columns::<3>(3);
-        dF1.fixed_columns_mut::<3>(0)
-            .copy_from(&(f1_theta * dtheta1_da + p1.f_frame));
-        dF1.fixed_columns_mut::<3>(3).copy_from(&(f1_theta * jri1));
-        dF1.fixed_columns_mut::<3>(6).copy_from(&p1.f_y.fixed_columns::<3>(6));
-        dF1.fixed_columns_mut::<3>(9).copy_from(&p1.f_y.fixed_columns::<3>(9));
-        dF1.fixed_columns_mut::<3>(9).scale_mut(1.0 / length);
+        let f1 = &p1.f_y;
+        for c in 0..3 {
+            for i in 0..12 {
+                let product =
+                    |m: &Matrix3<f64>| f1[(i, 3)] * m[(0, c)] + f1[(i, 4)] * m[(1, c)] + f1[(i, 5)] * m[(2, c)];
+                dF1[(i, c)] = product(&dtheta1_da) + p1.f_frame[(i, c)];
+                dF1[(i, 3 + c)] = product(&jri1);
+                dF1[(i, 6 + c)] = f1[(i, 6 + c)];
+                dF1[(i, 9 + c)] = f1[(i, 9 + c)] * inv_length;
+            }
+        }
         ends
     }
 

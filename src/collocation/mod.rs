@@ -43,6 +43,7 @@ mod equilibrium;
 mod estimate;
 pub(crate) mod friction;
 mod homotopy;
+mod interval_jacobian;
 mod interval_kept;
 pub(crate) mod linear;
 mod locate;

@@ -20,13 +20,15 @@ pub(super) struct PointLinearization {
 }
 
 /// The rotation at a point of an interval whose local coordinate is theta: exp(theta),
-/// R = R_k exp(theta) and J_r(theta)^-1, evaluated once and shared by the point's eq. 13
+/// R = R_k exp(theta), J_r(theta) and J_r(theta)^-1, evaluated once (`so3::exp_and_jacobians`) and shared by the point's eq. 13
 /// linearization ([`rhs_linearized_inline`]) and the chain rule ([`super::ends::EndColumns`]).
 pub(super) struct PointFrame {
     /// exp(theta).
     pub(super) E: Matrix3<f64>,
     /// R_k exp(theta).
     pub(super) R: Matrix3<f64>,
+    /// J_r(theta).
+    pub(super) Jr: Matrix3<f64>,
     /// J_r(theta)^-1.
     pub(super) Jri: Matrix3<f64>,
     /// theta = 0 exactly (an interval's start node): E, J_r and J_r^-1 are the identity.
@@ -37,11 +39,12 @@ impl PointFrame {
     /// The frame at theta of an interval starting at `Rk`.
     #[inline(always)]
     pub(super) fn new(Rk: &Matrix3<f64>, theta: &Vector3<f64>) -> Self {
-        let E = so3::exp(theta);
+        let [E, Jr, Jri] = so3::exp_and_jacobians(theta);
         PointFrame {
             E,
             R: Rk * E,
-            Jri: so3::right_jacobian_inv(theta),
+            Jr,
+            Jri,
             start: false,
         }
     }
@@ -53,6 +56,7 @@ impl PointFrame {
         PointFrame {
             E,
             R,
+            Jr: so3::right_jacobian(theta),
             Jri: so3::right_jacobian_inv(theta),
             start: false,
         }
@@ -67,6 +71,7 @@ impl PointFrame {
         PointFrame {
             E: Matrix3::identity(),
             R: *Rk,
+            Jr: Matrix3::identity(),
             Jri: Matrix3::identity(),
             start: true,
         }
@@ -91,7 +96,7 @@ pub(super) fn rhs_linearized_inline(
     let theta: Vector3<f64> = y.fixed_rows::<3>(THETA).into();
     let v = site.strain(&y.fixed_rows::<3>(V).into());
     let u: Vector3<f64> = y.fixed_rows::<3>(U).into();
-    let PointFrame { E, R, Jri, start } = frame;
+    let PointFrame { E, R, Jr, Jri, start } = frame;
     debug_assert!(!start || theta == Vector3::zeros(), "the start frame is for theta = 0");
     // Products with a hat matrix are taken as cross products (`linearize::mul_hat`): the
     // same values as the 3 x 3 product, whose terms with hat's zeros add signed zeros, and
@@ -131,16 +136,15 @@ pub(super) fn rhs_linearized_inline(
         f_frame.fixed_view_mut::<3, 3>(0, 0).copy_from(&p_theta);
         f_frame.fixed_view_mut::<6, 3>(6, 0).copy_from(&lin.d_rotation);
     } else {
-        let Jr = so3::right_jacobian(&theta);
         f.fixed_rows_mut::<3>(THETA).copy_from(&(Jri * u));
         // p' = R_k exp(theta) v: exp(theta + d) = exp(theta) exp(J_r d)
         f_y.fixed_view_mut::<3, 3>(0, 3)
-            .copy_from(&(linearize::mul_hat(&-R, &v) * Jr));
+            .copy_from(&(linearize::mul_hat(&-R, &v) * *Jr));
         f_y.fixed_view_mut::<3, 3>(3, 3)
             .copy_from(&so3::d_right_jacobian_inv_u(&theta, &u));
         f_y.fixed_view_mut::<3, 3>(3, 9).copy_from(Jri);
         // (v', u') depend on theta through R = R_k exp(theta): a right perturbation J_r d
-        f_y.fixed_view_mut::<6, 3>(6, 3).copy_from(&(lin.d_rotation * Jr));
+        f_y.fixed_view_mut::<6, 3>(6, 3).copy_from(&(lin.d_rotation * *Jr));
         // R_k exp(phi) w = R_k w - R_k hat(w) phi;  R_k exp(phi) E = R_k E exp(E^T phi)
         f_frame
             .fixed_view_mut::<3, 3>(0, 0)

@@ -24,6 +24,24 @@ fn spd_inverse3(a: &Matrix3<f64>) -> Option<Matrix3<f64>> {
     Some(Matrix3::new(c00, c01, c02, c01, c11, c12, c02, c12, minor2) * inv)
 }
 
+/// The 3x3 block of `M` at row `r`, column `c`, copied entry by entry: `into_owned()` of a
+/// view stayed a call to nalgebra's allocator (about 120 instructions) in the interval
+/// Jacobian's AVX2 build, two per point (docs/benchmarks.md, "The interval block (row14)").
+#[inline(always)]
+fn block3(M: &Matrix6<f64>, r: usize, c: usize) -> Matrix3<f64> {
+    Matrix3::new(
+        M[(r, c)],
+        M[(r, c + 1)],
+        M[(r, c + 2)],
+        M[(r + 1, c)],
+        M[(r + 1, c + 1)],
+        M[(r + 1, c + 2)],
+        M[(r + 2, c)],
+        M[(r + 2, c + 1)],
+        M[(r + 2, c + 2)],
+    )
+}
+
 /// M = [P, G; rho G^T, Q] (3x3 blocks, P and Q symmetric; rho = 1, M symmetric positive
 /// definite, on a Cosserat rod, rho = 0, M block triangular, on a Kirchhoff rod) factored by
 /// block elimination: P^-1, W = P^-1 G and the inverse of the Schur complement
@@ -48,15 +66,15 @@ impl Schur6 {
     /// is G^T when `coupled`, else 0); None when P or S is not SPD.
     #[inline(always)]
     fn new(M: &Matrix6<f64>, coupled: bool) -> Option<Self> {
-        let P_inv = spd_inverse3(&M.fixed_view::<3, 3>(0, 0).into_owned())?;
-        let G: Matrix3<f64> = M.fixed_view::<3, 3>(0, 3).into_owned();
+        let P_inv = spd_inverse3(&block3(M, 0, 0))?;
+        let G = block3(M, 0, 3);
         let W = P_inv * G;
         let S_inv = if coupled {
             let S = M.fixed_view::<3, 3>(3, 3) - G.tr_mul(&W);
             // S is symmetric; average out the rounding of the product.
             spd_inverse3(&((S + S.transpose()) * 0.5))?
         } else {
-            spd_inverse3(&M.fixed_view::<3, 3>(3, 3).into_owned())?
+            spd_inverse3(&block3(M, 3, 3))?
         };
         Some(Schur6 {
             P_inv,
