@@ -159,8 +159,22 @@ const MAX_SWEEPS: usize = 40;
 const ABSOLUTE_CHANGE: f64 = 1e-6;
 /// The relative part of the stopping test ([`settled`]).
 const RELATIVE_CHANGE: f64 = 1e-5;
-/// Weight of the first sweep's step in the relaxed update (Aitken adapts it afterwards).
-const RELAXATION: f64 = 0.5;
+/// Weight of the first sweep's step in the relaxed update (Aitken adapts it afterwards):
+/// the whole step, since the sweeps of a bent rod by tendons and its weight contract about
+/// tenfold (a half step left the other half to the second sweep, docs/benchmarks.md "Guess,
+/// estimate and count").
+const RELAXATION: f64 = 1.0;
+/// The whole first step is kept when the next sweep's change is below this fraction of the
+/// first's; otherwise the loads' moment arms swing with the shape they bend (a tendon and a
+/// tip load pulling the same way) and the sweeps start again with [`BACKED_OFF`]. For a
+/// fixed point that contracts by q (|q| < 1) the whole step leaves the error q e and the half
+/// step (1 + q) e / 2: the whole step is the smaller for every sign of q when |q| < 1/3, and
+/// a sweep's change shows |q| alone.
+const CONTRACTION: f64 = 1.0 / 3.0;
+/// Weight of the first step when the whole of it did not contract by [`CONTRACTION`]: the
+/// sweeps start again from the reference strains with this weight, and Aitken adapts it
+/// from there.
+const BACKED_OFF: f64 = 0.5;
 
 /// The rigid-equilibrium estimate of the state at every mesh node, refined by re-summing
 /// the loads on the shape it predicts (moment arms and body frames from the previous sweep)
@@ -247,7 +261,9 @@ fn rigid_estimate_in(model: &Model, nodes: &[MeshNode], b: &mut SweepBuffers, re
     integrate_poses_into(model, nodes, strains, shape);
     let mut last_change = f64::INFINITY;
     let mut relaxation = RELAXATION;
-    let mut stepped = false;
+    // The steps taken, and whether the first was taken again at half weight.
+    let mut steps = 0;
+    let mut backed_off = false;
     // The nodes' sites do not depend on the shape: evaluated once, not three times a sweep.
     sites.clear();
     sites.extend(nodes.iter().map(|n| model.site_on(n.s, n.segment_end)));
@@ -279,23 +295,33 @@ fn rigid_estimate_in(model: &Model, nodes: &[MeshNode], b: &mut SweepBuffers, re
             m
         });
         let change = groups[0].max(groups[1]);
+        if steps == 1 && !backed_off && !(change < CONTRACTION * last_change) {
+            // The whole first step did not contract enough: start again from the reference
+            // strains with its half (`last_step` is the first step), as if it had been the
+            // first weight.
+            reference_strains_into(model, nodes, strains);
+            relax_strains(strains, last_step, BACKED_OFF, length);
+            integrate_poses_into(model, nodes, strains, shape);
+            relaxation = BACKED_OFF;
+            backed_off = true;
+            continue;
+        }
         if !(change < last_change || last_change.is_infinite()) || !change.is_finite() {
             break;
         }
-        if !stepped {
+        if steps == 0 {
             deformation = groups;
         }
-        // Aitken's dynamic relaxation (Irons & Tuck): the plain fixed point can cycle when
-        // a load's moment arm swings with the shape it bends (a tendon and a tip load
-        // pulling the same way); the factor adapts to the observed contraction.
-        if stepped {
+        // Aitken's dynamic relaxation (Irons & Tuck): the factor adapts to the observed
+        // contraction.
+        if steps > 0 {
             relaxation = aitken(relaxation, last_step, step);
         }
         relax_strains(strains, step, relaxation, length);
         integrate_poses_into(model, nodes, strains, shape);
         last_change = change;
         std::mem::swap(step, last_step);
-        stepped = true;
+        steps += 1;
         if settled(groups, deformation, relative) {
             break;
         }
