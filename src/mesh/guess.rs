@@ -53,8 +53,11 @@ pub(crate) fn integrate_poses_into(
         if h > 0.0 {
             let v = (strain(model, &nodes[k], &strains[k].0) + strain(model, &nodes[k + 1], &strains[k + 1].0)) * 0.5;
             let u = (strains[k].1 + strains[k + 1].1) * 0.5;
-            p += R * so3::exp(&(u * (h / 2.0))) * v * h;
-            R *= so3::exp(&(u * h));
+            // exp(u h) = exp(u h / 2)^2: one exponential per interval.
+            let half = so3::exp(&(u * (h / 2.0)));
+            let R_half = R * half;
+            p += R_half * v * h;
+            R = R_half * half;
         }
         out.push((p, R));
     }
