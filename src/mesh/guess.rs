@@ -53,11 +53,8 @@ pub(crate) fn integrate_poses_into(
         if h > 0.0 {
             let v = (strain(model, &nodes[k], &strains[k].0) + strain(model, &nodes[k + 1], &strains[k + 1].0)) * 0.5;
             let u = (strains[k].1 + strains[k + 1].1) * 0.5;
-            // exp(u h) = exp(u h / 2)^2: one exponential per interval.
-            let half = so3::exp(&(u * (h / 2.0)));
-            let R_half = R * half;
-            p += R_half * v * h;
-            R = R_half * half;
+            p += R * so3::exp(&(u * (h / 2.0))) * v * h;
+            R *= so3::exp(&(u * h));
         }
         out.push((p, R));
     }
@@ -183,27 +180,32 @@ const BACKED_OFF: f64 = 0.5;
 /// the loads on the shape it predicts (moment arms and body frames from the previous sweep)
 /// until the curvature stops changing, or grows (then the previous sweep is kept).
 pub fn rigid_estimate(model: &Model, nodes: &[MeshNode]) -> Vec<State> {
-    rigid_estimate_to(model, nodes, RELATIVE_CHANGE)
+    rigid_estimate_to(model, nodes, RELATIVE_CHANGE, RELAXATION)
 }
 
 /// [`initial`], with the rigid-equilibrium sweeps held to the absolute stopping test
 /// alone (each strain group's change below 1e-6, [`settled`] without its relative part):
 /// the shooting cross-check starts from this guess's base strains, and its Newton did not
 /// converge on a pull-in of two antagonistic pairs (tests/shooting_displacement.rs) from
-/// the guess that stops at 1e-5 of the deformation.
+/// the guess that stops at 1e-5 of the deformation. Its first step is the half step
+/// ([`BACKED_OFF`]), the guess shooting was tested from: from the whole one (with poses
+/// integrated by one exponential an interval) shooting's Newton stopped short of its
+/// tolerance on a displacement-controlled tendon (tests/actuation.rs, its line search
+/// failing at a residual of 2e-10).
 pub(crate) fn initial_absolute(model: &Model, nodes: &[MeshNode], kind: InitialGuess) -> Vec<State> {
     match kind {
-        InitialGuess::RigidEquilibrium => rigid_estimate_to(model, nodes, 0.0),
+        InitialGuess::RigidEquilibrium => rigid_estimate_to(model, nodes, 0.0, BACKED_OFF),
         InitialGuess::Unloaded => initial(model, nodes, kind),
     }
 }
 
-/// [`rigid_estimate`] with the relative part `relative` of the stopping test ([`settled`]).
-fn rigid_estimate_to(model: &Model, nodes: &[MeshNode], relative: f64) -> Vec<State> {
+/// [`rigid_estimate`] with the relative part `relative` of the stopping test ([`settled`])
+/// and the first step's weight `first` ([`RELAXATION`], or [`BACKED_OFF`] from the start).
+fn rigid_estimate_to(model: &Model, nodes: &[MeshNode], relative: f64, first: f64) -> Vec<State> {
     // The sweeps' buffers come from this thread's last estimate (taken out, so that an
     // estimate nested in a user function's call finds none and allocates its own).
     let mut buffers = SWEEP_BUFFERS.with(|b| std::mem::take(&mut *b.borrow_mut()));
-    let x = rigid_estimate_in(model, nodes, &mut buffers, relative);
+    let x = rigid_estimate_in(model, nodes, &mut buffers, (relative, first));
     SWEEP_BUFFERS.with(|b| *b.borrow_mut() = buffers);
     x
 }
@@ -247,7 +249,12 @@ thread_local! {
 }
 
 /// [`rigid_estimate_to`] in the buffers `b` (their contents on entry are not read).
-fn rigid_estimate_in(model: &Model, nodes: &[MeshNode], b: &mut SweepBuffers, relative: f64) -> Vec<State> {
+fn rigid_estimate_in(
+    model: &Model,
+    nodes: &[MeshNode],
+    b: &mut SweepBuffers,
+    (relative, first): (f64, f64),
+) -> Vec<State> {
     let length = model.robot.length();
     let SweepBuffers {
         strains,
@@ -263,10 +270,10 @@ fn rigid_estimate_in(model: &Model, nodes: &[MeshNode], b: &mut SweepBuffers, re
     reference_strains_into(model, nodes, strains);
     integrate_poses_into(model, nodes, strains, shape);
     let mut last_change = f64::INFINITY;
-    let mut relaxation = RELAXATION;
-    // The steps taken, and whether the first was taken again at half weight.
+    let mut relaxation = first;
+    // The steps taken, and whether the first was (or is) taken at half weight.
     let mut steps = 0;
-    let mut backed_off = false;
+    let mut backed_off = first <= BACKED_OFF;
     // The nodes' sites do not depend on the shape: evaluated once, not three times a sweep.
     sites.clear();
     sites.extend(nodes.iter().map(|n| model.site_on(n.s, n.segment_end)));
