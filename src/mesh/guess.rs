@@ -159,53 +159,34 @@ const MAX_SWEEPS: usize = 40;
 const ABSOLUTE_CHANGE: f64 = 1e-6;
 /// The relative part of the stopping test ([`settled`]).
 const RELATIVE_CHANGE: f64 = 1e-5;
-/// Weight of the first sweep's step in the relaxed update (Aitken adapts it afterwards):
-/// the whole step, since the sweeps of a bent rod by tendons and its weight contract about
-/// tenfold (a half step left the other half to the second sweep, docs/benchmarks.md "Guess,
-/// estimate and count").
-const RELAXATION: f64 = 1.0;
-/// The whole first step is kept when the next sweep's change is below this fraction of the
-/// first's; otherwise the loads' moment arms swing with the shape they bend (a tendon and a
-/// tip load pulling the same way) and the sweeps start again with [`BACKED_OFF`]. For a
-/// fixed point that contracts by q (|q| < 1) the whole step leaves the error q e and the half
-/// step (1 + q) e / 2: the whole step is the smaller for every sign of q when |q| < 1/3, and
-/// a sweep's change shows |q| alone.
-const CONTRACTION: f64 = 1.0 / 3.0;
-/// Weight of the first step when the whole of it did not contract by [`CONTRACTION`]: the
-/// sweeps start again from the reference strains with this weight, and Aitken adapts it
-/// from there.
-const BACKED_OFF: f64 = 0.5;
+/// Weight of the first sweep's step in the relaxed update (Aitken adapts it afterwards).
+const RELAXATION: f64 = 0.5;
 
 /// The rigid-equilibrium estimate of the state at every mesh node, refined by re-summing
 /// the loads on the shape it predicts (moment arms and body frames from the previous sweep)
 /// until the curvature stops changing, or grows (then the previous sweep is kept).
 pub fn rigid_estimate(model: &Model, nodes: &[MeshNode]) -> Vec<State> {
-    rigid_estimate_to(model, nodes, RELATIVE_CHANGE, RELAXATION)
+    rigid_estimate_to(model, nodes, RELATIVE_CHANGE)
 }
 
 /// [`initial`], with the rigid-equilibrium sweeps held to the absolute stopping test
 /// alone (each strain group's change below 1e-6, [`settled`] without its relative part):
 /// the shooting cross-check starts from this guess's base strains, and its Newton did not
 /// converge on a pull-in of two antagonistic pairs (tests/shooting_displacement.rs) from
-/// the guess that stops at 1e-5 of the deformation. Its first step is the half step
-/// ([`BACKED_OFF`]), the guess shooting was tested from: from the whole one (with poses
-/// integrated by one exponential an interval) shooting's Newton stopped short of its
-/// tolerance on a displacement-controlled tendon (tests/actuation.rs, its line search
-/// failing at a residual of 2e-10).
+/// the guess that stops at 1e-5 of the deformation.
 pub(crate) fn initial_absolute(model: &Model, nodes: &[MeshNode], kind: InitialGuess) -> Vec<State> {
     match kind {
-        InitialGuess::RigidEquilibrium => rigid_estimate_to(model, nodes, 0.0, BACKED_OFF),
+        InitialGuess::RigidEquilibrium => rigid_estimate_to(model, nodes, 0.0),
         InitialGuess::Unloaded => initial(model, nodes, kind),
     }
 }
 
-/// [`rigid_estimate`] with the relative part `relative` of the stopping test ([`settled`])
-/// and the first step's weight `first` ([`RELAXATION`], or [`BACKED_OFF`] from the start).
-fn rigid_estimate_to(model: &Model, nodes: &[MeshNode], relative: f64, first: f64) -> Vec<State> {
+/// [`rigid_estimate`] with the relative part `relative` of the stopping test ([`settled`]).
+fn rigid_estimate_to(model: &Model, nodes: &[MeshNode], relative: f64) -> Vec<State> {
     // The sweeps' buffers come from this thread's last estimate (taken out, so that an
     // estimate nested in a user function's call finds none and allocates its own).
     let mut buffers = SWEEP_BUFFERS.with(|b| std::mem::take(&mut *b.borrow_mut()));
-    let x = rigid_estimate_in(model, nodes, &mut buffers, (relative, first));
+    let x = rigid_estimate_in(model, nodes, &mut buffers, relative);
     SWEEP_BUFFERS.with(|b| *b.borrow_mut() = buffers);
     x
 }
@@ -249,12 +230,7 @@ thread_local! {
 }
 
 /// [`rigid_estimate_to`] in the buffers `b` (their contents on entry are not read).
-fn rigid_estimate_in(
-    model: &Model,
-    nodes: &[MeshNode],
-    b: &mut SweepBuffers,
-    (relative, first): (f64, f64),
-) -> Vec<State> {
+fn rigid_estimate_in(model: &Model, nodes: &[MeshNode], b: &mut SweepBuffers, relative: f64) -> Vec<State> {
     let length = model.robot.length();
     let SweepBuffers {
         strains,
@@ -270,10 +246,8 @@ fn rigid_estimate_in(
     reference_strains_into(model, nodes, strains);
     integrate_poses_into(model, nodes, strains, shape);
     let mut last_change = f64::INFINITY;
-    let mut relaxation = first;
-    // The steps taken, and whether the first was (or is) taken at half weight.
-    let mut steps = 0;
-    let mut backed_off = first <= BACKED_OFF;
+    let mut relaxation = RELAXATION;
+    let mut stepped = false;
     // The nodes' sites do not depend on the shape: evaluated once, not three times a sweep.
     sites.clear();
     sites.extend(nodes.iter().map(|n| model.site_on(n.s, n.segment_end)));
@@ -305,33 +279,23 @@ fn rigid_estimate_in(
             m
         });
         let change = groups[0].max(groups[1]);
-        if steps == 1 && !backed_off && !(change < CONTRACTION * last_change) {
-            // The whole first step did not contract enough: start again from the reference
-            // strains with its half (`last_step` is the first step), as if it had been the
-            // first weight.
-            reference_strains_into(model, nodes, strains);
-            relax_strains(strains, last_step, BACKED_OFF, length);
-            integrate_poses_into(model, nodes, strains, shape);
-            relaxation = BACKED_OFF;
-            backed_off = true;
-            continue;
-        }
         if !(change < last_change || last_change.is_infinite()) || !change.is_finite() {
             break;
         }
-        if steps == 0 {
+        if !stepped {
             deformation = groups;
         }
-        // Aitken's dynamic relaxation (Irons & Tuck): the factor adapts to the observed
-        // contraction.
-        if steps > 0 {
+        // Aitken's dynamic relaxation (Irons & Tuck): the plain fixed point can cycle when
+        // a load's moment arm swings with the shape it bends (a tendon and a tip load
+        // pulling the same way); the factor adapts to the observed contraction.
+        if stepped {
             relaxation = aitken(relaxation, last_step, step);
         }
         relax_strains(strains, step, relaxation, length);
         integrate_poses_into(model, nodes, strains, shape);
         last_change = change;
         std::mem::swap(step, last_step);
-        steps += 1;
+        stepped = true;
         if settled(groups, deformation, relative) {
             break;
         }
