@@ -307,7 +307,7 @@ fn transpose_into(t: &SMatrix<f64, 6, 6>, z: &mut SMatrix<f64, 6, 6>) {
 /// frame; a node's rotation increment's w_t is its R times the body-frame one, with the
 /// accelerations interpolated linearly between the nodes ([`Mass::new`]). Row i of the
 /// result is the load of acceleration component i.
-fn inertia_load_transposed(site: &Site, Rc: &Matrix3<f64>, ratio: f64, length: f64) -> SMatrix<f64, 6, 6> {
+pub(crate) fn inertia_load_transposed(site: &Site, Rc: &Matrix3<f64>, ratio: f64, length: f64) -> SMatrix<f64, 6, 6> {
     let section = &site.section.section;
     let rho_a = ratio * section.kse[2];
     let rho_j = [
