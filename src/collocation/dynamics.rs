@@ -243,6 +243,15 @@ fn restrict(a: &mut Vec<f64>) {
     a.truncate(nodes * MOVING);
 }
 
+/// [`restrict`] of `a` into `out` (its (p, theta) parts, [`MOVING`] per node), without
+/// copying `a` whole first.
+fn restricted(a: &[f64], out: &mut Vec<f64>) {
+    out.resize(a.len() / NODE * MOVING, 0.0);
+    for (to, node) in out.chunks_exact_mut(MOVING).zip(a.chunks_exact(NODE)) {
+        to.copy_from_slice(&node[..MOVING]);
+    }
+}
+
 /// The rates (v', u') of eq. 13 at a collocation point with state (Rc, v, u), and
 /// d(v', u') / d(acceleration) there into `z`, up to the quadrature weight: M^-1 of the
 /// load per unit acceleration ([`inertia_load_transposed`]) (eq. 13: F = M x - rhs with

@@ -22,7 +22,7 @@
 
 #![allow(non_snake_case)]
 
-use super::{KRYLOV, MOVING, Mass, Vibration, inertia_load_transposed, quadrature, restrict, spectrum};
+use super::{KRYLOV, MOVING, Mass, Vibration, inertia_load_transposed, quadrature, restricted, spectrum};
 use crate::collocation::friction::Capstan;
 use crate::collocation::residual::end_values;
 use crate::collocation::unknowns::{THETA, U, V, unknowns};
@@ -246,9 +246,7 @@ pub(super) fn modes_held(
         {
             return false;
         }
-        out.clear();
-        out.extend_from_slice(&dx);
-        restrict(out);
+        restricted(&dx, out);
         true
     };
     spectrum(&mut operator, x.len(), krylov, all)
