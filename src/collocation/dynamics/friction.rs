@@ -114,7 +114,16 @@ impl CapstanMass {
                 _ => point(2 * k, &sites.start, seg, (&a.R, &a.v, &a.u), &z_a, w, &mut za, &mut ta)?,
             };
             // Node k + 1 as the next link's start, where a Jacobian keeps it.
-            let (rb, kappa_b) = point(2 * k + 2, &sites.end, seg, (&b.R, &b.v, &b.u), &z_b, w, &mut zb, &mut tb)?;
+            let (rb, kappa_b) = point(
+                2 * k + 2,
+                &sites.end,
+                seg,
+                (&b.R, &b.v, &b.u),
+                &z_b,
+                w,
+                &mut zb,
+                &mut tb,
+            )?;
             // The Hermite-Simpson midpoint of (y, z), as the interval's rows take it.
             let [y0, y1, f0, f1] = end_values(sites, a, b, &ra, &rb);
             let ym = (y0 + y1) * 0.5 + (f0 - f1) * (h / 8.0);
@@ -250,4 +259,67 @@ pub(super) fn modes_held(
         true
     };
     spectrum(&mut operator, x.len(), krylov, all)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::collocation::sensitivity::Sensitivity;
+    use crate::report::Method;
+    use crate::{Friction, Motion, cases};
+
+    /// The mass with friction from the responses that the Jacobian at the answer keeps
+    /// (`Profile::kept_response`) is the mass evaluated afresh, bit for bit, on every block
+    /// and capstan row: case H with friction on its helix (pull) and case S released, at
+    /// their answers.
+    #[test]
+    fn kept_responses_give_the_mass_bit_for_bit() {
+        let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+        let mut h = cases::case_h();
+        h.tendons[4].friction = Some(Friction::pull(0.1));
+        let mut s = cases::case_s();
+        s.tendons[0].friction = Some(Friction {
+            coefficient: 0.1,
+            motion: Motion::Release,
+        });
+        for robot in [h, s] {
+            let solution = crate::collocation::solve(&robot, &Default::default()).unwrap();
+            let (mut border, x, _) = Sensitivity::new(&robot, &solution).unwrap().into_border();
+            // Nothing kept yet: every point evaluated.
+            let fresh = CapstanMass::new(&border, &x).unwrap();
+            let mut report = SolveReport::new(Method::Collocation);
+            assert!(border.factor_at(&x, &mut report).unwrap());
+            // The Jacobian at x kept node 0's response (the mass reads it below).
+            let system = border.system();
+            let profile = system.friction.as_ref().unwrap();
+            let z: Vec<f64> = profile.z.iter().map(|z| z[0]).collect();
+            let w = profile.multipliers(0);
+            let (mut loads, mut turns) = (SMatrix::zeros(), Vec::new());
+            let seg = system.mesh.nodes[0].segment_end;
+            let state = (&x[0].R, &x[0].v, &x[0].u);
+            assert!(
+                profile
+                    .kept_response(0, seg, state, (&z, w.as_deref()), (&mut loads, &mut turns))
+                    .is_some()
+            );
+            let kept = CapstanMass::new(&border, &x).unwrap();
+            let mut compared = 0;
+            for (a, b) in fresh.backbone.blocks.iter().zip(&kept.backbone.blocks) {
+                match (a, b) {
+                    (Some(a), Some(b)) => {
+                        assert_eq!(bits(a.as_slice()), bits(b.as_slice()));
+                        compared += 1;
+                    }
+                    (None, None) => {}
+                    _ => panic!("a jump in one mass only"),
+                }
+            }
+            assert!(compared >= 16, "{compared} intervals");
+            assert_eq!(fresh.rows.len(), kept.rows.len());
+            for ((ra, ka, a), (rb, kb, b)) in fresh.rows.iter().zip(&kept.rows) {
+                assert_eq!((ra, ka), (rb, kb));
+                assert_eq!(bits(a.as_slice()), bits(b.as_slice()));
+            }
+        }
+    }
 }
