@@ -27,15 +27,12 @@ use nalgebra::Vector3;
 /// section 3), each costing about a tenth of a residual evaluation with friction.
 const PASSES: usize = 10;
 
-/// A pass that changes the strains by less than this (scaled: v, and u L) is the last: the
-/// start then lies within a few 1e-4 of the solution with friction, from where Newton takes
-/// the same one Newton step and one chord step as from a start settled to 1e-4 (measured
-/// on S and H at mu = 0.1: first steps 1.6e-5 and 3.5e-4, chord steps 1.3e-10 and 2.3e-8;
-/// docs/friction.md section 3), and the start's own error (the turning between nodes as the
-/// angle between their tangents, the sweep's midpoint rule) is 1e-5 to 1e-4 anyway. H's
-/// passes change the strains by 1.2e-2, 1.7e-3, 8.2e-4, 3.2e-4, 7.7e-5 from its fourth on:
-/// 1e-4 took two passes more (0.45 M instructions) for no step fewer.
-const SETTLED: f64 = 1e-3;
+/// A pass that changes the strains by less than this (scaled: v, and u L) is the last: a
+/// start that far from the solution leaves Newton's first step about 3e-8 (its quadratic
+/// constant is about 3 in these units), which chord steps finish, and the start's own error
+/// (the turning between nodes as the angle between their tangents, the sweep's midpoint
+/// rule) is 1e-5 to 1e-4 anyway.
+const SETTLED: f64 = 1e-4;
 
 /// Log tensions of `profile` marched along the states `x` by the capstan law
 /// `z' = w mu |t'|`: the turning of tendon j's path between two nodes is the angle between
@@ -229,7 +226,7 @@ mod tests {
                 motion,
             });
             let (start, plain) = distances(&rough);
-            // Measured 1.1e-5 (S), 3.5e-4 (H pull), 1.8e-4 (H release): the start's own
+            // Measured 1.1e-5 (S), 5.6e-5 (H pull), 9.7e-5 (H release): the start's own
             // error (turning between node tangents, midpoint poses); 1e-3 still leaves
             // Newton's first step about 3e-6 (quadratic constant about 3 in these units).
             assert!(start < 1e-3, "start {start:e} from the solution with friction");
