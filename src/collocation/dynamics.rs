@@ -243,6 +243,15 @@ fn restrict(a: &mut Vec<f64>) {
     a.truncate(nodes * MOVING);
 }
 
+/// [`restrict`] of `a` into `out` (its (p, theta) parts, [`MOVING`] per node), without
+/// copying `a` whole first.
+fn restricted(a: &[f64], out: &mut Vec<f64>) {
+    out.resize(a.len() / NODE * MOVING, 0.0);
+    for (to, node) in out.chunks_exact_mut(MOVING).zip(a.chunks_exact(NODE)) {
+        to.copy_from_slice(&node[..MOVING]);
+    }
+}
+
 /// The rates (v', u') of eq. 13 at a collocation point with state (Rc, v, u), and
 /// d(v', u') / d(acceleration) there into `z`, up to the quadrature weight: M^-1 of the
 /// load per unit acceleration ([`inertia_load_transposed`]) (eq. 13: F = M x - rhs with
@@ -307,7 +316,7 @@ fn transpose_into(t: &SMatrix<f64, 6, 6>, z: &mut SMatrix<f64, 6, 6>) {
 /// frame; a node's rotation increment's w_t is its R times the body-frame one, with the
 /// accelerations interpolated linearly between the nodes ([`Mass::new`]). Row i of the
 /// result is the load of acceleration component i.
-fn inertia_load_transposed(site: &Site, Rc: &Matrix3<f64>, ratio: f64, length: f64) -> SMatrix<f64, 6, 6> {
+pub(crate) fn inertia_load_transposed(site: &Site, Rc: &Matrix3<f64>, ratio: f64, length: f64) -> SMatrix<f64, 6, 6> {
     let section = &site.section.section;
     let rho_a = ratio * section.kse[2];
     let rho_j = [

@@ -22,7 +22,7 @@
 
 #![allow(non_snake_case)]
 
-use super::{KRYLOV, MOVING, Mass, Vibration, inertia_load_transposed, quadrature, restrict, spectrum};
+use super::{KRYLOV, MOVING, Mass, Vibration, inertia_load_transposed, quadrature, restricted, spectrum};
 use crate::collocation::friction::Capstan;
 use crate::collocation::residual::end_values;
 use crate::collocation::unknowns::{THETA, U, V, unknowns};
@@ -46,17 +46,19 @@ impl CapstanMass {
     fn new(border: &Capstan, x: &[State]) -> Option<Self> {
         let system = border.system();
         let profile = system.friction.as_ref()?;
-        let robot = system.model.robot;
-        let length = robot.length();
-        let ratio = super::DENSITY / robot.rod.geometry.map_or(super::MODULUS, |g| g.youngs_modulus);
+        let (ratio, length) = mass_scale(system.model.robot);
         let count = profile.count();
         let mut model: Model = system.model.clone();
         let mut lin = FrictionLinearization::default();
         let mut turning_at = vec![SMatrix::<f64, 1, 6>::zeros(); count];
-        // Eq. 13 with friction at a point with the slips at log tensions `z`: its rates,
+        // Eq. 13 with friction at point `index` (link k's start node 2k, its midpoint
+        // 2k + 1, the last node 2 links) with the slips at log tensions `z`: its rates,
         // turning rates, response to a unit acceleration (`z6`) and the turning rates'
-        // response (`turn`, one per slip).
-        let mut point = |site: &Site,
+        // response (`turn`, one per slip). Taken from the Jacobian at the same inputs when it
+        // kept them (`Profile::kept_response`: the same evaluation, bit for bit), else
+        // evaluated.
+        let mut point = |index: usize,
+                         site: &Site,
                          seg: f64,
                          (Rc, v, u): (&Matrix3<f64>, &Vector3<f64>, &Vector3<f64>),
                          z: &[f64],
@@ -64,11 +66,16 @@ impl CapstanMass {
                          z6: &mut SMatrix<f64, 6, 6>,
                          turn: &mut Vec<SMatrix<f64, 1, 6>>|
          -> Option<(nalgebra::Vector6<f64>, Vec<f64>)> {
+            let mut t = SMatrix::<f64, 6, 6>::zeros();
+            if let Some(kept) = profile.kept_response(index, seg, (Rc, v, u), (z, w), (&mut t, turn)) {
+                *z6 = t.transpose();
+                return Some(kept);
+            }
             for (j, &i) in profile.slipping.iter().enumerate() {
                 model.tensions[i] = profile.tension(j, z[j]);
             }
             linearize_into(&model, site, seg, (Rc, v, u), &profile.slipping, w, false, &mut lin).ok()?;
-            let mut t = inertia_load_transposed(site, Rc, ratio, length);
+            t = inertia_load_transposed(site, Rc, ratio, length);
             if !lin.load_response(&mut t, &mut turning_at) {
                 return None;
             }
@@ -104,9 +111,19 @@ impl CapstanMass {
                     std::mem::swap(&mut ta, &mut tb);
                     start
                 }
-                _ => point(&sites.start, seg, (&a.R, &a.v, &a.u), &z_a, w, &mut za, &mut ta)?,
+                _ => point(2 * k, &sites.start, seg, (&a.R, &a.v, &a.u), &z_a, w, &mut za, &mut ta)?,
             };
-            let (rb, kappa_b) = point(&sites.end, seg, (&b.R, &b.v, &b.u), &z_b, w, &mut zb, &mut tb)?;
+            // Node k + 1 as the next link's start, where a Jacobian keeps it.
+            let (rb, kappa_b) = point(
+                2 * k + 2,
+                &sites.end,
+                seg,
+                (&b.R, &b.v, &b.u),
+                &z_b,
+                w,
+                &mut zb,
+                &mut tb,
+            )?;
             // The Hermite-Simpson midpoint of (y, z), as the interval's rows take it.
             let [y0, y1, f0, f1] = end_values(sites, a, b, &ra, &rb);
             let ym = (y0 + y1) * 0.5 + (f0 - f1) * (h / 8.0);
@@ -116,7 +133,7 @@ impl CapstanMass {
             let part = |at: usize| Vector3::new(ym[at], ym[at + 1], ym[at + 2]);
             let Rm = a.R * so3::exp(&part(THETA));
             let (vm, um) = (part(V), part(U));
-            point(&sites.mid, seg, (&Rm, &vm, &um), &z_m, w, &mut zm, &mut tm)?;
+            point(2 * k + 1, &sites.mid, seg, (&Rm, &vm, &um), &z_m, w, &mut zm, &mut tm)?;
             let mut block = quadrature(h, (&a.R, &b.R), [&za, &zm, &zb]);
             for r in 3..6 {
                 for c in 0..12 {
@@ -150,6 +167,13 @@ impl CapstanMass {
             y_psi[*row] = block.iter().zip(z).map(|(m, z)| m * z).sum();
         }
     }
+}
+
+/// The rod's density over its Young's modulus and its length, the scale of the inertia
+/// loads of the mass ([`inertia_load_transposed`]).
+pub(crate) fn mass_scale(robot: &crate::Robot) -> (f64, f64) {
+    let ratio = super::DENSITY / robot.rod.geometry.map_or(super::MODULUS, |g| g.youngs_modulus);
+    (ratio, robot.length())
 }
 
 /// The scope of a verdict with friction, noted on every full-slip solve that has one
@@ -231,10 +255,71 @@ pub(super) fn modes_held(
         {
             return false;
         }
-        out.clear();
-        out.extend_from_slice(&dx);
-        restrict(out);
+        restricted(&dx, out);
         true
     };
     spectrum(&mut operator, x.len(), krylov, all)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::collocation::sensitivity::Sensitivity;
+    use crate::report::Method;
+    use crate::{Friction, Motion, cases};
+
+    /// The mass with friction from the responses that the Jacobian at the answer keeps
+    /// (`Profile::kept_response`) is the mass evaluated afresh, bit for bit, on every block
+    /// and capstan row: case H with friction on its helix (pull) and case S released, at
+    /// their answers.
+    #[test]
+    fn kept_responses_give_the_mass_bit_for_bit() {
+        let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+        let mut h = cases::case_h();
+        h.tendons[4].friction = Some(Friction::pull(0.1));
+        let mut s = cases::case_s();
+        s.tendons[0].friction = Some(Friction {
+            coefficient: 0.1,
+            motion: Motion::Release,
+        });
+        for robot in [h, s] {
+            let solution = crate::collocation::solve(&robot, &Default::default()).unwrap();
+            let (mut border, x, _) = Sensitivity::new(&robot, &solution).unwrap().into_border();
+            // Nothing kept yet: every point evaluated.
+            let fresh = CapstanMass::new(&border, &x).unwrap();
+            let mut report = SolveReport::new(Method::Collocation);
+            assert!(border.factor_at(&x, &mut report).unwrap());
+            // The Jacobian at x kept node 0's response (the mass reads it below).
+            let system = border.system();
+            let profile = system.friction.as_ref().unwrap();
+            let z: Vec<f64> = profile.z.iter().map(|z| z[0]).collect();
+            let w = profile.multipliers(0);
+            let (mut loads, mut turns) = (SMatrix::zeros(), Vec::new());
+            let seg = system.mesh.nodes[0].segment_end;
+            let state = (&x[0].R, &x[0].v, &x[0].u);
+            assert!(
+                profile
+                    .kept_response(0, seg, state, (&z, w.as_deref()), (&mut loads, &mut turns))
+                    .is_some()
+            );
+            let kept = CapstanMass::new(&border, &x).unwrap();
+            let mut compared = 0;
+            for (a, b) in fresh.backbone.blocks.iter().zip(&kept.backbone.blocks) {
+                match (a, b) {
+                    (Some(a), Some(b)) => {
+                        assert_eq!(bits(a.as_slice()), bits(b.as_slice()));
+                        compared += 1;
+                    }
+                    (None, None) => {}
+                    _ => panic!("a jump in one mass only"),
+                }
+            }
+            assert!(compared >= 16, "{compared} intervals");
+            assert_eq!(fresh.rows.len(), kept.rows.len());
+            for ((ra, ka, a), (rb, kb, b)) in fresh.rows.iter().zip(&kept.rows) {
+                assert_eq!((ra, ka), (rb, kb));
+                assert_eq!(bits(a.as_slice()), bits(b.as_slice()));
+            }
+        }
+    }
 }

@@ -62,6 +62,15 @@ impl Capstan<'_> {
 }
 
 impl Capstan<'_> {
+    /// Sets whether the links' evaluations with derivatives keep eq. 13 with friction's
+    /// response to the inertia loads for the verdict's mass ([`Profile::keep_responses`]).
+    pub(super) fn keep_responses(&self, on: bool) {
+        if let Some(profile) = &self.system.friction {
+            let robot = self.system.model.robot;
+            profile.keep_responses(on.then(|| crate::collocation::dynamics::friction::mass_scale(robot)));
+        }
+    }
+
     /// Node n's local column of slip l's log tension, if it has one there.
     fn z_column(&self, n: usize, l: usize) -> Option<usize> {
         self.node_slips[n].iter().position(|&j| j == l).map(|p| NODE + p)
@@ -192,8 +201,13 @@ impl Capstan<'_> {
 }
 
 impl Border for Capstan<'_> {
+    /// At the trial point the profile keeps eq. 13 with friction's response to the inertia
+    /// loads ([`Profile::keep_responses`]): a Jacobian evaluated there is the one Newton
+    /// evaluates ahead at the answer for the verdict ([`newton::run_bordered_ahead`]), whose
+    /// mass reads the same points (a residual keeps nothing).
     fn on<R>(&mut self, point: Point, f: impl FnOnce(&System) -> R) -> R {
         self.load(point);
+        self.keep_responses(point == Point::Trial);
         f(&self.system)
     }
 

@@ -403,6 +403,10 @@ fn interval_at_kernel(
         }
         out.psi_z[(j, count + j)] = 1.0;
     }
+    // For the verdict's mass at the same state, when the profile keeps it (the Jacobian at
+    // the answer).
+    profile.keep_response(2 * k, &sites.start, segment_end, (&a.R, &a.v, &a.u), (za, w), &la);
+    profile.keep_response(2 * k + 1, &sites.mid, segment_end, (&Rm, &vm, &um), (zm, w), &lm);
     profile.keep_end(k, segment_end, b, zb, w, derivatives, lb);
     profile.give(la);
     profile.give(lm);

@@ -11,8 +11,8 @@ use crate::mesh::Mesh;
 use crate::model::equations::{Model, Site};
 use crate::model::friction::{self, FrictionLinearization};
 use crate::solution::State;
-use nalgebra::{SMatrix, Vector3};
-use std::cell::RefCell;
+use nalgebra::{Matrix3, SMatrix, Vector3, Vector6};
+use std::cell::{Cell, RefCell};
 
 /// The log tensions of the tendons with friction on a mesh, and a model to evaluate eq. 13
 /// with them.
@@ -53,6 +53,41 @@ pub(crate) struct Profile<'a> {
     spare_links: RefCell<Vec<IntervalLinearization>>,
     #[allow(clippy::vec_box)]
     scratch_links: RefCell<Vec<Box<LinkScratch>>>,
+    /// While set ([`Profile::keep_responses`]: the rod's density over its modulus, and its
+    /// length), the links' evaluations with derivatives keep eq. 13 with friction's response
+    /// to the inertia loads at their start nodes and midpoints ([`Profile::keep_response`]),
+    /// for the mass of the linearized dynamics at the same state.
+    responding: Cell<Option<(f64, f64)>>,
+    /// Those responses: link k's start node at 2k, its midpoint at 2k + 1.
+    responses: RefCell<Responses>,
+}
+
+/// Eq. 13 with friction's responses to the unit inertia loads at points (their rates,
+/// turning rates and [`FrictionLinearization::load_response`]) and everything they were
+/// evaluated from: a point with the same inputs, bit for bit, has the same response. Point
+/// i's log tensions, multipliers, turning rates and turning responses are entries
+/// `i * count..(i + 1) * count` of the flat buffers (`count` slips), sized once per mesh.
+#[derive(Debug, Default)]
+struct Responses {
+    points: Vec<Response>,
+    z: Vec<f64>,
+    w: Vec<f64>,
+    turning: Vec<f64>,
+    turns: Vec<SMatrix<f64, 1, 6>>,
+}
+
+/// One point of [`Responses`].
+#[derive(Clone, Debug, Default)]
+struct Response {
+    /// Whether it holds a response (false before the first, or where eq. 13 was singular).
+    valid: bool,
+    segment_end: f64,
+    state: (Matrix3<f64>, Vector3<f64>, Vector3<f64>),
+    /// Whether it was evaluated with multipliers (in the flat buffer `w`).
+    multipliers: bool,
+    rates: Vector6<f64>,
+    /// The response to the six unit loads, one per row.
+    loads: SMatrix<f64, 6, 6>,
 }
 
 /// The buffers of one link's evaluation ([`super::interval::interval`], and its order-6
@@ -132,6 +167,8 @@ impl<'a> Profile<'a> {
             spare: RefCell::new(Vec::new()),
             spare_links: RefCell::new(Vec::new()),
             scratch_links: RefCell::new(Vec::new()),
+            responding: Cell::new(None),
+            responses: RefCell::new(Responses::default()),
         }
     }
 
@@ -152,6 +189,8 @@ impl<'a> Profile<'a> {
             spare: RefCell::new(Vec::new()),
             spare_links: RefCell::new(Vec::new()),
             scratch_links: RefCell::new(Vec::new()),
+            responding: Cell::new(None),
+            responses: RefCell::new(Responses::default()),
         }
     }
 
@@ -408,6 +447,98 @@ impl<'a> Profile<'a> {
         }
         turning.clone_from(&kept.turning);
         Some(kept.rates)
+    }
+
+    /// Sets whether the links' evaluations with derivatives keep eq. 13 with friction's
+    /// response to the inertia loads at their start nodes and midpoints
+    /// ([`Profile::keep_response`]; `mass`: the rod's density over its Young's modulus and
+    /// its length, [`crate::collocation::dynamics::inertia_load_transposed`]), for the
+    /// Jacobian at the answer whose verdict's mass reads them at the same points.
+    pub(crate) fn keep_responses(&self, mass: Option<(f64, f64)>) {
+        self.responding.set(mass);
+    }
+
+    /// Keeps the response of `lin`, eq. 13 with friction at point `index` (link k's start
+    /// node 2k, its midpoint 2k + 1) of `site` evaluated at the state (R, v, u), log
+    /// tensions `z`, multipliers `w` and segment end `segment_end`, when
+    /// [`Profile::keep_responses`] is set.
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn keep_response(
+        &self,
+        index: usize,
+        site: &Site,
+        segment_end: f64,
+        (R, v, u): (&Matrix3<f64>, &Vector3<f64>, &Vector3<f64>),
+        (z, w): (&[f64], Option<&[f64]>),
+        lin: &FrictionLinearization,
+    ) {
+        let Some((ratio, length)) = self.responding.get() else {
+            return;
+        };
+        let count = self.count();
+        let mut responses = self.responses.borrow_mut();
+        let Responses {
+            points,
+            z: zs,
+            w: ws,
+            turning,
+            turns,
+        } = &mut *responses;
+        if points.len() <= index {
+            // Every point of the mesh at once: 2 per link.
+            let size = (2 * self.z.first().map_or(0, Vec::len)).max(index + 1);
+            points.resize(size, Response::default());
+            for buffer in [&mut *zs, &mut *ws, &mut *turning] {
+                buffer.resize(size * count, 0.0);
+            }
+            turns.resize(size * count, SMatrix::zeros());
+        }
+        let range = index * count..(index + 1) * count;
+        let kept = &mut points[index];
+        kept.segment_end = segment_end;
+        kept.state = (*R, *v, *u);
+        zs[range.clone()].copy_from_slice(z);
+        kept.multipliers = w.is_some();
+        if let Some(w) = w {
+            ws[range.clone()].copy_from_slice(w);
+        }
+        kept.rates = lin.lin.rates;
+        turning[range.clone()].copy_from_slice(&lin.turning);
+        let mut loads = crate::collocation::dynamics::inertia_load_transposed(site, R, ratio, length);
+        kept.valid = lin.load_response(&mut loads, &mut turns[range]);
+        kept.loads = loads;
+    }
+
+    /// The rates and turning rates at point `index` with its response to the inertia loads
+    /// (into `loads`, one load per row, and `turns`, one per slip) kept by
+    /// [`Profile::keep_response`] from the same inputs, bit for bit (what evaluating them
+    /// again gives); None otherwise.
+    pub(crate) fn kept_response(
+        &self,
+        index: usize,
+        segment_end: f64,
+        state: (&Matrix3<f64>, &Vector3<f64>, &Vector3<f64>),
+        (z, w): (&[f64], Option<&[f64]>),
+        (loads, turns): (&mut SMatrix<f64, 6, 6>, &mut Vec<SMatrix<f64, 1, 6>>),
+    ) -> Option<(Vector6<f64>, Vec<f64>)> {
+        let responses = self.responses.borrow();
+        let kept = responses.points.get(index)?;
+        let range = index * self.count()..(index + 1) * self.count();
+        let same = kept.valid
+            && kept.segment_end == segment_end
+            && (&kept.state.0, &kept.state.1, &kept.state.2) == state
+            && responses.z[range.clone()] == *z
+            && match w {
+                Some(w) => kept.multipliers && responses.w[range.clone()] == *w,
+                None => !kept.multipliers,
+            };
+        if !same {
+            return None;
+        }
+        *loads = kept.loads;
+        turns.clear();
+        turns.extend_from_slice(&responses.turns[range.clone()]);
+        Some((kept.rates, responses.turning[range].to_vec()))
     }
 
     /// The robot.

@@ -131,12 +131,13 @@ pub(super) fn capstan_start(model: &Model, mesh: &Mesh, x: &mut [State], profile
             relaxation = aitken(relaxation, &last_step, &step);
         }
         relax_strains(&mut strains, &step, relaxation, length);
-        kept.copy_from_slice(x);
         integrate_poses_into(model, nodes, &strains, &mut poses);
+        // The shape before this pass stays in `kept` (the buffers swapped, not copied).
+        kept.swap_with_slice(x);
         for (k, state) in x.iter_mut().enumerate() {
             let (a, b) = (&poses0[k], &poses[k]);
             *state = State {
-                s: state.s,
+                s: kept[k].s,
                 p: x0[k].p + (b.0 - a.0),
                 R: x0[k].R * a.1.transpose() * b.1,
                 v: strains[k].0,
