@@ -51,6 +51,7 @@ pub(crate) mod newton;
 mod options;
 mod order6;
 mod order8;
+mod path_index;
 mod path;
 mod path_types;
 mod phase;

@@ -22,7 +22,8 @@ use super::branch;
 pub(super) use super::corrector::{correct, correct_to};
 use super::homotopy::{Homotopy, Point, dot, tangent};
 use super::locate;
-use super::neutral::index;
+use super::neutral;
+use super::path_index;
 use super::newton::{self, Settings, Workspace};
 use super::options::Options;
 pub(super) use super::path_types::{End, Recorded, Start};
@@ -145,6 +146,14 @@ pub(super) fn follow(
         }
     };
     let tracing = record.is_some();
+    // The count compared between points: under loads that are not conservative the parity of
+    // the conjugate points, which sees folds, real bifurcations and jumps to a branch of the
+    // other sign of det J (module `parity`); a trace records the conjugate-point count
+    // (unknown for such loads: a parity is no verdict).
+    let index = |system: &System, ws: &mut Workspace, x: &[State], family: bool, report: &mut SolveReport| match tracing {
+        true => neutral::index(system, ws, x, family, report),
+        false => path_index::index(system, ws, x, family, report),
+    };
     // A trace records its own branch; every other path leaves a stable branch for a stable
     // one where the branch it is on loses stability (module `branch`).
     let mut switching = !tracing;
