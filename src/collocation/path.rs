@@ -23,9 +23,9 @@ pub(super) use super::corrector::{correct, correct_to};
 use super::homotopy::{Homotopy, Point, dot, tangent};
 use super::locate;
 use super::neutral;
-use super::path_index;
 use super::newton::{self, Settings, Workspace};
 use super::options::Options;
+use super::path_index;
 pub(super) use super::path_types::{End, Recorded, Start};
 use super::phase::{Phase, generic};
 use super::refine;
@@ -150,7 +150,8 @@ pub(super) fn follow(
     // the conjugate points, which sees folds, real bifurcations and jumps to a branch of the
     // other sign of det J (module `parity`); a trace records the conjugate-point count
     // (unknown for such loads: a parity is no verdict).
-    let index = |system: &System, ws: &mut Workspace, x: &[State], family: bool, report: &mut SolveReport| match tracing {
+    let index = |system: &System, ws: &mut Workspace, x: &[State], family: bool, report: &mut SolveReport| match tracing
+    {
         true => neutral::index(system, ws, x, family, report),
         false => path_index::index(system, ws, x, family, report),
     };

@@ -1,16 +1,16 @@
 //! The count a load path compares between its points, for every load (docs/stability.md,
-//! "Loads that are not conservative: events on the load path").
+//! "Loads that are not conservative: the linearized dynamics", "Events on the load path").
 //!
 //! Under conservative loads it is the number of unstable directions (module `neutral`).
-//! Under loads that are not conservative that number has no meaning (the conjugate-point
-//! test needs a potential energy), but the parity of the conjugate points still does: it is
-//! the sign of det Q at the base, det Q(L) = I at the tip, and det Q(0) vanishes exactly
-//! where the Jacobian is singular, so the parity changes where a real eigenvalue of the
-//! linearization crosses zero (a fold, a real bifurcation, a divergence), whatever the
-//! load, and nowhere else. From the rest state (parity 0) an odd parity proves an odd number
-//! of real eigenvalues crossed: unstable by divergence. An even parity proves nothing (two
-//! crossings, or a flutter pair); the answer's verdict still comes from the linearized
-//! dynamics.
+//! Under loads that are not conservative it is no verdict (the conjugate-point test needs a
+//! potential energy), but the same count of the roots of det Q on [0, L) still labels the
+//! branch. Its roots move continuously along a branch. One enters or leaves at the base only
+//! where det J is zero (a fold, a real bifurcation, a real eigenvalue through zero). Two can
+//! also leave as a pair in the interior, which conservative loads forbid and which no
+//! measured path showed. So a change without a fold
+//! is a jump to another branch or a crossing, as under conservative loads. Its parity is the
+//! sign of det J relative to the rest state, but a jump can keep the parity (robot 254's, to
+//! a state with 2 conjugate points), so the whole count is compared.
 
 use super::neutral;
 use super::newton::Workspace;
@@ -20,10 +20,10 @@ use crate::report::{SolveReport, Stability};
 use crate::solution::State;
 
 /// The number of unstable directions at `x` (module `neutral`, [`neutral::index`]) under
-/// conservative loads; under loads that are not conservative the parity of the conjugate
-/// points (0 or 1), roots in the neutral zone at the base included (a root there is det Q
-/// near zero at the base, which the sign must see). `ws` holds the Jacobian evaluated at
-/// `x`. None when the fields cannot be carried along the rod.
+/// conservative loads; under loads that are not conservative the count of the conjugate
+/// points, roots in the neutral zone at the base included (a root there is det J near zero,
+/// which the path must see). `ws` holds the Jacobian evaluated at `x`. None when the fields
+/// cannot be carried along the rod.
 pub(super) fn index(
     system: &System,
     ws: &mut Workspace,
