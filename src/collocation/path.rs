@@ -146,14 +146,16 @@ pub(super) fn follow(
         }
     };
     let tracing = record.is_some();
-    // The count compared between points: under loads that are not conservative the parity of
-    // the conjugate points, which sees folds, real bifurcations and jumps to a branch of the
-    // other sign of det J (module `parity`); a trace records the conjugate-point count
-    // (unknown for such loads: a parity is no verdict).
-    let index = |system: &System, ws: &mut Workspace, x: &[State], family: bool, report: &mut SolveReport| match tracing
-    {
-        true => neutral::index(system, ws, x, family, report),
-        false => path_index::index(system, ws, x, family, report),
+    // The count compared between points: under loads that are not conservative the
+    // conjugate-point count as a label of the branch, which sees folds, real bifurcations and
+    // jumps to another branch (module `path_index`); a trace records the verdict's count
+    // (unknown for such loads: the label is no verdict).
+    let index = |system: &System, ws: &mut Workspace, x: &[State], family, report: &mut SolveReport| {
+        if tracing {
+            neutral::index(system, ws, x, family, report)
+        } else {
+            path_index::index(system, ws, x, family, report)
+        }
     };
     // A trace records its own branch; every other path leaves a stable branch for a stable
     // one where the branch it is on loses stability (module `branch`).
