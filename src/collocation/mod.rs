@@ -53,6 +53,7 @@ mod options;
 mod order6;
 mod order8;
 mod path;
+mod path_index;
 mod path_types;
 mod phase;
 mod pipeline;

@@ -22,9 +22,10 @@ use super::branch;
 pub(super) use super::corrector::{correct, correct_to};
 use super::homotopy::{Homotopy, Point, dot, tangent};
 use super::locate;
-use super::neutral::index;
+use super::neutral;
 use super::newton::{self, Settings, Workspace};
 use super::options::Options;
+use super::path_index;
 pub(super) use super::path_types::{End, Recorded, Start};
 use super::phase::{Phase, generic};
 use super::refine;
@@ -140,6 +141,17 @@ pub(super) fn follow(
         }
     };
     let tracing = record.is_some();
+    // The count compared between points: under loads that are not conservative the
+    // conjugate-point count as a label of the branch, which sees folds, real bifurcations and
+    // jumps to another branch (module `path_index`); a trace records the verdict's count
+    // (unknown for such loads: the label is no verdict).
+    let index = |system: &System, ws: &mut Workspace, x: &[State], family, report: &mut SolveReport| {
+        if tracing {
+            neutral::index(system, ws, x, family, report)
+        } else {
+            path_index::index(system, ws, x, family, report)
+        }
+    };
     // A trace records its own branch; every other path leaves a stable branch for a stable
     // one where the branch it is on loses stability (module `branch`).
     let mut switching = !tracing;
