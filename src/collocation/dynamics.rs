@@ -31,6 +31,8 @@ mod arnoldi;
 pub(crate) mod friction;
 mod hessenberg;
 pub(crate) mod pulled;
+#[cfg(test)]
+mod simulate;
 pub(crate) mod stuck;
 
 use super::newton::Workspace;
