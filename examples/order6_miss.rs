@@ -3,11 +3,12 @@
 //! 1e-10 L solve (or `TOL`), then the order-4 and order-6 answers (with the unreported order-8
 //! estimate, before its factor and rounding term) on the mesh that solve ends on and on that
 //! mesh with every interval split into k, against order-4 references on 32x and 64x that
-//! mesh (warm, from the solve, and cold, from the default guess).
+//! mesh (warm, from the solve, and cold, from the default guess), and each order-6 answer's
+//! distance from the one on the finest split (which does not carry those references' rounding).
 //!
 //! `cargo run --release --example order6_miss -- [ROBOT.toml]` (default
 //! tests/data/order6-miss-slender.toml, a robot of the 600-robot property run);
-//! `SPLITS=1,2,4` chooses k, `NODES=1` prints the error node by node on the solve's mesh,
+//! `SPLITS=1,2,4` chooses k, `NODES=1` prints the solve's mesh and the error node by node on it,
 //! `INTERVALS=32` solves on that fixed uniform mesh instead, `TOL=1e-7` at that tolerance (relative to L; at the default 1e-7 the solve
 //! is the order-4 answer, and split 1 shows the order-6 answer the default would return,
 //! tests/data/order6-default-miss.toml: docs/numerics.md, "Why the default keeps order 4").
@@ -72,6 +73,9 @@ fn main() {
     let mut dedup = nodes.clone();
     dedup.dedup();
     println!("{} intervals", solution.report.intervals);
+    if std::env::var("NODES").is_ok() {
+        println!("mesh {dedup:?}");
+    }
     let reference = |k: usize| {
         let fine = collocation::Options {
             mesh: Some(split(&dedup, k)),
@@ -119,7 +123,8 @@ fn main() {
     );
     let splits: Vec<usize> =
         std::env::var("SPLITS").map_or(vec![1, 2, 4], |t| t.split(',').map(|k| k.parse().unwrap()).collect());
-    for k in splits {
+    let mut tips6 = Vec::new();
+    for &k in &splits {
         let (x4, x6, est) = order6(&robot, &solution, &split(&dedup, k), 1e-12);
         let t4 = x4.last().unwrap();
         println!(
@@ -128,6 +133,7 @@ fn main() {
             rot(&t4.R, &r64.tip().R)
         );
         let tip = x6.last().unwrap();
+        tips6.push((k, tip.p, tip.R));
         // Unreported: the order-8 estimate itself (SAFETY 1.25, ROUNDING 4e-13).
         let raw_p = (est.tip_position - 4e-13 * length) / 1.25;
         let raw_r = (est.tip_rotation - 4e-13) / 1.25;
@@ -158,6 +164,17 @@ fn main() {
                 let dr = rot(&n.R, &r64.nodes[j].R);
                 println!("  node {i} s/L {:.4}: dp {d:.3e} dtheta {dr:.3e}", nodes[i] / length);
             }
+        }
+    }
+    // The order-6 answers against the finest one: a reference that does not carry the
+    // order-4 references' rounding on 32x and 64x the mesh.
+    if let Some(&(kf, pf, rf)) = tips6.last() {
+        for &(k, p, r) in &tips6 {
+            println!(
+                "order 6 split {k} vs split {kf}: {:.3e} L, {:.3e} rad",
+                (p - pf).norm() / length,
+                rot(&r, &rf)
+            );
         }
     }
 }
