@@ -360,7 +360,7 @@ fn moved_note((lambda, reached): (f64, bool)) -> String {
     };
     format!(
         "{why}, and Newton at the full load from its folds found no stable state: the robot snaps at \
-         the fold at {:.1} % of the way, and this stable state is where the load path goes on from \
+         the fold at {:.1} % of the way, and this is the state where the load path goes on from \
          the state its damped motion just past the fold comes to rest in",
         100.0 * lambda
     )
@@ -449,7 +449,6 @@ fn choose_from(
                         .iter()
                         .map(|&l| picked_note(l, end.family.then_some(&end.x[..]))),
                 );
-                report.notes.extend(end.moved_from.iter().map(|&m| moved_note(m)));
                 report.notes.extend(end.moved_from.iter().map(|&m| moved_note(m)));
                 report.notes.extend(end.snapped_from.map(snapped_note));
                 report.notes.extend(end.relaxed_from.map(relaxed_note));

@@ -30,6 +30,7 @@ pub(super) use super::path_types::{End, Recorded, Start};
 use super::phase::{Phase, generic};
 use super::refine;
 use super::snap;
+use super::stability;
 use super::system::System;
 use crate::mesh::guess::rigid_estimate;
 use crate::report::{SolveReport, Termination};
@@ -153,8 +154,12 @@ pub(super) fn follow(
         }
     };
     // A trace records its own branch; every other path leaves a stable branch for a stable
-    // one where the branch it is on loses stability (module `branch`).
-    let mut switching = !tracing;
+    // one where the branch it is on loses stability (module `branch`). Switching, snapping
+    // and landing need states known to be stable, which only the conservative count gives:
+    // under other loads the count labels branches and nothing more (they would give up).
+    let conservative = stability::non_conservative(&system.model).is_none();
+    landing &= conservative;
+    let mut switching = !tracing && conservative;
     let mut picked = Vec::new();
     // The phase condition of a family's branch, once the path has taken one (module `phase`).
     let mut phase: Option<Phase> = None;

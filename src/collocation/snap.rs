@@ -226,9 +226,9 @@ impl Fold {
 /// before, the family flag, and why the path landed (as [`End::snapped_from`]); `chain`: the
 /// motions this solve ran before. Returns the end, the path before the fold joined to it;
 /// None (with `system` at lambda = 1) when the fold's states are on another mesh, the motion
-/// does not come to rest at a stable state, or the path on fails on this mesh; the path on's
-/// failure after it refined the mesh is returned as it is (the states of the path before
-/// belong to the old mesh).
+/// does not come to rest at a stable state, or the path on fails or ends unstable on this
+/// mesh; the path on's end or failure after it refined the mesh is returned as it is (the
+/// states of the path before belong to the old mesh).
 #[allow(clippy::too_many_arguments)]
 pub(super) fn from_fold(
     system: &mut System,
@@ -273,6 +273,14 @@ pub(super) fn from_fold(
             }
         },
     };
+    // The route counts only where it ends stable (the motion rests stable, the path on may
+    // not end so); a mesh the path on refined to keeps its end, as its failure there.
+    if system.mesh.nodes.len() == nodes
+        && !(ws.linearize(system, &end.x, report) && index(system, ws, &end.x, end.family, report) == Some(0))
+    {
+        homotopy.set(system, 1.0);
+        return None;
+    }
     // The robot's route: the path up to the fold it snapped at, then the path on.
     let join = |before: &[f64], n: usize, after: &mut Vec<f64>| {
         let mut all = before[..n.min(before.len())].to_vec();
@@ -290,7 +298,7 @@ pub(super) fn from_fold(
 /// The fold of `fold` located, and the stable state where the damped motion from its state
 /// comes to rest under the load [`PAST_FOLD`] past it (at most 1): (the fold's load factor,
 /// the motion's, the state), with `system` at the motion's load; None when it does not come
-/// to rest at a stable state.
+/// to rest at a stable state or the fold was not located.
 fn motion_past(
     system: &mut System,
     homotopy: &Homotopy,
@@ -305,8 +313,10 @@ fn motion_past(
     let mut slope = fold.next_tl.abs().max(point.tl.abs());
     // The last state located on the path's side of the fold (before the turn, stable).
     let (mut lf, mut xf) = (point.lambda, point.x.clone());
+    let mut located = false;
     for _ in 0..MAX_BISECTIONS {
         if (hi - lo) * slope <= 0.5 * locate::LOCATED {
+            located = true;
             break;
         }
         let m = 0.5 * (lo + hi);
@@ -328,6 +338,10 @@ fn motion_past(
         } else {
             hi = m;
         }
+    }
+    // A fold not located could lie further than PAST_FOLD past the last state before it.
+    if !located {
+        return None;
     }
     let load = (lf + PAST_FOLD).min(1.0);
     homotopy.set(system, load);
