@@ -176,7 +176,8 @@ fn pulled_step(
 /// tension itself is a kink of the step's pull-in (see [`toward_root`]) and a tie for every
 /// link of the march, whose stuck profile there is the last answer's; the secant's tension
 /// lies off it, on the side of the root. Where the secant is missing (the second step, a
-/// slack or unmoved tendon) or not increasing, the last step's tension.
+/// slack or unmoved tendon), not increasing, or behind the input's new direction (a
+/// reversal), the last step's tension.
 fn predicted(robot: &crate::Robot, last: &Solution, before: Option<&Solution>) -> Vec<f64> {
     let mut tensions = last.tensions();
     let Some(before) = before else {
@@ -188,7 +189,9 @@ fn predicted(robot: &crate::Robot, last: &Solution, before: Option<&Solution>) -
         };
         let (a, b) = (&before.tendons[i], &last.tendons[i]);
         let slope = (b.displacement - a.displacement) / (b.tension - a.tension);
-        if a.tension > 0.0 && b.tension > 0.0 && slope.is_finite() && slope > 0.0 {
+        // At a reversal the secant spans the stuck kink (a slope near zero): not used there.
+        let onward = (q - b.displacement) * (b.displacement - a.displacement) > 0.0;
+        if onward && a.tension > 0.0 && b.tension > 0.0 && slope.is_finite() && slope > 0.0 {
             tensions[i] = (b.tension + (q - b.displacement) / slope).max(0.0);
         }
     }
