@@ -124,7 +124,7 @@ pub(super) enum Start<'x> {
     Warm(&'x [State]),
     /// The load path from `x`, a stable state at rest under the load factor `lambda` (where
     /// the robot's damped motion past a fold came to rest, [`super::snap::from_fold`]), to 1;
-    /// it snaps and lands as [`Start::Rest`] with `land`.
+    /// it snaps and lands as [`Start::Rest`] with `land` true.
     Resting {
         /// The states at `lambda`.
         x: &'x [State],

@@ -50,7 +50,7 @@ pub(crate) struct Sample {
 /// (p, theta) (a direction that meets the constraints to first order and holds every mode,
 /// no one in particular), at rest: `steps` steps of length `h` (s), stopped early once the
 /// norm has grown `stop` times; Newmark's gamma = 1/2 + `delta`. `ws` holds the factors of the Jacobian at `x` on entry (its
-/// factors are J + (4 / h^2) M on return). None when a factorization, a solve or a step's
+/// factors are J + M / (beta h^2) on return, beta = (gamma + 1/2)^2 / 4). None when a factorization, a solve or a step's
 /// Newton iteration fails.
 pub(crate) fn motion(
     system: &System,
