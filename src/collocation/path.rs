@@ -65,23 +65,7 @@ const WARM_TURNED_BACK: &str = "the path from the warm start turned back at a fo
 /// A step that changes the number of unstable directions without a fold has jumped to
 /// another branch near a bifurcation, unless it is this short (in normalized arclength):
 /// then the path crosses a bifurcation point itself.
-const BIFURCATION_STEP: f64 = 1e-3;
-
-/// Whether a path whose count of unstable directions went from `counts.0` to `counts.1` over
-/// a step `h` (as the path signs it) snaps there (docs/stability.md, "Snapping from a bifurcation"): on a
-/// load path from rest that may leave its branch (`landing`: a cold or warm solve's, not one
-/// that keeps to its warm start's branch, [`Start::Rest`]), with the count risen, no family
-/// held, and either no switch left (`switching` false) or a step short enough to cross the
-/// bifurcation that found no stable branch.
-fn snaps_here(
-    landing: bool,
-    counts: (Option<usize>, Option<usize>),
-    switching: bool,
-    h: f64,
-    holds_family: bool,
-) -> bool {
-    matches!(counts, (Some(a), Some(b)) if b > a) && landing && !holds_family && (!switching || h <= BIFURCATION_STEP)
-}
+pub(super) const BIFURCATION_STEP: f64 = 1e-3;
 
 /// Follows a path on `system` (whose mesh it may refine, replacing `system` and `ws`) from
 /// lambda = 0 to 1 ([`Start`]): the load path from rest, the Newton homotopy from a warm
@@ -336,7 +320,7 @@ pub(super) fn follow(
                 h = h1.abs().min(max_step);
                 continue;
             }
-            if snaps_here(landing, (unstable, landed_unstable), switching, h1, phase.is_some())
+            if snap::snaps_here(landing, (unstable, landed_unstable), switching, h1, phase.is_some())
                 && let Some((at, picked_side, x)) = snap::from_bifurcation(
                     system,
                     &homotopy,
@@ -446,7 +430,7 @@ pub(super) fn follow(
                     // path may not switch (it did once) or a step short enough to cross it
                     // found no stable branch: the robot snaps (docs/stability.md, "Snapping
                     // from a bifurcation").
-                    if snaps_here(landing, (Some(a), Some(b)), switching, h, phase.is_some())
+                    if snap::snaps_here(landing, (Some(a), Some(b)), switching, h, phase.is_some())
                         && let Some((at, picked_side, x)) = snap::from_bifurcation(
                             system,
                             &homotopy,

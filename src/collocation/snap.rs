@@ -14,7 +14,7 @@ use super::locate;
 use super::neutral::index;
 use super::newton::{self, Settings, Workspace};
 use super::options::Options;
-use super::path::{End, Start, correct_to, follow};
+use super::path::{BIFURCATION_STEP, End, Start, correct_to, follow};
 use super::phase::{Phase, generic, kernel};
 use super::relax::relax;
 use super::system::System;
@@ -348,4 +348,20 @@ fn motion_past(
     let x = relax(system, ws, xf, settings, report)?;
     report.termination = Termination::Converged;
     Some((lf, load, x))
+}
+
+/// Whether a path whose count of unstable directions went from `counts.0` to `counts.1` over
+/// a step `h` (as the path signs it) snaps there (docs/stability.md, "Snapping from a bifurcation"): on a
+/// load path from rest that may leave its branch (`landing`: a cold or warm solve's, not one
+/// that keeps to its warm start's branch, [`Start::Rest`]), with the count risen, no family
+/// held, and either no switch left (`switching` false) or a step short enough to cross the
+/// bifurcation that found no stable branch.
+pub(super) fn snaps_here(
+    landing: bool,
+    counts: (Option<usize>, Option<usize>),
+    switching: bool,
+    h: f64,
+    holds_family: bool,
+) -> bool {
+    matches!(counts, (Some(a), Some(b)) if b > a) && landing && !holds_family && (!switching || h <= BIFURCATION_STEP)
 }
