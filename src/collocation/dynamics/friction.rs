@@ -302,7 +302,13 @@ mod tests {
                     .kept_response(0, seg, state, (&z, w.as_deref()), (&mut loads, &mut turns))
                     .is_some()
             );
+            let hits = border.system().friction.as_ref().unwrap().kept_hits();
             let kept = CapstanMass::new(&border, &x).unwrap();
+            // Each link's start node and midpoint reads a kept response (measured: exactly
+            // 2 per link on H; a cache that never hits would read none).
+            let links = x.len() - 1;
+            let read = border.system().friction.as_ref().unwrap().kept_hits() - hits;
+            assert!(read >= 2 * links, "{read} kept responses read for {links} links");
             let mut compared = 0;
             for (a, b) in fresh.backbone.blocks.iter().zip(&kept.backbone.blocks) {
                 match (a, b) {

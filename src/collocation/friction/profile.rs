@@ -74,6 +74,9 @@ struct Responses {
     w: Vec<f64>,
     turning: Vec<f64>,
     turns: Vec<SMatrix<f64, 1, 6>>,
+    /// How many times a kept response was returned (tests count the reuse).
+    #[cfg(test)]
+    hits: std::cell::Cell<usize>,
 }
 
 /// One point of [`Responses`].
@@ -483,6 +486,7 @@ impl<'a> Profile<'a> {
             w: ws,
             turning,
             turns,
+            ..
         } = &mut *responses;
         if points.len() <= index {
             // Every point of the mesh at once: 2 per link.
@@ -535,10 +539,18 @@ impl<'a> Profile<'a> {
         if !same {
             return None;
         }
+        #[cfg(test)]
+        responses.hits.set(responses.hits.get() + 1);
         *loads = kept.loads;
         turns.clear();
         turns.extend_from_slice(&responses.turns[range.clone()]);
         Some((kept.rates, responses.turning[range].to_vec()))
+    }
+
+    /// How many kept responses [`Profile::kept_response`] returned so far.
+    #[cfg(test)]
+    pub(crate) fn kept_hits(&self) -> usize {
+        self.responses.borrow().hits.get()
     }
 
     /// The robot.
