@@ -299,10 +299,7 @@ mod tests {
     /// without AVX2 both are the baseline).
     #[test]
     fn interval_jacobian_gives_the_baseline_bits() {
-        let mut robot = crate::cases::prototype();
-        for (i, tendon) in robot.tendons.iter_mut().enumerate().take(4) {
-            tendon.set_tension(0.4 + 0.7 * i as f64);
-        }
+        let robot = crate::collocation::test_support::pulled_prototype();
         let model = Model::new(&robot);
         let mesh = Mesh::uniform(&robot, 16).unwrap();
         let x = rigid_estimate(&model, &mesh.nodes);

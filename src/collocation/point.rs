@@ -169,10 +169,7 @@ mod tests {
     /// exp, J_r, J_r^-1 and products with the identity, not a term.
     #[test]
     fn the_start_frame_gives_the_general_frames_values_at_theta_zero() {
-        let mut robot = crate::cases::prototype();
-        for (i, tendon) in robot.tendons.iter_mut().enumerate().take(4) {
-            tendon.set_tension(0.4 + 0.7 * i as f64);
-        }
+        let robot = crate::collocation::test_support::pulled_prototype();
         let model = Model::new(&robot);
         let length = robot.length();
         let Rk = *Rotation3::from_euler_angles(0.3, -0.2, 0.7).matrix();

@@ -10,6 +10,16 @@ use crate::report::{Method, SolveReport};
 use crate::solution::State;
 use crate::{Robot, Solution};
 
+/// The prototype with its four tendons pulled at 0.4, 1.1, 1.8 and 2.5 N: every tendon
+/// term of eq. 13 and its linearization at work.
+pub(crate) fn pulled_prototype() -> Robot {
+    let mut robot = crate::cases::prototype();
+    for (i, tendon) in robot.tendons.iter_mut().enumerate().take(4) {
+        tendon.set_tension(0.4 + 0.7 * i as f64);
+    }
+    robot
+}
+
 /// The system of `robot` at `solution`'s tensions on `solution`'s own mesh, the solution's
 /// states on it, and a workspace (block elimination) that has evaluated and factored the
 /// Jacobian there, with the report that counted it.
