@@ -50,11 +50,50 @@ pub(super) fn fold(
     report: &mut SolveReport,
     r: &mut [f64],
 ) -> f64 {
+    let bracket = fold_bracket(system, homotopy, ws, (point, h), next.tl, settings, report, r);
+    restore(system, homotopy, ws, next, report);
+    bracket.lambda.unwrap_or(next.lambda)
+}
+
+/// Where a bisection of a fold's step ended ([`fold_bracket`]).
+pub(super) struct FoldBracket {
+    /// Whether the bracket narrowed to [`LOCATED`] (not: a middle point failed to converge,
+    /// or its Jacobian or tangent failed).
+    pub located: bool,
+    /// The load factor of the last middle point corrected (None when none was).
+    pub lambda: Option<f64>,
+    /// The last middle point corrected on `point`'s side of the fold (before the turn): its
+    /// load factor and state (None when none was).
+    pub before: Option<(f64, Vec<State>)>,
+}
+
+/// Bisection on the arclength of the step `h` from `point` that crossed a fold (the tangent's
+/// t_lambda past it `next_tl`): each middle point corrected on the bordered system to the
+/// solve's tolerance and its tangent oriented along the path, the bracket kept around the
+/// sign change of t_lambda until lambda moves over it by at most [`LOCATED`]. Leaves the
+/// factors of the last middle point (the caller restores or uses them).
+#[allow(clippy::too_many_arguments)]
+pub(super) fn fold_bracket(
+    system: &mut System,
+    homotopy: &Homotopy,
+    ws: &mut Workspace,
+    (point, h): (&Point, f64),
+    next_tl: f64,
+    settings: &Settings,
+    report: &mut SolveReport,
+    r: &mut [f64],
+) -> FoldBracket {
     let side = point.tl > 0.0;
     let (mut lo, mut hi) = (0.0, h);
-    let (mut lambda, mut slope) = (next.lambda, next.tl.abs().max(point.tl.abs()));
+    let mut slope = next_tl.abs().max(point.tl.abs());
+    let mut bracket = FoldBracket {
+        located: false,
+        lambda: None,
+        before: None,
+    };
     for _ in 0..MAX_BISECTIONS {
         if (hi - lo) * slope <= 0.5 * LOCATED {
+            bracket.located = true;
             break;
         }
         let m = 0.5 * (lo + hi);
@@ -67,15 +106,15 @@ pub(super) fn fold(
         let Some((p, _)) = tangent(system, homotopy, ws, x, l, Some((&point.tx, point.tl)), report) else {
             break;
         };
+        (bracket.lambda, slope) = (Some(l), p.tl.abs());
         if (p.tl > 0.0) == side {
             lo = m;
+            bracket.before = Some((l, p.x));
         } else {
             hi = m;
         }
-        (lambda, slope) = (l, p.tl.abs());
     }
-    restore(system, homotopy, ws, next, report);
-    lambda
+    bracket
 }
 
 /// The lambda where the number of unstable directions changes from `before` (at `point`)

@@ -9,12 +9,12 @@
 //! (docs/stability.md, "A path that ends unstable after its folds lands from them").
 
 use super::branch::SYMMETRIC_COS;
-use super::homotopy::{Homotopy, Point, dot, tangent};
+use super::homotopy::{Homotopy, Point, dot};
 use super::locate;
 use super::neutral::index;
 use super::newton::{self, Settings, Workspace};
 use super::options::Options;
-use super::path::{BIFURCATION_STEP, End, Start, correct_to, follow};
+use super::path::{BIFURCATION_STEP, End, Start, follow};
 use super::phase::{Phase, generic, kernel};
 use super::relax::relax;
 use super::system::System;
@@ -184,9 +184,6 @@ const PAST_FOLD: f64 = 0.01;
 /// The most motions from folds one solve chains (each followed by a path on that may snap at
 /// a fold again): a bound, so that a solve always ends.
 const MAX_CHAIN: usize = 8;
-/// The most bisections locating the fold (as [`locate::fold`]'s: any step below 1e-18 of
-/// itself).
-const MAX_BISECTIONS: usize = 60;
 
 /// The first fold a load path met on a stable branch going forward, where the robot loaded
 /// from rest snaps: the point before it, the step `h` that crossed it, the tangent's
@@ -219,7 +216,7 @@ impl Fold {
 
 /// The robot's route from the first fold of a load path whose landing at the full load
 /// found no stable state: the fold located (bisection on the step's arclength as
-/// [`locate::fold`], keeping the last state before the turn), the damped motion (module
+/// [`locate::fold_bracket`], keeping the last state before the turn), the damped motion (module
 /// `relax`) from the fold's state under the load [`PAST_FOLD`] past it, and the load path on
 /// from where it comes to rest to lambda = 1 ([`Start::Resting`]), which may snap again
 /// (at most [`MAX_CHAIN`] motions). `path`: the folds, bifurcations and picked sides recorded
@@ -309,40 +306,22 @@ fn motion_past(
 ) -> Option<(f64, f64, Vec<State>)> {
     let point = &fold.point;
     let mut r = vec![0.0; system.unknowns()];
-    let (mut lo, mut hi) = (0.0, fold.h);
-    let mut slope = fold.next_tl.abs().max(point.tl.abs());
-    // The last state located on the path's side of the fold (before the turn, stable).
-    let (mut lf, mut xf) = (point.lambda, point.x.clone());
-    let mut located = false;
-    for _ in 0..MAX_BISECTIONS {
-        if (hi - lo) * slope <= 0.5 * locate::LOCATED {
-            located = true;
-            break;
-        }
-        let m = 0.5 * (lo + hi);
-        let Some((x, l, _)) = correct_to(system, homotopy, ws, point, m, settings.tolerance, report, &mut r, None)
-        else {
-            break;
-        };
-        homotopy.set(system, l);
-        if !ws.linearize(system, &x, report) {
-            break;
-        }
-        let Some((p, _)) = tangent(system, homotopy, ws, x, l, Some((&point.tx, point.tl)), report) else {
-            break;
-        };
-        slope = p.tl.abs();
-        if p.tl > 0.0 {
-            lo = m;
-            (lf, xf) = (l, p.x);
-        } else {
-            hi = m;
-        }
-    }
+    let bracket = locate::fold_bracket(
+        system,
+        homotopy,
+        ws,
+        (point, fold.h),
+        fold.next_tl,
+        settings,
+        report,
+        &mut r,
+    );
     // A fold not located could lie further than PAST_FOLD past the last state before it.
-    if !located {
+    if !bracket.located {
         return None;
     }
+    // The last state located on the path's side of the fold (before the turn, stable).
+    let (lf, xf) = bracket.before.unwrap_or_else(|| (point.lambda, point.x.clone()));
     let load = (lf + PAST_FOLD).min(1.0);
     homotopy.set(system, load);
     let x = relax(system, ws, xf, settings, report)?;
