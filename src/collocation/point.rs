@@ -49,19 +49,6 @@ impl PointFrame {
         }
     }
 
-    /// [`PointFrame::new`] from `E = so3::exp(theta)` and `R = Rk * E` that the caller has
-    /// already formed: the same values, without forming them again.
-    #[inline(always)]
-    pub(super) fn with_rotation(E: Matrix3<f64>, R: Matrix3<f64>, theta: &Vector3<f64>) -> Self {
-        PointFrame {
-            E,
-            R,
-            Jr: so3::right_jacobian(theta),
-            Jri: so3::right_jacobian_inv(theta),
-            start: false,
-        }
-    }
-
     /// The frame at the interval's start node (theta = 0): `so3::exp`, `so3::right_jacobian`
     /// and `so3::right_jacobian_inv` give the identity there (every off-diagonal term a
     /// signed zero added to 0), and a product with the identity gives the other factor's

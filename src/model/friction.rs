@@ -36,7 +36,10 @@ use crate::model::robot::{Robot, TendonModel};
 use crate::model::tangential::{Slip, solve};
 use crate::model::tendon::Tendon;
 use crate::{Error, Readable};
-use nalgebra::{Matrix3, Matrix6, Matrix6x3, SMatrix, Vector3, Vector6};
+use nalgebra::allocator::Allocator;
+use nalgebra::{
+    DefaultAllocator, DimMin, Dyn, Matrix3, Matrix6, Matrix6x3, OMatrix, OVector, SMatrix, U1, U2, U3, Vector3, Vector6,
+};
 
 /// Checks the friction of tendon `i`: a finite coefficient >= 0, and for a coefficient > 0
 /// what the full-slip model needs: the coupled tendon model, and no breakpoint (point load or another tendon's termination)
@@ -518,25 +521,16 @@ impl FrictionLinearization {
             return false;
         }
         let slips = &self.slips;
-        let m = slips.len();
-        if m > 0 {
-            // J^-1 b = M^-1 b - Y S^-1 G^T M^-1 b (Woodbury, as `linearize_into`), S = I + G^T Y.
-            let gradients: Vec<Vector6<f64>> = slips.iter().map(Slip::gradient).collect();
-            let schur =
-                nalgebra::DMatrix::from_fn(m, m, |j, l| f64::from(u8::from(j == l)) + gradients[j].dot(&slips[l].y));
-            let lu = schur.lu();
-            for r in 0..6 {
-                let mb: Vector6<f64> = loads.row(r).transpose();
-                let g = nalgebra::DVector::from_fn(m, |l, _| gradients[l].dot(&mb));
-                let Some(w) = lu.solve(&g) else {
-                    return false;
-                };
-                let mut out = mb;
-                for (sl, wj) in slips.iter().zip(w.iter()) {
-                    out -= sl.y * *wj;
-                }
-                loads.set_row(r, &out.transpose());
-            }
+        // On the stack for up to 3 tendons with friction here (no allocation per point).
+        let woodbury = match slips.len() {
+            0 => true,
+            1 => woodbury_rows(U1, slips, loads),
+            2 => woodbury_rows(U2, slips, loads),
+            3 => woodbury_rows(U3, slips, loads),
+            m => woodbury_rows(Dyn(m), slips, loads),
+        };
+        if !woodbury {
+            return false;
         }
         turning.iter_mut().for_each(|t| t.fill(0.0));
         for sl in slips {
@@ -550,6 +544,33 @@ impl FrictionLinearization {
         }
         loads.iter().all(|v| v.is_finite())
     }
+}
+
+/// J^-1 b = M^-1 b - Y S^-1 G^T M^-1 b for each row of `loads` (which holds (M^-1 b)^T),
+/// S = I + G^T Y (Woodbury, as [`linearize_into`]), with S and its LU factors of dimension
+/// `d` (the number of `slips`): fixed dimensions keep them on the stack, the same
+/// operations in the same order as for a dynamic one. False for a singular S.
+fn woodbury_rows<D: DimMin<D, Output = D>>(d: D, slips: &[Slip], loads: &mut SMatrix<f64, 6, 6>) -> bool
+where
+    DefaultAllocator: Allocator<D, D> + Allocator<D>,
+{
+    let gradients = OVector::<Vector6<f64>, D>::from_fn_generic(d, U1, |l, _| slips[l].gradient());
+    let schur =
+        OMatrix::<f64, D, D>::from_fn_generic(d, d, |j, l| f64::from(u8::from(j == l)) + gradients[j].dot(&slips[l].y));
+    let lu = schur.lu();
+    for r in 0..6 {
+        let mb: Vector6<f64> = loads.row(r).transpose();
+        let g = OVector::<f64, D>::from_fn_generic(d, U1, |l, _| gradients[l].dot(&mb));
+        let Some(w) = lu.solve(&g) else {
+            return false;
+        };
+        let mut out = mb;
+        for (sl, wj) in slips.iter().zip(w.iter()) {
+            out -= sl.y * *wj;
+        }
+        loads.set_row(r, &out.transpose());
+    }
+    true
 }
 
 #[cfg(test)]

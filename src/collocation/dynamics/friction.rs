@@ -88,6 +88,12 @@ impl CapstanMass {
         let mut rows = Vec::new();
         let (mut za, mut zm, mut zb) = (SMatrix::<f64, 6, 6>::zeros(), SMatrix::zeros(), SMatrix::zeros());
         let (mut ta, mut tm, mut tb) = (Vec::new(), Vec::new(), Vec::new());
+        // The log tensions at the link's nodes and midpoint, refilled per link.
+        let (mut z_a, mut z_b, mut z_m) = (
+            Vec::with_capacity(count),
+            Vec::with_capacity(count),
+            Vec::with_capacity(count),
+        );
         // The node whose evaluation the last interval left in (zb, tb, end), with its
         // segment and multipliers: the next interval's start when it has the same inputs.
         let mut carried: Option<(usize, f64, Option<Vec<f64>>)> = None;
@@ -103,8 +109,10 @@ impl CapstanMass {
             let h = sites.end.s - sites.start.s;
             let multipliers = profile.multipliers(k);
             let w = multipliers.as_deref();
-            let z_a: Vec<f64> = profile.z.iter().map(|z| z[k]).collect();
-            let z_b: Vec<f64> = profile.z.iter().map(|z| z[k + 1]).collect();
+            z_a.clear();
+            z_a.extend(profile.z.iter().map(|z| z[k]));
+            z_b.clear();
+            z_b.extend(profile.z.iter().map(|z| z[k + 1]));
             let (ra, kappa_a) = match (carried.take(), end.take()) {
                 (Some((node, s, kept)), Some(start)) if node == k && s == seg && kept.as_deref() == w => {
                     std::mem::swap(&mut za, &mut zb);
@@ -127,9 +135,8 @@ impl CapstanMass {
             // The Hermite-Simpson midpoint of (y, z), as the interval's rows take it.
             let [y0, y1, f0, f1] = end_values(sites, a, b, &ra, &rb);
             let ym = (y0 + y1) * 0.5 + (f0 - f1) * (h / 8.0);
-            let z_m: Vec<f64> = (0..count)
-                .map(|j| 0.5 * (z_a[j] + z_b[j]) + h / 8.0 * (kappa_a[j] - kappa_b[j]))
-                .collect();
+            z_m.clear();
+            z_m.extend((0..count).map(|j| 0.5 * (z_a[j] + z_b[j]) + h / 8.0 * (kappa_a[j] - kappa_b[j])));
             let part = |at: usize| Vector3::new(ym[at], ym[at + 1], ym[at + 2]);
             let Rm = a.R * so3::exp(&part(THETA));
             let (vm, um) = (part(V), part(U));
@@ -141,8 +148,8 @@ impl CapstanMass {
                 }
             }
             blocks.push(Some(block));
-            end = Some((rb, kappa_b.clone()));
-            carried = Some((k + 1, seg, multipliers.clone()));
+            end = Some((rb, kappa_b));
+            carried = Some((k + 1, seg, multipliers));
             // The capstan row psi = z_b - z_a - h/6 (kappa~_a + 4 kappa~_m + kappa~_b)
             // gains the same quadrature of the turning rates' response, with the sign the
             // backbone rows' rates have in theirs (module docs of `dynamics`).

@@ -226,19 +226,21 @@ fn interval_at_kernel(
     zm.extend((0..count).map(|j| 0.5 * (za[j] + zb[j]) + h / 8.0 * (la.turning[j] - lb.turning[j])));
     let theta_m: Vector3<f64> = ym.fixed_rows::<3>(THETA).into();
     let (vm, um): (Vector3<f64>, Vector3<f64>) = (ym.fixed_rows::<3>(6).into(), ym.fixed_rows::<3>(9).into());
-    // exp(theta_m) and R_m once: the midpoint's frame and the chain rule below take them.
-    let Em = so3::exp(&theta_m);
-    let Rm = a.R * Em;
+    // exp(theta_m) and R_m once; with derivatives the midpoint's whole frame (exp, J_r and
+    // J_r^-1 from one evaluation, the same bits as `so3::exp`), which the chain rule below
+    // takes too.
+    let frame_m = derivatives.then(|| PointFrame::new(&a.R, &theta_m));
+    let (Em, Rm) = match &frame_m {
+        Some(frame) => (frame.E, frame.R),
+        None => {
+            let Em = so3::exp(&theta_m);
+            (Em, a.R * Em)
+        }
+    };
     let lm = profile.point(&sites.mid, segment_end, &Rm, (&vm, &um), zm, w, derivatives)?;
-    let pm = derivatives.then(|| {
-        rhs_linearized_inline(
-            &sites.mid,
-            &lm.lin,
-            &a.R,
-            &ym,
-            &PointFrame::with_rotation(Em, Rm, &theta_m),
-        )
-    });
+    let pm = frame_m
+        .as_ref()
+        .map(|frame| rhs_linearized_inline(&sites.mid, &lm.lin, &a.R, &ym, frame));
     let fm = pm
         .as_ref()
         .map_or_else(|| rhs_from_rates(&sites.mid, &Rm, &ym, &lm.lin.rates), |pm| pm.f);
@@ -291,7 +293,7 @@ fn interval_at_kernel(
         }
     }
     out.derivatives = derivatives;
-    let (Some(jac), Some((p0, p1)), Some(pm), Some(frame1)) = (jac, ends, pm, frame1) else {
+    let (Some(jac), Some((p0, p1)), Some(pm), Some(frame1), Some(frame_m)) = (jac, ends, pm, frame1, frame_m) else {
         profile.keep_end(k, segment_end, b, zb, w, derivatives, lb);
         profile.give(la);
         profile.give(lm);
@@ -316,7 +318,7 @@ fn interval_at_kernel(
     dzm.clear();
     dzm.extend((0..count).map(|j| (node_turning(&la, j, 0) - node_turning(&lb, j, 9)) * (h / 8.0)));
     // F_m and kappa~_m in the midpoint's local coordinates (theta, v, u) and the frame.
-    let Jr_m = so3::right_jacobian(&theta_m);
+    let Jr_m = frame_m.Jr;
     let turning_y = |j: usize| {
         let mut row = SMatrix::<f64, 1, 12>::zeros();
         let d_phi = lm.d_turning[j].fixed_columns::<3>(6).into_owned();

@@ -10,7 +10,7 @@
 //! substitution and passes the other 6 rows on. The last step is a 12 x 12 dense solve of
 //! the leftover and tip rows. No fill outside the staircase, about 6 kflop per node (5.4 in the elimination, 0.4 in
 //! the back substitution), no
-//! allocation after construction.
+//! allocation after the first factoring.
 
 use std::time::{Duration, Instant};
 
@@ -55,9 +55,10 @@ const EMPTY: Record = Record {
 
 /// Scratch and factors for one mesh.
 pub struct BlockElimination {
-    /// Pivot rows of each step, 12 x 25 (block k, block k + 1, right-hand side), row major.
+    /// Pivot rows of each step, 12 x 25 (block k, block k + 1, right-hand side), row major;
+    /// empty until the first factoring.
     pivots: Vec<[[f64; COLS]; NODE]>,
-    /// Row operations of each step.
+    /// Row operations of each step; empty until the first factoring.
     records: Vec<Record>,
     /// The last node's 12 x 12 upper-triangular rows (right-hand side in column 12, then
     /// padding) and their row operations.
@@ -72,11 +73,13 @@ pub struct BlockElimination {
 }
 
 impl BlockElimination {
-    /// Scratch for a mesh with `nodes` nodes.
+    /// Scratch for a mesh with `nodes` nodes. The per-link factors (about 4.5 kB a link)
+    /// are allocated by the first factoring: a workspace whose Jacobian is factored
+    /// elsewhere (the staircase of tendons with friction) never zeroes them.
     pub fn new(nodes: usize) -> Self {
         BlockElimination {
-            pivots: vec![[[0.0; COLS]; NODE]; nodes - 1],
-            records: vec![EMPTY; nodes - 1],
+            pivots: Vec::new(),
+            records: Vec::new(),
             last: [[0.0; LAST_COLS]; NODE],
             last_record: EMPTY,
             links: nodes - 1,
@@ -204,6 +207,11 @@ impl BlockElimination {
         values: &[f64],
         mut slots: impl FnMut(usize, &mut [f64]),
     ) -> Option<[[f64; LW]; NODE]> {
+        if self.pivots.len() != self.links {
+            // The first factoring: the factors zeroed, as they were allocated before.
+            self.pivots = vec![[[0.0; COLS]; NODE]; self.links];
+            self.records = vec![EMPTY; self.links];
+        }
         // Carried rows start as the base rows: columns 0..6 of block 0.
         let mut carry = [[0.0; W]; CARRY];
         for (r, row) in carry.iter_mut().enumerate() {
