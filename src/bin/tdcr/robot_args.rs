@@ -67,6 +67,21 @@ pub fn set_tension(robot: &mut Robot, index: usize, tension: f64) -> Result<(), 
     }
 }
 
+/// Bad input if `values` (the `option`'s `I=VALUE` arguments) give a tendon twice: the
+/// second would silently replace the first.
+pub fn once(option: &str, values: &[(usize, f64)]) -> Result<(), Failure> {
+    for (k, &(i, a)) in values.iter().enumerate() {
+        if let Some(&(_, b)) = values[..k].iter().find(|&&(j, _)| j == i) {
+            return Err(Failure::Input(format!(
+                "{option} {i}=... is given twice ({option} {i}={} and {option} {i}={}): give each tendon one value",
+                tdcr::Readable(b),
+                tdcr::Readable(a)
+            )));
+        }
+    }
+    Ok(())
+}
+
 /// Sets the friction coefficient of tendon `index` (from 1), keeping the motion the file
 /// gives it (`pull` by default); a number past the last tendon is bad input.
 pub fn set_friction(robot: &mut Robot, index: usize, coefficient: f64) -> Result<(), Failure> {

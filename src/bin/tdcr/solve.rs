@@ -7,7 +7,7 @@ use tdcr::plot::{Figure, Style, shape_legend};
 
 use crate::args::{SolverArgs, parse_disks, parse_displacement, parse_friction, parse_samples, parse_tension};
 use crate::failure::{Failure, emit, note, picture_format, write_file, write_picture};
-use crate::robot_args::{apply, read_robot, run_solver, set_displacement, set_friction, set_tension};
+use crate::robot_args::{apply, once, read_robot, run_solver, set_displacement, set_friction, set_tension};
 use crate::tables::{diagnostics, solution_table, summary};
 
 /// The output formats of `solve`.
@@ -70,21 +70,6 @@ pub struct SolveArgs {
     disks: Option<usize>,
     #[command(flatten)]
     picture: crate::picture::PictureArgs,
-}
-
-/// Bad input if `values` (the `option`'s `I=VALUE` arguments) give a tendon twice: the
-/// second would silently replace the first.
-fn once(option: &str, values: &[(usize, f64)]) -> Result<(), Failure> {
-    for (k, &(i, a)) in values.iter().enumerate() {
-        if let Some(&(_, b)) = values[..k].iter().find(|&&(j, _)| j == i) {
-            return Err(Failure::Input(format!(
-                "{option} {i}=... is given twice ({option} {i}={} and {option} {i}={}): give each tendon one value",
-                tdcr::Readable(b),
-                tdcr::Readable(a)
-            )));
-        }
-    }
-    Ok(())
 }
 
 /// `tdcr solve`: solves one robot file and writes the output (and the picture).
