@@ -105,3 +105,50 @@ fn sweep_takes_friction_as_solve_does() {
         stderr(&out)
     );
 }
+
+/// An empty `--history`, an empty value in its list, and a negative tension in it are bad
+/// input (exit 2) whose message says so in the command's words.
+#[test]
+fn bad_history_lists_say_what_is_wrong() {
+    let dir = scratch("history");
+    std::fs::write(dir.join("robot.toml"), example_with(&dir, "friction = 0.1\n")).unwrap();
+    for (list, says) in [
+        ("", "--history is empty"),
+        ("0,,2", "value 2 of --history 0,,2 is empty"),
+        ("0,-1", "--history lists tension.1 = -1 N, a negative tension"),
+    ] {
+        let history = format!("--history={list}");
+        let out = run(&dir, &["sweep", "robot.toml", "--tension", "1=0", &history]);
+        assert_eq!(out.status.code(), Some(2), "{list}");
+        let err = stderr(&out);
+        assert!(err.contains(says) && !err.contains("tendons[0]"), "{list}: {err}");
+    }
+}
+
+/// A library message names its field as robot files and Python's messages do
+/// (`tendon[1].stiffness`), not by the library's index from 0 (`tendons[0]`).
+#[test]
+fn library_messages_name_fields_as_robot_files_do() {
+    let dir = scratch("field");
+    std::fs::write(dir.join("robot.toml"), example_with(&dir, "friction = 0.1\n")).unwrap();
+    let out = run(
+        &dir,
+        &["sweep", "robot.toml", "--tension", "1=0:4.91:5", "--history", "up-down"],
+    );
+    assert_eq!(out.status.code(), Some(2));
+    let err = stderr(&out);
+    assert!(
+        err.contains("`tendon[1].stiffness` tendon 1 sticks") && !err.contains("tendons[0]"),
+        "{err}"
+    );
+    let out = run(
+        &dir,
+        &["solve", "robot.toml", "--rod", "cosserat", "--tendons", "point_moment"],
+    );
+    assert_eq!(out.status.code(), Some(2));
+    let err = stderr(&out);
+    assert!(
+        err.contains("`tendon[1].friction` is 0.1") && !err.contains("tendons[0]"),
+        "{err}"
+    );
+}
