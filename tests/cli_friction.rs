@@ -106,6 +106,71 @@ fn sweep_takes_friction_as_solve_does() {
     );
 }
 
+/// The full `--jacobian` JSON has `friction`: d(tip pose)/d(mu_i), 6 rows x one column per
+/// tendon, the library's `TipSensitivities::friction` (zero for tendons without friction),
+/// which a central difference of two solves confirms.
+#[test]
+fn the_json_jacobian_has_the_tip_sensitivity_to_friction() {
+    let dir = scratch("jacobian");
+    std::fs::write(dir.join("robot.toml"), example_with(&dir, "")).unwrap();
+    let solve = |mu: f64, jacobian: bool| {
+        let friction = format!("1={mu}");
+        let mut args = vec![
+            "solve",
+            "robot.toml",
+            "--friction",
+            &friction,
+            "--intervals",
+            "64",
+            "--format",
+            "json",
+        ];
+        if jacobian {
+            args.push("--jacobian");
+        }
+        let out = run(&dir, &args);
+        assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+        serde_json::from_str::<serde_json::Value>(&stdout(&out)).unwrap()
+    };
+    let json = solve(0.1, true);
+    let column = |c: usize| -> Vec<f64> {
+        (0..6)
+            .map(|r| json["jacobian"]["friction"][r][c].as_f64().unwrap())
+            .collect()
+    };
+    let rows = json["jacobian"]["friction"].as_array().unwrap();
+    assert_eq!(rows.len(), 6);
+    assert!(rows.iter().all(|r| r.as_array().unwrap().len() == 5));
+    // The library's column on the same robot and mesh.
+    let mut robot = tdcr::io::parse(&example_with(&dir, ""), "robot.toml").unwrap().robot;
+    robot.tendons[0].friction = Some(tdcr::Friction::pull(0.1));
+    let solution = tdcr::collocation::solve(&robot, &tdcr::collocation::Options::fixed(64)).unwrap();
+    let want = tdcr::tip_sensitivities(&robot, &solution).unwrap().friction;
+    let scale = want.column(0).norm();
+    assert!(scale > 0.0);
+    for (r, got) in column(0).iter().enumerate() {
+        // 1e-12 of the column: the same robot, mesh and solve (the JSON prints in full)
+        assert!(
+            (got - want[(r, 0)]).abs() <= 1e-12 * scale,
+            "row {r}: {got} vs {}",
+            want[(r, 0)]
+        );
+    }
+    // Tendons without friction: no derivative is taken.
+    assert!((1..5).all(|c| column(c).iter().all(|&x| x == 0.0)));
+    // Against a central difference of the tip position in mu (step 1e-3).
+    let tip =
+        |j: &serde_json::Value| -> Vec<f64> { (0..3).map(|i| j["tip"]["position"][i].as_f64().unwrap()).collect() };
+    let (up, down) = (tip(&solve(0.101, false)), tip(&solve(0.099, false)));
+    let exact = column(0);
+    let difference: Vec<f64> = (0..3).map(|i| (up[i] - down[i]) / 0.002).collect();
+    let norm = difference.iter().map(|x| x * x).sum::<f64>().sqrt();
+    let off = (0..3).map(|i| (exact[i] - difference[i]).powi(2)).sum::<f64>().sqrt();
+    // 1e-4 relative: the difference's truncation error at a step of 1e-3 (the column itself
+    // is held to 1e-6 against sharper references in tests/sensitivity.rs)
+    assert!(off <= 1e-4 * norm, "{exact:?} vs {difference:?}");
+}
+
 /// An empty `--history`, an empty value in its list, and a negative tension in it are bad
 /// input (exit 2) whose message says so in the command's words.
 #[test]
