@@ -171,6 +171,37 @@ fn the_json_jacobian_has_the_tip_sensitivity_to_friction() {
     assert!(off <= 1e-4 * norm, "{exact:?} vs {difference:?}");
 }
 
+/// `tdcr check` lists a tendon's friction with its motion, and warns that a `motion` on a
+/// tendon without friction has no effect (as a `free_length` without `stiffness`).
+#[test]
+fn check_says_what_friction_and_motion_do() {
+    let dir = scratch("check");
+    std::fs::write(
+        dir.join("rough.toml"),
+        example_with(&dir, "friction = 0.1\nmotion = \"release\"\n"),
+    )
+    .unwrap();
+    let out = run(&dir, &["check", "rough.toml"]);
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    let text = stdout(&out);
+    let line = text.lines().find(|l| l.contains("tendon 1:")).unwrap();
+    assert!(line.ends_with("friction 0.1 (release)"), "{line}");
+    assert!(!text.contains("warning"), "{text}");
+    std::fs::write(dir.join("moved.toml"), example_with(&dir, "motion = \"release\"\n")).unwrap();
+    let out = run(&dir, &["check", "moved.toml"]);
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    let text = stdout(&out) + &stderr(&out);
+    assert!(
+        text.contains("`tendon[1].motion`") && text.contains("no friction") && text.contains("give `friction`"),
+        "{text}"
+    );
+    // `solve` prints it too, and `--friction` gives the motion its effect.
+    let out = run(&dir, &["solve", "moved.toml"]);
+    assert!(stderr(&out).contains("`tendon[1].motion`"), "{}", stderr(&out));
+    let out = run(&dir, &["solve", "moved.toml", "--friction", "1=0.1"]);
+    assert!(!stderr(&out).contains("`tendon[1].motion`"), "{}", stderr(&out));
+}
+
 /// An empty `--history`, an empty value in its list, and a negative tension in it are bad
 /// input (exit 2) whose message says so in the command's words.
 #[test]
