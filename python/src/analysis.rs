@@ -458,18 +458,48 @@ fn rows3(value: &Bound<'_, PyAny>, what: &str) -> PyResult<Vec<Vector3<f64>>> {
         .collect())
 }
 
+/// `calibrate`'s `motions` for `rows` measurements: each "pull", "release" or None (the
+/// robot's own motion); all None when not given.
+fn motion_list(motions: Option<Vec<Option<String>>>, rows: usize) -> PyResult<Vec<Option<tdcr::Motion>>> {
+    let Some(motions) = motions else {
+        return Ok(vec![None; rows]);
+    };
+    if motions.len() != rows {
+        return Err(invalid(format!(
+            "calibrate: {} motions for {rows} measurements; give one per measurement (\"pull\", \"release\" or None)",
+            motions.len()
+        )));
+    }
+    motions
+        .into_iter()
+        .enumerate()
+        .map(|(k, m)| match m.as_deref() {
+            None => Ok(None),
+            Some("pull") => Ok(Some(tdcr::Motion::Pull)),
+            Some("release") => Ok(Some(tdcr::Motion::Release)),
+            Some(other) => Err(invalid(format!(
+                "calibrate: motions[{k}] is \"{other}\"; give \"pull\" (a loading step), \"release\" (an unloading \
+                 step) or None (the robot's motion)"
+            ))),
+        })
+        .collect()
+}
+
 /// Calibration (`tdcr::fit::calibrate`): fits Young's modulus and the base XYZ Euler angles
 /// (by default; `fit` names any of "youngs_modulus", "euler", "base_position",
 /// "offset_scale", "friction": the coefficient shared by the tendons with friction, read
 /// back from the fitted robot) to measured tips. `tensions` is (M, k) (N, file order), `tip_forces`
-/// (M, 3) (N, world frame), `measured_tips` (M, 3) (m). The fit starts from the robot's own
+/// (M, 3) (N, world frame), `measured_tips` (M, 3) (m); `motions`, M entries "pull" (a
+/// loading step), "release" (an unloading step) or None (the robot's motion), gives the
+/// motion the tendons with friction model in each measurement, as the CSV's `motion`
+/// column does for `tdcr calibrate` (docs/calibration.md). The fit starts from the robot's own
 /// parameters; `options` are the forward solver's (as `solve`, collocation), on a fixed
 /// mesh (`intervals`; `tol` is refused) so that the model tips are smooth in the
 /// parameters. Ctrl-C stops it within about 0.1 s with `KeyboardInterrupt` (no result).
 #[pyfunction]
 #[pyo3(
-    signature = (robot, tensions, tip_forces, measured_tips, *, fit=None, max_iterations=None, **options),
-    text_signature = "(robot, tensions, tip_forces, measured_tips, *, fit=None, max_iterations=50, **options)"
+    signature = (robot, tensions, tip_forces, measured_tips, *, fit=None, motions=None, max_iterations=None, **options),
+    text_signature = "(robot, tensions, tip_forces, measured_tips, *, fit=None, motions=None, max_iterations=50, **options)"
 )]
 #[allow(clippy::too_many_arguments)]
 pub fn calibrate(
@@ -479,6 +509,7 @@ pub fn calibrate(
     tip_forces: &Bound<'_, PyAny>,
     measured_tips: &Bound<'_, PyAny>,
     fit: Option<Vec<String>>,
+    motions: Option<Vec<Option<String>>>,
     max_iterations: Option<&Bound<'_, PyAny>>,
     options: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<PyCalibration> {
@@ -498,14 +529,16 @@ pub fn calibrate(
             tips.len()
         )));
     }
+    let motions = motion_list(motions, forces.len())?;
     let experiments: Vec<Measurement> = tensions
         .into_iter()
         .zip(forces.into_iter().zip(tips))
-        .map(|(tensions, (tip_force, measured_tip))| Measurement {
+        .zip(motions)
+        .map(|((tensions, (tip_force, measured_tip)), motion)| Measurement {
             tensions,
             tip_force,
             measured_tip,
-            motion: None,
+            motion,
         })
         .collect();
     let mut chosen = Fit::default();

@@ -37,3 +37,30 @@ def test_tension_at_follows_the_capstan_law_between_the_path_points():
         solution.tension_at(2, 0.1)
     with pytest.raises(tdcr.InvalidInput, match="not finite"):
         solution.tension_at(0, float("nan"))
+
+
+def test_calibrate_fits_mu_from_loading_and_unloading_steps():
+    loads = [1.0, 2.0, 3.0, 4.0]
+    motions = ["pull"] * 4 + ["release"] * 4
+    tensions = np.array([[t, 1.0] for t in loads + loads])
+    forces = np.zeros((8, 3))
+    tips = np.array([tdcr.solve(rough(0.1, t, m)).tip_position for t, m in zip(tensions[:, 0], motions)])
+
+    def fitted(motions):
+        fit = tdcr.calibrate(rough(0.05), tensions, forces, tips, fit=["friction"], motions=motions)
+        (line,) = [x for x in fit.robot.to_toml().splitlines() if x.startswith("friction")]
+        return fit, float(line.split("=")[1])
+
+    fit, mu = fitted(motions)
+    assert fit.converged
+    # Noise-free data on the solver's own meshes: mu back to 1e-9, as test_friction.py.
+    assert abs(mu - 0.1) < 1e-9
+    # Every step taken as a loading one fits the unloading tips with another mu, worse.
+    wrong, mu_wrong = fitted(None)
+    # 1e-5 m: the unloading tips lie millimetres from the loading ones at mu = 0.1, so a
+    # single-motion fit misses them by far more than 10 um; 1e-9 m: noise-free data.
+    assert abs(mu_wrong - 0.1) > 1e-3 and wrong.rms_error > 1e-5 and fit.rms_error < 1e-9
+    with pytest.raises(tdcr.InvalidInput, match="7 motions for 8 measurements"):
+        tdcr.calibrate(rough(0.05), tensions, forces, tips, fit=["friction"], motions=motions[1:])
+    with pytest.raises(tdcr.InvalidInput, match='motions\\[0\\] is "up"'):
+        tdcr.calibrate(rough(0.05), tensions, forces, tips, fit=["friction"], motions=["up"] + motions[1:])
