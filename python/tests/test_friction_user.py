@@ -64,3 +64,11 @@ def test_calibrate_fits_mu_from_loading_and_unloading_steps():
         tdcr.calibrate(rough(0.05), tensions, forces, tips, fit=["friction"], motions=motions[1:])
     with pytest.raises(tdcr.InvalidInput, match='motions\\[0\\] is "up"'):
         tdcr.calibrate(rough(0.05), tensions, forces, tips, fit=["friction"], motions=["up"] + motions[1:])
+
+
+def test_an_empty_history_is_bad_input():
+    robot = rough(0.1, 0.0, stiffness=2000.0)
+    with pytest.raises(tdcr.InvalidInput, match="gives no rows"):
+        tdcr.history(robot, {"tension.1": []})
+    with pytest.raises(tdcr.InvalidInput, match="gives no rows"):
+        tdcr.history(robot, {"tension.1": np.array([])}, up_down=True)
