@@ -248,3 +248,34 @@ fn library_messages_name_fields_as_robot_files_do() {
         "{err}"
     );
 }
+
+/// The table of `solve` gives the tension along each tendon with friction at every sample
+/// (`T1/N`: the input at s = 0, the delivered tension at the termination, falling between
+/// while pulled), and no such column without friction.
+#[test]
+fn the_table_has_the_tension_along_a_tendon_with_friction() {
+    let dir = scratch("table");
+    std::fs::write(dir.join("robot.toml"), example_with(&dir, "")).unwrap();
+    let out = run(&dir, &["solve", "robot.toml", "--friction", "1=0.1", "--samples", "5"]);
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    let text = stdout(&out);
+    let lines: Vec<&str> = text.lines().collect();
+    let head = lines.iter().position(|l| l.trim_start().starts_with("s/mm")).unwrap();
+    assert!(lines[head].ends_with("T1/N"), "{}", lines[head]);
+    let column: Vec<f64> = lines[head + 1..head + 6]
+        .iter()
+        .map(|l| l.split_whitespace().last().unwrap().parse().unwrap())
+        .collect();
+    let delivered: f64 = lines
+        .iter()
+        .find(|l| l.split_whitespace().next() == Some("1"))
+        .and_then(|l| l.split_whitespace().nth(2))
+        .unwrap()
+        .parse()
+        .unwrap();
+    assert_eq!(column[0], 2.94);
+    assert_eq!(column[4], delivered);
+    assert!(column.windows(2).all(|w| w[1] < w[0]), "{column:?}");
+    let out = run(&dir, &["solve", "robot.toml", "--samples", "5"]);
+    assert!(!stdout(&out).contains("T1/N"));
+}
