@@ -108,7 +108,7 @@ fn sweep_takes_friction_as_solve_does() {
 
 /// The full `--jacobian` JSON has `friction`: d(tip pose)/d(mu_i), 6 rows x one column per
 /// tendon, the library's `TipSensitivities::friction` (zero for tendons without friction),
-/// which a central difference of two solves confirms.
+/// which a central difference of two solves confirms; the tendon's `delivered_tension`.
 #[test]
 fn the_json_jacobian_has_the_tip_sensitivity_to_friction() {
     let dir = scratch("jacobian");
@@ -145,6 +145,17 @@ fn the_json_jacobian_has_the_tip_sensitivity_to_friction() {
     let mut robot = tdcr::io::parse(&example_with(&dir, ""), "robot.toml").unwrap().robot;
     robot.tendons[0].friction = Some(tdcr::Friction::pull(0.1));
     let solution = tdcr::collocation::solve(&robot, &tdcr::collocation::Options::fixed(64)).unwrap();
+    // The tendon keeps `tension` (the input at the base entry) and has `delivered_tension`
+    // (at its termination), the last of its `tensions` along the path.
+    let tendon = &json["tendons"][0];
+    assert_eq!(tendon["tension"].as_f64(), Some(2.94));
+    let delivered = tendon["delivered_tension"].as_f64().unwrap();
+    assert_eq!(delivered, solution.tendons[0].delivered_tension);
+    assert!(delivered < 2.94);
+    assert_eq!(
+        tendon["tensions"].as_array().unwrap().last().unwrap().as_f64(),
+        Some(delivered)
+    );
     let want = tdcr::tip_sensitivities(&robot, &solution).unwrap().friction;
     let scale = want.column(0).norm();
     assert!(scale > 0.0);
