@@ -290,3 +290,39 @@ fn the_table_has_the_tension_along_a_tendon_with_friction() {
     let out = run(&dir, &["solve", "robot.toml", "--samples", "5"]);
     assert!(!stdout(&out).contains("T1/N"));
 }
+
+/// `--motion 1=release` gives the answer of `motion = "release"` in the file (the tension
+/// rises toward the termination); a bad motion is bad input naming both; without friction
+/// it has no effect, and the warning says so.
+#[test]
+fn motion_on_the_command_line_is_the_files_motion() {
+    let dir = scratch("motion");
+    std::fs::write(dir.join("pull.toml"), example_with(&dir, "friction = 0.1\n")).unwrap();
+    std::fs::write(
+        dir.join("release.toml"),
+        example_with(&dir, "friction = 0.1\nmotion = \"release\"\n"),
+    )
+    .unwrap();
+    let json = |args: &[&str]| {
+        let mut a = vec!["solve"];
+        a.extend(args);
+        a.extend(["--format", "json"]);
+        let out = run(&dir, &a);
+        assert_eq!(out.status.code(), Some(0), "{a:?}: {}", stderr(&out));
+        let v: serde_json::Value = serde_json::from_str(&stdout(&out)).unwrap();
+        (
+            v["tip"]["position"].clone(),
+            v["tendons"][0]["delivered_tension"].as_f64().unwrap(),
+        )
+    };
+    let by_option = json(&["pull.toml", "--motion", "1=release"]);
+    assert_eq!(by_option, json(&["release.toml"]));
+    assert!(by_option.1 > 2.94, "{}", by_option.1);
+    assert_eq!(json(&["release.toml", "--motion", "1=pull"]), json(&["pull.toml"]));
+    let out = run(&dir, &["solve", "pull.toml", "--motion", "1=up"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(stderr(&out).contains("`up` is neither `pull`"), "{}", stderr(&out));
+    let out = run(&dir, &["solve", "pull.toml", "--motion", "2=release"]);
+    assert_eq!(out.status.code(), Some(0));
+    assert!(stderr(&out).contains("`tendon[2].motion`"), "{}", stderr(&out));
+}

@@ -69,17 +69,38 @@ pub fn set_tension(robot: &mut Robot, index: usize, tension: f64) -> Result<(), 
 
 /// Bad input if `values` (the `option`'s `I=VALUE` arguments) give a tendon twice: the
 /// second would silently replace the first.
-pub fn once(option: &str, values: &[(usize, f64)]) -> Result<(), Failure> {
+pub fn once<T: Copy, D: std::fmt::Display>(
+    option: &str,
+    values: &[(usize, T)],
+    show: impl Fn(T) -> D,
+) -> Result<(), Failure> {
     for (k, &(i, a)) in values.iter().enumerate() {
         if let Some(&(_, b)) = values[..k].iter().find(|&&(j, _)| j == i) {
             return Err(Failure::Input(format!(
                 "{option} {i}=... is given twice ({option} {i}={} and {option} {i}={}): give each tendon one value",
-                tdcr::Readable(b),
-                tdcr::Readable(a)
+                show(b),
+                show(a)
             )));
         }
     }
     Ok(())
+}
+
+/// Sets the motion that tendon `index`'s (from 1) friction opposes, keeping its
+/// coefficient (0 without friction: the motion then has no effect, which the file's
+/// warnings say); a number past the last tendon is bad input.
+pub fn set_motion(robot: &mut Robot, index: usize, motion: tdcr::Motion) -> Result<(), Failure> {
+    let count = robot.tendons.len();
+    match robot.tendons.get_mut(index.wrapping_sub(1)) {
+        Some(t) => {
+            let coefficient = t.friction.map_or(0.0, |f| f.coefficient);
+            t.friction = Some(tdcr::Friction { coefficient, motion });
+            Ok(())
+        }
+        None => Err(Failure::Input(format!(
+            "--motion {index}=...: the robot has {count} tendon(s), numbered 1 to {count} in file order"
+        ))),
+    }
 }
 
 /// Sets the friction coefficient of tendon `index` (from 1), keeping the motion the file
