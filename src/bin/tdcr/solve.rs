@@ -5,11 +5,9 @@ use std::path::PathBuf;
 use tdcr::io::output;
 use tdcr::plot::{Figure, Style, shape_legend};
 
-use crate::args::{
-    SolverArgs, parse_disks, parse_displacement, parse_friction, parse_motion, parse_samples, parse_tension,
-};
+use crate::args::{SolverArgs, parse_disks, parse_displacement, parse_samples, parse_tension};
 use crate::failure::{Failure, emit, note, picture_format, write_file, write_picture};
-use crate::robot_args::{apply, once, read_robot, run_solver, set_displacement, set_friction, set_motion, set_tension};
+use crate::robot_args::{FrictionArgs, apply, once, read_robot, run_solver, set_displacement, set_tension};
 use crate::tables::{diagnostics, solution_table, summary};
 
 /// The output formats of `solve`.
@@ -36,16 +34,8 @@ pub struct SolveArgs {
     /// (its tension is then solved for; docs/actuation.md). Repeatable.
     #[arg(long, value_name = "I=METRES", value_parser = parse_displacement)]
     displacement: Vec<(usize, f64)>,
-    /// Friction coefficient of tendon I (numbered from 1) in its channels, full slip in the
-    /// file's motion or --motion's (`pull` unless told `release`; docs/friction.md).
-    /// Repeatable.
-    #[arg(long, value_name = "I=MU", value_parser = parse_friction)]
-    friction: Vec<(usize, f64)>,
-    /// The motion tendon I's friction opposes, replacing the file's `motion`: `pull` (the
-    /// actuator pulls in: tension falls toward the termination) or `release` (it lets out:
-    /// tension rises). Repeatable.
-    #[arg(long, value_name = "I=pull|release", value_parser = parse_motion)]
-    motion: Vec<(usize, tdcr::Motion)>,
+    #[command(flatten)]
+    friction: FrictionArgs,
     #[command(flatten)]
     solver: SolverArgs,
     /// Output at K evenly spaced arc lengths (interpolated with the scheme's own
@@ -99,14 +89,7 @@ pub fn run(args: &SolveArgs) -> Result<(), Failure> {
         }
         set_displacement(&mut file.robot, i, q)?;
     }
-    once("--friction", &args.friction, tdcr::Readable)?;
-    for &(i, mu) in &args.friction {
-        set_friction(&mut file.robot, i, mu)?;
-    }
-    once("--motion", &args.motion, tdcr::Motion::name)?;
-    for &(i, motion) in &args.motion {
-        set_motion(&mut file.robot, i, motion)?;
-    }
+    args.friction.apply(&mut file.robot)?;
     apply(&mut file, &args.solver);
     crate::failure::warn_file(&name, &file);
     crate::failure::warn_scales(&name, &file.robot);

@@ -12,12 +12,10 @@ use tdcr::io::csv_table::CsvTable;
 use tdcr::io::{number, output};
 use tdcr::{Parameter, Robot, Solution};
 
-use crate::args::{
-    SolverArgs, parse_disks, parse_displacement_sweep, parse_friction, parse_motion, parse_param_sweep, parse_sweep,
-};
+use crate::args::{SolverArgs, parse_disks, parse_displacement_sweep, parse_param_sweep, parse_sweep};
 use crate::failure::{Failure, emit, note, picture_format, write_file, write_picture};
 use crate::failure::{solver_failure, with_likely_causes};
-use crate::robot_args::{apply, once, read_robot, set_displacement, set_friction, set_motion, set_tension};
+use crate::robot_args::{FrictionArgs, apply, read_robot, set_displacement, set_tension};
 use crate::sweep_picture::{Drawn, Shape, chosen, picture};
 use crate::tables::summary;
 
@@ -43,15 +41,8 @@ pub struct SweepArgs {
     /// COUNT as every other range.
     #[arg(long, value_name = "NAME=START:STOP:COUNT", value_parser = parse_param_sweep, allow_hyphen_values = true)]
     param: Vec<(String, Vec<f64>)>,
-    /// Friction coefficient of tendon I (numbered from 1) in its channels, replacing the
-    /// file's: full slip in the file's motion for a plain sweep, stick/slip decided per step
-    /// with --history (docs/friction.md). Repeatable.
-    #[arg(long, value_name = "I=MU", value_parser = parse_friction)]
-    friction: Vec<(usize, f64)>,
-    /// The motion tendon I's friction opposes in a plain sweep (full slip), replacing the
-    /// file's `motion`: `pull` or `release`. Repeatable; a --history decides it per step.
-    #[arg(long, value_name = "I=pull|release", value_parser = parse_motion)]
-    motion: Vec<(usize, tdcr::Motion)>,
+    #[command(flatten)]
+    friction: FrictionArgs,
     #[command(flatten)]
     solver: SolverArgs,
     /// Warm-start the first step from a saved solution: the JSON of `tdcr solve --format
@@ -270,14 +261,7 @@ pub fn run(args: &SweepArgs) -> Result<(), Failure> {
     }
     let (name, mut file) = read_robot(&args.file)?;
     apply(&mut file, &args.solver);
-    once("--friction", &args.friction, tdcr::Readable)?;
-    for &(i, mu) in &args.friction {
-        set_friction(&mut file.robot, i, mu)?;
-    }
-    once("--motion", &args.motion, tdcr::Motion::name)?;
-    for &(i, motion) in &args.motion {
-        set_motion(&mut file.robot, i, motion)?;
-    }
+    args.friction.apply(&mut file.robot)?;
     let plan = Plan::new(args, &file.robot)?;
     let steps = plan.steps;
     for &(i, ref v) in &args.tension {
