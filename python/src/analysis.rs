@@ -458,33 +458,6 @@ fn rows3(value: &Bound<'_, PyAny>, what: &str) -> PyResult<Vec<Vector3<f64>>> {
         .collect())
 }
 
-/// `calibrate`'s `motions` for `rows` measurements: each "pull", "release" or None (the
-/// robot's own motion); all None when not given.
-fn motion_list(motions: Option<Vec<Option<String>>>, rows: usize) -> PyResult<Vec<Option<tdcr::Motion>>> {
-    let Some(motions) = motions else {
-        return Ok(vec![None; rows]);
-    };
-    if motions.len() != rows {
-        return Err(invalid(format!(
-            "calibrate: {} motions for {rows} measurements; give one per measurement (\"pull\", \"release\" or None)",
-            motions.len()
-        )));
-    }
-    motions
-        .into_iter()
-        .enumerate()
-        .map(|(k, m)| match m.as_deref() {
-            None => Ok(None),
-            Some("pull") => Ok(Some(tdcr::Motion::Pull)),
-            Some("release") => Ok(Some(tdcr::Motion::Release)),
-            Some(other) => Err(invalid(format!(
-                "calibrate: motions[{k}] is \"{other}\"; give \"pull\" (a loading step), \"release\" (an unloading \
-                 step) or None (the robot's motion)"
-            ))),
-        })
-        .collect()
-}
-
 /// Calibration (`tdcr::fit::calibrate`): fits Young's modulus and the base XYZ Euler angles
 /// (by default; `fit` names any of "youngs_modulus", "euler", "base_position",
 /// "offset_scale", "friction": the coefficient shared by the tendons with friction, read
@@ -529,7 +502,7 @@ pub fn calibrate(
             tips.len()
         )));
     }
-    let motions = motion_list(motions, forces.len())?;
+    let motions = crate::convert::motions(motions, forces.len())?;
     let experiments: Vec<Measurement> = tensions
         .into_iter()
         .zip(forces.into_iter().zip(tips))
