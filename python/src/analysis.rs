@@ -462,14 +462,17 @@ fn rows3(value: &Bound<'_, PyAny>, what: &str) -> PyResult<Vec<Vector3<f64>>> {
 /// (by default; `fit` names any of "youngs_modulus", "euler", "base_position",
 /// "offset_scale", "friction": the coefficient shared by the tendons with friction, read
 /// back from the fitted robot) to measured tips. `tensions` is (M, k) (N, file order), `tip_forces`
-/// (M, 3) (N, world frame), `measured_tips` (M, 3) (m). The fit starts from the robot's own
+/// (M, 3) (N, world frame), `measured_tips` (M, 3) (m); `motions`, M entries "pull" (a
+/// loading step), "release" (an unloading step) or None (the robot's motion), gives the
+/// motion the tendons with friction model in each measurement, as the CSV's `motion`
+/// column does for `tdcr calibrate` (docs/calibration.md). The fit starts from the robot's own
 /// parameters; `options` are the forward solver's (as `solve`, collocation), on a fixed
 /// mesh (`intervals`; `tol` is refused) so that the model tips are smooth in the
 /// parameters. Ctrl-C stops it within about 0.1 s with `KeyboardInterrupt` (no result).
 #[pyfunction]
 #[pyo3(
-    signature = (robot, tensions, tip_forces, measured_tips, *, fit=None, max_iterations=None, **options),
-    text_signature = "(robot, tensions, tip_forces, measured_tips, *, fit=None, max_iterations=50, **options)"
+    signature = (robot, tensions, tip_forces, measured_tips, *, fit=None, motions=None, max_iterations=None, **options),
+    text_signature = "(robot, tensions, tip_forces, measured_tips, *, fit=None, motions=None, max_iterations=50, **options)"
 )]
 #[allow(clippy::too_many_arguments)]
 pub fn calibrate(
@@ -479,6 +482,7 @@ pub fn calibrate(
     tip_forces: &Bound<'_, PyAny>,
     measured_tips: &Bound<'_, PyAny>,
     fit: Option<Vec<String>>,
+    motions: Option<Vec<Option<String>>>,
     max_iterations: Option<&Bound<'_, PyAny>>,
     options: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<PyCalibration> {
@@ -498,14 +502,16 @@ pub fn calibrate(
             tips.len()
         )));
     }
+    let motions = crate::convert::motions(motions, forces.len())?;
     let experiments: Vec<Measurement> = tensions
         .into_iter()
         .zip(forces.into_iter().zip(tips))
-        .map(|(tensions, (tip_force, measured_tip))| Measurement {
+        .zip(motions)
+        .map(|((tensions, (tip_force, measured_tip)), motion)| Measurement {
             tensions,
             tip_force,
             measured_tip,
-            motion: None,
+            motion,
         })
         .collect();
     let mut chosen = Fit::default();

@@ -251,3 +251,30 @@ pub fn table_of(value: &Bound<'_, PyAny>, what: &str, width: Option<usize>) -> P
     }
     Ok(view.rows().into_iter().map(|r| r.to_vec()).collect())
 }
+
+/// `calibrate`'s `motions` for `rows` measurements: each "pull", "release" or None (the
+/// robot's own motion); all None when not given.
+pub fn motions(motions: Option<Vec<Option<String>>>, rows: usize) -> PyResult<Vec<Option<tdcr::Motion>>> {
+    let Some(motions) = motions else {
+        return Ok(vec![None; rows]);
+    };
+    if motions.len() != rows {
+        return Err(invalid(format!(
+            "calibrate: {} motions for {rows} measurements; give one per measurement (\"pull\", \"release\" or None)",
+            motions.len()
+        )));
+    }
+    motions
+        .into_iter()
+        .enumerate()
+        .map(|(k, m)| match m.as_deref() {
+            None => Ok(None),
+            Some("pull") => Ok(Some(tdcr::Motion::Pull)),
+            Some("release") => Ok(Some(tdcr::Motion::Release)),
+            Some(other) => Err(invalid(format!(
+                "calibrate: motions[{k}] is \"{other}\"; give \"pull\" (a loading step), \"release\" (an unloading \
+                 step) or None (the robot's motion)"
+            ))),
+        })
+        .collect()
+}

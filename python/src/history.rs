@@ -3,6 +3,7 @@
 
 use crate::boundary;
 use crate::branch::{step_item, tip_rows};
+use crate::errors::invalid;
 use crate::options::Use;
 use crate::robot::{PyRobot, Rows};
 use crate::solution::PySolution;
@@ -99,8 +100,9 @@ crate::pickle::pickled_fields! {
 /// load history with stick/slip friction, as `tdcr sweep --history` does: each step from
 /// the tendon state the last left, so a tendon let back out sticks where friction holds it
 /// (docs/friction.md). With `up_down`, the rows are solved up and then back down (the last
-/// row once). Collocation; options as `solve`. A failed step is raised with `index` set to
-/// its row and `partial` to the `History` of the rows before it.
+/// row once). Collocation; options as `solve`. No rows raise `tdcr.InvalidInput`; a failed
+/// step is raised with `index` set to its row and `partial` to the `History` of the rows
+/// before it.
 #[pyfunction]
 #[pyo3(signature = (robot, parameters, up_down = false, **options))]
 pub fn history(
@@ -113,7 +115,10 @@ pub fn history(
     let settings = crate::options::apply(&robot.file.solver, options, Use::Collocation("history"))?;
     let rows = Rows::new(robot, parameters)?;
     if rows.len() == 0 {
-        return PyHistory::new(py, Vec::new());
+        return Err(invalid(
+            "history: `parameters` gives no rows, so there is no step to solve; give each input's values in order, \
+             e.g. {\"tension.1\": numpy.linspace(0.0, 4.91, 11)}",
+        ));
     }
     let mut ranges = rows.ranges(py)?;
     if up_down {

@@ -193,6 +193,30 @@ impl PySolution {
         })
     }
 
+    /// The tension (N) of tendon `i` (from 0, as `tendons`) at arc length `s` (m, clamped to
+    /// the tendon's span): between the points of its path interpolated linearly in the
+    /// logarithm of the tension, exact where the path turns at a constant rate
+    /// (`tdcr::Solution::tension_at`, docs/friction.md). Without friction, its tension.
+    fn tension_at(&self, i: &Bound<'_, PyAny>, s: &Bound<'_, PyAny>) -> PyResult<f64> {
+        let i = crate::convert::count(i, "Solution.tension_at: `i`")?;
+        let s = crate::convert::number(s, "Solution.tension_at: `s`")?;
+        if !s.is_finite() {
+            return Err(invalid(format!("Solution.tension_at: s = {s} m is not finite")));
+        }
+        let k = self.solution.tendons.len();
+        if i >= k {
+            return Err(invalid(format!(
+                "Solution.tension_at: i = {i}, but the solution has {k} tendon(s), numbered 0 to {} as in `tendons`",
+                k.saturating_sub(1)
+            )));
+        }
+        // None only for a tendon without path points: its one tension is the answer.
+        Ok(self
+            .solution
+            .tension_at(i, s)
+            .unwrap_or(self.solution.tendons[i].tension))
+    }
+
     /// plot(ax=None, *, tendons=True, label=None) -> Axes
     ///
     /// Draws the shape with matplotlib (the `plot` extra): `tdcr.plot(self, ...)`.

@@ -25,14 +25,15 @@ pub fn json(robot: &Robot, solution: &Solution, count: Option<usize>, jacobian: 
     let mut file = with_robot(robot, solution, count);
     file.jacobian = jacobian.map(|j| {
         // Rows: tip position (m per unit), then the tip rotation as a world-frame rotation
-        // vector (rad per unit); one column per tendon (N of tension, m of pull-in), force
-        // (N) or moment (N m) component.
+        // vector (rad per unit); one column per tendon (N of tension, m of pull-in, unit of
+        // friction coefficient), force (N) or moment (N m) component.
         let rows = |m: &dyn Fn(usize, usize) -> f64, cols: usize| {
             (0..6).map(|r| (0..cols).map(|c| Num(m(r, c))).collect()).collect()
         };
         Jacobian {
             tension: rows(&|r, c| j.tension[(r, c)], j.tension.ncols()),
             displacement: rows(&|r, c| j.displacement[(r, c)], j.displacement.ncols()),
+            friction: rows(&|r, c| j.friction[(r, c)], j.friction.ncols()),
             tip_force: rows(&|r, c| j.tip_force[(r, c)], 3),
             tip_moment: rows(&|r, c| j.tip_moment[(r, c)], 3),
         }

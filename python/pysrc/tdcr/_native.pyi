@@ -295,6 +295,8 @@ class Solution:
     def report(self) -> SolveReport: ...
     def at(self, s: float, left: bool = False) -> State:
         """The state at arc length s (m) from the scheme's interpolant."""
+    def tension_at(self, i: int, s: float) -> float:
+        """The tension (N) of tendon i (from 0) at arc length s (m), log-linear between path points."""
     def to_json(self) -> str:
         """The whole solution as the solution JSON of `tdcr solve --format json` (docs/cli.md)."""
     @staticmethod
@@ -645,6 +647,7 @@ def calibrate(
     measured_tips: ArrayLike,
     *,
     fit: Optional[Sequence[Literal["youngs_modulus", "euler", "base_position", "offset_scale", "friction"]]] = None,
+    motions: Optional[Sequence[Optional[Literal["pull", "release"]]]] = None,
     max_iterations: int = 50,
     intervals: Optional[int] = None,
     residual_tolerance: Optional[float] = None,

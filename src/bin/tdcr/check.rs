@@ -129,7 +129,8 @@ fn segment_lines(rod: &tdcr::Rod) -> String {
 }
 
 /// A tendon in a few words for `check`: its routing with the turns it makes over its own
-/// length, its end, its tension or pull-in, and its stiffness and free length when set.
+/// length, its end, its tension or pull-in, its stiffness and free length when set, and its
+/// friction coefficient with the motion it models when it has friction.
 fn tendon(t: &Tendon, length: f64) -> String {
     let end = t.end(length);
     let at = if end < length {
@@ -181,7 +182,11 @@ fn tendon(t: &Tendon, length: f64) -> String {
         ),
         None => String::new(),
     };
-    format!("{routing}, {at}, {actuation}{elastic}")
+    let friction = match t.friction {
+        Some(f) if f.coefficient > 0.0 => format!(", friction {} ({})", Readable(f.coefficient), f.motion.name()),
+        _ => String::new(),
+    };
+    format!("{routing}, {at}, {actuation}{elastic}{friction}")
 }
 
 /// `tdcr example`: the prototype as a commented robot file.

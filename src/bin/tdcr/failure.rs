@@ -55,9 +55,24 @@ fn flags(field: &str) -> Option<&'static str> {
     }
 }
 
+/// A library error's message in the command line's words: a field path numbered as in
+/// robot files (`tendon[1].stiffness` for the library's `tendons[0].stiffness`), as
+/// Python's messages number it.
+pub fn message(e: &Error) -> String {
+    match e {
+        Error::InvalidInput { field, problem, hint } => {
+            format!(
+                "invalid input: `{}` {problem}; {hint}",
+                tdcr::io::file_field(field, false)
+            )
+        }
+        other => other.to_string(),
+    }
+}
+
 /// A solver error as a failure: input problems exit 2, solver failures 3, the rest 1.
 pub fn solver_failure(e: Error) -> Failure {
-    let text = e.to_string();
+    let text = message(&e);
     if let Error::NotConverged { report, .. } = &e {
         return Failure::NotConverged(format!("{text}\n{}", diagnostics(report)));
     }

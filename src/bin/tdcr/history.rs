@@ -10,7 +10,7 @@ use tdcr::io::csv_table::CsvTable;
 use tdcr::io::{number, output};
 use tdcr::plot::{Chart, Segment, significant};
 
-use crate::failure::{Failure, emit, note, picture_format, solver_failure, write_file};
+use crate::failure::{Failure, emit, message, note, picture_format, solver_failure, write_file};
 
 /// What `--history` asks for: the ranges up and back down, or the swept input's values in
 /// the order given.
@@ -24,17 +24,20 @@ pub enum History {
 
 /// Parses `--history`: `up-down` or a comma-separated list of finite numbers.
 pub fn parse_history(text: &str) -> Result<History, String> {
+    const GIVE: &str = "give `up-down` or the input's values in order, e.g. 0,2,4.91,2,0";
     if text == "up-down" {
         return Ok(History::UpDown);
     }
+    if text.trim().is_empty() {
+        return Err(format!("--history is empty: {GIVE}"));
+    }
     let values = text
         .split(',')
-        .map(|v| match v.trim().parse::<f64>() {
+        .enumerate()
+        .map(|(k, v)| match v.trim().parse::<f64>() {
             Ok(x) if x.is_finite() => Ok(x),
-            _ => Err(format!(
-                "`{v}` in --history {text} is not a finite number: give `up-down` or the input's values in order, e.g. \
-                 0,2,4.91,2,0"
-            )),
+            _ if v.trim().is_empty() => Err(format!("value {} of --history {text} is empty: {GIVE}", k + 1)),
+            _ => Err(format!("`{v}` in --history {text} is not a finite number: {GIVE}")),
         })
         .collect::<Result<Vec<f64>, String>>()?;
     Ok(History::Values(values))
@@ -48,13 +51,21 @@ pub fn steps(ranges: &Ranges, base: &tdcr::Robot, history: &History) -> Result<R
         History::UpDown => Ok(ranges.up_down()),
         History::Values(values) => {
             let swept = ranges.swept().map_or(0, |(i, _)| i);
+            let input = ranges.inputs()[swept].0;
+            if let (Input::Parameter(tdcr::Parameter::Tension(_)), Some(v)) = (input, values.iter().find(|v| **v < 0.0))
+            {
+                return Err(Failure::Input(format!(
+                    "--history lists {input} = {} N, a negative tension: a tendon can only pull; give tensions >= 0",
+                    tdcr::Readable(*v)
+                )));
+            }
             let inputs = ranges
                 .inputs()
                 .iter()
                 .enumerate()
                 .map(|(i, (input, v))| (*input, if i == swept { values.clone() } else { vec![v[0]] }))
                 .collect();
-            Ranges::new(base.clone(), inputs).map_err(|e| Failure::Input(format!("--history: {e}")))
+            Ranges::new(base.clone(), inputs).map_err(|e| Failure::Input(format!("--history: {}", message(&e))))
         }
     }
 }
@@ -71,7 +82,7 @@ pub fn run(
     if let Some(path) = plot {
         picture_format(path)?;
     }
-    let result = history(ranges, options).map_err(|e| Failure::Input(format!("--history: {e}")))?;
+    let result = history(ranges, options).map_err(|e| Failure::Input(format!("--history: {}", message(&e))))?;
     let swept = ranges.swept().map_or(0, |(i, _)| i);
     let (input, values) = &ranges.inputs()[swept];
     let count = ranges.robot(0.0).map_or(0, |r| r.tendons.len());

@@ -67,9 +67,77 @@ pub fn set_tension(robot: &mut Robot, index: usize, tension: f64) -> Result<(), 
     }
 }
 
+/// Bad input if `values` (the `option`'s `I=VALUE` arguments) give a tendon twice: the
+/// second would silently replace the first.
+pub fn once<T: Copy, D: std::fmt::Display>(
+    option: &str,
+    values: &[(usize, T)],
+    show: impl Fn(T) -> D,
+) -> Result<(), Failure> {
+    for (k, &(i, a)) in values.iter().enumerate() {
+        if let Some(&(_, b)) = values[..k].iter().find(|&&(j, _)| j == i) {
+            return Err(Failure::Input(format!(
+                "{option} {i}=... is given twice ({option} {i}={} and {option} {i}={}): give each tendon one value",
+                show(b),
+                show(a)
+            )));
+        }
+    }
+    Ok(())
+}
+
+/// The friction options of `solve` and `sweep`: `--friction I=MU` and `--motion
+/// I=pull|release`, each once per tendon.
+#[derive(clap::Args)]
+pub struct FrictionArgs {
+    /// Friction coefficient of tendon I (numbered from 1) in its channels, replacing the
+    /// file's: full slip in the file's motion or --motion's (`pull` unless told `release`);
+    /// with `sweep --history`, stick/slip decided per step (docs/friction.md). Repeatable.
+    #[arg(long, value_name = "I=MU", value_parser = crate::args::parse_friction)]
+    friction: Vec<(usize, f64)>,
+    /// The motion tendon I's friction opposes in full slip, replacing the file's `motion`:
+    /// `pull` (the actuator pulls in: tension falls toward the termination) or `release` (it
+    /// lets out: tension rises). Repeatable.
+    #[arg(long, value_name = "I=pull|release", value_parser = crate::args::parse_motion)]
+    motion: Vec<(usize, tdcr::Motion)>,
+}
+
+impl FrictionArgs {
+    /// Sets the coefficients, then the motions, on `robot`; a tendon given twice or past
+    /// the last is bad input.
+    pub fn apply(&self, robot: &mut Robot) -> Result<(), Failure> {
+        once("--friction", &self.friction, tdcr::Readable)?;
+        for &(i, mu) in &self.friction {
+            set_friction(robot, i, mu)?;
+        }
+        once("--motion", &self.motion, tdcr::Motion::name)?;
+        for &(i, motion) in &self.motion {
+            set_motion(robot, i, motion)?;
+        }
+        Ok(())
+    }
+}
+
+/// Sets the motion that tendon `index`'s (from 1) friction opposes, keeping its
+/// coefficient (0 without friction: the motion then has no effect, which the file's
+/// warnings say); a number past the last tendon is bad input.
+fn set_motion(robot: &mut Robot, index: usize, motion: tdcr::Motion) -> Result<(), Failure> {
+    let count = robot.tendons.len();
+    match robot.tendons.get_mut(index.wrapping_sub(1)) {
+        Some(t) => {
+            let coefficient = t.friction.map_or(0.0, |f| f.coefficient);
+            t.friction = Some(tdcr::Friction { coefficient, motion });
+            Ok(())
+        }
+        None => Err(Failure::Input(format!(
+            "--motion {index}=...: the robot has {count} tendon(s), numbered 1 to {count} in file order"
+        ))),
+    }
+}
+
 /// Sets the friction coefficient of tendon `index` (from 1), keeping the motion the file
 /// gives it (`pull` by default); a number past the last tendon is bad input.
-pub fn set_friction(robot: &mut Robot, index: usize, coefficient: f64) -> Result<(), Failure> {
+fn set_friction(robot: &mut Robot, index: usize, coefficient: f64) -> Result<(), Failure> {
     let count = robot.tendons.len();
     match robot.tendons.get_mut(index.wrapping_sub(1)) {
         Some(t) => {

@@ -5,9 +5,9 @@ use std::path::PathBuf;
 use tdcr::io::output;
 use tdcr::plot::{Figure, Style, shape_legend};
 
-use crate::args::{SolverArgs, parse_disks, parse_displacement, parse_friction, parse_samples, parse_tension};
+use crate::args::{SolverArgs, parse_disks, parse_displacement, parse_samples, parse_tension};
 use crate::failure::{Failure, emit, note, picture_format, write_file, write_picture};
-use crate::robot_args::{apply, read_robot, run_solver, set_displacement, set_friction, set_tension};
+use crate::robot_args::{FrictionArgs, apply, once, read_robot, run_solver, set_displacement, set_tension};
 use crate::tables::{diagnostics, solution_table, summary};
 
 /// The output formats of `solve`.
@@ -34,10 +34,8 @@ pub struct SolveArgs {
     /// (its tension is then solved for; docs/actuation.md). Repeatable.
     #[arg(long, value_name = "I=METRES", value_parser = parse_displacement)]
     displacement: Vec<(usize, f64)>,
-    /// Friction coefficient of tendon I (numbered from 1) in its channels, full slip in the
-    /// file's motion (`pull` unless the file says `release`; docs/friction.md). Repeatable.
-    #[arg(long, value_name = "I=MU", value_parser = parse_friction)]
-    friction: Vec<(usize, f64)>,
+    #[command(flatten)]
+    friction: FrictionArgs,
     #[command(flatten)]
     solver: SolverArgs,
     /// Output at K evenly spaced arc lengths (interpolated with the scheme's own
@@ -72,29 +70,14 @@ pub struct SolveArgs {
     picture: crate::picture::PictureArgs,
 }
 
-/// Bad input if `values` (the `option`'s `I=VALUE` arguments) give a tendon twice: the
-/// second would silently replace the first.
-fn once(option: &str, values: &[(usize, f64)]) -> Result<(), Failure> {
-    for (k, &(i, a)) in values.iter().enumerate() {
-        if let Some(&(_, b)) = values[..k].iter().find(|&&(j, _)| j == i) {
-            return Err(Failure::Input(format!(
-                "{option} {i}=... is given twice ({option} {i}={} and {option} {i}={}): give each tendon one value",
-                tdcr::Readable(b),
-                tdcr::Readable(a)
-            )));
-        }
-    }
-    Ok(())
-}
-
 /// `tdcr solve`: solves one robot file and writes the output (and the picture).
 pub fn run(args: &SolveArgs) -> Result<(), Failure> {
     if let Some(path) = &args.plot {
         picture_format(path)?;
     }
     let (name, mut file) = read_robot(&args.file)?;
-    once("--tension", &args.tension)?;
-    once("--displacement", &args.displacement)?;
+    once("--tension", &args.tension, tdcr::Readable)?;
+    once("--displacement", &args.displacement, tdcr::Readable)?;
     for &(i, t) in &args.tension {
         set_tension(&mut file.robot, i, t)?;
     }
@@ -106,10 +89,7 @@ pub fn run(args: &SolveArgs) -> Result<(), Failure> {
         }
         set_displacement(&mut file.robot, i, q)?;
     }
-    once("--friction", &args.friction)?;
-    for &(i, mu) in &args.friction {
-        set_friction(&mut file.robot, i, mu)?;
-    }
+    args.friction.apply(&mut file.robot)?;
     apply(&mut file, &args.solver);
     crate::failure::warn_file(&name, &file);
     crate::failure::warn_scales(&name, &file.robot);

@@ -15,7 +15,7 @@ use tdcr::{Parameter, Robot, Solution};
 use crate::args::{SolverArgs, parse_disks, parse_displacement_sweep, parse_param_sweep, parse_sweep};
 use crate::failure::{Failure, emit, note, picture_format, write_file, write_picture};
 use crate::failure::{solver_failure, with_likely_causes};
-use crate::robot_args::{apply, read_robot, set_displacement, set_tension};
+use crate::robot_args::{FrictionArgs, apply, read_robot, set_displacement, set_tension};
 use crate::sweep_picture::{Drawn, Shape, chosen, picture};
 use crate::tables::summary;
 
@@ -41,6 +41,8 @@ pub struct SweepArgs {
     /// COUNT as every other range.
     #[arg(long, value_name = "NAME=START:STOP:COUNT", value_parser = parse_param_sweep, allow_hyphen_values = true)]
     param: Vec<(String, Vec<f64>)>,
+    #[command(flatten)]
+    friction: FrictionArgs,
     #[command(flatten)]
     solver: SolverArgs,
     /// Warm-start the first step from a saved solution: the JSON of `tdcr solve --format
@@ -259,6 +261,7 @@ pub fn run(args: &SweepArgs) -> Result<(), Failure> {
     }
     let (name, mut file) = read_robot(&args.file)?;
     apply(&mut file, &args.solver);
+    args.friction.apply(&mut file.robot)?;
     let plan = Plan::new(args, &file.robot)?;
     let steps = plan.steps;
     for &(i, ref v) in &args.tension {

@@ -172,7 +172,8 @@ pub fn summary(report: &SolveReport, length: f64) -> String {
     }
 }
 
-/// The table of `tdcr solve`: the summary, the tip pose and one row per sample.
+/// The table of `tdcr solve`: the summary, the tip pose, the tendons, and one row per
+/// sample, with the tension along each tendon with friction.
 pub fn solution_table(name: &str, file: &RobotFile, solution: &Solution, samples: &[output::Sample]) -> String {
     let tip = solution.tip();
     let tangent = tip.R.column(2);
@@ -224,19 +225,42 @@ pub fn solution_table(name: &str, file: &RobotFile, solution: &Solution, samples
             fixed(t.slack * 1e3, 9, 4)
         );
     }
+    // With friction, the tension along each tendon with friction at every sample, up to
+    // its end (`Solution::tension_at`; docs/friction.md).
+    let length = file.robot.length();
+    let varying: Vec<(usize, f64)> = file
+        .robot
+        .tendons
+        .iter()
+        .enumerate()
+        .filter(|(_, t)| t.friction.is_some_and(|f| f.coefficient > 0.0))
+        .map(|(i, t)| (i, t.end(length)))
+        .collect();
+    let heads: String = varying
+        .iter()
+        .map(|(i, _)| format!(" {:>10}", format!("T{}/N", i + 1)))
+        .collect();
     let _ = writeln!(
         out,
-        "\n{:>9} {:>10} {:>10} {:>10} {:>10} {:>10} {:>10} {:>10} {:>10} {:>10}",
+        "\n{:>9} {:>10} {:>10} {:>10} {:>10} {:>10} {:>10} {:>10} {:>10} {:>10}{heads}",
         "s/mm", "x/mm", "y/mm", "z/mm", "nx/N", "ny/N", "nz/N", "mx/N mm", "my/N mm", "mz/N mm"
     );
     for x in samples {
+        let tensions: String = varying
+            .iter()
+            .map(|&(i, end)| match solution.tension_at(i, x.s) {
+                Some(t) if x.s <= end => format!(" {}", fixed(t, 10, 5)),
+                _ => format!(" {:>10}", ""),
+            })
+            .collect();
         let _ = writeln!(
             out,
-            "{} {} {} {}",
+            "{} {} {} {}{}",
             fixed(x.s * 1e3, 9, 3),
             row((x.p * 1e3).into(), 10, 4),
             row(x.n.into(), 10, 5),
-            row((x.m * 1e3).into(), 10, 4)
+            row((x.m * 1e3).into(), 10, 4),
+            tensions.trim_end()
         );
     }
     out

@@ -67,25 +67,36 @@ pub struct RobotFile {
 impl RobotFile {
     /// What the file gives that has no effect on the solve, one message each (`tdcr check`
     /// and `tdcr solve` print them as warnings; they are not errors): a `free_length` on a
-    /// tendon without `stiffness`. An inextensible tendon's free length, between the base
-    /// and the actuator, is there but does not stretch, so it changes nothing; the free
-    /// length counts only in the stretch of an elastic tendon (docs/actuation.md).
+    /// tendon without `stiffness`, and a `motion = "release"` on a tendon without friction.
+    /// An inextensible tendon's free length, between the base and the actuator, is there but
+    /// does not stretch, so it changes nothing; the free length counts only in the stretch of
+    /// an elastic tendon (docs/actuation.md). The motion says which way friction acts, so
+    /// without friction it changes nothing (docs/friction.md).
     pub fn warnings(&self) -> Vec<String> {
-        self.robot
-            .tendons
-            .iter()
-            .enumerate()
-            .filter(|(_, t)| t.stiffness.is_none() && t.free_length != 0.0)
-            .map(|(i, t)| {
-                format!(
+        let mut warnings = Vec::new();
+        for (i, t) in self.robot.tendons.iter().enumerate() {
+            if t.stiffness.is_none() && t.free_length != 0.0 {
+                warnings.push(format!(
                     "`tendon[{}].free_length` is {} m, but the tendon has no `stiffness`, so it is \
                      inextensible and its free length has no effect (only an elastic tendon's free length \
                      stretches); give `stiffness` (E_t A_t, N) to make it elastic, or remove `free_length`",
                     i + 1,
                     crate::Readable(t.free_length)
-                )
-            })
-            .collect()
+                ));
+            }
+            if let Some(f) = t.friction
+                && f.coefficient == 0.0
+                && f.motion == crate::Motion::Release
+            {
+                warnings.push(format!(
+                    "`tendon[{}].motion` is \"release\", but the tendon has no friction, so the motion has no \
+                     effect (it says which way friction acts); give `friction` (e.g. 0.1) to model it, or remove \
+                     `motion`",
+                    i + 1
+                ));
+            }
+        }
+        warnings
     }
 }
 

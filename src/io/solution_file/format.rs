@@ -189,6 +189,10 @@ pub(crate) struct TendonEntry {
 pub(crate) struct Jacobian {
     pub tension: Vec<Vec<Num>>,
     pub displacement: Vec<Vec<Num>>,
+    /// Per friction coefficient, one column per tendon (zero without friction); absent in
+    /// files written before it.
+    #[serde(default)]
+    pub friction: Vec<Vec<Num>>,
     pub tip_force: Vec<Vec<Num>>,
     pub tip_moment: Vec<Vec<Num>>,
 }

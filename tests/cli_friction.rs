@@ -1,0 +1,328 @@
+//! Friction through the `tdcr` command as a new user meets it (docs/friction.md, issue 24):
+//! `--friction` on `sweep` as on `solve`, d(tip)/d(mu) in the JSON's `jacobian`, what
+//! `check` says about friction and motion, and bad `--history` lists in the command's words.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+const TDCR: &str = env!("CARGO_BIN_EXE_tdcr");
+
+fn scratch(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("tdcr-cli-friction-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+fn run(dir: &Path, args: &[&str]) -> Output {
+    let out = Command::new(TDCR).args(args).current_dir(dir).output().unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        !stderr.contains("panicked") && !stderr.contains("RUST_BACKTRACE"),
+        "{stderr}"
+    );
+    out
+}
+
+fn stdout(out: &Output) -> String {
+    String::from_utf8_lossy(&out.stdout).into_owned()
+}
+
+fn stderr(out: &Output) -> String {
+    String::from_utf8_lossy(&out.stderr).into_owned()
+}
+
+/// `tdcr example` with `added` (robot-file lines) after tendon 1's tension.
+fn example_with(dir: &Path, added: &str) -> String {
+    let text = stdout(&run(dir, &["example"]));
+    let from = "tension = 2.94                   # N, >= 0\n";
+    assert!(text.contains(from));
+    text.replacen(from, &format!("{from}{added}"), 1)
+}
+
+/// `tdcr sweep --friction 1=0.1` on a file without friction gives the rows of the same
+/// sweep on the file with `friction = 0.1`, as a history and as a plain sweep (before, sweep
+/// refused the option, while the history's own message told the user to give it).
+#[test]
+fn sweep_takes_friction_as_solve_does() {
+    let dir = scratch("sweep");
+    std::fs::write(dir.join("plain.toml"), example_with(&dir, "stiffness = 2000.0\n")).unwrap();
+    std::fs::write(
+        dir.join("rough.toml"),
+        example_with(&dir, "stiffness = 2000.0\nfriction = 0.1\n"),
+    )
+    .unwrap();
+    for history in [true, false] {
+        let mut args = vec!["sweep", "FILE", "--tension", "1=0:4.91:3"];
+        if history {
+            args.extend(["--history", "up-down"]);
+        }
+        let csv = |file: &str, extra: &[&str]| {
+            let mut a = args.clone();
+            a[1] = file;
+            a.extend(extra);
+            let out = run(&dir, &a);
+            assert_eq!(out.status.code(), Some(0), "{a:?}: {}", stderr(&out));
+            stdout(&out)
+        };
+        let by_option = csv("plain.toml", &["--friction", "1=0.1"]);
+        let by_file = csv("rough.toml", &[]);
+        if history {
+            assert!(by_option.starts_with("step,direction,"), "{by_option}");
+        } else {
+            let frictionless = csv("plain.toml", &[]);
+            // The frictionless sweep differs (the tip bends less with friction); the solve
+            // times differ between runs, so compare up to the column before them.
+            let tips = |csv: &str| {
+                csv.lines()
+                    .map(|l| l.split(',').take(10).collect::<Vec<_>>().join(","))
+                    .collect::<Vec<_>>()
+            };
+            assert_eq!(tips(&by_option), tips(&by_file));
+            assert_ne!(tips(&by_option), tips(&frictionless));
+            continue;
+        }
+        assert_eq!(by_option, by_file);
+    }
+    // Once per tendon, as for solve.
+    let out = run(
+        &dir,
+        &[
+            "sweep",
+            "plain.toml",
+            "--tension",
+            "1=0:1:2",
+            "--friction",
+            "1=0.1",
+            "--friction",
+            "1=0.2",
+        ],
+    );
+    assert_eq!(out.status.code(), Some(2));
+    assert!(
+        stderr(&out).contains("--friction 1=... is given twice"),
+        "{}",
+        stderr(&out)
+    );
+}
+
+/// The full `--jacobian` JSON has `friction`: d(tip pose)/d(mu_i), 6 rows x one column per
+/// tendon, the library's `TipSensitivities::friction` (zero for tendons without friction),
+/// which a central difference of two solves confirms; the tendon's `delivered_tension`.
+#[test]
+fn the_json_jacobian_has_the_tip_sensitivity_to_friction() {
+    let dir = scratch("jacobian");
+    std::fs::write(dir.join("robot.toml"), example_with(&dir, "")).unwrap();
+    let solve = |mu: f64, jacobian: bool| {
+        let friction = format!("1={mu}");
+        let mut args = vec![
+            "solve",
+            "robot.toml",
+            "--friction",
+            &friction,
+            "--intervals",
+            "64",
+            "--format",
+            "json",
+        ];
+        if jacobian {
+            args.push("--jacobian");
+        }
+        let out = run(&dir, &args);
+        assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+        serde_json::from_str::<serde_json::Value>(&stdout(&out)).unwrap()
+    };
+    let json = solve(0.1, true);
+    let column = |c: usize| -> Vec<f64> {
+        (0..6)
+            .map(|r| json["jacobian"]["friction"][r][c].as_f64().unwrap())
+            .collect()
+    };
+    let rows = json["jacobian"]["friction"].as_array().unwrap();
+    assert_eq!(rows.len(), 6);
+    assert!(rows.iter().all(|r| r.as_array().unwrap().len() == 5));
+    // The library's column on the same robot and mesh.
+    let mut robot = tdcr::io::parse(&example_with(&dir, ""), "robot.toml").unwrap().robot;
+    robot.tendons[0].friction = Some(tdcr::Friction::pull(0.1));
+    let solution = tdcr::collocation::solve(&robot, &tdcr::collocation::Options::fixed(64)).unwrap();
+    // The tendon keeps `tension` (the input at the base entry) and has `delivered_tension`
+    // (at its termination), the last of its `tensions` along the path.
+    let tendon = &json["tendons"][0];
+    assert_eq!(tendon["tension"].as_f64(), Some(2.94));
+    let delivered = tendon["delivered_tension"].as_f64().unwrap();
+    assert_eq!(delivered, solution.tendons[0].delivered_tension);
+    assert!(delivered < 2.94);
+    assert_eq!(
+        tendon["tensions"].as_array().unwrap().last().unwrap().as_f64(),
+        Some(delivered)
+    );
+    let want = tdcr::tip_sensitivities(&robot, &solution).unwrap().friction;
+    let scale = want.column(0).norm();
+    assert!(scale > 0.0);
+    for (r, got) in column(0).iter().enumerate() {
+        // 1e-12 of the column: the same robot, mesh and solve (the JSON prints in full)
+        assert!(
+            (got - want[(r, 0)]).abs() <= 1e-12 * scale,
+            "row {r}: {got} vs {}",
+            want[(r, 0)]
+        );
+    }
+    // Tendons without friction: no derivative is taken.
+    assert!((1..5).all(|c| column(c).iter().all(|&x| x == 0.0)));
+    // Against a central difference of the tip position in mu (step 1e-3).
+    let tip =
+        |j: &serde_json::Value| -> Vec<f64> { (0..3).map(|i| j["tip"]["position"][i].as_f64().unwrap()).collect() };
+    let (up, down) = (tip(&solve(0.101, false)), tip(&solve(0.099, false)));
+    let exact = column(0);
+    let difference: Vec<f64> = (0..3).map(|i| (up[i] - down[i]) / 0.002).collect();
+    let norm = difference.iter().map(|x| x * x).sum::<f64>().sqrt();
+    let off = (0..3).map(|i| (exact[i] - difference[i]).powi(2)).sum::<f64>().sqrt();
+    // 1e-4 relative: the difference's truncation error at a step of 1e-3 (the column itself
+    // is held to 1e-6 against sharper references in tests/sensitivity.rs)
+    assert!(off <= 1e-4 * norm, "{exact:?} vs {difference:?}");
+}
+
+/// `tdcr check` lists a tendon's friction with its motion, and warns that a `motion` on a
+/// tendon without friction has no effect (as a `free_length` without `stiffness`).
+#[test]
+fn check_says_what_friction_and_motion_do() {
+    let dir = scratch("check");
+    std::fs::write(
+        dir.join("rough.toml"),
+        example_with(&dir, "friction = 0.1\nmotion = \"release\"\n"),
+    )
+    .unwrap();
+    let out = run(&dir, &["check", "rough.toml"]);
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    let text = stdout(&out);
+    let line = text.lines().find(|l| l.contains("tendon 1:")).unwrap();
+    assert!(line.ends_with("friction 0.1 (release)"), "{line}");
+    assert!(!text.contains("warning"), "{text}");
+    std::fs::write(dir.join("moved.toml"), example_with(&dir, "motion = \"release\"\n")).unwrap();
+    let out = run(&dir, &["check", "moved.toml"]);
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    let text = stdout(&out) + &stderr(&out);
+    assert!(
+        text.contains("`tendon[1].motion`") && text.contains("no friction") && text.contains("give `friction`"),
+        "{text}"
+    );
+    // `solve` prints it too, and `--friction` gives the motion its effect.
+    let out = run(&dir, &["solve", "moved.toml"]);
+    assert!(stderr(&out).contains("`tendon[1].motion`"), "{}", stderr(&out));
+    let out = run(&dir, &["solve", "moved.toml", "--friction", "1=0.1"]);
+    assert!(!stderr(&out).contains("`tendon[1].motion`"), "{}", stderr(&out));
+}
+
+/// An empty `--history`, an empty value in its list, and a negative tension in it are bad
+/// input (exit 2) whose message says so in the command's words.
+#[test]
+fn bad_history_lists_say_what_is_wrong() {
+    let dir = scratch("history");
+    std::fs::write(dir.join("robot.toml"), example_with(&dir, "friction = 0.1\n")).unwrap();
+    for (list, says) in [
+        ("", "--history is empty"),
+        ("0,,2", "value 2 of --history 0,,2 is empty"),
+        ("0,-1", "--history lists tension.1 = -1 N, a negative tension"),
+    ] {
+        let history = format!("--history={list}");
+        let out = run(&dir, &["sweep", "robot.toml", "--tension", "1=0", &history]);
+        assert_eq!(out.status.code(), Some(2), "{list}");
+        let err = stderr(&out);
+        assert!(err.contains(says) && !err.contains("tendons[0]"), "{list}: {err}");
+    }
+}
+
+/// A library message names its field as robot files and Python's messages do
+/// (`tendon[1].stiffness`), not by the library's index from 0 (`tendons[0]`).
+#[test]
+fn library_messages_name_fields_as_robot_files_do() {
+    let dir = scratch("field");
+    std::fs::write(dir.join("robot.toml"), example_with(&dir, "friction = 0.1\n")).unwrap();
+    let out = run(
+        &dir,
+        &["sweep", "robot.toml", "--tension", "1=0:4.91:5", "--history", "up-down"],
+    );
+    assert_eq!(out.status.code(), Some(2));
+    let err = stderr(&out);
+    assert!(
+        err.contains("`tendon[1].stiffness` tendon 1 sticks") && !err.contains("tendons[0]"),
+        "{err}"
+    );
+    let out = run(
+        &dir,
+        &["solve", "robot.toml", "--rod", "cosserat", "--tendons", "point_moment"],
+    );
+    assert_eq!(out.status.code(), Some(2));
+    let err = stderr(&out);
+    assert!(
+        err.contains("`tendon[1].friction` is 0.1") && !err.contains("tendons[0]"),
+        "{err}"
+    );
+}
+
+/// The table of `solve` gives the tension along each tendon with friction at every sample
+/// (`T1/N`: the input at s = 0, the delivered tension at the termination, falling between
+/// while pulled), and no such column without friction.
+#[test]
+fn the_table_has_the_tension_along_a_tendon_with_friction() {
+    let dir = scratch("table");
+    std::fs::write(dir.join("robot.toml"), example_with(&dir, "")).unwrap();
+    let out = run(&dir, &["solve", "robot.toml", "--friction", "1=0.1", "--samples", "5"]);
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    let text = stdout(&out);
+    let lines: Vec<&str> = text.lines().collect();
+    let head = lines.iter().position(|l| l.trim_start().starts_with("s/mm")).unwrap();
+    assert!(lines[head].ends_with("T1/N"), "{}", lines[head]);
+    let column: Vec<f64> = lines[head + 1..head + 6]
+        .iter()
+        .map(|l| l.split_whitespace().last().unwrap().parse().unwrap())
+        .collect();
+    let delivered: f64 = lines
+        .iter()
+        .find(|l| l.split_whitespace().next() == Some("1"))
+        .and_then(|l| l.split_whitespace().nth(2))
+        .unwrap()
+        .parse()
+        .unwrap();
+    assert_eq!(column[0], 2.94);
+    assert_eq!(column[4], delivered);
+    assert!(column.windows(2).all(|w| w[1] < w[0]), "{column:?}");
+    let out = run(&dir, &["solve", "robot.toml", "--samples", "5"]);
+    assert!(!stdout(&out).contains("T1/N"));
+}
+
+/// `--motion 1=release` gives the answer of `motion = "release"` in the file (the tension
+/// rises toward the termination); a bad motion is bad input naming both; without friction
+/// it has no effect, and the warning says so.
+#[test]
+fn motion_on_the_command_line_is_the_files_motion() {
+    let dir = scratch("motion");
+    std::fs::write(dir.join("pull.toml"), example_with(&dir, "friction = 0.1\n")).unwrap();
+    std::fs::write(
+        dir.join("release.toml"),
+        example_with(&dir, "friction = 0.1\nmotion = \"release\"\n"),
+    )
+    .unwrap();
+    let json = |args: &[&str]| {
+        let mut a = vec!["solve"];
+        a.extend(args);
+        a.extend(["--format", "json"]);
+        let out = run(&dir, &a);
+        assert_eq!(out.status.code(), Some(0), "{a:?}: {}", stderr(&out));
+        let v: serde_json::Value = serde_json::from_str(&stdout(&out)).unwrap();
+        (
+            v["tip"]["position"].clone(),
+            v["tendons"][0]["delivered_tension"].as_f64().unwrap(),
+        )
+    };
+    let by_option = json(&["pull.toml", "--motion", "1=release"]);
+    assert_eq!(by_option, json(&["release.toml"]));
+    assert!(by_option.1 > 2.94, "{}", by_option.1);
+    assert_eq!(json(&["release.toml", "--motion", "1=pull"]), json(&["pull.toml"]));
+    let out = run(&dir, &["solve", "pull.toml", "--motion", "1=up"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(stderr(&out).contains("`up` is neither `pull`"), "{}", stderr(&out));
+    let out = run(&dir, &["solve", "pull.toml", "--motion", "2=release"]);
+    assert_eq!(out.status.code(), Some(0));
+    assert!(stderr(&out).contains("`tendon[2].motion`"), "{}", stderr(&out));
+}
