@@ -50,7 +50,7 @@ pub(crate) fn integrate_poses_into(
 /// [`integrate_poses_into`] with the arithmetic of `sums`: with [`Sums::Body`] each
 /// interval's rotation is exp(u h/2)^2, the half step's exponential (which the position
 /// needs) squared, instead of a second exponential exp(u h): the same rotation to
-/// rounding (docs/numerics.md, "Initial guess").
+/// rounding (docs/benchmarks.md, "A batch row (row15, 2026-12-06, seventh session)").
 fn integrate_poses_with(
     model: &Model,
     nodes: &[MeshNode],
@@ -85,15 +85,16 @@ fn integrate_poses_with(
 }
 
 /// The arithmetic of the rigid-equilibrium sweeps: the same sums to rounding, in two
-/// orders (docs/numerics.md, "Initial guess").
+/// orders (docs/benchmarks.md, "A batch row (row15, 2026-12-06, seventh session)").
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum Sums {
     /// The default guess's: each interval's rotation from one exponential (the half
     /// step's, squared), the tendons' pulls summed in the body frame.
     Body,
     /// The shooting cross-check's and the friction start's: two exponentials an interval,
-    /// the pulls rotated to the world frame tendon by tendon (shooting's Newton did not
-    /// converge on a displacement input of tests/actuation.rs from the other order's guess).
+    /// the pulls rotated to the world frame tendon by tendon (from a guess integrated with
+    /// one exponential an interval, shooting's Newton failed on a displacement input of
+    /// tests/actuation.rs: docs/benchmarks.md, "Guess, estimate and count").
     World,
 }
 
