@@ -177,7 +177,7 @@ impl Routing {
     ///
     /// Inlined for a straight routing (a constant point: its call cost more than its
     /// copies, and eq. 13 evaluates it for every taut tendon at every point); the other
-    /// routings are evaluated by a call ([`Routing::curved_at`]), so that their sines and
+    /// routings are evaluated by a call (`curved_at`), so that their sines and
     /// cosines are not inlined where they are rare.
     #[inline(always)]
     pub fn at(&self, s: f64, length: f64) -> RoutingPoint {
