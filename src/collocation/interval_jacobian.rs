@@ -46,24 +46,45 @@ pub fn interval_jacobian(
     jac: &mut [f64],
     tensions: Option<IntervalTensions>,
 ) -> Result<(Block<f64>, Linearization)> {
+    let mut end = Linearization::zeros();
+    interval_jacobian_into(model, sites, segment_end, (a, b), start, jac, tensions, &mut end).map(|r| (r, end))
+}
+
+/// [`interval_jacobian`] with the end node's linearization written into `end` instead of
+/// returned, so that the system's assembly keeps it where the next interval reads it (no
+/// copies of it per interval).
+///
+/// # Errors
+/// As [`interval_jacobian`].
+#[allow(clippy::too_many_arguments)]
+pub(super) fn interval_jacobian_into(
+    model: &Model,
+    sites: &IntervalSites,
+    segment_end: f64,
+    (a, b): (&State, &State),
+    start: Option<&Linearization>,
+    jac: &mut [f64],
+    tensions: Option<IntervalTensions>,
+    end: &mut Linearization,
+) -> Result<Block<f64>> {
     #[cfg(target_arch = "x86_64")]
     if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma") {
         // SAFETY: the processor supports the features the function is compiled for.
-        return unsafe { interval_jacobian_avx2(model, sites, segment_end, (a, b), start, jac, tensions, false) }
-            .map(|(r, end, _)| (r, end));
+        return unsafe { interval_jacobian_avx2(model, sites, segment_end, (a, b), start, jac, tensions, false, end) }
+            .map(|(r, _)| r);
     }
-    interval_jacobian_kernel(model, sites, segment_end, a, b, start, jac, None, tensions, false)
-        .map(|(r, end, _)| (r, end))
+    interval_jacobian_kernel(model, sites, segment_end, a, b, start, jac, None, tensions, false, end).map(|(r, _)| r)
 }
 
 /// [`interval_jacobian`] whose residual is bit for bit [`interval`](super::residual::interval)'s, with the rates at
 /// node a: F_1's position row is R_b v_b, as [`interval`](super::residual::interval) forms it, not R_a exp(theta_1) v_b
 /// (which differ by rounding; no derivative reads that row). For a Jacobian evaluated in
 /// place of a residual evaluation (Newton's trial point, `System::jacobian_rates`);
-/// `tensions` as in [`interval_jacobian`].
+/// `tensions` as in [`interval_jacobian`], `end` as in [`interval_jacobian_into`].
 ///
 /// # Errors
 /// As [`interval_jacobian`].
+#[allow(clippy::too_many_arguments)]
 pub(super) fn interval_jacobian_as_residual(
     model: &Model,
     sites: &IntervalSites,
@@ -72,20 +93,22 @@ pub(super) fn interval_jacobian_as_residual(
     start: Option<&Linearization>,
     jac: &mut [f64],
     tensions: Option<IntervalTensions>,
-) -> Result<(Block<f64>, Linearization, Vector6<f64>)> {
+    end: &mut Linearization,
+) -> Result<(Block<f64>, Vector6<f64>)> {
     #[cfg(target_arch = "x86_64")]
     if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma") {
         // SAFETY: the processor supports the features the function is compiled for.
-        return unsafe { interval_jacobian_avx2(model, sites, segment_end, (a, b), start, jac, tensions, true) };
+        return unsafe { interval_jacobian_avx2(model, sites, segment_end, (a, b), start, jac, tensions, true, end) };
     }
-    interval_jacobian_kernel(model, sites, segment_end, a, b, start, jac, None, tensions, true)
+    interval_jacobian_kernel(model, sites, segment_end, a, b, start, jac, None, tensions, true, end)
 }
 
 /// [`interval_jacobian`] that keeps eq. 13's factored matrix at its points in `kept` (the
 /// start's only when it evaluates it, not given `start`): the Jacobian at an answer whose
 /// verdict comes from the linearized dynamics, whose mass solves with them
 /// (`collocation/dynamics.rs`); `as_residual` as in [`interval_jacobian_as_residual`] (that
-/// Jacobian evaluated by Newton in place of its last residual), with the rates at node a.
+/// Jacobian evaluated by Newton in place of its last residual), with the rates at node a;
+/// `end` as in [`interval_jacobian_into`].
 ///
 /// # Errors
 /// As [`interval_jacobian`].
@@ -99,12 +122,13 @@ pub(super) fn interval_jacobian_keeping(
     jac: &mut [f64],
     kept: &mut IntervalFactors,
     as_residual: bool,
-) -> Result<(Block<f64>, Linearization, Vector6<f64>)> {
+    end: &mut Linearization,
+) -> Result<(Block<f64>, Vector6<f64>)> {
     #[cfg(target_arch = "x86_64")]
     if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma") {
         // SAFETY: the processor supports the features the function is compiled for.
         return unsafe {
-            interval_jacobian_keeping_avx2(model, sites, segment_end, (a, b), start, jac, kept, as_residual)
+            interval_jacobian_keeping_avx2(model, sites, segment_end, (a, b), start, jac, kept, as_residual, end)
         };
     }
     interval_jacobian_kernel(
@@ -118,6 +142,7 @@ pub(super) fn interval_jacobian_keeping(
         Some(kept),
         None,
         as_residual,
+        end,
     )
 }
 
@@ -134,8 +159,21 @@ unsafe fn interval_jacobian_avx2(
     jac: &mut [f64],
     tensions: Option<IntervalTensions>,
     as_residual: bool,
-) -> Result<(Block<f64>, Linearization, Vector6<f64>)> {
-    interval_jacobian_kernel(model, sites, segment_end, a, b, start, jac, None, tensions, as_residual)
+    end: &mut Linearization,
+) -> Result<(Block<f64>, Vector6<f64>)> {
+    interval_jacobian_kernel(
+        model,
+        sites,
+        segment_end,
+        a,
+        b,
+        start,
+        jac,
+        None,
+        tensions,
+        as_residual,
+        end,
+    )
 }
 
 /// [`interval_jacobian_kernel`] keeping the points' factors, with AVX2 and FMA enabled.
@@ -151,7 +189,8 @@ unsafe fn interval_jacobian_keeping_avx2(
     jac: &mut [f64],
     kept: &mut IntervalFactors,
     as_residual: bool,
-) -> Result<(Block<f64>, Linearization, Vector6<f64>)> {
+    end: &mut Linearization,
+) -> Result<(Block<f64>, Vector6<f64>)> {
     interval_jacobian_kernel(
         model,
         sites,
@@ -163,13 +202,14 @@ unsafe fn interval_jacobian_keeping_avx2(
         Some(kept),
         None,
         as_residual,
+        end,
     )
 }
 
 /// [`interval_jacobian`]'s operations; `kept` as in [`interval_jacobian_keeping`], `tensions`
 /// as in [`interval_jacobian`] (one of the two at most: a point keeps its factors or forms
-/// its tension rows), `as_residual` as in [`interval_jacobian_as_residual`]; also returns
-/// the rates at node a.
+/// its tension rows), `as_residual` as in [`interval_jacobian_as_residual`]; writes the end
+/// node's linearization into `end` and returns the residual and the rates at node a.
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
 fn interval_jacobian_kernel(
@@ -183,7 +223,8 @@ fn interval_jacobian_kernel(
     mut kept: Option<&mut IntervalFactors>,
     mut tensions: Option<IntervalTensions>,
     as_residual: bool,
-) -> Result<(Block<f64>, Linearization, Vector6<f64>)> {
+    end: &mut Linearization,
+) -> Result<(Block<f64>, Vector6<f64>)> {
     let length = model.robot.length();
     let h = sites.end.s - sites.start.s;
     let (y0, y1) = end_points(a, b);
@@ -202,16 +243,17 @@ fn interval_jacobian_kernel(
             &computed
         }
     };
-    let lin1 = match tensions.as_mut() {
+    *end = match tensions.as_mut() {
         Some(t) => linearize::linearize_tensions_inline(model, &sites.end, segment_end, (&b.R, &b.v, &b.u), t.end)?,
         None => {
             let keep = kept.as_deref_mut().map(|k| &mut k.end);
             linearize_keeping(model, &sites.end, segment_end, &b.R, &b.v, &b.u, keep)?
         }
     };
+    let lin1: &Linearization = end;
     let frame1 = PointFrame::new(&a.R, &theta1);
     let p0 = rhs_linearized_inline(&sites.start, lin0, &a.R, &y0, &PointFrame::start(&a.R));
-    let mut p1 = rhs_linearized_inline(&sites.end, &lin1, &a.R, &y1, &frame1);
+    let mut p1 = rhs_linearized_inline(&sites.end, lin1, &a.R, &y1, &frame1);
     if as_residual {
         // `end_rhs`'s position row (the midpoint reads only the theta, v and u rows).
         p1.f.fixed_rows_mut::<3>(P).copy_from(&(b.R * sites.end.strain(&b.v)));
@@ -250,7 +292,7 @@ fn interval_jacobian_kernel(
         let mid = (sites.mid.inextensible, &frame_m.R, &frame_m.Jri);
         derivative_rows(mid, h, length, [t.start, t.end, t.mid, t.dy_mid], t.rows);
     }
-    Ok((residual, lin1, lin0.rates))
+    Ok((residual, lin0.rates))
 }
 
 /// The midpoint's F on the 18 columns: its (theta, v, u) columns of dF/dy times the
@@ -319,7 +361,8 @@ mod tests {
             let (mut fast, mut baseline) = ([0.0; 12 * 24], [0.0; 12 * 24]);
             let (r_fast, l_fast) =
                 interval_jacobian(&model, &sites, seg, &x[k], &x[k + 1], None, &mut fast, None).unwrap();
-            let (r_base, l_base, _) = interval_jacobian_kernel(
+            let mut l_base = Linearization::zeros();
+            let (r_base, _) = interval_jacobian_kernel(
                 &model,
                 &sites,
                 seg,
@@ -330,6 +373,7 @@ mod tests {
                 None,
                 None,
                 false,
+                &mut l_base,
             )
             .unwrap();
             assert!(fast.iter().all(|v| v.is_finite()));

@@ -25,7 +25,9 @@
 
 pub(super) use super::ends::EndColumns;
 pub use super::interval_jacobian::interval_jacobian;
-pub(super) use super::interval_jacobian::{interval_jacobian_as_residual, interval_jacobian_keeping, midpoint_product};
+pub(super) use super::interval_jacobian::{
+    interval_jacobian_as_residual, interval_jacobian_into, interval_jacobian_keeping, midpoint_product,
+};
 pub(crate) use super::interval_kept::IntervalFactors;
 pub use super::interval_kept::IntervalTensions;
 pub use super::order6::{QuarterSites, interval_order6};

@@ -44,6 +44,20 @@ pub(crate) fn integrate_poses_into(
     strains: &[(Vector3<f64>, Vector3<f64>)],
     out: &mut Vec<(Vector3<f64>, Matrix3<f64>)>,
 ) {
+    integrate_poses_with(model, nodes, strains, out, Sums::World);
+}
+
+/// [`integrate_poses_into`] with the arithmetic of `sums`: with [`Sums::Body`] each
+/// interval's rotation is exp(u h/2)^2, the half step's exponential (which the position
+/// needs) squared, instead of a second exponential exp(u h): the same rotation to
+/// rounding (docs/benchmarks.md, "A batch row (row15, 2026-12-06, seventh session)").
+fn integrate_poses_with(
+    model: &Model,
+    nodes: &[MeshNode],
+    strains: &[(Vector3<f64>, Vector3<f64>)],
+    out: &mut Vec<(Vector3<f64>, Matrix3<f64>)>,
+    sums: Sums,
+) {
     let mut p = model.base_position();
     let mut R = model.robot.base_rotation;
     out.clear();
@@ -53,11 +67,35 @@ pub(crate) fn integrate_poses_into(
         if h > 0.0 {
             let v = (strain(model, &nodes[k], &strains[k].0) + strain(model, &nodes[k + 1], &strains[k + 1].0)) * 0.5;
             let u = (strains[k].1 + strains[k + 1].1) * 0.5;
-            p += R * so3::exp(&(u * (h / 2.0))) * v * h;
-            R *= so3::exp(&(u * h));
+            let half = so3::exp(&(u * (h / 2.0)));
+            match sums {
+                Sums::World => {
+                    p += R * half * v * h;
+                    R *= so3::exp(&(u * h));
+                }
+                Sums::Body => {
+                    let R_half = R * half;
+                    p += R_half * v * h;
+                    R = R_half * half;
+                }
+            }
         }
         out.push((p, R));
     }
+}
+
+/// The arithmetic of the rigid-equilibrium sweeps: the same sums to rounding, in two
+/// orders (docs/benchmarks.md, "A batch row (row15, 2026-12-06, seventh session)").
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Sums {
+    /// The default guess's: each interval's rotation from one exponential (the half
+    /// step's, squared), the tendons' pulls summed in the body frame.
+    Body,
+    /// The shooting cross-check's and the friction start's: two exponentials an interval,
+    /// the pulls rotated to the world frame tendon by tendon (from a guess integrated with
+    /// one exponential an interval, shooting's Newton failed on a displacement input of
+    /// tests/actuation.rs: docs/benchmarks.md, "Guess, estimate and count").
+    World,
 }
 
 /// Where Newton starts when no previous solution is given.
@@ -166,7 +204,7 @@ const RELAXATION: f64 = 0.5;
 /// the loads on the shape it predicts (moment arms and body frames from the previous sweep)
 /// until the curvature stops changing, or grows (then the previous sweep is kept).
 pub fn rigid_estimate(model: &Model, nodes: &[MeshNode]) -> Vec<State> {
-    rigid_estimate_to(model, nodes, RELATIVE_CHANGE)
+    rigid_estimate_to(model, nodes, RELATIVE_CHANGE, Sums::Body)
 }
 
 /// [`initial`], with the rigid-equilibrium sweeps held to the absolute stopping test
@@ -176,17 +214,18 @@ pub fn rigid_estimate(model: &Model, nodes: &[MeshNode]) -> Vec<State> {
 /// the guess that stops at 1e-5 of the deformation.
 pub(crate) fn initial_absolute(model: &Model, nodes: &[MeshNode], kind: InitialGuess) -> Vec<State> {
     match kind {
-        InitialGuess::RigidEquilibrium => rigid_estimate_to(model, nodes, 0.0),
+        InitialGuess::RigidEquilibrium => rigid_estimate_to(model, nodes, 0.0, Sums::World),
         InitialGuess::Unloaded => initial(model, nodes, kind),
     }
 }
 
-/// [`rigid_estimate`] with the relative part `relative` of the stopping test ([`settled`]).
-fn rigid_estimate_to(model: &Model, nodes: &[MeshNode], relative: f64) -> Vec<State> {
+/// [`rigid_estimate`] with the relative part `relative` of the stopping test ([`settled`])
+/// and the arithmetic `sums`.
+fn rigid_estimate_to(model: &Model, nodes: &[MeshNode], relative: f64, sums: Sums) -> Vec<State> {
     // The sweeps' buffers come from this thread's last estimate (taken out, so that an
     // estimate nested in a user function's call finds none and allocates its own).
     let mut buffers = SWEEP_BUFFERS.with(|b| std::mem::take(&mut *b.borrow_mut()));
-    let x = rigid_estimate_in(model, nodes, &mut buffers, relative);
+    let x = rigid_estimate_in(model, nodes, &mut buffers, relative, sums);
     SWEEP_BUFFERS.with(|b| *b.borrow_mut() = buffers);
     x
 }
@@ -230,7 +269,7 @@ thread_local! {
 }
 
 /// [`rigid_estimate_to`] in the buffers `b` (their contents on entry are not read).
-fn rigid_estimate_in(model: &Model, nodes: &[MeshNode], b: &mut SweepBuffers, relative: f64) -> Vec<State> {
+fn rigid_estimate_in(model: &Model, nodes: &[MeshNode], b: &mut SweepBuffers, relative: f64, sums: Sums) -> Vec<State> {
     let length = model.robot.length();
     let SweepBuffers {
         strains,
@@ -244,7 +283,7 @@ fn rigid_estimate_in(model: &Model, nodes: &[MeshNode], b: &mut SweepBuffers, re
         route_ends,
     } = b;
     reference_strains_into(model, nodes, strains);
-    integrate_poses_into(model, nodes, strains, shape);
+    integrate_poses_with(model, nodes, strains, shape, sums);
     let mut last_change = f64::INFINITY;
     let mut relaxation = RELAXATION;
     let mut stepped = false;
@@ -265,7 +304,7 @@ fn rigid_estimate_in(model: &Model, nodes: &[MeshNode], b: &mut SweepBuffers, re
     // reference strains).
     let mut deformation = [0.0; 2];
     for _ in 0..MAX_SWEEPS {
-        let pulls = Pulls::Kept(routes, route_ends);
+        let pulls = Pulls::Kept(routes, route_ends, sums);
         sweep(model, (nodes, sites), (shape, strains), pulls, (wrench, next));
         // The fixed-point step, flattened (v then u L per node, so all are comparable).
         step.clear();
@@ -292,7 +331,7 @@ fn rigid_estimate_in(model: &Model, nodes: &[MeshNode], b: &mut SweepBuffers, re
             relaxation = aitken(relaxation, last_step, step);
         }
         relax_strains(strains, step, relaxation, length);
-        integrate_poses_into(model, nodes, strains, shape);
+        integrate_poses_with(model, nodes, strains, shape, sums);
         last_change = change;
         std::mem::swap(step, last_step);
         stepped = true;
@@ -381,8 +420,8 @@ pub(crate) fn relax_strains(strains: &mut [(Vector3<f64>, Vector3<f64>)], step: 
 #[derive(Clone, Copy)]
 enum Pulls<'a> {
     /// The model's tensions, with the taut tendons and their routing points at every node
-    /// kept (`routes`, node after node; `ends[k]` ends node k's).
-    Kept(&'a [(usize, f64, RoutingPoint)], &'a [usize]),
+    /// kept (`routes`, node after node; `ends[k]` ends node k's), summed as [`Sums`] says.
+    Kept(&'a [(usize, f64, RoutingPoint)], &'a [usize], Sums),
     /// Every tendon's tension at node k from `tensions[k]` (friction).
     Local(&'a [Vec<f64>]),
 }
@@ -433,9 +472,20 @@ fn sweep(
         // The tendons loading this node's segment pull it back along their paths.
         let v = site.strain(&v);
         let pull = match pulls {
-            Pulls::Kept(routes, ends) => {
+            Pulls::Kept(routes, ends, sums) => {
                 let from = if k == 0 { 0 } else { ends[k - 1] };
-                model.tendon_pull_of(routes[from..ends[k]].iter().copied(), node.s, &R, &v, &u)
+                let tendons = routes[from..ends[k]].iter().copied();
+                if sums == Sums::Body {
+                    // n_b = R^T n - sum f_b: the pulls stay in the body frame.
+                    let (mut n_b, mut m_b) = (R.transpose() * n, R.transpose() * m);
+                    if let Ok((f, l)) = model.tendon_pull_body_of(tendons, node.s, &v, &u) {
+                        n_b -= f;
+                        m_b -= l;
+                    }
+                    out.push(model.strains_for_wrench(site, &n_b, &m_b));
+                    continue;
+                }
+                model.tendon_pull_of(tendons, node.s, &R, &v, &u)
             }
             Pulls::Local(t) => {
                 let local = local.get_or_insert_with(|| model.clone());

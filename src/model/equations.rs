@@ -321,22 +321,36 @@ impl<'a> Model<'a> {
         let mut moment = Vector3::<T>::zeros();
         let coupled = self.robot.tendon_model == TendonModel::Coupled;
         for (i, tension, rp) in tendons {
-            let r = lift::<T>(&rp.r);
-            let pb_s = u.cross(&r) + lift::<T>(&rp.r_s) + v;
-            let speed = pb_s.norm();
-            if speed < T::from_f64(MIN_TENDON_SPEED).unwrap_or_else(T::zero) {
-                return Err(Error::SingularRouting {
-                    tendon: i,
-                    s,
-                    speed: to_f64(speed),
-                });
-            }
-            let f_b = pb_s * (T::from_f64(tension).unwrap_or_else(T::zero) / speed);
+            let (f_b, r) = body_pull(i, tension, &rp, s, v, u)?;
             // The point-moment model keeps only the moment of the tendon's pull.
             if coupled {
                 force += R * f_b;
             }
             moment += R * r.cross(&f_b);
+        }
+        Ok((force, moment))
+    }
+
+    /// [`Model::tendon_pull_of`] in the body frame: R^T times its force and moment, summed
+    /// over the tendons in the body frame and so without a rotation per tendon (the same
+    /// sums to rounding, not the same bits). For the default initial guess's sweeps, which
+    /// need the pulls only in the body frame.
+    pub(crate) fn tendon_pull_body_of(
+        &self,
+        tendons: impl Iterator<Item = (usize, f64, RoutingPoint)>,
+        s: f64,
+        v: &Vector3<f64>,
+        u: &Vector3<f64>,
+    ) -> Result<(Vector3<f64>, Vector3<f64>)> {
+        let mut force = Vector3::zeros();
+        let mut moment = Vector3::zeros();
+        let coupled = self.robot.tendon_model == TendonModel::Coupled;
+        for (i, tension, rp) in tendons {
+            let (f_b, r) = body_pull(i, tension, &rp, s, v, u)?;
+            if coupled {
+                force += f_b;
+            }
+            moment += r.cross(&f_b);
         }
         Ok((force, moment))
     }
@@ -368,6 +382,34 @@ impl<'a> Model<'a> {
         let u = lift::<T>(&site.reference.u_star) + m_b.component_div(&lift(&site.section.section.kbt));
         (v, u)
     }
+}
+
+/// A tendon's pull at s in the body frame, tau_i p_b' / |p_b'| with p_b' = u x r + r' + v
+/// (eq. 9), and its routing point r lifted: tendon `i` of tension `tension` (N) at routing
+/// point `rp`, for the strain `v` and curvature `u`.
+///
+/// # Errors
+/// [`Error::SingularRouting`] where |p_b'| is below [`MIN_TENDON_SPEED`].
+#[inline(always)]
+fn body_pull<T: Real>(
+    i: usize,
+    tension: f64,
+    rp: &RoutingPoint,
+    s: f64,
+    v: &Vector3<T>,
+    u: &Vector3<T>,
+) -> Result<(Vector3<T>, Vector3<T>)> {
+    let r = lift::<T>(&rp.r);
+    let pb_s = u.cross(&r) + lift::<T>(&rp.r_s) + v;
+    let speed = pb_s.norm();
+    if speed < T::from_f64(MIN_TENDON_SPEED).unwrap_or_else(T::zero) {
+        return Err(Error::SingularRouting {
+            tendon: i,
+            s,
+            speed: to_f64(speed),
+        });
+    }
+    Ok((pb_s * (T::from_f64(tension).unwrap_or_else(T::zero) / speed), r))
 }
 
 /// The real part of a scalar (its value for f64, the value without derivatives for duals).

@@ -174,6 +174,12 @@ impl Routing {
     }
 
     /// r, r', r'' at arc length `s` of a rod of `length` L (m).
+    ///
+    /// Inlined for a straight routing (a constant point: its call cost more than its
+    /// copies, and eq. 13 evaluates it for every taut tendon at every point); the other
+    /// routings are evaluated by a call (`curved_at`), so that their sines and
+    /// cosines are not inlined where they are rare.
+    #[inline(always)]
     pub fn at(&self, s: f64, length: f64) -> RoutingPoint {
         match self {
             Routing::Straight { x, y } => RoutingPoint {
@@ -181,6 +187,15 @@ impl Routing {
                 r_s: Vector3::zeros(),
                 r_ss: Vector3::zeros(),
             },
+            _ => self.curved_at(s, length),
+        }
+    }
+
+    /// [`Routing::at`] of a routing that is not straight.
+    #[inline(never)]
+    fn curved_at(&self, s: f64, length: f64) -> RoutingPoint {
+        match self {
+            Routing::Straight { .. } => self.at(s, length),
             Routing::Helical { radius, turns, phase } => {
                 let w = 2.0 * PI * turns / length;
                 let (sin, cos) = (w * s + phase).sin_cos();

@@ -481,8 +481,11 @@ impl<'a> System<'a> {
         }
         let links = x.len() - 1;
         let width = 2 * NODE;
-        // Linearization at the shared node of consecutive intervals, evaluated once.
-        let mut node_lin = None;
+        // Linearization at the shared node of consecutive intervals, evaluated once: interval
+        // k writes its end node's into `lins[(k + 1) % 2]`, where interval k + 1 reads it
+        // (`shared`: the link before was an interval).
+        let mut lins = [linearize::Linearization::zeros(); 2];
+        let mut shared = false;
         for k in 0..links {
             let rows = link_row(k)..link_row(k + 1);
             if let Some(sites) = &self.interval_sites[k] {
@@ -494,12 +497,14 @@ impl<'a> System<'a> {
                     out[rows].copy_from_slice(lin.residual.as_slice());
                     profile.keep(k, lin);
                 } else {
-                    let start = node_lin.as_ref();
-                    let (r, end) = match (kept.as_deref_mut(), rates.as_deref_mut()) {
+                    let [even, odd] = &mut lins;
+                    let (start, end) = if k % 2 == 0 { (&*even, odd) } else { (&*odd, even) };
+                    let start = shared.then_some(start);
+                    let ends = (&x[k], &x[k + 1]);
+                    let r = match (kept.as_deref_mut(), rates.as_deref_mut()) {
                         (None, Some(rates)) => {
-                            let ends = (&x[k], &x[k + 1]);
                             let sink = tensions.as_mut().map(|(sink, _)| sink.interval(start.is_some()));
-                            let (r, end, at_start) = residual::interval_jacobian_as_residual(
+                            let (r, at_start) = residual::interval_jacobian_as_residual(
                                 &self.model,
                                 sites,
                                 seg,
@@ -507,26 +512,26 @@ impl<'a> System<'a> {
                                 start,
                                 block,
                                 sink,
+                                end,
                             )?;
                             (rates[k], rates[k + 1]) = (at_start, end.rates);
-                            (r, end)
+                            r
                         }
-                        (None, None) => residual::interval_jacobian(
+                        (None, None) => residual::interval_jacobian_into(
                             &self.model,
                             sites,
                             seg,
-                            &x[k],
-                            &x[k + 1],
+                            ends,
                             start,
                             block,
                             tensions.as_mut().map(|(sink, _)| sink.interval(start.is_some())),
+                            end,
                         )?,
                         (Some(kept), rates) => {
                             if start.is_some() {
                                 kept[k].start = kept[k - 1].end.clone();
                             }
-                            let ends = (&x[k], &x[k + 1]);
-                            let (r, end, at_start) = residual::interval_jacobian_keeping(
+                            let (r, at_start) = residual::interval_jacobian_keeping(
                                 &self.model,
                                 sites,
                                 seg,
@@ -535,21 +540,22 @@ impl<'a> System<'a> {
                                 block,
                                 &mut kept[k],
                                 rates.is_some(),
+                                end,
                             )?;
                             if let Some(rates) = rates {
                                 (rates[k], rates[k + 1]) = (at_start, end.rates);
                             }
-                            (r, end)
+                            r
                         }
                     };
                     if let Some((sink, columns)) = tensions.as_mut() {
                         sink.write(k, n, columns);
                     }
-                    node_lin = Some(end);
+                    shared = true;
                     out[rows].copy_from_slice(r.as_slice());
                 }
             } else {
-                node_lin = None;
+                shared = false;
                 self.jump_rows(k, x, out, &mut values[at..at + NODE * width])?;
             }
             at += NODE * width;

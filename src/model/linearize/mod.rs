@@ -163,6 +163,17 @@ pub struct Linearization {
     pub d_rotation: Matrix6x3<f64>,
 }
 
+impl Linearization {
+    /// All zeros: a buffer for a linearization written later.
+    pub(crate) fn zeros() -> Self {
+        Linearization {
+            rates: Vector6::zeros(),
+            d_strains: Matrix6::zeros(),
+            d_rotation: Matrix6x3::zeros(),
+        }
+    }
+}
+
 /// a^ diag(d) + diag(d_s): column l of a^ scaled by d_l, plus d_s on the diagonal.
 fn hat_diag(a: &Vector3<f64>, d: &Vector3<f64>, d_s: &Vector3<f64>) -> Matrix3<f64> {
     Matrix3::new(
