@@ -1,7 +1,8 @@
 //! Error control of a history step with a stuck stretch (docs/friction.md section 8, "Error
-//! control of stuck steps"): the step is solved again on its mesh with every link split in
-//! two, four, ... parts, from the same carried material, until two successive answers agree
-//! to the tolerance; the finer one is returned, with their difference as its error estimate
+//! control of stuck steps"): the step is solved again on its mesh with its links split in
+//! two, four, ... parts (with a tolerance only the links where a tendon sticks, [`parts`];
+//! the others four times more slowly), from the same carried material, until two
+//! successive answers agree to the tolerance; the finer one is returned, with their difference as its error estimate
 //! plus the error the carried material's interpolation leaves ([`material_error`]), which
 //! every level shares. On each level the split node nearest each tendon's stick/slip
 //! boundary (estimated from the last level's tensions, [`boundaries`]) is moved onto it, so
@@ -33,10 +34,11 @@ const SLIDING_SEEN: u32 = 3;
 /// the answer `last` (the last level's, or the step's on the history's mesh) with its
 /// stick/slip `boundaries`. Uniform (`graded` false): 2^level. Graded: 2^level where a
 /// tendon sticks on the link in `last` or a boundary lies on it, and on the link before
-/// such a one; 2^(level - 2) (at least one) on the other links, where every tendon slides. A stuck link's multiplier is constant across it, so
-/// the step's error is of order 2 there and order 4 on the sliding links, whose error at
-/// the history's mesh is already that of a step that slides all along (docs/friction.md
-/// section 8, "Graded levels").
+/// such a one; 2^(level - 2) (at least one) on the other links, where every tendon
+/// slides. A stuck link's multiplier is constant across it, so the step's error is of
+/// order 2 there and order 4 on the sliding links, whose error on the history's mesh is
+/// already that of a step that slides all along (docs/friction.md section 8, "Graded
+/// levels").
 fn parts(before: &Carried, level: u32, graded: bool, last: &StepAnswer, boundaries: &[f64]) -> Vec<usize> {
     let full = 1 << level;
     let nodes = &before.mesh.nodes;
@@ -224,7 +226,7 @@ fn difference(coarse: &Solution, fine: &Solution) -> ErrorEstimate {
     }
 }
 
-/// The start of a step on `before`'s mesh with every link cut into `parts` equal links,
+/// The start of a step on `before`'s mesh with each link cut into its `parts` equal links,
 /// the one of them nearest each point of `boundaries` inside a link moved onto it (the
 /// mesh keeps its intervals): the carried material (lambda) interpolated at the new nodes
 /// by the quintic through the six nearest points of their smooth piece ([`lagrange`]:
