@@ -102,7 +102,7 @@ pub(super) fn refine(
             break;
         }
         let mut fine = split(robot, before, &parts, &best.0, &boundaries)?;
-        let (next, _) = solve_on(robot, options, &mut fine)?;
+        let (next, _) = solve_on(robot, options, &mut fine, false)?;
         let estimate = difference(&best.0, &next.0);
         best = next;
         best.0.report.error_estimate = Some(estimate);
@@ -195,7 +195,7 @@ fn material_error(
             );
         }
     }
-    let ((again, _), _) = solve_on(robot, options, &mut better)?;
+    let ((again, _), _) = solve_on(robot, options, &mut better, true)?;
     Ok(difference(answer, &again))
 }
 
