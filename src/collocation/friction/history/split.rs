@@ -1,7 +1,8 @@
 //! Error control of a history step with a stuck stretch (docs/friction.md section 8, "Error
-//! control of stuck steps"): the step is solved again on its mesh with every link split in
-//! two, four, ... parts, from the same carried material, until two successive answers agree
-//! to the tolerance; the finer one is returned, with their difference as its error estimate
+//! control of stuck steps"): the step is solved again on its mesh with its links split in
+//! two, four, ... parts (with a tolerance only the links where a tendon sticks, [`parts`];
+//! the others four times more slowly), from the same carried material, until two
+//! successive answers agree to the tolerance; the finer one is returned, with their difference as its error estimate
 //! plus the error the carried material's interpolation leaves ([`material_error`]), which
 //! every level shares. On each level the split node nearest each tendon's stick/slip
 //! boundary (estimated from the last level's tensions, [`boundaries`]) is moved onto it, so
@@ -25,6 +26,50 @@ use nalgebra::Vector3;
 /// `max_intervals`) reports so.
 const LEVELS: u32 = 6;
 
+/// The first graded level whose difference to the one before sees the sliding links'
+/// error: they are cut in 2^(level - 2) parts, so first again from level 2 to 3.
+const SLIDING_SEEN: u32 = 3;
+
+/// How many parts each link of `before`'s mesh is cut into on split level `level` after
+/// the answer `last` (the last level's, or the step's on the history's mesh) with its
+/// stick/slip `boundaries`. Uniform (`graded` false): 2^level. Graded: 2^level where a
+/// tendon sticks on the link in `last` or a boundary lies on it, and on the link before
+/// such a one; 2^(level - 2) (at least one) on the other links, where every tendon
+/// slides. A stuck link's multiplier is constant across it, so the step's error is of
+/// order 2 there and order 4 on the sliding links, whose error on the history's mesh is
+/// already that of a step that slides all along (docs/friction.md section 8, "Graded
+/// levels").
+fn parts(before: &Carried, level: u32, graded: bool, last: &StepAnswer, boundaries: &[f64]) -> Vec<usize> {
+    let full = 1 << level;
+    let nodes = &before.mesh.nodes;
+    if !graded {
+        return vec![full; nodes.len() - 1];
+    }
+    let sliding = 1 << level.saturating_sub(2);
+    let fine: Vec<bool> = nodes
+        .windows(2)
+        .map(|pair| {
+            let (a, b) = (pair[0].s, pair[1].s);
+            let stuck = last.1.iter().any(|(_, list)| {
+                list.iter()
+                    .any(|&(start, end, c)| c == Contact::Stick && start < b && end > a)
+            });
+            stuck || boundaries.iter().any(|&e| e >= a && e <= b)
+        })
+        .collect();
+    // The link before a fine one is fine too: the boundary's estimate ([`boundaries`])
+    // reads three nodes on each side of it, at the fine spacing.
+    (0..fine.len())
+        .map(|k| {
+            if fine[k] || fine.get(k + 1) == Some(&true) {
+                full
+            } else {
+                sliding
+            }
+        })
+        .collect()
+}
+
 /// Solves the step again on split meshes (module docs) after `answer`, its solution on
 /// the history's mesh from the material `before`, within `options.max_intervals` (one split
 /// at least), and adds the material's error to the finest answer's estimate; leaves in
@@ -47,13 +92,17 @@ pub(super) fn refine(
     // the tolerance, or the last): every level reads the same material.
     let mut material = None;
     let intervals = before.mesh.intervals();
+    // With a tolerance the levels are graded (only the links that stick are cut at the
+    // full rate); without one the step is solved once more on its links cut in two.
+    let graded = options.tolerance.is_some();
     for level in 1..=LEVELS {
-        if intervals << level > options.max_intervals.max(2 * intervals) {
+        let boundaries = boundaries(&best);
+        let parts = parts(before, level, graded, &best, &boundaries);
+        if parts.iter().sum::<usize>() > options.max_intervals.max(2 * intervals) {
             break;
         }
-        let boundaries = boundaries(&best);
-        let mut fine = split(robot, before, 1 << level, &best.0, &boundaries)?;
-        let (next, _) = solve_on(robot, options, &mut fine)?;
+        let mut fine = split(robot, before, &parts, &best.0, &boundaries)?;
+        let (next, _) = solve_on(robot, options, &mut fine, false)?;
         let estimate = difference(&best.0, &next.0);
         best = next;
         best.0.report.error_estimate = Some(estimate);
@@ -61,7 +110,9 @@ pub(super) fn refine(
         let Some(tol) = options.tolerance else {
             break;
         };
-        if !refine::meets(&estimate, tol, length) {
+        // The sliding links are cut again from level 3 on: only then does the difference
+        // see their error too.
+        if level < SLIDING_SEEN || !refine::meets(&estimate, tol, length) {
             continue;
         }
         let material = match material {
@@ -144,7 +195,7 @@ fn material_error(
             );
         }
     }
-    let ((again, _), _) = solve_on(robot, options, &mut better)?;
+    let ((again, _), _) = solve_on(robot, options, &mut better, true)?;
     Ok(difference(answer, &again))
 }
 
@@ -175,7 +226,7 @@ fn difference(coarse: &Solution, fine: &Solution) -> ErrorEstimate {
     }
 }
 
-/// The start of a step on `before`'s mesh with every link cut into `parts` equal links,
+/// The start of a step on `before`'s mesh with each link cut into its `parts` equal links,
 /// the one of them nearest each point of `boundaries` inside a link moved onto it (the
 /// mesh keeps its intervals): the carried material (lambda) interpolated at the new nodes
 /// by the quintic through the six nearest points of their smooth piece ([`lagrange`]:
@@ -185,10 +236,10 @@ fn difference(coarse: &Solution, fine: &Solution) -> ErrorEstimate {
 ///
 /// # Errors
 /// An invalid mesh (none: the points lie on the rod).
-fn split(robot: &Robot, before: &Carried, parts: usize, guess: &Solution, boundaries: &[f64]) -> Result<Carried> {
+fn split(robot: &Robot, before: &Carried, parts: &[usize], guess: &Solution, boundaries: &[f64]) -> Result<Carried> {
     let nodes = &before.mesh.nodes;
-    let mut points = Vec::with_capacity(nodes.len() * parts);
-    for pair in nodes.windows(2) {
+    let mut points = Vec::with_capacity(parts.iter().sum::<usize>() + 1);
+    for (pair, &parts) in nodes.windows(2).zip(parts) {
         let (a, b) = (pair[0].s, pair[1].s);
         points.push(a);
         if b > a {
