@@ -177,7 +177,8 @@ fn carry(block: &[f64; NODE * LINK], y: &Fields, identity: bool, structured: boo
         row(block, &wide, identity, 10),
         row(block, &wide, identity, 11),
     ];
-    if !structured && !(eliminate::<0>(&mut m) && eliminate::<1>(&mut m) && eliminate::<2>(&mut m)) {
+    let position = structured || (eliminate::<0>(&mut m) && eliminate::<1>(&mut m) && eliminate::<2>(&mut m));
+    if !position {
         return None;
     }
     const _: () = assert!(NODE == 12 && POSITION == 3);
