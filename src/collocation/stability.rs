@@ -25,12 +25,9 @@ use crate::model::parameter::Parameter;
 use crate::report::Stability;
 use nalgebra::{Complex, DMatrix, Matrix6, SMatrix};
 
-/// The six Jacobi fields at a node: row r is component r of a node's unknowns (dp, dtheta,
-/// dv, du), column j field j.
-type Fields = [[f64; 6]; NODE];
+mod link;
 
-/// A 6 x 6 block, row major.
-type Block6 = [[f64; 6]; 6];
+use link::{Fields, advance};
 
 // The fields' rows 0..6 are (dp, dtheta) and 6..12 (dv, du): the sweep's blocks Q and the
 // tip rows' columns are taken by these offsets.
@@ -108,11 +105,15 @@ pub(crate) fn count(values: &[f64], s: &[f64]) -> (Stability, Option<NeutralRoot
     };
     // Identity in (dp, dtheta); (dv, du) = -T_vu^-1 T_theta dtheta.
     let vu = -t_vu_lu * t_theta;
-    let mut y: Fields = [[0.0; 6]; NODE];
-    for (j, row) in y.iter_mut().take(6).enumerate() {
+    // The fields at node k + 1 and the buffer the link writes the next ones into, in turn:
+    // `fields[at]` holds them; `next` the fields at node k before normalization.
+    let mut fields: [Fields; 2] = [[[0.0; 6]; NODE]; 2];
+    let mut at = 0;
+    let mut next: Fields = [[0.0; 6]; NODE];
+    for (j, row) in fields[0].iter_mut().take(6).enumerate() {
         row[j] = 1.0;
     }
-    for (r, row) in y.iter_mut().skip(V).take(6).enumerate() {
+    for (r, row) in fields[0].iter_mut().skip(V).take(6).enumerate() {
         for (j, value) in row.iter_mut().skip(THETA).take(3).enumerate() {
             *value = vu[(r, j)];
         }
@@ -127,11 +128,17 @@ pub(crate) fn count(values: &[f64], s: &[f64]) -> (Stability, Option<NeutralRoot
     // singular, they are orthonormalized instead, and the next link takes the general path.
     let mut identity = true;
     for k in (0..links).rev() {
-        let at = BASE_ROWS * BASE_COLUMNS + k * link_block;
-        let Some(link) = values[at..at + link_block]
+        let from = BASE_ROWS * BASE_COLUMNS + k * link_block;
+        let [first_buffer, second_buffer] = &mut fields;
+        let (y, spare) = if at == 0 {
+            (&*first_buffer, second_buffer)
+        } else {
+            (&*second_buffer, first_buffer)
+        };
+        let Some(link) = values[from..from + link_block]
             .try_into()
             .ok()
-            .and_then(|b| advance(b, &y, identity))
+            .and_then(|b| advance(b, y, identity, &mut next, spare))
         else {
             return (
                 Stability::Unknown {
@@ -143,8 +150,7 @@ pub(crate) fn count(values: &[f64], s: &[f64]) -> (Stability, Option<NeutralRoot
                 None,
             );
         };
-        let next = &link.next;
-        if !next.iter().flatten().all(|v| v.is_finite()) {
+        if !link.finite {
             return (
                 Stability::Unknown {
                     reason: format!("the Jacobi fields became non-finite at s = {:.4} m", s[k]),
@@ -156,10 +162,10 @@ pub(crate) fn count(values: &[f64], s: &[f64]) -> (Stability, Option<NeutralRoot
         let mut roots = match identity {
             true if link.bound < 1.0 => Vec::new(),
             true => {
-                let q1 = block6(next);
+                let q1 = block6(&next);
                 roots(&(q1 - Matrix6::identity()), q1.determinant() < 0.0, false)
             }
-            false => crossings(&block6(&y), &block6(next)),
+            false => crossings(&block6(y), &block6(&next)),
         };
         if k == 0 {
             // A root at the base itself is a zero eigenvalue of the second variation, not a
@@ -179,17 +185,14 @@ pub(crate) fn count(values: &[f64], s: &[f64]) -> (Stability, Option<NeutralRoot
             first.get_or_insert(s[k + 1] + t * (s[k] - s[k + 1]));
         }
         count += roots.len();
-        match link.normalized {
-            Some(normalized) => {
-                y = normalized;
-                identity = true;
-            }
-            None => {
-                let q = SMatrix::<f64, NODE, 6>::from_fn(|r, c| next[r][c]).qr().q();
-                y = std::array::from_fn(|r| std::array::from_fn(|c| q[(r, c)]));
-                identity = false;
-            }
+        // The next link's fields: the normalized ones the link wrote into `spare`, or the
+        // orthonormalized ones written there now.
+        identity = link.normalized;
+        if !identity {
+            let q = SMatrix::<f64, NODE, 6>::from_fn(|r, c| next[r][c]).qr().q();
+            *spare = std::array::from_fn(|r| std::array::from_fn(|c| q[(r, c)]));
         }
+        at = 1 - at;
     }
     let verdict = match first {
         None => Stability::Stable,
@@ -204,198 +207,6 @@ pub(crate) fn count(values: &[f64], s: &[f64]) -> (Stability, Option<NeutralRoot
 /// The (dp, dtheta) block Q of `fields`, as a matrix.
 fn block6(fields: &Fields) -> Matrix6<f64> {
     Matrix6::from_fn(|r, c| fields[r][c])
-}
-
-/// One link of the sweep: the fields at node k ([`carry`]), the bound on the eigenvalues of
-/// their Q1 - I (the max row sum of its absolute values), and the fields normalized to
-/// (dp, dtheta) block I when Q1 is well conditioned.
-struct Link {
-    next: Fields,
-    bound: f64,
-    /// `next` Q1^-1; None when Q1 is singular or its condition number (in max-entry norms)
-    /// is 1e6 or more. Below 1e6, Q1 is far enough from singular that its inverse is
-    /// accurate to about 1e-10 relative.
-    normalized: Option<Fields>,
-}
-
-/// [`Link`] for the link with rows `block` from the fields `y` at node k + 1 (`identity`:
-/// their (dp, dtheta) block is exactly I). On x86-64 with AVX2 and FMA (checked at run
-/// time) the arithmetic is compiled for them, else for the baseline. None for a zero pivot.
-fn advance(block: &[f64; NODE * 2 * NODE], y: &Fields, identity: bool) -> Option<Link> {
-    #[cfg(target_arch = "x86_64")]
-    if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma") {
-        // SAFETY: the processor supports the features the function is compiled for.
-        return unsafe { advance_avx2(block, y, identity) };
-    }
-    advance_kernel(block, y, identity)
-}
-
-/// [`advance_kernel`] with AVX2 and FMA enabled.
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2,fma")]
-unsafe fn advance_avx2(block: &[f64; NODE * 2 * NODE], y: &Fields, identity: bool) -> Option<Link> {
-    advance_kernel(block, y, identity)
-}
-
-/// [`advance`]'s arithmetic, on fixed-size arrays (the verdict runs it once per link; a
-/// generic LU and inverse cost several times as much).
-#[inline(always)]
-fn advance_kernel(block: &[f64; NODE * 2 * NODE], y: &Fields, identity: bool) -> Option<Link> {
-    let next = carry(block, y, identity)?;
-    let q1: Block6 = std::array::from_fn(|r| next[r]);
-    let bound = q1
-        .iter()
-        .enumerate()
-        .map(|(r, row)| {
-            row.iter()
-                .enumerate()
-                .map(|(c, v)| if r == c { (v - 1.0).abs() } else { v.abs() })
-                .sum::<f64>()
-        })
-        .fold(0.0, f64::max);
-    let max = |m: &Block6| m.iter().flatten().fold(0.0f64, |x, v| x.max(v.abs()));
-    let normalized = inverse6(&q1)
-        .filter(|inv| max(&q1) * max(inv) < 1e6)
-        .map(|inv| normalized(&next, &inv));
-    Some(Link {
-        next,
-        bound,
-        normalized,
-    })
-}
-
-/// The fields at node k from those at node k + 1 through one link's rows [A | B] (12 x 24,
-/// row major in `block`), A next = -B y: Gaussian elimination with partial pivoting of the 12 x 18
-/// augmented matrix [A | -B y], then back substitution, on fixed-size arrays (the verdict
-/// runs it once per link; a generic LU costs several times as much). When `identity`, the
-/// (dp, dtheta) block of y is exactly the identity, and B y = B_(p, theta) + B_(v, u)
-/// y_(v, u) takes half the products. None for a zero pivot.
-#[inline(always)]
-fn carry(block: &[f64; NODE * 2 * NODE], y: &Fields, identity: bool) -> Option<Fields> {
-    const W: usize = 2 * NODE;
-    let mut m = [[0.0f64; NODE + 6]; NODE];
-    for (row, line) in m.iter_mut().zip(block.chunks_exact(W)) {
-        let (a, b) = line.split_at(NODE);
-        row[..NODE].copy_from_slice(a);
-        let mut product = [0.0f64; 6];
-        let from = if identity {
-            product.copy_from_slice(&b[..6]);
-            6
-        } else {
-            0
-        };
-        for c in from..NODE {
-            let (bc, yc) = (b[c], &y[c]);
-            for j in 0..6 {
-                product[j] += bc * yc[j];
-            }
-        }
-        for (x, p) in row[NODE..].iter_mut().zip(&product) {
-            *x = -p;
-        }
-    }
-    for c in 0..NODE {
-        let mut best = c;
-        for r in c + 1..NODE {
-            if m[r][c].abs() > m[best][c].abs() {
-                best = r;
-            }
-        }
-        if m[best][c] == 0.0 {
-            return None;
-        }
-        m.swap(c, best);
-        let inv = 1.0 / m[c][c];
-        let pivot_row = m[c];
-        for row in m.iter_mut().skip(c + 1) {
-            let f = row[c] * inv;
-            if f != 0.0 {
-                // The whole row, for a fixed trip count: the columns before c + 1 become
-                // garbage that no later step reads (the pivot search reads column c + 1 on,
-                // the back substitution the upper triangle).
-                for j in 0..NODE + 6 {
-                    row[j] -= f * pivot_row[j];
-                }
-            }
-        }
-    }
-    let mut out: Fields = [[0.0; 6]; NODE];
-    for r in (0..NODE).rev() {
-        let mut v: [f64; 6] = m[r][NODE..].try_into().ok()?;
-        for k in r + 1..NODE {
-            let a = m[r][k];
-            for (x, o) in v.iter_mut().zip(&out[k]) {
-                *x -= a * o;
-            }
-        }
-        let d = m[r][r];
-        for (o, x) in out[r].iter_mut().zip(&v) {
-            *o = x / d;
-        }
-    }
-    Some(out)
-}
-
-/// The inverse of the 6 x 6 matrix `q` by Gauss-Jordan elimination with partial pivoting;
-/// None for a zero pivot.
-#[inline(always)]
-fn inverse6(q: &Block6) -> Option<Block6> {
-    // Rows [q | I], reduced to [I | q^-1].
-    let mut a: [[f64; 12]; 6] = std::array::from_fn(|r| {
-        std::array::from_fn(|c| {
-            if c < 6 {
-                q[r][c]
-            } else if c == r + 6 {
-                1.0
-            } else {
-                0.0
-            }
-        })
-    });
-    for c in 0..6 {
-        let mut best = c;
-        for r in c + 1..6 {
-            if a[r][c].abs() > a[best][c].abs() {
-                best = r;
-            }
-        }
-        if a[best][c] == 0.0 {
-            return None;
-        }
-        a.swap(c, best);
-        let p = 1.0 / a[c][c];
-        for x in a[c].iter_mut() {
-            *x *= p;
-        }
-        let pivot_row = a[c];
-        for (r, row) in a.iter_mut().enumerate() {
-            let f = row[c];
-            if r != c && f != 0.0 {
-                for (x, v) in row.iter_mut().zip(&pivot_row) {
-                    *x -= f * v;
-                }
-            }
-        }
-    }
-    Some(std::array::from_fn(|r| std::array::from_fn(|c| a[r][6 + c])))
-}
-
-/// The fields `next` in the basis where their (dp, dtheta) block is the identity: `next`
-/// Q1^-1 with `inv` = Q1^-1, the identity set exactly.
-#[inline(always)]
-fn normalized(next: &Fields, inv: &Block6) -> Fields {
-    let mut y: Fields = [[0.0; 6]; NODE];
-    for (j, row) in y.iter_mut().take(6).enumerate() {
-        row[j] = 1.0;
-    }
-    for (out, row) in y.iter_mut().zip(next).skip(6) {
-        for (x, inv_row) in row.iter().zip(inv) {
-            for (o, v) in out.iter_mut().zip(inv_row) {
-                *o += x * v;
-            }
-        }
-    }
-    y
 }
 
 /// Roots t in (0, 1] of det(q0 + t (q1 - q0)) = 0, in increasing t, counted with
@@ -462,74 +273,4 @@ fn roots(m: &Matrix6<f64>, parity_changes: bool, flip: bool) -> Vec<f64> {
     }
     roots.sort_by(f64::total_cmp);
     roots
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// Deterministic entries in [-1, 1) (a linear congruential sequence), for test matrices.
-    fn entries(seed: u64, n: usize) -> Vec<f64> {
-        let mut state = seed;
-        (0..n)
-            .map(|_| {
-                state = state
-                    .wrapping_mul(6364136223846793005)
-                    .wrapping_add(1442695040888963407);
-                (state >> 11) as f64 / (1u64 << 52) as f64 - 1.0
-            })
-            .collect()
-    }
-
-    /// The fixed-size kernel solves A next = -B y as a generic LU does, with and without the
-    /// identity shortcut: to 1e-12 relative (both are backward stable on these well-conditioned
-    /// blocks, whose A has a dominant diagonal; the difference is rounding).
-    #[test]
-    fn carry_matches_a_generic_lu() {
-        for seed in 1..20 {
-            let mut block: [f64; NODE * 2 * NODE] = entries(seed, NODE * 2 * NODE).try_into().unwrap();
-            for r in 0..NODE {
-                block[r * 2 * NODE + r] += 8.0;
-            }
-            let mut y: Fields = std::array::from_fn(|r| entries(100 + seed * 13 + r as u64, 6).try_into().unwrap());
-            for identity in [false, true] {
-                if identity {
-                    for (r, row) in y.iter_mut().take(6).enumerate() {
-                        *row = std::array::from_fn(|c| if r == c { 1.0 } else { 0.0 });
-                    }
-                }
-                let got = carry(&block, &y, identity).expect("a regular block");
-                let a = DMatrix::from_fn(NODE, NODE, |r, c| block[r * 2 * NODE + c]);
-                let b = DMatrix::from_fn(NODE, NODE, |r, c| block[r * 2 * NODE + NODE + c]);
-                let yy = DMatrix::from_fn(NODE, 6, |r, c| y[r][c]);
-                let want = a.lu().solve(&(-(b * yy))).expect("a regular block");
-                let scale = want.amax();
-                for r in 0..NODE {
-                    for c in 0..6 {
-                        assert!(
-                            (got[r][c] - want[(r, c)]).abs() <= 1e-12 * scale,
-                            "seed {seed}, ({r}, {c})"
-                        );
-                    }
-                }
-            }
-        }
-    }
-
-    /// The 6 x 6 Gauss-Jordan inverse: q q^-1 = I to 1e-13 on well-conditioned matrices
-    /// (rounding of a 6 x 6 elimination), None for a singular one.
-    #[test]
-    fn inverse6_inverts_and_refuses_a_singular_matrix() {
-        for seed in 1..20 {
-            let v = entries(seed, 36);
-            let q: Block6 =
-                std::array::from_fn(|r| std::array::from_fn(|c| v[6 * r + c] + if r == c { 4.0 } else { 0.0 }));
-            let inv = inverse6(&q).expect("regular");
-            let product = Matrix6::from_fn(|r, c| q[r][c]) * Matrix6::from_fn(|r, c| inv[r][c]);
-            assert!((product - Matrix6::identity()).amax() <= 1e-13, "seed {seed}");
-        }
-        let mut singular: Block6 = [[1.0; 6]; 6];
-        singular[0][0] = 2.0;
-        assert!(inverse6(&singular).is_none());
-    }
 }
