@@ -58,6 +58,8 @@ type Weights = Vec<Vec<f64>>;
 /// The weights of every sweep and of the final quadrature, computed once.
 struct Tables {
     sweeps: Vec<Weights>,
+    /// `wholes[j]`: the integrals from 0 to 1 of sweep j's Lagrange basis polynomials.
+    wholes: Vec<Vec<f64>>,
     quadrature: Vec<f64>,
 }
 
@@ -77,8 +79,10 @@ fn tables() -> &'static Tables {
                 output.iter().map(|&o| integrals(&n, GRID[o])).collect()
             })
             .collect();
+        let wholes = SWEEPS.iter().map(|(input, _)| integrals(&nodes(input), 6)).collect();
         Tables {
             sweeps,
+            wholes,
             quadrature: integrals(&nodes(&[0, 1, 2, 3, 4]), 6),
         }
     })
@@ -163,16 +167,23 @@ pub(super) fn rows(
         stages[i] = d * (3.0 * t2 - 2.0 * t3) + f0 * (h * (t3 - 2.0 * t2 + t)) + f1 * (h * (t3 - t2));
     }
     let mut rates = [Block::<f64>::zeros(); 5];
-    for ((input, output), weights) in SWEEPS.iter().zip(&tables.sweeps) {
+    let sweeps = SWEEPS.iter().zip(&tables.sweeps).zip(&tables.wholes);
+    for (((input, output), weights), whole) in sweeps {
         for &i in *input {
             rates[i] = eval(i, &stages[i])?;
         }
-        for (&o, w) in output.iter().zip(weights) {
-            let mut integral = f0 * w[0] + f1 * w[w.len() - 1];
+        let integral = |w: &[f64]| {
+            let mut sum = f0 * w[0] + f1 * w[w.len() - 1];
             for (&i, wi) in input.iter().zip(&w[1..]) {
-                integral += rates[i] * *wi;
+                sum += rates[i] * *wi;
             }
-            stages[o] = integral * h;
+            sum
+        };
+        // What integrating from y0 alone misses at y1: shared out linearly over the
+        // interval, so that a stage is (1 - t) (y0 + h int_0^t P) + t (y1 - h int_t^1 P).
+        let miss = d - integral(whole) * h;
+        for (&o, w) in output.iter().zip(weights) {
+            stages[o] = integral(w) * h + miss * at(o);
         }
     }
     let w = &tables.quadrature;
