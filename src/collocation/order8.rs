@@ -303,4 +303,39 @@ mod tests {
         // 8.6: the local error is O(h^9); at these h the next term still shows (measured 8.9)
         assert!(order > 8.6, "local errors {a:.3e}, {b:.3e}: observed {order:.2}");
     }
+
+    /// End points that disagree with the rates, as a node's rounded axial strain does on a
+    /// slender rod (docs/numerics.md, "An estimate low on a slender rod: the sweeps' one-sided
+    /// stages"): a chain a -> b -> c, b' = k3 a and c' = k1 b (the axial strain drives the
+    /// shear strain's rate, the shear strain the curvature's), a = eps at both ends and b = c = 0
+    /// there. b's row is the disagreement, -h k3 eps, in every scheme; c's row is 0 in the
+    /// order-4 and order-6 schemes, whose stages treat both ends alike, and must be 0 here too.
+    /// Sweeps that integrated from y0 alone built b = h k3 eps t at the stages and gave c's
+    /// row -h^2 k1 k3 eps / 2, which the estimate read as an error of 1e-11 L.
+    #[test]
+    fn the_rows_treat_both_end_points_alike() {
+        // The est14 robot's GA / EI (1/m^2), EA u / GA (1/m) and interval on 100 intervals
+        // (m), and one ulp of an axial strain near 1.
+        let (k1, k3, h, eps) = (3.3e7, 14.0, 5.9e-3, f64::EPSILON);
+        let f = |y: &Block<f64>| {
+            let mut f = Block::zeros();
+            f[1] = k3 * y[0];
+            f[2] = k1 * y[1];
+            f
+        };
+        let mut y0 = Block::zeros();
+        y0[0] = eps;
+        let r = rows(&y0, &y0, &f(&y0), &f(&y0), h, |_, inc| Ok(f(&(y0 + inc)))).unwrap();
+        let b_row = h * k3 * eps;
+        // 1e-12: the 7-point weights sum to 1 up to rounding
+        assert!((r[1] + b_row).abs() <= 1e-12 * b_row, "b's row {:e}", r[1]);
+        // 1e-9 of what one-sided sweeps gave (h^2 k1 k3 eps / 2 = 1.1e-9): rounding of the
+        // stages' weights only
+        let one_sided = h * h * k1 * k3 * eps / 2.0;
+        assert!(
+            r[2].abs() <= 1e-9 * one_sided,
+            "c's row {:e} against {one_sided:e}",
+            r[2]
+        );
+    }
 }
