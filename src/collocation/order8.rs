@@ -338,7 +338,7 @@ mod tests {
     /// row -h^2 k1 k3 eps / 2, which the estimate read as an error of 1e-11 L.
     #[test]
     fn the_rows_treat_both_end_points_alike() {
-        // The est14 robot's GA / EI (1/m^2), EA u / GA (1/m) and interval on 100 intervals
+        // tests/data/est14-guess-miss.toml's GA / EI (1/m^2), EA u / GA (1/m) and interval on 100 intervals
         // (m), and one ulp of an axial strain near 1.
         let (k1, k3, h, eps) = (3.3e7, 14.0, 5.9e-3, f64::EPSILON);
         let f = |y: &Block<f64>| {
