@@ -156,11 +156,10 @@ fn integrals(nodes: &[i64], s: i64) -> Vec<Ratio> {
                 c = next;
             }
             // integral_0^(s/6) L dt = (1/6) integral_0^s L d tau
-            let total = c.iter().enumerate().fold(Ratio(0, 1), |acc, (i, &ci)| {
+            c.iter().enumerate().fold(Ratio(0, 1), |acc, (i, &ci)| {
                 let power = i128::from(s).pow(i as u32 + 1);
                 acc.add(ci.mul(Ratio::new(power, 6 * (i as i128 + 1))))
-            });
-            total
+            })
         })
         .collect()
 }
