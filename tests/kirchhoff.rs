@@ -405,7 +405,7 @@ fn the_error_estimate_with_friction_on_a_kirchhoff_rod() {
     // 1e-7 L: shooting's full slip agrees with the default solve to the solve's tolerance
     assert!(tip_distance(&c, &s) <= 1e-7 * robot.length());
     // Order 4: the estimate falls 16-fold per halving (12 to 20: the ratio 2^4 up to the
-    // O(h^6) terms, measured 15.9 and 16.0 on 32/64/128 intervals)
+    // O(h^6) terms, measured 16.0 and 15.9 on 32/64/128 intervals)
     let estimates: Vec<f64> = [32, 64, 128]
         .iter()
         .map(|&n| {
