@@ -373,6 +373,52 @@ fn friction_on_a_kirchhoff_rod() {
     assert!((ratio / (-0.2f64).exp() - 1.0).abs() < 1e-8, "{ratio}");
 }
 
+/// The error estimate with friction on a Kirchhoff rod (docs/friction.md, "Error estimate"):
+/// case S with mu = 0.1 on its tendon solves at default settings, with an estimate that
+/// meets the tolerance, matches the true error against a fine mesh and converges at order 4
+/// (the order-6 rows once took the position rate from the force coordinate instead of v*,
+/// a mesh-independent 5.6e-6 m that drove the refinement to its interval cap).
+#[test]
+fn the_error_estimate_with_friction_on_a_kirchhoff_rod() {
+    let mut robot = kirchhoff(&cases::case_s());
+    robot.tendons[0].friction = Some(tdcr::Friction::pull(0.1));
+    let c = tdcr::solve(&robot, &Default::default()).unwrap();
+    let estimate = c.report.error_estimate.expect("an estimate").tip_position;
+    let fine = collocation::solve(&robot, &collocation::Options::fixed(1024)).unwrap();
+    let truth = tip_distance(&c, &fine);
+    let s = shooting::solve(&robot, &tight_shooting()).unwrap();
+    eprintln!(
+        "{} intervals: estimate {estimate:.6e} m, true error {truth:.6e} m, shooting {:.1e} m",
+        c.report.intervals,
+        tip_distance(&c, &s)
+    );
+    // The tolerance 1e-7 L, met on the first or second mesh (32 or 64 intervals) as on the
+    // frictionless rod: an estimate that converges needs no finer mesh
+    assert!(estimate <= 1e-7 * robot.length(), "estimate {estimate:.2e} m");
+    assert!(c.report.intervals <= 64, "{} intervals", c.report.intervals);
+    // 1%: deferred correction is asymptotically exact (measured 5.0960e-9 against
+    // 5.0963e-9 m, an O(h^6) difference; the 1024-interval reference is ~5e-14 m off)
+    assert!(
+        (estimate - truth).abs() <= 0.01 * truth,
+        "estimate {estimate:.6e} against {truth:.6e} m"
+    );
+    // 1e-7 L: shooting's full slip agrees with the default solve to the solve's tolerance
+    assert!(tip_distance(&c, &s) <= 1e-7 * robot.length());
+    // Order 4: the estimate falls 16-fold per halving (12 to 20: the ratio 2^4 up to the
+    // O(h^6) terms, measured 16.0 and 15.9 on 32/64/128 intervals)
+    let estimates: Vec<f64> = [32, 64, 128]
+        .iter()
+        .map(|&n| {
+            let x = collocation::solve(&robot, &collocation::Options::fixed(n)).unwrap();
+            x.report.error_estimate.expect("an estimate").tip_position
+        })
+        .collect();
+    eprintln!("estimates on 32/64/128 intervals: {estimates:?}");
+    for w in estimates.windows(2) {
+        assert!((12.0..20.0).contains(&(w[0] / w[1])), "estimates {estimates:?}");
+    }
+}
+
 /// Beck's column (a cantilever under a follower tip force P) is the classical problem of an
 /// inextensible, unshearable rod: it loses stability by flutter at P L^2 / EI = 20.051
 /// (Euler-Bernoulli, uniform mass). The linearized dynamics (docs/stability.md) of the

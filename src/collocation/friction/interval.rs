@@ -484,12 +484,9 @@ pub(crate) fn interval_order6(
                 rates
             }
         };
-        let mut f = Block::zeros();
-        f.fixed_rows_mut::<3>(0).copy_from(&(R * v));
-        f.fixed_rows_mut::<3>(THETA)
-            .copy_from(&(so3::right_jacobian_inv(&theta) * u));
-        f.fixed_rows_mut::<6>(6).copy_from(&rates);
-        Ok::<_, crate::Error>(f)
+        // p' = R v with v the strain of the coordinate (v* on a Kirchhoff rod, whose
+        // coordinate carries the force), as in the order-4 rows.
+        Ok::<_, crate::Error>(rhs_from_rates(site, &R, y, &rates))
     };
     let f0 = stage(&sites.start, &y0, za, Some((k, a)), k0)?;
     let f1 = stage(&sites.end, &y1, zb, Some((k + 1, b)), k1)?;
