@@ -180,8 +180,9 @@ pub fn tendon_path(robot: &Robot, solution: &Solution, index: usize) -> Vec<Vect
 impl Panel {
     /// Adds a solved shape: the backbone sampled densely with [`Solution::at`], the tendon
     /// paths ([`tendon_path`]: thin, pulled ones solid, slack ones dashed if
-    /// [`Style::slack_tendons`]; a pulled tendon with friction in pieces darker and wider
-    /// where its tension is higher, [`solved_shape_legend`]), spacer disks ([`Style::disks`]), arrows for the tip force
+    /// [`Style::slack_tendons`]; with [`Style::tendon_colors`], a pulled tendon with friction
+    /// in pieces darker and wider where its tension is higher, [`solved_shape_legend`]),
+    /// spacer disks ([`Style::disks`]), arrows for the tip force
     /// and point loads and small arrows for a distributed force ([`Style::loads`],
     /// [`Style::distributed_load`]), a square at the base and a dot at the tip.
     pub fn add_shape(&mut self, robot: &Robot, solution: &Solution, style: &Style) {
@@ -191,7 +192,7 @@ impl Panel {
             if !pulled && !style.slack_tendons {
                 continue;
             }
-            if let Some(profile) = pulled.then(|| tension::profile(robot, solution, i)).flatten() {
+            if let Some(profile) = tension::shaded(robot, solution, i, style, pulled) {
                 let end = tendon.end(length).min(length);
                 let color = tendon_color(style, i);
                 let points = tendon_path(robot, solution, i);
@@ -297,7 +298,8 @@ pub fn shape_legend(robot: &Robot, style: &Style) -> Vec<LegendEntry> {
 }
 
 /// [`shape_legend`] for the shape `solution` of `robot`: a tendon with friction, which
-/// [`Panel::add_shape`] draws darker and wider where its tension is higher, has an entry
+/// [`Panel::add_shape`] draws darker and wider where its tension is higher when tendons
+/// have their own colours ([`Style::tendon_colors`]), has an entry
 /// with its friction, its motion, its tension at the base entry and the tension it delivers
 /// at its termination (`...; friction 0.1, pulled in: 2.94 N at the base -> 2.55 N
 /// delivered`); every other entry is [`shape_legend`]'s.
@@ -313,7 +315,7 @@ fn legend(robot: &Robot, solution: Option<&Solution>, style: &Style) -> Vec<Lege
         if !pulled && !style.slack_tendons {
             continue;
         }
-        let profile = solution.filter(|_| pulled).and_then(|s| tension::profile(robot, s, i));
+        let profile = solution.and_then(|s| tension::shaded(robot, s, i, style, pulled));
         if let Some(profile) = profile {
             let routing = routing_label(tendon, robot.length());
             legend.push(tension::legend_entry(

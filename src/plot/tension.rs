@@ -1,11 +1,11 @@
-//! Tendons with friction drawn by their tension: the path in pieces whose width follows
+//! Tendons with friction drawn by their tension (when tendons have their own colours): the path in pieces whose width follows
 //! tau(s) / tau_max and whose colour lightens from the tendon's own colour (highest tension)
 //! toward white (lowest), one hue, so it reads in greyscale and for colour-blind readers;
 //! and the legend words that give the tension at the base entry and the delivered one
 //! (docs/cli.md, "Pictures"; docs/friction.md).
 
 use super::axes::significant;
-use super::{Curve, LegendEntry, Symbol};
+use super::{Curve, LegendEntry, Style, Symbol};
 use crate::model::tendon::Motion;
 use crate::{Robot, Solution};
 use nalgebra::Vector3;
@@ -43,6 +43,17 @@ impl Profile {
     /// Stroke width (px) at tension `tau`: [`FRICTION_WIDTH`] times tau / tau_max.
     pub(super) fn width(&self, tau: f64) -> f64 {
         FRICTION_WIDTH * (tau / self.high).clamp(0.0, 1.0)
+    }
+}
+
+/// The tension profile of tendon `index` when `style` draws it by its tension: tendons have
+/// their own colours ([`Style::tendon_colors`]; a picture of many shapes in one colour, a
+/// sweep's, draws them as lines) and this one is `pulled` and has a [`profile`].
+pub(super) fn shaded(robot: &Robot, solution: &Solution, index: usize, style: &Style, pulled: bool) -> Option<Profile> {
+    if style.tendon_colors && pulled {
+        profile(robot, solution, index)
+    } else {
+        None
     }
 }
 
