@@ -521,3 +521,19 @@ fn frictionless_tendons_are_drawn_and_labelled_as_before() {
     let (zero, _) = case_s_with_friction(0.0);
     assert_eq!(zero.to_svg(), case_s_figure().to_svg());
 }
+
+#[test]
+fn tendons_in_the_shapes_colour_are_lines_even_with_friction() {
+    let mut robot = cases::case_s();
+    robot.tendons[0].friction = Some(crate::model::tendon::Friction::pull(0.1));
+    let solution = solve(&robot);
+    // A sweep's shapes: every tendon in the shape's colour, described by no legend entry.
+    let style = Style::new("#9a9a9a");
+    let mut panel = Panel::default();
+    panel.add_shape(&robot, &solution, &style);
+    assert_eq!(panel.curves.len(), 2, "tendon 1 and the backbone");
+    assert_eq!(panel.curves[0].width, shape::TENDON_WIDTH);
+    assert_eq!(panel.curves[0].color, "#9a9a9a");
+    let legend = solved_shape_legend(&robot, &solution, &style);
+    assert_eq!(legend, shape_legend(&robot, &style));
+}
