@@ -2,6 +2,7 @@
 //! entry's symbol (line, disk, arrow, dot) and text.
 
 use super::layout::MARGIN;
+use super::tension::{LIGHTEST, lighter};
 use super::text::{FONT, escape, text_width, wrap};
 use super::{LegendEntry, Symbol};
 use std::fmt::Write;
@@ -15,6 +16,8 @@ pub(super) struct LegendLayout {
 
 /// Width of a legend entry's symbol and the space after it (px).
 const SYMBOL: f64 = 38.0;
+/// Segments of a [`Symbol::Ramp`] sample.
+const RAMP_STEPS: usize = 6;
 /// Line height of legend labels (px).
 const LEGEND_LINE: f64 = 15.0;
 
@@ -81,6 +84,21 @@ pub(super) fn legend_entry(svg: &mut String, entry: &LegendEntry, x: f64, y: f64
             mid + 4.0
         ),
         Symbol::Dot => writeln!(svg, r#"<circle cx="{}" cy="{mid}" r="3" fill="{color}"/>"#, x + 15.0),
+        Symbol::Ramp => {
+            // Six segments from the colour to its lightest shade, narrowing by a third.
+            for k in 0..RAMP_STEPS {
+                let share = k as f64 / (RAMP_STEPS - 1) as f64;
+                let _ = write!(
+                    svg,
+                    r#"<line x1="{}" y1="{mid}" x2="{}" y2="{mid}" stroke="{}" stroke-width="{}"/>"#,
+                    x + 30.0 * k as f64 / RAMP_STEPS as f64,
+                    x + 30.0 * (k + 1) as f64 / RAMP_STEPS as f64,
+                    lighter(color, LIGHTEST * share),
+                    entry.width * (1.0 - share / 3.0)
+                );
+            }
+            writeln!(svg)
+        }
     };
     for (k, line) in lines.iter().enumerate() {
         let _ = writeln!(

@@ -31,6 +31,7 @@ mod png;
 mod scene;
 mod shape;
 mod svg;
+mod tension;
 mod text;
 mod view;
 
@@ -38,8 +39,8 @@ pub use axes::significant;
 pub use chart::{Chart, Mark, Segment};
 pub use png::{Png, fonts_found};
 pub use shape::{
-    FORCE_COLOR, default_disks, disk_radius, routing_label, shape_legend, tendon_description, tendon_label,
-    tendon_path, turns_label,
+    FORCE_COLOR, default_disks, disk_radius, routing_label, shape_legend, solved_shape_legend, tendon_description,
+    tendon_label, tendon_path, turns_label,
 };
 pub use view::{VIEWS, View};
 
@@ -129,6 +130,9 @@ pub enum Symbol {
     Arrow,
     /// A dot.
     Dot,
+    /// A line shading from the entry's colour (left) toward white (right): a tendon with
+    /// friction, darker where its tension is higher ([`solved_shape_legend`]).
+    Ramp,
 }
 
 /// One legend line: a sample and its label.

@@ -3,6 +3,7 @@
 //! the turns each makes over its own length, [`Tendon::turns`]) and loads.
 
 use super::axes::significant;
+use super::tension;
 use super::{Arrow, ArrowKind, Curve, Disk, LegendEntry, Marker, PALETTE, Panel, Style, Symbol};
 use crate::model::routing::Routing;
 use crate::model::tendon::Tendon;
@@ -179,7 +180,9 @@ pub fn tendon_path(robot: &Robot, solution: &Solution, index: usize) -> Vec<Vect
 impl Panel {
     /// Adds a solved shape: the backbone sampled densely with [`Solution::at`], the tendon
     /// paths ([`tendon_path`]: thin, pulled ones solid, slack ones dashed if
-    /// [`Style::slack_tendons`]), spacer disks ([`Style::disks`]), arrows for the tip force
+    /// [`Style::slack_tendons`]; with [`Style::tendon_colors`], a pulled tendon with friction
+    /// in pieces darker and wider where its tension is higher, [`solved_shape_legend`]),
+    /// spacer disks ([`Style::disks`]), arrows for the tip force
     /// and point loads and small arrows for a distributed force ([`Style::loads`],
     /// [`Style::distributed_load`]), a square at the base and a dot at the tip.
     pub fn add_shape(&mut self, robot: &Robot, solution: &Solution, style: &Style) {
@@ -187,6 +190,15 @@ impl Panel {
         for (i, tendon) in robot.tendons.iter().enumerate() {
             let pulled = tendon.tension() > 0.0;
             if !pulled && !style.slack_tendons {
+                continue;
+            }
+            if let Some(profile) = tension::shaded(robot, solution, i, style, pulled) {
+                let end = tendon.end(length).min(length);
+                let color = tendon_color(style, i);
+                let points = tendon_path(robot, solution, i);
+                let opacity = 0.9 * style.opacity;
+                self.curves
+                    .extend(tension::pieces(&points, end, solution, i, &profile, color, opacity));
                 continue;
             }
             self.curves.push(Curve {
@@ -279,12 +291,40 @@ pub(super) fn tendon_color(style: &Style, index: usize) -> &str {
 
 /// The legend of one shape drawn with `style` ([`Panel::add_shape`]): the backbone, every
 /// tendon drawn ([`tendon_label`]: which one, its routing and true turns, its tension), the
-/// spacer disks, and the loads with their magnitudes.
+/// spacer disks, and the loads with their magnitudes. It knows the robot only: for a robot
+/// whose tendons have friction, [`solved_shape_legend`] also gives the tension each delivers.
 pub fn shape_legend(robot: &Robot, style: &Style) -> Vec<LegendEntry> {
+    legend(robot, None, style)
+}
+
+/// [`shape_legend`] for the shape `solution` of `robot`: a tendon with friction, which
+/// [`Panel::add_shape`] draws darker and wider where its tension is higher when tendons
+/// have their own colours ([`Style::tendon_colors`]), has an entry
+/// with its friction, its motion, its tension at the base entry and the tension it delivers
+/// at its termination (`...; friction 0.1, pulled in: 2.94 N at the base -> 2.55 N
+/// delivered`); every other entry is [`shape_legend`]'s.
+pub fn solved_shape_legend(robot: &Robot, solution: &Solution, style: &Style) -> Vec<LegendEntry> {
+    legend(robot, Some(solution), style)
+}
+
+/// [`shape_legend`], with the entries of tendons with friction from `solution` if given.
+fn legend(robot: &Robot, solution: Option<&Solution>, style: &Style) -> Vec<LegendEntry> {
     let mut legend = vec![LegendEntry::new(Symbol::Line, "backbone (thick line)", &style.color).width(BACKBONE_WIDTH)];
     for (i, tendon) in robot.tendons.iter().enumerate() {
         let pulled = tendon.tension() > 0.0;
         if !pulled && !style.slack_tendons {
+            continue;
+        }
+        let profile = solution.and_then(|s| tension::shaded(robot, s, i, style, pulled));
+        if let Some(profile) = profile {
+            let routing = routing_label(tendon, robot.length());
+            legend.push(tension::legend_entry(
+                robot,
+                i,
+                &profile,
+                &routing,
+                tendon_color(style, i),
+            ));
             continue;
         }
         let line = if pulled { "thin line" } else { "thin dashed line" };

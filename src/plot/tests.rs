@@ -5,6 +5,7 @@ use super::*;
 use crate::cases;
 use crate::model::routing::{Routing, RoutingPoint};
 use crate::model::tendon::Tendon;
+use axes::significant;
 
 fn solve(robot: &Robot) -> Solution {
     crate::collocation::solve(robot, &Default::default()).unwrap()
@@ -388,4 +389,151 @@ fn placed_disks_are_drawn_where_they_sit_with_their_weight_in_the_legend() {
         1,
         "{labels:?}"
     );
+}
+
+/// Case S with friction `mu` on tendon 1 (pulled in), drawn and labelled as `tdcr solve
+/// --plot` does, with the solution.
+fn case_s_with_friction(mu: f64) -> (Figure, Solution) {
+    let mut robot = cases::case_s();
+    robot.tendons[0].friction = Some(crate::model::tendon::Friction::pull(mu));
+    let solution = solve(&robot);
+    let mut style = Style::new("#000000");
+    style.slack_tendons = true;
+    style.tendon_colors = true;
+    style.disks = Some(12);
+    let mut figure = Figure::new("case S");
+    figure.add_shape(&robot, &solution, &style);
+    figure.legend = solved_shape_legend(&robot, &solution, &style);
+    (figure, solution)
+}
+
+#[test]
+fn a_tendon_with_friction_is_labelled_with_its_input_and_delivered_tension() {
+    let (figure, solution) = case_s_with_friction(0.1);
+    let svg = figure.to_svg();
+    let state = solution.tendons[0];
+    // S with mu = 0.1 delivers 2.550 N of its 2.94 N (docs/friction.md, "Issue 24 as a user
+    // finds it"): the legend gives both, from the solution.
+    assert_eq!(significant(state.delivered_tension), "2.55");
+    let entry = &figure.legend[1];
+    assert_eq!(entry.symbol, Symbol::Ramp);
+    assert_eq!(
+        entry.label,
+        format!(
+            "tendon 1 (line darker and wider where the tension is higher): straight at (8, 0) mm; friction 0.1, pulled in: {} N at the base -> {} N delivered",
+            significant(state.tension),
+            significant(state.delivered_tension)
+        )
+    );
+    // The label is wrapped in the SVG; its last words are on one line.
+    assert!(svg.contains("2.94 N at the base -&gt; 2.55 N delivered"), "{svg}");
+    // The slack tendons keep their entries.
+    assert_eq!(
+        figure.legend[2].label,
+        "tendon 2 (thin dashed line): straight at (0, 8) mm; slack (0 N)"
+    );
+}
+
+#[test]
+fn a_tendon_with_friction_is_drawn_lighter_and_thinner_where_its_tension_falls() {
+    let (figure, solution) = case_s_with_friction(0.1);
+    // Tendon 1's pieces come first, up to the first slack (dashed) tendon.
+    let pieces: Vec<&Curve> = figure.panels[0]
+        .curves
+        .iter()
+        .take_while(|c| c.dash.is_none())
+        .collect();
+    assert!(pieces.len() >= 10, "{}", pieces.len());
+    // One hue, lighter toward the termination: the sum of the red, green and blue bytes
+    // never falls, and the last piece is the lightest shade of the tendon's colour.
+    let lightness = |c: &Curve| {
+        (1..7)
+            .step_by(2)
+            .map(|k| u32::from_str_radix(&c.color[k..k + 2], 16).unwrap())
+            .sum::<u32>()
+    };
+    for pair in pieces.windows(2) {
+        assert!(
+            lightness(pair[1]) >= lightness(pair[0]),
+            "{} {}",
+            pair[0].color,
+            pair[1].color
+        );
+    }
+    let lightest = tension::lighter(PALETTE[0], tension::LIGHTEST);
+    assert!(lightness(pieces[0]) < lightness(pieces.last().unwrap()));
+    // 12: within a few units of each byte of the lightest shade (the last piece's middle
+    // lies half a piece before the termination).
+    let end = Curve {
+        color: lightest,
+        ..pieces[0].clone()
+    };
+    assert!(lightness(&end) - lightness(pieces.last().unwrap()) < 12);
+    // Pulled in: the tension falls from the base, so every piece is thinner than the last,
+    // and the width follows tau / tau_max.
+    for pair in pieces.windows(2) {
+        assert!(pair[1].width < pair[0].width, "{} {}", pair[0].width, pair[1].width);
+        assert_eq!(pair[0].points.last(), pair[1].points.first());
+    }
+    let delivered = solution.tendons[0].delivered_tension / solution.tendons[0].tension;
+    let last = pieces.last().unwrap().width / tension::FRICTION_WIDTH;
+    // The last piece is drawn at the tension of its middle, within 1 % of the end's (the
+    // tension falls 13 % over the whole tendon, 40 pieces).
+    assert!((last - delivered).abs() < 0.01, "{last} {delivered}");
+    // The path drawn is the whole tendon: from its base entry to its termination.
+    let whole = tendon_path(&cases::case_s(), &solution, 0);
+    assert_eq!(pieces[0].points[0], whole[0]);
+    assert_eq!(pieces.last().unwrap().points.last(), whole.last());
+}
+
+#[test]
+fn frictionless_tendons_are_drawn_and_labelled_as_before() {
+    let robot = cases::case_s();
+    let solution = solve(&robot);
+    let mut style = Style::new("#000000");
+    style.slack_tendons = true;
+    style.tendon_colors = true;
+    let mut figure = Figure::new("case S");
+    figure.add_shape(&robot, &solution, &style);
+    // The tendons as the code before friction shading drew them: one curve each, thin,
+    // solid when pulled and dashed when slack.
+    for (i, tendon) in robot.tendons.iter().enumerate() {
+        let pulled = tendon.tension() > 0.0;
+        let before = Curve {
+            points: tendon_path(&robot, &solution, i),
+            color: PALETTE[i].to_string(),
+            width: if pulled { shape::TENDON_WIDTH } else { 1.0 },
+            dash: (!pulled).then(|| shape::SLACK_DASH.to_string()),
+            opacity: if pulled { 0.9 } else { 0.8 },
+        };
+        assert_eq!(figure.panels[0].curves[i], before, "tendon {}", i + 1);
+    }
+    assert_eq!(figure.panels[0].curves.len(), robot.tendons.len() + 1);
+    // The legend of the solved shape is the robot's, so the SVG is byte for byte the same.
+    let before = {
+        let mut f = figure.clone();
+        f.legend = shape_legend(&robot, &style);
+        f.to_svg()
+    };
+    figure.legend = solved_shape_legend(&robot, &solution, &style);
+    assert_eq!(figure.to_svg(), before);
+    // A coefficient of 0 is the frictionless tendon (solved bit for bit as without one).
+    let (zero, _) = case_s_with_friction(0.0);
+    assert_eq!(zero.to_svg(), case_s_figure().to_svg());
+}
+
+#[test]
+fn tendons_in_the_shapes_colour_are_lines_even_with_friction() {
+    let mut robot = cases::case_s();
+    robot.tendons[0].friction = Some(crate::model::tendon::Friction::pull(0.1));
+    let solution = solve(&robot);
+    // A sweep's shapes: every tendon in the shape's colour, described by no legend entry.
+    let style = Style::new("#9a9a9a");
+    let mut panel = Panel::default();
+    panel.add_shape(&robot, &solution, &style);
+    assert_eq!(panel.curves.len(), 2, "tendon 1 and the backbone");
+    assert_eq!(panel.curves[0].width, shape::TENDON_WIDTH);
+    assert_eq!(panel.curves[0].color, "#9a9a9a");
+    let legend = solved_shape_legend(&robot, &solution, &style);
+    assert_eq!(legend, shape_legend(&robot, &style));
 }

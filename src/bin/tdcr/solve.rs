@@ -3,7 +3,7 @@
 use clap::{Args, ValueEnum};
 use std::path::PathBuf;
 use tdcr::io::output;
-use tdcr::plot::{Figure, Style, shape_legend};
+use tdcr::plot::{Figure, Style, solved_shape_legend};
 
 use crate::args::{SolverArgs, parse_disks, parse_displacement, parse_samples, parse_tension};
 use crate::failure::{Failure, emit, note, picture_format, write_file, write_picture};
@@ -171,7 +171,7 @@ pub fn run(args: &SolveArgs) -> Result<(), Failure> {
         // The file's own disks, unless --disks asks for others.
         style.placed_disks = file.disks.clone().filter(|_| args.disks.is_none());
         figure.add_shape(&file.robot, &solution, &style);
-        figure.legend = shape_legend(&file.robot, &style);
+        figure.legend = solved_shape_legend(&file.robot, &solution, &style);
         args.picture.apply(&mut figure);
         write_picture(path, &figure, "plot")?;
     }
