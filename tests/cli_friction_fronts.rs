@@ -99,3 +99,64 @@ fn friction_is_a_jacobian_column_by_name() {
         stderr(&out)
     );
 }
+
+/// `solve --format csv` has a column `tension_I` per tendon with friction (its tension at
+/// each sample, blank past its end) and the JSON's samples a `tensions` list (every tendon,
+/// null past its end); both equal the library's `Solution::tension_at`, and without friction
+/// neither is there (the CSV's header is the frictionless one).
+#[test]
+fn the_csv_and_json_samples_have_the_tension_along_each_tendon() {
+    let dir = scratch("samples");
+    // Tendon 1 with friction ends at mid-length; tendon 2 (no friction) pulled too.
+    let text = example_with(&dir, "friction = 0.1\nend = 0.121\n");
+    std::fs::write(dir.join("rough.toml"), &text).unwrap();
+    std::fs::write(dir.join("plain.toml"), example_with(&dir, "")).unwrap();
+    let args = ["--tension", "2=1", "--samples", "5", "--intervals", "32"];
+    let out = run(&dir, &[&["solve", "rough.toml", "--format", "csv"][..], &args].concat());
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    let csv = stdout(&out);
+    let mut lines = csv.lines();
+    let header = lines.next().unwrap();
+    assert_eq!(header, format!("{},tension_1", tdcr::io::output::CSV_HEADER));
+    let rough = json(
+        &dir,
+        &[&["solve", "rough.toml", "--format", "json"][..], &args].concat(),
+    );
+    let mut robot = tdcr::io::parse(&text, "rough.toml").unwrap().robot;
+    robot.tendons[1].set_tension(1.0);
+    let solution = tdcr::collocation::solve(&robot, &tdcr::collocation::Options::fixed(32)).unwrap();
+    let samples = rough["samples"].as_array().unwrap();
+    assert_eq!(samples.len(), 5);
+    for (k, (line, sample)) in lines.zip(samples).enumerate() {
+        let cells: Vec<&str> = line.split(',').collect();
+        let s: f64 = cells[0].parse().unwrap();
+        let tensions = sample["tensions"].as_array().unwrap();
+        assert_eq!(tensions.len(), 5);
+        // Tendon 2 has no friction: its constant tension, up to the tip.
+        assert_eq!(tensions[1].as_f64(), Some(1.0));
+        if s <= 0.121 {
+            let want = solution.tension_at(0, s).unwrap();
+            // Bitwise: the same robot, mesh and solve, numbers printed in full.
+            assert_eq!(cells[19].parse::<f64>().unwrap(), want, "sample {k}");
+            assert_eq!(tensions[0].as_f64(), Some(want), "sample {k}");
+            // The capstan loss of a pull: below the base entry's 2.94 N past it.
+            assert!(want <= 2.94 && (s == 0.0 || want < 2.94), "sample {k}: {want}");
+        } else {
+            assert_eq!(cells[19], "", "sample {k}: past the tendon's end");
+            assert!(tensions[0].is_null(), "sample {k}");
+        }
+    }
+    let delivered = rough["tendons"][0]["delivered_tension"].as_f64().unwrap();
+    assert_eq!(solution.tension_at(0, 0.121), Some(delivered));
+    // The JSON reads back (the samples are output only).
+    let back = tdcr::io::read_solution(&serde_json::to_string(&rough).unwrap(), &robot).unwrap();
+    assert_eq!(back.tip().p, solution.tip().p);
+    // Without friction: the frictionless columns and no `tensions`.
+    let out = run(&dir, &[&["solve", "plain.toml", "--format", "csv"][..], &args].concat());
+    assert_eq!(stdout(&out).lines().next(), Some(tdcr::io::output::CSV_HEADER));
+    let plain = json(
+        &dir,
+        &[&["solve", "plain.toml", "--format", "json"][..], &args].concat(),
+    );
+    assert!(plain["samples"][0].get("tensions").is_none());
+}

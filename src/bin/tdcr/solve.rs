@@ -147,7 +147,11 @@ pub fn run(args: &SolveArgs) -> Result<(), Failure> {
                 output::json(&file.robot, &solution, args.samples, jacobian.as_ref())
             }
         },
-        Format::Csv => output::csv(&output::samples(&file.robot, &solution, args.samples)),
+        Format::Csv => output::csv(
+            &file.robot,
+            &solution,
+            &output::samples(&file.robot, &solution, args.samples),
+        ),
         Format::Table => {
             let mut text = solution_table(
                 &name,
