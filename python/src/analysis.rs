@@ -423,6 +423,14 @@ pub struct PyCalibration {
     base_position: Py<PyArray1<f64>>,
     /// Fitted factor on every tendon offset.
     offset_scale: f64,
+    /// Fitted friction coefficient of the tendons with friction (0 without friction).
+    friction: f64,
+    /// Standard errors of the fitted unknowns by `names`, in the attributes' units (E in Pa,
+    /// angles in deg, base position in m); None when there are no more residuals than
+    /// unknowns or the fit is singular (as at beta = +-90 deg).
+    standard_errors: Option<Py<PyDict>>,
+    /// Noise estimate per tip coordinate (m), the standard errors' sigma.
+    noise_estimate: f64,
     /// The robot with the fitted parameters (and the input robot's solver settings).
     robot: Py<PyRobot>,
     /// Predicted tips of the fitted robot (m), (M, 3).
@@ -445,7 +453,8 @@ pub struct PyCalibration {
 
 crate::pickle::pickled_fields! {
     PyCalibration {
-        names, youngs_modulus, euler_deg, base_position, offset_scale, robot, tips, tip_errors,
+        names, youngs_modulus, euler_deg, base_position, offset_scale, friction, standard_errors,
+        noise_estimate, robot, tips, tip_errors,
         rms_error, max_error, converged, termination, iterations, solves,
     }
 }
@@ -572,6 +581,12 @@ pub fn calibrate(
         euler_deg: PyArray1::from_slice(py, out.fitted.euler_deg().as_slice()).unbind(),
         base_position: PyArray1::from_slice(py, out.fitted.base_position.as_slice()).unbind(),
         offset_scale: out.fitted.offset_scale,
+        friction: out.fitted.friction,
+        standard_errors: out
+            .standard_errors
+            .map(|se| crate::convert::standard_errors(py, &out.fit, &se))
+            .transpose()?,
+        noise_estimate: out.noise_estimate,
         robot: Py::new(py, fitted)?,
         tips: predicted.into_pyarray(py).unbind(),
         tip_errors: PyArray1::from_vec(py, out.tip_errors()).unbind(),

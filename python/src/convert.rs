@@ -278,3 +278,30 @@ pub fn motions(motions: Option<Vec<Option<String>>>, rows: usize) -> PyResult<Ve
         })
         .collect()
 }
+
+/// The standard errors `se` of a calibration's fitted unknowns as a dict keyed by their
+/// names (`Fit::names`: `E`, `alpha`, ..., `mu`), in the units of `Calibration`'s attributes:
+/// E in Pa, the Euler angles in deg (as `euler_deg`), the base position in m.
+pub fn standard_errors(
+    py: Python<'_>,
+    fit: &tdcr::fit::calibration::Fit,
+    se: &tdcr::fit::calibration::Parameters,
+) -> PyResult<Py<PyDict>> {
+    let out = PyDict::new(py);
+    for name in fit.names() {
+        let value = match name {
+            "E" => se.youngs_modulus,
+            "alpha" => se.euler_deg().x,
+            "beta" => se.euler_deg().y,
+            "gamma" => se.euler_deg().z,
+            "x0" => se.base_position.x,
+            "y0" => se.base_position.y,
+            "z0" => se.base_position.z,
+            "offset_scale" => se.offset_scale,
+            "mu" => se.friction,
+            _ => f64::NAN,
+        };
+        out.set_item(name, value)?;
+    }
+    Ok(out.unbind())
+}

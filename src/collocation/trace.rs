@@ -159,7 +159,7 @@ pub fn trace_until(
     crate::model::friction::unsupported(robot, "tracing a branch")?;
     if matches!(
         parameter,
-        Parameter::YoungsModulus | Parameter::Displacement(_) | Parameter::RoutingOffset(..)
+        Parameter::YoungsModulus | Parameter::Displacement(_) | Parameter::RoutingOffset(..) | Parameter::Friction(_)
     ) {
         return Err(crate::error::invalid(
             "parameter",

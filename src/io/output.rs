@@ -69,6 +69,14 @@ fn with_robot(robot: &Robot, solution: &Solution, count: Option<usize>) -> Solut
     if count.is_some() {
         file.samples = samples(robot, solution, count).iter().map(sample_entry).collect();
     }
+    // With friction, every tendon's tension at every sample (null past its end).
+    if !friction_tendons(robot).is_empty() {
+        for entry in &mut file.samples {
+            let s = entry.s.0;
+            let at = |i: usize| Num(tension_at_sample(robot, solution, i, s).unwrap_or(f64::NAN));
+            entry.tensions = Some((0..robot.tendons.len()).map(at).collect());
+        }
+    }
     let length = robot.length();
     for (entry, tendon) in file.tendons.iter_mut().zip(&robot.tendons) {
         entry.end = Some(Num(tendon.end(length)));
@@ -88,14 +96,45 @@ pub fn solution_json(solution: &Solution) -> String {
 /// The CSV header: arc length, position, internal force and moment, and R row-major.
 pub const CSV_HEADER: &str = "s,px,py,pz,nx,ny,nz,mx,my,mz,R11,R12,R13,R21,R22,R23,R31,R32,R33";
 
-/// The samples as CSV: [`CSV_HEADER`], then one row per sample (SI units, full precision).
-pub fn csv(samples: &[Sample]) -> String {
-    let mut table = CsvTable::new(CSV_HEADER.split(','));
+/// The samples of `solution` (of `robot`) as CSV: [`CSV_HEADER`], then for each tendon I
+/// with friction ([`friction_tendons`]) a column `tension_I`, its tension at the sample
+/// ([`tension_at_sample`], blank past its end); one row per sample (SI units, full
+/// precision). Without friction the columns are those of [`CSV_HEADER`] alone.
+pub fn csv(robot: &Robot, solution: &Solution, samples: &[Sample]) -> String {
+    let varying = friction_tendons(robot);
+    let heads = varying.iter().map(|i| format!("tension_{}", i + 1));
+    let mut table = CsvTable::new(CSV_HEADER.split(',').map(str::to_string).chain(heads));
     for x in samples {
         let mut values = vec![x.s];
         values.extend(x.p.iter().chain(x.n.iter()).chain(x.m.iter()));
         values.extend(rows(&x.R).iter().flatten());
-        table.numbers(values);
+        let mut cells: Vec<String> = values.into_iter().map(number).collect();
+        cells.extend(
+            varying
+                .iter()
+                .map(|&i| tension_at_sample(robot, solution, i, x.s).map_or_else(String::new, number)),
+        );
+        table.row(cells);
     }
     table.finish()
+}
+
+/// The tendons of `robot` with friction (a positive coefficient), 0-based in file order:
+/// those whose tension varies along their path.
+pub fn friction_tendons(robot: &Robot) -> Vec<usize> {
+    (0..robot.tendons.len())
+        .filter(|&i| robot.tendons[i].active_friction().is_some())
+        .collect()
+}
+
+/// The tension (N) of tendon `i` (0-based) at arc length `s` of `solution`
+/// ([`Solution::tension_at`], docs/friction.md), `None` past the tendon's end on `robot`
+/// (or for a tendon it does not have): the value of the table's `TI/N`, the CSV's
+/// `tension_I` and the JSON's `samples[].tensions`.
+pub fn tension_at_sample(robot: &Robot, solution: &Solution, i: usize, s: f64) -> Option<f64> {
+    let end = robot.tendons.get(i)?.end(robot.length());
+    if s > end {
+        return None;
+    }
+    solution.tension_at(i, s)
 }

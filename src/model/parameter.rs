@@ -15,6 +15,7 @@
 //! | `youngs_modulus` | E of a rod built from its geometry, at fixed Poisson's ratio (G follows) | Pa |
 //! | `displacement.I` | tendon I's actuator pull-in; the tendon becomes displacement-controlled | m |
 //! | `routing.I.x\|y` | the body-frame offset x or y of tendon I's straight routing | m |
+//! | `friction.I` | tendon I's friction coefficient mu in its channels, its motion kept (`pull` when it had none) | - |
 //!
 //! ```
 //! use tdcr::Parameter;
@@ -62,11 +63,16 @@ pub enum Parameter {
     /// Component 0 or 1 (x, y) of the body-frame offset (m) of tendon i's straight routing
     /// (named `routing.{i + 1}.x|y`).
     RoutingOffset(usize, usize),
+    /// The friction coefficient mu of tendon i in its channels (index from 0; named
+    /// `friction.{i + 1}`). Setting it keeps the tendon's motion (`pull` when it had no
+    /// friction).
+    Friction(usize),
 }
 
 /// The names [`Parameter`] accepts, for messages.
 pub const NAMES: &str = "tension.I (I = 1, 2, ...), tip_force.x|y|z, tip_moment.x|y|z, base_position.x|y|z, \
-                         distributed_force.x|y|z, load_scale, youngs_modulus, displacement.I, routing.I.x|y";
+                         distributed_force.x|y|z, load_scale, youngs_modulus, displacement.I, routing.I.x|y, \
+                         friction.I";
 
 const AXES: [&str; 3] = ["x", "y", "z"];
 
@@ -99,6 +105,7 @@ impl FromStr for Parameter {
         match head {
             "tension" => Ok(Parameter::Tension(tendon(tail)?)),
             "displacement" => Ok(Parameter::Displacement(tendon(tail)?)),
+            "friction" => Ok(Parameter::Friction(tendon(tail)?)),
             "routing" => {
                 let (number, component) = tail.split_once('.').ok_or_else(unknown)?;
                 let axis = AXES[..2].iter().position(|a| *a == component).ok_or_else(unknown)?;
@@ -126,6 +133,7 @@ impl fmt::Display for Parameter {
             Parameter::YoungsModulus => f.write_str("youngs_modulus"),
             Parameter::Displacement(i) => write!(f, "displacement.{}", i + 1),
             Parameter::RoutingOffset(i, k) => write!(f, "routing.{}.{}", i + 1, axis(k)),
+            Parameter::Friction(i) => write!(f, "friction.{}", i + 1),
         }
     }
 }
@@ -154,7 +162,12 @@ impl Parameter {
     pub fn check(&self, robot: &Robot) -> Result<()> {
         let count = robot.tendons.len();
         match *self {
-            Parameter::Tension(i) | Parameter::Displacement(i) | Parameter::RoutingOffset(i, _) if i >= count => {
+            Parameter::Tension(i)
+            | Parameter::Displacement(i)
+            | Parameter::RoutingOffset(i, _)
+            | Parameter::Friction(i)
+                if i >= count =>
+            {
                 Err(invalid(
                     self.to_string(),
                     format!("names tendon {}, but the robot has {count} tendon(s)", i + 1),
@@ -219,6 +232,7 @@ impl Parameter {
                 Routing::Straight { x, y } => [x, y][k],
                 _ => f64::NAN,
             },
+            Parameter::Friction(i) => robot.tendons[i].friction.map_or(0.0, |f| f.coefficient),
         })
     }
 
@@ -255,6 +269,14 @@ impl Parameter {
                 if let Routing::Straight { x, y } = &mut robot.tendons[i].routing {
                     *(if k == 0 { x } else { y }) = value;
                 }
+            }
+            Parameter::Friction(i) => {
+                let t = &mut robot.tendons[i];
+                let motion = t.friction.map_or(super::tendon::Motion::Pull, |f| f.motion);
+                t.friction = Some(super::tendon::Friction {
+                    coefficient: value,
+                    motion,
+                });
             }
             Parameter::YoungsModulus => {
                 if let Some(g) = robot.rod.geometry {
@@ -299,7 +321,7 @@ impl Parameter {
             Parameter::TipMoment(_) => "N m",
             Parameter::BasePosition(_) | Parameter::Displacement(_) | Parameter::RoutingOffset(..) => "m",
             Parameter::DistributedForce(_) => "N/m",
-            Parameter::LoadScale => "",
+            Parameter::LoadScale | Parameter::Friction(_) => "",
             Parameter::YoungsModulus => "Pa",
         }
     }
@@ -372,6 +394,7 @@ mod tests {
             "youngs_modulus",
             "displacement.3",
             "routing.2.y",
+            "friction.4",
         ] {
             assert_eq!(name.parse::<Parameter>().unwrap().to_string(), name);
         }
@@ -386,6 +409,8 @@ mod tests {
             "displacement.0",
             "routing.1.z",
             "routing.1",
+            "friction.0",
+            "friction",
         ] {
             let e = bad.parse::<Parameter>().unwrap_err();
             assert!(e.contains(bad), "{e}");
@@ -416,6 +441,7 @@ mod tests {
             "displacement.3",
             "routing.1.x",
             "routing.4.y",
+            "friction.1",
         ] {
             let p: Parameter = text.parse().unwrap();
             let value = if p == Parameter::YoungsModulus { 105e9 } else { 0.25 };

@@ -630,6 +630,14 @@ class Calibration:
     euler_deg: FloatArray
     base_position: FloatArray
     offset_scale: float
+    friction: float
+    """Fitted friction coefficient of the tendons with friction (0 without friction)."""
+    standard_errors: Optional[Dict[str, float]]
+    """Standard errors of the fitted unknowns keyed by `names`, in the attributes' units
+    (E in Pa, alpha/beta/gamma in deg, x0/y0/z0 in m); None when there are no more residuals
+    than unknowns or the fit is singular."""
+    noise_estimate: float
+    """Noise estimate per tip coordinate (m), the sigma of the standard errors."""
     robot: Robot
     tips: FloatArray
     tip_errors: FloatArray

@@ -55,6 +55,8 @@ pub struct BatchArgs {
     #[arg(long, value_name = "K", default_value_t = 0)]
     points: usize,
     #[command(flatten)]
+    friction: crate::robot_args::FrictionArgs,
+    #[command(flatten)]
     solver: SolverArgs,
 }
 
@@ -179,6 +181,7 @@ pub fn run(args: &BatchArgs) -> Result<(), Failure> {
         .check()
         .map_err(|e| Failure::Input(format!("--points {}: {e}", args.points)))?;
     let (_, mut file) = read_robot(&args.robot)?;
+    args.friction.apply(&mut file.robot)?;
     apply(&mut file, &args.solver);
     let text = std::fs::read_to_string(&args.cases)
         .map_err(|e| Failure::Input(format!("cannot read parameter table {}: {e}", args.cases)))?;

@@ -59,6 +59,8 @@ pub struct CalibrateArgs {
     /// Print every Levenberg-Marquardt iteration to standard error.
     #[arg(short, long)]
     verbose: bool,
+    #[command(flatten)]
+    friction: crate::robot_args::FrictionArgs,
 }
 
 /// Output formats of `tdcr calibrate`.
@@ -120,7 +122,8 @@ pub fn run(args: &CalibrateArgs) -> Result<(), Failure> {
             "ROBOT and EXPERIMENTS cannot both be `-`: only one can come from standard input".into(),
         ));
     }
-    let (name, file) = read_robot(&args.robot)?;
+    let (name, mut file) = read_robot(&args.robot)?;
+    args.friction.apply(&mut file.robot)?;
     let (csv_name, text) = read_csv(&args.experiments)?;
     let tendons = file.robot.tendons.len();
     let experiments = parse_csv(&text, &csv_name, tendons).map_err(|e| {

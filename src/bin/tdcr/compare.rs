@@ -9,7 +9,7 @@ use tdcr::plot::{Curve, Figure, LegendEntry, Marker, PALETTE};
 use tdcr::{Method, Robot, Solution, collocation, shooting};
 
 use crate::args::SolverArgs;
-use crate::failure::{Failure, emit, solver_failure, write_picture};
+use crate::failure::{Failure, emit, note, solver_failure, write_picture};
 use crate::robot_args::{apply, read_robot};
 
 /// The arguments of `tdcr compare`.
@@ -25,6 +25,8 @@ pub struct CompareArgs {
     #[arg(long, value_name = "S1,S2", value_delimiter = ',', value_enum)]
     methods: Vec<crate::args::MethodArg>,
     #[command(flatten)]
+    friction: crate::robot_args::FrictionArgs,
+    #[command(flatten)]
     solver: SolverArgs,
     /// Draw the shapes overlaid into FILE: PNG if its name ends in .png, else SVG.
     #[arg(long, value_name = "FILE.svg|FILE.png")]
@@ -34,11 +36,12 @@ pub struct CompareArgs {
 /// Runs `tdcr compare`.
 pub fn run(args: &CompareArgs) -> Result<(), Failure> {
     let (name, mut file) = read_robot(&args.file)?;
+    args.friction.apply(&mut file.robot)?;
     apply(&mut file, &args.solver);
     let robot = file.robot.clone();
     let shapes = if args.methods.is_empty() {
         let variants = if args.models.is_empty() {
-            Variant::ALL.to_vec()
+            defaults(&name, &robot)
         } else {
             args.models
                 .iter()
@@ -64,6 +67,29 @@ pub fn run(args: &CompareArgs) -> Result<(), Failure> {
         write_picture(path, &figure(&name, &robot, &shapes), "plot")?;
     }
     Ok(())
+}
+
+/// The default models for `robot`: every [`Variant`], but those whose robot the library
+/// refuses for its tendons' friction (the point-moment model), each left out with a note
+/// saying why. Other refusals stay errors (the solve reports them).
+fn defaults(name: &str, robot: &Robot) -> Vec<Variant> {
+    let mut kept = Vec::new();
+    for v in Variant::ALL {
+        match v.robot(robot).validate() {
+            Err(e @ tdcr::Error::InvalidInput { .. }) if friction_field(&e) => note(&format!(
+                "note: {name}: compare leaves out {}: {}",
+                v.name(),
+                crate::failure::message(&e)
+            )),
+            _ => kept.push(v),
+        }
+    }
+    kept
+}
+
+/// Whether `e` names a tendon's friction (`tendons[I].friction`).
+fn friction_field(e: &tdcr::Error) -> bool {
+    matches!(e, tdcr::Error::InvalidInput { field, .. } if field.starts_with("tendons[") && field.ends_with("].friction"))
 }
 
 /// `robot` solved by `method` with the file's options.

@@ -43,8 +43,9 @@ pub struct SolveArgs {
     #[arg(long, value_name = "K", value_parser = parse_samples)]
     samples: Option<usize>,
     /// Add the tip Jacobian. Bare `--jacobian`: every tip Jacobian (d tip pose / d tensions,
-    /// pull-ins, tip force, tip moment) in the JSON output. `--jacobian=COLUMNS`: only those
-    /// columns (comma-separated parameter names or the groups `tension`, `tip_force`,
+    /// pull-ins, friction coefficients, tip force, tip moment) in the JSON output. `--jacobian=COLUMNS`: only those
+    /// columns (comma-separated parameter names such as `tension.2`, `friction.1` or
+    /// `tip_force.z`, or the groups `tension`, `tip_force`,
     /// `tip_moment`, `base_position`), as a 6 x n table or under `tip_jacobian` in the JSON
     /// (docs/cli.md).
     #[arg(long, value_name = "COLUMNS", num_args = 0..=1, require_equals = true, default_missing_value = "all")]
@@ -107,8 +108,14 @@ pub fn run(args: &SolveArgs) -> Result<(), Failure> {
             let names: Vec<&str> = list.split(',').map(str::trim).collect();
             let wrt = tdcr::collocation::sensitivity::columns(&names, &file.robot)
                 .map_err(|e| Failure::Input(format!("--jacobian={list}: {e}")))?;
-            let tip = tdcr::collocation::sensitivity::tip_jacobian(&file.robot, &solution, &wrt)
-                .map_err(|e| Failure::Other(e.to_string()))?;
+            // A column the solution has no derivative in (the friction coefficient of a
+            // tendon without friction) is bad input, in the option's words.
+            let tip = tdcr::collocation::sensitivity::tip_jacobian(&file.robot, &solution, &wrt).map_err(|e| {
+                match crate::failure::solver_failure(e) {
+                    Failure::Input(text) => Failure::Input(format!("--jacobian={list}: {text}")),
+                    other => other,
+                }
+            })?;
             Some((wrt, tip))
         }
     };
@@ -140,7 +147,11 @@ pub fn run(args: &SolveArgs) -> Result<(), Failure> {
                 output::json(&file.robot, &solution, args.samples, jacobian.as_ref())
             }
         },
-        Format::Csv => output::csv(&output::samples(&file.robot, &solution, args.samples)),
+        Format::Csv => output::csv(
+            &file.robot,
+            &solution,
+            &output::samples(&file.robot, &solution, args.samples),
+        ),
         Format::Table => {
             let mut text = solution_table(
                 &name,

@@ -227,18 +227,10 @@ pub fn solution_table(name: &str, file: &RobotFile, solution: &Solution, samples
     }
     // With friction, the tension along each tendon with friction at every sample, up to
     // its end (`Solution::tension_at`; docs/friction.md).
-    let length = file.robot.length();
-    let varying: Vec<(usize, f64)> = file
-        .robot
-        .tendons
-        .iter()
-        .enumerate()
-        .filter(|(_, t)| t.friction.is_some_and(|f| f.coefficient > 0.0))
-        .map(|(i, t)| (i, t.end(length)))
-        .collect();
+    let varying = tdcr::io::output::friction_tendons(&file.robot);
     let heads: String = varying
         .iter()
-        .map(|(i, _)| format!(" {:>10}", format!("T{}/N", i + 1)))
+        .map(|i| format!(" {:>10}", format!("T{}/N", i + 1)))
         .collect();
     let _ = writeln!(
         out,
@@ -248,10 +240,12 @@ pub fn solution_table(name: &str, file: &RobotFile, solution: &Solution, samples
     for x in samples {
         let tensions: String = varying
             .iter()
-            .map(|&(i, end)| match solution.tension_at(i, x.s) {
-                Some(t) if x.s <= end => format!(" {}", fixed(t, 10, 5)),
-                _ => format!(" {:>10}", ""),
-            })
+            .map(
+                |&i| match tdcr::io::output::tension_at_sample(&file.robot, solution, i, x.s) {
+                    Some(t) => format!(" {}", fixed(t, 10, 5)),
+                    None => format!(" {:>10}", ""),
+                },
+            )
             .collect();
         let _ = writeln!(
             out,

@@ -177,7 +177,10 @@ fn with_flags(e: tdcr::Error, parameter: Parameter) -> Failure {
             if field == "parameter"
                 && matches!(
                     parameter,
-                    Parameter::YoungsModulus | Parameter::Displacement(_) | Parameter::RoutingOffset(..)
+                    Parameter::YoungsModulus
+                        | Parameter::Displacement(_)
+                        | Parameter::RoutingOffset(..)
+                        | Parameter::Friction(_)
                 ) =>
         {
             Some(format!("tdcr sweep --param {parameter}=START:STOP:COUNT"))

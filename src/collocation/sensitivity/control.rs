@@ -65,7 +65,8 @@ pub fn columns<S: AsRef<str>>(names: &[S], robot: &Robot) -> Result<Vec<Paramete
 ///
 /// Costs one Jacobian assembly and factorization, then per column one solve with the
 /// stored factors, plus one pass over the mesh for all tension columns together (exact) and
-/// two residual evaluations for E, a distributed force or a routing offset (differenced).
+/// two residual evaluations for E, a distributed force, a routing offset or a friction
+/// coefficient (differenced).
 /// A `displacement.I` column holds the other pull-ins (docs/actuation.md, "Sensitivities").
 ///
 /// # Errors
@@ -236,7 +237,7 @@ fn column(sens: &mut Sensitivity, robot: &Robot, p: Parameter) -> Result<Option<
             };
             youngs_modulus(sens, geometry)?
         }
-        Parameter::RoutingOffset(..) | Parameter::DistributedForce(_) => sens.parameter(p)?,
+        Parameter::RoutingOffset(..) | Parameter::DistributedForce(_) | Parameter::Friction(_) => sens.parameter(p)?,
         Parameter::Displacement(_) => {
             return Err(invalid(
                 p.to_string(),
@@ -250,7 +251,7 @@ fn column(sens: &mut Sensitivity, robot: &Robot, p: Parameter) -> Result<Option<
                 p.to_string(),
                 "is not a column of the control Jacobian",
                 "ask for tension.I, displacement.I, tip_force.x|y|z, tip_moment.x|y|z, base_position.x|y|z, \
-                 distributed_force.x|y|z, routing.I.x|y or youngs_modulus",
+                 distributed_force.x|y|z, routing.I.x|y, friction.I or youngs_modulus",
             ));
         }
     };

@@ -176,6 +176,15 @@ impl Sensitivity<'_> {
     /// friction (mu = 0: the log tensions are not unknowns there, so the derivative would
     /// need another system); as [`Sensitivity::derivative`].
     pub fn friction(&mut self, tendon: usize) -> Result<Vec<NodeDerivative>> {
+        self.friction_rhs(tendon)?;
+        self.respond()
+    }
+
+    /// Writes -dF/dmu of [`Sensitivity::friction`] into the right-hand side buffer.
+    ///
+    /// # Errors
+    /// As [`Sensitivity::friction`].
+    pub(super) fn friction_rhs(&mut self, tendon: usize) -> Result<()> {
         let robot = self.robot();
         let t = Self::tendon_of(robot, tendon)?;
         let Some(friction) = t.active_friction() else {
@@ -196,10 +205,13 @@ impl Sensitivity<'_> {
         } else {
             Difference::Forward
         };
-        self.derivative(RELATIVE_STEP, difference, |r, dq| {
+        let perturb = |r: &mut crate::Robot, dq: f64| {
             if let Some(f) = &mut r.tendons[tendon].friction {
                 f.coefficient = mu + dq;
             }
+        };
+        self.differenced_rhs(RELATIVE_STEP, difference, |border, states, dq, out| {
+            residual_at(border, states, &perturb, dq, out)
         })
     }
 

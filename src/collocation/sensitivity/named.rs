@@ -18,7 +18,7 @@ impl Sensitivity<'_> {
     /// tip-moment component's [`Sensitivity::tip_moment`], a base-position component's
     /// [`Sensitivity::base_position`], `youngs_modulus` (at fixed Poisson's ratio) of a rod
     /// built from its geometry [`Sensitivity::stiffness`] along dk = k / E (exact without
-    /// friction); `distributed_force.*`, `load_scale`, `routing.I.x|y` (and E with friction)
+    /// friction), a friction coefficient's [`Sensitivity::friction`]; `distributed_force.*`, `load_scale`, `routing.I.x|y` (and E with friction)
     /// are differenced centrally with steps [`RELATIVE_STEP`] times max(|f|, E I / L^3), 1,
     /// max(|r_I|, L / 100) and E.
     /// `displacement.I` has no such derivative (it enters no row: the pull-in holds the
@@ -42,6 +42,7 @@ impl Sensitivity<'_> {
             Parameter::TipForce(axis) => return self.tip_force_rhs(axis),
             Parameter::TipMoment(axis) => return self.tip_moment_rhs(axis),
             Parameter::BasePosition(axis) => return self.base_position_rhs(axis),
+            Parameter::Friction(i) => return self.friction_rhs(i),
             // The residual is linear in f_e: any step is exact but for rounding; the scale
             // is that of the tip force over the rod's length.
             Parameter::DistributedForce(_) => RELATIVE_STEP * value.abs().max(force_scale(robot) / robot.length()),

@@ -156,6 +156,11 @@ pub(crate) struct SampleEntry {
     pub R: M3,
     pub n: V3,
     pub m: V3,
+    /// With friction (`tdcr solve --format json` of a robot with a tendon with friction):
+    /// every tendon's tension at s (N, null past its end); absent otherwise and in older
+    /// files.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub tensions: Option<Vec<Num>>,
 }
 
 #[derive(Serialize, Deserialize)]
@@ -246,6 +251,7 @@ pub(crate) fn sample_entry(x: &Sample) -> SampleEntry {
         R: m3(&x.R),
         n: v3(&x.n),
         m: v3(&x.m),
+        tensions: None,
     }
 }
 
