@@ -17,6 +17,8 @@ use crate::model::routing::RoutingPoint;
 use crate::{Error, Real};
 use nalgebra::{Matrix3, Vector3};
 
+mod pulls;
+
 /// Below this |p_i'| (body frame, dimensionless) a tendon's path has no usable tangent.
 pub(crate) const MIN_TENDON_SPEED: f64 = 1e-9;
 
@@ -286,75 +288,6 @@ impl<'a> Model<'a> {
         Ok((x.fixed_rows::<3>(0).into(), x.fixed_rows::<3>(3).into()))
     }
 
-    /// The sum over the selected tendons of their internal tension tau_i t_i (world frame,
-    /// N) and its moment about the centreline (R r_i) x tau_i t_i (N m), where
-    /// t_i = p_i' / |p_i'| is the unit tangent of the tendon's path (eq. 9) for the state
-    /// (R, v, u), v the strain ([`Site::strain`] of a node's coordinate).
-    ///
-    /// The point load of tendon i on the backbone where its path ends or bends is
-    /// tau_i (t_i(s+) - t_i(s-)) (docs/model.md section 5), so jump and tip conditions are
-    /// differences of these sums.
-    pub fn tendon_pull<T: Real>(
-        &self,
-        s: f64,
-        which: Which,
-        R: &Matrix3<T>,
-        v: &Vector3<T>,
-        u: &Vector3<T>,
-    ) -> Result<(Vector3<T>, Vector3<T>)> {
-        self.tendon_pull_of(self.tendons(s, which), s, R, v, u)
-    }
-
-    /// [`Model::tendon_pull`] of the tendons `tendons` at s, given as [`Model::tendons`]
-    /// yields them (index, tension, routing point at s): for a caller that sums the same
-    /// tendons at s on many shapes (the initial guess's sweeps) and keeps their routing
-    /// points instead of evaluating them on every sweep.
-    pub(crate) fn tendon_pull_of<T: Real>(
-        &self,
-        tendons: impl Iterator<Item = (usize, f64, RoutingPoint)>,
-        s: f64,
-        R: &Matrix3<T>,
-        v: &Vector3<T>,
-        u: &Vector3<T>,
-    ) -> Result<(Vector3<T>, Vector3<T>)> {
-        let mut force = Vector3::<T>::zeros();
-        let mut moment = Vector3::<T>::zeros();
-        let coupled = self.robot.tendon_model == TendonModel::Coupled;
-        for (i, tension, rp) in tendons {
-            let (f_b, r) = body_pull(i, tension, &rp, s, v, u)?;
-            // The point-moment model keeps only the moment of the tendon's pull.
-            if coupled {
-                force += R * f_b;
-            }
-            moment += R * r.cross(&f_b);
-        }
-        Ok((force, moment))
-    }
-
-    /// [`Model::tendon_pull_of`] in the body frame: R^T times its force and moment, summed
-    /// over the tendons in the body frame and so without a rotation per tendon (the same
-    /// sums to rounding, not the same bits). For the default initial guess's sweeps, which
-    /// need the pulls only in the body frame.
-    pub(crate) fn tendon_pull_body_of(
-        &self,
-        tendons: impl Iterator<Item = (usize, f64, RoutingPoint)>,
-        s: f64,
-        v: &Vector3<f64>,
-        u: &Vector3<f64>,
-    ) -> Result<(Vector3<f64>, Vector3<f64>)> {
-        let mut force = Vector3::zeros();
-        let mut moment = Vector3::zeros();
-        let coupled = self.robot.tendon_model == TendonModel::Coupled;
-        for (i, tension, rp) in tendons {
-            let (f_b, r) = body_pull(i, tension, &rp, s, v, u)?;
-            if coupled {
-                force += f_b;
-            }
-            moment += r.cross(&f_b);
-        }
-        Ok((force, moment))
-    }
-
     /// Internal force n = R D (v - v*) (N) and moment m = R C (u - u*) (N m), world frame
     /// (eq. 3), for the node coordinates (v, u): on a Kirchhoff rod v is the translational
     /// coordinate v* + D^-1 n_b ([`Site::strain`]), so this is its force, not eq. 3's.
@@ -382,34 +315,6 @@ impl<'a> Model<'a> {
         let u = lift::<T>(&site.reference.u_star) + m_b.component_div(&lift(&site.section.section.kbt));
         (v, u)
     }
-}
-
-/// A tendon's pull at s in the body frame, tau_i p_b' / |p_b'| with p_b' = u x r + r' + v
-/// (eq. 9), and its routing point r lifted: tendon `i` of tension `tension` (N) at routing
-/// point `rp`, for the strain `v` and curvature `u`.
-///
-/// # Errors
-/// [`Error::SingularRouting`] where |p_b'| is below [`MIN_TENDON_SPEED`].
-#[inline(always)]
-fn body_pull<T: Real>(
-    i: usize,
-    tension: f64,
-    rp: &RoutingPoint,
-    s: f64,
-    v: &Vector3<T>,
-    u: &Vector3<T>,
-) -> Result<(Vector3<T>, Vector3<T>)> {
-    let r = lift::<T>(&rp.r);
-    let pb_s = u.cross(&r) + lift::<T>(&rp.r_s) + v;
-    let speed = pb_s.norm();
-    if speed < T::from_f64(MIN_TENDON_SPEED).unwrap_or_else(T::zero) {
-        return Err(Error::SingularRouting {
-            tendon: i,
-            s,
-            speed: to_f64(speed),
-        });
-    }
-    Ok((pb_s * (T::from_f64(tension).unwrap_or_else(T::zero) / speed), r))
 }
 
 /// The real part of a scalar (its value for f64, the value without derivatives for duals).
