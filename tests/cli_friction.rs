@@ -322,7 +322,24 @@ fn motion_on_the_command_line_is_the_files_motion() {
     let out = run(&dir, &["solve", "pull.toml", "--motion", "1=up"]);
     assert_eq!(out.status.code(), Some(2));
     assert!(stderr(&out).contains("`up` is neither `pull`"), "{}", stderr(&out));
-    let out = run(&dir, &["solve", "pull.toml", "--motion", "2=release"]);
-    assert_eq!(out.status.code(), Some(0));
-    assert!(stderr(&out).contains("`tendon[2].motion`"), "{}", stderr(&out));
+    // A motion on a tendon without friction changes nothing: the warning names the option
+    // (for `pull` too), and no file field the file does not have.
+    for motion in ["2=release", "2=pull"] {
+        let out = run(&dir, &["solve", "pull.toml", "--motion", motion]);
+        assert_eq!(out.status.code(), Some(0));
+        let err = stderr(&out);
+        let want = format!("warning: --motion {motion} has no effect: tendon 2 has no friction; add --friction 2=MU");
+        assert!(err.contains(&want), "{err}");
+        assert!(!err.contains("`tendon[2].motion`"), "{err}");
+    }
+    let out = run(
+        &dir,
+        &["sweep", "pull.toml", "--tension", "1=0:1:2", "--motion", "2=pull"],
+    );
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    assert!(
+        stderr(&out).contains("warning: --motion 2=pull has no effect"),
+        "{}",
+        stderr(&out)
+    );
 }
