@@ -343,3 +343,33 @@ fn motion_on_the_command_line_is_the_files_motion() {
         stderr(&out)
     );
 }
+
+/// A load history decides stick and slip per step, so `--motion` would be ignored: bad input.
+#[test]
+fn history_refuses_motion() {
+    let dir = scratch("history_motion");
+    std::fs::write(
+        dir.join("rough.toml"),
+        example_with(&dir, "stiffness = 2000.0\nfriction = 0.1\n"),
+    )
+    .unwrap();
+    let args = [
+        "sweep",
+        "rough.toml",
+        "--tension",
+        "1=0:1:2",
+        "--history",
+        "up-down",
+        "--motion",
+        "1=release",
+    ];
+    let out = run(&dir, &args);
+    assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
+    assert!(
+        stderr(&out).contains(
+            "--motion has no effect with --history: each step decides stick and slip from the last step's tendon state"
+        ),
+        "{}",
+        stderr(&out)
+    );
+}

@@ -103,6 +103,11 @@ pub struct FrictionArgs {
 }
 
 impl FrictionArgs {
+    /// Whether any `--motion` is given.
+    pub fn gives_motion(&self) -> bool {
+        !self.motion.is_empty()
+    }
+
     /// Sets the coefficients, then the motions, on `robot`; a tendon given twice or past
     /// the last is bad input. A `--motion` on a tendon left without friction changes
     /// nothing (the motion says which way friction acts): a warning line says so.

@@ -259,6 +259,13 @@ pub fn run(args: &SweepArgs) -> Result<(), Failure> {
     if let Some(path) = &args.plot {
         picture_format(path)?;
     }
+    if args.history.is_some() && args.friction.gives_motion() {
+        return Err(Failure::Input(
+            "--motion has no effect with --history: each step decides stick and slip from the last step's \
+             tendon state"
+                .into(),
+        ));
+    }
     let (name, mut file) = read_robot(&args.file)?;
     // The file's warnings say what the file gives, before the options replace it.
     let read_warnings = file.warnings();
