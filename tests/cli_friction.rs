@@ -322,6 +322,10 @@ fn motion_on_the_command_line_is_the_files_motion() {
     let out = run(&dir, &["solve", "pull.toml", "--motion", "1=up"]);
     assert_eq!(out.status.code(), Some(2));
     assert!(stderr(&out).contains("`up` is neither `pull`"), "{}", stderr(&out));
+    // The same names and meanings as the experiments file's motion column.
+    assert!(stderr(&out).contains("give `pull` (the actuator pulls the tendon in: a loading step) or `release` (it lets it out: an unloading step)"), "{}", stderr(&out));
+    // Blanks around the name are trimmed, as in the experiments file.
+    assert_eq!(json(&["pull.toml", "--motion", "1= release "]), json(&["release.toml"]));
     // A motion on a tendon without friction changes nothing: the warning names the option
     // (for `pull` too), and no file field the file does not have.
     for motion in ["2=release", "2=pull"] {
