@@ -322,7 +322,58 @@ fn motion_on_the_command_line_is_the_files_motion() {
     let out = run(&dir, &["solve", "pull.toml", "--motion", "1=up"]);
     assert_eq!(out.status.code(), Some(2));
     assert!(stderr(&out).contains("`up` is neither `pull`"), "{}", stderr(&out));
-    let out = run(&dir, &["solve", "pull.toml", "--motion", "2=release"]);
-    assert_eq!(out.status.code(), Some(0));
-    assert!(stderr(&out).contains("`tendon[2].motion`"), "{}", stderr(&out));
+    // The same names and meanings as the experiments file's motion column.
+    assert!(stderr(&out).contains("give `pull` (the actuator pulls the tendon in: a loading step) or `release` (it lets it out: an unloading step)"), "{}", stderr(&out));
+    // Blanks around the name are trimmed, as in the experiments file.
+    assert_eq!(json(&["pull.toml", "--motion", "1= release "]), json(&["release.toml"]));
+    // A motion on a tendon without friction changes nothing: the warning names the option
+    // (for `pull` too), and no file field the file does not have.
+    for motion in ["2=release", "2=pull"] {
+        let out = run(&dir, &["solve", "pull.toml", "--motion", motion]);
+        assert_eq!(out.status.code(), Some(0));
+        let err = stderr(&out);
+        let want = format!("warning: --motion {motion} has no effect: tendon 2 has no friction; add --friction 2=MU");
+        assert!(err.contains(&want), "{err}");
+        assert!(!err.contains("`tendon[2].motion`"), "{err}");
+    }
+    let out = run(
+        &dir,
+        &["sweep", "pull.toml", "--tension", "1=0:1:2", "--motion", "2=pull"],
+    );
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    assert!(
+        stderr(&out).contains("warning: --motion 2=pull has no effect"),
+        "{}",
+        stderr(&out)
+    );
+}
+
+/// A load history decides stick and slip per step, so `--motion` would be ignored: bad input.
+#[test]
+fn history_refuses_motion() {
+    let dir = scratch("history_motion");
+    std::fs::write(
+        dir.join("rough.toml"),
+        example_with(&dir, "stiffness = 2000.0\nfriction = 0.1\n"),
+    )
+    .unwrap();
+    let args = [
+        "sweep",
+        "rough.toml",
+        "--tension",
+        "1=0:1:2",
+        "--history",
+        "up-down",
+        "--motion",
+        "1=release",
+    ];
+    let out = run(&dir, &args);
+    assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
+    assert!(
+        stderr(&out).contains(
+            "--motion has no effect with --history: each step decides stick and slip from the last step's tendon state"
+        ),
+        "{}",
+        stderr(&out)
+    );
 }

@@ -145,6 +145,8 @@ fn the_experiments_csv_carries_the_motion() {
     .unwrap_err();
     let message = bad.to_string();
     assert!(message.contains("`motion`") && message.contains("release"), "{message}");
+    // The names and what they mean are those the command line's --motion gives.
+    assert!(message.contains("give `pull` (the actuator pulls the tendon in: a loading step) or `release` (it lets it out: an unloading step) or leave it empty"), "{message}");
 }
 
 #[test]

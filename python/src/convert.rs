@@ -267,14 +267,14 @@ pub fn motions(motions: Option<Vec<Option<String>>>, rows: usize) -> PyResult<Ve
     motions
         .into_iter()
         .enumerate()
-        .map(|(k, m)| match m.as_deref() {
+        .map(|(k, m)| match m.as_deref().map(str::trim) {
             None => Ok(None),
-            Some("pull") => Ok(Some(tdcr::Motion::Pull)),
-            Some("release") => Ok(Some(tdcr::Motion::Release)),
-            Some(other) => Err(invalid(format!(
-                "calibrate: motions[{k}] is \"{other}\"; give \"pull\" (a loading step), \"release\" (an unloading \
-                 step) or None (the robot's motion)"
-            ))),
+            Some(name) => tdcr::Motion::from_name(name).map(Some).ok_or_else(|| {
+                invalid(format!(
+                    "calibrate: motions[{k}] is \"{name}\"; give {} or None (the robot's motion)",
+                    tdcr::Motion::CHOICES
+                ))
+            }),
         })
         .collect()
 }

@@ -6,7 +6,7 @@ use crate::robot::PyRobot;
 use crate::solution::PySolution;
 use pyo3::prelude::*;
 use std::path::PathBuf;
-use tdcr::plot::{Figure, Format, Style, View, shape_legend};
+use tdcr::plot::{Figure, Format, Style, View, solved_shape_legend};
 
 /// figure(robot, solution, path, *, views=None, width=None, font_size=None, title=None, disks=None) -> None
 ///
@@ -63,7 +63,7 @@ pub fn figure(
     // The file's own disks, unless `disks` asks for others.
     style.placed_disks = robot.file.disks.clone().filter(|_| disks.is_none());
     figure.add_shape(r, &solution.solution, &style);
-    figure.legend = shape_legend(r, &style);
+    figure.legend = solved_shape_legend(r, &solution.solution, &style);
     let (bytes, text) = py
         .detach(|| figure.render(format))
         .map_err(|e| crate::errors::Error::new_err(format!("figure: cannot draw {}: {e}", path.display())))?;

@@ -72,3 +72,12 @@ def test_an_empty_history_is_bad_input():
         tdcr.history(robot, {"tension.1": []})
     with pytest.raises(tdcr.InvalidInput, match="gives no rows"):
         tdcr.history(robot, {"tension.1": np.array([])}, up_down=True)
+
+
+def test_figure_legend_gives_the_delivered_tension(tmp_path):
+    # The picture's legend, like `tdcr solve --plot`'s, gives the tension a tendon with
+    # friction delivers at its termination (it knows the solution, not the robot only).
+    robot = rough(0.1)
+    tdcr.figure(robot, tdcr.solve(robot), tmp_path / "shape.svg")
+    svg = (tmp_path / "shape.svg").read_text()
+    assert "friction 0.1, pulled in" in svg and "N delivered" in svg

@@ -175,19 +175,17 @@ pub fn parse_csv(text: &str, file: &str, tendons: usize) -> Result<Vec<Measureme
         if let Some((column, cell)) = motion_column.map(|c| &cells[c]) {
             match cell.trim() {
                 "" => {}
-                "pull" => motion = Some(Motion::Pull),
-                "release" => motion = Some(Motion::Release),
-                other => {
-                    ok = false;
-                    problems.push(Problem {
-                        position: at(line, *column),
-                        field: MOTION_COLUMN.into(),
-                        message: format!(
-                            "is `{}`; give pull (a loading step), release (an unloading step) or leave it empty",
-                            printable(other)
-                        ),
-                    });
-                }
+                name => match Motion::from_name(name) {
+                    Some(m) => motion = Some(m),
+                    None => {
+                        ok = false;
+                        problems.push(Problem {
+                            position: at(line, *column),
+                            field: MOTION_COLUMN.into(),
+                            message: format!("is `{}`; give {} or leave it empty", printable(name), Motion::CHOICES),
+                        });
+                    }
+                },
             }
         }
         for (index, ((column, cell), slot)) in cells.into_iter().zip(&slots).enumerate() {

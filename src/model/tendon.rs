@@ -53,7 +53,13 @@ impl Motion {
         }
     }
 
-    /// The motion called `name` (`pull` or `release`), None for any other name.
+    /// The names [`Motion::from_name`] takes, with what each means: every front end (the
+    /// command line, experiment files, Python) says this when a name is none of them.
+    pub const CHOICES: &'static str =
+        "`pull` (the actuator pulls the tendon in: a loading step) or `release` (it lets it out: an unloading step)";
+
+    /// The motion called `name` (`pull` or `release`, as [`Motion::name`] gives them), None
+    /// for any other name; the front ends trim blanks around the name first.
     pub fn from_name(name: &str) -> Option<Self> {
         match name {
             "pull" => Some(Motion::Pull),

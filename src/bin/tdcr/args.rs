@@ -186,13 +186,15 @@ pub fn parse_friction(text: &str) -> Result<(usize, f64), String> {
 /// `I=pull|release` (`--motion`): a tendon number and the motion its friction opposes.
 pub fn parse_motion(text: &str) -> Result<(usize, tdcr::Motion), String> {
     let (index, value) = parse_tendon(text, "I=pull or I=release, e.g. 1=release")?;
-    match value.trim() {
-        "pull" => Ok((index, tdcr::Motion::Pull)),
-        "release" => Ok((index, tdcr::Motion::Release)),
-        other => Err(format!(
-            "motion `{other}` is neither `pull` (the actuator pulls the tendon in) nor `release` (it lets it out)"
-        )),
-    }
+    let name = value.trim();
+    tdcr::Motion::from_name(name)
+        .map(|motion| (index, motion))
+        .ok_or_else(|| {
+            format!(
+                "motion `{name}` is neither `pull` nor `release`; give {}",
+                tdcr::Motion::CHOICES
+            )
+        })
 }
 
 /// `I=METRES` (`--displacement`): a tendon number from 1 and its actuator pull-in in m

@@ -57,7 +57,10 @@ fn flags(field: &str) -> Option<&'static str> {
 
 /// A library error's message in the command line's words: a field path numbered as in
 /// robot files (`tendon[1].stiffness` for the library's `tendons[0].stiffness`), as
-/// Python's messages number it.
+/// Python's messages number it. A `base_rotation` error is named `base.rotation` even
+/// for a file that gives `base.euler_xyz_deg`, but none reaches here: the file's rotation
+/// is checked when the file is read (named as the file spells it), no option replaces it,
+/// and calibration only turns it by another rotation.
 pub fn message(e: &Error) -> String {
     match e {
         Error::InvalidInput { field, problem, hint } => {
@@ -147,10 +150,16 @@ pub fn warn_scales(name: &str, robot: &Robot) {
     }
 }
 
-/// Prints what the robot file gives that has no effect (`RobotFile::warnings`, a
-/// `free_length` without `stiffness`) to standard error, one `warning:` line each.
-pub fn warn_file(name: &str, file: &tdcr::io::RobotFile) {
-    for w in file.warnings() {
+/// Prints what the robot file gives that has no effect (`RobotFile::warnings`, e.g. a
+/// `free_length` without `stiffness`) to standard error, one `warning:` line each:
+/// `read` are the warnings of the file as read, `file` is it with the command-line options
+/// applied, and only the warnings of both are printed. A warning only the options cause
+/// (`--motion` on a tendon without friction) names a field the file does not have, so the
+/// options warn about themselves; one the options clear (`--friction` on a tendon whose
+/// file gives only `motion`) no longer holds.
+pub fn warn_file(name: &str, read: &[String], file: &tdcr::io::RobotFile) {
+    let now = file.warnings();
+    for w in read.iter().filter(|w| now.contains(w)) {
         note(&format!("warning: {name}: {w}"));
     }
 }

@@ -103,8 +103,14 @@ pub struct FrictionArgs {
 }
 
 impl FrictionArgs {
+    /// Whether any `--motion` is given.
+    pub fn gives_motion(&self) -> bool {
+        !self.motion.is_empty()
+    }
+
     /// Sets the coefficients, then the motions, on `robot`; a tendon given twice or past
-    /// the last is bad input.
+    /// the last is bad input. A `--motion` on a tendon left without friction changes
+    /// nothing (the motion says which way friction acts): a warning line says so.
     pub fn apply(&self, robot: &mut Robot) -> Result<(), Failure> {
         once("--friction", &self.friction, tdcr::Readable)?;
         for &(i, mu) in &self.friction {
@@ -113,14 +119,20 @@ impl FrictionArgs {
         once("--motion", &self.motion, tdcr::Motion::name)?;
         for &(i, motion) in &self.motion {
             set_motion(robot, i, motion)?;
+            if robot.tendons[i - 1].friction.is_none_or(|f| f.coefficient == 0.0) {
+                note(&format!(
+                    "warning: --motion {i}={} has no effect: tendon {i} has no friction; add --friction {i}=MU",
+                    motion.name()
+                ));
+            }
         }
         Ok(())
     }
 }
 
 /// Sets the motion that tendon `index`'s (from 1) friction opposes, keeping its
-/// coefficient (0 without friction: the motion then has no effect, which the file's
-/// warnings say); a number past the last tendon is bad input.
+/// coefficient (0 without friction: the motion then has no effect, which
+/// [`FrictionArgs::apply`] warns about); a number past the last tendon is bad input.
 fn set_motion(robot: &mut Robot, index: usize, motion: tdcr::Motion) -> Result<(), Failure> {
     let count = robot.tendons.len();
     match robot.tendons.get_mut(index.wrapping_sub(1)) {

@@ -77,6 +77,8 @@ pub fn run(args: &SolveArgs) -> Result<(), Failure> {
         picture_format(path)?;
     }
     let (name, mut file) = read_robot(&args.file)?;
+    // The file's warnings say what the file gives, before the options replace it.
+    let read_warnings = file.warnings();
     once("--tension", &args.tension, tdcr::Readable)?;
     once("--displacement", &args.displacement, tdcr::Readable)?;
     for &(i, t) in &args.tension {
@@ -92,7 +94,7 @@ pub fn run(args: &SolveArgs) -> Result<(), Failure> {
     }
     args.friction.apply(&mut file.robot)?;
     apply(&mut file, &args.solver);
-    crate::failure::warn_file(&name, &file);
+    crate::failure::warn_file(&name, &read_warnings, &file);
     crate::failure::warn_scales(&name, &file.robot);
     let start = args
         .start

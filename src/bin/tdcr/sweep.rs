@@ -259,7 +259,16 @@ pub fn run(args: &SweepArgs) -> Result<(), Failure> {
     if let Some(path) = &args.plot {
         picture_format(path)?;
     }
+    if args.history.is_some() && args.friction.gives_motion() {
+        return Err(Failure::Input(
+            "--motion has no effect with --history: each step decides stick and slip from the last step's \
+             tendon state"
+                .into(),
+        ));
+    }
     let (name, mut file) = read_robot(&args.file)?;
+    // The file's warnings say what the file gives, before the options replace it.
+    let read_warnings = file.warnings();
     apply(&mut file, &args.solver);
     args.friction.apply(&mut file.robot)?;
     let plan = Plan::new(args, &file.robot)?;
@@ -270,7 +279,7 @@ pub fn run(args: &SweepArgs) -> Result<(), Failure> {
     for &(i, ref v) in &args.displacement {
         set_displacement(&mut file.robot, i, v[0])?;
     }
-    crate::failure::warn_file(&name, &file);
+    crate::failure::warn_file(&name, &read_warnings, &file);
     // Every step's robot must be valid before any is solved (a pull-in longer than the
     // tendon's path, a negative modulus): bad input, exit 2, not a failed solve.
     for k in 0..steps {
