@@ -46,7 +46,7 @@ pub const SAFETY: f64 = 1.25;
 /// 1800 eps) covers it with the same room as [`SAFETY`]. Tolerances below it cannot be
 /// met. The floors of 3e-12 to 2e-11 L some random robots (L / r of 670 to 4700) had in the
 /// order-6 answer were the stages' strains rounded near 1 (a force of EA eps), which the
-/// order-6 answer and its estimate now keep ([`super::stage`]; docs/numerics.md, "Why the
+/// order-6 answer and its estimate now keep (`collocation::stage`; docs/numerics.md, "Why the
 /// estimate was low on some random robots").
 pub const ROUNDING: f64 = 4e-13;
 
