@@ -56,7 +56,7 @@ pub mod system {
 /// The order-6 answer of tight tolerances: the deferred-corrected solution on one mesh with
 /// its estimate (docs/numerics.md, "The order-6 answer").
 pub mod deferred {
-    pub use crate::collocation::deferred::corrected;
+    pub use crate::collocation::deferred::{ROUNDING, SAFETY, corrected};
 }
 
 /// The residual blocks (base, intervals, jumps, tip).

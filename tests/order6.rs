@@ -472,11 +472,10 @@ fn the_order_8_estimate_follows_the_error_on_a_slender_rod_with_two_helices() {
         let points: Vec<f64> = (0..=n).map(|k| length * k as f64 / n as f64).collect();
         let (tip, estimate) = order6_on(&robot, &solution, &points);
         let (reference, _) = order6_on(&robot, &solution, &split(&points, 4));
-        // The estimate before its factor 1.25 and its rounding term 4e-13 L (rad)
-        // (deferred.rs, SAFETY and ROUNDING).
+        // The estimate before its safety factor and its rounding term (L, rad).
         let raw = [
-            (estimate.tip_position / length - 4e-13) / 1.25,
-            (estimate.tip_rotation - 4e-13) / 1.25,
+            (estimate.tip_position / length - deferred::ROUNDING) / deferred::SAFETY,
+            (estimate.tip_rotation - deferred::ROUNDING) / deferred::SAFETY,
         ];
         let error = apart((tip.p, tip.R), &reference, length);
         let ratio = [error[0] / raw[0], error[1] / raw[1]];

@@ -38,7 +38,7 @@ pub(crate) const ORDER6_BELOW: f64 = 1e-8;
 /// since the stages keep their strains' low part (up to 1.97 before, which no factor
 /// covered: a rounding floor of the order-6 answer, docs/numerics.md, "Why the estimate was
 /// low on some random robots").
-const SAFETY: f64 = 1.25;
+pub const SAFETY: f64 = 1.25;
 
 /// Rounding, relative to L (and in rad): added to the order-6 estimate, which sees
 /// truncation only. Solutions of cases S and H on 2048 and 4096 intervals agree to
@@ -46,9 +46,9 @@ const SAFETY: f64 = 1.25;
 /// 1800 eps) covers it with the same room as [`SAFETY`]. Tolerances below it cannot be
 /// met. The floors of 3e-12 to 2e-11 L some random robots (L / r of 670 to 4700) had in the
 /// order-6 answer were the stages' strains rounded near 1 (a force of EA eps), which the
-/// order-6 answer and its estimate now keep ([`super::stage`]; docs/numerics.md, "Why the
+/// order-6 answer and its estimate now keep (`collocation::stage`; docs/numerics.md, "Why the
 /// estimate was low on some random robots").
-const ROUNDING: f64 = 4e-13;
+pub const ROUNDING: f64 = 4e-13;
 
 /// Chord steps on phi4(x) = phi4(x4) - phi6(x4) from x4 with Newton's factors: with
 /// factors a step old, one step leaves an error of about 1e-3 of the correction (the order-6

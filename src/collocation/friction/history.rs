@@ -328,7 +328,7 @@ fn rigid(i: usize, s: f64) -> Error {
 /// sliding against its slip, section 8 of docs/friction.md).
 pub(crate) fn step(robot: &Robot, options: &Options, carried: &mut Carried) -> Result<StepAnswer> {
     let before = carried.material();
-    let (answer, stuck) = solve_on(robot, options, carried, false)?;
+    let (answer, stuck) = solve_on(robot, options, carried, None)?;
     if !stuck {
         return Ok(answer);
     }
@@ -336,13 +336,14 @@ pub(crate) fn step(robot: &Robot, options: &Options, carried: &mut Carried) -> R
 }
 
 /// [`step`] on `carried`'s own mesh, and whether a tendon has a stuck stretch (then the
-/// answer has no error estimate: [`split::refine`] gives it one). With `held`, `carried`
-/// is an answer whose material was changed slightly: Newton solves once with its pattern
-/// and capacities held, without a march ([`split`]'s material error).
+/// answer has no error estimate: [`split::refine`] gives it one). With `held` (a slip in
+/// m), `carried` is an answer whose material was changed slightly: Newton solves once with
+/// its pattern and capacities held, without a march ([`split`]'s material error), and a
+/// slip against the friction up to `held` beyond rounding passes the slip check.
 ///
 /// # Errors
 /// As [`step`].
-fn solve_on(robot: &Robot, options: &Options, carried: &mut Carried, held: bool) -> Result<(StepAnswer, bool)> {
+fn solve_on(robot: &Robot, options: &Options, carried: &mut Carried, held: Option<f64>) -> Result<(StepAnswer, bool)> {
     let start = Instant::now();
     let model = Model::new(robot);
     let mut system = System::new(model.clone(), carried.mesh.clone());
@@ -376,7 +377,7 @@ fn solve_on(robot: &Robot, options: &Options, carried: &mut Carried, held: bool)
         stop_when_damped: false,
     };
     let solved = std::mem::replace(&mut carried.solved, false);
-    let mut settled = !held && !march(&mut border, &x, false)? && solved;
+    let mut settled = held.is_none() && !march(&mut border, &x, false)? && solved;
     // A rigid tendon that would stick is refused by the march; one that is near sticking
     // may keep Newton or the passes from settling, which the hint names.
     let rigid_hint = robot
@@ -406,7 +407,7 @@ fn solve_on(robot: &Robot, options: &Options, carried: &mut Carried, held: bool)
         }
         // The contacts and multipliers on the converged shape: settled when Newton's were.
         border.load(Point::Current);
-        settled = held || !march(&mut border, &x, true)?;
+        settled = held.is_some() || !march(&mut border, &x, true)?;
     }
     if !settled {
         return Err(Error::NotConverged {
@@ -516,9 +517,10 @@ fn solve_on(robot: &Robot, options: &Options, carried: &mut Carried, held: bool)
         }
         // An unloaded tendon is slack: no normal force, so friction holds nothing back. A
         // held solve is the answer's linear response to its material, with the answer's
-        // checked pattern: where the slip is 0 to rounding its sign may flip.
-        if profile.base[j] > 0.0 && !held {
-            check_slip(i, &grips[j], &lambda, &x, span)?;
+        // checked pattern: where the slip is 0 to rounding its sign may flip by up to the
+        // material's change, which `held` bounds.
+        if profile.base[j] > 0.0 {
+            check_slip(i, &grips[j], &lambda, &x, span, held.unwrap_or(0.0))?;
         }
         let nodes: Vec<f64> = x[..=span].iter().map(|n| n.s).collect();
         next[j].kinks = grips[j].kinks_after(&grips[j].contacts, &nodes, &lambda);
@@ -553,8 +555,8 @@ fn solve_on(robot: &Robot, options: &Options, carried: &mut Carried, held: bool)
 /// does not resolve.
 ///
 /// # Errors
-/// The direction violated beyond rounding.
-fn check_slip(i: usize, grip: &Grip, lambda: &[f64], x: &[State], span: usize) -> Result<()> {
+/// The direction violated beyond rounding and `slack` (m).
+fn check_slip(i: usize, grip: &Grip, lambda: &[f64], x: &[State], span: usize, slack: f64) -> Result<()> {
     let mut d = vec![0.0; span + 1];
     let mut size = 0.0_f64;
     for k in (0..span).rev() {
@@ -564,7 +566,7 @@ fn check_slip(i: usize, grip: &Grip, lambda: &[f64], x: &[State], span: usize) -
         size = size.max(d[k].abs());
     }
     // Rounding of the sums: 1e-12 of the largest slip, and of the span's length at 1e-15.
-    let tolerance = 1e-12 * size + 1e-15 * x[span].s;
+    let tolerance = 1e-12 * size + 1e-15 * x[span].s + slack;
     for (k, &c) in grip.contacts.iter().enumerate() {
         let wrong = match c {
             Contact::Pull => d[k].max(d[k + 1]) > tolerance,
