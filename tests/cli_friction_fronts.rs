@@ -3,42 +3,13 @@
 //! tendon in `solve`'s CSV and JSON samples, `--friction` and `--motion` on `batch`,
 //! `compare` and `calibrate`.
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+mod common;
 
-const TDCR: &str = env!("CARGO_BIN_EXE_tdcr");
+use common::cli::{example_with, run, stderr, stdout};
+use std::path::{Path, PathBuf};
 
 fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("tdcr-cli-fronts-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
-
-fn run(dir: &Path, args: &[&str]) -> Output {
-    let out = Command::new(TDCR).args(args).current_dir(dir).output().unwrap();
-    let stderr = String::from_utf8_lossy(&out.stderr);
-    assert!(
-        !stderr.contains("panicked") && !stderr.contains("RUST_BACKTRACE"),
-        "{stderr}"
-    );
-    out
-}
-
-fn stdout(out: &Output) -> String {
-    String::from_utf8_lossy(&out.stdout).into_owned()
-}
-
-fn stderr(out: &Output) -> String {
-    String::from_utf8_lossy(&out.stderr).into_owned()
-}
-
-/// `tdcr example` with `added` (robot-file lines) after tendon 1's tension.
-fn example_with(dir: &Path, added: &str) -> String {
-    let text = stdout(&run(dir, &["example"]));
-    let from = "tension = 2.94                   # N, >= 0\n";
-    assert!(text.contains(from));
-    text.replacen(from, &format!("{from}{added}"), 1)
+    common::cli::scratch("cli-fronts", name)
 }
 
 /// Runs `args` in `dir`, requires exit 0 and returns standard output as JSON.

@@ -1,23 +1,13 @@
 //! `tdcr sweep --history` (docs/cli.md): one CSV row per step in order with the direction,
 //! delivered tension and stick/slip zones, the hysteresis loop's picture, and bad input.
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+mod common;
 
-const TDCR: &str = env!("CARGO_BIN_EXE_tdcr");
+use common::cli::run;
+use std::path::{Path, PathBuf};
 
 fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("tdcr-cli-history-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
-
-fn run(dir: &Path, args: &[&str]) -> Output {
-    let out = Command::new(TDCR).args(args).current_dir(dir).output().unwrap();
-    let stderr = String::from_utf8_lossy(&out.stderr);
-    assert!(!stderr.contains("panicked"), "{stderr}");
-    out
+    common::cli::scratch("cli-history", name)
 }
 
 /// The example robot with friction 0.1 on tendon 1, and its stiffness unless `rigid`.

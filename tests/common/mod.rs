@@ -4,6 +4,8 @@
 //! returns and never depend on how many solvers there are.
 #![allow(dead_code)] // each test crate uses a different subset
 
+pub mod cli;
+
 use tdcr::shooting::{self, Options};
 use tdcr::{Result, Robot, Solution};
 
