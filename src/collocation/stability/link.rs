@@ -256,14 +256,10 @@ fn product_rows<const FROM: usize>(product: &mut [f64; 8], b: &[f64], y: &[[f64;
     }
 }
 
-/// Column `C` of the elimination: the pivot search among rows C.. (the first largest
-/// absolute value), the swap, and row r -= f_r * (pivot row) for every row r below C with
-/// f_r = m[r][C] / pivot non-zero. The update runs over the columns from C + 1 rounded down
-/// to a multiple of four: the columns before C + 1 are dead in the rows below the pivot
-/// (left of the diagonal of any later pivot row; the back substitution reads the upper
-/// triangle and the right-hand sides). False for a zero pivot.
+/// Partial pivoting for column C of `m`: the row from C down with the largest |m[r][C]|
+/// (the first of equals) swapped into row C. False when that entry is zero (a zero pivot).
 #[inline(always)]
-fn eliminate<const C: usize>(m: &mut [[f64; W]; NODE]) -> bool {
+fn pivot<const C: usize, const COLS: usize, const ROWS: usize>(m: &mut [[f64; COLS]; ROWS]) -> bool {
     let mut best = C;
     let mut size = m[C][C].abs();
     for (r, row) in m.iter().enumerate().skip(C + 1) {
@@ -278,6 +274,20 @@ fn eliminate<const C: usize>(m: &mut [[f64; W]; NODE]) -> bool {
     }
     if best != C {
         m.swap(C, best);
+    }
+    true
+}
+
+/// Column `C` of the elimination: the pivot search among rows C.. (the first largest
+/// absolute value), the swap, and row r -= f_r * (pivot row) for every row r below C with
+/// f_r = m[r][C] / pivot non-zero. The update runs over the columns from C + 1 rounded down
+/// to a multiple of four: the columns before C + 1 are dead in the rows below the pivot
+/// (left of the diagonal of any later pivot row; the back substitution reads the upper
+/// triangle and the right-hand sides). False for a zero pivot.
+#[inline(always)]
+fn eliminate<const C: usize>(m: &mut [[f64; W]; NODE]) -> bool {
+    if !pivot::<C, W, NODE>(m) {
+        return false;
     }
     let inv = 1.0 / m[C][C];
     let pivot_row = m[C];
@@ -349,20 +359,8 @@ fn inverse6(q: &Block6) -> Option<Block6> {
 /// their own columns, the result the right half). False for a zero pivot.
 #[inline(always)]
 fn jordan<const C: usize>(a: &mut [[f64; 12]; 6]) -> bool {
-    let mut best = C;
-    let mut size = a[C][C].abs();
-    for (r, row) in a.iter().enumerate().skip(C + 1) {
-        let v = row[C].abs();
-        if v > size {
-            best = r;
-            size = v;
-        }
-    }
-    if a[best][C] == 0.0 {
+    if !pivot::<C, 12, 6>(a) {
         return false;
-    }
-    if best != C {
-        a.swap(C, best);
     }
     let p = 1.0 / a[C][C];
     for x in a[C].iter_mut() {
