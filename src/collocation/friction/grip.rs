@@ -106,10 +106,6 @@ pub(crate) struct Grip {
     /// interpolated from one piece's nodes and bounding kinks only (docs/friction.md
     /// section 8, "The material's kinks").
     pub(crate) kinks: Vec<Kink>,
-    /// Per link, lambda of the carried material at the link's midpoint, where a stuck link
-    /// takes the stuck tension itself ([`super::stuck`]); empty where the links keep the
-    /// constant multiplier (the history's own mesh).
-    pub(crate) midpoints: Vec<f64>,
 }
 
 /// A kink of the carried material: its arc length (m), and lambda at it as the smooth
@@ -139,27 +135,6 @@ impl Grip {
     }
 }
 
-impl Profile<'_> {
-    /// Whether link k takes its stuck slips' tension point by point ([`super::stuck`]): a
-    /// loaded slip sticks on it and its grip carries the material at the links' midpoints.
-    pub(crate) fn pointwise(&self, k: usize) -> bool {
-        std::env::var("TDCR_POINTWISE").is_ok()
-            && self.grips.as_ref().is_some_and(|grips| {
-                grips.iter().enumerate().any(|(j, g)| {
-                    g.contacts.get(k) == Some(&Contact::Stick) && self.base[j] > 0.0 && g.midpoints.len() > k
-                })
-            })
-    }
-
-    /// Slip j's carried material (lambda) at the midpoint of link k (NaN where not carried).
-    pub(crate) fn material_at_midpoint(&self, j: usize, k: usize) -> f64 {
-        self.grips
-            .as_ref()
-            .and_then(|g| g[j].midpoints.get(k).copied())
-            .unwrap_or(f64::NAN)
-    }
-}
-
 /// A stuck material's tension (N) and its derivatives in a node's v and u.
 pub(crate) type Stuck = (f64, Vector3<f64>, Vector3<f64>);
 
@@ -177,29 +152,16 @@ impl Profile<'_> {
         b: &State,
         length: f64,
     ) -> (f64, Vector3<f64>, Vector3<f64>) {
+        let robot = self.robot();
+        let tendon = &robot.tendons[self.slipping[j]];
         let Some(grip) = self.grips.as_ref().map(|g| &g[j]) else {
             return (f64::NAN, Vector3::zeros(), Vector3::zeros());
         };
-        self.stuck_tension_with(j, grip.reference[node], site, (b.s, &b.v, &b.u), length)
-    }
-
-    /// [`Profile::stuck_tension`] of the material `lambda` (unstretched length per unit s)
-    /// at arc length s with strains (v, u): E_t A_t (|p_j'| / lambda - 1) and its
-    /// derivatives in (v, u).
-    pub(crate) fn stuck_tension_with(
-        &self,
-        j: usize,
-        lambda: f64,
-        site: &Site,
-        (s, v, u): (f64, &Vector3<f64>, &Vector3<f64>),
-        length: f64,
-    ) -> Stuck {
-        let robot = self.robot();
-        let tendon = &robot.tendons[self.slipping[j]];
-        let rp = tendon.routing.at(s, length);
+        let rp = tendon.routing.at(b.s, length);
         // The path sees the strain: v* on a Kirchhoff rod, whose coordinate v is the force's.
-        let p = u.cross(&rp.r) + rp.r_s + site.strain(v);
+        let p = b.u.cross(&rp.r) + rp.r_s + site.strain(&b.v);
         let speed = p.norm();
+        let lambda = grip.reference[node];
         let Some(stiffness) = tendon.stiffness else {
             let sign = (speed - lambda).signum();
             return (sign * f64::INFINITY, Vector3::zeros(), Vector3::zeros());

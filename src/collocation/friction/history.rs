@@ -182,7 +182,6 @@ pub(crate) fn start(robots: &[Robot], options: &Options) -> Result<Carried> {
             capacities: vec![0.0; span],
             reference,
             kinks: Vec::new(),
-            midpoints: Vec::new(),
         });
     }
     let corrected = grips

@@ -90,24 +90,8 @@ pub(crate) fn interval(
     jac: Option<&mut [f64]>,
 ) -> Result<IntervalLinearization> {
     let w = profile.multipliers(k);
-    // In a history, a link where a loaded slip sticks, on a mesh that carries the
-    // material at its midpoints, takes the stuck tension point by point ([`super::stuck`]).
-    if let Some(w) = w.as_deref().filter(|_| profile.pointwise(k)) {
-        return super::stuck::interval(profile, length, k, sites, segment_end, a, b, w, jac);
-    }
     let derivatives = jac.is_some();
-    let mut out = interval_at(
-        profile,
-        length,
-        k,
-        sites,
-        segment_end,
-        a,
-        b,
-        [w.as_deref(); 3],
-        None,
-        jac,
-    )?;
+    let mut out = interval_at(profile, length, k, sites, segment_end, a, b, w.as_deref(), jac)?;
     let (Some(w), true) = (w, derivatives) else {
         return Ok(out);
     };
@@ -123,7 +107,7 @@ pub(crate) fn interval(
         let moved = |d: f64| -> Result<Block<f64>> {
             let mut w = w.clone();
             w[j] += d;
-            Ok(interval_at(profile, length, k, sites, segment_end, a, b, [Some(&w); 3], None, None)?.residual)
+            Ok(interval_at(profile, length, k, sites, segment_end, a, b, Some(&w), None)?.residual)
         };
         let d_rows = (moved(step)? - moved(-step)?) / (2.0 * step);
         for r in 0..12 {
@@ -134,9 +118,8 @@ pub(crate) fn interval(
     Ok(out)
 }
 
-/// [`interval`] with the slips' multipliers `w` at the link's start, end and midpoint
-/// (None in full slip: the motions' signs), the backbone rows' derivatives at fixed `w`;
-/// the log tensions at the link's nodes are the profile's, or `z` (start, end) when given.
+/// [`interval`] with the slips' multipliers `w` (None in full slip: the motions' signs),
+/// the backbone rows' derivatives at fixed `w`.
 ///
 /// On x86-64 with AVX2 and FMA (checked at run time) the link's own arithmetic (the chain
 /// rule with the log tensions' columns, the capstan rows and the writes) is compiled for
@@ -144,7 +127,7 @@ pub(crate) fn interval(
 /// same order (Rust does not fuse a product and a sum into an FMA), so the same bits in
 /// wider registers.
 #[allow(clippy::too_many_arguments)]
-pub(super) fn interval_at(
+fn interval_at(
     profile: &Profile,
     length: f64,
     k: usize,
@@ -152,16 +135,15 @@ pub(super) fn interval_at(
     segment_end: f64,
     a: &State,
     b: &State,
-    w: [Option<&[f64]>; 3],
-    z: Option<(&[f64], &[f64])>,
+    w: Option<&[f64]>,
     jac: Option<&mut [f64]>,
 ) -> Result<IntervalLinearization> {
     #[cfg(target_arch = "x86_64")]
     if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma") {
         // SAFETY: the processor supports the features the function is compiled for.
-        return unsafe { interval_at_avx2(profile, length, k, sites, segment_end, a, b, w, z, jac) };
+        return unsafe { interval_at_avx2(profile, length, k, sites, segment_end, a, b, w, jac) };
     }
-    interval_at_kernel(profile, length, k, sites, segment_end, a, b, w, z, jac)
+    interval_at_kernel(profile, length, k, sites, segment_end, a, b, w, jac)
 }
 
 /// [`interval_at_kernel`] with AVX2 and FMA enabled.
@@ -176,11 +158,10 @@ unsafe fn interval_at_avx2(
     segment_end: f64,
     a: &State,
     b: &State,
-    w: [Option<&[f64]>; 3],
-    z: Option<(&[f64], &[f64])>,
+    w: Option<&[f64]>,
     jac: Option<&mut [f64]>,
 ) -> Result<IntervalLinearization> {
-    interval_at_kernel(profile, length, k, sites, segment_end, a, b, w, z, jac)
+    interval_at_kernel(profile, length, k, sites, segment_end, a, b, w, jac)
 }
 
 /// [`interval_at`]'s operations.
@@ -194,8 +175,7 @@ fn interval_at_kernel(
     segment_end: f64,
     a: &State,
     b: &State,
-    w: [Option<&[f64]>; 3],
-    z: Option<(&[f64], &[f64])>,
+    w: Option<&[f64]>,
     jac: Option<&mut [f64]>,
 ) -> Result<IntervalLinearization> {
     let count = profile.count();
@@ -214,25 +194,16 @@ fn interval_at_kernel(
         ..
     } = &mut *scratch;
     za.clear();
+    za.extend(profile.z.iter().map(|z| z[k]));
     zb.clear();
-    match z {
-        Some((start, end)) => {
-            za.extend_from_slice(start);
-            zb.extend_from_slice(end);
-        }
-        None => {
-            za.extend(profile.z.iter().map(|z| z[k]));
-            zb.extend(profile.z.iter().map(|z| z[k + 1]));
-        }
-    }
-    let [wa, wb, wm] = w;
+    zb.extend(profile.z.iter().map(|z| z[k + 1]));
     let (y0, y1) = end_points(a, b);
     let theta1: Vector3<f64> = y1.fixed_rows::<3>(THETA).into();
     let derivatives = jac.is_some();
-    let la = profile.start_point(k, &sites.start, segment_end, a, za, wa, derivatives)?;
-    let lb = profile.point(&sites.end, segment_end, &b.R, (&b.v, &b.u), zb, wb, derivatives)?;
-    profile.keep_node(k, segment_end, a, (za, wa), &la);
-    profile.keep_node(k + 1, segment_end, b, (zb, wb), &lb);
+    let la = profile.start_point(k, &sites.start, segment_end, a, za, w, derivatives)?;
+    let lb = profile.point(&sites.end, segment_end, &b.R, (&b.v, &b.u), zb, w, derivatives)?;
+    profile.keep_node(k, segment_end, a, (za, w), &la);
+    profile.keep_node(k + 1, segment_end, b, (zb, w), &lb);
     // F at a point from its rates; with derivatives also its linearization (a residual
     // needs only the value, the same arithmetic as the linearization's).
     let value = |site: &Site, lin: &FrictionLinearization, y: &Block<f64>| {
@@ -266,7 +237,7 @@ fn interval_at_kernel(
             (Em, a.R * Em)
         }
     };
-    let lm = profile.point(&sites.mid, segment_end, &Rm, (&vm, &um), zm, wm, derivatives)?;
+    let lm = profile.point(&sites.mid, segment_end, &Rm, (&vm, &um), zm, w, derivatives)?;
     let pm = frame_m
         .as_ref()
         .map(|frame| rhs_linearized_inline(&sites.mid, &lm.lin, &a.R, &ym, frame));
@@ -323,7 +294,7 @@ fn interval_at_kernel(
     }
     out.derivatives = derivatives;
     let (Some(jac), Some((p0, p1)), Some(pm), Some(frame1), Some(frame_m)) = (jac, ends, pm, frame1, frame_m) else {
-        profile.keep_end(k, segment_end, b, zb, wb, derivatives, lb);
+        profile.keep_end(k, segment_end, b, zb, w, derivatives, lb);
         profile.give(la);
         profile.give(lm);
         profile.give_scratch(scratch);
@@ -436,9 +407,9 @@ fn interval_at_kernel(
     }
     // For the verdict's mass at the same state, when the profile keeps it (the Jacobian at
     // the answer).
-    profile.keep_response(2 * k, &sites.start, segment_end, (&a.R, &a.v, &a.u), (za, wa), &la);
-    profile.keep_response(2 * k + 1, &sites.mid, segment_end, (&Rm, &vm, &um), (zm, wm), &lm);
-    profile.keep_end(k, segment_end, b, zb, wb, derivatives, lb);
+    profile.keep_response(2 * k, &sites.start, segment_end, (&a.R, &a.v, &a.u), (za, w), &la);
+    profile.keep_response(2 * k + 1, &sites.mid, segment_end, (&Rm, &vm, &um), (zm, w), &lm);
+    profile.keep_end(k, segment_end, b, zb, w, derivatives, lb);
     profile.give(la);
     profile.give(lm);
     profile.give_scratch(scratch);

@@ -25,7 +25,6 @@ mod profile;
 mod pull_ins;
 mod staircase;
 mod start;
-mod stuck;
 
 pub use grip::Contact;
 pub(crate) use grip::Grip;

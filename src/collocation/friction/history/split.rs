@@ -100,37 +100,12 @@ pub(super) fn refine(
     let mut reached = 0;
     for level in 1..=LEVELS {
         let boundaries = boundaries(&best);
-        let forced: Option<u32> = std::env::var("TDCR_SPLIT_LEVEL").ok().and_then(|v| v.parse().ok());
-        let parts = match forced {
-            Some(l) => vec![1 << l; before.mesh.intervals()],
-            None => parts(before, level, graded, &best, &boundaries),
-        };
+        let parts = parts(before, level, graded, &best, &boundaries);
         if parts.iter().sum::<usize>() > options.max_intervals.max(2 * intervals) {
             break;
         }
         let mut fine = split(robot, before, &parts, &best.0, &boundaries)?;
-        let (mut next, _) = solve_on(robot, options, &mut fine, None)?;
-        if forced.is_some() {
-            let mut placed = boundaries.clone();
-            for pass in 0..12 {
-                let again = self::boundaries(&next);
-                let moved = again.iter().zip(&placed).map(|(a, b)| (a - b).abs()).fold(
-                    if again.len() == placed.len() {
-                        0.0
-                    } else {
-                        f64::INFINITY
-                    },
-                    f64::max,
-                );
-                eprintln!("level {level} pass {pass}: boundaries {again:?} moved {moved:e}");
-                if moved < 1e-13 {
-                    break;
-                }
-                fine = split(robot, before, &parts, &next.0, &again)?;
-                next = solve_on(robot, options, &mut fine, None)?.0;
-                placed = again;
-            }
-        }
+        let (next, _) = solve_on(robot, options, &mut fine, None)?;
         reached = level;
         let estimate = difference(&best.0, &next.0);
         best = next;
@@ -230,11 +205,6 @@ fn material_error(
                     node.s,
                     8,
                 );
-            }
-            let nodes = &fine.mesh.nodes;
-            for (l, value) in grip.midpoints.iter_mut().enumerate() {
-                let mid = 0.5 * (nodes[l].s + nodes[l + 1].s);
-                *value = lagrange(&coarse[..=span], &corrected.values[..=span], &corrected.kinks, mid, 8);
             }
         }
         better
@@ -364,12 +334,6 @@ fn split(robot: &Robot, before: &Carried, parts: &[usize], guess: &Solution, bou
                 .map(|node| lagrange(&coarse[..=links], &old.reference[..=links], &old.kinks, node.s, 6))
                 .collect(),
             kinks: old.kinks.clone(),
-            midpoints: (0..span)
-                .map(|l| {
-                    let mid = 0.5 * (mesh.nodes[l].s + mesh.nodes[l + 1].s);
-                    lagrange(&coarse[..=links], &old.reference[..=links], &old.kinks, mid, 6)
-                })
-                .collect(),
         });
     }
     Ok(Carried {
@@ -397,26 +361,16 @@ fn boundaries(answer: &StepAnswer) -> Vec<f64> {
     let s: Vec<f64> = solution.nodes.iter().map(|n| n.s).collect();
     let mut out = Vec::new();
     for (i, list) in zones {
-        let debug = std::env::var("TDCR_POINTWISE").is_ok();
         let Some(pair) = list
             .windows(2)
             .find(|w| w[0].2 != Contact::Stick && w[1].2 == Contact::Stick)
         else {
-            if debug {
-                eprintln!("no boundary: zones {list:?}");
-            }
             continue;
         };
         let Some(a) = s.iter().position(|&x| x == pair[1].0) else {
-            if debug {
-                eprintln!("no boundary: start {} not a node", pair[1].0);
-            }
             continue;
         };
         if a < 2 || a + 3 >= s.len() {
-            if debug {
-                eprintln!("no boundary: node {a} of {}", s.len());
-            }
             continue;
         }
         let tension = &solution.tendon_tensions[*i];
@@ -433,23 +387,7 @@ fn boundaries(answer: &StepAnswer) -> Vec<f64> {
         };
         let gap = |at: f64| quadratic([a - 2, a - 1, a], at) - quadratic([a + 1, a + 2, a + 3], at);
         let (mut lo, mut hi) = (s[a - 1], s[a + 1]);
-        // Experiment: a node on the boundary whose link the march left sliding puts the
-        // root at the bracket's end, where the gap's sign is rounding; look one link back.
-        if gap(lo) * gap(hi) > 0.0 && std::env::var("TDCR_POINTWISE").is_ok() {
-            lo = s[a - 2];
-        }
         if gap(lo) * gap(hi) > 0.0 {
-            if debug {
-                eprintln!(
-                    "no boundary: gap {:e} {:e} {:e} at {} {} {}",
-                    gap(s[a - 2]),
-                    gap(s[a - 1]),
-                    gap(s[a + 1]),
-                    s[a - 2],
-                    s[a - 1],
-                    s[a + 1]
-                );
-            }
             continue;
         }
         // Bisection to the resolution of s.
