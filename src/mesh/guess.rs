@@ -51,6 +51,7 @@ pub(crate) fn integrate_poses_into(
 /// interval's rotation is exp(u h/2)^2, the half step's exponential (which the position
 /// needs) squared, instead of a second exponential exp(u h): the same rotation to
 /// rounding (docs/benchmarks.md, "A batch row (row15, 2026-12-06, seventh session)").
+#[inline(always)]
 fn integrate_poses_with(
     model: &Model,
     nodes: &[MeshNode],
@@ -225,7 +226,7 @@ fn rigid_estimate_to(model: &Model, nodes: &[MeshNode], relative: f64, sums: Sum
     // The sweeps' buffers come from this thread's last estimate (taken out, so that an
     // estimate nested in a user function's call finds none and allocates its own).
     let mut buffers = SWEEP_BUFFERS.with(|b| std::mem::take(&mut *b.borrow_mut()));
-    let x = rigid_estimate_in(model, nodes, &mut buffers, relative, sums);
+    let x = rigid_estimate_fast(model, nodes, &mut buffers, relative, sums);
     SWEEP_BUFFERS.with(|b| *b.borrow_mut() = buffers);
     x
 }
@@ -268,7 +269,40 @@ thread_local! {
     };
 }
 
+/// [`rigid_estimate_in`], compiled for AVX2 and FMA on a processor that has them (checked
+/// at run time): the same operations in the same order (Rust does not contract a product
+/// and a sum into an FMA), so the same bits (docs/benchmarks.md, "Default solve cost
+/// (row16, 2026-12-07, eighth session)").
+fn rigid_estimate_fast(
+    model: &Model,
+    nodes: &[MeshNode],
+    b: &mut SweepBuffers,
+    relative: f64,
+    sums: Sums,
+) -> Vec<State> {
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma") {
+        // SAFETY: the processor supports the features the function is compiled for.
+        return unsafe { rigid_estimate_avx2(model, nodes, b, relative, sums) };
+    }
+    rigid_estimate_in(model, nodes, b, relative, sums)
+}
+
+/// [`rigid_estimate_in`] with AVX2 and FMA enabled.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+unsafe fn rigid_estimate_avx2(
+    model: &Model,
+    nodes: &[MeshNode],
+    b: &mut SweepBuffers,
+    relative: f64,
+    sums: Sums,
+) -> Vec<State> {
+    rigid_estimate_in(model, nodes, b, relative, sums)
+}
+
 /// [`rigid_estimate_to`] in the buffers `b` (their contents on entry are not read).
+#[inline(always)]
 fn rigid_estimate_in(model: &Model, nodes: &[MeshNode], b: &mut SweepBuffers, relative: f64, sums: Sums) -> Vec<State> {
     let length = model.robot.length();
     let SweepBuffers {
@@ -431,6 +465,7 @@ enum Pulls<'a> {
 /// taken from), into `out`, with the tendons of `pulls`; `wrench` is the buffer of the
 /// distal wrenches.
 #[allow(clippy::type_complexity)]
+#[inline(always)]
 fn sweep(
     model: &Model,
     (nodes, sites): (&[MeshNode], &[Site]),
@@ -524,5 +559,40 @@ mod tests {
         // Without the relative part (shooting's guess) only the absolute floor stops.
         assert!(!settled([5e-7, 5e-6], bent, 0.0));
         assert!(settled([5e-7, 5e-7], bent, 0.0));
+    }
+
+    /// The AVX2 build of the rigid-equilibrium sweeps gives the baseline build's bits (every
+    /// node state) on the prototype with four tendons pulled and on case H (a tip force and
+    /// a helical tendon), with both sums and stopping tests (on a processor without AVX2
+    /// both are the baseline).
+    #[test]
+    fn the_guess_gives_the_baseline_bits() {
+        let bits = |x: &[State]| {
+            x.iter()
+                .flat_map(|n| {
+                    n.p.iter()
+                        .chain(n.R.iter())
+                        .chain(n.v.iter())
+                        .chain(n.u.iter())
+                        .copied()
+                })
+                .map(f64::to_bits)
+                .collect::<Vec<_>>()
+        };
+        let mut pulled = crate::cases::prototype();
+        for (i, tendon) in pulled.tendons.iter_mut().enumerate().take(4) {
+            tendon.set_tension(0.4 + 0.7 * i as f64);
+        }
+        for robot in [pulled, crate::cases::case_h()] {
+            let model = Model::new(&robot);
+            let mesh = Mesh::uniform(&robot, 16).unwrap();
+            for (relative, sums) in [(RELATIVE_CHANGE, Sums::Body), (0.0, Sums::World)] {
+                let fast = rigid_estimate_fast(&model, &mesh.nodes, &mut SweepBuffers::default(), relative, sums);
+                let baseline = rigid_estimate_in(&model, &mesh.nodes, &mut SweepBuffers::default(), relative, sums);
+                assert_eq!(bits(&fast), bits(&baseline));
+                // A bent shape: the sweeps ran.
+                assert!(fast.last().unwrap().u.norm() > 1.0);
+            }
+        }
     }
 }

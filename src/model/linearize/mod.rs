@@ -326,8 +326,7 @@ pub fn rates(
     v: &Vector3<f64>,
     u: &Vector3<f64>,
 ) -> Result<Vector6<f64>> {
-    let x = assemble(model, site, segment_end, (R, v, u), None, None)?.x;
-    Ok(Vector6::from_fn(|i, _| x[i]))
+    rates_of(model, site, segment_end, (R, v, u), None)
 }
 
 /// [`rates`] for the strain v + `low`, where `low` is below v's last place: the deviation
@@ -347,7 +346,52 @@ pub(crate) fn rates_split(
     (v, low): (&Vector3<f64>, &Vector3<f64>),
     u: &Vector3<f64>,
 ) -> Result<Vector6<f64>> {
-    let x = assemble(model, site, segment_end, (R, v, u), None, Some(low))?.x;
+    rates_of(model, site, segment_end, (R, v, u), Some(low))
+}
+
+/// [`rates`] (`low` as in [`rates_split`]), compiled for AVX2 and FMA on a processor that
+/// has them (checked at run time): the same operations in the same order (Rust does not
+/// contract a product and a sum into an FMA), so the same bits in wider registers, as the
+/// interval Jacobian's linearization (docs/benchmarks.md, "Default solve cost (row16,
+/// 2026-12-07, eighth session)").
+fn rates_of(
+    model: &Model,
+    site: &Site,
+    segment_end: f64,
+    state: (&Matrix3<f64>, &Vector3<f64>, &Vector3<f64>),
+    low: Option<&Vector3<f64>>,
+) -> Result<Vector6<f64>> {
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma") {
+        // SAFETY: the processor supports the features the function is compiled for.
+        return unsafe { rates_avx2(model, site, segment_end, state, low) };
+    }
+    rates_kernel(model, site, segment_end, state, low)
+}
+
+/// [`rates_kernel`] with AVX2 and FMA enabled.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+unsafe fn rates_avx2(
+    model: &Model,
+    site: &Site,
+    segment_end: f64,
+    state: (&Matrix3<f64>, &Vector3<f64>, &Vector3<f64>),
+    low: Option<&Vector3<f64>>,
+) -> Result<Vector6<f64>> {
+    rates_kernel(model, site, segment_end, state, low)
+}
+
+/// [`rates_of`]' operations: eq. 13's pass 1 alone.
+#[inline(always)]
+fn rates_kernel(
+    model: &Model,
+    site: &Site,
+    segment_end: f64,
+    state: (&Matrix3<f64>, &Vector3<f64>, &Vector3<f64>),
+    low: Option<&Vector3<f64>>,
+) -> Result<Vector6<f64>> {
+    let x = assemble(model, site, segment_end, state, None, low)?.x;
     Ok(Vector6::from_fn(|i, _| x[i]))
 }
 
@@ -944,6 +988,30 @@ mod tests {
                     // 1e-12: both exact derivatives in f64; only rounding in M^-1 differs.
                     assert!(rel(d, &ad) < 1e-12, "tendon {j} at {s}: {d} vs {ad}");
                 }
+            }
+        }
+    }
+
+    /// The AVX2 build of [`rates`] gives the baseline build's bits (the same operations in
+    /// the same order) on the several-tendon robot with loads, at sites in both segments,
+    /// with and without a low part of the strain (on a processor without AVX2 both are the
+    /// baseline).
+    #[test]
+    fn rates_give_the_baseline_bits() {
+        let robot = several_tendons().with_loads(Loads::self_weight(0.47, -Vector3::z()));
+        let model = Model::new(&robot);
+        let l = robot.length();
+        let (v, u) = state();
+        let low = Vector3::new(3e-17, -1e-17, 2e-17);
+        let bits = |x: &Vector6<f64>| x.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+        for (s, end) in [(0.0, l), (0.07, 0.5 * l), (0.13, l), (0.2, l)] {
+            let site = model.site(s);
+            for low in [None, Some(&low)] {
+                let state = (&generic_rotation(), &v, &u);
+                let fast = rates_of(&model, &site, end, state, low).unwrap();
+                let baseline = rates_kernel(&model, &site, end, state, low).unwrap();
+                assert_eq!(bits(&fast), bits(&baseline), "at {s}");
+                assert!(fast.iter().all(|x| x.is_finite()));
             }
         }
     }
