@@ -70,6 +70,10 @@ pub struct BlockElimination {
     /// entry is written before it is read, so it is not zeroed each time); allocated by
     /// the first.
     wide_panel: Option<Box<[[f64; WIDE]; ROWS]>>,
+    /// The right-hand sides of [`BlockElimination::factor_with_last`] row by row (row r of
+    /// every one in `carried_rows[r]`), so that a panel row takes its slots in one copy;
+    /// kept between factorings, as the panel.
+    carried_rows: Vec<[f64; CARRIED]>,
 }
 
 impl BlockElimination {
@@ -84,6 +88,7 @@ impl BlockElimination {
             last_record: EMPTY,
             links: nodes - 1,
             wide_panel: None,
+            carried_rows: Vec::new(),
         }
     }
 
@@ -173,17 +178,30 @@ impl BlockElimination {
     /// [`BlockElimination::factor_with_last`]'s operations.
     #[inline(always)]
     fn factor_with_last_kernel(&mut self, values: &[f64], rhs: &[f64], count: usize, last: &mut [[f64; NODE]]) -> bool {
-        debug_assert!(count <= CARRIED && last.len() == count && rhs.len().is_multiple_of(count.max(1)));
-        let n = rhs.len() / count.max(1);
+        // The unknowns: one node's 12 a link, and the last node's.
+        let n = (self.links + 1) * NODE;
+        debug_assert!(count <= CARRIED && last.len() == count && rhs.len() == n * count);
         let mut panel = self.wide_panel.take().unwrap_or_else(|| Box::new([[0.0; WIDE]; ROWS]));
-        // Every slot written (0 past the right-hand sides): the kept panel's old values are
-        // never read.
-        let eliminated = self.eliminate_all::<WIDE, LAST_WIDE, { 2 * NODE }, NODE>(&mut panel, values, |row, slots| {
-            for (j, slot) in slots.iter_mut().enumerate() {
-                *slot = if j < count { rhs[j * n + row] } else { 0.0 };
+        // The right-hand sides transposed, 0 past the last one, column by column (a
+        // contiguous read each): gathering the slots of a panel row from the columns one at
+        // a time cost about 60 instructions a row (a bounds check and a branch a slot).
+        let mut rows = std::mem::take(&mut self.carried_rows);
+        rows.resize(n, [0.0; CARRIED]);
+        for j in 0..CARRIED {
+            if j < count {
+                for (row, v) in rows.iter_mut().zip(&rhs[j * n..(j + 1) * n]) {
+                    row[j] = *v;
+                }
+            } else {
+                rows.iter_mut().for_each(|row| row[j] = 0.0);
             }
+        }
+        // Every slot written: the kept panel's old values are never read.
+        let eliminated = self.eliminate_all::<WIDE, LAST_WIDE, { 2 * NODE }, NODE>(&mut panel, values, |row, slots| {
+            slots.copy_from_slice(&rows[row]);
         });
         self.wide_panel = Some(panel);
+        self.carried_rows = rows;
         let Some(rows) = eliminated else {
             return false;
         };
