@@ -396,15 +396,34 @@ fn settled(change: [f64; 2], deformation: [f64; 2], relative: f64) -> bool {
         .all(|(c, d)| *c < ABSOLUTE_CHANGE.max(relative * d))
 }
 
+/// The tendons that reach each node's segment ([`Model::reaching`], slack ones included)
+/// with their routing points there, node after node into `routes`, and where each node's
+/// end into `ends`: what [`distal_strains`] pulls with, kept across its sweeps since they
+/// do not depend on the shape or the tensions.
+pub(crate) fn reaching_routes(
+    model: &Model,
+    nodes: &[MeshNode],
+    (routes, ends): (&mut Vec<(usize, f64, RoutingPoint)>, &mut Vec<usize>),
+) {
+    routes.clear();
+    ends.clear();
+    for n in nodes {
+        routes.extend(model.reaching(n.s, Which::ActiveTo(n.segment_end)));
+        ends.push(routes.len());
+    }
+}
+
 /// The node strains that carry the loads distal to each node on the shape of the states
-/// `x` (the sweep of [`rigid_estimate`]; `sites`: the nodes' sites), with every tendon's
-/// tension at node k taken from `tensions[k]` instead of the model's: a tension that varies
-/// along a tendon (friction, docs/friction.md section 3) pulls each cross-section with its
-/// local value. Into `out`; `wrench` is the buffer of the distal wrenches.
+/// `x` (the sweep of [`rigid_estimate`]; `sites`: the nodes' sites; `routes`: the tendons
+/// reaching each node, [`reaching_routes`]), with every tendon's tension at node k taken
+/// from `tensions[k]` instead of the model's: a tension that varies along a tendon
+/// (friction, docs/friction.md section 3) pulls each cross-section with its local value.
+/// Into `out`; `wrench` is the buffer of the distal wrenches.
 #[allow(clippy::type_complexity)]
 pub(crate) fn distal_strains(
     model: &Model,
     (nodes, sites): (&[MeshNode], &[Site]),
+    routes: (&[(usize, f64, RoutingPoint)], &[usize]),
     x: &[State],
     tensions: &[Vec<f64>],
     (wrench, out): (
@@ -418,7 +437,7 @@ pub(crate) fn distal_strains(
         model,
         (nodes, sites),
         (&shape, &strains),
-        Pulls::Local(tensions),
+        Pulls::Local(routes.0, routes.1, tensions),
         (wrench, out),
     );
 }
@@ -456,8 +475,11 @@ enum Pulls<'a> {
     /// The model's tensions, with the taut tendons and their routing points at every node
     /// kept (`routes`, node after node; `ends[k]` ends node k's), summed as [`Sums`] says.
     Kept(&'a [(usize, f64, RoutingPoint)], &'a [usize], Sums),
-    /// Every tendon's tension at node k from `tensions[k]` (friction).
-    Local(&'a [Vec<f64>]),
+    /// Every tendon's tension at node k from `tensions[k]` (friction), with the tendons
+    /// reaching every node and their routing points there kept as in `Kept` (slack ones
+    /// included: a tendon pulls where its local tension is positive, as
+    /// [`Model::tendons`] takes it).
+    Local(&'a [(usize, f64, RoutingPoint)], &'a [usize], &'a [Vec<f64>]),
 }
 
 /// One sweep: node strains carrying the loads distal to each node, summed on `shape`
@@ -497,8 +519,6 @@ fn sweep(
         };
     }
     out.clear();
-    // The model with node k's tensions, when they vary along the tendons.
-    let mut local: Option<Model> = None;
     for (k, node) in nodes.iter().enumerate() {
         let site = &sites[k];
         let R = shape[k].1;
@@ -522,10 +542,14 @@ fn sweep(
                 }
                 model.tendon_pull_of(tendons, node.s, &R, &v, &u)
             }
-            Pulls::Local(t) => {
-                let local = local.get_or_insert_with(|| model.clone());
-                local.tensions.copy_from_slice(&t[k]);
-                local.tendon_pull(node.s, Which::ActiveTo(node.segment_end), &R, &v, &u)
+            Pulls::Local(routes, ends, t) => {
+                let from = if k == 0 { 0 } else { ends[k - 1] };
+                let (local, factor) = (&t[k], model.tension_factor);
+                let tendons = routes[from..ends[k]].iter().filter_map(|&(i, _, rp)| {
+                    let tension = local[i];
+                    (tension > 0.0).then_some((i, tension * factor, rp))
+                });
+                model.tendon_pull_of(tendons, node.s, &R, &v, &u)
             }
         };
         if let Ok((f, l)) = pull {
@@ -539,6 +563,55 @@ fn sweep(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The sweep with local tensions pulls with the kept routing points of the tendons
+    /// reaching each node ([`reaching_routes`]) exactly as the model's own tendons would:
+    /// with every node's tensions the model's (tendon 1 slack, tendon 2 pulling at half the
+    /// helix's tension), it is the sweep with the model's tendons and routing points, bit
+    /// for bit, on case H (the friction start relies on it, docs/friction.md section 3).
+    #[test]
+    fn local_sweep_pulls_as_the_model() {
+        let robot = crate::cases::case_h();
+        let mut model = Model::new(&robot);
+        model.tensions[0] = 0.0;
+        model.tensions[1] = 0.5 * model.tensions[4];
+        let mesh = Mesh::uniform(&robot, 24).expect("mesh");
+        let nodes = &mesh.nodes;
+        let x = rigid_estimate(&model, nodes);
+        let sites: Vec<Site> = nodes.iter().map(|n| model.site_on(n.s, n.segment_end)).collect();
+        let (mut reaching, mut ends) = (Vec::new(), Vec::new());
+        reaching_routes(&model, nodes, (&mut reaching, &mut ends));
+        let tensions = vec![model.tensions.clone(); nodes.len()];
+        let (mut wrench, mut local) = (Vec::new(), Vec::new());
+        let routes = (&reaching[..], &ends[..]);
+        distal_strains(
+            &model,
+            (nodes, &sites),
+            routes,
+            &x,
+            &tensions,
+            (&mut wrench, &mut local),
+        );
+        let (mut taut, mut taut_ends) = (Vec::new(), Vec::new());
+        for n in nodes {
+            taut.extend(model.tendons(n.s, Which::ActiveTo(n.segment_end)));
+            taut_ends.push(taut.len());
+        }
+        let shape: Vec<_> = x.iter().map(|s| (s.p, s.R)).collect();
+        let strains: Vec<_> = x.iter().map(|s| (s.v, s.u)).collect();
+        let mut kept = Vec::new();
+        let pulls = Pulls::Kept(&taut, &taut_ends, Sums::World);
+        sweep(
+            &model,
+            (nodes, &sites),
+            (&shape, &strains),
+            pulls,
+            (&mut wrench, &mut kept),
+        );
+        // The slack tendon is among the kept routes but pulls nowhere.
+        assert!(reaching.len() > taut.len(), "a slack tendon is kept");
+        assert_eq!(local, kept);
+    }
 
     /// The stopping test of the rigid-equilibrium sweeps holds each strain group to its own
     /// scale: a change of 5e-6 in u L is small against a curvature deformation of 1 rad

@@ -15,11 +15,13 @@
 
 use super::Profile;
 use crate::mesh::Mesh;
-use crate::mesh::guess::{aitken, distal_strains, integrate_poses, integrate_poses_into, relax_strains};
+use crate::mesh::guess::{
+    aitken, distal_strains, integrate_poses, integrate_poses_into, reaching_routes, relax_strains,
+};
 use crate::model::equations::{Model, Site};
 use crate::model::routing::RoutingPoint;
 use crate::solution::State;
-use nalgebra::Vector3;
+use nalgebra::{Matrix3, Vector3};
 
 /// Most passes of the start. Each pass's shape change moves the turning, hence the log
 /// tensions, by about mu times the change of the bending angle, and the tip load's moment
@@ -96,12 +98,24 @@ pub(super) fn capstan_start(model: &Model, mesh: &Mesh, x: &mut [State], profile
                 .collect()
         })
         .collect();
+    // The tendons reaching each node and their routing points there: the same on every pass.
+    let (mut reaching, mut ends) = (Vec::new(), Vec::with_capacity(nodes.len()));
+    reaching_routes(model, nodes, (&mut reaching, &mut ends));
     let x0 = x.to_vec();
     let mut tensions: Vec<Vec<f64>> = vec![model.tensions.clone(); nodes.len()];
     let (mut wrench, mut plain, mut rough) = (Vec::new(), Vec::new(), Vec::new());
-    distal_strains(model, (nodes, &sites), &x0, &tensions, (&mut wrench, &mut plain));
+    distal_strains(
+        model,
+        (nodes, &sites),
+        (&reaching, &ends),
+        &x0,
+        &tensions,
+        (&mut wrench, &mut plain),
+    );
     let strains0: Vec<(Vector3<f64>, Vector3<f64>)> = x0.iter().map(|s| (s.v, s.u)).collect();
     let poses0 = integrate_poses(model, nodes, &strains0);
+    // Each node's frame relative to its integrated pose, R_0 P_0^T: the same on every pass.
+    let frames0: Vec<Matrix3<f64>> = x0.iter().zip(&poses0).map(|(s, a)| s.R * a.1.transpose()).collect();
     let mut strains = strains0.clone();
     let mut poses = Vec::with_capacity(nodes.len());
     let (mut last_change, mut relaxation) = (f64::INFINITY, 1.0f64);
@@ -110,7 +124,14 @@ pub(super) fn capstan_start(model: &Model, mesh: &Mesh, x: &mut [State], profile
     for _ in 0..PASSES {
         march(model, (&sites, &routes), x, profile);
         node_tensions(model, profile, &mut tensions);
-        distal_strains(model, (nodes, &sites), x, &tensions, (&mut wrench, &mut rough));
+        distal_strains(
+            model,
+            (nodes, &sites),
+            (&reaching, &ends),
+            x,
+            &tensions,
+            (&mut wrench, &mut rough),
+        );
         // The fixed-point step, flattened (v then u L per node, so all are comparable).
         step.clear();
         step.extend(
@@ -139,7 +160,7 @@ pub(super) fn capstan_start(model: &Model, mesh: &Mesh, x: &mut [State], profile
             *state = State {
                 s: kept[k].s,
                 p: x0[k].p + (b.0 - a.0),
-                R: x0[k].R * a.1.transpose() * b.1,
+                R: frames0[k] * b.1,
                 v: strains[k].0,
                 u: strains[k].1,
             };
