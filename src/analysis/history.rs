@@ -145,7 +145,8 @@ pub fn history(ranges: &Ranges, options: &collocation::Options) -> Result<Histor
     Ok(HistoryResult { steps, failure: None })
 }
 
-/// The note of a step whose inputs repeat the last step's ([`held`]).
+/// The note of a step whose inputs repeat the last step's: its answer is the last one, stuck all
+/// along (docs/friction.md section 8, "A repeated step").
 pub const REPEATED: &str = "the inputs repeat the last step's: nothing is driven, so nothing slides, and the last \
      step's answer (its estimate included) is this step's, every tendon with friction stuck all along";
 
