@@ -34,6 +34,9 @@ pub enum Termination {
     SingularJacobian,
     /// The residual became non-finite (the model broke down at a visited state).
     NonFinite,
+    /// A load-history step's stick/slip zones kept changing: every pass's Newton converged,
+    /// but each march on the new shape changed the zones again (docs/friction.md section 8).
+    ZonesUnsettled,
 }
 
 impl fmt::Display for Termination {
@@ -44,6 +47,10 @@ impl fmt::Display for Termination {
             Termination::LineSearchFailed => "the line search found no step that reduces the residual",
             Termination::SingularJacobian => "the Newton matrix is singular: zero pivot or non-finite step",
             Termination::NonFinite => "the residual became non-finite at a state the iteration visited",
+            Termination::ZonesUnsettled => {
+                "the stick/slip zones did not settle: each pass's Newton converged, but the march on its shape \
+                 changed the zones again"
+            }
         })
     }
 }
@@ -423,6 +430,7 @@ mod tests {
             Termination::LineSearchFailed,
             Termination::SingularJacobian,
             Termination::NonFinite,
+            Termination::ZonesUnsettled,
         ];
         let texts: Vec<String> = all.iter().map(|t| t.to_string()).collect();
         for (i, t) in texts.iter().enumerate() {
@@ -430,5 +438,12 @@ mod tests {
             assert!(texts.iter().skip(i + 1).all(|o| o != t));
         }
         assert!(texts[3].contains("singular"));
+        // A history step whose zones keep changing did not converge, whatever its last
+        // Newton run did: its sentence says so, not "converged" (main's message did).
+        assert!(
+            texts[5].starts_with("the stick/slip zones did not settle"),
+            "{}",
+            texts[5]
+        );
     }
 }

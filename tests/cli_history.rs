@@ -132,3 +132,74 @@ fn a_rigid_tendon_that_sticks_says_to_set_its_stiffness() {
     // The steps before it are in the CSV.
     assert_eq!(String::from_utf8_lossy(&out.stdout).lines().count(), 6);
 }
+
+/// The CSV of `sweep robot.toml ARGS --history LIST` in `dir`, which must exit 0, as rows
+/// of fields (header first).
+fn history_csv(dir: &Path, args: &[&str]) -> Vec<Vec<String>> {
+    let mut all = vec!["sweep", "robot.toml"];
+    all.extend(args);
+    let out = run(dir, &all);
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{args:?}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    String::from_utf8_lossy(&out.stdout)
+        .lines()
+        .map(|l| l.split(',').map(String::from).collect())
+        .collect()
+}
+
+#[test]
+fn a_small_reversal_and_a_repeated_pull_in_are_solved() {
+    // Both stopped on main with "the stick/slip zones did not settle in 40 passes".
+    let dir = scratch("reversal");
+    robot(&dir, false);
+    let rows = history_csv(
+        &dir,
+        &[
+            "--tension",
+            "1=0",
+            "--history",
+            "0,2.375632203228038,5.8406468246737075,5.8",
+        ],
+    );
+    let zones = column(&rows[0].join(","), "zones_1");
+    assert_eq!(rows.len(), 5);
+    assert!(
+        rows[4][zones].starts_with("release 0-") && rows[4][zones].contains(" stick "),
+        "{:?}",
+        rows[4]
+    );
+    let rows = history_csv(&dir, &["--displacement", "1=0", "--history", "0,0.01,0.02,0.02,0.015"]);
+    let (zones, iterations) = (
+        column(&rows[0].join(","), "zones_1"),
+        column(&rows[0].join(","), "iterations"),
+    );
+    assert_eq!(rows.len(), 6);
+    // The repeat is the last state, stuck all along, with no iterations; the step after it
+    // lets the tendon out.
+    assert_eq!(rows[4][zones], "stick 0-0.242");
+    assert_eq!(rows[4][iterations], "0");
+    assert!(rows[5][zones].starts_with("release 0-"), "{:?}", rows[5]);
+}
+
+#[test]
+fn an_unloaded_tendon_is_slack_and_a_one_step_history_has_its_work_and_estimate() {
+    let dir = scratch("slack");
+    robot(&dir, false);
+    let rows = history_csv(&dir, &["--tension", "1=0:4.91:3", "--history", "up-down"]);
+    let header = rows[0].join(",");
+    let zones = column(&header, "zones_1");
+    // At 0 N (first and last step) no normal force: slack, not sliding out (main: `release`).
+    assert_eq!(rows[1][zones], "slack 0-0.242");
+    assert_eq!(rows[5][zones], "slack 0-0.242");
+    let rows = history_csv(&dir, &["--tension", "1=0", "--history", "2"]);
+    let (iterations, estimate) = (column(&header, "iterations"), column(&header, "tip_error_estimate"));
+    // Main: 0 iterations and an empty estimate (the full-slip solve's answer, its work unsaid).
+    assert!(rows[1][iterations].parse::<usize>().unwrap() > 0, "{:?}", rows[1]);
+    let e: f64 = rows[1][estimate].parse().unwrap();
+    // 2.42e-8 m: the default tolerance 1e-7 L, which the step meets.
+    assert!(e > 0.0 && e < 2.42e-8, "{e}");
+}

@@ -5,7 +5,7 @@
 
 use nalgebra::Vector3;
 use tdcr::analysis::equilibrium::imbalance;
-use tdcr::analysis::history::{Contact, HistoryStep, history};
+use tdcr::analysis::history::{Contact, HistoryStep, REPEATED, history};
 use tdcr::analysis::sweep::{Input, Ranges};
 use tdcr::{Friction, Robot, cases};
 
@@ -105,6 +105,41 @@ fn a_pull_in_history_step_reports_the_tension_a_tension_history_needs() {
             // 1e-12 m: the pull-in the tension history reports is the one the other held
             // (slack steps report their input, the tension history the slack's end)
             assert!(q < 1e-12, "step {k}: pull-ins differ by {q:.2e} m");
+        }
+    }
+}
+
+#[test]
+fn a_repeated_pull_in_is_the_last_state_stuck_all_along() {
+    // The brief's history (main: "did not settle in 40 passes" at step 4, the repeat) and a
+    // repeat in the middle of the way back.
+    for (list, repeats) in [
+        (vec![0.0, 0.01, 0.02, 0.02, 0.015], vec![3]),
+        (vec![0.0, 0.01, 0.01, 0.02, 0.015, 0.015, 0.01], vec![2, 5]),
+    ] {
+        let ranges = Ranges::new(prototype(), vec![(Input::Displacement(0), list.clone())]).unwrap();
+        let result = history(&ranges, &Default::default()).unwrap();
+        if let Some((k, e)) = &result.failure {
+            panic!("{list:?}, step {k}: {e}");
+        }
+        let steps = result.steps;
+        assert_eq!(steps.len(), list.len());
+        for k in repeats {
+            let (last, step) = (&steps[k - 1], &steps[k]);
+            assert_eq!(step.solution.tip_position(), last.solution.tip_position());
+            assert_eq!(step.solution.tendons[0].tension, last.solution.tendons[0].tension);
+            let zones = &step.zones[0].zones;
+            assert!(zones.len() == 1 && zones[0].contact == Contact::Stick, "{zones:?}");
+            let report = &step.solution.report;
+            assert!(report.iterations == 0 && report.error_estimate.is_some());
+            assert!(report.notes.iter().any(|n| n == REPEATED));
+            // The step after it slides from the base entry the way the input moves.
+            let way = if list[k + 1] > list[k] {
+                Contact::Pull
+            } else {
+                Contact::Release
+            };
+            assert_eq!(steps[k + 1].zones[0].zones[0].contact, way, "{list:?}, step {}", k + 1);
         }
     }
 }

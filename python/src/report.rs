@@ -23,6 +23,7 @@ pub fn termination_name(t: Termination) -> &'static str {
         Termination::LineSearchFailed => "line_search_failed",
         Termination::SingularJacobian => "singular_jacobian",
         Termination::NonFinite => "non_finite",
+        Termination::ZonesUnsettled => "zones_unsettled",
     }
 }
 

@@ -29,6 +29,8 @@ def test_up_down_closes_a_loop_whose_way_back_is_on_the_other_side():
     # Back at 0 N the tendon is slack and the rod where it started (1e-9 m: two solves of
     # the same robot to the residual tolerance).
     assert np.linalg.norm(tips[20] - rest) < 1e-9
+    # At 0 N no normal force: slack, the CLI's name too (not `release`).
+    assert h.zones[0][0][1] == [(0.0, 0.242, "slack")] and h.zones[20][0][1] == [(0.0, 0.242, "slack")]
     for k in range(1, 10):
         assert np.linalg.norm(tips[20 - k] - rest) > np.linalg.norm(tips[k] - rest)
     # The first step back slides out near the base and sticks beyond, holding the

@@ -99,6 +99,17 @@ pub fn history(ranges: &Ranges, options: &collocation::Options) -> Result<Histor
     let mut carried = friction::history::start(&robots, options)?;
     let mut steps: Vec<HistoryStep> = Vec::with_capacity(robots.len());
     for (k, robot) in robots.iter().enumerate() {
+        // A step whose inputs are the last step's: nothing is driven, so nothing slides.
+        let repeated =
+            k > 0 && (0..ranges.inputs().len()).all(|i| ranges.value(i, k as f64) == ranges.value(i, (k - 1) as f64));
+        if let Some(step) = steps
+            .last()
+            .filter(|_| repeated)
+            .and_then(|last| held(robot, &mut carried, last))
+        {
+            steps.push(step);
+            continue;
+        }
         let answer = if robot.has_displacement_inputs() {
             let mut back = steps.iter().rev().map(|s| &s.solution);
             pulled_step(robot, options, &mut carried, (back.next(), back.next()))
@@ -132,6 +143,58 @@ pub fn history(ranges: &Ranges, options: &collocation::Options) -> Result<Histor
         }
     }
     Ok(HistoryResult { steps, failure: None })
+}
+
+/// The note of a step whose inputs repeat the last step's: its answer is the last one, stuck all
+/// along (docs/friction.md section 8, "A repeated step").
+pub const REPEATED: &str = "the inputs repeat the last step's: nothing is driven, so nothing slides, and the last \
+     step's answer (its estimate included) is this step's, every tendon with friction stuck all along";
+
+/// A step of `robot` whose inputs equal those of the `last` step (docs/friction.md section
+/// 8, "A repeated step"): the last answer, with no iterations, its estimate, the note
+/// [`REPEATED`], every loaded tendon with friction stuck all along (a slack one stays
+/// slack), and its own stability verdict with that pattern held. `carried` keeps the last
+/// state. None where a loaded tendon with friction is rigid (the step is then solved).
+fn held(robot: &crate::Robot, carried: &mut friction::history::Carried, last: &HistoryStep) -> Option<HistoryStep> {
+    let solved = robot.with_tensions(&last.solution.tensions());
+    if !friction::history::hold_last(&solved, carried) {
+        return None;
+    }
+    let mut solution = last.solution.clone();
+    let report = &mut solution.report;
+    (
+        report.iterations,
+        report.newton_steps,
+        report.chord_steps,
+        report.load_steps,
+    ) = (0, 0, 0, 0);
+    report.history.clear();
+    report.evaluations = Default::default();
+    report.timings = Default::default();
+    report.notes.retain(|n| n != stuck::STICK_HELD);
+    report.notes.push(REPEATED.into());
+    if robot.has_displacement_inputs() {
+        stuck::assess_pulled(robot, carried, &mut solution);
+    } else {
+        stuck::assess_step(robot, carried, &mut solution.report);
+    }
+    let zones = last
+        .zones
+        .iter()
+        .map(|t| {
+            let (start, end) = (
+                t.zones.first().map_or(0.0, |z| z.start),
+                t.zones.last().map_or(0.0, |z| z.end),
+            );
+            let slack = t.zones.iter().all(|z| z.contact == Contact::Slack);
+            let contact = if slack { Contact::Slack } else { Contact::Stick };
+            TendonZones {
+                tendon: t.tendon,
+                zones: vec![Zone { start, end, contact }],
+            }
+        })
+        .collect();
+    Some(HistoryStep { solution, zones })
 }
 
 /// One step of a history whose `robot` has displacement-controlled tendons: their pull-ins

@@ -175,7 +175,8 @@ class SolveReport:
     def method(self) -> str: ...
     @property
     def termination(self) -> str:
-        """"converged", "max_iterations", "line_search_failed", "singular_jacobian" or "non_finite"."""
+        """"converged", "max_iterations", "line_search_failed", "singular_jacobian", "non_finite" or
+        "zones_unsettled" (a load-history step whose stick/slip zones did not settle)."""
     @property
     def termination_message(self) -> str: ...
     @property

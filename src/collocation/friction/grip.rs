@@ -21,15 +21,20 @@ pub enum Contact {
     /// Stuck to its channel: the material has not moved since the last step, and the
     /// tension follows from its elastic stretch (|w| <= 1).
     Stick,
+    /// Unloaded (0 N at its base entry): no tension, so no normal force on the channel and
+    /// nothing for friction to hold; the material is reset to its current path
+    /// (docs/friction.md section 8).
+    Slack,
 }
 
 impl Contact {
-    /// The name the command line and files use: `pull`, `release` or `stick`.
+    /// The name the command line and files use: `pull`, `release`, `stick` or `slack`.
     pub fn name(self) -> &'static str {
         match self {
             Contact::Pull => "pull",
             Contact::Release => "release",
             Contact::Stick => "stick",
+            Contact::Slack => "slack",
         }
     }
 }
@@ -47,15 +52,24 @@ pub(crate) struct Choice {
     pub(crate) multiplier: f64,
 }
 
+/// Where the stuck profile and a sliding one agree to this in log tension (relative
+/// tension) at a link's end, the link sticks (nothing needs to slide): a tie decided by
+/// rounding alternates between passes. A converged stick row resolves its log tension to
+/// about 1e-13 to 4e-12 (measured on the pull-in history's trials, docs/friction.md
+/// section 8, "Ties"), and a pull-in loop sees the tie as a jump of its pull-in of
+/// TIE tau times the sliding slope (2e-12 m on the prototype), below its resolution.
+pub(crate) const TIE: f64 = 1e-10;
+
 /// The Coulomb choice on a link: with base tension `base`, log tension `za` at its start,
 /// capacity `capacity` (C) and the stuck material's tension `stuck` at its end, the tension
 /// there is `z_b = z_a + clamp(zeta_b - z_a, -C, C)`: it sticks where friction can hold the
-/// stuck profile, else slides the way the stuck tension lies (above: out, below: in). An
-/// unloaded tendon (base 0) slides out, slack.
+/// stuck profile (to [`TIE`]: nothing needs to slide), else slides the way the stuck
+/// tension lies (above: out, below: in). An unloaded tendon (base 0) is slack (its
+/// multiplier +1 as before it had its own name: its tension, 0, carries no load).
 pub(crate) fn choose(base: f64, za: f64, capacity: f64, stuck: f64) -> Choice {
     if base == 0.0 {
         return Choice {
-            contact: Contact::Release,
+            contact: Contact::Slack,
             zeta: f64::NEG_INFINITY,
             multiplier: 1.0,
         };
@@ -66,9 +80,9 @@ pub(crate) fn choose(base: f64, za: f64, capacity: f64, stuck: f64) -> Choice {
         f64::NEG_INFINITY
     };
     let t = zeta - za;
-    let (contact, multiplier) = if t <= -capacity {
+    let (contact, multiplier) = if t <= -capacity - TIE {
         (Contact::Pull, -1.0)
-    } else if t >= capacity {
+    } else if t >= capacity + TIE {
         (Contact::Release, 1.0)
     } else {
         (Contact::Stick, stuck_multiplier(za, zeta, capacity))
@@ -170,5 +184,33 @@ impl Profile<'_> {
         let scale = stiffness / lambda;
         let d_v = if site.inextensible { Vector3::zeros() } else { t * scale };
         (stiffness * (speed / lambda - 1.0), d_v, rp.r.cross(&t) * scale)
+    }
+
+    /// The stuck tension at a node as the node's own tension moves it: `stuck`
+    /// ([`Profile::stuck_tension`] at the node, with its derivatives in v and u) on a shape
+    /// solved with tension `solved` there, carried to the tension at which the two agree,
+    /// which is what the link's stick row settles on (docs/friction.md section 8, "The
+    /// march's own tension"). The tendon's tension tau at s is part of the cross-section's
+    /// load: raising it by dtau shortens the rod by dv = -K_se^-1 t dtau and bends it toward
+    /// the tendon by du = -K_bt^-1 (r x t) dtau, with t the path's unit tangent and r the
+    /// tendon's offset (body frame), so the stuck tension changes by
+    /// g dtau, g = -(d_v . K_se^-1 d_v + d_u . K_bt^-1 d_u) / (E_t A_t / lambda) <= 0
+    /// (about -E_t A_t r^2 / (E I), -30 on the prototype with E_t A_t = 2000 N). The two
+    /// agree at (stuck - g solved) / (1 - g). A slack or rigid stuck tension (not finite or
+    /// not positive) is returned as it is.
+    pub(crate) fn stuck_own(&self, j: usize, node: usize, site: &Site, stuck: &Stuck, solved: f64) -> f64 {
+        let (value, d_v, d_u) = *stuck;
+        let tendon = &self.robot().tendons[self.slipping[j]];
+        let lambda = self.grips.as_ref().map_or(f64::NAN, |g| g[j].reference[node]);
+        let Some(stiffness) = tendon.stiffness else {
+            return value;
+        };
+        if !(value.is_finite() && value > 0.0 && solved.is_finite() && lambda > 0.0) {
+            return value;
+        }
+        let section = &site.section.section;
+        let compliance = d_v.dot(&d_v.component_div(&section.kse)) + d_u.dot(&d_u.component_div(&section.kbt));
+        let gain = -compliance * lambda / stiffness;
+        (value - gain * solved) / (1.0 - gain)
     }
 }

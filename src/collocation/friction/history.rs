@@ -249,7 +249,23 @@ fn march(border: &mut Capstan, x: &[State], converged: bool) -> Result<bool> {
         };
         for j in (0..count).filter(|&j| profile.on_link(j, k)) {
             let (base, za, capacity) = (profile.base[j], z[j][k], capacities[j]);
-            let mut choice = choose(base, za, capacity, stuck_tensions[j]);
+            // On a converged shape the stuck tension is read at the tension the stick row
+            // would settle on, not the one the shape was solved with (`stuck_own`): a
+            // link's own tension moves its stuck tension about 30 times as much the other
+            // way, so a choice from the solved one alternates between sliding in and out.
+            let stuck_tension = if converged && base > 0.0 {
+                let at = profile.stuck_tension(j, k + 1, &sites.end, &x[k + 1], length);
+                profile.stuck_own(
+                    j,
+                    k + 1,
+                    &sites.end,
+                    &(stuck_tensions[j], at.1, at.2),
+                    base * z[j][k + 1].exp(),
+                )
+            } else {
+                stuck_tensions[j]
+            };
+            let mut choice = choose(base, za, capacity, stuck_tension);
             let first = *sliding[j].get_or_insert(choice.contact);
             if base > 0.0 && (stuck[j] || choice.contact != first) {
                 choice.contact = Contact::Stick;
@@ -318,6 +334,44 @@ fn rigid(i: usize, s: f64) -> Error {
     )
 }
 
+/// Holds the last step's answer as the answer of a step whose inputs equal its own
+/// (docs/friction.md section 8, "A repeated step"): `robot` with the tensions of that
+/// answer. Nothing is driven, so nothing slides: every tendon with friction that carries
+/// tension is stuck all along, at the tension it has, and the material it leaves is the
+/// last step's (`carried` keeps it). What changes is the pattern the step's stability
+/// verdict holds, rewritten in `carried.settled`: every link stuck, with the multiplier its
+/// log tensions give and the material at the answer as its stick rows' (so the rows hold
+/// there exactly). Returns false, and changes nothing, where a stuck tendon is rigid (its
+/// stuck tension is indeterminate: the step is solved, and the march refuses it).
+pub(crate) fn hold_last(robot: &Robot, carried: &mut Carried) -> bool {
+    let Some(settled) = carried.settled.as_mut() else {
+        return false;
+    };
+    let model = Model::new(robot);
+    let profile = Profile::new(&model, &settled.mesh);
+    let loaded = |j: usize| profile.base[j] > 0.0;
+    if (0..profile.count()).any(|j| loaded(j) && robot.tendons[profile.slipping[j]].stiffness.is_none()) {
+        return false;
+    }
+    let length = robot.length();
+    for (j, grip) in settled.grips.iter_mut().enumerate().filter(|&(j, _)| loaded(j)) {
+        let (i, span, base) = (profile.slipping[j], profile.spans[j], profile.base[j]);
+        let tendon = &robot.tendons[i];
+        let z = &settled.z[j];
+        for k in 0..span {
+            grip.contacts[k] = Contact::Stick;
+            grip.multipliers[k] = stuck_multiplier(z[k], z[k + 1], grip.capacities[k]);
+        }
+        for (n, node) in settled.x[..=span].iter().enumerate() {
+            let speed = length::speed(&tendon.routing.at(node.s, length), &node.v, &node.u);
+            grip.reference[n] = tendon
+                .stiffness
+                .map_or(speed, |e| speed / (1.0 + base * z[n].exp() / e));
+        }
+    }
+    true
+}
+
 /// Solves one step of a history: `robot` (validated, the history's geometry) from the state
 /// `carried` holds, which it then holds for the next step. Returns the solution and the
 /// zones of the tendons with friction.
@@ -377,6 +431,9 @@ fn solve_on(robot: &Robot, options: &Options, carried: &mut Carried, held: Optio
         stop_when_damped: false,
     };
     let solved = std::mem::replace(&mut carried.solved, false);
+    // The first step when it is the mesh-choosing full-slip solve itself (its answer, held
+    // by the march): that solve's work and estimate are the step's.
+    let template = solved.then(|| carried.report.clone());
     let mut settled = held.is_none() && !march(&mut border, &x, false)? && solved;
     // A rigid tendon that would stick is refused by the march; one that is near sticking
     // may keep Newton or the passes from settling, which the hint names.
@@ -389,12 +446,14 @@ fn solve_on(robot: &Robot, options: &Options, carried: &mut Carried, held: Optio
             format!("; tendon {} is rigid: set its `stiffness` if it sticks", i + 1)
         });
     let mut ran = false;
+    let mut worst_s = 0.0;
     for _ in 0..PASSES {
         if settled {
             break;
         }
         let (termination, worst) = newton::run_bordered(&mut border, &mut ws, &mut x, &settings, &mut report);
         ran = true;
+        worst_s = border.system.row_position(worst.min(border.system.unknowns() - 1));
         report.termination = termination;
         if termination != Termination::Converged {
             let system = &border.system;
@@ -410,13 +469,13 @@ fn solve_on(robot: &Robot, options: &Options, carried: &mut Carried, held: Optio
         settled = held.is_some() || !march(&mut border, &x, true)?;
     }
     if !settled {
+        // Every pass's Newton converged: what failed is the zones (the termination says so).
+        report.termination = Termination::ZonesUnsettled;
         return Err(Error::NotConverged {
             method: Method::Collocation,
             report: Box::new(report),
-            worst_s: 0.0,
-            hint: format!(
-                "the stick/slip zones did not settle in {PASSES} passes: take smaller steps of the history{rigid_hint}"
-            ),
+            worst_s,
+            hint: format!("{PASSES} passes of march and Newton: take smaller steps of the history{rigid_hint}"),
         });
     }
     // The estimate does not see a stuck stretch's error (its multiplier is constant per
@@ -466,6 +525,24 @@ fn solve_on(robot: &Robot, options: &Options, carried: &mut Carried, held: Optio
         })
         .collect();
     pipeline::record_estimate(&mut report, estimated.as_ref().map(|(c, _)| c), options, robot.length());
+    if let Some(first) = template.filter(|_| !ran && !stuck) {
+        // No pass ran: x is the full-slip solve's answer on this mesh, with its counts and
+        // its estimate (deferred correction, as a step that slides all along has).
+        (
+            report.iterations,
+            report.newton_steps,
+            report.chord_steps,
+            report.load_steps,
+        ) = (
+            first.iterations,
+            first.newton_steps,
+            first.chord_steps,
+            first.load_steps,
+        );
+        report.termination = first.termination;
+        report.error_estimate = first.error_estimate;
+        report.tolerance_met = first.tolerance_met;
+    }
     if stuck {
         report.error_estimate = None;
         report.tolerance_met = None;
@@ -571,7 +648,7 @@ fn check_slip(i: usize, grip: &Grip, lambda: &[f64], x: &[State], span: usize, s
         let wrong = match c {
             Contact::Pull => d[k].max(d[k + 1]) > tolerance,
             Contact::Release => d[k].min(d[k + 1]) < -tolerance,
-            Contact::Stick => false,
+            Contact::Stick | Contact::Slack => false,
         };
         if wrong {
             return Err(error::invalid(

@@ -114,12 +114,13 @@ fn finite(v: &V3, what: &str) -> Result<Vector3<f64>> {
 
 /// The termination whose sentence is `text`.
 fn termination(text: &str) -> Result<Termination> {
-    const ALL: [Termination; 5] = [
+    const ALL: [Termination; 6] = [
         Termination::Converged,
         Termination::MaxIterations,
         Termination::LineSearchFailed,
         Termination::SingularJacobian,
         Termination::NonFinite,
+        Termination::ZonesUnsettled,
     ];
     ALL.into_iter().find(|t| t.to_string() == text).ok_or_else(|| {
         bad(format!(
