@@ -14,7 +14,12 @@
 //! the backbone with the links' rows and multipliers held; the march is repeated on the new
 //! shape until it changes nothing.
 
+mod repeat;
+mod slip;
 mod split;
+
+pub(crate) use repeat::hold_last;
+use slip::check_slip;
 
 use super::grip::{Kink, choose, stuck_multiplier};
 use super::staircase::Staircase;
@@ -334,44 +339,6 @@ fn rigid(i: usize, s: f64) -> Error {
     )
 }
 
-/// Holds the last step's answer as the answer of a step whose inputs equal its own
-/// (docs/friction.md section 8, "A repeated step"): `robot` with the tensions of that
-/// answer. Nothing is driven, so nothing slides: every tendon with friction that carries
-/// tension is stuck all along, at the tension it has, and the material it leaves is the
-/// last step's (`carried` keeps it). What changes is the pattern the step's stability
-/// verdict holds, rewritten in `carried.settled`: every link stuck, with the multiplier its
-/// log tensions give and the material at the answer as its stick rows' (so the rows hold
-/// there exactly). Returns false, and changes nothing, where a stuck tendon is rigid (its
-/// stuck tension is indeterminate: the step is solved, and the march refuses it).
-pub(crate) fn hold_last(robot: &Robot, carried: &mut Carried) -> bool {
-    let Some(settled) = carried.settled.as_mut() else {
-        return false;
-    };
-    let model = Model::new(robot);
-    let profile = Profile::new(&model, &settled.mesh);
-    let loaded = |j: usize| profile.base[j] > 0.0;
-    if (0..profile.count()).any(|j| loaded(j) && robot.tendons[profile.slipping[j]].stiffness.is_none()) {
-        return false;
-    }
-    let length = robot.length();
-    for (j, grip) in settled.grips.iter_mut().enumerate().filter(|&(j, _)| loaded(j)) {
-        let (i, span, base) = (profile.slipping[j], profile.spans[j], profile.base[j]);
-        let tendon = &robot.tendons[i];
-        let z = &settled.z[j];
-        for k in 0..span {
-            grip.contacts[k] = Contact::Stick;
-            grip.multipliers[k] = stuck_multiplier(z[k], z[k + 1], grip.capacities[k]);
-        }
-        for (n, node) in settled.x[..=span].iter().enumerate() {
-            let speed = length::speed(&tendon.routing.at(node.s, length), &node.v, &node.u);
-            grip.reference[n] = tendon
-                .stiffness
-                .map_or(speed, |e| speed / (1.0 + base * z[n].exp() / e));
-        }
-    }
-    true
-}
-
 /// Solves one step of a history: `robot` (validated, the history's geometry) from the state
 /// `carried` holds, which it then holds for the next step. Returns the solution and the
 /// zones of the tendons with friction.
@@ -622,46 +589,4 @@ fn solve_on(robot: &Robot, options: &Options, carried: &mut Carried, held: Optio
     carried.x = x;
     carried.factors = Some((ws, border.stairs));
     Ok(((solution, zones), stuck))
-}
-
-/// Checks that every stretch of tendon `i` slides the way its friction acts (Coulomb's
-/// direction): the slip since the last step, d(s) = xi_new(s) - xi_old(s) with xi the
-/// unstretched length from s to the termination (trapezoidal rule on the nodes), is <= 0
-/// on links sliding in and >= 0 on links sliding out. A stretch that slides against its
-/// friction would need a slip zone that starts away from the base entry, which the march
-/// does not resolve.
-///
-/// # Errors
-/// The direction violated beyond rounding and `slack` (m).
-fn check_slip(i: usize, grip: &Grip, lambda: &[f64], x: &[State], span: usize, slack: f64) -> Result<()> {
-    let mut d = vec![0.0; span + 1];
-    let mut size = 0.0_f64;
-    for k in (0..span).rev() {
-        let h = x[k + 1].s - x[k].s;
-        let change = |n: usize| lambda[n] - grip.reference[n];
-        d[k] = d[k + 1] + 0.5 * h * (change(k) + change(k + 1));
-        size = size.max(d[k].abs());
-    }
-    // Rounding of the sums: 1e-12 of the largest slip, and of the span's length at 1e-15.
-    let tolerance = 1e-12 * size + 1e-15 * x[span].s + slack;
-    for (k, &c) in grip.contacts.iter().enumerate() {
-        let wrong = match c {
-            Contact::Pull => d[k].max(d[k + 1]) > tolerance,
-            Contact::Release => d[k].min(d[k + 1]) < -tolerance,
-            Contact::Stick | Contact::Slack => false,
-        };
-        if wrong {
-            return Err(error::invalid(
-                format!("tendons[{i}].friction"),
-                format!(
-                    "tendon {} would slide against its friction near s = {:.4} m in this step (a slip zone that \
-                     does not start at the base entry), which the stick/slip history does not model",
-                    i + 1,
-                    x[k].s
-                ),
-                "take the history in smaller steps, or hold the loads while the tendons move",
-            ));
-        }
-    }
-    Ok(())
 }
