@@ -39,6 +39,18 @@ pub enum Termination {
     ZonesUnsettled,
 }
 
+impl Termination {
+    /// Every termination, in declaration order (to read one back from its name).
+    pub const ALL: [Termination; 6] = [
+        Termination::Converged,
+        Termination::MaxIterations,
+        Termination::LineSearchFailed,
+        Termination::SingularJacobian,
+        Termination::NonFinite,
+        Termination::ZonesUnsettled,
+    ];
+}
+
 impl fmt::Display for Termination {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         f.write_str(match self {
@@ -424,15 +436,7 @@ mod tests {
 
     #[test]
     fn every_termination_has_its_own_sentence() {
-        let all = [
-            Termination::Converged,
-            Termination::MaxIterations,
-            Termination::LineSearchFailed,
-            Termination::SingularJacobian,
-            Termination::NonFinite,
-            Termination::ZonesUnsettled,
-        ];
-        let texts: Vec<String> = all.iter().map(|t| t.to_string()).collect();
+        let texts: Vec<String> = Termination::ALL.iter().map(|t| t.to_string()).collect();
         for (i, t) in texts.iter().enumerate() {
             assert!(t.len() > 20 && !t.contains('\n'));
             assert!(texts.iter().skip(i + 1).all(|o| o != t));

@@ -180,6 +180,26 @@ fn a_repeated_step_is_the_last_state_stuck_all_along() {
 }
 
 #[test]
+fn a_held_step_is_an_equilibrium_and_is_noted_once() {
+    // A step repeated twice keeps one note (review: the second copy carried the first's).
+    let steps = tension_history(&[0.0, 3.0, 2.0, 2.0, 2.0]);
+    for step in &steps[3..] {
+        let notes = &step.solution.report.notes;
+        assert_eq!(notes.iter().filter(|n| *n == REPEATED).count(), 1, "{notes:?}");
+    }
+    // The held answer is the equilibrium the solver finds for an input 1e-7 N away, stuck
+    // all along: the tips agree to the two answers' estimates plus 1e-7 N times the
+    // sliding slope (an upper bound on the stuck one's).
+    let near = tension_history(&[0.0, 3.0, 2.0, 2.0000001]);
+    assert_eq!(first_zone(&near[3]), (0.242, Contact::Stick));
+    let estimate = |s: &HistoryStep| s.solution.report.error_estimate.unwrap().tip_position;
+    let slope = (tip(&steps[1]) - tip(&steps[2])).norm();
+    let bound = estimate(&steps[3]) + estimate(&near[3]) + 1e-7 * slope;
+    let gap = (tip(&steps[3]) - tip(&near[3])).norm();
+    assert!(gap <= bound, "held and solved differ by {gap} m, more than {bound} m");
+}
+
+#[test]
 fn an_unloaded_tendon_is_slack() {
     let steps = tension_history(&[0.0, 2.0, 0.0]);
     for k in [0, 2] {

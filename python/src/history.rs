@@ -13,7 +13,7 @@ use pyo3::types::{PyDict, PyList};
 use tdcr::analysis::history::{HistoryStep, history as solve_history};
 
 /// One tendon's stick/slip zones at one step: (tendon index from 0, [(start, end,
-/// contact), ...]) with the contact `pull`, `release` or `stick`.
+/// contact), ...]) with the contact `pull`, `release`, `stick` or `slack` (0 N).
 type Zones = (usize, Vec<(f64, f64, String)>);
 
 /// The result of `history`: every step's solution and the stick/slip zones of each tendon
@@ -68,8 +68,8 @@ crate::pickle::pickled_fields! {
 
     /// Per step, per tendon with friction, `(tendon, [(start, end, contact), ...])`: the
     /// tendon's index (from 0) and its zones from the base entry to its termination (arc
-    /// lengths in m), `contact` one of `pull` (sliding in), `release` (sliding out) or
-    /// `stick`.
+    /// lengths in m), `contact` one of `pull` (sliding in), `release` (sliding out), `stick`
+    /// or `slack` (0 N at the base entry).
     #[getter]
     fn zones(&self) -> Vec<Vec<Zones>> {
         self.zones.clone()

@@ -52,14 +52,6 @@ macro_rules! pickled_fields {
 }
 pub(crate) use pickled_fields;
 
-/// The five terminations, to read one back from its name.
-const TERMINATIONS: [Termination; 5] = [
-    Termination::Converged,
-    Termination::MaxIterations,
-    Termination::LineSearchFailed,
-    Termination::SingularJacobian,
-    Termination::NonFinite,
-];
 
 /// A report as a dict of plain values (floats kept bitwise, infinities and NaN signs
 /// included, which JSON could not keep).
@@ -134,7 +126,7 @@ pub fn report_from(d: &Bound<'_, PyDict>) -> PyResult<SolveReport> {
     };
     let mut r = SolveReport::new(method);
     let termination: String = field(d, "termination")?;
-    r.termination = TERMINATIONS
+    r.termination = Termination::ALL
         .into_iter()
         .find(|t| termination_name(*t) == termination)
         .ok_or_else(|| bad("termination"))?;

@@ -148,7 +148,7 @@ pub fn history(ranges: &Ranges, options: &collocation::Options) -> Result<Histor
 /// The note of a step whose inputs repeat the last step's: its answer is the last one, stuck all
 /// along (docs/friction.md section 8, "A repeated step").
 pub const REPEATED: &str = "the inputs repeat the last step's: nothing is driven, so nothing slides, and the last \
-     step's answer (its estimate included) is this step's, every tendon with friction stuck all along";
+     step's answer (its estimate included) is this step's, every loaded tendon with friction stuck all along";
 
 /// A step of `robot` whose inputs equal those of the `last` step (docs/friction.md section
 /// 8, "A repeated step"): the last answer, with no iterations, its estimate, the note
@@ -171,7 +171,7 @@ fn held(robot: &crate::Robot, carried: &mut friction::history::Carried, last: &H
     report.history.clear();
     report.evaluations = Default::default();
     report.timings = Default::default();
-    report.notes.retain(|n| n != stuck::STICK_HELD);
+    report.notes.retain(|n| n != stuck::STICK_HELD && n != REPEATED);
     report.notes.push(REPEATED.into());
     if robot.has_displacement_inputs() {
         stuck::assess_pulled(robot, carried, &mut solution);

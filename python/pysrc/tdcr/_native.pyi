@@ -525,7 +525,7 @@ class History:
     @property
     def zones(self) -> List[List[Tuple[int, List[Tuple[float, float, str]]]]]:
         """Per step, per tendon with friction: (tendon index from 0, [(start, end, contact),
-        ...]) from its base entry to its termination (m), contact `pull`, `release` or `stick`."""
+        ...]) from its base entry to its termination (m), contact `pull`, `release`, `stick` or `slack` (0 N)."""
     @property
     def tip_positions(self) -> FloatArray:
         """Tip positions (m, world frame), shape (n, 3)."""

@@ -19,7 +19,8 @@ pub enum Contact {
     /// termination at the full friction rate (w = +1).
     Release,
     /// Stuck to its channel: the material has not moved since the last step, and the
-    /// tension follows from its elastic stretch (|w| <= 1).
+    /// tension follows from its elastic stretch (|w| <= 1 + TIE / C: a tie within the
+    /// march's TIE of the friction limit sticks).
     Stick,
     /// Unloaded (0 N at its base entry): no tension, so no normal force on the channel and
     /// nothing for friction to hold; the material is reset to its current path
@@ -58,7 +59,7 @@ pub(crate) struct Choice {
 /// about 1e-13 to 4e-12 (measured on the pull-in history's trials, docs/friction.md
 /// section 8, "Ties"), and a pull-in loop sees the tie as a jump of its pull-in of
 /// TIE tau times the sliding slope (2e-12 m on the prototype), below its resolution.
-pub(crate) const TIE: f64 = 1e-10;
+const TIE: f64 = 1e-10;
 
 /// The Coulomb choice on a link: with base tension `base`, log tension `za` at its start,
 /// capacity `capacity` (C) and the stuck material's tension `stuck` at its end, the tension

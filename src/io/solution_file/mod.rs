@@ -114,15 +114,7 @@ fn finite(v: &V3, what: &str) -> Result<Vector3<f64>> {
 
 /// The termination whose sentence is `text`.
 fn termination(text: &str) -> Result<Termination> {
-    const ALL: [Termination; 6] = [
-        Termination::Converged,
-        Termination::MaxIterations,
-        Termination::LineSearchFailed,
-        Termination::SingularJacobian,
-        Termination::NonFinite,
-        Termination::ZonesUnsettled,
-    ];
-    ALL.into_iter().find(|t| t.to_string() == text).ok_or_else(|| {
+    Termination::ALL.into_iter().find(|t| t.to_string() == text).ok_or_else(|| {
         bad(format!(
             "`termination` \"{text}\" is not one of the solver's terminations"
         ))
