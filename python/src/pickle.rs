@@ -52,7 +52,6 @@ macro_rules! pickled_fields {
 }
 pub(crate) use pickled_fields;
 
-
 /// A report as a dict of plain values (floats kept bitwise, infinities and NaN signs
 /// included, which JSON could not keep).
 pub fn report_state<'py>(py: Python<'py>, r: &SolveReport) -> PyResult<Bound<'py, PyDict>> {

@@ -114,11 +114,14 @@ fn finite(v: &V3, what: &str) -> Result<Vector3<f64>> {
 
 /// The termination whose sentence is `text`.
 fn termination(text: &str) -> Result<Termination> {
-    Termination::ALL.into_iter().find(|t| t.to_string() == text).ok_or_else(|| {
-        bad(format!(
-            "`termination` \"{text}\" is not one of the solver's terminations"
-        ))
-    })
+    Termination::ALL
+        .into_iter()
+        .find(|t| t.to_string() == text)
+        .ok_or_else(|| {
+            bad(format!(
+                "`termination` \"{text}\" is not one of the solver's terminations"
+            ))
+        })
 }
 
 impl SolutionFile {
