@@ -61,13 +61,20 @@ pub(crate) struct Choice {
 /// TIE tau times the sliding slope (2e-12 m on the prototype), below its resolution.
 const TIE: f64 = 1e-10;
 
+/// The tie width of [`choose`] for Newton's `residual_tolerance`: [`TIE`] at the default
+/// (1e-11) and below; a looser tolerance resolves the stick rows only to about itself, so
+/// the width grows with it (ten times it: a margin over the 0.4 times measured at 1e-11).
+pub(crate) fn tie(residual_tolerance: f64) -> f64 {
+    TIE.max(10.0 * residual_tolerance)
+}
+
 /// The Coulomb choice on a link: with base tension `base`, log tension `za` at its start,
 /// capacity `capacity` (C) and the stuck material's tension `stuck` at its end, the tension
 /// there is `z_b = z_a + clamp(zeta_b - z_a, -C, C)`: it sticks where friction can hold the
-/// stuck profile (to [`TIE`]: nothing needs to slide), else slides the way the stuck
+/// stuck profile (to `tie`, from [`tie`]: nothing needs to slide), else slides the way the stuck
 /// tension lies (above: out, below: in). An unloaded tendon (base 0) is slack (its
 /// multiplier +1 as before it had its own name: its tension, 0, carries no load).
-pub(crate) fn choose(base: f64, za: f64, capacity: f64, stuck: f64) -> Choice {
+pub(crate) fn choose(base: f64, za: f64, capacity: f64, stuck: f64, tie: f64) -> Choice {
     if base == 0.0 {
         return Choice {
             contact: Contact::Slack,
@@ -81,9 +88,9 @@ pub(crate) fn choose(base: f64, za: f64, capacity: f64, stuck: f64) -> Choice {
         f64::NEG_INFINITY
     };
     let t = zeta - za;
-    let (contact, multiplier) = if t <= -capacity - TIE {
+    let (contact, multiplier) = if t <= -capacity - tie {
         (Contact::Pull, -1.0)
-    } else if t >= capacity + TIE {
+    } else if t >= capacity + tie {
         (Contact::Release, 1.0)
     } else {
         (Contact::Stick, stuck_multiplier(za, zeta, capacity))
@@ -213,5 +220,27 @@ impl Profile<'_> {
         let compliance = d_v.dot(&d_v.component_div(&section.kse)) + d_u.dot(&d_u.component_div(&section.kbt));
         let gain = -compliance * lambda / stiffness;
         (value - gain * solved) / (1.0 - gain)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_tie_sticks_and_a_choice_beyond_it_slides() {
+        let (base, za, capacity) = (2.0, -0.1, 0.05);
+        let at = |t: f64| choose(base, za, capacity, base * (za + t).exp(), tie(1e-11)).contact;
+        // Just inside the capacity plus the tie (the log tension is rounded to about 1e-16
+        // relative here, far inside 0.5 TIE): both sides stick.
+        assert_eq!(at(-capacity - 0.5 * TIE), Contact::Stick);
+        assert_eq!(at(capacity + 0.5 * TIE), Contact::Stick);
+        // Twice the tie beyond: the link slides, in below and out above.
+        assert_eq!(at(-capacity - 2.0 * TIE), Contact::Pull);
+        assert_eq!(at(capacity + 2.0 * TIE), Contact::Release);
+        // The width is TIE at the default residual tolerance and grows with a looser one.
+        assert_eq!(tie(1e-11), TIE);
+        assert_eq!(tie(1e-8), 1e-7);
+        assert_eq!(choose(0.0, 0.0, capacity, 1.0, TIE).contact, Contact::Slack);
     }
 }

@@ -21,7 +21,7 @@ mod split;
 pub(crate) use repeat::hold_last;
 use slip::check_slip;
 
-use super::grip::{Kink, choose, stuck_multiplier};
+use super::grip::{self, Kink, choose, stuck_multiplier};
 use super::staircase::Staircase;
 use super::*;
 use crate::model::length;
@@ -211,6 +211,7 @@ pub(crate) fn start(robots: &[Robot], options: &Options) -> Result<Carried> {
 
 /// The march of every tendon with friction along the shape `x` (module docs): new contacts,
 /// multipliers and predicted log tensions written into `border`'s profile and unknowns.
+/// A link within `tie` (log tension, [`grip::tie`]) of its friction limit sticks.
 /// Each link's capacity and stuck tension are those of its evaluation at `x`, the profile's
 /// log tensions and contacts: when Newton has just `converged` to `x`, its last evaluation
 /// of every link (kept by the profile) is that one and is read, else the link is evaluated.
@@ -219,7 +220,7 @@ pub(crate) fn start(robots: &[Robot], options: &Options) -> Result<Carried> {
 /// # Errors
 /// A model breakdown on a link; a rigid tendon that would stick (statically
 /// indeterminate).
-fn march(border: &mut Capstan, x: &[State], converged: bool) -> Result<bool> {
+fn march(border: &mut Capstan, x: &[State], converged: bool, tie: f64) -> Result<bool> {
     let system = &border.system;
     let length = system.model.robot.length();
     let Some(profile) = system.friction.as_ref() else {
@@ -270,7 +271,7 @@ fn march(border: &mut Capstan, x: &[State], converged: bool) -> Result<bool> {
             } else {
                 stuck_tensions[j]
             };
-            let mut choice = choose(base, za, capacity, stuck_tension);
+            let mut choice = choose(base, za, capacity, stuck_tension, tie);
             let first = *sliding[j].get_or_insert(choice.contact);
             if base > 0.0 && (stuck[j] || choice.contact != first) {
                 choice.contact = Contact::Stick;
@@ -366,6 +367,7 @@ pub(crate) fn step(robot: &Robot, options: &Options, carried: &mut Carried) -> R
 /// As [`step`].
 fn solve_on(robot: &Robot, options: &Options, carried: &mut Carried, held: Option<f64>) -> Result<(StepAnswer, bool)> {
     let start = Instant::now();
+    let tie = grip::tie(options.residual_tolerance);
     let model = Model::new(robot);
     let mut system = System::new(model.clone(), carried.mesh.clone());
     let mut profile = Profile::new(&model, &system.mesh);
@@ -401,7 +403,7 @@ fn solve_on(robot: &Robot, options: &Options, carried: &mut Carried, held: Optio
     // The first step when it is the mesh-choosing full-slip solve itself (its answer, held
     // by the march): that solve's work and estimate are the step's.
     let template = solved.then(|| carried.report.clone());
-    let mut settled = held.is_none() && !march(&mut border, &x, false)? && solved;
+    let mut settled = held.is_none() && !march(&mut border, &x, false, tie)? && solved;
     // A rigid tendon that would stick is refused by the march; one that is near sticking
     // may keep Newton or the passes from settling, which the hint names.
     let rigid_hint = robot
@@ -433,7 +435,7 @@ fn solve_on(robot: &Robot, options: &Options, carried: &mut Carried, held: Optio
         }
         // The contacts and multipliers on the converged shape: settled when Newton's were.
         border.load(Point::Current);
-        settled = held.is_some() || !march(&mut border, &x, true)?;
+        settled = held.is_some() || !march(&mut border, &x, true, tie)?;
     }
     if !settled {
         // Every pass's Newton converged: what failed is the zones (the termination says so).
