@@ -7,6 +7,7 @@
 
 use super::residual::Block;
 use crate::model::linearize;
+use crate::model::routing::RoutingPoint;
 use nalgebra::{Matrix3, Vector6};
 
 /// The buffers of one interval's tension columns that [`interval_jacobian`](super::residual::interval_jacobian) fills besides
@@ -14,13 +15,16 @@ use nalgebra::{Matrix3, Vector6};
 /// when the start node's linearization is given, as the previous interval's `end`, else
 /// written), at the end node and at the midpoint (its total derivative), the midpoint's
 /// strain motion, and the interval rows' derivatives dF/dtau_i (scaled), as
-/// `residual::interval_derivatives` gives them with `linearize::tension_rates`.
+/// `residual::interval_derivatives` gives them with `linearize::tension_rates`; and every
+/// tendon's routing point at the end node and at the midpoint when they are kept (else
+/// each point evaluates the routings it needs).
 pub struct IntervalTensions<'t> {
     pub(crate) start: &'t mut [Vector6<f64>],
     pub(crate) end: &'t mut [Vector6<f64>],
     pub(crate) mid: &'t mut [Vector6<f64>],
     pub(crate) dy_mid: &'t mut [Vector6<f64>],
     pub(crate) rows: &'t mut [Block<f64>],
+    pub(crate) routing: Option<[&'t [RoutingPoint]; 2]>,
 }
 
 /// Eq. 13's factored matrix at an interval's three points and the midpoint's orientation,

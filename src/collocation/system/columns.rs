@@ -4,37 +4,47 @@
 //! sides of the sensitivities (docs/sensitivity.md, "Exact tension columns").
 
 use super::{Columns, System};
-use crate::collocation::residual::{self, Block, IntervalTensions};
+use crate::collocation::residual::{self, Block, IntervalSites, IntervalTensions};
 use crate::collocation::unknowns::{BASE_ROWS, link_row, tip_row};
 use crate::error::Result;
 use crate::model::equations::Side;
 use crate::model::linearize;
+use crate::model::robot::Robot;
+use crate::model::routing::{Routing, RoutingPoint};
 use crate::solution::State;
 use nalgebra::{Vector3, Vector6};
 
 /// The buffers of the tension columns formed with the Jacobian ([`System::jacobian_and_tensions`]):
 /// the rates' derivatives at an interval's start node, end node and midpoint, the
-/// midpoint's strain motion (one entry per tendon in each), and one interval's rows.
+/// midpoint's strain motion (one entry per tendon in each), one interval's rows, and the
+/// tendons' routing points at the intervals' end nodes and midpoints.
 pub(super) struct TensionSink {
     rates: [Vec<Vector6<f64>>; 4],
     block: Vec<Block<f64>>,
+    routing: RoutingPoints,
 }
 
 impl TensionSink {
-    /// Buffers for `width` tendons.
-    pub(super) fn new(width: usize) -> Self {
+    /// Buffers for the tendons of `system`'s robot, with the routing points `routing` kept
+    /// from an earlier sink (computed again where they are not those of `system`).
+    fn new(system: &System, mut routing: RoutingPoints) -> Self {
+        let width = system.model.robot.tendons.len();
+        routing.prepare(system.model.robot, &system.interval_sites);
         TensionSink {
             rates: std::array::from_fn(|_| vec![Vector6::zeros(); width]),
             block: vec![Block::zeros(); width],
+            routing,
         }
     }
 
-    /// The buffers of the next interval for [`residual::interval_jacobian`]; with
+    /// The buffers of link `k` (an interval) for [`residual::interval_jacobian`]; with
     /// `carried`, the start node's derivatives are the last interval's end ones.
-    pub(super) fn interval(&mut self, carried: bool) -> IntervalTensions<'_> {
+    #[inline]
+    pub(super) fn interval(&mut self, carried: bool, k: usize) -> IntervalTensions<'_> {
         if carried {
             self.rates.swap(0, 1);
         }
+        let routing = self.routing.interval(k, self.block.len());
         let [start, end, mid, dy_mid] = &mut self.rates;
         IntervalTensions {
             start,
@@ -42,6 +52,7 @@ impl TensionSink {
             mid,
             dy_mid,
             rows: &mut self.block,
+            routing,
         }
     }
 
@@ -53,6 +64,110 @@ impl TensionSink {
         }
     }
 }
+
+/// The tendons' routing points r, r', r'' at every interval's end node and midpoint, which a
+/// workspace keeps between the Jacobians that form the tension columns
+/// ([`System::jacobian_and_tensions`]): they depend on the routings, the rod's length and
+/// the arc lengths only, not on the state, and a slack tendon (no point kept by eq. 13's
+/// assembly) needs them at every point (a helical routing's a sine and a cosine each).
+/// Computed by [`Routing::at`] as the pass would, so the same bits; an interval's are
+/// computed again when its arc lengths differ from those they were computed at, all of them
+/// when the routings or the length differ. Not kept for a robot with a user routing
+/// ([`Routing::Custom`]: a closure, which cannot be compared).
+#[derive(Default)]
+pub(crate) struct RoutingPoints {
+    /// The routings' parameters and the rod's length the points are for; empty: none kept.
+    key: Vec<f64>,
+    /// Per link, the arc lengths of its end node and midpoint the points were computed at
+    /// (NaN: not computed).
+    at: Vec<[f64; 2]>,
+    /// Per link, every tendon's point at its end node, then at its midpoint.
+    points: Vec<RoutingPoint>,
+}
+
+impl RoutingPoints {
+    /// Makes the points those of `robot` at the end nodes and midpoints of the intervals
+    /// `sites` (one entry per link, None for a jump): all computed again unless they were
+    /// computed for `robot`'s routings and length, else a link's where its arc lengths
+    /// differ.
+    fn prepare(&mut self, robot: &Robot, sites: &[Option<IntervalSites>]) {
+        let length = robot.length();
+        let mut key = std::mem::take(&mut self.key);
+        let same = key.len() == KEY * robot.tendons.len() + 1
+            && key[0] == length
+            && robot
+                .tendons
+                .iter()
+                .zip(key[1..].chunks_exact(KEY))
+                .all(|(t, k)| routing_key(&t.routing).is_some_and(|r| r[..] == *k));
+        if !same {
+            key.clear();
+            self.at.clear();
+            self.points.clear();
+            let keys: Option<Vec<[f64; KEY]>> = robot.tendons.iter().map(|t| routing_key(&t.routing)).collect();
+            if let Some(keys) = keys {
+                key.push(length);
+                key.extend(keys.iter().flatten());
+            }
+        }
+        self.key = key;
+        if self.key.is_empty() {
+            return;
+        }
+        let width = robot.tendons.len();
+        let length = robot.length();
+        if self.at.len() != sites.len() {
+            let zero = RoutingPoint {
+                r: Vector3::zeros(),
+                r_s: Vector3::zeros(),
+                r_ss: Vector3::zeros(),
+            };
+            self.at.resize(sites.len(), [f64::NAN; 2]);
+            self.points.resize(sites.len() * 2 * width, zero);
+        }
+        let links = self
+            .at
+            .iter_mut()
+            .zip(self.points.chunks_exact_mut(2 * width))
+            .zip(sites);
+        for ((at, points), sites) in links {
+            let Some(sites) = sites else { continue };
+            let s = [sites.end.s, sites.mid.s];
+            if *at != s {
+                for (points, s) in points.chunks_exact_mut(width).zip(s) {
+                    for (p, t) in points.iter_mut().zip(&robot.tendons) {
+                        *p = t.routing.at(s, length);
+                    }
+                }
+                *at = s;
+            }
+        }
+    }
+
+    /// Every tendon's routing point at link `k`'s end node and at its midpoint (`width`
+    /// tendons); None when none are kept (a user routing).
+    #[inline]
+    fn interval(&self, k: usize, width: usize) -> Option<[&[RoutingPoint]; 2]> {
+        if self.key.is_empty() {
+            return None;
+        }
+        let (end, mid) = self.points[2 * k * width..2 * (k + 1) * width].split_at(width);
+        Some([end, mid])
+    }
+}
+
+/// The kind and parameters that fix a routing's points on a rod of given length; None for
+/// a user routing.
+fn routing_key(routing: &Routing) -> Option<[f64; KEY]> {
+    match *routing {
+        Routing::Straight { x, y } => Some([0.0, x, y, 0.0]),
+        Routing::Helical { radius, turns, phase } => Some([1.0, radius, turns, phase]),
+        Routing::Custom(_) => None,
+    }
+}
+
+/// Numbers of a routing's key ([`routing_key`]).
+const KEY: usize = 4;
 
 impl System<'_> {
     /// The exact derivative of the residual in some parameters at the states `x`,
@@ -134,10 +249,13 @@ impl System<'_> {
         out: &mut [f64],
         values: &mut [f64],
         tensions: &mut [f64],
+        routing: &mut RoutingPoints,
     ) -> Result<()> {
         debug_assert!(self.friction.is_none());
-        let mut sink = TensionSink::new(self.model.robot.tendons.len());
-        self.jacobian_with(x, out, values, None, Some((&mut sink, &mut *tensions)), None)?;
+        let mut sink = TensionSink::new(self, std::mem::take(routing));
+        let result = self.jacobian_with(x, out, values, None, Some((&mut sink, &mut *tensions)), None);
+        *routing = sink.routing;
+        result?;
         self.point_load_columns(x, Columns::Tensions, tensions)
     }
 
@@ -155,10 +273,13 @@ impl System<'_> {
         values: &mut [f64],
         rates: &mut [Vector6<f64>],
         tensions: &mut [f64],
+        routing: &mut RoutingPoints,
     ) -> Result<()> {
         debug_assert!(self.friction.is_none());
-        let mut sink = TensionSink::new(self.model.robot.tendons.len());
-        self.jacobian_with(x, out, values, None, Some((&mut sink, &mut *tensions)), Some(rates))?;
+        let mut sink = TensionSink::new(self, std::mem::take(routing));
+        let result = self.jacobian_with(x, out, values, None, Some((&mut sink, &mut *tensions)), Some(rates));
+        *routing = sink.routing;
+        result?;
         self.outer_rows(x, out)?;
         self.point_load_columns(x, Columns::Tensions, tensions)
     }
@@ -252,7 +373,13 @@ mod tests {
             let (mut residual, mut with) = (vec![0.0; n], vec![0.0; values.len()]);
             let mut columns = vec![f64::NAN; n * width];
             system
-                .jacobian_and_tensions(&x, &mut residual, &mut with, &mut columns)
+                .jacobian_and_tensions(
+                    &x,
+                    &mut residual,
+                    &mut with,
+                    &mut columns,
+                    &mut RoutingPoints::default(),
+                )
                 .unwrap();
             let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
             assert_eq!(bits(&plain), bits(&residual));
@@ -301,6 +428,8 @@ mod tests {
             let answer: Vec<State> = solution.nodes.iter().map(|n| n.state()).collect();
             let system = System::new(Model::new(&robot), Mesh::from_points(&robot, &s).unwrap());
             let guess = crate::mesh::guess::rigid_estimate(&system.model, &system.mesh.nodes);
+            // Kept from the answer's columns for the guess's, as a workspace keeps them.
+            let mut kept = RoutingPoints::default();
             for x in [answer, guess] {
                 let n = system.unknowns();
                 let (mut residual, mut rates) = (vec![0.0; n], vec![Vector6::zeros(); x.len()]);
@@ -326,16 +455,75 @@ mod tests {
                 let mut both_rates = vec![Vector6::zeros(); x.len()];
                 let mut columns = vec![f64::NAN; n * width];
                 system
-                    .jacobian_rates_and_tensions(&x, &mut both, &mut both_values, &mut both_rates, &mut columns)
+                    .jacobian_rates_and_tensions(
+                        &x,
+                        &mut both,
+                        &mut both_values,
+                        &mut both_rates,
+                        &mut columns,
+                        &mut kept,
+                    )
                     .unwrap();
                 assert_eq!(bits(&residual, &both), None, "{case} {rod_model:?}");
                 assert_eq!(bits(&values, &both_values), None, "{case} {rod_model:?}");
                 assert_eq!(bits(&flat(&rates), &flat(&both_rates)), None, "{case} {rod_model:?}");
                 let (mut r, mut v) = (vec![0.0; n], vec![0.0; values.len()]);
                 let mut want = vec![f64::NAN; n * width];
-                system.jacobian_and_tensions(&x, &mut r, &mut v, &mut want).unwrap();
+                let fresh = &mut RoutingPoints::default();
+                system
+                    .jacobian_and_tensions(&x, &mut r, &mut v, &mut want, fresh)
+                    .unwrap();
                 assert_eq!(bits(&want, &columns), None, "{case} {rod_model:?}");
             }
+        }
+    }
+
+    /// Routing points kept from another robot's tension columns on the same mesh (the
+    /// helical tendon's phase and a straight tendon's offset moved) are computed again, and
+    /// kept ones give the columns of fresh ones bit for bit; a robot with a user routing
+    /// keeps none.
+    #[test]
+    fn kept_routing_points_give_the_bits_of_fresh_ones() {
+        let bits = |a: &[f64], b: &[f64]| a.iter().zip(b).position(|(a, b)| a.to_bits() != b.to_bits());
+        let robot = crate::cases::case_h();
+        let solution = crate::collocation::solve(&robot, &Options::default()).unwrap();
+        let s: Vec<f64> = solution.nodes.iter().map(|n| n.s).collect();
+        let x: Vec<State> = solution.nodes.iter().map(|n| n.state()).collect();
+        let mut moved = robot.clone();
+        moved.tendons[4].routing = Routing::Helical {
+            radius: 0.008,
+            turns: 1.0,
+            phase: 0.3,
+        };
+        moved.tendons[0].routing = Routing::Straight { x: 0.007, y: 0.001 };
+        let mut custom = robot.clone();
+        custom.tendons[4].routing = Routing::Custom(std::sync::Arc::new(|s: f64, length: f64| {
+            Routing::Helical {
+                radius: 0.008,
+                turns: 1.0,
+                phase: 0.0,
+            }
+            .at(s, length)
+        }));
+        let mut kept = RoutingPoints::default();
+        for (k, robot) in [&robot, &robot, &moved, &custom].into_iter().enumerate() {
+            let system = System::new(Model::new(robot), Mesh::from_points(robot, &s).unwrap());
+            let (n, width) = (system.unknowns(), robot.tendons.len());
+            let columns = |routing: &mut RoutingPoints| {
+                let (mut r, mut v) = (vec![0.0; n], vec![0.0; nonzeros(&system.mesh)]);
+                let mut c = vec![f64::NAN; n * width];
+                system
+                    .jacobian_and_tensions(&x, &mut r, &mut v, &mut c, routing)
+                    .unwrap();
+                c
+            };
+            let with_kept = columns(&mut kept);
+            assert_eq!(
+                bits(&with_kept, &columns(&mut RoutingPoints::default())),
+                None,
+                "robot {k}"
+            );
+            assert_eq!(kept.key.is_empty(), k == 3, "robot {k}");
         }
     }
 }

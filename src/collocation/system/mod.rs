@@ -21,6 +21,7 @@ use crate::mesh::Mesh;
 use crate::model::equations::{Model, Site};
 use crate::model::linearize;
 use crate::solution::State;
+pub(crate) use columns::RoutingPoints;
 use columns::TensionSink;
 use nalgebra::{SVector, Vector6};
 use num_dual::DualSVec64;
@@ -503,7 +504,7 @@ impl<'a> System<'a> {
                     let ends = (&x[k], &x[k + 1]);
                     let r = match (kept.as_deref_mut(), rates.as_deref_mut()) {
                         (None, Some(rates)) => {
-                            let sink = tensions.as_mut().map(|(sink, _)| sink.interval(start.is_some()));
+                            let sink = tensions.as_mut().map(|(sink, _)| sink.interval(start.is_some(), k));
                             let (r, at_start) = residual::interval_jacobian_as_residual(
                                 &self.model,
                                 sites,
@@ -524,7 +525,7 @@ impl<'a> System<'a> {
                             ends,
                             start,
                             block,
-                            tensions.as_mut().map(|(sink, _)| sink.interval(start.is_some())),
+                            tensions.as_mut().map(|(sink, _)| sink.interval(start.is_some(), k)),
                             end,
                         )?,
                         (Some(kept), rates) => {

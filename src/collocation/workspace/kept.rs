@@ -146,6 +146,7 @@ impl Workspace {
             &mut self.values,
             &mut self.trial_rates,
             &mut columns,
+            &mut self.routing_points,
         );
         match result {
             Ok(()) => {
@@ -193,7 +194,13 @@ impl Workspace {
         }
         let mut columns = self.take_buffer(system.unknowns() * system.model.robot.tendons.len());
         let ok = system
-            .jacobian_and_tensions(x, &mut self.trial_residual, &mut self.values, &mut columns)
+            .jacobian_and_tensions(
+                x,
+                &mut self.trial_residual,
+                &mut self.values,
+                &mut columns,
+                &mut self.routing_points,
+            )
             .is_ok();
         if ok {
             columns.iter_mut().for_each(|d| *d = -*d);

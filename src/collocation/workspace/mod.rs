@@ -7,7 +7,7 @@ use super::linear::{Linear, LinearSolver};
 use super::newton::STEP_TOLERANCE;
 use super::residual::IntervalFactors;
 use super::stability::NeutralRoots;
-use super::system::{System, SystemBuffers};
+use super::system::{RoutingPoints, System, SystemBuffers};
 use super::unknowns::nonzeros;
 use crate::mesh::Mesh;
 use crate::report::{SolveReport, Stability};
@@ -141,6 +141,9 @@ pub struct Workspace {
     /// -dF/dtau_i of every tendon (column-major) that the last [`Workspace::verdict_at`]
     /// formed with the Jacobian in `values`; taken by [`Workspace::take_tension_rhs`].
     tension_rhs: Option<Vec<f64>>,
+    /// The tendons' routing points at the intervals' end nodes and midpoints, kept for the
+    /// next Jacobian that forms the tension columns.
+    routing_points: RoutingPoints,
 }
 
 impl Workspace {
@@ -176,6 +179,7 @@ impl Workspace {
             buffers: Vec::new(),
             keep_tensions: false,
             tension_rhs: None,
+            routing_points: RoutingPoints::default(),
         })
     }
 
