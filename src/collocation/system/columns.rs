@@ -56,11 +56,14 @@ impl TensionSink {
         }
     }
 
-    /// Writes the last interval's rows, those of link `k`, into the columns `out` (column
-    /// i the i-th tendon's, `n` rows each).
+    /// Writes the last interval's rows, those of link `k`, negated into the columns `out`
+    /// (column i the i-th tendon's, `n` rows each): the right-hand sides -dF/dtau_i.
     pub(super) fn write(&self, k: usize, n: usize, out: &mut [f64]) {
         for (i, b) in self.block.iter().enumerate() {
-            out[i * n + link_row(k)..i * n + link_row(k + 1)].copy_from_slice(b.as_slice());
+            let rows = &mut out[i * n + link_row(k)..i * n + link_row(k + 1)];
+            for (o, v) in rows.iter_mut().zip(b.iter()) {
+                *o = -*v;
+            }
         }
     }
 }
@@ -234,8 +237,10 @@ impl System<'_> {
     }
 
     /// The residual into `out`, the Jacobian values into `values` (as [`System::jacobian`],
-    /// the same bits), and dF/dtau_i of every tendon into `tensions` (column-major, as
-    /// [`System::parameter_columns`] with [`Columns::Tensions`], to rounding): each interval's
+    /// the same bits), and -dF/dtau_i of every tendon into `tensions` (column-major; the
+    /// right-hand sides of the tension columns: [`System::parameter_columns`] with
+    /// [`Columns::Tensions`] negated, to rounding), with the routing points kept in `routing`
+    /// between calls ([`RoutingPoints`]): each interval's
     /// tension rows from the same assembly and factors of eq. 13 at its nodes and midpoint
     /// as its Jacobian block, the midpoint's chain rule through the linearization's
     /// d(v', u')/d(v, u) (docs/sensitivity.md, "Tension columns formed with the verdict's
@@ -256,10 +261,12 @@ impl System<'_> {
         let result = self.jacobian_with(x, out, values, None, Some((&mut sink, &mut *tensions)), None);
         *routing = sink.routing;
         result?;
-        self.point_load_columns(x, Columns::Tensions, tensions)
+        self.point_load_columns(x, Columns::Tensions, tensions)?;
+        self.negate_outer_rows(tensions);
+        Ok(())
     }
 
-    /// [`System::jacobian_rates`] with the tension columns dF/dtau_i of
+    /// [`System::jacobian_rates`] with the tension columns' right-hand sides -dF/dtau_i of
     /// [`System::jacobian_and_tensions`] from the same evaluations (tendons without
     /// friction): the Jacobian at a trial point of Newton's for a verdict that keeps the
     /// tension columns.
@@ -281,7 +288,27 @@ impl System<'_> {
         *routing = sink.routing;
         result?;
         self.outer_rows(x, out)?;
-        self.point_load_columns(x, Columns::Tensions, tensions)
+        self.point_load_columns(x, Columns::Tensions, tensions)?;
+        self.negate_outer_rows(tensions);
+        Ok(())
+    }
+
+    /// Negates the rows of the columns `out` outside the intervals (base rows, jumps, tip
+    /// rows), which [`System::point_load_columns`] wrote as dF/dq: with the interval rows
+    /// the sink wrote negated, the columns are then -dF/dq throughout (negation is exact:
+    /// the bits of negating the whole columns afterwards).
+    fn negate_outer_rows(&self, out: &mut [f64]) {
+        let n = self.unknowns();
+        let tip = tip_row(self.mesh.nodes.len());
+        for column in out.chunks_exact_mut(n) {
+            let jumps = (0..self.interval_sites.len()).filter(|&k| self.interval_sites[k].is_none());
+            let rows = std::iter::once(0..BASE_ROWS)
+                .chain(jumps.map(|k| link_row(k)..link_row(k + 1)))
+                .chain(std::iter::once(tip..n));
+            for r in rows {
+                column[r].iter_mut().for_each(|v| *v = -*v);
+            }
+        }
     }
 
     /// The rows of [`System::parameter_columns`] outside the intervals: base rows 0, a
@@ -386,6 +413,8 @@ mod tests {
             assert_eq!(bits(&values), bits(&with));
             let mut pass = vec![f64::NAN; n * width];
             system.parameter_columns(&x, Columns::Tensions, &mut pass).unwrap();
+            // The right-hand sides: -dF/dtau.
+            pass.iter_mut().for_each(|v| *v = -*v);
             for i in 0..width {
                 let (a, b) = (&columns[i * n..(i + 1) * n], &pass[i * n..(i + 1) * n]);
                 let scale = b.iter().fold(0.0f64, |m, v| m.max(v.abs()));

@@ -150,7 +150,6 @@ impl Workspace {
         );
         match result {
             Ok(()) => {
-                columns.iter_mut().for_each(|d| *d = -*d);
                 self.tension_rhs = Some(columns);
                 Ok(true)
             }
@@ -203,7 +202,6 @@ impl Workspace {
             )
             .is_ok();
         if ok {
-            columns.iter_mut().for_each(|d| *d = -*d);
             self.tension_rhs = Some(columns);
         } else {
             self.give_buffer(columns);
