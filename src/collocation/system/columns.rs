@@ -14,63 +14,57 @@ use crate::model::routing::{Routing, RoutingPoint};
 use crate::solution::State;
 use nalgebra::{Vector3, Vector6};
 
-/// The buffers of the tension columns formed with the Jacobian ([`System::jacobian_and_tensions`]):
-/// the rates' derivatives at an interval's start node, end node and midpoint, the
-/// midpoint's strain motion (one entry per tendon in each), one interval's rows, and the
-/// tendons' routing points at the intervals' end nodes and midpoints.
-pub(super) struct TensionSink {
+/// The buffers of the tension columns formed with the Jacobian ([`System::jacobian_and_tensions`]),
+/// which a workspace keeps between Jacobians: the rates' derivatives at an interval's start
+/// node, end node and midpoint, the midpoint's strain motion (one entry per tendon in
+/// each), and the tendons' routing points at the intervals' end nodes and midpoints.
+#[derive(Default)]
+pub(crate) struct TensionSink {
     rates: [Vec<Vector6<f64>>; 4],
-    block: Vec<Block<f64>>,
     routing: RoutingPoints,
 }
 
 impl TensionSink {
-    /// Buffers for the tendons of `system`'s robot, with the routing points `routing` kept
-    /// from an earlier sink (computed again where they are not those of `system`).
-    fn new(system: &System, mut routing: RoutingPoints) -> Self {
+    /// Makes the buffers those of `system`'s tendons and routing points (computed again
+    /// where the kept ones are not `system`'s).
+    fn prepare(&mut self, system: &System) {
         let width = system.model.robot.tendons.len();
-        routing.prepare(system.model.robot, &system.interval_sites);
-        TensionSink {
-            rates: std::array::from_fn(|_| vec![Vector6::zeros(); width]),
-            block: vec![Block::zeros(); width],
-            routing,
+        for rates in &mut self.rates {
+            rates.resize(width, Vector6::zeros());
         }
+        self.routing.prepare(system.model.robot, &system.interval_sites);
     }
 
-    /// The buffers of link `k` (an interval) for [`residual::interval_jacobian`]; with
-    /// `carried`, the start node's derivatives are the last interval's end ones.
+    /// The buffers of link `k` (an interval) for [`residual::interval_jacobian`], its rows
+    /// of the right-hand sides going into `columns` (`n` rows each); with `carried`, the
+    /// start node's derivatives are the last interval's end ones.
     #[inline]
-    pub(super) fn interval(&mut self, carried: bool, k: usize) -> IntervalTensions<'_> {
+    pub(super) fn interval<'t>(
+        &'t mut self,
+        carried: bool,
+        k: usize,
+        columns: &'t mut [f64],
+        n: usize,
+    ) -> IntervalTensions<'t> {
         if carried {
             self.rates.swap(0, 1);
         }
-        let routing = self.routing.interval(k, self.block.len());
         let [start, end, mid, dy_mid] = &mut self.rates;
         IntervalTensions {
+            routing: self.routing.interval(k, start.len()),
             start,
             end,
             mid,
             dy_mid,
-            rows: &mut self.block,
-            routing,
-        }
-    }
-
-    /// Writes the last interval's rows, those of link `k`, negated into the columns `out`
-    /// (column i the i-th tendon's, `n` rows each): the right-hand sides -dF/dtau_i.
-    pub(super) fn write(&self, k: usize, n: usize, out: &mut [f64]) {
-        for (i, b) in self.block.iter().enumerate() {
-            let rows = &mut out[i * n + link_row(k)..i * n + link_row(k + 1)];
-            for (o, v) in rows.iter_mut().zip(b.iter()) {
-                *o = -*v;
-            }
+            columns,
+            n,
+            row: link_row(k),
         }
     }
 }
 
-/// The tendons' routing points r, r', r'' at every interval's end node and midpoint, which a
-/// workspace keeps between the Jacobians that form the tension columns
-/// ([`System::jacobian_and_tensions`]): they depend on the routings, the rod's length and
+/// The tendons' routing points r, r', r'' at every interval's end node and midpoint, kept
+/// between the Jacobians that form the tension columns ([`TensionSink`]): they depend on the routings, the rod's length and
 /// the arc lengths only, not on the state, and a slack tendon (no point kept by eq. 13's
 /// assembly) needs them at every point (a helical routing's a sine and a cosine each).
 /// Computed by [`Routing::at`] as the pass would, so the same bits; an interval's are
@@ -78,7 +72,7 @@ impl TensionSink {
 /// when the routings or the length differ. Not kept for a robot with a user routing
 /// ([`Routing::Custom`]: a closure, which cannot be compared).
 #[derive(Default)]
-pub(crate) struct RoutingPoints {
+struct RoutingPoints {
     /// The routings' parameters and the rod's length the points are for; empty: none kept.
     key: Vec<f64>,
     /// Per link, the arc lengths of its end node and midpoint the points were computed at
@@ -239,8 +233,8 @@ impl System<'_> {
     /// The residual into `out`, the Jacobian values into `values` (as [`System::jacobian`],
     /// the same bits), and -dF/dtau_i of every tendon into `tensions` (column-major; the
     /// right-hand sides of the tension columns: [`System::parameter_columns`] with
-    /// [`Columns::Tensions`] negated, to rounding), with the routing points kept in `routing`
-    /// between calls ([`RoutingPoints`]): each interval's
+    /// [`Columns::Tensions`] negated, to rounding), with the buffers `sink` keeps between
+    /// calls: each interval's
     /// tension rows from the same assembly and factors of eq. 13 at its nodes and midpoint
     /// as its Jacobian block, the midpoint's chain rule through the linearization's
     /// d(v', u')/d(v, u) (docs/sensitivity.md, "Tension columns formed with the verdict's
@@ -254,13 +248,11 @@ impl System<'_> {
         out: &mut [f64],
         values: &mut [f64],
         tensions: &mut [f64],
-        routing: &mut RoutingPoints,
+        sink: &mut TensionSink,
     ) -> Result<()> {
         debug_assert!(self.friction.is_none());
-        let mut sink = TensionSink::new(self, std::mem::take(routing));
-        let result = self.jacobian_with(x, out, values, None, Some((&mut sink, &mut *tensions)), None);
-        *routing = sink.routing;
-        result?;
+        sink.prepare(self);
+        self.jacobian_with(x, out, values, None, Some((sink, &mut *tensions)), None)?;
         self.point_load_columns(x, Columns::Tensions, tensions)?;
         self.negate_outer_rows(tensions);
         Ok(())
@@ -280,13 +272,11 @@ impl System<'_> {
         values: &mut [f64],
         rates: &mut [Vector6<f64>],
         tensions: &mut [f64],
-        routing: &mut RoutingPoints,
+        sink: &mut TensionSink,
     ) -> Result<()> {
         debug_assert!(self.friction.is_none());
-        let mut sink = TensionSink::new(self, std::mem::take(routing));
-        let result = self.jacobian_with(x, out, values, None, Some((&mut sink, &mut *tensions)), Some(rates));
-        *routing = sink.routing;
-        result?;
+        sink.prepare(self);
+        self.jacobian_with(x, out, values, None, Some((sink, &mut *tensions)), Some(rates))?;
         self.outer_rows(x, out)?;
         self.point_load_columns(x, Columns::Tensions, tensions)?;
         self.negate_outer_rows(tensions);
@@ -299,16 +289,18 @@ impl System<'_> {
     /// the bits of negating the whole columns afterwards).
     fn negate_outer_rows(&self, out: &mut [f64]) {
         let n = self.unknowns();
-        let tip = tip_row(self.mesh.nodes.len());
-        for column in out.chunks_exact_mut(n) {
-            let jumps = (0..self.interval_sites.len()).filter(|&k| self.interval_sites[k].is_none());
-            let rows = std::iter::once(0..BASE_ROWS)
-                .chain(jumps.map(|k| link_row(k)..link_row(k + 1)))
-                .chain(std::iter::once(tip..n));
-            for r in rows {
-                column[r].iter_mut().for_each(|v| *v = -*v);
+        let negate = |out: &mut [f64], rows: std::ops::Range<usize>| {
+            for column in out.chunks_exact_mut(n) {
+                column[rows.clone()].iter_mut().for_each(|v| *v = -*v);
+            }
+        };
+        negate(out, 0..BASE_ROWS);
+        for (k, sites) in self.interval_sites.iter().enumerate() {
+            if sites.is_none() {
+                negate(out, link_row(k)..link_row(k + 1));
             }
         }
+        negate(out, tip_row(self.mesh.nodes.len())..n);
     }
 
     /// The rows of [`System::parameter_columns`] outside the intervals: base rows 0, a
@@ -400,13 +392,7 @@ mod tests {
             let (mut residual, mut with) = (vec![0.0; n], vec![0.0; values.len()]);
             let mut columns = vec![f64::NAN; n * width];
             system
-                .jacobian_and_tensions(
-                    &x,
-                    &mut residual,
-                    &mut with,
-                    &mut columns,
-                    &mut RoutingPoints::default(),
-                )
+                .jacobian_and_tensions(&x, &mut residual, &mut with, &mut columns, &mut TensionSink::default())
                 .unwrap();
             let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
             assert_eq!(bits(&plain), bits(&residual));
@@ -458,7 +444,7 @@ mod tests {
             let system = System::new(Model::new(&robot), Mesh::from_points(&robot, &s).unwrap());
             let guess = crate::mesh::guess::rigid_estimate(&system.model, &system.mesh.nodes);
             // Kept from the answer's columns for the guess's, as a workspace keeps them.
-            let mut kept = RoutingPoints::default();
+            let mut kept = TensionSink::default();
             for x in [answer, guess] {
                 let n = system.unknowns();
                 let (mut residual, mut rates) = (vec![0.0; n], vec![Vector6::zeros(); x.len()]);
@@ -498,7 +484,7 @@ mod tests {
                 assert_eq!(bits(&flat(&rates), &flat(&both_rates)), None, "{case} {rod_model:?}");
                 let (mut r, mut v) = (vec![0.0; n], vec![0.0; values.len()]);
                 let mut want = vec![f64::NAN; n * width];
-                let fresh = &mut RoutingPoints::default();
+                let fresh = &mut TensionSink::default();
                 system
                     .jacobian_and_tensions(&x, &mut r, &mut v, &mut want, fresh)
                     .unwrap();
@@ -534,11 +520,11 @@ mod tests {
             }
             .at(s, length)
         }));
-        let mut kept = RoutingPoints::default();
+        let mut kept = TensionSink::default();
         for (k, robot) in [&robot, &robot, &moved, &custom].into_iter().enumerate() {
             let system = System::new(Model::new(robot), Mesh::from_points(robot, &s).unwrap());
             let (n, width) = (system.unknowns(), robot.tendons.len());
-            let columns = |routing: &mut RoutingPoints| {
+            let columns = |sink: &mut TensionSink| {
                 let (mut r, mut v) = (vec![0.0; n], vec![0.0; nonzeros(&system.mesh)]);
                 let mut c = vec![f64::NAN; n * width];
                 system
@@ -548,11 +534,11 @@ mod tests {
             };
             let with_kept = columns(&mut kept);
             assert_eq!(
-                bits(&with_kept, &columns(&mut RoutingPoints::default())),
+                bits(&with_kept, &columns(&mut TensionSink::default())),
                 None,
                 "robot {k}"
             );
-            assert_eq!(kept.key.is_empty(), k == 3, "robot {k}");
+            assert_eq!(kept.routing.key.is_empty(), k == 3, "robot {k}");
         }
     }
 }

@@ -146,7 +146,7 @@ impl Workspace {
             &mut self.values,
             &mut self.trial_rates,
             &mut columns,
-            &mut self.routing_points,
+            &mut self.tension_sink,
         );
         match result {
             Ok(()) => {
@@ -198,7 +198,7 @@ impl Workspace {
                 &mut self.trial_residual,
                 &mut self.values,
                 &mut columns,
-                &mut self.routing_points,
+                &mut self.tension_sink,
             )
             .is_ok();
         if ok {
