@@ -325,7 +325,14 @@ impl System<'_> {
         // not the whole buffer.
         for column in out.chunks_exact_mut(n) {
             column[..BASE_ROWS].fill(0.0);
-            for k in (0..x.len() - 1).filter(|&k| self.interval_sites[k].is_none()) {
+        }
+        for (k, _) in self
+            .interval_sites
+            .iter()
+            .enumerate()
+            .filter(|(_, sites)| sites.is_none())
+        {
+            for column in out.chunks_exact_mut(n) {
                 column[link_row(k)..link_row(k) + 6].fill(0.0);
             }
         }
