@@ -535,7 +535,7 @@ mod tests {
                 let (mut r, mut v) = (vec![0.0; n], vec![0.0; nonzeros(&system.mesh)]);
                 let mut c = vec![f64::NAN; n * width];
                 system
-                    .jacobian_and_tensions(&x, &mut r, &mut v, &mut c, routing)
+                    .jacobian_and_tensions(&x, &mut r, &mut v, &mut c, sink)
                     .unwrap();
                 c
             };
