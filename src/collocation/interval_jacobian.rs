@@ -305,7 +305,8 @@ fn interval_jacobian_kernel(
             *d += lin_m.d_strains * dy;
         }
         let mid = (sites.mid.inextensible, &frame_m.R, &frame_m.Jri);
-        // The right-hand sides' rows, h/6 (...): the rows' derivatives negated.
+        // The right-hand sides' rows, weight h/6: the rows' derivatives (weight -h/6)
+        // negated, bit for bit, written straight into the columns.
         let (columns, n, row) = (t.columns, t.n, t.row);
         derivative_rows(mid, h / 6.0, length, [t.start, t.end, t.mid, t.dy_mid], |i, b| {
             columns[i * n + row..i * n + row + b.len()].copy_from_slice(b.as_slice());

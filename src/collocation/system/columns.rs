@@ -64,13 +64,13 @@ impl TensionSink {
 }
 
 /// The tendons' routing points r, r', r'' at every interval's end node and midpoint, kept
-/// between the Jacobians that form the tension columns ([`TensionSink`]): they depend on the routings, the rod's length and
-/// the arc lengths only, not on the state, and a slack tendon (no point kept by eq. 13's
-/// assembly) needs them at every point (a helical routing's a sine and a cosine each).
-/// Computed by [`Routing::at`] as the pass would, so the same bits; an interval's are
-/// computed again when its arc lengths differ from those they were computed at, all of them
-/// when the routings or the length differ. Not kept for a robot with a user routing
-/// ([`Routing::Custom`]: a closure, which cannot be compared).
+/// between the Jacobians that form the tension columns ([`TensionSink`]): they depend on
+/// the routings, the rod's length and the arc lengths only, not on the state, and a slack
+/// tendon (no point kept by eq. 13's assembly) needs them at every point (a helical
+/// routing's a sine and a cosine each). Computed by [`Routing::at`] as the pass would, so
+/// the same bits; an interval's are computed again when its arc lengths differ from those
+/// they were computed at, all of them when the routings or the length differ. Not kept for
+/// a robot with a user routing ([`Routing::Custom`]: a closure, which cannot be compared).
 #[derive(Default)]
 struct RoutingPoints {
     /// The routings' parameters and the rod's length the points are for; empty: none kept.
@@ -112,7 +112,6 @@ impl RoutingPoints {
             return;
         }
         let width = robot.tendons.len();
-        let length = robot.length();
         if self.at.len() != sites.len() {
             let zero = RoutingPoint {
                 r: Vector3::zeros(),
@@ -534,9 +533,7 @@ mod tests {
             let columns = |sink: &mut TensionSink| {
                 let (mut r, mut v) = (vec![0.0; n], vec![0.0; nonzeros(&system.mesh)]);
                 let mut c = vec![f64::NAN; n * width];
-                system
-                    .jacobian_and_tensions(&x, &mut r, &mut v, &mut c, sink)
-                    .unwrap();
+                system.jacobian_and_tensions(&x, &mut r, &mut v, &mut c, sink).unwrap();
                 c
             };
             let with_kept = columns(&mut kept);

@@ -80,7 +80,7 @@ fn tension_rates_kernel(
 ) -> Result<Vector6<f64>> {
     let (v, u) = (state.1, state.2);
     point_derivatives(model, site, segment_end, state, along, out, |x_v, x_u, cached, out| {
-        tension_partials(model, site, segment_end, (v, u), (x_v, x_u), cached, None, out)
+        tension_partials(model, site, segment_end, (v, u), (x_v, x_u), (cached, None), out)
     })
 }
 
@@ -101,8 +101,7 @@ pub(super) fn tension_partials(
     segment_end: f64,
     (v, u): (&Vector3<f64>, &Vector3<f64>),
     (x_v, x_u): (&Vector3<f64>, &Vector3<f64>),
-    cached: &[TendonPoint],
-    routing: Option<&[RoutingPoint]>,
+    (cached, routing): (&[TendonPoint], Option<&[RoutingPoint]>),
     out: &mut [Vector6<f64>],
 ) -> Result<()> {
     let length = model.robot.length();
@@ -174,8 +173,7 @@ pub(crate) fn linearize_tensions_inline(
         segment_end,
         (v, u),
         (&x_v, &x_u),
-        cache.points(),
-        routing,
+        (cache.points(), routing),
         tensions,
     )?;
     for d in tensions.iter_mut().filter(|d| **d != Vector6::zeros()) {
