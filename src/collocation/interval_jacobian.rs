@@ -244,7 +244,14 @@ fn interval_jacobian_kernel(
         }
     };
     *end = match tensions.as_mut() {
-        Some(t) => linearize::linearize_tensions_inline(model, &sites.end, segment_end, (&b.R, &b.v, &b.u), t.end)?,
+        Some(t) => linearize::linearize_tensions_inline(
+            model,
+            &sites.end,
+            segment_end,
+            (&b.R, &b.v, &b.u),
+            t.end,
+            t.routing.map(|[end, _]| end),
+        )?,
         None => {
             let keep = kept.as_deref_mut().map(|k| &mut k.end);
             linearize_keeping(model, &sites.end, segment_end, &b.R, &b.v, &b.u, keep)?
@@ -263,7 +270,15 @@ fn interval_jacobian_kernel(
     let (v_m, u_m): (Vector3<f64>, Vector3<f64>) = (ym.fixed_rows::<3>(V).into(), ym.fixed_rows::<3>(U).into());
     let lin_m = match tensions.as_mut() {
         Some(t) => {
-            linearize::linearize_tensions_inline(model, &sites.mid, segment_end, (&frame_m.R, &v_m, &u_m), t.mid)?
+            let routing = t.routing.map(|[_, mid]| mid);
+            linearize::linearize_tensions_inline(
+                model,
+                &sites.mid,
+                segment_end,
+                (&frame_m.R, &v_m, &u_m),
+                t.mid,
+                routing,
+            )?
         }
         None => {
             let keep = kept.map(|k| {
@@ -290,7 +305,12 @@ fn interval_jacobian_kernel(
             *d += lin_m.d_strains * dy;
         }
         let mid = (sites.mid.inextensible, &frame_m.R, &frame_m.Jri);
-        derivative_rows(mid, h, length, [t.start, t.end, t.mid, t.dy_mid], t.rows);
+        // The right-hand sides' rows, weight h/6: the rows' derivatives (weight -h/6)
+        // negated, bit for bit, written straight into the columns.
+        let (columns, n, row) = (t.columns, t.n, t.row);
+        derivative_rows(mid, h / 6.0, length, [t.start, t.end, t.mid, t.dy_mid], |i, b| {
+            columns[i * n + row..i * n + row + b.len()].copy_from_slice(b.as_slice());
+        });
     }
     Ok((residual, lin0.rates))
 }

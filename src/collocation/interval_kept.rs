@@ -5,22 +5,28 @@
 
 #![allow(non_snake_case)] // R for rotation matrices, as the paper writes them
 
-use super::residual::Block;
 use crate::model::linearize;
+use crate::model::routing::RoutingPoint;
 use nalgebra::{Matrix3, Vector6};
 
 /// The buffers of one interval's tension columns that [`interval_jacobian`](super::residual::interval_jacobian) fills besides
 /// the Jacobian (one entry per tendon in each): d(v', u')/dtau_i at the start node (read
 /// when the start node's linearization is given, as the previous interval's `end`, else
 /// written), at the end node and at the midpoint (its total derivative), the midpoint's
-/// strain motion, and the interval rows' derivatives dF/dtau_i (scaled), as
-/// `residual::interval_derivatives` gives them with `linearize::tension_rates`.
+/// strain motion; the columns the interval's rows of the right-hand sides -dF/dtau_i
+/// (scaled: `residual::interval_derivatives` with `linearize::tension_rates`, negated) go
+/// into, column i from `columns[i n]`, the interval's rows from `row` on; and every
+/// tendon's routing point at the end node and at the midpoint when they are kept (else
+/// each point evaluates the routings it needs).
 pub struct IntervalTensions<'t> {
     pub(crate) start: &'t mut [Vector6<f64>],
     pub(crate) end: &'t mut [Vector6<f64>],
     pub(crate) mid: &'t mut [Vector6<f64>],
     pub(crate) dy_mid: &'t mut [Vector6<f64>],
-    pub(crate) rows: &'t mut [Block<f64>],
+    pub(crate) columns: &'t mut [f64],
+    pub(crate) n: usize,
+    pub(crate) row: usize,
+    pub(crate) routing: Option<[&'t [RoutingPoint]; 2]>,
 }
 
 /// Eq. 13's factored matrix at an interval's three points and the midpoint's orientation,

@@ -299,25 +299,27 @@ pub(super) fn interval_derivatives(
     point(model, &sites.mid, segment_end, (&R_m, &v_m, &u_m), Some(dy_mid), d_mid)?;
     let Jri = so3::right_jacobian_inv(&theta_m);
     let mid = (sites.mid.inextensible, &R_m, &Jri);
-    derivative_rows(mid, h, model.robot.length(), [d_start, d_end, d_mid, dy_mid], out);
+    let rows = [&*d_start, &*d_end, &*d_mid, &*dy_mid];
+    derivative_rows(mid, -h / 6.0, model.robot.length(), rows, |i, b| out[i] = b);
     Ok(rates1)
 }
 
 /// The interval rows' derivatives of [`interval_derivatives`] from the rates' derivatives
 /// at node a, node b and the midpoint (its total derivative) and the midpoint's strain
 /// motion `dy_mid`, for an interval of length `h` whose midpoint has the rotation R_m and
-/// J_r(theta_m)^-1 (`mid`, with whether its rod is inextensible): out[i] = -h/6 (dF_0 +
-/// 4 dF_m + dF_1), scaled.
+/// J_r(theta_m)^-1 (`mid`, with whether its rod is inextensible): `write(i, rows)` for
+/// each parameter i with rows = `weight` (dF_0 + 4 dF_m + dF_1), scaled; the rows'
+/// derivatives for `weight` = -h/6, the right-hand sides (their negation, the same bits:
+/// rounding is symmetric in the sign) for h/6.
 #[inline(always)]
 pub(super) fn derivative_rows(
     (inextensible, R_m, Jri): (bool, &Matrix3<f64>, &Matrix3<f64>),
-    h: f64,
+    weight: f64,
     length: f64,
     [d_start, d_end, d_mid, dy_mid]: [&[Vector6<f64>]; 4],
-    out: &mut [Block<f64>],
+    mut write: impl FnMut(usize, Block<f64>),
 ) {
-    for (i, row) in out.iter_mut().enumerate() {
-        let dym = dy_mid[i];
+    for (i, &dym) in dy_mid.iter().enumerate() {
         // dF_0 + 4 dF_m + dF_1.
         let mut dF = Block::zeros();
         // The midpoint's position rate is R_m times the strain: on a Kirchhoff rod that is
@@ -330,6 +332,6 @@ pub(super) fn derivative_rows(
             .copy_from(&(Jri * dym.fixed_rows::<3>(3) * 4.0));
         dF.fixed_rows_mut::<6>(V)
             .copy_from(&(d_mid[i] * 4.0 + d_start[i] + d_end[i]));
-        *row = scale_rows(dF * (-h / 6.0), length);
+        write(i, scale_rows(dF * weight, length));
     }
 }

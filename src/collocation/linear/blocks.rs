@@ -74,6 +74,9 @@ pub struct BlockElimination {
     /// every one in `carried_rows[r]`), so that a panel row takes its slots in one copy;
     /// kept between factorings, as the panel.
     carried_rows: Vec<[f64; CARRIED]>,
+    /// How many leading slots of `carried_rows` the last factoring wrote (the others are
+    /// zero in every row).
+    carried_written: usize,
 }
 
 impl BlockElimination {
@@ -89,6 +92,7 @@ impl BlockElimination {
             links: nodes - 1,
             wide_panel: None,
             carried_rows: Vec::new(),
+            carried_written: 0,
         }
     }
 
@@ -185,6 +189,8 @@ impl BlockElimination {
         // The right-hand sides transposed, 0 past the last one, column by column (a
         // contiguous read each): gathering the slots of a panel row from the columns one at
         // a time cost about 60 instructions a row (a bounds check and a branch a slot).
+        // Slots past the last one are zeroed only where the last factoring wrote them (new
+        // rows come zeroed).
         let mut rows = std::mem::take(&mut self.carried_rows);
         rows.resize(n, [0.0; CARRIED]);
         for j in 0..CARRIED {
@@ -192,10 +198,11 @@ impl BlockElimination {
                 for (row, v) in rows.iter_mut().zip(&rhs[j * n..(j + 1) * n]) {
                     row[j] = *v;
                 }
-            } else {
+            } else if j < self.carried_written {
                 rows.iter_mut().for_each(|row| row[j] = 0.0);
             }
         }
+        self.carried_written = count;
         // Every slot written: the kept panel's old values are never read.
         let eliminated = self.eliminate_all::<WIDE, LAST_WIDE, { 2 * NODE }, NODE>(&mut panel, values, |row, slots| {
             slots.copy_from_slice(&rows[row]);

@@ -4,55 +4,166 @@
 //! sides of the sensitivities (docs/sensitivity.md, "Exact tension columns").
 
 use super::{Columns, System};
-use crate::collocation::residual::{self, Block, IntervalTensions};
+use crate::collocation::residual::{self, Block, IntervalSites, IntervalTensions};
 use crate::collocation::unknowns::{BASE_ROWS, link_row, tip_row};
 use crate::error::Result;
 use crate::model::equations::Side;
 use crate::model::linearize;
+use crate::model::robot::Robot;
+use crate::model::routing::{Routing, RoutingPoint};
 use crate::solution::State;
 use nalgebra::{Vector3, Vector6};
 
-/// The buffers of the tension columns formed with the Jacobian ([`System::jacobian_and_tensions`]):
-/// the rates' derivatives at an interval's start node, end node and midpoint, the
-/// midpoint's strain motion (one entry per tendon in each), and one interval's rows.
-pub(super) struct TensionSink {
+/// The buffers of the tension columns formed with the Jacobian ([`System::jacobian_and_tensions`]),
+/// which a workspace keeps between Jacobians: the rates' derivatives at an interval's start
+/// node, end node and midpoint, the midpoint's strain motion (one entry per tendon in
+/// each), and the tendons' routing points at the intervals' end nodes and midpoints.
+#[derive(Default)]
+pub(crate) struct TensionSink {
     rates: [Vec<Vector6<f64>>; 4],
-    block: Vec<Block<f64>>,
+    routing: RoutingPoints,
 }
 
 impl TensionSink {
-    /// Buffers for `width` tendons.
-    pub(super) fn new(width: usize) -> Self {
-        TensionSink {
-            rates: std::array::from_fn(|_| vec![Vector6::zeros(); width]),
-            block: vec![Block::zeros(); width],
+    /// Makes the buffers those of `system`'s tendons and routing points (computed again
+    /// where the kept ones are not `system`'s).
+    fn prepare(&mut self, system: &System) {
+        let width = system.model.robot.tendons.len();
+        for rates in &mut self.rates {
+            rates.resize(width, Vector6::zeros());
         }
+        self.routing.prepare(system.model.robot, &system.interval_sites);
     }
 
-    /// The buffers of the next interval for [`residual::interval_jacobian`]; with
-    /// `carried`, the start node's derivatives are the last interval's end ones.
-    pub(super) fn interval(&mut self, carried: bool) -> IntervalTensions<'_> {
+    /// The buffers of link `k` (an interval) for [`residual::interval_jacobian`], its rows
+    /// of the right-hand sides going into `columns` (`n` rows each); with `carried`, the
+    /// start node's derivatives are the last interval's end ones.
+    #[inline]
+    pub(super) fn interval<'t>(
+        &'t mut self,
+        carried: bool,
+        k: usize,
+        columns: &'t mut [f64],
+        n: usize,
+    ) -> IntervalTensions<'t> {
         if carried {
             self.rates.swap(0, 1);
         }
         let [start, end, mid, dy_mid] = &mut self.rates;
         IntervalTensions {
+            routing: self.routing.interval(k, start.len()),
             start,
             end,
             mid,
             dy_mid,
-            rows: &mut self.block,
-        }
-    }
-
-    /// Writes the last interval's rows, those of link `k`, into the columns `out` (column
-    /// i the i-th tendon's, `n` rows each).
-    pub(super) fn write(&self, k: usize, n: usize, out: &mut [f64]) {
-        for (i, b) in self.block.iter().enumerate() {
-            out[i * n + link_row(k)..i * n + link_row(k + 1)].copy_from_slice(b.as_slice());
+            columns,
+            n,
+            row: link_row(k),
         }
     }
 }
+
+/// The tendons' routing points r, r', r'' at every interval's end node and midpoint, kept
+/// between the Jacobians that form the tension columns ([`TensionSink`]): they depend on
+/// the routings, the rod's length and the arc lengths only, not on the state, and a slack
+/// tendon (no point kept by eq. 13's assembly) needs them at every point (a helical
+/// routing's a sine and a cosine each). Computed by [`Routing::at`] as the pass would, so
+/// the same bits; an interval's are computed again when its arc lengths differ from those
+/// they were computed at, all of them when the routings or the length differ. Not kept for
+/// a robot with a user routing ([`Routing::Custom`]: a closure, which cannot be compared).
+#[derive(Default)]
+struct RoutingPoints {
+    /// The routings' parameters and the rod's length the points are for; empty: none kept.
+    key: Vec<f64>,
+    /// Per link, the arc lengths of its end node and midpoint the points were computed at
+    /// (NaN: not computed).
+    at: Vec<[f64; 2]>,
+    /// Per link, every tendon's point at its end node, then at its midpoint.
+    points: Vec<RoutingPoint>,
+}
+
+impl RoutingPoints {
+    /// Makes the points those of `robot` at the end nodes and midpoints of the intervals
+    /// `sites` (one entry per link, None for a jump): all computed again unless they were
+    /// computed for `robot`'s routings and length, else a link's where its arc lengths
+    /// differ.
+    fn prepare(&mut self, robot: &Robot, sites: &[Option<IntervalSites>]) {
+        let length = robot.length();
+        let mut key = std::mem::take(&mut self.key);
+        let same = key.len() == KEY * robot.tendons.len() + 1
+            && key[0] == length
+            && robot
+                .tendons
+                .iter()
+                .zip(key[1..].chunks_exact(KEY))
+                .all(|(t, k)| routing_key(&t.routing).is_some_and(|r| r[..] == *k));
+        if !same {
+            key.clear();
+            self.at.clear();
+            self.points.clear();
+            let keys: Option<Vec<[f64; KEY]>> = robot.tendons.iter().map(|t| routing_key(&t.routing)).collect();
+            if let Some(keys) = keys {
+                key.push(length);
+                key.extend(keys.iter().flatten());
+            }
+        }
+        self.key = key;
+        if self.key.is_empty() {
+            return;
+        }
+        let width = robot.tendons.len();
+        if self.at.len() != sites.len() {
+            let zero = RoutingPoint {
+                r: Vector3::zeros(),
+                r_s: Vector3::zeros(),
+                r_ss: Vector3::zeros(),
+            };
+            self.at.resize(sites.len(), [f64::NAN; 2]);
+            self.points.resize(sites.len() * 2 * width, zero);
+        }
+        let links = self
+            .at
+            .iter_mut()
+            .zip(self.points.chunks_exact_mut(2 * width))
+            .zip(sites);
+        for ((at, points), sites) in links {
+            let Some(sites) = sites else { continue };
+            let s = [sites.end.s, sites.mid.s];
+            if *at != s {
+                for (points, s) in points.chunks_exact_mut(width).zip(s) {
+                    for (p, t) in points.iter_mut().zip(&robot.tendons) {
+                        *p = t.routing.at(s, length);
+                    }
+                }
+                *at = s;
+            }
+        }
+    }
+
+    /// Every tendon's routing point at link `k`'s end node and at its midpoint (`width`
+    /// tendons); None when none are kept (a user routing).
+    #[inline]
+    fn interval(&self, k: usize, width: usize) -> Option<[&[RoutingPoint]; 2]> {
+        if self.key.is_empty() {
+            return None;
+        }
+        let (end, mid) = self.points[2 * k * width..2 * (k + 1) * width].split_at(width);
+        Some([end, mid])
+    }
+}
+
+/// The kind and parameters that fix a routing's points on a rod of given length; None for
+/// a user routing.
+fn routing_key(routing: &Routing) -> Option<[f64; KEY]> {
+    match *routing {
+        Routing::Straight { x, y } => Some([0.0, x, y, 0.0]),
+        Routing::Helical { radius, turns, phase } => Some([1.0, radius, turns, phase]),
+        Routing::Custom(_) => None,
+    }
+}
+
+/// Numbers of a routing's key ([`routing_key`]).
+const KEY: usize = 4;
 
 impl System<'_> {
     /// The exact derivative of the residual in some parameters at the states `x`,
@@ -119,8 +230,10 @@ impl System<'_> {
     }
 
     /// The residual into `out`, the Jacobian values into `values` (as [`System::jacobian`],
-    /// the same bits), and dF/dtau_i of every tendon into `tensions` (column-major, as
-    /// [`System::parameter_columns`] with [`Columns::Tensions`], to rounding): each interval's
+    /// the same bits), and -dF/dtau_i of every tendon into `tensions` (column-major; the
+    /// right-hand sides of the tension columns: [`System::parameter_columns`] with
+    /// [`Columns::Tensions`] negated, to rounding), with the buffers `sink` keeps between
+    /// calls: each interval's
     /// tension rows from the same assembly and factors of eq. 13 at its nodes and midpoint
     /// as its Jacobian block, the midpoint's chain rule through the linearization's
     /// d(v', u')/d(v, u) (docs/sensitivity.md, "Tension columns formed with the verdict's
@@ -134,14 +247,17 @@ impl System<'_> {
         out: &mut [f64],
         values: &mut [f64],
         tensions: &mut [f64],
+        sink: &mut TensionSink,
     ) -> Result<()> {
         debug_assert!(self.friction.is_none());
-        let mut sink = TensionSink::new(self.model.robot.tendons.len());
-        self.jacobian_with(x, out, values, None, Some((&mut sink, &mut *tensions)), None)?;
-        self.point_load_columns(x, Columns::Tensions, tensions)
+        sink.prepare(self);
+        self.jacobian_with(x, out, values, None, Some((sink, &mut *tensions)), None)?;
+        self.point_load_columns(x, Columns::Tensions, tensions)?;
+        self.negate_outer_rows(tensions);
+        Ok(())
     }
 
-    /// [`System::jacobian_rates`] with the tension columns dF/dtau_i of
+    /// [`System::jacobian_rates`] with the tension columns' right-hand sides -dF/dtau_i of
     /// [`System::jacobian_and_tensions`] from the same evaluations (tendons without
     /// friction): the Jacobian at a trial point of Newton's for a verdict that keeps the
     /// tension columns.
@@ -155,12 +271,35 @@ impl System<'_> {
         values: &mut [f64],
         rates: &mut [Vector6<f64>],
         tensions: &mut [f64],
+        sink: &mut TensionSink,
     ) -> Result<()> {
         debug_assert!(self.friction.is_none());
-        let mut sink = TensionSink::new(self.model.robot.tendons.len());
-        self.jacobian_with(x, out, values, None, Some((&mut sink, &mut *tensions)), Some(rates))?;
+        sink.prepare(self);
+        self.jacobian_with(x, out, values, None, Some((sink, &mut *tensions)), Some(rates))?;
         self.outer_rows(x, out)?;
-        self.point_load_columns(x, Columns::Tensions, tensions)
+        self.point_load_columns(x, Columns::Tensions, tensions)?;
+        self.negate_outer_rows(tensions);
+        Ok(())
+    }
+
+    /// Negates the rows of the columns `out` outside the intervals (base rows, jumps, tip
+    /// rows), which [`System::point_load_columns`] wrote as dF/dq: with the interval rows
+    /// the sink wrote negated, the columns are then -dF/dq throughout (negation is exact:
+    /// the bits of negating the whole columns afterwards).
+    fn negate_outer_rows(&self, out: &mut [f64]) {
+        let n = self.unknowns();
+        let negate = |out: &mut [f64], rows: std::ops::Range<usize>| {
+            for column in out.chunks_exact_mut(n) {
+                column[rows.clone()].iter_mut().for_each(|v| *v = -*v);
+            }
+        };
+        negate(out, 0..BASE_ROWS);
+        for (k, sites) in self.interval_sites.iter().enumerate() {
+            if sites.is_none() {
+                negate(out, link_row(k)..link_row(k + 1));
+            }
+        }
+        negate(out, tip_row(self.mesh.nodes.len())..n);
     }
 
     /// The rows of [`System::parameter_columns`] outside the intervals: base rows 0, a
@@ -185,7 +324,14 @@ impl System<'_> {
         // not the whole buffer.
         for column in out.chunks_exact_mut(n) {
             column[..BASE_ROWS].fill(0.0);
-            for k in (0..x.len() - 1).filter(|&k| self.interval_sites[k].is_none()) {
+        }
+        for (k, _) in self
+            .interval_sites
+            .iter()
+            .enumerate()
+            .filter(|(_, sites)| sites.is_none())
+        {
+            for column in out.chunks_exact_mut(n) {
                 column[link_row(k)..link_row(k) + 6].fill(0.0);
             }
         }
@@ -252,13 +398,15 @@ mod tests {
             let (mut residual, mut with) = (vec![0.0; n], vec![0.0; values.len()]);
             let mut columns = vec![f64::NAN; n * width];
             system
-                .jacobian_and_tensions(&x, &mut residual, &mut with, &mut columns)
+                .jacobian_and_tensions(&x, &mut residual, &mut with, &mut columns, &mut TensionSink::default())
                 .unwrap();
             let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
             assert_eq!(bits(&plain), bits(&residual));
             assert_eq!(bits(&values), bits(&with));
             let mut pass = vec![f64::NAN; n * width];
             system.parameter_columns(&x, Columns::Tensions, &mut pass).unwrap();
+            // The right-hand sides: -dF/dtau.
+            pass.iter_mut().for_each(|v| *v = -*v);
             for i in 0..width {
                 let (a, b) = (&columns[i * n..(i + 1) * n], &pass[i * n..(i + 1) * n]);
                 let scale = b.iter().fold(0.0f64, |m, v| m.max(v.abs()));
@@ -301,6 +449,8 @@ mod tests {
             let answer: Vec<State> = solution.nodes.iter().map(|n| n.state()).collect();
             let system = System::new(Model::new(&robot), Mesh::from_points(&robot, &s).unwrap());
             let guess = crate::mesh::guess::rigid_estimate(&system.model, &system.mesh.nodes);
+            // Kept from the answer's columns for the guess's, as a workspace keeps them.
+            let mut kept = TensionSink::default();
             for x in [answer, guess] {
                 let n = system.unknowns();
                 let (mut residual, mut rates) = (vec![0.0; n], vec![Vector6::zeros(); x.len()]);
@@ -326,16 +476,73 @@ mod tests {
                 let mut both_rates = vec![Vector6::zeros(); x.len()];
                 let mut columns = vec![f64::NAN; n * width];
                 system
-                    .jacobian_rates_and_tensions(&x, &mut both, &mut both_values, &mut both_rates, &mut columns)
+                    .jacobian_rates_and_tensions(
+                        &x,
+                        &mut both,
+                        &mut both_values,
+                        &mut both_rates,
+                        &mut columns,
+                        &mut kept,
+                    )
                     .unwrap();
                 assert_eq!(bits(&residual, &both), None, "{case} {rod_model:?}");
                 assert_eq!(bits(&values, &both_values), None, "{case} {rod_model:?}");
                 assert_eq!(bits(&flat(&rates), &flat(&both_rates)), None, "{case} {rod_model:?}");
                 let (mut r, mut v) = (vec![0.0; n], vec![0.0; values.len()]);
                 let mut want = vec![f64::NAN; n * width];
-                system.jacobian_and_tensions(&x, &mut r, &mut v, &mut want).unwrap();
+                let fresh = &mut TensionSink::default();
+                system
+                    .jacobian_and_tensions(&x, &mut r, &mut v, &mut want, fresh)
+                    .unwrap();
                 assert_eq!(bits(&want, &columns), None, "{case} {rod_model:?}");
             }
+        }
+    }
+
+    /// Routing points kept from another robot's tension columns on the same mesh (the
+    /// helical tendon's phase and a straight tendon's offset moved) are computed again, and
+    /// kept ones give the columns of fresh ones bit for bit; a robot with a user routing
+    /// keeps none.
+    #[test]
+    fn kept_routing_points_give_the_bits_of_fresh_ones() {
+        let bits = |a: &[f64], b: &[f64]| a.iter().zip(b).position(|(a, b)| a.to_bits() != b.to_bits());
+        let robot = crate::cases::case_h();
+        let solution = crate::collocation::solve(&robot, &Options::default()).unwrap();
+        let s: Vec<f64> = solution.nodes.iter().map(|n| n.s).collect();
+        let x: Vec<State> = solution.nodes.iter().map(|n| n.state()).collect();
+        let mut moved = robot.clone();
+        moved.tendons[4].routing = Routing::Helical {
+            radius: 0.008,
+            turns: 1.0,
+            phase: 0.3,
+        };
+        moved.tendons[0].routing = Routing::Straight { x: 0.007, y: 0.001 };
+        let mut custom = robot.clone();
+        custom.tendons[4].routing = Routing::Custom(std::sync::Arc::new(|s: f64, length: f64| {
+            Routing::Helical {
+                radius: 0.008,
+                turns: 1.0,
+                phase: 0.0,
+            }
+            .at(s, length)
+        }));
+        let mut kept = TensionSink::default();
+        for (k, robot) in [&robot, &robot, &moved, &custom].into_iter().enumerate() {
+            let system = System::new(Model::new(robot), Mesh::from_points(robot, &s).unwrap());
+            let (n, width) = (system.unknowns(), robot.tendons.len());
+            let columns = |sink: &mut TensionSink| {
+                let (mut r, mut v) = (vec![0.0; n], vec![0.0; nonzeros(&system.mesh)]);
+                let mut c = vec![f64::NAN; n * width];
+                system.jacobian_and_tensions(&x, &mut r, &mut v, &mut c, sink).unwrap();
+                c
+            };
+            let with_kept = columns(&mut kept);
+            assert_eq!(
+                bits(&with_kept, &columns(&mut TensionSink::default())),
+                None,
+                "robot {k}"
+            );
+            assert_eq!(kept.routing.key.is_empty(), k == 3, "robot {k}");
         }
     }
 }

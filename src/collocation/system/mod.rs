@@ -21,7 +21,7 @@ use crate::mesh::Mesh;
 use crate::model::equations::{Model, Site};
 use crate::model::linearize;
 use crate::solution::State;
-use columns::TensionSink;
+pub(crate) use columns::TensionSink;
 use nalgebra::{SVector, Vector6};
 use num_dual::DualSVec64;
 
@@ -503,7 +503,9 @@ impl<'a> System<'a> {
                     let ends = (&x[k], &x[k + 1]);
                     let r = match (kept.as_deref_mut(), rates.as_deref_mut()) {
                         (None, Some(rates)) => {
-                            let sink = tensions.as_mut().map(|(sink, _)| sink.interval(start.is_some()));
+                            let sink = tensions
+                                .as_mut()
+                                .map(|(sink, columns)| sink.interval(start.is_some(), k, columns, n));
                             let (r, at_start) = residual::interval_jacobian_as_residual(
                                 &self.model,
                                 sites,
@@ -524,7 +526,9 @@ impl<'a> System<'a> {
                             ends,
                             start,
                             block,
-                            tensions.as_mut().map(|(sink, _)| sink.interval(start.is_some())),
+                            tensions
+                                .as_mut()
+                                .map(|(sink, columns)| sink.interval(start.is_some(), k, columns, n)),
                             end,
                         )?,
                         (Some(kept), rates) => {
@@ -548,9 +552,6 @@ impl<'a> System<'a> {
                             r
                         }
                     };
-                    if let Some((sink, columns)) = tensions.as_mut() {
-                        sink.write(k, n, columns);
-                    }
                     shared = true;
                     out[rows].copy_from_slice(r.as_slice());
                 }

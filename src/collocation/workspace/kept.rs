@@ -146,10 +146,10 @@ impl Workspace {
             &mut self.values,
             &mut self.trial_rates,
             &mut columns,
+            &mut self.tension_sink,
         );
         match result {
             Ok(()) => {
-                columns.iter_mut().for_each(|d| *d = -*d);
                 self.tension_rhs = Some(columns);
                 Ok(true)
             }
@@ -193,10 +193,15 @@ impl Workspace {
         }
         let mut columns = self.take_buffer(system.unknowns() * system.model.robot.tendons.len());
         let ok = system
-            .jacobian_and_tensions(x, &mut self.trial_residual, &mut self.values, &mut columns)
+            .jacobian_and_tensions(
+                x,
+                &mut self.trial_residual,
+                &mut self.values,
+                &mut columns,
+                &mut self.tension_sink,
+            )
             .is_ok();
         if ok {
-            columns.iter_mut().for_each(|d| *d = -*d);
             self.tension_rhs = Some(columns);
         } else {
             self.give_buffer(columns);

@@ -7,7 +7,7 @@ use super::linear::{Linear, LinearSolver};
 use super::newton::STEP_TOLERANCE;
 use super::residual::IntervalFactors;
 use super::stability::NeutralRoots;
-use super::system::{System, SystemBuffers};
+use super::system::{System, SystemBuffers, TensionSink};
 use super::unknowns::nonzeros;
 use crate::mesh::Mesh;
 use crate::report::{SolveReport, Stability};
@@ -141,6 +141,8 @@ pub struct Workspace {
     /// -dF/dtau_i of every tendon (column-major) that the last [`Workspace::verdict_at`]
     /// formed with the Jacobian in `values`; taken by [`Workspace::take_tension_rhs`].
     tension_rhs: Option<Vec<f64>>,
+    /// The buffers of the Jacobians that form the tension columns, kept for the next.
+    tension_sink: TensionSink,
 }
 
 impl Workspace {
@@ -176,6 +178,7 @@ impl Workspace {
             buffers: Vec::new(),
             keep_tensions: false,
             tension_rhs: None,
+            tension_sink: TensionSink::default(),
         })
     }
 

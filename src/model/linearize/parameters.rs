@@ -10,6 +10,7 @@
 use super::{Linearization, TendonCache, TendonPoint, assemble, breakdown, derivative};
 use crate::error::Result;
 use crate::model::equations::{Model, Site};
+use crate::model::routing::RoutingPoint;
 use nalgebra::{Matrix3, Matrix6, Matrix6x3, Vector3, Vector6};
 
 /// Eq. 13 (corrected) at (R, v, u) with the derivatives of its rates in every tendon's
@@ -79,15 +80,17 @@ fn tension_rates_kernel(
 ) -> Result<Vector6<f64>> {
     let (v, u) = (state.1, state.2);
     point_derivatives(model, site, segment_end, state, along, out, |x_v, x_u, cached, out| {
-        tension_partials(model, site, segment_end, (v, u), (x_v, x_u), cached, out)
+        tension_partials(model, site, segment_end, (v, u), (x_v, x_u), (cached, None), out)
     })
 }
 
 /// dF/dtau_i at fixed rates x = (x_v, x_u) and state (v, u) for every tendon that reaches
 /// `segment_end` (F = M x - rhs, [`tension_rates`]), into `out[i]` (the other entries left
 /// as they are), given the points of the first taut tendons eq. 13's assembly kept, in the
-/// order it kept them (`cached`). Always inlined, so that it is compiled with its caller's
-/// target features (the interval Jacobian's AVX2 build, [`linearize_tensions_inline`]).
+/// order it kept them (`cached`), and every tendon's routing point at the site if they are
+/// kept (`routing`, in the robot's order: [`Routing::at`](crate::model::routing::Routing::at) at `site.s`, else
+/// evaluated here). Always inlined, so that it is compiled with its caller's target
+/// features (the interval Jacobian's AVX2 build, [`linearize_tensions_inline`]).
 ///
 /// # Errors
 /// [`crate::Error::SingularRouting`] for a slack tendon without a tangent.
@@ -98,7 +101,7 @@ pub(super) fn tension_partials(
     segment_end: f64,
     (v, u): (&Vector3<f64>, &Vector3<f64>),
     (x_v, x_u): (&Vector3<f64>, &Vector3<f64>),
-    cached: &[TendonPoint],
+    (cached, routing): (&[TendonPoint], Option<&[RoutingPoint]>),
     out: &mut [Vector6<f64>],
 ) -> Result<()> {
     let length = model.robot.length();
@@ -115,7 +118,10 @@ pub(super) fn tension_partials(
                 ..tp
             },
             None => {
-                let rp = tendon.routing.at(site.s, length);
+                let rp = match routing {
+                    Some(points) => points[i],
+                    None => tendon.routing.at(site.s, length),
+                };
                 TendonPoint::new(i, model.tension_factor, &rp, site, v, u)?
             }
         };
@@ -137,6 +143,8 @@ pub(super) fn tension_partials(
 /// repeats [`super::linearize_keeping`]'s on purpose: one always-inlined helper for both,
 /// returning the assembly, measured 0.017 M instructions dearer per warm S solve with the
 /// tension columns kept (2026-12-06), which put the control Jacobian over its 25 %.
+/// `routing`: every tendon's routing point at the site when they are kept, as
+/// [`tension_partials`] takes them.
 ///
 /// # Errors
 /// As [`super::linearize`]; [`Error::SingularRouting`] also for a slack tendon without a tangent.
@@ -147,6 +155,7 @@ pub(crate) fn linearize_tensions_inline(
     segment_end: f64,
     (R, v, u): (&Matrix3<f64>, &Vector3<f64>, &Vector3<f64>),
     tensions: &mut [Vector6<f64>],
+    routing: Option<&[RoutingPoint]>,
 ) -> Result<Linearization> {
     let mut cache = TendonCache::new();
     let assembled = assemble(model, site, segment_end, (R, v, u), Some(&mut cache), None)?;
@@ -158,7 +167,15 @@ pub(crate) fn linearize_tensions_inline(
     let x_v = Vector3::new(x[0], x[1], x[2]);
     let x_u = Vector3::new(x[3], x[4], x[5]);
     tensions.fill(Vector6::zeros());
-    tension_partials(model, site, segment_end, (v, u), (&x_v, &x_u), cache.points(), tensions)?;
+    tension_partials(
+        model,
+        site,
+        segment_end,
+        (v, u),
+        (&x_v, &x_u),
+        (cache.points(), routing),
+        tensions,
+    )?;
     for d in tensions.iter_mut().filter(|d| **d != Vector6::zeros()) {
         let mut row = d.transpose();
         if !assembled.factor.solve_transposed_mut(&mut row) {
@@ -185,7 +202,7 @@ pub(crate) fn linearize_tensions(
     state: (&Matrix3<f64>, &Vector3<f64>, &Vector3<f64>),
     tensions: &mut [Vector6<f64>],
 ) -> Result<Linearization> {
-    linearize_tensions_inline(model, site, segment_end, state, tensions)
+    linearize_tensions_inline(model, site, segment_end, state, tensions, None)
 }
 
 /// Eq. 13 (corrected) at (R, v, u) with the derivatives of its rates in the six diagonal
