@@ -31,7 +31,8 @@ pub(crate) struct Profile<'a> {
     /// The model with the tensions of one point, for eq. 13 with friction.
     scratch: RefCell<Model<'a>>,
     /// Each link's last evaluation ([`interval`] through the system's residual or
-    /// Jacobian), which the border reads instead of evaluating the link again.
+    /// Jacobian), which the border reads instead of evaluating the link again, and a
+    /// stuck link's multiplier its capacity from ([`Profile::stuck_capacity`]).
     cache: RefCell<Vec<Option<IntervalLinearization>>>,
     /// Each link's capstan rows of the order-6 scheme from its last [`interval_order6`]
     /// (empty before one), for the error estimate.
