@@ -286,6 +286,25 @@ fn every_step_meets_the_default_tolerance_with_an_honest_estimate() {
 }
 
 #[test]
+fn a_stuck_steps_last_level_settles_in_two_passes() {
+    // A stuck link's multiplier divides by the capacity of the link's last evaluation, so
+    // Newton's own iterations carry it along with the shape and the second pass of march
+    // and Newton only confirms the pattern (docs/friction.md section 8, "Where a stuck
+    // step's levels spend").
+    let steps = loop_steps(&Default::default());
+    let first = &steps[11];
+    assert!(first.zones[0].zones.iter().any(|z| z.contact == Contact::Stick));
+    let iterations = first.solution.report.iterations;
+    // its last split level (226 intervals): 5 iterations in the first pass and 1 residual
+    // evaluation in the second, 6 measured; with the last march's capacity held over each
+    // Newton solve it took three passes, 6 + 3 + 2 = 11
+    assert!(
+        iterations <= 8,
+        "the first stuck step's last level took {iterations} iterations"
+    );
+}
+
+#[test]
 fn the_fine_loops_stuck_steps_have_honest_estimates() {
     // 50 steps each way: the stick/slip boundary moves about one link of the history's
     // mesh per step, so each stuck step's boundary lies next to the last one, the kink of

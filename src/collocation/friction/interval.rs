@@ -100,7 +100,7 @@ pub(crate) fn interval(
     // 1e-6 leaves a truncation of 1e-12 and rounding of 1e-10 of the rows' scale).
     let count = profile.count();
     for j in (0..count).filter(|&j| profile.on_link(j, k) && profile.sticks(j, k)) {
-        let Some(capacity) = profile.grips.as_ref().map(|g| g[j].capacities[k]).filter(|c| *c > 0.0) else {
+        let Some(capacity) = profile.stuck_capacity(j, k).filter(|c| *c > 0.0) else {
             continue;
         };
         let step = 1e-6;

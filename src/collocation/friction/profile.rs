@@ -31,7 +31,8 @@ pub(crate) struct Profile<'a> {
     /// The model with the tensions of one point, for eq. 13 with friction.
     scratch: RefCell<Model<'a>>,
     /// Each link's last evaluation ([`interval`] through the system's residual or
-    /// Jacobian), which the border reads instead of evaluating the link again.
+    /// Jacobian), which the border reads instead of evaluating the link again, and a
+    /// stuck link's multiplier its capacity from ([`Profile::stuck_capacity`]).
     cache: RefCell<Vec<Option<IntervalLinearization>>>,
     /// Each link's capstan rows of the order-6 scheme from its last [`interval_order6`]
     /// (empty before one), for the error estimate.
@@ -275,19 +276,37 @@ impl<'a> Profile<'a> {
 
     /// The friction multipliers w_j of the slips on link k in a history (None in full
     /// slip: the motions' signs): -1 or +1 where a slip slides; where it sticks,
-    /// w = (z_b - z_a) / C with C its capacity on the link from the last march, so that
-    /// the tangential load follows the log tensions the stick rows set (a step behind, only
-    /// C, which the shape changes slowly, lags).
+    /// w = (z_b - z_a) / C with C from [`Profile::stuck_capacity`], so that the tangential
+    /// load follows the log tensions the stick rows set (only C, which the shape changes
+    /// slowly, lags: one evaluation of the link behind).
     pub(crate) fn multipliers(&self, k: usize) -> Option<Vec<f64>> {
         self.grips.as_ref().map(|g| {
             g.iter()
                 .enumerate()
                 .map(|(j, g)| match g.contacts.get(k) {
-                    Some(Contact::Stick) => stuck_multiplier(self.z[j][k], self.z[j][k + 1], g.capacities[k]),
+                    Some(Contact::Stick) => {
+                        stuck_multiplier(self.z[j][k], self.z[j][k + 1], self.stuck_capacity(j, k).unwrap_or(0.0))
+                    }
                     _ => g.multipliers.get(k).copied().unwrap_or(1.0),
                 })
                 .collect()
         })
+    }
+
+    /// The capacity C that slip j's multiplier on stuck link k divides by: the link's own
+    /// from its last evaluation (Newton's last iterate) when the profile keeps one, else
+    /// the last march's (None outside a history). With the march's C held over a whole
+    /// Newton solve, each pass of march and Newton only moved C by the shape's change over
+    /// the pass before (about 1e3 times less per pass): three or four passes per solve of
+    /// a stuck step. With the last evaluation's, Newton's own iterations carry C along and
+    /// the step settles on the second pass, at the same fixed point (docs/friction.md
+    /// section 8, "Where a stuck step's levels spend").
+    pub(crate) fn stuck_capacity(&self, j: usize, k: usize) -> Option<f64> {
+        let kept = self.cache.borrow()[k]
+            .as_ref()
+            .and_then(|lin| lin.capacity.get(j).copied())
+            .filter(|c| *c > 0.0);
+        kept.or_else(|| self.grips.as_ref().and_then(|g| g[j].capacities.get(k).copied()))
     }
 
     /// Whether slip j sticks on link k (a history's stick row replaces its capstan row).
