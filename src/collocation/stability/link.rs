@@ -52,25 +52,7 @@ pub(super) fn advance(
     next: &mut Fields,
     normalized: &mut Fields,
 ) -> Option<Link> {
-    #[cfg(target_arch = "x86_64")]
-    if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma") {
-        // SAFETY: the processor supports the features the function is compiled for.
-        return unsafe { advance_avx2(block, y, identity, next, normalized) };
-    }
-    advance_kernel(block, y, identity, next, normalized)
-}
-
-/// [`advance_kernel`] with AVX2 and FMA enabled.
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2,fma")]
-unsafe fn advance_avx2(
-    block: &[f64; NODE * LINK],
-    y: &Fields,
-    identity: bool,
-    next: &mut Fields,
-    normalized: &mut Fields,
-) -> Option<Link> {
-    advance_kernel(block, y, identity, next, normalized)
+    crate::simd::avx2_fma!(advance_kernel(block, y, identity, next, normalized))
 }
 
 /// [`advance`]'s arithmetic, on fixed-size arrays with loops of constant trip counts.
