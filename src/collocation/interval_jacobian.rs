@@ -14,6 +14,7 @@ use super::unknowns::{P, THETA, U, V};
 use crate::error::Result;
 use crate::model::equations::Model;
 use crate::model::linearize::{self, Linearization, linearize_keeping};
+use crate::simd::avx2_fma;
 use crate::solution::State;
 use nalgebra::{SMatrix, Vector3, Vector6};
 
@@ -106,7 +107,7 @@ fn interval_jacobian_tensions(
     as_residual: bool,
     end: &mut Linearization,
 ) -> Result<(Block<f64>, Vector6<f64>)> {
-    crate::simd::avx2_fma!(interval_jacobian_kernel(
+    avx2_fma!(interval_jacobian_kernel(
         model,
         sites,
         segment_end,
@@ -142,7 +143,7 @@ pub(super) fn interval_jacobian_keeping(
     as_residual: bool,
     end: &mut Linearization,
 ) -> Result<(Block<f64>, Vector6<f64>)> {
-    crate::simd::avx2_fma!(interval_jacobian_kernel(
+    avx2_fma!(interval_jacobian_kernel(
         model,
         sites,
         segment_end,

@@ -12,6 +12,7 @@ use crate::mesh::{Mesh, MeshNode, spare};
 use crate::model::equations::{Model, Site, Which};
 use crate::model::robot::RodModel;
 use crate::model::routing::RoutingPoint;
+use crate::simd::avx2_fma;
 use crate::so3;
 use crate::solution::{Node, Solution, State};
 use nalgebra::{Matrix3, Vector3};
@@ -280,7 +281,7 @@ fn rigid_estimate_fast(
     relative: f64,
     sums: Sums,
 ) -> Vec<State> {
-    crate::simd::avx2_fma!(rigid_estimate_in(model, nodes, b, relative, sums))
+    avx2_fma!(rigid_estimate_in(model, nodes, b, relative, sums))
 }
 
 /// [`rigid_estimate_to`] in the buffers `b` (their contents on entry are not read).

@@ -35,6 +35,7 @@ use crate::model::linearize::{Linearization, Point};
 use crate::model::robot::{Robot, TendonModel};
 use crate::model::tangential::{Slip, solve};
 use crate::model::tendon::Tendon;
+use crate::simd::avx2_fma;
 use crate::{Error, Readable};
 use nalgebra::allocator::Allocator;
 use nalgebra::{
@@ -284,7 +285,7 @@ pub(crate) fn linearize_into(
     derivatives: bool,
     out: &mut FrictionLinearization,
 ) -> Result<()> {
-    crate::simd::avx2_fma!(linearize_into_kernel(
+    avx2_fma!(linearize_into_kernel(
         model,
         site,
         segment_end,

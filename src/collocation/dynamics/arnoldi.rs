@@ -5,6 +5,7 @@
 
 use super::grows;
 use super::hessenberg;
+use crate::simd::avx2_fma;
 use nalgebra::{Complex, DMatrix};
 
 /// The Arnoldi steps after which a solve's verdict tests whether it may stop ([`settled`]):
@@ -345,7 +346,7 @@ fn last_component(h: &DMatrix<f64>, m: usize, theta: Complex<f64>, work: &mut Wo
 /// compiled for them: the same operations in the same order (Rust does not fuse a product
 /// and a sum into an FMA), so the same bits, in wider registers.
 fn orthogonalize(basis: &[Vec<f64>], next: &mut [f64], column: &mut [f64]) {
-    crate::simd::avx2_fma!(orthogonalize_kernel(basis, next, column));
+    avx2_fma!(orthogonalize_kernel(basis, next, column));
 }
 
 /// [`orthogonalize`]'s operations.

@@ -26,6 +26,7 @@ pub(crate) use super::profile::Profile;
 use crate::error::Result;
 use crate::model::equations::Site;
 use crate::model::friction::FrictionLinearization;
+use crate::simd::avx2_fma;
 use crate::so3;
 use crate::solution::State;
 use nalgebra::{DMatrix, SMatrix, Vector3, Vector6};
@@ -138,7 +139,7 @@ fn interval_at(
     w: Option<&[f64]>,
     jac: Option<&mut [f64]>,
 ) -> Result<IntervalLinearization> {
-    crate::simd::avx2_fma!(interval_at_kernel(profile, length, k, sites, segment_end, a, b, w, jac))
+    avx2_fma!(interval_at_kernel(profile, length, k, sites, segment_end, a, b, w, jac))
 }
 
 /// [`interval_at`]'s operations.

@@ -21,6 +21,7 @@
 //! the cost grows with the mesh, not with its square.
 
 use crate::collocation::unknowns::{BASE_ROWS, NODE};
+use crate::simd::avx2_fma;
 
 /// The shape of one elimination step and where its row operations and pivot rows are kept
 /// in the staircase's buffers ([`Staircase`]: `swaps`, `factors`, `upper`).
@@ -150,7 +151,7 @@ impl Staircase {
     /// AVX2 and FMA (checked at run time) compiled for them, as the solve: the same
     /// operations in the same order, so the same bits.
     pub(crate) fn factor(&mut self, fill: impl FnMut(Block, &mut [f64])) -> bool {
-        crate::simd::avx2_fma!(self.factor_kernel(fill))
+        avx2_fma!(self.factor_kernel(fill))
     }
 
     /// [`Staircase::factor`]'s operations: step by step, the panel of the carried rows over
@@ -200,7 +201,7 @@ impl Staircase {
     /// them, as the frictionless `solve_again` is: the same operations in the same order
     /// (Rust does not fuse a product and a sum into an FMA), so the same bits.
     pub(crate) fn solve(&mut self, rhs: impl FnMut(Block, &mut [f64]), out: impl FnMut(usize, &[f64])) -> bool {
-        crate::simd::avx2_fma!(self.solve_kernel(rhs, out))
+        avx2_fma!(self.solve_kernel(rhs, out))
     }
 
     /// [`Staircase::solve`]'s operations, in place in one buffer of the unknowns' length:

@@ -15,6 +15,7 @@
 use std::time::{Duration, Instant};
 
 use crate::collocation::unknowns::{BASE_COLUMNS, BASE_ROWS, NODE, THETA, TIP_COLUMNS, TIP_ROWS, link_row, tip_row};
+use crate::simd::avx2_fma;
 
 /// Rows carried from one step to the next: at step 0 the base rows; after each step the
 /// rows left over once a node's 12 pivots are chosen, as many as there are base rows.
@@ -101,7 +102,7 @@ impl BlockElimination {
     /// [`BlockElimination::factor_with_last`]: the same operations in the same order, the
     /// panels' row copies inlined as 32-byte moves instead of calls to `memcpy`.
     pub fn solve(&mut self, values: &[f64], rhs: &[f64], x: &mut [f64]) -> Option<(Duration, Duration)> {
-        crate::simd::avx2_fma!(self.solve_kernel(values, rhs, x))
+        avx2_fma!(self.solve_kernel(values, rhs, x))
     }
 
     /// [`BlockElimination::solve`]'s operations.
@@ -142,7 +143,7 @@ impl BlockElimination {
     /// [`BlockElimination::solve_again`]: the same operations in the same order, the panels'
     /// row copies inlined as 32-byte moves instead of calls to `memcpy`.
     pub fn factor_with_last(&mut self, values: &[f64], rhs: &[f64], count: usize, last: &mut [[f64; NODE]]) -> bool {
-        crate::simd::avx2_fma!(self.factor_with_last_kernel(values, rhs, count, last))
+        avx2_fma!(self.factor_with_last_kernel(values, rhs, count, last))
     }
 
     /// [`BlockElimination::factor_with_last`]'s operations.
@@ -260,7 +261,7 @@ impl BlockElimination {
     /// time) compiled for them: the same operations in the same order (Rust does not fuse a
     /// product and a sum into an FMA), so the same bits, in wider registers.
     pub fn solve_again(&self, rhs: &[f64], x: &mut [f64]) {
-        crate::simd::avx2_fma!(self.solve_again_kernel(rhs, x));
+        avx2_fma!(self.solve_again_kernel(rhs, x));
     }
 
     /// [`BlockElimination::solve_again`]'s operations.
@@ -328,7 +329,7 @@ impl BlockElimination {
     /// The same cost as [`BlockElimination::solve_again`]; compiled for AVX2 and FMA as it
     /// is (the same bits).
     pub fn solve_transposed(&self, c: &[f64], y: &mut [f64]) {
-        crate::simd::avx2_fma!(self.solve_transposed_kernel(c, y));
+        avx2_fma!(self.solve_transposed_kernel(c, y));
     }
 
     /// [`BlockElimination::solve_transposed`]'s operations.
@@ -437,7 +438,7 @@ fn eliminate_fast<const R: usize, const W: usize, const ALWAYS: usize>(
     rows: &mut [[f64; W]; R],
     record: &mut Record,
 ) -> bool {
-    crate::simd::avx2_fma!(eliminate::<R, W, ALWAYS>(rows, record))
+    avx2_fma!(eliminate::<R, W, ALWAYS>(rows, record))
 }
 
 /// Gaussian elimination with partial pivoting of the first [`NODE`] columns of `rows` (each

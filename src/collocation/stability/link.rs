@@ -5,6 +5,7 @@
 //! the caller's buffers, so the sweep copies no fields from link to link.
 
 use crate::collocation::unknowns::{NODE, P};
+use crate::simd::avx2_fma;
 
 /// The six Jacobi fields at a node: row r is component r of a node's unknowns (dp, dtheta,
 /// dv, du), column j field j.
@@ -52,7 +53,7 @@ pub(super) fn advance(
     next: &mut Fields,
     normalized: &mut Fields,
 ) -> Option<Link> {
-    crate::simd::avx2_fma!(advance_kernel(block, y, identity, next, normalized))
+    avx2_fma!(advance_kernel(block, y, identity, next, normalized))
 }
 
 /// [`advance`]'s arithmetic, on fixed-size arrays with loops of constant trip counts.

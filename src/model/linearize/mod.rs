@@ -103,6 +103,7 @@ mod point;
 pub(crate) use point::{Factored, Point, rates_and_solve};
 
 mod tendon;
+use crate::simd::avx2_fma;
 pub(crate) use tendon::TendonPoint;
 use tendon::hat_mul;
 pub(crate) use tendon::mul_hat;
@@ -361,7 +362,7 @@ fn rates_of(
     state: (&Matrix3<f64>, &Vector3<f64>, &Vector3<f64>),
     low: Option<&Vector3<f64>>,
 ) -> Result<Vector6<f64>> {
-    crate::simd::avx2_fma!(rates_kernel(model, site, segment_end, state, low))
+    avx2_fma!(rates_kernel(model, site, segment_end, state, low))
 }
 
 /// [`rates_of`]' operations: eq. 13's pass 1 alone.

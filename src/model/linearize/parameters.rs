@@ -10,6 +10,7 @@
 use super::{Linearization, TendonCache, TendonPoint, assemble, breakdown, derivative};
 use crate::error::Result;
 use crate::model::equations::{Model, Site};
+use crate::simd::avx2_fma;
 use nalgebra::{Matrix3, Matrix6, Matrix6x3, Vector3, Vector6};
 
 /// Eq. 13 (corrected) at (R, v, u) with the derivatives of its rates in every tendon's
@@ -45,7 +46,7 @@ pub(crate) fn tension_rates(
     along: Option<&[Vector6<f64>]>,
     out: &mut [Vector6<f64>],
 ) -> Result<Vector6<f64>> {
-    crate::simd::avx2_fma!(tension_rates_kernel(model, site, segment_end, state, along, out))
+    avx2_fma!(tension_rates_kernel(model, site, segment_end, state, along, out))
 }
 
 /// [`tension_rates`]' operations.
