@@ -6,7 +6,7 @@
 //! Both copies perform the same operations in the same order: Rust does not contract a
 //! product and a sum into an FMA, so enabling FMA only lets the compiler use the wider
 //! registers and moves, and both copies give the same bits (docs/architecture.md, "Run-time
-//! SIMD dispatch").
+//! SIMD dispatch in one place").
 
 #[cfg(target_arch = "x86_64")]
 use std::sync::atomic::{AtomicU8, Ordering};
@@ -32,8 +32,10 @@ pub(crate) fn avx2_fma_detected() -> bool {
 /// [`avx2_fma_detected`], else compiled for the baseline. `$kernel` should call an
 /// `#[inline(always)]` function, so that its whole body is compiled into each copy: the
 /// AVX2 copy is an always-inlined closure inside a function with the features enabled
-/// (`with_avx2_fma`, a symbol in the caller's module in a profile). Each call site compiles
-/// its own pair, so a kernel should be dispatched from one place.
+/// (`with_avx2_fma`, a symbol in the caller's module in a profile). The closure captures the
+/// call's arguments by value (`move`): by reference, the AVX2 copy read them through the
+/// caller's stack, a few more instructions a call (docs/benchmarks.md, "tidy17"). Each call
+/// site compiles its own pair, so a kernel should be dispatched from one place.
 #[cfg(target_arch = "x86_64")]
 macro_rules! avx2_fma {
     ($kernel:expr) => {{
