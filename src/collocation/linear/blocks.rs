@@ -433,7 +433,7 @@ fn replay_column<const C: usize, const N: usize>(record: &Record, v: &mut [f64; 
 }
 
 /// [`eliminate`] compiled for AVX2 and FMA when the processor has them (checked at run
-/// time, the result cached by std), else for the baseline x86-64 or other target.
+/// time, the result cached: `crate::simd`), else for the baseline x86-64 or other target.
 fn eliminate_fast<const R: usize, const W: usize, const ALWAYS: usize>(
     rows: &mut [[f64; W]; R],
     record: &mut Record,
