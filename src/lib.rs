@@ -63,6 +63,7 @@ pub mod model;
 pub mod plot;
 mod report;
 pub mod shooting;
+mod simd;
 pub mod so3;
 mod solution;
 

@@ -2,9 +2,9 @@
 //! analytic elastica), the default solve of all 32 Table-2 experiments against a fine
 //! reference, fixed meshes reported as such, and the interval cap with its estimate.
 
-use nalgebra::Vector3;
-use tdcr::cases::analytic::elastica_tip;
-use tdcr::{Loads, Robot, Rod, Section, cases, collocation};
+mod common;
+
+use tdcr::{Loads, Robot, Rod, cases, collocation};
 
 /// The solution on a 2048-interval fixed mesh: its tip error is below 1e-12 m on the
 /// reference cases (the order-4 error falls 16x per halving from 1.3e-12 m at 256).
@@ -36,16 +36,8 @@ fn estimate_is_asymptotically_exact_on_the_reference_cases() {
 
 #[test]
 fn estimate_matches_the_elastica() {
-    // The cantilever of tests/analytic.rs: EA = GA = 1e5 EI/L^2, a tip force P = lambda
-    // EI / L^2; the exact tip is the inextensible elastica's plus the shift P L / K.
-    let (length, ei) = (0.5, 2.0);
-    let stiff = 1e5 * ei / (length * length);
-    let rod = Rod::new(length, Section::explicit(stiff, stiff, ei, ei, 0.75 * ei));
     for lambda in [2.0, 10.0] {
-        let force = lambda * ei / (length * length);
-        let robot = Robot::new(rod.clone()).with_loads(Loads::none().with_tip_force(Vector3::new(force, 0.0, 0.0)));
-        let (x, z) = elastica_tip(lambda);
-        let exact = Vector3::new(x * length + force * length / stiff, 0.0, z * length);
+        let (robot, exact) = common::elastica_cantilever(lambda);
         for intervals in [16, 32] {
             let solution = collocation::solve(&robot, &collocation::Options::fixed(intervals)).unwrap();
             let error = (solution.tip_position() - exact).norm();

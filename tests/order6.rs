@@ -7,10 +7,9 @@
 mod common;
 
 use tdcr::advanced::{deferred, equations::Model, guess, mesh::Mesh, newton, system::System};
-use tdcr::cases::analytic::elastica_tip;
 use tdcr::collocation::{self, LinearSolver};
 use tdcr::nalgebra::{Matrix3, Vector3};
-use tdcr::{Loads, Method, Robot, Rod, RodModel, Section, Solution, SolveReport, Termination, cases, so3};
+use tdcr::{Method, Robot, RodModel, Solution, SolveReport, Termination, cases, so3};
 
 /// Collocation on 4096 intervals (order 4: errors about 1e-15 m on these robots) with
 /// Newton to 1e-14: solutions on 2048 and 4096 intervals agree to 5e-14 m.
@@ -25,20 +24,8 @@ fn reference(robot: &Robot) -> Solution {
 /// The order-6 tip on a uniform mesh of `intervals` and its reported estimate (m).
 fn order6_tip(robot: &Robot, intervals: usize) -> (Vector3<f64>, f64) {
     let solution = collocation::solve(robot, &collocation::Options::fixed(intervals)).unwrap();
-    let system = System::new(Model::new(robot), Mesh::uniform(robot, intervals).unwrap());
-    let mut ws = newton::Workspace::new(&system, LinearSolver::Blocks).unwrap();
-    let mut x = guess::interpolate(&system.model, &solution, &system.mesh);
-    let settings = newton::Settings {
-        tolerance: 1e-11,
-        max_iterations: 30,
-        reuse_factors: false,
-        stop_when_damped: false,
-    };
-    let mut report = SolveReport::new(Method::Collocation);
-    let (termination, _) = newton::run(&system, &mut ws, &mut x, &settings, &mut report);
-    assert_eq!(termination, Termination::Converged);
-    let (x6, estimate) = deferred::corrected(&system, &mut ws, &x, &mut report).unwrap().unwrap();
-    (x6.last().unwrap().p, estimate.tip_position)
+    let (tip, estimate) = order6_on_mesh(robot, &solution, Mesh::uniform(robot, intervals).unwrap(), 1e-11);
+    (tip.p, estimate.tip_position)
 }
 
 /// Observed orders between consecutive meshes of `meshes`, each error against the
@@ -134,16 +121,8 @@ fn tight_tolerances_need_far_fewer_intervals_and_report_honest_estimates() {
 
 #[test]
 fn the_estimate_is_above_the_elastica_error() {
-    // The cantilever of tests/analytic.rs (EA = GA = 1e5 EI/L^2, tip force lambda EI/L^2):
-    // the exact tip is the elastica's plus the shift P L / K.
-    let (length, ei) = (0.5, 2.0);
-    let stiff = 1e5 * ei / (length * length);
-    let rod = Rod::new(length, Section::explicit(stiff, stiff, ei, ei, 0.75 * ei));
     for lambda in [2.0, 10.0] {
-        let force = lambda * ei / (length * length);
-        let robot = Robot::new(rod.clone()).with_loads(Loads::none().with_tip_force(Vector3::new(force, 0.0, 0.0)));
-        let (x, z) = elastica_tip(lambda);
-        let exact = Vector3::new(x * length + force * length / stiff, 0.0, z * length);
+        let (robot, exact) = common::elastica_cantilever(lambda);
         let options = collocation::Options {
             tolerance: Some(1e-9),
             ..Default::default()
@@ -158,7 +137,7 @@ fn the_estimate_is_above_the_elastica_error() {
         // 5e-12 m: the elliptic-integral reference is good to 1e-11 relative (0.5 m tip)
         assert!(error <= e.tip_position + 5e-12, "lambda {lambda}: error {error:.3e} m");
         assert!(
-            error <= 1e-9 * length,
+            error <= 1e-9 * robot.length(),
             "lambda {lambda}: error {error:.3e} m above the tolerance"
         );
     }
@@ -422,11 +401,17 @@ fn slender_helices() -> Robot {
 /// The order-6 answer on the mesh through `points` (Newton to 1e-12 from `from` on it first)
 /// and its reported estimate.
 fn order6_on(robot: &Robot, from: &Solution, points: &[f64]) -> (tdcr::State, tdcr::ErrorEstimate) {
-    let system = System::new(Model::new(robot), Mesh::from_points(robot, points).unwrap());
+    order6_on_mesh(robot, from, Mesh::from_points(robot, points).unwrap(), 1e-12)
+}
+
+/// The order-6 tip state on `mesh` (Newton to `tolerance` from `from` on it first) and its
+/// reported estimate.
+fn order6_on_mesh(robot: &Robot, from: &Solution, mesh: Mesh, tolerance: f64) -> (tdcr::State, tdcr::ErrorEstimate) {
+    let system = System::new(Model::new(robot), mesh);
     let mut ws = newton::Workspace::new(&system, LinearSolver::Blocks).unwrap();
     let mut x = guess::interpolate(&system.model, from, &system.mesh);
     let settings = newton::Settings {
-        tolerance: 1e-12,
+        tolerance,
         max_iterations: 30,
         reuse_factors: false,
         stop_when_damped: false,

@@ -14,6 +14,7 @@ use super::unknowns::{P, THETA, U, V};
 use crate::error::Result;
 use crate::model::equations::Model;
 use crate::model::linearize::{self, Linearization, linearize_keeping};
+use crate::simd::avx2_fma;
 use crate::solution::State;
 use nalgebra::{SMatrix, Vector3, Vector6};
 
@@ -67,13 +68,7 @@ pub(super) fn interval_jacobian_into(
     tensions: Option<IntervalTensions>,
     end: &mut Linearization,
 ) -> Result<Block<f64>> {
-    #[cfg(target_arch = "x86_64")]
-    if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma") {
-        // SAFETY: the processor supports the features the function is compiled for.
-        return unsafe { interval_jacobian_avx2(model, sites, segment_end, (a, b), start, jac, tensions, false, end) }
-            .map(|(r, _)| r);
-    }
-    interval_jacobian_kernel(model, sites, segment_end, a, b, start, jac, None, tensions, false, end).map(|(r, _)| r)
+    interval_jacobian_tensions(model, sites, segment_end, (a, b), start, jac, tensions, false, end).map(|(r, _)| r)
 }
 
 /// [`interval_jacobian`] whose residual is bit for bit [`interval`](super::residual::interval)'s, with the rates at
@@ -95,12 +90,36 @@ pub(super) fn interval_jacobian_as_residual(
     tensions: Option<IntervalTensions>,
     end: &mut Linearization,
 ) -> Result<(Block<f64>, Vector6<f64>)> {
-    #[cfg(target_arch = "x86_64")]
-    if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma") {
-        // SAFETY: the processor supports the features the function is compiled for.
-        return unsafe { interval_jacobian_avx2(model, sites, segment_end, (a, b), start, jac, tensions, true, end) };
-    }
-    interval_jacobian_kernel(model, sites, segment_end, a, b, start, jac, None, tensions, true, end)
+    interval_jacobian_tensions(model, sites, segment_end, (a, b), start, jac, tensions, true, end)
+}
+
+/// [`interval_jacobian_as_residual`] or, with `as_residual` false, [`interval_jacobian_into`]
+/// (returning the rates at node a too): one AVX2 copy of the kernel for both.
+#[allow(clippy::too_many_arguments)]
+fn interval_jacobian_tensions(
+    model: &Model,
+    sites: &IntervalSites,
+    segment_end: f64,
+    (a, b): (&State, &State),
+    start: Option<&Linearization>,
+    jac: &mut [f64],
+    tensions: Option<IntervalTensions>,
+    as_residual: bool,
+    end: &mut Linearization,
+) -> Result<(Block<f64>, Vector6<f64>)> {
+    avx2_fma!(interval_jacobian_kernel(
+        model,
+        sites,
+        segment_end,
+        a,
+        b,
+        start,
+        jac,
+        None,
+        tensions,
+        as_residual,
+        end
+    ))
 }
 
 /// [`interval_jacobian`] that keeps eq. 13's factored matrix at its points in `kept` (the
@@ -124,14 +143,7 @@ pub(super) fn interval_jacobian_keeping(
     as_residual: bool,
     end: &mut Linearization,
 ) -> Result<(Block<f64>, Vector6<f64>)> {
-    #[cfg(target_arch = "x86_64")]
-    if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma") {
-        // SAFETY: the processor supports the features the function is compiled for.
-        return unsafe {
-            interval_jacobian_keeping_avx2(model, sites, segment_end, (a, b), start, jac, kept, as_residual, end)
-        };
-    }
-    interval_jacobian_kernel(
+    avx2_fma!(interval_jacobian_kernel(
         model,
         sites,
         segment_end,
@@ -143,67 +155,7 @@ pub(super) fn interval_jacobian_keeping(
         None,
         as_residual,
         end,
-    )
-}
-
-/// [`interval_jacobian_kernel`] with AVX2 and FMA enabled.
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2,fma")]
-#[allow(clippy::too_many_arguments)]
-unsafe fn interval_jacobian_avx2(
-    model: &Model,
-    sites: &IntervalSites,
-    segment_end: f64,
-    (a, b): (&State, &State),
-    start: Option<&Linearization>,
-    jac: &mut [f64],
-    tensions: Option<IntervalTensions>,
-    as_residual: bool,
-    end: &mut Linearization,
-) -> Result<(Block<f64>, Vector6<f64>)> {
-    interval_jacobian_kernel(
-        model,
-        sites,
-        segment_end,
-        a,
-        b,
-        start,
-        jac,
-        None,
-        tensions,
-        as_residual,
-        end,
-    )
-}
-
-/// [`interval_jacobian_kernel`] keeping the points' factors, with AVX2 and FMA enabled.
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2,fma")]
-#[allow(clippy::too_many_arguments)]
-unsafe fn interval_jacobian_keeping_avx2(
-    model: &Model,
-    sites: &IntervalSites,
-    segment_end: f64,
-    (a, b): (&State, &State),
-    start: Option<&Linearization>,
-    jac: &mut [f64],
-    kept: &mut IntervalFactors,
-    as_residual: bool,
-    end: &mut Linearization,
-) -> Result<(Block<f64>, Vector6<f64>)> {
-    interval_jacobian_kernel(
-        model,
-        sites,
-        segment_end,
-        a,
-        b,
-        start,
-        jac,
-        Some(kept),
-        None,
-        as_residual,
-        end,
-    )
+    ))
 }
 
 /// [`interval_jacobian`]'s operations; `kept` as in [`interval_jacobian_keeping`], `tensions`
@@ -317,7 +269,7 @@ fn interval_jacobian_kernel(
 
 /// The midpoint's F on the 18 columns: its (theta, v, u) columns of dF/dy times the
 /// midpoint's columns `dYm`, plus dF/dphi on the theta_a columns. Written out so that it
-/// inlines into [`interval_jacobian_avx2`] (nalgebra's product is a call compiled for the
+/// inlines into the AVX2 copy of [`interval_jacobian_kernel`] (nalgebra's product is a call compiled for the
 /// baseline there), with each entry's sum in the order of nalgebra's product (the k = 0
 /// term, then each further term added to it), so the same bits.
 #[inline(always)]

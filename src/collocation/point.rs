@@ -70,7 +70,7 @@ impl PointFrame {
 /// kinematics p' = R_k exp(theta) v, theta' = J_r(theta)^-1 u (v the strain of the
 /// coordinate, [`Site::strain`]: constant on a Kirchhoff rod), with the point's `frame`
 /// ([`PointFrame`] at y's theta; [`PointFrame::start`] only where that is exactly 0).
-/// Always inlined, so that in `residual::interval_jacobian_avx2` it is compiled for AVX2
+/// Always inlined, so that in the interval Jacobian's AVX2 copy it is compiled for AVX2
 /// too (the same operations in the same order).
 #[inline(always)]
 pub(super) fn rhs_linearized_inline(

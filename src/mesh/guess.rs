@@ -12,6 +12,7 @@ use crate::mesh::{Mesh, MeshNode, spare};
 use crate::model::equations::{Model, Site, Which};
 use crate::model::robot::RodModel;
 use crate::model::routing::RoutingPoint;
+use crate::simd::avx2_fma;
 use crate::so3;
 use crate::solution::{Node, Solution, State};
 use nalgebra::{Matrix3, Vector3};
@@ -280,25 +281,7 @@ fn rigid_estimate_fast(
     relative: f64,
     sums: Sums,
 ) -> Vec<State> {
-    #[cfg(target_arch = "x86_64")]
-    if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma") {
-        // SAFETY: the processor supports the features the function is compiled for.
-        return unsafe { rigid_estimate_avx2(model, nodes, b, relative, sums) };
-    }
-    rigid_estimate_in(model, nodes, b, relative, sums)
-}
-
-/// [`rigid_estimate_in`] with AVX2 and FMA enabled.
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2,fma")]
-unsafe fn rigid_estimate_avx2(
-    model: &Model,
-    nodes: &[MeshNode],
-    b: &mut SweepBuffers,
-    relative: f64,
-    sums: Sums,
-) -> Vec<State> {
-    rigid_estimate_in(model, nodes, b, relative, sums)
+    avx2_fma!(rigid_estimate_in(model, nodes, b, relative, sums))
 }
 
 /// [`rigid_estimate_to`] in the buffers `b` (their contents on entry are not read).

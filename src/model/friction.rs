@@ -35,6 +35,7 @@ use crate::model::linearize::{Linearization, Point};
 use crate::model::robot::{Robot, TendonModel};
 use crate::model::tangential::{Slip, solve};
 use crate::model::tendon::Tendon;
+use crate::simd::avx2_fma;
 use crate::{Error, Readable};
 use nalgebra::allocator::Allocator;
 use nalgebra::{
@@ -284,31 +285,16 @@ pub(crate) fn linearize_into(
     derivatives: bool,
     out: &mut FrictionLinearization,
 ) -> Result<()> {
-    #[cfg(target_arch = "x86_64")]
-    if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma") {
-        // SAFETY: the processor supports the features the function is compiled for.
-        return unsafe {
-            linearize_into_avx2(model, site, segment_end, state, slipping, multipliers, derivatives, out)
-        };
-    }
-    linearize_into_kernel(model, site, segment_end, state, slipping, multipliers, derivatives, out)
-}
-
-/// [`linearize_into_kernel`] with AVX2 and FMA enabled.
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2,fma")]
-#[allow(clippy::too_many_arguments)]
-unsafe fn linearize_into_avx2(
-    model: &Model,
-    site: &Site,
-    segment_end: f64,
-    state: (&Matrix3<f64>, &Vector3<f64>, &Vector3<f64>),
-    slipping: &[usize],
-    multipliers: Option<&[f64]>,
-    derivatives: bool,
-    out: &mut FrictionLinearization,
-) -> Result<()> {
-    linearize_into_kernel(model, site, segment_end, state, slipping, multipliers, derivatives, out)
+    avx2_fma!(linearize_into_kernel(
+        model,
+        site,
+        segment_end,
+        state,
+        slipping,
+        multipliers,
+        derivatives,
+        out
+    ))
 }
 
 /// [`linearize_into`]'s operations.

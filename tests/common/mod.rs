@@ -6,8 +6,10 @@
 
 pub mod cli;
 
+use tdcr::cases::analytic::elastica_tip;
+use tdcr::nalgebra::Vector3;
 use tdcr::shooting::{self, Options};
-use tdcr::{Result, Robot, Solution};
+use tdcr::{Loads, Result, Robot, Rod, Section, Solution};
 
 /// Every solver's result on `robot`, labelled by solver name, at tight tolerances.
 pub fn try_solve_all(robot: &Robot) -> Vec<(&'static str, Result<Solution>)> {
@@ -56,4 +58,20 @@ pub fn on_split_mesh(robot: &Robot, solution: &Solution, k: usize) -> Result<Sol
         ..Default::default()
     };
     tdcr::collocation::solve_from(robot, &fine, solution)
+}
+
+/// The cantilever of tests/analytic.rs (0.5 m, EI = 2 N m^2, EA = GA =
+/// 1e5 EI/L^2) under a tip force P = `lambda` EI/L^2 along x, and its exact tip: the
+/// inextensible elastica's plus the shift P L / K along the load.
+pub fn elastica_cantilever(lambda: f64) -> (Robot, Vector3<f64>) {
+    let (length, ei) = (0.5, 2.0);
+    let stiff = 1e5 * ei / (length * length);
+    let rod = Rod::new(length, Section::explicit(stiff, stiff, ei, ei, 0.75 * ei));
+    let force = lambda * ei / (length * length);
+    let robot = Robot::new(rod).with_loads(Loads::none().with_tip_force(Vector3::new(force, 0.0, 0.0)));
+    let (x, z) = elastica_tip(lambda);
+    (
+        robot,
+        Vector3::new(x * length + force * length / stiff, 0.0, z * length),
+    )
 }

@@ -5,6 +5,7 @@
 
 use super::grows;
 use super::hessenberg;
+use crate::simd::avx2_fma;
 use nalgebra::{Complex, DMatrix};
 
 /// The Arnoldi steps after which a solve's verdict tests whether it may stop ([`settled`]):
@@ -345,19 +346,7 @@ fn last_component(h: &DMatrix<f64>, m: usize, theta: Complex<f64>, work: &mut Wo
 /// compiled for them: the same operations in the same order (Rust does not fuse a product
 /// and a sum into an FMA), so the same bits, in wider registers.
 fn orthogonalize(basis: &[Vec<f64>], next: &mut [f64], column: &mut [f64]) {
-    #[cfg(target_arch = "x86_64")]
-    if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma") {
-        // SAFETY: the processor supports the features the function is compiled for.
-        return unsafe { orthogonalize_avx2(basis, next, column) };
-    }
-    orthogonalize_kernel(basis, next, column);
-}
-
-/// [`orthogonalize_kernel`] with AVX2 and FMA enabled.
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2,fma")]
-unsafe fn orthogonalize_avx2(basis: &[Vec<f64>], next: &mut [f64], column: &mut [f64]) {
-    orthogonalize_kernel(basis, next, column);
+    avx2_fma!(orthogonalize_kernel(basis, next, column));
 }
 
 /// [`orthogonalize`]'s operations.

@@ -26,6 +26,7 @@ pub(crate) use super::profile::Profile;
 use crate::error::Result;
 use crate::model::equations::Site;
 use crate::model::friction::FrictionLinearization;
+use crate::simd::avx2_fma;
 use crate::so3;
 use crate::solution::State;
 use nalgebra::{DMatrix, SMatrix, Vector3, Vector6};
@@ -138,30 +139,7 @@ fn interval_at(
     w: Option<&[f64]>,
     jac: Option<&mut [f64]>,
 ) -> Result<IntervalLinearization> {
-    #[cfg(target_arch = "x86_64")]
-    if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma") {
-        // SAFETY: the processor supports the features the function is compiled for.
-        return unsafe { interval_at_avx2(profile, length, k, sites, segment_end, a, b, w, jac) };
-    }
-    interval_at_kernel(profile, length, k, sites, segment_end, a, b, w, jac)
-}
-
-/// [`interval_at_kernel`] with AVX2 and FMA enabled.
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2,fma")]
-#[allow(clippy::too_many_arguments)]
-unsafe fn interval_at_avx2(
-    profile: &Profile,
-    length: f64,
-    k: usize,
-    sites: &IntervalSites,
-    segment_end: f64,
-    a: &State,
-    b: &State,
-    w: Option<&[f64]>,
-    jac: Option<&mut [f64]>,
-) -> Result<IntervalLinearization> {
-    interval_at_kernel(profile, length, k, sites, segment_end, a, b, w, jac)
+    avx2_fma!(interval_at_kernel(profile, length, k, sites, segment_end, a, b, w, jac))
 }
 
 /// [`interval_at`]'s operations.

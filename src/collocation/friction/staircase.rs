@@ -21,6 +21,7 @@
 //! the cost grows with the mesh, not with its square.
 
 use crate::collocation::unknowns::{BASE_ROWS, NODE};
+use crate::simd::avx2_fma;
 
 /// The shape of one elimination step and where its row operations and pivot rows are kept
 /// in the staircase's buffers ([`Staircase`]: `swaps`, `factors`, `upper`).
@@ -150,19 +151,7 @@ impl Staircase {
     /// AVX2 and FMA (checked at run time) compiled for them, as the solve: the same
     /// operations in the same order, so the same bits.
     pub(crate) fn factor(&mut self, fill: impl FnMut(Block, &mut [f64])) -> bool {
-        #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma") {
-            // SAFETY: the processor supports the features the function is compiled for.
-            return unsafe { self.factor_avx2(fill) };
-        }
-        self.factor_kernel(fill)
-    }
-
-    /// [`Staircase::factor_kernel`] with AVX2 and FMA enabled.
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2,fma")]
-    unsafe fn factor_avx2(&mut self, fill: impl FnMut(Block, &mut [f64])) -> bool {
-        self.factor_kernel(fill)
+        avx2_fma!(self.factor_kernel(fill))
     }
 
     /// [`Staircase::factor`]'s operations: step by step, the panel of the carried rows over
@@ -212,19 +201,7 @@ impl Staircase {
     /// them, as the frictionless `solve_again` is: the same operations in the same order
     /// (Rust does not fuse a product and a sum into an FMA), so the same bits.
     pub(crate) fn solve(&mut self, rhs: impl FnMut(Block, &mut [f64]), out: impl FnMut(usize, &[f64])) -> bool {
-        #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma") {
-            // SAFETY: the processor supports the features the function is compiled for.
-            return unsafe { self.solve_avx2(rhs, out) };
-        }
-        self.solve_kernel(rhs, out)
-    }
-
-    /// [`Staircase::solve_kernel`] with AVX2 and FMA enabled.
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2,fma")]
-    unsafe fn solve_avx2(&mut self, rhs: impl FnMut(Block, &mut [f64]), out: impl FnMut(usize, &[f64])) -> bool {
-        self.solve_kernel(rhs, out)
+        avx2_fma!(self.solve_kernel(rhs, out))
     }
 
     /// [`Staircase::solve`]'s operations, in place in one buffer of the unknowns' length:

@@ -15,6 +15,7 @@
 use std::time::{Duration, Instant};
 
 use crate::collocation::unknowns::{BASE_COLUMNS, BASE_ROWS, NODE, THETA, TIP_COLUMNS, TIP_ROWS, link_row, tip_row};
+use crate::simd::avx2_fma;
 
 /// Rows carried from one step to the next: at step 0 the base rows; after each step the
 /// rows left over once a node's 12 pivots are chosen, as many as there are base rows.
@@ -105,19 +106,7 @@ impl BlockElimination {
     /// [`BlockElimination::factor_with_last`]: the same operations in the same order, the
     /// panels' row copies inlined as 32-byte moves instead of calls to `memcpy`.
     pub fn solve(&mut self, values: &[f64], rhs: &[f64], x: &mut [f64]) -> Option<(Duration, Duration)> {
-        #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma") {
-            // SAFETY: the processor supports the features the function is compiled for.
-            return unsafe { self.solve_avx2(values, rhs, x) };
-        }
-        self.solve_kernel(values, rhs, x)
-    }
-
-    /// [`BlockElimination::solve_kernel`] with AVX2 and FMA enabled.
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2,fma")]
-    unsafe fn solve_avx2(&mut self, values: &[f64], rhs: &[f64], x: &mut [f64]) -> Option<(Duration, Duration)> {
-        self.solve_kernel(values, rhs, x)
+        avx2_fma!(self.solve_kernel(values, rhs, x))
     }
 
     /// [`BlockElimination::solve`]'s operations.
@@ -158,25 +147,7 @@ impl BlockElimination {
     /// [`BlockElimination::solve_again`]: the same operations in the same order, the panels'
     /// row copies inlined as 32-byte moves instead of calls to `memcpy`.
     pub fn factor_with_last(&mut self, values: &[f64], rhs: &[f64], count: usize, last: &mut [[f64; NODE]]) -> bool {
-        #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma") {
-            // SAFETY: the processor supports the features the function is compiled for.
-            return unsafe { self.factor_with_last_avx2(values, rhs, count, last) };
-        }
-        self.factor_with_last_kernel(values, rhs, count, last)
-    }
-
-    /// [`BlockElimination::factor_with_last_kernel`] with AVX2 and FMA enabled.
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2,fma")]
-    unsafe fn factor_with_last_avx2(
-        &mut self,
-        values: &[f64],
-        rhs: &[f64],
-        count: usize,
-        last: &mut [[f64; NODE]],
-    ) -> bool {
-        self.factor_with_last_kernel(values, rhs, count, last)
+        avx2_fma!(self.factor_with_last_kernel(values, rhs, count, last))
     }
 
     /// [`BlockElimination::factor_with_last`]'s operations.
@@ -297,19 +268,7 @@ impl BlockElimination {
     /// time) compiled for them: the same operations in the same order (Rust does not fuse a
     /// product and a sum into an FMA), so the same bits, in wider registers.
     pub fn solve_again(&self, rhs: &[f64], x: &mut [f64]) {
-        #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma") {
-            // SAFETY: the processor supports the features the function is compiled for.
-            return unsafe { self.solve_again_avx2(rhs, x) };
-        }
-        self.solve_again_kernel(rhs, x);
-    }
-
-    /// [`BlockElimination::solve_again_kernel`] with AVX2 and FMA enabled.
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2,fma")]
-    unsafe fn solve_again_avx2(&self, rhs: &[f64], x: &mut [f64]) {
-        self.solve_again_kernel(rhs, x);
+        avx2_fma!(self.solve_again_kernel(rhs, x));
     }
 
     /// [`BlockElimination::solve_again`]'s operations.
@@ -340,7 +299,7 @@ impl BlockElimination {
 
     /// The recorded row operations of every step on `rhs`: gives each step's transformed
     /// pivot rows to `pivot_rows(k, rows)` and returns the last node's transformed rows.
-    /// Always inlined, so that [`BlockElimination::solve_again_avx2`] runs it compiled for
+    /// Always inlined, so that the AVX2 copy of [`BlockElimination::solve_again`] runs it compiled for
     /// AVX2 too (as a call it was compiled for the baseline).
     #[inline(always)]
     fn replay_all(&self, rhs: &[f64], mut pivot_rows: impl FnMut(usize, &[f64])) -> [f64; NODE] {
@@ -377,19 +336,7 @@ impl BlockElimination {
     /// The same cost as [`BlockElimination::solve_again`]; compiled for AVX2 and FMA as it
     /// is (the same bits).
     pub fn solve_transposed(&self, c: &[f64], y: &mut [f64]) {
-        #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma") {
-            // SAFETY: the processor supports the features the function is compiled for.
-            return unsafe { self.solve_transposed_avx2(c, y) };
-        }
-        self.solve_transposed_kernel(c, y);
-    }
-
-    /// [`BlockElimination::solve_transposed_kernel`] with AVX2 and FMA enabled.
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2,fma")]
-    unsafe fn solve_transposed_avx2(&self, c: &[f64], y: &mut [f64]) {
-        self.solve_transposed_kernel(c, y);
+        avx2_fma!(self.solve_transposed_kernel(c, y));
     }
 
     /// [`BlockElimination::solve_transposed`]'s operations.
@@ -493,27 +440,12 @@ fn replay_column<const C: usize, const N: usize>(record: &Record, v: &mut [f64; 
 }
 
 /// [`eliminate`] compiled for AVX2 and FMA when the processor has them (checked at run
-/// time, the result cached by std), else for the baseline x86-64 or other target.
+/// time, the result cached: `crate::simd`), else for the baseline x86-64 or other target.
 fn eliminate_fast<const R: usize, const W: usize, const ALWAYS: usize>(
     rows: &mut [[f64; W]; R],
     record: &mut Record,
 ) -> bool {
-    #[cfg(target_arch = "x86_64")]
-    if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma") {
-        // SAFETY: the processor supports the features the function is compiled for.
-        return unsafe { eliminate_avx2::<R, W, ALWAYS>(rows, record) };
-    }
-    eliminate::<R, W, ALWAYS>(rows, record)
-}
-
-/// [`eliminate`] with AVX2 and FMA enabled.
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2,fma")]
-unsafe fn eliminate_avx2<const R: usize, const W: usize, const ALWAYS: usize>(
-    rows: &mut [[f64; W]; R],
-    record: &mut Record,
-) -> bool {
-    eliminate::<R, W, ALWAYS>(rows, record)
+    avx2_fma!(eliminate::<R, W, ALWAYS>(rows, record))
 }
 
 /// Gaussian elimination with partial pivoting of the first [`NODE`] columns of `rows` (each

@@ -5,6 +5,7 @@
 //! the caller's buffers, so the sweep copies no fields from link to link.
 
 use crate::collocation::unknowns::{NODE, P};
+use crate::simd::avx2_fma;
 
 /// The six Jacobi fields at a node: row r is component r of a node's unknowns (dp, dtheta,
 /// dv, du), column j field j.
@@ -24,6 +25,25 @@ const _: () = assert!(W.is_multiple_of(4));
 /// Unknowns of the position increment, the first columns of A and of B.
 const POSITION: usize = 3;
 const _: () = assert!(P == 0);
+
+/// The listed constants c written out, one instance of a step per row or column so that
+/// every loop in it has constant bounds: `array f(args); c...` is `[f(args, c), ...]`,
+/// `all f(args); c...` is `true && f::<c>(args) && ...` (stops at the first false), `each
+/// f(args); c...` is `f::<c>(args); ...`.
+macro_rules! unrolled {
+    (array $f:ident $args:tt; $($c:literal)*) => {
+        [$(unrolled!(@last $f $args $c)),*]
+    };
+    (all $f:ident $args:tt; $($c:literal)*) => {
+        true $(&& $f::<$c> $args)*
+    };
+    (each $f:ident $args:tt; $($c:literal)*) => {
+        $($f::<$c> $args;)*
+    };
+    (@last $f:ident ($($arg:expr),*) $c:literal) => {
+        $f($($arg,)* $c)
+    };
+}
 
 /// What [`advance`] found on one link besides the fields it wrote.
 pub(super) struct Link {
@@ -52,25 +72,7 @@ pub(super) fn advance(
     next: &mut Fields,
     normalized: &mut Fields,
 ) -> Option<Link> {
-    #[cfg(target_arch = "x86_64")]
-    if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma") {
-        // SAFETY: the processor supports the features the function is compiled for.
-        return unsafe { advance_avx2(block, y, identity, next, normalized) };
-    }
-    advance_kernel(block, y, identity, next, normalized)
-}
-
-/// [`advance_kernel`] with AVX2 and FMA enabled.
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2,fma")]
-unsafe fn advance_avx2(
-    block: &[f64; NODE * LINK],
-    y: &Fields,
-    identity: bool,
-    next: &mut Fields,
-    normalized: &mut Fields,
-) -> Option<Link> {
-    advance_kernel(block, y, identity, next, normalized)
+    avx2_fma!(advance_kernel(block, y, identity, next, normalized))
 }
 
 /// [`advance`]'s arithmetic, on fixed-size arrays with loops of constant trip counts.
@@ -163,50 +165,18 @@ fn carry(block: &[f64; NODE * LINK], y: &Fields, identity: bool, structured: boo
     }
     // Built row by row as a whole (no zeroing of the matrix first).
     const _: () = assert!(NODE == 12);
-    let mut m = [
-        row(block, &wide, identity, 0),
-        row(block, &wide, identity, 1),
-        row(block, &wide, identity, 2),
-        row(block, &wide, identity, 3),
-        row(block, &wide, identity, 4),
-        row(block, &wide, identity, 5),
-        row(block, &wide, identity, 6),
-        row(block, &wide, identity, 7),
-        row(block, &wide, identity, 8),
-        row(block, &wide, identity, 9),
-        row(block, &wide, identity, 10),
-        row(block, &wide, identity, 11),
-    ];
-    let position = structured || (eliminate::<0>(&mut m) && eliminate::<1>(&mut m) && eliminate::<2>(&mut m));
+    let mut m = unrolled!(array row(block, &wide, identity); 0 1 2 3 4 5 6 7 8 9 10 11);
+    let position = structured || unrolled!(all eliminate(&mut m); 0 1 2);
     if !position {
         return None;
     }
     const _: () = assert!(NODE == 12 && POSITION == 3);
-    let pivoted = eliminate::<3>(&mut m)
-        && eliminate::<4>(&mut m)
-        && eliminate::<5>(&mut m)
-        && eliminate::<6>(&mut m)
-        && eliminate::<7>(&mut m)
-        && eliminate::<8>(&mut m)
-        && eliminate::<9>(&mut m)
-        && eliminate::<10>(&mut m)
-        && eliminate::<11>(&mut m);
+    let pivoted = unrolled!(all eliminate(&mut m); 3 4 5 6 7 8 9 10 11);
     if !pivoted {
         return None;
     }
     let mut x = [[0.0f64; 8]; NODE];
-    substitute::<11>(&m, &mut x);
-    substitute::<10>(&m, &mut x);
-    substitute::<9>(&m, &mut x);
-    substitute::<8>(&m, &mut x);
-    substitute::<7>(&m, &mut x);
-    substitute::<6>(&m, &mut x);
-    substitute::<5>(&m, &mut x);
-    substitute::<4>(&m, &mut x);
-    substitute::<3>(&m, &mut x);
-    substitute::<2>(&m, &mut x);
-    substitute::<1>(&m, &mut x);
-    substitute::<0>(&m, &mut x);
+    unrolled!(each substitute(&m, &mut x); 11 10 9 8 7 6 5 4 3 2 1 0);
     for (o, row) in out.iter_mut().zip(&x) {
         o.copy_from_slice(&row[..6]);
     }
@@ -336,12 +306,7 @@ fn inverse6(q: &Block6) -> Option<Block6> {
         row[..6].copy_from_slice(&q[r]);
         row[6 + r] = 1.0;
     }
-    let reduced = jordan::<0>(&mut a)
-        && jordan::<1>(&mut a)
-        && jordan::<2>(&mut a)
-        && jordan::<3>(&mut a)
-        && jordan::<4>(&mut a)
-        && jordan::<5>(&mut a);
+    let reduced = unrolled!(all jordan(&mut a); 0 1 2 3 4 5);
     if !reduced {
         return None;
     }

@@ -103,6 +103,7 @@ mod point;
 pub(crate) use point::{Factored, Point, rates_and_solve};
 
 mod tendon;
+use crate::simd::avx2_fma;
 pub(crate) use tendon::TendonPoint;
 use tendon::hat_mul;
 pub(crate) use tendon::mul_hat;
@@ -361,25 +362,7 @@ fn rates_of(
     state: (&Matrix3<f64>, &Vector3<f64>, &Vector3<f64>),
     low: Option<&Vector3<f64>>,
 ) -> Result<Vector6<f64>> {
-    #[cfg(target_arch = "x86_64")]
-    if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma") {
-        // SAFETY: the processor supports the features the function is compiled for.
-        return unsafe { rates_avx2(model, site, segment_end, state, low) };
-    }
-    rates_kernel(model, site, segment_end, state, low)
-}
-
-/// [`rates_kernel`] with AVX2 and FMA enabled.
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2,fma")]
-unsafe fn rates_avx2(
-    model: &Model,
-    site: &Site,
-    segment_end: f64,
-    state: (&Matrix3<f64>, &Vector3<f64>, &Vector3<f64>),
-    low: Option<&Vector3<f64>>,
-) -> Result<Vector6<f64>> {
-    rates_kernel(model, site, segment_end, state, low)
+    avx2_fma!(rates_kernel(model, site, segment_end, state, low))
 }
 
 /// [`rates_of`]' operations: eq. 13's pass 1 alone.

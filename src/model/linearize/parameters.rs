@@ -11,6 +11,7 @@ use super::{Linearization, TendonCache, TendonPoint, assemble, breakdown, deriva
 use crate::error::Result;
 use crate::model::equations::{Model, Site};
 use crate::model::routing::RoutingPoint;
+use crate::simd::avx2_fma;
 use nalgebra::{Matrix3, Matrix6, Matrix6x3, Vector3, Vector6};
 
 /// Eq. 13 (corrected) at (R, v, u) with the derivatives of its rates in every tendon's
@@ -46,26 +47,7 @@ pub(crate) fn tension_rates(
     along: Option<&[Vector6<f64>]>,
     out: &mut [Vector6<f64>],
 ) -> Result<Vector6<f64>> {
-    #[cfg(target_arch = "x86_64")]
-    if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma") {
-        // SAFETY: the processor supports the features the function is compiled for.
-        return unsafe { tension_rates_avx2(model, site, segment_end, state, along, out) };
-    }
-    tension_rates_kernel(model, site, segment_end, state, along, out)
-}
-
-/// [`tension_rates_kernel`] with AVX2 and FMA enabled.
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2,fma")]
-unsafe fn tension_rates_avx2(
-    model: &Model,
-    site: &Site,
-    segment_end: f64,
-    state: (&Matrix3<f64>, &Vector3<f64>, &Vector3<f64>),
-    along: Option<&[Vector6<f64>]>,
-    out: &mut [Vector6<f64>],
-) -> Result<Vector6<f64>> {
-    tension_rates_kernel(model, site, segment_end, state, along, out)
+    avx2_fma!(tension_rates_kernel(model, site, segment_end, state, along, out))
 }
 
 /// [`tension_rates`]' operations.

@@ -1,0 +1,73 @@
+//! Run-time SIMD dispatch: the hot kernels (the interval Jacobian, the linearizations, the
+//! block eliminations, the rigid guess, the stability sweep, the Arnoldi orthogonalization)
+//! are compiled twice, for the baseline x86-64 and with AVX2 and FMA enabled, and
+//! [`avx2_fma!`] runs the AVX2 copy on a processor that has the features.
+//!
+//! Both copies perform the same operations in the same order: Rust does not contract a
+//! product and a sum into an FMA, so enabling FMA only lets the compiler use the wider
+//! registers and moves, and both copies give the same bits (docs/architecture.md, "Run-time
+//! SIMD dispatch in one place").
+
+#[cfg(target_arch = "x86_64")]
+use std::sync::atomic::{AtomicU8, Ordering};
+
+/// Whether the processor has AVX2 and FMA: detected on the first call, then one load of a
+/// cached answer (std's detection tests the two features apart).
+#[cfg(target_arch = "x86_64")]
+#[inline]
+pub(crate) fn avx2_fma_detected() -> bool {
+    /// 0 before the first detection, then 1 without the features, 2 with them.
+    static DETECTED: AtomicU8 = AtomicU8::new(0);
+    match DETECTED.load(Ordering::Relaxed) {
+        0 => {
+            let has = std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma");
+            DETECTED.store(1 + u8::from(has), Ordering::Relaxed);
+            has
+        }
+        cached => cached == 2,
+    }
+}
+
+/// Evaluates the call `$kernel` compiled with AVX2 and FMA enabled when
+/// [`avx2_fma_detected`], else compiled for the baseline. `$kernel` should call an
+/// `#[inline(always)]` function, so that its whole body is compiled into each copy: the
+/// AVX2 copy is an always-inlined closure inside a function with the features enabled
+/// (`with_avx2_fma`, a symbol in the caller's module in a profile). The closure captures the
+/// call's arguments by value (`move`): by reference, the AVX2 copy read them through the
+/// caller's stack, a few more instructions a call (docs/benchmarks.md, "tidy17"). Each call
+/// site compiles its own pair, so a kernel should be dispatched from one place.
+#[cfg(target_arch = "x86_64")]
+macro_rules! avx2_fma {
+    ($kernel:expr) => {{
+        /// Calls `kernel` with AVX2 and FMA enabled.
+        #[target_feature(enable = "avx2,fma")]
+        fn with_avx2_fma<T>(kernel: impl FnOnce() -> T) -> T {
+            kernel()
+        }
+        /// [`with_avx2_fma`], for a processor that has the features.
+        #[inline(always)]
+        fn detected_avx2_fma<T>(kernel: impl FnOnce() -> T) -> T {
+            // SAFETY: only called when `avx2_fma_detected()`: the processor has the
+            // features `with_avx2_fma` is compiled for.
+            unsafe { with_avx2_fma(kernel) }
+        }
+        if $crate::simd::avx2_fma_detected() {
+            detected_avx2_fma(
+                #[inline(always)]
+                move || $kernel,
+            )
+        } else {
+            $kernel
+        }
+    }};
+}
+
+/// Evaluates the call `$kernel` (other targets than x86-64: no run-time dispatch).
+#[cfg(not(target_arch = "x86_64"))]
+macro_rules! avx2_fma {
+    ($kernel:expr) => {
+        $kernel
+    };
+}
+
+pub(crate) use avx2_fma;
