@@ -71,6 +71,10 @@ pub struct BlockElimination {
     /// entry is written before it is read, so it is not zeroed each time); allocated by
     /// the first.
     wide_panel: Option<Box<[[f64; WIDE]; ROWS]>>,
+    /// The panel of [`BlockElimination::solve`], kept between solves as `wide_panel` is:
+    /// the right-hand side's padding columns are never written, so they stay zero (up to
+    /// their sign, which no other column reads) from the first solve's allocation.
+    panel: Option<Box<[[f64; COLS]; ROWS]>>,
     /// The right-hand sides of [`BlockElimination::factor_with_last`] row by row (row r of
     /// every one in `carried_rows[r]`), so that a panel row takes its slots in one copy;
     /// kept between factorings, as the panel.
@@ -92,6 +96,7 @@ impl BlockElimination {
             last_record: EMPTY,
             links: nodes - 1,
             wide_panel: None,
+            panel: None,
             carried_rows: Vec::new(),
             carried_written: 0,
         }
@@ -113,9 +118,12 @@ impl BlockElimination {
     #[inline(always)]
     fn solve_kernel(&mut self, values: &[f64], rhs: &[f64], x: &mut [f64]) -> Option<(Duration, Duration)> {
         let start = Instant::now();
-        let mut panel = [[0.0; COLS]; ROWS];
-        let last = self
-            .eliminate_all::<COLS, LAST_COLS, COLS, LAST_COLS>(&mut panel, values, |row, slots| slots[0] = rhs[row])?;
+        let mut panel = self.panel.take().unwrap_or_else(|| Box::new([[0.0; COLS]; ROWS]));
+        let last = self.eliminate_all::<COLS, LAST_COLS, COLS, LAST_COLS>(&mut panel, values, |row, slots| {
+            slots[0] = rhs[row];
+        });
+        self.panel = Some(panel);
+        let last = last?;
         let eliminated = start.elapsed();
         let start = Instant::now();
         let n = self.links;
