@@ -68,6 +68,81 @@ fn one_step_from_rest_is_the_full_slip_pull_solve() {
     assert!((delivered - pulled.tendons[0].delivered_tension).abs() < 1e-12);
 }
 
+/// The prototype with friction `mu` (E_t A_t 2000 N) on tendon 3 (x = -0.008 m: the top
+/// side, which the rod's own weight, bending the rod down, stretches) at `tension`, and
+/// tendon 1 without friction at 0 N; rigid (no stiffness) if `rigid`.
+fn top_tendon(tension: f64, rigid: bool) -> Robot {
+    let mut robot = cases::prototype().with_tensions(&[0.0, 0.0, tension, 0.0, 0.0]);
+    robot.tendons[2].friction = Some(Friction::pull(0.1));
+    robot.tendons[2].stiffness = (!rigid).then_some(2000.0);
+    robot
+}
+
+/// `robot`'s history of tendon `i`'s (index) tension through `values`.
+fn history_of(robot: &Robot, i: usize, values: &[f64]) -> Vec<HistoryStep> {
+    let ranges = Ranges::new(
+        robot.clone(),
+        vec![(Input::Parameter(Parameter::Tension(i)), values.to_vec())],
+    )
+    .unwrap();
+    solved(history(&ranges, &Default::default()).unwrap())
+}
+
+#[test]
+fn a_first_step_pulls_in_from_rest_a_tendon_the_rods_weight_stretches() {
+    // Main refused step 1 of both: "tendon 3 would go slack near s = 0.0581 m while stuck
+    // in its channel ...; take the history in smaller steps" (0.0605 m for the second).
+    // It laid the material at rest along the straight reference rod, which the weight's
+    // bending stretches on the top side by far more than 1 N does (E_t A_t r kappa, about
+    // 20 N near the base), so the march let the tendon out at the base and stuck it beyond.
+    let robot = top_tendon(1.0, false);
+    let pulled = tdcr::solve(&robot, &Default::default()).unwrap();
+    // Tendon 1 (no friction) at 0 then 1 N: step 1 chose the history's mesh, so it is the
+    // full-slip pull solve itself.
+    let steps = history_of(&robot, 0, &[0.0, 1.0]);
+    let distance = (tip(&steps[0]) - pulled.tip_position()).norm();
+    // 1e-10 m: the same equations on the same mesh, as for tendon 1 above
+    assert!(distance < 1e-10, "{distance:e} m from the full-slip pull solve");
+    let delivered = steps[0].solution.tendons[2].delivered_tension;
+    // 1e-12 N: the same profile to rounding
+    assert!((delivered - pulled.tendons[2].delivered_tension).abs() < 1e-12);
+    for step in &steps {
+        assert_eq!(step.zones[0].zones.len(), 1, "{:?}", step.zones);
+    }
+    assert_eq!(steps[0].zones[0].zones[0].contact, Contact::Pull);
+    // Tendon 1 then bends the rod down: tendon 3's path lengthens and it slides out.
+    assert_eq!(steps[1].zones[0].zones[0].contact, Contact::Release);
+    // Tendon 3 itself at 1 then 2 N: step 1 is solved on the 2 N step's mesh, so it agrees
+    // with the full-slip solve to the two answers' estimated errors.
+    let steps = history_of(&robot, 2, &[1.0, 2.0]);
+    let estimates = [&steps[0].solution, &pulled].map(|s| s.report.error_estimate.unwrap().tip_position);
+    let distance = (tip(&steps[0]) - pulled.tip_position()).norm();
+    assert!(
+        distance <= estimates[0] + estimates[1],
+        "{distance:e} m, estimates {estimates:?}"
+    );
+    for step in &steps {
+        assert_eq!(step.zones[0].zones.len(), 1);
+        assert_eq!(step.zones[0].zones[0].contact, Contact::Pull);
+    }
+}
+
+#[test]
+fn a_rigid_tendon_pulled_in_from_rest_needs_no_stiffness() {
+    // Main refused step 1: the rigid tendon "sticks" (the same stretched rest material).
+    let robot = top_tendon(1.0, true);
+    let steps = history_of(&robot, 2, &[1.0, 2.0]);
+    let pulled = tdcr::solve(&robot, &Default::default()).unwrap();
+    let estimates = [&steps[0].solution, &pulled].map(|s| s.report.error_estimate.unwrap().tip_position);
+    let distance = (tip(&steps[0]) - pulled.tip_position()).norm();
+    // The two meshes differ (the history's is the 2 N step's): their estimates bound it.
+    assert!(
+        distance <= estimates[0] + estimates[1],
+        "{distance:e} m, estimates {estimates:?}"
+    );
+    assert!(steps.iter().all(|s| s.zones[0].zones[0].contact == Contact::Pull));
+}
+
 #[test]
 fn a_one_step_history_reports_the_full_slip_solves_work_and_estimate() {
     let robot = prototype(0.1).with_tensions(&[2.0, 0.0, 0.0, 0.0, 0.0]);

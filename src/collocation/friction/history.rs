@@ -14,10 +14,12 @@
 //! the backbone with the links' rows and multipliers held; the march is repeated on the new
 //! shape until it changes nothing.
 
+mod refusal;
 mod repeat;
 mod slip;
 mod split;
 
+use refusal::{rigid, slack};
 pub(crate) use repeat::hold_last;
 use slip::check_slip;
 
@@ -66,6 +68,10 @@ pub(crate) struct Carried {
     /// The last step's answer as its stability verdict reads it (on the mesh it was solved
     /// on, split levels included); None before the first step.
     pub(crate) settled: Option<Settled>,
+    /// Whether no step has been solved yet: the tendons are at rest, slack in their
+    /// channels with no material laid along any path, so the first step pulls every loaded
+    /// one in from its actuator and it slides in all along (docs/friction.md section 8).
+    pub(crate) rest: bool,
 }
 
 /// A tendon's carried material on the history's mesh (docs/friction.md section 8).
@@ -114,6 +120,7 @@ impl Carried {
             report: self.report.clone(),
             factors: None,
             settled: None,
+            rest: self.rest,
         }
     }
 }
@@ -124,8 +131,9 @@ pub(crate) type StepAnswer = (Solution, Vec<(usize, Vec<(f64, f64, Contact)>)>);
 
 /// The start of a history of `robots` (validated, same geometry) from rest: the mesh the
 /// default full-slip `pull` solve picks for the step with the most tension on the tendons
-/// with friction, its solution as the first guess, and every tendon with friction
-/// unstretched on the unloaded rod (lambda = the rest path's speed |p'|), sliding in.
+/// with friction, its solution as the first guess, and every tendon with friction slack,
+/// sliding in, with no material yet (lambda NaN until the first step lays it: nothing
+/// reads it before, [`Carried::rest`]).
 ///
 /// # Errors
 /// As [`super::super::solve`] on that step.
@@ -162,30 +170,20 @@ pub(crate) fn start(robots: &[Robot], options: &Options) -> Result<Carried> {
     let x: Vec<State> = first.nodes.iter().map(|n| n.state()).collect();
     let model = Model::new(&pulled);
     let profile = Profile::new(&model, &mesh);
-    let length = pulled.length();
     let mut z = profile.z.clone();
     let mut grips = Vec::with_capacity(profile.count());
     for (j, &i) in profile.slipping.iter().enumerate() {
-        let tendon = &pulled.tendons[i];
         let span = profile.spans[j];
         let base = profile.base[j];
         for (n, value) in z[j].iter_mut().enumerate() {
             let tension = first.tendon_tensions[i][n.min(span)];
             *value = if base > 0.0 { (tension / base).ln() } else { 0.0 };
         }
-        let reference = mesh
-            .nodes
-            .iter()
-            .map(|node| {
-                let rest = pulled.rod.reference_on(node.s, node.segment_end);
-                length::speed(&tendon.routing.at(node.s, length), &rest.v_star, &rest.u_star)
-            })
-            .collect();
         grips.push(Grip {
             contacts: vec![Contact::Pull; span],
             multipliers: vec![-1.0; span],
             capacities: vec![0.0; span],
-            reference,
+            reference: vec![f64::NAN; mesh.nodes.len()],
             kinks: Vec::new(),
         });
     }
@@ -206,12 +204,15 @@ pub(crate) fn start(robots: &[Robot], options: &Options) -> Result<Carried> {
         report: first.report,
         factors: None,
         settled: None,
+        rest: true,
     })
 }
 
 /// The march of every tendon with friction along the shape `x` (module docs): new contacts,
 /// multipliers and predicted log tensions written into `border`'s profile and unknowns.
-/// A link within `tie` (log tension, [`grip::tie`]) of its friction limit sticks.
+/// A link within `tie` (log tension, [`grip::tie`]) of its friction limit sticks. At `rest`
+/// (the first step, [`Carried::rest`]) a loaded tendon is pulled in from slack: its material
+/// holds no stuck tension, so it slides in on every link.
 /// Each link's capacity and stuck tension are those of its evaluation at `x`, the profile's
 /// log tensions and contacts: when Newton has just `converged` to `x`, its last evaluation
 /// of every link (kept by the profile) is that one and is read, else the link is evaluated.
@@ -220,7 +221,7 @@ pub(crate) fn start(robots: &[Robot], options: &Options) -> Result<Carried> {
 /// # Errors
 /// A model breakdown on a link; a rigid tendon that would stick (statically
 /// indeterminate).
-fn march(border: &mut Capstan, x: &[State], converged: bool, tie: f64) -> Result<bool> {
+fn march(border: &mut Capstan, x: &[State], converged: bool, tie: f64, rest: bool) -> Result<bool> {
     let system = &border.system;
     let length = system.model.robot.length();
     let Some(profile) = system.friction.as_ref() else {
@@ -259,7 +260,9 @@ fn march(border: &mut Capstan, x: &[State], converged: bool, tie: f64) -> Result
             // would settle on, not the one the shape was solved with (`stuck_own`): a
             // link's own tension moves its stuck tension about 30 times as much the other
             // way, so a choice from the solved one alternates between sliding in and out.
-            let stuck_tension = if converged && base > 0.0 {
+            let stuck_tension = if rest {
+                0.0
+            } else if converged && base > 0.0 {
                 let at = profile.stuck_tension(j, k + 1, &sites.end, &x[k + 1], length);
                 profile.stuck_own(
                     j,
@@ -312,32 +315,6 @@ fn march(border: &mut Capstan, x: &[State], converged: bool, tie: f64) -> Result
     }
     border.reload();
     Ok(changed)
-}
-
-/// The error for tendon `i` whose stuck part would go slack near `s`.
-fn slack(i: usize, s: f64) -> Error {
-    error::invalid(
-        format!("tendons[{i}]"),
-        format!(
-            "tendon {} would go slack near s = {s:.4} m while stuck in its channel, which the stick/slip history does \
-             not model",
-            i + 1
-        ),
-        "take the history in smaller steps",
-    )
-}
-
-/// The error for rigid tendon `i` that sticks near `s`.
-fn rigid(i: usize, s: f64) -> Error {
-    error::invalid(
-        format!("tendons[{i}].stiffness"),
-        format!(
-            "tendon {} sticks in its channel near s = {s:.4} m during this step, but it is rigid: the tension of \
-             a stuck rigid tendon can be anything friction allows (statically indeterminate)",
-            i + 1
-        ),
-        "set the tendon's axial stiffness E_t A_t (`stiffness` in N) so that its stuck part stretches",
-    )
 }
 
 /// Solves one step of a history: `robot` (validated, the history's geometry) from the state
@@ -403,7 +380,8 @@ fn solve_on(robot: &Robot, options: &Options, carried: &mut Carried, held: Optio
     // The first step when it is the mesh-choosing full-slip solve itself (its answer, held
     // by the march): that solve's work and estimate are the step's.
     let template = solved.then(|| carried.report.clone());
-    let mut settled = held.is_none() && !march(&mut border, &x, false, tie)? && solved;
+    let rest = carried.rest;
+    let mut settled = held.is_none() && !march(&mut border, &x, false, tie, rest)? && solved;
     // A rigid tendon that would stick is refused by the march; one that is near sticking
     // may keep Newton or the passes from settling, which the hint names.
     let rigid_hint = robot
@@ -435,7 +413,7 @@ fn solve_on(robot: &Robot, options: &Options, carried: &mut Carried, held: Optio
         }
         // The contacts and multipliers on the converged shape: settled when Newton's were.
         border.load(Point::Current);
-        settled = held.is_some() || !march(&mut border, &x, true, tie)?;
+        settled = held.is_some() || !march(&mut border, &x, true, tie, rest)?;
     }
     if !settled {
         // Every pass's Newton converged: what failed is the zones (the termination says so).
@@ -561,11 +539,12 @@ fn solve_on(robot: &Robot, options: &Options, carried: &mut Carried, held: Optio
             order6.values[..=span].copy_from_slice(&if corrected { material(true) } else { lambda.clone() });
             order6.kinks.clear();
         }
-        // An unloaded tendon is slack: no normal force, so friction holds nothing back. A
-        // held solve is the answer's linear response to its material, with the answer's
+        // An unloaded tendon is slack: no normal force, so friction holds nothing back; at
+        // rest a loaded one is pulled in from slack, which has no material to slip against.
+        // A held solve is the answer's linear response to its material, with the answer's
         // checked pattern: where the slip is 0 to rounding its sign may flip by up to the
         // material's change, which `held` bounds.
-        if profile.base[j] > 0.0 {
+        if profile.base[j] > 0.0 && !rest {
             check_slip(i, &grips[j], &lambda, &x, span, held.unwrap_or(0.0))?;
         }
         let nodes: Vec<f64> = x[..=span].iter().map(|n| n.s).collect();
@@ -590,5 +569,6 @@ fn solve_on(robot: &Robot, options: &Options, carried: &mut Carried, held: Optio
     carried.grips = next;
     carried.x = x;
     carried.factors = Some((ws, border.stairs));
+    carried.rest = false;
     Ok(((solution, zones), stuck))
 }

@@ -194,6 +194,7 @@ fn material_error(
             report: fine.report.clone(),
             factors,
             settled: None,
+            rest: false,
         };
         for ((grip, old), corrected) in better.grips.iter_mut().zip(&before.grips).zip(&before.corrected) {
             let span = old.contacts.len();
@@ -346,6 +347,7 @@ fn split(robot: &Robot, before: &Carried, parts: &[usize], guess: &Solution, bou
         report: before.report.clone(),
         factors: None,
         settled: None,
+        rest: before.rest,
     })
 }
 
