@@ -144,6 +144,43 @@ fn a_rigid_tendon_pulled_in_from_rest_needs_no_stiffness() {
 }
 
 #[test]
+fn opposite_tendons_with_friction_close_their_loop() {
+    // Tendons 1 and 3 lie on opposite sides, each moving the other's stuck tension by a
+    // gain of the size of its own (docs/friction.md section 8, "Opposite tendons"): tendon
+    // 3 held at 1 N, tendon 1 pulled to 4.91 N in 20 steps and let back out.
+    let mut robot = top_tendon(1.0, false);
+    robot.tendons[0].friction = Some(Friction::pull(0.1));
+    robot.tendons[0].stiffness = Some(2000.0);
+    let ranges = ranges(robot, TOP, 20);
+    let steps = solved(history(&ranges, &Default::default()).unwrap());
+    assert_eq!(steps.len(), 41);
+    let rest = tip(&steps[0]);
+    // 1e-9 m: two Newton solves of the same robot, as for tendon 1 alone
+    let closing = (tip(&steps[40]) - rest).norm();
+    assert!(closing < 1e-9, "the loop is open by {closing} m");
+    for k in 1..20 {
+        let (up, down) = (&steps[k], &steps[40 - k]);
+        let (bent_up, bent_down) = ((tip(up) - rest).norm(), (tip(down) - rest).norm());
+        assert!(bent_down > bent_up, "step {k}: {bent_down} <= {bent_up}");
+    }
+    // Going up tendon 1 slides in and tendon 3, whose path the bending lengthens, out; the
+    // first step back lets tendon 1 out near its base and pulls tendon 3 in, both stuck
+    // beyond.
+    let contacts = |k: usize, t: usize| -> Vec<Contact> { steps[k].zones[t].zones.iter().map(|z| z.contact).collect() };
+    assert_eq!(
+        (contacts(10, 0), contacts(10, 1)),
+        (vec![Contact::Pull], vec![Contact::Release])
+    );
+    assert_eq!(contacts(21, 0), vec![Contact::Release, Contact::Stick]);
+    assert_eq!(contacts(21, 1), vec![Contact::Pull, Contact::Stick]);
+    for (k, step) in steps.iter().enumerate() {
+        let e = imbalance(&ranges.robot(k as f64).unwrap(), &step.solution);
+        // 1e-8: the solver's tolerance in the wrenches relative to the tension, as above
+        assert!(e.max() < 1e-8, "step {k}: imbalance {e:?}");
+    }
+}
+
+#[test]
 fn a_one_step_history_reports_the_full_slip_solves_work_and_estimate() {
     let robot = prototype(0.1).with_tensions(&[2.0, 0.0, 0.0, 0.0, 0.0]);
     let ranges = Ranges::new(
