@@ -144,39 +144,46 @@ fn a_rigid_tendon_pulled_in_from_rest_needs_no_stiffness() {
 }
 
 #[test]
-fn opposite_tendons_with_friction_close_their_loop() {
+fn opposite_tendons_with_friction_close_their_loops() {
     // Tendons 1 and 3 lie on opposite sides, each moving the other's stuck tension by a
-    // gain of the size of its own (docs/friction.md section 8, "Opposite tendons"): tendon
-    // 3 held at 1 N, tendon 1 pulled to 4.91 N in 20 steps and let back out.
-    let mut robot = top_tendon(1.0, false);
-    robot.tendons[0].friction = Some(Friction::pull(0.1));
-    robot.tendons[0].stiffness = Some(2000.0);
-    let ranges = ranges(robot, TOP, 20);
-    let steps = solved(history(&ranges, &Default::default()).unwrap());
-    assert_eq!(steps.len(), 41);
-    let rest = tip(&steps[0]);
-    // 1e-9 m: two Newton solves of the same robot, as for tendon 1 alone
-    let closing = (tip(&steps[40]) - rest).norm();
-    assert!(closing < 1e-9, "the loop is open by {closing} m");
-    for k in 1..20 {
-        let (up, down) = (&steps[k], &steps[40 - k]);
-        let (bent_up, bent_down) = ((tip(up) - rest).norm(), (tip(down) - rest).norm());
-        assert!(bent_down > bent_up, "step {k}: {bent_down} <= {bent_up}");
-    }
-    // Going up tendon 1 slides in and tendon 3, whose path the bending lengthens, out; the
-    // first step back lets tendon 1 out near its base and pulls tendon 3 in, both stuck
-    // beyond.
-    let contacts = |k: usize, t: usize| -> Vec<Contact> { steps[k].zones[t].zones.iter().map(|z| z.contact).collect() };
-    assert_eq!(
-        (contacts(10, 0), contacts(10, 1)),
-        (vec![Contact::Pull], vec![Contact::Release])
-    );
-    assert_eq!(contacts(21, 0), vec![Contact::Release, Contact::Stick]);
-    assert_eq!(contacts(21, 1), vec![Contact::Pull, Contact::Stick]);
-    for (k, step) in steps.iter().enumerate() {
-        let e = imbalance(&ranges.robot(k as f64).unwrap(), &step.solution);
-        // 1e-8: the solver's tolerance in the wrenches relative to the tension, as above
-        assert!(e.max() < 1e-8, "step {k}: imbalance {e:?}");
+    // gain of the size of its own (docs/friction.md section 8, "Opposite tendons"): one held
+    // at 1 N, the other pulled to 4.91 N and let back out. Before the march coupled them,
+    // tendon 1 in 10 steps failed at step 2 and tendon 3 in 10 steps at step 8 (Newton
+    // found no descent); all three were refused at step 1 on main.
+    for (swept, steps) in [(0, 10), (0, 20), (2, 10)] {
+        let held = 2 - swept;
+        let mut robot = top_tendon(0.0, false);
+        robot.tendons[0].friction = Some(Friction::pull(0.1));
+        robot.tendons[0].stiffness = Some(2000.0);
+        robot.tendons[held].set_tension(1.0);
+        let values: Vec<f64> = (0..=steps).map(|k| TOP * k as f64 / steps as f64).collect();
+        let ranges = Ranges::new(robot, vec![(Input::Parameter(Parameter::Tension(swept)), values)])
+            .unwrap()
+            .up_down();
+        let result = solved(history(&ranges, &Default::default()).unwrap());
+        assert_eq!(result.len(), 2 * steps + 1);
+        let rest = tip(&result[0]);
+        // 1e-9 m: two Newton solves of the same robot, as for tendon 1 alone
+        let closing = (tip(&result[2 * steps]) - rest).norm();
+        assert!(closing < 1e-9, "tendon {}: the loop is open by {closing} m", swept + 1);
+        // Zones are listed for tendons 1 and 3 in that order.
+        let (s, h) = (swept / 2, 1 - swept / 2);
+        let contacts =
+            |k: usize, t: usize| -> Vec<Contact> { result[k].zones[t].zones.iter().map(|z| z.contact).collect() };
+        // Going up the swept tendon slides in and the held one, whose path the bending
+        // lengthens, out; the first step back lets the swept one out near its base and pulls
+        // the held one in, both stuck beyond.
+        assert_eq!(
+            (contacts(steps, s), contacts(steps, h)),
+            (vec![Contact::Pull], vec![Contact::Release])
+        );
+        assert_eq!(contacts(steps + 1, s), vec![Contact::Release, Contact::Stick]);
+        assert_eq!(contacts(steps + 1, h), vec![Contact::Pull, Contact::Stick]);
+        for (k, step) in result.iter().enumerate() {
+            let e = imbalance(&ranges.robot(k as f64).unwrap(), &step.solution);
+            // 1e-8: the solver's tolerance in the wrenches relative to the tension, as above
+            assert!(e.max() < 1e-8, "tendon {}, step {k}: imbalance {e:?}", swept + 1);
+        }
     }
 }
 

@@ -195,6 +195,7 @@ fn material_error(
             factors,
             settled: None,
             rest: false,
+            tensions: fine.tensions.clone(),
         };
         for ((grip, old), corrected) in better.grips.iter_mut().zip(&before.grips).zip(&before.corrected) {
             let span = old.contacts.len();
@@ -348,6 +349,7 @@ fn split(robot: &Robot, before: &Carried, parts: &[usize], guess: &Solution, bou
         factors: None,
         settled: None,
         rest: before.rest,
+        tensions: robot.tendons.iter().map(|t| t.tension()).collect(),
     })
 }
 
