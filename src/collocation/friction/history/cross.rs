@@ -1,6 +1,7 @@
-//! The other tendons' share of a stuck tension on a converged shape (docs/friction.md
-//! section 8, "Opposite tendons"): the march's choices move the tendons' tensions at a node
-//! from those the shape was solved with, and each change moves every stuck tension there.
+//! The other tendons' share of a stuck tension in the march (docs/friction.md section 8,
+//! "Opposite tendons"): a step's inputs and the march's choices move the tendons' tensions
+//! at a node from those the shape was solved with, and each change moves every stuck
+//! tension there.
 
 use super::super::grip::{Stuck, choose};
 use super::{Contact, Profile, State};
@@ -30,9 +31,9 @@ pub(super) fn gain(profile: &Profile, l: usize, site: &Site, b: &State, d_v: &Ve
 }
 
 /// What the march knows of slip j on a link before the link's choices: its log tension
-/// `za` at the link's start, the link's capacity, its log tension at the link's end that the
-/// shape was solved with, and whether it must stick there (stuck before, or its first
-/// link slid the other way than `first`).
+/// `za` at the link's start, the link's capacity, its tension at the link's end that the
+/// shape was solved with, whether it must stick there (stuck before, or its first link slid
+/// the other way than `first`), and whether the link is on its span.
 pub(super) struct Before {
     /// z at the link's start.
     pub(super) za: f64,
@@ -52,7 +53,7 @@ pub(super) struct Before {
 /// each loaded slip's stuck tension at the link's end `b` (at `site`), `stuck_at[j]` (N,
 /// already at its own fixed point, `read[j]` its value and derivatives), moved by the other
 /// slips' changes of tension there, each from the one the shape was solved with to the one
-/// its own choice ([`choose`] with `tie`, `before[j]`) gives:
+/// its own choice ([`choose`] with `tie`, `before[j]`) gives (an unloaded one's to 0):
 /// `tau*_j += sum_l g_jl dtau_l / (1 - g_jj)`. Slips not loaded or not read are left.
 pub(super) fn couple(
     profile: &Profile,
