@@ -68,6 +68,125 @@ fn one_step_from_rest_is_the_full_slip_pull_solve() {
     assert!((delivered - pulled.tendons[0].delivered_tension).abs() < 1e-12);
 }
 
+/// The prototype with friction `mu` (E_t A_t 2000 N) on tendon 3 (x = -0.008 m: the top
+/// side, which the rod's own weight, bending the rod down, stretches) at `tension`, and
+/// tendon 1 without friction at 0 N; rigid (no stiffness) if `rigid`.
+fn top_tendon(tension: f64, rigid: bool) -> Robot {
+    let mut robot = cases::prototype().with_tensions(&[0.0, 0.0, tension, 0.0, 0.0]);
+    robot.tendons[2].friction = Some(Friction::pull(0.1));
+    robot.tendons[2].stiffness = (!rigid).then_some(2000.0);
+    robot
+}
+
+/// `robot`'s history of tendon `i`'s (index) tension through `values`.
+fn history_of(robot: &Robot, i: usize, values: &[f64]) -> Vec<HistoryStep> {
+    let ranges = Ranges::new(
+        robot.clone(),
+        vec![(Input::Parameter(Parameter::Tension(i)), values.to_vec())],
+    )
+    .unwrap();
+    solved(history(&ranges, &Default::default()).unwrap())
+}
+
+#[test]
+fn a_first_step_pulls_in_from_rest_a_tendon_the_rods_weight_stretches() {
+    // Main refused step 1 of both: "tendon 3 would go slack near s = 0.0581 m while stuck
+    // in its channel ...; take the history in smaller steps" (0.0605 m for the second).
+    // It laid the material at rest along the straight reference rod, which the weight's
+    // bending stretches on the top side by far more than 1 N does (E_t A_t r kappa, about
+    // 20 N near the base), so the march let the tendon out at the base and stuck it beyond.
+    let robot = top_tendon(1.0, false);
+    let pulled = tdcr::solve(&robot, &Default::default()).unwrap();
+    // Tendon 1 (no friction) at 0 then 1 N: step 1 chose the history's mesh, so it is the
+    // full-slip pull solve itself.
+    let steps = history_of(&robot, 0, &[0.0, 1.0]);
+    let distance = (tip(&steps[0]) - pulled.tip_position()).norm();
+    // 1e-10 m: the same equations on the same mesh, as for tendon 1 above
+    assert!(distance < 1e-10, "{distance:e} m from the full-slip pull solve");
+    let delivered = steps[0].solution.tendons[2].delivered_tension;
+    // 1e-12 N: the same profile to rounding
+    assert!((delivered - pulled.tendons[2].delivered_tension).abs() < 1e-12);
+    for step in &steps {
+        assert_eq!(step.zones[0].zones.len(), 1, "{:?}", step.zones);
+    }
+    assert_eq!(steps[0].zones[0].zones[0].contact, Contact::Pull);
+    // Tendon 1 then bends the rod down: tendon 3's path lengthens and it slides out.
+    assert_eq!(steps[1].zones[0].zones[0].contact, Contact::Release);
+    // Tendon 3 itself at 1 then 2 N: step 1 is solved on the 2 N step's mesh, so it agrees
+    // with the full-slip solve to the two answers' estimated errors.
+    let steps = history_of(&robot, 2, &[1.0, 2.0]);
+    let estimates = [&steps[0].solution, &pulled].map(|s| s.report.error_estimate.unwrap().tip_position);
+    let distance = (tip(&steps[0]) - pulled.tip_position()).norm();
+    assert!(
+        distance <= estimates[0] + estimates[1],
+        "{distance:e} m, estimates {estimates:?}"
+    );
+    for step in &steps {
+        assert_eq!(step.zones[0].zones.len(), 1);
+        assert_eq!(step.zones[0].zones[0].contact, Contact::Pull);
+    }
+}
+
+#[test]
+fn a_rigid_tendon_pulled_in_from_rest_needs_no_stiffness() {
+    // Main refused step 1: the rigid tendon "sticks" (the same stretched rest material).
+    let robot = top_tendon(1.0, true);
+    let steps = history_of(&robot, 2, &[1.0, 2.0]);
+    let pulled = tdcr::solve(&robot, &Default::default()).unwrap();
+    let estimates = [&steps[0].solution, &pulled].map(|s| s.report.error_estimate.unwrap().tip_position);
+    let distance = (tip(&steps[0]) - pulled.tip_position()).norm();
+    // The two meshes differ (the history's is the 2 N step's): their estimates bound it.
+    assert!(
+        distance <= estimates[0] + estimates[1],
+        "{distance:e} m, estimates {estimates:?}"
+    );
+    assert!(steps.iter().all(|s| s.zones[0].zones[0].contact == Contact::Pull));
+}
+
+#[test]
+fn opposite_tendons_with_friction_close_their_loops() {
+    // Tendons 1 and 3 lie on opposite sides, each moving the other's stuck tension by a
+    // gain of the size of its own (docs/friction.md section 8, "Opposite tendons"): one held
+    // at 1 N, the other pulled to 4.91 N and let back out. Before the march coupled them,
+    // tendon 1 in 10 steps failed at step 2 and tendon 3 in 10 steps at step 8 (Newton
+    // found no descent); all three were refused at step 1 on main.
+    for (swept, steps) in [(0, 10), (0, 20), (2, 10)] {
+        let held = 2 - swept;
+        let mut robot = top_tendon(0.0, false);
+        robot.tendons[0].friction = Some(Friction::pull(0.1));
+        robot.tendons[0].stiffness = Some(2000.0);
+        robot.tendons[held].set_tension(1.0);
+        let values: Vec<f64> = (0..=steps).map(|k| TOP * k as f64 / steps as f64).collect();
+        let ranges = Ranges::new(robot, vec![(Input::Parameter(Parameter::Tension(swept)), values)])
+            .unwrap()
+            .up_down();
+        let result = solved(history(&ranges, &Default::default()).unwrap());
+        assert_eq!(result.len(), 2 * steps + 1);
+        let rest = tip(&result[0]);
+        // 1e-9 m: two Newton solves of the same robot, as for tendon 1 alone
+        let closing = (tip(&result[2 * steps]) - rest).norm();
+        assert!(closing < 1e-9, "tendon {}: the loop is open by {closing} m", swept + 1);
+        // Zones are listed for tendons 1 and 3 in that order.
+        let (s, h) = (swept / 2, 1 - swept / 2);
+        let contacts =
+            |k: usize, t: usize| -> Vec<Contact> { result[k].zones[t].zones.iter().map(|z| z.contact).collect() };
+        // Going up the swept tendon slides in and the held one, whose path the bending
+        // lengthens, out; the first step back lets the swept one out near its base and pulls
+        // the held one in, both stuck beyond.
+        assert_eq!(
+            (contacts(steps, s), contacts(steps, h)),
+            (vec![Contact::Pull], vec![Contact::Release])
+        );
+        assert_eq!(contacts(steps + 1, s), vec![Contact::Release, Contact::Stick]);
+        assert_eq!(contacts(steps + 1, h), vec![Contact::Pull, Contact::Stick]);
+        for (k, step) in result.iter().enumerate() {
+            let e = imbalance(&ranges.robot(k as f64).unwrap(), &step.solution);
+            // 1e-8: the solver's tolerance in the wrenches relative to the tension, as above
+            assert!(e.max() < 1e-8, "tendon {}, step {k}: imbalance {e:?}", swept + 1);
+        }
+    }
+}
+
 #[test]
 fn a_one_step_history_reports_the_full_slip_solves_work_and_estimate() {
     let robot = prototype(0.1).with_tensions(&[2.0, 0.0, 0.0, 0.0, 0.0]);

@@ -14,14 +14,19 @@
 //! the backbone with the links' rows and multipliers held; the march is repeated on the new
 //! shape until it changes nothing.
 
+mod cross;
+mod refusal;
 mod repeat;
+mod rest;
 mod slip;
 mod split;
 
+use refusal::{rigid, slack};
 pub(crate) use repeat::hold_last;
+pub(crate) use rest::start;
 use slip::check_slip;
 
-use super::grip::{self, Kink, choose, stuck_multiplier};
+use super::grip::{self, Kink, Stuck, choose, stuck_multiplier};
 use super::staircase::Staircase;
 use super::*;
 use crate::model::length;
@@ -66,6 +71,12 @@ pub(crate) struct Carried {
     /// The last step's answer as its stability verdict reads it (on the mesh it was solved
     /// on, split levels included); None before the first step.
     pub(crate) settled: Option<Settled>,
+    /// Whether no step has been solved yet: the tendons are at rest, slack in their
+    /// channels with no material laid along any path, so the first step pulls every loaded
+    /// one in from its actuator and it slides in all along (docs/friction.md section 8).
+    pub(crate) rest: bool,
+    /// The base tension (N) of every tendon that `x` was solved with.
+    pub(crate) tensions: Vec<f64>,
 }
 
 /// A tendon's carried material on the history's mesh (docs/friction.md section 8).
@@ -114,6 +125,8 @@ impl Carried {
             report: self.report.clone(),
             factors: None,
             settled: None,
+            rest: self.rest,
+            tensions: self.tensions.clone(),
         }
     }
 }
@@ -122,96 +135,13 @@ impl Carried {
 /// as (start s, end s, contact), base to termination.
 pub(crate) type StepAnswer = (Solution, Vec<(usize, Vec<(f64, f64, Contact)>)>);
 
-/// The start of a history of `robots` (validated, same geometry) from rest: the mesh the
-/// default full-slip `pull` solve picks for the step with the most tension on the tendons
-/// with friction, its solution as the first guess, and every tendon with friction
-/// unstretched on the unloaded rod (lambda = the rest path's speed |p'|), sliding in.
-///
-/// # Errors
-/// As [`super::super::solve`] on that step.
-pub(crate) fn start(robots: &[Robot], options: &Options) -> Result<Carried> {
-    // The most pull-in on the tendons with friction first (their tension is solved), then
-    // the most tension.
-    let load = |r: &Robot| -> (f64, f64) {
-        let active = crate::model::friction::slipping(r);
-        let pulled = active.iter().filter_map(|&i| r.tendons[i].displacement()).sum();
-        (pulled, active.iter().map(|&i| r.tendons[i].tension()).sum())
-    };
-    let mut most = 0;
-    for (n, r) in robots.iter().enumerate() {
-        if load(r).partial_cmp(&load(&robots[most])) == Some(std::cmp::Ordering::Greater) {
-            most = n;
-        }
-    }
-    let mut pulled = robots[most].clone();
-    for t in &mut pulled.tendons {
-        if let Some(f) = t.friction.as_mut() {
-            f.motion = crate::model::tendon::Motion::Pull;
-        }
-    }
-    let mut first = super::super::solve(&pulled, options)?;
-    // The steps report their own verdicts: the full-slip verdict's note is not theirs.
-    first
-        .report
-        .notes
-        .retain(|n| n != crate::collocation::dynamics::friction::SLIP_HELD);
-    // A pull-in's base tension is the solved one.
-    let pulled = pulled.with_tensions(&first.tensions());
-    let points: Vec<f64> = first.nodes.iter().map(|n| n.s).collect();
-    let mesh = Mesh::from_points(&pulled, &points)?;
-    let x: Vec<State> = first.nodes.iter().map(|n| n.state()).collect();
-    let model = Model::new(&pulled);
-    let profile = Profile::new(&model, &mesh);
-    let length = pulled.length();
-    let mut z = profile.z.clone();
-    let mut grips = Vec::with_capacity(profile.count());
-    for (j, &i) in profile.slipping.iter().enumerate() {
-        let tendon = &pulled.tendons[i];
-        let span = profile.spans[j];
-        let base = profile.base[j];
-        for (n, value) in z[j].iter_mut().enumerate() {
-            let tension = first.tendon_tensions[i][n.min(span)];
-            *value = if base > 0.0 { (tension / base).ln() } else { 0.0 };
-        }
-        let reference = mesh
-            .nodes
-            .iter()
-            .map(|node| {
-                let rest = pulled.rod.reference_on(node.s, node.segment_end);
-                length::speed(&tendon.routing.at(node.s, length), &rest.v_star, &rest.u_star)
-            })
-            .collect();
-        grips.push(Grip {
-            contacts: vec![Contact::Pull; span],
-            multipliers: vec![-1.0; span],
-            capacities: vec![0.0; span],
-            reference,
-            kinks: Vec::new(),
-        });
-    }
-    let corrected = grips
-        .iter()
-        .map(|g| Material {
-            values: g.reference.clone(),
-            kinks: Vec::new(),
-        })
-        .collect();
-    Ok(Carried {
-        mesh,
-        x,
-        z,
-        grips,
-        corrected,
-        solved: most == 0,
-        report: first.report,
-        factors: None,
-        settled: None,
-    })
-}
-
 /// The march of every tendon with friction along the shape `x` (module docs): new contacts,
 /// multipliers and predicted log tensions written into `border`'s profile and unknowns.
-/// A link within `tie` (log tension, [`grip::tie`]) of its friction limit sticks.
+/// A link within `tie` (log tension, [`grip::tie`]) of its friction limit sticks. At `rest`
+/// (the first step, [`Carried::rest`]) a loaded tendon is pulled in from slack: its material
+/// holds no stuck tension, so it slides in on every link. On a shape not `converged` for
+/// this step (the last step's, solved with the base tensions `solved`), a stuck tension is
+/// moved by the other tendons' changes of base tension since ([`cross::stuck_moved`]).
 /// Each link's capacity and stuck tension are those of its evaluation at `x`, the profile's
 /// log tensions and contacts: when Newton has just `converged` to `x`, its last evaluation
 /// of every link (kept by the profile) is that one and is read, else the link is evaluated.
@@ -220,7 +150,7 @@ pub(crate) fn start(robots: &[Robot], options: &Options) -> Result<Carried> {
 /// # Errors
 /// A model breakdown on a link; a rigid tendon that would stick (statically
 /// indeterminate).
-fn march(border: &mut Capstan, x: &[State], converged: bool, tie: f64) -> Result<bool> {
+fn march(border: &mut Capstan, x: &[State], converged: bool, tie: f64, rest: bool, solved: &[f64]) -> Result<bool> {
     let system = &border.system;
     let length = system.model.robot.length();
     let Some(profile) = system.friction.as_ref() else {
@@ -235,7 +165,24 @@ fn march(border: &mut Capstan, x: &[State], converged: bool, tie: f64) -> Result
     // link that does not (stick, or the other way), sticks to its termination: a stretch
     // that slid beyond a stuck one would carry material past it (section 8).
     let mut stuck = vec![false; count];
+    // Whether a tendon other than slip j has a new base tension (only off a converged shape).
+    let tendons = &system.model.robot.tendons;
+    let loaded = profile.base.iter().filter(|&&b| b > 0.0).count();
+    let others_moved: Vec<bool> = (0..count)
+        .map(|j| {
+            !converged
+                && (loaded > 1
+                    || tendons
+                        .iter()
+                        .enumerate()
+                        .any(|(l, t)| l != profile.slipping[j] && t.tension() != solved[l]))
+        })
+        .collect();
     let mut sliding: Vec<Option<Contact>> = vec![None; count];
+    // Each slip's stuck tension at the link's end, as read (with its derivatives) and as
+    // chosen with.
+    let mut read: Vec<Option<Stuck>> = vec![None; count];
+    let mut stuck_at = vec![0.0; count];
     for k in 0..last {
         let Some(sites) = system.interval_sites(k) else {
             continue;
@@ -253,25 +200,62 @@ fn march(border: &mut Capstan, x: &[State], converged: bool, tie: f64) -> Result
                 (lin.capacity, lin.stuck_tension)
             }
         };
-        for j in (0..count).filter(|&j| profile.on_link(j, k)) {
-            let (base, za, capacity) = (profile.base[j], z[j][k], capacities[j]);
-            // On a converged shape the stuck tension is read at the tension the stick row
-            // would settle on, not the one the shape was solved with (`stuck_own`): a
-            // link's own tension moves its stuck tension about 30 times as much the other
-            // way, so a choice from the solved one alternates between sliding in and out.
-            let stuck_tension = if converged && base > 0.0 {
+        // On a converged shape the stuck tension is read at the tension the stick row would
+        // settle on, not the one the shape was solved with (`stuck_own`): a link's own
+        // tension moves its stuck tension about 30 times as much the other way, so a choice
+        // from the solved one alternates between sliding in and out; and another loaded
+        // tendon's choice moves it by a gain of the same size ([`cross::couple`]).
+        read.fill(None);
+        for j in (0..count).filter(|&j| profile.on_link(j, k) && !rest) {
+            let base = profile.base[j];
+            stuck_at[j] = if converged && base > 0.0 {
                 let at = profile.stuck_tension(j, k + 1, &sites.end, &x[k + 1], length);
-                profile.stuck_own(
+                let own = profile.stuck_own(
                     j,
                     k + 1,
                     &sites.end,
                     &(stuck_tensions[j], at.1, at.2),
                     base * z[j][k + 1].exp(),
-                )
+                );
+                read[j] = Some(at);
+                own
+            } else if base > 0.0 && others_moved[j] {
+                let at = profile.stuck_tension(j, k + 1, &sites.end, &x[k + 1], length);
+                let moved = cross::stuck_moved(
+                    profile,
+                    j,
+                    k + 1,
+                    &sites.end,
+                    &x[k + 1],
+                    &(stuck_tensions[j], at.1, at.2),
+                    solved,
+                );
+                read[j] = Some(at);
+                moved
             } else {
                 stuck_tensions[j]
             };
-            let mut choice = choose(base, za, capacity, stuck_tension, tie);
+        }
+        if count > 1 {
+            let before: Vec<cross::Before> = (0..count)
+                .map(|j| cross::Before {
+                    za: z[j][k],
+                    capacity: capacities[j],
+                    solved: if converged {
+                        profile.base[j]
+                    } else {
+                        solved[profile.slipping[j]]
+                    } * z[j][k + 1].exp(),
+                    stuck: stuck[j],
+                    first: sliding[j],
+                    on: profile.on_link(j, k),
+                })
+                .collect();
+            cross::couple(profile, &sites.end, &x[k + 1], &read, &before, &mut stuck_at, tie);
+        }
+        for j in (0..count).filter(|&j| profile.on_link(j, k)) {
+            let (base, za, capacity) = (profile.base[j], z[j][k], capacities[j]);
+            let mut choice = choose(base, za, capacity, stuck_at[j], tie);
             let first = *sliding[j].get_or_insert(choice.contact);
             if base > 0.0 && (stuck[j] || choice.contact != first) {
                 choice.contact = Contact::Stick;
@@ -312,32 +296,6 @@ fn march(border: &mut Capstan, x: &[State], converged: bool, tie: f64) -> Result
     }
     border.reload();
     Ok(changed)
-}
-
-/// The error for tendon `i` whose stuck part would go slack near `s`.
-fn slack(i: usize, s: f64) -> Error {
-    error::invalid(
-        format!("tendons[{i}]"),
-        format!(
-            "tendon {} would go slack near s = {s:.4} m while stuck in its channel, which the stick/slip history does \
-             not model",
-            i + 1
-        ),
-        "take the history in smaller steps",
-    )
-}
-
-/// The error for rigid tendon `i` that sticks near `s`.
-fn rigid(i: usize, s: f64) -> Error {
-    error::invalid(
-        format!("tendons[{i}].stiffness"),
-        format!(
-            "tendon {} sticks in its channel near s = {s:.4} m during this step, but it is rigid: the tension of \
-             a stuck rigid tendon can be anything friction allows (statically indeterminate)",
-            i + 1
-        ),
-        "set the tendon's axial stiffness E_t A_t (`stiffness` in N) so that its stuck part stretches",
-    )
 }
 
 /// Solves one step of a history: `robot` (validated, the history's geometry) from the state
@@ -403,7 +361,8 @@ fn solve_on(robot: &Robot, options: &Options, carried: &mut Carried, held: Optio
     // The first step when it is the mesh-choosing full-slip solve itself (its answer, held
     // by the march): that solve's work and estimate are the step's.
     let template = solved.then(|| carried.report.clone());
-    let mut settled = held.is_none() && !march(&mut border, &x, false, tie)? && solved;
+    let rest = carried.rest;
+    let mut settled = held.is_none() && !march(&mut border, &x, false, tie, rest, &carried.tensions)? && solved;
     // A rigid tendon that would stick is refused by the march; one that is near sticking
     // may keep Newton or the passes from settling, which the hint names.
     let rigid_hint = robot
@@ -435,7 +394,7 @@ fn solve_on(robot: &Robot, options: &Options, carried: &mut Carried, held: Optio
         }
         // The contacts and multipliers on the converged shape: settled when Newton's were.
         border.load(Point::Current);
-        settled = held.is_some() || !march(&mut border, &x, true, tie)?;
+        settled = held.is_some() || !march(&mut border, &x, true, tie, rest, &carried.tensions)?;
     }
     if !settled {
         // Every pass's Newton converged: what failed is the zones (the termination says so).
@@ -561,11 +520,12 @@ fn solve_on(robot: &Robot, options: &Options, carried: &mut Carried, held: Optio
             order6.values[..=span].copy_from_slice(&if corrected { material(true) } else { lambda.clone() });
             order6.kinks.clear();
         }
-        // An unloaded tendon is slack: no normal force, so friction holds nothing back. A
-        // held solve is the answer's linear response to its material, with the answer's
+        // An unloaded tendon is slack: no normal force, so friction holds nothing back; at
+        // rest a loaded one is pulled in from slack, which has no material to slip against.
+        // A held solve is the answer's linear response to its material, with the answer's
         // checked pattern: where the slip is 0 to rounding its sign may flip by up to the
         // material's change, which `held` bounds.
-        if profile.base[j] > 0.0 {
+        if profile.base[j] > 0.0 && !rest {
             check_slip(i, &grips[j], &lambda, &x, span, held.unwrap_or(0.0))?;
         }
         let nodes: Vec<f64> = x[..=span].iter().map(|n| n.s).collect();
@@ -590,5 +550,7 @@ fn solve_on(robot: &Robot, options: &Options, carried: &mut Carried, held: Optio
     carried.grips = next;
     carried.x = x;
     carried.factors = Some((ws, border.stairs));
+    carried.rest = false;
+    carried.tensions = robot.tendons.iter().map(|t| t.tension()).collect();
     Ok(((solution, zones), stuck))
 }

@@ -194,6 +194,8 @@ fn material_error(
             report: fine.report.clone(),
             factors,
             settled: None,
+            rest: false,
+            tensions: fine.tensions.clone(),
         };
         for ((grip, old), corrected) in better.grips.iter_mut().zip(&before.grips).zip(&before.corrected) {
             let span = old.contacts.len();
@@ -346,6 +348,8 @@ fn split(robot: &Robot, before: &Carried, parts: &[usize], guess: &Solution, bou
         report: before.report.clone(),
         factors: None,
         settled: None,
+        rest: before.rest,
+        tensions: robot.tendons.iter().map(|t| t.tension()).collect(),
     })
 }
 
