@@ -164,7 +164,35 @@ pub(crate) fn exp_and_jacobians(theta: &Vector3<f64>) -> [Matrix3<f64>; 3] {
         )
     };
     let k = hat(theta);
-    let kk = Matrix3::new(
+    let kk = hat_squared(&k);
+    // I + k c1 + k^2 c2 entry by entry (J_r's I - k b as I + k (-b): the same bits).
+    let combine = |c1: f64, c2: f64| combine(&k, &kk, c1, c2);
+    [combine(a, b), combine(-b, d), combine(0.5, e)]
+}
+
+/// [`exp`] of an f64 rotation vector, always inlined so that it is compiled with its
+/// caller's target features (the rigid-equilibrium guess's AVX2 build, `mesh/guess.rs`),
+/// where [`exp`] is a call to the baseline build: the same operations as [`exp`] (hat(theta)^2
+/// and the sum I + k a + k^2 b as [`exp_and_jacobians`] writes them out), so the same bits.
+#[inline(always)]
+pub(crate) fn exp_inlined(theta: &Vector3<f64>) -> Matrix3<f64> {
+    let t2 = theta.norm_squared();
+    // (sin t / t, (1 - cos t) / t^2) as [`ratios`] forms them.
+    let (a, b) = if t2 < SERIES_THETA_SQ {
+        (series(t2, &SIN_RATIO), series(t2, &COS_RATIO))
+    } else {
+        let t = t2.sqrt();
+        (t.sin() / t, (1.0 - t.cos()) / t2)
+    };
+    let k = hat(theta);
+    combine(&k, &hat_squared(&k), a, b)
+}
+
+/// k^2 for k = hat(theta), each entry summed as nalgebra's product sums it (so the same
+/// bits as `k * k`).
+#[inline(always)]
+fn hat_squared(k: &Matrix3<f64>) -> Matrix3<f64> {
+    Matrix3::new(
         k[(0, 0)] * k[(0, 0)] + k[(0, 1)] * k[(1, 0)] + k[(0, 2)] * k[(2, 0)],
         k[(0, 0)] * k[(0, 1)] + k[(0, 1)] * k[(1, 1)] + k[(0, 2)] * k[(2, 1)],
         k[(0, 0)] * k[(0, 2)] + k[(0, 1)] * k[(1, 2)] + k[(0, 2)] * k[(2, 2)],
@@ -174,17 +202,18 @@ pub(crate) fn exp_and_jacobians(theta: &Vector3<f64>) -> [Matrix3<f64>; 3] {
         k[(2, 0)] * k[(0, 0)] + k[(2, 1)] * k[(1, 0)] + k[(2, 2)] * k[(2, 0)],
         k[(2, 0)] * k[(0, 1)] + k[(2, 1)] * k[(1, 1)] + k[(2, 2)] * k[(2, 1)],
         k[(2, 0)] * k[(0, 2)] + k[(2, 1)] * k[(1, 2)] + k[(2, 2)] * k[(2, 2)],
-    );
-    // I + k c1 + k^2 c2 entry by entry (J_r's I - k b as I + k (-b): the same bits).
-    // Slice iterators: nalgebra's matrix iterators stayed unrolled loops of pointer steps.
-    let combine = |c1: f64, c2: f64| {
-        let mut m = Matrix3::identity();
-        for ((m, kn), kkn) in m.as_mut_slice().iter_mut().zip(k.as_slice()).zip(kk.as_slice()) {
-            *m = *m + kn * c1 + kkn * c2;
-        }
-        m
-    };
-    [combine(a, b), combine(-b, d), combine(0.5, e)]
+    )
+}
+
+/// I + k c1 + k2 c2 entry by entry, summed as nalgebra's `I + k * c1 + k2 * c2` sums each
+/// entry. Slice iterators: nalgebra's matrix iterators stayed unrolled loops of pointer steps.
+#[inline(always)]
+fn combine(k: &Matrix3<f64>, k2: &Matrix3<f64>, c1: f64, c2: f64) -> Matrix3<f64> {
+    let mut m = Matrix3::identity();
+    for ((m, kn), kkn) in m.as_mut_slice().iter_mut().zip(k.as_slice()).zip(k2.as_slice()) {
+        *m = *m + kn * c1 + kkn * c2;
+    }
+    m
 }
 
 /// d(J_r^-1(theta) u)/d(theta) (3 x 3), f64 only: the Jacobian evaluation's derivative of
@@ -339,7 +368,8 @@ mod tests {
     use num_dual::Dual64;
 
     /// The three maps evaluated together give the bits of each evaluated alone, below and
-    /// above the series switch (|theta| = 1/2) and at theta = 0.
+    /// above the series switch (|theta| = 1/2) and at theta = 0; so does the always-inlined
+    /// exponential [`exp_inlined`].
     #[test]
     fn exp_and_jacobians_gives_the_three_functions_bits() {
         for theta in [
@@ -353,6 +383,7 @@ mod tests {
             let [e, jr, jri] = exp_and_jacobians(&theta);
             let bits = |m: &Matrix3<f64>| m.map(f64::to_bits);
             assert_eq!(bits(&e), bits(&exp(&theta)), "{theta}");
+            assert_eq!(bits(&exp_inlined(&theta)), bits(&exp(&theta)), "{theta}");
             assert_eq!(bits(&jr), bits(&right_jacobian(&theta)), "{theta}");
             assert_eq!(bits(&jri), bits(&right_jacobian_inv(&theta)), "{theta}");
         }

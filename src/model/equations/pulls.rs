@@ -60,7 +60,9 @@ impl Model<'_> {
     /// [`Model::tendon_pull_of`] in the body frame: R^T times its force and moment, summed
     /// over the tendons in the body frame and so without a rotation per tendon (the same
     /// sums to rounding, not the same bits). For the default initial guess's sweeps, which
-    /// need the pulls only in the body frame.
+    /// need the pulls only in the body frame; always inlined, so that it is compiled into
+    /// their AVX2 build (`mesh/guess.rs`).
+    #[inline(always)]
     pub(crate) fn tendon_pull_body_of(
         &self,
         tendons: impl Iterator<Item = (usize, f64, RoutingPoint)>,
