@@ -225,3 +225,58 @@ fn a_tendon_the_rods_weight_stretches_is_pulled_in_from_rest() {
         assert_eq!(rows[1][zones], "pull 0-0.242", "{input}: {:?}", rows[1]);
     }
 }
+
+#[test]
+fn a_stuck_tendon_going_slack_is_refused_and_pulling_it_in_further_solves() {
+    // Tendon 3 (top side, friction 0.1, E_t A_t 2000 N) at 0.3 N laid from rest; the
+    // helical tendon 5 pulled to 0.5 N turns the rod so that tendon 3's path lengthens near
+    // the base and shortens beyond: it slides out near the base, and the material stuck
+    // beyond would go slack (docs/friction.md section 8, "Limits").
+    let dir = scratch("slack-refused");
+    let out = run(&dir, &["example"]);
+    let text = String::from_utf8_lossy(&out.stdout).into_owned();
+    let from = "routing = { kind = \"straight\", x = -0.008, y = 0.0 }\ntension = 0.0\n";
+    assert!(text.contains(from));
+    let to =
+        "routing = { kind = \"straight\", x = -0.008, y = 0.0 }\ntension = 0.3\nfriction = 0.1\nstiffness = 2000.0\n";
+    std::fs::write(dir.join("robot.toml"), text.replacen(from, to, 1)).unwrap();
+    let sweep = |tendon_3: &str| {
+        let args = [
+            "sweep",
+            "robot.toml",
+            "--tension",
+            "1=0",
+            "--tension",
+            "5=0:0.5:2",
+            "--tension",
+            tendon_3,
+            "--history",
+            "up-down",
+        ];
+        run(&dir, &args)
+    };
+    let refused = sweep("3=0.3");
+    assert_eq!(refused.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&refused.stderr);
+    assert!(
+        err.contains("history step 2 of 3") && err.contains("tendon 3 would go slack") && err.contains("pull it in"),
+        "{err}"
+    );
+    // The hint followed: tendon 3 pulled in further on that step (1 N) slides in all along.
+    let out = sweep("3=0.3:1:2");
+    assert_eq!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stderr));
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    let rows: Vec<Vec<&str>> = stdout.lines().map(|l| l.split(',').collect()).collect();
+    let zones = column(&rows[0].join(","), "zones_3");
+    assert_eq!(rows.len(), 4, "{rows:?}");
+    assert_eq!(rows[2][zones], "pull 0-0.242", "{:?}", rows[2]);
+    // Letting it go slack in the step before does not lay a material that avoids it: from
+    // 0 N with tendon 5 at 0 N, the same step is refused (the hint no longer offers it).
+    let slack_first = sweep("3=0:0.3:2");
+    assert_eq!(slack_first.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&slack_first.stderr);
+    assert!(
+        err.contains("history step 2 of 3") && err.contains("would go slack"),
+        "{err}"
+    );
+}

@@ -120,7 +120,9 @@ pub(crate) struct Grip {
     /// at the last march.
     pub(crate) capacities: Vec<f64>,
     /// Per node, lambda: the unstretched length of tendon per unit s of the material there
-    /// at the end of the last step (docs/friction.md section 8).
+    /// at the end of the last step (docs/friction.md section 8); NaN before the first step
+    /// and, on the history's mesh, past the tendon's termination for the whole history (no
+    /// material: the march, the slip check and the kinks read the nodes up to it).
     pub(crate) reference: Vec<f64>,
     /// The kinks of that material, in increasing s: each where an earlier step's stick/slip
     /// boundary left one, still inside the stretch that has stuck since, as (s in m, lambda

@@ -165,7 +165,10 @@ fn march(border: &mut Capstan, x: &[State], converged: bool, tie: f64, rest: boo
     // link that does not (stick, or the other way), sticks to its termination: a stretch
     // that slid beyond a stuck one would carry material past it (section 8).
     let mut stuck = vec![false; count];
-    // Whether a tendon other than slip j has a new base tension (only off a converged shape).
+    // Whether slip j's stuck tension is moved by the others on the first march of a step
+    // (off the last step's converged shape): when a tendon other than slip j has a new base
+    // tension, and whenever more than one tendon is loaded, even if no input changed (the
+    // `stuck_moved` path then carries each stuck tension to its own fixed point alone).
     let tendons = &system.model.robot.tendons;
     let loaded = profile.base.iter().filter(|&&b| b > 0.0).count();
     let others_moved: Vec<bool> = (0..count)

@@ -73,7 +73,9 @@ pub struct BlockElimination {
     wide_panel: Option<Box<[[f64; WIDE]; ROWS]>>,
     /// The panel of [`BlockElimination::solve`], kept between solves as `wide_panel` is:
     /// the right-hand side's padding columns are never written, so they stay zero (up to
-    /// their sign, which no other column reads) from the first solve's allocation.
+    /// their sign) from the first solve's allocation, unless an infinite entry in `values`
+    /// puts NaN in them (0 x inf in a row operation); either way no live column reads them,
+    /// so they never reach the solution.
     panel: Option<Box<[[f64; COLS]; ROWS]>>,
     /// The right-hand sides of [`BlockElimination::factor_with_last`] row by row (row r of
     /// every one in `carried_rows[r]`), so that a panel row takes its slots in one copy;

@@ -500,7 +500,8 @@ mod tests {
     }
 
     /// Routing points kept from another robot's tension columns on the same mesh (the
-    /// helical tendon's phase and a straight tendon's offset moved) are computed again, and
+    /// helical tendon's phase and a straight tendon's offset moved, an unloaded tendon made
+    /// helical) are computed again, and
     /// kept ones give the columns of fresh ones bit for bit; a robot with a user routing
     /// keeps none.
     #[test]
@@ -517,6 +518,13 @@ mod tests {
             phase: 0.3,
         };
         moved.tendons[0].routing = Routing::Straight { x: 0.007, y: 0.001 };
+        // An unloaded tendon's points enter its tension column (a loaded one's come from the
+        // linearization's own), and a helical one's move with s.
+        moved.tendons[1].routing = Routing::Helical {
+            radius: 0.008,
+            turns: 0.5,
+            phase: 1.0,
+        };
         let mut custom = robot.clone();
         custom.tendons[4].routing = Routing::Custom(std::sync::Arc::new(|s: f64, length: f64| {
             Routing::Helical {
@@ -526,23 +534,45 @@ mod tests {
             }
             .at(s, length)
         }));
+        // The same node count with every odd interior node moved a quarter interval (the
+        // links' `at != s` branch), and every other node (fewer links).
+        let shifted: Vec<f64> = (0..s.len())
+            .map(|k| {
+                if k % 2 == 1 && k + 1 < s.len() {
+                    s[k] + 0.25 * (s[k + 1] - s[k])
+                } else {
+                    s[k]
+                }
+            })
+            .collect();
+        let half: Vec<usize> = (0..s.len()).filter(|&k| k % 2 == 0 || k + 1 == s.len()).collect();
+        let (s_half, x_half): (Vec<f64>, Vec<State>) = half.iter().map(|&k| (s[k], x[k])).unzip();
+        let meshes = [
+            (&robot, &s, &x),
+            (&robot, &s, &x),
+            (&moved, &s, &x),
+            (&moved, &shifted, &x),
+            (&moved, &s_half, &x_half),
+            (&moved, &s, &x),
+            (&custom, &s, &x),
+        ];
         let mut kept = TensionSink::default();
-        for (k, robot) in [&robot, &robot, &moved, &custom].into_iter().enumerate() {
-            let system = System::new(Model::new(robot), Mesh::from_points(robot, &s).unwrap());
+        for (k, (robot, s, x)) in meshes.into_iter().enumerate() {
+            let system = System::new(Model::new(robot), Mesh::from_points(robot, s).unwrap());
             let (n, width) = (system.unknowns(), robot.tendons.len());
             let columns = |sink: &mut TensionSink| {
                 let (mut r, mut v) = (vec![0.0; n], vec![0.0; nonzeros(&system.mesh)]);
                 let mut c = vec![f64::NAN; n * width];
-                system.jacobian_and_tensions(&x, &mut r, &mut v, &mut c, sink).unwrap();
+                system.jacobian_and_tensions(x, &mut r, &mut v, &mut c, sink).unwrap();
                 c
             };
             let with_kept = columns(&mut kept);
             assert_eq!(
                 bits(&with_kept, &columns(&mut TensionSink::default())),
                 None,
-                "robot {k}"
+                "mesh {k}"
             );
-            assert_eq!(kept.routing.key.is_empty(), k == 3, "robot {k}");
+            assert_eq!(kept.routing.key.is_empty(), k == 6, "mesh {k}");
         }
     }
 }

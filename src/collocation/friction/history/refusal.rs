@@ -16,9 +16,8 @@ pub(super) fn slack(i: usize, s: f64) -> Error {
              there shorter than the material stuck in it), which the stick/slip history does not model",
             i + 1
         ),
-        "keep the tendon taut through this step (pull it in further: more tension or pull-in at its base entry), \
-         or let it go slack at its base entry (0 N) in a step before this one, which lays its material along the \
-         path again",
+        "keep the tendon taut through this step: pull it in further (more tension at its base entry), so that it \
+         slides in along that stretch",
     )
 }
 

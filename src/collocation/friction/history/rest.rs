@@ -9,7 +9,9 @@ use crate::collocation::friction::*;
 /// default full-slip `pull` solve picks for the step with the most tension on the tendons
 /// with friction, its solution as the first guess, and every tendon with friction slack,
 /// sliding in, with no material yet (lambda NaN until the first step lays it: nothing
-/// reads it before, [`Carried::rest`]).
+/// reads it before, [`Carried::rest`]). A step lays it only up to the tendon's termination,
+/// so past it lambda stays NaN on the history's mesh for the whole history: no material
+/// there (docs/friction.md section 8, "From rest").
 ///
 /// # Errors
 /// As [`crate::collocation::solve`] on that step.
