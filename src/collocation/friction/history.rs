@@ -37,9 +37,13 @@ use crate::solution::Solution;
 /// is about mu tau r^2 / (E I) (1e-3 on the prototype) per pass; 40 covers any settling
 /// history many times over.
 const PASSES: usize = 40;
-/// A stuck link's multiplier has settled when it changes by less than this between passes:
-/// the tangential load it scales is mu tau kappa w, and 1e-10 of it moves the tip far below
-/// the residual tolerance.
+/// A stuck link's capacity has settled when it changes by less than this (relative) from
+/// the march before a step's first pass: the tangential load its multiplier scales is
+/// mu tau kappa w, and 1e-10 of it moves the tip far below the residual tolerance. After a
+/// converged pass only the contacts count: the multipliers divide by the capacity of
+/// Newton's own last evaluation ([`Profile::stuck_capacity`]), so the march's capacity is
+/// no input of the next pass, which only repeated the converged answer (docs/friction.md
+/// section 8, "A pass that changes nothing").
 const SETTLED: f64 = 1e-10;
 
 /// What a history carries from one step to the next on its mesh.
@@ -281,7 +285,9 @@ fn march(border: &mut Capstan, x: &[State], converged: bool, tie: f64, rest: boo
             };
             let grip = &mut grips[j];
             changed |= grip.contacts[k] != choice.contact
-                || (choice.contact == Contact::Stick && (grip.capacities[k] - capacity).abs() > SETTLED * capacity);
+                || (!converged
+                    && choice.contact == Contact::Stick
+                    && (grip.capacities[k] - capacity).abs() > SETTLED * capacity);
             grip.contacts[k] = choice.contact;
             grip.multipliers[k] = choice.multiplier;
             grip.capacities[k] = capacity;
