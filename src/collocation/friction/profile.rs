@@ -294,8 +294,11 @@ impl<'a> Profile<'a> {
     }
 
     /// The capacity C that slip j's multiplier on stuck link k divides by: the link's own
-    /// from its last evaluation (Newton's last iterate) when the profile keeps one, else
-    /// the last march's (None outside a history). With the march's C held over a whole
+    /// from its last evaluation when the profile keeps one (whatever state that was: an
+    /// accepted iterate, a rejected trial point or another residual's; so a stuck link's
+    /// rows depend on the evaluation before by a term of first order in the change of
+    /// state between the two, which vanishes as Newton converges), else the last march's
+    /// (None outside a history). With the march's C held over a whole
     /// Newton solve, each pass of march and Newton only moved C by the shape's change over
     /// the pass before (about 1e3 times less per pass): three or four passes per solve of
     /// a stuck step. With the last evaluation's, Newton's own iterations carry C along and
