@@ -258,7 +258,7 @@ fn march(border: &mut Capstan, x: &[State], converged: bool, tie: f64, rest: boo
                     on: profile.on_link(j, k),
                 })
                 .collect();
-            cross::couple(profile, &sites.end, &x[k + 1], &read, &before, &mut stuck_at, tie);
+            cross::couple(profile, &sites.end, &x[k + 1], &read, &before, &mut stuck_at);
         }
         for j in (0..count).filter(|&j| profile.on_link(j, k)) {
             let (base, za, capacity) = (profile.base[j], z[j][k], capacities[j]);

@@ -3,10 +3,10 @@
 //! at a node from those the shape was solved with, and each change moves every stuck
 //! tension there.
 
-use super::super::grip::{Stuck, choose};
+use super::super::grip::Stuck;
 use super::{Contact, Profile, State};
 use crate::model::equations::Site;
-use nalgebra::Vector3;
+use nalgebra::{DMatrix, DVector, Vector3};
 
 /// The gain g_jl (N/N) of slip j's stuck tension at a node (state `b` at `site`), with
 /// derivatives `d_v`, `d_u` in the node's v and u, in the tension of tendon `l` (robot
@@ -49,12 +49,17 @@ pub(super) struct Before {
     pub(super) on: bool,
 }
 
-/// One Jacobi step of the node's system (docs/friction.md section 8, "Opposite tendons"):
-/// each loaded slip's stuck tension at the link's end `b` (at `site`), `stuck_at[j]` (N,
-/// already at its own fixed point, `read[j]` its value and derivatives), moved by the other
-/// slips' changes of tension there, each from the one the shape was solved with to the one
-/// its own choice ([`choose`] with `tie`, `before[j]`) gives (an unloaded one's to 0):
-/// `tau*_j += sum_l g_jl dtau_l / (1 - g_jj)`. Slips not loaded or not read are left.
+/// The node's joint solve (docs/friction.md section 8, "Opposite tendons"): each loaded
+/// slip's stuck tension at the link's end `b` (at `site`), `stuck_at[j]` (N, already at its
+/// own fixed point, `read[j]` its value and derivatives), moved by the other slips' changes
+/// of tension there from those the shape was solved with, `tau*_j += sum_l g_jl dtau_l /
+/// (1 - g_jj)`, where the changes are the node's own answer: every loaded slip's tension is
+/// its stuck one where it sticks and a bound of its link (`z_a -+ C`) where it slides, each
+/// as [`choose`] (without the tie) and `before[j]` allow, and an unloaded one's 0. The
+/// system is a box complementarity problem whose matrix (the identity less the scaled
+/// cross gains) is a positive diagonal times a symmetric positive definite one, so its
+/// answer is unique; it is found by trying each loaded slip's three cases (in, stuck, out),
+/// 3^n small solves for n loaded slips on the link. Slips not loaded or not read are left.
 pub(super) fn couple(
     profile: &Profile,
     site: &Site,
@@ -62,55 +67,159 @@ pub(super) fn couple(
     read: &[Option<Stuck>],
     before: &[Before],
     stuck_at: &mut [f64],
-    tie: f64,
 ) {
     let loaded: Vec<usize> = (0..read.len())
         .filter(|&j| read[j].is_some() && stuck_at[j].is_finite())
         .collect();
-    // Every slip on the link changes its tension: a loaded one by its choice, an unloaded
-    // one (slack) to 0.
-    let sources: Vec<usize> = (0..read.len())
-        .filter(|&l| before[l].on && (loaded.contains(&l) || profile.base[l] == 0.0))
+    // Every slip on the link changes its tension: a loaded one by the node's answer, an
+    // unloaded one (slack) to 0.
+    let slack: Vec<usize> = (0..read.len())
+        .filter(|&l| before[l].on && profile.base[l] == 0.0)
         .collect();
-    if loaded.is_empty() || sources.len() < 2 {
+    if loaded.is_empty() || loaded.len() + slack.len() < 2 {
         return;
     }
-    let change: Vec<f64> = sources
-        .iter()
-        .map(|&l| {
-            let (base, w) = (profile.base[l], &before[l]);
-            if base == 0.0 {
-                return -w.solved;
+    let n = loaded.len();
+    // gains[a][c]: loaded slip a's stuck tension per N of loaded slip c's (0 on the
+    // diagonal, which `stuck_at` holds already); fixed[a]: the unloaded slips' share.
+    let mut gains = vec![vec![0.0; n]; n];
+    let mut fixed = vec![0.0; n];
+    for (a, &j) in loaded.iter().enumerate() {
+        let Some((_, d_v, d_u)) = read[j] else {
+            continue;
+        };
+        let g = |l: usize| gain(profile, profile.slipping[l], site, b, &d_v, &d_u);
+        let own = g(j);
+        for (c, &l) in loaded.iter().enumerate() {
+            if l != j && before[l].solved.is_finite() {
+                gains[a][c] = g(l) / (1.0 - own);
             }
-            let choice = choose(base, w.za, w.capacity, stuck_at[l], tie);
-            let forced = w.stuck || w.first.is_some_and(|c| c != choice.contact);
-            let zb = if forced || choice.contact == Contact::Stick {
-                choice.zeta
-            } else {
-                w.za + choice.multiplier * w.capacity
-            };
-            base * zb.exp() - w.solved
-        })
-        .collect();
-    let moved: Vec<f64> = loaded
+        }
+        fixed[a] = slack
+            .iter()
+            .filter(|&&l| l != j && before[l].solved.is_finite())
+            .map(|&l| g(l) * -before[l].solved)
+            .sum::<f64>()
+            / (1.0 - own);
+    }
+    // Each loaded slip's bounds (N): sliding in below `low`, out above `high`; a slip
+    // stuck on an earlier link has neither, one whose first link slid one way only that
+    // way's (the other way it sticks).
+    let bounds: Vec<(f64, f64)> = loaded
         .iter()
         .map(|&j| {
-            let Some((_, d_v, d_u)) = read[j] else {
-                return stuck_at[j];
-            };
-            let own = gain(profile, profile.slipping[j], site, b, &d_v, &d_u);
-            let shift: f64 = sources
-                .iter()
-                .zip(&change)
-                .filter(|&(&l, dtau)| l != j && dtau.is_finite())
-                .map(|(&l, dtau)| gain(profile, profile.slipping[l], site, b, &d_v, &d_u) * dtau)
-                .sum();
-            stuck_at[j] + shift / (1.0 - own)
+            let w = &before[j];
+            let base = profile.base[j];
+            let (low, high) = (base * (w.za - w.capacity).exp(), base * (w.za + w.capacity).exp());
+            match (w.stuck, w.first) {
+                (true, _) => (f64::NEG_INFINITY, f64::INFINITY),
+                (false, Some(Contact::Pull)) => (low, f64::INFINITY),
+                (false, Some(Contact::Release)) => (f64::NEG_INFINITY, high),
+                _ => (low, high),
+            }
         })
         .collect();
+    let solved: Vec<f64> = loaded.iter().map(|&j| before[j].solved).collect();
+    let stuck_of = |a: usize, tau: &[f64]| -> f64 {
+        stuck_at[loaded[a]]
+            + fixed[a]
+            + (0..n)
+                .filter(|&c| c != a)
+                .map(|c| gains[a][c] * (tau[c] - solved[c]))
+                .sum::<f64>()
+    };
+    // The case with the least violation (0 for the answer; rounding may leave a little).
+    let mut best: Option<(f64, Vec<f64>)> = None;
+    for code in 0..3usize.pow(n as u32) {
+        // case[a]: 0 slides in (at low), 1 sticks, 2 slides out (at high).
+        let case: Vec<usize> = (0..n).map(|a| code / 3usize.pow(a as u32) % 3).collect();
+        if (0..n).any(|a| {
+            (case[a] == 0 && bounds[a].0 == f64::NEG_INFINITY) || (case[a] == 2 && bounds[a].1 == f64::INFINITY)
+        }) {
+            continue;
+        }
+        let Some(tau) = tensions(
+            &case,
+            &bounds,
+            &solved,
+            &gains,
+            &fixed,
+            &loaded.iter().map(|&j| stuck_at[j]).collect::<Vec<_>>(),
+        ) else {
+            continue;
+        };
+        let violation: f64 = (0..n)
+            .map(|a| {
+                let f = stuck_of(a, &tau);
+                let (low, high) = bounds[a];
+                match case[a] {
+                    0 => (f - low).max(0.0),
+                    2 => (high - f).max(0.0),
+                    _ => (low - f).max(0.0) + (f - high).max(0.0),
+                }
+            })
+            .sum();
+        if violation.is_finite() && best.as_ref().is_none_or(|(v, _)| violation < *v) {
+            best = Some((violation, tau));
+        }
+    }
+    let Some((_, tau)) = best else {
+        return;
+    };
+    let moved: Vec<f64> = (0..n).map(|a| stuck_of(a, &tau)).collect();
     for (&j, value) in loaded.iter().zip(moved) {
         stuck_at[j] = value;
     }
+}
+
+/// The loaded slips' tensions (N) at the node for one case per slip (0: at its low bound,
+/// 1: stuck, 2: at its high bound): the stuck ones solve
+/// `tau_a - sum_c gains[a][c] (tau_c - solved_c) = stuck[a] + fixed[a]` with the others at
+/// their bounds. None where that system is singular.
+fn tensions(
+    case: &[usize],
+    bounds: &[(f64, f64)],
+    solved: &[f64],
+    gains: &[Vec<f64>],
+    fixed: &[f64],
+    stuck: &[f64],
+) -> Option<Vec<f64>> {
+    let n = case.len();
+    let mut tau: Vec<f64> = (0..n)
+        .map(|a| match case[a] {
+            0 => bounds[a].0,
+            2 => bounds[a].1,
+            _ => 0.0,
+        })
+        .collect();
+    let free: Vec<usize> = (0..n).filter(|&a| case[a] == 1).collect();
+    if free.is_empty() {
+        return Some(tau);
+    }
+    let m = free.len();
+    let matrix = DMatrix::from_fn(m, m, |r, c| {
+        let (a, e) = (free[r], free[c]);
+        if a == e { 1.0 } else { -gains[a][e] }
+    });
+    let rhs = DVector::from_fn(m, |r, _| {
+        let a = free[r];
+        stuck[a]
+            + fixed[a]
+            + (0..n)
+                .map(|c| {
+                    if case[c] == 1 {
+                        -gains[a][c] * solved[c]
+                    } else {
+                        gains[a][c] * (tau[c] - solved[c])
+                    }
+                })
+                .sum::<f64>()
+    });
+    let x = matrix.lu().solve(&rhs)?;
+    for (r, &a) in free.iter().enumerate() {
+        tau[a] = x[r];
+    }
+    Some(tau)
 }
 
 /// Slip j's stuck tension at node `node` (state `b` at `site`) for this step's base
