@@ -149,8 +149,10 @@ fn opposite_tendons_with_friction_close_their_loops() {
     // gain of the size of its own (docs/friction.md section 8, "Opposite tendons"): one held
     // at 1 N, the other pulled to 4.91 N and let back out. Before the march coupled them,
     // tendon 1 in 10 steps failed at step 2 and tendon 3 in 10 steps at step 8 (Newton
-    // found no descent); all three were refused at step 1 on main.
-    for (swept, steps) in [(0, 10), (0, 20), (2, 10)] {
+    // found no descent); all three were refused at step 1 on main. Tendon 3 in 20 steps
+    // stopped at step 24 (the zones did not settle) while the coupling was one Jacobi step
+    // of the node's system; the node's joint solve settles it.
+    for (swept, steps) in [(0, 10), (0, 20), (2, 10), (2, 20)] {
         let ranges = opposite(swept, steps);
         let result = solved(history(&ranges, &Default::default()).unwrap());
         assert_eq!(result.len(), 2 * steps + 1);
@@ -195,21 +197,25 @@ fn opposite(swept: usize, steps: usize) -> Ranges {
 
 #[test]
 fn opposite_tendons_estimates_are_honest_where_a_tight_history_solves() {
-    // The coupling of opposite tendons is one Jacobi step, not the node's joint solve
-    // (docs/friction.md section 8, "Opposite tendons"), so converging is not enough: each
-    // step is compared with the same history at 1e-11 L. That history fails at the first
-    // step back (the zones do not settle), at 1e-9 and 1e-10 L too (step 11 or 12), so
-    // only the steps it solves, every step up to the top (all sliding), are checked; the
-    // stuck steps are a known limit there.
+    // Converging is not enough: each step is compared with the same history at 1e-11 L.
+    // While the coupling of opposite tendons was one Jacobi step of the node's system, that
+    // history failed at the first step back (the zones did not settle), at 1e-9 and 1e-10
+    // L too, and only the steps up to the top were checked; with the node's joint solve
+    // (docs/friction.md section 8, "Opposite tendons") it solves every step, and the stuck
+    // steps are checked too. The sliding steps on the way down are left out: some miss
+    // their tolerance (estimate about 10 times it) and their estimates are not the error
+    // to 1 % there (tendon 3's step 16: 1.18).
     for swept in [0, 2] {
         let ranges = opposite(swept, 10);
         let steps = solved(history(&ranges, &Default::default()).unwrap());
         let reference = history(&ranges, &tolerance(1e-11)).unwrap();
-        assert!(
-            reference.steps.len() > 10,
-            "tendon {}: the tight history stops below the top",
+        assert_eq!(
+            reference.steps.len(),
+            steps.len(),
+            "tendon {}: the tight history stops early",
             swept + 1
         );
+        let mut stuck_steps = 0;
         for (k, (step, exact)) in steps.iter().zip(&reference.steps).enumerate() {
             let error = (tip(step) - tip(exact)).norm();
             let estimate = step.solution.report.error_estimate.expect("every step has an estimate");
@@ -219,13 +225,14 @@ fn opposite_tendons_estimates_are_honest_where_a_tight_history_solves() {
                 .iter()
                 .any(|t| t.zones.iter().any(|z| z.contact == Contact::Stick))
             {
+                stuck_steps += 1;
                 // the honesty requirement itself, as on tendon 1's loop
                 assert!(
                     ratio <= 1.0,
                     "tendon {}, stuck step {k}: error / estimate {ratio}",
                     swept + 1
                 );
-            } else {
+            } else if k <= 10 {
                 // a sliding step's deferred correction is its error to a fraction of a
                 // percent (measured at most 1.0001): 1 % as on tendon 1's loop
                 assert!(
@@ -235,6 +242,8 @@ fn opposite_tendons_estimates_are_honest_where_a_tight_history_solves() {
                 );
             }
         }
+        // The way back sticks on its first steps (3 with tendon 1 swept, 2 with tendon 3).
+        assert!(stuck_steps >= 2, "tendon {}: {stuck_steps} stuck steps", swept + 1);
     }
 }
 
