@@ -55,7 +55,7 @@ pub(super) struct Before {
 /// of tension there from those the shape was solved with, `tau*_j += sum_l g_jl dtau_l /
 /// (1 - g_jj)`, where the changes are the node's own answer: every loaded slip's tension is
 /// its stuck one where it sticks and a bound of its link (`z_a -+ C`) where it slides, each
-/// as [`choose`] (without the tie) and `before[j]` allow, and an unloaded one's 0. The
+/// as [`choose`](super::super::grip::choose) (without the tie) and `before[j]` allow, and an unloaded one's 0. The
 /// system is a box complementarity problem whose matrix (the identity less the scaled
 /// cross gains) is a positive diagonal times a symmetric positive definite one, so its
 /// answer is unique; it is found by trying each loaded slip's three cases (in, stuck, out),
@@ -120,8 +120,9 @@ pub(super) fn couple(
         })
         .collect();
     let solved: Vec<f64> = loaded.iter().map(|&j| before[j].solved).collect();
+    let alone: Vec<f64> = loaded.iter().map(|&j| stuck_at[j]).collect();
     let stuck_of = |a: usize, tau: &[f64]| -> f64 {
-        stuck_at[loaded[a]]
+        alone[a]
             + fixed[a]
             + (0..n)
                 .filter(|&c| c != a)
@@ -138,14 +139,7 @@ pub(super) fn couple(
         }) {
             continue;
         }
-        let Some(tau) = tensions(
-            &case,
-            &bounds,
-            &solved,
-            &gains,
-            &fixed,
-            &loaded.iter().map(|&j| stuck_at[j]).collect::<Vec<_>>(),
-        ) else {
+        let Some(tau) = tensions(&case, &bounds, &solved, &gains, &fixed, &alone) else {
             continue;
         };
         let violation: f64 = (0..n)
