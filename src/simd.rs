@@ -44,18 +44,23 @@ macro_rules! avx2_fma {
         fn with_avx2_fma<T>(kernel: impl FnOnce() -> T) -> T {
             kernel()
         }
-        /// [`with_avx2_fma`], for a processor that has the features.
+        /// `kernel` as an `FnOnce` closure: written as an argument of this bound, the closure
+        /// is inferred `FnOnce`, so `with_avx2_fma` calls its body and not a `call_once`
+        /// shim that is compiled apart, without the features (as through
+        /// `std::convert::identity`). An argument too because an attribute on a closure in a
+        /// `let` is not stable.
         #[inline(always)]
-        fn detected_avx2_fma<T>(kernel: impl FnOnce() -> T) -> T {
-            // SAFETY: only called when `avx2_fma_detected()`: the processor has the
-            // features `with_avx2_fma` is compiled for.
-            unsafe { with_avx2_fma(kernel) }
+        fn once<T>(kernel: impl FnOnce() -> T) -> impl FnOnce() -> T {
+            kernel
         }
         if $crate::simd::avx2_fma_detected() {
-            detected_avx2_fma(
+            let kernel = once(
                 #[inline(always)]
                 move || $kernel,
-            )
+            );
+            // SAFETY: the processor has the features `with_avx2_fma` is compiled for, as
+            // `avx2_fma_detected()` has just said.
+            unsafe { with_avx2_fma(kernel) }
         } else {
             $kernel
         }

@@ -54,6 +54,25 @@ const EMPTY: Record = Record {
     factors: [[0.0; ROWS]; NODE],
 };
 
+/// The working rows of one elimination, `W` columns wide (the last node's rows `LW`), kept
+/// between eliminations so that none zeroes them; allocated by the first.
+struct Scratch<const W: usize, const LW: usize> {
+    /// The panel of a step: the carried rows in rows 0..[`CARRY`], then one link's rows.
+    panel: [[f64; W]; ROWS],
+    /// The last node's rows: the carried rows, then the tip rows.
+    last: [[f64; LW]; NODE],
+}
+
+impl<const W: usize, const LW: usize> Scratch<W, LW> {
+    /// Zeroed rows, for the first elimination.
+    fn zeroed() -> Box<Self> {
+        Box::new(Scratch {
+            panel: [[0.0; W]; ROWS],
+            last: [[0.0; LW]; NODE],
+        })
+    }
+}
+
 /// Scratch and factors for one mesh.
 pub struct BlockElimination {
     /// Pivot rows of each step, 12 x 25 (block k, block k + 1, right-hand side), row major;
@@ -67,16 +86,16 @@ pub struct BlockElimination {
     last_record: Record,
     /// Number of links.
     links: usize,
-    /// The panel of [`BlockElimination::factor_with_last`], kept between factorings (every
-    /// entry is written before it is read, so it is not zeroed each time); allocated by
+    /// The rows of [`BlockElimination::factor_with_last`], kept between factorings (every
+    /// entry is written before it is read, so they are not zeroed each time); allocated by
     /// the first.
-    wide_panel: Option<Box<[[f64; WIDE]; ROWS]>>,
-    /// The panel of [`BlockElimination::solve`], kept between solves as `wide_panel` is:
+    wide_scratch: Option<Box<Scratch<WIDE, LAST_WIDE>>>,
+    /// The rows of [`BlockElimination::solve`], kept between solves as `wide_scratch` is:
     /// the right-hand side's padding columns are never written, so they stay zero (up to
     /// their sign) from the first solve's allocation, unless an infinite entry in `values`
     /// puts NaN in them (0 x inf in a row operation); either way no live column reads them,
     /// so they never reach the solution.
-    panel: Option<Box<[[f64; COLS]; ROWS]>>,
+    scratch: Option<Box<Scratch<COLS, LAST_COLS>>>,
     /// The right-hand sides of [`BlockElimination::factor_with_last`] row by row (row r of
     /// every one in `carried_rows[r]`), so that a panel row takes its slots in one copy;
     /// kept between factorings, as the panel.
@@ -97,8 +116,8 @@ impl BlockElimination {
             last: [[0.0; LAST_COLS]; NODE],
             last_record: EMPTY,
             links: nodes - 1,
-            wide_panel: None,
-            panel: None,
+            wide_scratch: None,
+            scratch: None,
             carried_rows: Vec::new(),
             carried_written: 0,
         }
@@ -120,18 +139,21 @@ impl BlockElimination {
     #[inline(always)]
     fn solve_kernel(&mut self, values: &[f64], rhs: &[f64], x: &mut [f64]) -> Option<(Duration, Duration)> {
         let start = Instant::now();
-        let mut panel = self.panel.take().unwrap_or_else(|| Box::new([[0.0; COLS]; ROWS]));
-        let last = self.eliminate_all::<COLS, LAST_COLS, COLS, LAST_COLS>(&mut panel, values, |row, slots| {
+        let mut scratch = self.scratch.take().unwrap_or_else(Scratch::zeroed);
+        let solved = self.eliminate_all::<COLS, LAST_COLS, COLS, LAST_COLS>(&mut scratch, values, |row, slots| {
             slots[0] = rhs[row];
         });
-        self.panel = Some(panel);
-        let last = last?;
+        if !solved {
+            self.scratch = Some(scratch);
+            return None;
+        }
         let eliminated = start.elapsed();
         let start = Instant::now();
+        let last = &scratch.last;
         let n = self.links;
         let rhs_of = |rows: &[[f64; COLS]; NODE]| std::array::from_fn::<f64, NODE, _>(|i| rows[i][2 * NODE]);
         let last_rhs = std::array::from_fn::<f64, NODE, _>(|i| last[i][NODE]);
-        back_substitute(&last, &last_rhs, &mut x[n * NODE..(n + 1) * NODE], None);
+        back_substitute(last, &last_rhs, &mut x[n * NODE..(n + 1) * NODE], None);
         for k in (0..n).rev() {
             let (head, tail) = x.split_at_mut((k + 1) * NODE);
             back_substitute(
@@ -141,6 +163,7 @@ impl BlockElimination {
                 Some(&tail[..NODE]),
             );
         }
+        self.scratch = Some(scratch);
         Some((eliminated, start.elapsed()))
     }
 
@@ -166,7 +189,7 @@ impl BlockElimination {
         // The unknowns: one node's 12 a link, and the last node's.
         let n = (self.links + 1) * NODE;
         debug_assert!(count <= CARRIED && last.len() == count && rhs.len() == n * count);
-        let mut panel = self.wide_panel.take().unwrap_or_else(|| Box::new([[0.0; WIDE]; ROWS]));
+        let mut scratch = self.wide_scratch.take().unwrap_or_else(Scratch::zeroed);
         // The right-hand sides transposed, 0 past the last one, column by column (a
         // contiguous read each): gathering the slots of a panel row from the columns one at
         // a time cost about 60 instructions a row (a bounds check and a branch a slot).
@@ -185,53 +208,56 @@ impl BlockElimination {
         }
         self.carried_written = count;
         // Every slot written: the kept panel's old values are never read.
-        let eliminated = self.eliminate_all::<WIDE, LAST_WIDE, { 2 * NODE }, NODE>(&mut panel, values, |row, slots| {
-            slots.copy_from_slice(&rows[row]);
-        });
-        self.wide_panel = Some(panel);
+        let eliminated =
+            self.eliminate_all::<WIDE, LAST_WIDE, { 2 * NODE }, NODE>(&mut scratch, values, |row, slots| {
+                slots.copy_from_slice(&rows[row]);
+            });
         self.carried_rows = rows;
-        let Some(rows) = eliminated else {
-            return false;
-        };
-        for (j, x) in last.iter_mut().enumerate() {
-            let column = std::array::from_fn::<f64, NODE, _>(|i| rows[i][NODE + j]);
-            back_substitute(&self.last, &column, x, None);
+        if eliminated {
+            let rows = &scratch.last;
+            for (j, x) in last.iter_mut().enumerate() {
+                let column = std::array::from_fn::<f64, NODE, _>(|i| rows[i][NODE + j]);
+                back_substitute(&self.last, &column, x, None);
+            }
         }
-        true
+        self.wide_scratch = Some(scratch);
+        eliminated
     }
 
-    /// The elimination of [`BlockElimination::solve`] in `panel`, `W` columns wide (the last
-    /// node's rows `LW`), the right-hand sides in columns 2 NODE.. (NODE.. of the last node's
-    /// rows) as `slots(row, out)` writes them for each row of J; columns from `ALWAYS`
+    /// The elimination of [`BlockElimination::solve`] in `scratch`, `W` columns wide (the
+    /// last node's rows `LW`), the right-hand sides in columns 2 NODE.. (NODE.. of the last
+    /// node's rows) as `slots(row, out)` writes them for each row of J; columns from `ALWAYS`
     /// (`LAST_ALWAYS` in the last node's rows) on take every row operation, also those whose
-    /// multiplier is zero. Keeps the pivot rows and row operations, and returns the last
-    /// node's eliminated rows; None on a zero pivot.
+    /// multiplier is zero. Keeps the pivot rows and row operations, and leaves the last
+    /// node's eliminated rows in `scratch.last`; false on a zero pivot.
+    ///
+    /// Every entry of `scratch` it reads is written first (the zeros of the carried rows
+    /// included), so the values a former elimination left there never reach the answer,
+    /// and nothing is zeroed as a whole: a zeroed local array costs a `memset` a call.
     #[inline(always)]
     fn eliminate_all<const W: usize, const LW: usize, const ALWAYS: usize, const LAST_ALWAYS: usize>(
         &mut self,
-        panel: &mut [[f64; W]; ROWS],
+        scratch: &mut Scratch<W, LW>,
         values: &[f64],
         mut slots: impl FnMut(usize, &mut [f64]),
-    ) -> Option<[[f64; LW]; NODE]> {
+    ) -> bool {
         if self.pivots.len() != self.links {
             // The first factoring: the factors zeroed, as they were allocated before.
             self.pivots = vec![[[0.0; COLS]; NODE]; self.links];
             self.records = vec![EMPTY; self.links];
         }
-        // Carried rows start as the base rows: columns 0..6 of block 0.
-        let mut carry = [[0.0; W]; CARRY];
-        for (r, row) in carry.iter_mut().enumerate() {
+        let panel = &mut scratch.panel;
+        // Carried rows start as the base rows: columns 0..6 of block 0, zero in the rest of
+        // the two blocks.
+        for (r, row) in panel[..CARRY].iter_mut().enumerate() {
             row[..BASE_COLUMNS].copy_from_slice(&values[r * BASE_COLUMNS..(r + 1) * BASE_COLUMNS]);
+            row[BASE_COLUMNS..2 * NODE].fill(0.0);
             slots(r, &mut row[2 * NODE..]);
         }
         let mut at = BASE_ROWS * BASE_COLUMNS;
         for k in 0..self.links {
-            // Panel: carried rows (block k only) over link k's rows (blocks k and k + 1).
-            for (r, row) in carry.iter().enumerate() {
-                panel[r][..NODE].copy_from_slice(&row[..NODE]);
-                panel[r][NODE..2 * NODE].fill(0.0);
-                panel[r][2 * NODE..].copy_from_slice(&row[2 * NODE..]);
-            }
+            // Panel: carried rows (block k only, rows 0..CARRY) over link k's rows (blocks k
+            // and k + 1).
             for r in 0..NODE {
                 let row = &mut panel[CARRY + r];
                 row[..2 * NODE].copy_from_slice(&values[at + r * 2 * NODE..at + (r + 1) * 2 * NODE]);
@@ -239,21 +265,23 @@ impl BlockElimination {
             }
             at += NODE * 2 * NODE;
             if !eliminate_fast::<ROWS, W, ALWAYS>(panel, &mut self.records[k]) {
-                return None;
+                return false;
             }
             for (kept, row) in self.pivots[k].iter_mut().zip(panel.iter()) {
                 kept.copy_from_slice(&row[..COLS]);
             }
-            // The rows not chosen as pivots carry block k + 1 forward (shifted to block k).
-            for (r, row) in carry.iter_mut().enumerate() {
-                let src = &panel[NODE + r];
+            // The rows not chosen as pivots carry block k + 1 forward (shifted to block k,
+            // zero in block k + 1) into rows 0..CARRY, the pivot rows being kept.
+            let (carried, rest) = panel.split_at_mut(NODE);
+            for (row, src) in carried[..CARRY].iter_mut().zip(&rest[..CARRY]) {
                 row[..NODE].copy_from_slice(&src[NODE..2 * NODE]);
+                row[NODE..2 * NODE].fill(0.0);
                 row[2 * NODE..].copy_from_slice(&src[2 * NODE..]);
             }
         }
         // Last node: carried rows and the tip rows (columns 3..12).
-        let mut last = [[0.0; LW]; NODE];
-        for (r, row) in carry.iter().enumerate() {
+        let last = &mut scratch.last;
+        for (r, row) in panel[..CARRY].iter().enumerate() {
             last[r][..NODE].copy_from_slice(&row[..NODE]);
             last[r][NODE..NODE + W - 2 * NODE].copy_from_slice(&row[2 * NODE..]);
         }
@@ -263,13 +291,13 @@ impl BlockElimination {
             last[CARRY + r][..THETA].fill(0.0);
             slots(tip_row0 + r, &mut last[CARRY + r][NODE..]);
         }
-        if !eliminate_fast::<NODE, LW, LAST_ALWAYS>(&mut last, &mut self.last_record) {
-            return None;
+        if !eliminate_fast::<NODE, LW, LAST_ALWAYS>(last, &mut self.last_record) {
+            return false;
         }
-        for (kept, row) in self.last.iter_mut().zip(&last) {
+        for (kept, row) in self.last.iter_mut().zip(last.iter()) {
             kept.copy_from_slice(&row[..LAST_COLS]);
         }
-        Some(last)
+        true
     }
 
     /// Solves J x = rhs with the factors of the last successful [`BlockElimination::solve`]:
@@ -597,6 +625,41 @@ mod tests {
         assert!(fast.iter().all(|v| v.is_finite()));
         let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
         assert_eq!(bits(&fast), bits(&baseline));
+    }
+
+    /// The AVX2 build of `solve` gives the baseline build's bits, and so does an elimination
+    /// whose kept rows hold what a refused elimination (an infinite entry in link 2's
+    /// rows: NaN and infinities) and another Jacobian's left there: every entry it reads
+    /// is written first.
+    #[test]
+    fn solve_gives_the_baseline_bits_whatever_its_rows_held() {
+        let (nodes, values, residual) = case_h_jacobian();
+        let n = residual.len();
+        let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+        let mut fresh = BlockElimination::new(nodes);
+        let (mut fast, mut baseline) = (vec![0.0; n], vec![0.0; n]);
+        assert!(fresh.solve(&values, &residual, &mut fast).is_some());
+        assert!(
+            BlockElimination::new(nodes)
+                .solve_kernel(&values, &residual, &mut baseline)
+                .is_some()
+        );
+        assert!(fast.iter().all(|v| v.is_finite()));
+        assert_eq!(bits(&fast), bits(&baseline));
+        let mut reused = BlockElimination::new(nodes);
+        let mut step = vec![0.0; n];
+        let mut refused = values.clone();
+        refused[BASE_ROWS * BASE_COLUMNS + 2 * NODE * 2 * NODE + 6] = f64::INFINITY;
+        assert!(reused.solve(&refused, &residual, &mut step).is_none());
+        let other: Vec<f64> = values
+            .iter()
+            .enumerate()
+            .map(|(i, v)| v * (1.5 + (i as f64).sin()))
+            .collect();
+        let shifted: Vec<f64> = residual.iter().map(|v| v + 1.0).collect();
+        assert!(reused.solve(&other, &shifted, &mut step).is_some());
+        assert!(reused.solve(&values, &residual, &mut step).is_some());
+        assert_eq!(bits(&step), bits(&fast));
     }
 
     /// The AVX2 build of `solve_transposed` gives the baseline build's bits, as
