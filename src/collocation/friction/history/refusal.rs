@@ -40,7 +40,7 @@ pub(super) fn slack(i: usize, s: f64) -> Error {
 pub(super) fn stalled(profile: &Profile, s: &[f64], tolerance: f64) -> Option<Error> {
     let grips = profile.grips.as_ref()?;
     let robot = profile.robot();
-    let mut weakest: Option<(f64, usize, f64)> = None;
+    let mut weakest: Option<(f64, f64, usize, f64)> = None;
     for (j, grip) in grips.iter().enumerate() {
         let i = profile.slipping[j];
         let Some(stiffness) = robot.tendons[i].stiffness else {
@@ -52,13 +52,18 @@ pub(super) fn stalled(profile: &Profile, s: &[f64], tolerance: f64) -> Option<Er
         let floor = stiffness * f64::EPSILON / tolerance;
         for k in (0..profile.spans[j]).filter(|&k| grip.contacts[k] == Contact::Stick) {
             let tension = profile.tension(j, profile.z[j][k + 1]);
-            let below = !tension.is_finite() || tension < floor;
-            if below && weakest.is_none_or(|(t, _, _)| !(tension >= t)) {
-                weakest = Some((tension, i, s[k + 1]));
+            // A tension that is not finite (a stick row past slack) ranks below any other.
+            let rank = if tension.is_finite() {
+                tension
+            } else {
+                f64::NEG_INFINITY
+            };
+            if rank < floor && weakest.is_none_or(|(r, ..)| rank < r) {
+                weakest = Some((rank, tension, i, s[k + 1]));
             }
         }
     }
-    let (tension, i, at) = weakest?;
+    let (_, tension, i, at) = weakest?;
     Some(error::invalid(
         format!("tendons[{i}]"),
         format!(
