@@ -280,3 +280,54 @@ fn a_stuck_tendon_going_slack_is_refused_and_pulling_it_in_further_solves() {
         "{err}"
     );
 }
+
+#[test]
+fn a_stuck_tension_driven_to_zero_is_refused_as_going_slack() {
+    // Tendon 5 routed half a turn (bottom side at the base, top at the tip; no friction)
+    // pulled in steps of 0.25 N with tendon 3 (top side, friction 0.1, E_t A_t 2000 N) held
+    // at 1 N: tendon 3 slides out over its first 0.12 m and the rest stays stuck at a
+    // delivered tension of 0.73, 0.49, 0.25 N; at 1 N it would be about 0.01 N, which the
+    // stick row cannot resolve to 1e-11, and Newton stalled (main: "take smaller steps",
+    // which does not help). Refused as going slack, with the hint that helps
+    // (docs/friction.md section 8, "Limits").
+    let dir = scratch("stalled-slack");
+    let out = run(&dir, &["example"]);
+    let text = String::from_utf8_lossy(&out.stdout).into_owned();
+    let from = "routing = { kind = \"straight\", x = -0.008, y = 0.0 }\ntension = 0.0\n";
+    let helix = "turns_per_rod_length = 1.0";
+    assert!(text.contains(from) && text.contains(helix));
+    let to =
+        "routing = { kind = \"straight\", x = -0.008, y = 0.0 }\ntension = 1.0\nfriction = 0.1\nstiffness = 2000.0\n";
+    let text = text
+        .replacen(from, to, 1)
+        .replacen(helix, "turns_per_rod_length = 0.5", 1);
+    std::fs::write(dir.join("robot.toml"), text).unwrap();
+    let args = [
+        "sweep",
+        "robot.toml",
+        "--tension",
+        "1=0",
+        "--tension",
+        "5=0:1:5",
+        "--history",
+        "up-down",
+    ];
+    let refused = run(&dir, &args);
+    assert_eq!(refused.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&refused.stderr);
+    assert!(
+        err.contains("history step 5 of 9")
+            && err.contains("tendon 3 is going slack")
+            && err.contains("pull it in")
+            && !err.contains("take smaller steps"),
+        "{err}"
+    );
+    // The steps before it are written: tendon 3's stuck stretch falls toward 0 N.
+    let stdout = String::from_utf8_lossy(&refused.stdout);
+    let rows: Vec<Vec<&str>> = stdout.lines().map(|l| l.split(',').collect()).collect();
+    assert_eq!(rows.len(), 5, "{rows:?}");
+    let delivered = column(&rows[0].join(","), "delivered_3");
+    let last: f64 = rows[4][delivered].parse().unwrap();
+    // 0.2512 N (as before the change): a quarter of the held 1 N is the point, so 0.01 N.
+    assert!((last - 0.25).abs() < 0.01, "{last}");
+}

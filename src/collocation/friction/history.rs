@@ -21,7 +21,7 @@ mod rest;
 mod slip;
 mod split;
 
-use refusal::{rigid, slack};
+use refusal::{rigid, slack, stalled};
 pub(crate) use repeat::hold_last;
 pub(crate) use rest::start;
 use slip::check_slip;
@@ -393,7 +393,16 @@ fn solve_on(robot: &Robot, options: &Options, carried: &mut Carried, held: Optio
         worst_s = border.system.row_position(worst.min(border.system.unknowns() - 1));
         report.termination = termination;
         if termination != Termination::Converged {
+            // A stuck stretch the shape drives toward 0 N stalls Newton before the march
+            // can refuse it as slack: that is the reason, and its hint the one that helps.
+            border.load(Point::Current);
             let system = &border.system;
+            if let Some(profile) = system.friction.as_ref() {
+                let s: Vec<f64> = x.iter().map(|n| n.s).collect();
+                if let Some(refusal) = stalled(profile, &s, options.residual_tolerance) {
+                    return Err(refusal);
+                }
+            }
             return Err(Error::NotConverged {
                 method: Method::Collocation,
                 report: Box::new(report),

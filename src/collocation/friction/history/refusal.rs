@@ -1,7 +1,13 @@
 //! The stuck stretches a history step refuses, with what the user can change
 //! (docs/friction.md section 8, "Limits").
 
+use crate::collocation::friction::{Contact, Profile};
 use crate::error::{self, Error};
+
+/// What the user can change when a stuck stretch goes slack: more tension at the base
+/// entry slides the tendon in along it.
+const TAUT: &str = "keep the tendon taut through this step: pull it in further (more tension at its base entry), so that \
+                    it slides in along that stretch";
 
 /// The error for tendon `i` whose stuck part would go slack near `s`: the step's shape
 /// makes the path there shorter than the material stuck in it. The first step of a history
@@ -16,9 +22,58 @@ pub(super) fn slack(i: usize, s: f64) -> Error {
              there shorter than the material stuck in it), which the stick/slip history does not model",
             i + 1
         ),
-        "keep the tendon taut through this step: pull it in further (more tension at its base entry), so that it \
-         slides in along that stretch",
+        TAUT,
     )
+}
+
+/// The true reason a step whose Newton did not converge (at its last iterate, loaded into
+/// `profile`; `s` the nodes' arc lengths) failed, when it is a stuck stretch going slack:
+/// a stuck link whose tension at its end node is not finite or is below what the stick
+/// row resolves at `tolerance`. Its row `z_b - ln(tau / tau_0)` reads tau from
+/// `E_t A_t (|p'| / lambda - 1)`, whose ratio rounds to about eps, so it resolves tau only
+/// to about E_t A_t eps / tau in log tension: below tau = E_t A_t eps / tolerance (0.044 N
+/// at 2000 N and 1e-11) Newton cannot reach the tolerance (it stalled at 1.01e-11 with
+/// tau about 0.01 N: docs/friction.md section 8, "Limits"). That stretch is going slack (the shape
+/// drives its stuck tension smoothly toward 0 N, where the march would refuse it as
+/// [`slack`]), and smaller steps do not help; more tension at the base entry does. None
+/// when no stuck link is that close to slack (Newton failed for another reason).
+pub(super) fn stalled(profile: &Profile, s: &[f64], tolerance: f64) -> Option<Error> {
+    let grips = profile.grips.as_ref()?;
+    let robot = profile.robot();
+    let mut weakest: Option<(f64, f64, usize, f64)> = None;
+    for (j, grip) in grips.iter().enumerate() {
+        let i = profile.slipping[j];
+        let Some(stiffness) = robot.tendons[i].stiffness else {
+            continue;
+        };
+        if profile.base[j] <= 0.0 {
+            continue;
+        }
+        let floor = stiffness * f64::EPSILON / tolerance;
+        for k in (0..profile.spans[j]).filter(|&k| grip.contacts[k] == Contact::Stick) {
+            let tension = profile.tension(j, profile.z[j][k + 1]);
+            // A tension that is not finite (a stick row past slack) ranks below any other.
+            let rank = if tension.is_finite() {
+                tension
+            } else {
+                f64::NEG_INFINITY
+            };
+            if rank < floor && weakest.is_none_or(|(r, ..)| rank < r) {
+                weakest = Some((rank, tension, i, s[k + 1]));
+            }
+        }
+    }
+    let (_, tension, i, at) = weakest?;
+    Some(error::invalid(
+        format!("tendons[{i}]"),
+        format!(
+            "tendon {} is going slack near s = {at:.4} m while stuck in its channel: the step's shape drives its stuck \
+             tension there toward 0 N ({tension:.2e} N at Newton's last iterate, below what the stick row resolves at \
+             the residual tolerance), which the stick/slip history does not model; smaller steps do not remove it",
+            i + 1
+        ),
+        TAUT,
+    ))
 }
 
 /// The error for rigid tendon `i` that sticks near `s`.
