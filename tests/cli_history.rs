@@ -204,19 +204,32 @@ fn an_unloaded_tendon_is_slack_and_a_one_step_history_has_its_work_and_estimate(
     assert!(e > 0.0 && e < 2.42e-8, "{e}");
 }
 
+/// Writes `dir/robot.toml`: the example robot with tendon 3 (the top side, which the rod's
+/// weight stretches) at `tension` N with friction 0.1 and E_t A_t = 2000 N, and, with
+/// `helix_turns`, the helical tendon 5 at that many turns per rod length instead of one.
+fn top_tendon_with_friction(dir: &Path, tension: &str, helix_turns: Option<&str>) {
+    let out = run(dir, &["example"]);
+    let text = String::from_utf8_lossy(&out.stdout).into_owned();
+    let from = "routing = { kind = \"straight\", x = -0.008, y = 0.0 }\ntension = 0.0\n";
+    let helix = "turns_per_rod_length = 1.0";
+    assert!(text.contains(from) && text.contains(helix));
+    let to = format!(
+        "routing = {{ kind = \"straight\", x = -0.008, y = 0.0 }}\ntension = {tension}\nfriction = 0.1\nstiffness = 2000.0\n"
+    );
+    let mut text = text.replacen(from, &to, 1);
+    if let Some(turns) = helix_turns {
+        text = text.replacen(helix, &format!("turns_per_rod_length = {turns}"), 1);
+    }
+    std::fs::write(dir.join("robot.toml"), text).unwrap();
+}
+
 #[test]
 fn a_tendon_the_rods_weight_stretches_is_pulled_in_from_rest() {
     // Tendon 3 lies on the top side, which the rod's weight stretches: main refused step 1
     // of both histories ("would go slack near s = 0.0581 m while stuck in its channel ...;
     // take the history in smaller steps"), a hint step 1 cannot follow.
     let dir = scratch("top");
-    let out = run(&dir, &["example"]);
-    let text = String::from_utf8_lossy(&out.stdout).into_owned();
-    let from = "routing = { kind = \"straight\", x = -0.008, y = 0.0 }\ntension = 0.0\n";
-    assert!(text.contains(from));
-    let to =
-        "routing = { kind = \"straight\", x = -0.008, y = 0.0 }\ntension = 1.0\nfriction = 0.1\nstiffness = 2000.0\n";
-    std::fs::write(dir.join("robot.toml"), text.replacen(from, to, 1)).unwrap();
+    top_tendon_with_friction(&dir, "1.0", None);
     for (input, list) in [("1=0", "0,1"), ("3=1", "1,2")] {
         let rows = history_csv(&dir, &["--tension", input, "--history", list]);
         let zones = column(&rows[0].join(","), "zones_3");
@@ -233,13 +246,7 @@ fn a_stuck_tendon_going_slack_is_refused_and_pulling_it_in_further_solves() {
     // the base and shortens beyond: it slides out near the base, and the material stuck
     // beyond would go slack (docs/friction.md section 8, "Limits").
     let dir = scratch("slack-refused");
-    let out = run(&dir, &["example"]);
-    let text = String::from_utf8_lossy(&out.stdout).into_owned();
-    let from = "routing = { kind = \"straight\", x = -0.008, y = 0.0 }\ntension = 0.0\n";
-    assert!(text.contains(from));
-    let to =
-        "routing = { kind = \"straight\", x = -0.008, y = 0.0 }\ntension = 0.3\nfriction = 0.1\nstiffness = 2000.0\n";
-    std::fs::write(dir.join("robot.toml"), text.replacen(from, to, 1)).unwrap();
+    top_tendon_with_friction(&dir, "0.3", None);
     let sweep = |tendon_3: &str| {
         let args = [
             "sweep",
@@ -291,17 +298,7 @@ fn a_stuck_tension_driven_to_zero_is_refused_as_going_slack() {
     // which does not help). Refused as going slack, with the hint that helps
     // (docs/friction.md section 8, "Limits").
     let dir = scratch("stalled-slack");
-    let out = run(&dir, &["example"]);
-    let text = String::from_utf8_lossy(&out.stdout).into_owned();
-    let from = "routing = { kind = \"straight\", x = -0.008, y = 0.0 }\ntension = 0.0\n";
-    let helix = "turns_per_rod_length = 1.0";
-    assert!(text.contains(from) && text.contains(helix));
-    let to =
-        "routing = { kind = \"straight\", x = -0.008, y = 0.0 }\ntension = 1.0\nfriction = 0.1\nstiffness = 2000.0\n";
-    let text = text
-        .replacen(from, to, 1)
-        .replacen(helix, "turns_per_rod_length = 0.5", 1);
-    std::fs::write(dir.join("robot.toml"), text).unwrap();
+    top_tendon_with_friction(&dir, "1.0", Some("0.5"));
     let args = [
         "sweep",
         "robot.toml",
