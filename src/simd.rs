@@ -50,11 +50,11 @@ macro_rules! avx2_fma {
         /// `std::convert::identity`). An argument too because an attribute on a closure in a
         /// `let` is not stable.
         #[inline(always)]
-        fn once<T>(kernel: impl FnOnce() -> T) -> impl FnOnce() -> T {
+        fn avx2_fma_once<T>(kernel: impl FnOnce() -> T) -> impl FnOnce() -> T {
             kernel
         }
         if $crate::simd::avx2_fma_detected() {
-            let kernel = once(
+            let kernel = avx2_fma_once(
                 #[inline(always)]
                 move || $kernel,
             );

@@ -232,7 +232,9 @@ impl BlockElimination {
     /// node's eliminated rows in `scratch.last`; false on a zero pivot.
     ///
     /// Every entry of `scratch` it reads is written first (the zeros of the carried rows
-    /// included), so the values a former elimination left there never reach the answer,
+    /// included), except [`BlockElimination::solve`]'s padding columns past its one
+    /// right-hand side, which the row operations read but no live column does; so the
+    /// values a former elimination left there never reach the answer,
     /// and nothing is zeroed as a whole: a zeroed local array costs a `memset` a call.
     #[inline(always)]
     fn eliminate_all<const W: usize, const LW: usize, const ALWAYS: usize, const LAST_ALWAYS: usize>(

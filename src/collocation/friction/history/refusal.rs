@@ -28,8 +28,10 @@ pub(super) fn slack(i: usize, s: f64) -> Error {
 
 /// The true reason a step whose Newton did not converge (at its last iterate, loaded into
 /// `profile`; `s` the nodes' arc lengths) failed, when it is a stuck stretch going slack:
-/// a stuck link whose tension at its end node is not finite or is below what the stick
-/// row resolves at `tolerance`. Its row `z_b - ln(tau / tau_0)` reads tau from
+/// a stuck link whose tension at its end node is below what the stick row resolves at
+/// `tolerance` and below a tenth of its tendon's base-entry tension (so that a healthy stuck
+/// tension under a residual tolerance too tight for its stick row, or an iterate that blew
+/// up, keeps Newton's own error). Its row `z_b - ln(tau / tau_0)` reads tau from
 /// `E_t A_t (|p'| / lambda - 1)`, whose ratio rounds to about eps, so it resolves tau only
 /// to about E_t A_t eps / tau in log tension: below tau = E_t A_t eps / tolerance (0.044 N
 /// at 2000 N and 1e-11) Newton cannot reach the tolerance (it stalled at 1.01e-11 with
@@ -40,7 +42,7 @@ pub(super) fn slack(i: usize, s: f64) -> Error {
 pub(super) fn stalled(profile: &Profile, s: &[f64], tolerance: f64) -> Option<Error> {
     let grips = profile.grips.as_ref()?;
     let robot = profile.robot();
-    let mut weakest: Option<(f64, f64, usize, f64)> = None;
+    let mut weakest: Option<(f64, usize, f64)> = None;
     for (j, grip) in grips.iter().enumerate() {
         let i = profile.slipping[j];
         let Some(stiffness) = robot.tendons[i].stiffness else {
@@ -49,21 +51,17 @@ pub(super) fn stalled(profile: &Profile, s: &[f64], tolerance: f64) -> Option<Er
         if profile.base[j] <= 0.0 {
             continue;
         }
-        let floor = stiffness * f64::EPSILON / tolerance;
+        // A tenth of the base entry's tension: well below it, the stretch is being driven
+        // toward 0 N, not merely resolved too finely.
+        let floor = (stiffness * f64::EPSILON / tolerance).min(0.1 * profile.base[j]);
         for k in (0..profile.spans[j]).filter(|&k| grip.contacts[k] == Contact::Stick) {
             let tension = profile.tension(j, profile.z[j][k + 1]);
-            // A tension that is not finite (a stick row past slack) ranks below any other.
-            let rank = if tension.is_finite() {
-                tension
-            } else {
-                f64::NEG_INFINITY
-            };
-            if rank < floor && weakest.is_none_or(|(r, ..)| rank < r) {
-                weakest = Some((rank, tension, i, s[k + 1]));
+            if tension.is_finite() && tension < floor && weakest.is_none_or(|(t, ..)| tension < t) {
+                weakest = Some((tension, i, s[k + 1]));
             }
         }
     }
-    let (_, tension, i, at) = weakest?;
+    let (tension, i, at) = weakest?;
     Some(error::invalid(
         format!("tendons[{i}]"),
         format!(
