@@ -125,7 +125,9 @@ pub(super) fn couple(
         alone[a]
             + fixed[a]
             + (0..n)
-                .filter(|&c| c != a)
+                // A zero gain (also that of a slip whose solved tension is not finite) adds
+                // nothing: skipped, so that 0 x inf does not make every case NaN.
+                .filter(|&c| c != a && gains[a][c] != 0.0)
                 .map(|c| gains[a][c] * (tau[c] - solved[c]))
                 .sum::<f64>()
     };
@@ -200,6 +202,7 @@ fn tensions(
         stuck[a]
             + fixed[a]
             + (0..n)
+                .filter(|&c| gains[a][c] != 0.0)
                 .map(|c| {
                     if case[c] == 1 {
                         -gains[a][c] * solved[c]
