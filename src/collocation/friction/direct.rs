@@ -131,7 +131,7 @@ mod tests {
     /// load path to the buckled state, stable) and its report counts the direct run too.
     #[test]
     fn the_fallback_returns_the_load_paths_stable_state_where_the_direct_answer_is_unstable() {
-        let (length, radius, e) = (0.5, 1e-3, 200e9);
+        let (length, radius, e): (f64, f64, f64) = (0.5, 1e-3, 200e9);
         let p_cr = std::f64::consts::PI.powi(3) * e * radius.powi(4) / 4.0 / (4.0 * length * length);
         let p = 1.2 * p_cr;
         let robot = Robot::new(Rod::solid_circle(length, radius, e, 0.3))
