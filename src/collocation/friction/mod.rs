@@ -12,7 +12,8 @@
 //! the tension. The whole matrix, reordered node by node, is factored as one staircase
 //! ([`staircase`]; the blocks handed to it in `border.rs`), in the Newton loop of
 //! displacement-controlled tendons ([`newton::run_bordered`]). The solve starts from the
-//! frictionless solution on its mesh, moved to the capstan start ([`start`]).
+//! initial guess ([`direct`]) or the frictionless solution on its mesh, moved to the
+//! capstan start ([`start`]).
 #![allow(non_snake_case)]
 
 mod border;
