@@ -42,9 +42,8 @@ pub(super) fn applies(options: &Options, warm: Option<&Solution>, assess: bool) 
 /// pick the next mesh and start it, which the frictionless Newton does at less cost (case
 /// H: 18.48 M instructions against 17.26 M, docs/benchmarks.md "start18"), so the caller
 /// takes the frictionless start instead. Expected to be refined: with a tolerance, a
-/// routing or the precurvature turns by more per interval than the resolution study's
-/// one-turn helix may for its order-4 error to meet the tolerance (of the loaded tendons
-/// only),
+/// loaded tendon's routing or the precurvature turns by more per interval than the
+/// resolution study's one-turn helix may for its order-4 error to meet the tolerance,
 /// `STUDY_ANGLE (tol / STUDY_ERROR)^(1/4)` (0.107 rad at the default 1e-7: H's helix turns
 /// 0.196 rad per interval of 32). This is a prediction of cost only: either route returns
 /// an answer to the tolerance.
