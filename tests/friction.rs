@@ -283,6 +283,35 @@ fn the_error_estimate_covers_friction_at_default_settings() {
     }
 }
 
+/// Where Newton with friction goes straight from the initial guess to a stable answer and
+/// the first mesh is final (S at mu = 0.1), the solve runs no frictionless Newton
+/// (docs/friction.md section 3, "Which start"): the report counts one mesh and one Newton
+/// run, the one with friction. The answer is the one Newton with friction reaches from the
+/// frictionless solution (`nearest`, whose frictionless start counts a mesh of its own) on
+/// the same mesh.
+#[test]
+fn a_direct_solve_with_friction_runs_no_frictionless_newton() {
+    use tdcr::collocation::{Equilibrium, Options};
+    let [s, _] = rough_cases();
+    let direct = tdcr::collocation::solve(&s, &Options::default()).unwrap();
+    let report = &direct.report;
+    assert_eq!(report.stability, tdcr::Stability::Stable, "{report:?}");
+    assert_eq!(report.meshes, 1, "{report:?}");
+    assert_eq!(report.iterations, report.history.len(), "{report:?}");
+    let nearest = Options {
+        equilibrium: Equilibrium::Nearest,
+        ..Default::default()
+    };
+    let from_smooth = tdcr::collocation::solve(&s, &nearest).unwrap();
+    assert_eq!(from_smooth.report.meshes, 2, "{:?}", from_smooth.report);
+    assert_eq!(from_smooth.report.intervals, report.intervals);
+    // 1e-10 m: the same discrete solution from two starts, each within Newton's stopping
+    // test of it (extrapolated error below 1e-10 in the scaled unknowns, p / L with L =
+    // 0.242 m); measured 4e-13 m.
+    let apart = (direct.tip_position() - from_smooth.tip_position()).norm();
+    assert!(apart < 1e-10, "{apart:e} m");
+}
+
 #[test]
 fn global_equilibrium_holds_with_friction() {
     let mut released = cases::case_h();

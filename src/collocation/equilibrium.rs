@@ -114,8 +114,10 @@ impl Choose {
 }
 
 /// The most Newton iterations of a direct solve that counts as clean: from a guess on the
-/// right branch Newton converges in 2-8 (docs/numerics.md); more means it wandered.
-const CLEAN_ITERATIONS: usize = 12;
+/// right branch Newton converges in 2-8 (docs/numerics.md); more means it wandered. The
+/// direct route of a solve with friction holds its Newton to the same bound
+/// (collocation/friction/direct.rs).
+pub(crate) const CLEAN_ITERATIONS: usize = 12;
 
 /// Whether Newton went straight to its root: no damped step and few iterations. A damped
 /// step means the guess was outside Newton's region of quadratic convergence, where the

@@ -12,11 +12,13 @@
 //! the tension. The whole matrix, reordered node by node, is factored as one staircase
 //! ([`staircase`]; the blocks handed to it in `border.rs`), in the Newton loop of
 //! displacement-controlled tendons ([`newton::run_bordered`]). The solve starts from the
-//! frictionless solution on its mesh, moved to the capstan start ([`start`]).
+//! initial guess ([`direct`]) or the frictionless solution on its mesh, moved to the
+//! capstan start ([`start`]).
 #![allow(non_snake_case)]
 
 mod border;
 mod correction;
+mod direct;
 mod grip;
 pub(crate) mod history;
 mod interval;
@@ -31,6 +33,7 @@ pub(crate) use grip::Grip;
 pub(crate) use interval::{Profile, interval, interval_order6};
 pub(in crate::collocation) use pull_ins::solve_pull_ins;
 
+use super::equilibrium::CLEAN_ITERATIONS;
 use super::newton::{self, Border, Linearization, Point, Settings, Workspace};
 use super::system::System;
 use super::unknowns::{self, NODE, link_row, tip_row};
@@ -270,10 +273,12 @@ impl<'r> Capstan<'r> {
     }
 }
 
-/// Solves a robot with tendons with friction (validated, with `options` validated): the
-/// frictionless robot first ([`pipeline::solve_start`]: its equilibrium choice on the first
-/// mesh, which also picks the mesh to start on), then [`refine_with_friction`] from its
-/// states and constant tensions, with the verdict of its linearized dynamics.
+/// Solves a robot with tendons with friction (validated, with `options` validated): Newton
+/// with friction from the initial guess moved to the capstan start ([`direct`]), where
+/// that route applies and its answer stands; else the frictionless robot first
+/// ([`pipeline::solve_start`]: its equilibrium choice on the first mesh, which also picks
+/// the mesh to start on), then [`refine_with_friction`] from its states and constant
+/// tensions, with the verdict of its linearized dynamics.
 ///
 /// # Errors
 /// As [`super::solve`].
@@ -284,13 +289,22 @@ pub(super) fn solve(robot: &Robot, options: &Options, warm: Option<&Solution>, c
 /// [`solve`], with the verdict of the linearized dynamics when `assess` (else `unknown`:
 /// the held pull-ins' loop, whose verdict is not this solve's).
 ///
-/// With a verdict, the frictionless start's equilibrium choice accepts a direct answer
-/// without its own verdict ([`pipeline::solve_start`] `unassessed`): the answer with
-/// friction built on it stands when its verdict is `stable`, the criterion the choice
-/// applies to every direct answer (docs/friction.md section 3, "Which start"). Otherwise
-/// (not `stable`, or the solve with friction failed) the whole solve runs again from the
-/// full choice on the frictionless robot, and the report counts both (but for a failed
-/// first run whose error carries no report, whose work is then not counted).
+/// With a verdict, a cold start and the load path's choice, the direct route runs first
+/// ([`direct::solve`]: Newton with friction from the guess, no frictionless Newton) unless
+/// its first mesh is expected to be refined ([`direct::first_mesh`]); its answer stands
+/// when Newton went straight to it and its verdict is `stable` (docs/friction.md section
+/// 3, "Which start"). Otherwise (not `stable`, or a Newton with friction that failed) the
+/// whole solve runs from the full choice on the frictionless robot, and the report counts
+/// both (but for a failed first run whose error carries no report, whose work is then not
+/// counted).
+///
+/// Where the direct route does not run (a warm start; `nearest` or no continuation, whose
+/// frictionless choice takes Newton's answer without a verdict; a first mesh expected to
+/// be refined), the frictionless start's
+/// equilibrium choice accepts a direct answer without its own verdict
+/// ([`pipeline::solve_start`] `unassessed`) when the solve has one: the answer with
+/// friction built on it stands when its verdict is `stable`, else the full choice runs, as
+/// above.
 ///
 /// # Errors
 /// As [`super::solve`].
@@ -306,14 +320,21 @@ fn solve_assessed(
     for t in &mut smooth.tendons {
         t.friction = None;
     }
-    let first = pipeline::solve_start(&smooth, options, warm, cache, assess)?;
-    let provisional = first.provisional;
-    let answer = from_start(robot, options, first, cache, assess, start);
-    if !provisional {
-        return answer;
-    }
+    let direct = match direct::applies(options, warm, assess) {
+        true => direct::first_mesh(&smooth, options)?,
+        false => None,
+    };
+    let provisional = if let Some(from) = direct {
+        direct::solve(robot, options, from, start)
+    } else {
+        let first = pipeline::solve_start(&smooth, options, warm, cache, assess)?;
+        if !first.provisional {
+            return from_start(robot, options, first, cache, assess, start);
+        }
+        from_start(robot, options, first, cache, assess, start)
+    };
     // The work of the provisional route, which the report of the full one counts.
-    let tried = match answer {
+    let tried = match provisional {
         Ok(solution) if solution.report.stability.is_stable() => return Ok(solution),
         Ok(solution) => Some(solution.report),
         Err(Error::NotConverged { report, .. }) => Some(*report),
@@ -351,6 +372,7 @@ fn from_start(
         None,
         (first.report, assess),
         start,
+        false,
     )
 }
 
@@ -361,7 +383,10 @@ fn from_start(
 /// against the same tolerance as the rotation) meet it. `report` holds what came before
 /// (the frictionless solve's counts, or none), with whether to assess the answer's
 /// stability (the linearized dynamics with the capstan rows; else `unknown`); `start` is
-/// when the solve began.
+/// when the solve began. With `direct` (the direct route, [`direct`]), `from` is the
+/// initial guess, and Newton on the first mesh counts as converged only if it went
+/// straight to its root ([`CLEAN_ITERATIONS`], no damped step), with no second try from
+/// constant tensions.
 ///
 /// # Errors
 /// As [`super::solve`].
@@ -372,6 +397,7 @@ fn refine_with_friction(
     mut previous: Option<(Vec<f64>, Vec<Vec<f64>>)>,
     (mut report, assess): (SolveReport, bool),
     start: Instant,
+    direct: bool,
 ) -> Result<Solution> {
     let (mut mesh, mut x) = from;
     let settings = Settings {
@@ -380,14 +406,23 @@ fn refine_with_friction(
         reuse_factors: false,
         stop_when_damped: false,
     };
+    // The direct route's first mesh: Newton from the guess must go straight to its root,
+    // as the equilibrium choice's direct answer must ([`direct`]).
+    let mut first = direct.then_some(Settings {
+        max_iterations: options.max_iterations.min(CLEAN_ITERATIONS),
+        stop_when_damped: true,
+        ..settings
+    });
     let model = Model::new(robot);
     let length = robot.length();
     // Whether the first mesh starts from the capstan start (until Newton fails from it),
-    // and the states it moves, for that case.
+    // and the states it moves, for that case (not on the direct route, whose caller falls
+    // back to the frictionless start instead).
     let mut capstan = previous.is_none();
-    let plain = capstan.then(|| (mesh.clone(), x.clone()));
+    let plain = (capstan && !direct).then(|| (mesh.clone(), x.clone()));
     // The last mesh's node arc lengths and log tensions, interpolated onto the next.
     loop {
+        let settings = first.take().unwrap_or(settings);
         report.meshes += 1;
         let mut system = System::new(model.clone(), mesh);
         let mut profile = Profile::new(&model, &system.mesh);

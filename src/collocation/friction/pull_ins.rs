@@ -42,7 +42,7 @@ fn solve_near(robot: &Robot, options: &Options, near: &Solution) -> Result<Solut
     report.notes = near.report.notes.clone();
     let mesh = Mesh::from_points(robot, &s)?;
     let x = interpolate(&Model::new(robot), near, &mesh);
-    refine_with_friction(robot, options, (mesh, x), Some((s, z)), (report, false), start)
+    refine_with_friction(robot, options, (mesh, x), Some((s, z)), (report, false), start, false)
 }
 
 /// Solves a robot with friction and displacement-controlled tendons (validated, with

@@ -1,5 +1,7 @@
 //! Where Newton with friction starts (docs/friction.md section 3, "The start"): the
-//! frictionless solution corrected for the tension profile by the rigid-equilibrium sweep.
+//! frictionless solution, or on the direct route the initial guess (the frictionless
+//! rigid-equilibrium sweep), corrected for the tension profile by the rigid-equilibrium
+//! sweep with the local tensions.
 //!
 //! A cut through the backbone and its tendons at s leaves on the distal part only the
 //! external loads and the tendons' tensions at the cut, whatever the friction in the
@@ -79,7 +81,8 @@ fn node_tensions(model: &Model, profile: &Profile, out: &mut [Vec<f64>]) {
     }
 }
 
-/// Moves the frictionless solution `x` (on `mesh`) to the start of Newton with friction and
+/// Moves the frictionless solution or initial guess `x` (on `mesh`) to the start of Newton
+/// with friction and
 /// writes the log tensions marched along it into `profile` (module docs). The passes are
 /// relaxed as the rigid-equilibrium estimate's sweeps are (Aitken's factor: the tip load's
 /// moment arm swings with the shape the tension profile bends) and stop when a pass changes
