@@ -75,7 +75,7 @@ pub struct Options {
     /// times the tolerance on the starting mesh starts instead on the mesh that error asks
     /// for (docs/numerics.md, "The first mesh from the guess"): case H is then solved on one
     /// mesh instead of two (12 % fewer instructions), but on random robots the prediction
-    /// scatters too much to pay (15 % more in total), so it is off by default.
+    /// scatters too much to pay (17 % more in total), so it is off by default.
     pub first_mesh_from_guess: bool,
 }
 
