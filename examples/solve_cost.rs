@@ -1,7 +1,6 @@
 //! Instructions per default solve, for callgrind (docs/benchmarks.md, "Where a solve's
 //! instructions go"): solves case S or H (or SM: S with a dead tip moment, whose verdict
-//! comes from the linearized dynamics) cold (`predicted`: cold with
-//! `Options::first_mesh_from_guess`), or warm (a solver that has just solved the
+//! comes from the linearized dynamics) cold, or warm (a solver that has just solved the
 //! case at 0.99 times the tension solves it at full tension from that solution, as `tdcr
 //! bench` does), `count` times inside [`measured`], after one untimed solve of the same kind.
 //!
@@ -55,7 +54,7 @@ fn uncounted(solver: &mut collocation::Solver, previous: &Robot) -> Result<Solut
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().collect();
-    let usage = "usage: solve_cost S|H|SM cold|warm|predicted COUNT [TOL [INTERVALS]]";
+    let usage = "usage: solve_cost S|H|SM cold|warm COUNT [TOL [INTERVALS]]";
     let (case, start, count) = match args.as_slice() {
         [_, c, s, n, ..] => (c.as_str(), s.as_str(), n.parse::<usize>()?.max(1)),
         _ => return Err(usage.into()),
@@ -80,11 +79,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     if let Some(intervals) = args.get(5) {
         options.intervals = intervals.parse()?;
     }
-    // `predicted`: cold, starting on the mesh the guess predicts
-    // (`Options::first_mesh_from_guess`).
-    options.first_mesh_from_guess = start == "predicted";
     let solution = match start {
-        "cold" | "predicted" => {
+        "cold" => {
             collocation::solve(&robot, &options)?;
             measured(&robot, None, &options, count)?
         }

@@ -170,30 +170,3 @@ fn the_estimate_names_the_order_of_its_answer() {
     let read = tdcr::io::parse_solution(&tdcr::io::output::solution_json(&solution)).unwrap();
     assert_eq!(read.report.error_estimate, Some(estimate));
 }
-
-/// The first mesh from the guess (`Options::first_mesh_from_guess`, docs/numerics.md "The
-/// first mesh from the guess"): case H, whose 32-interval first mesh misses the orientation
-/// tolerance about 40-fold (and is solved again on 85 intervals by default), starts on the
-/// mesh its guess predicts and is solved there once, within the tolerance and on the same
-/// equilibrium; case S, which meets the tolerance on 32 intervals (its prediction is a
-/// third of the tolerance), keeps that first mesh and its answer bit for bit.
-#[test]
-fn case_h_is_solved_on_the_mesh_its_guess_predicts() {
-    let options = collocation::Options {
-        first_mesh_from_guess: true,
-        ..Default::default()
-    };
-    let default = collocation::Options::default();
-    let h = collocation::solve(&cases::case_h(), &options).unwrap();
-    assert_eq!(h.report.meshes, 1, "{:?}", h.report);
-    assert_eq!(h.report.tolerance_met, Some(true));
-    assert!(h.report.stability.is_stable(), "{}", h.report.stability);
-    assert_eq!(collocation::solve(&cases::case_h(), &default).unwrap().report.meshes, 2);
-    // Against the published tip, good to about 5e-10 m: within the tolerance (2.4e-8 m).
-    let tip = h.tip_position() - nalgebra::Vector3::from(cases::TIP_H);
-    assert!(tip.norm() < 1e-7 * cases::LENGTH, "{tip:?}");
-    let s = collocation::solve(&cases::case_s(), &options).unwrap();
-    assert_eq!((s.report.meshes, s.report.intervals), (1, 32), "{:?}", s.report);
-    let s_default = collocation::solve(&cases::case_s(), &default).unwrap();
-    assert_eq!(s.tip_position(), s_default.tip_position());
-}

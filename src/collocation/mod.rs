@@ -58,7 +58,6 @@ mod path_types;
 mod phase;
 mod pipeline;
 mod point;
-mod predict;
 pub(crate) mod refine;
 mod relax;
 pub(crate) mod residual;

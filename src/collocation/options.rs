@@ -71,12 +71,6 @@ pub struct Options {
     pub initial_guess: InitialGuess,
     /// The linear solver for Newton steps. Default: `Blocks` (the structured elimination).
     pub linear_solver: LinearSolver,
-    /// Under error control, a cold start whose guess predicts a tip error of more than 8
-    /// times the tolerance on the starting mesh starts instead on the mesh that error asks
-    /// for (docs/numerics.md, "The first mesh from the guess"): case H is then solved on one
-    /// mesh instead of two (12 % fewer instructions), but on random robots the prediction
-    /// scatters too much to pay (17 % more in total), so it is off by default.
-    pub first_mesh_from_guess: bool,
 }
 
 impl Default for Options {
@@ -92,7 +86,6 @@ impl Default for Options {
             equilibrium: Equilibrium::LoadPath,
             initial_guess: InitialGuess::RigidEquilibrium,
             linear_solver: LinearSolver::Blocks,
-            first_mesh_from_guess: false,
         }
     }
 }

@@ -28,7 +28,7 @@ const START_ANGLE: f64 = std::f64::consts::PI / 8.0;
 
 /// Re-meshing aims at this fraction of the tolerance, so that the new mesh meets it despite
 /// the estimate's own O(h^6) error and a non-asymptotic coarse mesh.
-pub(super) const TARGET_FRACTION: f64 = 0.8;
+const TARGET_FRACTION: f64 = 0.8;
 
 /// Each re-mesh has at least this factor more intervals, so refinement ends at the cap in
 /// a bounded number of levels even where the error does not yet fall like h^4.

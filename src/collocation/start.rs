@@ -2,11 +2,10 @@
 //! initial guess of a cold start.
 
 use super::options::Options;
-use super::predict;
 use super::refine;
 use crate::Robot;
 use crate::error::{Result, invalid};
-use crate::mesh::{Mesh, guess, nodes, resolution, spare};
+use crate::mesh::{Mesh, guess, resolution, spare};
 use crate::model::equations::Model;
 use crate::solution::{Solution, State};
 
@@ -74,9 +73,7 @@ pub(crate) fn resolves(robot: &Robot, options: &Options, mesh: &Mesh) -> Result<
 /// The initial guess of a cold start on `mesh` for `model` (a robot's model as
 /// [`Model::new`] makes it: the given tensions, full load). With error control and no
 /// fixed mesh, the start moves first to a mesh that resolves the initial guess and the
-/// routings (the resolution rule), when `mesh` does not; where `mesh` does, and
-/// `options.first_mesh_from_guess` asks for it, to the mesh the guess predicts the
-/// tolerance needs ([`predict::first_mesh`]), with the guess interpolated onto it.
+/// routings (the resolution rule), when `mesh` does not.
 ///
 /// # Errors
 /// [`crate::Error::InvalidInput`] if the finer mesh cannot be built.
@@ -88,34 +85,10 @@ pub(crate) fn cold_start(model: &Model, options: &Options, mesh: &mut Mesh) -> R
     }
     let floor = options.intervals.max(resolution::required(robot).intervals);
     let needed = refine::start_intervals(robot, &x0, floor).min(options.max_intervals);
-    if needed > mesh.intervals() {
-        spare::give(x0);
-        std::mem::replace(mesh, Mesh::uniform(robot, needed)?).release();
-        return Ok(guess::initial(model, &mesh.nodes, options.initial_guess));
+    if needed <= mesh.intervals() {
+        return Ok(x0);
     }
-    // The mesh the guess predicts the tolerance needs, where the start is clearly too
-    // coarse for it (docs/numerics.md, "The first mesh from the guess"), when asked for.
-    let Some(tol) = options.tolerance.filter(|_| options.first_mesh_from_guess) else {
-        return Ok(x0);
-    };
-    let Some(fine) = predict::first_mesh(robot, mesh, &x0, tol, options)? else {
-        return Ok(x0);
-    };
-    // The guess moves to the finer mesh by its interpolant (as a level's answer moves to
-    // the next mesh), a few times cheaper than the rigid-equilibrium sweeps there; where
-    // eq. 13 breaks down at a guess's node, the sweeps run on the finer mesh.
-    let mut ends = spare::take(mesh.nodes.len());
-    ends.extend(mesh.nodes.iter().map(|n| n.segment_end));
-    let moved = nodes::nodes(model, &x0, &ends, None).map(|at| {
-        let x = guess::interpolate_nodes(model, &at, &fine);
-        spare::give(at);
-        x
-    });
-    spare::give(ends);
     spare::give(x0);
-    std::mem::replace(mesh, fine).release();
-    match moved {
-        Ok(x) => Ok(x),
-        Err(_) => Ok(guess::initial(model, &mesh.nodes, options.initial_guess)),
-    }
+    std::mem::replace(mesh, Mesh::uniform(robot, needed)?).release();
+    Ok(guess::initial(model, &mesh.nodes, options.initial_guess))
 }
