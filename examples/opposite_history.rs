@@ -107,6 +107,9 @@ fn main() {
                 distance / estimate
             );
         }
+        if std::env::var_os("PRINT_TIPS").is_some() {
+            println!("      tip {:?}", step.solution.tip_position());
+        }
         if std::env::var_os("INFLECTIONS").is_some() {
             let nodes = &step.solution.nodes;
             for c in 0..3 {

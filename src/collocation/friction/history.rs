@@ -22,7 +22,7 @@ mod rest;
 mod slip;
 mod split;
 
-use refusal::{rigid, slack, stalled};
+use refusal::{resolution, rigid, slack, stalled};
 pub(crate) use repeat::hold_last;
 pub(crate) use rest::start;
 use slip::check_slip;
@@ -404,17 +404,25 @@ fn solve_on(robot: &Robot, options: &Options, carried: &mut Carried, held: Optio
             // can refuse it as slack: that is the reason, and its hint the one that helps.
             border.load(Point::Current);
             let system = &border.system;
+            let mut looser = String::new();
             if let Some(profile) = system.friction.as_ref() {
                 let s: Vec<f64> = x.iter().map(|n| n.s).collect();
                 if let Some(refusal) = stalled(profile, &s, options.residual_tolerance) {
                     return Err(refusal);
+                }
+                // A healthy stuck tension under a residual tolerance tighter than its stick
+                // row resolves: loosening it is what helps.
+                if let Some(hint) = resolution(profile, options.residual_tolerance) {
+                    looser = format!("; {hint}");
                 }
             }
             return Err(Error::NotConverged {
                 method: Method::Collocation,
                 report: Box::new(report),
                 worst_s: system.row_position(worst.min(system.unknowns() - 1)),
-                hint: format!("a history step is solved from the last step's state: take smaller steps{rigid_hint}"),
+                hint: format!(
+                    "a history step is solved from the last step's state: take smaller steps{rigid_hint}{looser}"
+                ),
             });
         }
         // The contacts and multipliers on the converged shape: settled when Newton's were.
