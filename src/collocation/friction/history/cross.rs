@@ -127,11 +127,7 @@ pub(super) fn couple(
         gains,
         fixed,
     };
-    let Some(tau) = (if std::env::var_os("TDCR_ENUMERATE").is_some() {
-        node.enumerate()
-    } else {
-        node.pivot().or_else(|| node.enumerate())
-    }) else {
+    let Some(tau) = node.pivot().or_else(|| node.enumerate()) else {
         return;
     };
     for (a, &j) in loaded.iter().enumerate() {
