@@ -169,9 +169,9 @@ fn history_nodes(carried: &Carried, fine: &Carried) -> Vec<usize> {
 /// between two nodes, the point where its component along t' at the first node changes
 /// sign, by bisection on the solution's interpolant to the resolution of s (t' by a
 /// central difference, [`STEP`]); points of several tendons closer than 1e-9 of their link
-/// are one, at their mean. A tendon's turning rate kappa = |t'| passes through 0 there,
-/// with a kink, in a planar bend; a reversal without a zero (a path that turns in 3-D)
-/// costs only a node.
+/// are one, at their mean. Only links near a reversal of the backbone's bending are
+/// looked at. A tendon's turning rate kappa = |t'| passes through 0 there, with a kink, in a
+/// planar bend; a reversal without a zero (a path that turns in 3-D) costs only a node.
 pub(super) fn inflections(robot: &Robot, solution: &Solution) -> Vec<f64> {
     let length = robot.length();
     let mut found: Vec<(f64, f64)> = Vec::new();
@@ -182,6 +182,18 @@ pub(super) fn inflections(robot: &Robot, solution: &Solution) -> Vec<f64> {
         .filter(|w| w[1].s <= w[0].s)
         .map(|w| w[0].s)
         .collect();
+    // The links near a reversal of the backbone's bending (u_x, u_y) between two nodes,
+    // within three links of it: a tendon's turning follows the bending, so only there is
+    // it worth its interpolated tangents (a history's sliding steps mostly have none). The
+    // bending's zero lies about 1e-6 m from the tendons' (section 8, "honest18"), beyond
+    // the two nodes a refined step has at the tendons' own, 1e-9 to 4e-8 m apart: one link
+    // either side missed them there (error / estimate 1.03).
+    let nodes = &solution.nodes;
+    let bending = |n: usize| nalgebra::Vector2::new(nodes[n].u.x, nodes[n].u.y);
+    let reversed: Vec<bool> = (0..nodes.len().saturating_sub(1))
+        .map(|n| bending(n).dot(&bending(n + 1)) <= 0.0)
+        .collect();
+    let near = |k: usize| reversed[k.saturating_sub(3)..(k + 4).min(reversed.len())].contains(&true);
     for (i, tendon) in robot.tendons.iter().enumerate() {
         if tendon.active_friction().is_none() {
             continue;
@@ -195,7 +207,7 @@ pub(super) fn inflections(robot: &Robot, solution: &Solution) -> Vec<f64> {
         };
         for (k, pair) in solution.nodes.windows(2).enumerate() {
             let (a, b) = (pair[0].s, pair[1].s);
-            if b <= a || b > end || solution.tendon_tensions[i][k] <= 0.0 {
+            if b <= a || b > end || solution.tendon_tensions[i][k] <= 0.0 || !near(k) {
                 continue;
             }
             // The segment that holds the link: the interpolant is smooth within it.
