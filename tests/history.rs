@@ -208,7 +208,7 @@ fn opposite_tendons_estimates_are_honest_where_a_tight_history_solves() {
     // joint solve (docs/friction.md section 8, "Opposite tendons") it solves every step.
     // Every step meets the default tolerance with an honest estimate: before the sliding
     // steps were solved again with a node where a tendon's path stops turning ("Sliding
-    // steps at an inflection"), tendon 3's steps 5, 6, 16 and 17 (from 1) and tendon 1's
+    // steps at an inflection"), tendon 3's steps 4, 5, 6, 16 and 17 (from 1) and tendon 1's
     // steps 1, 2, 20 and 21 missed it (estimates up to 1.9e-6 m against 2.4e-8 m), and
     // tendon 3's step 17 had 1.18 times its estimate as error, step 19 (met) 0.94.
     for swept in [0, 2] {

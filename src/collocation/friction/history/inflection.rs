@@ -124,7 +124,8 @@ pub(super) fn refine(
         let Some((next, fine)) = located else {
             break;
         };
-        let met = next.0.report.tolerance_met == Some(true);
+        // Without a tolerance the node is the whole of it: the levels have nothing to meet.
+        let met = next.0.report.tolerance_met == Some(true) || options.tolerance.is_none();
         best = next;
         finest = Some(fine);
         if met {
@@ -190,8 +191,11 @@ pub(super) fn inflections(robot: &Robot, solution: &Solution) -> Vec<f64> {
     // either side missed them there (error / estimate 1.03).
     let nodes = &solution.nodes;
     let bending = |n: usize| nalgebra::Vector2::new(nodes[n].u.x, nodes[n].u.y);
+    // A rod that is straight to within a total turning of 1e-8 rad (a column below or at
+    // its buckling load, bent only by rounding) has no kink worth a node.
+    let straight = 1e-8 / length;
     let reversed: Vec<bool> = (0..nodes.len().saturating_sub(1))
-        .map(|n| bending(n).dot(&bending(n + 1)) <= 0.0)
+        .map(|n| bending(n).dot(&bending(n + 1)) <= 0.0 && bending(n).norm().max(bending(n + 1).norm()) > straight)
         .collect();
     let near = |k: usize| reversed[k.saturating_sub(3)..(k + 4).min(reversed.len())].contains(&true);
     for (i, tendon) in robot.tendons.iter().enumerate() {
