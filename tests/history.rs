@@ -304,7 +304,7 @@ fn a_sliding_step_at_an_inflection_is_solved_with_a_node_there() {
 /// 3's missed their tolerance, and tendon 3's step 13 met it with 1.9 times its estimate as
 /// error). The stuck steps are left out: tendon 1's step 58 still misses its tolerance
 /// (estimate 1.8e-6 m, error 8.1e-6 m; docs/friction.md section 8, "Still open"). Long
-/// (about two minutes in release): `cargo test --release --test history -- --ignored
+/// (about 40 s in release): `cargo test --release --test history -- --ignored
 /// opposite_101`.
 #[test]
 #[ignore]
