@@ -281,9 +281,14 @@ fn a_column_with_a_friction_tendon_held_or_in_a_history_diverges_past_eulers_loa
             let held_rate = divergence_rate(&pulled.report.stability);
             let step_rate = divergence_rate(&step.report.stability);
             eprintln!("{factor} P_cr: growth rate {want} full slip, {held_rate} held, {step_rate} history step");
-            // 1e-6 relative: the history's step is the full-slip system on its mesh (the
-            // same as the solve's), its verdict from a Jacobian at the same answer
-            assert!((step_rate / want - 1.0).abs() < 1e-6, "{step_rate} against {want}");
+            // 1e-5 relative: the history's step is the full-slip system on its mesh (the
+            // same as the solve's) with a node added where the tendon's path stops turning
+            // (docs/friction.md section 8, "honest18"), its verdict from a Jacobian at that
+            // answer: the growth rate's change with that node (measured 5.4e-6; 1e-6 on the
+            // same mesh)
+            let extra = step.report.intervals - full.report.intervals;
+            assert!(extra <= 2, "{extra} more intervals");
+            assert!((step_rate / want - 1.0).abs() < 1e-5, "{step_rate} against {want}");
             // The out-of-plane buckling mode does not stretch the tendon (at y = 0), so
             // holding it leaves that mode's growth: 1e-3 relative (measured within 4.1e-5:
             // the held tension follows the small in-plane part of the mode)

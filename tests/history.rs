@@ -98,14 +98,19 @@ fn a_first_step_pulls_in_from_rest_a_tendon_the_rods_weight_stretches() {
     let robot = top_tendon(1.0, false);
     let pulled = tdcr::solve(&robot, &Default::default()).unwrap();
     // Tendon 1 (no friction) at 0 then 1 N: step 1 chose the history's mesh, so it is the
-    // full-slip pull solve itself.
+    // full-slip pull solve itself, solved again with a node where the weight's bend and
+    // tendon 3's turn the other way meet (docs/friction.md section 8, "Sliding steps at an
+    // inflection"): one more interval.
     let steps = history_of(&robot, 0, &[0.0, 1.0]);
+    assert_eq!(steps[0].solution.report.intervals, pulled.report.intervals + 1);
     let distance = (tip(&steps[0]) - pulled.tip_position()).norm();
-    // 1e-10 m: the same equations on the same mesh, as for tendon 1 above
+    // 1e-10 m: the same equations, the mesh one node richer, as for tendon 1 above
     assert!(distance < 1e-10, "{distance:e} m from the full-slip pull solve");
     let delivered = steps[0].solution.tendons[2].delivered_tension;
-    // 1e-12 N: the same profile to rounding
-    assert!((delivered - pulled.tendons[2].delivered_tension).abs() < 1e-12);
+    let difference = (delivered - pulled.tendons[2].delivered_tension).abs();
+    // 1e-8 N: the full-slip solve's error of the tension with its kink inside a link
+    // (measured 2.7e-9 N; 1e-12 N, rounding, before the node)
+    assert!(difference < 1e-8, "{difference:e} N");
     for step in &steps {
         assert_eq!(step.zones[0].zones.len(), 1, "{:?}", step.zones);
     }
@@ -199,51 +204,113 @@ fn opposite(swept: usize, steps: usize) -> Ranges {
 fn opposite_tendons_estimates_are_honest_where_a_tight_history_solves() {
     // Converging is not enough: each step is compared with the same history at 1e-11 L.
     // While the coupling of opposite tendons was one Jacobi step of the node's system, that
-    // history failed at the first step back (the zones did not settle), at 1e-9 and 1e-10
-    // L too, and only the steps up to the top were checked; with the node's joint solve
-    // (docs/friction.md section 8, "Opposite tendons") it solves every step, and the stuck
-    // steps are checked too. The sliding steps on the way down are left out: some miss
-    // their tolerance (estimate about 10 times it) and their estimates are not the error
-    // to 1 % there (tendon 3's step 16: 1.18).
+    // history failed at the first step back (the zones did not settle); with the node's
+    // joint solve (docs/friction.md section 8, "Opposite tendons") it solves every step.
+    // Every step meets the default tolerance with an honest estimate: before the sliding
+    // steps were solved again with a node where a tendon's path stops turning ("Sliding
+    // steps at an inflection"), tendon 3's steps 4, 5, 6, 16 and 17 (from 1) and tendon 1's
+    // steps 1, 2, 20 and 21 missed it (estimates up to 1.9e-6 m against 2.4e-8 m), and
+    // tendon 3's step 17 had 1.18 times its estimate as error, step 19 (met) 0.94.
     for swept in [0, 2] {
-        let ranges = opposite(swept, 10);
-        let steps = solved(history(&ranges, &Default::default()).unwrap());
-        let reference = history(&ranges, &tolerance(1e-11)).unwrap();
-        assert_eq!(
-            reference.steps.len(),
-            steps.len(),
-            "tendon {}: the tight history stops early",
-            swept + 1
-        );
-        let mut stuck_steps = 0;
-        for (k, (step, exact)) in steps.iter().zip(&reference.steps).enumerate() {
-            let error = (tip(step) - tip(exact)).norm();
-            let estimate = step.solution.report.error_estimate.expect("every step has an estimate");
-            let ratio = error / estimate.tip_position;
-            if step
-                .zones
-                .iter()
-                .any(|t| t.zones.iter().any(|z| z.contact == Contact::Stick))
-            {
-                stuck_steps += 1;
-                // the honesty requirement itself, as on tendon 1's loop
-                assert!(
-                    ratio <= 1.0,
-                    "tendon {}, stuck step {k}: error / estimate {ratio}",
-                    swept + 1
-                );
-            } else if k <= 10 {
-                // a sliding step's deferred correction is its error to a fraction of a
-                // percent (measured at most 1.0001): 1 % as on tendon 1's loop
-                assert!(
-                    ratio <= 1.01,
-                    "tendon {}, step {k}: error / estimate {ratio}",
-                    swept + 1
-                );
-            }
+        check_opposite(&opposite(swept, 10), swept, true);
+    }
+}
+
+/// Every step of the opposite-tendon history `ranges` (tendon `swept + 1` swept) at the
+/// default tolerance meets it, with an estimate not below its error against the same
+/// history at 1e-11 L; the steps with a stuck stretch only if `stuck`.
+fn check_opposite(ranges: &Ranges, swept: usize, stuck: bool) {
+    let steps = solved(history(ranges, &Default::default()).unwrap());
+    let reference = history(ranges, &tolerance(1e-11)).unwrap();
+    assert_eq!(
+        reference.steps.len(),
+        steps.len(),
+        "tendon {}: the tight history stops early",
+        swept + 1
+    );
+    let length = ranges.robot(0.0).unwrap().length();
+    let mut stuck_steps = 0;
+    for (k, (step, exact)) in steps.iter().zip(&reference.steps).enumerate() {
+        let sticks = step
+            .zones
+            .iter()
+            .any(|t| t.zones.iter().any(|z| z.contact == Contact::Stick));
+        stuck_steps += usize::from(sticks);
+        if sticks && !stuck {
+            continue;
         }
-        // The way back sticks on its first steps (3 with tendon 1 swept, 2 with tendon 3).
-        assert!(stuck_steps >= 2, "tendon {}: {stuck_steps} stuck steps", swept + 1);
+        let error = (tip(step) - tip(exact)).norm();
+        let report = &step.solution.report;
+        let estimate = report.error_estimate.expect("every step has an estimate");
+        assert_eq!(
+            report.tolerance_met,
+            Some(true),
+            "tendon {}, step {}: {estimate:?}",
+            swept + 1,
+            k + 1
+        );
+        // the default tolerance, 1e-7 L, against a reference whose tips are within 1e-10 m
+        assert!(
+            error <= 1e-7 * length,
+            "tendon {}, step {}: tip error {error} m",
+            swept + 1,
+            k + 1
+        );
+        let ratio = error / estimate.tip_position;
+        if sticks {
+            // the honesty requirement itself, as on tendon 1's loop
+            assert!(
+                ratio <= 1.0,
+                "tendon {}, stuck step {}: error / estimate {ratio}",
+                swept + 1,
+                k + 1
+            );
+        } else {
+            // a sliding step's deferred correction is its error to a fraction of a percent
+            // (measured 0.998 to 1.002 with the nodes at the inflections): 1 % as on tendon
+            // 1's loop
+            assert!(
+                ratio <= 1.01,
+                "tendon {}, step {}: error / estimate {ratio}",
+                swept + 1,
+                k + 1
+            );
+        }
+    }
+    // The way back sticks on its first steps (3 with tendon 1 swept, 2 with tendon 3).
+    assert!(stuck_steps >= 2, "tendon {}: {stuck_steps} stuck steps", swept + 1);
+}
+
+#[test]
+fn a_sliding_step_at_an_inflection_is_solved_with_a_node_there() {
+    // Tendon 3 swept to 2.455 N with tendon 1 held at 1 N: the rod bends back near
+    // s = 0.0188 m, where both tendons' paths stop turning, and on the history's mesh
+    // (chosen at the top, 4.91 N, with no inflection) the step missed its tolerance by 77
+    // times. It is solved with a node at each of the two points (a few 1e-8 m apart).
+    let steps = solved(history(&opposite(2, 10), &Default::default()).unwrap());
+    let (top, at) = (&steps[6], &steps[5]);
+    let intervals = top.solution.report.intervals;
+    assert_eq!(at.solution.report.intervals, intervals + 2);
+    assert_eq!(at.solution.report.tolerance_met, Some(true));
+    // Its nodes include every node of the history's mesh.
+    let s: Vec<f64> = at.solution.nodes.iter().map(|n| n.s).collect();
+    for node in &top.solution.nodes {
+        assert!(s.contains(&node.s), "node {} is not on the refined mesh", node.s);
+    }
+}
+
+/// The 101-step opposite histories (tendon 1 or 3 swept in 50 steps each way): every
+/// sliding step checked as in the 21-step ones (on main 20 of tendon 1's and 31 of tendon
+/// 3's missed their tolerance, and tendon 3's step 13 met it with 1.9 times its estimate as
+/// error). The stuck steps are left out: tendon 1's step 58 still misses its tolerance
+/// (estimate 1.8e-6 m, error 8.1e-6 m; docs/friction.md section 8, "Still open"). Long
+/// (about 40 s in release): `cargo test --release --test history -- --ignored
+/// opposite_101`.
+#[test]
+#[ignore]
+fn opposite_101_steps_sliding_estimates_are_honest() {
+    for swept in [0, 2] {
+        check_opposite(&opposite(swept, 50), swept, false);
     }
 }
 
@@ -643,6 +710,26 @@ fn a_rigid_tendon_that_sticks_is_refused_with_what_to_set() {
     assert_eq!(k, 5);
     assert_eq!(field, "tendons[0].stiffness");
     assert!(hint.contains("stiffness"), "{hint}");
+}
+
+#[test]
+fn a_residual_tolerance_tighter_than_the_stick_row_resolves_is_named() {
+    // The prototype's loop with a residual tolerance of 5e-14 (the sliding steps reach
+    // about 2e-14): the first step back sticks beyond 45 mm at about 4 N, whose stick row
+    // resolves log tension only to E_t A_t eps / tau, about 1.1e-13, so Newton cannot reach
+    // 5e-14 there. The tension is healthy (not going slack), so the step keeps Newton's
+    // error, whose hint now names the residual tolerance (main: only "take smaller steps",
+    // which does not help).
+    let options = tdcr::collocation::Options {
+        residual_tolerance: 5e-14,
+        ..Default::default()
+    };
+    let result = history(&ranges(prototype(0.1), TOP, 10), &options).unwrap();
+    let Some((k, Error::NotConverged { hint, .. })) = &result.failure else {
+        panic!("{:?}", result.failure);
+    };
+    assert!(*k > 10, "a step back, where the tendon sticks: step {k}, {hint}");
+    assert!(hint.contains("loosen residual_tolerance"), "{hint}");
 }
 
 #[test]

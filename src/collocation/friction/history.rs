@@ -15,13 +15,14 @@
 //! shape until it changes nothing.
 
 mod cross;
+mod inflection;
 mod refusal;
 mod repeat;
 mod rest;
 mod slip;
 mod split;
 
-use refusal::{rigid, slack, stalled};
+use refusal::{resolution, rigid, slack, stalled};
 pub(crate) use repeat::hold_last;
 pub(crate) use rest::start;
 use slip::check_slip;
@@ -318,10 +319,16 @@ fn march(border: &mut Capstan, x: &[State], converged: bool, tie: f64, rest: boo
 pub(crate) fn step(robot: &Robot, options: &Options, carried: &mut Carried) -> Result<StepAnswer> {
     let before = carried.material();
     let (answer, stuck) = solve_on(robot, options, carried, None)?;
-    if !stuck {
-        return Ok(answer);
+    if stuck {
+        return split::refine(robot, options, carried, &before, answer);
     }
-    split::refine(robot, options, carried, &before, answer)
+    // A step that slides all along where a tendon's path stops turning inside a link has
+    // a kink of its tension there that its estimate does not see ([`inflection`]); a step
+    // that misses its tolerance is solved again too.
+    if answer.0.report.tolerance_met == Some(false) || !inflection::inflections(robot, &answer.0).is_empty() {
+        return inflection::refine(robot, options, carried, &before, answer);
+    }
+    Ok(answer)
 }
 
 /// [`step`] on `carried`'s own mesh, and whether a tendon has a stuck stretch (then the
@@ -397,17 +404,25 @@ fn solve_on(robot: &Robot, options: &Options, carried: &mut Carried, held: Optio
             // can refuse it as slack: that is the reason, and its hint the one that helps.
             border.load(Point::Current);
             let system = &border.system;
+            let mut looser = String::new();
             if let Some(profile) = system.friction.as_ref() {
                 let s: Vec<f64> = x.iter().map(|n| n.s).collect();
                 if let Some(refusal) = stalled(profile, &s, options.residual_tolerance) {
                     return Err(refusal);
+                }
+                // A healthy stuck tension under a residual tolerance tighter than its stick
+                // row resolves: loosening it is what helps.
+                if let Some(hint) = resolution(profile, options.residual_tolerance) {
+                    looser = format!("; {hint}");
                 }
             }
             return Err(Error::NotConverged {
                 method: Method::Collocation,
                 report: Box::new(report),
                 worst_s: system.row_position(worst.min(system.unknowns() - 1)),
-                hint: format!("a history step is solved from the last step's state: take smaller steps{rigid_hint}"),
+                hint: format!(
+                    "a history step is solved from the last step's state: take smaller steps{rigid_hint}{looser}"
+                ),
             });
         }
         // The contacts and multipliers on the converged shape: settled when Newton's were.

@@ -58,7 +58,8 @@ pub(super) struct Before {
 /// as [`choose`](super::super::grip::choose) (without the tie) and `before[j]` allow, and an unloaded one's 0. The
 /// system is a box complementarity problem whose matrix (the identity less the scaled
 /// cross gains) is a positive diagonal times a symmetric positive definite one, so its
-/// answer is unique; it is found by trying each loaded slip's three cases (in, stuck, out),
+/// answer is unique; it is found by block principal pivoting ([`Node::pivot`]: a few small
+/// solves), or where that fails by trying each loaded slip's three cases (in, stuck, out),
 /// 3^n small solves for n loaded slips on the link. Slips not loaded or not read are left.
 pub(super) fn couple(
     profile: &Profile,
@@ -119,52 +120,150 @@ pub(super) fn couple(
             }
         })
         .collect();
-    let solved: Vec<f64> = loaded.iter().map(|&j| before[j].solved).collect();
-    let alone: Vec<f64> = loaded.iter().map(|&j| stuck_at[j]).collect();
-    let stuck_of = |a: usize, tau: &[f64]| -> f64 {
-        alone[a]
-            + fixed[a]
-            + (0..n)
-                // A zero gain (also that of a slip whose solved tension is not finite) adds
-                // nothing: skipped, so that 0 x inf does not make every case NaN.
-                .filter(|&c| c != a && gains[a][c] != 0.0)
-                .map(|c| gains[a][c] * (tau[c] - solved[c]))
-                .sum::<f64>()
+    let node = Node {
+        solved: loaded.iter().map(|&j| before[j].solved).collect(),
+        alone: loaded.iter().map(|&j| stuck_at[j]).collect(),
+        bounds,
+        gains,
+        fixed,
     };
-    // The case with the least violation (0 for the answer; rounding may leave a little).
-    let mut best: Option<(f64, Vec<f64>)> = None;
-    for code in 0..3usize.pow(n as u32) {
-        // case[a]: 0 slides in (at low), 1 sticks, 2 slides out (at high).
-        let case: Vec<usize> = (0..n).map(|a| code / 3usize.pow(a as u32) % 3).collect();
-        if (0..n).any(|a| {
-            (case[a] == 0 && bounds[a].0 == f64::NEG_INFINITY) || (case[a] == 2 && bounds[a].1 == f64::INFINITY)
-        }) {
-            continue;
-        }
-        let Some(tau) = tensions(&case, &bounds, &solved, &gains, &fixed, &alone) else {
-            continue;
-        };
-        let violation: f64 = (0..n)
-            .map(|a| {
-                let f = stuck_of(a, &tau);
-                let (low, high) = bounds[a];
-                match case[a] {
-                    0 => (f - low).max(0.0),
-                    2 => (high - f).max(0.0),
-                    _ => (low - f).max(0.0) + (f - high).max(0.0),
-                }
-            })
-            .sum();
-        if violation.is_finite() && best.as_ref().is_none_or(|(v, _)| violation < *v) {
-            best = Some((violation, tau));
-        }
-    }
-    let Some((_, tau)) = best else {
+    let Some(tau) = node.pivot().or_else(|| node.enumerate()) else {
         return;
     };
-    let moved: Vec<f64> = (0..n).map(|a| stuck_of(a, &tau)).collect();
-    for (&j, value) in loaded.iter().zip(moved) {
-        stuck_at[j] = value;
+    for (a, &j) in loaded.iter().enumerate() {
+        stuck_at[j] = node.stuck_of(a, &tau);
+    }
+}
+
+/// The node's box complementarity problem ([`couple`]) for n loaded slips: each slip's
+/// tension is its stuck one, `stuck_of`, clamped to its `bounds`.
+struct Node {
+    /// Each slip's bounds (N), infinite where it cannot slide that way.
+    bounds: Vec<(f64, f64)>,
+    /// The tensions (N) the shape was solved with.
+    solved: Vec<f64>,
+    /// gains[a][c]: slip a's stuck tension per N of slip c's (0 on the diagonal).
+    gains: Vec<Vec<f64>>,
+    /// The unloaded slips' share of each stuck tension (N).
+    fixed: Vec<f64>,
+    /// Each stuck tension alone, at its own fixed point (N).
+    alone: Vec<f64>,
+}
+
+/// Most case changes of [`Node::pivot`] before it gives up (to the enumeration): a
+/// principal pivoting method on a P-matrix ends in at most a few on these nodes (two
+/// tendons: at most 2); 50 bounds the work of any node with a handful of tendons.
+const PIVOTS: usize = 50;
+
+impl Node {
+    /// Slip a's stuck tension (N) when the slips' tensions are `tau`.
+    fn stuck_of(&self, a: usize, tau: &[f64]) -> f64 {
+        self.alone[a]
+            + self.fixed[a]
+            + (0..tau.len())
+                // A zero gain (also that of a slip whose solved tension is not finite) adds
+                // nothing: skipped, so that 0 x inf does not make every case NaN.
+                .filter(|&c| c != a && self.gains[a][c] != 0.0)
+                .map(|c| self.gains[a][c] * (tau[c] - self.solved[c]))
+                .sum::<f64>()
+    }
+
+    /// How far slip a's tension `tau` (of the case `case`) is from its complementarity
+    /// condition: 0 where it holds.
+    fn violation(&self, a: usize, case: usize, tau: &[f64]) -> f64 {
+        let f = self.stuck_of(a, tau);
+        let (low, high) = self.bounds[a];
+        match case {
+            0 => (f - low).max(0.0),
+            2 => (high - f).max(0.0),
+            _ => (low - f).max(0.0) + (f - high).max(0.0),
+        }
+    }
+
+    /// Whether slip a may take case `case` (not a bound that is infinite).
+    fn allowed(&self, a: usize, case: usize) -> bool {
+        !((case == 0 && self.bounds[a].0 == f64::NEG_INFINITY) || (case == 2 && self.bounds[a].1 == f64::INFINITY))
+    }
+
+    /// The answer by block principal pivoting (Judice and Pires' method for a box
+    /// complementarity problem with a P-matrix): from each slip's own choice (its stuck
+    /// tension alone clamped to its bounds), the tensions of the case; every slip whose
+    /// condition fails (a stuck tension beyond a bound, a bound its stuck tension does not
+    /// reach) changes its case, all at once while that lowers the count of failing slips
+    /// and, after three changes that did not, only the first (Murty's least index rule,
+    /// which ends for a P-matrix). A condition holds to 1e-12 of the tension (rounding).
+    /// None after [`PIVOTS`] changes or on a singular case.
+    fn pivot(&self) -> Option<Vec<f64>> {
+        let n = self.alone.len();
+        let mut case: Vec<usize> = (0..n)
+            .map(|a| {
+                let f = self.alone[a] + self.fixed[a];
+                let (low, high) = self.bounds[a];
+                if f < low {
+                    0
+                } else if f > high {
+                    2
+                } else {
+                    1
+                }
+            })
+            .collect();
+        let (mut fewest, mut stalled) = (n + 1, 0);
+        for _ in 0..PIVOTS {
+            let tau = tensions(&case, &self.bounds, &self.solved, &self.gains, &self.fixed, &self.alone)?;
+            let failing: Vec<usize> = (0..n)
+                .filter(|&a| self.violation(a, case[a], &tau) > 1e-12 * (1.0 + tau[a].abs()))
+                .collect();
+            if failing.is_empty() {
+                return Some(tau);
+            }
+            if failing.len() < fewest {
+                (fewest, stalled) = (failing.len(), 0);
+            } else {
+                stalled += 1;
+            }
+            let change = if stalled < 3 { &failing[..] } else { &failing[..1] };
+            for &a in change {
+                let f = self.stuck_of(a, &tau);
+                let low = self.bounds[a].0;
+                case[a] = match case[a] {
+                    1 if f < low => 0,
+                    1 => 2,
+                    _ => 1,
+                };
+                if !self.allowed(a, case[a]) {
+                    return None;
+                }
+            }
+        }
+        None
+    }
+
+    /// The answer by trying every case (3^n): the one with the least violation (0 for the
+    /// answer; rounding may leave a little). The fallback of [`Node::pivot`], and its check.
+    fn enumerate(&self) -> Option<Vec<f64>> {
+        let n = self.alone.len();
+        let mut best: Option<(f64, Vec<f64>)> = None;
+        let mut case = vec![0; n];
+        for code in 0..3usize.pow(n as u32) {
+            // case[a]: 0 slides in (at low), 1 sticks, 2 slides out (at high).
+            let mut rest = code;
+            for c in &mut case {
+                *c = rest % 3;
+                rest /= 3;
+            }
+            if (0..n).any(|a| !self.allowed(a, case[a])) {
+                continue;
+            }
+            let Some(tau) = tensions(&case, &self.bounds, &self.solved, &self.gains, &self.fixed, &self.alone) else {
+                continue;
+            };
+            let violation: f64 = (0..n).map(|a| self.violation(a, case[a], &tau)).sum();
+            if violation.is_finite() && best.as_ref().is_none_or(|(v, _)| violation < *v) {
+                best = Some((violation, tau));
+            }
+        }
+        best.map(|(_, tau)| tau)
     }
 }
 
@@ -258,4 +357,103 @@ pub(super) fn stuck_moved(
     }
     let own = gain(profile, i, site, b, d_v, d_u);
     (moved - own * tension_at(i, solved[i])) / (1.0 - own)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::Node;
+    use nalgebra::DMatrix;
+
+    /// A small linear congruential generator: uniform numbers in [0, 1), reproducible.
+    struct Uniform(u64);
+
+    impl Uniform {
+        fn next(&mut self) -> f64 {
+            self.0 = self
+                .0
+                .wrapping_mul(6_364_136_223_846_793_005)
+                .wrapping_add(1_442_695_040_888_963_407);
+            (self.0 >> 11) as f64 / (1u64 << 53) as f64
+        }
+
+        fn between(&mut self, low: f64, high: f64) -> f64 {
+            low + (high - low) * self.next()
+        }
+    }
+
+    /// A random node of n slips whose matrix has the structure of the march's (docs/
+    /// friction.md section 8): I - G = D^-1 (D + B^T B) with D a positive diagonal, rows
+    /// scaled to a unit diagonal (G's diagonal is folded into the stuck tensions), so a
+    /// P-matrix; random bounds (some infinite on one side or both), stuck tensions and
+    /// solved tensions.
+    fn node(n: usize, random: &mut Uniform) -> Node {
+        let b = DMatrix::from_fn(n, n, |_, _| random.between(-1.5, 1.5));
+        let d: Vec<f64> = (0..n).map(|_| random.between(0.2, 2.0)).collect();
+        let mut m = b.transpose() * &b;
+        for a in 0..n {
+            m[(a, a)] += d[a];
+            for c in 0..n {
+                m[(a, c)] /= d[a];
+            }
+        }
+        let gains = (0..n)
+            .map(|a| {
+                (0..n)
+                    .map(|c| if a == c { 0.0 } else { -m[(a, c)] / m[(a, a)] })
+                    .collect()
+            })
+            .collect();
+        let bounds = (0..n)
+            .map(|_| {
+                let low = random.between(-1.0, 3.0);
+                let high = low + random.between(0.0, 2.0);
+                match (random.next() * 6.0) as usize {
+                    0 => (f64::NEG_INFINITY, high),
+                    1 => (low, f64::INFINITY),
+                    2 => (f64::NEG_INFINITY, f64::INFINITY),
+                    _ => (low, high),
+                }
+            })
+            .collect();
+        Node {
+            bounds,
+            solved: (0..n).map(|_| random.between(0.0, 5.0)).collect(),
+            gains,
+            fixed: (0..n).map(|_| random.between(-0.5, 0.5)).collect(),
+            alone: (0..n).map(|_| random.between(-3.0, 6.0)).collect(),
+        }
+    }
+
+    #[test]
+    fn pivoting_finds_the_enumerations_answer_on_random_p_matrices() {
+        let mut random = Uniform(24);
+        for n in 1..=4 {
+            for trial in 0..500 {
+                let node = node(n, &mut random);
+                let pivoted = node.pivot().expect("pivoting ends on a P-matrix");
+                let enumerated = node.enumerate().expect("one case is the answer");
+                for (a, (p, e)) in pivoted.iter().zip(&enumerated).enumerate() {
+                    // 1e-9 of the tension: the same case solved by the same LU, or a
+                    // degenerate tie (a stuck tension at its bound) decided by rounding
+                    assert!(
+                        (p - e).abs() <= 1e-9 * (1.0 + e.abs()),
+                        "n = {n}, trial {trial}, slip {a}: pivoting {pivoted:?}, enumeration {enumerated:?}"
+                    );
+                }
+                // The answer holds every slip's condition (to rounding: 1e-12 of it).
+                for a in 0..n {
+                    let case = match pivoted[a] {
+                        t if t == node.bounds[a].0 => 0,
+                        t if t == node.bounds[a].1 => 2,
+                        _ => 1,
+                    };
+                    let violation = node.violation(a, case, &pivoted);
+                    assert!(
+                        violation <= 1e-12 * (1.0 + pivoted[a].abs()),
+                        "n = {n}, trial {trial}: {violation}"
+                    );
+                }
+            }
+        }
+    }
 }

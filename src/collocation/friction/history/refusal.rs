@@ -62,6 +62,10 @@ pub(super) fn stalled(profile: &Profile, s: &[f64], tolerance: f64) -> Option<Er
         }
     }
     let (tension, i, at) = weakest?;
+    let hint = match resolution(profile, tolerance) {
+        Some(looser) => format!("{TAUT}; {looser}"),
+        None => TAUT.to_string(),
+    };
     Some(error::invalid(
         format!("tendons[{i}]"),
         format!(
@@ -70,7 +74,38 @@ pub(super) fn stalled(profile: &Profile, s: &[f64], tolerance: f64) -> Option<Er
              the residual tolerance), which the stick/slip history does not model; smaller steps do not remove it",
             i + 1
         ),
-        TAUT,
+        hint,
+    ))
+}
+
+/// What to loosen when the residual `tolerance` is tighter than the stick row of a stuck
+/// link of `profile` resolves, E_t A_t eps / tau in log tension ([`stalled`]), while the
+/// default residual tolerance would resolve it: the weakest such link's tendon, its stuck
+/// tension and the tolerance that resolves it. None when no stuck link is below its
+/// resolution, or only below the default's (then loosening is not what helps).
+pub(super) fn resolution(profile: &Profile, tolerance: f64) -> Option<String> {
+    let grips = profile.grips.as_ref()?;
+    let robot = profile.robot();
+    let default = crate::collocation::Options::default().residual_tolerance;
+    let mut weakest: Option<(f64, usize, f64)> = None;
+    for (j, grip) in grips.iter().enumerate() {
+        let i = profile.slipping[j];
+        let Some(stiffness) = robot.tendons[i].stiffness else {
+            continue;
+        };
+        for k in (0..profile.spans[j]).filter(|&k| grip.contacts[k] == Contact::Stick) {
+            let tension = profile.tension(j, profile.z[j][k + 1]);
+            let needed = stiffness * f64::EPSILON / tension;
+            if tension > 0.0 && needed > tolerance && needed <= default && weakest.is_none_or(|(n, ..)| needed > n) {
+                weakest = Some((needed, i, tension));
+            }
+        }
+    }
+    let (needed, i, tension) = weakest?;
+    Some(format!(
+        "or loosen residual_tolerance ({tolerance:e}) to {needed:.1e} or more: tendon {}'s stick row resolves its stuck \
+         tension ({tension:.2} N) only to E_t A_t eps / tau = {needed:.1e} in log tension",
+        i + 1
     ))
 }
 

@@ -269,7 +269,13 @@ fn difference(coarse: &Solution, fine: &Solution) -> ErrorEstimate {
 ///
 /// # Errors
 /// An invalid mesh (none: the points lie on the rod).
-fn split(robot: &Robot, before: &Carried, parts: &[usize], guess: &Solution, boundaries: &[f64]) -> Result<Carried> {
+pub(super) fn split(
+    robot: &Robot,
+    before: &Carried,
+    parts: &[usize],
+    guess: &Solution,
+    boundaries: &[f64],
+) -> Result<Carried> {
     let nodes = &before.mesh.nodes;
     let mut points = Vec::with_capacity(parts.iter().sum::<usize>() + 1);
     for (pair, &parts) in nodes.windows(2).zip(parts) {
@@ -278,11 +284,17 @@ fn split(robot: &Robot, before: &Carried, parts: &[usize], guess: &Solution, bou
         if b > a {
             let mut inner: Vec<f64> = (1..parts).map(|q| a + (b - a) * q as f64 / parts as f64).collect();
             // A boundary within 1e-3 of the link from one of its ends is left to that node.
+            // Each boundary takes a point of its own (a second one in the link the next
+            // nearest).
             let margin = 1e-3 * (b - a);
+            let mut taken = vec![false; inner.len()];
             for &e in boundaries.iter().filter(|&&e| e > a + margin && e < b - margin) {
-                let nearest = (0..inner.len()).min_by(|&p, &q| (inner[p] - e).abs().total_cmp(&(inner[q] - e).abs()));
+                let nearest = (0..inner.len())
+                    .filter(|&q| !taken[q])
+                    .min_by(|&p, &q| (inner[p] - e).abs().total_cmp(&(inner[q] - e).abs()));
                 if let Some(q) = nearest {
                     inner[q] = e;
+                    taken[q] = true;
                 }
             }
             inner.sort_by(f64::total_cmp);
@@ -466,7 +478,7 @@ fn lagrange(s: &[f64], values: &[f64], kinks: &[Kink], at: f64, points: usize) -
 /// material at its best (`corrected`) is the one `before` the step where the step stuck
 /// (its material has not moved), and the step's own where it slid, with the kink at the
 /// boundary between them (docs/friction.md section 8, "The material's kinks").
-fn hand_back(carried: &mut Carried, fine: &Carried, before: &Carried) {
+pub(super) fn hand_back(carried: &mut Carried, fine: &Carried, before: &Carried) {
     let index: Vec<usize> = carried
         .mesh
         .nodes
