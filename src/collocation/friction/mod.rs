@@ -422,8 +422,8 @@ fn refine_with_friction(
     };
     // The direct route's first mesh: Newton from the guess must go straight to its root,
     // as the equilibrium choice's direct answer must ([`direct`]).
-    let direct = route == Route::Direct;
-    let mut first = direct.then_some(Settings {
+    let from_guess = route == Route::Direct;
+    let mut first = from_guess.then_some(Settings {
         max_iterations: options.max_iterations.min(CLEAN_ITERATIONS),
         stop_when_damped: true,
         ..settings
@@ -438,7 +438,7 @@ fn refine_with_friction(
     // mesh's log tensions interpolated (`previous`), not constant ones, and the refinement
     // goes on from its answer.
     let mut capstan = previous.is_none();
-    let plain = (capstan && !direct).then(|| (mesh.clone(), x.clone()));
+    let plain = (capstan && !from_guess).then(|| (mesh.clone(), x.clone()));
     // The last mesh's node arc lengths and log tensions, interpolated onto the next.
     loop {
         let settings = first.take().unwrap_or(settings);
