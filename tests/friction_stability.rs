@@ -178,11 +178,12 @@ fn a_column_with_a_friction_tendon_diverges_past_eulers_load() {
 }
 
 /// A column past Euler's load with a friction tendon at default settings (the load path's
-/// choice). Newton from the straight guess lands on the nearly straight state, unstable;
-/// the frictionless start accepts that direct answer without its own verdict, the answer
-/// with friction built on it diverges, and the solve falls back to the full choice on the
-/// frictionless robot: the load path to the buckled state, stable (docs/friction.md
-/// section 3, "Which start"). Without the fallback the answer would be the straight state.
+/// choice), solved cold: its straight tendon turns nothing, so the solve takes the direct
+/// route (docs/friction.md section 3, "The direct route"). Newton with friction from the
+/// straight guess lands on the nearly straight state, whose verdict is a divergence, so
+/// that answer does not stand and the solve falls back to the full choice on the
+/// frictionless robot: the load path to the buckled state, stable. Without the fallback
+/// the answer would be the straight state.
 #[test]
 fn a_column_past_eulers_load_with_friction_reaches_the_load_paths_state() {
     let options = Options::default();
@@ -213,6 +214,39 @@ fn a_column_past_eulers_load_with_friction_reaches_the_load_paths_state() {
         (tip - buckled).norm() < 1e-4 * buckled.x.abs(),
         "{tip} against {buckled}"
     );
+}
+
+/// The same column solved from the frictionless nearly straight state (a warm start),
+/// which takes the provisional route (docs/friction.md section 3, "Which start"; a warm
+/// start never takes the direct route): the frictionless Newton from the warm states goes
+/// straight to the nearly straight state, which the choice accepts without its verdict;
+/// the answer with friction built on it diverges, and the solve falls back to the full
+/// choice: the load path to the buckled state, stable. Without the fallback the answer
+/// would be the nearly straight state.
+#[test]
+fn a_warm_column_past_eulers_load_with_friction_falls_back_to_the_load_paths_state() {
+    let options = Options::default();
+    let straight = collocation::solve(&column(1.2, 0.0, TENSION), &nearest()).unwrap();
+    assert!(
+        matches!(straight.report.stability, Stability::Unstable { .. }),
+        "{:?}",
+        straight.report
+    );
+    let solution = collocation::solve_from(&column(1.2, 0.1, TENSION), &options, &straight).unwrap();
+    let report = &solution.report;
+    assert!(matches!(report.path, tdcr::PathTaken::LoadPath { .. }), "{report:?}");
+    assert_eq!(report.stability, Stability::Stable, "{report:?}");
+    // The cold solve's buckled state (the direct route's fallback, the test above): the
+    // two routes end in the same full choice from the same frictionless load path.
+    let cold = collocation::solve(&column(1.2, 0.1, TENSION), &options).unwrap();
+    let (tip, buckled, nearly_straight) = (solution.tip_position(), cold.tip_position(), straight.tip_position());
+    // Buckled at 1.2 P_cr the tip is 0.32 m off the axis (measured), the nearly straight
+    // state's 0.17 mm: 50 mm and 1 mm separate them by far.
+    assert!(tip.x.abs() > 0.05, "{tip}");
+    assert!(nearly_straight.x.abs() < 1e-3, "{nearly_straight}");
+    // 1e-9 m: both are the load path's end refined to the default tolerance 1e-7 L (5e-8 m
+    // on this 0.5 m column) from the same frictionless states (measured: identical).
+    assert!((tip - buckled).norm() < 1e-9, "{tip} against {buckled}");
 }
 
 /// A load-history step gets the verdict of its own linearized dynamics, its stick/slip

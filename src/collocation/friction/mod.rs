@@ -300,11 +300,10 @@ pub(super) fn solve(robot: &Robot, options: &Options, warm: Option<&Solution>, c
 ///
 /// Where the direct route does not run (a warm start; `nearest` or no continuation, whose
 /// frictionless choice takes Newton's answer without a verdict; a first mesh expected to
-/// be refined), the frictionless start's
-/// equilibrium choice accepts a direct answer without its own verdict
-/// ([`pipeline::solve_start`] `unassessed`) when the solve has one: the answer with
-/// friction built on it stands when its verdict is `stable`, else the full choice runs, as
-/// above.
+/// be refined), the frictionless start's equilibrium choice accepts a direct answer
+/// without its own verdict ([`pipeline::solve_start`] `unassessed`) when the solve has one:
+/// the answer with friction built on it stands when its verdict is `stable`, else the full
+/// choice runs, as above.
 ///
 /// # Errors
 /// As [`super::solve`].
@@ -320,18 +319,21 @@ fn solve_assessed(
     for t in &mut smooth.tendons {
         t.friction = None;
     }
-    let direct = match direct::applies(options, warm, assess) {
-        true => direct::first_mesh(&smooth, options)?,
-        false => None,
+    let from_guess = if direct::applies(options, warm, assess) {
+        direct::first_mesh(&smooth, options)?
+    } else {
+        None
     };
-    let provisional = if let Some(from) = direct {
+    let provisional = if let Some(from) = from_guess {
         direct::solve(robot, options, from, start)
     } else {
         let first = pipeline::solve_start(&smooth, options, warm, cache, assess)?;
-        if !first.provisional {
-            return from_start(robot, options, first, cache, assess, start);
+        let provisional = first.provisional;
+        let answer = from_start(robot, options, first, cache, assess, start);
+        if !provisional {
+            return answer;
         }
-        from_start(robot, options, first, cache, assess, start)
+        answer
     };
     // The work of the provisional route, which the report of the full one counts.
     let tried = match provisional {
@@ -372,8 +374,22 @@ fn from_start(
         None,
         (first.report, assess),
         start,
-        false,
+        Route::Frictionless,
     )
+}
+
+/// Where Newton with friction on the first mesh of [`refine_with_friction`] starts from, and
+/// what it must do there.
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+enum Route {
+    /// The direct route ([`direct`]): from the initial guess; Newton on the first mesh
+    /// counts as converged only if it went straight to its root ([`CLEAN_ITERATIONS`], no
+    /// damped step), with no second try from constant tensions.
+    Direct,
+    /// From a frictionless solution (or a pull-in's states): any converged Newton stands,
+    /// and a Newton that failed from the capstan start tries once more from constant
+    /// tensions.
+    Frictionless,
 }
 
 /// On the mesh and from the node states of `from`, Newton bordered by the log tensions
@@ -383,10 +399,8 @@ fn from_start(
 /// against the same tolerance as the rotation) meet it. `report` holds what came before
 /// (the frictionless solve's counts, or none), with whether to assess the answer's
 /// stability (the linearized dynamics with the capstan rows; else `unknown`); `start` is
-/// when the solve began. With `direct` (the direct route, [`direct`]), `from` is the
-/// initial guess, and Newton on the first mesh counts as converged only if it went
-/// straight to its root ([`CLEAN_ITERATIONS`], no damped step), with no second try from
-/// constant tensions.
+/// when the solve began. `route` says what `from` is and what Newton on the first mesh must
+/// do ([`Route`]).
 ///
 /// # Errors
 /// As [`super::solve`].
@@ -397,7 +411,7 @@ fn refine_with_friction(
     mut previous: Option<(Vec<f64>, Vec<Vec<f64>>)>,
     (mut report, assess): (SolveReport, bool),
     start: Instant,
-    direct: bool,
+    route: Route,
 ) -> Result<Solution> {
     let (mut mesh, mut x) = from;
     let settings = Settings {
@@ -408,18 +422,23 @@ fn refine_with_friction(
     };
     // The direct route's first mesh: Newton from the guess must go straight to its root,
     // as the equilibrium choice's direct answer must ([`direct`]).
-    let mut first = direct.then_some(Settings {
+    let from_guess = route == Route::Direct;
+    let mut first = from_guess.then_some(Settings {
         max_iterations: options.max_iterations.min(CLEAN_ITERATIONS),
         stop_when_damped: true,
         ..settings
     });
     let model = Model::new(robot);
     let length = robot.length();
-    // Whether the first mesh starts from the capstan start (until Newton fails from it),
-    // and the states it moves, for that case (not on the direct route, whose caller falls
-    // back to the frictionless start instead).
+    // Whether the first mesh starts from the capstan start, and the states it moves, for a
+    // second try from them with constant tensions where Newton fails (not on the direct
+    // route, whose caller falls back to the frictionless start instead). `capstan` is
+    // cleared only by that retry: where the first mesh converged and Newton fails on a later
+    // one, the retry runs too, on the first mesh from these states with the last converged
+    // mesh's log tensions interpolated (`previous`), not constant ones, and the refinement
+    // goes on from its answer.
     let mut capstan = previous.is_none();
-    let plain = (capstan && !direct).then(|| (mesh.clone(), x.clone()));
+    let plain = (capstan && !from_guess).then(|| (mesh.clone(), x.clone()));
     // The last mesh's node arc lengths and log tensions, interpolated onto the next.
     loop {
         let settings = first.take().unwrap_or(settings);
@@ -433,7 +452,8 @@ fn refine_with_friction(
                 }
             }
         } else if capstan {
-            // From the frictionless shape: its tension profile and the shape it bends.
+            // From the frictionless shape or the guess: its tension profile and the shape it
+            // bends.
             start::capstan_start(&model, &system.mesh, &mut x, &mut profile);
         }
         system.friction = Some(profile);

@@ -2,7 +2,7 @@
 //! the held tendons' base-entry tensions around solves with friction at given tensions, each
 //! after the first started from the last one's solution ([`solve_near`]).
 
-use super::{refine_with_friction, solve_assessed};
+use super::{Route, refine_with_friction, solve_assessed};
 use crate::Robot;
 use crate::collocation::{Cache, Options, pipeline};
 use crate::error::Result;
@@ -42,7 +42,15 @@ fn solve_near(robot: &Robot, options: &Options, near: &Solution) -> Result<Solut
     report.notes = near.report.notes.clone();
     let mesh = Mesh::from_points(robot, &s)?;
     let x = interpolate(&Model::new(robot), near, &mesh);
-    refine_with_friction(robot, options, (mesh, x), Some((s, z)), (report, false), start, false)
+    refine_with_friction(
+        robot,
+        options,
+        (mesh, x),
+        Some((s, z)),
+        (report, false),
+        start,
+        Route::Frictionless,
+    )
 }
 
 /// Solves a robot with friction and displacement-controlled tendons (validated, with

@@ -82,12 +82,11 @@ fn node_tensions(model: &Model, profile: &Profile, out: &mut [Vec<f64>]) {
 }
 
 /// Moves the frictionless solution or initial guess `x` (on `mesh`) to the start of Newton
-/// with friction and
-/// writes the log tensions marched along it into `profile` (module docs). The passes are
-/// relaxed as the rigid-equilibrium estimate's sweeps are (Aitken's factor: the tip load's
-/// moment arm swings with the shape the tension profile bends) and stop when a pass changes
-/// the strains less than [`SETTLED`], or not less than the one before did (then the shape
-/// before it is kept).
+/// with friction and writes the log tensions marched along it into `profile` (module
+/// docs). The passes are relaxed as the rigid-equilibrium estimate's sweeps are (Aitken's
+/// factor: the tip load's moment arm swings with the shape the tension profile bends) and
+/// stop when a pass changes the strains less than [`SETTLED`], or not less than the one
+/// before did (then the shape before it is kept).
 pub(super) fn capstan_start(model: &Model, mesh: &Mesh, x: &mut [State], profile: &mut Profile) {
     let nodes = &mesh.nodes;
     let length = model.robot.length();
