@@ -174,6 +174,10 @@ fn path_turning(sl: &Slip) -> f64 {
 
 /// tau_i' / tau_i = w_i mu_i |q_i| / tau_i (1/m).
 fn relative(sl: &Slip) -> f64 {
+    if sl.given {
+        // The given rate itself (g = rate tau).
+        return sl.signed_mu;
+    }
     // k_i = tau_i / |p_i^b'| > 0 for a loading tendon
     sl.g * sl.tp.inv_speed / sl.tp.k
 }
@@ -199,6 +203,11 @@ pub(crate) struct FrictionLinearization {
     pub d_turning: Vec<SMatrix<f64, 1, 9>>,
     /// d(turning_j)/dz_l, row-major k x k.
     pub d_turning_log_tension: Vec<f64>,
+    /// Where a slip's load is given as a relative rate r_l ([`crate::model::tangential`]'s
+    /// given slips; empty when none is): d(v', u')/dr_l, one per tendon of [`slipping`] (0
+    /// for the others), and d(turning_j)/dr_l, row-major k x k.
+    pub d_given: Vec<Vector6<f64>>,
+    pub d_turning_given: Vec<f64>,
     /// Scratch of the evaluation: eq. 13 assembled at the point, the slips loading it, their
     /// gradients dg_i/dx and their columns dPhi/dz_i.
     point: Option<Point>,
@@ -223,6 +232,8 @@ impl Default for FrictionLinearization {
             kappa: Vec::new(),
             d_turning: Vec::new(),
             d_turning_log_tension: Vec::new(),
+            d_given: Vec::new(),
+            d_turning_given: Vec::new(),
             point: None,
             slips: Vec::new(),
             gradients: Vec::new(),
@@ -346,6 +357,8 @@ fn linearize_into_kernel(
     out.d_log_tension.clear();
     out.d_turning.clear();
     out.d_turning_log_tension.clear();
+    out.d_given.clear();
+    out.d_turning_given.clear();
     if !derivatives {
         out.lin = Linearization {
             rates: x,
@@ -378,7 +391,12 @@ fn linearize_into_kernel(
         let QQ = tp.normal_derivative(&Vector3::new(x[0], x[1], x[2]), &Vector3::new(x[3], x[4], x[5]), u);
         let explicit = sl.q_hat.transpose() * QQ; // 1 x 6
         *kept = explicit;
-        let dg = explicit * sl.signed_mu;
+        // A given load does not depend on the state at fixed tension.
+        let dg = if sl.given {
+            SMatrix::<f64, 1, 6>::zeros()
+        } else {
+            explicit * sl.signed_mu
+        };
         for c in 0..6 {
             let dt = if c < 3 {
                 dt_dv.column(c).into_owned()
@@ -466,8 +484,12 @@ fn linearize_into_kernel(
     d_turning_log_tension.resize(k * k, 0.0);
     for (sl, explicit) in slips.iter().zip(out.explicit.iter()) {
         let tp = &sl.tp;
-        // w mu / tau = w mu inv_speed / k
-        let factor = sl.signed_mu * tp.inv_speed / tp.k;
+        // w mu / tau = w mu inv_speed / k; a given rate is constant.
+        let factor = if sl.given {
+            0.0
+        } else {
+            sl.signed_mu * tp.inv_speed / tp.k
+        };
         let mut row = SMatrix::<f64, 1, 9>::zeros();
         for c in 0..9 {
             let through_rates = sl.q_hat.dot(&sl.normal_change(&dx.column(c).into_owned()));
@@ -477,6 +499,26 @@ fn linearize_into_kernel(
         d_turning[sl.slot] = row;
         for l in 0..k {
             d_turning_log_tension[sl.slot * k + l] = factor * sl.q_hat.dot(&sl.normal_change(&d_log_tension[l]));
+        }
+    }
+    // The given rates' columns: dx/dr_l = -J^-1 e_l tau_l, and the turning rates' change.
+    if slips.iter().any(|sl| sl.given) {
+        let d_given = &mut out.d_given;
+        d_given.resize(k, Vector6::zeros());
+        for sl in slips.iter().filter(|sl| sl.given) {
+            d_given[sl.slot] = -solve_j(&(sl.e * sl.tension())).ok_or_else(|| breakdown(site.s))?;
+        }
+        let d_turning_given = &mut out.d_turning_given;
+        d_turning_given.resize(k * k, 0.0);
+        for sl in slips {
+            for l in 0..k {
+                d_turning_given[sl.slot * k + l] = if sl.given {
+                    f64::from(u8::from(sl.slot == l))
+                } else {
+                    let factor = sl.signed_mu * sl.tp.inv_speed / sl.tp.k;
+                    factor * sl.q_hat.dot(&sl.normal_change(&d_given[l]))
+                };
+            }
         }
     }
     out.lin = Linearization {

@@ -20,8 +20,13 @@ const MAX_ITERATIONS: usize = 30;
 pub(super) struct Slip {
     /// Its place in [`slipping`]'s list.
     pub(super) slot: usize,
-    /// w_i mu_i: the signed friction coefficient.
+    /// w_i mu_i: the signed friction coefficient; for a `given` slip, its given relative
+    /// rate tau_i' / tau_i (1/m).
     pub(super) signed_mu: f64,
+    /// Whether its tangential load is given as a relative rate of its tension (a stuck link
+    /// of a history step, docs/friction.md section 8, "Order 4 on stuck links"):
+    /// g_i = signed_mu tau_i, explicit (no dependence on the rates), else w_i mu_i |q_i|.
+    pub(super) given: bool,
     /// The tendon's point quantities (r_i, t_i, k_i = tau_i / |p_i^b'|, ...).
     pub(super) tp: TendonPoint,
     /// e_i = (t_i, r_i x t_i): the direction of its tangential load in eq. 13's rows.
@@ -71,10 +76,28 @@ impl Slip {
         (a - t * t.dot(a)) * self.tp.k
     }
 
+    /// The tension tau_i = k_i |p_i^b'| (N).
+    pub(super) fn tension(&self) -> f64 {
+        self.tp.k / self.tp.inv_speed
+    }
+
+    /// The tangential load the slip's law sets at its current normal load: w_i mu_i |q_i|,
+    /// or for a `given` slip its rate times its tension.
+    fn target(&self) -> f64 {
+        if self.given {
+            self.signed_mu * self.tension()
+        } else {
+            self.signed_mu * self.q.norm()
+        }
+    }
+
     /// dg_i/dx = w_i mu_i k_i (q^, r_i x q^): the gradient of the tangential load in the
     /// rates (q^ is normal to t_i, so the projection drops out); (0, r_i x q^) on a
-    /// Kirchhoff rod, whose q_i does not depend on x_v.
+    /// Kirchhoff rod, whose q_i does not depend on x_v; 0 for a `given` slip.
     pub(super) fn gradient(&self) -> Vector6<f64> {
+        if self.given {
+            return Vector6::zeros();
+        }
         let m = self.tp.r.cross(&self.q_hat);
         let h = if self.tp.inextensible {
             Vector3::zeros()
@@ -91,8 +114,11 @@ impl Slip {
 /// tension the model holds for it here ([`Model::tensions`]; for a tendon with friction, its
 /// tension at this s), with the friction multiplier w_j of each tendon of `slipping` from
 /// `multipliers` when given (a stick/slip history, docs/friction.md section 8), else its
-/// motion's sign. The large [`Point`] stays with the caller, so that it is not copied; the
-/// slips go into `slips` (cleared first, its capacity kept).
+/// motion's sign. Where `multipliers` holds twice as many entries as `slipping`, its
+/// second half flags (nonzero) the slips whose tangential load is given as the relative
+/// rate in the first half, `tau_j' / tau_j = multipliers[j] mu_j` (a stuck link's
+/// pointwise load, [`Slip::given`]). The large [`Point`] stays with the caller, so that it
+/// is not copied; the slips go into `slips` (cleared first, its capacity kept).
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
 pub(super) fn solve(
@@ -123,9 +149,11 @@ pub(super) fn solve(
         if !point.solve_rows(&mut row) {
             return Err(breakdown(site.s));
         }
+        let given = multipliers.is_some_and(|w| w.len() > slipping.len() && w[slipping.len() + slot] != 0.0);
         slips.push(Slip {
             slot,
             signed_mu: multipliers.map_or(friction.motion.sign(), |w| w[slot]) * friction.coefficient,
+            given,
             tp,
             e,
             y: row.transpose(),
@@ -166,12 +194,15 @@ fn newton(slips: &mut [Slip], x0: Vector6<f64>, s: f64) -> Result<Vector6<f64>> 
         let mut size = 0.0_f64;
         for sl in slips.iter_mut() {
             size = size.max(sl.refresh(&x));
+            if sl.given {
+                size = size.max(sl.target().abs());
+            }
         }
         if k == 0 || size == 0.0 {
             break;
         }
         for (j, sl) in slips.iter().enumerate() {
-            step[j] = sl.signed_mu * sl.q.norm() - sl.g;
+            step[j] = sl.target() - sl.g;
             let gradient = sl.gradient();
             for (l, other) in slips.iter().enumerate() {
                 matrix[j * k + l] = f64::from(u8::from(j == l)) + gradient.dot(&other.y);
@@ -223,6 +254,13 @@ fn newton(slips: &mut [Slip], x0: Vector6<f64>, s: f64) -> Result<Vector6<f64>> 
 /// cancellation (the root of the larger magnitude from the sum of like signs, the other
 /// from the product), and the normal load refreshed at the rates x0 - g y.
 fn single(slip: &mut Slip, x0: &Vector6<f64>) -> Option<Vector6<f64>> {
+    if slip.given {
+        // An explicit load: the rates follow from it directly.
+        slip.g = slip.target();
+        let x = x0 - slip.y * slip.g;
+        slip.refresh(&x);
+        return Some(x);
+    }
     let q0 = slip.normal(x0);
     let s = slip.signed_mu;
     if q0 == Vector3::zeros() || s == 0.0 {

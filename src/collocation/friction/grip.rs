@@ -130,6 +130,15 @@ pub(crate) struct Grip {
     /// interpolated from one piece's nodes and bounding kinks only (docs/friction.md
     /// section 8, "The material's kinks").
     pub(crate) kinks: Vec<Kink>,
+    /// On a split level's mesh ([`super::history`]'s `split`), per link, lambda of the
+    /// carried material at the link's midpoint, where a stuck link takes the stuck tension
+    /// point by point ([`super::stuck`]); empty on the history's own mesh, whose stuck links
+    /// keep the constant multiplier.
+    pub(crate) midpoints: Vec<f64>,
+    /// On a split level's mesh, the arc length of the node placed at this slip's estimated
+    /// stick/slip boundary, where the march resolves a near tie toward sliding (the link
+    /// ending at it slides, as the estimate has it).
+    pub(crate) boundary: Option<f64>,
 }
 
 /// A kink of the carried material: its arc length (m), and lambda at it as the smooth
@@ -163,6 +172,26 @@ impl Grip {
 pub(crate) type Stuck = (f64, Vector3<f64>, Vector3<f64>);
 
 impl Profile<'_> {
+    /// Whether link k takes its stuck slips' tension point by point ([`super::stuck`]): a
+    /// loaded slip sticks on it and its grip carries the material at the links' midpoints
+    /// (a split level's mesh).
+    pub(crate) fn pointwise(&self, k: usize) -> bool {
+        self.grips.as_ref().is_some_and(|grips| {
+            grips
+                .iter()
+                .enumerate()
+                .any(|(j, g)| g.contacts.get(k) == Some(&Contact::Stick) && self.base[j] > 0.0 && g.midpoints.len() > k)
+        })
+    }
+
+    /// Slip j's carried material (lambda) at the midpoint of link k (NaN where not carried).
+    pub(crate) fn material_at_midpoint(&self, j: usize, k: usize) -> f64 {
+        self.grips
+            .as_ref()
+            .and_then(|g| g[j].midpoints.get(k).copied())
+            .unwrap_or(f64::NAN)
+    }
+
     /// Slip j's tension (N) at node state `b` (arc length b.s) if the material there had
     /// not moved since the last step of a history: E_t A_t (|p_j'| / lambda - 1) with
     /// lambda the carried unstretched length per unit s at node `node` (docs/friction.md
@@ -176,16 +205,29 @@ impl Profile<'_> {
         b: &State,
         length: f64,
     ) -> (f64, Vector3<f64>, Vector3<f64>) {
-        let robot = self.robot();
-        let tendon = &robot.tendons[self.slipping[j]];
         let Some(grip) = self.grips.as_ref().map(|g| &g[j]) else {
             return (f64::NAN, Vector3::zeros(), Vector3::zeros());
         };
-        let rp = tendon.routing.at(b.s, length);
+        self.stuck_tension_with(j, grip.reference[node], site, (b.s, &b.v, &b.u), length)
+    }
+
+    /// [`Profile::stuck_tension`] of the material `lambda` (unstretched length per unit s)
+    /// at arc length s with strains (v, u): E_t A_t (|p_j'| / lambda - 1) and its
+    /// derivatives in (v, u).
+    pub(crate) fn stuck_tension_with(
+        &self,
+        j: usize,
+        lambda: f64,
+        site: &Site,
+        (s, v, u): (f64, &Vector3<f64>, &Vector3<f64>),
+        length: f64,
+    ) -> Stuck {
+        let robot = self.robot();
+        let tendon = &robot.tendons[self.slipping[j]];
+        let rp = tendon.routing.at(s, length);
         // The path sees the strain: v* on a Kirchhoff rod, whose coordinate v is the force's.
-        let p = b.u.cross(&rp.r) + rp.r_s + site.strain(&b.v);
+        let p = u.cross(&rp.r) + rp.r_s + site.strain(v);
         let speed = p.norm();
-        let lambda = grip.reference[node];
         let Some(stiffness) = tendon.stiffness else {
             let sign = (speed - lambda).signum();
             return (sign * f64::INFINITY, Vector3::zeros(), Vector3::zeros());

@@ -91,8 +91,18 @@ pub(crate) fn interval(
     jac: Option<&mut [f64]>,
 ) -> Result<IntervalLinearization> {
     let w = profile.multipliers(k);
+    // On a split level's mesh a link where a loaded slip sticks takes its stuck tension
+    // point by point (docs/friction.md section 8, "Order 4 on stuck links").
+    let mut jac = jac;
+    if let Some(w) = w.as_deref().filter(|_| profile.pointwise(k))
+        && let Some(out) =
+            super::stuck::interval(profile, length, k, sites, segment_end, (a, b), w, jac.as_deref_mut())?
+    {
+        return Ok(out);
+    }
     let derivatives = jac.is_some();
-    let mut out = interval_at(profile, length, k, sites, segment_end, a, b, w.as_deref(), jac)?;
+    let w3 = [w.as_deref(); 3];
+    let mut out = interval_at(profile, length, k, sites, segment_end, a, b, w3, jac, None)?;
     let (Some(w), true) = (w, derivatives) else {
         return Ok(out);
     };
@@ -108,7 +118,7 @@ pub(crate) fn interval(
         let moved = |d: f64| -> Result<Block<f64>> {
             let mut w = w.clone();
             w[j] += d;
-            Ok(interval_at(profile, length, k, sites, segment_end, a, b, Some(&w), None)?.residual)
+            Ok(interval_at(profile, length, k, sites, segment_end, a, b, [Some(&w); 3], None, None)?.residual)
         };
         let d_rows = (moved(step)? - moved(-step)?) / (2.0 * step);
         for r in 0..12 {
@@ -119,8 +129,11 @@ pub(crate) fn interval(
     Ok(out)
 }
 
-/// [`interval`] with the slips' multipliers `w` (None in full slip: the motions' signs),
-/// the backbone rows' derivatives at fixed `w`.
+/// [`interval`] with the slips' multipliers `w` at the link's start, midpoint and end (None
+/// in full slip: the motions' signs; a pointwise stuck link's give its stuck slips' rates,
+/// [`super::stuck`]), the backbone rows' derivatives at fixed `w`; with `columns` (and
+/// `jac`) also the rows' derivatives in the given rates and the midpoint's strains' in
+/// everything ([`Columns`]).
 ///
 /// On x86-64 with AVX2 and FMA (checked at run time) the link's own arithmetic (the chain
 /// rule with the log tensions' columns, the capstan rows and the writes) is compiled for
@@ -128,7 +141,7 @@ pub(crate) fn interval(
 /// same order (Rust does not fuse a product and a sum into an FMA), so the same bits in
 /// wider registers.
 #[allow(clippy::too_many_arguments)]
-fn interval_at(
+pub(super) fn interval_at(
     profile: &Profile,
     length: f64,
     k: usize,
@@ -136,10 +149,22 @@ fn interval_at(
     segment_end: f64,
     a: &State,
     b: &State,
-    w: Option<&[f64]>,
+    w: [Option<&[f64]>; 3],
     jac: Option<&mut [f64]>,
+    columns: Option<&mut Columns>,
 ) -> Result<IntervalLinearization> {
-    avx2_fma!(interval_at_kernel(profile, length, k, sites, segment_end, a, b, w, jac))
+    avx2_fma!(interval_at_kernel(
+        profile,
+        length,
+        k,
+        sites,
+        segment_end,
+        a,
+        b,
+        w,
+        jac,
+        columns
+    ))
 }
 
 /// [`interval_at`]'s operations.
@@ -153,8 +178,9 @@ fn interval_at_kernel(
     segment_end: f64,
     a: &State,
     b: &State,
-    w: Option<&[f64]>,
+    [wa, wm, wb]: [Option<&[f64]>; 3],
     jac: Option<&mut [f64]>,
+    mut columns: Option<&mut Columns>,
 ) -> Result<IntervalLinearization> {
     let count = profile.count();
     let h = sites.end.s - sites.start.s;
@@ -178,10 +204,10 @@ fn interval_at_kernel(
     let (y0, y1) = end_points(a, b);
     let theta1: Vector3<f64> = y1.fixed_rows::<3>(THETA).into();
     let derivatives = jac.is_some();
-    let la = profile.start_point(k, &sites.start, segment_end, a, za, w, derivatives)?;
-    let lb = profile.point(&sites.end, segment_end, &b.R, (&b.v, &b.u), zb, w, derivatives)?;
-    profile.keep_node(k, segment_end, a, (za, w), &la);
-    profile.keep_node(k + 1, segment_end, b, (zb, w), &lb);
+    let la = profile.start_point(k, &sites.start, segment_end, a, za, wa, derivatives)?;
+    let lb = profile.point(&sites.end, segment_end, &b.R, (&b.v, &b.u), zb, wb, derivatives)?;
+    profile.keep_node(k, segment_end, a, (za, wa), &la);
+    profile.keep_node(k + 1, segment_end, b, (zb, wb), &lb);
     // F at a point from its rates; with derivatives also its linearization (a residual
     // needs only the value, the same arithmetic as the linearization's).
     let value = |site: &Site, lin: &FrictionLinearization, y: &Block<f64>| {
@@ -215,7 +241,11 @@ fn interval_at_kernel(
             (Em, a.R * Em)
         }
     };
-    let lm = profile.point(&sites.mid, segment_end, &Rm, (&vm, &um), zm, w, derivatives)?;
+    let lm = profile.point(&sites.mid, segment_end, &Rm, (&vm, &um), zm, wm, derivatives)?;
+    if let Some(columns) = columns.as_deref_mut() {
+        columns.vm = vm;
+        columns.um = um;
+    }
     let pm = frame_m
         .as_ref()
         .map(|frame| rhs_linearized_inline(&sites.mid, &lm.lin, &a.R, &ym, frame));
@@ -272,7 +302,7 @@ fn interval_at_kernel(
     }
     out.derivatives = derivatives;
     let (Some(jac), Some((p0, p1)), Some(pm), Some(frame1), Some(frame_m)) = (jac, ends, pm, frame1, frame_m) else {
-        profile.keep_end(k, segment_end, b, zb, w, derivatives, lb);
+        profile.keep_end(k, segment_end, b, zb, wb, derivatives, lb);
         profile.give(la);
         profile.give(lm);
         profile.give_scratch(scratch);
@@ -358,6 +388,9 @@ fn interval_at_kernel(
             }
             let column = scale_rows(-(dF_end + dFm_z * 4.0) * (h / 6.0), length);
             out.rows_z.set_column(side * count + l, &column);
+            if let Some(columns) = columns.as_deref_mut() {
+                columns.d_ym_z.set_column(side * count + l, &dym.fixed_rows::<6>(6));
+            }
             for j in (0..count).filter(|&j| on[j]) {
                 let (row_y, _) = turning_y(j);
                 let mut dturn = (row_y * dym)[0];
@@ -367,6 +400,57 @@ fn interval_at_kernel(
                 let own_end = lin.d_turning_log_tension[j * count + l];
                 let delta = if j == l { -sign } else { 0.0 };
                 out.psi_z[(j, side * count + l)] = delta - h / 6.0 * (own_end + 4.0 * dturn);
+            }
+        }
+    }
+    // A pointwise stuck link's given rates: the rows' columns in them, and the midpoint's
+    // strains' in everything (for zeta_m's derivatives, [`super::stuck`]).
+    if let Some(columns) = columns {
+        columns.d_ym = dYm.fixed_rows::<6>(3).into_owned();
+        columns.rows_r = DMatrix::zeros(12 + count, 3 * count);
+        columns.d_ym_r = DMatrix::zeros(6, 2 * count);
+        let given = |lin: &FrictionLinearization, l: usize| {
+            let mut col = Block::<f64>::zeros();
+            col.fixed_rows_mut::<6>(6).copy_from(&lin.d_given[l]);
+            col
+        };
+        for (side, sign, lin) in [(0, 1.0, &la), (1, -1.0, &lb)] {
+            if lin.d_given.is_empty() {
+                continue;
+            }
+            for l in 0..count {
+                // F at the node and y_m move with the node's rate r_l; so do the turning
+                // rates there, hence z_m.
+                let dF_end = given(lin, l);
+                let dym = dF_end * (sign * h / 8.0);
+                dzm_l.clear();
+                dzm_l.extend((0..count).map(|j| sign * h / 8.0 * lin.d_turning_given[j * count + l]));
+                let mut dFm_r = pm.f_y * dym;
+                for (j, d) in dzm_l.iter().enumerate() {
+                    dFm_r += rates_z(&lm, j) * *d;
+                }
+                let column = 2 * side * count + l;
+                let rows = scale_rows(-(dF_end + dFm_r * 4.0) * (h / 6.0), length);
+                columns.rows_r.fixed_view_mut::<12, 1>(0, column).copy_from(&rows);
+                for j in (0..count).filter(|&j| on[j]) {
+                    let (row_y, _) = turning_y(j);
+                    let mut dturn = (row_y * dym)[0];
+                    for (m, d) in dzm_l.iter().enumerate() {
+                        dturn += lm.d_turning_log_tension[j * count + m] * d;
+                    }
+                    let own_end = lin.d_turning_given[j * count + l];
+                    columns.rows_r[(12 + j, column)] = -h / 6.0 * (own_end + 4.0 * dturn);
+                }
+                columns.d_ym_r.set_column(side * count + l, &dym.fixed_rows::<6>(6));
+            }
+        }
+        if !lm.d_given.is_empty() {
+            for l in 0..count {
+                let rows = scale_rows(-given(&lm, l) * (4.0 * h / 6.0), length);
+                columns.rows_r.fixed_view_mut::<12, 1>(0, count + l).copy_from(&rows);
+                for j in (0..count).filter(|&j| on[j]) {
+                    columns.rows_r[(12 + j, count + l)] = -h / 6.0 * 4.0 * lm.d_turning_given[j * count + l];
+                }
             }
         }
     }
@@ -385,13 +469,46 @@ fn interval_at_kernel(
     }
     // For the verdict's mass at the same state, when the profile keeps it (the Jacobian at
     // the answer).
-    profile.keep_response(2 * k, &sites.start, segment_end, (&a.R, &a.v, &a.u), (za, w), &la);
-    profile.keep_response(2 * k + 1, &sites.mid, segment_end, (&Rm, &vm, &um), (zm, w), &lm);
-    profile.keep_end(k, segment_end, b, zb, w, derivatives, lb);
+    profile.keep_response(2 * k, &sites.start, segment_end, (&a.R, &a.v, &a.u), (za, wa), &la);
+    profile.keep_response(2 * k + 1, &sites.mid, segment_end, (&Rm, &vm, &um), (zm, wm), &lm);
+    profile.keep_end(k, segment_end, b, zb, wb, derivatives, lb);
     profile.give(la);
     profile.give(lm);
     profile.give_scratch(scratch);
     Ok(out)
+}
+
+/// A pointwise stuck link's extra derivatives from [`interval_at`] ([`super::stuck`]):
+/// the rows' columns in the given relative rates, and the midpoint's strains (v_m, u_m)
+/// with their derivatives, at fixed rates.
+#[derive(Debug)]
+pub(super) struct Columns {
+    /// The midpoint's strains v_m, u_m (u unscaled).
+    pub(super) vm: Vector3<f64>,
+    pub(super) um: Vector3<f64>,
+    /// d(backbone rows (scaled), then psi)/dr: (12 + k) x 3k, columns r_a of slip l (l),
+    /// r_m (k + l), r_b (2k + l).
+    pub(super) rows_r: DMatrix<f64>,
+    /// d(v_m, u_m)/d(the 18 columns of the midpoint: theta, v, u L of node a, then b).
+    pub(super) d_ym: SMatrix<f64, 6, 18>,
+    /// d(v_m, u_m)/dz: 6 x 2k, columns z_a of every slip, then z_b.
+    pub(super) d_ym_z: DMatrix<f64>,
+    /// d(v_m, u_m)/dr: 6 x 2k, columns r_a of every slip, then r_b.
+    pub(super) d_ym_r: DMatrix<f64>,
+}
+
+impl Columns {
+    /// Empty columns for `count` slips.
+    pub(super) fn new(count: usize) -> Self {
+        Columns {
+            vm: Vector3::zeros(),
+            um: Vector3::zeros(),
+            rows_r: DMatrix::zeros(12 + count, 3 * count),
+            d_ym: SMatrix::zeros(),
+            d_ym_z: DMatrix::zeros(6, 2 * count),
+            d_ym_r: DMatrix::zeros(6, 2 * count),
+        }
+    }
 }
 
 /// Link k's order-6 rows with friction: backbone rows, capstan rows (one per slip) and the

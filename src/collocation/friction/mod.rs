@@ -25,6 +25,7 @@ mod profile;
 mod pull_ins;
 mod staircase;
 mod start;
+mod stuck;
 
 pub use grip::Contact;
 pub(crate) use grip::Grip;

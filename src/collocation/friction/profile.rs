@@ -501,6 +501,14 @@ impl<'a> Profile<'a> {
             return;
         };
         let count = self.count();
+        // A pointwise stuck link's given rates ([`super::stuck`]) are not the multipliers
+        // the verdict evaluates its points with: nothing to keep for it there.
+        if w.is_some_and(|w| w.len() != count) {
+            if let Some(kept) = self.responses.borrow_mut().points.get_mut(index) {
+                kept.valid = false;
+            }
+            return;
+        }
         let mut responses = self.responses.borrow_mut();
         let Responses {
             points,

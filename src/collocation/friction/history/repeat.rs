@@ -30,6 +30,9 @@ pub(crate) fn hold_last(robot: &Robot, carried: &mut Carried) -> bool {
         let (i, span, base) = (profile.slipping[j], profile.spans[j], profile.base[j]);
         let tendon = &robot.tendons[i];
         let z = &settled.z[j];
+        // The material between the nodes is not rebuilt: the held pattern's stuck links
+        // keep the constant multiplier.
+        grip.midpoints.clear();
         for k in 0..span {
             grip.contacts[k] = Contact::Stick;
             grip.multipliers[k] = stuck_multiplier(z[k], z[k + 1], grip.capacities[k]);

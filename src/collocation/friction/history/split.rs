@@ -27,8 +27,29 @@ use nalgebra::Vector3;
 const LEVELS: u32 = 6;
 
 /// The first graded level whose difference to the one before sees the sliding links'
-/// error: they are cut in 2^(level - 2) parts, so first again from level 2 to 3.
-const SLIDING_SEEN: u32 = 3;
+/// error: they are cut in 2^(level - 1) parts, so first again from level 1 to 2; the first
+/// whose difference is of two pointwise levels (order 4) too.
+const SLIDING_SEEN: u32 = 2;
+
+/// Placings of a level's boundary node at most: each re-estimates the boundary from the
+/// level's answer and solves the level again.
+const PLACINGS: usize = 6;
+
+/// A boundary that moved by less than this (m) since the level was solved stays: the
+/// tension's kink then lies within it of a node, a tip error of about this times the
+/// jump of the slope of the log tension (1/m) times the link's length, far below any
+/// tolerance.
+const PLACED: f64 = 1e-10;
+
+/// Whether the boundaries `again` differ from `placed`: another tendon, or one moved by
+/// more than [`PLACED`].
+fn moved(placed: &[(usize, f64)], again: &[(usize, f64)]) -> bool {
+    placed.len() != again.len()
+        || placed
+            .iter()
+            .zip(again)
+            .any(|(&(i, e), &(l, f))| i != l || (e - f).abs() > PLACED)
+}
 
 /// How many parts each link of `before`'s mesh is cut into on split level `level` after
 /// the answer `last` (the last level's, or the step's on the history's mesh) with its
@@ -39,13 +60,13 @@ const SLIDING_SEEN: u32 = 3;
 /// order 2 there and order 4 on the sliding links, whose error on the history's mesh is
 /// already that of a step that slides all along (docs/friction.md section 8, "Graded
 /// levels").
-fn parts(before: &Carried, level: u32, graded: bool, last: &StepAnswer, boundaries: &[f64]) -> Vec<usize> {
+fn parts(before: &Carried, level: u32, graded: bool, last: &StepAnswer, boundaries: &[(usize, f64)]) -> Vec<usize> {
     let full = 1 << level;
     let nodes = &before.mesh.nodes;
     if !graded {
         return vec![full; nodes.len() - 1];
     }
-    let sliding = 1 << level.saturating_sub(2);
+    let sliding = 1 << level.saturating_sub(SLIDING_SEEN - 1);
     let fine: Vec<bool> = nodes
         .windows(2)
         .map(|pair| {
@@ -54,7 +75,7 @@ fn parts(before: &Carried, level: u32, graded: bool, last: &StepAnswer, boundari
                 list.iter()
                     .any(|&(start, end, c)| c == Contact::Stick && start < b && end > a)
             });
-            stuck || boundaries.iter().any(|&e| e >= a && e <= b)
+            stuck || boundaries.iter().any(|&(_, e)| e >= a && e <= b)
         })
         .collect();
     // The link before a fine one is fine too: the boundary's estimate ([`boundaries`])
@@ -98,23 +119,47 @@ pub(super) fn refine(
     // The last level solved: a graded refine that the interval cap ends before
     // [`SLIDING_SEEN`] has an estimate without the sliding links' error.
     let mut reached = 0;
+    // The boundaries the last level's nodes settled on (none before the first level:
+    // estimated from the answer on the history's mesh).
+    let mut settled: Option<Vec<(usize, f64)>> = None;
     for level in 1..=LEVELS {
-        let boundaries = boundaries(&best);
-        let parts = parts(before, level, graded, &best, &boundaries);
+        let mut placed = settled.take().unwrap_or_else(|| boundaries(&best));
+        let parts = parts(before, level, graded, &best, &placed);
         if parts.iter().sum::<usize>() > options.max_intervals.max(2 * intervals) {
             break;
         }
-        let mut fine = split(robot, before, &parts, &best.0, &boundaries)?;
-        let (next, _) = solve_on(robot, options, &mut fine, None)?;
+        let mut fine = split(robot, before, &parts, &best.0, &placed)?;
+        let (mut next, _) = solve_on(robot, options, &mut fine, None)?;
+        // The boundary estimated again from this level's answer, and the level solved
+        // again with its node there, until it stays (docs/friction.md section 8: a node a
+        // fixed distance off the boundary leaves a kink inside a link, order 1).
+        let mut earlier: Option<Vec<(usize, f64)>> = None;
+        for _ in 0..PLACINGS {
+            let again = boundaries(&next);
+            // Settled, or back where it was two placings ago: the tie at the node decides
+            // the side by the last 1e-8 of log tension, which can alternate by that much
+            // over 1/m (1e-8 m).
+            if !moved(&placed, &again) || earlier.as_ref().is_some_and(|e| !moved(e, &again)) {
+                break;
+            }
+            let parts = self::parts(before, level, graded, &next, &again);
+            fine = split(robot, before, &parts, &next.0, &again)?;
+            next = solve_on(robot, options, &mut fine, None)?.0;
+            earlier = Some(std::mem::replace(&mut placed, again));
+        }
+        settled = Some(placed);
         reached = level;
-        let estimate = difference(&best.0, &next.0);
+        // Two pointwise levels differ at order 4: the finer one's error is their
+        // difference / 15; the first level's difference to the answer on the history's mesh
+        // (the constant multiplier, order 2) is taken whole.
+        let estimate = difference(&best.0, &next.0, if level > 1 { 3 } else { 1 });
         best = next;
         best.0.report.error_estimate = Some(estimate);
         let fine = finest.insert(fine);
         let Some(tol) = options.tolerance else {
             break;
         };
-        // The sliding links are cut again from level 3 on: only then does the difference
+        // The sliding links are cut again from level 2 on: only then does the difference
         // see their error too.
         if level < SLIDING_SEEN || !refine::meets(&estimate, tol, length) {
             continue;
@@ -208,6 +253,11 @@ fn material_error(
                     8,
                 );
             }
+            let nodes = &fine.mesh.nodes;
+            for (l, value) in grip.midpoints.iter_mut().enumerate() {
+                let mid = 0.5 * (nodes[l].s + nodes[l + 1].s);
+                *value = lagrange(&coarse[..=span], &corrected.values[..=span], &corrected.kinks, mid, 8);
+            }
         }
         better
     };
@@ -229,7 +279,7 @@ fn material_error(
         // A real flip (or a held Newton that fails): the step's full loop sets the pattern.
         Err(_) => solve_on(robot, options, &mut start(None), None)?.0.0,
     };
-    Ok(difference(answer, &again))
+    Ok(difference(answer, &again, 1))
 }
 
 /// The error estimate of the finer of two answers of a step: their difference. With an
@@ -237,7 +287,9 @@ fn material_error(
 /// (at the order 2 the boundary node gives, by about 3 times; where the boundary moves
 /// between levels the order is irregular, and at order 1 the difference about equals it).
 /// [`material_error`] measures the material's error with it too.
-fn difference(coarse: &Solution, fine: &Solution) -> ErrorEstimate {
+fn difference(coarse: &Solution, fine: &Solution, order: u32) -> ErrorEstimate {
+    // The finer one's error at `order` (1: the difference whole).
+    let factor = 1.0 / f64::from((1_u32 << order) - 1);
     let (a, b) = (coarse.tip(), fine.tip());
     // The angle of R_a^T R_b from its cosine and sine together: the cosine alone resolves
     // no angle below sqrt(2 eps) = 1.5e-8 rad, which would read differences of 1e-9 rad as
@@ -252,10 +304,10 @@ fn difference(coarse: &Solution, fine: &Solution) -> ErrorEstimate {
         .map(|n| (coarse.at(n.s).p - n.p).norm())
         .fold(0.0, f64::max);
     ErrorEstimate {
-        tip_position: (a.p - b.p).norm(),
-        tip_rotation: sin.atan2(cos),
-        backbone_max,
-        order: 2,
+        tip_position: (a.p - b.p).norm() * factor,
+        tip_rotation: sin.atan2(cos) * factor,
+        backbone_max: backbone_max * factor,
+        order,
     }
 }
 
@@ -269,9 +321,17 @@ fn difference(coarse: &Solution, fine: &Solution) -> ErrorEstimate {
 ///
 /// # Errors
 /// An invalid mesh (none: the points lie on the rod).
-fn split(robot: &Robot, before: &Carried, parts: &[usize], guess: &Solution, boundaries: &[f64]) -> Result<Carried> {
+fn split(
+    robot: &Robot,
+    before: &Carried,
+    parts: &[usize],
+    guess: &Solution,
+    boundaries: &[(usize, f64)],
+) -> Result<Carried> {
     let nodes = &before.mesh.nodes;
     let mut points = Vec::with_capacity(parts.iter().sum::<usize>() + 1);
+    // Each tendon's boundary node: the point placed on it, or the link's end it is left to.
+    let mut placed: Vec<(usize, f64)> = Vec::new();
     for (pair, &parts) in nodes.windows(2).zip(parts) {
         let (a, b) = (pair[0].s, pair[1].s);
         points.push(a);
@@ -279,10 +339,15 @@ fn split(robot: &Robot, before: &Carried, parts: &[usize], guess: &Solution, bou
             let mut inner: Vec<f64> = (1..parts).map(|q| a + (b - a) * q as f64 / parts as f64).collect();
             // A boundary within 1e-3 of the link from one of its ends is left to that node.
             let margin = 1e-3 * (b - a);
-            for &e in boundaries.iter().filter(|&&e| e > a + margin && e < b - margin) {
+            for &(i, e) in boundaries.iter().filter(|&&(_, e)| e >= a && e <= b) {
+                if e <= a + margin || e >= b - margin {
+                    placed.push((i, if e - a < b - e { a } else { b }));
+                    continue;
+                }
                 let nearest = (0..inner.len()).min_by(|&p, &q| (inner[p] - e).abs().total_cmp(&(inner[q] - e).abs()));
                 if let Some(q) = nearest {
                     inner[q] = e;
+                    placed.push((i, e));
                 }
             }
             inner.sort_by(f64::total_cmp);
@@ -336,6 +401,13 @@ fn split(robot: &Robot, before: &Carried, parts: &[usize], guess: &Solution, bou
                 .map(|node| lagrange(&coarse[..=links], &old.reference[..=links], &old.kinks, node.s, 6))
                 .collect(),
             kinks: old.kinks.clone(),
+            midpoints: (0..span)
+                .map(|l| {
+                    let mid = 0.5 * (mesh.nodes[l].s + mesh.nodes[l + 1].s);
+                    lagrange(&coarse[..=links], &old.reference[..=links], &old.kinks, mid, 6)
+                })
+                .collect(),
+            boundary: placed.iter().find(|&&(t, _)| t == i).map(|&(_, e)| e),
         });
     }
     Ok(Carried {
@@ -360,7 +432,7 @@ fn split(robot: &Robot, before: &Carried, parts: &[usize], guess: &Solution, bou
 /// (docs/friction.md section 8, "A node at the boundary"). A tendon whose stuck stretch
 /// starts within two nodes of its base or three of its termination, or whose two profiles
 /// do not cross there, gives none.
-fn boundaries(answer: &StepAnswer) -> Vec<f64> {
+fn boundaries(answer: &StepAnswer) -> Vec<(usize, f64)> {
     let (solution, zones) = answer;
     let s: Vec<f64> = solution.nodes.iter().map(|n| n.s).collect();
     let mut out = Vec::new();
@@ -391,6 +463,11 @@ fn boundaries(answer: &StepAnswer) -> Vec<f64> {
         };
         let gap = |at: f64| quadratic([a - 2, a - 1, a], at) - quadratic([a + 1, a + 2, a + 3], at);
         let (mut lo, mut hi) = (s[a - 1], s[a + 1]);
+        // A root at the start node itself (the boundary node of the last placing, whose tie
+        // the march left stuck) may show as none: look one link further back.
+        if gap(lo) * gap(hi) > 0.0 {
+            lo = s[a - 2];
+        }
         if gap(lo) * gap(hi) > 0.0 {
             continue;
         }
@@ -403,7 +480,7 @@ fn boundaries(answer: &StepAnswer) -> Vec<f64> {
                 lo = mid;
             }
         }
-        out.push(0.5 * (lo + hi));
+        out.push((*i, 0.5 * (lo + hi)));
     }
     out
 }
