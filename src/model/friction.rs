@@ -205,7 +205,8 @@ pub(crate) struct FrictionLinearization {
     pub d_turning_log_tension: Vec<f64>,
     /// Where a slip's load is given as a relative rate r_l ([`crate::model::tangential`]'s
     /// given slips; empty when none is): d(v', u')/dr_l, one per tendon of [`slipping`] (0
-    /// for the others), and d(turning_j)/dr_l, row-major k x k.
+    /// for the others), and d(turning_j)/dr_l, row-major k x k (with derivatives only;
+    /// without them d(v', u')/dr_l where every slip here is given, else empty).
     pub d_given: Vec<Vector6<f64>>,
     pub d_turning_given: Vec<f64>,
     /// Scratch of the evaluation: eq. 13 assembled at the point, the slips loading it, their
@@ -359,6 +360,15 @@ fn linearize_into_kernel(
     out.d_turning_log_tension.clear();
     out.d_given.clear();
     out.d_turning_given.clear();
+    // Where every slip here is given, J = M and dx/dr_l = -y_l tau_l, which the slips hold:
+    // the rates' change with the given rates at no cost (a residual's inner solve of a
+    // pointwise stuck link reads it, `collocation/friction/stuck.rs`).
+    if !derivatives && !slips.is_empty() && slips.iter().all(|sl| sl.given) {
+        out.d_given.resize(k, Vector6::zeros());
+        for sl in slips {
+            out.d_given[sl.slot] = -sl.y * sl.tension();
+        }
+    }
     if !derivatives {
         out.lin = Linearization {
             rates: x,

@@ -102,6 +102,30 @@ pub(crate) fn choose(base: f64, za: f64, capacity: f64, stuck: f64, tie: f64) ->
     }
 }
 
+/// How near (log tension) its sliding limit the stuck tension at a split level's boundary
+/// node must be for the march to let the link ending there slide ([`boundary_tie`]): the
+/// boundary's estimate (`history/split.rs`) and the discrete answer's own meeting of the
+/// two profiles differ by up to 3e-6 on the prototype's stuck steps (measured on the 21-
+/// and 101-step histories), the estimate's error, which the levels' difference measures.
+pub(crate) const BOUNDARY_TIE: f64 = 1e-5;
+
+/// The choice on the link ending at a split level's boundary node ([`Grip::boundary`]) of
+/// a loaded slip not stuck before it, whose first links slid the way `way`: a stick within
+/// [`BOUNDARY_TIE`] of the sliding limit `za +- capacity` slides instead. The node is the
+/// boundary as the estimate places it, and a choice left to rounding would start the stuck
+/// stretch one node early and put the next estimate's bracket off the root
+/// (docs/friction.md section 8, "ord18").
+pub(crate) fn boundary_tie(choice: &mut Choice, way: Option<Contact>, za: f64, capacity: f64) {
+    let Some(way @ (Contact::Pull | Contact::Release)) = way else {
+        return;
+    };
+    let w = if way == Contact::Pull { -1.0 } else { 1.0 };
+    if choice.contact == Contact::Stick && (choice.zeta - (za + w * capacity)).abs() <= BOUNDARY_TIE {
+        choice.contact = way;
+        choice.multiplier = w;
+    }
+}
+
 /// The multiplier of a stuck link with log tensions `za`, `zb` at its ends and capacity
 /// `capacity`: the share of the friction it can hold that the stuck profile uses.
 pub(crate) fn stuck_multiplier(za: f64, zb: f64, capacity: f64) -> f64 {

@@ -26,7 +26,7 @@ pub(crate) use repeat::hold_last;
 pub(crate) use rest::start;
 use slip::check_slip;
 
-use super::grip::{self, Kink, Stuck, choose, stuck_multiplier};
+use super::grip::{self, BOUNDARY_TIE, Kink, Stuck, boundary_tie, choose, stuck_multiplier};
 use super::staircase::Staircase;
 use super::*;
 use crate::model::length;
@@ -37,13 +37,6 @@ use crate::solution::Solution;
 /// is about mu tau r^2 / (E I) (1e-3 on the prototype) per pass; 40 covers any settling
 /// history many times over.
 const PASSES: usize = 40;
-/// How near (log tension) its sliding limit the stuck tension at a split level's boundary
-/// node must be for the march to let the link ending there slide ([`Grip::boundary`]): the
-/// boundary's estimate ([`split`]) and the discrete answer's own meeting of the two
-/// profiles differ by up to 3e-6 on the prototype's stuck steps (measured on the 21- and
-/// 101-step histories), the estimate's error, which the levels' difference measures.
-const BOUNDARY_TIE: f64 = 1e-5;
-
 /// A stuck link's capacity has settled when it changes by less than this (relative) from
 /// the march before a step's first pass: the tangential load its multiplier scales is
 /// mu tau kappa w, and 1e-10 of it moves the tip far below the residual tolerance. After a
@@ -270,21 +263,9 @@ fn march(border: &mut Capstan, x: &[State], converged: bool, tie: f64, rest: boo
         for j in (0..count).filter(|&j| profile.on_link(j, k)) {
             let (base, za, capacity) = (profile.base[j], z[j][k], capacities[j]);
             let mut choice = choose(base, za, capacity, stuck_at[j], tie);
-            // At a split level's boundary node the link ending there slides where its
-            // choice is a near tie (the stuck tension there within BOUNDARY_TIE of the
-            // link's sliding limit): the node is the boundary as the estimate places it, and
-            // a choice left to rounding would put the stuck stretch's start one node early
-            // and the next estimate's bracket off the root (docs/friction.md section 8,
-            // "Order 4 on stuck links").
-            if let (false, Some(way @ (Contact::Pull | Contact::Release))) = (stuck[j], sliding[j])
-                && grips[j].boundary == Some(system.mesh.nodes[k + 1].s)
-                && base > 0.0
-            {
-                let w = if way == Contact::Pull { -1.0 } else { 1.0 };
-                if choice.contact == Contact::Stick && (choice.zeta - (za + w * capacity)).abs() <= BOUNDARY_TIE {
-                    choice.contact = way;
-                    choice.multiplier = w;
-                }
+            // At a split level's boundary node a near tie slides ([`grip::boundary_tie`]).
+            if !stuck[j] && base > 0.0 && grips[j].boundary == Some(system.mesh.nodes[k + 1].s) {
+                boundary_tie(&mut choice, sliding[j], za, capacity);
             }
             let first = *sliding[j].get_or_insert(choice.contact);
             if base > 0.0 && (stuck[j] || choice.contact != first) {
@@ -567,10 +548,10 @@ fn solve_on(robot: &Robot, options: &Options, carried: &mut Carried, held: Optio
         // checked pattern: where the slip is 0 to rounding its sign may flip by up to the
         // material's change, which `held` bounds.
         if profile.base[j] > 0.0 && !rest {
-            // A tie at a split level's boundary node slides ([`BOUNDARY_TIE`]): its tension
-            // may then be off its stuck one by that much, the material there by
-            // BOUNDARY_TIE lambda tau / (E_t A_t) < BOUNDARY_TIE per unit s, a slip below
-            // BOUNDARY_TIE times the rod's length.
+            // A tie at a split level's boundary node slides ([`grip::boundary_tie`]): its
+            // tension may then be off its stuck one by BOUNDARY_TIE relative, the material
+            // there by BOUNDARY_TIE lambda tau / (E_t A_t) < BOUNDARY_TIE per unit s, a slip
+            // below BOUNDARY_TIE times the rod's length.
             let tied = if grips[j].boundary.is_some() {
                 BOUNDARY_TIE * length
             } else {

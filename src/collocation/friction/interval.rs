@@ -23,6 +23,7 @@ use super::super::residual::{
 use super::super::unknowns::THETA;
 use super::profile::LinkScratch;
 pub(crate) use super::profile::Profile;
+use super::stuck::Columns;
 use crate::error::Result;
 use crate::model::equations::Site;
 use crate::model::friction::FrictionLinearization;
@@ -476,39 +477,6 @@ fn interval_at_kernel(
     profile.give(lm);
     profile.give_scratch(scratch);
     Ok(out)
-}
-
-/// A pointwise stuck link's extra derivatives from [`interval_at`] ([`super::stuck`]):
-/// the rows' columns in the given relative rates, and the midpoint's strains (v_m, u_m)
-/// with their derivatives, at fixed rates.
-#[derive(Debug)]
-pub(super) struct Columns {
-    /// The midpoint's strains v_m, u_m (u unscaled).
-    pub(super) vm: Vector3<f64>,
-    pub(super) um: Vector3<f64>,
-    /// d(backbone rows (scaled), then psi)/dr: (12 + k) x 3k, columns r_a of slip l (l),
-    /// r_m (k + l), r_b (2k + l).
-    pub(super) rows_r: DMatrix<f64>,
-    /// d(v_m, u_m)/d(the 18 columns of the midpoint: theta, v, u L of node a, then b).
-    pub(super) d_ym: SMatrix<f64, 6, 18>,
-    /// d(v_m, u_m)/dz: 6 x 2k, columns z_a of every slip, then z_b.
-    pub(super) d_ym_z: DMatrix<f64>,
-    /// d(v_m, u_m)/dr: 6 x 2k, columns r_a of every slip, then r_b.
-    pub(super) d_ym_r: DMatrix<f64>,
-}
-
-impl Columns {
-    /// Empty columns for `count` slips.
-    pub(super) fn new(count: usize) -> Self {
-        Columns {
-            vm: Vector3::zeros(),
-            um: Vector3::zeros(),
-            rows_r: DMatrix::zeros(12 + count, 3 * count),
-            d_ym: SMatrix::zeros(),
-            d_ym_z: DMatrix::zeros(6, 2 * count),
-            d_ym_r: DMatrix::zeros(6, 2 * count),
-        }
-    }
 }
 
 /// Link k's order-6 rows with friction: backbone rows, capstan rows (one per slip) and the

@@ -21,18 +21,58 @@
 //! part follows from the implicit function theorem,
 //! `d zeta / dX = (I - dZ/d zeta)^-1 dZ/dX` (one small solve per link).
 
-use super::interval::{Columns, IntervalLinearization, interval_at};
+use super::interval::{IntervalLinearization, interval_at};
 use super::profile::Profile;
 use crate::collocation::residual::IntervalSites;
 use crate::error::Result;
 use crate::solution::State;
 use crate::{Error, dense};
-use nalgebra::{DMatrix, Vector6};
+use nalgebra::{DMatrix, SMatrix, Vector3, Vector6};
 
-/// Evaluations of the midpoint's strains at most while solving for zeta_m: each after the
-/// first two solves an affine model of y_m(zeta_m) exactly (y_m is affine in the given
-/// rates where no sliding slip loads the nodes), so two or three settle it.
-const ITERATIONS: usize = 12;
+/// A pointwise stuck link's extra derivatives from [`interval_at`] (this module):
+/// the rows' columns in the given relative rates, and the midpoint's strains (v_m, u_m)
+/// with their derivatives, at fixed rates.
+#[derive(Debug)]
+pub(super) struct Columns {
+    /// The midpoint's strains v_m, u_m (u unscaled).
+    pub(super) vm: Vector3<f64>,
+    pub(super) um: Vector3<f64>,
+    /// d(backbone rows (scaled), then psi)/dr: (12 + k) x 3k, columns r_a of slip l (l),
+    /// r_m (k + l), r_b (2k + l).
+    pub(super) rows_r: DMatrix<f64>,
+    /// d(v_m, u_m)/d(the 18 columns of the midpoint: theta, v, u L of node a, then b).
+    pub(super) d_ym: SMatrix<f64, 6, 18>,
+    /// d(v_m, u_m)/dz: 6 x 2k, columns z_a of every slip, then z_b.
+    pub(super) d_ym_z: DMatrix<f64>,
+    /// d(v_m, u_m)/dr: 6 x 2k, columns r_a of every slip, then r_b.
+    pub(super) d_ym_r: DMatrix<f64>,
+}
+
+impl Columns {
+    /// Empty columns for `count` slips.
+    pub(super) fn new(count: usize) -> Self {
+        Columns {
+            vm: Vector3::zeros(),
+            um: Vector3::zeros(),
+            rows_r: DMatrix::zeros(12 + count, 3 * count),
+            d_ym: SMatrix::zeros(),
+            d_ym_z: DMatrix::zeros(6, 2 * count),
+            d_ym_r: DMatrix::zeros(6, 2 * count),
+        }
+    }
+}
+
+/// Iterations at most of the inner solve for zeta_m ([`midpoint`]): Newton on the affine
+/// model converges quadratically from Hermite's z_m in three or four; the secant of the
+/// general case in five to eight.
+const ITERATIONS: usize = 30;
+
+/// The midpoint's strains (v_m, u_m) for a zeta_m, and their change with each stuck
+/// zeta_m where it is affine (None elsewhere).
+type Strains = (Vector6<f64>, Option<Vec<Vector6<f64>>>);
+
+/// A stuck log tension at the midpoint and its gradient in the midpoint's strains.
+type Gradient = (f64, Vector6<f64>);
 
 /// The reason a midpoint's stuck tension is refused (not positive).
 const SLACK: &str = "the stuck tension at a link's midpoint is not positive";
@@ -92,21 +132,25 @@ pub(super) fn interval(
         }
         out
     };
-    // The midpoint's strains (v_m, u_m) of Hermite-Simpson for `zeta`.
-    let strains = |zeta: &[f64]| -> Result<Vector6<f64>> {
+    // The midpoint's strains (v_m, u_m) of Hermite-Simpson for `zeta`, and their change
+    // with each stuck zeta_m where the nodes' rates are affine in the given rates (every
+    // slip there given: then exact).
+    let strains = |zeta: &[f64]| -> Result<Strains> {
         let [wa, _, wb] = points(zeta);
         let la = profile.point(&sites.start, segment_end, &a.R, (&a.v, &a.u), &za, Some(&wa), false)?;
-        let xa = la.lin.rates;
-        profile.give(la);
         let lb = profile.point(&sites.end, segment_end, &b.R, (&b.v, &b.u), &zb, Some(&wb), false)?;
-        let xb = lb.lin.rates;
+        let (xa, xb) = (la.lin.rates, lb.lin.rates);
+        // y_m moves by h/8 (dx_a/dr_a 4/h + dx_b/dr_b 4/h) per unit of zeta_m.
+        let slopes = (!la.d_given.is_empty() && !lb.d_given.is_empty())
+            .then(|| stuck.iter().map(|&j| (la.d_given[j] + lb.d_given[j]) * 0.5).collect());
+        profile.give(la);
         profile.give(lb);
         let ends = Vector6::new(a.v[0], a.v[1], a.v[2], a.u[0], a.u[1], a.u[2])
             + Vector6::new(b.v[0], b.v[1], b.v[2], b.u[0], b.u[1], b.u[2]);
-        Ok(ends * 0.5 + (xa - xb) * (h / 8.0))
+        Ok((ends * 0.5 + (xa - xb) * (h / 8.0), slopes))
     };
     // The stuck log tensions at the midpoint strains `y`, with their gradients in them.
-    let stuck_at = |y: &Vector6<f64>| -> Result<Vec<(f64, Vector6<f64>)>> {
+    let stuck_at = |y: &Vector6<f64>| -> Result<Vec<Gradient>> {
         let (v, u) = (y.fixed_rows::<3>(0).into_owned(), y.fixed_rows::<3>(3).into_owned());
         stuck
             .iter()
@@ -249,78 +293,80 @@ pub(super) fn interval(
 }
 
 /// zeta_m = Z(y_m(zeta_m)) for the stuck slips (module docs), from `start`: `strains`
-/// gives y_m's strains for a zeta (two point evaluations), `stuck_at` the Z and their
-/// gradients at strains. One stuck slip (the usual case): each iteration fits y_m affinely
-/// to the last two evaluations (exact where no sliding slip loads the nodes: the rates are
-/// then affine in the given rate) and solves the fixed point on that model to rounding by
-/// a secant on the cheap Z, then evaluates y_m there; several: a secant per slip on the
-/// evaluations themselves. It stops when the fixed point holds to 1e-12 at the evaluated
-/// strains (Z's own rounding is about 1e-13: the stuck tension's stretch is 1e-3) or the
-/// iterates stop moving.
+/// gives y_m's strains for a zeta (two point evaluations) and, where the nodes' rates are
+/// affine in the given rates, their exact change with each zeta_m; `stuck_at` the Z and
+/// their gradients at strains. Affine (every slip at the nodes stuck here, the usual case):
+/// y_m is known for every zeta from one evaluation, and Newton on the cheap Z solves the
+/// fixed point to rounding. Otherwise a secant per slip on the evaluations themselves,
+/// until the fixed point holds to 1e-12 (Z's own rounding is about 1e-13: the stuck
+/// tension's stretch is 1e-3) or the iterates stop moving.
 ///
 /// # Errors
 /// Those of `strains` and `stuck_at`.
 fn midpoint(
     start: &[f64],
-    strains: &dyn Fn(&[f64]) -> Result<Vector6<f64>>,
-    stuck_at: &dyn Fn(&Vector6<f64>) -> Result<Vec<(f64, Vector6<f64>)>>,
+    strains: &dyn Fn(&[f64]) -> Result<Strains>,
+    stuck_at: &dyn Fn(&Vector6<f64>) -> Result<Vec<Gradient>>,
 ) -> Result<Vec<f64>> {
     let n = start.len();
     if n == 0 {
         return Ok(Vec::new());
     }
+    let (y0, slopes) = strains(start)?;
+    if let Some(slopes) = slopes {
+        // y(zeta) = y0 + sum_j slopes_j (zeta_j - start_j): Newton on zeta - Z(y(zeta)),
+        // whose Jacobian is I - (grad Z_i . slopes_j).
+        let mut zeta = start.to_vec();
+        for _ in 0..ITERATIONS {
+            let mut y = y0;
+            for (j, slope) in slopes.iter().enumerate() {
+                y += slope * (zeta[j] - start[j]);
+            }
+            let at = stuck_at(&y)?;
+            let mut step: Vec<f64> = at.iter().zip(&zeta).map(|((z, _), x)| z - x).collect();
+            let mut matrix: Vec<f64> = (0..n * n)
+                .map(|e| {
+                    let (i, j) = (e / n, e % n);
+                    f64::from(u8::from(i == j)) - at[i].1.dot(&slopes[j])
+                })
+                .collect();
+            if !dense::solve_dense(&mut matrix, &mut step, n) {
+                break;
+            }
+            let moved = step.iter().fold(0.0_f64, |m, d| m.max(d.abs()));
+            for (x, d) in zeta.iter_mut().zip(&step) {
+                *x += d;
+            }
+            if moved <= 4.0 * f64::EPSILON * (1.0 + zeta.iter().fold(0.0_f64, |m, x| m.max(x.abs()))) {
+                break;
+            }
+        }
+        return Ok(zeta);
+    }
     let left = |zeta: &[f64], y: &Vector6<f64>| -> Result<Vec<f64>> {
         Ok(stuck_at(y)?.iter().zip(zeta).map(|((z, _), x)| x - z).collect())
     };
     let size = |g: &[f64]| g.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
-    let (mut p, mut yp) = (start.to_vec(), strains(start)?);
-    let mut gp = left(&p, &yp)?;
+    let (mut p, mut gp) = (start.to_vec(), left(start, &y0)?);
     let mut c: Vec<f64> = start.iter().map(|x| x + 1e-3).collect();
-    let mut yc = strains(&c)?;
-    let mut gc = left(&c, &yc)?;
+    let mut gc = left(&c, &strains(&c)?.0)?;
     for _ in 0..ITERATIONS {
         if size(&gc) <= 1e-12 {
             break;
         }
-        let next: Vec<f64> = if n == 1 {
-            // The affine model of y_m and the fixed point on it, by a secant.
-            let model = |zeta: f64| yc + (yc - yp) * ((zeta - c[0]) / (c[0] - p[0]));
-            let g = |zeta: f64| -> Result<f64> { Ok(left(&[zeta], &model(zeta))?[0]) };
-            let (mut x0, mut x1) = (p[0], c[0]);
-            let (mut g0, mut g1) = (gp[0], gc[0]);
-            for _ in 0..60 {
-                let slope = (g1 - g0) / (x1 - x0);
-                if !(slope.is_finite() && slope != 0.0) || g1 == 0.0 {
-                    break;
+        let next: Vec<f64> = (0..n)
+            .map(|j| {
+                let slope = (gc[j] - gp[j]) / (c[j] - p[j]);
+                if slope.is_finite() && slope != 0.0 {
+                    c[j] - gc[j] / slope
+                } else {
+                    c[j]
                 }
-                let x2 = x1 - g1 / slope;
-                let settled = (x2 - x1).abs() <= 4.0 * f64::EPSILON * (1.0 + x2.abs());
-                (x0, g0, x1, g1) = (x1, g1, x2, g(x2)?);
-                if settled {
-                    break;
-                }
-            }
-            vec![x1]
-        } else {
-            (0..n)
-                .map(|j| {
-                    let slope = (gc[j] - gp[j]) / (c[j] - p[j]);
-                    if slope.is_finite() && slope != 0.0 {
-                        c[j] - gc[j] / slope
-                    } else {
-                        c[j]
-                    }
-                })
-                .collect()
-        };
+            })
+            .collect();
         let moved = next.iter().zip(&c).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
-        let y = strains(&next)?;
-        let g = left(&next, &y)?;
-        (p, yp, gp) = (
-            std::mem::replace(&mut c, next),
-            std::mem::replace(&mut yc, y),
-            std::mem::replace(&mut gc, g),
-        );
+        let g = left(&next, &strains(&next)?.0)?;
+        (p, gp) = (std::mem::replace(&mut c, next), std::mem::replace(&mut gc, g));
         if moved <= 1e-14 {
             break;
         }

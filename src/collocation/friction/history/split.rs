@@ -1,14 +1,17 @@
 //! Error control of a history step with a stuck stretch (docs/friction.md section 8, "Error
 //! control of stuck steps"): the step is solved again on its mesh with its links split in
 //! two, four, ... parts (with a tolerance only the links where a tendon sticks, [`parts`];
-//! the others four times more slowly), from the same carried material, until two
-//! successive answers agree to the tolerance; the finer one is returned, with their difference as its error estimate
-//! plus the error the carried material's interpolation leaves ([`material_error`]), which
-//! every level shares. On each level the split node nearest each tendon's stick/slip
-//! boundary (estimated from the last level's tensions, [`boundaries`]) is moved onto it, so
-//! the kink of the tension lies at a node and the step is of order 2 over the levels. The
-//! history's own mesh is a subset of every split mesh, so the material the step leaves is
-//! handed back to it at its nodes exactly.
+//! the others at half that rate), from the same carried material, until two successive
+//! answers agree to the tolerance; the finer one is returned, with their difference (over 7
+//! from the second level on) as its error estimate plus the error the carried material's
+//! interpolation leaves ([`material_error`]), which every level shares. On each level the
+//! split node nearest each tendon's stick/slip boundary is moved onto it, the boundary
+//! estimated again from the level's own answer ([`boundaries`]) and the level solved again
+//! until it stays, so the kink of the tension lies at a node; the stuck links take the
+//! stuck tension point by point (`collocation/friction/stuck.rs`), order 4
+//! (docs/friction.md section 8, "Order 4 on stuck links", "ord18"). The history's own mesh
+//! is a subset of every split mesh, so the material the step leaves is handed back to it at
+//! its nodes exactly.
 
 use super::{Carried, Contact, Grip, Kink, Options, Profile, Result, Robot, StepAnswer, solve_on};
 use crate::collocation::refine;
@@ -20,10 +23,10 @@ use crate::solution::Solution;
 use nalgebra::Vector3;
 
 /// Most splits of a stuck step's links: 2^6 = 64 parts per link. With a node at the
-/// stick/slip boundary a stuck step's split differences fall about 4 times per level
-/// (order 2, docs/friction.md section 8), so 64 parts cut a step's error about 4 000
-/// times; a step that still misses its tolerance (or would need more than
-/// `max_intervals`) reports so.
+/// stick/slip boundary, placed again on each level, and the pointwise load on stuck links
+/// a stuck step's split differences fall about 16 times per level (order 4,
+/// docs/friction.md section 8, "ord18"); a step that still misses its tolerance (or would
+/// need more than `max_intervals`) reports so.
 const LEVELS: u32 = 6;
 
 /// The first graded level whose difference to the one before sees the sliding links'
@@ -39,7 +42,7 @@ const PLACINGS: usize = 6;
 /// tension's kink then lies within it of a node, a tip error of about this times the
 /// jump of the slope of the log tension (1/m) times the link's length, far below any
 /// tolerance.
-const PLACED: f64 = 1e-10;
+const PLACED: f64 = 1e-9;
 
 /// Whether the boundaries `again` differ from `placed`: another tendon, or one moved by
 /// more than [`PLACED`].
@@ -55,11 +58,10 @@ fn moved(placed: &[(usize, f64)], again: &[(usize, f64)]) -> bool {
 /// the answer `last` (the last level's, or the step's on the history's mesh) with its
 /// stick/slip `boundaries`. Uniform (`graded` false): 2^level. Graded: 2^level where a
 /// tendon sticks on the link in `last` or a boundary lies on it, and on the link before
-/// such a one; 2^(level - 2) (at least one) on the other links, where every tendon
-/// slides. A stuck link's multiplier is constant across it, so the step's error is of
-/// order 2 there and order 4 on the sliding links, whose error on the history's mesh is
-/// already that of a step that slides all along (docs/friction.md section 8, "Graded
-/// levels").
+/// such a one; 2^(level - 1) on the other links, where every tendon slides: from level 2
+/// on every link is halved between levels, so their difference is of order 4 on the stuck
+/// links (the pointwise load) and the sliding ones alike (docs/friction.md section 8,
+/// "Graded levels", "ord18").
 fn parts(before: &Carried, level: u32, graded: bool, last: &StepAnswer, boundaries: &[(usize, f64)]) -> Vec<usize> {
     let full = 1 << level;
     let nodes = &before.mesh.nodes;
@@ -282,11 +284,13 @@ fn material_error(
     Ok(difference(answer, &again, 1))
 }
 
-/// The error estimate of the finer of two answers of a step: their difference. With an
-/// order p >= 1 the finer one's error is the difference / (2^p - 1), so this bounds it
-/// (at the order 2 the boundary node gives, by about 3 times; where the boundary moves
-/// between levels the order is irregular, and at order 1 the difference about equals it).
-/// [`material_error`] measures the material's error with it too.
+/// The error estimate of the finer of two answers of a step: their difference over
+/// 2^order - 1, the finer one's error where the two are of that order and the finer has
+/// half the link length (`order` 1: the difference whole). The split levels take order 3
+/// for two pointwise levels of order 4 (with 15 the estimates were below the error on
+/// some of the prototype's stuck steps, docs/friction.md section 8, "ord18"), 1 for the
+/// first level against the answer on the history's mesh; [`material_error`] measures the
+/// material's error with order 1.
 fn difference(coarse: &Solution, fine: &Solution, order: u32) -> ErrorEstimate {
     // The finer one's error at `order` (1: the difference whole).
     let factor = 1.0 / f64::from((1_u32 << order) - 1);
