@@ -402,6 +402,32 @@ impl SolveReport {
         t.stability += u.stability;
     }
 
+    /// Replaces this report's work counts (those [`SolveReport::add_work`] adds) by
+    /// `spent`'s: an answer that is the last of several solves reports all of them.
+    pub(crate) fn set_work(&mut self, spent: &SolveReport) {
+        self.iterations = spent.iterations;
+        self.newton_steps = spent.newton_steps;
+        self.chord_steps = spent.chord_steps;
+        self.load_steps = spent.load_steps;
+        self.meshes = spent.meshes;
+        self.evaluations = spent.evaluations;
+        let (t, u) = (&mut self.timings, &spent.timings);
+        t.assembly = u.assembly;
+        t.factorization = u.factorization;
+        t.solve = u.solve;
+        t.estimate = u.estimate;
+        t.stability = u.stability;
+    }
+
+    /// Adds one more mesh's solve, reported by `solve`, to this report's work counts: its
+    /// iterations, evaluations and timings, and one mesh (a history step's solves each
+    /// carry the mesh count of the solve that chose the history's mesh, not their own).
+    pub(crate) fn add_mesh_work(&mut self, solve: &SolveReport) {
+        let meshes = self.meshes;
+        self.add_work(solve);
+        self.meshes = meshes + 1;
+    }
+
     /// [`SolveReport::new`] with the stability's reason [`NOT_ASSESSED`] in `not_assessed`
     /// (a kept buffer that holds that text), so that no string is allocated.
     pub(crate) fn new_in(method: Method, not_assessed: String) -> Self {

@@ -540,13 +540,13 @@ fn a_stuck_steps_last_level_settles_in_two_passes() {
     let steps = loop_steps(&Default::default());
     let first = &steps[11];
     assert!(first.zones[0].zones.iter().any(|z| z.contact == Contact::Stick));
+    // The report counts every solve of the step: the history's mesh and the split levels
+    // (59, 113 and 226 intervals). Measured 26 in all; while the last march's capacity was
+    // held over each Newton solve, the three levels alone took 14 + 14 + 11 = 39.
     let iterations = first.solution.report.iterations;
-    // its last split level (226 intervals): 5 iterations in the first pass and 1 residual
-    // evaluation in the second, 6 measured; with the last march's capacity held over each
-    // Newton solve it took three passes, 6 + 3 + 2 = 11
     assert!(
-        iterations <= 8,
-        "the first stuck step's last level took {iterations} iterations"
+        iterations <= 30,
+        "the first stuck step's solves took {iterations} iterations"
     );
 }
 

@@ -1,5 +1,5 @@
-//! Error control of a history step that slides all along and misses its tolerance
-//! (docs/friction.md section 8, "Sliding steps at an inflection"): where the backbone's
+//! Error control of a history step that slides all along and misses its tolerance or has
+//! an inflection (docs/friction.md section 8, "Sliding steps at an inflection"): where the backbone's
 //! bending changes sign inside a link, a tendon's turning rate kappa = |t'| has a kink
 //! (it passes through 0), so its sliding tension, tau' = -+ mu tau kappa, has a jump in its
 //! second derivative inside the link: the link's collocation loses its order and the
@@ -39,10 +39,10 @@ const SETTLED: f64 = 1e-8;
 /// history's mesh from the material `before`, which misses its tolerance, within
 /// `options.max_intervals`, until a level meets the tolerance; leaves in `carried` the last
 /// level's material at the history's nodes, its order-6 material where the level has it.
-/// Returns `answer` unchanged (and `carried` as it was after it) when the backbone has no
-/// inflection and the first level would be the history's mesh itself, or when a level
-/// sticks (a refined shape that changes the step's pattern: then the coarse answer says it
-/// misses).
+/// Returns `answer` (and `carried` as it was after it) when no level was solved: the
+/// interval cap, or a level that sticks (a refined shape that changes the step's pattern).
+/// With a tolerance that answer then says it misses it, whatever its estimate: its estimate
+/// does not see the kink that brought it here. Its report counts every solve made.
 ///
 /// # Errors
 /// As [`super::step`], on a refined mesh.
@@ -55,6 +55,8 @@ pub(super) fn refine(
 ) -> Result<StepAnswer> {
     let intervals = before.mesh.intervals();
     let links = before.mesh.nodes.len() - 1;
+    // The work of every solve of the step, which its answer reports.
+    let mut spent = answer.0.report.clone();
     let mut best = answer;
     let mut finest: Option<Carried> = None;
     for level in 1..=LEVELS {
@@ -90,6 +92,7 @@ pub(super) fn refine(
                 })
                 .collect();
             let (next, stuck) = solve_on(robot, options, &mut fine, None)?;
+            spent.add_mesh_work(&next.0.report);
             if stuck || next.0.report.error_estimate.is_none() {
                 break;
             }
@@ -132,6 +135,9 @@ pub(super) fn refine(
             break;
         }
     }
+    if finest.is_none() && options.tolerance.is_some() {
+        best.0.report.tolerance_met = Some(false);
+    }
     if let Some(fine) = finest {
         hand_back(carried, &fine, before);
         // The material at its best is the level's deferred-corrected one where it has it.
@@ -144,6 +150,7 @@ pub(super) fn refine(
             }
         }
     }
+    best.0.report.set_work(&spent);
     Ok(best)
 }
 

@@ -86,6 +86,8 @@ pub(super) fn refine(
     answer: StepAnswer,
 ) -> Result<StepAnswer> {
     let length = robot.length();
+    // The work of every solve of the step, which its answer reports.
+    let mut spent = answer.0.report.clone();
     let mut best = answer;
     let mut finest: Option<Carried> = None;
     // The material's error, measured once (on the first level whose split difference meets
@@ -106,6 +108,7 @@ pub(super) fn refine(
         }
         let mut fine = split(robot, before, &parts, &best.0, &boundaries)?;
         let (next, _) = solve_on(robot, options, &mut fine, None)?;
+        spent.add_mesh_work(&next.0.report);
         reached = level;
         let estimate = difference(&best.0, &next.0);
         best = next;
@@ -145,6 +148,7 @@ pub(super) fn refine(
             .map(|(tol, estimate)| seen && refine::meets(&estimate, tol, length));
         hand_back(carried, &fine, before);
     }
+    best.0.report.set_work(&spent);
     Ok(best)
 }
 
