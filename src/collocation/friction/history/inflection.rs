@@ -139,9 +139,8 @@ pub(super) fn refine(
         best.0.report.tolerance_met = Some(false);
     }
     if let Some(fine) = finest {
-        hand_back(carried, &fine, before);
+        let index = hand_back(carried, &fine, before);
         // The material at its best is the level's deferred-corrected one where it has it.
-        let index = history_nodes(carried, &fine);
         for (corrected, order6) in carried.corrected.iter_mut().zip(&fine.corrected) {
             for (value, &n) in corrected.values.iter_mut().zip(&index) {
                 if order6.values[n].is_finite() {
@@ -152,23 +151,6 @@ pub(super) fn refine(
     }
     best.0.report.set_work(&spent);
     Ok(best)
-}
-
-/// The index in `fine`'s mesh of each of `carried`'s (the history's) nodes, matched by arc
-/// length and segment.
-fn history_nodes(carried: &Carried, fine: &Carried) -> Vec<usize> {
-    carried
-        .mesh
-        .nodes
-        .iter()
-        .map(|node| {
-            fine.mesh
-                .nodes
-                .iter()
-                .position(|f| f.s == node.s && f.segment_end == node.segment_end)
-                .unwrap_or(0)
-        })
-        .collect()
 }
 
 /// Where the path of a tendon with friction of `robot` stops turning inside a link of
