@@ -65,22 +65,31 @@ pub(super) fn refine(
         if per_link == 1 && points.is_empty() {
             continue;
         }
-        let parts: Vec<usize> = before
-            .mesh
-            .nodes
-            .windows(2)
-            .map(|pair| {
-                let inside = points.iter().filter(|&&e| e > pair[0].s && e < pair[1].s).count();
-                per_link.max(inside + 1)
-            })
-            .collect();
-        if parts.iter().sum::<usize>() > options.max_intervals.max(intervals + links) {
+        // Each history link's parts: the level's, or one more than the points inside it.
+        let parts_of = |points: &[f64]| -> Vec<usize> {
+            before
+                .mesh
+                .nodes
+                .windows(2)
+                .map(|pair| {
+                    let inside = points.iter().filter(|&&e| e > pair[0].s && e < pair[1].s).count();
+                    per_link.max(inside + 1)
+                })
+                .collect()
+        };
+        let cap = options.max_intervals.max(intervals + links);
+        if parts_of(&points).iter().sum::<usize>() > cap {
             break;
         }
         // The points are located on the last answer, to its error: solved again from the
         // new answer while they move.
         let mut located = None;
         for _ in 0..RELOCATE {
+            // Recomputed on each placing: a point may have moved into another link.
+            let parts = parts_of(&points);
+            if parts.iter().sum::<usize>() > cap {
+                break;
+            }
             let mut fine = split(robot, before, &parts, &best.0, &points)?;
             // Slots for the level's order-6 material, which `solve_on` fills.
             fine.corrected = fine
@@ -117,8 +126,18 @@ pub(super) fn refine(
                     moved = moved.max(d);
                 }
             }
+            // A point found with no partner (a kink the last placing did not have, or one
+            // that moved farther than `NEAR`) is placed too, and the level is not settled.
+            let unmatched: Vec<f64> = found
+                .iter()
+                .zip(&found_taken)
+                .filter(|(_, t)| !**t)
+                .map(|(&g, _)| g)
+                .collect();
+            let fresh = !unmatched.is_empty();
+            points.extend(unmatched);
             points.sort_by(f64::total_cmp);
-            let settled = moved <= SETTLED * robot.length();
+            let settled = moved <= SETTLED * robot.length() && !fresh;
             located = Some((next, fine));
             if settled {
                 break;
