@@ -133,6 +133,17 @@ fn a_rigid_tendon_that_sticks_says_to_set_its_stiffness() {
     assert_eq!(String::from_utf8_lossy(&out.stdout).lines().count(), 6);
 }
 
+/// `sweep robot.toml --tension T ... --history up-down` in `dir`, one `--tension` per item of
+/// `tensions`, whatever its exit.
+fn up_down(dir: &Path, tensions: &[&str]) -> std::process::Output {
+    let mut args = vec!["sweep", "robot.toml"];
+    for t in tensions {
+        args.extend(["--tension", t]);
+    }
+    args.extend(["--history", "up-down"]);
+    run(dir, &args)
+}
+
 /// The CSV of `sweep robot.toml ARGS --history LIST` in `dir`, which must exit 0, as rows
 /// of fields (header first).
 fn history_csv(dir: &Path, args: &[&str]) -> Vec<Vec<String>> {
@@ -247,21 +258,7 @@ fn a_stuck_tendon_going_slack_is_refused_and_pulling_it_in_further_solves() {
     // beyond would go slack (docs/friction.md section 8, "Limits").
     let dir = scratch("slack-refused");
     top_tendon_with_friction(&dir, "0.3", None);
-    let sweep = |tendon_3: &str| {
-        let args = [
-            "sweep",
-            "robot.toml",
-            "--tension",
-            "1=0",
-            "--tension",
-            "5=0:0.5:2",
-            "--tension",
-            tendon_3,
-            "--history",
-            "up-down",
-        ];
-        run(&dir, &args)
-    };
+    let sweep = |tendon_3: &str| up_down(&dir, &["1=0", "5=0:0.5:2", tendon_3]);
     let refused = sweep("3=0.3");
     assert_eq!(refused.status.code(), Some(2));
     let err = String::from_utf8_lossy(&refused.stderr);
@@ -299,17 +296,7 @@ fn a_stuck_tension_driven_to_zero_is_refused_as_going_slack() {
     // (docs/friction.md section 8, "Limits").
     let dir = scratch("stalled-slack");
     top_tendon_with_friction(&dir, "1.0", Some("0.5"));
-    let args = [
-        "sweep",
-        "robot.toml",
-        "--tension",
-        "1=0",
-        "--tension",
-        "5=0:1:5",
-        "--history",
-        "up-down",
-    ];
-    let refused = run(&dir, &args);
+    let refused = up_down(&dir, &["1=0", "5=0:1:5"]);
     assert_eq!(refused.status.code(), Some(2));
     let err = String::from_utf8_lossy(&refused.stderr);
     assert!(
