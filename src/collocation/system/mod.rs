@@ -11,6 +11,7 @@
 mod ahead;
 mod columns;
 mod jump;
+mod lanes;
 
 use super::friction::{self, Profile};
 use super::residual::{self, Block, Delta, IntervalFactors, IntervalSites, QuarterSites};
@@ -486,17 +487,24 @@ impl<'a> System<'a> {
         // (`shared`: the link before was an interval).
         let mut lins = [linearize::Linearization::zeros(); 2];
         let mut shared = false;
-        for k in 0..links {
+        let mut k = 0;
+        while k < links {
             let rows = link_row(k)..link_row(k + 1);
             if let Some(sites) = &self.interval_sites[k] {
                 let seg = self.mesh.nodes[k].segment_end;
-                let block = &mut values[at..at + NODE * width];
                 if let Some(profile) = &self.friction {
-                    let length = self.model.robot.length();
+                    let (length, block) = (self.model.robot.length(), &mut values[at..at + NODE * width]);
                     let lin = friction::interval(profile, length, k, sites, seg, &x[k], &x[k + 1], Some(block))?;
                     out[rows].copy_from_slice(lin.residual.as_slice());
                     profile.keep(k, lin);
+                } else if kept.is_none()
+                    && tensions.is_none()
+                    && self.interval_group(k, x, out, &mut values[at..], &mut lins, shared, rates.as_deref_mut())?
+                {
+                    (shared, k, at) = (true, k + 4, at + 4 * NODE * width);
+                    continue;
                 } else {
+                    let block = &mut values[at..at + NODE * width];
                     let [even, odd] = &mut lins;
                     let (start, end) = if k % 2 == 0 { (&*even, odd) } else { (&*odd, even) };
                     let start = shared.then_some(start);
@@ -560,6 +568,7 @@ impl<'a> System<'a> {
                 self.jump_rows(k, x, out, &mut values[at..at + NODE * width])?;
             }
             at += NODE * width;
+            k += 1;
         }
         let tip = residual::tip(
             &self.model,
