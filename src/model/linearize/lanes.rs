@@ -30,16 +30,23 @@ const Z33: M3 = [[F4::ZERO; 3]; 3];
 /// The four lanes' values of a 3-vector.
 #[inline(always)]
 fn gather(v: [&Vector3<f64>; 4]) -> V3 {
-    let lanes = |i: usize| F4([v[0][i], v[1][i], v[2][i], v[3][i]]);
-    [lanes(0), lanes(1), lanes(2)]
+    let mut out = Z3;
+    for (i, x) in out.iter_mut().enumerate() {
+        *x = F4([v[0][i], v[1][i], v[2][i], v[3][i]]);
+    }
+    out
 }
 
 /// The four lanes' values of a 3x3 matrix.
 #[inline(always)]
 fn gather3(m: [&Matrix3<f64>; 4]) -> M3 {
-    let lanes = |r: usize, c: usize| F4([m[0][(r, c)], m[1][(r, c)], m[2][(r, c)], m[3][(r, c)]]);
-    let row = |r: usize| [lanes(r, 0), lanes(r, 1), lanes(r, 2)];
-    [row(0), row(1), row(2)]
+    let mut out = Z33;
+    for (r, row) in out.iter_mut().enumerate() {
+        for (c, x) in row.iter_mut().enumerate() {
+            *x = F4([m[0][(r, c)], m[1][(r, c)], m[2][(r, c)], m[3][(r, c)]]);
+        }
+    }
+    out
 }
 
 #[inline(always)]
@@ -81,31 +88,46 @@ fn cross(a: &V3, b: &V3) -> V3 {
 /// m v as nalgebra's product: entry i is (m_i0 v_0 + m_i1 v_1) + m_i2 v_2.
 #[inline(always)]
 fn mat_vec(m: &M3, v: &V3) -> V3 {
-    let entry = |i: usize| m[i][0] * v[0] + m[i][1] * v[1] + m[i][2] * v[2];
-    [entry(0), entry(1), entry(2)]
+    let mut out = Z3;
+    for (x, row) in out.iter_mut().zip(m) {
+        *x = row[0] * v[0] + row[1] * v[1] + row[2] * v[2];
+    }
+    out
 }
 
 /// m^T v as nalgebra's `tr_mul` (column dot products).
 #[inline(always)]
 fn tr_vec(m: &M3, v: &V3) -> V3 {
-    let entry = |i: usize| m[0][i] * v[0] + m[1][i] * v[1] + m[2][i] * v[2];
-    [entry(0), entry(1), entry(2)]
+    let mut out = Z3;
+    for (i, x) in out.iter_mut().enumerate() {
+        *x = m[0][i] * v[0] + m[1][i] * v[1] + m[2][i] * v[2];
+    }
+    out
 }
 
 /// a b as nalgebra's product.
 #[inline(always)]
 fn mat_mat(a: &M3, b: &M3) -> M3 {
-    let entry = |i: usize, j: usize| a[i][0] * b[0][j] + a[i][1] * b[1][j] + a[i][2] * b[2][j];
-    let row = |i: usize| [entry(i, 0), entry(i, 1), entry(i, 2)];
-    [row(0), row(1), row(2)]
+    // Loops, not closures: a closure here stayed a call compiled for the baseline.
+    let mut out = Z33;
+    for (i, row) in out.iter_mut().enumerate() {
+        for (j, x) in row.iter_mut().enumerate() {
+            *x = a[i][0] * b[0][j] + a[i][1] * b[1][j] + a[i][2] * b[2][j];
+        }
+    }
+    out
 }
 
 /// a^T b as nalgebra's `tr_mul` (dot products of columns).
 #[inline(always)]
 fn tr_mat(a: &M3, b: &M3) -> M3 {
-    let entry = |i: usize, j: usize| a[0][i] * b[0][j] + a[1][i] * b[1][j] + a[2][i] * b[2][j];
-    let row = |i: usize| [entry(i, 0), entry(i, 1), entry(i, 2)];
-    [row(0), row(1), row(2)]
+    let mut out = Z33;
+    for (i, row) in out.iter_mut().enumerate() {
+        for (j, x) in row.iter_mut().enumerate() {
+            *x = a[0][i] * b[0][j] + a[1][i] * b[1][j] + a[2][i] * b[2][j];
+        }
+    }
+    out
 }
 
 #[inline(always)]
@@ -120,14 +142,15 @@ fn add_m(a: &mut M3, b: &M3) {
 /// `tendon::mul_hat`: m a^, row j is (m_j x a)^T.
 #[inline(always)]
 fn mul_hat(m: &M3, a: &V3) -> M3 {
-    let row = |j: usize| {
-        [
-            m[j][1] * a[2] - m[j][2] * a[1],
-            m[j][2] * a[0] - m[j][0] * a[2],
-            m[j][0] * a[1] - m[j][1] * a[0],
-        ]
-    };
-    [row(0), row(1), row(2)]
+    let mut out = Z33;
+    for (o, m) in out.iter_mut().zip(m) {
+        *o = [
+            m[1] * a[2] - m[2] * a[1],
+            m[2] * a[0] - m[0] * a[2],
+            m[0] * a[1] - m[1] * a[0],
+        ];
+    }
+    out
 }
 
 /// `tendon::hat_mul` on a 3 x C matrix given by its columns: a^ m, column l is a x m_l.
@@ -295,12 +318,16 @@ impl Schur {
     fn solve_rows<const C: usize>(&self, rows: &mut [[F4; 6]; C]) {
         let (P, G, S, W) = (&self.P_inv, &self.G, &self.S_inv, &self.W);
         for b in rows.iter_mut() {
-            let w_j = |j: usize| b[0] * P[0][j] + b[1] * P[1][j] + b[2] * P[2][j];
-            let w = [w_j(0), w_j(1), w_j(2)];
-            let y_j = |j: usize| b[3 + j] - (w[0] * G[0][j] + w[1] * G[1][j] + w[2] * G[2][j]);
-            let y = [y_j(0), y_j(1), y_j(2)];
-            let x_j = |j: usize| y[0] * S[0][j] + y[1] * S[1][j] + y[2] * S[2][j];
-            let x_u = [x_j(0), x_j(1), x_j(2)];
+            let (mut w, mut y, mut x_u) = (Z3, Z3, Z3);
+            for j in 0..3 {
+                w[j] = b[0] * P[0][j] + b[1] * P[1][j] + b[2] * P[2][j];
+            }
+            for j in 0..3 {
+                y[j] = b[3 + j] - (w[0] * G[0][j] + w[1] * G[1][j] + w[2] * G[2][j]);
+            }
+            for j in 0..3 {
+                x_u[j] = y[0] * S[0][j] + y[1] * S[1][j] + y[2] * S[2][j];
+            }
             for j in 0..3 {
                 b[j] = w[j] - (x_u[0] * W[j][0] + x_u[1] * W[j][1] + x_u[2] * W[j][2]);
                 b[3 + j] = x_u[j];
@@ -328,19 +355,24 @@ impl SiteLanes {
     #[inline(always)]
     fn new(sites: [&Site; 4]) -> Self {
         let [s0, s1, s2, s3] = sites;
-        let gather = |f: fn(&Site) -> &Vector3<f64>| gather([f(s0), f(s1), f(s2), f(s3)]);
+        // A macro, not a closure of field accessors (those would be calls).
+        macro_rules! gather {
+            ($($field:ident).+) => {
+                gather([&s0.$($field).+, &s1.$($field).+, &s2.$($field).+, &s3.$($field).+])
+            };
+        }
         SiteLanes {
-            kse: gather(|s| &s.section.section.kse),
-            kbt: gather(|s| &s.section.section.kbt),
-            kse_s: gather(|s| &s.section.kse_s),
-            kbt_s: gather(|s| &s.section.kbt_s),
-            v_star: gather(|s| &s.reference.v_star),
-            u_star: gather(|s| &s.reference.u_star),
-            v_star_s: gather(|s| &s.reference.v_star_s),
-            u_star_s: gather(|s| &s.reference.u_star_s),
-            f_e: gather(|s| &s.f_e),
-            l_e: gather(|s| &s.l_e),
-            f_follower: gather(|s| &s.f_follower),
+            kse: gather!(section.section.kse),
+            kbt: gather!(section.section.kbt),
+            kse_s: gather!(section.kse_s),
+            kbt_s: gather!(section.kbt_s),
+            v_star: gather!(reference.v_star),
+            u_star: gather!(reference.u_star),
+            v_star_s: gather!(reference.v_star_s),
+            u_star_s: gather!(reference.u_star_s),
+            f_e: gather!(f_e),
+            l_e: gather!(l_e),
+            f_follower: gather!(f_follower),
         }
     }
 }
@@ -486,14 +518,20 @@ pub(crate) fn linearize_lanes(
         }
     }
     factor.solve_rows(&mut dFt);
+    // d(v', u') = -M^-1 dF, negated in lanes (the same bits as lane by lane).
+    for row in dFt.iter_mut() {
+        for value in row.iter_mut() {
+            *value = -*value;
+        }
+    }
     for (lane, lin) in out.iter_mut().enumerate() {
         for i in 0..6 {
             lin.rates[i] = x[i].lane(lane);
             for k in 0..6 {
-                lin.d_strains[(i, k)] = -dFt[k][i].lane(lane);
+                lin.d_strains[(i, k)] = dFt[k][i].lane(lane);
             }
             for k in 0..3 {
-                lin.d_rotation[(i, k)] = -dFt[6 + k][i].lane(lane);
+                lin.d_rotation[(i, k)] = dFt[6 + k][i].lane(lane);
             }
         }
     }
