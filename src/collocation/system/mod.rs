@@ -480,14 +480,12 @@ impl<'a> System<'a> {
             values[at..at + BASE_COLUMNS].copy_from_slice(derivative(&d.eps.0).as_slice());
             at += BASE_COLUMNS;
         }
-        let links = x.len() - 1;
-        let width = 2 * NODE;
+        let (links, width) = (x.len() - 1, 2 * NODE);
         // Linearization at the shared node of consecutive intervals, evaluated once: interval
         // k writes its end node's into `lins[(k + 1) % 2]`, where interval k + 1 reads it
-        // (`shared`: the link before was an interval).
-        let mut lins = [linearize::Linearization::zeros(); 2];
-        let mut shared = false;
-        let mut k = 0;
+        // (`shared`: the link before was an interval). Runs of four intervals of one segment
+        // go to the lane kernel (`interval_group`) when nothing is kept besides the rates.
+        let (mut lins, mut shared, mut k) = ([linearize::Linearization::zeros(); 2], false, 0);
         while k < links {
             let rows = link_row(k)..link_row(k + 1);
             if let Some(sites) = &self.interval_sites[k] {

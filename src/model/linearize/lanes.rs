@@ -525,13 +525,17 @@ pub(crate) fn linearize_lanes(
         }
     }
     for (lane, lin) in out.iter_mut().enumerate() {
-        for i in 0..6 {
-            lin.rates[i] = x[i].lane(lane);
-            for k in 0..6 {
-                lin.d_strains[(i, k)] = dFt[k][i].lane(lane);
-            }
-            for k in 0..3 {
-                lin.d_rotation[(i, k)] = dFt[6 + k][i].lane(lane);
+        for (i, x_i) in x.iter().enumerate() {
+            lin.rates[i] = x_i.lane(lane);
+        }
+        // Row k of dF^T is column k of the derivatives.
+        for (k, row) in dFt.iter().enumerate() {
+            for (i, value) in row.iter().enumerate() {
+                if k < 6 {
+                    lin.d_strains[(i, k)] = value.lane(lane);
+                } else {
+                    lin.d_rotation[(i, k - 6)] = value.lane(lane);
+                }
             }
         }
     }
