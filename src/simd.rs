@@ -8,6 +8,8 @@
 //! registers and moves, and both copies give the same bits (docs/architecture.md, "Run-time
 //! SIMD dispatch in one place").
 
+pub(crate) mod lanes;
+
 #[cfg(target_arch = "x86_64")]
 use std::sync::atomic::{AtomicU8, Ordering};
 

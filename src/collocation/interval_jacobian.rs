@@ -96,7 +96,7 @@ pub(super) fn interval_jacobian_as_residual(
 /// [`interval_jacobian_as_residual`] or, with `as_residual` false, [`interval_jacobian_into`]
 /// (returning the rates at node a too): one AVX2 copy of the kernel for both.
 #[allow(clippy::too_many_arguments)]
-fn interval_jacobian_tensions(
+pub(super) fn interval_jacobian_tensions(
     model: &Model,
     sites: &IntervalSites,
     segment_end: f64,

@@ -45,6 +45,7 @@ pub(crate) mod friction;
 mod homotopy;
 mod interval_jacobian;
 mod interval_kept;
+mod interval_lanes;
 pub(crate) mod linear;
 mod locate;
 mod neutral;

@@ -11,6 +11,7 @@
 mod ahead;
 mod columns;
 mod jump;
+mod lanes;
 
 use super::friction::{self, Profile};
 use super::residual::{self, Block, Delta, IntervalFactors, IntervalSites, QuarterSites};
@@ -479,24 +480,29 @@ impl<'a> System<'a> {
             values[at..at + BASE_COLUMNS].copy_from_slice(derivative(&d.eps.0).as_slice());
             at += BASE_COLUMNS;
         }
-        let links = x.len() - 1;
-        let width = 2 * NODE;
+        let (links, width) = (x.len() - 1, 2 * NODE);
         // Linearization at the shared node of consecutive intervals, evaluated once: interval
         // k writes its end node's into `lins[(k + 1) % 2]`, where interval k + 1 reads it
-        // (`shared`: the link before was an interval).
-        let mut lins = [linearize::Linearization::zeros(); 2];
-        let mut shared = false;
-        for k in 0..links {
+        // (`shared`: the link before was an interval). Runs of four intervals of one segment
+        // go to the lane kernel (`interval_group`) when nothing is kept besides the rates.
+        let (mut lins, mut shared, mut k) = ([linearize::Linearization::zeros(); 2], false, 0);
+        while k < links {
             let rows = link_row(k)..link_row(k + 1);
             if let Some(sites) = &self.interval_sites[k] {
                 let seg = self.mesh.nodes[k].segment_end;
-                let block = &mut values[at..at + NODE * width];
                 if let Some(profile) = &self.friction {
-                    let length = self.model.robot.length();
+                    let (length, block) = (self.model.robot.length(), &mut values[at..at + NODE * width]);
                     let lin = friction::interval(profile, length, k, sites, seg, &x[k], &x[k + 1], Some(block))?;
                     out[rows].copy_from_slice(lin.residual.as_slice());
                     profile.keep(k, lin);
+                } else if kept.is_none()
+                    && tensions.is_none()
+                    && self.interval_group(k, x, out, &mut values[at..], &mut lins, shared, rates.as_deref_mut())?
+                {
+                    (shared, k, at) = (true, k + 4, at + 4 * NODE * width);
+                    continue;
                 } else {
+                    let block = &mut values[at..at + NODE * width];
                     let [even, odd] = &mut lins;
                     let (start, end) = if k % 2 == 0 { (&*even, odd) } else { (&*odd, even) };
                     let start = shared.then_some(start);
@@ -560,6 +566,7 @@ impl<'a> System<'a> {
                 self.jump_rows(k, x, out, &mut values[at..at + NODE * width])?;
             }
             at += NODE * width;
+            k += 1;
         }
         let tip = residual::tip(
             &self.model,

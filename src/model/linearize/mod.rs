@@ -96,6 +96,9 @@ use std::mem::MaybeUninit;
 mod factor;
 use factor::Factor;
 
+mod lanes;
+pub(crate) use lanes::linearize_lanes;
+
 mod parameters;
 pub(crate) use parameters::{linearize_tensions, linearize_tensions_inline, stiffness_rates, tension_rates};
 
