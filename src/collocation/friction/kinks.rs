@@ -3,7 +3,7 @@
 //! a link, each tendon with friction's turning rate has a kink and its sliding tension a
 //! jump in its second derivative ([`super::turning`]); the link loses its order and the
 //! deferred correction misjudges it (estimates up to 2 times below the true error, meshes
-//! refined 1.5 to 3 times past a smooth solve's). Each mesh of the refinement gets a node
+//! refined 1.4 to 3.2 times past a smooth solve's). Each mesh of the refinement gets a node
 //! at each such point, located on the last answer and moved to where the next one puts it
 //! until it settles; the estimate then sees a smooth answer on every link and chooses the
 //! next mesh as for a smooth solve.
