@@ -6,7 +6,8 @@
 //!
 //! `opposite_history SWEPT STEPS [REFERENCE]`: SWEPT is the swept tendon (1 or 3), STEPS the
 //! steps each way (10: tests/history.rs; 50: the 101-step history), REFERENCE the tight
-//! history's tolerance in L (1e-11 unless given; `none` skips it).
+//! history's tolerance in L (1e-11 unless given; `none` skips it). With REFERENCE_ZONES
+//! set, each step's line is preceded by the reference step's contacts.
 
 use tdcr::Motion;
 use tdcr::analysis::history::{Contact, history};
@@ -54,6 +55,24 @@ fn main() {
         let error = exact.as_ref().and_then(|e| e.get(k)).map_or(f64::NAN, |e| {
             (step.solution.tip_position() - e.solution.tip_position()).norm()
         });
+        let zones_of = |step: &tdcr::analysis::history::HistoryStep| -> String {
+            step.zones
+                .iter()
+                .map(|t| {
+                    t.zones
+                        .iter()
+                        .map(|z| format!("{} {:.4}-{:.4}", z.contact.name(), z.start, z.end))
+                        .collect::<Vec<_>>()
+                        .join(" ")
+                })
+                .collect::<Vec<_>>()
+                .join(" | ")
+        };
+        if std::env::var_os("REFERENCE_ZONES").is_some()
+            && let Some(e) = exact.as_ref().and_then(|e| e.get(k))
+        {
+            println!("      reference zones: {}", zones_of(e));
+        }
         let zones: Vec<String> = step
             .zones
             .iter()

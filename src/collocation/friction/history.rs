@@ -325,7 +325,7 @@ pub(crate) fn step(robot: &Robot, options: &Options, carried: &mut Carried) -> R
     // A step that slides all along where a tendon's path stops turning inside a link has
     // a kink of its tension there that its estimate does not see ([`inflection`]); a step
     // that misses its tolerance is solved again too.
-    if answer.0.report.tolerance_met == Some(false) || !inflection::inflections(robot, &answer.0).is_empty() {
+    if answer.0.report.tolerance_met == Some(false) || !turning::inflections(robot, &answer.0).is_empty() {
         return inflection::refine(robot, options, carried, &before, answer);
     }
     Ok(answer)

@@ -22,11 +22,13 @@ mod direct;
 mod grip;
 pub(crate) mod history;
 mod interval;
+mod kinks;
 mod linearized;
 mod profile;
 mod pull_ins;
 mod staircase;
 mod start;
+mod turning;
 
 pub use grip::Contact;
 pub(crate) use grip::Grip;
@@ -396,7 +398,8 @@ enum Route {
 /// ([`Capstan`]) from `previous` (node arc lengths and log tensions per slip, interpolated;
 /// the capstan start of [`start`] when None), its error estimate ([`estimate_with_friction`]) and, with a
 /// tolerance, re-meshing until the tip's estimate and the tension profile's (relative,
-/// against the same tolerance as the rotation) meet it. `report` holds what came before
+/// against the same tolerance as the rotation) meet it, each mesh with a node where a tendon
+/// stops turning ([`kinks`]). `report` holds what came before
 /// (the frictionless solve's counts, or none), with whether to assess the answer's
 /// stability (the linearized dynamics with the capstan rows; else `unknown`); `start` is
 /// when the solve began. `route` says what `from` is and what Newton on the first mesh must
@@ -439,6 +442,7 @@ fn refine_with_friction(
     // goes on from its answer.
     let mut capstan = previous.is_none();
     let plain = (capstan && !from_guess).then(|| (mesh.clone(), x.clone()));
+    let mut kinks = kinks::Kinks::default();
     // The last mesh's node arc lengths and log tensions, interpolated onto the next.
     loop {
         let settings = first.take().unwrap_or(settings);
@@ -523,6 +527,14 @@ fn refine_with_friction(
             }
             _ => None,
         };
+        // The estimate's mesh with a node where a tendon stops turning ([`kinks`]).
+        let rates = estimated.as_ref().map(|(c, _)| c.node_rates.as_slice());
+        let next = if estimated.is_some() {
+            let answer = || nodes::solution_with_tensions(&model, &x, &ends, (&tensions, None), rates, report.clone());
+            kinks.next(robot, options, (&system.mesh, &x), answer, next)?
+        } else {
+            next
+        };
         let Some(fine) = next else {
             pipeline::record_estimate(&mut report, estimated.as_ref().map(|(c, _)| c), options, length);
             let t = Instant::now();
@@ -547,11 +559,9 @@ fn refine_with_friction(
             report.timings.stability += t.elapsed();
             report.timings.total = start.elapsed();
             // The estimate's node rates are eq. 13 with friction at the same states and tensions.
-            let rates = estimated.as_ref().map(|(c, _)| c.node_rates.as_slice());
             return nodes::solution_with_tensions(&model, &x, &ends, (&tensions, None), rates, report);
         };
         workspace::keep(system.mesh.clone(), options.linear_solver, ws);
-        let rates = estimated.as_ref().map(|(c, _)| c.node_rates.as_slice());
         let guess = nodes::solution_with_tensions(&model, &x, &ends, (&tensions, None), rates, report.clone())?;
         let s: Vec<f64> = system.mesh.nodes.iter().map(|n| n.s).collect();
         previous = Some((s, profile.z.clone()));

@@ -13,7 +13,7 @@
 
 use super::split::{hand_back, split};
 use super::{Carried, Material, Options, Result, Robot, StepAnswer, solve_on};
-use crate::solution::Solution;
+use crate::collocation::friction::turning::{NEAR, SETTLED, inflections, relocate};
 
 /// Most levels: level l cuts every link into 2^(l - 1) parts besides the nodes at the
 /// inflections; 4 levels are 8 parts per link, a 4096 times smaller error at order 4.
@@ -21,19 +21,6 @@ const LEVELS: u32 = 4;
 
 /// Most solves of one level while its inflections move.
 const RELOCATE: usize = 4;
-
-/// A point found on a level's answer within this (relative to L) of one it was solved with
-/// is that point, moved.
-const NEAR: f64 = 1e-4;
-
-/// The half-width of the central difference of a path's unit tangent (relative to L):
-/// 1e-7 L leaves an error of its square (the tangent is smooth: only |t'| has a kink) and of
-/// rounding, eps / 1e-7, about 1e-9 of the turning, below what a point's place matters by.
-const STEP: f64 = 1e-7;
-
-/// An inflection has settled when it moves by less than this (relative to L) between two
-/// solves of a level.
-const SETTLED: f64 = 1e-8;
 
 /// Solves the sliding step again (module docs) after `answer`, its solution on the
 /// history's mesh from the material `before`, which misses its tolerance, within
@@ -105,38 +92,11 @@ pub(super) fn refine(
             if stuck || next.0.report.error_estimate.is_none() {
                 break;
             }
-            // Each point moves to the nearest point found on the new answer, nearest pairs
-            // first; one that sits on a node may not be seen again (its turning's sign there
-            // is rounding's) and stays where it is.
+            // Each point moves to where the new answer puts it; a point found there without a
+            // partner (a kink the last placing did not have, or one that moved farther than
+            // `NEAR`) is placed too, and the level is not settled.
             let found = inflections(robot, &next.0);
-            let near = NEAR * robot.length();
-            let mut pairs: Vec<(f64, usize, usize)> = points
-                .iter()
-                .enumerate()
-                .flat_map(|(p, &e)| found.iter().enumerate().map(move |(f, &g)| ((g - e).abs(), p, f)))
-                .filter(|&(d, _, _)| d < near)
-                .collect();
-            pairs.sort_by(|a, b| a.0.total_cmp(&b.0));
-            let (mut point_taken, mut found_taken) = (vec![false; points.len()], vec![false; found.len()]);
-            let mut moved = 0.0_f64;
-            for (d, p, f) in pairs {
-                if !point_taken[p] && !found_taken[f] {
-                    (point_taken[p], found_taken[f]) = (true, true);
-                    points[p] = found[f];
-                    moved = moved.max(d);
-                }
-            }
-            // A point found with no partner (a kink the last placing did not have, or one
-            // that moved farther than `NEAR`) is placed too, and the level is not settled.
-            let unmatched: Vec<f64> = found
-                .iter()
-                .zip(&found_taken)
-                .filter(|(_, t)| !**t)
-                .map(|(&g, _)| g)
-                .collect();
-            let fresh = !unmatched.is_empty();
-            points.extend(unmatched);
-            points.sort_by(f64::total_cmp);
+            let (moved, fresh) = relocate(&mut points, &found, NEAR * robot.length());
             let settled = moved <= SETTLED * robot.length() && !fresh;
             located = Some((next, fine));
             if settled {
@@ -170,94 +130,4 @@ pub(super) fn refine(
     }
     best.0.report.set_work(&spent);
     Ok(best)
-}
-
-/// Where the path of a tendon with friction of `robot` stops turning inside a link of
-/// `solution` (within a segment and the tendon's span, where the tendon is loaded): where
-/// its turning t' (t the path's unit tangent, p_i' = R (v + u x r_i + r_i')) reverses
-/// between two nodes, the point where its component along t' at the first node changes
-/// sign, by bisection on the solution's interpolant to the resolution of s (t' by a
-/// central difference, [`STEP`]); points of several tendons closer than 1e-9 of their link
-/// are one, at their mean. Only links near a reversal of the backbone's bending are
-/// looked at. A tendon's turning rate kappa = |t'| passes through 0 there, with a kink, in a
-/// planar bend; a reversal without a zero (a path that turns in 3-D) costs only a node.
-pub(super) fn inflections(robot: &Robot, solution: &Solution) -> Vec<f64> {
-    let length = robot.length();
-    let mut found: Vec<(f64, f64)> = Vec::new();
-    // Where the segments meet: the nodes listed twice.
-    let jumps: Vec<f64> = solution
-        .nodes
-        .windows(2)
-        .filter(|w| w[1].s <= w[0].s)
-        .map(|w| w[0].s)
-        .collect();
-    // The links near a reversal of the backbone's bending (u_x, u_y) between two nodes,
-    // within three links of it: a tendon's turning follows the bending, so only there is
-    // it worth its interpolated tangents (a history's sliding steps mostly have none). The
-    // bending's zero lies about 1e-6 m from the tendons' (section 8, "honest18"), beyond
-    // the two nodes a refined step has at the tendons' own, 1e-9 to 4e-8 m apart: one link
-    // either side missed them there (error / estimate 1.03).
-    let nodes = &solution.nodes;
-    let bending = |n: usize| nalgebra::Vector2::new(nodes[n].u.x, nodes[n].u.y);
-    // A rod that is straight to within a total turning of 1e-8 rad (a column below or at
-    // its buckling load, bent only by rounding) has no kink worth a node.
-    let straight = 1e-8 / length;
-    let reversed: Vec<bool> = (0..nodes.len().saturating_sub(1))
-        .map(|n| bending(n).dot(&bending(n + 1)) <= 0.0 && bending(n).norm().max(bending(n + 1).norm()) > straight)
-        .collect();
-    let near = |k: usize| reversed[k.saturating_sub(3)..(k + 4).min(reversed.len())].contains(&true);
-    for (i, tendon) in robot.tendons.iter().enumerate() {
-        if tendon.active_friction().is_none() {
-            continue;
-        }
-        let end = tendon.end(length);
-        let tangent = |s: f64| {
-            let state = solution.at(s);
-            let rp = tendon.routing.at(s, length);
-            let d = state.R * (state.v + state.u.cross(&rp.r) + rp.r_s);
-            d / d.norm()
-        };
-        for (k, pair) in solution.nodes.windows(2).enumerate() {
-            let (a, b) = (pair[0].s, pair[1].s);
-            if b <= a || b > end || solution.tendon_tensions[i][k] <= 0.0 || !near(k) {
-                continue;
-            }
-            // The segment that holds the link: the interpolant is smooth within it.
-            let first = jumps.iter().copied().filter(|&j| j <= a).fold(0.0, f64::max);
-            let last = jumps.iter().copied().filter(|&j| j >= b).fold(length, f64::min);
-            let turning = |s: f64| {
-                let (lo, hi) = ((s - STEP * length).max(first), (s + STEP * length).min(last));
-                (tangent(hi) - tangent(lo)) / (hi - lo)
-            };
-            let along = turning(a);
-            if along.dot(&turning(b)) >= 0.0 {
-                continue;
-            }
-            let (mut lo, mut hi) = (a, b);
-            while hi - lo > 4.0 * f64::EPSILON * hi {
-                let mid = 0.5 * (lo + hi);
-                if along.dot(&turning(mid)) > 0.0 {
-                    lo = mid;
-                } else {
-                    hi = mid;
-                }
-            }
-            found.push((0.5 * (lo + hi), b - a));
-        }
-    }
-    // Points closer than 1e-9 of their link share one node, at their mean; the tendons on
-    // opposite sides of a planar bend, a few 1e-8 m apart on the prototype, have one each
-    // (one node at their mean leaves about 1 % of such a step's error unseen).
-    found.sort_by(|a, b| a.0.total_cmp(&b.0));
-    let mut out: Vec<(f64, usize)> = Vec::new();
-    for (at, link) in found {
-        match out.last_mut() {
-            Some((mean, count)) if at - *mean <= 1e-9 * link => {
-                *mean += (at - *mean) / (*count + 1) as f64;
-                *count += 1;
-            }
-            _ => out.push((at, 1)),
-        }
-    }
-    out.into_iter().map(|(at, _)| at).collect()
 }
