@@ -202,6 +202,7 @@ mod tests {
         ] {
             robot.validate().unwrap();
             let worst = worst_difference(&robot);
+            eprintln!("{name}: worst relative difference {worst:.2e}");
             assert!(worst < 1e-12, "{name}: closed form and dual numbers differ by {worst:.3e}");
         }
     }
