@@ -104,8 +104,7 @@ pub(super) fn tip_rows(model: &Model, site: &Site, x: &State, out: &mut [f64], v
         for (block, scale) in [1.0, 1.0, inv_length].into_iter().enumerate() {
             for c in 0..3 {
                 values[r * TIP_COLUMNS + 3 * block + c] = force[block][(r, c)] * scale / section.kse[r];
-                values[(3 + r) * TIP_COLUMNS + 3 * block + c] =
-                    moment[block][(r, c)] * scale / section.kbt[r] * length;
+                values[(3 + r) * TIP_COLUMNS + 3 * block + c] = moment[block][(r, c)] * scale / section.kbt[r] * length;
             }
         }
     }
@@ -203,7 +202,10 @@ mod tests {
             robot.validate().unwrap();
             let worst = worst_difference(&robot);
             eprintln!("{name}: worst relative difference {worst:.2e}");
-            assert!(worst < 1e-12, "{name}: closed form and dual numbers differ by {worst:.3e}");
+            assert!(
+                worst < 1e-12,
+                "{name}: closed form and dual numbers differ by {worst:.3e}"
+            );
         }
     }
 }

@@ -23,8 +23,8 @@ pub use super::workspace::Workspace;
 use crate::report::{Iteration, SolveReport, Termination};
 use crate::solution::State;
 use ahead::evaluate_trial_ahead;
-use norms::max_norm;
 pub(crate) use ahead::{run_ahead, run_bordered_ahead};
+use norms::max_norm;
 use std::time::Instant;
 
 /// Armijo sufficient-decrease constant (Dennis & Schnabel's customary 1e-4).

@@ -53,7 +53,13 @@ mod tests {
     fn max_norm_gives_the_in_order_folds_bits() {
         for len in 0..27 {
             let v: Vec<f64> = (0..len)
-                .map(|i| if i % 5 == 3 { -0.0 } else { ((i * 37 % 11) as f64 - 5.0) * 1.7e-3 })
+                .map(|i| {
+                    if i % 5 == 3 {
+                        -0.0
+                    } else {
+                        ((i * 37 % 11) as f64 - 5.0) * 1.7e-3
+                    }
+                })
                 .collect();
             assert_eq!(max_norm(&v).to_bits(), max_norm_in_order(&v).to_bits(), "length {len}");
             for bad in [f64::INFINITY, f64::NEG_INFINITY, f64::NAN] {
