@@ -1,8 +1,8 @@
 //! The base and tip rows of the collocation Jacobian in closed form (docs/numerics.md, "The
 //! base and tip rows' derivatives"): their values are the f64 residual's
 //! ([`residual::base`], [`residual::tip`]) and their derivatives the chain rule written out,
-//! where dual numbers carried 6 and 9 derivative lanes through the same code (a sixth of a
-//! Jacobian's instructions for 12 of its rows).
+//! where dual numbers carried 6 and 9 derivative lanes through the same code (a ninth of a
+//! prototype Jacobian's instructions, 67 k of 0.61 M, for 12 of its 396 rows).
 //!
 //! Base rows b = ((p - p_0) / L, log(R_0^T R)) with p -> p + L dp, R -> R exp(dtheta):
 //! db/d(dp) = I, db/d(dtheta) = J_r^-1(log(R_0^T R)).
