@@ -244,13 +244,15 @@ fn tip_sensitivities_hold_the_pull_ins() {
 }
 
 /// Shooting as tight as it goes: integration at 1e-12 (its supported floor, local errors
-/// that sum to about 1e-11 m along the rod) and Newton to 1e-10 (the tip wrench in N and
+/// that sum to about 1e-11 m along the rod) and Newton to 2e-10 (the tip wrench in N and
 /// N m / L, and the gaps over L; case H's residual noise floor at this integration
-/// tolerance is about 7e-11, and 1e-10 moves the tip by well under 1e-9 m).
+/// tolerance is about 7e-11: at 1e-10 its line search stalled at 1.1e-10 when the
+/// displacement input, taken from a collocation solve, moved in its last bits; 2e-10 moves
+/// the tip by well under 1e-9 m).
 fn tight_shooting() -> shooting::Options {
     shooting::Options {
         integration_tolerance: 1e-12,
-        residual_tolerance: 1e-10,
+        residual_tolerance: 2e-10,
         ..Default::default()
     }
 }

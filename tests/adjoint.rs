@@ -221,7 +221,7 @@ fn pulled_parameters(robot: &Robot) -> Vec<Parameter> {
 /// held) contracted with a tip cotangent, pull-in and routing columns included.
 #[test]
 fn adjoint_with_pull_ins_equals_the_contracted_tip_jacobian() {
-    check_adjoint_with_pull_ins(&pulled());
+    check_adjoint_with_pull_ins(&pulled(), 1e-10);
 }
 
 /// The same on a Kirchhoff rod, whose path lengths do not move with the node coordinate v
@@ -230,10 +230,17 @@ fn adjoint_with_pull_ins_equals_the_contracted_tip_jacobian() {
 fn adjoint_with_pull_ins_of_a_kirchhoff_rod_equals_the_contracted_tip_jacobian() {
     let mut robot = pulled();
     robot.rod_model = tdcr::RodModel::Kirchhoff;
-    check_adjoint_with_pull_ins(&robot);
+    // 1e-9: the routing.2.x entry is this rod's least accurate, its adjoint and forward
+    // values measured 3.0e-11 (the Jacobian's end rows by dual numbers) and 1.05e-10 (in
+    // closed form, the same derivatives to 8e-16) of the terms apart, the other entries
+    // below 1e-12: rounding amplified by the bordered Kirchhoff system, not a wrong term
+    // (which would be off by O(1)).
+    check_adjoint_with_pull_ins(&robot, 1e-9);
 }
 
-fn check_adjoint_with_pull_ins(robot: &Robot) {
+/// The adjoint with pull-ins of `robot` against its contracted tip Jacobian, to `tolerance` of
+/// the terms' magnitudes.
+fn check_adjoint_with_pull_ins(robot: &Robot, tolerance: f64) {
     let robot = robot.clone();
     let solution = collocation::solve(&robot, &options()).unwrap();
     assert!(
@@ -251,10 +258,11 @@ fn check_adjoint_with_pull_ins(robot: &Robot) {
         let column = j.column(c);
         let terms = (0..3).map(|k| (cot.tip_position[k] * column[k], cot.tip_rotation[k] * column[3 + k]));
         let (expected, magnitude) = terms.fold((0.0, 0.0), |(e, m), (a, b)| (e + a + b, m + a.abs() + b.abs()));
-        // 1e-10 of the terms' magnitudes: as adjoint_gradient_equals_contracted_forward_sensitivities
-        // (a zero column must give exactly zero).
+        // `tolerance` of the terms' magnitudes: 1e-10 as
+        // adjoint_gradient_equals_contracted_forward_sensitivities (a zero column must give
+        // exactly zero).
         assert!(
-            (g - expected).abs() <= 1e-10 * magnitude,
+            (g - expected).abs() <= tolerance * magnitude,
             "{p}: adjoint {g:.15e}, forward {expected:.15e}"
         );
     }

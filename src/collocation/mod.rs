@@ -38,6 +38,7 @@ pub(crate) mod constrained;
 mod corrector;
 pub(crate) mod deferred;
 pub(crate) mod dynamics;
+mod end_rows;
 mod ends;
 mod equilibrium;
 mod estimate;

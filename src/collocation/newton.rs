@@ -13,6 +13,7 @@
 //! the stopping tests are the same code for both.
 
 mod ahead;
+mod norms;
 
 use super::MAX_ITERATIONS;
 use super::linear::Linear;
@@ -23,6 +24,7 @@ use crate::report::{Iteration, SolveReport, Termination};
 use crate::solution::State;
 use ahead::evaluate_trial_ahead;
 pub(crate) use ahead::{run_ahead, run_bordered_ahead};
+use norms::max_norm;
 use std::time::Instant;
 
 /// Armijo sufficient-decrease constant (Dennis & Schnabel's customary 1e-4).
@@ -271,11 +273,6 @@ fn stops(before_last: f64, last_step: f64, fresh: bool) -> bool {
         // Linear: e_k+1 = theta e_k and |dx_k| = (1 - theta) e_k.
         theta / (1.0 - theta) * last_step <= STEP_TOLERANCE
     }
-}
-
-fn max_norm(v: &[f64]) -> f64 {
-    v.iter()
-        .fold(0.0, |m, x| if x.is_nan() { f64::NAN } else { m.max(x.abs()) })
 }
 
 /// The scaled residual max-norm over the collocation rows and the border's.

@@ -136,9 +136,12 @@ pub(super) fn rhs(
     let theta: Vector3<f64> = y.fixed_rows::<3>(THETA).into();
     let v: Vector3<f64> = y.fixed_rows::<3>(V).into();
     let u: Vector3<f64> = y.fixed_rows::<3>(U).into();
-    let R = Rk * so3::exp(&theta);
+    // exp(theta) and J_r^-1(theta) from one hat(theta) and its square: the bits of
+    // `so3::exp` and `so3::right_jacobian_inv` (`exp_and_jacobians`; J_r is not used).
+    let [E, _, Jri] = so3::exp_and_jacobians(&theta);
+    let R = Rk * E;
     let rates = linearize::rates(model, site, segment_end, &R, &v, &u)?;
-    Ok(rhs_from_rates(site, &R, y, &rates))
+    Ok(rhs_with(site, &R, &Jri, y, &rates))
 }
 
 /// F(s, y) in the local coordinates of an interval, given the frame R = R_k exp(theta) of
@@ -146,12 +149,17 @@ pub(super) fn rhs(
 /// [`Site::strain`]), theta' = J_r(theta)^-1 u, and the rates.
 pub(super) fn rhs_from_rates(site: &Site, R: &Matrix3<f64>, y: &Block<f64>, rates: &Vector6<f64>) -> Block<f64> {
     let theta: Vector3<f64> = y.fixed_rows::<3>(THETA).into();
+    rhs_with(site, R, &so3::right_jacobian_inv(&theta), y, rates)
+}
+
+/// [`rhs_from_rates`] given J_r^-1(theta) (`Jri`) too.
+#[inline(always)]
+fn rhs_with(site: &Site, R: &Matrix3<f64>, Jri: &Matrix3<f64>, y: &Block<f64>, rates: &Vector6<f64>) -> Block<f64> {
     let v: Vector3<f64> = y.fixed_rows::<3>(V).into();
     let u: Vector3<f64> = y.fixed_rows::<3>(U).into();
     let mut f = Block::zeros();
     f.fixed_rows_mut::<3>(P).copy_from(&(R * site.strain(&v)));
-    f.fixed_rows_mut::<3>(THETA)
-        .copy_from(&(so3::right_jacobian_inv(&theta) * u));
+    f.fixed_rows_mut::<3>(THETA).copy_from(&(Jri * u));
     f.fixed_rows_mut::<6>(V).copy_from(rates);
     f
 }

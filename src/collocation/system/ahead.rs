@@ -4,7 +4,7 @@
 
 use super::System;
 use crate::collocation::residual::{self, Delta, IntervalFactors};
-use crate::collocation::unknowns::{BASE_ROWS, link_row, tip_row};
+use crate::collocation::unknowns::link_row;
 use crate::error::Result;
 use crate::solution::State;
 use nalgebra::Vector6;
@@ -12,7 +12,7 @@ use nalgebra::Vector6;
 impl System<'_> {
     /// [`System::jacobian`] whose residual is bit for bit [`System::residual_rates`]'s, with
     /// the node rates written as that writes them ([`residual::interval_jacobian_as_residual`];
-    /// the base, jump and tip rows evaluated again in f64):
+    /// the jump rows evaluated again in f64):
     /// a Jacobian evaluated where Newton would evaluate the residual. Returns whether `rates`
     /// were written: not for tendons with friction, whose residual gives none (its interval
     /// rows and the links' evaluations the capstan rows are read from are the residual's
@@ -30,11 +30,11 @@ impl System<'_> {
     ) -> Result<bool> {
         if self.friction.is_some() {
             self.jacobian(x, out, values)?;
-            self.outer_rows(x, out)?;
+            self.jump_residual_rows(x, out)?;
             return Ok(false);
         }
         self.jacobian_with(x, out, values, None, None, Some(rates))?;
-        self.outer_rows(x, out)?;
+        self.jump_residual_rows(x, out)?;
         Ok(true)
     }
 
@@ -55,26 +55,24 @@ impl System<'_> {
     ) -> Result<()> {
         debug_assert!(self.friction.is_none(), "no factored matrices kept with friction");
         self.jacobian_with(x, out, values, Some(kept), None, Some(rates))?;
-        self.outer_rows(x, out)
+        self.jump_residual_rows(x, out)
     }
 
-    /// The rows outside the intervals (base, jumps, tip) of the residual at `x` into `out`,
-    /// as [`System::residual_rates`] writes them: their dual numbers' values in a Jacobian
-    /// can differ from the f64 evaluation in the last bits (the tip's wrench balance).
+    /// The jump rows of the residual at `x` into `out`, as [`System::residual_rates`] writes
+    /// them: their dual numbers' values in a Jacobian can differ from the f64 evaluation in
+    /// the last bits. (The base and tip rows a Jacobian writes are the f64 residual's
+    /// already: [`super::end_rows`].)
     ///
     /// # Errors
     /// A model breakdown at a visited state.
-    pub(super) fn outer_rows(&self, x: &[State], out: &mut [f64]) -> Result<()> {
+    pub(super) fn jump_residual_rows(&self, x: &[State], out: &mut [f64]) -> Result<()> {
         let z = Delta::<f64>::zeros();
-        out[..BASE_ROWS].copy_from_slice(residual::base(&self.model, &x[0], &z).as_slice());
         let links = x.len() - 1;
         for k in (0..links).filter(|&k| self.interval_sites[k].is_none()) {
             let sites = (&self.node_sites[k], &self.node_sites[k + 1]);
             let r = residual::jump(&self.model, sites, &x[k], &x[k + 1], &z, &z)?;
             out[link_row(k)..link_row(k + 1)].copy_from_slice(r.as_slice());
         }
-        let tip = residual::tip(&self.model, &self.node_sites[links], &x[links], &z)?;
-        out[tip_row(x.len())..].copy_from_slice(tip.as_slice());
         Ok(())
     }
 }

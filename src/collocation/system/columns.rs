@@ -276,7 +276,7 @@ impl System<'_> {
         debug_assert!(self.friction.is_none());
         sink.prepare(self);
         self.jacobian_with(x, out, values, None, Some((sink, &mut *tensions)), Some(rates))?;
-        self.outer_rows(x, out)?;
+        self.jump_residual_rows(x, out)?;
         self.point_load_columns(x, Columns::Tensions, tensions)?;
         self.negate_outer_rows(tensions);
         Ok(())

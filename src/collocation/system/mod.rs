@@ -5,42 +5,27 @@
 //!
 //! The pattern is built once per mesh; each Newton
 //! iteration refills the values in the same order. The Jacobian is exact: interval blocks by
-//! the chain rule of [`residual::interval_jacobian`], the base, jump and tip blocks by
-//! num-dual dual numbers run through the same generic residual code.
+//! the chain rule of [`residual::interval_jacobian`], the base and tip blocks in closed form
+//! ([`end_rows`]), the jump blocks by num-dual dual numbers run through the same generic
+//! residual code.
 
 mod ahead;
 mod columns;
 mod jump;
 mod lanes;
 
+use super::end_rows;
 use super::friction::{self, Profile};
 use super::residual::{self, Block, Delta, IntervalFactors, IntervalSites, QuarterSites};
 use super::stage;
-use super::unknowns::{self, BASE_COLUMNS, BASE_ROWS, NODE, THETA, TIP_COLUMNS, link_row, tip_row};
+use super::unknowns::{self, BASE_COLUMNS, BASE_ROWS, NODE, link_row, tip_row};
 use crate::error::Result;
 use crate::mesh::Mesh;
 use crate::model::equations::{Model, Site};
 use crate::model::linearize;
 use crate::solution::State;
 pub(crate) use columns::TensionSink;
-use nalgebra::{SVector, Vector6};
-use num_dual::DualSVec64;
-
-/// A node's unknowns as dual numbers that carry the derivatives in `N` of them, from
-/// `first` on; the others are constants. The base rows read only (p, theta) and the tip
-/// rows only (theta, v, u): seeding just those makes no derivative lane that nothing reads,
-/// and every carried lane gets the operations, so the bits, it got when all 12 were seeded
-/// (a dual number's lanes never mix, and an unseeded unknown never meets the rows' code).
-fn seeded<const N: usize>(first: usize) -> Delta<DualSVec64<N>> {
-    Delta::<DualSVec64<N>>::from_fn(|i, _| {
-        let x = DualSVec64::<N>::from(0.0);
-        if (first..first + N).contains(&i) {
-            x.derivative(i - first)
-        } else {
-            x
-        }
-    })
-}
+use nalgebra::Vector6;
 
 /// The parameters whose exact residual columns [`System::parameter_columns`] gives.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -473,13 +458,8 @@ impl<'a> System<'a> {
             "kept factors exclude tension rows"
         );
         let n = self.unknowns();
-        let mut at = 0;
-        let base = residual::base(&self.model, &x[0], &seeded::<BASE_COLUMNS>(0));
-        for (r, d) in base.iter().enumerate() {
-            out[r] = d.re;
-            values[at..at + BASE_COLUMNS].copy_from_slice(derivative(&d.eps.0).as_slice());
-            at += BASE_COLUMNS;
-        }
+        end_rows::base_rows(&self.model, &x[0], out, values);
+        let mut at = BASE_ROWS * BASE_COLUMNS;
         let (links, width) = (x.len() - 1, 2 * NODE);
         // Linearization at the shared node of consecutive intervals, evaluated once: interval
         // k writes its end node's into `lins[(k + 1) % 2]`, where interval k + 1 reads it
@@ -568,18 +548,13 @@ impl<'a> System<'a> {
             at += NODE * width;
             k += 1;
         }
-        let tip = residual::tip(
+        end_rows::tip_rows(
             &self.model,
             &self.node_sites[links],
             &x[links],
-            &seeded::<TIP_COLUMNS>(THETA),
-        )?;
-        for (r, d) in tip.iter().enumerate() {
-            out[tip_row(x.len()) + r] = d.re;
-            values[at..at + TIP_COLUMNS].copy_from_slice(derivative(&d.eps.0).as_slice());
-            at += TIP_COLUMNS;
-        }
-        Ok(())
+            &mut out[tip_row(x.len())..],
+            &mut values[at..],
+        )
     }
 
     /// The states `x` moved by `alpha` times the scaled Newton step `step`
@@ -592,9 +567,4 @@ impl<'a> System<'a> {
     pub fn interval_sites(&self, k: usize) -> Option<&IntervalSites> {
         self.interval_sites[k].as_ref()
     }
-}
-
-/// The derivative part of a dual number (zero when it carries none).
-fn derivative<const N: usize>(eps: &Option<SVector<f64, N>>) -> SVector<f64, N> {
-    eps.unwrap_or_else(SVector::zeros)
 }

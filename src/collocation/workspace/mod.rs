@@ -11,6 +11,7 @@ use super::system::{System, SystemBuffers, TensionSink};
 use super::unknowns::nonzeros;
 use crate::mesh::Mesh;
 use crate::report::{SolveReport, Stability};
+use crate::simd::avx2_fma;
 use crate::solution::State;
 use nalgebra::Vector6;
 use std::cell::RefCell;
@@ -32,9 +33,16 @@ thread_local! {
 }
 
 /// Whether every entry of `values` is finite, checked in fixed-width chunks that the
-/// compiler vectorizes (the Jacobian's check after each assembly): 0 x is (signed) zero for
-/// a finite x and NaN for an infinite or NaN one, and a sum with a NaN stays NaN.
+/// compiler vectorizes (the Jacobian's check after each assembly), compiled for AVX2 where
+/// the processor has it ([`avx2_fma!`]): 0 x is (signed) zero for a finite x and NaN for an
+/// infinite or NaN one, and a sum with a NaN stays NaN.
 pub(crate) fn all_finite(values: &[f64]) -> bool {
+    avx2_fma!(all_finite_lanes(values))
+}
+
+/// [`all_finite`]'s lanes.
+#[inline(always)]
+fn all_finite_lanes(values: &[f64]) -> bool {
     let mut chunks = values.chunks_exact(8);
     let mut sums = [0.0f64; 8];
     for chunk in &mut chunks {
