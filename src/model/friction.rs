@@ -431,20 +431,13 @@ fn linearize_into_kernel(
             inverse[j * m_count + l] = *c;
         }
     }
-    // J^-1 applied to M^-1 b: subtract Y S^-1 G^T (M^-1 b).
-    let woodbury = |mb: Vector6<f64>| -> Vector6<f64> {
-        let mut out = mb;
-        for (j, sl) in slips.iter().enumerate() {
-            let wj: f64 = (0..m_count)
-                .map(|l| inverse[j * m_count + l] * gradients[l].dot(&mb))
-                .sum();
-            out -= sl.y * wj;
-        }
-        out
-    };
     let solve_j = |b: &Vector6<f64>| -> Option<Vector6<f64>> {
         let mut row = b.transpose();
-        point.solve_rows(&mut row).then(|| woodbury(row.transpose()))
+        point.solve_rows(&mut row).then(|| {
+            let mut column = row.transpose();
+            woodbury(slips, gradients, inverse, &mut column);
+            column
+        })
     };
     // The 9 columns of dPhi/d(v, u, phi) through M^-1 at once.
     if !point.solve_rows(&mut rows) {
@@ -452,7 +445,9 @@ fn linearize_into_kernel(
     }
     let mut dx = SMatrix::<f64, 6, 9>::zeros();
     for c in 0..9 {
-        dx.set_column(c, &-woodbury(rows.row(c).transpose()));
+        let mut column = rows.row(c).transpose();
+        woodbury(slips, gradients, inverse, &mut column);
+        dx.set_column(c, &-column);
     }
     let d_log_tension = &mut out.d_log_tension;
     d_log_tension.resize(k, Vector6::zeros());
@@ -485,6 +480,29 @@ fn linearize_into_kernel(
         d_rotation: Matrix6x3::from_fn(|i, c| dx[(i, 6 + c)]),
     };
     Ok(())
+}
+
+/// J^-1 applied to `mb` = M^-1 b in place: `mb` minus Y S^-1 G^T `mb` (Woodbury, module docs
+/// and [`linearize_into`]), Y the slips' y_i, G their gradients dg_i/dx, `inverse` S^-1 row
+/// major. Each w_j = sum_l (S^-1)_jl (g_l . mb) is summed from -0.0 in ascending l, as
+/// `Iterator::sum` sums (so with one slip it is the one term, which is computed alone); the
+/// products g_l . mb of the unchanged `mb`, once per slip.
+#[inline(always)]
+fn woodbury(slips: &[Slip], gradients: &[Vector6<f64>], inverse: &[f64], mb: &mut Vector6<f64>) {
+    if let ([sl], [g], [s]) = (slips, gradients, inverse) {
+        let w = s * g.dot(mb);
+        *mb -= sl.y * w;
+        return;
+    }
+    let b = *mb;
+    let count = slips.len();
+    for (j, sl) in slips.iter().enumerate() {
+        let mut w = -0.0;
+        for (l, g) in gradients.iter().enumerate() {
+            w += inverse[j * count + l] * g.dot(&b);
+        }
+        *mb -= sl.y * w;
+    }
 }
 
 impl FrictionLinearization {
