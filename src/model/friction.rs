@@ -528,7 +528,7 @@ impl FrictionLinearization {
         // On the stack for up to 3 tendons with friction here (no allocation per point).
         let woodbury = match slips.len() {
             0 => true,
-            1 => woodbury_rows(U1, slips, loads),
+            1 => woodbury_one(&slips[0], loads),
             2 => woodbury_rows(U2, slips, loads),
             3 => woodbury_rows(U3, slips, loads),
             m => woodbury_rows(Dyn(m), slips, loads),
@@ -548,6 +548,24 @@ impl FrictionLinearization {
         }
         loads.iter().all(|v| v.is_finite())
     }
+}
+
+/// [`woodbury_rows`] for one slip, written out: S = 1 + g . y is 1 x 1, and its LU solve is
+/// w = (g . M^-1 b) / S (nalgebra's for a 1 x 1 matrix: no pivoting, one division, false for
+/// S = 0), so the rows are the same bits without building the LU.
+fn woodbury_one(slip: &Slip, loads: &mut SMatrix<f64, 6, 6>) -> bool {
+    let gradient = slip.gradient();
+    let schur = 1.0 + gradient.dot(&slip.y);
+    if schur == 0.0 {
+        return false;
+    }
+    for r in 0..6 {
+        let mb: Vector6<f64> = loads.row(r).transpose();
+        let w = gradient.dot(&mb) / schur;
+        let out = mb - slip.y * w;
+        loads.set_row(r, &out.transpose());
+    }
+    true
 }
 
 /// J^-1 b = M^-1 b - Y S^-1 G^T M^-1 b for each row of `loads` (which holds (M^-1 b)^T),
