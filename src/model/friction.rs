@@ -616,6 +616,28 @@ mod tests {
         (robot, R, Vector3::new(0.01, -0.02, 0.98), Vector3::new(4.0, 9.0, -3.0))
     }
 
+    /// The one-slip Woodbury rows of the load response ([`woodbury_one`]) are nalgebra's
+    /// 1 x 1 LU solve ([`woodbury_rows`]) bit for bit: case H with friction on its helix
+    /// alone, at the bent state of [`setup`], on six loads made from its rotation.
+    #[test]
+    fn one_slip_load_response_is_the_lu_solve_bit_for_bit() {
+        let (mut robot, R, v, u) = setup();
+        robot.tendons[0].friction = None;
+        let model = Model::new(&robot);
+        let slipping = slipping(&robot);
+        let site = model.site(0.07);
+        let lin = linearize(&model, &site, robot.length(), (&R, &v, &u), &slipping, None, true).unwrap();
+        assert_eq!(lin.slips.len(), 1);
+        let loads = SMatrix::<f64, 6, 6>::from_fn(|i, j| (R[(i % 3, j % 3)] + 0.1 * (i + 2 * j) as f64) * 1e-3);
+        let (mut one, mut lu) = (loads, loads);
+        assert!(woodbury_one(&lin.slips[0], &mut one));
+        assert!(woodbury_rows(U1, &lin.slips, &mut lu));
+        let bits = |m: &SMatrix<f64, 6, 6>| m.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+        assert_eq!(bits(&one), bits(&lu));
+        // The correction is there (not a copy of the loads).
+        assert_ne!(bits(&one), bits(&loads));
+    }
+
     #[test]
     fn linearization_matches_central_differences() {
         let (robot, R, v, u) = setup();
