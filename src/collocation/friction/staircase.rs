@@ -377,8 +377,8 @@ fn eliminate_column<const C: usize, const R: usize, const W: usize>(
     // The first row of largest |entry|, the largest kept in hand (not read again through
     // `best`): the same choice, NaN never chosen over a number nor a number over a NaN at C.
     let (mut best, mut largest) = (C, panel[C][C].abs());
-    for r in C + 1..R {
-        let size = panel[r][C].abs();
+    for (r, row) in panel.iter().enumerate().skip(C + 1) {
+        let size = row[C].abs();
         if size > largest {
             (best, largest) = (r, size);
         }
