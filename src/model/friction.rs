@@ -431,20 +431,13 @@ fn linearize_into_kernel(
             inverse[j * m_count + l] = *c;
         }
     }
-    // J^-1 applied to M^-1 b: subtract Y S^-1 G^T (M^-1 b).
-    let woodbury = |mb: Vector6<f64>| -> Vector6<f64> {
-        let mut out = mb;
-        for (j, sl) in slips.iter().enumerate() {
-            let wj: f64 = (0..m_count)
-                .map(|l| inverse[j * m_count + l] * gradients[l].dot(&mb))
-                .sum();
-            out -= sl.y * wj;
-        }
-        out
-    };
     let solve_j = |b: &Vector6<f64>| -> Option<Vector6<f64>> {
         let mut row = b.transpose();
-        point.solve_rows(&mut row).then(|| woodbury(row.transpose()))
+        point.solve_rows(&mut row).then(|| {
+            let mut column = row.transpose();
+            woodbury(slips, gradients, inverse, &mut column);
+            column
+        })
     };
     // The 9 columns of dPhi/d(v, u, phi) through M^-1 at once.
     if !point.solve_rows(&mut rows) {
@@ -452,7 +445,9 @@ fn linearize_into_kernel(
     }
     let mut dx = SMatrix::<f64, 6, 9>::zeros();
     for c in 0..9 {
-        dx.set_column(c, &-woodbury(rows.row(c).transpose()));
+        let mut column = rows.row(c).transpose();
+        woodbury(slips, gradients, inverse, &mut column);
+        dx.set_column(c, &-column);
     }
     let d_log_tension = &mut out.d_log_tension;
     d_log_tension.resize(k, Vector6::zeros());
@@ -487,6 +482,29 @@ fn linearize_into_kernel(
     Ok(())
 }
 
+/// J^-1 applied to `mb` = M^-1 b in place: `mb` minus Y S^-1 G^T `mb` (Woodbury, module docs
+/// and [`linearize_into`]), Y the slips' y_i, G their gradients dg_i/dx, `inverse` S^-1 row
+/// major. Each w_j = sum_l (S^-1)_jl (g_l . mb) is summed from -0.0 in ascending l, as
+/// `Iterator::sum` sums (so with one slip it is the one term, which is computed alone); the
+/// products g_l . mb of the unchanged `mb`, once per slip.
+#[inline(always)]
+fn woodbury(slips: &[Slip], gradients: &[Vector6<f64>], inverse: &[f64], mb: &mut Vector6<f64>) {
+    if let ([sl], [g], [s]) = (slips, gradients, inverse) {
+        let w = s * g.dot(mb);
+        *mb -= sl.y * w;
+        return;
+    }
+    let b = *mb;
+    let count = slips.len();
+    for (j, sl) in slips.iter().enumerate() {
+        let mut w = -0.0;
+        for (l, g) in gradients.iter().enumerate() {
+            w += inverse[j * count + l] * g.dot(&b);
+        }
+        *mb -= sl.y * w;
+    }
+}
+
 impl FrictionLinearization {
     /// The response of this point's rates and turning rates to body loads (distributed
     /// force and moment, body frame, N/m and N m/m), for the mass of the linearized dynamics
@@ -510,7 +528,7 @@ impl FrictionLinearization {
         // On the stack for up to 3 tendons with friction here (no allocation per point).
         let woodbury = match slips.len() {
             0 => true,
-            1 => woodbury_rows(U1, slips, loads),
+            1 => woodbury_one(&slips[0], loads),
             2 => woodbury_rows(U2, slips, loads),
             3 => woodbury_rows(U3, slips, loads),
             m => woodbury_rows(Dyn(m), slips, loads),
@@ -530,6 +548,24 @@ impl FrictionLinearization {
         }
         loads.iter().all(|v| v.is_finite())
     }
+}
+
+/// [`woodbury_rows`] for one slip, written out: S = 1 + g . y is 1 x 1, and its LU solve is
+/// w = (g . M^-1 b) / S (nalgebra's for a 1 x 1 matrix: no pivoting, one division, false for
+/// S = 0), so the rows are the same bits without building the LU.
+fn woodbury_one(slip: &Slip, loads: &mut SMatrix<f64, 6, 6>) -> bool {
+    let gradient = slip.gradient();
+    let schur = 1.0 + gradient.dot(&slip.y);
+    if schur == 0.0 {
+        return false;
+    }
+    for r in 0..6 {
+        let mb: Vector6<f64> = loads.row(r).transpose();
+        let w = gradient.dot(&mb) / schur;
+        let out = mb - slip.y * w;
+        loads.set_row(r, &out.transpose());
+    }
+    true
 }
 
 /// J^-1 b = M^-1 b - Y S^-1 G^T M^-1 b for each row of `loads` (which holds (M^-1 b)^T),
@@ -578,6 +614,28 @@ mod tests {
         });
         let R = so3::exp(&Vector3::new(0.3, -0.7, 0.4));
         (robot, R, Vector3::new(0.01, -0.02, 0.98), Vector3::new(4.0, 9.0, -3.0))
+    }
+
+    /// The one-slip Woodbury rows of the load response ([`woodbury_one`]) are nalgebra's
+    /// 1 x 1 LU solve ([`woodbury_rows`]) bit for bit: case H with friction on its helix
+    /// alone, at the bent state of [`setup`], on six loads made from its rotation.
+    #[test]
+    fn one_slip_load_response_is_the_lu_solve_bit_for_bit() {
+        let (mut robot, R, v, u) = setup();
+        robot.tendons[0].friction = None;
+        let model = Model::new(&robot);
+        let slipping = slipping(&robot);
+        let site = model.site(0.07);
+        let lin = linearize(&model, &site, robot.length(), (&R, &v, &u), &slipping, None, true).unwrap();
+        assert_eq!(lin.slips.len(), 1);
+        let loads = SMatrix::<f64, 6, 6>::from_fn(|i, j| (R[(i % 3, j % 3)] + 0.1 * (i + 2 * j) as f64) * 1e-3);
+        let (mut one, mut lu) = (loads, loads);
+        assert!(woodbury_one(&lin.slips[0], &mut one));
+        assert!(woodbury_rows(U1, &lin.slips, &mut lu));
+        let bits = |m: &SMatrix<f64, 6, 6>| m.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+        assert_eq!(bits(&one), bits(&lu));
+        // The correction is there (not a copy of the loads).
+        assert_ne!(bits(&one), bits(&loads));
     }
 
     #[test]

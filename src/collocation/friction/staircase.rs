@@ -374,10 +374,13 @@ fn eliminate_column<const C: usize, const R: usize, const W: usize>(
     swaps: &mut [usize],
     factors: &mut [f64],
 ) -> bool {
-    let mut best = C;
-    for r in C + 1..R {
-        if panel[r][C].abs() > panel[best][C].abs() {
-            best = r;
+    // The first row of largest |entry|, the largest kept in hand (not read again through
+    // `best`): the same choice, NaN never chosen over a number nor a number over a NaN at C.
+    let (mut best, mut largest) = (C, panel[C][C].abs());
+    for (r, row) in panel.iter().enumerate().skip(C + 1) {
+        let size = row[C].abs();
+        if size > largest {
+            (best, largest) = (r, size);
         }
     }
     let pivot = panel[best][C];
@@ -411,10 +414,11 @@ fn eliminate_column<const C: usize, const R: usize, const W: usize>(
 #[inline(always)]
 fn eliminate_any(panel: &mut [f64], rows: usize, width: usize, pivots: usize, (swaps, factors): Record) -> bool {
     for c in 0..pivots {
-        let mut best = c;
+        let (mut best, mut largest) = (c, panel[c * width + c].abs());
         for r in c + 1..rows {
-            if panel[r * width + c].abs() > panel[best * width + c].abs() {
-                best = r;
+            let size = panel[r * width + c].abs();
+            if size > largest {
+                (best, largest) = (r, size);
             }
         }
         let pivot = panel[best * width + c];
