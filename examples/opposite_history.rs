@@ -73,17 +73,6 @@ fn main() {
         {
             println!("      reference zones: {}", zones_of(e));
         }
-        let zones: Vec<String> = step
-            .zones
-            .iter()
-            .map(|t| {
-                t.zones
-                    .iter()
-                    .map(|z| format!("{} {:.4}-{:.4}", z.contact.name(), z.start, z.end))
-                    .collect::<Vec<_>>()
-                    .join(" ")
-            })
-            .collect();
         let tight = exact.as_ref().and_then(|e| e.get(k)).map_or(String::new(), |e| {
             let r = &e.solution.report;
             format!(
@@ -100,7 +89,7 @@ fn main() {
             report.intervals,
             report.tolerance_met,
             error / estimate,
-            zones.join(" | ")
+            zones_of(step)
         );
         // A step that slides all along is the full-slip solve with each tendon's motion:
         // an independent reference, with the mesh chosen by its own adaptive refinement.

@@ -233,11 +233,7 @@ fn rough_cases() -> [Robot; 2] {
 #[test]
 fn collocation_with_friction_converges_at_order_four() {
     for robot in rough_cases() {
-        // A fixed mesh of 8192 intervals, without nodes at the points or error control:
-        // its error is the kink's, first order in h, measured within 1e-12 m of the
-        // solve at 1e-11 L here (and the shooting solver at 1e-12 is ~1e-11 m off)
-        let fine = tdcr::collocation::Options::fixed(8192);
-        let reference = tdcr::collocation::solve(&robot, &fine).unwrap();
+        let reference = shooting::solve(&robot, &tight()).unwrap();
         let error = |intervals: usize| {
             let c = tdcr::collocation::solve(&robot, &tdcr::collocation::Options::fixed(intervals)).unwrap();
             let tension = c
@@ -272,11 +268,7 @@ fn collocation_with_friction_converges_at_order_four() {
 #[test]
 fn the_error_estimate_covers_friction_at_default_settings() {
     for robot in rough_cases() {
-        // A fixed mesh of 8192 intervals, without nodes at the points or error control:
-        // its error is the kink's, first order in h, measured within 1e-12 m of the
-        // solve at 1e-11 L here (and the shooting solver at 1e-12 is ~1e-11 m off)
-        let fine = tdcr::collocation::Options::fixed(8192);
-        let reference = tdcr::collocation::solve(&robot, &fine).unwrap();
+        let reference = shooting::solve(&robot, &tight()).unwrap();
         let c = tdcr::solve(&robot, &Default::default()).unwrap();
         let estimate = c.report.error_estimate.expect("an estimate");
         let truth = (c.tip_position() - reference.tip_position()).norm();

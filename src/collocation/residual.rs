@@ -1,6 +1,7 @@
 //! The residual blocks of the collocation system. The base, jump and tip blocks are generic
-//! over the scalar, so one code path gives their residual (f64) and their exact Jacobian
-//! (num-dual forward mode). The interval blocks have two f64 paths: [`interval`] for the
+//! over the scalar, so one code path gives their residual (f64) and the jump blocks' exact
+//! Jacobian (num-dual forward mode); the base and tip blocks' Jacobian is in closed form
+//! ([`super::end_rows`]), checked against the dual numbers in its tests. The interval blocks have two f64 paths: [`interval`] for the
 //! residual and [`interval_jacobian`] for the residual with its exact Jacobian by the chain
 //! rule through the scheme and the analytic linearization of eq. 13
 //! ([`crate::model::linearize`]); tests/jacobian.rs checks the two against central

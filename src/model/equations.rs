@@ -3,8 +3,9 @@
 //!
 //! Everything that depends only on s (stiffness, reference strains, routings, external
 //! loads) is evaluated once in f64 as a [`Site`]. The tendon pulls, point wrenches and
-//! internal wrench are generic over the scalar, so the base, jump and tip blocks of the
-//! collocation Jacobian are taken exactly by forward-mode automatic differentiation. Eq. 13
+//! internal wrench are generic over the scalar, so the jump blocks of the collocation
+//! Jacobian are taken exactly by forward-mode automatic differentiation (the base and tip
+//! blocks are in closed form, `collocation::end_rows`, checked against it). Eq. 13
 //! itself is in f64 only, in [`linearize`] with its exact linearization.
 #![allow(non_snake_case)]
 

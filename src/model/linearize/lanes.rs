@@ -425,7 +425,9 @@ pub(crate) fn linearize_lanes(
             }
             break;
         };
-        if count == CACHED_TENDONS || [t1.0, t2.0, t3.0] != [t0.0; 3] {
+        // One tension per tendon without friction, so lane 0's serves all four; a lane
+        // whose tension differs (none today) goes to the scalar kernel with the rest.
+        if count == CACHED_TENDONS || [t1.0, t2.0, t3.0] != [t0.0; 3] || [t1.1, t2.1, t3.1] != [t0.1; 3] {
             return false;
         }
         let Some(tp) = TendonLanes::new(t0.1, [&t0.2, &t1.2, &t2.2, &t3.2], &v, &u) else {
