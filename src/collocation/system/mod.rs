@@ -484,7 +484,7 @@ impl<'a> System<'a> {
         // Linearization at the shared node of consecutive intervals, evaluated once: interval
         // k writes its end node's into `lins[(k + 1) % 2]`, where interval k + 1 reads it
         // (`shared`: the link before was an interval). Runs of four intervals of one segment
-        // go to the lane kernel (`interval_group`) when nothing is kept besides the rates.
+        // go to the lane kernel (`interval_group`) unless eq. 13's factors are kept.
         let (mut lins, mut shared, mut k) = ([linearize::Linearization::zeros(); 2], false, 0);
         while k < links {
             let rows = link_row(k)..link_row(k + 1);
@@ -496,8 +496,16 @@ impl<'a> System<'a> {
                     out[rows].copy_from_slice(lin.residual.as_slice());
                     profile.keep(k, lin);
                 } else if kept.is_none()
-                    && tensions.is_none()
-                    && self.interval_group(k, x, out, &mut values[at..], &mut lins, shared, rates.as_deref_mut())?
+                    && self.interval_group(
+                        k,
+                        x,
+                        out,
+                        &mut values[at..],
+                        &mut lins,
+                        shared,
+                        rates.as_deref_mut(),
+                        &mut tensions,
+                    )?
                 {
                     (shared, k, at) = (true, k + 4, at + 4 * NODE * width);
                     continue;
