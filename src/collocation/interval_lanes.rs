@@ -55,7 +55,7 @@ impl GroupTensions<'_> {
         let (before, from) = self.ends.split_at_mut(j);
         IntervalTensions {
             start: match before.last_mut() {
-                Some(end) => &mut **end,
+                Some(end) => end,
                 None => &mut *self.start,
             },
             end: &mut *from[0],

@@ -515,11 +515,11 @@ impl<'a> System<'a> {
                     let (start, end) = if k % 2 == 0 { (&*even, odd) } else { (&*odd, even) };
                     let start = shared.then_some(start);
                     let ends = (&x[k], &x[k + 1]);
+                    let sink = tensions
+                        .as_mut()
+                        .map(|(sink, columns)| sink.interval(shared, k, columns, n));
                     let r = match (kept.as_deref_mut(), rates.as_deref_mut()) {
                         (None, Some(rates)) => {
-                            let sink = tensions
-                                .as_mut()
-                                .map(|(sink, columns)| sink.interval(start.is_some(), k, columns, n));
                             let (r, at_start) = residual::interval_jacobian_as_residual(
                                 &self.model,
                                 sites,
@@ -533,18 +533,9 @@ impl<'a> System<'a> {
                             (rates[k], rates[k + 1]) = (at_start, end.rates);
                             r
                         }
-                        (None, None) => residual::interval_jacobian_into(
-                            &self.model,
-                            sites,
-                            seg,
-                            ends,
-                            start,
-                            block,
-                            tensions
-                                .as_mut()
-                                .map(|(sink, columns)| sink.interval(start.is_some(), k, columns, n)),
-                            end,
-                        )?,
+                        (None, None) => {
+                            residual::interval_jacobian_into(&self.model, sites, seg, ends, start, block, sink, end)?
+                        }
                         (Some(kept), rates) => {
                             if start.is_some() {
                                 kept[k].start = kept[k - 1].end.clone();
