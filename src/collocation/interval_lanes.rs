@@ -2,7 +2,9 @@
 //! eq. 13's linearizations at their four end nodes, then at their four midpoints, each in
 //! one pass of four f64 lanes ([`linearize_lanes`], one interval per lane), the rest of each
 //! interval's block (the chain rule through the scheme, already wide within one interval)
-//! as the scalar kernel forms it.
+//! as the scalar kernel forms it. For a Jacobian that forms the tension columns
+//! ([`GroupTensions`]), the lanes also give each point's derivatives in every tension, and
+//! each interval's rows are written by the scalar kernel's own tail (`tension_rows`).
 //!
 //! The 32 intervals of a Jacobian are independent once the node states are known: interval
 //! k's start linearization is interval k-1's end one, and its midpoint's state needs only
