@@ -247,24 +247,40 @@ fn interval_jacobian_kernel(
     let dFm = midpoint_product(&pm, &ends.midpoint(h));
     ends.write(&dFm, h, length, jac);
     if let Some(t) = tensions {
-        // The chain rule of `interval_derivatives`: the midpoint's strains move by
-        // dy_m = h/8 (dF_0 - dF_1) with each tension, which adds d(v', u')/d(v, u) dy_m
-        // to its derivative at the fixed state.
-        for ((dy, s), e) in t.dy_mid.iter_mut().zip(t.start.iter()).zip(t.end.iter()) {
-            *dy = (s - e) * (h / 8.0);
-        }
-        for (d, dy) in t.mid.iter_mut().zip(t.dy_mid.iter()) {
-            *d += lin_m.d_strains * dy;
-        }
-        let mid = (sites.mid.inextensible, &frame_m.R, &frame_m.Jri);
-        // The right-hand sides' rows, weight h/6: the rows' derivatives (weight -h/6)
-        // negated, bit for bit, written straight into the columns.
-        let (columns, n, row) = (t.columns, t.n, t.row);
-        derivative_rows(mid, h / 6.0, length, [t.start, t.end, t.mid, t.dy_mid], |i, b| {
-            columns[i * n + row..i * n + row + b.len()].copy_from_slice(b.as_slice());
-        });
+        tension_rows(t, h, length, &lin_m, (sites.mid.inextensible, &frame_m));
     }
     Ok((residual, lin0.rates))
+}
+
+/// An interval's rows of the tension columns' right-hand sides into `t.columns`, from the
+/// rates' derivatives at its fixed states in `t` (start node, end node, midpoint), its
+/// length `h`, the midpoint's linearization `lin_m` and frame (with whether its rod is
+/// inextensible): the tail of the interval kernel with `tensions`, shared with the lane
+/// kernel of `interval_lanes` (the same operations, so the same bits).
+#[inline(always)]
+pub(super) fn tension_rows(
+    t: IntervalTensions,
+    h: f64,
+    length: f64,
+    lin_m: &Linearization,
+    (inextensible, frame_m): (bool, &PointFrame),
+) {
+    // The chain rule of `interval_derivatives`: the midpoint's strains move by
+    // dy_m = h/8 (dF_0 - dF_1) with each tension, which adds d(v', u')/d(v, u) dy_m
+    // to its derivative at the fixed state.
+    for ((dy, s), e) in t.dy_mid.iter_mut().zip(t.start.iter()).zip(t.end.iter()) {
+        *dy = (s - e) * (h / 8.0);
+    }
+    for (d, dy) in t.mid.iter_mut().zip(t.dy_mid.iter()) {
+        *d += lin_m.d_strains * dy;
+    }
+    let mid = (inextensible, &frame_m.R, &frame_m.Jri);
+    // The right-hand sides' rows, weight h/6: the rows' derivatives (weight -h/6)
+    // negated, bit for bit, written straight into the columns.
+    let (columns, n, row) = (t.columns, t.n, t.row);
+    derivative_rows(mid, h / 6.0, length, [t.start, t.end, t.mid, t.dy_mid], |i, b| {
+        columns[i * n + row..i * n + row + b.len()].copy_from_slice(b.as_slice());
+    });
 }
 
 /// The midpoint's F on the 18 columns: its (theta, v, u) columns of dF/dy times the

@@ -2,7 +2,9 @@
 //! eq. 13's linearizations at their four end nodes, then at their four midpoints, each in
 //! one pass of four f64 lanes ([`linearize_lanes`], one interval per lane), the rest of each
 //! interval's block (the chain rule through the scheme, already wide within one interval)
-//! as the scalar kernel forms it.
+//! as the scalar kernel forms it. For a Jacobian that forms the tension columns
+//! ([`GroupTensions`]), the lanes also give each point's derivatives in every tension, and
+//! each interval's rows are written by the scalar kernel's own tail (`tension_rows`).
 //!
 //! The 32 intervals of a Jacobian are independent once the node states are known: interval
 //! k's start linearization is interval k-1's end one, and its midpoint's state needs only
@@ -13,14 +15,16 @@
 //! (`linearize_lanes`' module docs) the four intervals go to the scalar kernel.
 #![allow(non_snake_case)]
 
-use super::interval_jacobian::interval_jacobian_tensions;
+use super::interval_jacobian::{interval_jacobian_tensions, tension_rows};
 use super::residual::{
-    Block, EndColumns, IntervalSites, PointFrame, PointLinearization, end_points, rhs_linearized_inline, scale_rows,
+    Block, EndColumns, IntervalSites, IntervalTensions, PointFrame, PointLinearization, end_points,
+    rhs_linearized_inline, scale_rows,
 };
 use super::unknowns::{P, THETA, U, V};
 use crate::error::Result;
 use crate::model::equations::{Model, Site};
-use crate::model::linearize::{Linearization, linearize_keeping, linearize_lanes};
+use crate::model::linearize::{Linearization, TensionLanes, linearize_keeping, linearize_lanes, linearize_tensions};
+use crate::model::routing::RoutingPoint;
 use crate::simd::lanes::F4;
 use crate::solution::State;
 use nalgebra::{SMatrix, Vector3, Vector6};
@@ -28,12 +32,64 @@ use nalgebra::{SMatrix, Vector3, Vector6};
 /// Entries of one interval's row-major 12 x 24 block.
 const BLOCK: usize = 12 * 24;
 
+/// The buffers of four intervals' tension columns (what [`IntervalTensions`] is for one
+/// interval; `TensionSink::group` lends them): d(v', u')/dtau_i at the first interval's
+/// start node (read when its linearization is given, else written), at the four end nodes
+/// and the four midpoints, the midpoint's strain motion (one entry per tendon in each), the
+/// columns the rows go into (`n` rows each, interval j's from `rows[j]` on) and every
+/// tendon's routing point at each interval's end node and midpoint when they are kept.
+pub(super) struct GroupTensions<'t> {
+    pub(super) start: &'t mut [Vector6<f64>],
+    pub(super) ends: [&'t mut [Vector6<f64>]; 4],
+    pub(super) mids: [&'t mut [Vector6<f64>]; 4],
+    pub(super) dy_mid: &'t mut [Vector6<f64>],
+    pub(super) columns: &'t mut [f64],
+    pub(super) n: usize,
+    pub(super) rows: [usize; 4],
+    pub(super) routing: Option<[[&'t [RoutingPoint]; 2]; 4]>,
+}
+
+impl GroupTensions<'_> {
+    /// Interval j's buffers as the one-interval kernel takes them (its start node's
+    /// derivatives are interval j - 1's end ones).
+    #[inline(always)]
+    fn interval(&mut self, j: usize) -> IntervalTensions<'_> {
+        let (before, from) = self.ends.split_at_mut(j);
+        IntervalTensions {
+            start: match before.last_mut() {
+                Some(end) => end,
+                None => &mut *self.start,
+            },
+            end: &mut *from[0],
+            mid: &mut *self.mids[j],
+            dy_mid: &mut *self.dy_mid,
+            columns: &mut *self.columns,
+            n: self.n,
+            row: self.rows[j],
+            routing: self.routing.map(|r| r[j]),
+        }
+    }
+
+    /// The lanes' buffers at the end nodes (`at` 0) or the midpoints (`at` 1).
+    #[inline(always)]
+    fn lanes(&mut self, at: usize) -> TensionLanes<'_> {
+        let [a, b, c, d] = if at == 0 { &mut self.ends } else { &mut self.mids };
+        TensionLanes {
+            out: [&mut **a, &mut **b, &mut **c, &mut **d],
+            routing: self.routing.map(|r| [r[0][at], r[1][at], r[2][at], r[3][at]]),
+        }
+    }
+}
+
 /// The blocks of the four intervals between the nodes `x[0..5]` (`sites[j]` interval j's,
 /// all in one segment ending at `segment_end`) into `jac` (four 12 x 24 blocks in turn),
 /// the linearizations at their end nodes into `ends`, and for each interval its residual
 /// and the rates at its start node: what `interval_jacobian_into` gives for each (with
 /// `as_residual`, `interval_jacobian_as_residual`), bit for bit, with `start` the
 /// linearization at `x[0]` if known (the interval before's end one; else evaluated here).
+///
+/// With `tensions`, also each interval's rows of the tension columns' right-hand sides, as
+/// `interval_jacobian_tensions` writes them with [`GroupTensions::interval`]'s buffers.
 ///
 /// With AVX2 and FMA (checked at run time, as `avx2_fma!` checks) the linearizations run in
 /// lanes; else, or where a lane leaves the common path, the four intervals are evaluated
@@ -52,13 +108,15 @@ pub(super) fn interval_jacobians4(
     jac: &mut [f64],
     as_residual: bool,
     ends: &mut [Linearization; 4],
+    mut tensions: Option<GroupTensions>,
 ) -> Result<[(Block<f64>, Vector6<f64>); 4]> {
     debug_assert!(x.len() == 5 && jac.len() == 4 * BLOCK);
     #[cfg(target_arch = "x86_64")]
     if crate::simd::avx2_fma_detected() {
         // SAFETY: the processor has the features `lanes_avx2` is compiled for, as
         // `avx2_fma_detected()` has just said.
-        let lanes = unsafe { lanes_avx2(model, sites, segment_end, x, start, jac, as_residual, ends) };
+        let t = tensions.as_mut();
+        let lanes = unsafe { lanes_avx2(model, sites, segment_end, x, start, jac, as_residual, ends, t) };
         if let Some(out) = lanes {
             return Ok(out);
         }
@@ -67,8 +125,8 @@ pub(super) fn interval_jacobians4(
     let mut start = start.copied();
     for (j, (block, end)) in jac.chunks_exact_mut(BLOCK).zip(ends.iter_mut()).enumerate() {
         let nodes = (&x[j], &x[j + 1]);
-        let s = start.as_ref();
-        out[j] = interval_jacobian_tensions(model, sites[j], segment_end, nodes, s, block, None, as_residual, end)?;
+        let (s, t) = (start.as_ref(), tensions.as_mut().map(|t| t.interval(j)));
+        out[j] = interval_jacobian_tensions(model, sites[j], segment_end, nodes, s, block, t, as_residual, end)?;
         start = Some(*end);
     }
     Ok(out)
@@ -87,8 +145,9 @@ fn lanes_avx2(
     jac: &mut [f64],
     as_residual: bool,
     ends: &mut [Linearization; 4],
+    tensions: Option<&mut GroupTensions>,
 ) -> Option<[(Block<f64>, Vector6<f64>); 4]> {
-    lanes_kernel(model, sites, segment_end, x, start, jac, as_residual, ends)
+    lanes_kernel(model, sites, segment_end, x, start, jac, as_residual, ends, tensions)
 }
 
 /// One interval's values up to its midpoint state, as the scalar kernel forms them: what
@@ -195,14 +254,19 @@ fn lanes_kernel(
     jac: &mut [f64],
     as_residual: bool,
     ends: &mut [Linearization; 4],
+    mut tensions: Option<&mut GroupTensions>,
 ) -> Option<[(Block<f64>, Vector6<f64>); 4]> {
     let length = model.robot.length();
     let computed;
     let start = match start {
         Some(l) => l,
         None => {
-            let a = &x[0];
-            computed = linearize_keeping(model, &sites[0].start, segment_end, &a.R, &a.v, &a.u, None).ok()?;
+            let (a, site) = (&x[0], &sites[0].start);
+            computed = match tensions.as_deref_mut() {
+                Some(t) => linearize_tensions(model, site, segment_end, (&a.R, &a.v, &a.u), t.start),
+                None => linearize_keeping(model, site, segment_end, &a.R, &a.v, &a.u, None),
+            }
+            .ok()?;
             &computed
         }
     };
@@ -219,6 +283,7 @@ fn lanes_kernel(
         segment_end,
         end_states,
         ends,
+        tensions.as_deref_mut().map(|t| t.lanes(0)),
     ) {
         return None;
     }
@@ -248,6 +313,7 @@ fn lanes_kernel(
         segment_end,
         mid_states,
         &mut mids,
+        tensions.as_deref_mut().map(|t| t.lanes(1)),
     ) {
         return None;
     }
@@ -266,6 +332,15 @@ fn lanes_kernel(
         let columns = EndColumns::new(&p0, &p1, &p.frame1, length);
         let dFm = midpoint_product_wide(&pm, &columns.midpoint(p.h));
         columns.write(&dFm, p.h, length, block);
+        if let Some(t) = tensions.as_deref_mut() {
+            tension_rows(
+                t.interval(j),
+                p.h,
+                length,
+                &mids[j],
+                (site.mid.inextensible, &p.frame_m),
+            );
+        }
     }
     Some(out)
 }
@@ -359,11 +434,13 @@ mod tests {
                 };
                 let nodes = &x[k..k + 5];
                 let (mut jac, mut ends) = (vec![0.0; 4 * BLOCK], [Linearization::zeros(); 4]);
-                let out =
-                    interval_jacobians4(&model, sites, seg, nodes, start, &mut jac, as_residual, &mut ends).unwrap();
+                let out = interval_jacobians4(&model, sites, seg, nodes, start, &mut jac, as_residual, &mut ends, None)
+                    .unwrap();
                 check(&jac, &ends, &out);
                 let (mut jac, mut ends) = (vec![0.0; 4 * BLOCK], [Linearization::zeros(); 4]);
-                if let Some(out) = lanes_kernel(&model, sites, seg, nodes, start, &mut jac, as_residual, &mut ends) {
+                if let Some(out) =
+                    lanes_kernel(&model, sites, seg, nodes, start, &mut jac, as_residual, &mut ends, None)
+                {
                     check(&jac, &ends, &out);
                     taken += 1;
                 }
@@ -372,7 +449,7 @@ mod tests {
                     let (mut jac, mut ends) = (vec![0.0; 4 * BLOCK], [Linearization::zeros(); 4]);
                     // SAFETY: the processor has AVX2 and FMA.
                     let lanes =
-                        unsafe { lanes_avx2(&model, sites, seg, nodes, start, &mut jac, as_residual, &mut ends) };
+                        unsafe { lanes_avx2(&model, sites, seg, nodes, start, &mut jac, as_residual, &mut ends, None) };
                     if let Some(out) = lanes {
                         check(&jac, &ends, &out);
                     }
@@ -400,6 +477,175 @@ mod tests {
                 .ending_at(half),
         );
         assert!(compare(&ending, 16, 0.01) > 0);
+    }
+
+    /// Compares the four-interval kernels with the tension columns (as `compare`, with and
+    /// without the routing points kept) with the scalar kernel given the buffers as
+    /// `TensionSink::interval` lends them, on every run of four intervals of one segment:
+    /// the blocks, residuals and end linearizations, the rows written into the columns, and
+    /// the derivatives at every end node and midpoint, bit for bit. Returns how many runs
+    /// the lanes took.
+    fn compare_tensions(robot: &Robot, intervals: usize, turn: f64) -> usize {
+        let model = Model::new(robot);
+        let mesh = Mesh::uniform(robot, intervals).unwrap();
+        let mut x = rigid_estimate(&model, &mesh.nodes);
+        for (k, state) in x.iter_mut().enumerate() {
+            state.R *= so3::exp(&(Vector3::new(0.3, -0.5, 0.8) * (turn * k as f64)));
+        }
+        let system = System::new(model.clone(), mesh.clone());
+        let (width, length) = (robot.tendons.len(), robot.length());
+        let (n, rows) = (48, [0, 12, 24, 36]);
+        let at = |s: f64| {
+            robot
+                .tendons
+                .iter()
+                .map(|t| t.routing.at(s, length))
+                .collect::<Vec<_>>()
+        };
+        let mut taken = 0;
+        for k in 0..mesh.nodes.len().saturating_sub(4) {
+            let Some(sites) = (0..4).map(|j| system.interval_sites(k + j)).collect::<Option<Vec<_>>>() else {
+                continue;
+            };
+            let seg = mesh.nodes[k].segment_end;
+            if mesh.nodes[k..k + 4].iter().any(|n| n.segment_end != seg) {
+                continue;
+            }
+            let sites: [&IntervalSites; 4] = sites.try_into().unwrap();
+            let points: Vec<[Vec<_>; 2]> = sites.iter().map(|s| [at(s.end.s), at(s.mid.s)]).collect();
+            let a = &x[k];
+            let mut given_t = vec![Vector6::zeros(); width];
+            let given = linearize_tensions(&model, &sites[0].start, seg, (&a.R, &a.v, &a.u), &mut given_t).unwrap();
+            for ((start, as_residual), kept) in
+                [(None, false), (Some(&given), false), (Some(&given), true), (None, true)]
+                    .into_iter()
+                    .zip([true, false, true, false])
+            {
+                let routing = |j: usize| kept.then(|| [&points[j][0][..], &points[j][1][..]]);
+                // The scalar kernel with the sink's buffers: start, end, mid, dy_mid.
+                let mut rates: [Vec<Vector6<f64>>; 4] = std::array::from_fn(|_| vec![Vector6::zeros(); width]);
+                rates[0].copy_from_slice(&given_t);
+                let (mut scalar_columns, mut scalar_jac) = (vec![f64::NAN; n * width], vec![0.0; 4 * BLOCK]);
+                let (mut scalar_ends, mut scalar_at, mut s) = ([Linearization::zeros(); 4], Vec::new(), start.copied());
+                for (j, (block, end)) in scalar_jac
+                    .chunks_exact_mut(BLOCK)
+                    .zip(scalar_ends.iter_mut())
+                    .enumerate()
+                {
+                    if j > 0 {
+                        rates.swap(0, 1);
+                    }
+                    let [t_start, t_end, mid, dy_mid] = &mut rates;
+                    let t = IntervalTensions {
+                        start: t_start,
+                        end: t_end,
+                        mid,
+                        dy_mid,
+                        columns: &mut scalar_columns,
+                        n,
+                        row: rows[j],
+                        routing: routing(j),
+                    };
+                    let nodes = (&x[k + j], &x[k + j + 1]);
+                    interval_jacobian_tensions(
+                        &model,
+                        sites[j],
+                        seg,
+                        nodes,
+                        s.as_ref(),
+                        block,
+                        Some(t),
+                        as_residual,
+                        end,
+                    )
+                    .unwrap();
+                    s = Some(*end);
+                    scalar_at.push([rates[1].clone(), rates[2].clone()]);
+                }
+                let nodes = &x[k..k + 5];
+                let run = |lanes: bool| {
+                    let mut buffers: Vec<Vec<Vector6<f64>>> = vec![vec![Vector6::zeros(); width]; 10];
+                    buffers[0].copy_from_slice(&given_t);
+                    let [b0, e0, e1, e2, e3, m0, m1, m2, m3, dy] = &mut buffers[..] else {
+                        unreachable!()
+                    };
+                    let (mut columns, mut jac) = (vec![f64::NAN; n * width], vec![0.0; 4 * BLOCK]);
+                    let mut ends = [Linearization::zeros(); 4];
+                    let mut group = GroupTensions {
+                        start: b0,
+                        ends: [e0, e1, e2, e3],
+                        mids: [m0, m1, m2, m3],
+                        dy_mid: dy,
+                        columns: &mut columns,
+                        n,
+                        rows,
+                        routing: kept.then(|| std::array::from_fn(|j| [&points[j][0][..], &points[j][1][..]])),
+                    };
+                    let took = if lanes {
+                        lanes_kernel(
+                            &model,
+                            sites,
+                            seg,
+                            nodes,
+                            start,
+                            &mut jac,
+                            as_residual,
+                            &mut ends,
+                            Some(&mut group),
+                        )
+                        .is_some()
+                    } else {
+                        interval_jacobians4(
+                            &model,
+                            sites,
+                            seg,
+                            nodes,
+                            start,
+                            &mut jac,
+                            as_residual,
+                            &mut ends,
+                            Some(group),
+                        )
+                        .unwrap();
+                        true
+                    };
+                    if took {
+                        assert_eq!(bits(&jac), bits(&scalar_jac), "blocks at {k}");
+                        assert_eq!(bits(&columns), bits(&scalar_columns), "tension rows at {k}");
+                        let flat =
+                            |v: &[Vector6<f64>]| bits(&v.iter().flat_map(|d| d.iter().copied()).collect::<Vec<_>>());
+                        for j in 0..4 {
+                            assert_eq!(
+                                bits(ends[j].d_strains.as_slice()),
+                                bits(scalar_ends[j].d_strains.as_slice())
+                            );
+                            assert_eq!(flat(&buffers[1 + j]), flat(&scalar_at[j][0]), "end {}", k + j);
+                            assert_eq!(flat(&buffers[5 + j]), flat(&scalar_at[j][1]), "midpoint {}", k + j);
+                        }
+                    }
+                    took
+                };
+                run(false);
+                if run(true) {
+                    taken += 1;
+                }
+            }
+        }
+        taken
+    }
+
+    /// The tension columns' rows and derivatives of every lane are the scalar kernel's
+    /// bits: on the prototype with four tendons pulled and its helical tendon slack (small
+    /// angles, angles past the exponential's series switch), on case S (one straight tendon
+    /// taut, the others slack) and case H (the helical tendon taut, with its tip force); the
+    /// lanes take every run there.
+    #[test]
+    fn lanes_give_the_scalar_bits_of_the_tension_columns() {
+        let prototype = crate::collocation::test_support::pulled_prototype();
+        assert_eq!(compare_tensions(&prototype, 32, 0.0), 4 * 29);
+        assert_eq!(compare_tensions(&prototype, 12, 0.7), 4 * 9);
+        assert_eq!(compare_tensions(&crate::cases::case_s(), 16, 0.01), 4 * 13);
+        assert_eq!(compare_tensions(&crate::cases::case_h(), 16, 0.0), 4 * 13);
     }
 
     /// A Kirchhoff rod leaves the lanes' path: the four intervals go to the scalar kernel,

@@ -4,6 +4,7 @@
 //! sides of the sensitivities (docs/sensitivity.md, "Exact tension columns").
 
 use super::{Columns, System};
+use crate::collocation::interval_lanes::GroupTensions;
 use crate::collocation::residual::{self, Block, IntervalSites, IntervalTensions};
 use crate::collocation::unknowns::{BASE_ROWS, link_row, tip_row};
 use crate::error::Result;
@@ -21,6 +22,9 @@ use nalgebra::{Vector3, Vector6};
 #[derive(Default)]
 pub(crate) struct TensionSink {
     rates: [Vec<Vector6<f64>>; 4],
+    /// A run of four intervals' end nodes but the last (whose are `rates[1]`, where the
+    /// next interval reads them) and midpoints: seven entries per tendon.
+    group: Vec<Vector6<f64>>,
     routing: RoutingPoints,
 }
 
@@ -32,6 +36,7 @@ impl TensionSink {
         for rates in &mut self.rates {
             rates.resize(width, Vector6::zeros());
         }
+        self.group.resize(7 * width, Vector6::zeros());
         self.routing.prepare(system.model.robot, &system.interval_sites);
     }
 
@@ -59,6 +64,46 @@ impl TensionSink {
             columns,
             n,
             row: link_row(k),
+        }
+    }
+}
+
+impl TensionSink {
+    /// The buffers of the links `k..k + 4` (intervals of one segment) for the lane kernel
+    /// (`interval_lanes::interval_jacobians4`), as [`TensionSink::interval`] gives them to
+    /// one interval: with `carried`, the first start node's derivatives are the last
+    /// interval's end ones; the last end node's are where the next interval reads them.
+    pub(super) fn group<'t>(
+        &'t mut self,
+        carried: bool,
+        k: usize,
+        columns: &'t mut [f64],
+        n: usize,
+    ) -> GroupTensions<'t> {
+        if carried {
+            self.rates.swap(0, 1);
+        }
+        let width = self.rates[0].len();
+        let [start, last, _, dy_mid] = &mut self.rates;
+        let (e0, rest) = self.group.split_at_mut(width);
+        let (e1, rest) = rest.split_at_mut(width);
+        let (e2, rest) = rest.split_at_mut(width);
+        let (m0, rest) = rest.split_at_mut(width);
+        let (m1, rest) = rest.split_at_mut(width);
+        let (m2, m3) = rest.split_at_mut(width);
+        let routing = [0, 1, 2, 3].map(|j| self.routing.interval(k + j, width));
+        GroupTensions {
+            start,
+            ends: [e0, e1, e2, last],
+            mids: [m0, m1, m2, m3],
+            dy_mid,
+            columns,
+            n,
+            rows: [0, 1, 2, 3].map(|j| link_row(k + j)),
+            routing: match routing {
+                [Some(a), Some(b), Some(c), Some(d)] => Some([a, b, c, d]),
+                _ => None,
+            },
         }
     }
 }

@@ -2,7 +2,7 @@
 //! the lane kernel of `collocation::interval_lanes` where four consecutive links are
 //! intervals of one segment.
 
-use super::System;
+use super::{System, TensionSink};
 use crate::collocation::interval_lanes::interval_jacobians4;
 use crate::collocation::unknowns::{NODE, link_row};
 use crate::error::Result;
@@ -13,7 +13,9 @@ use nalgebra::Vector6;
 impl System<'_> {
     /// The links k..k+4 of a frictionless system when they are four intervals of one
     /// segment: their residual rows into `out`, their blocks into `values` (from link k's
-    /// on), the rates at their nodes into `rates` when given, and the linearization at
+    /// on), the rates at their nodes into `rates` when given, their rows of the tension
+    /// columns into `tensions` with its sink's buffers when given (as
+    /// `System::jacobian_with` passes them), and the linearization at
     /// node k + 4 into `lins[k % 2]`, where link k + 4 reads it (the one at node k read
     /// from there when `shared`, as `System::jacobian_with` passes them); true when they
     /// were (else nothing is written).
@@ -30,6 +32,7 @@ impl System<'_> {
         lins: &mut [Linearization; 2],
         shared: bool,
         rates: Option<&mut [Vector6<f64>]>,
+        tensions: &mut Option<(&mut TensionSink, &mut [f64])>,
     ) -> Result<bool> {
         let Some(links) = self.interval_sites.get(k..k + 4) else {
             return Ok(false);
@@ -46,6 +49,10 @@ impl System<'_> {
         let mut ends = [Linearization::zeros(); 4];
         let block = &mut values[..4 * NODE * 2 * NODE];
         let as_residual = rates.is_some();
+        let n = self.unknowns();
+        let tensions = tensions
+            .as_mut()
+            .map(|(sink, columns)| sink.group(shared, k, columns, n));
         let group = interval_jacobians4(
             &self.model,
             [s0, s1, s2, s3],
@@ -55,6 +62,7 @@ impl System<'_> {
             block,
             as_residual,
             &mut ends,
+            tensions,
         )?;
         for (j, (residual, _)) in group.iter().enumerate() {
             out[link_row(k + j)..link_row(k + j + 1)].copy_from_slice(residual.as_slice());

@@ -464,7 +464,7 @@ impl<'a> System<'a> {
         // Linearization at the shared node of consecutive intervals, evaluated once: interval
         // k writes its end node's into `lins[(k + 1) % 2]`, where interval k + 1 reads it
         // (`shared`: the link before was an interval). Runs of four intervals of one segment
-        // go to the lane kernel (`interval_group`) when nothing is kept besides the rates.
+        // go to the lane kernel (`interval_group`) unless eq. 13's factors are kept.
         let (mut lins, mut shared, mut k) = ([linearize::Linearization::zeros(); 2], false, 0);
         while k < links {
             let rows = link_row(k)..link_row(k + 1);
@@ -476,8 +476,16 @@ impl<'a> System<'a> {
                     out[rows].copy_from_slice(lin.residual.as_slice());
                     profile.keep(k, lin);
                 } else if kept.is_none()
-                    && tensions.is_none()
-                    && self.interval_group(k, x, out, &mut values[at..], &mut lins, shared, rates.as_deref_mut())?
+                    && self.interval_group(
+                        k,
+                        x,
+                        out,
+                        &mut values[at..],
+                        &mut lins,
+                        shared,
+                        rates.as_deref_mut(),
+                        &mut tensions,
+                    )?
                 {
                     (shared, k, at) = (true, k + 4, at + 4 * NODE * width);
                     continue;
@@ -487,11 +495,11 @@ impl<'a> System<'a> {
                     let (start, end) = if k % 2 == 0 { (&*even, odd) } else { (&*odd, even) };
                     let start = shared.then_some(start);
                     let ends = (&x[k], &x[k + 1]);
+                    let sink = tensions
+                        .as_mut()
+                        .map(|(sink, columns)| sink.interval(shared, k, columns, n));
                     let r = match (kept.as_deref_mut(), rates.as_deref_mut()) {
                         (None, Some(rates)) => {
-                            let sink = tensions
-                                .as_mut()
-                                .map(|(sink, columns)| sink.interval(start.is_some(), k, columns, n));
                             let (r, at_start) = residual::interval_jacobian_as_residual(
                                 &self.model,
                                 sites,
@@ -505,18 +513,9 @@ impl<'a> System<'a> {
                             (rates[k], rates[k + 1]) = (at_start, end.rates);
                             r
                         }
-                        (None, None) => residual::interval_jacobian_into(
-                            &self.model,
-                            sites,
-                            seg,
-                            ends,
-                            start,
-                            block,
-                            tensions
-                                .as_mut()
-                                .map(|(sink, columns)| sink.interval(start.is_some(), k, columns, n)),
-                            end,
-                        )?,
+                        (None, None) => {
+                            residual::interval_jacobian_into(&self.model, sites, seg, ends, start, block, sink, end)?
+                        }
                         (Some(kept), rates) => {
                             if start.is_some() {
                                 kept[k].start = kept[k - 1].end.clone();

@@ -13,11 +13,14 @@
 //! points with the scalar code, which gives the error or the fallback's values.
 #![allow(non_snake_case)]
 
+mod tensions;
+
 use super::{CACHED_TENDONS, Linearization};
 use crate::model::equations::{MIN_TENDON_SPEED, Model, Site};
 use crate::simd::lanes::F4;
 use nalgebra::{Matrix3, Vector3};
 use std::mem::MaybeUninit;
+pub(crate) use tensions::TensionLanes;
 
 /// A 3-vector of lanes.
 type V3 = [F4; 3];
@@ -378,9 +381,11 @@ impl SiteLanes {
 }
 
 /// [`super::linearize_keeping`] without keeping at four points (one site and state per
-/// lane, the same `segment_end`), written into `out`: true when every lane took the
-/// uniform path (module docs), else false with `out` partly written (evaluate the points
-/// with the scalar code then). Always inlined, for the AVX2 build of its caller.
+/// lane, the same `segment_end`), written into `out`, with `tensions` also
+/// [`super::linearize_tensions_inline`]'s derivatives in every tension: true when every
+/// lane took the uniform path (module docs), else false with `out` and `tensions` partly
+/// written (evaluate the points with the scalar code then). Always inlined, for the AVX2
+/// build of its caller.
 #[inline(always)]
 pub(crate) fn linearize_lanes(
     model: &Model,
@@ -388,6 +393,7 @@ pub(crate) fn linearize_lanes(
     segment_end: f64,
     states: [(&Matrix3<f64>, &Vector3<f64>, &Vector3<f64>); 4],
     out: &mut [Linearization; 4],
+    tensions: Option<TensionLanes>,
 ) -> bool {
     if sites.iter().any(|s| s.inextensible) {
         return false;
@@ -483,6 +489,21 @@ pub(crate) fn linearize_lanes(
     factor.solve_rows(&mut x);
     let [x] = x;
     let (x_v, x_u) = ([x[0], x[1], x[2]], [x[3], x[4], x[5]]);
+    if let Some(tensions) = tensions {
+        // SAFETY: the first `count` slots were written above (MaybeUninit<T> has T's
+        // layout; TendonLanes is Copy).
+        let taut = unsafe { std::slice::from_raw_parts(tendons.as_ptr().cast::<TendonLanes>(), count) };
+        let solved = tensions::Solved {
+            v: &v,
+            u: &u,
+            x_v: &x_v,
+            x_u: &x_u,
+            factor: &factor,
+        };
+        if !tensions::tension_lanes(model, sites, segment_end, taut, &solved, tensions) {
+            return false;
+        }
+    }
 
     // Pass 2, `derivative`.
     let (mut top_v, mut top_u, mut bottom_v, mut bottom_u) = (Z33, Z33, Z33, Z33);
