@@ -133,15 +133,22 @@ pub(super) fn rhs(
     Rk: &Matrix3<f64>,
     y: &Block<f64>,
 ) -> Result<Block<f64>> {
-    let theta: Vector3<f64> = y.fixed_rows::<3>(THETA).into();
     let v: Vector3<f64> = y.fixed_rows::<3>(V).into();
     let u: Vector3<f64> = y.fixed_rows::<3>(U).into();
+    let (R, Jri) = rhs_frame(Rk, y);
+    let rates = linearize::rates(model, site, segment_end, &R, &v, &u)?;
+    Ok(rhs_with(site, &R, &Jri, y, &rates))
+}
+
+/// The frame R = R_k exp(theta) of y's theta in the local coordinates of an interval
+/// starting at `Rk`, and J_r^-1(theta): what [`rhs`] evaluates besides the rates.
+#[inline(always)]
+pub(super) fn rhs_frame(Rk: &Matrix3<f64>, y: &Block<f64>) -> (Matrix3<f64>, Matrix3<f64>) {
+    let theta: Vector3<f64> = y.fixed_rows::<3>(THETA).into();
     // exp(theta) and J_r^-1(theta) from one hat(theta) and its square: the bits of
     // `so3::exp` and `so3::right_jacobian_inv` (`exp_and_jacobians`; J_r is not used).
     let [E, _, Jri] = so3::exp_and_jacobians(&theta);
-    let R = Rk * E;
-    let rates = linearize::rates(model, site, segment_end, &R, &v, &u)?;
-    Ok(rhs_with(site, &R, &Jri, y, &rates))
+    (Rk * E, Jri)
 }
 
 /// F(s, y) in the local coordinates of an interval, given the frame R = R_k exp(theta) of
@@ -154,7 +161,13 @@ pub(super) fn rhs_from_rates(site: &Site, R: &Matrix3<f64>, y: &Block<f64>, rate
 
 /// [`rhs_from_rates`] given J_r^-1(theta) (`Jri`) too.
 #[inline(always)]
-fn rhs_with(site: &Site, R: &Matrix3<f64>, Jri: &Matrix3<f64>, y: &Block<f64>, rates: &Vector6<f64>) -> Block<f64> {
+pub(super) fn rhs_with(
+    site: &Site,
+    R: &Matrix3<f64>,
+    Jri: &Matrix3<f64>,
+    y: &Block<f64>,
+    rates: &Vector6<f64>,
+) -> Block<f64> {
     let v: Vector3<f64> = y.fixed_rows::<3>(V).into();
     let u: Vector3<f64> = y.fixed_rows::<3>(U).into();
     let mut f = Block::zeros();

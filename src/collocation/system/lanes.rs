@@ -4,6 +4,8 @@
 
 use super::System;
 use crate::collocation::interval_lanes::interval_jacobians4;
+use crate::collocation::order6::intervals_order6_lanes;
+use crate::collocation::residual::Block;
 use crate::collocation::unknowns::{NODE, link_row};
 use crate::error::Result;
 use crate::model::linearize::Linearization;
@@ -67,5 +69,38 @@ impl System<'_> {
         }
         *slot = ends[3];
         Ok(true)
+    }
+
+    /// Link k's order-6 rows ([`interval_order6`](crate::collocation::residual::interval_order6), given the node rates `rates`)
+    /// from four intervals' evaluation in lanes ([`intervals_order6_lanes`]), which covers
+    /// the links k..k+4 when they are four intervals of one segment and starts where `group`
+    /// (the last group's first link and rows, None where the lanes declined) does not cover
+    /// k: None when link k is not covered or the lanes declined (evaluate it alone then).
+    pub(super) fn order6_group(
+        &self,
+        k: usize,
+        x: &[State],
+        rates: &[Vector6<f64>],
+        group: &mut Option<(usize, Option<[Block<f64>; 4]>)>,
+    ) -> Option<Block<f64>> {
+        if let Some((first, rows)) = group
+            && (*first..*first + 4).contains(&k)
+        {
+            return rows.map(|rows| rows[k - *first]);
+        }
+        let [Some(s0), Some(s1), Some(s2), Some(s3)] = self.interval_sites.get(k..k + 4)? else {
+            return None;
+        };
+        let seg = self.mesh.nodes[k].segment_end;
+        if self.mesh.nodes[k + 1..k + 4].iter().any(|n| n.segment_end != seg) {
+            return None;
+        }
+        let sites = [s0, s1, s2, s3];
+        let quarters = sites.map(|s| self.quarters(s));
+        let nodes = std::array::from_fn(|j| (&x[k + j], &x[k + j + 1]));
+        let node_rates = std::array::from_fn(|j| (&rates[k + j], &rates[k + j + 1]));
+        let rows = intervals_order6_lanes(&self.model, sites, quarters.each_ref(), seg, nodes, node_rates);
+        *group = Some((k, rows));
+        rows.map(|rows| rows[0])
     }
 }

@@ -322,6 +322,9 @@ impl<'a> System<'a> {
                 Ok((r, end))
             });
         }
+        // With the node rates known the intervals are independent: runs of four go to the
+        // lanes (`order6_group`).
+        let mut group = None;
         self.rows(x, out, |k, sites, seg, a, b, start| {
             let (start, end) = if known {
                 (rates[k], rates[k + 1])
@@ -329,8 +332,14 @@ impl<'a> System<'a> {
                 self.end_rates(sites, seg, a, b, start)?
             };
             (rates[k], rates[k + 1]) = (start, end);
-            let quarters = self.quarters(sites);
-            let r = residual::interval_order6(&self.model, sites, &quarters, seg, a, b, &start, &end)?;
+            let grouped = known.then(|| self.order6_group(k, x, rates, &mut group)).flatten();
+            let r = match grouped {
+                Some(r) => r,
+                None => {
+                    let quarters = self.quarters(sites);
+                    residual::interval_order6(&self.model, sites, &quarters, seg, a, b, &start, &end)?
+                }
+            };
             local[k] = r.amax();
             Ok((r, end))
         })
