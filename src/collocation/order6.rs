@@ -5,13 +5,12 @@
 // R for rotation matrices, as in the paper and residual.rs.
 #![allow(non_snake_case)]
 
-use super::residual::{Block, IntervalSites, end_values, rhs, rhs_frame, rhs_with, scale_rows};
-use super::unknowns::{U, V};
+use super::residual::{Block, IntervalSites, end_values, rhs, rhs_lanes, scale_rows};
 use crate::error::Result;
 use crate::model::equations::{Model, Site};
-use crate::model::linearize::rates_lanes;
+use crate::simd::{avx2_fma, four};
 use crate::solution::State;
-use nalgebra::{Matrix3, Vector3, Vector6};
+use nalgebra::Vector6;
 
 /// The sites the order-6 residual of an interval needs besides its [`IntervalSites`]: at
 /// a quarter and three quarters of the interval.
@@ -108,11 +107,11 @@ impl Stages {
 
 /// [`interval_order6`] of four intervals of one segment (`segment_end`) at once (interval j
 /// between `nodes[j]`, with its sites and the rates at its nodes), each stage's eq. 13 at
-/// the four intervals in one pass of four f64 lanes ([`rates_lanes`]), each interval's bits
+/// the four intervals in one pass of four f64 lanes ([`rhs_lanes`]), each interval's bits
 /// those of [`interval_order6`]. The stages of one interval depend on each other (y_1/2 on
-/// F at y_1/4 and y_3/4), the intervals do not. None without AVX2 and FMA (checked at run
-/// time) or where a lane leaves the lanes' common path: evaluate the intervals one by one
-/// then (which gives the errors).
+/// F at y_1/4 and y_3/4), the intervals do not. Compiled for AVX2 and FMA where the
+/// processor has them (checked at run time). None where a lane leaves the lanes' common
+/// path: evaluate the intervals one by one then (which gives the errors).
 pub(super) fn intervals_order6_lanes(
     model: &Model,
     sites: [&IntervalSites; 4],
@@ -121,19 +120,12 @@ pub(super) fn intervals_order6_lanes(
     nodes: [(&State, &State); 4],
     rates: [(&Vector6<f64>, &Vector6<f64>); 4],
 ) -> Option<[Block<f64>; 4]> {
-    #[cfg(target_arch = "x86_64")]
-    if crate::simd::avx2_fma_detected() {
-        // SAFETY: the processor has the features `lanes_avx2` is compiled for, as
-        // `avx2_fma_detected()` has just said.
-        return unsafe { lanes_avx2(model, sites, quarters, segment_end, nodes, rates) };
-    }
-    None
+    avx2_fma!(lanes_kernel(model, sites, quarters, segment_end, nodes, rates))
 }
 
-/// [`intervals_order6_lanes`]' evaluation, compiled with AVX2 and FMA.
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2,fma")]
-fn lanes_avx2(
+/// [`intervals_order6_lanes`]' evaluation.
+#[inline(always)]
+fn lanes_kernel(
     model: &Model,
     sites: [&IntervalSites; 4],
     quarters: [&QuarterSites; 4],
@@ -141,37 +133,16 @@ fn lanes_avx2(
     nodes: [(&State, &State); 4],
     rates: [(&Vector6<f64>, &Vector6<f64>); 4],
 ) -> Option<[Block<f64>; 4]> {
-    let st: [Stages; 4] =
-        std::array::from_fn(|j| Stages::new(sites[j], nodes[j].0, nodes[j].1, rates[j].0, rates[j].1));
-    let Rk = nodes.map(|(a, _)| &a.R);
-    let q_sites = quarters.map(|q| &q.quarter);
-    let f_q = rhs_lanes(model, q_sites, segment_end, Rk, st.each_ref().map(|s| &s.y_q))?;
-    let tq_sites = quarters.map(|q| &q.three_quarters);
-    let f_tq = rhs_lanes(model, tq_sites, segment_end, Rk, st.each_ref().map(|s| &s.y_tq))?;
-    let y_m: [Block<f64>; 4] = std::array::from_fn(|j| st[j].y_mid(&f_q[j], &f_tq[j]));
-    let f_m = rhs_lanes(model, sites.map(|s| &s.mid), segment_end, Rk, y_m.each_ref())?;
+    let st = four!(j => Stages::new(sites[j], nodes[j].0, nodes[j].1, rates[j].0, rates[j].1));
+    let Rk = four!(j => &nodes[j].0.R);
+    let q_sites = four!(j => &quarters[j].quarter);
+    let f_q = rhs_lanes(model, q_sites, segment_end, Rk, four!(j => &st[j].y_q))?;
+    let tq_sites = four!(j => &quarters[j].three_quarters);
+    let f_tq = rhs_lanes(model, tq_sites, segment_end, Rk, four!(j => &st[j].y_tq))?;
+    let y_m = four!(j => st[j].y_mid(&f_q[j], &f_tq[j]));
+    let f_m = rhs_lanes(model, four!(j => &sites[j].mid), segment_end, Rk, four!(j => &y_m[j]))?;
     let length = model.robot.length();
-    Some(std::array::from_fn(|j| st[j].rows(&f_q[j], &f_tq[j], &f_m[j], length)))
-}
-
-/// [`rhs`] at four points of four intervals (interval j starting at `Rk[j]`), eq. 13's
-/// rates in lanes: None where a lane leaves their common path.
-#[inline(always)]
-fn rhs_lanes(
-    model: &Model,
-    sites: [&Site; 4],
-    segment_end: f64,
-    Rk: [&Matrix3<f64>; 4],
-    y: [&Block<f64>; 4],
-) -> Option<[Block<f64>; 4]> {
-    let frames: [(Matrix3<f64>, Matrix3<f64>); 4] = std::array::from_fn(|j| rhs_frame(Rk[j], y[j]));
-    let v: [Vector3<f64>; 4] = std::array::from_fn(|j| y[j].fixed_rows::<3>(V).into());
-    let u: [Vector3<f64>; 4] = std::array::from_fn(|j| y[j].fixed_rows::<3>(U).into());
-    let states = std::array::from_fn(|j| (&frames[j].0, &v[j], &u[j]));
-    let rates = rates_lanes(model, sites, segment_end, states)?;
-    Some(std::array::from_fn(|j| {
-        rhs_with(sites[j], &frames[j].0, &frames[j].1, y[j], &rates[j])
-    }))
+    Some(four!(j => st[j].rows(&f_q[j], &f_tq[j], &f_m[j], length)))
 }
 
 #[cfg(test)]
@@ -181,12 +152,14 @@ mod tests {
     use crate::mesh::{Mesh, guess::rigid_estimate};
     use crate::model::linearize::rates;
     use crate::{Robot, so3};
+    use nalgebra::Vector3;
 
     fn bits(v: &[f64]) -> Vec<u64> {
         v.iter().map(|x| x.to_bits()).collect()
     }
 
-    /// Compares [`intervals_order6_lanes`] with [`interval_order6`] bit for bit on every
+    /// Compares [`intervals_order6_lanes`] with [`interval_order6`], and Newton's residual
+    /// rows in lanes (`residual::intervals_lanes`) with `residual::interval`, bit for bit on every
     /// run of four intervals of one segment of `robot` on `intervals` uniform intervals, at
     /// the rigid estimate with node k turned by k `turn` rad about a fixed axis and its
     /// curvature moved by k `bend` (stages off the straight rod). Returns how many runs the
@@ -200,7 +173,7 @@ mod tests {
             state.u += Vector3::new(1.0, -2.0, 0.5) * (bend * k as f64);
         }
         let system = System::new(model.clone(), mesh.clone());
-        let mut taken = 0;
+        let (mut taken, mut residual_taken) = (0, 0);
         for k in 0..mesh.nodes.len().saturating_sub(4) {
             let Some(sites) = (0..4).map(|j| system.interval_sites(k + j)).collect::<Option<Vec<_>>>() else {
                 continue;
@@ -228,6 +201,39 @@ mod tests {
             });
             let nodes = std::array::from_fn(|j| (&x[k + j], &x[k + j + 1]));
             let lane_rates = std::array::from_fn(|j| (&node_rates[j].0, &node_rates[j].1));
+            // Newton's residual rows of the four intervals (`residual::intervals_lanes`).
+            let mut start = node_rates[0].0;
+            let residual: [_; 4] = std::array::from_fn(|j| {
+                let (a, b) = (&x[k + j], &x[k + j + 1]);
+                let out = crate::collocation::residual::interval(&model, sites[j], seg, a, b, Some(start)).unwrap();
+                start = out.2;
+                out
+            });
+            if let Some(lanes) =
+                crate::collocation::residual::intervals_lanes(&model, sites, seg, &x[k..k + 5], node_rates[0].0)
+            {
+                for j in 0..4 {
+                    assert_eq!(
+                        bits(lanes[j].0.as_slice()),
+                        bits(residual[j].0.as_slice()),
+                        "residual {}",
+                        k + j
+                    );
+                    assert_eq!(
+                        bits(lanes[j].2.as_slice()),
+                        bits(residual[j].2.as_slice()),
+                        "rates {}",
+                        k + j + 1
+                    );
+                    assert_eq!(
+                        bits(lanes[j].1.as_slice()),
+                        bits(residual[j].1.as_slice()),
+                        "rates {}",
+                        k + j
+                    );
+                }
+                residual_taken += 1;
+            }
             if let Some(lanes) = intervals_order6_lanes(&model, sites, quarters.each_ref(), seg, nodes, lane_rates) {
                 for j in 0..4 {
                     assert!(scalar[j].amax() > 0.0, "interval {} has order-6 rows", k + j);
@@ -241,6 +247,8 @@ mod tests {
                 taken += 1;
             }
         }
+        // Both see the lanes' path at points of the same intervals.
+        assert_eq!(residual_taken, taken);
         taken
     }
 

@@ -227,7 +227,12 @@ impl<'a> System<'a> {
                 Ok((residual, Vector6::zeros()))
             });
         }
-        self.rows(x, out, |_, sites, seg, a, b, start| {
+        // Runs of four intervals of one segment go to the lanes (`residual_group`).
+        let mut group = None;
+        self.rows(x, out, |k, sites, seg, a, b, start| {
+            if let Some((r, _, end)) = self.residual_group(k, x, start, &mut group)? {
+                return Ok((r, end));
+            }
             residual::interval(&self.model, sites, seg, a, b, start).map(|(r, _, end)| (r, end))
         })
     }
@@ -271,8 +276,12 @@ impl<'a> System<'a> {
         if self.friction.is_some() {
             return self.residual(x, out).map(|()| false);
         }
+        let mut group = None;
         self.rows(x, out, |k, sites, seg, a, b, start| {
-            let (r, start, end) = residual::interval(&self.model, sites, seg, a, b, start)?;
+            let (r, start, end) = match self.residual_group(k, x, start, &mut group)? {
+                Some(grouped) => grouped,
+                None => residual::interval(&self.model, sites, seg, a, b, start)?,
+            };
             (rates[k], rates[k + 1]) = (start, end);
             Ok((r, end))
         })?;

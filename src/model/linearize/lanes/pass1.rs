@@ -10,6 +10,7 @@ use super::{
 };
 use crate::model::equations::{Model, Site};
 use crate::model::linearize::CACHED_TENDONS;
+use crate::simd::four;
 use crate::simd::lanes::F4;
 use nalgebra::{Matrix3, Vector3, Vector6};
 use std::mem::MaybeUninit;
@@ -154,7 +155,9 @@ pub(crate) fn rates_lanes(
 ) -> Option<[Vector6<f64>; 4]> {
     let mut tendons = [const { MaybeUninit::<TendonLanes>::uninit() }; CACHED_TENDONS];
     let x = assemble(model, sites, segment_end, states, &mut tendons)?.x;
-    Some(std::array::from_fn(|lane| Vector6::from_fn(|i, _| x[i].lane(lane))))
+    Some(
+        four!(lane => Vector6::new(x[0].lane(lane), x[1].lane(lane), x[2].lane(lane), x[3].lane(lane), x[4].lane(lane), x[5].lane(lane))),
+    )
 }
 
 #[cfg(test)]
@@ -169,7 +172,10 @@ mod tests {
     /// pulled, in both builds; a Kirchhoff rod's sites are declined.
     #[test]
     fn lanes_give_the_scalar_rates() {
-        let mut robot = crate::collocation::test_support::pulled_prototype();
+        let mut robot = crate::cases::prototype();
+        for (i, tendon) in robot.tendons.iter_mut().enumerate().take(4) {
+            tendon.set_tension(0.4 + 0.7 * i as f64);
+        }
         let model = Model::new(&robot);
         let l = robot.length();
         let sites = [0.0, 0.13, 0.41, 0.77].map(|a| model.site(a * l));
