@@ -1,7 +1,8 @@
 //! Pass 1 of the lane linearization ([`assemble`], `assemble` of the scalar code in lanes):
 //! M, the right-hand side, M's factors and the rates x at four points. [`rates_lanes`] is
 //! this pass alone, the lanes of [`super::super::rates`] (eq. 13's rates without their
-//! linearization), for the stages of the order-6 residual (`collocation::order6`).
+//! linearization), for the order-6 residual's stages and Newton's residual of four
+//! intervals at once (`collocation::order6`, `collocation::residual`).
 #![allow(non_snake_case)]
 
 use super::{
