@@ -78,3 +78,31 @@ macro_rules! avx2_fma {
 }
 
 pub(crate) use avx2_fma;
+
+/// `[e(0), e(1), e(2), e(3)]` for `four!(j => e(j))`: one value per lane built without a
+/// closure (`std::array::from_fn`'s closures stayed calls compiled for the baseline, out of
+/// an AVX2 kernel, with their results copied; docs/benchmarks.md, "lanes19").
+macro_rules! four {
+    ($j:ident => $e:expr) => {
+        [
+            {
+                let $j = 0;
+                $e
+            },
+            {
+                let $j = 1;
+                $e
+            },
+            {
+                let $j = 2;
+                $e
+            },
+            {
+                let $j = 3;
+                $e
+            },
+        ]
+    };
+}
+
+pub(crate) use four;

@@ -37,6 +37,7 @@ use super::unknowns::{P, THETA, U, V};
 use crate::error::Result;
 use crate::model::equations::{Model, Site, lift, lift_m};
 use crate::model::linearize;
+use crate::simd::{avx2_fma, four};
 use crate::solution::State;
 use crate::{Real, so3};
 use nalgebra::{Matrix3, SVector, Vector3, Vector6};
@@ -134,15 +135,22 @@ pub(super) fn rhs(
     Rk: &Matrix3<f64>,
     y: &Block<f64>,
 ) -> Result<Block<f64>> {
-    let theta: Vector3<f64> = y.fixed_rows::<3>(THETA).into();
     let v: Vector3<f64> = y.fixed_rows::<3>(V).into();
     let u: Vector3<f64> = y.fixed_rows::<3>(U).into();
+    let (R, Jri) = rhs_frame(Rk, y);
+    let rates = linearize::rates(model, site, segment_end, &R, &v, &u)?;
+    Ok(rhs_with(site, &R, &Jri, y, &rates))
+}
+
+/// The frame R = R_k exp(theta) of y's theta in the local coordinates of an interval
+/// starting at `Rk`, and J_r^-1(theta): what [`rhs`] evaluates besides the rates.
+#[inline(always)]
+fn rhs_frame(Rk: &Matrix3<f64>, y: &Block<f64>) -> (Matrix3<f64>, Matrix3<f64>) {
+    let theta: Vector3<f64> = y.fixed_rows::<3>(THETA).into();
     // exp(theta) and J_r^-1(theta) from one hat(theta) and its square: the bits of
     // `so3::exp` and `so3::right_jacobian_inv` (`exp_and_jacobians`; J_r is not used).
     let [E, _, Jri] = so3::exp_and_jacobians(&theta);
-    let R = Rk * E;
-    let rates = linearize::rates(model, site, segment_end, &R, &v, &u)?;
-    Ok(rhs_with(site, &R, &Jri, y, &rates))
+    (Rk * E, Jri)
 }
 
 /// F(s, y) in the local coordinates of an interval, given the frame R = R_k exp(theta) of
@@ -151,6 +159,26 @@ pub(super) fn rhs(
 pub(super) fn rhs_from_rates(site: &Site, R: &Matrix3<f64>, y: &Block<f64>, rates: &Vector6<f64>) -> Block<f64> {
     let theta: Vector3<f64> = y.fixed_rows::<3>(THETA).into();
     rhs_with(site, R, &so3::right_jacobian_inv(&theta), y, rates)
+}
+
+/// [`rhs`] at four points of four intervals (interval j starting at `Rk[j]`), eq. 13's
+/// rates in one pass of four f64 lanes ([`linearize::rates_lanes`]), each point's bits those
+/// of [`rhs`]: None where a lane leaves the lanes' common path. Always inlined, for the
+/// AVX2 build of its caller.
+#[inline(always)]
+pub(super) fn rhs_lanes(
+    model: &Model,
+    sites: [&Site; 4],
+    segment_end: f64,
+    Rk: [&Matrix3<f64>; 4],
+    y: [&Block<f64>; 4],
+) -> Option<[Block<f64>; 4]> {
+    let frames = four!(j => rhs_frame(Rk[j], y[j]));
+    let v: [Vector3<f64>; 4] = four!(j => y[j].fixed_rows::<3>(V).into());
+    let u: [Vector3<f64>; 4] = four!(j => y[j].fixed_rows::<3>(U).into());
+    let states = four!(j => (&frames[j].0, &v[j], &u[j]));
+    let rates = linearize::rates_lanes(model, sites, segment_end, states)?;
+    Some(four!(j => rhs_with(sites[j], &frames[j].0, &frames[j].1, y[j], &rates[j])))
 }
 
 /// [`rhs_from_rates`] given J_r^-1(theta) (`Jri`) too.
@@ -244,10 +272,63 @@ pub fn interval(
     let ym = (y0 + y1) * 0.5 + (f0 - f1) * (h / 8.0);
     let fm = rhs(model, &sites.mid, segment_end, &a.R, &ym)?;
     Ok((
-        scale_rows(y1 - y0 - (f0 + fm * 4.0 + f1) * (h / 6.0), model.robot.length()),
+        simpson_rows([y0, y1, f0, f1], &fm, h, model.robot.length()),
         rates0,
         rates1,
     ))
+}
+
+/// The interval rows y_1 - y_0 - h/6 (F_0 + 4 F_m + F_1), scaled, from [`end_values`]' y_0,
+/// y_1, F_0, F_1 and F_m at the midpoint.
+#[inline(always)]
+fn simpson_rows([y0, y1, f0, f1]: [Block<f64>; 4], fm: &Block<f64>, h: f64, length: f64) -> Block<f64> {
+    scale_rows(y1 - y0 - (f0 + fm * 4.0 + f1) * (h / 6.0), length)
+}
+
+/// An interval's rows with the rates (v', u') at its two nodes, as [`interval`] gives them.
+pub(super) type IntervalRows = (Block<f64>, Vector6<f64>, Vector6<f64>);
+
+/// [`interval`] of four intervals of one segment (`segment_end`) at once, interval j between
+/// the nodes `x[j]` and `x[j + 1]` with the sites `sites[j]`, given the rates at `x[0]`
+/// (`start`): eq. 13's rates at the four end nodes in one pass of four f64 lanes, then at
+/// the four midpoints in a second ([`rhs_lanes`]), the rest as [`interval`] forms it, so
+/// each interval's rows and node rates have [`interval`]'s bits. Compiled for AVX2 and FMA
+/// where the processor has them (checked at run time). None where a lane leaves the lanes'
+/// common path: evaluate the intervals one by one then (which gives the errors).
+pub(super) fn intervals_lanes(
+    model: &Model,
+    sites: [&IntervalSites; 4],
+    segment_end: f64,
+    x: &[State],
+    start: Vector6<f64>,
+) -> Option<[IntervalRows; 4]> {
+    avx2_fma!(intervals_kernel(model, sites, segment_end, x, start))
+}
+
+/// [`intervals_lanes`]' evaluation.
+#[inline(always)]
+fn intervals_kernel(
+    model: &Model,
+    sites: [&IntervalSites; 4],
+    segment_end: f64,
+    x: &[State],
+    start: Vector6<f64>,
+) -> Option<[IntervalRows; 4]> {
+    let end_states = four!(j => (&x[j + 1].R, &x[j + 1].v, &x[j + 1].u));
+    let end_rates = linearize::rates_lanes(model, four!(j => &sites[j].end), segment_end, end_states)?;
+    let start_rates = [start, end_rates[0], end_rates[1], end_rates[2]];
+    let values = four!(j => end_values(sites[j], &x[j], &x[j + 1], &start_rates[j], &end_rates[j]));
+    let h = four!(j => sites[j].end.s - sites[j].start.s);
+    let ym = four!(j => (values[j][0] + values[j][1]) * 0.5 + (values[j][2] - values[j][3]) * (h[j] / 8.0));
+    let fm = rhs_lanes(
+        model,
+        four!(j => &sites[j].mid),
+        segment_end,
+        four!(j => &x[j].R),
+        four!(j => &ym[j]),
+    )?;
+    let length = model.robot.length();
+    Some(four!(j => (simpson_rows(values[j], &fm[j], h[j], length), start_rates[j], end_rates[j])))
 }
 
 /// The derivative of eq. 13's rates at one point in some parameters (with the strains

@@ -4,8 +4,11 @@
 
 use super::{System, TensionSink};
 use crate::collocation::interval_lanes::interval_jacobians4;
+use crate::collocation::order6::intervals_order6_lanes;
+use crate::collocation::residual::{self, Block, IntervalRows, IntervalSites};
 use crate::collocation::unknowns::{NODE, link_row};
 use crate::error::Result;
+use crate::model::linearize;
 use crate::model::linearize::Linearization;
 use crate::solution::State;
 use nalgebra::Vector6;
@@ -76,4 +79,84 @@ impl System<'_> {
         *slot = ends[3];
         Ok(true)
     }
+
+    /// Link k's value from `group` (the first link and the values of the last four links
+    /// evaluated at once, None where the lanes declined them) when it covers k; else, when
+    /// the links k..k+4 are four intervals of one segment, from `lanes` (given their sites
+    /// and segment end) evaluated and kept in `group`. None when neither gives it (evaluate
+    /// link k alone then).
+    fn grouped<T: Copy>(
+        &self,
+        k: usize,
+        group: &mut Group<T>,
+        lanes: impl FnOnce([&IntervalSites; 4], f64) -> Result<Option<[T; 4]>>,
+    ) -> Result<Option<T>> {
+        if let Some((first, values)) = group
+            && (*first..*first + 4).contains(&k)
+        {
+            return Ok(values.map(|values| values[k - *first]));
+        }
+        let Some([Some(s0), Some(s1), Some(s2), Some(s3)]) = self.interval_sites.get(k..k + 4) else {
+            return Ok(None);
+        };
+        let seg = self.mesh.nodes[k].segment_end;
+        if self.mesh.nodes[k + 1..k + 4].iter().any(|n| n.segment_end != seg) {
+            return Ok(None);
+        }
+        let values = lanes([s0, s1, s2, s3], seg)?;
+        *group = Some((k, values));
+        Ok(values.map(|values| values[0]))
+    }
+
+    /// Link k's order-6 rows ([`interval_order6`](crate::collocation::residual::interval_order6),
+    /// given the node rates `rates` at `x`) from four intervals evaluated at once
+    /// ([`intervals_order6_lanes`]; `group` as [`System::grouped`] keeps them).
+    pub(super) fn order6_group(
+        &self,
+        k: usize,
+        x: &[State],
+        rates: &[Vector6<f64>],
+        group: &mut Group<Block<f64>>,
+    ) -> Option<Block<f64>> {
+        let lanes = |sites: [&IntervalSites; 4], seg| {
+            let quarters = sites.map(|s| self.quarters(s));
+            let nodes = std::array::from_fn(|j| (&x[k + j], &x[k + j + 1]));
+            let node_rates = std::array::from_fn(|j| (&rates[k + j], &rates[k + j + 1]));
+            Ok(intervals_order6_lanes(
+                &self.model,
+                sites,
+                quarters.each_ref(),
+                seg,
+                nodes,
+                node_rates,
+            ))
+        };
+        self.grouped(k, group, lanes).ok().flatten()
+    }
+
+    /// Link k's interval rows with the rates at its nodes ([`residual::interval`], given the
+    /// rates at node k when known, `start`) from four intervals evaluated at once
+    /// ([`residual::intervals_lanes`]; `group` as [`System::grouped`] keeps them).
+    ///
+    /// # Errors
+    /// A model breakdown at node k (whose rates are evaluated here when not given).
+    pub(super) fn residual_group(
+        &self,
+        k: usize,
+        x: &[State],
+        start: Option<Vector6<f64>>,
+        group: &mut Group<IntervalRows>,
+    ) -> Result<Option<IntervalRows>> {
+        self.grouped(k, group, |sites, seg| {
+            let start = match start {
+                Some(r) => r,
+                None => linearize::rates(&self.model, &sites[0].start, seg, &x[k].R, &x[k].v, &x[k].u)?,
+            };
+            Ok(residual::intervals_lanes(&self.model, sites, seg, &x[k..k + 5], start))
+        })
+    }
 }
+
+/// Four links' values evaluated at once: the first link, and the values (None where the
+/// lanes declined them).
+pub(super) type Group<T> = Option<(usize, Option<[T; 4]>)>;

@@ -227,7 +227,12 @@ impl<'a> System<'a> {
                 Ok((residual, Vector6::zeros()))
             });
         }
-        self.rows(x, out, |_, sites, seg, a, b, start| {
+        // Runs of four intervals of one segment go to the lanes (`residual_group`).
+        let mut group = None;
+        self.rows(x, out, |k, sites, seg, a, b, start| {
+            if let Some((r, _, end)) = self.residual_group(k, x, start, &mut group)? {
+                return Ok((r, end));
+            }
             residual::interval(&self.model, sites, seg, a, b, start).map(|(r, _, end)| (r, end))
         })
     }
@@ -271,8 +276,12 @@ impl<'a> System<'a> {
         if self.friction.is_some() {
             return self.residual(x, out).map(|()| false);
         }
+        let mut group = None;
         self.rows(x, out, |k, sites, seg, a, b, start| {
-            let (r, start, end) = residual::interval(&self.model, sites, seg, a, b, start)?;
+            let (r, start, end) = match self.residual_group(k, x, start, &mut group)? {
+                Some(grouped) => grouped,
+                None => residual::interval(&self.model, sites, seg, a, b, start)?,
+            };
             (rates[k], rates[k + 1]) = (start, end);
             Ok((r, end))
         })?;
@@ -322,6 +331,9 @@ impl<'a> System<'a> {
                 Ok((r, end))
             });
         }
+        // With the node rates known the intervals are independent: runs of four go to the
+        // lanes (`order6_group`).
+        let mut group = None;
         self.rows(x, out, |k, sites, seg, a, b, start| {
             let (start, end) = if known {
                 (rates[k], rates[k + 1])
@@ -329,8 +341,14 @@ impl<'a> System<'a> {
                 self.end_rates(sites, seg, a, b, start)?
             };
             (rates[k], rates[k + 1]) = (start, end);
-            let quarters = self.quarters(sites);
-            let r = residual::interval_order6(&self.model, sites, &quarters, seg, a, b, &start, &end)?;
+            let grouped = known.then(|| self.order6_group(k, x, rates, &mut group)).flatten();
+            let r = match grouped {
+                Some(r) => r,
+                None => {
+                    let quarters = self.quarters(sites);
+                    residual::interval_order6(&self.model, sites, &quarters, seg, a, b, &start, &end)?
+                }
+            };
             local[k] = r.amax();
             Ok((r, end))
         })

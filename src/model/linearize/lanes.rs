@@ -13,7 +13,10 @@
 //! points with the scalar code, which gives the error or the fallback's values.
 #![allow(non_snake_case)]
 
+mod pass1;
 mod tensions;
+pub(crate) use pass1::rates_lanes;
+use pass1::{Assembled, assemble};
 
 use super::{CACHED_TENDONS, Linearization};
 use crate::model::equations::{MIN_TENDON_SPEED, Model, Site};
@@ -395,99 +398,23 @@ pub(crate) fn linearize_lanes(
     out: &mut [Linearization; 4],
     tensions: Option<TensionLanes>,
 ) -> bool {
-    if sites.iter().any(|s| s.inextensible) {
-        return false;
-    }
-    let site = SiteLanes::new(sites);
-    let [t0, t1, t2, t3] = states;
-    let R = gather3([t0.0, t1.0, t2.0, t3.0]);
-    let v = gather([t0.1, t1.1, t2.1, t3.1]);
-    let u = gather([t0.2, t1.2, t2.2, t3.2]);
-
-    // Pass 1, `assemble`.
-    let dv = sub(&v, &site.v_star);
-    let du = sub(&u, &site.u_star);
-    let n_b = mul(&dv, &site.kse);
-    let m_b = mul(&du, &site.kbt);
-    let f_b = tr_vec(&R, &site.f_e);
-    let l_b = tr_vec(&R, &site.l_e);
-    let (mut A, mut G, mut H) = (Z33, Z33, Z33);
-    let (mut a, mut b) = (Z3, Z3);
     // Only the first `count` slots are written and read (zeroing all 8 was a memset).
     let mut tendons = [const { MaybeUninit::<TendonLanes>::uninit() }; CACHED_TENDONS];
-    let mut count = 0;
-    let [s0, s1, s2, s3] = sites;
-    let mut iters = [
-        model.distributed_tendons(s0.s, segment_end),
-        model.distributed_tendons(s1.s, segment_end),
-        model.distributed_tendons(s2.s, segment_end),
-        model.distributed_tendons(s3.s, segment_end),
-    ];
-    loop {
-        let next = [iters[0].next(), iters[1].next(), iters[2].next(), iters[3].next()];
-        let [Some(t0), Some(t1), Some(t2), Some(t3)] = &next else {
-            if next.iter().any(Option::is_some) {
-                return false;
-            }
-            break;
-        };
-        // One tension per tendon without friction, so lane 0's serves all four; a lane
-        // whose tension differs (none today) goes to the scalar kernel with the rest.
-        if count == CACHED_TENDONS || [t1.0, t2.0, t3.0] != [t0.0; 3] || [t1.1, t2.1, t3.1] != [t0.1; 3] {
-            return false;
-        }
-        let Some(tp) = TendonLanes::new(t0.1, [&t0.2, &t1.2, &t2.2, &t3.2], &v, &u) else {
-            return false;
-        };
-        let A_i = tp.A();
-        let G_i = mul_hat(&A_i, &[-tp.r[0], -tp.r[1], -tp.r[2]]);
-        add_m(&mut A, &A_i);
-        add_m(&mut G, &G_i);
-        add_m(&mut H, &hat_mul(&tp.r, &G_i));
-        let a_i = mat_vec(&A_i, &tp.c);
-        b = add(&b, &cross(&tp.r, &a_i));
-        a = add(&a, &a_i);
-        tendons[count].write(tp);
-        count += 1;
-    }
-    let rhs_v = sub(
-        &sub(
-            &sub(
-                &sub(
-                    &sub(&mul(&site.v_star_s, &site.kse), &cross(&u, &n_b)),
-                    &mul(&dv, &site.kse_s),
-                ),
-                &f_b,
-            ),
-            &site.f_follower,
-        ),
-        &a,
-    );
-    let rhs_u = sub(
-        &sub(
-            &sub(
-                &sub(
-                    &sub(&mul(&site.u_star_s, &site.kbt), &cross(&u, &m_b)),
-                    &mul(&du, &site.kbt_s),
-                ),
-                &cross(&v, &n_b),
-            ),
-            &l_b,
-        ),
-        &b,
-    );
-    // M = [A + D, G; G^T, H + C]: its diagonal blocks as the scalar code adds D and C.
-    let (mut P, mut Q) = (A, H);
-    for j in 0..3 {
-        P[j][j] += site.kse[j];
-        Q[j][j] += site.kbt[j];
-    }
-    let Some(factor) = Schur::new(&P, &G, &Q) else {
+    let Some(pass1) = assemble(model, sites, segment_end, states, &mut tendons) else {
         return false;
     };
-    let mut x = [[rhs_v[0], rhs_v[1], rhs_v[2], rhs_u[0], rhs_u[1], rhs_u[2]]];
-    factor.solve_rows(&mut x);
-    let [x] = x;
+    let Assembled {
+        site,
+        v,
+        u,
+        n_b,
+        m_b,
+        f_b,
+        l_b,
+        factor,
+        x,
+        count,
+    } = pass1;
     let (x_v, x_u) = ([x[0], x[1], x[2]], [x[3], x[4], x[5]]);
     if let Some(tensions) = tensions {
         // SAFETY: the first `count` slots were written above (MaybeUninit<T> has T's

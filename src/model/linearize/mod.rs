@@ -97,7 +97,7 @@ mod factor;
 use factor::Factor;
 
 mod lanes;
-pub(crate) use lanes::{TensionLanes, linearize_lanes};
+pub(crate) use lanes::{TensionLanes, linearize_lanes, rates_lanes};
 
 mod parameters;
 pub(crate) use parameters::{linearize_tensions, linearize_tensions_inline, stiffness_rates, tension_rates};
