@@ -15,6 +15,7 @@ use crate::error::Result;
 use crate::model::equations::Model;
 use crate::model::linearize::{self, Linearization, linearize_keeping};
 use crate::simd::avx2_fma;
+use crate::simd::lanes::F4;
 use crate::solution::State;
 use nalgebra::{SMatrix, Vector3, Vector6};
 
@@ -284,13 +285,16 @@ pub(super) fn tension_rows(
 }
 
 /// The midpoint's F on the 18 columns: its (theta, v, u) columns of dF/dy times the
-/// midpoint's columns `dYm`, plus dF/dphi on the theta_a columns. Written out so that it
-/// inlines into the AVX2 copy of [`interval_jacobian_kernel`] (nalgebra's product is a call compiled for the
-/// baseline there), with each entry's sum in the order of nalgebra's product (the k = 0
-/// term, then each further term added to it), so the same bits.
+/// midpoint's columns `dYm`, plus dF/dphi on the theta_a columns. Each column's 12 rows are
+/// three [`F4`]s, so the loops are wide in every build (the one-interval kernel's, the lane
+/// kernel's and friction's AVX2 copies: written on scalars the lane kernel's build left them
+/// scalar, 3.5 k instructions an interval against 1.4 k), with each entry's sum in the order
+/// of nalgebra's product (the k = 0 term, then each further term added to it), so the same
+/// bits.
 #[inline(always)]
 pub(super) fn midpoint_product(pm: &PointLinearization, dYm: &SMatrix<f64, 9, 18>) -> SMatrix<f64, 12, 18> {
-    let f_y = pm.f_y.as_slice(); // column-major, 12 x 12
+    let load = |s: &[f64], i: usize| F4([s[i], s[i + 1], s[i + 2], s[i + 3]]);
+    let (f_y, f_frame) = (pm.f_y.as_slice(), pm.f_frame.as_slice()); // column-major
     let mut dFm = SMatrix::<f64, 12, 18>::zeros();
     for (j, (col, dy)) in dFm
         .as_mut_slice()
@@ -298,21 +302,19 @@ pub(super) fn midpoint_product(pm: &PointLinearization, dYm: &SMatrix<f64, 9, 18
         .zip(dYm.as_slice().chunks_exact(9))
         .enumerate()
     {
-        let col: &mut [f64; 12] = col.try_into().expect("a column of 12 rows");
-        let first: &[f64; 12] = f_y[36..48].try_into().expect("a column of 12 rows");
-        for (c, f) in col.iter_mut().zip(first) {
-            *c = f * dy[0];
-        }
-        for (k, dy_k) in dy.iter().enumerate().skip(1) {
-            let f: &[f64; 12] = f_y[12 * (3 + k)..12 * (4 + k)].try_into().expect("a column of 12 rows");
-            for (c, f) in col.iter_mut().zip(f) {
-                *c += f * dy_k;
+        let mut c = [load(f_y, 36) * dy[0], load(f_y, 40) * dy[0], load(f_y, 44) * dy[0]];
+        for (k, &dy_k) in dy.iter().enumerate().skip(1) {
+            for (r, c) in c.iter_mut().enumerate() {
+                *c += load(f_y, 12 * (3 + k) + 4 * r) * dy_k;
             }
         }
         if j < 3 {
-            for (c, f) in col.iter_mut().zip(pm.f_frame.column(j).iter()) {
-                *c += f;
+            for (r, c) in c.iter_mut().enumerate() {
+                *c += load(f_frame, 12 * j + 4 * r);
             }
+        }
+        for (r, c) in c.iter().enumerate() {
+            col[4 * r..4 * r + 4].copy_from_slice(&c.0);
         }
     }
     dFm

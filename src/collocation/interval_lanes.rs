@@ -15,19 +15,17 @@
 //! (`linearize_lanes`' module docs) the four intervals go to the scalar kernel.
 #![allow(non_snake_case)]
 
-use super::interval_jacobian::{interval_jacobian_tensions, tension_rows};
+use super::interval_jacobian::{interval_jacobian_tensions, midpoint_product, tension_rows};
 use super::residual::{
-    Block, EndColumns, IntervalSites, IntervalTensions, PointFrame, PointLinearization, end_points,
-    rhs_linearized_inline, scale_rows,
+    Block, EndColumns, IntervalSites, IntervalTensions, PointFrame, end_points, rhs_linearized_inline, scale_rows,
 };
 use super::unknowns::{P, THETA, U, V};
 use crate::error::Result;
 use crate::model::equations::{Model, Site};
 use crate::model::linearize::{Linearization, TensionLanes, linearize_keeping, linearize_lanes, linearize_tensions};
 use crate::model::routing::RoutingPoint;
-use crate::simd::lanes::F4;
 use crate::solution::State;
-use nalgebra::{SMatrix, Vector3, Vector6};
+use nalgebra::{Vector3, Vector6};
 
 /// Entries of one interval's row-major 12 x 24 block.
 const BLOCK: usize = 12 * 24;
@@ -208,39 +206,6 @@ fn ahead(
     }
 }
 
-/// `interval_jacobian::midpoint_product` with each column's 12 rows as three [`F4`]s: the
-/// same operations on each entry in the same order, so its bits. In the lane kernel's AVX2
-/// build the compiler left that function's loops scalar (3.5 k instructions an interval
-/// against 1.4 k in the scalar kernel's build); written on lanes they are wide in both.
-#[inline(always)]
-fn midpoint_product_wide(pm: &PointLinearization, dYm: &SMatrix<f64, 9, 18>) -> SMatrix<f64, 12, 18> {
-    let load = |s: &[f64], i: usize| F4([s[i], s[i + 1], s[i + 2], s[i + 3]]);
-    let (f_y, f_frame) = (pm.f_y.as_slice(), pm.f_frame.as_slice()); // column-major
-    let mut dFm = SMatrix::<f64, 12, 18>::zeros();
-    for (j, (col, dy)) in dFm
-        .as_mut_slice()
-        .chunks_exact_mut(12)
-        .zip(dYm.as_slice().chunks_exact(9))
-        .enumerate()
-    {
-        let mut c = [load(f_y, 36) * dy[0], load(f_y, 40) * dy[0], load(f_y, 44) * dy[0]];
-        for (k, &dy_k) in dy.iter().enumerate().skip(1) {
-            for (r, c) in c.iter_mut().enumerate() {
-                *c += load(f_y, 12 * (3 + k) + 4 * r) * dy_k;
-            }
-        }
-        if j < 3 {
-            for (r, c) in c.iter_mut().enumerate() {
-                *c += load(f_frame, 12 * j + 4 * r);
-            }
-        }
-        for (r, c) in c.iter().enumerate() {
-            col[4 * r..4 * r + 4].copy_from_slice(&c.0);
-        }
-    }
-    dFm
-}
-
 /// [`interval_jacobians4`] with the linearizations in lanes; None (nothing valid written)
 /// where a lane leaves their common path or the start node's linearization fails.
 #[inline(always)]
@@ -330,7 +295,7 @@ fn lanes_kernel(
         let residual = scale_rows(p.y1 - p.y0 - (p0.f + pm.f * 4.0 + p1.f) * (p.h / 6.0), length);
         out[j] = (residual, lin0.rates);
         let columns = EndColumns::new(&p0, &p1, &p.frame1, length);
-        let dFm = midpoint_product_wide(&pm, &columns.midpoint(p.h));
+        let dFm = midpoint_product(&pm, &columns.midpoint(p.h));
         columns.write(&dFm, p.h, length, block);
         if let Some(t) = tensions.as_deref_mut() {
             tension_rows(
