@@ -35,11 +35,17 @@ fn max_norm_lanes(v: &[f64]) -> f64 {
         .fold(0.0, |m: f64, x| if x.abs() > m { x.abs() } else { m })
 }
 
-/// The max-norm of `v` by an in-order fold (a NaN entry makes the norm NaN unless a later
-/// entry is compared after it, `f64::max` ignoring a NaN operand).
+/// The max-norm of `v` by an in-order fold: NaN when any entry is NaN (`f64::max` alone
+/// would drop a NaN met before a later entry, and a residual with a NaN row would pass as
+/// converged), infinite when any entry is infinite.
 fn max_norm_in_order(v: &[f64]) -> f64 {
-    v.iter()
-        .fold(0.0, |m, x| if x.is_nan() { f64::NAN } else { m.max(x.abs()) })
+    v.iter().fold(0.0, |m, x| {
+        if m.is_nan() || x.is_nan() {
+            f64::NAN
+        } else {
+            m.max(x.abs())
+        }
+    })
 }
 
 #[cfg(test)]
@@ -71,6 +77,9 @@ mod tests {
                         max_norm_in_order(&w).to_bits(),
                         "{bad} at {at} of {len}"
                     );
+                    // A NaN anywhere makes the norm NaN, an infinity infinite.
+                    assert_eq!(max_norm(&w).is_nan(), bad.is_nan(), "{bad} at {at} of {len}");
+                    assert!(bad.is_nan() || max_norm(&w) == f64::INFINITY, "{bad} at {at} of {len}");
                 }
             }
         }
