@@ -303,7 +303,7 @@ fn a_sliding_step_at_an_inflection_is_solved_with_a_node_there() {
 /// step checked as in the 21-step ones (before honest18 20 of tendon 1's and 31 of tendon
 /// 3's sliding steps missed their tolerance, and tendon 3's step 13 met it with 1.9 times
 /// its estimate as error; before hist20 tendon 1's stuck step 58 missed it, estimate
-/// 1.8e-6 m, error 8.1e-6 m, docs/friction.md section 8, "hist20"). Long (about 70 s in
+/// 1.8e-6 m, error 8.1e-6 m, docs/friction.md section 8, "hist20"). Long (about 40 s in
 /// release): `cargo test --release --test history -- --ignored opposite_101`.
 #[test]
 #[ignore]
