@@ -139,21 +139,40 @@ pub(crate) struct Grip {
 pub(crate) type Kink = (f64, f64, f64);
 
 impl Grip {
+    /// The stick/slip boundary of these contacts: the start node of the first stuck link
+    /// after a sliding one (None where the tendon slides all along or sticks all along).
+    pub(crate) fn boundary(&self) -> Option<usize> {
+        self.contacts
+            .iter()
+            .position(|&c| c == Contact::Stick)
+            .filter(|&k| k > 0)
+    }
+
     /// The kinks of the material a step leaves, whose solved `contacts` on the nodes `s`
     /// of its mesh give `lambda` at those nodes, started from this grip's material
     /// (`reference` on the same nodes, the stuck stretch's material): the step's stick/slip
     /// boundary (the start node of its first stuck link after a sliding one), with the
     /// material the sliding stretch leaves there before it and the stuck material after it,
     /// then this material's kinks beyond it (its stuck stretch kept them; the sliding
-    /// stretch replaced the material, smooth, and with it the kinks). A tendon that slides
-    /// all along leaves none; one stuck all along keeps them all.
-    pub(crate) fn kinks_after(&self, contacts: &[Contact], s: &[f64], lambda: &[f64]) -> Vec<Kink> {
-        let Some(first) = contacts.iter().position(|&c| c == Contact::Stick) else {
-            return Vec::new();
+    /// stretch replaced the material, and with it the kinks). The material the sliding
+    /// stretch lays is smooth but where another tendon's stick/slip boundary lies (the
+    /// points `others`, nodes of `s`): that tendon's tangential load jumps there, and with
+    /// it the rate of the rod's strains and so of this tendon's path speed; each such node
+    /// inside the sliding stretch is a kink too, with the same lambda on both sides
+    /// (docs/friction.md section 8, "hist20"). A tendon that slides all along leaves only
+    /// those; one stuck all along keeps its kinks.
+    pub(crate) fn kinks_after(&self, contacts: &[Contact], s: &[f64], lambda: &[f64], others: &[f64]) -> Vec<Kink> {
+        let first = contacts.iter().position(|&c| c == Contact::Stick);
+        let mut laid: Vec<Kink> = (1..first.unwrap_or(contacts.len()))
+            .filter(|&n| others.contains(&s[n]))
+            .map(|n| (s[n], lambda[n], lambda[n]))
+            .collect();
+        let Some(first) = first else {
+            return laid;
         };
         let boundary = s[first];
-        let new = (first > 0).then_some((boundary, lambda[first], self.reference[first]));
-        new.into_iter()
+        laid.extend((first > 0).then_some((boundary, lambda[first], self.reference[first])));
+        laid.into_iter()
             .chain(self.kinks.iter().copied().filter(|&(e, _, _)| e > boundary))
             .collect()
     }

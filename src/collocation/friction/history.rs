@@ -562,7 +562,13 @@ fn solve_on(robot: &Robot, options: &Options, carried: &mut Carried, held: Optio
             check_slip(i, &grips[j], &lambda, &x, span, held.unwrap_or(0.0))?;
         }
         let nodes: Vec<f64> = x[..=span].iter().map(|n| n.s).collect();
-        next[j].kinks = grips[j].kinks_after(&grips[j].contacts, &nodes, &lambda);
+        // The other tendons' stick/slip boundaries: kinks of this one's path speed, so of
+        // the material it lays where it slides (docs/friction.md section 8, "hist20").
+        let others: Vec<f64> = (0..grips.len())
+            .filter(|&l| l != j)
+            .filter_map(|l| grips[l].boundary().map(|k| x[k].s))
+            .collect();
+        next[j].kinks = grips[j].kinks_after(&grips[j].contacts, &nodes, &lambda, &others);
         next[j].reference[..=span].copy_from_slice(&lambda);
         let mut list: Vec<(f64, f64, Contact)> = Vec::new();
         for (k, &c) in grips[j].contacts.iter().enumerate() {

@@ -522,12 +522,15 @@ pub(super) fn hand_back(carried: &mut Carried, fine: &Carried, before: &Carried)
             .map(|((&s, &slid), &kept)| if s > boundary { kept } else { slid })
             .collect();
         let span = was.contacts.len();
+        // The kinks its sliding stretch laid at other tendons' boundaries, with the
+        // order-4 material there (as the boundary's own kink has before it).
+        let laid = f.kinks.iter().copied().filter(|&(e, _, _)| e < boundary);
         corrected.kinks = match first {
-            None => Vec::new(),
+            None => laid.collect(),
             Some(k) => {
                 let stuck = lagrange(&coarse[..=span], &old.values[..=span], &old.kinks, boundary, 8);
                 let new = (k > 0).then_some((boundary, f.reference[k], stuck));
-                new.into_iter()
+                laid.chain(new)
                     .chain(old.kinks.iter().copied().filter(|&(e, _, _)| e > boundary))
                     .collect()
             }
