@@ -52,16 +52,34 @@ impl EndColumns {
     /// frame (at theta_1).
     #[inline(always)]
     pub(super) fn new(p0: &PointLinearization, p1: &PointLinearization, frame1: &PointFrame, length: f64) -> Self {
+        let mut ends = EndColumns::zeros();
+        ends.fill(p0, p1, frame1, length);
+        ends
+    }
+
+    /// Columns of zeros, for [`EndColumns::fill`].
+    #[inline(always)]
+    pub(super) fn zeros() -> Self {
+        EndColumns {
+            dtheta1_da: Matrix3::zeros(),
+            jri1: Matrix3::zeros(),
+            inv_length: 0.0,
+            dF0: SMatrix::zeros(),
+            dF1: SMatrix::zeros(),
+        }
+    }
+
+    /// [`EndColumns::new`] in place (every entry is overwritten): for a kernel that forms
+    /// the columns of several intervals in turn, without moving them out of a constructor.
+    #[inline(always)]
+    pub(super) fn fill(&mut self, p0: &PointLinearization, p1: &PointLinearization, frame1: &PointFrame, length: f64) {
         // theta_1 = log(exp(-d_a) Q exp(d_b)): d/d d_b = J_r^-1, d/d d_a = -J_r^-1 exp(theta_1)^T
         let jri1 = frame1.Jri;
         let dtheta1_da = -jri1 * frame1.E.transpose();
-        let mut ends = EndColumns {
-            dtheta1_da,
-            jri1,
-            inv_length: 1.0 / length,
-            dF0: SMatrix::zeros(),
-            dF1: SMatrix::zeros(),
-        };
+        self.dtheta1_da = dtheta1_da;
+        self.jri1 = jri1;
+        self.inv_length = 1.0 / length;
+        let ends = self;
         // The frame R_k = R_a exp(d_a) enters every F through the theta_a columns. Written
         // entry by entry (nalgebra's products and `scale_mut` stayed calls in the AVX2
         // build): each product entry summed as nalgebra's sums it (the k = 0 term, then
@@ -88,7 +106,6 @@ impl EndColumns {
                 dF1[(i, 9 + c)] = f1[(i, 9 + c)] * inv_length;
             }
         }
-        ends
     }
 
     /// y_0 at row `3 RB + r`, column `3 CB + c`.

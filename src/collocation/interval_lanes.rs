@@ -283,6 +283,7 @@ fn lanes_kernel(
         return None;
     }
     let mut out = [(Block::zeros(), Vector6::zeros()); 4];
+    let mut columns = EndColumns::zeros();
     for (j, (block, p)) in jac.chunks_exact_mut(BLOCK).zip(&ahead).enumerate() {
         let (site, a, b) = (sites[j], &x[j], &x[j + 1]);
         let lin0 = if j == 0 { start } else { &ends[j - 1] };
@@ -294,7 +295,7 @@ fn lanes_kernel(
         let pm = rhs_linearized_inline(&site.mid, &mids[j], &a.R, &p.ym, &p.frame_m);
         let residual = scale_rows(p.y1 - p.y0 - (p0.f + pm.f * 4.0 + p1.f) * (p.h / 6.0), length);
         out[j] = (residual, lin0.rates);
-        let columns = EndColumns::new(&p0, &p1, &p.frame1, length);
+        columns.fill(&p0, &p1, &p.frame1, length);
         let dFm = midpoint_product(&pm, &columns.midpoint(p.h));
         columns.write(&dFm, p.h, length, block);
         if let Some(t) = tensions.as_deref_mut() {

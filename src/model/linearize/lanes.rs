@@ -474,22 +474,47 @@ pub(crate) fn linearize_lanes(
             *value = -*value;
         }
     }
-    for (lane, lin) in out.iter_mut().enumerate() {
-        for (i, x_i) in x.iter().enumerate() {
-            lin.rates[i] = x_i.lane(lane);
-        }
-        // Row k of dF^T is column k of the derivatives.
-        for (k, row) in dFt.iter().enumerate() {
-            for (i, value) in row.iter().enumerate() {
-                if k < 6 {
-                    lin.d_strains[(i, k)] = value.lane(lane);
-                } else {
-                    lin.d_rotation[(i, k - 6)] = value.lane(lane);
-                }
-            }
-        }
+    // Lane l's values into out[l]: the rates, then row k of dF^T as column k of the
+    // derivatives (six consecutive entries of the column-major d_strains or d_rotation).
+    let [o0, o1, o2, o3] = out;
+    let rates = [
+        o0.rates.as_mut_slice(),
+        o1.rates.as_mut_slice(),
+        o2.rates.as_mut_slice(),
+        o3.rates.as_mut_slice(),
+    ];
+    scatter6(&x, rates);
+    for (k, row) in dFt.iter().enumerate() {
+        let c = if k < 6 { 6 * k } else { 6 * (k - 6) };
+        let columns = if k < 6 {
+            [
+                &mut o0.d_strains.as_mut_slice()[c..c + 6],
+                &mut o1.d_strains.as_mut_slice()[c..c + 6],
+                &mut o2.d_strains.as_mut_slice()[c..c + 6],
+                &mut o3.d_strains.as_mut_slice()[c..c + 6],
+            ]
+        } else {
+            [
+                &mut o0.d_rotation.as_mut_slice()[c..c + 6],
+                &mut o1.d_rotation.as_mut_slice()[c..c + 6],
+                &mut o2.d_rotation.as_mut_slice()[c..c + 6],
+                &mut o3.d_rotation.as_mut_slice()[c..c + 6],
+            ]
+        };
+        scatter6(row, columns);
     }
     true
+}
+
+/// Six values of four lanes into the lanes' outputs, lane l's six into `out[l][..6]`
+/// together (moves only, so the values): a transpose, not a loop of `lane` per lane and
+/// value, which went through the stack value by value.
+#[inline(always)]
+fn scatter6(v: &[F4; 6], out: [&mut [f64]; 4]) {
+    let [a, b, c, d, e, f] = [v[0].0, v[1].0, v[2].0, v[3].0, v[4].0, v[5].0];
+    for (l, o) in out.into_iter().enumerate() {
+        o[..6].copy_from_slice(&[a[l], b[l], c[l], d[l], e[l], f[l]]);
+    }
 }
 
 #[inline(always)]
