@@ -17,6 +17,10 @@ use crate::so3;
 use crate::solution::{Node, Solution, State};
 use nalgebra::{Matrix3, Vector3};
 
+mod quads;
+
+use quads::TendonQuad;
+
 /// The strain v at mesh node `node` whose translational coordinate is `v` (v* on a
 /// Kirchhoff rod, [`crate::model::equations::Site::strain`]).
 fn strain(model: &Model, node: &MeshNode, v: &Vector3<f64>) -> Vector3<f64> {
@@ -256,6 +260,9 @@ struct SweepBuffers {
     /// [`Model::tendons`] yields them, node after node, and where each node's end.
     routes: Vec<(usize, f64, RoutingPoint)>,
     route_ends: Vec<usize>,
+    /// The same tendons four by four in lanes ([`quads::quads`]), and where each node's end.
+    quads: Vec<TendonQuad>,
+    quad_ends: Vec<usize>,
 }
 
 thread_local! {
@@ -271,6 +278,8 @@ thread_local! {
             sites: Vec::new(),
             routes: Vec::new(),
             route_ends: Vec::new(),
+            quads: Vec::new(),
+            quad_ends: Vec::new(),
         })
     };
 }
@@ -303,6 +312,8 @@ fn rigid_estimate_in(model: &Model, nodes: &[MeshNode], b: &mut SweepBuffers, re
         sites,
         routes,
         route_ends,
+        quads,
+        quad_ends,
     } = b;
     reference_strains_into(model, nodes, strains);
     integrate_poses_with(model, nodes, strains, shape, sums);
@@ -322,23 +333,25 @@ fn rigid_estimate_in(model: &Model, nodes: &[MeshNode], b: &mut SweepBuffers, re
         routes.extend(model.tendons(n.s, Which::ActiveTo(n.segment_end)));
         route_ends.push(routes.len());
     }
+    // The body-frame sums take them four at a time, in lanes laid out once.
+    if sums == Sums::Body {
+        quads.reserve(nodes.len() * model.robot.tendons.len().div_ceil(4));
+        quads::quads((routes, route_ends), (quads, quad_ends));
+    }
     // The deformation of each strain group, v and u L: the first sweep's step (from the
     // reference strains).
     let mut deformation = [0.0; 2];
     for _ in 0..MAX_SWEEPS {
-        let pulls = Pulls::Kept(routes, route_ends, sums);
+        let pulls = match sums {
+            Sums::Body => Pulls::Quads(quads, quad_ends),
+            Sums::World => Pulls::Kept(routes, route_ends),
+        };
         sweep(model, (nodes, sites), (shape, strains), pulls, (wrench, next));
-        // The fixed-point step, flattened (v then u L per node, so all are comparable).
-        step.clear();
-        step.extend(next.iter().zip(strains.iter()).flat_map(|(a, b)| {
-            let (dv, du) = (a.0 - b.0, (a.1 - b.1) * length);
-            [dv[0], dv[1], dv[2], du[0], du[1], du[2]]
-        }));
-        // The largest change of each group (v, u L).
-        let groups = step.chunks_exact(3).enumerate().fold([0.0f64; 2], |mut m, (i, x)| {
-            m[i % 2] = x.iter().fold(m[i % 2], |m, x| m.max(x.abs()));
-            m
-        });
+        // The fixed-point step, flattened (v then u L per node, so all are comparable), the
+        // largest change of each group (v, u L) and, after the first step, Aitken's sums
+        // against the step before, in one pass.
+        let against = if stepped { Some(&last_step[..]) } else { None };
+        let (groups, sums_aitken) = step_of(next, strains, length, against, step);
         let change = groups[0].max(groups[1]);
         if !(change < last_change || last_change.is_infinite()) || !change.is_finite() {
             break;
@@ -349,8 +362,8 @@ fn rigid_estimate_in(model: &Model, nodes: &[MeshNode], b: &mut SweepBuffers, re
         // Aitken's dynamic relaxation (Irons & Tuck): the plain fixed point can cycle when
         // a load's moment arm swings with the shape it bends (a tendon and a tip load
         // pulling the same way); the factor adapts to the observed contraction.
-        if stepped {
-            relaxation = aitken(relaxation, last_step, step);
+        if let Some((num, den)) = sums_aitken {
+            relaxation = aitken_factor(relaxation, num, den);
         }
         relax_strains(strains, step, relaxation, length);
         integrate_poses_with(model, nodes, strains, shape, sums);
@@ -439,11 +452,51 @@ pub(crate) fn aitken(relaxation: f64, last_step: &[f64], step: &[f64]) -> f64 {
         num += a * (b - a);
         den += (b - a) * (b - a);
     }
+    aitken_factor(relaxation, num, den)
+}
+
+/// [`aitken`]'s factor from its sums `num` = sum a (b - a) and `den` = sum (b - a)^2 over
+/// the steps a (the last) and b.
+#[inline(always)]
+fn aitken_factor(relaxation: f64, num: f64, den: f64) -> f64 {
     if den > 0.0 {
         (-relaxation * num / den).clamp(0.1, 1.0)
     } else {
         relaxation
     }
+}
+
+/// The fixed-point step from `strains` to `next`, flattened into `step` (v, then u L per
+/// node; `length` is L), with the largest absolute change of each group (v, u L) and, when
+/// `last_step` is given, [`aitken`]'s sums (num, den) against it: the same operations in
+/// the same order as flattening, folding the groups and summing apart, in one pass.
+#[inline(always)]
+fn step_of(
+    next: &[(Vector3<f64>, Vector3<f64>)],
+    strains: &[(Vector3<f64>, Vector3<f64>)],
+    length: f64,
+    last_step: Option<&[f64]>,
+    step: &mut Vec<f64>,
+) -> ([f64; 2], Option<(f64, f64)>) {
+    step.clear();
+    step.resize(6 * strains.len(), 0.0);
+    let mut groups = [0.0f64; 2];
+    let (mut num, mut den) = (0.0, 0.0);
+    for (k, ((a, b), out)) in next.iter().zip(strains).zip(step.chunks_exact_mut(6)).enumerate() {
+        let (dv, du) = (a.0 - b.0, (a.1 - b.1) * length);
+        let x = [dv[0], dv[1], dv[2], du[0], du[1], du[2]];
+        out.copy_from_slice(&x);
+        for (i, x) in x.iter().enumerate() {
+            groups[i / 3] = groups[i / 3].max(x.abs());
+        }
+        if let Some(last) = last_step {
+            for (a, b) in last[6 * k..6 * k + 6].iter().zip(&x) {
+                num += a * (b - a);
+                den += (b - a) * (b - a);
+            }
+        }
+    }
+    (groups, last_step.map(|_| (num, den)))
 }
 
 /// Moves the node strains (v, u) by `relaxation` times the flattened fixed-point `step`
@@ -461,8 +514,12 @@ pub(crate) fn relax_strains(strains: &mut [(Vector3<f64>, Vector3<f64>)], step: 
 #[derive(Clone, Copy)]
 enum Pulls<'a> {
     /// The model's tensions, with the taut tendons and their routing points at every node
-    /// kept (`routes`, node after node; `ends[k]` ends node k's), summed as [`Sums`] says.
-    Kept(&'a [(usize, f64, RoutingPoint)], &'a [usize], Sums),
+    /// kept (`routes`, node after node; `ends[k]` ends node k's), rotated to the world frame
+    /// tendon by tendon ([`Sums::World`]).
+    Kept(&'a [(usize, f64, RoutingPoint)], &'a [usize]),
+    /// The same tendons four by four in lanes (`quads`; `ends[k]` ends node k's), summed in
+    /// the body frame ([`Sums::Body`]).
+    Quads(&'a [TendonQuad], &'a [usize]),
     /// Every tendon's tension at node k from `tensions[k]` (friction), with the tendons
     /// reaching every node and their routing points there kept as in `Kept` (slack ones
     /// included: a tendon pulls where its local tension is positive, as
@@ -507,6 +564,7 @@ fn sweep(
         };
     }
     out.clear();
+    let coupled = model.robot.tendon_model == crate::model::robot::TendonModel::Coupled;
     for (k, node) in nodes.iter().enumerate() {
         let site = &sites[k];
         let R = shape[k].1;
@@ -515,19 +573,20 @@ fn sweep(
         // The tendons loading this node's segment pull it back along their paths.
         let v = site.strain(&v);
         let pull = match pulls {
-            Pulls::Kept(routes, ends, sums) => {
+            Pulls::Quads(quads, ends) => {
+                let from = if k == 0 { 0 } else { ends[k - 1] };
+                // n_b = R^T n - sum f_b: the pulls stay in the body frame.
+                let (mut n_b, mut m_b) = (R.transpose() * n, R.transpose() * m);
+                if let Some((f, l)) = quads::pull(&quads[from..ends[k]], coupled, &v, &u) {
+                    n_b -= f;
+                    m_b -= l;
+                }
+                out.push(model.strains_for_wrench(site, &n_b, &m_b));
+                continue;
+            }
+            Pulls::Kept(routes, ends) => {
                 let from = if k == 0 { 0 } else { ends[k - 1] };
                 let tendons = routes[from..ends[k]].iter().copied();
-                if sums == Sums::Body {
-                    // n_b = R^T n - sum f_b: the pulls stay in the body frame.
-                    let (mut n_b, mut m_b) = (R.transpose() * n, R.transpose() * m);
-                    if let Ok((f, l)) = model.tendon_pull_body_of(tendons, node.s, &v, &u) {
-                        n_b -= f;
-                        m_b -= l;
-                    }
-                    out.push(model.strains_for_wrench(site, &n_b, &m_b));
-                    continue;
-                }
                 model.tendon_pull_of(tendons, node.s, &R, &v, &u)
             }
             Pulls::Local(routes, ends, t) => {
@@ -588,7 +647,7 @@ mod tests {
         let shape: Vec<_> = x.iter().map(|s| (s.p, s.R)).collect();
         let strains: Vec<_> = x.iter().map(|s| (s.v, s.u)).collect();
         let mut kept = Vec::new();
-        let pulls = Pulls::Kept(&taut, &taut_ends, Sums::World);
+        let pulls = Pulls::Kept(&taut, &taut_ends);
         sweep(
             &model,
             (nodes, &sites),
