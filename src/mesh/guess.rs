@@ -17,9 +17,7 @@ use crate::so3;
 use crate::solution::{Node, Solution, State};
 use nalgebra::{Matrix3, Vector3};
 
-mod quads;
-
-use quads::TendonQuad;
+mod lanes;
 
 /// The strain v at mesh node `node` whose translational coordinate is `v` (v* on a
 /// Kirchhoff rod, [`crate::model::equations::Site::strain`]).
@@ -55,7 +53,8 @@ pub(crate) fn integrate_poses_into(
 /// [`integrate_poses_into`] with the arithmetic of `sums`: with [`Sums::Body`] each
 /// interval's rotation is exp(u h/2)^2, the half step's exponential (which the position
 /// needs) squared, instead of a second exponential exp(u h): the same rotation to
-/// rounding (docs/benchmarks.md, "A batch row (row15, 2026-12-06, seventh session)").
+/// rounding (docs/benchmarks.md, "A batch row (row15, 2026-12-06, seventh session)"),
+/// its products taken column by column in lanes ([`lanes::integrate_body`]).
 #[inline(always)]
 fn integrate_poses_with(
     model: &Model,
@@ -64,6 +63,10 @@ fn integrate_poses_with(
     out: &mut Vec<(Vector3<f64>, Matrix3<f64>)>,
     sums: Sums,
 ) {
+    if sums == Sums::Body {
+        lanes::integrate_body(model, nodes, strains, out);
+        return;
+    }
     let mut p = model.base_position();
     let mut R = model.robot.base_rotation;
     out.clear();
@@ -73,23 +76,9 @@ fn integrate_poses_with(
         if h > 0.0 {
             let v = (strain(model, &nodes[k], &strains[k].0) + strain(model, &nodes[k + 1], &strains[k + 1].0)) * 0.5;
             let u = (strains[k].1 + strains[k + 1].1) * 0.5;
-            // The default guess's exponential is compiled into its AVX2 build; the
-            // friction start's integration keeps the call.
-            let half = match sums {
-                Sums::Body => so3::exp_inlined(&(u * (h / 2.0))),
-                Sums::World => so3::exp(&(u * (h / 2.0))),
-            };
-            match sums {
-                Sums::World => {
-                    p += R * half * v * h;
-                    R *= so3::exp(&(u * h));
-                }
-                Sums::Body => {
-                    let R_half = R * half;
-                    p += R_half * v * h;
-                    R = R_half * half;
-                }
-            }
+            let half = so3::exp(&(u * (h / 2.0)));
+            p += R * half * v * h;
+            R *= so3::exp(&(u * h));
         }
         out.push((p, R));
     }
@@ -260,9 +249,6 @@ struct SweepBuffers {
     /// [`Model::tendons`] yields them, node after node, and where each node's end.
     routes: Vec<(usize, f64, RoutingPoint)>,
     route_ends: Vec<usize>,
-    /// The same tendons four by four in lanes ([`quads::quads`]), and where each node's end.
-    quads: Vec<TendonQuad>,
-    quad_ends: Vec<usize>,
 }
 
 thread_local! {
@@ -278,8 +264,6 @@ thread_local! {
             sites: Vec::new(),
             routes: Vec::new(),
             route_ends: Vec::new(),
-            quads: Vec::new(),
-            quad_ends: Vec::new(),
         })
     };
 }
@@ -312,8 +296,6 @@ fn rigid_estimate_in(model: &Model, nodes: &[MeshNode], b: &mut SweepBuffers, re
         sites,
         routes,
         route_ends,
-        quads,
-        quad_ends,
     } = b;
     reference_strains_into(model, nodes, strains);
     integrate_poses_with(model, nodes, strains, shape, sums);
@@ -333,19 +315,11 @@ fn rigid_estimate_in(model: &Model, nodes: &[MeshNode], b: &mut SweepBuffers, re
         routes.extend(model.tendons(n.s, Which::ActiveTo(n.segment_end)));
         route_ends.push(routes.len());
     }
-    // The body-frame sums take them four at a time, in lanes laid out once.
-    if sums == Sums::Body {
-        quads.reserve(nodes.len() * model.robot.tendons.len().div_ceil(4));
-        quads::quads((routes, route_ends), (quads, quad_ends));
-    }
     // The deformation of each strain group, v and u L: the first sweep's step (from the
     // reference strains).
     let mut deformation = [0.0; 2];
     for _ in 0..MAX_SWEEPS {
-        let pulls = match sums {
-            Sums::Body => Pulls::Quads(quads, quad_ends),
-            Sums::World => Pulls::Kept(routes, route_ends),
-        };
+        let pulls = Pulls::Kept(routes, route_ends, sums);
         sweep(model, (nodes, sites), (shape, strains), pulls, (wrench, next));
         // The fixed-point step, flattened (v then u L per node, so all are comparable), the
         // largest change of each group (v, u L) and, after the first step, Aitken's sums
@@ -514,12 +488,8 @@ pub(crate) fn relax_strains(strains: &mut [(Vector3<f64>, Vector3<f64>)], step: 
 #[derive(Clone, Copy)]
 enum Pulls<'a> {
     /// The model's tensions, with the taut tendons and their routing points at every node
-    /// kept (`routes`, node after node; `ends[k]` ends node k's), rotated to the world frame
-    /// tendon by tendon ([`Sums::World`]).
-    Kept(&'a [(usize, f64, RoutingPoint)], &'a [usize]),
-    /// The same tendons four by four in lanes (`quads`; `ends[k]` ends node k's), summed in
-    /// the body frame ([`Sums::Body`]).
-    Quads(&'a [TendonQuad], &'a [usize]),
+    /// kept (`routes`, node after node; `ends[k]` ends node k's), summed as [`Sums`] says.
+    Kept(&'a [(usize, f64, RoutingPoint)], &'a [usize], Sums),
     /// Every tendon's tension at node k from `tensions[k]` (friction), with the tendons
     /// reaching every node and their routing points there kept as in `Kept` (slack ones
     /// included: a tendon pulls where its local tension is positive, as
@@ -564,7 +534,6 @@ fn sweep(
         };
     }
     out.clear();
-    let coupled = model.robot.tendon_model == crate::model::robot::TendonModel::Coupled;
     for (k, node) in nodes.iter().enumerate() {
         let site = &sites[k];
         let R = shape[k].1;
@@ -573,20 +542,19 @@ fn sweep(
         // The tendons loading this node's segment pull it back along their paths.
         let v = site.strain(&v);
         let pull = match pulls {
-            Pulls::Quads(quads, ends) => {
-                let from = if k == 0 { 0 } else { ends[k - 1] };
-                // n_b = R^T n - sum f_b: the pulls stay in the body frame.
-                let (mut n_b, mut m_b) = (R.transpose() * n, R.transpose() * m);
-                if let Some((f, l)) = quads::pull(&quads[from..ends[k]], coupled, &v, &u) {
-                    n_b -= f;
-                    m_b -= l;
-                }
-                out.push(model.strains_for_wrench(site, &n_b, &m_b));
-                continue;
-            }
-            Pulls::Kept(routes, ends) => {
+            Pulls::Kept(routes, ends, sums) => {
                 let from = if k == 0 { 0 } else { ends[k - 1] };
                 let tendons = routes[from..ends[k]].iter().copied();
+                if sums == Sums::Body {
+                    // n_b = R^T n - sum f_b: the pulls stay in the body frame.
+                    let (mut n_b, mut m_b) = (R.transpose() * n, R.transpose() * m);
+                    if let Ok((f, l)) = model.tendon_pull_body_of(tendons, node.s, &v, &u) {
+                        n_b -= f;
+                        m_b -= l;
+                    }
+                    out.push(model.strains_for_wrench(site, &n_b, &m_b));
+                    continue;
+                }
                 model.tendon_pull_of(tendons, node.s, &R, &v, &u)
             }
             Pulls::Local(routes, ends, t) => {
@@ -647,7 +615,7 @@ mod tests {
         let shape: Vec<_> = x.iter().map(|s| (s.p, s.R)).collect();
         let strains: Vec<_> = x.iter().map(|s| (s.v, s.u)).collect();
         let mut kept = Vec::new();
-        let pulls = Pulls::Kept(&taut, &taut_ends);
+        let pulls = Pulls::Kept(&taut, &taut_ends, Sums::World);
         sweep(
             &model,
             (nodes, &sites),

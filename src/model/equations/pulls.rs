@@ -1,7 +1,7 @@
 //! The tendons' pulls on the backbone at a site: tau_i t_i and its moment, summed over the
 //! tendons that reach s (eq. 9 and eq. 11's tendon terms), in the world frame (generic over
 //! the scalar, for the automatic derivatives of the end blocks) or in the body frame (the
-//! reference of the default initial guess's lane sums, `mesh/guess/quads.rs`).
+//! default initial guess's sweeps).
 #![allow(non_snake_case)]
 
 use super::{MIN_TENDON_SPEED, Model, Which, lift, to_f64};
@@ -59,10 +59,10 @@ impl Model<'_> {
 
     /// [`Model::tendon_pull_of`] in the body frame: R^T times its force and moment, summed
     /// over the tendons in the body frame and so without a rotation per tendon (the same
-    /// sums to rounding, not the same bits). The default initial guess's sweeps sum the
-    /// same arithmetic four tendons at a time in lanes (`mesh/guess/quads.rs`); this scalar
-    /// loop is the reference their test compares bits with.
-    #[cfg(test)]
+    /// sums to rounding, not the same bits). For the default initial guess's sweeps, which
+    /// need the pulls only in the body frame; always inlined, so that it is compiled into
+    /// their AVX2 build (`mesh/guess.rs`).
+    #[inline(always)]
     pub(crate) fn tendon_pull_body_of(
         &self,
         tendons: impl Iterator<Item = (usize, f64, RoutingPoint)>,
