@@ -312,7 +312,10 @@ fn rigid_estimate_in(model: &Model, nodes: &[MeshNode], b: &mut SweepBuffers, re
     routes.reserve(nodes.len() * model.robot.tendons.len());
     route_ends.clear();
     for n in nodes {
-        routes.extend(model.tendons(n.s, Which::ActiveTo(n.segment_end)));
+        // Pushed one by one, in this kernel (`extend` was a baseline call).
+        for route in model.tendons(n.s, Which::ActiveTo(n.segment_end)) {
+            routes.push(route);
+        }
         route_ends.push(routes.len());
     }
     // The deformation of each strain group, v and u L: the first sweep's step (from the
