@@ -170,22 +170,29 @@ pub(crate) fn exp_and_jacobians(theta: &Vector3<f64>) -> [Matrix3<f64>; 3] {
     [combine(a, b), combine(-b, d), combine(0.5, e)]
 }
 
-/// [`exp`] of an f64 rotation vector, always inlined so that it is compiled with its
-/// caller's target features (the rigid-equilibrium guess's AVX2 build, `mesh/guess.rs`),
-/// where [`exp`] is a call to the baseline build: the same operations as [`exp`] (hat(theta)^2
-/// and the sum I + k a + k^2 b as [`exp_and_jacobians`] writes them out), so the same bits.
-#[inline(always)]
+/// [`exp`] of an f64 rotation vector, the same operations as [`exp`] (hat(theta)^2 and the
+/// sum I + k a + k^2 b as [`exp_and_jacobians`] writes them out), so the same bits: the
+/// scalar reference that the rigid-equilibrium guess's exponential in lanes
+/// (`mesh/guess/lanes.rs`) is tested against.
+#[cfg(test)]
 pub(crate) fn exp_inlined(theta: &Vector3<f64>) -> Matrix3<f64> {
-    let t2 = theta.norm_squared();
-    // (sin t / t, (1 - cos t) / t^2) as [`ratios`] forms them.
-    let (a, b) = if t2 < SERIES_THETA_SQ {
+    let (a, b) = exp_ratios(theta.norm_squared());
+    let k = hat(theta);
+    combine(&k, &hat_squared(&k), a, b)
+}
+
+/// (sin t / t, (1 - cos t) / t^2) for t^2 = `t2`, as [`ratios`] forms them (f64): the
+/// coefficients of the rigid-equilibrium guess's exponential in lanes
+/// (`mesh/guess/lanes.rs`), always inlined so that it is compiled into the guess's AVX2
+/// build.
+#[inline(always)]
+pub(crate) fn exp_ratios(t2: f64) -> (f64, f64) {
+    if t2 < SERIES_THETA_SQ {
         (series(t2, &SIN_RATIO), series(t2, &COS_RATIO))
     } else {
         let t = t2.sqrt();
         (t.sin() / t, (1.0 - t.cos()) / t2)
-    };
-    let k = hat(theta);
-    combine(&k, &hat_squared(&k), a, b)
+    }
 }
 
 /// k^2 for k = hat(theta), each entry summed as nalgebra's product sums it (so the same

@@ -17,6 +17,8 @@ use crate::so3;
 use crate::solution::{Node, Solution, State};
 use nalgebra::{Matrix3, Vector3};
 
+mod lanes;
+
 /// The strain v at mesh node `node` whose translational coordinate is `v` (v* on a
 /// Kirchhoff rod, [`crate::model::equations::Site::strain`]).
 fn strain(model: &Model, node: &MeshNode, v: &Vector3<f64>) -> Vector3<f64> {
@@ -51,7 +53,8 @@ pub(crate) fn integrate_poses_into(
 /// [`integrate_poses_into`] with the arithmetic of `sums`: with [`Sums::Body`] each
 /// interval's rotation is exp(u h/2)^2, the half step's exponential (which the position
 /// needs) squared, instead of a second exponential exp(u h): the same rotation to
-/// rounding (docs/benchmarks.md, "A batch row (row15, 2026-12-06, seventh session)").
+/// rounding (docs/benchmarks.md, "A batch row (row15, 2026-12-06, seventh session)"),
+/// its products taken column by column in lanes ([`lanes::integrate_body`]).
 #[inline(always)]
 fn integrate_poses_with(
     model: &Model,
@@ -60,6 +63,10 @@ fn integrate_poses_with(
     out: &mut Vec<(Vector3<f64>, Matrix3<f64>)>,
     sums: Sums,
 ) {
+    if sums == Sums::Body {
+        lanes::integrate_body(model, nodes, strains, out);
+        return;
+    }
     let mut p = model.base_position();
     let mut R = model.robot.base_rotation;
     out.clear();
@@ -69,23 +76,9 @@ fn integrate_poses_with(
         if h > 0.0 {
             let v = (strain(model, &nodes[k], &strains[k].0) + strain(model, &nodes[k + 1], &strains[k + 1].0)) * 0.5;
             let u = (strains[k].1 + strains[k + 1].1) * 0.5;
-            // The default guess's exponential is compiled into its AVX2 build; the
-            // friction start's integration keeps the call.
-            let half = match sums {
-                Sums::Body => so3::exp_inlined(&(u * (h / 2.0))),
-                Sums::World => so3::exp(&(u * (h / 2.0))),
-            };
-            match sums {
-                Sums::World => {
-                    p += R * half * v * h;
-                    R *= so3::exp(&(u * h));
-                }
-                Sums::Body => {
-                    let R_half = R * half;
-                    p += R_half * v * h;
-                    R = R_half * half;
-                }
-            }
+            let half = so3::exp(&(u * (h / 2.0)));
+            p += R * half * v * h;
+            R *= so3::exp(&(u * h));
         }
         out.push((p, R));
     }
@@ -319,7 +312,10 @@ fn rigid_estimate_in(model: &Model, nodes: &[MeshNode], b: &mut SweepBuffers, re
     routes.reserve(nodes.len() * model.robot.tendons.len());
     route_ends.clear();
     for n in nodes {
-        routes.extend(model.tendons(n.s, Which::ActiveTo(n.segment_end)));
+        // Pushed one by one, in this kernel (`extend` was a baseline call).
+        for route in model.tendons(n.s, Which::ActiveTo(n.segment_end)) {
+            routes.push(route);
+        }
         route_ends.push(routes.len());
     }
     // The deformation of each strain group, v and u L: the first sweep's step (from the
@@ -328,17 +324,11 @@ fn rigid_estimate_in(model: &Model, nodes: &[MeshNode], b: &mut SweepBuffers, re
     for _ in 0..MAX_SWEEPS {
         let pulls = Pulls::Kept(routes, route_ends, sums);
         sweep(model, (nodes, sites), (shape, strains), pulls, (wrench, next));
-        // The fixed-point step, flattened (v then u L per node, so all are comparable).
-        step.clear();
-        step.extend(next.iter().zip(strains.iter()).flat_map(|(a, b)| {
-            let (dv, du) = (a.0 - b.0, (a.1 - b.1) * length);
-            [dv[0], dv[1], dv[2], du[0], du[1], du[2]]
-        }));
-        // The largest change of each group (v, u L).
-        let groups = step.chunks_exact(3).enumerate().fold([0.0f64; 2], |mut m, (i, x)| {
-            m[i % 2] = x.iter().fold(m[i % 2], |m, x| m.max(x.abs()));
-            m
-        });
+        // The fixed-point step, flattened (v then u L per node, so all are comparable), the
+        // largest change of each group (v, u L) and, after the first step, Aitken's sums
+        // against the step before, in one pass.
+        let against = if stepped { Some(&last_step[..]) } else { None };
+        let (groups, sums_aitken) = step_of(next, strains, length, against, step);
         let change = groups[0].max(groups[1]);
         if !(change < last_change || last_change.is_infinite()) || !change.is_finite() {
             break;
@@ -349,8 +339,8 @@ fn rigid_estimate_in(model: &Model, nodes: &[MeshNode], b: &mut SweepBuffers, re
         // Aitken's dynamic relaxation (Irons & Tuck): the plain fixed point can cycle when
         // a load's moment arm swings with the shape it bends (a tendon and a tip load
         // pulling the same way); the factor adapts to the observed contraction.
-        if stepped {
-            relaxation = aitken(relaxation, last_step, step);
+        if let Some((num, den)) = sums_aitken {
+            relaxation = aitken_factor(relaxation, num, den);
         }
         relax_strains(strains, step, relaxation, length);
         integrate_poses_with(model, nodes, strains, shape, sums);
@@ -439,11 +429,51 @@ pub(crate) fn aitken(relaxation: f64, last_step: &[f64], step: &[f64]) -> f64 {
         num += a * (b - a);
         den += (b - a) * (b - a);
     }
+    aitken_factor(relaxation, num, den)
+}
+
+/// [`aitken`]'s factor from its sums `num` = sum a (b - a) and `den` = sum (b - a)^2 over
+/// the steps a (the last) and b.
+#[inline(always)]
+fn aitken_factor(relaxation: f64, num: f64, den: f64) -> f64 {
     if den > 0.0 {
         (-relaxation * num / den).clamp(0.1, 1.0)
     } else {
         relaxation
     }
+}
+
+/// The fixed-point step from `strains` to `next`, flattened into `step` (v, then u L per
+/// node; `length` is L), with the largest absolute change of each group (v, u L) and, when
+/// `last_step` is given, [`aitken`]'s sums (num, den) against it: the same operations in
+/// the same order as flattening, folding the groups and summing apart, in one pass.
+#[inline(always)]
+fn step_of(
+    next: &[(Vector3<f64>, Vector3<f64>)],
+    strains: &[(Vector3<f64>, Vector3<f64>)],
+    length: f64,
+    last_step: Option<&[f64]>,
+    step: &mut Vec<f64>,
+) -> ([f64; 2], Option<(f64, f64)>) {
+    step.clear();
+    step.resize(6 * strains.len(), 0.0);
+    let mut groups = [0.0f64; 2];
+    let (mut num, mut den) = (0.0, 0.0);
+    for (k, ((a, b), out)) in next.iter().zip(strains).zip(step.chunks_exact_mut(6)).enumerate() {
+        let (dv, du) = (a.0 - b.0, (a.1 - b.1) * length);
+        let x = [dv[0], dv[1], dv[2], du[0], du[1], du[2]];
+        out.copy_from_slice(&x);
+        for (i, x) in x.iter().enumerate() {
+            groups[i / 3] = groups[i / 3].max(x.abs());
+        }
+        if let Some(last) = last_step {
+            for (a, b) in last[6 * k..6 * k + 6].iter().zip(&x) {
+                num += a * (b - a);
+                den += (b - a) * (b - a);
+            }
+        }
+    }
+    (groups, last_step.map(|_| (num, den)))
 }
 
 /// Moves the node strains (v, u) by `relaxation` times the flattened fixed-point `step`
