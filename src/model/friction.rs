@@ -29,6 +29,9 @@
 //! step (1e-3 for the prototype).
 #![allow(non_snake_case)]
 
+mod lanes;
+pub(crate) use lanes::linearize_lanes_into;
+
 use crate::error::{Result, invalid};
 use crate::model::equations::{Model, Site};
 use crate::model::linearize::{Linearization, Point};
