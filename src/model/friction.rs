@@ -210,6 +210,22 @@ pub(crate) struct FrictionLinearization {
     columns: Vec<Vector6<f64>>,
     /// Each slip's q^_i^T dq_i/d(v, u) at fixed rates, for dg_i and d(turning_i).
     explicit: Vec<SMatrix<f64, 1, 6>>,
+    /// The lanes' response to one set of loads ([`linearize_lanes_into`] evaluates no
+    /// scalar scratch), which [`FrictionLinearization::load_response`] returns for the same
+    /// loads while it is `current` (not after another evaluation).
+    lane_response: Option<LaneResponse>,
+}
+
+/// [`FrictionLinearization::load_response`] of a point the lanes evaluated, for the loads
+/// `input` (one per row): the rows it leaves, the turning responses and whether it holds.
+#[derive(Debug)]
+struct LaneResponse {
+    input: SMatrix<f64, 6, 6>,
+    output: SMatrix<f64, 6, 6>,
+    turning: Vec<SMatrix<f64, 1, 6>>,
+    valid: bool,
+    /// Whether it is of the point's current evaluation (the buffers outlive it).
+    current: bool,
 }
 
 impl Default for FrictionLinearization {
@@ -231,6 +247,7 @@ impl Default for FrictionLinearization {
             gradients: Vec::new(),
             columns: Vec::new(),
             explicit: Vec::new(),
+            lane_response: None,
         }
     }
 }
@@ -313,6 +330,9 @@ fn linearize_into_kernel(
     derivatives: bool,
     out: &mut FrictionLinearization,
 ) -> Result<()> {
+    if let Some(kept) = &mut out.lane_response {
+        kept.current = false;
+    }
     // Eq. 13 assembled in the point this linearization kept (in place, not moved).
     let point = match &mut out.point {
         Some(point) => {
@@ -519,8 +539,23 @@ impl FrictionLinearization {
     /// as [`crate::model::linearize::rates_and_solve`] takes them) and becomes row by row
     /// (J^-1 b)^T; `turning[j]` (one per tendon of [`slipping`], 0 for those not loading
     /// here) gets T_j b, one column per load. False for a point without an evaluation
-    /// ([`linearize_into`]) or a singular J.
+    /// ([`linearize_into`]) or a singular J. A point the lanes evaluated
+    /// ([`linearize_lanes_into`]) answers only for the loads they were given (what the
+    /// scalar code gives for them, computed there), else false.
     pub(crate) fn load_response(&self, loads: &mut SMatrix<f64, 6, 6>, turning: &mut [SMatrix<f64, 1, 6>]) -> bool {
+        if let Some(kept) = &self.lane_response
+            && kept.current
+            && kept.turning.len() == turning.len()
+            && kept
+                .input
+                .iter()
+                .zip(loads.iter())
+                .all(|(a, b)| a.to_bits() == b.to_bits())
+        {
+            *loads = kept.output;
+            turning.copy_from_slice(&kept.turning);
+            return kept.valid;
+        }
         let Some(point) = &self.point else {
             return false;
         };

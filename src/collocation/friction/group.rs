@@ -9,21 +9,23 @@
 //! performs the scalar code's operations in its order, and every link reads the same
 //! inputs as when the links are evaluated one by one (the start node's evaluation that
 //! the link before kept is the lanes' end node of that link), so each link's evaluation
-//! has the one-link kernel's bits (the tests compare them). The group declines (the
-//! caller evaluates the links one by one) where the links' multipliers differ, a slip
-//! sticks on one of them, the profile keeps the inertia responses (their scratch is the
-//! scalar code's), or a lane leaves the lanes' path.
+//! has the one-link kernel's bits (the tests compare them). Where the profile keeps the
+//! responses to the inertia loads (the Jacobian at the answer, for the verdict), the lanes
+//! give them too. The group declines (the caller evaluates the links one by one) where the
+//! links' multipliers differ, a slip sticks on one of them, or a lane leaves the lanes'
+//! path.
 #![allow(non_snake_case)]
 
 use super::interval::{IntervalLinearization, Link, back, front, node_tensions};
 use super::profile::{LinkScratch, Profile};
+use crate::collocation::dynamics::inertia_load_transposed;
 use crate::collocation::residual::IntervalSites;
 use crate::error::Result;
 use crate::model::equations::Site;
 use crate::model::friction::{FrictionLinearization, linearize_lanes_into};
 use crate::simd::avx2_fma;
 use crate::solution::State;
-use nalgebra::{Matrix3, Vector3};
+use nalgebra::{Matrix3, SMatrix, Vector3};
 
 /// Entries of one link's row-major 12 x 24 backbone block.
 const BLOCK: usize = 12 * 24;
@@ -73,12 +75,24 @@ fn intervals4_kernel(
     }
     let w = w.as_deref();
     let derivatives = jac.is_some();
-    let mut scratch: [Box<LinkScratch>; 4] = std::array::from_fn(|_| profile.take_scratch());
+    let mut scratch: [Box<LinkScratch>; 4] = [
+        profile.take_scratch(),
+        profile.take_scratch(),
+        profile.take_scratch(),
+        profile.take_scratch(),
+    ];
     for (j, s) in scratch.iter_mut().enumerate() {
         node_tensions(profile, k + j, s);
     }
     let la = profile.start_point(k, &sites[0].start, segment_end, &x[0], &scratch[0].za, w, derivatives)?;
     let state = |n: usize| (&x[n].R, &x[n].v, &x[n].u);
+    // Where the profile keeps the responses to the inertia loads (a Jacobian at the answer),
+    // the lanes give them at the points [`back`] keeps them for: each link's start (the
+    // link before's end) and midpoint.
+    let responding = profile.responding.get().filter(|_| derivatives);
+    let inertia = |site: [&Site; 4], R: [&Matrix3<f64>; 4]| {
+        responding.map(|(ratio, length)| std::array::from_fn(|j| inertia_load_transposed(site[j], R[j], ratio, length)))
+    };
     let Some(ends) = points4(
         profile,
         sites.map(|s| &s.end),
@@ -86,13 +100,16 @@ fn intervals4_kernel(
         [state(1), state(2), state(3), state(4)],
         [&scratch[0].zb, &scratch[1].zb, &scratch[2].zb, &scratch[3].zb],
         w,
-        derivatives,
+        (
+            derivatives,
+            inertia(sites.map(|s| &s.end), [&x[1].R, &x[2].R, &x[3].R, &x[4].R]),
+        ),
     ) else {
         profile.give(la);
         scratch.into_iter().for_each(|s| profile.give_scratch(s));
         return Ok(None);
     };
-    let links: [Link; 4] = std::array::from_fn(|j| Link {
+    let link = |j: usize| Link {
         profile,
         length,
         k: k + j,
@@ -101,7 +118,8 @@ fn intervals4_kernel(
         a: &x[j],
         b: &x[j + 1],
         w,
-    });
+    };
+    let links = [link(0), link(1), link(2), link(3)];
     let starts = [&*la, &*ends[0], &*ends[1], &*ends[2]];
     let [s0, s1, s2, s3] = &mut scratch;
     let fronts = [
@@ -118,7 +136,13 @@ fn intervals4_kernel(
         [mid(0), mid(1), mid(2), mid(3)],
         [&scratch[0].zm, &scratch[1].zm, &scratch[2].zm, &scratch[3].zm],
         w,
-        derivatives,
+        (
+            derivatives,
+            inertia(
+                sites.map(|s| &s.mid),
+                [&fronts[0].Rm, &fronts[1].Rm, &fronts[2].Rm, &fronts[3].Rm],
+            ),
+        ),
     ) else {
         profile.give(la);
         ends.into_iter().for_each(|l| profile.give(l));
@@ -145,8 +169,9 @@ fn intervals4_kernel(
 }
 
 /// Eq. 13 with friction at four points at once ([`Profile::point`] at each: the slips at
-/// log tensions `z[l]` in lane l, multipliers `w`), in the profile's spare linearizations;
-/// None where the lanes decline them.
+/// log tensions `z[l]` in lane l, multipliers `w`), in the profile's spare linearizations,
+/// with derivatives when `derivatives.0` and the responses to the loads `derivatives.1`
+/// when given; None where the lanes decline them.
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
 fn points4(
@@ -156,7 +181,7 @@ fn points4(
     states: [(&Matrix3<f64>, &Vector3<f64>, &Vector3<f64>); 4],
     z: [&[f64]; 4],
     w: Option<&[f64]>,
-    derivatives: bool,
+    (derivatives, loads): (bool, Option<[SMatrix<f64, 6, 6>; 4]>),
 ) -> Option<[Box<FrictionLinearization>; 4]> {
     let mut quad = profile.quad.borrow_mut();
     if quad.is_empty() {
@@ -181,6 +206,7 @@ fn points4(
         &profile.slipping,
         [w; 4],
         derivatives,
+        loads.as_ref(),
         outs,
     ) {
         return Some(out);

@@ -17,7 +17,7 @@
 //! evaluates the points with the scalar code, which gives the error or Newton's loads.
 #![allow(non_snake_case)]
 
-use super::FrictionLinearization;
+use super::{FrictionLinearization, LaneResponse};
 use crate::model::equations::{Model, Site};
 use crate::model::linearize::CACHED_TENDONS;
 use crate::model::linearize::Linearization;
@@ -128,13 +128,14 @@ fn single(slip: &mut SlipLanes, x0: &[F4; 6]) -> Option<[F4; 6]> {
         F4::splat(0.5) * (root - linear),
     );
     let (first, second) = (t / leading, constant / t);
-    let g = F4(std::array::from_fn(|l| {
-        if s.0[l] > 0.0 {
+    let mut g = first;
+    for l in 0..4 {
+        g.0[l] = if s.0[l] > 0.0 {
             first.0[l].max(second.0[l])
         } else {
             first.0[l].min(second.0[l])
-        }
-    }));
+        };
+    }
     if !all(g, f64::is_finite) {
         return None;
     }
@@ -151,6 +152,9 @@ fn single(slip: &mut SlipLanes, x0: &[F4; 6]) -> Option<[F4; 6]> {
 /// lane, the same `segment_end` and tendons with friction `slipping`), written into `out`:
 /// true when every lane took the common path (module docs), else false with `out` partly
 /// written (evaluate the points with the scalar code then, which refills every field).
+/// With derivatives and `loads` (one matrix of loads per lane, one load per row), each
+/// lane's [`FrictionLinearization::load_response`] to its loads too, which the point then
+/// returns for them.
 /// Always inlined, for the AVX2 build of its caller.
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
@@ -162,6 +166,7 @@ pub(crate) fn linearize_lanes_into(
     slipping: &[usize],
     multipliers: [Option<&[f64]>; 4],
     derivatives: bool,
+    loads: Option<&[SMatrix<f64, 6, 6>; 4]>,
     out: [&mut FrictionLinearization; 4],
 ) -> bool {
     if slipping.len() > CACHED_TENDONS {
@@ -219,6 +224,7 @@ pub(crate) fn linearize_lanes_into(
     });
     if !derivatives {
         for (lane, o) in out.into_iter().enumerate() {
+            forget_response(o);
             fill_values(o, k, slip.as_ref().map(|sl| sl.slot), turning, lane);
             o.lin = Linearization {
                 rates: Vector6::from_fn(|i, _| x[i].lane(lane)),
@@ -231,6 +237,11 @@ pub(crate) fn linearize_lanes_into(
     let Some(derived) = derive(&pass1, taut, &x, slip.as_ref()) else {
         return false;
     };
+    let mut out = out;
+    match loads {
+        Some(loads) => respond(&pass1, slip.as_ref(), loads, k, &mut out),
+        None => out.iter_mut().for_each(|o| forget_response(o)),
+    }
     for (lane, o) in out.into_iter().enumerate() {
         fill_values(o, k, slip.as_ref().map(|sl| sl.slot), turning, lane);
         let dx = &derived.dx;
@@ -274,6 +285,84 @@ fn fill_values(o: &mut FrictionLinearization, k: usize, slot: Option<usize>, tur
     o.d_turning_log_tension.clear();
 }
 
+/// `FrictionLinearization::load_response` of each lane to its `loads` (one load per row),
+/// kept in lane l's linearization in `out` (its buffers reused):
+/// M^-1 by the lanes' factors, the one-slip Woodbury correction (its 1 + g . y checked
+/// non-zero by [`derive`]) and the turning responses, as the scalar code forms them.
+#[inline(always)]
+fn respond(
+    pass1: &crate::model::linearize::lanes::pass1::Assembled,
+    slip: Option<&SlipLanes>,
+    loads: &[SMatrix<f64, 6, 6>; 4],
+    k: usize,
+    out: &mut [&mut FrictionLinearization; 4],
+) {
+    let mut rows: [[F4; 6]; 6] = [[F4::ZERO; 6]; 6];
+    for (r, row) in rows.iter_mut().enumerate() {
+        for (c, x) in row.iter_mut().enumerate() {
+            *x = F4([loads[0][(r, c)], loads[1][(r, c)], loads[2][(r, c)], loads[3][(r, c)]]);
+        }
+    }
+    pass1.factor.solve_rows(&mut rows);
+    let mut turning = [[F4::ZERO; 6]; 1];
+    if let Some(sl) = slip {
+        let gradient = sl.gradient();
+        let schur = F4::splat(1.0) + dot6(&gradient, &sl.y);
+        for row in rows.iter_mut() {
+            let w = dot6(&gradient, row) / schur;
+            for (m, y) in row.iter_mut().zip(&sl.y) {
+                *m -= *y * w;
+            }
+        }
+        let factor = sl.s * sl.tp.inv_speed / sl.tp.k;
+        for (r, row) in rows.iter().enumerate() {
+            turning[0][r] = factor * dot(&sl.q_hat, &sl.normal_change(row));
+        }
+    }
+    for (lane, o) in out.iter_mut().enumerate() {
+        let kept = o.lane_response.get_or_insert_with(|| LaneResponse {
+            input: SMatrix::zeros(),
+            output: SMatrix::zeros(),
+            turning: Vec::new(),
+            valid: false,
+            current: false,
+        });
+        kept.current = true;
+        kept.input = loads[lane];
+        for r in 0..6 {
+            for c in 0..6 {
+                kept.output[(r, c)] = rows[r][c].lane(lane);
+            }
+        }
+        kept.turning.clear();
+        kept.turning.resize(k, SMatrix::zeros());
+        if let Some(sl) = slip {
+            for r in 0..6 {
+                kept.turning[sl.slot][r] = turning[0][r].lane(lane);
+            }
+        }
+        kept.valid = kept.output.iter().all(|v| v.is_finite());
+    }
+}
+
+/// Marks `o`'s lane response as not of its current evaluation (its buffers kept).
+#[inline(always)]
+fn forget_response(o: &mut FrictionLinearization) {
+    if let Some(kept) = &mut o.lane_response {
+        kept.current = false;
+    }
+}
+
+/// Every entry negated (the scalar code's `-` on each lane).
+#[inline(always)]
+fn negate<const R: usize>(rows: &mut [[F4; 6]; R]) {
+    for row in rows.iter_mut() {
+        for v in row.iter_mut() {
+            *v = -*v;
+        }
+    }
+}
+
 /// The derivatives of [`linearize_lanes_into`]: d(v', u')/d(v, u, phi) (row c direction c),
 /// and for the slip d(v', u')/dz, d(turning)/d(v, u, phi) and d(turning)/dz_l (one per
 /// tendon with friction, at most [`CACHED_TENDONS`] read).
@@ -294,8 +383,8 @@ fn derive(
     let mut rows = derivative_lanes(pass1, taut, x);
     let Some(sl) = slip else {
         pass1.factor.solve_rows(&mut rows);
-        let dx = rows.map(|row| row.map(|v| -v));
-        return Some(Derived { dx, slip: None });
+        negate(&mut rows);
+        return Some(Derived { dx: rows, slip: None });
     };
     let tp = &sl.tp;
     let u = &pass1.u;
@@ -307,8 +396,14 @@ fn derive(
             *p = one(i, j) - tp.t[i] * tp.t[j];
         }
     }
-    let dt_dv = P.map(|row| row.map(|p| p * tp.inv_speed));
-    let dt_du = mat_mat(&P.map(|row| row.map(|p| -p * tp.inv_speed)), &hat3(&tp.r));
+    let (mut dt_dv, mut minus) = (P, P);
+    for i in 0..3 {
+        for j in 0..3 {
+            dt_dv[i][j] = P[i][j] * tp.inv_speed;
+            minus[i][j] = -P[i][j] * tp.inv_speed;
+        }
+    }
+    let dt_du = mat_mat(&minus, &hat3(&tp.r));
     let (Q, dq_du) = tp.normal_derivative(&[x[0], x[1], x[2]], &[x[3], x[4], x[5]], u);
     let column_of = |m: &M3, c: usize| [m[0][c], m[1][c], m[2][c]];
     let mut explicit = [F4::ZERO; 6];
@@ -336,7 +431,10 @@ fn derive(
     }
     let m = cross(&tp.r, &sl.q);
     let q_m = [sl.q[0], sl.q[1], sl.q[2], m[0], m[1], m[2]];
-    let column: [F4; 6] = std::array::from_fn(|i| q_m[i] + sl.e[i] * sl.g);
+    let mut column = q_m;
+    for (c, e) in column.iter_mut().zip(&sl.e) {
+        *c += *e * sl.g;
+    }
     // Woodbury with one slip: S = 1 + g . y, S^-1 as `dense::solve_dense` gives it.
     let gradient = sl.gradient();
     let schur = F4::splat(1.0) + dot6(&gradient, &sl.y);
@@ -357,19 +455,21 @@ fn derive(
     for row in rows.iter_mut() {
         woodbury(row);
     }
-    let dx = rows.map(|row| row.map(|v| -v));
+    negate(&mut rows);
+    let dx = rows;
     let mut solved = [column];
     pass1.factor.solve_rows(&mut solved);
-    let [mut d_log] = solved;
-    woodbury(&mut d_log);
-    let d_log = d_log.map(|v| -v);
+    woodbury(&mut solved[0]);
+    negate(&mut solved);
+    let [d_log] = solved;
     // turning = w mu |q| / tau: d = (w mu / tau) q^ . (dq|x + dq through dx).
     let factor = sl.s * tp.inv_speed / tp.k;
-    let d_turning: [F4; 9] = std::array::from_fn(|c| {
+    let mut d_turning = [F4::ZERO; 9];
+    for (c, d) in d_turning.iter_mut().enumerate() {
         let through = dot(&sl.q_hat, &sl.normal_change(&dx[c]));
         let direct = if c < 6 { explicit[c] } else { F4::ZERO };
-        factor * (direct + through)
-    });
+        *d = factor * (direct + through);
+    }
     // d turning / dz_l: the slip's own column, the zero columns of the others.
     let zero = factor * dot(&sl.q_hat, &sl.normal_change(&[F4::ZERO; 6]));
     let own = factor * dot(&sl.q_hat, &sl.normal_change(&d_log));
@@ -431,6 +531,8 @@ mod tests {
             std::array::from_fn(|l| so3::exp(&(Vector3::new(0.3, -0.7, 0.4) * (1.0 + l as f64))));
         let v: [Vector3<f64>; 4] = std::array::from_fn(|l| Vector3::new(0.01, -0.02 * l as f64, 0.98));
         let u: [Vector3<f64>; 4] = std::array::from_fn(|l| Vector3::new(4.0 - l as f64, 9.0, -3.0 + 0.5 * l as f64));
+        let loads: [SMatrix<f64, 6, 6>; 4] =
+            std::array::from_fn(|l| SMatrix::from_fn(|i, j| (R[l][(i % 3, j % 3)] + 0.1 * (i + 2 * j) as f64) * 1e-3));
         let mut lanes: [FrictionLinearization; 4] = std::array::from_fn(|_| FrictionLinearization::default());
         let [a, b, c, d] = &mut lanes;
         let taken = linearize_lanes_into(
@@ -441,6 +543,7 @@ mod tests {
             &slipping,
             w,
             derivatives,
+            derivatives.then_some(&loads),
             [a, b, c, d],
         );
         if !taken {
@@ -460,6 +563,26 @@ mod tests {
             assert!(scalar.turning.iter().any(|t| *t != 0.0), "lane {l}: no friction here");
             assert_eq!(bits(&lanes[l]), bits(&scalar), "lane {l}");
             assert!(lanes[l].point.is_none() && lanes[l].slips.is_empty());
+            // The response to the lane's loads is the scalar point's, bit for bit; to other
+            // loads the lanes give none.
+            let mut turns = [
+                vec![SMatrix::<f64, 1, 6>::zeros(); slipping.len()],
+                vec![SMatrix::zeros(); slipping.len()],
+            ];
+            let (mut mine, mut theirs) = (loads[l], loads[l]);
+            let [t0, t1] = &mut turns;
+            assert_eq!(lanes[l].load_response(&mut mine, t0), derivatives);
+            if derivatives {
+                assert!(scalar.load_response(&mut theirs, t1));
+                let bits6 = |m: &SMatrix<f64, 6, 6>| m.map(f64::to_bits);
+                assert_eq!(bits6(&mine), bits6(&theirs), "lane {l} response");
+                assert_ne!(bits6(&mine), bits6(&loads[l]));
+                let tb =
+                    |t: &[SMatrix<f64, 1, 6>]| t.iter().flat_map(|t| t.iter().map(|x| x.to_bits())).collect::<Vec<_>>();
+                assert_eq!(tb(t0), tb(t1), "lane {l} turning response");
+                let mut other = loads[(l + 1) % 4];
+                assert!(!lanes[l].load_response(&mut other, t0));
+            }
         }
         true
     }
