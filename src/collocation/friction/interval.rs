@@ -430,7 +430,7 @@ pub(super) fn back(
         row
     };
     dzm.clear();
-    dzm.extend((0..count).map(|j| (node_turning(&la, j, 0) - node_turning(&lb, j, 9)) * (h / 8.0)));
+    dzm.extend((0..count).map(|j| (node_turning(la, j, 0) - node_turning(lb, j, 9)) * (h / 8.0)));
     // F_m and kappa~_m in the midpoint's local coordinates (theta, v, u) and the frame.
     let Jr_m = frame_m.Jr;
     let turning_y = |j: usize| {
@@ -451,7 +451,7 @@ pub(super) fn back(
         col
     };
     for (j, dz) in dzm.iter().enumerate() {
-        dFm += rates_z(&lm, j) * dz;
+        dFm += rates_z(lm, j) * dz;
     }
     ends.write(&dFm, h, length, jac);
 
@@ -470,7 +470,7 @@ pub(super) fn back(
     }
     // The capstan rows in the block's columns (p columns are 0).
     for j in (0..count).filter(|&j| on[j]) {
-        let row = (node_turning(&la, j, 0) + dturn_m[j] * 4.0 + node_turning(&lb, j, 9)) * (-h / 6.0);
+        let row = (node_turning(la, j, 0) + dturn_m[j] * 4.0 + node_turning(lb, j, 9)) * (-h / 6.0);
         for c in 0..18 {
             let column = if c < 9 { 3 + c } else { 6 + c };
             out.psi_x[(j, column)] = row[c];
@@ -490,7 +490,7 @@ pub(super) fn back(
             }));
             let mut dFm_z = pm.f_y * dym;
             for (j, d) in dzm_l.iter().enumerate() {
-                dFm_z += rates_z(&lm, j) * *d;
+                dFm_z += rates_z(lm, j) * *d;
             }
             let column = scale_rows(-(dF_end + dFm_z * 4.0) * (h / 6.0), length);
             out.rows_z.set_column(side * count + l, &column);

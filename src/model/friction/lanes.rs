@@ -329,16 +329,16 @@ fn respond(
         });
         kept.current = true;
         kept.input = loads[lane];
-        for r in 0..6 {
-            for c in 0..6 {
-                kept.output[(r, c)] = rows[r][c].lane(lane);
+        for (r, row) in rows.iter().enumerate() {
+            for (c, value) in row.iter().enumerate() {
+                kept.output[(r, c)] = value.lane(lane);
             }
         }
         kept.turning.clear();
         kept.turning.resize(k, SMatrix::zeros());
         if let Some(sl) = slip {
-            for r in 0..6 {
-                kept.turning[sl.slot][r] = turning[0][r].lane(lane);
+            for (r, value) in turning[0].iter().enumerate() {
+                kept.turning[sl.slot][r] = value.lane(lane);
             }
         }
         kept.valid = kept.output.iter().all(|v| v.is_finite());
@@ -351,6 +351,21 @@ fn forget_response(o: &mut FrictionLinearization) {
     if let Some(kept) = &mut o.lane_response {
         kept.current = false;
     }
+}
+
+/// `woodbury` of the scalar code with one slip: `mb` minus y (S^-1 (g . mb)).
+#[inline(always)]
+fn woodbury(mb: &mut [F4; 6], gradient: &[F4; 6], inverse: F4, y: &[F4; 6]) {
+    let w = inverse * dot6(gradient, mb);
+    for (m, y) in mb.iter_mut().zip(y) {
+        *m -= *y * w;
+    }
+}
+
+/// Column c of a 3x3 matrix of lanes.
+#[inline(always)]
+fn column_of(m: &M3, c: usize) -> V3 {
+    [m[0][c], m[1][c], m[2][c]]
 }
 
 /// Every entry negated (the scalar code's `-` on each lane).
@@ -405,15 +420,14 @@ fn derive(
     }
     let dt_du = mat_mat(&minus, &hat3(&tp.r));
     let (Q, dq_du) = tp.normal_derivative(&[x[0], x[1], x[2]], &[x[3], x[4], x[5]], u);
-    let column_of = |m: &M3, c: usize| [m[0][c], m[1][c], m[2][c]];
     let mut explicit = [F4::ZERO; 6];
-    for c in 0..6 {
+    for (c, x) in explicit.iter_mut().enumerate() {
         let qq = if c < 3 {
             column_of(&Q, c)
         } else {
             column_of(&dq_du, c - 3)
         };
-        explicit[c] = dot(&sl.q_hat, &qq);
+        *x = dot(&sl.q_hat, &qq);
     }
     for c in 0..6 {
         let dg = explicit[c] * sl.s;
@@ -445,21 +459,15 @@ fn derive(
     if !all(inverse, f64::is_finite) {
         return None;
     }
-    let woodbury = |mb: &mut [F4; 6]| {
-        let w = inverse * dot6(&gradient, mb);
-        for (m, y) in mb.iter_mut().zip(&sl.y) {
-            *m -= *y * w;
-        }
-    };
     pass1.factor.solve_rows(&mut rows);
     for row in rows.iter_mut() {
-        woodbury(row);
+        woodbury(row, &gradient, inverse, &sl.y);
     }
     negate(&mut rows);
     let dx = rows;
     let mut solved = [column];
     pass1.factor.solve_rows(&mut solved);
-    woodbury(&mut solved[0]);
+    woodbury(&mut solved[0], &gradient, inverse, &sl.y);
     negate(&mut solved);
     let [d_log] = solved;
     // turning = w mu |q| / tau: d = (w mu / tau) q^ . (dq|x + dq through dx).
