@@ -31,7 +31,7 @@ use nalgebra::{Matrix3, SMatrix, Vector3};
 const BLOCK: usize = 12 * 24;
 
 /// Links k..k+4 with friction (`sites` theirs, one segment ending at `segment_end`, `x`
-/// the five node states from node k on) evaluated at once, as [`super::interval`]
+/// the five node states from node k on) evaluated at once, as [`super::interval()`]
 /// evaluates each, their blocks into `jac` (four consecutive 12 x 24 blocks) when given:
 /// None where the group declines (module docs; then evaluate them one by one).
 ///
@@ -66,12 +66,14 @@ fn intervals4_kernel(
     if x.len() < 5 {
         return Ok(None);
     }
+    // The cheap test first (no multipliers formed): a history's stuck links, where the
+    // links one by one are tried again at each of them.
+    if (0..4).any(|j| (0..profile.count()).any(|i| profile.sticks(i, k + j))) {
+        return Ok(None);
+    }
     let w = profile.multipliers(k);
-    for j in 0..4 {
-        let stuck = (0..profile.count()).any(|i| profile.sticks(i, k + j));
-        if stuck || (j > 0 && profile.multipliers(k + j) != w) {
-            return Ok(None);
-        }
+    if (1..4).any(|j| profile.multipliers(k + j) != w) {
+        return Ok(None);
     }
     let w = w.as_deref();
     let derivatives = jac.is_some();
@@ -151,7 +153,7 @@ fn intervals4_kernel(
     };
     let mut blocks = jac.map(|jac| jac[..4 * BLOCK].chunks_exact_mut(BLOCK));
     let mut block = || blocks.as_mut().and_then(Iterator::next);
-    let [f0, f1, f2, f3] = fronts;
+    let [f0, f1, f2, f3] = &fronts;
     let [s0, s1, s2, s3] = &mut scratch;
     let out = [
         back(&links[0], f0, [starts[0], &mids[0], &ends[0]], block(), s0),

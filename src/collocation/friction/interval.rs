@@ -182,7 +182,7 @@ fn interval_at_kernel(
         w,
         derivatives,
     )?;
-    let out = back(&link, front, [&la, &lm, &lb], jac, &mut scratch);
+    let out = back(&link, &front, [&la, &lm, &lb], jac, &mut scratch);
     profile.keep_end(k, segment_end, b, &scratch.zb, w, derivatives, lb);
     profile.give(la);
     profile.give(lm);
@@ -312,7 +312,7 @@ pub(super) fn front(
 #[inline(always)]
 pub(super) fn back(
     link: &Link,
-    front: Front,
+    front: &Front,
     l: [&FrictionLinearization; 3],
     jac: Option<&mut [f64]>,
     scratch: &mut LinkScratch,
@@ -328,20 +328,10 @@ pub(super) fn back(
         w,
     } = *link;
     let [la, lm, lb] = l;
-    let Front {
-        y0,
-        y1,
-        ends,
-        frame1,
-        frame_m,
-        f0,
-        f1,
-        ym,
-        Em,
-        Rm,
-        vm,
-        um,
-    } = front;
+    // The small values copied, the ends' linearizations and the frames read in place.
+    let (y0, y1, f0, f1, ym) = (front.y0, front.y1, front.f0, front.f1, front.ym);
+    let (Em, Rm, vm, um) = (front.Em, front.Rm, front.vm, front.um);
+    let (ends, frame1, frame_m) = (front.ends.as_ref(), front.frame1.as_ref(), front.frame_m.as_ref());
     let count = profile.count();
     let h = sites.end.s - sites.start.s;
     let derivatives = jac.is_some();
@@ -356,9 +346,7 @@ pub(super) fn back(
         dzm_l,
         ..
     } = scratch;
-    let pm = frame_m
-        .as_ref()
-        .map(|frame| rhs_linearized_inline(&sites.mid, &lm.lin, &a.R, &ym, frame));
+    let pm = frame_m.map(|frame| rhs_linearized_inline(&sites.mid, &lm.lin, &a.R, &ym, frame));
     let fm = pm
         .as_ref()
         .map_or_else(|| rhs_from_rates(&sites.mid, &Rm, &ym, &lm.lin.rates), |pm| pm.f);
@@ -417,7 +405,7 @@ pub(super) fn back(
 
     // The backbone rows: the chain rule of residual::interval_jacobian, with the midpoint's
     // log tensions z_m depending on the node states through kappa~_a, kappa~_b.
-    let ends = EndColumns::new(&p0, &p1, &frame1, length);
+    let ends = EndColumns::new(p0, p1, frame1, length);
     let dYm = ends.midpoint(h);
     // d kappa~ / d(18 columns) at the nodes: (theta, v, u / L) of their own node.
     let node_turning = |l: &FrictionLinearization, j: usize, first: usize| {
