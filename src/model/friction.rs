@@ -29,6 +29,11 @@
 //! step (1e-3 for the prototype).
 #![allow(non_snake_case)]
 
+mod lanes;
+mod response;
+pub(crate) use lanes::linearize_lanes_into;
+use response::LaneResponse;
+
 use crate::error::{Result, invalid};
 use crate::model::equations::{Model, Site};
 use crate::model::linearize::{Linearization, Point};
@@ -37,10 +42,7 @@ use crate::model::tangential::{Slip, solve};
 use crate::model::tendon::Tendon;
 use crate::simd::avx2_fma;
 use crate::{Error, Readable};
-use nalgebra::allocator::Allocator;
-use nalgebra::{
-    DefaultAllocator, DimMin, Dyn, Matrix3, Matrix6, Matrix6x3, OMatrix, OVector, SMatrix, U1, U2, U3, Vector3, Vector6,
-};
+use nalgebra::{Matrix3, Matrix6, Matrix6x3, SMatrix, Vector3, Vector6};
 
 /// Checks the friction of tendon `i`: a finite coefficient >= 0, and for a coefficient > 0
 /// what the full-slip model needs: the coupled tendon model, and no breakpoint (point load or another tendon's termination)
@@ -207,6 +209,10 @@ pub(crate) struct FrictionLinearization {
     columns: Vec<Vector6<f64>>,
     /// Each slip's q^_i^T dq_i/d(v, u) at fixed rates, for dg_i and d(turning_i).
     explicit: Vec<SMatrix<f64, 1, 6>>,
+    /// The lanes' response to one set of loads ([`linearize_lanes_into`] evaluates no
+    /// scalar scratch), which [`FrictionLinearization::load_response`] returns for the same
+    /// loads while it is `current` (not after another evaluation).
+    lane_response: Option<LaneResponse>,
 }
 
 impl Default for FrictionLinearization {
@@ -228,6 +234,7 @@ impl Default for FrictionLinearization {
             gradients: Vec::new(),
             columns: Vec::new(),
             explicit: Vec::new(),
+            lane_response: None,
         }
     }
 }
@@ -310,6 +317,9 @@ fn linearize_into_kernel(
     derivatives: bool,
     out: &mut FrictionLinearization,
 ) -> Result<()> {
+    if let Some(kept) = &mut out.lane_response {
+        kept.current = false;
+    }
     // Eq. 13 assembled in the point this linearization kept (in place, not moved).
     let point = match &mut out.point {
         Some(point) => {
@@ -505,102 +515,14 @@ fn woodbury(slips: &[Slip], gradients: &[Vector6<f64>], inverse: &[f64], mb: &mu
     }
 }
 
-impl FrictionLinearization {
-    /// The response of this point's rates and turning rates to body loads (distributed
-    /// force and moment, body frame, N/m and N m/m), for the mass of the linearized dynamics
-    /// with friction (docs/stability.md, "Tendons with friction"): at fixed state, tensions
-    /// and multipliers a load b changes the rates by -J^-1 b, J = M + sum_i e_i (dg_i/dx)^T
-    /// the matrix of eq. 13 with the tangential loads (module docs: the frictionless -M^-1 b,
-    /// and the tangential loads following the normal loads the new rates press), and each
-    /// turning rate w_j mu_j kappa_j by -T_j b. `loads` holds one load per row (transposed,
-    /// as [`crate::model::linearize::rates_and_solve`] takes them) and becomes row by row
-    /// (J^-1 b)^T; `turning[j]` (one per tendon of [`slipping`], 0 for those not loading
-    /// here) gets T_j b, one column per load. False for a point without an evaluation
-    /// ([`linearize_into`]) or a singular J.
-    pub(crate) fn load_response(&self, loads: &mut SMatrix<f64, 6, 6>, turning: &mut [SMatrix<f64, 1, 6>]) -> bool {
-        let Some(point) = &self.point else {
-            return false;
-        };
-        if !point.solve_rows(loads) {
-            return false;
-        }
-        let slips = &self.slips;
-        // On the stack for up to 3 tendons with friction here (no allocation per point).
-        let woodbury = match slips.len() {
-            0 => true,
-            1 => woodbury_one(&slips[0], loads),
-            2 => woodbury_rows(U2, slips, loads),
-            3 => woodbury_rows(U3, slips, loads),
-            m => woodbury_rows(Dyn(m), slips, loads),
-        };
-        if !woodbury {
-            return false;
-        }
-        turning.iter_mut().for_each(|t| t.fill(0.0));
-        for sl in slips {
-            // d turning_j = (w_j mu_j / tau_j) q^_j . dq_j, dq_j through the rates alone
-            // (the state is fixed), as `linearize_into`'s d_turning.
-            let factor = sl.signed_mu * sl.tp.inv_speed / sl.tp.k;
-            for (r, t) in turning[sl.slot].iter_mut().enumerate() {
-                let change = sl.normal_change(&loads.row(r).transpose());
-                *t = factor * sl.q_hat.dot(&change);
-            }
-        }
-        loads.iter().all(|v| v.is_finite())
-    }
-}
-
-/// [`woodbury_rows`] for one slip, written out: S = 1 + g . y is 1 x 1, and its LU solve is
-/// w = (g . M^-1 b) / S (nalgebra's for a 1 x 1 matrix: no pivoting, one division, false for
-/// S = 0), so the rows are the same bits without building the LU.
-fn woodbury_one(slip: &Slip, loads: &mut SMatrix<f64, 6, 6>) -> bool {
-    let gradient = slip.gradient();
-    let schur = 1.0 + gradient.dot(&slip.y);
-    if schur == 0.0 {
-        return false;
-    }
-    for r in 0..6 {
-        let mb: Vector6<f64> = loads.row(r).transpose();
-        let w = gradient.dot(&mb) / schur;
-        let out = mb - slip.y * w;
-        loads.set_row(r, &out.transpose());
-    }
-    true
-}
-
-/// J^-1 b = M^-1 b - Y S^-1 G^T M^-1 b for each row of `loads` (which holds (M^-1 b)^T),
-/// S = I + G^T Y (Woodbury, as [`linearize_into`]), with S and its LU factors of dimension
-/// `d` (the number of `slips`): fixed dimensions keep them on the stack, the same
-/// operations in the same order as for a dynamic one. False for a singular S.
-fn woodbury_rows<D: DimMin<D, Output = D>>(d: D, slips: &[Slip], loads: &mut SMatrix<f64, 6, 6>) -> bool
-where
-    DefaultAllocator: Allocator<D, D> + Allocator<D>,
-{
-    let gradients = OVector::<Vector6<f64>, D>::from_fn_generic(d, U1, |l, _| slips[l].gradient());
-    let schur =
-        OMatrix::<f64, D, D>::from_fn_generic(d, d, |j, l| f64::from(u8::from(j == l)) + gradients[j].dot(&slips[l].y));
-    let lu = schur.lu();
-    for r in 0..6 {
-        let mb: Vector6<f64> = loads.row(r).transpose();
-        let g = OVector::<f64, D>::from_fn_generic(d, U1, |l, _| gradients[l].dot(&mb));
-        let Some(w) = lu.solve(&g) else {
-            return false;
-        };
-        let mut out = mb;
-        for (sl, wj) in slips.iter().zip(w.iter()) {
-            out -= sl.y * *wj;
-        }
-        loads.set_row(r, &out.transpose());
-    }
-    true
-}
-
 #[cfg(test)]
 mod tests {
+    use super::response::{woodbury_one, woodbury_rows};
     use super::*;
     use crate::cases;
     use crate::model::tendon::Friction;
     use crate::so3;
+    use nalgebra::U1;
 
     /// Case H with friction on its helical tendon and a straight one, at a bent, twisted
     /// state with a generic rotation.

@@ -17,7 +17,7 @@
 #![allow(non_snake_case)]
 
 use super::super::residual::{
-    Block, EndColumns, IntervalSites, PointFrame, QuarterSites, end_points, midpoint_product, rhs_from_rates,
+    Block, EndColumns, IntervalSites, PointFrame, PointLinearization, end_points, midpoint_product, rhs_from_rates,
     rhs_linearized_inline, scale_rows,
 };
 use super::super::unknowns::THETA;
@@ -29,7 +29,7 @@ use crate::model::friction::FrictionLinearization;
 use crate::simd::avx2_fma;
 use crate::so3;
 use crate::solution::State;
-use nalgebra::{DMatrix, SMatrix, Vector3, Vector6};
+use nalgebra::{DMatrix, Matrix3, SMatrix, Vector3};
 
 /// The linearization of an interval with friction: its backbone rows, capstan rows and
 /// their derivatives.
@@ -142,7 +142,7 @@ fn interval_at(
     avx2_fma!(interval_at_kernel(profile, length, k, sites, segment_end, a, b, w, jac))
 }
 
-/// [`interval_at`]'s operations.
+/// [`interval_at`]'s operations: the link's nodes, [`front`], its midpoint and [`back`].
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
 fn interval_at_kernel(
@@ -156,32 +156,107 @@ fn interval_at_kernel(
     w: Option<&[f64]>,
     jac: Option<&mut [f64]>,
 ) -> Result<IntervalLinearization> {
-    let count = profile.count();
-    let h = sites.end.s - sites.start.s;
     // The link's buffers, the profile's spare ones (given back at the end).
     let mut scratch = profile.take_scratch();
-    let LinkScratch {
-        za,
-        zb,
-        zm,
-        on,
-        stuck,
-        dzm,
-        dturn_m,
-        dzm_l,
+    node_tensions(profile, k, &mut scratch);
+    let derivatives = jac.is_some();
+    let la = profile.start_point(k, &sites.start, segment_end, a, &scratch.za, w, derivatives)?;
+    let lb = profile.point(&sites.end, segment_end, &b.R, (&b.v, &b.u), &scratch.zb, w, derivatives)?;
+    let link = Link {
+        profile,
+        length,
+        k,
+        sites,
+        segment_end,
+        a,
+        b,
+        w,
+    };
+    let front = front(&link, &la, &lb, derivatives, &mut scratch);
+    let lm = profile.point(
+        &sites.mid,
+        segment_end,
+        &front.Rm,
+        (&front.vm, &front.um),
+        &scratch.zm,
+        w,
+        derivatives,
+    )?;
+    let out = back(&link, &front, [&la, &lm, &lb], jac, &mut scratch);
+    profile.keep_end(k, segment_end, b, &scratch.zb, w, derivatives, lb);
+    profile.give(la);
+    profile.give(lm);
+    profile.give_scratch(scratch);
+    Ok(out)
+}
+
+/// The log tensions at link k's nodes into `scratch`.
+#[inline(always)]
+pub(super) fn node_tensions(profile: &Profile, k: usize, scratch: &mut LinkScratch) {
+    scratch.za.clear();
+    scratch.za.extend(profile.z.iter().map(|z| z[k]));
+    scratch.zb.clear();
+    scratch.zb.extend(profile.z.iter().map(|z| z[k + 1]));
+}
+
+/// One link's inputs: link k of `profile` between the states `a` and `b`, the slips at
+/// multipliers `w`.
+pub(super) struct Link<'l, 'p> {
+    pub(super) profile: &'l Profile<'p>,
+    pub(super) length: f64,
+    pub(super) k: usize,
+    pub(super) sites: &'l IntervalSites,
+    pub(super) segment_end: f64,
+    pub(super) a: &'l State,
+    pub(super) b: &'l State,
+    pub(super) w: Option<&'l [f64]>,
+}
+
+/// A link's evaluation up to its midpoint's state (its log tensions in the scratch's
+/// `zm`): what [`back`] takes with the midpoint's linearization.
+pub(super) struct Front {
+    y0: Block<f64>,
+    y1: Block<f64>,
+    ends: Option<(PointLinearization, PointLinearization)>,
+    frame1: Option<PointFrame>,
+    frame_m: Option<PointFrame>,
+    f0: Block<f64>,
+    f1: Block<f64>,
+    ym: Block<f64>,
+    Em: Matrix3<f64>,
+    /// The midpoint's rotation and strains, where eq. 13 with friction is evaluated next.
+    pub(super) Rm: Matrix3<f64>,
+    pub(super) vm: Vector3<f64>,
+    pub(super) um: Vector3<f64>,
+}
+
+/// A link's evaluation from eq. 13 with friction at its nodes (`la`, `lb`, at the log
+/// tensions in `scratch`) to its midpoint's state; keeps the nodes' rates in the profile.
+#[inline(always)]
+pub(super) fn front(
+    link: &Link,
+    la: &FrictionLinearization,
+    lb: &FrictionLinearization,
+    derivatives: bool,
+    scratch: &mut LinkScratch,
+) -> Front {
+    let Link {
+        profile,
+        k,
+        sites,
+        segment_end,
+        a,
+        b,
+        w,
         ..
-    } = &mut *scratch;
-    za.clear();
-    za.extend(profile.z.iter().map(|z| z[k]));
-    zb.clear();
-    zb.extend(profile.z.iter().map(|z| z[k + 1]));
+    } = *link;
+    let count = profile.count();
+    let h = sites.end.s - sites.start.s;
+    let LinkScratch { za, zb, zm, .. } = scratch;
     let (y0, y1) = end_points(a, b);
     let theta1: Vector3<f64> = y1.fixed_rows::<3>(THETA).into();
-    let derivatives = jac.is_some();
-    let la = profile.start_point(k, &sites.start, segment_end, a, za, w, derivatives)?;
-    let lb = profile.point(&sites.end, segment_end, &b.R, (&b.v, &b.u), zb, w, derivatives)?;
-    profile.keep_node(k, segment_end, a, (za, w), &la);
-    profile.keep_node(k + 1, segment_end, b, (zb, w), &lb);
+    profile.keep_node(k, segment_end, a, (za, w), la);
+    profile.keep_node(k + 1, segment_end, b, (zb, w), lb);
     // F at a point from its rates; with derivatives also its linearization (a residual
     // needs only the value, the same arithmetic as the linearization's).
     let value = |site: &Site, lin: &FrictionLinearization, y: &Block<f64>| {
@@ -197,7 +272,7 @@ fn interval_at_kernel(
     });
     let (f0, f1) = match &ends {
         Some((p0, p1)) => (p0.f, p1.f),
-        None => (value(&sites.start, &la, &y0), value(&sites.end, &lb, &y1)),
+        None => (value(&sites.start, la, &y0), value(&sites.end, lb, &y1)),
     };
     let ym = (y0 + y1) * 0.5 + (f0 - f1) * (h / 8.0);
     zm.clear();
@@ -215,10 +290,63 @@ fn interval_at_kernel(
             (Em, a.R * Em)
         }
     };
-    let lm = profile.point(&sites.mid, segment_end, &Rm, (&vm, &um), zm, w, derivatives)?;
-    let pm = frame_m
-        .as_ref()
-        .map(|frame| rhs_linearized_inline(&sites.mid, &lm.lin, &a.R, &ym, frame));
+    Front {
+        y0,
+        y1,
+        ends,
+        frame1,
+        frame_m,
+        f0,
+        f1,
+        ym,
+        Em,
+        Rm,
+        vm,
+        um,
+    }
+}
+
+/// The rest of a link's evaluation ([`interval_at`]) from its [`Front`] and eq. 13 with
+/// friction at its start, midpoint and end (`l`); the profile keeps the start's and the
+/// midpoint's responses when it keeps them (not the end's linearization: the caller does).
+#[inline(always)]
+pub(super) fn back(
+    link: &Link,
+    front: &Front,
+    l: [&FrictionLinearization; 3],
+    jac: Option<&mut [f64]>,
+    scratch: &mut LinkScratch,
+) -> IntervalLinearization {
+    let Link {
+        profile,
+        length,
+        k,
+        sites,
+        segment_end,
+        a,
+        b,
+        w,
+    } = *link;
+    let [la, lm, lb] = l;
+    // The small values copied, the ends' linearizations and the frames read in place.
+    let (y0, y1, f0, f1, ym) = (front.y0, front.y1, front.f0, front.f1, front.ym);
+    let (Em, Rm, vm, um) = (front.Em, front.Rm, front.vm, front.um);
+    let (ends, frame1, frame_m) = (front.ends.as_ref(), front.frame1.as_ref(), front.frame_m.as_ref());
+    let count = profile.count();
+    let h = sites.end.s - sites.start.s;
+    let derivatives = jac.is_some();
+    let LinkScratch {
+        za,
+        zb,
+        zm,
+        on,
+        stuck,
+        dzm,
+        dturn_m,
+        dzm_l,
+        ..
+    } = scratch;
+    let pm = frame_m.map(|frame| rhs_linearized_inline(&sites.mid, &lm.lin, &a.R, &ym, frame));
     let fm = pm
         .as_ref()
         .map_or_else(|| rhs_from_rates(&sites.mid, &Rm, &ym, &lm.lin.rates), |pm| pm.f);
@@ -272,16 +400,12 @@ fn interval_at_kernel(
     }
     out.derivatives = derivatives;
     let (Some(jac), Some((p0, p1)), Some(pm), Some(frame1), Some(frame_m)) = (jac, ends, pm, frame1, frame_m) else {
-        profile.keep_end(k, segment_end, b, zb, w, derivatives, lb);
-        profile.give(la);
-        profile.give(lm);
-        profile.give_scratch(scratch);
-        return Ok(out);
+        return out;
     };
 
     // The backbone rows: the chain rule of residual::interval_jacobian, with the midpoint's
     // log tensions z_m depending on the node states through kappa~_a, kappa~_b.
-    let ends = EndColumns::new(&p0, &p1, &frame1, length);
+    let ends = EndColumns::new(p0, p1, frame1, length);
     let dYm = ends.midpoint(h);
     // d kappa~ / d(18 columns) at the nodes: (theta, v, u / L) of their own node.
     let node_turning = |l: &FrictionLinearization, j: usize, first: usize| {
@@ -294,7 +418,7 @@ fn interval_at_kernel(
         row
     };
     dzm.clear();
-    dzm.extend((0..count).map(|j| (node_turning(&la, j, 0) - node_turning(&lb, j, 9)) * (h / 8.0)));
+    dzm.extend((0..count).map(|j| (node_turning(la, j, 0) - node_turning(lb, j, 9)) * (h / 8.0)));
     // F_m and kappa~_m in the midpoint's local coordinates (theta, v, u) and the frame.
     let Jr_m = frame_m.Jr;
     let turning_y = |j: usize| {
@@ -315,7 +439,7 @@ fn interval_at_kernel(
         col
     };
     for (j, dz) in dzm.iter().enumerate() {
-        dFm += rates_z(&lm, j) * dz;
+        dFm += rates_z(lm, j) * dz;
     }
     ends.write(&dFm, h, length, jac);
 
@@ -334,7 +458,7 @@ fn interval_at_kernel(
     }
     // The capstan rows in the block's columns (p columns are 0).
     for j in (0..count).filter(|&j| on[j]) {
-        let row = (node_turning(&la, j, 0) + dturn_m[j] * 4.0 + node_turning(&lb, j, 9)) * (-h / 6.0);
+        let row = (node_turning(la, j, 0) + dturn_m[j] * 4.0 + node_turning(lb, j, 9)) * (-h / 6.0);
         for c in 0..18 {
             let column = if c < 9 { 3 + c } else { 6 + c };
             out.psi_x[(j, column)] = row[c];
@@ -354,7 +478,7 @@ fn interval_at_kernel(
             }));
             let mut dFm_z = pm.f_y * dym;
             for (j, d) in dzm_l.iter().enumerate() {
-                dFm_z += rates_z(&lm, j) * *d;
+                dFm_z += rates_z(lm, j) * *d;
             }
             let column = scale_rows(-(dF_end + dFm_z * 4.0) * (h / 6.0), length);
             out.rows_z.set_column(side * count + l, &column);
@@ -385,131 +509,18 @@ fn interval_at_kernel(
     }
     // For the verdict's mass at the same state, when the profile keeps it (the Jacobian at
     // the answer).
-    profile.keep_response(2 * k, &sites.start, segment_end, (&a.R, &a.v, &a.u), (za, w), &la);
-    profile.keep_response(2 * k + 1, &sites.mid, segment_end, (&Rm, &vm, &um), (zm, w), &lm);
-    profile.keep_end(k, segment_end, b, zb, w, derivatives, lb);
-    profile.give(la);
-    profile.give(lm);
-    profile.give_scratch(scratch);
-    Ok(out)
-}
-
-/// Link k's order-6 rows with friction: backbone rows, capstan rows (one per slip) and the
-/// rates at the two nodes.
-pub(crate) type Order6 = (Block<f64>, Vec<f64>, Vector6<f64>, Vector6<f64>);
-
-/// Link k's order-6 rows with friction (the Cash-Singhal formula of
-/// [`super::super::residual::interval_order6`] on the state (y, z)): the 12 backbone rows,
-/// the capstan rows psi6 (0 for slips not on the link), and the rates (v', u') at the two
-/// nodes.
-///
-/// # Errors
-/// A model breakdown at a stage.
-#[allow(clippy::too_many_arguments)]
-pub(crate) fn interval_order6(
-    profile: &Profile,
-    length: f64,
-    k: usize,
-    sites: &IntervalSites,
-    quarters: &QuarterSites,
-    segment_end: f64,
-    a: &State,
-    b: &State,
-) -> Result<Order6> {
-    let count = profile.count();
-    let h = sites.end.s - sites.start.s;
-    // The link's buffers, the profile's spare ones (given back at the end).
-    let mut scratch = profile.take_scratch();
-    let LinkScratch {
-        za,
-        zb,
-        zm: z_m,
-        z_q,
-        z_tq,
-        turnings: [k0, k1, k_q, k_tq, k_m],
-        ..
-    } = &mut *scratch;
-    za.clear();
-    za.extend(profile.z.iter().map(|z| z[k]));
-    zb.clear();
-    zb.extend(profile.z.iter().map(|z| z[k + 1]));
-    let (y0, y1) = end_points(a, b);
-    let w = profile.multipliers(k);
-    let w = w.as_deref();
-    // F and kappa~ (into `turning`) at a local state (y, z) of the interval; at a node
-    // (`node`: its index and state), eq. 13 with friction at the node's own state, taken
-    // from the last pass that evaluated it there when it has the same inputs.
-    let stage = |site: &Site, y: &Block<f64>, z: &[f64], node: Option<(usize, &State)>, turning: &mut Vec<f64>| {
-        let theta: Vector3<f64> = y.fixed_rows::<3>(THETA).into();
-        let (v, u): (Vector3<f64>, Vector3<f64>) = (y.fixed_rows::<3>(6).into(), y.fixed_rows::<3>(9).into());
-        let R = a.R * so3::exp(&theta);
-        let rates = match node {
-            Some((n, state)) => match profile.node_rates(n, segment_end, state, (z, w), turning) {
-                Some(rates) => rates,
-                None => {
-                    let lin = profile.point(site, segment_end, &state.R, (&state.v, &state.u), z, w, false)?;
-                    turning.clone_from(&lin.turning);
-                    let rates = lin.lin.rates;
-                    profile.give(lin);
-                    rates
-                }
-            },
-            None => {
-                let lin = profile.point(site, segment_end, &R, (&v, &u), z, w, false)?;
-                turning.clone_from(&lin.turning);
-                let rates = lin.lin.rates;
-                profile.give(lin);
-                rates
-            }
-        };
-        // p' = R v with v the strain of the coordinate (v* on a Kirchhoff rod, whose
-        // coordinate carries the force), as in the order-4 rows.
-        Ok::<_, crate::Error>(rhs_from_rates(site, &R, y, &rates))
-    };
-    let f0 = stage(&sites.start, &y0, za, Some((k, a)), k0)?;
-    let f1 = stage(&sites.end, &y1, zb, Some((k + 1, b)), k1)?;
-    let (k0, k1) = (&*k0, &*k1);
-    let combine = |c0: f64, c1: f64, d0: f64, d1: f64, z: &mut Vec<f64>| {
-        let y = (y0 * c0 + y1 * c1) / 32.0 + (f0 * d0 + f1 * d1) * (h / 64.0);
-        z.clear();
-        z.extend((0..count).map(|j| (za[j] * c0 + zb[j] * c1) / 32.0 + (k0[j] * d0 + k1[j] * d1) * (h / 64.0)));
-        y
-    };
-    let y_q = combine(27.0, 5.0, 9.0, -3.0, z_q);
-    let y_tq = combine(5.0, 27.0, 3.0, -9.0, z_tq);
-    let f_q = stage(&quarters.quarter, &y_q, z_q, None, k_q)?;
-    let f_tq = stage(&quarters.three_quarters, &y_tq, z_tq, None, k_tq)?;
-    let y_m = (y0 + y1) * 0.5 + ((f1 - f0) * (5.0 / 24.0) + (f_q - f_tq) * (2.0 / 3.0)) * h;
-    z_m.clear();
-    z_m.extend(
-        (0..count)
-            .map(|j| 0.5 * (za[j] + zb[j]) + ((k1[j] - k0[j]) * (5.0 / 24.0) + (k_q[j] - k_tq[j]) * (2.0 / 3.0)) * h),
-    );
-    let f_m = stage(&sites.mid, &y_m, z_m, None, k_m)?;
-    let quadrature = ((f0 + f1) * 7.0 + (f_q + f_tq) * 32.0 + f_m * 12.0) * (h / 90.0);
-    let psi: Vec<f64> = (0..count)
-        .map(|j| {
-            if profile.on_link(j, k) && profile.sticks(j, k) {
-                // The stick row is algebraic: the same at any order.
-                zb[j] - (profile.stuck_tension(j, k + 1, &sites.end, b, length).0 / profile.base[j]).ln()
-            } else if profile.on_link(j, k) {
-                zb[j] - za[j] - (7.0 * (k0[j] + k1[j]) + 32.0 * (k_q[j] + k_tq[j]) + 12.0 * k_m[j]) * (h / 90.0)
-            } else {
-                0.0
-            }
-        })
-        .collect();
-    let rates = |f: &Block<f64>| f.fixed_rows::<6>(6).into_owned();
-    profile.order6.borrow_mut()[k].clone_from(&psi);
-    profile.give_scratch(scratch);
-    Ok((scale_rows(y1 - y0 - quadrature, length), psi, rates(&f0), rates(&f1)))
+    profile.keep_response(2 * k, &sites.start, segment_end, (&a.R, &a.v, &a.u), (za, w), la);
+    profile.keep_response(2 * k + 1, &sites.mid, segment_end, (&Rm, &vm, &um), (zm, w), lm);
+    out
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::cases;
+    use crate::collocation::friction::interval_order6;
     use crate::collocation::residual::IntervalSites;
+    use crate::collocation::residual::QuarterSites;
     use crate::mesh::Mesh;
     use crate::model::equations::Model;
     use crate::model::tendon::{Friction, Motion};

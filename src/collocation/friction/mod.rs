@@ -20,10 +20,12 @@ mod border;
 mod correction;
 mod direct;
 mod grip;
+mod group;
 pub(crate) mod history;
 mod interval;
 mod kinks;
 mod linearized;
+mod order6;
 mod profile;
 mod pull_ins;
 mod staircase;
@@ -32,7 +34,9 @@ mod turning;
 
 pub use grip::Contact;
 pub(crate) use grip::Grip;
-pub(crate) use interval::{Profile, interval, interval_order6};
+pub(crate) use group::intervals4;
+pub(crate) use interval::{IntervalLinearization, Profile, interval};
+pub(crate) use order6::interval_order6;
 pub(in crate::collocation) use pull_ins::solve_pull_ins;
 
 use super::equilibrium::CLEAN_ITERATIONS;

@@ -28,8 +28,10 @@ pub(crate) struct Profile<'a> {
     pub(crate) z: Vec<Vec<f64>>,
     /// In a stick/slip history, each slip's [`Grip`] on this mesh; None in full slip.
     pub(crate) grips: Option<Vec<Grip>>,
-    /// The model with the tensions of one point, for eq. 13 with friction.
-    scratch: RefCell<Model<'a>>,
+    /// The model with the tensions of one point, for eq. 13 with friction, and four
+    /// copies of it (made at the first use) for four points at once.
+    pub(super) scratch: RefCell<Model<'a>>,
+    pub(super) quad: RefCell<Vec<Model<'a>>>,
     /// Each link's last evaluation ([`interval`] through the system's residual or
     /// Jacobian), which the border reads instead of evaluating the link again, and a
     /// stuck link's multiplier its capacity from ([`Profile::stuck_capacity`]).
@@ -48,7 +50,7 @@ pub(crate) struct Profile<'a> {
     // Boxed so that taking and giving one moves a pointer, not its 700 bytes (measured:
     // the moves' memcpy cost S's friction solve 0.18 M instructions).
     #[allow(clippy::vec_box)]
-    spare: RefCell<Vec<Box<FrictionLinearization>>>,
+    pub(super) spare: RefCell<Vec<Box<FrictionLinearization>>>,
     /// Links' evaluations the cache no longer holds and the links' scratch buffers, for the
     /// next links to refill.
     spare_links: RefCell<Vec<IntervalLinearization>>,
@@ -58,7 +60,7 @@ pub(crate) struct Profile<'a> {
     /// length), the links' evaluations with derivatives keep eq. 13 with friction's response
     /// to the inertia loads at their start nodes and midpoints ([`Profile::keep_response`]),
     /// for the mass of the linearized dynamics at the same state.
-    responding: Cell<Option<(f64, f64)>>,
+    pub(super) responding: Cell<Option<(f64, f64)>>,
     /// Those responses: link k's start node at 2k, its midpoint at 2k + 1.
     responses: RefCell<Responses>,
 }
@@ -109,7 +111,7 @@ pub(super) struct LinkScratch {
     pub(super) dturn_m: Vec<SMatrix<f64, 1, 18>>,
     pub(super) dzm_l: Vec<f64>,
     /// The order-6 rows' log tensions at the quarter stages and their five stages'
-    /// turning rates ([`super::interval::interval_order6`]; its midpoint's in `zm`).
+    /// turning rates ([`super::order6::interval_order6`]; its midpoint's in `zm`).
     pub(super) z_q: Vec<f64>,
     pub(super) z_tq: Vec<f64>,
     pub(super) turnings: [Vec<f64>; 5],
@@ -164,6 +166,7 @@ impl<'a> Profile<'a> {
             base,
             spans,
             scratch: RefCell::new(model.clone()),
+            quad: RefCell::new(Vec::new()),
             cache: RefCell::new((1..mesh.nodes.len()).map(|_| None).collect()),
             order6: RefCell::new(vec![Vec::new(); mesh.nodes.len() - 1]),
             end: RefCell::new(None),
@@ -186,6 +189,7 @@ impl<'a> Profile<'a> {
             z: self.z.clone(),
             grips: self.grips.clone(),
             scratch: RefCell::new(self.scratch.borrow().clone()),
+            quad: RefCell::new(Vec::new()),
             cache: RefCell::new(self.cache.borrow().iter().map(|_| None).collect()),
             order6: RefCell::new(vec![Vec::new(); self.z[0].len() - 1]),
             end: RefCell::new(None),

@@ -3,6 +3,7 @@
 //! intervals of one segment.
 
 use super::{System, TensionSink};
+use crate::collocation::friction::{self, IntervalLinearization, Profile};
 use crate::collocation::interval_lanes::interval_jacobians4;
 use crate::collocation::order6::intervals_order6_lanes;
 use crate::collocation::residual::{self, Block, IntervalRows, IntervalSites};
@@ -78,6 +79,63 @@ impl System<'_> {
         }
         *slot = ends[3];
         Ok(true)
+    }
+
+    /// [`System::residual`] of a system with friction (`profile`): each link's evaluation
+    /// kept in the profile; runs of four intervals of one segment at once
+    /// ([`System::friction_group`]).
+    ///
+    /// # Errors
+    /// A model breakdown at a visited state.
+    pub(super) fn friction_residual(&self, profile: &Profile, x: &[State], out: &mut [f64]) -> Result<()> {
+        let length = self.model.robot.length();
+        // Runs of four intervals of one segment at once (`friction_group`), kept as
+        // each link is reached.
+        let mut group: Option<(usize, [Option<friction::IntervalLinearization>; 4])> = None;
+        self.rows(x, out, |k, sites, seg, a, b, _| {
+            let grouped = match &mut group {
+                Some((first, lins)) if (*first..*first + 4).contains(&k) => lins[k - *first].take(),
+                _ => self.friction_group(profile, k, x, None)?.and_then(|lins| {
+                    let mut lins = lins.map(Some);
+                    let first = lins[0].take();
+                    group = Some((k, lins));
+                    first
+                }),
+            };
+            let lin = match grouped {
+                Some(lin) => lin,
+                None => friction::interval(profile, length, k, sites, seg, a, b, None)?,
+            };
+            let residual = lin.residual;
+            profile.keep(k, lin);
+            Ok((residual, Vector6::zeros()))
+        })
+    }
+
+    /// The links k..k+4 of a system with friction (`profile`) evaluated at once
+    /// ([`friction::intervals4`]) when they are four intervals of one segment and the group
+    /// takes them, their blocks into `values` (from link k's on) when given; None otherwise
+    /// (evaluate them one by one then).
+    ///
+    /// # Errors
+    /// A model breakdown at node k.
+    pub(super) fn friction_group(
+        &self,
+        profile: &Profile,
+        k: usize,
+        x: &[State],
+        values: Option<&mut [f64]>,
+    ) -> Result<Option<[IntervalLinearization; 4]>> {
+        let Some([Some(s0), Some(s1), Some(s2), Some(s3)]) = self.interval_sites.get(k..k + 4) else {
+            return Ok(None);
+        };
+        let seg = self.mesh.nodes[k].segment_end;
+        if self.mesh.nodes[k + 1..k + 4].iter().any(|n| n.segment_end != seg) {
+            return Ok(None);
+        }
+        let length = self.model.robot.length();
+        let values = values.map(|v| &mut v[..4 * NODE * 2 * NODE]);
+        friction::intervals4(profile, length, k, [s0, s1, s2, s3], seg, &x[k..k + 5], values)
     }
 
     /// Link k's value from `group` (the first link and the values of the last four links

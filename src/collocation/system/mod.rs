@@ -219,13 +219,7 @@ impl<'a> System<'a> {
     /// A model breakdown at a visited state.
     pub fn residual(&self, x: &[State], out: &mut [f64]) -> Result<()> {
         if let Some(profile) = &self.friction {
-            let length = self.model.robot.length();
-            return self.rows(x, out, |k, sites, seg, a, b, _| {
-                let lin = friction::interval(profile, length, k, sites, seg, a, b, None)?;
-                let residual = lin.residual;
-                profile.keep(k, lin);
-                Ok((residual, Vector6::zeros()))
-            });
+            return self.friction_residual(profile, x, out);
         }
         // Runs of four intervals of one segment go to the lanes (`residual_group`).
         let mut group = None;
@@ -489,6 +483,14 @@ impl<'a> System<'a> {
             if let Some(sites) = &self.interval_sites[k] {
                 let seg = self.mesh.nodes[k].segment_end;
                 if let Some(profile) = &self.friction {
+                    if let Some(lins) = self.friction_group(profile, k, x, Some(&mut values[at..]))? {
+                        for (j, lin) in lins.into_iter().enumerate() {
+                            out[link_row(k + j)..link_row(k + j + 1)].copy_from_slice(lin.residual.as_slice());
+                            profile.keep(k + j, lin);
+                        }
+                        (shared, k, at) = (true, k + 4, at + 4 * NODE * width);
+                        continue;
+                    }
                     let (length, block) = (self.model.robot.length(), &mut values[at..at + NODE * width]);
                     let lin = friction::interval(profile, length, k, sites, seg, &x[k], &x[k + 1], Some(block))?;
                     out[rows].copy_from_slice(lin.residual.as_slice());

@@ -13,7 +13,7 @@
 //! points with the scalar code, which gives the error or the fallback's values.
 #![allow(non_snake_case)]
 
-mod pass1;
+pub(in crate::model) mod pass1;
 mod tensions;
 pub(crate) use pass1::rates_lanes;
 use pass1::{Assembled, assemble};
@@ -26,16 +26,16 @@ use std::mem::MaybeUninit;
 pub(crate) use tensions::TensionLanes;
 
 /// A 3-vector of lanes.
-type V3 = [F4; 3];
+pub(in crate::model) type V3 = [F4; 3];
 /// A 3x3 matrix of lanes, `m[row][column]`.
-type M3 = [[F4; 3]; 3];
+pub(in crate::model) type M3 = [[F4; 3]; 3];
 
-const Z3: V3 = [F4::ZERO; 3];
-const Z33: M3 = [[F4::ZERO; 3]; 3];
+pub(in crate::model) const Z3: V3 = [F4::ZERO; 3];
+pub(in crate::model) const Z33: M3 = [[F4::ZERO; 3]; 3];
 
 /// The four lanes' values of a 3-vector.
 #[inline(always)]
-fn gather(v: [&Vector3<f64>; 4]) -> V3 {
+pub(in crate::model) fn gather(v: [&Vector3<f64>; 4]) -> V3 {
     let mut out = Z3;
     for (i, x) in out.iter_mut().enumerate() {
         *x = F4([v[0][i], v[1][i], v[2][i], v[3][i]]);
@@ -45,7 +45,7 @@ fn gather(v: [&Vector3<f64>; 4]) -> V3 {
 
 /// The four lanes' values of a 3x3 matrix.
 #[inline(always)]
-fn gather3(m: [&Matrix3<f64>; 4]) -> M3 {
+pub(in crate::model) fn gather3(m: [&Matrix3<f64>; 4]) -> M3 {
     let mut out = Z33;
     for (r, row) in out.iter_mut().enumerate() {
         for (c, x) in row.iter_mut().enumerate() {
@@ -56,34 +56,34 @@ fn gather3(m: [&Matrix3<f64>; 4]) -> M3 {
 }
 
 #[inline(always)]
-fn add(a: &V3, b: &V3) -> V3 {
+pub(in crate::model) fn add(a: &V3, b: &V3) -> V3 {
     [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
 }
 
 #[inline(always)]
-fn sub(a: &V3, b: &V3) -> V3 {
+pub(in crate::model) fn sub(a: &V3, b: &V3) -> V3 {
     [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
 }
 
 #[inline(always)]
-fn mul(a: &V3, b: &V3) -> V3 {
+pub(in crate::model) fn mul(a: &V3, b: &V3) -> V3 {
     [a[0] * b[0], a[1] * b[1], a[2] * b[2]]
 }
 
 #[inline(always)]
-fn scale(a: &V3, k: F4) -> V3 {
+pub(in crate::model) fn scale(a: &V3, k: F4) -> V3 {
     [a[0] * k, a[1] * k, a[2] * k]
 }
 
 /// a . b as nalgebra's 3-vector dot: (a_0 b_0 + a_1 b_1) + a_2 b_2.
 #[inline(always)]
-fn dot(a: &V3, b: &V3) -> F4 {
+pub(in crate::model) fn dot(a: &V3, b: &V3) -> F4 {
     a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 }
 
 /// a x b as nalgebra's `cross`.
 #[inline(always)]
-fn cross(a: &V3, b: &V3) -> V3 {
+pub(in crate::model) fn cross(a: &V3, b: &V3) -> V3 {
     [
         a[1] * b[2] - a[2] * b[1],
         a[2] * b[0] - a[0] * b[2],
@@ -93,7 +93,7 @@ fn cross(a: &V3, b: &V3) -> V3 {
 
 /// m v as nalgebra's product: entry i is (m_i0 v_0 + m_i1 v_1) + m_i2 v_2.
 #[inline(always)]
-fn mat_vec(m: &M3, v: &V3) -> V3 {
+pub(in crate::model) fn mat_vec(m: &M3, v: &V3) -> V3 {
     let mut out = Z3;
     for (x, row) in out.iter_mut().zip(m) {
         *x = row[0] * v[0] + row[1] * v[1] + row[2] * v[2];
@@ -103,7 +103,7 @@ fn mat_vec(m: &M3, v: &V3) -> V3 {
 
 /// m^T v as nalgebra's `tr_mul` (column dot products).
 #[inline(always)]
-fn tr_vec(m: &M3, v: &V3) -> V3 {
+pub(in crate::model) fn tr_vec(m: &M3, v: &V3) -> V3 {
     let mut out = Z3;
     for (i, x) in out.iter_mut().enumerate() {
         *x = m[0][i] * v[0] + m[1][i] * v[1] + m[2][i] * v[2];
@@ -113,7 +113,7 @@ fn tr_vec(m: &M3, v: &V3) -> V3 {
 
 /// a b as nalgebra's product.
 #[inline(always)]
-fn mat_mat(a: &M3, b: &M3) -> M3 {
+pub(in crate::model) fn mat_mat(a: &M3, b: &M3) -> M3 {
     // Loops, not closures: a closure here stayed a call compiled for the baseline.
     let mut out = Z33;
     for (i, row) in out.iter_mut().enumerate() {
@@ -126,7 +126,7 @@ fn mat_mat(a: &M3, b: &M3) -> M3 {
 
 /// a^T b as nalgebra's `tr_mul` (dot products of columns).
 #[inline(always)]
-fn tr_mat(a: &M3, b: &M3) -> M3 {
+pub(in crate::model) fn tr_mat(a: &M3, b: &M3) -> M3 {
     let mut out = Z33;
     for (i, row) in out.iter_mut().enumerate() {
         for (j, x) in row.iter_mut().enumerate() {
@@ -137,7 +137,7 @@ fn tr_mat(a: &M3, b: &M3) -> M3 {
 }
 
 #[inline(always)]
-fn add_m(a: &mut M3, b: &M3) {
+pub(in crate::model) fn add_m(a: &mut M3, b: &M3) {
     for (ra, rb) in a.iter_mut().zip(b) {
         for (x, y) in ra.iter_mut().zip(rb) {
             *x += *y;
@@ -147,7 +147,7 @@ fn add_m(a: &mut M3, b: &M3) {
 
 /// `tendon::mul_hat`: m a^, row j is (m_j x a)^T.
 #[inline(always)]
-fn mul_hat(m: &M3, a: &V3) -> M3 {
+pub(in crate::model) fn mul_hat(m: &M3, a: &V3) -> M3 {
     let mut out = Z33;
     for (o, m) in out.iter_mut().zip(m) {
         *o = [
@@ -161,7 +161,7 @@ fn mul_hat(m: &M3, a: &V3) -> M3 {
 
 /// `tendon::hat_mul` on a 3 x C matrix given by its columns: a^ m, column l is a x m_l.
 #[inline(always)]
-fn hat_mul(a: &V3, m: &M3) -> M3 {
+pub(in crate::model) fn hat_mul(a: &V3, m: &M3) -> M3 {
     let mut out = Z33;
     for l in 0..3 {
         out[0][l] = a[1] * m[2][l] - a[2] * m[1][l];
@@ -173,14 +173,14 @@ fn hat_mul(a: &V3, m: &M3) -> M3 {
 
 /// `linearize::hat3`.
 #[inline(always)]
-fn hat3(a: &V3) -> M3 {
+pub(in crate::model) fn hat3(a: &V3) -> M3 {
     let z = F4::ZERO;
     [[z, -a[2], a[1]], [a[2], z, -a[0]], [-a[1], a[0], z]]
 }
 
 /// `linearize::hat_diag`: a^ diag(d) + diag(d_s).
 #[inline(always)]
-fn hat_diag(a: &V3, d: &V3, d_s: &V3) -> M3 {
+pub(in crate::model) fn hat_diag(a: &V3, d: &V3, d_s: &V3) -> M3 {
     [
         [d_s[0], -a[2] * d[1], a[1] * d[2]],
         [a[2] * d[0], d_s[1], -a[0] * d[2]],
@@ -190,20 +190,20 @@ fn hat_diag(a: &V3, d: &V3, d_s: &V3) -> M3 {
 
 /// `tendon::TendonPoint` in lanes (Cosserat rod).
 #[derive(Clone, Copy)]
-struct TendonLanes {
-    r: V3,
-    e: V3,
-    c: V3,
-    t: V3,
-    k: F4,
-    inv_speed: F4,
+pub(in crate::model) struct TendonLanes {
+    pub(in crate::model) r: V3,
+    pub(in crate::model) e: V3,
+    pub(in crate::model) c: V3,
+    pub(in crate::model) t: V3,
+    pub(in crate::model) k: F4,
+    pub(in crate::model) inv_speed: F4,
 }
 
 impl TendonLanes {
-    /// `TendonPoint::new`; None when a lane's tangent is shorter than the scalar code
-    /// accepts (it reports the error).
+    /// `TendonPoint::new` (each lane at its tension); None when a lane's tangent is shorter
+    /// than the scalar code accepts (it reports the error).
     #[inline(always)]
-    fn new(tension: f64, rp: [&crate::model::routing::RoutingPoint; 4], v: &V3, u: &V3) -> Option<Self> {
+    fn new(tension: F4, rp: [&crate::model::routing::RoutingPoint; 4], v: &V3, u: &V3) -> Option<Self> {
         let r = gather([&rp[0].r, &rp[1].r, &rp[2].r, &rp[3].r]);
         let r_s = gather([&rp[0].r_s, &rp[1].r_s, &rp[2].r_s, &rp[3].r_s]);
         let r_ss = gather([&rp[0].r_ss, &rp[1].r_ss, &rp[2].r_ss, &rp[3].r_ss]);
@@ -221,14 +221,14 @@ impl TendonLanes {
             e,
             c,
             t: scale(&p, inv_speed),
-            k: F4::splat(tension) * inv_speed,
+            k: tension * inv_speed,
             inv_speed,
         })
     }
 
     /// `TendonPoint::A`.
     #[inline(always)]
-    fn A(&self) -> M3 {
+    pub(in crate::model) fn A(&self) -> M3 {
         let (t, k) = (&self.t, self.k);
         let kt = scale(t, k);
         let (xy, xz, yz) = (-kt[0] * t[1], -kt[0] * t[2], -kt[1] * t[2]);
@@ -241,7 +241,7 @@ impl TendonLanes {
 
     /// `TendonPoint::normal_derivative` (Cosserat rod): [dq/dv, dq/du] as two 3x3 blocks.
     #[inline(always)]
-    fn normal_derivative(&self, x_v: &V3, x_u: &V3, u: &V3) -> (M3, M3) {
+    pub(in crate::model) fn normal_derivative(&self, x_v: &V3, x_u: &V3, u: &V3) -> (M3, M3) {
         let A = self.A();
         let t = &self.t;
         let z = add(&sub(x_v, &cross(&self.r, x_u)), &self.c);
@@ -269,7 +269,7 @@ impl TendonLanes {
 
 /// `factor::spd_inverse3`; None when a lane fails the SPD test.
 #[inline(always)]
-fn spd_inverse3(a: &M3) -> Option<M3> {
+pub(in crate::model) fn spd_inverse3(a: &M3) -> Option<M3> {
     let c00 = a[1][1] * a[2][2] - a[1][2] * a[1][2];
     let c01 = a[0][2] * a[1][2] - a[0][1] * a[2][2];
     let c02 = a[0][1] * a[1][2] - a[0][2] * a[1][1];
@@ -292,7 +292,7 @@ fn spd_inverse3(a: &M3) -> Option<M3> {
 }
 
 /// `factor::Schur6` for a Cosserat rod (M symmetric, rho = 1).
-struct Schur {
+pub(in crate::model) struct Schur {
     P_inv: M3,
     G: M3,
     W: M3,
@@ -321,7 +321,7 @@ impl Schur {
     /// `Schur6::solve_transposed_mut` on rows: each row (b_v, b_u) of `rows` overwritten
     /// with its solution.
     #[inline(always)]
-    fn solve_rows<const C: usize>(&self, rows: &mut [[F4; 6]; C]) {
+    pub(in crate::model) fn solve_rows<const C: usize>(&self, rows: &mut [[F4; 6]; C]) {
         let (P, G, S, W) = (&self.P_inv, &self.G, &self.S_inv, &self.W);
         for b in rows.iter_mut() {
             let (mut w, mut y, mut x_u) = (Z3, Z3, Z3);
@@ -343,7 +343,7 @@ impl Schur {
 }
 
 /// The lanes of a site's quantities that eq. 13 reads.
-struct SiteLanes {
+pub(in crate::model) struct SiteLanes {
     kse: V3,
     kbt: V3,
     kse_s: V3,
@@ -400,74 +400,27 @@ pub(crate) fn linearize_lanes(
 ) -> bool {
     // Only the first `count` slots are written and read (zeroing all 8 was a memset).
     let mut tendons = [const { MaybeUninit::<TendonLanes>::uninit() }; CACHED_TENDONS];
-    let Some(pass1) = assemble(model, sites, segment_end, states, &mut tendons) else {
+    let Some(pass1) = assemble([model; 4], sites, segment_end, states, &mut tendons) else {
         return false;
     };
-    let Assembled {
-        site,
-        v,
-        u,
-        n_b,
-        m_b,
-        f_b,
-        l_b,
-        factor,
-        x,
-        count,
-    } = pass1;
-    let (x_v, x_u) = ([x[0], x[1], x[2]], [x[3], x[4], x[5]]);
+    // SAFETY: the first `count` slots were written by `assemble` (MaybeUninit<T> has T's
+    // layout; TendonLanes is Copy).
+    let taut = unsafe { std::slice::from_raw_parts(tendons.as_ptr().cast::<TendonLanes>(), pass1.count) };
+    let x = pass1.x;
     if let Some(tensions) = tensions {
-        // SAFETY: the first `count` slots were written above (MaybeUninit<T> has T's
-        // layout; TendonLanes is Copy).
-        let taut = unsafe { std::slice::from_raw_parts(tendons.as_ptr().cast::<TendonLanes>(), count) };
         let solved = tensions::Solved {
-            v: &v,
-            u: &u,
-            x_v: &x_v,
-            x_u: &x_u,
-            factor: &factor,
+            v: &pass1.v,
+            u: &pass1.u,
+            x_v: &[x[0], x[1], x[2]],
+            x_u: &[x[3], x[4], x[5]],
+            factor: &pass1.factor,
         };
         if !tensions::tension_lanes(model, sites, segment_end, taut, &solved, tensions) {
             return false;
         }
     }
-
-    // Pass 2, `derivative`.
-    let (mut top_v, mut top_u, mut bottom_v, mut bottom_u) = (Z33, Z33, Z33, Z33);
-    for tp in &tendons[..count] {
-        // SAFETY: the first `count` slots were written above (TendonLanes is Copy).
-        let tp = unsafe { tp.assume_init_ref() };
-        let (dv_, du_) = tp.normal_derivative(&x_v, &x_u, &u);
-        add_m(&mut top_v, &dv_);
-        add_m(&mut top_u, &du_);
-        add_m(&mut bottom_v, &hat_mul(&tp.r, &dv_));
-        add_m(&mut bottom_u, &hat_mul(&tp.r, &du_));
-    }
-    let n_hat = hat3(&n_b);
-    let mut strain_term = hat_diag(&v, &site.kse, &Z3);
-    sub_m(&mut strain_term, &n_hat);
-    let mut b00 = hat_diag(&u, &site.kse, &site.kse_s);
-    add_m(&mut b00, &top_v);
-    let mut b01 = top_u;
-    sub_m(&mut b01, &n_hat);
-    let mut b10 = strain_term;
-    add_m(&mut b10, &bottom_v);
-    let mut b11 = hat_diag(&u, &site.kbt, &site.kbt_s);
-    sub_m(&mut b11, &hat3(&m_b));
-    add_m(&mut b11, &bottom_u);
-    let blocks = [[b00, b01, hat3(&f_b)], [b10, b11, hat3(&l_b)]];
-    // dF^T: row k is direction k of (v, u, phi), column j row j of F.
-    let mut dFt = [[F4::ZERO; 6]; 9];
-    for (row, blocks_row) in blocks.iter().enumerate() {
-        for (col, block) in blocks_row.iter().enumerate() {
-            for (r, block_row) in block.iter().enumerate() {
-                for (c, value) in block_row.iter().enumerate() {
-                    dFt[3 * col + c][3 * row + r] = *value;
-                }
-            }
-        }
-    }
-    factor.solve_rows(&mut dFt);
+    let mut dFt = derivative_lanes(&pass1, taut, &x);
+    pass1.factor.solve_rows(&mut dFt);
     // d(v', u') = -M^-1 dF, negated in lanes (the same bits as lane by lane).
     for row in dFt.iter_mut() {
         for value in row.iter_mut() {
@@ -517,8 +470,49 @@ fn scatter6(v: &[F4; 6], out: [&mut [f64]; 4]) {
     }
 }
 
+/// Pass 2 (the scalar `derivative`) at four points: dF^T at the rates `x`, x held fixed,
+/// from pass 1's values and its taut tendons (`taut`, in its order). Row k is direction k
+/// of (v, u, phi), column j row j of F.
 #[inline(always)]
-fn sub_m(a: &mut M3, b: &M3) {
+pub(in crate::model) fn derivative_lanes(pass1: &Assembled, taut: &[TendonLanes], x: &[F4; 6]) -> [[F4; 6]; 9] {
+    let (x_v, x_u) = ([x[0], x[1], x[2]], [x[3], x[4], x[5]]);
+    let (site, v, u) = (&pass1.site, &pass1.v, &pass1.u);
+    let (mut top_v, mut top_u, mut bottom_v, mut bottom_u) = (Z33, Z33, Z33, Z33);
+    for tp in taut {
+        let (dv_, du_) = tp.normal_derivative(&x_v, &x_u, u);
+        add_m(&mut top_v, &dv_);
+        add_m(&mut top_u, &du_);
+        add_m(&mut bottom_v, &hat_mul(&tp.r, &dv_));
+        add_m(&mut bottom_u, &hat_mul(&tp.r, &du_));
+    }
+    let n_hat = hat3(&pass1.n_b);
+    let mut strain_term = hat_diag(v, &site.kse, &Z3);
+    sub_m(&mut strain_term, &n_hat);
+    let mut b00 = hat_diag(u, &site.kse, &site.kse_s);
+    add_m(&mut b00, &top_v);
+    let mut b01 = top_u;
+    sub_m(&mut b01, &n_hat);
+    let mut b10 = strain_term;
+    add_m(&mut b10, &bottom_v);
+    let mut b11 = hat_diag(u, &site.kbt, &site.kbt_s);
+    sub_m(&mut b11, &hat3(&pass1.m_b));
+    add_m(&mut b11, &bottom_u);
+    let blocks = [[b00, b01, hat3(&pass1.f_b)], [b10, b11, hat3(&pass1.l_b)]];
+    let mut dFt = [[F4::ZERO; 6]; 9];
+    for (row, blocks_row) in blocks.iter().enumerate() {
+        for (col, block) in blocks_row.iter().enumerate() {
+            for (r, block_row) in block.iter().enumerate() {
+                for (c, value) in block_row.iter().enumerate() {
+                    dFt[3 * col + c][3 * row + r] = *value;
+                }
+            }
+        }
+    }
+    dFt
+}
+
+#[inline(always)]
+pub(in crate::model) fn sub_m(a: &mut M3, b: &M3) {
     for (ra, rb) in a.iter_mut().zip(b) {
         for (x, y) in ra.iter_mut().zip(rb) {
             *x -= *y;

@@ -96,7 +96,7 @@ use std::mem::MaybeUninit;
 mod factor;
 use factor::Factor;
 
-mod lanes;
+pub(super) mod lanes;
 pub(crate) use lanes::{TensionLanes, linearize_lanes, rates_lanes};
 
 mod parameters;
@@ -114,7 +114,7 @@ pub(crate) use tendon::mul_hat;
 /// Tendons whose per-tendon quantities are kept on the stack between the two passes (solve
 /// for x, then differentiate at x); further tendons are re-evaluated from their routing.
 /// 8 covers the usual 3-6 tendon robots (the prototype has 5) at 0.9 kB of stack.
-const CACHED_TENDONS: usize = 8;
+pub(in crate::model) const CACHED_TENDONS: usize = 8;
 
 /// The first [`CACHED_TENDONS`] tendon points of one linearization, kept on the stack
 /// between its two passes. The slots past `len` stay uninitialized: zeroing all 0.9 kB

@@ -18,27 +18,30 @@ use std::mem::MaybeUninit;
 
 /// Pass 1's values at four points that pass 2 reads again (the scalar `Assembled` and
 /// what the scalar code has at hand besides).
-pub(super) struct Assembled {
-    pub(super) site: SiteLanes,
-    pub(super) v: V3,
-    pub(super) u: V3,
-    pub(super) n_b: V3,
-    pub(super) m_b: V3,
-    pub(super) f_b: V3,
-    pub(super) l_b: V3,
-    pub(super) factor: Schur,
+pub(in crate::model) struct Assembled {
+    pub(in crate::model) site: SiteLanes,
+    pub(in crate::model) v: V3,
+    pub(in crate::model) u: V3,
+    pub(in crate::model) n_b: V3,
+    pub(in crate::model) m_b: V3,
+    pub(in crate::model) f_b: V3,
+    pub(in crate::model) l_b: V3,
+    pub(in crate::model) factor: Schur,
     /// The rates (v', u').
-    pub(super) x: [F4; 6],
+    pub(in crate::model) x: [F4; 6],
     /// Tendons that load the backbone, the first `count` slots of the caller's `tendons`.
-    pub(super) count: usize,
+    pub(in crate::model) count: usize,
+    /// Their indices in the robot (the same in every lane), the first `count` entries.
+    pub(in crate::model) indices: [usize; CACHED_TENDONS],
 }
 
-/// The scalar `assemble` (without `low`) at four points (one site and state per lane, the
-/// same `segment_end`), each lane's tendons written into `tendons`: None as soon as a lane
-/// leaves the uniform path (the module docs of `lanes`).
+/// The scalar `assemble` (without `low`) at four points (one site, state and model per
+/// lane, the same `segment_end`), each lane's tendons written into `tendons`: None as soon
+/// as a lane leaves the uniform path (the module docs of `lanes`). The lanes' models may
+/// differ in their tensions alone (friction's tension profile: each point's own).
 #[inline(always)]
-pub(super) fn assemble(
-    model: &Model,
+pub(in crate::model) fn assemble(
+    models: [&Model; 4],
     sites: [&Site; 4],
     segment_end: f64,
     states: [(&Matrix3<f64>, &Vector3<f64>, &Vector3<f64>); 4],
@@ -62,12 +65,14 @@ pub(super) fn assemble(
     let (mut A, mut G, mut H) = (Z33, Z33, Z33);
     let (mut a, mut b) = (Z3, Z3);
     let mut count = 0;
+    let mut indices = [0; CACHED_TENDONS];
     let [s0, s1, s2, s3] = sites;
+    let [m0, m1, m2, m3] = models;
     let mut iters = [
-        model.distributed_tendons(s0.s, segment_end),
-        model.distributed_tendons(s1.s, segment_end),
-        model.distributed_tendons(s2.s, segment_end),
-        model.distributed_tendons(s3.s, segment_end),
+        m0.distributed_tendons(s0.s, segment_end),
+        m1.distributed_tendons(s1.s, segment_end),
+        m2.distributed_tendons(s2.s, segment_end),
+        m3.distributed_tendons(s3.s, segment_end),
     ];
     loop {
         let next = [iters[0].next(), iters[1].next(), iters[2].next(), iters[3].next()];
@@ -77,12 +82,12 @@ pub(super) fn assemble(
             }
             break;
         };
-        // One tension per tendon without friction, so lane 0's serves all four; a lane
-        // whose tension differs (none today) goes to the scalar kernel with the rest.
-        if count == CACHED_TENDONS || [t1.0, t2.0, t3.0] != [t0.0; 3] || [t1.1, t2.1, t3.1] != [t0.1; 3] {
+        // The same tendons in every lane (each at its lane's tension).
+        if count == CACHED_TENDONS || [t1.0, t2.0, t3.0] != [t0.0; 3] {
             return None;
         }
-        let tp = TendonLanes::new(t0.1, [&t0.2, &t1.2, &t2.2, &t3.2], &v, &u)?;
+        let tension = F4([t0.1, t1.1, t2.1, t3.1]);
+        let tp = TendonLanes::new(tension, [&t0.2, &t1.2, &t2.2, &t3.2], &v, &u)?;
         let A_i = tp.A();
         let G_i = mul_hat(&A_i, &[-tp.r[0], -tp.r[1], -tp.r[2]]);
         add_m(&mut A, &A_i);
@@ -92,6 +97,7 @@ pub(super) fn assemble(
         b = add(&b, &cross(&tp.r, &a_i));
         a = add(&a, &a_i);
         tendons[count].write(tp);
+        indices[count] = t0.0;
         count += 1;
     }
     let rhs_v = sub(
@@ -141,6 +147,7 @@ pub(super) fn assemble(
         factor,
         x,
         count,
+        indices,
     })
 }
 
@@ -157,7 +164,7 @@ pub(crate) fn rates_lanes(
     states: [(&Matrix3<f64>, &Vector3<f64>, &Vector3<f64>); 4],
 ) -> Option<[Vector6<f64>; 4]> {
     let mut tendons = [const { MaybeUninit::<TendonLanes>::uninit() }; CACHED_TENDONS];
-    let x = assemble(model, sites, segment_end, states, &mut tendons)?.x;
+    let x = assemble([model; 4], sites, segment_end, states, &mut tendons)?.x;
     Some(
         four!(lane => Vector6::new(x[0].lane(lane), x[1].lane(lane), x[2].lane(lane), x[3].lane(lane), x[4].lane(lane), x[5].lane(lane))),
     )

@@ -70,7 +70,7 @@ pub(super) fn tension_lanes(
                 None => tendon.routing.at(sites[lane].s, length),
             };
             let rp = [point(0), point(1), point(2), point(3)];
-            match TendonLanes::new(model.tension_factor, [&rp[0], &rp[1], &rp[2], &rp[3]], v, u) {
+            match TendonLanes::new(F4::splat(model.tension_factor), [&rp[0], &rp[1], &rp[2], &rp[3]], v, u) {
                 Some(tp) => tp,
                 None => return false,
             }
