@@ -316,10 +316,10 @@ fn opposite_101_steps_estimates_are_honest() {
 #[test]
 fn a_tendon_sliding_past_the_other_tendons_boundary_keeps_sliding_where_the_reference_does() {
     // Steps 1 to 58 of the 101-step opposite history with tendon 1 swept (50 steps up, 7
-    // back). On step 58 tendon 3 slides in to 0.0707 m and sticks beyond, and tendon 1,
+    // back), at the default tolerance and at 1e-9 L (about 9 s in a release build). On step 58 tendon 3 slides in to 0.0707 m and sticks beyond, and tendon 1,
     // let out, slides out to 0.0914 m in the same history at 1e-9, 1e-10 and 1e-11 L.
     // The material tendon 1 laid on step 57 has a kink where tendon 3's step-57 boundary
-    // lay (0.0581 m). Its interpolation straddled it, and on main the march read tendon 1's
+    // lay (0.0581 m). Its interpolation straddled it, and before hist20 (2e8826c) the march read tendon 1's
     // stuck tension just past tendon 3's boundary on step 58's second split level below
     // what friction holds, stopped tendon 1 at 0.0709 m and kept it there: 8.1e-6 m from
     // the reference's tip, missing its tolerance (docs/friction.md section 8, "hist20").
@@ -343,7 +343,7 @@ fn a_tendon_sliding_past_the_other_tendons_boundary_keeps_sliding_where_the_refe
         assert_eq!(zone.contact, Contact::Release);
         zone.end
     };
-    // within one link of the history's mesh (L / 32) of the reference's (main: 20 mm short)
+    // within one link of the history's mesh (L / 32) of the reference's (before hist20: 20 mm short)
     let link = length / 32.0;
     assert!(
         (released(step) - released(exact)).abs() < link,

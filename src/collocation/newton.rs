@@ -24,7 +24,7 @@ use crate::report::{Iteration, SolveReport, Termination};
 use crate::solution::State;
 use ahead::evaluate_trial_ahead;
 pub(crate) use ahead::{run_ahead, run_bordered_ahead};
-use norms::max_norm;
+use norms::{max_norm, nan_max};
 use std::time::Instant;
 
 /// Armijo sufficient-decrease constant (Dennis & Schnabel's customary 1e-4).
@@ -277,8 +277,7 @@ fn stops(before_last: f64, last_step: f64, fresh: bool) -> bool {
 
 /// The scaled residual max-norm over the collocation rows and the border's.
 fn norm(residual: &[f64], border: &[f64]) -> f64 {
-    let (a, b) = (max_norm(residual), max_norm(border));
-    if a.is_nan() || b.is_nan() { f64::NAN } else { a.max(b) }
+    nan_max(max_norm(residual), max_norm(border))
 }
 
 /// The merit 0.5 |(F, psi)|^2 of the line search.
@@ -396,7 +395,7 @@ fn run_with<B: Border>(
                 report,
             )
         {
-            let step_norm = max_norm(&ws.step).max(border_step);
+            let step_norm = nan_max(max_norm(&ws.step), border_step);
             unknowns::retract(x, &ws.step, 1.0, length, &mut ws.trial);
             border.trial(1.0);
             // The Jacobian there when the step would end the run and leave the one held
@@ -453,7 +452,7 @@ fn run_with<B: Border>(
         let Some(border_step) = border.step(Current, x, &mut ws.step, &mut at, report) else {
             return (Termination::SingularJacobian, worst(ws, border));
         };
-        let step_norm = max_norm(&ws.step).max(border_step);
+        let step_norm = nan_max(max_norm(&ws.step), border_step);
         let phi = merit(&ws.residual, border.residual(Current));
         let mut alpha = 1.0;
         // Whether the value buffer holds the finite Jacobian at the full step's end.
@@ -501,7 +500,7 @@ fn run_with<B: Border>(
                     values: &ws.values,
                 };
                 if let Some(border_step) = border.step(Trial, &ws.trial, &mut ws.simplified, &mut at, report)
-                    && max_norm(&ws.simplified).max(border_step) <= (1.0 - alpha / 4.0) * step_norm
+                    && nan_max(max_norm(&ws.simplified), border_step) <= (1.0 - alpha / 4.0) * step_norm
                 {
                     break;
                 }

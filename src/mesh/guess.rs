@@ -425,11 +425,18 @@ pub(crate) fn distal_strains(
 /// along `last_step`, kept in [0.1, 1]; `relaxation` (the last factor) when they are equal.
 pub(crate) fn aitken(relaxation: f64, last_step: &[f64], step: &[f64]) -> f64 {
     let (mut num, mut den) = (0.0, 0.0);
-    for (a, b) in last_step.iter().zip(step) {
-        num += a * (b - a);
-        den += (b - a) * (b - a);
-    }
+    aitken_sums(last_step, step, (&mut num, &mut den));
     aitken_factor(relaxation, num, den)
+}
+
+/// Adds [`aitken`]'s sums over the steps `last` (a) and `step` (b) to `num` (a (b - a))
+/// and `den` ((b - a)^2), entry by entry in order.
+#[inline(always)]
+fn aitken_sums(last: &[f64], step: &[f64], (num, den): (&mut f64, &mut f64)) {
+    for (a, b) in last.iter().zip(step) {
+        *num += a * (b - a);
+        *den += (b - a) * (b - a);
+    }
 }
 
 /// [`aitken`]'s factor from its sums `num` = sum a (b - a) and `den` = sum (b - a)^2 over
@@ -467,10 +474,7 @@ fn step_of(
             groups[i / 3] = groups[i / 3].max(x.abs());
         }
         if let Some(last) = last_step {
-            for (a, b) in last[6 * k..6 * k + 6].iter().zip(&x) {
-                num += a * (b - a);
-                den += (b - a) * (b - a);
-            }
+            aitken_sums(&last[6 * k..6 * k + 6], &x, (&mut num, &mut den));
         }
     }
     (groups, last_step.map(|_| (num, den)))

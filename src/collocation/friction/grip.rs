@@ -125,16 +125,18 @@ pub(crate) struct Grip {
     /// material: the march, the slip check and the kinks read the nodes up to it).
     pub(crate) reference: Vec<f64>,
     /// The kinks of that material, in increasing s: each where an earlier step's stick/slip
-    /// boundary left one, still inside the stretch that has stuck since, as (s in m, lambda
-    /// just before it, lambda just after it). Between them lambda is smooth, so it is
+    /// boundary left one, still inside the stretch that has stuck since, or where another
+    /// tendon's stick/slip boundary lay while this one slid ([`Grip::kinks_after`]), as (s
+    /// in m, lambda just before it, lambda just after it). Between them lambda is smooth, so it is
     /// interpolated from one piece's nodes and bounding kinks only (docs/friction.md
     /// section 8, "The material's kinks").
     pub(crate) kinks: Vec<Kink>,
 }
 
 /// A kink of the carried material: its arc length (m), and lambda at it as the smooth
-/// piece before it and the one after it have it. The two agree where the step placed its
-/// stick/slip boundary exactly; a boundary misplaced by delta leaves a jump of order delta
+/// piece before it and the one after it have it. The two agree at a kink laid where another
+/// tendon's boundary lay (only the slope jumps there) and at a stick/slip boundary the step
+/// placed exactly; a boundary misplaced by delta leaves a jump of order delta
 /// between the sliding side's material and the stuck side's (docs/friction.md section 8).
 pub(crate) type Kink = (f64, f64, f64);
 
@@ -160,7 +162,9 @@ impl Grip {
     /// it the rate of the rod's strains and so of this tendon's path speed; each such node
     /// inside the sliding stretch is a kink too, with the same lambda on both sides
     /// (docs/friction.md section 8, "hist20"). A tendon that slides all along leaves only
-    /// those; one stuck all along keeps its kinks.
+    /// those; one stuck all along keeps its kinks. A slack tendon (no stuck link) records
+    /// them too, harmlessly: its material is laid afresh when it next takes load, sliding
+    /// in all along.
     pub(crate) fn kinks_after(&self, contacts: &[Contact], s: &[f64], lambda: &[f64], others: &[f64]) -> Vec<Kink> {
         let first = contacts.iter().position(|&c| c == Contact::Stick);
         let mut laid: Vec<Kink> = (1..first.unwrap_or(contacts.len()))

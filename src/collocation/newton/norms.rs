@@ -11,6 +11,12 @@ pub(super) fn max_norm(v: &[f64]) -> f64 {
     avx2_fma!(max_norm_lanes(v))
 }
 
+/// The larger of two norms, NaN when either is (`f64::max` returns the other operand of a
+/// NaN, which would let a step or residual with a NaN entry pass Newton's tests).
+pub(super) fn nan_max(a: f64, b: f64) -> f64 {
+    if a.is_nan() || b.is_nan() { f64::NAN } else { a.max(b) }
+}
+
 /// [`max_norm`]'s lanes.
 #[inline(always)]
 fn max_norm_lanes(v: &[f64]) -> f64 {
@@ -50,7 +56,16 @@ fn max_norm_in_order(v: &[f64]) -> f64 {
 
 #[cfg(test)]
 mod tests {
-    use super::{max_norm, max_norm_in_order};
+    use super::{max_norm, max_norm_in_order, nan_max};
+
+    /// The larger of two norms keeps a NaN on either side, and is `f64::max` otherwise.
+    #[test]
+    fn nan_max_keeps_a_nan_on_either_side() {
+        assert!(nan_max(f64::NAN, 1.0).is_nan());
+        assert!(nan_max(1.0, f64::NAN).is_nan());
+        assert_eq!(nan_max(2.0, 1.0), 2.0);
+        assert_eq!(nan_max(1.0, f64::INFINITY), f64::INFINITY);
+    }
 
     /// The lanes give the in-order fold's bits on every length around the lanes' width, with
     /// signed zeros, and with an infinity or a NaN at every position (where the fold's

@@ -23,7 +23,7 @@ use crate::model::linearize::CACHED_TENDONS;
 use crate::model::linearize::Linearization;
 use crate::model::linearize::lanes::pass1::assemble;
 use crate::model::linearize::lanes::{
-    M3, TendonLanes, V3, add, cross, derivative_lanes, dot, hat3, mat_mat, scale, sub,
+    M3, TendonLanes, V3, add, cross, derivative_lanes, dot, hat3, mat_mat, negate, scale, sub,
 };
 use crate::simd::lanes::F4;
 use nalgebra::{Matrix3, Matrix6, Matrix6x3, SMatrix, Vector3, Vector6};
@@ -366,16 +366,6 @@ fn woodbury(mb: &mut [F4; 6], gradient: &[F4; 6], inverse: F4, y: &[F4; 6]) {
 #[inline(always)]
 fn column_of(m: &M3, c: usize) -> V3 {
     [m[0][c], m[1][c], m[2][c]]
-}
-
-/// Every entry negated (the scalar code's `-` on each lane).
-#[inline(always)]
-fn negate<const R: usize>(rows: &mut [[F4; 6]; R]) {
-    for row in rows.iter_mut() {
-        for v in row.iter_mut() {
-            *v = -*v;
-        }
-    }
 }
 
 /// The derivatives of [`linearize_lanes_into`]: d(v', u')/d(v, u, phi) (row c direction c),

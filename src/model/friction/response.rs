@@ -11,9 +11,13 @@ use nalgebra::{DefaultAllocator, DimMin, Dyn, OMatrix, OVector, SMatrix, U1, U2,
 /// `input` (one per row): the rows it leaves, the turning responses and whether it holds.
 #[derive(Debug)]
 pub(super) struct LaneResponse {
+    /// The body loads it answers, one per row (as `load_response` takes them).
     pub(super) input: SMatrix<f64, 6, 6>,
+    /// The rates' responses to those loads, row by row (what `load_response` leaves).
     pub(super) output: SMatrix<f64, 6, 6>,
+    /// Each slip's turning-rate response to the loads.
     pub(super) turning: Vec<SMatrix<f64, 1, 6>>,
+    /// Whether its responses are finite (what `load_response` returns for it).
     pub(super) valid: bool,
     /// Whether it is of the point's current evaluation (the buffers outlive it).
     pub(super) current: bool,

@@ -422,11 +422,7 @@ pub(crate) fn linearize_lanes(
     let mut dFt = derivative_lanes(&pass1, taut, &x);
     pass1.factor.solve_rows(&mut dFt);
     // d(v', u') = -M^-1 dF, negated in lanes (the same bits as lane by lane).
-    for row in dFt.iter_mut() {
-        for value in row.iter_mut() {
-            *value = -*value;
-        }
-    }
+    negate(&mut dFt);
     // Lane l's values into out[l]: the rates, then row k of dF^T as column k of the
     // derivatives (six consecutive entries of the column-major d_strains or d_rotation).
     let [o0, o1, o2, o3] = out;
@@ -509,6 +505,16 @@ pub(in crate::model) fn derivative_lanes(pass1: &Assembled, taut: &[TendonLanes]
         }
     }
     dFt
+}
+
+/// Every entry negated (the scalar code's `-` on each lane).
+#[inline(always)]
+pub(in crate::model) fn negate<const R: usize>(rows: &mut [[F4; 6]; R]) {
+    for row in rows.iter_mut() {
+        for v in row.iter_mut() {
+            *v = -*v;
+        }
+    }
 }
 
 #[inline(always)]

@@ -481,7 +481,8 @@ fn lagrange(s: &[f64], values: &[f64], kinks: &[Kink], at: f64, points: usize) -
 /// which are nodes of the split mesh (matched by arc length and segment), so exactly. The
 /// material at its best (`corrected`) is the one `before` the step where the step stuck
 /// (its material has not moved), and the step's own where it slid, with the kink at the
-/// boundary between them (docs/friction.md section 8, "The material's kinks"). Returns
+/// boundary between them and the kinks the sliding stretch laid where other tendons'
+/// boundaries lay (docs/friction.md section 8, "The material's kinks", "hist20"). Returns
 /// the index in `fine`'s mesh of each of the history's nodes.
 pub(super) fn hand_back(carried: &mut Carried, fine: &Carried, before: &Carried) -> Vec<usize> {
     let index: Vec<usize> = carried
