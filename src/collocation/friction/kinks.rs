@@ -6,7 +6,9 @@
 //! refined 1.4 to 3.2 times past a smooth solve's). Each mesh of the refinement gets a node
 //! at each such point, located on the last answer and moved to where the next one puts it
 //! until it settles; the estimate then sees a smooth answer on every link and chooses the
-//! next mesh as for a smooth solve.
+//! next mesh as for a smooth solve. Points that cannot move the answer by more than a small
+//! share of the tolerance (a vanishing mu) get no node: the estimate is widened by their
+//! bound instead ("kinks20"), so the solve is mu = 0's to within friction's own effect.
 
 use super::Options;
 use super::turning::{Effect, NEAR, SETTLED, kinks, relocate, reversed};
