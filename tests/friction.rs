@@ -504,3 +504,33 @@ fn a_full_slip_solve_whose_bending_reverses_has_an_honest_estimate() {
         assert!(report.intervals <= 36, "{} intervals", report.intervals);
     }
 }
+
+/// A vanishing mu solves as mu = 0 does (issue 24: "At mu = 0 everything reduces to today's
+/// model exactly"): where a kink of the sliding tension cannot move the answer by 1e-3 of
+/// the tolerance, no node is placed at it (docs/friction.md section 8, "kinks20"), so the
+/// mesh is the frictionless solve's and the tip moves by friction's own effect alone. On main
+/// the kink nodes gave 34 intervals and moved the tip by 6.5e-12 m at mu = 1e-12.
+#[test]
+fn a_vanishing_mu_solves_on_the_frictionless_mesh() {
+    // Tendon 3 at 1.47 N against tendon 1 at 1 N: the bending reverses, so each tendon with
+    // friction has a point where it stops turning (honest19's first case).
+    let frictionless = cases::prototype().with_tensions(&[1.0, 0.0, 1.47, 0.0, 0.0]);
+    let plain = tdcr::solve(&frictionless, &Default::default()).unwrap();
+    let mut vanishing = frictionless.clone();
+    for i in [0, 2] {
+        vanishing.tendons[i].friction = Some(Friction::pull(1e-12));
+    }
+    let solution = tdcr::solve(&vanishing, &Default::default()).unwrap();
+    let nodes = |s: &tdcr::Solution| s.nodes.iter().map(|n| n.s).collect::<Vec<_>>();
+    assert_eq!(solution.report.intervals, plain.report.intervals);
+    assert_eq!(nodes(&solution), nodes(&plain));
+    // friction's own effect is 2.4e-3 m per unit mu (2.4e-15 m here); the rest is Newton's
+    // rounding, far below 1e-12 m
+    let moved = (solution.tip_position() - plain.tip_position()).norm();
+    assert!(moved < 1e-12, "tip moved by {moved:.2e} m");
+    assert_eq!(solution.report.tolerance_met, Some(true));
+    // the estimate widened by the kinks' bound (4.7e-17 m here) stays the frictionless one's
+    // to the friction estimate's own rounding (measured 2.5e-4 relative)
+    let estimate = |s: &tdcr::Solution| s.report.error_estimate.expect("an estimate").tip_position;
+    assert!((estimate(&solution) / estimate(&plain) - 1.0).abs() < 1e-2);
+}

@@ -6,13 +6,17 @@
 //! refined 1.4 to 3.2 times past a smooth solve's). Each mesh of the refinement gets a node
 //! at each such point, located on the last answer and moved to where the next one puts it
 //! until it settles; the estimate then sees a smooth answer on every link and chooses the
-//! next mesh as for a smooth solve.
+//! next mesh as for a smooth solve. Points that cannot move the answer by more than a small
+//! share of the tolerance (a vanishing mu) get no node: the estimate is widened by their
+//! bound instead ("kinks20"), so the solve is mu = 0's to within friction's own effect.
 
 use super::Options;
-use super::turning::{NEAR, SETTLED, inflections, relocate, reversed};
+use super::turning::{Effect, NEAR, SETTLED, kinks, relocate, reversed};
 use crate::Robot;
+use crate::collocation::refine;
 use crate::error::Result;
 use crate::mesh::Mesh;
+use crate::report::{ErrorEstimate, SolveReport};
 use crate::solution::{Solution, State};
 
 /// Most solves of one mesh level while its points move (as a history's sliding step,
@@ -23,6 +27,13 @@ const RELOCATE: usize = 4;
 /// way to the point (a link that short only adds an interval).
 const CROWDED: f64 = 1e-3;
 
+/// No point is placed while the bound on what all of them together can do to the answer
+/// ([`Effect`]) is within this share of the tolerance (on the tip position, the tip
+/// rotation and the tensions): the answer's estimate is widened by the bound instead, by
+/// at most this share of the tolerance, so a vanishing mu solves on mu = 0's meshes
+/// (docs/friction.md section 8, "kinks20").
+const NEGLIGIBLE: f64 = 1e-3;
+
 /// The points placed as nodes of the refinement's meshes, and how often the points of the
 /// current level have been placed.
 #[derive(Default)]
@@ -31,6 +42,10 @@ pub(super) struct Kinks {
     points: Vec<f64>,
     /// Solves of this level with its points moved.
     placings: usize,
+    /// The bound on the effect of the points of the answer looked at last, where they were
+    /// left inside their links as negligible ([`NEGLIGIBLE`]); zero where there were none
+    /// or they were placed.
+    unplaced: Effect,
 }
 
 impl Kinks {
@@ -42,7 +57,10 @@ impl Kinks {
     /// only then): while one moves by more than 1e-8 L or a new one is found (at most
     /// [`RELOCATE`] times per level), `mesh` with the points moved, whatever `next`; once
     /// they settle, `next` with the points, or None. A mesh with the points that would exceed
-    /// `options.max_intervals` is not tried: `next` stands as it is.
+    /// `options.max_intervals` is not tried: `next` stands as it is. While none has been
+    /// placed, points whose effect is negligible ([`NEGLIGIBLE`]) are not placed either
+    /// (`next` stands), unless the answer is done (`next` None) and its `estimate` widened
+    /// by their effect would no longer meet the tolerance.
     ///
     /// # Errors
     /// Those of `solution`, or of a mesh through the points.
@@ -50,16 +68,32 @@ impl Kinks {
         &mut self,
         robot: &Robot,
         options: &Options,
-        (mesh, x): (&Mesh, &[State]),
+        (mesh, x, estimate): (&Mesh, &[State], &ErrorEstimate),
         solution: impl FnOnce() -> Result<Solution>,
         next: Option<Mesh>,
     ) -> Result<Option<Mesh>> {
         let length = robot.length();
+        self.unplaced = Effect::default();
         let bending: Vec<_> = x.iter().map(|state| state.u).collect();
-        if options.tolerance.is_none() || (self.points.is_empty() && !reversed(&bending, length).contains(&true)) {
+        let Some(tol) = options.tolerance else {
+            return Ok(next);
+        };
+        if self.points.is_empty() && !reversed(&bending, length).contains(&true) {
             return Ok(next);
         }
-        let found = inflections(robot, &solution()?);
+        let kinks = kinks(robot, &solution()?);
+        let effect = kinks.iter().fold(Effect::default(), |sum, kink| sum.plus(kink.effect));
+        let negligible = effect.tip <= NEGLIGIBLE * tol * length
+            && effect.rotation <= NEGLIGIBLE * tol
+            && effect.tension <= NEGLIGIBLE * tol;
+        if self.points.is_empty()
+            && negligible
+            && (next.is_some() || refine::meets(&widened(estimate, effect), tol, length))
+        {
+            self.unplaced = effect;
+            return Ok(next);
+        }
+        let found: Vec<f64> = kinks.iter().map(|kink| kink.at).collect();
         let placed = self.points.clone();
         let (moved, fresh) = relocate(&mut self.points, &found, NEAR * length);
         let settled = moved <= SETTLED * length && !fresh;
@@ -83,6 +117,22 @@ impl Kinks {
         Ok(Some(placed_mesh))
     }
 
+    /// Widens the estimate in `report` (recorded from the last answer looked at) by the
+    /// bound on the effect of the points left inside their links ([`NEGLIGIBLE`]), and
+    /// whether it meets the tolerance with it; nothing where there were none.
+    pub(super) fn widen(&self, report: &mut SolveReport, length: f64) {
+        if self.unplaced == Effect::default() {
+            return;
+        }
+        if let Some(estimate) = report.error_estimate.as_mut() {
+            *estimate = widened(estimate, self.unplaced);
+        }
+        report.tolerance_met = report
+            .tolerance
+            .zip(report.error_estimate)
+            .map(|(tol, e)| refine::meets(&e, tol, length));
+    }
+
     /// `mesh` without its nodes at `placed` (the points it was built with), with a node at
     /// each point; a node of its own within [`CROWDED`] of its link of a point gives way.
     fn through(&self, robot: &Robot, mesh: &Mesh, placed: &[f64]) -> Result<Mesh> {
@@ -102,5 +152,14 @@ impl Kinks {
             .collect();
         // Breakpoints, 0 and L come back in `from_points` whatever gave way.
         Mesh::from_points(robot, &points)
+    }
+}
+
+/// `estimate` with the bound `effect` added to its tip position and rotation.
+fn widened(estimate: &ErrorEstimate, effect: Effect) -> ErrorEstimate {
+    ErrorEstimate {
+        tip_position: estimate.tip_position + effect.tip,
+        tip_rotation: estimate.tip_rotation + effect.rotation,
+        ..*estimate
     }
 }

@@ -533,14 +533,15 @@ fn refine_with_friction(
         };
         // The estimate's mesh with a node where a tendon stops turning ([`kinks`]).
         let rates = estimated.as_ref().map(|(c, _)| c.node_rates.as_slice());
-        let next = if estimated.is_some() {
+        let next = if let Some((correction, _)) = &estimated {
             let answer = || nodes::solution_with_tensions(&model, &x, &ends, (&tensions, None), rates, report.clone());
-            kinks.next(robot, options, (&system.mesh, &x), answer, next)?
+            kinks.next(robot, options, (&system.mesh, &x, &correction.estimate), answer, next)?
         } else {
             next
         };
         let Some(fine) = next else {
             pipeline::record_estimate(&mut report, estimated.as_ref().map(|(c, _)| c), options, length);
+            kinks.widen(&mut report, length);
             let t = Instant::now();
             report.stability = if assess {
                 // The Jacobian Newton evaluated at x, factored with the border's blocks from

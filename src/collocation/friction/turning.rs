@@ -59,8 +59,82 @@ pub(super) fn reversed(bending: &[Vector3<f64>], length: f64) -> Vec<bool> {
 /// near a reversal of the backbone's bending ([`reversed`]) are looked at. A tendon's
 /// turning rate kappa = |t'| passes through 0 there, with a kink, in a planar bend.
 pub(super) fn inflections(robot: &Robot, solution: &Solution) -> Vec<f64> {
+    kinks(robot, solution).into_iter().map(|kink| kink.at).collect()
+}
+
+/// The most a kink left inside a link can move an answer (docs/friction.md section 8,
+/// "kinks20"), to first order in the tension's error.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub(super) struct Effect {
+    /// On the tip position (m).
+    pub(super) tip: f64,
+    /// On the tip rotation (rad).
+    pub(super) rotation: f64,
+    /// On a tendon's tension, relative.
+    pub(super) tension: f64,
+}
+
+impl Effect {
+    /// The sum of two effects (they add along the tendons).
+    pub(super) fn plus(self, other: Effect) -> Effect {
+        Effect {
+            tip: self.tip + other.tip,
+            rotation: self.rotation + other.rotation,
+            tension: self.tension + other.tension,
+        }
+    }
+}
+
+/// A point where the tendons stop turning ([`inflections`]) and what leaving it inside its
+/// link could do to the answer (summed over the tendons that share the point).
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Kink {
+    /// Its arc length (m).
+    pub(super) at: f64,
+    /// The bound on its effect ([`effect`]).
+    pub(super) effect: Effect,
+}
+
+/// What a link `[a, b]` holding a kink of tendon `i` of `robot` (friction `mu`, largest
+/// turning rate `kappa` on the link) can do to `solution`'s answer if no node is placed at
+/// the kink (docs/friction.md section 8, "kinks20"). The link adds to the log tension
+/// h / 6 mu (kappa_a + 4 kappa_m + kappa_b), a rule with positive weights summing to h, and
+/// the exact integral of mu kappa >= 0: both lie in [0, mu h kappa], so the link's error in
+/// z (the tension's relative error beyond it) is at most delta = mu h kappa, kink or not. A
+/// relative change delta of the tension beyond `a` changes the tendon's moment on each
+/// section there by at most delta tau |r| and its axial load by delta tau (tau, |r| the
+/// largest tension and offset beyond `a`), so the curvature by delta tau |r| / EI and the
+/// strain by delta tau / EA (the smallest stiffnesses beyond `a`), over the tendon's
+/// remaining span `end - a`, each with a lever of at most `L - a` to the tip.
+fn effect(robot: &Robot, solution: &Solution, i: usize, (a, b): (f64, f64), mu: f64, kappa: f64) -> Effect {
     let length = robot.length();
-    let mut found: Vec<(f64, f64)> = Vec::new();
+    let tendon = &robot.tendons[i];
+    let end = tendon.end(length);
+    let (mut tau, mut offset, mut bending, mut axial) = (0.0_f64, 0.0_f64, f64::INFINITY, f64::INFINITY);
+    for (node, &tension) in solution.nodes.iter().zip(&solution.tendon_tensions[i]) {
+        if node.s < a || node.s > end {
+            continue;
+        }
+        tau = tau.max(tension.abs());
+        offset = offset.max(tendon.routing.at(node.s, length).r.norm());
+        let section = robot.rod.section_at(node.s).section;
+        bending = bending.min(section.kbt[0].min(section.kbt[1]));
+        axial = axial.min(section.kse[2]);
+    }
+    let delta = mu * (b - a) * kappa;
+    let span = (end - a).max(0.0);
+    let rotation = delta * tau * offset * span / bending;
+    Effect {
+        tip: rotation * (length - a) + delta * tau * span / axial,
+        rotation,
+        tension: delta,
+    }
+}
+
+/// The points of [`inflections`], each with the bound on its effect ([`effect`]).
+pub(super) fn kinks(robot: &Robot, solution: &Solution) -> Vec<Kink> {
+    let length = robot.length();
+    let mut found: Vec<(f64, f64, Effect)> = Vec::new();
     // Where the segments meet: the nodes listed twice.
     let jumps: Vec<f64> = solution
         .nodes
@@ -81,9 +155,9 @@ pub(super) fn inflections(robot: &Robot, solution: &Solution) -> Vec<f64> {
     }
     let near = |k: usize| reversed[k.saturating_sub(3)..(k + 4).min(reversed.len())].contains(&true);
     for (i, tendon) in robot.tendons.iter().enumerate() {
-        if tendon.active_friction().is_none() {
+        let Some(friction) = tendon.active_friction() else {
             continue;
-        }
+        };
         let end = tendon.end(length);
         let tangent = |s: f64| {
             let state = solution.at(s);
@@ -118,27 +192,34 @@ pub(super) fn inflections(robot: &Robot, solution: &Solution) -> Vec<f64> {
             }
             // A kink only where the turning nearly vanishes ([`KINK`]).
             let at = 0.5 * (lo + hi);
-            if turning(at).norm() > KINK * turning(a).norm().max(turning(b).norm()) {
+            let ends = turning(a).norm().max(turning(b).norm());
+            if turning(at).norm() > KINK * ends {
                 continue;
             }
-            found.push((at, b - a));
+            let kappa = ends.max(turning(0.5 * (a + b)).norm());
+            found.push((
+                at,
+                b - a,
+                effect(robot, solution, i, (a, b), friction.coefficient, kappa),
+            ));
         }
     }
     // Points closer than 1e-9 of their link share one node, at their mean; the tendons on
     // opposite sides of a planar bend, a few 1e-8 m apart on the prototype, have one each
     // (one node at their mean leaves about 1 % of such a step's error unseen).
     found.sort_by(|a, b| a.0.total_cmp(&b.0));
-    let mut out: Vec<(f64, usize)> = Vec::new();
-    for (at, link) in found {
+    let mut out: Vec<(Kink, usize)> = Vec::new();
+    for (at, link, effect) in found {
         match out.last_mut() {
-            Some((mean, count)) if at - *mean <= 1e-9 * link => {
-                *mean += (at - *mean) / (*count + 1) as f64;
+            Some((kink, count)) if at - kink.at <= 1e-9 * link => {
+                kink.at += (at - kink.at) / (*count + 1) as f64;
+                kink.effect = kink.effect.plus(effect);
                 *count += 1;
             }
-            _ => out.push((at, 1)),
+            _ => out.push((Kink { at, effect }, 1)),
         }
     }
-    out.into_iter().map(|(at, _)| at).collect()
+    out.into_iter().map(|(kink, _)| kink).collect()
 }
 
 /// Moves each of `points` (placed as nodes of the last solve) to the nearest of `found`
