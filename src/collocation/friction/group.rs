@@ -16,6 +16,7 @@
 //! path.
 #![allow(non_snake_case)]
 
+use super::grip::Contact;
 use super::interval::{IntervalLinearization, Link, back, front, node_tensions};
 use super::profile::{LinkScratch, Profile};
 use crate::collocation::dynamics::inertia_load_transposed;
@@ -66,15 +67,10 @@ fn intervals4_kernel(
     if x.len() < 5 {
         return Ok(None);
     }
-    // The cheap test first (no multipliers formed): a history's stuck links, where the
-    // links one by one are tried again at each of them.
-    if (0..4).any(|j| (0..profile.count()).any(|i| profile.sticks(i, k + j))) {
+    if !slides_alike(profile, k) {
         return Ok(None);
     }
     let w = profile.multipliers(k);
-    if (1..4).any(|j| profile.multipliers(k + j) != w) {
-        return Ok(None);
-    }
     let w = w.as_deref();
     let derivatives = jac.is_some();
     let mut scratch: [Box<LinkScratch>; 4] = [
@@ -168,6 +164,21 @@ fn intervals4_kernel(
     }
     scratch.into_iter().for_each(|s| profile.give_scratch(s));
     Ok(Some(out))
+}
+
+/// Whether links k..k+4 of `profile` share one sliding pattern, which the group requires:
+/// no slip sticks on any of them and each slip's multiplier is the same on all four (then
+/// [`Profile::multipliers`] of each link is the same list). Read in place, no multipliers
+/// formed: in a history the caller asks at each link of a stick zone and of its
+/// neighbours, so the test is on the one-link path's bill (docs/benchmarks.md, fricfix20).
+fn slides_alike(profile: &Profile, k: usize) -> bool {
+    let Some(grips) = &profile.grips else {
+        return true;
+    };
+    grips.iter().all(|g| {
+        let w = |n: usize| g.multipliers.get(n).copied().unwrap_or(1.0);
+        (k..k + 4).all(|n| g.contacts.get(n) != Some(&Contact::Stick)) && (k + 1..k + 4).all(|n| w(n) == w(k))
+    })
 }
 
 /// Eq. 13 with friction at four points at once ([`Profile::point`] at each: the slips at
