@@ -120,11 +120,12 @@ fn intervals4_kernel(
     let links = [link(0), link(1), link(2), link(3)];
     let starts = [&*la, &*ends[0], &*ends[1], &*ends[2]];
     let [s0, s1, s2, s3] = &mut scratch;
+    let [mut p0, mut p1, mut p2, mut p3] = [None, None, None, None];
     let fronts = [
-        front(&links[0], starts[0], &ends[0], derivatives, s0),
-        front(&links[1], starts[1], &ends[1], derivatives, s1),
-        front(&links[2], starts[2], &ends[2], derivatives, s2),
-        front(&links[3], starts[3], &ends[3], derivatives, s3),
+        front(&links[0], starts[0], &ends[0], derivatives, s0, &mut p0),
+        front(&links[1], starts[1], &ends[1], derivatives, s1, &mut p1),
+        front(&links[2], starts[2], &ends[2], derivatives, s2, &mut p2),
+        front(&links[3], starts[3], &ends[3], derivatives, s3, &mut p3),
     ];
     let mid = |j: usize| (&fronts[j].Rm, &fronts[j].vm, &fronts[j].um);
     let Some(mids) = points4(
