@@ -387,8 +387,9 @@ mod tests {
 
     /// In a history (an elastic helix, grips on the mesh): links that slide with one
     /// multiplier go to the group with the one-link bits; a stick zone on one of the four
-    /// links (its multiplier then the stuck fraction, its row the stick row) and two tendons
-    /// with friction (Newton's tangential loads) make the group decline.
+    /// links (its multiplier then the stuck fraction, its row the stick row), a link that
+    /// slides the other way, and two tendons with friction (Newton's tangential loads) make
+    /// the group decline.
     #[test]
     fn group_takes_sliding_history_links_and_declines_a_stick_zone_and_two_slips() {
         let mut h = cases::case_h();
@@ -415,6 +416,13 @@ mod tests {
         p.grips = Some(vec![grip(contacts)]);
         alone.grips = p.grips.clone();
         assert!(p.sticks(0, setup.k + 2));
+        assert!(compare(&setup, &p, &alone).is_none());
+        // Links that all slide, one of them the other way (multiplier +1 among -1s).
+        let mut contacts = vec![Contact::Pull; links];
+        contacts[setup.k + 3] = Contact::Release;
+        p.grips = Some(vec![grip(contacts)]);
+        alone.grips = p.grips.clone();
+        assert!(!p.sticks(0, setup.k + 3));
         assert!(compare(&setup, &p, &alone).is_none());
 
         let mut two = cases::case_h();
