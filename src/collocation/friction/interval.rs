@@ -278,7 +278,7 @@ pub(super) fn front<'e>(
             rhs_linearized_inline(&sites.end, &lb.lin, &a.R, &y1, frame1),
         ));
     }
-    let ends = (&*slot).as_ref();
+    let ends = slot.as_ref();
     let (f0, f1) = match ends {
         Some((p0, p1)) => (p0.f, p1.f),
         None => (value(&sites.start, la, &y0), value(&sites.end, lb, &y1)),
