@@ -172,7 +172,8 @@ fn interval_at_kernel(
         b,
         w,
     };
-    let front = front(&link, &la, &lb, derivatives, &mut scratch);
+    let mut ends = None;
+    let front = front(&link, &la, &lb, derivatives, &mut scratch, &mut ends);
     let lm = profile.point(
         &sites.mid,
         segment_end,
@@ -212,12 +213,16 @@ pub(super) struct Link<'l, 'p> {
     pub(super) w: Option<&'l [f64]>,
 }
 
+/// The linearizations of F at a link's two nodes (with derivatives only): [`front`] writes
+/// them into a slot of its caller's, so that they are not moved with the [`Front`].
+pub(super) type Ends = Option<(PointLinearization, PointLinearization)>;
+
 /// A link's evaluation up to its midpoint's state (its log tensions in the scratch's
 /// `zm`): what [`back`] takes with the midpoint's linearization.
-pub(super) struct Front {
+pub(super) struct Front<'e> {
     y0: Block<f64>,
     y1: Block<f64>,
-    ends: Option<(PointLinearization, PointLinearization)>,
+    ends: Option<&'e (PointLinearization, PointLinearization)>,
     frame1: Option<PointFrame>,
     frame_m: Option<PointFrame>,
     f0: Block<f64>,
@@ -231,15 +236,17 @@ pub(super) struct Front {
 }
 
 /// A link's evaluation from eq. 13 with friction at its nodes (`la`, `lb`, at the log
-/// tensions in `scratch`) to its midpoint's state; keeps the nodes' rates in the profile.
+/// tensions in `scratch`) to its midpoint's state, the ends' linearizations into `slot`
+/// (None, as given, without derivatives); keeps the nodes' rates in the profile.
 #[inline(always)]
-pub(super) fn front(
+pub(super) fn front<'e>(
     link: &Link,
     la: &FrictionLinearization,
     lb: &FrictionLinearization,
     derivatives: bool,
     scratch: &mut LinkScratch,
-) -> Front {
+    slot: &'e mut Ends,
+) -> Front<'e> {
     let Link {
         profile,
         k,
@@ -264,13 +271,15 @@ pub(super) fn front(
         rhs_from_rates(site, &(a.R * so3::exp(&theta)), y, &lin.lin.rates)
     };
     let frame1 = derivatives.then(|| PointFrame::new(&a.R, &theta1));
-    let ends = frame1.as_ref().map(|frame1| {
-        (
+    // Written only with derivatives (an assignment of None would copy the whole slot).
+    if let Some(frame1) = &frame1 {
+        *slot = Some((
             rhs_linearized_inline(&sites.start, &la.lin, &a.R, &y0, &PointFrame::start(&a.R)),
             rhs_linearized_inline(&sites.end, &lb.lin, &a.R, &y1, frame1),
-        )
-    });
-    let (f0, f1) = match &ends {
+        ));
+    }
+    let ends = slot.as_ref();
+    let (f0, f1) = match ends {
         Some((p0, p1)) => (p0.f, p1.f),
         None => (value(&sites.start, la, &y0), value(&sites.end, lb, &y1)),
     };
@@ -331,7 +340,7 @@ pub(super) fn back(
     // The small values copied, the ends' linearizations and the frames read in place.
     let (y0, y1, f0, f1, ym) = (front.y0, front.y1, front.f0, front.f1, front.ym);
     let (Em, Rm, vm, um) = (front.Em, front.Rm, front.vm, front.um);
-    let (ends, frame1, frame_m) = (front.ends.as_ref(), front.frame1.as_ref(), front.frame_m.as_ref());
+    let (ends, frame1, frame_m) = (front.ends, front.frame1.as_ref(), front.frame_m.as_ref());
     let count = profile.count();
     let h = sites.end.s - sites.start.s;
     let derivatives = jac.is_some();
