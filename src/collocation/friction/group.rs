@@ -70,6 +70,14 @@ fn intervals4_kernel(
     if !slides_alike(profile, k) {
         return Ok(None);
     }
+    // What the lanes decline whatever the states (two or more tendons with friction, a
+    // Kirchhoff rod's inextensible sites) is declined before any point is evaluated.
+    let inextensible = sites
+        .iter()
+        .any(|s| s.start.inextensible || s.mid.inextensible || s.end.inextensible);
+    if profile.slipping.len() > 1 || inextensible {
+        return Ok(None);
+    }
     let w = profile.multipliers(k);
     let w = w.as_deref();
     let derivatives = jac.is_some();
@@ -103,7 +111,8 @@ fn intervals4_kernel(
             inertia(sites.map(|s| &s.end), [&x[1].R, &x[2].R, &x[3].R, &x[4].R]),
         ),
     ) else {
-        profile.give(la);
+        // The start node's evaluation is kept for the one-link kernel that takes over.
+        profile.keep_node_point(k, segment_end, &x[0], &scratch[0].za, w, derivatives, la);
         scratch.into_iter().for_each(|s| profile.give_scratch(s));
         return Ok(None);
     };

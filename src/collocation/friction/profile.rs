@@ -31,12 +31,13 @@ pub(crate) struct Profile<'a> {
     /// The model with the tensions of one point, for eq. 13 with friction, and four
     /// copies of it (made at the first use) for four points at once.
     pub(super) scratch: RefCell<Model<'a>>,
+    /// Four copies of `scratch`, one per lane of friction's four links at once.
     pub(super) quad: RefCell<Vec<Model<'a>>>,
     /// Each link's last evaluation ([`interval`] through the system's residual or
     /// Jacobian), which the border reads instead of evaluating the link again, and a
     /// stuck link's multiplier its capacity from ([`Profile::stuck_capacity`]).
     cache: RefCell<Vec<Option<IntervalLinearization>>>,
-    /// Each link's capstan rows of the order-6 scheme from its last [`interval_order6`]
+    /// Each link's capstan rows of the order-6 scheme from its last [`super::order6::interval_order6`]
     /// (empty before one), for the error estimate.
     pub(crate) order6: RefCell<Vec<Vec<f64>>>,
     /// The last link's evaluation at its end node, which the next link's start takes
@@ -406,6 +407,22 @@ impl<'a> Profile<'a> {
         derivatives: bool,
         lin: Box<FrictionLinearization>,
     ) {
+        self.keep_node_point(k + 1, segment_end, b, z, w, derivatives, lin);
+    }
+
+    /// Keeps the evaluation `lin` at node n (state `b`, log tensions `z`) for the link that
+    /// starts there ([`Profile::start_point`]), in the buffers of the last one kept.
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn keep_node_point(
+        &self,
+        n: usize,
+        segment_end: f64,
+        b: &State,
+        z: &[f64],
+        w: Option<&[f64]>,
+        derivatives: bool,
+        lin: Box<FrictionLinearization>,
+    ) {
         let mut end = self.end.borrow_mut();
         let kept = end.get_or_insert_with(|| KeptEnd {
             node: 0,
@@ -416,7 +433,7 @@ impl<'a> Profile<'a> {
             derivatives,
             lin: None,
         });
-        kept.node = k + 1;
+        kept.node = n;
         kept.segment_end = segment_end;
         kept.state = *b;
         kept.z.clear();
