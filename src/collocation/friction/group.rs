@@ -70,12 +70,10 @@ fn intervals4_kernel(
     if !slides_alike(profile, k) {
         return Ok(None);
     }
-    // What the lanes decline whatever the states (two or more tendons with friction, a
-    // Kirchhoff rod's inextensible sites) is declined before any point is evaluated.
-    let inextensible = sites
-        .iter()
-        .any(|s| s.start.inextensible || s.mid.inextensible || s.end.inextensible);
-    if profile.slipping.len() > 1 || inextensible {
+    // What the lanes decline whatever the states (two or more tendons with friction) is
+    // declined before any point is evaluated; a Kirchhoff rod's sites decline in the lanes,
+    // which keep the start node's evaluation for the one-link kernel.
+    if profile.slipping.len() > 1 {
         return Ok(None);
     }
     let w = profile.multipliers(k);
