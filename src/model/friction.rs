@@ -31,6 +31,8 @@
 
 mod lanes;
 mod response;
+#[cfg(test)]
+pub(crate) use lanes::friction_robots;
 pub(crate) use lanes::linearize_lanes_into;
 use response::LaneResponse;
 

@@ -110,7 +110,7 @@ fn intervals4_kernel(
         ),
     ) else {
         // The start node's evaluation is kept for the one-link kernel that takes over.
-        profile.keep_node_point(k, segment_end, &x[0], &scratch[0].za, w, derivatives, la);
+        profile.keep_point(k, segment_end, &x[0], &scratch[0].za, w, derivatives, la);
         scratch.into_iter().for_each(|s| profile.give_scratch(s));
         return Ok(None);
     };
@@ -166,7 +166,7 @@ fn intervals4_kernel(
         back(&links[3], f3, [starts[3], &mids[3], &ends[3]], block(), s3),
     ];
     let [e0, e1, e2, e3] = ends;
-    profile.keep_end(k + 3, segment_end, &x[4], &scratch[3].zb, w, derivatives, e3);
+    profile.keep_point(k + 4, segment_end, &x[4], &scratch[3].zb, w, derivatives, e3);
     for lin in [la, e0, e1, e2].into_iter().chain(mids) {
         profile.give(lin);
     }
@@ -243,7 +243,7 @@ mod tests {
     use crate::collocation::friction::{Contact, Grip, interval};
     use crate::mesh::Mesh;
     use crate::model::equations::Model;
-    use crate::model::tendon::{Friction, Motion};
+    use crate::model::tendon::Friction;
     use crate::so3;
 
     /// A link's evaluation and block as bits.
@@ -375,17 +375,7 @@ mod tests {
     /// tendon 1 pulled), friction H (case H's helix pulled) and the helix released.
     #[test]
     fn group_gives_the_one_link_bits() {
-        let mut s = cases::prototype();
-        s.tendons[0].set_tension(2.0);
-        s.tendons[0].friction = Some(Friction::pull(0.1));
-        let mut h = cases::case_h();
-        h.tendons[4].friction = Some(Friction::pull(0.3));
-        let mut released = h.clone();
-        released.tendons[4].friction = Some(Friction {
-            coefficient: 0.2,
-            motion: Motion::Release,
-        });
-        for robot in [&s, &h, &released] {
+        for robot in &crate::model::friction::friction_robots() {
             let (setup, model) = prepare(robot);
             let (p, alone) = (profile(&model, &setup), profile(&model, &setup));
             assert!(compare(&setup, &p, &alone).is_some());

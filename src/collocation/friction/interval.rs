@@ -184,7 +184,7 @@ fn interval_at_kernel(
         derivatives,
     )?;
     let out = back(&link, &front, [&la, &lm, &lb], jac, &mut scratch);
-    profile.keep_end(k, segment_end, b, &scratch.zb, w, derivatives, lb);
+    profile.keep_point(k + 1, segment_end, b, &scratch.zb, w, derivatives, lb);
     profile.give(la);
     profile.give(lm);
     profile.give_scratch(scratch);

@@ -394,26 +394,10 @@ impl<'a> Profile<'a> {
         self.point(site, segment_end, &a.R, (&a.v, &a.u), z, w, derivatives)
     }
 
-    /// Keeps link k's evaluation `lin` at its end node (state `b`, log tensions `z`) for the
-    /// next link, in the buffers of the last one kept.
-    #[allow(clippy::too_many_arguments)]
-    pub(super) fn keep_end(
-        &self,
-        k: usize,
-        segment_end: f64,
-        b: &State,
-        z: &[f64],
-        w: Option<&[f64]>,
-        derivatives: bool,
-        lin: Box<FrictionLinearization>,
-    ) {
-        self.keep_node_point(k + 1, segment_end, b, z, w, derivatives, lin);
-    }
-
     /// Keeps the evaluation `lin` at node n (state `b`, log tensions `z`) for the link that
     /// starts there ([`Profile::start_point`]), in the buffers of the last one kept.
     #[allow(clippy::too_many_arguments)]
-    pub(super) fn keep_node_point(
+    pub(super) fn keep_point(
         &self,
         n: usize,
         segment_end: f64,

@@ -481,12 +481,31 @@ fn derive(
     })
 }
 
+/// The robots the lane tests of friction run on: the prototype with friction 0.1 on
+/// tendon 1 pulled at 2 N (friction S), case H with friction 0.3 on its helix pulled
+/// (friction H), and that helix released with friction 0.2.
+#[cfg(test)]
+pub(crate) fn friction_robots() -> [crate::Robot; 3] {
+    use crate::model::tendon::{Friction, Motion};
+    let mut s = crate::cases::prototype();
+    s.tendons[0].friction = Some(Friction::pull(0.1));
+    s.tendons[0].set_tension(2.0);
+    let mut h = crate::cases::case_h();
+    h.tendons[4].friction = Some(Friction::pull(0.3));
+    let mut released = h.clone();
+    released.tendons[4].friction = Some(Friction {
+        coefficient: 0.2,
+        motion: Motion::Release,
+    });
+    [s, h, released]
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::cases;
     use crate::model::friction::{linearize, slipping};
-    use crate::model::tendon::{Friction, Motion};
+    use crate::model::tendon::Friction;
     use crate::so3;
 
     /// Every field a caller reads of a friction linearization, as bits.
@@ -593,24 +612,15 @@ mod tests {
     /// fraction in one lane).
     #[test]
     fn lanes_give_the_scalar_bits() {
-        let mut s = cases::prototype();
-        s.tendons[0].friction = Some(Friction::pull(0.1));
-        s.tendons[0].set_tension(2.0);
-        let mut h = cases::case_h();
-        h.tendons[4].friction = Some(Friction::pull(0.3));
-        let mut released = h.clone();
-        released.tendons[4].friction = Some(Friction {
-            coefficient: 0.2,
-            motion: Motion::Release,
-        });
-        for robot in [&s, &h, &released] {
+        let robots = friction_robots();
+        for robot in &robots {
             for derivatives in [false, true] {
                 assert!(compare(robot, [None; 4], derivatives));
             }
         }
         let (slide, stuck) = ([-1.0], [0.37]);
         let w = [Some(&slide[..]), Some(&stuck[..]), Some(&slide[..]), Some(&[1.0][..])];
-        assert!(compare(&h, w, true));
+        assert!(compare(&robots[1], w, true));
     }
 
     /// Where the lanes decline (two tendons with friction loading the points: Newton's
