@@ -67,6 +67,9 @@ pub(super) fn refine_with_friction(
     // goes on from its answer.
     let mut capstan = previous.is_none();
     let plain = (capstan && !from_guess).then(|| (mesh.clone(), x.clone()));
+    // Whether the continuation in the friction coefficients ran (once at most, where both
+    // tries from `plain` failed).
+    let mut continued = false;
     let mut kinks = kinks::Kinks::default();
     // The last mesh's node arc lengths and log tensions, interpolated onto the next.
     loop {
@@ -106,6 +109,18 @@ pub(super) fn refine_with_friction(
             // with constant tensions, the start of earlier versions (its counts add up).
             report.meshes -= 1;
             (mesh, x) = (m.clone(), states.clone());
+            continue;
+        }
+        if termination != Termination::Converged
+            && !std::mem::replace(&mut continued, true)
+            && let Some((m, states)) = &plain
+            && let Some((solved, z)) = continuation::in_friction(robot, options, m, states, &mut report)?
+        {
+            // Both tries failed: the friction coefficients followed from 0 on the first mesh
+            // ([`continuation`]), and the refinement from their answer.
+            report.meshes -= 1;
+            previous = Some((m.nodes.iter().map(|n| n.s).collect(), z));
+            (mesh, x) = (m.clone(), solved);
             continue;
         }
         report.termination = termination;

@@ -17,6 +17,7 @@
 #![allow(non_snake_case)]
 
 mod border;
+mod continuation;
 mod correction;
 mod direct;
 mod grip;

@@ -1,0 +1,138 @@
+//! Continuation in the friction coefficients (docs/friction.md, "refuse21"): where Newton
+//! with friction fails from the frictionless solution, every coefficient is scaled by a
+//! factor `lambda` followed from 0 (the frictionless solution, constant tensions) to 1 (the
+//! robot's own coefficients) on one mesh, each step's Newton starting from the last
+//! converged step's states and log tensions, the log tensions scaled with `lambda` (the
+//! capstan law's z is mu times the turning: exact for a shape that does not move).
+//!
+//! Released tendons with large mu deliver up to exp(mu theta) times their input, so the
+//! frictionless shape can be far from the answer; the path from it by growing mu is the one
+//! a robot takes as its channels' friction is switched on, and its steps are short where
+//! the shape moves fast. A step whose Newton fails is halved; the continuation gives up
+//! below [`SMALLEST_STEP`] or after [`MOST_STEPS`] Newton runs (then the caller's
+//! refusal stands, with the work counted).
+
+use super::*;
+
+/// The first step in `lambda`.
+const FIRST_STEP: f64 = 0.25;
+
+/// The smallest step in `lambda`: a path that needs a shorter one turns back (a fold in
+/// mu) or leaves the shapes Newton reaches, and the solve is refused.
+const SMALLEST_STEP: f64 = 1.0 / 64.0;
+
+/// Most Newton runs of one continuation (successful steps and halved ones): with steps
+/// doubled after every success, a path that needs more is not going anywhere.
+const MOST_STEPS: usize = 48;
+
+/// Node states and log tensions (per slip, at every node) of a converged Newton with
+/// friction.
+type Solved = (Vec<State>, Vec<Vec<f64>>);
+
+/// `robot` with every friction coefficient scaled by `lambda` (> 0: the same tendons slip).
+fn scaled(robot: &Robot, lambda: f64) -> Robot {
+    let mut scaled = robot.clone();
+    for t in &mut scaled.tendons {
+        if let Some(f) = &mut t.friction {
+            f.coefficient *= lambda;
+        }
+    }
+    scaled
+}
+
+/// Newton with friction for `robot` on `mesh` from the states `x` and the log tensions `z`
+/// (per slip, at every node; None: the capstan start from `x`); the converged log tensions,
+/// with `x` moved to the root, or None where Newton failed (`x` is then undefined).
+fn newton_on(
+    robot: &Robot,
+    mesh: &Mesh,
+    (x, z): (&mut Vec<State>, Option<&[Vec<f64>]>),
+    (ws, settings): (&mut Workspace, &Settings),
+    report: &mut SolveReport,
+) -> Option<Vec<Vec<f64>>> {
+    let model = Model::new(robot);
+    let mut system = System::new(model.clone(), mesh.clone());
+    let mut profile = Profile::new(&model, &system.mesh);
+    match z {
+        Some(z) => profile.z = z.to_vec(),
+        None => start::capstan_start(&model, &system.mesh, x, &mut profile),
+    }
+    system.friction = Some(profile);
+    let mut border = Capstan::new(system);
+    let (termination, _) = newton::run_bordered(&mut border, ws, x, settings, report);
+    if termination != Termination::Converged {
+        return None;
+    }
+    border.load(Point::Current);
+    border.system.friction.as_ref().map(|p| p.z.clone())
+}
+
+/// Follows the friction coefficients of `robot` from 0 to their values on `mesh`, from the
+/// frictionless solution `x0` there ([module docs](self)): the states and log tensions
+/// (per slip, at every node) of `robot` itself, or None where the continuation gave up. Its
+/// Newton counts go to `report`, and a note says how many steps it took.
+///
+/// # Errors
+/// A workspace that cannot be built for `mesh`.
+pub(super) fn in_friction(
+    robot: &Robot,
+    options: &Options,
+    mesh: &Mesh,
+    x0: &[State],
+    report: &mut SolveReport,
+) -> Result<Option<Solved>> {
+    let settings = Settings {
+        tolerance: options.residual_tolerance,
+        max_iterations: options.max_iterations,
+        reuse_factors: false,
+        stop_when_damped: false,
+    };
+    let mut ws = Workspace::new(&System::new(Model::new(robot), mesh.clone()), options.linear_solver)?;
+    let (mut lambda, mut step) = (0.0, FIRST_STEP);
+    let mut x = x0.to_vec();
+    let mut z: Option<Vec<Vec<f64>>> = None;
+    for run in 1..=MOST_STEPS {
+        let target = (lambda + step).min(1.0);
+        let mut trial = x.clone();
+        // The last step's log tensions grown with lambda; the capstan start on the first.
+        let start = z.as_ref().map(|z| {
+            let grow = target / lambda;
+            z.iter()
+                .map(|zj| zj.iter().map(|v| v * grow).collect())
+                .collect::<Vec<Vec<f64>>>()
+        });
+        let owned;
+        let robot_at = if target < 1.0 {
+            owned = scaled(robot, target);
+            &owned
+        } else {
+            robot
+        };
+        match newton_on(
+            robot_at,
+            mesh,
+            (&mut trial, start.as_deref()),
+            (&mut ws, &settings),
+            report,
+        ) {
+            Some(solved) => {
+                (lambda, x, z) = (target, trial, Some(solved));
+                if lambda >= 1.0 {
+                    report.notes.push(format!(
+                        "Newton with friction failed from the frictionless shape; the friction coefficients \
+                         were followed from 0 to their values in {run} Newton runs"
+                    ));
+                    return Ok(z.map(|z| (x, z)));
+                }
+                step *= 2.0;
+            }
+            None => {
+                step /= 2.0;
+                if step < SMALLEST_STEP {
+                    break;
+                }
+            }
+        }
+    }
+    Ok(None)
+}

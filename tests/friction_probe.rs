@@ -1,0 +1,206 @@
+//! Random full-slip solves of the prototype with friction on opposite tendons 1 and 3
+//! (docs/friction.md, "refuse21"): the probe that found collocation refusing large-mu solves
+//! the shooting solver answers, and the refused cases it found, kept as fast tests.
+//!
+//! The probe is ignored by default (a few minutes on a release build):
+//! `cargo test --release --test friction_probe -- --ignored --nocapture`.
+
+use nalgebra::Vector3;
+use tdcr::{Friction, Motion, Robot, cases, shooting};
+
+/// Random inputs from a fixed linear congruential sequence, uniform in [0, 1).
+fn uniform(state: &mut u64) -> f64 {
+    *state = state
+        .wrapping_mul(6364136223846793005)
+        .wrapping_add(1442695040888963407);
+    (*state >> 11) as f64 / (1u64 << 53) as f64
+}
+
+/// The prototype with tendons 1 and 3 (indices 0 and 2) at `tensions`, friction `mu` on
+/// each (tendon 1 released when `release`), and a tip moment `moment` N m about world y
+/// (the horizontal normal of the plane the two tendons bend the rod in).
+fn opposite(tensions: [f64; 2], mu: [f64; 2], release: bool, moment: f64) -> Robot {
+    let mut robot = cases::prototype();
+    robot.tendons[0].set_tension(tensions[0]);
+    robot.tendons[2].set_tension(tensions[1]);
+    let motion = if release { Motion::Release } else { Motion::Pull };
+    robot.tendons[0].friction = Some(Friction {
+        coefficient: mu[0],
+        motion,
+    });
+    robot.tendons[2].friction = Some(Friction::pull(mu[1]));
+    robot.loads.tip_moment = Vector3::new(0.0, moment, 0.0);
+    robot
+}
+
+/// Case k of the probe's sequence: tensions 0 to 5 N (tendon 1 near slack, 0 to 0.05 N,
+/// in every other case), mu 0.05 to 1 on each, tendon 1 released in 30 %, a tip moment of
+/// up to 0.03 N m either way.
+fn case(state: &mut u64, k: usize) -> Robot {
+    let t1 = if k.is_multiple_of(2) {
+        0.05 * uniform(state)
+    } else {
+        5.0 * uniform(state)
+    };
+    let t3 = 5.0 * uniform(state);
+    let mu = [0.05 + 0.95 * uniform(state), 0.05 + 0.95 * uniform(state)];
+    let release = uniform(state) < 0.3;
+    let moment = 0.03 * (2.0 * uniform(state) - 1.0);
+    opposite([t1, t3], mu, release, moment)
+}
+
+fn tight() -> shooting::Options {
+    shooting::Options {
+        integration_tolerance: 1e-12,
+        ..Default::default()
+    }
+}
+
+/// The distance between the tips of two solves (m).
+fn apart(a: &tdcr::Solution, b: &tdcr::Solution) -> f64 {
+    (a.tip_position() - b.tip_position()).norm()
+}
+
+/// The probe: `TDCR_PROBE_CASES` cases (default 450) of the sequence from seed 2026, each
+/// solved at default settings. An answer is checked against a solve at tolerance 1e-10
+/// (its true error; 1e-9 or 1e-8 where that refuses) and against the shooting solver at
+/// 1e-12 where it answers; a refusal
+/// is untrue where the shooting solver or collocation on a fixed mesh of 128 intervals
+/// answers. Fails on an untrue refusal, an answer away from shooting, or an estimate below
+/// the true error.
+#[test]
+#[ignore]
+fn probe_opposite_tendons_with_large_friction() {
+    let count: usize = std::env::var("TDCR_PROBE_CASES")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(450);
+    // References of the true error: the first of three tight tolerances that answers (the
+    // tightest can refuse where the mesh grows past what Newton reaches from the last one).
+    let references: Vec<_> = [1e-10, 1e-9, 1e-8]
+        .into_iter()
+        .map(|tolerance| tdcr::collocation::Options {
+            tolerance: Some(tolerance),
+            ..Default::default()
+        })
+        .collect();
+    let fixed = tdcr::collocation::Options {
+        intervals: 128,
+        tolerance: None,
+        ..Default::default()
+    };
+    let mut state = 2026;
+    let (mut refused, mut untrue, mut wrong) = (Vec::new(), Vec::new(), Vec::new());
+    let (mut continued, mut worst_ratio, mut worst_shooting) = (0, 0.0_f64, 0.0_f64);
+    for k in 0..count {
+        let robot = case(&mut state, k);
+        let describe = format!(
+            "case {k}: tensions {:.4} {:.4} N, mu {:.3} {:.3}, tendon 1 {:?}, moment {:.4} N m",
+            robot.tendons[0].tension(),
+            robot.tendons[2].tension(),
+            robot.tendons[0].friction.map_or(0.0, |f| f.coefficient),
+            robot.tendons[2].friction.map_or(0.0, |f| f.coefficient),
+            robot.tendons[0].friction.map(|f| f.motion),
+            robot.loads.tip_moment.y
+        );
+        let shot = shooting::solve(&robot, &tight());
+        match tdcr::solve(&robot, &Default::default()) {
+            Ok(c) => {
+                continued += usize::from(c.report.notes.iter().any(|n| n.contains("followed from 0")));
+                let estimate = c.report.error_estimate.map_or(f64::NAN, |e| e.tip_position);
+                let reference = references.iter().find_map(|o| tdcr::collocation::solve(&robot, o).ok());
+                let (truth, bound) = reference.as_ref().map_or((f64::NAN, 0.0), |f| {
+                    (
+                        apart(&c, f),
+                        f.report.error_estimate.map_or(f64::NAN, |e| e.tip_position),
+                    )
+                });
+                worst_ratio = worst_ratio.max(truth / estimate);
+                let from_shooting = shot.as_ref().map_or(0.0, |s| apart(&c, s));
+                worst_shooting = worst_shooting.max(from_shooting);
+                // Three times the estimate and the reference's: deferred correction's
+                // estimate is asymptotically exact (1e-11 m for rounding). Three times the
+                // estimate plus 1e-8 m from shooting: its own error at 1e-12 reaches 5e-9 m
+                // on the steepest profiles (case 163 against the reference).
+                if !(truth <= 3.0 * (estimate + bound) + 1e-11 && from_shooting <= 3.0 * estimate + 1e-8) {
+                    eprintln!(
+                        "{describe}: true error {truth:e} m, estimate {estimate:e} m, {from_shooting:e} m from \
+                         shooting"
+                    );
+                    wrong.push(k);
+                }
+            }
+            Err(e) => {
+                let answered = shot.is_ok() || tdcr::collocation::solve(&robot, &fixed).is_ok();
+                eprintln!("{describe}: refused ({e}); answered by shooting or on 128 intervals: {answered}");
+                refused.push(k);
+                if answered {
+                    untrue.push(k);
+                }
+            }
+        }
+    }
+    eprintln!(
+        "{count} cases: {} refused {refused:?}, {} of them untrue {untrue:?}; {continued} answered by the \
+         continuation in mu; worst true error over the estimate {worst_ratio:.3}, worst distance to \
+         shooting {worst_shooting:.3e} m; {} wrong {wrong:?}",
+        refused.len(),
+        untrue.len(),
+        wrong.len()
+    );
+    assert!(untrue.is_empty() && wrong.is_empty());
+}
+
+/// Two solves the probe found refused on main (cases 163 and 441: tendon 1 released at
+/// about 4.5 N with mu 0.63 and 0.36, tendon 3 pulled with mu 0.43 and 0.91, opposite tip
+/// moments): Newton with friction failed from the frictionless shape on the first mesh,
+/// from the capstan start and from constant tensions. The continuation in the friction
+/// coefficients answers them: the answer agrees with the shooting solver, and its estimate
+/// covers its distance to a solve at tolerance 1e-10.
+#[test]
+fn large_friction_on_a_released_tendon_is_answered() {
+    let cases = [
+        opposite(
+            [4.471881775438046, 0.6532878863777375],
+            [0.6317954495919584, 0.42573848435693806],
+            true,
+            -0.023271778194689948,
+        ),
+        opposite(
+            [4.755257850684195, 1.302669994482863],
+            [0.35585877468993965, 0.9133981975411736],
+            true,
+            0.006960523398905223,
+        ),
+    ];
+    let fine = tdcr::collocation::Options {
+        tolerance: Some(1e-10),
+        ..Default::default()
+    };
+    for robot in cases {
+        let c = tdcr::solve(&robot, &Default::default()).unwrap();
+        let estimate = c.report.error_estimate.unwrap().tip_position;
+        assert!(
+            c.report.notes.iter().any(|n| n.contains("followed from 0")),
+            "{:?}",
+            c.report.notes
+        );
+        let reference = tdcr::collocation::solve(&robot, &fine).unwrap();
+        let truth = apart(&c, &reference);
+        // Three times the estimate: deferred correction is asymptotically exact; 1e-11 m for
+        // the reference's own error (its tolerance, 2.4e-11 m, is met with a factor ~10 to spare).
+        assert!(
+            truth <= 3.0 * estimate + 1e-11,
+            "true error {truth:e} m, estimate {estimate:e} m"
+        );
+        // 1e-8 m: the shooting solver's own error at 1e-12 on these steep tension profiles
+        // (5e-9 m on the first against the reference).
+        let s = shooting::solve(&robot, &tight()).unwrap();
+        assert!(apart(&c, &s) < 1e-8, "{:e} m from shooting", apart(&c, &s));
+        assert!(
+            apart(&reference, &s) < 1e-8,
+            "{:e} m from shooting",
+            apart(&reference, &s)
+        );
+    }
+}
