@@ -204,3 +204,38 @@ fn large_friction_on_a_released_tendon_is_answered() {
         );
     }
 }
+
+/// Case 91 of the probe (tendon 1 released at 2.19 N with mu 0.93) at tolerance 1e-9:
+/// answered by the continuation on 32 intervals, whose estimate then asked for 3 752; Newton
+/// failed there from the 32-interval answer interpolated (main refused the solve: the
+/// brief's "third mesh"). The mesh between them, 64 intervals, converges, and the
+/// refinement goes on from it. The shooting solver breaks down on this robot (the
+/// tangential friction loads), so the answer is checked against the solve at tolerance
+/// 1e-8, which needs no mesh between.
+#[test]
+fn a_mesh_newton_fails_on_is_reached_through_a_halved_one() {
+    let robot = opposite(
+        [2.191613373984957, 3.304268274921852],
+        [0.9301479208260797, 0.16785393348536815],
+        true,
+        0.01881651726173821,
+    );
+    let at = |tolerance: f64| {
+        let options = tdcr::collocation::Options {
+            tolerance: Some(tolerance),
+            ..Default::default()
+        };
+        tdcr::collocation::solve(&robot, &options).unwrap()
+    };
+    let (tight, loose) = (at(1e-9), at(1e-8));
+    let estimate = |s: &tdcr::Solution| s.report.error_estimate.unwrap().tip_position;
+    assert!(estimate(&tight) <= 1e-9 * robot.length());
+    // Three times both estimates: deferred correction is asymptotically exact; 1e-12 m for
+    // rounding.
+    let bound = 3.0 * (estimate(&tight) + estimate(&loose)) + 1e-12;
+    assert!(
+        apart(&tight, &loose) <= bound,
+        "{:e} m apart, bound {bound:e} m",
+        apart(&tight, &loose)
+    );
+}

@@ -30,6 +30,11 @@ pub(super) enum Route {
 /// when the solve began. `route` says what `from` is and what Newton on the first mesh must
 /// do ([`Route`]).
 ///
+/// Where Newton fails: from the capstan start, once more from `from` with constant tensions;
+/// then (from a frictionless start) the friction coefficients followed from 0 on the first
+/// mesh ([`continuation`]); on a mesh more than twice as fine as the last converged one, once
+/// more through that one halved. Past those, the solve is refused.
+///
 /// # Errors
 /// As [`super::solve`].
 pub(super) fn refine_with_friction(
@@ -71,6 +76,9 @@ pub(super) fn refine_with_friction(
     // tries from `plain` failed).
     let mut continued = false;
     let mut kinks = kinks::Kinks::default();
+    // The last converged mesh and its answer, for a mesh between it and a finer one Newton
+    // failed on.
+    let mut coarse: Option<(Mesh, Solution)> = None;
     // The last mesh's node arc lengths and log tensions, interpolated onto the next.
     loop {
         let settings = first.take().unwrap_or(settings);
@@ -121,6 +129,19 @@ pub(super) fn refine_with_friction(
             report.meshes -= 1;
             previous = Some((m.nodes.iter().map(|n| n.s).collect(), z));
             (mesh, x) = (m.clone(), solved);
+            continue;
+        }
+        if termination != Termination::Converged
+            && let Some((m, guess)) = &coarse
+            && 2 * m.intervals() < border.system.mesh.intervals()
+        {
+            // Newton failed on a mesh more than twice as fine as the last converged one,
+            // from that one's answer interpolated: once more on the converged mesh with
+            // every interval halved, and the refinement from there.
+            let halved = halve(robot, m)?;
+            report.meshes -= 1;
+            x = interpolate(&model, guess, &halved);
+            mesh = halved;
             continue;
         }
         report.termination = termination;
@@ -207,6 +228,7 @@ pub(super) fn refine_with_friction(
         let s: Vec<f64> = system.mesh.nodes.iter().map(|n| n.s).collect();
         previous = Some((s, profile.z.clone()));
         x = interpolate(&model, &guess, &fine);
+        coarse = Some((system.mesh.clone(), guess));
         mesh = fine;
     }
 }
@@ -225,4 +247,20 @@ fn linear(points: &[f64], values: &[f64], s: f64) -> f64 {
     }
     let t = ((s - a) / (b - a)).clamp(0.0, 1.0);
     values[k] + t * (values[k + 1] - values[k])
+}
+
+/// `mesh` with every interval of positive length halved.
+///
+/// # Errors
+/// None in practice: the midpoints lie on the rod ([`Mesh::from_points`]).
+fn halve(robot: &Robot, mesh: &Mesh) -> Result<Mesh> {
+    let nodes = &mesh.nodes;
+    let mut points: Vec<f64> = nodes.iter().map(|n| n.s).collect();
+    points.extend(
+        nodes
+            .windows(2)
+            .filter(|w| w[1].s > w[0].s)
+            .map(|w| 0.5 * (w[0].s + w[1].s)),
+    );
+    Mesh::from_points(robot, &points)
 }

@@ -13,7 +13,8 @@
 //! ([`staircase`]; the blocks handed to it in `border.rs`), in the Newton loop of
 //! displacement-controlled tendons ([`newton::run_bordered`]). The solve starts from the
 //! initial guess ([`direct`]) or the frictionless solution on its mesh, moved to the
-//! capstan start ([`start`]).
+//! capstan start ([`start`]), mesh by mesh ([`meshes`]); where Newton fails from there, the
+//! friction coefficients are followed from 0 ([`continuation`]).
 #![allow(non_snake_case)]
 
 mod border;
