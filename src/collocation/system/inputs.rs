@@ -171,4 +171,36 @@ mod tests {
         assert!(!same(&inputs, &with_function(&robot), &mesh));
         assert!(!same(&inputs, &robot, &mesh));
     }
+
+    /// A system built in the buffers of another system on the same mesh has its own sites,
+    /// bit for bit those of a system built afresh: recomputed after the prototype for the
+    /// prototype with 1.5 times its self weight and a 1.2 times stiffer one (stale sites
+    /// would be the prototype's), kept for one with other tensions.
+    #[test]
+    fn a_system_in_kept_buffers_has_its_own_sites() {
+        use crate::collocation::system::System;
+        let base = crate::cases::prototype();
+        let mut heavier = base.clone();
+        heavier.loads.distributed_force = Field::Constant(base.loads.distributed_force.at(0.0) * 1.5);
+        let mut stiffer = base.clone();
+        let Stiffness::Uniform(section) = &mut stiffer.rod.stiffness else {
+            panic!("the prototype's section is uniform");
+        };
+        section.kbt *= 1.2;
+        let mut pulled = base.clone();
+        pulled.tendons[1].set_tension(1.0);
+        let mesh = Mesh::uniform(&base, 16).unwrap();
+        let sites = |system: &System| format!("{:?} {:?}", system.node_sites, system.interval_sites);
+        let (_, mut buffers) = System::new(Model::new(&base), mesh.clone()).into_parts();
+        let base_sites = sites(&System::new(Model::new(&base), mesh.clone()));
+        for (robot, same_sites) in [(&heavier, false), (&stiffer, false), (&pulled, true), (&base, true)] {
+            let model = Model::new(robot);
+            let system = System::with_buffers(&model, mesh.clone(), buffers);
+            let own = sites(&System::new(Model::new(robot), mesh.clone()));
+            assert_eq!(sites(&system), own);
+            // The prototype's sites (left in the buffers) would not do for the first two.
+            assert_eq!(own == base_sites, same_sites);
+            buffers = system.into_parts().1;
+        }
+    }
 }
