@@ -3,6 +3,7 @@
 //! batch, the next step of a sweep: only the tensions changed) takes them instead of
 //! computing them again.
 
+use super::{System, SystemBuffers};
 use crate::mesh::Mesh;
 use crate::model::equations::Model;
 use crate::model::loads::Field;
@@ -58,6 +59,24 @@ impl SiteInputs {
                 loads.follower_distributed_force.clone(),
             ],
         ));
+    }
+}
+
+impl<'a> System<'a> {
+    /// The system of a copy of `model` on `mesh`, its sites and the copy's tensions written
+    /// into `buffers` (a workspace's, [`System::into_parts`]) instead of new ones.
+    /// The sites are kept when the buffers' are those of `model` on `mesh` bit for bit
+    /// (a batch's next row: only the tensions changed).
+    pub(crate) fn with_buffers(model: &Model<'a>, mesh: Mesh, buffers: SystemBuffers) -> Self {
+        let model = model.clone_in(buffers.tensions);
+        let buffers = SystemBuffers {
+            tensions: Vec::new(),
+            ..buffers
+        };
+        match buffers.has_sites_of(&model, &mesh) && buffers.inputs.are_of(&model, &mesh) {
+            true => System::with_kept_sites(model, mesh, buffers),
+            false => System::assembled(model, mesh, buffers),
+        }
     }
 }
 

@@ -26,7 +26,6 @@ use crate::model::equations::{Model, Site};
 use crate::model::linearize;
 use crate::solution::State;
 pub(crate) use columns::TensionSink;
-use inputs::SiteInputs;
 use nalgebra::Vector6;
 
 /// The parameters whose exact residual columns [`System::parameter_columns`] gives.
@@ -57,7 +56,7 @@ pub struct System<'a> {
     /// are then collocated with it; `None` without friction.
     pub(crate) friction: Option<Profile<'a>>,
     /// What the buffers' sites were computed from, for [`System::into_parts`].
-    inputs: SiteInputs,
+    inputs: inputs::SiteInputs,
 }
 
 /// The buffers a [`System`] fills for its mesh (the sites) and its model's tensions, which
@@ -73,7 +72,7 @@ pub(crate) struct SystemBuffers {
     /// [`SystemBuffers::has_sites_of`] checks.
     sites_of: Option<(f64, Option<(crate::model::parameter::Parameter, f64)>)>,
     /// What the sites were computed from ([`System::with_buffers`] keeps them when the same).
-    inputs: SiteInputs,
+    inputs: inputs::SiteInputs,
 }
 
 impl SystemBuffers {
@@ -92,22 +91,6 @@ impl<'a> System<'a> {
     /// The system of `model` on `mesh`.
     pub fn new(model: Model<'a>, mesh: Mesh) -> Self {
         Self::assembled(model, mesh, SystemBuffers::default())
-    }
-
-    /// The system of a copy of `model` on `mesh`, its sites and the copy's tensions written
-    /// into `buffers` (a workspace's, [`System::into_parts`]) instead of new ones.
-    /// The sites are kept when the buffers' are those of `model` on `mesh` bit for bit
-    /// (a batch's next row: only the tensions changed).
-    pub(crate) fn with_buffers(model: &Model<'a>, mesh: Mesh, buffers: SystemBuffers) -> Self {
-        let model = model.clone_in(buffers.tensions);
-        let buffers = SystemBuffers {
-            tensions: Vec::new(),
-            ..buffers
-        };
-        match buffers.has_sites_of(&model, &mesh) && buffers.inputs.are_of(&model, &mesh) {
-            true => Self::with_kept_sites(model, mesh, buffers),
-            false => Self::assembled(model, mesh, buffers),
-        }
     }
 
     /// The system of `model` on `mesh`, its sites computed into `buffers`.
