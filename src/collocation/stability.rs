@@ -27,7 +27,7 @@ use nalgebra::{Complex, DMatrix, Matrix6, SMatrix};
 
 mod link;
 
-use link::{Fields, advance};
+use link::{Fields, NEAR_IDENTITY, advance};
 
 // The fields' rows 0..6 are (dp, dtheta) and 6..12 (dv, du): the sweep's blocks Q and the
 // tip rows' columns are taken by these offsets.
@@ -87,6 +87,13 @@ pub(crate) type NeutralRoots = (usize, f64);
 /// `neutral` decides it by the lowest vibration mode (docs/stability.md, "A root at the
 /// base").
 pub(crate) fn count(values: &[f64], s: &[f64]) -> (Stability, Option<NeutralRoots>) {
+    count_with(values, s, NEAR_IDENTITY)
+}
+
+/// [`count`], the fields normalized by an LU solve on the links where the bound on Q1 - I
+/// is below `near_identity` ([`link::NEAR_IDENTITY`] in a verdict; 0: by Q1's inverse on
+/// every link, the tests' reference).
+fn count_with(values: &[f64], s: &[f64], near_identity: f64) -> (Stability, Option<NeutralRoots>) {
     let nodes = s.len();
     let links = nodes - 1;
     let link_block = NODE * 2 * NODE;
@@ -138,7 +145,7 @@ pub(crate) fn count(values: &[f64], s: &[f64]) -> (Stability, Option<NeutralRoot
         let Some(link) = values[from..from + link_block]
             .try_into()
             .ok()
-            .and_then(|b| advance(b, y, identity, &mut next, spare))
+            .and_then(|b| advance(b, y, identity, near_identity, &mut next, spare))
         else {
             return (
                 Stability::Unknown {
@@ -273,4 +280,131 @@ fn roots(m: &Matrix6<f64>, parity_changes: bool, flip: bool) -> Vec<f64> {
     }
     roots.sort_by(f64::total_cmp);
     roots
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::collocation::options::{Equilibrium, Options};
+    use crate::collocation::test_support::linearized_at;
+    use crate::model::loads::Loads;
+    use crate::model::rod::Rod;
+    use crate::model::routing::Routing;
+    use crate::model::tendon::Tendon;
+    use crate::{Robot, cases};
+    use std::f64::consts::PI;
+
+    /// Deterministic numbers in [0, 1) (a linear congruential sequence).
+    fn uniform(state: &mut u64) -> f64 {
+        *state = state
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        (*state >> 11) as f64 / (1u64 << 53) as f64
+    }
+
+    /// A random robot in the ranges of tests/properties.rs (length 0.05..1 m, radius
+    /// 0.2..2 mm, E 1..300 GPa, 1..8 straight or helical tendons at 1..10 mm ending in
+    /// (0.3 L, L], tensions up to the one that bends the rod through 2 pi, self weight 1..3
+    /// times the rod's own, a tip force up to 2 E I / L^2), in random directions.
+    fn random_robot(state: &mut u64) -> Robot {
+        let mut u = || uniform(state);
+        let (length, radius) = (0.05 + 0.95 * u(), 0.2e-3 + 1.8e-3 * u());
+        let rod = Rod::solid_circle(length, radius, 1e9 + 299e9 * u(), 0.25 + 0.2 * u());
+        let ei = rod.section_at(0.0).section.kbt[0];
+        let weight = (1.0 + 2.0 * u()) * 8000.0 * 9.81 * PI * radius * radius;
+        let down = nalgebra::Vector3::new(2.0 * u() - 1.0, 2.0 * u() - 1.0, 2.0 * u() - 2.5);
+        let tip = nalgebra::Vector3::new(2.0 * u() - 1.0, 2.0 * u() - 1.0, 2.0 * u() - 1.0 + 1e-3);
+        let tip = tip.normalize() * 2.0 * u() * ei / (length * length);
+        let mut robot = Robot::new(rod).with_loads(Loads::self_weight(weight, down).with_tip_force(tip));
+        let count = 1 + (8.0 * u()) as usize;
+        for _ in 0..count {
+            let (offset, angle) = (0.001 + 0.009 * u(), 2.0 * PI * u());
+            let routing = if u() < 0.5 {
+                Routing::helical(offset, 4.0 * u() - 2.0, angle)
+            } else {
+                Routing::straight(offset * angle.cos(), offset * angle.sin())
+            };
+            let tension = u() * 2.0 * PI * ei / (offset * length) / count as f64;
+            let mut tendon = Tendon::new(routing, tension);
+            if u() < 0.5 {
+                tendon = tendon.ending_at((0.3 + 0.7 * u()) * length);
+            }
+            robot = robot.with_tendon(tendon);
+        }
+        robot
+    }
+
+    /// The fields normalized by the LU solve where Q1 is near the identity give the verdict
+    /// of the inverse on every link (the earlier sweep): the same count and roots left at the
+    /// base, conjugate points within 1e-9 of the rod length (the normalized fields differ by
+    /// rounding, about 1e-15 relative a link; a root moves with them by as little), on the
+    /// default solves of 60 random robots and, to count unstable directions, their nearest
+    /// equilibria from the guess, the prototype, and the straight column past one to five
+    /// times Euler's load (unstable in 2 to 4 directions).
+    #[test]
+    fn the_near_identity_normalization_keeps_every_verdict() {
+        let mut robots: Vec<Robot> = vec![cases::prototype()];
+        let column_rod = Rod::solid_circle(1.0, 0.001, 200e9, 0.3);
+        let euler = PI * PI * column_rod.section_at(0.0).section.kbt[0] / 4.0;
+        for factor in [0.5, 1.5, 3.0, 5.0, 12.0] {
+            let load = nalgebra::Vector3::new(0.0, 0.0, -factor * euler);
+            robots.push(Robot::new(column_rod.clone()).with_loads(Loads::none().with_tip_force(load)));
+        }
+        let mut state = 29;
+        robots.extend((0..60).map(|_| random_robot(&mut state)));
+        let nearest = Options {
+            equilibrium: Equilibrium::Nearest,
+            ..Options::default()
+        };
+        let (mut compared, mut unstable, mut neutral) = (0, 0, 0);
+        for (i, robot) in robots.iter().enumerate() {
+            for options in [&Options::default(), &nearest] {
+                let Ok(solution) = crate::collocation::solve(robot, options) else {
+                    continue;
+                };
+                let (_, _, mut ws, _) = linearized_at(robot, &solution);
+                let s: Vec<f64> = solution.nodes.iter().map(|n| n.s).collect();
+                let length = robot.length();
+                ws.verdict_counted(|values| {
+                    let (new, new_neutral) = count(values, &s);
+                    let (old, old_neutral) = count_with(values, &s, 0.0);
+                    match (&new, &old) {
+                        (Stability::Stable, Stability::Stable) => {}
+                        (
+                            Stability::Unstable {
+                                directions: a,
+                                conjugate_point: x,
+                            },
+                            Stability::Unstable {
+                                directions: b,
+                                conjugate_point: y,
+                            },
+                        ) => {
+                            assert_eq!(a, b, "robot {i}");
+                            assert!((x - y).abs() <= 1e-9 * length, "robot {i}: {x} {y}");
+                            unstable += 1;
+                        }
+                        _ => panic!("robot {i}: {new:?} against {old:?}"),
+                    }
+                    match (new_neutral, old_neutral) {
+                        (None, None) => {}
+                        (Some((a, x)), Some((b, y))) => {
+                            assert_eq!(a, b, "robot {i}");
+                            assert!((x - y).abs() <= 1e-9 * length, "robot {i}");
+                            neutral += 1;
+                        }
+                        other => panic!("robot {i}: neutral roots {other:?}"),
+                    }
+                    compared += 1;
+                    (new, new_neutral)
+                });
+            }
+        }
+        // Most solves compared, and unstable verdicts among them (the columns past Euler's
+        // load at least), so that the count itself was compared.
+        assert!(
+            compared >= 100 && unstable >= 4,
+            "{compared} compared, {unstable} unstable, {neutral} neutral"
+        );
+    }
 }

@@ -3,6 +3,7 @@
 
 pub mod guess;
 pub mod nodes;
+pub(crate) mod points;
 pub mod resolution;
 pub(crate) mod spare;
 

@@ -2,9 +2,8 @@
 //! (eq. 13) and internal wrenches at every node from the model, and the tendon paths.
 #![allow(non_snake_case)]
 
-use crate::Robot;
 use crate::error::Result;
-use crate::mesh::spare;
+use crate::mesh::{points, spare};
 use crate::model::equations::Model;
 use crate::model::friction;
 use crate::model::length;
@@ -76,26 +75,45 @@ fn build(model: &Model, states: &[State], segment_ends: &[f64], along: Along, re
     let robot = model.robot;
     let length = robot.length();
     let nodes = node_list(model, states, segment_ends, &along)?;
+    let mut s = spare::take(nodes.len());
+    s.extend(nodes.iter().map(|n| n.s));
     // Each tendon's path and tensions are allocated once at their final length (counted
-    // first), and nothing else is.
+    // first), and nothing else is. Its routing points are evaluated once for its path and
+    // its length ([`points::with_points`]).
     let (mut tendon_paths, mut tendon_tensions) = (
         Vec::with_capacity(robot.tendons.len()),
         Vec::with_capacity(robot.tendons.len()),
     );
+    let mut lengths = spare::take(robot.tendons.len());
     for (i, t) in robot.tendons.iter().enumerate() {
         let end = t.end(length);
         let count = on_path(&nodes, end).count();
-        let mut path = Vec::with_capacity(count);
-        path.extend(on_path(&nodes, end).map(|k| nodes[k].p + nodes[k].R * t.routing.at(nodes[k].s, length).r));
+        // The nodes on [0, end]: those of the path and of the length's quadrature.
+        let reach = s.partition_point(|&sk| sk <= end);
+        let (path, tendon_length) = points::with_points(&t.routing, length, &s[..reach], |points| {
+            let mut path = Vec::with_capacity(count);
+            path.extend(on_path(&nodes, end).map(|k| nodes[k].p + nodes[k].R * points.at(k).r));
+            // The quadrature depends only on the nodes and the tendon's end: kept by the
+            // thread.
+            let tendon_length = length::NodeQuadrature::with_kept(&s, end, |q| {
+                q.integrate(|k| length::speed(&points.at(k), &nodes[k].v, &nodes[k].u))
+            });
+            (path, tendon_length)
+        });
         tendon_paths.push(path);
-        let mut tensions = Vec::with_capacity(count);
-        tensions.extend(on_path(&nodes, end).map(|k| match along {
-            Along::Constant(_) => model.tensions[i],
-            Along::Varying(profile, _, _) => profile[k][i],
-        }));
+        lengths.push(tendon_length);
+        let tensions = match along {
+            Along::Constant(_) => vec![model.tensions[i]; count],
+            Along::Varying(profile, _, _) => {
+                let mut tensions = Vec::with_capacity(count);
+                tensions.extend(on_path(&nodes, end).map(|k| profile[k][i]));
+                tensions
+            }
+        };
         tendon_tensions.push(tensions);
     }
-    let mut tendons = tendon_states(model, &nodes);
+    let mut tendons = tendon_states(model, &lengths);
+    spare::give(lengths);
     for (state, tensions) in tendons.iter_mut().zip(&tendon_tensions) {
         state.delivered_tension = tensions.last().copied().unwrap_or(state.tension);
     }
@@ -103,7 +121,6 @@ fn build(model: &Model, states: &[State], segment_ends: &[f64], along: Along, re
         // An elastic tendon with friction stretches by its varying tension: the integral of
         // tau(s) / (E_t A_t) over its reference path, plus its free length at the base
         // tension (docs/friction.md); constant tension gives the compliance of tendon_states.
-        let s: Vec<f64> = nodes.iter().map(|n| n.s).collect();
         for (i, (t, state)) in robot.tendons.iter().zip(tendons.iter_mut()).enumerate() {
             let (Some(stiffness), Some(_)) = (t.stiffness, t.active_friction()) else {
                 continue;
@@ -117,6 +134,7 @@ fn build(model: &Model, states: &[State], segment_ends: &[f64], along: Along, re
             state.displacement = state.reference_length - state.length + stretch;
         }
     }
+    spare::give(s);
     Ok(Solution {
         nodes,
         tendon_paths,
@@ -187,24 +205,20 @@ fn fill_nodes(
     Ok(())
 }
 
-/// Each tendon's tension, pull-in, lengths and slack at the solved `nodes` (docs/actuation.md):
-/// the length by the node quadrature, and for a displacement-controlled tendon the slack
-/// phi = l_ref - l - q + c tau when its tension is 0 (phi is the solver's residual, about 0,
-/// when taut).
-fn tendon_states(model: &Model, nodes: &[Node]) -> Vec<TendonState> {
+/// Each tendon's tension, pull-in, lengths and slack (docs/actuation.md), its path length
+/// given (`lengths`, m: the node quadrature over the solved nodes): for a
+/// displacement-controlled tendon the slack phi = l_ref - l - q + c tau when its tension is
+/// 0 (phi is the solver's residual, about 0, when taut).
+fn tendon_states(model: &Model, lengths: &[f64]) -> Vec<TendonState> {
     let robot = model.robot;
-    let mut s = spare::take(nodes.len());
-    s.extend(nodes.iter().map(|n| n.s));
-    let l = robot.length();
     let mut breakpoints = spare::take(robot.tendons.len());
     robot.breakpoints_into(&mut breakpoints);
-    // The quadrature depends only on the nodes and the tendon's end: kept by the thread.
     let states = robot
         .tendons
         .iter()
+        .zip(lengths)
         .enumerate()
-        .map(|(i, t)| {
-            let length = length::NodeQuadrature::with_kept(&s, t.end(l), |q| tendon_length(robot, i, q, &s, nodes));
+        .map(|(i, (t, &length))| {
             let reference_length = length::reference_length_on(robot, &breakpoints, i);
             let tension = model.tensions[i];
             let taken_up = reference_length - length + t.compliance(reference_length) * tension;
@@ -228,15 +242,6 @@ fn tendon_states(model: &Model, nodes: &[Node]) -> Vec<TendonState> {
             }
         })
         .collect();
-    spare::give(s);
     spare::give(breakpoints);
     states
-}
-
-/// The path length of tendon `i` over solved `nodes` at arc lengths `s`, by `quadrature`
-/// (the [`length::NodeQuadrature`] of those nodes over the tendon's span).
-fn tendon_length(robot: &Robot, i: usize, quadrature: &length::NodeQuadrature, s: &[f64], nodes: &[Node]) -> f64 {
-    let t = &robot.tendons[i];
-    let l = robot.length();
-    quadrature.integrate(|k| length::speed(&t.routing.at(s[k], l), &nodes[k].v, &nodes[k].u))
 }

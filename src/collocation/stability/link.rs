@@ -64,15 +64,18 @@ pub(super) struct Link {
 /// at node k into `next` (A next = -B y) and, when Q1 is well conditioned ([`Link`]), the
 /// fields normalized to (dp, dtheta) block I into `normalized`. On x86-64 with AVX2 and FMA
 /// (checked at run time) the arithmetic is compiled for them, else for the baseline. None
-/// for a zero pivot.
+/// for a zero pivot. `near_identity`: the bound on Q1 - I below which the fields are
+/// normalized by an LU solve ([`NEAR_IDENTITY`] in a verdict; 0 for the inverse on every
+/// link, as the tests' reference).
 pub(super) fn advance(
     block: &[f64; NODE * LINK],
     y: &Fields,
     identity: bool,
+    near_identity: f64,
     next: &mut Fields,
     normalized: &mut Fields,
 ) -> Option<Link> {
-    avx2_fma!(advance_kernel(block, y, identity, next, normalized))
+    avx2_fma!(advance_kernel(block, y, identity, near_identity, next, normalized))
 }
 
 /// [`advance`]'s arithmetic, on fixed-size arrays with loops of constant trip counts.
@@ -81,6 +84,7 @@ fn advance_kernel(
     block: &[f64; NODE * LINK],
     y: &Fields,
     identity: bool,
+    near_identity: f64,
     next: &mut Fields,
     normalized: &mut Fields,
 ) -> Option<Link> {
@@ -95,12 +99,17 @@ fn advance_kernel(
         }
         bound = bound.max(sum);
     }
-    let written = match inverse6(q1) {
-        Some(inv) if largest(q1) * largest(&inv) < 1e6 => {
-            normalize(next, &inv, normalized);
-            true
+    let written = if bound < near_identity {
+        normalize_near_identity(next, normalized);
+        true
+    } else {
+        match inverse6(q1) {
+            Some(inv) if largest(q1) * largest(&inv) < 1e6 => {
+                normalize(next, &inv, normalized);
+                true
+            }
+            _ => false,
         }
-        _ => false,
     };
     Some(Link {
         bound,
@@ -346,6 +355,85 @@ fn jordan<const C: usize>(a: &mut [[f64; 12]; 6]) -> bool {
     true
 }
 
+/// The bound on Q1 - I below which [`advance`] normalizes the fields by an LU solve without
+/// pivoting ([`normalize_near_identity`]) instead of Q1's inverse. With b the max row sum of
+/// |Q1 - I| below 1/2, Q1 is strictly diagonally dominant by rows, Gaussian elimination
+/// without pivoting is stable on it (its growth factor is at most 2), and
+/// ||Q1^-1||_inf <= 1 / (1 - b) < 2: its condition number in max-entry norms is below
+/// 6 (1 + b) / (1 - b) < 18, far below the 1e6 at which the fields are orthonormalized
+/// instead, so the path taken is the one the inverse's test would take.
+pub(super) const NEAR_IDENTITY: f64 = 0.5;
+
+/// The fields `next` normalized as [`normalize`] does, when the max row sum of |Q1 - I| is
+/// below [`NEAR_IDENTITY`]: X = W Q1^-1 for the (dv, du) block W, from X Q1 = W row by row,
+/// with Q1 = L U factored without pivoting (x L U = w: z U = w by columns, then x L = z),
+/// written to `out` with the identity set exactly. About half the arithmetic of the
+/// Gauss-Jordan inverse and the product; the normalized fields differ from theirs by
+/// rounding (a unit test keeps them within 1e-13 relative).
+#[inline(always)]
+fn normalize_near_identity(next: &Fields, out: &mut Fields) {
+    // Q1's rows padded to two 4-lane vectors, reduced in place to U (zeros below the
+    // diagonal), the multipliers of L in `lower` (zeros on and above its diagonal).
+    let mut upper = [[0.0f64; 8]; 6];
+    for (w, row) in upper.iter_mut().zip(&next[..6]) {
+        w[..6].copy_from_slice(row);
+    }
+    let mut lower = [[0.0f64; 8]; 6];
+    unrolled!(each factor(&mut upper, &mut lower); 0 1 2 3 4);
+    for (j, row) in out[..6].iter_mut().enumerate() {
+        *row = [0.0; 6];
+        row[j] = 1.0;
+    }
+    for (o, w) in out[6..].iter_mut().zip(&next[6..]) {
+        let mut z = [0.0f64; 8];
+        z[..6].copy_from_slice(w);
+        let mut x = [0.0f64; 8];
+        unrolled!(each forward(&upper, &mut z, &mut x); 0 1 2 3 4 5);
+        unrolled!(each backward(&lower, &mut x); 5 4 3 2 1);
+        o.copy_from_slice(&x[..6]);
+    }
+}
+
+/// Column `K` of [`normalize_near_identity`]'s LU factorization without pivoting: the
+/// multiplier l = a[i][K] / a[K][K] of every row i below K into `lower`, row i -= l (row K)
+/// on whole vectors (columns left of K hold zeros in both rows, so stay zero), a[i][K] set
+/// to an exact zero.
+#[inline(always)]
+fn factor<const K: usize>(upper: &mut [[f64; 8]; 6], lower: &mut [[f64; 8]; 6]) {
+    let pivot_row = upper[K];
+    #[allow(clippy::needless_range_loop)]
+    for i in K + 1..6 {
+        let l = upper[i][K] / pivot_row[K];
+        lower[i][K] = l;
+        for j in 0..8 {
+            upper[i][j] -= l * pivot_row[j];
+        }
+        upper[i][K] = 0.0;
+    }
+}
+
+/// Column `C` of z U = w ([`normalize_near_identity`]): x_C = z_C / U[C][C], then z -=
+/// x_C (row C of U), which leaves the columns up to C, already read, and changes the later
+/// ones.
+#[inline(always)]
+fn forward<const C: usize>(upper: &[[f64; 8]; 6], z: &mut [f64; 8], x: &mut [f64; 8]) {
+    let xc = z[C] / upper[C][C];
+    x[C] = xc;
+    for (zj, u) in z.iter_mut().zip(&upper[C]) {
+        *zj -= xc * u;
+    }
+}
+
+/// Row `I` of x L = z ([`normalize_near_identity`], x holding z): x_I is final once the rows
+/// after it are done; x -= x_I (row I of L), whose entries from I on are zero.
+#[inline(always)]
+fn backward<const I: usize>(lower: &[[f64; 8]; 6], x: &mut [f64; 8]) {
+    let xi = x[I];
+    for (xj, l) in x.iter_mut().zip(&lower[I]) {
+        *xj -= xi * l;
+    }
+}
+
 /// The fields `next` in the basis where their (dp, dtheta) block is the identity, written to
 /// `out`: `next` Q1^-1 with `inv` = Q1^-1, the identity set exactly.
 #[inline(always)]
@@ -354,14 +442,21 @@ fn normalize(next: &Fields, inv: &Block6, out: &mut Fields) {
         *row = [0.0; 6];
         row[j] = 1.0;
     }
+    // The inverse's rows padded to two 4-lane vectors (the padding's sums stay zero), so
+    // that each row of the product is two vector sums: the same products and sums, in the
+    // same order, on the live lanes.
+    let mut wide = [[0.0f64; 8]; 6];
+    for (w, row) in wide.iter_mut().zip(inv) {
+        w[..6].copy_from_slice(row);
+    }
     for (o, row) in out[6..].iter_mut().zip(&next[6..]) {
-        let mut sum = [0.0f64; 6];
-        for (x, inv_row) in row.iter().zip(inv) {
+        let mut sum = [0.0f64; 8];
+        for (x, inv_row) in row.iter().zip(&wide) {
             for (s, v) in sum.iter_mut().zip(inv_row) {
                 *s += x * v;
             }
         }
-        *o = sum;
+        o.copy_from_slice(&sum[..6]);
     }
 }
 
@@ -495,6 +590,46 @@ mod tests {
         assert!(inverse6(&singular).is_none());
     }
 
+    /// Near the identity (max row sum of |Q1 - I| up to 0.49) the LU solve without pivoting
+    /// gives the normalized fields of the inverse to 1e-13 of their largest entry (both are
+    /// backward stable, Q1's condition number is below 18: the difference is rounding), and
+    /// the identity block exactly.
+    #[test]
+    fn the_near_identity_normalization_is_the_inverses() {
+        for seed in 1..40 {
+            let v = entries(seed, NODE * 6);
+            let size = 0.49 * seed as f64 / 39.0;
+            let next: Fields = std::array::from_fn(|r| {
+                std::array::from_fn(|c| match r < 6 {
+                    true => f64::from(u8::from(r == c)) + size / 6.0 * v[6 * r + c],
+                    false => 3.0 * v[6 * r + c],
+                })
+            });
+            let q1: &Block6 = next[..6].try_into().unwrap();
+            let bound = (0..6)
+                .map(|r| {
+                    (0..6)
+                        .map(|c| (q1[r][c] - f64::from(u8::from(r == c))).abs())
+                        .sum::<f64>()
+                })
+                .fold(0.0, f64::max);
+            assert!(bound < NEAR_IDENTITY, "seed {seed}");
+            let (mut by_inverse, mut by_lu) = ([[0.0; 6]; NODE], [[0.0; 6]; NODE]);
+            normalize(&next, &inverse6(q1).expect("regular"), &mut by_inverse);
+            normalize_near_identity(&next, &mut by_lu);
+            let scale = by_inverse.iter().flatten().fold(0.0f64, |m, x| m.max(x.abs()));
+            for r in 0..NODE {
+                for c in 0..6 {
+                    let (a, b) = (by_inverse[r][c], by_lu[r][c]);
+                    match r < 6 {
+                        true => assert_eq!(a.to_bits(), b.to_bits(), "seed {seed}"),
+                        false => assert!((a - b).abs() <= 1e-13 * scale, "seed {seed}: ({r}, {c}) {a} {b}"),
+                    }
+                }
+            }
+        }
+    }
+
     /// A link's summary: the bound is the max row sum of |Q1 - I|, the normalized fields have
     /// (dp, dtheta) block I and equal next Q1^-1 to 1e-12 (rounding of the inverse and the
     /// product), and non-finite fields are reported as such.
@@ -504,7 +639,7 @@ mod tests {
             let (block, fields) = link(seed, true);
             let y = with_identity(fields);
             let (mut next, mut normalized) = ([[0.0; 6]; NODE], [[0.0; 6]; NODE]);
-            let link = advance(&block, &y, true, &mut next, &mut normalized).expect("a regular block");
+            let link = advance(&block, &y, true, NEAR_IDENTITY, &mut next, &mut normalized).expect("a regular block");
             assert!(link.finite && link.normalized, "seed {seed}");
             let q1 = Matrix6::from_fn(|r, c| next[r][c]);
             let want = (0..6)
@@ -534,7 +669,7 @@ mod tests {
         let mut y = with_identity(fields);
         y[9][2] = f64::INFINITY;
         let (mut next, mut normalized) = ([[0.0; 6]; NODE], [[0.0; 6]; NODE]);
-        let link = advance(&block, &y, true, &mut next, &mut normalized).expect("no zero pivot");
+        let link = advance(&block, &y, true, NEAR_IDENTITY, &mut next, &mut normalized).expect("no zero pivot");
         assert!(!link.finite);
     }
 }

@@ -11,6 +11,7 @@
 
 mod ahead;
 mod columns;
+mod inputs;
 mod jump;
 mod lanes;
 
@@ -54,6 +55,8 @@ pub struct System<'a> {
     /// The tension profile of the tendons with friction (docs/friction.md), whose intervals
     /// are then collocated with it; `None` without friction.
     pub(crate) friction: Option<Profile<'a>>,
+    /// What the buffers' sites were computed from, for [`System::into_parts`].
+    inputs: inputs::SiteInputs,
 }
 
 /// The buffers a [`System`] fills for its mesh (the sites) and its model's tensions, which
@@ -68,6 +71,8 @@ pub(crate) struct SystemBuffers {
     /// (the system that gave them back), None before any: what
     /// [`SystemBuffers::has_sites_of`] checks.
     sites_of: Option<(f64, Option<(crate::model::parameter::Parameter, f64)>)>,
+    /// What the sites were computed from ([`System::with_buffers`] keeps them when the same).
+    inputs: inputs::SiteInputs,
 }
 
 impl SystemBuffers {
@@ -88,17 +93,6 @@ impl<'a> System<'a> {
         Self::assembled(model, mesh, SystemBuffers::default())
     }
 
-    /// The system of a copy of `model` on `mesh`, its sites and the copy's tensions written
-    /// into `buffers` (a workspace's, [`System::into_parts`]) instead of new ones.
-    pub(crate) fn with_buffers(model: &Model<'a>, mesh: Mesh, buffers: SystemBuffers) -> Self {
-        let model = model.clone_in(buffers.tensions);
-        let buffers = SystemBuffers {
-            tensions: Vec::new(),
-            ..buffers
-        };
-        Self::assembled(model, mesh, buffers)
-    }
-
     /// The system of `model` on `mesh`, its sites computed into `buffers`.
     fn assembled(model: Model<'a>, mesh: Mesh, buffers: SystemBuffers) -> Self {
         let mut sys = System {
@@ -108,6 +102,7 @@ impl<'a> System<'a> {
             node_sites: buffers.node_sites,
             rate_evaluations: 0,
             friction: None,
+            inputs: buffers.inputs,
         };
         sys.set_factors(sys.model.tension_factor, sys.model.load_factor);
         sys
@@ -127,6 +122,7 @@ impl<'a> System<'a> {
             node_sites: buffers.node_sites,
             rate_evaluations: 0,
             friction: None,
+            inputs: buffers.inputs,
         };
         sys.count_rate_evaluations();
         sys
@@ -134,12 +130,14 @@ impl<'a> System<'a> {
 
     /// The mesh, and the buffers of the sites and the model's tensions for a later
     /// [`System::with_buffers`].
-    pub(crate) fn into_parts(self) -> (Mesh, SystemBuffers) {
+    pub(crate) fn into_parts(mut self) -> (Mesh, SystemBuffers) {
+        self.inputs.record(&self.model, &self.mesh);
         let buffers = SystemBuffers {
             tensions: self.model.tensions,
             interval_sites: self.interval_sites,
             node_sites: self.node_sites,
             sites_of: Some((self.model.load_factor, self.model.parameter)),
+            inputs: self.inputs,
         };
         (self.mesh, buffers)
     }
