@@ -208,7 +208,7 @@ fn large_friction_on_a_released_tendon_is_answered() {
 /// Case 91 of the probe (tendon 1 released at 2.19 N with mu 0.93) at tolerance 1e-9:
 /// answered by the continuation on 32 intervals, whose estimate then asked for 3 752; Newton
 /// failed there from the 32-interval answer interpolated (main refused the solve: the
-/// brief's "third mesh"). The mesh between them, 64 intervals, converges, and the
+/// "third mesh" of docs/friction.md's kinks20 probe). The mesh between them, 64 intervals, converges, and the
 /// refinement goes on from it. The shooting solver breaks down on this robot (the
 /// tangential friction loads), so the answer is checked against the solve at tolerance
 /// 1e-8, which needs no mesh between.

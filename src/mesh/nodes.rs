@@ -88,8 +88,9 @@ fn build(model: &Model, states: &[State], segment_ends: &[f64], along: Along, re
     for (i, t) in robot.tendons.iter().enumerate() {
         let end = t.end(length);
         let count = on_path(&nodes, end).count();
-        // The nodes on [0, end]: those of the path and of the length's quadrature.
-        let reach = s.partition_point(|&sk| sk <= end);
+        // The nodes on [0, end] and the first past it: those of the path and of the
+        // length's quadrature (which weighs the node past `end` where `end` is not a node).
+        let reach = (s.partition_point(|&sk| sk <= end) + 1).min(s.len());
         let (path, tendon_length) = points::with_points(&t.routing, length, &s[..reach], |points| {
             let mut path = Vec::with_capacity(count);
             path.extend(on_path(&nodes, end).map(|k| nodes[k].p + nodes[k].R * points.at(k).r));

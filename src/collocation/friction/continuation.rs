@@ -69,8 +69,9 @@ fn newton_on(
 
 /// Follows the friction coefficients of `robot` from 0 to their values on `mesh`, from the
 /// frictionless solution `x0` there ([module docs](self)): the states and log tensions
-/// (per slip, at every node) of `robot` itself, or None where the continuation gave up. Its
-/// Newton counts go to `report`, and a note says how many steps it took.
+/// (per slip, at every node) of `robot` itself, or, where the continuation gave up, the
+/// largest fraction `lambda` of the coefficients it solved (0: none). Its Newton counts go to
+/// `report`, and a note says how many steps it took.
 ///
 /// # Errors
 /// A workspace that cannot be built for `mesh`.
@@ -80,7 +81,7 @@ pub(super) fn in_friction(
     mesh: &Mesh,
     x0: &[State],
     report: &mut SolveReport,
-) -> Result<Option<Solved>> {
+) -> Result<std::result::Result<Solved, f64>> {
     let settings = Settings {
         tolerance: options.residual_tolerance,
         max_iterations: options.max_iterations,
@@ -122,7 +123,10 @@ pub(super) fn in_friction(
                         "Newton with friction failed from the frictionless shape; the friction coefficients \
                          were followed from 0 to their values in {run} Newton runs"
                     ));
-                    return Ok(z.map(|z| (x, z)));
+                    if let Some(z) = z {
+                        return Ok(Ok((x, z)));
+                    }
+                    break;
                 }
                 step *= 2.0;
             }
@@ -134,5 +138,5 @@ pub(super) fn in_friction(
             }
         }
     }
-    Ok(None)
+    Ok(Err(lambda))
 }

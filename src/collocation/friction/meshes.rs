@@ -73,8 +73,11 @@ pub(super) fn refine_with_friction(
     let mut capstan = previous.is_none();
     let plain = (capstan && !from_guess).then(|| (mesh.clone(), x.clone()));
     // Whether the continuation in the friction coefficients ran (once at most, where both
-    // tries from `plain` failed).
+    // tries from `plain` failed on the first mesh itself; a later mesh's failure goes to
+    // the halved mesh below instead).
     let mut continued = false;
+    // The largest fraction of the coefficients the continuation solved, where it gave up.
+    let mut reached: Option<f64> = None;
     let mut kinks = kinks::Kinks::default();
     // The last converged mesh and its answer, for a mesh between it and a finer one Newton
     // failed on.
@@ -120,16 +123,21 @@ pub(super) fn refine_with_friction(
             continue;
         }
         if termination != Termination::Converged
-            && !std::mem::replace(&mut continued, true)
             && let Some((m, states)) = &plain
-            && let Some((solved, z)) = continuation::in_friction(robot, options, m, states, &mut report)?
+            && same_nodes(&border.system.mesh, m)
+            && !std::mem::replace(&mut continued, true)
         {
-            // Both tries failed: the friction coefficients followed from 0 on the first mesh
-            // ([`continuation`]), and the refinement from their answer.
-            report.meshes -= 1;
-            previous = Some((m.nodes.iter().map(|n| n.s).collect(), z));
-            (mesh, x) = (m.clone(), solved);
-            continue;
+            match continuation::in_friction(robot, options, m, states, &mut report)? {
+                Ok((solved, z)) => {
+                    // Both tries failed: the friction coefficients followed from 0 on the
+                    // first mesh ([`continuation`]), and the refinement from their answer.
+                    report.meshes -= 1;
+                    previous = Some((m.nodes.iter().map(|n| n.s).collect(), z));
+                    (mesh, x) = (m.clone(), solved);
+                    continue;
+                }
+                Err(lambda) => reached = Some(lambda),
+            }
         }
         if termination != Termination::Converged
             && let Some((m, guess)) = &coarse
@@ -155,9 +163,16 @@ pub(super) fn refine_with_friction(
                 method: Method::Collocation,
                 report: Box::new(report.clone()),
                 worst_s: system.row_position(worst.min(system.unknowns() - 1)),
-                hint: "friction is solved from the frictionless shape: lower the friction coefficient, or solve \
-                       with the shooting solver to compare"
-                    .into(),
+                hint: match reached {
+                    Some(lambda) => format!(
+                        "the friction coefficients were followed from 0 and Newton failed beyond {lambda:.3} of their \
+                         values on the first mesh: lower the friction coefficient, or solve with the shooting solver \
+                         to compare"
+                    ),
+                    None => "friction is solved from the frictionless shape: lower the friction coefficient, or solve \
+                             with the shooting solver to compare"
+                        .into(),
+                },
             });
         }
         let t = Instant::now();
@@ -234,7 +249,7 @@ pub(super) fn refine_with_friction(
 }
 
 /// The value at `s` of the piecewise-linear interpolant through (`points`, `values`)
-/// (clamped at the ends; at a repeated point, the first).
+/// (clamped at the ends; at a repeated point, the value of its last copy: the right limit).
 fn linear(points: &[f64], values: &[f64], s: f64) -> f64 {
     let k = points
         .iter()
@@ -247,6 +262,15 @@ fn linear(points: &[f64], values: &[f64], s: f64) -> f64 {
     }
     let t = ((s - a) / (b - a)).clamp(0.0, 1.0);
     values[k] + t * (values[k + 1] - values[k])
+}
+
+/// Whether meshes `a` and `b` have the same nodes (arc lengths, bit for bit).
+fn same_nodes(a: &Mesh, b: &Mesh) -> bool {
+    a.nodes.len() == b.nodes.len()
+        && a.nodes
+            .iter()
+            .zip(&b.nodes)
+            .all(|(p, q)| p.s.to_bits() == q.s.to_bits())
 }
 
 /// `mesh` with every interval of positive length halved.

@@ -442,21 +442,14 @@ fn normalize(next: &Fields, inv: &Block6, out: &mut Fields) {
         *row = [0.0; 6];
         row[j] = 1.0;
     }
-    // The inverse's rows padded to two 4-lane vectors (the padding's sums stay zero), so
-    // that each row of the product is two vector sums: the same products and sums, in the
-    // same order, on the live lanes.
-    let mut wide = [[0.0f64; 8]; 6];
-    for (w, row) in wide.iter_mut().zip(inv) {
-        w[..6].copy_from_slice(row);
-    }
     for (o, row) in out[6..].iter_mut().zip(&next[6..]) {
-        let mut sum = [0.0f64; 8];
-        for (x, inv_row) in row.iter().zip(&wide) {
+        let mut sum = [0.0f64; 6];
+        for (x, inv_row) in row.iter().zip(inv) {
             for (s, v) in sum.iter_mut().zip(inv_row) {
                 *s += x * v;
             }
         }
-        o.copy_from_slice(&sum[..6]);
+        *o = sum;
     }
 }
 
