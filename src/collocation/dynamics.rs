@@ -181,7 +181,9 @@ impl Mass {
     /// y = M x for scaled unknowns x given by their (p, theta) part `z` alone (M reads no
     /// other column): [`MOVING`] per node, p then theta, as [`restrict`] gives them. Writes
     /// only the rows M has, the (v', u') rows of each interval; `y` must be zero elsewhere
-    /// (as [`modes`]'s buffer, zeroed once, stays).
+    /// (as [`modes`]'s buffer, zeroed once, stays). Always inlined, so that a caller compiled
+    /// for AVX2 (`friction::CapstanMass::apply`) compiles it so too.
+    #[inline(always)]
     fn apply(&self, z: &[f64], y: &mut [f64]) {
         for (k, block) in self.blocks.iter().enumerate() {
             let Some(block) = block else { continue };

@@ -173,28 +173,37 @@ impl Capstan<'_> {
     /// `border_step`. Returns max |dz|, None without factors or for a value that is not
     /// finite.
     pub(super) fn solve_factored(&mut self, rhs_x: &[f64], rhs_z: &[f64], dx: &mut [f64]) -> Option<f64> {
-        let nodes = self.system.mesh.nodes.len();
-        let links = nodes - 1;
+        if !self.stairs.ready {
+            return None;
+        }
+        let links = self.system.mesh.nodes.len() - 1;
         let (offsets, node_slips) = (&self.offsets, &self.node_slips);
+        // The staircase's block order: the base rows, each link's backbone rows followed by
+        // the border rows of its node k + 1's slips, the tip rows.
+        let ok = self.stairs.solve(|w| {
+            w[..BASE_ROWS].copy_from_slice(&rhs_x[..BASE_ROWS]);
+            let mut at = BASE_ROWS;
+            for k in 0..links {
+                w[at..at + NODE].copy_from_slice(&rhs_x[link_row(k)..link_row(k + 1)]);
+                at += NODE;
+                for &j in &node_slips[k + 1] {
+                    w[at] = rhs_z[offsets[j] + k];
+                    at += 1;
+                }
+            }
+            w[at..].copy_from_slice(&rhs_x[tip_row(links + 1)..]);
+        });
+        // The solution node by node: its 12 unknowns, then the log tensions of its slips.
         let dz = &mut self.border_step;
-        let ok = self.stairs.solve(
-            |block, out| match block {
-                Block::Base => out.copy_from_slice(&rhs_x[..BASE_ROWS]),
-                Block::Link(k) => {
-                    out[..NODE].copy_from_slice(&rhs_x[link_row(k)..link_row(k + 1)]);
-                    for (a, &j) in node_slips[k + 1].iter().enumerate() {
-                        out[NODE + a] = rhs_z[offsets[j] + k];
-                    }
-                }
-                Block::Tip => out.copy_from_slice(&rhs_x[tip_row(links + 1)..]),
-            },
-            |n, values| {
-                dx[n * NODE..(n + 1) * NODE].copy_from_slice(&values[..NODE]);
-                for (a, &j) in node_slips[n].iter().enumerate() {
-                    dz[offsets[j] + n - 1] = values[NODE + a];
-                }
-            },
-        );
+        let mut values = self.stairs.solution();
+        for (n, slips) in node_slips.iter().enumerate() {
+            let (node, rest) = values.split_at(NODE + slips.len());
+            dx[n * NODE..(n + 1) * NODE].copy_from_slice(&node[..NODE]);
+            for (a, &j) in slips.iter().enumerate() {
+                dz[offsets[j] + n - 1] = node[NODE + a];
+            }
+            values = rest;
+        }
         let norm = dz.iter().fold(0.0, |acc: f64, d| acc.max(d.abs()));
         ok.then_some(norm)
     }
