@@ -106,3 +106,23 @@ macro_rules! four {
 }
 
 pub(crate) use four;
+
+/// Whether every value of `v` is finite: v * 0 is a zero for a finite v and NaN for an
+/// infinite one or a NaN, and a sum of zeros is a zero, so eight partial sums of them (whole
+/// vectors, where testing value by value takes a few instructions each) hold a NaN exactly
+/// when some value is not finite. Always inlined, so that an AVX2 kernel compiles it for
+/// AVX2 too.
+#[inline(always)]
+pub(crate) fn all_finite(v: &[f64]) -> bool {
+    let mut sums = [0.0f64; 8];
+    let (chunks, rest) = v.as_chunks::<8>();
+    for chunk in chunks {
+        for (sum, x) in sums.iter_mut().zip(chunk) {
+            *sum += x * 0.0;
+        }
+    }
+    for (sum, x) in sums.iter_mut().zip(rest) {
+        *sum += x * 0.0;
+    }
+    !sums.iter().any(|s| s.is_nan())
+}

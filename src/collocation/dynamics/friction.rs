@@ -29,7 +29,7 @@ use crate::collocation::unknowns::{THETA, U, V, unknowns};
 use crate::model::equations::{Model, Site};
 use crate::model::friction::{FrictionLinearization, linearize_into};
 use crate::report::{SolveReport, Stability};
-use crate::simd::avx2_fma;
+use crate::simd::{all_finite, avx2_fma};
 use crate::so3;
 use crate::solution::State;
 use nalgebra::{Matrix3, SMatrix, Vector3};
@@ -265,10 +265,7 @@ pub(super) fn modes_held(
     let mut dx = vec![0.0; n];
     let mut operator = |z: &[f64], out: &mut Vec<f64>| -> bool {
         mass.apply(z, &mut y_x, &mut y_psi);
-        if !border.solve_with_factors(&y_x, &y_psi, &mut dx)
-            || !held(border, &mut dx)
-            || !dx.iter().all(|v| v.is_finite())
-        {
+        if !border.solve_with_factors(&y_x, &y_psi, &mut dx) || !held(border, &mut dx) || !all_finite(&dx) {
             return false;
         }
         restricted(&dx, out);

@@ -87,83 +87,88 @@ impl Capstan<'_> {
         let count = self.offsets.len();
         let tip_start = BASE_ENTRIES + links * LINK_ENTRIES;
         let mut stairs = std::mem::take(&mut self.stairs);
-        let ok = stairs.factor(|block, out| match block {
-            Block::Base => {
-                let width = NODE;
-                for r in 0..BASE_ROWS {
-                    out[r * width..r * width + BASE_COLUMNS]
-                        .copy_from_slice(&values[r * BASE_COLUMNS..(r + 1) * BASE_COLUMNS]);
+        // Inlined into the factorization's kernel (compiled for AVX2 with it): as a call it
+        // was compiled for the baseline.
+        let ok = stairs.factor(
+            #[inline(always)]
+            |block, out| match block {
+                Block::Base => {
+                    let width = NODE;
+                    for r in 0..BASE_ROWS {
+                        out[r * width..r * width + BASE_COLUMNS]
+                            .copy_from_slice(&values[r * BASE_COLUMNS..(r + 1) * BASE_COLUMNS]);
+                    }
                 }
-            }
-            Block::Link(k) => {
-                let (left, right) = (&self.node_slips[k], &self.node_slips[k + 1]);
-                let ck = NODE + left.len();
-                let width = ck + NODE + right.len();
-                // Node k's log tensions are columns NODE.. of the block, node k + 1's ck + NODE..:
-                // a node's columns in the order of its slips.
-                let sides = [(left, NODE), (right, ck + NODE)];
-                let block = &values[BASE_ENTRIES + k * LINK_ENTRIES..BASE_ENTRIES + (k + 1) * LINK_ENTRIES];
-                let (rows, border_rows) = out.split_at_mut(NODE * width);
-                for (row, values) in rows.chunks_exact_mut(width).zip(block.chunks_exact(2 * NODE)) {
-                    let (a, b) = values.split_at(NODE);
-                    row[..NODE].copy_from_slice(a);
-                    row[ck..ck + NODE].copy_from_slice(b);
-                }
-                // F_z: column (side, slip l) of the link's rows (one entry per cell, so in
-                // any order).
-                if let Some(rz) = &self.link_z[k] {
-                    for (side, (slips, first)) in sides.iter().enumerate() {
-                        for (p, &l) in slips.iter().enumerate() {
-                            // Column-major storage: the column is a run of the slice.
-                            let column = &rz.as_slice()[(side * count + l) * NODE..(side * count + l + 1) * NODE];
-                            for (row, v) in rows.chunks_exact_mut(width).zip(column) {
-                                row[first + p] += v;
+                Block::Link(k) => {
+                    let (left, right) = (&self.node_slips[k], &self.node_slips[k + 1]);
+                    let ck = NODE + left.len();
+                    let width = ck + NODE + right.len();
+                    // Node k's log tensions are columns NODE.. of the block, node k + 1's ck + NODE..:
+                    // a node's columns in the order of its slips.
+                    let sides = [(left, NODE), (right, ck + NODE)];
+                    let block = &values[BASE_ENTRIES + k * LINK_ENTRIES..BASE_ENTRIES + (k + 1) * LINK_ENTRIES];
+                    let (rows, border_rows) = out.split_at_mut(NODE * width);
+                    for (row, values) in rows.chunks_exact_mut(width).zip(block.chunks_exact(2 * NODE)) {
+                        let (a, b) = values.split_at(NODE);
+                        row[..NODE].copy_from_slice(a);
+                        row[ck..ck + NODE].copy_from_slice(b);
+                    }
+                    // F_z: column (side, slip l) of the link's rows (one entry per cell, so in
+                    // any order).
+                    if let Some(rz) = &self.link_z[k] {
+                        for (side, (slips, first)) in sides.iter().enumerate() {
+                            for (p, &l) in slips.iter().enumerate() {
+                                // Column-major storage: the column is a run of the slice.
+                                let column = &rz.as_slice()[(side * count + l) * NODE..(side * count + l + 1) * NODE];
+                                for (row, v) in rows.chunks_exact_mut(width).zip(column) {
+                                    row[first + p] += v;
+                                }
+                            }
+                        }
+                    }
+                    for (j, term) in self.terminations.iter().enumerate() {
+                        if let (Some((first, vals)), Some(c)) = (term, self.z_column(k, j))
+                            && profile.spans[j] == k
+                            && (link_row(k)..link_row(k + 1)).contains(first)
+                        {
+                            for (i, v) in vals.iter().enumerate() {
+                                rows[(first - link_row(k) + i) * width + c] += v;
+                            }
+                        }
+                    }
+                    // The capstan rows of the slips on link k (node k + 1's): psi_x over the
+                    // two nodes' backbone columns, psi_z over their log tensions (a slip has a
+                    // log tension at a node exactly when the node is in its span: `unknown`).
+                    for (&j, row) in right.iter().zip(border_rows.chunks_exact_mut(width)) {
+                        let global = self.offsets[j] + k;
+                        let (a, b) = self.psi_x[global].split_at(NODE);
+                        row[..NODE].copy_from_slice(a);
+                        row[ck..ck + NODE].copy_from_slice(b);
+                        for (side, (slips, first)) in sides.iter().enumerate() {
+                            for (p, &l) in slips.iter().enumerate() {
+                                row[first + p] += self.psi_z[(global * 2 + side) * count + l];
                             }
                         }
                     }
                 }
-                for (j, term) in self.terminations.iter().enumerate() {
-                    if let (Some((first, vals)), Some(c)) = (term, self.z_column(k, j))
-                        && profile.spans[j] == k
-                        && (link_row(k)..link_row(k + 1)).contains(first)
-                    {
-                        for (i, v) in vals.iter().enumerate() {
-                            rows[(first - link_row(k) + i) * width + c] += v;
+                Block::Tip => {
+                    let width = NODE + self.node_slips[links].len();
+                    for r in 0..TIP_ROWS {
+                        out[r * width + THETA..r * width + NODE]
+                            .copy_from_slice(&values[tip_start + r * TIP_COLUMNS..tip_start + (r + 1) * TIP_COLUMNS]);
+                    }
+                    for (j, term) in self.terminations.iter().enumerate() {
+                        if let (Some((first, vals)), Some(c)) = (term, self.z_column(links, j))
+                            && *first == tip_row(nodes)
+                        {
+                            for (i, v) in vals.iter().enumerate() {
+                                out[i * width + c] += v;
+                            }
                         }
                     }
                 }
-                // The capstan rows of the slips on link k (node k + 1's): psi_x over the
-                // two nodes' backbone columns, psi_z over their log tensions (a slip has a
-                // log tension at a node exactly when the node is in its span: `unknown`).
-                for (&j, row) in right.iter().zip(border_rows.chunks_exact_mut(width)) {
-                    let global = self.offsets[j] + k;
-                    let (a, b) = self.psi_x[global].split_at(NODE);
-                    row[..NODE].copy_from_slice(a);
-                    row[ck..ck + NODE].copy_from_slice(b);
-                    for (side, (slips, first)) in sides.iter().enumerate() {
-                        for (p, &l) in slips.iter().enumerate() {
-                            row[first + p] += self.psi_z[(global * 2 + side) * count + l];
-                        }
-                    }
-                }
-            }
-            Block::Tip => {
-                let width = NODE + self.node_slips[links].len();
-                for r in 0..TIP_ROWS {
-                    out[r * width + THETA..r * width + NODE]
-                        .copy_from_slice(&values[tip_start + r * TIP_COLUMNS..tip_start + (r + 1) * TIP_COLUMNS]);
-                }
-                for (j, term) in self.terminations.iter().enumerate() {
-                    if let (Some((first, vals)), Some(c)) = (term, self.z_column(links, j))
-                        && *first == tip_row(nodes)
-                    {
-                        for (i, v) in vals.iter().enumerate() {
-                            out[i * width + c] += v;
-                        }
-                    }
-                }
-            }
-        });
+            },
+        );
         self.stairs = stairs;
         ok
     }

@@ -21,7 +21,7 @@
 //! the cost grows with the mesh, not with its square.
 
 use crate::collocation::unknowns::{BASE_ROWS, NODE};
-use crate::simd::avx2_fma;
+use crate::simd::{all_finite, avx2_fma};
 
 /// The shape of one elimination step and where its row operations and pivot rows are kept
 /// in the staircase's buffers ([`Staircase`]: `swaps`, `factors`, `upper`).
@@ -251,25 +251,6 @@ impl Staircase {
         }
         all_finite(w)
     }
-}
-
-/// Whether every value of `v` is finite: v * 0 is a zero for a finite v and NaN for an
-/// infinite one or a NaN, and a sum of zeros is a zero, so eight partial sums of them (whole
-/// vectors, where testing value by value takes a few instructions each) hold a NaN exactly
-/// when some value is not finite.
-#[inline(always)]
-fn all_finite(v: &[f64]) -> bool {
-    let mut sums = [0.0f64; 8];
-    let (chunks, rest) = v.as_chunks::<8>();
-    for chunk in chunks {
-        for (sum, x) in sums.iter_mut().zip(chunk) {
-            *sum += x * 0.0;
-        }
-    }
-    for (sum, x) in sums.iter_mut().zip(rest) {
-        *sum += x * 0.0;
-    }
-    !sums.iter().any(|s| s.is_nan())
 }
 
 /// One elimination step's buffers: its panel, the carried rows (in: this node's columns of
