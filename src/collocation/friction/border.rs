@@ -87,8 +87,8 @@ impl Capstan<'_> {
         let count = self.offsets.len();
         let tip_start = BASE_ENTRIES + links * LINK_ENTRIES;
         let mut stairs = std::mem::take(&mut self.stairs);
-        // Inlined into the factorization's kernel (compiled for AVX2 with it): as a call it
-        // was compiled for the baseline.
+        // Inlined into the factorization's steps (compiled for AVX2 with them): as a call
+        // it was compiled for the baseline.
         let ok = stairs.factor(
             #[inline(always)]
             |block, out| match block {

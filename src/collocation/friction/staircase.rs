@@ -179,12 +179,25 @@ impl Staircase {
                 factors: &mut self.factors[step.factors_at..step.factors_at + step.pivots * step.rows],
                 upper: &mut self.upper[step.upper_at..step.upper_at + step.pivots * step.width],
             };
-            let fill = |rows: &mut [f64]| fill(block, rows);
+            // The caller's `fill` inlined into the step (compiled for AVX2 with it): as a call
+            // it was compiled for the baseline.
             let ok = match (step.rows, step.width, step.pivots) {
-                (18, 24, 12) => factor_step::<18, 24, 12>(this, fill),
-                (20, 26, 13) => factor_step::<20, 26, 13>(this, fill),
-                (22, 28, 14) => factor_step::<22, 28, 14>(this, fill),
-                _ => factor_step_any(this, step, fill),
+                (18, 24, 12) => factor_step::<18, 24, 12>(
+                    this,
+                    #[inline(always)]
+                    |rows| fill(block, rows),
+                ),
+                (20, 26, 13) => factor_step::<20, 26, 13>(
+                    this,
+                    #[inline(always)]
+                    |rows| fill(block, rows),
+                ),
+                (22, 28, 14) => factor_step::<22, 28, 14>(
+                    this,
+                    #[inline(always)]
+                    |rows| fill(block, rows),
+                ),
+                _ => factor_step_any(this, step, |rows| fill(block, rows)),
             };
             if !ok {
                 return false;
