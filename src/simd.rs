@@ -126,3 +126,33 @@ pub(crate) fn all_finite(v: &[f64]) -> bool {
     }
     !sums.iter().any(|s| s.is_nan())
 }
+
+#[cfg(test)]
+mod tests {
+    use super::all_finite;
+
+    /// Finite values (zeros of both signs, the largest and smallest magnitudes among them)
+    /// pass; one infinity or NaN fails wherever it is: in a whole chunk of eight or in the
+    /// remainder, first or last.
+    #[test]
+    fn all_finite_finds_every_value_that_is_not() {
+        let finite: Vec<f64> = (0..19)
+            .map(|i| match i % 5 {
+                0 => 0.0,
+                1 => -0.0,
+                2 => f64::MAX,
+                3 => -f64::MIN_POSITIVE,
+                _ => i as f64 - 9.5,
+            })
+            .collect();
+        assert!(all_finite(&finite));
+        assert!(all_finite(&[]));
+        for bad in [f64::INFINITY, f64::NEG_INFINITY, f64::NAN] {
+            for at in [0, 7, 8, 15, 16, 18] {
+                let mut v = finite.clone();
+                v[at] = bad;
+                assert!(!all_finite(&v), "{bad} at {at}");
+            }
+        }
+    }
+}

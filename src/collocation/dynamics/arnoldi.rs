@@ -492,6 +492,22 @@ fn dot(a: &[f64], b: &[f64]) -> f64 {
 mod tests {
     use super::*;
 
+    /// The next test comes after the steps a hundredfold fall per step needs, rounded up:
+    /// case H with friction's 302 times its bound after 9 steps waits two steps (it waited
+    /// one, and that test failed at 2.3 times); a whole number of hundredfolds waits that
+    /// many; a value that is not finite, or barely above its bound, waits one.
+    #[test]
+    fn the_next_test_waits_for_the_fall_it_needs() {
+        assert_eq!(next_test(9, 302.0), 11);
+        assert_eq!(next_test(8, 15.5), 9);
+        assert_eq!(next_test(8, 1.35), 9);
+        assert_eq!(next_test(8, 100.0), 9);
+        assert_eq!(next_test(8, 1e4), 10);
+        assert_eq!(next_test(8, 1e5), 11);
+        assert_eq!(next_test(8, f64::NAN), 9);
+        assert_eq!(next_test(8, f64::INFINITY), 9);
+    }
+
     /// The residual estimate of a real Ritz value in real arithmetic is the complex run's
     /// bit for bit, on Hessenberg matrices of Arnoldi's sizes with pivots both ways (rows
     /// of very different scales, as shift-invert's Ritz values have) and at their real
