@@ -1,7 +1,8 @@
 //! Run-time SIMD dispatch: the hot kernels (the interval Jacobian, the linearizations, the
-//! block eliminations, the rigid guess, the stability sweep, the Arnoldi orthogonalization)
-//! are compiled twice, for the baseline x86-64 and with AVX2 and FMA enabled, and
-//! [`avx2_fma!`] runs the AVX2 copy on a processor that has the features.
+//! block eliminations, the rigid guess, the stability sweep, the Arnoldi orthogonalization,
+//! the dynamics' mass quadrature and products) are compiled twice, for the baseline x86-64
+//! and with AVX2 and FMA enabled, and [`avx2_fma!`] runs the AVX2 copy on a processor that
+//! has the features.
 //!
 //! Both copies perform the same operations in the same order: Rust does not contract a
 //! product and a sum into an FMA, so enabling FMA only lets the compiler use the wider
