@@ -1,7 +1,8 @@
 //! Run-time SIMD dispatch: the hot kernels (the interval Jacobian, the linearizations, the
-//! block eliminations, the rigid guess, the stability sweep, the Arnoldi orthogonalization)
-//! are compiled twice, for the baseline x86-64 and with AVX2 and FMA enabled, and
-//! [`avx2_fma!`] runs the AVX2 copy on a processor that has the features.
+//! block eliminations, the rigid guess, the stability sweep, the Arnoldi orthogonalization,
+//! the dynamics' mass quadrature and products) are compiled twice, for the baseline x86-64
+//! and with AVX2 and FMA enabled, and [`avx2_fma!`] runs the AVX2 copy on a processor that
+//! has the features.
 //!
 //! Both copies perform the same operations in the same order: Rust does not contract a
 //! product and a sum into an FMA, so enabling FMA only lets the compiler use the wider
@@ -106,3 +107,53 @@ macro_rules! four {
 }
 
 pub(crate) use four;
+
+/// Whether every value of `v` is finite: v * 0 is a zero for a finite v and NaN for an
+/// infinite one or a NaN, and a sum of zeros is a zero, so eight partial sums of them (whole
+/// vectors, where testing value by value takes a few instructions each) hold a NaN exactly
+/// when some value is not finite. Always inlined, so that an AVX2 kernel compiles it for
+/// AVX2 too.
+#[inline(always)]
+pub(crate) fn all_finite(v: &[f64]) -> bool {
+    let mut sums = [0.0f64; 8];
+    let (chunks, rest) = v.as_chunks::<8>();
+    for chunk in chunks {
+        for (sum, x) in sums.iter_mut().zip(chunk) {
+            *sum += x * 0.0;
+        }
+    }
+    for (sum, x) in sums.iter_mut().zip(rest) {
+        *sum += x * 0.0;
+    }
+    !sums.iter().any(|s| s.is_nan())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::all_finite;
+
+    /// Finite values (zeros of both signs, the largest and smallest magnitudes among them)
+    /// pass; one infinity or NaN fails wherever it is: in a whole chunk of eight or in the
+    /// remainder, first or last.
+    #[test]
+    fn all_finite_finds_every_value_that_is_not() {
+        let finite: Vec<f64> = (0..19)
+            .map(|i| match i % 5 {
+                0 => 0.0,
+                1 => -0.0,
+                2 => f64::MAX,
+                3 => -f64::MIN_POSITIVE,
+                _ => i as f64 - 9.5,
+            })
+            .collect();
+        assert!(all_finite(&finite));
+        assert!(all_finite(&[]));
+        for bad in [f64::INFINITY, f64::NEG_INFINITY, f64::NAN] {
+            for at in [0, 7, 8, 15, 16, 18] {
+                let mut v = finite.clone();
+                v[at] = bad;
+                assert!(!all_finite(&v), "{bad} at {at}");
+            }
+        }
+    }
+}

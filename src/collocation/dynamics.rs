@@ -43,6 +43,7 @@ use super::unknowns::{BASE_COLUMNS, BASE_ROWS, NODE, P, THETA, U, V, link_row, u
 use crate::model::equations::{Model, Site};
 use crate::model::linearize;
 use crate::report::{Growth, Stability};
+use crate::simd::avx2_fma;
 use crate::so3;
 use crate::solution::State;
 use crate::{Robot, Solution};
@@ -181,7 +182,9 @@ impl Mass {
     /// y = M x for scaled unknowns x given by their (p, theta) part `z` alone (M reads no
     /// other column): [`MOVING`] per node, p then theta, as [`restrict`] gives them. Writes
     /// only the rows M has, the (v', u') rows of each interval; `y` must be zero elsewhere
-    /// (as [`modes`]'s buffer, zeroed once, stays).
+    /// (as [`modes`]'s buffer, zeroed once, stays). Always inlined, so that a caller compiled
+    /// for AVX2 (`friction::CapstanMass::apply`) compiles it so too.
+    #[inline(always)]
     fn apply(&self, z: &[f64], y: &mut [f64]) {
         for (k, block) in self.blocks.iter().enumerate() {
             let Some(block) = block else { continue };
@@ -203,8 +206,19 @@ impl Mass {
 /// acceleration component at a point) at its start, midpoint and end ([`response`]):
 /// Simpson's weights h/6 (1, 4, 1), with the accelerations interpolated linearly between the
 /// nodes (weights of node a, node b) and a node's rotation increment acting through its `R`;
-/// columns (p, theta) of node a then node b.
+/// columns (p, theta) of node a then node b. On x86-64 with AVX2 and FMA (checked at run
+/// time) compiled for them: the same operations in the same order, so the same bits.
 fn quadrature<const ROWS: usize>(
+    h: f64,
+    R: (&Matrix3<f64>, &Matrix3<f64>),
+    z: [&SMatrix<f64, ROWS, 6>; 3],
+) -> SMatrix<f64, ROWS, 12> {
+    avx2_fma!(quadrature_kernel(h, R, z))
+}
+
+/// [`quadrature`]'s operations.
+#[inline(always)]
+fn quadrature_kernel<const ROWS: usize>(
     h: f64,
     (Ra, Rb): (&Matrix3<f64>, &Matrix3<f64>),
     z: [&SMatrix<f64, ROWS, 6>; 3],

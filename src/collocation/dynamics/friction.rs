@@ -29,6 +29,7 @@ use crate::collocation::unknowns::{THETA, U, V, unknowns};
 use crate::model::equations::{Model, Site};
 use crate::model::friction::{FrictionLinearization, linearize_into};
 use crate::report::{SolveReport, Stability};
+use crate::simd::{all_finite, avx2_fma};
 use crate::so3;
 use crate::solution::State;
 use nalgebra::{Matrix3, SMatrix, Vector3};
@@ -165,8 +166,16 @@ impl CapstanMass {
     }
 
     /// (y_x, y_psi) = M z for the (p, theta) parts `z` ([`restrict`]'s layout); `y_x` must be
-    /// zero outside the rows [`Mass::apply`] writes, `y_psi` is written whole.
+    /// zero outside the rows [`Mass::apply`] writes, `y_psi` is written whole. On x86-64 with
+    /// AVX2 and FMA (checked at run time) compiled for them: the same operations in the same
+    /// order (no product and sum fused), so the same bits.
     fn apply(&self, z: &[f64], y_x: &mut [f64], y_psi: &mut [f64]) {
+        avx2_fma!(self.apply_kernel(z, y_x, y_psi));
+    }
+
+    /// [`CapstanMass::apply`]'s operations.
+    #[inline(always)]
+    fn apply_kernel(&self, z: &[f64], y_x: &mut [f64], y_psi: &mut [f64]) {
         self.backbone.apply(z, y_x);
         y_psi.fill(0.0);
         for (row, k, block) in &self.rows {
@@ -256,10 +265,7 @@ pub(super) fn modes_held(
     let mut dx = vec![0.0; n];
     let mut operator = |z: &[f64], out: &mut Vec<f64>| -> bool {
         mass.apply(z, &mut y_x, &mut y_psi);
-        if !border.solve_with_factors(&y_x, &y_psi, &mut dx)
-            || !held(border, &mut dx)
-            || !dx.iter().all(|v| v.is_finite())
-        {
+        if !border.solve_with_factors(&y_x, &y_psi, &mut dx) || !held(border, &mut dx) || !all_finite(&dx) {
             return false;
         }
         restricted(&dx, out);

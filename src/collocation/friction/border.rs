@@ -87,83 +87,88 @@ impl Capstan<'_> {
         let count = self.offsets.len();
         let tip_start = BASE_ENTRIES + links * LINK_ENTRIES;
         let mut stairs = std::mem::take(&mut self.stairs);
-        let ok = stairs.factor(|block, out| match block {
-            Block::Base => {
-                let width = NODE;
-                for r in 0..BASE_ROWS {
-                    out[r * width..r * width + BASE_COLUMNS]
-                        .copy_from_slice(&values[r * BASE_COLUMNS..(r + 1) * BASE_COLUMNS]);
+        // Inlined into the factorization's steps (compiled for AVX2 with them): as a call
+        // it was compiled for the baseline.
+        let ok = stairs.factor(
+            #[inline(always)]
+            |block, out| match block {
+                Block::Base => {
+                    let width = NODE;
+                    for r in 0..BASE_ROWS {
+                        out[r * width..r * width + BASE_COLUMNS]
+                            .copy_from_slice(&values[r * BASE_COLUMNS..(r + 1) * BASE_COLUMNS]);
+                    }
                 }
-            }
-            Block::Link(k) => {
-                let (left, right) = (&self.node_slips[k], &self.node_slips[k + 1]);
-                let ck = NODE + left.len();
-                let width = ck + NODE + right.len();
-                // Node k's log tensions are columns NODE.. of the block, node k + 1's ck + NODE..:
-                // a node's columns in the order of its slips.
-                let sides = [(left, NODE), (right, ck + NODE)];
-                let block = &values[BASE_ENTRIES + k * LINK_ENTRIES..BASE_ENTRIES + (k + 1) * LINK_ENTRIES];
-                let (rows, border_rows) = out.split_at_mut(NODE * width);
-                for (row, values) in rows.chunks_exact_mut(width).zip(block.chunks_exact(2 * NODE)) {
-                    let (a, b) = values.split_at(NODE);
-                    row[..NODE].copy_from_slice(a);
-                    row[ck..ck + NODE].copy_from_slice(b);
-                }
-                // F_z: column (side, slip l) of the link's rows (one entry per cell, so in
-                // any order).
-                if let Some(rz) = &self.link_z[k] {
-                    for (side, (slips, first)) in sides.iter().enumerate() {
-                        for (p, &l) in slips.iter().enumerate() {
-                            // Column-major storage: the column is a run of the slice.
-                            let column = &rz.as_slice()[(side * count + l) * NODE..(side * count + l + 1) * NODE];
-                            for (row, v) in rows.chunks_exact_mut(width).zip(column) {
-                                row[first + p] += v;
+                Block::Link(k) => {
+                    let (left, right) = (&self.node_slips[k], &self.node_slips[k + 1]);
+                    let ck = NODE + left.len();
+                    let width = ck + NODE + right.len();
+                    // Node k's log tensions are columns NODE.. of the block, node k + 1's ck + NODE..:
+                    // a node's columns in the order of its slips.
+                    let sides = [(left, NODE), (right, ck + NODE)];
+                    let block = &values[BASE_ENTRIES + k * LINK_ENTRIES..BASE_ENTRIES + (k + 1) * LINK_ENTRIES];
+                    let (rows, border_rows) = out.split_at_mut(NODE * width);
+                    for (row, values) in rows.chunks_exact_mut(width).zip(block.chunks_exact(2 * NODE)) {
+                        let (a, b) = values.split_at(NODE);
+                        row[..NODE].copy_from_slice(a);
+                        row[ck..ck + NODE].copy_from_slice(b);
+                    }
+                    // F_z: column (side, slip l) of the link's rows (one entry per cell, so in
+                    // any order).
+                    if let Some(rz) = &self.link_z[k] {
+                        for (side, (slips, first)) in sides.iter().enumerate() {
+                            for (p, &l) in slips.iter().enumerate() {
+                                // Column-major storage: the column is a run of the slice.
+                                let column = &rz.as_slice()[(side * count + l) * NODE..(side * count + l + 1) * NODE];
+                                for (row, v) in rows.chunks_exact_mut(width).zip(column) {
+                                    row[first + p] += v;
+                                }
+                            }
+                        }
+                    }
+                    for (j, term) in self.terminations.iter().enumerate() {
+                        if let (Some((first, vals)), Some(c)) = (term, self.z_column(k, j))
+                            && profile.spans[j] == k
+                            && (link_row(k)..link_row(k + 1)).contains(first)
+                        {
+                            for (i, v) in vals.iter().enumerate() {
+                                rows[(first - link_row(k) + i) * width + c] += v;
+                            }
+                        }
+                    }
+                    // The capstan rows of the slips on link k (node k + 1's): psi_x over the
+                    // two nodes' backbone columns, psi_z over their log tensions (a slip has a
+                    // log tension at a node exactly when the node is in its span: `unknown`).
+                    for (&j, row) in right.iter().zip(border_rows.chunks_exact_mut(width)) {
+                        let global = self.offsets[j] + k;
+                        let (a, b) = self.psi_x[global].split_at(NODE);
+                        row[..NODE].copy_from_slice(a);
+                        row[ck..ck + NODE].copy_from_slice(b);
+                        for (side, (slips, first)) in sides.iter().enumerate() {
+                            for (p, &l) in slips.iter().enumerate() {
+                                row[first + p] += self.psi_z[(global * 2 + side) * count + l];
                             }
                         }
                     }
                 }
-                for (j, term) in self.terminations.iter().enumerate() {
-                    if let (Some((first, vals)), Some(c)) = (term, self.z_column(k, j))
-                        && profile.spans[j] == k
-                        && (link_row(k)..link_row(k + 1)).contains(first)
-                    {
-                        for (i, v) in vals.iter().enumerate() {
-                            rows[(first - link_row(k) + i) * width + c] += v;
+                Block::Tip => {
+                    let width = NODE + self.node_slips[links].len();
+                    for r in 0..TIP_ROWS {
+                        out[r * width + THETA..r * width + NODE]
+                            .copy_from_slice(&values[tip_start + r * TIP_COLUMNS..tip_start + (r + 1) * TIP_COLUMNS]);
+                    }
+                    for (j, term) in self.terminations.iter().enumerate() {
+                        if let (Some((first, vals)), Some(c)) = (term, self.z_column(links, j))
+                            && *first == tip_row(nodes)
+                        {
+                            for (i, v) in vals.iter().enumerate() {
+                                out[i * width + c] += v;
+                            }
                         }
                     }
                 }
-                // The capstan rows of the slips on link k (node k + 1's): psi_x over the
-                // two nodes' backbone columns, psi_z over their log tensions (a slip has a
-                // log tension at a node exactly when the node is in its span: `unknown`).
-                for (&j, row) in right.iter().zip(border_rows.chunks_exact_mut(width)) {
-                    let global = self.offsets[j] + k;
-                    let (a, b) = self.psi_x[global].split_at(NODE);
-                    row[..NODE].copy_from_slice(a);
-                    row[ck..ck + NODE].copy_from_slice(b);
-                    for (side, (slips, first)) in sides.iter().enumerate() {
-                        for (p, &l) in slips.iter().enumerate() {
-                            row[first + p] += self.psi_z[(global * 2 + side) * count + l];
-                        }
-                    }
-                }
-            }
-            Block::Tip => {
-                let width = NODE + self.node_slips[links].len();
-                for r in 0..TIP_ROWS {
-                    out[r * width + THETA..r * width + NODE]
-                        .copy_from_slice(&values[tip_start + r * TIP_COLUMNS..tip_start + (r + 1) * TIP_COLUMNS]);
-                }
-                for (j, term) in self.terminations.iter().enumerate() {
-                    if let (Some((first, vals)), Some(c)) = (term, self.z_column(links, j))
-                        && *first == tip_row(nodes)
-                    {
-                        for (i, v) in vals.iter().enumerate() {
-                            out[i * width + c] += v;
-                        }
-                    }
-                }
-            }
-        });
+            },
+        );
         self.stairs = stairs;
         ok
     }
@@ -173,28 +178,37 @@ impl Capstan<'_> {
     /// `border_step`. Returns max |dz|, None without factors or for a value that is not
     /// finite.
     pub(super) fn solve_factored(&mut self, rhs_x: &[f64], rhs_z: &[f64], dx: &mut [f64]) -> Option<f64> {
-        let nodes = self.system.mesh.nodes.len();
-        let links = nodes - 1;
+        if !self.stairs.ready {
+            return None;
+        }
+        let links = self.system.mesh.nodes.len() - 1;
         let (offsets, node_slips) = (&self.offsets, &self.node_slips);
+        // The staircase's block order: the base rows, each link's backbone rows followed by
+        // the border rows of its node k + 1's slips, the tip rows.
+        let ok = self.stairs.solve(|w| {
+            w[..BASE_ROWS].copy_from_slice(&rhs_x[..BASE_ROWS]);
+            let mut at = BASE_ROWS;
+            for k in 0..links {
+                w[at..at + NODE].copy_from_slice(&rhs_x[link_row(k)..link_row(k + 1)]);
+                at += NODE;
+                for &j in &node_slips[k + 1] {
+                    w[at] = rhs_z[offsets[j] + k];
+                    at += 1;
+                }
+            }
+            w[at..].copy_from_slice(&rhs_x[tip_row(links + 1)..]);
+        });
+        // The solution node by node: its 12 unknowns, then the log tensions of its slips.
         let dz = &mut self.border_step;
-        let ok = self.stairs.solve(
-            |block, out| match block {
-                Block::Base => out.copy_from_slice(&rhs_x[..BASE_ROWS]),
-                Block::Link(k) => {
-                    out[..NODE].copy_from_slice(&rhs_x[link_row(k)..link_row(k + 1)]);
-                    for (a, &j) in node_slips[k + 1].iter().enumerate() {
-                        out[NODE + a] = rhs_z[offsets[j] + k];
-                    }
-                }
-                Block::Tip => out.copy_from_slice(&rhs_x[tip_row(links + 1)..]),
-            },
-            |n, values| {
-                dx[n * NODE..(n + 1) * NODE].copy_from_slice(&values[..NODE]);
-                for (a, &j) in node_slips[n].iter().enumerate() {
-                    dz[offsets[j] + n - 1] = values[NODE + a];
-                }
-            },
-        );
+        let mut values = self.stairs.solution();
+        for (n, slips) in node_slips.iter().enumerate() {
+            let (node, rest) = values.split_at(NODE + slips.len());
+            dx[n * NODE..(n + 1) * NODE].copy_from_slice(&node[..NODE]);
+            for (a, &j) in slips.iter().enumerate() {
+                dz[offsets[j] + n - 1] = node[NODE + a];
+            }
+            values = rest;
+        }
         let norm = dz.iter().fold(0.0, |acc: f64, d| acc.max(d.abs()));
         ok.then_some(norm)
     }

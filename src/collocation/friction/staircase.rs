@@ -21,7 +21,7 @@
 //! the cost grows with the mesh, not with its square.
 
 use crate::collocation::unknowns::{BASE_ROWS, NODE};
-use crate::simd::avx2_fma;
+use crate::simd::{all_finite, avx2_fma};
 
 /// The shape of one elimination step and where its row operations and pivot rows are kept
 /// in the staircase's buffers ([`Staircase`]: `swaps`, `factors`, `upper`).
@@ -179,12 +179,25 @@ impl Staircase {
                 factors: &mut self.factors[step.factors_at..step.factors_at + step.pivots * step.rows],
                 upper: &mut self.upper[step.upper_at..step.upper_at + step.pivots * step.width],
             };
-            let fill = |rows: &mut [f64]| fill(block, rows);
+            // The caller's `fill` inlined into the step (compiled for AVX2 with it): as a call
+            // it was compiled for the baseline.
             let ok = match (step.rows, step.width, step.pivots) {
-                (18, 24, 12) => factor_step::<18, 24, 12>(this, fill),
-                (20, 26, 13) => factor_step::<20, 26, 13>(this, fill),
-                (22, 28, 14) => factor_step::<22, 28, 14>(this, fill),
-                _ => factor_step_any(this, step, fill),
+                (18, 24, 12) => factor_step::<18, 24, 12>(
+                    this,
+                    #[inline(always)]
+                    |rows| fill(block, rows),
+                ),
+                (20, 26, 13) => factor_step::<20, 26, 13>(
+                    this,
+                    #[inline(always)]
+                    |rows| fill(block, rows),
+                ),
+                (22, 28, 14) => factor_step::<22, 28, 14>(
+                    this,
+                    #[inline(always)]
+                    |rows| fill(block, rows),
+                ),
+                _ => factor_step_any(this, step, |rows| fill(block, rows)),
             };
             if !ok {
                 return false;
@@ -194,35 +207,42 @@ impl Staircase {
         true
     }
 
-    /// Solves the factored system for the right-hand side whose rows `rhs` gives by block
-    /// (written into a slice of the block's row count), the solution written node by node
-    /// through `out(n, values)` (node n's columns). False without factors or for a value
-    /// that is not finite. On x86-64 with AVX2 and FMA (checked at run time) compiled for
-    /// them, as the frictionless `solve_again` is: the same operations in the same order
-    /// (Rust does not fuse a product and a sum into an FMA), so the same bits.
-    pub(crate) fn solve(&mut self, rhs: impl FnMut(Block, &mut [f64]), out: impl FnMut(usize, &[f64])) -> bool {
-        avx2_fma!(self.solve_kernel(rhs, out))
+    /// Solves the factored system for the right-hand side that `rhs` writes whole into a
+    /// slice of the unknowns' length, block after block: the base rows, each link's rows
+    /// ([`Block::Link`]: its node k + 1's column count of them) in link order, the tip rows.
+    /// The solution is left node by node in [`Staircase::solution`]. False without factors
+    /// (then `rhs` is not called) or for a value that is not finite. On x86-64 with AVX2 and
+    /// FMA (checked at run time) compiled for them, as the frictionless `solve_again` is: the
+    /// same operations in the same order (Rust does not fuse a product and a sum into an
+    /// FMA), so the same bits.
+    pub(crate) fn solve(&mut self, rhs: impl FnOnce(&mut [f64])) -> bool {
+        avx2_fma!(self.solve_kernel(rhs))
+    }
+
+    /// The solution of the last [`Staircase::solve`] with factors, node by node: node n's
+    /// columns (its 12 unknowns, then its log tensions) after those of the nodes before it.
+    pub(crate) fn solution(&self) -> &[f64] {
+        &self.transformed
     }
 
     /// [`Staircase::solve`]'s operations, in place in one buffer of the unknowns' length:
     /// step k's rows occupy its positions `first[k]..` (the rows it carries on are where
     /// step k + 1's rows begin, so nothing is copied between steps); after the replay its
     /// pivot rows' values stay there, and the back substitution overwrites them with node
-    /// k's unknowns.
+    /// k's unknowns. Step k's new rows (link k's, or the tip's) begin where the rows it
+    /// carries end, at `first[k] + columns[k] - 6` = `first[k + 1] - 6`, right after link
+    /// k - 1's rows (the base rows, 6 of them, for link 0), and no step writes past its own
+    /// rows: so the right-hand side is written whole before the replay, in block order.
     #[inline(always)]
-    fn solve_kernel(&mut self, mut rhs: impl FnMut(Block, &mut [f64]), mut out: impl FnMut(usize, &[f64])) -> bool {
+    fn solve_kernel(&mut self, rhs: impl FnOnce(&mut [f64])) -> bool {
         if !self.ready {
             return false;
         }
-        let links = self.columns.len() - 1;
         let w = &mut self.transformed[..];
-        rhs(Block::Base, &mut w[..BASE_ROWS]);
+        rhs(w);
         for (k, step) in self.steps.iter().enumerate() {
             let at = self.first[k];
             let rows = &mut w[at..at + step.rows];
-            let carried = step.rows - if k < links { self.columns[k + 1] } else { BASE_ROWS };
-            let block = if k < links { Block::Link(k) } else { Block::Tip };
-            rhs(block, &mut rows[carried..]);
             let swaps = &self.swaps[step.swaps_at..step.swaps_at + step.pivots];
             let factors = &self.factors[step.factors_at..step.factors_at + step.pivots * step.rows];
             replay(step, (swaps, factors), rows);
@@ -241,9 +261,8 @@ impl Staircase {
                 (14, 14) => back_substitute::<14, 14>(upper, x, next),
                 _ => back_substitute_any(upper, x, next),
             }
-            out(k, x);
         }
-        w.iter().all(|v| v.is_finite())
+        all_finite(w)
     }
 }
 
@@ -719,23 +738,19 @@ mod tests {
                     dense[(row + r) * n + col0 + c] = values[r * width + c];
                 }
             }
-            blocks.push((b, row, values));
+            blocks.push((b, values));
             row += rows;
         }
         assert_eq!(row, n);
         assert!(stairs.factor(|b, out| {
-            let (_, _, v) = blocks.iter().find(|(x, _, _)| *x == b).unwrap();
+            let (_, v) = blocks.iter().find(|(x, _)| *x == b).unwrap();
             out.copy_from_slice(v);
         }));
         let rhs: Vec<f64> = (0..n).map(|_| random()).collect();
-        let mut x = vec![0.0; n];
-        assert!(stairs.solve(
-            |b, out| {
-                let (_, r0, _) = blocks.iter().find(|(x, _, _)| *x == b).unwrap();
-                out.copy_from_slice(&rhs[*r0..*r0 + out.len()]);
-            },
-            |node, v| x[first[node]..first[node] + v.len()].copy_from_slice(v),
-        ));
+        // The dense rows are in block order and its columns node by node, as the
+        // staircase takes the right-hand side and leaves the solution.
+        assert!(stairs.solve(|w| w.copy_from_slice(&rhs)));
+        let x = stairs.solution().to_vec();
         let mut a = dense.clone();
         let mut expected = rhs.clone();
         assert!(crate::dense::solve_dense(&mut a, &mut expected, n));
