@@ -79,8 +79,10 @@ impl<const W: usize, const LW: usize> Scratch<W, LW> {
 
 /// Scratch and factors for one mesh.
 pub struct BlockElimination {
-    /// Pivot rows of each step, 12 x 25 (block k, block k + 1, right-hand side), row major;
-    /// empty until the first factoring.
+    /// Pivot rows of each step, 12 x 25 (block k, block k + 1, right-hand side), row major,
+    /// and one more block, whose first rows [`BlockElimination::solve`]'s last step leaves
+    /// its carried rows in (it eliminates in place: step k's panel is rows 12 k..12 k + 18
+    /// of these blocks); empty until the first factoring.
     pivots: Vec<[[f64; COLS]; NODE]>,
     /// Row operations of each step; empty until the first factoring.
     records: Vec<Record>,
@@ -94,12 +96,9 @@ pub struct BlockElimination {
     /// entry is written before it is read, so they are not zeroed each time); allocated by
     /// the first.
     wide_scratch: Option<Box<Scratch<WIDE, LAST_WIDE>>>,
-    /// The rows of [`BlockElimination::solve`], kept between solves as `wide_scratch` is:
-    /// the right-hand side's padding columns are never written, so they stay zero (up to
-    /// their sign) from the first solve's allocation, unless an infinite entry in `values`
-    /// puts NaN in them (0 x inf in a row operation); either way no live column reads them,
-    /// so they never reach the solution.
-    scratch: Option<Box<Scratch<COLS, LAST_COLS>>>,
+    /// The last node's rows of [`BlockElimination::solve`], kept between solves as
+    /// `wide_scratch` is.
+    last_rows: [[f64; LAST_COLS]; NODE],
     /// The right-hand sides of [`BlockElimination::factor_with_last`] row by row (row r of
     /// every one in `carried_rows[r]`), so that a panel row takes its slots in one copy;
     /// kept between factorings, as the panel.
@@ -121,7 +120,7 @@ impl BlockElimination {
             last_record: EMPTY,
             links: nodes - 1,
             wide_scratch: None,
-            scratch: None,
+            last_rows: [[0.0; LAST_COLS]; NODE],
             carried_rows: Vec::new(),
             carried_written: 0,
         }
@@ -143,17 +142,12 @@ impl BlockElimination {
     #[inline(always)]
     fn solve_kernel(&mut self, values: &[f64], rhs: &[f64], x: &mut [f64]) -> Option<(Duration, Duration)> {
         let start = Instant::now();
-        let mut scratch = self.scratch.take().unwrap_or_else(Scratch::zeroed);
-        let solved = self.eliminate_all::<COLS, LAST_COLS, COLS, LAST_COLS>(&mut scratch, values, |row, slots| {
-            slots[0] = rhs[row];
-        });
-        if !solved {
-            self.scratch = Some(scratch);
+        if !self.eliminate_in_place(values, rhs) {
             return None;
         }
         let eliminated = start.elapsed();
         let start = Instant::now();
-        let last = &scratch.last;
+        let last = &self.last_rows;
         let n = self.links;
         let rhs_of = |rows: &[[f64; COLS]; NODE]| std::array::from_fn::<f64, NODE, _>(|i| rows[i][2 * NODE]);
         let last_rhs = std::array::from_fn::<f64, NODE, _>(|i| last[i][NODE]);
@@ -167,7 +161,6 @@ impl BlockElimination {
                 Some(&tail[..NODE]),
             );
         }
-        self.scratch = Some(scratch);
         Some((eliminated, start.elapsed()))
     }
 
@@ -228,17 +221,17 @@ impl BlockElimination {
         eliminated
     }
 
-    /// The elimination of [`BlockElimination::solve`] in `scratch`, `W` columns wide (the
-    /// last node's rows `LW`), the right-hand sides in columns 2 NODE.. (NODE.. of the last
-    /// node's rows) as `slots(row, out)` writes them for each row of J; columns from `ALWAYS`
-    /// (`LAST_ALWAYS` in the last node's rows) on take every row operation, also those whose
-    /// multiplier is zero. Keeps the pivot rows and row operations, and leaves the last
-    /// node's eliminated rows in `scratch.last`; false on a zero pivot.
+    /// The elimination of [`BlockElimination::factor_with_last`] in `scratch` (that of
+    /// [`BlockElimination::solve`] is [`BlockElimination::eliminate_in_place`]), `W` columns
+    /// wide (the last node's rows `LW`), the right-hand sides in columns 2 NODE.. (NODE.. of
+    /// the last node's rows) as `slots(row, out)` writes them for each row of J; columns
+    /// from `ALWAYS` (`LAST_ALWAYS` in the last node's rows) on take every row operation,
+    /// also those whose multiplier is zero. Copies the pivot rows out, keeps the row
+    /// operations, and leaves the last node's eliminated rows in `scratch.last`; false on a
+    /// zero pivot.
     ///
     /// Every entry of `scratch` it reads is written first (the zeros of the carried rows
-    /// included), except [`BlockElimination::solve`]'s padding columns past its one
-    /// right-hand side, which the row operations read but no live column does; so the
-    /// values a former elimination left there never reach the answer,
+    /// included), so the values a former elimination left there never reach the answer,
     /// and nothing is zeroed as a whole: a zeroed local array costs a `memset` a call.
     #[inline(always)]
     fn eliminate_all<const W: usize, const LW: usize, const ALWAYS: usize, const LAST_ALWAYS: usize>(
@@ -247,11 +240,7 @@ impl BlockElimination {
         values: &[f64],
         mut slots: impl FnMut(usize, &mut [f64]),
     ) -> bool {
-        if self.pivots.len() != self.links {
-            // The first factoring: the factors zeroed, as they were allocated before.
-            self.pivots = vec![[[0.0; COLS]; NODE]; self.links];
-            self.records = vec![EMPTY; self.links];
-        }
+        self.allocate();
         let panel = &mut scratch.panel;
         // Carried rows start as the base rows: columns 0..6 of block 0, zero in the rest of
         // the two blocks.
@@ -285,25 +274,69 @@ impl BlockElimination {
                 row[2 * NODE..].copy_from_slice(&src[2 * NODE..]);
             }
         }
-        // Last node: carried rows and the tip rows (columns 3..12).
-        let last = &mut scratch.last;
-        for (r, row) in panel[..CARRY].iter().enumerate() {
-            last[r][..NODE].copy_from_slice(&row[..NODE]);
-            last[r][NODE..NODE + W - 2 * NODE].copy_from_slice(&row[2 * NODE..]);
+        let (panel, last) = (&scratch.panel, &mut scratch.last);
+        let tip = &values[at..];
+        let kept = (&mut self.last, &mut self.last_record);
+        eliminate_last::<W, LW, LAST_ALWAYS>(&panel[..CARRY], last, tip, tip_row(self.links + 1), slots, kept)
+    }
+
+    /// The first factoring's allocation of the factors, zeroed.
+    fn allocate(&mut self) {
+        if self.pivots.len() != self.links + 1 {
+            self.pivots = vec![[[0.0; COLS]; NODE]; self.links + 1];
+            self.records = vec![EMPTY; self.links];
         }
-        let tip_row0 = tip_row(self.links + 1);
-        for r in 0..TIP_ROWS {
-            last[CARRY + r][THETA..NODE].copy_from_slice(&values[at + r * TIP_COLUMNS..at + (r + 1) * TIP_COLUMNS]);
-            last[CARRY + r][..THETA].fill(0.0);
-            slots(tip_row0 + r, &mut last[CARRY + r][NODE..]);
+    }
+
+    /// [`BlockElimination::eliminate_all`] for [`BlockElimination::solve`]'s one right-hand
+    /// side, in place: step k's panel is rows 12 k..12 k + 18 of `pivots`, its carried rows
+    /// those the step before left below its pivot rows, so the pivot rows stay where the
+    /// elimination leaves them and are not copied. Every entry it reads is written first, as
+    /// in [`BlockElimination::eliminate_all`], except the padding columns past the
+    /// right-hand side: they hold whatever a former elimination left there (zeros, NaN from
+    /// 0 x inf, a carried right-hand side of [`BlockElimination::factor_with_last`]), which
+    /// the row operations read but no live column does, so it never reaches the answer.
+    #[inline(always)]
+    fn eliminate_in_place(&mut self, values: &[f64], rhs: &[f64]) -> bool {
+        self.allocate();
+        let rows = self.pivots.as_flattened_mut();
+        for (r, row) in rows[..CARRY].iter_mut().enumerate() {
+            row[..BASE_COLUMNS].copy_from_slice(&values[r * BASE_COLUMNS..(r + 1) * BASE_COLUMNS]);
+            row[BASE_COLUMNS..2 * NODE].fill(0.0);
+            row[2 * NODE] = rhs[r];
         }
-        if !eliminate_fast::<NODE, LW, LAST_ALWAYS>(last, &mut self.last_record) {
-            return false;
+        let mut at = BASE_ROWS * BASE_COLUMNS;
+        for k in 0..self.links {
+            let Some(panel) = rows[k * NODE..].first_chunk_mut::<ROWS>() else {
+                unreachable!("pivots hold links + 1 blocks of {NODE} rows, so {ROWS} from block k");
+            };
+            for r in 0..NODE {
+                let row = &mut panel[CARRY + r];
+                row[..2 * NODE].copy_from_slice(&values[at + r * 2 * NODE..at + (r + 1) * 2 * NODE]);
+                row[2 * NODE] = rhs[link_row(k) + r];
+            }
+            at += NODE * 2 * NODE;
+            if !eliminate_fast::<ROWS, COLS, COLS>(panel, &mut self.records[k]) {
+                return false;
+            }
+            // The rows not chosen as pivots carry block k + 1 forward in place (shifted to
+            // block k, zero in block k + 1; the right-hand side stays in its column).
+            for row in &mut panel[NODE..] {
+                row.copy_within(NODE..2 * NODE, 0);
+                row[NODE..2 * NODE].fill(0.0);
+            }
         }
-        for (kept, row) in self.last.iter_mut().zip(last.iter()) {
-            kept.copy_from_slice(&row[..LAST_COLS]);
-        }
-        true
+        let carried = &self.pivots[self.links][..CARRY];
+        let kept = (&mut self.last, &mut self.last_record);
+        let tip = (&values[at..], tip_row(self.links + 1));
+        eliminate_last::<COLS, LAST_COLS, LAST_COLS>(
+            carried,
+            &mut self.last_rows,
+            tip.0,
+            tip.1,
+            |row, slots| slots[0] = rhs[row],
+            kept,
+        )
     }
 
     /// Solves J x = rhs with the factors of the last successful [`BlockElimination::solve`]:
@@ -422,6 +455,38 @@ impl BlockElimination {
         }
         y[..CARRY].copy_from_slice(&carry);
     }
+}
+
+/// The last step of an elimination: the `carried` rows (block k in columns 0..12, the
+/// right-hand sides from column 24) and the tip rows (`tip`: their values, on columns 3..12;
+/// `slots` writes the right-hand sides of J's row `tip_row0 + r` as in
+/// [`BlockElimination::eliminate_all`]) into `last`, eliminated; keeps its pivot rows and row
+/// operations in `kept`. False on a zero pivot.
+#[inline(always)]
+fn eliminate_last<const W: usize, const LW: usize, const LAST_ALWAYS: usize>(
+    carried: &[[f64; W]],
+    last: &mut [[f64; LW]; NODE],
+    tip: &[f64],
+    tip_row0: usize,
+    mut slots: impl FnMut(usize, &mut [f64]),
+    kept: (&mut [[f64; LAST_COLS]; NODE], &mut Record),
+) -> bool {
+    for (r, row) in carried.iter().enumerate() {
+        last[r][..NODE].copy_from_slice(&row[..NODE]);
+        last[r][NODE..NODE + W - 2 * NODE].copy_from_slice(&row[2 * NODE..]);
+    }
+    for r in 0..TIP_ROWS {
+        last[CARRY + r][THETA..NODE].copy_from_slice(&tip[r * TIP_COLUMNS..(r + 1) * TIP_COLUMNS]);
+        last[CARRY + r][..THETA].fill(0.0);
+        slots(tip_row0 + r, &mut last[CARRY + r][NODE..]);
+    }
+    if !eliminate_fast::<NODE, LW, LAST_ALWAYS>(last, kept.1) {
+        return false;
+    }
+    for (kept, row) in kept.0.iter_mut().zip(last.iter()) {
+        kept.copy_from_slice(&row[..LAST_COLS]);
+    }
+    true
 }
 
 /// The transpose of [`replay`]: the eliminations transposed (pivot row c collects its
