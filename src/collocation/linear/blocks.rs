@@ -612,8 +612,8 @@ mod tests {
 
     /// The AVX2 build of `solve` gives the baseline build's bits, and so does an elimination
     /// whose kept rows hold what a refused elimination (an infinite entry in link 2's
-    /// rows: NaN and infinities) and another Jacobian's left there: every entry it reads
-    /// is written first.
+    /// rows: NaN and infinities), another Jacobian's and a factoring with carried
+    /// right-hand sides left there: every live entry it reads is written first.
     #[test]
     fn solve_gives_the_baseline_bits_whatever_its_rows_held() {
         let (nodes, values, residual) = case_h_jacobian();
@@ -641,6 +641,13 @@ mod tests {
             .collect();
         let shifted: Vec<f64> = residual.iter().map(|v| v + 1.0).collect();
         assert!(reused.solve(&other, &shifted, &mut step).is_some());
+        assert!(reused.solve(&values, &residual, &mut step).is_some());
+        assert_eq!(bits(&step), bits(&fast));
+        // A factoring with carried right-hand sides copies them into the kept rows' padding
+        // columns, which the in-place elimination of a solve reads but no live column does.
+        let carried: Vec<f64> = (0..n * CARRIED).map(|i| (i as f64 * 0.37).sin() * 1e3).collect();
+        let mut last = vec![[0.0; NODE]; CARRIED];
+        assert!(reused.factor_with_last(&other, &carried, CARRIED, &mut last));
         assert!(reused.solve(&values, &residual, &mut step).is_some());
         assert_eq!(bits(&step), bits(&fast));
     }

@@ -198,6 +198,7 @@ mod tests {
     /// The column-by-column elimination [`eliminate`] replaced (each column's search, swap
     /// and row operations in turn, column C zeroed in the rows below): the reference its
     /// live entries and records must match bit for bit.
+    #[allow(clippy::needless_range_loop)]
     fn eliminate_by_columns<const R: usize, const W: usize, const ALWAYS: usize>(
         rows: &mut [[f64; W]; R],
         record: &mut Record,
