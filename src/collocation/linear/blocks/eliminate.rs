@@ -108,7 +108,10 @@ fn eliminate_pair<const C: usize, const R: usize, const W: usize, const ALWAYS: 
     }
     record.swaps[C] = best;
     let inverse = 1.0 / pivot;
-    let prow = rows[C];
+    // The pivot rows by reference, the rows below them apart: copies of the pivot rows
+    // (the compiler's for `let prow = rows[C]`) went through the stack, 14 instructions a row.
+    let (head, below) = rows.split_at_mut(C + 1);
+    let prow = &head[C];
     // The rows' multipliers and column C + 1 after column C's operation, by position.
     let mut f = [0.0; R];
     let mut next = [0.0; R];
@@ -116,13 +119,14 @@ fn eliminate_pair<const C: usize, const R: usize, const W: usize, const ALWAYS: 
     // `vmovq xmm, xmm` valgrind 3.19 cannot decode (docs/benchmarks.md, "Control Jacobian").
     #[allow(clippy::needless_range_loop)]
     for r in C + 1..R {
-        let factor = rows[r][C] * inverse;
+        let row = &below[r - C - 1];
+        let factor = row[C] * inverse;
         record.factors[C][r] = factor;
         f[r] = factor;
         next[r] = if factor != 0.0 {
-            rows[r][C + 1] - factor * prow[C + 1]
+            row[C + 1] - factor * prow[C + 1]
         } else {
-            rows[r][C + 1]
+            row[C + 1]
         };
     }
     // Column C + 1.
@@ -132,13 +136,14 @@ fn eliminate_pair<const C: usize, const R: usize, const W: usize, const ALWAYS: 
     }
     let pivot = next[best];
     if best != C + 1 {
-        swap_rows(rows, C + 1, best);
+        swap_rows(below, 0, best - C - 1);
         f.swap(C + 1, best);
         next.swap(C + 1, best);
     }
     record.swaps[C + 1] = best;
+    let (pivot_row, below) = below.split_at_mut(1);
+    let row = &mut pivot_row[0];
     let from = (C + 1) & !3;
-    let row = &mut rows[C + 1];
     let factor = f[C + 1];
     if factor != 0.0 {
         for j in from..W {
@@ -150,14 +155,14 @@ fn eliminate_pair<const C: usize, const R: usize, const W: usize, const ALWAYS: 
         }
     }
     let inverse = 1.0 / pivot;
-    let prow2 = rows[C + 1];
+    let prow2 = &pivot_row[0];
     let from = (C + 2) & !3;
     #[allow(clippy::needless_range_loop)]
     for r in C + 2..R {
         let factor = f[r];
         let factor2 = next[r] * inverse;
         record.factors[C + 1][r] = factor2;
-        let row = &mut rows[r];
+        let row = &mut below[r - C - 2];
         match (factor != 0.0, factor2 != 0.0) {
             (true, true) => {
                 for j in from..W {
