@@ -62,11 +62,12 @@ fn usable(size: f64) -> bool {
     size.to_bits().wrapping_sub(1) < f64::INFINITY.to_bits() - 1
 }
 
-/// Swaps rows `a` < `b`, entry by entry (`rows.swap` went through a copy on the stack).
+/// Swaps rows `a` < `b` from column `from` on, entry by entry (`rows.swap` went through a
+/// copy on the stack).
 #[inline(always)]
-fn swap_rows<const W: usize>(rows: &mut [[f64; W]], a: usize, b: usize) {
+fn swap_rows<const W: usize>(rows: &mut [[f64; W]], a: usize, b: usize, from: usize) {
     let (head, tail) = rows.split_at_mut(b);
-    for (x, y) in head[a].iter_mut().zip(tail[0].iter_mut()) {
+    for (x, y) in head[a][from..].iter_mut().zip(tail[0][from..].iter_mut()) {
         std::mem::swap(x, y);
     }
 }
@@ -90,7 +91,8 @@ fn swap_rows<const W: usize>(rows: &mut [[f64; W]], a: usize, b: usize) {
 /// C + 1 from C + 2 rounded down: the columns before are dead in those rows, since they
 /// lie left of the diagonal of any row that becomes a pivot row later and the rows carried
 /// on are read from column [`NODE`] on. Dead entries hold what the skipped operations would
-/// have changed, never read.
+/// have changed, never read. For the same reason a swap leaves the whole 4-lane vectors left
+/// of its column where they are: dead in both rows.
 #[inline(always)]
 fn eliminate_pair<const C: usize, const R: usize, const W: usize, const ALWAYS: usize>(
     rows: &mut [[f64; W]; R],
@@ -104,7 +106,7 @@ fn eliminate_pair<const C: usize, const R: usize, const W: usize, const ALWAYS: 
     }
     let pivot = rows[best][C];
     if best != C {
-        swap_rows(rows, C, best);
+        swap_rows(rows, C, best, C & !3);
     }
     record.swaps[C] = best;
     let inverse = 1.0 / pivot;
@@ -136,7 +138,7 @@ fn eliminate_pair<const C: usize, const R: usize, const W: usize, const ALWAYS: 
     }
     let pivot = next[best];
     if best != C + 1 {
-        swap_rows(below, 0, best - C - 1);
+        swap_rows(below, 0, best - C - 1, (C + 1) & !3);
         f.swap(C + 1, best);
         next.swap(C + 1, best);
     }
