@@ -334,10 +334,10 @@ fn settled(h: &DMatrix<f64>, m: usize) -> Result<Vec<Ritz>, usize> {
 /// at most (about shift-invert's ratio of |mu| at the band's edge, [`WANTED`]), so it is
 /// expected to need log10(far) / 2 more steps, rounded up, and no test is made before then
 /// (a faster fall costs only the steps skipped, not the verdict: the run stops only where
-/// [`settled`] holds). Rounded down until 2026-12-07 (branch fverd21), a test came a step
-/// early whenever log10(far) / 2 was not a whole number, and failed unless the estimate fell
-/// faster than assumed (case H with friction: 302 times its bound after 9 steps, tested
-/// again after 10 at 2.3 times, settled after 11).
+/// [`settled`] holds). Rounded down, a test would come a step early whenever log10(far) / 2
+/// is not a whole number, and fail unless the estimate fell faster than assumed
+/// (docs/stability.md). A next test beyond the last of the fixed checks sends the run to its
+/// full Krylov steps: more work, the same verdict.
 fn next_test(m: usize, far: f64) -> usize {
     let steps = if far.is_finite() {
         (far.log10() / 2.0).ceil()

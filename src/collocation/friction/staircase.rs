@@ -83,6 +83,8 @@ impl Staircase {
     /// The staircase of a mesh whose node n carries `extra[n]` log-tension unknowns
     /// (`extra[0]` must be 0: the log tensions are 0 at the base).
     pub(crate) fn new(extra: &[usize]) -> Self {
+        // The right-hand side is laid out in block order from row 0 (`solve`).
+        debug_assert!(extra.first().is_none_or(|&e| e == 0), "log tensions at the base");
         let columns: Vec<usize> = extra.iter().map(|e| NODE + e).collect();
         let widest = columns.iter().copied().max().unwrap_or(NODE);
         let first = columns

@@ -17,6 +17,10 @@ use std::time::{Duration, Instant};
 use crate::collocation::unknowns::{BASE_COLUMNS, BASE_ROWS, NODE, THETA, TIP_COLUMNS, TIP_ROWS, link_row, tip_row};
 use crate::simd::avx2_fma;
 
+mod eliminate;
+
+use eliminate::eliminate_fast;
+
 /// Rows carried from one step to the next: at step 0 the base rows; after each step the
 /// rows left over once a node's 12 pivots are chosen, as many as there are base rows.
 const CARRY: usize = BASE_ROWS;
@@ -25,7 +29,7 @@ const _: () = assert!(CARRY + TIP_ROWS == NODE && BASE_COLUMNS == CARRY);
 /// Rows of a panel: carried rows plus one link.
 const ROWS: usize = CARRY + NODE;
 /// Columns of a panel: two nodes, the right-hand side in column 2 NODE, and padding to a
-/// multiple of four, so that every row update of [`eliminate`] runs in whole 4-lane vectors.
+/// multiple of four, so that every row update of [`eliminate::eliminate_fast`] runs in whole 4-lane vectors.
 const COLS: usize = 2 * NODE + 4;
 /// Columns of the last node's rows: its unknowns, the right-hand side, padding as [`COLS`].
 const LAST_COLS: usize = NODE + 4;
@@ -75,8 +79,10 @@ impl<const W: usize, const LW: usize> Scratch<W, LW> {
 
 /// Scratch and factors for one mesh.
 pub struct BlockElimination {
-    /// Pivot rows of each step, 12 x 25 (block k, block k + 1, right-hand side), row major;
-    /// empty until the first factoring.
+    /// Pivot rows of each step, 12 x 25 (block k, block k + 1, right-hand side), row major,
+    /// and one more block, whose first rows [`BlockElimination::solve`]'s last step leaves
+    /// its carried rows in (it eliminates in place: step k's panel is rows 12 k..12 k + 18
+    /// of these blocks); empty until the first factoring.
     pivots: Vec<[[f64; COLS]; NODE]>,
     /// Row operations of each step; empty until the first factoring.
     records: Vec<Record>,
@@ -90,12 +96,9 @@ pub struct BlockElimination {
     /// entry is written before it is read, so they are not zeroed each time); allocated by
     /// the first.
     wide_scratch: Option<Box<Scratch<WIDE, LAST_WIDE>>>,
-    /// The rows of [`BlockElimination::solve`], kept between solves as `wide_scratch` is:
-    /// the right-hand side's padding columns are never written, so they stay zero (up to
-    /// their sign) from the first solve's allocation, unless an infinite entry in `values`
-    /// puts NaN in them (0 x inf in a row operation); either way no live column reads them,
-    /// so they never reach the solution.
-    scratch: Option<Box<Scratch<COLS, LAST_COLS>>>,
+    /// The last node's rows of [`BlockElimination::solve`], kept between solves as
+    /// `wide_scratch` is.
+    last_rows: [[f64; LAST_COLS]; NODE],
     /// The right-hand sides of [`BlockElimination::factor_with_last`] row by row (row r of
     /// every one in `carried_rows[r]`), so that a panel row takes its slots in one copy;
     /// kept between factorings, as the panel.
@@ -117,7 +120,7 @@ impl BlockElimination {
             last_record: EMPTY,
             links: nodes - 1,
             wide_scratch: None,
-            scratch: None,
+            last_rows: [[0.0; LAST_COLS]; NODE],
             carried_rows: Vec::new(),
             carried_written: 0,
         }
@@ -139,17 +142,12 @@ impl BlockElimination {
     #[inline(always)]
     fn solve_kernel(&mut self, values: &[f64], rhs: &[f64], x: &mut [f64]) -> Option<(Duration, Duration)> {
         let start = Instant::now();
-        let mut scratch = self.scratch.take().unwrap_or_else(Scratch::zeroed);
-        let solved = self.eliminate_all::<COLS, LAST_COLS, COLS, LAST_COLS>(&mut scratch, values, |row, slots| {
-            slots[0] = rhs[row];
-        });
-        if !solved {
-            self.scratch = Some(scratch);
+        if !self.eliminate_in_place(values, rhs) {
             return None;
         }
         let eliminated = start.elapsed();
         let start = Instant::now();
-        let last = &scratch.last;
+        let last = &self.last_rows;
         let n = self.links;
         let rhs_of = |rows: &[[f64; COLS]; NODE]| std::array::from_fn::<f64, NODE, _>(|i| rows[i][2 * NODE]);
         let last_rhs = std::array::from_fn::<f64, NODE, _>(|i| last[i][NODE]);
@@ -163,7 +161,6 @@ impl BlockElimination {
                 Some(&tail[..NODE]),
             );
         }
-        self.scratch = Some(scratch);
         Some((eliminated, start.elapsed()))
     }
 
@@ -224,17 +221,17 @@ impl BlockElimination {
         eliminated
     }
 
-    /// The elimination of [`BlockElimination::solve`] in `scratch`, `W` columns wide (the
-    /// last node's rows `LW`), the right-hand sides in columns 2 NODE.. (NODE.. of the last
-    /// node's rows) as `slots(row, out)` writes them for each row of J; columns from `ALWAYS`
-    /// (`LAST_ALWAYS` in the last node's rows) on take every row operation, also those whose
-    /// multiplier is zero. Keeps the pivot rows and row operations, and leaves the last
-    /// node's eliminated rows in `scratch.last`; false on a zero pivot.
+    /// The elimination of [`BlockElimination::factor_with_last`] in `scratch` (that of
+    /// [`BlockElimination::solve`] is [`BlockElimination::eliminate_in_place`]), `W` columns
+    /// wide (the last node's rows `LW`), the right-hand sides in columns 2 NODE.. (NODE.. of
+    /// the last node's rows) as `slots(row, out)` writes them for each row of J; columns
+    /// from `ALWAYS` (`LAST_ALWAYS` in the last node's rows) on take every row operation,
+    /// also those whose multiplier is zero. Copies the pivot rows out, keeps the row
+    /// operations, and leaves the last node's eliminated rows in `scratch.last`; false on a
+    /// zero pivot.
     ///
     /// Every entry of `scratch` it reads is written first (the zeros of the carried rows
-    /// included), except [`BlockElimination::solve`]'s padding columns past its one
-    /// right-hand side, which the row operations read but no live column does; so the
-    /// values a former elimination left there never reach the answer,
+    /// included), so the values a former elimination left there never reach the answer,
     /// and nothing is zeroed as a whole: a zeroed local array costs a `memset` a call.
     #[inline(always)]
     fn eliminate_all<const W: usize, const LW: usize, const ALWAYS: usize, const LAST_ALWAYS: usize>(
@@ -243,11 +240,7 @@ impl BlockElimination {
         values: &[f64],
         mut slots: impl FnMut(usize, &mut [f64]),
     ) -> bool {
-        if self.pivots.len() != self.links {
-            // The first factoring: the factors zeroed, as they were allocated before.
-            self.pivots = vec![[[0.0; COLS]; NODE]; self.links];
-            self.records = vec![EMPTY; self.links];
-        }
+        self.allocate();
         let panel = &mut scratch.panel;
         // Carried rows start as the base rows: columns 0..6 of block 0, zero in the rest of
         // the two blocks.
@@ -281,25 +274,69 @@ impl BlockElimination {
                 row[2 * NODE..].copy_from_slice(&src[2 * NODE..]);
             }
         }
-        // Last node: carried rows and the tip rows (columns 3..12).
-        let last = &mut scratch.last;
-        for (r, row) in panel[..CARRY].iter().enumerate() {
-            last[r][..NODE].copy_from_slice(&row[..NODE]);
-            last[r][NODE..NODE + W - 2 * NODE].copy_from_slice(&row[2 * NODE..]);
+        let (panel, last) = (&scratch.panel, &mut scratch.last);
+        let tip = &values[at..];
+        let kept = (&mut self.last, &mut self.last_record);
+        eliminate_last::<W, LW, LAST_ALWAYS>(&panel[..CARRY], last, tip, tip_row(self.links + 1), slots, kept)
+    }
+
+    /// The first factoring's allocation of the factors, zeroed.
+    fn allocate(&mut self) {
+        if self.pivots.len() != self.links + 1 {
+            self.pivots = vec![[[0.0; COLS]; NODE]; self.links + 1];
+            self.records = vec![EMPTY; self.links];
         }
-        let tip_row0 = tip_row(self.links + 1);
-        for r in 0..TIP_ROWS {
-            last[CARRY + r][THETA..NODE].copy_from_slice(&values[at + r * TIP_COLUMNS..at + (r + 1) * TIP_COLUMNS]);
-            last[CARRY + r][..THETA].fill(0.0);
-            slots(tip_row0 + r, &mut last[CARRY + r][NODE..]);
+    }
+
+    /// [`BlockElimination::eliminate_all`] for [`BlockElimination::solve`]'s one right-hand
+    /// side, in place: step k's panel is rows 12 k..12 k + 18 of `pivots`, its carried rows
+    /// those the step before left below its pivot rows, so the pivot rows stay where the
+    /// elimination leaves them and are not copied. Every entry it reads is written first, as
+    /// in [`BlockElimination::eliminate_all`], except the padding columns past the
+    /// right-hand side: they hold whatever a former elimination left there (zeros, NaN from
+    /// 0 x inf, a carried right-hand side of [`BlockElimination::factor_with_last`]), which
+    /// the row operations read but no live column does, so it never reaches the answer.
+    #[inline(always)]
+    fn eliminate_in_place(&mut self, values: &[f64], rhs: &[f64]) -> bool {
+        self.allocate();
+        let rows = self.pivots.as_flattened_mut();
+        for (r, row) in rows[..CARRY].iter_mut().enumerate() {
+            row[..BASE_COLUMNS].copy_from_slice(&values[r * BASE_COLUMNS..(r + 1) * BASE_COLUMNS]);
+            row[BASE_COLUMNS..2 * NODE].fill(0.0);
+            row[2 * NODE] = rhs[r];
         }
-        if !eliminate_fast::<NODE, LW, LAST_ALWAYS>(last, &mut self.last_record) {
-            return false;
+        let mut at = BASE_ROWS * BASE_COLUMNS;
+        for k in 0..self.links {
+            let Some(panel) = rows[k * NODE..].first_chunk_mut::<ROWS>() else {
+                unreachable!("pivots hold links + 1 blocks of {NODE} rows, so {ROWS} from block k");
+            };
+            for r in 0..NODE {
+                let row = &mut panel[CARRY + r];
+                row[..2 * NODE].copy_from_slice(&values[at + r * 2 * NODE..at + (r + 1) * 2 * NODE]);
+                row[2 * NODE] = rhs[link_row(k) + r];
+            }
+            at += NODE * 2 * NODE;
+            if !eliminate_fast::<ROWS, COLS, COLS>(panel, &mut self.records[k]) {
+                return false;
+            }
+            // The rows not chosen as pivots carry block k + 1 forward in place (shifted to
+            // block k, zero in block k + 1; the right-hand side stays in its column).
+            for row in &mut panel[NODE..] {
+                row.copy_within(NODE..2 * NODE, 0);
+                row[NODE..2 * NODE].fill(0.0);
+            }
         }
-        for (kept, row) in self.last.iter_mut().zip(last.iter()) {
-            kept.copy_from_slice(&row[..LAST_COLS]);
-        }
-        true
+        let carried = &self.pivots[self.links][..CARRY];
+        let kept = (&mut self.last, &mut self.last_record);
+        let tip = (&values[at..], tip_row(self.links + 1));
+        eliminate_last::<COLS, LAST_COLS, LAST_COLS>(
+            carried,
+            &mut self.last_rows,
+            tip.0,
+            tip.1,
+            |row, slots| slots[0] = rhs[row],
+            kept,
+        )
     }
 
     /// Solves J x = rhs with the factors of the last successful [`BlockElimination::solve`]:
@@ -420,6 +457,38 @@ impl BlockElimination {
     }
 }
 
+/// The last step of an elimination: the `carried` rows (block k in columns 0..12, the
+/// right-hand sides from column 24) and the tip rows (`tip`: their values, on columns 3..12;
+/// `slots` writes the right-hand sides of J's row `tip_row0 + r` as in
+/// [`BlockElimination::eliminate_all`]) into `last`, eliminated; keeps its pivot rows and row
+/// operations in `kept`. False on a zero pivot.
+#[inline(always)]
+fn eliminate_last<const W: usize, const LW: usize, const LAST_ALWAYS: usize>(
+    carried: &[[f64; W]],
+    last: &mut [[f64; LW]; NODE],
+    tip: &[f64],
+    tip_row0: usize,
+    mut slots: impl FnMut(usize, &mut [f64]),
+    kept: (&mut [[f64; LAST_COLS]; NODE], &mut Record),
+) -> bool {
+    for (r, row) in carried.iter().enumerate() {
+        last[r][..NODE].copy_from_slice(&row[..NODE]);
+        last[r][NODE..NODE + W - 2 * NODE].copy_from_slice(&row[2 * NODE..]);
+    }
+    for r in 0..TIP_ROWS {
+        last[CARRY + r][THETA..NODE].copy_from_slice(&tip[r * TIP_COLUMNS..(r + 1) * TIP_COLUMNS]);
+        last[CARRY + r][..THETA].fill(0.0);
+        slots(tip_row0 + r, &mut last[CARRY + r][NODE..]);
+    }
+    if !eliminate_fast::<NODE, LW, LAST_ALWAYS>(last, kept.1) {
+        return false;
+    }
+    for (kept, row) in kept.0.iter_mut().zip(last.iter()) {
+        kept.copy_from_slice(&row[..LAST_COLS]);
+    }
+    true
+}
+
 /// The transpose of [`replay`]: the eliminations transposed (pivot row c collects its
 /// multipliers' rows) and the swaps, in reverse order.
 fn replay_transposed<const N: usize>(record: &Record, v: &mut [f64; N]) {
@@ -477,94 +546,6 @@ fn replay_column<const C: usize, const N: usize>(record: &Record, v: &mut [f64; 
     for r in C + 1..N {
         v[r] -= factors[r] * pivot;
     }
-}
-
-/// [`eliminate`] compiled for AVX2 and FMA when the processor has them (checked at run
-/// time, the result cached: `crate::simd`), else for the baseline x86-64 or other target.
-fn eliminate_fast<const R: usize, const W: usize, const ALWAYS: usize>(
-    rows: &mut [[f64; W]; R],
-    record: &mut Record,
-) -> bool {
-    avx2_fma!(eliminate::<R, W, ALWAYS>(rows, record))
-}
-
-/// Gaussian elimination with partial pivoting of the first [`NODE`] columns of `rows` (each
-/// `W` wide: the columns to eliminate, further columns, right-hand sides, padding):
-/// afterwards rows 0..NODE are upper triangular in those columns and the remaining rows are
-/// zero there. The multipliers use the pivot's reciprocal (one division per column, as
-/// LAPACK's dgetf2). Columns from `ALWAYS` on (right-hand sides that must see every
-/// operation [`replay`] would apply) are updated also by a zero multiplier; `ALWAYS = W`
-/// for none. Returns false on a zero pivot. Each column is its own instance of
-/// [`eliminate_column`], so that its loops have constant bounds and compile to
-/// straight-line vector code.
-#[inline(always)]
-fn eliminate<const R: usize, const W: usize, const ALWAYS: usize>(
-    rows: &mut [[f64; W]; R],
-    record: &mut Record,
-) -> bool {
-    const _: () = assert!(NODE == 12);
-    eliminate_column::<0, R, W, ALWAYS>(rows, record)
-        && eliminate_column::<1, R, W, ALWAYS>(rows, record)
-        && eliminate_column::<2, R, W, ALWAYS>(rows, record)
-        && eliminate_column::<3, R, W, ALWAYS>(rows, record)
-        && eliminate_column::<4, R, W, ALWAYS>(rows, record)
-        && eliminate_column::<5, R, W, ALWAYS>(rows, record)
-        && eliminate_column::<6, R, W, ALWAYS>(rows, record)
-        && eliminate_column::<7, R, W, ALWAYS>(rows, record)
-        && eliminate_column::<8, R, W, ALWAYS>(rows, record)
-        && eliminate_column::<9, R, W, ALWAYS>(rows, record)
-        && eliminate_column::<10, R, W, ALWAYS>(rows, record)
-        && eliminate_column::<11, R, W, ALWAYS>(rows, record)
-}
-
-/// Column `C` of [`eliminate`]: the pivot search among rows C.., the swap, and row r -=
-/// f_r * (pivot row) for every row r below C, f_r = rows[r][C] / pivot.
-///
-/// The update of a row runs over the columns from C + 1 rounded down to a multiple of four
-/// (whole 4-lane vectors; `W` is a multiple of four) to the end. Columns before C + 1 are
-/// dead in every row below the pivot: they lie left of the diagonal of any row that
-/// becomes a pivot row later, and the rows carried on are read from column [`NODE`] on.
-/// Column C itself is set to zero, as without the extra columns, and every live column
-/// sees the same operations in the same order, so the same bits.
-#[inline(always)]
-fn eliminate_column<const C: usize, const R: usize, const W: usize, const ALWAYS: usize>(
-    rows: &mut [[f64; W]; R],
-    record: &mut Record,
-) -> bool {
-    let mut best = C;
-    for r in C + 1..R {
-        if rows[r][C].abs() > rows[best][C].abs() {
-            best = r;
-        }
-    }
-    let pivot = rows[best][C];
-    if pivot == 0.0 || !pivot.is_finite() {
-        return false;
-    }
-    rows.swap(C, best);
-    record.swaps[C] = best;
-    let inverse = 1.0 / pivot;
-    let start = (C + 1) & !3;
-    let prow = rows[C];
-    // Indexed, not `iter_mut().enumerate().skip(..)`: that form's AVX2 build emits a
-    // `vmovq xmm, xmm` valgrind 3.19 cannot decode (docs/benchmarks.md, "Control Jacobian").
-    #[allow(clippy::needless_range_loop)]
-    for r in C + 1..R {
-        let row = &mut rows[r];
-        let f = row[C] * inverse;
-        record.factors[C][r] = f;
-        if f != 0.0 {
-            for j in start..W {
-                row[j] -= f * prow[j];
-            }
-            row[C] = 0.0;
-        } else {
-            for j in ALWAYS..W {
-                row[j] -= f * prow[j];
-            }
-        }
-    }
-    true
 }
 
 /// Solves the upper-triangular pivot rows for this node's 12 unknowns with right-hand side
@@ -631,8 +612,8 @@ mod tests {
 
     /// The AVX2 build of `solve` gives the baseline build's bits, and so does an elimination
     /// whose kept rows hold what a refused elimination (an infinite entry in link 2's
-    /// rows: NaN and infinities) and another Jacobian's left there: every entry it reads
-    /// is written first.
+    /// rows: NaN and infinities), another Jacobian's and a factoring with carried
+    /// right-hand sides left there: every live entry it reads is written first.
     #[test]
     fn solve_gives_the_baseline_bits_whatever_its_rows_held() {
         let (nodes, values, residual) = case_h_jacobian();
@@ -660,6 +641,13 @@ mod tests {
             .collect();
         let shifted: Vec<f64> = residual.iter().map(|v| v + 1.0).collect();
         assert!(reused.solve(&other, &shifted, &mut step).is_some());
+        assert!(reused.solve(&values, &residual, &mut step).is_some());
+        assert_eq!(bits(&step), bits(&fast));
+        // A factoring with carried right-hand sides copies them into the kept rows' padding
+        // columns, which the in-place elimination of a solve reads but no live column does.
+        let carried: Vec<f64> = (0..n * CARRIED).map(|i| (i as f64 * 0.37).sin() * 1e3).collect();
+        let mut last = vec![[0.0; NODE]; CARRIED];
+        assert!(reused.factor_with_last(&other, &carried, CARRIED, &mut last));
         assert!(reused.solve(&values, &residual, &mut step).is_some());
         assert_eq!(bits(&step), bits(&fast));
     }

@@ -205,6 +205,8 @@ impl Workspace {
         for (r, f) in self.rhs.iter_mut().zip(&self.residual) {
             *r = -f;
         }
+        // The factoring overwrites the stored factors: none are usable until it succeeds.
+        self.factored = false;
         let times = self.linear.solve(&self.values, &self.rhs, &mut self.step);
         let Some((factor_time, solve_time)) = times else {
             return false;
