@@ -177,13 +177,13 @@ impl System<'_> {
         group: &mut Group<Block<f64>>,
     ) -> Option<Block<f64>> {
         let lanes = |sites: [&IntervalSites; 4], seg| {
-            let quarters = sites.map(|s| self.quarters(s));
+            let quarters = std::array::from_fn(|j| self.quarters(k + j));
             let nodes = std::array::from_fn(|j| (&x[k + j], &x[k + j + 1]));
             let node_rates = std::array::from_fn(|j| (&rates[k + j], &rates[k + j + 1]));
             Ok(intervals_order6_lanes(
                 &self.model,
                 sites,
-                quarters.each_ref(),
+                quarters,
                 seg,
                 nodes,
                 node_rates,

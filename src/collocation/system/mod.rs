@@ -14,10 +14,11 @@ mod columns;
 mod inputs;
 mod jump;
 mod lanes;
+mod quarters;
 
 use super::end_rows;
 use super::friction::{self, Profile};
-use super::residual::{self, Block, Delta, IntervalFactors, IntervalSites, QuarterSites};
+use super::residual::{self, Block, Delta, IntervalFactors, IntervalSites};
 use super::stage;
 use super::unknowns::{self, BASE_COLUMNS, BASE_ROWS, NODE, link_row, tip_row};
 use crate::error::Result;
@@ -57,6 +58,8 @@ pub struct System<'a> {
     pub(crate) friction: Option<Profile<'a>>,
     /// What the buffers' sites were computed from, for [`System::into_parts`].
     inputs: inputs::SiteInputs,
+    /// The order-6 estimate's quarter sites on these sites, once it asked for them.
+    quarters: quarters::Quarters,
 }
 
 /// The buffers a [`System`] fills for its mesh (the sites) and its model's tensions, which
@@ -73,6 +76,8 @@ pub(crate) struct SystemBuffers {
     sites_of: Option<(f64, Option<(crate::model::parameter::Parameter, f64)>)>,
     /// What the sites were computed from ([`System::with_buffers`] keeps them when the same).
     inputs: inputs::SiteInputs,
+    /// The quarter sites on these sites, if computed (kept with them).
+    quarters: quarters::Quarters,
 }
 
 impl SystemBuffers {
@@ -103,6 +108,7 @@ impl<'a> System<'a> {
             rate_evaluations: 0,
             friction: None,
             inputs: buffers.inputs,
+            quarters: buffers.quarters,
         };
         sys.set_factors(sys.model.tension_factor, sys.model.load_factor);
         sys
@@ -123,6 +129,7 @@ impl<'a> System<'a> {
             rate_evaluations: 0,
             friction: None,
             inputs: buffers.inputs,
+            quarters: buffers.quarters,
         };
         sys.count_rate_evaluations();
         sys
@@ -138,6 +145,7 @@ impl<'a> System<'a> {
             node_sites: self.node_sites,
             sites_of: Some((self.model.load_factor, self.model.parameter)),
             inputs: self.inputs,
+            quarters: self.quarters,
         };
         (self.mesh, buffers)
     }
@@ -158,8 +166,9 @@ impl<'a> System<'a> {
         }
     }
 
-    /// Recomputes the sites from the model.
+    /// Recomputes the sites from the model (and forgets the quarter sites on the old ones).
     fn refresh(&mut self) {
+        self.quarters.forget();
         let model = &self.model;
         self.node_sites.clear();
         self.node_sites
@@ -250,8 +259,8 @@ impl<'a> System<'a> {
     /// A model breakdown at a visited state.
     pub(crate) fn order6_residual_split(&self, x: &[State], out: &mut [f64], rates: &[Vector6<f64>]) -> Result<()> {
         self.rows(x, out, |k, sites, seg, a, b, _| {
-            let quarters = self.quarters(sites);
-            let r = stage::interval_order6_split(&self.model, sites, &quarters, seg, a, b, &rates[k], &rates[k + 1])?;
+            let quarters = self.quarters(k);
+            let r = stage::interval_order6_split(&self.model, sites, quarters, seg, a, b, &rates[k], &rates[k + 1])?;
             Ok((r, rates[k + 1]))
         })
     }
@@ -316,8 +325,8 @@ impl<'a> System<'a> {
         if let Some(profile) = &self.friction {
             let length = self.model.robot.length();
             return self.rows(x, out, |k, sites, seg, a, b, _| {
-                let quarters = self.quarters(sites);
-                let (r, psi, start, end) = friction::interval_order6(profile, length, k, sites, &quarters, seg, a, b)?;
+                let quarters = self.quarters(k);
+                let (r, psi, start, end) = friction::interval_order6(profile, length, k, sites, quarters, seg, a, b)?;
                 (rates[k], rates[k + 1]) = (start, end);
                 local[k] = psi.iter().fold(r.amax(), |m, p| m.max(p.abs()));
                 Ok((r, end))
@@ -337,8 +346,8 @@ impl<'a> System<'a> {
             let r = match grouped {
                 Some(r) => r,
                 None => {
-                    let quarters = self.quarters(sites);
-                    residual::interval_order6(&self.model, sites, &quarters, seg, a, b, &start, &end)?
+                    let quarters = self.quarters(k);
+                    residual::interval_order6(&self.model, sites, quarters, seg, a, b, &start, &end)?
                 }
             };
             local[k] = r.amax();
@@ -364,15 +373,6 @@ impl<'a> System<'a> {
             None => linearize::rates(&self.model, &sites.start, seg, &a.R, &a.v, &a.u)?,
         };
         Ok((start, linearize::rates(&self.model, &sites.end, seg, &b.R, &b.v, &b.u)?))
-    }
-
-    /// The sites at a quarter and three quarters of an interval.
-    fn quarters(&self, sites: &IntervalSites) -> QuarterSites {
-        let h = sites.end.s - sites.start.s;
-        QuarterSites {
-            quarter: self.model.site(sites.start.s + 0.25 * h),
-            three_quarters: self.model.site(sites.start.s + 0.75 * h),
-        }
     }
 
     /// Writes the base, link and tip rows at `x` into `out`, interval k's rows by `interval(k,
