@@ -239,3 +239,33 @@ fn a_mesh_newton_fails_on_is_reached_through_a_halved_one() {
         apart(&tight, &loose)
     );
 }
+
+/// Case 167 of the probe (tendon 1 released at 4.76 N with mu 0.895, tendon 3 pulled at
+/// 4.01 N with mu 0.380): the continuation in the coefficients gives up near two thirds of
+/// them (docs/friction.md section 4, "Large friction on a released tendon"). The refusal
+/// reports that last run -- its termination, not the earlier run's at the full coefficients
+/// -- and how far the coefficients got; it does not send the user to the shooting solver,
+/// which breaks down on this robot.
+#[test]
+fn a_refusal_after_the_continuation_says_how_far_it_got() {
+    let robot = opposite(
+        [4.7587430601211675, 4.00565086861725],
+        [0.8950880107773121, 0.37986643273817366],
+        true,
+        0.008960342660040147,
+    );
+    let error = tdcr::collocation::solve(&robot, &tdcr::collocation::Options::default()).unwrap_err();
+    let message = error.to_string();
+    assert!(message.contains("followed from 0"), "{message}");
+    assert!(message.contains("% of them on the first mesh"), "{message}");
+    assert!(!message.contains("shooting"), "{message}");
+    match error {
+        // The continuation's last run stalls in the line search (the history printed with
+        // the error is that run's); the run at the full coefficients before it stopped at
+        // the iteration limit, which the refusal used to report.
+        tdcr::Error::NotConverged { report, .. } => {
+            assert_eq!(report.termination, tdcr::Termination::LineSearchFailed)
+        }
+        other => panic!("{other}"),
+    }
+}

@@ -42,14 +42,15 @@ fn scaled(robot: &Robot, lambda: f64) -> Robot {
 
 /// Newton with friction for `robot` on `mesh` from the states `x` and the log tensions `z`
 /// (per slip, at every node; None: the capstan start from `x`); the converged log tensions,
-/// with `x` moved to the root, or None where Newton failed (`x` is then undefined).
+/// with `x` moved to the root, or where Newton failed its termination and the index of its
+/// largest scaled residual (`x` is then undefined).
 fn newton_on(
     robot: &Robot,
     mesh: &Mesh,
     (x, z): (&mut Vec<State>, Option<&[Vec<f64>]>),
     (ws, settings): (&mut Workspace, &Settings),
     report: &mut SolveReport,
-) -> Option<Vec<Vec<f64>>> {
+) -> std::result::Result<Vec<Vec<f64>>, (Termination, usize)> {
     let model = Model::new(robot);
     let mut system = System::new(model.clone(), mesh.clone());
     let mut profile = Profile::new(&model, &system.mesh);
@@ -59,19 +60,31 @@ fn newton_on(
     }
     system.friction = Some(profile);
     let mut border = Capstan::new(system);
-    let (termination, _) = newton::run_bordered(&mut border, ws, x, settings, report);
+    let (termination, worst) = newton::run_bordered(&mut border, ws, x, settings, report);
     if termination != Termination::Converged {
-        return None;
+        return Err((termination, worst));
     }
     border.load(Point::Current);
-    border.system.friction.as_ref().map(|p| p.z.clone())
+    Ok(border.system.friction.as_ref().map(|p| p.z.clone()).unwrap_or_default())
+}
+
+/// Where a continuation gave up ([`in_friction`]).
+pub(super) struct GaveUp {
+    /// The largest fraction of the coefficients solved (0: none).
+    pub(super) reached: f64,
+    /// The fraction of the last Newton run, which failed.
+    pub(super) tried: f64,
+    /// That run's termination.
+    pub(super) termination: Termination,
+    /// The index of that run's largest scaled residual.
+    pub(super) worst: usize,
 }
 
 /// Follows the friction coefficients of `robot` from 0 to their values on `mesh`, from the
 /// frictionless solution `x0` there ([module docs](self)): the states and log tensions
-/// (per slip, at every node) of `robot` itself, or, where the continuation gave up, the
-/// largest fraction `lambda` of the coefficients it solved (0: none). Its Newton counts go to
-/// `report`, and a note says how many steps it took.
+/// (per slip, at every node) of `robot` itself, or where the continuation gave up, how far
+/// it got and its last run's failure ([`GaveUp`]). Its Newton counts go to `report`, and a
+/// note says how many steps it took.
 ///
 /// # Errors
 /// A workspace that cannot be built for `mesh`.
@@ -81,7 +94,7 @@ pub(super) fn in_friction(
     mesh: &Mesh,
     x0: &[State],
     report: &mut SolveReport,
-) -> Result<std::result::Result<Solved, f64>> {
+) -> Result<std::result::Result<Solved, GaveUp>> {
     let settings = Settings {
         tolerance: options.residual_tolerance,
         max_iterations: options.max_iterations,
@@ -92,6 +105,8 @@ pub(super) fn in_friction(
     let (mut lambda, mut step) = (0.0, FIRST_STEP);
     let mut x = x0.to_vec();
     let mut z: Option<Vec<Vec<f64>>> = None;
+    // The last failed run: its fraction, termination and worst residual's index.
+    let mut failed = (0.0, Termination::MaxIterations, 0);
     for run in 1..=MOST_STEPS {
         let target = (lambda + step).min(1.0);
         let mut trial = x.clone();
@@ -116,21 +131,19 @@ pub(super) fn in_friction(
             (&mut ws, &settings),
             report,
         ) {
-            Some(solved) => {
-                (lambda, x, z) = (target, trial, Some(solved));
-                if lambda >= 1.0 {
+            Ok(solved) => {
+                if target >= 1.0 {
                     report.notes.push(format!(
                         "Newton with friction failed from the frictionless shape; the friction coefficients \
                          were followed from 0 to their values in {run} Newton runs"
                     ));
-                    if let Some(z) = z {
-                        return Ok(Ok((x, z)));
-                    }
-                    break;
+                    return Ok(Ok((trial, solved)));
                 }
+                (lambda, x, z) = (target, trial, Some(solved));
                 step *= 2.0;
             }
-            None => {
+            Err((termination, worst)) => {
+                failed = (target, termination, worst);
                 step /= 2.0;
                 if step < SMALLEST_STEP {
                     break;
@@ -138,5 +151,11 @@ pub(super) fn in_friction(
             }
         }
     }
-    Ok(Err(lambda))
+    let (tried, termination, worst) = failed;
+    Ok(Err(GaveUp {
+        reached: lambda,
+        tried,
+        termination,
+        worst,
+    }))
 }

@@ -76,8 +76,8 @@ pub(super) fn refine_with_friction(
     // tries from `plain` failed on the first mesh itself; a later mesh's failure goes to
     // the halved mesh below instead).
     let mut continued = false;
-    // The largest fraction of the coefficients the continuation solved, where it gave up.
-    let mut reached: Option<f64> = None;
+    // Where the continuation gave up: how far it got.
+    let mut reached: Option<continuation::GaveUp> = None;
     let mut kinks = kinks::Kinks::default();
     // The last converged mesh and its answer, for a mesh between it and a finer one Newton
     // failed on.
@@ -107,7 +107,7 @@ pub(super) fn refine_with_friction(
         let mut border = Capstan::new(system);
         // With a verdict, Newton evaluates the Jacobian at its predicted last trial point in
         // place of the residual there, which the verdict factors (below).
-        let (termination, worst) = if assess {
+        let (mut termination, mut worst) = if assess {
             newton::run_bordered_ahead(&mut border, &mut ws, &mut x, &settings, &mut report)
         } else {
             newton::run_bordered(&mut border, &mut ws, &mut x, &settings, &mut report)
@@ -136,7 +136,11 @@ pub(super) fn refine_with_friction(
                     (mesh, x) = (m.clone(), solved);
                     continue;
                 }
-                Err(lambda) => reached = Some(lambda),
+                Err(gave_up) => {
+                    // The refusal reports the continuation's last run, at its coefficients.
+                    (termination, worst) = (gave_up.termination, gave_up.worst);
+                    reached = Some(gave_up);
+                }
             }
         }
         if termination != Termination::Converged
@@ -147,6 +151,12 @@ pub(super) fn refine_with_friction(
             // from that one's answer interpolated: once more on the converged mesh with
             // every interval halved, and the refinement from there.
             let halved = halve(robot, m)?;
+            report.notes.push(format!(
+                "Newton with friction failed on a mesh of {} intervals; the refinement went on from the last \
+                 converged mesh of {} intervals with every interval halved",
+                border.system.mesh.intervals(),
+                m.intervals()
+            ));
             report.meshes -= 1;
             x = interpolate(&model, guess, &halved);
             mesh = halved;
@@ -163,16 +173,7 @@ pub(super) fn refine_with_friction(
                 method: Method::Collocation,
                 report: Box::new(report.clone()),
                 worst_s: system.row_position(worst.min(system.unknowns() - 1)),
-                hint: match reached {
-                    Some(lambda) => format!(
-                        "the friction coefficients were followed from 0 and Newton failed beyond {lambda:.3} of their \
-                         values on the first mesh: lower the friction coefficient, or solve with the shooting solver \
-                         to compare"
-                    ),
-                    None => "friction is solved from the frictionless shape: lower the friction coefficient, or solve \
-                             with the shooting solver to compare"
-                        .into(),
-                },
+                hint: refusal_hint(reached.as_ref(), continued, border.system.mesh.intervals()),
             });
         }
         let t = Instant::now();
@@ -262,6 +263,31 @@ fn linear(points: &[f64], values: &[f64], s: f64) -> f64 {
     }
     let t = ((s - a) / (b - a)).clamp(0.0, 1.0);
     values[k] + t * (values[k + 1] - values[k])
+}
+
+/// What to try after Newton with friction failed on a mesh of `intervals` intervals: where
+/// the continuation in the coefficients gave up (`reached`), where it had answered the first
+/// mesh (`continued` without `reached`), or where it did not run.
+fn refusal_hint(reached: Option<&continuation::GaveUp>, continued: bool, intervals: usize) -> String {
+    match reached {
+        Some(g) => format!(
+            "the friction coefficients were followed from 0: Newton solved {:.0} % of them on the first mesh \
+             ({intervals} intervals) and failed at {:.0} % (the termination and residual above are that run's). A \
+             full-slip equilibrium may not exist: a released tendon delivers up to exp(mu theta) times its input, \
+             which bends the rod and turns its path further (docs/friction.md, \"Large friction on a released \
+             tendon\"); lower the friction coefficient of a released tendon, or pull it in instead",
+            100.0 * g.reached,
+            100.0 * g.tried
+        ),
+        None if continued => format!(
+            "the friction coefficients were followed from 0 to their values on the first mesh, and Newton then \
+             failed on a finer mesh ({intervals} intervals): loosen the tolerance, or lower the friction \
+             coefficient of a released tendon"
+        ),
+        None => "friction is solved from the frictionless shape: lower the friction coefficient, or solve with \
+                 the shooting solver to compare"
+            .into(),
+    }
 }
 
 /// Whether meshes `a` and `b` have the same nodes (arc lengths, bit for bit).
