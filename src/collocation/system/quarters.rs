@@ -7,14 +7,16 @@
 use super::System;
 use crate::collocation::residual::{IntervalSites, QuarterSites};
 use crate::model::equations::Model;
-use std::cell::{Cell, OnceCell};
+use std::sync::{Mutex, OnceLock};
 
 /// Each link's [`QuarterSites`] (`None` for a jump), once computed from the model and the
-/// interval sites they belong to; the buffer of those forgotten, for the next.
+/// interval sites they belong to; the buffer of those forgotten, for the next. Both are
+/// thread-safe (a `Solver` is shared across threads, Python's included); the lock is taken
+/// only when the sites are computed.
 #[derive(Default)]
 pub(super) struct Quarters {
-    sites: OnceCell<Vec<Option<QuarterSites>>>,
-    spare: Cell<Vec<Option<QuarterSites>>>,
+    sites: OnceLock<Vec<Option<QuarterSites>>>,
+    spare: Mutex<Vec<Option<QuarterSites>>>,
 }
 
 impl Quarters {
@@ -22,7 +24,8 @@ impl Quarters {
     /// computed now unless they were since the last [`Quarters::forget`].
     fn of(&self, model: &Model, interval_sites: &[Option<IntervalSites>]) -> &[Option<QuarterSites>] {
         self.sites.get_or_init(|| {
-            let mut quarters = self.spare.take();
+            // A poisoned lock holds only a buffer: take it all the same.
+            let mut quarters = std::mem::take(&mut *self.spare.lock().unwrap_or_else(|e| e.into_inner()));
             quarters.clear();
             quarters.extend(interval_sites.iter().map(|sites| {
                 sites.as_ref().map(|sites| {
@@ -41,7 +44,7 @@ impl Quarters {
     /// their buffer.
     pub(super) fn forget(&mut self) {
         if let Some(quarters) = self.sites.take() {
-            self.spare.set(quarters);
+            *self.spare.get_mut().unwrap_or_else(|e| e.into_inner()) = quarters;
         }
     }
 
