@@ -229,6 +229,15 @@ mod tests {
     use super::*;
     use crate::cases;
 
+    /// A `Solver` can be shared across threads (the Python package's solver object needs it,
+    /// and batches share robots): a cache inside it that is not `Sync` fails to compile here
+    /// rather than in the Python build.
+    #[test]
+    fn a_solver_is_send_and_sync() {
+        fn shared<T: Send + Sync>() {}
+        shared::<Solver>();
+    }
+
     /// With [`Solver::keep_tension_columns`], a warm solve that ends on chord steps leaves the
     /// tension columns its verdict formed with the Jacobian at the answer, for
     /// [`Solver::tip_jacobian`] to take; without the flag it leaves none. (The pass over the
