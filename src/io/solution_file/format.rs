@@ -66,6 +66,10 @@ pub(crate) struct SolutionFile {
     pub error_estimate: Option<Estimate>,
     pub tolerance: Option<f64>,
     pub tolerance_met: Option<bool>,
+    /// The report's notes (what the solve did that its counts do not say, e.g. friction
+    /// coefficients followed from 0); absent when there are none.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub notes: Vec<String>,
     /// Total solve time (s).
     pub solve_time: f64,
     pub bending_angle_deg: Num,
@@ -326,6 +330,7 @@ impl SolutionFile {
             }),
             tolerance: report.tolerance,
             tolerance_met: report.tolerance_met,
+            notes: report.notes.clone(),
             solve_time: t.total.as_secs_f64(),
             bending_angle_deg: Num(bending_angle(solution).to_degrees()),
             tip: Tip {

@@ -292,6 +292,7 @@ impl SolutionFile {
         };
         report.unknowns = self.unknowns;
         report.nonzeros = self.nonzeros;
+        report.notes = self.notes.clone();
         report.intervals = self.intervals;
         report.error_estimate = self.error_estimate.as_ref().map(|e| ErrorEstimate {
             tip_position: e.tip_position_m.0,
@@ -394,6 +395,21 @@ mod tests {
             let warm = crate::collocation::solve_from(&robot, &Default::default(), &back).unwrap();
             assert!(warm.report.iterations <= 2, "{}", warm.report.iterations);
         }
+    }
+
+    /// The report's notes are written and read back (a solve with friction carries its
+    /// verdict's scope); a report without notes writes no `notes` key.
+    #[test]
+    fn the_reports_notes_read_back() {
+        let mut robot = crate::cases::case_s();
+        let plain = crate::collocation::solve(&robot, &Default::default()).unwrap();
+        assert!(plain.report.notes.is_empty());
+        assert!(!crate::io::output::solution_json(&plain).contains("\"notes\""));
+        robot.tendons[0].friction = Some(crate::Friction::pull(0.1));
+        let solution = crate::collocation::solve(&robot, &Default::default()).unwrap();
+        assert!(!solution.report.notes.is_empty());
+        let back = parse_solution(&crate::io::output::json(&robot, &solution, None, None)).unwrap();
+        assert_eq!(back.report.notes, solution.report.notes);
     }
 
     #[test]
