@@ -228,6 +228,12 @@ fn a_mesh_newton_fails_on_is_reached_through_a_halved_one() {
         tdcr::collocation::solve(&robot, &options).unwrap()
     };
     let (tight, loose) = (at(1e-9), at(1e-8));
+    // The path this test is about: the refinement went on from a halved mesh, and says so.
+    assert!(
+        tight.report.notes.iter().any(|n| n.contains("every interval halved")),
+        "{:?}",
+        tight.report.notes
+    );
     let estimate = |s: &tdcr::Solution| s.report.error_estimate.unwrap().tip_position;
     assert!(estimate(&tight) <= 1e-9 * robot.length());
     // Three times both estimates: deferred correction is asymptotically exact; 1e-12 m for
