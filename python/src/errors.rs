@@ -92,8 +92,18 @@ fn message(error: &tdcr::Error) -> String {
 /// command line prints them) and in the exception's `likely_causes` (a list of strings,
 /// empty when there are none).
 pub fn explained(error: tdcr::Error, robot: &tdcr::Robot) -> PyErr {
-    let causes = tdcr::model::scales::likely_causes(&error, robot);
-    let text = tdcr::model::scales::with_likely_causes(&message(&error), &causes);
+    explained_by(error, std::slice::from_ref(robot), "")
+}
+
+/// [`explained`] for a failure to solve one of `robots` (a history's steps before any was
+/// solved: the likely causes of each, once), its message after `prefix` (when not empty).
+pub fn explained_by(error: tdcr::Error, robots: &[tdcr::Robot], prefix: &str) -> PyErr {
+    let causes = tdcr::model::scales::likely_causes_of(&error, robots);
+    let text = match prefix {
+        "" => message(&error),
+        _ => format!("{prefix}: {}", message(&error)),
+    };
+    let text = tdcr::model::scales::with_likely_causes(&text, &causes);
     let err = with_text(error, text);
     Python::attach(|py| {
         let causes: Vec<String> = causes.iter().map(|w| w.to_string()).collect();

@@ -3,7 +3,7 @@
 
 use crate::boundary;
 use crate::branch::{step_item, tip_rows};
-use crate::errors::invalid;
+use crate::errors::{self, invalid};
 use crate::options::Use;
 use crate::robot::{PyRobot, Rows};
 use crate::solution::PySolution;
@@ -102,7 +102,9 @@ crate::pickle::pickled_fields! {
 /// (docs/friction.md). With `up_down`, the rows are solved up and then back down (the last
 /// row once). Collocation; options as `solve`. No rows raise `tdcr.InvalidInput`; a failed
 /// step is raised with `index` set to its row and `partial` to the `History` of the rows
-/// before it.
+/// before it (with `likely_causes`, as a failed solve's); a failure before any step (the
+/// full-slip solve of the most loaded step, which chooses the history's mesh) is raised
+/// without `index`.
 #[pyfunction]
 #[pyo3(signature = (robot, parameters, up_down = false, **options))]
 pub fn history(
@@ -125,12 +127,28 @@ pub fn history(
         ranges = ranges.up_down();
     }
     let options = settings.collocation;
-    let result = boundary::detached(py, || solve_history(&ranges, &options))?;
+    let robots = || (0..ranges.steps()).filter_map(|k| ranges.robot(k as f64).ok()).collect::<Vec<_>>();
+    let result = py
+        .detach(|| boundary::caught(|| solve_history(&ranges, &options)))
+        .map_err(|failure| match failure {
+            // Before any step: the full-slip solve that chooses the history's mesh.
+            boundary::Failure::Library(e) if !matches!(e, tdcr::Error::InvalidInput { .. }) => errors::explained_by(
+                e,
+                &robots(),
+                "history: no step was solved: the full-slip solve of the most loaded step, which chooses the \
+                 history's mesh, failed",
+            ),
+            other => other.into_py(),
+        })?;
     let partial = PyHistory::new(py, result.steps)?;
     match result.failure {
         None => Ok(partial),
         Some((i, e)) => {
-            let err = boundary::Failure::Library(e).into_py_at(py, "", i);
+            let err = match ranges.robot(i as f64) {
+                Ok(robot) => errors::explained(e, &robot),
+                Err(_) => boundary::Failure::Library(e).into_py(),
+            };
+            err.value(py).setattr("index", i)?;
             err.value(py).setattr("partial", Py::new(py, partial)?)?;
             Err(err)
         }

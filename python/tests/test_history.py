@@ -66,6 +66,15 @@ def test_a_rigid_tendon_that_sticks_raises_with_the_steps_before():
     assert len(caught.value.partial) == 11
 
 
+def test_a_history_whose_mesh_solve_fails_raises_a_solver_failure_with_its_causes():
+    # 1000 N bends the rod far past its tendon's limit: the full-slip solve of that step,
+    # which chooses the history's mesh, fails before any step is solved.
+    with pytest.raises(tdcr.NotConverged, match="no step was solved") as caught:
+        tdcr.history(robot(), {"tension.1": [0.0, 2.0, 1000.0]})
+    assert caught.value.likely_causes
+    assert not hasattr(caught.value, "index")
+
+
 def prototype_with_friction(tmp_path, actuation):
     """The prototype (self weight, tendon 1 loaded) with mu = 0.1 and E_t A_t = 2000 N on
     tendon 1, driven by `actuation` (a robot-file line), as tests/history_pull_in.rs."""

@@ -168,6 +168,20 @@ pub fn likely_causes(error: &crate::Error, robot: &Robot) -> Vec<Warning> {
     }
 }
 
+/// [`likely_causes`] of `error`, a failure to solve one of `robots` (a sweep's or a
+/// history's steps, when the failure is not one step's): each robot's, once each.
+pub fn likely_causes_of(error: &crate::Error, robots: &[Robot]) -> Vec<Warning> {
+    let mut causes: Vec<Warning> = Vec::new();
+    for robot in robots {
+        for w in likely_causes(error, robot) {
+            if !causes.contains(&w) {
+                causes.push(w);
+            }
+        }
+    }
+    causes
+}
+
 /// `message` (a failure's, possibly several lines) with `causes` after its first line, as
 /// an indented list headed `likely cause:` (or `likely causes:`): the form the command line
 /// and the Python package print.

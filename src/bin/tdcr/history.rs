@@ -10,7 +10,7 @@ use tdcr::io::csv_table::CsvTable;
 use tdcr::io::{number, output};
 use tdcr::plot::{Chart, Segment, significant};
 
-use crate::failure::{Failure, emit, message, note, picture_format, solver_failure, write_file};
+use crate::failure::{Failure, emit, message, note, picture_format, solver_failure, with_likely_causes, write_file};
 
 /// What `--history` asks for: the ranges up and back down, or the swept input's values in
 /// the order given.
@@ -82,7 +82,7 @@ pub fn run(
     if let Some(path) = plot {
         picture_format(path)?;
     }
-    let result = history(ranges, options).map_err(|e| Failure::Input(format!("--history: {}", message(&e))))?;
+    let result = history(ranges, options).map_err(|e| before_any_step(e, ranges))?;
     let swept = ranges.swept().map_or(0, |(i, _)| i);
     let (input, values) = &ranges.inputs()[swept];
     let count = ranges.robot(0.0).map_or(0, |r| r.tendons.len());
@@ -104,6 +104,7 @@ pub fn run(
         row(&mut csv, k, direction, values[k.min(values.len() - 1)], step);
     }
     let text = csv.finish();
+    warn_unstable(name, &result.steps);
     match out {
         Some(path) => {
             write_file(path, &text, "CSV")?;
@@ -130,7 +131,11 @@ pub fn run(
     match result.failure {
         Some((k, e)) => {
             let head = format!("history step {} of {}", k + 1, ranges.steps());
-            Err(match solver_failure(e) {
+            let failure = match ranges.robot(k as f64) {
+                Ok(robot) => with_likely_causes(solver_failure(e), &robot),
+                Err(_) => solver_failure(e),
+            };
+            Err(match failure {
                 Failure::Input(t) => Failure::Input(format!("{head}: {t}")),
                 Failure::NotConverged(t) => {
                     Failure::NotConverged(format!("{head} failed; the CSV holds the steps before it\n{t}"))
@@ -142,6 +147,60 @@ pub fn run(
         None => Ok(()),
     }
 }
+
+/// Says on standard error which steps of the history are unstable (each run of them once,
+/// with its first step's verdict): the CSV's `stability` column alone is easy to miss.
+fn warn_unstable(name: &str, steps: &[HistoryStep]) {
+    let unstable = |k: usize| {
+        matches!(
+            steps[k].solution.report.stability,
+            tdcr::Stability::Unstable { .. } | tdcr::Stability::Growing { .. }
+        )
+    };
+    let mut k = 0;
+    while k < steps.len() {
+        if !unstable(k) {
+            k += 1;
+            continue;
+        }
+        let first = k;
+        while k + 1 < steps.len() && unstable(k + 1) {
+            k += 1;
+        }
+        let which = if first == k {
+            format!("step {}", first + 1)
+        } else {
+            format!("steps {} to {}", first + 1, k + 1)
+        };
+        note(&format!(
+            "warning: {name}: history {which} of {}: the equilibrium is {}: a real robot would not stay in it \
+             (`tdcr solve` on a step's inputs says more)",
+            steps.len(),
+            steps[first].solution.report.stability
+        ));
+        k += 1;
+    }
+}
+
+/// A failure of the history before any step was solved: bad input (a usage error), or the
+/// full-slip solve of the most loaded step, which chooses the history's mesh (a solver
+/// failure, exit 3, with its diagnostics and the likely causes the steps' robots give).
+fn before_any_step(e: tdcr::Error, ranges: &Ranges) -> Failure {
+    let robots: Vec<tdcr::Robot> = (0..ranges.steps()).filter_map(|k| ranges.robot(k as f64).ok()).collect();
+    let causes = tdcr::model::scales::likely_causes_of(&e, &robots);
+    match solver_failure(e) {
+        Failure::Input(t) => Failure::Input(format!("--history: {t}")),
+        Failure::NotConverged(t) => Failure::NotConverged(tdcr::model::scales::with_likely_causes(
+            &format!("--history: no step was solved: {HEAD_FAILED}: {t}"),
+            &causes,
+        )),
+        Failure::Other(t) => Failure::Other(format!("--history: no step was solved: {HEAD_FAILED}: {t}")),
+        Failure::BrokenPipe => Failure::BrokenPipe,
+    }
+}
+
+/// What fails when a history fails before its first step, other than bad input.
+const HEAD_FAILED: &str = "the full-slip solve of the most loaded step, which chooses the history's mesh, failed";
 
 /// The CSV header: the step, its direction, the tensions, the swept input, the tip, and
 /// per tendon with friction its delivered tension and zones.

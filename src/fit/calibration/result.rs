@@ -39,6 +39,10 @@ pub struct PoorFit {
     pub mean_error: f64,
     /// Rod length L (m).
     pub length: f64,
+    /// Whether the robot has a tendon with friction: then rows measured where a tendon
+    /// sticks (the first steps after its actuator reverses), which the fit's full-slip
+    /// solves cannot describe, are a likely cause too.
+    pub friction: bool,
 }
 
 impl fmt::Display for PoorFit {
@@ -74,7 +78,17 @@ impl fmt::Display for PoorFit {
              position off by more than the fitted parameters can absorb (fit the position too); units (tip \
              positions in mm instead of m, tensions in mN); tension columns in another order than the robot \
              file's tendons"
-        )
+        )?;
+        if self.friction {
+            write!(
+                f,
+                "; rows measured while a tendon with friction sticks (the first steps after its actuator reverses, \
+                 as at the start of an unloading branch), which the fit's full-slip solve of each row in its \
+                 `motion` cannot describe: keep only the rows that a load history of the same inputs (`tdcr sweep \
+                 --history`) shows sliding all along; a wrong `motion` column"
+            )?;
+        }
+        Ok(())
     }
 }
 
@@ -206,6 +220,7 @@ impl Calibration {
             limit,
             mean_error: self.errors.mean,
             length,
+            friction: crate::model::friction::any(&self.robot),
         })
     }
 
