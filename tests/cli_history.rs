@@ -139,10 +139,16 @@ fn a_history_whose_mesh_solve_fails_says_so_as_a_solver_failure() {
     robot(&dir, false);
     // 1000 N bends the prototype far past its tendon's limit (EI / r^2, about 26 N): the
     // full-slip solve of that step, which chooses the history's mesh, fails before any step.
-    let out = run(&dir, &["sweep", "robot.toml", "--tension", "1=0", "--history", "0,2,1000"]);
+    let out = run(
+        &dir,
+        &["sweep", "robot.toml", "--tension", "1=0", "--history", "0,2,1000"],
+    );
     let err = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(3), "{err}");
-    assert!(err.contains("no step was solved") && err.contains("chooses the history's mesh"), "{err}");
+    assert!(
+        err.contains("no step was solved") && err.contains("chooses the history's mesh"),
+        "{err}"
+    );
     assert!(err.contains("likely cause") && err.contains("termination:"), "{err}");
 }
 

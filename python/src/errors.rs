@@ -56,6 +56,13 @@ create_exception!(
     "A robot's scales or loads are far from any tendon robot's (a 200 m rod, a tendon bending the rod past a radian per offset, a solved tension past its limit): the answer may be right but is likely not what was meant."
 );
 
+create_exception!(
+    tdcr,
+    PoorFitWarning,
+    PyUserWarning,
+    "A calibration converged but does not explain the data: its noise estimate is far above the measurement noise (Calibration.poor_fit says why, with the likely causes)."
+);
+
 /// A library error as the matching exception, with the same message.
 pub fn to_py(error: tdcr::Error) -> PyErr {
     to_py_with(error, "")
@@ -182,5 +189,6 @@ pub fn register(module: &Bound<'_, PyModule>) -> PyResult<()> {
     module.add("NotConverged", py.get_type::<NotConverged>())?;
     module.add("IntervalCap", py.get_type::<IntervalCap>())?;
     module.add("PlausibilityWarning", py.get_type::<PlausibilityWarning>())?;
+    module.add("PoorFitWarning", py.get_type::<PoorFitWarning>())?;
     Ok(())
 }

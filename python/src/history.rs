@@ -127,7 +127,11 @@ pub fn history(
         ranges = ranges.up_down();
     }
     let options = settings.collocation;
-    let robots = || (0..ranges.steps()).filter_map(|k| ranges.robot(k as f64).ok()).collect::<Vec<_>>();
+    let robots = || {
+        (0..ranges.steps())
+            .filter_map(|k| ranges.robot(k as f64).ok())
+            .collect::<Vec<_>>()
+    };
     let result = py
         .detach(|| boundary::caught(|| solve_history(&ranges, &options)))
         .map_err(|failure| match failure {

@@ -6,6 +6,7 @@
 mod analysis;
 mod boundary;
 mod branch;
+mod calibration;
 mod compare;
 mod control;
 mod convert;
@@ -277,7 +278,7 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<solution::PyState>()?;
     m.add_class::<analysis::PyTipSensitivities>()?;
     m.add_class::<analysis::PyInverseResult>()?;
-    m.add_class::<analysis::PyCalibration>()?;
+    m.add_class::<calibration::PyCalibration>()?;
     m.add_class::<branch::PySweep>()?;
     m.add_class::<branch::PyTrace>()?;
     m.add_class::<history::PyHistory>()?;
@@ -294,7 +295,7 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(gradient::linearize, m)?)?;
     m.add_function(wrap_pyfunction!(analysis::solve_tensions, m)?)?;
     m.add_function(wrap_pyfunction!(analysis::solve_displacements, m)?)?;
-    m.add_function(wrap_pyfunction!(analysis::calibrate, m)?)?;
+    m.add_function(wrap_pyfunction!(calibration::calibrate, m)?)?;
     m.add_function(wrap_pyfunction!(compare::compare, m)?)?;
     m.add_function(wrap_pyfunction!(picture::figure, m)?)?;
     m.add_function(wrap_pyfunction!(case_s, m)?)?;

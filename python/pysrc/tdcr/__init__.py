@@ -19,7 +19,7 @@ stick/slip friction: the hysteresis loop),
 and `tdcr.jax` wrap it, with the `torch` and `jax` extras), `solve_tensions` and `solve_displacements` (inverse statics), `calibrate` (E and base angles from measured tips). Cases:
 `tdcr.cases`. A cluster: `tdcr.distributed` (Dask). Errors: `Error` and its subclasses
 `InvalidInput` (with `FileError`, `SingularRouting`), `NotConverged`, `IntervalCap`,
-`Breakdown`; warnings: `PlausibilityWarning`. Pictures: `plot` and `Solution.plot`
+`Breakdown`; warnings: `PlausibilityWarning`, `PoorFitWarning`. Pictures: `plot` and `Solution.plot`
 (matplotlib, the `plot` extra), `figure` (the command line's SVG/PNG picture). docs/python.md
 is the walk-through.
 """
@@ -31,6 +31,7 @@ from ._native import (
     Event,
     FileError,
     PlausibilityWarning,
+    PoorFitWarning,
     IntervalCap,
     InvalidInput,
     InverseResult,
@@ -74,6 +75,7 @@ __all__ = [
     "FileError",
     "History",
     "PlausibilityWarning",
+    "PoorFitWarning",
     "IntervalCap",
     "InvalidInput",
     "InverseResult",

@@ -32,6 +32,7 @@ __all__ = [
     "Solver",
     "figure",
     "PlausibilityWarning",
+    "PoorFitWarning",
     "Event",
     "tip_sensitivities",
     "linearize",
@@ -648,6 +649,9 @@ class Calibration:
     termination: str
     iterations: int
     solves: int
+    poor_fit: Optional[str]
+    """Why the fit does not explain the data (noise estimate far above `noise`, or above
+    1.5 % of the rod length without it), with the likely causes; None when it does."""
 
 def calibrate(
     robot: Robot,
@@ -655,14 +659,22 @@ def calibrate(
     tip_forces: ArrayLike,
     measured_tips: ArrayLike,
     *,
-    fit: Optional[Sequence[Literal["youngs_modulus", "euler", "base_position", "offset_scale", "friction"]]] = None,
+    fit: Optional[
+        Sequence[
+            Literal[
+                "youngs_modulus", "euler", "base_position", "offset_scale", "friction", "e", "position", "offset", "mu"
+            ]
+        ]
+    ] = None,
     motions: Optional[Sequence[Optional[Literal["pull", "release"]]]] = None,
     max_iterations: int = 50,
+    noise: Optional[float] = None,
     intervals: Optional[int] = None,
     residual_tolerance: Optional[float] = None,
 ) -> Calibration:
-    """Fits E and the base Euler angles (by default) to measured tips; Ctrl-C raises
-    KeyboardInterrupt (no result)."""
+    """Fits E and the base Euler angles (by default) to measured tips; a fit far above the
+    measurement `noise` (m per coordinate) sets `poor_fit` and warns (`PoorFitWarning`);
+    Ctrl-C raises KeyboardInterrupt (no result)."""
 
 def case_s() -> Robot:
     """Reference case S."""
@@ -728,6 +740,9 @@ class Solver:
 
 class PlausibilityWarning(UserWarning):
     """A robot's scales or loads are far from any tendon robot's (a 200 m rod, ...)."""
+
+class PoorFitWarning(UserWarning):
+    """A calibration converged but does not explain the data (`Calibration.poor_fit`)."""
 
 def figure(
     robot: Robot,

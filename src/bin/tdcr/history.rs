@@ -186,7 +186,9 @@ fn warn_unstable(name: &str, steps: &[HistoryStep]) {
 /// full-slip solve of the most loaded step, which chooses the history's mesh (a solver
 /// failure, exit 3, with its diagnostics and the likely causes the steps' robots give).
 fn before_any_step(e: tdcr::Error, ranges: &Ranges) -> Failure {
-    let robots: Vec<tdcr::Robot> = (0..ranges.steps()).filter_map(|k| ranges.robot(k as f64).ok()).collect();
+    let robots: Vec<tdcr::Robot> = (0..ranges.steps())
+        .filter_map(|k| ranges.robot(k as f64).ok())
+        .collect();
     let causes = tdcr::model::scales::likely_causes_of(&e, &robots);
     match solver_failure(e) {
         Failure::Input(t) => Failure::Input(format!("--history: {t}")),
