@@ -141,6 +141,9 @@ tip_moment = [0.0, 0.0, 0.0]            # N m
 routing = { kind = "straight", x = 0.008, y = 0.0 }   # m
 tension = 2.94                   # N, >= 0
 # end = 0.242                    # m, where the tendon is attached; default the tip
+# friction = 0.1                 # capstan friction coefficient in its channels (docs/friction.md)
+# motion = "pull"                # or "release": the way it slides in full slip; default pull
+# stiffness = 2000.0             # N, E_t A_t: an elastic tendon (a load history needs it)
 
 [[tendon]]                       # tendon 2
 routing = { kind = "straight", x = 0.0, y = 0.008 }
