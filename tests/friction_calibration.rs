@@ -215,3 +215,57 @@ fn the_command_fits_mu() {
     assert!(stdout.contains("friction = 0.100000"), "{stdout}");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// Tendons whose coefficients differ keep their ratios: the fit scales them together (mu
+/// is the first one's), and a fit without mu leaves each its own (before, every forward
+/// solve of the fit gave all of them the first one's).
+#[test]
+fn different_coefficients_keep_their_ratios() {
+    // Tendons 1 and 2 (at right angles) with mu 0.05 and 0.15; the truth twice both.
+    let mut start = robot(0.05);
+    start.tendons[1].friction = Some(Friction::pull(0.15));
+    let mut data = experiments();
+    for e in &mut data {
+        e.tensions[1] = 0.5 * e.tensions[0];
+    }
+    let mut truth = Parameters::of(&start);
+    assert_eq!(truth.friction, 0.05);
+    truth.friction = 0.1;
+    let applied = truth.apply(&start);
+    // 1e-15 relative: the ratio 3 times 2, rounded once.
+    let second = applied.tendons[1].friction.unwrap().coefficient;
+    assert!((second / 0.3 - 1.0).abs() < 1e-15, "{second}");
+    let tips = predict(&start, &truth, &data, &CalibrationOptions::default()).unwrap();
+    for (e, tip) in data.iter_mut().zip(tips) {
+        e.measured_tip = tip;
+    }
+    let options = CalibrationOptions {
+        fit: Fit {
+            friction: true,
+            ..Fit::none()
+        },
+        ..CalibrationOptions::default()
+    };
+    let fit = calibrate(&start, &data, &options).unwrap();
+    assert!(fit.converged(), "{}", fit.termination);
+    // 1e-8: noise-free data made by the same model on the same mesh; a wrong column (the
+    // plain sum) would still converge, but more slowly: the value is what is checked.
+    assert!(
+        (fit.fitted.friction / 0.1 - 1.0).abs() < 1e-8,
+        "{}",
+        fit.fitted.friction
+    );
+    let fitted = fit.robot.tendons[1].friction.unwrap().coefficient;
+    assert!((fitted / 0.3 - 1.0).abs() < 1e-8, "{fitted}");
+    // E alone: the coefficients are the robot's own in every solve and in the result.
+    let e_only = CalibrationOptions {
+        fit: Fit {
+            youngs_modulus: true,
+            ..Fit::none()
+        },
+        ..CalibrationOptions::default()
+    };
+    let fit = calibrate(&start, &data, &e_only).unwrap();
+    assert_eq!(fit.robot.tendons[0].friction.unwrap().coefficient, 0.05);
+    assert_eq!(fit.robot.tendons[1].friction.unwrap().coefficient, 0.15);
+}

@@ -75,7 +75,8 @@ fn rows3(value: &Bound<'_, PyAny>, what: &str) -> PyResult<Vec<Vector3<f64>>> {
 
 /// Calibration (`tdcr::fit::calibrate`): fits Young's modulus and the base XYZ Euler angles
 /// (by default; `fit` names any of "youngs_modulus", "euler", "base_position",
-/// "offset_scale", "friction": the coefficient shared by the tendons with friction, read
+/// "offset_scale", "friction": the first tendon with friction's coefficient, the others'
+/// scaled with it in proportion, read
 /// back from the fitted robot; `tdcr calibrate --fit`'s names "e", "position", "offset" and
 /// "mu" are accepted too) to measured tips. `noise` (m per coordinate, e.g. 1e-4 for 0.1
 /// mm) is the measurement noise: a fit whose noise estimate is above 3 times it (above 1.5 %

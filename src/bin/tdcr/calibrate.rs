@@ -38,7 +38,7 @@ pub struct CalibrateArgs {
     experiments: String,
     /// Parameters to fit, comma-separated: e (Young's modulus at fixed Poisson's ratio),
     /// euler (base XYZ Euler angles), position (base position), offset (tendon offset scale),
-    /// mu (the friction coefficient shared by the robot's tendons with friction).
+    /// mu (the friction coefficient of the robot's first tendon with friction; the others keep their ratios to it).
     #[arg(long, value_name = "LIST", default_value = "e,euler", value_parser = parse_fit)]
     fit: Fit,
     /// Mesh intervals of every solve (a fixed mesh). Default: the robot file's `intervals`.

@@ -40,8 +40,9 @@
 //!   error in where the tendon holes are), off by default. It is nearly interchangeable with
 //!   E for tendon-bent shapes (the tendon moment tau c r bends against E I); experiments with
 //!   a tip load or with no tension separate them.
-//! - Friction coefficient mu (dimensionless), off by default: one value for every tendon with
-//!   friction (docs/friction.md), which the robot must have (its coefficient is the start).
+//! - Friction coefficient mu (dimensionless), off by default: the first tendon with friction's
+//!   (docs/friction.md), which the robot must have (its coefficient is the start); the other
+//!   tendons with friction keep their ratios to it (one shared value where they are equal).
 //!   Each experiment's [`Measurement::motion`] says whether it is a loading (`pull`) or an
 //!   unloading (`release`) step; the difference between the two is what identifies mu.
 //!
@@ -60,6 +61,7 @@
 //! d p_k / dc      = Sensitivity::derivative of the scaled routings (central difference of
 //!                   the residual, IFT solve)
 //! d p_k / d mu     = sum over the tendons with friction of TipSensitivities::friction
+//!                    times mu_i / mu (1 where the coefficients are equal)
 //! ```
 //!
 //! The sensitivity module differentiates with respect to a world-frame rotation vector phi,
@@ -250,10 +252,21 @@ fn jacobian(
                         Unknown::Euler(i) => rotation.column(*i).into_owned(),
                         Unknown::BasePosition(i) => sens.base_position.fixed_rows::<3>(0).column(*i).into_owned(),
                         Unknown::OffsetScale => offset_column(&robot, solution, params.offset_scale)?,
-                        // Every tendon with friction shares mu: the sum of their columns.
-                        Unknown::Friction => (0..robot.tendons.len())
-                            .map(|i| sens.friction.fixed_view::<3, 1>(0, i).into_owned())
-                            .sum(),
+                        // Every tendon with friction moves with mu (the first one's), in
+                        // proportion to its coefficient: the sum of their columns, each times
+                        // its coefficient over the first's (1 where they are equal).
+                        Unknown::Friction => {
+                            let first = Parameters::of(&robot).friction;
+                            (0..robot.tendons.len())
+                                .map(|i| {
+                                    let column = sens.friction.fixed_view::<3, 1>(0, i).into_owned();
+                                    match robot.tendons[i].active_friction() {
+                                        Some(f) if f.coefficient != first => column * (f.coefficient / first),
+                                        _ => column,
+                                    }
+                                })
+                                .sum()
+                        }
                     };
                     block.set_column(j, &(column * u.scale(start, length)));
                 }

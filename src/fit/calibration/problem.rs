@@ -59,9 +59,10 @@ pub struct Parameters {
     pub base_position: Vector3<f64>,
     /// Factor on every tendon offset r_i(s), relative to the robot's routings (1: as given).
     pub offset_scale: f64,
-    /// Friction coefficient mu (dimensionless) of every tendon with friction (one shared
-    /// value, docs/friction.md). 0 when no tendon of the robot has friction (then mu cannot
-    /// be fitted).
+    /// Friction coefficient mu (dimensionless) of the robot's first tendon with friction
+    /// (docs/friction.md); the other tendons with friction keep their coefficients' ratios
+    /// to it (one shared value where they are equal), so fitting it scales them all. 0 when
+    /// no tendon of the robot has friction (then mu cannot be fitted).
     pub friction: f64,
 }
 
@@ -95,8 +96,9 @@ impl Parameters {
 
     /// A copy of `robot` with these parameters: the section rebuilt from the rod's geometry
     /// with E (when the rod has a geometry and E is finite), the base pose set, and every
-    /// tendon offset multiplied by `offset_scale`, and every tendon with friction given the
-    /// coefficient `friction` (when it is > 0 and finite; 0 leaves the robot's).
+    /// tendon offset multiplied by `offset_scale`, and the first tendon with friction given
+    /// the coefficient `friction`, the others theirs times the same factor (when it is > 0
+    /// and finite; 0 leaves the robot's).
     pub fn apply(&self, robot: &Robot) -> Robot {
         let mut out = robot.clone();
         if let (Some(g), true) = (&mut out.rod.geometry, self.youngs_modulus.is_finite()) {
@@ -116,10 +118,15 @@ impl Parameters {
                 t.routing = scaled_routing(&t.routing, self.offset_scale);
             }
         }
-        if self.friction.is_finite() && self.friction > 0.0 {
+        let first = Parameters::of(robot).friction;
+        if self.friction.is_finite() && self.friction > 0.0 && first > 0.0 {
+            // Equal coefficients take the value itself (no rounding of a ratio).
+            let factor = self.friction / first;
             for f in out.tendons.iter_mut().filter_map(|t| t.friction.as_mut()) {
-                if f.coefficient > 0.0 {
+                if f.coefficient == first {
                     f.coefficient = self.friction;
+                } else if f.coefficient > 0.0 {
+                    f.coefficient *= factor;
                 }
             }
         }
@@ -138,7 +145,8 @@ pub struct Fit {
     pub base_position: bool,
     /// The tendon offset scale. Default false.
     pub offset_scale: bool,
-    /// The friction coefficient shared by the tendons with friction. Default false.
+    /// The friction coefficient: the first tendon with friction's, the others' kept in
+    /// proportion ([`Parameters::friction`]). Default false.
     pub friction: bool,
 }
 
