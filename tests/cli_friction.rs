@@ -51,6 +51,14 @@ fn sweep_takes_friction_as_solve_does() {
             };
             assert_eq!(tips(&by_option), tips(&by_file));
             assert_ne!(tips(&by_option), tips(&frictionless));
+            // The delivered tension, last, as the history's CSV has it: below the input
+            // (pulled in, friction takes its share), none without friction.
+            let header = by_option.lines().next().unwrap();
+            assert!(header.ends_with(",event,delivered_1"), "{header}");
+            assert!(frictionless.lines().next().unwrap().ends_with(",event"));
+            let last = by_option.lines().last().unwrap();
+            let delivered: f64 = last.rsplit(',').next().unwrap().parse().unwrap();
+            assert!(delivered > 3.5 && delivered < 4.91, "{last}");
             continue;
         }
         assert_eq!(by_option, by_file);

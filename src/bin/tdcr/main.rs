@@ -18,6 +18,7 @@ mod picture;
 mod robot_args;
 mod solve;
 mod sweep;
+mod sweep_csv;
 mod sweep_picture;
 mod table2;
 mod tables;

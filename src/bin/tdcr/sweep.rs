@@ -8,14 +8,13 @@ use std::io::{IsTerminal, Write};
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
 use tdcr::analysis::sweep::{Input, Kind, Ranges, Sweep, SweepSolver};
-use tdcr::io::csv_table::CsvTable;
-use tdcr::io::{number, output};
 use tdcr::{Parameter, Robot, Solution};
 
 use crate::args::{SolverArgs, parse_disks, parse_displacement_sweep, parse_param_sweep, parse_sweep};
 use crate::failure::{Failure, emit, note, picture_format, write_file, write_picture};
 use crate::failure::{solver_failure, with_likely_causes};
 use crate::robot_args::{FrictionArgs, apply, read_robot, set_displacement, set_tension};
+use crate::sweep_csv::{header, row};
 use crate::sweep_picture::{Drawn, Shape, chosen, picture};
 use crate::tables::summary;
 
@@ -33,7 +32,7 @@ pub struct SweepArgs {
     /// releases it) or a fixed `I=METRES`. Repeatable; every range must have the same COUNT.
     /// The CSV gets a `displacement_I` column, and `tension_I` holds the solved tension.
     #[arg(long, value_name = "I=START:STOP:COUNT", value_parser = parse_displacement_sweep, allow_hyphen_values = true)]
-    displacement: Vec<(usize, Vec<f64>)>,
+    pub(crate) displacement: Vec<(usize, Vec<f64>)>,
     /// Any other input: `NAME=START:STOP:COUNT` or `NAME=VALUE`, NAME one of
     /// `tension.I` (N), `tip_force.x|y|z` (N), `tip_moment.x|y|z` (N m),
     /// `base_position.x|y|z` (m), `distributed_force.x|y|z` (N/m, that component at every s),
@@ -130,8 +129,10 @@ impl Progress {
 }
 
 /// The ranges of a sweep: the `--param` inputs parsed for the robot, and the number of steps.
-struct Plan<'a> {
-    params: Vec<(Parameter, &'a Vec<f64>)>,
+pub(crate) struct Plan<'a> {
+    /// The `--param` inputs and their values.
+    pub(crate) params: Vec<(Parameter, &'a Vec<f64>)>,
+    /// The number of steps.
     steps: usize,
 }
 
@@ -249,7 +250,7 @@ fn parse_shapes(text: &str) -> Result<Shapes, String> {
 }
 
 /// The k-th value of a range, or its one value.
-fn at(v: &[f64], k: usize) -> f64 {
+pub(crate) fn at(v: &[f64], k: usize) -> f64 {
     v[if v.len() == 1 { 0 } else { k }]
 }
 
@@ -292,7 +293,7 @@ pub fn run(args: &SweepArgs) -> Result<(), Failure> {
             )));
         }
     }
-    let mut csv = header(args, &plan, file.robot.tendons.len());
+    let mut csv = header(args, &plan, &file.robot);
     let start = args
         .start
         .as_deref()
@@ -352,7 +353,7 @@ pub fn run(args: &SweepArgs) -> Result<(), Failure> {
         }
         let event: Vec<String> = step.events.iter().map(ToString::to_string).collect();
         let event = event.join("; ");
-        row(&mut csv, args, &plan, k, &step.solution, &event);
+        row(&mut csv, (args, &plan, &file.robot), k, &step.solution, &event);
         if args.solver.verbose {
             progress.finish();
             note(&format!(
@@ -413,65 +414,6 @@ fn step_failure(f: Failure, k: usize, steps: usize, robot: &Robot) -> Failure {
         Failure::Other(t) => Failure::Other(format!("{head} failed; the CSV holds the steps before it\n{t}")),
         Failure::BrokenPipe => Failure::BrokenPipe,
     }
-}
-
-/// The CSV table with its header: the tensions of the `count` tendons, the pull-ins of the
-/// `--displacement` tendons, the `--param` inputs, then the results.
-fn header(args: &SweepArgs, plan: &Plan, count: usize) -> CsvTable {
-    let mut names = vec!["step".to_string()];
-    names.extend((1..=count).map(|i| format!("tension_{i}")));
-    names.extend(args.displacement.iter().map(|(i, _)| format!("displacement_{i}")));
-    names.extend(plan.params.iter().map(|(p, _)| p.to_string()));
-    names.extend(
-        [
-            "tip_x",
-            "tip_y",
-            "tip_z",
-            "bending_angle_deg",
-            "iterations",
-            "load_steps",
-            "solve_time",
-            "intervals",
-            "tip_error_estimate",
-            "stability",
-            "path",
-            "event",
-        ]
-        .map(String::from),
-    );
-    CsvTable::new(names)
-}
-
-/// Appends the CSV row of step `k` (from 0).
-fn row(csv: &mut CsvTable, args: &SweepArgs, plan: &Plan, k: usize, solution: &Solution, event: &str) {
-    let tip = solution.tip_position();
-    let report = &solution.report;
-    let mut fields = vec![(k + 1).to_string()];
-    // The solved tensions: the inputs of tension-controlled tendons, the unknowns of
-    // displacement-controlled ones.
-    fields.extend(solution.tendons.iter().map(|t| number(t.tension)));
-    fields.extend(
-        args.displacement
-            .iter()
-            .map(|&(i, _)| number(solution.tendons[i - 1].displacement)),
-    );
-    // The swept value itself (a load scale is not a property of the scaled robot).
-    fields.extend(plan.params.iter().map(|(_, v)| number(at(v, k))));
-    fields.extend([
-        number(tip.x),
-        number(tip.y),
-        number(tip.z),
-        number(output::bending_angle(solution).to_degrees()),
-        report.iterations.to_string(),
-        report.load_steps.to_string(),
-        number(report.timings.total.as_secs_f64()),
-        report.intervals.to_string(),
-        report.error_estimate.map_or(String::new(), |e| number(e.tip_position)),
-        report.stability.verdict().to_string(),
-        report.path.name().to_string(),
-        event.to_string(),
-    ]);
-    csv.row(fields);
 }
 
 /// The swept ranges, as the picture's subtitle says them.
