@@ -356,3 +356,31 @@ fn history_refuses_motion() {
         stderr(&out)
     );
 }
+
+/// A sweep whose released helical tendon makes the state flutter (the verdict of the
+/// linearized dynamics with friction) names the event as a loss of stability, on standard
+/// error too, where it said "stable to unknown" and the rows said `unstable`.
+#[test]
+fn a_sweep_into_flutter_says_it_became_unstable() {
+    let dir = scratch("flutter");
+    // A 0.3 m nitinol rod, tendon 3 helical (half a turn) with mu = 0.2 (a user's robot).
+    std::fs::write(
+        dir.join("robot.toml"),
+        "[rod]\nlength = 0.3\nouter_radius = 0.0005\nyoungs_modulus = 60e9\npoisson_ratio = 0.33\n\n\
+         [[tendon]]\nrouting = { kind = \"straight\", x = 0.006, y = 0.0 }\ntension = 0.0\n\n\
+         [[tendon]]\nrouting = { kind = \"helical\", radius = 0.006, turns_per_rod_length = 0.5, phase = 4.1887902047863905 }\n\
+         tension = 0.0\nfriction = 0.2\nstiffness = 1500.0\n",
+    )
+    .unwrap();
+    let out = run(
+        &dir,
+        &["sweep", "robot.toml", "--tension", "2=0:3:16", "--motion", "2=release"],
+    );
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    let csv = stdout(&out);
+    let unstable = csv.lines().filter(|l| l.contains(",unstable,")).count();
+    assert!(unstable > 0, "{csv}");
+    assert!(csv.contains("stable to unstable (flutter"), "{csv}");
+    assert!(!csv.contains("to unknown"), "{csv}");
+    assert!(stderr(&out).contains("warning: sweep step"), "{}", stderr(&out));
+}

@@ -28,7 +28,7 @@ impl Sweep<'_> {
         // found no stable state near it) the middle points follow its branch by Newton,
         // whatever their stability: where that branch ends (its fold) or changes is where
         // the sweep leaves it, a point of the branch and not of the step size.
-        let unstable = left.unstable.is_some_and(|n| n > 0);
+        let unstable = left.unstable.has_unstable_directions();
         // Bisection halves the bracket: 60 halvings take any step below 1e-18 of it, so
         // the width is reached first.
         for _ in 0..60 {
@@ -134,7 +134,7 @@ impl Sweep<'_> {
     /// of the unstable directions (a bifurcation). Each is at the bracket's middle.
     pub(super) fn events(&self, before: &Mark, after: &Mark) -> Vec<Event> {
         let at = 0.5 * (before.t + after.t);
-        let event = |kind| self.event(kind, at, before.unstable.is_some_and(|n| n > 0));
+        let event = |kind| self.event(kind, at, before.unstable.has_unstable_directions());
         let mut out: Vec<Event> = after
             .taut
             .iter()

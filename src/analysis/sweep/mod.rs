@@ -69,13 +69,14 @@ pub enum Kind {
         /// How far the tip jumped across the located bracket (m).
         distance: f64,
     },
-    /// The number of unstable directions changed without a jump: the branch crossed a
-    /// bifurcation (`None`: unknown).
+    /// The state's instability changed without a jump (its number of unstable directions,
+    /// or a growing mode of the linearized dynamics appeared or went): the branch crossed a
+    /// bifurcation.
     Bifurcation {
-        /// Unstable directions before.
-        before: Option<usize>,
-        /// Unstable directions after.
-        after: Option<usize>,
+        /// The instability before.
+        before: Instability,
+        /// The instability after.
+        after: Instability,
     },
     /// A displacement-controlled tendon (from 0) went taut (its solved tension became positive).
     Taut(usize),
@@ -124,13 +125,51 @@ fn significant(v: f64) -> crate::Readable {
     crate::Readable((v * scale).round() / scale)
 }
 
-/// `directions` unstable directions in words.
-fn stability_words(directions: Option<usize>) -> String {
-    match directions {
-        Some(0) => "stable".into(),
-        Some(1) => "unstable (1 direction)".into(),
-        Some(n) => format!("unstable ({n} directions)"),
-        None => "unknown".into(),
+/// A state's instability as a sweep's events compare it ([`Stability`] without its figures).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Instability {
+    /// The number of unstable directions of the second variation (conservative loads; 0:
+    /// stable, which a verdict of the linearized dynamics gives too).
+    Directions(usize),
+    /// A growing mode of the linearized dynamics (loads that are not conservative, friction).
+    Growing {
+        /// Whether it oscillates (flutter) or not (divergence).
+        flutter: bool,
+    },
+    /// No verdict.
+    Unknown,
+}
+
+impl Instability {
+    /// The instability of a state with the verdict `s`.
+    pub fn of(s: &Stability) -> Self {
+        match s {
+            Stability::Stable => Instability::Directions(0),
+            Stability::Unstable { directions, .. } => Instability::Directions(*directions),
+            Stability::Growing { growth, .. } => Instability::Growing {
+                flutter: matches!(growth, crate::report::Growth::Flutter { .. }),
+            },
+            Stability::Unknown { .. } => Instability::Unknown,
+        }
+    }
+
+    /// Whether the energy decreases along some direction (a conservative instability: the
+    /// robot leaves the state by buckling or snapping, which the sweep's snaps follow). A
+    /// growing mode of the linearized dynamics is not one: damping can hold it.
+    pub fn has_unstable_directions(&self) -> bool {
+        matches!(self, Instability::Directions(n) if *n > 0)
+    }
+}
+
+/// `instability` in words.
+fn stability_words(instability: Instability) -> String {
+    match instability {
+        Instability::Directions(0) => "stable".into(),
+        Instability::Directions(1) => "unstable (1 direction)".into(),
+        Instability::Directions(n) => format!("unstable ({n} directions)"),
+        Instability::Growing { flutter: true } => "unstable (flutter: a growing oscillation)".into(),
+        Instability::Growing { flutter: false } => "unstable (divergence: a growing mode)".into(),
+        Instability::Unknown => "unknown".into(),
     }
 }
 
@@ -181,15 +220,6 @@ pub struct Step {
     pub events: Vec<Event>,
 }
 
-/// Unstable directions of a verdict (0: stable; `None`: unknown).
-pub(crate) fn directions(s: &Stability) -> Option<usize> {
-    match s {
-        Stability::Stable => Some(0),
-        Stability::Unstable { directions, .. } => Some(*directions),
-        _ => None,
-    }
-}
-
 /// Which displacement-controlled tendons (from 0) are taut in `solution` of `robot`.
 fn taut(robot: &Robot, solution: &Solution) -> Vec<(usize, bool)> {
     (0..robot.tendons.len())
@@ -204,7 +234,7 @@ struct Mark {
     t: f64,
     solution: Solution,
     taut: Vec<(usize, bool)>,
-    unstable: Option<usize>,
+    unstable: Instability,
 }
 
 impl Mark {
@@ -212,7 +242,7 @@ impl Mark {
         Mark {
             t,
             taut: taut(robot, &solution),
-            unstable: directions(&solution.report.stability),
+            unstable: Instability::of(&solution.report.stability),
             solution,
         }
     }
@@ -341,8 +371,8 @@ impl<'r> Sweep<'r> {
                 // robot went when the states it was on lost their stability: the snap is
                 // at that (located) loss, not where the sweep happened to find the state.
                 if jump
-                    && left.unstable.is_some_and(|n| n > 0)
-                    && right.unstable == Some(0)
+                    && left.unstable.has_unstable_directions()
+                    && right.unstable == Instability::Directions(0)
                     && let Some((at, tip)) = self.lost
                 {
                     let landed = self.landing(at, &right, tip);
@@ -371,7 +401,7 @@ impl<'r> Sweep<'r> {
                     })
                 };
                 let found: Vec<Event> = found.into_iter().filter(|e| !again(e)).collect();
-                if before.unstable == Some(0) && after.unstable.is_some_and(|n| n > 0) {
+                if before.unstable == Instability::Directions(0) && after.unstable.has_unstable_directions() {
                     self.lost = Some((0.5 * (before.t + after.t), before.tip()));
                 }
                 events.extend(found);
@@ -390,7 +420,7 @@ impl<'r> Sweep<'r> {
                 self.pace = Some((right.tip() - left.tip()).norm() / span);
             }
         }
-        if right.unstable == Some(0) {
+        if right.unstable == Instability::Directions(0) {
             self.lost = None;
         }
         self.last = Some(right.clone());

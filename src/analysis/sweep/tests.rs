@@ -390,8 +390,8 @@ fn every_step_has_its_own_verdict_and_the_bifurcation_is_located() {
     assert_eq!(
         e.kind,
         Kind::Bifurcation {
-            before: Some(0),
-            after: Some(2)
+            before: Instability::Directions(0),
+            after: Instability::Directions(2)
         }
     );
     // P_cr of the rod to 5e-4 relative: the discretization's error in the critical load
@@ -423,8 +423,8 @@ fn a_bifurcation_on_an_unstable_branch_is_located_along_it() {
     assert_eq!(
         e.kind,
         Kind::Bifurcation {
-            before: Some(2),
-            after: Some(4)
+            before: Instability::Directions(2),
+            after: Instability::Directions(4)
         }
     );
     assert!(e.from_unstable, "{e:?}");

@@ -351,6 +351,15 @@ pub fn run(args: &SweepArgs) -> Result<(), Failure> {
                 drawn.snaps.push((k, before, after, e.to_string()));
             }
         }
+        // A bifurcation into an unstable state: on standard error too (the CSV's column alone
+        // is easy to miss).
+        for e in step.events.iter().filter(|e| {
+            matches!(e.kind, Kind::Bifurcation { after, .. } if after.has_unstable_directions()
+                || matches!(after, tdcr::analysis::sweep::Instability::Growing { .. }))
+        }) {
+            progress.finish();
+            note(&format!("warning: sweep step {}: {e}", k + 1));
+        }
         let event: Vec<String> = step.events.iter().map(ToString::to_string).collect();
         let event = event.join("; ");
         row(&mut csv, (args, &plan, &file.robot), k, &step.solution, &event);
