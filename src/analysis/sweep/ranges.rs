@@ -75,14 +75,14 @@ impl Ranges {
             if values.len() != 1 && values.len() != steps {
                 return Err(invalid(
                     format!("{input}"),
-                    format!("{input} has {} values but another input has {steps}", values.len()),
+                    format!("has {} values but another input has {steps}", values.len()),
                     "give every input one value per step (or one value for all steps)",
                 ));
             }
             if let Some(v) = values.iter().find(|v| !v.is_finite()) {
                 return Err(invalid(
                     format!("{input}"),
-                    format!("{input} has the value {v}"),
+                    format!("has the value {v}"),
                     "give finite values",
                 ));
             }

@@ -114,8 +114,8 @@ pub(super) fn rigid(i: usize, s: f64) -> Error {
     error::invalid(
         format!("tendons[{i}].stiffness"),
         format!(
-            "tendon {} sticks in its channel near s = {s:.4} m during this step, but it is rigid: the tension of \
-             a stuck rigid tendon can be anything friction allows (statically indeterminate)",
+            "is not set (tendon {} is rigid), but the tendon sticks in its channel near s = {s:.4} m during this \
+             step: the tension of a stuck rigid tendon can be anything friction allows (statically indeterminate)",
             i + 1
         ),
         "set the tendon's axial stiffness E_t A_t (`stiffness` in N) so that its stuck part stretches",
