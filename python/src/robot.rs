@@ -342,7 +342,8 @@ impl PyRobot {
     /// A copy with named parameters set, e.g. `{"tension.1": 3.0, "tip_force.z": -0.1}`
     /// (the names of `tdcr batch` headers and of sweeps: `tension.I`, which makes tendon I
     /// tension-controlled, `tip_force.x|y|z`, `tip_moment.x|y|z`, `base_position.x|y|z`,
-    /// `distributed_force.x|y|z`, `load_scale`, `youngs_modulus`; docs/parameters.md).
+    /// `distributed_force.x|y|z`, `load_scale`, `youngs_modulus`, `friction.I`, tendon I's
+    /// friction coefficient; docs/parameters.md).
     fn with_parameters(&self, parameters: &Bound<'_, PyDict>) -> PyResult<Self> {
         let mut out = self.clone();
         let mut set = Vec::with_capacity(parameters.len());
@@ -389,6 +390,30 @@ impl PyRobot {
     #[getter]
     fn tendon_stiffnesses(&self) -> Vec<Option<f64>> {
         self.file.robot.tendons.iter().map(|t| t.stiffness).collect()
+    }
+
+    /// Friction coefficients mu of the tendons with friction in their channels, None for the
+    /// others: a list of k entries, file order (docs/friction.md).
+    #[getter]
+    fn frictions(&self) -> Vec<Option<f64>> {
+        self.file
+            .robot
+            .tendons
+            .iter()
+            .map(|t| t.friction.map(|f| f.coefficient))
+            .collect()
+    }
+
+    /// The motion each tendon with friction models in full slip, "pull" or "release", None
+    /// for the others: a list of k entries, file order (a load history decides its own).
+    #[getter]
+    fn motions(&self) -> Vec<Option<&'static str>> {
+        self.file
+            .robot
+            .tendons
+            .iter()
+            .map(|t| t.friction.map(|f| f.motion.name()))
+            .collect()
     }
 
     /// Free lengths (m) of tendon between the base and the actuator, shape (k,), file order

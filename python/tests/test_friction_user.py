@@ -84,6 +84,13 @@ def test_calibrate_says_when_the_fit_does_not_explain_the_data():
         tdcr.calibrate(rough(0.05), tensions, forces, tips, fit=["mu"], noise=-1.0)
 
 
+def test_a_robot_reads_its_friction_back():
+    robot = rough(0.1, motion="release")
+    assert robot.frictions == [0.1, None]
+    assert robot.motions == ["release", None]
+    assert robot.with_parameters({"friction.2": 0.3}).frictions == [0.1, 0.3]
+
+
 def test_an_empty_history_is_bad_input():
     robot = rough(0.1, 0.0, stiffness=2000.0)
     with pytest.raises(tdcr.InvalidInput, match="gives no rows"):

@@ -117,7 +117,8 @@ class Robot:
     def with_displacements(self, displacements: Sequence[Optional[float]]) -> Robot:
         """A copy with actuator pull-ins (m) per tendon; None: tension-controlled."""
     def with_parameters(self, parameters: Mapping[str, float]) -> Robot:
-        """A copy with named parameters set (`tension.1`, `tip_force.z`, ...; docs/parameters.md).
+        """A copy with named parameters set (`tension.1`, `tip_force.z`, `friction.1`, ...;
+        docs/parameters.md).
 
         `tension.I` makes tendon I tension-controlled, as `with_tensions` does."""
     @property
@@ -135,6 +136,12 @@ class Robot:
     @property
     def tendon_stiffnesses(self) -> List[Optional[float]]:
         """Axial stiffnesses E_t A_t (N) of elastic tendons, None for inextensible ones."""
+    @property
+    def frictions(self) -> List[Optional[float]]:
+        """Friction coefficients of the tendons with friction, None for the others."""
+    @property
+    def motions(self) -> List[Optional[str]]:
+        """"pull" or "release" for the tendons with friction (full slip), None for the others."""
     @property
     def free_lengths(self) -> FloatArray:
         """Free lengths (m) between base and actuator, shape (k,)."""
