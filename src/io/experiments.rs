@@ -127,7 +127,10 @@ pub fn parse_csv(text: &str, file: &str, tendons: usize) -> Result<Vec<Measureme
         } else if slot.is_none() {
             let hint = match name.strip_prefix("tension_").and_then(|i| i.parse::<usize>().ok()) {
                 Some(i) => format!("the robot has {tendons} tendon(s), so tension_{i} is not one of its columns"),
-                None => format!("the columns are {}", expected.join(",")),
+                None => format!(
+                    "the columns are {} (and an optional {MOTION_COLUMN})",
+                    expected.join(",")
+                ),
             };
             problems.push(Problem {
                 position: at(header_line, column),

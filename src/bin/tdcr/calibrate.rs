@@ -128,8 +128,10 @@ pub fn run(args: &CalibrateArgs) -> Result<(), Failure> {
     let tendons = file.robot.tendons.len();
     let experiments = parse_csv(&text, &csv_name, tendons).map_err(|e| {
         Failure::Input(format!(
-            "{e}\n  the header for this robot ({tendons} tendon(s)) is {}",
-            csv_header(tendons)
+            "{e}\n  the header for this robot ({tendons} tendon(s)) is {}, with an optional `{}` column (pull or \
+             release, for tendons with friction)",
+            csv_header(tendons),
+            tdcr::io::experiments::MOTION_COLUMN
         ))
     })?;
     let mut options = CalibrationOptions {
