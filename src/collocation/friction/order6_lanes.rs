@@ -118,9 +118,25 @@ fn decline(profile: &Profile, stages: Vec<Stages>) -> Option<[Order6; 4]> {
 
 /// Eq. 13 with friction without derivatives at four points at once (`Profile::point` at
 /// each: a site, a state, the slips at log tensions `z[l]` and multipliers `w[l]` in lane
-/// l), in the profile's spare linearizations; None where the lanes decline them.
-#[inline(always)]
+/// l), in the profile's spare linearizations; None where the lanes decline them. One
+/// function for the three stages, compiled for AVX2 and FMA where the processor has them
+/// (checked at run time): inlined at each stage, the three copies of the lanes cost S's
+/// order-6 rows 32 k instructions more (H's 88 k).
+#[inline(never)]
 fn points4(
+    profile: &Profile,
+    sites: [&Site; 4],
+    segment_end: f64,
+    states: &[(nalgebra::Matrix3<f64>, nalgebra::Vector3<f64>, nalgebra::Vector3<f64>); 4],
+    z: [&[f64]; 4],
+    w: [Option<&[f64]>; 4],
+) -> Option<[Box<FrictionLinearization>; 4]> {
+    avx2_fma!(points4_kernel(profile, sites, segment_end, states, z, w))
+}
+
+/// [`points4`]'s operations.
+#[inline(always)]
+fn points4_kernel(
     profile: &Profile,
     sites: [&Site; 4],
     segment_end: f64,
