@@ -29,6 +29,7 @@ mod kinks;
 mod linearized;
 mod meshes;
 mod order6;
+mod order6_lanes;
 mod profile;
 mod pull_ins;
 mod staircase;
@@ -39,7 +40,8 @@ pub use grip::Contact;
 pub(crate) use grip::Grip;
 pub(crate) use group::intervals4;
 pub(crate) use interval::{IntervalLinearization, Profile, interval};
-pub(crate) use order6::interval_order6;
+pub(crate) use order6::{Order6, interval_order6};
+pub(crate) use order6_lanes::intervals4_order6;
 pub(in crate::collocation) use pull_ins::solve_pull_ins;
 
 use super::equilibrium::CLEAN_ITERATIONS;

@@ -70,11 +70,10 @@ fn march(model: &Model, (sites, routes): (&[Site], &[Vec<RoutingPoint>]), x: &[S
     }
 }
 
-/// Every tendon's tension at every node from `profile` into `out` (the profile for the
-/// slips, the model's tension for the others).
-fn node_tensions(model: &Model, profile: &Profile, out: &mut [Vec<f64>]) {
+/// The slips' tensions at every node from `profile` into `out` (every tendon's tension
+/// at each node, the others' the model's, which `out` holds already and keeps).
+fn node_tensions(profile: &Profile, out: &mut [Vec<f64>]) {
     for (n, t) in out.iter_mut().enumerate() {
-        t.copy_from_slice(&model.tensions);
         for (j, &i) in profile.slipping.iter().enumerate() {
             t[i] = profile.tension(j, profile.z[j][n.min(profile.spans[j])]);
         }
@@ -91,18 +90,26 @@ pub(super) fn capstan_start(model: &Model, mesh: &Mesh, x: &mut [State], profile
     let nodes = &mesh.nodes;
     let length = model.robot.length();
     let sites: Vec<Site> = nodes.iter().map(|n| model.site_on(n.s, n.segment_end)).collect();
-    let routes: Vec<Vec<RoutingPoint>> = (0..profile.count())
-        .map(|j| {
-            let routing = &model.robot.tendons[profile.slipping[j]].routing;
-            nodes[..=profile.spans[j]]
-                .iter()
-                .map(|n| routing.at(n.s, length))
-                .collect()
-        })
-        .collect();
     // The tendons reaching each node and their routing points there: the same on every pass.
     let (mut reaching, mut ends) = (Vec::new(), Vec::with_capacity(nodes.len()));
     reaching_routes(model, nodes, (&mut reaching, &mut ends));
+    // Each slip's routing points at the nodes of its span: those of `reaching` (the same
+    // evaluation, `Routing::at` at the node), else evaluated.
+    let routes: Vec<Vec<RoutingPoint>> = (0..profile.count())
+        .map(|j| {
+            let tendon = profile.slipping[j];
+            let routing = &model.robot.tendons[tendon].routing;
+            (0..=profile.spans[j])
+                .map(|k| {
+                    let from = if k == 0 { 0 } else { ends[k - 1] };
+                    reaching[from..ends[k]]
+                        .iter()
+                        .find(|r| r.0 == tendon)
+                        .map_or_else(|| routing.at(nodes[k].s, length), |r| r.2)
+                })
+                .collect()
+        })
+        .collect();
     let x0 = x.to_vec();
     let mut tensions: Vec<Vec<f64>> = vec![model.tensions.clone(); nodes.len()];
     let (mut wrench, mut plain, mut rough) = (Vec::new(), Vec::new(), Vec::new());
@@ -125,7 +132,7 @@ pub(super) fn capstan_start(model: &Model, mesh: &Mesh, x: &mut [State], profile
     let mut kept = x.to_vec();
     for _ in 0..PASSES {
         march(model, (&sites, &routes), x, profile);
-        node_tensions(model, profile, &mut tensions);
+        node_tensions(profile, &mut tensions);
         distal_strains(
             model,
             (nodes, &sites),

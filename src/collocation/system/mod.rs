@@ -11,6 +11,7 @@
 
 mod ahead;
 mod columns;
+mod friction6;
 mod inputs;
 mod jump;
 mod lanes;
@@ -323,14 +324,7 @@ impl<'a> System<'a> {
     ) -> Result<()> {
         local.fill(0.0);
         if let Some(profile) = &self.friction {
-            let length = self.model.robot.length();
-            return self.rows(x, out, |k, sites, seg, a, b, _| {
-                let quarters = self.quarters(k);
-                let (r, psi, start, end) = friction::interval_order6(profile, length, k, sites, quarters, seg, a, b)?;
-                (rates[k], rates[k + 1]) = (start, end);
-                local[k] = psi.iter().fold(r.amax(), |m, p| m.max(p.abs()));
-                Ok((r, end))
-            });
+            return self.friction_order6(profile, x, out, local, rates);
         }
         // With the node rates known the intervals are independent: runs of four go to the
         // lanes (`order6_group`).
