@@ -72,6 +72,26 @@ pub struct HistoryResult {
     pub failure: Option<(usize, Error)>,
 }
 
+/// The direction of each step of `ranges`' swept input ([`Ranges::swept`], the first input
+/// that changes): `up` where it rose from the step before, `down` where it fell, `held`
+/// (the first step, and where it did not change): the CSV's `direction` column and Python's
+/// `History.directions`.
+pub fn directions(ranges: &Ranges) -> Vec<&'static str> {
+    let swept = ranges.swept().map_or(0, |(i, _)| i);
+    (0..ranges.steps())
+        .map(|k| {
+            let change = k
+                .checked_sub(1)
+                .map(|p| ranges.value(swept, k as f64) - ranges.value(swept, p as f64));
+            match change {
+                Some(d) if d > 0.0 => "up",
+                Some(d) if d < 0.0 => "down",
+                _ => "held",
+            }
+        })
+        .collect()
+}
+
 /// Solves the steps of `ranges` as a history with stick/slip friction (module docs), by
 /// collocation with `options`, stopping at the first step that fails
 /// ([`HistoryResult::failure`]). The friction coefficients are the tendons'; their

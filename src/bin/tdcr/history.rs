@@ -4,7 +4,7 @@
 //! hysteresis loop (the tip's displacement against the swept input) as a picture.
 
 use std::path::Path;
-use tdcr::analysis::history::{HistoryStep, history};
+use tdcr::analysis::history::{HistoryStep, directions, history};
 use tdcr::analysis::sweep::{Input, Ranges};
 use tdcr::io::csv_table::CsvTable;
 use tdcr::io::{number, output};
@@ -92,16 +92,9 @@ pub fn run(
         .map(|s| s.zones.iter().map(|z| z.tendon).collect())
         .unwrap_or_default();
     let mut csv = header(count, *input, &slipping);
+    let directions = directions(ranges);
     for (k, step) in result.steps.iter().enumerate() {
-        let direction = match k
-            .checked_sub(1)
-            .map(|p| values[k.min(values.len() - 1)] - values[p.min(values.len() - 1)])
-        {
-            Some(d) if d > 0.0 => "up",
-            Some(d) if d < 0.0 => "down",
-            _ => "held",
-        };
-        row(&mut csv, k, direction, values[k.min(values.len() - 1)], step);
+        row(&mut csv, k, directions[k], values[k.min(values.len() - 1)], step);
     }
     let text = csv.finish();
     warn_unstable(name, &result.steps);
