@@ -92,31 +92,63 @@ pub(crate) fn interval(
 ) -> Result<IntervalLinearization> {
     let w = profile.multipliers(k);
     let derivatives = jac.is_some();
-    let mut out = interval_at(profile, length, k, sites, segment_end, a, b, w.as_deref(), jac)?;
-    let (Some(w), true) = (w, derivatives) else {
-        return Ok(out);
+    let (Some(w), true) = (w.as_deref(), derivatives) else {
+        return interval_at(profile, length, k, sites, segment_end, a, b, w.as_deref(), jac);
     };
     // A stuck link's multiplier w = (z_b - z_a) / C moves its backbone rows with its log
-    // tensions: d(rows)/dw by a central difference (the rows are smooth in w; a step of
-    // 1e-6 leaves a truncation of 1e-12 and rounding of 1e-10 of the rows' scale).
+    // tensions ([`add_multiplier_columns`]). The moved rows are evaluated first, so that the
+    // link's own evaluation is the one the profile keeps at its nodes (for the next link's
+    // start and the order-6 rows).
     let count = profile.count();
-    for j in (0..count).filter(|&j| profile.on_link(j, k) && profile.sticks(j, k)) {
-        let Some(capacity) = profile.stuck_capacity(j, k).filter(|c| *c > 0.0) else {
-            continue;
-        };
-        let step = 1e-6;
+    let mut moved_rows = Vec::new();
+    for (j, capacity) in stuck_slips(profile, k) {
         let moved = |d: f64| -> Result<Block<f64>> {
-            let mut w = w.clone();
+            let mut w = w.to_vec();
             w[j] += d;
-            Ok(interval_at(profile, length, k, sites, segment_end, a, b, Some(&w), None)?.residual)
+            let lin = interval_at(profile, length, k, sites, segment_end, a, b, Some(&w), None)?;
+            let rows = lin.residual;
+            profile.give_link(lin);
+            Ok(rows)
         };
-        let d_rows = (moved(step)? - moved(-step)?) / (2.0 * step);
-        for r in 0..12 {
-            out.rows_z[(r, j)] -= d_rows[r] / capacity;
-            out.rows_z[(r, count + j)] += d_rows[r] / capacity;
-        }
+        moved_rows.push((j, capacity, moved(MULTIPLIER_STEP)?, moved(-MULTIPLIER_STEP)?));
+    }
+    let mut out = interval_at(profile, length, k, sites, segment_end, a, b, Some(w), jac)?;
+    for (j, capacity, plus, minus) in &moved_rows {
+        add_multiplier_columns(&mut out, count, (*j, *capacity), plus, minus);
     }
     Ok(out)
+}
+
+/// The step of the central difference in a stuck slip's multiplier: the rows are smooth in
+/// w, and a step of 1e-6 leaves a truncation of 1e-12 and rounding of 1e-10 of the rows'
+/// scale.
+pub(super) const MULTIPLIER_STEP: f64 = 1e-6;
+
+/// The slips that stick on link k of `profile` (their rows the stick rows, their
+/// multipliers w = (z_b - z_a) / C), with their capacities C > 0
+/// ([`Profile::stuck_capacity`]; a slip without one has w = 0 whatever its log tensions).
+pub(super) fn stuck_slips<'p>(profile: &'p Profile, k: usize) -> impl Iterator<Item = (usize, f64)> + 'p {
+    (0..profile.count())
+        .filter(move |&j| profile.on_link(j, k) && profile.sticks(j, k))
+        .filter_map(move |j| profile.stuck_capacity(j, k).filter(|c| *c > 0.0).map(|c| (j, c)))
+}
+
+/// Adds to a stuck link's backbone rows' derivatives in the log tensions (`out`, `count`
+/// slips) their change through slip j's multiplier w = (z_b - z_a) / C (`(j, C)`): the
+/// rows' derivative in w by a central difference of the rows `plus` and `minus` at
+/// w_j +- [`MULTIPLIER_STEP`], divided by -C in z_a's column and +C in z_b's.
+pub(super) fn add_multiplier_columns(
+    out: &mut IntervalLinearization,
+    count: usize,
+    (j, capacity): (usize, f64),
+    plus: &Block<f64>,
+    minus: &Block<f64>,
+) {
+    let d_rows = (plus - minus) / (2.0 * MULTIPLIER_STEP);
+    for r in 0..12 {
+        out.rows_z[(r, j)] -= d_rows[r] / capacity;
+        out.rows_z[(r, count + j)] += d_rows[r] / capacity;
+    }
 }
 
 /// [`interval`] with the slips' multipliers `w` (None in full slip: the motions' signs),
@@ -128,7 +160,7 @@ pub(crate) fn interval(
 /// same order (Rust does not fuse a product and a sum into an FMA), so the same bits in
 /// wider registers.
 #[allow(clippy::too_many_arguments)]
-fn interval_at(
+pub(super) fn interval_at(
     profile: &Profile,
     length: f64,
     k: usize,
