@@ -18,7 +18,7 @@
 
 use super::interval::{
     IntervalLinearization, Link, MULTIPLIER_STEP, add_multiplier_columns, back, front, interval_at, node_tensions,
-    stuck_slips,
+    stuck_slips, value_rows,
 };
 use super::profile::{LinkScratch, Profile};
 use crate::collocation::dynamics::inertia_load_transposed;
@@ -150,16 +150,10 @@ impl Group<'_, '_> {
             })
         });
         let moved_w: [Option<&[f64]>; 4] = std::array::from_fn(|l| moved[l].as_deref());
-        if let Some(lins) = self.evaluate(moved_w, None)? {
-            let rows = std::array::from_fn(|l| {
-                if stuck[l].is_some() {
-                    lins[l].residual
-                } else {
-                    Block::zeros()
-                }
-            });
-            lins.into_iter().for_each(|lin| self.profile.give_link(lin));
-            return Ok(rows);
+        if let Some(rows) = self.rows(moved_w) {
+            return Ok(std::array::from_fn(|l| {
+                if stuck[l].is_some() { rows[l] } else { Block::zeros() }
+            }));
         }
         let mut rows = [Block::zeros(); 4];
         for (l, row) in rows.iter_mut().enumerate().filter(|(l, _)| stuck[*l].is_some()) {
@@ -186,6 +180,89 @@ impl Group<'_, '_> {
             profile.give_link(lin);
         }
         Ok(rows)
+    }
+
+    /// The four links' backbone rows alone (no derivatives; the profile keeps nothing of
+    /// them) at the slips' multipliers `w`, each link's start evaluated at its own: the
+    /// rows [`Group::evaluate`] gives there. None where the lanes decline a point.
+    #[inline(always)]
+    fn rows(&self, w: [Option<&[f64]>; 4]) -> Option<[Block<f64>; 4]> {
+        let Group {
+            profile,
+            length,
+            k,
+            sites,
+            segment_end,
+            x,
+        } = *self;
+        let mut scratch: [Box<LinkScratch>; 4] = [
+            profile.take_scratch(),
+            profile.take_scratch(),
+            profile.take_scratch(),
+            profile.take_scratch(),
+        ];
+        for (j, s) in scratch.iter_mut().enumerate() {
+            node_tensions(profile, k + j, s);
+        }
+        let state = |n: usize| (&x[n].R, &x[n].v, &x[n].u);
+        let starts = points4(
+            profile,
+            sites.map(|s| &s.start),
+            segment_end,
+            [state(0), state(1), state(2), state(3)],
+            [&scratch[0].za, &scratch[1].za, &scratch[2].za, &scratch[3].za],
+            w,
+            (false, None),
+        );
+        let ends = starts.as_ref().and_then(|_| {
+            points4(
+                profile,
+                sites.map(|s| &s.end),
+                segment_end,
+                [state(1), state(2), state(3), state(4)],
+                [&scratch[0].zb, &scratch[1].zb, &scratch[2].zb, &scratch[3].zb],
+                w,
+                (false, None),
+            )
+        });
+        let mut rows = None;
+        if let (Some(starts), Some(ends)) = (&starts, &ends) {
+            let link = |j: usize| Link {
+                profile,
+                length,
+                k: k + j,
+                sites: sites[j],
+                segment_end,
+                a: &x[j],
+                b: &x[j + 1],
+                w: w[j],
+            };
+            let links = [link(0), link(1), link(2), link(3)];
+            let [s0, s1, s2, s3] = &mut scratch;
+            let [mut p0, mut p1, mut p2, mut p3] = [None, None, None, None];
+            let fronts = [
+                front(&links[0], (&starts[0], &ends[0]), (false, false), s0, &mut p0),
+                front(&links[1], (&starts[1], &ends[1]), (false, false), s1, &mut p1),
+                front(&links[2], (&starts[2], &ends[2]), (false, false), s2, &mut p2),
+                front(&links[3], (&starts[3], &ends[3]), (false, false), s3, &mut p3),
+            ];
+            let mid = |j: usize| (&fronts[j].Rm, &fronts[j].vm, &fronts[j].um);
+            if let Some(mids) = points4(
+                profile,
+                sites.map(|s| &s.mid),
+                segment_end,
+                [mid(0), mid(1), mid(2), mid(3)],
+                [&scratch[0].zm, &scratch[1].zm, &scratch[2].zm, &scratch[3].zm],
+                w,
+                (false, None),
+            ) {
+                rows = Some(std::array::from_fn(|j| value_rows(&links[j], &fronts[j], &mids[j])));
+                mids.into_iter().for_each(|l| profile.give(l));
+            }
+        }
+        starts.into_iter().chain(ends).flatten().for_each(|l| profile.give(l));
+        scratch.into_iter().for_each(|s| profile.give_scratch(s));
+        rows
     }
 
     /// The four links' evaluations at the slips' multipliers `w` (one list per link), their
@@ -299,10 +376,10 @@ impl Group<'_, '_> {
         let [s0, s1, s2, s3] = &mut scratch;
         let [mut p0, mut p1, mut p2, mut p3] = [None, None, None, None];
         let fronts = [
-            front(&links[0], start_of[0], &ends[0], derivatives, s0, &mut p0),
-            front(&links[1], start_of[1], &ends[1], derivatives, s1, &mut p1),
-            front(&links[2], start_of[2], &ends[2], derivatives, s2, &mut p2),
-            front(&links[3], start_of[3], &ends[3], derivatives, s3, &mut p3),
+            front(&links[0], (start_of[0], &ends[0]), (derivatives, true), s0, &mut p0),
+            front(&links[1], (start_of[1], &ends[1]), (derivatives, true), s1, &mut p1),
+            front(&links[2], (start_of[2], &ends[2]), (derivatives, true), s2, &mut p2),
+            front(&links[3], (start_of[3], &ends[3]), (derivatives, true), s3, &mut p3),
         ];
         let mid = |j: usize| (&fronts[j].Rm, &fronts[j].vm, &fronts[j].um);
         let Some(mids) = points4(

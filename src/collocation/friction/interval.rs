@@ -205,7 +205,7 @@ fn interval_at_kernel(
         w,
     };
     let mut ends = None;
-    let front = front(&link, &la, &lb, derivatives, &mut scratch, &mut ends);
+    let front = front(&link, (&la, &lb), (derivatives, true), &mut scratch, &mut ends);
     let lm = profile.point(
         &sites.mid,
         segment_end,
@@ -269,13 +269,13 @@ pub(super) struct Front<'e> {
 
 /// A link's evaluation from eq. 13 with friction at its nodes (`la`, `lb`, at the log
 /// tensions in `scratch`) to its midpoint's state, the ends' linearizations into `slot`
-/// (None, as given, without derivatives); keeps the nodes' rates in the profile.
+/// (None, as given, without derivatives); with `keep`, keeps the nodes' rates in the
+/// profile ([`Profile::keep_node`]).
 #[inline(always)]
 pub(super) fn front<'e>(
     link: &Link,
-    la: &FrictionLinearization,
-    lb: &FrictionLinearization,
-    derivatives: bool,
+    (la, lb): (&FrictionLinearization, &FrictionLinearization),
+    (derivatives, keep): (bool, bool),
     scratch: &mut LinkScratch,
     slot: &'e mut Ends,
 ) -> Front<'e> {
@@ -292,10 +292,12 @@ pub(super) fn front<'e>(
     let count = profile.count();
     let h = sites.end.s - sites.start.s;
     let LinkScratch { za, zb, zm, .. } = scratch;
+    if keep {
+        profile.keep_node(k, segment_end, a, (za, w), la);
+        profile.keep_node(k + 1, segment_end, b, (zb, w), lb);
+    }
     let (y0, y1) = end_points(a, b);
     let theta1: Vector3<f64> = y1.fixed_rows::<3>(THETA).into();
-    profile.keep_node(k, segment_end, a, (za, w), la);
-    profile.keep_node(k + 1, segment_end, b, (zb, w), lb);
     // F at a point from its rates; with derivatives also its linearization (a residual
     // needs only the value, the same arithmetic as the linearization's).
     let value = |site: &Site, lin: &FrictionLinearization, y: &Block<f64>| {
@@ -347,6 +349,25 @@ pub(super) fn front<'e>(
     }
 }
 
+/// A link's 12 backbone rows (scaled) from its [`Front`] and F at its midpoint `fm`
+/// (`h` its length, `length` the rod's).
+#[inline(always)]
+fn rows_with(front: &Front, fm: &Block<f64>, h: f64, length: f64) -> Block<f64> {
+    scale_rows(
+        front.y1 - front.y0 - (front.f0 + fm * 4.0 + front.f1) * (h / 6.0),
+        length,
+    )
+}
+
+/// A link's 12 backbone rows (scaled) from its [`Front`] and eq. 13 with friction at its
+/// midpoint `lm` evaluated without derivatives: the rows [`back`] gives then.
+#[inline(always)]
+pub(super) fn value_rows(link: &Link, front: &Front, lm: &FrictionLinearization) -> Block<f64> {
+    let sites = link.sites;
+    let fm = rhs_from_rates(&sites.mid, &front.Rm, &front.ym, &lm.lin.rates);
+    rows_with(front, &fm, sites.end.s - sites.start.s, link.length)
+}
+
 /// The rest of a link's evaluation ([`interval_at`]) from its [`Front`] and eq. 13 with
 /// friction at its start, midpoint and end (`l`); the profile keeps the start's and the
 /// midpoint's responses when it keeps them (not the end's linearization: the caller does).
@@ -370,7 +391,7 @@ pub(super) fn back(
     } = *link;
     let [la, lm, lb] = l;
     // The small values copied, the ends' linearizations and the frames read in place.
-    let (y0, y1, f0, f1, ym) = (front.y0, front.y1, front.f0, front.f1, front.ym);
+    let ym = front.ym;
     let (Em, Rm, vm, um) = (front.Em, front.Rm, front.vm, front.um);
     let (ends, frame1, frame_m) = (front.ends, front.frame1.as_ref(), front.frame_m.as_ref());
     let count = profile.count();
@@ -388,10 +409,10 @@ pub(super) fn back(
         ..
     } = scratch;
     let pm = frame_m.map(|frame| rhs_linearized_inline(&sites.mid, &lm.lin, &a.R, &ym, frame));
-    let fm = pm
-        .as_ref()
-        .map_or_else(|| rhs_from_rates(&sites.mid, &Rm, &ym, &lm.lin.rates), |pm| pm.f);
-    let residual = scale_rows(y1 - y0 - (f0 + fm * 4.0 + f1) * (h / 6.0), length);
+    let residual = match &pm {
+        Some(pm) => rows_with(front, &pm.f, h, length),
+        None => value_rows(link, front, lm),
+    };
     on.clear();
     on.extend((0..count).map(|j| profile.on_link(j, k)));
     // In a history, the stuck material's tension at node b, for the stick/slip choice.
