@@ -16,11 +16,13 @@
 //! path.
 #![allow(non_snake_case)]
 
-use super::grip::Contact;
-use super::interval::{IntervalLinearization, Link, back, front, node_tensions};
+use super::interval::{
+    IntervalLinearization, Link, MULTIPLIER_STEP, add_multiplier_columns, back, front, interval_at, node_tensions,
+    stuck_slips, value_rows,
+};
 use super::profile::{LinkScratch, Profile};
 use crate::collocation::dynamics::inertia_load_transposed;
-use crate::collocation::residual::IntervalSites;
+use crate::collocation::residual::{Block, IntervalSites};
 use crate::error::Result;
 use crate::model::equations::Site;
 use crate::model::friction::{FrictionLinearization, linearize_lanes_into};
@@ -37,7 +39,9 @@ const BLOCK: usize = 12 * 24;
 /// None where the group declines (module docs; then evaluate them one by one).
 ///
 /// # Errors
-/// A model breakdown at node k (the one point evaluated alone, as the first link does).
+/// A model breakdown at node k (the one point evaluated alone, as the first link does,
+/// where the four links' multipliers are the same), or at a link whose rows' change with
+/// a stuck multiplier the lanes declined ([`super::interval()`] evaluates it then).
 ///
 /// On x86-64 with AVX2 and FMA (checked at run time) compiled for them, with the lanes and
 /// the one-link kernel's code inlined: the same operations in the same order.
@@ -53,7 +57,9 @@ pub(crate) fn intervals4(
     avx2_fma!(intervals4_kernel(profile, length, k, sites, segment_end, x, jac))
 }
 
-/// [`intervals4`]'s operations.
+/// [`intervals4`]'s operations: the rows at the stuck links' moved multipliers (as
+/// [`super::interval()`] forms them, before the links' own evaluation, which the profile
+/// then keeps at the nodes), the four links' evaluation, and the moved rows' columns.
 #[inline(always)]
 fn intervals4_kernel(
     profile: &Profile,
@@ -64,133 +70,361 @@ fn intervals4_kernel(
     x: &[State],
     jac: Option<&mut [f64]>,
 ) -> Result<Option<[IntervalLinearization; 4]>> {
-    if x.len() < 5 {
-        return Ok(None);
-    }
-    if !slides_alike(profile, k) {
-        return Ok(None);
-    }
     // What the lanes decline whatever the states (two or more tendons with friction) is
     // declined before any point is evaluated; a Kirchhoff rod's sites decline in the lanes,
     // which keep the start node's evaluation for the one-link kernel.
-    if profile.slipping.len() > 1 {
+    if x.len() < 5 || profile.slipping.len() > 1 {
         return Ok(None);
     }
-    let w = profile.multipliers(k);
-    let w = w.as_deref();
-    let derivatives = jac.is_some();
-    let mut scratch: [Box<LinkScratch>; 4] = [
-        profile.take_scratch(),
-        profile.take_scratch(),
-        profile.take_scratch(),
-        profile.take_scratch(),
-    ];
-    for (j, s) in scratch.iter_mut().enumerate() {
-        node_tensions(profile, k + j, s);
-    }
-    let la = profile.start_point(k, &sites[0].start, segment_end, &x[0], &scratch[0].za, w, derivatives)?;
-    let state = |n: usize| (&x[n].R, &x[n].v, &x[n].u);
-    // Where the profile keeps the responses to the inertia loads (a Jacobian at the answer),
-    // the lanes give them at the points [`back`] keeps them for: each link's start (the
-    // link before's end) and midpoint.
-    let responding = profile.responding.get().filter(|_| derivatives);
-    let inertia = |site: [&Site; 4], R: [&Matrix3<f64>; 4]| {
-        responding.map(|(ratio, length)| std::array::from_fn(|j| inertia_load_transposed(site[j], R[j], ratio, length)))
-    };
-    let Some(ends) = points4(
-        profile,
-        sites.map(|s| &s.end),
-        segment_end,
-        [state(1), state(2), state(3), state(4)],
-        [&scratch[0].zb, &scratch[1].zb, &scratch[2].zb, &scratch[3].zb],
-        w,
-        (
-            derivatives,
-            inertia(sites.map(|s| &s.end), [&x[1].R, &x[2].R, &x[3].R, &x[4].R]),
-        ),
-    ) else {
-        // The start node's evaluation is kept for the one-link kernel that takes over.
-        profile.keep_point(k, segment_end, &x[0], &scratch[0].za, w, derivatives, la);
-        scratch.into_iter().for_each(|s| profile.give_scratch(s));
-        return Ok(None);
-    };
-    let link = |j: usize| Link {
+    let multipliers: [Option<Vec<f64>>; 4] = std::array::from_fn(|j| profile.multipliers(k + j));
+    let w: [Option<&[f64]>; 4] = std::array::from_fn(|j| multipliers[j].as_deref());
+    let group = Group {
         profile,
         length,
-        k: k + j,
-        sites: sites[j],
+        k,
+        sites,
         segment_end,
-        a: &x[j],
-        b: &x[j + 1],
-        w,
+        x,
     };
-    let links = [link(0), link(1), link(2), link(3)];
-    let starts = [&*la, &*ends[0], &*ends[1], &*ends[2]];
-    let [s0, s1, s2, s3] = &mut scratch;
-    let [mut p0, mut p1, mut p2, mut p3] = [None, None, None, None];
-    let fronts = [
-        front(&links[0], starts[0], &ends[0], derivatives, s0, &mut p0),
-        front(&links[1], starts[1], &ends[1], derivatives, s1, &mut p1),
-        front(&links[2], starts[2], &ends[2], derivatives, s2, &mut p2),
-        front(&links[3], starts[3], &ends[3], derivatives, s3, &mut p3),
-    ];
-    let mid = |j: usize| (&fronts[j].Rm, &fronts[j].vm, &fronts[j].um);
-    let Some(mids) = points4(
-        profile,
-        sites.map(|s| &s.mid),
-        segment_end,
-        [mid(0), mid(1), mid(2), mid(3)],
-        [&scratch[0].zm, &scratch[1].zm, &scratch[2].zm, &scratch[3].zm],
-        w,
-        (
-            derivatives,
-            inertia(
-                sites.map(|s| &s.mid),
-                [&fronts[0].Rm, &fronts[1].Rm, &fronts[2].Rm, &fronts[3].Rm],
-            ),
-        ),
-    ) else {
-        profile.give(la);
-        ends.into_iter().for_each(|l| profile.give(l));
-        scratch.into_iter().for_each(|s| profile.give_scratch(s));
+    // With derivatives, each stuck slip's rows at its multiplier moved both ways.
+    let mut moved = Vec::new();
+    if jac.is_some() {
+        for j in 0..profile.count() {
+            let stuck: [Option<f64>; 4] =
+                std::array::from_fn(|l| w[l].and_then(|_| stuck_slips(profile, k + l).find(|s| s.0 == j).map(|s| s.1)));
+            if stuck.iter().all(Option::is_none) {
+                continue;
+            }
+            let plus = group.moved_rows(w, j, &stuck, MULTIPLIER_STEP)?;
+            let minus = group.moved_rows(w, j, &stuck, -MULTIPLIER_STEP)?;
+            moved.push((j, stuck, plus, minus));
+        }
+    }
+    let Some(mut out) = group.evaluate(w, jac)? else {
         return Ok(None);
     };
-    let mut blocks = jac.map(|jac| jac[..4 * BLOCK].chunks_exact_mut(BLOCK));
-    let mut block = || blocks.as_mut().and_then(Iterator::next);
-    let [f0, f1, f2, f3] = &fronts;
-    let [s0, s1, s2, s3] = &mut scratch;
-    let out = [
-        back(&links[0], f0, [starts[0], &mids[0], &ends[0]], block(), s0),
-        back(&links[1], f1, [starts[1], &mids[1], &ends[1]], block(), s1),
-        back(&links[2], f2, [starts[2], &mids[2], &ends[2]], block(), s2),
-        back(&links[3], f3, [starts[3], &mids[3], &ends[3]], block(), s3),
-    ];
-    let [e0, e1, e2, e3] = ends;
-    profile.keep_point(k + 4, segment_end, &x[4], &scratch[3].zb, w, derivatives, e3);
-    for lin in [la, e0, e1, e2].into_iter().chain(mids) {
-        profile.give(lin);
+    let count = profile.count();
+    for (j, stuck, plus, minus) in &moved {
+        for (l, capacity) in stuck.iter().enumerate() {
+            if let Some(capacity) = capacity {
+                add_multiplier_columns(&mut out[l], count, (*j, *capacity), &plus[l], &minus[l]);
+            }
+        }
     }
-    scratch.into_iter().for_each(|s| profile.give_scratch(s));
     Ok(Some(out))
 }
 
-/// Whether links k..k+4 of `profile` share one sliding pattern, which the group requires:
-/// no slip sticks on any of them and each slip's multiplier is the same on all four (then
-/// [`Profile::multipliers`] of each link is the same list). Read in place, no multipliers
-/// formed: in a history the caller asks at each link of a stick zone and of its
-/// neighbours, so the test is on the one-link path's bill (docs/benchmarks.md, fricfix20).
-fn slides_alike(profile: &Profile, k: usize) -> bool {
-    let Some(grips) = &profile.grips else {
-        return true;
-    };
-    grips.iter().all(|g| {
-        let w = |n: usize| g.multipliers.get(n).copied().unwrap_or(1.0);
-        (k..k + 4).all(|n| g.contacts.get(n) != Some(&Contact::Stick)) && (k + 1..k + 4).all(|n| w(n) == w(k))
-    })
+/// Four consecutive links of one segment: link k + l in lane l.
+struct Group<'g, 'p> {
+    profile: &'g Profile<'p>,
+    length: f64,
+    k: usize,
+    sites: [&'g IntervalSites; 4],
+    segment_end: f64,
+    /// The five node states from node k on.
+    x: &'g [State],
+}
+
+impl Group<'_, '_> {
+    /// Link k + l's backbone rows, without derivatives, at its multipliers `w[l]` with slip
+    /// j's moved by `step` where `stuck[l]` (zero rows in the other lanes): the four links
+    /// at once, or each moved one by [`interval_at`] where the lanes decline them.
+    ///
+    /// # Errors
+    /// A model breakdown at a point of a moved link.
+    #[inline(always)]
+    fn moved_rows(
+        &self,
+        w: [Option<&[f64]>; 4],
+        j: usize,
+        stuck: &[Option<f64>; 4],
+        step: f64,
+    ) -> Result<[Block<f64>; 4]> {
+        let moved: [Option<Vec<f64>>; 4] = std::array::from_fn(|l| {
+            w[l].map(|w| {
+                let mut w = w.to_vec();
+                if stuck[l].is_some() {
+                    w[j] += step;
+                }
+                w
+            })
+        });
+        let moved_w: [Option<&[f64]>; 4] = std::array::from_fn(|l| moved[l].as_deref());
+        if let Some(rows) = self.rows(moved_w) {
+            return Ok(std::array::from_fn(|l| {
+                if stuck[l].is_some() { rows[l] } else { Block::zeros() }
+            }));
+        }
+        let mut rows = [Block::zeros(); 4];
+        for (l, row) in rows.iter_mut().enumerate().filter(|(l, _)| stuck[*l].is_some()) {
+            let Group {
+                profile,
+                length,
+                k,
+                sites,
+                segment_end,
+                x,
+            } = *self;
+            let lin = interval_at(
+                profile,
+                length,
+                k + l,
+                sites[l],
+                segment_end,
+                &x[l],
+                &x[l + 1],
+                moved_w[l],
+                None,
+            )?;
+            *row = lin.residual;
+            profile.give_link(lin);
+        }
+        Ok(rows)
+    }
+
+    /// The four links' backbone rows alone (no derivatives; the profile keeps nothing of
+    /// them) at the slips' multipliers `w`, each link's start evaluated at its own: the
+    /// rows [`Group::evaluate`] gives there. None where the lanes decline a point.
+    #[inline(always)]
+    fn rows(&self, w: [Option<&[f64]>; 4]) -> Option<[Block<f64>; 4]> {
+        let Group {
+            profile,
+            length,
+            k,
+            sites,
+            segment_end,
+            x,
+        } = *self;
+        let mut scratch: [Box<LinkScratch>; 4] = [
+            profile.take_scratch(),
+            profile.take_scratch(),
+            profile.take_scratch(),
+            profile.take_scratch(),
+        ];
+        for (j, s) in scratch.iter_mut().enumerate() {
+            node_tensions(profile, k + j, s);
+        }
+        let state = |n: usize| (&x[n].R, &x[n].v, &x[n].u);
+        let starts = points4(
+            profile,
+            sites.map(|s| &s.start),
+            segment_end,
+            [state(0), state(1), state(2), state(3)],
+            [&scratch[0].za, &scratch[1].za, &scratch[2].za, &scratch[3].za],
+            w,
+            (false, None),
+        );
+        let ends = starts.as_ref().and_then(|_| {
+            points4(
+                profile,
+                sites.map(|s| &s.end),
+                segment_end,
+                [state(1), state(2), state(3), state(4)],
+                [&scratch[0].zb, &scratch[1].zb, &scratch[2].zb, &scratch[3].zb],
+                w,
+                (false, None),
+            )
+        });
+        let mut rows = None;
+        if let (Some(starts), Some(ends)) = (&starts, &ends) {
+            let link = |j: usize| Link {
+                profile,
+                length,
+                k: k + j,
+                sites: sites[j],
+                segment_end,
+                a: &x[j],
+                b: &x[j + 1],
+                w: w[j],
+            };
+            let links = [link(0), link(1), link(2), link(3)];
+            let [s0, s1, s2, s3] = &mut scratch;
+            let [mut p0, mut p1, mut p2, mut p3] = [None, None, None, None];
+            let fronts = [
+                front(&links[0], (&starts[0], &ends[0]), (false, false), s0, &mut p0),
+                front(&links[1], (&starts[1], &ends[1]), (false, false), s1, &mut p1),
+                front(&links[2], (&starts[2], &ends[2]), (false, false), s2, &mut p2),
+                front(&links[3], (&starts[3], &ends[3]), (false, false), s3, &mut p3),
+            ];
+            let mid = |j: usize| (&fronts[j].Rm, &fronts[j].vm, &fronts[j].um);
+            if let Some(mids) = points4(
+                profile,
+                sites.map(|s| &s.mid),
+                segment_end,
+                [mid(0), mid(1), mid(2), mid(3)],
+                [&scratch[0].zm, &scratch[1].zm, &scratch[2].zm, &scratch[3].zm],
+                w,
+                (false, None),
+            ) {
+                rows = Some(std::array::from_fn(|j| value_rows(&links[j], &fronts[j], &mids[j])));
+                mids.into_iter().for_each(|l| profile.give(l));
+            }
+        }
+        starts.into_iter().chain(ends).flatten().for_each(|l| profile.give(l));
+        scratch.into_iter().for_each(|s| profile.give_scratch(s));
+        rows
+    }
+
+    /// The four links' evaluations at the slips' multipliers `w` (one list per link), their
+    /// blocks into `jac` when given, the rows' change with a stuck multiplier aside: None
+    /// where the lanes decline a point. Where the links' multipliers are the same, each
+    /// link's start is the link before's end, and link k's start is evaluated alone
+    /// ([`Profile::start_point`], which takes it from the link before when that kept it);
+    /// else the four starts are evaluated at once, each at its own link's multipliers (as
+    /// the one-link kernel evaluates them: a link's end at its own multipliers is not the
+    /// next one's start).
+    ///
+    /// # Errors
+    /// A model breakdown at node k where it is evaluated alone.
+    #[inline(always)]
+    fn evaluate(&self, w: [Option<&[f64]>; 4], jac: Option<&mut [f64]>) -> Result<Option<[IntervalLinearization; 4]>> {
+        let Group {
+            profile,
+            length,
+            k,
+            sites,
+            segment_end,
+            x,
+        } = *self;
+        let derivatives = jac.is_some();
+        let alike = w[1..].iter().all(|wl| *wl == w[0]);
+        let mut scratch: [Box<LinkScratch>; 4] = [
+            profile.take_scratch(),
+            profile.take_scratch(),
+            profile.take_scratch(),
+            profile.take_scratch(),
+        ];
+        for (j, s) in scratch.iter_mut().enumerate() {
+            node_tensions(profile, k + j, s);
+        }
+        let state = |n: usize| (&x[n].R, &x[n].v, &x[n].u);
+        // Where the profile keeps the responses to the inertia loads (a Jacobian at the
+        // answer), the lanes give them at the points [`back`] keeps them for: each link's
+        // start and midpoint (and the last end, the next link's start where it is taken).
+        let responding = profile.responding.get().filter(|_| derivatives);
+        let inertia = |site: [&Site; 4], R: [&Matrix3<f64>; 4]| {
+            responding
+                .map(|(ratio, length)| std::array::from_fn(|j| inertia_load_transposed(site[j], R[j], ratio, length)))
+        };
+        let give_scratch = |scratch: [Box<LinkScratch>; 4]| scratch.into_iter().for_each(|s| profile.give_scratch(s));
+        // Link k's start alone (`first`) or the four starts at once (`starts`).
+        let (first, starts) = if alike {
+            let za = &scratch[0].za;
+            let first = profile.start_point(k, &sites[0].start, segment_end, &x[0], za, w[0], derivatives)?;
+            (Some(first), None)
+        } else {
+            let Some(starts) = points4(
+                profile,
+                sites.map(|s| &s.start),
+                segment_end,
+                [state(0), state(1), state(2), state(3)],
+                [&scratch[0].za, &scratch[1].za, &scratch[2].za, &scratch[3].za],
+                w,
+                (
+                    derivatives,
+                    inertia(sites.map(|s| &s.start), [&x[0].R, &x[1].R, &x[2].R, &x[3].R]),
+                ),
+            ) else {
+                give_scratch(scratch);
+                return Ok(None);
+            };
+            (None, Some(starts))
+        };
+        let give_starts = |first: Option<Box<FrictionLinearization>>,
+                           starts: Option<[Box<FrictionLinearization>; 4]>| {
+            first
+                .into_iter()
+                .chain(starts.into_iter().flatten())
+                .for_each(|l| profile.give(l));
+        };
+        let Some(ends) = points4(
+            profile,
+            sites.map(|s| &s.end),
+            segment_end,
+            [state(1), state(2), state(3), state(4)],
+            [&scratch[0].zb, &scratch[1].zb, &scratch[2].zb, &scratch[3].zb],
+            w,
+            (
+                derivatives,
+                inertia(sites.map(|s| &s.end), [&x[1].R, &x[2].R, &x[3].R, &x[4].R]),
+            ),
+        ) else {
+            // Link k's start is kept for the one-link kernel that takes over.
+            if let Some(first) = first {
+                profile.keep_point(k, segment_end, &x[0], &scratch[0].za, w[0], derivatives, first);
+            }
+            give_starts(None, starts);
+            give_scratch(scratch);
+            return Ok(None);
+        };
+        let link = |j: usize| Link {
+            profile,
+            length,
+            k: k + j,
+            sites: sites[j],
+            segment_end,
+            a: &x[j],
+            b: &x[j + 1],
+            w: w[j],
+        };
+        let links = [link(0), link(1), link(2), link(3)];
+        let start_of: [&FrictionLinearization; 4] = match (&first, &starts) {
+            (Some(first), _) => [first, &ends[0], &ends[1], &ends[2]],
+            (_, Some(s)) => [&s[0], &s[1], &s[2], &s[3]],
+            (None, None) => unreachable!("link k's start is evaluated alone or with the others"),
+        };
+        let [s0, s1, s2, s3] = &mut scratch;
+        let [mut p0, mut p1, mut p2, mut p3] = [None, None, None, None];
+        let fronts = [
+            front(&links[0], (start_of[0], &ends[0]), (derivatives, true), s0, &mut p0),
+            front(&links[1], (start_of[1], &ends[1]), (derivatives, true), s1, &mut p1),
+            front(&links[2], (start_of[2], &ends[2]), (derivatives, true), s2, &mut p2),
+            front(&links[3], (start_of[3], &ends[3]), (derivatives, true), s3, &mut p3),
+        ];
+        let mid = |j: usize| (&fronts[j].Rm, &fronts[j].vm, &fronts[j].um);
+        let Some(mids) = points4(
+            profile,
+            sites.map(|s| &s.mid),
+            segment_end,
+            [mid(0), mid(1), mid(2), mid(3)],
+            [&scratch[0].zm, &scratch[1].zm, &scratch[2].zm, &scratch[3].zm],
+            w,
+            (
+                derivatives,
+                inertia(
+                    sites.map(|s| &s.mid),
+                    [&fronts[0].Rm, &fronts[1].Rm, &fronts[2].Rm, &fronts[3].Rm],
+                ),
+            ),
+        ) else {
+            give_starts(first, starts);
+            ends.into_iter().for_each(|l| profile.give(l));
+            give_scratch(scratch);
+            return Ok(None);
+        };
+        let mut blocks = jac.map(|jac| jac[..4 * BLOCK].chunks_exact_mut(BLOCK));
+        let mut block = || blocks.as_mut().and_then(Iterator::next);
+        let [f0, f1, f2, f3] = &fronts;
+        let [s0, s1, s2, s3] = &mut scratch;
+        let out = [
+            back(&links[0], f0, [start_of[0], &mids[0], &ends[0]], block(), s0),
+            back(&links[1], f1, [start_of[1], &mids[1], &ends[1]], block(), s1),
+            back(&links[2], f2, [start_of[2], &mids[2], &ends[2]], block(), s2),
+            back(&links[3], f3, [start_of[3], &mids[3], &ends[3]], block(), s3),
+        ];
+        let [e0, e1, e2, e3] = ends;
+        profile.keep_point(k + 4, segment_end, &x[4], &scratch[3].zb, w[3], derivatives, e3);
+        give_starts(first, starts);
+        for lin in [e0, e1, e2].into_iter().chain(mids) {
+            profile.give(lin);
+        }
+        give_scratch(scratch);
+        Ok(Some(out))
+    }
 }
 
 /// Eq. 13 with friction at four points at once ([`Profile::point`] at each: the slips at
-/// log tensions `z[l]` in lane l, multipliers `w`), in the profile's spare linearizations,
+/// log tensions `z[l]` and multipliers `w[l]` in lane l), in the profile's spare linearizations,
 /// with derivatives when `derivatives.0` and the responses to the loads `derivatives.1`
 /// when given; None where the lanes decline them.
 #[inline(always)]
@@ -201,7 +435,7 @@ fn points4(
     segment_end: f64,
     states: [(&Matrix3<f64>, &Vector3<f64>, &Vector3<f64>); 4],
     z: [&[f64]; 4],
-    w: Option<&[f64]>,
+    w: [Option<&[f64]>; 4],
     (derivatives, loads): (bool, Option<[SMatrix<f64, 6, 6>; 4]>),
 ) -> Option<[Box<FrictionLinearization>; 4]> {
     let mut quad = profile.quad.borrow_mut();
@@ -225,7 +459,7 @@ fn points4(
         segment_end,
         states,
         &profile.slipping,
-        [w; 4],
+        w,
         derivatives,
         loads.as_ref(),
         outs,
@@ -382,45 +616,62 @@ mod tests {
         }
     }
 
-    /// In a history (an elastic helix, grips on the mesh): links that slide with one
-    /// multiplier go to the group with the one-link bits; a stick zone on one of the four
-    /// links (its multiplier then the stuck fraction, its row the stick row), a link that
-    /// slides the other way, and two tendons with friction (Newton's tangential loads) make
-    /// the group decline.
+    /// In a history (an elastic helix, grips on the mesh), every link goes to the group
+    /// with the one-link bits, blocks and the stuck multipliers' columns included: links
+    /// that slide with one multiplier, a stick zone on one of the four links (its
+    /// multiplier the stuck fraction, its row the stick row), links that slide both ways,
+    /// four stuck links each at its own multiplier and four at the same one; two tendons
+    /// with friction (Newton's tangential loads) make the group decline.
     #[test]
-    fn group_takes_sliding_history_links_and_declines_a_stick_zone_and_two_slips() {
+    fn group_takes_stuck_and_sliding_history_links_and_declines_two_slips() {
         let mut h = cases::case_h();
         h.tendons[4].friction = Some(Friction::pull(0.3));
         h.tendons[4].stiffness = Some(2000.0);
         let (setup, model) = prepare(&h);
         let links = setup.mesh.nodes.len() - 1;
-        let grip = |contacts: Vec<Contact>| Grip {
+        let k = setup.k;
+        // Capacities that differ from link to link (so do the stuck multipliers then) or
+        // one for all.
+        let grip = |contacts: Vec<Contact>, capacity: &dyn Fn(usize) -> f64| Grip {
             multipliers: contacts
                 .iter()
                 .map(|c| if *c == Contact::Release { 1.0 } else { -1.0 })
                 .collect(),
-            capacities: vec![0.05; links],
+            capacities: (0..links).map(capacity).collect(),
             reference: setup.x.iter().map(|n| 0.999 * (1.0 + 1e-3 * n.s)).collect(),
             kinks: Vec::new(),
             contacts,
         };
+        let varied = |n: usize| 0.05 + 0.01 * n as f64;
         let (mut p, mut alone) = (profile(&model, &setup), profile(&model, &setup));
-        p.grips = Some(vec![grip(vec![Contact::Pull; links])]);
-        alone.grips = p.grips.clone();
-        assert!(compare(&setup, &p, &alone).is_some());
+        // Log tensions falling by a binary fraction per node: equal capacities give equal
+        // stuck multipliers, bit for bit.
+        for q in [&mut p, &mut alone] {
+            for (n, z) in q.z[0].iter_mut().enumerate() {
+                *z = -0.03125 * n as f64;
+            }
+        }
+        let mut check = |contacts: Vec<Contact>, capacity: &dyn Fn(usize) -> f64| {
+            p.grips = Some(vec![grip(contacts, capacity)]);
+            alone.grips = p.grips.clone();
+            let w: Vec<f64> = (k..k + 4).map(|n| p.multipliers(n).unwrap()[0]).collect();
+            assert!(compare(&setup, &p, &alone).is_some(), "multipliers {w:?}");
+            w
+        };
+        assert_eq!(check(vec![Contact::Pull; links], &varied), [-1.0; 4]);
         let mut contacts = vec![Contact::Pull; links];
-        contacts[setup.k + 2] = Contact::Stick;
-        p.grips = Some(vec![grip(contacts)]);
-        alone.grips = p.grips.clone();
-        assert!(p.sticks(0, setup.k + 2));
-        assert!(compare(&setup, &p, &alone).is_none());
+        contacts[k + 2] = Contact::Stick;
+        let w = check(contacts, &varied);
+        assert!(w[2] != -1.0 && w[2] != 0.0 && w[3] == -1.0);
         // Links that all slide, one of them the other way (multiplier +1 among -1s).
         let mut contacts = vec![Contact::Pull; links];
-        contacts[setup.k + 3] = Contact::Release;
-        p.grips = Some(vec![grip(contacts)]);
-        alone.grips = p.grips.clone();
-        assert!(!p.sticks(0, setup.k + 3));
-        assert!(compare(&setup, &p, &alone).is_none());
+        contacts[k + 3] = Contact::Release;
+        assert_eq!(check(contacts, &varied), [-1.0, -1.0, -1.0, 1.0]);
+        // Four stuck links, each at its own multiplier, then all at the same one.
+        let w = check(vec![Contact::Stick; links], &varied);
+        assert!((1..4).all(|l| w[l] != w[l - 1] && w[l] != 0.0));
+        let w = check(vec![Contact::Stick; links], &|_| 0.05);
+        assert!(w.iter().all(|x| *x == w[0] && *x != 0.0 && *x != -1.0));
 
         let mut two = cases::case_h();
         two.tendons[4].friction = Some(Friction::pull(0.3));
@@ -429,5 +680,65 @@ mod tests {
         let (two_setup, model) = prepare(&two);
         let (p, alone) = (profile(&model, &two_setup), profile(&model, &two_setup));
         assert!(compare(&two_setup, &p, &alone).is_none());
+    }
+
+    /// A NaN in a log tension of a stuck link (its multiplier NaN): the group declines it,
+    /// or with derivatives gives the error the one-link kernel gives at that link (where
+    /// the rows at the moved multipliers are evaluated alone); a NaN in a node state: the
+    /// group declines it, and the one-link kernel gives NaN rows or an error.
+    #[test]
+    fn group_declines_nan() {
+        let mut h = cases::case_h();
+        h.tendons[4].friction = Some(Friction::pull(0.3));
+        h.tendons[4].stiffness = Some(2000.0);
+        let (mut setup, model) = prepare(&h);
+        let links = setup.mesh.nodes.len() - 1;
+        let k = setup.k;
+        let mut p = profile(&model, &setup);
+        p.grips = Some(vec![Grip {
+            multipliers: vec![-1.0; links],
+            capacities: vec![0.05; links],
+            reference: setup.x.iter().map(|n| 0.999 * (1.0 + 1e-3 * n.s)).collect(),
+            kinks: Vec::new(),
+            contacts: vec![Contact::Stick; links],
+        }]);
+        let sites: [&IntervalSites; 4] = std::array::from_fn(|j| &setup.sites[j]);
+        let seg = setup.mesh.nodes[k].segment_end;
+        let group = |p: &Profile, x: &[State], derivatives: bool| {
+            let mut jac = vec![0.0; 4 * BLOCK];
+            intervals4(
+                p,
+                setup.length,
+                k,
+                sites,
+                seg,
+                &x[k..k + 5],
+                derivatives.then_some(&mut jac[..]),
+            )
+            .map(|g| g.is_some())
+        };
+        let one = |p: &Profile, x: &[State], derivatives: bool| {
+            let mut block = vec![0.0; BLOCK];
+            let jac = derivatives.then_some(&mut block[..]);
+            interval(p, setup.length, k + 1, sites[1], seg, &x[k + 1], &x[k + 2], jac)
+        };
+        p.z[0][k + 2] = f64::NAN;
+        assert!(p.multipliers(k + 1).unwrap()[0].is_nan());
+        assert!(matches!(group(&p, &setup.x, false), Ok(false)));
+        let (grouped, alone) = (group(&p, &setup.x, true), one(&p, &setup.x, true));
+        assert!(
+            matches!((&grouped, &alone), (Err(a), Err(b)) if format!("{a:?}") == format!("{b:?}")),
+            "{grouped:?}"
+        );
+        p.z[0][k + 2] = -0.1;
+        setup.x[k + 2].u[1] = f64::NAN;
+        for derivatives in [false, true] {
+            assert!(matches!(group(&p, &setup.x, derivatives), Ok(false)));
+            // Alone, the link gives NaN rows or eq. 13's breakdown at the NaN node, as its
+            // points meet the NaN.
+            if let Ok(alone) = one(&p, &setup.x, derivatives) {
+                assert!(alone.residual.iter().any(|r| r.is_nan()));
+            }
+        }
     }
 }

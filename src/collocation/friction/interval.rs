@@ -92,31 +92,63 @@ pub(crate) fn interval(
 ) -> Result<IntervalLinearization> {
     let w = profile.multipliers(k);
     let derivatives = jac.is_some();
-    let mut out = interval_at(profile, length, k, sites, segment_end, a, b, w.as_deref(), jac)?;
-    let (Some(w), true) = (w, derivatives) else {
-        return Ok(out);
+    let (Some(w), true) = (w.as_deref(), derivatives) else {
+        return interval_at(profile, length, k, sites, segment_end, a, b, w.as_deref(), jac);
     };
     // A stuck link's multiplier w = (z_b - z_a) / C moves its backbone rows with its log
-    // tensions: d(rows)/dw by a central difference (the rows are smooth in w; a step of
-    // 1e-6 leaves a truncation of 1e-12 and rounding of 1e-10 of the rows' scale).
+    // tensions ([`add_multiplier_columns`]). The moved rows are evaluated first, so that the
+    // link's own evaluation is the one the profile keeps at its nodes (for the next link's
+    // start and the order-6 rows).
     let count = profile.count();
-    for j in (0..count).filter(|&j| profile.on_link(j, k) && profile.sticks(j, k)) {
-        let Some(capacity) = profile.stuck_capacity(j, k).filter(|c| *c > 0.0) else {
-            continue;
-        };
-        let step = 1e-6;
+    let mut moved_rows = Vec::new();
+    for (j, capacity) in stuck_slips(profile, k) {
         let moved = |d: f64| -> Result<Block<f64>> {
-            let mut w = w.clone();
+            let mut w = w.to_vec();
             w[j] += d;
-            Ok(interval_at(profile, length, k, sites, segment_end, a, b, Some(&w), None)?.residual)
+            let lin = interval_at(profile, length, k, sites, segment_end, a, b, Some(&w), None)?;
+            let rows = lin.residual;
+            profile.give_link(lin);
+            Ok(rows)
         };
-        let d_rows = (moved(step)? - moved(-step)?) / (2.0 * step);
-        for r in 0..12 {
-            out.rows_z[(r, j)] -= d_rows[r] / capacity;
-            out.rows_z[(r, count + j)] += d_rows[r] / capacity;
-        }
+        moved_rows.push((j, capacity, moved(MULTIPLIER_STEP)?, moved(-MULTIPLIER_STEP)?));
+    }
+    let mut out = interval_at(profile, length, k, sites, segment_end, a, b, Some(w), jac)?;
+    for (j, capacity, plus, minus) in &moved_rows {
+        add_multiplier_columns(&mut out, count, (*j, *capacity), plus, minus);
     }
     Ok(out)
+}
+
+/// The step of the central difference in a stuck slip's multiplier: the rows are smooth in
+/// w, and a step of 1e-6 leaves a truncation of 1e-12 and rounding of 1e-10 of the rows'
+/// scale.
+pub(super) const MULTIPLIER_STEP: f64 = 1e-6;
+
+/// The slips that stick on link k of `profile` (their rows the stick rows, their
+/// multipliers w = (z_b - z_a) / C), with their capacities C > 0
+/// ([`Profile::stuck_capacity`]; a slip without one has w = 0 whatever its log tensions).
+pub(super) fn stuck_slips<'p>(profile: &'p Profile, k: usize) -> impl Iterator<Item = (usize, f64)> + 'p {
+    (0..profile.count())
+        .filter(move |&j| profile.on_link(j, k) && profile.sticks(j, k))
+        .filter_map(move |j| profile.stuck_capacity(j, k).filter(|c| *c > 0.0).map(|c| (j, c)))
+}
+
+/// Adds to a stuck link's backbone rows' derivatives in the log tensions (`out`, `count`
+/// slips) their change through slip j's multiplier w = (z_b - z_a) / C (`(j, C)`): the
+/// rows' derivative in w by a central difference of the rows `plus` and `minus` at
+/// w_j +- [`MULTIPLIER_STEP`], divided by -C in z_a's column and +C in z_b's.
+pub(super) fn add_multiplier_columns(
+    out: &mut IntervalLinearization,
+    count: usize,
+    (j, capacity): (usize, f64),
+    plus: &Block<f64>,
+    minus: &Block<f64>,
+) {
+    let d_rows = (plus - minus) / (2.0 * MULTIPLIER_STEP);
+    for r in 0..12 {
+        out.rows_z[(r, j)] -= d_rows[r] / capacity;
+        out.rows_z[(r, count + j)] += d_rows[r] / capacity;
+    }
 }
 
 /// [`interval`] with the slips' multipliers `w` (None in full slip: the motions' signs),
@@ -128,7 +160,7 @@ pub(crate) fn interval(
 /// same order (Rust does not fuse a product and a sum into an FMA), so the same bits in
 /// wider registers.
 #[allow(clippy::too_many_arguments)]
-fn interval_at(
+pub(super) fn interval_at(
     profile: &Profile,
     length: f64,
     k: usize,
@@ -173,7 +205,7 @@ fn interval_at_kernel(
         w,
     };
     let mut ends = None;
-    let front = front(&link, &la, &lb, derivatives, &mut scratch, &mut ends);
+    let front = front(&link, (&la, &lb), (derivatives, true), &mut scratch, &mut ends);
     let lm = profile.point(
         &sites.mid,
         segment_end,
@@ -237,13 +269,13 @@ pub(super) struct Front<'e> {
 
 /// A link's evaluation from eq. 13 with friction at its nodes (`la`, `lb`, at the log
 /// tensions in `scratch`) to its midpoint's state, the ends' linearizations into `slot`
-/// (None, as given, without derivatives); keeps the nodes' rates in the profile.
+/// (None, as given, without derivatives); with `keep`, keeps the nodes' rates in the
+/// profile ([`Profile::keep_node`]).
 #[inline(always)]
 pub(super) fn front<'e>(
     link: &Link,
-    la: &FrictionLinearization,
-    lb: &FrictionLinearization,
-    derivatives: bool,
+    (la, lb): (&FrictionLinearization, &FrictionLinearization),
+    (derivatives, keep): (bool, bool),
     scratch: &mut LinkScratch,
     slot: &'e mut Ends,
 ) -> Front<'e> {
@@ -260,10 +292,12 @@ pub(super) fn front<'e>(
     let count = profile.count();
     let h = sites.end.s - sites.start.s;
     let LinkScratch { za, zb, zm, .. } = scratch;
+    if keep {
+        profile.keep_node(k, segment_end, a, (za, w), la);
+        profile.keep_node(k + 1, segment_end, b, (zb, w), lb);
+    }
     let (y0, y1) = end_points(a, b);
     let theta1: Vector3<f64> = y1.fixed_rows::<3>(THETA).into();
-    profile.keep_node(k, segment_end, a, (za, w), la);
-    profile.keep_node(k + 1, segment_end, b, (zb, w), lb);
     // F at a point from its rates; with derivatives also its linearization (a residual
     // needs only the value, the same arithmetic as the linearization's).
     let value = |site: &Site, lin: &FrictionLinearization, y: &Block<f64>| {
@@ -315,6 +349,25 @@ pub(super) fn front<'e>(
     }
 }
 
+/// A link's 12 backbone rows (scaled) from its [`Front`] and F at its midpoint `fm`
+/// (`h` its length, `length` the rod's).
+#[inline(always)]
+fn rows_with(front: &Front, fm: &Block<f64>, h: f64, length: f64) -> Block<f64> {
+    scale_rows(
+        front.y1 - front.y0 - (front.f0 + fm * 4.0 + front.f1) * (h / 6.0),
+        length,
+    )
+}
+
+/// A link's 12 backbone rows (scaled) from its [`Front`] and eq. 13 with friction at its
+/// midpoint `lm` evaluated without derivatives: the rows [`back`] gives then.
+#[inline(always)]
+pub(super) fn value_rows(link: &Link, front: &Front, lm: &FrictionLinearization) -> Block<f64> {
+    let sites = link.sites;
+    let fm = rhs_from_rates(&sites.mid, &front.Rm, &front.ym, &lm.lin.rates);
+    rows_with(front, &fm, sites.end.s - sites.start.s, link.length)
+}
+
 /// The rest of a link's evaluation ([`interval_at`]) from its [`Front`] and eq. 13 with
 /// friction at its start, midpoint and end (`l`); the profile keeps the start's and the
 /// midpoint's responses when it keeps them (not the end's linearization: the caller does).
@@ -338,7 +391,7 @@ pub(super) fn back(
     } = *link;
     let [la, lm, lb] = l;
     // The small values copied, the ends' linearizations and the frames read in place.
-    let (y0, y1, f0, f1, ym) = (front.y0, front.y1, front.f0, front.f1, front.ym);
+    let ym = front.ym;
     let (Em, Rm, vm, um) = (front.Em, front.Rm, front.vm, front.um);
     let (ends, frame1, frame_m) = (front.ends, front.frame1.as_ref(), front.frame_m.as_ref());
     let count = profile.count();
@@ -356,10 +409,10 @@ pub(super) fn back(
         ..
     } = scratch;
     let pm = frame_m.map(|frame| rhs_linearized_inline(&sites.mid, &lm.lin, &a.R, &ym, frame));
-    let fm = pm
-        .as_ref()
-        .map_or_else(|| rhs_from_rates(&sites.mid, &Rm, &ym, &lm.lin.rates), |pm| pm.f);
-    let residual = scale_rows(y1 - y0 - (f0 + fm * 4.0 + f1) * (h / 6.0), length);
+    let residual = match &pm {
+        Some(pm) => rows_with(front, &pm.f, h, length),
+        None => value_rows(link, front, lm),
+    };
     on.clear();
     on.extend((0..count).map(|j| profile.on_link(j, k)));
     // In a history, the stuck material's tension at node b, for the stick/slip choice.

@@ -264,6 +264,11 @@ impl<'a> Profile<'a> {
             .unwrap_or_else(IntervalLinearization::empty)
     }
 
+    /// Takes back a link evaluation its caller is done with, for the next link to refill.
+    pub(super) fn give_link(&self, lin: IntervalLinearization) {
+        self.spare_links.borrow_mut().push(lin);
+    }
+
     /// A link's scratch buffers: spare ones, else new ones ([`Profile::give_scratch`]).
     pub(super) fn take_scratch(&self) -> Box<LinkScratch> {
         self.scratch_links.borrow_mut().pop().unwrap_or_default()
