@@ -516,8 +516,9 @@ impl<'a> Profile<'a> {
             ..
         } = &mut *responses;
         if points.len() <= index {
-            // Every point of the mesh at once: 2 per link.
-            let size = (2 * self.z.first().map_or(0, Vec::len)).max(index + 1);
+            // Every point of the mesh at once: 2 per link, and the stuck links' ends
+            // ([`Profile::end_point`]).
+            let size = (3 * self.z.first().map_or(0, Vec::len)).max(index + 1);
             points.resize(size, Response::default());
             for buffer in [&mut *zs, &mut *ws, &mut *turning] {
                 buffer.resize(size * count, 0.0);
@@ -538,6 +539,13 @@ impl<'a> Profile<'a> {
         let mut loads = crate::collocation::dynamics::inertia_load_transposed(site, R, ratio, length);
         kept.valid = lin.load_response(&mut loads, &mut turns[range]);
         kept.loads = loads;
+    }
+
+    /// The point index [`Profile::keep_response`] keeps link k's end node at when the link
+    /// has a stuck slip: evaluated with the link's own multipliers, which the next link's
+    /// start (point 2k + 2) does not share.
+    pub(crate) fn end_point(&self, k: usize) -> usize {
+        2 * self.z.first().map_or(0, Vec::len) + k
     }
 
     /// The rates and turning rates at point `index` with its response to the inertia loads
