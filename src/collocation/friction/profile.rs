@@ -548,6 +548,23 @@ impl<'a> Profile<'a> {
         2 * self.z.first().map_or(0, Vec::len) + k
     }
 
+    /// [`Profile::keep_response`] of link k's end node `lin` at [`Profile::end_point`] when
+    /// the link has a stuck slip (its multipliers are its own, not the next link's start's).
+    pub(super) fn keep_end_response(
+        &self,
+        k: usize,
+        site: &Site,
+        segment_end: f64,
+        state: (&Matrix3<f64>, &Vector3<f64>, &Vector3<f64>),
+        (z, w): (&[f64], Option<&[f64]>),
+        lin: &FrictionLinearization,
+    ) {
+        if self.responding.get().is_none() || !(0..self.count()).any(|j| self.sticks(j, k)) {
+            return;
+        }
+        self.keep_response(self.end_point(k), site, segment_end, state, (z, w), lin);
+    }
+
     /// The rates and turning rates at point `index` with its response to the inertia loads
     /// (into `loads`, one load per row, and `turns`, one per slip) kept by
     /// [`Profile::keep_response`] from the same inputs, bit for bit (what evaluating them
