@@ -43,8 +43,10 @@ struct CapstanMass {
 
 impl CapstanMass {
     /// The mass of `border`'s system (its profile at the current log tensions) at the
-    /// equilibrium `x`; None when eq. 13 with friction or its load response breaks down.
-    fn new(border: &Capstan, x: &[State]) -> Option<Self> {
+    /// equilibrium `x`, with each link's multipliers `held` when given ([`Multipliers`]),
+    /// else the profile's now; None when eq. 13 with friction or its load response breaks
+    /// down.
+    fn new(border: &Capstan, x: &[State], held: Option<&Multipliers>) -> Option<Self> {
         let system = border.system();
         let profile = system.friction.as_ref()?;
         let (ratio, length) = mass_scale(system.model.robot);
@@ -108,7 +110,10 @@ impl CapstanMass {
             let seg = system.mesh.nodes[k].segment_end;
             let (a, b) = (&x[k], &x[k + 1]);
             let h = sites.end.s - sites.start.s;
-            let multipliers = profile.multipliers(k);
+            let multipliers = match held {
+                Some(held) => held.0.get(k).cloned().flatten(),
+                None => profile.multipliers(k),
+            };
             let w = multipliers.as_deref();
             z_a.clear();
             z_a.extend(profile.z.iter().map(|z| z[k]));
@@ -122,9 +127,11 @@ impl CapstanMass {
                 }
                 _ => point(2 * k, &sites.start, seg, (&a.R, &a.v, &a.u), &z_a, w, &mut za, &mut ta)?,
             };
-            // Node k + 1 as the next link's start, where a Jacobian keeps it.
+            // Node k + 1 as the next link's start, where a Jacobian keeps it, or on a link
+            // with a stuck slip as its own end (with its own multipliers).
+            let stuck = (0..count).any(|j| profile.sticks(j, k));
             let (rb, kappa_b) = point(
-                2 * k + 2,
+                if stuck { profile.end_point(k) } else { 2 * k + 2 },
                 &sites.end,
                 seg,
                 (&b.R, &b.v, &b.u),
@@ -210,47 +217,72 @@ pub(crate) fn held_unknown() -> Stability {
     }
 }
 
+/// Each link's multipliers (`Profile::multipliers`: None in full slip; on a stuck link of
+/// a history step w = (z_b - z_a) / C, C the link's capacity from its last evaluation) as
+/// the bordered Jacobian at the answer takes them: read before [`factor_at`] evaluates it,
+/// since that evaluation leaves each stuck link's own capacity at the answer in the
+/// profile, which may differ from the one it was evaluated with in the last bits
+/// (docs/stability.md, "Load-history steps"). The mass takes the same, so that it is the
+/// Jacobian's linearization and reads the responses that Jacobian kept at its points.
+pub(super) struct Multipliers(Vec<Option<Vec<f64>>>);
+
+/// The bordered Jacobian of `border` evaluated and factored at `x` for a verdict (counted
+/// in `report`), with the multipliers it took; Err with the verdict when it is singular or
+/// cannot be evaluated.
+pub(super) fn factor_at(border: &mut Capstan, x: &[State], report: &mut SolveReport) -> Result<Multipliers, Stability> {
+    let multipliers = border
+        .system()
+        .friction
+        .as_ref()
+        .map_or_else(Vec::new, |p| (0..x.len() - 1).map(|k| p.multipliers(k)).collect());
+    match border.factor_at(x, report) {
+        Ok(true) => Ok(Multipliers(multipliers)),
+        Ok(false) => Err(Stability::Unknown {
+            reason: "the bordered Jacobian at the solution is singular".into(),
+        }),
+        Err(e) => Err(Stability::Unknown {
+            reason: format!("the bordered Jacobian at the solution could not be evaluated: {e}"),
+        }),
+    }
+}
+
 /// The verdict of the linearized dynamics at the equilibrium `x` of `border`'s system (its
 /// profile loaded at the solved log tensions), with the factors of Newton's last bordered
 /// Jacobian held in its staircase when `fresh` (that Jacobian belongs to `x`: evaluated
 /// within Newton's stopping distance of it, docs/stability.md "Which Jacobian"), else with
 /// the bordered Jacobian evaluated and factored at `x` for it (counted in `report`).
 pub(crate) fn assess(border: &mut Capstan, x: &[State], fresh: bool, report: &mut SolveReport) -> Stability {
-    if !fresh {
-        match border.factor_at(x, report) {
-            Ok(true) => {}
-            Ok(false) => {
-                return Stability::Unknown {
-                    reason: "the bordered Jacobian at the solution is singular".into(),
-                };
-            }
-            Err(e) => {
-                return Stability::Unknown {
-                    reason: format!("the bordered Jacobian at the solution could not be evaluated: {e}"),
-                };
-            }
+    let multipliers = if fresh {
+        None
+    } else {
+        match factor_at(border, x, report) {
+            Ok(m) => Some(m),
+            Err(verdict) => return verdict,
         }
-    }
-    modes(border, x, KRYLOV, false).stability
+    };
+    modes_held(border, x, KRYLOV, false, multipliers.as_ref(), &mut |_, _| true).stability
 }
 
 /// [`assess`] with the eigenvalues, from `krylov` Arnoldi steps as [`super::modes`] takes
-/// them.
+/// them, with the factors `border` holds (the mass with the profile's multipliers now).
 pub(super) fn modes(border: &mut Capstan, x: &[State], krylov: usize, all: bool) -> Vibration {
-    modes_held(border, x, krylov, all, &mut |_, _| true)
+    modes_held(border, x, krylov, all, None, &mut |_, _| true)
 }
 
-/// [`modes`] with `held` applied to each bordered solve's backbone part (scaled node
-/// unknowns, the border's log tensions still its last solve's) before the restriction:
-/// the held pull-ins' projection of `pulled.rs` (false when it cannot be applied).
+/// [`modes`] with the mass taking `multipliers` when given (those of the Jacobian
+/// factored by [`factor_at`]), and `held` applied to each bordered solve's backbone part
+/// (scaled node unknowns, the border's log tensions still its last solve's) before the
+/// restriction: the held pull-ins' projection of `pulled.rs` (false when it cannot be
+/// applied).
 pub(super) fn modes_held(
     border: &mut Capstan,
     x: &[State],
     krylov: usize,
     all: bool,
+    multipliers: Option<&Multipliers>,
     held: &mut dyn FnMut(&Capstan, &mut [f64]) -> bool,
 ) -> Vibration {
-    let Some(mass) = CapstanMass::new(border, x) else {
+    let Some(mass) = CapstanMass::new(border, x, multipliers) else {
         return Vibration {
             stability: Stability::Unknown {
                 reason: "the mass matrix with friction could not be formed (eq. 13 with friction singular at a point)"
@@ -299,7 +331,7 @@ mod tests {
             let solution = crate::collocation::solve(&robot, &Default::default()).unwrap();
             let (mut border, x, _) = Sensitivity::new(&robot, &solution).unwrap().into_border();
             // Nothing kept yet: every point evaluated.
-            let fresh = CapstanMass::new(&border, &x).unwrap();
+            let fresh = CapstanMass::new(&border, &x, None).unwrap();
             let mut report = SolveReport::new(Method::Collocation);
             assert!(border.factor_at(&x, &mut report).unwrap());
             // The Jacobian at x kept node 0's response (the mass reads it below).
@@ -316,7 +348,7 @@ mod tests {
                     .is_some()
             );
             let hits = border.system().friction.as_ref().unwrap().kept_hits();
-            let kept = CapstanMass::new(&border, &x).unwrap();
+            let kept = CapstanMass::new(&border, &x, None).unwrap();
             // Each link's start node and midpoint reads a kept response (measured: exactly
             // 2 per link on H; a cache that never hits would read none).
             let links = x.len() - 1;
@@ -339,6 +371,69 @@ mod tests {
                 assert_eq!((ra, ka), (rb, kb));
                 assert_eq!(bits(a.as_slice()), bits(b.as_slice()));
             }
+        }
+    }
+
+    /// On a history step with a stuck stretch (the prototype's pull-release loop, tendon 1
+    /// at mu 0.1 and E_t A_t 2000 N, the first step back: stuck from 0.049 m to the tip), the
+    /// Jacobian at the answer takes each link's multipliers as they were before it (each
+    /// stuck link's w = (z_b - z_a) / C); with those, the mass reads every link's midpoint,
+    /// each stuck link's start and end node and the sliding links' ends from that Jacobian's
+    /// kept responses, and is the mass evaluated afresh with the same multipliers, bit for bit.
+    #[test]
+    fn a_stuck_steps_mass_reads_the_jacobians_responses_bit_for_bit() {
+        use crate::analysis::sweep::{Input, Ranges};
+        use crate::collocation::friction::history::{start, step};
+        use crate::model::parameter::Parameter;
+        let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+        let mut robot = cases::prototype();
+        robot.tendons[0].friction = Some(Friction::pull(0.1));
+        robot.tendons[0].stiffness = Some(2000.0);
+        let values: Vec<f64> = (0..=10).map(|k| 4.91 * k as f64 / 10.0).collect();
+        let ranges = Ranges::new(robot, vec![(Input::Parameter(Parameter::Tension(0)), values)])
+            .unwrap()
+            .up_down();
+        let robots: Vec<crate::Robot> = (0..12).map(|k| ranges.robot(k as f64).unwrap()).collect();
+        let options = Default::default();
+        let mut carried = start(&robots, &options).unwrap();
+        for robot in &robots {
+            step(robot, &options, &mut carried).unwrap();
+        }
+        let settled = carried.settled.as_ref().unwrap();
+        let x = &settled.x;
+        let links = x.len() - 1;
+        let mut border = super::super::stuck::border(&robots[11], settled);
+        let profile = border.system().friction.as_ref().unwrap();
+        let stuck = (0..links).filter(|&k| profile.sticks(0, k)).count();
+        assert!(stuck > links / 2 && stuck < links, "{stuck} of {links} links stuck");
+        let before = Multipliers((0..links).map(|k| profile.multipliers(k)).collect());
+        // Nothing kept yet: every point evaluated.
+        let fresh = CapstanMass::new(&border, x, Some(&before)).unwrap();
+        let mut report = SolveReport::new(Method::Collocation);
+        let held = factor_at(&mut border, x, &mut report).ok().unwrap();
+        assert_eq!(held.0, before.0);
+        let hits = border.system().friction.as_ref().unwrap().kept_hits();
+        let kept = CapstanMass::new(&border, x, Some(&held)).unwrap();
+        // Per link its midpoint and end node, and a stuck link's start (its multipliers are
+        // not the link before's, so its start is not carried from that link's end; the
+        // bound leaves one such start to be carried where two links' multipliers happen
+        // to agree, and leaves out the first link's start). Measured: 656 = 2 x 226 + 204
+        // read on 226 links, 204 of them stuck; without the stuck links' ends kept each of
+        // them is evaluated afresh (204 fewer reads), and with the multipliers taken after
+        // the Jacobian a stuck link's start and midpoint miss wherever its capacity's last
+        // bits moved.
+        let read = border.system().friction.as_ref().unwrap().kept_hits() - hits;
+        assert!(
+            read >= 2 * links + stuck - 1,
+            "{read} kept responses read for {links} links, {stuck} stuck"
+        );
+        for (a, b) in fresh.backbone.blocks.iter().zip(&kept.backbone.blocks) {
+            assert_eq!(a.map(|a| bits(a.as_slice())), b.map(|b| bits(b.as_slice())));
+        }
+        assert_eq!(fresh.rows.len(), kept.rows.len());
+        for ((ra, ka, a), (rb, kb, b)) in fresh.rows.iter().zip(&kept.rows) {
+            assert_eq!((ra, ka), (rb, kb));
+            assert_eq!(bits(a.as_slice()), bits(b.as_slice()));
         }
     }
 }

@@ -93,15 +93,15 @@ fn held_modes(
         stability: Stability::Unknown { reason },
         eigenvalues: Vec::new(),
     };
-    match border.factor_at(x, report) {
-        Ok(true) => {}
-        Ok(false) => return unknown("the bordered Jacobian at the solution is singular".into()),
-        Err(e) => {
-            return unknown(format!(
-                "the bordered Jacobian at the solution could not be evaluated: {e}"
-            ));
+    let multipliers = match super::friction::factor_at(border, x, report) {
+        Ok(m) => m,
+        Err(stability) => {
+            return Vibration {
+                stability,
+                eigenvalues: Vec::new(),
+            };
         }
-    }
+    };
     let tendons = held(original, solution);
     let k = tendons.len();
     let n = border.system().unknowns();
@@ -127,7 +127,7 @@ fn held_modes(
         columns.push(dx);
     }
     let Some(schur) = (k > 0).then(|| directions.displacement_by_tension().lu()) else {
-        return super::friction::modes(border, x, krylov, all);
+        return super::friction::modes_held(border, x, krylov, all, Some(&multipliers), &mut |_, _| true);
     };
     let mut project = |border: &Capstan, a: &mut [f64]| -> bool {
         let change = directions.change_along(a, x, border);
@@ -141,7 +141,7 @@ fn held_modes(
         }
         true
     };
-    super::friction::modes_held(border, x, krylov, all, &mut project)
+    super::friction::modes_held(border, x, krylov, all, Some(&multipliers), &mut project)
 }
 
 /// [`assess`] for a full-slip solve with friction and displacement control: `solution` of

@@ -99,7 +99,8 @@ fn close(report: &mut SolveReport, started: Instant) {
 mod tests {
     use super::*;
     use crate::analysis::sweep::{Input, Ranges};
-    use crate::collocation::dynamics::{KRYLOV_MODES, Vibration, friction::modes, vibration};
+    use crate::collocation::dynamics::friction::{factor_at, modes_held};
+    use crate::collocation::dynamics::{KRYLOV_MODES, Vibration, vibration};
     use crate::collocation::friction::history::{start, step};
     use crate::model::parameter::Parameter;
     use crate::model::tendon::{Friction, Motion};
@@ -111,8 +112,15 @@ mod tests {
         let settled = carried.settled.as_ref().unwrap();
         let mut border = border(robot, settled);
         let mut report = SolveReport::new(crate::report::Method::Collocation);
-        assert!(border.factor_at(&settled.x, &mut report).unwrap());
-        modes(&mut border, &settled.x, KRYLOV_MODES, true)
+        let multipliers = factor_at(&mut border, &settled.x, &mut report).ok().unwrap();
+        modes_held(
+            &mut border,
+            &settled.x,
+            KRYLOV_MODES,
+            true,
+            Some(&multipliers),
+            &mut |_, _| true,
+        )
     }
 
     /// The history of `ranges` solved step by step: per step its robot, the answer's

@@ -573,6 +573,7 @@ pub(super) fn back(
     // the answer).
     profile.keep_response(2 * k, &sites.start, segment_end, (&a.R, &a.v, &a.u), (za, w), la);
     profile.keep_response(2 * k + 1, &sites.mid, segment_end, (&Rm, &vm, &um), (zm, w), lm);
+    profile.keep_end_response(k, &sites.end, segment_end, (&b.R, &b.v, &b.u), (zb, w), lb);
     out
 }
 

@@ -521,8 +521,9 @@ impl<'a> Profile<'a> {
             ..
         } = &mut *responses;
         if points.len() <= index {
-            // Every point of the mesh at once: 2 per link.
-            let size = (2 * self.z.first().map_or(0, Vec::len)).max(index + 1);
+            // Every point of the mesh at once: 2 per link, and the stuck links' ends
+            // ([`Profile::end_point`]).
+            let size = (3 * self.z.first().map_or(0, Vec::len)).max(index + 1);
             points.resize(size, Response::default());
             for buffer in [&mut *zs, &mut *ws, &mut *turning] {
                 buffer.resize(size * count, 0.0);
@@ -543,6 +544,30 @@ impl<'a> Profile<'a> {
         let mut loads = crate::collocation::dynamics::inertia_load_transposed(site, R, ratio, length);
         kept.valid = lin.load_response(&mut loads, &mut turns[range]);
         kept.loads = loads;
+    }
+
+    /// The point index [`Profile::keep_response`] keeps link k's end node at when the link
+    /// has a stuck slip: evaluated with the link's own multipliers, which the next link's
+    /// start (point 2k + 2) does not share.
+    pub(crate) fn end_point(&self, k: usize) -> usize {
+        2 * self.z.first().map_or(0, Vec::len) + k
+    }
+
+    /// [`Profile::keep_response`] of link k's end node `lin` at [`Profile::end_point`] when
+    /// the link has a stuck slip (its multipliers are its own, not the next link's start's).
+    pub(super) fn keep_end_response(
+        &self,
+        k: usize,
+        site: &Site,
+        segment_end: f64,
+        state: (&Matrix3<f64>, &Vector3<f64>, &Vector3<f64>),
+        (z, w): (&[f64], Option<&[f64]>),
+        lin: &FrictionLinearization,
+    ) {
+        if self.responding.get().is_none() || !(0..self.count()).any(|j| self.sticks(j, k)) {
+            return;
+        }
+        self.keep_response(self.end_point(k), site, segment_end, state, (z, w), lin);
     }
 
     /// The rates and turning rates at point `index` with its response to the inertia loads
