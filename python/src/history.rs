@@ -7,10 +7,11 @@ use crate::errors::{self, invalid};
 use crate::options::Use;
 use crate::robot::{PyRobot, Rows};
 use crate::solution::PySolution;
-use numpy::PyArray2;
+use numpy::{PyArray1, PyArray2};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
-use tdcr::analysis::history::{HistoryStep, history as solve_history};
+use tdcr::analysis::history::{HistoryStep, directions, history as solve_history};
+use tdcr::analysis::sweep::Ranges;
 
 /// One tendon's stick/slip zones at one step: (tendon index from 0, [(start, end,
 /// contact), ...]) with the contact `pull`, `release`, `stick` or `slack` (0 N).
@@ -23,10 +24,23 @@ pub struct PyHistory {
     solutions: Py<PyList>,
     zones: Vec<Vec<Zones>>,
     tips: Vec<[f64; 3]>,
+    /// Each input's name and its value at every step solved.
+    inputs: Vec<(String, Vec<f64>)>,
+    /// Each step's direction of the swept input.
+    directions: Vec<String>,
 }
 
 impl PyHistory {
-    fn new(py: Python<'_>, steps: Vec<HistoryStep>) -> PyResult<Self> {
+    /// The history of `steps`, the first of `ranges`' steps solved in order.
+    fn new(py: Python<'_>, steps: Vec<HistoryStep>, ranges: &Ranges) -> PyResult<Self> {
+        let n = steps.len();
+        let inputs = ranges
+            .inputs()
+            .iter()
+            .enumerate()
+            .map(|(i, (input, _))| (input.to_string(), (0..n).map(|k| ranges.value(i, k as f64)).collect()))
+            .collect();
+        let directions = directions(ranges).into_iter().take(n).map(String::from).collect();
         let solutions = PyList::empty(py);
         let (mut zones, mut tips) = (Vec::new(), Vec::new());
         for step in steps {
@@ -53,12 +67,14 @@ impl PyHistory {
             solutions: solutions.unbind(),
             zones,
             tips,
+            inputs,
+            directions,
         })
     }
 }
 
 crate::pickle::pickled_fields! {
-    PyHistory { solutions, zones, tips }
+    PyHistory { solutions, zones, tips, inputs, directions }
 
     /// The solutions, one per step solved, in order.
     #[getter]
@@ -73,6 +89,24 @@ crate::pickle::pickled_fields! {
     #[getter]
     fn zones(&self) -> Vec<Vec<Zones>> {
         self.zones.clone()
+    }
+
+    /// Each input's values at the steps solved, by name (`tension.1`, ...; as `parameters`
+    /// gave them, up and back down with `up_down`): a dict of arrays of shape (n,).
+    #[getter]
+    fn inputs<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let out = PyDict::new(py);
+        for (name, values) in &self.inputs {
+            out.set_item(name, PyArray1::from_slice(py, values))?;
+        }
+        Ok(out)
+    }
+
+    /// Each step's direction of the swept input (the first that changes): "up", "down", or
+    /// "held" (the first step, and where it did not change), as the command line's CSV.
+    #[getter]
+    fn directions(&self) -> Vec<String> {
+        self.directions.clone()
     }
 
     /// Tip positions (m, world frame), shape (n, 3).
@@ -144,7 +178,7 @@ pub fn history(
             ),
             other => other.into_py(),
         })?;
-    let partial = PyHistory::new(py, result.steps)?;
+    let partial = PyHistory::new(py, result.steps, &ranges)?;
     match result.failure {
         None => Ok(partial),
         Some((i, e)) => {

@@ -51,6 +51,24 @@ def test_up_down_closes_a_loop_whose_way_back_is_on_the_other_side():
     assert again.zones == h.zones
 
 
+def test_the_history_keeps_its_inputs_and_directions_and_draws_its_loop(tmp_path):
+    tensions = np.linspace(0.0, 2.0, 3)
+    h = tdcr.history(robot(), {"tension.1": tensions}, up_down=True)
+    assert list(h.inputs["tension.1"]) == [0.0, 1.0, 2.0, 1.0, 0.0]
+    assert h.directions == ["held", "up", "up", "down", "down"]
+    matplotlib = pytest.importorskip("matplotlib")
+    matplotlib.use("Agg")
+    ax = tdcr.plot_history(h)
+    # Four segments: two up (solid), two down (dashed), one legend entry each.
+    assert len(ax.lines) == 4
+    assert [line.get_linestyle() for line in ax.lines] == ["-", "-", "--", "--"]
+    assert [t.get_text() for t in ax.get_legend().get_texts()] == [
+        "loading: the input rises",
+        "unloading: the input falls",
+    ]
+    ax.figure.savefig(tmp_path / "loop.png")
+
+
 def test_one_step_from_rest_is_the_pull_solve():
     h = tdcr.history(robot(), {"tension.1": [2.0]})
     direct = tdcr.solve(robot(tension=2.0))

@@ -65,7 +65,7 @@ from ._native import (
 )
 from . import cases
 from ._dataset import dataset
-from .plotting import plot
+from .plotting import plot, plot_history
 
 __all__ = [
     "Breakdown",
@@ -100,6 +100,7 @@ __all__ = [
     "history",
     "linearize",
     "plot",
+    "plot_history",
     "solve",
     "solve_batch",
     "solve_displacements",

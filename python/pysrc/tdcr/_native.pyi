@@ -535,6 +535,12 @@ class History:
         """Per step, per tendon with friction: (tendon index from 0, [(start, end, contact),
         ...]) from its base entry to its termination (m), contact `pull`, `release`, `stick` or `slack` (0 N)."""
     @property
+    def inputs(self) -> Dict[str, FloatArray]:
+        """Each input's values at the steps solved, by name, shape (n,)."""
+    @property
+    def directions(self) -> List[str]:
+        """Each step's direction of the swept input: "up", "down" or "held"."""
+    @property
     def tip_positions(self) -> FloatArray:
         """Tip positions (m, world frame), shape (n, 3)."""
     def __len__(self) -> int: ...

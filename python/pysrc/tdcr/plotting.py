@@ -1,8 +1,9 @@
 """Plots with matplotlib (the `plot` extra: pip install "./python[plot]").
 
 `plot(solution)` draws a solved shape in 3-D: the backbone, each tendon's path (slack
-tendons dashed) and the tip. `tdcr.figure` writes the command line's own SVG/PNG picture
-without matplotlib.
+tendons dashed) and the tip. `plot_history(history)` draws a load history's hysteresis loop
+as `tdcr sweep --history --plot` does. `tdcr.figure` writes the command line's own SVG/PNG
+picture without matplotlib.
 """
 
 from typing import Any, Optional
@@ -49,4 +50,39 @@ def plot(solution: Any, ax: Optional[Any] = None, *, tendons: bool = True, label
     ax.set_zlabel("z (m)")
     # Equal scales on the three axes: a bend looks like a bend.
     ax.set_aspect("equal")
+    return ax
+
+
+def plot_history(history: Any, ax: Optional[Any] = None) -> Any:
+    """Draws the hysteresis loop of `history` (a `tdcr.History`) into the 2-D axes `ax` (new
+    ones in a new figure when None), as `tdcr sweep --history --plot` does: the tip's
+    displacement from its place at the first step (mm) against the swept input (the first
+    input that changes), the steps where it rises solid, those where it falls dashed.
+    Returns the axes."""
+    plt = _pyplot()
+    if ax is None:
+        ax = plt.figure().add_subplot()
+    if len(history) == 0:
+        return ax
+    inputs = history.inputs
+    name = next((n for n, v in inputs.items() if any(x != v[0] for x in v)), next(iter(inputs)))
+    x = inputs[name]
+    tips = history.tip_positions
+    moved = [1e3 * float(sum((t - tips[0]) ** 2) ** 0.5) for t in tips]
+    directions = history.directions
+    labelled = set()
+    for k in range(1, len(x)):
+        rising = directions[k] != "down"
+        label = "loading: the input rises" if rising else "unloading: the input falls"
+        ax.plot(
+            [x[k - 1], x[k]],
+            [moved[k - 1], moved[k]],
+            color="#1f5fa8" if rising else "#e07b00",
+            linestyle="-" if rising else "--",
+            label=None if label in labelled else label,
+        )
+        labelled.add(label)
+    ax.set_xlabel(name)
+    ax.set_ylabel("tip displacement from the first step (mm)")
+    ax.legend()
     return ax
