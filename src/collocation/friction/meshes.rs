@@ -322,7 +322,7 @@ fn refusal_hint(
                 "no equilibrium on the branch the robot reaches as its friction grows from 0: on the first mesh \
                  ({intervals} intervals) Newton solved {:.0} % of the friction coefficients (the termination and \
                  residual above are its run at {:.0} %), and the branch of equilibria followed on by its arclength \
-                 reaches {:.1} % of them, where tendon {} has friction coefficient {:.3} and delivers {:.3} N, and \
+                 reaches {:.2} % of them, where tendon {} has friction coefficient {:.3} and delivers {:.3} N, and \
                  {how} (docs/friction.md, \"Large friction on a released tendon\"). Lower the friction coefficient \
                  of tendon {} below {:.3} (on finer meshes the bound lies lower), or pull it in instead",
                 100.0 * g.reached,
