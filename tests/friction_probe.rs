@@ -350,3 +350,52 @@ fn a_refusal_reports_where_the_branch_ends() {
     assert!(errors[1] <= 2e-3, "lambda off by {errors:?}, closed form {lambda_s}");
     assert!(errors[1] < errors[0] + 5e-5, "{errors:?}");
 }
+
+/// A fold: one released tendon close to the axis (1 mm) on a straight rod, at 20 N, on a
+/// fixed mesh of 16 intervals. In the continuum its delivered tension runs away as lambda
+/// approaches lambda_inf = EI / (mu r L tau_0) = 0.872 (the closed form of
+/// `a_refusal_reports_where_the_branch_ends`; its path would degenerate at 4 060 N, lambda
+/// 0.868); on a coarse mesh the discrete capstan rows turn back first, at 91 N on 8
+/// intervals, 138 N on 16 and 418 N on 32 (lambda 0.634, 0.714, 0.845). The fold is a
+/// property of the robot on that mesh, not of how far its own coefficient lies past it: the
+/// solve at a coefficient 0.1 % below the reported one answers, and 0.1 % above it is refused
+/// with the same fold.
+#[test]
+fn a_refusal_reports_the_fold_it_finds() {
+    let with = |mu: f64| {
+        let mut robot = Robot::new(Rod::solid_circle(
+            cases::LENGTH,
+            cases::RADIUS,
+            cases::YOUNGS_MODULUS,
+            cases::POISSON_RATIO,
+        ))
+        .with_tendon(Tendon::new(Routing::straight(0.001, 0.0), 20.0));
+        robot.tendons[0].friction = Some(Friction {
+            coefficient: mu,
+            motion: Motion::Release,
+        });
+        tdcr::collocation::solve(&robot, &tdcr::collocation::Options::fixed(16))
+    };
+    let folded = |mu: f64| {
+        let message = with(mu).unwrap_err().to_string();
+        assert!(message.contains("turns back there (a fold)"), "{message}");
+        let (percent, tension) = branch_end(&message);
+        (percent / 100.0 * mu, tension)
+    };
+    let (coefficient, tension) = folded(1.0);
+    // The coefficient of the mesh's fold (measured 0.7135) and its tension (138 N).
+    assert!((0.70..0.73).contains(&coefficient) && (120.0..160.0).contains(&tension));
+    assert!(with(coefficient * 0.999).is_ok());
+    let (again, tension_again) = folded(coefficient * 1.001);
+    // The same fold to twice the printed resolution (lambda to 1e-2 of a per cent: 5e-5 of
+    // the coefficient); the tension, which is not flat along the branch there, to where
+    // regula falsi stops (0.05 N: 4e-4 of it).
+    assert!(
+        (again - coefficient).abs() <= 2e-6 + 1e-4 * coefficient,
+        "{again} against {coefficient}"
+    );
+    assert!(
+        (tension_again - tension).abs() <= 0.05,
+        "{tension_again} N against {tension} N"
+    );
+}

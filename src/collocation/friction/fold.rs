@@ -1,27 +1,29 @@
 //! Past the end of the continuation in the friction coefficients (docs/friction.md,
-//! "fold22"): the branch of equilibria from the frictionless shape followed on one mesh with
-//! the coefficients' fraction `lambda` as an unknown and one log tension as the parameter,
-//! which tells a fold (the branch turning back in `lambda`) from a solve Newton merely
-//! failed.
+//! "fold22"): the branch of equilibria from the frictionless shape followed on one mesh by
+//! pseudo-arclength, the coefficients' fraction `lambda` an unknown, which tells a fold (the
+//! branch turning back in `lambda`) and the branch's end where a tendon's path degenerates
+//! from a solve Newton merely failed.
 //!
 //! Natural-parameter continuation ([`super::continuation`]) fixes `lambda` and cannot pass
 //! a point where the branch turns back: there the bordered Jacobian A of the residual
 //! (backbone and capstan rows) in the states and log tensions y is singular, and
-//! dy/dlambda = -A^-1 F_lambda runs away. Here the branch is parametrized instead by the log
-//! tension z_k that grows fastest with `lambda` at the start (Rheinboldt's local
-//! parametrization): each point solves
+//! dy/dlambda = -A^-1 F_lambda runs away. Here each point solves
 //!
 //! ```text
-//! F(y, lambda) = 0,   y_k = zeta,
+//! F(y, lambda) = 0,   t . (y - y_b, lambda - lambda_b) = ds
 //! ```
 //!
-//! by Newton on the extended system, by block elimination with A's staircase factors:
-//! w = A^-1 (-F), u = A^-1 F_lambda, dlambda = (y_k + w_k - zeta) / u_k, dy = w - u dlambda
-//! (F_lambda by central differences in `lambda`). Along the branch dlambda/dzeta = -1/u_k
-//! is smooth, and it vanishes where A is singular; a sign change between two converged
-//! points is a fold (det A changes sign there while the extended system stays regular),
-//! located by regula falsi on it. Where `lambda` reaches 1 instead, the robot is solved
-//! there from the branch.
+//! from the tangent predictor at the last point b (t its unit tangent in the scaled
+//! unknowns and `lambda`), by Newton on the extended system by block elimination with A's
+//! staircase factors: w = A^-1 (-F), u = A^-1 F_lambda, dy = w - u dlambda with dlambda from
+//! the constraint row (F_lambda by central differences in `lambda`). The tangent is
+//! (-u, 1) normalized, oriented along the last one; its `lambda` component changes sign
+//! exactly where A is singular on the branch (det A changes sign there while the extended
+//! system stays regular): a sign change between two converged points is a fold, located by
+//! regula falsi on that component over the arclength. Where `lambda` reaches 1 instead,
+//! the robot is solved there from the branch. Where the corrector fails at every step
+//! length while a tendon's path has all but vanished (its speed below [`DEGENERATE`] of the
+//! backbone's), the branch ends at the model's own singularity.
 
 use super::continuation;
 use super::*;

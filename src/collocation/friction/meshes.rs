@@ -324,7 +324,7 @@ fn refusal_hint(
                  residual above are its run at {:.0} %), and the branch of equilibria followed on by its arclength \
                  reaches {:.2} % of them, where tendon {} has friction coefficient {:.3} and delivers {:.3} N, and \
                  {how} (docs/friction.md, \"Large friction on a released tendon\"). Lower the friction coefficient \
-                 of tendon {} below {:.3} (on finer meshes the bound lies lower), or pull it in instead",
+                 of tendon {} below {:.3} (the first mesh's value; finer meshes move it), or pull it in instead",
                 100.0 * g.reached,
                 100.0 * g.tried,
                 100.0 * e.lambda,
