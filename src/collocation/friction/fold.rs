@@ -85,8 +85,9 @@ pub(super) struct End {
     pub(super) coefficient: f64,
     /// Its delivered tension there (N).
     pub(super) tension: f64,
-    /// Its path's smallest speed over the backbone's there ([`path_speed`]).
-    pub(super) speed: f64,
+    /// The tendon with friction whose path is slowest there, and that speed over the
+    /// backbone's ([`path_speed`]).
+    pub(super) slowest: (usize, f64),
 }
 
 /// What following the branch past the natural continuation found.
@@ -104,7 +105,7 @@ pub(super) enum Beyond {
 /// curvature within 1 % of the tendon's offset) ends the branch where the corrector fails
 /// on: the tendon's load on the rod grows as the inverse cube of that speed (eq. 11's
 /// |p_i'|^3), which vanishes where the rod's curvature reaches the inverse offset.
-const DEGENERATE: f64 = 0.01;
+pub(super) const DEGENERATE: f64 = 0.01;
 
 /// `robot` with every friction coefficient scaled by `lambda`.
 fn scaled(robot: &Robot, lambda: f64) -> Robot {
@@ -362,7 +363,7 @@ fn follow_counted(
                         tendon,
                         coefficient: coefficient * point.lambda,
                         tension,
-                        speed,
+                        slowest: (tendon, speed),
                     }));
                 }
                 return Ok(Beyond::Unknown);
@@ -377,14 +378,14 @@ fn follow_counted(
         if next_t[last] <= 0.0 && t[last] > 0.0 {
             let top = locate(robot, mesh, (&point, &t), (ds, next_t[last]), tolerance, iterations);
             let (tendon, coefficient, tension) = delivered(robot, mesh, &top, None, &next_t);
-            let speed = path_speed(robot, mesh, &top).1;
+            let slowest = path_speed(robot, mesh, &top);
             return Ok(Beyond::Ends(End {
                 folded: true,
                 lambda: top.lambda,
                 tendon,
                 coefficient: coefficient * top.lambda,
                 tension,
-                speed,
+                slowest,
             }));
         }
         (point, t) = (next, next_t);
@@ -486,8 +487,8 @@ fn locate(
     best
 }
 
-/// The slip of `tendon` (None: the one whose delivered log tension moves most along the
-/// tangent `t`) at `point` on `mesh`: its tendon (index in the robot), its coefficient in
+/// The slip of `tendon` (None: the one whose delivered tension moves most along the tangent
+/// `t`, in newtons) at `point` on `mesh`: its tendon (index in the robot), its coefficient in
 /// `robot`, and its delivered tension at `point` (N).
 fn delivered(robot: &Robot, mesh: &Mesh, point: &BranchPoint, tendon: Option<usize>, t: &[f64]) -> (usize, f64, f64) {
     let border = border_at(robot, mesh, &point.z);
@@ -498,13 +499,16 @@ fn delivered(robot: &Robot, mesh: &Mesh, point: &BranchPoint, tendon: Option<usi
     let end = |j: usize| border.offsets[j] + profile.spans[j] - 1;
     let j = match tendon.and_then(|i| profile.slipping.iter().position(|&s| s == i)) {
         Some(j) => j,
-        None => (0..profile.count())
-            .max_by(|&a, &b| t[n + end(a)].abs().total_cmp(&t[n + end(b)].abs()))
-            .unwrap_or(0),
+        None => {
+            let moves = |j: usize| t[n + end(j)].abs() * profile.tension(j, point.z[end(j)]);
+            (0..profile.count())
+                .max_by(|&a, &b| moves(a).total_cmp(&moves(b)))
+                .unwrap_or(0)
+        }
     };
     let tendon = profile.slipping[j];
     let coefficient = robot.tendons[tendon].friction.map_or(f64::NAN, |f| f.coefficient);
-    (tendon, coefficient, profile.base[j] * point.z[end(j)].exp())
+    (tendon, coefficient, profile.tension(j, point.z[end(j)]))
 }
 
 /// The tendon with friction whose path is slowest at a node of `point`, and that speed

@@ -308,15 +308,20 @@ fn refusal_hint(
 ) -> String {
     match (reached, ended) {
         (Some(g), Some(e)) => {
-            let how = if e.folded {
-                "turns back there (a fold)".to_string()
-            } else {
-                format!(
+            let (slow, speed) = e.slowest;
+            let how = match (e.folded, speed < fold::DEGENERATE) {
+                (true, false) => "turns back there (a fold)".to_string(),
+                (true, true) => format!(
+                    "turns back there (a fold), where tendon {}'s path has all but vanished ({speed:.1e} of the \
+                     backbone's length per length: the rod's curvature is nearly the inverse of its offset)",
+                    slow + 1
+                ),
+                (false, _) => format!(
                     "ends there: the rod's curvature reaches the inverse of tendon {}'s offset, where its path \
-                     has all but vanished ({:.1e} of the backbone's length per length) and the model no longer holds",
-                    e.tendon + 1,
-                    e.speed
-                )
+                     has all but vanished ({speed:.1e} of the backbone's length per length) and the model no longer \
+                     holds",
+                    slow + 1
+                ),
             };
             format!(
                 "no equilibrium on the branch the robot reaches as its friction grows from 0: on the first mesh \
