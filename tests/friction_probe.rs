@@ -399,3 +399,37 @@ fn a_refusal_reports_the_fold_it_finds() {
         "{tension_again} N against {tension} N"
     );
 }
+
+/// Case 113 of the probe with tendon 1's coefficient lowered to 0.55 (below where its branch
+/// ends on every mesh: 0.709 of the coefficient on the first mesh, 0.626 on 128 intervals;
+/// docs/friction.md, "fold22"). The continuation in the coefficients gives up at 89 % of
+/// them on the first mesh; the branch followed on by its arclength reaches them, and the
+/// refinement goes on from that answer. Its estimate covers its distance to a solve at
+/// tolerance 1e-10 (measured 1.08e-10 m against an estimate of 1.09e-10 m).
+#[test]
+fn past_the_continuation_the_branch_reaches_the_coefficients() {
+    let robot = opposite([4.2340, 4.0224], [0.55, 0.866], true, 0.0066);
+    let c = tdcr::solve(&robot, &Default::default()).unwrap();
+    assert!(
+        c.report
+            .notes
+            .iter()
+            .any(|n| n.contains("branch of equilibria by its arclength")),
+        "{:?}",
+        c.report.notes
+    );
+    let fine = tdcr::collocation::Options {
+        tolerance: Some(1e-10),
+        ..Default::default()
+    };
+    let reference = tdcr::collocation::solve(&robot, &fine).unwrap();
+    let estimate = c.report.error_estimate.unwrap().tip_position;
+    let bound = reference.report.error_estimate.unwrap().tip_position;
+    // Three times both estimates, as in the probe: deferred correction is asymptotically
+    // exact; 1e-11 m for rounding.
+    let truth = apart(&c, &reference);
+    assert!(
+        truth <= 3.0 * (estimate + bound) + 1e-11,
+        "true error {truth:e} m, estimate {estimate:e} m"
+    );
+}

@@ -131,8 +131,15 @@ fn border_at<'r>(robot: &'r Robot, mesh: &Mesh, z: &[f64]) -> Capstan<'r> {
 }
 
 /// The residual (backbone rows, then capstan rows) of `robot` scaled by `lambda` at the
-/// states `x` and log tensions `z`; None on a model breakdown or a value that is not finite.
-fn residual(robot: &Robot, mesh: &Mesh, lambda: f64, (x, z): (&[State], &[f64])) -> Option<Vec<f64>> {
+/// states `x` and log tensions `z` (counted in `report`); None on a model breakdown or a
+/// value that is not finite.
+fn residual(
+    robot: &Robot,
+    mesh: &Mesh,
+    lambda: f64,
+    (x, z): (&[State], &[f64]),
+    report: &mut SolveReport,
+) -> Option<Vec<f64>> {
     // At lambda <= 0 no tendon slips: not this border's system.
     if lambda <= 0.0 {
         return None;
@@ -141,7 +148,11 @@ fn residual(robot: &Robot, mesh: &Mesh, lambda: f64, (x, z): (&[State], &[f64]))
     let mut border = border_at(&robot, mesh, z);
     let n = border.system.unknowns();
     let mut out = vec![0.0; n + z.len()];
-    let ok = border.on(Point::Current, |s| s.residual(x, &mut out[..n]).is_ok());
+    let ok = border.on(Point::Current, |s| {
+        report.evaluations.residual += 1;
+        report.evaluations.equations += s.rate_evaluations();
+        s.residual(x, &mut out[..n]).is_ok()
+    });
     border.rows(Point::Current, x);
     out[n..].copy_from_slice(border.residual(Point::Current));
     (ok && out.iter().all(|v| v.is_finite())).then_some(out)
@@ -168,8 +179,14 @@ impl Linearized<'_> {
 }
 
 /// The Jacobian A of `robot` scaled by `point.lambda` at the point, factored, with the
-/// residual there and F_lambda; None on a model breakdown or a singular matrix.
-fn linearize<'r>(robot: &Robot, mesh: &Mesh, at: &'r Robot, point: &BranchPoint) -> Option<Linearized<'r>> {
+/// residual there and F_lambda (counted in `report`); None on a model breakdown or a
+/// singular matrix.
+fn linearize<'r>(
+    robot: &Robot,
+    mesh: &Mesh,
+    (at, point): (&'r Robot, &BranchPoint),
+    report: &mut SolveReport,
+) -> Option<Linearized<'r>> {
     // Central where lambda - DIFFERENCE > 0, else forward (no slip at lambda <= 0).
     let low = if point.lambda > DIFFERENCE {
         point.lambda - DIFFERENCE
@@ -177,8 +194,8 @@ fn linearize<'r>(robot: &Robot, mesh: &Mesh, at: &'r Robot, point: &BranchPoint)
         point.lambda
     };
     let high = low + 2.0 * DIFFERENCE;
-    let up = residual(robot, mesh, high, (&point.x, &point.z))?;
-    let down = residual(robot, mesh, low, (&point.x, &point.z))?;
+    let up = residual(robot, mesh, high, (&point.x, &point.z), report)?;
+    let down = residual(robot, mesh, low, (&point.x, &point.z), report)?;
     let column = up.iter().zip(&down).map(|(a, b)| (a - b) / (high - low)).collect();
     let mut border = border_at(at, mesh, &point.z);
     let n = border.system.unknowns();
@@ -234,15 +251,15 @@ fn tangent(u: &[f64], along: Option<&[f64]>) -> Vec<f64> {
 /// Newton on the extended system F(y, lambda) = 0, t . (y - y_b, lambda - lambda_b) = `ds`
 /// from the tangent predictor at `base` (the module docs; `t` the unit tangent there, the
 /// difference in y the sum of the steps taken, in scaled unknowns): the converged point and
-/// its unit tangent (oriented along `t`), with the Newton iterations taken added to
-/// `iterations`; None where it fails.
+/// its unit tangent (oriented along `t`), its Newton iterations and evaluations counted in
+/// `report`; None where it fails.
 fn correct(
     robot: &Robot,
     mesh: &Mesh,
     (base, t): (&BranchPoint, &[f64]),
     ds: f64,
     tolerance: f64,
-    iterations: &mut usize,
+    report: &mut SolveReport,
 ) -> Option<(BranchPoint, Vec<f64>)> {
     let length = robot.length();
     let last = t.len() - 1;
@@ -251,7 +268,7 @@ fn correct(
     let mut point = moved(base, &taken[..last], taken[last], 1.0, length);
     for _ in 0..CORRECTOR_ITERATIONS {
         let at = scaled(robot, point.lambda);
-        let mut linear = linearize(robot, mesh, &at, &point)?;
+        let mut linear = linearize(robot, mesh, (&at, &point), report)?;
         let minus: Vec<f64> = linear.residual.iter().map(|f| -f).collect();
         let w = linear.solve(&minus)?;
         let column = std::mem::take(&mut linear.column);
@@ -270,7 +287,8 @@ fn correct(
         if max_norm(&linear.residual) <= tolerance && size <= STEP_TOLERANCE {
             return Some((point, tangent(&u, Some(t))));
         }
-        *iterations += 1;
+        report.iterations += 1;
+        report.newton_steps += 1;
         // The merit 0.5 |(F, constraint)|^2 with Armijo's test (its slope along the Newton
         // step is -2 merit).
         let constraint = |taken: &[f64]| dot(t, taken) - ds;
@@ -284,7 +302,7 @@ fn correct(
                 .zip(step.iter().chain([&dlambda]))
                 .map(|(a, d)| a + alpha * d)
                 .collect();
-            if let Some(r) = residual(robot, mesh, trial.lambda, (&trial.x, &trial.z))
+            if let Some(r) = residual(robot, mesh, trial.lambda, (&trial.x, &trial.z), report)
                 && merit(&r, constraint(&trial_taken)) <= (1.0 - 2e-4 * alpha) * phi
             {
                 (point, taken) = (trial, trial_taken);
@@ -303,7 +321,7 @@ fn correct(
 /// the natural continuation) past where the natural continuation gave up ([module
 /// docs](self)): a fold with where it is, the answer at `lambda` = 1 where the branch
 /// reaches it (the robot solved there by the plain bordered Newton from the branch), or
-/// neither. Its Newton iterations go to `report`.
+/// neither. Its Newton iterations and evaluations are counted in `report`.
 ///
 /// # Errors
 /// A workspace that cannot be built for `mesh`.
@@ -314,28 +332,13 @@ pub(super) fn follow(
     start: BranchPoint,
     report: &mut SolveReport,
 ) -> Result<Beyond> {
-    let mut iterations = 0;
-    let answer = follow_counted(robot, options, mesh, start, (&mut iterations, report));
-    report.iterations += iterations;
-    report.newton_steps += iterations;
-    answer
-}
-
-/// [`follow`], its corrector's Newton iterations counted in `iterations`.
-fn follow_counted(
-    robot: &Robot,
-    options: &Options,
-    mesh: &Mesh,
-    start: BranchPoint,
-    (iterations, report): (&mut usize, &mut SolveReport),
-) -> Result<Beyond> {
     let tolerance = options.residual_tolerance;
     // From the frictionless solution (no step converged) there is no border to follow.
     if start.lambda <= 0.0 {
         return Ok(Beyond::Unknown);
     }
     let at = scaled(robot, start.lambda);
-    let Some(mut first) = linearize(robot, mesh, &at, &start) else {
+    let Some(mut first) = linearize(robot, mesh, (&at, &start), report) else {
         return Ok(Beyond::Unknown);
     };
     let column = std::mem::take(&mut first.column);
@@ -350,7 +353,7 @@ fn follow_counted(
     let mut runs = 0;
     while runs < MOST_RUNS && point.lambda > 0.0 && max_norm(&point.z) < LARGEST_LOG_TENSION {
         runs += 1;
-        let Some((next, next_t)) = correct(robot, mesh, (&point, &t), ds, tolerance, iterations) else {
+        let Some((next, next_t)) = correct(robot, mesh, (&point, &t), ds, tolerance, report) else {
             ds /= 2.0;
             if ds < SMALLEST_STEP {
                 // Where a tendon's path has all but vanished, the model ends there.
@@ -376,7 +379,7 @@ fn follow_counted(
             return at_one(robot, options, mesh, [&next, &point], (runs, report));
         }
         if next_t[last] <= 0.0 && t[last] > 0.0 {
-            let top = locate(robot, mesh, (&point, &t), (ds, next_t[last]), tolerance, iterations);
+            let top = locate(robot, mesh, (&point, &t), (ds, next_t[last]), tolerance, report);
             let (tendon, coefficient, tension) = delivered(robot, mesh, &top, None, &next_t);
             let slowest = path_speed(robot, mesh, &top);
             return Ok(Beyond::Ends(End {
@@ -453,7 +456,7 @@ fn locate(
     (a, t): (&BranchPoint, &[f64]),
     (ds, end): (f64, f64),
     tolerance: f64,
-    iterations: &mut usize,
+    report: &mut SolveReport,
 ) -> BranchPoint {
     let last = t.len() - 1;
     let mut best = a.clone();
@@ -465,7 +468,7 @@ fn locate(
             break;
         }
         let s = low + g_low / (g_low - g_high) * (high - low);
-        let Some((c, tc)) = correct(robot, mesh, (a, t), s, tolerance, iterations) else {
+        let Some((c, tc)) = correct(robot, mesh, (a, t), s, tolerance, report) else {
             break;
         };
         let g = tc[last];
