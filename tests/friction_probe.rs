@@ -6,7 +6,7 @@
 //! `cargo test --release --test friction_probe -- --ignored --nocapture`.
 
 use nalgebra::Vector3;
-use tdcr::{Friction, Motion, Robot, cases, shooting};
+use tdcr::{Friction, Motion, Robot, Rod, Routing, Tendon, cases, shooting};
 
 /// Random inputs from a fixed linear congruential sequence, uniform in [0, 1).
 fn uniform(state: &mut u64) -> f64 {
@@ -262,8 +262,12 @@ fn a_refusal_after_the_continuation_says_how_far_it_got() {
     );
     let error = tdcr::collocation::solve(&robot, &tdcr::collocation::Options::default()).unwrap_err();
     let message = error.to_string();
-    assert!(message.contains("followed from 0"), "{message}");
-    assert!(message.contains("% of them on the first mesh"), "{message}");
+    assert!(
+        message.contains("Newton solved 67 % of the friction coefficients"),
+        "{message}"
+    );
+    // The branch past it (docs/friction.md, "fold22"): tendon 1's path degenerates.
+    assert!(message.contains("ends there"), "{message}");
     assert!(!message.contains("shooting"), "{message}");
     match error {
         // The continuation's last run stalls in the line search (the history printed with
@@ -274,4 +278,158 @@ fn a_refusal_after_the_continuation_says_how_far_it_got() {
         }
         other => panic!("{other}"),
     }
+}
+
+/// The fraction of the friction coefficients (per cent) and the delivered tension (N) a
+/// refusal reports where the branch from the frictionless shape ends (docs/friction.md,
+/// "fold22").
+fn branch_end(message: &str) -> (f64, f64) {
+    let number = |after: &str, until: &str| -> f64 {
+        let start = message.find(after).map(|i| i + after.len()).unwrap();
+        let end = start + message[start..].find(until).unwrap();
+        message[start..end]
+            .trim()
+            .parse()
+            .unwrap_or_else(|_| panic!("{message}"))
+    };
+    (
+        number("arclength reaches ", " % of them"),
+        number("and delivers ", " N"),
+    )
+}
+
+/// One released tendon on a straight rod without other loads, where the branch has a closed
+/// form (docs/friction.md, "fold22"): the rod's moment is tau(s) r, so its curvature
+/// tau r / EI turns the tendon at that rate and tau' = lambda mu r tau^2 / EI, whence
+/// 1/tau_0 - 1/tau(L) = lambda mu r L / EI. The tendon's path speed v_3 - kappa r (v_3 =
+/// 1 - tau / EA) vanishes at the tip when tau(L) = tau_s = 1 / (r^2 / EI + 1 / EA): the branch
+/// ends at lambda_s = (1/tau_0 - 1/tau_s) EI / (mu r L). The refusal reports it, on fixed
+/// meshes of 64 and 128 intervals.
+#[test]
+fn a_refusal_reports_where_the_branch_ends() {
+    let (tau0, mu) = (3.0, 1.0);
+    let (length, radius, r) = (cases::LENGTH, cases::RADIUS, cases::TENDON_OFFSET);
+    let mut robot = Robot::new(Rod::solid_circle(
+        length,
+        radius,
+        cases::YOUNGS_MODULUS,
+        cases::POISSON_RATIO,
+    ))
+    .with_tendon(Tendon::new(Routing::straight(r, 0.0), tau0));
+    robot.tendons[0].friction = Some(Friction {
+        coefficient: mu,
+        motion: Motion::Release,
+    });
+    let area = std::f64::consts::PI * radius * radius;
+    let (ei, ea) = (
+        cases::YOUNGS_MODULUS * area * radius * radius / 4.0,
+        cases::YOUNGS_MODULUS * area,
+    );
+    let tau_s = 1.0 / (r * r / ei + 1.0 / ea);
+    let lambda_s = (1.0 / tau0 - 1.0 / tau_s) * ei / (mu * r * length);
+    let mut errors = Vec::new();
+    for intervals in [64, 128] {
+        let error = tdcr::collocation::solve(&robot, &tdcr::collocation::Options::fixed(intervals)).unwrap_err();
+        let message = error.to_string();
+        assert!(
+            message.contains("ends there") && message.contains("tendon 1"),
+            "{message}"
+        );
+        let (percent, tension) = branch_end(&message);
+        // The corrector stops where the path speed is about 1e-6: tau(L) within 1e-4 of
+        // tau_s relative (dtau/dspeed ~ tau_s), printed to 1e-3 N.
+        assert!(
+            (tension - tau_s).abs() <= 2e-3 + 1e-4 * tau_s,
+            "{tension} N, closed form {tau_s} N"
+        );
+        errors.push((percent / 100.0 - lambda_s).abs());
+    }
+    // The scheme is of order 4 (measured: 6.2e-3 on 64 intervals, 4e-4 on 128, 7.4e-2 on
+    // the default first mesh of 32); 2e-3 on 128 intervals leaves a factor 5 to it, and
+    // the finer mesh must be the closer (5e-5 for the printed 1e-4 of a per cent).
+    assert!(errors[1] <= 2e-3, "lambda off by {errors:?}, closed form {lambda_s}");
+    assert!(errors[1] < errors[0] + 5e-5, "{errors:?}");
+}
+
+/// A fold: one released tendon close to the axis (1 mm) on a straight rod, at 20 N, on a
+/// fixed mesh of 16 intervals. In the continuum its delivered tension runs away as lambda
+/// approaches lambda_inf = EI / (mu r L tau_0) = 0.872 (the closed form of
+/// `a_refusal_reports_where_the_branch_ends`; its path would degenerate at 4 060 N, lambda
+/// 0.868); on a coarse mesh the discrete capstan rows turn back first, at 91 N on 8
+/// intervals, 138 N on 16 and 418 N on 32 (lambda 0.634, 0.714, 0.845). The fold is a
+/// property of the robot on that mesh, not of how far its own coefficient lies past it: the
+/// solve at a coefficient 0.1 % below the reported one answers, and 0.1 % above it is refused
+/// with the same fold.
+#[test]
+fn a_refusal_reports_the_fold_it_finds() {
+    let with = |mu: f64| {
+        let mut robot = Robot::new(Rod::solid_circle(
+            cases::LENGTH,
+            cases::RADIUS,
+            cases::YOUNGS_MODULUS,
+            cases::POISSON_RATIO,
+        ))
+        .with_tendon(Tendon::new(Routing::straight(0.001, 0.0), 20.0));
+        robot.tendons[0].friction = Some(Friction {
+            coefficient: mu,
+            motion: Motion::Release,
+        });
+        tdcr::collocation::solve(&robot, &tdcr::collocation::Options::fixed(16))
+    };
+    let folded = |mu: f64| {
+        let message = with(mu).unwrap_err().to_string();
+        assert!(message.contains("turns back there (a fold)"), "{message}");
+        let (percent, tension) = branch_end(&message);
+        (percent / 100.0 * mu, tension)
+    };
+    let (coefficient, tension) = folded(1.0);
+    // The coefficient of the mesh's fold (measured 0.7135) and its tension (138 N).
+    assert!((0.70..0.73).contains(&coefficient) && (120.0..160.0).contains(&tension));
+    assert!(with(coefficient * 0.999).is_ok());
+    let (again, tension_again) = folded(coefficient * 1.001);
+    // The same fold to twice the printed resolution (lambda to 1e-2 of a per cent: 5e-5 of
+    // the coefficient); the tension, which is not flat along the branch there, to where
+    // regula falsi stops (0.05 N: 4e-4 of it).
+    assert!(
+        (again - coefficient).abs() <= 2e-6 + 1e-4 * coefficient,
+        "{again} against {coefficient}"
+    );
+    assert!(
+        (tension_again - tension).abs() <= 0.05,
+        "{tension_again} N against {tension} N"
+    );
+}
+
+/// Case 113 of the probe with tendon 1's coefficient lowered to 0.55 (below where its branch
+/// ends on every mesh: 0.709 of the coefficient on the first mesh, 0.626 on 128 intervals;
+/// docs/friction.md, "fold22"). The continuation in the coefficients gives up at 89 % of
+/// them on the first mesh; the branch followed on by its arclength reaches them, and the
+/// refinement goes on from that answer. Its estimate covers its distance to a solve at
+/// tolerance 1e-10 (measured 1.08e-10 m against an estimate of 1.09e-10 m).
+#[test]
+fn past_the_continuation_the_branch_reaches_the_coefficients() {
+    let robot = opposite([4.2340, 4.0224], [0.55, 0.866], true, 0.0066);
+    let c = tdcr::solve(&robot, &Default::default()).unwrap();
+    assert!(
+        c.report
+            .notes
+            .iter()
+            .any(|n| n.contains("branch of equilibria by its arclength")),
+        "{:?}",
+        c.report.notes
+    );
+    let fine = tdcr::collocation::Options {
+        tolerance: Some(1e-10),
+        ..Default::default()
+    };
+    let reference = tdcr::collocation::solve(&robot, &fine).unwrap();
+    let estimate = c.report.error_estimate.unwrap().tip_position;
+    let bound = reference.report.error_estimate.unwrap().tip_position;
+    // Three times both estimates, as in the probe: deferred correction is asymptotically
+    // exact; 1e-11 m for rounding.
+    let truth = apart(&c, &reference);
+    assert!(
+        truth <= 3.0 * (estimate + bound) + 1e-11,
+        "true error {truth:e} m, estimate {estimate:e} m"
+    );
 }

@@ -44,7 +44,7 @@ fn scaled(robot: &Robot, lambda: f64) -> Robot {
 /// (per slip, at every node; None: the capstan start from `x`); the converged log tensions,
 /// with `x` moved to the root, or where Newton failed its termination and the index of its
 /// largest scaled residual (`x` is then undefined).
-fn newton_on(
+pub(super) fn newton_on(
     robot: &Robot,
     mesh: &Mesh,
     (x, z): (&mut Vec<State>, Option<&[Vec<f64>]>),
@@ -78,6 +78,10 @@ pub(super) struct GaveUp {
     pub(super) termination: Termination,
     /// The index of that run's largest scaled residual.
     pub(super) worst: usize,
+    /// The node states at `reached` (the frictionless solution at 0).
+    pub(super) x: Vec<State>,
+    /// The log tensions there (per slip, at every node; None at 0: zero).
+    pub(super) z: Option<Vec<Vec<f64>>>,
 }
 
 /// Follows the friction coefficients of `robot` from 0 to their values on `mesh`, from the
@@ -157,5 +161,7 @@ pub(super) fn in_friction(
         tried,
         termination,
         worst,
+        x,
+        z,
     }))
 }

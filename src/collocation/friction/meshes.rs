@@ -78,6 +78,8 @@ pub(super) fn refine_with_friction(
     let mut continued = false;
     // Where the continuation gave up: how far it got.
     let mut reached: Option<continuation::GaveUp> = None;
+    // Where the branch past it ends (turns back, or a tendon's path degenerates).
+    let mut ended: Option<fold::End> = None;
     let mut kinks = kinks::Kinks::default();
     // The last converged mesh and its answer, for a mesh between it and a finer one Newton
     // failed on.
@@ -136,7 +138,31 @@ pub(super) fn refine_with_friction(
                     (mesh, x) = (m.clone(), solved);
                     continue;
                 }
-                Err(gave_up) => {
+                Err(mut gave_up) => {
+                    // Past where it gave up, the branch followed by a log tension
+                    // ([`fold`]): to the robot's coefficients, or to a fold.
+                    let z = fold::flat(robot, m, gave_up.z.as_deref());
+                    let start = fold::BranchPoint {
+                        lambda: gave_up.reached,
+                        x: std::mem::take(&mut gave_up.x),
+                        z,
+                    };
+                    match fold::follow(robot, options, m, start, &mut report)? {
+                        fold::Beyond::Answer(solved, z, runs) => {
+                            report.notes.push(format!(
+                                "Newton with friction failed from the frictionless shape; the friction coefficients \
+                                 were followed from 0 to {:.0} % of their values, and on to their values along the \
+                                 branch of equilibria by its arclength in {runs} corrector runs",
+                                100.0 * gave_up.reached
+                            ));
+                            report.meshes -= 1;
+                            previous = Some((m.nodes.iter().map(|n| n.s).collect(), z));
+                            (mesh, x) = (m.clone(), solved);
+                            continue;
+                        }
+                        fold::Beyond::Ends(end) => ended = Some(end),
+                        fold::Beyond::Unknown => {}
+                    }
                     // The refusal reports the continuation's last run, at its coefficients.
                     (termination, worst) = (gave_up.termination, gave_up.worst);
                     reached = Some(gave_up);
@@ -173,7 +199,12 @@ pub(super) fn refine_with_friction(
                 method: Method::Collocation,
                 report: Box::new(report.clone()),
                 worst_s: system.row_position(worst.min(system.unknowns() - 1)),
-                hint: refusal_hint(reached.as_ref(), continued, border.system.mesh.intervals()),
+                hint: refusal_hint(
+                    reached.as_ref(),
+                    ended.as_ref(),
+                    continued,
+                    border.system.mesh.intervals(),
+                ),
             });
         }
         let t = Instant::now();
@@ -266,25 +297,65 @@ fn linear(points: &[f64], values: &[f64], s: f64) -> f64 {
 }
 
 /// What to try after Newton with friction failed on a mesh of `intervals` intervals: where
-/// the continuation in the coefficients gave up (`reached`), where it had answered the first
-/// mesh (`continued` without `reached`), or where it did not run.
-fn refusal_hint(reached: Option<&continuation::GaveUp>, continued: bool, intervals: usize) -> String {
-    match reached {
-        Some(g) => format!(
+/// the branch past the continuation in the coefficients ends (`ended`), where the
+/// continuation gave up (`reached`), where it had answered the first mesh (`continued`
+/// without `reached`), or where it did not run.
+fn refusal_hint(
+    reached: Option<&continuation::GaveUp>,
+    ended: Option<&fold::End>,
+    continued: bool,
+    intervals: usize,
+) -> String {
+    match (reached, ended) {
+        (Some(g), Some(e)) => {
+            let (slow, speed) = e.slowest;
+            let how = match (e.folded, speed < fold::DEGENERATE) {
+                (true, false) => "turns back there (a fold)".to_string(),
+                (true, true) => format!(
+                    "turns back there (a fold), where tendon {}'s path has all but vanished ({speed:.1e} of the \
+                     backbone's length per length: the rod's curvature is nearly the inverse of its offset)",
+                    slow + 1
+                ),
+                (false, _) => format!(
+                    "ends there: the rod's curvature reaches the inverse of tendon {}'s offset, where its path \
+                     has all but vanished ({speed:.1e} of the backbone's length per length) and the model no longer \
+                     holds",
+                    slow + 1
+                ),
+            };
+            format!(
+                "no equilibrium on the branch the robot reaches as its friction grows from 0: on the first mesh \
+                 ({intervals} intervals) Newton solved {:.0} % of the friction coefficients (the termination and \
+                 residual above are its run at {:.0} %), and the branch of equilibria followed on by its arclength \
+                 reaches {:.2} % of them, where tendon {} has friction coefficient {:.3} and delivers {:.3} N, and \
+                 {how} (docs/friction.md, \"Large friction on a released tendon\"). Lower the friction coefficient \
+                 of tendon {} below {:.3} (the first mesh's value; finer meshes move it), or pull it in instead",
+                100.0 * g.reached,
+                100.0 * g.tried,
+                100.0 * e.lambda,
+                e.tendon + 1,
+                e.coefficient,
+                e.tension,
+                e.tendon + 1,
+                e.coefficient,
+            )
+        }
+        (Some(g), None) => format!(
             "the friction coefficients were followed from 0: Newton solved {:.0} % of them on the first mesh \
-             ({intervals} intervals) and failed at {:.0} % (the termination and residual above are that run's). A \
-             full-slip equilibrium may not exist: a released tendon delivers up to exp(mu theta) times its input, \
-             which bends the rod and turns its path further (docs/friction.md, \"Large friction on a released \
-             tendon\"); lower the friction coefficient of a released tendon, or pull it in instead",
+             ({intervals} intervals) and failed at {:.0} % (the termination and residual above are that run's), \
+             and the branch of equilibria past it, followed by its arclength, neither reached their values nor \
+             ended. A full-slip equilibrium may not exist: a released tendon delivers up to exp(mu theta) \
+             times its input, which bends the rod and turns its path further (docs/friction.md, \"Large friction on \
+             a released tendon\"); lower the friction coefficient of a released tendon, or pull it in instead",
             100.0 * g.reached,
             100.0 * g.tried
         ),
-        None if continued => format!(
+        (None, _) if continued => format!(
             "the friction coefficients were followed from 0 to their values on the first mesh, and Newton then \
              failed on a finer mesh ({intervals} intervals): loosen the tolerance, or lower the friction \
              coefficient of a released tendon"
         ),
-        None => "friction is solved from the frictionless shape: lower the friction coefficient, or solve with \
+        (None, _) => "friction is solved from the frictionless shape: lower the friction coefficient, or solve with \
                  the shooting solver to compare"
             .into(),
     }

@@ -21,6 +21,7 @@ mod border;
 mod continuation;
 mod correction;
 mod direct;
+mod fold;
 mod grip;
 mod group;
 pub(crate) mod history;
