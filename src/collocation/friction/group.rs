@@ -429,7 +429,7 @@ impl Group<'_, '_> {
 /// when given; None where the lanes decline them.
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
-fn points4(
+pub(super) fn points4(
     profile: &Profile,
     sites: [&Site; 4],
     segment_end: f64,

@@ -18,7 +18,7 @@ use super::order6::{Order6, Stages, stage_rhs, stage_state};
 use super::profile::Profile;
 use crate::collocation::residual::{IntervalSites, QuarterSites};
 use crate::model::equations::Site;
-use crate::model::friction::{FrictionLinearization, linearize_lanes_into};
+use crate::model::friction::FrictionLinearization;
 use crate::simd::{avx2_fma, four};
 use crate::solution::State;
 
@@ -134,7 +134,7 @@ fn points4(
     avx2_fma!(points4_kernel(profile, sites, segment_end, states, z, w))
 }
 
-/// [`points4`]'s operations.
+/// [`points4`]'s operations: [`group::points4`](super::group::points4) without derivatives.
 #[inline(always)]
 fn points4_kernel(
     profile: &Profile,
@@ -144,37 +144,8 @@ fn points4_kernel(
     z: [&[f64]; 4],
     w: [Option<&[f64]>; 4],
 ) -> Option<[Box<FrictionLinearization>; 4]> {
-    let mut quad = profile.quad.borrow_mut();
-    if quad.is_empty() {
-        let model = profile.scratch.borrow();
-        quad.extend((0..4).map(|_| model.clone()));
-    }
-    for (model, z) in quad.iter_mut().zip(z) {
-        for (j, &i) in profile.slipping.iter().enumerate() {
-            model.tensions[i] = profile.tension(j, z[j]);
-        }
-    }
-    let mut out: [Box<FrictionLinearization>; 4] =
-        std::array::from_fn(|_| profile.spare.borrow_mut().pop().unwrap_or_default());
-    let [o0, o1, o2, o3] = &mut out;
-    let models = [&quad[0], &quad[1], &quad[2], &quad[3]];
-    let outs = [&mut **o0, &mut **o1, &mut **o2, &mut **o3];
     let states = four!(j => (&states[j].0, &states[j].1, &states[j].2));
-    if linearize_lanes_into(
-        models,
-        sites,
-        segment_end,
-        states,
-        &profile.slipping,
-        w,
-        false,
-        None,
-        outs,
-    ) {
-        return Some(out);
-    }
-    out.into_iter().for_each(|l| profile.give(l));
-    None
+    super::group::points4(profile, sites, segment_end, states, z, w, (false, None))
 }
 
 #[cfg(test)]
