@@ -92,6 +92,7 @@ mod adjoint;
 mod control;
 mod ends;
 mod exact;
+mod first_pull;
 mod held;
 mod named;
 mod tip;
