@@ -145,3 +145,29 @@ fn first_pull_of_a_helical_tendon_matches_solves_at_small_tensions() {
     check("case H, tendon 5, pull", &h, 4, 0.2, Motion::Pull);
     check("case H, tendon 5, release", &h, 4, 0.2, Motion::Release);
 }
+
+/// Inverse statics with friction on every tendon, all free, starting with two of them at
+/// 0 N: the linearization there takes their first-pull columns (it refused before), and the
+/// tensions that made the target are found.
+#[test]
+fn inverse_statics_starts_from_unloaded_tendons_with_friction() {
+    use tdcr::fit::inverse::{InverseOptions, Target, solve_tensions};
+    let mut robot = cases::case_s();
+    for (i, mu) in [(0, 0.1), (1, 0.1), (2, 0.2)] {
+        robot.tendons[i].friction = Some(Friction::pull(mu));
+    }
+    robot.tendons[0].set_tension(2.0);
+    robot.tendons[1].set_tension(0.5);
+    let options = InverseOptions::new(5.0);
+    let goal = collocation::solve(&robot, &options.solver).unwrap().tip_position();
+    robot.tendons[0].set_tension(0.5);
+    robot.tendons[1].set_tension(0.0);
+    assert_eq!(robot.tendons[2].tension(), 0.0);
+    let found = solve_tensions(&robot, &Target::position(goal), &options).unwrap_or_else(|e| panic!("{e}"));
+    eprintln!(
+        "inverse: tensions {:?}, reachable {}, position error {:.2e} m, {} iterations",
+        found.tensions, found.reachable, found.position_error, found.iterations
+    );
+    assert!(found.reachable, "{:?}", found.termination);
+    assert!((found.tip_position() - goal).norm() <= options.tolerance);
+}
