@@ -33,37 +33,30 @@ use crate::solution::State;
 const PROBE: f64 = 1e-12;
 
 impl Sensitivity<'_> {
-    /// Writes -(dF/dh, dpsi/dh) at h = 0+ for tendon `tendon` with friction at 0 N into the
-    /// right-hand side buffer (module docs): the second-order forward difference with the
-    /// step `step` of the residual with the tendon's log tensions held at z*, its own
-    /// capstan rows 0.
+    /// Tendon `tendon`'s slip index and z* (module docs), its log tensions at every node
+    /// under its first pull, when it has friction and 0 N at its base entry; None otherwise.
     ///
     /// # Errors
-    /// A model breakdown at a visited state; [`crate::Error::InvalidInput`] when the tendon
-    /// has no log tensions (no friction) or z* is not finite.
-    pub(super) fn first_pull_rhs(&mut self, tendon: usize, step: f64) -> Result<()> {
+    /// A model breakdown at a visited state; [`crate::Error::InvalidInput`] when z* is not
+    /// finite.
+    pub(super) fn first_pull(&mut self, tendon: usize) -> Result<Option<(usize, Vec<f64>)>> {
         let n = self.border.system().unknowns();
         let slot = self.border.system().friction.as_ref().and_then(|p| {
             let j = p.slipping.iter().position(|&i| i == tendon)?;
-            Some((j, p.spans[j], p.z[j].len()))
+            (p.base[j] == 0.0).then_some((j, p.spans[j], p.z[j].len()))
         });
         let Some((j, span, nodes)) = slot else {
-            return Err(invalid(
-                format!("tendons[{tendon}].friction"),
-                "is not set, so the tendon has no log tensions to hold at their first-pull profile",
-                "differentiate a tendon with friction here, or one without through Sensitivity::tension",
-            ));
+            return Ok(None);
         };
-        let rows: Vec<usize> = (0..span).map(|k| n + self.border.capstan_row(j, k)).collect();
-        // z*: the capstan rows at a probe tension, log tensions 0, give each link's increment
+        // The capstan rows at a probe tension, log tensions 0, give each link's increment
         // (psi = z_b - z_a - increment; at this tension the increments do not depend on z).
         let probe = PROBE * bend_scale(self.robot(), tendon);
         let zero = vec![0.0; nodes];
         let out = &mut self.scratch[1];
         residual_with(&self.border, &self.states, (tendon, j, &zero), probe, out)?;
         let mut z = vec![0.0; nodes];
-        for (k, &r) in rows.iter().enumerate() {
-            z[k + 1] = z[k] - out[r];
+        for k in 0..span {
+            z[k + 1] = z[k] - out[n + self.border.capstan_row(j, k)];
         }
         let last = z[span];
         z[span + 1..].iter_mut().for_each(|v| *v = last);
@@ -74,6 +67,28 @@ impl Sensitivity<'_> {
                 "give the tendon a small tension (e.g. 1e-3 N) to differentiate there",
             ));
         }
+        Ok(Some((j, z)))
+    }
+
+    /// Writes -(dF/dh, dpsi/dh) at h = 0+ for tendon `tendon` with friction at 0 N into the
+    /// right-hand side buffer (module docs): the second-order forward difference with the
+    /// step `step` of the residual with the tendon's log tensions held at z*, its own
+    /// capstan rows 0.
+    ///
+    /// # Errors
+    /// A model breakdown at a visited state; [`crate::Error::InvalidInput`] when the tendon
+    /// has no log tensions (no friction) or z* is not finite.
+    pub(super) fn first_pull_rhs(&mut self, tendon: usize, step: f64) -> Result<()> {
+        let Some((j, z)) = self.first_pull(tendon)? else {
+            return Err(invalid(
+                format!("tendons[{tendon}].friction"),
+                "has no first-pull profile here: the tendon is not one with friction at 0 N",
+                "differentiate it through Sensitivity::tension, which takes this route only for such a tendon",
+            ));
+        };
+        let n = self.border.system().unknowns();
+        let span = self.border.system().friction.as_ref().map_or(0, |p| p.spans[j]);
+        let rows: Vec<usize> = (0..span).map(|k| n + self.border.capstan_row(j, k)).collect();
         self.differenced_rhs(step, Difference::Forward, |border, states, dq, out| {
             residual_with(border, states, (tendon, j, &z), dq, out)
         })?;
