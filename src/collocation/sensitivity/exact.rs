@@ -24,7 +24,7 @@ impl Sensitivity<'_> {
     ///
     /// A tendon with friction at 0 N gets the one-sided derivative at 0+ too, the response
     /// to its first pull with the capstan profile of the current shape
-    /// ([`Sensitivity::first_pull_rhs`], docs/friction.md section 3, "Sensitivities").
+    /// (`first_pull.rs`, docs/friction.md section 3, "Sensitivities").
     ///
     /// # Errors
     /// [`crate::Error::InvalidInput`] for a tendon index out of range; as
