@@ -796,7 +796,7 @@ fn huge_iteration_counts_exit_2_naming_the_bound() {
             &format!("iterations-{n}"),
             &text,
             &[
-                "robot.toml:62:1: `solver.max_iterations`",
+                "robot.toml:65:1: `solver.max_iterations`",
                 &format!("is {n}, above the limit of 10000"),
             ],
         );

@@ -384,3 +384,55 @@ fn a_sweep_into_flutter_says_it_became_unstable() {
     assert!(!csv.contains("to unknown"), "{csv}");
     assert!(stderr(&out).contains("warning: sweep step"), "{}", stderr(&out));
 }
+
+/// Tendon 2 with friction at 0 N (tendon 1 pulled with friction): its tension column is the
+/// first pull's (docs/friction.md section 3, "Sensitivities") in every output of `tdcr
+/// solve`: numbers in `--jacobian --format json` (null before), the same bits in
+/// `--jacobian=tension --format json`, the same to print precision in the table (exit 2
+/// before), and the table prints an exact 0 without a sign (`-0.000000e0` before).
+#[test]
+fn jacobian_of_an_unloaded_tendon_with_friction_is_the_first_pulls_everywhere() {
+    let dir = scratch("first-pull");
+    std::fs::write(dir.join("robot.toml"), example_with(&dir, "")).unwrap();
+    let base = ["solve", "robot.toml", "--friction", "1=0.1", "--friction", "2=0.1"];
+    let with = |extra: &[&str]| {
+        let mut a = base.to_vec();
+        a.extend(extra);
+        let out = run(&dir, &a);
+        assert_eq!(out.status.code(), Some(0), "{a:?}: {}", stderr(&out));
+        stdout(&out)
+    };
+    let parse = |text: &str| -> serde_json::Value { serde_json::from_str(text).unwrap() };
+    let all = parse(&with(&["--jacobian", "--format", "json"]));
+    let chosen = parse(&with(&["--jacobian=tension", "--format", "json"]));
+    let table = with(&["--jacobian=tension"]);
+    assert!(!table.contains("-0.000000e0"), "{table}");
+    let printed: Vec<Vec<f64>> = table
+        .lines()
+        .skip_while(|l| !l.starts_with("tip Jacobian"))
+        .skip(2)
+        .take(6)
+        .map(|l| l.split_whitespace().skip(1).map(|x| x.parse().unwrap()).collect())
+        .collect();
+    assert_eq!(printed.len(), 6, "{table}");
+    for row in 0..6 {
+        for column in 0..5 {
+            let value = all["jacobian"]["tension"][row][column]
+                .as_f64()
+                .unwrap_or_else(|| panic!("row {row}, column {column}: {}", all["jacobian"]["tension"]));
+            assert!(value.is_finite());
+            assert_eq!(
+                chosen["tip_jacobian"]["rows"][row][column].as_f64(),
+                Some(value),
+                "row {row}, column {column}"
+            );
+            // The table's 7 significant digits.
+            assert!(
+                (printed[row][column] - value).abs() <= 5e-7 * value.abs(),
+                "row {row}, column {column}"
+            );
+        }
+    }
+    // Tendon 2 (at 90 degrees) bends the tip toward +y: its column is no zero placeholder.
+    assert!(all["jacobian"]["tension"][1][1].as_f64().unwrap() > 1e-2);
+}

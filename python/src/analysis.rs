@@ -91,7 +91,9 @@ impl PyTipSensitivities {
     }
 
     /// d(tip pose)/d(tension_i) (per N), shape (6, k), one column per tendon (zero for a
-    /// displacement-controlled one: see `displacement`).
+    /// displacement-controlled one: see `displacement`). For a tendon at 0 N, with or
+    /// without friction, the one-sided derivative of its first pull (docs/friction.md
+    /// section 3, "Sensitivities").
     #[getter]
     fn tension<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
         rows(py, &self.inner.tension)

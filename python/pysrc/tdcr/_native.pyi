@@ -318,7 +318,8 @@ class TipSensitivities:
 
     @property
     def tension(self) -> FloatArray:
-        """(6, k), per N (zero columns for displacement-controlled tendons)."""
+        """(6, k), per N (zero columns for displacement-controlled tendons; a tendon at 0 N,
+        with friction too, has the one-sided derivative of its first pull)."""
     @property
     def displacement(self) -> FloatArray:
         """(6, k), per m of pull-in (zero columns for tension-controlled or slack tendons)."""

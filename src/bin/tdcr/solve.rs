@@ -205,7 +205,8 @@ fn jacobian_table(wrt: &[tdcr::Parameter], tip: &tdcr::nalgebra::DMatrix<f64>) -
     for (r, label) in ["p.x", "p.y", "p.z", "rot.x", "rot.y", "rot.z"].iter().enumerate() {
         text.push_str(&format!("{label:<6}"));
         for c in 0..tip.ncols() {
-            text.push_str(&format!(" {:>14.6e}", tip[(r, c)]));
+            // + 0.0 prints an exact zero without its sign (-0.0 + 0.0 = 0.0).
+            text.push_str(&format!(" {:>14.6e}", tip[(r, c)] + 0.0));
         }
         text.push('\n');
     }

@@ -98,7 +98,7 @@ pub(in crate::collocation) fn solve_pull_ins(
 /// "Derivatives at a held pull-in"), from one linearization of the bordered system and one
 /// bordered solve per held tendon, in place of one full solve per tendon for a forward
 /// difference. None, and the loop differences, where it does not apply: a held tendon at
-/// 0 N (its tension derivative with friction is not modelled) or a linearization that
+/// 0 N (left to the differences, though the sensitivities now have its first pull) or a linearization that
 /// fails (a singular Jacobian, a solution that is not converged to its limit).
 fn slope(robot: &Robot, solution: &Solution, held: &[usize]) -> Option<Vec<f64>> {
     if held.iter().any(|&j| solution.tendons[j].tension <= 0.0) {

@@ -4,7 +4,7 @@
 //! (module docs of `sensitivity`, docs/sensitivity.md "Exact tension columns"); and the
 //! residual at the solution with a parameter moved, which every differenced one takes.
 
-use super::{Difference, NodeDerivative, RELATIVE_STEP, Sensitivity, force_scale, singular};
+use super::{Difference, NodeDerivative, RELATIVE_STEP, Sensitivity, singular};
 use crate::collocation::friction::Capstan;
 use crate::collocation::system::{Columns, System};
 use crate::collocation::unknowns;
@@ -22,9 +22,12 @@ impl Sensitivity<'_> {
     /// with tendons with friction, whose tensions also set the capstan rows, central
     /// differences of the bordered residual (one-sided for a slack tendon).
     ///
+    /// A tendon with friction at 0 N gets the one-sided derivative at 0+ too, the response
+    /// to its first pull with the capstan profile of the current shape
+    /// (`first_pull.rs`, docs/friction.md section 3, "Sensitivities").
+    ///
     /// # Errors
-    /// [`crate::Error::InvalidInput`] for a tendon index out of range or a tendon with
-    /// friction at 0 N (not modelled: its log tensions jump under the first pull); as
+    /// [`crate::Error::InvalidInput`] for a tendon index out of range; as
     /// [`Sensitivity::derivative`].
     pub fn tension(&mut self, tendon: usize) -> Result<Vec<NodeDerivative>> {
         self.tension_rhs(tendon)?;
@@ -106,12 +109,7 @@ impl Sensitivity<'_> {
     fn friction_tension_rhs(&mut self, tendon: usize) -> Result<()> {
         let robot = self.robot();
         let t = &robot.tendons[tendon];
-        let offset = t.routing.at(0.0, robot.length()).r.norm();
-        let bend = if offset > 0.0 {
-            robot.bending_stiffness() / (robot.length() * offset)
-        } else {
-            force_scale(robot)
-        };
+        let bend = super::first_pull::bend_scale(robot, tendon);
         let tension = self.border.input_tension(tendon);
         let step = RELATIVE_STEP * tension.max(bend);
         // Central needs q - h inside the model's domain (tension > 0 keeps the tendon in it).
@@ -121,12 +119,8 @@ impl Sensitivity<'_> {
             Difference::Forward
         };
         if tension == 0.0 && t.active_friction().is_some() {
-            return Err(invalid(
-                format!("tendons[{tendon}].tension"),
-                "is 0 N on a tendon with friction, where the tension derivative is not modelled: the capstan \
-                 law leaves the log tension of an unloaded tendon at 0, and its limit under the first pull differs",
-                "give the tendon a small tension (e.g. 1e-3 N) to differentiate there, or set its friction to 0",
-            ));
+            // The first pull: the one-sided limit at 0+ (first_pull.rs).
+            return self.first_pull_rhs(tendon, step);
         }
         let perturb = |r: &mut Robot, dq: f64| r.tendons[tendon].set_tension(tension + dq);
         self.differenced_rhs(step, difference, |border, states, dq, out| {

@@ -246,6 +246,11 @@ impl TensionDirections {
     pub(super) fn from(sens: &mut Sensitivity, solution: &Solution, tendons: Vec<usize>) -> Result<Self> {
         let mut directions = Self::layout(solution, &sens.border, tendons);
         for m in 0..directions.tendons.len() {
+            // A tendon with friction at 0 N stretches under its first pull by the profile
+            // exp(z*) (first_pull.rs), not the constant one its log tensions hold at 0 N.
+            if let Some((_, z)) = sens.first_pull(directions.tendons[m])? {
+                directions.first_pull_compliance(m, solution, &sens.border, &z);
+            }
             let d = sens.tension(directions.tendons[m])?;
             directions.tip.set_column(m, &d[d.len() - 1].pose());
             let change = directions.length_change(&d, sens);
@@ -260,7 +265,6 @@ impl TensionDirections {
     /// [`TensionDirections::set_direction`] fills them.
     pub(crate) fn layout(solution: &Solution, border: &Capstan, tendons: Vec<usize>) -> Self {
         let robot = border.system().model.robot;
-        let mesh = &border.system().mesh;
         let k = tendons.len();
         let rod_length = robot.length();
         let s: Vec<f64> = solution.nodes.iter().map(|n| n.s).collect();
@@ -285,18 +289,7 @@ impl TensionDirections {
             let reference_length = solution.tendons[i].reference_length;
             match (t.stiffness, border.log_tensions(i)) {
                 (Some(stiffness), Some((z, _))) => {
-                    // Per unit base tension, the stretch of the profile exp(z) on the node
-                    // quadrature of its reference path (as TendonState::displacement).
-                    let unit: Vec<(usize, f64)> = quadrature
-                        .weights
-                        .iter()
-                        .zip(routing)
-                        .map(|(&(node, w), rp)| {
-                            let reference = robot.rod.reference_on(s[node], mesh.nodes[node].segment_end);
-                            let speed = length::speed(rp, &reference.v_star, &reference.u_star);
-                            (node, w * z[node].exp() * speed / stiffness)
-                        })
-                        .collect();
+                    let unit = unit_stretch(border, (&s, quadrature, routing), &z, stiffness);
                     compliance.push(unit.iter().map(|(_, c)| c).sum::<f64>() + t.free_length / stiffness);
                     let base = solution.tendons[i].tension;
                     stretch.push(Some(unit.into_iter().map(|(node, c)| (node, c * base)).collect()));
@@ -317,6 +310,21 @@ impl TensionDirections {
             strains,
             fixed_strain: robot.rod_model == RodModel::Kirchhoff,
         }
+    }
+
+    /// Tendon m's compliance with its log tensions `z` (at every node) in place of the
+    /// border's: a tendon with friction at 0 N, whose pull-in under its first pull stretches
+    /// the profile exp(z*). Unchanged for a rigid tendon (no stretch).
+    fn first_pull_compliance(&mut self, m: usize, solution: &Solution, border: &Capstan, z: &[f64]) {
+        let robot = border.system().model.robot;
+        let t = &robot.tendons[self.tendons[m]];
+        let Some(stiffness) = t.stiffness else {
+            return;
+        };
+        let s: Vec<f64> = solution.nodes.iter().map(|n| n.s).collect();
+        let (quadrature, routing) = &self.paths[m];
+        let unit = unit_stretch(border, (&s, quadrature, routing), z, stiffness);
+        self.compliance[m] = unit.iter().map(|(_, c)| c).sum::<f64>() + t.free_length / stiffness;
     }
 
     /// Sets tendon m's direction from the bordered solve of `border` that gave the scaled
@@ -422,5 +430,108 @@ impl TensionDirections {
             }
         }
         schur.lu().solve(&rhs).ok_or_else(super::singular)
+    }
+}
+
+/// Per unit base tension, the stretch of the tension profile exp(z) (z at the nodes) on the
+/// node quadrature of a tendon's reference path (as TendonState::displacement): each
+/// quadrature node and its weight times exp(z) times the reference path speed over the
+/// tendon's axial stiffness `stiffness` (N). `path` holds the node arc lengths, the
+/// quadrature and the routing at its nodes, `border` the rod and the mesh.
+fn unit_stretch(
+    border: &Capstan,
+    (s, quadrature, routing): (&[f64], &NodeQuadrature, &[RoutingPoint]),
+    z: &[f64],
+    stiffness: f64,
+) -> Vec<(usize, f64)> {
+    let robot = border.system().model.robot;
+    let mesh = &border.system().mesh;
+    quadrature
+        .weights
+        .iter()
+        .zip(routing)
+        .map(|(&(node, w), rp)| {
+            let reference = robot.rod.reference_on(s[node], mesh.nodes[node].segment_end);
+            let speed = length::speed(rp, &reference.v_star, &reference.u_star);
+            (node, w * z[node].exp() * speed / stiffness)
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::collocation::{self, Options};
+    use crate::{Friction, cases};
+
+    /// dQ/dtau of an elastic tendon with friction at 0 N (case S's tendon 2, E_t A_t = 2000 N,
+    /// mu = 0.2, beside tendon 1 pulled at 2.94 N with mu = 0.1): its column against the
+    /// pull-ins of full solves at small tensions on the same mesh, (Q(h) - Q(0)) / h at
+    /// h = 1e-3 and 1e-4 N, Richardson-extrapolated. Its own entry includes the stretch of
+    /// its first pull's profile exp(z*) (before: exp(0), the constant tension's).
+    #[test]
+    fn pull_in_slopes_of_an_unloaded_tendon_with_friction_match_solves() {
+        let mut robot = cases::case_s();
+        robot.tendons[0].friction = Some(Friction::pull(0.1));
+        robot.tendons[1].friction = Some(Friction::pull(0.2));
+        for t in &mut robot.tendons[..2] {
+            t.stiffness = Some(2000.0);
+        }
+        let options = Options {
+            intervals: 64,
+            tolerance: None,
+            residual_tolerance: 1e-12,
+            ..Default::default()
+        };
+        let reference = collocation::solve(&robot, &options).unwrap();
+        let directions = TensionDirections::new(&robot, &reference, vec![0, 1]).unwrap();
+        let slopes = directions.displacement_by_tension();
+        let pull_ins = |h: f64| {
+            let mut pulled = robot.clone();
+            pulled.tendons[1].set_tension(h);
+            let solved = collocation::solve_from(&pulled, &options, &reference).unwrap();
+            assert_eq!(solved.nodes.len(), reference.nodes.len());
+            [0, 1].map(|j| (solved.tendons[j].displacement - reference.tendons[j].displacement) / h)
+        };
+        let (coarse, fine) = (pull_ins(1e-3), pull_ins(1e-4));
+        // The constant profile's own compliance, for the size of what the first pull changes.
+        let unit = |z: &[f64]| -> f64 {
+            let border = Capstan::at_solution(
+                crate::model::equations::Model::new(&robot),
+                crate::mesh::Mesh::from_points(&robot, &reference.nodes.iter().map(|n| n.s).collect::<Vec<_>>())
+                    .unwrap(),
+                &reference,
+            );
+            let s: Vec<f64> = reference.nodes.iter().map(|n| n.s).collect();
+            let (quadrature, routing) = &directions.paths[1];
+            unit_stretch(&border, (&s, quadrature, routing), z, 2000.0)
+                .iter()
+                .map(|(_, c)| c)
+                .sum()
+        };
+        let constant = unit(&vec![0.0; reference.nodes.len()]);
+        for j in 0..2 {
+            let extrapolated = (fine[j] * 10.0 - coarse[j]) / 9.0;
+            let error = (slopes[(j, 1)] - extrapolated).abs();
+            eprintln!(
+                "dQ_{}/dtau_2: {:.9e} m/N, solves {extrapolated:.9e} (off by {error:.1e}); the constant profile's \
+                 compliance {constant:.4e}, the first pull's {:.4e}",
+                j + 1,
+                slopes[(j, 1)],
+                directions.compliance[1] - robot.tendons[1].free_length / 2000.0
+            );
+            // 1e-9 m/N: the pull-ins' rounding (about 1e-14 m) over 1e-4 N carried through
+            // the extrapolation, and the extrapolation's truncation (the quotients' curvature
+            // times 1e-7 N^2); measured 1.1e-12 and 3.1e-10. Far below what the first pull's
+            // profile changes in the tendon's own entry (1.7e-5 m/N here).
+            assert!(
+                error <= 1e-9,
+                "dQ_{}/dtau_2 {} against {extrapolated}",
+                j + 1,
+                slopes[(j, 1)]
+            );
+        }
+        // The profile matters: the constant one's compliance is 1.7e-5 m/N more.
+        assert!((directions.compliance[1] - robot.tendons[1].free_length / 2000.0 - constant).abs() > 1e-6);
     }
 }

@@ -62,7 +62,8 @@
 //! A tendon with zero tension is left out of the model, and a string cannot push, so its
 //! derivative is the one-sided (right) derivative: exact without friction, else the
 //! second-order forward difference (-3 F(0) + 4 F(h) - F(2h)) / (2h)
-//! ([`Difference::Forward`]).
+//! ([`Difference::Forward`]), with the log tensions of a tendon with friction at 0 N held
+//! at the capstan profile of its first pull (`first_pull.rs`).
 //!
 //! # Conventions
 //!
@@ -92,6 +93,7 @@ mod adjoint;
 mod control;
 mod ends;
 mod exact;
+mod first_pull;
 mod held;
 mod named;
 mod tip;

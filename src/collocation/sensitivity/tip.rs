@@ -30,9 +30,9 @@ pub struct ModulusSensitivities {
 #[derive(Clone, Debug, PartialEq)]
 pub struct TipSensitivities {
     /// d(tip pose)/d(tension_i), 6 x k (per N), one column per tendon. For a slack tendon
-    /// the one-sided (pulling) derivative; zero for a displacement-controlled tendon (see
-    /// `displacement`); NaN for a tendon with friction at 0 N, where it is not modelled
-    /// ([`super::Sensitivity::tension`]).
+    /// the one-sided (pulling) derivative, with friction too (the first pull's capstan
+    /// profile, [`super::Sensitivity::tension`]); zero for a displacement-controlled tendon
+    /// (see `displacement`).
     pub tension: DMatrix<f64>,
     /// d(tip pose)/d(q_i), 6 x k (per m of actuator pull-in), one column per tendon: zero
     /// for a tension-controlled tendon and for a slack one. With displacement-controlled
@@ -142,9 +142,6 @@ pub(crate) fn tip_sensitivities_from(
     for i in 0..k {
         if robot.tendons[i].displacement().is_some() {
             displacement.set_column(i, &held.pull(i)?);
-        } else if robot.tendons[i].active_friction().is_some() && solution.tendons[i].tension == 0.0 {
-            // Not modelled at 0 N with friction (Sensitivity::tension): NaN, not a guess.
-            tension.set_column(i, &Vector6::repeat(f64::NAN));
         } else {
             // Forward solves: the columns a controller's Solver::tip_jacobian gives, to 1e-12.
             tension.set_column(i, &tip.sens.tension_tip(&held, i)?);
