@@ -224,7 +224,7 @@ fn library_messages_name_fields_as_robot_files_do() {
     assert_eq!(out.status.code(), Some(2));
     let err = stderr(&out);
     assert!(
-        err.contains("`tendon[1].stiffness` tendon 1 sticks") && !err.contains("tendons[0]"),
+        err.contains("`tendon[1].stiffness` is not set (tendon 1 is rigid)") && !err.contains("tendons[0]"),
         "{err}"
     );
     let out = run(

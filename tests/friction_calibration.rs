@@ -257,6 +257,31 @@ fn different_coefficients_keep_their_ratios() {
     );
     let fitted = fit.robot.tendons[1].friction.unwrap().coefficient;
     assert!((fitted / 0.3 - 1.0).abs() < 1e-8, "{fitted}");
+    // The fit's column d(tips)/d(mu) weighs tendon 2's by its ratio 3: mu's standard error
+    // is the noise estimate over the column's norm (one unknown), which a central
+    // difference of the predicted tips gives too. 1e-4: the difference's truncation and the
+    // noise estimate's rounding (the plain sum of the columns is off by far more).
+    let h = 1e-6 * fit.fitted.friction;
+    let tips = |mu: f64| {
+        let p = Parameters {
+            friction: mu,
+            ..fit.fitted
+        };
+        predict(&start, &p, &data, &CalibrationOptions::default()).unwrap()
+    };
+    let (up, down) = (tips(fit.fitted.friction + h), tips(fit.fitted.friction - h));
+    let norm = up
+        .iter()
+        .zip(&down)
+        .map(|(a, b)| ((a - b) / (2.0 * h)).norm_squared())
+        .sum::<f64>()
+        .sqrt();
+    let error = fit.standard_errors.expect("standard errors").friction;
+    assert!(
+        (error * norm / fit.noise_estimate - 1.0).abs() < 1e-4,
+        "{error} {norm} {}",
+        fit.noise_estimate
+    );
     // E alone: the coefficients are the robot's own in every solve and in the result.
     let e_only = CalibrationOptions {
         fit: Fit {

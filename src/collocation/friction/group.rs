@@ -4,16 +4,19 @@
 //! the one-link kernel's own code ([`front`] and [`back`]), as the frictionless block of
 //! four intervals does (`collocation/interval_lanes.rs`).
 //!
-//! Link k's start is link k-1's end, and its midpoint's state needs only its own nodes,
-//! so the four links' ends and then their midpoints are independent points. Each lane
-//! performs the scalar code's operations in its order, and every link reads the same
-//! inputs as when the links are evaluated one by one (the start node's evaluation that
-//! the link before kept is the lanes' end node of that link), so each link's evaluation
-//! has the one-link kernel's bits (the tests compare them). Where the profile keeps the
-//! responses to the inertia loads (the Jacobian at the answer, for the verdict), the lanes
-//! give them too. The group declines (the caller evaluates the links one by one) where the
-//! links' multipliers differ, a slip sticks on one of them, or a lane leaves the lanes'
-//! path.
+//! Where the four links' multipliers are equal, link k's start is link k-1's end, and its
+//! midpoint's state needs only its own nodes, so the four links' ends and then their
+//! midpoints are independent points; where they differ (stuck links, each at its own
+//! multiplier), the four starts are evaluated in lanes too, each at its own link's
+//! multipliers, as the one-link kernel does. A stuck link's moved rows (its multiplier's
+//! central difference) are evaluated four links at a time as well. Each lane performs the
+//! scalar code's operations in its order, and every link reads the same inputs as when the
+//! links are evaluated one by one, so each link's evaluation has the one-link kernel's bits
+//! (the tests compare them). Where the profile keeps the responses to the inertia loads
+//! (the Jacobian at the answer, for the verdict), the lanes give them too. The group
+//! declines (the caller evaluates the links one by one) with two or more tendons with
+//! friction, fewer than four links left, or where a lane leaves the lanes' path (a
+//! Kirchhoff rod's sites, a breakdown, a zero or NaN multiplier).
 #![allow(non_snake_case)]
 
 use super::interval::{

@@ -328,14 +328,16 @@ fn refusal_hint(
                  ({intervals} intervals) Newton solved {:.0} % of the friction coefficients (the termination and \
                  residual above are its run at {:.0} %), and the branch of equilibria followed on by its arclength \
                  reaches {:.2} % of them, where tendon {} has friction coefficient {:.3} and delivers {:.3} N, and \
-                 {how} (docs/friction.md, \"Large friction on a released tendon\"). Lower the friction coefficient \
-                 of tendon {} below {:.3} (the first mesh's value; finer meshes move it), or pull it in instead",
+                 {how} (docs/friction.md, \"Large friction on a released tendon\"). Lower the friction \
+                 coefficients below {:.2} % of their values (the branch scales them all together), tendon {}'s below \
+                 {:.3} (the first mesh's value; finer meshes move it), or pull it in instead",
                 100.0 * g.reached,
                 100.0 * g.tried,
                 100.0 * e.lambda,
                 e.tendon + 1,
                 e.coefficient,
                 e.tension,
+                100.0 * e.lambda,
                 e.tendon + 1,
                 e.coefficient,
             )
