@@ -30,7 +30,7 @@ const MOST_STEPS: usize = 48;
 type Solved = (Vec<State>, Vec<Vec<f64>>);
 
 /// `robot` with every friction coefficient scaled by `lambda` (> 0: the same tendons slip).
-fn scaled(robot: &Robot, lambda: f64) -> Robot {
+pub(super) fn scaled(robot: &Robot, lambda: f64) -> Robot {
     let mut scaled = robot.clone();
     for t in &mut scaled.tendons {
         if let Some(f) = &mut t.friction {

@@ -25,7 +25,7 @@
 //! length while a tendon's path has all but vanished (its speed below [`DEGENERATE`] of the
 //! backbone's), the branch ends at the model's own singularity.
 
-use super::continuation;
+use super::continuation::{self, scaled};
 use super::*;
 use crate::collocation::newton::STEP_TOLERANCE;
 
@@ -106,17 +106,6 @@ pub(super) enum Beyond {
 /// on: the tendon's load on the rod grows as the inverse cube of that speed (eq. 11's
 /// |p_i'|^3), which vanishes where the rod's curvature reaches the inverse offset.
 pub(super) const DEGENERATE: f64 = 0.01;
-
-/// `robot` with every friction coefficient scaled by `lambda`.
-fn scaled(robot: &Robot, lambda: f64) -> Robot {
-    let mut scaled = robot.clone();
-    for t in &mut scaled.tendons {
-        if let Some(f) = &mut t.friction {
-            f.coefficient *= lambda;
-        }
-    }
-    scaled
-}
 
 /// The border on `mesh` for `robot` at the log tensions `z` (its profile loaded).
 fn border_at<'r>(robot: &'r Robot, mesh: &Mesh, z: &[f64]) -> Capstan<'r> {
