@@ -99,12 +99,7 @@ pub(super) fn in_friction(
     x0: &[State],
     report: &mut SolveReport,
 ) -> Result<std::result::Result<Solved, GaveUp>> {
-    let settings = Settings {
-        tolerance: options.residual_tolerance,
-        max_iterations: options.max_iterations,
-        reuse_factors: false,
-        stop_when_damped: false,
-    };
+    let settings = fresh_settings(options);
     let mut ws = Workspace::new(&System::new(Model::new(robot), mesh.clone()), options.linear_solver)?;
     let (mut lambda, mut step) = (0.0, FIRST_STEP);
     let mut x = x0.to_vec();

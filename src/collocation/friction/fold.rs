@@ -398,12 +398,7 @@ fn at_one(
     points: [&BranchPoint; 2],
     (runs, report): (usize, &mut SolveReport),
 ) -> Result<Beyond> {
-    let settings = Settings {
-        tolerance: options.residual_tolerance,
-        max_iterations: options.max_iterations,
-        reuse_factors: false,
-        stop_when_damped: false,
-    };
+    let settings = fresh_settings(options);
     let mut ws = Workspace::new(&System::new(Model::new(robot), mesh.clone()), options.linear_solver)?;
     let mut order = points;
     order.sort_by(|a, b| (a.lambda - 1.0).abs().total_cmp(&(b.lambda - 1.0).abs()));

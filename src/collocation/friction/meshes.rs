@@ -47,12 +47,7 @@ pub(super) fn refine_with_friction(
     route: Route,
 ) -> Result<Solution> {
     let (mut mesh, mut x) = from;
-    let settings = Settings {
-        tolerance: options.residual_tolerance,
-        max_iterations: options.max_iterations,
-        reuse_factors: false,
-        stop_when_damped: false,
-    };
+    let settings = fresh_settings(options);
     // The direct route's first mesh: Newton from the guess must go straight to its root,
     // as the equilibrium choice's direct answer must ([`direct`]).
     let from_guess = route == Route::Direct;

@@ -390,3 +390,15 @@ fn from_start(
         Route::Frictionless,
     )
 }
+
+/// Newton's settings of a friction solve from `options`: their residual tolerance and
+/// iteration cap, a fresh Jacobian for each step's start (no factors carried in), and no
+/// stop on damping.
+fn fresh_settings(options: &Options) -> Settings {
+    Settings {
+        tolerance: options.residual_tolerance,
+        max_iterations: options.max_iterations,
+        reuse_factors: false,
+        stop_when_damped: false,
+    }
+}
