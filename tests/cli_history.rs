@@ -305,37 +305,25 @@ fn a_stuck_tendon_going_slack_is_refused_and_pulling_it_in_further_solves() {
 }
 
 #[test]
-fn a_stuck_tension_driven_to_zero_is_refused_as_going_slack() {
+fn a_stuck_stretch_friction_cannot_hold_is_refused() {
     // Tendon 5 routed half a turn (bottom side at the base, top at the tip; no friction)
     // pulled in steps of 0.245 N with tendon 3 (top side, friction 0.1, E_t A_t 2000 N) held
-    // at 1 N: tendon 3 slides out over its first 0.12 m and the rest stays stuck at a
-    // delivered tension of 0.74, 0.50, 0.27 N; at 0.98 N it would be about 0.03 N, which
-    // the stick row cannot resolve to 1e-11 (below 0.044 N), and Newton stalled (before
-    // stall17: "take smaller steps", which does not help). Refused as going slack, with the
-    // hint that helps (docs/friction.md section 8, "Limits"). Up to 1 N in steps of 0.25 N
-    // (this test before honest19), the history's mesh, chosen on the full-slip solve at the
-    // top, now has a node where the tendons stop turning, and the march refuses that step
-    // first as going slack on its shape ("would go slack near s = 0.2382 m"), as true a
-    // refusal but not the one this test is for.
+    // at 1 N: tendon 3 slides out near the base, and beyond, its stuck material's tension
+    // falls about 20 times faster than friction can hold (w = -19.9 on one link), so that
+    // stretch would slip while stuck on both sides, which the history does not model
+    // (docs/friction.md section 8, "Limits"). Until 2026-12-07 (fifteenth session) steps 2
+    // to 4 were answered as stuck there (Coulomb's law broken, nothing said) and step 5 was
+    // refused as going slack (the stalled stick row, `refusal::stalled`).
     let dir = scratch("stalled-slack");
     top_tendon_with_friction(&dir, "1.0", Some("0.5"));
     let refused = up_down(&dir, &["1=0", "5=0:0.98:5"]);
     assert_eq!(refused.status.code(), Some(2));
     let err = String::from_utf8_lossy(&refused.stderr);
     assert!(
-        err.contains("history step 5 of 9")
-            && err.contains("tendon 3 is going slack")
-            && err.contains("pull it in")
+        err.contains("history step 2 of 9")
+            && err.contains("tendon 3's stuck stretch")
+            && err.contains("times the friction its channel can hold")
             && !err.contains("take smaller steps"),
         "{err}"
     );
-    // The steps before it are written: tendon 3's stuck stretch falls toward 0 N.
-    let stdout = String::from_utf8_lossy(&refused.stdout);
-    let rows: Vec<Vec<&str>> = stdout.lines().map(|l| l.split(',').collect()).collect();
-    assert_eq!(rows.len(), 5, "{rows:?}");
-    let delivered = column(&rows[0].join(","), "delivered_3");
-    let last: f64 = rows[4][delivered].parse().unwrap();
-    // 0.2657 N (0.2512 N up to 1 N in steps of 0.25 N): 0.01 N, a small share of it, tells
-    // the fourth step's stuck tension from another step's.
-    assert!((last - 0.266).abs() < 0.01, "{last}");
 }
