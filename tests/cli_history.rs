@@ -327,3 +327,59 @@ fn a_stuck_stretch_friction_cannot_hold_is_refused() {
         "{err}"
     );
 }
+
+#[test]
+fn steps_that_miss_the_tolerance_are_marked_and_warned() {
+    // With at most 100 intervals the first steps back (stuck, refined by split levels) stop
+    // at the cap with estimates above the tolerance: a history goes on from them, so the
+    // CSV marks them and standard error says which (before 2026-12-07, fifteenth session,
+    // only Python's report showed it).
+    let dir = scratch("missed");
+    robot(&dir, false);
+    let text = std::fs::read_to_string(dir.join("robot.toml")).unwrap();
+    let capped = text.replacen("# max_intervals = 8192", "max_intervals = 100", 1);
+    assert_ne!(capped, text);
+    std::fs::write(dir.join("robot.toml"), capped).unwrap();
+    let out = up_down(&dir, &["1=0:4.91:11"]);
+    assert_eq!(out.status.code(), Some(0));
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    let mut lines = stdout.lines();
+    let met = column(lines.next().unwrap(), "tolerance_met");
+    let missed: Vec<usize> = lines
+        .enumerate()
+        .filter(|(_, l)| l.split(',').nth(met) == Some("false"))
+        .map(|(k, _)| k + 1)
+        .collect();
+    assert!(!missed.is_empty() && missed.iter().all(|&k| k > 11), "{missed:?}");
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("miss") && err.contains("the tolerance") && err.contains("max_intervals"),
+        "{err}"
+    );
+}
+
+#[test]
+fn a_list_for_one_of_several_single_inputs_is_refused() {
+    // `--tension 1=2 --param tip_force.x=0 --history 0,0.01,0` swept tendon 1's tension
+    // (the first input given) and dropped the 2 N without a word, where the user meant the
+    // force (before 2026-12-07, fifteenth session).
+    let dir = scratch("ambiguous");
+    robot(&dir, false);
+    let args = [
+        "sweep",
+        "robot.toml",
+        "--tension",
+        "1=2",
+        "--param",
+        "tip_force.x=0",
+        "--history",
+        "0,0.01,0",
+    ];
+    let out = run(&dir, &args);
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("tension.1, tip_force.x") && err.contains("as a range"),
+        "{err}"
+    );
+}

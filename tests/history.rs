@@ -739,3 +739,26 @@ fn up_down_goes_back_without_repeating_the_top() {
     assert_eq!(values, &vec![0.0, 1.0, 2.0, 1.0, 0.0]);
     assert_eq!(ranges.steps(), 5);
 }
+
+#[test]
+fn a_failed_step_reports_no_estimate_tolerance_or_verdict() {
+    // With at most 6 Newton iterations the solve that chooses the history's mesh converges
+    // and step 1 (from rest, 8 iterations) does not. Until 2026-12-07 (fifteenth session)
+    // its error's report kept that solve's estimate, `tolerance_met` and `stable` verdict,
+    // none of which belongs to the failed step (a new-user check).
+    let options = tdcr::collocation::Options {
+        max_iterations: 6,
+        ..Default::default()
+    };
+    let result = history(&ranges(prototype(0.1), TOP, 10), &options).unwrap();
+    let Some((0, Error::NotConverged { report, .. })) = &result.failure else {
+        panic!("{:?}", result.failure);
+    };
+    assert_eq!(report.error_estimate, None);
+    assert_eq!(report.tolerance_met, None);
+    assert!(
+        matches!(report.stability, tdcr::Stability::Unknown { .. }),
+        "{:?}",
+        report.stability
+    );
+}

@@ -130,6 +130,7 @@ pub fn history(ranges: &Ranges, options: &collocation::Options) -> Result<Histor
             steps.push(step);
             continue;
         }
+        let start = std::time::Instant::now();
         let answer = if robot.has_displacement_inputs() {
             let mut back = steps.iter().rev().map(|s| &s.solution);
             pulled_step(robot, options, &mut carried, (back.next(), back.next()))
@@ -141,8 +142,13 @@ pub fn history(ranges: &Ranges, options: &collocation::Options) -> Result<Histor
             })
         };
         match answer {
-            Ok((solution, zones)) => steps.push(HistoryStep {
-                solution,
+            Ok((mut solution, zones)) => steps.push(HistoryStep {
+                solution: {
+                    // The whole step's time: its split levels, trial tensions and verdict
+                    // included, which its parts' sums count too.
+                    solution.report.timings.total = start.elapsed();
+                    solution
+                },
                 zones: zones
                     .into_iter()
                     .map(|(tendon, list)| TendonZones {

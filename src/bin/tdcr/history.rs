@@ -44,12 +44,22 @@ pub fn parse_history(text: &str) -> Result<History, String> {
 }
 
 /// The history's steps from the sweep's `ranges`: up and down, or the swept input (the
-/// first that changes, else the first given) at the listed values with every other input
+/// first that changes, else the only one given) at the listed values with every other input
 /// at its first value.
 pub fn steps(ranges: &Ranges, base: &tdcr::Robot, history: &History) -> Result<Ranges, Failure> {
     match history {
         History::UpDown => Ok(ranges.up_down()),
         History::Values(values) => {
+            // With several inputs and none a range, which one the list is for is a guess.
+            if ranges.swept().is_none() && ranges.inputs().len() > 1 {
+                let given: Vec<String> = ranges.inputs().iter().map(|(input, _)| input.to_string()).collect();
+                return Err(Failure::Input(format!(
+                    "--history lists values for one input, and {} are given as single values: give the one the list \
+                     is for as a range (e.g. --param {}=0:1:2, its range only marks it) and the others as single values",
+                    given.join(", "),
+                    given[given.len() - 1]
+                )));
+            }
             let swept = ranges.swept().map_or(0, |(i, _)| i);
             let input = ranges.inputs()[swept].0;
             if let (Input::Parameter(tdcr::Parameter::Tension(_)), Some(v)) = (input, values.iter().find(|v| **v < 0.0))
@@ -98,6 +108,7 @@ pub fn run(
     }
     let text = csv.finish();
     warn_unstable(name, &result.steps);
+    warn_missed(name, &result.steps);
     match out {
         Some(path) => {
             write_file(path, &text, "CSV")?;
@@ -139,6 +150,28 @@ pub fn run(
         }
         None => Ok(()),
     }
+}
+
+/// Says on standard error which steps of the history miss their tolerance (the estimate
+/// above it: a stuck step whose split levels reached the interval cap, or 64 parts per
+/// link): a plain solve would fail there, but a history goes on, since its later steps
+/// start from this one; the CSV's `tolerance_met` column says which.
+fn warn_missed(name: &str, steps: &[HistoryStep]) {
+    let missed: Vec<String> = steps
+        .iter()
+        .enumerate()
+        .filter(|(_, s)| s.solution.report.tolerance_met == Some(false))
+        .map(|(k, _)| (k + 1).to_string())
+        .collect();
+    let which = match missed.len() {
+        0 => return,
+        1 => format!("step {} misses", missed[0]),
+        _ => format!("steps {} miss", missed.join(", ")),
+    };
+    note(&format!(
+        "warning: {name}: history {which} the tolerance (the estimate is above it: see the CSV's \
+         `tip_error_estimate` and `tolerance_met`); raise `max_intervals` or loosen the tolerance"
+    ));
 }
 
 /// Says on standard error which steps of the history are unstable (each run of them once,
@@ -208,7 +241,16 @@ fn header(count: usize, input: Input, slipping: &[usize]) -> CsvTable {
         names.push(format!("delivered_{}", i + 1));
         names.push(format!("zones_{}", i + 1));
     }
-    names.extend(["iterations", "intervals", "tip_error_estimate", "stability"].map(String::from));
+    names.extend(
+        [
+            "iterations",
+            "intervals",
+            "tip_error_estimate",
+            "tolerance_met",
+            "stability",
+        ]
+        .map(String::from),
+    );
     CsvTable::new(names)
 }
 
@@ -239,6 +281,7 @@ fn row(csv: &mut CsvTable, k: usize, direction: &str, value: f64, step: &History
         report.iterations.to_string(),
         report.intervals.to_string(),
         report.error_estimate.map_or(String::new(), |e| number(e.tip_position)),
+        report.tolerance_met.map_or(String::new(), |met| met.to_string()),
         report.stability.verdict().to_string(),
     ]);
     csv.row(fields);

@@ -22,7 +22,7 @@ mod rest;
 mod slip;
 mod split;
 
-use refusal::{resolution, rigid, slack, stalled};
+use refusal::{resolution, rigid, slack, stalled, unanswered};
 pub(crate) use repeat::hold_last;
 pub(crate) use rest::start;
 use slip::check_slip;
@@ -418,7 +418,7 @@ fn solve_on(robot: &Robot, options: &Options, carried: &mut Carried, held: Optio
             }
             return Err(Error::NotConverged {
                 method: Method::Collocation,
-                report: Box::new(report),
+                report: Box::new(unanswered(report)),
                 worst_s: system.row_position(worst.min(system.unknowns() - 1)),
                 hint: format!(
                     "a history step is solved from the last step's state: take smaller steps{rigid_hint}{looser}"
@@ -434,7 +434,7 @@ fn solve_on(robot: &Robot, options: &Options, carried: &mut Carried, held: Optio
         report.termination = Termination::ZonesUnsettled;
         return Err(Error::NotConverged {
             method: Method::Collocation,
-            report: Box::new(report),
+            report: Box::new(unanswered(report)),
             worst_s,
             hint: format!("{PASSES} passes of march and Newton: take smaller steps of the history{rigid_hint}"),
         });

@@ -1,8 +1,9 @@
 //! The stuck stretches a history step refuses, with what the user can change
-//! (docs/friction.md section 8, "Limits").
+//! (docs/friction.md section 8, "Limits"), and the report of a step that failed.
 
 use crate::collocation::friction::{Contact, Profile};
 use crate::error::{self, Error};
+use crate::report::{NOT_ASSESSED, SolveReport, Stability};
 
 /// What the user can change when a stuck stretch goes slack: more tension at the base
 /// entry slides the tendon in along it.
@@ -120,4 +121,15 @@ pub(super) fn rigid(i: usize, s: f64) -> Error {
         ),
         "set the tendon's axial stiffness E_t A_t (`stiffness` in N) so that its stuck part stretches",
     )
+}
+
+/// The report of a step that failed: its template's estimate, tolerance and verdict are
+/// those of the solve that chose the history's mesh, not this step's, which has none.
+pub(super) fn unanswered(mut report: SolveReport) -> SolveReport {
+    report.error_estimate = None;
+    report.tolerance_met = None;
+    report.stability = Stability::Unknown {
+        reason: NOT_ASSESSED.into(),
+    };
+    report
 }
