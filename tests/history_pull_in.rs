@@ -143,3 +143,27 @@ fn a_repeated_pull_in_is_the_last_state_stuck_all_along() {
         }
     }
 }
+
+#[test]
+fn a_rigid_tendon_pulled_in_further_slides_in_all_along() {
+    // Tendon 1 rigid (no stiffness), pulled in 8 then 12 mm: each step slides in all along,
+    // which needs no stiffness, and matches the full-slip pull solve of its pull-in. Until
+    // 2026-12-07 (fifteenth session) the second step's Newton started at the first step's
+    // tension, where nothing is driven and the rigid tendon sticks all along, and the step
+    // was refused as statically indeterminate (a new-user check).
+    let mut robot = prototype();
+    robot.tendons[0].stiffness = None;
+    let ranges = Ranges::new(robot.clone(), vec![(Input::Displacement(0), vec![0.008, 0.012])]).unwrap();
+    let result = history(&ranges, &Default::default()).unwrap();
+    if let Some((k, e)) = &result.failure {
+        panic!("step {k}: {e}");
+    }
+    let step = &result.steps[1];
+    assert_eq!(step.zones[0].zones.len(), 1);
+    assert_eq!(step.zones[0].zones[0].contact, Contact::Pull);
+    let full = tdcr::solve(&ranges.robot(1.0).unwrap(), &Default::default()).unwrap();
+    // two solves of the same discrete problem from different starts, each to Newton's
+    // tolerance: their tips agree far below the 2.4e-8 m tolerance
+    let gap = (tip(step) - full.tip_position()).norm();
+    assert!(gap < 1e-10, "{gap} m from the full-slip solve");
+}

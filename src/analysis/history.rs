@@ -234,9 +234,16 @@ fn pulled_step(
     carried: &mut friction::history::Carried,
     (last, before): (Option<&Solution>, Option<&Solution>),
 ) -> Result<friction::history::StepAnswer> {
+    // A rigid tendon with friction at the last step's tension is stuck all along (nothing
+    // is driven), which is statically indeterminate and refused: where no secant moves
+    // the second step's start off it, the start is the full-slip solve's, as the first's.
+    let rigid = robot
+        .tendons
+        .iter()
+        .any(|t| t.displacement().is_some() && t.active_friction().is_some() && t.stiffness.is_none());
     let start = match last {
-        Some(w) => predicted(robot, w, before),
-        None => collocation::solve(robot, options)?.tensions(),
+        Some(w) if !(rigid && before.is_none()) => predicted(robot, w, before),
+        _ => collocation::solve(robot, options)?.tensions(),
     };
     let mut kept = None;
     let solution = crate::model::pull_in::hold(
