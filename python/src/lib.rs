@@ -97,6 +97,22 @@ impl Batch {
         }
     }
 
+    /// The tendons (from 0) with friction in some robot of the batch.
+    fn tendons_with_friction(&self) -> Vec<usize> {
+        match self {
+            Batch::List(list) => {
+                let mut all: Vec<usize> = list
+                    .iter()
+                    .flat_map(|r| tdcr::io::row_outputs::RowOutputs::tendons_with_friction(r, &[]))
+                    .collect();
+                all.sort_unstable();
+                all.dedup();
+                all
+            }
+            Batch::Rows(rows) => rows.tendons_with_friction(),
+        }
+    }
+
     /// The inputs of the rows `range` for [`Batch::solve`] without the GIL (parameter
     /// columns: their values copied; a list: nothing).
     fn chunk(&self, py: Python<'_>, range: std::ops::Range<usize>) -> robot::Chunk {
