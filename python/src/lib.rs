@@ -97,18 +97,11 @@ impl Batch {
         }
     }
 
-    /// The tendons (from 0) with friction in some robot of the batch.
+    /// The tendons (from 0) with friction in some row of parameter columns, whose delivered
+    /// tensions `solve_parameters` keeps (it takes rows only: none for a list).
     fn tendons_with_friction(&self) -> Vec<usize> {
         match self {
-            Batch::List(list) => {
-                let mut all: Vec<usize> = list
-                    .iter()
-                    .flat_map(|r| tdcr::io::row_outputs::RowOutputs::tendons_with_friction(r, &[]))
-                    .collect();
-                all.sort_unstable();
-                all.dedup();
-                all
-            }
+            Batch::List(_) => Vec::new(),
             Batch::Rows(rows) => rows.tendons_with_friction(),
         }
     }

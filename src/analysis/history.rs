@@ -143,8 +143,8 @@ impl LoopAxis {
             .ok_or_else(|| {
                 invalid(
                     "the loop's y axis",
-                    &format!("is `{name}`, which is not a quantity of a history step"),
-                    &format!("give one of {}", Self::NAMES.join(", ")),
+                    format!("is `{name}`, which is not a quantity of a history step"),
+                    format!("give one of {}", Self::NAMES.join(", ")),
                 )
             })
     }

@@ -56,9 +56,7 @@ impl RowOutputs {
     /// rows are those of a run without friction.
     pub fn tendons_with_friction(robot: &Robot, parameters: &[Parameter]) -> Vec<usize> {
         (0..robot.tendons.len())
-            .filter(|&i| {
-                robot.tendons[i].active_friction().is_some() || parameters.iter().any(|p| *p == Parameter::Friction(i))
-            })
+            .filter(|&i| robot.tendons[i].active_friction().is_some() || parameters.contains(&Parameter::Friction(i)))
             .collect()
     }
 

@@ -505,14 +505,6 @@ class Sweep:
     @property
     def tip_positions(self) -> FloatArray:
         """Tip positions (m, world frame), shape (n, 3)."""
-    @property
-    def tip_displacements(self) -> FloatArray:
-        """The tip's distance from its place at the first step (m), shape (n,)."""
-    def loop_axis(
-        self, y: Literal["tip_displacement", "bending_angle", "tip_x", "tip_y", "tip_z"] = "tip_displacement"
-    ) -> Tuple[str, FloatArray]:
-        """The hysteresis loop's y axis as `tdcr sweep --history --plot --loop-y Y` draws it:
-        (label with unit, value per step in mm or deg)."""
     def __len__(self) -> int: ...
     def __getitem__(self, index: int, /) -> Solution: ...
     def __iter__(self) -> Iterator[Solution]: ...
