@@ -352,3 +352,56 @@ fn optional_columns_carry_the_quaternion_stability_estimate_and_points() {
     assert_eq!(out.status.code(), Some(2));
     assert!(text(&out.stderr).contains("at least 2"), "{}", text(&out.stderr));
 }
+
+#[test]
+fn tendons_with_friction_get_their_delivered_tension_as_solve_gives_it() {
+    // Tendon 1 has friction from --friction, tendon 3 from a `friction.3` column (0 in one
+    // row: that row delivers its tension); tendons 2 and 4 have none and get no column.
+    let dir = scratch("delivered");
+    std::fs::write(
+        dir.join("cases.csv"),
+        "tension.1,tension.3,friction.3\n2.0,1.5,0.2\n1.0,2.5,0.0\n",
+    )
+    .unwrap();
+    let out = run(
+        &dir,
+        &["batch", "cases.csv", "--robot", "robot.toml", "--friction", "1=0.1"],
+    );
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+    let results = text(&out.stdout);
+    let lines: Vec<&str> = results.lines().collect();
+    let header: Vec<&str> = lines[0].split(',').collect();
+    assert_eq!(&header[9..], &["delivered_1", "delivered_3", "error"]);
+    for (line, (t1, t3, mu3)) in lines[1..].iter().zip([("2.0", "1.5", "0.2"), ("1.0", "2.5", "0.0")]) {
+        let cells: Vec<&str> = line.split(',').collect();
+        let solved = run(
+            &dir,
+            &[
+                "solve",
+                "robot.toml",
+                "--friction",
+                "1=0.1",
+                "--friction",
+                &format!("3={mu3}"),
+                "--tension",
+                &format!("1={t1}"),
+                "--tension",
+                &format!("3={t3}"),
+                "--format",
+                "json",
+            ],
+        );
+        assert_eq!(solved.status.code(), Some(0), "{}", text(&solved.stderr));
+        let json: serde_json::Value = serde_json::from_slice(&solved.stdout).unwrap();
+        let delivered = |i: usize| json["tendons"][i]["delivered_tension"].as_f64().unwrap();
+        // Exact: one computation (each row solved as `tdcr solve` solves it), written in a
+        // format that reads back bitwise.
+        assert_eq!(cells[9].parse::<f64>().unwrap(), delivered(0), "{line}");
+        assert_eq!(cells[10].parse::<f64>().unwrap(), delivered(2), "{line}");
+        // Friction holds tendon 1 back (pulled in); a coefficient of 0 delivers the tension.
+        assert!(delivered(0) < t1.parse::<f64>().unwrap());
+        if mu3 == "0.0" {
+            assert_eq!(cells[10].parse::<f64>().unwrap(), t3.parse::<f64>().unwrap());
+        }
+    }
+}

@@ -756,6 +756,24 @@ fn command_rejects_bad_input_with_exit_code_2() {
         "{stderr}"
     );
 
+    // An error about the optional `motion` column: the header shown has it (main gave the
+    // header without it, then named the column apart).
+    let mut with_motion: Vec<String> = csv.lines().map(String::from).collect();
+    with_motion[0].push_str(",motion");
+    for line in &mut with_motion[1..] {
+        line.push_str(",pul");
+    }
+    std::fs::write(dir.join("motion.csv"), with_motion.join("\n")).unwrap();
+    let out = tdcr(&dir, &["calibrate", "robot.toml", "motion.csv"]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{stderr}");
+    assert!(
+        stderr.contains("`motion` is `pul`")
+            && stderr.contains("the header for this robot (5 tendon(s)) is tension_1,")
+            && stderr.contains("measured_z,motion ("),
+        "{stderr}"
+    );
+
     let out = tdcr(
         &dir,
         &["calibrate", "robot.toml", "experiments.csv", "--fit", "e,stiffness"],

@@ -103,6 +103,98 @@ fn an_explicit_list_is_solved_in_order() {
 }
 
 #[test]
+fn a_list_with_a_second_range_warns_that_the_range_is_held() {
+    // `--history V1,...` lists the swept input's values; tendon 2's range 0:1:3 is held at
+    // its first value (main said nothing).
+    let dir = scratch("held-range");
+    robot(&dir, false);
+    let out = run(
+        &dir,
+        &[
+            "sweep",
+            "robot.toml",
+            "--tension",
+            "1=0:3:3",
+            "--tension",
+            "2=0.5:1:3",
+            "--history",
+            "0,3,1",
+        ],
+    );
+    assert_eq!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stderr));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(err.matches("warning").count(), 1, "{err}");
+    assert!(err.contains("tension.2 at its first value 0.5"), "{err}");
+    let csv = String::from_utf8_lossy(&out.stdout).into_owned();
+    let lines: Vec<&str> = csv.lines().collect();
+    let c = column(lines[0], "tension_2");
+    assert!(lines[1..].iter().all(|l| l.split(',').nth(c) == Some("0.5")), "{csv}");
+    // One range and a fixed value: nothing to warn about.
+    let out = run(
+        &dir,
+        &[
+            "sweep",
+            "robot.toml",
+            "--tension",
+            "1=0",
+            "--tension",
+            "2=0.5",
+            "--history",
+            "0,1",
+        ],
+    );
+    assert_eq!(out.status.code(), Some(0));
+    assert!(!String::from_utf8_lossy(&out.stderr).contains("warning"));
+}
+
+#[test]
+fn the_loop_plots_the_quantity_asked_for() {
+    let dir = scratch("loop-y");
+    robot(&dir, false);
+    for (name, label) in [
+        (None, "tip displacement from the first step (mm)"),
+        (Some("bending_angle"), "bending angle (deg)"),
+        (Some("tip_z"), "tip z (mm)"),
+    ] {
+        let mut args = vec![
+            "sweep",
+            "robot.toml",
+            "--tension",
+            "1=0:2:2",
+            "--history",
+            "up-down",
+            "--plot",
+            "loop.svg",
+        ];
+        if let Some(n) = name {
+            args.extend(["--loop-y", n]);
+        }
+        let out = run(&dir, &args);
+        assert_eq!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stderr));
+        let svg = std::fs::read_to_string(dir.join("loop.svg")).unwrap();
+        assert!(svg.contains(label), "{name:?}");
+    }
+    let out = run(
+        &dir,
+        &[
+            "sweep",
+            "robot.toml",
+            "--tension",
+            "1=0:2:2",
+            "--history",
+            "up-down",
+            "--plot",
+            "loop.svg",
+            "--loop-y",
+            "angle",
+        ],
+    );
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("`angle`") && err.contains("bending_angle, tip_x"), "{err}");
+}
+
+#[test]
 fn a_history_value_that_is_not_a_number_is_bad_input() {
     let dir = scratch("nan");
     robot(&dir, false);
@@ -234,7 +326,42 @@ fn an_unloaded_tendon_is_slack_and_a_one_step_history_has_its_work_and_estimate(
     assert!(e > 0.0 && e < 2.42e-8, "{e}");
 }
 
-/// Writes `dir/robot.toml`: the example robot with tendon 3 (the top side, which the rod's
+#[test]
+fn a_pull_in_loop_back_at_its_first_pull_in_is_slack_at_both_ends() {
+    // Without the rod's weight tendon 1 is just taut at pull-in 0: the first step solves it
+    // at 0 N, the last (back at 0 after 12 mm) at rounding-level tension (main: 8.5e-12 N,
+    // zones `release 0-0.242`). Within the solve's residual tolerance (1e-11) of 0 N in tau
+    // / T it is slack, as the frictionless displacement solve decides: 0 N, `slack`.
+    let dir = scratch("pull-in-ends");
+    let out = run(&dir, &["example"]);
+    let text = String::from_utf8_lossy(&out.stdout).into_owned();
+    let (from, weight) = (
+        "tension = 2.94                   # N, >= 0\n",
+        "distributed_force = [0.0, 0.0, -0.47]",
+    );
+    assert!(text.contains(from) && text.contains(weight));
+    let text = text
+        .replacen(from, "displacement = 0.0\nstiffness = 2000.0\nfriction = 0.1\n", 1)
+        .replacen(weight, "distributed_force = [0.0, 0.0, 0.0]", 1);
+    std::fs::write(dir.join("robot.toml"), text).unwrap();
+    let rows = history_csv(&dir, &["--displacement", "1=0:0.012:4", "--history", "up-down"]);
+    let header = rows[0].join(",");
+    let (tension, delivered, zones) = (
+        column(&header, "tension_1"),
+        column(&header, "delivered_1"),
+        column(&header, "zones_1"),
+    );
+    assert_eq!(rows.len(), 8);
+    for k in [1, 7] {
+        assert_eq!(
+            [&rows[k][tension], &rows[k][delivered], &rows[k][zones]],
+            ["0", "0", "slack 0-0.242"],
+            "step {k}"
+        );
+    }
+    assert!(rows[6][zones].starts_with("release 0-"), "{:?}", rows[6]);
+}
+
 /// weight stretches) at `tension` N with friction 0.1 and E_t A_t = 2000 N, and, with
 /// `helix_turns`, the helical tendon 5 at that many turns per rod length instead of one.
 fn top_tendon_with_friction(dir: &Path, tension: &str, helix_turns: Option<&str>) {

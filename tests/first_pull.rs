@@ -111,6 +111,13 @@ fn check(name: &str, robot: &Robot, tendon: usize, mu: f64, motion: Motion) {
         "{name}: column {column:?} against {extrapolated:?} ({error:.2e}, rounding floor {:.1e})",
         floor / extrapolated.norm()
     );
+    // The cleaner figure of docs/friction.md, from 1e-3 and 1e-4 N, where the rounding
+    // carried (about 3e-12 m / 1e-4 N) is small beside the column: 2e-7, a margin of 2.7
+    // over the largest measured (2.4e-8 to 7.5e-8 relative in the four cases).
+    assert!(
+        coarse <= 2e-7,
+        "{name}: the extrapolation from 1e-3 and 1e-4 N is off by {coarse:.2e}"
+    );
     // The friction matters: the column of the same tendon without friction (constant
     // tension along it) is another one, by far more than the tolerances above.
     let mut smooth = robot.clone();

@@ -19,6 +19,8 @@ struct Outcome {
     orientation: [f64; 4],
     error_estimate: f64,
     points: Vec<[f64; 3]>,
+    /// The delivered tensions of `RowOutputs::delivered`'s tendons (N).
+    delivered: Vec<f64>,
 }
 
 /// The columns of `solve_parameters`: only the columns asked for, each a numpy array of
@@ -46,6 +48,8 @@ struct Table<'py> {
     error_estimate: Option<Bound<'py, PyArray1<f64>>>,
     /// (rows, K, 3), when asked.
     points: Option<Bound<'py, PyArray3<f64>>>,
+    /// (rows,) per tendon of `outputs.delivered`.
+    delivered: Vec<Bound<'py, PyArray1<f64>>>,
 }
 
 impl<'py> Table<'py> {
@@ -53,7 +57,6 @@ impl<'py> Table<'py> {
     fn new(py: Python<'py>, outputs: RowOutputs, rows: usize) -> Self {
         let k = outputs.points;
         Table {
-            outputs,
             done: 0,
             converged: PyArray1::zeros(py, rows, false),
             tips: PyArray2::zeros(py, [rows, 3], false),
@@ -64,12 +67,18 @@ impl<'py> Table<'py> {
             orientation: outputs.orientation.then(|| PyArray2::zeros(py, [rows, 4], false)),
             error_estimate: outputs.error_estimate.then(|| PyArray1::zeros(py, rows, false)),
             points: (k > 0).then(|| PyArray3::zeros(py, [rows, k, 3], false)),
+            delivered: outputs
+                .delivered
+                .iter()
+                .map(|_| PyArray1::zeros(py, rows, false))
+                .collect(),
+            outputs,
         }
     }
 
     /// Writes the next row: the outcome, or NaN and the message of a failed one.
     fn push(&mut self, result: Result<Outcome, String>) -> PyResult<()> {
-        let (i, k) = (self.done, self.outputs.points);
+        let (i, k, f) = (self.done, self.outputs.points, self.delivered.len());
         let o = result.unwrap_or_else(|message| {
             self.errors.push((i, message));
             Outcome {
@@ -79,6 +88,7 @@ impl<'py> Table<'py> {
                 orientation: [f64::NAN; 4],
                 error_estimate: f64::NAN,
                 points: vec![[f64::NAN; 3]; k],
+                delivered: vec![f64::NAN; f],
             }
         });
         let solved = o.iterations >= 0;
@@ -109,6 +119,9 @@ impl<'py> Table<'py> {
             for (out, point) in row.chunks_exact_mut(3).zip(&o.points) {
                 out.copy_from_slice(point);
             }
+        }
+        for (column, &d) in self.delivered.iter().zip(&o.delivered) {
+            column.readwrite().as_slice_mut()?[i] = d;
         }
         self.done += 1;
         Ok(())
@@ -153,6 +166,12 @@ impl<'py> Table<'py> {
         }
         if let Some(p) = self.points {
             d.set_item("points", rows(p.into_any())?)?;
+        }
+        // The `delivered_I` names of `tdcr batch`: the header's last columns.
+        let header = self.outputs.header();
+        let names = &header[header.len() - self.delivered.len()..];
+        for (name, column) in names.iter().zip(self.delivered) {
+            d.set_item(name, rows(column.into_any())?)?;
         }
         Ok(d)
     }
@@ -227,7 +246,9 @@ impl Progress {
 /// tip's unit quaternion (w, x, y, z), w >= 0; with `error_estimate=True` `error_estimate`
 /// (M,), the estimated tip position error (m; NaN without one); with `points=K` (0 or >= 2)
 /// `points` (M, K, 3), backbone points at s = j L / (K - 1) (m): the columns `tdcr batch`
-/// adds with `--orientation`, `--error-estimate`, `--points K`. Each solution is reduced to
+/// adds with `--orientation`, `--error-estimate`, `--points K`; and, for each tendon I with
+/// friction in the robot or a `friction.I` parameter, `delivered_I` (M,), the tension it
+/// delivers at its termination (N; NaN where failed), as `tdcr batch` writes it. Each solution is reduced to
 /// its row as soon as it is solved, so memory does not grow with M beyond the arrays.
 /// `progress`: a line on stderr with rows/s and the time left, for runs past a second (None:
 /// when stderr is a terminal). Ctrl-C raises `KeyboardInterrupt` with `completed` and
@@ -245,18 +266,19 @@ pub fn solve_parameters<'py>(
     progress: Option<bool>,
     options: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyDict>> {
+    let (batch, options) = crate::batch_robots("solve_parameters", robot.as_any(), Some(parameters), options)?;
     let outputs = RowOutputs {
         orientation,
         stability: true,
         error_estimate,
         points,
+        delivered: batch.tendons_with_friction(),
     };
     outputs
         .check()
         .map_err(|e| invalid(format!("solve_parameters: points={points}: {e}")))?;
-    let (batch, options) = crate::batch_robots("solve_parameters", robot.as_any(), Some(parameters), options)?;
     let total = batch.len();
-    let mut table = Table::new(py, outputs, total);
+    let mut table = Table::new(py, outputs.clone(), total);
     let mut bar = Progress::new(py, progress)?;
     let run = boundary::rows_with(
         py,
@@ -277,6 +299,7 @@ pub fn solve_parameters<'py>(
                 },
                 error_estimate: tip_error_estimate(&s),
                 points: outputs.points_of(&s).iter().map(|p| [p.x, p.y, p.z]).collect(),
+                delivered: outputs.delivered_of(&s),
             })
         },
         |i, result| {

@@ -10,7 +10,7 @@ use crate::solution::PySolution;
 use numpy::{PyArray1, PyArray2};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
-use tdcr::analysis::history::{HistoryStep, directions, history as solve_history};
+use tdcr::analysis::history::{HistoryStep, LoopAxis, directions, history as solve_history, tip_displacements};
 use tdcr::analysis::sweep::Ranges;
 
 /// One tendon's stick/slip zones at one step: (tendon index from 0, [(start, end,
@@ -73,6 +73,17 @@ impl PyHistory {
     }
 }
 
+impl PyHistory {
+    /// The steps' solutions (shared, not copied).
+    fn library_solutions<'py>(&self, py: Python<'py>) -> PyResult<Vec<Bound<'py, PySolution>>> {
+        self.solutions
+            .bind(py)
+            .iter()
+            .map(|item| item.cast_into::<PySolution>().map_err(PyErr::from))
+            .collect()
+    }
+}
+
 crate::pickle::pickled_fields! {
     PyHistory { solutions, zones, tips, inputs, directions }
 
@@ -113,6 +124,30 @@ crate::pickle::pickled_fields! {
     #[getter]
     fn tip_positions<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
         tip_rows(py, &self.tips)
+    }
+
+    /// The tip's displacement from its place at the first step (m), shape (n,): the
+    /// distance |p(L)_k - p(L)_0|, the y axis of `plot_history` by default (in mm there).
+    #[getter]
+    fn tip_displacements<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray1<f64>>> {
+        let solutions = self.library_solutions(py)?;
+        Ok(PyArray1::from_vec(py, tip_displacements(solutions.iter().map(|s| &s.get().solution))))
+    }
+
+    /// loop_axis(y="tip_displacement") -> (label, values)
+    ///
+    /// The y axis of the hysteresis loop as `tdcr sweep --history --plot --loop-y Y` draws
+    /// it: its label (with the unit) and its value at each step, shape (n,).
+    /// `y`: "tip_displacement" (the tip's distance from the first step, mm),
+    /// "bending_angle" (deg), or "tip_x", "tip_y", "tip_z" (mm, world frame).
+    #[pyo3(signature = (y = "tip_displacement"))]
+    fn loop_axis<'py>(&self, py: Python<'py>, y: &str) -> PyResult<(&'static str, Bound<'py, PyArray1<f64>>)> {
+        let axis = LoopAxis::parse(y).map_err(|e| invalid(format!("loop_axis: {e}")))?;
+        let solutions = self.library_solutions(py)?;
+        Ok((
+            axis.label(),
+            PyArray1::from_vec(py, axis.values(solutions.iter().map(|s| &s.get().solution))),
+        ))
     }
 
     fn __len__(&self) -> usize {

@@ -97,6 +97,15 @@ impl Batch {
         }
     }
 
+    /// The tendons (from 0) with friction in some row of parameter columns, whose delivered
+    /// tensions `solve_parameters` keeps (it takes rows only: none for a list).
+    fn tendons_with_friction(&self) -> Vec<usize> {
+        match self {
+            Batch::List(_) => Vec::new(),
+            Batch::Rows(rows) => rows.tendons_with_friction(),
+        }
+    }
+
     /// The inputs of the rows `range` for [`Batch::solve`] without the GIL (parameter
     /// columns: their values copied; a list: nothing).
     fn chunk(&self, py: Python<'_>, range: std::ops::Range<usize>) -> robot::Chunk {

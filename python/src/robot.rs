@@ -157,6 +157,13 @@ impl Rows {
         self.count
     }
 
+    /// The tendons with friction in some row (from 0), whose delivered tension a row of
+    /// `solve_parameters` carries (`tdcr::io::row_outputs`, as `tdcr batch`).
+    pub fn tendons_with_friction(&self) -> Vec<usize> {
+        let parameters: Vec<Parameter> = self.columns.iter().map(|(p, _)| *p).collect();
+        tdcr::io::row_outputs::RowOutputs::tendons_with_friction(&self.base, &parameters)
+    }
+
     /// The rows as the library sweep's ranges (the values between rows interpolated
     /// linearly, where the sweep locates its events).
     ///

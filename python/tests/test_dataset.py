@@ -156,3 +156,32 @@ def test_a_batch_of_100000_rows_stays_under_100_mb(tmp_path):
     # 0.1 MB beyond the returned table; 2 MB leaves room for one chunk's buffers and the
     # allocator's per-thread arenas, not for a copy of a column or a doubled array).
     assert peak - before < kept + 2 * mb, f"the call took {(peak - before) / mb:.1f} MB, returning {kept / mb:.1f} MB"
+
+
+def test_tendons_with_friction_get_delivered_columns_as_tdcr_batch_writes_them(tmp_path, cli_text):
+    # Tendon 1 has friction in the robot, tendon 3 from a `friction.3` parameter (0 in one
+    # row, which then delivers its tension); tendons 2 and 4 get no key, as in `tdcr batch`.
+    r = robot().with_parameters({"friction.1": 0.1})
+    params = {"tension.1": [2.0, 1.0], "tension.3": [1.5, 2.5], "friction.3": [0.2, 0.0]}
+    table = tdcr.solve_parameters(r, params)
+    assert [k for k in table if k.startswith("delivered")] == ["delivered_1", "delivered_3"]
+    for i in range(2):
+        s = tdcr.solve(r.with_parameters({k: v[i] for k, v in params.items()}))
+        assert table["delivered_1"][i] == s.tendons[0]["delivered_tension"] < params["tension.1"][i]
+        assert table["delivered_3"][i] == s.tendons[2]["delivered_tension"]
+    assert table["delivered_3"][1] == 2.5
+    assert not any(k.startswith("delivered") for k in tdcr.solve_parameters(robot(), {"tension.1": [1.0]}))
+    (tmp_path / "robot.toml").write_text(cli_text(["example", "robot"]))
+    (tmp_path / "cases.csv").write_text("tension.1,tension.3,friction.3\n2.0,1.5,0.2\n1.0,2.5,0.0\n")
+    out = cli_text(["batch", "cases.csv", "--robot", "robot.toml", "--friction", "1=0.1"], cwd=tmp_path)
+    lines = out.splitlines()
+    header = lines[0].split(",")
+    for k, line in enumerate(lines[1:]):
+        cells = dict(zip(header, line.split(",")))
+        # Exact: the same computation, written by the CLI in a format that reads back bitwise.
+        assert float(cells["delivered_1"]) == table["delivered_1"][k]
+        assert float(cells["delivered_3"]) == table["delivered_3"][k]
+    path = tmp_path / "d.npz"
+    tdcr.dataset(r, path, given=params, chunk_size=1)
+    with np.load(path) as z:
+        np.testing.assert_array_equal(z["delivered_3"], table["delivered_3"])

@@ -67,6 +67,23 @@ def test_the_history_keeps_its_inputs_and_directions_and_draws_its_loop(tmp_path
         "unloading: the input falls",
     ]
     ax.figure.savefig(tmp_path / "loop.png")
+    # The default y axis is the library's tip displacement (m there, mm here), one definition
+    # with the command line's picture; the other quantities by name.
+    np.testing.assert_array_equal(ax.lines[1].get_ydata(), 1e3 * h.tip_displacements[1:3])
+    assert ax.get_ylabel() == "tip displacement from the first step (mm)"
+    tips = h.tip_positions
+    np.testing.assert_array_equal(h.tip_displacements, np.linalg.norm(tips - tips[0], axis=1))
+    label, z = h.loop_axis("tip_z")
+    assert label == "tip z (mm)"
+    np.testing.assert_array_equal(z, 1e3 * tips[:, 2])
+    ax = tdcr.plot_history(h, y="bending_angle")
+    assert ax.get_ylabel() == "bending angle (deg)"
+    angles = h.loop_axis("bending_angle")[1]
+    np.testing.assert_array_equal(ax.lines[0].get_ydata(), angles[0:2])
+    # The first step at 0 N without loads is straight (1e-9 deg: rounding of the solve).
+    assert abs(angles[0]) < 1e-9 and angles[2] > 1.0
+    with pytest.raises(tdcr.InvalidInput, match="tip_displacement, bending_angle"):
+        tdcr.plot_history(h, y="angle")
 
 
 def test_one_step_from_rest_is_the_pull_solve():

@@ -92,6 +92,88 @@ pub fn directions(ranges: &Ranges) -> Vec<&'static str> {
         .collect()
 }
 
+/// The tip's displacement (m) at each of a history's steps from its place at the first:
+/// |p(L)_k - p(L)_0| for the `solutions` in order (empty for none). The y axis of the
+/// hysteresis loop by default ([`LoopAxis::TipDisplacement`]) and Python's
+/// `History.tip_displacements`.
+pub fn tip_displacements<'a>(solutions: impl IntoIterator<Item = &'a Solution>) -> Vec<f64> {
+    let tips: Vec<_> = solutions.into_iter().map(Solution::tip_position).collect();
+    tips.iter().map(|p| (p - tips[0]).norm()).collect()
+}
+
+/// What the y axis of a history's hysteresis loop shows against the swept input (`tdcr
+/// sweep --history --plot --loop-y NAME`, Python's `History.loop_axis` and
+/// `tdcr.plot_history(y=NAME)`). The displacement is a distance, so it is never negative:
+/// a loop whose unloading branch lies below its loading branch in displacement may lie
+/// above it in a tip coordinate (docs/cli.md: the prototype's tendon pulled in and let
+/// out, whose tip lies above in x and z on the way back).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum LoopAxis {
+    /// The tip's displacement from the first step (mm), [`tip_displacements`]: `tip_displacement`.
+    #[default]
+    TipDisplacement,
+    /// The bending angle (degrees; [`crate::analysis::samples::bending_angle`]): `bending_angle`.
+    BendingAngle,
+    /// One coordinate of the tip (mm, world frame; 0 for x, 1 for y, 2 for z): `tip_x`,
+    /// `tip_y`, `tip_z`.
+    Tip(usize),
+}
+
+impl LoopAxis {
+    /// The names the command line and Python take, in the order of [`LoopAxis::ALL`].
+    pub const NAMES: [&'static str; 5] = ["tip_displacement", "bending_angle", "tip_x", "tip_y", "tip_z"];
+    /// Every axis, in the order of [`LoopAxis::NAMES`].
+    pub const ALL: [LoopAxis; 5] = [
+        LoopAxis::TipDisplacement,
+        LoopAxis::BendingAngle,
+        LoopAxis::Tip(0),
+        LoopAxis::Tip(1),
+        LoopAxis::Tip(2),
+    ];
+
+    /// The axis of `name` (one of [`LoopAxis::NAMES`]).
+    ///
+    /// # Errors
+    /// [`Error::InvalidInput`] naming the choices for any other name.
+    pub fn parse(name: &str) -> Result<LoopAxis> {
+        Self::NAMES
+            .iter()
+            .position(|n| *n == name)
+            .map(|i| Self::ALL[i])
+            .ok_or_else(|| {
+                invalid(
+                    "the loop's y axis",
+                    format!("is `{name}`, which is not a quantity of a history step"),
+                    format!("give one of {}", Self::NAMES.join(", ")),
+                )
+            })
+    }
+
+    /// The axis's label, with its unit.
+    pub fn label(self) -> &'static str {
+        match self {
+            LoopAxis::TipDisplacement => "tip displacement from the first step (mm)",
+            LoopAxis::BendingAngle => "bending angle (deg)",
+            LoopAxis::Tip(0) => "tip x (mm)",
+            LoopAxis::Tip(1) => "tip y (mm)",
+            LoopAxis::Tip(_) => "tip z (mm)",
+        }
+    }
+
+    /// The axis's value at each of the `solutions` of a history's steps (in order), in the
+    /// unit of [`LoopAxis::label`] (mm or degrees).
+    pub fn values<'a>(self, solutions: impl IntoIterator<Item = &'a Solution>) -> Vec<f64> {
+        let solutions = solutions.into_iter();
+        match self {
+            LoopAxis::TipDisplacement => tip_displacements(solutions).iter().map(|d| d * 1e3).collect(),
+            LoopAxis::BendingAngle => solutions
+                .map(|s| crate::analysis::samples::bending_angle(s).to_degrees())
+                .collect(),
+            LoopAxis::Tip(i) => solutions.map(|s| s.tip_position()[i.min(2)] * 1e3).collect(),
+        }
+    }
+}
+
 /// Solves the steps of `ranges` as a history with stick/slip friction (module docs), by
 /// collocation with `options`, stopping at the first step that fails
 /// ([`HistoryResult::failure`]). The friction coefficients are the tendons'; their
@@ -250,6 +332,7 @@ fn pulled_step(
         robot,
         &start,
         last,
+        options.residual_tolerance,
         |r, _| {
             let mut trial = carried.snapshot();
             let (solution, zones) = friction::history::step(r, options, &mut trial)?;
@@ -339,4 +422,37 @@ fn toward_root(
         }
     }
     Some(slope)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn loop_axes_parse_from_their_names_and_others_are_refused() {
+        for (name, axis) in LoopAxis::NAMES.iter().zip(LoopAxis::ALL) {
+            assert_eq!(LoopAxis::parse(name).unwrap(), axis);
+        }
+        let e = LoopAxis::parse("angle").unwrap_err().to_string();
+        assert!(
+            e.contains("`angle`") && e.contains("tip_displacement, bending_angle, tip_x"),
+            "{e}"
+        );
+        assert_eq!(LoopAxis::default(), LoopAxis::TipDisplacement);
+    }
+
+    #[test]
+    fn loop_axes_give_the_distance_the_angle_and_the_coordinates_of_the_steps() {
+        let robot = crate::cases::case_s();
+        let rest = collocation::solve(&robot.with_tensions(&[0.0; 5]), &Default::default()).unwrap();
+        let pulled = collocation::solve(&robot, &Default::default()).unwrap();
+        let steps = [&rest, &pulled];
+        let moved = (pulled.tip_position() - rest.tip_position()).norm();
+        assert_eq!(tip_displacements(steps), vec![0.0, moved]);
+        assert_eq!(LoopAxis::TipDisplacement.values(steps), vec![0.0, moved * 1e3]);
+        let angle = crate::analysis::samples::bending_angle(&pulled).to_degrees();
+        assert_eq!(LoopAxis::BendingAngle.values(steps)[1], angle);
+        assert_eq!(LoopAxis::Tip(2).values(steps)[1], pulled.tip_position().z * 1e3);
+        assert!(tip_displacements(std::iter::empty()).is_empty());
+    }
 }

@@ -28,6 +28,26 @@ pub fn csv_header(tendons: usize) -> String {
     names.join(",")
 }
 
+/// The hint that follows a bad experiments CSV's `error` for a robot with `tendons`
+/// tendons: the header it wants. When a problem is about the optional `motion` column, the
+/// header shown ends in it (the file uses it); else the header without it, and that a
+/// `motion` column may follow.
+pub fn header_hint(tendons: usize, error: &FileError) -> String {
+    let head = format!("the header for this robot ({tendons} tendon(s)) is");
+    let what = "pull or release per row, for tendons with friction";
+    if error.problems.iter().any(|p| p.field == MOTION_COLUMN) {
+        format!(
+            "{head} {},{MOTION_COLUMN} (`{MOTION_COLUMN}`: {what}; empty, or left out, for none)",
+            csv_header(tendons)
+        )
+    } else {
+        format!(
+            "{head} {}, with an optional `{MOTION_COLUMN}` column ({what})",
+            csv_header(tendons)
+        )
+    }
+}
+
 /// The experiments as CSV (docs/calibration.md): the header of [`csv_header`], then one row
 /// per experiment in SI units (N, N, m), numbers written by [`crate::io::number`] to
 /// round-trip exactly.

@@ -1,14 +1,16 @@
 //! The optional outputs of a dataset row, one meaning for `tdcr batch` (its columns) and
 //! Python's `tdcr.solve_parameters` and `tdcr.dataset` (their keys): the tip orientation as
 //! a unit quaternion, the stability verdict, the estimated tip error and K backbone points
-//! evenly spaced from base to tip (docs/cli.md, "batch").
+//! evenly spaced from base to tip (docs/cli.md, "batch"); and, for each tendon with
+//! friction, the tension it delivers at its termination (docs/friction.md).
 
 use crate::error::{Result, invalid};
+use crate::model::{parameter::Parameter, robot::Robot};
 use crate::solution::Solution;
 use nalgebra::{Matrix3, Rotation3, UnitQuaternion, Vector3};
 
 /// Which optional outputs a row carries.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub struct RowOutputs {
     /// The tip orientation R(L) (body to world) as a unit quaternion (w, x, y, z), w >= 0.
     pub orientation: bool,
@@ -19,6 +21,10 @@ pub struct RowOutputs {
     /// K backbone points p(s_j) (m, world frame) at s_j = j L / (K - 1), j = 0..K-1 (base
     /// to tip); 0 for none, else at least 2.
     pub points: usize,
+    /// The tendons (numbered from 0, ascending) whose delivered tension (N, at the
+    /// termination; [`crate::TendonState::delivered_tension`]) a row carries: the tendons
+    /// with friction in some row ([`RowOutputs::tendons_with_friction`]); empty for none.
+    pub delivered: Vec<usize>,
 }
 
 impl RowOutputs {
@@ -43,8 +49,21 @@ impl RowOutputs {
         (0..k).map(|j| length * j as f64 / (k - 1) as f64).collect()
     }
 
+    /// The tendons of a table of rows on `robot` that have friction in some row (numbered
+    /// from 0, ascending): those with friction in `robot` (a coefficient > 0) and those whose
+    /// coefficient a column of `parameters` sets (`friction.I`; a row may set it to 0, and
+    /// such a row delivers the tendon's tension). A table without friction gets none, so its
+    /// rows are those of a run without friction.
+    pub fn tendons_with_friction(robot: &Robot, parameters: &[Parameter]) -> Vec<usize> {
+        (0..robot.tendons.len())
+            .filter(|&i| robot.tendons[i].active_friction().is_some() || parameters.contains(&Parameter::Friction(i)))
+            .collect()
+    }
+
     /// The column names these outputs add to a `tdcr batch` row: `q_w q_x q_y q_z`,
-    /// `stability`, `error_estimate`, `p1_x p1_y p1_z ... pK_z` (points numbered from 1).
+    /// `stability`, `error_estimate`, `p1_x p1_y p1_z ... pK_z` (points numbered from 1),
+    /// `delivered_I ...` (tendons numbered from 1), as `tdcr sweep` names the delivered
+    /// tension.
     pub fn header(&self) -> Vec<String> {
         let mut out = Vec::new();
         if self.orientation {
@@ -59,7 +78,16 @@ impl RowOutputs {
         for j in 1..=self.points {
             out.extend(["x", "y", "z"].map(|a| format!("p{j}_{a}")));
         }
+        out.extend(self.delivered.iter().map(|i| format!("delivered_{}", i + 1)));
         out
+    }
+
+    /// The delivered tensions (N) of [`RowOutputs::delivered`]'s tendons in `solution`.
+    pub fn delivered_of(&self, solution: &Solution) -> Vec<f64> {
+        self.delivered
+            .iter()
+            .map(|&i| solution.tendons[i].delivered_tension)
+            .collect()
     }
 
     /// The backbone points of `solution` ([`RowOutputs::arc_lengths`]).
@@ -123,5 +151,22 @@ mod tests {
             ..Default::default()
         };
         assert!(one.check().unwrap_err().to_string().contains("at least 2"));
+    }
+
+    #[test]
+    fn delivered_columns_are_the_tendons_with_friction_in_some_row() {
+        let mut robot = crate::cases::prototype();
+        assert!(RowOutputs::tendons_with_friction(&robot, &[Parameter::Tension(0)]).is_empty());
+        robot.tendons[2].friction = Some(crate::Friction {
+            coefficient: 0.1,
+            motion: crate::Motion::Pull,
+        });
+        let parameters = [Parameter::Friction(0), Parameter::Tension(1)];
+        let outputs = RowOutputs {
+            delivered: RowOutputs::tendons_with_friction(&robot, &parameters),
+            ..Default::default()
+        };
+        assert_eq!(outputs.delivered, vec![0, 2]);
+        assert_eq!(outputs.header(), vec!["delivered_1", "delivered_3"]);
     }
 }

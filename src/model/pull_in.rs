@@ -59,7 +59,11 @@ const TENSION_TOLERANCE: f64 = 1e-12;
 /// the base-entry `start` tensions of every tendon (a frictionless displacement solve's, or
 /// a history's last step's) and the `warm` shape. Returns the solution at the tensions that
 /// hold the pull-ins, its tendons reporting their pull-in input and slack; the last call of
-/// `solve` is the one at those tensions (a history keeps the state it left).
+/// `solve` is the one at those tensions (a history keeps the state it left). A held tendon on
+/// the slack side of the complementarity, or on its taut side within `residual_tolerance`
+/// (the solves' scaled Newton tolerance) of 0 N in tau / T, gets exactly 0 N: its tension
+/// is 0 to the solves' resolution, the rule of the frictionless displacement solve
+/// (`collocation::actuation`), so a tendon just taut at its rest pull-in is slack there.
 ///
 /// # Errors
 /// What `solve` returns, or [`Error::NotConverged`] when Newton on the tensions does not
@@ -68,6 +72,7 @@ pub(crate) fn hold(
     robot: &Robot,
     start: &[f64],
     warm: Option<&Solution>,
+    residual_tolerance: f64,
     mut solve: impl FnMut(&Robot, Option<&Solution>) -> Result<Solution>,
     mut slope: impl FnMut(&Robot, &Solution, &[usize]) -> Option<Vec<f64>>,
 ) -> Result<Solution> {
@@ -186,9 +191,10 @@ pub(crate) fn hold(
             break;
         }
     }
-    // A tendon on the slack side of the complementarity gets exactly 0 N.
+    // A tendon on the slack side of the complementarity, or just taut (within the
+    // tolerance of 0 N), gets exactly 0 N.
     let slack: Vec<bool> = (0..k)
-        .map(|j| tau[j] <= 0.0 || gaps[j] / length > tau[j] / scale[j])
+        .map(|j| tau[j] <= residual_tolerance * scale[j] || gaps[j] / length > tau[j] / scale[j])
         .collect();
     if slack.iter().zip(&tau).any(|(&s, &t)| s && t != 0.0) {
         for j in 0..k {

@@ -146,8 +146,14 @@ pub fn solve(robot: &Robot, options: &Options) -> Result<Solution> {
         }
         let first = solve(&smooth, options)?;
         // Differences for dphi/dtau: shooting imports nothing from collocation's linearization.
-        let mut solution =
-            crate::model::pull_in::hold(robot, &first.tensions(), None, |r, _| solve(r, options), |_, _, _| None)?;
+        let mut solution = crate::model::pull_in::hold(
+            robot,
+            &first.tensions(),
+            None,
+            options.residual_tolerance,
+            |r, _| solve(r, options),
+            |_, _, _| None,
+        )?;
         solution.report.timings.total = start.elapsed();
         return Ok(solution);
     }

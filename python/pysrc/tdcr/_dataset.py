@@ -107,9 +107,10 @@ def dataset(
     array), solves them in chunks of `chunk_size` rows with `solve_parameters` (its
     `orientation`, `error_estimate`, `points` and solver `options`), and writes `path`:
     `.npz` (the parameter columns as `parameter:NAME`, then `converged`, `tip_position`,
-    `iterations`, `stability`, the optional outputs, and `failed` / `failed_error`: the
+    `iterations`, `stability`, the optional outputs, `delivered_I` for each tendon I with
+    friction (the delivered tension, N), and `failed` / `failed_error`: the
     failed rows and their messages) or `.parquet` (pyarrow; one flat column each, named as
-    `tdcr batch` names them: tip_x, q_w, p1_x, ...). Finished chunks are kept in
+    `tdcr batch` names them: tip_x, q_w, p1_x, delivered_1, ...). Finished chunks are kept in
     `path + ".parts"` until the end, so calling again with the same arguments resumes an
     interrupted run (other arguments raise `tdcr.InvalidInput`). `progress`: a line on
     stderr with rows/s and the time left (None: when stderr is a terminal). Returns the

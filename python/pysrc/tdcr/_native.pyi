@@ -468,7 +468,8 @@ def solve_parameters(
 ) -> Dict[str, Any]:
     """`solve_batch` of parameter rows reduced to arrays (constant memory per row); optional
     `tip_orientation` (M, 4) quaternion (w, x, y, z), `error_estimate` (M,), `points` (M, K, 3)
-    at s = j L / (K - 1); a progress line on stderr past a second (`progress`, None: on a
+    at s = j L / (K - 1); `delivered_I` (M,) per tendon I with friction (N, at its
+    termination); a progress line on stderr past a second (`progress`, None: on a
     terminal). Ctrl-C raises KeyboardInterrupt with `completed` and `partial`."""
 
 @final
@@ -544,6 +545,14 @@ class History:
     @property
     def tip_positions(self) -> FloatArray:
         """Tip positions (m, world frame), shape (n, 3)."""
+    @property
+    def tip_displacements(self) -> FloatArray:
+        """The tip's distance from its place at the first step (m), shape (n,)."""
+    def loop_axis(
+        self, y: Literal["tip_displacement", "bending_angle", "tip_x", "tip_y", "tip_z"] = "tip_displacement"
+    ) -> Tuple[str, FloatArray]:
+        """The hysteresis loop's y axis as `tdcr sweep --history --plot --loop-y Y` draws it:
+        (label with unit, value per step in mm or deg)."""
     def __len__(self) -> int: ...
     def __getitem__(self, index: int, /) -> Solution: ...
     def __iter__(self) -> Iterator[Solution]: ...

@@ -53,12 +53,14 @@ def plot(solution: Any, ax: Optional[Any] = None, *, tendons: bool = True, label
     return ax
 
 
-def plot_history(history: Any, ax: Optional[Any] = None) -> Any:
+def plot_history(history: Any, ax: Optional[Any] = None, *, y: str = "tip_displacement") -> Any:
     """Draws the hysteresis loop of `history` (a `tdcr.History`) into the 2-D axes `ax` (new
-    ones in a new figure when None), as `tdcr sweep --history --plot` does: the tip's
-    displacement from its place at the first step (mm) against the swept input (the first
-    input that changes), the steps where it rises solid, those where it falls dashed.
-    Returns the axes."""
+    ones in a new figure when None), as `tdcr sweep --history --plot --loop-y Y` does: `y`
+    (`History.loop_axis`: "tip_displacement", the tip's distance from its place at the first
+    step in mm, by default; "bending_angle" in degrees; "tip_x", "tip_y" or "tip_z" in mm)
+    against the swept input (the first input that changes), the steps where it rises solid,
+    those where it falls dashed. Returns the axes."""
+    label_y, values = history.loop_axis(y)
     plt = _pyplot()
     if ax is None:
         ax = plt.figure().add_subplot()
@@ -67,8 +69,6 @@ def plot_history(history: Any, ax: Optional[Any] = None) -> Any:
     inputs = history.inputs
     name = next((n for n, v in inputs.items() if any(x != v[0] for x in v)), next(iter(inputs)))
     x = inputs[name]
-    tips = history.tip_positions
-    moved = [1e3 * float(sum((t - tips[0]) ** 2) ** 0.5) for t in tips]
     directions = history.directions
     labelled = set()
     for k in range(1, len(x)):
@@ -76,13 +76,13 @@ def plot_history(history: Any, ax: Optional[Any] = None) -> Any:
         label = "loading: the input rises" if rising else "unloading: the input falls"
         ax.plot(
             [x[k - 1], x[k]],
-            [moved[k - 1], moved[k]],
+            [values[k - 1], values[k]],
             color="#1f5fa8" if rising else "#e07b00",
             linestyle="-" if rising else "--",
             label=None if label in labelled else label,
         )
         labelled.add(label)
     ax.set_xlabel(name)
-    ax.set_ylabel("tip displacement from the first step (mm)")
+    ax.set_ylabel(label_y)
     ax.legend()
     return ax

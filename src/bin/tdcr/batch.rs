@@ -87,6 +87,7 @@ fn extra_fields(outputs: &RowOutputs, solution: &Solution) -> Vec<String> {
     for p in outputs.points_of(solution) {
         out.extend(p.iter().map(|&x| number(x)));
     }
+    out.extend(outputs.delivered_of(solution).into_iter().map(number));
     out
 }
 
@@ -171,11 +172,12 @@ impl Sink {
 /// row per input row as the rows are solved (in waves of blocks, in row order, so memory
 /// stays flat); exit code 3 when any row failed (after writing all of them).
 pub fn run(args: &BatchArgs) -> Result<(), Failure> {
-    let outputs = RowOutputs {
+    let mut outputs = RowOutputs {
         orientation: args.orientation,
         stability: args.stability,
         error_estimate: args.error_estimate,
         points: args.points,
+        delivered: Vec::new(),
     };
     outputs
         .check()
@@ -187,6 +189,7 @@ pub fn run(args: &BatchArgs) -> Result<(), Failure> {
         .map_err(|e| Failure::Input(format!("cannot read parameter table {}: {e}", args.cases)))?;
     let table = parameters::read(&args.cases, &text).map_err(|e| Failure::Input(e.to_string()))?;
     drop(text);
+    outputs.delivered = RowOutputs::tendons_with_friction(&file.robot, &table.parameters);
     let blocks = table.len().div_ceil(BLOCK);
     let (first, end) = match args.shard {
         Some((k, n)) => (k * blocks / n, (k + 1) * blocks / n),

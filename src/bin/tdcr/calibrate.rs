@@ -13,7 +13,7 @@ use tdcr::fit::calibration::{
     Calibration, CalibrationOptions, Fit, NOISE_FACTOR, Parameters, PoorFit, TipErrorStatistics,
     UNSTATED_NOISE_FRACTION, calibrate,
 };
-use tdcr::io::experiments::{csv_header, parse_csv};
+use tdcr::io::experiments::{header_hint, parse_csv};
 
 /// The CSV format, shown after `tdcr calibrate --help`.
 const CSV_HELP: &str = "EXPERIMENTS.csv: a header row, then one row per experiment, comma-separated, SI units:\n  \
@@ -126,14 +126,8 @@ pub fn run(args: &CalibrateArgs) -> Result<(), Failure> {
     args.friction.apply(&mut file.robot)?;
     let (csv_name, text) = read_csv(&args.experiments)?;
     let tendons = file.robot.tendons.len();
-    let experiments = parse_csv(&text, &csv_name, tendons).map_err(|e| {
-        Failure::Input(format!(
-            "{e}\n  the header for this robot ({tendons} tendon(s)) is {}, with an optional `{}` column (pull or \
-             release, for tendons with friction)",
-            csv_header(tendons),
-            tdcr::io::experiments::MOTION_COLUMN
-        ))
-    })?;
+    let experiments = parse_csv(&text, &csv_name, tendons)
+        .map_err(|e| Failure::Input(format!("{e}\n  {}", header_hint(tendons, &e))))?;
     let mut options = CalibrationOptions {
         fit: args.fit,
         max_iterations: args.max_iterations,

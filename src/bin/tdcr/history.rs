@@ -1,10 +1,11 @@
 //! `tdcr sweep --history`: the sweep's steps solved as a load history with stick/slip
 //! friction (`tdcr::analysis::history`): each step starts from the tendon state the last
 //! one left. CSV out, one row per step in order, with the stick/slip zones; optionally the
-//! hysteresis loop (the tip's displacement against the swept input) as a picture.
+//! hysteresis loop (the tip's displacement, the bending angle or a tip coordinate against
+//! the swept input) as a picture.
 
 use std::path::Path;
-use tdcr::analysis::history::{HistoryStep, directions, history};
+use tdcr::analysis::history::{HistoryStep, LoopAxis, directions, history};
 use tdcr::analysis::sweep::{Input, Ranges};
 use tdcr::io::csv_table::CsvTable;
 use tdcr::io::{number, output};
@@ -43,6 +44,11 @@ pub fn parse_history(text: &str) -> Result<History, String> {
     Ok(History::Values(values))
 }
 
+/// Parses `--loop-y`: one of [`LoopAxis::NAMES`].
+pub fn parse_loop_axis(text: &str) -> Result<LoopAxis, String> {
+    LoopAxis::parse(text).map_err(|e| format!("--loop-y: {}", message(&e)))
+}
+
 /// The history's steps from the sweep's `ranges`: up and down, or the swept input (the
 /// first that changes, else the only one given) at the listed values with every other input
 /// at its first value.
@@ -69,6 +75,21 @@ pub fn steps(ranges: &Ranges, base: &tdcr::Robot, history: &History) -> Result<R
                     tdcr::Readable(*v)
                 )));
             }
+            let held: Vec<String> = ranges
+                .inputs()
+                .iter()
+                .enumerate()
+                .filter(|(i, (_, v))| *i != swept && v.len() > 1)
+                .map(|(_, (input, v))| format!("{input} at its first value {}", tdcr::Readable(v[0])))
+                .collect();
+            if !held.is_empty() {
+                note(&format!(
+                    "warning: --history V1,V2,... lists the values of {} alone; the other ranges are not swept: {} \
+                     at every step (give each input its own history run, or `--history up-down` to run every range)",
+                    ranges.inputs()[swept].0,
+                    held.join(", ")
+                ));
+            }
             let inputs = ranges
                 .inputs()
                 .iter()
@@ -81,13 +102,14 @@ pub fn steps(ranges: &Ranges, base: &tdcr::Robot, history: &History) -> Result<R
 }
 
 /// Solves the history of `ranges` with `options`, writes the CSV (to `out` or standard
-/// output; the steps before a failure too) and the loop's picture (to `plot`).
+/// output; the steps before a failure too) and the loop's picture (to `plot`, with `y` on
+/// its y axis).
 pub fn run(
     name: &str,
     ranges: &Ranges,
     options: &tdcr::collocation::Options,
     out: Option<&Path>,
-    plot: Option<&Path>,
+    (plot, y): (Option<&Path>, LoopAxis),
 ) -> Result<(), Failure> {
     if let Some(path) = plot {
         picture_format(path)?;
@@ -119,7 +141,7 @@ pub fn run(
     if let Some(path) = plot
         && !result.steps.is_empty()
     {
-        let chart = picture(name, *input, values, &result.steps);
+        let chart = picture(name, (*input, values), &result.steps, y);
         let bytes = match picture_format(path)? {
             tdcr::plot::Format::Svg => chart.to_svg().into_bytes(),
             tdcr::plot::Format::Png => {
@@ -287,13 +309,12 @@ fn row(csv: &mut CsvTable, k: usize, direction: &str, value: f64, step: &History
     csv.row(fields);
 }
 
-/// The hysteresis loop: the tip's displacement from its place at the first step (mm)
-/// against the swept input, rising steps in one colour, falling ones in another.
-fn picture(name: &str, input: Input, values: &[f64], steps: &[HistoryStep]) -> Chart {
+/// The hysteresis loop: `y` (by default the tip's displacement from its place at the first
+/// step, mm) against the swept input, rising steps in one colour, falling ones in another.
+fn picture(name: &str, (input, values): (Input, &[f64]), steps: &[HistoryStep], y: LoopAxis) -> Chart {
     let (up, down) = ("#1f5fa8", "#e07b00");
-    let first = steps[0].solution.tip_position();
     let value = |k: usize| values[k.min(values.len() - 1)];
-    let moved = |k: usize| (steps[k].solution.tip_position() - first).norm() * 1e3;
+    let ys = y.values(steps.iter().map(|s| &s.solution));
     let unit = input.unit();
     let mut chart = Chart {
         title: format!("{name}: hysteresis over a load history of {} steps", steps.len()),
@@ -307,13 +328,13 @@ fn picture(name: &str, input: Input, values: &[f64], steps: &[HistoryStep]) -> C
         } else {
             format!("{input} ({unit})")
         },
-        y_label: "tip displacement from the first step (mm)".into(),
+        y_label: y.label().into(),
         ..Default::default()
     };
     for k in 1..steps.len() {
         let rising = value(k) >= value(k - 1);
         chart.segments.push(Segment {
-            ends: [(value(k - 1), moved(k - 1)), (value(k), moved(k))],
+            ends: [(value(k - 1), ys[k - 1]), (value(k), ys[k])],
             dashed: !rising,
             color: if rising { up } else { down }.into(),
         });

@@ -62,6 +62,11 @@ pub struct SweepArgs {
     /// ends in .png, else SVG.
     #[arg(long, value_name = "FILE.svg|FILE.png")]
     plot: Option<PathBuf>,
+    /// The y axis of a history's loop (`--history` with `--plot`): `tip_displacement` (the
+    /// tip's distance from the first step, mm; the default), `bending_angle` (deg), or
+    /// `tip_x`, `tip_y`, `tip_z` (mm).
+    #[arg(long, value_name = "NAME", value_parser = crate::history::parse_loop_axis, requires_all = ["history", "plot"])]
+    loop_y: Option<tdcr::analysis::history::LoopAxis>,
     /// Spacer disks drawn on the first and last shapes of the picture (default: about 2.5
     /// tendon offsets apart, 12 on the prototype; 0: none).
     #[arg(long, value_name = "N", value_parser = parse_disks, requires = "plot")]
@@ -316,7 +321,7 @@ pub fn run(args: &SweepArgs) -> Result<(), Failure> {
             &ranges,
             &file.solver.collocation,
             args.out.as_deref(),
-            args.plot.as_deref(),
+            (args.plot.as_deref(), args.loop_y.unwrap_or_default()),
         );
     }
     let mut sweep = Sweep::new(&inputs, solver, start);

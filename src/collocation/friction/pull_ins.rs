@@ -81,6 +81,7 @@ pub(in crate::collocation) fn solve_pull_ins(
         robot,
         &first.tensions(),
         Some(&first),
+        options.residual_tolerance,
         |r, warm| match (std::mem::replace(&mut near, true), warm) {
             (true, Some(last)) => solve_near(r, options, last),
             _ => solve_assessed(r, options, warm, cache, false),
