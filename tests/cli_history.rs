@@ -129,14 +129,15 @@ fn a_list_with_a_second_range_warns_that_the_range_is_held() {
     let lines: Vec<&str> = csv.lines().collect();
     let c = column(lines[0], "tension_2");
     assert!(lines[1..].iter().all(|l| l.split(',').nth(c) == Some("0.5")), "{csv}");
-    // One range and a fixed value: nothing to warn about.
+    // One range marking the swept input and a fixed value: nothing to warn about (two
+    // single values are refused: `a_list_for_one_of_several_single_inputs_is_refused`).
     let out = run(
         &dir,
         &[
             "sweep",
             "robot.toml",
             "--tension",
-            "1=0",
+            "1=0:1:2",
             "--tension",
             "2=0.5",
             "--history",
