@@ -125,8 +125,23 @@ impl Solution {
     /// exponential in the turning angle there; docs/friction.md). None for a tendon index
     /// out of range.
     pub fn tension_at(&self, i: usize, s: f64) -> Option<f64> {
+        let (points, tensions) = self.tension_points(i)?;
+        tension_between(&points, tensions, s)
+    }
+
+    /// [`Solution::tension_at`] at each arc length of `s`, the path's points found once
+    /// (the same values bit for bit).
+    pub(crate) fn tensions_at(&self, i: usize, s: impl Iterator<Item = f64>) -> Vec<Option<f64>> {
+        match self.tension_points(i) {
+            Some((points, tensions)) => s.map(|s| tension_between(&points, tensions, s)).collect(),
+            None => s.map(|_| None).collect(),
+        }
+    }
+
+    /// The arc lengths of the points of tendon `i`'s path (the nodes up to the tendon's end,
+    /// one per s) and its tensions there; None for a tendon index out of range.
+    fn tension_points(&self, i: usize) -> Option<(Vec<f64>, &[f64])> {
         let tensions = self.tendon_tensions.get(i)?;
-        // The arc lengths of the path's points: the nodes up to the tendon's end, one per s.
         let mut last = f64::NEG_INFINITY;
         let points: Vec<f64> = self
             .nodes
@@ -135,17 +150,7 @@ impl Solution {
             .filter(|&x| std::mem::replace(&mut last, x) < x)
             .take(tensions.len())
             .collect();
-        let (first, end) = (*points.first()?, *points.last()?);
-        let s = s.clamp(first, end);
-        let k = points
-            .iter()
-            .rposition(|&x| x <= s)?
-            .min(points.len().saturating_sub(2));
-        if points.len() < 2 || tensions[k] <= 0.0 || tensions[k + 1] <= 0.0 {
-            return Some(tensions[k]);
-        }
-        let t = (s - points[k]) / (points[k + 1] - points[k]);
-        Some(tensions[k] * (tensions[k + 1] / tensions[k]).powf(t))
+        Some((points, tensions))
     }
 
     /// The tip node.
@@ -192,6 +197,22 @@ impl Solution {
     }
 }
 
+/// The tension at arc length `s` (clamped to the path) of a path with the increasing
+/// `points` and the `tensions` there ([`Solution::tension_at`]).
+fn tension_between(points: &[f64], tensions: &[f64], s: f64) -> Option<f64> {
+    let (first, end) = (*points.first()?, *points.last()?);
+    let s = s.clamp(first, end);
+    let k = points
+        .iter()
+        .rposition(|&x| x <= s)?
+        .min(points.len().saturating_sub(2));
+    if points.len() < 2 || tensions[k] <= 0.0 || tensions[k + 1] <= 0.0 {
+        return Some(tensions[k]);
+    }
+    let t = (s - points[k]) / (points[k + 1] - points[k]);
+    Some(tensions[k] * (tensions[k + 1] / tensions[k]).powf(t))
+}
+
 /// The state at arc length `s` (m) interpolated between the `nodes` of a solution (what
 /// [`Solution::at_limit`] returns), choosing the left limit at a jump when `left` is set.
 pub(crate) fn at_limit(nodes: &[Node], s: f64, left: bool) -> State {
@@ -223,9 +244,21 @@ pub(crate) fn interval(nodes: &[Node], s: f64, left: bool) -> (usize, [f64; 4]) 
         b > a && if left { a < s && s <= b } else { a <= s && s < b }
     };
     let last = nodes.len() - 2;
-    let k = (0..=last)
-        .find(|&i| inside(i))
-        .unwrap_or(if left || s > 0.0 { last } else { 0 });
+    // A mesh's node arc lengths increase (repeated at a jump), so at most one interval of
+    // positive length holds s, the one from the last node at or before s (before s for
+    // the left limit): found by bisection. Where that one does not hold s (s at or past
+    // an end), the search through all of them, which finds none either.
+    let before = if left {
+        nodes.partition_point(|n| n.s < s)
+    } else {
+        nodes.partition_point(|n| n.s <= s)
+    };
+    let k = match before.checked_sub(1).filter(|&i| i <= last && inside(i)) {
+        Some(i) => i,
+        None => (0..=last)
+            .find(|&i| inside(i))
+            .unwrap_or(if left || s > 0.0 { last } else { 0 }),
+    };
     let t = (s - nodes[k].s) / (nodes[k + 1].s - nodes[k].s);
     let weights = [
         2.0 * t * t * t - 3.0 * t * t + 1.0,
@@ -234,4 +267,100 @@ pub(crate) fn interval(nodes: &[Node], s: f64, left: bool) -> (usize, [f64; 4]) 
         t * t * t - t * t,
     ];
     (k, weights)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A node at arc length `s` (the rest zero, identity rotation: `interval` reads s only).
+    fn node(s: f64) -> Node {
+        Node {
+            s,
+            p: Vector3::zeros(),
+            R: Matrix3::identity(),
+            v: Vector3::zeros(),
+            u: Vector3::zeros(),
+            v_s: Vector3::zeros(),
+            u_s: Vector3::zeros(),
+            n: Vector3::zeros(),
+            m: Vector3::zeros(),
+        }
+    }
+
+    /// `interval`'s search through every interval in order, as it was before the
+    /// bisection: the first interval of positive length holding s.
+    fn searched(nodes: &[Node], s: f64, left: bool) -> usize {
+        let inside = |i: usize| {
+            let (a, b) = (nodes[i].s, nodes[i + 1].s);
+            b > a && if left { a < s && s <= b } else { a <= s && s < b }
+        };
+        let last = nodes.len() - 2;
+        (0..=last)
+            .find(|&i| inside(i))
+            .unwrap_or(if left || s > 0.0 { last } else { 0 })
+    }
+
+    /// The bisection finds the interval the search in order finds, with its weights bit for
+    /// bit, on meshes with jumps (a repeated arc length, at the start, inside and at the
+    /// end) for arc lengths at every node, between nodes, at and past the ends and NaN,
+    /// both limits.
+    #[test]
+    fn the_bisection_finds_the_interval_of_the_search() {
+        let meshes: [&[f64]; 4] = [
+            &[0.0, 0.1, 0.2, 0.35, 0.5],
+            &[0.0, 0.1, 0.2, 0.2, 0.35, 0.5],
+            &[0.0, 0.0, 0.1, 0.2, 0.2, 0.2, 0.3, 0.3],
+            &[0.0, 0.5],
+        ];
+        let mut checked = 0;
+        for s in meshes {
+            let nodes: Vec<Node> = s.iter().map(|&s| node(s)).collect();
+            let mut at: Vec<f64> = s.to_vec();
+            at.extend(s.windows(2).map(|w| 0.5 * (w[0] + w[1])));
+            at.extend(s.windows(2).map(|w| w[0] + 1e-3 * (w[1] - w[0])));
+            at.extend([-0.1, 0.7, f64::NAN, 1e-300]);
+            for &x in &at {
+                for left in [false, true] {
+                    let (k, weights) = interval(&nodes, x, left);
+                    assert_eq!(k, searched(&nodes, x, left), "{x} left {left} on {s:?}");
+                    let (a, b) = (nodes[k].s, nodes[k + 1].s);
+                    let t = (x - a) / (b - a);
+                    let want = [
+                        2.0 * t * t * t - 3.0 * t * t + 1.0,
+                        t * t * t - 2.0 * t * t + t,
+                        -2.0 * t * t * t + 3.0 * t * t,
+                        t * t * t - t * t,
+                    ];
+                    let bits = |w: &[f64; 4]| w.map(f64::to_bits);
+                    assert_eq!(bits(&weights), bits(&want));
+                    checked += 1;
+                }
+            }
+        }
+        assert!(checked > 100, "{checked}");
+    }
+
+    /// The tensions along a path found once ([`Solution::tensions_at`]) are
+    /// [`Solution::tension_at`]'s bit for bit, on the prototype with friction on tendon 1 at
+    /// 2.94 N.
+    #[test]
+    fn tensions_along_a_path_are_the_tension_at_each_point() {
+        let mut robot = crate::cases::prototype().with_tensions(&[2.94, 0.0, 0.0, 0.0, 0.0]);
+        robot.tendons[0].friction = Some(crate::Friction::pull(0.1));
+        let solution = crate::collocation::solve(&robot, &Default::default()).unwrap();
+        let length = robot.length();
+        let s: Vec<f64> = (0..=200).map(|k| length * (k as f64 / 180.0 - 0.05)).collect();
+        for i in 0..robot.tendons.len() + 1 {
+            let along = solution.tensions_at(i, s.iter().copied());
+            assert_eq!(along.len(), s.len());
+            for (&x, got) in s.iter().zip(along) {
+                assert_eq!(got.map(f64::to_bits), solution.tension_at(i, x).map(f64::to_bits));
+            }
+        }
+        // Tendon 1's tension falls along it (pulled in against friction around its bend), so
+        // the comparison sees the interpolation, not one value everywhere.
+        let t = solution.tensions_at(0, [0.0, 0.5 * length].into_iter());
+        assert!(t[0].unwrap() > t[1].unwrap(), "{t:?}");
+    }
 }

@@ -13,14 +13,23 @@
 //! step's with the step's multipliers and rows, and the verdict is [`super::friction::assess`]
 //! on the step's bordered Jacobian, evaluated and factored at the answer.
 
+use super::{KRYLOV, Vibration};
 use crate::Robot;
 use crate::collocation::friction::history::{Carried, Settled};
-use crate::collocation::friction::{Capstan, Profile};
-use crate::collocation::system::System;
+use crate::collocation::friction::{Capstan, Kept, Profile};
+use crate::collocation::system::{System, SystemBuffers};
 use crate::model::equations::Model;
 use crate::report::{SolveReport, Stability};
 use crate::solution::Solution;
+use std::cell::RefCell;
 use std::time::Instant;
+
+thread_local! {
+    /// What the last verdict's border on this thread left for the next one
+    /// ([`border_kept`]): its system's sites and its staircase and Jacobian buffers. A
+    /// history builds one border per step, on its mesh or a step's split mesh.
+    static KEPT: RefCell<Option<(SystemBuffers, Kept)>> = const { RefCell::new(None) };
+}
 
 /// The scope of a history step's verdict, noted on every step that has one
 /// (docs/stability.md, "Tendons with friction"): the full-slip note's, with the stuck
@@ -43,6 +52,44 @@ pub(super) fn border<'r>(robot: &'r Robot, settled: &Settled) -> Capstan<'r> {
     Capstan::new(system)
 }
 
+/// [`border`] in the buffers the last verdict's border on this thread left, which `f`
+/// reads (each only where it is this one's: the sites where their inputs are the same bit
+/// for bit, [`System::with_buffers`]; the staircase where the mesh's log tensions sit at
+/// the same nodes, [`Capstan::with_kept`]), and then leaves in turn.
+fn border_kept<R>(robot: &Robot, settled: &Settled, f: impl FnOnce(&mut Capstan) -> R) -> R {
+    let (sites, kept) = KEPT.with_borrow_mut(Option::take).unwrap_or_default();
+    let model = Model::new(robot);
+    let mut system = System::with_buffers(&model, settled.mesh.clone(), sites);
+    let mut profile = Profile::new(&model, &system.mesh);
+    profile.z.clone_from(&settled.z);
+    profile.grips = Some(settled.grips.clone());
+    system.friction = Some(profile);
+    let mut border = Capstan::with_kept(system, kept);
+    let out = f(&mut border);
+    let (system, kept) = border.into_kept();
+    let (_, sites) = system.into_parts();
+    KEPT.set(Some((sites, kept)));
+    out
+}
+
+/// The linearized dynamics of the step `settled` of `robot` with its pattern held (module
+/// docs; `krylov` Arnoldi steps, all of them when `all`, as [`super::modes`] takes them):
+/// the bordered Jacobian evaluated and factored at the answer (counted in `report`), in a
+/// border built in the last verdict's buffers ([`border_kept`]).
+fn held_modes(robot: &Robot, settled: &Settled, krylov: usize, all: bool, report: &mut SolveReport) -> Vibration {
+    border_kept(robot, settled, |border| {
+        match super::friction::factor_at(border, &settled.x, report) {
+            Ok(multipliers) => {
+                super::friction::modes_held(border, &settled.x, krylov, all, Some(&multipliers), &mut |_, _| true)
+            }
+            Err(stability) => Vibration {
+                stability,
+                eigenvalues: Vec::new(),
+            },
+        }
+    })
+}
+
 /// The verdict of the history step `carried` last solved for `robot` (its answer's report
 /// `report`): the linearized dynamics with the step's pattern held (module docs), the
 /// bordered Jacobian evaluated and factored at the answer (counted in `report`), and the
@@ -50,10 +97,7 @@ pub(super) fn border<'r>(robot: &'r Robot, settled: &Settled) -> Capstan<'r> {
 pub(crate) fn assess_step(robot: &Robot, carried: &Carried, report: &mut SolveReport) {
     let t = Instant::now();
     report.stability = match carried.settled.as_ref() {
-        Some(settled) => {
-            let mut border = border(robot, settled);
-            super::friction::assess(&mut border, &settled.x, false, report)
-        }
+        Some(settled) => held_modes(robot, settled, KRYLOV, false, report).stability,
         None => unassessed(),
     };
     close(report, t);
@@ -100,7 +144,7 @@ mod tests {
     use super::*;
     use crate::analysis::sweep::{Input, Ranges};
     use crate::collocation::dynamics::friction::{factor_at, modes_held};
-    use crate::collocation::dynamics::{KRYLOV_MODES, Vibration, vibration};
+    use crate::collocation::dynamics::{KRYLOV_MODES, vibration};
     use crate::collocation::friction::history::{start, step};
     use crate::model::parameter::Parameter;
     use crate::model::tendon::{Friction, Motion};
@@ -121,6 +165,63 @@ mod tests {
             Some(&multipliers),
             &mut |_, _| true,
         )
+    }
+
+    /// The modes of the step `carried` last solved for `robot` from `krylov` Arnoldi steps
+    /// (all of them when `all`), in a border built afresh.
+    fn fresh_modes(robot: &Robot, carried: &Carried, krylov: usize, all: bool) -> Vibration {
+        let settled = carried.settled.as_ref().unwrap();
+        let mut border = border(robot, settled);
+        let mut report = SolveReport::new(crate::report::Method::Collocation);
+        let multipliers = factor_at(&mut border, &settled.x, &mut report).ok().unwrap();
+        modes_held(&mut border, &settled.x, krylov, all, Some(&multipliers), &mut |_, _| {
+            true
+        })
+    }
+
+    /// A verdict in the buffers the verdict before left (its system's sites, staircase and
+    /// Jacobian buffers: [`border_kept`]) is the one in a border built afresh, eigenvalues
+    /// bit for bit, the verdict's own Arnoldi run and the full one: the pull-release loop's
+    /// first 14 steps (full slip, then stuck on split meshes, so that the buffers pass
+    /// between meshes of different sizes), each assessed twice in turn.
+    #[test]
+    fn a_verdict_in_kept_buffers_is_the_fresh_one_bit_for_bit() {
+        let values: Vec<f64> = (0..=10).map(|k| 4.91 * k as f64 / 10.0).collect();
+        let ranges = Ranges::new(prototype(0.1), vec![(Input::Parameter(Parameter::Tension(0)), values)])
+            .unwrap()
+            .up_down();
+        let options = Default::default();
+        let robots: Vec<Robot> = (0..14).map(|k| ranges.robot(k as f64).unwrap()).collect();
+        let mut carried = start(&robots, &options).unwrap();
+        let bits = |v: &Vibration| -> Vec<u64> {
+            v.eigenvalues
+                .iter()
+                .flat_map(|c| [c.re.to_bits(), c.im.to_bits()])
+                .collect()
+        };
+        let (mut stuck_steps, mut sizes) = (0, std::collections::BTreeSet::new());
+        for robot in &robots {
+            let (_, zones) = step(robot, &options, &mut carried).unwrap();
+            let settled = carried.settled.as_ref().unwrap();
+            sizes.insert(settled.x.len());
+            for (krylov, all) in [(KRYLOV, false), (KRYLOV_MODES, true)] {
+                let fresh = fresh_modes(robot, &carried, krylov, all);
+                assert!(!fresh.eigenvalues.is_empty());
+                for _ in 0..2 {
+                    let mut report = SolveReport::new(crate::report::Method::Collocation);
+                    let kept = held_modes(robot, settled, krylov, all, &mut report);
+                    assert_eq!(kept.stability, fresh.stability);
+                    assert_eq!(bits(&kept), bits(&fresh));
+                    assert_eq!(report.evaluations.jacobian, 1);
+                }
+            }
+            stuck_steps += usize::from(zones.iter().any(|(_, z)| {
+                z.iter()
+                    .any(|(_, _, c)| *c == crate::collocation::friction::Contact::Stick)
+            }));
+        }
+        assert!(stuck_steps >= 3, "{stuck_steps} stuck steps");
+        assert!(sizes.len() >= 3, "meshes of {sizes:?} nodes");
     }
 
     /// The history of `ranges` solved step by step: per step its robot, the answer's

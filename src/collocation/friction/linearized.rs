@@ -13,6 +13,16 @@
 
 use super::*;
 
+/// What a border leaves for the next one built for a verdict ([`Capstan::into_kept`],
+/// [`Capstan::with_kept`]): its staircase (whose buffers fit a mesh with the same log
+/// tensions at its nodes) and the residual and Jacobian buffers of
+/// [`Capstan::factor_at`]. A history's verdicts build one border per step.
+#[derive(Default)]
+pub(crate) struct Kept {
+    pub(super) stairs: Option<Staircase>,
+    pub(super) at_buffers: (Vec<f64>, Vec<f64>),
+}
+
 impl<'r> Capstan<'r> {
     /// The border without rows of `system`, a system without friction built elsewhere
     /// (what [`Capstan::at_solution`] gives for a model without friction).
@@ -93,19 +103,39 @@ impl<'r> Capstan<'r> {
     /// A model breakdown at a visited state or a border block that is not finite.
     pub(crate) fn factor_at(&mut self, x: &[State], report: &mut SolveReport) -> Result<bool> {
         let t = Instant::now();
-        let mut residual = vec![0.0; self.system.unknowns() + self.z.len()];
-        let mut values = vec![0.0; unknowns::nonzeros(&self.system.mesh)];
+        // Zeroed, in the buffers a border before may have left ([`Capstan::with_kept`]).
+        let (mut residual, mut values) = std::mem::take(&mut self.at_buffers);
+        for (buffer, len) in [
+            (&mut residual, self.system.unknowns() + self.z.len()),
+            (&mut values, unknowns::nonzeros(&self.system.mesh)),
+        ] {
+            buffer.clear();
+            buffer.resize(len, 0.0);
+        }
         // The verdict's mass reads eq. 13 with friction at the same points.
         self.keep_responses(true);
         let evaluated = self.evaluate(x, &mut residual, &mut values);
         self.keep_responses(false);
-        evaluated?;
-        report.evaluations.jacobian += 1;
-        report.timings.assembly += t.elapsed();
-        let t = Instant::now();
-        let ok = self.factor(&values);
-        report.timings.factorization += t.elapsed();
-        Ok(ok)
+        let ok = evaluated.map(|()| {
+            report.evaluations.jacobian += 1;
+            report.timings.assembly += t.elapsed();
+            let t = Instant::now();
+            let ok = self.factor(&values);
+            report.timings.factorization += t.elapsed();
+            ok
+        });
+        self.at_buffers = (residual, values);
+        ok
+    }
+
+    /// The system, and the staircase and buffers for a later border on this thread
+    /// ([`Capstan::with_kept`]).
+    pub(crate) fn into_kept(self) -> (System<'r>, Kept) {
+        let kept = Kept {
+            stairs: Some(self.stairs),
+            at_buffers: self.at_buffers,
+        };
+        (self.system, kept)
     }
 
     /// Factors the bordered Jacobian at `x` into the staircase from the backbone Jacobian

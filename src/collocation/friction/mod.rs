@@ -41,6 +41,7 @@ pub use grip::Contact;
 pub(crate) use grip::Grip;
 pub(crate) use group::intervals4;
 pub(crate) use interval::{IntervalLinearization, Profile, interval};
+pub(crate) use linearized::Kept;
 pub(crate) use order6::{Order6, interval_order6};
 pub(crate) use order6_lanes::intervals4_order6;
 pub(in crate::collocation) use pull_ins::solve_pull_ins;
@@ -125,12 +126,22 @@ pub(crate) struct Capstan<'r> {
     node_slips: Vec<Vec<usize>>,
     /// The factors of the bordered matrix reordered node by node ([`Staircase`]).
     stairs: Staircase,
+    /// The residual and Jacobian buffers of [`Capstan::factor_at`], kept for a later
+    /// border ([`Capstan::into_kept`]).
+    at_buffers: (Vec<f64>, Vec<f64>),
 }
 
 impl<'r> Capstan<'r> {
     /// The border of `system`'s tendons with friction (its profile's log tensions and, in a
     /// history, contacts), unfactored.
     pub(crate) fn new(system: System<'r>) -> Self {
+        Self::with_kept(system, Kept::default())
+    }
+
+    /// [`Capstan::new`] in the buffers an earlier border left ([`Capstan::into_kept`]): its
+    /// staircase where it has this mesh's shape ([`Staircase::fits`]; not factored), and
+    /// the buffers of [`Capstan::factor_at`].
+    pub(crate) fn with_kept(system: System<'r>, kept: Kept) -> Self {
         let profile = system.friction.as_ref().map_or_else(Vec::new, |p| p.spans.clone());
         let mut offsets = Vec::with_capacity(profile.len());
         let mut m = 0;
@@ -168,12 +179,16 @@ impl<'r> Capstan<'r> {
             // Without friction nothing factors the bordered matrix (`Capstan::factor` returns
             // at once without a profile, and a staircase never factored solves nothing): an
             // empty one, which allocates nothing, not one step per node.
-            stairs: if frictionless {
-                Staircase::default()
-            } else {
-                Staircase::new(&extra)
+            stairs: match kept.stairs {
+                _ if frictionless => Staircase::default(),
+                Some(mut stairs) if stairs.fits(&extra) => {
+                    stairs.ready = false;
+                    stairs
+                }
+                _ => Staircase::new(&extra),
             },
             node_slips,
+            at_buffers: kept.at_buffers,
         };
         border.reload();
         border

@@ -80,6 +80,13 @@ pub(crate) struct Staircase {
 }
 
 impl Staircase {
+    /// Whether this is the staircase of a mesh whose node n carries `extra[n]` log-tension
+    /// unknowns ([`Staircase::new`]): every buffer and step then has the shape a new one
+    /// would have, and a factorization overwrites what its solves read.
+    pub(crate) fn fits(&self, extra: &[usize]) -> bool {
+        self.columns.len() == extra.len() && self.columns.iter().zip(extra).all(|(&c, &e)| c == NODE + e)
+    }
+
     /// The staircase of a mesh whose node n carries `extra[n]` log-tension unknowns
     /// (`extra[0]` must be 0: the log tensions are 0 at the base).
     pub(crate) fn new(extra: &[usize]) -> Self {

@@ -119,7 +119,7 @@ impl System<'_> {
     ///
     /// # Errors
     /// A model breakdown at node k.
-    pub(super) fn friction_group(
+    pub(crate) fn friction_group(
         &self,
         profile: &Profile,
         k: usize,
