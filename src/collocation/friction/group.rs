@@ -79,6 +79,10 @@ fn intervals4_kernel(
     if x.len() < 5 || profile.slipping.len() > 1 {
         return Ok(None);
     }
+    // A stuck link with per-point multipliers is evaluated alone.
+    if (0..4).any(|l| (0..profile.count()).any(|j| profile.sigma(j, k + l).is_some())) {
+        return Ok(None);
+    }
     let multipliers: [Option<Vec<f64>>; 4] = std::array::from_fn(|j| profile.multipliers(k + j));
     let w: [Option<&[f64]>; 4] = std::array::from_fn(|j| multipliers[j].as_deref());
     let group = Group {
@@ -176,7 +180,7 @@ impl Group<'_, '_> {
                 segment_end,
                 &x[l],
                 &x[l + 1],
-                moved_w[l],
+                moved_w[l].map(|w| [w; 3]),
                 None,
             )?;
             *row = lin.residual;
@@ -238,7 +242,7 @@ impl Group<'_, '_> {
                 segment_end,
                 a: &x[j],
                 b: &x[j + 1],
-                w: w[j],
+                w: w[j].map(|w| [w; 3]),
             };
             let links = [link(0), link(1), link(2), link(3)];
             let [s0, s1, s2, s3] = &mut scratch;
@@ -368,7 +372,7 @@ impl Group<'_, '_> {
             segment_end,
             a: &x[j],
             b: &x[j + 1],
-            w: w[j],
+            w: w[j].map(|w| [w; 3]),
         };
         let links = [link(0), link(1), link(2), link(3)];
         let start_of: [&FrictionLinearization; 4] = match (&first, &starts) {
@@ -643,6 +647,7 @@ mod tests {
             capacities: (0..links).map(capacity).collect(),
             reference: setup.x.iter().map(|n| 0.999 * (1.0 + 1e-3 * n.s)).collect(),
             kinks: Vec::new(),
+            points: Vec::new(),
             contacts,
         };
         let varied = |n: usize| 0.05 + 0.01 * n as f64;
@@ -703,6 +708,7 @@ mod tests {
             capacities: vec![0.05; links],
             reference: setup.x.iter().map(|n| 0.999 * (1.0 + 1e-3 * n.s)).collect(),
             kinks: Vec::new(),
+            points: Vec::new(),
             contacts: vec![Contact::Stick; links],
         }]);
         let sites: [&IntervalSites; 4] = std::array::from_fn(|j| &setup.sites[j]);

@@ -46,13 +46,23 @@ fn parts(before: &Carried, level: u32, graded: bool, last: &StepAnswer, boundari
         return vec![full; nodes.len() - 1];
     }
     let sliding = 1 << level.saturating_sub(2);
+    let pointwise = before.grips.len() == 1;
     let fine: Vec<bool> = nodes
         .windows(2)
         .map(|pair| {
             let (a, b) = (pair[0].s, pair[1].s);
+            // With per-point multipliers (one tendon with friction) a stuck link is of
+            // order 4 as a sliding one: only the links at the boundary, where the
+            // stretches meet, are cut at the full rate (docs/friction.md section 8, "ord23").
             let stuck = last.1.iter().any(|(_, list)| {
-                list.iter()
-                    .any(|&(start, end, c)| c == Contact::Stick && start < b && end > a)
+                list.iter().any(|&(start, end, c)| {
+                    c == Contact::Stick
+                        && if pointwise {
+                            start >= a && start <= b
+                        } else {
+                            start < b && end > a
+                        }
+                })
             });
             stuck || boundaries.iter().any(|&e| e >= a && e <= b)
         })
@@ -61,7 +71,7 @@ fn parts(before: &Carried, level: u32, graded: bool, last: &StepAnswer, boundari
     // reads three nodes on each side of it, at the fine spacing.
     (0..fine.len())
         .map(|k| {
-            if fine[k] || fine.get(k + 1) == Some(&true) {
+            if fine[k] || fine.get(k + 1) == Some(&true) || (pointwise && k > 0 && fine[k - 1]) {
                 full
             } else {
                 sliding
@@ -107,7 +117,20 @@ pub(super) fn refine(
             break;
         }
         let mut fine = split(robot, before, &parts, &best.0, &boundaries)?;
-        let (next, _) = solve_on(robot, options, &mut fine, None)?;
+        let next = match solve_on(robot, options, &mut fine, None) {
+            Ok((next, _)) => next,
+            // The per-point multipliers can leave a near tie at the placed boundary node
+            // that the march does not settle (docs/friction.md section 8, "ord23"): the
+            // level is solved again with the constant multiplier.
+            Err(_) if fine.grips.iter().any(|g| !g.points.is_empty()) => {
+                fine = split(robot, before, &parts, &best.0, &boundaries)?;
+                for grip in &mut fine.grips {
+                    grip.points.clear();
+                }
+                solve_on(robot, options, &mut fine, None)?.0
+            }
+            Err(e) => return Err(e),
+        };
         spent.add_mesh_work(&next.0.report);
         reached = level;
         let estimate = difference(&best.0, &next.0);
@@ -352,6 +375,19 @@ pub(super) fn split(
                 .map(|node| lagrange(&coarse[..=links], &old.reference[..=links], &old.kinks, node.s, 6))
                 .collect(),
             kinks: old.kinks.clone(),
+            points: (0..span)
+                .map(|l| {
+                    let (a, b) = (mesh.nodes[l].s, mesh.nodes[l + 1].s);
+                    let m = 0.5 * (a + b);
+                    let (s, v) = (&coarse[..=links], &old.reference[..=links]);
+                    [
+                        lagrange_slope(s, v, &old.kinks, a, m),
+                        lagrange(s, v, &old.kinks, m, 6),
+                        lagrange_slope(s, v, &old.kinks, m, m),
+                        lagrange_slope(s, v, &old.kinks, b, m),
+                    ]
+                })
+                .collect(),
         });
     }
     Ok(Carried {
@@ -472,6 +508,56 @@ fn lagrange(s: &[f64], values: &[f64], kinks: &[Kink], at: f64, points: usize) -
                 .map(|(_, &(sb, _))| (at - sb) / (sa - sb))
                 .product();
             weight * value
+        })
+        .sum()
+}
+
+/// The slope (1/m) at `at` of the quintic [`lagrange`] reads the carried material with,
+/// on the smooth piece that holds `within` (a point of the same link: at a kink the link's
+/// own side), through the six points of that piece nearest to `within`: lambda' for the
+/// stuck links' per-point multipliers (docs/friction.md section 8, "ord23").
+fn lagrange_slope(s: &[f64], values: &[f64], kinks: &[Kink], at: f64, within: f64) -> f64 {
+    let below = kinks.iter().rfind(|k| k.0 <= within);
+    let above = kinks.iter().find(|k| k.0 > within);
+    let (lo, hi) = (
+        below.map_or(f64::NEG_INFINITY, |k| k.0),
+        above.map_or(f64::INFINITY, |k| k.0),
+    );
+    let piece: Vec<(f64, f64)> = below
+        .map(|&(e, _, after)| (e, after))
+        .into_iter()
+        .chain(
+            s.iter()
+                .copied()
+                .zip(values.iter().copied())
+                .filter(|&(x, _)| x > lo && x < hi),
+        )
+        .chain(above.map(|&(e, before, _)| (e, before)))
+        .collect();
+    let n = piece.len();
+    let points = 6.min(n);
+    if points < 2 {
+        return 0.0;
+    }
+    let k = piece.iter().rposition(|p| p.0 <= within).unwrap_or(0);
+    let first = (k + 1).saturating_sub(points / 2).min(n - points);
+    let stencil = &piece[first..first + points];
+    // d/dx of sum_a v_a prod_{b != a} (x - s_b) / (s_a - s_b).
+    stencil
+        .iter()
+        .enumerate()
+        .map(|(a, &(sa, value))| {
+            let slope: f64 = (0..points)
+                .filter(|&c| c != a)
+                .map(|c| {
+                    let rest: f64 = (0..points)
+                        .filter(|&b| b != a && b != c)
+                        .map(|b| (at - stencil[b].0) / (sa - stencil[b].0))
+                        .product();
+                    rest / (sa - stencil[c].0)
+                })
+                .sum();
+            slope * value
         })
         .sum()
 }
