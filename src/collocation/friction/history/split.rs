@@ -6,7 +6,9 @@
 //! plus the error the carried material's interpolation leaves ([`material_error`]), which
 //! every level shares. On each level the split node nearest each tendon's stick/slip
 //! boundary (estimated from the last level's tensions, [`boundaries`]) is moved onto it, so
-//! the kink of the tension lies at a node and the step is of order 2 over the levels. The
+//! the kink of the tension lies at a node and the step is of order 4 over the levels with
+//! the stuck links' per-point multipliers (one tendon with friction; order 2 with the
+//! constant multiplier of two or more, docs/friction.md section 8, "ord23"). The
 //! history's own mesh is a subset of every split mesh, so the material the step leaves is
 //! handed back to it at its nodes exactly.
 
@@ -20,8 +22,9 @@ use crate::solution::Solution;
 use nalgebra::Vector3;
 
 /// Most splits of a stuck step's links: 2^6 = 64 parts per link. With a node at the
-/// stick/slip boundary a stuck step's split differences fall about 4 times per level
-/// (order 2, docs/friction.md section 8), so 64 parts cut a step's error about 4 000
+/// stick/slip boundary a stuck step's split differences fall about 4 times per level with
+/// the constant multiplier (order 2, docs/friction.md section 8; 16 to 25 times with the
+/// per-point ones), so 64 parts cut a step's error at least about 4 000
 /// times; a step that still misses its tolerance (or would need more than
 /// `max_intervals`) reports so.
 const LEVELS: u32 = 6;
@@ -32,13 +35,15 @@ const SLIDING_SEEN: u32 = 3;
 
 /// How many parts each link of `before`'s mesh is cut into on split level `level` after
 /// the answer `last` (the last level's, or the step's on the history's mesh) with its
-/// stick/slip `boundaries`. Uniform (`graded` false): 2^level. Graded: 2^level where a
-/// tendon sticks on the link in `last` or a boundary lies on it, and on the link before
-/// such a one; 2^(level - 2) (at least one) on the other links, where every tendon
-/// slides. A stuck link's multiplier is constant across it, so the step's error is of
-/// order 2 there and order 4 on the sliding links, whose error on the history's mesh is
-/// already that of a step that slides all along (docs/friction.md section 8, "Graded
-/// levels").
+/// stick/slip `boundaries`. Uniform (`graded` false): 2^level. Graded: 2^level on the
+/// fine links, 2^(level - 2) (at least one) on the others. With one tendon with friction
+/// the stuck links take per-point multipliers and are of order 4 like the sliding ones,
+/// whose error on the history's mesh is already that of a step that slides all along: the
+/// fine links are those where a stuck stretch of `last` starts or a boundary lies, and
+/// their neighbours (docs/friction.md section 8, "ord23"). With two or more a stuck
+/// link's multiplier is constant across it (order 2): the fine links are those where a
+/// tendon sticks in `last` or a boundary lies, and the link before such a one
+/// ("Graded levels").
 fn parts(before: &Carried, level: u32, graded: bool, last: &StepAnswer, boundaries: &[f64]) -> Vec<usize> {
     let full = 1 << level;
     let nodes = &before.mesh.nodes;
@@ -159,8 +164,18 @@ pub(super) fn refine(
             Some(m) => m,
             None => material_error(robot, options, before, &mut fine, &best.0)?,
         };
+        // The answer's order: 4 where its stuck links took per-point multipliers (one
+        // tendon with friction, a level that settled with them), else 2.
+        let order = if fine.grips.iter().all(|g| !g.points.is_empty()) && fine.grips.len() == 1 {
+            4
+        } else {
+            2
+        };
         let report = &mut best.0.report;
-        report.error_estimate = report.error_estimate.map(|e| sum(&e, &material));
+        report.error_estimate = report.error_estimate.map(|e| ErrorEstimate {
+            order,
+            ..sum(&e, &material)
+        });
         report.tolerance = options.tolerance;
         // Cut short before the sliding links are cut again, the estimate cannot vouch for
         // them: the step says it misses its tolerance (docs/friction.md section 8).
@@ -261,7 +276,8 @@ fn material_error(
 
 /// The error estimate of the finer of two answers of a step: their difference. With an
 /// order p >= 1 the finer one's error is the difference / (2^p - 1), so this bounds it
-/// (at the order 2 the boundary node gives, by about 3 times; where the boundary moves
+/// (at the order 2 the boundary node gives with constant multipliers, by about 3 times,
+/// at order 4 by about 15; where the boundary moves
 /// between levels the order is irregular, and at order 1 the difference about equals it).
 /// [`material_error`] measures the material's error with it too.
 fn difference(coarse: &Solution, fine: &Solution) -> ErrorEstimate {
