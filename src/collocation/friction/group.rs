@@ -79,12 +79,10 @@ fn intervals4_kernel(
     if x.len() < 5 || profile.slipping.len() > 1 {
         return Ok(None);
     }
-    // A stuck link with per-point multipliers is evaluated alone.
-    if (0..4).any(|l| (0..profile.count()).any(|j| profile.sigma(j, k + l).is_some())) {
-        return Ok(None);
-    }
-    let multipliers: [Option<Vec<f64>>; 4] = std::array::from_fn(|j| profile.multipliers(k + j));
-    let w: [Option<&[f64]>; 4] = std::array::from_fn(|j| multipliers[j].as_deref());
+    // Each link's multipliers at its start, midpoint and end ([`Profile::point_multipliers`]).
+    let multipliers: [Option<[Vec<f64>; 3]>; 4] =
+        std::array::from_fn(|j| profile.multipliers(k + j).map(|w| profile.point_multipliers(k + j, &w)));
+    let w: Points = std::array::from_fn(|j| multipliers[j].as_ref().map(|p| [&p[0][..], &p[1][..], &p[2][..]]));
     let group = Group {
         profile,
         length,
@@ -121,6 +119,14 @@ fn intervals4_kernel(
     Ok(Some(out))
 }
 
+/// Each of four links' multipliers at its start, midpoint and end (None in full slip).
+type Points<'w> = [Option<[&'w [f64]; 3]>; 4];
+
+/// The four links' multipliers at their point `p` (0 start, 1 midpoint, 2 end).
+fn at(w: Points<'_>, p: usize) -> [Option<&[f64]>; 4] {
+    w.map(|w| w.map(|w| w[p]))
+}
+
 /// Four consecutive links of one segment: link k + l in lane l.
 struct Group<'g, 'p> {
     profile: &'g Profile<'p>,
@@ -140,23 +146,20 @@ impl Group<'_, '_> {
     /// # Errors
     /// A model breakdown at a point of a moved link.
     #[inline(always)]
-    fn moved_rows(
-        &self,
-        w: [Option<&[f64]>; 4],
-        j: usize,
-        stuck: &[Option<f64>; 4],
-        step: f64,
-    ) -> Result<[Block<f64>; 4]> {
-        let moved: [Option<Vec<f64>>; 4] = std::array::from_fn(|l| {
+    fn moved_rows(&self, w: Points, j: usize, stuck: &[Option<f64>; 4], step: f64) -> Result<[Block<f64>; 4]> {
+        let moved: [Option<[Vec<f64>; 3]>; 4] = std::array::from_fn(|l| {
             w[l].map(|w| {
-                let mut w = w.to_vec();
-                if stuck[l].is_some() {
-                    w[j] += step;
-                }
-                w
+                let sigma = self.profile.sigma(j, self.k + l);
+                std::array::from_fn(|p| {
+                    let mut w = w[p].to_vec();
+                    if stuck[l].is_some() {
+                        w[j] += sigma.map_or(step, |sigma| step * sigma[p]);
+                    }
+                    w
+                })
             })
         });
-        let moved_w: [Option<&[f64]>; 4] = std::array::from_fn(|l| moved[l].as_deref());
+        let moved_w: Points = std::array::from_fn(|l| moved[l].as_ref().map(|p| [&p[0][..], &p[1][..], &p[2][..]]));
         if let Some(rows) = self.rows(moved_w) {
             return Ok(std::array::from_fn(|l| {
                 if stuck[l].is_some() { rows[l] } else { Block::zeros() }
@@ -180,7 +183,7 @@ impl Group<'_, '_> {
                 segment_end,
                 &x[l],
                 &x[l + 1],
-                moved_w[l].map(|w| [w; 3]),
+                moved_w[l],
                 None,
             )?;
             *row = lin.residual;
@@ -193,7 +196,7 @@ impl Group<'_, '_> {
     /// them) at the slips' multipliers `w`, each link's start evaluated at its own: the
     /// rows [`Group::evaluate`] gives there. None where the lanes decline a point.
     #[inline(always)]
-    fn rows(&self, w: [Option<&[f64]>; 4]) -> Option<[Block<f64>; 4]> {
+    fn rows(&self, w: Points) -> Option<[Block<f64>; 4]> {
         let Group {
             profile,
             length,
@@ -218,7 +221,7 @@ impl Group<'_, '_> {
             segment_end,
             [state(0), state(1), state(2), state(3)],
             [&scratch[0].za, &scratch[1].za, &scratch[2].za, &scratch[3].za],
-            w,
+            at(w, 0),
             (false, None),
         );
         let ends = starts.as_ref().and_then(|_| {
@@ -228,7 +231,7 @@ impl Group<'_, '_> {
                 segment_end,
                 [state(1), state(2), state(3), state(4)],
                 [&scratch[0].zb, &scratch[1].zb, &scratch[2].zb, &scratch[3].zb],
-                w,
+                at(w, 2),
                 (false, None),
             )
         });
@@ -242,7 +245,7 @@ impl Group<'_, '_> {
                 segment_end,
                 a: &x[j],
                 b: &x[j + 1],
-                w: w[j].map(|w| [w; 3]),
+                w: w[j],
             };
             let links = [link(0), link(1), link(2), link(3)];
             let [s0, s1, s2, s3] = &mut scratch;
@@ -260,7 +263,7 @@ impl Group<'_, '_> {
                 segment_end,
                 [mid(0), mid(1), mid(2), mid(3)],
                 [&scratch[0].zm, &scratch[1].zm, &scratch[2].zm, &scratch[3].zm],
-                w,
+                at(w, 1),
                 (false, None),
             ) {
                 rows = Some(std::array::from_fn(|j| value_rows(&links[j], &fronts[j], &mids[j])));
@@ -284,7 +287,7 @@ impl Group<'_, '_> {
     /// # Errors
     /// A model breakdown at node k where it is evaluated alone.
     #[inline(always)]
-    fn evaluate(&self, w: [Option<&[f64]>; 4], jac: Option<&mut [f64]>) -> Result<Option<[IntervalLinearization; 4]>> {
+    fn evaluate(&self, w: Points, jac: Option<&mut [f64]>) -> Result<Option<[IntervalLinearization; 4]>> {
         let Group {
             profile,
             length,
@@ -294,7 +297,8 @@ impl Group<'_, '_> {
             x,
         } = *self;
         let derivatives = jac.is_some();
-        let alike = w[1..].iter().all(|wl| *wl == w[0]);
+        // Alike: every link's multipliers the same at its three points and as the others'.
+        let alike = w.iter().all(|wl| *wl == w[0]) && w[0].is_none_or(|w| w[0] == w[1] && w[1] == w[2]);
         let mut scratch: [Box<LinkScratch>; 4] = [
             profile.take_scratch(),
             profile.take_scratch(),
@@ -317,7 +321,7 @@ impl Group<'_, '_> {
         // Link k's start alone (`first`) or the four starts at once (`starts`).
         let (first, starts) = if alike {
             let za = &scratch[0].za;
-            let first = profile.start_point(k, &sites[0].start, segment_end, &x[0], za, w[0], derivatives)?;
+            let first = profile.start_point(k, &sites[0].start, segment_end, &x[0], za, at(w, 0)[0], derivatives)?;
             (Some(first), None)
         } else {
             let Some(starts) = points4(
@@ -326,7 +330,7 @@ impl Group<'_, '_> {
                 segment_end,
                 [state(0), state(1), state(2), state(3)],
                 [&scratch[0].za, &scratch[1].za, &scratch[2].za, &scratch[3].za],
-                w,
+                at(w, 0),
                 (
                     derivatives,
                     inertia(sites.map(|s| &s.start), [&x[0].R, &x[1].R, &x[2].R, &x[3].R]),
@@ -350,7 +354,7 @@ impl Group<'_, '_> {
             segment_end,
             [state(1), state(2), state(3), state(4)],
             [&scratch[0].zb, &scratch[1].zb, &scratch[2].zb, &scratch[3].zb],
-            w,
+            at(w, 2),
             (
                 derivatives,
                 inertia(sites.map(|s| &s.end), [&x[1].R, &x[2].R, &x[3].R, &x[4].R]),
@@ -358,7 +362,7 @@ impl Group<'_, '_> {
         ) else {
             // Link k's start is kept for the one-link kernel that takes over.
             if let Some(first) = first {
-                profile.keep_point(k, segment_end, &x[0], &scratch[0].za, w[0], derivatives, first);
+                profile.keep_point(k, segment_end, &x[0], &scratch[0].za, at(w, 0)[0], derivatives, first);
             }
             give_starts(None, starts);
             give_scratch(scratch);
@@ -372,7 +376,7 @@ impl Group<'_, '_> {
             segment_end,
             a: &x[j],
             b: &x[j + 1],
-            w: w[j].map(|w| [w; 3]),
+            w: w[j],
         };
         let links = [link(0), link(1), link(2), link(3)];
         let start_of: [&FrictionLinearization; 4] = match (&first, &starts) {
@@ -395,7 +399,7 @@ impl Group<'_, '_> {
             segment_end,
             [mid(0), mid(1), mid(2), mid(3)],
             [&scratch[0].zm, &scratch[1].zm, &scratch[2].zm, &scratch[3].zm],
-            w,
+            at(w, 1),
             (
                 derivatives,
                 inertia(
@@ -420,7 +424,7 @@ impl Group<'_, '_> {
             back(&links[3], f3, [start_of[3], &mids[3], &ends[3]], block(), s3),
         ];
         let [e0, e1, e2, e3] = ends;
-        profile.keep_point(k + 4, segment_end, &x[4], &scratch[3].zb, w[3], derivatives, e3);
+        profile.keep_point(k + 4, segment_end, &x[4], &scratch[3].zb, at(w, 2)[3], derivatives, e3);
         give_starts(first, starts);
         for lin in [e0, e1, e2].into_iter().chain(mids) {
             profile.give(lin);
