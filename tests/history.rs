@@ -614,7 +614,7 @@ fn a_stuck_steps_last_level_settles_in_two_passes() {
     let first = &steps[11];
     assert!(first.zones[0].zones.iter().any(|z| z.contact == Contact::Stick));
     // The report counts every solve of the step: the history's mesh and the split levels
-    // (59, 113 and 226 intervals before ord23, 35, 38 and 82 since). Measured 26 in all (30 since ord23); while the last march's capacity was
+    // (59, 113 and 226 intervals before ord23, the last on 82 since). Measured 26 in all (30 since ord23); while the last march's capacity was
     // held over each Newton solve, the three levels alone took 14 + 14 + 11 = 39.
     let iterations = first.solution.report.iterations;
     assert!(

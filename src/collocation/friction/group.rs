@@ -19,11 +19,9 @@
 //! Kirchhoff rod's sites, a breakdown, a zero or NaN multiplier).
 #![allow(non_snake_case)]
 
-use super::interval::{
-    IntervalLinearization, Link, MULTIPLIER_STEP, add_multiplier_columns, back, front, interval_at, node_tensions,
-    stuck_slips, value_rows,
-};
+use super::interval::{IntervalLinearization, Link, back, front, interval_at, node_tensions, value_rows};
 use super::profile::{LinkScratch, Profile};
+use super::stuck_links::{MULTIPLIER_STEP, add_multiplier_columns, stuck_slips};
 use crate::collocation::dynamics::inertia_load_transposed;
 use crate::collocation::residual::{Block, IntervalSites};
 use crate::error::Result;

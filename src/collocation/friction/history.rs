@@ -16,6 +16,7 @@
 
 mod cross;
 mod inflection;
+mod interpolant;
 mod refusal;
 mod repeat;
 mod rest;
