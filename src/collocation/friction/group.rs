@@ -682,6 +682,42 @@ mod tests {
         assert!((1..4).all(|l| w[l] != w[l - 1] && w[l] != 0.0));
         let w = check(vec![Contact::Stick; links], &|_| 0.05);
         assert!(w.iter().all(|x| *x == w[0] && *x != 0.0 && *x != -1.0));
+        // Four stuck links with per-point multipliers (docs/friction.md section 8, "ord23"):
+        // the material's interpolant given, each link evaluated once so that its shares are
+        // kept, then the group against the links one by one.
+        let mut stuck = grip(vec![Contact::Stick; links], &varied);
+        // A material 10 % shorter than the path: stuck tensions of about 200 N.
+        stuck.reference = setup.x.iter().map(|n| 0.9 * (1.0 + 1e-3 * n.s)).collect();
+        stuck.points = (0..links)
+            .map(|l| [2e-3, 0.5 * (stuck.reference[l] + stuck.reference[l + 1]), 2e-3, 2e-3])
+            .collect();
+        p.grips = Some(vec![stuck]);
+        alone.grips = p.grips.clone();
+        let seg = setup.mesh.nodes[k].segment_end;
+        for q in [&p, &alone] {
+            for l in 0..4 {
+                let lin = interval(
+                    q,
+                    setup.length,
+                    k + l,
+                    &setup.sites[l],
+                    seg,
+                    &setup.x[k + l],
+                    &setup.x[k + l + 1],
+                    None,
+                )
+                .unwrap();
+                q.keep(k + l, lin);
+            }
+        }
+        // (The first link's start and midpoint give no finite share on this made-up state: it
+        // keeps the constant multiplier.)
+        assert!(p.sigma(0, k).is_none());
+        for l in 1..4 {
+            let sigma = p.sigma(0, k + l).expect("per-point shares kept");
+            assert!(sigma[0] != sigma[1] && sigma[1] != sigma[2], "{sigma:?}");
+        }
+        assert!(compare(&setup, &p, &alone).is_some());
 
         let mut two = cases::case_h();
         two.tendons[4].friction = Some(Friction::pull(0.3));
