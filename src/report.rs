@@ -127,9 +127,10 @@ pub struct ErrorEstimate {
     /// The order of accuracy of the answer this estimate belongs to: 4, the collocation
     /// solution (estimated from the order-6 residual), or 6, the deferred-corrected solution
     /// returned at tolerances of 1e-8 L and below (estimated from the order-8 residual;
-    /// docs/numerics.md, "The order-6 answer"), or 2, a load-history step with a stuck
-    /// stretch (estimated by the difference to the same step on a mesh twice as coarse;
-    /// docs/friction.md section 8, "Error control of stuck steps").
+    /// docs/numerics.md, "The order-6 answer"), or for a load-history step with a stuck
+    /// stretch (estimated by the difference to the same step on a finer split mesh;
+    /// docs/friction.md section 8, "Error control of stuck steps") 4 where its stuck links
+    /// take per-point multipliers (one tendon with friction, "ord23"), else 2.
     pub order: u32,
 }
 

@@ -6,7 +6,7 @@
 use super::interval::Profile;
 use crate::model::equations::Site;
 use crate::solution::State;
-use nalgebra::Vector3;
+use nalgebra::{Vector3, Vector6};
 
 /// How the tension of a tendon with friction evolves on a stretch of it during a step of a
 /// load history (docs/friction.md section 8).
@@ -131,6 +131,12 @@ pub(crate) struct Grip {
     /// interpolated from one piece's nodes and bounding kinks only (docs/friction.md
     /// section 8, "The material's kinks").
     pub(crate) kinks: Vec<Kink>,
+    /// Per link of a split mesh, the carried material's interpolant there: (lambda' at
+    /// its start, lambda at its midpoint, lambda' there, lambda' at its end), from the
+    /// smooth piece that holds the link, for the stuck links' per-point multipliers
+    /// ([`Profile::stuck_slope`]); empty where not given (the history's own mesh: a stuck
+    /// link's multiplier is constant across it there).
+    pub(crate) points: Vec<[f64; 4]>,
 }
 
 /// A kink of the carried material: its arc length (m), and lambda at it as the smooth
@@ -217,6 +223,59 @@ impl Profile<'_> {
         let scale = stiffness / lambda;
         let d_v = if site.inextensible { Vector3::zeros() } else { t * scale };
         (stiffness * (speed / lambda - 1.0), d_v, rp.r.cross(&t) * scale)
+    }
+
+    /// The stuck material's log-tension slope zeta' = tau_stuck' / tau_stuck (1/m) of slip
+    /// j at a point (`site`, strains `(v, u)`, eq. 13's rates `rates` there with the
+    /// tangential load `load` (N/m) it was evaluated with), the material there `lambda`
+    /// with slope `slope` (docs/friction.md section 8, "ord23"). With the path speed
+    /// `|p'|` and tangent t of the tendon (body frame),
+    /// `tau_stuck' = E_t A_t (t . p'' / lambda - |p'| lambda' / lambda^2)`, and
+    /// `t . p'' = t . (v' + u' x r + u x r' + r'')` falls with the tendon's own tangential
+    /// load g by `s g`, `s = e . M^-1 e` (e = (t, r x t)), so the stuck profile's own load
+    /// solves `g = A (t . p''|_0 - s g) - B`. `s` is taken from the section's stiffness,
+    /// `t . K_se^-1 t + (r x t) . K_bt^-1 (r x t)`, as [`Profile::stuck_own`] does: the rates
+    /// evaluated with `load` give `t . p''|_0 = t . p'' + s load` to that approximation, and
+    /// where `load` is the stuck profile's own (a settled lag) the answer is exact whatever
+    /// `s`. NaN for a rigid tendon or a stuck tension that is not positive.
+    #[allow(clippy::too_many_arguments)]
+    pub(crate) fn stuck_slope(
+        &self,
+        j: usize,
+        site: &Site,
+        (v, u): (&Vector3<f64>, &Vector3<f64>),
+        rates: &Vector6<f64>,
+        load: f64,
+        (lambda, slope): (f64, f64),
+        length: f64,
+    ) -> f64 {
+        let tendon = &self.robot().tendons[self.slipping[j]];
+        let Some(stiffness) = tendon.stiffness else {
+            return f64::NAN;
+        };
+        let rp = tendon.routing.at(site.s, length);
+        let p = u.cross(&rp.r) + rp.r_s + site.strain(v);
+        let speed = p.norm();
+        let t = p / speed;
+        let x_v = if site.inextensible {
+            Vector3::zeros()
+        } else {
+            Vector3::new(rates[0], rates[1], rates[2])
+        };
+        let x_u = Vector3::new(rates[3], rates[4], rates[5]);
+        let along = t.dot(&(x_v + x_u.cross(&rp.r) + u.cross(&rp.r_s) + rp.r_ss));
+        let section = &site.section.section;
+        let m = rp.r.cross(&t);
+        let own = if site.inextensible {
+            0.0
+        } else {
+            t.dot(&t.component_div(&section.kse))
+        } + m.dot(&m.component_div(&section.kbt));
+        let a = stiffness / lambda;
+        let b = stiffness * speed * slope / (lambda * lambda);
+        let g = (a * (along + own * load) - b) / (1.0 + a * own);
+        let stuck = stiffness * (speed / lambda - 1.0);
+        if stuck > 0.0 { g / stuck } else { f64::NAN }
     }
 
     /// The stuck tension at a node as the node's own tension moves it: `stuck`

@@ -19,11 +19,9 @@
 //! Kirchhoff rod's sites, a breakdown, a zero or NaN multiplier).
 #![allow(non_snake_case)]
 
-use super::interval::{
-    IntervalLinearization, Link, MULTIPLIER_STEP, add_multiplier_columns, back, front, interval_at, node_tensions,
-    stuck_slips, value_rows,
-};
+use super::interval::{IntervalLinearization, Link, back, front, interval_at, node_tensions, value_rows};
 use super::profile::{LinkScratch, Profile};
+use super::stuck_links::{MULTIPLIER_STEP, add_multiplier_columns, stuck_slips};
 use crate::collocation::dynamics::inertia_load_transposed;
 use crate::collocation::residual::{Block, IntervalSites};
 use crate::error::Result;
@@ -79,8 +77,10 @@ fn intervals4_kernel(
     if x.len() < 5 || profile.slipping.len() > 1 {
         return Ok(None);
     }
-    let multipliers: [Option<Vec<f64>>; 4] = std::array::from_fn(|j| profile.multipliers(k + j));
-    let w: [Option<&[f64]>; 4] = std::array::from_fn(|j| multipliers[j].as_deref());
+    // Each link's multipliers at its start, midpoint and end ([`Profile::point_multipliers`]).
+    let multipliers: [Option<[Vec<f64>; 3]>; 4] =
+        std::array::from_fn(|j| profile.multipliers(k + j).map(|w| profile.point_multipliers(k + j, &w)));
+    let w: Points = std::array::from_fn(|j| multipliers[j].as_ref().map(|p| [&p[0][..], &p[1][..], &p[2][..]]));
     let group = Group {
         profile,
         length,
@@ -117,6 +117,14 @@ fn intervals4_kernel(
     Ok(Some(out))
 }
 
+/// Each of four links' multipliers at its start, midpoint and end (None in full slip).
+type Points<'w> = [Option<[&'w [f64]; 3]>; 4];
+
+/// The four links' multipliers at their point `p` (0 start, 1 midpoint, 2 end).
+fn at(w: Points<'_>, p: usize) -> [Option<&[f64]>; 4] {
+    w.map(|w| w.map(|w| w[p]))
+}
+
 /// Four consecutive links of one segment: link k + l in lane l.
 struct Group<'g, 'p> {
     profile: &'g Profile<'p>,
@@ -136,23 +144,20 @@ impl Group<'_, '_> {
     /// # Errors
     /// A model breakdown at a point of a moved link.
     #[inline(always)]
-    fn moved_rows(
-        &self,
-        w: [Option<&[f64]>; 4],
-        j: usize,
-        stuck: &[Option<f64>; 4],
-        step: f64,
-    ) -> Result<[Block<f64>; 4]> {
-        let moved: [Option<Vec<f64>>; 4] = std::array::from_fn(|l| {
+    fn moved_rows(&self, w: Points, j: usize, stuck: &[Option<f64>; 4], step: f64) -> Result<[Block<f64>; 4]> {
+        let moved: [Option<[Vec<f64>; 3]>; 4] = std::array::from_fn(|l| {
             w[l].map(|w| {
-                let mut w = w.to_vec();
-                if stuck[l].is_some() {
-                    w[j] += step;
-                }
-                w
+                let sigma = self.profile.sigma(j, self.k + l);
+                std::array::from_fn(|p| {
+                    let mut w = w[p].to_vec();
+                    if stuck[l].is_some() {
+                        w[j] += sigma.map_or(step, |sigma| step * sigma[p]);
+                    }
+                    w
+                })
             })
         });
-        let moved_w: [Option<&[f64]>; 4] = std::array::from_fn(|l| moved[l].as_deref());
+        let moved_w: Points = std::array::from_fn(|l| moved[l].as_ref().map(|p| [&p[0][..], &p[1][..], &p[2][..]]));
         if let Some(rows) = self.rows(moved_w) {
             return Ok(std::array::from_fn(|l| {
                 if stuck[l].is_some() { rows[l] } else { Block::zeros() }
@@ -189,7 +194,7 @@ impl Group<'_, '_> {
     /// them) at the slips' multipliers `w`, each link's start evaluated at its own: the
     /// rows [`Group::evaluate`] gives there. None where the lanes decline a point.
     #[inline(always)]
-    fn rows(&self, w: [Option<&[f64]>; 4]) -> Option<[Block<f64>; 4]> {
+    fn rows(&self, w: Points) -> Option<[Block<f64>; 4]> {
         let Group {
             profile,
             length,
@@ -214,7 +219,7 @@ impl Group<'_, '_> {
             segment_end,
             [state(0), state(1), state(2), state(3)],
             [&scratch[0].za, &scratch[1].za, &scratch[2].za, &scratch[3].za],
-            w,
+            at(w, 0),
             (false, None),
         );
         let ends = starts.as_ref().and_then(|_| {
@@ -224,7 +229,7 @@ impl Group<'_, '_> {
                 segment_end,
                 [state(1), state(2), state(3), state(4)],
                 [&scratch[0].zb, &scratch[1].zb, &scratch[2].zb, &scratch[3].zb],
-                w,
+                at(w, 2),
                 (false, None),
             )
         });
@@ -256,7 +261,7 @@ impl Group<'_, '_> {
                 segment_end,
                 [mid(0), mid(1), mid(2), mid(3)],
                 [&scratch[0].zm, &scratch[1].zm, &scratch[2].zm, &scratch[3].zm],
-                w,
+                at(w, 1),
                 (false, None),
             ) {
                 rows = Some(std::array::from_fn(|j| value_rows(&links[j], &fronts[j], &mids[j])));
@@ -280,7 +285,7 @@ impl Group<'_, '_> {
     /// # Errors
     /// A model breakdown at node k where it is evaluated alone.
     #[inline(always)]
-    fn evaluate(&self, w: [Option<&[f64]>; 4], jac: Option<&mut [f64]>) -> Result<Option<[IntervalLinearization; 4]>> {
+    fn evaluate(&self, w: Points, jac: Option<&mut [f64]>) -> Result<Option<[IntervalLinearization; 4]>> {
         let Group {
             profile,
             length,
@@ -290,7 +295,8 @@ impl Group<'_, '_> {
             x,
         } = *self;
         let derivatives = jac.is_some();
-        let alike = w[1..].iter().all(|wl| *wl == w[0]);
+        // Alike: every link's multipliers the same at its three points and as the others'.
+        let alike = w.iter().all(|wl| *wl == w[0]) && w[0].is_none_or(|w| w[0] == w[1] && w[1] == w[2]);
         let mut scratch: [Box<LinkScratch>; 4] = [
             profile.take_scratch(),
             profile.take_scratch(),
@@ -313,7 +319,7 @@ impl Group<'_, '_> {
         // Link k's start alone (`first`) or the four starts at once (`starts`).
         let (first, starts) = if alike {
             let za = &scratch[0].za;
-            let first = profile.start_point(k, &sites[0].start, segment_end, &x[0], za, w[0], derivatives)?;
+            let first = profile.start_point(k, &sites[0].start, segment_end, &x[0], za, at(w, 0)[0], derivatives)?;
             (Some(first), None)
         } else {
             let Some(starts) = points4(
@@ -322,7 +328,7 @@ impl Group<'_, '_> {
                 segment_end,
                 [state(0), state(1), state(2), state(3)],
                 [&scratch[0].za, &scratch[1].za, &scratch[2].za, &scratch[3].za],
-                w,
+                at(w, 0),
                 (
                     derivatives,
                     inertia(sites.map(|s| &s.start), [&x[0].R, &x[1].R, &x[2].R, &x[3].R]),
@@ -346,7 +352,7 @@ impl Group<'_, '_> {
             segment_end,
             [state(1), state(2), state(3), state(4)],
             [&scratch[0].zb, &scratch[1].zb, &scratch[2].zb, &scratch[3].zb],
-            w,
+            at(w, 2),
             (
                 derivatives,
                 inertia(sites.map(|s| &s.end), [&x[1].R, &x[2].R, &x[3].R, &x[4].R]),
@@ -354,7 +360,7 @@ impl Group<'_, '_> {
         ) else {
             // Link k's start is kept for the one-link kernel that takes over.
             if let Some(first) = first {
-                profile.keep_point(k, segment_end, &x[0], &scratch[0].za, w[0], derivatives, first);
+                profile.keep_point(k, segment_end, &x[0], &scratch[0].za, at(w, 0)[0], derivatives, first);
             }
             give_starts(None, starts);
             give_scratch(scratch);
@@ -391,7 +397,7 @@ impl Group<'_, '_> {
             segment_end,
             [mid(0), mid(1), mid(2), mid(3)],
             [&scratch[0].zm, &scratch[1].zm, &scratch[2].zm, &scratch[3].zm],
-            w,
+            at(w, 1),
             (
                 derivatives,
                 inertia(
@@ -416,7 +422,7 @@ impl Group<'_, '_> {
             back(&links[3], f3, [start_of[3], &mids[3], &ends[3]], block(), s3),
         ];
         let [e0, e1, e2, e3] = ends;
-        profile.keep_point(k + 4, segment_end, &x[4], &scratch[3].zb, w[3], derivatives, e3);
+        profile.keep_point(k + 4, segment_end, &x[4], &scratch[3].zb, at(w, 2)[3], derivatives, e3);
         give_starts(first, starts);
         for lin in [e0, e1, e2].into_iter().chain(mids) {
             profile.give(lin);
@@ -643,6 +649,7 @@ mod tests {
             capacities: (0..links).map(capacity).collect(),
             reference: setup.x.iter().map(|n| 0.999 * (1.0 + 1e-3 * n.s)).collect(),
             kinks: Vec::new(),
+            points: Vec::new(),
             contacts,
         };
         let varied = |n: usize| 0.05 + 0.01 * n as f64;
@@ -675,6 +682,42 @@ mod tests {
         assert!((1..4).all(|l| w[l] != w[l - 1] && w[l] != 0.0));
         let w = check(vec![Contact::Stick; links], &|_| 0.05);
         assert!(w.iter().all(|x| *x == w[0] && *x != 0.0 && *x != -1.0));
+        // Four stuck links with per-point multipliers (docs/friction.md section 8, "ord23"):
+        // the material's interpolant given, each link evaluated once so that its shares are
+        // kept, then the group against the links one by one.
+        let mut stuck = grip(vec![Contact::Stick; links], &varied);
+        // A material 10 % shorter than the path: stuck tensions of about 200 N.
+        stuck.reference = setup.x.iter().map(|n| 0.9 * (1.0 + 1e-3 * n.s)).collect();
+        stuck.points = (0..links)
+            .map(|l| [2e-3, 0.5 * (stuck.reference[l] + stuck.reference[l + 1]), 2e-3, 2e-3])
+            .collect();
+        p.grips = Some(vec![stuck]);
+        alone.grips = p.grips.clone();
+        let seg = setup.mesh.nodes[k].segment_end;
+        for q in [&p, &alone] {
+            for l in 0..4 {
+                let lin = interval(
+                    q,
+                    setup.length,
+                    k + l,
+                    &setup.sites[l],
+                    seg,
+                    &setup.x[k + l],
+                    &setup.x[k + l + 1],
+                    None,
+                )
+                .unwrap();
+                q.keep(k + l, lin);
+            }
+        }
+        // (The first link's start and midpoint give no finite share on this made-up state: it
+        // keeps the constant multiplier.)
+        assert!(p.sigma(0, k).is_none());
+        for l in 1..4 {
+            let sigma = p.sigma(0, k + l).expect("per-point shares kept");
+            assert!(sigma[0] != sigma[1] && sigma[1] != sigma[2], "{sigma:?}");
+        }
+        assert!(compare(&setup, &p, &alone).is_some());
 
         let mut two = cases::case_h();
         two.tendons[4].friction = Some(Friction::pull(0.3));
@@ -703,6 +746,7 @@ mod tests {
             capacities: vec![0.05; links],
             reference: setup.x.iter().map(|n| 0.999 * (1.0 + 1e-3 * n.s)).collect(),
             kinks: Vec::new(),
+            points: Vec::new(),
             contacts: vec![Contact::Stick; links],
         }]);
         let sites: [&IntervalSites; 4] = std::array::from_fn(|j| &setup.sites[j]);

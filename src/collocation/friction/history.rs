@@ -16,6 +16,7 @@
 
 mod cross;
 mod inflection;
+mod interpolant;
 mod march;
 mod refusal;
 mod repeat;

@@ -23,6 +23,7 @@ use super::super::residual::{
 use super::super::unknowns::THETA;
 use super::profile::LinkScratch;
 pub(crate) use super::profile::Profile;
+use super::stuck_links::{MULTIPLIER_STEP, add_multiplier_columns, pointwise, slices, stuck_slips};
 use crate::error::Result;
 use crate::model::equations::Site;
 use crate::model::friction::FrictionLinearization;
@@ -43,6 +44,11 @@ pub(crate) struct IntervalLinearization {
     /// C_j = h/6 mu_j (kappa_a + 4 kappa_m + kappa_b): the most the log tension of slip j
     /// can change across the link (the capstan row's increment at |w| = 1).
     pub(crate) capacity: Vec<f64>,
+    /// Per slip stuck on the link with the material's interpolant given ([`Grip::points`]),
+    /// its per-point multipliers' shares (sigma_a, sigma_m, sigma_b) and their capacity
+    /// C_sigma = h/6 mu (sigma_a kappa_a + 4 sigma_m kappa_m + sigma_b kappa_b), which the
+    /// link's next evaluation takes ([`pointwise`]); None elsewhere.
+    pub(crate) pointwise: Vec<Option<[f64; 4]>>,
     /// In a history, slip j's tension at node b if its material there had not moved
     /// ([`Profile::stuck_tension`]); NaN in full slip.
     pub(crate) stuck_tension: Vec<f64>,
@@ -64,6 +70,7 @@ impl IntervalLinearization {
             residual: Block::zeros(),
             psi: Vec::new(),
             capacity: Vec::new(),
+            pointwise: Vec::new(),
             stuck_tension: Vec::new(),
             rows_z: DMatrix::zeros(0, 0),
             psi_x: DMatrix::zeros(0, 0),
@@ -91,9 +98,20 @@ pub(crate) fn interval(
     jac: Option<&mut [f64]>,
 ) -> Result<IntervalLinearization> {
     let w = profile.multipliers(k);
+    let points = w.as_deref().map(|w| profile.point_multipliers(k, w));
     let derivatives = jac.is_some();
-    let (Some(w), true) = (w.as_deref(), derivatives) else {
-        return interval_at(profile, length, k, sites, segment_end, a, b, w.as_deref(), jac);
+    let (Some(w), true) = (points.as_ref(), derivatives) else {
+        return interval_at(
+            profile,
+            length,
+            k,
+            sites,
+            segment_end,
+            a,
+            b,
+            points.as_ref().map(slices),
+            jac,
+        );
     };
     // A stuck link's multiplier w = (z_b - z_a) / C moves its backbone rows with its log
     // tensions ([`add_multiplier_columns`]). The moved rows are evaluated first, so that the
@@ -102,57 +120,28 @@ pub(crate) fn interval(
     let count = profile.count();
     let mut moved_rows = Vec::new();
     for (j, capacity) in stuck_slips(profile, k) {
+        let sigma = profile.sigma(j, k);
         let moved = |d: f64| -> Result<Block<f64>> {
-            let mut w = w.to_vec();
-            w[j] += d;
-            let lin = interval_at(profile, length, k, sites, segment_end, a, b, Some(&w), None)?;
+            let mut w = w.clone();
+            for (p, w) in w.iter_mut().enumerate() {
+                w[j] += sigma.map_or(d, |sigma| d * sigma[p]);
+            }
+            let lin = interval_at(profile, length, k, sites, segment_end, a, b, Some(slices(&w)), None)?;
             let rows = lin.residual;
             profile.give_link(lin);
             Ok(rows)
         };
         moved_rows.push((j, capacity, moved(MULTIPLIER_STEP)?, moved(-MULTIPLIER_STEP)?));
     }
-    let mut out = interval_at(profile, length, k, sites, segment_end, a, b, Some(w), jac)?;
+    let mut out = interval_at(profile, length, k, sites, segment_end, a, b, Some(slices(w)), jac)?;
     for (j, capacity, plus, minus) in &moved_rows {
         add_multiplier_columns(&mut out, count, (*j, *capacity), plus, minus);
     }
     Ok(out)
 }
 
-/// The step of the central difference in a stuck slip's multiplier: the rows are smooth in
-/// w, and a step of 1e-6 leaves a truncation of 1e-12 and rounding of 1e-10 of the rows'
-/// scale.
-pub(super) const MULTIPLIER_STEP: f64 = 1e-6;
-
-/// The slips that stick on link k of `profile` (their rows the stick rows, their
-/// multipliers w = (z_b - z_a) / C), with their capacities C > 0
-/// ([`Profile::stuck_capacity`]; a slip without one has w = 0 whatever its log tensions).
-pub(super) fn stuck_slips<'p>(profile: &'p Profile, k: usize) -> impl Iterator<Item = (usize, f64)> + 'p {
-    (0..profile.count())
-        .filter(move |&j| profile.on_link(j, k) && profile.sticks(j, k))
-        .filter_map(move |j| profile.stuck_capacity(j, k).filter(|c| *c > 0.0).map(|c| (j, c)))
-}
-
-/// Adds to a stuck link's backbone rows' derivatives in the log tensions (`out`, `count`
-/// slips) their change through slip j's multiplier w = (z_b - z_a) / C (`(j, C)`): the
-/// rows' derivative in w by a central difference of the rows `plus` and `minus` at
-/// w_j +- [`MULTIPLIER_STEP`], divided by -C in z_a's column and +C in z_b's.
-pub(super) fn add_multiplier_columns(
-    out: &mut IntervalLinearization,
-    count: usize,
-    (j, capacity): (usize, f64),
-    plus: &Block<f64>,
-    minus: &Block<f64>,
-) {
-    let d_rows = (plus - minus) / (2.0 * MULTIPLIER_STEP);
-    for r in 0..12 {
-        out.rows_z[(r, j)] -= d_rows[r] / capacity;
-        out.rows_z[(r, count + j)] += d_rows[r] / capacity;
-    }
-}
-
-/// [`interval`] with the slips' multipliers `w` (None in full slip: the motions' signs),
-/// the backbone rows' derivatives at fixed `w`.
+/// [`interval`] with the slips' multipliers `w` at the link's start, midpoint and end (None
+/// in full slip: the motions' signs), the backbone rows' derivatives at fixed `w`.
 ///
 /// On x86-64 with AVX2 and FMA (checked at run time) the link's own arithmetic (the chain
 /// rule with the log tensions' columns, the capstan rows and the writes) is compiled for
@@ -168,7 +157,7 @@ pub(super) fn interval_at(
     segment_end: f64,
     a: &State,
     b: &State,
-    w: Option<&[f64]>,
+    w: Option<[&[f64]; 3]>,
     jac: Option<&mut [f64]>,
 ) -> Result<IntervalLinearization> {
     avx2_fma!(interval_at_kernel(profile, length, k, sites, segment_end, a, b, w, jac))
@@ -185,15 +174,24 @@ fn interval_at_kernel(
     segment_end: f64,
     a: &State,
     b: &State,
-    w: Option<&[f64]>,
+    w: Option<[&[f64]; 3]>,
     jac: Option<&mut [f64]>,
 ) -> Result<IntervalLinearization> {
     // The link's buffers, the profile's spare ones (given back at the end).
     let mut scratch = profile.take_scratch();
     node_tensions(profile, k, &mut scratch);
     let derivatives = jac.is_some();
-    let la = profile.start_point(k, &sites.start, segment_end, a, &scratch.za, w, derivatives)?;
-    let lb = profile.point(&sites.end, segment_end, &b.R, (&b.v, &b.u), &scratch.zb, w, derivatives)?;
+    let [wa, wm, wb] = w.map_or([None; 3], |w| w.map(Some));
+    let la = profile.start_point(k, &sites.start, segment_end, a, &scratch.za, wa, derivatives)?;
+    let lb = profile.point(
+        &sites.end,
+        segment_end,
+        &b.R,
+        (&b.v, &b.u),
+        &scratch.zb,
+        wb,
+        derivatives,
+    )?;
     let link = Link {
         profile,
         length,
@@ -212,11 +210,11 @@ fn interval_at_kernel(
         &front.Rm,
         (&front.vm, &front.um),
         &scratch.zm,
-        w,
+        wm,
         derivatives,
     )?;
     let out = back(&link, &front, [&la, &lm, &lb], jac, &mut scratch);
-    profile.keep_point(k + 1, segment_end, b, &scratch.zb, w, derivatives, lb);
+    profile.keep_point(k + 1, segment_end, b, &scratch.zb, wb, derivatives, lb);
     profile.give(la);
     profile.give(lm);
     profile.give_scratch(scratch);
@@ -233,7 +231,7 @@ pub(super) fn node_tensions(profile: &Profile, k: usize, scratch: &mut LinkScrat
 }
 
 /// One link's inputs: link k of `profile` between the states `a` and `b`, the slips at
-/// multipliers `w`.
+/// multipliers `w` (at its start, midpoint and end).
 pub(super) struct Link<'l, 'p> {
     pub(super) profile: &'l Profile<'p>,
     pub(super) length: f64,
@@ -242,7 +240,7 @@ pub(super) struct Link<'l, 'p> {
     pub(super) segment_end: f64,
     pub(super) a: &'l State,
     pub(super) b: &'l State,
-    pub(super) w: Option<&'l [f64]>,
+    pub(super) w: Option<[&'l [f64]; 3]>,
 }
 
 /// The linearizations of F at a link's two nodes (with derivatives only): [`front`] writes
@@ -292,9 +290,10 @@ pub(super) fn front<'e>(
     let count = profile.count();
     let h = sites.end.s - sites.start.s;
     let LinkScratch { za, zb, zm, .. } = scratch;
+    let [wa, _, wb] = w.map_or([None; 3], |w| w.map(Some));
     if keep {
-        profile.keep_node(k, segment_end, a, (za, w), la);
-        profile.keep_node(k + 1, segment_end, b, (zb, w), lb);
+        profile.keep_node(k, segment_end, a, (za, wa), la);
+        profile.keep_node(k + 1, segment_end, b, (zb, wb), lb);
     }
     let (y0, y1) = end_points(a, b);
     let theta1: Vector3<f64> = y1.fixed_rows::<3>(THETA).into();
@@ -428,6 +427,17 @@ pub(super) fn back(
     out.capacity.clear();
     out.capacity
         .extend((0..count).map(|j| h / 6.0 * profile.coefficient(j) * (la.kappa[j] + 4.0 * lm.kappa[j] + lb.kappa[j])));
+    out.pointwise.clear();
+    out.pointwise.extend((0..count).map(|j| {
+        let points = [
+            (&sites.start, (&a.v, &a.u), la, za[j]),
+            (&sites.mid, (&vm, &um), lm, zm[j]),
+            (&sites.end, (&b.v, &b.u), lb, zb[j]),
+        ];
+        (on[j] && profile.sticks(j, k))
+            .then(|| pointwise(link, j, points))
+            .flatten()
+    }));
     out.psi.clear();
     out.psi.extend((0..count).map(|j| {
         if on[j] {
@@ -571,9 +581,10 @@ pub(super) fn back(
     }
     // For the verdict's mass at the same state, when the profile keeps it (the Jacobian at
     // the answer).
-    profile.keep_response(2 * k, &sites.start, segment_end, (&a.R, &a.v, &a.u), (za, w), la);
-    profile.keep_response(2 * k + 1, &sites.mid, segment_end, (&Rm, &vm, &um), (zm, w), lm);
-    profile.keep_end_response(k, &sites.end, segment_end, (&b.R, &b.v, &b.u), (zb, w), lb);
+    let [wa, wm, wb] = w.map_or([None; 3], |w| w.map(Some));
+    profile.keep_response(2 * k, &sites.start, segment_end, (&a.R, &a.v, &a.u), (za, wa), la);
+    profile.keep_response(2 * k + 1, &sites.mid, segment_end, (&Rm, &vm, &um), (zm, wm), lm);
+    profile.keep_end_response(k, &sites.end, segment_end, (&b.R, &b.v, &b.u), (zb, wb), lb);
     out
 }
 

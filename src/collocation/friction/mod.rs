@@ -35,6 +35,7 @@ mod profile;
 mod pull_ins;
 mod staircase;
 mod start;
+mod stuck_links;
 mod turning;
 
 pub use grip::Contact;

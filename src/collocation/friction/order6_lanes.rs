@@ -300,6 +300,7 @@ mod tests {
             capacities: vec![0.05; links],
             reference: setup.x.iter().map(|n| 0.999 * (1.0 + 1e-3 * n.s)).collect(),
             kinks: Vec::new(),
+            points: Vec::new(),
             contacts,
         };
         let (mut p, mut alone) = (setup.profile(), setup.profile());

@@ -296,7 +296,7 @@ impl<'a> Profile<'a> {
                 .enumerate()
                 .map(|(j, g)| match g.contacts.get(k) {
                     Some(Contact::Stick) => {
-                        stuck_multiplier(self.z[j][k], self.z[j][k + 1], self.stuck_capacity(j, k).unwrap_or(0.0))
+                        stuck_multiplier(self.z[j][k], self.z[j][k + 1], self.stuck_scale(j, k).unwrap_or(0.0))
                     }
                     _ => g.multipliers.get(k).copied().unwrap_or(1.0),
                 })
@@ -321,6 +321,45 @@ impl<'a> Profile<'a> {
             .and_then(|lin| lin.capacity.get(j).copied())
             .filter(|c| *c > 0.0);
         kept.or_else(|| self.grips.as_ref().and_then(|g| g[j].capacities.get(k).copied()))
+    }
+
+    /// The capacity slip j's multiplier W on stuck link k divides by: C_sigma of its
+    /// per-point multipliers from the link's last evaluation where it has them
+    /// ([`IntervalLinearization::pointwise`]), else [`Profile::stuck_capacity`].
+    pub(crate) fn stuck_scale(&self, j: usize, k: usize) -> Option<f64> {
+        self.pointwise(j, k).map(|p| p[3]).or_else(|| self.stuck_capacity(j, k))
+    }
+
+    /// Slip j's per-point multipliers' shares and capacity on link k from the link's last
+    /// evaluation, where it sticks there with them.
+    fn pointwise(&self, j: usize, k: usize) -> Option<[f64; 4]> {
+        if !self.sticks(j, k) {
+            return None;
+        }
+        self.cache.borrow()[k]
+            .as_ref()
+            .and_then(|lin| lin.pointwise.get(j).copied().flatten())
+    }
+
+    /// The shares (sigma_a, sigma_m, sigma_b) of slip j's multiplier at link k's start,
+    /// midpoint and end, where it sticks there with per-point multipliers.
+    pub(crate) fn sigma(&self, j: usize, k: usize) -> Option<[f64; 3]> {
+        self.pointwise(j, k).map(|p| [p[0], p[1], p[2]])
+    }
+
+    /// The multipliers at link k's start, midpoint and end from the link's `w`
+    /// ([`Profile::multipliers`]): W sigma_P for a slip stuck there with per-point
+    /// multipliers, w elsewhere (docs/friction.md section 8, "ord23").
+    pub(crate) fn point_multipliers(&self, k: usize, w: &[f64]) -> [Vec<f64>; 3] {
+        let mut out = [w.to_vec(), w.to_vec(), w.to_vec()];
+        for j in 0..w.len() {
+            if let Some(sigma) = self.sigma(j, k) {
+                for (p, points) in out.iter_mut().enumerate() {
+                    points[j] = w[j] * sigma[p];
+                }
+            }
+        }
+        out
     }
 
     /// Whether slip j sticks on link k (a history's stick row replaces its capstan row).

@@ -63,6 +63,7 @@ pub(crate) fn start(robots: &[Robot], options: &Options) -> Result<Carried> {
             capacities: vec![0.0; span],
             reference: vec![f64::NAN; mesh.nodes.len()],
             kinks: Vec::new(),
+            points: Vec::new(),
         });
     }
     let corrected = grips

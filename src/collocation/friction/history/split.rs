@@ -6,11 +6,14 @@
 //! plus the error the carried material's interpolation leaves ([`material_error`]), which
 //! every level shares. On each level the split node nearest each tendon's stick/slip
 //! boundary (estimated from the last level's tensions, [`boundaries`]) is moved onto it, so
-//! the kink of the tension lies at a node and the step is of order 2 over the levels. The
+//! the kink of the tension lies at a node and the step is of order 4 over the levels with
+//! the stuck links' per-point multipliers (one tendon with friction; order 2 with the
+//! constant multiplier of two or more, docs/friction.md section 8, "ord23"). The
 //! history's own mesh is a subset of every split mesh, so the material the step leaves is
 //! handed back to it at its nodes exactly.
 
-use super::{Carried, Contact, Grip, Kink, Options, Profile, Result, Robot, StepAnswer, solve_on};
+use super::interpolant::{lagrange, lagrange_slope};
+use super::{Carried, Contact, Grip, Options, Profile, Result, Robot, StepAnswer, solve_on};
 use crate::collocation::refine;
 use crate::mesh::Mesh;
 use crate::mesh::guess::interpolate;
@@ -20,8 +23,9 @@ use crate::solution::Solution;
 use nalgebra::Vector3;
 
 /// Most splits of a stuck step's links: 2^6 = 64 parts per link. With a node at the
-/// stick/slip boundary a stuck step's split differences fall about 4 times per level
-/// (order 2, docs/friction.md section 8), so 64 parts cut a step's error about 4 000
+/// stick/slip boundary a stuck step's split differences fall about 4 times per level with
+/// the constant multiplier (order 2, docs/friction.md section 8; 16 to 25 times with the
+/// per-point ones), so 64 parts cut a step's error at least about 4 000
 /// times; a step that still misses its tolerance (or would need more than
 /// `max_intervals`) reports so.
 const LEVELS: u32 = 6;
@@ -32,13 +36,15 @@ const SLIDING_SEEN: u32 = 3;
 
 /// How many parts each link of `before`'s mesh is cut into on split level `level` after
 /// the answer `last` (the last level's, or the step's on the history's mesh) with its
-/// stick/slip `boundaries`. Uniform (`graded` false): 2^level. Graded: 2^level where a
-/// tendon sticks on the link in `last` or a boundary lies on it, and on the link before
-/// such a one; 2^(level - 2) (at least one) on the other links, where every tendon
-/// slides. A stuck link's multiplier is constant across it, so the step's error is of
-/// order 2 there and order 4 on the sliding links, whose error on the history's mesh is
-/// already that of a step that slides all along (docs/friction.md section 8, "Graded
-/// levels").
+/// stick/slip `boundaries`. Uniform (`graded` false): 2^level. Graded: 2^level on the
+/// fine links, 2^(level - 2) (at least one) on the others. With one tendon with friction
+/// the stuck links take per-point multipliers and are of order 4 like the sliding ones,
+/// whose error on the history's mesh is already that of a step that slides all along: the
+/// fine links are those where a stuck stretch of `last` starts or a boundary lies, and
+/// their neighbours (docs/friction.md section 8, "ord23"). With two or more a stuck
+/// link's multiplier is constant across it (order 2): the fine links are those where a
+/// tendon sticks in `last` or a boundary lies, and the link before such a one
+/// ("Graded levels").
 fn parts(before: &Carried, level: u32, graded: bool, last: &StepAnswer, boundaries: &[f64]) -> Vec<usize> {
     let full = 1 << level;
     let nodes = &before.mesh.nodes;
@@ -46,13 +52,23 @@ fn parts(before: &Carried, level: u32, graded: bool, last: &StepAnswer, boundari
         return vec![full; nodes.len() - 1];
     }
     let sliding = 1 << level.saturating_sub(2);
+    let pointwise = before.grips.len() == 1;
     let fine: Vec<bool> = nodes
         .windows(2)
         .map(|pair| {
             let (a, b) = (pair[0].s, pair[1].s);
+            // With per-point multipliers (one tendon with friction) a stuck link is of
+            // order 4 as a sliding one: only the links at the boundary, where the
+            // stretches meet, are cut at the full rate (docs/friction.md section 8, "ord23").
             let stuck = last.1.iter().any(|(_, list)| {
-                list.iter()
-                    .any(|&(start, end, c)| c == Contact::Stick && start < b && end > a)
+                list.iter().any(|&(start, end, c)| {
+                    c == Contact::Stick
+                        && if pointwise {
+                            start >= a && start <= b
+                        } else {
+                            start < b && end > a
+                        }
+                })
             });
             stuck || boundaries.iter().any(|&e| e >= a && e <= b)
         })
@@ -61,7 +77,7 @@ fn parts(before: &Carried, level: u32, graded: bool, last: &StepAnswer, boundari
     // reads three nodes on each side of it, at the fine spacing.
     (0..fine.len())
         .map(|k| {
-            if fine[k] || fine.get(k + 1) == Some(&true) {
+            if fine[k] || fine.get(k + 1) == Some(&true) || (pointwise && k > 0 && fine[k - 1]) {
                 full
             } else {
                 sliding
@@ -107,7 +123,20 @@ pub(super) fn refine(
             break;
         }
         let mut fine = split(robot, before, &parts, &best.0, &boundaries)?;
-        let (next, _) = solve_on(robot, options, &mut fine, None)?;
+        let next = match solve_on(robot, options, &mut fine, None) {
+            Ok((next, _)) => next,
+            // The per-point multipliers can leave a near tie at the placed boundary node
+            // that the march does not settle (docs/friction.md section 8, "ord23"): the
+            // level is solved again with the constant multiplier.
+            Err(_) if fine.grips.iter().any(|g| !g.points.is_empty()) => {
+                fine = split(robot, before, &parts, &best.0, &boundaries)?;
+                for grip in &mut fine.grips {
+                    grip.points.clear();
+                }
+                solve_on(robot, options, &mut fine, None)?.0
+            }
+            Err(e) => return Err(e),
+        };
         spent.add_mesh_work(&next.0.report);
         reached = level;
         let estimate = difference(&best.0, &next.0);
@@ -136,8 +165,18 @@ pub(super) fn refine(
             Some(m) => m,
             None => material_error(robot, options, before, &mut fine, &best.0)?,
         };
+        // The answer's order: 4 where its stuck links took per-point multipliers (one
+        // tendon with friction, a level that settled with them), else 2.
+        let order = if fine.grips.iter().all(|g| !g.points.is_empty()) && fine.grips.len() == 1 {
+            4
+        } else {
+            2
+        };
         let report = &mut best.0.report;
-        report.error_estimate = report.error_estimate.map(|e| sum(&e, &material));
+        report.error_estimate = report.error_estimate.map(|e| ErrorEstimate {
+            order,
+            ..sum(&e, &material)
+        });
         report.tolerance = options.tolerance;
         // Cut short before the sliding links are cut again, the estimate cannot vouch for
         // them: the step says it misses its tolerance (docs/friction.md section 8).
@@ -238,7 +277,8 @@ fn material_error(
 
 /// The error estimate of the finer of two answers of a step: their difference. With an
 /// order p >= 1 the finer one's error is the difference / (2^p - 1), so this bounds it
-/// (at the order 2 the boundary node gives, by about 3 times; where the boundary moves
+/// (at the order 2 the boundary node gives with constant multipliers, by about 3 times,
+/// at order 4 by about 15; where the boundary moves
 /// between levels the order is irregular, and at order 1 the difference about equals it).
 /// [`material_error`] measures the material's error with it too.
 fn difference(coarse: &Solution, fine: &Solution) -> ErrorEstimate {
@@ -353,6 +393,19 @@ pub(super) fn split(
                 .map(|node| lagrange(&coarse[..=links], &old.reference[..=links], &old.kinks, node.s, 6))
                 .collect(),
             kinks: old.kinks.clone(),
+            points: (0..span)
+                .map(|l| {
+                    let (a, b) = (mesh.nodes[l].s, mesh.nodes[l + 1].s);
+                    let m = 0.5 * (a + b);
+                    let (s, v) = (&coarse[..=links], &old.reference[..=links]);
+                    [
+                        lagrange_slope(s, v, &old.kinks, a, m),
+                        lagrange(s, v, &old.kinks, m, 6),
+                        lagrange_slope(s, v, &old.kinks, m, m),
+                        lagrange_slope(s, v, &old.kinks, b, m),
+                    ]
+                })
+                .collect(),
         });
     }
     Ok(Carried {
@@ -423,69 +476,6 @@ fn boundaries(answer: &StepAnswer) -> Vec<f64> {
         out.push(0.5 * (lo + hi));
     }
     out
-}
-
-/// The carried material at `at` (docs/friction.md section 8, "The material's kinks"): the
-/// polynomial through the `points` points nearest to `at` of the smooth piece that holds
-/// it, evaluated there. A piece runs between two successive `kinks` (or a kink and an end
-/// of the span); its points are the nodes of `s` (increasing, within a tendon's span, with
-/// the material `values`) inside it and the kinks that bound it, with the piece's own
-/// lambda there, so no stencil straddles a kink and `at` always lies between a stencil's
-/// first and last point. `points` is 6 for the quintic the step is solved with (O(h^6) where
-/// the material is smooth), 8 for the degree-7 polynomial that estimates its error; a piece
-/// with fewer points gives the polynomial through all of them. At a node it is the value
-/// there exactly, so the material handed back at the history's nodes is the last step's;
-/// at a kink that is not a node, the value after it.
-fn lagrange(s: &[f64], values: &[f64], kinks: &[Kink], at: f64, points: usize) -> f64 {
-    if let Some(k) = s.iter().position(|&x| x == at) {
-        return values[k];
-    }
-    let below = kinks.iter().rfind(|k| k.0 <= at);
-    let above = kinks.iter().find(|k| k.0 > at);
-    let (lo, hi) = (
-        below.map_or(f64::NEG_INFINITY, |k| k.0),
-        above.map_or(f64::INFINITY, |k| k.0),
-    );
-    // The piece's nodes: those strictly between its kinks, a run of `s` (which increases),
-    // found by bisection; with the kinks, point p of the piece is `point(p)`, as a list
-    // of them would hold it.
-    let nodes = s.len().min(values.len());
-    let start = s[..nodes].partition_point(|&x| x <= lo);
-    let count = s[..nodes].partition_point(|&x| x < hi).saturating_sub(start);
-    let head = usize::from(below.is_some());
-    // The kinks as points of the piece: the one below with the lambda after it, the one
-    // above with the lambda before it.
-    let first_point = below.map_or((lo, 0.0), |&(e, _, after)| (e, after));
-    let last_point = above.map_or((hi, 0.0), |&(e, before, _)| (e, before));
-    let point = |p: usize| -> (f64, f64) {
-        if p < head {
-            first_point
-        } else if p - head < count {
-            (s[start + p - head], values[start + p - head])
-        } else {
-            last_point
-        }
-    };
-    let n = head + count + usize::from(above.is_some());
-    let points = points.min(n);
-    let k = (0..n).rposition(|p| point(p).0 <= at).unwrap_or(0);
-    let first = (k + 1).saturating_sub(points / 2).min(n - points);
-    let stencil = first..first + points;
-    stencil
-        .clone()
-        .map(|a| {
-            let (sa, value) = point(a);
-            let weight: f64 = stencil
-                .clone()
-                .filter(|&b| b != a)
-                .map(|b| {
-                    let sb = point(b).0;
-                    (at - sb) / (sa - sb)
-                })
-                .product();
-            weight * value
-        })
-        .sum()
 }
 
 /// Hands the material `fine` holds after its step back to the history's mesh in

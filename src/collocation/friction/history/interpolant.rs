@@ -1,0 +1,118 @@
+//! The carried material between the nodes of the history's mesh (docs/friction.md section
+//! 8, "The material's kinks", "ord23"): per smooth piece, the polynomial through the
+//! nearest points and its slope.
+
+use super::Kink;
+
+/// The carried material at `at` (docs/friction.md section 8, "The material's kinks"): the
+/// polynomial through the `points` points nearest to `at` of the smooth piece that holds
+/// it, evaluated there. A piece runs between two successive `kinks` (or a kink and an end
+/// of the span); its points are the nodes of `s` (increasing, within a tendon's span, with
+/// the material `values`) inside it and the kinks that bound it, with the piece's own
+/// lambda there, so no stencil straddles a kink and `at` always lies between a stencil's
+/// first and last point. `points` is 6 for the quintic the step is solved with (O(h^6) where
+/// the material is smooth), 8 for the degree-7 polynomial that estimates its error; a piece
+/// with fewer points gives the polynomial through all of them. At a node it is the value
+/// there exactly, so the material handed back at the history's nodes is the last step's;
+/// at a kink that is not a node, the value after it.
+pub(super) fn lagrange(s: &[f64], values: &[f64], kinks: &[Kink], at: f64, points: usize) -> f64 {
+    if let Some(k) = s.iter().position(|&x| x == at) {
+        return values[k];
+    }
+    let below = kinks.iter().rfind(|k| k.0 <= at);
+    let above = kinks.iter().find(|k| k.0 > at);
+    let (lo, hi) = (
+        below.map_or(f64::NEG_INFINITY, |k| k.0),
+        above.map_or(f64::INFINITY, |k| k.0),
+    );
+    // The piece's nodes: those strictly between its kinks, a run of `s` (which increases),
+    // found by bisection; with the kinks, point p of the piece is `point(p)`, as a list
+    // of them would hold it.
+    let nodes = s.len().min(values.len());
+    let start = s[..nodes].partition_point(|&x| x <= lo);
+    let count = s[..nodes].partition_point(|&x| x < hi).saturating_sub(start);
+    let head = usize::from(below.is_some());
+    // The kinks as points of the piece: the one below with the lambda after it, the one
+    // above with the lambda before it.
+    let first_point = below.map_or((lo, 0.0), |&(e, _, after)| (e, after));
+    let last_point = above.map_or((hi, 0.0), |&(e, before, _)| (e, before));
+    let point = |p: usize| -> (f64, f64) {
+        if p < head {
+            first_point
+        } else if p - head < count {
+            (s[start + p - head], values[start + p - head])
+        } else {
+            last_point
+        }
+    };
+    let n = head + count + usize::from(above.is_some());
+    let points = points.min(n);
+    let k = (0..n).rposition(|p| point(p).0 <= at).unwrap_or(0);
+    let first = (k + 1).saturating_sub(points / 2).min(n - points);
+    let stencil = first..first + points;
+    stencil
+        .clone()
+        .map(|a| {
+            let (sa, value) = point(a);
+            let weight: f64 = stencil
+                .clone()
+                .filter(|&b| b != a)
+                .map(|b| {
+                    let sb = point(b).0;
+                    (at - sb) / (sa - sb)
+                })
+                .product();
+            weight * value
+        })
+        .sum()
+}
+
+/// The slope (1/m) at `at` of the quintic [`lagrange`] reads the carried material with,
+/// on the smooth piece that holds `within` (a point of the same link: at a kink the link's
+/// own side), through the six points of that piece nearest to `within`: lambda' for the
+/// stuck links' per-point multipliers (docs/friction.md section 8, "ord23").
+pub(super) fn lagrange_slope(s: &[f64], values: &[f64], kinks: &[Kink], at: f64, within: f64) -> f64 {
+    let below = kinks.iter().rfind(|k| k.0 <= within);
+    let above = kinks.iter().find(|k| k.0 > within);
+    let (lo, hi) = (
+        below.map_or(f64::NEG_INFINITY, |k| k.0),
+        above.map_or(f64::INFINITY, |k| k.0),
+    );
+    let piece: Vec<(f64, f64)> = below
+        .map(|&(e, _, after)| (e, after))
+        .into_iter()
+        .chain(
+            s.iter()
+                .copied()
+                .zip(values.iter().copied())
+                .filter(|&(x, _)| x > lo && x < hi),
+        )
+        .chain(above.map(|&(e, before, _)| (e, before)))
+        .collect();
+    let n = piece.len();
+    let points = 6.min(n);
+    if points < 2 {
+        return 0.0;
+    }
+    let k = piece.iter().rposition(|p| p.0 <= within).unwrap_or(0);
+    let first = (k + 1).saturating_sub(points / 2).min(n - points);
+    let stencil = &piece[first..first + points];
+    // d/dx of sum_a v_a prod_{b != a} (x - s_b) / (s_a - s_b).
+    stencil
+        .iter()
+        .enumerate()
+        .map(|(a, &(sa, value))| {
+            let slope: f64 = (0..points)
+                .filter(|&c| c != a)
+                .map(|c| {
+                    let rest: f64 = (0..points)
+                        .filter(|&b| b != a && b != c)
+                        .map(|b| (at - stencil[b].0) / (sa - stencil[b].0))
+                        .product();
+                    rest / (sa - stencil[c].0)
+                })
+                .sum();
+            slope * value
+        })
+        .sum()
+}
