@@ -33,7 +33,8 @@ pub(super) enum Route {
 /// Where Newton fails: from the capstan start, once more from `from` with constant tensions;
 /// then (from a frictionless start) the friction coefficients followed from 0 on the first
 /// mesh ([`continuation`]); on a mesh more than twice as fine as the last converged one, once
-/// more through that one halved. Past those, the solve is refused.
+/// more through that one halved; on a later mesh that still fails, the coefficients followed
+/// from 0 on it (once in a solve). Past those, the solve is refused.
 ///
 /// # Errors
 /// As [`super::solve`].
@@ -213,6 +214,8 @@ pub(super) fn refine_with_friction(
                 hint: tried.hint(border.system.mesh.intervals()),
             });
         }
+        // A later failure is a new one, from this mesh's answer.
+        tried.later = None;
         let t = Instant::now();
         // Newton's last residual is the backbone rows' at x.
         let converged = Some(ws.residual.clone());
