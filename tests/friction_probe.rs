@@ -433,3 +433,43 @@ fn past_the_continuation_the_branch_reaches_the_coefficients() {
         "true error {truth:e} m, estimate {estimate:e} m"
     );
 }
+
+/// Case 251 of the probe (tendon 1 released at 4.20 N with mu 0.613, tendon 3 pulled at
+/// 1.62 N with mu 0.139; docs/friction.md, "fold23"). The continuation in the coefficients
+/// reaches them on the first mesh (32 intervals, tendon 1 delivering 63.1 N, estimate
+/// 3.4e-3 m), but that answer is the coarse mesh's alone: Newton from it fails on the 1 305
+/// intervals its estimate asks for and on the 64 of that mesh halved (no descent). On 64
+/// intervals the branch from the frictionless shape ends before the coefficients, where
+/// tendon 1's path degenerates. The refusal says so, on that mesh, and its advice holds:
+/// the robot with its coefficients lowered to 90 % of their values (below where the branch
+/// ends on 64 and 128 intervals, 95.76 % and 95.29 %) is answered.
+#[test]
+fn a_later_mesh_newton_fails_on_reports_where_the_branch_ends() {
+    let robot = opposite(
+        [4.195355500800999, 1.6243959856760033],
+        [0.6131088909246815, 0.13890054080086875],
+        true,
+        -0.001159675640740101,
+    );
+    let message = tdcr::solve(&robot, &Default::default()).unwrap_err().to_string();
+    assert!(
+        message.contains("ends there")
+            && message.contains("on 64 intervals, from the frictionless shape")
+            && message.contains("tendon 1"),
+        "{message}"
+    );
+    let (percent, tension) = branch_end(&message);
+    // Where the branch ends on 64 intervals (measured 95.76 %, 66.943 N), within 0.5 % of the
+    // coefficients of 128 intervals' 95.29 %; the tension where tendon 1's path degenerates
+    // is about EI/r^2 = 66 N on every mesh (fold22's table: 64.9 to 67.9 N).
+    assert!((95.29..96.3).contains(&percent), "{message}");
+    assert!((64.0..69.0).contains(&tension), "{message}");
+    let mut lowered = robot.clone();
+    for t in &mut lowered.tendons {
+        if let Some(f) = &mut t.friction {
+            f.coefficient *= 0.9;
+        }
+    }
+    let answer = tdcr::solve(&lowered, &Default::default()).unwrap();
+    assert!(answer.report.tolerance_met.unwrap_or(false), "{:?}", answer.report);
+}

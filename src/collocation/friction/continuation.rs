@@ -26,8 +26,8 @@ const SMALLEST_STEP: f64 = 1.0 / 64.0;
 const MOST_STEPS: usize = 48;
 
 /// Node states and log tensions (per slip, at every node) of a converged Newton with
-/// friction.
-type Solved = (Vec<State>, Vec<Vec<f64>>);
+/// friction, and the Newton runs it took.
+type Solved = (Vec<State>, Vec<Vec<f64>>, usize);
 
 /// `robot` with every friction coefficient scaled by `lambda` (> 0: the same tendons slip).
 pub(super) fn scaled(robot: &Robot, lambda: f64) -> Robot {
@@ -86,9 +86,9 @@ pub(super) struct GaveUp {
 
 /// Follows the friction coefficients of `robot` from 0 to their values on `mesh`, from the
 /// frictionless solution `x0` there ([module docs](self)): the states and log tensions
-/// (per slip, at every node) of `robot` itself, or where the continuation gave up, how far
-/// it got and its last run's failure ([`GaveUp`]). Its Newton counts go to `report`, and a
-/// note says how many steps it took.
+/// (per slip, at every node) of `robot` itself with the Newton runs taken, or where the
+/// continuation gave up, how far it got and its last run's failure ([`GaveUp`]). Its Newton
+/// counts go to `report`.
 ///
 /// # Errors
 /// A workspace that cannot be built for `mesh`.
@@ -132,11 +132,7 @@ pub(super) fn in_friction(
         ) {
             Ok(solved) => {
                 if target >= 1.0 {
-                    report.notes.push(format!(
-                        "Newton with friction failed from the frictionless shape; the friction coefficients \
-                         were followed from 0 to their values in {run} Newton runs"
-                    ));
-                    return Ok(Ok((trial, solved)));
+                    return Ok(Ok((trial, solved, run)));
                 }
                 (lambda, x, z) = (target, trial, Some(solved));
                 step *= 2.0;
@@ -159,4 +155,55 @@ pub(super) fn in_friction(
         x,
         z,
     }))
+}
+
+/// What following the friction coefficients on one mesh found ([`follow_on`]).
+pub(super) enum Followed {
+    /// The robot's node states and log tensions (per slip, at every node), and how they
+    /// were reached (a clause for the report's note).
+    Solved(Vec<State>, Vec<Vec<f64>>, String),
+    /// Where the continuation gave up, and where the branch past it ends, if shown.
+    Refused(GaveUp, Option<fold::End>),
+}
+
+/// The friction coefficients of `robot` followed from 0 on `mesh` from the frictionless
+/// solution `x0` there: by [`in_friction`], and past where it gives up along the branch by
+/// its arclength ([`fold::follow`]), to the robot's coefficients, or to where the branch
+/// turns back or ends. Its Newton counts go to `report`.
+///
+/// # Errors
+/// A workspace that cannot be built for `mesh`.
+pub(super) fn follow_on(
+    robot: &Robot,
+    options: &Options,
+    mesh: &Mesh,
+    x0: &[State],
+    report: &mut SolveReport,
+) -> Result<Followed> {
+    let mut gave_up = match in_friction(robot, options, mesh, x0, report)? {
+        Ok((x, z, runs)) => {
+            let how = format!("the friction coefficients were followed from 0 to their values in {runs} Newton runs");
+            return Ok(Followed::Solved(x, z, how));
+        }
+        Err(gave_up) => gave_up,
+    };
+    let z = fold::flat(robot, mesh, gave_up.z.as_deref());
+    let start = fold::BranchPoint {
+        lambda: gave_up.reached,
+        x: std::mem::take(&mut gave_up.x),
+        z,
+    };
+    let ended = match fold::follow(robot, options, mesh, start, report)? {
+        fold::Beyond::Answer(x, z, runs) => {
+            let how = format!(
+                "the friction coefficients were followed from 0 to {:.0} % of their values, and on to their values \
+                 along the branch of equilibria by its arclength in {runs} corrector runs",
+                100.0 * gave_up.reached
+            );
+            return Ok(Followed::Solved(x, z, how));
+        }
+        fold::Beyond::Ends(end) => Some(end),
+        fold::Beyond::Unknown => None,
+    };
+    Ok(Followed::Refused(gave_up, ended))
 }

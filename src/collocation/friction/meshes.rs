@@ -33,7 +33,8 @@ pub(super) enum Route {
 /// Where Newton fails: from the capstan start, once more from `from` with constant tensions;
 /// then (from a frictionless start) the friction coefficients followed from 0 on the first
 /// mesh ([`continuation`]); on a mesh more than twice as fine as the last converged one, once
-/// more through that one halved. Past those, the solve is refused.
+/// more through that one halved; on a later mesh that still fails, the coefficients followed
+/// from 0 on it (once in a solve). Past those, the solve is refused.
 ///
 /// # Errors
 /// As [`super::solve`].
@@ -67,14 +68,13 @@ pub(super) fn refine_with_friction(
     // goes on from its answer.
     let mut capstan = previous.is_none();
     let plain = (capstan && !from_guess).then(|| (mesh.clone(), x.clone()));
-    // Whether the continuation in the friction coefficients ran (once at most, where both
-    // tries from `plain` failed on the first mesh itself; a later mesh's failure goes to
-    // the halved mesh below instead).
+    // Whether the continuation in the friction coefficients ran on the first mesh (once at
+    // most, where both tries from `plain` failed on the first mesh itself; a later mesh's
+    // failure goes to the halved mesh below, and then to a continuation on the mesh that
+    // failed).
     let mut continued = false;
-    // Where the continuation gave up: how far it got.
-    let mut reached: Option<continuation::GaveUp> = None;
-    // Where the branch past it ends (turns back, or a tendon's path degenerates).
-    let mut ended: Option<fold::End> = None;
+    // What the continuations found, for the refusal's hint.
+    let mut tried = refusal::Tried::default();
     let mut kinks = kinks::Kinks::default();
     // The last converged mesh and its answer, for a mesh between it and a finer one Newton
     // failed on.
@@ -124,43 +124,24 @@ pub(super) fn refine_with_friction(
             && same_nodes(&border.system.mesh, m)
             && !std::mem::replace(&mut continued, true)
         {
-            match continuation::in_friction(robot, options, m, states, &mut report)? {
-                Ok((solved, z)) => {
-                    // Both tries failed: the friction coefficients followed from 0 on the
-                    // first mesh ([`continuation`]), and the refinement from their answer.
+            // Both tries failed: the friction coefficients followed from 0 on the first mesh
+            // ([`continuation`]), past where that gives up along the branch by its arclength
+            // ([`fold`]), and the refinement from their answer.
+            match continuation::follow_on(robot, options, m, states, &mut report)? {
+                continuation::Followed::Solved(solved, z, how) => {
+                    report.notes.push(format!(
+                        "Newton with friction failed from the frictionless shape; {how}"
+                    ));
+                    tried.followed = Some(m.intervals());
                     report.meshes -= 1;
                     previous = Some((m.nodes.iter().map(|n| n.s).collect(), z));
                     (mesh, x) = (m.clone(), solved);
                     continue;
                 }
-                Err(mut gave_up) => {
-                    // Past where it gave up, the branch followed by a log tension
-                    // ([`fold`]): to the robot's coefficients, or to a fold.
-                    let z = fold::flat(robot, m, gave_up.z.as_deref());
-                    let start = fold::BranchPoint {
-                        lambda: gave_up.reached,
-                        x: std::mem::take(&mut gave_up.x),
-                        z,
-                    };
-                    match fold::follow(robot, options, m, start, &mut report)? {
-                        fold::Beyond::Answer(solved, z, runs) => {
-                            report.notes.push(format!(
-                                "Newton with friction failed from the frictionless shape; the friction coefficients \
-                                 were followed from 0 to {:.0} % of their values, and on to their values along the \
-                                 branch of equilibria by its arclength in {runs} corrector runs",
-                                100.0 * gave_up.reached
-                            ));
-                            report.meshes -= 1;
-                            previous = Some((m.nodes.iter().map(|n| n.s).collect(), z));
-                            (mesh, x) = (m.clone(), solved);
-                            continue;
-                        }
-                        fold::Beyond::Ends(end) => ended = Some(end),
-                        fold::Beyond::Unknown => {}
-                    }
+                continuation::Followed::Refused(gave_up, end) => {
                     // The refusal reports the continuation's last run, at its coefficients.
                     (termination, worst) = (gave_up.termination, gave_up.worst);
-                    reached = Some(gave_up);
+                    (tried.reached, tried.ended) = (Some(gave_up), end);
                 }
             }
         }
@@ -172,6 +153,9 @@ pub(super) fn refine_with_friction(
             // from that one's answer interpolated: once more on the converged mesh with
             // every interval halved, and the refinement from there.
             let halved = halve(robot, m)?;
+            tried
+                .later
+                .get_or_insert((border.system.mesh.intervals(), m.intervals()));
             report.notes.push(format!(
                 "Newton with friction failed on a mesh of {} intervals; the refinement went on from the last \
                  converged mesh of {} intervals with every interval halved",
@@ -182,6 +166,39 @@ pub(super) fn refine_with_friction(
             x = interpolate(&model, guess, &halved);
             mesh = halved;
             continue;
+        }
+        if termination != Termination::Converged
+            && let Some((m, _)) = &coarse
+            && let Some((m0, states)) = &plain
+            && !std::mem::replace(&mut tried.again, true)
+        {
+            // Newton failed on a later mesh from a converged one's answer (and, where that
+            // was more than twice as fine, on the converged one halved): that answer may be
+            // its mesh's alone. The friction coefficients followed from 0 on the mesh that
+            // failed, from the frictionless solution interpolated onto it, as on the first
+            // mesh (once in a solve).
+            let failed = border.system.mesh.clone();
+            tried.later.get_or_insert((failed.intervals(), m.intervals()));
+            let x0 = frictionless_on(robot, (m0, states), &failed)?;
+            match continuation::follow_on(robot, options, &failed, &x0, &mut report)? {
+                continuation::Followed::Solved(solved, z, how) => {
+                    report.notes.push(format!(
+                        "Newton with friction failed on a mesh of {} intervals from the answer of the last converged \
+                         mesh ({} intervals); on it {how}",
+                        failed.intervals(),
+                        m.intervals()
+                    ));
+                    tried.followed = Some(failed.intervals());
+                    report.meshes -= 1;
+                    previous = Some((failed.nodes.iter().map(|n| n.s).collect(), z));
+                    (mesh, x) = (failed, solved);
+                    continue;
+                }
+                continuation::Followed::Refused(gave_up, end) => {
+                    (termination, worst) = (gave_up.termination, gave_up.worst);
+                    (tried.reached, tried.ended) = (Some(gave_up), end);
+                }
+            }
         }
         report.termination = termination;
         report.intervals = border.system.mesh.intervals();
@@ -194,14 +211,11 @@ pub(super) fn refine_with_friction(
                 method: Method::Collocation,
                 report: Box::new(report.clone()),
                 worst_s: system.row_position(worst.min(system.unknowns() - 1)),
-                hint: refusal_hint(
-                    reached.as_ref(),
-                    ended.as_ref(),
-                    continued,
-                    border.system.mesh.intervals(),
-                ),
+                hint: tried.hint(border.system.mesh.intervals()),
             });
         }
+        // A later failure is a new one, from this mesh's answer.
+        tried.later = None;
         let t = Instant::now();
         // Newton's last residual is the backbone rows' at x.
         let converged = Some(ws.residual.clone());
@@ -291,73 +305,6 @@ fn linear(points: &[f64], values: &[f64], s: f64) -> f64 {
     values[k] + t * (values[k + 1] - values[k])
 }
 
-/// What to try after Newton with friction failed on a mesh of `intervals` intervals: where
-/// the branch past the continuation in the coefficients ends (`ended`), where the
-/// continuation gave up (`reached`), where it had answered the first mesh (`continued`
-/// without `reached`), or where it did not run.
-fn refusal_hint(
-    reached: Option<&continuation::GaveUp>,
-    ended: Option<&fold::End>,
-    continued: bool,
-    intervals: usize,
-) -> String {
-    match (reached, ended) {
-        (Some(g), Some(e)) => {
-            let (slow, speed) = e.slowest;
-            let how = match (e.folded, speed < fold::DEGENERATE) {
-                (true, false) => "turns back there (a fold)".to_string(),
-                (true, true) => format!(
-                    "turns back there (a fold), where tendon {}'s path has all but vanished ({speed:.1e} of the \
-                     backbone's length per length: the rod's curvature is nearly the inverse of its offset)",
-                    slow + 1
-                ),
-                (false, _) => format!(
-                    "ends there: the rod's curvature reaches the inverse of tendon {}'s offset, where its path \
-                     has all but vanished ({speed:.1e} of the backbone's length per length) and the model no longer \
-                     holds",
-                    slow + 1
-                ),
-            };
-            format!(
-                "no equilibrium on the branch the robot reaches as its friction grows from 0: on the first mesh \
-                 ({intervals} intervals) Newton solved {:.0} % of the friction coefficients (the termination and \
-                 residual above are its run at {:.0} %), and the branch of equilibria followed on by its arclength \
-                 reaches {:.2} % of them, where tendon {} has friction coefficient {:.3} and delivers {:.3} N, and \
-                 {how} (docs/friction.md, \"Large friction on a released tendon\"). Lower the friction \
-                 coefficients below {:.2} % of their values (the branch scales them all together), tendon {}'s below \
-                 {:.3} (the first mesh's value; finer meshes move it), or pull it in instead",
-                100.0 * g.reached,
-                100.0 * g.tried,
-                100.0 * e.lambda,
-                e.tendon + 1,
-                e.coefficient,
-                e.tension,
-                100.0 * e.lambda,
-                e.tendon + 1,
-                e.coefficient,
-            )
-        }
-        (Some(g), None) => format!(
-            "the friction coefficients were followed from 0: Newton solved {:.0} % of them on the first mesh \
-             ({intervals} intervals) and failed at {:.0} % (the termination and residual above are that run's), \
-             and the branch of equilibria past it, followed by its arclength, neither reached their values nor \
-             ended. A full-slip equilibrium may not exist: a released tendon delivers up to exp(mu theta) \
-             times its input, which bends the rod and turns its path further (docs/friction.md, \"Large friction on \
-             a released tendon\"); lower the friction coefficient of a released tendon, or pull it in instead",
-            100.0 * g.reached,
-            100.0 * g.tried
-        ),
-        (None, _) if continued => format!(
-            "the friction coefficients were followed from 0 to their values on the first mesh, and Newton then \
-             failed on a finer mesh ({intervals} intervals): loosen the tolerance, or lower the friction \
-             coefficient of a released tendon"
-        ),
-        (None, _) => "friction is solved from the frictionless shape: lower the friction coefficient, or solve with \
-                 the shooting solver to compare"
-            .into(),
-    }
-}
-
 /// Whether meshes `a` and `b` have the same nodes (arc lengths, bit for bit).
 fn same_nodes(a: &Mesh, b: &Mesh) -> bool {
     a.nodes.len() == b.nodes.len()
@@ -365,6 +312,22 @@ fn same_nodes(a: &Mesh, b: &Mesh) -> bool {
             .iter()
             .zip(&b.nodes)
             .all(|(p, q)| p.s.to_bits() == q.s.to_bits())
+}
+
+/// The frictionless solution `states` on the mesh `from` of `robot`, interpolated onto
+/// `mesh` (the start of a continuation in the friction coefficients there).
+///
+/// # Errors
+/// A model breakdown at those states.
+fn frictionless_on(robot: &Robot, (from, states): (&Mesh, &[State]), mesh: &Mesh) -> Result<Vec<State>> {
+    let mut smooth = robot.clone();
+    for t in &mut smooth.tendons {
+        t.friction = None;
+    }
+    let model = Model::new(&smooth);
+    let ends = pipeline::segment_ends(from);
+    let nodes = nodes::nodes(&model, states, &ends, None)?;
+    Ok(crate::mesh::guess::interpolate_nodes(&model, &nodes, mesh))
 }
 
 /// `mesh` with every interval of positive length halved.

@@ -33,6 +33,7 @@ mod order6;
 mod order6_lanes;
 mod profile;
 mod pull_ins;
+mod refusal;
 mod staircase;
 mod start;
 mod stuck_links;
