@@ -67,18 +67,17 @@ pub(super) fn lagrange(s: &[f64], values: &[f64], kinks: &[Kink], at: f64, point
         .sum()
 }
 
-/// The slope (1/m) at `at` of the quintic [`lagrange`] reads the carried material with,
-/// on the smooth piece that holds `within` (a point of the same link: at a kink the link's
-/// own side), through the six points of that piece nearest to `within`: lambda' for the
-/// stuck links' per-point multipliers (docs/friction.md section 8, "ord23").
-pub(super) fn lagrange_slope(s: &[f64], values: &[f64], kinks: &[Kink], at: f64, within: f64) -> f64 {
-    let below = kinks.iter().rfind(|k| k.0 <= within);
-    let above = kinks.iter().find(|k| k.0 > within);
+/// The points (s, lambda) of the smooth piece of the carried material that holds `at`: the
+/// kink below it with the lambda after it, the nodes of `s` strictly between the kinks, and
+/// the kink above it with the lambda before it ([`lagrange`]'s piece, listed).
+fn piece(s: &[f64], values: &[f64], kinks: &[Kink], at: f64) -> Vec<(f64, f64)> {
+    let below = kinks.iter().rfind(|k| k.0 <= at);
+    let above = kinks.iter().find(|k| k.0 > at);
     let (lo, hi) = (
         below.map_or(f64::NEG_INFINITY, |k| k.0),
         above.map_or(f64::INFINITY, |k| k.0),
     );
-    let piece: Vec<(f64, f64)> = below
+    below
         .map(|&(e, _, after)| (e, after))
         .into_iter()
         .chain(
@@ -88,7 +87,15 @@ pub(super) fn lagrange_slope(s: &[f64], values: &[f64], kinks: &[Kink], at: f64,
                 .filter(|&(x, _)| x > lo && x < hi),
         )
         .chain(above.map(|&(e, before, _)| (e, before)))
-        .collect();
+        .collect()
+}
+
+/// The slope (1/m) at `at` of the quintic [`lagrange`] reads the carried material with,
+/// on the smooth piece that holds `within` (a point of the same link: at a kink the link's
+/// own side), through the six points of that piece nearest to `within`: lambda' for the
+/// stuck links' per-point multipliers (docs/friction.md section 8, "ord23").
+pub(super) fn lagrange_slope(s: &[f64], values: &[f64], kinks: &[Kink], at: f64, within: f64) -> f64 {
+    let piece = piece(s, values, kinks, within);
     let n = piece.len();
     let points = 6.min(n);
     if points < 2 {
@@ -127,23 +134,7 @@ mod tests {
         if let Some(k) = s.iter().position(|&x| x == at) {
             return values[k];
         }
-        let below = kinks.iter().rfind(|k| k.0 <= at);
-        let above = kinks.iter().find(|k| k.0 > at);
-        let (lo, hi) = (
-            below.map_or(f64::NEG_INFINITY, |k| k.0),
-            above.map_or(f64::INFINITY, |k| k.0),
-        );
-        let piece: Vec<(f64, f64)> = below
-            .map(|&(e, _, after)| (e, after))
-            .into_iter()
-            .chain(
-                s.iter()
-                    .copied()
-                    .zip(values.iter().copied())
-                    .filter(|&(x, _)| x > lo && x < hi),
-            )
-            .chain(above.map(|&(e, before, _)| (e, before)))
-            .collect();
+        let piece = piece(s, values, kinks, at);
         let n = piece.len();
         let points = points.min(n);
         let k = piece.iter().rposition(|p| p.0 <= at).unwrap_or(0);
