@@ -429,13 +429,15 @@ pub(super) fn back(
         .extend((0..count).map(|j| h / 6.0 * profile.coefficient(j) * (la.kappa[j] + 4.0 * lm.kappa[j] + lb.kappa[j])));
     out.pointwise.clear();
     out.pointwise.extend((0..count).map(|j| {
-        let points = [
-            (&sites.start, (&a.v, &a.u), la, za[j]),
-            (&sites.mid, (&vm, &um), lm, zm[j]),
-            (&sites.end, (&b.v, &b.u), lb, zb[j]),
-        ];
         (on[j] && profile.sticks(j, k))
-            .then(|| pointwise(link, j, points))
+            .then(|| {
+                let points = [
+                    (&sites.start, (&a.v, &a.u), la, za[j]),
+                    (&sites.mid, (&vm, &um), lm, zm[j]),
+                    (&sites.end, (&b.v, &b.u), lb, zb[j]),
+                ];
+                pointwise(link, j, points)
+            })
             .flatten()
     }));
     out.psi.clear();
