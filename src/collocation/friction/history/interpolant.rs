@@ -90,20 +90,28 @@ fn piece(s: &[f64], values: &[f64], kinks: &[Kink], at: f64) -> Vec<(f64, f64)> 
         .collect()
 }
 
+/// The `points` points of a listed `piece` ([`piece`]) nearest to `at`, as [`lagrange`]
+/// picks its stencil: half of them at or before `at` where the piece allows; all of them
+/// in a piece with fewer.
+fn nearest(piece: &[(f64, f64)], at: f64, points: usize) -> &[(f64, f64)] {
+    let n = piece.len();
+    let points = points.min(n);
+    let k = piece.iter().rposition(|p| p.0 <= at).unwrap_or(0);
+    let first = (k + 1).saturating_sub(points / 2).min(n - points);
+    &piece[first..first + points]
+}
+
 /// The slope (1/m) at `at` of the quintic [`lagrange`] reads the carried material with,
 /// on the smooth piece that holds `within` (a point of the same link: at a kink the link's
 /// own side), through the six points of that piece nearest to `within`: lambda' for the
 /// stuck links' per-point multipliers (docs/friction.md section 8, "ord23").
 pub(super) fn lagrange_slope(s: &[f64], values: &[f64], kinks: &[Kink], at: f64, within: f64) -> f64 {
     let piece = piece(s, values, kinks, within);
-    let n = piece.len();
-    let points = 6.min(n);
+    let stencil = nearest(&piece, within, 6);
+    let points = stencil.len();
     if points < 2 {
         return 0.0;
     }
-    let k = piece.iter().rposition(|p| p.0 <= within).unwrap_or(0);
-    let first = (k + 1).saturating_sub(points / 2).min(n - points);
-    let stencil = &piece[first..first + points];
     // d/dx of sum_a v_a prod_{b != a} (x - s_b) / (s_a - s_b).
     stencil
         .iter()
@@ -135,11 +143,7 @@ mod tests {
             return values[k];
         }
         let piece = piece(s, values, kinks, at);
-        let n = piece.len();
-        let points = points.min(n);
-        let k = piece.iter().rposition(|p| p.0 <= at).unwrap_or(0);
-        let first = (k + 1).saturating_sub(points / 2).min(n - points);
-        let stencil = &piece[first..first + points];
+        let stencil = nearest(&piece, at, points);
         stencil
             .iter()
             .enumerate()
