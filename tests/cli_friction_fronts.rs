@@ -269,3 +269,65 @@ fn compare_leaves_out_the_models_that_refuse_friction() {
     assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
     assert!(stderr(&out).contains("point-moment tendon model"), "{}", stderr(&out));
 }
+
+/// `calibrate --fit mu` with two tendons with friction moves both in proportion (mu is the
+/// first one's): the robot-file lines give each tendon its own coefficient, the JSON lists
+/// them per tendon, and the standard errors of parameters that were not fitted are null.
+/// The measurements are the paper robot's tips with friction 0.08 and 0.16 on tendons 1
+/// and 2 (`tdcr batch`), fitted from 0.05 and 0.1.
+#[test]
+fn calibrating_mu_gives_each_tendon_its_own_line_and_held_parameters_no_standard_error() {
+    let dir = scratch("calibrate_mu");
+    std::fs::write(dir.join("paper.toml"), stdout(&run(&dir, &["example", "paper-robot"]))).unwrap();
+    let experiments = stdout(&run(&dir, &["example", "experiments"]));
+    let cases: Vec<String> = experiments
+        .lines()
+        .map(|l| l.split(',').take(8).collect::<Vec<_>>().join(","))
+        .collect();
+    let head = cases[0].replace("tension_", "tension.").replace("tip_force_", "tip_force.");
+    std::fs::write(dir.join("cases.csv"), [&[head][..], &cases[1..]].concat().join("\n")).unwrap();
+    let batch = run(
+        &dir,
+        &["batch", "cases.csv", "--robot", "paper.toml", "--friction", "1=0.08", "--friction", "2=0.16"],
+    );
+    assert_eq!(batch.status.code(), Some(0), "{}", stderr(&batch));
+    let rows = stdout(&batch);
+    let names: Vec<&str> = rows.lines().next().unwrap().split(',').collect();
+    let column = |name: &str| names.iter().position(|n| *n == name).unwrap();
+    let tips = [column("tip_x"), column("tip_y"), column("tip_z")];
+    let mut measured = format!("{},measured_x,measured_y,measured_z\n", cases[0]);
+    for (case, row) in cases[1..].iter().zip(rows.lines().skip(1)) {
+        let values: Vec<&str> = row.split(',').collect();
+        measured += &format!("{case},{},{},{}\n", values[tips[0]], values[tips[1]], values[tips[2]]);
+    }
+    std::fs::write(dir.join("experiments.csv"), measured).unwrap();
+    let args = [
+        "calibrate", "paper.toml", "experiments.csv", "--fit", "e,mu", "--friction", "1=0.05", "--friction", "2=0.1",
+    ];
+    let out = run(&dir, &args);
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    let text = stdout(&out);
+    let line = |i: usize| -> f64 {
+        let head = format!("  [[tendon]] {i}: friction = ");
+        let found = text.lines().find_map(|l| l.strip_prefix(head.as_str()));
+        found.unwrap_or_else(|| panic!("no line for tendon {i}: {text}")).parse().unwrap()
+    };
+    // Each tendon its own recovered coefficient; 1e-4 covers the six printed digits and the
+    // fit's convergence on exact data.
+    assert!((line(1) - 0.08).abs() < 1e-4 && (line(2) - 0.16).abs() < 1e-4, "{text}");
+    let out = run(&dir, &[&args[..], &["--format", "json"]].concat());
+    let json: serde_json::Value = serde_json::from_str(&stdout(&out)).unwrap();
+    let frictions = json["fitted_frictions"].as_array().unwrap();
+    let mu = |i: usize| frictions[i].as_f64().unwrap();
+    assert_eq!(mu(0), json["fitted"]["friction"].as_f64().unwrap());
+    // Exactly the ratio the start gave (0.1 / 0.05 = 2), to rounding.
+    assert!((mu(1) / mu(0) - 2.0).abs() < 1e-12, "{frictions:?}");
+    assert!(frictions[2].is_null(), "{frictions:?}");
+    let se = &json["standard_errors"];
+    assert!(se["youngs_modulus"].as_f64().unwrap() > 0.0, "{se}");
+    assert!(se["friction"].as_f64().unwrap() > 0.0, "{se}");
+    assert!(
+        se["base_position"].is_null() && se["offset_scale"].is_null() && se["euler_xyz_deg"].is_null(),
+        "{se}"
+    );
+}

@@ -352,31 +352,46 @@ fn table(
         let _ = writeln!(out, "  every tendon offset (x, y, radius) times {:.6}", p.offset_scale);
     }
     if fit.fit.friction {
-        let _ = writeln!(out, "  [[tendon]] with friction: friction = {:.6}", p.friction);
+        // mu is the first tendon with friction's; the others moved with it in proportion, so
+        // each gets its own line.
+        for (i, f) in fit.robot.tendons.iter().enumerate() {
+            if let Some(f) = f.active_friction() {
+                let mu = f.coefficient;
+                // Six significant digits (fixed-point hides a coefficient fitted toward 0).
+                let value = if mu >= 1e-3 { format!("{mu:.6}") } else { format!("{mu:.5e}") };
+                let _ = writeln!(out, "  [[tendon]] {}: friction = {value}", i + 1);
+            }
+        }
     }
     out
 }
 
+/// Calibration parameters in the JSON: every one for the start and the fit; for the standard
+/// errors only the fitted ones (the others are null: they were held, not known exactly).
 #[derive(Serialize)]
 struct ParametersJson {
-    youngs_modulus: f64,
-    euler_xyz_rad: [f64; 3],
-    euler_xyz_deg: [f64; 3],
-    base_position: [f64; 3],
-    offset_scale: f64,
-    /// The friction coefficient of the tendons with friction; null without friction.
+    youngs_modulus: Option<f64>,
+    euler_xyz_rad: Option<[f64; 3]>,
+    euler_xyz_deg: Option<[f64; 3]>,
+    base_position: Option<[f64; 3]>,
+    offset_scale: Option<f64>,
+    /// The first tendon with friction's coefficient (the fitted mu; the others keep their
+    /// ratios to it, see `fitted_frictions`); null without friction.
     friction: Option<f64>,
 }
 
-impl From<&Parameters> for ParametersJson {
-    fn from(p: &Parameters) -> Self {
+impl ParametersJson {
+    /// `p`'s values, those of the parameters `fitted` selects only (all where `None`).
+    fn of(p: &Parameters, fitted: Option<&Fit>) -> Self {
+        let keep = |selected: bool| fitted.is_none_or(|_| selected);
+        let f = fitted.copied().unwrap_or_else(Fit::none);
         ParametersJson {
-            youngs_modulus: p.youngs_modulus,
-            euler_xyz_rad: p.euler.into(),
-            euler_xyz_deg: p.euler_deg().into(),
-            base_position: p.base_position.into(),
-            offset_scale: p.offset_scale,
-            friction: (p.friction.is_finite() && p.friction > 0.0).then_some(p.friction),
+            youngs_modulus: keep(f.youngs_modulus).then_some(p.youngs_modulus),
+            euler_xyz_rad: keep(f.euler).then(|| p.euler.into()),
+            euler_xyz_deg: keep(f.euler).then(|| p.euler_deg().into()),
+            base_position: keep(f.base_position).then(|| p.base_position.into()),
+            offset_scale: keep(f.offset_scale).then_some(p.offset_scale),
+            friction: (keep(f.friction) && p.friction.is_finite() && p.friction > 0.0).then_some(p.friction),
         }
     }
 }
@@ -444,6 +459,8 @@ struct CalibrationJson<'a> {
     start: ParametersJson,
     fitted: ParametersJson,
     standard_errors: Option<ParametersJson>,
+    /// The fitted robot's friction coefficient per tendon (null: no friction).
+    fitted_frictions: Vec<Option<f64>>,
     noise_estimate: f64,
     /// The fit's residuals against the measurement noise ([`Calibration::poor_fit`]).
     fit_quality: FitQuality,
@@ -471,9 +488,10 @@ fn json(
         sensitivity_evaluations: fit.sensitivity_evaluations,
         intervals: options.collocation.intervals,
         time: fit.timings.total.as_secs_f64(),
-        start: (&fit.start).into(),
-        fitted: (&fit.fitted).into(),
-        standard_errors: fit.standard_errors.as_ref().map(Into::into),
+        start: ParametersJson::of(&fit.start, None),
+        fitted: ParametersJson::of(&fit.fitted, None),
+        standard_errors: fit.standard_errors.as_ref().map(|e| ParametersJson::of(e, Some(&fit.fit))),
+        fitted_frictions: fit.robot.tendons.iter().map(|t| t.active_friction().map(|f| f.coefficient)).collect(),
         noise_estimate: fit.noise_estimate,
         fit_quality: FitQuality {
             stated_noise: noise,
