@@ -284,11 +284,22 @@ fn calibrating_mu_gives_each_tendon_its_own_line_and_held_parameters_no_standard
         .lines()
         .map(|l| l.split(',').take(8).collect::<Vec<_>>().join(","))
         .collect();
-    let head = cases[0].replace("tension_", "tension.").replace("tip_force_", "tip_force.");
+    let head = cases[0]
+        .replace("tension_", "tension.")
+        .replace("tip_force_", "tip_force.");
     std::fs::write(dir.join("cases.csv"), [&[head][..], &cases[1..]].concat().join("\n")).unwrap();
     let batch = run(
         &dir,
-        &["batch", "cases.csv", "--robot", "paper.toml", "--friction", "1=0.08", "--friction", "2=0.16"],
+        &[
+            "batch",
+            "cases.csv",
+            "--robot",
+            "paper.toml",
+            "--friction",
+            "1=0.08",
+            "--friction",
+            "2=0.16",
+        ],
     );
     assert_eq!(batch.status.code(), Some(0), "{}", stderr(&batch));
     let rows = stdout(&batch);
@@ -302,7 +313,15 @@ fn calibrating_mu_gives_each_tendon_its_own_line_and_held_parameters_no_standard
     }
     std::fs::write(dir.join("experiments.csv"), measured).unwrap();
     let args = [
-        "calibrate", "paper.toml", "experiments.csv", "--fit", "e,mu", "--friction", "1=0.05", "--friction", "2=0.1",
+        "calibrate",
+        "paper.toml",
+        "experiments.csv",
+        "--fit",
+        "e,mu",
+        "--friction",
+        "1=0.05",
+        "--friction",
+        "2=0.1",
     ];
     let out = run(&dir, &args);
     assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
@@ -310,7 +329,10 @@ fn calibrating_mu_gives_each_tendon_its_own_line_and_held_parameters_no_standard
     let line = |i: usize| -> f64 {
         let head = format!("  [[tendon]] {i}: friction = ");
         let found = text.lines().find_map(|l| l.strip_prefix(head.as_str()));
-        found.unwrap_or_else(|| panic!("no line for tendon {i}: {text}")).parse().unwrap()
+        found
+            .unwrap_or_else(|| panic!("no line for tendon {i}: {text}"))
+            .parse()
+            .unwrap()
     };
     // Each tendon its own recovered coefficient; 1e-4 covers the six printed digits and the
     // fit's convergence on exact data.

@@ -358,7 +358,11 @@ fn table(
             if let Some(f) = f.active_friction() {
                 let mu = f.coefficient;
                 // Six significant digits (fixed-point hides a coefficient fitted toward 0).
-                let value = if mu >= 1e-3 { format!("{mu:.6}") } else { format!("{mu:.5e}") };
+                let value = if mu >= 1e-3 {
+                    format!("{mu:.6}")
+                } else {
+                    format!("{mu:.5e}")
+                };
                 let _ = writeln!(out, "  [[tendon]] {}: friction = {value}", i + 1);
             }
         }
@@ -490,8 +494,16 @@ fn json(
         time: fit.timings.total.as_secs_f64(),
         start: ParametersJson::of(&fit.start, None),
         fitted: ParametersJson::of(&fit.fitted, None),
-        standard_errors: fit.standard_errors.as_ref().map(|e| ParametersJson::of(e, Some(&fit.fit))),
-        fitted_frictions: fit.robot.tendons.iter().map(|t| t.active_friction().map(|f| f.coefficient)).collect(),
+        standard_errors: fit
+            .standard_errors
+            .as_ref()
+            .map(|e| ParametersJson::of(e, Some(&fit.fit))),
+        fitted_frictions: fit
+            .robot
+            .tendons
+            .iter()
+            .map(|t| t.active_friction().map(|f| f.coefficient))
+            .collect(),
         noise_estimate: fit.noise_estimate,
         fit_quality: FitQuality {
             stated_noise: noise,
