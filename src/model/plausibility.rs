@@ -3,9 +3,14 @@
 
 use crate::model::robot::Robot;
 use crate::model::scales::{
-    FORCE_LIMIT, LENGTH_RANGE, LoadSite, MODULUS_RANGE, MOMENT_LIMIT, SELF_WEIGHT_LIMIT, SLENDERNESS_RANGE,
-    TENDON_LIMIT, Warning,
+    FORCE_LIMIT, FRICTION_LIMIT, FRICTION_TURNING_LIMIT, LENGTH_RANGE, LoadSite, MODULUS_RANGE, MOMENT_LIMIT,
+    PATH_LIMIT, SELF_WEIGHT_LIMIT, SLENDERNESS_RANGE, TENDON_LIMIT, Warning,
 };
+use nalgebra::Vector3;
+
+/// Pieces of a custom routing's path integrals on the straight rod ([`Robot::path_figures`]):
+/// 1024 trapezoids, far finer than any routing a channel follows.
+const PATH_PIECES: usize = 1024;
 
 /// Arc lengths where the stiffness and distributed loads are sampled: 33 evenly spaced.
 fn samples(length: f64) -> impl Iterator<Item = f64> {
@@ -34,6 +39,32 @@ impl Robot {
         let end = t.end(length);
         let offset = t.routing.max_offset(end, length);
         self.weakest_bending(end) / (offset * offset)
+    }
+
+    /// Tendon `i`'s path on the straight rod (no precurvature counted): its length (m) and
+    /// its total turning theta = integral of |t'| ds (rad) over the rod it spans, with
+    /// p' = e3 + r', p'' = r'' and |t'| = |p' x p''| / |p'|^2 per unit s. Exact for straight
+    /// and helical routings (constant integrands), trapezoids for a custom one.
+    fn path_figures(&self, i: usize) -> (f64, f64) {
+        let length = self.length();
+        let t = &self.tendons[i];
+        let end = t.end(length);
+        let rates = |s: f64| {
+            let r = t.routing.at(s, length);
+            let speed = Vector3::z() + r.r_s;
+            let turning = speed.cross(&r.r_ss).norm() / speed.norm_squared();
+            (speed.norm(), turning)
+        };
+        let pieces = match t.routing {
+            crate::model::routing::Routing::Custom(_) => PATH_PIECES,
+            _ => 1,
+        };
+        let h = end / pieces as f64;
+        (0..=pieces).fold((0.0, 0.0), |(path, turning), k| {
+            let weight = if k == 0 || k == pieces { 0.5 * h } else { h };
+            let (v, w) = rates(h * k as f64);
+            (path + weight * v, turning + weight * w)
+        })
     }
 
     /// The displacement-controlled tendons whose solved tensions are at or past their
@@ -153,6 +184,39 @@ impl Robot {
             };
             if moment.figure() > MOMENT_LIMIT {
                 out.push(moment);
+            }
+        }
+        for (i, t) in self.tendons.iter().enumerate() {
+            let span = t.end(length);
+            if span.is_nan() || span <= 0.0 {
+                continue;
+            }
+            let (path, turning) = self.path_figures(i);
+            let turns = t.routing.turns_between(0.0, span, length);
+            let w = Warning::PathLength {
+                tendon: i,
+                path,
+                span,
+                turns,
+            };
+            if w.figure() > PATH_LIMIT {
+                out.push(w);
+            }
+            let Some(f) = t.active_friction() else { continue };
+            let w = Warning::Friction {
+                tendon: i,
+                coefficient: f.coefficient,
+            };
+            if w.figure() > FRICTION_LIMIT {
+                out.push(w);
+            }
+            let w = Warning::FrictionTurning {
+                tendon: i,
+                coefficient: f.coefficient,
+                turning,
+            };
+            if w.figure() > FRICTION_TURNING_LIMIT {
+                out.push(w);
             }
         }
         out

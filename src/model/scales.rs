@@ -18,6 +18,9 @@
 //! | kappa r | the bend the tendons cause: the curvature kappa = \|sum tau_i r_i\| / EI of their net moment on a straight rod, times the offset r of the tendon furthest inside that bend (along it) | at or above 1 somewhere along the rod: the bend radius 1 / kappa would fall below that tendon's offset, the path of a tendon running along the backbone would fold, and no equilibrium exists past it unless loads or a precurvature (not counted) hold the bend back; a tendon winding around the rod (a helix) keeps a tangent across the backbone and can have equilibria past it (a one-turn helix at 1.01 does); for one tendon kappa r = tau r^2 / EI, the geometric limit EI / r^2; tendons pulled against each other (co-contraction) cause no bend and no warning |
 //! | F a^2 / EI | a tip force (a = L) or point force (a = its s) against stiffness | above 100: the rod bends only within (EI/F)^(1/2) < a/10 of the load |
 //! | M a / EI | the bending angle a tip or point moment alone causes (rad) | above 20 pi (ten turns) |
+//! | path / span | a tendon's path length on the straight rod against the length of rod it spans | above 2: a helix steeper than 60 degrees (one whose pitch is below 3.6 times its radius), which a channel in a rod rarely is; usually a turn count per metre given as per rod length or a radius in mm |
+//! | mu | a tendon's friction coefficient | above 1: tendon-channel pairs measure about 0.05 (PTFE) to 0.5 (steel on steel) |
+//! | mu theta | a tendon's friction coefficient times its path's total turning theta on the straight rod (rad) | above 10: a pulled tendon passes on less than exp(-10) = 4.5e-5 of its tension to its termination, a released one more than 2.2e4 times it; no default mesh resolves such a fall |
 //!
 //! A displacement-controlled tendon's tension is solved for, so these figures cannot check
 //! it; [`crate::Robot::solved_tensions`] holds a solution's tensions to the same geometric limit
@@ -51,6 +54,14 @@ pub const TENDON_LIMIT: f64 = 1.0;
 pub const FORCE_LIMIT: f64 = 100.0;
 /// Largest plausible bending angle of a moment, M a / EI, 20 pi rad (ten turns).
 pub const MOMENT_LIMIT: f64 = 20.0 * PI;
+/// Largest plausible ratio of a tendon's path length on the straight rod to the rod it
+/// spans, 2: a helix at 60 degrees to the backbone.
+pub const PATH_LIMIT: f64 = 2.0;
+/// Largest plausible friction coefficient, 1 (tendon-channel pairs: about 0.05 to 0.5).
+pub const FRICTION_LIMIT: f64 = 1.0;
+/// Largest plausible mu theta of a tendon (theta its path's total turning on the straight
+/// rod, rad), 10: the capstan factor exp(10) = 2.2e4.
+pub const FRICTION_TURNING_LIMIT: f64 = 10.0;
 
 /// Where a force or moment acts.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -153,6 +164,34 @@ pub enum Warning {
         /// EI, N m^2.
         bending_stiffness: f64,
     },
+    /// A tendon's path on the straight rod is more than [`PATH_LIMIT`] times the rod it spans.
+    PathLength {
+        /// The tendon (from 0; messages number from 1).
+        tendon: usize,
+        /// Its path length on the straight rod, m.
+        path: f64,
+        /// The length of rod it spans (its termination's arc length), m.
+        span: f64,
+        /// The turns its routing makes about the backbone over that span.
+        turns: f64,
+    },
+    /// A tendon's friction coefficient is above [`FRICTION_LIMIT`].
+    Friction {
+        /// The tendon (from 0; messages number from 1).
+        tendon: usize,
+        /// mu, dimensionless.
+        coefficient: f64,
+    },
+    /// A tendon's friction coefficient times its path's total turning on the straight rod is
+    /// above [`FRICTION_TURNING_LIMIT`].
+    FrictionTurning {
+        /// The tendon (from 0; messages number from 1).
+        tendon: usize,
+        /// mu, dimensionless.
+        coefficient: f64,
+        /// theta: the integral of its path's turning rate |t'| over the rod it spans, rad.
+        turning: f64,
+    },
 }
 
 /// The likely causes of `error`, a failure to solve `robot`: its implausible scales
@@ -235,6 +274,11 @@ impl Warning {
                 bending_stiffness,
                 ..
             } => moment * arm / bending_stiffness,
+            Warning::PathLength { path, span, .. } => path / span,
+            Warning::Friction { coefficient, .. } => coefficient,
+            Warning::FrictionTurning {
+                coefficient, turning, ..
+            } => coefficient * turning,
         }
     }
 }
@@ -481,6 +525,51 @@ impl fmt::Display for Warning {
                 fig(MOMENT_LIMIT / (2.0 * PI)),
                 fig(bending_stiffness)
             ),
+            Warning::PathLength {
+                tendon,
+                path,
+                span,
+                turns,
+            } => write!(
+                f,
+                "tendon {}'s path on the straight rod is {} m long over {} m of rod ({} times, {} turns about \
+                 the backbone), above {} times (a helix steeper than 60 degrees); check the routing: \
+                 turns_per_rod_length counts the turns over the whole rod, and offsets are in metres",
+                tendon + 1,
+                fig(path),
+                fig(span),
+                fig(x),
+                fig(turns),
+                fig(PATH_LIMIT)
+            ),
+            Warning::Friction { tendon, coefficient } => write!(
+                f,
+                "tendon {}'s friction coefficient {} is above {}: tendon-channel pairs measure about 0.05 (PTFE) \
+                 to 0.5 (steel on steel); check the value",
+                tendon + 1,
+                fig(coefficient),
+                fig(FRICTION_LIMIT)
+            ),
+            Warning::FrictionTurning {
+                tendon,
+                coefficient,
+                turning,
+            } => write!(
+                f,
+                "tendon {}'s path turns by {} rad along the straight rod, so its friction coefficient {} gives \
+                 mu theta = {}, above {}: pulled in, it passes on exp(-{}) = {} of its tension to its \
+                 termination; released, {} times it. No default mesh resolves such a change, and a solve may \
+                 fail or take minutes; check the routing (turns_per_rod_length, offsets in metres) and the \
+                 coefficient",
+                tendon + 1,
+                fig(turning),
+                fig(coefficient),
+                fig(x),
+                fig(FRICTION_TURNING_LIMIT),
+                fig(x),
+                fig((-x).exp()),
+                fig(x.exp())
+            ),
         }
     }
 }
@@ -523,11 +612,52 @@ mod tests {
         assert!(text.contains("unless loads hold the bend back"), "{text}");
     }
 
-    /// The prototype in every experiment of Table 2 is a robot of ordinary scales.
+    /// The prototype in every experiment of Table 2 is a robot of ordinary scales, with
+    /// friction 0.1 on every tendon too (the helical case H turns 1.5 rad: mu theta 0.15).
     #[test]
     fn table2_robots_have_no_warnings() {
         for e in cases::table2() {
             assert_eq!(e.robot().plausibility(), Vec::new(), "{}", e.label());
+            let mut rough = e.robot();
+            for t in &mut rough.tendons {
+                t.friction = Some(crate::model::tendon::Friction::pull(0.1));
+            }
+            assert_eq!(rough.plausibility(), Vec::new(), "{} with friction", e.label());
         }
+    }
+
+    /// A helix of 1000 turns over the prototype (a typo for turns per metre, or worse) is
+    /// flagged by its path length, and with friction by mu theta: exactly the helix's
+    /// (path = L sqrt(1 + (r w)^2), theta = L r w^2 / sqrt(1 + (r w)^2), w = 2 pi turns / L);
+    /// a coefficient above 1 is flagged by itself.
+    #[test]
+    fn a_helix_of_many_turns_and_a_large_coefficient_are_flagged() {
+        use crate::model::routing::Routing;
+        use crate::model::tendon::Friction;
+        let mut robot = cases::case_h();
+        let length = robot.length();
+        let r = 0.008;
+        robot.tendons[0].routing = Routing::helical(r, 1000.0, 0.0);
+        robot.tendons[0].friction = Some(Friction::pull(0.1));
+        robot.tendons[1].friction = Some(Friction::pull(5.0));
+        let warnings = robot.plausibility();
+        let w = 2.0 * PI * 1000.0 / length;
+        let root = (1.0 + (r * w).powi(2)).sqrt();
+        let [
+            Warning::PathLength { tendon: 0, path, .. },
+            Warning::FrictionTurning { tendon: 0, turning, .. },
+            Warning::Friction { tendon: 1, .. },
+        ] = warnings[..]
+        else {
+            panic!("{warnings:?}");
+        };
+        // Rounding of the one-piece rule on a constant integrand.
+        assert!((path / (length * root) - 1.0).abs() < 1e-12, "{path}");
+        assert!((turning / (length * r * w * w / root) - 1.0).abs() < 1e-12, "{turning}");
+        let text = warnings[1].to_string();
+        assert!(
+            text.contains("tendon 1's path turns by") && text.contains("mu theta = "),
+            "{text}"
+        );
     }
 }

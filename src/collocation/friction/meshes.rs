@@ -211,7 +211,13 @@ pub(super) fn refine_with_friction(
                 method: Method::Collocation,
                 report: Box::new(report.clone()),
                 worst_s: system.row_position(worst.min(system.unknowns() - 1)),
-                hint: tried.hint(border.system.mesh.intervals()),
+                hint: tried.hint(
+                    border.system.mesh.intervals(),
+                    robot.tendons.iter().any(|t| {
+                        t.active_friction()
+                            .is_some_and(|f| f.motion == crate::model::tendon::Motion::Release)
+                    }),
+                ),
             });
         }
         // A later failure is a new one, from this mesh's answer.

@@ -24,8 +24,10 @@ pub(super) struct Tried {
 impl Tried {
     /// What to try after Newton with friction failed on a mesh of `intervals` intervals:
     /// where the branch past the continuation in the coefficients ends, where the
-    /// continuation gave up, where it had answered a mesh, or where it did not run.
-    pub(super) fn hint(&self, intervals: usize) -> String {
+    /// continuation gave up, where it had answered a mesh, or where it did not run;
+    /// `released`: whether a tendon with friction is released (its tension grows along its
+    /// path, which can leave no full-slip equilibrium; a pulled one's falls).
+    pub(super) fn hint(&self, intervals: usize, released: bool) -> String {
         // The mesh the continuation ran on, and why there.
         let (on, value) = match self.later {
             Some((failed, converged)) if self.again => {
@@ -83,26 +85,67 @@ impl Tried {
                     e.coefficient,
                 )
             }
-            (Some(g), None) => format!(
-                "the friction coefficients were followed from 0: {on} Newton solved {:.0} % of them and failed at \
-                 {:.0} % (the termination and residual above are that run's), and the branch of equilibria past it, \
-                 followed by its arclength, neither reached their values nor ended. A full-slip equilibrium may not \
-                 exist: a released tendon delivers up to exp(mu theta) times its input, which bends the rod and \
-                 turns its path further (docs/friction.md, \"Large friction on a released tendon\"); lower the \
-                 friction coefficient of a released tendon, or pull it in instead",
-                100.0 * g.reached,
-                100.0 * g.tried
-            ),
+            (Some(g), None) => {
+                let why = if released {
+                    "A full-slip equilibrium may not exist: a released tendon delivers up to exp(mu theta) times its \
+                     input, which bends the rod and turns its path further (docs/friction.md, \"Large friction on a \
+                     released tendon\"); lower the friction coefficient of a released tendon, or pull it in instead"
+                } else {
+                    "A pulled tendon's tension falls as exp(-mu theta) along its path (theta its total turning), so \
+                     where mu theta is large its far end is all but slack and the mesh cannot resolve the fall; check \
+                     the routings and friction coefficients (`tdcr check` names implausible ones), or lower the \
+                     friction coefficients"
+                };
+                format!(
+                    "the friction coefficients were followed from 0: {on} Newton solved {:.0} % of them and failed \
+                     at {:.0} % (the termination and residual above are that run's), and the branch of equilibria \
+                     past it, followed by its arclength, neither reached their values nor ended. {why}",
+                    100.0 * g.reached,
+                    100.0 * g.tried
+                )
+            }
             (None, _) => match self.followed {
                 Some(k) => format!(
                     "the friction coefficients were followed from 0 to their values on a mesh of {k} intervals, and \
                      Newton then failed on a finer mesh ({intervals} intervals): loosen the tolerance, or lower the \
-                     friction coefficient of a released tendon"
+                     friction coefficient{}",
+                    if released { " of a released tendon" } else { "s" }
                 ),
                 None => "friction is solved from the frictionless shape: lower the friction coefficient, or solve \
                          with the shooting solver to compare"
                     .into(),
             },
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::report::Termination;
+
+    /// A solve whose continuation gave up with no branch's end found names the released
+    /// tendons' growth only where a tendon is released; a pulled one's hint speaks of its
+    /// tension's fall (a user's 1000-turn helix, pulled, was told to pull it in instead).
+    #[test]
+    fn the_hint_speaks_of_a_released_tendon_only_where_one_is() {
+        let tried = Tried {
+            reached: Some(continuation::GaveUp {
+                reached: 0.59,
+                tried: 0.61,
+                termination: Termination::LineSearchFailed,
+                worst: 0,
+                x: Vec::new(),
+                z: None,
+            }),
+            ..Tried::default()
+        };
+        let released = tried.hint(8192, true);
+        assert!(released.contains("a released tendon delivers"), "{released}");
+        let pulled = tried.hint(8192, false);
+        assert!(
+            !pulled.contains("released") && pulled.contains("A pulled tendon's tension falls"),
+            "{pulled}"
+        );
     }
 }
