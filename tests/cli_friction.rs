@@ -237,6 +237,15 @@ fn library_messages_name_fields_as_robot_files_do() {
         err.contains("`tendon[1].friction` is 0.1") && !err.contains("tendons[0]"),
         "{err}"
     );
+    // A batch row's robot, checked before any solve (user24: `tendons[0].friction`).
+    std::fs::write(dir.join("cases.csv"), "friction.1,tension.1\n0.1,2\n-0.1,2\n").unwrap();
+    let out = run(&dir, &["batch", "cases.csv", "--robot", "robot.toml"]);
+    assert_eq!(out.status.code(), Some(2));
+    let err = stderr(&out);
+    assert!(
+        err.contains("row 1: invalid input: `tendon[1].friction` is -0.1") && !err.contains("tendons[0]"),
+        "{err}"
+    );
 }
 
 /// The table of `solve` gives the tension along each tendon with friction at every sample

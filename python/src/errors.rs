@@ -81,17 +81,9 @@ pub fn to_py_with(error: tdcr::Error, prefix: &str) -> PyErr {
 
 /// The library's message, with a field path numbered as in robot files (`tendon[2].tension`
 /// for the library's `tendons[1].tension`: tendons and point loads from 1, the numbering
-/// of robot files, the command line and `tdcr.FileError`).
+/// of robot files, the command line and `tdcr.FileError`; [`tdcr::io::user_message`]).
 fn message(error: &tdcr::Error) -> String {
-    match error {
-        tdcr::Error::InvalidInput { field, problem, hint } => {
-            format!(
-                "invalid input: `{}` {problem}; {hint}",
-                tdcr::io::file_field(field, false)
-            )
-        }
-        other => other.to_string(),
-    }
+    tdcr::io::user_message(error)
 }
 
 /// A failure to solve `robot` as its exception, with the robot's implausible scales after

@@ -110,7 +110,7 @@ fn result_fields(result: tdcr::Result<Solution>, outputs: &RowOutputs, extra: us
             let mut fields = vec!["false".to_string(), iterations];
             fields.extend(std::iter::repeat_n(String::new(), 3 + extra));
             // One line per row: a multi-line message joined with "; ".
-            fields.push(e.to_string().replace('\n', "; "));
+            fields.push(tdcr::io::user_message(&e).replace('\n', "; "));
             (fields, true)
         }
     }
@@ -201,7 +201,10 @@ pub fn run(args: &BatchArgs) -> Result<(), Failure> {
     for row in rows.clone().map(|i| table.row(i)) {
         table
             .robot(&row, &file.robot)
-            .map_err(|e| Failure::Input(format!("{}:{}:1: row {}: {e}", args.cases, row.line, row.index)))?;
+            .map_err(|e| {
+                let e = tdcr::io::user_message(&e);
+                Failure::Input(format!("{}:{}:1: row {}: {e}", args.cases, row.line, row.index))
+            })?;
     }
     let mut sink = Sink::open(args.out.as_deref())?;
     let mut header = vec!["row".to_string()];

@@ -57,20 +57,12 @@ fn flags(field: &str) -> Option<&'static str> {
 
 /// A library error's message in the command line's words: a field path numbered as in
 /// robot files (`tendon[1].stiffness` for the library's `tendons[0].stiffness`), as
-/// Python's messages number it. A `base_rotation` error is named `base.rotation` even
-/// for a file that gives `base.euler_xyz_deg`, but none reaches here: the file's rotation
-/// is checked when the file is read (named as the file spells it), no option replaces it,
-/// and calibration only turns it by another rotation.
+/// Python's messages number it ([`tdcr::io::user_message`]). A `base_rotation` error is
+/// named `base.rotation` even for a file that gives `base.euler_xyz_deg`, but none reaches
+/// here: the file's rotation is checked when the file is read (named as the file spells it),
+/// no option replaces it, and calibration only turns it by another rotation.
 pub fn message(e: &Error) -> String {
-    match e {
-        Error::InvalidInput { field, problem, hint } => {
-            format!(
-                "invalid input: `{}` {problem}; {hint}",
-                tdcr::io::file_field(field, false)
-            )
-        }
-        other => other.to_string(),
-    }
+    tdcr::io::user_message(e)
 }
 
 /// A solver error as a failure: input problems exit 2, solver failures 3, the rest 1.

@@ -7,7 +7,7 @@
 //! solver settings are built in `build`.
 
 mod build;
-pub use build::file_field;
+pub use build::{file_field, user_message};
 mod check;
 mod segments;
 mod tables;
