@@ -303,7 +303,7 @@ pub fn solve_parameters<'py>(
             })
         },
         |i, result| {
-            table.push(result.map_err(|failure| tdcr::io::user_message(&failure)))?;
+            table.push(result.map_err(|failure| failure.to_string()))?;
             bar.update(py, i + 1, total, i + 1 == total)
         },
     );

@@ -10,7 +10,7 @@ use crate::solution::PySolution;
 use numpy::{PyArray1, PyArray2};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
-use tdcr::analysis::history::{HistoryStep, LoopAxis, directions, history as solve_history, tip_displacements};
+use tdcr::analysis::history::{HistoryStep, LoopAxis, directions, history_until, tip_displacements};
 use tdcr::analysis::sweep::Ranges;
 
 /// One tendon's stick/slip zones at one step: (tendon index from 0, [(start, end,
@@ -201,19 +201,28 @@ pub fn history(
             .filter_map(|k| ranges.robot(k as f64).ok())
             .collect::<Vec<_>>()
     };
-    let result = py
-        .detach(|| boundary::caught(|| solve_history(&ranges, &options)))
-        .map_err(|failure| match failure {
-            // Before any step: the full-slip solve that chooses the history's mesh.
-            boundary::Failure::Library(e) if !matches!(e, tdcr::Error::InvalidInput { .. }) => errors::explained_by(
-                e,
-                &robots(),
-                "history: no step was solved: the full-slip solve of the most loaded step, which chooses the \
-                 history's mesh, failed",
-            ),
-            other => other.into_py(),
-        })?;
+    // Ctrl-C stops between steps: the steps solved so far are the exception's `partial`.
+    let (result, signal) = boundary::stoppable(py, |asked| Ok(history_until(&ranges, &options, asked)))?;
+    let result = result.map_err(|e| match e {
+        // Before any step: the full-slip solve that chooses the history's mesh.
+        e if !matches!(e, tdcr::Error::InvalidInput { .. }) => errors::explained_by(
+            e,
+            &robots(),
+            "history: no step was solved: the full-slip solve of the most loaded step, which chooses the \
+             history's mesh, failed",
+        ),
+        e => boundary::Failure::Library(e).into_py(),
+    })?;
+    let completed = result.steps.len();
     let partial = PyHistory::new(py, result.steps, &ranges)?;
+    if let Some(e) = signal {
+        return Err(boundary::with_partial(
+            py,
+            e,
+            completed,
+            Py::new(py, partial)?.into_bound(py).into_any(),
+        ));
+    }
     match result.failure {
         None => Ok(partial),
         Some((i, e)) => {

@@ -184,6 +184,19 @@ impl LoopAxis {
 /// mesh-choosing solve failing. A step whose pull-ins' tensions are not found (Newton on
 /// the tensions, docs/friction.md section 3b) is that step's failure.
 pub fn history(ranges: &Ranges, options: &collocation::Options) -> Result<HistoryResult> {
+    history_until(ranges, options, &|| false)
+}
+
+/// [`history`], asking `stop` before every step after the first whether to give up (a
+/// front end's Ctrl-C): the steps solved up to there are returned, with no failure.
+///
+/// # Errors
+/// As [`history`].
+pub fn history_until(
+    ranges: &Ranges,
+    options: &collocation::Options,
+    stop: &dyn Fn() -> bool,
+) -> Result<HistoryResult> {
     options.validate()?;
     let robots = (0..ranges.steps())
         .map(|k| ranges.robot(k as f64))
@@ -201,6 +214,9 @@ pub fn history(ranges: &Ranges, options: &collocation::Options) -> Result<Histor
     let mut carried = friction::history::start(&robots, options)?;
     let mut steps: Vec<HistoryStep> = Vec::with_capacity(robots.len());
     for (k, robot) in robots.iter().enumerate() {
+        if k > 0 && stop() {
+            break;
+        }
         // A step whose inputs are the last step's: nothing is driven, so nothing slides.
         let repeated =
             k > 0 && (0..ranges.inputs().len()).all(|i| ranges.value(i, k as f64) == ranges.value(i, (k - 1) as f64));

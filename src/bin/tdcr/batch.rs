@@ -199,12 +199,10 @@ pub fn run(args: &BatchArgs) -> Result<(), Failure> {
     // Every row's robot is checked before any solve, so bad input stops the run before it
     // spends time; each is built again when it is solved.
     for row in rows.clone().map(|i| table.row(i)) {
-        table
-            .robot(&row, &file.robot)
-            .map_err(|e| {
-                let e = tdcr::io::user_message(&e);
-                Failure::Input(format!("{}:{}:1: row {}: {e}", args.cases, row.line, row.index))
-            })?;
+        table.robot(&row, &file.robot).map_err(|e| {
+            let e = tdcr::io::user_message(&e);
+            Failure::Input(format!("{}:{}:1: row {}: {e}", args.cases, row.line, row.index))
+        })?;
     }
     let mut sink = Sink::open(args.out.as_deref())?;
     let mut header = vec!["row".to_string()];
