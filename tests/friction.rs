@@ -434,6 +434,16 @@ fn branch_tracing_without_friction_says_so() {
         }
         other => panic!("expected an error, got {other:?}"),
     }
+    // Every tendon with friction is named (user24: the second was found only on the next try).
+    let mut both = s.clone();
+    both.tendons[3].friction = Some(tdcr::Friction::pull(0.2));
+    match tdcr::collocation::trace(&both, tdcr::Parameter::Tension(0), 0.0, 2.94, &Default::default()) {
+        Err(Error::InvalidInput { problem, hint, .. }) => {
+            assert!(problem.contains("tendon 4's 0.2"), "{problem}");
+            assert!(hint.contains("every tendon with friction to 0"), "{hint}");
+        }
+        other => panic!("expected an error, got {other:?}"),
+    }
 }
 
 #[test]

@@ -91,23 +91,38 @@ pub(crate) fn validate(robot: &Robot, i: usize, t: &Tendon) -> Result<()> {
     Ok(())
 }
 
-/// An error naming the first tendon of `robot` with friction when `what` (an analysis that
-/// does not model friction yet) is asked of it.
+/// An error naming the first tendon of `robot` with friction, and the others' coefficients,
+/// when `what` (an analysis that does not model friction yet) is asked of it.
 ///
 /// # Errors
 /// [`Error::InvalidInput`] naming `tendons[i].friction`.
 pub(crate) fn unsupported(robot: &Robot, what: &str) -> Result<()> {
-    match robot.tendons.iter().position(|t| t.active_friction().is_some()) {
-        None => Ok(()),
-        Some(i) => Err(invalid(
-            format!("tendons[{i}].friction"),
-            format!(
-                "is {}, and {what} does not model friction yet",
-                Readable(robot.tendons[i].friction.map_or(0.0, |f| f.coefficient))
-            ),
-            "set the friction to 0 for it; a solve (collocation or shooting) models friction",
-        )),
-    }
+    let with = slipping(robot);
+    let Some(&first) = with.first() else {
+        return Ok(());
+    };
+    let mu = |i: usize| Readable(robot.tendons[i].friction.map_or(0.0, |f| f.coefficient));
+    let others: Vec<String> = with[1..]
+        .iter()
+        .map(|&i| format!(", tendon {}'s {}", i + 1, mu(i)))
+        .collect();
+    Err(invalid(
+        format!("tendons[{first}].friction"),
+        format!(
+            "is {}{}, and {what} does not model friction yet",
+            mu(first),
+            others.concat()
+        ),
+        format!(
+            "set the friction of {} to 0 (robot file `friction = 0` in its [[tendon]]); a solve, sweep or load \
+             history models friction",
+            if others.is_empty() {
+                "this tendon"
+            } else {
+                "every tendon with friction"
+            }
+        ),
+    ))
 }
 
 /// Whether any tendon of `robot` has friction (a coefficient > 0).
