@@ -177,6 +177,16 @@ fn shards_add_up_to_the_unsharded_run_and_json_lines_read_the_same() {
     let out = run(&dir, &["batch", "cases.csv", "--robot", "robot.toml", "--shard", "3/3"]);
     assert_eq!(out.status.code(), Some(2));
     assert!(text(&out.stderr).contains("K/N"), "{}", text(&out.stderr));
+    // 150 rows are 3 blocks: of 4 shards the first is empty, and says why (user24: an empty
+    // shard of the docs' example wrote only a header, with no word).
+    let out = run(&dir, &["batch", "cases.csv", "--robot", "robot.toml", "--shard", "0/4"]);
+    assert_eq!(out.status.code(), Some(0));
+    assert_eq!(text(&out.stdout).lines().count(), 1);
+    assert!(
+        text(&out.stderr).contains("shard 0/4 holds none of the 150 rows: shards are made of whole blocks of 64 rows"),
+        "{}",
+        text(&out.stderr)
+    );
 }
 
 #[test]

@@ -196,6 +196,16 @@ pub fn run(args: &BatchArgs) -> Result<(), Failure> {
         None => (0, blocks),
     };
     let rows = (first * BLOCK).min(table.len())..(end * BLOCK).min(table.len());
+    if let Some((k, n)) = args.shard
+        && rows.is_empty()
+        && !table.is_empty()
+    {
+        note(&format!(
+            "shard {k}/{n} holds none of the {} rows: shards are made of whole blocks of {BLOCK} rows ({blocks} \
+             here), so with fewer blocks than shards some shards are empty",
+            table.len()
+        ));
+    }
     // Every row's robot is checked before any solve, so bad input stops the run before it
     // spends time; each is built again when it is solved.
     for row in rows.clone().map(|i| table.row(i)) {
