@@ -128,6 +128,11 @@ fn segment_lines(rod: &tdcr::Rod) -> String {
     out
 }
 
+/// `x` (m) rounded to the nanometre.
+fn nm(x: f64) -> f64 {
+    (x * 1e9).round() / 1e9
+}
+
 /// A tendon in a few words for `check`: its routing with the turns it makes over its own
 /// length, its end, its tension or pull-in, its stiffness and free length when set, and its
 /// friction coefficient with the motion it models when it has friction.
@@ -139,7 +144,9 @@ fn tendon(t: &Tendon, length: f64) -> String {
         format!("ends at the tip ({} m)", Readable(end))
     };
     let routing = match &t.routing {
-        Routing::Straight { x, y } => format!("straight at ({}, {}) m", Readable(*x), Readable(*y)),
+        // To the nanometre: an offset from polar coordinates, (-0.0025, 0.00433013) m, not
+        // every digit of its cosine.
+        Routing::Straight { x, y } => format!("straight at ({}, {}) m", Readable(nm(*x)), Readable(nm(*y))),
         Routing::Helical { radius, turns, phase } => {
             let own = t.turns(length);
             let plural = if own.abs() == 1.0 { "" } else { "s" };
