@@ -65,6 +65,11 @@ pub(crate) struct Profile<'a> {
     pub(super) responding: Cell<Option<(f64, f64)>>,
     /// Those responses: link k's start node at 2k, its midpoint at 2k + 1.
     responses: RefCell<Responses>,
+    /// Per slip and link, the per-point multipliers' shares and capacity
+    /// ([`IntervalLinearization::pointwise`]) a stuck link takes before its first evaluation
+    /// on this profile: a verdict's profile holds those of the answer it assesses
+    /// ([`Profile::shares`]; docs/stability.md, "Load-history steps"); empty elsewhere.
+    pub(crate) held_shares: Vec<Vec<Option<[f64; 4]>>>,
 }
 
 /// Eq. 13 with friction's responses to the unit inertia loads at points (their rates,
@@ -178,6 +183,7 @@ impl<'a> Profile<'a> {
             scratch_links: RefCell::new(Vec::new()),
             responding: Cell::new(None),
             responses: RefCell::new(Responses::default()),
+            held_shares: Vec::new(),
         }
     }
 
@@ -201,6 +207,7 @@ impl<'a> Profile<'a> {
             scratch_links: RefCell::new(Vec::new()),
             responding: Cell::new(None),
             responses: RefCell::new(Responses::default()),
+            held_shares: self.held_shares.clone(),
         }
     }
 
@@ -331,7 +338,7 @@ impl<'a> Profile<'a> {
     }
 
     /// Slip j's per-point multipliers' shares and capacity on link k from the link's last
-    /// evaluation, where it sticks there with them.
+    /// evaluation, where it sticks there with them (before one, the `held_shares`).
     fn pointwise(&self, j: usize, k: usize) -> Option<[f64; 4]> {
         if !self.sticks(j, k) {
             return None;
@@ -339,6 +346,17 @@ impl<'a> Profile<'a> {
         self.cache.borrow()[k]
             .as_ref()
             .and_then(|lin| lin.pointwise.get(j).copied().flatten())
+            .or_else(|| self.held_shares.get(j).and_then(|s| s.get(k).copied().flatten()))
+    }
+
+    /// Each slip's per-point multipliers' shares and capacity on every link (None where it
+    /// does not stick with them), as the next evaluation of each link would take them: what
+    /// a profile of the same answer holds as its `held_shares`.
+    pub(crate) fn shares(&self) -> Vec<Vec<Option<[f64; 4]>>> {
+        let links = self.cache.borrow().len();
+        (0..self.count())
+            .map(|j| (0..links).map(|k| self.pointwise(j, k)).collect())
+            .collect()
     }
 
     /// The shares (sigma_a, sigma_m, sigma_b) of slip j's multiplier at link k's start,
