@@ -298,17 +298,19 @@ impl<'a> Profile<'a> {
     /// load follows the log tensions the stick rows set (only C, which the shape changes
     /// slowly, lags: one evaluation of the link behind).
     pub(crate) fn multipliers(&self, k: usize) -> Option<Vec<f64>> {
-        self.grips.as_ref().map(|g| {
-            g.iter()
-                .enumerate()
-                .map(|(j, g)| match g.contacts.get(k) {
-                    Some(Contact::Stick) => {
-                        stuck_multiplier(self.z[j][k], self.z[j][k + 1], self.stuck_scale(j, k).unwrap_or(0.0))
-                    }
-                    _ => g.multipliers.get(k).copied().unwrap_or(1.0),
-                })
-                .collect()
-        })
+        self.grips
+            .as_ref()
+            .map(|g| g.iter().enumerate().map(|(j, g)| self.multiplier(g, j, k)).collect())
+    }
+
+    /// Slip j's entry of [`Profile::multipliers`] on link k, `grip` its grip.
+    pub(crate) fn multiplier(&self, grip: &Grip, j: usize, k: usize) -> f64 {
+        match grip.contacts.get(k) {
+            Some(Contact::Stick) => {
+                stuck_multiplier(self.z[j][k], self.z[j][k + 1], self.stuck_scale(j, k).unwrap_or(0.0))
+            }
+            _ => grip.multipliers.get(k).copied().unwrap_or(1.0),
+        }
     }
 
     /// The capacity C that slip j's multiplier on stuck link k divides by: the link's own
@@ -370,14 +372,20 @@ impl<'a> Profile<'a> {
     /// multipliers, w elsewhere (docs/friction.md section 8, "ord23").
     pub(crate) fn point_multipliers(&self, k: usize, w: &[f64]) -> [Vec<f64>; 3] {
         let mut out = [w.to_vec(), w.to_vec(), w.to_vec()];
-        for j in 0..w.len() {
-            if let Some(sigma) = self.sigma(j, k) {
-                for (p, points) in out.iter_mut().enumerate() {
-                    points[j] = w[j] * sigma[p];
-                }
+        for (j, &w) in w.iter().enumerate() {
+            for (points, at) in out.iter_mut().zip(self.point_multiplier(j, k, w)) {
+                points[j] = at;
             }
         }
         out
+    }
+
+    /// Slip j's entries of [`Profile::point_multipliers`] on link k from its multiplier `w`.
+    pub(crate) fn point_multiplier(&self, j: usize, k: usize, w: f64) -> [f64; 3] {
+        match self.sigma(j, k) {
+            Some(sigma) => sigma.map(|sigma| w * sigma),
+            None => [w; 3],
+        }
     }
 
     /// Whether slip j sticks on link k (a history's stick row replaces its capstan row).
