@@ -130,7 +130,16 @@ impl CapstanMass {
                     std::mem::swap(&mut ta, &mut tb);
                     start
                 }
-                _ => point(2 * k, &sites.start, seg, (&a.R, &a.v, &a.u), &z_a, w_a, &mut za, &mut ta)?,
+                _ => point(
+                    2 * k,
+                    &sites.start,
+                    seg,
+                    (&a.R, &a.v, &a.u),
+                    &z_a,
+                    w_a,
+                    &mut za,
+                    &mut ta,
+                )?,
             };
             // Node k + 1 as the next link's start, where a Jacobian keeps it, or on a link
             // with a stuck slip as its own end (with its own multipliers).
@@ -237,15 +246,11 @@ pub(super) struct Multipliers(Vec<Option<[Vec<f64>; 3]>>);
 /// in `report`), with the multipliers it took; Err with the verdict when it is singular or
 /// cannot be evaluated.
 pub(super) fn factor_at(border: &mut Capstan, x: &[State], report: &mut SolveReport) -> Result<Multipliers, Stability> {
-    let multipliers = border
-        .system()
-        .friction
-        .as_ref()
-        .map_or_else(Vec::new, |p| {
-            (0..x.len() - 1)
-                .map(|k| p.multipliers(k).map(|w| p.point_multipliers(k, &w)))
-                .collect()
-        });
+    let multipliers = border.system().friction.as_ref().map_or_else(Vec::new, |p| {
+        (0..x.len() - 1)
+            .map(|k| p.multipliers(k).map(|w| p.point_multipliers(k, &w)))
+            .collect()
+    });
     match border.factor_at(x, report) {
         Ok(true) => Ok(Multipliers(multipliers)),
         Ok(false) => Err(Stability::Unknown {
@@ -459,7 +464,10 @@ mod tests {
             .iter()
             .filter(|m| m.as_ref().is_some_and(|[a, m, b]| a != m || m != b))
             .count();
-        assert!(pointwise + 1 >= stuck, "{pointwise} of {stuck} stuck links with per-point multipliers");
+        assert!(
+            pointwise + 1 >= stuck,
+            "{pointwise} of {stuck} stuck links with per-point multipliers"
+        );
         // So the verdict's rows are the answer's: its backbone residual at the answer is
         // Newton's (the answer is an equilibrium of the system assessed), where the
         // constant multiplier leaves the per-point multipliers' O(h^2) spread of the

@@ -145,7 +145,10 @@ pub(super) fn lagrange_slopes<const N: usize>(
                 let slope: f64 = (0..points)
                     .filter(|&c| c != a)
                     .map(|c| {
-                        let rest: f64 = (0..points).filter(|&b| b != a && b != c).map(|b| factor[a][b]).product();
+                        let rest: f64 = (0..points)
+                            .filter(|&b| b != a && b != c)
+                            .map(|b| factor[a][b])
+                            .product();
                         rest / (sa - stencil[c].0)
                     })
                     .sum();
