@@ -110,22 +110,36 @@ impl CapstanMass {
             let seg = system.mesh.nodes[k].segment_end;
             let (a, b) = (&x[k], &x[k + 1]);
             let h = sites.end.s - sites.start.s;
+            // The multipliers at the link's start, midpoint and end (a stuck link's
+            // per-point ones, W sigma_P, where it has them).
             let multipliers = match held {
                 Some(held) => held.0.get(k).cloned().flatten(),
-                None => profile.multipliers(k),
+                None => profile.multipliers(k).map(|w| profile.point_multipliers(k, &w)),
             };
-            let w = multipliers.as_deref();
+            let [w_a, w_m, w_b] = match &multipliers {
+                Some([a, m, b]) => [Some(a.as_slice()), Some(m.as_slice()), Some(b.as_slice())],
+                None => [None; 3],
+            };
             z_a.clear();
             z_a.extend(profile.z.iter().map(|z| z[k]));
             z_b.clear();
             z_b.extend(profile.z.iter().map(|z| z[k + 1]));
             let (ra, kappa_a) = match (carried.take(), end.take()) {
-                (Some((node, s, kept)), Some(start)) if node == k && s == seg && kept.as_deref() == w => {
+                (Some((node, s, kept)), Some(start)) if node == k && s == seg && kept.as_deref() == w_a => {
                     std::mem::swap(&mut za, &mut zb);
                     std::mem::swap(&mut ta, &mut tb);
                     start
                 }
-                _ => point(2 * k, &sites.start, seg, (&a.R, &a.v, &a.u), &z_a, w, &mut za, &mut ta)?,
+                _ => point(
+                    2 * k,
+                    &sites.start,
+                    seg,
+                    (&a.R, &a.v, &a.u),
+                    &z_a,
+                    w_a,
+                    &mut za,
+                    &mut ta,
+                )?,
             };
             // Node k + 1 as the next link's start, where a Jacobian keeps it, or on a link
             // with a stuck slip as its own end (with its own multipliers).
@@ -136,7 +150,7 @@ impl CapstanMass {
                 seg,
                 (&b.R, &b.v, &b.u),
                 &z_b,
-                w,
+                w_b,
                 &mut zb,
                 &mut tb,
             )?;
@@ -148,7 +162,7 @@ impl CapstanMass {
             let part = |at: usize| Vector3::new(ym[at], ym[at + 1], ym[at + 2]);
             let Rm = a.R * so3::exp(&part(THETA));
             let (vm, um) = (part(V), part(U));
-            point(2 * k + 1, &sites.mid, seg, (&Rm, &vm, &um), &z_m, w, &mut zm, &mut tm)?;
+            point(2 * k + 1, &sites.mid, seg, (&Rm, &vm, &um), &z_m, w_m, &mut zm, &mut tm)?;
             let mut block = quadrature(h, (&a.R, &b.R), [&za, &zm, &zb]);
             for r in 3..6 {
                 for c in 0..12 {
@@ -157,7 +171,7 @@ impl CapstanMass {
             }
             blocks.push(Some(block));
             end = Some((rb, kappa_b));
-            carried = Some((k + 1, seg, multipliers));
+            carried = Some((k + 1, seg, w_b.map(<[f64]>::to_vec)));
             // The capstan row psi = z_b - z_a - h/6 (kappa~_a + 4 kappa~_m + kappa~_b)
             // gains the same quadrature of the turning rates' response, with the sign the
             // backbone rows' rates have in theirs (module docs of `dynamics`).
@@ -217,24 +231,26 @@ pub(crate) fn held_unknown() -> Stability {
     }
 }
 
-/// Each link's multipliers (`Profile::multipliers`: None in full slip; on a stuck link of
-/// a history step w = (z_b - z_a) / C, C the link's capacity from its last evaluation) as
-/// the bordered Jacobian at the answer takes them: read before [`factor_at`] evaluates it,
-/// since that evaluation leaves each stuck link's own capacity at the answer in the
-/// profile, which may differ from the one it was evaluated with in the last bits
-/// (docs/stability.md, "Load-history steps"). The mass takes the same, so that it is the
-/// Jacobian's linearization and reads the responses that Jacobian kept at its points.
-pub(super) struct Multipliers(Vec<Option<Vec<f64>>>);
+/// Each link's multipliers at its start, midpoint and end (`Profile::multipliers` and
+/// `Profile::point_multipliers`: None in full slip; on a stuck link of a history step
+/// w = (z_b - z_a) / C, C the link's capacity from its last evaluation, or with per-point
+/// multipliers W sigma_P at each point) as the bordered Jacobian at the answer takes them:
+/// read before [`factor_at`] evaluates it, since that evaluation leaves each stuck link's
+/// own capacity and shares at the answer in the profile, which may differ from the ones it
+/// was evaluated with in the last bits (docs/stability.md, "Load-history steps"). The mass
+/// takes the same, so that it is the Jacobian's linearization and reads the responses that
+/// Jacobian kept at its points.
+pub(super) struct Multipliers(Vec<Option<[Vec<f64>; 3]>>);
 
 /// The bordered Jacobian of `border` evaluated and factored at `x` for a verdict (counted
 /// in `report`), with the multipliers it took; Err with the verdict when it is singular or
 /// cannot be evaluated.
 pub(super) fn factor_at(border: &mut Capstan, x: &[State], report: &mut SolveReport) -> Result<Multipliers, Stability> {
-    let multipliers = border
-        .system()
-        .friction
-        .as_ref()
-        .map_or_else(Vec::new, |p| (0..x.len() - 1).map(|k| p.multipliers(k)).collect());
+    let multipliers = border.system().friction.as_ref().map_or_else(Vec::new, |p| {
+        (0..x.len() - 1)
+            .map(|k| p.multipliers(k).map(|w| p.point_multipliers(k, &w)))
+            .collect()
+    });
     match border.factor_at(x, report) {
         Ok(true) => Ok(Multipliers(multipliers)),
         Ok(false) => Err(Stability::Unknown {
@@ -377,7 +393,8 @@ mod tests {
     /// On a history step with a stuck stretch (the prototype's pull-release loop, tendon 1
     /// at mu 0.1 and E_t A_t 2000 N, the first step back: stuck from 0.049 m to the tip), the
     /// Jacobian at the answer takes each link's multipliers as they were before it (each
-    /// stuck link's w = (z_b - z_a) / C); with those, the mass reads every link's midpoint,
+    /// stuck link's W sigma_P at its three points, with the answer's shares); with those,
+    /// the mass reads every link's midpoint,
     /// each stuck link's start and end node and the sliding links' ends from that Jacobian's
     /// kept responses, and is the mass evaluated afresh with the same multipliers, bit for bit.
     #[test]
@@ -406,7 +423,11 @@ mod tests {
         let profile = border.system().friction.as_ref().unwrap();
         let stuck = (0..links).filter(|&k| profile.sticks(0, k)).count();
         assert!(stuck > links / 2 && stuck < links, "{stuck} of {links} links stuck");
-        let before = Multipliers((0..links).map(|k| profile.multipliers(k)).collect());
+        let before = Multipliers(
+            (0..links)
+                .map(|k| profile.multipliers(k).map(|w| profile.point_multipliers(k, &w)))
+                .collect(),
+        );
         // Nothing kept yet: every point evaluated.
         let fresh = CapstanMass::new(&border, x, Some(&before)).unwrap();
         let mut report = SolveReport::new(Method::Collocation);
@@ -435,5 +456,34 @@ mod tests {
             assert_eq!((ra, ka), (rb, kb));
             assert_eq!(bits(a.as_slice()), bits(b.as_slice()));
         }
+        // The Jacobian and the mass took the answer's per-point multipliers W sigma_P
+        // (docs/friction.md section 8, "ord23"): on the stuck links their three differ (the
+        // constant multiplier, as the verdict took before, has them equal).
+        let pointwise = held
+            .0
+            .iter()
+            .filter(|m| m.as_ref().is_some_and(|[a, m, b]| a != m || m != b))
+            .count();
+        assert!(
+            pointwise + 1 >= stuck,
+            "{pointwise} of {stuck} stuck links with per-point multipliers"
+        );
+        // So the verdict's rows are the answer's: its backbone residual at the answer is
+        // Newton's (the answer is an equilibrium of the system assessed), where the
+        // constant multiplier leaves the per-point multipliers' O(h^2) spread of the
+        // tangential loads.
+        let residual = |settled: &crate::collocation::friction::history::Settled| -> f64 {
+            let border = super::super::stuck::border(&robots[11], settled);
+            let mut r = vec![0.0; border.system().unknowns()];
+            border.system().residual(x, &mut r).unwrap();
+            // The links' rows: all but the tip's six end rows (which the border's tendon
+            // terms complete, as Newton's bordered residual does).
+            r[..r.len() - 6].iter().fold(0.0, |m: f64, v| m.max(v.abs()))
+        };
+        let mut constant = settled.clone();
+        constant.shares.clear();
+        let (own, other) = (residual(settled), residual(&constant));
+        // Measured: 8.9e-12 (Newton's residual tolerance is 1e-11) against 1.3e-8.
+        assert!(own < 1e-10 && other > 100.0 * own, "{own:e} {other:e}");
     }
 }

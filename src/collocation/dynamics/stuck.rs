@@ -2,7 +2,10 @@
 //! with friction", "Load-history steps"): the linearized dynamics of the step's own bordered
 //! system at its answer, on the mesh the step returns, with its pattern held: each sliding
 //! link keeps its capstan row (w = -1 or +1), each stuck link its stick row
-//! `z_b - zeta_b(y_b)` and its multiplier `w = (z_b - z_a) / C` (C held from the march).
+//! `z_b - zeta_b(y_b)` and its multiplier `w = (z_b - z_a) / C` (C held from the march), or
+//! with per-point multipliers (a split level with one tendon with friction) `W sigma_P` at
+//! each point P with the answer's shares and C_sigma (`Settled::shares`), as the answer's
+//! rows took them.
 //!
 //! A stuck link's tangential load is `w mu |q|` with w a function of the log tensions alone,
 //! so at fixed unknowns its response to a body load (through the normal load q the
@@ -48,6 +51,7 @@ pub(super) fn border<'r>(robot: &'r Robot, settled: &Settled) -> Capstan<'r> {
     let mut profile = Profile::new(&model, &system.mesh);
     profile.z.clone_from(&settled.z);
     profile.grips = Some(settled.grips.clone());
+    profile.held_shares.clone_from(&settled.shares);
     system.friction = Some(profile);
     Capstan::new(system)
 }
@@ -63,6 +67,7 @@ fn border_kept<R>(robot: &Robot, settled: &Settled, f: impl FnOnce(&mut Capstan)
     let mut profile = Profile::new(&model, &system.mesh);
     profile.z.clone_from(&settled.z);
     profile.grips = Some(settled.grips.clone());
+    profile.held_shares.clone_from(&settled.shares);
     system.friction = Some(profile);
     let mut border = Capstan::with_kept(system, kept);
     let out = f(&mut border);

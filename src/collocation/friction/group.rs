@@ -77,10 +77,26 @@ fn intervals4_kernel(
     if x.len() < 5 || profile.slipping.len() > 1 {
         return Ok(None);
     }
-    // Each link's multipliers at its start, midpoint and end ([`Profile::point_multipliers`]).
-    let multipliers: [Option<[Vec<f64>; 3]>; 4] =
-        std::array::from_fn(|j| profile.multipliers(k + j).map(|w| profile.point_multipliers(k + j, &w)));
-    let w: Points = std::array::from_fn(|j| multipliers[j].as_ref().map(|p| [&p[0][..], &p[1][..], &p[2][..]]));
+    // Each link's multipliers at its start, midpoint and end ([`Profile::point_multipliers`]),
+    // of its one slip (or none), in place: the lists cost an allocation each.
+    let count = profile.count();
+    let multipliers: [Option<[[f64; 1]; 3]>; 4] = std::array::from_fn(|l| {
+        profile.grips.as_ref().map(|grips| {
+            let mut points = [[0.0]; 3];
+            if let Some(grip) = grips.first().filter(|_| count == 1) {
+                let w = profile.multiplier(grip, 0, k + l);
+                for (point, at) in points.iter_mut().zip(profile.point_multiplier(0, k + l, w)) {
+                    point[0] = at;
+                }
+            }
+            points
+        })
+    });
+    let w: Points = std::array::from_fn(|l| {
+        multipliers[l]
+            .as_ref()
+            .map(|p| [&p[0][..count], &p[1][..count], &p[2][..count]])
+    });
     let group = Group {
         profile,
         length,

@@ -109,6 +109,10 @@ pub(crate) struct Settled {
     /// The contacts, multipliers and capacities the answer solved with, and the material
     /// the step started from (its stick rows' lambda).
     pub(crate) grips: Vec<Grip>,
+    /// The stuck links' per-point multipliers' shares and capacities at the answer
+    /// (`Profile::shares`; empty with the constant multiplier), which its verdict's rows
+    /// take as the answer's did (docs/stability.md, "Load-history steps").
+    pub(crate) shares: Vec<Vec<Option<[f64; 4]>>>,
 }
 
 impl Carried {
@@ -419,6 +423,7 @@ fn solve_on(robot: &Robot, options: &Options, carried: &mut Carried, held: Optio
         x: x.clone(),
         z: profile.z.clone(),
         grips,
+        shares: profile.shares(),
     });
     carried.z.clone_from(&profile.z);
     carried.grips = next;

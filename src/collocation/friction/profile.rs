@@ -65,6 +65,11 @@ pub(crate) struct Profile<'a> {
     pub(super) responding: Cell<Option<(f64, f64)>>,
     /// Those responses: link k's start node at 2k, its midpoint at 2k + 1.
     responses: RefCell<Responses>,
+    /// Per slip and link, the per-point multipliers' shares and capacity
+    /// ([`IntervalLinearization::pointwise`]) a stuck link takes before its first evaluation
+    /// on this profile: a verdict's profile holds those of the answer it assesses
+    /// ([`Profile::shares`]; docs/stability.md, "Load-history steps"); empty elsewhere.
+    pub(crate) held_shares: Vec<Vec<Option<[f64; 4]>>>,
 }
 
 /// Eq. 13 with friction's responses to the unit inertia loads at points (their rates,
@@ -178,6 +183,7 @@ impl<'a> Profile<'a> {
             scratch_links: RefCell::new(Vec::new()),
             responding: Cell::new(None),
             responses: RefCell::new(Responses::default()),
+            held_shares: Vec::new(),
         }
     }
 
@@ -201,6 +207,7 @@ impl<'a> Profile<'a> {
             scratch_links: RefCell::new(Vec::new()),
             responding: Cell::new(None),
             responses: RefCell::new(Responses::default()),
+            held_shares: self.held_shares.clone(),
         }
     }
 
@@ -291,17 +298,19 @@ impl<'a> Profile<'a> {
     /// load follows the log tensions the stick rows set (only C, which the shape changes
     /// slowly, lags: one evaluation of the link behind).
     pub(crate) fn multipliers(&self, k: usize) -> Option<Vec<f64>> {
-        self.grips.as_ref().map(|g| {
-            g.iter()
-                .enumerate()
-                .map(|(j, g)| match g.contacts.get(k) {
-                    Some(Contact::Stick) => {
-                        stuck_multiplier(self.z[j][k], self.z[j][k + 1], self.stuck_scale(j, k).unwrap_or(0.0))
-                    }
-                    _ => g.multipliers.get(k).copied().unwrap_or(1.0),
-                })
-                .collect()
-        })
+        self.grips
+            .as_ref()
+            .map(|g| g.iter().enumerate().map(|(j, g)| self.multiplier(g, j, k)).collect())
+    }
+
+    /// Slip j's entry of [`Profile::multipliers`] on link k, `grip` its grip.
+    pub(crate) fn multiplier(&self, grip: &Grip, j: usize, k: usize) -> f64 {
+        match grip.contacts.get(k) {
+            Some(Contact::Stick) => {
+                stuck_multiplier(self.z[j][k], self.z[j][k + 1], self.stuck_scale(j, k).unwrap_or(0.0))
+            }
+            _ => grip.multipliers.get(k).copied().unwrap_or(1.0),
+        }
     }
 
     /// The capacity C that slip j's multiplier on stuck link k divides by: the link's own
@@ -331,7 +340,7 @@ impl<'a> Profile<'a> {
     }
 
     /// Slip j's per-point multipliers' shares and capacity on link k from the link's last
-    /// evaluation, where it sticks there with them.
+    /// evaluation, where it sticks there with them (before one, the `held_shares`).
     fn pointwise(&self, j: usize, k: usize) -> Option<[f64; 4]> {
         if !self.sticks(j, k) {
             return None;
@@ -339,6 +348,17 @@ impl<'a> Profile<'a> {
         self.cache.borrow()[k]
             .as_ref()
             .and_then(|lin| lin.pointwise.get(j).copied().flatten())
+            .or_else(|| self.held_shares.get(j).and_then(|s| s.get(k).copied().flatten()))
+    }
+
+    /// Each slip's per-point multipliers' shares and capacity on every link (None where it
+    /// does not stick with them), as the next evaluation of each link would take them: what
+    /// a profile of the same answer holds as its `held_shares`.
+    pub(crate) fn shares(&self) -> Vec<Vec<Option<[f64; 4]>>> {
+        let links = self.cache.borrow().len();
+        (0..self.count())
+            .map(|j| (0..links).map(|k| self.pointwise(j, k)).collect())
+            .collect()
     }
 
     /// The shares (sigma_a, sigma_m, sigma_b) of slip j's multiplier at link k's start,
@@ -352,14 +372,20 @@ impl<'a> Profile<'a> {
     /// multipliers, w elsewhere (docs/friction.md section 8, "ord23").
     pub(crate) fn point_multipliers(&self, k: usize, w: &[f64]) -> [Vec<f64>; 3] {
         let mut out = [w.to_vec(), w.to_vec(), w.to_vec()];
-        for j in 0..w.len() {
-            if let Some(sigma) = self.sigma(j, k) {
-                for (p, points) in out.iter_mut().enumerate() {
-                    points[j] = w[j] * sigma[p];
-                }
+        for (j, &w) in w.iter().enumerate() {
+            for (points, at) in out.iter_mut().zip(self.point_multiplier(j, k, w)) {
+                points[j] = at;
             }
         }
         out
+    }
+
+    /// Slip j's entries of [`Profile::point_multipliers`] on link k from its multiplier `w`.
+    pub(crate) fn point_multiplier(&self, j: usize, k: usize, w: f64) -> [f64; 3] {
+        match self.sigma(j, k) {
+            Some(sigma) => sigma.map(|sigma| w * sigma),
+            None => [w; 3],
+        }
     }
 
     /// Whether slip j sticks on link k (a history's stick row replaces its capstan row).

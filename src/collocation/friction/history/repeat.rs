@@ -41,5 +41,7 @@ pub(crate) fn hold_last(robot: &Robot, carried: &mut Carried) -> bool {
                 .map_or(speed, |e| speed / (1.0 + base * z[n].exp() / e));
         }
     }
+    // Every link's multiplier is the constant one its capacity gives.
+    settled.shares.clear();
     true
 }

@@ -12,7 +12,7 @@
 //! history's own mesh is a subset of every split mesh, so the material the step leaves is
 //! handed back to it at its nodes exactly.
 
-use super::interpolant::{lagrange, lagrange_slope};
+use super::interpolant::{lagrange, lagrange_slopes};
 use super::{Carried, Contact, Grip, Options, Profile, Result, Robot, StepAnswer, solve_on};
 use crate::collocation::refine;
 use crate::mesh::Mesh;
@@ -398,12 +398,8 @@ pub(super) fn split(
                     let (a, b) = (mesh.nodes[l].s, mesh.nodes[l + 1].s);
                     let m = 0.5 * (a + b);
                     let (s, v) = (&coarse[..=links], &old.reference[..=links]);
-                    [
-                        lagrange_slope(s, v, &old.kinks, a, m),
-                        lagrange(s, v, &old.kinks, m, 6),
-                        lagrange_slope(s, v, &old.kinks, m, m),
-                        lagrange_slope(s, v, &old.kinks, b, m),
-                    ]
+                    let [sa, sm, sb] = lagrange_slopes(s, v, &old.kinks, [a, m, b], m);
+                    [sa, lagrange(s, v, &old.kinks, m, 6), sm, sb]
                 })
                 .collect(),
         });
