@@ -113,8 +113,9 @@ crate::pickle::pickled_fields! {
         Ok(out)
     }
 
-    /// Each step's direction of the swept input (the first that changes): "up", "down", or
-    /// "held" (the first step, and where it did not change), as the command line's CSV.
+    /// Each step's direction of the swept input (the first that changes): "from_rest" (the
+    /// first step, loaded from rest: the full-slip pull solve), then "up", "down", or "held"
+    /// (where it did not change), as the command line's CSV.
     #[getter]
     fn directions(&self) -> Vec<String> {
         self.directions.clone()

@@ -56,7 +56,7 @@ def test_the_history_keeps_its_inputs_and_directions_and_draws_its_loop(tmp_path
     tensions = np.linspace(0.0, 2.0, 3)
     h = tdcr.history(robot(), {"tension.1": tensions}, up_down=True)
     assert list(h.inputs["tension.1"]) == [0.0, 1.0, 2.0, 1.0, 0.0]
-    assert h.directions == ["held", "up", "up", "down", "down"]
+    assert h.directions == ["from_rest", "up", "up", "down", "down"]
     matplotlib = pytest.importorskip("matplotlib")
     matplotlib.use("Agg")
     ax = tdcr.plot_history(h)

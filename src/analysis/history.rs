@@ -73,24 +73,32 @@ pub struct HistoryResult {
 }
 
 /// The direction of each step of `ranges`' swept input ([`Ranges::swept`], the first input
-/// that changes): `up` where it rose from the step before, `down` where it fell, `held`
-/// (the first step, and where it did not change): the CSV's `direction` column and Python's
-/// `History.directions`.
+/// that changes): `from_rest` for the first step, which is loaded from rest (every loaded
+/// tendon with friction pulled in and sliding all along: the full-slip solve of its inputs,
+/// docs/friction.md section 8, "From rest"), then `up` where the input rose from the step
+/// before, `down` where it fell and `held` where it did not change: the CSV's `direction`
+/// column and Python's `History.directions`.
 pub fn directions(ranges: &Ranges) -> Vec<&'static str> {
     let swept = ranges.swept().map_or(0, |(i, _)| i);
     (0..ranges.steps())
         .map(|k| {
-            let change = k
-                .checked_sub(1)
-                .map(|p| ranges.value(swept, k as f64) - ranges.value(swept, p as f64));
-            match change {
-                Some(d) if d > 0.0 => "up",
-                Some(d) if d < 0.0 => "down",
-                _ => "held",
+            let Some(p) = k.checked_sub(1) else {
+                return FROM_REST;
+            };
+            let change = ranges.value(swept, k as f64) - ranges.value(swept, p as f64);
+            if change > 0.0 {
+                "up"
+            } else if change < 0.0 {
+                "down"
+            } else {
+                "held"
             }
         })
         .collect()
 }
+
+/// The direction of a history's first step ([`directions`]): loaded from rest.
+pub const FROM_REST: &str = "from_rest";
 
 /// The tip's displacement (m) at each of a history's steps from its place at the first:
 /// |p(L)_k - p(L)_0| for the `solutions` in order (empty for none). The y axis of the
@@ -427,6 +435,20 @@ fn toward_root(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The first step is loaded from rest whatever its value (here 0 N, then 2 N): it is
+    /// `from_rest`, not `held`, which is kept for a value repeated from the step before.
+    #[test]
+    fn the_first_step_is_from_rest_and_a_repeated_value_is_held() {
+        use crate::analysis::sweep::Input;
+        let tension = Input::Parameter(crate::Parameter::Tension(0));
+        let ranges = |values: Vec<f64>| Ranges::new(crate::cases::case_s(), vec![(tension, values)]).unwrap();
+        assert_eq!(
+            directions(&ranges(vec![0.0, 1.0, 1.0, 0.5])),
+            [FROM_REST, "up", "held", "down"]
+        );
+        assert_eq!(directions(&ranges(vec![2.0, 2.0])), [FROM_REST, "held"]);
+    }
 
     #[test]
     fn loop_axes_parse_from_their_names_and_others_are_refused() {

@@ -541,7 +541,7 @@ class History:
         """Each input's values at the steps solved, by name, shape (n,)."""
     @property
     def directions(self) -> List[str]:
-        """Each step's direction of the swept input: "up", "down" or "held"."""
+        """Each step's direction of the swept input: "from_rest" (the first step), then "up", "down" or "held"."""
     @property
     def tip_positions(self) -> FloatArray:
         """Tip positions (m, world frame), shape (n, 3)."""
