@@ -340,11 +340,7 @@ fn picture(name: &str, (input, values): (Input, &[f64]), steps: &[HistoryStep], 
             significant(values.iter().copied().fold(f64::INFINITY, f64::min)),
             significant(values.iter().copied().fold(f64::NEG_INFINITY, f64::max)),
         )],
-        x_label: if unit.is_empty() {
-            input.to_string()
-        } else {
-            format!("{input} ({unit})")
-        },
+        x_label: input.axis_label(),
         y_label: y.label().into(),
         ..Default::default()
     };
