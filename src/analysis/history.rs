@@ -5,8 +5,11 @@
 //! tendon and letting it back out then follows two different branches: the hysteresis loop.
 //! `tdcr sweep --history` and Python's `tdcr.history` both run it.
 //!
-//! The first step starts from rest: the tendons installed unstretched on the unloaded rod.
-//! All steps share one mesh, the one the default full-slip `pull` solve picks for the step
+//! The first step starts from rest: every tendon with friction slack in its channel, with
+//! no material laid, so a loaded one is pulled in and slides all along (the full-slip pull
+//! solve of the step's inputs; a step after one that left every tendon with friction slack
+//! is loaded from rest too, and starts again from that solve where Newton from the slack
+//! shape fails). All steps share one mesh, the one the default full-slip `pull` solve picks for the step
 //! with the most tension on the tendons with friction, so that the material carried from
 //! step to step sits on the same nodes.
 //!
@@ -221,16 +224,26 @@ pub fn history(ranges: &Ranges, options: &collocation::Options) -> Result<Histor
             continue;
         }
         let start = std::time::Instant::now();
-        let answer = if robot.has_displacement_inputs() {
-            let mut back = steps.iter().rev().map(|s| &s.solution);
-            pulled_step(robot, options, &mut carried, (back.next(), back.next()))
-        } else {
-            friction::history::step(robot, options, &mut carried).map(|(mut solution, zones)| {
-                // The step's answer is final: its verdict, with the step's pattern held.
-                stuck::assess_step(robot, &carried, &mut solution.report);
-                (solution, zones)
-            })
-        };
+        // After a step that left every tendon with friction slack, this one is loaded from
+        // rest: where Newton from the slack shape fails, it starts again from rest, from the
+        // full-slip pull solve of its inputs (docs/friction.md section 8, "From rest").
+        let from_rest = friction::history::all_slack(&carried, robot);
+        let mut answer = solve_step(robot, options, &mut carried, &steps);
+        if from_rest && let Err(Error::NotConverged { report: failed, .. }) = &answer {
+            let failed = (**failed).clone();
+            answer = friction::history::restart(robot, options, &mut carried).and_then(|first| {
+                let mut answer = solve_step(robot, options, &mut carried, &steps)?;
+                // The step's work: the failed attempt's, the full-slip solve's and its own.
+                for done in [&failed, &first] {
+                    let report = &mut answer.0.report;
+                    report.iterations += done.iterations;
+                    report.newton_steps += done.newton_steps;
+                    report.chord_steps += done.chord_steps;
+                    report.load_steps += done.load_steps;
+                }
+                Ok(answer)
+            });
+        }
         match answer {
             Ok((mut solution, zones)) => steps.push(HistoryStep {
                 solution: {
@@ -259,6 +272,24 @@ pub fn history(ranges: &Ranges, options: &collocation::Options) -> Result<Histor
         }
     }
     Ok(HistoryResult { steps, failure: None })
+}
+
+/// One step of `robot` from the `carried` state after the `steps` solved before it: a
+/// pull-in step ([`pulled_step`]) or a tension step, with its verdict.
+fn solve_step(
+    robot: &crate::Robot,
+    options: &collocation::Options,
+    carried: &mut friction::history::Carried,
+    steps: &[HistoryStep],
+) -> Result<friction::history::StepAnswer> {
+    if robot.has_displacement_inputs() {
+        let mut back = steps.iter().rev().map(|s| &s.solution);
+        return pulled_step(robot, options, carried, (back.next(), back.next()));
+    }
+    let (mut solution, zones) = friction::history::step(robot, options, carried)?;
+    // The step's answer is final: its verdict, with the step's pattern held.
+    stuck::assess_step(robot, carried, &mut solution.report);
+    Ok((solution, zones))
 }
 
 /// The note of a step whose inputs repeat the last step's: its answer is the last one, stuck all
