@@ -576,7 +576,7 @@ fn csv_round_trips_exactly() {
     let (experiments, _) = synthetic(&robot, &paper_frame_rotation(), &truth(&robot), NOISE, 5);
     let text = to_csv(&experiments);
     assert!(text.starts_with(
-        "tension_1,tension_2,tension_3,tension_4,tension_5,tip_force_x,tip_force_y,tip_force_z,measured_x,measured_y,measured_z\n"
+        "tension.1,tension.2,tension.3,tension.4,tension.5,tip_force.x,tip_force.y,tip_force.z,measured_x,measured_y,measured_z\n"
     ));
     assert_eq!(parse_csv(&text, "x.csv", 5).unwrap(), experiments);
 }
@@ -602,9 +602,38 @@ fn csv_columns_may_be_reordered_and_comments_skipped() {
     assert!(e.starts_with("x.csv:6:1:"), "{e}");
 }
 
+/// The inputs' columns are named as the parameters they set (`tension.1`, `tip_force.x`),
+/// and the names before that (`tension_1`, `tip_force_x`) are read as the same columns, in
+/// any mix; one column under both names is repeated, and a message names a column as the
+/// file spells it.
+#[test]
+fn csv_reads_the_inputs_under_their_names_before_2026_12_too() {
+    let new = "tension.2,tension.1,tip_force.x,tip_force.y,tip_force.z,measured_x,measured_y,measured_z\n\
+               1.5,0,0,0.098,0,0.05,0.1,-0.2\n";
+    let experiments = parse_csv(new, "new.csv", 2).unwrap();
+    assert_eq!(experiments[0].tensions, vec![0.0, 1.5]);
+    assert_eq!(experiments[0].tip_force, Vector3::new(0.0, 0.098, 0.0));
+    let old = new.replace("tension.", "tension_").replace("tip_force.", "tip_force_");
+    assert_eq!(parse_csv(&old, "old.csv", 2).unwrap(), experiments);
+    let mixed = new
+        .replacen("tension.1", "tension_1", 1)
+        .replacen("tip_force.y", "tip_force_y", 1);
+    assert_eq!(parse_csv(&mixed, "mixed.csv", 2).unwrap(), experiments);
+    let twice = new.replacen("tension.2", "tension_1", 1);
+    let e = parse_csv(&twice, "twice.csv", 2).unwrap_err().to_string();
+    assert!(
+        e.contains("`tension.1` is repeated") && e.contains("`tension.2` is missing"),
+        "{e}"
+    );
+    let e = parse_csv(&old.replace("1.5", "-1.5"), "old.csv", 2)
+        .unwrap_err()
+        .to_string();
+    assert!(e.starts_with("old.csv:2:1: `tension_2` (column 1) is -1.5 N"), "{e}");
+}
+
 #[test]
 fn csv_problems_name_line_column_and_field() {
-    let header = "tension_1,tip_force_x,tip_force_y,tip_force_z,measured_x,measured_y,measured_z";
+    let header = "tension.1,tip_force.x,tip_force.y,tip_force.z,measured_x,measured_y,measured_z";
     let problems = |text: &str| parse_csv(text, "e.csv", 1).unwrap_err().to_string();
 
     let text = format!("{header}\n1,0,0,0,0.1,0.2,0.3\n1,0,0,0,0.1,abc,0.3\n");
@@ -617,19 +646,19 @@ fn csv_problems_name_line_column_and_field() {
     let text = format!("{header}\n-1,0,0,0,0.1,0.2,0.3\n1,0,0,0,0.1,0.2\n2,0,0,inf,0.1,0.2,0.3\n");
     let e = problems(&text);
     let lines: Vec<&str> = e.lines().collect();
-    assert!(lines[0].starts_with("e.csv:2:1: `tension_1` (column 1) is -1 N"), "{e}");
+    assert!(lines[0].starts_with("e.csv:2:1: `tension.1` (column 1) is -1 N"), "{e}");
     assert!(
         lines[1].starts_with("e.csv:3:1: has 6 fields, but the header has 7 columns"),
         "{e}"
     );
     assert!(
-        lines[2].starts_with("e.csv:4:7: `tip_force_z` (column 4) is `inf`, not a finite number"),
+        lines[2].starts_with("e.csv:4:7: `tip_force.z` (column 4) is `inf`, not a finite number"),
         "{e}"
     );
 
-    let e = problems(&format!("{header},tension_2\n"));
+    let e = problems(&format!("{header},tension.2\n"));
     assert!(
-        e.contains("`tension_2` is not a column") && e.contains("the robot has 1 tendon(s)"),
+        e.contains("`tension.2` is not a column") && e.contains("the robot has 1 tendon(s)"),
         "{e}"
     );
     let e = problems(&header.replace(",measured_y", ""));
@@ -746,13 +775,13 @@ fn command_rejects_bad_input_with_exit_code_2() {
     assert!(stderr.contains("is `zero`, not a number"), "{stderr}");
 
     // A header for another robot: the message gives the right header.
-    std::fs::write(dir.join("short.csv"), csv.replace("tension_5,", "")).unwrap();
+    std::fs::write(dir.join("short.csv"), csv.replace("tension.5,", "")).unwrap();
     let out = tdcr(&dir, &["calibrate", "robot.toml", "short.csv"]);
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(2), "{stderr}");
     assert!(
-        stderr.contains("`tension_5` is missing")
-            && stderr.contains("the header for this robot (5 tendon(s)) is tension_1,"),
+        stderr.contains("`tension.5` is missing")
+            && stderr.contains("the header for this robot (5 tendon(s)) is tension.1,"),
         "{stderr}"
     );
 
@@ -769,7 +798,7 @@ fn command_rejects_bad_input_with_exit_code_2() {
     assert_eq!(out.status.code(), Some(2), "{stderr}");
     assert!(
         stderr.contains("`motion` is `pul`")
-            && stderr.contains("the header for this robot (5 tendon(s)) is tension_1,")
+            && stderr.contains("the header for this robot (5 tendon(s)) is tension.1,")
             && stderr.contains("measured_z,motion ("),
         "{stderr}"
     );

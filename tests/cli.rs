@@ -341,7 +341,7 @@ fn sweep_writes_csv_rows_and_a_trajectory_plot() {
     exits(&out, 0);
     let csv = stdout(&out);
     let lines: Vec<&str> = csv.lines().collect();
-    assert!(lines[0].starts_with("step,tension_1,tension_2"));
+    assert!(lines[0].starts_with("step,tension.1,tension.2"));
     assert_eq!(lines.len(), 8);
     assert!(lines[7].starts_with("7,3,0.5,"), "{}", lines[7]);
     // Pulling tendon 1 harder bends the tip down: z decreases along the sweep.
@@ -1132,7 +1132,7 @@ fn a_sweep_over_pull_ins_reports_solved_tensions_and_slack() {
     let header: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
     assert_eq!(
         &header[..5],
-        ["step", "tension_1", "tension_2", "displacement_1", "displacement_2"]
+        ["step", "tension.1", "tension.2", "displacement.1", "displacement.2"]
     );
     let rows: Vec<Vec<f64>> = csv
         .lines()

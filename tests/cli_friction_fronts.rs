@@ -71,7 +71,7 @@ fn friction_is_a_jacobian_column_by_name() {
     );
 }
 
-/// `solve --format csv` has a column `tension_I` per tendon with friction (its tension at
+/// `solve --format csv` has a column `tension.I` per tendon with friction (its tension at
 /// each sample, blank past its end) and the JSON's samples a `tensions` list (every tendon,
 /// null past its end); both equal the library's `Solution::tension_at`, and without friction
 /// neither is there (the CSV's header is the frictionless one).
@@ -88,7 +88,7 @@ fn the_csv_and_json_samples_have_the_tension_along_each_tendon() {
     let csv = stdout(&out);
     let mut lines = csv.lines();
     let header = lines.next().unwrap();
-    assert_eq!(header, format!("{},tension_1", tdcr::io::output::CSV_HEADER));
+    assert_eq!(header, format!("{},tension.1", tdcr::io::output::CSV_HEADER));
     let rough = json(
         &dir,
         &[&["solve", "rough.toml", "--format", "json"][..], &args].concat(),

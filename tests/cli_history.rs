@@ -57,7 +57,7 @@ fn up_down_writes_one_row_per_step_and_the_loop() {
     let header = lines[0];
     let (direction, tension, zones) = (
         column(header, "direction"),
-        column(header, "tension_1"),
+        column(header, "tension.1"),
         column(header, "zones_1"),
     );
     column(header, "delivered_1");
@@ -86,6 +86,85 @@ fn up_down_writes_one_row_per_step_and_the_loop() {
     assert!((1..10).all(|k| field(k, stability) == "stable"), "{csv}");
 }
 
+/// Every input column of the sweep and history CSVs is named as the parameter it sets
+/// (`tension.1`, `displacement.1`, `tip_force.z`), each once: a history swept in a tension
+/// has that tension's column alone (main wrote `tension_1` and again `tension.1`), and a
+/// `--param tension.2` is its `tension.2` column; giving one input twice is refused.
+#[test]
+fn input_columns_are_named_as_their_parameters_once_each() {
+    let dir = scratch("names");
+    robot(&dir, false);
+    let header = |args: &[&str]| {
+        let out = run(&dir, args);
+        assert_eq!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stderr));
+        let csv = String::from_utf8_lossy(&out.stdout).into_owned();
+        let names: Vec<String> = csv.lines().next().unwrap().split(',').map(String::from).collect();
+        for (k, name) in names.iter().enumerate() {
+            assert!(!names[..k].contains(name), "{name} twice in {names:?}");
+        }
+        names
+    };
+    let names = header(&["sweep", "robot.toml", "--tension", "1=0:1:2", "--history", "up-down"]);
+    assert_eq!(names[..4], ["step", "direction", "tension.1", "tension.2"]);
+    assert_eq!(names[7], "tip_x", "{names:?}");
+    let names = header(&[
+        "sweep",
+        "robot.toml",
+        "--displacement",
+        "1=0:0.002:2",
+        "--history",
+        "up-down",
+    ]);
+    assert_eq!(
+        names[2..8],
+        [
+            "tension.1",
+            "tension.2",
+            "tension.3",
+            "tension.4",
+            "tension.5",
+            "displacement.1"
+        ]
+    );
+    let names = header(&[
+        "sweep",
+        "robot.toml",
+        "--displacement",
+        "1=0:0.002:2",
+        "--param",
+        "tension.2=0:1:2",
+        "--param",
+        "tip_force.z=0:-0.1:2",
+    ]);
+    assert_eq!(
+        names[1..8],
+        [
+            "tension.1",
+            "tension.2",
+            "tension.3",
+            "tension.4",
+            "tension.5",
+            "displacement.1",
+            "tip_force.z"
+        ]
+    );
+    for (option, value) in [
+        ("--tension", "2=0:1:2"),
+        ("--displacement", "2=0:0.001:2"),
+        ("--param", "tension.2=0"),
+    ] {
+        let param = if option == "--displacement" {
+            "displacement.2=0:1:2"
+        } else {
+            "tension.2=0:1:2"
+        };
+        let out = run(&dir, &["sweep", "robot.toml", option, value, "--param", param]);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{option}: {err}");
+        assert!(err.contains("give each input one range or value"), "{err}");
+    }
+}
+
 #[test]
 fn an_explicit_list_is_solved_in_order() {
     let dir = scratch("list");
@@ -97,7 +176,7 @@ fn an_explicit_list_is_solved_in_order() {
     assert_eq!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stderr));
     let csv = String::from_utf8_lossy(&out.stdout).into_owned();
     let lines: Vec<&str> = csv.lines().collect();
-    let c = column(lines[0], "tension_1");
+    let c = column(lines[0], "tension.1");
     let tensions: Vec<&str> = lines[1..].iter().map(|l| l.split(',').nth(c).unwrap()).collect();
     assert_eq!(tensions, ["0", "3", "1", "2"]);
 }
@@ -127,7 +206,7 @@ fn a_list_with_a_second_range_warns_that_the_range_is_held() {
     assert!(err.contains("tension.2 at its first value 0.5"), "{err}");
     let csv = String::from_utf8_lossy(&out.stdout).into_owned();
     let lines: Vec<&str> = csv.lines().collect();
-    let c = column(lines[0], "tension_2");
+    let c = column(lines[0], "tension.2");
     assert!(lines[1..].iter().all(|l| l.split(',').nth(c) == Some("0.5")), "{csv}");
     // One range marking the swept input and a fixed value: nothing to warn about (two
     // single values are refused: `a_list_for_one_of_several_single_inputs_is_refused`).
@@ -348,7 +427,7 @@ fn a_pull_in_loop_back_at_its_first_pull_in_is_slack_at_both_ends() {
     let rows = history_csv(&dir, &["--displacement", "1=0:0.012:4", "--history", "up-down"]);
     let header = rows[0].join(",");
     let (tension, delivered, zones) = (
-        column(&header, "tension_1"),
+        column(&header, "tension.1"),
         column(&header, "delivered_1"),
         column(&header, "zones_1"),
     );

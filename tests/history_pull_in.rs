@@ -167,3 +167,44 @@ fn a_rigid_tendon_pulled_in_further_slides_in_all_along() {
     let gap = (tip(step) - full.tip_position()).norm();
     assert!(gap < 1e-10, "{gap} m from the full-slip solve");
 }
+
+#[test]
+fn a_rigid_pull_in_from_slack_straight_to_its_top_starts_again_from_rest() {
+    // A flexible rod (user23's nitinol: 0.3 m, r = 0.5 mm, E = 60 GPa, standing up under
+    // its weight) with two opposite rigid tendons, mu = 0.2, tendon 1 pulled in 0 then
+    // 6 mm. Step 1 leaves both slack; step 2 is then loaded from rest, as a first step is,
+    // and is the full-slip pull solve of its pull-in. Until 2026-12-07 (sixteenth session)
+    // its Newton started from the slack, straight rod and stalled (30 iterations, scaled
+    // residual 4e2) where the full-slip solve and a one-step history of 6 mm solve.
+    let tendon = |x: f64| {
+        let mut t = tdcr::Tendon::new(tdcr::Routing::straight(x, 0.0), 0.0);
+        t.friction = Some(Friction::pull(0.2));
+        t
+    };
+    let robot = Robot::new(tdcr::Rod::solid_circle(0.3, 0.0005, 60e9, 0.33))
+        .with_loads(tdcr::Loads::self_weight(0.2, -Vector3::z()))
+        .with_tendon(tendon(0.005))
+        .with_tendon(tendon(-0.005));
+    let ranges = Ranges::new(robot, vec![(Input::Displacement(0), vec![0.0, 0.006])]).unwrap();
+    let result = history(&ranges, &Default::default()).unwrap();
+    if let Some((k, e)) = &result.failure {
+        panic!("step {k}: {e}");
+    }
+    let step = &result.steps[1];
+    assert_eq!(step.zones[0].zones.len(), 1);
+    assert_eq!(step.zones[0].zones[0].contact, Contact::Pull);
+    assert_eq!(step.zones[1].zones[0].contact, Contact::Slack);
+    let full = tdcr::solve(&ranges.robot(1.0).unwrap(), &Default::default()).unwrap();
+    // the same discrete problem on the same mesh (the history's, chosen by this step's
+    // full-slip solve) from different starts, each to Newton's tolerance: far below the
+    // 3e-8 m tolerance
+    let gap = (tip(step) - full.tip_position()).norm();
+    assert!(gap < 1e-10, "{gap} m from the full-slip solve");
+    assert!(step.solution.report.error_estimate.is_some());
+    // Its work counts the failed attempt's and the full-slip solve's iterations too.
+    assert!(
+        step.solution.report.iterations > full.report.iterations,
+        "{}",
+        step.solution.report.iterations
+    );
+}

@@ -28,6 +28,9 @@ pub struct PyHistory {
     inputs: Vec<(String, Vec<f64>)>,
     /// Each step's direction of the swept input.
     directions: Vec<String>,
+    /// The swept input ([`Ranges::swept`], else the first): its index in `inputs` and the
+    /// label of its axis with the library's unit ([`tdcr::analysis::sweep::Input::axis_label`]).
+    swept: (usize, String),
 }
 
 impl PyHistory {
@@ -41,6 +44,8 @@ impl PyHistory {
             .map(|(i, (input, _))| (input.to_string(), (0..n).map(|k| ranges.value(i, k as f64)).collect()))
             .collect();
         let directions = directions(ranges).into_iter().take(n).map(String::from).collect();
+        let index = ranges.swept().map_or(0, |(i, _)| i);
+        let swept = (index, ranges.inputs()[index].0.axis_label());
         let solutions = PyList::empty(py);
         let (mut zones, mut tips) = (Vec::new(), Vec::new());
         for step in steps {
@@ -69,6 +74,7 @@ impl PyHistory {
             tips,
             inputs,
             directions,
+            swept,
         })
     }
 }
@@ -85,7 +91,7 @@ impl PyHistory {
 }
 
 crate::pickle::pickled_fields! {
-    PyHistory { solutions, zones, tips, inputs, directions }
+    PyHistory { solutions, zones, tips, inputs, directions, swept }
 
     /// The solutions, one per step solved, in order.
     #[getter]
@@ -113,8 +119,9 @@ crate::pickle::pickled_fields! {
         Ok(out)
     }
 
-    /// Each step's direction of the swept input (the first that changes): "up", "down", or
-    /// "held" (the first step, and where it did not change), as the command line's CSV.
+    /// Each step's direction of the swept input (the first that changes): "from_rest" (the
+    /// first step, loaded from rest: the full-slip pull solve), then "up", "down", or "held"
+    /// (where it did not change), as the command line's CSV.
     #[getter]
     fn directions(&self) -> Vec<String> {
         self.directions.clone()
@@ -148,6 +155,18 @@ crate::pickle::pickled_fields! {
             axis.label(),
             PyArray1::from_vec(py, axis.values(solutions.iter().map(|s| &s.get().solution))),
         ))
+    }
+
+    /// loop_x() -> (label, values)
+    ///
+    /// The x axis of the hysteresis loop as `tdcr sweep --history --plot` draws it: the
+    /// swept input (the first that changes, else the first given), its label with the
+    /// library's unit (e.g. "tension.1 (N)", "displacement.1 (m)") and its value at each
+    /// step, shape (n,).
+    fn loop_x<'py>(&self, py: Python<'py>) -> (String, Bound<'py, PyArray1<f64>>) {
+        let (index, label) = &self.swept;
+        let values = self.inputs.get(*index).map_or(&[][..], |(_, v)| &v[..]);
+        (label.clone(), PyArray1::from_slice(py, values))
     }
 
     fn __len__(&self) -> usize {

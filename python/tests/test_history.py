@@ -56,7 +56,7 @@ def test_the_history_keeps_its_inputs_and_directions_and_draws_its_loop(tmp_path
     tensions = np.linspace(0.0, 2.0, 3)
     h = tdcr.history(robot(), {"tension.1": tensions}, up_down=True)
     assert list(h.inputs["tension.1"]) == [0.0, 1.0, 2.0, 1.0, 0.0]
-    assert h.directions == ["held", "up", "up", "down", "down"]
+    assert h.directions == ["from_rest", "up", "up", "down", "down"]
     matplotlib = pytest.importorskip("matplotlib")
     matplotlib.use("Agg")
     ax = tdcr.plot_history(h)
@@ -68,6 +68,11 @@ def test_the_history_keeps_its_inputs_and_directions_and_draws_its_loop(tmp_path
         "unloading: the input falls",
     ]
     ax.figure.savefig(tmp_path / "loop.png")
+    # The x axis is the swept input labelled with the library's unit, as the command line's
+    # loop is (main labelled it "tension.1", without the unit).
+    assert h.loop_x()[0] == "tension.1 (N)" and ax.get_xlabel() == "tension.1 (N)"
+    np.testing.assert_array_equal(h.loop_x()[1], h.inputs["tension.1"])
+    assert pickle.loads(pickle.dumps(h)).loop_x()[0] == "tension.1 (N)"
     # The default y axis is the library's tip displacement (m there, mm here), one definition
     # with the command line's picture; the other quantities by name.
     np.testing.assert_array_equal(ax.lines[1].get_ydata(), 1e3 * h.tip_displacements[1:3])

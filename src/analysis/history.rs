@@ -5,8 +5,11 @@
 //! tendon and letting it back out then follows two different branches: the hysteresis loop.
 //! `tdcr sweep --history` and Python's `tdcr.history` both run it.
 //!
-//! The first step starts from rest: the tendons installed unstretched on the unloaded rod.
-//! All steps share one mesh, the one the default full-slip `pull` solve picks for the step
+//! The first step starts from rest: every tendon with friction slack in its channel, with
+//! no material laid, so a loaded one is pulled in and slides all along (the full-slip pull
+//! solve of the step's inputs; a step after one that left every tendon with friction slack
+//! is loaded from rest too, and starts again from that solve where Newton from the slack
+//! shape fails). All steps share one mesh, the one the default full-slip `pull` solve picks for the step
 //! with the most tension on the tendons with friction, so that the material carried from
 //! step to step sits on the same nodes.
 //!
@@ -73,24 +76,32 @@ pub struct HistoryResult {
 }
 
 /// The direction of each step of `ranges`' swept input ([`Ranges::swept`], the first input
-/// that changes): `up` where it rose from the step before, `down` where it fell, `held`
-/// (the first step, and where it did not change): the CSV's `direction` column and Python's
-/// `History.directions`.
+/// that changes): `from_rest` for the first step, which is loaded from rest (every loaded
+/// tendon with friction pulled in and sliding all along: the full-slip solve of its inputs,
+/// docs/friction.md section 8, "From rest"), then `up` where the input rose from the step
+/// before, `down` where it fell and `held` where it did not change: the CSV's `direction`
+/// column and Python's `History.directions`.
 pub fn directions(ranges: &Ranges) -> Vec<&'static str> {
     let swept = ranges.swept().map_or(0, |(i, _)| i);
     (0..ranges.steps())
         .map(|k| {
-            let change = k
-                .checked_sub(1)
-                .map(|p| ranges.value(swept, k as f64) - ranges.value(swept, p as f64));
-            match change {
-                Some(d) if d > 0.0 => "up",
-                Some(d) if d < 0.0 => "down",
-                _ => "held",
+            let Some(p) = k.checked_sub(1) else {
+                return FROM_REST;
+            };
+            let change = ranges.value(swept, k as f64) - ranges.value(swept, p as f64);
+            if change > 0.0 {
+                "up"
+            } else if change < 0.0 {
+                "down"
+            } else {
+                "held"
             }
         })
         .collect()
 }
+
+/// The direction of a history's first step ([`directions`]): loaded from rest.
+pub const FROM_REST: &str = "from_rest";
 
 /// The tip's displacement (m) at each of a history's steps from its place at the first:
 /// |p(L)_k - p(L)_0| for the `solutions` in order (empty for none). The y axis of the
@@ -229,16 +240,26 @@ pub fn history_until(
             continue;
         }
         let start = std::time::Instant::now();
-        let answer = if robot.has_displacement_inputs() {
-            let mut back = steps.iter().rev().map(|s| &s.solution);
-            pulled_step(robot, options, &mut carried, (back.next(), back.next()))
-        } else {
-            friction::history::step(robot, options, &mut carried).map(|(mut solution, zones)| {
-                // The step's answer is final: its verdict, with the step's pattern held.
-                stuck::assess_step(robot, &carried, &mut solution.report);
-                (solution, zones)
-            })
-        };
+        // After a step that left every tendon with friction slack, this one is loaded from
+        // rest: where Newton from the slack shape fails, it starts again from rest, from the
+        // full-slip pull solve of its inputs (docs/friction.md section 8, "From rest").
+        let from_rest = friction::history::all_slack(&carried, robot);
+        let mut answer = solve_step(robot, options, &mut carried, &steps);
+        if from_rest && let Err(Error::NotConverged { report: failed, .. }) = &answer {
+            let failed = (**failed).clone();
+            answer = friction::history::restart(robot, options, &mut carried).and_then(|first| {
+                let mut answer = solve_step(robot, options, &mut carried, &steps)?;
+                // The step's work: the failed attempt's, the full-slip solve's and its own.
+                for done in [&failed, &first] {
+                    let report = &mut answer.0.report;
+                    report.iterations += done.iterations;
+                    report.newton_steps += done.newton_steps;
+                    report.chord_steps += done.chord_steps;
+                    report.load_steps += done.load_steps;
+                }
+                Ok(answer)
+            });
+        }
         match answer {
             Ok((mut solution, zones)) => steps.push(HistoryStep {
                 solution: {
@@ -267,6 +288,24 @@ pub fn history_until(
         }
     }
     Ok(HistoryResult { steps, failure: None })
+}
+
+/// One step of `robot` from the `carried` state after the `steps` solved before it: a
+/// pull-in step ([`pulled_step`]) or a tension step, with its verdict.
+fn solve_step(
+    robot: &crate::Robot,
+    options: &collocation::Options,
+    carried: &mut friction::history::Carried,
+    steps: &[HistoryStep],
+) -> Result<friction::history::StepAnswer> {
+    if robot.has_displacement_inputs() {
+        let mut back = steps.iter().rev().map(|s| &s.solution);
+        return pulled_step(robot, options, carried, (back.next(), back.next()));
+    }
+    let (mut solution, zones) = friction::history::step(robot, options, carried)?;
+    // The step's answer is final: its verdict, with the step's pattern held.
+    stuck::assess_step(robot, carried, &mut solution.report);
+    Ok((solution, zones))
 }
 
 /// The note of a step whose inputs repeat the last step's: its answer is the last one, stuck all
@@ -443,6 +482,20 @@ fn toward_root(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The first step is loaded from rest whatever its value (here 0 N, then 2 N): it is
+    /// `from_rest`, not `held`, which is kept for a value repeated from the step before.
+    #[test]
+    fn the_first_step_is_from_rest_and_a_repeated_value_is_held() {
+        use crate::analysis::sweep::Input;
+        let tension = Input::Parameter(crate::Parameter::Tension(0));
+        let ranges = |values: Vec<f64>| Ranges::new(crate::cases::case_s(), vec![(tension, values)]).unwrap();
+        assert_eq!(
+            directions(&ranges(vec![0.0, 1.0, 1.0, 0.5])),
+            [FROM_REST, "up", "held", "down"]
+        );
+        assert_eq!(directions(&ranges(vec![2.0, 2.0])), [FROM_REST, "held"]);
+    }
 
     #[test]
     fn loop_axes_parse_from_their_names_and_others_are_refused() {

@@ -10,22 +10,40 @@ use crate::fit::calibration::Measurement;
 use crate::model::tendon::Motion;
 use nalgebra::Vector3;
 
-/// The tip-force and measured-tip columns of the experiments CSV, after the tensions.
+/// The tip-force and measured-tip columns of the experiments CSV, after the tensions: the
+/// inputs named as the parameters they set (`tip_force.x`, [`crate::Parameter`]), the
+/// measurement as the tip of the output files (`tip_x`) is, with `measured_` for `tip_`.
 pub const CSV_VECTOR_COLUMNS: [&str; 6] = [
-    "tip_force_x",
-    "tip_force_y",
-    "tip_force_z",
+    "tip_force.x",
+    "tip_force.y",
+    "tip_force.z",
     "measured_x",
     "measured_y",
     "measured_z",
 ];
 
 /// The header of an experiments CSV for a robot with `tendons` tendons:
-/// `tension_1,...,tension_k,tip_force_x,tip_force_y,tip_force_z,measured_x,measured_y,measured_z`.
+/// `tension.1,...,tension.k,tip_force.x,tip_force.y,tip_force.z,measured_x,measured_y,measured_z`.
+/// [`parse_csv`] also reads the inputs' names of earlier versions, `tension_I` and
+/// `tip_force_x` ([`current_name`]).
 pub fn csv_header(tendons: usize) -> String {
-    let mut names: Vec<String> = (1..=tendons).map(|i| format!("tension_{i}")).collect();
+    let mut names: Vec<String> = (0..tendons).map(|i| crate::Parameter::Tension(i).to_string()).collect();
     names.extend(CSV_VECTOR_COLUMNS.iter().map(|s| s.to_string()));
     names.join(",")
+}
+
+/// The column name `name` of an experiments CSV in the current spelling: `tension_I`,
+/// `tip_force_x`, `tip_force_y` and `tip_force_z` (the names before the inputs took their
+/// parameters' names) become `tension.I` and `tip_force.x` ...; every other name is itself.
+pub fn current_name(name: &str) -> String {
+    for head in ["tension_", "tip_force_"] {
+        if let Some(tail) = name.strip_prefix(head)
+            && !tail.is_empty()
+        {
+            return format!("{}.{tail}", &head[..head.len() - 1]);
+        }
+    }
+    name.to_string()
 }
 
 /// The hint that follows a bad experiments CSV's `error` for a robot with `tendons`
@@ -89,7 +107,8 @@ const MAX_CSV_PROBLEMS: usize = 20;
 /// Reads an experiments CSV (docs/calibration.md) for a robot with `tendons` tendons.
 ///
 /// The first line that is neither blank nor a `#` comment is the header: the column names
-/// of [`csv_header`] in any order, each once. Every following non-blank, non-comment line is
+/// of [`csv_header`] in any order, each once (`tension_I` and `tip_force_x` ... are read as
+/// `tension.I` and `tip_force.x` ..., the spelling of earlier versions). Every following non-blank, non-comment line is
 /// one experiment with a finite number in every column (tensions >= 0). `file` names the
 /// source in messages.
 ///
@@ -100,7 +119,7 @@ const MAX_CSV_PROBLEMS: usize = 20;
 ///
 /// # Examples
 /// ```
-/// let text = "tension_1,tip_force_x,tip_force_y,tip_force_z,measured_x,measured_y,measured_z\n\
+/// let text = "tension.1,tip_force.x,tip_force.y,tip_force.z,measured_x,measured_y,measured_z\n\
 ///             2.94,0,0,-0.098,0.15,0,-0.16\n";
 /// let experiments = tdcr::io::experiments::parse_csv(text, "data.csv", 1).unwrap();
 /// assert_eq!(experiments[0].tensions, vec![2.94]);
@@ -126,8 +145,12 @@ pub fn parse_csv(text: &str, file: &str, tendons: usize) -> Result<Vec<Measureme
     let mut slots: Vec<Option<usize>> = Vec::new();
     // The column index of the optional motion column.
     let mut motion_column = None;
-    for (column, name) in fields(&header) {
-        let name = name.trim();
+    // Each column's name as the file spells it, for the messages.
+    let mut written: Vec<String> = Vec::new();
+    for (column, given) in fields(&header) {
+        let given = printable(given.trim());
+        let name = current_name(&given);
+        let name = name.as_str();
         let slot = expected.iter().position(|e| e == name);
         if name == MOTION_COLUMN {
             if motion_column.is_some() {
@@ -141,12 +164,12 @@ pub fn parse_csv(text: &str, file: &str, tendons: usize) -> Result<Vec<Measureme
         } else if slot.is_some() && slots.contains(&slot) {
             problems.push(Problem {
                 position: at(header_line, column),
-                field: printable(name),
+                field: given.clone(),
                 message: "is repeated; give each column once".into(),
             });
         } else if slot.is_none() {
-            let hint = match name.strip_prefix("tension_").and_then(|i| i.parse::<usize>().ok()) {
-                Some(i) => format!("the robot has {tendons} tendon(s), so tension_{i} is not one of its columns"),
+            let hint = match name.strip_prefix("tension.").and_then(|i| i.parse::<usize>().ok()) {
+                Some(i) => format!("the robot has {tendons} tendon(s), so tension.{i} is not one of its columns"),
                 None => format!(
                     "the columns are {} (and an optional {MOTION_COLUMN})",
                     expected.join(",")
@@ -154,11 +177,12 @@ pub fn parse_csv(text: &str, file: &str, tendons: usize) -> Result<Vec<Measureme
             };
             problems.push(Problem {
                 position: at(header_line, column),
-                field: printable(name),
+                field: given.clone(),
                 message: format!("is not a column of the experiments file; {hint}"),
             });
         }
         slots.push(slot);
+        written.push(given);
     }
     for (i, name) in expected.iter().enumerate() {
         if !slots.contains(&Some(i)) {
@@ -213,7 +237,7 @@ pub fn parse_csv(text: &str, file: &str, tendons: usize) -> Result<Vec<Measureme
         }
         for (index, ((column, cell), slot)) in cells.into_iter().zip(&slots).enumerate() {
             let Some(slot) = *slot else { continue };
-            let name = &expected[slot];
+            let name = &written[index];
             let cell = cell.trim();
             let problem = match cell.parse::<f64>() {
                 Ok(x) if !x.is_finite() => Some(format!("is `{cell}`, not a finite number")),

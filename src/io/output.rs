@@ -97,12 +97,12 @@ pub fn solution_json(solution: &Solution) -> String {
 pub const CSV_HEADER: &str = "s,px,py,pz,nx,ny,nz,mx,my,mz,R11,R12,R13,R21,R22,R23,R31,R32,R33";
 
 /// The samples of `solution` (of `robot`) as CSV: [`CSV_HEADER`], then for each tendon I
-/// with friction ([`friction_tendons`]) a column `tension_I`, its tension at the sample
+/// with friction ([`friction_tendons`]) a column `tension.I`, its tension at the sample
 /// ([`tension_at_sample`], blank past its end); one row per sample (SI units, full
 /// precision). Without friction the columns are those of [`CSV_HEADER`] alone.
 pub fn csv(robot: &Robot, solution: &Solution, samples: &[Sample]) -> String {
     let varying = friction_tendons(robot);
-    let heads = varying.iter().map(|i| format!("tension_{}", i + 1));
+    let heads = varying.iter().map(|&i| Parameter::Tension(i).to_string());
     let mut table = CsvTable::new(CSV_HEADER.split(',').map(str::to_string).chain(heads));
     for x in samples {
         let mut values = vec![x.s];
@@ -130,7 +130,7 @@ pub fn friction_tendons(robot: &Robot) -> Vec<usize> {
 /// The tension (N) of tendon `i` (0-based) at arc length `s` of `solution`
 /// ([`Solution::tension_at`], docs/friction.md), `None` past the tendon's end on `robot`
 /// (or for a tendon it does not have): the value of the table's `TI/N`, the CSV's
-/// `tension_I` and the JSON's `samples[].tensions`.
+/// `tension.I` and the JSON's `samples[].tensions`.
 pub fn tension_at_sample(robot: &Robot, solution: &Solution, i: usize, s: f64) -> Option<f64> {
     let end = robot.tendons.get(i)?.end(robot.length());
     if s > end {

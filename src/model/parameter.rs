@@ -314,6 +314,12 @@ impl Parameter {
         Ok(out)
     }
 
+    /// The label of an axis of this parameter's values: its name with its unit in
+    /// parentheses, `tension.1 (N)`, or the name alone without a unit (`load_scale`).
+    pub fn axis_label(&self) -> String {
+        axis_label(&self.to_string(), self.unit())
+    }
+
     /// Its unit: N, N m, m, N/m, Pa or none.
     pub fn unit(&self) -> &'static str {
         match self {
@@ -334,6 +340,16 @@ impl Parameter {
             Parameter::DistributedForce(c) => with_component(f, c, value),
             _ => f,
         }
+    }
+}
+
+/// `name (unit)`, or `name` alone for an empty unit: the label of an axis of an input's
+/// values ([`Parameter::axis_label`], [`crate::analysis::sweep::Input::axis_label`]).
+pub(crate) fn axis_label(name: &str, unit: &str) -> String {
+    if unit.is_empty() {
+        name.to_string()
+    } else {
+        format!("{name} ({unit})")
     }
 }
 
@@ -379,6 +395,18 @@ fn scale_loads(robot: &mut Robot, factor: f64) {
 mod tests {
     use super::*;
     use crate::model::equations::{Model, Which};
+
+    /// An axis is labelled with the name and the unit, the name alone without one; a sweep's
+    /// pull-in as the parameter of the same name.
+    #[test]
+    fn axis_labels_carry_the_unit() {
+        assert_eq!(Parameter::Tension(0).axis_label(), "tension.1 (N)");
+        assert_eq!(Parameter::TipMoment(2).axis_label(), "tip_moment.z (N m)");
+        assert_eq!(Parameter::LoadScale.axis_label(), "load_scale");
+        let pull_in = crate::analysis::sweep::Input::Displacement(1);
+        assert_eq!(pull_in.axis_label(), "displacement.2 (m)");
+        assert_eq!(pull_in.axis_label(), Parameter::Displacement(1).axis_label());
+    }
 
     /// Every name round-trips; bad names list the good ones.
     #[test]

@@ -541,7 +541,7 @@ class History:
         """Each input's values at the steps solved, by name, shape (n,)."""
     @property
     def directions(self) -> List[str]:
-        """Each step's direction of the swept input: "up", "down" or "held"."""
+        """Each step's direction of the swept input: "from_rest" (the first step), then "up", "down" or "held"."""
     @property
     def tip_positions(self) -> FloatArray:
         """Tip positions (m, world frame), shape (n, 3)."""
@@ -553,6 +553,9 @@ class History:
     ) -> Tuple[str, FloatArray]:
         """The hysteresis loop's y axis as `tdcr sweep --history --plot --loop-y Y` draws it:
         (label with unit, value per step in mm or deg)."""
+    def loop_x(self) -> Tuple[str, FloatArray]:
+        """The hysteresis loop's x axis as `tdcr sweep --history --plot` draws it: the swept
+        input's label with the library's unit (e.g. "tension.1 (N)") and its value per step."""
     def __len__(self) -> int: ...
     def __getitem__(self, index: int, /) -> Solution: ...
     def __iter__(self) -> Iterator[Solution]: ...

@@ -58,7 +58,8 @@ def plot_history(history: Any, ax: Optional[Any] = None, *, y: str = "tip_displa
     ones in a new figure when None), as `tdcr sweep --history --plot --loop-y Y` does: `y`
     (`History.loop_axis`: "tip_displacement", the tip's distance from its place at the first
     step in mm, by default; "bending_angle" in degrees; "tip_x", "tip_y" or "tip_z" in mm)
-    against the swept input (the first input that changes), the steps where it rises solid,
+    against the swept input (`History.loop_x`: the first input that changes, labelled with
+    its unit as the command line labels it), the steps where it rises solid,
     those where it falls dashed. Returns the axes."""
     label_y, values = history.loop_axis(y)
     plt = _pyplot()
@@ -66,9 +67,7 @@ def plot_history(history: Any, ax: Optional[Any] = None, *, y: str = "tip_displa
         ax = plt.figure().add_subplot()
     if len(history) == 0:
         return ax
-    inputs = history.inputs
-    name = next((n for n, v in inputs.items() if any(x != v[0] for x in v)), next(iter(inputs)))
-    x = inputs[name]
+    label_x, x = history.loop_x()
     directions = history.directions
     labelled = set()
     for k in range(1, len(x)):
@@ -82,7 +81,7 @@ def plot_history(history: Any, ax: Optional[Any] = None, *, y: str = "tip_displa
             label=None if label in labelled else label,
         )
         labelled.add(label)
-    ax.set_xlabel(name)
+    ax.set_xlabel(label_x)
     ax.set_ylabel(label_y)
     ax.legend()
     return ax

@@ -25,6 +25,13 @@ impl Input {
         }
     }
 
+    /// The label of an axis of its values: `tension.1 (N)`, `displacement.2 (m)`, or the
+    /// name alone without a unit (`load_scale`): the x axis of a history's hysteresis loop
+    /// (`tdcr sweep --history --plot`, Python's `History.loop_x` and `tdcr.plot_history`).
+    pub fn axis_label(&self) -> String {
+        crate::model::parameter::axis_label(&self.to_string(), self.unit())
+    }
+
     fn apply(&self, robot: &mut Robot, value: f64) -> Result<()> {
         match self {
             Input::Parameter(p) => p.apply(robot, value),

@@ -17,12 +17,13 @@ use tdcr::io::experiments::{header_hint, parse_csv};
 
 /// The CSV format, shown after `tdcr calibrate --help`.
 const CSV_HELP: &str = "EXPERIMENTS.csv: a header row, then one row per experiment, comma-separated, SI units:\n  \
-    tension_1,...,tension_k      tension of each tendon in file order (N, >= 0; k = the robot's tendon count)\n  \
-    tip_force_x,tip_force_y,tip_force_z   tip force (N, world frame), replacing the robot file's\n  \
+    tension.1,...,tension.k      tension of each tendon in file order (N, >= 0; k = the robot's tendon count)\n  \
+    tip_force.x,tip_force.y,tip_force.z   tip force (N, world frame), replacing the robot file's\n  \
     measured_x,measured_y,measured_z      measured tip position (m, world frame)\n  \
     motion (optional)            pull (a loading step) or release (an unloading step) for the tendons with\n  \
                                  friction, empty for the robot file's motion\n\
-    Columns may come in any order; blank lines and lines starting with # are skipped. Everything else\n\
+    Columns may come in any order (tension_I and tip_force_x, the names before 2026-12, are read too);\n\
+    blank lines and lines starting with # are skipped. Everything else\n\
     (geometry, Poisson's ratio, gravity, routings) and the starting E and base pose come from ROBOT.toml.\n\
     Euler angles: R0 = Rx(alpha) Ry(beta) Rz(gamma), as the robot file's euler_xyz_deg.\n\
     Exit codes: 0 converged, 2 bad input, 3 a solve or the fit did not converge, 1 anything else.\n\

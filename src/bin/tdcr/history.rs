@@ -126,7 +126,13 @@ pub fn run(
     let mut csv = header(count, *input, &slipping);
     let directions = directions(ranges);
     for (k, step) in result.steps.iter().enumerate() {
-        row(&mut csv, k, directions[k], values[k.min(values.len() - 1)], step);
+        row(
+            &mut csv,
+            k,
+            directions[k],
+            (*input, values[k.min(values.len() - 1)]),
+            step,
+        );
     }
     let text = csv.finish();
     warn_unstable(name, &result.steps);
@@ -252,12 +258,15 @@ fn before_any_step(e: tdcr::Error, ranges: &Ranges) -> Failure {
 /// What fails when a history fails before its first step, other than bad input.
 const HEAD_FAILED: &str = "the full-slip solve of the most loaded step, which chooses the history's mesh, failed";
 
-/// The CSV header: the step, its direction, the tensions, the swept input, the tip, and
-/// per tendon with friction its delivered tension and zones.
+/// The CSV header: the step, its direction, the tensions (`tension.I`), the swept input
+/// unless it is a tension (a `tension.I` column holds it already), the tip, and per tendon
+/// with friction its delivered tension and zones.
 fn header(count: usize, input: Input, slipping: &[usize]) -> CsvTable {
     let mut names = vec!["step".to_string(), "direction".to_string()];
-    names.extend((1..=count).map(|i| format!("tension_{i}")));
-    names.push(input.to_string());
+    names.extend((0..count).map(|i| tdcr::Parameter::Tension(i).to_string()));
+    if has_column(input) {
+        names.push(input.to_string());
+    }
     names.extend(["tip_x", "tip_y", "tip_z", "bending_angle_deg"].map(String::from));
     for &i in slipping {
         names.push(format!("delivered_{}", i + 1));
@@ -276,13 +285,21 @@ fn header(count: usize, input: Input, slipping: &[usize]) -> CsvTable {
     CsvTable::new(names)
 }
 
-/// Appends the row of step `k` (from 0).
-fn row(csv: &mut CsvTable, k: usize, direction: &str, value: f64, step: &HistoryStep) {
+/// Whether the swept `input` has a column of its own: all but a tension, which is its
+/// tendon's `tension.I` column (a tension-controlled tendon's tension is its input).
+fn has_column(input: Input) -> bool {
+    !matches!(input, Input::Parameter(tdcr::Parameter::Tension(_)))
+}
+
+/// Appends the row of step `k` (from 0), with the value of the swept `input` at it.
+fn row(csv: &mut CsvTable, k: usize, direction: &str, (input, value): (Input, f64), step: &HistoryStep) {
     let solution = &step.solution;
     let tip = solution.tip_position();
     let mut fields = vec![(k + 1).to_string(), direction.to_string()];
     fields.extend(solution.tendons.iter().map(|t| number(t.tension)));
-    fields.push(number(value));
+    if has_column(input) {
+        fields.push(number(value));
+    }
     fields.extend([
         number(tip.x),
         number(tip.y),
@@ -323,11 +340,7 @@ fn picture(name: &str, (input, values): (Input, &[f64]), steps: &[HistoryStep], 
             significant(values.iter().copied().fold(f64::INFINITY, f64::min)),
             significant(values.iter().copied().fold(f64::NEG_INFINITY, f64::max)),
         )],
-        x_label: if unit.is_empty() {
-            input.to_string()
-        } else {
-            format!("{input} ({unit})")
-        },
+        x_label: input.axis_label(),
         y_label: y.label().into(),
         ..Default::default()
     };

@@ -30,7 +30,7 @@ pub struct SweepArgs {
     /// Actuator pull-in of tendon I (from 1), which makes it displacement-controlled (its
     /// tension solved): `I=START:STOP:COUNT` (COUNT evenly spaced values, m; negative
     /// releases it) or a fixed `I=METRES`. Repeatable; every range must have the same COUNT.
-    /// The CSV gets a `displacement_I` column, and `tension_I` holds the solved tension.
+    /// The CSV gets a `displacement.I` column, and `tension.I` holds the solved tension.
     #[arg(long, value_name = "I=START:STOP:COUNT", value_parser = parse_displacement_sweep, allow_hyphen_values = true)]
     pub(crate) displacement: Vec<(usize, Vec<f64>)>,
     /// Any other input: `NAME=START:STOP:COUNT` or `NAME=VALUE`, NAME one of
@@ -194,7 +194,23 @@ impl<'a> Plan<'a> {
                 )));
             }
         }
-        for (p, _) in &params {
+        for (k, (p, _)) in params.iter().enumerate() {
+            let given = |ranges: &[(usize, Vec<f64>)], t: usize| ranges.iter().any(|(j, _)| *j == t + 1);
+            let by_option = match *p {
+                Parameter::Tension(t) if given(&args.tension, t) => Some(("--tension", t + 1)),
+                Parameter::Displacement(t) if given(&args.displacement, t) => Some(("--displacement", t + 1)),
+                _ => None,
+            };
+            let twice = match by_option {
+                Some((option, i)) => Some(format!("{option} {i}=... and --param {p}=... both set {p}")),
+                None => params[..k]
+                    .iter()
+                    .any(|(q, _)| q == p)
+                    .then(|| format!("--param {p}=... is given twice")),
+            };
+            if let Some(twice) = twice {
+                return Err(Failure::Input(format!("{twice}: give each input one range or value")));
+            }
             if let Parameter::Tension(t) = p
                 && args.displacement.iter().any(|(j, _)| *j == t + 1)
             {

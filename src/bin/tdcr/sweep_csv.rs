@@ -3,18 +3,24 @@
 
 use tdcr::io::csv_table::CsvTable;
 use tdcr::io::{number, output};
-use tdcr::{Robot, Solution};
+use tdcr::{Parameter, Robot, Solution};
 
 use crate::sweep::{Plan, SweepArgs, at};
 
-/// The CSV table with its header: the tensions of `robot`'s tendons, the pull-ins of the
-/// `--displacement` tendons, the `--param` inputs, the results, then each tendon with
-/// friction's delivered tension (at its termination), as `sweep --history` gives it.
+/// The CSV table with its header: the tensions of `robot`'s tendons (`tension.I`), the
+/// pull-ins of the `--displacement` tendons (`displacement.I`), the `--param` inputs other
+/// than tensions (a `--param tension.I` is the `tension.I` column), the results, then each
+/// tendon with friction's delivered tension (at its termination), as `sweep --history`
+/// gives it. Every input column is named as the parameter it is (`Parameter`'s names).
 pub fn header(args: &SweepArgs, plan: &Plan, robot: &Robot) -> CsvTable {
     let mut names = vec!["step".to_string()];
-    names.extend((1..=robot.tendons.len()).map(|i| format!("tension_{i}")));
-    names.extend(args.displacement.iter().map(|(i, _)| format!("displacement_{i}")));
-    names.extend(plan.params.iter().map(|(p, _)| p.to_string()));
+    names.extend((0..robot.tendons.len()).map(|i| Parameter::Tension(i).to_string()));
+    names.extend(
+        args.displacement
+            .iter()
+            .map(|(i, _)| Parameter::Displacement(i - 1).to_string()),
+    );
+    names.extend(columns(plan).map(|(p, _)| p.to_string()));
     names.extend(
         [
             "tip_x",
@@ -34,6 +40,12 @@ pub fn header(args: &SweepArgs, plan: &Plan, robot: &Robot) -> CsvTable {
     );
     names.extend(with_friction(robot).map(|i| format!("delivered_{}", i + 1)));
     CsvTable::new(names)
+}
+
+/// The `--param` inputs with a column of their own: all but the tensions, whose values
+/// the `tension.I` columns hold (a tension-controlled tendon's solved tension is its input).
+fn columns<'p, 'a>(plan: &'p Plan<'a>) -> impl Iterator<Item = &'p (Parameter, &'a Vec<f64>)> + 'p {
+    plan.params.iter().filter(|(p, _)| !matches!(p, Parameter::Tension(_)))
 }
 
 /// The tendons of `robot` with friction (from 0): a sweep's inputs do not change which.
@@ -67,7 +79,7 @@ pub fn row(
             .map(|&(i, _)| number(solution.tendons[i - 1].displacement)),
     );
     // The swept value itself (a load scale is not a property of the scaled robot).
-    fields.extend(plan.params.iter().map(|(_, v)| number(at(v, k))));
+    fields.extend(columns(plan).map(|(_, v)| number(at(v, k))));
     fields.extend([
         number(tip.x),
         number(tip.y),

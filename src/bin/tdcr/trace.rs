@@ -284,11 +284,7 @@ fn picture(name: &str, t: &Trace, coordinate: Coordinate) -> Chart {
             t.points.len(),
             t.report.iterations
         )],
-        x_label: if t.parameter.unit().is_empty() {
-            t.parameter.to_string()
-        } else {
-            format!("{} ({})", t.parameter, t.parameter.unit())
-        },
+        x_label: t.parameter.axis_label(),
         y_label: format!("tip {label} (mm)"),
         ..Default::default()
     };

@@ -27,7 +27,7 @@ mod split;
 use march::march;
 use refusal::{resolution, rigid, slack, stalled, unanswered};
 pub(crate) use repeat::hold_last;
-pub(crate) use rest::start;
+pub(crate) use rest::{all_slack, restart, start};
 use slip::check_slip;
 
 use super::grip::{self, Kink, Stuck, choose, stuck_multiplier};

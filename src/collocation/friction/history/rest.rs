@@ -87,3 +87,71 @@ pub(crate) fn start(robots: &[Robot], options: &Options) -> Result<Carried> {
         tensions: pulled.tendons.iter().map(|t| t.tension()).collect(),
     })
 }
+
+/// Whether `carried`'s last step left every tendon with friction slack (0 N at its base):
+/// then no tendon with friction grips its channel and the next step is loaded from rest, as
+/// the first is (docs/friction.md section 8, "From rest"). False before the first step.
+pub(crate) fn all_slack(carried: &Carried, robot: &Robot) -> bool {
+    !carried.rest
+        && crate::model::friction::slipping(robot)
+            .iter()
+            .all(|&i| carried.tensions.get(i).is_some_and(|&t| t == 0.0))
+}
+
+/// Starts `carried` again from rest for the step of `robot` after a step that left every
+/// tendon with friction slack ([`all_slack`]): no material laid (lambda NaN, as [`start`]
+/// leaves it), every tendon with friction sliding in, and the node states and log tensions
+/// of the default full-slip `pull` solve of the step's inputs (on its own mesh, with its
+/// load path where Newton needs one) at the history's nodes, from which the step's Newton
+/// starts. That solve is the step's answer on its own mesh (a step from rest is the
+/// full-slip pull), so the step's Newton on the history's mesh starts within that mesh
+/// change of its answer instead of from the slack step's shape.
+///
+/// Returns the report of that full-slip solve (its work is the step's too).
+///
+/// # Errors
+/// As [`crate::collocation::solve`] on the step.
+pub(crate) fn restart(robot: &Robot, options: &Options, carried: &mut Carried) -> Result<SolveReport> {
+    let mut pulled = robot.clone();
+    for t in &mut pulled.tendons {
+        if let Some(f) = t.friction.as_mut() {
+            f.motion = crate::model::tendon::Motion::Pull;
+        }
+    }
+    let first = crate::collocation::solve(&pulled, options)?;
+    let pulled = pulled.with_tensions(&first.tensions());
+    let nodes = &carried.mesh.nodes;
+    // A breakpoint's two nodes: the first is the left limit.
+    let x: Vec<State> = (0..nodes.len())
+        .map(|n| first.at_limit(nodes[n].s, nodes.get(n + 1).is_some_and(|m| m.s == nodes[n].s)))
+        .collect();
+    let model = Model::new(&pulled);
+    let profile = Profile::new(&model, &carried.mesh);
+    let mut z = profile.z.clone();
+    for (j, &i) in profile.slipping.iter().enumerate() {
+        let (span, base) = (profile.spans[j], profile.base[j]);
+        for (n, value) in z[j].iter_mut().enumerate() {
+            let tension = first.tension_at(i, nodes[n.min(span)].s).unwrap_or(base);
+            *value = if base > 0.0 { (tension / base).ln() } else { 0.0 };
+        }
+        let grip = &mut carried.grips[j];
+        grip.contacts.fill(Contact::Pull);
+        grip.multipliers.fill(-1.0);
+        grip.capacities.fill(0.0);
+        grip.reference.fill(f64::NAN);
+        grip.kinks.clear();
+        grip.points.clear();
+    }
+    for material in &mut carried.corrected {
+        material.values.fill(f64::NAN);
+        material.kinks.clear();
+    }
+    carried.x = x;
+    carried.z = z;
+    carried.solved = false;
+    carried.factors = None;
+    carried.settled = None;
+    carried.rest = true;
+    carried.tensions = pulled.tendons.iter().map(|t| t.tension()).collect();
+    Ok(first.report)
+}
