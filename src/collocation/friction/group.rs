@@ -77,10 +77,6 @@ fn intervals4_kernel(
     if x.len() < 5 || profile.slipping.len() > 1 {
         return Ok(None);
     }
-    // Each link's multipliers at its start, midpoint and end ([`Profile::point_multipliers`]).
-    let multipliers: [Option<[Vec<f64>; 3]>; 4] =
-        std::array::from_fn(|j| profile.multipliers(k + j).map(|w| profile.point_multipliers(k + j, &w)));
-    let w: Points = std::array::from_fn(|j| multipliers[j].as_ref().map(|p| [&p[0][..], &p[1][..], &p[2][..]]));
     let group = Group {
         profile,
         length,
@@ -89,6 +85,15 @@ fn intervals4_kernel(
         segment_end,
         x,
     };
+    // Full slip: every multiplier the motion's sign and no stuck link, so none of the
+    // history's per-point multipliers or moved rows below.
+    if profile.grips.is_none() {
+        return group.evaluate([None; 4], jac);
+    }
+    // Each link's multipliers at its start, midpoint and end ([`Profile::point_multipliers`]).
+    let multipliers: [Option<[Vec<f64>; 3]>; 4] =
+        std::array::from_fn(|j| profile.multipliers(k + j).map(|w| profile.point_multipliers(k + j, &w)));
+    let w: Points = std::array::from_fn(|j| multipliers[j].as_ref().map(|p| [&p[0][..], &p[1][..], &p[2][..]]));
     // With derivatives, each stuck slip's rows at its multiplier moved both ways.
     let mut moved = Vec::new();
     if jac.is_some() {
