@@ -303,7 +303,13 @@ pub(super) fn front<'e>(
         let theta: Vector3<f64> = y.fixed_rows::<3>(THETA).into();
         rhs_from_rates(site, &(a.R * so3::exp(&theta)), y, &lin.lin.rates)
     };
-    let frame1 = derivatives.then(|| PointFrame::new(&a.R, &theta1));
+    // Written as `if`, not `bool::then` with a closure, so that it is inlined into the
+    // kernels that call this (compiled for AVX2 and FMA) instead of a call compiled apart.
+    let frame1 = if derivatives {
+        Some(PointFrame::new(&a.R, &theta1))
+    } else {
+        None
+    };
     // Written only with derivatives (an assignment of None would copy the whole slot).
     if let Some(frame1) = &frame1 {
         *slot = Some((
@@ -324,7 +330,11 @@ pub(super) fn front<'e>(
     // exp(theta_m) and R_m once; with derivatives the midpoint's whole frame (exp, J_r and
     // J_r^-1 from one evaluation, the same bits as `so3::exp`), which the chain rule below
     // takes too.
-    let frame_m = derivatives.then(|| PointFrame::new(&a.R, &theta_m));
+    let frame_m = if derivatives {
+        Some(PointFrame::new(&a.R, &theta_m))
+    } else {
+        None
+    };
     let (Em, Rm) = match &frame_m {
         Some(frame) => (frame.E, frame.R),
         None => {
@@ -407,7 +417,12 @@ pub(super) fn back(
         dzm_l,
         ..
     } = scratch;
-    let pm = frame_m.map(|frame| rhs_linearized_inline(&sites.mid, &lm.lin, &a.R, &ym, frame));
+    // As `if let`, not `Option::map` with a closure (see `front`).
+    let pm = if let Some(frame) = frame_m {
+        Some(rhs_linearized_inline(&sites.mid, &lm.lin, &a.R, &ym, frame))
+    } else {
+        None
+    };
     let residual = match &pm {
         Some(pm) => rows_with(front, &pm.f, h, length),
         None => value_rows(link, front, lm),
