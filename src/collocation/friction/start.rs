@@ -297,11 +297,10 @@ mod tests {
                 "{motion:?} on tendon {}: start {start:e}, frictionless {plain:e}",
                 tendon + 1
             );
-            // Measured 1.1e-5 (S), 5.6e-5 (H pull), 9.7e-5 (H release) with the passes
-            // stopped at 1e-4 (the start's own error: turning between node tangents,
-            // midpoint poses), and see docs/friction.md section 3 for [`SETTLED`]'s; 1e-3
-            // still leaves Newton's first step about 3e-6 (quadratic constant about 3 in
-            // these units).
+            // Measured 1.1e-5 (S), 3.5e-4 (H pull), 1.8e-4 (H release) with the passes
+            // stopped at [`SETTLED`] (5.6e-5 and 9.7e-5 on H at 1e-4: the start's own
+            // error, turning between node tangents, midpoint poses); 1e-3 still leaves
+            // Newton's first step about 3e-6 (quadratic constant about 3 in these units).
             assert!(start < 1e-3, "start {start:e} from the solution with friction");
             // The frictionless start is 0.18 (S) to 0.35 (H release) away: the start must
             // be far closer, or it has not moved.
