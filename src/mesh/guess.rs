@@ -40,7 +40,9 @@ pub(crate) fn integrate_poses(
     out
 }
 
-/// [`integrate_poses`] into `out` (cleared first), whose buffer a caller reuses.
+/// [`integrate_poses`] into `out` (cleared first), whose buffer a caller reuses. Inlined
+/// into its callers (the capstan start compiles it for AVX2 and FMA with its passes).
+#[inline(always)]
 pub(crate) fn integrate_poses_into(
     model: &Model,
     nodes: &[MeshNode],
@@ -398,6 +400,7 @@ pub(crate) fn reaching_routes(
 /// (friction, docs/friction.md section 3) pulls each cross-section with its local value.
 /// Into `out`; `wrench` is the buffer of the distal wrenches.
 #[allow(clippy::type_complexity)]
+#[inline(always)]
 pub(crate) fn distal_strains(
     model: &Model,
     (nodes, sites): (&[MeshNode], &[Site]),

@@ -56,7 +56,7 @@ pub(super) fn newton_on(
     let mut profile = Profile::new(&model, &system.mesh);
     match z {
         Some(z) => profile.z = z.to_vec(),
-        None => start::capstan_start(&model, &system.mesh, x, &mut profile),
+        None => start::capstan_start(&model, &system.mesh, x, &mut profile, start::Settle::Guess),
     }
     system.friction = Some(profile);
     let mut border = Capstan::new(system);

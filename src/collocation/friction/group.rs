@@ -77,6 +77,19 @@ fn intervals4_kernel(
     if x.len() < 5 || profile.slipping.len() > 1 {
         return Ok(None);
     }
+    let group = Group {
+        profile,
+        length,
+        k,
+        sites,
+        segment_end,
+        x,
+    };
+    // Full slip: every multiplier the motion's sign and no stuck link, so none of the
+    // history's per-point multipliers or moved rows below.
+    if profile.grips.is_none() {
+        return group.evaluate([None; 4], jac);
+    }
     // Each link's multipliers at its start, midpoint and end ([`Profile::point_multipliers`]),
     // of its one slip (or none), in place: the lists cost an allocation each.
     let count = profile.count();
@@ -97,14 +110,6 @@ fn intervals4_kernel(
             .as_ref()
             .map(|p| [&p[0][..count], &p[1][..count], &p[2][..count]])
     });
-    let group = Group {
-        profile,
-        length,
-        k,
-        sites,
-        segment_end,
-        x,
-    };
     // With derivatives, each stuck slip's rows at its multiplier moved both ways.
     let mut moved = Vec::new();
     if jac.is_some() {

@@ -303,14 +303,19 @@ pub(super) fn front<'e>(
         let theta: Vector3<f64> = y.fixed_rows::<3>(THETA).into();
         rhs_from_rates(site, &(a.R * so3::exp(&theta)), y, &lin.lin.rates)
     };
-    let frame1 = derivatives.then(|| PointFrame::new(&a.R, &theta1));
-    // Written only with derivatives (an assignment of None would copy the whole slot).
-    if let Some(frame1) = &frame1 {
+    // The slot written only with derivatives (an assignment of None would copy it whole).
+    // Here and below `if` and `match`, not `bool::then` or `Option::map` with a closure,
+    // which stayed calls compiled apart from the AVX2 kernels this is inlined into.
+    let frame1 = if derivatives {
+        let frame1 = PointFrame::new(&a.R, &theta1);
         *slot = Some((
             rhs_linearized_inline(&sites.start, &la.lin, &a.R, &y0, &PointFrame::start(&a.R)),
-            rhs_linearized_inline(&sites.end, &lb.lin, &a.R, &y1, frame1),
+            rhs_linearized_inline(&sites.end, &lb.lin, &a.R, &y1, &frame1),
         ));
-    }
+        Some(frame1)
+    } else {
+        None
+    };
     let ends = slot.as_ref();
     let (f0, f1) = match ends {
         Some((p0, p1)) => (p0.f, p1.f),
@@ -324,13 +329,12 @@ pub(super) fn front<'e>(
     // exp(theta_m) and R_m once; with derivatives the midpoint's whole frame (exp, J_r and
     // J_r^-1 from one evaluation, the same bits as `so3::exp`), which the chain rule below
     // takes too.
-    let frame_m = derivatives.then(|| PointFrame::new(&a.R, &theta_m));
-    let (Em, Rm) = match &frame_m {
-        Some(frame) => (frame.E, frame.R),
-        None => {
-            let Em = so3::exp(&theta_m);
-            (Em, a.R * Em)
-        }
+    let (Em, Rm, frame_m) = if derivatives {
+        let frame = PointFrame::new(&a.R, &theta_m);
+        (frame.E, frame.R, Some(frame))
+    } else {
+        let Em = so3::exp(&theta_m);
+        (Em, a.R * Em, None)
     };
     Front {
         y0,
@@ -407,10 +411,13 @@ pub(super) fn back(
         dzm_l,
         ..
     } = scratch;
-    let pm = frame_m.map(|frame| rhs_linearized_inline(&sites.mid, &lm.lin, &a.R, &ym, frame));
-    let residual = match &pm {
-        Some(pm) => rows_with(front, &pm.f, h, length),
-        None => value_rows(link, front, lm),
+    let (pm, residual) = match frame_m {
+        Some(frame) => {
+            let pm = rhs_linearized_inline(&sites.mid, &lm.lin, &a.R, &ym, frame);
+            let residual = rows_with(front, &pm.f, h, length);
+            (Some(pm), residual)
+        }
+        None => (None, value_rows(link, front, lm)),
     };
     on.clear();
     on.extend((0..count).map(|j| profile.on_link(j, k)));

@@ -94,7 +94,12 @@ pub(super) fn refine_with_friction(
         } else if capstan {
             // From the frictionless shape or the guess: its tension profile and the shape it
             // bends.
-            start::capstan_start(&model, &system.mesh, &mut x, &mut profile);
+            let settle = if from_guess {
+                start::Settle::Guess
+            } else {
+                start::Settle::Solution
+            };
+            start::capstan_start(&model, &system.mesh, &mut x, &mut profile, settle);
         }
         system.friction = Some(profile);
         let mut ws = match workspace::spare(&system.mesh, options.linear_solver) {
