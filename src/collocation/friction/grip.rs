@@ -291,19 +291,30 @@ impl Profile<'_> {
     /// agree at (stuck - g solved) / (1 - g). A slack or rigid stuck tension (not finite or
     /// not positive) is returned as it is.
     pub(crate) fn stuck_own(&self, j: usize, node: usize, site: &Site, stuck: &Stuck, solved: f64) -> f64 {
-        let (value, d_v, d_u) = *stuck;
+        let value = stuck.0;
+        if !(value.is_finite() && value > 0.0 && solved.is_finite()) {
+            return value;
+        }
+        match self.own_gain(j, node, site, stuck) {
+            Some(gain) => (value - gain * solved) / (1.0 - gain),
+            None => value,
+        }
+    }
+
+    /// The gain g <= 0 of [`Profile::stuck_own`]: how much the stuck tension at a node
+    /// (`stuck`, with its derivatives in v and u) moves per unit of the node's own tension
+    /// (None for a rigid tendon or a material that is not positive).
+    pub(crate) fn own_gain(&self, j: usize, node: usize, site: &Site, stuck: &Stuck) -> Option<f64> {
+        let (_, d_v, d_u) = *stuck;
         let tendon = &self.robot().tendons[self.slipping[j]];
         let lambda = self.grips.as_ref().map_or(f64::NAN, |g| g[j].reference[node]);
-        let Some(stiffness) = tendon.stiffness else {
-            return value;
-        };
-        if !(value.is_finite() && value > 0.0 && solved.is_finite() && lambda > 0.0) {
-            return value;
+        let stiffness = tendon.stiffness?;
+        if !(lambda > 0.0) {
+            return None;
         }
         let section = &site.section.section;
         let compliance = d_v.dot(&d_v.component_div(&section.kse)) + d_u.dot(&d_u.component_div(&section.kbt));
-        let gain = -compliance * lambda / stiffness;
-        (value - gain * solved) / (1.0 - gain)
+        Some(-compliance * lambda / stiffness)
     }
 }
 

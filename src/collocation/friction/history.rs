@@ -23,6 +23,7 @@ mod repeat;
 mod rest;
 mod slip;
 mod split;
+mod zone;
 
 use march::march;
 use refusal::{resolution, rigid, slack, stalled, unanswered};

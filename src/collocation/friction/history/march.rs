@@ -62,6 +62,10 @@ pub(super) fn march(
     // chosen with.
     let mut read: Vec<Option<Stuck>> = vec![None; count];
     let mut stuck_at = vec![0.0; count];
+    // Per slip and node, what a slip zone's balance reads of the stuck tension
+    // ([`zone::Predictor`]): the stuck tension on the shape, its derivatives where read,
+    // and the tension the shape was solved with there.
+    let mut seen: Vec<Vec<Option<(f64, Option<Stuck>, f64)>>> = vec![vec![None; last + 1]; count];
     // Off a converged shape, runs of four links within the spans evaluated at once where
     // the lanes take them (`System::friction_group`: each link with the one-link
     // kernel's bits), each evaluation handed back to the profile's spares once read.
@@ -160,6 +164,11 @@ pub(super) fn march(
             let (base, za, capacity) = (profile.base[j], z[j][k], capacities[j]);
             let mut choice = choose(base, za, capacity, stuck_at[j], tie);
             let first = *sliding[j].get_or_insert(choice.contact);
+            seen[j][k + 1] = Some(if converged {
+                (stuck_tensions[j], read[j], base * z[j][k + 1].exp())
+            } else {
+                (stuck_at[j], None, stuck_at[j])
+            });
             if base > 0.0 && (stuck[j] || choice.contact != first) {
                 choice.contact = Contact::Stick;
                 choice.multiplier = stuck_multiplier(za, choice.zeta, capacity);
@@ -180,14 +189,70 @@ pub(super) fn march(
                 _ => za + choice.multiplier * capacity,
             };
             let grip = &mut grips[j];
-            changed |= grip.contacts[k] != choice.contact
-                || (!converged
-                    && choice.contact == Contact::Stick
-                    && (grip.capacities[k] - capacity).abs() > SETTLED * capacity);
+            changed |= !converged
+                && choice.contact == Contact::Stick
+                && (grip.capacities[k] - capacity).abs() > SETTLED * capacity;
             grip.contacts[k] = choice.contact;
             grip.multipliers[k] = choice.multiplier;
             grip.capacities[k] = capacity;
             z[j][k + 1] = zb;
+        }
+    }
+    // Slip zones inside the stuck stretches, where a stuck link's multiplier leaves the
+    // friction cone ([`zone`]).
+    for (j, grip) in grips.iter_mut().enumerate() {
+        let span = profile.spans[j];
+        let steep = grip.contacts[..span]
+            .iter()
+            .enumerate()
+            .any(|(k, &c)| c == Contact::Stick && (z[j][k + 1] - z[j][k]).abs() > grip.capacities[k] + tie);
+        let i = profile.slipping[j];
+        let (Some(stiffness), true) = (system.model.robot.tendons[i].stiffness, steep && !rest) else {
+            continue;
+        };
+        let predictors: Vec<Option<zone::Predictor>> = (0..=span)
+            .map(|n| {
+                let (value, read, solved) = seen[j][n]?;
+                let gain = match (read, n.checked_sub(1).and_then(|k| system.interval_sites(k))) {
+                    (Some(read), Some(sites)) => profile.own_gain(j, n, &sites.end, &read).unwrap_or(0.0),
+                    _ => 0.0,
+                };
+                Some(zone::Predictor { value, gain, solved })
+            })
+            .collect();
+        let s: Vec<f64> = x[..=span].iter().map(|n| n.s).collect();
+        let Grip {
+            contacts,
+            multipliers,
+            capacities,
+            reference,
+            ..
+        } = grip;
+        zone::open(
+            i,
+            &mut zone::Tendon {
+                contacts: &mut contacts[..span],
+                multipliers: &mut multipliers[..span],
+                capacities: &capacities[..span],
+                z: &mut z[j][..=span],
+                predictors: &predictors,
+                reference: &reference[..=span],
+                s: &s,
+                stiffness,
+                base: profile.base[j],
+                first: sliding[j],
+                tie,
+            },
+        )?;
+    }
+    // What changed: a contact, or a transition link's multiplier beyond the tie.
+    if let Some(old) = profile.grips.as_ref() {
+        for (new, old) in grips.iter().zip(old) {
+            for k in 0..new.contacts.len() {
+                changed |= new.contacts[k] != old.contacts[k]
+                    || (new.contacts[k] != Contact::Stick
+                        && (new.multipliers[k] - old.multipliers[k]).abs() * new.capacities[k] > tie);
+            }
         }
     }
     if let Some(p) = border.system.friction.as_mut() {
