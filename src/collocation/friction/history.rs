@@ -283,7 +283,10 @@ fn solve_on(robot: &Robot, options: &Options, carried: &mut Carried, held: Optio
         .friction
         .as_ref()
         .and_then(|p| p.grips.as_ref())
-        .is_some_and(|g| g.iter().any(|g| g.contacts.contains(&Contact::Stick)));
+        .is_some_and(|g| {
+            g.iter()
+                .any(|g| g.contacts.contains(&Contact::Stick) || !g.zone_starts().is_empty())
+        });
     // The deferred correction of the node states and log tensions (scaled as Newton's
     // steps): the order-6 material the step leaves for the next stuck step's estimate.
     let mut correction = Vec::new();

@@ -228,7 +228,10 @@ pub(super) fn march(
             reference,
             ..
         } = grip;
-        zone::open(
+        // Off a converged shape a zone the march cannot resolve is left stuck where it
+        // failed: the march on the converged shape decides (the slip check refuses what
+        // stays outside the cone).
+        let opened = zone::open(
             i,
             &mut zone::Tendon {
                 contacts: &mut contacts[..span],
@@ -243,7 +246,10 @@ pub(super) fn march(
                 first: sliding[j],
                 tie,
             },
-        )?;
+        );
+        if converged {
+            opened?;
+        }
     }
     // What changed: a contact, or a transition link's multiplier beyond the tie.
     if let Some(old) = profile.grips.as_ref() {

@@ -57,7 +57,15 @@ pub(super) fn check_slip(i: usize, grip: &Grip, lambda: &[f64], x: &[State], spa
     // material crosses its start, so its slip returns to 0 there (its end is stuck too).
     if std::env::var("SLIP24_DEBUG").is_ok() {
         for k in 0..span {
-            eprintln!("k {k} s {:.5} {:?} w {:.6} C {:.3e} d {:.3e} c {:.3e}", x[k].s, grip.contacts[k], grip.multipliers[k], grip.capacities[k], d[k], lambda[k] - grip.reference[k]);
+            eprintln!(
+                "k {k} s {:.5} {:?} w {:.6} C {:.3e} d {:.3e} c {:.3e}",
+                x[k].s,
+                grip.contacts[k],
+                grip.multipliers[k],
+                grip.capacities[k],
+                d[k],
+                lambda[k] - grip.reference[k]
+            );
         }
     }
     let mut balanced = vec![0.0; span + 1];
@@ -66,14 +74,21 @@ pub(super) fn check_slip(i: usize, grip: &Grip, lambda: &[f64], x: &[State], spa
     for t in (0..span).filter(|&t| sliding(grip.contacts[t])) {
         let w = grip.multipliers[t];
         // A zone after a stuck link, or one that starts inside link t where the base zone
-        // sliding the other way ends (its mean multiplier w strictly inside [-1, 1]).
+        // sliding the other way ends (after a link sliding the other way; on the first link,
+        // its mean multiplier w strictly inside [-1, 1]).
         let after_stuck = t > 0 && grip.contacts[t - 1] == Contact::Stick;
-        let after_base = w.abs() < 1.0 && (t == 0 || (sliding(grip.contacts[t - 1]) && grip.contacts[t - 1] != grip.contacts[t]));
+        let after_base = if t == 0 {
+            w.abs() < 1.0
+        } else {
+            sliding(grip.contacts[t - 1]) && grip.contacts[t - 1] != grip.contacts[t]
+        };
         if !after_stuck && !after_base {
             continue;
         }
         let end = (t..span).find(|&k| grip.contacts[k] == Contact::Stick).unwrap_or(span);
-        let zone: f64 = (t..end).map(|k| 0.5 * (x[k + 1].s - x[k].s) * (lambda[k] + lambda[k + 1])).sum();
+        let zone: f64 = (t..end)
+            .map(|k| 0.5 * (x[k + 1].s - x[k].s) * (lambda[k] + lambda[k + 1]))
+            .sum();
         let allowed = BALANCE * zone + tolerance;
         let sigma = if grip.contacts[t] == Contact::Pull { -1.0 } else { 1.0 };
         let start = if after_stuck {
@@ -98,7 +113,10 @@ pub(super) fn check_slip(i: usize, grip: &Grip, lambda: &[f64], x: &[State], spa
                 "take the history in smaller steps",
             ));
         }
-        balanced[t] = allowed;
+        // The balance's residual moves the slip over the whole zone.
+        for b in &mut balanced[t..=end] {
+            *b = f64::max(*b, allowed);
+        }
     }
     // Where a zone starts inside a link after the base zone sliding the other way, the
     // link's start belongs to the base zone (checked as the end of the link before).

@@ -161,9 +161,8 @@ pub(super) fn open(i: usize, tendon: &mut Tendon) -> Result<()> {
     let zeta = tendon.z.to_vec();
     // A base zone sliding the other way: the first zone may start inside it (the two
     // meet where the slip is 0, with no stuck point between them).
-    let opposite = |contact: Contact| {
-        first_stuck > 0 && tendon.first.is_some_and(|f| f != contact && f != Contact::Stick)
-    };
+    let opposite =
+        |contact: Contact| first_stuck > 0 && tendon.first.is_some_and(|f| f != contact && f != Contact::Stick);
     let mut lower = first_stuck;
     let mut k = first_stuck;
     while k < links {
@@ -177,7 +176,11 @@ pub(super) fn open(i: usize, tendon: &mut Tendon) -> Result<()> {
         // The transition link and its multiplier: from the steep link toward the base, the
         // first whose bracket [sigma, w_stuck] holds the balance's root.
         let mut found = None;
-        let bottom = if lower == first_stuck && opposite(contact) { 0 } else { lower };
+        let bottom = if lower == first_stuck && opposite(contact) {
+            0
+        } else {
+            lower
+        };
         for t in (bottom..=k).rev() {
             let adjacent = t <= first_stuck && opposite(contact);
             if sigma * tendon.run(t, sigma, sigma, &zeta, adjacent).balance > 0.0 {
