@@ -438,20 +438,19 @@ fn a_stuck_stretch_friction_cannot_hold_is_refused() {
     // pulled in steps of 0.245 N with tendon 3 (top side, friction 0.1, E_t A_t 2000 N) held
     // at 1 N: tendon 3 slides out near the base, and beyond, its stuck material's tension
     // falls about 20 times faster than friction can hold (w = -19.9 on one link), so that
-    // stretch would slip while stuck on both sides, which the history does not model
-    // (docs/friction.md section 8, "Limits"). Until 2026-12-07 (fifteenth session) steps 2
-    // to 4 were answered as stuck there (Coulomb's law broken, nothing said) and step 5 was
-    // refused as going slack (the stalled stick row, `refusal::stalled`).
+    // stretch slips while stuck on both sides: a slip zone opens (docs/friction.md section
+    // 8, "Slip zones inside a stuck stretch"), and further on the stuck tension falls below
+    // 0 N, which is refused (a zone could keep it taut, which is not modelled). Until
+    // 2026-12-07 (fifteenth session) steps 2 to 4 were answered as stuck there (Coulomb's
+    // law broken, nothing said) and step 5 was refused as going slack (the stalled stick
+    // row, `refusal::stalled`); until slip24 step 2 was refused by the cone check.
     let dir = scratch("stalled-slack");
     top_tendon_with_friction(&dir, "1.0", Some("0.5"));
     let refused = up_down(&dir, &["1=0", "5=0:0.98:5"]);
     assert_eq!(refused.status.code(), Some(2));
     let err = String::from_utf8_lossy(&refused.stderr);
     assert!(
-        err.contains("history step 2 of 9")
-            && err.contains("tendon 3's stuck stretch")
-            && err.contains("times the friction its channel can hold")
-            && !err.contains("take smaller steps"),
+        err.contains("history step 2 of 9") && err.contains("tendon 3 would go slack near s = 0.1361 m while stuck"),
         "{err}"
     );
 }

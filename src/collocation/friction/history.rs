@@ -407,7 +407,12 @@ fn solve_on(robot: &Robot, options: &Options, carried: &mut Carried, held: Optio
             .filter(|&l| l != j)
             .filter_map(|l| grips[l].boundary().map(|k| x[k].s))
             .collect();
-        next[j].kinks = grips[j].kinks_after(&grips[j].contacts, &nodes, &lambda, &others);
+        next[j].kinks = if grips[j].zone_starts().is_empty() {
+            grips[j].kinks_after(&grips[j].contacts, &nodes, &lambda, &others)
+        } else {
+            let old = |n: usize| grips[j].reference[n];
+            zone::kinks(&grips[j].contacts, &nodes, &lambda, &old, &grips[j].kinks, &others)
+        };
         next[j].reference[..=span].copy_from_slice(&lambda);
         let mut list: Vec<(f64, f64, Contact)> = Vec::new();
         for (k, &c) in grips[j].contacts.iter().enumerate() {

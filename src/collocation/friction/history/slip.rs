@@ -55,19 +55,6 @@ pub(super) fn check_slip(i: usize, grip: &Grip, lambda: &[f64], x: &[State], spa
     let tolerance = 1e-12 * size + 1e-15 * x[span].s + slack;
     // Each slip zone inside the stuck stretch (a sliding link after a stuck one): no
     // material crosses its start, so its slip returns to 0 there (its end is stuck too).
-    if std::env::var("SLIP24_DEBUG").is_ok() {
-        for k in 0..span {
-            eprintln!(
-                "k {k} s {:.5} {:?} w {:.6} C {:.3e} d {:.3e} c {:.3e}",
-                x[k].s,
-                grip.contacts[k],
-                grip.multipliers[k],
-                grip.capacities[k],
-                d[k],
-                lambda[k] - grip.reference[k]
-            );
-        }
-    }
     let mut balanced = vec![0.0; span + 1];
     let mut adjacent = vec![false; span];
     let sliding = |c: Contact| matches!(c, Contact::Pull | Contact::Release);

@@ -536,13 +536,34 @@ pub(super) fn hand_back(carried: &mut Carried, fine: &Carried, before: &Carried)
         // all along).
         let first = f.contacts.iter().position(|&c| c == Contact::Stick);
         let boundary = first.map_or(f64::INFINITY, |k| fine.mesh.nodes[k].s);
+        let span = was.contacts.len();
+        if !f.zone_starts().is_empty() {
+            // Slip zones inside the stuck stretch: a node's material moved unless the
+            // fine link before it sticks ([`super::zone::kinks`]).
+            corrected.values = index
+                .iter()
+                .zip(&grip.reference)
+                .zip(&old.values)
+                .map(|((&n, &slid), &kept)| {
+                    if n > 0 && f.contacts.get(n - 1) == Some(&Contact::Stick) {
+                        kept
+                    } else {
+                        slid
+                    }
+                })
+                .collect();
+            let s: Vec<f64> = fine.mesh.nodes.iter().map(|n| n.s).collect();
+            let stuck = |n: usize| lagrange(&coarse[..=span], &old.values[..=span], &old.kinks, s[n], 8);
+            let others: Vec<f64> = f.kinks.iter().filter(|k| k.1 == k.2).map(|k| k.0).collect();
+            corrected.kinks = super::zone::kinks(&f.contacts, &s, &f.reference, &stuck, &old.kinks, &others);
+            continue;
+        }
         corrected.values = coarse
             .iter()
             .zip(&grip.reference)
             .zip(&old.values)
             .map(|((&s, &slid), &kept)| if s > boundary { kept } else { slid })
             .collect();
-        let span = was.contacts.len();
         // The kinks its sliding stretch laid at other tendons' boundaries, with the
         // order-4 material there (as the boundary's own kink has before it).
         let laid = f.kinks.iter().copied().filter(|&(e, _, _)| e < boundary);

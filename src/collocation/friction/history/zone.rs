@@ -194,11 +194,20 @@ pub(super) fn open(i: usize, tendon: &mut Tendon) -> Result<()> {
             found = Some((t, tendon.root(t, sigma, (sigma, stuck), &zeta, adjacent), adjacent));
             break;
         }
+        // Where no link down to the base zone holds the root, the zone reaches it: with
+        // the base zone's direction it is a longer base zone; against it, it reaches the
+        // base entry (searched down to link 0) and is the base zone, sliding its way from
+        // there. Either way the slip keeps the zone's sign all along: no start from any
+        // link balanced it.
         let merge = found.is_none()
             && lower == first_stuck
-            && (first_stuck == 0 || tendon.first == Some(contact) || tendon.first == Some(Contact::Stick));
+            && (first_stuck == 0
+                || tendon.first == Some(contact)
+                || tendon.first == Some(Contact::Stick)
+                || opposite(contact));
         let (t, w, adjacent) = match found {
             Some(found) => found,
+            None if merge && opposite(contact) => (0, sigma, false),
             None if merge => (first_stuck, sigma, false),
             None => {
                 return Err(error::invalid(
@@ -253,4 +262,57 @@ pub(super) fn open(i: usize, tendon: &mut Tendon) -> Result<()> {
         k = r + 1;
     }
     Ok(())
+}
+
+/// The kinks of the material a step with slip zones inside its stuck stretch leaves
+/// ([`Grip::kinks_after`] for a step without them): `contacts` on the nodes `s`, `new` the
+/// material at the nodes where it moved (a node moved unless the link before it sticks),
+/// `old(n)` the material before the step at node n with its kinks `before`. A kink where a
+/// moved stretch meets a stuck one (at the first stuck link's start node, the sliding
+/// side's value first, as the base zone's boundary), where a zone starts after a stuck
+/// stretch (at the zone's first node after the link holding its start, the stuck side's
+/// value first), where a zone starts inside the base zone sliding the other way (at the
+/// start node of the link holding it, one value: only the slope jumps) and at the nodes
+/// `others` inside moved stretches; `before`'s kinks inside the stretches that stuck. A
+/// zone of a single node leaves no kinks of its own (its node's material is its own).
+pub(super) fn kinks(
+    contacts: &[Contact],
+    s: &[f64],
+    new: &[f64],
+    old: &dyn Fn(usize) -> f64,
+    before: &[Kink],
+    others: &[f64],
+) -> Vec<Kink> {
+    let links = contacts.len();
+    let stuck = |k: usize| k < links && contacts[k] == Contact::Stick;
+    let moved = |n: usize| n == 0 || !stuck(n - 1);
+    let mut out: Vec<Kink> = Vec::new();
+    // The start of the stretch that stuck (exclusive), while in one.
+    let mut kept: Option<f64> = None;
+    let mut skip = None;
+    for n in 0..links {
+        if moved(n) && stuck(n) {
+            if n > 0 && skip != Some(n) {
+                out.push((s[n], new[n], old(n)));
+            }
+            kept = kept.or(Some(s[n]));
+        } else if !moved(n) && !stuck(n) {
+            // A zone starts inside link n, after a stuck stretch.
+            let from = kept.take().unwrap_or(f64::NEG_INFINITY);
+            out.extend(before.iter().copied().filter(|&(e, _, _)| e > from && e < s[n + 1]));
+            if !stuck(n + 1) {
+                out.push((s[n + 1], old(n + 1), new[n + 1]));
+            }
+            skip = Some(n + 1);
+        } else if n > 0 && moved(n) && !stuck(n) && skip != Some(n) {
+            let turned = !stuck(n - 1) && contacts[n - 1] != contacts[n];
+            if turned || others.contains(&s[n]) {
+                out.push((s[n], new[n], new[n]));
+            }
+        }
+    }
+    if let Some(from) = kept {
+        out.extend(before.iter().copied().filter(|&(e, _, _)| e > from));
+    }
+    out
 }
