@@ -199,7 +199,9 @@ pub(super) fn march(
         }
     }
     // Slip zones inside the stuck stretches, where a stuck link's multiplier leaves the
-    // friction cone ([`zone`]).
+    // friction cone ([`zone`]), on a converged shape only: on a guess (a step's or a split
+    // level's first march) a stuck link may leave the cone where the answer does not, and a
+    // zone opened there changes the passes of steps that end without one.
     for (j, grip) in grips.iter_mut().enumerate() {
         let span = profile.spans[j];
         let steep = grip.contacts[..span]
@@ -207,11 +209,24 @@ pub(super) fn march(
             .enumerate()
             .any(|(k, &c)| c == Contact::Stick && (z[j][k + 1] - z[j][k]).abs() > grip.capacities[k] + tie);
         let i = profile.slipping[j];
-        let (Some(stiffness), true) = (system.model.robot.tendons[i].stiffness, steep && !rest) else {
+        let (Some(stiffness), true) = (system.model.robot.tendons[i].stiffness, steep && !rest && converged) else {
             continue;
         };
         let predictors: Vec<Option<zone::Predictor>> = (0..=span)
             .map(|n| {
+                // The base entry's stuck tension is read only here (a zone that starts
+                // inside the first link counts its material's change there).
+                if n == 0 {
+                    let sites = system.interval_sites(0)?;
+                    let at = profile.stuck_tension(j, 0, &sites.start, &x[0], length);
+                    let gain = if converged {
+                        profile.own_gain(j, 0, &sites.start, &at).unwrap_or(0.0)
+                    } else {
+                        0.0
+                    };
+                    let solved = profile.base[j] * z[j][0].exp();
+                    return Some(zone::Predictor { value: at.0, gain, solved });
+                }
                 let (value, read, solved) = seen[j][n]?;
                 let gain = match (read, n.checked_sub(1).and_then(|k| system.interval_sites(k))) {
                     (Some(read), Some(sites)) => profile.own_gain(j, n, &sites.end, &read).unwrap_or(0.0),
