@@ -149,16 +149,13 @@ pub(crate) type Kink = (f64, f64, f64);
 impl Grip {
     /// The start links of its slip zones other than the base zone (docs/friction.md
     /// section 8, "Slip zones inside a stuck stretch"): a sliding link after a stuck one
-    /// or after one sliding the other way, or one whose mean multiplier lies strictly
-    /// inside [-1, 1] (a zone starting inside it). Empty where the tendon slides
+    /// or after one sliding the other way (a zone starting inside it where the base zone
+    /// ends). Empty where the tendon slides
     /// from its base and then sticks, as the march leaves it without zones.
     pub(crate) fn zone_starts(&self) -> Vec<usize> {
         let sliding = |c: Contact| matches!(c, Contact::Pull | Contact::Release);
         (0..self.contacts.len())
-            .filter(|&t| {
-                sliding(self.contacts[t])
-                    && ((t > 0 && self.contacts[t - 1] != self.contacts[t]) || self.multipliers[t].abs() < 1.0)
-            })
+            .filter(|&t| sliding(self.contacts[t]) && t > 0 && self.contacts[t - 1] != self.contacts[t])
             .collect()
     }
 

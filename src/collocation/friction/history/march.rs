@@ -199,15 +199,15 @@ pub(super) fn march(
         }
     }
     // Slip zones inside the stuck stretches, where a stuck link's multiplier leaves the
-    // friction cone ([`zone`]), on a converged shape only: on a guess (a step's or a split
+    // friction cone beyond the slip check's `CONE` (within it the stuck stretch is
+    // answered as before) ([`zone`]), on a converged shape only: on a guess (a step's or a split
     // level's first march) a stuck link may leave the cone where the answer does not, and a
     // zone opened there changes the passes of steps that end without one.
     for (j, grip) in grips.iter_mut().enumerate() {
         let span = profile.spans[j];
-        let steep = grip.contacts[..span]
-            .iter()
-            .enumerate()
-            .any(|(k, &c)| c == Contact::Stick && (z[j][k + 1] - z[j][k]).abs() > grip.capacities[k] + tie);
+        let steep = grip.contacts[..span].iter().enumerate().any(|(k, &c)| {
+            c == Contact::Stick && (z[j][k + 1] - z[j][k]).abs() > grip.capacities[k] * (1.0 + slip::CONE)
+        });
         let i = profile.slipping[j];
         let (Some(stiffness), true) = (system.model.robot.tendons[i].stiffness, steep && !rest && converged) else {
             continue;
@@ -225,7 +225,11 @@ pub(super) fn march(
                         0.0
                     };
                     let solved = profile.base[j] * z[j][0].exp();
-                    return Some(zone::Predictor { value: at.0, gain, solved });
+                    return Some(zone::Predictor {
+                        value: at.0,
+                        gain,
+                        solved,
+                    });
                 }
                 let (value, read, solved) = seen[j][n]?;
                 let gain = match (read, n.checked_sub(1).and_then(|k| system.interval_sites(k))) {

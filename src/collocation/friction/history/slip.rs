@@ -61,14 +61,9 @@ pub(super) fn check_slip(i: usize, grip: &Grip, lambda: &[f64], x: &[State], spa
     for t in (0..span).filter(|&t| sliding(grip.contacts[t])) {
         let w = grip.multipliers[t];
         // A zone after a stuck link, or one that starts inside link t where the base zone
-        // sliding the other way ends (after a link sliding the other way; on the first link,
-        // its mean multiplier w strictly inside [-1, 1]).
+        // sliding the other way ends (after a link sliding the other way).
         let after_stuck = t > 0 && grip.contacts[t - 1] == Contact::Stick;
-        let after_base = if t == 0 {
-            w.abs() < 1.0
-        } else {
-            sliding(grip.contacts[t - 1]) && grip.contacts[t - 1] != grip.contacts[t]
-        };
+        let after_base = t > 0 && sliding(grip.contacts[t - 1]) && grip.contacts[t - 1] != grip.contacts[t];
         if !after_stuck && !after_base {
             continue;
         }

@@ -167,7 +167,7 @@ pub(super) fn open(i: usize, tendon: &mut Tendon) -> Result<()> {
     let mut k = first_stuck;
     while k < links {
         let step = tendon.z[k + 1] - tendon.z[k];
-        if tendon.contacts[k] != Contact::Stick || step.abs() <= tendon.capacities[k] + tendon.tie {
+        if tendon.contacts[k] != Contact::Stick || step.abs() <= tendon.capacities[k] * (1.0 + super::slip::CONE) {
             k += 1;
             continue;
         }
@@ -177,7 +177,7 @@ pub(super) fn open(i: usize, tendon: &mut Tendon) -> Result<()> {
         // first whose bracket [sigma, w_stuck] holds the balance's root.
         let mut found = None;
         let bottom = if lower == first_stuck && opposite(contact) {
-            0
+            1
         } else {
             lower
         };
