@@ -12,7 +12,10 @@
 //! change across a link by at most the capstan increment C either way, so
 //! `z_b = z_a + clamp(zeta_b - z_a, -C, C)` with zeta_b the stuck log tension. Newton solves
 //! the backbone with the links' rows and multipliers held; the march is repeated on the new
-//! shape until it changes nothing.
+//! shape until it changes nothing. Where the stuck profile changes faster along s than
+//! friction can hold, the march opens a slip zone inside the stuck stretch ([`zone`]): a
+//! transition link whose multiplier is the root of the zone's material balance, then links
+//! sliding at the full rate to where the stretch sticks again.
 
 mod cross;
 mod inflection;

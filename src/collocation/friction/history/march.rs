@@ -1,6 +1,7 @@
 //! The march of a history step's stick/slip pattern along a shape (docs/friction.md
 //! section 8): each tendon with friction from its base entry, link by link, sliding or
-//! sticking as its 1-D Coulomb problem on that shape says (module docs of [`super`]).
+//! sticking as its 1-D Coulomb problem on that shape says (module docs of [`super`]), then
+//! slip zones inside the stuck stretch where friction cannot hold it ([`super::zone`]).
 
 use super::*;
 

@@ -1,6 +1,6 @@
 //! Coulomb's law checked on a step's answer (docs/friction.md section 8, "Limits"): every
-//! stretch of a tendon slides the way its friction acts, and friction can hold every stuck
-//! one.
+//! stretch of a tendon slides the way its friction acts, every slip zone inside a stuck
+//! stretch holds its material, and friction can hold every stuck link.
 
 use crate::collocation::friction::*;
 
@@ -32,16 +32,17 @@ pub(super) fn zone_start(h: f64, theta: f64, start: f64, end: f64) -> f64 {
 /// Checks that every stretch of tendon `i` slides the way its friction acts (Coulomb's
 /// direction): the slip since the last step, d(s) = xi_new(s) - xi_old(s) with xi the
 /// unstretched length from s to the termination (trapezoidal rule on the nodes), is <= 0
-/// on links sliding in and >= 0 on links sliding out. A stretch that slides against its
-/// friction would need a slip zone that starts away from the base entry, which the march
-/// does not resolve. And every stuck link's multiplier w = (z_b - z_a) / C lies in
-/// [-1, 1] to [`CONE`]: a stuck profile that changes faster than friction can hold would
-/// slip inside the stuck stretch (a slip zone with both ends stuck), which the march does
-/// not resolve either.
+/// on links sliding in and >= 0 on links sliding out. Every slip zone inside the stuck
+/// stretch (docs/friction.md section 8, "Slip zones inside a stuck stretch") holds its
+/// material: its slip is 0 at its start to [`BALANCE`] of its length (where it starts
+/// inside the base zone sliding the other way, at the point of its transition link its
+/// mean multiplier gives, [`zone_start`]), and the direction check allows that over the
+/// zone. And every stuck link's multiplier w = (z_b - z_a) / C lies in [-1, 1] to
+/// [`CONE`] (the march opens a zone beyond it).
 ///
 /// # Errors
-/// The direction violated beyond rounding and `slack` (m), or a stuck link's |w| above
-/// 1 + [`CONE`].
+/// The direction violated beyond rounding and `slack` (m), a zone's balance missed, or a
+/// stuck link's |w| above 1 + [`CONE`].
 pub(super) fn check_slip(i: usize, grip: &Grip, lambda: &[f64], x: &[State], span: usize, slack: f64) -> Result<()> {
     let mut d = vec![0.0; span + 1];
     let mut size = 0.0_f64;
