@@ -321,7 +321,8 @@ impl Profile<'_> {
         let tendon = &self.robot().tendons[self.slipping[j]];
         let lambda = self.grips.as_ref().map_or(f64::NAN, |g| g[j].reference[node]);
         let stiffness = tendon.stiffness?;
-        if !(lambda > 0.0) {
+        // (NaN past the termination: no material.)
+        if lambda.is_nan() || lambda <= 0.0 {
             return None;
         }
         let section = &site.section.section;

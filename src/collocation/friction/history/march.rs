@@ -5,6 +5,10 @@
 
 use super::*;
 
+/// A node's stuck tension as a slip zone's balance reads it: its value on the shape (N), its
+/// derivatives where read, and the node's tension the shape was solved with (N).
+type Seen = (f64, Option<Stuck>, f64);
+
 /// The march of every tendon with friction along the shape `x` (module docs): new contacts,
 /// multipliers and predicted log tensions written into `border`'s profile and unknowns.
 /// A link within `tie` (log tension, [`grip::tie`]) of its friction limit sticks. At `rest`
@@ -66,7 +70,7 @@ pub(super) fn march(
     // Per slip and node, what a slip zone's balance reads of the stuck tension
     // ([`zone::Predictor`]): the stuck tension on the shape, its derivatives where read,
     // and the tension the shape was solved with there.
-    let mut seen: Vec<Vec<Option<(f64, Option<Stuck>, f64)>>> = vec![vec![None; last + 1]; count];
+    let mut seen: Vec<Vec<Option<Seen>>> = vec![vec![None; last + 1]; count];
     // Off a converged shape, runs of four links within the spans evaluated at once where
     // the lanes take them (`System::friction_group`: each link with the one-link
     // kernel's bits), each evaluation handed back to the profile's spares once read.
