@@ -147,6 +147,18 @@ pub(crate) struct Grip {
 pub(crate) type Kink = (f64, f64, f64);
 
 impl Grip {
+    /// The start links of its slip zones other than the base zone (docs/friction.md
+    /// section 8, "Slip zones inside a stuck stretch"): a sliding link after a stuck one
+    /// or after one sliding the other way (a zone starting inside it where the base zone
+    /// ends). Empty where the tendon slides
+    /// from its base and then sticks, as the march leaves it without zones.
+    pub(crate) fn zone_starts(&self) -> Vec<usize> {
+        let sliding = |c: Contact| matches!(c, Contact::Pull | Contact::Release);
+        (0..self.contacts.len())
+            .filter(|&t| sliding(self.contacts[t]) && t > 0 && self.contacts[t - 1] != self.contacts[t])
+            .collect()
+    }
+
     /// The stick/slip boundary of these contacts: the start node of the first stuck link
     /// after a sliding one (None where the tendon slides all along or sticks all along).
     pub(crate) fn boundary(&self) -> Option<usize> {
@@ -291,19 +303,31 @@ impl Profile<'_> {
     /// agree at (stuck - g solved) / (1 - g). A slack or rigid stuck tension (not finite or
     /// not positive) is returned as it is.
     pub(crate) fn stuck_own(&self, j: usize, node: usize, site: &Site, stuck: &Stuck, solved: f64) -> f64 {
-        let (value, d_v, d_u) = *stuck;
+        let value = stuck.0;
+        if !(value.is_finite() && value > 0.0 && solved.is_finite()) {
+            return value;
+        }
+        match self.own_gain(j, node, site, stuck) {
+            Some(gain) => (value - gain * solved) / (1.0 - gain),
+            None => value,
+        }
+    }
+
+    /// The gain g <= 0 of [`Profile::stuck_own`]: how much the stuck tension at a node
+    /// (`stuck`, with its derivatives in v and u) moves per unit of the node's own tension
+    /// (None for a rigid tendon or a material that is not positive).
+    pub(crate) fn own_gain(&self, j: usize, node: usize, site: &Site, stuck: &Stuck) -> Option<f64> {
+        let (_, d_v, d_u) = *stuck;
         let tendon = &self.robot().tendons[self.slipping[j]];
         let lambda = self.grips.as_ref().map_or(f64::NAN, |g| g[j].reference[node]);
-        let Some(stiffness) = tendon.stiffness else {
-            return value;
-        };
-        if !(value.is_finite() && value > 0.0 && solved.is_finite() && lambda > 0.0) {
-            return value;
+        let stiffness = tendon.stiffness?;
+        // (NaN past the termination: no material.)
+        if lambda.is_nan() || lambda <= 0.0 {
+            return None;
         }
         let section = &site.section.section;
         let compliance = d_v.dot(&d_v.component_div(&section.kse)) + d_u.dot(&d_u.component_div(&section.kbt));
-        let gain = -compliance * lambda / stiffness;
-        (value - gain * solved) / (1.0 - gain)
+        Some(-compliance * lambda / stiffness)
     }
 }
 

@@ -12,7 +12,10 @@
 //! change across a link by at most the capstan increment C either way, so
 //! `z_b = z_a + clamp(zeta_b - z_a, -C, C)` with zeta_b the stuck log tension. Newton solves
 //! the backbone with the links' rows and multipliers held; the march is repeated on the new
-//! shape until it changes nothing.
+//! shape until it changes nothing. Where the stuck profile changes faster along s than
+//! friction can hold, the march opens a slip zone inside the stuck stretch ([`zone`]): a
+//! transition link whose multiplier is the root of the zone's material balance, then links
+//! sliding at the full rate to where the stretch sticks again.
 
 mod cross;
 mod inflection;
@@ -23,6 +26,7 @@ mod repeat;
 mod rest;
 mod slip;
 mod split;
+mod zone;
 
 use march::march;
 use refusal::{resolution, rigid, slack, stalled, unanswered};
@@ -286,7 +290,10 @@ fn solve_on(robot: &Robot, options: &Options, carried: &mut Carried, held: Optio
         .friction
         .as_ref()
         .and_then(|p| p.grips.as_ref())
-        .is_some_and(|g| g.iter().any(|g| g.contacts.contains(&Contact::Stick)));
+        .is_some_and(|g| {
+            g.iter()
+                .any(|g| g.contacts.contains(&Contact::Stick) || !g.zone_starts().is_empty())
+        });
     // The deferred correction of the node states and log tensions (scaled as Newton's
     // steps): the order-6 material the step leaves for the next stuck step's estimate.
     let mut correction = Vec::new();
@@ -407,7 +414,12 @@ fn solve_on(robot: &Robot, options: &Options, carried: &mut Carried, held: Optio
             .filter(|&l| l != j)
             .filter_map(|l| grips[l].boundary().map(|k| x[k].s))
             .collect();
-        next[j].kinks = grips[j].kinks_after(&grips[j].contacts, &nodes, &lambda, &others);
+        next[j].kinks = if grips[j].zone_starts().is_empty() {
+            grips[j].kinks_after(&grips[j].contacts, &nodes, &lambda, &others)
+        } else {
+            let old = |n: usize| grips[j].reference[n];
+            zone::kinks(&grips[j].contacts, &nodes, &lambda, &old, &grips[j].kinks, &others)
+        };
         next[j].reference[..=span].copy_from_slice(&lambda);
         let mut list: Vec<(f64, f64, Contact)> = Vec::new();
         for (k, &c) in grips[j].contacts.iter().enumerate() {

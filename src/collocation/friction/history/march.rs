@@ -1,8 +1,13 @@
 //! The march of a history step's stick/slip pattern along a shape (docs/friction.md
 //! section 8): each tendon with friction from its base entry, link by link, sliding or
-//! sticking as its 1-D Coulomb problem on that shape says (module docs of [`super`]).
+//! sticking as its 1-D Coulomb problem on that shape says (module docs of [`super`]), then
+//! slip zones inside the stuck stretch where friction cannot hold it ([`super::zone`]).
 
 use super::*;
+
+/// A node's stuck tension as a slip zone's balance reads it: its value on the shape (N), its
+/// derivatives where read, and the node's tension the shape was solved with (N).
+type Seen = (f64, Option<Stuck>, f64);
 
 /// The march of every tendon with friction along the shape `x` (module docs): new contacts,
 /// multipliers and predicted log tensions written into `border`'s profile and unknowns.
@@ -62,6 +67,10 @@ pub(super) fn march(
     // chosen with.
     let mut read: Vec<Option<Stuck>> = vec![None; count];
     let mut stuck_at = vec![0.0; count];
+    // Per slip and node, what a slip zone's balance reads of the stuck tension
+    // ([`zone::Predictor`]): the stuck tension on the shape, its derivatives where read,
+    // and the tension the shape was solved with there.
+    let mut seen: Vec<Vec<Option<Seen>>> = vec![vec![None; last + 1]; count];
     // Off a converged shape, runs of four links within the spans evaluated at once where
     // the lanes take them (`System::friction_group`: each link with the one-link
     // kernel's bits), each evaluation handed back to the profile's spares once read.
@@ -160,6 +169,11 @@ pub(super) fn march(
             let (base, za, capacity) = (profile.base[j], z[j][k], capacities[j]);
             let mut choice = choose(base, za, capacity, stuck_at[j], tie);
             let first = *sliding[j].get_or_insert(choice.contact);
+            seen[j][k + 1] = Some(if converged {
+                (stuck_tensions[j], read[j], base * z[j][k + 1].exp())
+            } else {
+                (stuck_at[j], None, stuck_at[j])
+            });
             if base > 0.0 && (stuck[j] || choice.contact != first) {
                 choice.contact = Contact::Stick;
                 choice.multiplier = stuck_multiplier(za, choice.zeta, capacity);
@@ -180,14 +194,95 @@ pub(super) fn march(
                 _ => za + choice.multiplier * capacity,
             };
             let grip = &mut grips[j];
-            changed |= grip.contacts[k] != choice.contact
-                || (!converged
-                    && choice.contact == Contact::Stick
-                    && (grip.capacities[k] - capacity).abs() > SETTLED * capacity);
+            changed |= !converged
+                && choice.contact == Contact::Stick
+                && (grip.capacities[k] - capacity).abs() > SETTLED * capacity;
             grip.contacts[k] = choice.contact;
             grip.multipliers[k] = choice.multiplier;
             grip.capacities[k] = capacity;
             z[j][k + 1] = zb;
+        }
+    }
+    // Slip zones inside the stuck stretches, where a stuck link's multiplier leaves the
+    // friction cone beyond the slip check's `CONE` (within it the stuck stretch is
+    // answered as before) ([`zone`]), on a converged shape only: on a guess (a step's or a split
+    // level's first march) a stuck link may leave the cone where the answer does not, and a
+    // zone opened there changes the passes of steps that end without one.
+    for (j, grip) in grips.iter_mut().enumerate() {
+        let span = profile.spans[j];
+        let steep = grip.contacts[..span].iter().enumerate().any(|(k, &c)| {
+            c == Contact::Stick && (z[j][k + 1] - z[j][k]).abs() > grip.capacities[k] * (1.0 + slip::CONE)
+        });
+        let i = profile.slipping[j];
+        let (Some(stiffness), true) = (system.model.robot.tendons[i].stiffness, steep && !rest && converged) else {
+            continue;
+        };
+        let predictors: Vec<Option<zone::Predictor>> = (0..=span)
+            .map(|n| {
+                // The base entry's stuck tension is read only here (a zone that starts
+                // inside the first link counts its material's change there).
+                if n == 0 {
+                    let sites = system.interval_sites(0)?;
+                    let at = profile.stuck_tension(j, 0, &sites.start, &x[0], length);
+                    let gain = if converged {
+                        profile.own_gain(j, 0, &sites.start, &at).unwrap_or(0.0)
+                    } else {
+                        0.0
+                    };
+                    let solved = profile.base[j] * z[j][0].exp();
+                    return Some(zone::Predictor {
+                        value: at.0,
+                        gain,
+                        solved,
+                    });
+                }
+                let (value, read, solved) = seen[j][n]?;
+                let gain = match (read, n.checked_sub(1).and_then(|k| system.interval_sites(k))) {
+                    (Some(read), Some(sites)) => profile.own_gain(j, n, &sites.end, &read).unwrap_or(0.0),
+                    _ => 0.0,
+                };
+                Some(zone::Predictor { value, gain, solved })
+            })
+            .collect();
+        let s: Vec<f64> = x[..=span].iter().map(|n| n.s).collect();
+        let Grip {
+            contacts,
+            multipliers,
+            capacities,
+            reference,
+            ..
+        } = grip;
+        // Off a converged shape a zone the march cannot resolve is left stuck where it
+        // failed: the march on the converged shape decides (the slip check refuses what
+        // stays outside the cone).
+        let opened = zone::open(
+            i,
+            &mut zone::Tendon {
+                contacts: &mut contacts[..span],
+                multipliers: &mut multipliers[..span],
+                capacities: &capacities[..span],
+                z: &mut z[j][..=span],
+                predictors: &predictors,
+                reference: &reference[..=span],
+                s: &s,
+                stiffness,
+                base: profile.base[j],
+                first: sliding[j],
+                tie,
+            },
+        );
+        if converged {
+            opened?;
+        }
+    }
+    // What changed: a contact, or a transition link's multiplier beyond the tie.
+    if let Some(old) = profile.grips.as_ref() {
+        for (new, old) in grips.iter().zip(old) {
+            for k in 0..new.contacts.len() {
+                changed |= new.contacts[k] != old.contacts[k]
+                    || (new.contacts[k] != Contact::Stick
+                        && (new.multipliers[k] - old.multipliers[k]).abs() * new.capacities[k] > tie);
+            }
         }
     }
     if let Some(p) = border.system.friction.as_mut() {

@@ -70,7 +70,14 @@ fn parts(before: &Carried, level: u32, graded: bool, last: &StepAnswer, boundari
                         }
                 })
             });
-            stuck || boundaries.iter().any(|&e| e >= a && e <= b)
+            // A slip zone inside the stuck stretch starts inside a link (docs/friction.md
+            // section 8, "Slip zones inside a stuck stretch"): its tension kinks there.
+            let zone = last.1.iter().any(|(_, list)| {
+                list.iter()
+                    .skip(1)
+                    .any(|&(start, _, c)| c != Contact::Stick && start >= a && start <= b)
+            });
+            stuck || zone || boundaries.iter().any(|&e| e >= a && e <= b)
         })
         .collect();
     // The link before a fine one is fine too: the boundary's estimate ([`boundaries`])
@@ -425,25 +432,37 @@ pub(super) fn split(
 /// stuck nodes' (beyond that start node), each extrapolated into the link
 /// (docs/friction.md section 8, "A node at the boundary"). A tendon whose stuck stretch
 /// starts within two nodes of its base or three of its termination, or whose two profiles
-/// do not cross there, gives none.
+/// do not cross there, gives none. The same for each end of every slip zone inside the
+/// stuck stretch (section 8, "Slip zones inside a stuck stretch"): the stretches before
+/// and after the link where its zone list changes.
 fn boundaries(answer: &StepAnswer) -> Vec<f64> {
     let (solution, zones) = answer;
     let s: Vec<f64> = solution.nodes.iter().map(|n| n.s).collect();
     let mut out = Vec::new();
     for (i, list) in zones {
-        let Some(pair) = list
+        let base = list
             .windows(2)
-            .find(|w| w[0].2 != Contact::Stick && w[1].2 == Contact::Stick)
-        else {
-            continue;
-        };
-        let Some(a) = s.iter().position(|&x| x == pair[1].0) else {
-            continue;
-        };
-        if a < 2 || a + 3 >= s.len() {
-            continue;
+            .position(|w| w[0].2 != Contact::Stick && w[1].2 == Contact::Stick);
+        // Every other change of the list: zones inside the stuck stretch.
+        let inner = (0..list.len().saturating_sub(1))
+            .filter(|&p| Some(p) != base && list[p].2 != Contact::Slack && list[p + 1].2 != Contact::Slack);
+        for p in base.into_iter().chain(inner) {
+            if let Some(e) = meeting(&s, &solution.tendon_tensions[*i], list[p + 1].0) {
+                out.push(e);
+            }
         }
-        let tension = &solution.tendon_tensions[*i];
+    }
+    out
+}
+
+/// The root, around the node at `start`, of the difference of the quadratics through the
+/// three nodes' `tension` up to it and the three after the next ([`boundaries`]).
+fn meeting(s: &[f64], tension: &[f64], start: f64) -> Option<f64> {
+    {
+        let a = s.iter().position(|&x| x == start)?;
+        if a < 2 || a + 3 >= s.len() {
+            return None;
+        }
         let quadratic = |n: [usize; 3], at: f64| -> f64 {
             (0..3)
                 .map(|p| {
@@ -458,7 +477,7 @@ fn boundaries(answer: &StepAnswer) -> Vec<f64> {
         let gap = |at: f64| quadratic([a - 2, a - 1, a], at) - quadratic([a + 1, a + 2, a + 3], at);
         let (mut lo, mut hi) = (s[a - 1], s[a + 1]);
         if gap(lo) * gap(hi) > 0.0 {
-            continue;
+            return None;
         }
         // Bisection to the resolution of s.
         while hi - lo > 4.0 * f64::EPSILON * hi {
@@ -469,9 +488,8 @@ fn boundaries(answer: &StepAnswer) -> Vec<f64> {
                 lo = mid;
             }
         }
-        out.push(0.5 * (lo + hi));
+        Some(0.5 * (lo + hi))
     }
-    out
 }
 
 /// Hands the material `fine` holds after its step back to the history's mesh in
@@ -514,13 +532,34 @@ pub(super) fn hand_back(carried: &mut Carried, fine: &Carried, before: &Carried)
         // all along).
         let first = f.contacts.iter().position(|&c| c == Contact::Stick);
         let boundary = first.map_or(f64::INFINITY, |k| fine.mesh.nodes[k].s);
+        let span = was.contacts.len();
+        if !f.zone_starts().is_empty() {
+            // Slip zones inside the stuck stretch: a node's material moved unless the
+            // fine link before it sticks ([`super::zone::kinks`]).
+            corrected.values = index
+                .iter()
+                .zip(&grip.reference)
+                .zip(&old.values)
+                .map(|((&n, &slid), &kept)| {
+                    if n > 0 && f.contacts.get(n - 1) == Some(&Contact::Stick) {
+                        kept
+                    } else {
+                        slid
+                    }
+                })
+                .collect();
+            let s: Vec<f64> = fine.mesh.nodes.iter().map(|n| n.s).collect();
+            let stuck = |n: usize| lagrange(&coarse[..=span], &old.values[..=span], &old.kinks, s[n], 8);
+            let others: Vec<f64> = f.kinks.iter().filter(|k| k.1 == k.2).map(|k| k.0).collect();
+            corrected.kinks = super::zone::kinks(&f.contacts, &s, &f.reference, &stuck, &old.kinks, &others);
+            continue;
+        }
         corrected.values = coarse
             .iter()
             .zip(&grip.reference)
             .zip(&old.values)
             .map(|((&s, &slid), &kept)| if s > boundary { kept } else { slid })
             .collect();
-        let span = was.contacts.len();
         // The kinks its sliding stretch laid at other tendons' boundaries, with the
         // order-4 material there (as the boundary's own kink has before it).
         let laid = f.kinks.iter().copied().filter(|&(e, _, _)| e < boundary);
