@@ -529,7 +529,7 @@ fn a_stuck_stretch_friction_cannot_hold_is_refused() {
     assert_eq!(refused.status.code(), Some(2));
     let err = String::from_utf8_lossy(&refused.stderr);
     assert!(
-        err.contains("history step 2 of 9") && err.contains("tendon 3 would go slack near s = 0.1361 m while stuck"),
+        err.contains("history step 2 of 9") && err.contains("tendon 3 would go slack near s = 0.1361 m if stuck"),
         "{err}"
     );
 }

@@ -19,8 +19,9 @@ pub(super) fn slack(i: usize, s: f64) -> Error {
     error::invalid(
         format!("tendons[{i}]"),
         format!(
-            "tendon {} would go slack near s = {s:.4} m while stuck in its channel (the step's shape makes its path \
-             there shorter than the material stuck in it), which the stick/slip history does not model",
+            "tendon {} would go slack near s = {s:.4} m if stuck in its channel (the step's shape makes its path \
+             there shorter than the material stuck in it), unless it slips there in a zone, which the stick/slip \
+             history does not place at such a node: neither is modelled",
             i + 1
         ),
         TAUT,
