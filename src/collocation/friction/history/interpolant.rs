@@ -11,67 +11,39 @@ use super::Kink;
 /// the material `values`) inside it and the kinks that bound it, with the piece's own
 /// lambda there, so no stencil straddles a kink and `at` always lies between a stencil's
 /// first and last point. `points` is 6 for the quintic the step is solved with (O(h^6) where
-/// the material is smooth), 8 for the degree-7 polynomial that estimates its error; a piece
-/// with fewer points gives the polynomial through all of them. At a node it is the value
+/// the material is smooth), 8 for the degree-7 polynomial that estimates its error (at most
+/// 8 are read); a piece with fewer points gives the polynomial through all of them. At a node it is the value
 /// there exactly, so the material handed back at the history's nodes is the last step's;
 /// at a kink that is not a node, the value after it.
 pub(super) fn lagrange(s: &[f64], values: &[f64], kinks: &[Kink], at: f64, points: usize) -> f64 {
     if let Some(k) = s.iter().position(|&x| x == at) {
         return values[k];
     }
-    let below = kinks.iter().rfind(|k| k.0 <= at);
-    let above = kinks.iter().find(|k| k.0 > at);
-    let (lo, hi) = (
-        below.map_or(f64::NEG_INFINITY, |k| k.0),
-        above.map_or(f64::INFINITY, |k| k.0),
-    );
-    // The piece's nodes: those strictly between its kinks, a run of `s` (which increases),
-    // found by bisection; with the kinks, point p of the piece is `point(p)`, as a list
-    // of them would hold it.
-    let nodes = s.len().min(values.len());
-    let start = s[..nodes].partition_point(|&x| x <= lo);
-    let count = s[..nodes].partition_point(|&x| x < hi).saturating_sub(start);
-    let head = usize::from(below.is_some());
-    // The kinks as points of the piece: the one below with the lambda after it, the one
-    // above with the lambda before it.
-    let first_point = below.map_or((lo, 0.0), |&(e, _, after)| (e, after));
-    let last_point = above.map_or((hi, 0.0), |&(e, before, _)| (e, before));
-    let point = |p: usize| -> (f64, f64) {
-        if p < head {
-            first_point
-        } else if p - head < count {
-            (s[start + p - head], values[start + p - head])
-        } else {
-            last_point
-        }
-    };
-    let n = head + count + usize::from(above.is_some());
-    let points = points.min(n);
-    let k = (0..n).rposition(|p| point(p).0 <= at).unwrap_or(0);
-    let first = (k + 1).saturating_sub(points / 2).min(n - points);
-    let stencil = first..first + points;
+    let (stencil, points) = stencil(s, values, kinks, at, points);
+    let stencil = &stencil[..points];
     stencil
-        .clone()
-        .map(|a| {
-            let (sa, value) = point(a);
+        .iter()
+        .enumerate()
+        .map(|(a, &(sa, value))| {
             let weight: f64 = stencil
-                .clone()
-                .filter(|&b| b != a)
-                .map(|b| {
-                    let sb = point(b).0;
-                    (at - sb) / (sa - sb)
-                })
+                .iter()
+                .enumerate()
+                .filter(|&(b, _)| b != a)
+                .map(|(_, &(sb, _))| (at - sb) / (sa - sb))
                 .product();
             weight * value
         })
         .sum()
 }
 
-/// The stencil [`lagrange_slopes`] reads: the (up to) six points of the smooth piece of the
-/// carried material that holds `within` nearest to it, as [`lagrange`] picks them (half of
-/// them at or before `within` where the piece allows), found by bisection and copied once;
-/// with their count.
-fn stencil(s: &[f64], values: &[f64], kinks: &[Kink], within: f64) -> ([(f64, f64); 6], usize) {
+/// The stencil [`lagrange`] and [`lagrange_slopes`] read: the (up to) `points` (at most 8)
+/// points (s, lambda) of the smooth piece of the carried material that holds `within`
+/// nearest to it (half of them at or before `within` where the piece allows), in order,
+/// found by bisection and copied once; with their count. A piece runs between two
+/// successive kinks (or a kink and an end of the span): its points are the nodes strictly
+/// between them and the kinks, the one below with the lambda after it, the one above with
+/// the lambda before it.
+fn stencil(s: &[f64], values: &[f64], kinks: &[Kink], within: f64, points: usize) -> ([(f64, f64); 8], usize) {
     let below = kinks.iter().rfind(|k| k.0 <= within);
     let above = kinks.iter().find(|k| k.0 > within);
     let (lo, hi) = (
@@ -94,8 +66,8 @@ fn stencil(s: &[f64], values: &[f64], kinks: &[Kink], within: f64) -> ([(f64, f6
         }
     };
     let n = head + count + usize::from(above.is_some());
-    let points = n.min(6);
-    let mut out = [(0.0, 0.0); 6];
+    let points = points.min(n).min(8);
+    let mut out = [(0.0, 0.0); 8];
     if points == 0 {
         return (out, 0);
     }
@@ -122,7 +94,7 @@ pub(super) fn lagrange_slopes<const N: usize>(
     ats: [f64; N],
     within: f64,
 ) -> [f64; N] {
-    let (stencil, points) = stencil(s, values, kinks, within);
+    let (stencil, points) = stencil(s, values, kinks, within, 6);
     if points < 2 {
         return [0.0; N];
     }
@@ -250,7 +222,7 @@ mod tests {
     /// The material between the nodes is the listed piece's polynomial bit for bit: on a
     /// span of 33 nodes (a jump, i.e. a repeated node, among them) with no kink, one, two,
     /// a kink at a node and kinks near the ends, at points between and at the nodes and
-    /// the kinks, through 6 and 8 points and more points than a short piece has.
+    /// the kinks, through 6 and 8 points, more than a short piece has.
     #[test]
     fn the_material_is_the_listed_pieces_polynomial() {
         let mut s: Vec<f64> = (0..32).map(|k| 0.242 * (k as f64 / 31.0).powf(1.1)).collect();
@@ -271,7 +243,7 @@ mod tests {
             let mut at = at.clone();
             at.extend(kinks.iter().flat_map(|k| [k.0, k.0 - 1e-9, k.0 + 1e-9]));
             for &x in &at {
-                for points in [6, 8, 40] {
+                for points in [6, 8] {
                     let (got, want) = (
                         lagrange(&s, &values, kinks, x, points),
                         listed(&s, &values, kinks, x, points),
