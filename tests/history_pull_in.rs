@@ -154,18 +154,25 @@ fn a_rigid_tendon_pulled_in_further_slides_in_all_along() {
     let mut robot = prototype();
     robot.tendons[0].stiffness = None;
     let ranges = Ranges::new(robot.clone(), vec![(Input::Displacement(0), vec![0.008, 0.012])]).unwrap();
-    let result = history(&ranges, &Default::default()).unwrap();
+    let (step, full) = second_step_and_its_full_slip_solve(&ranges);
+    // two solves of the same discrete problem from different starts, each to Newton's
+    // tolerance: their tips agree far below the 2.4e-8 m tolerance
+    let gap = (tip(&step) - full.tip_position()).norm();
+    assert!(gap < 1e-10, "{gap} m from the full-slip solve");
+}
+
+/// The second step of the history of `ranges`, which must solve with tendon 1 sliding in
+/// all along, and the full-slip solve of its inputs.
+fn second_step_and_its_full_slip_solve(ranges: &Ranges) -> (tdcr::analysis::history::HistoryStep, tdcr::Solution) {
+    let result = history(ranges, &Default::default()).unwrap();
     if let Some((k, e)) = &result.failure {
         panic!("step {k}: {e}");
     }
-    let step = &result.steps[1];
+    let step = result.steps[1].clone();
     assert_eq!(step.zones[0].zones.len(), 1);
     assert_eq!(step.zones[0].zones[0].contact, Contact::Pull);
     let full = tdcr::solve(&ranges.robot(1.0).unwrap(), &Default::default()).unwrap();
-    // two solves of the same discrete problem from different starts, each to Newton's
-    // tolerance: their tips agree far below the 2.4e-8 m tolerance
-    let gap = (tip(step) - full.tip_position()).norm();
-    assert!(gap < 1e-10, "{gap} m from the full-slip solve");
+    (step, full)
 }
 
 #[test]
@@ -186,19 +193,12 @@ fn a_rigid_pull_in_from_slack_straight_to_its_top_starts_again_from_rest() {
         .with_tendon(tendon(0.005))
         .with_tendon(tendon(-0.005));
     let ranges = Ranges::new(robot, vec![(Input::Displacement(0), vec![0.0, 0.006])]).unwrap();
-    let result = history(&ranges, &Default::default()).unwrap();
-    if let Some((k, e)) = &result.failure {
-        panic!("step {k}: {e}");
-    }
-    let step = &result.steps[1];
-    assert_eq!(step.zones[0].zones.len(), 1);
-    assert_eq!(step.zones[0].zones[0].contact, Contact::Pull);
+    let (step, full) = second_step_and_its_full_slip_solve(&ranges);
     assert_eq!(step.zones[1].zones[0].contact, Contact::Slack);
-    let full = tdcr::solve(&ranges.robot(1.0).unwrap(), &Default::default()).unwrap();
     // the same discrete problem on the same mesh (the history's, chosen by this step's
     // full-slip solve) from different starts, each to Newton's tolerance: far below the
     // 3e-8 m tolerance
-    let gap = (tip(step) - full.tip_position()).norm();
+    let gap = (tip(&step) - full.tip_position()).norm();
     assert!(gap < 1e-10, "{gap} m from the full-slip solve");
     assert!(step.solution.report.error_estimate.is_some());
     // Its work counts the failed attempt's and the full-slip solve's iterations too.
