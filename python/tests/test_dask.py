@@ -54,3 +54,20 @@ def test_chunks_cover_the_rows_in_order():
     assert np.array_equal(np.concatenate([p["tension.1"] for p in parts]), np.arange(10.0))
     with pytest.raises(tdcr.InvalidInput):
         tdcr.distributed.chunks({"tension.1": [1.0]}, 0)
+
+
+def test_every_output_the_options_ask_for_comes_back(client):
+    # A new user's check: the cluster's result had only the five default keys, so
+    # `delivered_I` (a tendon with friction), `tip_orientation`, `error_estimate` and
+    # `points` were dropped without a word while the local call returned them.
+    robot = tdcr.cases.prototype().with_parameters({"friction.1": 0.1})
+    rows = {"tension.1": np.linspace(0.5, 3.0, 12), "tension.2": np.linspace(0.0, 1.0, 12)}
+    options = dict(orientation=True, error_estimate=True, points=3)
+    local = tdcr.solve_parameters(robot, rows, **options)
+    remote = tdcr.distributed.solve_parameters(client, robot, rows, chunk_size=5, **options)
+    assert sorted(remote) == sorted(local) and "delivered_1" in local
+    for key, value in local.items():
+        if isinstance(value, np.ndarray):
+            assert np.array_equal(remote[key], value), key
+        else:
+            assert remote[key] == value, key

@@ -21,7 +21,7 @@ import numpy as np
 
 from . import _native
 
-__all__ = ["chunks", "solve_chunk", "solve_parameters"]
+__all__ = ["chunks", "join", "solve_chunk", "solve_parameters"]
 
 
 def chunks(parameters: Mapping[str, Any], chunk_size: int) -> List[Dict[str, np.ndarray]]:
@@ -79,8 +79,8 @@ def solve_parameters(
     """`tdcr.solve_parameters(robot, parameters, **options)` on a Dask cluster: one task per
     chunk of `chunk_size` rows, submitted with `client.map` (Dask reruns a task up to
     `retries` times when its worker fails), gathered and joined in row order. Returns the
-    same dict (`converged`, `tip_position`, `iterations`, `stability`, `error`), bitwise identical to the
-    local call."""
+    same dict as the local call, with every key the options ask for (`delivered_I`,
+    `tip_rotation`, the points...), bitwise identical to it."""
     text = robot.to_toml()
     parts = chunks(parameters, chunk_size)
     # Names and options checked here, as the local call checks them, before any task runs.
@@ -89,10 +89,17 @@ def solve_parameters(
     results = client.gather(futures)
     if not results:
         return _native.solve_parameters(robot, dict(parameters), **options)
-    return {
-        "converged": np.concatenate([r["converged"] for r in results]),
-        "tip_position": np.concatenate([r["tip_position"] for r in results]),
-        "iterations": np.concatenate([r["iterations"] for r in results]),
-        "stability": [verdict for r in results for verdict in r["stability"]],
-        "error": [message for r in results for message in r["error"]],
-    }
+    return join(results)
+
+
+def join(results: List[Dict[str, Any]]) -> Dict[str, Any]:
+    """The chunks' results as one, in row order: every key the local call returns, arrays
+    concatenated along their first axis (rows) and lists chained."""
+    joined: Dict[str, Any] = {}
+    for key, first in results[0].items():
+        parts = [r[key] for r in results]
+        if isinstance(first, np.ndarray):
+            joined[key] = np.concatenate(parts)
+        else:
+            joined[key] = [item for part in parts for item in part]
+    return joined
