@@ -74,4 +74,7 @@ def test_matplotlib_plot_draws_backbone_and_tendons():
     assert len(lines) == 1 + 5  # backbone and five tendon paths
     np.testing.assert_array_equal(np.asarray(lines[0].get_data_3d()).T, solution.p)
     assert [l.get_linestyle() for l in lines[1:]] == ["--"] * 4 + ["-"]
+    # The labels are shown (user25: they were set, but no legend was drawn).
+    texts = [t.get_text() for t in ax.get_legend().get_texts()]
+    assert texts[0] == "backbone" and texts[1] == "tendon 1 (slack)" and texts[5].startswith("tendon 5 (")
     assert tdcr.plot(solution, ax, tendons=False) is ax

@@ -24,8 +24,9 @@ def _pyplot() -> Any:
 def plot(solution: Any, ax: Optional[Any] = None, *, tendons: bool = True, label: Optional[str] = None) -> Any:
     """Draws `solution` (a `tdcr.Solution`) into the 3-D axes `ax` (new ones in a new figure
     when None): the backbone in black (labelled `label`), the tendon paths in the colours of
-    matplotlib's cycle (slack tendons dashed) when `tendons`, and the tip as a dot. Axes in
-    metres with equal scales. Returns the axes."""
+    matplotlib's cycle (slack tendons dashed) when `tendons`, and the tip as a dot, with a
+    legend of the axes' labelled lines (each tendon's tension). Axes in metres with equal
+    scales. Returns the axes."""
     plt = _pyplot()
     if ax is None:
         figure = plt.figure()
@@ -48,6 +49,7 @@ def plot(solution: Any, ax: Optional[Any] = None, *, tendons: bool = True, label
     ax.set_xlabel("x (m)")
     ax.set_ylabel("y (m)")
     ax.set_zlabel("z (m)")
+    ax.legend(fontsize="small")
     # Equal scales on the three axes: a bend looks like a bend.
     ax.set_aspect("equal")
     return ax
