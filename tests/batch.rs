@@ -177,13 +177,33 @@ fn shards_add_up_to_the_unsharded_run_and_json_lines_read_the_same() {
     let out = run(&dir, &["batch", "cases.csv", "--robot", "robot.toml", "--shard", "3/3"]);
     assert_eq!(out.status.code(), Some(2));
     assert!(text(&out.stderr).contains("K/N"), "{}", text(&out.stderr));
-    // 150 rows are 3 blocks: of 4 shards the first is empty, and says why (user24: an empty
-    // shard of the docs' example wrote only a header, with no word).
-    let out = run(&dir, &["batch", "cases.csv", "--robot", "robot.toml", "--shard", "0/4"]);
+    // 150 rows are 3 blocks: of 4 shards the first three hold one block each (K B / N <= b <
+    // (K+1) B / N, as docs/cli.md says; user25: shard 0/4, the docs' "first of 4 parts", was
+    // the empty one) and the last is empty, and says why (user24: an empty shard wrote only a
+    // header, with no word).
+    let out = run(
+        &dir,
+        &[
+            "batch",
+            "cases.csv",
+            "--robot",
+            "robot.toml",
+            "--shard",
+            "0/4",
+            "--intervals",
+            "8",
+        ],
+    );
+    assert_eq!(out.status.code(), Some(0));
+    assert_eq!(
+        text(&out.stdout),
+        all.lines().take(65).map(|l| format!("{l}\n")).collect::<String>()
+    );
+    let out = run(&dir, &["batch", "cases.csv", "--robot", "robot.toml", "--shard", "3/4"]);
     assert_eq!(out.status.code(), Some(0));
     assert_eq!(text(&out.stdout).lines().count(), 1);
     assert!(
-        text(&out.stderr).contains("shard 0/4 holds none of the 150 rows: shards are made of whole blocks of 64 rows"),
+        text(&out.stderr).contains("shard 3/4 holds none of the 150 rows: shards are made of whole blocks of 64 rows"),
         "{}",
         text(&out.stderr)
     );

@@ -192,7 +192,9 @@ pub fn run(args: &BatchArgs) -> Result<(), Failure> {
     outputs.delivered = RowOutputs::tendons_with_friction(&file.robot, &table.parameters);
     let blocks = table.len().div_ceil(BLOCK);
     let (first, end) = match args.shard {
-        Some((k, n)) => (k * blocks / n, (k + 1) * blocks / n),
+        // The blocks b with K B / N <= b < (K+1) B / N (docs/cli.md): the first shards
+        // are the ones that hold rows when there are fewer blocks than shards.
+        Some((k, n)) => ((k * blocks).div_ceil(n), ((k + 1) * blocks).div_ceil(n)),
         None => (0, blocks),
     };
     let rows = (first * BLOCK).min(table.len())..(end * BLOCK).min(table.len());
