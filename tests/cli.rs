@@ -1010,6 +1010,72 @@ fn trace_writes_the_branch_with_stability_and_a_picture() {
 }
 
 #[test]
+fn trace_and_compare_take_the_tendon_inputs_solve_takes() {
+    // user25: `trace --tension` and `compare --tension` were unknown options (clap pointed
+    // at `--tendons`), and trace's refusal of friction could only be answered in the file.
+    let dir = scratch("trace-inputs");
+    std::fs::write(dir.join("robot.toml"), example()).unwrap();
+    let first_tip = |out: &Output| -> Vec<f64> {
+        let csv = stdout(out);
+        let row = csv.lines().nth(1).unwrap().to_string();
+        row.split(',').skip(2).take(3).map(|x| x.parse().unwrap()).collect()
+    };
+    let args = ["trace", "robot.toml", "--param", "tension.1=0:1"];
+    let plain = run(&dir, &args, None);
+    exits(&plain, 0);
+    let with = run(&dir, &[&args[..], &["--tension", "2=0.5"]].concat(), None);
+    exits(&with, 0);
+    let out = run(
+        &dir,
+        &[
+            "solve",
+            "robot.toml",
+            "--tension",
+            "1=0",
+            "--tension",
+            "2=0.5",
+            "--format",
+            "json",
+        ],
+        None,
+    );
+    exits(&out, 0);
+    let solved = tip_of(&serde_json::from_str(&stdout(&out)).unwrap());
+    let traced = first_tip(&with);
+    // The trace's first point is the solve of the same inputs; both converge to Newton's
+    // tolerance (1e-11 scaled), far below 1e-9 m.
+    for k in 0..3 {
+        assert!((traced[k] - solved[k]).abs() < 1e-9, "{traced:?} {solved:?}");
+    }
+    assert!(
+        (first_tip(&plain)[1] - traced[1]).abs() > 1e-3,
+        "tendon 2 bends the rod sideways"
+    );
+    let rough = example().replacen("# friction = 0.1 ", "friction = 0.1 ", 1);
+    assert_ne!(rough, example());
+    std::fs::write(dir.join("rough.toml"), rough).unwrap();
+    let refused = run(&dir, &["trace", "rough.toml", "--param", "tension.1=0:1"], None);
+    exits(&refused, 2);
+    has(&stderr(&refused), "--friction I=0");
+    let out = run(
+        &dir,
+        &["trace", "rough.toml", "--param", "tension.1=0:1", "--friction", "1=0"],
+        None,
+    );
+    exits(&out, 0);
+    assert_eq!(stdout(&out), stdout(&plain));
+    let out = run(
+        &dir,
+        &["compare", "robot.toml", "--tension", "1=1", "--displacement", "1=0.001"],
+        None,
+    );
+    exits(&out, 2);
+    has(&stderr(&out), "both given");
+    let out = run(&dir, &["compare", "robot.toml", "--tension", "1=1"], None);
+    exits(&out, 0);
+}
+
+#[test]
 fn sweep_reports_a_jump_and_varies_any_input() {
     let dir = scratch("sweep-jump");
     // About twice Euler's load on a 0.5 m rod buckled towards -x by a 10 mN imperfection; a

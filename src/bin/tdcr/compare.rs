@@ -25,6 +25,8 @@ pub struct CompareArgs {
     #[arg(long, value_name = "S1,S2", value_delimiter = ',', value_enum)]
     methods: Vec<crate::args::MethodArg>,
     #[command(flatten)]
+    tendons: crate::robot_args::TendonArgs,
+    #[command(flatten)]
     friction: crate::robot_args::FrictionArgs,
     #[command(flatten)]
     solver: SolverArgs,
@@ -36,6 +38,7 @@ pub struct CompareArgs {
 /// Runs `tdcr compare`.
 pub fn run(args: &CompareArgs) -> Result<(), Failure> {
     let (name, mut file) = read_robot(&args.file)?;
+    args.tendons.apply(&mut file.robot)?;
     args.friction.apply(&mut file.robot)?;
     apply(&mut file, &args.solver);
     let robot = file.robot.clone();

@@ -86,6 +86,40 @@ pub fn once<T: Copy, D: std::fmt::Display>(
     Ok(())
 }
 
+/// The tendon inputs of `solve`, `trace` and `compare`: `--tension I=NEWTONS` and
+/// `--displacement I=METRES`, each once per tendon, not both for one tendon.
+#[derive(clap::Args)]
+pub struct TendonArgs {
+    /// Tension of tendon I (numbered from 1) in N, replacing the file's. Repeatable.
+    #[arg(long, value_name = "I=NEWTONS", value_parser = crate::args::parse_tension)]
+    tension: Vec<(usize, f64)>,
+    /// Drive tendon I (numbered from 1) by its actuator's pull-in in m instead of a tension
+    /// (its tension is then solved for; docs/actuation.md). Repeatable.
+    #[arg(long, value_name = "I=METRES", value_parser = crate::args::parse_displacement)]
+    displacement: Vec<(usize, f64)>,
+}
+
+impl TendonArgs {
+    /// Sets the tensions, then the pull-ins, on `robot`; a tendon given twice, by both or
+    /// past the last is bad input.
+    pub fn apply(&self, robot: &mut Robot) -> Result<(), Failure> {
+        once("--tension", &self.tension, tdcr::Readable)?;
+        once("--displacement", &self.displacement, tdcr::Readable)?;
+        for &(i, t) in &self.tension {
+            set_tension(robot, i, t)?;
+        }
+        for &(i, q) in &self.displacement {
+            if self.tension.iter().any(|&(j, _)| j == i) {
+                return Err(Failure::Input(format!(
+                    "--tension {i}=... and --displacement {i}=... both given: drive a tendon by its tension or by its displacement"
+                )));
+            }
+            set_displacement(robot, i, q)?;
+        }
+        Ok(())
+    }
+}
+
 /// The friction options of `solve` and `sweep`: `--friction I=MU` and `--motion
 /// I=pull|release`, each once per tendon.
 #[derive(clap::Args)]

@@ -5,9 +5,9 @@ use std::path::PathBuf;
 use tdcr::io::output;
 use tdcr::plot::{Figure, Style, solved_shape_legend};
 
-use crate::args::{SolverArgs, parse_disks, parse_displacement, parse_samples, parse_tension};
+use crate::args::{SolverArgs, parse_disks, parse_samples};
 use crate::failure::{Failure, emit, note, picture_format, write_file, write_picture};
-use crate::robot_args::{FrictionArgs, apply, once, read_robot, run_solver, set_displacement, set_tension};
+use crate::robot_args::{FrictionArgs, TendonArgs, apply, read_robot, run_solver};
 use crate::tables::{diagnostics, solution_table, summary};
 
 /// The output formats of `solve`.
@@ -27,13 +27,8 @@ pub enum Format {
 pub struct SolveArgs {
     /// Robot file (TOML; `-` reads standard input).
     file: String,
-    /// Tension of tendon I (numbered from 1) in N, replacing the file's. Repeatable.
-    #[arg(long, value_name = "I=NEWTONS", value_parser = parse_tension)]
-    tension: Vec<(usize, f64)>,
-    /// Drive tendon I (numbered from 1) by its actuator's pull-in in m instead of a tension
-    /// (its tension is then solved for; docs/actuation.md). Repeatable.
-    #[arg(long, value_name = "I=METRES", value_parser = parse_displacement)]
-    displacement: Vec<(usize, f64)>,
+    #[command(flatten)]
+    tendons: TendonArgs,
     #[command(flatten)]
     friction: FrictionArgs,
     #[command(flatten)]
@@ -79,19 +74,7 @@ pub fn run(args: &SolveArgs) -> Result<(), Failure> {
     let (name, mut file) = read_robot(&args.file)?;
     // The file's warnings say what the file gives, before the options replace it.
     let read_warnings = file.warnings();
-    once("--tension", &args.tension, tdcr::Readable)?;
-    once("--displacement", &args.displacement, tdcr::Readable)?;
-    for &(i, t) in &args.tension {
-        set_tension(&mut file.robot, i, t)?;
-    }
-    for &(i, q) in &args.displacement {
-        if args.tension.iter().any(|&(j, _)| j == i) {
-            return Err(Failure::Input(format!(
-                "--tension {i}=... and --displacement {i}=... both given: drive a tendon by its tension or by its displacement"
-            )));
-        }
-        set_displacement(&mut file.robot, i, q)?;
-    }
+    args.tendons.apply(&mut file.robot)?;
     args.friction.apply(&mut file.robot)?;
     apply(&mut file, &args.solver);
     crate::failure::warn_file(&name, &read_warnings, &file);

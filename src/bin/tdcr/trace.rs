@@ -48,6 +48,10 @@ pub struct TraceArgs {
     #[arg(long, value_name = "NAME=START:STOP", allow_hyphen_values = true)]
     param: String,
     #[command(flatten)]
+    tendons: crate::robot_args::TendonArgs,
+    #[command(flatten)]
+    friction: crate::robot_args::FrictionArgs,
+    #[command(flatten)]
     solver: SolverArgs,
     /// Output format.
     #[arg(long, value_enum, default_value_t)]
@@ -97,6 +101,8 @@ pub fn run(args: &TraceArgs) -> Result<(), Failure> {
         picture_format(path)?;
     }
     let (name, mut file) = read_robot(&args.file)?;
+    args.tendons.apply(&mut file.robot)?;
+    args.friction.apply(&mut file.robot)?;
     apply(&mut file, &args.solver);
     let (param, from, to) = parse_range(&args.param)?;
     let parameter = Parameter::parse(param, &file.robot).map_err(|e| Failure::Input(e.to_string()))?;
@@ -187,6 +193,9 @@ fn with_flags(e: tdcr::Error, parameter: Parameter) -> Failure {
         }
         tdcr::Error::InvalidInput { field, .. } if field.ends_with(".displacement") => {
             Some("tdcr sweep --displacement I=START:STOP:COUNT".to_string())
+        }
+        tdcr::Error::InvalidInput { field, .. } if field.ends_with(".friction") => {
+            Some("--friction I=0 for each tendon named".to_string())
         }
         _ => None,
     };
