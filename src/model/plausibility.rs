@@ -4,7 +4,7 @@
 use crate::model::robot::Robot;
 use crate::model::scales::{
     FORCE_LIMIT, FRICTION_LIMIT, FRICTION_TURNING_LIMIT, LENGTH_RANGE, LoadSite, MODULUS_RANGE, MOMENT_LIMIT,
-    PATH_LIMIT, SELF_WEIGHT_LIMIT, SLENDERNESS_RANGE, TENDON_LIMIT, Warning,
+    OFFSET_LIMIT, PATH_LIMIT, SELF_WEIGHT_LIMIT, SLENDERNESS_RANGE, TENDON_LIMIT, Warning,
 };
 use nalgebra::Vector3;
 
@@ -200,6 +200,14 @@ impl Robot {
                 turns,
             };
             if w.figure() > PATH_LIMIT {
+                out.push(w);
+            }
+            let w = Warning::Offset {
+                tendon: i,
+                offset: t.routing.max_offset(span, length),
+                length,
+            };
+            if w.figure() > OFFSET_LIMIT {
                 out.push(w);
             }
             let Some(f) = t.active_friction() else { continue };

@@ -57,6 +57,10 @@ pub const MOMENT_LIMIT: f64 = 20.0 * PI;
 /// Largest plausible ratio of a tendon's path length on the straight rod to the rod it
 /// spans, 2: a helix at 60 degrees to the backbone.
 pub const PATH_LIMIT: f64 = 2.0;
+/// Largest plausible ratio of a tendon's largest offset from the backbone to the rod's
+/// length, 1: wider than long is a robot of disks, not a rod (an offset typed in mm reads
+/// as metres, 1000 times too far out).
+pub const OFFSET_LIMIT: f64 = 1.0;
 /// Largest plausible friction coefficient, 1 (tendon-channel pairs: about 0.05 to 0.5).
 pub const FRICTION_LIMIT: f64 = 1.0;
 /// Largest plausible mu theta of a tendon (theta its path's total turning on the straight
@@ -175,6 +179,16 @@ pub enum Warning {
         /// The turns its routing makes about the backbone over that span.
         turns: f64,
     },
+    /// A tendon's largest offset from the backbone is more than [`OFFSET_LIMIT`] times the
+    /// rod's length.
+    Offset {
+        /// The tendon (from 0; messages number from 1).
+        tendon: usize,
+        /// Its largest distance from the backbone along the rod it spans, m.
+        offset: f64,
+        /// The rod's length L, m.
+        length: f64,
+    },
     /// A tendon's friction coefficient is above [`FRICTION_LIMIT`].
     Friction {
         /// The tendon (from 0; messages number from 1).
@@ -275,6 +289,7 @@ impl Warning {
                 ..
             } => moment * arm / bending_stiffness,
             Warning::PathLength { path, span, .. } => path / span,
+            Warning::Offset { offset, length, .. } => offset / length,
             Warning::Friction { coefficient, .. } => coefficient,
             Warning::FrictionTurning {
                 coefficient, turning, ..
@@ -542,6 +557,16 @@ impl fmt::Display for Warning {
                 fig(turns),
                 fig(PATH_LIMIT)
             ),
+            Warning::Offset { tendon, offset, length } => write!(
+                f,
+                "tendon {} runs {} m from the backbone of a {} m rod ({} times its length, above {}); \
+                 offsets are in metres (8 mm is 0.008)",
+                tendon + 1,
+                fig(offset),
+                fig(length),
+                fig(x),
+                fig(OFFSET_LIMIT)
+            ),
             Warning::Friction { tendon, coefficient } => write!(
                 f,
                 "tendon {}'s friction coefficient {} is above {}: tendon-channel pairs measure about 0.05 (PTFE) \
@@ -624,6 +649,31 @@ mod tests {
             }
             assert_eq!(rough.plausibility(), Vec::new(), "{} with friction", e.label());
         }
+    }
+
+    /// An offset typed in millimetres (8 for 0.008) is flagged by itself, with the tendon,
+    /// the offset and the rod's length; the prototype's 8 mm on 0.242 m is not.
+    #[test]
+    fn an_offset_longer_than_the_rod_is_flagged() {
+        let mut robot = cases::case_s();
+        robot.tendons[2].routing = crate::model::routing::Routing::straight(0.0, 8.0);
+        let warnings = robot.plausibility();
+        let [
+            Warning::Offset {
+                tendon: 2,
+                offset,
+                length,
+            },
+        ] = warnings[..]
+        else {
+            panic!("{warnings:?}");
+        };
+        assert_eq!((offset, length), (8.0, robot.length()));
+        let text = warnings[0].to_string();
+        assert!(
+            text.contains("tendon 3 runs 8 m from the backbone of a 0.242 m rod"),
+            "{text}"
+        );
     }
 
     /// A helix of 1000 turns over the prototype (a typo for turns per metre, or worse) is
