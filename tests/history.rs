@@ -764,7 +764,7 @@ fn a_history_without_friction_is_refused() {
     let Err(Error::InvalidInput { problem, .. }) = history(&ranges, &Default::default()) else {
         panic!("a history without friction was solved");
     };
-    assert!(problem.contains("no tendon has friction"), "{problem}");
+    assert!(problem.contains("none has friction"), "{problem}");
 }
 
 #[test]

@@ -117,7 +117,7 @@ def test_every_bad_input_raises_its_class_with_the_command_line_message():
         tdcr.solve(tdcr.cases.case_s(), tol=-1.0)
     with pytest.raises(tdcr.InvalidInput, match="names tendon 6, but the robot has 5"):
         tdcr.cases.case_s().with_parameters({"tension.6": 1.0})
-    with pytest.raises(tdcr.InvalidInput, match="a string can only pull"):
+    with pytest.raises(tdcr.InvalidInput, match="a tendon can only pull"):
         tdcr.cases.case_s().with_tensions([-1.0, 0, 0, 0, 0])
     with pytest.raises(tdcr.NotConverged, match="collocation did not converge") as e:
         tdcr.solve(tdcr.cases.case_h(), max_iterations=1, continuation=False)

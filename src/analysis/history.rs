@@ -218,7 +218,7 @@ pub fn history_until(
     if !crate::model::friction::any(&robots[0]) {
         return Err(invalid(
             "tendons",
-            "no tendon has friction, so a history has nothing to carry from step to step",
+            "(the robot's tendons): none has friction, so a history has nothing to carry from step to step",
             "give a tendon friction (robot file `friction = 0.1`, command line --friction I=MU), or run a plain sweep",
         ));
     }

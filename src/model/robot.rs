@@ -352,7 +352,7 @@ impl Robot {
             return Err(invalid(
                 format!("tendons[{i}].tension"),
                 format!("is {} N", Readable(t.tension())),
-                "a string can only pull: give a finite tension >= 0",
+                "a tendon can only pull: give a finite tension >= 0",
             ));
         }
         let end = t.end(l);
