@@ -190,6 +190,13 @@ fn solve_on(robot: &Robot, options: &Options, carried: &mut Carried, held: Optio
     let mut profile = Profile::new(&model, &system.mesh);
     profile.z.clone_from(&carried.z);
     profile.grips = Some(carried.grips.clone());
+    // A held solve (the material's term) is the answer with its material changed slightly:
+    // its stuck links start from the answer's own per-point shares, not from the constant
+    // multiplier a fresh profile's first evaluation takes (docs/friction.md section 8,
+    // "est25"), so Newton starts near the answer it converges to.
+    if let Some(settled) = carried.settled.as_ref().filter(|_| held.is_some()) {
+        profile.held_shares.clone_from(&settled.shares);
+    }
     system.friction = Some(profile);
     let mut border = Capstan::new(system);
     let mut ws = match carried.factors.take() {

@@ -68,7 +68,8 @@ pub(crate) struct Profile<'a> {
     /// Per slip and link, the per-point multipliers' shares and capacity
     /// ([`IntervalLinearization::pointwise`]) a stuck link takes before its first evaluation
     /// on this profile: a verdict's profile holds those of the answer it assesses
-    /// ([`Profile::shares`]; docs/stability.md, "Load-history steps"); empty elsewhere.
+    /// ([`Profile::shares`]; docs/stability.md, "Load-history steps"), and so does the
+    /// material term's held solve (docs/friction.md section 8, "est25"); empty elsewhere.
     pub(crate) held_shares: Vec<Vec<Option<[f64; 4]>>>,
 }
 

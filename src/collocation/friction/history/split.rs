@@ -263,6 +263,8 @@ fn material_error(
     };
     let factors = fine.factors.take();
     let mut better = start(factors);
+    // The answer's pattern with its per-point shares, which the held solve starts from.
+    better.settled.clone_from(&fine.settled);
     // The largest change of the material from the one the answer was solved from, times
     // the rod's length: the most it moves the slip (its integral), so the held pattern's
     // slip may cross zero by that much.
