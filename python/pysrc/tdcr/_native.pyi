@@ -49,6 +49,7 @@ __all__ = [
     "InvalidInput",
     "FileError",
     "SingularRouting",
+    "ModelLimit",
     "Breakdown",
     "NotConverged",
     "IntervalCap",
@@ -73,6 +74,9 @@ class FileError(InvalidInput):
 
 class SingularRouting(InvalidInput):
     """A tendon's path has (nearly) no tangent."""
+
+class ModelLimit(Error):
+    """The input is valid but the model cannot answer it (CLI exit code 4)."""
 
 class Breakdown(Error):
     """The model equations broke down numerically."""
