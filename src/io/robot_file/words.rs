@@ -15,7 +15,7 @@ pub enum Front {
 }
 
 /// The option a library hint names as something to change, written into the hint as
-/// `` `tendons[I].KEY` `` (as the library writes it) and spelled for each reader by
+/// `` `tendons[I].KEY` `` (as the library writes it) and spelled for each front end by
 /// [`user_message`].
 const OPTIONS: [&str; 1] = ["motion"];
 
