@@ -17,6 +17,20 @@ pub enum Error {
         /// What to do about it.
         hint: String,
     },
+    /// The input is valid, but the model (or the analysis asked) cannot answer it: a load
+    /// history step whose stick/slip pattern the history does not model, an analysis that
+    /// does not model friction yet. Changing the input (smaller steps, another analysis)
+    /// may help; the input itself breaks no rule.
+    #[error("outside the model: `{field}` {problem}; {hint}")]
+    ModelLimit {
+        /// Path of the field whose value takes the model past its limit, e.g.
+        /// `tendons[0].friction`.
+        field: String,
+        /// What the model cannot answer, with the values.
+        problem: String,
+        /// What to try instead.
+        hint: String,
+    },
     /// A tendon's path has (nearly) no tangent, so its force per unit length is undefined.
     #[error(
         "tendon {} has a vanishing path tangent |p_i'| = {speed:.3e} at s = {s:.6} m; \
@@ -97,6 +111,21 @@ impl fmt::Display for Readable {
     }
 }
 
+/// `x`, a number near 1 in magnitude that a message compares with 1 (a friction ratio
+/// refused for exceeding 1), with enough decimals that it reads as different from 1: two
+/// significant digits of |x| - 1, at least 3 decimals (`1.00040` for 1.0004, `1.500` for
+/// 1.5), so that a refused `1.0004` is not printed `1.000`.
+pub(crate) fn near_one(x: f64) -> String {
+    let excess = (x.abs() - 1.0).abs();
+    // 15 decimals: past them an f64 near 1 has no digits left to show.
+    let decimals = if excess > 0.0 && excess.is_finite() {
+        (1 - excess.log10().floor() as i64).clamp(3, 15) as usize
+    } else {
+        3
+    };
+    format!("{x:.decimals$}")
+}
+
 /// Which estimate of an [`Error::IntervalCap`] misses its tolerance, in words: the position,
 /// the orientation or both, each with its value and tolerance (and, when only one binds, the
 /// other's margin).
@@ -127,9 +156,35 @@ pub(crate) fn invalid(field: impl Into<String>, problem: impl Into<String>, hint
     }
 }
 
+/// How a hint names tendon `i`'s option `key` (e.g. `motion`) as something to change: its
+/// field path in backquotes, `` `tendons[0].motion` ``, which the front ends spell as they
+/// take it (`tdcr::io::user_message`: `--motion 1=release` on the command line).
+pub(crate) fn option_token(i: usize, key: &str) -> String {
+    format!("`tendons[{i}].{key}`")
+}
+
+/// An [`Error::ModelLimit`]: valid input the model cannot answer.
+pub(crate) fn limit(field: impl Into<String>, problem: impl Into<String>, hint: impl Into<String>) -> Error {
+    Error::ModelLimit {
+        field: field.into(),
+        problem: problem.into(),
+        hint: hint.into(),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_ratio_near_one_shows_how_far_from_one_it_is() {
+        // user24: w = -1.0004 was printed "1.000 times".
+        assert_eq!(near_one(-1.0004), "-1.00040");
+        assert_eq!(near_one(1.0004), "1.00040");
+        assert_eq!(near_one(1.5), "1.500");
+        assert_eq!(near_one(1.0 + 3e-9), "1.0000000030");
+        assert_eq!(near_one(1.0), "1.000");
+    }
 
     #[test]
     fn the_interval_cap_names_the_estimate_that_binds() {

@@ -427,8 +427,9 @@ fn inverse_statics_with_friction_in_the_forward_model() {
 #[test]
 fn branch_tracing_without_friction_says_so() {
     let [s, _] = rough_cases();
+    // A model limit (front25): the robot is valid, the trace does not model its friction.
     match tdcr::collocation::trace(&s, tdcr::Parameter::Tension(0), 0.0, 2.94, &Default::default()) {
-        Err(Error::InvalidInput { field, problem, .. }) => {
+        Err(Error::ModelLimit { field, problem, .. }) => {
             assert_eq!(field, "tendons[0].friction");
             assert!(problem.contains("does not model friction yet"), "{problem}");
         }
@@ -438,7 +439,7 @@ fn branch_tracing_without_friction_says_so() {
     let mut both = s.clone();
     both.tendons[3].friction = Some(tdcr::Friction::pull(0.2));
     match tdcr::collocation::trace(&both, tdcr::Parameter::Tension(0), 0.0, 2.94, &Default::default()) {
-        Err(Error::InvalidInput { problem, hint, .. }) => {
+        Err(Error::ModelLimit { problem, hint, .. }) => {
             assert!(problem.contains("tendon 4's 0.2"), "{problem}");
             assert!(hint.contains("every tendon with friction to 0"), "{hint}");
         }

@@ -29,7 +29,7 @@ pub enum Failure {
 impl fmt::Display for Failure {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
-            Failure::Library(e) => write!(f, "{}", tdcr::io::user_message(e)),
+            Failure::Library(e) => write!(f, "{}", tdcr::io::user_message(e, tdcr::io::Front::Python)),
             Failure::Panic(message) => write!(f, "{}", internal_message(message)),
         }
     }

@@ -32,6 +32,12 @@ create_exception!(
 );
 create_exception!(
     tdcr,
+    ModelLimit,
+    Error,
+    "The input is valid but the model cannot answer it: a load history step whose stick/slip pattern the history does not model, an analysis that does not model friction yet (the command line's exit code 4)."
+);
+create_exception!(
+    tdcr,
     Breakdown,
     Error,
     "The model equations broke down numerically at a state the solver visited."
@@ -83,7 +89,7 @@ pub fn to_py_with(error: tdcr::Error, prefix: &str) -> PyErr {
 /// for the library's `tendons[1].tension`: tendons and point loads from 1, the numbering
 /// of robot files, the command line and `tdcr.FileError`; [`tdcr::io::user_message`]).
 fn message(error: &tdcr::Error) -> String {
-    tdcr::io::user_message(error)
+    tdcr::io::user_message(error, tdcr::io::Front::Python)
 }
 
 /// A failure to solve `robot` as its exception, with the robot's implausible scales after
@@ -128,6 +134,7 @@ pub fn warn(py: Python<'_>, warnings: &[tdcr::model::scales::Warning]) -> PyResu
 fn with_text(error: tdcr::Error, text: String) -> PyErr {
     match error {
         tdcr::Error::InvalidInput { .. } => InvalidInput::new_err(text),
+        tdcr::Error::ModelLimit { .. } => ModelLimit::new_err(text),
         tdcr::Error::SingularRouting { .. } => SingularRouting::new_err(text),
         tdcr::Error::Breakdown { .. } => Breakdown::new_err(text),
         tdcr::Error::IntervalCap { .. } => IntervalCap::new_err(text),
@@ -177,6 +184,7 @@ pub fn register(module: &Bound<'_, PyModule>) -> PyResult<()> {
     module.add("InvalidInput", py.get_type::<InvalidInput>())?;
     module.add("FileError", py.get_type::<FileError>())?;
     module.add("SingularRouting", py.get_type::<SingularRouting>())?;
+    module.add("ModelLimit", py.get_type::<ModelLimit>())?;
     module.add("Breakdown", py.get_type::<Breakdown>())?;
     module.add("NotConverged", py.get_type::<NotConverged>())?;
     module.add("IntervalCap", py.get_type::<IntervalCap>())?;

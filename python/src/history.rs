@@ -224,7 +224,7 @@ pub fn history(
     let (result, signal) = boundary::stoppable(py, |asked| Ok(history_until(&ranges, &options, asked)))?;
     let result = result.map_err(|e| match e {
         // Before any step: the full-slip solve that chooses the history's mesh.
-        e if !matches!(e, tdcr::Error::InvalidInput { .. }) => errors::explained_by(
+        e if !matches!(e, tdcr::Error::InvalidInput { .. } | tdcr::Error::ModelLimit { .. }) => errors::explained_by(
             e,
             &robots(),
             "history: no step was solved: the full-slip solve of the most loaded step, which chooses the \

@@ -80,14 +80,23 @@ impl PySolveReport {
         self.report.method.to_string()
     }
 
-    /// Why Newton stopped: "converged", "max_iterations", "line_search_failed",
-    /// "singular_jacobian" or "non_finite".
+    /// Why Newton stopped, as a sentence: the `termination` of the solution JSON (`tdcr solve
+    /// --format json`) and of `InverseResult` and `Calibration`. Until 2026-12-08 this was
+    /// the short code, now `termination_code`.
     #[getter]
-    fn termination(&self) -> &'static str {
+    fn termination(&self) -> String {
+        self.report.termination.to_string()
+    }
+
+    /// Why Newton stopped, as a short code for comparisons: "converged", "max_iterations",
+    /// "line_search_failed", "singular_jacobian", "non_finite" or "zones_unsettled".
+    #[getter]
+    fn termination_code(&self) -> &'static str {
         termination_name(self.report.termination)
     }
 
-    /// The termination as a sentence (as the command line prints it).
+    /// The same sentence as `termination` (its name before 2026-12-08, kept for code
+    /// written then).
     #[getter]
     fn termination_message(&self) -> String {
         self.report.termination.to_string()
@@ -295,7 +304,7 @@ impl PySolveReport {
     }
 
     /// The report's scalars as one flat dict (a row for a table of runs): `method`,
-    /// `termination`, `converged`, `iterations`, `newton_steps`, `chord_steps`,
+    /// `termination` (the sentence), `termination_code`, `converged`, `iterations`, `newton_steps`, `chord_steps`,
     /// `load_steps`, `meshes`, `jacobian_evaluations`, `residual_evaluations`, `residual`,
     /// `intervals`, `unknowns`, `tip_error_estimate`, `tolerance`, `tolerance_met`,
     /// `stability`, `unstable_directions`, `conjugate_point_s`, `stability_reason`, `path`,
@@ -305,7 +314,8 @@ impl PySolveReport {
         let r = &self.report;
         let d = PyDict::new(py);
         d.set_item("method", r.method.to_string())?;
-        d.set_item("termination", termination_name(r.termination))?;
+        d.set_item("termination", r.termination.to_string())?;
+        d.set_item("termination_code", termination_name(r.termination))?;
         d.set_item("converged", r.termination == Termination::Converged)?;
         d.set_item("iterations", r.iterations)?;
         d.set_item("newton_steps", r.newton_steps)?;

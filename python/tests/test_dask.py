@@ -36,7 +36,7 @@ def test_results_and_exceptions_travel_through_dask(client):
     solution = tdcr.solve(robot)
     with pytest.raises(tdcr.NotConverged) as e:
         client.submit(tdcr.solve, robot, max_iterations=1, continuation=False, pure=False).result()
-    assert e.value.report.termination == "max_iterations" and e.value.report.iterations == 1
+    assert e.value.report.termination_code == "max_iterations" and e.value.report.iterations == 1
     sens = client.submit(tdcr.tip_sensitivities, robot, solution).result()
     assert np.array_equal(sens.compliance, tdcr.tip_sensitivities(robot, solution).compliance)
     shear = tdcr.Robot(

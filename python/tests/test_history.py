@@ -100,7 +100,9 @@ def test_one_step_from_rest_is_the_pull_solve():
 
 
 def test_a_rigid_tendon_that_sticks_raises_with_the_steps_before():
-    with pytest.raises(tdcr.InvalidInput, match="stiffness") as caught:
+    # A model limit, not bad input (front25): the rigid tendon is valid, its stuck tension
+    # indeterminate.
+    with pytest.raises(tdcr.ModelLimit, match="stiffness") as caught:
         tdcr.history(robot(stiffness=None), {"tension.1": np.linspace(0.0, 2.0, 11)}, up_down=True)
     # Loading from rest slides all along; the first step back would stick.
     assert caught.value.index == 11
@@ -156,3 +158,26 @@ def test_a_pull_in_history_closes_a_loop_whose_way_back_is_on_the_other_side(tmp
     tensions = [step.tendons[0]["tension"] for step in h]
     again = tdcr.history(prototype_with_friction(tmp_path, "tension = 0.0"), {"tension.1": tensions})
     assert np.max(np.linalg.norm(again.tip_positions - tips, axis=1)) < 1e-9
+
+
+def test_a_step_the_history_does_not_model_is_a_model_limit_not_bad_input():
+    # user24: the prototype (friction 0.1, E_t A_t 2000 N on tendon 1) held at 2.94 N while
+    # a sideways tip force rises to 0.05 N: step 2 would slide against friction away from
+    # the base entry. The input is valid: `ModelLimit` (a `tdcr.Error`), not `InvalidInput`
+    # (main raised InvalidInput).
+    text = tdcr.example().replace(
+        "tension = 2.94                   # N, >= 0\n",
+        "tension = 2.94                   # N, >= 0\nfriction = 0.1\nstiffness = 2000.0\n",
+        1,
+    )
+    proto = tdcr.Robot.from_toml(text)
+    with pytest.raises(tdcr.ModelLimit, match="outside the model: `tendon\\[1\\].friction`") as caught:
+        tdcr.history(proto, {"tip_force.y": np.linspace(0.0, 0.05, 5)}, up_down=True)
+    assert not isinstance(caught.value, tdcr.InvalidInput)
+    assert isinstance(caught.value, tdcr.Error)
+    assert caught.value.index == 1 and len(caught.value.partial) == 1
+
+
+def test_a_trace_of_a_robot_with_friction_is_a_model_limit():
+    with pytest.raises(tdcr.ModelLimit, match="does not model friction yet"):
+        tdcr.trace(robot(tension=1.0), "tension.1", 0.0, 1.0)

@@ -231,7 +231,7 @@ def test_process_pool_in_a_forked_child_after_batches_returns_and_raises_the_sam
         remote_batch = pool.submit(tdcr.solve_batch, robot, rows, intervals=16).result(timeout=120)
         with pytest.raises(tdcr.NotConverged) as e:
             pool.submit(failing_solve).result(timeout=120)
-    assert e.value.report.iterations == 1 and e.value.report.termination == "max_iterations"
+    assert e.value.report.iterations == 1 and e.value.report.termination_code == "max_iterations"
     assert np.array_equal(remote["tip_position"], local["tip_position"])
     assert all(np.array_equal(a.p, b.p) for a, b in zip(remote_batch, batch))
 

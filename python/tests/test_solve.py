@@ -2,6 +2,7 @@
 options, reports, the JSON and pickle round trips, sensitivities, sweeps and inverse
 statics."""
 
+import json
 import pickle
 
 import numpy as np
@@ -69,7 +70,10 @@ def test_arrays_have_their_shapes_and_dtypes():
     assert np.array_equal(solution.at(robot.length).p, solution.tip_position)
     assert robot.tensions.shape == (5,) and robot.base_rotation.shape == (3, 3)
     report = solution.report
-    assert report.converged and report.termination == "converged" and report.method == "collocation"
+    assert report.converged and report.termination_code == "converged" and report.method == "collocation"
+    # One meaning per name (front25): `termination` is the sentence the solution JSON holds.
+    assert report.termination == json.loads(solution.to_json())["termination"]
+    assert report.termination != "converged" and report.to_dict()["termination_code"] == "converged"
     # A direct solve on one mesh: every iteration is in the history of its one Newton run.
     assert report.load_steps == 0 and report.meshes == 1 and report.path == "direct"
     assert report.iterations >= 1 and report.history.shape == (report.iterations,)
@@ -121,7 +125,7 @@ def test_every_bad_input_raises_its_class_with_the_command_line_message():
         tdcr.cases.case_s().with_tensions([-1.0, 0, 0, 0, 0])
     with pytest.raises(tdcr.NotConverged, match="collocation did not converge") as e:
         tdcr.solve(tdcr.cases.case_h(), max_iterations=1, continuation=False)
-    assert e.value.report.termination == "max_iterations"
+    assert e.value.report.termination_code == "max_iterations"
     with pytest.raises(tdcr.IntervalCap, match="needs more than the cap of 64 intervals"):
         tdcr.solve(tdcr.cases.case_h(), tol=1e-14, max_intervals=64)
     with pytest.raises(tdcr.InvalidInput, match="not a Solution.to_json text"):

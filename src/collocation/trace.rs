@@ -130,6 +130,7 @@ pub struct Trace {
 /// solve chose (refined along the way where the shape needs it).
 ///
 /// # Errors
+/// [`crate::Error::ModelLimit`] for a robot with friction (a trace does not model it yet).
 /// Invalid input (also a displacement-controlled tendon left after setting `parameter`:
 /// trace its tension or sweep its pull-in; `youngs_modulus`, which only a sweep varies; a
 /// negative tension; a range of two equal or non-finite values), or the start's solve

@@ -30,7 +30,7 @@ pub use csv_table::number;
 #[cfg(feature = "files")]
 pub use example::{calibration_truth, example, example_cases, example_experiments, paper_frame_example};
 #[cfg(feature = "files")]
-pub use robot_file::{RobotFile, SolverSettings, file_field, parse, user_message};
+pub use robot_file::{Front, RobotFile, SolverSettings, file_field, parse, user_message};
 pub use solution_file::{parse_solution, read_solution};
 
 /// A 1-based line and column in the source text.

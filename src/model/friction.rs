@@ -95,7 +95,7 @@ pub(crate) fn validate(robot: &Robot, i: usize, t: &Tendon) -> Result<()> {
 /// when `what` (an analysis that does not model friction yet) is asked of it.
 ///
 /// # Errors
-/// [`Error::InvalidInput`] naming `tendons[i].friction`.
+/// [`Error::ModelLimit`] naming `tendons[i].friction`.
 pub(crate) fn unsupported(robot: &Robot, what: &str) -> Result<()> {
     let with = slipping(robot);
     let Some(&first) = with.first() else {
@@ -106,7 +106,7 @@ pub(crate) fn unsupported(robot: &Robot, what: &str) -> Result<()> {
         .iter()
         .map(|&i| format!(", tendon {}'s {}", i + 1, mu(i)))
         .collect();
-    Err(invalid(
+    Err(crate::error::limit(
         format!("tendons[{first}].friction"),
         format!(
             "is {}{}, and {what} does not model friction yet",

@@ -18,8 +18,8 @@ stick/slip friction: the hysteresis loop),
 `tip_sensitivities` (Jacobians, compliance), `linearize` (gradients by the adjoint; `tdcr.torch`
 and `tdcr.jax` wrap it, with the `torch` and `jax` extras), `solve_tensions` and `solve_displacements` (inverse statics), `calibrate` (E and base angles from measured tips). Cases:
 `tdcr.cases`. A cluster: `tdcr.distributed` (Dask). Errors: `Error` and its subclasses
-`InvalidInput` (with `FileError`, `SingularRouting`), `NotConverged`, `IntervalCap`,
-`Breakdown`; warnings: `PlausibilityWarning`, `PoorFitWarning`. Pictures: `plot` and `Solution.plot`
+`InvalidInput` (with `FileError`, `SingularRouting`), `ModelLimit`, `NotConverged`,
+`IntervalCap`, `Breakdown`; warnings: `PlausibilityWarning`, `PoorFitWarning`. Pictures: `plot` and `Solution.plot`
 (matplotlib, the `plot` extra), `figure` (the command line's SVG/PNG picture). docs/python.md
 is the walk-through.
 """
@@ -36,6 +36,7 @@ from ._native import (
     InvalidInput,
     InverseResult,
     Linearization,
+    ModelLimit,
     NotConverged,
     Robot,
     SingularRouting,
@@ -80,6 +81,7 @@ __all__ = [
     "InvalidInput",
     "InverseResult",
     "Linearization",
+    "ModelLimit",
     "NotConverged",
     "Robot",
     "SingularRouting",

@@ -49,6 +49,7 @@ __all__ = [
     "InvalidInput",
     "FileError",
     "SingularRouting",
+    "ModelLimit",
     "Breakdown",
     "NotConverged",
     "IntervalCap",
@@ -73,6 +74,9 @@ class FileError(InvalidInput):
 
 class SingularRouting(InvalidInput):
     """A tendon's path has (nearly) no tangent."""
+
+class ModelLimit(Error):
+    """The input is valid but the model cannot answer it (CLI exit code 4)."""
 
 class Breakdown(Error):
     """The model equations broke down numerically."""
@@ -183,10 +187,14 @@ class SolveReport:
     def method(self) -> str: ...
     @property
     def termination(self) -> str:
+        """Why Newton stopped, as a sentence (the solution JSON's `termination`)."""
+    @property
+    def termination_code(self) -> str:
         """"converged", "max_iterations", "line_search_failed", "singular_jacobian", "non_finite" or
         "zones_unsettled" (a load-history step whose stick/slip zones did not settle)."""
     @property
-    def termination_message(self) -> str: ...
+    def termination_message(self) -> str:
+        """The same sentence as `termination` (its name before 2026-12-08)."""
     @property
     def converged(self) -> bool: ...
     @property

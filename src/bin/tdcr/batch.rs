@@ -33,7 +33,7 @@ pub struct BatchArgs {
     /// Robot file (TOML) whose values the rows change.
     #[arg(long, value_name = "ROBOT.toml")]
     robot: String,
-    /// Write the result CSV to FILE instead of standard output.
+    /// Write the result CSV to FILE instead of standard output (`-`: standard output).
     #[arg(long, value_name = "FILE")]
     out: Option<std::path::PathBuf>,
     /// Solve only shard K of N (K = 0, ..., N-1): a contiguous range of rows (whole blocks
@@ -110,7 +110,7 @@ fn result_fields(result: tdcr::Result<Solution>, outputs: &RowOutputs, extra: us
             let mut fields = vec!["false".to_string(), iterations];
             fields.extend(std::iter::repeat_n(String::new(), 3 + extra));
             // One line per row: a multi-line message joined with "; ".
-            fields.push(tdcr::io::user_message(&e).replace('\n', "; "));
+            fields.push(crate::failure::message(&e).replace('\n', "; "));
             (fields, true)
         }
     }
@@ -212,11 +212,11 @@ pub fn run(args: &BatchArgs) -> Result<(), Failure> {
     // spends time; each is built again when it is solved.
     for row in rows.clone().map(|i| table.row(i)) {
         table.robot(&row, &file.robot).map_err(|e| {
-            let e = tdcr::io::user_message(&e);
+            let e = crate::failure::message(&e);
             Failure::Input(format!("{}:{}:1: row {}: {e}", args.cases, row.line, row.index))
         })?;
     }
-    let mut sink = Sink::open(args.out.as_deref())?;
+    let mut sink = Sink::open(crate::failure::out_path(&args.out))?;
     let mut header = vec!["row".to_string()];
     header.extend(table.parameters.iter().map(ToString::to_string));
     header.extend(["converged", "iterations", "tip_x", "tip_y", "tip_z"].map(String::from));
@@ -268,7 +268,7 @@ pub fn run(args: &BatchArgs) -> Result<(), Failure> {
     if let Ok(mut p) = progress.lock() {
         p.bar.finish();
     }
-    if let Some(path) = &args.out {
+    if let Some(path) = crate::failure::out_path(&args.out) {
         note(&format!("wrote {} ({} rows)", path.display(), rows.len()));
     }
     if failed > 0 {

@@ -14,6 +14,9 @@ pub enum Failure {
     Input(String),
     /// A solver did not converge (exit 3).
     NotConverged(String),
+    /// Valid input the model cannot answer, e.g. a load history step whose stick/slip
+    /// pattern the history does not model (`Error::ModelLimit`, exit 4).
+    Limit(String),
     /// Anything else, e.g. an output file that cannot be written (exit 1).
     Other(String),
     /// Standard output was closed by the reader (`tdcr | head`): stop quietly (exit 0).
@@ -26,15 +29,29 @@ impl Failure {
         match self {
             Failure::Input(_) => 2,
             Failure::NotConverged(_) => 3,
+            Failure::Limit(_) => 4,
             Failure::Other(_) => 1,
             Failure::BrokenPipe => 0,
+        }
+    }
+
+    /// The failure of one step of several, its message headed by `head` (`sweep step 2 of
+    /// 9`): `HEAD: MESSAGE` for bad input, and for the others a first line saying what
+    /// happened at `head` and `then` (what the output holds), the message after it.
+    pub fn headed(self, head: &str, then: &str) -> Failure {
+        match self {
+            Failure::Input(t) => Failure::Input(format!("{head}: {t}")),
+            Failure::NotConverged(t) => Failure::NotConverged(format!("{head} failed; {then}\n{t}")),
+            Failure::Limit(t) => Failure::Limit(format!("{head} is outside the model; {then}\n{t}")),
+            Failure::Other(t) => Failure::Other(format!("{head} failed; {then}\n{t}")),
+            Failure::BrokenPipe => Failure::BrokenPipe,
         }
     }
 
     /// Prints the message to standard error, each line after `error: ` unless indented.
     pub fn print(&self) {
         let text = match self {
-            Failure::Input(t) | Failure::NotConverged(t) | Failure::Other(t) => t,
+            Failure::Input(t) | Failure::NotConverged(t) | Failure::Limit(t) | Failure::Other(t) => t,
             Failure::BrokenPipe => return,
         };
         let mut err = std::io::stderr().lock();
@@ -62,10 +79,11 @@ fn flags(field: &str) -> Option<&'static str> {
 /// here: the file's rotation is checked when the file is read (named as the file spells it),
 /// no option replaces it, and calibration only turns it by another rotation.
 pub fn message(e: &Error) -> String {
-    tdcr::io::user_message(e)
+    tdcr::io::user_message(e, tdcr::io::Front::CommandLine)
 }
 
-/// A solver error as a failure: input problems exit 2, solver failures 3, the rest 1.
+/// A solver error as a failure: input problems exit 2, solver failures 3, model limits 4,
+/// the rest 1.
 pub fn solver_failure(e: Error) -> Failure {
     let text = message(&e);
     if let Error::NotConverged { report, .. } = &e {
@@ -78,6 +96,8 @@ pub fn solver_failure(e: Error) -> Failure {
             Some(flags) => format!("{text} (on the command line: {flags})"),
             None => text,
         })
+    } else if matches!(e, Error::ModelLimit { .. }) {
+        Failure::Limit(text)
     } else if matches!(e, Error::SingularRouting { .. }) {
         Failure::Input(text)
     } else {
@@ -191,6 +211,12 @@ pub fn emit(text: &str) -> Result<(), Failure> {
         Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => Err(Failure::BrokenPipe),
         Err(e) => Err(Failure::Other(format!("cannot write to standard output: {e}"))),
     }
+}
+
+/// The file `--out FILE` names, or None for standard output: without `--out`, and for
+/// `--out -`.
+pub fn out_path(out: &Option<std::path::PathBuf>) -> Option<&Path> {
+    out.as_deref().filter(|p| p.as_os_str() != "-")
 }
 
 /// Writes `text` to `path`, creating its folder; `what` names the file in messages.

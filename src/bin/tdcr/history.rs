@@ -137,17 +137,25 @@ pub fn run(
     let text = csv.finish();
     warn_unstable(name, &result.steps);
     warn_missed(name, &result.steps);
+    let stopped = result.failure.as_ref().map(|(k, _)| *k);
+    let partial = stopped.map_or(String::new(), |k| format!(" ({})", holds(k, ranges.steps())));
     match out {
         Some(path) => {
             write_file(path, &text, "CSV")?;
-            note(&format!("wrote {}", path.display()));
+            note(&format!("wrote {}{partial}", path.display()));
         }
         None => emit(&text)?,
     }
     if let Some(path) = plot
         && !result.steps.is_empty()
     {
-        let chart = picture(name, (*input, values), &result.steps, y);
+        let chart = picture(
+            name,
+            (*input, values),
+            &result.steps,
+            y,
+            stopped.map(|k| (k, ranges.steps())),
+        );
         let bytes = match picture_format(path)? {
             tdcr::plot::Format::Svg => chart.to_svg().into_bytes(),
             tdcr::plot::Format::Png => {
@@ -158,7 +166,7 @@ pub fn run(
             }
         };
         write_file(path, bytes, "picture")?;
-        note(&format!("wrote {}", path.display()));
+        note(&format!("wrote {}{partial}", path.display()));
     }
     match result.failure {
         Some((k, e)) => {
@@ -167,16 +175,19 @@ pub fn run(
                 Ok(robot) => with_likely_causes(solver_failure(e), &robot),
                 Err(_) => solver_failure(e),
             };
-            Err(match failure {
-                Failure::Input(t) => Failure::Input(format!("{head}: {t}")),
-                Failure::NotConverged(t) => {
-                    Failure::NotConverged(format!("{head} failed; the CSV holds the steps before it\n{t}"))
-                }
-                Failure::Other(t) => Failure::Other(format!("{head} failed; the CSV holds the steps before it\n{t}")),
-                Failure::BrokenPipe => Failure::BrokenPipe,
-            })
+            Err(failure.headed(&head, "the CSV holds only the steps before it"))
         }
         None => Ok(()),
+    }
+}
+
+/// What the output of a history that stopped at step `k` (from 0) of `steps` holds: the
+/// steps before it only.
+fn holds(k: usize, steps: usize) -> String {
+    match k {
+        0 => format!("no step: the history stopped at step 1 of {steps}"),
+        1 => format!("step 1 only: the history stopped at step 2 of {steps}"),
+        _ => format!("steps 1 to {k} only: the history stopped at step {} of {steps}", k + 1),
     }
 }
 
@@ -246,6 +257,7 @@ fn before_any_step(e: tdcr::Error, ranges: &Ranges) -> Failure {
     let causes = tdcr::model::scales::likely_causes_of(&e, &robots);
     match solver_failure(e) {
         Failure::Input(t) => Failure::Input(format!("--history: {t}")),
+        Failure::Limit(t) => Failure::Limit(format!("--history: {t}")),
         Failure::NotConverged(t) => Failure::NotConverged(tdcr::model::scales::with_likely_causes(
             &format!("--history: no step was solved: {HEAD_FAILED}: {t}"),
             &causes,
@@ -327,14 +339,28 @@ fn row(csv: &mut CsvTable, k: usize, direction: &str, (input, value): (Input, f6
 }
 
 /// The hysteresis loop: `y` (by default the tip's displacement from its place at the first
-/// step, mm) against the swept input, rising steps in one colour, falling ones in another.
-fn picture(name: &str, (input, values): (Input, &[f64]), steps: &[HistoryStep], y: LoopAxis) -> Chart {
+/// step, mm) against the swept input, rising steps in one colour, falling ones in another;
+/// `stopped`, the step (from 0) where the history stopped and its number of steps, for a
+/// history that stopped before its end (the title says so).
+fn picture(
+    name: &str,
+    (input, values): (Input, &[f64]),
+    steps: &[HistoryStep],
+    y: LoopAxis,
+    stopped: Option<(usize, usize)>,
+) -> Chart {
     let (up, down) = ("#1f5fa8", "#e07b00");
     let value = |k: usize| values[k.min(values.len() - 1)];
     let ys = y.values(steps.iter().map(|s| &s.solution));
     let unit = input.unit();
     let mut chart = Chart {
-        title: format!("{name}: hysteresis over a load history of {} steps", steps.len()),
+        title: match stopped {
+            None => format!("{name}: hysteresis over a load history of {} steps", steps.len()),
+            Some((k, total)) => format!(
+                "{name}: hysteresis over a load history that STOPPED at step {} of {total}",
+                k + 1
+            ),
+        },
         subtitle: vec![format!(
             "each step from the tendon state the last left (stick/slip friction); {input} from {} to {} {unit}",
             significant(values.iter().copied().fold(f64::INFINITY, f64::min)),

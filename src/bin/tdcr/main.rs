@@ -2,7 +2,8 @@
 //!
 //! With no arguments it runs the main job: the paper's prototype under all 32 experiments of
 //! Table 2, one table on standard output and a picture of all shapes in `./out/`.
-//! Exit codes: 0 success, 2 bad input, 3 did not converge, 1 anything else.
+//! Exit codes: 0 success, 2 bad input, 3 did not converge, 4 outside the model (valid input
+//! the model cannot answer), 1 anything else.
 //!
 //! This file holds the command line and the dispatch; each command has its own module.
 
@@ -41,7 +42,8 @@ use robot_args::read_robot;
     args_conflicts_with_subcommands = true,
     after_help = "Without a command: solve the paper's prototype under the 32 experiments of Table 2, \
                   print a table and draw every shape into OUT_DIR.\n\
-                  Exit codes: 0 success, 2 bad input, 3 did not converge, 1 anything else.\n\
+                  Exit codes: 0 success, 2 bad input, 3 did not converge, 4 outside the model, 1 anything \
+                  else.\n\
                   Robot files: docs/robot-file.md; this command: docs/cli.md."
 )]
 struct Cli {

@@ -48,7 +48,7 @@ pub struct SolveArgs {
     /// Output format.
     #[arg(long, value_enum, default_value_t = Format::Table)]
     format: Format,
-    /// Write the output to FILE instead of standard output.
+    /// Write the output to FILE instead of standard output (`-`: standard output).
     #[arg(long, value_name = "FILE")]
     out: Option<PathBuf>,
     /// Draw the shape into FILE: PNG if its name ends in .png, else SVG.
@@ -150,7 +150,7 @@ pub fn run(args: &SolveArgs) -> Result<(), Failure> {
             text
         }
     };
-    match &args.out {
+    match crate::failure::out_path(&args.out) {
         Some(path) => {
             write_file(path, &text, "output")?;
             note(&format!("wrote {}", path.display()));

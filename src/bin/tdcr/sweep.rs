@@ -55,7 +55,7 @@ pub struct SweepArgs {
     /// draws the hysteresis loop.
     #[arg(long, value_name = "up-down|V1,V2,...", value_parser = crate::history::parse_history)]
     history: Option<crate::history::History>,
-    /// Write the CSV to FILE instead of standard output.
+    /// Write the CSV to FILE instead of standard output (`-`: standard output).
     #[arg(long, value_name = "FILE")]
     out: Option<PathBuf>,
     /// Draw the tip trajectory (with the first and last shapes) into FILE: PNG if its name
@@ -336,7 +336,7 @@ pub fn run(args: &SweepArgs) -> Result<(), Failure> {
             &name,
             &ranges,
             &file.solver.collocation,
-            args.out.as_deref(),
+            crate::failure::out_path(&args.out),
             (args.plot.as_deref(), args.loop_y.unwrap_or_default()),
         );
     }
@@ -405,7 +405,7 @@ pub fn run(args: &SweepArgs) -> Result<(), Failure> {
     progress.finish();
     past_limit.summary(&name, drawn.tips.len());
     let csv = csv.finish();
-    match &args.out {
+    match crate::failure::out_path(&args.out) {
         Some(path) => {
             write_file(path, &csv, "CSV")?;
             note(&format!("wrote {}", path.display()));
@@ -434,16 +434,9 @@ pub fn run(args: &SweepArgs) -> Result<(), Failure> {
 /// A failed step's failure, its message headed by the step and its tendon inputs.
 fn step_failure(f: Failure, k: usize, steps: usize, robot: &Robot) -> Failure {
     let head = format!("sweep step {} of {steps} ({})", k + 1, step_inputs(robot));
-    match f {
-        // Exit 2 for bad input, as `solve` exits (the checks before the first solve should
-        // have found it).
-        Failure::Input(t) => Failure::Input(format!("{head}: {t}")),
-        Failure::NotConverged(t) => {
-            Failure::NotConverged(format!("{head} failed; the CSV holds the steps before it\n{t}"))
-        }
-        Failure::Other(t) => Failure::Other(format!("{head} failed; the CSV holds the steps before it\n{t}")),
-        Failure::BrokenPipe => Failure::BrokenPipe,
-    }
+    // Exit 2 for bad input, as `solve` exits (the checks before the first solve should have
+    // found it).
+    f.headed(&head, "the CSV holds the steps before it")
 }
 
 /// The swept ranges, as the picture's subtitle says them.

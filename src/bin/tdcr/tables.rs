@@ -193,21 +193,24 @@ pub fn solution_table(name: &str, file: &RobotFile, solution: &Solution, samples
     );
     // With friction, the tension a tendon delivers at its termination (docs/friction.md).
     let friction = solution.tendons.iter().any(|t| t.delivered_tension != t.tension);
-    let _ = writeln!(
-        out,
-        "\n{:>7} {:>12}{} {:>12} {:>12} {:>12} {:>9}",
-        "tendon",
-        "tension/N",
-        if friction {
-            format!(" {:>12}", "delivered/N")
-        } else {
-            String::new()
-        },
-        "pull-in/mm",
-        "length/mm",
-        "ref len/mm",
-        "slack/mm"
-    );
+    // No tendons: no tendon table (an empty header says nothing).
+    if !solution.tendons.is_empty() {
+        let _ = writeln!(
+            out,
+            "\n{:>7} {:>12}{} {:>12} {:>12} {:>12} {:>9}",
+            "tendon",
+            "tension/N",
+            if friction {
+                format!(" {:>12}", "delivered/N")
+            } else {
+                String::new()
+            },
+            "pull-in/mm",
+            "length/mm",
+            "ref len/mm",
+            "slack/mm"
+        );
+    }
     for (i, t) in solution.tendons.iter().enumerate() {
         let _ = writeln!(
             out,

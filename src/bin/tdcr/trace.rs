@@ -56,7 +56,7 @@ pub struct TraceArgs {
     /// Output format.
     #[arg(long, value_enum, default_value_t)]
     format: TraceFormat,
-    /// Write the output to FILE instead of standard output.
+    /// Write the output to FILE instead of standard output (`-`: standard output).
     #[arg(long, value_name = "FILE")]
     out: Option<PathBuf>,
     /// Draw the branch (the parameter against a tip coordinate; stable solid, unstable
@@ -111,7 +111,7 @@ pub fn run(args: &TraceArgs) -> Result<(), Failure> {
         TraceFormat::Csv => csv(&t),
         TraceFormat::Json => json(&t),
     };
-    match &args.out {
+    match crate::failure::out_path(&args.out) {
         Some(path) => {
             write_file(path, &text, "trace")?;
             note(&format!("wrote {}", path.display()));

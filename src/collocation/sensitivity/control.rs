@@ -32,7 +32,8 @@ use nalgebra::{DMatrix, Vector3};
 ///
 /// # Errors
 /// [`crate::Error::InvalidInput`] for a name that is neither, or that the robot does not
-/// have (as [`Parameter::parse`]).
+/// have (as [`Parameter::parse`]); `tension` for a robot with no tendons (it names no
+/// column).
 ///
 /// # Examples
 /// ```
@@ -47,6 +48,13 @@ pub fn columns<S: AsRef<str>>(names: &[S], robot: &Robot) -> Result<Vec<Paramete
     for name in names {
         let axes = |p: fn(usize) -> Parameter| (0..3).map(p).collect::<Vec<_>>();
         match name.as_ref() {
+            "tension" if robot.tendons.is_empty() => {
+                return Err(crate::error::invalid(
+                    "jacobian columns",
+                    "name `tension`, but the robot has no tendons: there is no tension to differentiate by",
+                    "leave out `tension`, or give the robot a tendon",
+                ));
+            }
             "tension" => out.extend((0..robot.tendons.len()).map(Parameter::Tension)),
             "tip_force" => out.extend(axes(Parameter::TipForce)),
             "tip_moment" => out.extend(axes(Parameter::TipMoment)),

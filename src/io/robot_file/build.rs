@@ -217,18 +217,6 @@ pub fn file_field(field: &str, euler: bool) -> String {
     }
 }
 
-/// A library error's message in the words of robot files, the command line and Python: an
-/// invalid input's field path numbered as in robot files (`tendon[1].stiffness` for the
-/// library's `tendons[0].stiffness`); other errors as the library words them.
-pub fn user_message(e: &Error) -> String {
-    match e {
-        Error::InvalidInput { field, problem, hint } => {
-            format!("invalid input: `{}` {problem}; {hint}", file_field(field, false))
-        }
-        other => other.to_string(),
-    }
-}
-
 /// A library validation error as a problem at the line of the field it names.
 pub(super) fn library_problem(locator: &Locator, e: &Error, euler: bool) -> Problem {
     let (field, message) = match e {

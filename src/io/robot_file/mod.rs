@@ -7,7 +7,9 @@
 //! solver settings are built in `build`.
 
 mod build;
-pub use build::{file_field, user_message};
+pub use build::file_field;
+mod words;
+pub use words::{Front, user_message};
 mod check;
 mod segments;
 mod tables;

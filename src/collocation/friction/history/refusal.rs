@@ -16,7 +16,7 @@ const TAUT: &str = "keep the tendon taut through this step: pull it in further (
 /// do not remove it: the stuck material's tension falls with the shape as the input moves,
 /// so it reaches 0 on the way whatever the steps.
 pub(super) fn slack(i: usize, s: f64) -> Error {
-    error::invalid(
+    error::limit(
         format!("tendons[{i}]"),
         format!(
             "tendon {} would go slack near s = {s:.4} m if stuck in its channel (the step's shape makes its path \
@@ -68,7 +68,7 @@ pub(super) fn stalled(profile: &Profile, s: &[f64], tolerance: f64) -> Option<Er
         Some(looser) => format!("{TAUT}; {looser}"),
         None => TAUT.to_string(),
     };
-    Some(error::invalid(
+    Some(error::limit(
         format!("tendons[{i}]"),
         format!(
             "tendon {} is going slack near s = {at:.4} m while stuck in its channel: the step's shape drives its stuck \
@@ -113,7 +113,7 @@ pub(super) fn resolution(profile: &Profile, tolerance: f64) -> Option<String> {
 
 /// The error for rigid tendon `i` that sticks near `s`.
 pub(super) fn rigid(i: usize, s: f64) -> Error {
-    error::invalid(
+    error::limit(
         format!("tendons[{i}].stiffness"),
         format!(
             "is not set (tendon {} is rigid), but the tendon sticks in its channel near s = {s:.4} m during this \

@@ -82,7 +82,7 @@ pub(super) fn check_slip(i: usize, grip: &Grip, lambda: &[f64], x: &[State], spa
         };
         adjacent[t] = after_base && !after_stuck;
         if start.abs() > allowed {
-            return Err(error::invalid(
+            return Err(error::limit(
                 format!("tendons[{i}].friction"),
                 format!(
                     "tendon {}'s slip zone from s = {:.4} m to {:.4} m does not hold its material in this step (it \
@@ -109,18 +109,22 @@ pub(super) fn check_slip(i: usize, grip: &Grip, lambda: &[f64], x: &[State], spa
     for (k, &c) in grip.contacts.iter().enumerate() {
         let w = grip.multipliers[k];
         if c == Contact::Stick && w.abs() > 1.0 + CONE {
-            return Err(error::invalid(
+            return Err(error::limit(
                 format!("tendons[{i}].friction"),
                 format!(
-                    "tendon {}'s stuck stretch near s = {:.4} m would need {:.3} times the friction its channel \
-                     can hold (w = {w:.4}) in this step: it would slip there while stuck on both sides, which the \
+                    "tendon {}'s stuck stretch near s = {:.4} m would need {} times the friction its channel \
+                     can hold (w = {}) in this step: it would slip there while stuck on both sides, which the \
                      stick/slip history does not model",
                     i + 1,
                     x[k].s,
-                    w.abs()
+                    error::near_one(w.abs()),
+                    error::near_one(w)
                 ),
-                "see docs/friction.md section 8, \"Limits\": the history cannot go on past this step; a \
-                 full-slip solve (`motion`) gives the step without its history",
+                format!(
+                    "see docs/friction.md section 8, \"Limits\": the history cannot go on past this step; a \
+                     full-slip solve ({}) gives the step without its history",
+                    error::option_token(i, "motion")
+                ),
             ));
         }
         // At a zone's start the slip is 0 to its balance.
@@ -131,7 +135,7 @@ pub(super) fn check_slip(i: usize, grip: &Grip, lambda: &[f64], x: &[State], spa
             Contact::Stick | Contact::Slack => false,
         };
         if wrong {
-            return Err(error::invalid(
+            return Err(error::limit(
                 format!("tendons[{i}].friction"),
                 format!(
                     "tendon {} would slide against its friction near s = {:.4} m in this step (a slip zone that \

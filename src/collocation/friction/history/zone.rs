@@ -210,7 +210,7 @@ pub(super) fn open(i: usize, tendon: &mut Tendon) -> Result<()> {
             None if merge && opposite(contact) => (0, sigma, false),
             None if merge => (first_stuck, sigma, false),
             None => {
-                return Err(error::invalid(
+                return Err(error::limit(
                     format!("tendons[{i}].friction"),
                     format!(
                         "tendon {}'s stuck stretch near s = {:.4} m would slip while stuck on both sides, and the \
@@ -224,8 +224,11 @@ pub(super) fn open(i: usize, tendon: &mut Tendon) -> Result<()> {
                             "another slip zone"
                         }
                     ),
-                    "take the history in smaller steps; a full-slip solve (`motion`) gives the step without its \
-                     history",
+                    format!(
+                        "take the history in smaller steps; a full-slip solve ({}) gives the step without its \
+                         history",
+                        error::option_token(i, "motion")
+                    ),
                 ));
             }
         };
@@ -244,13 +247,14 @@ pub(super) fn open(i: usize, tendon: &mut Tendon) -> Result<()> {
         };
         let w_r = stuck_multiplier(tendon.z[r], zeta[r + 1], tendon.capacities[r]);
         if w_r.abs() > 1.0 + tendon.tie / tendon.capacities[r].max(f64::MIN_POSITIVE) {
-            return Err(error::invalid(
+            return Err(error::limit(
                 format!("tendons[{i}].friction"),
                 format!(
                     "tendon {}'s slip zone near s = {:.4} m would end where its stuck stretch changes faster than \
-                     friction can hold the other way (w = {w_r:.4}), which the stick/slip history does not model",
+                     friction can hold the other way (w = {}), which the stick/slip history does not model",
                     i + 1,
                     tendon.s[r],
+                    error::near_one(w_r),
                 ),
                 "take the history in smaller steps",
             ));
