@@ -264,6 +264,60 @@ pub(super) fn open(i: usize, tendon: &mut Tendon) -> Result<()> {
     Ok(())
 }
 
+/// Per link of a tendon's `contacts`, whether it lies in a slip zone inside the stuck
+/// stretch: a sliding link after the base zone's run (the leading links that all have the
+/// first link's contact).
+pub(super) fn in_zone(contacts: &[Contact]) -> Vec<bool> {
+    let base = contacts.first().copied();
+    let mut left = false;
+    contacts
+        .iter()
+        .map(|&c| {
+            left |= Some(c) != base;
+            left && matches!(c, Contact::Pull | Contact::Release)
+        })
+        .collect()
+}
+
+/// Refuses slip zones of two tendons over the same link (`grips` the tendons' patterns
+/// after the march, `spans` their spans, `slipping` their robot indices, `s` the nodes'
+/// arc lengths): each zone's balance is solved with the other tendon's tension held there
+/// (docs/friction.md section 8, "opp25"), and the other's zone moves its stuck tension by
+/// about as much as its own tension does (`cross::gain`), so the two balances form one
+/// system, which the march does not solve: passes of march and Newton that solve each
+/// alone alternate between patterns (measured on the opposite tendons' way back).
+///
+/// # Errors
+/// Two tendons with a slip zone on one link.
+pub(super) fn overlap(grips: &[Grip], spans: &[usize], slipping: &[usize], s: &[f64]) -> Result<()> {
+    let zones: Vec<Vec<bool>> = grips
+        .iter()
+        .zip(spans)
+        .map(|(g, &span)| in_zone(&g.contacts[..span]))
+        .collect();
+    for (a, za) in zones.iter().enumerate() {
+        for (b, zb) in zones.iter().enumerate().skip(a + 1) {
+            let Some(k) = (0..za.len().min(zb.len())).find(|&k| za[k] && zb[k]) else {
+                continue;
+            };
+            return Err(error::invalid(
+                format!("tendons[{}].friction", slipping[b]),
+                format!(
+                    "tendons {} and {} would both slip while stuck on both sides near s = {:.4} m in this step: their \
+                     slip zones lie on the same stretch, where each moves the other's stuck tension about as much as \
+                     its own, which the stick/slip history does not model",
+                    slipping[a] + 1,
+                    slipping[b] + 1,
+                    s[k]
+                ),
+                "see docs/friction.md section 8, \"opp25\": the history cannot go on past this step; a full-slip \
+                 solve (`motion`) gives the step without its history",
+            ));
+        }
+    }
+    Ok(())
+}
+
 /// The kinks of the material a step with slip zones inside its stuck stretch leaves
 /// ([`Grip::kinks_after`] for a step without them): `contacts` on the nodes `s`, `new` the
 /// material at the nodes where it moved (a node moved unless the link before it sticks),
