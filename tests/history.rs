@@ -225,15 +225,24 @@ fn opposite_tendons_estimates_are_honest_where_a_tight_history_solves() {
     // steps 1, 2, 20 and 21 missed it (estimates up to 1.9e-6 m against 2.4e-8 m), and
     // tendon 3's step 17 had 1.18 times its estimate as error, step 19 (met) 0.94.
     for swept in [0, 2] {
-        check_opposite(&opposite(swept, 10), swept);
+        let refused = check_opposite(&opposite(swept, 10), swept);
+        // The first step back: the two tendons' slip zones on one stretch (docs/friction.md
+        // section 8, "opp25"; main: the zones did not settle in 40 passes).
+        assert!(
+            refused
+                .as_ref()
+                .is_some_and(|e| e.contains("slip zones lie on the same stretch")),
+            "tendon {}: {refused:?}",
+            swept + 1
+        );
     }
 }
 
 /// Every step the opposite-tendon history `ranges` (tendon `swept + 1` swept) answers at
 /// the default tolerance slides all along and meets the tolerance, with an estimate not
 /// below its error against the same history at 1e-11 L, which answers the same steps and
-/// refuses the next one for the same reason.
-fn check_opposite(ranges: &Ranges, swept: usize) {
+/// refuses the next one for the same reason, which it returns.
+fn check_opposite(ranges: &Ranges, swept: usize) -> Option<String> {
     let answer = history(ranges, &Default::default()).unwrap();
     let steps = answer.steps;
     let reference = history(ranges, &tolerance(1e-11)).unwrap();
@@ -291,6 +300,7 @@ fn check_opposite(ranges: &Ranges, swept: usize) {
             k + 1
         );
     }
+    answer.failure.map(|(_, e)| e.to_string())
 }
 
 #[test]

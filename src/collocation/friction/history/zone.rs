@@ -13,13 +13,18 @@
 //! falls monotonically with w_T; where its root would need |w_T| > 1, T moves one link
 //! toward the base. A zone that reaches the base zone with the base zone's direction
 //! merges with it (a longer base zone); one that reaches the other way's base zone or an
-//! earlier interior zone is refused.
+//! earlier interior zone is refused, and so are zones of two tendons on one link
+//! ([`overlap`]). The stuck tension a zone's balance reads moves with the node's own
+//! tension by the own gain, with the other tendons that stick there answering
+//! ([`Predictor`], `cross::couple`).
 
 use super::*;
 
 /// The stuck material's tension at a node as its own tension moves it, for the zone's
 /// balance: `value` (N) on the shape solved with tension `solved` there, moving by `gain`
-/// per unit of the node's tension ([`Profile::own_gain`]; 0 off a converged shape).
+/// per unit of the node's tension ([`Profile::own_gain`], or with other tendons that stick
+/// at the node the coupled gain of `cross::couple`, then through the node's joint answer;
+/// 0 off a converged shape).
 #[derive(Clone, Copy, Debug)]
 pub(super) struct Predictor {
     /// The stuck tension on the current shape (N).
