@@ -47,6 +47,11 @@ pub(super) struct Before {
     pub(super) first: Option<Contact>,
     /// Whether its span includes the link.
     pub(super) on: bool,
+    /// Whether the link lies in one of its slip zones inside the stuck stretch on the
+    /// pattern the shape was solved with: its tension there is the zone's, held at
+    /// `solved` in the node's solve (the march sticks it, and the zone, opened after the
+    /// march, moves it by the zone's balance, not by the node's answer).
+    pub(super) held: bool,
 }
 
 /// The node's joint solve (docs/friction.md section 8, "Opposite tendons"): each loaded
@@ -61,6 +66,17 @@ pub(super) struct Before {
 /// answer is unique; it is found by block principal pivoting ([`Node::pivot`]: a few small
 /// solves), or where that fails by trying each loaded slip's three cases (in, stuck, out),
 /// 3^n small solves for n loaded slips on the link. Slips not loaded or not read are left.
+/// A slip `held` in one of its slip zones keeps the tension the shape was solved with
+/// there (both bounds at it).
+///
+/// Each loaded slip j that sticks in the node's answer gets in `coupled[j]` its stuck
+/// tension's gain in its own tension with the others answering (a slip zone's balance reads
+/// it, [`super::zone::Predictor`]): the stuck material's tension moves by g_jj per unit of
+/// j's tension and by g_jl per unit of slip l's, and each other slip that sticks there
+/// moves with j's tension as the node's system says (those sliding at a bound of their link
+/// do not), so `g_eff = g_jj + sum_l g_jl dtau_l / dtau_j` (about -1 N/N for two opposite
+/// tendons on the prototype, against g_jj = -30: the other tendon's answer nearly cancels
+/// the own gain, docs/friction.md section 8, "opp25").
 pub(super) fn couple(
     profile: &Profile,
     site: &Site,
@@ -68,6 +84,7 @@ pub(super) fn couple(
     read: &[Option<Stuck>],
     before: &[Before],
     stuck_at: &mut [f64],
+    coupled: &mut [Option<f64>],
 ) {
     let loaded: Vec<usize> = (0..read.len())
         .filter(|&j| read[j].is_some() && stuck_at[j].is_finite())
@@ -85,12 +102,14 @@ pub(super) fn couple(
     // diagonal, which `stuck_at` holds already); fixed[a]: the unloaded slips' share.
     let mut gains = vec![vec![0.0; n]; n];
     let mut fixed = vec![0.0; n];
+    let mut owns = vec![0.0; n];
     for (a, &j) in loaded.iter().enumerate() {
         let Some((_, d_v, d_u)) = read[j] else {
             continue;
         };
         let g = |l: usize| gain(profile, profile.slipping[l], site, b, &d_v, &d_u);
         let own = g(j);
+        owns[a] = own;
         for (c, &l) in loaded.iter().enumerate() {
             if l != j && before[l].solved.is_finite() {
                 gains[a][c] = g(l) / (1.0 - own);
@@ -113,6 +132,7 @@ pub(super) fn couple(
             let base = profile.base[j];
             let (low, high) = (base * (w.za - w.capacity).exp(), base * (w.za + w.capacity).exp());
             match (w.stuck, w.first) {
+                _ if w.held => (w.solved, w.solved),
                 (true, _) => (f64::NEG_INFINITY, f64::INFINITY),
                 (false, Some(Contact::Pull)) => (low, f64::INFINITY),
                 (false, Some(Contact::Release)) => (f64::NEG_INFINITY, high),
@@ -132,6 +152,15 @@ pub(super) fn couple(
     };
     for (a, &j) in loaded.iter().enumerate() {
         stuck_at[j] = node.stuck_of(a, &tau);
+    }
+    // The slips that stick in the answer (a sliding one's tension is its bound, exactly).
+    let sticking: Vec<bool> = (0..n)
+        .map(|a| tau[a] != node.bounds[a].0 && tau[a] != node.bounds[a].1)
+        .collect();
+    for (a, &j) in loaded.iter().enumerate() {
+        if sticking[a] || before[j].held {
+            coupled[j] = node.coupled_gain(a, owns[a], &sticking);
+        }
     }
 }
 
@@ -168,12 +197,39 @@ impl Node {
                 .sum::<f64>()
     }
 
+    /// Slip a's stuck tension's gain in its own tension (own gain `own`, g_aa) with the
+    /// other slips that are `sticking` answering ([`couple`]): their changes solve
+    /// `(I - G_SS) dtau_S = G_Sa dtau_a` (G the scaled gains, each row already at its own
+    /// fixed point), and slip a's unscaled cross gains are `(1 - g_aa) G_ac`. None where
+    /// that system is singular.
+    fn coupled_gain(&self, a: usize, own: f64, sticking: &[bool]) -> Option<f64> {
+        let others: Vec<usize> = (0..sticking.len()).filter(|&c| c != a && sticking[c]).collect();
+        if others.is_empty() {
+            return Some(own);
+        }
+        let m = others.len();
+        let matrix = DMatrix::from_fn(m, m, |r, c| {
+            let (x, y) = (others[r], others[c]);
+            if x == y { 1.0 } else { -self.gains[x][y] }
+        });
+        let rhs = DVector::from_fn(m, |r, _| self.gains[others[r]][a]);
+        let response = matrix.lu().solve(&rhs)?;
+        let moved: f64 = others
+            .iter()
+            .zip(response.iter())
+            .map(|(&c, r)| self.gains[a][c] * r)
+            .sum();
+        Some(own + (1.0 - own) * moved)
+    }
+
     /// How far slip a's tension `tau` (of the case `case`) is from its complementarity
     /// condition: 0 where it holds.
     fn violation(&self, a: usize, case: usize, tau: &[f64]) -> f64 {
         let f = self.stuck_of(a, tau);
         let (low, high) = self.bounds[a];
         match case {
+            // A held slip (equal bounds): its tension is given, whatever its stuck one.
+            0 | 2 if low == high => 0.0,
             0 => (f - low).max(0.0),
             2 => (high - f).max(0.0),
             _ => (low - f).max(0.0) + (f - high).max(0.0),
@@ -199,7 +255,7 @@ impl Node {
             .map(|a| {
                 let f = self.alone[a] + self.fixed[a];
                 let (low, high) = self.bounds[a];
-                if f < low {
+                if f < low || low == high {
                     0
                 } else if f > high {
                     2
@@ -422,6 +478,66 @@ mod tests {
             fixed: (0..n).map(|_| random.between(-0.5, 0.5)).collect(),
             alone: (0..n).map(|_| random.between(-3.0, 6.0)).collect(),
         }
+    }
+
+    #[test]
+    fn a_stuck_slips_coupled_gain_is_its_stuck_tensions_slope_with_the_others_answering() {
+        // The slope of slip a's stuck material's tension in its own tension, measured by
+        // holding a's tension (both bounds at it) a little either side of the node's answer
+        // and solving the node again, against `coupled_gain`. That material's tension is
+        // (1 - g_aa) stuck_of(a) + g_aa tau_a (stuck_of is at a's own fixed point).
+        let mut random = Uniform(25);
+        let mut checked = 0;
+        for n in 2..=4 {
+            for _ in 0..300 {
+                let node = node(n, &mut random);
+                let own = random.between(-40.0, 0.0);
+                let Some(tau) = node.pivot() else { continue };
+                let case = |tau: &[f64], bounds: &[(f64, f64)]| -> Vec<bool> {
+                    (0..n).map(|c| tau[c] != bounds[c].0 && tau[c] != bounds[c].1).collect()
+                };
+                let sticking = case(&tau, &node.bounds);
+                for a in (0..n).filter(|&a| sticking[a]) {
+                    let delta = 1e-6 * (1.0 + tau[a].abs());
+                    let material = |held: f64| -> Option<(f64, Vec<bool>)> {
+                        let mut moved = Node {
+                            bounds: node.bounds.clone(),
+                            solved: node.solved.clone(),
+                            gains: node.gains.clone(),
+                            fixed: node.fixed.clone(),
+                            alone: node.alone.clone(),
+                        };
+                        moved.bounds[a] = (held, held);
+                        let t = moved.pivot()?;
+                        let mut cases = case(&t, &node.bounds);
+                        cases[a] = true;
+                        Some(((1.0 - own) * moved.stuck_of(a, &t) + own * t[a], cases))
+                    };
+                    let (Some((up, cu)), Some((down, cd))) = (material(tau[a] + delta), material(tau[a] - delta))
+                    else {
+                        panic!("a held slip's node is solved");
+                    };
+                    // Skip a slip whose small move changes another slip's case (a kink of
+                    // the slope, not its value).
+                    if cu != sticking || cd != sticking {
+                        continue;
+                    }
+                    let slope = (up - down) / (2.0 * delta);
+                    let gain = node
+                        .coupled_gain(a, own, &sticking)
+                        .expect("a P-matrix's block is regular");
+                    // The node's tensions are linear in the held one while no case changes:
+                    // the central difference is exact but for rounding (1e-16 / 1e-6 times
+                    // the gains, below 1e-7 of 40)
+                    assert!(
+                        (slope - gain).abs() <= 1e-6 * (1.0 + gain.abs()),
+                        "n = {n}, slip {a}: measured {slope}, coupled_gain {gain}"
+                    );
+                    checked += 1;
+                }
+            }
+        }
+        assert!(checked > 300, "{checked} slips checked");
     }
 
     #[test]

@@ -6,8 +6,11 @@
 use super::*;
 
 /// A node's stuck tension as a slip zone's balance reads it: its value on the shape (N), its
-/// derivatives where read, and the node's tension the shape was solved with (N).
-type Seen = (f64, Option<Stuck>, f64);
+/// derivatives where read, the node's tension the shape was solved with (N), and, where
+/// the node's joint solve coupled it to other tendons that stick there
+/// ([`cross::couple`]), its gain with them answering: then the value is the joint
+/// answer's, at which the node's tension is the stuck one.
+type Seen = (f64, Option<Stuck>, f64, Option<f64>);
 
 /// The march of every tendon with friction along the shape `x` (module docs): new contacts,
 /// multipliers and predicted log tensions written into `border`'s profile and unknowns.
@@ -67,6 +70,15 @@ pub(super) fn march(
     // chosen with.
     let mut read: Vec<Option<Stuck>> = vec![None; count];
     let mut stuck_at = vec![0.0; count];
+    let mut coupled: Vec<Option<f64>> = vec![None; count];
+    // On a converged shape with two or more tendons with friction, the links each slip had
+    // in a slip zone inside its stuck stretch on the pattern Newton solved with (any
+    // sliding link after the base zone's run): the node's joint solve holds its tension
+    // there ([`cross::Before`]'s `held`).
+    let in_zone: Vec<Vec<bool>> = match profile.grips.as_ref() {
+        Some(old) if converged && count > 1 => old.iter().map(|grip| zone::in_zone(&grip.contacts)).collect(),
+        _ => vec![Vec::new(); count],
+    };
     // Per slip and node, what a slip zone's balance reads of the stuck tension
     // ([`zone::Predictor`]): the stuck tension on the shape, its derivatives where read,
     // and the tension the shape was solved with there.
@@ -161,18 +173,28 @@ pub(super) fn march(
                     stuck: stuck[j],
                     first: sliding[j],
                     on: profile.on_link(j, k),
+                    held: in_zone[j].get(k).copied().unwrap_or(false),
                 })
                 .collect();
-            cross::couple(profile, &sites.end, &x[k + 1], &read, &before, &mut stuck_at);
+            coupled.fill(None);
+            cross::couple(
+                profile,
+                &sites.end,
+                &x[k + 1],
+                &read,
+                &before,
+                &mut stuck_at,
+                &mut coupled,
+            );
         }
         for j in (0..count).filter(|&j| profile.on_link(j, k)) {
             let (base, za, capacity) = (profile.base[j], z[j][k], capacities[j]);
             let mut choice = choose(base, za, capacity, stuck_at[j], tie);
             let first = *sliding[j].get_or_insert(choice.contact);
-            seen[j][k + 1] = Some(if converged {
-                (stuck_tensions[j], read[j], base * z[j][k + 1].exp())
-            } else {
-                (stuck_at[j], None, stuck_at[j])
+            seen[j][k + 1] = Some(match coupled[j] {
+                Some(gain) if converged => (stuck_at[j], None, stuck_at[j], Some(gain)),
+                _ if converged => (stuck_tensions[j], read[j], base * z[j][k + 1].exp(), None),
+                _ => (stuck_at[j], None, stuck_at[j], None),
             });
             if base > 0.0 && (stuck[j] || choice.contact != first) {
                 choice.contact = Contact::Stick;
@@ -236,9 +258,10 @@ pub(super) fn march(
                         solved,
                     });
                 }
-                let (value, read, solved) = seen[j][n]?;
-                let gain = match (read, n.checked_sub(1).and_then(|k| system.interval_sites(k))) {
-                    (Some(read), Some(sites)) => profile.own_gain(j, n, &sites.end, &read).unwrap_or(0.0),
+                let (value, read, solved, coupled) = seen[j][n]?;
+                let gain = match (coupled, read, n.checked_sub(1).and_then(|k| system.interval_sites(k))) {
+                    (Some(gain), _, _) => gain,
+                    (None, Some(read), Some(sites)) => profile.own_gain(j, n, &sites.end, &read).unwrap_or(0.0),
                     _ => 0.0,
                 };
                 Some(zone::Predictor { value, gain, solved })
@@ -274,6 +297,11 @@ pub(super) fn march(
         if converged {
             opened?;
         }
+    }
+    // Slip zones of two tendons on one link: the march solves each zone's balance alone.
+    if converged && count > 1 {
+        let s: Vec<f64> = x.iter().map(|n| n.s).collect();
+        zone::overlap(&grips, &profile.spans, &profile.slipping, &s)?;
     }
     // What changed: a contact, or a transition link's multiplier beyond the tie.
     if let Some(old) = profile.grips.as_ref() {

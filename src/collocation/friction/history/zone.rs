@@ -13,13 +13,18 @@
 //! falls monotonically with w_T; where its root would need |w_T| > 1, T moves one link
 //! toward the base. A zone that reaches the base zone with the base zone's direction
 //! merges with it (a longer base zone); one that reaches the other way's base zone or an
-//! earlier interior zone is refused.
+//! earlier interior zone is refused, and so are zones of two tendons on one link
+//! ([`overlap`]). The stuck tension a zone's balance reads moves with the node's own
+//! tension by the own gain, with the other tendons that stick there answering
+//! ([`Predictor`], `cross::couple`).
 
 use super::*;
 
 /// The stuck material's tension at a node as its own tension moves it, for the zone's
 /// balance: `value` (N) on the shape solved with tension `solved` there, moving by `gain`
-/// per unit of the node's tension ([`Profile::own_gain`]; 0 off a converged shape).
+/// per unit of the node's tension ([`Profile::own_gain`], or with other tendons that stick
+/// at the node the coupled gain of `cross::couple`, then through the node's joint answer;
+/// 0 off a converged shape).
 #[derive(Clone, Copy, Debug)]
 pub(super) struct Predictor {
     /// The stuck tension on the current shape (N).
@@ -264,6 +269,63 @@ pub(super) fn open(i: usize, tendon: &mut Tendon) -> Result<()> {
         tendon.z[r + 1] = zeta[r + 1];
         lower = r + 1;
         k = r + 1;
+    }
+    Ok(())
+}
+
+/// Per link of a tendon's `contacts`, whether it lies in a slip zone inside the stuck
+/// stretch: a sliding link after the base zone's run (the leading links that all have the
+/// first link's contact).
+pub(super) fn in_zone(contacts: &[Contact]) -> Vec<bool> {
+    let base = contacts.first().copied();
+    let mut left = false;
+    contacts
+        .iter()
+        .map(|&c| {
+            left |= Some(c) != base;
+            left && matches!(c, Contact::Pull | Contact::Release)
+        })
+        .collect()
+}
+
+/// Refuses slip zones of two tendons over the same link (`grips` the tendons' patterns
+/// after the march, `spans` their spans, `slipping` their robot indices, `s` the nodes'
+/// arc lengths): each zone's balance is solved with the other tendon's tension held there
+/// (docs/friction.md section 8, "opp25"), and the other's zone moves its stuck tension by
+/// about as much as its own tension does (`cross::gain`), so the two balances form one
+/// system, which the march does not solve: passes of march and Newton that solve each
+/// alone alternate between patterns (measured on the opposite tendons' way back).
+///
+/// # Errors
+/// Two tendons with a slip zone on one link.
+pub(super) fn overlap(grips: &[Grip], spans: &[usize], slipping: &[usize], s: &[f64]) -> Result<()> {
+    let zones: Vec<Vec<bool>> = grips
+        .iter()
+        .zip(spans)
+        .map(|(g, &span)| in_zone(&g.contacts[..span]))
+        .collect();
+    for (a, za) in zones.iter().enumerate() {
+        for (b, zb) in zones.iter().enumerate().skip(a + 1) {
+            let Some(k) = (0..za.len().min(zb.len())).find(|&k| za[k] && zb[k]) else {
+                continue;
+            };
+            return Err(error::limit(
+                format!("tendons[{}].friction", slipping[b]),
+                format!(
+                    "tendons {} and {} would both slip while stuck on both sides near s = {:.4} m in this step: their \
+                     slip zones lie on the same stretch, where each moves the other's stuck tension about as much as \
+                     its own, which the stick/slip history does not model",
+                    slipping[a] + 1,
+                    slipping[b] + 1,
+                    s[k]
+                ),
+                format!(
+                    "see docs/friction.md section 8, \"opp25\": the history cannot go on past this step; a full-slip \
+                     solve ({}) gives the step without its history",
+                    error::option_token(slipping[b], "motion")
+                ),
+            ));
+        }
     }
     Ok(())
 }
