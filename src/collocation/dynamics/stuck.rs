@@ -116,13 +116,13 @@ pub(crate) fn assess_step(robot: &Robot, carried: &Carried, report: &mut SolveRe
 /// direction through the reversal, so that the held load can do positive work over a cycle,
 /// which Coulomb friction (its power on the robot never positive) cannot: the held model's
 /// flutter is not the robot's. A step stuck all along keeps its verdict (small
-/// motions keep a stuck stretch stuck), and so do divergence and `stable` (their scope: the
-/// held pattern).
+/// motions keep a stuck stretch stuck; a slack tendon carries no friction load), and so do
+/// divergence and `stable` (their scope: the held pattern).
 fn at_rest(held: Stability, settled: &Settled) -> Stability {
     let sliding = settled
         .grips
         .iter()
-        .any(|g| g.contacts.iter().any(|c| *c != Contact::Stick));
+        .any(|g| g.contacts.iter().any(|c| matches!(c, Contact::Pull | Contact::Release)));
     match held {
         Stability::Growing {
             growth: Growth::Flutter { frequency },
