@@ -12,6 +12,7 @@
 pub(crate) mod lanes;
 
 #[cfg(target_arch = "x86_64")]
+use nalgebra::{ArrayStorage, Const, Matrix, RawStorage, SMatrix};
 use std::sync::atomic::{AtomicU8, Ordering};
 
 /// Whether the processor has AVX2 and FMA: detected on the first call, then one load of a
@@ -126,6 +127,60 @@ pub(crate) fn all_finite(v: &[f64]) -> bool {
         *sum += x * 0.0;
     }
     !sums.iter().any(|s| s.is_nan())
+}
+
+/// `list` refilled with `f(0)`, .., `f(count - 1)`. Always inlined, so that an AVX2 kernel
+/// compiles it for AVX2 too: the friction lane kernel's short per-link lists (one value per
+/// tendon with friction), which `clear` with `extend` or `resize` left as calls compiled
+/// for the baseline, each several times the cost of its values.
+#[inline(always)]
+pub(crate) fn refill<T>(list: &mut Vec<T>, count: usize, mut f: impl FnMut(usize) -> T) {
+    list.clear();
+    list.reserve(count);
+    for j in 0..count {
+        list.push(f(j));
+    }
+}
+
+/// a b summed entry by entry as nalgebra's product of fixed-size matrices sums it (its
+/// `gemm` by columns, each column an `axcpy` per term: a_i0 b_0j first, then a_ik b_kj
+/// added for k = 1, 2, ..), so the same bits. Always inlined, so that an AVX2 kernel
+/// compiles it for AVX2 too: nalgebra's products there stayed calls compiled for the
+/// baseline.
+#[inline(always)]
+pub(crate) fn product<const R: usize, const K: usize, const C: usize, SA, SB>(
+    a: &Matrix<f64, Const<R>, Const<K>, SA>,
+    b: &Matrix<f64, Const<K>, Const<C>, SB>,
+) -> SMatrix<f64, R, C>
+where
+    SA: RawStorage<f64, Const<R>, Const<K>>,
+    SB: RawStorage<f64, Const<K>, Const<C>>,
+{
+    let mut columns = [[0.0; R]; C];
+    for (j, column) in columns.iter_mut().enumerate() {
+        for (i, entry) in column.iter_mut().enumerate() {
+            let mut sum = a[(i, 0)] * b[(0, j)];
+            for k in 1..K {
+                sum = a[(i, k)] * b[(k, j)] + sum;
+            }
+            *entry = sum;
+        }
+    }
+    SMatrix::from_data(ArrayStorage(columns))
+}
+
+/// The fixed-size matrix whose entry (i, c) is `f(i, c)`, as nalgebra's `from_fn` fills
+/// it. Always inlined, so that an AVX2 kernel compiles it for AVX2 too: `from_fn` stayed a
+/// call compiled for the baseline, its closure called once per entry.
+#[inline(always)]
+pub(crate) fn filled<const R: usize, const C: usize>(f: impl Fn(usize, usize) -> f64) -> SMatrix<f64, R, C> {
+    let mut columns = [[0.0; R]; C];
+    for (c, column) in columns.iter_mut().enumerate() {
+        for (i, entry) in column.iter_mut().enumerate() {
+            *entry = f(i, c);
+        }
+    }
+    SMatrix::from_data(ArrayStorage(columns))
 }
 
 #[cfg(test)]
