@@ -161,7 +161,7 @@ where
         for (i, entry) in column.iter_mut().enumerate() {
             let mut sum = a[(i, 0)] * b[(0, j)];
             for k in 1..K {
-                sum = a[(i, k)] * b[(k, j)] + sum;
+                sum += a[(i, k)] * b[(k, j)];
             }
             *entry = sum;
         }
