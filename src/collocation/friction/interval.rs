@@ -27,7 +27,7 @@ use super::stuck_links::{MULTIPLIER_STEP, add_multiplier_columns, pointwise, sli
 use crate::error::Result;
 use crate::model::equations::Site;
 use crate::model::friction::FrictionLinearization;
-use crate::simd::avx2_fma;
+use crate::simd::{avx2_fma, product, refill};
 use crate::so3;
 use crate::solution::State;
 use nalgebra::{DMatrix, Matrix3, SMatrix, Vector3};
@@ -224,10 +224,8 @@ fn interval_at_kernel(
 /// The log tensions at link k's nodes into `scratch`.
 #[inline(always)]
 pub(super) fn node_tensions(profile: &Profile, k: usize, scratch: &mut LinkScratch) {
-    scratch.za.clear();
-    scratch.za.extend(profile.z.iter().map(|z| z[k]));
-    scratch.zb.clear();
-    scratch.zb.extend(profile.z.iter().map(|z| z[k + 1]));
+    refill(&mut scratch.za, profile.z.len(), |j| profile.z[j][k]);
+    refill(&mut scratch.zb, profile.z.len(), |j| profile.z[j][k + 1]);
 }
 
 /// One link's inputs: link k of `profile` between the states `a` and `b`, the slips at
@@ -322,8 +320,9 @@ pub(super) fn front<'e>(
         None => (value(&sites.start, la, &y0), value(&sites.end, lb, &y1)),
     };
     let ym = (y0 + y1) * 0.5 + (f0 - f1) * (h / 8.0);
-    zm.clear();
-    zm.extend((0..count).map(|j| 0.5 * (za[j] + zb[j]) + h / 8.0 * (la.turning[j] - lb.turning[j])));
+    refill(zm, count, |j| {
+        0.5 * (za[j] + zb[j]) + h / 8.0 * (la.turning[j] - lb.turning[j])
+    });
     let theta_m: Vector3<f64> = ym.fixed_rows::<3>(THETA).into();
     let (vm, um): (Vector3<f64>, Vector3<f64>) = (ym.fixed_rows::<3>(6).into(), ym.fixed_rows::<3>(9).into());
     // exp(theta_m) and R_m once; with derivatives the midpoint's whole frame (exp, J_r and
@@ -419,23 +418,18 @@ pub(super) fn back(
         }
         None => (None, value_rows(link, front, lm)),
     };
-    on.clear();
-    on.extend((0..count).map(|j| profile.on_link(j, k)));
+    refill(on, count, |j| profile.on_link(j, k));
     // In a history, the stuck material's tension at node b, for the stick/slip choice.
-    stuck.clear();
-    stuck.extend(
-        (0..count).map(|j| {
-            (profile.grips.is_some() && on[j]).then(|| profile.stuck_tension(j, k + 1, &sites.end, b, length))
-        }),
-    );
+    refill(stuck, count, |j| {
+        (profile.grips.is_some() && on[j]).then(|| profile.stuck_tension(j, k + 1, &sites.end, b, length))
+    });
     // The link's evaluation in the buffers of one the profile no longer keeps.
     let mut out = profile.take_link();
     out.residual = residual;
-    out.capacity.clear();
-    out.capacity
-        .extend((0..count).map(|j| h / 6.0 * profile.coefficient(j) * (la.kappa[j] + 4.0 * lm.kappa[j] + lb.kappa[j])));
-    out.pointwise.clear();
-    out.pointwise.extend((0..count).map(|j| {
+    refill(&mut out.capacity, count, |j| {
+        h / 6.0 * profile.coefficient(j) * (la.kappa[j] + 4.0 * lm.kappa[j] + lb.kappa[j])
+    });
+    refill(&mut out.pointwise, count, |j| {
         (on[j] && profile.sticks(j, k))
             .then(|| {
                 let points = [
@@ -446,15 +440,14 @@ pub(super) fn back(
                 pointwise(link, j, points)
             })
             .flatten()
-    }));
-    out.psi.clear();
-    out.psi.extend((0..count).map(|j| {
+    });
+    refill(&mut out.psi, count, |j| {
         if on[j] {
             zb[j] - za[j] - h / 6.0 * (la.turning[j] + 4.0 * lm.turning[j] + lb.turning[j])
         } else {
             0.0
         }
-    }));
+    });
     // In a history, a stuck link's row is its stick row z_b - zeta_b, zeta_b the stuck
     // material's log tension (section 8); a sliding link keeps its capstan row at w = -1
     // or +1.
@@ -463,9 +456,7 @@ pub(super) fn back(
             out.psi[j] = zb[j] - (tension / profile.base[j]).ln();
         }
     }
-    out.stuck_tension.clear();
-    out.stuck_tension
-        .extend(stuck.iter().map(|t| t.map_or(f64::NAN, |t| t.0)));
+    refill(&mut out.stuck_tension, count, |j| stuck[j].map_or(f64::NAN, |t| t.0));
     // The blocks keep their shape (sized once per recycled evaluation); without
     // derivatives they are not written, and nothing reads them then.
     for (block, shape) in [
@@ -498,19 +489,20 @@ pub(super) fn back(
         }
         row
     };
-    dzm.clear();
-    dzm.extend((0..count).map(|j| (node_turning(la, j, 0) - node_turning(lb, j, 9)) * (h / 8.0)));
+    refill(dzm, count, |j| {
+        (node_turning(la, j, 0) - node_turning(lb, j, 9)) * (h / 8.0)
+    });
     // F_m and kappa~_m in the midpoint's local coordinates (theta, v, u) and the frame.
     let Jr_m = frame_m.Jr;
     let turning_y = |j: usize| {
         let mut row = SMatrix::<f64, 1, 12>::zeros();
         let d_phi = lm.d_turning[j].fixed_columns::<3>(6).into_owned();
-        row.fixed_columns_mut::<3>(3).copy_from(&(d_phi * Jr_m));
+        row.fixed_columns_mut::<3>(3).copy_from(&product(&d_phi, &Jr_m));
         row.fixed_columns_mut::<3>(6)
             .copy_from(&lm.d_turning[j].fixed_columns::<3>(0));
         row.fixed_columns_mut::<3>(9)
             .copy_from(&lm.d_turning[j].fixed_columns::<3>(3));
-        (row, d_phi * Em.transpose())
+        (row, product(&d_phi, &Em.transpose()))
     };
     // The frictionless midpoint's product (the same sums in the same order as nalgebra's).
     let mut dFm = midpoint_product(&pm, &dYm);
@@ -520,7 +512,7 @@ pub(super) fn back(
         col
     };
     for (j, dz) in dzm.iter().enumerate() {
-        dFm += rates_z(lm, j) * dz;
+        dFm += product(&rates_z(lm, j), dz);
     }
     ends.write(&dFm, h, length, jac);
 
@@ -528,7 +520,7 @@ pub(super) fn back(
     dturn_m.clear();
     for j in 0..count {
         let (row_y, row_frame) = turning_y(j);
-        let mut row = row_y.fixed_columns::<9>(3) * dYm;
+        let mut row = product(&row_y.fixed_columns::<9>(3), &dYm);
         for c in 0..3 {
             row[c] += row_frame[c];
         }
@@ -552,12 +544,11 @@ pub(super) fn back(
             let dF_end = rates_z(lin, l); // dF_a or dF_b / dz
             // y_m moves by +-h/8 dF_end; z_m by delta/2 +- h/8 d kappa~_end / dz.
             let dym = dF_end * (sign * h / 8.0);
-            dzm_l.clear();
-            dzm_l.extend((0..count).map(|j| {
+            refill(dzm_l, count, |j| {
                 let own = if j == l { 0.5 } else { 0.0 };
                 own + sign * h / 8.0 * lin.d_turning_log_tension[j * count + l]
-            }));
-            let mut dFm_z = pm.f_y * dym;
+            });
+            let mut dFm_z = product(&pm.f_y, &dym);
             for (j, d) in dzm_l.iter().enumerate() {
                 dFm_z += rates_z(lm, j) * *d;
             }
@@ -565,7 +556,7 @@ pub(super) fn back(
             out.rows_z.set_column(side * count + l, &column);
             for j in (0..count).filter(|&j| on[j]) {
                 let (row_y, _) = turning_y(j);
-                let mut dturn = (row_y * dym)[0];
+                let mut dturn = product(&row_y, &dym)[0];
                 for (m, d) in dzm_l.iter().enumerate() {
                     dturn += lm.d_turning_log_tension[j * count + m] * d;
                 }

@@ -26,6 +26,7 @@ use crate::model::linearize::lanes::{
     M3, TendonLanes, V3, add, cross, derivative_lanes, dot, hat3, mat_mat, negate, scale, sub,
 };
 use crate::simd::lanes::F4;
+use crate::simd::{filled, refill};
 use nalgebra::{Matrix3, Matrix6, Matrix6x3, SMatrix, Vector3, Vector6};
 use std::mem::MaybeUninit;
 
@@ -227,7 +228,7 @@ pub(crate) fn linearize_lanes_into(
             forget_response(o);
             fill_values(o, k, slip.as_ref().map(|sl| sl.slot), turning, lane);
             o.lin = Linearization {
-                rates: Vector6::from_fn(|i, _| x[i].lane(lane)),
+                rates: filled(|i, _| x[i].lane(lane)),
                 d_strains: Matrix6::zeros(),
                 d_rotation: Matrix6x3::zeros(),
             };
@@ -246,16 +247,16 @@ pub(crate) fn linearize_lanes_into(
         fill_values(o, k, slip.as_ref().map(|sl| sl.slot), turning, lane);
         let dx = &derived.dx;
         o.lin = Linearization {
-            rates: Vector6::from_fn(|i, _| x[i].lane(lane)),
-            d_strains: Matrix6::from_fn(|i, c| dx[c][i].lane(lane)),
-            d_rotation: Matrix6x3::from_fn(|i, c| dx[6 + c][i].lane(lane)),
+            rates: filled(|i, _| x[i].lane(lane)),
+            d_strains: filled(|i, c| dx[c][i].lane(lane)),
+            d_rotation: filled(|i, c| dx[6 + c][i].lane(lane)),
         };
-        o.d_log_tension.resize(k, Vector6::zeros());
-        o.d_turning.resize(k, SMatrix::zeros());
-        o.d_turning_log_tension.resize(k * k, 0.0);
+        refill(&mut o.d_log_tension, k, |_| Vector6::zeros());
+        refill(&mut o.d_turning, k, |_| SMatrix::zeros());
+        refill(&mut o.d_turning_log_tension, k * k, |_| 0.0);
         if let (Some(sl), Some((d_log, d_turning, d_turning_log))) = (&slip, &derived.slip) {
-            o.d_log_tension[sl.slot] = Vector6::from_fn(|i, _| d_log[i].lane(lane));
-            o.d_turning[sl.slot] = SMatrix::<f64, 1, 9>::from_fn(|_, c| d_turning[c].lane(lane));
+            o.d_log_tension[sl.slot] = filled(|i, _| d_log[i].lane(lane));
+            o.d_turning[sl.slot] = filled(|_, c| d_turning[c].lane(lane));
             for (l, d) in d_turning_log.iter().enumerate().take(k) {
                 o.d_turning_log_tension[sl.slot * k + l] = d.lane(lane);
             }
@@ -272,10 +273,8 @@ pub(crate) fn linearize_lanes_into(
 fn fill_values(o: &mut FrictionLinearization, k: usize, slot: Option<usize>, turning: Option<(F4, F4)>, lane: usize) {
     o.point = None;
     o.slips.clear();
-    o.kappa.clear();
-    o.kappa.resize(k, 0.0);
-    o.turning.clear();
-    o.turning.resize(k, 0.0);
+    refill(&mut o.kappa, k, |_| 0.0);
+    refill(&mut o.turning, k, |_| 0.0);
     if let (Some(slot), Some((kappa, turning))) = (slot, turning) {
         o.kappa[slot] = kappa.lane(lane);
         o.turning[slot] = turning.lane(lane);
@@ -334,8 +333,7 @@ fn respond(
                 kept.output[(r, c)] = value.lane(lane);
             }
         }
-        kept.turning.clear();
-        kept.turning.resize(k, SMatrix::zeros());
+        refill(&mut kept.turning, k, |_| SMatrix::zeros());
         if let Some(sl) = slip {
             for (r, value) in turning[0].iter().enumerate() {
                 kept.turning[sl.slot][r] = value.lane(lane);
