@@ -840,3 +840,43 @@ fn a_minor_loop_that_does_not_reach_full_slip_does_not_close() {
         last = solution.tip_position();
     }
 }
+
+#[test]
+fn a_zoned_steps_observed_order_is_two_as_its_estimate_says() {
+    // The nitinol loop's first step back at tolerances 1e-5, 1e-6 and 1e-7 L: the split
+    // levels double its intervals (76, 152, 304), against the history at --tol 1e-10
+    // (2 496 intervals, estimate 2.6e-10 m). The zone's transition link holds one multiplier
+    // w_T across it, and the meeting point it stands for lies inside it, so its tension has
+    // a kink a link cannot follow: second order, which the step's estimate says
+    // (`ErrorEstimate.order` 2), not the fourth order of a stuck step's split levels.
+    let tight = solved(&up_down(), Some(1e-10));
+    let exact = tight[11].solution.tip_position();
+    let mut last: Option<(usize, f64)> = None;
+    for tolerance in [1e-5, 1e-6, 1e-7] {
+        let steps = solved(&up_down(), Some(tolerance));
+        let solution = &steps[11].solution;
+        let estimate = solution.report.error_estimate.unwrap();
+        assert_eq!(estimate.order, 2);
+        let error = (solution.tip_position() - exact).norm();
+        let intervals = solution.report.intervals;
+        if let Some((n, e)) = last {
+            let order = (e / error).ln() / (intervals as f64 / n as f64).ln();
+            eprintln!("{n} -> {intervals} intervals: tip error {e:.3e} -> {error:.3e} m, observed order {order:.2}");
+            // measured 1.94 and 1.77 (the second with the reference's 2.6e-10 m in an error
+            // of 3.8e-9 m): 2 to within 0.5
+            assert!((order - 2.0).abs() < 0.5, "observed order {order}");
+        }
+        last = Some((intervals, error));
+    }
+}
+
+#[test]
+#[ignore = "fails on main (ed634ba): the nitinol loop at --tol 1e-8 is refused at step 15"]
+fn the_nitinol_loop_is_answered_at_a_tolerance_of_1e_8() {
+    // Main answers the loop at the default tolerance (1e-7 L) and at 1e-10, but at 1e-8 it
+    // refuses step 15: "tendon 1's slip zone from s = 0.2775 m to 0.3000 m does not hold its
+    // material in this step (it moves 1.055e-7 m across its start, allowed 2.2e-10 m)". The
+    // zone's meeting point is 0.2804 m on the other two (0.2800 and 0.2804 m reported).
+    let steps = solved(&up_down(), Some(1e-8));
+    assert_eq!(steps.len(), 21);
+}
