@@ -16,9 +16,9 @@
 //! `z' = mu kappa sign(d)` where `d != 0`, so `d` is the slip and the multiplier
 //! `w = z' / (mu kappa)` lies in [-1, 1] where it vanishes. On a fine uniform grid (the
 //! objective by the trapezoidal rule, each cell's capacity `mu integral kappa` by Simpson's
-//! rule on the shape's cubic Hermite interpolant) the discrete problem is solved by a
-//! primal-dual active-set (semismooth Newton) iteration: no march from the base, no zones
-//! opened one by one, no bisection of a balance. The material of each step is carried along
+//! rule on the shape's cubic Hermite interpolant) the discrete problem is solved by an
+//! interior-point (log-barrier, damped Newton) method ([`coulomb`]): no march from the
+//! base, no zones opened one by one, no bisection of a balance. The material of each step is carried along
 //! by this solver too (from the step after a slack one, loaded from rest: full slip in), so
 //! only the shapes come from the history.
 
@@ -156,7 +156,7 @@ struct Coulomb {
 
 /// Solves A x = b for a tridiagonal A (sub-diagonal `low[j]` = A[j+1][j], diagonal `diag`,
 /// super-diagonal `up[j]` = A[j][j+1]) by Gaussian elimination with partial pivoting
-/// (LAPACK's dgtsv: the active-set rows put zeros on the diagonal).
+/// (LAPACK's dgtsv).
 fn tridiagonal(mut low: Vec<f64>, mut diag: Vec<f64>, mut up: Vec<f64>, mut b: Vec<f64>) -> Vec<f64> {
     let n = diag.len();
     let mut fill = vec![0.0; n];
