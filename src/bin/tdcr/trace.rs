@@ -194,13 +194,14 @@ fn with_flags(e: tdcr::Error, parameter: Parameter) -> Failure {
         tdcr::Error::InvalidInput { field, .. } if field.ends_with(".displacement") => {
             Some("tdcr sweep --displacement I=START:STOP:COUNT".to_string())
         }
-        tdcr::Error::InvalidInput { field, .. } if field.ends_with(".friction") => {
+        tdcr::Error::ModelLimit { field, .. } if field.ends_with(".friction") => {
             Some("--friction I=0 for each tendon named".to_string())
         }
         _ => None,
     };
     match (crate::failure::solver_failure(e), sweep) {
         (Failure::Input(text), Some(command)) => Failure::Input(format!("{text} (on the command line: {command})")),
+        (Failure::Limit(text), Some(command)) => Failure::Limit(format!("{text} (on the command line: {command})")),
         (f, _) => f,
     }
 }
