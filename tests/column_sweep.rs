@@ -88,7 +88,10 @@ fn the_round_column_swept_past_euler_keeps_its_plane_on_modest_meshes_along_the_
         // it jumped by up to 180 deg before).
         let azimuth = tip.y.atan2(tip.x);
         let first = *plane.get_or_insert(azimuth);
-        assert!((azimuth - first).abs() < 1e-3, "{case}: azimuth {azimuth} against {first}");
+        assert!(
+            (azimuth - first).abs() < 1e-3,
+            "{case}: azimuth {azimuth} against {first}"
+        );
     }
     // The straight column past P_cr is an equilibrium, unstable (its two buckling
     // directions): Newton from the straight guess finds it and the verdict says so.
@@ -112,7 +115,14 @@ fn tdcr_sweep_gives_the_library_rows() {
     )
     .unwrap();
     let out = std::process::Command::new(TDCR)
-        .args(["sweep", "col.toml", "--param", "tip_force.z=0:-0.3:31", "--out", "col.csv"])
+        .args([
+            "sweep",
+            "col.toml",
+            "--param",
+            "tip_force.z=0:-0.3:31",
+            "--out",
+            "col.csv",
+        ])
         .current_dir(&dir)
         .output()
         .unwrap();
