@@ -9,10 +9,10 @@ mod common;
 use common::cli::{TDCR, scratch};
 use common::column_elastica;
 use std::f64::consts::PI;
+use tdcr::PathTaken;
 use tdcr::analysis::sweep::{Input, Kind, Ranges, SweepResult, SweepSolver, sweep};
 use tdcr::collocation::{self, Equilibrium, Options};
 use tdcr::nalgebra::Vector3;
-use tdcr::report::PathTaken;
 use tdcr::{Loads, Parameter, Robot, Rod};
 
 const LENGTH: f64 = 0.25;
@@ -142,15 +142,20 @@ fn tdcr_sweep_gives_the_library_rows() {
         let tip = step.solution.tip_position();
         assert_eq!(row, &vec![tip.x, tip.y, tip.z]);
     }
-    // numpy's linspace (k * (stop / 30)) differs from the CLI's values in the last bits:
-    // the rows then agree to 1e-9 L (the plane is held, so rounding moves the states by
-    // rounding only; before, the two took other planes from step 13 on).
+    // numpy's linspace (k * (stop / 30)) differs from the CLI's values in the last bits.
+    // The plane the round column buckles into is still chosen by the step that buckles
+    // (solved from rest), and rounding turns it by a little (measured: 5.6e-6 m at the tip
+    // on step 12); every plane is an equilibrium, so the states agree in what does not
+    // depend on the plane: the tip's height and its distance from the axis, to 2e-7 L (each
+    // answer is within the default tolerance, 1e-7 L, of the exact one, on its own mesh;
+    // measured 1.1e-9 m; before, the two took other states from step 13 on, 100-300 mm apart).
     let linspace: Vec<f64> = (0..STEPS).map(|k| k as f64 * (STOP / (STEPS - 1) as f64)).collect();
     let other = swept(linspace);
     assert!(other.failure.is_none());
     for (k, (a, b)) in other.steps.iter().zip(&library.steps).enumerate() {
-        let d = (a.solution.tip_position() - b.solution.tip_position()).norm();
-        assert!(d < 1e-9 * LENGTH, "step {k}: {d} m");
+        let (a, b) = (a.solution.tip_position(), b.solution.tip_position());
+        let d = (a.z - b.z).abs().max((a.x.hypot(a.y) - b.x.hypot(b.y)).abs());
+        assert!(d < 2e-7 * LENGTH, "step {k}: {d} m");
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
