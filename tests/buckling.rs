@@ -3,8 +3,11 @@
 //! return the stable state, buckled towards the imperfection past Euler's load
 //! (docs/stability.md, "Branch switching"); the buckled tips are compared with the elastica.
 
+mod common;
+
+use common::column_elastica as elastica;
 use nalgebra::Vector3;
-use std::f64::consts::{FRAC_PI_2, PI};
+use std::f64::consts::PI;
 use tdcr::collocation::{self, Options};
 use tdcr::{Loads, Robot, Rod, Solution};
 
@@ -24,46 +27,6 @@ fn column(p: f64, eps: f64) -> Robot {
 fn euler_load() -> f64 {
     let ei = column(0.0, 0.0).rod.section_at(0.0).section.kbt[0];
     PI * PI * ei / (4.0 * LENGTH * LENGTH)
-}
-
-/// Complete elliptic integrals K(k) and E(k) by Simpson's rule on 20 000 intervals (the
-/// integrands are smooth for k <= 0.999, the largest modulus below; error below 1e-10).
-fn elliptic_k_e(k: f64) -> (f64, f64) {
-    let n = 20_000;
-    let h = FRAC_PI_2 / n as f64;
-    let (mut kk, mut ee) = (0.0, 0.0);
-    for i in 0..=n {
-        let w = if i == 0 || i == n {
-            1.0
-        } else if i % 2 == 1 {
-            4.0
-        } else {
-            2.0
-        };
-        let d = (1.0 - (k * (i as f64 * h).sin()).powi(2)).sqrt();
-        kk += w / d;
-        ee += w * d;
-    }
-    (kk * h / 3.0, ee * h / 3.0)
-}
-
-/// The tip of the inextensible buckled column (the elastica) at P / P_cr = `ratio` > 1:
-/// (lateral, axial) / L. With k = sin(alpha / 2) (alpha the tip angle), P / P_cr =
-/// (2 K(k) / pi)^2, the lateral deflection is 2 k / K(k) and the height 2 E(k) / K(k) - 1.
-fn elastica(ratio: f64) -> (f64, f64) {
-    let (mut lo, mut hi) = (0.0, 0.999_999);
-    for _ in 0..60 {
-        let mid = 0.5 * (lo + hi);
-        let (kk, _) = elliptic_k_e(mid);
-        if (2.0 * kk / PI).powi(2) < ratio {
-            lo = mid
-        } else {
-            hi = mid
-        }
-    }
-    let k = 0.5 * (lo + hi);
-    let (kk, ee) = elliptic_k_e(k);
-    (2.0 * k / kk, 2.0 * ee / kk - 1.0)
 }
 
 fn solve(ratio: f64, eps: f64) -> Solution {

@@ -144,7 +144,7 @@ pub(crate) fn solve_start(
     let start = Instant::now();
     let model = Model::new(robot);
     let mut report = SolveReport::new(Method::Collocation);
-    let (mesh, x0, reuse, choose) = begin(robot, options, warm, cache, &model, &mut report)?;
+    let (mesh, x0, reuse, choose) = begin(robot, options, warm, cache, &model, &mut report, false)?;
     let choose = if unassessed { choose.unassessed() } else { choose };
     report.meshes += 1;
     let level =
@@ -181,8 +181,14 @@ pub(crate) fn solve_start(
 
 /// The first mesh of a tension solve and the states Newton starts from on it: the warm
 /// start interpolated (kept when it is the cached solver's last solution, or a stable one
-/// near the answer), or the cold start; whether the cached factors are reused, and how the
-/// equilibrium is chosen there.
+/// near the answer, or always with `keep_warm`), or the cold start; whether the cached
+/// factors are reused, and how the equilibrium is chosen there.
+///
+/// `keep_warm` is a sweep's solve on the branch of its warm start
+/// ([`super::solve_on_branch`]): the cold guess is not compared with it, since a smaller
+/// residual does not make it a state of that branch (the straight column past Euler's load
+/// is an exact equilibrium, residual zero, of another branch than the buckled warm start;
+/// docs/stability.md, "col25").
 ///
 /// # Errors
 /// As [`super::solve`].
@@ -193,6 +199,7 @@ fn begin(
     cache: &mut Cache,
     model: &Model,
     report: &mut SolveReport,
+    keep_warm: bool,
 ) -> Result<(Mesh, Vec<State>, bool, Choose)> {
     let mut mesh = initial_mesh(robot, options, warm)?;
     if options.tolerance.is_none() {
@@ -206,7 +213,7 @@ fn begin(
         _ => false,
     };
     let (x0, choose) = match warm {
-        Some(w) if reuse => (w, Choose::FromWarm),
+        Some(w) if reuse || keep_warm => (w, Choose::FromWarm),
         Some(w) => {
             let system = System::new(model.clone(), mesh.clone());
             // A stable warm start near the answer (by the predicted step) is kept; else the

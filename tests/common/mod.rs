@@ -6,6 +6,7 @@
 
 pub mod cli;
 
+use std::f64::consts::{FRAC_PI_2, PI};
 use tdcr::cases::analytic::elastica_tip;
 use tdcr::nalgebra::Vector3;
 use tdcr::shooting::{self, Options};
@@ -74,4 +75,44 @@ pub fn elastica_cantilever(lambda: f64) -> (Robot, Vector3<f64>) {
         robot,
         Vector3::new(x * length + force * length / stiff, 0.0, z * length),
     )
+}
+
+/// Complete elliptic integrals K(k) and E(k) by Simpson's rule on 20 000 intervals (the
+/// integrands are smooth for k <= 0.999, the largest modulus below; error below 1e-10).
+pub fn elliptic_k_e(k: f64) -> (f64, f64) {
+    let n = 20_000;
+    let h = FRAC_PI_2 / n as f64;
+    let (mut kk, mut ee) = (0.0, 0.0);
+    for i in 0..=n {
+        let w = if i == 0 || i == n {
+            1.0
+        } else if i % 2 == 1 {
+            4.0
+        } else {
+            2.0
+        };
+        let d = (1.0 - (k * (i as f64 * h).sin()).powi(2)).sqrt();
+        kk += w / d;
+        ee += w * d;
+    }
+    (kk * h / 3.0, ee * h / 3.0)
+}
+
+/// The tip of the inextensible buckled clamped-free column (the elastica) at P / P_cr = `ratio` > 1:
+/// (lateral, axial) / L. With k = sin(alpha / 2) (alpha the tip angle), P / P_cr =
+/// (2 K(k) / pi)^2, the lateral deflection is 2 k / K(k) and the height 2 E(k) / K(k) - 1.
+pub fn column_elastica(ratio: f64) -> (f64, f64) {
+    let (mut lo, mut hi) = (0.0, 0.999_999);
+    for _ in 0..60 {
+        let mid = 0.5 * (lo + hi);
+        let (kk, _) = elliptic_k_e(mid);
+        if (2.0 * kk / PI).powi(2) < ratio {
+            lo = mid
+        } else {
+            hi = mid
+        }
+    }
+    let k = 0.5 * (lo + hi);
+    let (kk, ee) = elliptic_k_e(k);
+    (2.0 * k / kk, 2.0 * ee / kk - 1.0)
 }

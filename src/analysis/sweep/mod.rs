@@ -47,6 +47,10 @@ const PATHED_SHARE: f64 = 0.05;
 /// Events are located to this share of the sweep's range (the bracket's width; the value
 /// reported is its middle).
 pub const LOCATED: f64 = 1e-6;
+/// The most equal sub-steps [`Sweep::continued`] splits a step into (1, 2, then 4): a
+/// step too long for Newton from the last state (the buckled column's tip moves 0.23 L
+/// between 1.03 and 1.12 P_cr) is reached in pieces before the sweep gives up its branch.
+const CONTINUED_PIECES: usize = 4;
 /// The most events located within one step (a step that crosses more is reported with
 /// these, the rest merged into the step's state).
 const MAX_EVENTS: usize = 8;
@@ -358,8 +362,10 @@ impl<'r> Sweep<'r> {
         let t = k as f64;
         let robot = self.ranges.robot(t)?;
         let warm = self.last.as_ref().map(|m| &m.solution).or(self.start.as_ref());
-        let solution = self.solve(&robot, warm)?;
-        let mut right = Mark::new(t, &robot, solution);
+        let mut right = match self.continued(&robot, t) {
+            Some(right) => right,
+            None => Mark::new(t, &robot, self.solve(&robot, warm)?),
+        };
         let mut events = Vec::new();
         if let Some(mut left) = self.last.clone() {
             for _ in 0..MAX_EVENTS {
@@ -431,6 +437,61 @@ impl<'r> Sweep<'r> {
         })
     }
 
+    /// The step at `t` (its robot `robot`) continued from the last point's stable state on
+    /// its branch (collocation: [`Sweep::on_branch`], which keeps the warm start), when that
+    /// reaches a stable state by Newton or by the homotopy from the last state (`direct` or
+    /// `from_warm_start`) without a jump ([`Sweep::jumped`]), in one piece or in up to
+    /// [`CONTINUED_PIECES`]: the state the robot moves to from where it was. `None` otherwise (no last point, an unstable one, a branch that
+    /// ends or loses its stability, shooting), and the step is solved by [`Sweep::solve`].
+    ///
+    /// Without it, a step of the buckled round column (every plane an equilibrium) lost its
+    /// branch: the cold guess, the straight column (an exact equilibrium, unstable past
+    /// Euler's load), has the smaller residual and replaced the warm start, and the load path
+    /// from rest on the warm start's mesh took another plane (docs/stability.md, "col25").
+    fn continued(&self, robot: &Robot, t: f64) -> Option<Mark> {
+        let left = self.last.as_ref()?;
+        if left.unstable != Instability::Directions(0) || matches!(self.solver, SweepSolver::Shooting(_)) {
+            return None;
+        }
+        let mut pieces = 1;
+        while pieces <= CONTINUED_PIECES {
+            if let Some(right) = self.continued_in(left, robot, t, pieces) {
+                return Some(right);
+            }
+            pieces *= 2;
+        }
+        None
+    }
+
+    /// [`Sweep::continued`] in `pieces` equal sub-steps from `left` to `t`, each from the
+    /// last and each one that must reach a stable state without a jump.
+    fn continued_in(&self, left: &Mark, robot: &Robot, t: f64, pieces: usize) -> Option<Mark> {
+        let mut last = left.clone();
+        for k in 1..=pieces {
+            let (at, here) = if k == pieces {
+                (t, robot.clone())
+            } else {
+                let at = left.t + (t - left.t) * k as f64 / pieces as f64;
+                (at, self.ranges.robot(at).ok()?)
+            };
+            let SweepSolver::Collocation(options) = &self.solver else {
+                return None;
+            };
+            let options = fresh_mesh(options, &here)?;
+            let solution = collocation::solve_on_branch(&here, &options, &last.solution).ok()?;
+            let reached = matches!(
+                solution.report.path,
+                PathTaken::Direct | PathTaken::FromWarmStart { .. }
+            );
+            let next = Mark::new(at, &here, solution);
+            if !reached || next.unstable != Instability::Directions(0) || self.jumped(&last, &next) {
+                return None;
+            }
+            last = next;
+        }
+        Some(last)
+    }
+
     /// Whether the tip may have jumped from `left` to `right`: it moved faster than
     /// [`JUMP_RATIO`] times the pace before and more than [`JUMP_SHARE`] of L, or `right`
     /// fell back to the load path and moved it more than [`PATHED_SHARE`] of L.
@@ -442,6 +503,22 @@ impl<'r> Sweep<'r> {
         let faster = self.pace.is_some_and(|p| moved > JUMP_RATIO * p * span);
         (faster && moved > JUMP_SHARE * length) || (pathed && moved > PATHED_SHARE * length)
     }
+}
+
+/// `options` with the mesh a cold solve of `robot` starts on (`options.intervals`
+/// uniform) where refinement runs and no mesh is given: a continued step starts there
+/// instead of on the last state's final mesh, which refinement would only add to (the
+/// buckled column's meshes grew to 5 815 intervals over the sweep where a cold solve
+/// takes 123-336). None when that mesh cannot be built.
+fn fresh_mesh(options: &collocation::Options, robot: &Robot) -> Option<collocation::Options> {
+    if options.mesh.is_some() || options.tolerance.is_none() {
+        return Some(options.clone());
+    }
+    let mesh = crate::mesh::Mesh::uniform(robot, options.intervals).ok()?;
+    Some(collocation::Options {
+        mesh: Some(mesh.nodes.iter().map(|n| n.s).collect()),
+        ..options.clone()
+    })
 }
 
 /// The result of [`sweep`]: the steps solved, in order, and the failure that ended the

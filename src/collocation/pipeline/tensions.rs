@@ -101,12 +101,12 @@ fn attempt(
     let mut report = SolveReport::new_in(Method::Collocation, spare::note(NOT_ASSESSED));
     // Newton's iterations are recorded without growing the history after this.
     report.history.reserve(options.max_iterations.min(MAX_ITERATIONS));
-    let (mesh, x0, reuse, choose) = match begin(robot, options, warm, cache, &model, &mut report) {
+    let (mesh, x0, reuse, choose) = match begin(robot, options, warm, cache, &model, &mut report, on_branch) {
         Ok(begun) => begun,
         Err(e) => return Attempt::Answer(Err(e)),
     };
     // A solve started from the cold guess (its residual was the smaller) has no branch to
-    // keep to.
+    // keep to; on a branch (`on_branch`) the warm start is always kept (`begin`).
     let choose = match choose {
         Choose::FromWarm if on_branch => Choose::OnBranch,
         other => other,
