@@ -4,9 +4,12 @@
 //! bifurcation), and displacement-controlled tendons going taut or slack (docs/stability.md,
 //! "Tracing a branch"). `tdcr sweep` and Python's `tdcr.sweep` both run it.
 //!
-//! Every collocation step is [`collocation::solve_from`] the previous step's solution (which
-//! keeps a stable warm start whose predicted Newton step is small), with a fresh workspace,
-//! so its stability verdict is its own. When a step changes what the last step was (a
+//! A collocation step after a stable one first continues that branch: `solve_on_branch`
+//! from the previous solution, in 1, 2 or 4 sub-steps, each starting on the cold solve's
+//! mesh, kept when it is stable and does not jump (a symmetric column past its buckling load
+//! keeps its plane). Otherwise the step is [`collocation::solve_from`] the previous step's
+//! solution (which keeps a stable warm start whose predicted Newton step is small). Each
+//! step has a fresh workspace, so its stability verdict is its own. When a step changes what the last step was (a
 //! tendon's engagement, the number of unstable directions, or the tip jumped), the change
 //! is located by bisection on the inputs between the two steps (module `locate`): each
 //! bisection point is solved from the last point before the change, keeping to its branch
