@@ -128,6 +128,23 @@ struct Grid {
     capacity: Vec<f64>,
 }
 
+impl Grid {
+    /// The path's friction capacity summed from the base entry (mu times the turning angle),
+    /// as a function of s: linear within each cell.
+    fn turning(&self) -> impl Fn(f64) -> f64 + '_ {
+        let h = self.s[1] - self.s[0];
+        let mut turn = vec![0.0; CELLS + 1];
+        for j in 0..CELLS {
+            turn[j + 1] = turn[j] + self.capacity[j];
+        }
+        move |s: f64| {
+            let j = ((s / h).floor() as usize).min(CELLS - 1);
+            let t = (s - self.s[j]) / h;
+            turn[j] * (1.0 - t) + turn[j + 1] * t
+        }
+    }
+}
+
 fn grid(solution: &Solution, robot: &Robot, i: usize) -> Grid {
     let end = robot.tendons[i].end(robot.length());
     let mu = robot.tendons[i].friction.unwrap().coefficient;
@@ -393,16 +410,7 @@ fn log_tension(grid: &Grid, answer: &Coulomb, s: f64) -> f64 {
 /// link with one multiplier w, as every link of a sliding zone has).
 fn code_log_tension(step: &HistoryStep, grid: &Grid) -> Vec<f64> {
     let solution = &step.solution;
-    let h = grid.s[1] - grid.s[0];
-    let mut turn = vec![0.0; CELLS + 1];
-    for j in 0..CELLS {
-        turn[j + 1] = turn[j] + grid.capacity[j];
-    }
-    let turn_at = |s: f64| {
-        let j = ((s / h).floor() as usize).min(CELLS - 1);
-        let t = (s - grid.s[j]) / h;
-        turn[j] * (1.0 - t) + turn[j + 1] * t
-    };
+    let turn_at = grid.turning();
     let end = *grid.s.last().unwrap();
     let mut points: Vec<(f64, f64)> = Vec::new();
     for node in &solution.nodes {
@@ -467,15 +475,7 @@ fn law(before: (&HistoryStep, &Grid), after: (&HistoryStep, &Grid), stiffness: f
     let d = code_slip(before, after, stiffness);
     let h = grid.s[1] - grid.s[0];
     let index = |s: f64| ((s / h).round() as usize).min(CELLS);
-    let mut turn = vec![0.0; CELLS + 1];
-    for j in 0..CELLS {
-        turn[j + 1] = turn[j] + grid.capacity[j];
-    }
-    let turn_at = |s: f64| {
-        let j = ((s / h).floor() as usize).min(CELLS - 1);
-        let t = (s - grid.s[j]) / h;
-        turn[j] * (1.0 - t) + turn[j + 1] * t
-    };
+    let turn_at = grid.turning();
     let solution = &step.solution;
     let mut nodes: Vec<f64> = solution.nodes.iter().map(|n| n.s).collect();
     nodes.dedup();
